@@ -1,0 +1,1 @@
+//! Mesh loading, the meshlet LOD DAG builder and the meshlet asset format.
