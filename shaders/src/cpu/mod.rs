@@ -1,0 +1,9 @@
+//! Rust references for the bit-exact encodings of the shared WGSL modules.
+//!
+//! The asset builder encodes with these functions and pass tests compare GPU output
+//! against them, so each mirrors its WGSL counterpart operation for operation.
+
+pub mod layout;
+pub mod octahedral;
+pub mod positions;
+pub mod visbuffer;

@@ -1,0 +1,49 @@
+#define_import_path meshlight::instance
+
+// One placed copy of a mesh. Layout matches `cpu::layout::Instance`.
+
+struct Instance {
+    // Mesh space to world space.
+    world_from_local: mat4x4<f32>,
+    // Last frame's world_from_local, for motion vectors and last frame's occlusion test.
+    previous_world_from_local: mat4x4<f32>,
+    // World space to mesh space; its transposed upper 3x3 transforms normals.
+    local_from_world: mat4x4<f32>,
+    // The mesh's quantisation grid: xyz origin, w step (mesh units per grid step).
+    position_grid: vec4<f32>,
+    // Index into the material table.
+    material: u32,
+    // The mesh's first meshlet in the shared meshlet array.
+    first_meshlet: u32,
+    // How many meshlets the mesh has (all LOD levels).
+    meshlet_count: u32,
+    // Padding to a 16-byte multiple.
+    padding: u32,
+}
+
+fn instance_transform_point(instance: Instance, p: vec3<f32>) -> vec3<f32> {
+    return (instance.world_from_local * vec4(p, 1.0)).xyz;
+}
+
+fn instance_previous_transform_point(instance: Instance, p: vec3<f32>) -> vec3<f32> {
+    return (instance.previous_world_from_local * vec4(p, 1.0)).xyz;
+}
+
+// World-space normal; uses the inverse so non-uniform scale keeps normals perpendicular.
+fn instance_transform_normal(instance: Instance, n: vec3<f32>) -> vec3<f32> {
+    let m = instance.local_from_world;
+    let inverse_transpose = transpose(mat3x3(m[0].xyz, m[1].xyz, m[2].xyz));
+    return normalize(inverse_transpose * n);
+}
+
+// The largest axis scale: a mesh-space radius or error times this bounds it in world space.
+fn instance_max_scale(instance: Instance) -> f32 {
+    let m = instance.world_from_local;
+    let s = vec3(dot(m[0].xyz, m[0].xyz), dot(m[1].xyz, m[1].xyz), dot(m[2].xyz, m[2].xyz));
+    return sqrt(max(s.x, max(s.y, s.z)));
+}
+
+// A mesh-space sphere (xyz centre, w radius) in world space, radius scaled conservatively.
+fn instance_transform_sphere(instance: Instance, sphere: vec4<f32>) -> vec4<f32> {
+    return vec4(instance_transform_point(instance, sphere.xyz), sphere.w * instance_max_scale(instance));
+}
