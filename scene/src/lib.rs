@@ -1,1 +1,28 @@
 //! Mesh loading, the meshlet LOD DAG builder and the meshlet asset format.
+//!
+//! The path from a file to the GPU: [`load::load_mesh`] → [`Mesh::clean`] →
+//! [`dag::build_dag`] → [`asset::MeshletAsset::from_dag`] (quantise and pack) →
+//! [`asset::MeshletAsset::save`] / [`asset::MeshletAsset::load`]. [`build_asset`] runs
+//! the whole chain; [`procedural_mesh`] is the built-in default mesh.
+
+pub mod asset;
+pub mod bounds;
+pub mod compress;
+pub mod dag;
+pub mod error;
+pub mod grouping;
+pub mod load;
+pub mod mesh;
+pub mod meshlets;
+pub mod pipeline;
+pub mod procedural;
+pub mod simplify;
+pub mod verify;
+
+pub use dag::{Dag, DagOptions, build_dag};
+pub use error::SceneError;
+pub use grouping::Grouping;
+pub use mesh::{CleanReport, Mesh};
+pub use procedural::{DEFAULT_SEGMENTS, procedural_mesh};
+pub use asset::MeshletAsset;
+pub use pipeline::{BuildOptions, Built, build_asset};

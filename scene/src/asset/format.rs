@@ -1,0 +1,153 @@
+//! The on-disk and in-memory layout of a meshlet asset. Every record is `#[repr(C)]`
+//! plain old data of 4-byte fields, so a loaded file is used in place through bytemuck
+//! casts and uploaded to the GPU as is.
+//!
+//! File = [`AssetHeader`] then four sections, each a whole number of 32-bit words:
+//! meshlets ([`MeshletRecord`]), groups ([`GroupRecord`]), group children (`u32`
+//! meshlet ids) and the payload (`u32` words of packed vertex and index data).
+
+use bytemuck::{Pod, Zeroable};
+
+pub const MAGIC: [u8; 8] = *b"MLASSET\0";
+/// Bumped on any layout change; older files are refused, not misread.
+pub const VERSION: u32 = 1;
+
+/// Header flag: the payload holds UVs after the normals.
+pub const FLAG_UVS: u32 = 1;
+
+/// Section order in [`AssetHeader::sections`].
+pub const SECTION_MESHLETS: usize = 0;
+pub const SECTION_GROUPS: usize = 1;
+pub const SECTION_CHILDREN: usize = 2;
+pub const SECTION_PAYLOAD: usize = 3;
+pub const SECTION_COUNT: usize = 4;
+
+/// Where a section lies, in 32-bit words from the start of the file.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct Section {
+    pub offset: u32,
+    pub words: u32,
+}
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct AssetHeader {
+    pub magic: [u8; 8],
+    pub version: u32,
+    pub flags: u32,
+    /// Whole file size in bytes, low and high halves (the header stays 4-byte aligned).
+    pub file_size: [u32; 2],
+    /// Checksum of every byte after the header, low and high halves.
+    pub checksum: [u32; 2],
+    pub meshlet_count: u32,
+    pub group_count: u32,
+    pub level_count: u32,
+    pub root_count: u32,
+    pub lod0_meshlets: u32,
+    pub lod0_triangles: u32,
+    pub total_triangles: u32,
+    pub total_vertices: u32,
+    pub input_vertices: u32,
+    pub dropped_degenerate: u32,
+    pub bounds_min: [f32; 3],
+    pub bounds_max: [f32; 3],
+    /// Position grid: `position = quant_origin + quant_step * q`.
+    pub quant_origin: [f32; 3],
+    pub quant_step: f32,
+    pub quant_bits: u32,
+    pub uv_min: [f32; 2],
+    pub uv_step: [f32; 2],
+    pub sections: [Section; SECTION_COUNT],
+}
+
+impl AssetHeader {
+    pub const WORDS: usize = size_of::<AssetHeader>() / 4;
+
+    pub fn has_uvs(&self) -> bool {
+        self.flags & FLAG_UVS != 0
+    }
+}
+
+/// One meshlet: what culling, LOD selection and rasterisation need, 80 bytes.
+///
+/// A meshlet is drawn when its own LOD error projected from `lod_sphere` is
+/// imperceptible and its parent's, projected from `parent_sphere`, is not.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct MeshletRecord {
+    /// Sphere around the decoded vertices (centre, radius), for culling.
+    pub bounds: [f32; 4],
+    /// LOD sphere of the group that produced this meshlet.
+    pub lod_sphere: [f32; 4],
+    /// LOD sphere of the group this meshlet was simplified in.
+    pub parent_sphere: [f32; 4],
+    pub lod_error: f32,
+    /// `f32::MAX` for roots: always "perceptible", so a root is drawn when nothing
+    /// finer is. (Not infinity: shader compilers may assume floats are finite.)
+    pub parent_error: f32,
+    /// First payload word, relative to the payload section.
+    pub data_offset: u32,
+    /// vertex count (bits 0..8), triangle count (8..16), level (16..24).
+    pub counts: u32,
+    /// Per-meshlet minimum of the grid coordinates; packed values are offsets from it.
+    pub grid_min: [u32; 3],
+    /// Bits per packed axis: x (0..8), y (8..16), z (16..24).
+    pub bits: u32,
+}
+
+impl MeshletRecord {
+    pub fn vertex_count(&self) -> u32 {
+        self.counts & 0xff
+    }
+    pub fn triangle_count(&self) -> u32 {
+        (self.counts >> 8) & 0xff
+    }
+    pub fn level(&self) -> u32 {
+        (self.counts >> 16) & 0xff
+    }
+    pub fn axis_bits(&self) -> [u32; 3] {
+        [self.bits & 0xff, (self.bits >> 8) & 0xff, (self.bits >> 16) & 0xff]
+    }
+}
+
+/// One simplification group: for checking the DAG, and for hierarchical culling later.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GroupRecord {
+    pub lod_sphere: [f32; 4],
+    pub error: f32,
+    pub level: u32,
+    /// Range in the children section.
+    pub first_child: u32,
+    pub child_count: u32,
+}
+
+/// Payload layout of one meshlet, in words from its `data_offset`: positions, normals,
+/// UVs (when the asset has them), indices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PayloadLayout {
+    pub positions: u32,
+    pub normals: u32,
+    pub uvs: u32,
+    pub indices: u32,
+    pub end: u32,
+}
+
+impl PayloadLayout {
+    pub fn of(record: &MeshletRecord, has_uvs: bool) -> Self {
+        let vc = record.vertex_count();
+        let positions = 0;
+        let normals = crate::compress::position_words(vc, record.axis_bits());
+        let uvs = normals + vc;
+        let indices = uvs + if has_uvs { vc } else { 0 };
+        let end = indices + (record.triangle_count() * 3).div_ceil(4);
+        Self {
+            positions,
+            normals,
+            uvs,
+            indices,
+            end,
+        }
+    }
+}

@@ -1,0 +1,417 @@
+//! A built meshlet asset: one word buffer holding header and sections, written to disk
+//! as is and read back with one read and bytemuck casts.
+
+pub mod checksum;
+pub mod format;
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::compress::{
+    BitWriter, Quantization, UvQuantization, bits_for, decode_normal, encode_normal, get_bits,
+};
+use crate::dag::Dag;
+use crate::error::SceneError;
+use crate::mesh::Mesh;
+use format::*;
+
+/// A meshlet asset, validated: every accessor below is infallible because loading
+/// refused anything inconsistent.
+#[derive(Clone, PartialEq)]
+pub struct MeshletAsset {
+    words: Vec<u32>,
+}
+
+impl std::fmt::Debug for MeshletAsset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MeshletAsset")
+            .field("header", self.header())
+            .field("bytes", &self.bytes().len())
+            .finish()
+    }
+}
+
+/// One meshlet decoded back to floats, for tests, tools and CPU references.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecodedMeshlet {
+    pub positions: Vec<Vec3>,
+    /// Grid coordinates: exact, so equal positions compare equal across meshlets.
+    pub grid: Vec<[u32; 3]>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<[f32; 2]>,
+    pub triangles: Vec<[u8; 3]>,
+}
+
+impl MeshletAsset {
+    /// Quantises and packs a DAG of `mesh` (the cleaned mesh it was built from).
+    pub fn from_dag(mesh: &Mesh, dag: &Dag, position_bits: u32, dropped_degenerate: usize) -> Self {
+        let (min, max) = mesh.bounds();
+        let quant = Quantization::new(min, max, position_bits);
+        let uvq = UvQuantization::new(&mesh.uvs);
+        let has_uvs = mesh.has_uvs();
+        let grid: Vec<[u32; 3]> = mesh.positions.par_iter().map(|&p| quant.quantize(p)).collect();
+        let pad = quant.max_error();
+
+        let encoded: Vec<(MeshletRecord, Vec<u32>)> = dag
+            .clusters
+            .par_iter()
+            .map(|c| {
+                // Local vertices in order of first use, which meshoptimizer already
+                // arranged for locality.
+                let mut locals: Vec<u32> = Vec::with_capacity(c.indices.len());
+                let mut slot = std::collections::HashMap::with_capacity(c.indices.len());
+                let local_index: Vec<u8> = c
+                    .indices
+                    .iter()
+                    .map(|&g| {
+                        *slot.entry(g).or_insert_with(|| {
+                            locals.push(g);
+                            (locals.len() - 1) as u8
+                        })
+                    })
+                    .collect();
+                let lo = locals.iter().fold([u32::MAX; 3], |m, &v| {
+                    let q = grid[v as usize];
+                    [m[0].min(q[0]), m[1].min(q[1]), m[2].min(q[2])]
+                });
+                let hi = locals.iter().fold([0u32; 3], |m, &v| {
+                    let q = grid[v as usize];
+                    [m[0].max(q[0]), m[1].max(q[1]), m[2].max(q[2])]
+                });
+                let bits = [0, 1, 2].map(|k| bits_for(hi[k] - lo[k]));
+                let mut data = Vec::new();
+                let mut w = BitWriter::new(&mut data);
+                for &v in &locals {
+                    let q = grid[v as usize];
+                    for k in 0..3 {
+                        w.put(q[k] - lo[k], bits[k]);
+                    }
+                }
+                data.extend(locals.iter().map(|&v| encode_normal(mesh.normals[v as usize])));
+                if has_uvs {
+                    data.extend(locals.iter().map(|&v| uvq.encode(mesh.uvs[v as usize])));
+                }
+                let mut index_bytes = local_index;
+                index_bytes.resize(index_bytes.len().div_ceil(4) * 4, 0);
+                data.extend(index_bytes.chunks_exact(4).map(|b| u32::from_le_bytes(b.try_into().unwrap())));
+                let sphere4 = |c: Vec3, r: f32| [c.x, c.y, c.z, r];
+                let record = MeshletRecord {
+                    bounds: sphere4(c.bounds.0, c.bounds.1 + pad),
+                    lod_sphere: sphere4(c.lod.center, c.lod.radius),
+                    parent_sphere: sphere4(c.parent.center, c.parent.radius),
+                    lod_error: c.lod.error,
+                    parent_error: if c.parent.error.is_finite() { c.parent.error } else { f32::MAX },
+                    data_offset: 0,
+                    counts: locals.len() as u32
+                        | ((c.triangle_count() as u32) << 8)
+                        | (c.level.min(255) << 16),
+                    grid_min: lo,
+                    bits: bits[0] | (bits[1] << 8) | (bits[2] << 16),
+                };
+                (record, data)
+            })
+            .collect();
+
+        let mut meshlets = Vec::with_capacity(encoded.len());
+        let mut payload = Vec::new();
+        for (mut record, data) in encoded {
+            record.data_offset = payload.len() as u32;
+            payload.extend_from_slice(&data);
+            meshlets.push(record);
+        }
+        let mut children = Vec::new();
+        let groups: Vec<GroupRecord> = dag
+            .groups
+            .iter()
+            .map(|g| {
+                let first_child = children.len() as u32;
+                children.extend_from_slice(&g.children);
+                GroupRecord {
+                    lod_sphere: [g.lod.center.x, g.lod.center.y, g.lod.center.z, g.lod.radius],
+                    error: g.lod.error,
+                    level: g.level,
+                    first_child,
+                    child_count: g.children.len() as u32,
+                }
+            })
+            .collect();
+
+        let mut header = <AssetHeader as bytemuck::Zeroable>::zeroed();
+        header.magic = MAGIC;
+        header.version = VERSION;
+        header.flags = if has_uvs { FLAG_UVS } else { 0 };
+        header.meshlet_count = meshlets.len() as u32;
+        header.group_count = groups.len() as u32;
+        header.level_count = dag.level_count;
+        header.root_count = dag.roots().count() as u32;
+        let lod0 = dag.clusters.iter().filter(|c| c.level == 0);
+        header.lod0_meshlets = lod0.clone().count() as u32;
+        header.lod0_triangles = lod0.map(|c| c.triangle_count() as u32).sum();
+        header.total_triangles = meshlets.iter().map(|m| m.triangle_count()).sum();
+        header.total_vertices = meshlets.iter().map(|m| m.vertex_count()).sum();
+        header.input_vertices = mesh.positions.len() as u32;
+        header.dropped_degenerate = dropped_degenerate as u32;
+        header.bounds_min = min.to_array();
+        header.bounds_max = max.to_array();
+        header.quant_origin = quant.origin.to_array();
+        header.quant_step = quant.step;
+        header.quant_bits = quant.bits;
+        header.uv_min = uvq.min;
+        header.uv_step = uvq.step;
+
+        let mut words: Vec<u32> = vec![0; AssetHeader::WORDS];
+        let push = |words: &mut Vec<u32>, data: &[u32]| {
+            let s = Section {
+                offset: words.len() as u32,
+                words: data.len() as u32,
+            };
+            words.extend_from_slice(data);
+            s
+        };
+        header.sections[SECTION_MESHLETS] = push(&mut words, bytemuck::cast_slice(&meshlets));
+        header.sections[SECTION_GROUPS] = push(&mut words, bytemuck::cast_slice(&groups));
+        header.sections[SECTION_CHILDREN] = push(&mut words, &children);
+        header.sections[SECTION_PAYLOAD] = push(&mut words, &payload);
+        let size = words.len() as u64 * 4;
+        header.file_size = [size as u32, (size >> 32) as u32];
+        let sum = checksum::checksum(&words[AssetHeader::WORDS..]);
+        header.checksum = [sum as u32, (sum >> 32) as u32];
+        words[..AssetHeader::WORDS].copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(&header)));
+        Self { words }
+    }
+
+    /// Reads and validates an asset file. Any inconsistency is an error; nothing of a
+    /// bad file is ever returned.
+    pub fn load(path: &Path) -> Result<Self, SceneError> {
+        let mut file = std::fs::File::open(path).map_err(|e| SceneError::io(path, e))?;
+        let len = file.metadata().map_err(|e| SceneError::io(path, e))?.len();
+        let header_bytes = (AssetHeader::WORDS * 4) as u64;
+        if len < header_bytes {
+            // Too short for a header: still say "wrong magic" when the start is not ours.
+            let mut start = vec![0u8; len as usize];
+            file.read_exact(&mut start).map_err(|e| SceneError::io(path, e))?;
+            if !MAGIC.starts_with(&start[..start.len().min(8)]) {
+                return Err(SceneError::AssetMagic { path: path.to_owned() });
+            }
+            return Err(SceneError::AssetTruncated {
+                path: path.to_owned(),
+                expected: header_bytes,
+                actual: len,
+            });
+        }
+        // Read into u32 words so every section is 4-byte aligned for the casts.
+        let mut words = vec![0u32; len.div_ceil(4) as usize];
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut words);
+        file.read_exact(&mut bytes[..len as usize])
+            .map_err(|e| SceneError::io(path, e))?;
+        Self::from_words(words, len, path)
+    }
+
+    /// Validates a word buffer holding `len` bytes of an asset file.
+    pub fn from_words(words: Vec<u32>, len: u64, path: &Path) -> Result<Self, SceneError> {
+        let p = || path.to_owned();
+        let corrupt = |reason: String| SceneError::AssetCorrupt { path: p(), reason };
+        let header_words = AssetHeader::WORDS;
+        if (words.len() as u64) < header_words as u64 || len < (header_words * 4) as u64 {
+            return Err(SceneError::AssetTruncated {
+                path: p(),
+                expected: (header_words * 4) as u64,
+                actual: len,
+            });
+        }
+        let header: AssetHeader = *bytemuck::from_bytes(bytemuck::cast_slice(&words[..header_words]));
+        if header.magic != MAGIC {
+            return Err(SceneError::AssetMagic { path: p() });
+        }
+        if header.version != VERSION {
+            return Err(SceneError::AssetVersion {
+                path: p(),
+                found: header.version,
+                expected: VERSION,
+            });
+        }
+        let size = header.file_size[0] as u64 | ((header.file_size[1] as u64) << 32);
+        if len < size {
+            return Err(SceneError::AssetTruncated {
+                path: p(),
+                expected: size,
+                actual: len,
+            });
+        }
+        if len != size || size % 4 != 0 {
+            return Err(corrupt(format!("{len} bytes where the header says {size}")));
+        }
+        let stored = header.checksum[0] as u64 | ((header.checksum[1] as u64) << 32);
+        let found = checksum::checksum(&words[header_words..]);
+        if found != stored {
+            return Err(SceneError::AssetChecksum {
+                path: p(),
+                expected: stored,
+                found,
+            });
+        }
+        let asset = Self { words };
+        asset.validate().map_err(corrupt)?;
+        Ok(asset)
+    }
+
+    /// Structural checks that the checksum cannot give: a file written by a buggy or
+    /// hostile writer with a valid checksum must still never make an accessor panic.
+    fn validate(&self) -> Result<(), String> {
+        let h = self.header();
+        let total = self.words.len() as u64;
+        let sizes = [
+            (SECTION_MESHLETS, size_of::<MeshletRecord>() / 4, h.meshlet_count, "meshlets"),
+            (SECTION_GROUPS, size_of::<GroupRecord>() / 4, h.group_count, "groups"),
+        ];
+        for (i, s) in h.sections.iter().enumerate() {
+            if s.offset < AssetHeader::WORDS as u32 || s.offset as u64 + s.words as u64 > total {
+                return Err(format!("section {i} lies outside the file"));
+            }
+        }
+        for (section, record_words, count, name) in sizes {
+            if h.sections[section].words as u64 != record_words as u64 * count as u64 {
+                return Err(format!("the {name} section does not hold {count} records"));
+            }
+        }
+        let payload = self.payload().len() as u64;
+        let has_uvs = h.has_uvs();
+        if h.quant_bits < crate::compress::MIN_POSITION_BITS || h.quant_bits > crate::compress::MAX_POSITION_BITS {
+            return Err(format!("position grid of {} bits", h.quant_bits));
+        }
+        for (i, m) in self.meshlets().iter().enumerate() {
+            let (vc, tc) = (m.vertex_count(), m.triangle_count());
+            let bits = m.axis_bits();
+            if vc == 0 || tc == 0 || vc > crate::meshlets::MAX_VERTICES as u32 || tc > crate::meshlets::MAX_TRIANGLES as u32 {
+                return Err(format!("meshlet {i} has {vc} vertices and {tc} triangles"));
+            }
+            if bits.iter().any(|&b| b > h.quant_bits) {
+                return Err(format!("meshlet {i} packs more bits than the grid has"));
+            }
+            let layout = PayloadLayout::of(m, has_uvs);
+            if m.data_offset as u64 + layout.end as u64 > payload {
+                return Err(format!("meshlet {i} data lies outside the payload"));
+            }
+            let start = (m.data_offset + layout.indices) as usize;
+            let idx: &[u8] = bytemuck::cast_slice(&self.payload()[start..start + (layout.end - layout.indices) as usize]);
+            if idx[..tc as usize * 3].iter().any(|&l| l as u32 >= vc) {
+                return Err(format!("meshlet {i} has a local index beyond its {vc} vertices"));
+            }
+        }
+        let children = self.children();
+        for (i, g) in self.groups().iter().enumerate() {
+            if g.first_child as u64 + g.child_count as u64 > children.len() as u64 {
+                return Err(format!("group {i} children lie outside their section"));
+            }
+        }
+        if children.iter().any(|&c| c >= h.meshlet_count) {
+            return Err("a group child refers to a missing meshlet".into());
+        }
+        Ok(())
+    }
+
+    pub fn save(&self, path: &Path) -> Result<(), SceneError> {
+        std::fs::write(path, self.bytes()).map_err(|source| SceneError::Write {
+            path: PathBuf::from(path),
+            source,
+        })
+    }
+
+    /// The file image.
+    pub fn bytes(&self) -> &[u8] {
+        bytemuck::cast_slice(&self.words)
+    }
+
+    pub fn header(&self) -> &AssetHeader {
+        bytemuck::from_bytes(bytemuck::cast_slice(&self.words[..AssetHeader::WORDS]))
+    }
+
+    fn section(&self, i: usize) -> &[u32] {
+        let s = self.header().sections[i];
+        &self.words[s.offset as usize..(s.offset + s.words) as usize]
+    }
+
+    pub fn meshlets(&self) -> &[MeshletRecord] {
+        bytemuck::cast_slice(self.section(SECTION_MESHLETS))
+    }
+
+    pub fn groups(&self) -> &[GroupRecord] {
+        bytemuck::cast_slice(self.section(SECTION_GROUPS))
+    }
+
+    pub fn children(&self) -> &[u32] {
+        self.section(SECTION_CHILDREN)
+    }
+
+    pub fn group_children(&self, group: &GroupRecord) -> &[u32] {
+        &self.children()[group.first_child as usize..(group.first_child + group.child_count) as usize]
+    }
+
+    /// Packed vertex and index words, addressed by [`MeshletRecord::data_offset`].
+    pub fn payload(&self) -> &[u32] {
+        self.section(SECTION_PAYLOAD)
+    }
+
+    pub fn quantization(&self) -> Quantization {
+        let h = self.header();
+        Quantization {
+            origin: Vec3::from(h.quant_origin),
+            step: h.quant_step,
+            bits: h.quant_bits,
+        }
+    }
+
+    /// Decodes one meshlet (as the GPU would).
+    pub fn decode_meshlet(&self, index: usize) -> DecodedMeshlet {
+        let h = self.header();
+        let m = &self.meshlets()[index];
+        let layout = PayloadLayout::of(m, h.has_uvs());
+        let data = &self.payload()[m.data_offset as usize..(m.data_offset + layout.end) as usize];
+        let vc = m.vertex_count() as usize;
+        let bits = m.axis_bits();
+        let stride = (bits[0] + bits[1] + bits[2]) as usize;
+        let quant = self.quantization();
+        let grid: Vec<[u32; 3]> = (0..vc)
+            .map(|v| {
+                let mut at = v * stride;
+                [0, 1, 2].map(|k| {
+                    // In range: validated at load.
+                    let d = get_bits(&data[..layout.normals as usize], at, bits[k]).unwrap_or(0);
+                    at += bits[k] as usize;
+                    m.grid_min[k] + d
+                })
+            })
+            .collect();
+        let uvq = UvQuantization {
+            min: h.uv_min,
+            step: h.uv_step,
+        };
+        let normals = data[layout.normals as usize..layout.uvs as usize]
+            .iter()
+            .map(|&n| decode_normal(n))
+            .collect();
+        let uvs = if h.has_uvs() {
+            data[layout.uvs as usize..layout.indices as usize]
+                .iter()
+                .map(|&u| uvq.decode(u))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let idx: &[u8] = bytemuck::cast_slice(&data[layout.indices as usize..]);
+        let triangles = idx[..m.triangle_count() as usize * 3]
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
+        DecodedMeshlet {
+            positions: grid.iter().map(|&q| quant.dequantize(q)).collect(),
+            grid,
+            normals,
+            uvs,
+            triangles,
+        }
+    }
+}

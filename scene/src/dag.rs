@@ -1,0 +1,277 @@
+//! The meshlet LOD DAG: meshlets of the input, then level after level of groups of
+//! about eight neighbouring meshlets, each simplified to half with its border locked
+//! and split into new meshlets, until a root of one to three meshlets is left.
+//!
+//! Why borders are locked: two neighbouring groups simplify independently, so only the
+//! vertices they share may never move; then any cut through the DAG (each cluster drawn
+//! when its own error is acceptable and its parent's is not) is watertight.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::bounds::{LodBounds, merge_spheres, sphere_of_points};
+use crate::error::SceneError;
+use crate::grouping::{Grouping, group_clusters};
+use crate::mesh::{Mesh, position_remap};
+use crate::meshlets::split_into_meshlets;
+use crate::simplify::simplify_group;
+
+/// Marks "none" in cluster → group links.
+pub const NO_GROUP: u32 = u32::MAX;
+
+/// One meshlet of the DAG, in the input mesh's vertex ids.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DagCluster {
+    /// Three global vertex ids per triangle.
+    pub indices: Vec<u32>,
+    /// 0 for the input's meshlets; a simplified cluster is one above the group level.
+    pub level: u32,
+    /// Sphere around the cluster's own vertices, for culling.
+    pub bounds: (Vec3, f32),
+    /// The LOD sphere and error of the group that produced this cluster (its own
+    /// sphere and zero error at level 0).
+    pub lod: LodBounds,
+    /// The LOD sphere and error of the group this cluster was simplified in; infinite
+    /// error for root clusters, which are drawn whenever nothing finer is.
+    pub parent: LodBounds,
+    /// The group this cluster is a child of, or [`NO_GROUP`] for roots.
+    pub parent_group: u32,
+    /// The group that produced this cluster, or [`NO_GROUP`] at level 0.
+    pub source_group: u32,
+}
+
+impl DagCluster {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+}
+
+/// A set of clusters simplified together; its outputs are the clusters whose
+/// `source_group` is this group.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DagGroup {
+    /// The build iteration that formed the group (children may be from lower levels when
+    /// they were stuck before).
+    pub level: u32,
+    /// Encloses every child's LOD sphere; error = max(own simplification, children).
+    pub lod: LodBounds,
+    /// Error of this group's simplification alone.
+    pub simplify_error: f32,
+    pub children: Vec<u32>,
+}
+
+/// The whole hierarchy for one mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dag {
+    pub clusters: Vec<DagCluster>,
+    pub groups: Vec<DagGroup>,
+    /// Number of cluster levels (max level + 1).
+    pub level_count: u32,
+}
+
+/// How to build the DAG.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct DagOptions {
+    pub grouping: Grouping,
+}
+
+/// Reported once per finished level, for progress bars.
+#[derive(Debug, Clone, Copy)]
+pub struct LevelProgress {
+    pub level: u32,
+    /// Clusters not yet simplified (the candidates for the next level).
+    pub active_clusters: usize,
+    pub active_triangles: usize,
+}
+
+/// Builds the DAG of a cleaned mesh (see [`Mesh::clean`]).
+pub fn build_dag(
+    mesh: &Mesh,
+    options: &DagOptions,
+    progress: &mut dyn FnMut(LevelProgress),
+) -> Result<Dag, SceneError> {
+    let positions = &mesh.positions;
+    let normals = &mesh.normals;
+    let remap = position_remap(positions);
+
+    let mut clusters: Vec<DagCluster> = split_into_meshlets(positions, &mesh.indices)
+        .into_par_iter()
+        .map(|indices| {
+            let bounds = sphere_of(positions, &indices);
+            DagCluster {
+                indices,
+                level: 0,
+                bounds,
+                lod: LodBounds {
+                    center: bounds.0,
+                    radius: bounds.1,
+                    error: 0.0,
+                },
+                parent: LodBounds::ROOT_PARENT,
+                parent_group: NO_GROUP,
+                source_group: NO_GROUP,
+            }
+        })
+        .collect();
+    let mut groups: Vec<DagGroup> = Vec::new();
+    let mut active: Vec<u32> = (0..clusters.len() as u32).collect();
+    let mut level = 0u32;
+    let mut aggressive = false;
+    // Which group uses each welded vertex this level; shared ones are the borders.
+    let mut owner = vec![u32::MAX; positions.len()];
+    let mut border = vec![false; positions.len()];
+
+    while active.len() > 1 {
+        let keyed: Vec<Vec<u32>> = active
+            .iter()
+            .map(|&c| clusters[c as usize].indices.iter().map(|&v| remap[v as usize]).collect())
+            .collect();
+        let level_groups = group_clusters(options.grouping, &keyed, positions, &mesh.source)?;
+
+        owner.fill(u32::MAX);
+        border.fill(false);
+        for (g, members) in level_groups.iter().enumerate() {
+            for &m in members {
+                for &k in &keyed[m as usize] {
+                    let o = &mut owner[k as usize];
+                    if *o == u32::MAX {
+                        *o = g as u32;
+                    } else if *o != g as u32 {
+                        border[k as usize] = true;
+                    }
+                }
+            }
+        }
+
+        let results: Vec<_> = level_groups
+            .par_iter()
+            .map(|members| {
+                let indices: Vec<u32> = members
+                    .iter()
+                    .flat_map(|&m| clusters[active[m as usize] as usize].indices.iter().copied())
+                    .collect();
+                let simplified = simplify_group(
+                    positions,
+                    normals,
+                    &indices,
+                    |v| border[remap[v as usize] as usize],
+                    aggressive,
+                )?;
+                let meshlets = split_into_meshlets(positions, &simplified.indices);
+                let bounds: Vec<_> = meshlets.iter().map(|m| sphere_of(positions, m)).collect();
+                Some((simplified.error, meshlets, bounds))
+            })
+            .collect();
+
+        let mut next = Vec::with_capacity(active.len() / 2);
+        let mut progressed = false;
+        for (members, result) in level_groups.iter().zip(results) {
+            let children: Vec<u32> = members.iter().map(|&m| active[m as usize]).collect();
+            let Some((simplify_error, meshlets, bounds)) = result else {
+                // Stuck: try again next level, grouped with other neighbours.
+                next.extend(children);
+                continue;
+            };
+            progressed = true;
+            let lod = group_lod(&clusters, &children, simplify_error);
+            let id = groups.len() as u32;
+            for &c in &children {
+                let child = &mut clusters[c as usize];
+                child.parent = lod;
+                child.parent_group = id;
+            }
+            for (indices, bounds) in meshlets.into_iter().zip(bounds) {
+                next.push(clusters.len() as u32);
+                clusters.push(DagCluster {
+                    indices,
+                    level: level + 1,
+                    bounds,
+                    lod,
+                    parent: LodBounds::ROOT_PARENT,
+                    parent_group: NO_GROUP,
+                    source_group: id,
+                });
+            }
+            groups.push(DagGroup {
+                level,
+                lod,
+                simplify_error,
+                children,
+            });
+        }
+        if !progressed {
+            if aggressive {
+                log::warn!(
+                    "{}: simplification stuck with {} root clusters",
+                    mesh.source,
+                    next.len()
+                );
+                break;
+            }
+            aggressive = true;
+            continue;
+        }
+        aggressive = false;
+        active = next;
+        level += 1;
+        progress(LevelProgress {
+            level,
+            active_clusters: active.len(),
+            active_triangles: active
+                .iter()
+                .map(|&c| clusters[c as usize].triangle_count())
+                .sum(),
+        });
+    }
+    let level_count = clusters.iter().map(|c| c.level).max().unwrap_or(0) + 1;
+    Ok(Dag {
+        clusters,
+        groups,
+        level_count,
+    })
+}
+
+fn sphere_of(positions: &[Vec3], indices: &[u32]) -> (Vec3, f32) {
+    sphere_of_points(indices.iter().map(|&i| positions[i as usize]))
+}
+
+/// The group's LOD bounds: a sphere around the children's LOD spheres, so that the
+/// projected error of a parent is never below a child's from any viewpoint, and
+/// error = max(own, children), so that error never decreases toward the root.
+fn group_lod(clusters: &[DagCluster], children: &[u32], simplify_error: f32) -> LodBounds {
+    let mut sphere: Option<(Vec3, f32)> = None;
+    let mut error = simplify_error;
+    for &c in children {
+        let lod = clusters[c as usize].lod;
+        let s = (lod.center, lod.radius);
+        sphere = Some(match sphere {
+            None => s,
+            Some(acc) => merge_spheres(acc, s),
+        });
+        error = error.max(lod.error);
+    }
+    let (center, radius) = sphere.unwrap_or((Vec3::ZERO, 0.0));
+    LodBounds {
+        center,
+        radius,
+        error,
+    }
+}
+
+impl Dag {
+    /// Triangles and clusters per level, for summaries.
+    pub fn level_stats(&self) -> Vec<(usize, usize)> {
+        let mut stats = vec![(0usize, 0usize); self.level_count as usize];
+        for c in &self.clusters {
+            let s = &mut stats[c.level as usize];
+            s.0 += c.triangle_count();
+            s.1 += 1;
+        }
+        stats
+    }
+
+    /// The clusters with no parent.
+    pub fn roots(&self) -> impl Iterator<Item = &DagCluster> {
+        self.clusters.iter().filter(|c| c.parent_group == NO_GROUP)
+    }
+}

@@ -1,0 +1,140 @@
+//! The crate's one error type.
+//!
+//! Every variant names the file (or the in-memory source) and says what is wrong and,
+//! where there is something to change, what to change: the messages reach users of
+//! `meshlight bake` and `meshlight inspect` verbatim.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong between a mesh file and a loaded meshlet asset.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{path}: cannot read the file ({source}); check that the path exists and is readable")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    #[error("{path}: cannot write the file ({source}); check that the folder exists and is writable")]
+    Write {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    #[error(
+        "{path}: unsupported file type {extension:?}; give a mesh ending in .obj, .gltf, .glb or .stl"
+    )]
+    UnsupportedFormat { path: PathBuf, extension: String },
+
+    #[error("{path}: invalid OBJ: {reason}")]
+    Obj { path: PathBuf, reason: String },
+
+    #[error("{path}: invalid glTF: {reason}")]
+    Gltf { path: PathBuf, reason: String },
+
+    #[error(
+        "{path}: glTF mesh {mesh:?}, primitive {primitive} has no POSITION attribute; \
+         re-export it with vertex positions or remove the primitive"
+    )]
+    GltfMissingPosition {
+        path: PathBuf,
+        mesh: String,
+        primitive: usize,
+    },
+
+    #[error("{path}: invalid STL{}: {reason}", line.map(|l| format!(" at line {l}")).unwrap_or_default())]
+    Stl {
+        path: PathBuf,
+        line: Option<usize>,
+        reason: String,
+    },
+
+    #[error("{source_name}: the mesh has no triangles{detail}; give a mesh with at least one non-degenerate triangle")]
+    EmptyMesh { source_name: String, detail: String },
+
+    #[error(
+        "{source_name}: vertex {vertex} has a non-finite position {position:?}; \
+         fix or remove that vertex in the source mesh"
+    )]
+    NonFinitePosition {
+        source_name: String,
+        vertex: usize,
+        position: [f32; 3],
+    },
+
+    #[error(
+        "{source_name}: triangle {triangle} refers to vertex {index}, but the mesh has only \
+         {vertex_count} vertices; the index buffer is corrupt"
+    )]
+    IndexOutOfRange {
+        source_name: String,
+        triangle: usize,
+        index: u32,
+        vertex_count: usize,
+    },
+
+    #[error(
+        "{source_name}: {count} {what} exceed the asset format's limit of {limit}; \
+         split the mesh into several assets"
+    )]
+    TooLarge {
+        source_name: String,
+        what: &'static str,
+        count: u64,
+        limit: u64,
+    },
+
+    #[error("{source_name}: the attribute arrays do not match the {vertex_count} positions ({detail})")]
+    AttributeMismatch {
+        source_name: String,
+        vertex_count: usize,
+        detail: String,
+    },
+
+    #[error("invalid build option: {0}")]
+    InvalidOption(String),
+
+    #[error("{source_name}: the LOD build failed: {reason}")]
+    Build { source_name: String, reason: String },
+
+    #[error("{path}: not a meshlet asset (wrong magic bytes); bake one with `meshlight bake MESH -o {path}`")]
+    AssetMagic { path: PathBuf },
+
+    #[error(
+        "{path}: asset format version {found}, this build reads version {expected}; \
+         re-bake the asset from its source mesh"
+    )]
+    AssetVersion {
+        path: PathBuf,
+        found: u32,
+        expected: u32,
+    },
+
+    #[error("{path}: the asset is truncated ({actual} bytes, expected {expected}); re-bake or re-copy it")]
+    AssetTruncated {
+        path: PathBuf,
+        expected: u64,
+        actual: u64,
+    },
+
+    #[error("{path}: the asset is corrupt (checksum {found:#018x}, header says {expected:#018x}); re-bake or re-copy it")]
+    AssetChecksum {
+        path: PathBuf,
+        expected: u64,
+        found: u64,
+    },
+
+    #[error("{path}: the asset is corrupt: {reason}; re-bake it from its source mesh")]
+    AssetCorrupt { path: PathBuf, reason: String },
+}
+
+impl SceneError {
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Self::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,79 @@
+//! Wavefront OBJ through `tobj`, with every object of the file merged into one mesh.
+
+use std::io::BufReader;
+use std::path::Path;
+
+use glam::Vec3;
+
+use crate::error::SceneError;
+use crate::load::read_file;
+use crate::mesh::Mesh;
+
+pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
+    let bytes = read_file(path)?;
+    parse_obj(path, &bytes)
+}
+
+/// Parses OBJ text. Polygons are fan-triangulated; vertices are split where normals or
+/// texture coordinates differ (seams), which the builder sees through by position.
+pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let mut reader = BufReader::new(bytes);
+    // Materials do not matter to geometry; a missing .mtl must not fail the load.
+    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| SceneError::Obj {
+        path: path.to_owned(),
+        reason: describe(e),
+    })?;
+
+    let mut mesh = Mesh {
+        source: path.display().to_string(),
+        ..Mesh::default()
+    };
+    let all_normals = models
+        .iter()
+        .all(|m| m.mesh.normals.len() == m.mesh.positions.len());
+    let all_uvs = models
+        .iter()
+        .all(|m| m.mesh.texcoords.len() / 2 == m.mesh.positions.len() / 3)
+        && models.iter().any(|m| !m.mesh.texcoords.is_empty());
+    for model in &models {
+        let m = &model.mesh;
+        let base = mesh.positions.len() as u32;
+        mesh.positions
+            .extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        if all_normals {
+            mesh.normals
+                .extend(m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])));
+        }
+        if all_uvs {
+            mesh.uvs.extend(m.texcoords.chunks_exact(2).map(|t| [t[0], t[1]]));
+        }
+        mesh.indices.extend(m.indices.iter().map(|&i| i + base));
+    }
+    Ok(mesh)
+}
+
+fn describe(e: tobj::LoadError) -> String {
+    use tobj::LoadError as E;
+    match e {
+        E::PositionParseError => "a `v` line has a malformed coordinate; each needs 3 numbers".into(),
+        E::NormalParseError => "a `vn` line has a malformed coordinate; each needs 3 numbers".into(),
+        E::TexcoordParseError => "a `vt` line has a malformed coordinate".into(),
+        E::FaceParseError => "an `f` line is malformed; faces list 3 or more vertex indices".into(),
+        E::InvalidPolygon => "a face has fewer than 3 vertices".into(),
+        E::FaceVertexOutOfBounds => {
+            "a face refers to a vertex index beyond the `v` lines of the file; the file is truncated or corrupt".into()
+        }
+        E::FaceTexCoordOutOfBounds => "a face refers to a texture coordinate that does not exist".into(),
+        E::FaceNormalOutOfBounds => "a face refers to a normal that does not exist".into(),
+        other => other.to_string(),
+    }
+}

@@ -1,0 +1,196 @@
+//! The in-memory triangle mesh every loader produces and the builder consumes, and the
+//! checks that turn untrusted input into a mesh the builder can rely on.
+
+use glam::Vec3;
+
+use crate::error::SceneError;
+
+/// Most triangles one asset may hold. The payload is addressed with 32-bit word offsets
+/// and the whole DAG holds about twice the input triangles at a few words each, so
+/// 2^25 input triangles keeps every offset far inside `u32` with room for bad cases.
+pub const MAX_TRIANGLES: u64 = 1 << 25;
+/// Most vertices one input mesh may hold (same reasoning as [`MAX_TRIANGLES`]).
+pub const MAX_VERTICES: u64 = 1 << 26;
+
+/// An indexed triangle mesh with per-vertex normals and optional texture coordinates.
+///
+/// Vertices on UV seams or hard edges appear several times with the same position; the
+/// builder treats such copies as one point for adjacency, so seams never split groups.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Mesh {
+    /// Where the mesh came from (a file path or a generator name), quoted in errors.
+    pub source: String,
+    pub positions: Vec<Vec3>,
+    /// Unit normals, one per position.
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates, one per position, or empty when the source has none.
+    pub uvs: Vec<[f32; 2]>,
+    /// Three indices per triangle, counter-clockwise front faces.
+    pub indices: Vec<u32>,
+}
+
+/// What [`Mesh::clean`] removed, for the bake summary.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CleanReport {
+    /// Triangles that repeated a vertex or had zero area; dropped before building.
+    pub dropped_degenerate: usize,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    pub fn has_uvs(&self) -> bool {
+        !self.uvs.is_empty()
+    }
+
+    /// Refuses counts beyond the asset format's limits before any large allocation.
+    pub fn check_limits(source: &str, vertices: u64, triangles: u64) -> Result<(), SceneError> {
+        if triangles > MAX_TRIANGLES {
+            return Err(SceneError::TooLarge {
+                source_name: source.to_owned(),
+                what: "triangles",
+                count: triangles,
+                limit: MAX_TRIANGLES,
+            });
+        }
+        if vertices > MAX_VERTICES {
+            return Err(SceneError::TooLarge {
+                source_name: source.to_owned(),
+                what: "vertices",
+                count: vertices,
+                limit: MAX_VERTICES,
+            });
+        }
+        Ok(())
+    }
+
+    /// Validates the mesh and drops degenerate triangles, so that the builder only ever
+    /// sees finite positions, in-range indices and triangles with area.
+    ///
+    /// Errors: empty mesh, non-finite position, index out of range, attribute arrays of
+    /// the wrong length, counts beyond the format's limits.
+    pub fn clean(&mut self) -> Result<CleanReport, SceneError> {
+        let n = self.positions.len();
+        if !self.indices.len().is_multiple_of(3) {
+            return Err(SceneError::AttributeMismatch {
+                source_name: self.source.clone(),
+                vertex_count: n,
+                detail: format!("{} indices is not a whole number of triangles", self.indices.len()),
+            });
+        }
+        Self::check_limits(&self.source, n as u64, self.triangle_count() as u64)?;
+        if self.normals.len() != n && !self.normals.is_empty() {
+            return Err(SceneError::AttributeMismatch {
+                source_name: self.source.clone(),
+                vertex_count: n,
+                detail: format!("{} normals", self.normals.len()),
+            });
+        }
+        if self.uvs.len() != n && !self.uvs.is_empty() {
+            return Err(SceneError::AttributeMismatch {
+                source_name: self.source.clone(),
+                vertex_count: n,
+                detail: format!("{} texture coordinates", self.uvs.len()),
+            });
+        }
+        if let Some(vertex) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(SceneError::NonFinitePosition {
+                source_name: self.source.clone(),
+                vertex,
+                position: self.positions[vertex].to_array(),
+            });
+        }
+        for (i, &index) in self.indices.iter().enumerate() {
+            if index as usize >= n {
+                return Err(SceneError::IndexOutOfRange {
+                    source_name: self.source.clone(),
+                    triangle: i / 3,
+                    index,
+                    vertex_count: n,
+                });
+            }
+        }
+        let before = self.triangle_count();
+        let positions = &self.positions;
+        let mut kept = Vec::with_capacity(self.indices.len());
+        for t in self.indices.chunks_exact(3) {
+            let (a, b, c) = (t[0], t[1], t[2]);
+            if a == b || b == c || a == c {
+                continue;
+            }
+            let (pa, pb, pc) = (positions[a as usize], positions[b as usize], positions[c as usize]);
+            // Exact zero area: repeated positions or collinear points. A relative threshold
+            // would drop legitimate slivers of dense scans.
+            if (pb - pa).cross(pc - pa) == Vec3::ZERO {
+                continue;
+            }
+            kept.extend_from_slice(t);
+        }
+        self.indices = kept;
+        let report = CleanReport {
+            dropped_degenerate: before - self.triangle_count(),
+        };
+        if self.indices.is_empty() {
+            let detail = if before == 0 {
+                String::new()
+            } else {
+                format!(" left after dropping {before} degenerate ones")
+            };
+            return Err(SceneError::EmptyMesh {
+                source_name: self.source.clone(),
+                detail,
+            });
+        }
+        if self.normals.len() != n || self.normals.iter().any(|v| !v.is_finite()) {
+            self.generate_normals();
+        } else {
+            for v in &mut self.normals {
+                *v = v.normalize_or(Vec3::Z);
+            }
+        }
+        Ok(report)
+    }
+
+    /// Area-weighted smooth normals. Copies of one position (seams) are accumulated
+    /// together so that seams stay invisible in shading.
+    pub fn generate_normals(&mut self) {
+        let remap = position_remap(&self.positions);
+        let mut acc = vec![Vec3::ZERO; self.positions.len()];
+        for t in self.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
+            // Unnormalised cross product = area weighting.
+            let n = (b - a).cross(c - a);
+            for &i in t {
+                acc[remap[i as usize] as usize] += n;
+            }
+        }
+        self.normals = (0..self.positions.len())
+            .map(|i| acc[remap[i] as usize].normalize_or(Vec3::Z))
+            .collect();
+    }
+
+    /// Axis-aligned bounds of all positions.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.positions.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        )
+    }
+}
+
+/// For every vertex, the first vertex with a bit-identical position. Deterministic,
+/// and independent of attributes so that UV seams do not break adjacency.
+pub fn position_remap(positions: &[Vec3]) -> Vec<u32> {
+    let mut map = std::collections::HashMap::with_capacity(positions.len());
+    positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            // +0.0 and -0.0 are one point.
+            let key = (*p + Vec3::ZERO).to_array().map(f32::to_bits);
+            *map.entry(key).or_insert(i as u32)
+        })
+        .collect()
+}

@@ -1,0 +1,82 @@
+//! Simplifying one group of clusters to about half its triangles without moving its
+//! border, so that neighbouring groups still meet exactly at every level.
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+use meshopt::{SimplifyOptions, SimplifyVertex};
+
+/// A group counts as simplified when it lost at least this share of its triangles;
+/// otherwise its clusters are retried at the next level with other neighbours.
+const STUCK_RATIO: f32 = 0.85;
+/// Weight of each normal component against position error. With `ErrorClamped` the
+/// attribute error cannot exceed the position error scale, so the weight only steers
+/// which collapses happen first.
+const NORMAL_WEIGHT: f32 = 0.5;
+
+/// One simplified group in the group's own (global) vertex ids.
+pub struct Simplified {
+    pub indices: Vec<u32>,
+    /// Object-space error of this simplification alone.
+    pub error: f32,
+}
+
+/// Simplifies `indices` (global vertex ids) to about half. `locked(v)` says whether a
+/// global vertex lies on the group border. Returns `None` when the group is stuck.
+///
+/// Works on a compact copy of the group's vertices: meshoptimizer's cost is per vertex
+/// of the buffer it is given, and a group is a tiny part of the mesh.
+pub fn simplify_group(
+    positions: &[Vec3],
+    normals: &[Vec3],
+    indices: &[u32],
+    locked: impl Fn(u32) -> bool,
+    aggressive: bool,
+) -> Option<Simplified> {
+    let mut local_of: HashMap<u32, u32> = HashMap::with_capacity(indices.len() / 2);
+    let mut globals: Vec<u32> = Vec::with_capacity(indices.len() / 2);
+    let local: Vec<u32> = indices
+        .iter()
+        .map(|&g| {
+            *local_of.entry(g).or_insert_with(|| {
+                globals.push(g);
+                (globals.len() - 1) as u32
+            })
+        })
+        .collect();
+    let pos: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
+    let attrs: Vec<Vec3> = globals.iter().map(|&g| normals[g as usize]).collect();
+    let locks: Vec<SimplifyVertex> = globals
+        .iter()
+        .map(|&g| if locked(g) { SimplifyVertex::Lock } else { SimplifyVertex::None })
+        .collect();
+    let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&pos), 12, 0)
+        .expect("Vec3 is 12 bytes");
+    let triangles = indices.len() / 3;
+    let target = (triangles / 2).max(1) * 3;
+    let mut options = SimplifyOptions::ErrorAbsolute | SimplifyOptions::ErrorClamped;
+    if aggressive {
+        // Last resort for groups that stay stuck: let disconnected pieces vanish.
+        options |= SimplifyOptions::Prune;
+    }
+    let mut error = 0.0f32;
+    let out = meshopt::simplify_with_attributes_and_locks(
+        &local,
+        &adapter,
+        bytemuck::cast_slice(&attrs),
+        &[NORMAL_WEIGHT; 3],
+        12,
+        &locks,
+        target,
+        f32::MAX,
+        options,
+        Some(&mut error),
+    );
+    if out.is_empty() || out.len() / 3 > (triangles as f32 * STUCK_RATIO) as usize {
+        return None;
+    }
+    Some(Simplified {
+        indices: out.iter().map(|&l| globals[l as usize]).collect(),
+        error,
+    })
+}
