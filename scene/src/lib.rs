@@ -7,6 +7,7 @@
 
 pub mod asset;
 pub mod bounds;
+pub mod cli;
 pub mod compress;
 pub mod dag;
 pub mod error;

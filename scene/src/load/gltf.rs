@@ -15,6 +15,23 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
         path: path.to_owned(),
         reason,
     };
+    // The validator reports a primitive without POSITION as generic "missing data"; look
+    // for that case first so the error can name the mesh and primitive.
+    if let Ok(raw) = gltf::Gltf::from_slice_without_validation(&bytes) {
+        // The raw JSON, not the accessor API: unvalidated indices may be out of range.
+        let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+        for (mi, m) in raw.document.as_json().meshes.iter().enumerate() {
+            for (pi, p) in m.primitives.iter().enumerate() {
+                if !p.attributes.contains_key(&position) {
+                    return Err(SceneError::GltfMissingPosition {
+                        path: path.to_owned(),
+                        mesh: m.name.clone().unwrap_or_else(|| format!("#{mi}")),
+                        primitive: pi,
+                    });
+                }
+            }
+        }
+    }
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| err(e.to_string()))?;
     let base = path.parent();
     let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())

@@ -1,0 +1,218 @@
+//! `meshlight bake` and `meshlight inspect`: argument structs for the facade's clap
+//! parser and the functions that run them and print their summaries.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::asset::MeshletAsset;
+use crate::compress::DEFAULT_POSITION_BITS;
+use crate::error::SceneError;
+use crate::grouping::Grouping;
+use crate::load::load_mesh;
+use crate::mesh::Mesh;
+use crate::pipeline::{BuildOptions, Built, build_asset};
+use crate::procedural::{DEFAULT_SEGMENTS, procedural_mesh};
+use crate::verify::{expected_levels, level_stats, verify};
+
+/// Input name that selects the built-in procedural mesh instead of a file.
+pub const PROCEDURAL_INPUT: &str = "procedural";
+
+/// Build a meshlet LOD asset from a mesh file.
+#[derive(clap::Args, Debug, Clone)]
+pub struct BakeArgs {
+    /// Mesh to bake: .obj, .gltf, .glb or .stl; `procedural` for the built-in torus knot.
+    pub input: PathBuf,
+    /// Asset file to write (conventionally *.mlasset).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// How meshlets are grouped for simplification.
+    #[arg(long, value_enum, default_value_t = Grouping::Metis)]
+    pub grouping: Grouping,
+    /// Bits per axis of the mesh-wide position grid (4 to 24).
+    #[arg(long, default_value_t = DEFAULT_POSITION_BITS,
+          value_parser = clap::value_parser!(u32).range(4..=24))]
+    pub position_bits: u32,
+    /// Tube segments of the procedural mesh (16 × segments² triangles).
+    #[arg(long, default_value_t = DEFAULT_SEGMENTS,
+          value_parser = clap::value_parser!(u32).range(3..=1024))]
+    pub segments: u32,
+}
+
+/// Print an asset's header and DAG statistics and verify its invariants.
+#[derive(clap::Args, Debug, Clone)]
+pub struct InspectArgs {
+    /// Asset file written by `meshlight bake`.
+    pub file: PathBuf,
+}
+
+/// Loads the input (or generates the procedural mesh), builds, saves and prints the
+/// bake summary.
+pub fn run_bake(args: &BakeArgs) -> Result<(), SceneError> {
+    let load_start = Instant::now();
+    let mesh = load_input(&args.input, args.segments)?;
+    let load_time = load_start.elapsed();
+
+    let bar = indicatif::ProgressBar::new(mesh.triangle_count() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} building LOD DAG [{bar:30}] {msg} ({elapsed})",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    // Short builds finish before a bar would help; indicatif hides it off a terminal.
+    if mesh.triangle_count() < 200_000 {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let input_triangles = mesh.triangle_count() as u64;
+    let built = build_asset(
+        &mesh,
+        &BuildOptions {
+            grouping: args.grouping,
+            position_bits: args.position_bits,
+        },
+        &mut |p| {
+            // Triangles left shrink by about half per level; show progress toward zero.
+            bar.set_position(input_triangles.saturating_sub(p.active_triangles as u64));
+            bar.set_message(format!(
+                "level {}: {} clusters, {} triangles left",
+                p.level, p.active_clusters, p.active_triangles
+            ));
+        },
+    )?;
+    bar.finish_and_clear();
+    built.asset.save(&args.output)?;
+    print!("{}", bake_summary(&args.input, &args.output, &built, load_time.as_secs_f64()));
+    Ok(())
+}
+
+fn load_input(input: &Path, segments: u32) -> Result<Mesh, SceneError> {
+    if input.as_os_str() == PROCEDURAL_INPUT && !input.exists() {
+        return Ok(procedural_mesh(segments));
+    }
+    load_mesh(input)
+}
+
+/// The text `meshlight bake` prints.
+pub fn bake_summary(input: &Path, output: &Path, built: &Built, load_seconds: f64) -> String {
+    let h = built.asset.header();
+    let mut s = String::new();
+    let _ = writeln!(s, "baked {} -> {}", input.display(), output.display());
+    let _ = writeln!(
+        s,
+        "  input: {} triangles, {} vertices; {} degenerate triangles dropped",
+        built.mesh.triangle_count(),
+        built.mesh.positions.len(),
+        built.clean.dropped_degenerate
+    );
+    s += &dag_table(&built.asset);
+    let seconds = built.total_time.as_secs_f64();
+    let _ = writeln!(
+        s,
+        "  build time: {:.3} s ({:.3} s DAG, {:.3} s loading before), {:.0} input triangles/s",
+        seconds,
+        built.dag_time.as_secs_f64(),
+        load_seconds,
+        h.lod0_triangles as f64 / seconds
+    );
+    s
+}
+
+/// Loads an asset (which validates magic, version, size, checksum and structure),
+/// prints its header and statistics, and verifies the DAG invariants.
+pub fn run_inspect(args: &InspectArgs) -> Result<(), SceneError> {
+    let asset = MeshletAsset::load(&args.file)?;
+    print!("{}", inspect_summary(&args.file, &asset));
+    let problems = verify(&asset);
+    if problems.is_empty() {
+        println!("  invariants: all hold");
+        Ok(())
+    } else {
+        for p in &problems {
+            println!("  violated: {p}");
+        }
+        Err(SceneError::AssetCorrupt {
+            path: args.file.clone(),
+            reason: format!("{} DAG invariant violations, first: {}", problems.len(), problems[0]),
+        })
+    }
+}
+
+/// The header and DAG statistics `meshlight inspect` prints.
+pub fn inspect_summary(path: &Path, asset: &MeshletAsset) -> String {
+    let h = asset.header();
+    let mut s = String::new();
+    let _ = writeln!(s, "{}: meshlet asset version {}", path.display(), h.version);
+    let _ = writeln!(
+        s,
+        "  {} bytes, checksum {:#018x}, {} meshlets, {} groups, UVs: {}",
+        asset.bytes().len(),
+        h.checksum[0] as u64 | ((h.checksum[1] as u64) << 32),
+        h.meshlet_count,
+        h.group_count,
+        if h.has_uvs() { "yes" } else { "no" }
+    );
+    let _ = writeln!(
+        s,
+        "  bounds {:?} .. {:?}; position grid {} bits, step {:.3e} (max error {:.3e})",
+        h.bounds_min,
+        h.bounds_max,
+        h.quant_bits,
+        h.quant_step,
+        asset.quantization().max_error()
+    );
+    let _ = writeln!(
+        s,
+        "  source: {} vertices; {} degenerate triangles were dropped",
+        h.input_vertices, h.dropped_degenerate
+    );
+    s += &dag_table(asset);
+    s
+}
+
+fn dag_table(asset: &MeshletAsset) -> String {
+    let h = asset.header();
+    let stats = level_stats(asset);
+    let mut s = String::new();
+    let _ = writeln!(s, "  level  meshlets  triangles  fill   max error");
+    for (level, st) in stats.iter().enumerate() {
+        let max_error = asset
+            .meshlets()
+            .iter()
+            .filter(|m| m.level() as usize == level)
+            .map(|m| m.lod_error)
+            .fold(0.0f32, f32::max);
+        let _ = writeln!(
+            s,
+            "  {level:>5}  {:>8}  {:>9}  {:>5.1}  {:.3e}",
+            st.meshlets,
+            st.triangles,
+            st.triangles as f64 / st.meshlets.max(1) as f64,
+            max_error
+        );
+    }
+    let roots: Vec<_> = asset.meshlets().iter().filter(|m| m.parent_error == f32::MAX).collect();
+    let _ = writeln!(
+        s,
+        "  levels: {} (log2 of LOD-0 meshlets + 1 = {:.1}); root: {} meshlets, {} triangles",
+        h.level_count,
+        expected_levels(h.lod0_meshlets),
+        roots.len(),
+        roots.iter().map(|m| m.triangle_count()).sum::<u32>()
+    );
+    let _ = writeln!(
+        s,
+        "  meshlet fill: {:.1} triangles per meshlet overall, {:.1} at LOD 0",
+        h.total_triangles as f64 / h.meshlet_count.max(1) as f64,
+        h.lod0_triangles as f64 / h.lod0_meshlets.max(1) as f64
+    );
+    let _ = writeln!(
+        s,
+        "  size: {} bytes, {:.2} bytes per LOD-0 triangle ({} triangles in all levels)",
+        asset.bytes().len(),
+        asset.bytes().len() as f64 / h.lod0_triangles.max(1) as f64,
+        h.total_triangles
+    );
+    s
+}
