@@ -7,6 +7,8 @@ use crate::error::SceneError;
 
 /// Target clusters per group.
 pub const GROUP_SIZE: usize = 8;
+static METIS_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// METIS seed: fixed, so the same input gives the same groups.
 const METIS_SEED: i32 = 0x6d6c;
 
@@ -126,6 +128,11 @@ fn metis_parts(clusters: &[Vec<u32>], source: &str) -> Result<Vec<i32>, SceneErr
         source_name: source.to_owned(),
         reason: format!("METIS could not partition {} clusters: {e}", clusters.len()),
     };
+    // METIS keeps its random generator in process-wide statics and re-seeds it at the
+    // start of each call; two concurrent calls (two builds in one process) would
+    // interleave draws and lose determinism. One call at a time keeps same input → same
+    // groups.
+    let _serial = METIS_LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
     metis::Graph::new(1, nparts, &xadj, &adjncy)
         .map_err(|e| fail(e.to_string()))?
         .set_adjwgt(&adjwgt)

@@ -26,3 +26,14 @@ pub fn checksum(words: &[u32]) -> u64 {
     h = h.wrapping_mul(K1);
     h ^ (h >> 29)
 }
+
+/// The checksum stored in a file: the header (with its checksum field read as zero)
+/// and the body, so that damage to any byte is detected.
+pub fn file_checksum(header: &[u32], body: &[u32]) -> u64 {
+    let mut h = [0u32; super::format::AssetHeader::WORDS];
+    h.copy_from_slice(header);
+    let at = std::mem::offset_of!(super::format::AssetHeader, checksum) / 4;
+    h[at] = 0;
+    h[at + 1] = 0;
+    checksum(body) ^ checksum(&h).rotate_left(32).wrapping_mul(K1)
+}

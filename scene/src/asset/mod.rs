@@ -177,7 +177,7 @@ impl MeshletAsset {
         header.sections[SECTION_PAYLOAD] = push(&mut words, &payload);
         let size = words.len() as u64 * 4;
         header.file_size = [size as u32, (size >> 32) as u32];
-        let sum = checksum::checksum(&words[AssetHeader::WORDS..]);
+        let sum = checksum::file_checksum(bytemuck::cast_slice(std::slice::from_ref(&header)), &words[AssetHeader::WORDS..]);
         header.checksum = [sum as u32, (sum >> 32) as u32];
         words[..AssetHeader::WORDS].copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(&header)));
         Self { words }
@@ -193,7 +193,7 @@ impl MeshletAsset {
             // Too short for a header: still say "wrong magic" when the start is not ours.
             let mut start = vec![0u8; len as usize];
             file.read_exact(&mut start).map_err(|e| SceneError::io(path, e))?;
-            if !MAGIC.starts_with(&start[..start.len().min(8)]) {
+            if start.is_empty() || !MAGIC.starts_with(&start[..start.len().min(8)]) {
                 return Err(SceneError::AssetMagic { path: path.to_owned() });
             }
             return Err(SceneError::AssetTruncated {
@@ -245,7 +245,7 @@ impl MeshletAsset {
             return Err(corrupt(format!("{len} bytes where the header says {size}")));
         }
         let stored = header.checksum[0] as u64 | ((header.checksum[1] as u64) << 32);
-        let found = checksum::checksum(&words[header_words..]);
+        let found = checksum::file_checksum(&words[..header_words], &words[header_words..]);
         if found != stored {
             return Err(SceneError::AssetChecksum {
                 path: p(),

@@ -1,0 +1,204 @@
+//! Compression round trips, save/load, determinism, and refusal of damaged files.
+
+mod common;
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use meshlight_scene::asset::checksum::file_checksum;
+use meshlight_scene::asset::format::{AssetHeader, MeshletRecord, SECTION_MESHLETS, VERSION};
+use meshlight_scene::{BuildOptions, Built, MeshletAsset, SceneError, build_asset, load::load_mesh, procedural_mesh};
+use proptest::prelude::*;
+
+fn build(mesh: &meshlight_scene::Mesh) -> Built {
+    build_asset(mesh, &BuildOptions::default(), &mut |_| {}).unwrap()
+}
+
+/// Checks every decoded meshlet against the DAG cluster it came from.
+fn check_round_trip(built: &Built) {
+    let asset = &built.asset;
+    let quant = asset.quantization();
+    let step = quant.step;
+    let h = asset.header();
+    for (i, cluster) in built.dag.clusters.iter().enumerate() {
+        let d = asset.decode_meshlet(i);
+        let decoded: Vec<u32> = d.triangles.iter().flatten().map(|&l| l as u32).collect();
+        // Same corners in the same order, through the local vertex list.
+        let mut locals: Vec<u32> = Vec::new();
+        let mut slot = HashMap::new();
+        for &g in &cluster.indices {
+            slot.entry(g).or_insert_with(|| {
+                locals.push(g);
+                locals.len() as u32 - 1
+            });
+        }
+        assert_eq!(decoded, cluster.indices.iter().map(|g| slot[g]).collect::<Vec<_>>());
+        assert_eq!(d.positions.len(), locals.len());
+        for (k, &g) in locals.iter().enumerate() {
+            let p = built.mesh.positions[g as usize];
+            let e = (d.positions[k] - p).abs().max_element();
+            // Half a step, plus f32 rounding of `origin + q * step` at the mesh's magnitude.
+            let rounding = 4.0 * f32::EPSILON * (quant.origin.abs().max_element() + step * (1u32 << quant.bits) as f32);
+            assert!(e <= step * 0.5 + rounding, "meshlet {i}: position error {e} > half step {}", step * 0.5);
+            let n = built.mesh.normals[g as usize];
+            assert!((d.normals[k] - n).length() <= 1e-3, "meshlet {i}: normal {} vs {n}", d.normals[k]);
+            if h.has_uvs() {
+                let uv = built.mesh.uvs[g as usize];
+                for a in 0..2 {
+                    assert!((d.uvs[k][a] - uv[a]).abs() <= h.uv_step[a] * 0.5 + 1e-6, "meshlet {i}: uv");
+                }
+            }
+        }
+        // The culling sphere holds the decoded vertices.
+        let m = &asset.meshlets()[i];
+        let c = glam::Vec3::new(m.bounds[0], m.bounds[1], m.bounds[2]);
+        assert!(d.positions.iter().all(|p| p.distance(c) <= m.bounds[3] * (1.0 + 1e-6)));
+    }
+}
+
+#[test]
+fn compressed_vertices_decode_within_the_quantisation_step() {
+    check_round_trip(&build(&procedural_mesh(32)));
+    // With UVs and seams.
+    if let Some(path) = common::shared_mesh("spot.obj") {
+        let built = build(&load_mesh(&path).unwrap());
+        assert!(built.asset.header().has_uvs());
+        check_round_trip(&built);
+    }
+}
+
+#[test]
+fn coarser_grids_pack_fewer_bits() {
+    let mesh = procedural_mesh(24);
+    let size = |bits| {
+        build_asset(&mesh, &BuildOptions { position_bits: bits, ..Default::default() }, &mut |_| {})
+            .unwrap()
+            .asset
+            .bytes()
+            .len()
+    };
+    assert!(size(12) < size(16) && size(16) < size(20));
+}
+
+#[test]
+fn save_then_load_gives_the_same_asset() {
+    let built = build(&procedural_mesh(24));
+    let dir = common::scratch("roundtrip");
+    let path = dir.join("a.mlasset");
+    built.asset.save(&path).unwrap();
+    let loaded = MeshletAsset::load(&path).unwrap();
+    assert_eq!(loaded, built.asset);
+    assert_eq!(loaded.decode_meshlet(3), built.asset.decode_meshlet(3));
+}
+
+#[test]
+fn builds_are_byte_identical_whatever_the_thread_count() {
+    let mesh = procedural_mesh(40);
+    let on = |threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| build(&mesh).asset.bytes().to_vec())
+    };
+    let (a, b, c) = (on(1), on(2), on(3));
+    assert!(a == b && b == c, "same input must give the same bytes");
+    if let Some(path) = common::shared_mesh("beast.obj") {
+        let mesh = load_mesh(&path).unwrap();
+        assert_eq!(build(&mesh).asset.bytes(), build(&mesh).asset.bytes());
+    }
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+#[test]
+fn damaged_files_are_refused_with_typed_errors() {
+    let built = build(&procedural_mesh(12));
+    let good = built.asset.bytes().to_vec();
+    let dir = common::scratch("damaged");
+
+    let err = MeshletAsset::load(&write(&dir, "t.mlasset", &good[..good.len() - 7])).unwrap_err();
+    assert!(matches!(err, SceneError::AssetTruncated { .. }), "{err:?}");
+    let err = MeshletAsset::load(&write(&dir, "h.mlasset", &good[..40])).unwrap_err();
+    assert!(matches!(err, SceneError::AssetTruncated { .. }), "{err:?}");
+
+    let mut bad = good.clone();
+    bad[..4].copy_from_slice(b"PLY\n");
+    let err = MeshletAsset::load(&write(&dir, "m.mlasset", &bad)).unwrap_err();
+    assert!(matches!(err, SceneError::AssetMagic { .. }), "{err:?}");
+    assert!(err.to_string().contains("m.mlasset") && err.to_string().contains("meshlight bake"));
+    let err = MeshletAsset::load(&write(&dir, "e.mlasset", b"")).unwrap_err();
+    assert!(matches!(err, SceneError::AssetMagic { .. }), "{err:?}");
+
+    let mut bad = good.clone();
+    bad[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
+    let err = MeshletAsset::load(&write(&dir, "v.mlasset", &bad)).unwrap_err();
+    assert!(matches!(err, SceneError::AssetVersion { found, .. } if found == VERSION + 1), "{err:?}");
+    assert!(err.to_string().contains("re-bake"));
+
+    let mut bad = good.clone();
+    let at = bad.len() - 100;
+    bad[at] ^= 0x10;
+    let err = MeshletAsset::load(&write(&dir, "c.mlasset", &bad)).unwrap_err();
+    assert!(matches!(err, SceneError::AssetChecksum { .. }), "{err:?}");
+
+    let err = MeshletAsset::load(&dir.join("missing.mlasset")).unwrap_err();
+    assert!(matches!(err, SceneError::Io { .. }), "{err:?}");
+}
+
+/// A file with a valid checksum but inconsistent records (a buggy writer) is refused by
+/// the structural checks, so no accessor can later index out of bounds.
+#[test]
+fn structurally_broken_files_with_valid_checksums_are_refused() {
+    let built = build(&procedural_mesh(12));
+    let words: Vec<u32> = bytemuck::cast_slice(built.asset.bytes()).to_vec();
+    let header: AssetHeader = *bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
+    let first = header.sections[SECTION_MESHLETS].offset as usize;
+    let record_words = size_of::<MeshletRecord>() / 4;
+    let edits: [(&str, fn(&mut MeshletRecord)); 3] = [
+        ("data outside the payload", |m| m.data_offset = u32::MAX / 2),
+        ("more than 128 triangles", |m| m.counts = (m.counts & !0xff00) | (200 << 8)),
+        ("local index beyond its vertices", |m| m.counts = (m.counts & !0xff) | 1),
+    ];
+    for (what, edit) in edits {
+        let mut w = words.clone();
+        let rec: &mut MeshletRecord = bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut w[first..first + record_words]));
+        edit(rec);
+        let sum = file_checksum(&w[..AssetHeader::WORDS], &w[AssetHeader::WORDS..]);
+        let at = std::mem::offset_of!(AssetHeader, checksum) / 4;
+        w[at] = sum as u32;
+        w[at + 1] = (sum >> 32) as u32;
+        let len = w.len() as u64 * 4;
+        let err = MeshletAsset::from_words(w, len, Path::new("x.mlasset")).unwrap_err();
+        assert!(matches!(err, SceneError::AssetCorrupt { .. }), "{what}: {err:?}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    /// Any truncation or single-bit flip is refused, never accepted and never a panic.
+    #[test]
+    fn random_damage_is_always_refused(cut in 0usize..1 << 20, bit in 0usize..1 << 23, truncate: bool) {
+        thread_local! {
+            static GOOD: Vec<u8> = build(&procedural_mesh(6)).asset.bytes().to_vec();
+        }
+        let good = GOOD.with(|g| g.clone());
+        let mut bad = good.clone();
+        if truncate {
+            bad.truncate(cut % good.len());
+        } else {
+            let b = bit % (good.len() * 8);
+            bad[b / 8] ^= 1 << (b % 8);
+        }
+        let words: Vec<u32> = bad.chunks(4).map(|c| {
+            let mut w = [0u8; 4];
+            w[..c.len()].copy_from_slice(c);
+            u32::from_le_bytes(w)
+        }).collect();
+        prop_assert!(MeshletAsset::from_words(words, bad.len() as u64, Path::new("p")).is_err());
+    }
+}
