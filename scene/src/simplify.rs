@@ -53,30 +53,54 @@ pub fn simplify_group(
     let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&pos), 12, 0)
         .expect("Vec3 is 12 bytes");
     let triangles = indices.len() / 3;
-    let target = (triangles / 2).max(1) * 3;
     let mut options = SimplifyOptions::ErrorAbsolute | SimplifyOptions::ErrorClamped;
     if aggressive {
         // Last resort for groups that stay stuck: let disconnected pieces vanish.
         options |= SimplifyOptions::Prune;
     }
-    let mut error = 0.0f32;
-    let out = meshopt::simplify_with_attributes_and_locks(
-        &local,
-        &adapter,
-        bytemuck::cast_slice(&attrs),
-        &[NORMAL_WEIGHT; 3],
-        12,
-        &locks,
-        target,
-        f32::MAX,
-        options,
-        Some(&mut error),
-    );
-    if out.is_empty() || out.len() / 3 > (triangles as f32 * STUCK_RATIO) as usize {
-        return None;
+    // Welded ids for the manifold check: seams must not count as separate edges.
+    let weld = crate::mesh::position_remap(&pos);
+    let folds_before = overused_edges(&local, &weld);
+    // Half first; if that folds the surface onto itself (near the root of thin shapes,
+    // where opposite sides of a tube meet), a milder target that still counts as progress.
+    for target in [triangles / 2, triangles * 3 / 4] {
+        let target = target.max(1) * 3;
+        let mut error = 0.0f32;
+        let out = meshopt::simplify_with_attributes_and_locks(
+            &local,
+            &adapter,
+            bytemuck::cast_slice(&attrs),
+            &[NORMAL_WEIGHT; 3],
+            12,
+            &locks,
+            target,
+            f32::MAX,
+            options,
+            Some(&mut error),
+        );
+        if out.is_empty() || out.len() / 3 > (triangles as f32 * STUCK_RATIO) as usize {
+            return None;
+        }
+        if overused_edges(&out, &weld) > folds_before {
+            continue;
+        }
+        return Some(Simplified {
+            indices: out.iter().map(|&l| globals[l as usize]).collect(),
+            error,
+        });
     }
-    Some(Simplified {
-        indices: out.iter().map(|&l| globals[l as usize]).collect(),
-        error,
-    })
+    None
+}
+
+/// Edges (between welded vertices) used by more than two triangles: a fold or a
+/// non-manifold junction, which a watertight cut cannot contain.
+fn overused_edges(indices: &[u32], weld: &[u32]) -> usize {
+    let mut edges: Vec<u64> = indices
+        .chunks_exact(3)
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| (weld[a as usize], weld[b as usize]))
+        .map(|(a, b)| ((a.min(b) as u64) << 32) | a.max(b) as u64)
+        .collect();
+    edges.sort_unstable();
+    edges.chunk_by(|a, b| a == b).filter(|run| run.len() > 2).count()
 }
