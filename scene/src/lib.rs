@@ -6,6 +6,7 @@
 //! the whole chain; [`procedural_mesh`] is the built-in default mesh.
 
 pub mod asset;
+pub mod bench;
 pub mod bounds;
 pub mod cli;
 pub mod compress;
