@@ -79,3 +79,52 @@ fn importing_visbuffer64_without_int64_names_the_missing_capability() {
         other => panic!("expected MissingCapability, got {other:?}"),
     }
 }
+
+/// One expression per shared module; using any item makes naga_oil build and validate
+/// the whole module, so a broken function anywhere in it fails here.
+const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
+    ("meshlight::math", "math::saturate(0.5)"),
+    ("meshlight::view", "view::ndc_to_uv(vec2(0.0))"),
+    ("meshlight::octahedral", "octahedral::unpack_octahedral_normal(0u)"),
+    ("meshlight::meshlet", "meshlet::meshlet_local_index(0u, 1u)"),
+    ("meshlight::instance", "instance::instance_max_scale(instance::Instance())"),
+    ("meshlight::visbuffer", "visbuffer::visbuffer_pack(0.5, 1u, 2u)"),
+    ("meshlight::visbuffer64", "visbuffer64::visbuffer64_pack(0.5, 1u, 2u)"),
+    ("meshlight::light", "light::cluster_index(light::ClusterGrid(), vec3(0u))"),
+];
+
+#[test]
+fn each_module_composes_on_its_own() {
+    // Importing one module alone also catches a module that only worked because an
+    // earlier import brought in what it uses.
+    let mut library = ShaderLibrary::new(int64()).unwrap();
+    for module in shared_modules() {
+        let (_, expression) = ONE_USE_PER_MODULE
+            .iter()
+            .find(|(name, _)| *name == module.name)
+            .unwrap_or_else(|| panic!("add a use of {} to ONE_USE_PER_MODULE", module.name));
+        let source = format!(
+            "#import {}\n@compute @workgroup_size(1)\nfn main() {{\n    _ = {expression};\n}}\n",
+            module.name
+        );
+        let shader = PassShader {
+            name: module.name,
+            source: Box::leak(source.into_boxed_str()),
+            file_path: "generated",
+        };
+        let composed = compose(&mut library, &shader);
+        validate(module.name, &composed, module.capabilities).unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+#[test]
+fn composing_is_deterministic() {
+    // naga_oil keeps hash maps inside; two libraries (with different hash seeds) must
+    // still produce the same module, or the pipeline cache would miss.
+    let first = compose(&mut ShaderLibrary::new(Capabilities::empty()).unwrap(), &EVERY_MODULE);
+    let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
+    let second = compose(&mut library, &EVERY_MODULE);
+    let third = compose(&mut library, &EVERY_MODULE);
+    assert_eq!(format!("{first:?}"), format!("{second:?}"));
+    assert_eq!(format!("{second:?}"), format!("{third:?}"));
+}
