@@ -39,8 +39,9 @@ pub fn pack_bit_widths(bits: [u32; 3]) -> u32 {
 }
 
 /// Appends one meshlet's position deltas (q - meshlet minimum) to `stream`, bit-packed
-/// with `bits` per axis, plus one padding word that the shader's two-word reads may
-/// touch. Returns the meshlet's `position_offset`.
+/// with `bits` per axis, then padding so that the shader's two-word read of every field
+/// (even a zero-width one at the very end) stays inside the stream. Returns the
+/// meshlet's `position_offset`; the next meshlet may start right after.
 pub fn pack_positions(deltas: &[[u32; 3]], bits: [u32; 3], stream: &mut Vec<u32>) -> u32 {
     let offset = u32::try_from(stream.len()).expect("position stream beyond 2^32 words");
     let mut writer = BitWriter { stream, start: offset as usize, bit: 0 };
@@ -55,8 +56,10 @@ pub fn pack_positions(deltas: &[[u32; 3]], bits: [u32; 3], stream: &mut Vec<u32>
             writer.write(delta[axis], count);
         }
     }
-    let used = writer.bit.div_ceil(32);
-    stream.resize(offset as usize + used + 1, 0);
+    // The last field may start at bit `total` (a zero-width axis), whose two-word read
+    // touches word total / 32 + 1.
+    let total = writer.bit;
+    stream.resize(offset as usize + total / 32 + 2, 0);
     offset
 }
 

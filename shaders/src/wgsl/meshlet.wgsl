@@ -70,8 +70,8 @@ fn meshlet_position_bits(meshlet: Meshlet) -> vec3<u32> {
 
 // Where axis `axis` (0 = x, 1 = y, 2 = z) of local vertex `vertex` begins: x = index of
 // the first u32 in the position stream, y = bit within it. Read words x and x + 1 and
-// pass them to `meshlet_read_position_axis` (the stream carries one trailing padding
-// word so x + 1 is always in bounds).
+// pass them to `meshlet_read_position_axis` (`cpu::positions::pack_positions` pads each
+// meshlet's part so x + 1 is always in bounds).
 fn meshlet_position_location(meshlet: Meshlet, vertex: u32, axis: u32) -> vec2<u32> {
     let bits = meshlet_position_bits(meshlet);
     let stride = bits.x + bits.y + bits.z;
