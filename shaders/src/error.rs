@@ -16,7 +16,9 @@ pub enum ShaderError {
         message: String,
     },
     /// The pass shader does not preprocess, parse, or resolve its imports.
-    #[error("shader `{shader}` ({file}) does not compose; fix the source at the place shown:\n{message}")]
+    #[error(
+        "shader `{shader}` ({file}) does not compose; fix the source at the place shown:\n{message}"
+    )]
     Compose {
         /// The pass shader's name.
         shader: String,

@@ -92,7 +92,12 @@ impl ShaderLibrary {
             }
             added.push(module);
         }
-        Ok(Self { composer, capabilities, added, unavailable })
+        Ok(Self {
+            composer,
+            capabilities,
+            added,
+            unavailable,
+        })
     }
 
     /// The capabilities the library composes and validates under.
@@ -123,7 +128,10 @@ impl ShaderLibrary {
 
     /// The import paths of the shared modules this library offers, in the order added.
     pub fn shared_module_names(&self) -> Vec<String> {
-        self.added.iter().map(|module| module.name.to_owned()).collect()
+        self.added
+            .iter()
+            .map(|module| module.name.to_owned())
+            .collect()
     }
 
     fn naga_oil_defs(
@@ -167,9 +175,10 @@ impl ShaderLibrary {
         }
         let message = error.emit_to_string(&self.composer);
         match error.inner {
-            ComposerErrorInner::ShaderValidationError(_) => {
-                ShaderError::Validate { shader: shader.name.to_owned(), message }
-            }
+            ComposerErrorInner::ShaderValidationError(_) => ShaderError::Validate {
+                shader: shader.name.to_owned(),
+                message,
+            },
             _ => ShaderError::Compose {
                 shader: shader.name.to_owned(),
                 file: shader.file_path.to_owned(),
@@ -200,6 +209,9 @@ pub fn validate(
             for (_, label) in error.spans() {
                 message.push_str(&format!("\n  at: {label}"));
             }
-            ShaderError::Validate { shader: name.to_owned(), message }
+            ShaderError::Validate {
+                shader: name.to_owned(),
+                message,
+            }
         })
 }

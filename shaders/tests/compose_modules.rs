@@ -22,7 +22,9 @@ fn int64() -> Capabilities {
 }
 
 fn compose(library: &mut ShaderLibrary, shader: &PassShader) -> naga::Module {
-    library.compose(shader, &[]).unwrap_or_else(|error| panic!("{error}"))
+    library
+        .compose(shader, &[])
+        .unwrap_or_else(|error| panic!("{error}"))
 }
 
 #[test]
@@ -38,11 +40,21 @@ fn every_module_composes_and_validates_without_int64() {
     let module = compose(&mut library, &EVERY_MODULE);
     validate(EVERY_MODULE.name, &module, Capabilities::empty()).unwrap_or_else(|e| panic!("{e}"));
     // Each module's functions survive composition (none was silently dropped).
-    let names: Vec<&str> =
-        module.functions.iter().filter_map(|(_, f)| f.name.as_deref()).collect();
-    for needle in ["sphere_in_frustum", "octahedral_decode", "meshlet_in_lod_cut", "read_bits",
-        "instance_transform_normal", "visbuffer_pack", "cluster_aabb", "cone_intersects_sphere"]
-    {
+    let names: Vec<&str> = module
+        .functions
+        .iter()
+        .filter_map(|(_, f)| f.name.as_deref())
+        .collect();
+    for needle in [
+        "sphere_in_frustum",
+        "octahedral_decode",
+        "meshlet_in_lod_cut",
+        "read_bits",
+        "instance_transform_normal",
+        "visbuffer_pack",
+        "cluster_aabb",
+        "cone_intersects_sphere",
+    ] {
         assert!(
             names.iter().any(|name| name.starts_with(needle)),
             "{needle} missing from the composed module: {names:?}"
@@ -69,9 +81,18 @@ fn visbuffer64_module_needs_int64() {
 #[test]
 fn importing_visbuffer64_without_int64_names_the_missing_capability() {
     let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
-    assert!(!library.shared_module_names().iter().any(|n| n == "meshlight::visbuffer64"));
+    assert!(
+        !library
+            .shared_module_names()
+            .iter()
+            .any(|n| n == "meshlight::visbuffer64")
+    );
     match library.compose(&VISBUFFER64, &[]) {
-        Err(ShaderError::MissingCapability { shader, module, missing }) => {
+        Err(ShaderError::MissingCapability {
+            shader,
+            module,
+            missing,
+        }) => {
             assert_eq!(shader, "uses_visbuffer64");
             assert_eq!(module, "meshlight::visbuffer64");
             assert!(missing.contains("SHADER_INT64"), "{missing}");
@@ -85,12 +106,27 @@ fn importing_visbuffer64_without_int64_names_the_missing_capability() {
 const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
     ("meshlight::math", "math::saturate(0.5)"),
     ("meshlight::view", "view::ndc_to_uv(vec2(0.0))"),
-    ("meshlight::octahedral", "octahedral::unpack_octahedral_normal(0u)"),
+    (
+        "meshlight::octahedral",
+        "octahedral::unpack_octahedral_normal(0u)",
+    ),
     ("meshlight::meshlet", "meshlet::meshlet_local_index(0u, 1u)"),
-    ("meshlight::instance", "instance::instance_max_scale(instance::Instance())"),
-    ("meshlight::visbuffer", "visbuffer::visbuffer_pack(0.5, 1u, 2u)"),
-    ("meshlight::visbuffer64", "visbuffer64::visbuffer64_pack(0.5, 1u, 2u)"),
-    ("meshlight::light", "light::cluster_index(light::ClusterGrid(), vec3(0u))"),
+    (
+        "meshlight::instance",
+        "instance::instance_max_scale(instance::Instance())",
+    ),
+    (
+        "meshlight::visbuffer",
+        "visbuffer::visbuffer_pack(0.5, 1u, 2u)",
+    ),
+    (
+        "meshlight::visbuffer64",
+        "visbuffer64::visbuffer64_pack(0.5, 1u, 2u)",
+    ),
+    (
+        "meshlight::light",
+        "light::cluster_index(light::ClusterGrid(), vec3(0u))",
+    ),
 ];
 
 #[test]
@@ -121,7 +157,10 @@ fn each_module_composes_on_its_own() {
 fn composing_is_deterministic() {
     // naga_oil keeps hash maps inside; two libraries (with different hash seeds) must
     // still produce the same module, or the pipeline cache would miss.
-    let first = compose(&mut ShaderLibrary::new(Capabilities::empty()).unwrap(), &EVERY_MODULE);
+    let first = compose(
+        &mut ShaderLibrary::new(Capabilities::empty()).unwrap(),
+        &EVERY_MODULE,
+    );
     let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
     let second = compose(&mut library, &EVERY_MODULE);
     let third = compose(&mut library, &EVERY_MODULE);

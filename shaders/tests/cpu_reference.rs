@@ -11,7 +11,11 @@ fn unit(v: [f32; 3]) -> Option<[f32; 3]> {
 /// Angle between two vectors, via atan2 in f64 so tiny angles are not lost to acos.
 fn angle_degrees(a: [f32; 3], b: [f32; 3]) -> f32 {
     let [a, b] = [a, b].map(|v| v.map(f64::from));
-    let cross = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let cross = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
     let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
     let cos = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     sin.atan2(cos).to_degrees() as f32
@@ -88,7 +92,12 @@ fn visbuffer_layout_is_depth_then_cluster_then_triangle() {
 
 #[test]
 fn octahedral_poles_and_axes_are_exact_enough() {
-    for n in [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0]] {
+    for n in [
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+        [1.0, 0.0, 0.0],
+        [0.0, -1.0, 0.0],
+    ] {
         let back = octahedral::unpack(octahedral::pack(n));
         assert!(angle_degrees(n, back) < 1e-3, "{n:?} -> {back:?}");
     }
@@ -107,7 +116,10 @@ fn snorm16_rounds_half_up_and_clamps() {
 
 #[test]
 fn grid_decodes_shared_vertices_identically() {
-    let grid = positions::Grid { origin: [-1.5, 0.25, 3.0], step: 1.0 / 1024.0 };
+    let grid = positions::Grid {
+        origin: [-1.5, 0.25, 3.0],
+        step: 1.0 / 1024.0,
+    };
     let p = [0.123_456, 1.5, 3.75];
     let q = grid.quantize(p);
     let back = grid.dequantize(q);
@@ -130,7 +142,10 @@ fn indices_pack_four_per_word_low_byte_first() {
     assert_eq!(stream[1], u32::from_le_bytes([0, 1, 2, 2]));
     for (t, triangle) in triangles.iter().enumerate() {
         for corner in 0..3 {
-            assert_eq!(positions::read_index(&stream, offset, t as u32, corner), u32::from(triangle[corner as usize]));
+            assert_eq!(
+                positions::read_index(&stream, offset, t as u32, corner),
+                u32::from(triangle[corner as usize])
+            );
         }
     }
 }
@@ -141,7 +156,10 @@ fn read_bits_handles_straddling_and_full_words() {
     assert_eq!(positions::read_bits(words, 28, 8), 0xAF);
     assert_eq!(positions::read_bits([0x1234_5678, 0], 0, 32), 0x1234_5678);
     assert_eq!(positions::read_bits([0xFFFF_FFFF, 0], 31, 0), 0);
-    assert_eq!(positions::read_bits([0x8000_0000, 0x7FFF_FFFF], 31, 32), u32::MAX);
+    assert_eq!(
+        positions::read_bits([0x8000_0000, 0x7FFF_FFFF], 31, 32),
+        u32::MAX
+    );
 }
 
 #[test]
@@ -151,5 +169,66 @@ fn a_zero_width_axis_at_a_word_boundary_stays_in_bounds() {
     let bits = [32, 0, 0];
     let mut stream = Vec::new();
     let offset = positions::pack_positions(&[[7, 0, 0], [9, 0, 0]], bits, &mut stream);
-    assert_eq!(positions::read_position(&stream, offset, bits, 1), [9, 0, 0]);
+    assert_eq!(
+        positions::read_position(&stream, offset, bits, 1),
+        [9, 0, 0]
+    );
+}
+
+mod light {
+    use meshlight_shaders::cpu::layout::ClusterGrid;
+    use meshlight_shaders::cpu::light::*;
+
+    #[test]
+    fn slices_are_logarithmic_and_clamped() {
+        let grid = ClusterGrid::new([16, 9, 24], [1920, 1080], 0.1, 1000.0);
+        assert_eq!(grid.tile_size, [120.0, 120.0]);
+        assert_eq!(grid.cluster_count, 16 * 9 * 24);
+        assert_eq!(z_slice_of_depth(&grid, 0.01), 0);
+        assert_eq!(z_slice_of_depth(&grid, 1e6), 23);
+        // 0.1..1000 is 4 decades over 24 slices: 6 slices per decade.
+        assert_eq!(z_slice_of_depth(&grid, 1.05), 6);
+        assert_eq!(z_slice_of_depth(&grid, 9.5), 11);
+        for slice in 0..24 {
+            let (start, end) = (z_slice_start(&grid, slice), z_slice_start(&grid, slice + 1));
+            assert!(start < end);
+            let middle = (start * end).sqrt();
+            assert_eq!(
+                z_slice_of_depth(&grid, middle),
+                slice,
+                "middle of slice {slice}"
+            );
+        }
+        assert_eq!(z_slice_start(&grid, 24), 1000.0);
+        assert_eq!(cluster_index(&grid, [15, 8, 23]), grid.cluster_count - 1);
+        assert_eq!(cluster_index(&grid, [1, 0, 0]), 1);
+        assert_eq!(cluster_index(&grid, [0, 1, 0]), 16);
+    }
+
+    #[test]
+    fn sphere_and_cone_tests() {
+        assert!(sphere_intersects_aabb(
+            [2.0, 0.5, 0.5],
+            1.01,
+            [0.0; 3],
+            [1.0; 3]
+        ));
+        assert!(!sphere_intersects_aabb(
+            [2.0, 0.5, 0.5],
+            0.99,
+            [0.0; 3],
+            [1.0; 3]
+        ));
+        let (cos, sin) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
+        let cone = |center, radius| {
+            cone_intersects_sphere([0.0; 3], [0.0, 0.0, -1.0], 10.0, cos, sin, center, radius)
+        };
+        assert!(cone([0.0, 0.0, -5.0], 0.1), "on the axis");
+        assert!(!cone([0.0, 0.0, 5.0], 1.0), "behind the apex");
+        assert!(!cone([0.0, 0.0, -12.0], 1.0), "beyond the cap");
+        // At depth 5 the side is at 5 * tan(30°) ≈ 2.89; a point at x = 4 is about
+        // (4 - 2.89) * cos 30° ≈ 0.96 outside it.
+        assert!(!cone([4.0, 0.0, -5.0], 0.9));
+        assert!(cone([4.0, 0.0, -5.0], 1.0));
+    }
 }

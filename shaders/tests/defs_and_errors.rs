@@ -38,13 +38,23 @@ impl ShaderDefs for TestDefs {
 
 fn compose(defs: &TestDefs) -> naga::Module {
     let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
-    library.compose(&DEFS, &defs.shader_defs()).unwrap_or_else(|error| panic!("{error}"))
+    library
+        .compose(&DEFS, &defs.shader_defs())
+        .unwrap_or_else(|error| panic!("{error}"))
 }
 
 #[test]
 fn a_switch_selects_its_branch() {
-    let on = compose(&TestDefs { double: true, scale: 500, level: 3 });
-    let off = compose(&TestDefs { double: false, scale: 500, level: 3 });
+    let on = compose(&TestDefs {
+        double: true,
+        scale: 500,
+        level: 3,
+    });
+    let off = compose(&TestDefs {
+        double: false,
+        scale: 500,
+        level: 3,
+    });
     assert_eq!(stored_literals(&on), vec![2000, 500, 333]);
     // Bool(false) must behave as absent, although naga_oil alone would take it as defined.
     assert_eq!(stored_literals(&off), vec![1000, 500, 333]);
@@ -52,7 +62,11 @@ fn a_switch_selects_its_branch() {
 
 #[test]
 fn values_are_substituted_and_compared() {
-    let module = compose(&TestDefs { double: false, scale: 777, level: 4 });
+    let module = compose(&TestDefs {
+        double: false,
+        scale: 777,
+        level: 4,
+    });
     assert_eq!(stored_literals(&module), vec![1000, 777, 444]);
 }
 
@@ -65,9 +79,15 @@ fn the_pass_shader_macro_labels_the_file_with_the_crate() {
 #[test]
 fn a_def_given_twice_with_different_values_is_rejected() {
     let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
-    let defs = [("SCALE", ShaderDef::UInt(1)), ("LEVEL", ShaderDef::Int(3)), ("SCALE", ShaderDef::UInt(2))];
+    let defs = [
+        ("SCALE", ShaderDef::UInt(1)),
+        ("LEVEL", ShaderDef::Int(3)),
+        ("SCALE", ShaderDef::UInt(2)),
+    ];
     match library.compose(&DEFS, &defs) {
-        Err(ShaderError::Compose { shader, message, .. }) => {
+        Err(ShaderError::Compose {
+            shader, message, ..
+        }) => {
             assert_eq!(shader, "defs");
             assert!(message.contains("SCALE"), "{message}");
         }
@@ -80,7 +100,11 @@ fn a_missing_import_names_the_shader_and_the_module() {
     let shader = pass_shader!("missing_import", "wgsl/missing_import.wgsl");
     let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
     match library.compose(&shader, &[]) {
-        Err(ShaderError::Compose { shader, file, message }) => {
+        Err(ShaderError::Compose {
+            shader,
+            file,
+            message,
+        }) => {
             assert_eq!(shader, "missing_import");
             assert_eq!(file, "meshlight-shaders/wgsl/missing_import.wgsl");
             assert!(message.contains("meshlight::no_such_module"), "{message}");
@@ -97,8 +121,14 @@ fn invalid_wgsl_reports_file_and_line() {
     let ShaderError::Compose { message, .. } = &error else {
         panic!("expected a Compose error, got {error:?}");
     };
-    assert!(message.contains("meshlight-shaders/wgsl/broken.wgsl:6:"), "{message}");
-    assert!(message.contains("x = ;"), "the offending line is quoted: {message}");
+    assert!(
+        message.contains("meshlight-shaders/wgsl/broken.wgsl:6:"),
+        "{message}"
+    );
+    assert!(
+        message.contains("x = ;"),
+        "the offending line is quoted: {message}"
+    );
     // The Display form carries the same text, for `?` users.
     assert!(error.to_string().contains("broken.wgsl:6:"));
 }
@@ -116,5 +146,6 @@ fn a_module_invalid_for_the_capabilities_is_a_validation_error() {
         other => panic!("expected a Validate error, got {other:?}"),
     }
     let mut with = ShaderLibrary::new(Capabilities::SHADER_INT64).unwrap();
-    with.compose(&shader, &[]).unwrap_or_else(|error| panic!("{error}"));
+    with.compose(&shader, &[])
+        .unwrap_or_else(|error| panic!("{error}"));
 }

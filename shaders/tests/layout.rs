@@ -3,7 +3,9 @@
 
 use std::mem::{offset_of, size_of};
 
-use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject, Cluster, Instance, Meshlet, View};
+use meshlight_shaders::cpu::layout::{
+    Cluster, ClusterGrid, ClusterableObject, Instance, Meshlet, View,
+};
 use meshlight_shaders::{Capabilities, PassShader, ShaderLibrary};
 
 const STRUCTS: PassShader = PassShader {
@@ -16,7 +18,10 @@ const STRUCTS: PassShader = PassShader {
 fn wgsl_layout(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
     let decorated = |ty_name: &str| {
         // naga_oil appends a module decoration to imported names.
-        ty_name == name || ty_name.strip_prefix(name).is_some_and(|rest| rest.starts_with("X_naga_oil"))
+        ty_name == name
+            || ty_name
+                .strip_prefix(name)
+                .is_some_and(|rest| rest.starts_with("X_naga_oil"))
     };
     let ty = module
         .types
@@ -27,7 +32,10 @@ fn wgsl_layout(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {
     let naga::TypeInner::Struct { members, span } = &ty.inner else {
         panic!("{name} is not a struct");
     };
-    let members = members.iter().map(|m| (m.name.clone().unwrap(), m.offset)).collect();
+    let members = members
+        .iter()
+        .map(|m| (m.name.clone().unwrap(), m.offset))
+        .collect();
     (members, *span)
 }
 
@@ -47,25 +55,91 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         .unwrap()
         .compose(&STRUCTS, &[])
         .unwrap_or_else(|error| panic!("{error}"));
-    assert_layout!(&module, "View", View, [
-        view, projection, view_projection, inverse_view, inverse_projection,
-        inverse_view_projection, previous_view_projection, frustum, camera_position, near,
-        viewport_size, inverse_viewport_size, lod_scale, frame_index, padding,
-    ]);
-    assert_layout!(&module, "Meshlet", Meshlet, [
-        bounding_sphere, lod_sphere, parent_lod_sphere, lod_error, parent_lod_error,
-        position_offset, vertex_offset, index_offset, vertex_count, triangle_count,
-        position_bits, position_min, padding,
-    ]);
+    assert_layout!(
+        &module,
+        "View",
+        View,
+        [
+            view,
+            projection,
+            view_projection,
+            inverse_view,
+            inverse_projection,
+            inverse_view_projection,
+            previous_view_projection,
+            frustum,
+            camera_position,
+            near,
+            viewport_size,
+            inverse_viewport_size,
+            lod_scale,
+            frame_index,
+            padding,
+        ]
+    );
+    assert_layout!(
+        &module,
+        "Meshlet",
+        Meshlet,
+        [
+            bounding_sphere,
+            lod_sphere,
+            parent_lod_sphere,
+            lod_error,
+            parent_lod_error,
+            position_offset,
+            vertex_offset,
+            index_offset,
+            vertex_count,
+            triangle_count,
+            position_bits,
+            position_min,
+            padding,
+        ]
+    );
     assert_layout!(&module, "Cluster", Cluster, [instance, meshlet]);
-    assert_layout!(&module, "Instance", Instance, [
-        world_from_local, previous_world_from_local, local_from_world, position_grid,
-        material, first_meshlet, meshlet_count, padding,
-    ]);
-    assert_layout!(&module, "ClusterableObject", ClusterableObject, [
-        position_range, direction_cos_angle, color_intensity, kind, sin_angle, payload, padding,
-    ]);
-    assert_layout!(&module, "ClusterGrid", ClusterGrid, [
-        dims, cluster_count, tile_size, near, far, z_slice_scale, z_slice_bias, padding,
-    ]);
+    assert_layout!(
+        &module,
+        "Instance",
+        Instance,
+        [
+            world_from_local,
+            previous_world_from_local,
+            local_from_world,
+            position_grid,
+            material,
+            first_meshlet,
+            meshlet_count,
+            padding,
+        ]
+    );
+    assert_layout!(
+        &module,
+        "ClusterableObject",
+        ClusterableObject,
+        [
+            position_range,
+            direction_cos_angle,
+            color_intensity,
+            kind,
+            sin_angle,
+            payload,
+            padding,
+        ]
+    );
+    assert_layout!(
+        &module,
+        "ClusterGrid",
+        ClusterGrid,
+        [
+            dims,
+            cluster_count,
+            tile_size,
+            near,
+            far,
+            z_slice_scale,
+            z_slice_bias,
+            padding,
+        ]
+    );
 }

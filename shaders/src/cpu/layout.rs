@@ -119,8 +119,14 @@ impl ClusterGrid {
     /// A grid of `dims` clusters over a `viewport` of pixels, slices spaced
     /// logarithmically from `near` to `far` (both positive, `far > near`).
     pub fn new(dims: [u32; 3], viewport: [u32; 2], near: f32, far: f32) -> Self {
-        assert!(dims.iter().all(|&d| d > 0), "cluster grid dims must be non-zero: {dims:?}");
-        assert!(near > 0.0 && far > near, "cluster grid needs 0 < near < far, got {near}..{far}");
+        assert!(
+            dims.iter().all(|&d| d > 0),
+            "cluster grid dims must be non-zero: {dims:?}"
+        );
+        assert!(
+            near > 0.0 && far > near,
+            "cluster grid needs 0 < near < far, got {near}..{far}"
+        );
         let z_slice_scale = dims[2] as f32 / (far / near).log2();
         Self {
             dims,

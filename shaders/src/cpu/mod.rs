@@ -4,6 +4,7 @@
 //! against them, so each mirrors its WGSL counterpart operation for operation.
 
 pub mod layout;
+pub mod light;
 pub mod octahedral;
 pub mod positions;
 pub mod visbuffer;

@@ -20,7 +20,10 @@ pub fn encode(n: [f32; 3]) -> [f32; 2] {
     let l1 = n[0].abs() + n[1].abs() + n[2].abs();
     let p = [n[0] / l1, n[1] / l1];
     if n[2] < 0.0 {
-        [(1.0 - p[1].abs()) * sign_not_zero(p[0]), (1.0 - p[0].abs()) * sign_not_zero(p[1])]
+        [
+            (1.0 - p[1].abs()) * sign_not_zero(p[0]),
+            (1.0 - p[0].abs()) * sign_not_zero(p[1]),
+        ]
     } else {
         p
     }
@@ -44,5 +47,8 @@ pub fn pack(n: [f32; 3]) -> u32 {
 
 /// The inverse of [`pack`], up to quantisation.
 pub fn unpack(packed: u32) -> [f32; 3] {
-    decode([snorm16_to_f32(packed as u16), snorm16_to_f32((packed >> 16) as u16)])
+    decode([
+        snorm16_to_f32(packed as u16),
+        snorm16_to_f32((packed >> 16) as u16),
+    ])
 }

@@ -34,7 +34,10 @@ pub fn bits_for(max_delta: u32) -> u32 {
 
 /// Per-axis bit widths in the `Meshlet::position_bits` form: x | y << 8 | z << 16.
 pub fn pack_bit_widths(bits: [u32; 3]) -> u32 {
-    assert!(bits.iter().all(|&b| b <= 32), "a bit width above 32: {bits:?}");
+    assert!(
+        bits.iter().all(|&b| b <= 32),
+        "a bit width above 32: {bits:?}"
+    );
     bits[0] | (bits[1] << 8) | (bits[2] << 16)
 }
 
@@ -44,7 +47,11 @@ pub fn pack_bit_widths(bits: [u32; 3]) -> u32 {
 /// meshlet's `position_offset`; the next meshlet may start right after.
 pub fn pack_positions(deltas: &[[u32; 3]], bits: [u32; 3], stream: &mut Vec<u32>) -> u32 {
     let offset = u32::try_from(stream.len()).expect("position stream beyond 2^32 words");
-    let mut writer = BitWriter { stream, start: offset as usize, bit: 0 };
+    let mut writer = BitWriter {
+        stream,
+        start: offset as usize,
+        bit: 0,
+    };
     for delta in deltas {
         for axis in 0..3 {
             let count = bits[axis];
@@ -110,7 +117,12 @@ pub fn read_bits(words: [u32; 2], bit: u32, count: u32) -> u32 {
 }
 
 /// Decodes local vertex `vertex` of a meshlet exactly as the shader does.
-pub fn read_position(stream: &[u32], position_offset: u32, bits: [u32; 3], vertex: u32) -> [u32; 3] {
+pub fn read_position(
+    stream: &[u32],
+    position_offset: u32,
+    bits: [u32; 3],
+    vertex: u32,
+) -> [u32; 3] {
     let stride = bits[0] + bits[1] + bits[2];
     let mut before = 0;
     std::array::from_fn(|axis| {
@@ -137,5 +149,9 @@ pub fn pack_indices(triangles: &[[u8; 3]], stream: &mut Vec<u32>) -> u32 {
 /// Corner `corner` of triangle `triangle`, read like the shader.
 pub fn read_index(stream: &[u32], index_offset: u32, triangle: u32, corner: u32) -> u32 {
     let byte = triangle * 3 + corner;
-    extract_bits(stream[(index_offset + byte / 4) as usize], (byte % 4) * 8, 8)
+    extract_bits(
+        stream[(index_offset + byte / 4) as usize],
+        (byte % 4) * 8,
+        8,
+    )
 }

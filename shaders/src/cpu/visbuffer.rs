@@ -23,8 +23,14 @@ pub fn depth_bits(depth: f32) -> u32 {
 /// Out-of-range ids are a caller bug (they would alias other clusters), so they panic in
 /// debug builds; the triangle is masked like the shader does.
 pub fn pack(depth: f32, cluster: u32, triangle: u32) -> u64 {
-    debug_assert!(cluster < MAX_CLUSTERS, "cluster {cluster} needs more than {CLUSTER_BITS} bits");
-    debug_assert!(triangle < MAX_TRIANGLES, "triangle {triangle} needs more than {TRIANGLE_BITS} bits");
+    debug_assert!(
+        cluster < MAX_CLUSTERS,
+        "cluster {cluster} needs more than {CLUSTER_BITS} bits"
+    );
+    debug_assert!(
+        triangle < MAX_TRIANGLES,
+        "triangle {triangle} needs more than {TRIANGLE_BITS} bits"
+    );
     let payload = (cluster << TRIANGLE_BITS) | (triangle & (MAX_TRIANGLES - 1));
     (u64::from(depth_bits(depth)) << 32) | u64::from(payload)
 }
