@@ -44,6 +44,7 @@ fn check_round_trip(built: &Built) {
             assert!((d.normals[k] - n).length() <= 1e-3, "meshlet {i}: normal {} vs {n}", d.normals[k]);
             if h.has_uvs() {
                 let uv = built.mesh.uvs[g as usize];
+                #[allow(clippy::needless_range_loop)]
                 for a in 0..2 {
                     assert!((d.uvs[k][a] - uv[a]).abs() <= h.uv_step[a] * 0.5 + 1e-6, "meshlet {i}: uv");
                 }
@@ -159,7 +160,8 @@ fn structurally_broken_files_with_valid_checksums_are_refused() {
     let header: AssetHeader = *bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
     let first = header.sections[SECTION_MESHLETS].offset as usize;
     let record_words = size_of::<MeshletRecord>() / 4;
-    let edits: [(&str, fn(&mut MeshletRecord)); 3] = [
+    type Edit = (&'static str, fn(&mut MeshletRecord));
+    let edits: [Edit; 3] = [
         ("data outside the payload", |m| m.data_offset = u32::MAX / 2),
         ("more than 128 triangles", |m| m.counts = (m.counts & !0xff00) | (200 << 8)),
         ("local index beyond its vertices", |m| m.counts = (m.counts & !0xff) | 1),

@@ -122,7 +122,7 @@ fn glb_loads_from_its_binary_chunk() {
     let dir = common::scratch("glb");
     let buf = gltf_buffer();
     let mut json = gltf_json("", buf.len()).into_bytes();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut glb = Vec::new();

@@ -241,7 +241,7 @@ impl MeshletAsset {
                 actual: len,
             });
         }
-        if len != size || size % 4 != 0 {
+        if len != size || !size.is_multiple_of(4) {
             return Err(corrupt(format!("{len} bytes where the header says {size}")));
         }
         let stored = header.checksum[0] as u64 | ((header.checksum[1] as u64) << 32);

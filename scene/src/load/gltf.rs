@@ -121,7 +121,7 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
                 Some(i) => i.into_u32().collect(),
                 None => (0..count).collect(),
             };
-            if indices.len() % 3 != 0 {
+            if !indices.len().is_multiple_of(3) {
                 return Err(err(format!(
                     "mesh {mesh_name:?} primitive {pi}: {} indices is not a whole number of triangles",
                     indices.len()
