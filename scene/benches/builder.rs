@@ -7,16 +7,24 @@ use std::path::PathBuf;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use meshlight_scene::bench::{builder_scenario, format_table};
 use meshlight_scene::load::load_mesh;
-use meshlight_scene::{BuildOptions, DEFAULT_SEGMENTS, Mesh, MeshletAsset, build_asset, procedural_mesh};
+use meshlight_scene::{
+    BuildOptions, DEFAULT_SEGMENTS, Mesh, MeshletAsset, build_asset, procedural_mesh,
+};
 
 fn meshes() -> Vec<(String, Mesh)> {
     let mut out = Vec::new();
-    let bunny = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes/stanford-bunny.obj"));
+    let bunny = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/meshes/stanford-bunny.obj"
+    ));
     match load_mesh(&bunny) {
         Ok(m) => out.push(("bunny".to_owned(), m)),
         Err(e) => eprintln!("bunny not measured: {e}"),
     }
-    out.push(("procedural 1M".to_owned(), procedural_mesh(DEFAULT_SEGMENTS)));
+    out.push((
+        "procedural 1M".to_owned(),
+        procedural_mesh(DEFAULT_SEGMENTS),
+    ));
     out
 }
 
@@ -40,12 +48,16 @@ fn bench(c: &mut Criterion) {
     group.finish();
 
     let (_, mesh) = meshes.last().unwrap();
-    let asset = build_asset(mesh, &BuildOptions::default(), &mut |_| {}).unwrap().asset;
+    let asset = build_asset(mesh, &BuildOptions::default(), &mut |_| {})
+        .unwrap()
+        .asset;
     let path = scratch.join("meshlight-bench-load.mlasset");
     asset.save(&path).unwrap();
     let mut group = c.benchmark_group("load");
     group.throughput(Throughput::Bytes(asset.bytes().len() as u64));
-    group.bench_function("procedural 1M from page cache", |b| b.iter(|| MeshletAsset::load(&path).unwrap()));
+    group.bench_function("procedural 1M from page cache", |b| {
+        b.iter(|| MeshletAsset::load(&path).unwrap())
+    });
     group.finish();
     let _ = std::fs::remove_file(&path);
 }

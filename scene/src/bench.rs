@@ -40,7 +40,12 @@ impl BuilderBench {
 
 /// Runs the builder scenario `repeats` times (best time kept); the asset is written to
 /// `scratch` for the load measurement.
-pub fn builder_scenario(name: &str, mesh: &Mesh, repeats: usize, scratch: &Path) -> Result<BuilderBench, SceneError> {
+pub fn builder_scenario(
+    name: &str,
+    mesh: &Mesh,
+    repeats: usize,
+    scratch: &Path,
+) -> Result<BuilderBench, SceneError> {
     let options = BuildOptions::default();
     let mut best = f64::INFINITY;
     let mut built = None;
@@ -55,7 +60,10 @@ pub fn builder_scenario(name: &str, mesh: &Mesh, repeats: usize, scratch: &Path)
 
     let (clod_seconds, clod_levels, clod_root_clusters) = clod_baseline(&built.mesh, repeats);
 
-    let path = scratch.join(format!("{}.mlasset", name.replace(|c: char| !c.is_ascii_alphanumeric(), "_")));
+    let path = scratch.join(format!(
+        "{}.mlasset",
+        name.replace(|c: char| !c.is_ascii_alphanumeric(), "_")
+    ));
     built.asset.save(&path)?;
     let bytes = built.asset.bytes().len();
     // Warm the page cache, then take the best of several loads.

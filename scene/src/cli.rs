@@ -83,7 +83,10 @@ pub fn run_bake(args: &BakeArgs) -> Result<(), SceneError> {
     )?;
     bar.finish_and_clear();
     built.asset.save(&args.output)?;
-    print!("{}", bake_summary(&args.input, &args.output, &built, load_time.as_secs_f64()));
+    print!(
+        "{}",
+        bake_summary(&args.input, &args.output, &built, load_time.as_secs_f64())
+    );
     Ok(())
 }
 
@@ -134,7 +137,11 @@ pub fn run_inspect(args: &InspectArgs) -> Result<(), SceneError> {
         }
         Err(SceneError::AssetCorrupt {
             path: args.file.clone(),
-            reason: format!("{} DAG invariant violations, first: {}", problems.len(), problems[0]),
+            reason: format!(
+                "{} DAG invariant violations, first: {}",
+                problems.len(),
+                problems[0]
+            ),
         })
     }
 }
@@ -192,7 +199,11 @@ fn dag_table(asset: &MeshletAsset) -> String {
             max_error
         );
     }
-    let roots: Vec<_> = asset.meshlets().iter().filter(|m| m.parent_error == f32::MAX).collect();
+    let roots: Vec<_> = asset
+        .meshlets()
+        .iter()
+        .filter(|m| m.parent_error == f32::MAX)
+        .collect();
     let _ = writeln!(
         s,
         "  levels: {} (log2 of LOD-0 meshlets + 1 = {:.1}); root: {} meshlets, {} triangles",

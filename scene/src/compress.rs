@@ -169,7 +169,9 @@ impl UvQuantization {
             if self.step[k] == 0.0 {
                 0
             } else {
-                ((uv[k] - self.min[k]) / self.step[k]).round().clamp(0.0, 65535.0) as u32
+                ((uv[k] - self.min[k]) / self.step[k])
+                    .round()
+                    .clamp(0.0, 65535.0) as u32
             }
         };
         q(0) | (q(1) << 16)

@@ -124,7 +124,13 @@ pub fn build_dag(
     while active.len() > 1 {
         let keyed: Vec<Vec<u32>> = active
             .iter()
-            .map(|&c| clusters[c as usize].indices.iter().map(|&v| remap[v as usize]).collect())
+            .map(|&c| {
+                clusters[c as usize]
+                    .indices
+                    .iter()
+                    .map(|&v| remap[v as usize])
+                    .collect()
+            })
             .collect();
         let level_groups = group_clusters(options.grouping, &keyed, positions, &mesh.source)?;
 
@@ -148,7 +154,12 @@ pub fn build_dag(
             .map(|members| {
                 let indices: Vec<u32> = members
                     .iter()
-                    .flat_map(|&m| clusters[active[m as usize] as usize].indices.iter().copied())
+                    .flat_map(|&m| {
+                        clusters[active[m as usize] as usize]
+                            .indices
+                            .iter()
+                            .copied()
+                    })
                     .collect();
                 let simplified = simplify_group(
                     positions,

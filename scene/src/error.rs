@@ -16,7 +16,9 @@ pub enum SceneError {
         source: std::io::Error,
     },
 
-    #[error("{path}: cannot write the file ({source}); check that the folder exists and is writable")]
+    #[error(
+        "{path}: cannot write the file ({source}); check that the folder exists and is writable"
+    )]
     Write {
         path: PathBuf,
         #[source]
@@ -51,7 +53,9 @@ pub enum SceneError {
         reason: String,
     },
 
-    #[error("{source_name}: the mesh has no triangles{detail}; give a mesh with at least one non-degenerate triangle")]
+    #[error(
+        "{source_name}: the mesh has no triangles{detail}; give a mesh with at least one non-degenerate triangle"
+    )]
     EmptyMesh { source_name: String, detail: String },
 
     #[error(
@@ -86,7 +90,9 @@ pub enum SceneError {
         limit: u64,
     },
 
-    #[error("{source_name}: the attribute arrays do not match the {vertex_count} positions ({detail})")]
+    #[error(
+        "{source_name}: the attribute arrays do not match the {vertex_count} positions ({detail})"
+    )]
     AttributeMismatch {
         source_name: String,
         vertex_count: usize,
@@ -99,7 +105,9 @@ pub enum SceneError {
     #[error("{source_name}: the LOD build failed: {reason}")]
     Build { source_name: String, reason: String },
 
-    #[error("{path}: not a meshlet asset (wrong magic bytes); bake one with `meshlight bake MESH -o {path}`")]
+    #[error(
+        "{path}: not a meshlet asset (wrong magic bytes); bake one with `meshlight bake MESH -o {path}`"
+    )]
     AssetMagic { path: PathBuf },
 
     #[error(
@@ -112,14 +120,18 @@ pub enum SceneError {
         expected: u32,
     },
 
-    #[error("{path}: the asset is truncated ({actual} bytes, expected {expected}); re-bake or re-copy it")]
+    #[error(
+        "{path}: the asset is truncated ({actual} bytes, expected {expected}); re-bake or re-copy it"
+    )]
     AssetTruncated {
         path: PathBuf,
         expected: u64,
         actual: u64,
     },
 
-    #[error("{path}: the asset is corrupt (checksum {found:#018x}, header says {expected:#018x}); re-bake or re-copy it")]
+    #[error(
+        "{path}: the asset is corrupt (checksum {found:#018x}, header says {expected:#018x}); re-bake or re-copy it"
+    )]
     AssetChecksum {
         path: PathBuf,
         expected: u64,

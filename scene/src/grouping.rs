@@ -132,7 +132,9 @@ fn metis_parts(clusters: &[Vec<u32>], source: &str) -> Result<Vec<i32>, SceneErr
     // start of each call; two concurrent calls (two builds in one process) would
     // interleave draws and lose determinism. One call at a time keeps same input → same
     // groups.
-    let _serial = METIS_LOCK.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    let _serial = METIS_LOCK
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner());
     metis::Graph::new(1, nparts, &xadj, &adjncy)
         .map_err(|e| fail(e.to_string()))?
         .set_adjwgt(&adjwgt)

@@ -21,10 +21,10 @@ pub mod procedural;
 pub mod simplify;
 pub mod verify;
 
+pub use asset::MeshletAsset;
 pub use dag::{Dag, DagOptions, build_dag};
 pub use error::SceneError;
 pub use grouping::Grouping;
 pub use mesh::{CleanReport, Mesh};
-pub use procedural::{DEFAULT_SEGMENTS, procedural_mesh};
-pub use asset::MeshletAsset;
 pub use pipeline::{BuildOptions, Built, build_asset};
+pub use procedural::{DEFAULT_SEGMENTS, procedural_mesh};

@@ -77,7 +77,10 @@ impl Mesh {
             return Err(SceneError::AttributeMismatch {
                 source_name: self.source.clone(),
                 vertex_count: n,
-                detail: format!("{} indices is not a whole number of triangles", self.indices.len()),
+                detail: format!(
+                    "{} indices is not a whole number of triangles",
+                    self.indices.len()
+                ),
             });
         }
         Self::check_limits(&self.source, n as u64, self.triangle_count() as u64)?;
@@ -120,7 +123,11 @@ impl Mesh {
             if a == b || b == c || a == c {
                 continue;
             }
-            let (pa, pb, pc) = (positions[a as usize], positions[b as usize], positions[c as usize]);
+            let (pa, pb, pc) = (
+                positions[a as usize],
+                positions[b as usize],
+                positions[c as usize],
+            );
             // Exact zero area: repeated positions or collinear points. A relative threshold
             // would drop legitimate slivers of dense scans.
             if (pb - pa).cross(pc - pa) == Vec3::ZERO {

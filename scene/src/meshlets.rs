@@ -40,6 +40,11 @@ pub fn split_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<u32>>
     let meshlets = meshopt::build_meshlets(indices, &adapter, MAX_VERTICES, MAX_TRIANGLES, 0.0);
     meshlets
         .iter()
-        .map(|m| m.triangles.iter().map(|&t| m.vertices[t as usize]).collect())
+        .map(|m| {
+            m.triangles
+                .iter()
+                .map(|&t| m.vertices[t as usize])
+                .collect()
+        })
         .collect()
 }

@@ -70,7 +70,8 @@ pub fn build_asset(
         progress,
     )?;
     let dag_time = dag_start.elapsed();
-    let asset = MeshletAsset::from_dag(&mesh, &dag, options.position_bits, clean.dropped_degenerate);
+    let asset =
+        MeshletAsset::from_dag(&mesh, &dag, options.position_bits, clean.dropped_degenerate);
     Ok(Built {
         asset,
         dag,

@@ -48,7 +48,13 @@ pub fn simplify_group(
     let attrs: Vec<Vec3> = globals.iter().map(|&g| normals[g as usize]).collect();
     let locks: Vec<SimplifyVertex> = globals
         .iter()
-        .map(|&g| if locked(g) { SimplifyVertex::Lock } else { SimplifyVertex::None })
+        .map(|&g| {
+            if locked(g) {
+                SimplifyVertex::Lock
+            } else {
+                SimplifyVertex::None
+            }
+        })
         .collect();
     let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&pos), 12, 0)
         .expect("Vec3 is 12 bytes");
@@ -102,5 +108,8 @@ fn overused_edges(indices: &[u32], weld: &[u32]) -> usize {
         .map(|(a, b)| ((a.min(b) as u64) << 32) | a.max(b) as u64)
         .collect();
     edges.sort_unstable();
-    edges.chunk_by(|a, b| a == b).filter(|run| run.len() > 2).count()
+    edges
+        .chunk_by(|a, b| a == b)
+        .filter(|run| run.len() > 2)
+        .count()
 }

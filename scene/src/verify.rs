@@ -18,7 +18,9 @@ pub struct LevelStats {
 pub fn level_stats(asset: &MeshletAsset) -> Vec<LevelStats> {
     let mut stats = vec![LevelStats::default(); asset.header().level_count.max(1) as usize];
     for m in asset.meshlets() {
-        let Some(s) = stats.get_mut(m.level() as usize) else { continue };
+        let Some(s) = stats.get_mut(m.level() as usize) else {
+            continue;
+        };
         s.meshlets += 1;
         s.triangles += m.triangle_count() as usize;
         s.vertices += m.vertex_count() as usize;
@@ -50,10 +52,14 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
                 ));
             }
             if !contains(sphere(g.lod_sphere), sphere(child.lod_sphere)) {
-                problems.push(format!("group {gi}: LOD sphere does not contain child meshlet {c}'s"));
+                problems.push(format!(
+                    "group {gi}: LOD sphere does not contain child meshlet {c}'s"
+                ));
             }
             if child.parent_error != g.error || child.parent_sphere != g.lod_sphere {
-                problems.push(format!("meshlet {c}: parent LOD bounds differ from its group {gi}'s"));
+                problems.push(format!(
+                    "meshlet {c}: parent LOD bounds differ from its group {gi}'s"
+                ));
             }
         }
     }
@@ -67,14 +73,19 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
             (false, n) => problems.push(format!("meshlet {i} is a child of {n} groups, not one")),
         }
         if m.lod_error > m.parent_error {
-            problems.push(format!("meshlet {i}: own error {} above its parent's {}", m.lod_error, m.parent_error));
+            problems.push(format!(
+                "meshlet {i}: own error {} above its parent's {}",
+                m.lod_error, m.parent_error
+            ));
         }
         if m.level() == 0 && m.lod_error != 0.0 {
             problems.push(format!("LOD-0 meshlet {i} has error {}", m.lod_error));
         }
     }
     if !(1..=3).contains(&roots) {
-        problems.push(format!("{roots} root meshlets; the DAG should end in 1 to 3"));
+        problems.push(format!(
+            "{roots} root meshlets; the DAG should end in 1 to 3"
+        ));
     }
     if roots as u32 != h.root_count {
         problems.push(format!("header says {} roots, found {roots}", h.root_count));

@@ -7,7 +7,9 @@ use std::path::Path;
 
 use meshlight_scene::asset::checksum::file_checksum;
 use meshlight_scene::asset::format::{AssetHeader, MeshletRecord, SECTION_MESHLETS, VERSION};
-use meshlight_scene::{BuildOptions, Built, MeshletAsset, SceneError, build_asset, load::load_mesh, procedural_mesh};
+use meshlight_scene::{
+    BuildOptions, Built, MeshletAsset, SceneError, build_asset, load::load_mesh, procedural_mesh,
+};
 use proptest::prelude::*;
 
 fn build(mesh: &meshlight_scene::Mesh) -> Built {
@@ -32,28 +34,48 @@ fn check_round_trip(built: &Built) {
                 locals.len() as u32 - 1
             });
         }
-        assert_eq!(decoded, cluster.indices.iter().map(|g| slot[g]).collect::<Vec<_>>());
+        assert_eq!(
+            decoded,
+            cluster.indices.iter().map(|g| slot[g]).collect::<Vec<_>>()
+        );
         assert_eq!(d.positions.len(), locals.len());
         for (k, &g) in locals.iter().enumerate() {
             let p = built.mesh.positions[g as usize];
             let e = (d.positions[k] - p).abs().max_element();
             // Half a step, plus f32 rounding of `origin + q * step` at the mesh's magnitude.
-            let rounding = 4.0 * f32::EPSILON * (quant.origin.abs().max_element() + step * (1u32 << quant.bits) as f32);
-            assert!(e <= step * 0.5 + rounding, "meshlet {i}: position error {e} > half step {}", step * 0.5);
+            let rounding = 4.0
+                * f32::EPSILON
+                * (quant.origin.abs().max_element() + step * (1u32 << quant.bits) as f32);
+            assert!(
+                e <= step * 0.5 + rounding,
+                "meshlet {i}: position error {e} > half step {}",
+                step * 0.5
+            );
             let n = built.mesh.normals[g as usize];
-            assert!((d.normals[k] - n).length() <= 1e-3, "meshlet {i}: normal {} vs {n}", d.normals[k]);
+            assert!(
+                (d.normals[k] - n).length() <= 1e-3,
+                "meshlet {i}: normal {} vs {n}",
+                d.normals[k]
+            );
             if h.has_uvs() {
                 let uv = built.mesh.uvs[g as usize];
                 #[allow(clippy::needless_range_loop)]
                 for a in 0..2 {
-                    assert!((d.uvs[k][a] - uv[a]).abs() <= h.uv_step[a] * 0.5 + 1e-6, "meshlet {i}: uv");
+                    assert!(
+                        (d.uvs[k][a] - uv[a]).abs() <= h.uv_step[a] * 0.5 + 1e-6,
+                        "meshlet {i}: uv"
+                    );
                 }
             }
         }
         // The culling sphere holds the decoded vertices.
         let m = &asset.meshlets()[i];
         let c = glam::Vec3::new(m.bounds[0], m.bounds[1], m.bounds[2]);
-        assert!(d.positions.iter().all(|p| p.distance(c) <= m.bounds[3] * (1.0 + 1e-6)));
+        assert!(
+            d.positions
+                .iter()
+                .all(|p| p.distance(c) <= m.bounds[3] * (1.0 + 1e-6))
+        );
     }
 }
 
@@ -72,11 +94,18 @@ fn compressed_vertices_decode_within_the_quantisation_step() {
 fn coarser_grids_pack_fewer_bits() {
     let mesh = procedural_mesh(24);
     let size = |bits| {
-        build_asset(&mesh, &BuildOptions { position_bits: bits, ..Default::default() }, &mut |_| {})
-            .unwrap()
-            .asset
-            .bytes()
-            .len()
+        build_asset(
+            &mesh,
+            &BuildOptions {
+                position_bits: bits,
+                ..Default::default()
+            },
+            &mut |_| {},
+        )
+        .unwrap()
+        .asset
+        .bytes()
+        .len()
     };
     assert!(size(12) < size(16) && size(16) < size(20));
 }
@@ -138,7 +167,10 @@ fn damaged_files_are_refused_with_typed_errors() {
     let mut bad = good.clone();
     bad[8..12].copy_from_slice(&(VERSION + 1).to_le_bytes());
     let err = MeshletAsset::load(&write(&dir, "v.mlasset", &bad)).unwrap_err();
-    assert!(matches!(err, SceneError::AssetVersion { found, .. } if found == VERSION + 1), "{err:?}");
+    assert!(
+        matches!(err, SceneError::AssetVersion { found, .. } if found == VERSION + 1),
+        "{err:?}"
+    );
     assert!(err.to_string().contains("re-bake"));
 
     let mut bad = good.clone();
@@ -157,18 +189,25 @@ fn damaged_files_are_refused_with_typed_errors() {
 fn structurally_broken_files_with_valid_checksums_are_refused() {
     let built = build(&procedural_mesh(12));
     let words: Vec<u32> = bytemuck::cast_slice(built.asset.bytes()).to_vec();
-    let header: AssetHeader = *bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
+    let header: AssetHeader =
+        *bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
     let first = header.sections[SECTION_MESHLETS].offset as usize;
     let record_words = size_of::<MeshletRecord>() / 4;
     type Edit = (&'static str, fn(&mut MeshletRecord));
     let edits: [Edit; 3] = [
         ("data outside the payload", |m| m.data_offset = u32::MAX / 2),
-        ("more than 128 triangles", |m| m.counts = (m.counts & !0xff00) | (200 << 8)),
-        ("local index beyond its vertices", |m| m.counts = (m.counts & !0xff) | 1),
+        ("more than 128 triangles", |m| {
+            m.counts = (m.counts & !0xff00) | (200 << 8)
+        }),
+        ("local index beyond its vertices", |m| {
+            m.counts = (m.counts & !0xff) | 1
+        }),
     ];
     for (what, edit) in edits {
         let mut w = words.clone();
-        let rec: &mut MeshletRecord = bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut w[first..first + record_words]));
+        let rec: &mut MeshletRecord = bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
+            &mut w[first..first + record_words],
+        ));
         edit(rec);
         let sum = file_checksum(&w[..AssetHeader::WORDS], &w[AssetHeader::WORDS..]);
         let at = std::mem::offset_of!(AssetHeader, checksum) / 4;
@@ -176,7 +215,10 @@ fn structurally_broken_files_with_valid_checksums_are_refused() {
         w[at + 1] = (sum >> 32) as u32;
         let len = w.len() as u64 * 4;
         let err = MeshletAsset::from_words(w, len, Path::new("x.mlasset")).unwrap_err();
-        assert!(matches!(err, SceneError::AssetCorrupt { .. }), "{what}: {err:?}");
+        assert!(
+            matches!(err, SceneError::AssetCorrupt { .. }),
+            "{what}: {err:?}"
+        );
     }
 }
 

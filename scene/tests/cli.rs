@@ -17,7 +17,16 @@ fn bake_then_inspect_the_procedural_mesh() {
     let dir = common::scratch("cli");
     let out = dir.join("knot.mlasset");
     let cli = Cli::try_parse_from([
-        "bake", "procedural", "-o", out.to_str().unwrap(), "--segments", "12", "--grouping", "partition", "--position-bits", "14",
+        "bake",
+        "procedural",
+        "-o",
+        out.to_str().unwrap(),
+        "--segments",
+        "12",
+        "--grouping",
+        "partition",
+        "--position-bits",
+        "14",
     ])
     .unwrap();
     assert_eq!(cli.bake.grouping, Grouping::Partition);
@@ -38,16 +47,29 @@ fn bake_then_inspect_the_procedural_mesh() {
 fn bad_options_are_refused_by_the_parser() {
     assert!(Cli::try_parse_from(["bake", "m.obj", "-o", "x", "--position-bits", "40"]).is_err());
     assert!(Cli::try_parse_from(["bake", "m.obj", "-o", "x", "--grouping", "random"]).is_err());
-    assert!(Cli::try_parse_from(["bake", "m.obj"]).is_err(), "-o is required");
+    assert!(
+        Cli::try_parse_from(["bake", "m.obj"]).is_err(),
+        "-o is required"
+    );
 }
 
 #[test]
 fn bake_summary_reports_levels_fill_and_size() {
-    let Some(path) = common::shared_mesh("spot.obj") else { return };
+    let Some(path) = common::shared_mesh("spot.obj") else {
+        return;
+    };
     let mesh = meshlight_scene::load::load_mesh(&path).unwrap();
     let built = meshlight_scene::build_asset(&mesh, &Default::default(), &mut |_| {}).unwrap();
     let text = meshlight_scene::cli::bake_summary(&path, "spot.mlasset".as_ref(), &built, 0.0);
-    for needle in ["level  meshlets  triangles", "levels:", "root:", "meshlet fill", "bytes per LOD-0 triangle", "build time", "input triangles/s"] {
+    for needle in [
+        "level  meshlets  triangles",
+        "levels:",
+        "root:",
+        "meshlet fill",
+        "bytes per LOD-0 triangle",
+        "build time",
+        "input triangles/s",
+    ] {
         assert!(text.contains(needle), "missing {needle:?} in\n{text}");
     }
 }

@@ -4,10 +4,15 @@ mod common;
 
 use meshlight_scene::dag::Dag;
 use meshlight_scene::verify::{expected_levels, verify};
-use meshlight_scene::{BuildOptions, Built, Grouping, Mesh, build_asset, load::load_mesh, procedural_mesh};
+use meshlight_scene::{
+    BuildOptions, Built, Grouping, Mesh, build_asset, load::load_mesh, procedural_mesh,
+};
 
 fn build(mesh: &Mesh, grouping: Grouping) -> Built {
-    let options = BuildOptions { grouping, ..BuildOptions::default() };
+    let options = BuildOptions {
+        grouping,
+        ..BuildOptions::default()
+    };
     build_asset(mesh, &options, &mut |_| {}).unwrap()
 }
 
@@ -26,7 +31,11 @@ fn canonical(indices: &[u32]) -> Vec<[u32; 3]> {
 }
 
 fn lod0_indices(dag: &Dag) -> Vec<u32> {
-    dag.clusters.iter().filter(|c| c.level == 0).flat_map(|c| c.indices.iter().copied()).collect()
+    dag.clusters
+        .iter()
+        .filter(|c| c.level == 0)
+        .flat_map(|c| c.indices.iter().copied())
+        .collect()
 }
 
 fn check(name: &str, built: &Built) {
@@ -39,20 +48,34 @@ fn check(name: &str, built: &Built) {
     );
     let h = built.asset.header();
     for c in &built.dag.clusters {
-        assert!(c.triangle_count() <= 128 && c.triangle_count() > 0, "{name}: meshlet of {} triangles", c.triangle_count());
+        assert!(
+            c.triangle_count() <= 128 && c.triangle_count() > 0,
+            "{name}: meshlet of {} triangles",
+            c.triangle_count()
+        );
     }
     // Directly, not only through verify(): the DAG itself satisfies the group rules.
     for g in &built.dag.groups {
         for &c in &g.children {
             let child = &built.dag.clusters[c as usize];
-            assert!(g.lod.error >= child.lod.error, "{name}: group error below a child's");
             assert!(
-                meshlight_scene::bounds::contains((g.lod.center, g.lod.radius), (child.lod.center, child.lod.radius)),
+                g.lod.error >= child.lod.error,
+                "{name}: group error below a child's"
+            );
+            assert!(
+                meshlight_scene::bounds::contains(
+                    (g.lod.center, g.lod.radius),
+                    (child.lod.center, child.lod.radius)
+                ),
                 "{name}: group sphere does not contain a child's"
             );
         }
     }
-    assert!((1..=3).contains(&h.root_count), "{name}: {} roots", h.root_count);
+    assert!(
+        (1..=3).contains(&h.root_count),
+        "{name}: {} roots",
+        h.root_count
+    );
     let expected = expected_levels(h.lod0_meshlets);
     assert!(
         (h.level_count as f32 - expected).abs() <= 2.0,
@@ -67,7 +90,9 @@ fn check(name: &str, built: &Built) {
 
 #[test]
 fn invariants_hold_on_every_shared_mesh() {
-    let Some(dir) = common::shared_meshes() else { return };
+    let Some(dir) = common::shared_meshes() else {
+        return;
+    };
     for name in common::SHARED_MESHES {
         let mesh = load_mesh(&dir.join(name)).unwrap();
         check(name, &build(&mesh, Grouping::Metis));
@@ -76,12 +101,17 @@ fn invariants_hold_on_every_shared_mesh() {
 
 #[test]
 fn invariants_hold_with_meshopt_partitioning() {
-    let Some(path) = common::shared_mesh("stanford-bunny.obj") else { return };
+    let Some(path) = common::shared_mesh("stanford-bunny.obj") else {
+        return;
+    };
     let mesh = load_mesh(&path).unwrap();
     let metis = build(&mesh, Grouping::Metis);
     let partition = build(&mesh, Grouping::Partition);
     check("bunny (partition_clusters)", &partition);
-    assert_ne!(metis.dag.groups, partition.dag.groups, "the grouping option must change the groups");
+    assert_ne!(
+        metis.dag.groups, partition.dag.groups,
+        "the grouping option must change the groups"
+    );
 }
 
 /// The full default mesh (1M triangles): the size the renderer starts with.
@@ -104,12 +134,18 @@ fn verify_reports_broken_invariants() {
     let child = dag.groups[0].children[0] as usize;
     dag.clusters[child].lod.error = dag.groups[0].lod.error * 2.0 + 1.0;
     let problems = verify(&rebuild(&dag));
-    assert!(problems.iter().any(|p| p.contains("below child")), "{problems:?}");
+    assert!(
+        problems.iter().any(|p| p.contains("below child")),
+        "{problems:?}"
+    );
 
     let mut dag = built.dag.clone();
     dag.groups[0].lod.radius *= 0.5;
     let problems = verify(&rebuild(&dag));
-    assert!(problems.iter().any(|p| p.contains("does not contain")), "{problems:?}");
+    assert!(
+        problems.iter().any(|p| p.contains("does not contain")),
+        "{problems:?}"
+    );
 
     let mut dag = built.dag.clone();
     for c in &mut dag.clusters {
@@ -117,5 +153,8 @@ fn verify_reports_broken_invariants() {
         c.parent = meshlight_scene::bounds::LodBounds::ROOT_PARENT;
     }
     let problems = verify(&rebuild(&dag));
-    assert!(problems.iter().any(|p| p.contains("root meshlets")), "{problems:?}");
+    assert!(
+        problems.iter().any(|p| p.contains("root meshlets")),
+        "{problems:?}"
+    );
 }

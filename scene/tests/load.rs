@@ -21,13 +21,17 @@ fn obj_polygons_are_triangulated_and_normals_generated() {
     assert!(mesh.normals.is_empty());
     mesh.clean().unwrap();
     for n in &mesh.normals {
-        assert!((n.z - 1.0).abs() < 1e-6, "generated normal {n} should face +z");
+        assert!(
+            (n.z - 1.0).abs() < 1e-6,
+            "generated normal {n} should face +z"
+        );
     }
 }
 
 #[test]
 fn obj_with_normals_and_uvs_keeps_them() {
-    let text = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n";
+    let text =
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n";
     let mesh = parse_obj(Path::new("tri.obj"), text).unwrap();
     assert_eq!(mesh.uvs, vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
     assert_eq!(mesh.normals.len(), 3);
@@ -57,7 +61,10 @@ fn stl_ascii_and_binary_load_the_same_welded_mesh() {
     let b = parse_stl(Path::new("b.stl"), &binary).unwrap();
     assert_eq!(a.positions.len(), 4, "corners are welded by position");
     assert_eq!(a.triangle_count(), 4);
-    assert_eq!((a.positions.clone(), a.indices.clone()), (b.positions, b.indices));
+    assert_eq!(
+        (a.positions.clone(), a.indices.clone()),
+        (b.positions, b.indices)
+    );
 }
 
 #[test]
@@ -95,7 +102,10 @@ fn gltf_buffer() -> Vec<u8> {
 fn gltf_applies_node_transforms_and_merges_primitives() {
     let dir = common::scratch("gltf");
     let buf = gltf_buffer();
-    let uri = format!(r#","uri":"data:application/octet-stream;base64,{}""#, common::base64(&buf));
+    let uri = format!(
+        r#","uri":"data:application/octet-stream;base64,{}""#,
+        common::base64(&buf)
+    );
     let path = dir.join("tet.gltf");
     std::fs::write(&path, gltf_json(&uri, buf.len())).unwrap();
     let mesh = load_mesh(&path).unwrap();
@@ -112,8 +122,15 @@ fn gltf_applies_node_transforms_and_merges_primitives() {
     for t in cleaned.indices.chunks(3) {
         let [a, b, c] = [t[0], t[1], t[2]].map(|i| cleaned.positions[i as usize]);
         let centre = (a + b + c) / 3.0;
-        let part_centre = if centre.x > 5.0 { glam::Vec3::new(10.25, 0.25, 0.25) } else { glam::Vec3::new(-0.25, 0.25, 0.25) };
-        assert!((b - a).cross(c - a).dot(centre - part_centre) > 0.0, "inward face at {centre}");
+        let part_centre = if centre.x > 5.0 {
+            glam::Vec3::new(10.25, 0.25, 0.25)
+        } else {
+            glam::Vec3::new(-0.25, 0.25, 0.25)
+        };
+        assert!(
+            (b - a).cross(c - a).dot(centre - part_centre) > 0.0,
+            "inward face at {centre}"
+        );
     }
 }
 
@@ -144,14 +161,26 @@ fn glb_loads_from_its_binary_chunk() {
 fn gltf_without_position_is_refused() {
     let dir = common::scratch("gltf-nopos");
     let buf = gltf_buffer();
-    let uri = format!(r#","uri":"data:application/octet-stream;base64,{}""#, common::base64(&buf));
-    let json = gltf_json(&uri, buf.len()).replace(r#""attributes":{"POSITION":0}"#, r#""attributes":{"TEXCOORD_0":2}"#);
+    let uri = format!(
+        r#","uri":"data:application/octet-stream;base64,{}""#,
+        common::base64(&buf)
+    );
+    let json = gltf_json(&uri, buf.len()).replace(
+        r#""attributes":{"POSITION":0}"#,
+        r#""attributes":{"TEXCOORD_0":2}"#,
+    );
     let path = dir.join("nopos.gltf");
     std::fs::write(&path, json).unwrap();
     let err = load_mesh(&path).unwrap_err();
-    assert!(matches!(err, SceneError::GltfMissingPosition { primitive: 0, .. }), "{err:?}");
+    assert!(
+        matches!(err, SceneError::GltfMissingPosition { primitive: 0, .. }),
+        "{err:?}"
+    );
     let msg = err.to_string();
-    assert!(msg.contains("nopos.gltf") && msg.contains("POSITION"), "{msg}");
+    assert!(
+        msg.contains("nopos.gltf") && msg.contains("POSITION"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -168,21 +197,31 @@ fn non_finite_positions_are_refused() {
         let text = format!("v 0 0 0\nv 1 {bad} 0\nv 0 1 0\nf 1 2 3\n");
         let mesh = parse_obj(Path::new("bad.obj"), text.as_bytes()).unwrap();
         let err = build(&mesh).unwrap_err();
-        assert!(matches!(err, SceneError::NonFinitePosition { vertex: 1, .. }), "{bad}: {err:?}");
+        assert!(
+            matches!(err, SceneError::NonFinitePosition { vertex: 1, .. }),
+            "{bad}: {err:?}"
+        );
         assert!(err.to_string().contains("bad.obj"));
     }
 }
 
 #[test]
 fn indices_out_of_range_are_refused() {
-    let err = parse_obj(Path::new("oob.obj"), b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").unwrap_err();
+    let err = parse_obj(
+        Path::new("oob.obj"),
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+    )
+    .unwrap_err();
     assert!(matches!(err, SceneError::Obj { .. }), "{err:?}");
     assert!(err.to_string().contains("oob.obj") && err.to_string().contains("vertex index"));
 
     let mut mesh = procedural_mesh(8);
     mesh.indices[7] = mesh.positions.len() as u32 + 5;
     let err = build(&mesh).unwrap_err();
-    assert!(matches!(err, SceneError::IndexOutOfRange { triangle: 2, .. }), "{err:?}");
+    assert!(
+        matches!(err, SceneError::IndexOutOfRange { triangle: 2, .. }),
+        "{err:?}"
+    );
 }
 
 #[test]
@@ -191,7 +230,8 @@ fn degenerate_triangles_are_dropped_and_counted() {
     let n = mesh.triangle_count();
     mesh.indices.extend_from_slice(&[0, 0, 1]); // repeated index
     let a = mesh.positions.len() as u32;
-    mesh.positions.extend([glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::X * 2.0]); // collinear
+    mesh.positions
+        .extend([glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::X * 2.0]); // collinear
     mesh.normals.extend([glam::Vec3::Z; 3]);
     mesh.indices.extend_from_slice(&[a, a + 1, a + 2]);
     let built = build(&mesh).unwrap();
@@ -202,7 +242,9 @@ fn degenerate_triangles_are_dropped_and_counted() {
 
 #[test]
 fn open_non_manifold_mesh_still_builds() {
-    let Some(path) = common::shared_mesh("teapot.obj") else { return };
+    let Some(path) = common::shared_mesh("teapot.obj") else {
+        return;
+    };
     let built = build(&load_mesh(&path).unwrap()).unwrap();
     assert!(meshlight_scene::verify::verify(&built.asset).is_empty());
 }
@@ -230,12 +272,19 @@ fn unreadable_files_name_the_path() {
     assert!(matches!(err, SceneError::Io { .. }), "{err:?}");
     assert!(err.to_string().contains("/nonexistent/dir/mesh.obj"));
     let err = load_mesh(Path::new("mesh.ply")).unwrap_err();
-    assert!(matches!(err, SceneError::UnsupportedFormat { .. }), "{err:?}");
+    assert!(
+        matches!(err, SceneError::UnsupportedFormat { .. }),
+        "{err:?}"
+    );
 }
 
 #[test]
 fn truncated_stl_is_refused() {
-    let err = parse_stl(Path::new("t.stl"), b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n").unwrap_err();
+    let err = parse_stl(
+        Path::new("t.stl"),
+        b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n",
+    )
+    .unwrap_err();
     assert!(matches!(err, SceneError::Stl { .. }), "{err:?}");
     let mut binary = vec![0u8; 80];
     binary.extend_from_slice(&10u32.to_le_bytes());

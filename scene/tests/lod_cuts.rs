@@ -28,7 +28,9 @@ fn thresholds(built: &Built) -> Vec<f32> {
 fn every_cut_of_the_closed_procedural_mesh_is_watertight() {
     let built = build(&procedural_mesh(48));
     let asset = &built.asset;
-    let decoded: Vec<_> = (0..asset.meshlets().len()).map(|i| asset.decode_meshlet(i)).collect();
+    let decoded: Vec<_> = (0..asset.meshlets().len())
+        .map(|i| asset.decode_meshlet(i))
+        .collect();
     let cuts = thresholds(&built);
     assert!(cuts.len() > 10);
     let mut levels_seen = std::collections::BTreeSet::new();
@@ -57,10 +59,16 @@ fn every_cut_of_the_closed_procedural_mesh_is_watertight() {
         assert!(triangles > 0, "the cut at {t} is empty");
         for (edge, v) in &edges {
             // 2 uses, one in each direction: 16 - 16 + 2 = 2.
-            assert_eq!(*v, 2, "cut at error {t}: edge {edge:?} is not shared by exactly two triangles (code {v})");
+            assert_eq!(
+                *v, 2,
+                "cut at error {t}: edge {edge:?} is not shared by exactly two triangles (code {v})"
+            );
         }
     }
-    assert!(levels_seen.len() as u32 == asset.header().level_count, "the cuts visited every level");
+    assert!(
+        levels_seen.len() as u32 == asset.header().level_count,
+        "the cuts visited every level"
+    );
 }
 
 /// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
@@ -106,11 +114,17 @@ struct Surface<'a> {
 
 impl<'a> Surface<'a> {
     fn new(positions: &'a [Vec3], indices: &[u32], cell: f32) -> Self {
-        let triangles: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        let triangles: Vec<[u32; 3]> = indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect();
         let mut cells: HashMap<[i32; 3], Vec<u32>> = HashMap::new();
         for (i, t) in triangles.iter().enumerate() {
             let [a, b, c] = t.map(|v| positions[v as usize]);
-            let (lo, hi) = ((a.min(b).min(c) / cell).floor(), (a.max(b).max(c) / cell).floor());
+            let (lo, hi) = (
+                (a.min(b).min(c) / cell).floor(),
+                (a.max(b).max(c) / cell).floor(),
+            );
             for x in lo.x as i32..=hi.x as i32 {
                 for y in lo.y as i32..=hi.y as i32 {
                     for z in lo.z as i32..=hi.z as i32 {
@@ -119,7 +133,12 @@ impl<'a> Surface<'a> {
                 }
             }
         }
-        Self { positions, triangles, cells, cell }
+        Self {
+            positions,
+            triangles,
+            cells,
+            cell,
+        }
     }
 
     /// Distance from p to the surface, searched in growing shells and cut off once it
@@ -140,9 +159,12 @@ impl<'a> Surface<'a> {
                         if x.abs().max(y.abs()).max(z.abs()) != ring {
                             continue;
                         }
-                        let Some(list) = self.cells.get(&[c[0] + x, c[1] + y, c[2] + z]) else { continue };
+                        let Some(list) = self.cells.get(&[c[0] + x, c[1] + y, c[2] + z]) else {
+                            continue;
+                        };
                         for &t in list {
-                            let [a, b, cc] = self.triangles[t as usize].map(|v| self.positions[v as usize]);
+                            let [a, b, cc] =
+                                self.triangles[t as usize].map(|v| self.positions[v as usize]);
                             best = best.min(closest_on_triangle(p, a, b, cc).distance(p));
                         }
                     }
@@ -174,9 +196,23 @@ fn check_lod_quality(name: &str, built: &Built) {
         let bound = cluster.lod.error;
         for t in cluster.indices.chunks_exact(3) {
             let [a, b, c] = [t[0], t[1], t[2]].map(|v| mesh.positions[v as usize]);
-            for p in [a, b, c, (a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5, (a + b + c) / 3.0] {
+            for p in [
+                a,
+                b,
+                c,
+                (a + b) * 0.5,
+                (b + c) * 0.5,
+                (c + a) * 0.5,
+                (a + b + c) / 3.0,
+            ] {
                 let d = surface.distance(p, bound);
-                let ratio = if bound > 0.0 { d / bound } else if d <= 1e-6 { 0.0 } else { f32::INFINITY };
+                let ratio = if bound > 0.0 {
+                    d / bound
+                } else if d <= 1e-6 {
+                    0.0
+                } else {
+                    f32::INFINITY
+                };
                 let w = &mut worst[cluster.level as usize];
                 *w = w.max(ratio);
                 assert!(

@@ -12,7 +12,9 @@ pub fn checksum(words: &[u32]) -> u64 {
     for c in &mut chunks {
         for (l, lane) in lanes.iter_mut().enumerate() {
             let w = (c[2 * l] as u64) | ((c[2 * l + 1] as u64) << 32);
-            *lane = (*lane ^ w.wrapping_mul(K2)).rotate_left(31).wrapping_mul(K1);
+            *lane = (*lane ^ w.wrapping_mul(K2))
+                .rotate_left(31)
+                .wrapping_mul(K1);
         }
     }
     let mut h = (words.len() as u64).wrapping_mul(K1);
@@ -20,7 +22,9 @@ pub fn checksum(words: &[u32]) -> u64 {
         h = (h ^ lane).wrapping_mul(K2).rotate_left(27);
     }
     for &w in chunks.remainder() {
-        h = (h ^ (w as u64).wrapping_mul(K1)).rotate_left(23).wrapping_mul(K2);
+        h = (h ^ (w as u64).wrapping_mul(K1))
+            .rotate_left(23)
+            .wrapping_mul(K2);
     }
     h ^= h >> 33;
     h = h.wrapping_mul(K1);

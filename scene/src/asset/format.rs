@@ -107,7 +107,11 @@ impl MeshletRecord {
         (self.counts >> 16) & 0xff
     }
     pub fn axis_bits(&self) -> [u32; 3] {
-        [self.bits & 0xff, (self.bits >> 8) & 0xff, (self.bits >> 16) & 0xff]
+        [
+            self.bits & 0xff,
+            (self.bits >> 8) & 0xff,
+            (self.bits >> 16) & 0xff,
+        ]
     }
 }
 

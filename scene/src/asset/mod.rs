@@ -52,7 +52,11 @@ impl MeshletAsset {
         let quant = Quantization::new(min, max, position_bits);
         let uvq = UvQuantization::new(&mesh.uvs);
         let has_uvs = mesh.has_uvs();
-        let grid: Vec<[u32; 3]> = mesh.positions.par_iter().map(|&p| quant.quantize(p)).collect();
+        let grid: Vec<[u32; 3]> = mesh
+            .positions
+            .par_iter()
+            .map(|&p| quant.quantize(p))
+            .collect();
         let pad = quant.max_error();
 
         let encoded: Vec<(MeshletRecord, Vec<u32>)> = dag
@@ -90,20 +94,32 @@ impl MeshletAsset {
                         w.put(q[k] - lo[k], bits[k]);
                     }
                 }
-                data.extend(locals.iter().map(|&v| encode_normal(mesh.normals[v as usize])));
+                data.extend(
+                    locals
+                        .iter()
+                        .map(|&v| encode_normal(mesh.normals[v as usize])),
+                );
                 if has_uvs {
                     data.extend(locals.iter().map(|&v| uvq.encode(mesh.uvs[v as usize])));
                 }
                 let mut index_bytes = local_index;
                 index_bytes.resize(index_bytes.len().div_ceil(4) * 4, 0);
-                data.extend(index_bytes.chunks_exact(4).map(|b| u32::from_le_bytes(b.try_into().unwrap())));
+                data.extend(
+                    index_bytes
+                        .chunks_exact(4)
+                        .map(|b| u32::from_le_bytes(b.try_into().unwrap())),
+                );
                 let sphere4 = |c: Vec3, r: f32| [c.x, c.y, c.z, r];
                 let record = MeshletRecord {
                     bounds: sphere4(c.bounds.0, c.bounds.1 + pad),
                     lod_sphere: sphere4(c.lod.center, c.lod.radius),
                     parent_sphere: sphere4(c.parent.center, c.parent.radius),
                     lod_error: c.lod.error,
-                    parent_error: if c.parent.error.is_finite() { c.parent.error } else { f32::MAX },
+                    parent_error: if c.parent.error.is_finite() {
+                        c.parent.error
+                    } else {
+                        f32::MAX
+                    },
                     data_offset: 0,
                     counts: locals.len() as u32
                         | ((c.triangle_count() as u32) << 8)
@@ -177,9 +193,13 @@ impl MeshletAsset {
         header.sections[SECTION_PAYLOAD] = push(&mut words, &payload);
         let size = words.len() as u64 * 4;
         header.file_size = [size as u32, (size >> 32) as u32];
-        let sum = checksum::file_checksum(bytemuck::cast_slice(std::slice::from_ref(&header)), &words[AssetHeader::WORDS..]);
+        let sum = checksum::file_checksum(
+            bytemuck::cast_slice(std::slice::from_ref(&header)),
+            &words[AssetHeader::WORDS..],
+        );
         header.checksum = [sum as u32, (sum >> 32) as u32];
-        words[..AssetHeader::WORDS].copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(&header)));
+        words[..AssetHeader::WORDS]
+            .copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(&header)));
         Self { words }
     }
 
@@ -192,9 +212,12 @@ impl MeshletAsset {
         if len < header_bytes {
             // Too short for a header: still say "wrong magic" when the start is not ours.
             let mut start = vec![0u8; len as usize];
-            file.read_exact(&mut start).map_err(|e| SceneError::io(path, e))?;
+            file.read_exact(&mut start)
+                .map_err(|e| SceneError::io(path, e))?;
             if start.is_empty() || !MAGIC.starts_with(&start[..start.len().min(8)]) {
-                return Err(SceneError::AssetMagic { path: path.to_owned() });
+                return Err(SceneError::AssetMagic {
+                    path: path.to_owned(),
+                });
             }
             return Err(SceneError::AssetTruncated {
                 path: path.to_owned(),
@@ -222,7 +245,8 @@ impl MeshletAsset {
                 actual: len,
             });
         }
-        let header: AssetHeader = *bytemuck::from_bytes(bytemuck::cast_slice(&words[..header_words]));
+        let header: AssetHeader =
+            *bytemuck::from_bytes(bytemuck::cast_slice(&words[..header_words]));
         if header.magic != MAGIC {
             return Err(SceneError::AssetMagic { path: p() });
         }
@@ -264,8 +288,18 @@ impl MeshletAsset {
         let h = self.header();
         let total = self.words.len() as u64;
         let sizes = [
-            (SECTION_MESHLETS, size_of::<MeshletRecord>() / 4, h.meshlet_count, "meshlets"),
-            (SECTION_GROUPS, size_of::<GroupRecord>() / 4, h.group_count, "groups"),
+            (
+                SECTION_MESHLETS,
+                size_of::<MeshletRecord>() / 4,
+                h.meshlet_count,
+                "meshlets",
+            ),
+            (
+                SECTION_GROUPS,
+                size_of::<GroupRecord>() / 4,
+                h.group_count,
+                "groups",
+            ),
         ];
         for (i, s) in h.sections.iter().enumerate() {
             if s.offset < AssetHeader::WORDS as u32 || s.offset as u64 + s.words as u64 > total {
@@ -279,13 +313,19 @@ impl MeshletAsset {
         }
         let payload = self.payload().len() as u64;
         let has_uvs = h.has_uvs();
-        if h.quant_bits < crate::compress::MIN_POSITION_BITS || h.quant_bits > crate::compress::MAX_POSITION_BITS {
+        if h.quant_bits < crate::compress::MIN_POSITION_BITS
+            || h.quant_bits > crate::compress::MAX_POSITION_BITS
+        {
             return Err(format!("position grid of {} bits", h.quant_bits));
         }
         for (i, m) in self.meshlets().iter().enumerate() {
             let (vc, tc) = (m.vertex_count(), m.triangle_count());
             let bits = m.axis_bits();
-            if vc == 0 || tc == 0 || vc > crate::meshlets::MAX_VERTICES as u32 || tc > crate::meshlets::MAX_TRIANGLES as u32 {
+            if vc == 0
+                || tc == 0
+                || vc > crate::meshlets::MAX_VERTICES as u32
+                || tc > crate::meshlets::MAX_TRIANGLES as u32
+            {
                 return Err(format!("meshlet {i} has {vc} vertices and {tc} triangles"));
             }
             if bits.iter().any(|&b| b > h.quant_bits) {
@@ -296,9 +336,13 @@ impl MeshletAsset {
                 return Err(format!("meshlet {i} data lies outside the payload"));
             }
             let start = (m.data_offset + layout.indices) as usize;
-            let idx: &[u8] = bytemuck::cast_slice(&self.payload()[start..start + (layout.end - layout.indices) as usize]);
+            let idx: &[u8] = bytemuck::cast_slice(
+                &self.payload()[start..start + (layout.end - layout.indices) as usize],
+            );
             if idx[..tc as usize * 3].iter().any(|&l| l as u32 >= vc) {
-                return Err(format!("meshlet {i} has a local index beyond its {vc} vertices"));
+                return Err(format!(
+                    "meshlet {i} has a local index beyond its {vc} vertices"
+                ));
             }
         }
         let children = self.children();
@@ -347,7 +391,8 @@ impl MeshletAsset {
     }
 
     pub fn group_children(&self, group: &GroupRecord) -> &[u32] {
-        &self.children()[group.first_child as usize..(group.first_child + group.child_count) as usize]
+        &self.children()
+            [group.first_child as usize..(group.first_child + group.child_count) as usize]
     }
 
     /// Packed vertex and index words, addressed by [`MeshletRecord::data_offset`].

@@ -34,8 +34,11 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
     }
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| err(e.to_string()))?;
     let base = path.parent();
-    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
-        .map_err(|e| err(format!("cannot load its buffers ({e}); keep .bin files beside the .gltf")))?;
+    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone()).map_err(|e| {
+        err(format!(
+            "cannot load its buffers ({e}); keep .bin files beside the .gltf"
+        ))
+    })?;
 
     let mut mesh = Mesh {
         source: path.display().to_string(),
@@ -70,7 +73,10 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
             .unwrap_or_else(|| format!("#{}", gmesh.index()));
         for (pi, primitive) in gmesh.primitives().enumerate() {
             if primitive.mode() != gltf::mesh::Mode::Triangles {
-                log::warn!("{}: mesh {mesh_name:?} primitive {pi} is not triangles; skipped", path.display());
+                log::warn!(
+                    "{}: mesh {mesh_name:?} primitive {pi} is not triangles; skipped",
+                    path.display()
+                );
                 continue;
             }
             let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
@@ -92,7 +98,9 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
             let normal_matrix = Mat3::from_mat4(*transform).inverse().transpose();
             match reader.read_normals() {
                 Some(n) => {
-                    let n: Vec<Vec3> = n.map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero()).collect();
+                    let n: Vec<Vec3> = n
+                        .map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero())
+                        .collect();
                     if n.len() != positions.len() {
                         return Err(err(format!(
                             "mesh {mesh_name:?} primitive {pi}: NORMAL has {} elements, POSITION {}",
@@ -104,10 +112,13 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
                 }
                 None => {
                     normals_complete = false;
-                    mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, positions.len()));
+                    mesh.normals
+                        .extend(std::iter::repeat_n(Vec3::ZERO, positions.len()));
                 }
             }
-            let uvs = reader.read_tex_coords(0).map(|t| t.into_f32().collect::<Vec<_>>());
+            let uvs = reader
+                .read_tex_coords(0)
+                .map(|t| t.into_f32().collect::<Vec<_>>());
             match &uvs {
                 Some(t) if t.len() == positions.len() => {}
                 _ => any_missing_uv = true,

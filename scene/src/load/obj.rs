@@ -47,14 +47,21 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
     for model in &models {
         let m = &model.mesh;
         let base = mesh.positions.len() as u32;
-        mesh.positions
-            .extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        mesh.positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
         if all_normals {
-            mesh.normals
-                .extend(m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])));
+            mesh.normals.extend(
+                m.normals
+                    .chunks_exact(3)
+                    .map(|n| Vec3::new(n[0], n[1], n[2])),
+            );
         }
         if all_uvs {
-            mesh.uvs.extend(m.texcoords.chunks_exact(2).map(|t| [t[0], t[1]]));
+            mesh.uvs
+                .extend(m.texcoords.chunks_exact(2).map(|t| [t[0], t[1]]));
         }
         mesh.indices.extend(m.indices.iter().map(|&i| i + base));
     }

@@ -57,7 +57,8 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
     Err(SceneError::Stl {
         path: path.to_owned(),
         line: None,
-        reason: "neither ASCII (starting with `solid`) nor a binary STL of at least 84 bytes".into(),
+        reason: "neither ASCII (starting with `solid`) nor a binary STL of at least 84 bytes"
+            .into(),
     })
 }
 
@@ -108,7 +109,10 @@ fn parse_ascii(path: &Path, source: &str, text: &str) -> Result<Mesh, SceneError
                 if polygon.len() < 3 {
                     return Err(err(
                         line_no,
-                        format!("a facet has {} vertices; facets need at least 3", polygon.len()),
+                        format!(
+                            "a facet has {} vertices; facets need at least 3",
+                            polygon.len()
+                        ),
                     ));
                 }
                 // Facets with more than three vertices are fan-triangulated.
@@ -123,7 +127,10 @@ fn parse_ascii(path: &Path, source: &str, text: &str) -> Result<Mesh, SceneError
         }
     }
     if in_loop {
-        return Err(err(text.lines().count(), "the file ends inside a facet; it is truncated".into()));
+        return Err(err(
+            text.lines().count(),
+            "the file ends inside a facet; it is truncated".into(),
+        ));
     }
     Ok(welder.finish())
 }
@@ -159,7 +166,9 @@ impl Welder {
     fn polygon(&mut self, corners: &[Vec3]) {
         let ids: Vec<u32> = corners.iter().map(|&p| self.vertex(p)).collect();
         for k in 1..ids.len() - 1 {
-            self.mesh.indices.extend_from_slice(&[ids[0], ids[k], ids[k + 1]]);
+            self.mesh
+                .indices
+                .extend_from_slice(&[ids[0], ids[k], ids[k + 1]]);
         }
     }
 

@@ -11,7 +11,10 @@ pub fn shared_meshes() -> Option<PathBuf> {
         return Some(dir);
     }
     if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("{} is missing; CI must provide the shared test meshes", dir.display());
+        panic!(
+            "{} is missing; CI must provide the shared test meshes",
+            dir.display()
+        );
     }
     eprintln!(
         "did not run: the shared test meshes are not at {} (they live beside the project, not in it)",
@@ -60,7 +63,12 @@ pub fn base64(data: &[u8]) -> String {
 /// A closed tetrahedron as (positions, indices).
 pub fn tetrahedron() -> (Vec<[f32; 3]>, Vec<u16>) {
     (
-        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ],
         vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
     )
 }
