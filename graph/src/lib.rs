@@ -1,1 +1,28 @@
-//! placeholder
+//! The meshlight frame graph.
+//!
+//! Declare resources and passes with [`GraphBuilder`] (or load a pipeline file), compile
+//! to a [`Plan`] with no device, inspect or dump it, and run it frame after frame with an
+//! [`Executor`].
+
+pub mod access;
+pub mod builder;
+pub mod compile;
+pub mod contract;
+// pub mod dump;
+pub mod error;
+pub mod exec;
+// pub mod file;
+pub mod pass;
+pub mod plan;
+pub mod resource;
+
+pub use access::Access;
+pub use builder::{Bindings, GraphBuilder, History, PassNode, PassOutputs};
+pub use compile::{CompileOptions, CompiledGraph};
+pub use contract::{Slot, SlotKind, StageContract};
+pub use error::{GraphError, Result};
+pub use exec::{BindingLayout, ComputeDesc, Executor, FrameStats, GpuAdapter, GpuContext, Imports, RecordContext};
+pub use pass::{Pass, SetupContext};
+pub use plan::Plan;
+pub use resource::{AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture, TextureDesc};
+pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};

@@ -1,0 +1,216 @@
+//! The code-first API: declare resources, add passes with slot bindings, compile.
+
+use crate::compile::{compile, CompileOptions, CompiledGraph};
+use crate::contract::StageContract;
+use crate::error::{GraphError, Result};
+use crate::pass::Pass;
+use crate::resource::*;
+
+/// How a slot is bound when a pass is added.
+#[derive(Clone, Debug)]
+enum Target {
+    Handle(AnyHandle),
+    Name(String),
+}
+
+/// Slot → resource bindings of one pass. Slots left out bind to the resource of the same
+/// name, at its current version.
+#[derive(Clone, Debug, Default)]
+pub struct Bindings {
+    entries: Vec<(String, Target)>,
+}
+
+impl Bindings {
+    pub fn new() -> Self {
+        Self::default()
+    }
+    pub fn bind(mut self, slot: &str, handle: impl Into<AnyHandle>) -> Self {
+        self.entries.push((slot.to_string(), Target::Handle(handle.into())));
+        self
+    }
+    /// Binds a slot to a resource by name, at its current version.
+    pub fn bind_named(mut self, slot: &str, resource: &str) -> Self {
+        self.entries.push((slot.to_string(), Target::Name(resource.to_string())));
+        self
+    }
+}
+
+/// A pass as the graph keeps it: its instance name, implementation and bound slots.
+pub struct PassNode {
+    pub name: String,
+    pub pass: Box<dyn Pass>,
+    pub contract: StageContract,
+    /// In contract slot order.
+    pub bindings: Vec<AnyHandle>,
+}
+
+/// A resource written this frame and read next frame.
+#[derive(Clone, Copy, Debug)]
+pub struct History<K> {
+    /// Last frame's contents (read-only; zeroed on the first frame).
+    pub prev: Handle<K>,
+    /// This frame's contents, to be written.
+    pub current: Handle<K>,
+}
+
+/// New versions of the resources a pass wrote.
+#[derive(Clone, Debug)]
+pub struct PassOutputs {
+    pub pass: String,
+    written: Vec<(&'static str, AnyHandle)>,
+}
+
+impl PassOutputs {
+    fn find(&self, slot: &str) -> Result<AnyHandle> {
+        self.written.iter().find(|(s, _)| *s == slot).map(|(_, h)| *h).ok_or_else(|| GraphError::UnknownSlot {
+            pass: self.pass.clone(),
+            stage: "(written slots)".into(),
+            slot: slot.to_string(),
+            available: self.written.iter().map(|(s, _)| *s).collect::<Vec<_>>().join(", "),
+        })
+    }
+    /// The new version of the buffer written through `slot`.
+    pub fn buffer(&self, slot: &str) -> Result<Handle<Buffer>> {
+        self.find(slot).map(|h| Handle::new(h.id, h.version))
+    }
+    /// The new version of the texture written through `slot`.
+    pub fn texture(&self, slot: &str) -> Result<Handle<Texture>> {
+        self.find(slot).map(|h| Handle::new(h.id, h.version))
+    }
+    pub fn written(&self) -> &[(&'static str, AnyHandle)] {
+        &self.written
+    }
+}
+
+/// Declares a frame: resources, then passes in the order their effects should apply.
+#[derive(Default)]
+pub struct GraphBuilder {
+    pub(crate) resources: Vec<ResourceInfo>,
+    pub(crate) passes: Vec<PassNode>,
+    /// The newest version of each resource seen so far, to resolve by-name bindings.
+    current: Vec<u32>,
+    /// Errors found while declaring, reported by `compile` so declaration code stays linear.
+    pub(crate) deferred: Vec<GraphError>,
+}
+
+impl GraphBuilder {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn add_resource(&mut self, name: &str, desc: ResourceDesc, kind: ResourceKind) -> ResourceId {
+        if self.resources.iter().any(|r| r.name == name) {
+            self.deferred.push(GraphError::DuplicateName { what: "resource", name: name.to_string() });
+        }
+        self.resources.push(ResourceInfo { name: name.to_string(), desc, kind });
+        self.current.push(0);
+        ResourceId(self.resources.len() as u32 - 1)
+    }
+
+    pub fn create_buffer(&mut self, name: &str, desc: BufferDesc) -> Handle<Buffer> {
+        Handle::new(self.add_resource(name, ResourceDesc::Buffer(desc), ResourceKind::Transient), 0)
+    }
+    pub fn create_texture(&mut self, name: &str, desc: TextureDesc) -> Handle<Texture> {
+        Handle::new(self.add_resource(name, ResourceDesc::Texture(desc), ResourceKind::Transient), 0)
+    }
+    /// A caller-owned buffer; `usage` is what the caller created it with.
+    pub fn import_buffer(&mut self, name: &str, desc: BufferDesc, usage: wgpu::BufferUsages) -> Handle<Buffer> {
+        let kind = ResourceKind::Imported { usage: ImportedUsage::Buffer(usage) };
+        Handle::new(self.add_resource(name, ResourceDesc::Buffer(desc), kind), 0)
+    }
+    pub fn import_texture(&mut self, name: &str, desc: TextureDesc, usage: wgpu::TextureUsages) -> Handle<Texture> {
+        let kind = ResourceKind::Imported { usage: ImportedUsage::Texture(usage) };
+        Handle::new(self.add_resource(name, ResourceDesc::Texture(desc), kind), 0)
+    }
+    /// A buffer carried to the next frame: write `current`; read last frame's as `prev`
+    /// (named `<name>.prev`).
+    pub fn history_buffer(&mut self, name: &str, desc: BufferDesc) -> History<Buffer> {
+        let (prev, current) = self.history(name, ResourceDesc::Buffer(desc));
+        History { prev: Handle::new(prev, 0), current: Handle::new(current, 0) }
+    }
+    pub fn history_texture(&mut self, name: &str, desc: TextureDesc) -> History<Texture> {
+        let (prev, current) = self.history(name, ResourceDesc::Texture(desc));
+        History { prev: Handle::new(prev, 0), current: Handle::new(current, 0) }
+    }
+    fn history(&mut self, name: &str, desc: ResourceDesc) -> (ResourceId, ResourceId) {
+        let n = self.resources.len() as u32;
+        let current = self.add_resource(name, desc.clone(), ResourceKind::History { prev: ResourceId(n + 1) });
+        let prev = self.add_resource(&format!("{name}.prev"), desc, ResourceKind::HistoryPrev { current });
+        (prev, current)
+    }
+    /// Keeps a transient after the frame so the caller can read it back.
+    pub fn export<K>(&mut self, handle: Handle<K>) {
+        let r = &mut self.resources[handle.id.index()];
+        if r.kind == ResourceKind::Transient {
+            r.kind = ResourceKind::Exported;
+        }
+    }
+
+    /// Looks a resource up by name, at its newest version.
+    pub fn resource(&self, name: &str) -> Option<AnyHandle> {
+        let i = self.resources.iter().position(|r| r.name == name)?;
+        Some(AnyHandle { id: ResourceId(i as u32), version: self.current[i] })
+    }
+    /// Looks a resource up by name at an explicit version (pipeline files use `name@3`).
+    pub fn resource_at(&self, name: &str, version: u32) -> Option<AnyHandle> {
+        let i = self.resources.iter().position(|r| r.name == name)?;
+        Some(AnyHandle { id: ResourceId(i as u32), version })
+    }
+    pub fn resources(&self) -> &[ResourceInfo] {
+        &self.resources
+    }
+
+    /// Adds a pass instance named `name`. Slots not in `bindings` bind to the resource of
+    /// the same name. Returns the new versions of what it writes.
+    pub fn add_pass(&mut self, name: &str, pass: impl Pass + 'static, bindings: Bindings) -> Result<PassOutputs> {
+        self.add_boxed_pass(name, Box::new(pass), bindings)
+    }
+
+    pub fn add_boxed_pass(&mut self, name: &str, pass: Box<dyn Pass>, bindings: Bindings) -> Result<PassOutputs> {
+        if self.passes.iter().any(|p| p.name == name) {
+            return Err(GraphError::DuplicateName { what: "pass", name: name.to_string() });
+        }
+        let contract = pass.contract();
+        for (slot, _) in &bindings.entries {
+            if contract.slot(slot).is_none() {
+                return Err(GraphError::UnknownSlot {
+                    pass: name.to_string(),
+                    stage: contract.stage.to_string(),
+                    slot: slot.clone(),
+                    available: contract.slot_names().join(", "),
+                });
+            }
+        }
+        let mut resolved = Vec::with_capacity(contract.slots.len());
+        for slot in &contract.slots {
+            let target = bindings.entries.iter().rev().find(|(s, _)| s == slot.name).map(|(_, t)| t.clone());
+            let handle = match target {
+                Some(Target::Handle(h)) => h,
+                Some(Target::Name(res)) => self.resource(&res).ok_or_else(|| GraphError::UnknownResource {
+                    pass: name.to_string(),
+                    slot: slot.name.to_string(),
+                    resource: res.clone(),
+                })?,
+                None => self
+                    .resource(slot.name)
+                    .ok_or_else(|| GraphError::UnboundSlot { pass: name.to_string(), slot: slot.name.to_string() })?,
+            };
+            resolved.push(handle);
+        }
+        let mut written = Vec::new();
+        for (slot, handle) in contract.slots.iter().zip(&resolved) {
+            if slot.access.writes() {
+                let next = AnyHandle { id: handle.id, version: handle.version + 1 };
+                let cur = &mut self.current[handle.id.index()];
+                *cur = (*cur).max(next.version);
+                written.push((slot.name, next));
+            }
+        }
+        self.passes.push(PassNode { name: name.to_string(), pass, contract, bindings: resolved });
+        Ok(PassOutputs { pass: name.to_string(), written })
+    }
+
+    pub fn compile(self, options: &CompileOptions) -> Result<CompiledGraph> {
+        compile(self, options)
+    }
+}

@@ -1,0 +1,128 @@
+//! Walks the passes in declaration order, checks every handle's version and derives the
+//! dependency edges: writer → reader, reader → next writer, writer → next writer.
+
+use crate::builder::PassNode;
+use crate::error::{GraphError, Result};
+use crate::resource::ResourceInfo;
+use serde::Serialize;
+use std::collections::HashMap;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeKind {
+    /// The later pass reads what the earlier one wrote.
+    ReadAfterWrite,
+    /// The later pass overwrites what the earlier one read.
+    WriteAfterRead,
+    /// The later pass overwrites what the earlier one wrote.
+    WriteAfterWrite,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+pub struct Edge {
+    pub from: usize,
+    pub to: usize,
+    pub resource: usize,
+    pub version: u32,
+    pub kind: EdgeKind,
+}
+
+/// Who wrote and who read each version of each resource.
+#[derive(Default)]
+pub struct VersionTable {
+    pub writer: HashMap<(usize, u32), usize>,
+    pub readers: HashMap<(usize, u32), Vec<usize>>,
+    pub edges: Vec<Edge>,
+}
+
+pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<VersionTable> {
+    let mut t = VersionTable::default();
+    let mut current = vec![0u32; resources.len()];
+    // Reads of versions not yet written in declaration order (possible only with explicit
+    // versions, as in pipeline files); resolved once every writer is known.
+    let mut forward: Vec<(usize, usize, &str, u32)> = Vec::new();
+
+    for (p, node) in passes.iter().enumerate() {
+        for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+            let r = h.id.index();
+            let res = &resources[r];
+            let cur = current[r];
+            let stale = |given: u32| GraphError::StaleVersion {
+                pass: node.name.clone(),
+                slot: slot.name.to_string(),
+                resource: res.name.clone(),
+                given,
+                current: cur,
+                writer: t.writer.get(&(r, cur)).map(|&w| passes[w].name.clone()).unwrap_or_default(),
+            };
+            if slot.access.writes() {
+                if h.version != cur {
+                    return Err(stale(h.version));
+                }
+                if slot.access.reads() {
+                    read_edge(&mut t, resources, passes, p, slot.name, r, cur)?;
+                }
+                if let Some(&w) = t.writer.get(&(r, cur)) {
+                    push(&mut t.edges, w, p, r, cur, EdgeKind::WriteAfterWrite);
+                }
+                for &reader in t.readers.get(&(r, cur)).into_iter().flatten() {
+                    push(&mut t.edges, reader, p, r, cur, EdgeKind::WriteAfterRead);
+                }
+                t.writer.insert((r, cur + 1), p);
+                current[r] = cur + 1;
+            } else if h.version < cur {
+                return Err(stale(h.version));
+            } else if h.version > cur {
+                forward.push((p, r, slot.name, h.version));
+            } else {
+                read_edge(&mut t, resources, passes, p, slot.name, r, cur)?;
+                t.readers.entry((r, cur)).or_default().push(p);
+            }
+        }
+    }
+    for (p, r, slot, v) in forward {
+        let Some(&w) = t.writer.get(&(r, v)) else {
+            return Err(no_writer(resources, passes, p, slot, r, v));
+        };
+        push(&mut t.edges, w, p, r, v, EdgeKind::ReadAfterWrite);
+        if let Some(&next) = t.writer.get(&(r, v + 1)) {
+            push(&mut t.edges, p, next, r, v, EdgeKind::WriteAfterRead);
+        }
+        t.readers.entry((r, v)).or_default().push(p);
+    }
+    t.edges.sort();
+    t.edges.dedup();
+    Ok(t)
+}
+
+fn read_edge(
+    t: &mut VersionTable,
+    resources: &[ResourceInfo],
+    passes: &[PassNode],
+    p: usize,
+    slot: &str,
+    r: usize,
+    v: u32,
+) -> Result<()> {
+    match t.writer.get(&(r, v)) {
+        Some(&w) => push(&mut t.edges, w, p, r, v, EdgeKind::ReadAfterWrite),
+        None if v == 0 && resources[r].starts_written() => {}
+        None => return Err(no_writer(resources, passes, p, slot, r, v)),
+    }
+    Ok(())
+}
+
+fn no_writer(resources: &[ResourceInfo], passes: &[PassNode], p: usize, slot: &str, r: usize, v: u32) -> GraphError {
+    GraphError::ReadWithoutWriter {
+        pass: passes[p].name.clone(),
+        slot: slot.to_string(),
+        resource: resources[r].name.clone(),
+        version: v,
+    }
+}
+
+fn push(edges: &mut Vec<Edge>, from: usize, to: usize, resource: usize, version: u32, kind: EdgeKind) {
+    if from != to {
+        edges.push(Edge { from, to, resource, version, kind });
+    }
+}

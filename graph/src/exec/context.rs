@@ -1,0 +1,140 @@
+//! The headless device: adapter selection, feature negotiation, small blocking helpers.
+
+use crate::error::{GraphError, Result};
+
+/// The environment variable that picks an adapter by a substring of its name.
+pub const ADAPTER_ENV: &str = "MESHLIGHT_ADAPTER";
+
+/// Features the executor itself uses when the adapter has them (per-pass GPU timing).
+pub const TIMING_FEATURES: wgpu::Features =
+    wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
+
+/// A chosen adapter, before a device is created for it.
+pub struct GpuAdapter {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+}
+
+impl GpuAdapter {
+    /// The adapter named by `MESHLIGHT_ADAPTER`, else the first Vulkan adapter.
+    pub fn select() -> Result<Self> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::VULKAN;
+        let instance = wgpu::Instance::new(desc);
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+        let wanted = std::env::var(ADAPTER_ENV).ok().filter(|s| !s.is_empty());
+        let adapter = match &wanted {
+            Some(w) => adapters.into_iter().find(|a| a.get_info().name.to_lowercase().contains(&w.to_lowercase())).ok_or_else(|| {
+                GraphError::NoAdapter { detail: format!(" matching {ADAPTER_ENV}={w:?} (found: {})", names.join(", ")) }
+            })?,
+            None => adapters.into_iter().next().ok_or_else(|| GraphError::NoAdapter { detail: String::new() })?,
+        };
+        Ok(Self { instance, adapter })
+    }
+
+    pub fn features(&self) -> wgpu::Features {
+        self.adapter.features()
+    }
+    pub fn info(&self) -> wgpu::AdapterInfo {
+        self.adapter.get_info()
+    }
+
+    /// Creates the device with `features` (what the compiled graphs need) plus timing
+    /// features where the adapter has them, and the adapter's own limits so large
+    /// buffers work.
+    pub fn open(self, features: wgpu::Features) -> Result<GpuContext> {
+        let have = self.adapter.features();
+        let missing = features - have;
+        if !missing.is_empty() {
+            return Err(GraphError::Device(format!(
+                "the adapter lacks {}",
+                missing.iter_names().map(|(n, _)| n).collect::<Vec<_>>().join(", ")
+            )));
+        }
+        let enabled = features | (TIMING_FEATURES & have);
+        let desc = wgpu::DeviceDescriptor {
+            label: Some("meshlight"),
+            required_features: enabled,
+            required_limits: self.adapter.limits(),
+            ..Default::default()
+        };
+        let (device, queue) =
+            pollster::block_on(self.adapter.request_device(&desc)).map_err(|e| GraphError::Device(e.to_string()))?;
+        let info = self.adapter.get_info();
+        Ok(GpuContext { instance: self.instance, adapter: self.adapter, device, queue, features: enabled, info })
+    }
+}
+
+/// An open device and its queue.
+pub struct GpuContext {
+    pub instance: wgpu::Instance,
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    /// Features enabled on the device.
+    pub features: wgpu::Features,
+    pub info: wgpu::AdapterInfo,
+}
+
+impl GpuContext {
+    /// Selects an adapter and opens it with every feature the adapter has out of `wanted`.
+    pub fn with_available(wanted: wgpu::Features) -> Result<Self> {
+        let adapter = GpuAdapter::select()?;
+        let f = wanted & adapter.features();
+        adapter.open(f)
+    }
+
+    /// Copies `size` bytes at `offset` of `buffer` (which needs COPY_SRC) to the CPU.
+    pub fn read_buffer(&self, buffer: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<u8>> {
+        if size == 0 {
+            return Ok(Vec::new());
+        }
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("meshlight readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+        enc.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
+        self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GraphError::Readback(e.to_string()));
+        }
+        self.map_and_read(&staging)
+    }
+
+    /// Waits for a MAP_READ buffer and returns its bytes.
+    pub fn map_and_read(&self, staging: &wgpu::Buffer) -> Result<Vec<u8>> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GraphError::Readback(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| GraphError::Readback(e.to_string()))?
+            .map_err(|e| GraphError::Readback(e.to_string()))?;
+        let bytes = staging.get_mapped_range(..).map_err(|e| GraphError::Readback(e.to_string()))?.to_vec();
+        staging.unmap();
+        Ok(bytes)
+    }
+
+    /// Creates a buffer holding `data`.
+    pub fn buffer_with_data(&self, label: &str, data: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        let size = (data.len() as u64).max(4).next_multiple_of(4);
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        if !data.is_empty() {
+            let mut padded = data.to_vec();
+            padded.resize(size as usize, 0);
+            self.queue.write_buffer(&buffer, 0, &padded);
+        }
+        buffer
+    }
+}

@@ -1,0 +1,134 @@
+//! The compiled plan as plain data: what dumps print and what the executor follows.
+
+use crate::access::Access;
+use crate::compile::pool::{Lifetime, PoolSlot};
+use crate::compile::versions::Edge;
+use crate::resource::{ImportedUsage, ResourceInfo};
+use serde::{Serialize, Serializer};
+
+/// How a render target is loaded and stored by one pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LoadOp {
+    /// Earlier contents matter: load them.
+    Load,
+    /// Nothing wrote it yet this frame: clear.
+    Clear,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StoreOp {
+    Store,
+    /// Nothing reads the result: let the GPU drop it.
+    Discard,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct AttachmentOps {
+    pub load: LoadOp,
+    pub store: StoreOp,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SlotUse {
+    pub slot: &'static str,
+    pub resource: usize,
+    pub access: Access,
+    /// The version read (or written from).
+    pub version: u32,
+    /// The version produced, for writes.
+    pub writes_version: Option<u32>,
+    /// For render and depth targets.
+    pub ops: Option<AttachmentOps>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PassPlan {
+    pub name: String,
+    pub stage: &'static str,
+    pub implementation: &'static str,
+    pub slots: Vec<SlotUse>,
+    /// Scratch resources this pass declared.
+    pub scratch: Vec<usize>,
+    pub shader_defs: Vec<(String, String)>,
+    #[serde(serialize_with = "ser_features")]
+    pub required_features: wgpu::Features,
+    #[serde(serialize_with = "ser_features")]
+    pub optional_features: wgpu::Features,
+    pub side_effect: bool,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ResourcePlan {
+    #[serde(flatten)]
+    pub info: ResourceInfo,
+    /// Number of versions written this frame.
+    pub versions: u32,
+    pub lifetime: Option<Lifetime>,
+    pub pool_slot: Option<usize>,
+    #[serde(serialize_with = "ser_buffer_usages")]
+    pub buffer_usage: wgpu::BufferUsages,
+    #[serde(serialize_with = "ser_texture_usages")]
+    pub texture_usage: wgpu::TextureUsages,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Plan {
+    pub passes: Vec<PassPlan>,
+    /// Indices into `passes`, in execution order (culled passes left out).
+    pub order: Vec<usize>,
+    pub culled: Vec<usize>,
+    pub resources: Vec<ResourcePlan>,
+    pub edges: Vec<Edge>,
+    pub pool_slots: Vec<PoolSlot>,
+    pub bytes_without_reuse: u64,
+    pub bytes_with_reuse: u64,
+    #[serde(serialize_with = "ser_features")]
+    pub enabled_features: wgpu::Features,
+}
+
+impl Plan {
+    pub fn pass_index(&self, name: &str) -> Option<usize> {
+        self.passes.iter().position(|p| p.name == name)
+    }
+    pub fn resource_index(&self, name: &str) -> Option<usize> {
+        self.resources.iter().position(|r| r.info.name == name)
+    }
+    pub fn is_culled(&self, pass: usize) -> bool {
+        self.culled.contains(&pass)
+    }
+}
+
+fn flag_names<B: bitflags::Flags>(flags: &B) -> Vec<String> {
+    flags.iter_names().map(|(n, _)| n.to_string()).collect()
+}
+
+pub(crate) fn ser_features<S: Serializer>(f: &wgpu::Features, s: S) -> Result<S::Ok, S::Error> {
+    // Features print as their names; `iter_names` is stable in declaration order.
+    let names: Vec<String> = f.iter_names().map(|(n, _)| n.to_string()).collect();
+    names.serialize(s)
+}
+pub(crate) fn ser_buffer_usages<S: Serializer>(u: &wgpu::BufferUsages, s: S) -> Result<S::Ok, S::Error> {
+    flag_names(u).serialize(s)
+}
+pub(crate) fn ser_texture_usages<S: Serializer>(u: &wgpu::TextureUsages, s: S) -> Result<S::Ok, S::Error> {
+    flag_names(u).serialize(s)
+}
+pub(crate) fn ser_buffer_usage_or_texture<S: Serializer>(u: &ImportedUsage, s: S) -> Result<S::Ok, S::Error> {
+    match u {
+        ImportedUsage::Buffer(b) => flag_names(b).serialize(s),
+        ImportedUsage::Texture(t) => flag_names(t).serialize(s),
+    }
+}
+pub(crate) fn ser_format<S: Serializer>(f: &wgpu::TextureFormat, s: S) -> Result<S::Ok, S::Error> {
+    format_name(*f).serialize(s)
+}
+pub(crate) fn ser_opt_format<S: Serializer>(f: &Option<wgpu::TextureFormat>, s: S) -> Result<S::Ok, S::Error> {
+    f.map(format_name).serialize(s)
+}
+
+/// A texture format as written in WGSL and pipeline files (`rgba8unorm`, `r32uint`, …).
+pub fn format_name(f: wgpu::TextureFormat) -> String {
+    format!("{f:?}").to_lowercase()
+}
