@@ -39,6 +39,7 @@ impl Bindings {
 pub struct PassNode {
     pub name: String,
     pub pass: Box<dyn Pass>,
+    /// The stage contract with unbound optional slots removed.
     pub contract: StageContract,
     /// In contract slot order.
     pub bindings: Vec<AnyHandle>,
@@ -170,7 +171,7 @@ impl GraphBuilder {
         if self.passes.iter().any(|p| p.name == name) {
             return Err(GraphError::DuplicateName { what: "pass", name: name.to_string() });
         }
-        let contract = pass.contract();
+        let mut contract = pass.contract();
         for (slot, _) in &bindings.entries {
             if contract.slot(slot).is_none() {
                 return Err(GraphError::UnknownSlot {
@@ -182,6 +183,7 @@ impl GraphBuilder {
             }
         }
         let mut resolved = Vec::with_capacity(contract.slots.len());
+        let mut unbound_optional = Vec::new();
         for slot in &contract.slots {
             let target = bindings.entries.iter().rev().find(|(s, _)| s == slot.name).map(|(_, t)| t.clone());
             let handle = match target {
@@ -191,12 +193,19 @@ impl GraphBuilder {
                     slot: slot.name.to_string(),
                     resource: res.clone(),
                 })?,
-                None => self
-                    .resource(slot.name)
-                    .ok_or_else(|| GraphError::UnboundSlot { pass: name.to_string(), slot: slot.name.to_string() })?,
+                None => match self.resource(slot.name) {
+                    Some(h) => h,
+                    None if slot.optional => {
+                        unbound_optional.push(slot.name);
+                        continue;
+                    }
+                    None => return Err(GraphError::UnboundSlot { pass: name.to_string(), slot: slot.name.to_string() }),
+                },
             };
             resolved.push(handle);
         }
+        // The node keeps only bound slots, so every later step sees slots and handles in step.
+        contract.slots.retain(|s| !unbound_optional.contains(&s.name));
         let mut written = Vec::new();
         for (slot, handle) in contract.slots.iter().zip(&resolved) {
             if slot.access.writes() {

@@ -27,14 +27,22 @@ pub struct Slot {
     pub kind: SlotKind,
     /// One line for dumps and error messages.
     pub doc: &'static str,
+    /// An optional slot may stay unbound; the pass checks `RecordContext::is_bound`.
+    pub optional: bool,
 }
 
 impl Slot {
     pub fn buffer(name: &'static str, access: Access, element: Element, doc: &'static str) -> Self {
-        Self { name, access, kind: SlotKind::Buffer { element: Some(element) }, doc }
+        Self { name, access, kind: SlotKind::Buffer { element: Some(element) }, doc, optional: false }
     }
     pub fn texture(name: &'static str, access: Access, format: Option<wgpu::TextureFormat>, doc: &'static str) -> Self {
-        Self { name, access, kind: SlotKind::Texture { format }, doc }
+        Self { name, access, kind: SlotKind::Texture { format }, doc, optional: false }
+    }
+    /// Marks the slot optional: left unbound (and with no resource of its name), the pass
+    /// runs without it.
+    pub fn optional(mut self) -> Self {
+        self.optional = true;
+        self
     }
 }
 

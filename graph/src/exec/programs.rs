@@ -23,6 +23,9 @@ pub(crate) struct ModuleKey {
 pub(crate) struct ProgramKey {
     pub module: ModuleKey,
     pub entry: &'static str,
+    /// The declared layouts: two passes whose wgpu layouts agree but whose slots differ
+    /// must not share a program, since the program remembers where each binding comes from.
+    pub declared: Vec<crate::exec::BindingLayout>,
     pub layouts: Vec<Vec<wgpu::BindGroupLayoutEntry>>,
 }
 

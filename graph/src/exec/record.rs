@@ -82,6 +82,10 @@ impl<'a> RecordContext<'a> {
         }
     }
 
+    /// True when `slot` is bound (always, unless the slot is optional).
+    pub fn is_bound(&self, slot: &str) -> bool {
+        self.node.contract.slot(slot).is_some()
+    }
     /// The buffer bound to `slot`, and its size in bytes (the pooled buffer may be larger).
     pub fn buffer(&self, slot: &str) -> Result<(&'a wgpu::Buffer, u64)> {
         self.buffer_of(self.slot_resource(slot)?)
@@ -139,6 +143,7 @@ impl<'a> RecordContext<'a> {
         let key = ProgramKey {
             module: ModuleKey { shader: desc.shader.name, defs: desc.defs.shader_defs() },
             entry: desc.entry,
+            declared: desc.layouts.to_vec(),
             layouts,
         };
         if let Some(p) = self.programs.compute_program(&key) {

@@ -1,0 +1,126 @@
+//! Small passes for graph tests: `fill` writes `i * k`, `add` writes `input[i] + k`.
+#![allow(dead_code)]
+
+use meshlight_graph::*;
+
+pub const SHADER: PassShader = PassShader { name: "test::arith", source: include_str!("arith.wgsl"), file_path: "graph/tests/support/arith.wgsl" };
+
+fn u32s(name: &'static str, access: Access, doc: &'static str) -> Slot {
+    Slot::buffer(name, access, Element::U32, doc)
+}
+
+/// Stage `produce`: writes `output`.
+pub struct Fill {
+    pub count: u32,
+    pub k: u32,
+}
+
+/// Stage `transform`: reads `input`, writes `output`. Two implementations share it.
+pub struct Add {
+    pub count: u32,
+    pub k: u32,
+}
+/// A second implementation of `transform` giving the same result as `Add { k }` for k = 2·half.
+pub struct AddTwice {
+    pub count: u32,
+    pub half: u32,
+}
+
+pub fn produce_contract() -> StageContract {
+    StageContract { stage: "produce", slots: vec![u32s("output", Access::StorageWrite, "values written")] }
+}
+pub fn transform_contract() -> StageContract {
+    StageContract {
+        stage: "transform",
+        slots: vec![u32s("input", Access::StorageRead, "values read"), u32s("output", Access::StorageWrite, "values written")],
+    }
+}
+
+fn layout_out_only() -> BindingLayout {
+    // `fill` reads no input, but the shader declares it; bind the output twice would alias,
+    // so `fill` uses a layout without binding 0.
+    BindingLayout::compute("fill").slot(1, "output").uniform(2)
+}
+fn layout_in_out() -> BindingLayout {
+    BindingLayout::compute("add").slot(0, "input").slot(1, "output").uniform(2)
+}
+
+fn dispatch(ctx: &mut RecordContext<'_>, entry: &'static str, layout: BindingLayout, count: u32, k: u32) -> Result<()> {
+    let program = ctx.compute_program(&ComputeDesc { shader: &SHADER, entry, defs: &(), layouts: &[layout] })?;
+    let params = [count, k, 0, 0];
+    let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&params))])?;
+    let mut pass = ctx.compute_pass();
+    pass.set_pipeline(&program.pipeline);
+    pass.set_bind_group(0, &bg, &[]);
+    pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
+    Ok(())
+}
+
+impl Pass for Fill {
+    fn contract(&self) -> StageContract {
+        produce_contract()
+    }
+    fn implementation(&self) -> &'static str {
+        "fill"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.min_bytes("output", self.count as u64 * 4);
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        dispatch(ctx, "fill", layout_out_only(), self.count, self.k)
+    }
+}
+
+impl Pass for Add {
+    fn contract(&self) -> StageContract {
+        transform_contract()
+    }
+    fn implementation(&self) -> &'static str {
+        "add"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.min_bytes("output", self.count as u64 * 4);
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        dispatch(ctx, "add", layout_in_out(), self.count, self.k)
+    }
+}
+
+impl Pass for AddTwice {
+    fn contract(&self) -> StageContract {
+        transform_contract()
+    }
+    fn implementation(&self) -> &'static str {
+        "add_twice"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.scratch_buffer("half", BufferDesc::array(Element::U32, self.count as u64), &[Access::StorageReadWrite, Access::StorageRead]);
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        // input + half into scratch, then scratch + half into output.
+        let first = BindingLayout::compute("add_twice.first").slot(0, "input").scratch(1, "half", Access::StorageReadWrite).uniform(2);
+        let second = BindingLayout::compute("add_twice.second").scratch(0, "half", Access::StorageRead).slot(1, "output").uniform(2);
+        dispatch(ctx, "add", first, self.count, self.half)?;
+        dispatch(ctx, "add", second, self.count, self.half)
+    }
+}
+
+/// Opens the first Vulkan adapter with everything it offers that tests may use.
+pub fn gpu() -> GpuContext {
+    match GpuContext::with_available(wgpu::Features::all()) {
+        Ok(g) => g,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+pub fn storage_buffer(gpu: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buffer {
+    gpu.buffer_with_data(label, bytemuck::cast_slice(words), wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC)
+}
+
+pub fn read_u32s(gpu: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Vec<u32> {
+    let bytes = gpu.read_buffer(buffer, 0, count as u64 * 4).expect("readback");
+    bytemuck::cast_slice(&bytes).to_vec()
+}
