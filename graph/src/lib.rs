@@ -11,7 +11,7 @@ pub mod contract;
 // pub mod dump;
 pub mod error;
 pub mod exec;
-// pub mod file;
+pub mod file;
 pub mod pass;
 pub mod plan;
 pub mod resource;
