@@ -8,7 +8,7 @@ pub mod access;
 pub mod builder;
 pub mod compile;
 pub mod contract;
-// pub mod dump;
+pub mod dump;
 pub mod error;
 pub mod exec;
 pub mod file;

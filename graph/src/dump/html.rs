@@ -1,0 +1,91 @@
+//! One self-contained HTML page (no scripts, no network): the pass order with per-pass GPU
+//! time bars, and the resource-lifetime chart (rows = resources, columns = passes).
+
+use super::kind_tag;
+use crate::exec::FrameStats;
+use crate::plan::Plan;
+use std::fmt::Write;
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+fn bytes(b: u64) -> String {
+    match b {
+        b if b >= 1 << 30 => format!("{:.2} GiB", b as f64 / (1u64 << 30) as f64),
+        b if b >= 1 << 20 => format!("{:.2} MiB", b as f64 / (1u64 << 20) as f64),
+        b if b >= 1 << 10 => format!("{:.1} KiB", b as f64 / 1024.0),
+        b => format!("{b} B"),
+    }
+}
+
+pub fn to_html(plan: &Plan, title: &str, last_frame: Option<&FrameStats>) -> String {
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\n<style>\n\
+body{{font:14px/1.4 system-ui,sans-serif;margin:2em;color:#222}}\n\
+table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px solid #ddd;text-align:left}}\n\
+.bar{{background:#4a78c2;height:12px}}.life{{background:#7bb274}}.slot{{color:#666;font-size:12px}}\n\
+.culled{{color:#999;text-decoration:line-through}}th.v{{writing-mode:vertical-rl;font-weight:normal}}\n\
+</style></head><body>\n<h1>{t}</h1>\n",
+        t = esc(title)
+    );
+    let _ = writeln!(
+        h,
+        "<p>{} passes run, {} culled; transient memory {} with slot reuse, {} without.</p>",
+        plan.order.len(),
+        plan.culled.len(),
+        bytes(plan.bytes_with_reuse),
+        bytes(plan.bytes_without_reuse)
+    );
+
+    h.push_str("<h2>Pass order</h2>\n<table><tr><th>#</th><th>pass</th><th>stage / implementation</th><th>GPU µs</th><th></th><th>CPU record µs</th></tr>\n");
+    let max_gpu = last_frame.map(|f| f.passes.iter().filter_map(|p| p.gpu_us).fold(0.0, f64::max)).unwrap_or(0.0);
+    for (o, &p) in plan.order.iter().enumerate() {
+        let pass = &plan.passes[p];
+        let timing = last_frame.and_then(|f| f.passes.iter().find(|t| t.name == pass.name));
+        let gpu = timing.and_then(|t| t.gpu_us);
+        let width = match gpu {
+            Some(g) if max_gpu > 0.0 => (g / max_gpu * 300.0).round() as u32,
+            _ => 0,
+        };
+        let _ = writeln!(
+            h,
+            "<tr><td>{o}</td><td>{}</td><td>{} / {}</td><td>{}</td><td><div class=\"bar\" style=\"width:{width}px\"></div></td><td>{}</td></tr>",
+            esc(&pass.name),
+            esc(pass.stage),
+            esc(pass.implementation),
+            gpu.map(|g| format!("{g:.1}")).unwrap_or_else(|| "–".into()),
+            timing.map(|t| format!("{:.1}", t.cpu_record_us)).unwrap_or_else(|| "–".into()),
+        );
+    }
+    for &p in &plan.culled {
+        let _ = writeln!(h, "<tr class=\"culled\"><td></td><td>{}</td><td colspan=\"4\">culled: nothing it writes is used</td></tr>", esc(&plan.passes[p].name));
+    }
+    h.push_str("</table>\n<h2>Resource lifetimes</h2>\n<table><tr><th>resource</th><th>kind</th><th>size</th><th>slot</th>");
+    for &p in &plan.order {
+        let _ = write!(h, "<th class=\"v\">{}</th>", esc(&plan.passes[p].name));
+    }
+    h.push_str("</tr>\n");
+    for res in &plan.resources {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td class=\"slot\">{}</td><td>{}</td><td>{}</td>",
+            esc(&res.info.name),
+            kind_tag(&res.info.kind),
+            bytes(res.info.desc.bytes()),
+            res.pool_slot.map(|s| s.to_string()).unwrap_or_else(|| "–".into())
+        );
+        for (o, &p) in plan.order.iter().enumerate() {
+            let used = plan.passes[p].slots.iter().any(|s| plan.resources[s.resource].info.name == res.info.name)
+                || plan.passes[p].scratch.iter().any(|&s| plan.resources[s].info.name == res.info.name);
+            let alive = res.lifetime.is_some_and(|l| l.first <= o && o <= l.last);
+            let class = if alive { " class=\"life\"" } else { "" };
+            let _ = write!(h, "<td{class}>{}</td>", if used { "●" } else { "" });
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</table>\n</body></html>\n");
+    h
+}

@@ -1,0 +1,55 @@
+//! Deterministic dumps of a compiled plan: DOT, JSON, Mermaid and a self-contained HTML
+//! page. Everything iterates in plan order, so equal plans give equal bytes.
+
+mod dot;
+mod html;
+mod mermaid;
+
+pub use dot::to_dot;
+pub use html::to_html;
+pub use mermaid::to_mermaid;
+
+use crate::exec::FrameStats;
+use crate::plan::Plan;
+use crate::resource::ResourceKind;
+use serde::Serialize;
+
+#[derive(Serialize)]
+struct JsonDump<'a> {
+    plan: &'a Plan,
+    last_frame: Option<&'a FrameStats>,
+}
+
+/// The plan (order, culled passes, lifetimes, pool slots, usages) and the last frame's timings.
+pub fn to_json(plan: &Plan, last_frame: Option<&FrameStats>) -> String {
+    serde_json::to_string_pretty(&JsonDump { plan, last_frame }).expect("plan serialises: no maps with non-string keys")
+}
+
+/// A node for one version of a resource, as read or written by some pass.
+pub(crate) fn version_nodes(plan: &Plan) -> Vec<(usize, u32)> {
+    let mut v: Vec<(usize, u32)> = Vec::new();
+    for p in &plan.passes {
+        for s in &p.slots {
+            if s.access.reads() {
+                v.push((s.resource, s.version));
+            }
+            if let Some(w) = s.writes_version {
+                v.push((s.resource, w));
+            }
+        }
+    }
+    v.sort();
+    v.dedup();
+    v
+}
+
+pub(crate) fn kind_tag(kind: &ResourceKind) -> &'static str {
+    match kind {
+        ResourceKind::Transient => "transient",
+        ResourceKind::Imported { .. } => "imported",
+        ResourceKind::History { .. } => "history",
+        ResourceKind::HistoryPrev { .. } => "history (prev)",
+        ResourceKind::Exported => "exported",
+        ResourceKind::Scratch { .. } => "scratch",
+    }
+}
