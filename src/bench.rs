@@ -1,0 +1,248 @@
+//! `meshlight bench`: named scenarios, a table on stdout and the same rows as JSON.
+//!
+//! GPU figures come from timestamps on whatever adapter runs the command; only numbers
+//! from a real GPU say anything about speed.
+
+use crate::graph::*;
+use serde::Serialize;
+use std::time::Instant;
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Scenarios to run (default: all that need no mesh files). Known: graph-compile,
+    /// graph-execute, pool-reuse, render, builder.
+    #[arg(long = "scenario", value_delimiter = ',')]
+    pub scenarios: Vec<String>,
+    /// Write the rows as JSON here too.
+    #[arg(long)]
+    pub json: Option<std::path::PathBuf>,
+    /// Fewer repeats and smaller sizes, for a quick look.
+    #[arg(long)]
+    pub quick: bool,
+}
+
+/// One measured row: what was measured, the value, its unit, and optional context.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub scenario: String,
+    pub case: String,
+    pub metric: String,
+    pub value: f64,
+    pub unit: String,
+    /// Value relative to the scenario's baseline measured in the same run, when it has one.
+    pub vs_baseline: Option<f64>,
+    pub device: String,
+}
+
+const ALL: &[&str] = &["graph-compile", "graph-execute", "pool-reuse", "render", "builder"];
+
+pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    let scenarios: Vec<String> = if args.scenarios.is_empty() { ALL.iter().map(|s| s.to_string()).collect() } else { args.scenarios.clone() };
+    let mut rows = Vec::new();
+    for s in &scenarios {
+        let new = match s.as_str() {
+            "graph-compile" => graph_compile(args.quick),
+            "graph-execute" => graph_execute(args.quick)?,
+            "pool-reuse" => pool_reuse(),
+            "render" => render(args.quick)?,
+            "builder" => builder(args.quick)?,
+            other => return Err(format!("unknown scenario `{other}`; known: {}", ALL.join(", ")).into()),
+        };
+        for r in &new {
+            println!(
+                "{:<14} {:<28} {:<22} {:>14.3} {:<10} {}",
+                r.scenario,
+                r.case,
+                r.metric,
+                r.value,
+                r.unit,
+                r.vs_baseline.map(|b| format!("×{b:.2} vs baseline")).unwrap_or_default()
+            );
+        }
+        rows.extend(new);
+    }
+    if let Some(path) = &args.json {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        std::fs::write(path, serde_json::to_string_pretty(&rows)?)?;
+    }
+    Ok(())
+}
+
+fn row(scenario: &str, case: String, metric: &str, value: f64, unit: &str, device: &str) -> Row {
+    Row { scenario: scenario.into(), case, metric: metric.into(), value, unit: unit.into(), vs_baseline: None, device: device.into() }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// A pass with any slots that records nothing: compile and CPU-overhead benchmarks.
+pub struct NoopPass {
+    pub slots: Vec<Slot>,
+}
+
+impl Pass for NoopPass {
+    fn contract(&self) -> StageContract {
+        StageContract { stage: "noop", slots: self.slots.clone() }
+    }
+    fn implementation(&self) -> &'static str {
+        "noop"
+    }
+    fn setup(&self, _: &mut SetupContext) -> Result<()> {
+        Ok(())
+    }
+    fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// A random layered graph of `n` passes: each writes its own transient and reads up to
+/// three earlier ones; every tenth also accumulates into the imported output.
+pub fn random_graph(n: usize, seed: u64) -> GraphBuilder {
+    let mut state = seed | 1;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut g = GraphBuilder::new();
+    let mut out = g.import_buffer("out", BufferDesc::array(Element::U32, 16), wgpu::BufferUsages::STORAGE).erase();
+    let names: Vec<String> = (0..n).map(|i| format!("t{i}")).collect();
+    for name in &names {
+        g.create_buffer(name, BufferDesc::array(Element::U32, 64 + next() % 4096));
+    }
+    const INPUTS: [&str; 3] = ["in0", "in1", "in2"];
+    for i in 0..n {
+        let mut slots = Vec::new();
+        let mut b = Bindings::new();
+        for name in INPUTS.iter().take(if i == 0 { 0 } else { (next() % 4) as usize }) {
+            let src = (next() % i as u64) as usize;
+            slots.push(Slot::buffer(name, Access::StorageRead, Element::U32, ""));
+            b = b.bind_named(name, &names[src]);
+        }
+        slots.push(Slot::buffer("w", Access::StorageWrite, Element::U32, ""));
+        b = b.bind_named("w", &names[i]);
+        let accumulate = i % 10 == 9 || i == n - 1;
+        if accumulate {
+            slots.push(Slot::buffer("out", Access::StorageReadWrite, Element::U32, ""));
+            b = b.bind("out", out);
+        }
+        let outputs = g.add_pass(&format!("p{i}"), NoopPass { slots }, b).expect("generated graphs are well-formed");
+        if accumulate {
+            out = outputs.written().iter().find(|(s, _)| *s == "out").map(|(_, h)| *h).unwrap_or(out);
+        }
+    }
+    g
+}
+
+fn graph_compile(quick: bool) -> Vec<Row> {
+    let mut rows = Vec::new();
+    for n in [10usize, 100, 1000] {
+        let reps = if quick { 5 } else { 30 };
+        let times: Vec<f64> = (0..reps)
+            .map(|i| {
+                let g = random_graph(n, 0x5eed + i as u64);
+                let t = Instant::now();
+                let c = g.compile(&CompileOptions::new(wgpu::Features::empty())).expect("compiles");
+                let dt = t.elapsed().as_secs_f64() * 1e3;
+                std::hint::black_box(c.plan.order.len());
+                dt
+            })
+            .collect();
+        rows.push(row("graph-compile", format!("{n} passes"), "compile time (median)", median(times), "ms", "cpu"));
+    }
+    rows
+}
+
+fn graph_execute(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
+    let adapter = GpuAdapter::select()?;
+    let device = adapter.info().name;
+    let mut rows = Vec::new();
+    for n in [10usize, 100] {
+        let compiled = random_graph(n, 7).compile(&CompileOptions::new(adapter.features()))?;
+        let gpu = GpuContext::with_available(compiled.plan.enabled_features)?;
+        let out = gpu.device.create_buffer(&wgpu::BufferDescriptor { label: Some("out"), size: 64, usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
+        let mut exec = Executor::new(gpu);
+        exec.gpu_timing = false;
+        let imports = Imports::new().buffer("out", &out);
+        exec.execute(&compiled, &imports)?;
+        let frames = if quick { 20 } else { 200 };
+        let mut record = Vec::new();
+        let mut frame = Vec::new();
+        for _ in 0..frames {
+            let s = exec.execute(&compiled, &imports)?;
+            record.push(s.passes.iter().map(|p| p.cpu_record_us).sum::<f64>() / n as f64);
+            frame.push(s.cpu_frame_us / n as f64);
+        }
+        exec.device().poll(wgpu::PollType::wait_indefinitely()).ok();
+        rows.push(row("graph-execute", format!("{n} passes"), "CPU per pass (frame)", median(frame), "µs", &device));
+        rows.push(row("graph-execute", format!("{n} passes"), "CPU per pass (record)", median(record), "µs", &device));
+    }
+    Ok(rows)
+}
+
+/// A graph shaped like one virtual-geometry frame, to show what slot reuse saves.
+pub fn sample_frame_graph(width: u32, height: u32) -> GraphBuilder {
+    let px = width as u64 * height as u64;
+    let mut g = GraphBuilder::new();
+    let usage = wgpu::BufferUsages::STORAGE;
+    g.import_buffer("scene", BufferDesc::array(Element::U32, 1 << 20), usage);
+    g.import_buffer("image", BufferDesc::array(Element::U32, px), usage);
+    let stages: [(&str, &[&str], &[(&str, u64)]); 8] = [
+        ("fill_clusters", &["scene"], &[("clusters", 1 << 20)]),
+        ("cull_first", &["clusters"], &[("candidates", 1 << 20), ("dispatch_first", 4)]),
+        ("raster_first", &["candidates", "dispatch_first"], &[("visbuffer", px * 2)]),
+        ("depth_pyramid", &["visbuffer"], &[("pyramid", px / 3)]),
+        ("cull_second", &["clusters", "pyramid"], &[("second", 1 << 19), ("dispatch_second", 4)]),
+        ("raster_second", &["second", "dispatch_second", "visbuffer"], &[("visbuffer2", px * 2)]),
+        ("material_depth", &["visbuffer2"], &[("material", px)]),
+        ("resolve", &["visbuffer2", "material"], &[("image", 0)]),
+    ];
+    for (pass, reads, writes) in stages {
+        let mut slots: Vec<Slot> = reads.iter().map(|r| Slot::buffer(r, Access::StorageRead, Element::U32, "")).collect();
+        for (w, words) in writes {
+            if *words > 0 {
+                g.create_buffer(w, BufferDesc::array(Element::U32, *words));
+            }
+            slots.push(Slot::buffer(w, Access::StorageWrite, Element::U32, ""));
+        }
+        g.add_pass(pass, NoopPass { slots }, Bindings::new()).expect("sample graph is well-formed");
+    }
+    g
+}
+
+fn pool_reuse() -> Vec<Row> {
+    let plan = sample_frame_graph(1920, 1080).compile(&CompileOptions::new(wgpu::Features::empty())).expect("compiles").plan;
+    let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+    let mut with = row("pool-reuse", "sample frame 1920x1080".into(), "transient bytes, reuse", mib(plan.bytes_with_reuse), "MiB", "cpu");
+    with.vs_baseline = Some(plan.bytes_with_reuse as f64 / plan.bytes_without_reuse as f64);
+    vec![row("pool-reuse", "sample frame 1920x1080".into(), "transient bytes, no reuse", mib(plan.bytes_without_reuse), "MiB", "cpu"), with]
+}
+
+fn render(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
+    let mesh = crate::scene::procedural_mesh(if quick { 64 } else { crate::scene::DEFAULT_SEGMENTS });
+    let tris = (mesh.indices.len() / 3) as f64;
+    let r = crate::demo::render(&mesh.positions, &mesh.indices, 1920, 1080)?;
+    let mut rows = Vec::new();
+    for p in &r.stats.passes {
+        if let Some(us) = p.gpu_us {
+            rows.push(row("render", format!("{} tris 1920x1080", tris), &format!("{} GPU (first frame)", p.name), us / 1e3, "ms", &r.adapter));
+        }
+    }
+    Ok(rows)
+}
+
+fn builder(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::error::Error>> {
+    let mesh = crate::scene::procedural_mesh(if quick { 64 } else { crate::scene::DEFAULT_SEGMENTS });
+    let dir = std::env::temp_dir().join("meshlight-bench");
+    std::fs::create_dir_all(&dir)?;
+    let b = crate::scene::bench::builder_scenario("procedural", &mesh, if quick { 1 } else { 3 }, &dir)?;
+    println!("{}", crate::scene::bench::format_table(std::slice::from_ref(&b)));
+    let mut r = row("builder", "procedural".into(), "input triangles/s", b.triangles_per_second(), "tri/s", "cpu");
+    r.vs_baseline = Some(b.triangles_per_second() / b.clod_triangles_per_second());
+    Ok(vec![r])
+}
