@@ -1,0 +1,235 @@
+//! What both implementations share: the shader, its typed defs, the level layout of the
+//! fan buffer, scratch declarations, and the recording of a list of dispatches.
+
+use crate::{ScanOptions, Subgroups};
+use meshlight_graph::{Access, BindingLayout, BufferDesc, ComputeDesc, Element, RecordContext, Result, SetupContext};
+use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
+
+pub(crate) const SHADER: PassShader = pass_shader!("scan_fan::scan", "scan.wgsl");
+
+/// Kernel entry points in `scan.wgsl`.
+pub(crate) mod entry {
+    pub const REDUCE: &str = "reduce";
+    pub const SCAN_ADD: &str = "scan_add";
+    pub const WALK: &str = "walk";
+    pub const DISPATCH_ARGS: &str = "dispatch_args";
+}
+
+/// Mirrors the WGSL `FLAG_*` constants.
+pub(crate) mod flag {
+    pub const INCLUSIVE: u32 = 1;
+    pub const CARRY: u32 = 2;
+    pub const TOTAL: u32 = 4;
+}
+
+/// The API's cap on workgroups per dispatch dimension; larger grids are split into rows.
+pub(crate) const MAX_GROUPS_PER_DIM: u32 = 65_535;
+
+/// The variant of `scan.wgsl` a pass runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ScanDefs {
+    /// Elements each lane scans serially (`ITEMS`).
+    pub items_per_thread: u32,
+    /// Subgroup scans (`SUBGROUPS`).
+    pub subgroups: bool,
+    /// The element count comes from the `count` slot (`GPU_COUNT`).
+    pub gpu_count: bool,
+}
+
+impl ShaderDefs for ScanDefs {
+    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
+        vec![
+            ("ITEMS", ShaderDef::UInt(self.items_per_thread)),
+            ("SUBGROUPS", ShaderDef::Bool(self.subgroups)),
+            ("GPU_COUNT", ShaderDef::Bool(self.gpu_count)),
+        ]
+    }
+}
+
+/// The uniform block of every dispatch; mirrors `Params` in `scan.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct GpuParams {
+    pub count: u32,
+    pub level: u32,
+    pub src_offset: u32,
+    pub dst_offset: u32,
+    pub flags: u32,
+    pub capacity: u32,
+    pub indirect_levels: u32,
+    pub _pad: u32,
+}
+
+/// Element counts of each level and where the levels above 0 sit in the fan buffer.
+///
+/// Level 0 is the input; level l + 1 holds one total per tile of level l. The last level
+/// fits one tile. Built from the capacity, so with a GPU count every level is big enough.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct Levels {
+    pub sizes: Vec<u32>,
+    /// `offsets[l]`: first word of level l in `fan` (0 for level 0, which is not in it).
+    pub offsets: Vec<u32>,
+}
+
+impl Levels {
+    /// Recursive levels until one tile holds the top (the `scan_fan` scheme).
+    pub fn recursive(count: u32, tile: u32) -> Self {
+        let mut sizes = vec![count];
+        while *sizes.last().expect("level 0") > tile {
+            let n = sizes.last().expect("level 0").div_ceil(tile);
+            sizes.push(n);
+        }
+        Self::with_offsets(sizes)
+    }
+
+    /// At most one level of tile totals, however many (the `two_step` scheme).
+    pub fn single_fan(count: u32, tile: u32) -> Self {
+        let sizes = if count > tile { vec![count, count.div_ceil(tile)] } else { vec![count] };
+        Self::with_offsets(sizes)
+    }
+
+    fn with_offsets(sizes: Vec<u32>) -> Self {
+        let mut offsets = vec![0; sizes.len()];
+        for l in 2..sizes.len() {
+            offsets[l] = offsets[l - 1] + sizes[l - 1];
+        }
+        Self { sizes, offsets }
+    }
+
+    pub fn top(&self) -> usize {
+        self.sizes.len() - 1
+    }
+
+    /// Words of `fan`: every level above 0 (at least one, so the buffer exists).
+    pub fn fan_words(&self) -> u64 {
+        self.sizes[1..].iter().map(|&n| n as u64).sum::<u64>().max(1)
+    }
+
+    /// The uniform block for a dispatch on `level`.
+    pub fn params(&self, options: &ScanOptions, level: usize, flags: u32) -> GpuParams {
+        GpuParams {
+            count: options.count,
+            level: level as u32,
+            src_offset: self.offsets[level],
+            dst_offset: self.offsets.get(level + 1).copied().unwrap_or(0),
+            flags,
+            capacity: options.count,
+            indirect_levels: self.top() as u32,
+            _pad: 0,
+        }
+    }
+}
+
+/// Splits `groups` workgroups into a grid no wider than the per-dimension cap. The kernels
+/// skip the surplus of the last row. Mirrors `dispatch_args` in `scan.wgsl`.
+pub(crate) fn grid(groups: u32) -> [u32; 2] {
+    let rows = groups.div_ceil(MAX_GROUPS_PER_DIM).max(1);
+    [groups.div_ceil(rows), rows]
+}
+
+/// How a dispatch gets its workgroup count.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Grid {
+    /// Known on the CPU.
+    Direct([u32; 2]),
+    /// The tile grid of `level`, computed on the GPU by `dispatch_args`.
+    Indirect { level: usize },
+}
+
+impl Grid {
+    /// The tile grid of `level` of `levels`: direct when the count is known on the CPU.
+    pub fn tiles(levels: &Levels, level: usize, tile: u32, gpu_count: bool) -> Self {
+        if gpu_count { Grid::Indirect { level } } else { Grid::Direct(grid(levels.sizes[level].div_ceil(tile))) }
+    }
+    pub const ONE: Grid = Grid::Direct([1, 1]);
+}
+
+/// One dispatch of `scan.wgsl`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Step {
+    pub entry: &'static str,
+    pub params: GpuParams,
+    pub grid: Grid,
+}
+
+/// Setup shared by both implementations: validation, the variant, the scratch buffers.
+///
+/// Setup cannot see which optional slots are bound, so the `args` and `total` scratch
+/// buffers (a few words) are declared either way, and the recorded defs assume a CPU
+/// count; `record` picks the variant from the bindings.
+pub(crate) fn setup(ctx: &mut SetupContext, options: &ScanOptions, levels: &Levels) -> Result<()> {
+    options.validate()?;
+    ctx.optional_features(wgpu::Features::SUBGROUP);
+    let subgroups = options.subgroups == Subgroups::Auto && ctx.has(wgpu::Features::SUBGROUP);
+    ctx.shader_defs(&ScanDefs { items_per_thread: options.items_per_thread, subgroups, gpu_count: false });
+    ctx.scratch_buffer("fan", BufferDesc::array(Element::U32, levels.fan_words()), &[Access::StorageReadWrite]);
+    ctx.scratch_buffer(
+        "args",
+        BufferDesc::array(Element::DISPATCH_ARGS, levels.top().max(1) as u64),
+        &[Access::StorageReadWrite, Access::Indirect],
+    );
+    ctx.scratch_buffer("total", BufferDesc::array(Element::U32, 1), &[Access::StorageReadWrite]);
+    let bytes = options.count as u64 * 4;
+    ctx.min_bytes("input", bytes);
+    ctx.min_bytes("output", bytes);
+    ctx.min_bytes("total", 4);
+    ctx.min_bytes("count", 4);
+    Ok(())
+}
+
+/// The bind group every kernel but `dispatch_args` uses, from the bound slots.
+fn scan_layout(ctx: &RecordContext<'_>, gpu_count: bool) -> BindingLayout {
+    let layout = BindingLayout::compute("scan_fan").slot(0, "input").slot(1, "output").scratch(2, "fan", Access::StorageReadWrite);
+    let layout = if ctx.is_bound("total") { layout.slot(3, "total") } else { layout.scratch(3, "total", Access::StorageReadWrite) };
+    let layout = layout.uniform(4);
+    if gpu_count { layout.slot(5, "count") } else { layout }
+}
+
+fn args_layout() -> BindingLayout {
+    BindingLayout::compute("scan_fan.args").uniform(4).slot(5, "count").scratch(6, "args", Access::StorageReadWrite)
+}
+
+/// A step with its pipeline and bind group resolved, ready to encode.
+struct Encoded {
+    program: std::sync::Arc<meshlight_graph::exec::ComputeProgram>,
+    bind_group: wgpu::BindGroup,
+    grid: Grid,
+}
+
+/// True when the element count comes from the `count` slot.
+pub(crate) fn gpu_count(ctx: &RecordContext<'_>) -> bool {
+    ctx.is_bound("count")
+}
+
+/// Encodes `steps` in order in one compute pass; wgpu orders the storage writes of one
+/// dispatch before the reads of the next.
+pub(crate) fn record(ctx: &mut RecordContext<'_>, options: &ScanOptions, steps: &[Step]) -> Result<()> {
+    let gpu_count = gpu_count(ctx);
+    let defs = ScanDefs { items_per_thread: options.items_per_thread, subgroups: options.subgroups.enabled(ctx.features()), gpu_count };
+    let scan = scan_layout(ctx, gpu_count);
+    let args = args_layout();
+    let mut encoded = Vec::with_capacity(steps.len());
+    for step in steps {
+        let layout = if step.entry == entry::DISPATCH_ARGS { &args } else { &scan };
+        let program = ctx.compute_program(&ComputeDesc {
+            shader: &SHADER,
+            entry: step.entry,
+            defs: &defs,
+            layouts: std::slice::from_ref(layout),
+        })?;
+        let bind_group = ctx.bind_group(&program, 0, &[(4, bytemuck::bytes_of(&step.params))])?;
+        encoded.push(Encoded { program, bind_group, grid: step.grid });
+    }
+    let args_buffer = if gpu_count { Some(ctx.scratch("args")?.0) } else { None };
+    let mut pass = ctx.compute_pass();
+    for e in &encoded {
+        pass.set_pipeline(&e.program.pipeline);
+        pass.set_bind_group(0, &e.bind_group, &[]);
+        match (e.grid, args_buffer) {
+            (Grid::Direct([x, y]), _) => pass.dispatch_workgroups(x, y, 1),
+            (Grid::Indirect { level }, Some(buffer)) => pass.dispatch_workgroups_indirect(buffer, level as u64 * 12),
+            (Grid::Indirect { .. }, None) => unreachable!("indirect steps are planned only with a GPU count"),
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,186 @@
+//! Stage `scan_fan`: prefix sum of u32 counts into offsets, plus their total.
+//!
+//! Light clustering counts objects per cluster on the GPU; turning those counts into the
+//! start offset of each cluster's list is a prefix sum. It is also the first pass crate, so
+//! it shows the shape every pass crate follows: the contract here, one module per
+//! implementation, the WGSL beside them, a CPU reference, GPU tests against it, and a
+//! benchmark.
+//!
+//! # Contract
+//!
+//! | slot     | access        | holds | |
+//! |----------|---------------|-------|---|
+//! | `input`  | storage read  | u32   | the counts, `count` of them |
+//! | `output` | storage write | u32   | `output[i]` = sum of `input[..i]` (exclusive) or `input[..=i]` (inclusive) |
+//! | `total`  | storage write | u32   | optional: `total[0]` = sum of all counted inputs |
+//! | `count`  | storage read  | u32   | optional: `count[0]` = elements to scan, written by an earlier pass |
+//!
+//! # Definitions the tests pin down
+//!
+//! - Sums are u32 and wrap modulo 2^32, exactly like [`cpu_scan`]; counts near `u32::MAX`
+//!   wrap rather than saturate or fail.
+//! - With the `count` slot bound, the element count is `min(count[0], capacity)` where the
+//!   capacity is the pass's `count` parameter; the dispatches are indirect. Elements of
+//!   `output` at or past the element count are never written, whichever way the count
+//!   comes, so a caller's contents there survive.
+//! - An empty scan writes only `total[0] = 0`.
+//!
+//! # Implementations
+//!
+//! - [`ScanFan`] (`scan_fan`, the default): per tile a reduction into a fan buffer, the fan
+//!   scanned recursively (any number of levels), then each tile scanned with its carry.
+//! - [`TwoStep`] (`two_step`): the same first and last steps, with one workgroup walking
+//!   all tile totals in order in between — simpler, and the comparison for the benchmark.
+//!
+//! Both share this contract and [`ScanOptions`], so swapping them is a one-line change.
+//!
+//! # Why reduce-then-scan
+//!
+//! The textbook order (scan each chunk and write it, scan the chunk totals, then read and
+//! rewrite every element to add its chunk's carry) moves 16 bytes per element; the best it
+//! can reach is half of copy bandwidth. Here step 1 only reduces each tile to its total
+//! (4 bytes read per element) and step 3 does the Hillis–Steele tile scan and the carry add
+//! in one read and one write (8 bytes), 12 bytes in all.
+
+use meshlight_graph::file::{Params, Registry};
+use meshlight_graph::{Access, Element, GraphError, Pass, Result, Slot, StageContract};
+
+pub mod bench;
+mod cpu;
+mod kernels;
+mod scan_fan;
+mod two_step;
+
+pub use cpu::cpu_scan;
+pub use kernels::ScanDefs;
+pub use scan_fan::ScanFan;
+pub use two_step::TwoStep;
+
+/// The stage name pipelines use.
+pub const STAGE: &str = "scan_fan";
+
+/// Lanes per workgroup: one Hillis–Steele step per doubling, eight steps for 256 lanes.
+pub const WORKGROUP: u32 = 256;
+
+/// The largest element count a pass accepts. Tile offsets are u32 on the GPU, and the
+/// last tile must not run past 2^32.
+pub const MAX_COUNT: u32 = 1 << 31;
+
+/// The slots every implementation of `scan_fan` shares.
+pub fn contract() -> StageContract {
+    StageContract {
+        stage: STAGE,
+        slots: vec![
+            Slot::buffer("input", Access::StorageRead, Element::U32, "counts to scan; at least `count` elements"),
+            Slot::buffer(
+                "output",
+                Access::StorageWrite,
+                Element::U32,
+                "prefix sums (exclusive unless `inclusive`); elements past the count are left untouched",
+            ),
+            Slot::buffer("total", Access::StorageWrite, Element::U32, "total[0] = sum of all counted inputs, modulo 2^32").optional(),
+            Slot::buffer(
+                "count",
+                Access::StorageRead,
+                Element::U32,
+                "count[0] = elements to scan, from an earlier pass; clamped to the `count` parameter, dispatches become indirect",
+            )
+            .optional(),
+        ],
+    }
+}
+
+/// Whether the local scan uses subgroup operations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Subgroups {
+    /// Subgroup scans where the device has `SUBGROUP`, the shared-memory scan elsewhere.
+    #[default]
+    Auto,
+    /// Always the shared-memory Hillis–Steele scan (to compare, or to test that path).
+    Off,
+}
+
+impl Subgroups {
+    fn parse(value: &str) -> Result<Self> {
+        match value {
+            "auto" => Ok(Self::Auto),
+            "off" => Ok(Self::Off),
+            other => Err(GraphError::Parameter {
+                pass: String::new(),
+                message: format!("`subgroups` must be \"auto\" or \"off\", not {other:?}"),
+            }),
+        }
+    }
+    /// True when this mode uses subgroups on a device with `features`.
+    pub fn enabled(self, features: wgpu::Features) -> bool {
+        self == Self::Auto && features.contains(wgpu::Features::SUBGROUP)
+    }
+}
+
+/// What both implementations are configured with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ScanOptions {
+    /// Elements to scan; with the `count` slot bound, the most the GPU count may say.
+    pub count: u32,
+    /// Inclusive sums (`output[i]` includes `input[i]`) instead of exclusive ones.
+    pub inclusive: bool,
+    pub subgroups: Subgroups,
+    /// Consecutive elements each lane scans serially before the workgroup scan; a tile is
+    /// 256 × this. 1 gives the plain 256-element Hillis–Steele chunk; larger values cut the
+    /// barriers and the fan per element, which is what makes the scan bandwidth-bound.
+    pub items_per_thread: u32,
+}
+
+/// Parameter names a pipeline file may use.
+const PARAM_KEYS: [&str; 4] = ["count", "inclusive", "subgroups", "items_per_thread"];
+
+impl ScanOptions {
+    pub const DEFAULT_ITEMS_PER_THREAD: u32 = 8;
+
+    pub fn new(count: u32) -> Self {
+        Self { count, inclusive: false, subgroups: Subgroups::Auto, items_per_thread: Self::DEFAULT_ITEMS_PER_THREAD }
+    }
+
+    /// Reads `count`, `inclusive`, `subgroups` ("auto" | "off") and `items_per_thread`.
+    pub fn from_params(params: &Params) -> Result<Self> {
+        params.only(&PARAM_KEYS)?;
+        let options = Self {
+            count: params.u32("count", 0)?,
+            inclusive: params.bool("inclusive", false)?,
+            subgroups: Subgroups::parse(&params.string("subgroups", "auto")?)?,
+            items_per_thread: params.u32("items_per_thread", Self::DEFAULT_ITEMS_PER_THREAD)?,
+        };
+        options.validate()?;
+        Ok(options)
+    }
+
+    /// Elements per tile.
+    pub fn tile(&self) -> u32 {
+        WORKGROUP * self.items_per_thread
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        let bad = |message: String| Err(GraphError::Parameter { pass: String::new(), message });
+        if !matches!(self.items_per_thread, 1 | 2 | 4 | 8 | 16) {
+            return bad(format!("`items_per_thread` = {} must be 1, 2, 4, 8 or 16", self.items_per_thread));
+        }
+        if self.count > MAX_COUNT {
+            return bad(format!("`count` = {} exceeds the largest supported scan, {MAX_COUNT}; split the data", self.count));
+        }
+        Ok(())
+    }
+}
+
+fn build_scan_fan(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(ScanFan::with_options(ScanOptions::from_params(params)?)))
+}
+
+fn build_two_step(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(TwoStep::with_options(ScanOptions::from_params(params)?)))
+}
+
+/// Registers both implementations of stage `scan_fan` for pipeline files.
+pub fn register(registry: &mut Registry) {
+    registry.register(STAGE, "scan_fan", build_scan_fan);
+    registry.register(STAGE, "two_step", build_two_step);
+}

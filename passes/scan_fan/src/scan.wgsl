@@ -1,0 +1,323 @@
+// Prefix sum of u32 counts, shared by both implementations of stage `scan_fan`.
+//
+// Work is cut into tiles of WG lanes × ITEMS elements. A lane owns ITEMS consecutive
+// elements of its tile, scans them serially in registers, and the lanes' totals are scanned
+// across the workgroup (Hillis–Steele in workgroup memory, or subgroup scans when the
+// adapter has them). With ITEMS = 1 a tile is exactly one 256-element Hillis–Steele chunk.
+//
+// Levels: level 0 is `input` -> `output`. Level l > 0 holds the tile totals of level l - 1
+// and lives in the `fan` scratch buffer at `params.src_offset`; it is scanned in place.
+// All sums are u32 and wrap modulo 2^32, like the CPU reference.
+
+struct Params {
+    // Elements of level 0 when the count comes from the CPU (unused with GPU_COUNT).
+    count: u32,
+    // The level this dispatch works on (0 = input/output, l > 0 = fan level l).
+    level: u32,
+    // Offset in `fan` of this level's values (levels > 0).
+    src_offset: u32,
+    // Offset in `fan` of the next level: `reduce` writes tile totals there, `scan_add` reads
+    // each tile's carry from there.
+    dst_offset: u32,
+    // FLAG_* bits.
+    flags: u32,
+    // The most elements level 0 may hold; a GPU count above it is clamped.
+    capacity: u32,
+    // Levels whose dispatch arguments `dispatch_args` writes (GPU_COUNT only).
+    indirect_levels: u32,
+    _pad: u32,
+}
+
+// Write inclusive sums (element i includes itself) instead of exclusive ones.
+const FLAG_INCLUSIVE: u32 = 1u;
+// Add the tile's carry, read from the next level, to every element of the tile.
+const FLAG_CARRY: u32 = 2u;
+// Write the sum of the whole level to `total[0]` (the top level, a single tile).
+const FLAG_TOTAL: u32 = 4u;
+
+const WG: u32 = 256u;
+const ITEMS: u32 = #{ITEMS};
+const TILE: u32 = WG * ITEMS;
+// Dispatch dimensions are capped by the API; larger grids are split into rows.
+const MAX_GROUPS_PER_DIM: u32 = 65535u;
+
+// Level 0 values, read once per element by `reduce` and once by `scan_add`.
+@group(0) @binding(0) var<storage, read> input: array<u32>;
+// Level 0 prefix sums; elements at or past the count are never written.
+@group(0) @binding(1) var<storage, read_write> output: array<u32>;
+// Tile totals of every level above 0, one region per level, scanned in place.
+@group(0) @binding(2) var<storage, read_write> fan: array<u32>;
+// total[0] = the sum of all counted elements.
+@group(0) @binding(3) var<storage, read_write> total: array<u32>;
+// Per-dispatch parameters.
+@group(0) @binding(4) var<uniform> params: Params;
+#ifdef GPU_COUNT
+// gpu_count[0] = the number of elements of level 0, written by an earlier pass.
+@group(0) @binding(5) var<storage, read> gpu_count: array<u32>;
+#endif
+
+// One tile, padded every 32 words so lanes reading ITEMS consecutive words hit distinct banks.
+var<workgroup> tile: array<u32, TILE + TILE / 32u>;
+// Hillis–Steele ping-pong buffers (two halves of WG).
+var<workgroup> lanes: array<u32, 512>;
+// Per-subgroup totals, then their exclusive prefixes.
+var<workgroup> subgroup_sums: array<u32, 256>;
+// The workgroup total, broadcast from the lane that computed it.
+var<workgroup> workgroup_total: u32;
+
+struct Invocation {
+    @builtin(local_invocation_index) index: u32,
+    @builtin(workgroup_id) workgroup: vec3<u32>,
+    @builtin(num_workgroups) workgroups: vec3<u32>,
+#ifdef SUBGROUPS
+    @builtin(subgroup_id) subgroup: u32,
+    @builtin(num_subgroups) subgroups: u32,
+    @builtin(subgroup_invocation_id) subgroup_lane: u32,
+    @builtin(subgroup_size) subgroup_size: u32,
+#endif
+}
+
+fn padded(i: u32) -> u32 {
+    return i + (i >> 5u);
+}
+
+fn div_ceil(a: u32, b: u32) -> u32 {
+    return a / b + select(0u, 1u, a % b != 0u);
+}
+
+// Elements at `level`: the level-0 count, divided into tiles once per level above it.
+fn level_count(level: u32) -> u32 {
+#ifdef GPU_COUNT
+    var n = min(gpu_count[0], params.capacity);
+#else
+    var n = params.count;
+#endif
+    for (var l = 0u; l < level; l++) {
+        n = div_ceil(n, TILE);
+    }
+    return n;
+}
+
+fn tile_index(inv: Invocation) -> u32 {
+    return inv.workgroup.x + inv.workgroup.y * inv.workgroups.x;
+}
+
+fn load(i: u32) -> u32 {
+    if params.level == 0u {
+        return input[i];
+    }
+    return fan[params.src_offset + i];
+}
+
+fn store(i: u32, value: u32) {
+    if params.level == 0u {
+        output[i] = value;
+    } else {
+        fan[params.src_offset + i] = value;
+    }
+}
+
+// True when subgroups tile the workgroup exactly, so (subgroup, lane) orders the lanes.
+// Vulkan does not promise full subgroups; when they are not, the shared-memory scan runs.
+fn full_subgroups(inv: Invocation) -> bool {
+#ifdef SUBGROUPS
+    return inv.subgroups * inv.subgroup_size == WG;
+#else
+    return false;
+#endif
+}
+
+// The lane's place in the tile's order.
+fn lane_position(inv: Invocation) -> u32 {
+#ifdef SUBGROUPS
+    if full_subgroups(inv) {
+        return inv.subgroup * inv.subgroup_size + inv.subgroup_lane;
+    }
+#endif
+    return inv.index;
+}
+
+// Exclusive prefix of `value` over lanes in `position` order, and the workgroup total.
+// Every lane of the workgroup must call it.
+fn scan_lanes(inv: Invocation, position: u32, value: u32) -> vec2<u32> {
+#ifdef SUBGROUPS
+    if full_subgroups(inv) {
+        return scan_lanes_subgroups(inv, value);
+    }
+#endif
+    return scan_lanes_shared(position, value);
+}
+
+// Hillis–Steele: log2(WG) steps, each adding the value `offset` lanes back.
+fn scan_lanes_shared(position: u32, value: u32) -> vec2<u32> {
+    lanes[position] = value;
+    workgroupBarrier();
+    var src = 0u;
+    for (var offset = 1u; offset < WG; offset = offset << 1u) {
+        let dst = WG - src;
+        var x = lanes[src + position];
+        if position >= offset {
+            x += lanes[src + position - offset];
+        }
+        lanes[dst + position] = x;
+        workgroupBarrier();
+        src = dst;
+    }
+    let result = vec2(lanes[src + position] - value, lanes[src + WG - 1u]);
+    workgroupBarrier();
+    return result;
+}
+
+#ifdef SUBGROUPS
+// Scan within each subgroup, then the first subgroup scans the subgroup totals in blocks
+// of its own size, so any subgroup size from 1 to WG works.
+fn scan_lanes_subgroups(inv: Invocation, value: u32) -> vec2<u32> {
+    let inclusive = subgroupInclusiveAdd(value);
+    if inv.subgroup_lane == inv.subgroup_size - 1u {
+        subgroup_sums[inv.subgroup] = inclusive;
+    }
+    workgroupBarrier();
+    if inv.subgroup == 0u {
+        var carry = 0u;
+        for (var base = 0u; base < inv.subgroups; base += inv.subgroup_size) {
+            let i = base + inv.subgroup_lane;
+            var s = 0u;
+            if i < inv.subgroups {
+                s = subgroup_sums[i];
+            }
+            let before = subgroupExclusiveAdd(s);
+            if i < inv.subgroups {
+                subgroup_sums[i] = before + carry;
+            }
+            carry += subgroupAdd(s);
+        }
+        if inv.subgroup_lane == 0u {
+            workgroup_total = carry;
+        }
+    }
+    workgroupBarrier();
+    let result = vec2(subgroup_sums[inv.subgroup] + inclusive - value, workgroup_total);
+    workgroupBarrier();
+    return result;
+}
+#endif
+
+// Scans tile `t` of the current level (n elements) with `carry` added to every element.
+// Returns the tile's own total (without the carry).
+fn scan_tile(inv: Invocation, t: u32, n: u32, carry: u32, inclusive: bool) -> u32 {
+    let base = t * TILE;
+    // Coalesced: consecutive lanes load consecutive elements.
+    for (var k = 0u; k < ITEMS; k++) {
+        let j = k * WG + inv.index;
+        var v = 0u;
+        if base + j < n {
+            v = load(base + j);
+        }
+        tile[padded(j)] = v;
+    }
+    workgroupBarrier();
+    let position = lane_position(inv);
+    let first = position * ITEMS;
+    var own = 0u;
+    for (var k = 0u; k < ITEMS; k++) {
+        own += tile[padded(first + k)];
+    }
+    let scanned = scan_lanes(inv, position, own);
+    var running = carry + scanned.x;
+    for (var k = 0u; k < ITEMS; k++) {
+        let v = tile[padded(first + k)];
+        if inclusive {
+            running += v;
+            tile[padded(first + k)] = running;
+        } else {
+            tile[padded(first + k)] = running;
+            running += v;
+        }
+    }
+    workgroupBarrier();
+    for (var k = 0u; k < ITEMS; k++) {
+        let j = k * WG + inv.index;
+        if base + j < n {
+            store(base + j, tile[padded(j)]);
+        }
+    }
+    // The tile is reused by the caller's next iteration.
+    workgroupBarrier();
+    return scanned.y;
+}
+
+// Step 1: each tile's total into the next level's region of `fan`.
+@compute @workgroup_size(256)
+fn reduce(inv: Invocation) {
+    let n = level_count(params.level);
+    let t = tile_index(inv);
+    if t >= div_ceil(n, TILE) {
+        return;
+    }
+    let base = t * TILE;
+    var own = 0u;
+    for (var k = 0u; k < ITEMS; k++) {
+        let i = base + k * WG + inv.index;
+        if i < n {
+            own += load(i);
+        }
+    }
+    // Any lane order gives the same sum, so the position is the plain index.
+    let sums = scan_lanes(inv, lane_position(inv), own);
+    if inv.index == 0u {
+        fan[params.dst_offset + t] = sums.y;
+    }
+}
+
+// Steps 2 and 3: scan each tile and add its carry from the (already scanned) next level.
+// The top level is one tile; it runs even when empty so the total is always written.
+@compute @workgroup_size(256)
+fn scan_add(inv: Invocation) {
+    let n = level_count(params.level);
+    let t = tile_index(inv);
+    if t >= max(div_ceil(n, TILE), 1u) {
+        return;
+    }
+    var carry = 0u;
+    if (params.flags & FLAG_CARRY) != 0u {
+        carry = fan[params.dst_offset + t];
+    }
+    let sum = scan_tile(inv, t, n, carry, (params.flags & FLAG_INCLUSIVE) != 0u);
+    if (params.flags & FLAG_TOTAL) != 0u && inv.index == 0u {
+        total[0] = sum;
+    }
+}
+
+// The two-step scheme's middle step: one workgroup walks all tiles of level 1 in order,
+// scanning each exclusively with the running total of the tiles before it.
+@compute @workgroup_size(256)
+fn walk(inv: Invocation) {
+    let n = level_count(params.level);
+    var running = 0u;
+    for (var t = 0u; t < div_ceil(n, TILE); t++) {
+        running += scan_tile(inv, t, n, running, false);
+    }
+    if inv.index == 0u {
+        total[0] = running;
+    }
+}
+
+#ifdef GPU_COUNT
+// Indirect dispatch arguments, three words per level below the top.
+@group(0) @binding(6) var<storage, read_write> args: array<u32>;
+
+// One invocation turns the GPU count into the tile grid of every level, splitting grids
+// wider than MAX_GROUPS_PER_DIM into rows (the kernels skip the surplus of the last row).
+@compute @workgroup_size(1)
+fn dispatch_args() {
+    var n = min(gpu_count[0], params.capacity);
+    for (var l = 0u; l < params.indirect_levels; l++) {
+        let tiles = div_ceil(n, TILE);
+        let rows = max(div_ceil(tiles, MAX_GROUPS_PER_DIM), 1u);
+        args[3u * l] = div_ceil(tiles, rows);
+        args[3u * l + 1u] = rows;
+        args[3u * l + 2u] = 1u;
+        n = tiles;
+    }
+}
+#endif
