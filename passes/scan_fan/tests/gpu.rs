@@ -92,3 +92,70 @@ fn sixteen_million_elements() {
     check(&mut exec, &Case::new(Implementation::ScanFan, n).inclusive(true), &input);
     check(&mut exec, &Case::new(Implementation::TwoStep, n), &input);
 }
+
+#[test]
+fn random_sizes_values_and_options() {
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, TestRunner};
+    let exec = std::cell::RefCell::new(executor());
+    let strategy = (1u32..300_000, any::<u64>(), any::<bool>(), any::<bool>(), any::<bool>(), prop::sample::select(vec![1u32, 2, 4, 8, 16]), any::<bool>());
+    let mut runner = TestRunner::new(Config { cases: 24, failure_persistence: None, ..Config::default() });
+    runner
+        .run(&strategy, |(count, seed, two_step, inclusive, subgroups_off, items, near_max)| {
+            let mut rng = XorShift(seed | 1);
+            let input = if near_max { rng.near_max(count as usize) } else { rng.values(count as usize, u32::MAX) };
+            let implementation = if two_step { Implementation::TwoStep } else { Implementation::ScanFan };
+            let subgroups = if subgroups_off { Subgroups::Off } else { Subgroups::Auto };
+            let case = Case::new(implementation, count).inclusive(inclusive).subgroups(subgroups).items(items);
+            check(&mut exec.borrow_mut(), &case, &input);
+            Ok(())
+        })
+        .unwrap();
+}
+
+/// The registry builds both implementations from a pipeline file, and swapping the
+/// `implementation` line gives the same result.
+#[test]
+fn pipeline_file_builds_both_implementations() {
+    use meshlight_graph::file::{Registry, parse_pipeline};
+    use meshlight_graph::*;
+    let mut registry = Registry::new();
+    meshlight_pass_scan_fan::register(&mut registry);
+    let n = 5_000u32;
+    let input = XorShift(0x5eed_0006).values(n as usize, 100);
+    let (expected, total) = meshlight_pass_scan_fan::cpu_scan(&input, true);
+    let mut exec = executor();
+    for implementation in ["scan_fan", "two_step"] {
+        let text = format!(
+            r#"
+[[resource]]
+name = "counts"
+kind = "imported"
+buffer = {{ element = "u32", count = {n} }}
+usage = ["STORAGE", "COPY_SRC", "COPY_DST"]
+[[resource]]
+name = "offsets"
+kind = "exported"
+buffer = {{ element = "u32", count = {n} }}
+[[resource]]
+name = "total"
+kind = "exported"
+buffer = {{ element = "u32", count = 1 }}
+[[pass]]
+name = "scan"
+stage = "scan_fan"
+implementation = "{implementation}"
+params = {{ count = {n}, inclusive = true, subgroups = "off", items_per_thread = 4 }}
+bind = {{ input = "counts", output = "offsets" }}
+"#
+        );
+        let g = parse_pipeline(&text, "inline.toml", &registry).unwrap();
+        let compiled = g.compile(&CompileOptions::new(exec.gpu.features)).unwrap();
+        let counts = exec.gpu.buffer_with_data("counts", bytemuck::cast_slice(&input), USAGE);
+        exec.execute(&compiled, &Imports::new().buffer("counts", &counts)).unwrap();
+        let offsets: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("offsets").unwrap());
+        let got_total: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("total").unwrap());
+        assert_eq!(offsets, expected, "{implementation}");
+        assert_eq!(got_total[0], total, "{implementation}");
+    }
+}
