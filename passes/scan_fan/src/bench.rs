@@ -1,1 +1,272 @@
-//! Benchmark (placeholder, filled below).
+//! The prefix-sum benchmark `meshlight bench` runs: both implementations against a
+//! device-to-device buffer copy of the same bytes (timed in the same frame, with the same
+//! per-pass timestamps) and against the CPU prefix sum of the same data.
+//!
+//! Absolute figures mean something only on a real GPU; on lavapipe the run checks that the
+//! benchmark works, not how fast anything is.
+
+use crate::{MAX_COUNT, ScanFan, ScanOptions, TwoStep, cpu_scan_into};
+use meshlight_graph::{
+    Access, Bindings, BufferDesc, CompileOptions, Element, Executor, GraphBuilder, GraphError,
+    Imports, Pass, RecordContext, Result, SetupContext, Slot, StageContract,
+};
+use serde::Serialize;
+use std::time::Instant;
+
+/// The sizes the issue asks for: 2^20 … 2^28 elements.
+pub const SIZES: [u64; 5] = [1 << 20, 1 << 22, 1 << 24, 1 << 26, 1 << 28];
+
+/// Bytes each element costs a scan at the least: read once, written once.
+const BYTES_PER_ELEMENT: f64 = 8.0;
+
+/// One implementation at one size.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub implementation: String,
+    pub elements: u64,
+    /// Median over the repeats of the pass's GPU time (its timestamp pair).
+    pub gpu_ms: f64,
+    pub elements_per_s: f64,
+    /// `elements × 8 bytes / gpu time`: the bandwidth of one read and one write per element.
+    pub gb_per_s: f64,
+    /// Bandwidth of `copy_buffer_to_buffer` of the same `elements × 4` bytes (counting the
+    /// read and the write), median over the same frames.
+    pub copy_gb_per_s: f64,
+    /// Median time of the single-threaded CPU prefix sum of the same data.
+    pub cpu_ms: f64,
+    /// `gb_per_s / copy_gb_per_s`; the goal is ≥ 0.6 for `scan_fan` at 2^26 elements.
+    pub ratio_to_copy: f64,
+}
+
+/// The implementations measured, by the name in the table.
+fn variants(count: u32) -> Vec<(&'static str, Box<dyn Pass>)> {
+    let chunk256 = ScanOptions {
+        items_per_thread: 1,
+        ..ScanOptions::new(count)
+    };
+    let items16 = ScanOptions {
+        items_per_thread: 16,
+        ..ScanOptions::new(count)
+    };
+    vec![
+        ("scan_fan", Box::new(ScanFan::new(count))),
+        ("two_step", Box::new(TwoStep::new(count))),
+        // The plain 256-element Hillis–Steele chunk, to show what the serial per-lane
+        // items buy.
+        (
+            "scan_fan/chunk256",
+            Box::new(ScanFan::with_options(chunk256)),
+        ),
+        // Bigger tiles: fewer workgroups and a smaller fan, to tune the default.
+        ("scan_fan/items16", Box::new(ScanFan::with_options(items16))),
+    ]
+}
+
+/// Stage `copy`: a device-to-device copy, the bandwidth yardstick.
+struct CopyPass;
+
+impl Pass for CopyPass {
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: "copy",
+            slots: vec![
+                Slot::buffer("src", Access::CopySrc, Element::U32, "bytes to copy"),
+                Slot::buffer("dst", Access::CopyDst, Element::U32, "where they go"),
+            ],
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "copy_buffer_to_buffer"
+    }
+    fn setup(&self, _: &mut SetupContext) -> Result<()> {
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let (src, bytes) = ctx.buffer("src")?;
+        let (dst, _) = ctx.buffer("dst")?;
+        ctx.encoder().copy_buffer_to_buffer(src, 0, dst, 0, bytes);
+        Ok(())
+    }
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// Small counts (so nothing wraps and a bug cannot hide behind wrap-around), reproducible.
+fn data(n: usize) -> Vec<u32> {
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    (0..n)
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 59) as u32
+        })
+        .collect()
+}
+
+const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+/// Runs every implementation and the copy at each size, `repeats` timed frames after one
+/// warm-up frame, and checks each implementation's total against the CPU's.
+///
+/// Needs `TIMESTAMP_QUERY` on the device. Memory: the input, one output per
+/// implementation and the copy target, each `4 × size` bytes (6 GiB at 2^28).
+pub fn run(exec: &mut Executor, sizes: &[u64], repeats: u32) -> Result<Vec<Row>> {
+    if !exec.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
+        return Err(GraphError::Device("the benchmark needs TIMESTAMP_QUERY; open the device with it (GpuContext::with_available)".into()));
+    }
+    exec.gpu_timing = true;
+    let repeats = repeats.max(1);
+    let mut rows = Vec::new();
+    for &size in sizes {
+        if size == 0 || size > MAX_COUNT as u64 {
+            return Err(GraphError::Parameter {
+                pass: "bench".into(),
+                message: format!("size {size} must be in 1..={MAX_COUNT}"),
+            });
+        }
+        let count = size as u32;
+        let input = data(size as usize);
+
+        let mut out = vec![0u32; input.len()];
+        let mut cpu_ms = Vec::new();
+        let mut cpu_total = 0;
+        for _ in 0..repeats.min(5) {
+            let t = Instant::now();
+            cpu_total = cpu_scan_into(&input, &mut out, false);
+            cpu_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            std::hint::black_box(&out);
+        }
+        drop(out);
+        let cpu_ms = median(&mut cpu_ms);
+
+        let desc = BufferDesc::array(Element::U32, size);
+        let mut g = GraphBuilder::new();
+        let input_h = g.import_buffer("input", desc.clone(), USAGE);
+        let copy_h = g.import_buffer("copy", desc.clone(), USAGE);
+        g.add_pass(
+            "copy",
+            CopyPass,
+            Bindings::new().bind("src", input_h).bind("dst", copy_h),
+        )?;
+        let names: Vec<&'static str> = variants(count).iter().map(|(name, _)| *name).collect();
+        for (name, pass) in variants(count) {
+            let output = g.import_buffer(&format!("{name}.output"), desc.clone(), USAGE);
+            let total = g.import_buffer(
+                &format!("{name}.total"),
+                BufferDesc::array(Element::U32, 1),
+                USAGE,
+            );
+            g.add_boxed_pass(
+                name,
+                pass,
+                Bindings::new()
+                    .bind("input", input_h)
+                    .bind("output", output)
+                    .bind("total", total),
+            )?;
+        }
+        let compiled = g.compile(&CompileOptions::new(exec.gpu.features))?;
+
+        let gpu = &exec.gpu;
+        let input_buf = gpu.buffer_with_data("bench input", bytemuck::cast_slice(&input), USAGE);
+        drop(input);
+        let make = |label: &str, bytes: u64| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage: USAGE,
+                mapped_at_creation: false,
+            })
+        };
+        let copy_buf = make("bench copy", size * 4);
+        let outputs: Vec<wgpu::Buffer> = names.iter().map(|n| make(n, size * 4)).collect();
+        let totals: Vec<wgpu::Buffer> = names.iter().map(|n| make(n, 4)).collect();
+        let mut imports = Imports::new()
+            .buffer("input", &input_buf)
+            .buffer("copy", &copy_buf);
+        for ((name, output), total) in names.iter().zip(&outputs).zip(&totals) {
+            imports = imports
+                .buffer(&format!("{name}.output"), output)
+                .buffer(&format!("{name}.total"), total);
+        }
+
+        let mut times: Vec<Vec<f64>> = vec![Vec::new(); names.len() + 1];
+        exec.execute(&compiled, &imports)?;
+        for _ in 0..repeats {
+            let stats = exec.execute(&compiled, &imports)?;
+            for pass in &stats.passes {
+                let slot = if pass.name == "copy" {
+                    0
+                } else {
+                    1 + names
+                        .iter()
+                        .position(|n| *n == pass.name)
+                        .expect("a benchmarked pass")
+                };
+                let us = pass
+                    .gpu_us
+                    .ok_or_else(|| GraphError::Device("no GPU time for a pass".into()))?;
+                times[slot].push(us / 1e3);
+            }
+        }
+
+        for (name, total) in names.iter().zip(&totals) {
+            let got: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.gpu.read_buffer(total, 0, 4)?);
+            if got[0] != cpu_total {
+                return Err(GraphError::Record {
+                    pass: name.to_string(),
+                    message: format!(
+                        "total {} at {size} elements, the CPU says {cpu_total}",
+                        got[0]
+                    ),
+                });
+            }
+        }
+
+        let copy_ms = median(&mut times[0]);
+        let copy_gb_per_s = size as f64 * BYTES_PER_ELEMENT / (copy_ms * 1e-3) / 1e9;
+        for (i, name) in names.iter().enumerate() {
+            let gpu_ms = median(&mut times[i + 1]);
+            let gb_per_s = size as f64 * BYTES_PER_ELEMENT / (gpu_ms * 1e-3) / 1e9;
+            rows.push(Row {
+                implementation: name.to_string(),
+                elements: size,
+                gpu_ms,
+                elements_per_s: size as f64 / (gpu_ms * 1e-3),
+                gb_per_s,
+                copy_gb_per_s,
+                cpu_ms,
+                ratio_to_copy: gb_per_s / copy_gb_per_s,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// The rows as a fixed-width text table.
+pub fn table(rows: &[Row]) -> String {
+    let mut s = format!(
+        "{:<18} {:>11} {:>10} {:>12} {:>9} {:>9} {:>9} {:>8}\n",
+        "implementation", "elements", "gpu ms", "Gelem/s", "GB/s", "copy GB/s", "cpu ms", "÷ copy"
+    );
+    for r in rows {
+        s += &format!(
+            "{:<18} {:>11} {:>10.3} {:>12.2} {:>9.1} {:>9.1} {:>9.2} {:>8.2}\n",
+            r.implementation,
+            r.elements,
+            r.gpu_ms,
+            r.elements_per_s / 1e9,
+            r.gb_per_s,
+            r.copy_gb_per_s,
+            r.cpu_ms,
+            r.ratio_to_copy
+        );
+    }
+    s
+}

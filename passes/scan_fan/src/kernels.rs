@@ -2,7 +2,9 @@
 //! fan buffer, scratch declarations, and the recording of a list of dispatches.
 
 use crate::{ScanOptions, Subgroups};
-use meshlight_graph::{Access, BindingLayout, BufferDesc, ComputeDesc, Element, RecordContext, Result, SetupContext};
+use meshlight_graph::{
+    Access, BindingLayout, BufferDesc, ComputeDesc, Element, RecordContext, Result, SetupContext,
+};
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
 pub(crate) const SHADER: PassShader = pass_shader!("scan_fan::scan", "scan.wgsl");
@@ -84,7 +86,11 @@ impl Levels {
 
     /// At most one level of tile totals, however many (the `two_step` scheme).
     pub fn single_fan(count: u32, tile: u32) -> Self {
-        let sizes = if count > tile { vec![count, count.div_ceil(tile)] } else { vec![count] };
+        let sizes = if count > tile {
+            vec![count, count.div_ceil(tile)]
+        } else {
+            vec![count]
+        };
         Self::with_offsets(sizes)
     }
 
@@ -102,7 +108,11 @@ impl Levels {
 
     /// Words of `fan`: every level above 0 (at least one, so the buffer exists).
     pub fn fan_words(&self) -> u64 {
-        self.sizes[1..].iter().map(|&n| n as u64).sum::<u64>().max(1)
+        self.sizes[1..]
+            .iter()
+            .map(|&n| n as u64)
+            .sum::<u64>()
+            .max(1)
     }
 
     /// The uniform block for a dispatch on `level`.
@@ -139,7 +149,11 @@ pub(crate) enum Grid {
 impl Grid {
     /// The tile grid of `level` of `levels`: direct when the count is known on the CPU.
     pub fn tiles(levels: &Levels, level: usize, tile: u32, gpu_count: bool) -> Self {
-        if gpu_count { Grid::Indirect { level } } else { Grid::Direct(grid(levels.sizes[level].div_ceil(tile))) }
+        if gpu_count {
+            Grid::Indirect { level }
+        } else {
+            Grid::Direct(grid(levels.sizes[level].div_ceil(tile)))
+        }
     }
     pub const ONE: Grid = Grid::Direct([1, 1]);
 }
@@ -161,14 +175,26 @@ pub(crate) fn setup(ctx: &mut SetupContext, options: &ScanOptions, levels: &Leve
     options.validate()?;
     ctx.optional_features(wgpu::Features::SUBGROUP);
     let subgroups = options.subgroups == Subgroups::Auto && ctx.has(wgpu::Features::SUBGROUP);
-    ctx.shader_defs(&ScanDefs { items_per_thread: options.items_per_thread, subgroups, gpu_count: false });
-    ctx.scratch_buffer("fan", BufferDesc::array(Element::U32, levels.fan_words()), &[Access::StorageReadWrite]);
+    ctx.shader_defs(&ScanDefs {
+        items_per_thread: options.items_per_thread,
+        subgroups,
+        gpu_count: false,
+    });
+    ctx.scratch_buffer(
+        "fan",
+        BufferDesc::array(Element::U32, levels.fan_words()),
+        &[Access::StorageReadWrite],
+    );
     ctx.scratch_buffer(
         "args",
         BufferDesc::array(Element::DISPATCH_ARGS, levels.top().max(1) as u64),
         &[Access::StorageReadWrite, Access::Indirect],
     );
-    ctx.scratch_buffer("total", BufferDesc::array(Element::U32, 1), &[Access::StorageReadWrite]);
+    ctx.scratch_buffer(
+        "total",
+        BufferDesc::array(Element::U32, 1),
+        &[Access::StorageReadWrite],
+    );
     let bytes = options.count as u64 * 4;
     ctx.min_bytes("input", bytes);
     ctx.min_bytes("output", bytes);
@@ -179,14 +205,28 @@ pub(crate) fn setup(ctx: &mut SetupContext, options: &ScanOptions, levels: &Leve
 
 /// The bind group every kernel but `dispatch_args` uses, from the bound slots.
 fn scan_layout(ctx: &RecordContext<'_>, gpu_count: bool) -> BindingLayout {
-    let layout = BindingLayout::compute("scan_fan").slot(0, "input").slot(1, "output").scratch(2, "fan", Access::StorageReadWrite);
-    let layout = if ctx.is_bound("total") { layout.slot(3, "total") } else { layout.scratch(3, "total", Access::StorageReadWrite) };
+    let layout = BindingLayout::compute("scan_fan")
+        .slot(0, "input")
+        .slot(1, "output")
+        .scratch(2, "fan", Access::StorageReadWrite);
+    let layout = if ctx.is_bound("total") {
+        layout.slot(3, "total")
+    } else {
+        layout.scratch(3, "total", Access::StorageReadWrite)
+    };
     let layout = layout.uniform(4);
-    if gpu_count { layout.slot(5, "count") } else { layout }
+    if gpu_count {
+        layout.slot(5, "count")
+    } else {
+        layout
+    }
 }
 
 fn args_layout() -> BindingLayout {
-    BindingLayout::compute("scan_fan.args").uniform(4).slot(5, "count").scratch(6, "args", Access::StorageReadWrite)
+    BindingLayout::compute("scan_fan.args")
+        .uniform(4)
+        .slot(5, "count")
+        .scratch(6, "args", Access::StorageReadWrite)
 }
 
 /// A step with its pipeline and bind group resolved, ready to encode.
@@ -203,14 +243,26 @@ pub(crate) fn gpu_count(ctx: &RecordContext<'_>) -> bool {
 
 /// Encodes `steps` in order in one compute pass; wgpu orders the storage writes of one
 /// dispatch before the reads of the next.
-pub(crate) fn record(ctx: &mut RecordContext<'_>, options: &ScanOptions, steps: &[Step]) -> Result<()> {
+pub(crate) fn record(
+    ctx: &mut RecordContext<'_>,
+    options: &ScanOptions,
+    steps: &[Step],
+) -> Result<()> {
     let gpu_count = gpu_count(ctx);
-    let defs = ScanDefs { items_per_thread: options.items_per_thread, subgroups: options.subgroups.enabled(ctx.features()), gpu_count };
+    let defs = ScanDefs {
+        items_per_thread: options.items_per_thread,
+        subgroups: options.subgroups.enabled(ctx.features()),
+        gpu_count,
+    };
     let scan = scan_layout(ctx, gpu_count);
     let args = args_layout();
     let mut encoded = Vec::with_capacity(steps.len());
     for step in steps {
-        let layout = if step.entry == entry::DISPATCH_ARGS { &args } else { &scan };
+        let layout = if step.entry == entry::DISPATCH_ARGS {
+            &args
+        } else {
+            &scan
+        };
         let program = ctx.compute_program(&ComputeDesc {
             shader: &SHADER,
             entry: step.entry,
@@ -218,18 +270,62 @@ pub(crate) fn record(ctx: &mut RecordContext<'_>, options: &ScanOptions, steps: 
             layouts: std::slice::from_ref(layout),
         })?;
         let bind_group = ctx.bind_group(&program, 0, &[(4, bytemuck::bytes_of(&step.params))])?;
-        encoded.push(Encoded { program, bind_group, grid: step.grid });
+        encoded.push(Encoded {
+            program,
+            bind_group,
+            grid: step.grid,
+        });
     }
-    let args_buffer = if gpu_count { Some(ctx.scratch("args")?.0) } else { None };
+    let args_buffer = if gpu_count {
+        Some(ctx.scratch("args")?.0)
+    } else {
+        None
+    };
     let mut pass = ctx.compute_pass();
     for e in &encoded {
         pass.set_pipeline(&e.program.pipeline);
         pass.set_bind_group(0, &e.bind_group, &[]);
         match (e.grid, args_buffer) {
             (Grid::Direct([x, y]), _) => pass.dispatch_workgroups(x, y, 1),
-            (Grid::Indirect { level }, Some(buffer)) => pass.dispatch_workgroups_indirect(buffer, level as u64 * 12),
-            (Grid::Indirect { .. }, None) => unreachable!("indirect steps are planned only with a GPU count"),
+            (Grid::Indirect { level }, Some(buffer)) => {
+                pass.dispatch_workgroups_indirect(buffer, level as u64 * 12)
+            }
+            (Grid::Indirect { .. }, None) => {
+                unreachable!("indirect steps are planned only with a GPU count")
+            }
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grids_stay_under_the_dimension_cap_and_cover_every_tile() {
+        for groups in [0, 1, 65_535, 65_536, 65_537, 1 << 20, 1 << 23] {
+            let [x, y] = grid(groups);
+            assert!(
+                x <= MAX_GROUPS_PER_DIM && y <= MAX_GROUPS_PER_DIM,
+                "{groups}: {x}×{y}"
+            );
+            assert!(x as u64 * y as u64 >= groups as u64, "{groups}: {x}×{y}");
+            assert!(
+                (x as u64 * y as u64) < groups as u64 + y as u64 || groups == 0,
+                "{groups}: {x}×{y} wastes a row"
+            );
+        }
+    }
+
+    #[test]
+    fn levels_recurse_until_one_tile_and_pack_the_fan() {
+        let l = Levels::recursive(1 << 28, 256);
+        assert_eq!(l.sizes, [1 << 28, 1 << 20, 1 << 12, 16]);
+        assert_eq!(l.offsets, [0, 0, 1 << 20, (1 << 20) + (1 << 12)]);
+        assert_eq!(l.fan_words(), (1 << 20) + (1 << 12) + 16);
+        assert_eq!(Levels::recursive(256, 256).sizes, [256]);
+        assert_eq!(Levels::recursive(257, 256).sizes, [257, 2]);
+        assert_eq!(Levels::single_fan(1 << 28, 256).sizes, [1 << 28, 1 << 20]);
+    }
 }

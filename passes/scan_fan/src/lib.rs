@@ -51,7 +51,7 @@ mod kernels;
 mod scan_fan;
 mod two_step;
 
-pub use cpu::cpu_scan;
+pub use cpu::{cpu_scan, cpu_scan_into};
 pub use kernels::ScanDefs;
 pub use scan_fan::ScanFan;
 pub use two_step::TwoStep;
@@ -138,7 +138,12 @@ impl ScanOptions {
     pub const DEFAULT_ITEMS_PER_THREAD: u32 = 8;
 
     pub fn new(count: u32) -> Self {
-        Self { count, inclusive: false, subgroups: Subgroups::Auto, items_per_thread: Self::DEFAULT_ITEMS_PER_THREAD }
+        Self {
+            count,
+            inclusive: false,
+            subgroups: Subgroups::Auto,
+            items_per_thread: Self::DEFAULT_ITEMS_PER_THREAD,
+        }
     }
 
     /// Reads `count`, `inclusive`, `subgroups` ("auto" | "off") and `items_per_thread`.
@@ -160,23 +165,38 @@ impl ScanOptions {
     }
 
     pub fn validate(&self) -> Result<()> {
-        let bad = |message: String| Err(GraphError::Parameter { pass: String::new(), message });
+        let bad = |message: String| {
+            Err(GraphError::Parameter {
+                pass: String::new(),
+                message,
+            })
+        };
         if !matches!(self.items_per_thread, 1 | 2 | 4 | 8 | 16) {
-            return bad(format!("`items_per_thread` = {} must be 1, 2, 4, 8 or 16", self.items_per_thread));
+            return bad(format!(
+                "`items_per_thread` = {} must be 1, 2, 4, 8 or 16",
+                self.items_per_thread
+            ));
         }
         if self.count > MAX_COUNT {
-            return bad(format!("`count` = {} exceeds the largest supported scan, {MAX_COUNT}; split the data", self.count));
+            return bad(format!(
+                "`count` = {} exceeds the largest supported scan, {MAX_COUNT}; split the data",
+                self.count
+            ));
         }
         Ok(())
     }
 }
 
 fn build_scan_fan(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(ScanFan::with_options(ScanOptions::from_params(params)?)))
+    Ok(Box::new(ScanFan::with_options(ScanOptions::from_params(
+        params,
+    )?)))
 }
 
 fn build_two_step(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(TwoStep::with_options(ScanOptions::from_params(params)?)))
+    Ok(Box::new(TwoStep::with_options(ScanOptions::from_params(
+        params,
+    )?)))
 }
 
 /// Registers both implementations of stage `scan_fan` for pipeline files.

@@ -4,7 +4,7 @@
 //! The fan of 2^28 elements in tiles of 2048 is 131,072 totals, one more level makes 64, so
 //! every level runs wide across the GPU; nothing is walked by a single workgroup.
 
-use crate::kernels::{self, entry, flag, Grid, Levels, Step};
+use crate::kernels::{self, Grid, Levels, Step, entry, flag};
 use crate::{ScanOptions, contract};
 use meshlight_graph::{Pass, RecordContext, Result, SetupContext, StageContract};
 
@@ -36,19 +36,41 @@ impl ScanFan {
         let o = &self.options;
         let levels = self.levels();
         let top = levels.top();
-        let inclusive_at = |level: usize| if level == 0 && o.inclusive { flag::INCLUSIVE } else { 0 };
+        let inclusive_at = |level: usize| {
+            if level == 0 && o.inclusive {
+                flag::INCLUSIVE
+            } else {
+                0
+            }
+        };
         let mut steps = Vec::with_capacity(2 * top + 2);
         if gpu_count && top > 0 {
-            steps.push(Step { entry: entry::DISPATCH_ARGS, params: levels.params(o, 0, 0), grid: Grid::ONE });
+            steps.push(Step {
+                entry: entry::DISPATCH_ARGS,
+                params: levels.params(o, 0, 0),
+                grid: Grid::ONE,
+            });
         }
         for level in 0..top {
             let grid = Grid::tiles(&levels, level, o.tile(), gpu_count);
-            steps.push(Step { entry: entry::REDUCE, params: levels.params(o, level, 0), grid });
+            steps.push(Step {
+                entry: entry::REDUCE,
+                params: levels.params(o, level, 0),
+                grid,
+            });
         }
-        steps.push(Step { entry: entry::SCAN_ADD, params: levels.params(o, top, flag::TOTAL | inclusive_at(top)), grid: Grid::ONE });
+        steps.push(Step {
+            entry: entry::SCAN_ADD,
+            params: levels.params(o, top, flag::TOTAL | inclusive_at(top)),
+            grid: Grid::ONE,
+        });
         for level in (0..top).rev() {
             let grid = Grid::tiles(&levels, level, o.tile(), gpu_count);
-            steps.push(Step { entry: entry::SCAN_ADD, params: levels.params(o, level, flag::CARRY | inclusive_at(level)), grid });
+            steps.push(Step {
+                entry: entry::SCAN_ADD,
+                params: levels.params(o, level, flag::CARRY | inclusive_at(level)),
+                grid,
+            });
         }
         steps
     }

@@ -5,7 +5,7 @@
 //! proportional to the number of tiles while the rest of the GPU idles. It is here to be
 //! measured against `scan_fan`, and as the obviously-correct variant.
 
-use crate::kernels::{self, entry, flag, Grid, Levels, Step};
+use crate::kernels::{self, Grid, Levels, Step, entry, flag};
 use crate::{ScanOptions, contract};
 use meshlight_graph::{Pass, RecordContext, Result, SetupContext, StageContract};
 
@@ -37,16 +37,36 @@ impl TwoStep {
         let levels = self.levels();
         let inclusive = if o.inclusive { flag::INCLUSIVE } else { 0 };
         if levels.top() == 0 {
-            return vec![Step { entry: entry::SCAN_ADD, params: levels.params(o, 0, flag::TOTAL | inclusive), grid: Grid::ONE }];
+            return vec![Step {
+                entry: entry::SCAN_ADD,
+                params: levels.params(o, 0, flag::TOTAL | inclusive),
+                grid: Grid::ONE,
+            }];
         }
         let tiles = Grid::tiles(&levels, 0, o.tile(), gpu_count);
         let mut steps = Vec::with_capacity(4);
         if gpu_count {
-            steps.push(Step { entry: entry::DISPATCH_ARGS, params: levels.params(o, 0, 0), grid: Grid::ONE });
+            steps.push(Step {
+                entry: entry::DISPATCH_ARGS,
+                params: levels.params(o, 0, 0),
+                grid: Grid::ONE,
+            });
         }
-        steps.push(Step { entry: entry::REDUCE, params: levels.params(o, 0, 0), grid: tiles });
-        steps.push(Step { entry: entry::WALK, params: levels.params(o, 1, 0), grid: Grid::ONE });
-        steps.push(Step { entry: entry::SCAN_ADD, params: levels.params(o, 0, flag::CARRY | inclusive), grid: tiles });
+        steps.push(Step {
+            entry: entry::REDUCE,
+            params: levels.params(o, 0, 0),
+            grid: tiles,
+        });
+        steps.push(Step {
+            entry: entry::WALK,
+            params: levels.params(o, 1, 0),
+            grid: Grid::ONE,
+        });
+        steps.push(Step {
+            entry: entry::SCAN_ADD,
+            params: levels.params(o, 0, flag::CARRY | inclusive),
+            grid: tiles,
+        });
         steps
     }
 }

@@ -19,7 +19,10 @@ fn counts_at_chunk_boundaries_match_the_cpu_reference() {
             for inclusive in [false, true] {
                 for subgroups in [Subgroups::Auto, Subgroups::Off] {
                     for count in COUNTS {
-                        let case = Case::new(implementation, count).items(items).inclusive(inclusive).subgroups(subgroups);
+                        let case = Case::new(implementation, count)
+                            .items(items)
+                            .inclusive(inclusive)
+                            .subgroups(subgroups);
                         check(&mut exec, &case, &input);
                     }
                 }
@@ -36,7 +39,10 @@ fn values_near_u32_max_wrap_modulo_two_to_the_32() {
         for inclusive in [false, true] {
             for subgroups in [Subgroups::Auto, Subgroups::Off] {
                 for count in [1, 257, 65_537] {
-                    let case = Case::new(implementation, count).items(1).inclusive(inclusive).subgroups(subgroups);
+                    let case = Case::new(implementation, count)
+                        .items(1)
+                        .inclusive(inclusive)
+                        .subgroups(subgroups);
                     check(&mut exec, &case, &input);
                 }
             }
@@ -54,13 +60,22 @@ fn gpu_count_gives_the_cpu_count_result_and_leaves_the_tail() {
             for inclusive in [false, true] {
                 // 0 and 1: below one tile; 65,537: several levels; CAPACITY + 5: clamped.
                 for count in [0, 1, 256, 2_049, 65_537, CAPACITY, CAPACITY + 5] {
-                    let indirect = Case::new(implementation, CAPACITY).items(items).inclusive(inclusive).gpu_count(count);
+                    let indirect = Case::new(implementation, CAPACITY)
+                        .items(items)
+                        .inclusive(inclusive)
+                        .gpu_count(count);
                     check(&mut exec, &indirect, &input);
-                    let direct = Case::new(implementation, count.min(CAPACITY)).items(items).inclusive(inclusive);
+                    let direct = Case::new(implementation, count.min(CAPACITY))
+                        .items(items)
+                        .inclusive(inclusive);
                     let a = run(&mut exec, &indirect, &input);
                     let b = run(&mut exec, &direct, &input);
                     let n = count.min(CAPACITY) as usize;
-                    assert_eq!(a.output[..n], b.output[..n], "{indirect:?} against {direct:?}");
+                    assert_eq!(
+                        a.output[..n],
+                        b.output[..n],
+                        "{indirect:?} against {direct:?}"
+                    );
                     assert_eq!(a.total, b.total, "{indirect:?} against {direct:?}");
                 }
             }
@@ -74,7 +89,11 @@ fn capacity_below_one_tile_with_a_gpu_count() {
     let input = XorShift(0x5eed_0004).values(300, 1 << 20);
     for implementation in Implementation::BOTH {
         for count in [0, 7, 300, 1_000] {
-            check(&mut exec, &Case::new(implementation, 300).gpu_count(count), &input);
+            check(
+                &mut exec,
+                &Case::new(implementation, 300).gpu_count(count),
+                &input,
+            );
         }
     }
 }
@@ -87,9 +106,23 @@ fn sixteen_million_elements() {
     let mut exec = executor();
     let n = 16_777_217;
     let input = XorShift(0x5eed_0005).values(n as usize, 1 << 12);
-    check(&mut exec, &Case::new(Implementation::ScanFan, n).items(1), &input);
-    check(&mut exec, &Case::new(Implementation::ScanFan, n).items(1).gpu_count(n - 3), &input);
-    check(&mut exec, &Case::new(Implementation::ScanFan, n).inclusive(true), &input);
+    check(
+        &mut exec,
+        &Case::new(Implementation::ScanFan, n).items(1),
+        &input,
+    );
+    check(
+        &mut exec,
+        &Case::new(Implementation::ScanFan, n)
+            .items(1)
+            .gpu_count(n - 3),
+        &input,
+    );
+    check(
+        &mut exec,
+        &Case::new(Implementation::ScanFan, n).inclusive(true),
+        &input,
+    );
     check(&mut exec, &Case::new(Implementation::TwoStep, n), &input);
 }
 
@@ -98,18 +131,48 @@ fn random_sizes_values_and_options() {
     use proptest::prelude::*;
     use proptest::test_runner::{Config, TestRunner};
     let exec = std::cell::RefCell::new(executor());
-    let strategy = (1u32..300_000, any::<u64>(), any::<bool>(), any::<bool>(), any::<bool>(), prop::sample::select(vec![1u32, 2, 4, 8, 16]), any::<bool>());
-    let mut runner = TestRunner::new(Config { cases: 24, failure_persistence: None, ..Config::default() });
+    let strategy = (
+        1u32..300_000,
+        any::<u64>(),
+        any::<bool>(),
+        any::<bool>(),
+        any::<bool>(),
+        prop::sample::select(vec![1u32, 2, 4, 8, 16]),
+        any::<bool>(),
+    );
+    let mut runner = TestRunner::new(Config {
+        cases: 24,
+        failure_persistence: None,
+        ..Config::default()
+    });
     runner
-        .run(&strategy, |(count, seed, two_step, inclusive, subgroups_off, items, near_max)| {
-            let mut rng = XorShift(seed | 1);
-            let input = if near_max { rng.near_max(count as usize) } else { rng.values(count as usize, u32::MAX) };
-            let implementation = if two_step { Implementation::TwoStep } else { Implementation::ScanFan };
-            let subgroups = if subgroups_off { Subgroups::Off } else { Subgroups::Auto };
-            let case = Case::new(implementation, count).inclusive(inclusive).subgroups(subgroups).items(items);
-            check(&mut exec.borrow_mut(), &case, &input);
-            Ok(())
-        })
+        .run(
+            &strategy,
+            |(count, seed, two_step, inclusive, subgroups_off, items, near_max)| {
+                let mut rng = XorShift(seed | 1);
+                let input = if near_max {
+                    rng.near_max(count as usize)
+                } else {
+                    rng.values(count as usize, u32::MAX)
+                };
+                let implementation = if two_step {
+                    Implementation::TwoStep
+                } else {
+                    Implementation::ScanFan
+                };
+                let subgroups = if subgroups_off {
+                    Subgroups::Off
+                } else {
+                    Subgroups::Auto
+                };
+                let case = Case::new(implementation, count)
+                    .inclusive(inclusive)
+                    .subgroups(subgroups)
+                    .items(items);
+                check(&mut exec.borrow_mut(), &case, &input);
+                Ok(())
+            },
+        )
         .unwrap();
 }
 
@@ -151,8 +214,11 @@ bind = {{ input = "counts", output = "offsets" }}
         );
         let g = parse_pipeline(&text, "inline.toml", &registry).unwrap();
         let compiled = g.compile(&CompileOptions::new(exec.gpu.features)).unwrap();
-        let counts = exec.gpu.buffer_with_data("counts", bytemuck::cast_slice(&input), USAGE);
-        exec.execute(&compiled, &Imports::new().buffer("counts", &counts)).unwrap();
+        let counts = exec
+            .gpu
+            .buffer_with_data("counts", bytemuck::cast_slice(&input), USAGE);
+        exec.execute(&compiled, &Imports::new().buffer("counts", &counts))
+            .unwrap();
         let offsets: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("offsets").unwrap());
         let got_total: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("total").unwrap());
         assert_eq!(offsets, expected, "{implementation}");

@@ -12,8 +12,14 @@ fn params(text: &str) -> Params {
 fn parameters_parse_with_defaults() {
     let o = ScanOptions::from_params(&params("count = 10")).unwrap();
     assert_eq!(o, ScanOptions::new(10));
-    let o = ScanOptions::from_params(&params("count = 7\ninclusive = true\nsubgroups = \"off\"\nitems_per_thread = 2")).unwrap();
-    assert_eq!((o.count, o.inclusive, o.subgroups, o.items_per_thread), (7, true, Subgroups::Off, 2));
+    let o = ScanOptions::from_params(&params(
+        "count = 7\ninclusive = true\nsubgroups = \"off\"\nitems_per_thread = 2",
+    ))
+    .unwrap();
+    assert_eq!(
+        (o.count, o.inclusive, o.subgroups, o.items_per_thread),
+        (7, true, Subgroups::Off, 2)
+    );
 }
 
 #[test]
@@ -35,8 +41,13 @@ fn bad_parameters_say_what_to_change() {
 fn registry_knows_both_implementations() {
     let mut registry = Registry::new();
     register(&mut registry);
-    assert_eq!(registry.implementations("scan_fan"), ["scan_fan", "two_step"]);
-    let pass = registry.build("scan_fan", "two_step", &params("count = 3")).unwrap();
+    assert_eq!(
+        registry.implementations("scan_fan"),
+        ["scan_fan", "two_step"]
+    );
+    let pass = registry
+        .build("scan_fan", "two_step", &params("count = 3"))
+        .unwrap();
     assert_eq!(pass.implementation(), "two_step");
 }
 
@@ -49,7 +60,12 @@ fn an_oversized_count_fails_at_compile_naming_the_pass() {
     let output = g.import_buffer("output", BufferDesc::array(Element::U32, n), usage);
     let mut pass = ScanFan::new(0);
     pass.options.count = n as u32;
-    g.add_pass("prefix", pass, Bindings::new().bind("input", input).bind("output", output)).unwrap();
+    g.add_pass(
+        "prefix",
+        pass,
+        Bindings::new().bind("input", input).bind("output", output),
+    )
+    .unwrap();
     match g.compile(&CompileOptions::new(wgpu::Features::empty())) {
         Err(GraphError::Parameter { pass, message }) => {
             assert_eq!(pass, "prefix");
@@ -65,7 +81,18 @@ fn output_shorter_than_the_count_is_a_descriptor_error() {
     let usage = wgpu::BufferUsages::STORAGE;
     let input = g.import_buffer("input", BufferDesc::array(Element::U32, 100), usage);
     let output = g.import_buffer("output", BufferDesc::array(Element::U32, 99), usage);
-    g.add_pass("prefix", ScanFan::new(100), Bindings::new().bind("input", input).bind("output", output)).unwrap();
-    let err = g.compile(&CompileOptions::new(wgpu::Features::empty())).err().expect("a descriptor error");
-    assert!(matches!(err, GraphError::DescriptorMismatch { ref slot, .. } if slot == "output"), "{err}");
+    g.add_pass(
+        "prefix",
+        ScanFan::new(100),
+        Bindings::new().bind("input", input).bind("output", output),
+    )
+    .unwrap();
+    let err = g
+        .compile(&CompileOptions::new(wgpu::Features::empty()))
+        .err()
+        .expect("a descriptor error");
+    assert!(
+        matches!(err, GraphError::DescriptorMismatch { ref slot, .. } if slot == "output"),
+        "{err}"
+    );
 }

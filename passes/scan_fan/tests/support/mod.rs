@@ -8,8 +8,9 @@ use meshlight_pass_scan_fan::{ScanFan, ScanOptions, Subgroups, TwoStep, cpu_scan
 /// written and did not shows up as a mismatch.
 pub const POISON: u32 = 0xDEAD_BEEF;
 
-pub const USAGE: wgpu::BufferUsages =
-    wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_SRC).union(wgpu::BufferUsages::COPY_DST);
+pub const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
 
 /// Opens the first Vulkan adapter; with none, fails with the graph's install hint.
 pub fn executor() -> Executor {
@@ -46,7 +47,11 @@ pub struct Case {
 
 impl Case {
     pub fn new(implementation: Implementation, count: u32) -> Self {
-        Self { implementation, options: ScanOptions::new(count), gpu_count: None }
+        Self {
+            implementation,
+            options: ScanOptions::new(count),
+            gpu_count: None,
+        }
     }
     pub fn inclusive(mut self, inclusive: bool) -> Self {
         self.options.inclusive = inclusive;
@@ -66,7 +71,8 @@ impl Case {
     }
     /// Elements the scan should cover.
     pub fn effective_count(&self) -> u32 {
-        self.gpu_count.map_or(self.options.count, |c| c.min(self.options.count))
+        self.gpu_count
+            .map_or(self.options.count, |c| c.min(self.options.count))
     }
 }
 
@@ -85,31 +91,55 @@ pub fn run(exec: &mut Executor, case: &Case, input: &[u32]) -> Outcome {
     let input_h = g.import_buffer("input", BufferDesc::array(Element::U32, capacity), USAGE);
     let output_h = g.import_buffer("output", BufferDesc::array(Element::U32, capacity), USAGE);
     let total_h = g.import_buffer("total", BufferDesc::array(Element::U32, 1), USAGE);
-    let mut bindings = Bindings::new().bind("input", input_h).bind("output", output_h).bind("total", total_h);
+    let mut bindings = Bindings::new()
+        .bind("input", input_h)
+        .bind("output", output_h)
+        .bind("total", total_h);
     if case.gpu_count.is_some() {
-        bindings = bindings.bind("count", g.import_buffer("count", BufferDesc::array(Element::U32, 1), USAGE));
+        bindings = bindings.bind(
+            "count",
+            g.import_buffer("count", BufferDesc::array(Element::U32, 1), USAGE),
+        );
     }
-    g.add_boxed_pass("scan", case.implementation.pass(case.options), bindings).expect("add the scan pass");
-    let compiled = g.compile(&CompileOptions::new(exec.gpu.features)).expect("compile");
+    g.add_boxed_pass("scan", case.implementation.pass(case.options), bindings)
+        .expect("add the scan pass");
+    let compiled = g
+        .compile(&CompileOptions::new(exec.gpu.features))
+        .expect("compile");
 
     let gpu = &exec.gpu;
-    let input_buf = gpu.buffer_with_data("input", bytemuck::cast_slice(&input[..capacity as usize]), USAGE);
-    let output_buf = gpu.buffer_with_data("output", bytemuck::cast_slice(&vec![POISON; capacity as usize]), USAGE);
+    let input_buf = gpu.buffer_with_data(
+        "input",
+        bytemuck::cast_slice(&input[..capacity as usize]),
+        USAGE,
+    );
+    let output_buf = gpu.buffer_with_data(
+        "output",
+        bytemuck::cast_slice(&vec![POISON; capacity as usize]),
+        USAGE,
+    );
     let total_buf = gpu.buffer_with_data("total", bytemuck::bytes_of(&POISON), USAGE);
-    let count_buf = gpu.buffer_with_data("count", bytemuck::bytes_of(&case.gpu_count.unwrap_or(0)), USAGE);
+    let count_buf = gpu.buffer_with_data(
+        "count",
+        bytemuck::bytes_of(&case.gpu_count.unwrap_or(0)),
+        USAGE,
+    );
     let imports = Imports::new()
         .buffer("input", &input_buf)
         .buffer("output", &output_buf)
         .buffer("total", &total_buf)
         .buffer("count", &count_buf);
-    exec.execute(&compiled, &imports).unwrap_or_else(|e| panic!("{case:?}: {e}"));
+    exec.execute(&compiled, &imports)
+        .unwrap_or_else(|e| panic!("{case:?}: {e}"));
     let output = read_u32s(&exec.gpu, &output_buf, capacity as usize);
     let total = read_u32s(&exec.gpu, &total_buf, 1)[0];
     Outcome { output, total }
 }
 
 pub fn read_u32s(gpu: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Vec<u32> {
-    let bytes = gpu.read_buffer(buffer, 0, count as u64 * 4).expect("readback");
+    let bytes = gpu
+        .read_buffer(buffer, 0, count as u64 * 4)
+        .expect("readback");
     bytemuck::pod_collect_to_vec(&bytes)
 }
 
@@ -124,11 +154,18 @@ pub fn check(exec: &mut Executor, case: &Case, input: &[u32]) {
             "{case:?}: first mismatch at element {i} of {n}: GPU {:#x}, CPU {:#x}{}",
             got.output[i],
             expected[i],
-            if got.output[i] == POISON { " (never written)" } else { "" }
+            if got.output[i] == POISON {
+                " (never written)"
+            } else {
+                ""
+            }
         );
     }
     if let Some(i) = (n..got.output.len()).find(|&i| got.output[i] != POISON) {
-        panic!("{case:?}: element {i}, past the count {n}, was written: {:#x}", got.output[i]);
+        panic!(
+            "{case:?}: element {i}, past the count {n}, was written: {:#x}",
+            got.output[i]
+        );
     }
     assert_eq!(got.total, total, "{case:?}: total");
 }
