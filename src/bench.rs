@@ -3,6 +3,7 @@
 //! GPU figures come from timestamps on whatever adapter runs the command; only numbers
 //! from a real GPU say anything about speed.
 
+use crate::graph::synthetic::{random_graph, NoopPass};
 use crate::graph::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -10,7 +11,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug, Clone)]
 pub struct BenchArgs {
     /// Scenarios to run (default: all that need no mesh files). Known: graph-compile,
-    /// graph-execute, pool-reuse, render, builder.
+    /// graph-execute, pool-reuse, render, builder, scan-fan.
     #[arg(long = "scenario", value_delimiter = ',')]
     pub scenarios: Vec<String>,
     /// Write the rows as JSON here too.
@@ -34,7 +35,7 @@ pub struct Row {
     pub device: String,
 }
 
-const ALL: &[&str] = &["graph-compile", "graph-execute", "pool-reuse", "render", "builder"];
+const ALL: &[&str] = &["graph-compile", "graph-execute", "pool-reuse", "render", "builder", "scan-fan"];
 
 pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Error>> {
     let scenarios: Vec<String> = if args.scenarios.is_empty() { ALL.iter().map(|s| s.to_string()).collect() } else { args.scenarios.clone() };
@@ -46,6 +47,7 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
             "pool-reuse" => pool_reuse(),
             "render" => render(args.quick)?,
             "builder" => builder(args.quick)?,
+            "scan-fan" => scan_fan(args.quick)?,
             other => return Err(format!("unknown scenario `{other}`; known: {}", ALL.join(", ")).into()),
         };
         for r in &new {
@@ -77,66 +79,6 @@ fn row(scenario: &str, case: String, metric: &str, value: f64, unit: &str, devic
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
-}
-
-/// A pass with any slots that records nothing: compile and CPU-overhead benchmarks.
-pub struct NoopPass {
-    pub slots: Vec<Slot>,
-}
-
-impl Pass for NoopPass {
-    fn contract(&self) -> StageContract {
-        StageContract { stage: "noop", slots: self.slots.clone() }
-    }
-    fn implementation(&self) -> &'static str {
-        "noop"
-    }
-    fn setup(&self, _: &mut SetupContext) -> Result<()> {
-        Ok(())
-    }
-    fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
-        Ok(())
-    }
-}
-
-/// A random layered graph of `n` passes: each writes its own transient and reads up to
-/// three earlier ones; every tenth also accumulates into the imported output.
-pub fn random_graph(n: usize, seed: u64) -> GraphBuilder {
-    let mut state = seed | 1;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        state
-    };
-    let mut g = GraphBuilder::new();
-    let mut out = g.import_buffer("out", BufferDesc::array(Element::U32, 16), wgpu::BufferUsages::STORAGE).erase();
-    let names: Vec<String> = (0..n).map(|i| format!("t{i}")).collect();
-    for name in &names {
-        g.create_buffer(name, BufferDesc::array(Element::U32, 64 + next() % 4096));
-    }
-    const INPUTS: [&str; 3] = ["in0", "in1", "in2"];
-    for i in 0..n {
-        let mut slots = Vec::new();
-        let mut b = Bindings::new();
-        for name in INPUTS.iter().take(if i == 0 { 0 } else { (next() % 4) as usize }) {
-            let src = (next() % i as u64) as usize;
-            slots.push(Slot::buffer(name, Access::StorageRead, Element::U32, ""));
-            b = b.bind_named(name, &names[src]);
-        }
-        slots.push(Slot::buffer("w", Access::StorageWrite, Element::U32, ""));
-        b = b.bind_named("w", &names[i]);
-        let accumulate = i % 10 == 9 || i == n - 1;
-        if accumulate {
-            slots.push(Slot::buffer("out", Access::StorageReadWrite, Element::U32, ""));
-            b = b.bind("out", out);
-        }
-        let outputs = g.add_pass(&format!("p{i}"), NoopPass { slots }, b).expect("generated graphs are well-formed");
-        if accumulate {
-            out = outputs.written().iter().find(|(s, _)| *s == "out").map(|(_, h)| *h).unwrap_or(out);
-        }
-    }
-    g
 }
 
 fn graph_compile(quick: bool) -> Vec<Row> {
@@ -245,4 +187,26 @@ fn builder(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::error::Err
     let mut r = row("builder", "procedural".into(), "input triangles/s", b.triangles_per_second(), "tri/s", "cpu");
     r.vs_baseline = Some(b.triangles_per_second() / b.clod_triangles_per_second());
     Ok(vec![r])
+}
+
+fn scan_fan(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
+    let gpu = GpuContext::with_available(wgpu::Features::all())?;
+    let device = gpu.info.name.clone();
+    let mut exec = Executor::new(gpu);
+    let sizes: Vec<u64> = if quick { vec![1 << 20, 1 << 22] } else { crate::scan_fan::bench::SIZES.to_vec() };
+    let rows = crate::scan_fan::bench::run(&mut exec, &sizes, if quick { 3 } else { 10 })?;
+    println!("{}", crate::scan_fan::bench::table(&rows));
+    let mut out = Vec::new();
+    for r in rows {
+        let case = format!("{} 2^{}", r.implementation, r.elements.trailing_zeros());
+        out.push(row("scan-fan", case.clone(), "elements/s", r.elements_per_s, "elem/s", &device));
+        let mut gb = row("scan-fan", case.clone(), "GB/s (8 B/elem)", r.gb_per_s, "GB/s", &device);
+        gb.vs_baseline = Some(r.ratio_to_copy);
+        out.push(gb);
+        out.push(row("scan-fan", case.clone(), "copy GB/s (baseline)", r.copy_gb_per_s, "GB/s", &device));
+        let mut cpu = row("scan-fan", case, "CPU prefix sum", r.cpu_ms, "ms", "cpu");
+        cpu.vs_baseline = Some(r.cpu_ms / r.gpu_ms);
+        out.push(cpu);
+    }
+    Ok(out)
 }

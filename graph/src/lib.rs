@@ -15,6 +15,7 @@ pub mod file;
 pub mod pass;
 pub mod plan;
 pub mod resource;
+pub mod synthetic;
 
 pub use access::Access;
 pub use builder::{Bindings, GraphBuilder, History, PassNode, PassOutputs};

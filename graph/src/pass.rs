@@ -36,6 +36,7 @@ pub struct ScratchDecl {
 #[derive(Debug)]
 pub struct SetupContext {
     adapter_features: wgpu::Features,
+    bound: Vec<&'static str>,
     pub(crate) required: wgpu::Features,
     pub(crate) optional: wgpu::Features,
     pub(crate) shader_defs: Vec<(String, ShaderDef)>,
@@ -45,9 +46,10 @@ pub struct SetupContext {
 }
 
 impl SetupContext {
-    pub(crate) fn new(adapter_features: wgpu::Features) -> Self {
+    pub(crate) fn new(adapter_features: wgpu::Features, bound: Vec<&'static str>) -> Self {
         Self {
             adapter_features,
+            bound,
             required: wgpu::Features::empty(),
             optional: wgpu::Features::empty(),
             shader_defs: Vec::new(),
@@ -59,6 +61,11 @@ impl SetupContext {
     /// The adapter's features, to choose between variants.
     pub fn adapter_features(&self) -> wgpu::Features {
         self.adapter_features
+    }
+    /// True when `slot` is bound (always, unless the slot is optional), so setup can pick
+    /// the variant that uses it.
+    pub fn is_bound(&self, slot: &str) -> bool {
+        self.bound.contains(&slot)
     }
     /// True when the feature will be enabled if the pass asks for it as optional.
     pub fn has(&self, feature: wgpu::Features) -> bool {

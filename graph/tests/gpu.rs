@@ -54,7 +54,7 @@ fn history_resource_carries_from_frame_to_frame() {
     for frame in 1..=4u32 {
         exec.execute(&compiled, &Imports::new()).unwrap();
         let bytes = exec.read_buffer("counter").unwrap();
-        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
         assert!(words.iter().all(|&w| w == frame), "frame {frame}: {:?}", &words[..4]);
     }
 }

@@ -51,7 +51,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     let mut enabled = wgpu::Features::empty();
     let mut scratch_of: Vec<Vec<usize>> = Vec::with_capacity(passes.len());
     for (p, node) in passes.iter().enumerate() {
-        let mut ctx = SetupContext::new(options.adapter_features);
+        let mut ctx = SetupContext::new(options.adapter_features, node.contract.slot_names());
         node.pass.setup(&mut ctx).map_err(|e| match e {
             GraphError::Parameter { message, .. } => GraphError::Parameter { pass: node.name.clone(), message },
             other => other,

@@ -183,7 +183,8 @@ impl Executor {
         let mut gpu_total_us = None;
         if let Some(ts) = self.timestamps.as_ref().filter(|_| timing && queries > 0) {
             let bytes = self.gpu.map_and_read(ts.readback())?;
-            let ticks: &[u64] = bytemuck::cast_slice(&bytes[..queries as usize * 8]);
+            // Mapped bytes carry no alignment guarantee for u64: copy rather than cast.
+            let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes[..queries as usize * 8]);
             let period_ns = self.gpu.queue.get_timestamp_period() as f64;
             let mut total = 0.0;
             for (i, t) in timings.iter_mut().enumerate() {

@@ -122,5 +122,5 @@ pub fn storage_buffer(gpu: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buf
 
 pub fn read_u32s(gpu: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Vec<u32> {
     let bytes = gpu.read_buffer(buffer, 0, count as u64 * 4).expect("readback");
-    bytemuck::cast_slice(&bytes).to_vec()
+    bytemuck::pod_collect_to_vec(&bytes)
 }

@@ -7,7 +7,7 @@ use meshlight_graph::{
 };
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
-pub(crate) const SHADER: PassShader = pass_shader!("scan_fan::scan", "scan.wgsl");
+pub const SHADER: PassShader = pass_shader!("scan_fan::scan", "scan.wgsl");
 
 /// Kernel entry points in `scan.wgsl`.
 pub(crate) mod entry {

@@ -1,0 +1,71 @@
+//! Synthetic graphs for benchmarks and property tests: passes that record nothing, and
+//! random layered DAGs of any size.
+
+use crate::access::Access;
+use crate::builder::{Bindings, GraphBuilder};
+use crate::contract::{Slot, StageContract};
+use crate::error::Result;
+use crate::exec::RecordContext;
+use crate::pass::{Pass, SetupContext};
+use crate::resource::{BufferDesc, Element};
+
+/// A pass with any slots that records nothing: compile and CPU-overhead benchmarks.
+pub struct NoopPass {
+    pub slots: Vec<Slot>,
+}
+
+impl Pass for NoopPass {
+    fn contract(&self) -> StageContract {
+        StageContract { stage: "noop", slots: self.slots.clone() }
+    }
+    fn implementation(&self) -> &'static str {
+        "noop"
+    }
+    fn setup(&self, _: &mut SetupContext) -> Result<()> {
+        Ok(())
+    }
+    fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// A random layered graph of `n` passes: each writes its own transient and reads up to
+/// three earlier ones; every tenth also accumulates into the imported output.
+pub fn random_graph(n: usize, seed: u64) -> GraphBuilder {
+    let mut state = seed | 1;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut g = GraphBuilder::new();
+    let mut out = g.import_buffer("out", BufferDesc::array(Element::U32, 16), wgpu::BufferUsages::STORAGE).erase();
+    let names: Vec<String> = (0..n).map(|i| format!("t{i}")).collect();
+    for name in &names {
+        g.create_buffer(name, BufferDesc::array(Element::U32, 64 + next() % 4096));
+    }
+    const INPUTS: [&str; 3] = ["in0", "in1", "in2"];
+    for i in 0..n {
+        let mut slots = Vec::new();
+        let mut b = Bindings::new();
+        for name in INPUTS.iter().take(if i == 0 { 0 } else { (next() % 4) as usize }) {
+            let src = (next() % i as u64) as usize;
+            slots.push(Slot::buffer(name, Access::StorageRead, Element::U32, ""));
+            b = b.bind_named(name, &names[src]);
+        }
+        slots.push(Slot::buffer("w", Access::StorageWrite, Element::U32, ""));
+        b = b.bind_named("w", &names[i]);
+        let accumulate = i % 10 == 9 || i == n - 1;
+        if accumulate {
+            slots.push(Slot::buffer("out", Access::StorageReadWrite, Element::U32, ""));
+            b = b.bind("out", out);
+        }
+        let outputs = g.add_pass(&format!("p{i}"), NoopPass { slots }, b).expect("generated graphs are well-formed");
+        if accumulate {
+            out = outputs.written().iter().find(|(s, _)| *s == "out").map(|(_, h)| *h).unwrap_or(out);
+        }
+    }
+    g
+}
+

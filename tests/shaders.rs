@@ -1,0 +1,42 @@
+//! Every pass entry point, with every shader-def variant it uses, composes through
+//! naga_oil against the shared library and validates.
+
+use meshlight::shaders::{validate, Capabilities, PassShader, ShaderDefs, ShaderLibrary};
+
+fn all_caps() -> Capabilities {
+    Capabilities::SHADER_INT64 | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX | Capabilities::SUBGROUP
+}
+
+fn check(shader: &PassShader, defs: &dyn ShaderDefs) {
+    let mut lib = ShaderLibrary::new(all_caps()).unwrap();
+    let module = lib.compose(shader, &defs.shader_defs()).unwrap_or_else(|e| panic!("{}: {e}", shader.name));
+    validate(shader.name, &module, all_caps()).unwrap_or_else(|e| panic!("{}: {e}", shader.name));
+    assert!(!module.entry_points.is_empty(), "{} has no entry points", shader.name);
+}
+
+#[test]
+fn demo_shaders_compose_and_validate() {
+    check(&meshlight::demo::RASTER_SHADER, &());
+    check(&meshlight::demo::SHADE_SHADER, &());
+}
+
+#[test]
+fn scan_fan_shader_variants_compose_and_validate() {
+    use meshlight::scan_fan::ScanDefs;
+    for items_per_thread in [1, 2, 4, 8, 16] {
+        for subgroups in [false, true] {
+            for gpu_count in [false, true] {
+                check(&meshlight::scan_fan::SHADER, &ScanDefs { items_per_thread, subgroups, gpu_count });
+            }
+        }
+    }
+}
+
+#[test]
+fn the_demo_raster_needs_int64_atomics() {
+    // Without the capability the composer must refuse it, not hand wgpu an invalid module.
+    let mut lib = ShaderLibrary::new(Capabilities::empty()).unwrap();
+    let composed = lib.compose(&meshlight::demo::RASTER_SHADER, &[]);
+    let validated = composed.and_then(|m| validate("demo::raster", &m, Capabilities::empty()));
+    assert!(validated.is_err());
+}
