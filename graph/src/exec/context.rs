@@ -78,11 +78,14 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
-    /// Selects an adapter and opens it with every feature the adapter has out of `wanted`.
+    /// Selects an adapter and opens it with every feature the adapter has out of `wanted`,
+    /// leaving out wgpu's experimental features, which must be asked for by name, and
+    /// mappable primary buffers, which slow discrete GPUs down.
     pub fn with_available(wanted: wgpu::Features) -> Result<Self> {
         let adapter = GpuAdapter::select()?;
         let f = wanted & adapter.features();
-        adapter.open(f)
+        let experimental = f.iter_names().filter(|(n, _)| n.starts_with("EXPERIMENTAL_")).fold(wgpu::Features::empty(), |acc, (_, x)| acc | x);
+        adapter.open(f - experimental - wgpu::Features::MAPPABLE_PRIMARY_BUFFERS)
     }
 
     /// Copies `size` bytes at `offset` of `buffer` (which needs COPY_SRC) to the CPU.
