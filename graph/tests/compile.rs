@@ -260,3 +260,17 @@ fn usages_and_render_target_ops_are_derived() {
     let color = &plan.resources[plan.resource_index("color").unwrap()];
     assert_eq!(color.texture_usage, wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING);
 }
+
+#[test]
+fn one_resource_in_a_read_and_a_write_slot_of_one_pass_is_an_error() {
+    let mut g = GraphBuilder::new();
+    g.import_buffer("out", u32s(4), IMPORT_USAGE);
+    g.add_pass("p", Fake::rw(&["in"], &["w"]), Bindings::new().bind_named("in", "out").bind_named("w", "out")).unwrap();
+    match g.compile(&opts()) {
+        Err(GraphError::UsageNotAllowed { pass, resource, reason, .. }) => {
+            assert_eq!((pass.as_str(), resource.as_str()), ("p", "out"));
+            assert!(reason.contains("another slot"), "{reason}");
+        }
+        other => panic!("{:?}", other.err()),
+    }
+}

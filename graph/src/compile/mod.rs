@@ -14,7 +14,7 @@ use crate::pass::SetupContext;
 use crate::plan::*;
 use crate::resource::*;
 use pool::Lifetime;
-use std::collections::HashSet;
+use std::collections::HashMap;
 
 #[derive(Clone, Debug)]
 pub struct CompileOptions {
@@ -231,7 +231,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
 
 /// Each slot against the resource bound to it: kind, element or format, size, usage.
 fn check_slots(resources: &[ResourceInfo], node: &PassNode, setup: &SetupContext) -> Result<()> {
-    let mut seen = HashSet::new();
+    let mut seen: HashMap<ResourceId, bool> = HashMap::new();
     for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
         let res = &resources[h.id.index()];
         let mismatch = |expected: String, found: String| GraphError::DescriptorMismatch {
@@ -312,10 +312,14 @@ fn check_slots(resources: &[ResourceInfo], node: &PassNode, setup: &SetupContext
                 });
             }
         }
-        // One resource in two slots of one pass would alias inside a dispatch.
-        if !seen.insert(h.id) && slot.access.writes() {
-            return Err(usage_err("its own slot".into(), "the same resource is bound to another slot of this pass".into()));
+        // One resource in two slots of one pass, one of them writing, would alias inside a
+        // dispatch (and wgpu rejects a writable storage binding that overlaps another).
+        if let Some(&other_writes) = seen.get(&h.id) {
+            if other_writes || slot.access.writes() {
+                return Err(usage_err("its own slot".into(), "the same resource is bound to another slot of this pass, and one of them writes".into()));
+            }
         }
+        seen.insert(h.id, slot.access.writes());
     }
     Ok(())
 }
