@@ -115,13 +115,16 @@ fn graph_execute(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
         let frames = if quick { 20 } else { 200 };
         let mut record = Vec::new();
         let mut frame = Vec::new();
+        let mut without_submit = Vec::new();
         for _ in 0..frames {
             let s = exec.execute(&compiled, &imports)?;
             record.push(s.passes.iter().map(|p| p.cpu_record_us).sum::<f64>() / n as f64);
             frame.push(s.cpu_frame_us / n as f64);
+            without_submit.push((s.cpu_frame_us - s.cpu_submit_us) / n as f64);
         }
         exec.device().poll(wgpu::PollType::wait_indefinitely()).ok();
         rows.push(row("graph-execute", format!("{n} passes"), "CPU per pass (frame)", median(frame), "µs", &device));
+        rows.push(row("graph-execute", format!("{n} passes"), "CPU per pass (no submit)", median(without_submit), "µs", &device));
         rows.push(row("graph-execute", format!("{n} passes"), "CPU per pass (record)", median(record), "µs", &device));
     }
     Ok(rows)

@@ -50,6 +50,8 @@ pub struct FrameStats {
     pub passes: Vec<PassTiming>,
     /// CPU time of the whole frame on the executor's side, excluding the GPU wait.
     pub cpu_frame_us: f64,
+    /// The part of `cpu_frame_us` spent in `queue.submit` (mostly driver work).
+    pub cpu_submit_us: f64,
     pub gpu_total_us: Option<f64>,
     pub bytes_with_reuse: u64,
     pub bytes_without_reuse: u64,
@@ -174,7 +176,9 @@ impl Executor {
         }
         self.programs.uniforms.flush(&self.gpu.queue);
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let submit_start = Instant::now();
         self.gpu.queue.submit(command_buffers);
+        let cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GraphError::Validation { pass: "(submit)".into(), message: e.to_string() });
         }
@@ -209,6 +213,7 @@ impl Executor {
             frame: self.frame - 1,
             passes: timings,
             cpu_frame_us,
+            cpu_submit_us,
             gpu_total_us,
             bytes_with_reuse: plan.bytes_with_reuse,
             bytes_without_reuse: plan.bytes_without_reuse,
