@@ -5,6 +5,11 @@
 //! Why borders are locked: two neighbouring groups simplify independently, so only the
 //! vertices they share may never move; then any cut through the DAG (each cluster drawn
 //! when its own error is acceptable and its parent's is not) is watertight.
+//!
+//! Why errors add up: a group's error must bound the distance from its output to the
+//! full-detail surface. Its children lie within their errors of LOD 0 and its output
+//! within the measured deviation of the children, so the sum of the two is a bound
+//! (triangle inequality), and it is never below a child's error.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -53,10 +58,13 @@ pub struct DagGroup {
     /// The build iteration that formed the group (children may be from lower levels when
     /// they were stuck before).
     pub level: u32,
-    /// Encloses every child's LOD sphere; error = max(own simplification, children).
+    /// Encloses every child's LOD sphere; error = max(children) + max(simplify error,
+    /// deviation).
     pub lod: LodBounds,
-    /// Error of this group's simplification alone.
+    /// Error of this group's simplification alone, as meshoptimizer estimates it.
     pub simplify_error: f32,
+    /// Measured distance from this group's output to its children's triangles.
+    pub deviation: f32,
     pub children: Vec<u32>,
 }
 
@@ -170,7 +178,7 @@ pub fn build_dag(
                 )?;
                 let meshlets = split_into_meshlets(positions, &simplified.indices);
                 let bounds: Vec<_> = meshlets.iter().map(|m| sphere_of(positions, m)).collect();
-                Some((simplified.error, meshlets, bounds))
+                Some((simplified.error, simplified.deviation, meshlets, bounds))
             })
             .collect();
 
@@ -178,13 +186,13 @@ pub fn build_dag(
         let mut progressed = false;
         for (members, result) in level_groups.iter().zip(results) {
             let children: Vec<u32> = members.iter().map(|&m| active[m as usize]).collect();
-            let Some((simplify_error, meshlets, bounds)) = result else {
+            let Some((simplify_error, deviation, meshlets, bounds)) = result else {
                 // Stuck: try again next level, grouped with other neighbours.
                 next.extend(children);
                 continue;
             };
             progressed = true;
-            let lod = group_lod(&clusters, &children, simplify_error);
+            let lod = group_lod(&clusters, &children, simplify_error.max(deviation));
             let id = groups.len() as u32;
             for &c in &children {
                 let child = &mut clusters[c as usize];
@@ -207,6 +215,7 @@ pub fn build_dag(
                 level,
                 lod,
                 simplify_error,
+                deviation,
                 children,
             });
         }
@@ -248,10 +257,11 @@ fn sphere_of(positions: &[Vec3], indices: &[u32]) -> (Vec3, f32) {
 
 /// The group's LOD bounds: a sphere around the children's LOD spheres, so that the
 /// projected error of a parent is never below a child's from any viewpoint, and
-/// error = max(own, children), so that error never decreases toward the root.
-fn group_lod(clusters: &[DagCluster], children: &[u32], simplify_error: f32) -> LodBounds {
+/// error = max(children) + own, which bounds the distance to LOD 0 and never decreases
+/// toward the root.
+fn group_lod(clusters: &[DagCluster], children: &[u32], own_error: f32) -> LodBounds {
     let mut sphere: Option<(Vec3, f32)> = None;
-    let mut error = simplify_error;
+    let mut error = 0.0f32;
     for &c in children {
         let lod = clusters[c as usize].lod;
         let s = (lod.center, lod.radius);
@@ -265,7 +275,7 @@ fn group_lod(clusters: &[DagCluster], children: &[u32], simplify_error: f32) -> 
     LodBounds {
         center,
         radius,
-        error,
+        error: error + own_error,
     }
 }
 

@@ -11,6 +11,7 @@ pub mod bounds;
 pub mod cli;
 pub mod compress;
 pub mod dag;
+pub mod deviation;
 pub mod error;
 pub mod grouping;
 pub mod load;

@@ -6,6 +6,8 @@ use std::collections::HashMap;
 use glam::Vec3;
 use meshopt::{SimplifyOptions, SimplifyVertex};
 
+use crate::deviation::simplified_deviation;
+
 /// A group counts as simplified when it lost at least this share of its triangles;
 /// otherwise its clusters are retried at the next level with other neighbours.
 const STUCK_RATIO: f32 = 0.85;
@@ -17,8 +19,11 @@ const NORMAL_WEIGHT: f32 = 0.5;
 /// One simplified group in the group's own (global) vertex ids.
 pub struct Simplified {
     pub indices: Vec<u32>,
-    /// Object-space error of this simplification alone.
+    /// Object-space error of this simplification alone, as meshoptimizer estimates it.
     pub error: f32,
+    /// Measured distance from the output's triangles to the input's (see
+    /// [`simplified_deviation`]).
+    pub deviation: f32,
 }
 
 /// Simplifies `indices` (global vertex ids) to about half. `locked(v)` says whether a
@@ -91,6 +96,7 @@ pub fn simplify_group(
             continue;
         }
         return Some(Simplified {
+            deviation: simplified_deviation(&pos, &local, &out),
             indices: out.iter().map(|&l| globals[l as usize]).collect(),
             error,
         });
