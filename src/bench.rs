@@ -137,21 +137,29 @@ pub fn sample_frame_graph(width: u32, height: u32) -> GraphBuilder {
     let usage = wgpu::BufferUsages::STORAGE;
     g.import_buffer("scene", BufferDesc::array(Element::U32, 1 << 20), usage);
     g.import_buffer("image", BufferDesc::array(Element::U32, px), usage);
-    let stages: [(&str, &[&str], &[(&str, u64)]); 8] = [
-        ("fill_clusters", &["scene"], &[("clusters", 1 << 20)]),
-        ("cull_first", &["clusters"], &[("candidates", 1 << 20), ("dispatch_first", 4)]),
-        ("raster_first", &["candidates", "dispatch_first"], &[("visbuffer", px * 2)]),
-        ("depth_pyramid", &["visbuffer"], &[("pyramid", px / 3)]),
-        ("cull_second", &["clusters", "pyramid"], &[("second", 1 << 19), ("dispatch_second", 4)]),
-        ("raster_second", &["second", "dispatch_second", "visbuffer"], &[("visbuffer2", px * 2)]),
-        ("material_depth", &["visbuffer2"], &[("material", px)]),
-        ("resolve", &["visbuffer2", "material"], &[("image", 0)]),
+    /// One pass of the sample frame: what it reads, and what it writes with its size in u32s
+    /// (0 for a resource declared elsewhere).
+    struct Stage {
+        pass: &'static str,
+        reads: Vec<&'static str>,
+        writes: Vec<(&'static str, u64)>,
+    }
+    let stage = |pass, reads: &[&'static str], writes: &[(&'static str, u64)]| Stage { pass, reads: reads.to_vec(), writes: writes.to_vec() };
+    let stages = [
+        stage("fill_clusters", &["scene"], &[("clusters", 1 << 20)]),
+        stage("cull_first", &["clusters"], &[("candidates", 1 << 20), ("dispatch_first", 4)]),
+        stage("raster_first", &["candidates", "dispatch_first"], &[("visbuffer", px * 2)]),
+        stage("depth_pyramid", &["visbuffer"], &[("pyramid", px / 3)]),
+        stage("cull_second", &["clusters", "pyramid"], &[("second", 1 << 19), ("dispatch_second", 4)]),
+        stage("raster_second", &["second", "dispatch_second", "visbuffer"], &[("visbuffer2", px * 2)]),
+        stage("material_depth", &["visbuffer2"], &[("material", px)]),
+        stage("resolve", &["visbuffer2", "material"], &[("image", 0)]),
     ];
-    for (pass, reads, writes) in stages {
+    for Stage { pass, reads, writes } in stages {
         let mut slots: Vec<Slot> = reads.iter().map(|r| Slot::buffer(r, Access::StorageRead, Element::U32, "")).collect();
         for (w, words) in writes {
-            if *words > 0 {
-                g.create_buffer(w, BufferDesc::array(Element::U32, *words));
+            if words > 0 {
+                g.create_buffer(w, BufferDesc::array(Element::U32, words));
             }
             slots.push(Slot::buffer(w, Access::StorageWrite, Element::U32, ""));
         }

@@ -75,7 +75,7 @@ fn main() -> ExitCode {
     let result: Result<(), Box<dyn std::error::Error>> = match cli.command {
         Command::Render(a) => render(a),
         Command::Graph(a) => graph(a),
-        Command::Bench(a) => meshlight::bench::run(&a).map_err(Into::into),
+        Command::Bench(a) => meshlight::bench::run(&a),
         Command::Bake(a) => meshlight::scene::cli::run_bake(&a).map_err(Into::into),
         Command::Inspect(a) => meshlight::scene::cli::run_inspect(&a).map_err(Into::into),
     };

@@ -107,11 +107,10 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         }
     }
     for (r, res) in resources.iter().enumerate() {
-        if res.kind == ResourceKind::Exported {
-            if let Some(l) = &mut lifetimes[r] {
+        if res.kind == ResourceKind::Exported
+            && let Some(l) = &mut lifetimes[r] {
                 l.last = order.len().saturating_sub(1).max(l.last);
             }
-        }
     }
     let pool = pool::assign_slots(&resources, &lifetimes);
 
@@ -243,21 +242,19 @@ fn check_slots(resources: &[ResourceInfo], node: &PassNode, setup: &SetupContext
         };
         match (&slot.kind, &res.desc) {
             (SlotKind::Buffer { element }, ResourceDesc::Buffer(b)) => {
-                if let Some(e) = element {
-                    if e != &b.element {
+                if let Some(e) = element
+                    && e != &b.element {
                         return Err(mismatch(
                             format!("a buffer of {} ({} bytes each)", e.name, e.size),
                             format!("a buffer of {} ({} bytes each)", b.element.name, b.element.size),
                         ));
                     }
-                }
             }
             (SlotKind::Texture { format }, ResourceDesc::Texture(t)) => {
-                if let Some(f) = format {
-                    if *f != t.format {
+                if let Some(f) = format
+                    && *f != t.format {
                         return Err(mismatch(format!("a {} texture", format_name(*f)), format!("a {} texture", format_name(t.format))));
                     }
-                }
             }
             (SlotKind::Buffer { .. }, d) | (SlotKind::Texture { .. }, d) => {
                 let expected = if matches!(slot.kind, SlotKind::Buffer { .. }) { "a buffer" } else { "a texture" };
@@ -282,11 +279,10 @@ fn check_slots(resources: &[ResourceInfo], node: &PassNode, setup: &SetupContext
                 let Some(need) = slot.access.buffer_usage() else {
                     return Err(usage_err("a texture".into(), "a buffer cannot be used this way".into()));
                 };
-                if let ResourceKind::Imported { usage: ImportedUsage::Buffer(have) } = res.kind {
-                    if !have.contains(need) {
+                if let ResourceKind::Imported { usage: ImportedUsage::Buffer(have) } = res.kind
+                    && !have.contains(need) {
                         return Err(usage_err(format!("{need:?}"), format!("it was imported with only {have:?}; create it with {need:?} too")));
                     }
-                }
             }
             ResourceDesc::Texture(t) => {
                 let Some(need) = slot.access.texture_usage() else {
@@ -295,15 +291,14 @@ fn check_slots(resources: &[ResourceInfo], node: &PassNode, setup: &SetupContext
                 if need.contains(wgpu::TextureUsages::STORAGE_BINDING) && t.format.is_depth_stencil_format() {
                     return Err(usage_err(format!("{need:?}"), format!("depth format {} cannot be a storage texture", format_name(t.format))));
                 }
-                if let ResourceKind::Imported { usage: ImportedUsage::Texture(have) } = res.kind {
-                    if !have.contains(need) {
+                if let ResourceKind::Imported { usage: ImportedUsage::Texture(have) } = res.kind
+                    && !have.contains(need) {
                         return Err(usage_err(format!("{need:?}"), format!("it was imported with only {have:?}; create it with {need:?} too")));
                     }
-                }
             }
         }
-        if slot.access.writes() {
-            if let ResourceKind::HistoryPrev { .. } = res.kind {
+        if slot.access.writes()
+            && let ResourceKind::HistoryPrev { .. } = res.kind {
                 return Err(GraphError::ReadOnlyResource {
                     pass: node.name.clone(),
                     slot: slot.name.to_string(),
@@ -311,14 +306,12 @@ fn check_slots(resources: &[ResourceInfo], node: &PassNode, setup: &SetupContext
                     why: "last frame's history is read-only; write the current half instead",
                 });
             }
-        }
         // One resource in two slots of one pass, one of them writing, would alias inside a
         // dispatch (and wgpu rejects a writable storage binding that overlaps another).
-        if let Some(&other_writes) = seen.get(&h.id) {
-            if other_writes || slot.access.writes() {
+        if let Some(&other_writes) = seen.get(&h.id)
+            && (other_writes || slot.access.writes()) {
                 return Err(usage_err("its own slot".into(), "the same resource is bound to another slot of this pass, and one of them writes".into()));
             }
-        }
         seen.insert(h.id, slot.access.writes());
     }
     Ok(())

@@ -70,11 +70,10 @@ pub fn assign_slots(resources: &[ResourceInfo], lifetimes: &[Option<Lifetime>]) 
             }
         };
         let slot = &mut slots[s];
-        if let (ResourceDesc::Buffer(have), ResourceDesc::Buffer(want)) = (&mut slot.desc, desc) {
-            if want.size > have.size {
+        if let (ResourceDesc::Buffer(have), ResourceDesc::Buffer(want)) = (&mut slot.desc, desc)
+            && want.size > have.size {
                 *have = want.clone();
             }
-        }
         slot.bytes = slot.desc.bytes();
         slot.members.push(r);
         slot.last_use = if shareable { life.last } else { usize::MAX };

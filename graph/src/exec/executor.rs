@@ -202,11 +202,10 @@ impl Executor {
         // Keep this frame's exported transients readable until the next frame.
         self.exported.clear();
         for (r, res) in plan.resources.iter().enumerate() {
-            if res.info.kind == ResourceKind::Exported {
-                if let Some(ph) = &physical[r] {
+            if res.info.kind == ResourceKind::Exported
+                && let Some(ph) = &physical[r] {
                     self.exported.insert(res.info.name.clone(), ph.clone());
                 }
-            }
         }
         self.frame += 1;
         Ok(FrameStats {
