@@ -18,17 +18,7 @@ pub fn split_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<u32>>
     // meshoptimizer's cost grows with the vertex buffer it is handed; a group of a large
     // mesh touches a few hundred vertices, so hand it a compact copy.
     if indices.len() * 4 < positions.len() {
-        let mut local_of = std::collections::HashMap::with_capacity(indices.len() / 2);
-        let mut globals: Vec<u32> = Vec::new();
-        let local: Vec<u32> = indices
-            .iter()
-            .map(|&g| {
-                *local_of.entry(g).or_insert_with(|| {
-                    globals.push(g);
-                    (globals.len() - 1) as u32
-                })
-            })
-            .collect();
+        let Localised { globals, local } = localise(indices);
         let compact: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
         return split_into_meshlets(&compact, &local)
             .into_iter()
@@ -47,4 +37,29 @@ pub fn split_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<u32>>
                 .collect()
         })
         .collect()
+}
+
+/// A triangle list re-indexed over only the vertices it uses.
+pub(crate) struct Localised {
+    /// Mesh-wide index of each local vertex, in first-use order.
+    pub globals: Vec<u32>,
+    /// The triangle list in local indices.
+    pub local: Vec<u32>,
+}
+
+/// Re-indexes `indices` over the vertices they use, so meshoptimizer works on arrays the
+/// size of the piece rather than of the whole mesh. First-use order keeps it deterministic.
+pub(crate) fn localise(indices: &[u32]) -> Localised {
+    let mut local_of: std::collections::HashMap<u32, u32> = std::collections::HashMap::with_capacity(indices.len() / 2);
+    let mut globals: Vec<u32> = Vec::with_capacity(indices.len() / 2);
+    let local = indices
+        .iter()
+        .map(|&g| {
+            *local_of.entry(g).or_insert_with(|| {
+                globals.push(g);
+                (globals.len() - 1) as u32
+            })
+        })
+        .collect();
+    Localised { globals, local }
 }

@@ -1,7 +1,6 @@
 //! Simplifying one group of clusters to about half its triangles without moving its
 //! border, so that neighbouring groups still meet exactly at every level.
 
-use std::collections::HashMap;
 
 use glam::Vec3;
 use meshopt::{SimplifyOptions, SimplifyVertex};
@@ -38,17 +37,7 @@ pub fn simplify_group(
     locked: impl Fn(u32) -> bool,
     aggressive: bool,
 ) -> Option<Simplified> {
-    let mut local_of: HashMap<u32, u32> = HashMap::with_capacity(indices.len() / 2);
-    let mut globals: Vec<u32> = Vec::with_capacity(indices.len() / 2);
-    let local: Vec<u32> = indices
-        .iter()
-        .map(|&g| {
-            *local_of.entry(g).or_insert_with(|| {
-                globals.push(g);
-                (globals.len() - 1) as u32
-            })
-        })
-        .collect();
+    let crate::meshlets::Localised { globals, local } = crate::meshlets::localise(indices);
     let pos: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
     let attrs: Vec<Vec3> = globals.iter().map(|&g| normals[g as usize]).collect();
     let locks: Vec<SimplifyVertex> = globals
