@@ -55,3 +55,32 @@ fn shaded_image_shows_the_mesh_over_the_background() {
     assert!(warm > 96 * 64 / 20, "the mesh covers the frame: {warm} warm pixels");
     assert!(r.rgba.chunks(4).all(|p| p[3] == 255));
 }
+
+#[test]
+fn gpu_shading_matches_the_cpu_reference() {
+    use meshlight::graph::*;
+    let m = mesh();
+    let (w, h) = (96, 64);
+    let view_proj = demo::camera_for(&m.positions, w, h);
+    let tris = (m.indices.len() / 3) as u32;
+    let mut g = demo::graph(m.positions.len() as u64 * 16, tris, w, h, view_proj).unwrap();
+    // Keep the visibility buffer, so the CPU shades exactly what the GPU saw.
+    let vis = g.resource("visbuffer").unwrap();
+    g.export(vis);
+    let adapter = GpuAdapter::select().unwrap_or_else(|e| panic!("{e}"));
+    let compiled = g.compile(&CompileOptions::new(adapter.features())).unwrap();
+    let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
+    let padded: Vec<[f32; 4]> = m.positions.iter().map(|p| [p.x, p.y, p.z, 1.0]).collect();
+    let pos = gpu.buffer_with_data("positions", bytemuck::cast_slice(&padded), wgpu::BufferUsages::STORAGE);
+    let idx = gpu.buffer_with_data("indices", bytemuck::cast_slice(&m.indices), wgpu::BufferUsages::STORAGE);
+    let image = gpu.buffer_with_data("image", &vec![0u8; (w * h * 4) as usize], wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+    let mut exec = Executor::new(gpu);
+    exec.execute(&compiled, &Imports::new().buffer("positions", &pos).buffer("indices", &idx).buffer("image", &image)).unwrap();
+    let vis: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("visbuffer").unwrap());
+    let gpu_rgba: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.gpu.read_buffer(&image, 0, (w * h * 4) as u64).unwrap());
+    let cpu_rgba = demo::cpu::shade(&vis, &m.positions, &m.indices, w, h, demo::LIGHT_DIR);
+    let channel = |p: u32, c: u32| ((p >> (8 * c)) & 255) as i32;
+    let worst = gpu_rgba.iter().zip(&cpu_rgba).map(|(&a, &b)| (0..4).map(|c| (channel(a, c) - channel(b, c)).abs()).max().unwrap()).max().unwrap();
+    assert!(worst <= 2, "GPU and CPU shading differ by up to {worst} levels in a channel");
+    assert!(vis.iter().any(|&v| v != 0));
+}

@@ -140,8 +140,8 @@ impl GraphBuilder {
         (prev, current)
     }
     /// Keeps a transient after the frame so the caller can read it back.
-    pub fn export<K>(&mut self, handle: Handle<K>) {
-        let r = &mut self.resources[handle.id.index()];
+    pub fn export(&mut self, handle: impl Into<AnyHandle>) {
+        let r = &mut self.resources[handle.into().id.index()];
         if r.kind == ResourceKind::Transient {
             r.kind = ResourceKind::Exported;
         }

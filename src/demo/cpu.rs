@@ -52,3 +52,28 @@ pub fn rasterise(positions: &[Vec3], indices: &[u32], view_proj: Mat4, width: u3
     }
     vis
 }
+
+/// CPU reference of the shading pass: the same background gradient, face-normal lighting
+/// and sRGB-ish packing, from a given visibility buffer.
+pub fn shade(vis: &[u64], positions: &[Vec3], indices: &[u32], width: u32, height: u32, light_dir: Vec3) -> Vec<u32> {
+    let light = light_dir.normalize();
+    (0..width * height)
+        .map(|i| {
+            let v = vis[i as usize];
+            let color = if v as u32 == 0 {
+                let t = (i / width) as f32 / height as f32;
+                Vec3::new(0.20, 0.24, 0.30).lerp(Vec3::new(0.05, 0.06, 0.08), t)
+            } else {
+                let t = (v as u32 - 1) as usize;
+                let [a, b, c] = [0, 1, 2].map(|k| positions[indices[3 * t + k] as usize]);
+                let n = (b - a).cross(c - a).normalize();
+                let diffuse = n.dot(light).max(0.0);
+                let ambient = Vec3::new(0.10, 0.08, 0.07).lerp(Vec3::new(0.18, 0.22, 0.30), n.y * 0.5 + 0.5);
+                Vec3::new(0.85, 0.55, 0.30) * (diffuse * Vec3::new(1.0, 0.95, 0.85) + ambient)
+            };
+            let srgb = color.clamp(Vec3::ZERO, Vec3::ONE).powf(1.0 / 2.2);
+            let [r, g, b] = (srgb * 255.0).round().to_array().map(|x| x as u32);
+            r | (g << 8) | (b << 16) | (255 << 24)
+        })
+        .collect()
+}
