@@ -29,27 +29,42 @@ pub fn simplified_deviation(positions: &[Vec3], source: &[u32], simplified: &[u3
         return 0.0;
     }
     let fans = Fans::new(positions.len(), source);
+    let spheres: Vec<(Vec3, f32)> = source
+        .chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions[i as usize]);
+            let centre = (a + b + c) / 3.0;
+            let r2 = centre
+                .distance_squared(a)
+                .max(centre.distance_squared(b))
+                .max(centre.distance_squared(c));
+            (centre, r2.sqrt())
+        })
+        .collect();
     let mut grid: Option<TriangleGrid> = None;
     let mut worst = 0.0f32;
     let mut measure = |p: Vec3, corners: &[u32]| {
-        let mut best = f32::INFINITY;
+        // Only whether some triangle lies within `worst` matters here: when none does,
+        // the grid search below finds the exact distance on its own. A triangle whose
+        // bounding sphere is farther than `worst` cannot, so it is skipped unmeasured.
+        let reach = worst.sqrt();
         for &v in corners {
             for &t in fans.of(v) {
+                let (centre, radius) = spheres[t as usize];
+                let r = radius + reach;
+                if centre.distance_squared(p) > r * r {
+                    continue;
+                }
                 let t = 3 * t as usize;
                 let [a, b, c] =
                     [source[t], source[t + 1], source[t + 2]].map(|i| positions[i as usize]);
-                let d = closest_on_triangle(p, a, b, c).distance_squared(p);
-                if d < best {
-                    best = d;
-                    if best <= worst {
-                        return;
-                    }
+                if closest_on_triangle(p, a, b, c).distance_squared(p) <= worst {
+                    return;
                 }
             }
         }
         let grid = grid.get_or_insert_with(|| TriangleGrid::new(positions, source));
-        best = best.min(grid.distance_squared(p, worst));
-        worst = worst.max(best);
+        worst = worst.max(grid.distance_squared(p, worst));
     };
     // Each edge once: the two triangles sharing it give the same midpoint.
     let mut edges: Vec<u64> = simplified
@@ -59,12 +74,20 @@ pub fn simplified_deviation(positions: &[Vec3], source: &[u32], simplified: &[u3
         .collect();
     edges.sort_unstable();
     edges.dedup();
+    // Triangles and edges kept unchanged from the source lie on it: their samples are
+    // at distance zero and are not measured.
     for t in simplified.chunks_exact(3) {
+        if fans.has_triangle(source, t[0], t[1], t[2]) {
+            continue;
+        }
         let [a, b, c] = [t[0], t[1], t[2]].map(|v| positions[v as usize]);
         measure((a + b + c) / 3.0, t);
     }
     for e in edges {
         let (i, j) = ((e >> 32) as u32, e as u32);
+        if fans.has_edge(source, i, j) {
+            continue;
+        }
         measure(
             (positions[i as usize] + positions[j as usize]) * 0.5,
             &[i, j],
@@ -97,6 +120,21 @@ impl Fans {
             *f += 1;
         }
         Self { start, triangles }
+    }
+
+    /// Whether some source triangle has the edge `i`–`j`.
+    fn has_edge(&self, source: &[u32], i: u32, j: u32) -> bool {
+        self.of(i)
+            .iter()
+            .any(|&t| source[3 * t as usize..3 * t as usize + 3].contains(&j))
+    }
+
+    /// Whether some source triangle has the corners `a`, `b` and `c`.
+    fn has_triangle(&self, source: &[u32], a: u32, b: u32, c: u32) -> bool {
+        self.of(a).iter().any(|&t| {
+            let s = &source[3 * t as usize..3 * t as usize + 3];
+            s.contains(&b) && s.contains(&c)
+        })
     }
 
     fn of(&self, v: u32) -> &[u32] {
