@@ -225,5 +225,18 @@ fn dag_table(asset: &MeshletAsset) -> String {
         asset.bytes().len() as f64 / h.lod0_triangles.max(1) as f64,
         h.total_triangles
     );
+    let b = asset.size_breakdown();
+    let per = |bytes: usize| bytes as f64 / h.lod0_triangles.max(1) as f64;
+    let _ = writeln!(
+        s,
+        "  bytes per LOD-0 triangle: records {:.2}, groups {:.2}, positions {:.2}, normals {:.2}, UVs {:.2}, indices {:.2}; {:.2} vertex copies per triangle",
+        per(b.meshlet_records),
+        per(b.groups),
+        per(b.positions),
+        per(b.normals),
+        per(b.uvs),
+        per(b.indices),
+        h.total_vertices as f64 / h.total_triangles.max(1) as f64
+    );
     s
 }

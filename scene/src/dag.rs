@@ -18,8 +18,8 @@ use crate::bounds::{LodBounds, merge_spheres, sphere_of_points};
 use crate::error::SceneError;
 use crate::grouping::{Grouping, group_clusters};
 use crate::mesh::{Mesh, position_remap};
-use crate::meshlets::split_into_meshlets;
-use crate::simplify::simplify_group;
+use crate::meshlets::{split_into_meshlets, split_mesh_into_meshlets};
+use crate::simplify::{Effort, simplify_group};
 
 /// Marks "none" in cluster → group links.
 pub const NO_GROUP: u32 = u32::MAX;
@@ -102,7 +102,7 @@ pub fn build_dag(
     let normals = &mesh.normals;
     let remap = position_remap(positions);
 
-    let mut clusters: Vec<DagCluster> = split_into_meshlets(positions, &mesh.indices)
+    let mut clusters: Vec<DagCluster> = split_mesh_into_meshlets(positions, &mesh.indices)
         .into_par_iter()
         .map(|indices| {
             let bounds = sphere_of(positions, &indices);
@@ -124,7 +124,7 @@ pub fn build_dag(
     let mut groups: Vec<DagGroup> = Vec::new();
     let mut active: Vec<u32> = (0..clusters.len() as u32).collect();
     let mut level = 0u32;
-    let mut aggressive = false;
+    let mut effort = Effort::Normal;
     // Which group uses each welded vertex this level; shared ones are the borders.
     let mut owner = vec![u32::MAX; positions.len()];
     let mut border = vec![false; positions.len()];
@@ -140,7 +140,11 @@ pub fn build_dag(
                     .collect()
             })
             .collect();
-        let level_groups = group_clusters(options.grouping, &keyed, positions, &mesh.source)?;
+        let level_groups = if effort == Effort::Whole {
+            vec![(0..keyed.len() as u32).collect()]
+        } else {
+            group_clusters(options.grouping, &keyed, positions, &mesh.source)?
+        };
 
         owner.fill(u32::MAX);
         border.fill(false);
@@ -174,7 +178,7 @@ pub fn build_dag(
                     normals,
                     &indices,
                     |v| border[remap[v as usize] as usize],
-                    aggressive,
+                    effort,
                 )?;
                 let meshlets = split_into_meshlets(positions, &simplified.indices);
                 let bounds: Vec<_> = meshlets.iter().map(|m| sphere_of(positions, m)).collect();
@@ -220,18 +224,24 @@ pub fn build_dag(
             });
         }
         if !progressed {
-            if aggressive {
-                log::warn!(
-                    "{}: simplification stuck with {} root clusters",
-                    mesh.source,
-                    next.len()
-                );
-                break;
-            }
-            aggressive = true;
+            effort = match effort {
+                Effort::Normal => Effort::Prune,
+                // Three or fewer roots is a finished DAG; more is worth one big group.
+                Effort::Prune if (4..=WHOLE_GROUP_LIMIT).contains(&active.len()) => Effort::Whole,
+                _ => {
+                    if next.len() > 3 {
+                        log::warn!(
+                            "{}: simplification stuck with {} root clusters",
+                            mesh.source,
+                            next.len()
+                        );
+                    }
+                    break;
+                }
+            };
             continue;
         }
-        aggressive = false;
+        effort = Effort::Normal;
         active = next;
         level += 1;
         progress(LevelProgress {
@@ -250,6 +260,10 @@ pub fn build_dag(
         level_count,
     })
 }
+
+/// Most clusters put in one group when a level near the root is stuck: a few thousand
+/// triangles, still a small simplification.
+const WHOLE_GROUP_LIMIT: usize = 4 * crate::grouping::GROUP_SIZE;
 
 fn sphere_of(positions: &[Vec3], indices: &[u32]) -> (Vec3, f32) {
     sphere_of_points(indices.iter().map(|&i| positions[i as usize]))

@@ -15,7 +15,8 @@ const METIS_SEED: i32 = 0x6d6c;
 /// How clusters are grouped; swappable so the two can be compared on the same input.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Grouping {
-    /// METIS k-way on the cluster graph, edge weight = shared edges (the default).
+    /// METIS recursive bisection of the cluster graph, edge weight = shared edges (the
+    /// default).
     #[default]
     Metis,
     /// meshoptimizer's `partition_clusters` (shared vertices and spatial proximity).
@@ -128,6 +129,10 @@ fn metis_parts(clusters: &[Vec<u32>], source: &str) -> Result<Vec<i32>, SceneErr
         source_name: source.to_owned(),
         reason: format!("METIS could not partition {} clusters: {e}", clusters.len()),
     };
+    // Recursive bisection rather than k-way: with a thousand parts k-way gains nothing
+    // from coarsening and spends its time in an initial recursive bisection plus
+    // refinement. On the 8,192 LOD-0 clusters of the default mesh it took 190 ms against
+    // 53 ms, for 3% fewer cut edges (shared edges between groups).
     // METIS keeps its random generator in process-wide statics and re-seeds it at the
     // start of each call; two concurrent calls (two builds in one process) would
     // interleave draws and lose determinism. One call at a time keeps same input → same
@@ -139,7 +144,7 @@ fn metis_parts(clusters: &[Vec<u32>], source: &str) -> Result<Vec<i32>, SceneErr
         .map_err(|e| fail(e.to_string()))?
         .set_adjwgt(&adjwgt)
         .set_option(metis::option::Seed(METIS_SEED))
-        .part_kway(&mut part)
+        .part_recursive(&mut part)
         .map_err(|e| fail(e.to_string()))?;
     Ok(part)
 }

@@ -190,7 +190,8 @@ impl Mesh {
 /// For every vertex, the first vertex with a bit-identical position. Deterministic,
 /// and independent of attributes so that UV seams do not break adjacency.
 pub fn position_remap(positions: &[Vec3]) -> Vec<u32> {
-    let mut map = std::collections::HashMap::with_capacity(positions.len());
+    let mut map =
+        rustc_hash::FxHashMap::with_capacity_and_hasher(positions.len(), Default::default());
     positions
         .iter()
         .enumerate()

@@ -1,12 +1,77 @@
 //! Splitting triangles into meshlets with meshoptimizer.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// Most vertices per meshlet: local indices are `u8`, and 255 leaves 255 free as a
 /// sentinel for the GPU.
 pub const MAX_VERTICES: usize = 255;
 /// Most triangles per meshlet: one workgroup of 128 threads rasterises one meshlet.
 pub const MAX_TRIANGLES: usize = 128;
+
+/// Triangles per independently split chunk of a large mesh. Fixed, not derived from the
+/// thread count, so the meshlets are the same on every machine; large enough that the
+/// partly filled meshlet at the end of each chunk costs well under 1% of fill.
+pub const CHUNK_TRIANGLES: usize = 1 << 15;
+
+/// Splits a whole mesh into meshlets, in parallel: the triangles are put in Morton order
+/// of their centroids and cut into chunks of [`CHUNK_TRIANGLES`], which are spatially
+/// compact, and each chunk is split on its own. meshoptimizer's splitter is serial and
+/// was the largest serial step of a build.
+pub fn split_mesh_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<u32>> {
+    if indices.len() <= CHUNK_TRIANGLES * 3 {
+        return split_into_meshlets(positions, indices);
+    }
+    let ordered = morton_ordered(positions, indices);
+    let chunks: Vec<Vec<Vec<u32>>> = ordered
+        .par_chunks(CHUNK_TRIANGLES * 3)
+        .map(|chunk| split_into_meshlets(positions, chunk))
+        .collect();
+    chunks.into_iter().flatten().collect()
+}
+
+/// The triangle list reordered along a Morton curve through the triangles' centroids
+/// (10 bits per axis over the mesh bounds); ties keep input order.
+fn morton_ordered(positions: &[Vec3], indices: &[u32]) -> Vec<u32> {
+    let (lo, hi) = positions
+        .iter()
+        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let extent = (hi - lo).max_element();
+    let scale = if extent > 0.0 { 1023.0 / extent } else { 0.0 };
+    let mut keyed: Vec<(u32, u32)> = indices
+        .par_chunks_exact(3)
+        .enumerate()
+        .map(|(i, t)| {
+            let centroid =
+                (positions[t[0] as usize] + positions[t[1] as usize] + positions[t[2] as usize])
+                    / 3.0;
+            let q = ((centroid - lo) * scale).clamp(Vec3::ZERO, Vec3::splat(1023.0));
+            (morton3(q.x as u32, q.y as u32, q.z as u32), i as u32)
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    keyed
+        .iter()
+        .flat_map(|&(_, t)| {
+            let t = t as usize * 3;
+            [indices[t], indices[t + 1], indices[t + 2]]
+        })
+        .collect()
+}
+
+/// Interleaves the low 10 bits of three coordinates into a 30-bit Morton code.
+fn morton3(x: u32, y: u32, z: u32) -> u32 {
+    fn spread(v: u32) -> u32 {
+        let mut v = v & 0x3ff;
+        v = (v | (v << 16)) & 0x0300_00ff;
+        v = (v | (v << 8)) & 0x0300_f00f;
+        v = (v | (v << 4)) & 0x030c_30c3;
+        (v | (v << 2)) & 0x0924_9249
+    }
+    spread(x) | (spread(y) << 1) | (spread(z) << 2)
+}
 
 /// Splits an indexed triangle list into meshlets; each returned list indexes
 /// `positions` like the input does. The cone weight is zero: the renderer culls by
@@ -50,7 +115,8 @@ pub(crate) struct Localised {
 /// Re-indexes `indices` over the vertices they use, so meshoptimizer works on arrays the
 /// size of the piece rather than of the whole mesh. First-use order keeps it deterministic.
 pub(crate) fn localise(indices: &[u32]) -> Localised {
-    let mut local_of: std::collections::HashMap<u32, u32> = std::collections::HashMap::with_capacity(indices.len() / 2);
+    let mut local_of: rustc_hash::FxHashMap<u32, u32> =
+        rustc_hash::FxHashMap::with_capacity_and_hasher(indices.len() / 2, Default::default());
     let mut globals: Vec<u32> = Vec::with_capacity(indices.len() / 2);
     let local = indices
         .iter()
@@ -62,4 +128,47 @@ pub(crate) fn localise(indices: &[u32]) -> Localised {
         })
         .collect();
     Localised { globals, local }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn morton_code_interleaves_axes() {
+        assert_eq!(morton3(1, 0, 0), 0b001);
+        assert_eq!(morton3(0, 1, 0), 0b010);
+        assert_eq!(morton3(0, 0, 1), 0b100);
+        assert_eq!(morton3(1023, 1023, 1023), (1 << 30) - 1);
+        assert_eq!(morton3(2, 0, 0), 0b001_000);
+    }
+
+    #[test]
+    fn chunked_split_keeps_every_triangle_once() {
+        let mesh = crate::procedural_mesh(48);
+        let meshlets = split_mesh_into_meshlets(&mesh.positions, &mesh.indices);
+        let mut seen: Vec<[u32; 3]> = meshlets
+            .iter()
+            .flat_map(|m| m.chunks_exact(3).map(|t| canonical([t[0], t[1], t[2]])))
+            .collect();
+        let mut input: Vec<[u32; 3]> = mesh
+            .indices
+            .chunks_exact(3)
+            .map(|t| canonical([t[0], t[1], t[2]]))
+            .collect();
+        assert!(
+            input.len() > CHUNK_TRIANGLES,
+            "the test mesh must span several chunks"
+        );
+        seen.sort_unstable();
+        input.sort_unstable();
+        assert_eq!(seen, input);
+        assert!(meshlets.iter().all(|m| m.len() / 3 <= MAX_TRIANGLES));
+    }
+
+    /// A triangle rotated to start at its smallest index, keeping its winding.
+    fn canonical(t: [u32; 3]) -> [u32; 3] {
+        let r = (0..3).min_by_key(|&i| t[i]).unwrap();
+        [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
+    }
 }

@@ -1,7 +1,6 @@
 //! Simplifying one group of clusters to about half its triangles without moving its
 //! border, so that neighbouring groups still meet exactly at every level.
 
-
 use glam::Vec3;
 use meshopt::{SimplifyOptions, SimplifyVertex};
 
@@ -25,6 +24,18 @@ pub struct Simplified {
     pub deviation: f32,
 }
 
+/// How hard a group is pushed; the DAG builder raises it when a whole level is stuck.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Effort {
+    /// Keep topology: no piece vanishes, no edge folds onto a third triangle.
+    Normal,
+    /// Let small disconnected pieces vanish.
+    Prune,
+    /// Last resort near the root, for a group that is everything left of the mesh:
+    /// pruning, and folds are accepted rather than ending with many roots.
+    Whole,
+}
+
 /// Simplifies `indices` (global vertex ids) to about half. `locked(v)` says whether a
 /// global vertex lies on the group border. Returns `None` when the group is stuck.
 ///
@@ -35,7 +46,7 @@ pub fn simplify_group(
     normals: &[Vec3],
     indices: &[u32],
     locked: impl Fn(u32) -> bool,
-    aggressive: bool,
+    effort: Effort,
 ) -> Option<Simplified> {
     let crate::meshlets::Localised { globals, local } = crate::meshlets::localise(indices);
     let pos: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
@@ -54,13 +65,13 @@ pub fn simplify_group(
         .expect("Vec3 is 12 bytes");
     let triangles = indices.len() / 3;
     let mut options = SimplifyOptions::ErrorAbsolute | SimplifyOptions::ErrorClamped;
-    if aggressive {
-        // Last resort for groups that stay stuck: let disconnected pieces vanish.
+    if effort != Effort::Normal {
         options |= SimplifyOptions::Prune;
     }
     // Welded ids for the manifold check: seams must not count as separate edges.
     let weld = crate::mesh::position_remap(&pos);
-    let folds_before = overused_edges(&local, &weld);
+    // The input's own folds, counted only when the output has any (most have none).
+    let mut folds_before: Option<usize> = None;
     // Half first; if that folds the surface onto itself (near the root of thin shapes,
     // where opposite sides of a tube meet), a milder target that still counts as progress.
     for target in [triangles / 2, triangles * 3 / 4] {
@@ -81,7 +92,11 @@ pub fn simplify_group(
         if out.is_empty() || out.len() / 3 > (triangles as f32 * STUCK_RATIO) as usize {
             return None;
         }
-        if overused_edges(&out, &weld) > folds_before {
+        let folds = overused_edges(&out, &weld);
+        if effort != Effort::Whole
+            && folds > 0
+            && folds > *folds_before.get_or_insert_with(|| overused_edges(&local, &weld))
+        {
             continue;
         }
         return Some(Simplified {

@@ -34,6 +34,32 @@ impl std::fmt::Debug for MeshletAsset {
     }
 }
 
+/// Where an asset's bytes go, for summaries and for choosing what to compress next.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SizeBreakdown {
+    pub header: usize,
+    pub meshlet_records: usize,
+    /// Group records plus their child lists.
+    pub groups: usize,
+    pub positions: usize,
+    pub normals: usize,
+    pub uvs: usize,
+    /// Local indices, including the padding of each meshlet's list to whole words.
+    pub indices: usize,
+}
+
+impl SizeBreakdown {
+    pub fn total(&self) -> usize {
+        self.header
+            + self.meshlet_records
+            + self.groups
+            + self.positions
+            + self.normals
+            + self.uvs
+            + self.indices
+    }
+}
+
 /// One meshlet decoded back to floats, for tests, tools and CPU references.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DecodedMeshlet {
@@ -66,7 +92,10 @@ impl MeshletAsset {
                 // Local vertices in order of first use, which meshoptimizer already
                 // arranged for locality.
                 let mut locals: Vec<u32> = Vec::with_capacity(c.indices.len());
-                let mut slot = std::collections::HashMap::with_capacity(c.indices.len());
+                let mut slot = rustc_hash::FxHashMap::with_capacity_and_hasher(
+                    c.indices.len(),
+                    Default::default(),
+                );
                 let local_index: Vec<u8> = c
                     .indices
                     .iter()
@@ -407,6 +436,25 @@ impl MeshletAsset {
             step: h.quant_step,
             bits: h.quant_bits,
         }
+    }
+
+    /// Bytes per part of the file; the parts add up to the file size.
+    pub fn size_breakdown(&self) -> SizeBreakdown {
+        let has_uvs = self.header().has_uvs();
+        let mut b = SizeBreakdown {
+            header: AssetHeader::WORDS * 4,
+            meshlet_records: self.section(SECTION_MESHLETS).len() * 4,
+            groups: (self.section(SECTION_GROUPS).len() + self.children().len()) * 4,
+            ..Default::default()
+        };
+        for m in self.meshlets() {
+            let l = PayloadLayout::of(m, has_uvs);
+            b.positions += (l.normals - l.positions) as usize * 4;
+            b.normals += (l.uvs - l.normals) as usize * 4;
+            b.uvs += (l.indices - l.uvs) as usize * 4;
+            b.indices += (l.end - l.indices) as usize * 4;
+        }
+        b
     }
 
     /// Decodes one meshlet (as the GPU would).
