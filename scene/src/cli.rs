@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::asset::MeshletAsset;
-use crate::compress::DEFAULT_POSITION_BITS;
+use crate::compress::PositionBits;
 use crate::error::SceneError;
 use crate::grouping::Grouping;
 use crate::load::load_mesh;
@@ -29,10 +29,10 @@ pub struct BakeArgs {
     /// How meshlets are grouped for simplification.
     #[arg(long, value_enum, default_value_t = Grouping::Metis)]
     pub grouping: Grouping,
-    /// Bits per axis of the mesh-wide position grid (4 to 24).
-    #[arg(long, default_value_t = DEFAULT_POSITION_BITS,
-          value_parser = clap::value_parser!(u32).range(4..=24))]
-    pub position_bits: u32,
+    /// Bits per axis of the mesh-wide position grid: 4 to 24, or `auto` for the fewest
+    /// whose error is at most 1/8 of the LOD-0 error.
+    #[arg(long, default_value_t = PositionBits::Auto)]
+    pub position_bits: PositionBits,
     /// Tube segments of the procedural mesh (16 × segments² triangles).
     #[arg(long, default_value_t = DEFAULT_SEGMENTS,
           value_parser = clap::value_parser!(u32).range(3..=1024))]

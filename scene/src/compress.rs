@@ -7,10 +7,14 @@
 
 use glam::{Vec2, Vec3};
 
-/// Default bits per axis of the position grid: a step of 1/65535 of the largest extent,
-/// orders of magnitude below the error of the first simplified level on the meshes we
-/// build, so quantisation never decides which LOD is drawn.
-pub const DEFAULT_POSITION_BITS: u32 = 16;
+/// Bits per axis of the position grid when the DAG gives nothing to derive them from (a
+/// mesh of one meshlet has no simplified level): a step of 1/65535 of the largest extent.
+pub const FALLBACK_POSITION_BITS: u32 = 16;
+/// The automatic grid keeps the quantisation error at most this share of the LOD-0
+/// error. LOD 0 is first drawn where its parent's error projects to the pixel threshold,
+/// so there its vertices sit within an eighth of a pixel of the originals: quantisation
+/// never decides which LOD is drawn, and one bit fewer would already allow a quarter.
+pub const AUTO_ERROR_SHARE: f32 = 1.0 / 8.0;
 /// The grid and the packed deltas are decoded with 32-bit integer maths and `f32`, which
 /// is exact up to 2^24 steps.
 pub const MAX_POSITION_BITS: u32 = 24;
@@ -55,6 +59,66 @@ impl Quantization {
     pub fn max_error(&self) -> f32 {
         self.step * 0.5 * 3f32.sqrt()
     }
+}
+
+/// Bits per axis of the mesh-wide position grid: fixed, or derived from the LOD errors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PositionBits {
+    /// The fewest bits whose quantisation error is at most [`AUTO_ERROR_SHARE`] of the
+    /// LOD-0 error (see [`auto_position_bits`]).
+    #[default]
+    Auto,
+    Fixed(u32),
+}
+
+impl std::str::FromStr for PositionBits {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "auto" {
+            return Ok(Self::Auto);
+        }
+        match s.parse::<u32>() {
+            Ok(b) if (MIN_POSITION_BITS..=MAX_POSITION_BITS).contains(&b) => Ok(Self::Fixed(b)),
+            _ => Err(format!(
+                "`{s}` is not a position precision: give `auto` or a number of bits from \
+                 {MIN_POSITION_BITS} to {MAX_POSITION_BITS}"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for PositionBits {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Auto => f.write_str("auto"),
+            Self::Fixed(b) => write!(f, "{b}"),
+        }
+    }
+}
+
+/// The grid for a mesh of largest extent `extent` whose LOD-0 meshlets are replaced at
+/// `lod0_errors` (each LOD-0 meshlet's parent error: the error of the first coarser
+/// version, below which LOD 0 is what is drawn).
+///
+/// The reference is the 10th percentile of those errors, not the minimum, so a few
+/// groups in flat regions do not drive the grid to its finest; errors below a millionth
+/// of the extent are rounding noise of flat regions and are ignored. The grid's worst
+/// error (half a step diagonally) is then kept at most [`AUTO_ERROR_SHARE`] of it.
+pub fn auto_position_bits(extent: f32, lod0_errors: &[f32]) -> u32 {
+    let mut errors: Vec<f32> = lod0_errors
+        .iter()
+        .copied()
+        .filter(|e| e.is_finite() && *e > extent * 1e-6)
+        .collect();
+    if errors.is_empty() || extent <= 0.0 {
+        return FALLBACK_POSITION_BITS;
+    }
+    errors.sort_unstable_by(f32::total_cmp);
+    let reference = errors[errors.len() / 10];
+    let step = reference * AUTO_ERROR_SHARE / (0.5 * 3f32.sqrt());
+    let cells = (extent / step).ceil() as f64 + 1.0;
+    (cells.log2().ceil() as u32).clamp(MIN_POSITION_BITS, MAX_POSITION_BITS)
 }
 
 /// Bits needed to store values `0..=range`.
@@ -182,5 +246,40 @@ impl UvQuantization {
             self.min[0] + (packed & 0xffff) as f32 * self.step[0],
             self.min[1] + (packed >> 16) as f32 * self.step[1],
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_bits_follow_the_reference_error() {
+        // Extent 1, reference 0.01: step ≤ 0.01 / 8 / 0.866 = 1.44e-3, 694 cells → 10 bits.
+        assert_eq!(auto_position_bits(1.0, &[0.01f32; 20]), 10);
+        // Ten times finer detail: 6,929 cells → 13 bits.
+        assert_eq!(auto_position_bits(1.0, &[0.001f32; 20]), 13);
+        // The 10th percentile, not the minimum: one tiny error does not matter.
+        let mut mixed = vec![0.01f32; 20];
+        mixed[0] = 1e-5;
+        assert_eq!(auto_position_bits(1.0, &mixed), 10);
+        // Flat-region noise and roots are ignored; nothing left falls back.
+        assert_eq!(
+            auto_position_bits(1.0, &[1e-9, f32::INFINITY]),
+            FALLBACK_POSITION_BITS
+        );
+        assert_eq!(auto_position_bits(1.0, &[]), FALLBACK_POSITION_BITS);
+        // The finest detail not taken for noise stays within what the decoder handles.
+        assert_eq!(auto_position_bits(1.0, &[2e-6; 20]), 22);
+        assert!(auto_position_bits(1.0, &[1.01e-6; 20]) <= MAX_POSITION_BITS);
+        assert_eq!(auto_position_bits(1.0, &[10.0; 20]), MIN_POSITION_BITS);
+    }
+
+    #[test]
+    fn position_bits_parse_with_a_helpful_error() {
+        assert_eq!("auto".parse::<PositionBits>(), Ok(PositionBits::Auto));
+        assert_eq!("12".parse::<PositionBits>(), Ok(PositionBits::Fixed(12)));
+        let e = "30".parse::<PositionBits>().unwrap_err();
+        assert!(e.contains("4 to 24") && e.contains("auto"), "{e}");
     }
 }

@@ -3,7 +3,7 @@
 use std::time::{Duration, Instant};
 
 use crate::asset::MeshletAsset;
-use crate::compress::{DEFAULT_POSITION_BITS, MAX_POSITION_BITS, MIN_POSITION_BITS};
+use crate::compress::{MAX_POSITION_BITS, MIN_POSITION_BITS, PositionBits, auto_position_bits};
 use crate::dag::{Dag, DagOptions, LevelProgress, build_dag};
 use crate::error::SceneError;
 use crate::grouping::Grouping;
@@ -14,14 +14,14 @@ use crate::mesh::{CleanReport, Mesh};
 pub struct BuildOptions {
     pub grouping: Grouping,
     /// Bits per axis of the mesh-wide position grid.
-    pub position_bits: u32,
+    pub position_bits: PositionBits,
 }
 
 impl Default for BuildOptions {
     fn default() -> Self {
         Self {
             grouping: Grouping::Metis,
-            position_bits: DEFAULT_POSITION_BITS,
+            position_bits: PositionBits::Auto,
         }
     }
 }
@@ -45,10 +45,12 @@ pub fn build_asset(
     options: &BuildOptions,
     progress: &mut dyn FnMut(LevelProgress),
 ) -> Result<Built, SceneError> {
-    if !(MIN_POSITION_BITS..=MAX_POSITION_BITS).contains(&options.position_bits) {
+    if let PositionBits::Fixed(bits) = options.position_bits
+        && !(MIN_POSITION_BITS..=MAX_POSITION_BITS).contains(&bits)
+    {
         return Err(SceneError::InvalidOption(format!(
-            "position bits {} is outside {MIN_POSITION_BITS}..={MAX_POSITION_BITS}",
-            options.position_bits
+            "position bits {bits} is outside {MIN_POSITION_BITS}..={MAX_POSITION_BITS}; \
+             give a value in that range or `auto`"
         )));
     }
     let start = Instant::now();
@@ -70,8 +72,20 @@ pub fn build_asset(
         progress,
     )?;
     let dag_time = dag_start.elapsed();
-    let asset =
-        MeshletAsset::from_dag(&mesh, &dag, options.position_bits, clean.dropped_degenerate);
+    let position_bits = match options.position_bits {
+        PositionBits::Fixed(bits) => bits,
+        PositionBits::Auto => {
+            let (min, max) = mesh.bounds();
+            let lod0_errors: Vec<f32> = dag
+                .clusters
+                .iter()
+                .filter(|c| c.level == 0)
+                .map(|c| c.parent.error)
+                .collect();
+            auto_position_bits((max - min).max_element(), &lod0_errors)
+        }
+    };
+    let asset = MeshletAsset::from_dag(&mesh, &dag, position_bits, clean.dropped_degenerate);
     Ok(Built {
         asset,
         dag,

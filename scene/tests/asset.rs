@@ -7,6 +7,7 @@ use std::path::Path;
 
 use meshlight_scene::asset::checksum::file_checksum;
 use meshlight_scene::asset::format::{AssetHeader, MeshletRecord, SECTION_MESHLETS, VERSION};
+use meshlight_scene::compress::{AUTO_ERROR_SHARE, MAX_POSITION_BITS, PositionBits, Quantization};
 use meshlight_scene::{
     BuildOptions, Built, MeshletAsset, SceneError, build_asset, load::load_mesh, procedural_mesh,
 };
@@ -97,7 +98,7 @@ fn coarser_grids_pack_fewer_bits() {
         build_asset(
             &mesh,
             &BuildOptions {
-                position_bits: bits,
+                position_bits: PositionBits::Fixed(bits),
                 ..Default::default()
             },
             &mut |_| {},
@@ -108,6 +109,55 @@ fn coarser_grids_pack_fewer_bits() {
         .len()
     };
     assert!(size(12) < size(16) && size(16) < size(20));
+}
+
+/// The automatic grid is the coarsest whose worst error is at most
+/// [`AUTO_ERROR_SHARE`] of the 10th-percentile LOD-0 error.
+fn check_auto_grid(name: &str, built: &Built) {
+    let (min, max) = built.mesh.bounds();
+    let mut errors: Vec<f32> = built
+        .dag
+        .clusters
+        .iter()
+        .filter(|c| c.level == 0 && c.parent.error.is_finite())
+        .map(|c| c.parent.error)
+        .collect();
+    errors.sort_unstable_by(f32::total_cmp);
+    let reference = errors[errors.len() / 10];
+    let budget = reference * AUTO_ERROR_SHARE;
+    let quant = built.asset.quantization();
+    assert!(
+        quant.max_error() <= budget,
+        "{name}: grid error {} above {budget}",
+        quant.max_error()
+    );
+    if quant.bits > 4 && quant.bits < MAX_POSITION_BITS {
+        let coarser = Quantization::new(min, max, quant.bits - 1);
+        assert!(
+            coarser.max_error() > budget,
+            "{name}: {} bits would also do; the automatic grid should be the coarsest",
+            quant.bits - 1
+        );
+    }
+}
+
+#[test]
+fn automatic_grid_is_the_coarsest_far_below_the_lod0_error() {
+    check_auto_grid("procedural 32", &build(&procedural_mesh(32)));
+    if let Some(path) = common::shared_mesh("stanford-bunny.obj") {
+        check_auto_grid("bunny", &build(&load_mesh(&path).unwrap()));
+    }
+    // A fixed precision is taken as given.
+    let fixed = build_asset(
+        &procedural_mesh(12),
+        &BuildOptions {
+            position_bits: PositionBits::Fixed(11),
+            ..Default::default()
+        },
+        &mut |_| {},
+    )
+    .unwrap();
+    assert_eq!(fixed.asset.header().quant_bits, 11);
 }
 
 #[test]
