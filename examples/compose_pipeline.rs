@@ -5,7 +5,9 @@
 use meshlight::graph::*;
 
 fn main() -> Result<()> {
-    let path = std::env::args().nth(1).unwrap_or_else(|| "pipelines/prefix_sum.toml".into());
+    let path = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "pipelines/prefix_sum.toml".into());
     let builder = file::load_pipeline(std::path::Path::new(&path), &meshlight::registry())?;
     let adapter = GpuAdapter::select()?;
     let compiled = builder.compile(&CompileOptions::new(adapter.features()))?;
@@ -19,7 +21,10 @@ fn main() -> Result<()> {
 
     let total: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("total")?);
     let (_, expected) = meshlight::scan_fan::cpu_scan(&counts, false);
-    println!("total {} (CPU: {expected}) on {}", total[0], exec.gpu.info.name);
+    println!(
+        "total {} (CPU: {expected}) on {}",
+        total[0], exec.gpu.info.name
+    );
     for p in &stats.passes {
         println!("  {}: {:?} µs GPU", p.name, p.gpu_us);
     }

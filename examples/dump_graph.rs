@@ -2,10 +2,13 @@
 //!
 //!     cargo run --example dump_graph && dot -Tsvg out/frame.dot -o out/frame.svg
 
-use meshlight::graph::{dump, CompileOptions};
+use meshlight::graph::{CompileOptions, dump};
 
 fn main() -> std::io::Result<()> {
-    let plan = meshlight::bench::sample_frame_graph(1920, 1080).compile(&CompileOptions::new(wgpu::Features::empty())).expect("the sample graph compiles").plan;
+    let plan = meshlight::bench::sample_frame_graph(1920, 1080)
+        .compile(&CompileOptions::new(wgpu::Features::empty()))
+        .expect("the sample graph compiles")
+        .plan;
     std::fs::create_dir_all("out")?;
     std::fs::write("out/frame.dot", dump::to_dot(&plan))?;
     std::fs::write("out/frame.json", dump::to_json(&plan, None))?;

@@ -3,7 +3,7 @@
 //! GPU figures come from timestamps on whatever adapter runs the command; only numbers
 //! from a real GPU say anything about speed.
 
-use crate::graph::synthetic::{random_graph, NoopPass};
+use crate::graph::synthetic::{NoopPass, random_graph};
 use crate::graph::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -35,10 +35,21 @@ pub struct Row {
     pub device: String,
 }
 
-const ALL: &[&str] = &["graph-compile", "graph-execute", "pool-reuse", "render", "builder", "scan-fan"];
+const ALL: &[&str] = &[
+    "graph-compile",
+    "graph-execute",
+    "pool-reuse",
+    "render",
+    "builder",
+    "scan-fan",
+];
 
 pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Error>> {
-    let scenarios: Vec<String> = if args.scenarios.is_empty() { ALL.iter().map(|s| s.to_string()).collect() } else { args.scenarios.clone() };
+    let scenarios: Vec<String> = if args.scenarios.is_empty() {
+        ALL.iter().map(|s| s.to_string()).collect()
+    } else {
+        args.scenarios.clone()
+    };
     let mut rows = Vec::new();
     for s in &scenarios {
         let new = match s.as_str() {
@@ -48,7 +59,9 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
             "render" => render(args.quick)?,
             "builder" => builder(args.quick)?,
             "scan-fan" => scan_fan(args.quick)?,
-            other => return Err(format!("unknown scenario `{other}`; known: {}", ALL.join(", ")).into()),
+            other => {
+                return Err(format!("unknown scenario `{other}`; known: {}", ALL.join(", ")).into());
+            }
         };
         for r in &new {
             println!(
@@ -58,7 +71,9 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
                 r.metric,
                 r.value,
                 r.unit,
-                r.vs_baseline.map(|b| format!("×{b:.2} vs baseline")).unwrap_or_default()
+                r.vs_baseline
+                    .map(|b| format!("×{b:.2} vs baseline"))
+                    .unwrap_or_default()
             );
         }
         rows.extend(new);
@@ -73,7 +88,15 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
 }
 
 fn row(scenario: &str, case: String, metric: &str, value: f64, unit: &str, device: &str) -> Row {
-    Row { scenario: scenario.into(), case, metric: metric.into(), value, unit: unit.into(), vs_baseline: None, device: device.into() }
+    Row {
+        scenario: scenario.into(),
+        case,
+        metric: metric.into(),
+        value,
+        unit: unit.into(),
+        vs_baseline: None,
+        device: device.into(),
+    }
 }
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -89,13 +112,22 @@ fn graph_compile(quick: bool) -> Vec<Row> {
             .map(|i| {
                 let g = random_graph(n, 0x5eed + i as u64);
                 let t = Instant::now();
-                let c = g.compile(&CompileOptions::new(wgpu::Features::empty())).expect("compiles");
+                let c = g
+                    .compile(&CompileOptions::new(wgpu::Features::empty()))
+                    .expect("compiles");
                 let dt = t.elapsed().as_secs_f64() * 1e3;
                 std::hint::black_box(c.plan.order.len());
                 dt
             })
             .collect();
-        rows.push(row("graph-compile", format!("{n} passes"), "compile time (median)", median(times), "ms", "cpu"));
+        rows.push(row(
+            "graph-compile",
+            format!("{n} passes"),
+            "compile time (median)",
+            median(times),
+            "ms",
+            "cpu",
+        ));
     }
     rows
 }
@@ -107,7 +139,12 @@ fn graph_execute(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
     for n in [10usize, 100] {
         let compiled = random_graph(n, 7).compile(&CompileOptions::new(adapter.features()))?;
         let gpu = GpuContext::with_available(compiled.plan.enabled_features)?;
-        let out = gpu.device.create_buffer(&wgpu::BufferDescriptor { label: Some("out"), size: 64, usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
+        let out = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("out"),
+            size: 64,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
         let mut exec = Executor::new(gpu);
         exec.gpu_timing = false;
         let imports = Imports::new().buffer("out", &out);
@@ -123,9 +160,30 @@ fn graph_execute(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
             without_submit.push((s.cpu_frame_us - s.cpu_submit_us) / n as f64);
         }
         exec.device().poll(wgpu::PollType::wait_indefinitely()).ok();
-        rows.push(row("graph-execute", format!("{n} passes"), "CPU per pass (frame)", median(frame), "µs", &device));
-        rows.push(row("graph-execute", format!("{n} passes"), "CPU per pass (no submit)", median(without_submit), "µs", &device));
-        rows.push(row("graph-execute", format!("{n} passes"), "CPU per pass (record)", median(record), "µs", &device));
+        rows.push(row(
+            "graph-execute",
+            format!("{n} passes"),
+            "CPU per pass (frame)",
+            median(frame),
+            "µs",
+            &device,
+        ));
+        rows.push(row(
+            "graph-execute",
+            format!("{n} passes"),
+            "CPU per pass (no submit)",
+            median(without_submit),
+            "µs",
+            &device,
+        ));
+        rows.push(row(
+            "graph-execute",
+            format!("{n} passes"),
+            "CPU per pass (record)",
+            median(record),
+            "µs",
+            &device,
+        ));
     }
     Ok(rows)
 }
@@ -144,58 +202,137 @@ pub fn sample_frame_graph(width: u32, height: u32) -> GraphBuilder {
         reads: Vec<&'static str>,
         writes: Vec<(&'static str, u64)>,
     }
-    let stage = |pass, reads: &[&'static str], writes: &[(&'static str, u64)]| Stage { pass, reads: reads.to_vec(), writes: writes.to_vec() };
+    let stage = |pass, reads: &[&'static str], writes: &[(&'static str, u64)]| Stage {
+        pass,
+        reads: reads.to_vec(),
+        writes: writes.to_vec(),
+    };
     let stages = [
         stage("fill_clusters", &["scene"], &[("clusters", 1 << 20)]),
-        stage("cull_first", &["clusters"], &[("candidates", 1 << 20), ("dispatch_first", 4)]),
-        stage("raster_first", &["candidates", "dispatch_first"], &[("visbuffer", px * 2)]),
+        stage(
+            "cull_first",
+            &["clusters"],
+            &[("candidates", 1 << 20), ("dispatch_first", 4)],
+        ),
+        stage(
+            "raster_first",
+            &["candidates", "dispatch_first"],
+            &[("visbuffer", px * 2)],
+        ),
         stage("depth_pyramid", &["visbuffer"], &[("pyramid", px / 3)]),
-        stage("cull_second", &["clusters", "pyramid"], &[("second", 1 << 19), ("dispatch_second", 4)]),
-        stage("raster_second", &["second", "dispatch_second", "visbuffer"], &[("visbuffer2", px * 2)]),
+        stage(
+            "cull_second",
+            &["clusters", "pyramid"],
+            &[("second", 1 << 19), ("dispatch_second", 4)],
+        ),
+        stage(
+            "raster_second",
+            &["second", "dispatch_second", "visbuffer"],
+            &[("visbuffer2", px * 2)],
+        ),
         stage("material_depth", &["visbuffer2"], &[("material", px)]),
         stage("resolve", &["visbuffer2", "material"], &[("image", 0)]),
     ];
-    for Stage { pass, reads, writes } in stages {
-        let mut slots: Vec<Slot> = reads.iter().map(|r| Slot::buffer(r, Access::StorageRead, Element::U32, "")).collect();
+    for Stage {
+        pass,
+        reads,
+        writes,
+    } in stages
+    {
+        let mut slots: Vec<Slot> = reads
+            .iter()
+            .map(|r| Slot::buffer(r, Access::StorageRead, Element::U32, ""))
+            .collect();
         for (w, words) in writes {
             if words > 0 {
                 g.create_buffer(w, BufferDesc::array(Element::U32, words));
             }
             slots.push(Slot::buffer(w, Access::StorageWrite, Element::U32, ""));
         }
-        g.add_pass(pass, NoopPass { slots }, Bindings::new()).expect("sample graph is well-formed");
+        g.add_pass(pass, NoopPass { slots }, Bindings::new())
+            .expect("sample graph is well-formed");
     }
     g
 }
 
 fn pool_reuse() -> Vec<Row> {
-    let plan = sample_frame_graph(1920, 1080).compile(&CompileOptions::new(wgpu::Features::empty())).expect("compiles").plan;
+    let plan = sample_frame_graph(1920, 1080)
+        .compile(&CompileOptions::new(wgpu::Features::empty()))
+        .expect("compiles")
+        .plan;
     let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
-    let mut with = row("pool-reuse", "sample frame 1920x1080".into(), "transient bytes, reuse", mib(plan.bytes_with_reuse), "MiB", "cpu");
+    let mut with = row(
+        "pool-reuse",
+        "sample frame 1920x1080".into(),
+        "transient bytes, reuse",
+        mib(plan.bytes_with_reuse),
+        "MiB",
+        "cpu",
+    );
     with.vs_baseline = Some(plan.bytes_with_reuse as f64 / plan.bytes_without_reuse as f64);
-    vec![row("pool-reuse", "sample frame 1920x1080".into(), "transient bytes, no reuse", mib(plan.bytes_without_reuse), "MiB", "cpu"), with]
+    vec![
+        row(
+            "pool-reuse",
+            "sample frame 1920x1080".into(),
+            "transient bytes, no reuse",
+            mib(plan.bytes_without_reuse),
+            "MiB",
+            "cpu",
+        ),
+        with,
+    ]
 }
 
 fn render(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
-    let mesh = crate::scene::procedural_mesh(if quick { 64 } else { crate::scene::DEFAULT_SEGMENTS });
+    let mesh = crate::scene::procedural_mesh(if quick {
+        64
+    } else {
+        crate::scene::DEFAULT_SEGMENTS
+    });
     let tris = (mesh.indices.len() / 3) as f64;
     let r = crate::demo::render(&mesh.positions, &mesh.indices, 1920, 1080)?;
     let mut rows = Vec::new();
     for p in &r.stats.passes {
         if let Some(us) = p.gpu_us {
-            rows.push(row("render", format!("{} tris 1920x1080", tris), &format!("{} GPU (first frame)", p.name), us / 1e3, "ms", &r.adapter));
+            rows.push(row(
+                "render",
+                format!("{} tris 1920x1080", tris),
+                &format!("{} GPU (first frame)", p.name),
+                us / 1e3,
+                "ms",
+                &r.adapter,
+            ));
         }
     }
     Ok(rows)
 }
 
 fn builder(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::error::Error>> {
-    let mesh = crate::scene::procedural_mesh(if quick { 64 } else { crate::scene::DEFAULT_SEGMENTS });
+    let mesh = crate::scene::procedural_mesh(if quick {
+        64
+    } else {
+        crate::scene::DEFAULT_SEGMENTS
+    });
     let dir = std::env::temp_dir().join("meshlight-bench");
     std::fs::create_dir_all(&dir)?;
-    let b = crate::scene::bench::builder_scenario("procedural", &mesh, if quick { 1 } else { 3 }, &dir)?;
-    println!("{}", crate::scene::bench::format_table(std::slice::from_ref(&b)));
-    let mut r = row("builder", "procedural".into(), "input triangles/s", b.triangles_per_second(), "tri/s", "cpu");
+    let b = crate::scene::bench::builder_scenario(
+        "procedural",
+        &mesh,
+        if quick { 1 } else { 3 },
+        &dir,
+    )?;
+    println!(
+        "{}",
+        crate::scene::bench::format_table(std::slice::from_ref(&b))
+    );
+    let mut r = row(
+        "builder",
+        "procedural".into(),
+        "input triangles/s",
+        b.triangles_per_second(),
+        "tri/s",
+        "cpu",
+    );
     r.vs_baseline = Some(b.triangles_per_second() / b.clod_triangles_per_second());
     Ok(vec![r])
 }
@@ -204,17 +341,42 @@ fn scan_fan(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
     let gpu = GpuContext::with_available(wgpu::Features::all())?;
     let device = gpu.info.name.clone();
     let mut exec = Executor::new(gpu);
-    let sizes: Vec<u64> = if quick { vec![1 << 20, 1 << 22] } else { crate::scan_fan::bench::SIZES.to_vec() };
+    let sizes: Vec<u64> = if quick {
+        vec![1 << 20, 1 << 22]
+    } else {
+        crate::scan_fan::bench::SIZES.to_vec()
+    };
     let rows = crate::scan_fan::bench::run(&mut exec, &sizes, if quick { 3 } else { 10 })?;
     println!("{}", crate::scan_fan::bench::table(&rows));
     let mut out = Vec::new();
     for r in rows {
         let case = format!("{} 2^{}", r.implementation, r.elements.trailing_zeros());
-        out.push(row("scan-fan", case.clone(), "elements/s", r.elements_per_s, "elem/s", &device));
-        let mut gb = row("scan-fan", case.clone(), "GB/s (8 B/elem)", r.gb_per_s, "GB/s", &device);
+        out.push(row(
+            "scan-fan",
+            case.clone(),
+            "elements/s",
+            r.elements_per_s,
+            "elem/s",
+            &device,
+        ));
+        let mut gb = row(
+            "scan-fan",
+            case.clone(),
+            "GB/s (8 B/elem)",
+            r.gb_per_s,
+            "GB/s",
+            &device,
+        );
         gb.vs_baseline = Some(r.ratio_to_copy);
         out.push(gb);
-        out.push(row("scan-fan", case.clone(), "copy GB/s (baseline)", r.copy_gb_per_s, "GB/s", &device));
+        out.push(row(
+            "scan-fan",
+            case.clone(),
+            "copy GB/s (baseline)",
+            r.copy_gb_per_s,
+            "GB/s",
+            &device,
+        ));
         let mut cpu = row("scan-fan", case, "CPU prefix sum", r.cpu_ms, "ms", "cpu");
         cpu.vs_baseline = Some(r.cpu_ms / r.gpu_ms);
         out.push(cpu);

@@ -1,12 +1,16 @@
 //! The `meshlight` command line.
 
 use clap::{Parser, Subcommand, ValueEnum};
-use meshlight::graph::{dump, CompileOptions, GraphError};
+use meshlight::graph::{CompileOptions, GraphError, dump};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "meshlight", version, about = "GPU render graphs on wgpu: virtual geometry and light clustering as swappable passes")]
+#[command(
+    name = "meshlight",
+    version,
+    about = "GPU render graphs on wgpu: virtual geometry and light clustering as swappable passes"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -83,7 +87,10 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            if matches!(e.downcast_ref::<GraphError>(), Some(GraphError::NoAdapter { .. })) {
+            if matches!(
+                e.downcast_ref::<GraphError>(),
+                Some(GraphError::NoAdapter { .. })
+            ) {
                 return ExitCode::from(EXIT_NO_ADAPTER);
             }
             ExitCode::FAILURE
@@ -106,13 +113,30 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     enc.set_color(png::ColorType::Rgba);
     enc.set_depth(png::BitDepth::Eight);
     enc.write_header()?.write_image_data(&r.rgba)?;
-    println!("rendered {} ({} triangles) at {}x{} on {} → {}", mesh.source, mesh.indices.len() / 3, r.width, r.height, r.adapter, a.output.display());
+    println!(
+        "rendered {} ({} triangles) at {}x{} on {} → {}",
+        mesh.source,
+        mesh.indices.len() / 3,
+        r.width,
+        r.height,
+        r.adapter,
+        a.output.display()
+    );
     for p in &r.stats.passes {
-        let gpu = p.gpu_us.map(|g| format!("{:.0} µs GPU", g)).unwrap_or_else(|| "no timestamps".into());
-        println!("  {:<8} {gpu}, {:.0} µs CPU record (first frame: includes pipeline creation)", p.name, p.cpu_record_us);
+        let gpu = p
+            .gpu_us
+            .map(|g| format!("{:.0} µs GPU", g))
+            .unwrap_or_else(|| "no timestamps".into());
+        println!(
+            "  {:<8} {gpu}, {:.0} µs CPU record (first frame: includes pipeline creation)",
+            p.name, p.cpu_record_us
+        );
     }
     if let Some(html) = a.html {
-        std::fs::write(&html, dump::to_html(&r.plan, "meshlight default scene", Some(&r.stats)))?;
+        std::fs::write(
+            &html,
+            dump::to_html(&r.plan, "meshlight default scene", Some(&r.stats)),
+        )?;
         println!("graph: {}", html.display());
     }
     Ok(())
@@ -121,7 +145,9 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
 fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
     let builder = meshlight::graph::file::load_pipeline(&a.pipeline, &meshlight::registry())?;
     // Planning without a device assumes every feature; running checks the real adapter.
-    let plan = builder.compile(&CompileOptions::new(wgpu::Features::all()))?.plan;
+    let plan = builder
+        .compile(&CompileOptions::new(wgpu::Features::all()))?
+        .plan;
     let title = a.pipeline.display().to_string();
     let text = match a.format {
         Format::Dot => dump::to_dot(&plan),

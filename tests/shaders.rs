@@ -1,7 +1,7 @@
 //! Every pass entry point, with every shader-def variant it uses, composes through
 //! naga_oil against the shared library and validates.
 
-use meshlight::shaders::{validate, Capabilities, PassShader, ShaderDefs, ShaderLibrary};
+use meshlight::shaders::{Capabilities, PassShader, ShaderDefs, ShaderLibrary, validate};
 
 fn all_caps() -> Capabilities {
     Capabilities::SHADER_INT64 | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX | Capabilities::SUBGROUP
@@ -9,9 +9,15 @@ fn all_caps() -> Capabilities {
 
 fn check(shader: &PassShader, defs: &dyn ShaderDefs) {
     let mut lib = ShaderLibrary::new(all_caps()).unwrap();
-    let module = lib.compose(shader, &defs.shader_defs()).unwrap_or_else(|e| panic!("{}: {e}", shader.name));
+    let module = lib
+        .compose(shader, &defs.shader_defs())
+        .unwrap_or_else(|e| panic!("{}: {e}", shader.name));
     validate(shader.name, &module, all_caps()).unwrap_or_else(|e| panic!("{}: {e}", shader.name));
-    assert!(!module.entry_points.is_empty(), "{} has no entry points", shader.name);
+    assert!(
+        !module.entry_points.is_empty(),
+        "{} has no entry points",
+        shader.name
+    );
 }
 
 #[test]
@@ -26,7 +32,14 @@ fn scan_fan_shader_variants_compose_and_validate() {
     for items_per_thread in [1, 2, 4, 8, 16] {
         for subgroups in [false, true] {
             for gpu_count in [false, true] {
-                check(&meshlight::scan_fan::SHADER, &ScanDefs { items_per_thread, subgroups, gpu_count });
+                check(
+                    &meshlight::scan_fan::SHADER,
+                    &ScanDefs {
+                        items_per_thread,
+                        subgroups,
+                        gpu_count,
+                    },
+                );
             }
         }
     }

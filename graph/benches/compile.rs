@@ -1,8 +1,8 @@
 //! Compile time of random graphs of 10, 100 and 1000 passes (target: 1000 passes < 2 ms).
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use meshlight_graph::synthetic::random_graph;
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use meshlight_graph::CompileOptions;
+use meshlight_graph::synthetic::random_graph;
 
 fn compile(c: &mut Criterion) {
     let mut group = c.benchmark_group("compile");
@@ -10,7 +10,10 @@ fn compile(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, &n| {
             b.iter_batched(
                 || random_graph(n, 0x5eed),
-                |g| g.compile(&CompileOptions::new(wgpu::Features::empty())).expect("compiles"),
+                |g| {
+                    g.compile(&CompileOptions::new(wgpu::Features::empty()))
+                        .expect("compiles")
+                },
                 criterion::BatchSize::SmallInput,
             )
         });

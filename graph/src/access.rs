@@ -33,12 +33,19 @@ pub enum Access {
 
 impl Access {
     pub fn reads(self) -> bool {
-        !matches!(self, Access::StorageWrite | Access::RenderTarget | Access::DepthTarget | Access::CopyDst)
+        !matches!(
+            self,
+            Access::StorageWrite | Access::RenderTarget | Access::DepthTarget | Access::CopyDst
+        )
     }
     pub fn writes(self) -> bool {
         matches!(
             self,
-            Access::StorageWrite | Access::RenderTarget | Access::DepthTarget | Access::CopyDst | Access::StorageReadWrite
+            Access::StorageWrite
+                | Access::RenderTarget
+                | Access::DepthTarget
+                | Access::CopyDst
+                | Access::StorageReadWrite
         )
     }
     pub fn name(self) -> &'static str {
@@ -75,7 +82,9 @@ impl Access {
     pub fn texture_usage(self) -> Option<wgpu::TextureUsages> {
         use wgpu::TextureUsages as U;
         Some(match self {
-            Access::StorageRead | Access::StorageWrite | Access::StorageReadWrite => U::STORAGE_BINDING,
+            Access::StorageRead | Access::StorageWrite | Access::StorageReadWrite => {
+                U::STORAGE_BINDING
+            }
             Access::Sampled => U::TEXTURE_BINDING,
             Access::RenderTarget | Access::DepthTarget => U::RENDER_ATTACHMENT,
             Access::CopySrc => U::COPY_SRC,

@@ -1,6 +1,6 @@
 //! The code-first API: declare resources, add passes with slot bindings, compile.
 
-use crate::compile::{compile, CompileOptions, CompiledGraph};
+use crate::compile::{CompileOptions, CompiledGraph, compile};
 use crate::contract::StageContract;
 use crate::error::{GraphError, Result};
 use crate::pass::Pass;
@@ -25,12 +25,14 @@ impl Bindings {
         Self::default()
     }
     pub fn bind(mut self, slot: &str, handle: impl Into<AnyHandle>) -> Self {
-        self.entries.push((slot.to_string(), Target::Handle(handle.into())));
+        self.entries
+            .push((slot.to_string(), Target::Handle(handle.into())));
         self
     }
     /// Binds a slot to a resource by name, at its current version.
     pub fn bind_named(mut self, slot: &str, resource: &str) -> Self {
-        self.entries.push((slot.to_string(), Target::Name(resource.to_string())));
+        self.entries
+            .push((slot.to_string(), Target::Name(resource.to_string())));
         self
     }
 }
@@ -63,12 +65,21 @@ pub struct PassOutputs {
 
 impl PassOutputs {
     fn find(&self, slot: &str) -> Result<AnyHandle> {
-        self.written.iter().find(|(s, _)| *s == slot).map(|(_, h)| *h).ok_or_else(|| GraphError::UnknownSlot {
-            pass: self.pass.clone(),
-            stage: "(written slots)".into(),
-            slot: slot.to_string(),
-            available: self.written.iter().map(|(s, _)| *s).collect::<Vec<_>>().join(", "),
-        })
+        self.written
+            .iter()
+            .find(|(s, _)| *s == slot)
+            .map(|(_, h)| *h)
+            .ok_or_else(|| GraphError::UnknownSlot {
+                pass: self.pass.clone(),
+                stage: "(written slots)".into(),
+                slot: slot.to_string(),
+                available: self
+                    .written
+                    .iter()
+                    .map(|(s, _)| *s)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
     }
     /// The new version of the buffer written through `slot`.
     pub fn buffer(&self, slot: &str) -> Result<Handle<Buffer>> {
@@ -101,42 +112,88 @@ impl GraphBuilder {
 
     fn add_resource(&mut self, name: &str, desc: ResourceDesc, kind: ResourceKind) -> ResourceId {
         if self.resources.iter().any(|r| r.name == name) {
-            self.deferred.push(GraphError::DuplicateName { what: "resource", name: name.to_string() });
+            self.deferred.push(GraphError::DuplicateName {
+                what: "resource",
+                name: name.to_string(),
+            });
         }
-        self.resources.push(ResourceInfo { name: name.to_string(), desc, kind });
+        self.resources.push(ResourceInfo {
+            name: name.to_string(),
+            desc,
+            kind,
+        });
         self.current.push(0);
         ResourceId(self.resources.len() as u32 - 1)
     }
 
     pub fn create_buffer(&mut self, name: &str, desc: BufferDesc) -> Handle<Buffer> {
-        Handle::new(self.add_resource(name, ResourceDesc::Buffer(desc), ResourceKind::Transient), 0)
+        Handle::new(
+            self.add_resource(name, ResourceDesc::Buffer(desc), ResourceKind::Transient),
+            0,
+        )
     }
     pub fn create_texture(&mut self, name: &str, desc: TextureDesc) -> Handle<Texture> {
-        Handle::new(self.add_resource(name, ResourceDesc::Texture(desc), ResourceKind::Transient), 0)
+        Handle::new(
+            self.add_resource(name, ResourceDesc::Texture(desc), ResourceKind::Transient),
+            0,
+        )
     }
     /// A caller-owned buffer; `usage` is what the caller created it with.
-    pub fn import_buffer(&mut self, name: &str, desc: BufferDesc, usage: wgpu::BufferUsages) -> Handle<Buffer> {
-        let kind = ResourceKind::Imported { usage: ImportedUsage::Buffer(usage) };
+    pub fn import_buffer(
+        &mut self,
+        name: &str,
+        desc: BufferDesc,
+        usage: wgpu::BufferUsages,
+    ) -> Handle<Buffer> {
+        let kind = ResourceKind::Imported {
+            usage: ImportedUsage::Buffer(usage),
+        };
         Handle::new(self.add_resource(name, ResourceDesc::Buffer(desc), kind), 0)
     }
-    pub fn import_texture(&mut self, name: &str, desc: TextureDesc, usage: wgpu::TextureUsages) -> Handle<Texture> {
-        let kind = ResourceKind::Imported { usage: ImportedUsage::Texture(usage) };
-        Handle::new(self.add_resource(name, ResourceDesc::Texture(desc), kind), 0)
+    pub fn import_texture(
+        &mut self,
+        name: &str,
+        desc: TextureDesc,
+        usage: wgpu::TextureUsages,
+    ) -> Handle<Texture> {
+        let kind = ResourceKind::Imported {
+            usage: ImportedUsage::Texture(usage),
+        };
+        Handle::new(
+            self.add_resource(name, ResourceDesc::Texture(desc), kind),
+            0,
+        )
     }
     /// A buffer carried to the next frame: write `current`; read last frame's as `prev`
     /// (named `<name>.prev`).
     pub fn history_buffer(&mut self, name: &str, desc: BufferDesc) -> History<Buffer> {
         let (prev, current) = self.history(name, ResourceDesc::Buffer(desc));
-        History { prev: Handle::new(prev, 0), current: Handle::new(current, 0) }
+        History {
+            prev: Handle::new(prev, 0),
+            current: Handle::new(current, 0),
+        }
     }
     pub fn history_texture(&mut self, name: &str, desc: TextureDesc) -> History<Texture> {
         let (prev, current) = self.history(name, ResourceDesc::Texture(desc));
-        History { prev: Handle::new(prev, 0), current: Handle::new(current, 0) }
+        History {
+            prev: Handle::new(prev, 0),
+            current: Handle::new(current, 0),
+        }
     }
     fn history(&mut self, name: &str, desc: ResourceDesc) -> (ResourceId, ResourceId) {
         let n = self.resources.len() as u32;
-        let current = self.add_resource(name, desc.clone(), ResourceKind::History { prev: ResourceId(n + 1) });
-        let prev = self.add_resource(&format!("{name}.prev"), desc, ResourceKind::HistoryPrev { current });
+        let current = self.add_resource(
+            name,
+            desc.clone(),
+            ResourceKind::History {
+                prev: ResourceId(n + 1),
+            },
+        );
+        let prev = self.add_resource(
+            &format!("{name}.prev"),
+            desc,
+            ResourceKind::HistoryPrev { current },
+        );
         (prev, current)
     }
     /// Keeps a transient after the frame so the caller can read it back.
@@ -150,12 +207,18 @@ impl GraphBuilder {
     /// Looks a resource up by name, at its newest version.
     pub fn resource(&self, name: &str) -> Option<AnyHandle> {
         let i = self.resources.iter().position(|r| r.name == name)?;
-        Some(AnyHandle { id: ResourceId(i as u32), version: self.current[i] })
+        Some(AnyHandle {
+            id: ResourceId(i as u32),
+            version: self.current[i],
+        })
     }
     /// Looks a resource up by name at an explicit version (pipeline files use `name@3`).
     pub fn resource_at(&self, name: &str, version: u32) -> Option<AnyHandle> {
         let i = self.resources.iter().position(|r| r.name == name)?;
-        Some(AnyHandle { id: ResourceId(i as u32), version })
+        Some(AnyHandle {
+            id: ResourceId(i as u32),
+            version,
+        })
     }
     pub fn resources(&self) -> &[ResourceInfo] {
         &self.resources
@@ -163,13 +226,26 @@ impl GraphBuilder {
 
     /// Adds a pass instance named `name`. Slots not in `bindings` bind to the resource of
     /// the same name. Returns the new versions of what it writes.
-    pub fn add_pass(&mut self, name: &str, pass: impl Pass + 'static, bindings: Bindings) -> Result<PassOutputs> {
+    pub fn add_pass(
+        &mut self,
+        name: &str,
+        pass: impl Pass + 'static,
+        bindings: Bindings,
+    ) -> Result<PassOutputs> {
         self.add_boxed_pass(name, Box::new(pass), bindings)
     }
 
-    pub fn add_boxed_pass(&mut self, name: &str, pass: Box<dyn Pass>, bindings: Bindings) -> Result<PassOutputs> {
+    pub fn add_boxed_pass(
+        &mut self,
+        name: &str,
+        pass: Box<dyn Pass>,
+        bindings: Bindings,
+    ) -> Result<PassOutputs> {
         if self.passes.iter().any(|p| p.name == name) {
-            return Err(GraphError::DuplicateName { what: "pass", name: name.to_string() });
+            return Err(GraphError::DuplicateName {
+                what: "pass",
+                name: name.to_string(),
+            });
         }
         let mut contract = pass.contract();
         for (slot, _) in &bindings.entries {
@@ -185,38 +261,64 @@ impl GraphBuilder {
         let mut resolved = Vec::with_capacity(contract.slots.len());
         let mut unbound_optional = Vec::new();
         for slot in &contract.slots {
-            let target = bindings.entries.iter().rev().find(|(s, _)| s == slot.name).map(|(_, t)| t.clone());
+            let target = bindings
+                .entries
+                .iter()
+                .rev()
+                .find(|(s, _)| s == slot.name)
+                .map(|(_, t)| t.clone());
             let handle = match target {
                 Some(Target::Handle(h)) => h,
-                Some(Target::Name(res)) => self.resource(&res).ok_or_else(|| GraphError::UnknownResource {
-                    pass: name.to_string(),
-                    slot: slot.name.to_string(),
-                    resource: res.clone(),
-                })?,
+                Some(Target::Name(res)) => {
+                    self.resource(&res)
+                        .ok_or_else(|| GraphError::UnknownResource {
+                            pass: name.to_string(),
+                            slot: slot.name.to_string(),
+                            resource: res.clone(),
+                        })?
+                }
                 None => match self.resource(slot.name) {
                     Some(h) => h,
                     None if slot.optional => {
                         unbound_optional.push(slot.name);
                         continue;
                     }
-                    None => return Err(GraphError::UnboundSlot { pass: name.to_string(), slot: slot.name.to_string() }),
+                    None => {
+                        return Err(GraphError::UnboundSlot {
+                            pass: name.to_string(),
+                            slot: slot.name.to_string(),
+                        });
+                    }
                 },
             };
             resolved.push(handle);
         }
         // The node keeps only bound slots, so every later step sees slots and handles in step.
-        contract.slots.retain(|s| !unbound_optional.contains(&s.name));
+        contract
+            .slots
+            .retain(|s| !unbound_optional.contains(&s.name));
         let mut written = Vec::new();
         for (slot, handle) in contract.slots.iter().zip(&resolved) {
             if slot.access.writes() {
-                let next = AnyHandle { id: handle.id, version: handle.version + 1 };
+                let next = AnyHandle {
+                    id: handle.id,
+                    version: handle.version + 1,
+                };
                 let cur = &mut self.current[handle.id.index()];
                 *cur = (*cur).max(next.version);
                 written.push((slot.name, next));
             }
         }
-        self.passes.push(PassNode { name: name.to_string(), pass, contract, bindings: resolved });
-        Ok(PassOutputs { pass: name.to_string(), written })
+        self.passes.push(PassNode {
+            name: name.to_string(),
+            pass,
+            contract,
+            bindings: resolved,
+        });
+        Ok(PassOutputs {
+            pass: name.to_string(),
+            written,
+        })
     }
 
     pub fn compile(self, options: &CompileOptions) -> Result<CompiledGraph> {

@@ -33,10 +33,29 @@ pub struct Slot {
 
 impl Slot {
     pub fn buffer(name: &'static str, access: Access, element: Element, doc: &'static str) -> Self {
-        Self { name, access, kind: SlotKind::Buffer { element: Some(element) }, doc, optional: false }
+        Self {
+            name,
+            access,
+            kind: SlotKind::Buffer {
+                element: Some(element),
+            },
+            doc,
+            optional: false,
+        }
     }
-    pub fn texture(name: &'static str, access: Access, format: Option<wgpu::TextureFormat>, doc: &'static str) -> Self {
-        Self { name, access, kind: SlotKind::Texture { format }, doc, optional: false }
+    pub fn texture(
+        name: &'static str,
+        access: Access,
+        format: Option<wgpu::TextureFormat>,
+        doc: &'static str,
+    ) -> Self {
+        Self {
+            name,
+            access,
+            kind: SlotKind::Texture { format },
+            doc,
+            optional: false,
+        }
     }
     /// Marks the slot optional: left unbound (and with no resource of its name), the pass
     /// runs without it.

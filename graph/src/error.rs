@@ -8,38 +8,99 @@ pub enum GraphError {
     #[error("dependency cycle: {} -> {}; break it by reading an earlier version of one of these resources", path.join(" -> "), path.first().map(String::as_str).unwrap_or(""))]
     Cycle { path: Vec<String> },
 
-    #[error("pass `{pass}` reads `{resource}` (version {version}) in slot `{slot}`, but no pass writes that version; add a pass that writes it before, or import the resource")]
-    ReadWithoutWriter { pass: String, slot: String, resource: String, version: u32 },
+    #[error(
+        "pass `{pass}` reads `{resource}` (version {version}) in slot `{slot}`, but no pass writes that version; add a pass that writes it before, or import the resource"
+    )]
+    ReadWithoutWriter {
+        pass: String,
+        slot: String,
+        resource: String,
+        version: u32,
+    },
 
-    #[error("pass `{pass}` uses a stale handle of `{resource}` in slot `{slot}`: version {given}, but `{writer}` has already written version {current}; use the handle `{writer}` returned")]
-    StaleVersion { pass: String, slot: String, resource: String, given: u32, current: u32, writer: String },
+    #[error(
+        "pass `{pass}` uses a stale handle of `{resource}` in slot `{slot}`: version {given}, but `{writer}` has already written version {current}; use the handle `{writer}` returned"
+    )]
+    StaleVersion {
+        pass: String,
+        slot: String,
+        resource: String,
+        given: u32,
+        current: u32,
+        writer: String,
+    },
 
-    #[error("pass `{pass}` slot `{slot}` expects {expected}, but `{resource}` is {found}; bind a resource of the expected kind or change the resource's descriptor")]
-    DescriptorMismatch { pass: String, slot: String, resource: String, expected: String, found: String },
+    #[error(
+        "pass `{pass}` slot `{slot}` expects {expected}, but `{resource}` is {found}; bind a resource of the expected kind or change the resource's descriptor"
+    )]
+    DescriptorMismatch {
+        pass: String,
+        slot: String,
+        resource: String,
+        expected: String,
+        found: String,
+    },
 
-    #[error("pass `{pass}` uses `{resource}` as {access} in slot `{slot}`, which needs {needed}, but {reason}")]
-    UsageNotAllowed { pass: String, slot: String, resource: String, access: String, needed: String, reason: String },
+    #[error(
+        "pass `{pass}` uses `{resource}` as {access} in slot `{slot}`, which needs {needed}, but {reason}"
+    )]
+    UsageNotAllowed {
+        pass: String,
+        slot: String,
+        resource: String,
+        access: String,
+        needed: String,
+        reason: String,
+    },
 
     #[error("duplicate {what} name `{name}`; every {what} in a graph needs a unique name")]
     DuplicateName { what: &'static str, name: String },
 
-    #[error("pass `{pass}` requires the adapter feature(s) {features}, which this adapter lacks; pick another implementation of stage `{stage}` or another adapter (MESHLIGHT_ADAPTER)")]
-    MissingFeature { pass: String, stage: String, features: String },
+    #[error(
+        "pass `{pass}` requires the adapter feature(s) {features}, which this adapter lacks; pick another implementation of stage `{stage}` or another adapter (MESHLIGHT_ADAPTER)"
+    )]
+    MissingFeature {
+        pass: String,
+        stage: String,
+        features: String,
+    },
 
     #[error("pass `{pass}` (stage `{stage}`) has no slot `{slot}`; its slots are: {available}")]
-    UnknownSlot { pass: String, stage: String, slot: String, available: String },
+    UnknownSlot {
+        pass: String,
+        stage: String,
+        slot: String,
+        available: String,
+    },
 
     #[error("pass `{pass}` leaves slot `{slot}` unbound; bind it to a resource")]
     UnboundSlot { pass: String, slot: String },
 
-    #[error("pass `{pass}` binds `{resource}` to slot `{slot}` but no resource of that name exists; declare it first")]
-    UnknownResource { pass: String, slot: String, resource: String },
+    #[error(
+        "pass `{pass}` binds `{resource}` to slot `{slot}` but no resource of that name exists; declare it first"
+    )]
+    UnknownResource {
+        pass: String,
+        slot: String,
+        resource: String,
+    },
 
     #[error("`{resource}` is read-only ({why}); pass `{pass}` cannot write it in slot `{slot}`")]
-    ReadOnlyResource { pass: String, slot: String, resource: String, why: &'static str },
+    ReadOnlyResource {
+        pass: String,
+        slot: String,
+        resource: String,
+        why: &'static str,
+    },
 
-    #[error("no implementation `{implementation}` of stage `{stage}` is registered; known: {known}")]
-    UnknownImplementation { stage: String, implementation: String, known: String },
+    #[error(
+        "no implementation `{implementation}` of stage `{stage}` is registered; known: {known}"
+    )]
+    UnknownImplementation {
+        stage: String,
+        implementation: String,
+        known: String,
+    },
 
     #[error("pass `{pass}` parameter error: {message}")]
     Parameter { pass: String, message: String },
@@ -53,14 +114,20 @@ pub enum GraphError {
     #[error("imported resource `{resource}` does not match its declaration: {message}")]
     ImportMismatch { resource: String, message: String },
 
-    #[error("no Vulkan adapter found{detail}. Install Mesa's software driver: `sudo apt-get install mesa-vulkan-drivers` (lavapipe), or set MESHLIGHT_ADAPTER to a name from `vulkaninfo --summary`")]
+    #[error(
+        "no Vulkan adapter found{detail}. Install Mesa's software driver: `sudo apt-get install mesa-vulkan-drivers` (lavapipe), or set MESHLIGHT_ADAPTER to a name from `vulkaninfo --summary`"
+    )]
     NoAdapter { detail: String },
 
     #[error("could not create the device: {0}")]
     Device(String),
 
     #[error("shader error in pass `{pass}`: {source}")]
-    Shader { pass: String, #[source] source: meshlight_shaders::ShaderError },
+    Shader {
+        pass: String,
+        #[source]
+        source: meshlight_shaders::ShaderError,
+    },
 
     #[error("wgpu validation error in pass `{pass}`: {message}")]
     Validation { pass: String, message: String },

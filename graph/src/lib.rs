@@ -22,8 +22,14 @@ pub use builder::{Bindings, GraphBuilder, History, PassNode, PassOutputs};
 pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
-pub use exec::{BindingLayout, ComputeDesc, Executor, FrameStats, GpuAdapter, GpuContext, Imports, RecordContext};
+pub use exec::{
+    BindingLayout, ComputeDesc, Executor, FrameStats, GpuAdapter, GpuContext, Imports,
+    RecordContext,
+};
+pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
 pub use pass::{Pass, SetupContext};
 pub use plan::Plan;
-pub use resource::{AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture, TextureDesc};
-pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
+pub use resource::{
+    AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture,
+    TextureDesc,
+};

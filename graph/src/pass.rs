@@ -86,7 +86,11 @@ impl SetupContext {
     }
     /// Declares a buffer only this pass uses; the graph pools it like any transient.
     pub fn scratch_buffer(&mut self, name: &str, desc: BufferDesc, accesses: &[Access]) {
-        self.scratch.push(ScratchDecl { name: name.to_string(), desc, accesses: accesses.to_vec() });
+        self.scratch.push(ScratchDecl {
+            name: name.to_string(),
+            desc,
+            accesses: accesses.to_vec(),
+        });
     }
     /// Marks the pass as having an effect outside the graph (readback, logging), so it is
     /// never culled.

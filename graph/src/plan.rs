@@ -109,13 +109,22 @@ pub(crate) fn ser_features<S: Serializer>(f: &wgpu::Features, s: S) -> Result<S:
     let names: Vec<String> = f.iter_names().map(|(n, _)| n.to_string()).collect();
     names.serialize(s)
 }
-pub(crate) fn ser_buffer_usages<S: Serializer>(u: &wgpu::BufferUsages, s: S) -> Result<S::Ok, S::Error> {
+pub(crate) fn ser_buffer_usages<S: Serializer>(
+    u: &wgpu::BufferUsages,
+    s: S,
+) -> Result<S::Ok, S::Error> {
     flag_names(u).serialize(s)
 }
-pub(crate) fn ser_texture_usages<S: Serializer>(u: &wgpu::TextureUsages, s: S) -> Result<S::Ok, S::Error> {
+pub(crate) fn ser_texture_usages<S: Serializer>(
+    u: &wgpu::TextureUsages,
+    s: S,
+) -> Result<S::Ok, S::Error> {
     flag_names(u).serialize(s)
 }
-pub(crate) fn ser_buffer_usage_or_texture<S: Serializer>(u: &ImportedUsage, s: S) -> Result<S::Ok, S::Error> {
+pub(crate) fn ser_buffer_usage_or_texture<S: Serializer>(
+    u: &ImportedUsage,
+    s: S,
+) -> Result<S::Ok, S::Error> {
     match u {
         ImportedUsage::Buffer(b) => flag_names(b).serialize(s),
         ImportedUsage::Texture(t) => flag_names(t).serialize(s),
@@ -124,7 +133,10 @@ pub(crate) fn ser_buffer_usage_or_texture<S: Serializer>(u: &ImportedUsage, s: S
 pub(crate) fn ser_format<S: Serializer>(f: &wgpu::TextureFormat, s: S) -> Result<S::Ok, S::Error> {
     format_name(*f).serialize(s)
 }
-pub(crate) fn ser_opt_format<S: Serializer>(f: &Option<wgpu::TextureFormat>, s: S) -> Result<S::Ok, S::Error> {
+pub(crate) fn ser_opt_format<S: Serializer>(
+    f: &Option<wgpu::TextureFormat>,
+    s: S,
+) -> Result<S::Ok, S::Error> {
     f.map(format_name).serialize(s)
 }
 

@@ -42,7 +42,11 @@ impl<K> Copy for Handle<K> {}
 
 impl<K> Handle<K> {
     pub(crate) fn new(id: ResourceId, version: u32) -> Self {
-        Self { id, version, _kind: PhantomData }
+        Self {
+            id,
+            version,
+            _kind: PhantomData,
+        }
     }
     pub fn id(&self) -> ResourceId {
         self.id
@@ -51,7 +55,10 @@ impl<K> Handle<K> {
         self.version
     }
     pub fn erase(self) -> AnyHandle {
-        AnyHandle { id: self.id, version: self.version }
+        AnyHandle {
+            id: self.id,
+            version: self.version,
+        }
     }
 }
 
@@ -76,26 +83,58 @@ pub struct Element {
 }
 
 impl Element {
-    pub const U32: Element = Element { name: Cow::Borrowed("u32"), size: 4 };
-    pub const U64: Element = Element { name: Cow::Borrowed("u64"), size: 8 };
-    pub const F32: Element = Element { name: Cow::Borrowed("f32"), size: 4 };
-    pub const VEC4_F32: Element = Element { name: Cow::Borrowed("vec4<f32>"), size: 16 };
+    pub const U32: Element = Element {
+        name: Cow::Borrowed("u32"),
+        size: 4,
+    };
+    pub const U64: Element = Element {
+        name: Cow::Borrowed("u64"),
+        size: 8,
+    };
+    pub const F32: Element = Element {
+        name: Cow::Borrowed("f32"),
+        size: 4,
+    };
+    pub const VEC4_F32: Element = Element {
+        name: Cow::Borrowed("vec4<f32>"),
+        size: 16,
+    };
     /// Three u32: `dispatch_workgroups_indirect` arguments.
-    pub const DISPATCH_ARGS: Element = Element { name: Cow::Borrowed("DispatchIndirectArgs"), size: 12 };
+    pub const DISPATCH_ARGS: Element = Element {
+        name: Cow::Borrowed("DispatchIndirectArgs"),
+        size: 12,
+    };
     /// Four u32: `draw_indirect` arguments.
-    pub const DRAW_ARGS: Element = Element { name: Cow::Borrowed("DrawIndirectArgs"), size: 16 };
+    pub const DRAW_ARGS: Element = Element {
+        name: Cow::Borrowed("DrawIndirectArgs"),
+        size: 16,
+    };
     /// Bytes with no structure (staging, readback).
-    pub const BYTES: Element = Element { name: Cow::Borrowed("u8"), size: 1 };
+    pub const BYTES: Element = Element {
+        name: Cow::Borrowed("u8"),
+        size: 1,
+    };
 
     pub const fn named(name: &'static str, size: u32) -> Element {
-        Element { name: Cow::Borrowed(name), size }
+        Element {
+            name: Cow::Borrowed(name),
+            size,
+        }
     }
 
     /// Resolves the element names a pipeline file may use without declaring a size.
     pub fn from_known_name(name: &str) -> Option<Element> {
-        [Self::U32, Self::U64, Self::F32, Self::VEC4_F32, Self::DISPATCH_ARGS, Self::DRAW_ARGS, Self::BYTES]
-            .into_iter()
-            .find(|e| e.name == name)
+        [
+            Self::U32,
+            Self::U64,
+            Self::F32,
+            Self::VEC4_F32,
+            Self::DISPATCH_ARGS,
+            Self::DRAW_ARGS,
+            Self::BYTES,
+        ]
+        .into_iter()
+        .find(|e| e.name == name)
     }
 }
 
@@ -107,7 +146,10 @@ pub struct BufferDesc {
 
 impl BufferDesc {
     pub fn array(element: Element, count: u64) -> Self {
-        Self { size: element.size as u64 * count, element }
+        Self {
+            size: element.size as u64 * count,
+            element,
+        }
     }
     pub fn elements(&self) -> u64 {
         self.size / self.element.size.max(1) as u64
@@ -125,7 +167,12 @@ pub struct TextureDesc {
 
 impl TextureDesc {
     pub fn d2(format: wgpu::TextureFormat, width: u32, height: u32) -> Self {
-        Self { format, width, height, mip_levels: 1 }
+        Self {
+            format,
+            width,
+            height,
+            mip_levels: 1,
+        }
     }
     pub fn bytes(&self) -> u64 {
         let block = self.format.block_copy_size(None).unwrap_or(4) as u64;
@@ -196,10 +243,16 @@ pub struct ResourceInfo {
 impl ResourceInfo {
     /// True when its contents outlive the frame, so passes writing it are never culled.
     pub fn is_visible_outside(&self) -> bool {
-        matches!(self.kind, ResourceKind::Imported { .. } | ResourceKind::History { .. } | ResourceKind::Exported)
+        matches!(
+            self.kind,
+            ResourceKind::Imported { .. } | ResourceKind::History { .. } | ResourceKind::Exported
+        )
     }
     /// True when version 0 holds meaningful data before any pass writes it.
     pub fn starts_written(&self) -> bool {
-        matches!(self.kind, ResourceKind::Imported { .. } | ResourceKind::HistoryPrev { .. })
+        matches!(
+            self.kind,
+            ResourceKind::Imported { .. } | ResourceKind::HistoryPrev { .. }
+        )
     }
 }

@@ -16,7 +16,10 @@ pub struct NoopPass {
 
 impl Pass for NoopPass {
     fn contract(&self) -> StageContract {
-        StageContract { stage: "noop", slots: self.slots.clone() }
+        StageContract {
+            stage: "noop",
+            slots: self.slots.clone(),
+        }
     }
     fn implementation(&self) -> &'static str {
         "noop"
@@ -40,7 +43,13 @@ pub fn random_graph(n: usize, seed: u64) -> GraphBuilder {
         state
     };
     let mut g = GraphBuilder::new();
-    let mut out = g.import_buffer("out", BufferDesc::array(Element::U32, 16), wgpu::BufferUsages::STORAGE).erase();
+    let mut out = g
+        .import_buffer(
+            "out",
+            BufferDesc::array(Element::U32, 16),
+            wgpu::BufferUsages::STORAGE,
+        )
+        .erase();
     let names: Vec<String> = (0..n).map(|i| format!("t{i}")).collect();
     for name in &names {
         g.create_buffer(name, BufferDesc::array(Element::U32, 64 + next() % 4096));
@@ -49,7 +58,10 @@ pub fn random_graph(n: usize, seed: u64) -> GraphBuilder {
     for i in 0..n {
         let mut slots = Vec::new();
         let mut b = Bindings::new();
-        for name in INPUTS.iter().take(if i == 0 { 0 } else { (next() % 4) as usize }) {
+        for name in INPUTS
+            .iter()
+            .take(if i == 0 { 0 } else { (next() % 4) as usize })
+        {
             let src = (next() % i as u64) as usize;
             slots.push(Slot::buffer(name, Access::StorageRead, Element::U32, ""));
             b = b.bind_named(name, &names[src]);
@@ -58,14 +70,25 @@ pub fn random_graph(n: usize, seed: u64) -> GraphBuilder {
         b = b.bind_named("w", &names[i]);
         let accumulate = i % 10 == 9 || i == n - 1;
         if accumulate {
-            slots.push(Slot::buffer("out", Access::StorageReadWrite, Element::U32, ""));
+            slots.push(Slot::buffer(
+                "out",
+                Access::StorageReadWrite,
+                Element::U32,
+                "",
+            ));
             b = b.bind("out", out);
         }
-        let outputs = g.add_pass(&format!("p{i}"), NoopPass { slots }, b).expect("generated graphs are well-formed");
+        let outputs = g
+            .add_pass(&format!("p{i}"), NoopPass { slots }, b)
+            .expect("generated graphs are well-formed");
         if accumulate {
-            out = outputs.written().iter().find(|(s, _)| *s == "out").map(|(_, h)| *h).unwrap_or(out);
+            out = outputs
+                .written()
+                .iter()
+                .find(|(s, _)| *s == "out")
+                .map(|(_, h)| *h)
+                .unwrap_or(out);
         }
     }
     g
 }
-

@@ -5,16 +5,39 @@ use meshlight_graph::*;
 use support::*;
 
 const N: u32 = 1000;
-const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_SRC).union(wgpu::BufferUsages::COPY_DST);
+const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
 
 fn three_pass_graph(transform: Box<dyn Pass>) -> GraphBuilder {
     let mut g = GraphBuilder::new();
     let a = g.create_buffer("a", BufferDesc::array(Element::U32, N as u64));
     let b = g.create_buffer("b", BufferDesc::array(Element::U32, N as u64));
     let result = g.import_buffer("result", BufferDesc::array(Element::U32, N as u64), USAGE);
-    let a = g.add_pass("fill", Fill { count: N, k: 3 }, Bindings::new().bind("output", a)).unwrap().buffer("output").unwrap();
-    let b = g.add_boxed_pass("transform", transform, Bindings::new().bind("input", a).bind("output", b)).unwrap().buffer("output").unwrap();
-    g.add_pass("add", Add { count: N, k: 7 }, Bindings::new().bind("input", b).bind("output", result)).unwrap();
+    let a = g
+        .add_pass(
+            "fill",
+            Fill { count: N, k: 3 },
+            Bindings::new().bind("output", a),
+        )
+        .unwrap()
+        .buffer("output")
+        .unwrap();
+    let b = g
+        .add_boxed_pass(
+            "transform",
+            transform,
+            Bindings::new().bind("input", a).bind("output", b),
+        )
+        .unwrap()
+        .buffer("output")
+        .unwrap();
+    g.add_pass(
+        "add",
+        Add { count: N, k: 7 },
+        Bindings::new().bind("input", b).bind("output", result),
+    )
+    .unwrap();
     g
 }
 
@@ -23,7 +46,9 @@ fn run_once(g: GraphBuilder) -> Vec<u32> {
     let compiled = g.compile(&CompileOptions::new(gpu.features)).unwrap();
     let result = gpu.buffer_with_data("result", &vec![0xFFu8; N as usize * 4], USAGE);
     let mut exec = Executor::new(gpu);
-    let stats = exec.execute(&compiled, &Imports::new().buffer("result", &result)).unwrap();
+    let stats = exec
+        .execute(&compiled, &Imports::new().buffer("result", &result))
+        .unwrap();
     assert_eq!(stats.passes.len(), 3);
     read_u32s(&exec.gpu, &result, N as usize)
 }
@@ -48,21 +73,34 @@ fn history_resource_carries_from_frame_to_frame() {
     let gpu = gpu();
     let mut g = GraphBuilder::new();
     let h = g.history_buffer("counter", BufferDesc::array(Element::U32, 64));
-    g.add_pass("accumulate", Add { count: 64, k: 1 }, Bindings::new().bind("input", h.prev).bind("output", h.current)).unwrap();
+    g.add_pass(
+        "accumulate",
+        Add { count: 64, k: 1 },
+        Bindings::new()
+            .bind("input", h.prev)
+            .bind("output", h.current),
+    )
+    .unwrap();
     let compiled = g.compile(&CompileOptions::new(gpu.features)).unwrap();
     let mut exec = Executor::new(gpu);
     for frame in 1..=4u32 {
         exec.execute(&compiled, &Imports::new()).unwrap();
         let bytes = exec.read_buffer("counter").unwrap();
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
-        assert!(words.iter().all(|&w| w == frame), "frame {frame}: {:?}", &words[..4]);
+        assert!(
+            words.iter().all(|&w| w == frame),
+            "frame {frame}: {:?}",
+            &words[..4]
+        );
     }
 }
 
 #[test]
 fn steady_graph_allocates_nothing_after_the_first_frame() {
     let gpu = gpu();
-    let compiled = three_pass_graph(Box::new(Add { count: N, k: 1 })).compile(&CompileOptions::new(gpu.features)).unwrap();
+    let compiled = three_pass_graph(Box::new(Add { count: N, k: 1 }))
+        .compile(&CompileOptions::new(gpu.features))
+        .unwrap();
     let result = gpu.buffer_with_data("result", &[0u8; N as usize * 4], USAGE);
     let mut exec = Executor::new(gpu);
     let imports = Imports::new().buffer("result", &result);
@@ -91,7 +129,12 @@ fn wgpu_validation_error_surfaces_as_an_error() {
         }
         fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
             let layout = BindingLayout::compute("fill").slot(1, "output").uniform(2);
-            let program = ctx.compute_program(&ComputeDesc { shader: &SHADER, entry: "fill", defs: &(), layouts: &[layout] })?;
+            let program = ctx.compute_program(&ComputeDesc {
+                shader: &SHADER,
+                entry: "fill",
+                defs: &(),
+                layouts: &[layout],
+            })?;
             let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&[1u32, 1, 0, 0]))])?;
             let mut pass = ctx.compute_pass();
             pass.set_pipeline(&program.pipeline);
@@ -103,7 +146,8 @@ fn wgpu_validation_error_surfaces_as_an_error() {
     let gpu = gpu();
     let mut g = GraphBuilder::new();
     let out = g.import_buffer("out", BufferDesc::array(Element::U32, 16), USAGE);
-    g.add_pass("too_big", Oversized, Bindings::new().bind("output", out)).unwrap();
+    g.add_pass("too_big", Oversized, Bindings::new().bind("output", out))
+        .unwrap();
     let compiled = g.compile(&CompileOptions::new(gpu.features)).unwrap();
     let buffer = gpu.buffer_with_data("out", &[0u8; 64], USAGE);
     let mut exec = Executor::new(gpu);
@@ -112,6 +156,9 @@ fn wgpu_validation_error_surfaces_as_an_error() {
             assert_eq!(pass, "too_big");
             assert!(!message.is_empty());
         }
-        other => panic!("expected a validation error, got {:?}", other.map(|s| s.frame)),
+        other => panic!(
+            "expected a validation error, got {:?}",
+            other.map(|s| s.frame)
+        ),
     }
 }

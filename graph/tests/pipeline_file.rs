@@ -2,7 +2,7 @@
 //! and wiring mistakes give typed errors naming what to change.
 
 mod support;
-use meshlight_graph::file::{parse_pipeline, Params, Registry};
+use meshlight_graph::file::{Params, Registry, parse_pipeline};
 use meshlight_graph::*;
 use support::*;
 
@@ -10,10 +10,23 @@ fn registry() -> Registry {
     let mut r = Registry::new();
     r.register("produce", "fill", |p: &Params| {
         p.only(&["count", "k"])?;
-        Ok(Box::new(Fill { count: p.u32("count", 1000)?, k: p.u32("k", 1)? }) as Box<dyn Pass>)
+        Ok(Box::new(Fill {
+            count: p.u32("count", 1000)?,
+            k: p.u32("k", 1)?,
+        }) as Box<dyn Pass>)
     });
-    r.register("transform", "add", |p: &Params| Ok(Box::new(Add { count: p.u32("count", 1000)?, k: p.u32("k", 0)? }) as Box<dyn Pass>));
-    r.register("transform", "add_twice", |p: &Params| Ok(Box::new(AddTwice { count: p.u32("count", 1000)?, half: p.u32("half", 0)? }) as Box<dyn Pass>));
+    r.register("transform", "add", |p: &Params| {
+        Ok(Box::new(Add {
+            count: p.u32("count", 1000)?,
+            k: p.u32("k", 0)?,
+        }) as Box<dyn Pass>)
+    });
+    r.register("transform", "add_twice", |p: &Params| {
+        Ok(Box::new(AddTwice {
+            count: p.u32("count", 1000)?,
+            half: p.u32("half", 0)?,
+        }) as Box<dyn Pass>)
+    });
     r
 }
 
@@ -54,10 +67,12 @@ fn run(text: &str) -> Vec<u32> {
     let g = parse_pipeline(text, "test.toml", &registry()).unwrap();
     let gpu = gpu();
     let compiled = g.compile(&CompileOptions::new(gpu.features)).unwrap();
-    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+    let usage =
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
     let result = gpu.buffer_with_data("result", &[0u8; 4000], usage);
     let mut exec = Executor::new(gpu);
-    exec.execute(&compiled, &Imports::new().buffer("result", &result)).unwrap();
+    exec.execute(&compiled, &Imports::new().buffer("result", &result))
+        .unwrap();
     read_u32s(&exec.gpu, &result, 1000)
 }
 
@@ -71,10 +86,21 @@ fn file_graph_runs_and_swapping_the_implementation_is_one_line() {
 
 #[test]
 fn wiring_a_slot_the_stage_does_not_have_is_a_typed_error() {
-    let text = file("add", "k = 1").replace("bind = { input = \"a\", output = \"result\" }", "bind = { inptu = \"a\", output = \"result\" }");
+    let text = file("add", "k = 1").replace(
+        "bind = { input = \"a\", output = \"result\" }",
+        "bind = { inptu = \"a\", output = \"result\" }",
+    );
     match parse_pipeline(&text, "test.toml", &registry()) {
-        Err(GraphError::UnknownSlot { pass, slot, available, .. }) => {
-            assert_eq!((pass.as_str(), slot.as_str(), available.as_str()), ("transform", "inptu", "input, output"));
+        Err(GraphError::UnknownSlot {
+            pass,
+            slot,
+            available,
+            ..
+        }) => {
+            assert_eq!(
+                (pass.as_str(), slot.as_str(), available.as_str()),
+                ("transform", "inptu", "input, output")
+            );
         }
         other => panic!("expected UnknownSlot, got {:?}", other.err()),
     }
@@ -82,10 +108,21 @@ fn wiring_a_slot_the_stage_does_not_have_is_a_typed_error() {
 
 #[test]
 fn wiring_a_resource_of_the_wrong_kind_is_a_typed_error() {
-    let text = file("add", "k = 1").replace("buffer = { element = \"u32\", count = 1000 }\n\n[[resource]]\nname = \"result\"", "buffer = { element = \"f32\", count = 1000 }\n\n[[resource]]\nname = \"result\"");
+    let text = file("add", "k = 1").replace(
+        "buffer = { element = \"u32\", count = 1000 }\n\n[[resource]]\nname = \"result\"",
+        "buffer = { element = \"f32\", count = 1000 }\n\n[[resource]]\nname = \"result\"",
+    );
     let g = parse_pipeline(&text, "test.toml", &registry()).unwrap();
     match g.compile(&CompileOptions::new(wgpu::Features::empty())) {
-        Err(GraphError::DescriptorMismatch { pass, slot, resource, .. }) => assert_eq!((pass.as_str(), slot.as_str(), resource.as_str()), ("fill", "output", "a")),
+        Err(GraphError::DescriptorMismatch {
+            pass,
+            slot,
+            resource,
+            ..
+        }) => assert_eq!(
+            (pass.as_str(), slot.as_str(), resource.as_str()),
+            ("fill", "output", "a")
+        ),
         other => panic!("expected DescriptorMismatch, got {:?}", other.err()),
     }
 }
@@ -107,8 +144,17 @@ fn bad_parameters_and_syntax_are_typed_errors() {
         }
         other => panic!("{:?}", other.err()),
     }
-    let misspelt = FILE.replace("params = { count = 1000, k = 3 }", "params = { count = 1000, kk = 3 }").replace("IMPL", "add").replace("PARAM", "k = 1");
-    assert!(matches!(parse_pipeline(&misspelt, "t.toml", &registry()), Err(GraphError::Parameter { .. })));
+    let misspelt = FILE
+        .replace(
+            "params = { count = 1000, k = 3 }",
+            "params = { count = 1000, kk = 3 }",
+        )
+        .replace("IMPL", "add")
+        .replace("PARAM", "k = 1");
+    assert!(matches!(
+        parse_pipeline(&misspelt, "t.toml", &registry()),
+        Err(GraphError::Parameter { .. })
+    ));
     match parse_pipeline("[[pass]]\nname = 3", "broken.toml", &registry()) {
         Err(GraphError::PipelineFile { file, .. }) => assert_eq!(file, "broken.toml"),
         other => panic!("{:?}", other.err()),

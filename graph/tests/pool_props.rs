@@ -27,10 +27,17 @@ fn graph(reads: &[Vec<usize>], sizes: &[u64], to_out: &[bool]) -> GraphBuilder {
         slots.push(Slot::buffer("w", Access::StorageWrite, Element::U32, ""));
         b = b.bind_named("w", &format!("t{i}"));
         if to_out[i] {
-            slots.push(Slot::buffer("out", Access::StorageReadWrite, Element::U32, ""));
+            slots.push(Slot::buffer(
+                "out",
+                Access::StorageReadWrite,
+                Element::U32,
+                "",
+            ));
             b = b.bind("out", out);
         }
-        let outs = g.add_pass(&format!("p{i}"), Fake::new("random", slots), b).unwrap();
+        let outs = g
+            .add_pass(&format!("p{i}"), Fake::new("random", slots), b)
+            .unwrap();
         if to_out[i] {
             out = outs.written().iter().find(|(s, _)| *s == "out").unwrap().1;
         }
@@ -40,8 +47,22 @@ fn graph(reads: &[Vec<usize>], sizes: &[u64], to_out: &[bool]) -> GraphBuilder {
 
 fn arb_graph() -> impl Strategy<Value = (Vec<Vec<usize>>, Vec<u64>, Vec<bool>)> {
     (2usize..40).prop_flat_map(|n| {
-        let reads = (0..n).map(|i| if i == 0 { Just(vec![]).boxed() } else { proptest::collection::btree_set(0..i, 0..=3.min(i)).prop_map(|s| s.into_iter().collect()).boxed() }).collect::<Vec<_>>();
-        (reads, proptest::collection::vec(1u64..4096, n), proptest::collection::vec(proptest::bool::weighted(0.3), n))
+        let reads = (0..n)
+            .map(|i| {
+                if i == 0 {
+                    Just(vec![]).boxed()
+                } else {
+                    proptest::collection::btree_set(0..i, 0..=3.min(i))
+                        .prop_map(|s| s.into_iter().collect())
+                        .boxed()
+                }
+            })
+            .collect::<Vec<_>>();
+        (
+            reads,
+            proptest::collection::vec(1u64..4096, n),
+            proptest::collection::vec(proptest::bool::weighted(0.3), n),
+        )
     })
 }
 

@@ -9,36 +9,77 @@ use meshlight_graph::*;
 fn sample() -> Plan {
     let mut g = GraphBuilder::new();
     g.import_buffer("scene", u32s(256), IMPORT_USAGE);
-    g.import_texture("output", TextureDesc::d2(wgpu::TextureFormat::Rgba8Unorm, 64, 64), wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC);
+    g.import_texture(
+        "output",
+        TextureDesc::d2(wgpu::TextureFormat::Rgba8Unorm, 64, 64),
+        wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+    );
     let depth = g.history_buffer("depth \"pyramid\"", u32s(64));
     g.create_buffer("clusters", u32s(1024));
     g.create_buffer("visible", u32s(1024));
     g.create_buffer("debug", u32s(16));
-    g.add_pass("fill", Fake::rw(&["scene"], &["clusters"]), Bindings::new()).unwrap();
-    g.add_pass("cull", Fake::rw(&["clusters", "prev"], &["visible"]), Bindings::new().bind("prev", depth.prev)).unwrap();
+    g.add_pass("fill", Fake::rw(&["scene"], &["clusters"]), Bindings::new())
+        .unwrap();
+    g.add_pass(
+        "cull",
+        Fake::rw(&["clusters", "prev"], &["visible"]),
+        Bindings::new().bind("prev", depth.prev),
+    )
+    .unwrap();
     let mut raster = Fake::rw(&["visible"], &["depth"]);
     raster.scratch = Some(4096);
-    g.add_pass("raster <sw>", raster, Bindings::new().bind("depth", depth.current)).unwrap();
-    let slots = vec![Slot::buffer("visible", Access::StorageRead, Element::U32, ""), Slot::texture("output", Access::StorageWrite, None, "")];
-    g.add_pass("resolve", Fake::new("resolve", slots), Bindings::new()).unwrap();
-    g.add_pass("debug_view", Fake::rw(&["clusters"], &["debug"]), Bindings::new()).unwrap();
-    g.compile(&CompileOptions::new(wgpu::Features::empty())).unwrap().plan
+    g.add_pass(
+        "raster <sw>",
+        raster,
+        Bindings::new().bind("depth", depth.current),
+    )
+    .unwrap();
+    let slots = vec![
+        Slot::buffer("visible", Access::StorageRead, Element::U32, ""),
+        Slot::texture("output", Access::StorageWrite, None, ""),
+    ];
+    g.add_pass("resolve", Fake::new("resolve", slots), Bindings::new())
+        .unwrap();
+    g.add_pass(
+        "debug_view",
+        Fake::rw(&["clusters"], &["debug"]),
+        Bindings::new(),
+    )
+    .unwrap();
+    g.compile(&CompileOptions::new(wgpu::Features::empty()))
+        .unwrap()
+        .plan
 }
 
 fn check(name: &str, actual: &str) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/snapshots").join(name);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/snapshots")
+        .join(name);
     if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
         std::fs::write(&path, actual).unwrap();
         return;
     }
-    let expected = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}; run with UPDATE_SNAPSHOTS=1 to create it", path.display()));
-    assert!(expected == actual, "{name} changed; diff it against {} (UPDATE_SNAPSHOTS=1 rewrites)\n{actual}", path.display());
+    let expected = std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e}; run with UPDATE_SNAPSHOTS=1 to create it",
+            path.display()
+        )
+    });
+    assert!(
+        expected == actual,
+        "{name} changed; diff it against {} (UPDATE_SNAPSHOTS=1 rewrites)\n{actual}",
+        path.display()
+    );
 }
 
 #[test]
 fn dot_dump_matches_snapshot() {
     let dot = dump::to_dot(&sample());
-    assert!(dot.contains("(culled)") && dot.contains("peripheries=2") && dot.contains("depth \\\"pyramid\\\""));
+    assert!(
+        dot.contains("(culled)")
+            && dot.contains("peripheries=2")
+            && dot.contains("depth \\\"pyramid\\\"")
+    );
     check("sample.dot", &dot);
 }
 

@@ -8,14 +8,27 @@ fn edge(a: [f32; 2], b: [f32; 2], p: [f32; 2]) -> f32 {
 }
 
 /// One visibility value per pixel, as the GPU pass writes them.
-pub fn rasterise(positions: &[Vec3], indices: &[u32], view_proj: Mat4, width: u32, height: u32) -> Vec<u64> {
+pub fn rasterise(
+    positions: &[Vec3],
+    indices: &[u32],
+    view_proj: Mat4,
+    width: u32,
+    height: u32,
+) -> Vec<u64> {
     let mut vis = vec![0u64; (width * height) as usize];
     let screen = |c: Vec4| {
         let n = c.truncate() / c.w;
-        [(n.x * 0.5 + 0.5) * width as f32, (0.5 - n.y * 0.5) * height as f32, n.z]
+        [
+            (n.x * 0.5 + 0.5) * width as f32,
+            (0.5 - n.y * 0.5) * height as f32,
+            n.z,
+        ]
     };
     for (t, tri) in indices.chunks_exact(3).enumerate() {
-        let c: Vec<Vec4> = tri.iter().map(|&i| view_proj * positions[i as usize].extend(1.0)).collect();
+        let c: Vec<Vec4> = tri
+            .iter()
+            .map(|&i| view_proj * positions[i as usize].extend(1.0))
+            .collect();
         if c.iter().any(|c| c.w <= 0.0) {
             continue;
         }
@@ -25,10 +38,30 @@ pub fn rasterise(positions: &[Vec3], indices: &[u32], view_proj: Mat4, width: u3
         if area >= 0.0 {
             continue;
         }
-        let lo_x = s.iter().map(|v| v[0]).fold(f32::MAX, f32::min).floor().max(0.0);
-        let lo_y = s.iter().map(|v| v[1]).fold(f32::MAX, f32::min).floor().max(0.0);
-        let hi_x = s.iter().map(|v| v[0]).fold(f32::MIN, f32::max).ceil().min(width as f32 - 1.0);
-        let hi_y = s.iter().map(|v| v[1]).fold(f32::MIN, f32::max).ceil().min(height as f32 - 1.0);
+        let lo_x = s
+            .iter()
+            .map(|v| v[0])
+            .fold(f32::MAX, f32::min)
+            .floor()
+            .max(0.0);
+        let lo_y = s
+            .iter()
+            .map(|v| v[1])
+            .fold(f32::MAX, f32::min)
+            .floor()
+            .max(0.0);
+        let hi_x = s
+            .iter()
+            .map(|v| v[0])
+            .fold(f32::MIN, f32::max)
+            .ceil()
+            .min(width as f32 - 1.0);
+        let hi_y = s
+            .iter()
+            .map(|v| v[1])
+            .fold(f32::MIN, f32::max)
+            .ceil()
+            .min(height as f32 - 1.0);
         let mut y = lo_y;
         while y <= hi_y {
             let mut x = lo_x;
@@ -55,7 +88,14 @@ pub fn rasterise(positions: &[Vec3], indices: &[u32], view_proj: Mat4, width: u3
 
 /// CPU reference of the shading pass: the same background gradient, face-normal lighting
 /// and sRGB-ish packing, from a given visibility buffer.
-pub fn shade(vis: &[u64], positions: &[Vec3], indices: &[u32], width: u32, height: u32, light_dir: Vec3) -> Vec<u32> {
+pub fn shade(
+    vis: &[u64],
+    positions: &[Vec3],
+    indices: &[u32],
+    width: u32,
+    height: u32,
+    light_dir: Vec3,
+) -> Vec<u32> {
     let light = light_dir.normalize();
     (0..width * height)
         .map(|i| {
@@ -68,7 +108,8 @@ pub fn shade(vis: &[u64], positions: &[Vec3], indices: &[u32], width: u32, heigh
                 let [a, b, c] = [0, 1, 2].map(|k| positions[indices[3 * t + k] as usize]);
                 let n = (b - a).cross(c - a).normalize();
                 let diffuse = n.dot(light).max(0.0);
-                let ambient = Vec3::new(0.10, 0.08, 0.07).lerp(Vec3::new(0.18, 0.22, 0.30), n.y * 0.5 + 0.5);
+                let ambient =
+                    Vec3::new(0.10, 0.08, 0.07).lerp(Vec3::new(0.18, 0.22, 0.30), n.y * 0.5 + 0.5);
                 Vec3::new(0.85, 0.55, 0.30) * (diffuse * Vec3::new(1.0, 0.95, 0.85) + ambient)
             };
             let srgb = color.clamp(Vec3::ZERO, Vec3::ONE).powf(1.0 / 2.2);

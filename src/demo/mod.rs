@@ -7,8 +7,16 @@ pub mod cpu;
 use glam::{Mat4, Vec3};
 use meshlight_graph::*;
 
-pub const RASTER_SHADER: PassShader = PassShader { name: "demo::raster", source: include_str!("raster.wgsl"), file_path: "src/demo/raster.wgsl" };
-pub const SHADE_SHADER: PassShader = PassShader { name: "demo::shade", source: include_str!("shade.wgsl"), file_path: "src/demo/shade.wgsl" };
+pub const RASTER_SHADER: PassShader = PassShader {
+    name: "demo::raster",
+    source: include_str!("raster.wgsl"),
+    file_path: "src/demo/raster.wgsl",
+};
+pub const SHADE_SHADER: PassShader = PassShader {
+    name: "demo::shade",
+    source: include_str!("shade.wgsl"),
+    file_path: "src/demo/shade.wgsl",
+};
 
 /// Visibility values: `(1 - depth) << 32 | triangle + 1`, zero where nothing was drawn.
 pub fn visbuffer_element() -> Element {
@@ -46,9 +54,24 @@ pub fn raster_contract() -> StageContract {
     StageContract {
         stage: "demo_raster",
         slots: vec![
-            Slot::buffer("positions", Access::StorageRead, Element::VEC4_F32, "world-space vertex positions (w = 1)"),
-            Slot::buffer("indices", Access::StorageRead, Element::U32, "three indices per triangle"),
-            Slot::buffer("visbuffer", Access::StorageWrite, visbuffer_element(), "one 64-bit visibility value per pixel; cleared by the pass, then atomicMax"),
+            Slot::buffer(
+                "positions",
+                Access::StorageRead,
+                Element::VEC4_F32,
+                "world-space vertex positions (w = 1)",
+            ),
+            Slot::buffer(
+                "indices",
+                Access::StorageRead,
+                Element::U32,
+                "three indices per triangle",
+            ),
+            Slot::buffer(
+                "visbuffer",
+                Access::StorageWrite,
+                visbuffer_element(),
+                "one 64-bit visibility value per pixel; cleared by the pass, then atomicMax",
+            ),
         ],
     }
 }
@@ -61,16 +84,32 @@ impl Pass for DemoRaster {
         "compute"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        ctx.require_features(wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX);
+        ctx.require_features(
+            wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
+        );
         ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
         ctx.min_bytes("indices", self.triangle_count as u64 * 12);
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let layout = BindingLayout::compute("demo_raster").slot(0, "positions").slot(1, "indices").slot(2, "visbuffer").uniform(3);
+        let layout = BindingLayout::compute("demo_raster")
+            .slot(0, "positions")
+            .slot(1, "indices")
+            .slot(2, "visbuffer")
+            .uniform(3);
         let layouts = [layout];
-        let clear = ctx.compute_program(&ComputeDesc { shader: &RASTER_SHADER, entry: "clear", defs: &(), layouts: &layouts })?;
-        let raster = ctx.compute_program(&ComputeDesc { shader: &RASTER_SHADER, entry: "raster", defs: &(), layouts: &layouts })?;
+        let clear = ctx.compute_program(&ComputeDesc {
+            shader: &RASTER_SHADER,
+            entry: "clear",
+            defs: &(),
+            layouts: &layouts,
+        })?;
+        let raster = ctx.compute_program(&ComputeDesc {
+            shader: &RASTER_SHADER,
+            entry: "raster",
+            defs: &(),
+            layouts: &layouts,
+        })?;
         let (cx, cy, c_row) = dispatch_size(self.width * self.height);
         let (rx, ry, r_row) = dispatch_size(self.triangle_count);
         let params = |threads_per_row| RasterParams {
@@ -114,10 +153,30 @@ pub fn shade_contract() -> StageContract {
     StageContract {
         stage: "demo_shade",
         slots: vec![
-            Slot::buffer("positions", Access::StorageRead, Element::VEC4_F32, "world-space vertex positions"),
-            Slot::buffer("indices", Access::StorageRead, Element::U32, "three indices per triangle"),
-            Slot::buffer("visbuffer", Access::StorageRead, visbuffer_element(), "visibility from the raster pass"),
-            Slot::buffer("image", Access::StorageWrite, Element::U32, "RGBA8 pixels, row-major"),
+            Slot::buffer(
+                "positions",
+                Access::StorageRead,
+                Element::VEC4_F32,
+                "world-space vertex positions",
+            ),
+            Slot::buffer(
+                "indices",
+                Access::StorageRead,
+                Element::U32,
+                "three indices per triangle",
+            ),
+            Slot::buffer(
+                "visbuffer",
+                Access::StorageRead,
+                visbuffer_element(),
+                "visibility from the raster pass",
+            ),
+            Slot::buffer(
+                "image",
+                Access::StorageWrite,
+                Element::U32,
+                "RGBA8 pixels, row-major",
+            ),
         ],
     }
 }
@@ -134,10 +193,26 @@ impl Pass for DemoShade {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let layout = BindingLayout::compute("demo_shade").slot(0, "positions").slot(1, "indices").slot(2, "visbuffer").slot(3, "image").uniform(4);
-        let program = ctx.compute_program(&ComputeDesc { shader: &SHADE_SHADER, entry: "shade", defs: &(), layouts: &[layout] })?;
+        let layout = BindingLayout::compute("demo_shade")
+            .slot(0, "positions")
+            .slot(1, "indices")
+            .slot(2, "visbuffer")
+            .slot(3, "image")
+            .uniform(4);
+        let program = ctx.compute_program(&ComputeDesc {
+            shader: &SHADE_SHADER,
+            entry: "shade",
+            defs: &(),
+            layouts: &[layout],
+        })?;
         let (x, y, row) = dispatch_size(self.width * self.height);
-        let params = ShadeParams { light_dir: self.light_dir.extend(0.0).to_array(), width: self.width, height: self.height, threads_per_row: row, _pad: 0 };
+        let params = ShadeParams {
+            light_dir: self.light_dir.extend(0.0).to_array(),
+            width: self.width,
+            height: self.height,
+            threads_per_row: row,
+            _pad: 0,
+        };
         let bg = ctx.bind_group(&program, 0, &[(4, bytemuck::bytes_of(&params))])?;
         let mut pass = ctx.compute_pass();
         pass.set_pipeline(&program.pipeline);
@@ -149,26 +224,75 @@ impl Pass for DemoShade {
 
 /// A camera looking at the mesh's bounding sphere from above and to the side.
 pub fn camera_for(positions: &[Vec3], width: u32, height: u32) -> Mat4 {
-    let (min, max) = positions.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+    let (min, max) = positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
     let center = (min + max) * 0.5;
     let radius = ((max - min).length() * 0.5).max(1e-6);
     let eye = center + Vec3::new(0.45, 0.55, 1.0).normalize() * radius * 2.6;
-    let proj = glam::camera::rh::proj::directx::perspective(40f32.to_radians(), width as f32 / height as f32, radius * 0.5, radius * 6.0);
+    let proj = glam::camera::rh::proj::directx::perspective(
+        40f32.to_radians(),
+        width as f32 / height as f32,
+        radius * 0.5,
+        radius * 6.0,
+    );
     proj * glam::camera::rh::view::look_at_mat4(eye, center, Vec3::Y)
 }
 
 pub const LIGHT_DIR: Vec3 = Vec3::new(0.4, 0.8, 0.5);
 
 /// The default-scene graph: positions and indices imported, visibility transient, image imported.
-pub fn graph(positions_bytes: u64, triangles: u32, width: u32, height: u32, view_proj: Mat4) -> Result<GraphBuilder> {
+pub fn graph(
+    positions_bytes: u64,
+    triangles: u32,
+    width: u32,
+    height: u32,
+    view_proj: Mat4,
+) -> Result<GraphBuilder> {
     let mut g = GraphBuilder::new();
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-    g.import_buffer("positions", BufferDesc { size: positions_bytes, element: Element::VEC4_F32 }, usage);
-    g.import_buffer("indices", BufferDesc::array(Element::U32, triangles as u64 * 3), usage);
-    g.create_buffer("visbuffer", BufferDesc::array(visbuffer_element(), width as u64 * height as u64));
-    g.import_buffer("image", BufferDesc::array(Element::U32, width as u64 * height as u64), wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
-    g.add_pass("raster", DemoRaster { view_proj, width, height, triangle_count: triangles }, Bindings::new())?;
-    g.add_pass("shade", DemoShade { width, height, light_dir: LIGHT_DIR }, Bindings::new())?;
+    g.import_buffer(
+        "positions",
+        BufferDesc {
+            size: positions_bytes,
+            element: Element::VEC4_F32,
+        },
+        usage,
+    );
+    g.import_buffer(
+        "indices",
+        BufferDesc::array(Element::U32, triangles as u64 * 3),
+        usage,
+    );
+    g.create_buffer(
+        "visbuffer",
+        BufferDesc::array(visbuffer_element(), width as u64 * height as u64),
+    );
+    g.import_buffer(
+        "image",
+        BufferDesc::array(Element::U32, width as u64 * height as u64),
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+    );
+    g.add_pass(
+        "raster",
+        DemoRaster {
+            view_proj,
+            width,
+            height,
+            triangle_count: triangles,
+        },
+        Bindings::new(),
+    )?;
+    g.add_pass(
+        "shade",
+        DemoShade {
+            width,
+            height,
+            light_dir: LIGHT_DIR,
+        },
+        Bindings::new(),
+    )?;
     Ok(g)
 }
 
@@ -187,13 +311,24 @@ pub fn render(positions: &[Vec3], indices: &[u32], width: u32, height: u32) -> R
     let view_proj = camera_for(positions, width, height);
     let padded: Vec<[f32; 4]> = positions.iter().map(|p| [p.x, p.y, p.z, 1.0]).collect();
     let triangles = (indices.len() / 3) as u32;
-    let compiled = graph(padded.len() as u64 * 16, triangles, width, height, view_proj)?.compile(&CompileOptions::new(adapter.features()))?;
+    let compiled = graph(
+        padded.len() as u64 * 16,
+        triangles,
+        width,
+        height,
+        view_proj,
+    )?
+    .compile(&CompileOptions::new(adapter.features()))?;
     let gpu = adapter.open(compiled.plan.enabled_features)?;
     let name = gpu.info.name.clone();
     let usage = wgpu::BufferUsages::STORAGE;
     let pos = gpu.buffer_with_data("positions", bytemuck::cast_slice(&padded), usage);
     let idx = gpu.buffer_with_data("indices", bytemuck::cast_slice(indices), usage);
-    let image = gpu.buffer_with_data("image", &[], wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+    let image = gpu.buffer_with_data(
+        "image",
+        &[],
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+    );
     let image = if image.size() < width as u64 * height as u64 * 4 {
         gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("image"),
@@ -205,8 +340,20 @@ pub fn render(positions: &[Vec3], indices: &[u32], width: u32, height: u32) -> R
         image
     };
     let mut exec = Executor::new(gpu);
-    let imports = Imports::new().buffer("positions", &pos).buffer("indices", &idx).buffer("image", &image);
+    let imports = Imports::new()
+        .buffer("positions", &pos)
+        .buffer("indices", &idx)
+        .buffer("image", &image);
     let stats = exec.execute(&compiled, &imports)?;
-    let rgba = exec.gpu.read_buffer(&image, 0, width as u64 * height as u64 * 4)?;
-    Ok(Rendered { width, height, rgba, stats, adapter: name, plan: compiled.plan })
+    let rgba = exec
+        .gpu
+        .read_buffer(&image, 0, width as u64 * height as u64 * 4)?;
+    Ok(Rendered {
+        width,
+        height,
+        rgba,
+        stats,
+        adapter: name,
+        plan: compiled.plan,
+    })
 }

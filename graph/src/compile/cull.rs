@@ -6,7 +6,12 @@ use crate::compile::versions::{Edge, EdgeKind};
 use crate::resource::ResourceInfo;
 
 /// Returns, per pass, whether it is kept.
-pub fn live_passes(resources: &[ResourceInfo], passes: &[PassNode], side_effects: &[bool], edges: &[Edge]) -> Vec<bool> {
+pub fn live_passes(
+    resources: &[ResourceInfo],
+    passes: &[PassNode],
+    side_effects: &[bool],
+    edges: &[Edge],
+) -> Vec<bool> {
     let mut live = vec![false; passes.len()];
     let mut stack: Vec<usize> = Vec::new();
     for (p, node) in passes.iter().enumerate() {
@@ -23,7 +28,10 @@ pub fn live_passes(resources: &[ResourceInfo], passes: &[PassNode], side_effects
     }
     // Data flows only along read-after-write edges; ordering edges pull in nothing.
     while let Some(p) = stack.pop() {
-        for e in edges.iter().filter(|e| e.to == p && e.kind == EdgeKind::ReadAfterWrite) {
+        for e in edges
+            .iter()
+            .filter(|e| e.to == p && e.kind == EdgeKind::ReadAfterWrite)
+        {
             if !live[e.from] {
                 live[e.from] = true;
                 stack.push(e.from);

@@ -41,7 +41,12 @@ impl CompiledGraph {
 }
 
 pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<CompiledGraph> {
-    let GraphBuilder { mut resources, passes, deferred, .. } = builder;
+    let GraphBuilder {
+        mut resources,
+        passes,
+        deferred,
+        ..
+    } = builder;
     if let Some(e) = deferred.into_iter().next() {
         return Err(e);
     }
@@ -53,7 +58,10 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     for (p, node) in passes.iter().enumerate() {
         let mut ctx = SetupContext::new(options.adapter_features, node.contract.slot_names());
         node.pass.setup(&mut ctx).map_err(|e| match e {
-            GraphError::Parameter { message, .. } => GraphError::Parameter { pass: node.name.clone(), message },
+            GraphError::Parameter { message, .. } => GraphError::Parameter {
+                pass: node.name.clone(),
+                message,
+            },
             other => other,
         })?;
         let missing = ctx.required - options.adapter_features;
@@ -61,7 +69,11 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             return Err(GraphError::MissingFeature {
                 pass: node.name.clone(),
                 stage: node.contract.stage.to_string(),
-                features: missing.iter_names().map(|(n, _)| n).collect::<Vec<_>>().join(", "),
+                features: missing
+                    .iter_names()
+                    .map(|(n, _)| n)
+                    .collect::<Vec<_>>()
+                    .join(", "),
             });
         }
         enabled |= ctx.required | (ctx.optional & options.adapter_features);
@@ -69,9 +81,16 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         for s in &ctx.scratch {
             let name = format!("{}/{}", node.name, s.name);
             if resources.iter().any(|r| r.name == name) {
-                return Err(GraphError::DuplicateName { what: "resource", name });
+                return Err(GraphError::DuplicateName {
+                    what: "resource",
+                    name,
+                });
             }
-            resources.push(ResourceInfo { name, desc: ResourceDesc::Buffer(s.desc.clone()), kind: ResourceKind::Scratch { pass: p } });
+            resources.push(ResourceInfo {
+                name,
+                desc: ResourceDesc::Buffer(s.desc.clone()),
+                kind: ResourceKind::Scratch { pass: p },
+            });
             mine.push(resources.len() - 1);
         }
         scratch_of.push(mine);
@@ -94,7 +113,10 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     // Lifetimes over the executed order.
     let mut lifetimes: Vec<Option<Lifetime>> = vec![None; resources.len()];
     let mut touch = |r: usize, at: usize| {
-        let l = lifetimes[r].get_or_insert(Lifetime { first: at, last: at });
+        let l = lifetimes[r].get_or_insert(Lifetime {
+            first: at,
+            last: at,
+        });
         l.first = l.first.min(at);
         l.last = l.last.max(at);
     };
@@ -108,9 +130,10 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     }
     for (r, res) in resources.iter().enumerate() {
         if res.kind == ResourceKind::Exported
-            && let Some(l) = &mut lifetimes[r] {
-                l.last = order.len().saturating_sub(1).max(l.last);
-            }
+            && let Some(l) = &mut lifetimes[r]
+        {
+            l.last = order.len().saturating_sub(1).max(l.last);
+        }
     }
     let pool = pool::assign_slots(&resources, &lifetimes);
 
@@ -120,8 +143,14 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     for &p in &order {
         for (slot, h) in passes[p].contract.slots.iter().zip(&passes[p].bindings) {
             let r = h.id.index();
-            buffer_usage[r] |= slot.access.buffer_usage().unwrap_or(wgpu::BufferUsages::empty());
-            texture_usage[r] |= slot.access.texture_usage().unwrap_or(wgpu::TextureUsages::empty());
+            buffer_usage[r] |= slot
+                .access
+                .buffer_usage()
+                .unwrap_or(wgpu::BufferUsages::empty());
+            texture_usage[r] |= slot
+                .access
+                .texture_usage()
+                .unwrap_or(wgpu::TextureUsages::empty());
         }
         for (decl, &r) in setups[p].scratch.iter().zip(&scratch_of[p]) {
             for a in &decl.accesses {
@@ -146,7 +175,10 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     // A history pair shares one physical format, so both halves need both usages.
     for r in 0..resources.len() {
         if let ResourceKind::History { prev } = resources[r].kind {
-            let (b, t) = (buffer_usage[r] | buffer_usage[prev.index()], texture_usage[r] | texture_usage[prev.index()]);
+            let (b, t) = (
+                buffer_usage[r] | buffer_usage[prev.index()],
+                texture_usage[r] | texture_usage[prev.index()],
+            );
             buffer_usage[r] = b;
             buffer_usage[prev.index()] = b;
             texture_usage[r] = t;
@@ -172,17 +204,37 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
                 .map(|(slot, h)| {
                     let r = h.id.index();
                     let writes_version = slot.access.writes().then_some(h.version + 1);
-                    let ops = matches!(slot.access, Access::RenderTarget | Access::DepthTarget).then(|| {
-                        let has_earlier = table.writer.contains_key(&(r, h.version)) || (h.version == 0 && resources[r].starts_written());
-                        let v = h.version + 1;
-                        let read_later = table.readers.get(&(r, v)).is_some_and(|rs| rs.iter().any(|&x| live[x]))
-                            || table.writer.get(&(r, v + 1)).is_some_and(|&w| live[w]);
-                        AttachmentOps {
-                            load: if has_earlier { LoadOp::Load } else { LoadOp::Clear },
-                            store: if read_later || resources[r].is_visible_outside() { StoreOp::Store } else { StoreOp::Discard },
-                        }
-                    });
-                    SlotUse { slot: slot.name, resource: r, access: slot.access, version: h.version, writes_version, ops }
+                    let ops = matches!(slot.access, Access::RenderTarget | Access::DepthTarget)
+                        .then(|| {
+                            let has_earlier = table.writer.contains_key(&(r, h.version))
+                                || (h.version == 0 && resources[r].starts_written());
+                            let v = h.version + 1;
+                            let read_later = table
+                                .readers
+                                .get(&(r, v))
+                                .is_some_and(|rs| rs.iter().any(|&x| live[x]))
+                                || table.writer.get(&(r, v + 1)).is_some_and(|&w| live[w]);
+                            AttachmentOps {
+                                load: if has_earlier {
+                                    LoadOp::Load
+                                } else {
+                                    LoadOp::Clear
+                                },
+                                store: if read_later || resources[r].is_visible_outside() {
+                                    StoreOp::Store
+                                } else {
+                                    StoreOp::Discard
+                                },
+                            }
+                        });
+                    SlotUse {
+                        slot: slot.name,
+                        resource: r,
+                        access: slot.access,
+                        version: h.version,
+                        writes_version,
+                        ops,
+                    }
                 })
                 .collect();
             PassPlan {
@@ -191,7 +243,11 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
                 implementation: node.pass.implementation(),
                 slots,
                 scratch: scratch_of[p].clone(),
-                shader_defs: setup.shader_defs.iter().map(|(n, v)| (n.clone(), format!("{v:?}"))).collect(),
+                shader_defs: setup
+                    .shader_defs
+                    .iter()
+                    .map(|(n, v)| (n.clone(), format!("{v:?}")))
+                    .collect(),
                 required_features: setup.required,
                 optional_features: setup.optional,
                 side_effect: setup.side_effect,
@@ -243,27 +299,45 @@ fn check_slots(resources: &[ResourceInfo], node: &PassNode, setup: &SetupContext
         match (&slot.kind, &res.desc) {
             (SlotKind::Buffer { element }, ResourceDesc::Buffer(b)) => {
                 if let Some(e) = element
-                    && e != &b.element {
-                        return Err(mismatch(
-                            format!("a buffer of {} ({} bytes each)", e.name, e.size),
-                            format!("a buffer of {} ({} bytes each)", b.element.name, b.element.size),
-                        ));
-                    }
+                    && e != &b.element
+                {
+                    return Err(mismatch(
+                        format!("a buffer of {} ({} bytes each)", e.name, e.size),
+                        format!(
+                            "a buffer of {} ({} bytes each)",
+                            b.element.name, b.element.size
+                        ),
+                    ));
+                }
             }
             (SlotKind::Texture { format }, ResourceDesc::Texture(t)) => {
                 if let Some(f) = format
-                    && *f != t.format {
-                        return Err(mismatch(format!("a {} texture", format_name(*f)), format!("a {} texture", format_name(t.format))));
-                    }
+                    && *f != t.format
+                {
+                    return Err(mismatch(
+                        format!("a {} texture", format_name(*f)),
+                        format!("a {} texture", format_name(t.format)),
+                    ));
+                }
             }
             (SlotKind::Buffer { .. }, d) | (SlotKind::Texture { .. }, d) => {
-                let expected = if matches!(slot.kind, SlotKind::Buffer { .. }) { "a buffer" } else { "a texture" };
-                return Err(mismatch(expected.to_string(), format!("a {}", d.kind_name())));
+                let expected = if matches!(slot.kind, SlotKind::Buffer { .. }) {
+                    "a buffer"
+                } else {
+                    "a texture"
+                };
+                return Err(mismatch(
+                    expected.to_string(),
+                    format!("a {}", d.kind_name()),
+                ));
             }
         }
         for (s, min) in setup.min_bytes.iter().filter(|(s, _)| s == slot.name) {
             if res.desc.bytes() < *min {
-                return Err(mismatch(format!("at least {min} bytes (slot {s})"), format!("{} bytes", res.desc.bytes())));
+                return Err(mismatch(
+                    format!("at least {min} bytes (slot {s})"),
+                    format!("{} bytes", res.desc.bytes()),
+                ));
             }
         }
         let usage_err = |needed: String, reason: String| GraphError::UsageNotAllowed {
@@ -277,41 +351,73 @@ fn check_slots(resources: &[ResourceInfo], node: &PassNode, setup: &SetupContext
         match &res.desc {
             ResourceDesc::Buffer(_) => {
                 let Some(need) = slot.access.buffer_usage() else {
-                    return Err(usage_err("a texture".into(), "a buffer cannot be used this way".into()));
+                    return Err(usage_err(
+                        "a texture".into(),
+                        "a buffer cannot be used this way".into(),
+                    ));
                 };
-                if let ResourceKind::Imported { usage: ImportedUsage::Buffer(have) } = res.kind
-                    && !have.contains(need) {
-                        return Err(usage_err(format!("{need:?}"), format!("it was imported with only {have:?}; create it with {need:?} too")));
-                    }
+                if let ResourceKind::Imported {
+                    usage: ImportedUsage::Buffer(have),
+                } = res.kind
+                    && !have.contains(need)
+                {
+                    return Err(usage_err(
+                        format!("{need:?}"),
+                        format!("it was imported with only {have:?}; create it with {need:?} too"),
+                    ));
+                }
             }
             ResourceDesc::Texture(t) => {
                 let Some(need) = slot.access.texture_usage() else {
-                    return Err(usage_err("a buffer".into(), "a texture cannot be used this way".into()));
+                    return Err(usage_err(
+                        "a buffer".into(),
+                        "a texture cannot be used this way".into(),
+                    ));
                 };
-                if need.contains(wgpu::TextureUsages::STORAGE_BINDING) && t.format.is_depth_stencil_format() {
-                    return Err(usage_err(format!("{need:?}"), format!("depth format {} cannot be a storage texture", format_name(t.format))));
+                if need.contains(wgpu::TextureUsages::STORAGE_BINDING)
+                    && t.format.is_depth_stencil_format()
+                {
+                    return Err(usage_err(
+                        format!("{need:?}"),
+                        format!(
+                            "depth format {} cannot be a storage texture",
+                            format_name(t.format)
+                        ),
+                    ));
                 }
-                if let ResourceKind::Imported { usage: ImportedUsage::Texture(have) } = res.kind
-                    && !have.contains(need) {
-                        return Err(usage_err(format!("{need:?}"), format!("it was imported with only {have:?}; create it with {need:?} too")));
-                    }
+                if let ResourceKind::Imported {
+                    usage: ImportedUsage::Texture(have),
+                } = res.kind
+                    && !have.contains(need)
+                {
+                    return Err(usage_err(
+                        format!("{need:?}"),
+                        format!("it was imported with only {have:?}; create it with {need:?} too"),
+                    ));
+                }
             }
         }
         if slot.access.writes()
-            && let ResourceKind::HistoryPrev { .. } = res.kind {
-                return Err(GraphError::ReadOnlyResource {
-                    pass: node.name.clone(),
-                    slot: slot.name.to_string(),
-                    resource: res.name.clone(),
-                    why: "last frame's history is read-only; write the current half instead",
-                });
-            }
+            && let ResourceKind::HistoryPrev { .. } = res.kind
+        {
+            return Err(GraphError::ReadOnlyResource {
+                pass: node.name.clone(),
+                slot: slot.name.to_string(),
+                resource: res.name.clone(),
+                why: "last frame's history is read-only; write the current half instead",
+            });
+        }
         // One resource in two slots of one pass, one of them writing, would alias inside a
         // dispatch (and wgpu rejects a writable storage binding that overlaps another).
         if let Some(&other_writes) = seen.get(&h.id)
-            && (other_writes || slot.access.writes()) {
-                return Err(usage_err("its own slot".into(), "the same resource is bound to another slot of this pass, and one of them writes".into()));
-            }
+            && (other_writes || slot.access.writes())
+        {
+            return Err(usage_err(
+                "its own slot".into(),
+                "the same resource is bound to another slot of this pass, and one of them writes"
+                    .into(),
+            ));
+        }
         seen.insert(h.id, slot.access.writes());
     }
     Ok(())

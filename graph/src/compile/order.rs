@@ -2,8 +2,8 @@
 
 use crate::compile::versions::Edge;
 use crate::error::GraphError;
-use petgraph::graph::{DiGraph, NodeIndex};
 use petgraph::Direction;
+use petgraph::graph::{DiGraph, NodeIndex};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -21,10 +21,19 @@ pub fn build_dag(pass_count: usize, edges: &[Edge]) -> DiGraph<usize, usize> {
 
 /// Kahn's algorithm with the lowest declaration index first, so equal inputs give equal
 /// orders and independent passes keep the order the user wrote.
-pub fn topological_order(dag: &DiGraph<usize, usize>, names: &[String]) -> Result<Vec<usize>, GraphError> {
+pub fn topological_order(
+    dag: &DiGraph<usize, usize>,
+    names: &[String],
+) -> Result<Vec<usize>, GraphError> {
     let n = dag.node_count();
-    let mut indegree: Vec<usize> = (0..n).map(|i| dag.neighbors_directed(NodeIndex::new(i), Direction::Incoming).count()).collect();
-    let mut ready: BinaryHeap<Reverse<usize>> = (0..n).filter(|&i| indegree[i] == 0).map(Reverse).collect();
+    let mut indegree: Vec<usize> = (0..n)
+        .map(|i| {
+            dag.neighbors_directed(NodeIndex::new(i), Direction::Incoming)
+                .count()
+        })
+        .collect();
+    let mut ready: BinaryHeap<Reverse<usize>> =
+        (0..n).filter(|&i| indegree[i] == 0).map(Reverse).collect();
     let mut order = Vec::with_capacity(n);
     while let Some(Reverse(p)) = ready.pop() {
         order.push(p);
@@ -40,7 +49,12 @@ pub fn topological_order(dag: &DiGraph<usize, usize>, names: &[String]) -> Resul
         return Ok(order);
     }
     let remaining: Vec<bool> = indegree.iter().map(|&d| d > 0).collect();
-    Err(GraphError::Cycle { path: find_cycle(dag, &remaining).into_iter().map(|p| names[p].clone()).collect() })
+    Err(GraphError::Cycle {
+        path: find_cycle(dag, &remaining)
+            .into_iter()
+            .map(|p| names[p].clone())
+            .collect(),
+    })
 }
 
 /// Every node left after Kahn's algorithm lies on or behind a cycle; walking predecessors
@@ -67,7 +81,12 @@ fn find_cycle(dag: &DiGraph<usize, usize>, remaining: &[bool]) -> Vec<usize> {
     let mut cycle: Vec<usize> = walk[seen_at[node]..].to_vec();
     cycle.reverse();
     // Start at the lowest index so the message is stable.
-    let lowest = cycle.iter().enumerate().min_by_key(|(_, p)| **p).map(|(i, _)| i).unwrap_or(0);
+    let lowest = cycle
+        .iter()
+        .enumerate()
+        .min_by_key(|(_, p)| **p)
+        .map(|(i, _)| i)
+        .unwrap_or(0);
     cycle.rotate_left(lowest);
     cycle
 }

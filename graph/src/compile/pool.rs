@@ -34,7 +34,10 @@ pub struct PoolSlot {
 
 /// True for resources the graph allocates (as opposed to the caller or the history store).
 pub fn is_pooled(kind: &ResourceKind) -> bool {
-    matches!(kind, ResourceKind::Transient | ResourceKind::Scratch { .. } | ResourceKind::Exported)
+    matches!(
+        kind,
+        ResourceKind::Transient | ResourceKind::Scratch { .. } | ResourceKind::Exported
+    )
 }
 
 pub struct PoolAssignment {
@@ -65,15 +68,22 @@ pub fn assign_slots(resources: &[ResourceInfo], lifetimes: &[Option<Lifetime>]) 
         let s = match candidate {
             Some(s) => s,
             None => {
-                slots.push(PoolSlot { index: slots.len(), desc: desc.clone(), bytes: 0, members: Vec::new(), last_use: 0 });
+                slots.push(PoolSlot {
+                    index: slots.len(),
+                    desc: desc.clone(),
+                    bytes: 0,
+                    members: Vec::new(),
+                    last_use: 0,
+                });
                 slots.len() - 1
             }
         };
         let slot = &mut slots[s];
         if let (ResourceDesc::Buffer(have), ResourceDesc::Buffer(want)) = (&mut slot.desc, desc)
-            && want.size > have.size {
-                *have = want.clone();
-            }
+            && want.size > have.size
+        {
+            *have = want.clone();
+        }
         slot.bytes = slot.desc.bytes();
         slot.members.push(r);
         slot.last_use = if shareable { life.last } else { usize::MAX };
@@ -81,18 +91,43 @@ pub fn assign_slots(resources: &[ResourceInfo], lifetimes: &[Option<Lifetime>]) 
     }
     let bytes_without_reuse = pooled.iter().map(|&r| resources[r].desc.bytes()).sum();
     let bytes_with_reuse = slots.iter().map(|s| s.bytes).sum();
-    PoolAssignment { slots, slot_of, bytes_without_reuse, bytes_with_reuse }
+    PoolAssignment {
+        slots,
+        slot_of,
+        bytes_without_reuse,
+        bytes_with_reuse,
+    }
 }
 
 /// A free, compatible slot: for buffers the smallest one that is large enough, else the
 /// largest (which then grows); for textures one with the identical descriptor.
-fn best_slot(slots: &[PoolSlot], resources: &[ResourceInfo], desc: &ResourceDesc, first: usize) -> Option<usize> {
-    let free = slots.iter().filter(|s| s.last_use < first && s.members.iter().all(|&m| resources[m].kind != ResourceKind::Exported));
+fn best_slot(
+    slots: &[PoolSlot],
+    resources: &[ResourceInfo],
+    desc: &ResourceDesc,
+    first: usize,
+) -> Option<usize> {
+    let free = slots.iter().filter(|s| {
+        s.last_use < first
+            && s.members
+                .iter()
+                .all(|&m| resources[m].kind != ResourceKind::Exported)
+    });
     match desc {
         ResourceDesc::Buffer(want) => {
-            let buffers: Vec<&PoolSlot> = free.filter(|s| matches!(s.desc, ResourceDesc::Buffer(_))).collect();
-            let fits = buffers.iter().filter(|s| s.bytes >= want.size).min_by_key(|s| (s.bytes, s.index));
-            fits.or_else(|| buffers.iter().max_by_key(|s| (s.bytes, usize::MAX - s.index))).map(|s| s.index)
+            let buffers: Vec<&PoolSlot> = free
+                .filter(|s| matches!(s.desc, ResourceDesc::Buffer(_)))
+                .collect();
+            let fits = buffers
+                .iter()
+                .filter(|s| s.bytes >= want.size)
+                .min_by_key(|s| (s.bytes, s.index));
+            fits.or_else(|| {
+                buffers
+                    .iter()
+                    .max_by_key(|s| (s.bytes, usize::MAX - s.index))
+            })
+            .map(|s| s.index)
         }
         ResourceDesc::Texture(_) => free.filter(|s| &s.desc == desc).map(|s| s.index).next(),
     }

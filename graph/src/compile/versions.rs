@@ -53,7 +53,11 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
                 resource: res.name.clone(),
                 given,
                 current: cur,
-                writer: t.writer.get(&(r, cur)).map(|&w| passes[w].name.clone()).unwrap_or_default(),
+                writer: t
+                    .writer
+                    .get(&(r, cur))
+                    .map(|&w| passes[w].name.clone())
+                    .unwrap_or_default(),
             };
             if slot.access.writes() {
                 if h.version != cur {
@@ -112,7 +116,14 @@ fn read_edge(
     Ok(())
 }
 
-fn no_writer(resources: &[ResourceInfo], passes: &[PassNode], p: usize, slot: &str, r: usize, v: u32) -> GraphError {
+fn no_writer(
+    resources: &[ResourceInfo],
+    passes: &[PassNode],
+    p: usize,
+    slot: &str,
+    r: usize,
+    v: u32,
+) -> GraphError {
     GraphError::ReadWithoutWriter {
         pass: passes[p].name.clone(),
         slot: slot.to_string(),
@@ -121,8 +132,21 @@ fn no_writer(resources: &[ResourceInfo], passes: &[PassNode], p: usize, slot: &s
     }
 }
 
-fn push(edges: &mut Vec<Edge>, from: usize, to: usize, resource: usize, version: u32, kind: EdgeKind) {
+fn push(
+    edges: &mut Vec<Edge>,
+    from: usize,
+    to: usize,
+    resource: usize,
+    version: u32,
+    kind: EdgeKind,
+) {
     if from != to {
-        edges.push(Edge { from, to, resource, version, kind });
+        edges.push(Edge {
+            from,
+            to,
+            resource,
+            version,
+            kind,
+        });
     }
 }

@@ -7,34 +7,63 @@ use crate::resource::ResourceKind;
 use std::fmt::Write;
 
 fn esc(s: &str) -> String {
-    s.replace('\\', "\\\\").replace('"', "\\\"").replace('\n', "\\n")
+    s.replace('\\', "\\\\")
+        .replace('"', "\\\"")
+        .replace('\n', "\\n")
 }
 
 pub fn to_dot(plan: &Plan) -> String {
-    let mut out = String::from("digraph meshlight {\n  rankdir=LR;\n  node [fontname=\"Helvetica\", fontsize=11];\n  edge [fontname=\"Helvetica\", fontsize=9];\n");
+    let mut out = String::from(
+        "digraph meshlight {\n  rankdir=LR;\n  node [fontname=\"Helvetica\", fontsize=11];\n  edge [fontname=\"Helvetica\", fontsize=9];\n",
+    );
     for (i, p) in plan.passes.iter().enumerate() {
         let culled = plan.is_culled(i);
-        let order = plan.order.iter().position(|&o| o == i).map(|o| format!("#{o} ")).unwrap_or_default();
-        let label = format!("{order}{}\n{}/{}{}", p.name, p.stage, p.implementation, if culled { "\n(culled)" } else { "" });
-        let style = if culled { ", style=\"filled,dashed\", fillcolor=\"#eeeeee\", fontcolor=\"#999999\", color=\"#999999\"" } else { ", style=filled, fillcolor=\"#dde8f7\"" };
+        let order = plan
+            .order
+            .iter()
+            .position(|&o| o == i)
+            .map(|o| format!("#{o} "))
+            .unwrap_or_default();
+        let label = format!(
+            "{order}{}\n{}/{}{}",
+            p.name,
+            p.stage,
+            p.implementation,
+            if culled { "\n(culled)" } else { "" }
+        );
+        let style = if culled {
+            ", style=\"filled,dashed\", fillcolor=\"#eeeeee\", fontcolor=\"#999999\", color=\"#999999\""
+        } else {
+            ", style=filled, fillcolor=\"#dde8f7\""
+        };
         let _ = writeln!(out, "  p{i} [shape=box, label=\"{}\"{style}];", esc(&label));
     }
     for (r, v) in version_nodes(plan) {
         let res = &plan.resources[r];
         let style = match res.info.kind {
-            ResourceKind::History { .. } | ResourceKind::HistoryPrev { .. } => ", peripheries=2, color=\"#b5651d\"",
+            ResourceKind::History { .. } | ResourceKind::HistoryPrev { .. } => {
+                ", peripheries=2, color=\"#b5651d\""
+            }
             ResourceKind::Imported { .. } => ", style=bold",
             ResourceKind::Exported => ", style=bold, color=\"#2e7d32\"",
             _ => "",
         };
         let label = format!("{} v{v}\n{}", res.info.name, kind_tag(&res.info.kind));
-        let _ = writeln!(out, "  r{r}v{v} [shape=ellipse, label=\"{}\"{style}];", esc(&label));
+        let _ = writeln!(
+            out,
+            "  r{r}v{v} [shape=ellipse, label=\"{}\"{style}];",
+            esc(&label)
+        );
     }
     for (i, p) in plan.passes.iter().enumerate() {
         for s in &p.slots {
             let label = esc(&format!("{}: {}", s.slot, s.access.name()));
             if s.access.reads() {
-                let _ = writeln!(out, "  r{}v{} -> p{i} [label=\"{label}\"];", s.resource, s.version);
+                let _ = writeln!(
+                    out,
+                    "  r{}v{} -> p{i} [label=\"{label}\"];",
+                    s.resource, s.version
+                );
             }
             if let Some(w) = s.writes_version {
                 let _ = writeln!(out, "  p{i} -> r{}v{w} [label=\"{label}\"];", s.resource);

@@ -7,7 +7,10 @@ use crate::plan::Plan;
 use std::fmt::Write;
 
 fn esc(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 fn bytes(b: u64) -> String {
@@ -41,7 +44,9 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
     );
 
     h.push_str("<h2>Pass order</h2>\n<table><tr><th>#</th><th>pass</th><th>stage / implementation</th><th>GPU µs</th><th></th><th>CPU record µs</th></tr>\n");
-    let max_gpu = last_frame.map(|f| f.passes.iter().filter_map(|p| p.gpu_us).fold(0.0, f64::max)).unwrap_or(0.0);
+    let max_gpu = last_frame
+        .map(|f| f.passes.iter().filter_map(|p| p.gpu_us).fold(0.0, f64::max))
+        .unwrap_or(0.0);
     for (o, &p) in plan.order.iter().enumerate() {
         let pass = &plan.passes[p];
         let timing = last_frame.and_then(|f| f.passes.iter().find(|t| t.name == pass.name));
@@ -57,11 +62,17 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
             esc(pass.stage),
             esc(pass.implementation),
             gpu.map(|g| format!("{g:.1}")).unwrap_or_else(|| "–".into()),
-            timing.map(|t| format!("{:.1}", t.cpu_record_us)).unwrap_or_else(|| "–".into()),
+            timing
+                .map(|t| format!("{:.1}", t.cpu_record_us))
+                .unwrap_or_else(|| "–".into()),
         );
     }
     for &p in &plan.culled {
-        let _ = writeln!(h, "<tr class=\"culled\"><td></td><td>{}</td><td colspan=\"4\">culled: nothing it writes is used</td></tr>", esc(&plan.passes[p].name));
+        let _ = writeln!(
+            h,
+            "<tr class=\"culled\"><td></td><td>{}</td><td colspan=\"4\">culled: nothing it writes is used</td></tr>",
+            esc(&plan.passes[p].name)
+        );
     }
     h.push_str("</table>\n<h2>Resource lifetimes</h2>\n<table><tr><th>resource</th><th>kind</th><th>size</th><th>slot</th>");
     for &p in &plan.order {
@@ -75,11 +86,19 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
             esc(&res.info.name),
             kind_tag(&res.info.kind),
             bytes(res.info.desc.bytes()),
-            res.pool_slot.map(|s| s.to_string()).unwrap_or_else(|| "–".into())
+            res.pool_slot
+                .map(|s| s.to_string())
+                .unwrap_or_else(|| "–".into())
         );
         for (o, &p) in plan.order.iter().enumerate() {
-            let used = plan.passes[p].slots.iter().any(|s| plan.resources[s.resource].info.name == res.info.name)
-                || plan.passes[p].scratch.iter().any(|&s| plan.resources[s].info.name == res.info.name);
+            let used = plan.passes[p]
+                .slots
+                .iter()
+                .any(|s| plan.resources[s.resource].info.name == res.info.name)
+                || plan.passes[p]
+                    .scratch
+                    .iter()
+                    .any(|&s| plan.resources[s].info.name == res.info.name);
             let alive = res.lifetime.is_some_and(|l| l.first <= o && o <= l.last);
             let class = if alive { " class=\"life\"" } else { "" };
             let _ = write!(h, "<td{class}>{}</td>", if used { "●" } else { "" });

@@ -5,18 +5,31 @@ use crate::plan::Plan;
 use std::fmt::Write;
 
 fn esc(s: &str) -> String {
-    s.replace('"', "#quot;").replace('<', "#lt;").replace('>', "#gt;")
+    s.replace('"', "#quot;")
+        .replace('<', "#lt;")
+        .replace('>', "#gt;")
 }
 
 pub fn to_mermaid(plan: &Plan) -> String {
     let mut out = String::from("flowchart LR\n");
     for (i, p) in plan.passes.iter().enumerate() {
         let culled = if plan.is_culled(i) { " (culled)" } else { "" };
-        let _ = writeln!(out, "  p{i}[\"{}<br/>{}/{}{culled}\"]", esc(&p.name), esc(p.stage), esc(p.implementation));
+        let _ = writeln!(
+            out,
+            "  p{i}[\"{}<br/>{}/{}{culled}\"]",
+            esc(&p.name),
+            esc(p.stage),
+            esc(p.implementation)
+        );
     }
     for (r, v) in version_nodes(plan) {
         let res = &plan.resources[r];
-        let _ = writeln!(out, "  r{r}v{v}([\"{} v{v}<br/>{}\"])", esc(&res.info.name), kind_tag(&res.info.kind));
+        let _ = writeln!(
+            out,
+            "  r{r}v{v}([\"{} v{v}<br/>{}\"])",
+            esc(&res.info.name),
+            kind_tag(&res.info.kind)
+        );
     }
     for (i, p) in plan.passes.iter().enumerate() {
         for s in &p.slots {

@@ -22,7 +22,8 @@ struct JsonDump<'a> {
 
 /// The plan (order, culled passes, lifetimes, pool slots, usages) and the last frame's timings.
 pub fn to_json(plan: &Plan, last_frame: Option<&FrameStats>) -> String {
-    serde_json::to_string_pretty(&JsonDump { plan, last_frame }).expect("plan serialises: no maps with non-string keys")
+    serde_json::to_string_pretty(&JsonDump { plan, last_frame })
+        .expect("plan serialises: no maps with non-string keys")
 }
 
 /// A node for one version of a resource, as read or written by some pass.

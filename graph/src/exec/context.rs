@@ -25,10 +25,21 @@ impl GpuAdapter {
         let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
         let wanted = std::env::var(ADAPTER_ENV).ok().filter(|s| !s.is_empty());
         let adapter = match &wanted {
-            Some(w) => adapters.into_iter().find(|a| a.get_info().name.to_lowercase().contains(&w.to_lowercase())).ok_or_else(|| {
-                GraphError::NoAdapter { detail: format!(" matching {ADAPTER_ENV}={w:?} (found: {})", names.join(", ")) }
-            })?,
-            None => adapters.into_iter().next().ok_or_else(|| GraphError::NoAdapter { detail: String::new() })?,
+            Some(w) => adapters
+                .into_iter()
+                .find(|a| a.get_info().name.to_lowercase().contains(&w.to_lowercase()))
+                .ok_or_else(|| GraphError::NoAdapter {
+                    detail: format!(
+                        " matching {ADAPTER_ENV}={w:?} (found: {})",
+                        names.join(", ")
+                    ),
+                })?,
+            None => adapters
+                .into_iter()
+                .next()
+                .ok_or_else(|| GraphError::NoAdapter {
+                    detail: String::new(),
+                })?,
         };
         Ok(Self { instance, adapter })
     }
@@ -49,7 +60,11 @@ impl GpuAdapter {
         if !missing.is_empty() {
             return Err(GraphError::Device(format!(
                 "the adapter lacks {}",
-                missing.iter_names().map(|(n, _)| n).collect::<Vec<_>>().join(", ")
+                missing
+                    .iter_names()
+                    .map(|(n, _)| n)
+                    .collect::<Vec<_>>()
+                    .join(", ")
             )));
         }
         let enabled = features | (TIMING_FEATURES & have);
@@ -59,10 +74,17 @@ impl GpuAdapter {
             required_limits: self.adapter.limits(),
             ..Default::default()
         };
-        let (device, queue) =
-            pollster::block_on(self.adapter.request_device(&desc)).map_err(|e| GraphError::Device(e.to_string()))?;
+        let (device, queue) = pollster::block_on(self.adapter.request_device(&desc))
+            .map_err(|e| GraphError::Device(e.to_string()))?;
         let info = self.adapter.get_info();
-        Ok(GpuContext { instance: self.instance, adapter: self.adapter, device, queue, features: enabled, info })
+        Ok(GpuContext {
+            instance: self.instance,
+            adapter: self.adapter,
+            device,
+            queue,
+            features: enabled,
+            info,
+        })
     }
 }
 
@@ -84,7 +106,10 @@ impl GpuContext {
     pub fn with_available(wanted: wgpu::Features) -> Result<Self> {
         let adapter = GpuAdapter::select()?;
         let f = wanted & adapter.features();
-        let experimental = f.iter_names().filter(|(n, _)| n.starts_with("EXPERIMENTAL_")).fold(wgpu::Features::empty(), |acc, (_, x)| acc | x);
+        let experimental = f
+            .iter_names()
+            .filter(|(n, _)| n.starts_with("EXPERIMENTAL_"))
+            .fold(wgpu::Features::empty(), |acc, (_, x)| acc | x);
         adapter.open(f - experimental - wgpu::Features::MAPPABLE_PRIMARY_BUFFERS)
     }
 
@@ -100,7 +125,11 @@ impl GpuContext {
             mapped_at_creation: false,
         });
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("readback"),
+            });
         enc.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
         self.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
@@ -115,17 +144,27 @@ impl GpuContext {
         staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
-        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GraphError::Readback(e.to_string()))?;
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GraphError::Readback(e.to_string()))?;
         rx.recv()
             .map_err(|e| GraphError::Readback(e.to_string()))?
             .map_err(|e| GraphError::Readback(e.to_string()))?;
-        let bytes = staging.get_mapped_range(..).map_err(|e| GraphError::Readback(e.to_string()))?.to_vec();
+        let bytes = staging
+            .get_mapped_range(..)
+            .map_err(|e| GraphError::Readback(e.to_string()))?
+            .to_vec();
         staging.unmap();
         Ok(bytes)
     }
 
     /// Creates a buffer holding `data`.
-    pub fn buffer_with_data(&self, label: &str, data: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    pub fn buffer_with_data(
+        &self,
+        label: &str,
+        data: &[u8],
+        usage: wgpu::BufferUsages,
+    ) -> wgpu::Buffer {
         let size = (data.len() as u64).max(4).next_multiple_of(4);
         let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),

@@ -25,12 +25,24 @@ impl Imports {
         Self::default()
     }
     pub fn buffer(mut self, name: &str, buffer: &wgpu::Buffer) -> Self {
-        self.entries.insert(name.to_string(), Physical::Buffer { buffer: buffer.clone(), size: buffer.size() });
+        self.entries.insert(
+            name.to_string(),
+            Physical::Buffer {
+                buffer: buffer.clone(),
+                size: buffer.size(),
+            },
+        );
         self
     }
     pub fn texture(mut self, name: &str, texture: &wgpu::Texture) -> Self {
         let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
-        self.entries.insert(name.to_string(), Physical::Texture { texture: texture.clone(), view });
+        self.entries.insert(
+            name.to_string(),
+            Physical::Texture {
+                texture: texture.clone(),
+                view,
+            },
+        );
         self
     }
 }
@@ -99,11 +111,21 @@ impl Executor {
         let physical = self
             .exported
             .get(name)
-            .or_else(|| self.histories.get(name).map(|pair| &pair[((self.frame + 1) % 2) as usize]))
-            .ok_or_else(|| GraphError::Readback(format!("`{name}` is neither an exported nor a history resource of the last frame")))?;
+            .or_else(|| {
+                self.histories
+                    .get(name)
+                    .map(|pair| &pair[((self.frame + 1) % 2) as usize])
+            })
+            .ok_or_else(|| {
+                GraphError::Readback(format!(
+                    "`{name}` is neither an exported nor a history resource of the last frame"
+                ))
+            })?;
         match physical {
             Physical::Buffer { buffer, size } => self.gpu.read_buffer(buffer, 0, *size),
-            Physical::Texture { .. } => Err(GraphError::Readback(format!("`{name}` is a texture; copy it to a buffer in a pass"))),
+            Physical::Texture { .. } => Err(GraphError::Readback(format!(
+                "`{name}` is a texture; copy it to a buffer in a pass"
+            ))),
         }
     }
 
@@ -115,7 +137,11 @@ impl Executor {
             return Err(GraphError::MissingFeature {
                 pass: "(graph)".into(),
                 stage: "(device)".into(),
-                features: missing.iter_names().map(|(n, _)| n).collect::<Vec<_>>().join(", "),
+                features: missing
+                    .iter_names()
+                    .map(|(n, _)| n)
+                    .collect::<Vec<_>>()
+                    .join(", "),
             });
         }
         self.pool.begin_frame();
@@ -127,9 +153,21 @@ impl Executor {
         let physical = self.resolve_resources(graph, imports)?;
 
         let timing = self.gpu_timing && self.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY);
-        if timing && self.timestamps.as_ref().is_none_or(|t| t.capacity() < plan.order.len() as u32 * 2) {
-            let inside = self.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
-            self.timestamps = Some(Timestamps::new(&self.gpu.device, plan.order.len() as u32, inside));
+        if timing
+            && self
+                .timestamps
+                .as_ref()
+                .is_none_or(|t| t.capacity() < plan.order.len() as u32 * 2)
+        {
+            let inside = self
+                .gpu
+                .features
+                .contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
+            self.timestamps = Some(Timestamps::new(
+                &self.gpu.device,
+                plan.order.len() as u32,
+                inside,
+            ));
         }
 
         let device = &self.gpu.device;
@@ -139,8 +177,14 @@ impl Executor {
             let node = &graph.passes[p];
             let t0 = Instant::now();
             let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(&node.name) });
-            let ts = if timing { self.timestamps.as_ref() } else { None };
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some(&node.name),
+            });
+            let ts = if timing {
+                self.timestamps.as_ref()
+            } else {
+                None
+            };
             if let Some(ts) = ts {
                 ts.write(&mut encoder, 2 * i as u32);
             }
@@ -161,16 +205,25 @@ impl Executor {
             }
             let cb = encoder.finish();
             if let Some(e) = pollster::block_on(scope.pop()) {
-                return Err(GraphError::Validation { pass: node.name.clone(), message: e.to_string() });
+                return Err(GraphError::Validation {
+                    pass: node.name.clone(),
+                    message: e.to_string(),
+                });
             }
             recorded?;
             command_buffers.push(cb);
-            timings.push(PassTiming { name: node.name.clone(), gpu_us: None, cpu_record_us: t0.elapsed().as_secs_f64() * 1e6 });
+            timings.push(PassTiming {
+                name: node.name.clone(),
+                gpu_us: None,
+                cpu_record_us: t0.elapsed().as_secs_f64() * 1e6,
+            });
         }
 
         let queries = plan.order.len() as u32 * 2;
         if let Some(ts) = self.timestamps.as_ref().filter(|_| timing) {
-            let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("meshlight timestamps") });
+            let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("meshlight timestamps"),
+            });
             ts.resolve(&mut enc, queries);
             command_buffers.push(enc.finish());
         }
@@ -180,7 +233,10 @@ impl Executor {
         self.gpu.queue.submit(command_buffers);
         let cpu_submit_us = submit_start.elapsed().as_secs_f64() * 1e6;
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GraphError::Validation { pass: "(submit)".into(), message: e.to_string() });
+            return Err(GraphError::Validation {
+                pass: "(submit)".into(),
+                message: e.to_string(),
+            });
         }
         let cpu_frame_us = frame_start.elapsed().as_secs_f64() * 1e6;
 
@@ -203,9 +259,10 @@ impl Executor {
         self.exported.clear();
         for (r, res) in plan.resources.iter().enumerate() {
             if res.info.kind == ResourceKind::Exported
-                && let Some(ph) = &physical[r] {
-                    self.exported.insert(res.info.name.clone(), ph.clone());
-                }
+                && let Some(ph) = &physical[r]
+            {
+                self.exported.insert(res.info.name.clone(), ph.clone());
+            }
         }
         self.frame += 1;
         Ok(FrameStats {
@@ -221,18 +278,37 @@ impl Executor {
         })
     }
 
-    fn resolve_resources(&mut self, graph: &CompiledGraph, imports: &Imports) -> Result<Vec<Option<Physical>>> {
+    fn resolve_resources(
+        &mut self,
+        graph: &CompiledGraph,
+        imports: &Imports,
+    ) -> Result<Vec<Option<Physical>>> {
         let plan = &graph.plan;
         let mut physical: Vec<Option<Physical>> = vec![None; plan.resources.len()];
         for slot in &plan.pool_slots {
             let members = &slot.members;
-            let bu = members.iter().fold(wgpu::BufferUsages::empty(), |u, &m| u | plan.resources[m].buffer_usage);
-            let tu = members.iter().fold(wgpu::TextureUsages::empty(), |u, &m| u | plan.resources[m].texture_usage);
-            let label = members.iter().map(|&m| plan.resources[m].info.name.as_str()).collect::<Vec<_>>().join("+");
-            let ph = self.pool.acquire(&self.gpu.device, &label, &slot.desc, bu, tu);
+            let bu = members.iter().fold(wgpu::BufferUsages::empty(), |u, &m| {
+                u | plan.resources[m].buffer_usage
+            });
+            let tu = members.iter().fold(wgpu::TextureUsages::empty(), |u, &m| {
+                u | plan.resources[m].texture_usage
+            });
+            let label = members
+                .iter()
+                .map(|&m| plan.resources[m].info.name.as_str())
+                .collect::<Vec<_>>()
+                .join("+");
+            let ph = self
+                .pool
+                .acquire(&self.gpu.device, &label, &slot.desc, bu, tu);
             for &m in members {
                 physical[m] = Some(match (&ph, &plan.resources[m].info.desc) {
-                    (Physical::Buffer { buffer, .. }, ResourceDesc::Buffer(b)) => Physical::Buffer { buffer: buffer.clone(), size: b.size },
+                    (Physical::Buffer { buffer, .. }, ResourceDesc::Buffer(b)) => {
+                        Physical::Buffer {
+                            buffer: buffer.clone(),
+                            size: b.size,
+                        }
+                    }
                     _ => ph.clone(),
                 });
             }
@@ -245,13 +321,20 @@ impl Executor {
                         if res.lifetime.is_none() {
                             continue;
                         }
-                        return Err(GraphError::MissingImport { resource: res.info.name.clone() });
+                        return Err(GraphError::MissingImport {
+                            resource: res.info.name.clone(),
+                        });
                     };
                     check_import(&res.info.name, &res.info.desc, *usage, ph)?;
                     physical[r] = Some(ph.clone());
                 }
                 ResourceKind::History { prev } => {
-                    let pair = self.history_pair(&res.info.name, &res.info.desc, res.buffer_usage, res.texture_usage);
+                    let pair = self.history_pair(
+                        &res.info.name,
+                        &res.info.desc,
+                        res.buffer_usage,
+                        res.texture_usage,
+                    );
                     physical[r] = Some(pair[parity].clone());
                     physical[prev.index()] = Some(pair[1 - parity].clone());
                 }
@@ -261,7 +344,13 @@ impl Executor {
         Ok(physical)
     }
 
-    fn history_pair(&mut self, name: &str, desc: &ResourceDesc, bu: wgpu::BufferUsages, tu: wgpu::TextureUsages) -> [Physical; 2] {
+    fn history_pair(
+        &mut self,
+        name: &str,
+        desc: &ResourceDesc,
+        bu: wgpu::BufferUsages,
+        tu: wgpu::TextureUsages,
+    ) -> [Physical; 2] {
         let device = &self.gpu.device;
         self.histories
             .entry(name.to_string())
@@ -275,20 +364,44 @@ impl Executor {
     }
 }
 
-fn check_import(name: &str, desc: &ResourceDesc, declared: ImportedUsage, ph: &Physical) -> Result<()> {
-    let mismatch = |message: String| Err(GraphError::ImportMismatch { resource: name.to_string(), message });
+fn check_import(
+    name: &str,
+    desc: &ResourceDesc,
+    declared: ImportedUsage,
+    ph: &Physical,
+) -> Result<()> {
+    let mismatch = |message: String| {
+        Err(GraphError::ImportMismatch {
+            resource: name.to_string(),
+            message,
+        })
+    };
     match (desc, ph, declared) {
         (ResourceDesc::Buffer(b), Physical::Buffer { buffer, .. }, ImportedUsage::Buffer(u)) => {
             if buffer.size() < b.size {
-                return mismatch(format!("declared {} bytes, the buffer has {}", b.size, buffer.size()));
+                return mismatch(format!(
+                    "declared {} bytes, the buffer has {}",
+                    b.size,
+                    buffer.size()
+                ));
             }
             if !buffer.usage().contains(u) {
-                return mismatch(format!("declared usage {u:?}, the buffer has {:?}", buffer.usage()));
+                return mismatch(format!(
+                    "declared usage {u:?}, the buffer has {:?}",
+                    buffer.usage()
+                ));
             }
             Ok(())
         }
-        (ResourceDesc::Texture(t), Physical::Texture { texture, .. }, ImportedUsage::Texture(u)) => {
-            if texture.format() != t.format || texture.width() != t.width || texture.height() != t.height {
+        (
+            ResourceDesc::Texture(t),
+            Physical::Texture { texture, .. },
+            ImportedUsage::Texture(u),
+        ) => {
+            if texture.format() != t.format
+                || texture.width() != t.width
+                || texture.height() != t.height
+            {
                 return mismatch(format!(
                     "declared {:?} {}x{}, the texture is {:?} {}x{}",
                     t.format,
@@ -300,7 +413,10 @@ fn check_import(name: &str, desc: &ResourceDesc, declared: ImportedUsage, ph: &P
                 ));
             }
             if !texture.usage().contains(u) {
-                return mismatch(format!("declared usage {u:?}, the texture has {:?}", texture.usage()));
+                return mismatch(format!(
+                    "declared usage {u:?}, the texture has {:?}",
+                    texture.usage()
+                ));
             }
             Ok(())
         }

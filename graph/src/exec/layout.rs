@@ -30,21 +30,38 @@ pub struct BindingLayout {
 
 impl BindingLayout {
     pub fn compute(label: &'static str) -> Self {
-        Self { label, visibility: wgpu::ShaderStages::COMPUTE, entries: Vec::new() }
+        Self {
+            label,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            entries: Vec::new(),
+        }
     }
     pub fn with_visibility(label: &'static str, visibility: wgpu::ShaderStages) -> Self {
-        Self { label, visibility, entries: Vec::new() }
+        Self {
+            label,
+            visibility,
+            entries: Vec::new(),
+        }
     }
     pub fn slot(mut self, binding: u32, slot: &'static str) -> Self {
-        self.entries.push(LayoutEntry { binding, source: BindingSource::Slot(slot) });
+        self.entries.push(LayoutEntry {
+            binding,
+            source: BindingSource::Slot(slot),
+        });
         self
     }
     pub fn scratch(mut self, binding: u32, name: &'static str, access: Access) -> Self {
-        self.entries.push(LayoutEntry { binding, source: BindingSource::Scratch(name, access) });
+        self.entries.push(LayoutEntry {
+            binding,
+            source: BindingSource::Scratch(name, access),
+        });
         self
     }
     pub fn uniform(mut self, binding: u32) -> Self {
-        self.entries.push(LayoutEntry { binding, source: BindingSource::Uniform });
+        self.entries.push(LayoutEntry {
+            binding,
+            source: BindingSource::Uniform,
+        });
         self
     }
 }
@@ -54,24 +71,41 @@ pub fn buffer_binding_type(access: Access) -> Option<wgpu::BindingType> {
     let ty = match access {
         Access::Uniform => wgpu::BufferBindingType::Uniform,
         Access::StorageRead => wgpu::BufferBindingType::Storage { read_only: true },
-        Access::StorageWrite | Access::StorageReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+        Access::StorageWrite | Access::StorageReadWrite => {
+            wgpu::BufferBindingType::Storage { read_only: false }
+        }
         _ => return None,
     };
-    Some(wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None })
+    Some(wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    })
 }
 
 /// The wgpu binding type for a texture of `format` used with `access`.
-pub fn texture_binding_type(access: Access, format: wgpu::TextureFormat) -> Option<wgpu::BindingType> {
-    let storage = |a| wgpu::BindingType::StorageTexture { access: a, format, view_dimension: wgpu::TextureViewDimension::D2 };
+pub fn texture_binding_type(
+    access: Access,
+    format: wgpu::TextureFormat,
+) -> Option<wgpu::BindingType> {
+    let storage = |a| wgpu::BindingType::StorageTexture {
+        access: a,
+        format,
+        view_dimension: wgpu::TextureViewDimension::D2,
+    };
     Some(match access {
         Access::Sampled => wgpu::BindingType::Texture {
-            sample_type: format.sample_type(None, None).unwrap_or(wgpu::TextureSampleType::Float { filterable: false }),
+            sample_type: format
+                .sample_type(None, None)
+                .unwrap_or(wgpu::TextureSampleType::Float { filterable: false }),
             view_dimension: wgpu::TextureViewDimension::D2,
             multisampled: false,
         },
         Access::StorageRead => storage(wgpu::StorageTextureAccess::ReadOnly),
         Access::StorageWrite => storage(wgpu::StorageTextureAccess::WriteOnly),
-        Access::StorageReadWrite if format == wgpu::TextureFormat::R64Uint => storage(wgpu::StorageTextureAccess::Atomic),
+        Access::StorageReadWrite if format == wgpu::TextureFormat::R64Uint => {
+            storage(wgpu::StorageTextureAccess::Atomic)
+        }
         Access::StorageReadWrite => storage(wgpu::StorageTextureAccess::ReadWrite),
         _ => return None,
     })

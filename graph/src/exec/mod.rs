@@ -8,7 +8,7 @@ pub mod programs;
 pub mod record;
 mod timing;
 
-pub use context::{GpuAdapter, GpuContext, ADAPTER_ENV};
+pub use context::{ADAPTER_ENV, GpuAdapter, GpuContext};
 pub use executor::{Executor, FrameStats, Imports, PassTiming};
 pub use layout::{BindingLayout, BindingSource, LayoutEntry};
 pub use programs::ComputeProgram;

@@ -6,8 +6,14 @@ use crate::resource::{ResourceDesc, TextureDesc};
 /// A GPU resource as a pass sees it.
 #[derive(Clone, Debug)]
 pub enum Physical {
-    Buffer { buffer: wgpu::Buffer, size: u64 },
-    Texture { texture: wgpu::Texture, view: wgpu::TextureView },
+    Buffer {
+        buffer: wgpu::Buffer,
+        size: u64,
+    },
+    Texture {
+        texture: wgpu::Texture,
+        view: wgpu::TextureView,
+    },
 }
 
 struct Entry {
@@ -74,7 +80,9 @@ impl PhysicalPool {
 
 fn fits(e: &Entry, desc: &ResourceDesc, bu: wgpu::BufferUsages, tu: wgpu::TextureUsages) -> bool {
     match (&e.physical, desc) {
-        (Physical::Buffer { size, .. }, ResourceDesc::Buffer(b)) => *size >= b.size && *size <= b.size.max(256) * 2 && e.buffer_usage.contains(bu),
+        (Physical::Buffer { size, .. }, ResourceDesc::Buffer(b)) => {
+            *size >= b.size && *size <= b.size.max(256) * 2 && e.buffer_usage.contains(bu)
+        }
         (Physical::Texture { texture, .. }, ResourceDesc::Texture(t)) => {
             texture.format() == t.format
                 && texture.width() == t.width
@@ -86,22 +94,45 @@ fn fits(e: &Entry, desc: &ResourceDesc, bu: wgpu::BufferUsages, tu: wgpu::Textur
     }
 }
 
-pub fn create(device: &wgpu::Device, label: &str, desc: &ResourceDesc, bu: wgpu::BufferUsages, tu: wgpu::TextureUsages) -> Physical {
+pub fn create(
+    device: &wgpu::Device,
+    label: &str,
+    desc: &ResourceDesc,
+    bu: wgpu::BufferUsages,
+    tu: wgpu::TextureUsages,
+) -> Physical {
     match desc {
         ResourceDesc::Buffer(b) => {
             // Zero-sized bindings are invalid; keep at least one element.
             let size = b.size.max(16).next_multiple_of(4);
-            let buffer = device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage: bu, mapped_at_creation: false });
-            Physical::Buffer { buffer, size: b.size }
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: bu,
+                mapped_at_creation: false,
+            });
+            Physical::Buffer {
+                buffer,
+                size: b.size,
+            }
         }
         ResourceDesc::Texture(t) => create_texture(device, label, t, tu),
     }
 }
 
-pub fn create_texture(device: &wgpu::Device, label: &str, t: &TextureDesc, usage: wgpu::TextureUsages) -> Physical {
+pub fn create_texture(
+    device: &wgpu::Device,
+    label: &str,
+    t: &TextureDesc,
+    usage: wgpu::TextureUsages,
+) -> Physical {
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
-        size: wgpu::Extent3d { width: t.width, height: t.height, depth_or_array_layers: 1 },
+        size: wgpu::Extent3d {
+            width: t.width,
+            height: t.height,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: t.mip_levels,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,

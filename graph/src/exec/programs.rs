@@ -31,7 +31,11 @@ pub(crate) struct ProgramKey {
 
 #[derive(Clone, PartialEq, Eq, Hash)]
 pub(crate) enum BoundResource {
-    Buffer { buffer: wgpu::Buffer, offset: u64, size: u64 },
+    Buffer {
+        buffer: wgpu::Buffer,
+        offset: u64,
+        size: u64,
+    },
     View(wgpu::TextureView),
 }
 
@@ -64,25 +68,53 @@ impl Programs {
         }
     }
 
-    pub fn layout(&mut self, device: &wgpu::Device, label: &str, entries: Vec<wgpu::BindGroupLayoutEntry>) -> wgpu::BindGroupLayout {
+    pub fn layout(
+        &mut self,
+        device: &wgpu::Device,
+        label: &str,
+        entries: Vec<wgpu::BindGroupLayoutEntry>,
+    ) -> wgpu::BindGroupLayout {
         self.layouts
             .entry(entries)
-            .or_insert_with_key(|entries| device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries }))
+            .or_insert_with_key(|entries| {
+                device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(label),
+                    entries,
+                })
+            })
             .clone()
     }
 
-    pub fn module(&mut self, device: &wgpu::Device, features: wgpu::Features, pass: &str, shader: &PassShader, key: ModuleKey) -> Result<wgpu::ShaderModule> {
+    pub fn module(
+        &mut self,
+        device: &wgpu::Device,
+        features: wgpu::Features,
+        pass: &str,
+        shader: &PassShader,
+        key: ModuleKey,
+    ) -> Result<wgpu::ShaderModule> {
         if let Some(m) = self.modules.get(&key) {
             return Ok(m.clone());
         }
         let library = match &mut self.library {
             Some(l) => l,
-            None => self.library.insert(
-                ShaderLibrary::new(capabilities_for(features))
-                    .map_err(|source| GraphError::Shader { pass: pass.to_string(), source })?,
-            ),
+            None => self
+                .library
+                .insert(
+                    ShaderLibrary::new(capabilities_for(features)).map_err(|source| {
+                        GraphError::Shader {
+                            pass: pass.to_string(),
+                            source,
+                        }
+                    })?,
+                ),
         };
-        let naga = library.compose(shader, &key.defs).map_err(|source| GraphError::Shader { pass: pass.to_string(), source })?;
+        let naga = library
+            .compose(shader, &key.defs)
+            .map_err(|source| GraphError::Shader {
+                pass: pass.to_string(),
+                source,
+            })?;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(shader.name),
             source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(naga)),
@@ -94,7 +126,11 @@ impl Programs {
     pub fn compute_program(&self, key: &ProgramKey) -> Option<Arc<ComputeProgram>> {
         self.compute.get(key).cloned()
     }
-    pub fn insert_compute_program(&mut self, key: ProgramKey, program: ComputeProgram) -> Arc<ComputeProgram> {
+    pub fn insert_compute_program(
+        &mut self,
+        key: ProgramKey,
+        program: ComputeProgram,
+    ) -> Arc<ComputeProgram> {
         self.pipelines_created += 1;
         let p = Arc::new(program);
         self.compute.insert(key, p.clone());
@@ -149,7 +185,11 @@ impl UniformArena {
     }
 
     /// `None` when the block is larger than one chunk (such data belongs in a slot).
-    pub fn push(&mut self, device: &wgpu::Device, bytes: &[u8]) -> Option<(wgpu::Buffer, u64, u64)> {
+    pub fn push(
+        &mut self,
+        device: &wgpu::Device,
+        bytes: &[u8],
+    ) -> Option<(wgpu::Buffer, u64, u64)> {
         let size = (bytes.len() as u64).max(16).next_multiple_of(16);
         if size > CHUNK {
             return None;
@@ -159,12 +199,13 @@ impl UniformArena {
             self.offset = 0;
         }
         while self.chunks.len() <= self.chunk {
-            self.chunks.push(device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("meshlight uniforms"),
-                size: CHUNK,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }));
+            self.chunks
+                .push(device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("meshlight uniforms"),
+                    size: CHUNK,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }));
             self.staged.push(Vec::new());
         }
         let staged = &mut self.staged[self.chunk];

@@ -4,9 +4,13 @@
 use crate::access::Access;
 use crate::builder::PassNode;
 use crate::error::{GraphError, Result};
-use crate::exec::layout::{buffer_binding_type, texture_binding_type, BindingLayout, BindingSource};
+use crate::exec::layout::{
+    BindingLayout, BindingSource, buffer_binding_type, texture_binding_type,
+};
 use crate::exec::physical::Physical;
-use crate::exec::programs::{BindGroupKey, BoundResource, ComputeProgram, ModuleKey, ProgramKey, Programs, CHUNK};
+use crate::exec::programs::{
+    BindGroupKey, BoundResource, CHUNK, ComputeProgram, ModuleKey, ProgramKey, Programs,
+};
 use crate::plan::{AttachmentOps, Plan};
 use crate::resource::ResourceDesc;
 use meshlight_shaders::{PassShader, ShaderDefs};
@@ -51,17 +55,29 @@ impl<'a> RecordContext<'a> {
     }
 
     fn err(&self, message: String) -> GraphError {
-        GraphError::Record { pass: self.node.name.clone(), message }
+        GraphError::Record {
+            pass: self.node.name.clone(),
+            message,
+        }
     }
 
     fn slot_resource(&self, slot: &str) -> Result<usize> {
         let pass = &self.plan.passes[self.pass_index];
-        pass.slots.iter().find(|s| s.slot == slot).map(|s| s.resource).ok_or_else(|| GraphError::UnknownSlot {
-            pass: self.node.name.clone(),
-            stage: pass.stage.to_string(),
-            slot: slot.to_string(),
-            available: pass.slots.iter().map(|s| s.slot).collect::<Vec<_>>().join(", "),
-        })
+        pass.slots
+            .iter()
+            .find(|s| s.slot == slot)
+            .map(|s| s.resource)
+            .ok_or_else(|| GraphError::UnknownSlot {
+                pass: self.node.name.clone(),
+                stage: pass.stage.to_string(),
+                slot: slot.to_string(),
+                available: pass
+                    .slots
+                    .iter()
+                    .map(|s| s.slot)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })
     }
     fn scratch_resource(&self, name: &str) -> Result<usize> {
         let full = format!("{}/{}", self.node.name, name);
@@ -70,15 +86,27 @@ impl<'a> RecordContext<'a> {
             .iter()
             .copied()
             .find(|&r| self.plan.resources[r].info.name == full)
-            .ok_or_else(|| self.err(format!("no scratch buffer `{name}`; declare it in setup with scratch_buffer")))
+            .ok_or_else(|| {
+                self.err(format!(
+                    "no scratch buffer `{name}`; declare it in setup with scratch_buffer"
+                ))
+            })
     }
     fn physical(&self, r: usize) -> Result<&'a Physical> {
-        self.physical[r].as_ref().ok_or_else(|| self.err(format!("resource `{}` has no GPU allocation", self.plan.resources[r].info.name)))
+        self.physical[r].as_ref().ok_or_else(|| {
+            self.err(format!(
+                "resource `{}` has no GPU allocation",
+                self.plan.resources[r].info.name
+            ))
+        })
     }
     fn buffer_of(&self, r: usize) -> Result<(&'a wgpu::Buffer, u64)> {
         match self.physical(r)? {
             Physical::Buffer { buffer, size } => Ok((buffer, *size)),
-            Physical::Texture { .. } => Err(self.err(format!("`{}` is a texture, not a buffer", self.plan.resources[r].info.name))),
+            Physical::Texture { .. } => Err(self.err(format!(
+                "`{}` is a texture, not a buffer",
+                self.plan.resources[r].info.name
+            ))),
         }
     }
 
@@ -96,7 +124,9 @@ impl<'a> RecordContext<'a> {
     pub fn texture(&self, slot: &str) -> Result<(&'a wgpu::Texture, &'a wgpu::TextureView)> {
         match self.physical(self.slot_resource(slot)?)? {
             Physical::Texture { texture, view } => Ok((texture, view)),
-            Physical::Buffer { .. } => Err(self.err(format!("slot `{slot}` holds a buffer, not a texture"))),
+            Physical::Buffer { .. } => {
+                Err(self.err(format!("slot `{slot}` holds a buffer, not a texture")))
+            }
         }
     }
     /// The descriptor of the resource bound to `slot`.
@@ -105,7 +135,11 @@ impl<'a> RecordContext<'a> {
     }
     /// Load and store ops the compiler derived for a render or depth target slot.
     pub fn attachment_ops(&self, slot: &str) -> Option<AttachmentOps> {
-        self.plan.passes[self.pass_index].slots.iter().find(|s| s.slot == slot).and_then(|s| s.ops)
+        self.plan.passes[self.pass_index]
+            .slots
+            .iter()
+            .find(|s| s.slot == slot)
+            .and_then(|s| s.ops)
     }
 
     fn layout_entries(&self, layout: &BindingLayout) -> Result<Vec<wgpu::BindGroupLayoutEntry>> {
@@ -126,22 +160,44 @@ impl<'a> RecordContext<'a> {
                             ResourceDesc::Buffer(_) => buffer_binding_type(slot.access),
                             ResourceDesc::Texture(t) => texture_binding_type(slot.access, t.format),
                         }
-                        .ok_or_else(|| self.err(format!("slot `{name}` ({}) cannot be bound in a bind group", slot.access.name())))?
+                        .ok_or_else(|| {
+                            self.err(format!(
+                                "slot `{name}` ({}) cannot be bound in a bind group",
+                                slot.access.name()
+                            ))
+                        })?
                     }
-                    BindingSource::Scratch(_, access) => buffer_binding_type(*access)
-                        .ok_or_else(|| self.err(format!("scratch access {} cannot be bound", access.name())))?,
-                    BindingSource::Uniform => buffer_binding_type(Access::Uniform).expect("uniform is a buffer binding"),
+                    BindingSource::Scratch(_, access) => {
+                        buffer_binding_type(*access).ok_or_else(|| {
+                            self.err(format!("scratch access {} cannot be bound", access.name()))
+                        })?
+                    }
+                    BindingSource::Uniform => {
+                        buffer_binding_type(Access::Uniform).expect("uniform is a buffer binding")
+                    }
                 };
-                Ok(wgpu::BindGroupLayoutEntry { binding: e.binding, visibility: layout.visibility, ty, count: None })
+                Ok(wgpu::BindGroupLayoutEntry {
+                    binding: e.binding,
+                    visibility: layout.visibility,
+                    ty,
+                    count: None,
+                })
             })
             .collect()
     }
 
     /// A compute pipeline, compiled once per (shader, entry, defs, layouts) and cached.
     pub fn compute_program(&mut self, desc: &ComputeDesc<'_>) -> Result<Arc<ComputeProgram>> {
-        let layouts = desc.layouts.iter().map(|l| self.layout_entries(l)).collect::<Result<Vec<_>>>()?;
+        let layouts = desc
+            .layouts
+            .iter()
+            .map(|l| self.layout_entries(l))
+            .collect::<Result<Vec<_>>>()?;
         let key = ProgramKey {
-            module: ModuleKey { shader: desc.shader.name, defs: desc.defs.shader_defs() },
+            module: ModuleKey {
+                shader: desc.shader.name,
+                defs: desc.defs.shader_defs(),
+            },
             entry: desc.entry,
             declared: desc.layouts.to_vec(),
             layouts,
@@ -149,63 +205,117 @@ impl<'a> RecordContext<'a> {
         if let Some(p) = self.programs.compute_program(&key) {
             return Ok(p);
         }
-        let module = self.programs.module(self.device, self.features, &self.node.name, desc.shader, key.module.clone())?;
+        let module = self.programs.module(
+            self.device,
+            self.features,
+            &self.node.name,
+            desc.shader,
+            key.module.clone(),
+        )?;
         let bgls: Vec<(BindingLayout, wgpu::BindGroupLayout)> = desc
             .layouts
             .iter()
             .zip(&key.layouts)
-            .map(|(l, entries)| (l.clone(), self.programs.layout(self.device, l.label, entries.clone())))
+            .map(|(l, entries)| {
+                (
+                    l.clone(),
+                    self.programs.layout(self.device, l.label, entries.clone()),
+                )
+            })
             .collect();
         let refs: Vec<Option<&wgpu::BindGroupLayout>> = bgls.iter().map(|(_, l)| Some(l)).collect();
         let label = format!("{}::{}", desc.shader.name, desc.entry);
-        let layout = self.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(&label),
-            bind_group_layouts: &refs,
-            immediate_size: 0,
-        });
-        let pipeline = self.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(&label),
-            layout: Some(&layout),
-            module: &module,
-            entry_point: Some(desc.entry),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        Ok(self.programs.insert_compute_program(key, ComputeProgram { pipeline, layouts: bgls }))
+        let layout = self
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(&label),
+                bind_group_layouts: &refs,
+                immediate_size: 0,
+            });
+        let pipeline = self
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(&label),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some(desc.entry),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        Ok(self.programs.insert_compute_program(
+            key,
+            ComputeProgram {
+                pipeline,
+                layouts: bgls,
+            },
+        ))
     }
 
     /// The bind group for `group` of `program`, filled from the slots its layout names;
     /// `uniforms` gives the bytes of each `Uniform` binding, by binding index.
-    pub fn bind_group(&mut self, program: &ComputeProgram, group: usize, uniforms: &[(u32, &[u8])]) -> Result<wgpu::BindGroup> {
-        let (layout, bgl) = program.layouts.get(group).ok_or_else(|| self.err(format!("program has no bind group {group}")))?;
+    pub fn bind_group(
+        &mut self,
+        program: &ComputeProgram,
+        group: usize,
+        uniforms: &[(u32, &[u8])],
+    ) -> Result<wgpu::BindGroup> {
+        let (layout, bgl) = program
+            .layouts
+            .get(group)
+            .ok_or_else(|| self.err(format!("program has no bind group {group}")))?;
         let mut entries = Vec::with_capacity(layout.entries.len());
         for e in &layout.entries {
             let bound = match &e.source {
                 BindingSource::Slot(name) => match self.physical(self.slot_resource(name)?)? {
-                    Physical::Buffer { buffer, size } => BoundResource::Buffer { buffer: buffer.clone(), offset: 0, size: (*size).max(4) },
+                    Physical::Buffer { buffer, size } => BoundResource::Buffer {
+                        buffer: buffer.clone(),
+                        offset: 0,
+                        size: (*size).max(4),
+                    },
                     Physical::Texture { view, .. } => BoundResource::View(view.clone()),
                 },
                 BindingSource::Scratch(name, _) => {
                     let (buffer, size) = self.scratch(name)?;
-                    BoundResource::Buffer { buffer: buffer.clone(), offset: 0, size: size.max(4) }
+                    BoundResource::Buffer {
+                        buffer: buffer.clone(),
+                        offset: 0,
+                        size: size.max(4),
+                    }
                 }
                 BindingSource::Uniform => {
                     let bytes = uniforms
                         .iter()
                         .find(|(b, _)| *b == e.binding)
                         .map(|(_, d)| *d)
-                        .ok_or_else(|| self.err(format!("no bytes given for uniform binding {} of `{}`", e.binding, layout.label)))?;
+                        .ok_or_else(|| {
+                            self.err(format!(
+                                "no bytes given for uniform binding {} of `{}`",
+                                e.binding, layout.label
+                            ))
+                        })?;
                     let (buffer, offset, size) = self
                         .programs
                         .uniforms
                         .push(self.device, bytes)
-                        .ok_or_else(|| self.err(format!("uniform block of {} bytes exceeds {CHUNK}; bind it through a slot", bytes.len())))?;
-                    BoundResource::Buffer { buffer, offset, size }
+                        .ok_or_else(|| {
+                            self.err(format!(
+                                "uniform block of {} bytes exceeds {CHUNK}; bind it through a slot",
+                                bytes.len()
+                            ))
+                        })?;
+                    BoundResource::Buffer {
+                        buffer,
+                        offset,
+                        size,
+                    }
                 }
             };
             entries.push((e.binding, bound));
         }
-        let key = BindGroupKey { layout: bgl.clone(), entries };
+        let key = BindGroupKey {
+            layout: bgl.clone(),
+            entries,
+        };
         if let Some(bg) = self.programs.bind_groups.get(&key) {
             return Ok(bg.clone());
         }
@@ -215,7 +325,11 @@ impl<'a> RecordContext<'a> {
             .map(|(binding, r)| wgpu::BindGroupEntry {
                 binding: *binding,
                 resource: match r {
-                    BoundResource::Buffer { buffer, offset, size } => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    BoundResource::Buffer {
+                        buffer,
+                        offset,
+                        size,
+                    } => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                         buffer,
                         offset: *offset,
                         size: wgpu::BufferSize::new(*size),
@@ -224,13 +338,21 @@ impl<'a> RecordContext<'a> {
                 },
             })
             .collect();
-        let bg = self.device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(layout.label), layout: bgl, entries: &wgpu_entries });
+        let bg = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(layout.label),
+            layout: bgl,
+            entries: &wgpu_entries,
+        });
         self.programs.bind_groups.insert(key, bg.clone());
         Ok(bg)
     }
 
     /// Begins a compute pass labelled with this pass's name.
     pub fn compute_pass(&mut self) -> wgpu::ComputePass<'_> {
-        self.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(&self.node.name), timestamp_writes: None })
+        self.encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(&self.node.name),
+                timestamp_writes: None,
+            })
     }
 }

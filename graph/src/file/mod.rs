@@ -5,5 +5,5 @@ mod pipeline;
 mod registry;
 
 pub use params::Params;
-pub use pipeline::{load_pipeline, parse_format, parse_pipeline, PipelineFile};
+pub use pipeline::{PipelineFile, load_pipeline, parse_format, parse_pipeline};
 pub use registry::{Factory, Registry};

@@ -87,27 +87,42 @@ pub fn load_pipeline(path: &Path, registry: &Registry) -> Result<GraphBuilder> {
 }
 
 pub fn parse_pipeline(text: &str, file: &str, registry: &Registry) -> Result<GraphBuilder> {
-    let ferr = |message: String| GraphError::PipelineFile { file: file.to_string(), message };
+    let ferr = |message: String| GraphError::PipelineFile {
+        file: file.to_string(),
+        message,
+    };
     let parsed: PipelineFile = toml::from_str(text).map_err(|e| ferr(e.to_string()))?;
     let mut g = GraphBuilder::new();
     for r in &parsed.resources {
         declare(&mut g, r).map_err(|m| ferr(format!("resource `{}`: {m}", r.name)))?;
     }
     for p in &parsed.passes {
-        let pass = registry.build(&p.stage, &p.implementation, &Params::new(p.params.clone())).map_err(|e| match e {
-            GraphError::Parameter { message, .. } => GraphError::Parameter { pass: p.name.clone(), message },
-            other => other,
-        })?;
+        let pass = registry
+            .build(&p.stage, &p.implementation, &Params::new(p.params.clone()))
+            .map_err(|e| match e {
+                GraphError::Parameter { message, .. } => GraphError::Parameter {
+                    pass: p.name.clone(),
+                    message,
+                },
+                other => other,
+            })?;
         let mut bindings = Bindings::new();
         for (slot, target) in &p.bind {
             bindings = match target.split_once('@') {
                 Some((res, v)) => {
-                    let v: u32 = v.parse().map_err(|_| ferr(format!("pass `{}` slot `{slot}`: `{target}` needs a version number after @", p.name)))?;
-                    let h = g.resource_at(res, v).ok_or_else(|| GraphError::UnknownResource {
-                        pass: p.name.clone(),
-                        slot: slot.clone(),
-                        resource: res.to_string(),
+                    let v: u32 = v.parse().map_err(|_| {
+                        ferr(format!(
+                            "pass `{}` slot `{slot}`: `{target}` needs a version number after @",
+                            p.name
+                        ))
                     })?;
+                    let h = g
+                        .resource_at(res, v)
+                        .ok_or_else(|| GraphError::UnknownResource {
+                            pass: p.name.clone(),
+                            slot: slot.clone(),
+                            resource: res.to_string(),
+                        })?;
                     bindings.bind(slot, h)
                 }
                 None => bindings.bind_named(slot, target),
@@ -122,9 +137,17 @@ fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), S
     match (&r.buffer, &r.texture) {
         (Some(b), None) => {
             let element = match (Element::from_known_name(&b.element), b.element_size) {
-                (_, Some(size)) => Element { name: b.element.clone().into(), size },
+                (_, Some(size)) => Element {
+                    name: b.element.clone().into(),
+                    size,
+                },
                 (Some(e), None) => e,
-                (None, None) => return Err(format!("element `{}` is not a known type; give `element_size` in bytes", b.element)),
+                (None, None) => {
+                    return Err(format!(
+                        "element `{}` is not a known type; give `element_size` in bytes",
+                        b.element
+                    ));
+                }
             };
             let desc = BufferDesc::array(element, b.count);
             match r.kind {
@@ -133,20 +156,29 @@ fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), S
                     let h = g.create_buffer(&r.name, desc);
                     g.export(h);
                 }
-                EntryKind::Imported => drop(g.import_buffer(&r.name, desc, buffer_usage(&r.usage)?)),
+                EntryKind::Imported => {
+                    drop(g.import_buffer(&r.name, desc, buffer_usage(&r.usage)?))
+                }
                 EntryKind::History => drop(g.history_buffer(&r.name, desc)),
             }
         }
         (None, Some(t)) => {
             let format = parse_format(&t.format)?;
-            let desc = TextureDesc { format, width: t.width, height: t.height, mip_levels: t.mip_levels };
+            let desc = TextureDesc {
+                format,
+                width: t.width,
+                height: t.height,
+                mip_levels: t.mip_levels,
+            };
             match r.kind {
                 EntryKind::Transient => drop(g.create_texture(&r.name, desc)),
                 EntryKind::Exported => {
                     let h = g.create_texture(&r.name, desc);
                     g.export(h);
                 }
-                EntryKind::Imported => drop(g.import_texture(&r.name, desc, texture_usage(&r.usage)?)),
+                EntryKind::Imported => {
+                    drop(g.import_texture(&r.name, desc, texture_usage(&r.usage)?))
+                }
                 EntryKind::History => drop(g.history_texture(&r.name, desc)),
             }
         }
@@ -156,27 +188,58 @@ fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), S
 }
 
 fn buffer_usage(names: &[String]) -> std::result::Result<wgpu::BufferUsages, String> {
-    names.iter().try_fold(wgpu::BufferUsages::empty(), |acc, n| {
-        wgpu::BufferUsages::from_name(n).map(|u| acc | u).ok_or_else(|| format!("unknown buffer usage `{n}`"))
-    })
+    names
+        .iter()
+        .try_fold(wgpu::BufferUsages::empty(), |acc, n| {
+            wgpu::BufferUsages::from_name(n)
+                .map(|u| acc | u)
+                .ok_or_else(|| format!("unknown buffer usage `{n}`"))
+        })
 }
 fn texture_usage(names: &[String]) -> std::result::Result<wgpu::TextureUsages, String> {
-    names.iter().try_fold(wgpu::TextureUsages::empty(), |acc, n| {
-        wgpu::TextureUsages::from_name(n).map(|u| acc | u).ok_or_else(|| format!("unknown texture usage `{n}`"))
-    })
+    names
+        .iter()
+        .try_fold(wgpu::TextureUsages::empty(), |acc, n| {
+            wgpu::TextureUsages::from_name(n)
+                .map(|u| acc | u)
+                .ok_or_else(|| format!("unknown texture usage `{n}`"))
+        })
 }
 
 /// Texture formats by their WGSL spelling (`rgba8unorm`, `r32uint`, `depth32float`, …).
 pub fn parse_format(name: &str) -> std::result::Result<wgpu::TextureFormat, String> {
     use wgpu::TextureFormat as F;
     const KNOWN: &[F] = &[
-        F::R8Unorm, F::R16Float, F::R32Uint, F::R32Sint, F::R32Float, F::R64Uint, F::Rg32Uint, F::Rg32Float,
-        F::Rgba8Unorm, F::Rgba8UnormSrgb, F::Bgra8Unorm, F::Rgba16Float, F::Rgba32Uint, F::Rgba32Float,
-        F::Depth32Float, F::Depth24Plus, F::Depth16Unorm,
+        F::R8Unorm,
+        F::R16Float,
+        F::R32Uint,
+        F::R32Sint,
+        F::R32Float,
+        F::R64Uint,
+        F::Rg32Uint,
+        F::Rg32Float,
+        F::Rgba8Unorm,
+        F::Rgba8UnormSrgb,
+        F::Bgra8Unorm,
+        F::Rgba16Float,
+        F::Rgba32Uint,
+        F::Rgba32Float,
+        F::Depth32Float,
+        F::Depth24Plus,
+        F::Depth16Unorm,
     ];
     KNOWN
         .iter()
         .copied()
         .find(|f| crate::plan::format_name(*f) == name.to_lowercase())
-        .ok_or_else(|| format!("unknown texture format `{name}`; known: {}", KNOWN.iter().map(|f| crate::plan::format_name(*f)).collect::<Vec<_>>().join(", ")))
+        .ok_or_else(|| {
+            format!(
+                "unknown texture format `{name}`; known: {}",
+                KNOWN
+                    .iter()
+                    .map(|f| crate::plan::format_name(*f))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
 }

@@ -13,19 +13,35 @@ pub struct Fake {
 
 impl Fake {
     pub fn new(stage: &'static str, slots: Vec<Slot>) -> Self {
-        Self { stage, slots, required: wgpu::Features::empty(), side_effect: false, scratch: None }
+        Self {
+            stage,
+            slots,
+            required: wgpu::Features::empty(),
+            side_effect: false,
+            scratch: None,
+        }
     }
     /// Reads each of `inputs`, writes each of `outputs` (u32 buffers).
     pub fn rw(inputs: &[&'static str], outputs: &[&'static str]) -> Self {
-        let mut slots: Vec<Slot> = inputs.iter().map(|n| Slot::buffer(n, Access::StorageRead, Element::U32, "")).collect();
-        slots.extend(outputs.iter().map(|n| Slot::buffer(n, Access::StorageWrite, Element::U32, "")));
+        let mut slots: Vec<Slot> = inputs
+            .iter()
+            .map(|n| Slot::buffer(n, Access::StorageRead, Element::U32, ""))
+            .collect();
+        slots.extend(
+            outputs
+                .iter()
+                .map(|n| Slot::buffer(n, Access::StorageWrite, Element::U32, "")),
+        );
         Self::new("fake", slots)
     }
 }
 
 impl Pass for Fake {
     fn contract(&self) -> StageContract {
-        StageContract { stage: self.stage, slots: self.slots.clone() }
+        StageContract {
+            stage: self.stage,
+            slots: self.slots.clone(),
+        }
     }
     fn implementation(&self) -> &'static str {
         "fake"
@@ -36,7 +52,14 @@ impl Pass for Fake {
             ctx.side_effect();
         }
         if let Some(bytes) = self.scratch {
-            ctx.scratch_buffer("tmp", BufferDesc { size: bytes, element: Element::BYTES }, &[Access::StorageReadWrite]);
+            ctx.scratch_buffer(
+                "tmp",
+                BufferDesc {
+                    size: bytes,
+                    element: Element::BYTES,
+                },
+                &[Access::StorageReadWrite],
+            );
         }
         Ok(())
     }
@@ -49,7 +72,8 @@ pub fn u32s(n: u64) -> BufferDesc {
     BufferDesc::array(Element::U32, n)
 }
 
-pub const IMPORT_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_SRC);
+pub const IMPORT_USAGE: wgpu::BufferUsages =
+    wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_SRC);
 
 pub fn opts() -> CompileOptions {
     CompileOptions::new(wgpu::Features::empty())

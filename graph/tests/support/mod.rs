@@ -3,7 +3,11 @@
 
 use meshlight_graph::*;
 
-pub const SHADER: PassShader = PassShader { name: "test::arith", source: include_str!("arith.wgsl"), file_path: "graph/tests/support/arith.wgsl" };
+pub const SHADER: PassShader = PassShader {
+    name: "test::arith",
+    source: include_str!("arith.wgsl"),
+    file_path: "graph/tests/support/arith.wgsl",
+};
 
 fn u32s(name: &'static str, access: Access, doc: &'static str) -> Slot {
     Slot::buffer(name, access, Element::U32, doc)
@@ -27,12 +31,18 @@ pub struct AddTwice {
 }
 
 pub fn produce_contract() -> StageContract {
-    StageContract { stage: "produce", slots: vec![u32s("output", Access::StorageWrite, "values written")] }
+    StageContract {
+        stage: "produce",
+        slots: vec![u32s("output", Access::StorageWrite, "values written")],
+    }
 }
 pub fn transform_contract() -> StageContract {
     StageContract {
         stage: "transform",
-        slots: vec![u32s("input", Access::StorageRead, "values read"), u32s("output", Access::StorageWrite, "values written")],
+        slots: vec![
+            u32s("input", Access::StorageRead, "values read"),
+            u32s("output", Access::StorageWrite, "values written"),
+        ],
     }
 }
 
@@ -42,11 +52,25 @@ fn layout_out_only() -> BindingLayout {
     BindingLayout::compute("fill").slot(1, "output").uniform(2)
 }
 fn layout_in_out() -> BindingLayout {
-    BindingLayout::compute("add").slot(0, "input").slot(1, "output").uniform(2)
+    BindingLayout::compute("add")
+        .slot(0, "input")
+        .slot(1, "output")
+        .uniform(2)
 }
 
-fn dispatch(ctx: &mut RecordContext<'_>, entry: &'static str, layout: BindingLayout, count: u32, k: u32) -> Result<()> {
-    let program = ctx.compute_program(&ComputeDesc { shader: &SHADER, entry, defs: &(), layouts: &[layout] })?;
+fn dispatch(
+    ctx: &mut RecordContext<'_>,
+    entry: &'static str,
+    layout: BindingLayout,
+    count: u32,
+    k: u32,
+) -> Result<()> {
+    let program = ctx.compute_program(&ComputeDesc {
+        shader: &SHADER,
+        entry,
+        defs: &(),
+        layouts: &[layout],
+    })?;
     let params = [count, k, 0, 0];
     let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&params))])?;
     let mut pass = ctx.compute_pass();
@@ -96,13 +120,23 @@ impl Pass for AddTwice {
         "add_twice"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        ctx.scratch_buffer("half", BufferDesc::array(Element::U32, self.count as u64), &[Access::StorageReadWrite, Access::StorageRead]);
+        ctx.scratch_buffer(
+            "half",
+            BufferDesc::array(Element::U32, self.count as u64),
+            &[Access::StorageReadWrite, Access::StorageRead],
+        );
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         // input + half into scratch, then scratch + half into output.
-        let first = BindingLayout::compute("add_twice.first").slot(0, "input").scratch(1, "half", Access::StorageReadWrite).uniform(2);
-        let second = BindingLayout::compute("add_twice.second").scratch(0, "half", Access::StorageRead).slot(1, "output").uniform(2);
+        let first = BindingLayout::compute("add_twice.first")
+            .slot(0, "input")
+            .scratch(1, "half", Access::StorageReadWrite)
+            .uniform(2);
+        let second = BindingLayout::compute("add_twice.second")
+            .scratch(0, "half", Access::StorageRead)
+            .slot(1, "output")
+            .uniform(2);
         dispatch(ctx, "add", first, self.count, self.half)?;
         dispatch(ctx, "add", second, self.count, self.half)
     }
@@ -117,10 +151,16 @@ pub fn gpu() -> GpuContext {
 }
 
 pub fn storage_buffer(gpu: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buffer {
-    gpu.buffer_with_data(label, bytemuck::cast_slice(words), wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC)
+    gpu.buffer_with_data(
+        label,
+        bytemuck::cast_slice(words),
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+    )
 }
 
 pub fn read_u32s(gpu: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Vec<u32> {
-    let bytes = gpu.read_buffer(buffer, 0, count as u64 * 4).expect("readback");
+    let bytes = gpu
+        .read_buffer(buffer, 0, count as u64 * 4)
+        .expect("readback");
     bytemuck::pod_collect_to_vec(&bytes)
 }

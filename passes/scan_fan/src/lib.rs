@@ -52,7 +52,7 @@ mod scan_fan;
 mod two_step;
 
 pub use cpu::{cpu_scan, cpu_scan_into};
-pub use kernels::{ScanDefs, SHADER};
+pub use kernels::{SHADER, ScanDefs};
 pub use scan_fan::ScanFan;
 pub use two_step::TwoStep;
 

@@ -124,7 +124,11 @@ fn sixteen_million_elements() {
         &input,
     );
     check(&mut exec, &Case::new(Implementation::TwoStep, n), &input);
-    check(&mut exec, &Case::new(Implementation::TwoStep, n).inclusive(true), &input);
+    check(
+        &mut exec,
+        &Case::new(Implementation::TwoStep, n).inclusive(true),
+        &input,
+    );
 }
 
 #[test]
