@@ -157,7 +157,7 @@ fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), S
                     g.export(h);
                 }
                 EntryKind::Imported => {
-                    drop(g.import_buffer(&r.name, desc, buffer_usage(&r.usage)?))
+                    let _ = g.import_buffer(&r.name, desc, buffer_usage(&r.usage)?);
                 }
                 EntryKind::History => drop(g.history_buffer(&r.name, desc)),
             }
@@ -177,7 +177,7 @@ fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), S
                     g.export(h);
                 }
                 EntryKind::Imported => {
-                    drop(g.import_texture(&r.name, desc, texture_usage(&r.usage)?))
+                    let _ = g.import_texture(&r.name, desc, texture_usage(&r.usage)?);
                 }
                 EntryKind::History => drop(g.history_texture(&r.name, desc)),
             }
