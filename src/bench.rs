@@ -60,7 +60,9 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
             "builder" => builder(args.quick)?,
             "scan-fan" => scan_fan(args.quick)?,
             other => {
-                return Err(format!("unknown scenario `{other}`; known: {}", ALL.join(", ")).into());
+                return Err(
+                    format!("unknown scenario `{other}`; known: {}", ALL.join(", ")).into(),
+                );
             }
         };
         for r in &new {
