@@ -20,6 +20,10 @@ pub struct BenchArgs {
     /// Fewer repeats and smaller sizes, for a quick look.
     #[arg(long)]
     pub quick: bool,
+    /// Mesh files the `builder` scenario measures besides the procedural mesh
+    /// (repeatable), e.g. `--mesh ../shared/meshes/stanford-bunny.obj`.
+    #[arg(long = "mesh")]
+    pub meshes: Vec<std::path::PathBuf>,
 }
 
 /// One measured row: what was measured, the value, its unit, and optional context.
@@ -57,7 +61,7 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
             "graph-execute" => graph_execute(args.quick)?,
             "pool-reuse" => pool_reuse(),
             "render" => render(args.quick)?,
-            "builder" => builder(args.quick)?,
+            "builder" => builder(args.quick, &args.meshes)?,
             "scan-fan" => scan_fan(args.quick)?,
             other => {
                 return Err(
@@ -309,34 +313,84 @@ fn render(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
     Ok(rows)
 }
 
-fn builder(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::error::Error>> {
-    let mesh = crate::scene::procedural_mesh(if quick {
+fn builder(
+    quick: bool,
+    files: &[std::path::PathBuf],
+) -> std::result::Result<Vec<Row>, Box<dyn std::error::Error>> {
+    let segments = if quick {
         64
     } else {
         crate::scene::DEFAULT_SEGMENTS
-    });
+    };
+    let mut meshes = Vec::new();
+    for f in files {
+        let name = f.file_stem().map_or_else(
+            || f.display().to_string(),
+            |s| s.to_string_lossy().into_owned(),
+        );
+        meshes.push((name, crate::scene::load::load_mesh(f)?));
+    }
+    meshes.push((
+        format!("procedural {segments}"),
+        crate::scene::procedural_mesh(segments),
+    ));
     let dir = std::env::temp_dir().join("meshlight-bench");
     std::fs::create_dir_all(&dir)?;
-    let b = crate::scene::bench::builder_scenario(
-        "procedural",
-        &mesh,
-        if quick { 1 } else { 3 },
-        &dir,
-    )?;
-    println!(
-        "{}",
-        crate::scene::bench::format_table(std::slice::from_ref(&b))
-    );
-    let mut r = row(
-        "builder",
-        "procedural".into(),
-        "input triangles/s",
-        b.triangles_per_second(),
-        "tri/s",
-        "cpu",
-    );
-    r.vs_baseline = Some(b.triangles_per_second() / b.clod_triangles_per_second());
-    Ok(vec![r])
+    let repeats = if quick { 1 } else { 5 };
+    let mut results = Vec::new();
+    for (name, mesh) in &meshes {
+        results.push(crate::scene::bench::builder_scenario(
+            name, mesh, repeats, &dir,
+        )?);
+    }
+    println!("{}", crate::scene::bench::format_table(&results));
+    let mut rows = Vec::new();
+    for b in &results {
+        let case = || b.name.clone();
+        let mut r = row(
+            "builder",
+            case(),
+            "input triangles/s",
+            b.triangles_per_second(),
+            "tri/s",
+            "cpu",
+        );
+        r.vs_baseline = Some(b.triangles_per_second() / b.clod_triangles_per_second());
+        rows.push(r);
+        rows.push(row(
+            "builder",
+            case(),
+            "build wall time",
+            b.build_seconds,
+            "s",
+            "cpu",
+        ));
+        rows.push(row(
+            "builder",
+            case(),
+            "clod_build wall time (baseline)",
+            b.clod_seconds,
+            "s",
+            "cpu",
+        ));
+        rows.push(row(
+            "builder",
+            case(),
+            "bytes per LOD-0 triangle",
+            b.bytes_per_lod0_triangle,
+            "B",
+            "cpu",
+        ));
+        rows.push(row(
+            "builder",
+            case(),
+            "asset load from page cache",
+            b.load_bytes_per_second / 1e9,
+            "GB/s",
+            "cpu",
+        ));
+    }
+    Ok(rows)
 }
 
 fn scan_fan(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
