@@ -10,6 +10,8 @@
 
 use glam::Vec3;
 
+use crate::mesh::{edge_key, triangle_edges};
+
 /// Grid cells allowed per source triangle; more only costs memory without pruning more.
 const CELLS_PER_TRIANGLE: usize = 4;
 
@@ -67,10 +69,8 @@ pub fn simplified_deviation(positions: &[Vec3], source: &[u32], simplified: &[u3
         worst = worst.max(grid.distance_squared(p, worst));
     };
     // Each edge once: the two triangles sharing it give the same midpoint.
-    let mut edges: Vec<u64> = simplified
-        .chunks_exact(3)
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-        .map(|(a, b)| ((a.min(b) as u64) << 32) | a.max(b) as u64)
+    let mut edges: Vec<u64> = triangle_edges(simplified)
+        .map(|(a, b)| edge_key(a, b))
         .collect();
     edges.sort_unstable();
     edges.dedup();
@@ -287,7 +287,7 @@ impl TriangleGrid {
 
 /// Closest point on triangle abc to p, by the Voronoi regions of its corners and edges
 /// (Ericson, Real-Time Collision Detection, 5.1.5).
-fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+pub fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {

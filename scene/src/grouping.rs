@@ -4,6 +4,7 @@
 use glam::Vec3;
 
 use crate::error::SceneError;
+use crate::mesh::{edge_key, triangle_edges};
 
 /// Target clusters per group.
 pub const GROUP_SIZE: usize = 8;
@@ -52,10 +53,8 @@ pub fn group_clusters(
 /// The edges of a cluster that no other triangle of the cluster shares: only these can
 /// connect it to other clusters, and there are far fewer of them than edges.
 fn border_edges(cluster: &[u32], out: &mut Vec<u64>) {
-    let mut edges: Vec<u64> = cluster
-        .chunks_exact(3)
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-        .map(|(a, b)| ((a.min(b) as u64) << 32) | a.max(b) as u64)
+    let mut edges: Vec<u64> = triangle_edges(cluster)
+        .map(|(a, b)| edge_key(a, b))
         .collect();
     edges.sort_unstable();
     let mut i = 0;

@@ -202,3 +202,15 @@ pub fn position_remap(positions: &[Vec3]) -> Vec<u32> {
         })
         .collect()
 }
+
+/// The three edges of every triangle, as (from, to) in winding order.
+pub(crate) fn triangle_edges(indices: &[u32]) -> impl Iterator<Item = (u32, u32)> + '_ {
+    indices
+        .chunks_exact(3)
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+}
+
+/// An undirected edge as one sortable key: both directions give the same value.
+pub(crate) fn edge_key(a: u32, b: u32) -> u64 {
+    ((a.min(b) as u64) << 32) | a.max(b) as u64
+}

@@ -5,6 +5,7 @@ use glam::Vec3;
 use meshopt::{SimplifyOptions, SimplifyVertex};
 
 use crate::deviation::simplified_deviation;
+use crate::mesh::{edge_key, triangle_edges};
 
 /// A group counts as simplified when it lost at least this share of its triangles;
 /// otherwise its clusters are retried at the next level with other neighbours.
@@ -111,11 +112,8 @@ pub fn simplify_group(
 /// Edges (between welded vertices) used by more than two triangles: a fold or a
 /// non-manifold junction, which a watertight cut cannot contain.
 fn overused_edges(indices: &[u32], weld: &[u32]) -> usize {
-    let mut edges: Vec<u64> = indices
-        .chunks_exact(3)
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-        .map(|(a, b)| (weld[a as usize], weld[b as usize]))
-        .map(|(a, b)| ((a.min(b) as u64) << 32) | a.max(b) as u64)
+    let mut edges: Vec<u64> = triangle_edges(indices)
+        .map(|(a, b)| edge_key(weld[a as usize], weld[b as usize]))
         .collect();
     edges.sort_unstable();
     edges
