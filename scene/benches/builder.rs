@@ -15,12 +15,10 @@ fn meshes() -> Vec<(String, Mesh)> {
     let mut out = Vec::new();
     let bunny = PathBuf::from(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../../shared/meshes/stanford-bunny.obj"
+        "/../assets/meshes/stanford-bunny.obj"
     ));
-    match load_mesh(&bunny) {
-        Ok(m) => out.push(("bunny".to_owned(), m)),
-        Err(e) => eprintln!("bunny not measured: {e}"),
-    }
+    let mesh = load_mesh(&bunny).expect("the bunny is part of the repository");
+    out.push(("bunny".to_owned(), mesh));
     out.push((
         "procedural 1M".to_owned(),
         procedural_mesh(DEFAULT_SEGMENTS),

@@ -13,7 +13,7 @@ use crate::load::load_mesh;
 use crate::mesh::Mesh;
 use crate::pipeline::{BuildOptions, Built, build_asset};
 use crate::procedural::{DEFAULT_SEGMENTS, procedural_mesh};
-use crate::verify::{expected_levels, level_stats, verify};
+use crate::verify::{expected_levels, level_stats, quality, verify};
 
 /// Input name that selects the built-in procedural mesh instead of a file.
 pub const PROCEDURAL_INPUT: &str = "procedural";
@@ -82,12 +82,39 @@ pub fn run_bake(args: &BakeArgs) -> Result<(), SceneError> {
         },
     )?;
     bar.finish_and_clear();
+    check_before_writing(&args.input, &built.asset)?;
     built.asset.save(&args.output)?;
     print!(
         "{}",
         bake_summary(&args.input, &args.output, &built, load_time.as_secs_f64())
     );
+    for w in quality(&built.asset).warnings {
+        println!("  warning: {w}");
+    }
     Ok(())
+}
+
+/// Refuses to write an asset that `inspect` would reject: the same structural checks
+/// as loading, and the DAG invariants.
+fn check_before_writing(input: &Path, asset: &MeshletAsset) -> Result<(), SceneError> {
+    let mut problems: Vec<String> = Vec::new();
+    if let Err(e) = asset.validate() {
+        problems.push(format!("{} {}", e.field, e.problem));
+    }
+    if problems.is_empty() {
+        problems = verify(asset);
+    }
+    match problems.first() {
+        None => Ok(()),
+        Some(first) => Err(SceneError::Build {
+            source_name: input.display().to_string(),
+            reason: format!(
+                "the built asset fails its own checks ({} problems, first: {first}), so it was \
+                 not written; please report this with the input mesh",
+                problems.len()
+            ),
+        }),
+    }
 }
 
 fn load_input(input: &Path, segments: u32) -> Result<Mesh, SceneError> {
@@ -123,13 +150,24 @@ pub fn bake_summary(input: &Path, output: &Path, built: &Built, load_seconds: f6
 }
 
 /// Loads an asset (which validates magic, version, size, checksum and structure),
-/// prints its header and statistics, and verifies the DAG invariants.
+/// prints its header and statistics, and verifies the DAG invariants. Structural
+/// violations fail; quality findings are printed as warnings and do not.
 pub fn run_inspect(args: &InspectArgs) -> Result<(), SceneError> {
     let asset = MeshletAsset::load(&args.file)?;
     print!("{}", inspect_summary(&args.file, &asset));
     let problems = verify(&asset);
     if problems.is_empty() {
         println!("  invariants: all hold");
+        let q = quality(&asset);
+        for w in &q.warnings {
+            println!("  warning: {w}");
+        }
+        if q.warnings.is_empty() {
+            println!(
+                "  quality: levels halve, {} root(s)",
+                asset.header().root_count
+            );
+        }
         Ok(())
     } else {
         for p in &problems {

@@ -33,8 +33,13 @@ impl Quantization {
     pub fn new(min: Vec3, max: Vec3, bits: u32) -> Self {
         let extent = (max - min).max_element();
         let cells = ((1u64 << bits) - 1) as f32;
-        // A point mesh or a flat mesh still needs a non-zero step.
-        let step = if extent > 0.0 { extent / cells } else { 1.0 };
+        // A point mesh or a flat mesh still needs a non-zero step, and a tiny extent one
+        // that does not underflow.
+        let step = if extent > 0.0 {
+            (extent / cells).max(f32::MIN_POSITIVE)
+        } else {
+            1.0
+        };
         Self {
             origin: min,
             step,

@@ -19,7 +19,7 @@ use crate::error::SceneError;
 use crate::grouping::{Grouping, group_clusters};
 use crate::mesh::{Mesh, position_remap};
 use crate::meshlets::{split_into_meshlets, split_mesh_into_meshlets};
-use crate::simplify::{Effort, simplify_group};
+use crate::simplify::{Mode, VertexFlags, simplify_group};
 
 /// Marks "none" in cluster → group links.
 pub const NO_GROUP: u32 = u32::MAX;
@@ -65,6 +65,8 @@ pub struct DagGroup {
     pub simplify_error: f32,
     /// Measured distance from this group's output to its children's triangles.
     pub deviation: f32,
+    /// How hard it had to be pushed to simplify.
+    pub mode: Mode,
     pub children: Vec<u32>,
 }
 
@@ -123,8 +125,10 @@ pub fn build_dag(
         .collect();
     let mut groups: Vec<DagGroup> = Vec::new();
     let mut active: Vec<u32> = (0..clusters.len() as u32).collect();
+    // Clusters whose group was stuck once; stuck again, they become terminal roots.
+    let mut retried = vec![false; clusters.len()];
     let mut level = 0u32;
-    let mut effort = Effort::Normal;
+    let seam = seam_vertices(mesh, &remap);
     // Which group uses each welded vertex this level; shared ones are the borders.
     let mut owner = vec![u32::MAX; positions.len()];
     let mut border = vec![false; positions.len()];
@@ -140,11 +144,7 @@ pub fn build_dag(
                     .collect()
             })
             .collect();
-        let level_groups = if effort == Effort::Whole {
-            vec![(0..keyed.len() as u32).collect()]
-        } else {
-            group_clusters(options.grouping, &keyed, positions, &mesh.source)?
-        };
+        let level_groups = group_clusters(options.grouping, &keyed, positions, &mesh.source)?;
 
         owner.fill(u32::MAX);
         border.fill(false);
@@ -161,6 +161,11 @@ pub fn build_dag(
             }
         }
 
+        let locked = |v: u32| border[remap[v as usize] as usize];
+        let flags = VertexFlags {
+            locked: &locked,
+            seam: &seam,
+        };
         let results: Vec<_> = level_groups
             .par_iter()
             .map(|members| {
@@ -173,30 +178,29 @@ pub fn build_dag(
                             .copied()
                     })
                     .collect();
-                let simplified = simplify_group(
-                    positions,
-                    normals,
-                    &indices,
-                    |v| border[remap[v as usize] as usize],
-                    effort,
-                )?;
+                let simplified = simplify_group(positions, normals, &indices, &flags)?;
                 let meshlets = split_into_meshlets(positions, &simplified.indices);
                 let bounds: Vec<_> = meshlets.iter().map(|m| sphere_of(positions, m)).collect();
-                Some((simplified.error, simplified.deviation, meshlets, bounds))
+                Some((simplified, meshlets, bounds))
             })
             .collect();
 
         let mut next = Vec::with_capacity(active.len() / 2);
-        let mut progressed = false;
         for (members, result) in level_groups.iter().zip(results) {
             let children: Vec<u32> = members.iter().map(|&m| active[m as usize]).collect();
-            let Some((simplify_error, deviation, meshlets, bounds)) = result else {
-                // Stuck: try again next level, grouped with other neighbours.
-                next.extend(children);
+            let Some((simplified, meshlets, bounds)) = result else {
+                // Stuck even with the sloppy fallback: once more with other neighbours,
+                // then a terminal root (drawn whenever nothing finer is).
+                for &c in &children {
+                    if !retried[c as usize] {
+                        retried[c as usize] = true;
+                        next.push(c);
+                    }
+                }
                 continue;
             };
-            progressed = true;
-            let lod = group_lod(&clusters, &children, simplify_error.max(deviation));
+            let own_error = simplified.error.max(simplified.deviation);
+            let lod = group_lod(&clusters, &children, own_error);
             let id = groups.len() as u32;
             for &c in &children {
                 let child = &mut clusters[c as usize];
@@ -205,6 +209,7 @@ pub fn build_dag(
             }
             for (indices, bounds) in meshlets.into_iter().zip(bounds) {
                 next.push(clusters.len() as u32);
+                retried.push(false);
                 clusters.push(DagCluster {
                     indices,
                     level: level + 1,
@@ -218,30 +223,12 @@ pub fn build_dag(
             groups.push(DagGroup {
                 level,
                 lod,
-                simplify_error,
-                deviation,
+                simplify_error: simplified.error,
+                deviation: simplified.deviation,
+                mode: simplified.mode,
                 children,
             });
         }
-        if !progressed {
-            effort = match effort {
-                Effort::Normal => Effort::Prune,
-                // Three or fewer roots is a finished DAG; more is worth one big group.
-                Effort::Prune if (4..=WHOLE_GROUP_LIMIT).contains(&active.len()) => Effort::Whole,
-                _ => {
-                    if next.len() > 3 {
-                        log::warn!(
-                            "{}: simplification stuck with {} root clusters",
-                            mesh.source,
-                            next.len()
-                        );
-                    }
-                    break;
-                }
-            };
-            continue;
-        }
-        effort = Effort::Normal;
         active = next;
         level += 1;
         progress(LevelProgress {
@@ -253,6 +240,16 @@ pub fn build_dag(
                 .sum(),
         });
     }
+    let roots = clusters
+        .iter()
+        .filter(|c| c.parent_group == NO_GROUP)
+        .count();
+    if roots > crate::verify::MAX_ROOTS as usize {
+        log::warn!(
+            "{}: {roots} root clusters; some groups stayed stuck even with sloppy simplification",
+            mesh.source
+        );
+    }
     let level_count = clusters.iter().map(|c| c.level).max().unwrap_or(0) + 1;
     Ok(Dag {
         clusters,
@@ -261,9 +258,22 @@ pub fn build_dag(
     })
 }
 
-/// Most clusters put in one group when a level near the root is stuck: a few thousand
-/// triangles, still a small simplification.
-const WHOLE_GROUP_LIMIT: usize = 4 * crate::grouping::GROUP_SIZE;
+/// Vertices on an attribute seam: another vertex at the same position has a different
+/// normal or UV. Permissive simplification may collapse across seams elsewhere but must
+/// keep these, or textures and shading tear.
+fn seam_vertices(mesh: &Mesh, remap: &[u32]) -> Vec<bool> {
+    let mut differs = vec![false; remap.len()];
+    for (v, &r) in remap.iter().enumerate() {
+        let r = r as usize;
+        if r != v
+            && (mesh.normals[v] != mesh.normals[r]
+                || (mesh.has_uvs() && mesh.uvs[v] != mesh.uvs[r]))
+        {
+            differs[r] = true;
+        }
+    }
+    remap.iter().map(|&r| differs[r as usize]).collect()
+}
 
 fn sphere_of(positions: &[Vec3], indices: &[u32]) -> (Vec3, f32) {
     sphere_of_points(indices.iter().map(|&i| positions[i as usize]))

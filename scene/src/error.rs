@@ -69,6 +69,18 @@ pub enum SceneError {
     },
 
     #[error(
+        "{source_name}: vertex {vertex} at {position:?} lies beyond ±{limit:e}, the largest \
+         coordinate the position grid and bounding spheres represent; scale the mesh down or \
+         move it nearer the origin"
+    )]
+    CoordinateRange {
+        source_name: String,
+        vertex: usize,
+        position: [f32; 3],
+        limit: f32,
+    },
+
+    #[error(
         "{source_name}: triangle {triangle} refers to vertex {index}, but the mesh has only \
          {vertex_count} vertices; the index buffer is corrupt"
     )]
@@ -136,6 +148,15 @@ pub enum SceneError {
         path: PathBuf,
         expected: u64,
         found: u64,
+    },
+
+    #[error("{path}: the asset is corrupt: {field} {problem}; re-bake it from its source mesh")]
+    AssetField {
+        path: PathBuf,
+        /// The header field, record field or section that is wrong, e.g.
+        /// `header.quant_step` or `meshlet[12].grid_min`.
+        field: String,
+        problem: String,
     },
 
     #[error("{path}: the asset is corrupt: {reason}; re-bake it from its source mesh")]

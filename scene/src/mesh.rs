@@ -12,6 +12,11 @@ pub const MAX_TRIANGLES: u64 = 1 << 25;
 /// Most vertices one input mesh may hold (same reasoning as [`MAX_TRIANGLES`]).
 pub const MAX_VERTICES: u64 = 1 << 26;
 
+/// Largest absolute coordinate a mesh may have. Bounding spheres square distances in
+/// `f32` (which overflows past about 1.8e19) and the grid decodes `origin + q · step`;
+/// at 1e16 every square, sum and sphere merge stays far inside the `f32` range.
+pub const MAX_COORDINATE: f32 = 1e16;
+
 /// An indexed triangle mesh with per-vertex normals and optional texture coordinates.
 ///
 /// Vertices on UV seams or hard edges appear several times with the same position; the
@@ -103,6 +108,18 @@ impl Mesh {
                 source_name: self.source.clone(),
                 vertex,
                 position: self.positions[vertex].to_array(),
+            });
+        }
+        if let Some(vertex) = self
+            .positions
+            .iter()
+            .position(|p| p.abs().max_element() > MAX_COORDINATE)
+        {
+            return Err(SceneError::CoordinateRange {
+                source_name: self.source.clone(),
+                vertex,
+                position: self.positions[vertex].to_array(),
+                limit: MAX_COORDINATE,
             });
         }
         for (i, &index) in self.indices.iter().enumerate() {

@@ -1,5 +1,7 @@
-//! The DAG invariants, checked on a packed asset: what `meshlight inspect` verifies and
-//! what the tests hold every built mesh to.
+//! The DAG checks on a packed asset, in two kinds: [`verify`] finds structural
+//! violations (the asset would draw wrongly: bounds, error monotonicity, parent links),
+//! which make `meshlight inspect` fail; [`quality`] finds a valid DAG that is merely poor
+//! (too deep, too many roots, levels that do not halve), which it reports as warnings.
 
 use glam::Vec3;
 
@@ -34,7 +36,83 @@ pub fn expected_levels(lod0_meshlets: u32) -> f32 {
     (lod0_meshlets.max(1) as f32).log2() + 1.0
 }
 
-/// Checks every invariant and returns one line per violation (empty = valid).
+/// Most levels a good DAG has: ⌈log2(LOD-0 meshlets)⌉ + 2.
+pub fn level_limit(lod0_meshlets: u32) -> u32 {
+    (lod0_meshlets.max(1) as f32).log2().ceil() as u32 + 2
+}
+
+/// Most triangles a level may hold relative to the level before (the last step to the
+/// root aside, which may be small).
+pub const MAX_LEVEL_RATIO: f64 = 0.55;
+/// Most triangles all levels together may hold relative to LOD 0.
+pub const MAX_TOTAL_RATIO: f64 = 2.1;
+/// Most root meshlets of a good DAG.
+pub const MAX_ROOTS: u32 = 3;
+
+/// How good a valid DAG is, and what is poor about it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Quality {
+    /// One line per finding, each saying what is poor and what to try.
+    pub warnings: Vec<String>,
+    /// Largest triangles(level) / triangles(level - 1), the last level aside.
+    pub worst_ratio: f64,
+    pub level_limit: u32,
+    /// All levels' triangles over LOD 0's.
+    pub total_ratio: f64,
+}
+
+/// The quality targets: levels that halve, a shallow DAG, one root.
+pub fn quality(asset: &MeshletAsset) -> Quality {
+    let h = asset.header();
+    let stats = level_stats(asset);
+    let limit = level_limit(h.lod0_meshlets);
+    let mut warnings = Vec::new();
+    let try_this = "try `--grouping partition`, or check the mesh for non-manifold edges and \
+                    disconnected slivers";
+    let mut worst_ratio = 0.0f64;
+    let last = stats.len().saturating_sub(1);
+    for level in 1..last {
+        let ratio = stats[level].triangles as f64 / stats[level - 1].triangles.max(1) as f64;
+        worst_ratio = worst_ratio.max(ratio);
+        if ratio > MAX_LEVEL_RATIO {
+            warnings.push(format!(
+                "level {level} holds {:.2}x the triangles of level {} (a good DAG halves, at most \
+                 {MAX_LEVEL_RATIO}x): simplification got stuck there; {try_this}",
+                ratio,
+                level - 1
+            ));
+        }
+    }
+    if h.level_count > limit {
+        warnings.push(format!(
+            "{} levels for {} LOD-0 meshlets, more than the {limit} that halving gives: the DAG \
+             is deep and LOD selection walks more levels; {try_this}",
+            h.level_count, h.lod0_meshlets
+        ));
+    }
+    if h.root_count > MAX_ROOTS {
+        warnings.push(format!(
+            "{} root meshlets (a good DAG ends in 1 to {MAX_ROOTS}): the coarsest view draws \
+             more than it needs; {try_this}",
+            h.root_count
+        ));
+    }
+    let total_ratio = h.total_triangles as f64 / h.lod0_triangles.max(1) as f64;
+    if total_ratio > MAX_TOTAL_RATIO {
+        warnings.push(format!(
+            "all levels hold {total_ratio:.2}x the LOD-0 triangles (at most {MAX_TOTAL_RATIO}x \
+             when levels halve): the asset is larger than it needs to be; {try_this}"
+        ));
+    }
+    Quality {
+        warnings,
+        worst_ratio,
+        level_limit: limit,
+        total_ratio,
+    }
+}
+
+/// Checks every structural invariant and returns one line per violation (empty = valid).
 pub fn verify(asset: &MeshletAsset) -> Vec<String> {
     let mut problems = Vec::new();
     let h = asset.header();
@@ -82,21 +160,11 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
             problems.push(format!("LOD-0 meshlet {i} has error {}", m.lod_error));
         }
     }
-    if !(1..=3).contains(&roots) {
-        problems.push(format!(
-            "{roots} root meshlets; the DAG should end in 1 to 3"
-        ));
+    if roots == 0 {
+        problems.push("no root meshlet; the coarsest level must have one".to_owned());
     }
     if roots as u32 != h.root_count {
         problems.push(format!("header says {} roots, found {roots}", h.root_count));
-    }
-    let expected = expected_levels(h.lod0_meshlets);
-    let levels = h.level_count as f32;
-    if (levels - expected).abs() > (expected * 0.5).max(2.0) {
-        problems.push(format!(
-            "{} levels for {} LOD-0 meshlets; about {:.1} expected",
-            h.level_count, h.lod0_meshlets, expected
-        ));
     }
     problems
 }

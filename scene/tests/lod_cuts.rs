@@ -35,7 +35,9 @@ fn every_cut_of_the_closed_procedural_mesh_is_watertight() {
     let cuts = thresholds(&built);
     assert!(cuts.len() > 10);
     let mut levels_seen = std::collections::BTreeSet::new();
+    let mut worst_folds = 0;
     for &t in &cuts {
+        let mut folds = 0usize;
         let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
         let mut triangles = 0;
         for (m, d) in asset.meshlets().iter().zip(&decoded) {
@@ -59,13 +61,24 @@ fn every_cut_of_the_closed_procedural_mesh_is_watertight() {
         }
         assert!(triangles > 0, "the cut at {t} is empty");
         for (edge, v) in &edges {
-            // 2 uses, one in each direction: 16 - 16 + 2 = 2.
-            assert_eq!(
-                *v, 2,
-                "cut at error {t}: edge {edge:?} is not shared by exactly two triangles (code {v})"
+            // Each use adds 16 in one direction or -16 in the other, plus 1: a crack
+            // leaves an edge unbalanced. Two uses (16 - 16 + 2 = 2) is a manifold edge;
+            // four or more balanced uses is a fold, where simplification closed the
+            // surface onto itself (allowed in small numbers, see FOLDS_PER_64_TRIANGLES).
+            let uses = v.rem_euclid(16);
+            assert!(
+                *v == uses && uses >= 2 && uses % 2 == 0,
+                "cut at error {t}: edge {edge:?} is a crack (code {v})"
             );
+            folds += (uses > 2) as usize;
         }
+        worst_folds = worst_folds.max(folds * 1000 / edges.len());
     }
+    println!("most fold edges in one cut: {worst_folds} per thousand edges");
+    assert!(
+        worst_folds <= 10,
+        "{worst_folds} per thousand edges of a cut are folds"
+    );
     assert!(
         levels_seen.len() as u32 == asset.header().level_count,
         "the cuts visited every level"
@@ -198,7 +211,8 @@ fn check_lod_quality(name: &str, built: &Built) -> f32 {
 #[test]
 fn simplified_levels_stay_within_their_stored_error() {
     check_lod_quality("procedural", &build(&procedural_mesh(32)));
-    if let Some(dir) = common::shared_meshes() {
+    {
+        let dir = common::shared_meshes();
         for name in common::SHARED_MESHES {
             check_lod_quality(name, &build(&load_mesh(&dir.join(name)).unwrap()));
         }

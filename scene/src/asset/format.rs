@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 
 pub const MAGIC: [u8; 8] = *b"MLASSET\0";
 /// Bumped on any layout change; older files are refused, not misread.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// Header flag: the payload holds UVs after the normals.
 pub const FLAG_UVS: u32 = 1;

@@ -3,6 +3,7 @@
 
 pub mod checksum;
 pub mod format;
+pub mod validate;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -306,84 +307,18 @@ impl MeshletAsset {
                 found,
             });
         }
-        let asset = Self { words };
-        asset.validate().map_err(corrupt)?;
-        Ok(asset)
+        validate::validate(&words).map_err(|e| SceneError::AssetField {
+            path: p(),
+            field: e.field,
+            problem: e.problem,
+        })?;
+        Ok(Self { words })
     }
 
-    /// Structural checks that the checksum cannot give: a file written by a buggy or
-    /// hostile writer with a valid checksum must still never make an accessor panic.
-    fn validate(&self) -> Result<(), String> {
-        let h = self.header();
-        let total = self.words.len() as u64;
-        let sizes = [
-            (
-                SECTION_MESHLETS,
-                size_of::<MeshletRecord>() / 4,
-                h.meshlet_count,
-                "meshlets",
-            ),
-            (
-                SECTION_GROUPS,
-                size_of::<GroupRecord>() / 4,
-                h.group_count,
-                "groups",
-            ),
-        ];
-        for (i, s) in h.sections.iter().enumerate() {
-            if s.offset < AssetHeader::WORDS as u32 || s.offset as u64 + s.words as u64 > total {
-                return Err(format!("section {i} lies outside the file"));
-            }
-        }
-        for (section, record_words, count, name) in sizes {
-            if h.sections[section].words as u64 != record_words as u64 * count as u64 {
-                return Err(format!("the {name} section does not hold {count} records"));
-            }
-        }
-        let payload = self.payload().len() as u64;
-        let has_uvs = h.has_uvs();
-        if h.quant_bits < crate::compress::MIN_POSITION_BITS
-            || h.quant_bits > crate::compress::MAX_POSITION_BITS
-        {
-            return Err(format!("position grid of {} bits", h.quant_bits));
-        }
-        for (i, m) in self.meshlets().iter().enumerate() {
-            let (vc, tc) = (m.vertex_count(), m.triangle_count());
-            let bits = m.axis_bits();
-            if vc == 0
-                || tc == 0
-                || vc > crate::meshlets::MAX_VERTICES as u32
-                || tc > crate::meshlets::MAX_TRIANGLES as u32
-            {
-                return Err(format!("meshlet {i} has {vc} vertices and {tc} triangles"));
-            }
-            if bits.iter().any(|&b| b > h.quant_bits) {
-                return Err(format!("meshlet {i} packs more bits than the grid has"));
-            }
-            let layout = PayloadLayout::of(m, has_uvs);
-            if m.data_offset as u64 + layout.end as u64 > payload {
-                return Err(format!("meshlet {i} data lies outside the payload"));
-            }
-            let start = (m.data_offset + layout.indices) as usize;
-            let idx: &[u8] = bytemuck::cast_slice(
-                &self.payload()[start..start + (layout.end - layout.indices) as usize],
-            );
-            if idx[..tc as usize * 3].iter().any(|&l| l as u32 >= vc) {
-                return Err(format!(
-                    "meshlet {i} has a local index beyond its {vc} vertices"
-                ));
-            }
-        }
-        let children = self.children();
-        for (i, g) in self.groups().iter().enumerate() {
-            if g.first_child as u64 + g.child_count as u64 > children.len() as u64 {
-                return Err(format!("group {i} children lie outside their section"));
-            }
-        }
-        if children.iter().any(|&c| c >= h.meshlet_count) {
-            return Err("a group child refers to a missing meshlet".into());
-        }
-        Ok(())
+    /// The structural checks [`MeshletAsset::load`] applies, for an asset built in
+    /// memory: `bake` runs them before writing, so it never writes what `load` refuses.
+    pub fn validate(&self) -> Result<(), validate::Invalid> {
+        validate::validate(&self.words)
     }
 
     pub fn save(&self, path: &Path) -> Result<(), SceneError> {

@@ -3,28 +3,23 @@
 
 use std::path::PathBuf;
 
-/// The shared test meshes beside the project. Returns `None` (after saying why) when the
-/// folder is absent on a developer's clone; under CI its absence fails the test.
-pub fn shared_meshes() -> Option<PathBuf> {
-    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/meshes"));
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!(
-            "{} is missing; CI must provide the shared test meshes",
-            dir.display()
-        );
-    }
-    eprintln!(
-        "did not run: the shared test meshes are not at {} (they live beside the project, not in it)",
+/// The project's test meshes (`assets/meshes`, with their origin and licence in its
+/// README). They are part of the repository, so a missing one is a broken checkout and
+/// fails the test that needs it.
+pub fn shared_meshes() -> PathBuf {
+    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../assets/meshes"));
+    assert!(
+        dir.is_dir(),
+        "{} is missing; the test meshes are part of the repository",
         dir.display()
     );
-    None
+    dir
 }
 
-pub fn shared_mesh(name: &str) -> Option<PathBuf> {
-    shared_meshes().map(|d| d.join(name))
+pub fn shared_mesh(name: &str) -> PathBuf {
+    let path = shared_meshes().join(name);
+    assert!(path.is_file(), "{} is missing", path.display());
+    path
 }
 
 pub const SHARED_MESHES: [&str; 5] = [

@@ -1,0 +1,327 @@
+//! Structural checks of a loaded asset, beyond what the checksum gives: a file written by
+//! a buggy or hostile writer with a valid checksum must still never make an accessor
+//! panic, an allocation explode, or `inspect` report "all hold". Counts are checked
+//! against what the file's size can hold before anything trusts them; every failure
+//! names the field that is wrong.
+
+use super::format::*;
+use crate::compress::{MAX_POSITION_BITS, MIN_POSITION_BITS};
+use crate::meshlets::{MAX_TRIANGLES, MAX_VERTICES};
+
+/// Most levels an asset may have: a meshlet stores its level in 8 bits.
+pub const MAX_LEVELS: u32 = 256;
+
+/// One inconsistency: the field and what is wrong with it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Invalid {
+    pub field: String,
+    pub problem: String,
+}
+
+fn bad(field: impl Into<String>, problem: impl Into<String>) -> Invalid {
+    Invalid {
+        field: field.into(),
+        problem: problem.into(),
+    }
+}
+
+fn finite_sphere(s: [f32; 4]) -> bool {
+    s.iter().all(|v| v.is_finite()) && s[3] >= 0.0
+}
+
+/// Checks `words`, a whole file image whose size and checksum already match its header.
+pub fn validate(words: &[u32]) -> Result<(), Invalid> {
+    let h: &AssetHeader = bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
+    let total = words.len() as u64;
+
+    if h.flags & !FLAG_UVS != 0 {
+        return Err(bad(
+            "header.flags",
+            format!("has unknown bits {:#x}", h.flags & !FLAG_UVS),
+        ));
+    }
+    // Sections tile the file in order: nothing overlaps, nothing is left over.
+    let mut at = AssetHeader::WORDS as u64;
+    for (i, s) in h.sections.iter().enumerate() {
+        if s.offset as u64 != at {
+            return Err(bad(
+                format!("header.sections[{i}].offset"),
+                format!(
+                    "is {}, expected {at} (sections follow each other)",
+                    s.offset
+                ),
+            ));
+        }
+        at += s.words as u64;
+        if at > total {
+            return Err(bad(
+                format!("header.sections[{i}].words"),
+                format!("runs to word {at}, past the file's {total} words"),
+            ));
+        }
+    }
+    if at != total {
+        return Err(bad(
+            "file size",
+            format!("{} trailing bytes after the last section", (total - at) * 4),
+        ));
+    }
+    let record = |section: usize, words: usize, count: u32, name: &str| {
+        if h.sections[section].words as u64 != words as u64 * count as u64 {
+            Err(bad(
+                format!("header.{name}_count"),
+                format!(
+                    "is {count}, but its section holds {} words ({words} per record)",
+                    h.sections[section].words
+                ),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    record(
+        SECTION_MESHLETS,
+        size_of::<MeshletRecord>() / 4,
+        h.meshlet_count,
+        "meshlet",
+    )?;
+    record(
+        SECTION_GROUPS,
+        size_of::<GroupRecord>() / 4,
+        h.group_count,
+        "group",
+    )?;
+    let section = |i: usize| {
+        let s = h.sections[i];
+        &words[s.offset as usize..(s.offset + s.words) as usize]
+    };
+    let meshlets: &[MeshletRecord] = bytemuck::cast_slice(section(SECTION_MESHLETS));
+    let groups: &[GroupRecord] = bytemuck::cast_slice(section(SECTION_GROUPS));
+    let children = section(SECTION_CHILDREN);
+    let payload = section(SECTION_PAYLOAD);
+
+    if h.meshlet_count == 0 {
+        return Err(bad(
+            "header.meshlet_count",
+            "is 0; an asset has at least one meshlet",
+        ));
+    }
+    if h.level_count == 0 || h.level_count > MAX_LEVELS.min(h.meshlet_count) {
+        return Err(bad(
+            "header.level_count",
+            format!(
+                "is {}, outside 1..={} (levels are 8-bit and each holds a meshlet)",
+                h.level_count,
+                MAX_LEVELS.min(h.meshlet_count)
+            ),
+        ));
+    }
+    header_floats(h)?;
+
+    let has_uvs = h.has_uvs();
+    let grid_max = (1u64 << h.quant_bits) - 1;
+    let (mut lod0_meshlets, mut lod0_triangles, mut triangles, mut vertices, mut roots) =
+        (0u64, 0u64, 0u64, 0u64, 0u64);
+    let mut max_level = 0;
+    for (i, m) in meshlets.iter().enumerate() {
+        let f = |name: &str| format!("meshlet[{i}].{name}");
+        let (vc, tc, level) = (m.vertex_count(), m.triangle_count(), m.level());
+        if m.counts >> 24 != 0 {
+            return Err(bad(f("counts"), "has bits set above bit 24"));
+        }
+        if vc == 0 || tc == 0 || vc > MAX_VERTICES as u32 || tc > MAX_TRIANGLES as u32 {
+            return Err(bad(
+                f("counts"),
+                format!(
+                    "says {vc} vertices and {tc} triangles; meshlets hold 1..={MAX_VERTICES} and 1..={MAX_TRIANGLES}"
+                ),
+            ));
+        }
+        if level >= h.level_count {
+            return Err(bad(
+                f("counts"),
+                format!(
+                    "level {level} is not below header.level_count {}",
+                    h.level_count
+                ),
+            ));
+        }
+        max_level = max_level.max(level);
+        if m.bits >> 24 != 0 {
+            return Err(bad(f("bits"), "has bits set above bit 24"));
+        }
+        let bits = m.axis_bits();
+        for (k, (&b, &min)) in bits.iter().zip(&m.grid_min).enumerate() {
+            if b > h.quant_bits {
+                return Err(bad(
+                    f("bits"),
+                    format!(
+                        "packs {b} bits on axis {k}, more than the grid's {}",
+                        h.quant_bits
+                    ),
+                ));
+            }
+            // Then minimum + offset < 2^25 cannot overflow 32-bit decoding; whether the
+            // decoded points stay inside the bounds is for `verify`, which decodes them.
+            if min as u64 > grid_max {
+                return Err(bad(
+                    f("grid_min"),
+                    format!("{min} on axis {k} lies past the grid's last point {grid_max}"),
+                ));
+            }
+        }
+        for (name, s) in [
+            ("bounds", m.bounds),
+            ("lod_sphere", m.lod_sphere),
+            ("parent_sphere", m.parent_sphere),
+        ] {
+            if !finite_sphere(s) {
+                return Err(bad(f(name), format!("{s:?} is not a finite sphere")));
+            }
+        }
+        if !(m.lod_error.is_finite() && m.lod_error >= 0.0) {
+            return Err(bad(f("lod_error"), format!("is {}", m.lod_error)));
+        }
+        if !(m.parent_error.is_finite() && m.parent_error >= 0.0) {
+            return Err(bad(f("parent_error"), format!("is {}", m.parent_error)));
+        }
+        let layout = PayloadLayout::of(m, has_uvs);
+        if m.data_offset as u64 + layout.end as u64 > payload.len() as u64 {
+            return Err(bad(f("data_offset"), "puts its data outside the payload"));
+        }
+        let start = (m.data_offset + layout.indices) as usize;
+        let idx: &[u8] =
+            bytemuck::cast_slice(&payload[start..start + (layout.end - layout.indices) as usize]);
+        if idx[..tc as usize * 3].iter().any(|&l| l as u32 >= vc) {
+            return Err(bad(
+                format!("meshlet[{i}] indices"),
+                format!("refer past its {vc} vertices"),
+            ));
+        }
+        if level == 0 {
+            lod0_meshlets += 1;
+            lod0_triangles += tc as u64;
+        }
+        triangles += tc as u64;
+        vertices += vc as u64;
+        roots += (m.parent_error == f32::MAX) as u64;
+    }
+    if max_level + 1 != h.level_count {
+        return Err(bad(
+            "header.level_count",
+            format!(
+                "is {}, but the highest meshlet level is {max_level}",
+                h.level_count
+            ),
+        ));
+    }
+    for (name, stored, counted) in [
+        ("lod0_meshlets", h.lod0_meshlets, lod0_meshlets),
+        ("lod0_triangles", h.lod0_triangles, lod0_triangles),
+        ("total_triangles", h.total_triangles, triangles),
+        ("total_vertices", h.total_vertices, vertices),
+        ("root_count", h.root_count, roots),
+    ] {
+        if stored as u64 != counted {
+            return Err(bad(
+                format!("header.{name}"),
+                format!("is {stored}, but the meshlets give {counted}"),
+            ));
+        }
+    }
+    for (i, g) in groups.iter().enumerate() {
+        let f = |name: &str| format!("group[{i}].{name}");
+        if !finite_sphere(g.lod_sphere) {
+            return Err(bad(
+                f("lod_sphere"),
+                format!("{:?} is not a finite sphere", g.lod_sphere),
+            ));
+        }
+        if !(g.error.is_finite() && g.error >= 0.0) {
+            return Err(bad(f("error"), format!("is {}", g.error)));
+        }
+        if g.level >= h.level_count {
+            return Err(bad(
+                f("level"),
+                format!(
+                    "is {}, not below header.level_count {}",
+                    g.level, h.level_count
+                ),
+            ));
+        }
+        if g.child_count == 0 || g.first_child as u64 + g.child_count as u64 > children.len() as u64
+        {
+            return Err(bad(
+                f("first_child"),
+                format!(
+                    "children {}..+{} are empty or outside the {} of their section",
+                    g.first_child,
+                    g.child_count,
+                    children.len()
+                ),
+            ));
+        }
+    }
+    if let Some(k) = children.iter().position(|&c| c >= h.meshlet_count) {
+        return Err(bad(
+            format!("children[{k}]"),
+            format!(
+                "refers to meshlet {}, past the {} meshlets",
+                children[k], h.meshlet_count
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The header's floating-point fields: grid, bounds and UV rectangle.
+fn header_floats(h: &AssetHeader) -> Result<(), Invalid> {
+    if !(MIN_POSITION_BITS..=MAX_POSITION_BITS).contains(&h.quant_bits) {
+        return Err(bad(
+            "header.quant_bits",
+            format!(
+                "is {}, outside {MIN_POSITION_BITS}..={MAX_POSITION_BITS}",
+                h.quant_bits
+            ),
+        ));
+    }
+    if !(h.quant_step.is_finite() && h.quant_step > 0.0) {
+        return Err(bad(
+            "header.quant_step",
+            format!(
+                "is {}; the grid step must be finite and positive",
+                h.quant_step
+            ),
+        ));
+    }
+    let reach = h.quant_step as f64 * ((1u64 << h.quant_bits) - 1) as f64;
+    for k in 0..3 {
+        let o = h.quant_origin[k];
+        if !o.is_finite() || (o as f64 + reach).abs() >= f32::MAX as f64 {
+            return Err(bad(
+                "header.quant_origin",
+                format!(
+                    "{:?} with step {} leaves the finite range",
+                    h.quant_origin, h.quant_step
+                ),
+            ));
+        }
+    }
+    let (lo, hi) = (h.bounds_min, h.bounds_max);
+    if (0..3).any(|k| !lo[k].is_finite() || !hi[k].is_finite() || lo[k] > hi[k]) {
+        return Err(bad(
+            "header.bounds_min/bounds_max",
+            format!("{lo:?} .. {hi:?} is not a finite, ordered box"),
+        ));
+    }
+    if h.has_uvs()
+        && (0..2)
+            .any(|k| !(h.uv_min[k].is_finite() && h.uv_step[k].is_finite() && h.uv_step[k] >= 0.0))
+    {
+        return Err(bad(
+            "header.uv_min/uv_step",
+            format!("{:?} / {:?} is not a finite rectangle", h.uv_min, h.uv_step),
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,217 @@
+//! Assets whose checksum is valid but whose contents are not: each inconsistency class is
+//! refused with an error naming the field, before any count is trusted for an
+//! allocation; and meshes whose coordinates the quantiser cannot represent are refused
+//! at bake time instead of producing such an asset.
+
+mod common;
+
+use std::path::Path;
+
+use meshlight_scene::asset::checksum::file_checksum;
+use meshlight_scene::asset::format::{AssetHeader, MeshletRecord, SECTION_MESHLETS};
+use meshlight_scene::load::parse_obj;
+use meshlight_scene::mesh::MAX_COORDINATE;
+use meshlight_scene::{BuildOptions, MeshletAsset, SceneError, build_asset, procedural_mesh};
+
+fn good_words() -> Vec<u32> {
+    let built = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {}).unwrap();
+    bytemuck::cast_slice(built.asset.bytes()).to_vec()
+}
+
+/// Rewrites the header's size and checksum so that only the structural checks can
+/// notice the damage.
+fn reseal(words: &mut [u32]) {
+    let size = words.len() as u64 * 4;
+    let h: &mut AssetHeader =
+        bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut words[..AssetHeader::WORDS]));
+    h.file_size = [size as u32, (size >> 32) as u32];
+    let sum = file_checksum(&words[..AssetHeader::WORDS], &words[AssetHeader::WORDS..]);
+    let at = std::mem::offset_of!(AssetHeader, checksum) / 4;
+    words[at] = sum as u32;
+    words[at + 1] = (sum >> 32) as u32;
+}
+
+fn header(words: &mut [u32]) -> &mut AssetHeader {
+    bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut words[..AssetHeader::WORDS]))
+}
+
+fn meshlet(words: &mut [u32], i: usize) -> &mut MeshletRecord {
+    let first = header(words).sections[SECTION_MESHLETS].offset as usize;
+    let n = size_of::<MeshletRecord>() / 4;
+    bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
+        &mut words[first + i * n..first + (i + 1) * n],
+    ))
+}
+
+/// Applies `edit`, reseals, loads, and expects an `AssetField` error naming `field`.
+fn refused(what: &str, field: &str, edit: impl FnOnce(&mut Vec<u32>)) {
+    let mut w = good_words();
+    edit(&mut w);
+    reseal(&mut w);
+    let len = w.len() as u64 * 4;
+    let err = MeshletAsset::from_words(w, len, Path::new("bad.mlasset")).unwrap_err();
+    match &err {
+        SceneError::AssetField { field: f, .. } => {
+            assert!(
+                f.contains(field),
+                "{what}: named {f:?}, expected {field:?}: {err}"
+            )
+        }
+        other => panic!("{what}: {other:?}"),
+    }
+    let msg = err.to_string();
+    assert!(
+        msg.contains("bad.mlasset") && msg.contains("re-bake"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn the_resealed_undamaged_asset_loads() {
+    let mut w = good_words();
+    reseal(&mut w);
+    let len = w.len() as u64 * 4;
+    MeshletAsset::from_words(w, len, Path::new("ok.mlasset")).unwrap();
+}
+
+#[test]
+fn header_counts_are_checked_before_anything_is_allocated() {
+    // These drove a 100 GB allocation and a 1.5 GB one before being checked.
+    refused("level count 2^32-1", "header.level_count", |w| {
+        header(w).level_count = u32::MAX
+    });
+    refused("level count 2^24", "header.level_count", |w| {
+        header(w).level_count = 1 << 24
+    });
+    refused("level count 0", "header.level_count", |w| {
+        header(w).level_count = 0
+    });
+    refused("meshlet count", "header.meshlet_count", |w| {
+        header(w).meshlet_count = u32::MAX
+    });
+    refused("group count", "header.group_count", |w| {
+        header(w).group_count += 1
+    });
+}
+
+#[test]
+fn quantisation_grid_must_be_usable() {
+    refused("NaN step", "header.quant_step", |w| {
+        header(w).quant_step = f32::NAN
+    });
+    refused("zero step", "header.quant_step", |w| {
+        header(w).quant_step = 0.0
+    });
+    refused("infinite origin", "header.quant_origin", |w| {
+        header(w).quant_origin[1] = f32::INFINITY
+    });
+    refused("grid overflow", "header.quant_origin", |w| {
+        header(w).quant_step = f32::MAX / 2.0
+    });
+    refused("grid bits", "header.quant_bits", |w| {
+        header(w).quant_bits = 40
+    });
+}
+
+#[test]
+fn totals_must_agree_with_the_records() {
+    refused("total triangles", "header.total_triangles", |w| {
+        header(w).total_triangles += 1
+    });
+    refused("total vertices", "header.total_vertices", |w| {
+        header(w).total_vertices -= 1
+    });
+    refused("LOD-0 triangles", "header.lod0_triangles", |w| {
+        header(w).lod0_triangles = 7
+    });
+    refused("LOD-0 meshlets", "header.lod0_meshlets", |w| {
+        header(w).lod0_meshlets += 1
+    });
+    refused("root count", "header.root_count", |w| {
+        header(w).root_count += 1
+    });
+}
+
+#[test]
+fn meshlet_records_must_fit_the_header() {
+    refused("grid minimum past the grid", "meshlet[0].grid_min", |w| {
+        let top = (1u32 << header(w).quant_bits) - 1;
+        meshlet(w, 0).grid_min[0] = top + 1;
+    });
+    refused("grid minimum near u32::MAX", "meshlet[0].grid_min", |w| {
+        meshlet(w, 0).grid_min[2] = u32::MAX - 1
+    });
+    refused("level past the level count", "meshlet[0].counts", |w| {
+        let levels = header(w).level_count;
+        let m = meshlet(w, 0);
+        m.counts = (m.counts & 0xffff) | (levels << 16);
+    });
+    refused("high count bits", "meshlet[1].counts", |w| {
+        meshlet(w, 1).counts |= 1 << 30
+    });
+    refused("NaN bounds", "meshlet[2].bounds", |w| {
+        meshlet(w, 2).bounds[0] = f32::NAN
+    });
+    refused("negative radius", "meshlet[2].lod_sphere", |w| {
+        meshlet(w, 2).lod_sphere[3] = -1.0
+    });
+    refused("NaN error", "meshlet[3].lod_error", |w| {
+        meshlet(w, 3).lod_error = f32::NAN
+    });
+    refused("infinite parent error", "meshlet[3].parent_error", |w| {
+        meshlet(w, 3).parent_error = f32::INFINITY
+    });
+}
+
+#[test]
+fn header_bounds_flags_and_layout_must_be_consistent() {
+    refused("inverted bounds", "header.bounds_min", |w| {
+        let h = header(w);
+        h.bounds_min[0] = h.bounds_max[0] + 1.0;
+    });
+    refused("NaN bounds", "header.bounds_min", |w| {
+        header(w).bounds_max[2] = f32::NAN
+    });
+    refused("unknown flag bits", "header.flags", |w| {
+        header(w).flags |= 0x8000
+    });
+    refused("trailing bytes", "file size", |w| {
+        w.extend_from_slice(&[0, 0])
+    });
+    refused("overlapping sections", "header.sections[1].offset", |w| {
+        header(w).sections[1].offset -= 1
+    });
+}
+
+#[test]
+fn coordinates_beyond_the_quantiser_are_refused_at_bake_time() {
+    let one_huge = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1e38 1 0\nf 1 2 3\nf 2 4 3\n";
+    let all_huge = "v 1e30 1e30 1e30\nv 1.1e30 1e30 1e30\nv 1e30 1.1e30 1e30\nf 1 2 3\n";
+    for (name, text) in [("one-huge.obj", one_huge), ("all-huge.obj", all_huge)] {
+        let mesh = parse_obj(Path::new(name), text.as_bytes()).unwrap();
+        let err = build_asset(&mesh, &BuildOptions::default(), &mut |_| {}).unwrap_err();
+        match &err {
+            SceneError::CoordinateRange { limit, .. } => assert_eq!(*limit, MAX_COORDINATE),
+            other => panic!("{name}: {other:?}"),
+        }
+        let msg = err.to_string();
+        assert!(
+            msg.contains(name) && msg.contains("scale the mesh down"),
+            "{msg}"
+        );
+    }
+    // Just inside the limit, a mesh bakes into an asset that loads and verifies.
+    let s = MAX_COORDINATE * 0.5;
+    let text = format!(
+        "v {s} {s} {s}\nv {} {s} {s}\nv {s} {} {s}\nf 1 2 3\n",
+        s * 1.5,
+        s * 1.5
+    );
+    let mesh = parse_obj(Path::new("big.obj"), text.as_bytes()).unwrap();
+    let built = build_asset(&mesh, &BuildOptions::default(), &mut |_| {}).unwrap();
+    let dir = common::scratch("big-coordinates");
+    let path = dir.join("big.mlasset");
+    built.asset.save(&path).unwrap();
+    let loaded = MeshletAsset::load(&path).unwrap();
+    assert!(meshlight_scene::verify::verify(&loaded).is_empty());
+}
