@@ -70,6 +70,19 @@ fn main() {
             built.asset.bytes().len() as f64 / h.lod0_triangles as f64,
             ratios.join(" ")
         );
+        let b = built.asset.size_breakdown();
+        let per = |bytes: usize| bytes as f64 / h.lod0_triangles as f64;
+        println!(
+            "  B/tri: records {:.2} groups {:.2} positions {:.2} normals {:.2} uvs {:.2} indices {:.2}; grid {} bits; {:.2} vertices/tri",
+            per(b.meshlet_records),
+            per(b.groups),
+            per(b.positions),
+            per(b.normals),
+            per(b.uvs),
+            per(b.indices),
+            h.quant_bits,
+            h.total_vertices as f64 / h.total_triangles as f64
+        );
         for w in &q.warnings {
             println!("  warning: {w}");
         }

@@ -35,9 +35,15 @@ fn check_round_trip(built: &Built) {
                 locals.len() as u32 - 1
             });
         }
+        // Triangles may be rotated (winding kept), never reordered or re-wound.
+        let rotated = |t: &[u32]| {
+            let r = (0..3).min_by_key(|&k| t[k]).unwrap();
+            [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
+        };
+        let expected: Vec<u32> = cluster.indices.iter().map(|g| slot[g]).collect();
         assert_eq!(
-            decoded,
-            cluster.indices.iter().map(|g| slot[g]).collect::<Vec<_>>()
+            decoded.chunks_exact(3).map(rotated).collect::<Vec<_>>(),
+            expected.chunks_exact(3).map(rotated).collect::<Vec<_>>()
         );
         assert_eq!(d.positions.len(), locals.len());
         for (k, &g) in locals.iter().enumerate() {

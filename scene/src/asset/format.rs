@@ -5,12 +5,23 @@
 //! File = [`AssetHeader`] then four sections, each a whole number of 32-bit words:
 //! meshlets ([`MeshletRecord`]), groups ([`GroupRecord`]), group children (`u32`
 //! meshlet ids) and the payload (`u32` words of packed vertex and index data).
+//!
+//! A meshlet's payload is three blocks of fixed-width records (see [`PayloadLayout`]),
+//! so that a GPU thread per vertex or per triangle finds its record by multiplying:
+//! - vertices: grid offsets from `grid_min` at the meshlet's bits per axis, then an
+//!   octahedral normal of 2 × [`crate::compress::NORMAL_BITS`];
+//! - UVs (when the asset has them): 2 × 16-bit unorm per vertex, one word;
+//! - triangles: the smallest local index at the meshlet's index bits, then the other
+//!   two corners, in winding order, as offsets from it at its delta bits. Local
+//!   vertices are numbered in order of first use and triangles keep meshoptimizer's
+//!   locality order, so a triangle's corners are close in number: 17 bits or so per
+//!   triangle where three bytes took 24.
 
 use bytemuck::{Pod, Zeroable};
 
 pub const MAGIC: [u8; 8] = *b"MLASSET\0";
 /// Bumped on any layout change; older files are refused, not misread.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// Header flag: the payload holds UVs after the normals.
 pub const FLAG_UVS: u32 = 1;
@@ -92,7 +103,8 @@ pub struct MeshletRecord {
     pub counts: u32,
     /// Per-meshlet minimum of the grid coordinates; packed values are offsets from it.
     pub grid_min: [u32; 3],
-    /// Bits per packed axis: x (0..8), y (8..16), z (16..24).
+    /// Bits per packed axis: x (0..8), y (8..16), z (16..24); then bits of a triangle's
+    /// first index (24..28) and of its two corner offsets (28..32).
     pub bits: u32,
 }
 
@@ -113,6 +125,23 @@ impl MeshletRecord {
             (self.bits >> 16) & 0xff,
         ]
     }
+    /// Bits of a triangle's first (smallest) local index.
+    pub fn index_bits(&self) -> u32 {
+        (self.bits >> 24) & 0xf
+    }
+    /// Bits of each of a triangle's two corner offsets from its first index.
+    pub fn delta_bits(&self) -> u32 {
+        self.bits >> 28
+    }
+    /// Bits of one vertex record: position offsets and the normal.
+    pub fn vertex_stride(&self) -> u32 {
+        let [x, y, z] = self.axis_bits();
+        x + y + z + 2 * crate::compress::NORMAL_BITS
+    }
+    /// Bits of one triangle record.
+    pub fn triangle_stride(&self) -> u32 {
+        self.index_bits() + 2 * self.delta_bits()
+    }
 }
 
 /// One simplification group: for checking the DAG, and for hierarchical culling later.
@@ -127,30 +156,27 @@ pub struct GroupRecord {
     pub child_count: u32,
 }
 
-/// Payload layout of one meshlet, in words from its `data_offset`: positions, normals,
-/// UVs (when the asset has them), indices.
+/// Payload layout of one meshlet, in words from its `data_offset`: vertex records,
+/// UVs (when the asset has them), triangle records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PayloadLayout {
-    pub positions: u32,
-    pub normals: u32,
+    pub vertices: u32,
     pub uvs: u32,
-    pub indices: u32,
+    pub triangles: u32,
     pub end: u32,
 }
 
 impl PayloadLayout {
     pub fn of(record: &MeshletRecord, has_uvs: bool) -> Self {
         let vc = record.vertex_count();
-        let positions = 0;
-        let normals = crate::compress::position_words(vc, record.axis_bits());
-        let uvs = normals + vc;
-        let indices = uvs + if has_uvs { vc } else { 0 };
-        let end = indices + (record.triangle_count() * 3).div_ceil(4);
+        let vertices = 0;
+        let uvs = (vc * record.vertex_stride()).div_ceil(32);
+        let triangles = uvs + if has_uvs { vc } else { 0 };
+        let end = triangles + (record.triangle_count() * record.triangle_stride()).div_ceil(32);
         Self {
-            positions,
-            normals,
+            vertices,
             uvs,
-            indices,
+            triangles,
             end,
         }
     }

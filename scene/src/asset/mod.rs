@@ -12,7 +12,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::compress::{
-    BitWriter, Quantization, UvQuantization, bits_for, decode_normal, encode_normal, get_bits,
+    BitWriter, NORMAL_BITS, Quantization, UvQuantization, bits_for, decode_normal_bits,
+    encode_normal_bits, get_bits,
 };
 use crate::dag::Dag;
 use crate::error::SceneError;
@@ -116,6 +117,23 @@ impl MeshletAsset {
                     [m[0].max(q[0]), m[1].max(q[1]), m[2].max(q[2])]
                 });
                 let bits = [0, 1, 2].map(|k| bits_for(hi[k] - lo[k]));
+                // Each triangle rotated (winding kept) to start at its smallest index.
+                let triangles: Vec<[u32; 3]> = local_index
+                    .chunks_exact(3)
+                    .map(|t| {
+                        let t = [t[0] as u32, t[1] as u32, t[2] as u32];
+                        let r = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+                        [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
+                    })
+                    .collect();
+                let index_bits = bits_for(locals.len() as u32 - 1);
+                let delta_bits = bits_for(
+                    triangles
+                        .iter()
+                        .map(|t| (t[1] - t[0]).max(t[2] - t[0]))
+                        .max()
+                        .unwrap_or(0),
+                );
                 let mut data = Vec::new();
                 let mut w = BitWriter::new(&mut data);
                 for &v in &locals {
@@ -123,22 +141,20 @@ impl MeshletAsset {
                     for k in 0..3 {
                         w.put(q[k] - lo[k], bits[k]);
                     }
+                    w.put(
+                        encode_normal_bits(mesh.normals[v as usize], NORMAL_BITS),
+                        2 * NORMAL_BITS,
+                    );
                 }
-                data.extend(
-                    locals
-                        .iter()
-                        .map(|&v| encode_normal(mesh.normals[v as usize])),
-                );
                 if has_uvs {
                     data.extend(locals.iter().map(|&v| uvq.encode(mesh.uvs[v as usize])));
                 }
-                let mut index_bytes = local_index;
-                index_bytes.resize(index_bytes.len().div_ceil(4) * 4, 0);
-                data.extend(
-                    index_bytes
-                        .chunks_exact(4)
-                        .map(|b| u32::from_le_bytes(b.try_into().unwrap())),
-                );
+                let mut w = BitWriter::new(&mut data);
+                for t in &triangles {
+                    w.put(t[0], index_bits);
+                    w.put(t[1] - t[0], delta_bits);
+                    w.put(t[2] - t[0], delta_bits);
+                }
                 let sphere4 = |c: Vec3, r: f32| [c.x, c.y, c.z, r];
                 let record = MeshletRecord {
                     bounds: sphere4(c.bounds.0, c.bounds.1 + pad),
@@ -155,7 +171,11 @@ impl MeshletAsset {
                         | ((c.triangle_count() as u32) << 8)
                         | (c.level.min(255) << 16),
                     grid_min: lo,
-                    bits: bits[0] | (bits[1] << 8) | (bits[2] << 16),
+                    bits: bits[0]
+                        | (bits[1] << 8)
+                        | (bits[2] << 16)
+                        | (index_bits << 24)
+                        | (delta_bits << 28),
                 };
                 (record, data)
             })
@@ -384,10 +404,14 @@ impl MeshletAsset {
         };
         for m in self.meshlets() {
             let l = PayloadLayout::of(m, has_uvs);
-            b.positions += (l.normals - l.positions) as usize * 4;
-            b.normals += (l.uvs - l.normals) as usize * 4;
-            b.uvs += (l.indices - l.uvs) as usize * 4;
-            b.indices += (l.end - l.indices) as usize * 4;
+            // Vertex records interleave positions and normals: split their words by bits.
+            let vertex_bytes = (l.uvs - l.vertices) as usize * 4;
+            let normal_share = 2 * NORMAL_BITS as usize;
+            let normals = vertex_bytes * normal_share / m.vertex_stride().max(1) as usize;
+            b.positions += vertex_bytes - normals;
+            b.normals += normals;
+            b.uvs += (l.triangles - l.uvs) as usize * 4;
+            b.indices += (l.end - l.triangles) as usize * 4;
         }
         b
     }
@@ -400,39 +424,48 @@ impl MeshletAsset {
         let data = &self.payload()[m.data_offset as usize..(m.data_offset + layout.end) as usize];
         let vc = m.vertex_count() as usize;
         let bits = m.axis_bits();
-        let stride = (bits[0] + bits[1] + bits[2]) as usize;
         let quant = self.quantization();
-        let grid: Vec<[u32; 3]> = (0..vc)
-            .map(|v| {
-                let mut at = v * stride;
-                [0, 1, 2].map(|k| {
-                    // In range: validated at load.
-                    let d = get_bits(&data[..layout.normals as usize], at, bits[k]).unwrap_or(0);
-                    at += bits[k] as usize;
-                    m.grid_min[k] + d
-                })
-            })
-            .collect();
+        let vertex_block = &data[..layout.uvs as usize];
+        let stride = m.vertex_stride() as usize;
+        // Every field is in range (validated at load); `unwrap_or(0)` only keeps a
+        // decoder of untrusted words from panicking.
+        let field = |block: &[u32], at: usize, bits: u32| get_bits(block, at, bits).unwrap_or(0);
+        let mut grid = Vec::with_capacity(vc);
+        let mut normals = Vec::with_capacity(vc);
+        for v in 0..vc {
+            let mut at = v * stride;
+            grid.push([0, 1, 2].map(|k| {
+                let d = field(vertex_block, at, bits[k]);
+                at += bits[k] as usize;
+                m.grid_min[k] + d
+            }));
+            normals.push(decode_normal_bits(
+                field(vertex_block, at, 2 * NORMAL_BITS),
+                NORMAL_BITS,
+            ));
+        }
         let uvq = UvQuantization {
             min: h.uv_min,
             step: h.uv_step,
         };
-        let normals = data[layout.normals as usize..layout.uvs as usize]
-            .iter()
-            .map(|&n| decode_normal(n))
-            .collect();
         let uvs = if h.has_uvs() {
-            data[layout.uvs as usize..layout.indices as usize]
+            data[layout.uvs as usize..layout.triangles as usize]
                 .iter()
                 .map(|&u| uvq.decode(u))
                 .collect()
         } else {
             Vec::new()
         };
-        let idx: &[u8] = bytemuck::cast_slice(&data[layout.indices as usize..]);
-        let triangles = idx[..m.triangle_count() as usize * 3]
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]])
+        let triangle_block = &data[layout.triangles as usize..];
+        let (ib, db) = (m.index_bits(), m.delta_bits());
+        let triangles = (0..m.triangle_count() as usize)
+            .map(|t| {
+                let at = t * m.triangle_stride() as usize;
+                let first = field(triangle_block, at, ib);
+                let d1 = field(triangle_block, at + ib as usize, db);
+                let d2 = field(triangle_block, at + (ib + db) as usize, db);
+                [first, first + d1, first + d2].map(|i| i.min(255) as u8)
+            })
             .collect();
         DecodedMeshlet {
             positions: grid.iter().map(|&q| quant.dequantize(q)).collect(),

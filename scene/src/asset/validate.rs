@@ -147,8 +147,15 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ));
         }
         max_level = max_level.max(level);
-        if m.bits >> 24 != 0 {
-            return Err(bad(f("bits"), "has bits set above bit 24"));
+        if m.index_bits() > 8 || m.delta_bits() > 8 {
+            return Err(bad(
+                f("bits"),
+                format!(
+                    "gives {}-bit indices and {}-bit corner offsets; local indices have at most 8",
+                    m.index_bits(),
+                    m.delta_bits()
+                ),
+            ));
         }
         let bits = m.axis_bits();
         for (k, (&b, &min)) in bits.iter().zip(&m.grid_min).enumerate() {
@@ -189,13 +196,12 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         if m.data_offset as u64 + layout.end as u64 > payload.len() as u64 {
             return Err(bad(f("data_offset"), "puts its data outside the payload"));
         }
-        let start = (m.data_offset + layout.indices) as usize;
-        let idx: &[u8] =
-            bytemuck::cast_slice(&payload[start..start + (layout.end - layout.indices) as usize]);
-        if idx[..tc as usize * 3].iter().any(|&l| l as u32 >= vc) {
+        let start = (m.data_offset + layout.triangles) as usize;
+        let block = &payload[start..m.data_offset as usize + layout.end as usize];
+        if let Some(t) = triangle_past_vertices(block, m) {
             return Err(bad(
-                format!("meshlet[{i}] indices"),
-                format!("refer past its {vc} vertices"),
+                format!("meshlet[{i}] triangle {t}"),
+                format!("refers past its {vc} vertices"),
             ));
         }
         if level == 0 {
@@ -324,4 +330,29 @@ fn header_floats(h: &AssetHeader) -> Result<(), Invalid> {
         ));
     }
     Ok(())
+}
+
+/// The first triangle of `block` (a meshlet's triangle records) with a corner at or past
+/// the meshlet's vertex count. Reads the records a word at a time: this runs on every
+/// load.
+fn triangle_past_vertices(block: &[u32], m: &MeshletRecord) -> Option<usize> {
+    let (ib, db) = (m.index_bits(), m.delta_bits());
+    let stride = (ib + 2 * db) as usize;
+    let vc = m.vertex_count();
+    let mask = |bits: u32| ((1u64 << bits) - 1) as u32;
+    for t in 0..m.triangle_count() as usize {
+        let at = t * stride;
+        let (word, shift) = (at / 32, at % 32);
+        // A record is at most 24 bits, so it lies within two consecutive words.
+        let lo = block[word] as u64;
+        let hi = block.get(word + 1).copied().unwrap_or(0) as u64;
+        let bits = ((lo | (hi << 32)) >> shift) as u32;
+        let first = bits & mask(ib);
+        let d1 = (bits >> ib) & mask(db);
+        let d2 = (bits >> (ib + db)) & mask(db);
+        if first + d1.max(d2) >= vc {
+            return Some(t);
+        }
+    }
+    None
 }
