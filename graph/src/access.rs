@@ -27,15 +27,24 @@ pub enum Access {
     DepthTarget,
     /// Destination of a copy or a clear.
     CopyDst,
-    /// Read-write storage: atomics, in-place updates, accumulation.
+    /// Read-write storage: atomics, in-place updates, accumulation onto earlier contents.
     StorageReadWrite,
+    /// Cleared by the pass, then read and written (atomic counters, `atomicMax` targets):
+    /// read-write inside the pass, but nothing written before it matters, so a fresh
+    /// transient needs no writer.
+    ClearedReadWrite,
 }
 
 impl Access {
+    /// True when the pass depends on what earlier passes wrote.
     pub fn reads(self) -> bool {
         !matches!(
             self,
-            Access::StorageWrite | Access::RenderTarget | Access::DepthTarget | Access::CopyDst
+            Access::StorageWrite
+                | Access::RenderTarget
+                | Access::DepthTarget
+                | Access::CopyDst
+                | Access::ClearedReadWrite
         )
     }
     pub fn writes(self) -> bool {
@@ -46,7 +55,12 @@ impl Access {
                 | Access::DepthTarget
                 | Access::CopyDst
                 | Access::StorageReadWrite
+                | Access::ClearedReadWrite
         )
+    }
+    /// True for storage accesses the shader both reads and writes (atomics).
+    pub fn read_write_storage(self) -> bool {
+        matches!(self, Access::StorageReadWrite | Access::ClearedReadWrite)
     }
     pub fn name(self) -> &'static str {
         match self {
@@ -62,6 +76,7 @@ impl Access {
             Access::DepthTarget => "depth-target",
             Access::CopyDst => "copy-dst",
             Access::StorageReadWrite => "storage-read-write",
+            Access::ClearedReadWrite => "cleared-read-write",
         }
     }
     /// The buffer usage this access needs, or `None` when a buffer cannot be used this way.
@@ -69,6 +84,8 @@ impl Access {
         use wgpu::BufferUsages as U;
         Some(match self {
             Access::StorageRead | Access::StorageWrite | Access::StorageReadWrite => U::STORAGE,
+            // The clear is a fill command, which needs COPY_DST.
+            Access::ClearedReadWrite => U::STORAGE | U::COPY_DST,
             Access::Uniform => U::UNIFORM,
             Access::Indirect => U::INDIRECT,
             Access::Vertex => U::VERTEX,
@@ -85,11 +102,37 @@ impl Access {
             Access::StorageRead | Access::StorageWrite | Access::StorageReadWrite => {
                 U::STORAGE_BINDING
             }
+            Access::ClearedReadWrite => U::STORAGE_BINDING | U::COPY_DST,
             Access::Sampled => U::TEXTURE_BINDING,
             Access::RenderTarget | Access::DepthTarget => U::RENDER_ATTACHMENT,
             Access::CopySrc => U::COPY_SRC,
             Access::CopyDst => U::COPY_DST,
             Access::Uniform | Access::Indirect | Access::Vertex | Access::Index => return None,
         })
+    }
+}
+
+/// The texture usage `access` needs on a texture of `format`: read-write storage on an
+/// `R64Uint` texture is 64-bit atomics, which need `STORAGE_ATOMIC` too.
+pub fn texture_usage_for(
+    access: Access,
+    format: wgpu::TextureFormat,
+) -> Option<wgpu::TextureUsages> {
+    let usage = access.texture_usage()?;
+    Some(
+        if access.read_write_storage() && format == wgpu::TextureFormat::R64Uint {
+            usage | wgpu::TextureUsages::STORAGE_ATOMIC
+        } else {
+            usage
+        },
+    )
+}
+
+/// Device features a slot of `access` on a texture of `format` needs.
+pub fn texture_features_for(access: Access, format: wgpu::TextureFormat) -> wgpu::Features {
+    if access.read_write_storage() && format == wgpu::TextureFormat::R64Uint {
+        wgpu::Features::TEXTURE_ATOMIC | wgpu::Features::TEXTURE_INT64_ATOMIC
+    } else {
+        wgpu::Features::empty()
     }
 }

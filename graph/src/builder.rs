@@ -17,7 +17,7 @@ enum Target {
 /// name, at its current version.
 #[derive(Clone, Debug, Default)]
 pub struct Bindings {
-    entries: Vec<(String, Target)>,
+    entries: Vec<(String, Target, Option<TextureRange>)>,
 }
 
 impl Bindings {
@@ -26,13 +26,34 @@ impl Bindings {
     }
     pub fn bind(mut self, slot: &str, handle: impl Into<AnyHandle>) -> Self {
         self.entries
-            .push((slot.to_string(), Target::Handle(handle.into())));
+            .push((slot.to_string(), Target::Handle(handle.into()), None));
+        self
+    }
+    /// Binds a slot to part of a texture: some mips or layers. Two slots of one pass may
+    /// bind one texture when their ranges are disjoint (read mip N − 1, write mip N).
+    pub fn bind_range(
+        mut self,
+        slot: &str,
+        handle: impl Into<AnyHandle>,
+        range: TextureRange,
+    ) -> Self {
+        self.entries
+            .push((slot.to_string(), Target::Handle(handle.into()), Some(range)));
         self
     }
     /// Binds a slot to a resource by name, at its current version.
     pub fn bind_named(mut self, slot: &str, resource: &str) -> Self {
         self.entries
-            .push((slot.to_string(), Target::Name(resource.to_string())));
+            .push((slot.to_string(), Target::Name(resource.to_string()), None));
+        self
+    }
+    /// [`Bindings::bind_named`] with a texture range.
+    pub fn bind_named_range(mut self, slot: &str, resource: &str, range: TextureRange) -> Self {
+        self.entries.push((
+            slot.to_string(),
+            Target::Name(resource.to_string()),
+            Some(range),
+        ));
         self
     }
 }
@@ -45,6 +66,8 @@ pub struct PassNode {
     pub contract: StageContract,
     /// In contract slot order.
     pub bindings: Vec<AnyHandle>,
+    /// Per slot, the texture range it binds (`None`: the whole resource).
+    pub ranges: Vec<Option<TextureRange>>,
 }
 
 /// A resource written this frame and read next frame.
@@ -103,6 +126,8 @@ pub struct GraphBuilder {
     current: Vec<u32>,
     /// Errors found while declaring, reported by `compile` so declaration code stays linear.
     pub(crate) deferred: Vec<GraphError>,
+    /// Size parameters and their values, in declaration order.
+    pub(crate) params: Vec<(String, u64)>,
 }
 
 impl GraphBuilder {
@@ -204,6 +229,34 @@ impl GraphBuilder {
         }
     }
 
+    /// Declares a size parameter: buffers made with [`BufferDesc::array_param`] hold
+    /// `value` elements, and [`CompiledGraph::set_param`] changes it without rebuilding.
+    pub fn size_param(&mut self, name: &str, value: u64) {
+        match self.params.iter_mut().find(|(n, _)| n == name) {
+            Some(p) => p.1 = value,
+            None => self.params.push((name.to_string(), value)),
+        }
+    }
+
+    /// Copies `range` (bytes; `None`: all) of `handle` to the CPU every frame, ready
+    /// `latency` frames later through [`crate::Executor::take_readback`], which never
+    /// waits for the GPU. The pass is named `readback:<name>` and is never culled.
+    pub fn readback(
+        &mut self,
+        name: &str,
+        handle: Handle<Buffer>,
+        range: Option<std::ops::Range<u64>>,
+        latency: u32,
+    ) -> Result<()> {
+        let pass = crate::readback::ReadbackPass::new(name, range, latency);
+        self.add_pass(
+            &format!("readback:{name}"),
+            pass,
+            Bindings::new().bind("source", handle),
+        )
+        .map(drop)
+    }
+
     /// Looks a resource up by name, at its newest version.
     pub fn resource(&self, name: &str) -> Option<AnyHandle> {
         let i = self.resources.iter().position(|r| r.name == name)?;
@@ -248,7 +301,7 @@ impl GraphBuilder {
             });
         }
         let mut contract = pass.contract();
-        for (slot, _) in &bindings.entries {
+        for (slot, _, _) in &bindings.entries {
             if contract.slot(slot).is_none() {
                 return Err(GraphError::UnknownSlot {
                     pass: name.to_string(),
@@ -259,14 +312,16 @@ impl GraphBuilder {
             }
         }
         let mut resolved = Vec::with_capacity(contract.slots.len());
+        let mut ranges = Vec::with_capacity(contract.slots.len());
         let mut unbound_optional = Vec::new();
         for slot in &contract.slots {
-            let target = bindings
+            let entry = bindings
                 .entries
                 .iter()
                 .rev()
-                .find(|(s, _)| s == slot.name)
-                .map(|(_, t)| t.clone());
+                .find(|(s, _, _)| s == slot.name);
+            let target = entry.map(|(_, t, _)| t.clone());
+            let range = entry.and_then(|(_, _, r)| *r);
             let handle = match target {
                 Some(Target::Handle(h)) => h,
                 Some(Target::Name(res)) => {
@@ -292,14 +347,17 @@ impl GraphBuilder {
                 },
             };
             resolved.push(handle);
+            ranges.push(range);
         }
         // The node keeps only bound slots, so every later step sees slots and handles in step.
         contract
             .slots
             .retain(|s| !unbound_optional.contains(&s.name));
+        // A pass makes one new version of each resource it writes, however many of its
+        // slots write disjoint parts of it.
         let mut written = Vec::new();
         for (slot, handle) in contract.slots.iter().zip(&resolved) {
-            if slot.access.writes() {
+            if slot.writes() {
                 let next = AnyHandle {
                     id: handle.id,
                     version: handle.version + 1,
@@ -314,6 +372,7 @@ impl GraphBuilder {
             pass,
             contract,
             bindings: resolved,
+            ranges,
         });
         Ok(PassOutputs {
             pass: name.to_string(),

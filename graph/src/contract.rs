@@ -18,12 +18,20 @@ pub enum SlotKind {
         #[serde(serialize_with = "crate::plan::ser_opt_format")]
         format: Option<wgpu::TextureFormat>,
     },
+    /// A 64-bit visibility target: a buffer of `u64` or an `R64Uint` texture. A software
+    /// rasteriser on a storage buffer and one on 64-bit texture atomics share a contract
+    /// through this, so swapping them stays a one-line change.
+    Visibility64,
 }
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Slot {
     pub name: &'static str,
+    /// The access bind groups use.
     pub access: Access,
+    /// Further uses in the same pass: the indirect arguments of a dispatch or draw, a copy.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub also: Vec<Access>,
     pub kind: SlotKind,
     /// One line for dumps and error messages.
     pub doc: &'static str,
@@ -39,6 +47,7 @@ impl Slot {
             kind: SlotKind::Buffer {
                 element: Some(element),
             },
+            also: Vec::new(),
             doc,
             optional: false,
         }
@@ -53,9 +62,45 @@ impl Slot {
             name,
             access,
             kind: SlotKind::Texture { format },
+            also: Vec::new(),
             doc,
             optional: false,
         }
+    }
+    /// A 64-bit visibility target (see [`SlotKind::Visibility64`]).
+    pub fn visibility64(name: &'static str, access: Access, doc: &'static str) -> Self {
+        Self {
+            name,
+            access,
+            kind: SlotKind::Visibility64,
+            also: Vec::new(),
+            doc,
+            optional: false,
+        }
+    }
+    /// Adds a further use in the same pass, e.g. `Access::Indirect` for a buffer a dispatch
+    /// appends to and a later dispatch or draw of the pass takes its arguments from.
+    pub fn also(mut self, access: Access) -> Self {
+        self.also.push(access);
+        self
+    }
+    /// Every access, the binding one first.
+    pub fn accesses(&self) -> impl Iterator<Item = Access> + '_ {
+        std::iter::once(self.access).chain(self.also.iter().copied())
+    }
+    /// True when the pass depends on earlier contents through any of its uses.
+    pub fn reads(&self) -> bool {
+        self.accesses().any(Access::reads)
+    }
+    pub fn writes(&self) -> bool {
+        self.accesses().any(Access::writes)
+    }
+    /// `storage-read-write+indirect`, for dumps and messages.
+    pub fn access_name(&self) -> String {
+        self.accesses()
+            .map(Access::name)
+            .collect::<Vec<_>>()
+            .join("+")
     }
     /// Marks the slot optional: left unbound (and with no resource of its name), the pass
     /// runs without it.

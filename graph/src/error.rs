@@ -102,6 +102,49 @@ pub enum GraphError {
         known: String,
     },
 
+    #[error(
+        "{file}: pass `{pass}` names stage `{stage}`, which no registered pass crate provides; stages: {known}"
+    )]
+    UnknownStage {
+        file: String,
+        pass: String,
+        stage: String,
+        known: String,
+    },
+
+    #[error("{what} is {value} {unit}, over the adapter's {limit} of {max}; {hint}")]
+    LimitExceeded {
+        /// The resource or pass, named.
+        what: String,
+        limit: &'static str,
+        value: u64,
+        max: u64,
+        unit: &'static str,
+        hint: String,
+    },
+
+    #[error(
+        "resource `{resource}`: its size overflows 64 bits (element count × element size); use a smaller count"
+    )]
+    SizeOverflow { resource: String },
+
+    #[error(
+        "resource `{resource}` is sized by parameter `{param}`, which is not declared; declare it with size_param (known: {known})"
+    )]
+    UnknownParam {
+        resource: String,
+        param: String,
+        known: String,
+    },
+
+    #[error(
+        "pass `{pass}` reads frame input `{input}`, which this frame does not supply; add it to the FrameData given to execute"
+    )]
+    MissingFrameInput { pass: String, input: String },
+
+    #[error("could not allocate `{resource}`: {message}")]
+    Allocation { resource: String, message: String },
+
     #[error("pass `{pass}` parameter error: {message}")]
     Parameter { pass: String, message: String },
 

@@ -14,6 +14,8 @@ pub mod exec;
 pub mod file;
 pub mod pass;
 pub mod plan;
+pub mod program;
+pub mod readback;
 pub mod resource;
 pub mod synthetic;
 
@@ -23,13 +25,15 @@ pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
-    BindingLayout, ComputeDesc, Executor, FrameStats, GpuAdapter, GpuContext, Imports,
-    RecordContext,
+    BindingLayout, ColorAttachment, ComputeProgram, DepthAttachment, Executor, FrameData,
+    FrameStats, GpuAdapter, GpuContext, GpuTimings, Imports, Readback, RecordContext,
+    RenderProgram, SamplerKind,
 };
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
 pub use pass::{Pass, SetupContext};
 pub use plan::Plan;
+pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};
 pub use resource::{
     AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture,
-    TextureDesc,
+    TextureDesc, TextureRange,
 };

@@ -5,7 +5,8 @@ use crate::access::Access;
 use crate::contract::StageContract;
 use crate::error::Result;
 use crate::exec::RecordContext;
-use crate::resource::BufferDesc;
+use crate::program::ProgramDesc;
+use crate::resource::{BufferDesc, ResourceDesc, TextureDesc};
 use meshlight_shaders::{ShaderDef, ShaderDefs};
 
 /// One implementation of a stage.
@@ -24,18 +25,20 @@ pub trait Pass: Send + Sync {
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()>;
 }
 
-/// A scratch buffer private to one pass.
+/// A scratch buffer or texture private to one pass.
 #[derive(Clone, Debug)]
 pub struct ScratchDecl {
     pub name: String,
-    pub desc: BufferDesc,
+    pub desc: ResourceDesc,
     pub accesses: Vec<Access>,
 }
 
 /// What `setup` collects from a pass.
 #[derive(Debug)]
-pub struct SetupContext {
+pub struct SetupContext<'a> {
     adapter_features: wgpu::Features,
+    limits: &'a wgpu::Limits,
+    params: &'a [(String, u64)],
     bound: Vec<&'static str>,
     pub(crate) required: wgpu::Features,
     pub(crate) optional: wgpu::Features,
@@ -43,12 +46,22 @@ pub struct SetupContext {
     pub(crate) scratch: Vec<ScratchDecl>,
     pub(crate) side_effect: bool,
     pub(crate) min_bytes: Vec<(String, u64)>,
+    pub(crate) programs: Vec<(String, ProgramDesc)>,
+    pub(crate) frame_inputs: Vec<String>,
+    pub(crate) dispatches: Vec<(String, [u32; 3])>,
 }
 
-impl SetupContext {
-    pub(crate) fn new(adapter_features: wgpu::Features, bound: Vec<&'static str>) -> Self {
+impl<'a> SetupContext<'a> {
+    pub(crate) fn new(
+        adapter_features: wgpu::Features,
+        limits: &'a wgpu::Limits,
+        params: &'a [(String, u64)],
+        bound: Vec<&'static str>,
+    ) -> Self {
         Self {
             adapter_features,
+            limits,
+            params,
             bound,
             required: wgpu::Features::empty(),
             optional: wgpu::Features::empty(),
@@ -56,11 +69,22 @@ impl SetupContext {
             scratch: Vec::new(),
             side_effect: false,
             min_bytes: Vec::new(),
+            programs: Vec::new(),
+            frame_inputs: Vec::new(),
+            dispatches: Vec::new(),
         }
     }
     /// The adapter's features, to choose between variants.
     pub fn adapter_features(&self) -> wgpu::Features {
         self.adapter_features
+    }
+    /// The adapter's limits (workgroups per dimension, binding sizes, …).
+    pub fn limits(&self) -> &wgpu::Limits {
+        self.limits
+    }
+    /// The value of a size parameter at compile time.
+    pub fn param(&self, name: &str) -> Option<u64> {
+        self.params.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
     }
     /// True when `slot` is bound (always, unless the slot is optional), so setup can pick
     /// the variant that uses it.
@@ -88,9 +112,46 @@ impl SetupContext {
     pub fn scratch_buffer(&mut self, name: &str, desc: BufferDesc, accesses: &[Access]) {
         self.scratch.push(ScratchDecl {
             name: name.to_string(),
-            desc,
+            desc: ResourceDesc::Buffer(desc),
             accesses: accesses.to_vec(),
         });
+    }
+    /// Declares a texture only this pass uses, e.g. the colour target a render pipeline
+    /// must have when its fragment shader writes only storage (a render target here is
+    /// cleared and discarded, so it costs no memory traffic).
+    pub fn scratch_texture(&mut self, name: &str, desc: TextureDesc, accesses: &[Access]) {
+        self.scratch.push(ScratchDecl {
+            name: name.to_string(),
+            desc: ResourceDesc::Texture(desc),
+            accesses: accesses.to_vec(),
+        });
+    }
+    /// Declares a program the pass records with; `record` fetches it by `name`. The plan
+    /// and its dumps list it with its exact defs.
+    pub fn program(&mut self, name: &str, desc: ProgramDesc) {
+        self.required |= desc.required_features();
+        if let crate::program::ProgramKind::Render { primitive, .. } = &desc.kind
+            && primitive.unclipped_depth
+        {
+            self.optional |= wgpu::Features::DEPTH_CLIP_CONTROL;
+        }
+        if desc.immediate_size > 0 {
+            self.optional |= wgpu::Features::IMMEDIATES;
+        }
+        self.programs.retain(|(n, _)| n != name);
+        self.programs.push((name.to_string(), desc));
+    }
+    /// Declares a per-frame input the pass reads in `record` (`RecordContext::frame_bytes`);
+    /// a frame that does not supply it fails with an error naming the pass and the input.
+    pub fn frame_input(&mut self, name: &str) {
+        if !self.frame_inputs.iter().any(|n| n == name) {
+            self.frame_inputs.push(name.to_string());
+        }
+    }
+    /// Declares the largest workgroup grid a dispatch of this pass uses, so a grid over
+    /// the adapter's per-dimension limit is a compile error instead of a device error.
+    pub fn dispatch(&mut self, label: &str, groups: [u32; 3]) {
+        self.dispatches.push((label.to_string(), groups));
     }
     /// Marks the pass as having an effect outside the graph (readback, logging), so it is
     /// never culled.

@@ -3,7 +3,8 @@
 use crate::access::Access;
 use crate::compile::pool::{Lifetime, PoolSlot};
 use crate::compile::versions::Edge;
-use crate::resource::{ImportedUsage, ResourceInfo};
+use crate::program::ProgramPlan;
+use crate::resource::{ImportedUsage, ResourceInfo, TextureRange};
 use serde::{Serialize, Serializer};
 
 /// How a render target is loaded and stored by one pass.
@@ -35,12 +36,39 @@ pub struct SlotUse {
     pub slot: &'static str,
     pub resource: usize,
     pub access: Access,
+    /// Further uses in the same pass (indirect arguments, copies).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub also: Vec<Access>,
     /// The version read (or written from).
     pub version: u32,
     /// The version produced, for writes.
     pub writes_version: Option<u32>,
     /// For render and depth targets.
     pub ops: Option<AttachmentOps>,
+    /// The mips and layers bound, for textures bound in part.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range: Option<TextureRange>,
+}
+
+impl SlotUse {
+    pub fn accesses(&self) -> impl Iterator<Item = Access> + '_ {
+        std::iter::once(self.access).chain(self.also.iter().copied())
+    }
+    pub fn reads(&self) -> bool {
+        self.accesses().any(Access::reads)
+    }
+    /// `storage-read-write+indirect`, with the range when the slot binds part of a texture.
+    pub fn access_name(&self) -> String {
+        let mut s = self
+            .accesses()
+            .map(Access::name)
+            .collect::<Vec<_>>()
+            .join("+");
+        if let Some(r) = &self.range {
+            s.push_str(&format!(" [{}]", r.label()));
+        }
+        s
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -52,6 +80,11 @@ pub struct PassPlan {
     /// Scratch resources this pass declared.
     pub scratch: Vec<usize>,
     pub shader_defs: Vec<(String, String)>,
+    /// The programs declared in setup, with the exact defs each runs with.
+    pub programs: Vec<ProgramPlan>,
+    /// Per-frame inputs the pass reads.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub frame_inputs: Vec<String>,
     #[serde(serialize_with = "ser_features")]
     pub required_features: wgpu::Features,
     #[serde(serialize_with = "ser_features")]
@@ -86,6 +119,11 @@ pub struct Plan {
     pub bytes_with_reuse: u64,
     #[serde(serialize_with = "ser_features")]
     pub enabled_features: wgpu::Features,
+    /// Size parameters and their current values.
+    pub params: Vec<(String, u64)>,
+    /// Bumped by every re-plan (a size parameter changed), so the executor knows to
+    /// replace resources.
+    pub generation: u64,
 }
 
 impl Plan {

@@ -140,19 +140,47 @@ impl Element {
 
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct BufferDesc {
+    /// Bytes. `u64::MAX` marks a size that overflowed, which compile reports.
     pub size: u64,
     pub element: Element,
+    /// The element count comes from this size parameter, set at compile time and changeable
+    /// at run time ([`crate::CompiledGraph::set_param`]); `size` is then resolved from it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub count_param: Option<String>,
 }
 
 impl BufferDesc {
+    /// `count` elements; a product past `u64::MAX` is kept as an overflow for compile to
+    /// report, never wrapped.
     pub fn array(element: Element, count: u64) -> Self {
         Self {
-            size: element.size as u64 * count,
+            size: (element.size as u64).checked_mul(count).unwrap_or(u64::MAX),
             element,
+            count_param: None,
+        }
+    }
+    /// As many elements as the size parameter `param` says (declared with
+    /// [`crate::GraphBuilder::size_param`]).
+    pub fn array_param(element: Element, param: &str) -> Self {
+        Self {
+            size: 0,
+            element,
+            count_param: Some(param.to_string()),
+        }
+    }
+    /// Raw bytes of one element type.
+    pub fn bytes(element: Element, size: u64) -> Self {
+        Self {
+            size,
+            element,
+            count_param: None,
         }
     }
     pub fn elements(&self) -> u64 {
         self.size / self.element.size.max(1) as u64
+    }
+    pub(crate) fn overflowed(&self) -> bool {
+        self.size == u64::MAX
     }
 }
 
@@ -163,6 +191,8 @@ pub struct TextureDesc {
     pub width: u32,
     pub height: u32,
     pub mip_levels: u32,
+    /// Array layers; 1 is a plain 2-D texture, more make a 2-D array.
+    pub layers: u32,
 }
 
 impl TextureDesc {
@@ -172,13 +202,139 @@ impl TextureDesc {
             width,
             height,
             mip_levels: 1,
+            layers: 1,
         }
+    }
+    /// A full mip chain down to 1×1 (`floor(log2(max(w, h))) + 1` levels).
+    pub fn with_full_mips(mut self) -> Self {
+        self.mip_levels = 32 - self.width.max(self.height).max(1).leading_zeros();
+        self
+    }
+    pub fn with_mips(mut self, mip_levels: u32) -> Self {
+        self.mip_levels = mip_levels;
+        self
+    }
+    pub fn with_layers(mut self, layers: u32) -> Self {
+        self.layers = layers;
+        self
     }
     pub fn bytes(&self) -> u64 {
         let block = self.format.block_copy_size(None).unwrap_or(4) as u64;
-        (0..self.mip_levels)
+        let per_layer: u64 = (0..self.mip_levels.min(32))
             .map(|m| ((self.width >> m).max(1) as u64) * ((self.height >> m).max(1) as u64) * block)
-            .sum()
+            .sum();
+        per_layer.saturating_mul(self.layers.max(1) as u64)
+    }
+    /// Every mip and layer.
+    pub fn full_range(&self) -> TextureRange {
+        TextureRange {
+            base_mip: 0,
+            mip_count: self.mip_levels,
+            base_layer: 0,
+            layer_count: self.layers,
+        }
+    }
+    /// Width and height of mip `level`.
+    pub fn mip_size(&self, level: u32) -> (u32, u32) {
+        ((self.width >> level).max(1), (self.height >> level).max(1))
+    }
+}
+
+/// A part of a texture a slot binds: mips `base_mip..base_mip + mip_count` of layers
+/// `base_layer..base_layer + layer_count`. Two slots of one pass may bind one texture when
+/// their ranges are disjoint, so a pass can read mip N − 1 while writing mip N.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+pub struct TextureRange {
+    pub base_mip: u32,
+    pub mip_count: u32,
+    pub base_layer: u32,
+    pub layer_count: u32,
+}
+
+impl TextureRange {
+    /// One mip of every layer (the layer count is filled in from the texture).
+    pub fn mip(level: u32) -> Self {
+        Self {
+            base_mip: level,
+            mip_count: 1,
+            base_layer: 0,
+            layer_count: u32::MAX,
+        }
+    }
+    /// Mips `first..first + count` of every layer.
+    pub fn mips(first: u32, count: u32) -> Self {
+        Self {
+            base_mip: first,
+            mip_count: count,
+            base_layer: 0,
+            layer_count: u32::MAX,
+        }
+    }
+    /// One layer, every mip.
+    pub fn layer(layer: u32) -> Self {
+        Self {
+            base_mip: 0,
+            mip_count: u32::MAX,
+            base_layer: layer,
+            layer_count: 1,
+        }
+    }
+    /// `u32::MAX` counts mean "to the end"; resolves them against `desc`.
+    pub fn resolve(self, desc: &TextureDesc) -> Self {
+        let mip_count = if self.mip_count == u32::MAX {
+            desc.mip_levels.saturating_sub(self.base_mip)
+        } else {
+            self.mip_count
+        };
+        let layer_count = if self.layer_count == u32::MAX {
+            desc.layers.saturating_sub(self.base_layer)
+        } else {
+            self.layer_count
+        };
+        Self {
+            mip_count,
+            layer_count,
+            ..self
+        }
+    }
+    pub fn overlaps(&self, other: &TextureRange) -> bool {
+        let span =
+            |a: u32, n: u32, b: u32, m: u32| a < b.saturating_add(m) && b < a.saturating_add(n);
+        span(
+            self.base_mip,
+            self.mip_count,
+            other.base_mip,
+            other.mip_count,
+        ) && span(
+            self.base_layer,
+            self.layer_count,
+            other.base_layer,
+            other.layer_count,
+        )
+    }
+    /// `mips 1..2`, `layer 3`, … for dumps.
+    pub fn label(&self) -> String {
+        let mips = if self.mip_count == 1 {
+            format!("mip {}", self.base_mip)
+        } else {
+            format!("mips {}..{}", self.base_mip, self.base_mip + self.mip_count)
+        };
+        if self.base_layer == 0 && self.layer_count <= 1 {
+            mips
+        } else {
+            format!(
+                "{mips}, layers {}..{}",
+                self.base_layer,
+                self.base_layer + self.layer_count
+            )
+        }
+    }
+    /// True when the range lies inside `desc`.
+    pub fn fits(&self, desc: &TextureDesc) -> bool {
+        self.mip_count > 0
+            && self.layer_count > 0
+            && self.base_mip as u64 + self.mip_count as u64 <= desc.mip_levels as u64
+            && self.base_layer as u64 + self.layer_count as u64 <= desc.layers as u64
     }
 }
 

@@ -266,6 +266,7 @@ fn usage_the_import_does_not_allow_is_an_error() {
         Slot {
             name: "args",
             access: Access::Indirect,
+            also: Vec::new(),
             kind: SlotKind::Texture { format: None },
             doc: "",
             optional: false,

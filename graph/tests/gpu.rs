@@ -43,7 +43,7 @@ fn three_pass_graph(transform: Box<dyn Pass>) -> GraphBuilder {
 
 fn run_once(g: GraphBuilder) -> Vec<u32> {
     let gpu = gpu();
-    let compiled = g.compile(&CompileOptions::new(gpu.features)).unwrap();
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let result = gpu.buffer_with_data("result", &vec![0xFFu8; N as usize * 4], USAGE);
     let mut exec = Executor::new(gpu);
     let stats = exec
@@ -81,7 +81,7 @@ fn history_resource_carries_from_frame_to_frame() {
             .bind("output", h.current),
     )
     .unwrap();
-    let compiled = g.compile(&CompileOptions::new(gpu.features)).unwrap();
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let mut exec = Executor::new(gpu);
     for frame in 1..=4u32 {
         exec.execute(&compiled, &Imports::new()).unwrap();
@@ -99,7 +99,7 @@ fn history_resource_carries_from_frame_to_frame() {
 fn steady_graph_allocates_nothing_after_the_first_frame() {
     let gpu = gpu();
     let compiled = three_pass_graph(Box::new(Add { count: N, k: 1 }))
-        .compile(&CompileOptions::new(gpu.features))
+        .compile(&CompileOptions::for_gpu(&gpu))
         .unwrap();
     let result = gpu.buffer_with_data("result", &[0u8; N as usize * 4], USAGE);
     let mut exec = Executor::new(gpu);
@@ -109,7 +109,9 @@ fn steady_graph_allocates_nothing_after_the_first_frame() {
     assert!(first.allocations > 0 && first.pipelines_created > 0);
     assert_eq!((second.allocations, second.pipelines_created), (0, 0));
     if exec.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
-        assert!(second.passes.iter().all(|p| p.gpu_us.is_some()));
+        let finished = exec.finish().unwrap().unwrap();
+        assert_eq!(finished.frame, second.frame);
+        assert!(finished.passes.iter().all(|p| p.gpu_us.is_some()));
     }
 }
 
@@ -124,17 +126,13 @@ fn wgpu_validation_error_surfaces_as_an_error() {
         fn implementation(&self) -> &'static str {
             "oversized"
         }
-        fn setup(&self, _: &mut SetupContext) -> Result<()> {
+        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+            let layout = BindingLayout::compute("fill").slot(1, "output").uniform(2);
+            ctx.program("fill", ProgramDesc::compute(&SHADER, "fill").layout(layout));
             Ok(())
         }
         fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-            let layout = BindingLayout::compute("fill").slot(1, "output").uniform(2);
-            let program = ctx.compute_program(&ComputeDesc {
-                shader: &SHADER,
-                entry: "fill",
-                defs: &(),
-                layouts: &[layout],
-            })?;
+            let program = ctx.compute("fill")?;
             let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&[1u32, 1, 0, 0]))])?;
             let mut pass = ctx.compute_pass();
             pass.set_pipeline(&program.pipeline);
@@ -148,7 +146,7 @@ fn wgpu_validation_error_surfaces_as_an_error() {
     let out = g.import_buffer("out", BufferDesc::array(Element::U32, 16), USAGE);
     g.add_pass("too_big", Oversized, Bindings::new().bind("output", out))
         .unwrap();
-    let compiled = g.compile(&CompileOptions::new(gpu.features)).unwrap();
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let buffer = gpu.buffer_with_data("out", &[0u8; 64], USAGE);
     let mut exec = Executor::new(gpu);
     match exec.execute(&compiled, &Imports::new().buffer("out", &buffer)) {

@@ -66,7 +66,7 @@ fn file(implementation: &str, param: &str) -> String {
 fn run(text: &str) -> Vec<u32> {
     let g = parse_pipeline(text, "test.toml", &registry()).unwrap();
     let gpu = gpu();
-    let compiled = g.compile(&CompileOptions::new(gpu.features)).unwrap();
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let usage =
         wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
     let result = gpu.buffer_with_data("result", &[0u8; 4000], usage);

@@ -14,7 +14,7 @@ use crate::{ShaderDef, ShaderError, SharedModule, shared_modules};
 ///
 /// `file_path` only labels diagnostics; use a path relative to the workspace
 /// (e.g. `passes/sw_raster/src/raster.wgsl`) so errors point at the file to open.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct PassShader {
     /// A stable name, used as the pipeline label and in errors.
     pub name: &'static str,

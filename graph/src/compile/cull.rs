@@ -20,7 +20,7 @@ pub fn live_passes(
             .slots
             .iter()
             .zip(&node.bindings)
-            .any(|(s, h)| s.access.writes() && resources[h.id.index()].is_visible_outside());
+            .any(|(s, h)| s.writes() && resources[h.id.index()].is_visible_outside());
         if visible || side_effects[p] {
             live[p] = true;
             stack.push(p);

@@ -2,42 +2,178 @@
 //! needs no device, so every rule here is tested headless.
 
 pub mod cull;
+pub mod limits;
 pub mod order;
 pub mod pool;
+pub mod slots;
 pub mod versions;
 
-use crate::access::Access;
+use crate::access::{Access, texture_usage_for};
 use crate::builder::{GraphBuilder, PassNode};
-use crate::contract::SlotKind;
 use crate::error::{GraphError, Result};
 use crate::pass::SetupContext;
 use crate::plan::*;
+use crate::program::{ProgramDesc, ProgramPlan};
 use crate::resource::*;
 use pool::Lifetime;
-use std::collections::HashMap;
+use std::sync::Arc;
 
 #[derive(Clone, Debug)]
 pub struct CompileOptions {
     /// Features of the adapter the graph will run on (`Features::all()` to plan without one).
     pub adapter_features: wgpu::Features,
+    /// Limits of the adapter: buffer, binding and texture sizes, workgroups per dimension.
+    pub limits: wgpu::Limits,
 }
 
 impl CompileOptions {
+    /// Plans for an adapter with `adapter_features` and wgpu's default limits, which every
+    /// Vulkan adapter meets; use [`CompileOptions::for_adapter`] to plan for a real one.
     pub fn new(adapter_features: wgpu::Features) -> Self {
-        Self { adapter_features }
+        Self {
+            adapter_features,
+            limits: wgpu::Limits::default(),
+        }
     }
+    pub fn with_limits(mut self, limits: wgpu::Limits) -> Self {
+        self.limits = limits;
+        self
+    }
+    /// The features enabled on an open device and its limits.
+    pub fn for_gpu(gpu: &crate::GpuContext) -> Self {
+        Self {
+            adapter_features: gpu.features,
+            limits: gpu.device.limits(),
+        }
+    }
+    /// The features and limits of `adapter`.
+    pub fn for_adapter(adapter: &crate::GpuAdapter) -> Self {
+        Self {
+            adapter_features: adapter.features(),
+            limits: adapter.adapter.limits(),
+        }
+    }
+}
+
+/// What compile learnt from each pass's setup that later re-plans need again.
+pub(crate) struct PassSetup {
+    pub min_bytes: Vec<(String, u64)>,
+    pub dispatches: Vec<(String, [u32; 3])>,
+    pub programs: Vec<(String, Arc<ProgramDesc>)>,
 }
 
 /// A plan plus the passes it runs.
 pub struct CompiledGraph {
     pub plan: Plan,
     pub(crate) passes: Vec<PassNode>,
+    pub(crate) setups: Vec<PassSetup>,
+    /// Descriptors as declared, before size parameters were applied.
+    declared: Vec<ResourceDesc>,
+    limits: wgpu::Limits,
 }
 
 impl CompiledGraph {
     pub fn pass_nodes(&self) -> &[PassNode] {
         &self.passes
     }
+
+    /// The current value of a size parameter.
+    pub fn param(&self, name: &str) -> Option<u64> {
+        self.plan
+            .params
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| *v)
+    }
+
+    /// Changes a size parameter: buffers sized by it get the new size, the pool is planned
+    /// again, and the executor replaces the old objects (and history) on the next frame,
+    /// without rebuilding or setting up any pass. On error the plan is left as it was.
+    pub fn set_param(&mut self, name: &str, value: u64) -> Result<()> {
+        let mut params = self.plan.params.clone();
+        let Some(p) = params.iter_mut().find(|(n, _)| n == name) else {
+            return Err(GraphError::UnknownParam {
+                resource: "(set_param)".into(),
+                param: name.to_string(),
+                known: param_names(&self.plan.params),
+            });
+        };
+        if p.1 == value {
+            return Ok(());
+        }
+        p.1 = value;
+        let mut infos: Vec<ResourceInfo> =
+            self.plan.resources.iter().map(|r| r.info.clone()).collect();
+        resolve_sizes(&mut infos, &self.declared, &params)?;
+        for (p, node) in self.passes.iter().enumerate() {
+            slots::check_min_bytes(&infos, node, &self.setups[p].min_bytes)?;
+        }
+        limits::check(
+            &infos,
+            &self.passes,
+            &self.setups,
+            &self.plan.order,
+            &self.limits,
+        )?;
+        let lifetimes: Vec<Option<Lifetime>> =
+            self.plan.resources.iter().map(|r| r.lifetime).collect();
+        let pool = pool::assign_slots(&infos, &lifetimes);
+        for (r, info) in infos.into_iter().enumerate() {
+            self.plan.resources[r].info = info;
+            self.plan.resources[r].pool_slot = pool.slot_of[r];
+        }
+        self.plan.pool_slots = pool.slots;
+        self.plan.bytes_with_reuse = pool.bytes_with_reuse;
+        self.plan.bytes_without_reuse = pool.bytes_without_reuse;
+        self.plan.params = params;
+        self.plan.generation += 1;
+        Ok(())
+    }
+}
+
+fn param_names(params: &[(String, u64)]) -> String {
+    if params.is_empty() {
+        return "none".into();
+    }
+    params
+        .iter()
+        .map(|(n, _)| n.as_str())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Applies size parameters to buffer descriptors that name one.
+fn resolve_sizes(
+    resources: &mut [ResourceInfo],
+    declared: &[ResourceDesc],
+    params: &[(String, u64)],
+) -> Result<()> {
+    for (res, decl) in resources.iter_mut().zip(declared) {
+        if let ResourceDesc::Buffer(b) = decl
+            && let Some(param) = &b.count_param
+        {
+            let count = params
+                .iter()
+                .find(|(n, _)| n == param)
+                .map(|(_, v)| *v)
+                .ok_or_else(|| GraphError::UnknownParam {
+                    resource: res.name.clone(),
+                    param: param.clone(),
+                    known: param_names(params),
+                })?;
+            let mut desc = BufferDesc::array(b.element.clone(), count);
+            desc.count_param = Some(param.clone());
+            res.desc = ResourceDesc::Buffer(desc);
+        }
+        if let ResourceDesc::Buffer(b) = &res.desc
+            && b.overflowed()
+        {
+            return Err(GraphError::SizeOverflow {
+                resource: res.name.clone(),
+            });
+        }
+    }
+    Ok(())
 }
 
 pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<CompiledGraph> {
@@ -45,18 +181,24 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         mut resources,
         passes,
         deferred,
+        params,
         ..
     } = builder;
     if let Some(e) = deferred.into_iter().next() {
         return Err(e);
     }
 
-    // Setup each pass against the adapter's features.
+    // Setup each pass against the adapter's features and limits.
     let mut setups = Vec::with_capacity(passes.len());
     let mut enabled = wgpu::Features::empty();
     let mut scratch_of: Vec<Vec<usize>> = Vec::with_capacity(passes.len());
     for (p, node) in passes.iter().enumerate() {
-        let mut ctx = SetupContext::new(options.adapter_features, node.contract.slot_names());
+        let mut ctx = SetupContext::new(
+            options.adapter_features,
+            &options.limits,
+            &params,
+            node.contract.slot_names(),
+        );
         node.pass.setup(&mut ctx).map_err(|e| match e {
             GraphError::Parameter { message, .. } => GraphError::Parameter {
                 pass: node.name.clone(),
@@ -64,16 +206,21 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             },
             other => other,
         })?;
+        // 64-bit texture atomics on a bound R64Uint texture are a requirement of the
+        // binding itself, whatever the pass declared.
+        for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+            if let ResourceDesc::Texture(t) = &resources[h.id.index()].desc {
+                for a in slot.accesses() {
+                    ctx.required |= crate::access::texture_features_for(a, t.format);
+                }
+            }
+        }
         let missing = ctx.required - options.adapter_features;
         if !missing.is_empty() {
             return Err(GraphError::MissingFeature {
                 pass: node.name.clone(),
                 stage: node.contract.stage.to_string(),
-                features: missing
-                    .iter_names()
-                    .map(|(n, _)| n)
-                    .collect::<Vec<_>>()
-                    .join(", "),
+                features: feature_names(missing),
             });
         }
         enabled |= ctx.required | (ctx.optional & options.adapter_features);
@@ -88,7 +235,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             }
             resources.push(ResourceInfo {
                 name,
-                desc: ResourceDesc::Buffer(s.desc.clone()),
+                desc: s.desc.clone(),
                 kind: ResourceKind::Scratch { pass: p },
             });
             mine.push(resources.len() - 1);
@@ -96,9 +243,12 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         scratch_of.push(mine);
         setups.push(ctx);
     }
+    let declared: Vec<ResourceDesc> = resources.iter().map(|r| r.desc.clone()).collect();
+    resolve_sizes(&mut resources, &declared, &params)?;
 
     for (node, setup) in passes.iter().zip(&setups) {
-        check_slots(&resources, node, setup)?;
+        slots::check_slots(&resources, node)?;
+        slots::check_min_bytes(&resources, node, &setup.min_bytes)?;
     }
 
     let table = versions::derive_edges(&resources, &passes)?;
@@ -137,24 +287,121 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     }
     let pool = pool::assign_slots(&resources, &lifetimes);
 
-    // Usages: every access any live pass makes, plus what the executor itself needs.
+    let (buffer_usage, texture_usage) = usages(&resources, &passes, &setups, &scratch_of, &order);
+
+    let mut versions = vec![0u32; resources.len()];
+    for &(r, v) in table.writer.keys() {
+        versions[r] = versions[r].max(v);
+    }
+
+    let pass_plans = passes
+        .iter()
+        .zip(&setups)
+        .enumerate()
+        .map(|(p, (node, setup))| PassPlan {
+            name: node.name.clone(),
+            stage: node.contract.stage,
+            implementation: node.pass.implementation(),
+            slots: slot_uses(&resources, &table, &live, node),
+            scratch: scratch_of[p].clone(),
+            shader_defs: setup
+                .shader_defs
+                .iter()
+                .map(|(n, v)| (n.clone(), format!("{v:?}")))
+                .collect(),
+            programs: setup
+                .programs
+                .iter()
+                .map(|(n, d)| ProgramPlan::new(n, d))
+                .collect(),
+            frame_inputs: setup.frame_inputs.clone(),
+            required_features: setup.required,
+            optional_features: setup.optional,
+            side_effect: setup.side_effect,
+        })
+        .collect();
+
+    let pass_setups: Vec<PassSetup> = setups
+        .into_iter()
+        .map(|s| PassSetup {
+            min_bytes: s.min_bytes,
+            dispatches: s.dispatches,
+            programs: s
+                .programs
+                .into_iter()
+                .map(|(n, d)| (n, Arc::new(d)))
+                .collect(),
+        })
+        .collect();
+    limits::check(&resources, &passes, &pass_setups, &order, &options.limits)?;
+
+    let resource_plans = resources
+        .into_iter()
+        .enumerate()
+        .map(|(r, info)| ResourcePlan {
+            info,
+            versions: versions[r],
+            lifetime: lifetimes[r],
+            pool_slot: pool.slot_of[r],
+            buffer_usage: buffer_usage[r],
+            texture_usage: texture_usage[r],
+        })
+        .collect();
+
+    Ok(CompiledGraph {
+        plan: Plan {
+            passes: pass_plans,
+            order,
+            culled,
+            resources: resource_plans,
+            edges: table.edges,
+            pool_slots: pool.slots,
+            bytes_without_reuse: pool.bytes_without_reuse,
+            bytes_with_reuse: pool.bytes_with_reuse,
+            enabled_features: enabled,
+            params,
+            generation: 0,
+        },
+        passes,
+        setups: pass_setups,
+        declared,
+        limits: options.limits.clone(),
+    })
+}
+
+pub(crate) fn feature_names(f: wgpu::Features) -> String {
+    f.iter_names()
+        .map(|(n, _)| n)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Every access any live pass makes, plus what the executor itself needs.
+fn usages(
+    resources: &[ResourceInfo],
+    passes: &[PassNode],
+    setups: &[SetupContext<'_>],
+    scratch_of: &[Vec<usize>],
+    order: &[usize],
+) -> (Vec<wgpu::BufferUsages>, Vec<wgpu::TextureUsages>) {
     let mut buffer_usage = vec![wgpu::BufferUsages::empty(); resources.len()];
     let mut texture_usage = vec![wgpu::TextureUsages::empty(); resources.len()];
-    for &p in &order {
+    let mut add = |r: usize, a: Access| {
+        buffer_usage[r] |= a.buffer_usage().unwrap_or(wgpu::BufferUsages::empty());
+        if let ResourceDesc::Texture(t) = &resources[r].desc {
+            texture_usage[r] |=
+                texture_usage_for(a, t.format).unwrap_or(wgpu::TextureUsages::empty());
+        }
+    };
+    for &p in order {
         for (slot, h) in passes[p].contract.slots.iter().zip(&passes[p].bindings) {
-            let r = h.id.index();
-            buffer_usage[r] |= slot
-                .access
-                .buffer_usage()
-                .unwrap_or(wgpu::BufferUsages::empty());
-            texture_usage[r] |= slot
-                .access
-                .texture_usage()
-                .unwrap_or(wgpu::TextureUsages::empty());
+            for a in slot.accesses() {
+                add(h.id.index(), a);
+            }
         }
         for (decl, &r) in setups[p].scratch.iter().zip(&scratch_of[p]) {
-            for a in &decl.accesses {
-                buffer_usage[r] |= a.buffer_usage().unwrap_or(wgpu::BufferUsages::empty());
+            for &a in &decl.accesses {
+                add(r, a);
             }
         }
     }
@@ -185,240 +432,64 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             texture_usage[prev.index()] = t;
         }
     }
-
-    let mut versions = vec![0u32; resources.len()];
-    for &(r, v) in table.writer.keys() {
-        versions[r] = versions[r].max(v);
-    }
-
-    let pass_plans = passes
-        .iter()
-        .zip(&setups)
-        .enumerate()
-        .map(|(p, (node, setup))| {
-            let slots = node
-                .contract
-                .slots
-                .iter()
-                .zip(&node.bindings)
-                .map(|(slot, h)| {
-                    let r = h.id.index();
-                    let writes_version = slot.access.writes().then_some(h.version + 1);
-                    let ops = matches!(slot.access, Access::RenderTarget | Access::DepthTarget)
-                        .then(|| {
-                            let has_earlier = table.writer.contains_key(&(r, h.version))
-                                || (h.version == 0 && resources[r].starts_written());
-                            let v = h.version + 1;
-                            let read_later = table
-                                .readers
-                                .get(&(r, v))
-                                .is_some_and(|rs| rs.iter().any(|&x| live[x]))
-                                || table.writer.get(&(r, v + 1)).is_some_and(|&w| live[w]);
-                            AttachmentOps {
-                                load: if has_earlier {
-                                    LoadOp::Load
-                                } else {
-                                    LoadOp::Clear
-                                },
-                                store: if read_later || resources[r].is_visible_outside() {
-                                    StoreOp::Store
-                                } else {
-                                    StoreOp::Discard
-                                },
-                            }
-                        });
-                    SlotUse {
-                        slot: slot.name,
-                        resource: r,
-                        access: slot.access,
-                        version: h.version,
-                        writes_version,
-                        ops,
-                    }
-                })
-                .collect();
-            PassPlan {
-                name: node.name.clone(),
-                stage: node.contract.stage,
-                implementation: node.pass.implementation(),
-                slots,
-                scratch: scratch_of[p].clone(),
-                shader_defs: setup
-                    .shader_defs
-                    .iter()
-                    .map(|(n, v)| (n.clone(), format!("{v:?}")))
-                    .collect(),
-                required_features: setup.required,
-                optional_features: setup.optional,
-                side_effect: setup.side_effect,
-            }
-        })
-        .collect();
-
-    let resource_plans = resources
-        .into_iter()
-        .enumerate()
-        .map(|(r, info)| ResourcePlan {
-            info,
-            versions: versions[r],
-            lifetime: lifetimes[r],
-            pool_slot: pool.slot_of[r],
-            buffer_usage: buffer_usage[r],
-            texture_usage: texture_usage[r],
-        })
-        .collect();
-
-    Ok(CompiledGraph {
-        plan: Plan {
-            passes: pass_plans,
-            order,
-            culled,
-            resources: resource_plans,
-            edges: table.edges,
-            pool_slots: pool.slots,
-            bytes_without_reuse: pool.bytes_without_reuse,
-            bytes_with_reuse: pool.bytes_with_reuse,
-            enabled_features: enabled,
-        },
-        passes,
-    })
+    (buffer_usage, texture_usage)
 }
 
-/// Each slot against the resource bound to it: kind, element or format, size, usage.
-fn check_slots(resources: &[ResourceInfo], node: &PassNode, setup: &SetupContext) -> Result<()> {
-    let mut seen: HashMap<ResourceId, bool> = HashMap::new();
-    for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
-        let res = &resources[h.id.index()];
-        let mismatch = |expected: String, found: String| GraphError::DescriptorMismatch {
-            pass: node.name.clone(),
-            slot: slot.name.to_string(),
-            resource: res.name.clone(),
-            expected,
-            found,
-        };
-        match (&slot.kind, &res.desc) {
-            (SlotKind::Buffer { element }, ResourceDesc::Buffer(b)) => {
-                if let Some(e) = element
-                    && e != &b.element
-                {
-                    return Err(mismatch(
-                        format!("a buffer of {} ({} bytes each)", e.name, e.size),
-                        format!(
-                            "a buffer of {} ({} bytes each)",
-                            b.element.name, b.element.size
-                        ),
-                    ));
-                }
+/// The plan's view of each slot: versions, the texture range, and for render and depth
+/// targets the load and store ops.
+fn slot_uses(
+    resources: &[ResourceInfo],
+    table: &versions::VersionTable,
+    live: &[bool],
+    node: &PassNode,
+) -> Vec<SlotUse> {
+    node.contract
+        .slots
+        .iter()
+        .zip(&node.bindings)
+        .zip(&node.ranges)
+        .map(|((slot, h), range)| {
+            let r = h.id.index();
+            let writes_version = slot.writes().then_some(h.version + 1);
+            let ops = slot
+                .accesses()
+                .any(|a| matches!(a, Access::RenderTarget | Access::DepthTarget))
+                .then(|| {
+                    let has_earlier = table.writer.contains_key(&(r, h.version))
+                        || (h.version == 0 && resources[r].starts_written());
+                    let v = h.version + 1;
+                    let read_later = table
+                        .readers
+                        .get(&(r, v))
+                        .is_some_and(|rs| rs.iter().any(|&x| live[x]))
+                        || table.writer.get(&(r, v + 1)).is_some_and(|&w| live[w]);
+                    AttachmentOps {
+                        load: if has_earlier {
+                            LoadOp::Load
+                        } else {
+                            LoadOp::Clear
+                        },
+                        store: if read_later || resources[r].is_visible_outside() {
+                            StoreOp::Store
+                        } else {
+                            StoreOp::Discard
+                        },
+                    }
+                });
+            let range = match (&resources[r].desc, range) {
+                (ResourceDesc::Texture(t), Some(range)) => Some(range.resolve(t)),
+                _ => None,
+            };
+            SlotUse {
+                slot: slot.name,
+                resource: r,
+                access: slot.access,
+                also: slot.also.clone(),
+                version: h.version,
+                writes_version,
+                ops,
+                range,
             }
-            (SlotKind::Texture { format }, ResourceDesc::Texture(t)) => {
-                if let Some(f) = format
-                    && *f != t.format
-                {
-                    return Err(mismatch(
-                        format!("a {} texture", format_name(*f)),
-                        format!("a {} texture", format_name(t.format)),
-                    ));
-                }
-            }
-            (SlotKind::Buffer { .. }, d) | (SlotKind::Texture { .. }, d) => {
-                let expected = if matches!(slot.kind, SlotKind::Buffer { .. }) {
-                    "a buffer"
-                } else {
-                    "a texture"
-                };
-                return Err(mismatch(
-                    expected.to_string(),
-                    format!("a {}", d.kind_name()),
-                ));
-            }
-        }
-        for (s, min) in setup.min_bytes.iter().filter(|(s, _)| s == slot.name) {
-            if res.desc.bytes() < *min {
-                return Err(mismatch(
-                    format!("at least {min} bytes (slot {s})"),
-                    format!("{} bytes", res.desc.bytes()),
-                ));
-            }
-        }
-        let usage_err = |needed: String, reason: String| GraphError::UsageNotAllowed {
-            pass: node.name.clone(),
-            slot: slot.name.to_string(),
-            resource: res.name.clone(),
-            access: slot.access.name().to_string(),
-            needed,
-            reason,
-        };
-        match &res.desc {
-            ResourceDesc::Buffer(_) => {
-                let Some(need) = slot.access.buffer_usage() else {
-                    return Err(usage_err(
-                        "a texture".into(),
-                        "a buffer cannot be used this way".into(),
-                    ));
-                };
-                if let ResourceKind::Imported {
-                    usage: ImportedUsage::Buffer(have),
-                } = res.kind
-                    && !have.contains(need)
-                {
-                    return Err(usage_err(
-                        format!("{need:?}"),
-                        format!("it was imported with only {have:?}; create it with {need:?} too"),
-                    ));
-                }
-            }
-            ResourceDesc::Texture(t) => {
-                let Some(need) = slot.access.texture_usage() else {
-                    return Err(usage_err(
-                        "a buffer".into(),
-                        "a texture cannot be used this way".into(),
-                    ));
-                };
-                if need.contains(wgpu::TextureUsages::STORAGE_BINDING)
-                    && t.format.is_depth_stencil_format()
-                {
-                    return Err(usage_err(
-                        format!("{need:?}"),
-                        format!(
-                            "depth format {} cannot be a storage texture",
-                            format_name(t.format)
-                        ),
-                    ));
-                }
-                if let ResourceKind::Imported {
-                    usage: ImportedUsage::Texture(have),
-                } = res.kind
-                    && !have.contains(need)
-                {
-                    return Err(usage_err(
-                        format!("{need:?}"),
-                        format!("it was imported with only {have:?}; create it with {need:?} too"),
-                    ));
-                }
-            }
-        }
-        if slot.access.writes()
-            && let ResourceKind::HistoryPrev { .. } = res.kind
-        {
-            return Err(GraphError::ReadOnlyResource {
-                pass: node.name.clone(),
-                slot: slot.name.to_string(),
-                resource: res.name.clone(),
-                why: "last frame's history is read-only; write the current half instead",
-            });
-        }
-        // One resource in two slots of one pass, one of them writing, would alias inside a
-        // dispatch (and wgpu rejects a writable storage binding that overlaps another).
-        if let Some(&other_writes) = seen.get(&h.id)
-            && (other_writes || slot.access.writes())
-        {
-            return Err(usage_err(
-                "its own slot".into(),
-                "the same resource is bound to another slot of this pass, and one of them writes"
-                    .into(),
-            ));
-        }
-        seen.insert(h.id, slot.access.writes());
-    }
-    Ok(())
+        })
+        .collect()
 }

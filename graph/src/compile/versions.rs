@@ -43,45 +43,52 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
     let mut forward: Vec<(usize, usize, &str, u32)> = Vec::new();
 
     for (p, node) in passes.iter().enumerate() {
-        for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+        let slots: Vec<_> = node.contract.slots.iter().zip(&node.bindings).collect();
+        // Reads first, against the versions before this pass: a pass that reads mip N − 1
+        // and writes mip N of one texture reads what came before it, whatever the slot order.
+        for (slot, h) in slots.iter().filter(|(s, _)| !s.writes()) {
             let r = h.id.index();
-            let res = &resources[r];
             let cur = current[r];
-            let stale = |given: u32| GraphError::StaleVersion {
-                pass: node.name.clone(),
-                slot: slot.name.to_string(),
-                resource: res.name.clone(),
-                given,
-                current: cur,
-                writer: t
-                    .writer
-                    .get(&(r, cur))
-                    .map(|&w| passes[w].name.clone())
-                    .unwrap_or_default(),
-            };
-            if slot.access.writes() {
-                if h.version != cur {
-                    return Err(stale(h.version));
-                }
-                if slot.access.reads() {
-                    read_edge(&mut t, resources, passes, p, slot.name, r, cur)?;
-                }
-                if let Some(&w) = t.writer.get(&(r, cur)) {
-                    push(&mut t.edges, w, p, r, cur, EdgeKind::WriteAfterWrite);
-                }
-                for &reader in t.readers.get(&(r, cur)).into_iter().flatten() {
-                    push(&mut t.edges, reader, p, r, cur, EdgeKind::WriteAfterRead);
-                }
-                t.writer.insert((r, cur + 1), p);
-                current[r] = cur + 1;
-            } else if h.version < cur {
-                return Err(stale(h.version));
+            if h.version < cur {
+                return Err(stale(
+                    &t, resources, passes, p, slot.name, r, h.version, cur,
+                ));
             } else if h.version > cur {
                 forward.push((p, r, slot.name, h.version));
             } else {
                 read_edge(&mut t, resources, passes, p, slot.name, r, cur)?;
                 t.readers.entry((r, cur)).or_default().push(p);
             }
+        }
+        // Then writes: one new version per resource, however many slots write parts of it.
+        let mut written: Vec<usize> = Vec::new();
+        for (slot, h) in slots.iter().filter(|(s, _)| s.writes()) {
+            let r = h.id.index();
+            let cur = if written.contains(&r) {
+                current[r] - 1
+            } else {
+                current[r]
+            };
+            if h.version != cur {
+                return Err(stale(
+                    &t, resources, passes, p, slot.name, r, h.version, current[r],
+                ));
+            }
+            if slot.reads() {
+                read_edge(&mut t, resources, passes, p, slot.name, r, cur)?;
+            }
+            if written.contains(&r) {
+                continue;
+            }
+            if let Some(&w) = t.writer.get(&(r, cur)) {
+                push(&mut t.edges, w, p, r, cur, EdgeKind::WriteAfterWrite);
+            }
+            for &reader in t.readers.get(&(r, cur)).into_iter().flatten() {
+                push(&mut t.edges, reader, p, r, cur, EdgeKind::WriteAfterRead);
+            }
+            t.writer.insert((r, cur + 1), p);
+            current[r] = cur + 1;
+            written.push(r);
         }
     }
     for (p, r, slot, v) in forward {
@@ -97,6 +104,31 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
     t.edges.sort();
     t.edges.dedup();
     Ok(t)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn stale(
+    t: &VersionTable,
+    resources: &[ResourceInfo],
+    passes: &[PassNode],
+    p: usize,
+    slot: &str,
+    r: usize,
+    given: u32,
+    current: u32,
+) -> GraphError {
+    GraphError::StaleVersion {
+        pass: passes[p].name.clone(),
+        slot: slot.to_string(),
+        resource: resources[r].name.clone(),
+        given,
+        current,
+        writer: t
+            .writer
+            .get(&(r, current))
+            .map(|&w| passes[w].name.clone())
+            .unwrap_or_default(),
+    }
 }
 
 fn read_edge(

@@ -57,8 +57,8 @@ pub fn to_dot(plan: &Plan) -> String {
     }
     for (i, p) in plan.passes.iter().enumerate() {
         for s in &p.slots {
-            let label = esc(&format!("{}: {}", s.slot, s.access.name()));
-            if s.access.reads() {
+            let label = esc(&format!("{}: {}", s.slot, s.access_name()));
+            if s.reads() {
                 let _ = writeln!(
                     out,
                     "  r{}v{} -> p{i} [label=\"{label}\"];",

@@ -33,8 +33,8 @@ pub fn to_mermaid(plan: &Plan) -> String {
     }
     for (i, p) in plan.passes.iter().enumerate() {
         for s in &p.slots {
-            let label = esc(&format!("{}: {}", s.slot, s.access.name()));
-            if s.access.reads() {
+            let label = esc(&format!("{}: {}", s.slot, s.access_name()));
+            if s.reads() {
                 let _ = writeln!(out, "  r{}v{} -->|\"{label}\"| p{i}", s.resource, s.version);
             }
             if let Some(w) = s.writes_version {

@@ -31,7 +31,7 @@ pub(crate) fn version_nodes(plan: &Plan) -> Vec<(usize, u32)> {
     let mut v: Vec<(usize, u32)> = Vec::new();
     for p in &plan.passes {
         for s in &p.slots {
-            if s.access.reads() {
+            if s.reads() {
                 v.push((s.resource, s.version));
             }
             if let Some(w) = s.writes_version {

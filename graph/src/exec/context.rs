@@ -9,6 +9,14 @@ pub const ADAPTER_ENV: &str = "MESHLIGHT_ADAPTER";
 pub const TIMING_FEATURES: wgpu::Features =
     wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
 
+/// Every feature wgpu marks experimental (the ones that need the opt-in).
+pub fn experimental_features() -> wgpu::Features {
+    wgpu::Features::all()
+        .iter_names()
+        .filter(|(n, _)| n.starts_with("EXPERIMENTAL_"))
+        .fold(wgpu::Features::empty(), |acc, (_, f)| acc | f)
+}
+
 /// A chosen adapter, before a device is created for it.
 pub struct GpuAdapter {
     pub instance: wgpu::Instance,
@@ -68,10 +76,20 @@ impl GpuAdapter {
             )));
         }
         let enabled = features | (TIMING_FEATURES & have);
+        // wgpu's experimental features (mesh shaders) need an explicit opt-in on top of
+        // the feature bit; it is given only when a pass asked for one.
+        let experimental = if enabled.intersects(experimental_features()) {
+            // SAFETY: the only experimental feature meshlight enables is mesh shading, and
+            // only for passes that declared it; its programs are validated by naga.
+            unsafe { wgpu::ExperimentalFeatures::enabled() }
+        } else {
+            wgpu::ExperimentalFeatures::disabled()
+        };
         let desc = wgpu::DeviceDescriptor {
             label: Some("meshlight"),
             required_features: enabled,
             required_limits: self.adapter.limits(),
+            experimental_features: experimental,
             ..Default::default()
         };
         let (device, queue) = pollster::block_on(self.adapter.request_device(&desc))
@@ -101,16 +119,14 @@ pub struct GpuContext {
 
 impl GpuContext {
     /// Selects an adapter and opens it with every feature the adapter has out of `wanted`,
-    /// leaving out wgpu's experimental features, which must be asked for by name, and
-    /// mappable primary buffers, which slow discrete GPUs down.
+    /// leaving out mappable primary buffers, which slow discrete GPUs down, and wgpu's
+    /// experimental features other than mesh shading, which no meshlight pass uses.
     pub fn with_available(wanted: wgpu::Features) -> Result<Self> {
         let adapter = GpuAdapter::select()?;
         let f = wanted & adapter.features();
-        let experimental = f
-            .iter_names()
-            .filter(|(n, _)| n.starts_with("EXPERIMENTAL_"))
-            .fold(wgpu::Features::empty(), |acc, (_, x)| acc | x);
-        adapter.open(f - experimental - wgpu::Features::MAPPABLE_PRIMARY_BUFFERS)
+        let unused_experimental =
+            experimental_features() - wgpu::Features::EXPERIMENTAL_MESH_SHADER;
+        adapter.open(f - unused_experimental - wgpu::Features::MAPPABLE_PRIMARY_BUFFERS)
     }
 
     /// Copies `size` bytes at `offset` of `buffer` (which needs COPY_SRC) to the CPU.

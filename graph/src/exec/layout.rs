@@ -12,12 +12,58 @@ pub enum BindingSource {
     Scratch(&'static str, Access),
     /// A small uniform block whose bytes the pass passes when it builds the bind group.
     Uniform,
+    /// A sampler the graph creates and caches.
+    Sampler(SamplerKind),
+}
+
+/// The samplers a layout can ask for. wgpu 30 has no min/max reduction samplers, so a
+/// conservative depth pyramid takes the minimum of its texel loads itself.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SamplerKind {
+    /// Linear filtering, clamped to the edge.
+    Linear,
+    /// Nearest texel, clamped: for integer and non-filterable formats (r32float).
+    Nearest,
+    /// A depth comparison sampler (`less-equal`).
+    Comparison,
+}
+
+impl SamplerKind {
+    pub(crate) fn binding_type(self) -> wgpu::BindingType {
+        wgpu::BindingType::Sampler(match self {
+            SamplerKind::Linear => wgpu::SamplerBindingType::Filtering,
+            SamplerKind::Nearest => wgpu::SamplerBindingType::NonFiltering,
+            SamplerKind::Comparison => wgpu::SamplerBindingType::Comparison,
+        })
+    }
+    pub(crate) fn descriptor(self) -> wgpu::SamplerDescriptor<'static> {
+        let filter = match self {
+            SamplerKind::Linear | SamplerKind::Comparison => wgpu::FilterMode::Linear,
+            SamplerKind::Nearest => wgpu::FilterMode::Nearest,
+        };
+        wgpu::SamplerDescriptor {
+            label: Some("meshlight sampler"),
+            address_mode_u: wgpu::AddressMode::ClampToEdge,
+            address_mode_v: wgpu::AddressMode::ClampToEdge,
+            address_mode_w: wgpu::AddressMode::ClampToEdge,
+            mag_filter: filter,
+            min_filter: filter,
+            mipmap_filter: match filter {
+                wgpu::FilterMode::Linear => wgpu::MipmapFilterMode::Linear,
+                wgpu::FilterMode::Nearest => wgpu::MipmapFilterMode::Nearest,
+            },
+            compare: (self == SamplerKind::Comparison).then_some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct LayoutEntry {
     pub binding: u32,
     pub source: BindingSource,
+    /// Stages that see this binding; `None`: the layout's default.
+    pub visibility: Option<wgpu::ShaderStages>,
 }
 
 /// One bind group of a pipeline, as a labelled list of slot bindings.
@@ -43,25 +89,36 @@ impl BindingLayout {
             entries: Vec::new(),
         }
     }
-    pub fn slot(mut self, binding: u32, slot: &'static str) -> Self {
+    /// Vertex + fragment (+ mesh and task where a mesh program uses the layout).
+    pub fn render(label: &'static str) -> Self {
+        Self::with_visibility(label, wgpu::ShaderStages::VERTEX_FRAGMENT)
+    }
+    fn push(mut self, binding: u32, source: BindingSource) -> Self {
         self.entries.push(LayoutEntry {
             binding,
-            source: BindingSource::Slot(slot),
+            source,
+            visibility: None,
         });
         self
     }
-    pub fn scratch(mut self, binding: u32, name: &'static str, access: Access) -> Self {
-        self.entries.push(LayoutEntry {
-            binding,
-            source: BindingSource::Scratch(name, access),
-        });
-        self
+    pub fn slot(self, binding: u32, slot: &'static str) -> Self {
+        self.push(binding, BindingSource::Slot(slot))
     }
-    pub fn uniform(mut self, binding: u32) -> Self {
-        self.entries.push(LayoutEntry {
-            binding,
-            source: BindingSource::Uniform,
-        });
+    pub fn scratch(self, binding: u32, name: &'static str, access: Access) -> Self {
+        self.push(binding, BindingSource::Scratch(name, access))
+    }
+    pub fn uniform(self, binding: u32) -> Self {
+        self.push(binding, BindingSource::Uniform)
+    }
+    pub fn sampler(self, binding: u32, kind: SamplerKind) -> Self {
+        self.push(binding, BindingSource::Sampler(kind))
+    }
+    /// Gives the entry added last its own stages, e.g. a storage buffer only the fragment
+    /// shader writes.
+    pub fn visible_in(mut self, stages: wgpu::ShaderStages) -> Self {
+        if let Some(e) = self.entries.last_mut() {
+            e.visibility = Some(stages);
+        }
         self
     }
 }
@@ -71,7 +128,7 @@ pub fn buffer_binding_type(access: Access) -> Option<wgpu::BindingType> {
     let ty = match access {
         Access::Uniform => wgpu::BufferBindingType::Uniform,
         Access::StorageRead => wgpu::BufferBindingType::Storage { read_only: true },
-        Access::StorageWrite | Access::StorageReadWrite => {
+        Access::StorageWrite | Access::StorageReadWrite | Access::ClearedReadWrite => {
             wgpu::BufferBindingType::Storage { read_only: false }
         }
         _ => return None,
@@ -83,30 +140,37 @@ pub fn buffer_binding_type(access: Access) -> Option<wgpu::BindingType> {
     })
 }
 
-/// The wgpu binding type for a texture of `format` used with `access`.
+/// The wgpu binding type for a texture of `format` used with `access`, seen as a 2-D
+/// texture or, when `array` is set, a 2-D array.
 pub fn texture_binding_type(
     access: Access,
     format: wgpu::TextureFormat,
+    array: bool,
 ) -> Option<wgpu::BindingType> {
+    let view_dimension = if array {
+        wgpu::TextureViewDimension::D2Array
+    } else {
+        wgpu::TextureViewDimension::D2
+    };
     let storage = |a| wgpu::BindingType::StorageTexture {
         access: a,
         format,
-        view_dimension: wgpu::TextureViewDimension::D2,
+        view_dimension,
     };
     Some(match access {
         Access::Sampled => wgpu::BindingType::Texture {
             sample_type: format
                 .sample_type(None, None)
                 .unwrap_or(wgpu::TextureSampleType::Float { filterable: false }),
-            view_dimension: wgpu::TextureViewDimension::D2,
+            view_dimension,
             multisampled: false,
         },
         Access::StorageRead => storage(wgpu::StorageTextureAccess::ReadOnly),
         Access::StorageWrite => storage(wgpu::StorageTextureAccess::WriteOnly),
-        Access::StorageReadWrite if format == wgpu::TextureFormat::R64Uint => {
+        a if a.read_write_storage() && format == wgpu::TextureFormat::R64Uint => {
             storage(wgpu::StorageTextureAccess::Atomic)
         }
-        Access::StorageReadWrite => storage(wgpu::StorageTextureAccess::ReadWrite),
+        a if a.read_write_storage() => storage(wgpu::StorageTextureAccess::ReadWrite),
         _ => return None,
     })
 }

@@ -2,14 +2,21 @@
 
 pub mod context;
 pub mod executor;
+pub mod frame;
 pub mod layout;
 pub mod physical;
 pub mod programs;
+pub mod readback;
 pub mod record;
-mod timing;
+mod ring;
+pub mod timing;
+mod views;
 
 pub use context::{ADAPTER_ENV, GpuAdapter, GpuContext};
 pub use executor::{Executor, FrameStats, Imports, PassTiming};
-pub use layout::{BindingLayout, BindingSource, LayoutEntry};
-pub use programs::ComputeProgram;
-pub use record::{ComputeDesc, RecordContext};
+pub use frame::FrameData;
+pub use layout::{BindingLayout, BindingSource, LayoutEntry, SamplerKind};
+pub use programs::{ComputeProgram, Program, RenderProgram};
+pub use readback::Readback;
+pub use record::{ColorAttachment, DepthAttachment, Immediates, RecordContext};
+pub use timing::GpuTimings;

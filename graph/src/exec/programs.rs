@@ -3,14 +3,63 @@
 //! the exact resources they bind; and a per-frame arena for small uniform blocks.
 
 use crate::error::{GraphError, Result};
+use crate::exec::layout::{BindingLayout, SamplerKind};
+use crate::program::ProgramDesc;
 use meshlight_shaders::{PassShader, ShaderDef, ShaderLibrary};
 use std::collections::HashMap;
 use std::sync::Arc;
 
+/// The bind-group layouts a program was built with, and where its immediate data goes.
+pub struct ProgramLayouts {
+    pub(crate) groups: Vec<(BindingLayout, wgpu::BindGroupLayout)>,
+    pub(crate) immediates: ImmediateMode,
+}
+
+/// How a program receives its immediate data.
+#[derive(Clone, Debug)]
+pub(crate) enum ImmediateMode {
+    None,
+    /// `set_immediates` on the pass (the device has `IMMEDIATES`).
+    Native {
+        size: u32,
+    },
+    /// A uniform block in bind group `group`, binding 0 (the fallback).
+    Uniform {
+        group: u32,
+    },
+}
+
+/// Anything with bind-group layouts: compute and render programs alike.
+pub trait Program {
+    fn layouts(&self) -> &ProgramLayouts;
+}
+
 /// A compute pipeline and the bind-group layouts it was built with.
 pub struct ComputeProgram {
     pub pipeline: wgpu::ComputePipeline,
-    pub(crate) layouts: Vec<(crate::exec::BindingLayout, wgpu::BindGroupLayout)>,
+    pub(crate) layouts: ProgramLayouts,
+}
+
+/// A render pipeline (vertex or mesh geometry) and the bind-group layouts it was built with.
+pub struct RenderProgram {
+    pub pipeline: wgpu::RenderPipeline,
+    pub(crate) layouts: ProgramLayouts,
+}
+
+impl<P: Program> Program for Arc<P> {
+    fn layouts(&self) -> &ProgramLayouts {
+        (**self).layouts()
+    }
+}
+impl Program for ComputeProgram {
+    fn layouts(&self) -> &ProgramLayouts {
+        &self.layouts
+    }
+}
+impl Program for RenderProgram {
+    fn layouts(&self) -> &ProgramLayouts {
+        &self.layouts
+    }
 }
 
 #[derive(Clone, PartialEq, Eq, Hash)]
@@ -19,14 +68,16 @@ pub(crate) struct ModuleKey {
     pub defs: Vec<(&'static str, ShaderDef)>,
 }
 
+/// What makes two programs the same pipeline: the declaration (shader, entries, defs,
+/// declared layouts, targets), the wgpu layout entries the bound resources resolve it to,
+/// and the formats of its attachments.
 #[derive(Clone, PartialEq, Eq, Hash)]
 pub(crate) struct ProgramKey {
-    pub module: ModuleKey,
-    pub entry: &'static str,
-    /// The declared layouts: two passes whose wgpu layouts agree but whose slots differ
-    /// must not share a program, since the program remembers where each binding comes from.
-    pub declared: Vec<crate::exec::BindingLayout>,
+    pub desc: ProgramDesc,
     pub layouts: Vec<Vec<wgpu::BindGroupLayoutEntry>>,
+    pub target_formats: Vec<wgpu::TextureFormat>,
+    pub depth_format: Option<wgpu::TextureFormat>,
+    pub native_immediates: bool,
 }
 
 #[derive(Clone, PartialEq, Eq, Hash)]
@@ -37,6 +88,7 @@ pub(crate) enum BoundResource {
         size: u64,
     },
     View(wgpu::TextureView),
+    Sampler(wgpu::Sampler),
 }
 
 #[derive(Clone, PartialEq, Eq, Hash)]
@@ -45,14 +97,23 @@ pub(crate) struct BindGroupKey {
     pub entries: Vec<(u32, BoundResource)>,
 }
 
+pub(crate) enum AnyProgram {
+    Compute(Arc<ComputeProgram>),
+    Render(Arc<RenderProgram>),
+}
+
 pub(crate) struct Programs {
     pub library: Option<ShaderLibrary>,
     modules: HashMap<ModuleKey, wgpu::ShaderModule>,
-    compute: HashMap<ProgramKey, Arc<ComputeProgram>>,
+    programs: HashMap<ProgramKey, AnyProgram>,
     layouts: HashMap<Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroupLayout>,
-    pub bind_groups: HashMap<BindGroupKey, wgpu::BindGroup>,
+    samplers: HashMap<SamplerKind, wgpu::Sampler>,
+    /// Bind groups by the exact objects they bind, with the frame that last used each;
+    /// one unused for a few frames is dropped, so it keeps no freed buffer alive.
+    pub bind_groups: HashMap<BindGroupKey, (wgpu::BindGroup, u64)>,
     pub uniforms: UniformArena,
     pub pipelines_created: u32,
+    pub frame: u64,
 }
 
 impl Programs {
@@ -60,12 +121,22 @@ impl Programs {
         Self {
             library: None,
             modules: HashMap::new(),
-            compute: HashMap::new(),
+            programs: HashMap::new(),
             layouts: HashMap::new(),
+            samplers: HashMap::new(),
             bind_groups: HashMap::new(),
             uniforms: UniformArena::default(),
             pipelines_created: 0,
+            frame: 0,
         }
+    }
+
+    pub fn begin_frame(&mut self, frame: u64) {
+        self.frame = frame;
+        self.uniforms.begin_frame();
+        self.bind_groups.retain(|_, (_, last)| {
+            frame.saturating_sub(*last) <= crate::exec::physical::EVICT_AFTER_FRAMES
+        });
     }
 
     pub fn layout(
@@ -82,6 +153,13 @@ impl Programs {
                     entries,
                 })
             })
+            .clone()
+    }
+
+    pub fn sampler(&mut self, device: &wgpu::Device, kind: SamplerKind) -> wgpu::Sampler {
+        self.samplers
+            .entry(kind)
+            .or_insert_with(|| device.create_sampler(&kind.descriptor()))
             .clone()
     }
 
@@ -123,18 +201,21 @@ impl Programs {
         Ok(module)
     }
 
-    pub fn compute_program(&self, key: &ProgramKey) -> Option<Arc<ComputeProgram>> {
-        self.compute.get(key).cloned()
+    pub fn compute(&self, key: &ProgramKey) -> Option<Arc<ComputeProgram>> {
+        match self.programs.get(key) {
+            Some(AnyProgram::Compute(p)) => Some(p.clone()),
+            _ => None,
+        }
     }
-    pub fn insert_compute_program(
-        &mut self,
-        key: ProgramKey,
-        program: ComputeProgram,
-    ) -> Arc<ComputeProgram> {
+    pub fn render(&self, key: &ProgramKey) -> Option<Arc<RenderProgram>> {
+        match self.programs.get(key) {
+            Some(AnyProgram::Render(p)) => Some(p.clone()),
+            _ => None,
+        }
+    }
+    pub fn insert(&mut self, key: ProgramKey, program: AnyProgram) {
         self.pipelines_created += 1;
-        let p = Arc::new(program);
-        self.compute.insert(key, p.clone());
-        p
+        self.programs.insert(key, program);
     }
 }
 
@@ -155,8 +236,17 @@ pub fn capabilities_for(features: wgpu::Features) -> naga::valid::Capabilities {
     if features.contains(wgpu::Features::SUBGROUP) {
         caps |= C::SUBGROUP;
     }
+    if features.contains(wgpu::Features::TEXTURE_ATOMIC) {
+        caps |= C::TEXTURE_ATOMIC;
+    }
     if features.contains(wgpu::Features::TEXTURE_INT64_ATOMIC) {
         caps |= C::TEXTURE_INT64_ATOMIC;
+    }
+    if features.contains(wgpu::Features::IMMEDIATES) {
+        caps |= C::IMMEDIATES;
+    }
+    if features.contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER) {
+        caps |= C::MESH_SHADER;
     }
     caps
 }

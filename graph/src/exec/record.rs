@@ -1,27 +1,84 @@
-//! What a pass sees while recording: its bound resources by slot name, cached programs and
-//! bind groups, and the command encoder.
+//! What a pass sees while recording: its bound resources by slot name, the programs it
+//! declared in setup, bind groups, the frame's inputs, and the command encoder.
 
-use crate::access::Access;
-use crate::builder::PassNode;
+use crate::compile::PassSetup;
 use crate::error::{GraphError, Result};
-use crate::exec::layout::{
-    BindingLayout, BindingSource, buffer_binding_type, texture_binding_type,
-};
+use crate::exec::frame::FrameData;
+use crate::exec::layout::{BindingSource, buffer_binding_type, texture_binding_type};
 use crate::exec::physical::Physical;
 use crate::exec::programs::{
-    BindGroupKey, BoundResource, CHUNK, ComputeProgram, ModuleKey, ProgramKey, Programs,
+    AnyProgram, BindGroupKey, BoundResource, CHUNK, ComputeProgram, ImmediateMode, ModuleKey,
+    Program, ProgramKey, ProgramLayouts, Programs, RenderProgram,
 };
-use crate::plan::{AttachmentOps, Plan};
-use crate::resource::ResourceDesc;
-use meshlight_shaders::{PassShader, ShaderDefs};
+use crate::exec::readback::Readbacks;
+use crate::exec::views::ViewCache;
+use crate::plan::{AttachmentOps, LoadOp, Plan, StoreOp};
+use crate::program::{Geometry, ProgramDesc, ProgramKind};
+use crate::resource::{ResourceDesc, ResourceKind, TextureDesc, TextureRange};
+use meshlight_shaders::ShaderDef;
 use std::sync::Arc;
 
-/// Describes a compute pipeline in terms of the pass's shader, defs and slot layouts.
-pub struct ComputeDesc<'a> {
-    pub shader: &'a PassShader,
-    pub entry: &'static str,
-    pub defs: &'a dyn ShaderDefs,
-    pub layouts: &'a [BindingLayout],
+/// A colour attachment of [`RecordContext::render_pass`]: a target slot or scratch
+/// texture, and the colour it is cleared to when the compiler chose to clear it.
+#[derive(Clone, Copy, Debug)]
+pub struct ColorAttachment {
+    pub target: &'static str,
+    pub clear: wgpu::Color,
+}
+
+impl ColorAttachment {
+    pub fn new(target: &'static str) -> Self {
+        Self {
+            target,
+            clear: wgpu::Color::TRANSPARENT,
+        }
+    }
+    pub fn clear(mut self, color: wgpu::Color) -> Self {
+        self.clear = color;
+        self
+    }
+}
+
+/// The depth attachment of [`RecordContext::render_pass`].
+#[derive(Clone, Copy, Debug)]
+pub struct DepthAttachment {
+    pub target: &'static str,
+    pub clear: f32,
+}
+
+/// Immediate data ready to set on a pass: natively, or as the fallback uniform block.
+pub struct Immediates {
+    inner: ImmediatesInner,
+}
+
+enum ImmediatesInner {
+    None,
+    Native(Vec<u8>),
+    Uniform {
+        group: u32,
+        bind_group: wgpu::BindGroup,
+    },
+}
+
+impl Immediates {
+    pub fn set_on_compute(&self, pass: &mut wgpu::ComputePass<'_>) {
+        match &self.inner {
+            ImmediatesInner::None => {}
+            ImmediatesInner::Native(bytes) => pass.set_immediates(0, bytes),
+            ImmediatesInner::Uniform { group, bind_group } => {
+                pass.set_bind_group(*group, bind_group, &[])
+            }
+        }
+    }
+    pub fn set_on_render(&self, pass: &mut wgpu::RenderPass<'_>) {
+        match &self.inner {
+            ImmediatesInner::None => {}
+            ImmediatesInner::Native(bytes) => pass.set_immediates(0, bytes),
+            ImmediatesInner::Uniform { group, bind_group } => {
+                pass.set_bind_group(*group, bind_group, &[])
+            }
+        }
+    }
 }
 
 pub struct RecordContext<'a> {
@@ -29,11 +86,18 @@ pub struct RecordContext<'a> {
     pub(crate) queue: &'a wgpu::Queue,
     pub(crate) features: wgpu::Features,
     pub(crate) encoder: &'a mut wgpu::CommandEncoder,
-    pub(crate) node: &'a PassNode,
+    pub(crate) node: &'a crate::builder::PassNode,
+    pub(crate) setup: &'a PassSetup,
     pub(crate) pass_index: usize,
     pub(crate) plan: &'a Plan,
     pub(crate) physical: &'a [Option<Physical>],
     pub(crate) programs: &'a mut Programs,
+    pub(crate) views: &'a mut ViewCache,
+    pub(crate) readbacks: &'a mut Readbacks,
+    pub(crate) frame_data: &'a FrameData,
+    pub(crate) frame_index: u64,
+    /// Per resource: for a history pair, whether `prev` holds last frame's contents.
+    pub(crate) history_valid: &'a [bool],
 }
 
 impl<'a> RecordContext<'a> {
@@ -53,6 +117,46 @@ impl<'a> RecordContext<'a> {
     pub fn pass_name(&self) -> &str {
         &self.node.name
     }
+    /// The executor's frame counter, from 0.
+    pub fn frame_index(&self) -> u64 {
+        self.frame_index
+    }
+    /// A per-frame input the pass declared with `SetupContext::frame_input`.
+    pub fn frame_bytes(&self, name: &str) -> Result<&'a [u8]> {
+        self.frame_data
+            .get(name)
+            .ok_or_else(|| GraphError::MissingFrameInput {
+                pass: self.node.name.clone(),
+                input: name.to_string(),
+            })
+    }
+    /// A per-frame u32 input (`FrameData::u32`).
+    pub fn frame_u32(&self, name: &str) -> Result<u32> {
+        let bytes = self.frame_bytes(name)?;
+        bytes
+            .get(..4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .ok_or_else(|| self.err(format!("frame input `{name}` holds fewer than 4 bytes")))
+    }
+    /// True when the history resource bound to `slot` (either half) holds last frame's
+    /// contents: false on the first frame and after it was resized.
+    pub fn history_valid(&self, slot: &str) -> Result<bool> {
+        let r = self.slot_resource(slot)?;
+        Ok(match self.plan.resources[r].info.kind {
+            ResourceKind::History { .. } | ResourceKind::HistoryPrev { .. } => {
+                self.history_valid[r]
+            }
+            _ => false,
+        })
+    }
+    /// The current value of a size parameter.
+    pub fn param(&self, name: &str) -> Option<u64> {
+        self.plan
+            .params
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| *v)
+    }
 
     fn err(&self, message: String) -> GraphError {
         GraphError::Record {
@@ -61,12 +165,11 @@ impl<'a> RecordContext<'a> {
         }
     }
 
-    fn slot_resource(&self, slot: &str) -> Result<usize> {
+    fn slot_use(&self, slot: &str) -> Result<&'a crate::plan::SlotUse> {
         let pass = &self.plan.passes[self.pass_index];
         pass.slots
             .iter()
             .find(|s| s.slot == slot)
-            .map(|s| s.resource)
             .ok_or_else(|| GraphError::UnknownSlot {
                 pass: self.node.name.clone(),
                 stage: pass.stage.to_string(),
@@ -79,6 +182,9 @@ impl<'a> RecordContext<'a> {
                     .join(", "),
             })
     }
+    fn slot_resource(&self, slot: &str) -> Result<usize> {
+        self.slot_use(slot).map(|s| s.resource)
+    }
     fn scratch_resource(&self, name: &str) -> Result<usize> {
         let full = format!("{}/{}", self.node.name, name);
         self.plan.passes[self.pass_index]
@@ -88,7 +194,7 @@ impl<'a> RecordContext<'a> {
             .find(|&r| self.plan.resources[r].info.name == full)
             .ok_or_else(|| {
                 self.err(format!(
-                    "no scratch buffer `{name}`; declare it in setup with scratch_buffer"
+                    "no scratch resource `{name}`; declare it in setup with scratch_buffer or scratch_texture"
                 ))
             })
     }
@@ -109,6 +215,29 @@ impl<'a> RecordContext<'a> {
             ))),
         }
     }
+    /// A slot's texture and the view of the part it binds; scratch textures by name when
+    /// no slot has that name.
+    fn target_view(&mut self, name: &str) -> Result<(wgpu::Texture, wgpu::TextureView, usize)> {
+        let (r, range) = match self.slot_use(name) {
+            Ok(s) => (s.resource, s.range),
+            Err(e) => match self.scratch_resource(name) {
+                Ok(r) => (r, None),
+                Err(_) => return Err(e),
+            },
+        };
+        match self.physical(r)? {
+            Physical::Texture { texture, view } => {
+                let view = match range {
+                    Some(range) => self.views.range(texture, range, self.frame_index),
+                    None => view.clone(),
+                };
+                Ok((texture.clone(), view, r))
+            }
+            Physical::Buffer { .. } => {
+                Err(self.err(format!("`{name}` is a buffer, not a texture")))
+            }
+        }
+    }
 
     /// True when `slot` is bound (always, unless the slot is optional).
     pub fn is_bound(&self, slot: &str) -> bool {
@@ -118,20 +247,29 @@ impl<'a> RecordContext<'a> {
     pub fn buffer(&self, slot: &str) -> Result<(&'a wgpu::Buffer, u64)> {
         self.buffer_of(self.slot_resource(slot)?)
     }
+    /// A scratch buffer declared in setup.
     pub fn scratch(&self, name: &str) -> Result<(&'a wgpu::Buffer, u64)> {
         self.buffer_of(self.scratch_resource(name)?)
     }
-    pub fn texture(&self, slot: &str) -> Result<(&'a wgpu::Texture, &'a wgpu::TextureView)> {
-        match self.physical(self.slot_resource(slot)?)? {
-            Physical::Texture { texture, view } => Ok((texture, view)),
-            Physical::Buffer { .. } => {
-                Err(self.err(format!("slot `{slot}` holds a buffer, not a texture")))
-            }
-        }
+    /// The texture bound to `slot` and the view of the mips and layers it binds.
+    pub fn texture(&mut self, slot: &str) -> Result<(wgpu::Texture, wgpu::TextureView)> {
+        self.slot_use(slot)?;
+        self.target_view(slot).map(|(t, v, _)| (t, v))
     }
     /// The descriptor of the resource bound to `slot`.
     pub fn desc(&self, slot: &str) -> Result<&'a ResourceDesc> {
         Ok(&self.plan.resources[self.slot_resource(slot)?].info.desc)
+    }
+    /// The mips and layers `slot` binds (the whole texture unless bound in part).
+    pub fn range(&self, slot: &str) -> Result<Option<TextureRange>> {
+        let s = self.slot_use(slot)?;
+        Ok(
+            match (&self.plan.resources[s.resource].info.desc, s.range) {
+                (_, Some(r)) => Some(r),
+                (ResourceDesc::Texture(t), None) => Some(t.full_range()),
+                _ => None,
+            },
+        )
     }
     /// Load and store ops the compiler derived for a render or depth target slot.
     pub fn attachment_ops(&self, slot: &str) -> Option<AttachmentOps> {
@@ -142,7 +280,39 @@ impl<'a> RecordContext<'a> {
             .and_then(|s| s.ops)
     }
 
-    fn layout_entries(&self, layout: &BindingLayout) -> Result<Vec<wgpu::BindGroupLayoutEntry>> {
+    /// Clears what `slot` binds to zero (a fill command): the first step of a
+    /// `ClearedReadWrite` slot. A pass that clears with its own dispatch need not call it.
+    pub fn clear(&mut self, slot: &str) -> Result<()> {
+        let r = self.slot_resource(slot)?;
+        match self.physical(r)? {
+            Physical::Buffer { buffer, size } => {
+                let bytes = size.next_multiple_of(4).min(buffer.size());
+                self.encoder.clear_buffer(buffer, 0, Some(bytes));
+            }
+            Physical::Texture { texture, .. } => {
+                let range = self
+                    .range(slot)?
+                    .unwrap_or_else(|| TextureRange::mips(0, 1));
+                self.encoder.clear_texture(
+                    texture,
+                    &wgpu::ImageSubresourceRange {
+                        aspect: wgpu::TextureAspect::All,
+                        base_mip_level: range.base_mip,
+                        mip_level_count: Some(range.mip_count),
+                        base_array_layer: range.base_layer,
+                        array_layer_count: Some(range.layer_count),
+                    },
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The wgpu layout entries of a declared layout, from the bound resources.
+    fn layout_entries(
+        &self,
+        layout: &crate::exec::BindingLayout,
+    ) -> Result<Vec<wgpu::BindGroupLayoutEntry>> {
         let contract = &self.node.contract;
         layout
             .entries
@@ -158,7 +328,9 @@ impl<'a> RecordContext<'a> {
                         })?;
                         match self.desc(name)? {
                             ResourceDesc::Buffer(_) => buffer_binding_type(slot.access),
-                            ResourceDesc::Texture(t) => texture_binding_type(slot.access, t.format),
+                            ResourceDesc::Texture(t) => {
+                                texture_binding_type(slot.access, t.format, t.layers > 1)
+                            }
                         }
                         .ok_or_else(|| {
                             self.err(format!(
@@ -167,18 +339,25 @@ impl<'a> RecordContext<'a> {
                             ))
                         })?
                     }
-                    BindingSource::Scratch(_, access) => {
-                        buffer_binding_type(*access).ok_or_else(|| {
+                    BindingSource::Scratch(name, access) => {
+                        let r = self.scratch_resource(name)?;
+                        match &self.plan.resources[r].info.desc {
+                            ResourceDesc::Buffer(_) => buffer_binding_type(*access),
+                            ResourceDesc::Texture(t) => {
+                                texture_binding_type(*access, t.format, t.layers > 1)
+                            }
+                        }
+                        .ok_or_else(|| {
                             self.err(format!("scratch access {} cannot be bound", access.name()))
                         })?
                     }
-                    BindingSource::Uniform => {
-                        buffer_binding_type(Access::Uniform).expect("uniform is a buffer binding")
-                    }
+                    BindingSource::Uniform => buffer_binding_type(crate::access::Access::Uniform)
+                        .expect("uniform is a buffer binding"),
+                    BindingSource::Sampler(kind) => kind.binding_type(),
                 };
                 Ok(wgpu::BindGroupLayoutEntry {
                     binding: e.binding,
-                    visibility: layout.visibility,
+                    visibility: e.visibility.unwrap_or(layout.visibility),
                     ty,
                     count: None,
                 })
@@ -186,33 +365,99 @@ impl<'a> RecordContext<'a> {
             .collect()
     }
 
-    /// A compute pipeline, compiled once per (shader, entry, defs, layouts) and cached.
-    pub fn compute_program(&mut self, desc: &ComputeDesc<'_>) -> Result<Arc<ComputeProgram>> {
+    fn declared(&self, name: &str) -> Result<&'a Arc<ProgramDesc>> {
+        self.setup
+            .programs
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, d)| d)
+            .ok_or_else(|| {
+                self.err(format!(
+                    "no program `{name}`; declare it in setup with SetupContext::program (declared: {})",
+                    self.setup
+                        .programs
+                        .iter()
+                        .map(|(n, _)| n.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })
+    }
+
+    fn target_format(&self, name: &str) -> Result<wgpu::TextureFormat> {
+        let r = match self.slot_resource(name) {
+            Ok(r) => r,
+            Err(e) => self.scratch_resource(name).map_err(|_| e)?,
+        };
+        match &self.plan.resources[r].info.desc {
+            ResourceDesc::Texture(TextureDesc { format, .. }) => Ok(*format),
+            ResourceDesc::Buffer(_) => Err(self.err(format!(
+                "render target `{name}` is a buffer; bind a texture"
+            ))),
+        }
+    }
+
+    fn program_key(&self, desc: &ProgramDesc) -> Result<ProgramKey> {
         let layouts = desc
             .layouts
             .iter()
             .map(|l| self.layout_entries(l))
             .collect::<Result<Vec<_>>>()?;
-        let key = ProgramKey {
-            module: ModuleKey {
-                shader: desc.shader.name,
-                defs: desc.defs.shader_defs(),
-            },
-            entry: desc.entry,
-            declared: desc.layouts.to_vec(),
-            layouts,
+        let (target_formats, depth_format) = match &desc.kind {
+            ProgramKind::Render { targets, depth, .. } => (
+                targets
+                    .iter()
+                    .map(|t| self.target_format(t.target))
+                    .collect::<Result<Vec<_>>>()?,
+                depth
+                    .as_ref()
+                    .map(|d| self.target_format(d.target))
+                    .transpose()?,
+            ),
+            ProgramKind::Compute { .. } => (Vec::new(), None),
         };
-        if let Some(p) = self.programs.compute_program(&key) {
-            return Ok(p);
-        }
+        Ok(ProgramKey {
+            desc: desc.clone(),
+            layouts,
+            target_formats,
+            depth_format,
+            native_immediates: self.features.contains(wgpu::Features::IMMEDIATES),
+        })
+    }
+
+    /// The module, bind-group layouts and pipeline layout of a program.
+    fn build_layouts(
+        &mut self,
+        key: &ProgramKey,
+    ) -> Result<(wgpu::ShaderModule, ProgramLayouts, wgpu::PipelineLayout)> {
+        let desc = &key.desc;
+        let mut defs: Vec<(&'static str, ShaderDef)> = desc.defs.clone();
+        let immediates = if desc.immediate_size == 0 {
+            ImmediateMode::None
+        } else {
+            defs.retain(|(n, _)| *n != "IMMEDIATES");
+            defs.push(("IMMEDIATES", ShaderDef::Bool(key.native_immediates)));
+            if key.native_immediates {
+                ImmediateMode::Native {
+                    size: desc.immediate_size,
+                }
+            } else {
+                ImmediateMode::Uniform {
+                    group: desc.layouts.len() as u32,
+                }
+            }
+        };
         let module = self.programs.module(
             self.device,
             self.features,
             &self.node.name,
             desc.shader,
-            key.module.clone(),
+            ModuleKey {
+                shader: desc.shader.name,
+                defs,
+            },
         )?;
-        let bgls: Vec<(BindingLayout, wgpu::BindGroupLayout)> = desc
+        let mut groups: Vec<(crate::exec::BindingLayout, wgpu::BindGroupLayout)> = desc
             .layouts
             .iter()
             .zip(&key.layouts)
@@ -223,63 +468,215 @@ impl<'a> RecordContext<'a> {
                 )
             })
             .collect();
-        let refs: Vec<Option<&wgpu::BindGroupLayout>> = bgls.iter().map(|(_, l)| Some(l)).collect();
-        let label = format!("{}::{}", desc.shader.name, desc.entry);
+        if let ImmediateMode::Uniform { .. } = immediates {
+            let visibility = desc
+                .layouts
+                .first()
+                .map(|l| l.visibility)
+                .unwrap_or(wgpu::ShaderStages::all());
+            let l =
+                crate::exec::BindingLayout::with_visibility("immediates", visibility).uniform(0);
+            let entries = self.layout_entries(&l)?;
+            let bgl = self.programs.layout(self.device, l.label, entries);
+            groups.push((l, bgl));
+        }
+        let refs: Vec<Option<&wgpu::BindGroupLayout>> =
+            groups.iter().map(|(_, l)| Some(l)).collect();
+        let label = format!("{}::{}", desc.shader.name, desc.entries().join("+"));
         let layout = self
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(&label),
                 bind_group_layouts: &refs,
-                immediate_size: 0,
+                immediate_size: match immediates {
+                    ImmediateMode::Native { size } => size,
+                    _ => 0,
+                },
             });
+        Ok((module, ProgramLayouts { groups, immediates }, layout))
+    }
+
+    /// The compute program declared in setup as `name`, built once and cached.
+    pub fn compute(&mut self, name: &str) -> Result<Arc<ComputeProgram>> {
+        let desc = self.declared(name)?;
+        let ProgramKind::Compute { entry } = desc.kind else {
+            return Err(self.err(format!("program `{name}` is not a compute program")));
+        };
+        let key = self.program_key(desc)?;
+        if let Some(p) = self.programs.compute(&key) {
+            return Ok(p);
+        }
+        let (module, layouts, layout) = self.build_layouts(&key)?;
+        let label = format!("{}::{entry}", desc.shader.name);
         let pipeline = self
             .device
             .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(&label),
                 layout: Some(&layout),
                 module: &module,
-                entry_point: Some(desc.entry),
+                entry_point: Some(entry),
                 compilation_options: Default::default(),
                 cache: None,
             });
-        Ok(self.programs.insert_compute_program(
-            key,
-            ComputeProgram {
-                pipeline,
-                layouts: bgls,
-            },
-        ))
+        let program = Arc::new(ComputeProgram { pipeline, layouts });
+        self.programs
+            .insert(key, AnyProgram::Compute(program.clone()));
+        Ok(program)
+    }
+
+    /// The render (vertex or mesh) program declared in setup as `name`, built once and
+    /// cached.
+    pub fn render(&mut self, name: &str) -> Result<Arc<RenderProgram>> {
+        let desc = self.declared(name)?;
+        let ProgramKind::Render {
+            geometry,
+            fragment,
+            targets,
+            depth,
+            primitive,
+        } = &desc.kind
+        else {
+            return Err(self.err(format!("program `{name}` is not a render program")));
+        };
+        let key = self.program_key(desc)?;
+        if let Some(p) = self.programs.render(&key) {
+            return Ok(p);
+        }
+        let (module, layouts, layout) = self.build_layouts(&key)?;
+        let label = format!("{}::{}", desc.shader.name, desc.entries().join("+"));
+        let color_states: Vec<Option<wgpu::ColorTargetState>> = targets
+            .iter()
+            .zip(&key.target_formats)
+            .map(|(t, format)| {
+                Some(wgpu::ColorTargetState {
+                    format: *format,
+                    blend: t.blend,
+                    write_mask: t.write_mask,
+                })
+            })
+            .collect();
+        let fragment_state = fragment.map(|entry| wgpu::FragmentState {
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets: &color_states,
+        });
+        let depth_stencil =
+            depth
+                .as_ref()
+                .zip(key.depth_format)
+                .map(|(d, format)| wgpu::DepthStencilState {
+                    format,
+                    depth_write_enabled: Some(d.write),
+                    depth_compare: Some(d.compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                });
+        let primitive_state = wgpu::PrimitiveState {
+            topology: primitive.topology,
+            strip_index_format: None,
+            front_face: primitive.front_face,
+            cull_mode: primitive.cull_mode,
+            unclipped_depth: primitive.unclipped_depth
+                && self.features.contains(wgpu::Features::DEPTH_CLIP_CONTROL),
+            polygon_mode: wgpu::PolygonMode::Fill,
+            conservative: false,
+        };
+        let pipeline = match geometry {
+            Geometry::Vertex { entry } => {
+                self.device
+                    .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                        label: Some(&label),
+                        layout: Some(&layout),
+                        vertex: wgpu::VertexState {
+                            module: &module,
+                            entry_point: Some(entry),
+                            compilation_options: Default::default(),
+                            buffers: &[],
+                        },
+                        primitive: primitive_state,
+                        depth_stencil,
+                        multisample: Default::default(),
+                        fragment: fragment_state,
+                        multiview_mask: None,
+                        cache: None,
+                    })
+            }
+            Geometry::Mesh { task, mesh } => {
+                if !self
+                    .features
+                    .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER)
+                {
+                    return Err(GraphError::MissingFeature {
+                        pass: self.node.name.clone(),
+                        stage: self.node.contract.stage.to_string(),
+                        features: "EXPERIMENTAL_MESH_SHADER".into(),
+                    });
+                }
+                self.device
+                    .create_mesh_pipeline(&wgpu::MeshPipelineDescriptor {
+                        label: Some(&label),
+                        layout: Some(&layout),
+                        task: task.map(|entry| wgpu::TaskState {
+                            module: &module,
+                            entry_point: Some(entry),
+                            compilation_options: Default::default(),
+                        }),
+                        mesh: wgpu::MeshState {
+                            module: &module,
+                            entry_point: Some(mesh),
+                            compilation_options: Default::default(),
+                        },
+                        primitive: primitive_state,
+                        depth_stencil,
+                        multisample: Default::default(),
+                        fragment: fragment_state,
+                        multiview: None,
+                        cache: None,
+                    })
+            }
+        };
+        let program = Arc::new(RenderProgram { pipeline, layouts });
+        self.programs
+            .insert(key, AnyProgram::Render(program.clone()));
+        Ok(program)
     }
 
     /// The bind group for `group` of `program`, filled from the slots its layout names;
     /// `uniforms` gives the bytes of each `Uniform` binding, by binding index.
     pub fn bind_group(
         &mut self,
-        program: &ComputeProgram,
+        program: &impl Program,
         group: usize,
         uniforms: &[(u32, &[u8])],
     ) -> Result<wgpu::BindGroup> {
         let (layout, bgl) = program
-            .layouts
+            .layouts()
+            .groups
             .get(group)
             .ok_or_else(|| self.err(format!("program has no bind group {group}")))?;
         let mut entries = Vec::with_capacity(layout.entries.len());
         for e in &layout.entries {
             let bound = match &e.source {
-                BindingSource::Slot(name) => match self.physical(self.slot_resource(name)?)? {
-                    Physical::Buffer { buffer, size } => BoundResource::Buffer {
-                        buffer: buffer.clone(),
-                        offset: 0,
-                        size: (*size).max(4),
-                    },
-                    Physical::Texture { view, .. } => BoundResource::View(view.clone()),
-                },
+                BindingSource::Slot(name) => {
+                    let r = self.slot_resource(name)?;
+                    match self.physical(r)? {
+                        Physical::Buffer { buffer, size } => BoundResource::Buffer {
+                            buffer: buffer.clone(),
+                            offset: 0,
+                            size: (*size).max(4),
+                        },
+                        Physical::Texture { .. } => BoundResource::View(self.target_view(name)?.1),
+                    }
+                }
                 BindingSource::Scratch(name, _) => {
-                    let (buffer, size) = self.scratch(name)?;
-                    BoundResource::Buffer {
-                        buffer: buffer.clone(),
-                        offset: 0,
-                        size: size.max(4),
+                    match self.physical(self.scratch_resource(name)?)? {
+                        Physical::Buffer { buffer, size } => BoundResource::Buffer {
+                            buffer: buffer.clone(),
+                            offset: 0,
+                            size: (*size).max(4),
+                        },
+                        Physical::Texture { view, .. } => BoundResource::View(view.clone()),
                     }
                 }
                 BindingSource::Uniform => {
@@ -293,31 +690,46 @@ impl<'a> RecordContext<'a> {
                                 e.binding, layout.label
                             ))
                         })?;
-                    let (buffer, offset, size) = self
-                        .programs
-                        .uniforms
-                        .push(self.device, bytes)
-                        .ok_or_else(|| {
-                            self.err(format!(
-                                "uniform block of {} bytes exceeds {CHUNK}; bind it through a slot",
-                                bytes.len()
-                            ))
-                        })?;
-                    BoundResource::Buffer {
-                        buffer,
-                        offset,
-                        size,
-                    }
+                    self.uniform(bytes)?
+                }
+                BindingSource::Sampler(kind) => {
+                    BoundResource::Sampler(self.programs.sampler(self.device, *kind))
                 }
             };
             entries.push((e.binding, bound));
         }
-        let key = BindGroupKey {
-            layout: bgl.clone(),
-            entries,
-        };
-        if let Some(bg) = self.programs.bind_groups.get(&key) {
-            return Ok(bg.clone());
+        Ok(self.cached_bind_group(layout.label, bgl.clone(), entries))
+    }
+
+    fn uniform(&mut self, bytes: &[u8]) -> Result<BoundResource> {
+        let (buffer, offset, size) =
+            self.programs
+                .uniforms
+                .push(self.device, bytes)
+                .ok_or_else(|| {
+                    self.err(format!(
+                        "uniform block of {} bytes exceeds {CHUNK}; bind it through a slot",
+                        bytes.len()
+                    ))
+                })?;
+        Ok(BoundResource::Buffer {
+            buffer,
+            offset,
+            size,
+        })
+    }
+
+    fn cached_bind_group(
+        &mut self,
+        label: &str,
+        layout: wgpu::BindGroupLayout,
+        entries: Vec<(u32, BoundResource)>,
+    ) -> wgpu::BindGroup {
+        let frame = self.programs.frame;
+        let key = BindGroupKey { layout, entries };
+        if let Some((bg, last)) = self.programs.bind_groups.get_mut(&key) {
+            *last = frame;
+            return bg.clone();
         }
         let wgpu_entries: Vec<wgpu::BindGroupEntry> = key
             .entries
@@ -335,16 +747,43 @@ impl<'a> RecordContext<'a> {
                         size: wgpu::BufferSize::new(*size),
                     }),
                     BoundResource::View(v) => wgpu::BindingResource::TextureView(v),
+                    BoundResource::Sampler(s) => wgpu::BindingResource::Sampler(s),
                 },
             })
             .collect();
         let bg = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(layout.label),
-            layout: bgl,
+            label: Some(label),
+            layout: &key.layout,
             entries: &wgpu_entries,
         });
-        self.programs.bind_groups.insert(key, bg.clone());
-        Ok(bg)
+        self.programs.bind_groups.insert(key, (bg.clone(), frame));
+        bg
+    }
+
+    /// Immediate data for `program`: set it on the pass with `set_on_compute` or
+    /// `set_on_render`. Natively where the device has `IMMEDIATES`, else as a uniform block.
+    pub fn immediates(&mut self, program: &impl Program, bytes: &[u8]) -> Result<Immediates> {
+        let layouts = program.layouts();
+        let inner = match layouts.immediates {
+            ImmediateMode::None => ImmediatesInner::None,
+            ImmediateMode::Native { size } => {
+                if bytes.len() as u32 > size {
+                    return Err(self.err(format!(
+                        "{} bytes of immediates for a program declared with {size}",
+                        bytes.len()
+                    )));
+                }
+                ImmediatesInner::Native(bytes.to_vec())
+            }
+            ImmediateMode::Uniform { group } => {
+                let (layout, bgl) = &layouts.groups[group as usize];
+                let bound = self.uniform(bytes)?;
+                let bind_group =
+                    self.cached_bind_group(layout.label, bgl.clone(), vec![(0, bound)]);
+                ImmediatesInner::Uniform { group, bind_group }
+            }
+        };
+        Ok(Immediates { inner })
     }
 
     /// Begins a compute pass labelled with this pass's name.
@@ -354,5 +793,100 @@ impl<'a> RecordContext<'a> {
                 label: Some(&self.node.name),
                 timestamp_writes: None,
             })
+    }
+
+    /// Begins a render pass labelled with this pass's name over `colors` and `depth`
+    /// (slots or scratch textures), with the load and store ops the compiler derived for
+    /// slots and clear-and-discard for scratch targets. The pass's timestamps bracket it.
+    pub fn render_pass(
+        &mut self,
+        colors: &[ColorAttachment],
+        depth: Option<DepthAttachment>,
+    ) -> Result<wgpu::RenderPass<'_>> {
+        let ops_of = |ctx: &Self, name: &str| -> AttachmentOps {
+            ctx.attachment_ops(name).unwrap_or(AttachmentOps {
+                load: LoadOp::Clear,
+                store: StoreOp::Discard,
+            })
+        };
+        let mut color_views = Vec::with_capacity(colors.len());
+        for c in colors {
+            let (_, view, _) = self.target_view(c.target)?;
+            color_views.push((view, ops_of(self, c.target), c.clear));
+        }
+        let depth_view = match depth {
+            Some(d) => {
+                let (_, view, _) = self.target_view(d.target)?;
+                Some((view, ops_of(self, d.target), d.clear))
+            }
+            None => None,
+        };
+        let store = |s: StoreOp| match s {
+            StoreOp::Store => wgpu::StoreOp::Store,
+            StoreOp::Discard => wgpu::StoreOp::Discard,
+        };
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = color_views
+            .iter()
+            .map(|(view, ops, clear)| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: match ops.load {
+                            LoadOp::Load => wgpu::LoadOp::Load,
+                            LoadOp::Clear => wgpu::LoadOp::Clear(*clear),
+                        },
+                        store: store(ops.store),
+                    },
+                })
+            })
+            .collect();
+        let depth_attachment =
+            depth_view.as_ref().map(
+                |(view, ops, clear)| wgpu::RenderPassDepthStencilAttachment {
+                    view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: match ops.load {
+                            LoadOp::Load => wgpu::LoadOp::Load,
+                            LoadOp::Clear => wgpu::LoadOp::Clear(*clear),
+                        },
+                        store: store(ops.store),
+                    }),
+                    stencil_ops: None,
+                },
+            );
+        Ok(self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(&self.node.name),
+            color_attachments: &attachments,
+            depth_stencil_attachment: depth_attachment,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        }))
+    }
+
+    /// Copies `slot` (or a byte range of it) into this frame's readback buffer `name`.
+    pub(crate) fn readback_copy(
+        &mut self,
+        name: &str,
+        latency: u32,
+        slot: &str,
+        range: Option<std::ops::Range<u64>>,
+    ) -> Result<()> {
+        let (buffer, size) = self.buffer(slot)?;
+        let range = range.unwrap_or(0..size.next_multiple_of(4).min(buffer.size()));
+        let frame = self.frame_index;
+        self.readbacks
+            .record(
+                self.device,
+                self.encoder,
+                name,
+                latency,
+                buffer,
+                range,
+                frame,
+            )
+            .map_err(|m| self.err(m))
     }
 }

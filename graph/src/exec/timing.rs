@@ -1,12 +1,28 @@
-//! One GPU timestamp pair per pass, resolved and read back after the frame.
+//! One GPU timestamp pair per pass, resolved every frame into a ring of map-read buffers
+//! and read frames later, so timing never makes the CPU wait for the GPU.
+
+use crate::exec::ring::MapRing;
+use serde::Serialize;
+use std::collections::HashMap;
+
+/// GPU time of each pass of one frame.
+#[derive(Clone, Debug, Serialize)]
+pub struct GpuTimings {
+    pub frame: u64,
+    /// (pass, µs) in execution order.
+    pub passes: Vec<(String, f64)>,
+    pub total_us: f64,
+}
 
 pub(crate) struct Timestamps {
     pub query_set: wgpu::QuerySet,
     resolve: wgpu::Buffer,
-    readback: wgpu::Buffer,
+    ring: MapRing,
     capacity: u32,
     /// True when timestamps may be written between passes on the encoder itself.
     inside_encoders: bool,
+    /// Pass names of frames whose timestamps are in flight.
+    pending: HashMap<u64, Vec<String>>,
 }
 
 impl Timestamps {
@@ -25,14 +41,10 @@ impl Timestamps {
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
-            readback: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("meshlight timestamp readback"),
-                size: bytes,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
+            ring: MapRing::new("meshlight timestamp readback"),
             capacity,
             inside_encoders,
+            pending: HashMap::new(),
         }
     }
 
@@ -57,15 +69,66 @@ impl Timestamps {
         }
     }
 
-    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder, count: u32) {
+    /// Resolves this frame's timestamps and copies them into a ring buffer. When every
+    /// ring buffer is still in flight the frame's timings are dropped, not waited for.
+    pub fn resolve(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: u64,
+        passes: Vec<String>,
+    ) {
+        let count = passes.len() as u32 * 2;
         if count == 0 {
             return;
         }
+        let bytes = count as u64 * 8;
         encoder.resolve_query_set(&self.query_set, 0..count, &self.resolve, 0);
-        encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.readback, 0, count as u64 * 8);
+        if let Some(dst) = self.ring.acquire(device, bytes, frame) {
+            encoder.copy_buffer_to_buffer(&self.resolve, 0, dst, 0, bytes);
+            self.pending.insert(frame, passes);
+        }
     }
 
-    pub fn readback(&self) -> &wgpu::Buffer {
-        &self.readback
+    pub fn submitted(&mut self) {
+        self.ring.submitted();
+    }
+    pub fn abandon(&mut self, frame: u64) {
+        self.ring.abandon();
+        self.pending.remove(&frame);
+    }
+    pub fn in_flight(&self) -> usize {
+        self.ring.in_flight()
+    }
+    pub fn dropped(&self) -> u64 {
+        self.ring.dropped
+    }
+
+    /// Timings of every frame whose timestamps the GPU has finished, oldest first.
+    pub fn harvest(&mut self, period_ns: f64) -> Vec<GpuTimings> {
+        self.ring
+            .take_ready(u64::MAX)
+            .into_iter()
+            .filter_map(|(frame, bytes)| {
+                let names = self.pending.remove(&frame)?;
+                // Mapped bytes carry no alignment guarantee for u64: copy rather than cast.
+                let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+                let passes: Vec<(String, f64)> = names
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, name)| {
+                        let us = ticks[2 * i + 1].saturating_sub(ticks[2 * i]) as f64 * period_ns
+                            / 1000.0;
+                        (name, us)
+                    })
+                    .collect();
+                let total_us = passes.iter().map(|(_, us)| us).sum();
+                Some(GpuTimings {
+                    frame,
+                    passes,
+                    total_us,
+                })
+            })
+            .collect()
     }
 }

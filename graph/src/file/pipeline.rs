@@ -4,7 +4,7 @@
 use crate::builder::{Bindings, GraphBuilder};
 use crate::error::{GraphError, Result};
 use crate::file::{Params, Registry};
-use crate::resource::{BufferDesc, Element, TextureDesc};
+use crate::resource::{BufferDesc, Element, TextureDesc, TextureRange};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -15,6 +15,10 @@ pub struct PipelineFile {
     /// Shown in dumps.
     #[serde(default)]
     pub name: Option<String>,
+    /// Size parameters: `[params] cluster_slots = 65536`; buffers name one with
+    /// `count_param` instead of `count`.
+    #[serde(default)]
+    pub params: BTreeMap<String, u64>,
     #[serde(default, rename = "resource")]
     pub resources: Vec<ResourceEntry>,
     #[serde(default, rename = "pass")]
@@ -37,7 +41,9 @@ pub struct BufferEntry {
     /// `DrawIndirectArgs`, `u8`) or any name with `element_size`.
     pub element: String,
     pub element_size: Option<u32>,
-    pub count: u64,
+    pub count: Option<u64>,
+    /// A size parameter from `[params]` giving the element count.
+    pub count_param: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -48,6 +54,9 @@ pub struct TextureEntry {
     pub height: u32,
     #[serde(default = "one")]
     pub mip_levels: u32,
+    /// Array layers (1: a plain 2-D texture).
+    #[serde(default = "one")]
+    pub layers: u32,
 }
 fn one() -> u32 {
     1
@@ -93,10 +102,26 @@ pub fn parse_pipeline(text: &str, file: &str, registry: &Registry) -> Result<Gra
     };
     let parsed: PipelineFile = toml::from_str(text).map_err(|e| ferr(e.to_string()))?;
     let mut g = GraphBuilder::new();
+    for (name, value) in &parsed.params {
+        g.size_param(name, *value);
+    }
     for r in &parsed.resources {
         declare(&mut g, r).map_err(|m| ferr(format!("resource `{}`: {m}", r.name)))?;
     }
     for p in &parsed.passes {
+        if registry.implementations(&p.stage).is_empty() {
+            let stages = registry.stage_names();
+            return Err(GraphError::UnknownStage {
+                file: file.to_string(),
+                pass: p.name.clone(),
+                stage: p.stage.clone(),
+                known: if stages.is_empty() {
+                    "none are registered".into()
+                } else {
+                    stages.join(", ")
+                },
+            });
+        }
         let pass = registry
             .build(&p.stage, &p.implementation, &Params::new(p.params.clone()))
             .map_err(|e| match e {
@@ -108,13 +133,22 @@ pub fn parse_pipeline(text: &str, file: &str, registry: &Registry) -> Result<Gra
             })?;
         let mut bindings = Bindings::new();
         for (slot, target) in &p.bind {
-            bindings = match target.split_once('@') {
+            let bad = |m: String| ferr(format!("pass `{}` slot `{slot}`: {m}", p.name));
+            let (target_res, range) = match target.split_once('#') {
+                Some((res, view)) => (res, Some(parse_range(view).map_err(bad)?)),
+                None => (target.as_str(), None),
+            };
+            bindings = match target_res.split_once('@') {
                 Some((res, v)) => {
-                    let v: u32 = v.parse().map_err(|_| {
-                        ferr(format!(
-                            "pass `{}` slot `{slot}`: `{target}` needs a version number after @",
-                            p.name
-                        ))
+                    let v: u32 = v.parse().map_err(|e: std::num::ParseIntError| {
+                        let why = match e.kind() {
+                            std::num::IntErrorKind::PosOverflow => format!(
+                                "the version after @ in `{target}` is too large (at most {})",
+                                u32::MAX
+                            ),
+                            _ => format!("`{target}` needs a version number after @"),
+                        };
+                        bad(why)
                     })?;
                     let h = g
                         .resource_at(res, v)
@@ -123,14 +157,59 @@ pub fn parse_pipeline(text: &str, file: &str, registry: &Registry) -> Result<Gra
                             slot: slot.clone(),
                             resource: res.to_string(),
                         })?;
-                    bindings.bind(slot, h)
+                    match range {
+                        Some(r) => bindings.bind_range(slot, h, r),
+                        None => bindings.bind(slot, h),
+                    }
                 }
-                None => bindings.bind_named(slot, target),
+                None => match range {
+                    Some(r) => bindings.bind_named_range(slot, target_res, r),
+                    None => bindings.bind_named(slot, target_res),
+                },
             };
         }
         g.add_boxed_pass(&p.name, pass, bindings)?;
     }
     Ok(g)
+}
+
+/// `mip=N`, `mips=A..B`, `layer=N`, `layers=A..B`, joined with `,`: the part of a texture
+/// a slot binds, written after `#` (`pyramid#mip=2`, `shadow#layer=1,mip=0`).
+fn parse_range(text: &str) -> std::result::Result<TextureRange, String> {
+    let mut range = TextureRange::mips(0, u32::MAX);
+    let span = |v: &str| -> Option<(u32, u32)> {
+        match v.split_once("..") {
+            Some((a, b)) => {
+                let (a, b): (u32, u32) = (a.trim().parse().ok()?, b.trim().parse().ok()?);
+                (b > a).then_some((a, b - a))
+            }
+            None => v.trim().parse().ok().map(|n| (n, 1)),
+        }
+    };
+    for part in text.split(',') {
+        let (key, value) = part.split_once('=').ok_or_else(|| {
+            format!("`#{text}`: expected `mip=N`, `mips=A..B`, `layer=N` or `layers=A..B`")
+        })?;
+        let (first, count) = span(value).ok_or_else(|| {
+            format!("`#{text}`: `{value}` is not a number or a non-empty range A..B")
+        })?;
+        match key.trim() {
+            "mip" | "mips" => {
+                range.base_mip = first;
+                range.mip_count = count;
+            }
+            "layer" | "layers" => {
+                range.base_layer = first;
+                range.layer_count = count;
+            }
+            other => {
+                return Err(format!(
+                    "`#{text}`: unknown view key `{other}`; use mip, mips, layer or layers"
+                ));
+            }
+        }
+    }
+    Ok(range)
 }
 
 fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), String> {
@@ -149,7 +228,11 @@ fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), S
                     ));
                 }
             };
-            let desc = BufferDesc::array(element, b.count);
+            let desc = match (b.count, &b.count_param) {
+                (Some(n), None) => BufferDesc::array(element, n),
+                (None, Some(p)) => BufferDesc::array_param(element, p),
+                _ => return Err("give exactly one of `count` or `count_param`".into()),
+            };
             match r.kind {
                 EntryKind::Transient => drop(g.create_buffer(&r.name, desc)),
                 EntryKind::Exported => {
@@ -169,6 +252,7 @@ fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), S
                 width: t.width,
                 height: t.height,
                 mip_levels: t.mip_levels,
+                layers: t.layers,
             };
             match r.kind {
                 EntryKind::Transient => drop(g.create_texture(&r.name, desc)),

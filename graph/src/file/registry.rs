@@ -48,6 +48,12 @@ impl Registry {
             .map(|(_, i)| i.clone())
             .collect()
     }
+    /// The registered stage names, each once, sorted.
+    pub fn stage_names(&self) -> Vec<String> {
+        let mut v: Vec<String> = self.factories.keys().map(|(s, _)| s.clone()).collect();
+        v.dedup();
+        v
+    }
     pub fn stages(&self) -> Vec<(String, String)> {
         self.factories.keys().cloned().collect()
     }

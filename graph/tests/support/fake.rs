@@ -54,10 +54,7 @@ impl Pass for Fake {
         if let Some(bytes) = self.scratch {
             ctx.scratch_buffer(
                 "tmp",
-                BufferDesc {
-                    size: bytes,
-                    element: Element::BYTES,
-                },
+                BufferDesc::bytes(Element::BYTES, bytes),
                 &[Access::StorageReadWrite],
             );
         }

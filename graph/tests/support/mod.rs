@@ -58,19 +58,12 @@ fn layout_in_out() -> BindingLayout {
         .uniform(2)
 }
 
-fn dispatch(
-    ctx: &mut RecordContext<'_>,
-    entry: &'static str,
-    layout: BindingLayout,
-    count: u32,
-    k: u32,
-) -> Result<()> {
-    let program = ctx.compute_program(&ComputeDesc {
-        shader: &SHADER,
-        entry,
-        defs: &(),
-        layouts: &[layout],
-    })?;
+fn program(entry: &'static str, layout: BindingLayout) -> ProgramDesc {
+    ProgramDesc::compute(&SHADER, entry).layout(layout)
+}
+
+fn dispatch(ctx: &mut RecordContext<'_>, name: &str, count: u32, k: u32) -> Result<()> {
+    let program = ctx.compute(name)?;
     let params = [count, k, 0, 0];
     let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&params))])?;
     let mut pass = ctx.compute_pass();
@@ -89,10 +82,11 @@ impl Pass for Fill {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("output", self.count as u64 * 4);
+        ctx.program("fill", program("fill", layout_out_only()));
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        dispatch(ctx, "fill", layout_out_only(), self.count, self.k)
+        dispatch(ctx, "fill", self.count, self.k)
     }
 }
 
@@ -105,10 +99,11 @@ impl Pass for Add {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("output", self.count as u64 * 4);
+        ctx.program("add", program("add", layout_in_out()));
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        dispatch(ctx, "add", layout_in_out(), self.count, self.k)
+        dispatch(ctx, "add", self.count, self.k)
     }
 }
 
@@ -125,9 +120,6 @@ impl Pass for AddTwice {
             BufferDesc::array(Element::U32, self.count as u64),
             &[Access::StorageReadWrite, Access::StorageRead],
         );
-        Ok(())
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         // input + half into scratch, then scratch + half into output.
         let first = BindingLayout::compute("add_twice.first")
             .slot(0, "input")
@@ -137,8 +129,13 @@ impl Pass for AddTwice {
             .scratch(0, "half", Access::StorageRead)
             .slot(1, "output")
             .uniform(2);
-        dispatch(ctx, "add", first, self.count, self.half)?;
-        dispatch(ctx, "add", second, self.count, self.half)
+        ctx.program("first", program("add", first));
+        ctx.program("second", program("add", second));
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        dispatch(ctx, "first", self.count, self.half)?;
+        dispatch(ctx, "second", self.count, self.half)
     }
 }
 

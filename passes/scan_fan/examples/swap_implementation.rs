@@ -35,11 +35,12 @@ fn prefix_sum(
             .bind_named("input", "counts")
             .bind("output", offsets),
     )?;
-    let compiled = g.compile(&CompileOptions::new(exec.gpu.features))?;
+    let compiled = g.compile(&CompileOptions::for_gpu(&exec.gpu))?;
     let counts = exec
         .gpu
         .buffer_with_data("counts", bytemuck::cast_slice(counts), USAGE);
-    let stats = exec.execute(&compiled, &Imports::new().buffer("counts", &counts))?;
+    exec.execute(&compiled, &Imports::new().buffer("counts", &counts))?;
+    let stats = exec.finish()?.expect("one frame ran");
     if let Some(us) = stats.passes[0].gpu_us {
         println!("  {:<9} {:>9.1} µs on the GPU", stats.passes[0].name, us);
     }

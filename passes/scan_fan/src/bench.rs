@@ -171,7 +171,7 @@ pub fn run(exec: &mut Executor, sizes: &[u64], repeats: u32) -> Result<Vec<Row>>
                     .bind("total", total),
             )?;
         }
-        let compiled = g.compile(&CompileOptions::new(exec.gpu.features))?;
+        let compiled = g.compile(&CompileOptions::for_gpu(&exec.gpu))?;
 
         let gpu = &exec.gpu;
         let input_buf = gpu.buffer_with_data("bench input", bytemuck::cast_slice(&input), USAGE);
@@ -198,9 +198,23 @@ pub fn run(exec: &mut Executor, sizes: &[u64], repeats: u32) -> Result<Vec<Row>>
 
         let mut times: Vec<Vec<f64>> = vec![Vec::new(); names.len() + 1];
         exec.execute(&compiled, &imports)?;
+        exec.finish()?;
+        exec.take_gpu_timings()?;
+        // Each frame waited for, so no timing is dropped however slow the GPU is.
         for _ in 0..repeats {
-            let stats = exec.execute(&compiled, &imports)?;
-            for pass in &stats.passes {
+            exec.execute(&compiled, &imports)?;
+            exec.finish()?;
+        }
+        let frames = exec.take_gpu_timings()?;
+        if frames.len() < repeats as usize {
+            return Err(GraphError::Device(format!(
+                "GPU timings came back for {} of {repeats} frames",
+                frames.len()
+            )));
+        }
+        for frame in frames.iter().rev().take(repeats as usize) {
+            for (name, us) in &frame.passes {
+                let pass = PassGpu { name, us: *us };
                 let slot = if pass.name == "copy" {
                     0
                 } else {
@@ -209,10 +223,7 @@ pub fn run(exec: &mut Executor, sizes: &[u64], repeats: u32) -> Result<Vec<Row>>
                         .position(|n| *n == pass.name)
                         .expect("a benchmarked pass")
                 };
-                let us = pass
-                    .gpu_us
-                    .ok_or_else(|| GraphError::Device("no GPU time for a pass".into()))?;
-                times[slot].push(us / 1e3);
+                times[slot].push(pass.us / 1e3);
             }
         }
 
@@ -269,4 +280,10 @@ pub fn table(rows: &[Row]) -> String {
         );
     }
     s
+}
+
+/// One pass's GPU time in one frame.
+struct PassGpu<'a> {
+    name: &'a str,
+    us: f64,
 }

@@ -3,7 +3,7 @@
 
 use crate::{ScanOptions, Subgroups};
 use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, ComputeDesc, Element, RecordContext, Result, SetupContext,
+    Access, BindingLayout, BufferDesc, Element, ProgramDesc, RecordContext, Result, SetupContext,
 };
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
@@ -166,20 +166,23 @@ pub(crate) struct Step {
     pub grid: Grid,
 }
 
-/// Setup shared by both implementations: validation, the variant, the scratch buffers.
-///
-/// Setup cannot see which optional slots are bound, so the `args` and `total` scratch
-/// buffers (a few words) are declared either way, and the recorded defs assume a CPU
-/// count; `record` picks the variant from the bindings.
-pub(crate) fn setup(ctx: &mut SetupContext, options: &ScanOptions, levels: &Levels) -> Result<()> {
+/// Setup shared by both implementations: validation, the variant, the scratch buffers,
+/// and one program per kernel the steps use, with the layout the bound slots give.
+pub(crate) fn setup(
+    ctx: &mut SetupContext,
+    options: &ScanOptions,
+    levels: &Levels,
+    steps: &[Step],
+) -> Result<()> {
     options.validate()?;
     ctx.optional_features(wgpu::Features::SUBGROUP);
-    let subgroups = options.subgroups == Subgroups::Auto && ctx.has(wgpu::Features::SUBGROUP);
-    ctx.shader_defs(&ScanDefs {
+    let gpu_count = gpu_count(ctx);
+    let defs = ScanDefs {
         items_per_thread: options.items_per_thread,
-        subgroups,
-        gpu_count: false,
-    });
+        subgroups: options.subgroups == Subgroups::Auto && ctx.has(wgpu::Features::SUBGROUP),
+        gpu_count,
+    };
+    ctx.shader_defs(&defs);
     ctx.scratch_buffer(
         "fan",
         BufferDesc::array(Element::U32, levels.fan_words()),
@@ -200,16 +203,33 @@ pub(crate) fn setup(ctx: &mut SetupContext, options: &ScanOptions, levels: &Leve
     ctx.min_bytes("output", bytes);
     ctx.min_bytes("total", 4);
     ctx.min_bytes("count", 4);
+    let scan = scan_layout(ctx.is_bound("total"), gpu_count);
+    for step in steps {
+        let layout = if step.entry == entry::DISPATCH_ARGS {
+            args_layout()
+        } else {
+            scan.clone()
+        };
+        ctx.program(
+            step.entry,
+            ProgramDesc::compute(&SHADER, step.entry)
+                .defs(&defs)
+                .layout(layout),
+        );
+        if let Grid::Direct([x, y]) = step.grid {
+            ctx.dispatch(step.entry, [x, y, 1]);
+        }
+    }
     Ok(())
 }
 
 /// The bind group every kernel but `dispatch_args` uses, from the bound slots.
-fn scan_layout(ctx: &RecordContext<'_>, gpu_count: bool) -> BindingLayout {
+fn scan_layout(total_bound: bool, gpu_count: bool) -> BindingLayout {
     let layout = BindingLayout::compute("scan_fan")
         .slot(0, "input")
         .slot(1, "output")
         .scratch(2, "fan", Access::StorageReadWrite);
-    let layout = if ctx.is_bound("total") {
+    let layout = if total_bound {
         layout.slot(3, "total")
     } else {
         layout.scratch(3, "total", Access::StorageReadWrite)
@@ -231,44 +251,22 @@ fn args_layout() -> BindingLayout {
 
 /// A step with its pipeline and bind group resolved, ready to encode.
 struct Encoded {
-    program: std::sync::Arc<meshlight_graph::exec::ComputeProgram>,
+    program: std::sync::Arc<meshlight_graph::ComputeProgram>,
     bind_group: wgpu::BindGroup,
     grid: Grid,
 }
 
 /// True when the element count comes from the `count` slot.
-pub(crate) fn gpu_count(ctx: &RecordContext<'_>) -> bool {
+pub(crate) fn gpu_count(ctx: &SetupContext) -> bool {
     ctx.is_bound("count")
 }
 
 /// Encodes `steps` in order in one compute pass; wgpu orders the storage writes of one
 /// dispatch before the reads of the next.
-pub(crate) fn record(
-    ctx: &mut RecordContext<'_>,
-    options: &ScanOptions,
-    steps: &[Step],
-) -> Result<()> {
-    let gpu_count = gpu_count(ctx);
-    let defs = ScanDefs {
-        items_per_thread: options.items_per_thread,
-        subgroups: options.subgroups.enabled(ctx.features()),
-        gpu_count,
-    };
-    let scan = scan_layout(ctx, gpu_count);
-    let args = args_layout();
+pub(crate) fn record(ctx: &mut RecordContext<'_>, steps: &[Step]) -> Result<()> {
     let mut encoded = Vec::with_capacity(steps.len());
     for step in steps {
-        let layout = if step.entry == entry::DISPATCH_ARGS {
-            &args
-        } else {
-            &scan
-        };
-        let program = ctx.compute_program(&ComputeDesc {
-            shader: &SHADER,
-            entry: step.entry,
-            defs: &defs,
-            layouts: std::slice::from_ref(layout),
-        })?;
+        let program = ctx.compute(step.entry)?;
         let bind_group = ctx.bind_group(&program, 0, &[(4, bytemuck::bytes_of(&step.params))])?;
         encoded.push(Encoded {
             program,
@@ -276,7 +274,7 @@ pub(crate) fn record(
             grid: step.grid,
         });
     }
-    let args_buffer = if gpu_count {
+    let args_buffer = if ctx.is_bound("count") {
         Some(ctx.scratch("args")?.0)
     } else {
         None

@@ -84,10 +84,10 @@ impl Pass for ScanFan {
         "scan_fan"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        kernels::setup(ctx, &self.options, &self.levels())
+        let steps = self.steps(kernels::gpu_count(ctx));
+        kernels::setup(ctx, &self.options, &self.levels(), &steps)
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let steps = self.steps(kernels::gpu_count(ctx));
-        kernels::record(ctx, &self.options, &steps)
+        kernels::record(ctx, &self.steps(ctx.is_bound("count")))
     }
 }

@@ -218,7 +218,7 @@ bind = {{ input = "counts", output = "offsets" }}
 "#
         );
         let g = parse_pipeline(&text, "inline.toml", &registry).unwrap();
-        let compiled = g.compile(&CompileOptions::new(exec.gpu.features)).unwrap();
+        let compiled = g.compile(&CompileOptions::for_gpu(&exec.gpu)).unwrap();
         let counts = exec
             .gpu
             .buffer_with_data("counts", bytemuck::cast_slice(&input), USAGE);

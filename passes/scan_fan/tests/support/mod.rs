@@ -104,7 +104,7 @@ pub fn run(exec: &mut Executor, case: &Case, input: &[u32]) -> Outcome {
     g.add_boxed_pass("scan", case.implementation.pass(case.options), bindings)
         .expect("add the scan pass");
     let compiled = g
-        .compile(&CompileOptions::new(exec.gpu.features))
+        .compile(&CompileOptions::for_gpu(&exec.gpu))
         .expect("compile");
 
     let gpu = &exec.gpu;
