@@ -11,11 +11,7 @@
 //! - vertices: grid offsets from `grid_min` at the meshlet's bits per axis, then an
 //!   octahedral normal of 2 × [`crate::compress::NORMAL_BITS`];
 //! - UVs (when the asset has them): 2 × 16-bit unorm per vertex, one word;
-//! - triangles: the smallest local index at the meshlet's index bits, then the other
-//!   two corners, in winding order, as offsets from it at its delta bits. Local
-//!   vertices are numbered in order of first use and triangles keep meshoptimizer's
-//!   locality order, so a triangle's corners are close in number: 17 bits or so per
-//!   triangle where three bytes took 24.
+//! - triangles: fixed-width records of about 16 bits, see [`super::triangles`].
 
 use bytemuck::{Pod, Zeroable};
 
@@ -103,8 +99,8 @@ pub struct MeshletRecord {
     pub counts: u32,
     /// Per-meshlet minimum of the grid coordinates; packed values are offsets from it.
     pub grid_min: [u32; 3],
-    /// Bits per packed axis: x (0..8), y (8..16), z (16..24); then bits of a triangle's
-    /// first index (24..28) and of its two corner offsets (28..32).
+    /// Bits per packed axis: x (0..8), y (8..16), z (16..24); then the widths of the
+    /// triangle records' fields: corner offset (24..28), corner deltas (28..32).
     pub bits: u32,
 }
 
@@ -125,13 +121,12 @@ impl MeshletRecord {
             (self.bits >> 16) & 0xff,
         ]
     }
-    /// Bits of a triangle's first (smallest) local index.
-    pub fn index_bits(&self) -> u32 {
-        (self.bits >> 24) & 0xf
-    }
-    /// Bits of each of a triangle's two corner offsets from its first index.
-    pub fn delta_bits(&self) -> u32 {
-        self.bits >> 28
+    /// Field widths of the triangle records (see [`super::triangles`]).
+    pub fn triangle_bits(&self) -> super::triangles::TriangleBits {
+        super::triangles::TriangleBits {
+            offset: (self.bits >> 24) & 0xf,
+            delta: self.bits >> 28,
+        }
     }
     /// Bits of one vertex record: position offsets and the normal.
     pub fn vertex_stride(&self) -> u32 {
@@ -140,7 +135,7 @@ impl MeshletRecord {
     }
     /// Bits of one triangle record.
     pub fn triangle_stride(&self) -> u32 {
-        self.index_bits() + 2 * self.delta_bits()
+        self.triangle_bits().stride()
     }
 }
 

@@ -3,6 +3,7 @@
 
 pub mod checksum;
 pub mod format;
+pub mod triangles;
 pub mod validate;
 
 use std::io::Read;
@@ -117,23 +118,6 @@ impl MeshletAsset {
                     [m[0].max(q[0]), m[1].max(q[1]), m[2].max(q[2])]
                 });
                 let bits = [0, 1, 2].map(|k| bits_for(hi[k] - lo[k]));
-                // Each triangle rotated (winding kept) to start at its smallest index.
-                let triangles: Vec<[u32; 3]> = local_index
-                    .chunks_exact(3)
-                    .map(|t| {
-                        let t = [t[0] as u32, t[1] as u32, t[2] as u32];
-                        let r = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
-                        [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
-                    })
-                    .collect();
-                let index_bits = bits_for(locals.len() as u32 - 1);
-                let delta_bits = bits_for(
-                    triangles
-                        .iter()
-                        .map(|t| (t[1] - t[0]).max(t[2] - t[0]))
-                        .max()
-                        .unwrap_or(0),
-                );
                 let mut data = Vec::new();
                 let mut w = BitWriter::new(&mut data);
                 for &v in &locals {
@@ -149,12 +133,11 @@ impl MeshletAsset {
                 if has_uvs {
                     data.extend(locals.iter().map(|&v| uvq.encode(mesh.uvs[v as usize])));
                 }
-                let mut w = BitWriter::new(&mut data);
-                for t in &triangles {
-                    w.put(t[0], index_bits);
-                    w.put(t[1] - t[0], delta_bits);
-                    w.put(t[2] - t[0], delta_bits);
-                }
+                let local: Vec<[u32; 3]> = local_index
+                    .chunks_exact(3)
+                    .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
+                    .collect();
+                let tri_bits = triangles::encode(&local, locals.len() as u32, &mut data);
                 let sphere4 = |c: Vec3, r: f32| [c.x, c.y, c.z, r];
                 let record = MeshletRecord {
                     bounds: sphere4(c.bounds.0, c.bounds.1 + pad),
@@ -174,8 +157,8 @@ impl MeshletAsset {
                     bits: bits[0]
                         | (bits[1] << 8)
                         | (bits[2] << 16)
-                        | (index_bits << 24)
-                        | (delta_bits << 28),
+                        | (tri_bits.offset << 24)
+                        | (tri_bits.delta << 28),
                 };
                 (record, data)
             })
@@ -457,14 +440,12 @@ impl MeshletAsset {
             Vec::new()
         };
         let triangle_block = &data[layout.triangles as usize..];
-        let (ib, db) = (m.index_bits(), m.delta_bits());
-        let triangles = (0..m.triangle_count() as usize)
+        let (vc, tc) = (m.vertex_count(), m.triangle_count());
+        let triangles = (0..tc)
             .map(|t| {
-                let at = t * m.triangle_stride() as usize;
-                let first = field(triangle_block, at, ib);
-                let d1 = field(triangle_block, at + ib as usize, db);
-                let d2 = field(triangle_block, at + (ib + db) as usize, db);
-                [first, first + d1, first + d2].map(|i| i.min(255) as u8)
+                triangles::decode(triangle_block, t, m.triangle_bits(), vc, tc)
+                    .unwrap_or([0; 3])
+                    .map(|i| i as u8)
             })
             .collect();
         DecodedMeshlet {

@@ -147,13 +147,13 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ));
         }
         max_level = max_level.max(level);
-        if m.index_bits() > 8 || m.delta_bits() > 8 {
+        let tb = m.triangle_bits();
+        if tb.offset == 0 || tb.offset > 9 || tb.delta > 8 {
             return Err(bad(
                 f("bits"),
                 format!(
-                    "gives {}-bit indices and {}-bit corner offsets; local indices have at most 8",
-                    m.index_bits(),
-                    m.delta_bits()
+                    "gives triangle fields of {} and {} bits; they take 1..=9 and 0..=8",
+                    tb.offset, tb.delta
                 ),
             ));
         }
@@ -332,27 +332,9 @@ fn header_floats(h: &AssetHeader) -> Result<(), Invalid> {
     Ok(())
 }
 
-/// The first triangle of `block` (a meshlet's triangle records) with a corner at or past
-/// the meshlet's vertex count. Reads the records a word at a time: this runs on every
-/// load.
-fn triangle_past_vertices(block: &[u32], m: &MeshletRecord) -> Option<usize> {
-    let (ib, db) = (m.index_bits(), m.delta_bits());
-    let stride = (ib + 2 * db) as usize;
-    let vc = m.vertex_count();
-    let mask = |bits: u32| ((1u64 << bits) - 1) as u32;
-    for t in 0..m.triangle_count() as usize {
-        let at = t * stride;
-        let (word, shift) = (at / 32, at % 32);
-        // A record is at most 24 bits, so it lies within two consecutive words.
-        let lo = block[word] as u64;
-        let hi = block.get(word + 1).copied().unwrap_or(0) as u64;
-        let bits = ((lo | (hi << 32)) >> shift) as u32;
-        let first = bits & mask(ib);
-        let d1 = (bits >> ib) & mask(db);
-        let d2 = (bits >> (ib + db)) & mask(db);
-        if first + d1.max(d2) >= vc {
-            return Some(t);
-        }
-    }
-    None
+/// The first triangle of `block` (a meshlet's triangle records) with a corner outside
+/// the meshlet's vertices.
+fn triangle_past_vertices(block: &[u32], m: &MeshletRecord) -> Option<u32> {
+    let (vc, tc) = (m.vertex_count(), m.triangle_count());
+    (0..tc).find(|&t| super::triangles::decode(block, t, m.triangle_bits(), vc, tc).is_none())
 }
