@@ -181,48 +181,48 @@ pub fn get_bits(words: &[u32], bit_offset: usize, bits: u32) -> Option<u32> {
 /// unit normal from the original over a dense sphere of directions
 /// (`normal_bits_meet_the_precision_bound`, precise encoding): 16 bits 4.3e-5, 13 bits
 /// 3.4e-4, 12 bits 6.8e-4, 11 bits 1.35e-3. The bound the tests hold decoded normals to
-/// is 1e-3 (0.06°, far below what shading shows); 12 bits is the fewest that meet it:
-/// 24 bits per normal instead of 32.
+/// is 1e-3 (0.06°, far below what shading shows); 12 bits is the fewest that meet it.
+/// In an asset each meshlet stores its normals as offsets from their smallest
+/// components, at the bits their range needs (see [`crate::asset::format`]).
 pub const NORMAL_BITS: u32 = 12;
 
-/// Octahedral mapping of a unit vector into 2 × `bits` snorm, packed x | y << bits.
+/// Octahedral mapping of a unit vector to two signed components in `-max..=max`, with
+/// `max = 2^(bits-1) - 1`.
 ///
 /// Of the four grid points around the exact mapping, the one that decodes closest to
 /// `n` is kept ("precise" octahedral encoding, Cigolle et al. 2014): rounding each
 /// component on its own can be up to twice as far off.
-pub fn encode_normal_bits(n: Vec3, bits: u32) -> u32 {
+pub fn encode_octahedral(n: Vec3, bits: u32) -> [i32; 2] {
     let n = n / (n.x.abs() + n.y.abs() + n.z.abs());
     let mut o = Vec2::new(n.x, n.y);
     if n.z < 0.0 {
         o = (Vec2::ONE - Vec2::new(o.y, o.x).abs()) * Vec2::new(sign(o.x), sign(o.y));
     }
-    let max = ((1u32 << (bits - 1)) - 1) as f32;
-    let mask = (1u32 << bits) - 1;
-    let pack = |x: f32, y: f32| {
-        let s = |v: f32| (v.clamp(-max, max) as i32 as u32) & mask;
-        s(x) | (s(y) << bits)
-    };
+    let max = ((1i32 << (bits - 1)) - 1) as f32;
     let target = n.normalize_or(Vec3::Z);
     let (fx, fy) = ((o.x * max).floor(), (o.y * max).floor());
-    let mut best = (f32::INFINITY, pack(fx, fy));
+    let mut best = (f32::INFINITY, [0, 0]);
     for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
-        let packed = pack(fx + dx, fy + dy);
-        let error = (decode_normal_bits(packed, bits) - target).length_squared();
+        let c = [
+            (fx + dx).clamp(-max, max) as i32,
+            (fy + dy).clamp(-max, max) as i32,
+        ];
+        let error = (decode_octahedral(c, bits) - target).length_squared();
         if error < best.0 {
-            best = (error, packed);
+            best = (error, c);
         }
     }
     best.1
 }
 
-/// Inverse of [`encode_normal_bits`].
-pub fn decode_normal_bits(packed: u32, bits: u32) -> Vec3 {
-    let max = ((1u32 << (bits - 1)) - 1) as f32;
-    let mask = (1u32 << bits) - 1;
-    let shift = 32 - bits;
-    // Sign-extend each component from `bits` bits.
-    let u = |v: u32| ((((v & mask) << shift) as i32 >> shift) as f32 / max).max(-1.0);
-    let (x, y) = (u(packed), u(packed >> bits));
+/// Inverse of [`encode_octahedral`]. Components out of range give some unit vector (or
+/// NaN for a damaged asset), never a panic.
+pub fn decode_octahedral(c: [i32; 2], bits: u32) -> Vec3 {
+    let max = ((1i32 << (bits - 1)) - 1) as f32;
+    let (x, y) = (
+        (c[0] as f32 / max).clamp(-1.0, 1.0),
+        (c[1] as f32 / max).clamp(-1.0, 1.0),
+    );
     let z = 1.0 - x.abs() - y.abs();
     let t = (-z).max(0.0);
     let x = x + if x >= 0.0 { -t } else { t };
@@ -322,7 +322,7 @@ mod tests {
                         theta.sin() * phi.sin(),
                         theta.cos(),
                     );
-                    let d = decode_normal_bits(encode_normal_bits(n, bits), bits);
+                    let d = decode_octahedral(encode_octahedral(n, bits), bits);
                     worst = worst.max((d - n).length());
                 }
             }

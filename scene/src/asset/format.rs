@@ -8,8 +8,11 @@
 //!
 //! A meshlet's payload is three blocks of fixed-width records (see [`PayloadLayout`]),
 //! so that a GPU thread per vertex or per triangle finds its record by multiplying:
-//! - vertices: grid offsets from `grid_min` at the meshlet's bits per axis, then an
-//!   octahedral normal of 2 × [`crate::compress::NORMAL_BITS`];
+//! - vertices: grid offsets from `grid_min` at the meshlet's bits per axis, then the
+//!   two octahedral normal components (of [`crate::compress::NORMAL_BITS`]) as offsets
+//!   from `normal_min` at the meshlet's normal bits. A meshlet is a small patch whose
+//!   normals span a fraction of the sphere, so this takes 14 to 20 bits where the full
+//!   components took 24;
 //! - UVs (when the asset has them): 2 × 16-bit unorm per vertex, one word;
 //! - triangles: fixed-width records of about 16 bits, see [`super::triangles`].
 
@@ -76,7 +79,7 @@ impl AssetHeader {
     }
 }
 
-/// One meshlet: what culling, LOD selection and rasterisation need, 80 bytes.
+/// One meshlet: what culling, LOD selection and rasterisation need, 84 bytes.
 ///
 /// A meshlet is drawn when its own LOD error projected from `lod_sphere` is
 /// imperceptible and its parent's, projected from `parent_sphere`, is not.
@@ -102,7 +105,14 @@ pub struct MeshletRecord {
     /// Bits per packed axis: x (0..8), y (8..16), z (16..24); then the widths of the
     /// triangle records' fields: corner offset (24..28), corner deltas (28..32).
     pub bits: u32,
+    /// Smallest octahedral normal components of the meshlet, biased by
+    /// [`NORMAL_BIAS`] to be unsigned: x (0..12), y (12..24); then the bits of each
+    /// component's offset: x (24..28), y (28..32).
+    pub normals: u32,
 }
+
+/// Added to a signed octahedral component to store it unsigned in 12 bits.
+pub const NORMAL_BIAS: i32 = 1 << (crate::compress::NORMAL_BITS - 1);
 
 impl MeshletRecord {
     pub fn vertex_count(&self) -> u32 {
@@ -128,10 +138,22 @@ impl MeshletRecord {
             delta: self.bits >> 28,
         }
     }
-    /// Bits of one vertex record: position offsets and the normal.
+    /// Smallest signed octahedral components of the meshlet's normals.
+    pub fn normal_min(&self) -> [i32; 2] {
+        [
+            (self.normals & 0xfff) as i32 - NORMAL_BIAS,
+            ((self.normals >> 12) & 0xfff) as i32 - NORMAL_BIAS,
+        ]
+    }
+    /// Bits of each octahedral component's offset from [`Self::normal_min`].
+    pub fn normal_bits(&self) -> [u32; 2] {
+        [(self.normals >> 24) & 0xf, self.normals >> 28]
+    }
+    /// Bits of one vertex record: position offsets and normal offsets.
     pub fn vertex_stride(&self) -> u32 {
         let [x, y, z] = self.axis_bits();
-        x + y + z + 2 * crate::compress::NORMAL_BITS
+        let [nx, ny] = self.normal_bits();
+        x + y + z + nx + ny
     }
     /// Bits of one triangle record.
     pub fn triangle_stride(&self) -> u32 {

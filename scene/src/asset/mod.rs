@@ -13,8 +13,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::compress::{
-    BitWriter, NORMAL_BITS, Quantization, UvQuantization, bits_for, decode_normal_bits,
-    encode_normal_bits, get_bits,
+    BitWriter, NORMAL_BITS, Quantization, UvQuantization, bits_for, decode_octahedral,
+    encode_octahedral, get_bits,
 };
 use crate::dag::Dag;
 use crate::error::SceneError;
@@ -118,17 +118,27 @@ impl MeshletAsset {
                     [m[0].max(q[0]), m[1].max(q[1]), m[2].max(q[2])]
                 });
                 let bits = [0, 1, 2].map(|k| bits_for(hi[k] - lo[k]));
+                let oct: Vec<[i32; 2]> = locals
+                    .iter()
+                    .map(|&v| encode_octahedral(mesh.normals[v as usize], NORMAL_BITS))
+                    .collect();
+                let oct_lo = oct
+                    .iter()
+                    .fold([i32::MAX; 2], |m, o| [m[0].min(o[0]), m[1].min(o[1])]);
+                let oct_hi = oct
+                    .iter()
+                    .fold([i32::MIN; 2], |m, o| [m[0].max(o[0]), m[1].max(o[1])]);
+                let oct_bits = [0, 1].map(|k| bits_for((oct_hi[k] - oct_lo[k]) as u32));
                 let mut data = Vec::new();
                 let mut w = BitWriter::new(&mut data);
-                for &v in &locals {
+                for (&v, o) in locals.iter().zip(&oct) {
                     let q = grid[v as usize];
                     for k in 0..3 {
                         w.put(q[k] - lo[k], bits[k]);
                     }
-                    w.put(
-                        encode_normal_bits(mesh.normals[v as usize], NORMAL_BITS),
-                        2 * NORMAL_BITS,
-                    );
+                    for k in 0..2 {
+                        w.put((o[k] - oct_lo[k]) as u32, oct_bits[k]);
+                    }
                 }
                 if has_uvs {
                     data.extend(locals.iter().map(|&v| uvq.encode(mesh.uvs[v as usize])));
@@ -159,6 +169,10 @@ impl MeshletAsset {
                         | (bits[2] << 16)
                         | (tri_bits.offset << 24)
                         | (tri_bits.delta << 28),
+                    normals: (oct_lo[0] + NORMAL_BIAS) as u32
+                        | (((oct_lo[1] + NORMAL_BIAS) as u32) << 12)
+                        | (oct_bits[0] << 24)
+                        | (oct_bits[1] << 28),
                 };
                 (record, data)
             })
@@ -389,7 +403,8 @@ impl MeshletAsset {
             let l = PayloadLayout::of(m, has_uvs);
             // Vertex records interleave positions and normals: split their words by bits.
             let vertex_bytes = (l.uvs - l.vertices) as usize * 4;
-            let normal_share = 2 * NORMAL_BITS as usize;
+            let [nx, ny] = m.normal_bits();
+            let normal_share = (nx + ny) as usize;
             let normals = vertex_bytes * normal_share / m.vertex_stride().max(1) as usize;
             b.positions += vertex_bytes - normals;
             b.normals += normals;
@@ -413,6 +428,7 @@ impl MeshletAsset {
         // Every field is in range (validated at load); `unwrap_or(0)` only keeps a
         // decoder of untrusted words from panicking.
         let field = |block: &[u32], at: usize, bits: u32| get_bits(block, at, bits).unwrap_or(0);
+        let (normal_min, normal_bits) = (m.normal_min(), m.normal_bits());
         let mut grid = Vec::with_capacity(vc);
         let mut normals = Vec::with_capacity(vc);
         for v in 0..vc {
@@ -422,10 +438,12 @@ impl MeshletAsset {
                 at += bits[k] as usize;
                 m.grid_min[k] + d
             }));
-            normals.push(decode_normal_bits(
-                field(vertex_block, at, 2 * NORMAL_BITS),
-                NORMAL_BITS,
-            ));
+            let oct = [0, 1].map(|k| {
+                let d = field(vertex_block, at, normal_bits[k]);
+                at += normal_bits[k] as usize;
+                normal_min[k] + d as i32
+            });
+            normals.push(decode_octahedral(oct, NORMAL_BITS));
         }
         let uvq = UvQuantization {
             min: h.uv_min,

@@ -39,7 +39,9 @@ pub fn encode(triangles: &[[u32; 3]], vertices: u32, out: &mut Vec<u32>) -> Tria
     let rotated: Vec<[u32; 3]> = triangles
         .iter()
         .map(|t| {
-            let r = (0..3).max_by_key(|&k| (t[k], std::cmp::Reverse(k))).unwrap_or(0);
+            let r = (0..3)
+                .max_by_key(|&k| (t[k], std::cmp::Reverse(k)))
+                .unwrap_or(0);
             [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
         })
         .collect();

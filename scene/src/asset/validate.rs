@@ -147,6 +147,19 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ));
         }
         max_level = max_level.max(level);
+        if m.normal_bits()
+            .iter()
+            .any(|&b| b > crate::compress::NORMAL_BITS)
+        {
+            return Err(bad(
+                f("normals"),
+                format!(
+                    "gives {:?}-bit normal offsets; components have {} bits",
+                    m.normal_bits(),
+                    crate::compress::NORMAL_BITS
+                ),
+            ));
+        }
         let tb = m.triangle_bits();
         if tb.offset == 0 || tb.offset > 9 || tb.delta > 8 {
             return Err(bad(
