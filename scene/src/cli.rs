@@ -226,7 +226,7 @@ fn dag_table(asset: &MeshletAsset) -> String {
             .meshlets()
             .iter()
             .filter(|m| m.level() as usize == level)
-            .map(|m| m.lod_error)
+            .map(|m| asset.lod(m).1)
             .fold(0.0f32, f32::max);
         let _ = writeln!(
             s,
@@ -240,7 +240,7 @@ fn dag_table(asset: &MeshletAsset) -> String {
     let roots: Vec<_> = asset
         .meshlets()
         .iter()
-        .filter(|m| m.parent_error == f32::MAX)
+        .filter(|m| m.parent_group == crate::asset::format::NO_GROUP)
         .collect();
     let _ = writeln!(
         s,

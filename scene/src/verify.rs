@@ -6,6 +6,7 @@
 use glam::Vec3;
 
 use crate::asset::MeshletAsset;
+use crate::asset::format::NO_GROUP;
 use crate::bounds::contains;
 
 /// Per-level counts of an asset.
@@ -123,41 +124,49 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
         for &c in asset.group_children(g) {
             let child = &meshlets[c as usize];
             parents[c as usize] += 1;
-            if child.lod_error > g.error {
+            let (child_sphere, child_error) = asset.lod(child);
+            if child_error > g.error {
                 problems.push(format!(
-                    "group {gi}: error {} below child meshlet {c}'s {}",
-                    g.error, child.lod_error
+                    "group {gi}: error {} below child meshlet {c}'s {child_error}",
+                    g.error
                 ));
             }
-            if !contains(sphere(g.lod_sphere), sphere(child.lod_sphere)) {
+            if !contains(sphere(g.lod_sphere), sphere(child_sphere)) {
                 problems.push(format!(
                     "group {gi}: LOD sphere does not contain child meshlet {c}'s"
                 ));
             }
-            if child.parent_error != g.error || child.parent_sphere != g.lod_sphere {
+            if child.parent_group != gi as u32 {
                 problems.push(format!(
-                    "meshlet {c}: parent LOD bounds differ from its group {gi}'s"
+                    "meshlet {c}: parent group {:#x}, but group {gi} lists it as a child",
+                    child.parent_group
                 ));
             }
         }
     }
     let mut roots = 0;
     for (i, m) in meshlets.iter().enumerate() {
-        let is_root = m.parent_error == f32::MAX;
+        let is_root = m.parent_group == NO_GROUP;
         roots += is_root as usize;
         match (is_root, parents[i]) {
             (true, 0) | (false, 1) => {}
             (true, n) => problems.push(format!("root meshlet {i} is a child of {n} groups")),
             (false, n) => problems.push(format!("meshlet {i} is a child of {n} groups, not one")),
         }
-        if m.lod_error > m.parent_error {
+        // The culling sphere holds every decoded vertex: what the renderer culls by.
+        let d = asset.decode_meshlet(i);
+        let centre = Vec3::new(m.bounds[0], m.bounds[1], m.bounds[2]);
+        let outside = d
+            .positions
+            .iter()
+            .map(|p| p.distance(centre))
+            .fold(0.0f32, f32::max);
+        if outside > m.bounds[3] * (1.0 + 1e-5) + 1e-6 * centre.abs().max_element() {
             problems.push(format!(
-                "meshlet {i}: own error {} above its parent's {}",
-                m.lod_error, m.parent_error
+                "meshlet {i}: a vertex lies {outside} from the centre of its culling sphere of \
+                 radius {}",
+                m.bounds[3]
             ));
-        }
-        if m.level() == 0 && m.lod_error != 0.0 {
-            problems.push(format!("LOD-0 meshlet {i} has error {}", m.lod_error));
         }
     }
     if roots == 0 {

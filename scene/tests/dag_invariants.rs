@@ -138,9 +138,18 @@ fn verify_reports_broken_invariants() {
     let rebuild = |dag: &Dag| meshlight_scene::MeshletAsset::from_dag(&built.mesh, dag, 16, 0);
     assert!(verify(&rebuild(&built.dag)).is_empty());
 
+    // A group whose error is below a (simplified) child's.
     let mut dag = built.dag.clone();
-    let child = dag.groups[0].children[0] as usize;
-    dag.clusters[child].lod.error = dag.groups[0].lod.error * 2.0 + 1.0;
+    let g = dag
+        .groups
+        .iter()
+        .position(|g| {
+            g.children
+                .iter()
+                .any(|&c| built.dag.clusters[c as usize].level > 0)
+        })
+        .unwrap();
+    dag.groups[g].lod.error = 0.0;
     let problems = verify(&rebuild(&dag));
     assert!(
         problems.iter().any(|p| p.contains("below child")),

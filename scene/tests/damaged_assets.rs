@@ -152,14 +152,26 @@ fn meshlet_records_must_fit_the_header() {
     refused("NaN bounds", "meshlet[2].bounds", |w| {
         meshlet(w, 2).bounds[0] = f32::NAN
     });
-    refused("negative radius", "meshlet[2].lod_sphere", |w| {
-        meshlet(w, 2).lod_sphere[3] = -1.0
+    refused("negative radius", "meshlet[2].bounds", |w| {
+        meshlet(w, 2).bounds[3] = -1.0
     });
-    refused("NaN error", "meshlet[3].lod_error", |w| {
-        meshlet(w, 3).lod_error = f32::NAN
-    });
-    refused("infinite parent error", "meshlet[3].parent_error", |w| {
-        meshlet(w, 3).parent_error = f32::INFINITY
+    refused(
+        "parent group past the groups",
+        "meshlet[3].parent_group",
+        |w| {
+            let groups = header(w).group_count;
+            meshlet(w, 3).parent_group = groups;
+        },
+    );
+    refused(
+        "LOD-0 meshlet with a source group",
+        "meshlet[0].source_group",
+        |w| meshlet(w, 0).source_group = 0,
+    );
+    refused("NaN group error", "group[0].error", |w| {
+        let at = header(w).sections[meshlight_scene::asset::format::SECTION_GROUPS].offset as usize
+            + std::mem::offset_of!(meshlight_scene::asset::format::GroupRecord, error) / 4;
+        w[at] = f32::NAN.to_bits();
     });
 }
 

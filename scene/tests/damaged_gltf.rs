@@ -41,7 +41,7 @@ const ACCESSORS: &str = r#"[{"bufferView":0,"componentType":5126,"count":4,"type
 const ONE_NODE: &str = r#"[{"mesh":0}]"#;
 
 fn write(name: &str, text: &str) -> PathBuf {
-    let dir = common::scratch("damaged-gltf");
+    let dir = common::scratch(&format!("damaged-gltf-{name}"));
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
     path

@@ -16,7 +16,12 @@ fn build(mesh: &meshlight_scene::Mesh) -> Built {
 /// Thresholds between every pair of consecutive distinct errors, plus both ends, so
 /// that every distinct cut of the DAG is visited.
 fn thresholds(built: &Built) -> Vec<f32> {
-    let mut errors: Vec<f32> = built.asset.meshlets().iter().map(|m| m.lod_error).collect();
+    let mut errors: Vec<f32> = built
+        .asset
+        .meshlets()
+        .iter()
+        .map(|m| built.asset.lod(m).1)
+        .collect();
     errors.sort_by(f32::total_cmp);
     errors.dedup();
     let mut t: Vec<f32> = errors.windows(2).map(|w| (w[0] + w[1]) * 0.5).collect();
@@ -42,7 +47,7 @@ fn every_cut_of_the_closed_procedural_mesh_is_watertight() {
         let mut triangles = 0;
         for (m, d) in asset.meshlets().iter().zip(&decoded) {
             // The runtime rule: own error acceptable, parent's not.
-            if !(m.lod_error <= t && t < m.parent_error) {
+            if !(asset.lod(m).1 <= t && t < asset.parent_lod(m).1) {
                 continue;
             }
             levels_seen.insert(m.level());

@@ -79,23 +79,30 @@ impl AssetHeader {
     }
 }
 
-/// One meshlet: what culling, LOD selection and rasterisation need, 84 bytes.
+/// Marks "no group" in [`MeshletRecord::source_group`] and
+/// [`MeshletRecord::parent_group`].
+pub const NO_GROUP: u32 = u32::MAX;
+
+/// One meshlet: what culling, LOD selection and rasterisation need, 52 bytes.
 ///
-/// A meshlet is drawn when its own LOD error projected from `lod_sphere` is
-/// imperceptible and its parent's, projected from `parent_sphere`, is not.
+/// A meshlet is drawn when its own LOD error projected from its own LOD sphere is
+/// imperceptible and its parent's is not. Both are the spheres and errors of groups
+/// ([`GroupRecord`]), shared by the eight or so meshlets of a group, so the record
+/// refers to them rather than holding copies: 32 bytes less per meshlet, half a byte
+/// per LOD-0 triangle.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct MeshletRecord {
-    /// Sphere around the decoded vertices (centre, radius), for culling.
+    /// Sphere around the decoded vertices (centre, radius), for culling; also the own
+    /// LOD sphere of a LOD-0 meshlet.
     pub bounds: [f32; 4],
-    /// LOD sphere of the group that produced this meshlet.
-    pub lod_sphere: [f32; 4],
-    /// LOD sphere of the group this meshlet was simplified in.
-    pub parent_sphere: [f32; 4],
-    pub lod_error: f32,
-    /// `f32::MAX` for roots: always "perceptible", so a root is drawn when nothing
-    /// finer is. (Not infinity: shader compilers may assume floats are finite.)
-    pub parent_error: f32,
+    /// The group whose simplification produced this meshlet: its LOD sphere and error
+    /// are this meshlet's own. [`NO_GROUP`] at LOD 0 (error 0, sphere = `bounds`).
+    pub source_group: u32,
+    /// The group this meshlet was simplified in: its LOD sphere and error are this
+    /// meshlet's parent's. [`NO_GROUP`] for roots, which are drawn whenever nothing
+    /// finer is (an infinite parent error).
+    pub parent_group: u32,
     /// First payload word, relative to the payload section.
     pub data_offset: u32,
     /// vertex count (bits 0..8), triangle count (8..16), level (16..24).

@@ -151,14 +151,8 @@ impl MeshletAsset {
                 let sphere4 = |c: Vec3, r: f32| [c.x, c.y, c.z, r];
                 let record = MeshletRecord {
                     bounds: sphere4(c.bounds.0, c.bounds.1 + pad),
-                    lod_sphere: sphere4(c.lod.center, c.lod.radius),
-                    parent_sphere: sphere4(c.parent.center, c.parent.radius),
-                    lod_error: c.lod.error,
-                    parent_error: if c.parent.error.is_finite() {
-                        c.parent.error
-                    } else {
-                        f32::MAX
-                    },
+                    source_group: c.source_group,
+                    parent_group: c.parent_group,
                     data_offset: 0,
                     counts: locals.len() as u32
                         | ((c.triangle_count() as u32) << 8)
@@ -193,7 +187,14 @@ impl MeshletAsset {
                 let first_child = children.len() as u32;
                 children.extend_from_slice(&g.children);
                 GroupRecord {
-                    lod_sphere: [g.lod.center.x, g.lod.center.y, g.lod.center.z, g.lod.radius],
+                    // Padded like the meshlet bounds that LOD-0 meshlets use as their LOD
+                    // spheres, so that every group sphere still holds its children's.
+                    lod_sphere: [
+                        g.lod.center.x,
+                        g.lod.center.y,
+                        g.lod.center.z,
+                        g.lod.radius + pad,
+                    ],
                     error: g.lod.error,
                     level: g.level,
                     first_child,
@@ -379,6 +380,24 @@ impl MeshletAsset {
     /// Packed vertex and index words, addressed by [`MeshletRecord::data_offset`].
     pub fn payload(&self) -> &[u32] {
         self.section(SECTION_PAYLOAD)
+    }
+
+    /// A meshlet's own LOD sphere and error: its source group's, or its bounds and zero
+    /// at LOD 0.
+    pub fn lod(&self, m: &MeshletRecord) -> ([f32; 4], f32) {
+        match self.groups().get(m.source_group as usize) {
+            Some(g) => (g.lod_sphere, g.error),
+            None => (m.bounds, 0.0),
+        }
+    }
+
+    /// A meshlet's parent LOD sphere and error: its parent group's, or an infinite
+    /// error (`f32::MAX`, which shaders handle) for roots.
+    pub fn parent_lod(&self, m: &MeshletRecord) -> ([f32; 4], f32) {
+        match self.groups().get(m.parent_group as usize) {
+            Some(g) => (g.lod_sphere, g.error),
+            None => ([0.0; 4], f32::MAX),
+        }
     }
 
     pub fn quantization(&self) -> Quantization {

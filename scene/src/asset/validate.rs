@@ -190,20 +190,31 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
                 ));
             }
         }
-        for (name, s) in [
-            ("bounds", m.bounds),
-            ("lod_sphere", m.lod_sphere),
-            ("parent_sphere", m.parent_sphere),
+        if !finite_sphere(m.bounds) {
+            return Err(bad(
+                f("bounds"),
+                format!("{:?} is not a finite sphere", m.bounds),
+            ));
+        }
+        for (name, g) in [
+            ("source_group", m.source_group),
+            ("parent_group", m.parent_group),
         ] {
-            if !finite_sphere(s) {
-                return Err(bad(f(name), format!("{s:?} is not a finite sphere")));
+            if g != NO_GROUP && g >= h.group_count {
+                return Err(bad(
+                    f(name),
+                    format!("is {g}, past the {} groups", h.group_count),
+                ));
             }
         }
-        if !(m.lod_error.is_finite() && m.lod_error >= 0.0) {
-            return Err(bad(f("lod_error"), format!("is {}", m.lod_error)));
-        }
-        if !(m.parent_error.is_finite() && m.parent_error >= 0.0) {
-            return Err(bad(f("parent_error"), format!("is {}", m.parent_error)));
+        if (level == 0) != (m.source_group == NO_GROUP) {
+            return Err(bad(
+                f("source_group"),
+                format!(
+                    "is {:#x} at level {level}; exactly the LOD-0 meshlets have none",
+                    m.source_group
+                ),
+            ));
         }
         let layout = PayloadLayout::of(m, has_uvs);
         if m.data_offset as u64 + layout.end as u64 > payload.len() as u64 {
@@ -223,7 +234,7 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         }
         triangles += tc as u64;
         vertices += vc as u64;
-        roots += (m.parent_error == f32::MAX) as u64;
+        roots += (m.parent_group == NO_GROUP) as u64;
     }
     if max_level + 1 != h.level_count {
         return Err(bad(
