@@ -136,3 +136,10 @@ pub fn texture_features_for(access: Access, format: wgpu::TextureFormat) -> wgpu
         wgpu::Features::empty()
     }
 }
+
+/// True when a slot with these uses depends on contents written before its pass: some use
+/// reads, and none overwrites or clears first.
+pub fn reads_earlier(mut accesses: impl Iterator<Item = Access> + Clone) -> bool {
+    let overwrites = accesses.clone().any(|a| a.writes() && !a.reads());
+    !overwrites && accesses.any(Access::reads)
+}

@@ -85,12 +85,14 @@ impl Slot {
         self
     }
     /// Every access, the binding one first.
-    pub fn accesses(&self) -> impl Iterator<Item = Access> + '_ {
+    pub fn accesses(&self) -> impl Iterator<Item = Access> + Clone + '_ {
         std::iter::once(self.access).chain(self.also.iter().copied())
     }
-    /// True when the pass depends on earlier contents through any of its uses.
+    /// True when the pass depends on earlier contents. A slot whose uses include one that
+    /// overwrites or clears (storage-write, cleared-read-write, a target) reads only what
+    /// the pass itself wrote through its other uses (the indirect arguments it appended).
     pub fn reads(&self) -> bool {
-        self.accesses().any(Access::reads)
+        crate::access::reads_earlier(self.accesses())
     }
     pub fn writes(&self) -> bool {
         self.accesses().any(Access::writes)

@@ -51,11 +51,11 @@ pub struct SlotUse {
 }
 
 impl SlotUse {
-    pub fn accesses(&self) -> impl Iterator<Item = Access> + '_ {
+    pub fn accesses(&self) -> impl Iterator<Item = Access> + Clone + '_ {
         std::iter::once(self.access).chain(self.also.iter().copied())
     }
     pub fn reads(&self) -> bool {
-        self.accesses().any(Access::reads)
+        crate::access::reads_earlier(self.accesses())
     }
     /// `storage-read-write+indirect`, with the range when the slot binds part of a texture.
     pub fn access_name(&self) -> String {

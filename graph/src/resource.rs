@@ -154,7 +154,7 @@ impl BufferDesc {
     /// report, never wrapped.
     pub fn array(element: Element, count: u64) -> Self {
         Self {
-            size: (element.size as u64).checked_mul(count).unwrap_or(u64::MAX),
+            size: (element.size as u64).saturating_mul(count),
             element,
             count_param: None,
         }

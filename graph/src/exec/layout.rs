@@ -64,6 +64,9 @@ pub struct LayoutEntry {
     pub source: BindingSource,
     /// Stages that see this binding; `None`: the layout's default.
     pub visibility: Option<wgpu::ShaderStages>,
+    /// Bound read-only although the slot writes: a later dispatch of the same pass reads
+    /// what an earlier one wrote (`var<storage, read>` in its shader).
+    pub read_only: bool,
 }
 
 /// One bind group of a pipeline, as a labelled list of slot bindings.
@@ -98,6 +101,7 @@ impl BindingLayout {
             binding,
             source,
             visibility: None,
+            read_only: false,
         });
         self
     }
@@ -112,6 +116,13 @@ impl BindingLayout {
     }
     pub fn sampler(self, binding: u32, kind: SamplerKind) -> Self {
         self.push(binding, BindingSource::Sampler(kind))
+    }
+    /// Binds the entry added last as read-only storage, whatever the slot's access.
+    pub fn read_only(mut self) -> Self {
+        if let Some(e) = self.entries.last_mut() {
+            e.read_only = true;
+        }
+        self
     }
     /// Gives the entry added last its own stages, e.g. a storage buffer only the fragment
     /// shader writes.

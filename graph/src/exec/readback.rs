@@ -10,6 +10,15 @@ pub struct Readback {
     pub bytes: Vec<u8>,
 }
 
+/// One frame's copy for a readback.
+pub(crate) struct ReadbackCopy<'a> {
+    pub name: &'a str,
+    pub latency: u32,
+    pub source: &'a wgpu::Buffer,
+    pub range: std::ops::Range<u64>,
+    pub frame: u64,
+}
+
 struct Channel {
     ring: MapRing,
     latency: u32,
@@ -22,19 +31,23 @@ pub(crate) struct Readbacks {
 }
 
 impl Readbacks {
-    /// Records the copy of `range` of `source` for frame `frame` into `name`'s ring.
+    /// Records the copy of `copy.range` of `copy.source` into `copy.name`'s ring.
     pub fn record(
         &mut self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
-        name: &str,
-        latency: u32,
-        source: &wgpu::Buffer,
-        range: std::ops::Range<u64>,
-        frame: u64,
+        copy: ReadbackCopy<'_>,
     ) -> Result<(), String> {
+        let ReadbackCopy {
+            name,
+            latency,
+            source,
+            range,
+            frame,
+        } = copy;
         let len = range.end.saturating_sub(range.start);
-        if range.start % wgpu::COPY_BUFFER_ALIGNMENT != 0 || len % wgpu::COPY_BUFFER_ALIGNMENT != 0
+        if !range.start.is_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
+            || !len.is_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
         {
             return Err(format!(
                 "readback `{name}`: range {range:?} must start and end on a multiple of 4 bytes"
@@ -73,11 +86,11 @@ impl Readbacks {
         }
     }
 
-    /// Moves finished copies old enough to be taken (frame + latency <= `next_frame`) into
-    /// the ready queues.
+    /// Moves finished copies old enough to be taken into the ready queues: with `next_frame`
+    /// frames executed, frame k is taken once frame k + latency has run.
     pub fn collect(&mut self, next_frame: u64) {
         for c in self.channels.values_mut() {
-            let up_to = next_frame.checked_sub(c.latency as u64);
+            let up_to = next_frame.checked_sub(c.latency as u64 + 1);
             if let Some(up_to) = up_to {
                 for (frame, bytes) in c.ring.take_ready(up_to) {
                     c.ready.push_back(Readback { frame, bytes });

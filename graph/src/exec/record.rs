@@ -326,10 +326,15 @@ impl<'a> RecordContext<'a> {
                             slot: name.to_string(),
                             available: contract.slot_names().join(", "),
                         })?;
+                        let access = if e.read_only {
+                            crate::access::Access::StorageRead
+                        } else {
+                            slot.access
+                        };
                         match self.desc(name)? {
-                            ResourceDesc::Buffer(_) => buffer_binding_type(slot.access),
+                            ResourceDesc::Buffer(_) => buffer_binding_type(access),
                             ResourceDesc::Texture(t) => {
-                                texture_binding_type(slot.access, t.format, t.layers > 1)
+                                texture_binding_type(access, t.format, t.layers > 1)
                             }
                         }
                         .ok_or_else(|| {
@@ -340,6 +345,11 @@ impl<'a> RecordContext<'a> {
                         })?
                     }
                     BindingSource::Scratch(name, access) => {
+                        let access = &if e.read_only {
+                            crate::access::Access::StorageRead
+                        } else {
+                            *access
+                        };
                         let r = self.scratch_resource(name)?;
                         match &self.plan.resources[r].info.desc {
                             ResourceDesc::Buffer(_) => buffer_binding_type(*access),
@@ -876,17 +886,15 @@ impl<'a> RecordContext<'a> {
     ) -> Result<()> {
         let (buffer, size) = self.buffer(slot)?;
         let range = range.unwrap_or(0..size.next_multiple_of(4).min(buffer.size()));
-        let frame = self.frame_index;
+        let copy = crate::exec::readback::ReadbackCopy {
+            name,
+            latency,
+            source: buffer,
+            range,
+            frame: self.frame_index,
+        };
         self.readbacks
-            .record(
-                self.device,
-                self.encoder,
-                name,
-                latency,
-                buffer,
-                range,
-                frame,
-            )
+            .record(self.device, self.encoder, copy)
             .map_err(|m| self.err(m))
     }
 }

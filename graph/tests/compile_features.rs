@@ -1,0 +1,629 @@
+//! Headless compile tests of limits, size parameters, texture ranges, multi-access slots,
+//! 64-bit visibility targets, mesh programs and pipeline-file errors.
+
+#[path = "support/fake.rs"]
+mod fake;
+use fake::*;
+use meshlight_graph::*;
+
+fn limits() -> wgpu::Limits {
+    wgpu::Limits::default()
+}
+
+fn one_writer(g: &mut GraphBuilder, name: &str) {
+    g.add_pass(
+        "w",
+        Fake::new(
+            "t",
+            vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
+        ),
+        Bindings::new().bind_named("out", name),
+    )
+    .unwrap();
+}
+
+#[test]
+fn a_size_that_overflows_u64_is_an_error_not_a_wrapped_size() {
+    let desc = BufferDesc::array(Element::U32, (1u64 << 62) + 65536);
+    assert_ne!(desc.size, 262_144, "the size must not wrap");
+    let mut g = GraphBuilder::new();
+    let h = g.create_buffer("huge", desc);
+    g.export(h);
+    one_writer(&mut g, "huge");
+    match g.compile(&opts()) {
+        Err(GraphError::SizeOverflow { resource }) => assert_eq!(resource, "huge"),
+        other => panic!("{:?}", other.err()),
+    }
+}
+
+#[test]
+fn a_buffer_over_max_buffer_size_is_a_compile_error() {
+    let mut g = GraphBuilder::new();
+    let h = g.create_buffer("four_tib", BufferDesc::array(Element::BYTES, 4 << 40));
+    g.export(h);
+    g.add_pass(
+        "w",
+        Fake::new(
+            "t",
+            vec![Slot::buffer("out", Access::CopyDst, Element::BYTES, "")],
+        ),
+        Bindings::new().bind_named("out", "four_tib"),
+    )
+    .unwrap();
+    match g.compile(&opts()) {
+        Err(GraphError::LimitExceeded {
+            what, limit, max, ..
+        }) => {
+            assert!(what.contains("four_tib"), "{what}");
+            assert_eq!(limit, "max_buffer_size");
+            assert_eq!(max, limits().max_buffer_size);
+        }
+        other => panic!("{:?}", other.err()),
+    }
+}
+
+#[test]
+fn a_storage_binding_over_its_limit_names_the_pass_slot_and_limit() {
+    let bytes = limits().max_storage_buffer_binding_size + 4;
+    let mut g = GraphBuilder::new();
+    let h = g.create_buffer("big", BufferDesc::array(Element::BYTES, bytes));
+    g.export(h);
+    g.add_pass(
+        "w",
+        Fake::new(
+            "t",
+            vec![Slot::buffer(
+                "out",
+                Access::StorageWrite,
+                Element::BYTES,
+                "",
+            )],
+        ),
+        Bindings::new().bind_named("out", "big"),
+    )
+    .unwrap();
+    match g.compile(&opts()) {
+        Err(GraphError::LimitExceeded { what, limit, .. }) => {
+            assert!(
+                what.contains("`big`") && what.contains("`out`") && what.contains("`w`"),
+                "{what}"
+            );
+            assert_eq!(limit, "max_storage_buffer_binding_size");
+        }
+        other => panic!("{:?}", other.err()),
+    }
+    // The same buffer as a copy destination is fine: only bindings have that limit.
+    let mut g = GraphBuilder::new();
+    let h = g.create_buffer("big", BufferDesc::array(Element::BYTES, bytes));
+    g.export(h);
+    g.add_pass(
+        "w",
+        Fake::new(
+            "t",
+            vec![Slot::buffer("out", Access::CopyDst, Element::BYTES, "")],
+        ),
+        Bindings::new().bind_named("out", "big"),
+    )
+    .unwrap();
+    g.compile(&opts()).unwrap();
+}
+
+#[test]
+fn a_texture_over_the_dimension_limit_is_a_compile_error() {
+    let mut g = GraphBuilder::new();
+    let wide = limits().max_texture_dimension_2d + 1;
+    let t = g.create_texture(
+        "wide",
+        TextureDesc::d2(wgpu::TextureFormat::R32Float, wide, 4),
+    );
+    g.export(t);
+    g.add_pass(
+        "w",
+        Fake::new(
+            "t",
+            vec![Slot::texture("t", Access::StorageWrite, None, "")],
+        ),
+        Bindings::new().bind_named("t", "wide"),
+    )
+    .unwrap();
+    match g.compile(&opts()) {
+        Err(GraphError::LimitExceeded { what, limit, .. }) => {
+            assert!(what.contains("wide"));
+            assert_eq!(limit, "max_texture_dimension_2d");
+        }
+        other => panic!("{:?}", other.err()),
+    }
+}
+
+#[test]
+fn a_declared_dispatch_over_the_per_dimension_limit_is_a_compile_error() {
+    struct Wide;
+    impl Pass for Wide {
+        fn contract(&self) -> StageContract {
+            StageContract {
+                stage: "wide",
+                slots: vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
+            }
+        }
+        fn implementation(&self) -> &'static str {
+            "wide"
+        }
+        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+            ctx.dispatch(
+                "main",
+                [ctx.limits().max_compute_workgroups_per_dimension + 1, 1, 1],
+            );
+            Ok(())
+        }
+        fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
+            Ok(())
+        }
+    }
+    let mut g = GraphBuilder::new();
+    g.import_buffer("out", u32s(4), IMPORT_USAGE);
+    g.add_pass("wide", Wide, Bindings::new()).unwrap();
+    match g.compile(&opts()) {
+        Err(GraphError::LimitExceeded { what, limit, .. }) => {
+            assert!(what.contains("`main`") && what.contains("`wide`"), "{what}");
+            assert_eq!(limit, "max_compute_workgroups_per_dimension");
+        }
+        other => panic!("{:?}", other.err()),
+    }
+}
+
+#[test]
+fn limits_come_from_the_options() {
+    let mut g = GraphBuilder::new();
+    let h = g.create_buffer("b", BufferDesc::array(Element::U32, 1024));
+    g.export(h);
+    one_writer(&mut g, "b");
+    let tight = wgpu::Limits {
+        max_buffer_size: 1024,
+        ..wgpu::Limits::default()
+    };
+    assert!(matches!(
+        g.compile(&opts().with_limits(tight)),
+        Err(GraphError::LimitExceeded { .. })
+    ));
+}
+
+#[test]
+fn size_parameters_resize_buffers_and_a_bad_value_leaves_the_plan_as_it_was() {
+    let mut g = GraphBuilder::new();
+    g.size_param("slots", 100);
+    let h = g.create_buffer("list", BufferDesc::array_param(Element::U32, "slots"));
+    g.export(h);
+    one_writer(&mut g, "list");
+    let mut c = g.compile(&opts()).unwrap();
+    let list = c.plan.resource_index("list").unwrap();
+    assert_eq!(c.plan.resources[list].info.desc.bytes(), 400);
+    c.set_param("slots", 1000).unwrap();
+    assert_eq!(c.plan.resources[list].info.desc.bytes(), 4000);
+    assert_eq!(c.plan.generation, 1);
+    // Past the adapter's buffer size: an error, and nothing changed.
+    match c.set_param("slots", 1 << 40) {
+        Err(GraphError::LimitExceeded { what, .. }) => assert!(what.contains("list")),
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(
+        c.set_param("slots", u64::MAX),
+        Err(GraphError::SizeOverflow { .. })
+    ));
+    assert_eq!(c.plan.resources[list].info.desc.bytes(), 4000);
+    assert_eq!(c.plan.generation, 1);
+    assert!(matches!(
+        c.set_param("nope", 1),
+        Err(GraphError::UnknownParam { .. })
+    ));
+    // A buffer naming an undeclared parameter fails at compile.
+    let mut g = GraphBuilder::new();
+    let h = g.create_buffer("list", BufferDesc::array_param(Element::U32, "slotz"));
+    g.export(h);
+    one_writer(&mut g, "list");
+    match g.compile(&opts()) {
+        Err(GraphError::UnknownParam {
+            resource, param, ..
+        }) => {
+            assert_eq!((resource.as_str(), param.as_str()), ("list", "slotz"))
+        }
+        other => panic!("{:?}", other.err()),
+    }
+}
+
+fn mip_pass() -> Fake {
+    Fake::new(
+        "down",
+        vec![
+            Slot::texture("src", Access::Sampled, None, ""),
+            Slot::texture("dst", Access::StorageWrite, None, ""),
+        ],
+    )
+}
+
+#[test]
+fn disjoint_mips_of_one_texture_may_be_read_and_written_by_one_pass() {
+    let mut g = GraphBuilder::new();
+    let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_full_mips();
+    let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
+    let out = g
+        .add_pass(
+            "mip1",
+            mip_pass(),
+            Bindings::new()
+                .bind_range("src", t, TextureRange::mip(0))
+                .bind_range("dst", t, TextureRange::mip(1)),
+        )
+        .unwrap();
+    let t1 = out.texture("dst").unwrap();
+    assert_eq!(t1.version(), 1);
+    g.add_pass(
+        "mip2",
+        mip_pass(),
+        Bindings::new()
+            .bind_range("src", t1, TextureRange::mip(1))
+            .bind_range("dst", t1, TextureRange::mip(2)),
+    )
+    .unwrap();
+    let c = g.compile(&opts()).unwrap();
+    assert_eq!(c.plan.order, [0, 1]);
+    assert_eq!(c.plan.edges.len(), 2, "{:?}", c.plan.edges);
+}
+
+#[test]
+fn overlapping_ranges_in_one_pass_stay_an_error() {
+    for (src, dst) in [
+        (TextureRange::mips(0, 2), TextureRange::mip(1)),
+        (TextureRange::mips(0, u32::MAX), TextureRange::mip(3)),
+    ] {
+        let mut g = GraphBuilder::new();
+        let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_full_mips();
+        let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
+        g.add_pass(
+            "bad",
+            mip_pass(),
+            Bindings::new()
+                .bind_range("src", t, src)
+                .bind_range("dst", t, dst),
+        )
+        .unwrap();
+        match g.compile(&opts()) {
+            Err(GraphError::UsageNotAllowed { pass, reason, .. }) => {
+                assert_eq!(pass, "bad");
+                assert!(reason.contains("overlapping"), "{reason}");
+            }
+            other => panic!("{:?}", other.err()),
+        }
+    }
+    // A range outside the texture is a descriptor error.
+    let mut g = GraphBuilder::new();
+    let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_mips(2);
+    let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
+    g.add_pass(
+        "bad",
+        mip_pass(),
+        Bindings::new()
+            .bind_range("src", t, TextureRange::mip(0))
+            .bind_range("dst", t, TextureRange::mip(2)),
+    )
+    .unwrap();
+    assert!(matches!(
+        g.compile(&opts()),
+        Err(GraphError::DescriptorMismatch { .. })
+    ));
+}
+
+#[test]
+fn texture_arrays_and_layer_ranges_plan_like_mips() {
+    let mut g = GraphBuilder::new();
+    let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 8, 8).with_layers(4);
+    assert_eq!(desc.bytes(), 8 * 8 * 4 * 4);
+    let t = g.create_texture("layers", desc);
+    let out = g.add_pass(
+        "copy",
+        mip_pass(),
+        Bindings::new()
+            .bind_range("dst", t, TextureRange::layer(0))
+            .bind_range("src", t, TextureRange::layer(1)),
+    );
+    // Layer 1 has no writer yet.
+    assert!(out.is_ok());
+    assert!(matches!(
+        g.compile(&opts()),
+        Err(GraphError::ReadWithoutWriter { .. })
+    ));
+}
+
+#[test]
+fn cleared_read_write_needs_no_writer_and_a_second_use_adds_its_usage() {
+    let mut g = GraphBuilder::new();
+    let args = g.create_buffer("args", u32s(4));
+    let out = g
+        .add_pass(
+            "append",
+            Fake::new(
+                "a",
+                vec![
+                    Slot::buffer("args", Access::ClearedReadWrite, Element::U32, "")
+                        .also(Access::Indirect),
+                ],
+            ),
+            Bindings::new().bind("args", args),
+        )
+        .unwrap();
+    g.export(out.buffer("args").unwrap());
+    let c = g.compile(&opts()).unwrap();
+    let r = &c.plan.resources[c.plan.resource_index("args").unwrap()];
+    assert_eq!(
+        r.buffer_usage,
+        wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::INDIRECT
+            | wgpu::BufferUsages::COPY_SRC
+    );
+    // The same slot as plain read-write is a read of a version nothing wrote.
+    let mut g = GraphBuilder::new();
+    let args = g.create_buffer("args", u32s(4));
+    let out = g
+        .add_pass(
+            "append",
+            Fake::new(
+                "a",
+                vec![Slot::buffer(
+                    "args",
+                    Access::StorageReadWrite,
+                    Element::U32,
+                    "",
+                )],
+            ),
+            Bindings::new().bind("args", args),
+        )
+        .unwrap();
+    g.export(out.buffer("args").unwrap());
+    assert!(matches!(
+        g.compile(&opts()),
+        Err(GraphError::ReadWithoutWriter { .. })
+    ));
+}
+
+fn vis_pass(access: Access) -> Fake {
+    Fake::new("sw_raster", vec![Slot::visibility64("vis", access, "")])
+}
+
+#[test]
+fn a_64_bit_visibility_slot_takes_a_u64_buffer_or_an_r64uint_texture() {
+    // Buffer: fine anywhere.
+    let mut g = GraphBuilder::new();
+    let v = g.create_buffer("vis", BufferDesc::array(Element::U64, 64));
+    let o = g
+        .add_pass(
+            "raster",
+            vis_pass(Access::ClearedReadWrite),
+            Bindings::new().bind("vis", v),
+        )
+        .unwrap();
+    g.export(o.buffer("vis").unwrap());
+    g.compile(&opts()).unwrap();
+
+    // Texture: STORAGE_ATOMIC usage and the texture-atomic features, required.
+    let build = || {
+        let mut g = GraphBuilder::new();
+        let v = g.create_texture("vis", TextureDesc::d2(wgpu::TextureFormat::R64Uint, 8, 8));
+        let o = g
+            .add_pass(
+                "raster",
+                vis_pass(Access::ClearedReadWrite),
+                Bindings::new().bind("vis", v),
+            )
+            .unwrap();
+        g.export(o.texture("vis").unwrap());
+        g
+    };
+    let atomics = wgpu::Features::TEXTURE_ATOMIC | wgpu::Features::TEXTURE_INT64_ATOMIC;
+    let c = build().compile(&CompileOptions::new(atomics)).unwrap();
+    let r = &c.plan.resources[c.plan.resource_index("vis").unwrap()];
+    assert!(
+        r.texture_usage
+            .contains(wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::STORAGE_ATOMIC)
+    );
+    assert!(c.plan.passes[0].required_features.contains(atomics));
+    match build().compile(&opts()) {
+        Err(GraphError::MissingFeature { pass, features, .. }) => {
+            assert_eq!(pass, "raster");
+            assert!(features.contains("TEXTURE_INT64_ATOMIC"), "{features}");
+        }
+        other => panic!("{:?}", other.err()),
+    }
+
+    // Anything else: a descriptor error naming both.
+    let mut g = GraphBuilder::new();
+    let v = g.create_buffer("vis", u32s(64));
+    g.add_pass(
+        "raster",
+        vis_pass(Access::ClearedReadWrite),
+        Bindings::new().bind("vis", v),
+    )
+    .unwrap();
+    match g.compile(&opts()) {
+        Err(GraphError::DescriptorMismatch {
+            expected, found, ..
+        }) => {
+            assert!(expected.contains("64-bit visibility"), "{expected}");
+            assert!(found.contains("u32"), "{found}");
+        }
+        other => panic!("{:?}", other.err()),
+    }
+}
+
+const MESH: PassShader = PassShader {
+    name: "test::mesh",
+    source: "",
+    file_path: "graph/tests/compile_features.rs",
+};
+
+#[test]
+fn a_mesh_program_requires_the_mesh_shader_feature() {
+    struct Meshy;
+    impl Pass for Meshy {
+        fn contract(&self) -> StageContract {
+            StageContract {
+                stage: "hw_raster",
+                slots: vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
+            }
+        }
+        fn implementation(&self) -> &'static str {
+            "mesh_shader"
+        }
+        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+            ctx.program(
+                "draw",
+                ProgramDesc::mesh(&MESH, Some("ts"), "ms").fragment("fs"),
+            );
+            Ok(())
+        }
+        fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
+            Ok(())
+        }
+    }
+    let build = || {
+        let mut g = GraphBuilder::new();
+        g.import_buffer("out", u32s(4), IMPORT_USAGE);
+        g.add_pass("hw", Meshy, Bindings::new()).unwrap();
+        g
+    };
+    match build().compile(&opts()) {
+        Err(GraphError::MissingFeature { pass, features, .. }) => {
+            assert_eq!(pass, "hw");
+            assert!(features.contains("EXPERIMENTAL_MESH_SHADER"), "{features}");
+        }
+        other => panic!("{:?}", other.err()),
+    }
+    let c = build()
+        .compile(&CompileOptions::new(
+            wgpu::Features::EXPERIMENTAL_MESH_SHADER,
+        ))
+        .unwrap();
+    let program = &c.plan.passes[0].programs[0];
+    assert_eq!(
+        (program.kind, program.entries.clone()),
+        ("mesh", vec!["ts", "ms", "fs"])
+    );
+}
+
+#[test]
+fn pipeline_file_errors_name_the_stage_and_the_version() {
+    let registry = {
+        let mut r = file::Registry::new();
+        r.register("transform", "add", |_| {
+            unreachable!("never built in these tests")
+        });
+        r
+    };
+    let text = r#"
+[[pass]]
+name = "first"
+stage = "trnasform"
+implementation = "add"
+"#;
+    match file::parse_pipeline(text, "p.toml", &registry) {
+        Err(GraphError::UnknownStage {
+            file,
+            pass,
+            stage,
+            known,
+        }) => {
+            assert_eq!(
+                (file.as_str(), pass.as_str(), stage.as_str()),
+                ("p.toml", "first", "trnasform")
+            );
+            assert_eq!(known, "transform");
+        }
+        other => panic!("{:?}", other.err()),
+    }
+    let text = r#"
+[[resource]]
+name = "x"
+kind = "transient"
+buffer = { element = "u32", count = 4 }
+
+[[pass]]
+name = "first"
+stage = "transform"
+implementation = "add"
+bind = { input = "x@4294967296" }
+"#;
+    let registry = {
+        let mut r = file::Registry::new();
+        r.register("transform", "add", |_| {
+            Ok(Box::new(Fake::rw(&["input"], &["output"])))
+        });
+        r
+    };
+    match file::parse_pipeline(text, "p.toml", &registry) {
+        Err(GraphError::PipelineFile { message, .. }) => {
+            assert!(message.contains("too large"), "{message}")
+        }
+        other => panic!("{:?}", other.err()),
+    }
+}
+
+#[test]
+fn pipeline_files_declare_size_parameters_and_texture_ranges() {
+    let mut registry = file::Registry::new();
+    registry.register("down", "fake", |_| Ok(Box::new(mip_pass())));
+    registry.register("fill", "fake", |_| {
+        Ok(Box::new(Fake::new(
+            "fill",
+            vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
+        )))
+    });
+    let text = r#"
+[params]
+slots = 300
+
+[[resource]]
+name = "list"
+kind = "exported"
+buffer = { element = "u32", count_param = "slots" }
+
+[[resource]]
+name = "pyr"
+kind = "imported"
+texture = { format = "r32float", width = 16, height = 16, mip_levels = 5 }
+usage = ["TEXTURE_BINDING", "STORAGE_BINDING"]
+
+[[pass]]
+name = "fill"
+stage = "fill"
+implementation = "fake"
+bind = { out = "list" }
+
+[[pass]]
+name = "mip1"
+stage = "down"
+implementation = "fake"
+bind = { src = "pyr#mip=0", dst = "pyr#mip=1" }
+
+[[pass]]
+name = "mip2"
+stage = "down"
+implementation = "fake"
+bind = { src = "pyr#mips=1..2", dst = "pyr#mip=2" }
+"#;
+    let c = file::parse_pipeline(text, "p.toml", &registry)
+        .unwrap()
+        .compile(&opts())
+        .unwrap();
+    assert_eq!(c.param("slots"), Some(300));
+    let list = c.plan.resource_index("list").unwrap();
+    assert_eq!(c.plan.resources[list].info.desc.bytes(), 1200);
+    let mip2 = &c.plan.passes[c.plan.pass_index("mip2").unwrap()];
+    assert_eq!(
+        mip2.slots[0].range.map(|r| (r.base_mip, r.mip_count)),
+        Some((1, 1))
+    );
+    let bad = text.replace("pyr#mip=0", "pyr#mip=x");
+    assert!(matches!(
+        file::parse_pipeline(&bad, "p.toml", &registry),
+        Err(GraphError::PipelineFile { .. })
+    ));
+}

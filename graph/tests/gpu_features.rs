@@ -1,0 +1,842 @@
+//! GPU tests of the frame graph's render passes, sub-resources, multi-access slots, frame
+//! data, async readback and growth, each against a CPU reference (lavapipe in CI).
+
+#[path = "support/rects.rs"]
+mod rects;
+mod support;
+
+use meshlight_graph::*;
+use rects::*;
+use support::gpu;
+
+const RASTER: PassShader = PassShader {
+    name: "test::features",
+    source: include_str!("support/features.wgsl"),
+    file_path: "graph/tests/support/features.wgsl",
+};
+const COMPUTE: PassShader = PassShader {
+    name: "test::compute",
+    source: include_str!("support/compute.wgsl"),
+    file_path: "graph/tests/support/compute.wgsl",
+};
+
+fn params(a: u32, b: u32) -> [u32; 4] {
+    [a, b, 0, 0]
+}
+
+/// A pass built from closures, so each test states its contract, setup and record inline.
+struct TestPass<S, R> {
+    stage: &'static str,
+    slots: Vec<Slot>,
+    setup: S,
+    record: R,
+}
+
+impl<S, R> Pass for TestPass<S, R>
+where
+    S: Fn(&mut SetupContext) -> Result<()> + Send + Sync,
+    R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
+{
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: self.stage,
+            slots: self.slots.clone(),
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "test"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        (self.setup)(ctx)
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        (self.record)(ctx)
+    }
+}
+
+fn pass<S, R>(stage: &'static str, slots: Vec<Slot>, setup: S, record: R) -> TestPass<S, R>
+where
+    S: Fn(&mut SetupContext) -> Result<()> + Send + Sync,
+    R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
+{
+    TestPass {
+        stage,
+        slots,
+        setup,
+        record,
+    }
+}
+
+fn read<T: bytemuck::Pod>(exec: &mut Executor, name: &str) -> Vec<T> {
+    bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
+}
+
+// ---------------------------------------------------------------------------------------
+// A render pass with a masked dummy colour target whose fragment shader does a 64-bit
+// atomicMax into a storage buffer.
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RectVertex {
+    pos: [f32; 4],
+    key: [u32; 4],
+}
+
+fn rect_vertices() -> Vec<RectVertex> {
+    let ndc = |x: u32, y: u32| {
+        [
+            x as f32 / W as f32 * 2.0 - 1.0,
+            1.0 - y.min(H) as f32 / H as f32 * 2.0,
+        ]
+    };
+    let mut v = Vec::new();
+    for ([x0, y0, x1, y1], depth, id) in RECTS {
+        let corners = [ndc(x0, y0), ndc(x1, y0), ndc(x1, y1), ndc(x0, y1)];
+        for i in [0, 1, 2, 0, 2, 3] {
+            v.push(RectVertex {
+                pos: [corners[i][0], corners[i][1], 0.0, 1.0],
+                key: [depth, id, 0, 0],
+            });
+        }
+    }
+    v
+}
+
+#[test]
+fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
+    let gpu = gpu();
+    let vertices = rect_vertices();
+    let vertex_count = vertices.len() as u32;
+    let mut g = GraphBuilder::new();
+    let rects = g.import_buffer(
+        "rects",
+        BufferDesc::array(Element::named("RectVertex", 32), vertex_count as u64),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let vis = g.create_buffer("vis", BufferDesc::array(Element::U64, (W * H) as u64));
+    let raster = pass(
+        "raster",
+        vec![
+            Slot::buffer(
+                "rects",
+                Access::StorageRead,
+                Element::named("RectVertex", 32),
+                "",
+            ),
+            Slot::buffer("vis", Access::ClearedReadWrite, Element::U64, ""),
+        ],
+        |ctx| {
+            ctx.require_features(
+                wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
+            );
+            ctx.scratch_texture(
+                "dummy",
+                TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
+                &[Access::RenderTarget],
+            );
+            let layout = BindingLayout::render("raster")
+                .slot(0, "rects")
+                .visible_in(wgpu::ShaderStages::VERTEX)
+                .slot(1, "vis")
+                .visible_in(wgpu::ShaderStages::FRAGMENT)
+                .uniform(2)
+                .visible_in(wgpu::ShaderStages::FRAGMENT);
+            ctx.program(
+                "rects",
+                ProgramDesc::render(&RASTER, "rect_vs")
+                    .fragment("rect_fs")
+                    .target(ColorTarget::masked("dummy"))
+                    .layout(layout),
+            );
+            Ok(())
+        },
+        move |ctx| {
+            ctx.clear("vis")?;
+            let program = ctx.render("rects")?;
+            let raster_params = [W, 0, 0, 0, 0, 0, 0, 0];
+            let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&raster_params))])?;
+            let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
+            rp.set_pipeline(&program.pipeline);
+            rp.set_bind_group(0, &bg, &[]);
+            rp.draw(0..vertex_count, 0..1);
+            Ok(())
+        },
+    );
+    let out = g
+        .add_pass(
+            "raster",
+            raster,
+            Bindings::new().bind("rects", rects).bind("vis", vis),
+        )
+        .unwrap();
+    g.export(out.buffer("vis").unwrap());
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    // The dummy target is cleared and never stored; the visibility buffer reads nothing.
+    let plan = &compiled.plan;
+    let dummy = plan.resource_index("raster/dummy").unwrap();
+    assert_eq!(
+        plan.resources[dummy].texture_usage,
+        wgpu::TextureUsages::RENDER_ATTACHMENT
+    );
+    assert!(plan.edges.is_empty(), "{:?}", plan.edges);
+    let dot = dump::to_dot(plan);
+    assert!(dot.contains("vis: cleared-read-write"), "{dot}");
+
+    let buffer = gpu.buffer_with_data(
+        "rects",
+        bytemuck::cast_slice(&vertices),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let mut exec = Executor::new(gpu);
+    let imports = Imports::new().buffer("rects", &buffer);
+    // Twice: the second frame must clear what the first left.
+    exec.execute(&compiled, &imports).unwrap();
+    exec.execute(&compiled, &imports).unwrap();
+    let got: Vec<u64> = read(&mut exec, "vis");
+    let want = cpu_rects();
+    let wrong = got.iter().zip(&want).filter(|(a, b)| a != b).count();
+    assert_eq!(wrong, 0, "{wrong} of {} pixels differ", want.len());
+    assert!(
+        want.iter().any(|&k| k >> 32 == 300),
+        "the reference covers the top rectangle"
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// A mip chain built within one frame through per-mip views, read back through a sampler.
+
+const MIP_W: u32 = 37;
+const MIP_H: u32 = 23;
+
+fn cpu_pyramid(base: &[f32]) -> Vec<Vec<f32>> {
+    let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, MIP_W, MIP_H).with_full_mips();
+    let mut mips = vec![base.to_vec()];
+    for level in 1..desc.mip_levels {
+        let (sw, sh) = desc.mip_size(level - 1);
+        let (dw, dh) = desc.mip_size(level);
+        let src = &mips[level as usize - 1];
+        let mut dst = vec![0f32; (dw * dh) as usize];
+        for y in 0..dh {
+            for x in 0..dw {
+                let x_end = if x == dw - 1 && sw % 2 == 1 {
+                    sw
+                } else {
+                    x * 2 + 2
+                };
+                let y_end = if y == dh - 1 && sh % 2 == 1 {
+                    sh
+                } else {
+                    y * 2 + 2
+                };
+                let mut m = f32::MAX;
+                for sy in y * 2..y_end.min(sh) {
+                    for sx in x * 2..x_end.min(sw) {
+                        m = m.min(src[(sy * sw + sx) as usize]);
+                    }
+                }
+                dst[(y * dw + x) as usize] = m;
+            }
+        }
+        mips.push(dst);
+    }
+    mips
+}
+
+#[test]
+fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
+    let gpu = gpu();
+    let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, MIP_W, MIP_H).with_full_mips();
+    let levels = desc.mip_levels;
+    assert_eq!(levels, 6);
+    let base: Vec<f32> = (0..MIP_W * MIP_H)
+        .map(|i| ((i * 7919) % 1000) as f32 / 7.0)
+        .collect();
+    let total: u64 = (0..levels)
+        .map(|l| {
+            let (w, h) = desc.mip_size(l);
+            (w * h) as u64
+        })
+        .sum();
+
+    let mut g = GraphBuilder::new();
+    let source = g.import_buffer(
+        "source",
+        BufferDesc::array(Element::F32, base.len() as u64),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let mut pyramid = g.create_texture("pyramid", desc.clone());
+    let base_pass = pass(
+        "base",
+        vec![
+            Slot::buffer("source", Access::StorageRead, Element::F32, ""),
+            Slot::texture(
+                "mip",
+                Access::StorageWrite,
+                Some(wgpu::TextureFormat::R32Float),
+                "",
+            ),
+        ],
+        |ctx| {
+            let layout = BindingLayout::compute("base")
+                .slot(0, "source")
+                .slot(1, "mip");
+            ctx.program(
+                "base",
+                ProgramDesc::compute(&COMPUTE, "write_base").layout(layout),
+            );
+            Ok(())
+        },
+        |ctx| {
+            let p = ctx.compute("base")?;
+            let bg = ctx.bind_group(&p, 0, &[])?;
+            let mut cp = ctx.compute_pass();
+            cp.set_pipeline(&p.pipeline);
+            cp.set_bind_group(0, &bg, &[]);
+            cp.dispatch_workgroups(MIP_W.div_ceil(8), MIP_H.div_ceil(8), 1);
+            Ok(())
+        },
+    );
+    pyramid = g
+        .add_pass(
+            "base",
+            base_pass,
+            Bindings::new()
+                .bind("source", source)
+                .bind_range("mip", pyramid, TextureRange::mip(0)),
+        )
+        .unwrap()
+        .texture("mip")
+        .unwrap();
+    for level in 1..levels {
+        let (dw, dh) = desc.mip_size(level);
+        let down = pass(
+            "downsample",
+            vec![
+                Slot::texture(
+                    "src",
+                    Access::Sampled,
+                    Some(wgpu::TextureFormat::R32Float),
+                    "",
+                ),
+                Slot::texture(
+                    "dst",
+                    Access::StorageWrite,
+                    Some(wgpu::TextureFormat::R32Float),
+                    "",
+                ),
+            ],
+            |ctx| {
+                let layout = BindingLayout::compute("downsample")
+                    .slot(3, "src")
+                    .slot(4, "dst");
+                ctx.program(
+                    "downsample",
+                    ProgramDesc::compute(&COMPUTE, "downsample").layout(layout),
+                );
+                Ok(())
+            },
+            move |ctx| {
+                let p = ctx.compute("downsample")?;
+                let bg = ctx.bind_group(&p, 0, &[])?;
+                let mut cp = ctx.compute_pass();
+                cp.set_pipeline(&p.pipeline);
+                cp.set_bind_group(0, &bg, &[]);
+                cp.dispatch_workgroups(dw.div_ceil(8), dh.div_ceil(8), 1);
+                Ok(())
+            },
+        );
+        pyramid = g
+            .add_pass(
+                &format!("mip{level}"),
+                down,
+                Bindings::new()
+                    .bind_range("src", pyramid, TextureRange::mip(level - 1))
+                    .bind_range("dst", pyramid, TextureRange::mip(level)),
+            )
+            .unwrap()
+            .texture("dst")
+            .unwrap();
+    }
+    let gathered = g.create_buffer("gathered", BufferDesc::array(Element::F32, total));
+    let gather = pass(
+        "gather",
+        vec![
+            Slot::texture("pyramid", Access::Sampled, None, ""),
+            Slot::buffer("gathered", Access::StorageWrite, Element::F32, ""),
+        ],
+        |ctx| {
+            let layout = BindingLayout::compute("gather")
+                .uniform(2)
+                .slot(5, "pyramid")
+                .sampler(6, SamplerKind::Nearest)
+                .slot(7, "gathered");
+            ctx.program(
+                "gather",
+                ProgramDesc::compute(&COMPUTE, "gather").layout(layout),
+            );
+            Ok(())
+        },
+        move |ctx| {
+            let desc = match ctx.desc("pyramid")? {
+                ResourceDesc::Texture(t) => t.clone(),
+                ResourceDesc::Buffer(_) => unreachable!("checked by the contract"),
+            };
+            let p = ctx.compute("gather")?;
+            let mut offset = 0;
+            let mut groups = Vec::new();
+            for level in 0..desc.mip_levels {
+                let (w, h) = desc.mip_size(level);
+                let bg =
+                    ctx.bind_group(&p, 0, &[(2, bytemuck::cast_slice(&params(level, offset)))])?;
+                groups.push((bg, (w * h).div_ceil(64)));
+                offset += w * h;
+            }
+            let mut cp = ctx.compute_pass();
+            cp.set_pipeline(&p.pipeline);
+            for (bg, n) in &groups {
+                cp.set_bind_group(0, bg, &[]);
+                cp.dispatch_workgroups(*n, 1, 1);
+            }
+            Ok(())
+        },
+    );
+    let out = g
+        .add_pass(
+            "gather",
+            gather,
+            Bindings::new()
+                .bind("pyramid", pyramid)
+                .bind("gathered", gathered),
+        )
+        .unwrap();
+    g.export(out.buffer("gathered").unwrap());
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let plan = &compiled.plan;
+    assert_eq!(plan.order.len(), levels as usize + 1);
+    let mip2 = &plan.passes[plan.pass_index("mip2").unwrap()];
+    assert_eq!(
+        mip2.slots[0].range,
+        Some(TextureRange::mip(1).resolve(&desc))
+    );
+    assert!(dump::to_dot(plan).contains("dst: storage-write [mip 2]"));
+
+    let source_buffer = gpu.buffer_with_data(
+        "source",
+        bytemuck::cast_slice(&base),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let mut exec = Executor::new(gpu);
+    exec.execute(&compiled, &Imports::new().buffer("source", &source_buffer))
+        .unwrap();
+    let got: Vec<f32> = read(&mut exec, "gathered");
+    let want: Vec<f32> = cpu_pyramid(&base).concat();
+    assert_eq!(got.len(), want.len());
+    assert_eq!(got, want);
+}
+
+// ---------------------------------------------------------------------------------------
+// A buffer cleared and appended to in one pass, used as indirect arguments in that pass
+// and by the next; storage and indirect in one dispatch.
+
+#[test]
+fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
+    const N: u32 = 1000;
+    let gpu = gpu();
+    let mut g = GraphBuilder::new();
+    let args = g.create_buffer("args", BufferDesc::array(Element::U32, 4));
+    let items = g.create_buffer("items", BufferDesc::array(Element::U32, N as u64));
+    let marks = g.create_buffer("marks", BufferDesc::array(Element::U32, N as u64));
+    let seen = g.create_buffer("seen", BufferDesc::array(Element::U32, N as u64));
+    let append = pass(
+        "append",
+        vec![
+            Slot::buffer("args", Access::ClearedReadWrite, Element::U32, "").also(Access::Indirect),
+            Slot::buffer("items", Access::StorageWrite, Element::U32, ""),
+            Slot::buffer("marks", Access::ClearedReadWrite, Element::U32, ""),
+        ],
+        |ctx| {
+            let append = BindingLayout::compute("append")
+                .uniform(2)
+                .slot(8, "args")
+                .slot(9, "items");
+            let mark = BindingLayout::compute("mark")
+                .uniform(2)
+                .slot(10, "items")
+                .read_only()
+                .slot(11, "marks");
+            ctx.program(
+                "append",
+                ProgramDesc::compute(&COMPUTE, "append").layout(append),
+            );
+            ctx.program("mark", ProgramDesc::compute(&COMPUTE, "mark").layout(mark));
+            Ok(())
+        },
+        |ctx| {
+            ctx.clear("args")?;
+            ctx.clear("marks")?;
+            let append = ctx.compute("append")?;
+            let mark = ctx.compute("mark")?;
+            let p = params(N, 6);
+            let a = ctx.bind_group(&append, 0, &[(2, bytemuck::cast_slice(&p))])?;
+            let m = ctx.bind_group(&mark, 0, &[(2, bytemuck::cast_slice(&p))])?;
+            let (args, _) = ctx.buffer("args")?;
+            let mut cp = ctx.compute_pass();
+            cp.set_pipeline(&append.pipeline);
+            cp.set_bind_group(0, &a, &[]);
+            cp.dispatch_workgroups(N.div_ceil(64), 1, 1);
+            cp.set_pipeline(&mark.pipeline);
+            cp.set_bind_group(0, &m, &[]);
+            cp.dispatch_workgroups_indirect(args, 0);
+            Ok(())
+        },
+    );
+    let out = g
+        .add_pass(
+            "append",
+            append,
+            Bindings::new()
+                .bind("args", args)
+                .bind("items", items)
+                .bind("marks", marks),
+        )
+        .unwrap();
+    let args = out.buffer("args").unwrap();
+    g.export(out.buffer("marks").unwrap());
+    let count = pass(
+        "count",
+        vec![
+            Slot::buffer("args", Access::StorageRead, Element::U32, "").also(Access::Indirect),
+            Slot::buffer("seen", Access::ClearedReadWrite, Element::U32, ""),
+        ],
+        |ctx| {
+            let layout = BindingLayout::compute("count")
+                .slot(12, "args")
+                .slot(13, "seen");
+            ctx.program(
+                "count",
+                ProgramDesc::compute(&COMPUTE, "count_groups").layout(layout),
+            );
+            Ok(())
+        },
+        |ctx| {
+            ctx.clear("seen")?;
+            let p = ctx.compute("count")?;
+            let bg = ctx.bind_group(&p, 0, &[])?;
+            let (args, _) = ctx.buffer("args")?;
+            let mut cp = ctx.compute_pass();
+            cp.set_pipeline(&p.pipeline);
+            cp.set_bind_group(0, &bg, &[]);
+            cp.dispatch_workgroups_indirect(args, 0);
+            Ok(())
+        },
+    );
+    let out = g
+        .add_pass(
+            "count",
+            count,
+            Bindings::new().bind("args", args).bind("seen", seen),
+        )
+        .unwrap();
+    g.export(out.buffer("seen").unwrap());
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let plan = &compiled.plan;
+    let args_plan = &plan.resources[plan.resource_index("args").unwrap()];
+    assert!(args_plan.buffer_usage.contains(
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST
+    ));
+    assert!(dump::to_dot(plan).contains("args: cleared-read-write+indirect"));
+
+    let mut exec = Executor::new(gpu);
+    for _ in 0..2 {
+        exec.execute(&compiled, &Imports::new()).unwrap();
+    }
+    let appended = N.div_ceil(3);
+    let marks: Vec<u32> = read(&mut exec, "marks");
+    for (i, m) in marks.iter().enumerate() {
+        assert_eq!(*m, if i % 3 == 0 { 7 } else { 0 }, "mark {i}");
+    }
+    let seen: Vec<u32> = read(&mut exec, "seen");
+    for (i, s) in seen.iter().enumerate() {
+        let want = if (i as u32) < appended {
+            appended * 1000 + i as u32
+        } else {
+            0
+        };
+        assert_eq!(*s, want, "group {i}");
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Frame data: 100 frames with new values and no recompile; async readback with latency.
+
+fn stamp_graph(latency: u32) -> CompiledGraph {
+    let mut g = GraphBuilder::new();
+    let stamp = g.create_buffer("stamp", BufferDesc::array(Element::U32, 2));
+    let writer = pass(
+        "stamp",
+        vec![Slot::buffer(
+            "stamp",
+            Access::StorageWrite,
+            Element::U32,
+            "",
+        )],
+        |ctx| {
+            ctx.frame_input("value");
+            let layout = BindingLayout::compute("stamp").uniform(2).slot(14, "stamp");
+            ctx.program(
+                "stamp",
+                ProgramDesc::compute(&COMPUTE, "write_stamp").layout(layout),
+            );
+            Ok(())
+        },
+        |ctx| {
+            let value = ctx.frame_u32("value")?;
+            let frame = ctx.frame_index() as u32;
+            let p = ctx.compute("stamp")?;
+            let bg = ctx.bind_group(&p, 0, &[(2, bytemuck::cast_slice(&params(value, frame)))])?;
+            let mut cp = ctx.compute_pass();
+            cp.set_pipeline(&p.pipeline);
+            cp.set_bind_group(0, &bg, &[]);
+            cp.dispatch_workgroups(1, 1, 1);
+            Ok(())
+        },
+    );
+    let out = g
+        .add_pass("stamp", writer, Bindings::new().bind("stamp", stamp))
+        .unwrap();
+    let stamp = out.buffer("stamp").unwrap();
+    g.export(stamp);
+    g.readback("stamp", stamp, None, latency).unwrap();
+    g.compile(&CompileOptions::new(wgpu::Features::empty()))
+        .unwrap()
+}
+
+#[test]
+fn frame_data_changes_every_frame_without_recompiling_or_allocating() {
+    let compiled = stamp_graph(1);
+    let mut exec = Executor::new(gpu());
+    let mut data = FrameData::new();
+    for f in 0..100u32 {
+        data.set_u32("value", 7919 * f + 3);
+        let stats = exec
+            .execute_frame(&compiled, &Imports::new(), &data)
+            .unwrap();
+        if f > 0 {
+            assert_eq!(
+                (stats.allocations, stats.pipelines_created),
+                (0, 0),
+                "frame {f}"
+            );
+        }
+        if f % 10 == 9 {
+            let got: Vec<u32> = read(&mut exec, "stamp");
+            assert_eq!(got, [7919 * f + 3, f], "frame {f}");
+        }
+    }
+    // A frame without the input is an error naming the pass and the input.
+    match exec.execute(&compiled, &Imports::new()) {
+        Err(GraphError::MissingFrameInput { pass, input }) => {
+            assert_eq!((pass.as_str(), input.as_str()), ("stamp", "value"))
+        }
+        other => panic!("{:?}", other.map(|s| s.frame)),
+    }
+}
+
+#[test]
+fn readback_of_frame_k_is_taken_at_frame_k_plus_latency_without_waiting() {
+    const LATENCY: u32 = 2;
+    const FRAMES: u32 = 100;
+    let compiled = stamp_graph(LATENCY);
+    let mut exec = Executor::new(gpu());
+    let mut data = FrameData::new();
+    let mut taken: Vec<(u64, u64)> = Vec::new();
+    for f in 0..FRAMES {
+        data.set_u32("value", 1000 + f);
+        exec.execute_frame(&compiled, &Imports::new(), &data)
+            .unwrap();
+        while let Some(r) = exec.take_readback("stamp").unwrap() {
+            let words: Vec<u32> = bytemuck::pod_collect_to_vec(&r.bytes);
+            assert_eq!(words, [1000 + r.frame as u32, r.frame as u32]);
+            taken.push((r.frame, f as u64));
+        }
+    }
+    assert_eq!(
+        exec.blocking_waits, 0,
+        "no frame or take waited for the GPU"
+    );
+    assert_eq!(exec.readbacks_dropped(), 0);
+    for &(k, at) in &taken {
+        assert!(at >= k + LATENCY as u64, "frame {k} taken at {at}");
+    }
+    // Once the GPU is drained, every frame old enough has come back, in order.
+    exec.finish().unwrap();
+    while let Some(r) = exec.take_readback("stamp").unwrap() {
+        taken.push((r.frame, FRAMES as u64));
+    }
+    let frames: Vec<u64> = taken.iter().map(|(k, _)| *k).collect();
+    let want: Vec<u64> = (0..(FRAMES - LATENCY) as u64).collect();
+    assert_eq!(frames, want);
+}
+
+// ---------------------------------------------------------------------------------------
+// Growth: a size parameter raised at run time.
+
+#[test]
+fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_objects() {
+    let mut g = GraphBuilder::new();
+    g.size_param("slots", 1024);
+    let list = g.create_buffer("list", BufferDesc::array_param(Element::U32, "slots"));
+    let hist = g.history_buffer("hist", BufferDesc::array_param(Element::U32, "slots"));
+    let grow = pass(
+        "grow",
+        vec![
+            Slot::buffer("list", Access::StorageWrite, Element::U32, ""),
+            Slot::buffer("prev", Access::StorageRead, Element::U32, ""),
+            Slot::buffer("hist", Access::StorageWrite, Element::U32, ""),
+        ],
+        |ctx| {
+            let layout = BindingLayout::compute("grow")
+                .uniform(2)
+                .slot(15, "list")
+                .slot(16, "prev")
+                .slot(17, "hist");
+            ctx.program(
+                "grow",
+                ProgramDesc::compute(&COMPUTE, "grow").layout(layout),
+            );
+            Ok(())
+        },
+        |ctx| {
+            let (_, bytes) = ctx.buffer("list")?;
+            let n = (bytes / 4) as u32;
+            let valid = ctx.history_valid("prev")? as u32;
+            let p = ctx.compute("grow")?;
+            let bg = ctx.bind_group(&p, 0, &[(2, bytemuck::cast_slice(&params(n, valid)))])?;
+            let mut cp = ctx.compute_pass();
+            cp.set_pipeline(&p.pipeline);
+            cp.set_bind_group(0, &bg, &[]);
+            cp.dispatch_workgroups(n.div_ceil(64), 1, 1);
+            Ok(())
+        },
+    );
+    let out = g
+        .add_pass(
+            "grow",
+            grow,
+            Bindings::new()
+                .bind("list", list)
+                .bind("prev", hist.prev)
+                .bind("hist", hist.current),
+        )
+        .unwrap();
+    g.export(out.buffer("list").unwrap());
+    let mut compiled = g
+        .compile(&CompileOptions::new(wgpu::Features::empty()))
+        .unwrap();
+    let mut exec = Executor::new(gpu());
+    for _ in 0..3 {
+        exec.execute(&compiled, &Imports::new()).unwrap();
+    }
+    let small_pool = exec.pool_bytes_held();
+    assert_eq!(small_pool, 1024 * 4);
+    let hist3: Vec<u32> = read(&mut exec, "hist");
+    assert_eq!((hist3.len(), hist3[0], hist3[1023]), (1024, 3, 3));
+
+    compiled.set_param("slots", 16384).unwrap();
+    assert_eq!(compiled.param("slots"), Some(16384));
+    assert_eq!(compiled.plan.bytes_with_reuse, 16384 * 4);
+    let stats = exec.execute(&compiled, &Imports::new()).unwrap();
+    assert!(stats.allocations > 0);
+    let list: Vec<u32> = read(&mut exec, "list");
+    assert_eq!(list.len(), 16384);
+    assert!(list.iter().enumerate().all(|(i, &v)| v == i as u32 * 2 + 1));
+    // History was resized and restarted: `prev` held nothing from before the resize.
+    let hist: Vec<u32> = read(&mut exec, "hist");
+    assert_eq!(hist.len(), 16384);
+    assert!(hist.iter().all(|&v| v == 1), "{:?}", &hist[..4]);
+    assert_eq!(exec.pool_bytes_held(), small_pool + 16384 * 4);
+    for _ in 0..4 {
+        exec.execute(&compiled, &Imports::new()).unwrap();
+    }
+    assert_eq!(exec.pool_bytes_held(), 16384 * 4, "the old list was freed");
+    let hist: Vec<u32> = read(&mut exec, "hist");
+    assert!(hist.iter().all(|&v| v == 5));
+}
+
+// ---------------------------------------------------------------------------------------
+// Immediates, natively and through the uniform fallback.
+
+const IMMEDIATE_SHADER: PassShader = PassShader {
+    name: "test::immediates",
+    source: r#"
+struct Block {
+    // Value written to every element.
+    value: u32,
+    // Elements to write.
+    count: u32,
+}
+#ifdef IMMEDIATES
+var<immediate> block: Block;
+#else
+@group(1) @binding(0) var<uniform> block: Block;
+#endif
+@group(0) @binding(0) var<storage, read_write> out: array<u32>;
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x < block.count {
+        out[id.x] = block.value + id.x;
+    }
+}
+"#,
+    file_path: "graph/tests/gpu_features.rs",
+};
+
+fn run_immediates(features: wgpu::Features) -> (bool, Vec<u32>) {
+    let gpu = GpuContext::with_available(features).unwrap();
+    let native = gpu.features.contains(wgpu::Features::IMMEDIATES);
+    let mut g = GraphBuilder::new();
+    let out = g.create_buffer("out", BufferDesc::array(Element::U32, 100));
+    let p = pass(
+        "imm",
+        vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
+        |ctx| {
+            ctx.program(
+                "main",
+                ProgramDesc::compute(&IMMEDIATE_SHADER, "main")
+                    .layout(BindingLayout::compute("imm").slot(0, "out"))
+                    .immediates(8),
+            );
+            Ok(())
+        },
+        |ctx| {
+            let p = ctx.compute("main")?;
+            let bg = ctx.bind_group(&p, 0, &[])?;
+            let imm = ctx.immediates(&p, bytemuck::cast_slice(&[500u32, 100]))?;
+            let mut cp = ctx.compute_pass();
+            cp.set_pipeline(&p.pipeline);
+            cp.set_bind_group(0, &bg, &[]);
+            imm.set_on_compute(&mut cp);
+            cp.dispatch_workgroups(2, 1, 1);
+            Ok(())
+        },
+    );
+    let o = g
+        .add_pass("imm", p, Bindings::new().bind("out", out))
+        .unwrap();
+    g.export(o.buffer("out").unwrap());
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let mut exec = Executor::new(gpu);
+    exec.execute(&compiled, &Imports::new()).unwrap();
+    (native, read(&mut exec, "out"))
+}
+
+#[test]
+fn immediates_reach_the_shader_natively_and_through_the_uniform_fallback() {
+    let want: Vec<u32> = (0..100).map(|i| 500 + i).collect();
+    let (native, got) = run_immediates(wgpu::Features::all());
+    assert_eq!(got, want, "native = {native}");
+    let (native, got) = run_immediates(wgpu::Features::all() - wgpu::Features::IMMEDIATES);
+    assert!(!native);
+    assert_eq!(got, want, "uniform fallback");
+}

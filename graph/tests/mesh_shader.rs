@@ -1,0 +1,159 @@
+//! Mesh programs: mesh-stage WGSL composes through the shader library, and a mesh pass
+//! draws like the CPU where the adapter has mesh shaders; where it has not (lavapipe),
+//! the graph reports the missing feature and everything else still opens and runs.
+
+#[path = "support/rects.rs"]
+mod rects;
+mod support;
+
+use meshlight_graph::*;
+use meshlight_shaders::{Capabilities, ShaderLibrary};
+use rects::*;
+
+const MESH: PassShader = PassShader {
+    name: "test::mesh",
+    source: include_str!("support/mesh.wgsl"),
+    file_path: "graph/tests/support/mesh.wgsl",
+};
+
+#[test]
+fn mesh_stage_wgsl_composes_and_validates_through_the_shader_library() {
+    let caps = Capabilities::MESH_SHADER
+        | Capabilities::SHADER_INT64
+        | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX;
+    let mut library = ShaderLibrary::new(caps).unwrap();
+    let module = library
+        .compose(&MESH, &[])
+        .unwrap_or_else(|e| panic!("{e}"));
+    let stages: Vec<(String, naga::ShaderStage)> = module
+        .entry_points
+        .iter()
+        .map(|e| (e.name.clone(), e.stage))
+        .collect();
+    assert!(
+        stages.contains(&("rect_ms".into(), naga::ShaderStage::Mesh)),
+        "{stages:?}"
+    );
+    assert!(stages.contains(&("rect_fs".into(), naga::ShaderStage::Fragment)));
+    // Without the capability the same source is refused, naming the problem.
+    let mut plain =
+        ShaderLibrary::new(Capabilities::SHADER_INT64 | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX)
+            .unwrap();
+    assert!(plain.compose(&MESH, &[]).is_err());
+}
+
+fn mesh_graph() -> GraphBuilder {
+    let mut g = GraphBuilder::new();
+    let rects = g.import_buffer(
+        "rects",
+        BufferDesc::array(Element::named("Rect", 32), RECTS.len() as u64),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let vis = g.create_buffer("vis", BufferDesc::array(Element::U64, (W * H) as u64));
+    let out = g
+        .add_pass(
+            "mesh_raster",
+            MeshRaster,
+            Bindings::new().bind("rects", rects).bind("vis", vis),
+        )
+        .unwrap();
+    g.export(out.buffer("vis").unwrap());
+    g
+}
+
+struct MeshRaster;
+
+impl Pass for MeshRaster {
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: "hw_raster",
+            slots: vec![
+                Slot::buffer("rects", Access::StorageRead, Element::named("Rect", 32), ""),
+                Slot::buffer("vis", Access::ClearedReadWrite, Element::U64, ""),
+            ],
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "mesh_shader"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.require_features(
+            wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
+        );
+        ctx.scratch_texture(
+            "dummy",
+            TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
+            &[Access::RenderTarget],
+        );
+        let layout = BindingLayout::with_visibility(
+            "mesh_raster",
+            wgpu::ShaderStages::MESH | wgpu::ShaderStages::FRAGMENT,
+        )
+        .slot(0, "rects")
+        .visible_in(wgpu::ShaderStages::MESH)
+        .slot(1, "vis")
+        .visible_in(wgpu::ShaderStages::FRAGMENT)
+        .uniform(2);
+        ctx.program(
+            "rects",
+            ProgramDesc::mesh(&MESH, None, "rect_ms")
+                .fragment("rect_fs")
+                .target(ColorTarget::masked("dummy"))
+                .layout(layout),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        ctx.clear("vis")?;
+        let program = ctx.render("rects")?;
+        let params = [W, H, 0, 0];
+        let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&params))])?;
+        let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
+        rp.set_pipeline(&program.pipeline);
+        rp.set_bind_group(0, &bg, &[]);
+        rp.draw_mesh_tasks(RECTS.len() as u32, 1, 1);
+        Ok(())
+    }
+}
+
+#[test]
+fn a_mesh_pass_draws_like_the_cpu_where_the_adapter_has_mesh_shaders() {
+    let adapter = GpuAdapter::select().unwrap_or_else(|e| panic!("{e}"));
+    let has_mesh = adapter
+        .features()
+        .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER);
+    let compiled = mesh_graph().compile(&CompileOptions::for_adapter(&adapter));
+    if !has_mesh {
+        // Lavapipe: the capability is reported missing at compile time, by name …
+        match compiled {
+            Err(GraphError::MissingFeature { pass, features, .. }) => {
+                assert_eq!(pass, "mesh_raster");
+                assert!(features.contains("EXPERIMENTAL_MESH_SHADER"), "{features}");
+            }
+            other => panic!("{:?}", other.err()),
+        }
+        // … and asking for everything still opens a working device without it.
+        let gpu = support::gpu();
+        assert!(
+            !gpu.features
+                .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER)
+        );
+        return;
+    }
+    let compiled = compiled.unwrap();
+    let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
+    let data: Vec<[u32; 8]> = RECTS
+        .iter()
+        .map(|([x0, y0, x1, y1], depth, id)| [*x0, *y0, *x1, *y1, *depth, *id, 0, 0])
+        .collect();
+    let rects = gpu.buffer_with_data(
+        "rects",
+        bytemuck::cast_slice(&data),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let mut exec = Executor::new(gpu);
+    exec.execute(&compiled, &Imports::new().buffer("rects", &rects))
+        .unwrap();
+    let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("vis").unwrap());
+    assert_eq!(got, cpu_rects());
+}

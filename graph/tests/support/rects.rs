@@ -1,0 +1,26 @@
+//! Pixel-aligned rectangles and their CPU visibility: what the raster tests draw. Edges
+//! lie on pixel boundaries, so no pixel centre is ambiguous and every rasteriser agrees.
+
+/// Pixel rectangles (x0, y0, x1, y1) with a depth word and an id.
+pub const RECTS: [([u32; 4], u32, u32); 4] = [
+    ([0, 0, 40, 30], 100, 1),
+    ([10, 5, 64, 20], 300, 2),
+    ([20, 10, 50, 64], 200, 3),
+    ([30, 0, 34, 64], 300, 4),
+];
+pub const W: u32 = 64;
+pub const H: u32 = 48;
+
+pub fn cpu_rects() -> Vec<u64> {
+    let mut vis = vec![0u64; (W * H) as usize];
+    for ([x0, y0, x1, y1], depth, id) in RECTS {
+        for y in y0..y1.min(H) {
+            for x in x0..x1.min(W) {
+                let key = (depth as u64) << 32 | id as u64;
+                let px = &mut vis[(y * W + x) as usize];
+                *px = (*px).max(key);
+            }
+        }
+    }
+    vis
+}
