@@ -7,6 +7,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use meshlight_scene::simplify::Mode;
 use meshlight_scene::verify::{level_stats, quality};
 use meshlight_scene::{BuildOptions, build_asset, load::load_mesh, procedural_mesh};
 
@@ -69,6 +70,12 @@ fn main() {
             seconds,
             built.asset.bytes().len() as f64 / h.lod0_triangles as f64,
             ratios.join(" ")
+        );
+        let modes = [Mode::Regular, Mode::Permissive, Mode::Sloppy]
+            .map(|m| built.dag.groups.iter().filter(|g| g.mode == m).count());
+        println!(
+            "  groups: {} regular, {} permissive, {} sloppy",
+            modes[0], modes[1], modes[2]
         );
         let b = built.asset.size_breakdown();
         let per = |bytes: usize| bytes as f64 / h.lod0_triangles as f64;
