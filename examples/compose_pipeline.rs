@@ -10,14 +10,16 @@ fn main() -> Result<()> {
         .unwrap_or_else(|| "pipelines/prefix_sum.toml".into());
     let builder = file::load_pipeline(std::path::Path::new(&path), &meshlight::registry())?;
     let adapter = GpuAdapter::select()?;
-    let compiled = builder.compile(&CompileOptions::new(adapter.features()))?;
+    let compiled = builder.compile(&CompileOptions::for_adapter(&adapter))?;
     let gpu = adapter.open(compiled.plan.enabled_features)?;
 
     let counts: Vec<u32> = (0..65_536u32).map(|i| i % 7).collect();
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let input = gpu.buffer_with_data("counts", bytemuck::cast_slice(&counts), usage);
     let mut exec = Executor::new(gpu);
-    let stats = exec.execute(&compiled, &Imports::new().buffer("counts", &input))?;
+    exec.execute(&compiled, &Imports::new().buffer("counts", &input))?;
+    // Frames never wait for the GPU; `finish` does, and fills in the GPU timings.
+    let stats = exec.finish()?.expect("one frame ran");
 
     let total: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("total")?);
     let (_, expected) = meshlight::scan_fan::cpu_scan(&counts, false);

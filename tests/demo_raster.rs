@@ -44,7 +44,7 @@ fn gpu_visibility_matches_the_cpu_reference() {
         Bindings::new(),
     )
     .unwrap();
-    let compiled = g.compile(&CompileOptions::new(adapter.features())).unwrap();
+    let compiled = g.compile(&CompileOptions::for_adapter(&adapter)).unwrap();
     let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
     let pos = gpu.buffer_with_data(
         "positions",
@@ -117,7 +117,7 @@ fn gpu_shading_matches_the_cpu_reference() {
     let vis = g.resource("visbuffer").unwrap();
     g.export(vis);
     let adapter = GpuAdapter::select().unwrap_or_else(|e| panic!("{e}"));
-    let compiled = g.compile(&CompileOptions::new(adapter.features())).unwrap();
+    let compiled = g.compile(&CompileOptions::for_adapter(&adapter)).unwrap();
     let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
     let padded: Vec<[f32; 4]> = m.positions.iter().map(|p| [p.x, p.y, p.z, 1.0]).collect();
     let pos = gpu.buffer_with_data(

@@ -623,8 +623,12 @@ fn frame_data_changes_every_frame_without_recompiling_or_allocating() {
             .unwrap();
         if f > 0 {
             assert_eq!(
-                (stats.allocations, stats.pipelines_created),
-                (0, 0),
+                (
+                    stats.allocations,
+                    stats.pipelines_created,
+                    stats.bind_groups_created
+                ),
+                (0, 0, 0),
                 "frame {f}"
             );
         }
@@ -839,4 +843,152 @@ fn immediates_reach_the_shader_natively_and_through_the_uniform_fallback() {
     let (native, got) = run_immediates(wgpu::Features::all() - wgpu::Features::IMMEDIATES);
     assert!(!native);
     assert_eq!(got, want, "uniform fallback");
+}
+
+// ---------------------------------------------------------------------------------------
+// Defects that used to panic or churn.
+
+#[test]
+fn an_allocation_the_device_refuses_is_an_error_naming_the_resource() {
+    let gpu = gpu();
+    let too_big = gpu.device.limits().max_buffer_size + 4096;
+    let mut g = GraphBuilder::new();
+    let big = g.create_buffer("big", BufferDesc::array(Element::BYTES, too_big));
+    let writer = pass(
+        "fill",
+        vec![Slot::buffer("big", Access::CopyDst, Element::BYTES, "")],
+        |_| Ok(()),
+        |_| Ok(()),
+    );
+    let out = g
+        .add_pass("fill", writer, Bindings::new().bind("big", big))
+        .unwrap();
+    g.export(out.buffer("big").unwrap());
+    // Options that claim more than the device has, so compile lets the buffer through.
+    let generous = wgpu::Limits {
+        max_buffer_size: u64::MAX,
+        ..gpu.device.limits()
+    };
+    let compiled = g
+        .compile(&CompileOptions::for_gpu(&gpu).with_limits(generous))
+        .unwrap();
+    let mut exec = Executor::new(gpu);
+    match exec.execute(&compiled, &Imports::new()) {
+        Err(GraphError::Allocation { resource, message }) => {
+            assert!(resource.contains("big"), "{resource}");
+            assert!(!message.is_empty());
+        }
+        other => panic!("{:?}", other.map(|s| s.frame)),
+    }
+}
+
+fn sampled_import_graph(mips: u32) -> GraphBuilder {
+    let mut g = GraphBuilder::new();
+    let src = g.import_texture(
+        "src",
+        TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_mips(mips),
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
+    let dst = g.create_texture("dst", TextureDesc::d2(wgpu::TextureFormat::R32Float, 8, 8));
+    let down = pass(
+        "downsample",
+        vec![
+            Slot::texture("src", Access::Sampled, None, ""),
+            Slot::texture("dst", Access::StorageWrite, None, ""),
+        ],
+        |ctx| {
+            let layout = BindingLayout::compute("downsample")
+                .slot(3, "src")
+                .slot(4, "dst");
+            ctx.program(
+                "down",
+                ProgramDesc::compute(&COMPUTE, "downsample").layout(layout),
+            );
+            Ok(())
+        },
+        |ctx| {
+            let p = ctx.compute("down")?;
+            let bg = ctx.bind_group(&p, 0, &[])?;
+            let mut cp = ctx.compute_pass();
+            cp.set_pipeline(&p.pipeline);
+            cp.set_bind_group(0, &bg, &[]);
+            cp.dispatch_workgroups(1, 1, 1);
+            Ok(())
+        },
+    );
+    let out = g
+        .add_pass(
+            "down",
+            down,
+            Bindings::new()
+                .bind_range("src", src, TextureRange::mip(0))
+                .bind("dst", dst),
+        )
+        .unwrap();
+    g.export(out.texture("dst").unwrap());
+    g
+}
+
+fn r32_texture(gpu: &GpuContext, mips: u32) -> wgpu::Texture {
+    gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("src"),
+        size: wgpu::Extent3d {
+            width: 16,
+            height: 16,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: mips,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::R32Float,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING,
+        view_formats: &[],
+    })
+}
+
+#[test]
+fn imported_textures_keep_their_views_and_bind_groups_across_frames() {
+    let gpu = gpu();
+    let texture = r32_texture(&gpu, 1);
+    let compiled = sampled_import_graph(1)
+        .compile(&CompileOptions::for_gpu(&gpu))
+        .unwrap();
+    let mut exec = Executor::new(gpu);
+    for frame in 0..4 {
+        // A fresh `Imports` every frame, as a render loop builds it.
+        let stats = exec
+            .execute(&compiled, &Imports::new().texture("src", &texture))
+            .unwrap();
+        if frame > 0 {
+            assert_eq!(
+                (
+                    stats.allocations,
+                    stats.pipelines_created,
+                    stats.bind_groups_created
+                ),
+                (0, 0, 0),
+                "frame {frame}"
+            );
+        }
+    }
+}
+
+#[test]
+fn an_imported_texture_with_other_mip_counts_is_refused() {
+    let gpu = gpu();
+    let texture = r32_texture(&gpu, 3);
+    let compiled = sampled_import_graph(1)
+        .compile(&CompileOptions::for_gpu(&gpu))
+        .unwrap();
+    let mut exec = Executor::new(gpu);
+    match exec.execute(&compiled, &Imports::new().texture("src", &texture)) {
+        Err(GraphError::ImportMismatch { resource, message }) => {
+            assert_eq!(resource, "src");
+            assert!(
+                message.contains("1 mips") && message.contains("3 mips"),
+                "{message}"
+            );
+        }
+        other => panic!("{:?}", other.map(|s| s.frame)),
+    }
 }

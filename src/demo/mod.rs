@@ -68,7 +68,7 @@ pub fn raster_contract() -> StageContract {
             ),
             Slot::buffer(
                 "visbuffer",
-                Access::StorageWrite,
+                Access::ClearedReadWrite,
                 visbuffer_element(),
                 "one 64-bit visibility value per pixel; cleared by the pass, then atomicMax",
             ),
@@ -89,27 +89,26 @@ impl Pass for DemoRaster {
         );
         ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
         ctx.min_bytes("indices", self.triangle_count as u64 * 12);
-        Ok(())
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let layout = BindingLayout::compute("demo_raster")
             .slot(0, "positions")
             .slot(1, "indices")
             .slot(2, "visbuffer")
             .uniform(3);
-        let layouts = [layout];
-        let clear = ctx.compute_program(&ComputeDesc {
-            shader: &RASTER_SHADER,
-            entry: "clear",
-            defs: &(),
-            layouts: &layouts,
-        })?;
-        let raster = ctx.compute_program(&ComputeDesc {
-            shader: &RASTER_SHADER,
-            entry: "raster",
-            defs: &(),
-            layouts: &layouts,
-        })?;
+        for entry in ["clear", "raster"] {
+            ctx.program(
+                entry,
+                ProgramDesc::compute(&RASTER_SHADER, entry).layout(layout.clone()),
+            );
+        }
+        let (cx, cy, _) = dispatch_size(self.width * self.height);
+        let (rx, ry, _) = dispatch_size(self.triangle_count);
+        ctx.dispatch("clear", [cx, cy, 1]);
+        ctx.dispatch("raster", [rx, ry, 1]);
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let clear = ctx.compute("clear")?;
+        let raster = ctx.compute("raster")?;
         let (cx, cy, c_row) = dispatch_size(self.width * self.height);
         let (rx, ry, r_row) = dispatch_size(self.triangle_count);
         let params = |threads_per_row| RasterParams {
@@ -190,21 +189,22 @@ impl Pass for DemoShade {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("image", self.width as u64 * self.height as u64 * 4);
-        Ok(())
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let layout = BindingLayout::compute("demo_shade")
             .slot(0, "positions")
             .slot(1, "indices")
             .slot(2, "visbuffer")
             .slot(3, "image")
             .uniform(4);
-        let program = ctx.compute_program(&ComputeDesc {
-            shader: &SHADE_SHADER,
-            entry: "shade",
-            defs: &(),
-            layouts: &[layout],
-        })?;
+        ctx.program(
+            "shade",
+            ProgramDesc::compute(&SHADE_SHADER, "shade").layout(layout),
+        );
+        let (x, y, _) = dispatch_size(self.width * self.height);
+        ctx.dispatch("shade", [x, y, 1]);
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let program = ctx.compute("shade")?;
         let (x, y, row) = dispatch_size(self.width * self.height);
         let params = ShadeParams {
             light_dir: self.light_dir.extend(0.0).to_array(),
@@ -254,10 +254,7 @@ pub fn graph(
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
     g.import_buffer(
         "positions",
-        BufferDesc {
-            size: positions_bytes,
-            element: Element::VEC4_F32,
-        },
+        BufferDesc::bytes(Element::VEC4_F32, positions_bytes),
         usage,
     );
     g.import_buffer(
@@ -318,7 +315,7 @@ pub fn render(positions: &[Vec3], indices: &[u32], width: u32, height: u32) -> R
         height,
         view_proj,
     )?
-    .compile(&CompileOptions::new(adapter.features()))?;
+    .compile(&CompileOptions::for_adapter(&adapter))?;
     let gpu = adapter.open(compiled.plan.enabled_features)?;
     let name = gpu.info.name.clone();
     let usage = wgpu::BufferUsages::STORAGE;
@@ -344,7 +341,10 @@ pub fn render(positions: &[Vec3], indices: &[u32], width: u32, height: u32) -> R
         .buffer("positions", &pos)
         .buffer("indices", &idx)
         .buffer("image", &image);
-    let stats = exec.execute(&compiled, &imports)?;
+    exec.execute(&compiled, &imports)?;
+    let stats = exec
+        .finish()?
+        .expect("a frame was executed, so its statistics exist");
     let rgba = exec
         .gpu
         .read_buffer(&image, 0, width as u64 * height as u64 * 4)?;

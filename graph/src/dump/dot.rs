@@ -24,8 +24,14 @@ pub fn to_dot(plan: &Plan) -> String {
             .position(|&o| o == i)
             .map(|o| format!("#{o} "))
             .unwrap_or_default();
+        let programs = if p.programs.is_empty() {
+            String::new()
+        } else {
+            let names: Vec<&str> = p.programs.iter().map(|x| x.name.as_str()).collect();
+            format!("\nprograms: {}", names.join(", "))
+        };
         let label = format!(
-            "{order}{}\n{}/{}{}",
+            "{order}{}\n{}/{}{programs}{}",
             p.name,
             p.stage,
             p.implementation,

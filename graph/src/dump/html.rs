@@ -43,7 +43,7 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
         bytes(plan.bytes_without_reuse)
     );
 
-    h.push_str("<h2>Pass order</h2>\n<table><tr><th>#</th><th>pass</th><th>stage / implementation</th><th>GPU µs</th><th></th><th>CPU record µs</th></tr>\n");
+    h.push_str("<h2>Pass order</h2>\n<table><tr><th>#</th><th>pass</th><th>stage / implementation</th><th>GPU µs</th><th></th><th>CPU record µs</th><th>programs (kind, entries, defs)</th></tr>\n");
     let max_gpu = last_frame
         .map(|f| f.passes.iter().filter_map(|p| p.gpu_us).fold(0.0, f64::max))
         .unwrap_or(0.0);
@@ -57,7 +57,7 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
         };
         let _ = writeln!(
             h,
-            "<tr><td>{o}</td><td>{}</td><td>{} / {}</td><td>{}</td><td><div class=\"bar\" style=\"width:{width}px\"></div></td><td>{}</td></tr>",
+            "<tr><td>{o}</td><td>{}</td><td>{} / {}</td><td>{}</td><td><div class=\"bar\" style=\"width:{width}px\"></div></td><td>{}</td><td>{}</td></tr>",
             esc(&pass.name),
             esc(pass.stage),
             esc(pass.implementation),
@@ -65,12 +65,28 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
             timing
                 .map(|t| format!("{:.1}", t.cpu_record_us))
                 .unwrap_or_else(|| "–".into()),
+            pass.programs
+                .iter()
+                .map(|p| esc(&format!(
+                    "{}: {} {}::{} [{}]",
+                    p.name,
+                    p.kind,
+                    p.shader,
+                    p.entries.join("+"),
+                    p.defs
+                        .iter()
+                        .map(|(n, v)| format!("{n}={v}"))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                )))
+                .collect::<Vec<_>>()
+                .join("<br>"),
         );
     }
     for &p in &plan.culled {
         let _ = writeln!(
             h,
-            "<tr class=\"culled\"><td></td><td>{}</td><td colspan=\"4\">culled: nothing it writes is used</td></tr>",
+            "<tr class=\"culled\"><td></td><td>{}</td><td colspan=\"5\">culled: nothing it writes is used</td></tr>",
             esc(&plan.passes[p].name)
         );
     }

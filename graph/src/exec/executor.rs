@@ -80,6 +80,8 @@ pub struct FrameStats {
     /// GPU resources created this frame (zero once a steady graph has warmed up).
     pub allocations: u32,
     pub pipelines_created: u32,
+    /// Bind groups created this frame (zero once steady: they are cached by what they bind).
+    pub bind_groups_created: u32,
 }
 
 /// A history pair and what it was made for.
@@ -281,6 +283,7 @@ impl Executor {
         self.programs.begin_frame(frame);
         self.views.begin_frame(frame);
         let pipelines_before = self.programs.pipelines_created;
+        let bind_groups_before = self.programs.bind_groups_created;
         let (physical, history_valid) = self.resolve_resources(graph, imports)?;
 
         let timing = self.gpu_timing && self.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY);
@@ -421,6 +424,7 @@ impl Executor {
             pool_bytes_held: self.pool.held_bytes(),
             allocations: self.pool.allocations,
             pipelines_created: self.programs.pipelines_created - pipelines_before,
+            bind_groups_created: self.programs.bind_groups_created - bind_groups_before,
         };
         self.last_stats = Some(stats.clone());
         Ok(stats)

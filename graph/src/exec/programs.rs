@@ -113,6 +113,7 @@ pub(crate) struct Programs {
     pub bind_groups: HashMap<BindGroupKey, (wgpu::BindGroup, u64)>,
     pub uniforms: UniformArena,
     pub pipelines_created: u32,
+    pub bind_groups_created: u32,
     pub frame: u64,
 }
 
@@ -127,6 +128,7 @@ impl Programs {
             bind_groups: HashMap::new(),
             uniforms: UniformArena::default(),
             pipelines_created: 0,
+            bind_groups_created: 0,
             frame: 0,
         }
     }

@@ -767,6 +767,7 @@ impl<'a> RecordContext<'a> {
             entries: &wgpu_entries,
         });
         self.programs.bind_groups.insert(key, (bg.clone(), frame));
+        self.programs.bind_groups_created += 1;
         bg
     }
 
