@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use crate::asset::MeshletAsset;
 use crate::asset::format::NO_GROUP;
+use crate::asset::triangles::first_out_of_range;
 use crate::bounds::contains;
 
 /// Per-level counts of an asset.
@@ -152,6 +153,12 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
             (true, 0) | (false, 1) => {}
             (true, n) => problems.push(format!("root meshlet {i} is a child of {n} groups")),
             (false, n) => problems.push(format!("meshlet {i} is a child of {n} groups, not one")),
+        }
+        let (vc, tc) = (m.vertex_count(), m.triangle_count());
+        if let Some(t) = first_out_of_range(asset.triangle_block(m), m.triangle_bits(), vc, tc) {
+            problems.push(format!(
+                "meshlet {i}: triangle {t} refers past its {vc} vertices (decoded clamped)"
+            ));
         }
         // The culling sphere holds every decoded vertex: what the renderer culls by.
         let d = asset.decode_meshlet(i);

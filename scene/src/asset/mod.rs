@@ -433,6 +433,13 @@ impl MeshletAsset {
         b
     }
 
+    /// A meshlet's triangle records (see [`triangles`]).
+    pub fn triangle_block(&self, m: &MeshletRecord) -> &[u32] {
+        let layout = PayloadLayout::of(m, self.header().has_uvs());
+        &self.payload()
+            [(m.data_offset + layout.triangles) as usize..(m.data_offset + layout.end) as usize]
+    }
+
     /// Decodes one meshlet (as the GPU would).
     pub fn decode_meshlet(&self, index: usize) -> DecodedMeshlet {
         let h = self.header();
@@ -480,9 +487,7 @@ impl MeshletAsset {
         let (vc, tc) = (m.vertex_count(), m.triangle_count());
         let triangles = (0..tc)
             .map(|t| {
-                triangles::decode(triangle_block, t, m.triangle_bits(), vc, tc)
-                    .unwrap_or([0; 3])
-                    .map(|i| i as u8)
+                triangles::decode(triangle_block, t, m.triangle_bits(), vc, tc).map(|i| i as u8)
             })
             .collect();
         DecodedMeshlet {

@@ -74,15 +74,15 @@ pub fn encode(triangles: &[[u32; 3]], vertices: u32, out: &mut Vec<u32>) -> Tria
     TriangleBits { offset, delta }
 }
 
-/// Decodes triangle `t` from a meshlet's triangle `block`; `None` when a corner falls
-/// outside `0..vertices` or the block is too short (a damaged record).
-pub fn decode(
+/// The three corners of triangle `t` as stored, which may lie outside `0..vertices` in
+/// a damaged record; `None` when the block is too short for the record.
+fn stored_corners(
     block: &[u32],
     t: u32,
     bits: TriangleBits,
     vertices: u32,
     triangles: u32,
-) -> Option<[u32; 3]> {
+) -> Option<[i64; 3]> {
     let at = t as usize * bits.stride() as usize;
     let (word, shift) = (at / 32, at % 32);
     // A record is at most 25 bits, so it lies within two consecutive words.
@@ -94,11 +94,37 @@ pub fn decode(
     let d1 = ((record >> bits.offset) & mask(bits.delta)) as i64;
     let d2 = ((record >> (bits.offset + bits.delta)) & mask(bits.delta)) as i64;
     let first = predicted_corner(t, vertices, triangles) + offset;
-    let corners = [first, first - d1, first - d2];
-    corners
-        .iter()
-        .all(|&c| (0..vertices as i64).contains(&c))
-        .then(|| corners.map(|c| c as u32))
+    Some([first, first - d1, first - d2])
+}
+
+/// Decodes triangle `t` from a meshlet's triangle `block`. Corners are clamped into
+/// `0..vertices`, as the GPU decoder clamps them: no record, however damaged, can
+/// index outside its meshlet, so loading need not decode every triangle to check it
+/// (that took most of the load time). [`first_out_of_range`] finds damaged records.
+pub fn decode(
+    block: &[u32],
+    t: u32,
+    bits: TriangleBits,
+    vertices: u32,
+    triangles: u32,
+) -> [u32; 3] {
+    let last = vertices.max(1) as i64 - 1;
+    stored_corners(block, t, bits, vertices, triangles)
+        .map_or([0; 3], |c| c.map(|c| c.clamp(0, last) as u32))
+}
+
+/// The first triangle whose stored corners fall outside `0..vertices` (and were
+/// clamped by [`decode`]): a damaged asset, which `verify` reports.
+pub fn first_out_of_range(
+    block: &[u32],
+    bits: TriangleBits,
+    vertices: u32,
+    triangles: u32,
+) -> Option<u32> {
+    (0..triangles).find(|&t| {
+        stored_corners(block, t, bits, vertices, triangles)
+            .is_none_or(|c| c.iter().any(|&c| !(0..vertices as i64).contains(&c)))
+    })
 }
 
 #[cfg(test)]
@@ -111,11 +137,13 @@ mod tests {
         let mut words = Vec::new();
         let bits = encode(&triangles, 6, &mut words);
         for (t, tri) in triangles.iter().enumerate() {
-            let d = decode(&words, t as u32, bits, 6, 5).unwrap();
+            let d = decode(&words, t as u32, bits, 6, 5);
             let r = (0..3).find(|&k| d[k] == tri[0]).unwrap();
             assert_eq!([d[r], d[(r + 1) % 3], d[(r + 2) % 3]], *tri);
         }
-        // One vertex fewer: some corner falls outside and the record is refused.
-        assert!((0..5).any(|t| decode(&words, t, bits, 5, 5).is_none()));
+        assert_eq!(first_out_of_range(&words, bits, 6, 5), None);
+        // One vertex fewer: some corner falls outside; it is found, and decodes clamped.
+        let t = first_out_of_range(&words, bits, 5, 5).unwrap();
+        assert!(decode(&words, t, bits, 5, 5).iter().all(|&c| c < 5));
     }
 }

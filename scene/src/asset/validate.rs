@@ -220,14 +220,6 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         if m.data_offset as u64 + layout.end as u64 > payload.len() as u64 {
             return Err(bad(f("data_offset"), "puts its data outside the payload"));
         }
-        let start = (m.data_offset + layout.triangles) as usize;
-        let block = &payload[start..m.data_offset as usize + layout.end as usize];
-        if let Some(t) = triangle_past_vertices(block, m) {
-            return Err(bad(
-                format!("meshlet[{i}] triangle {t}"),
-                format!("refers past its {vc} vertices"),
-            ));
-        }
         if level == 0 {
             lod0_meshlets += 1;
             lod0_triangles += tc as u64;
@@ -354,11 +346,4 @@ fn header_floats(h: &AssetHeader) -> Result<(), Invalid> {
         ));
     }
     Ok(())
-}
-
-/// The first triangle of `block` (a meshlet's triangle records) with a corner outside
-/// the meshlet's vertices.
-fn triangle_past_vertices(block: &[u32], m: &MeshletRecord) -> Option<u32> {
-    let (vc, tc) = (m.vertex_count(), m.triangle_count());
-    (0..tc).find(|&t| super::triangles::decode(block, t, m.triangle_bits(), vc, tc).is_none())
 }
