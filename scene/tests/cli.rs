@@ -71,3 +71,51 @@ fn bake_summary_reports_levels_fill_and_size() {
         assert!(text.contains(needle), "missing {needle:?} in\n{text}");
     }
 }
+
+/// A valid but poor DAG (every meshlet a root) passes `inspect` with warnings, exit 0;
+/// `bake` refuses to write what its own checks reject.
+#[test]
+fn inspect_warns_on_poor_dags_and_fails_only_on_broken_ones() {
+    let built = meshlight_scene::build_asset(
+        &meshlight_scene::procedural_mesh(12),
+        &Default::default(),
+        &mut |_| {},
+    )
+    .unwrap();
+    let mut dag = built.dag.clone();
+    dag.groups.clear();
+    for c in &mut dag.clusters {
+        c.parent_group = meshlight_scene::dag::NO_GROUP;
+        c.source_group = meshlight_scene::dag::NO_GROUP;
+        c.level = 0;
+    }
+    dag.level_count = 1;
+    let poor = MeshletAsset::from_dag(&built.mesh, &dag, 16, 0);
+    let q = meshlight_scene::verify::quality(&poor);
+    assert!(
+        q.warnings.iter().any(|w| w.contains("root meshlets")),
+        "{q:?}"
+    );
+    let dir = common::scratch("cli-poor");
+    let path = dir.join("poor.mlasset");
+    poor.save(&path).unwrap();
+    run_inspect(&InspectArgs { file: path }).unwrap();
+
+    // Broken: a group error below its children's. Not loadable by inspect's rules.
+    let mut dag = built.dag.clone();
+    let g = dag
+        .groups
+        .iter()
+        .position(|g| {
+            g.children
+                .iter()
+                .any(|&c| built.dag.clusters[c as usize].level > 0)
+        })
+        .unwrap();
+    dag.groups[g].lod.error = 0.0;
+    let broken = MeshletAsset::from_dag(&built.mesh, &dag, 16, 0);
+    let path = dir.join("broken.mlasset");
+    broken.save(&path).unwrap();
+    let err = run_inspect(&InspectArgs { file: path }).unwrap_err();
+    assert!(matches!(err, SceneError::AssetCorrupt { .. }), "{err:?}");
+}
