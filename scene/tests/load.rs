@@ -290,3 +290,23 @@ fn truncated_stl_is_refused() {
     let err = parse_stl(Path::new("t.stl"), &binary).unwrap_err();
     assert!(err.to_string().contains("truncated"), "{err}");
 }
+
+#[test]
+fn gltf_reads_buffers_from_files_beside_it() {
+    let dir = common::scratch("gltf-bin");
+    let buf = gltf_buffer();
+    std::fs::write(dir.join("tet data.bin"), &buf).unwrap();
+    let path = dir.join("tet.gltf");
+    std::fs::write(&path, gltf_json(r#","uri":"tet%20data.bin""#, buf.len())).unwrap();
+    assert_eq!(load_mesh(&path).unwrap().triangle_count(), 16);
+
+    std::fs::remove_file(dir.join("tet data.bin")).unwrap();
+    let err = load_mesh(&path).unwrap_err();
+    assert!(matches!(err, SceneError::Gltf { .. }), "{err:?}");
+    assert!(err.to_string().contains("beside the .gltf"), "{err}");
+
+    // A buffer shorter than it says.
+    std::fs::write(dir.join("tet data.bin"), &buf[..40]).unwrap();
+    let err = load_mesh(&path).unwrap_err();
+    assert!(err.to_string().contains("byteLength"), "{err}");
+}

@@ -77,7 +77,7 @@ fn missing(root: &Root, index: usize, role: Role) -> String {
 /// Checks accessor `index` for `role` against the file and the loaded `buffers`.
 pub fn check(
     root: &Root,
-    buffers: &[gltf::buffer::Data],
+    buffers: &[Vec<u8>],
     index: usize,
     role: Role,
 ) -> Result<CheckedAccessor, String> {
@@ -185,7 +185,7 @@ pub fn check(
 
 impl CheckedAccessor {
     /// Component `k` of element `i`, as `f32` (normalized integers scaled to 0..1).
-    fn float(&self, buffers: &[gltf::buffer::Data], i: usize, k: usize) -> f32 {
+    fn float(&self, buffers: &[Vec<u8>], i: usize, k: usize) -> f32 {
         let raw = self.raw(buffers, i, k);
         match self.component {
             ComponentType::F32 => f32::from_bits(raw),
@@ -196,10 +196,10 @@ impl CheckedAccessor {
     }
 
     /// The little-endian bits of component `k` of element `i` (in range: checked).
-    fn raw(&self, buffers: &[gltf::buffer::Data], i: usize, k: usize) -> u32 {
+    fn raw(&self, buffers: &[Vec<u8>], i: usize, k: usize) -> u32 {
         let size = self.component.size();
         let at = self.data.1 + self.offset + i * self.stride + k * size;
-        let b = &buffers[self.data.0].0[at..at + size];
+        let b = &buffers[self.data.0][at..at + size];
         match size {
             1 => b[0] as u32,
             2 => u16::from_le_bytes([b[0], b[1]]) as u32,
@@ -207,21 +207,21 @@ impl CheckedAccessor {
         }
     }
 
-    pub fn read_vec3(&self, buffers: &[gltf::buffer::Data]) -> Vec<[f32; 3]> {
+    pub fn read_vec3(&self, buffers: &[Vec<u8>]) -> Vec<[f32; 3]> {
         debug_assert_eq!(self.components, 3);
         (0..self.count)
             .map(|i| [0, 1, 2].map(|k| self.float(buffers, i, k)))
             .collect()
     }
 
-    pub fn read_vec2(&self, buffers: &[gltf::buffer::Data]) -> Vec<[f32; 2]> {
+    pub fn read_vec2(&self, buffers: &[Vec<u8>]) -> Vec<[f32; 2]> {
         debug_assert_eq!(self.components, 2);
         (0..self.count)
             .map(|i| [0, 1].map(|k| self.float(buffers, i, k)))
             .collect()
     }
 
-    pub fn read_indices(&self, buffers: &[gltf::buffer::Data]) -> Vec<u32> {
+    pub fn read_indices(&self, buffers: &[Vec<u8>]) -> Vec<u32> {
         (0..self.count).map(|i| self.raw(buffers, i, 0)).collect()
     }
 }

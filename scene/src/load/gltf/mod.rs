@@ -7,6 +7,7 @@
 //! checked before anything is read), so no damaged file reaches a reader that panics.
 
 mod accessor;
+mod buffers;
 mod nodes;
 
 use std::path::Path;
@@ -16,6 +17,7 @@ use gltf::json::validation::Checked;
 use gltf::json::{Root, mesh::Mode};
 
 use self::accessor::{Role, check, declared_count};
+use self::buffers::load_buffers;
 use self::nodes::{Instance, NodeError, expand};
 use crate::error::SceneError;
 use crate::load::read_file;
@@ -90,12 +92,7 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
         }
     };
 
-    let buffers =
-        gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone()).map_err(|e| {
-            err(format!(
-                "cannot load its buffers ({e}); keep .bin files beside the .gltf"
-            ))
-        })?;
+    let buffers = load_buffers(root, gltf.blob.clone(), path.parent()).map_err(err)?;
 
     let mut mesh = Mesh {
         source: path.display().to_string(),
