@@ -244,3 +244,28 @@ fn references_past_their_lists_are_refused() {
         &["POSITION accessor 0", "400 elements"],
     );
 }
+
+#[test]
+fn glb_header_lengths_are_checked_before_parsing() {
+    // A GLB whose header claims fewer bytes than the header itself (overflowed inside the
+    // glTF crate), more bytes than the file has, or that stops inside the header.
+    let mut glb = b"glTF".to_vec();
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    for (name, length, extra) in [
+        ("short.glb", 0u32, 8usize),
+        ("long.glb", 4096, 8),
+        ("cut.glb", 0, 0),
+    ] {
+        let mut bytes = glb.clone();
+        if extra > 0 {
+            bytes.extend_from_slice(&length.to_le_bytes());
+            bytes.extend_from_slice(&vec![0u8; extra]);
+        }
+        let dir = common::scratch(&format!("glb-{name}"));
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let err = load_mesh(&path).unwrap_err();
+        assert!(matches!(err, SceneError::Gltf { .. }), "{name}: {err:?}");
+        assert!(err.to_string().contains("truncated"), "{name}: {err}");
+    }
+}

@@ -276,3 +276,57 @@ fn fuzz_gltf_loader() {
         build_if_loaded(load_mesh(&path));
     });
 }
+
+/// The same glTF as a .glb: JSON chunk, then the buffer as the binary chunk.
+fn glb_bytes() -> Vec<u8> {
+    let (p, idx) = common::tetrahedron();
+    let mut buf: Vec<u8> = bytemuck::cast_slice(&p).to_vec();
+    buf.extend_from_slice(bytemuck::cast_slice(&idx));
+    let mut json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+        "buffers":[{{"byteLength":{}}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":24}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3"}},
+                     {{"bufferView":1,"componentType":5123,"count":12,"type":"SCALAR"}}]}}"#,
+        buf.len()
+    )
+    .into_bytes();
+    while !json.len().is_multiple_of(4) {
+        json.push(b' ');
+    }
+    let mut glb = Vec::new();
+    glb.extend_from_slice(b"glTF");
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&((12 + 8 + json.len() + 8 + buf.len()) as u32).to_le_bytes());
+    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend_from_slice(&json);
+    glb.extend_from_slice(&(buf.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"BIN\0");
+    glb.extend_from_slice(&buf);
+    glb
+}
+
+#[test]
+fn fuzz_glb_loader() {
+    let good = glb_bytes();
+    let json_len = u32::from_le_bytes(good[12..16].try_into().unwrap()) as usize;
+    let dir = common::scratch("fuzz-glb");
+    // Words of the headers and the binary chunk (the JSON text is the glTF target's).
+    let words: Vec<usize> = (0..5).chain((20 + json_len) / 4..good.len() / 4).collect();
+    let strategy = (
+        prop::collection::vec((prop::sample::select(words), interesting_word()), 1..5),
+        0usize..3,
+    );
+    fuzz("glb", strategy, |(edits, cut)| {
+        let mut b = good.clone();
+        for (w, v) in edits {
+            b[w * 4..w * 4 + 4].copy_from_slice(&v.to_le_bytes());
+        }
+        b.truncate(b.len() - cut * 7);
+        let path = dir.join("fuzz.glb");
+        std::fs::write(&path, b).unwrap();
+        build_if_loaded(load_mesh(&path));
+    });
+}

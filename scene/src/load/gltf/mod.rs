@@ -29,6 +29,7 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
         path: path.to_owned(),
         reason,
     };
+    check_glb_header(&bytes).map_err(err)?;
     let gltf = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(e.to_string()))?;
     let root: &Root = gltf.document.as_json();
     let position = Checked::Valid(gltf::Semantic::Positions);
@@ -211,6 +212,29 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
         mesh.uvs = uv_parts.into_iter().flatten().flatten().collect();
     }
     Ok(mesh)
+}
+
+/// The GLB header's length, checked before the glTF crate subtracts the header size from
+/// it (a length below 12 overflowed there).
+fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let Some(length) = bytes.get(8..12) else {
+        return Err(format!(
+            "a .glb of {} bytes is shorter than its 12-byte header; it is truncated",
+            bytes.len()
+        ));
+    };
+    let length = u32::from_le_bytes([length[0], length[1], length[2], length[3]]) as usize;
+    if length < 12 || length > bytes.len() {
+        return Err(format!(
+            "the GLB header says the file is {length} bytes, but it is {} bytes; it is \
+             truncated or damaged",
+            bytes.len()
+        ));
+    }
+    Ok(())
 }
 
 fn node_error(path: &Path, root: &Root, e: NodeError) -> SceneError {
