@@ -839,6 +839,14 @@ fn run_immediates(features: wgpu::Features) -> (bool, Vec<u32>) {
 fn immediates_reach_the_shader_natively_and_through_the_uniform_fallback() {
     let want: Vec<u32> = (0..100).map(|i| 500 + i).collect();
     let (native, got) = run_immediates(wgpu::Features::all());
+    eprintln!(
+        "immediates: {}",
+        if native {
+            "native"
+        } else {
+            "uniform fallback only"
+        }
+    );
     assert_eq!(got, want, "native = {native}");
     let (native, got) = run_immediates(wgpu::Features::all() - wgpu::Features::IMMEDIATES);
     assert!(!native);

@@ -123,6 +123,11 @@ fn a_mesh_pass_draws_like_the_cpu_where_the_adapter_has_mesh_shaders() {
         .features()
         .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER);
     let compiled = mesh_graph().compile(&CompileOptions::for_adapter(&adapter));
+    eprintln!(
+        "{}: mesh shaders {}",
+        adapter.info().name,
+        if has_mesh { "present" } else { "absent" }
+    );
     if !has_mesh {
         // Lavapipe: the capability is reported missing at compile time, by name …
         match compiled {

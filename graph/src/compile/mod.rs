@@ -212,6 +212,11 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             if let ResourceDesc::Texture(t) = &resources[h.id.index()].desc {
                 for a in slot.accesses() {
                     ctx.required |= crate::access::texture_features_for(a, t.format);
+                    // `RecordContext::clear` on a texture is a texture clear; a pass that
+                    // clears with its own dispatch does without it.
+                    if a == Access::ClearedReadWrite {
+                        ctx.optional |= wgpu::Features::CLEAR_TEXTURE;
+                    }
                 }
             }
         }

@@ -1,0 +1,221 @@
+//! A 64-bit visibility target as an `R64Uint` storage texture with atomics: the graph gives
+//! it `STORAGE_ATOMIC`, asks for the texture-atomic features, and the raster matches the
+//! CPU where the adapter has them; where it has not (lavapipe) compile names the feature.
+
+#[path = "support/rects.rs"]
+mod rects;
+mod support;
+
+use meshlight_graph::*;
+use rects::*;
+
+const SHADER: PassShader = PassShader {
+    name: "test::texture_atomics",
+    source: include_str!("support/texture_atomics.wgsl"),
+    file_path: "graph/tests/support/texture_atomics.wgsl",
+};
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct RectVertex {
+    pos: [f32; 4],
+    key: [u32; 4],
+}
+
+fn rect_vertices() -> Vec<RectVertex> {
+    let ndc = |x: u32, y: u32| {
+        [
+            x as f32 / W as f32 * 2.0 - 1.0,
+            1.0 - y.min(H) as f32 / H as f32 * 2.0,
+        ]
+    };
+    let mut v = Vec::new();
+    for ([x0, y0, x1, y1], depth, id) in RECTS {
+        let c = [ndc(x0, y0), ndc(x1, y0), ndc(x1, y1), ndc(x0, y1)];
+        for i in [0, 1, 2, 0, 2, 3] {
+            v.push(RectVertex {
+                pos: [c[i][0], c[i][1], 0.0, 1.0],
+                key: [depth, id, 0, 0],
+            });
+        }
+    }
+    v
+}
+
+/// Stage `raster` with a visibility target that may be a buffer or a texture; this
+/// implementation takes the texture.
+struct TextureRaster {
+    vertices: u32,
+}
+
+impl Pass for TextureRaster {
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: "raster",
+            slots: vec![
+                Slot::buffer(
+                    "rects",
+                    Access::StorageRead,
+                    Element::named("RectVertex", 32),
+                    "",
+                ),
+                Slot::visibility64("vis", Access::ClearedReadWrite, ""),
+            ],
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "texture_atomics"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.require_features(wgpu::Features::SHADER_INT64);
+        ctx.scratch_texture(
+            "dummy",
+            TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
+            &[Access::RenderTarget],
+        );
+        let layout = BindingLayout::render("raster")
+            .slot(0, "rects")
+            .visible_in(wgpu::ShaderStages::VERTEX)
+            .slot(1, "vis")
+            .visible_in(wgpu::ShaderStages::FRAGMENT);
+        ctx.program(
+            "rects",
+            ProgramDesc::render(&SHADER, "rect_vs")
+                .fragment("rect_fs")
+                .target(ColorTarget::masked("dummy"))
+                .layout(layout),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        ctx.clear("vis")?;
+        let program = ctx.render("rects")?;
+        let bg = ctx.bind_group(&program, 0, &[])?;
+        let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
+        rp.set_pipeline(&program.pipeline);
+        rp.set_bind_group(0, &bg, &[]);
+        rp.draw(0..self.vertices, 0..1);
+        Ok(())
+    }
+}
+
+/// Copies the visibility texture into a buffer the test reads.
+struct CopyOut;
+
+impl Pass for CopyOut {
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: "copy_out",
+            slots: vec![
+                Slot::texture(
+                    "vis",
+                    Access::CopySrc,
+                    Some(wgpu::TextureFormat::R64Uint),
+                    "",
+                ),
+                Slot::buffer("out", Access::CopyDst, Element::U64, ""),
+            ],
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "copy"
+    }
+    fn setup(&self, _: &mut SetupContext) -> Result<()> {
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let (texture, _) = ctx.texture("vis")?;
+        let (buffer, _) = ctx.buffer("out")?;
+        ctx.encoder().copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(W * 8),
+                    rows_per_image: Some(H),
+                },
+            },
+            wgpu::Extent3d {
+                width: W,
+                height: H,
+                depth_or_array_layers: 1,
+            },
+        );
+        Ok(())
+    }
+}
+
+fn graph(vertices: u32) -> GraphBuilder {
+    let mut g = GraphBuilder::new();
+    let rects = g.import_buffer(
+        "rects",
+        BufferDesc::array(Element::named("RectVertex", 32), vertices as u64),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let vis = g.create_texture("vis", TextureDesc::d2(wgpu::TextureFormat::R64Uint, W, H));
+    let out = g.create_buffer("out", BufferDesc::array(Element::U64, (W * H) as u64));
+    let drawn = g
+        .add_pass(
+            "raster",
+            TextureRaster { vertices },
+            Bindings::new().bind("rects", rects).bind("vis", vis),
+        )
+        .unwrap();
+    let copied = g
+        .add_pass(
+            "copy_out",
+            CopyOut,
+            Bindings::new()
+                .bind("vis", drawn.texture("vis").unwrap())
+                .bind("out", out),
+        )
+        .unwrap();
+    g.export(copied.buffer("out").unwrap());
+    g
+}
+
+#[test]
+fn an_r64uint_visibility_texture_rasterises_like_the_cpu_where_atomics_exist() {
+    let adapter = GpuAdapter::select().unwrap_or_else(|e| panic!("{e}"));
+    let vertices = rect_vertices();
+    let compiled = graph(vertices.len() as u32).compile(&CompileOptions::for_adapter(&adapter));
+    let atomics = wgpu::Features::TEXTURE_ATOMIC | wgpu::Features::TEXTURE_INT64_ATOMIC;
+    eprintln!(
+        "{}: 64-bit texture atomics {}",
+        adapter.info().name,
+        if adapter.features().contains(atomics) {
+            "present"
+        } else {
+            "absent"
+        }
+    );
+    if !adapter.features().contains(atomics) {
+        match compiled {
+            Err(GraphError::MissingFeature { pass, features, .. }) => {
+                assert_eq!(pass, "raster");
+                assert!(features.contains("TEXTURE_INT64_ATOMIC"), "{features}");
+            }
+            other => panic!("{:?}", other.err()),
+        }
+        return;
+    }
+    let compiled = compiled.unwrap();
+    let vis = &compiled.plan.resources[compiled.plan.resource_index("vis").unwrap()];
+    assert!(
+        vis.texture_usage
+            .contains(wgpu::TextureUsages::STORAGE_ATOMIC)
+    );
+    let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
+    let buffer = gpu.buffer_with_data(
+        "rects",
+        bytemuck::cast_slice(&vertices),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let mut exec = Executor::new(gpu);
+    let imports = Imports::new().buffer("rects", &buffer);
+    exec.execute(&compiled, &imports).unwrap();
+    exec.execute(&compiled, &imports).unwrap();
+    let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("out").unwrap());
+    assert_eq!(got, cpu_rects());
+}
