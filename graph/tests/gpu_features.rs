@@ -1000,3 +1000,100 @@ fn an_imported_texture_with_other_mip_counts_is_refused() {
         other => panic!("{:?}", other.map(|s| s.frame)),
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// Texture arrays: each layer written through its own one-layer view.
+
+#[test]
+fn layers_of_a_texture_array_are_written_through_their_own_views() {
+    const LAYERS: u32 = 3;
+    const SIDE: u32 = 8;
+    let gpu = gpu();
+    let mut g = GraphBuilder::new();
+    let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, SIDE, SIDE).with_layers(LAYERS);
+    let mut array = g.create_texture("array", desc);
+    for layer in 0..LAYERS {
+        let fill = pass(
+            "fill_layer",
+            vec![Slot::texture("layer", Access::StorageWrite, None, "")],
+            |ctx| {
+                let layout = BindingLayout::compute("fill_layer")
+                    .uniform(2)
+                    .slot(18, "layer");
+                ctx.program(
+                    "fill",
+                    ProgramDesc::compute(&COMPUTE, "fill_layer").layout(layout),
+                );
+                Ok(())
+            },
+            move |ctx| {
+                let p = ctx.compute("fill")?;
+                let bg = ctx.bind_group(
+                    &p,
+                    0,
+                    &[(2, bytemuck::cast_slice(&params(100 * (layer + 1), 0)))],
+                )?;
+                let mut cp = ctx.compute_pass();
+                cp.set_pipeline(&p.pipeline);
+                cp.set_bind_group(0, &bg, &[]);
+                cp.dispatch_workgroups(1, 1, 1);
+                Ok(())
+            },
+        );
+        array = g
+            .add_pass(
+                &format!("layer{layer}"),
+                fill,
+                Bindings::new().bind_range("layer", array, TextureRange::layer(layer)),
+            )
+            .unwrap()
+            .texture("layer")
+            .unwrap();
+    }
+    let flat = g.create_buffer(
+        "flat",
+        BufferDesc::array(Element::F32, (LAYERS * SIDE * SIDE) as u64),
+    );
+    let flatten = pass(
+        "flatten",
+        vec![
+            Slot::texture("array", Access::Sampled, None, ""),
+            Slot::buffer("flat", Access::StorageWrite, Element::F32, ""),
+        ],
+        |ctx| {
+            let layout = BindingLayout::compute("flatten")
+                .slot(19, "array")
+                .slot(20, "flat");
+            ctx.program(
+                "flatten",
+                ProgramDesc::compute(&COMPUTE, "flatten_layers").layout(layout),
+            );
+            Ok(())
+        },
+        |ctx| {
+            let p = ctx.compute("flatten")?;
+            let bg = ctx.bind_group(&p, 0, &[])?;
+            let mut cp = ctx.compute_pass();
+            cp.set_pipeline(&p.pipeline);
+            cp.set_bind_group(0, &bg, &[]);
+            cp.dispatch_workgroups(1, 1, LAYERS);
+            Ok(())
+        },
+    );
+    let out = g
+        .add_pass(
+            "flatten",
+            flatten,
+            Bindings::new().bind("array", array).bind("flat", flat),
+        )
+        .unwrap();
+    g.export(out.buffer("flat").unwrap());
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let mut exec = Executor::new(gpu);
+    exec.execute(&compiled, &Imports::new()).unwrap();
+    let got: Vec<f32> = read(&mut exec, "flat");
+    let want: Vec<f32> = (0..LAYERS * SIDE * SIDE)
+        .map(|i| (100 * (i / (SIDE * SIDE) + 1) + i % SIDE) as f32)
+        .collect();
+    assert_eq!(got, want);
+}

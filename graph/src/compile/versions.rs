@@ -3,7 +3,7 @@
 
 use crate::builder::PassNode;
 use crate::error::{GraphError, Result};
-use crate::resource::ResourceInfo;
+use crate::resource::{ResourceDesc, ResourceInfo, TextureRange};
 use serde::Serialize;
 use std::collections::HashMap;
 
@@ -43,10 +43,17 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
     let mut forward: Vec<(usize, usize, &str, u32)> = Vec::new();
 
     for (p, node) in passes.iter().enumerate() {
-        let slots: Vec<_> = node.contract.slots.iter().zip(&node.bindings).collect();
+        let slots: Vec<_> = node
+            .contract
+            .slots
+            .iter()
+            .zip(&node.bindings)
+            .zip(&node.ranges)
+            .map(|((s, h), range)| (s, h, range))
+            .collect();
         // Reads first, against the versions before this pass: a pass that reads mip N − 1
         // and writes mip N of one texture reads what came before it, whatever the slot order.
-        for (slot, h) in slots.iter().filter(|(s, _)| !s.writes()) {
+        for (slot, h, _) in slots.iter().filter(|(s, _, _)| !s.writes()) {
             let r = h.id.index();
             let cur = current[r];
             if h.version < cur {
@@ -62,7 +69,7 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
         }
         // Then writes: one new version per resource, however many slots write parts of it.
         let mut written: Vec<usize> = Vec::new();
-        for (slot, h) in slots.iter().filter(|(s, _)| s.writes()) {
+        for (slot, h, range) in slots.iter().filter(|(s, _, _)| s.writes()) {
             let r = h.id.index();
             let cur = if written.contains(&r) {
                 current[r] - 1
@@ -76,6 +83,12 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
             }
             if slot.reads() {
                 read_edge(&mut t, resources, passes, p, slot.name, r, cur)?;
+            } else if partial(&resources[r], **range)
+                && let Some(&w) = t.writer.get(&(r, cur))
+            {
+                // Writing some mips or layers keeps the rest: the new version carries what
+                // the earlier writer left there, so that writer is needed as much as this one.
+                push(&mut t.edges, w, p, r, cur, EdgeKind::ReadAfterWrite);
             }
             if written.contains(&r) {
                 continue;
@@ -104,6 +117,14 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
     t.edges.sort();
     t.edges.dedup();
     Ok(t)
+}
+
+/// True when `range` covers only part of the texture `res`.
+fn partial(res: &ResourceInfo, range: Option<TextureRange>) -> bool {
+    match (&res.desc, range) {
+        (ResourceDesc::Texture(t), Some(r)) => r.resolve(t) != t.full_range(),
+        _ => false,
+    }
 }
 
 #[allow(clippy::too_many_arguments)]

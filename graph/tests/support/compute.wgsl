@@ -124,3 +124,27 @@ fn grow(@builtin(global_invocation_id) id: vec3<u32>) {
         history[id.x] = select(0u, history_prev[id.x], params.b == 1u) + 1u;
     }
 }
+
+// ---- texture arrays: one pass per layer writes through a one-layer view, then every
+// layer is read back through the whole array.
+
+@group(0) @binding(18) var layer_out: texture_storage_2d_array<r32float, write>;
+@group(0) @binding(19) var layers_in: texture_2d_array<f32>;
+@group(0) @binding(20) var<storage, read_write> layers_flat: array<f32>;
+
+@compute @workgroup_size(8, 8)
+fn fill_layer(@builtin(global_invocation_id) id: vec3<u32>) {
+    // params.a: the value to write.
+    let size = textureDimensions(layer_out);
+    if id.x < size.x && id.y < size.y {
+        textureStore(layer_out, id.xy, 0u, vec4<f32>(f32(params.a) + f32(id.x), 0.0, 0.0, 0.0));
+    }
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn flatten_layers(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(layers_in);
+    if id.x < size.x && id.y < size.y && id.z < textureNumLayers(layers_in) {
+        layers_flat[(id.z * size.y + id.y) * size.x + id.x] = textureLoad(layers_in, id.xy, id.z, 0).r;
+    }
+}
