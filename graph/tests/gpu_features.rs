@@ -1097,3 +1097,188 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
         .collect();
     assert_eq!(got, want);
 }
+
+// ---------------------------------------------------------------------------------------
+// A render pass with a colour and a depth target, ops derived by the compiler.
+
+const DEPTH_SHADER: PassShader = PassShader {
+    name: "test::depth",
+    source: r#"
+struct RectVertex {
+    // x, y in clip space; z, w unused.
+    pos: vec4<f32>,
+    // x: depth key (larger is nearer), y: rectangle id.
+    key: vec4<u32>,
+}
+@group(0) @binding(0) var<storage, read> rect_vertices: array<RectVertex>;
+
+struct VOut {
+    @builtin(position) pos: vec4<f32>,
+    @location(0) @interpolate(flat) id: u32,
+}
+
+@vertex
+fn vs(@builtin(vertex_index) v: u32) -> VOut {
+    let r = rect_vertices[v];
+    return VOut(vec4<f32>(r.pos.xy, 1.0 - f32(r.key.x) / 1000.0, 1.0), r.key.y);
+}
+
+@fragment
+fn fs(in: VOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(f32(in.id) / 255.0, 0.0, 0.0, 1.0);
+}
+"#,
+    file_path: "graph/tests/gpu_features.rs",
+};
+
+#[test]
+fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
+    let gpu = gpu();
+    let vertices = rect_vertices();
+    let count = vertices.len() as u32;
+    let mut g = GraphBuilder::new();
+    let rects = g.import_buffer(
+        "rects",
+        BufferDesc::array(Element::named("RectVertex", 32), count as u64),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let color = g.create_texture(
+        "color",
+        TextureDesc::d2(wgpu::TextureFormat::Rgba8Unorm, W, H),
+    );
+    let depth = g.create_texture(
+        "depth",
+        TextureDesc::d2(wgpu::TextureFormat::Depth32Float, W, H),
+    );
+    let draw = pass(
+        "draw",
+        vec![
+            Slot::buffer(
+                "rects",
+                Access::StorageRead,
+                Element::named("RectVertex", 32),
+                "",
+            ),
+            Slot::texture("color", Access::RenderTarget, None, ""),
+            Slot::texture("depth", Access::DepthTarget, None, ""),
+        ],
+        |ctx| {
+            ctx.program(
+                "draw",
+                ProgramDesc::render(&DEPTH_SHADER, "vs")
+                    .fragment("fs")
+                    .target(ColorTarget::new("color"))
+                    .depth(DepthTarget {
+                        target: "depth",
+                        compare: wgpu::CompareFunction::LessEqual,
+                        write: true,
+                    })
+                    .primitive(Primitive {
+                        cull_mode: Some(wgpu::Face::Back),
+                        front_face: wgpu::FrontFace::Cw,
+                        unclipped_depth: true,
+                        ..Primitive::default()
+                    })
+                    .layout(BindingLayout::render("draw").slot(0, "rects")),
+            );
+            Ok(())
+        },
+        move |ctx| {
+            let p = ctx.render("draw")?;
+            let bg = ctx.bind_group(&p, 0, &[])?;
+            let mut rp = ctx.render_pass(
+                &[ColorAttachment::new("color")],
+                Some(DepthAttachment {
+                    target: "depth",
+                    clear: 1.0,
+                }),
+            )?;
+            rp.set_pipeline(&p.pipeline);
+            rp.set_bind_group(0, &bg, &[]);
+            rp.draw(0..count, 0..1);
+            Ok(())
+        },
+    );
+    let drawn = g
+        .add_pass(
+            "draw",
+            draw,
+            Bindings::new()
+                .bind("rects", rects)
+                .bind("color", color)
+                .bind("depth", depth),
+        )
+        .unwrap();
+    let out = g.create_buffer("out", BufferDesc::array(Element::U32, (W * H) as u64));
+    let copy = pass(
+        "copy",
+        vec![
+            Slot::texture("color", Access::CopySrc, None, ""),
+            Slot::buffer("out", Access::CopyDst, Element::U32, ""),
+        ],
+        |_| Ok(()),
+        |ctx| {
+            let (texture, _) = ctx.texture("color")?;
+            let (buffer, _) = ctx.buffer("out")?;
+            ctx.encoder().copy_texture_to_buffer(
+                texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(W * 4),
+                        rows_per_image: Some(H),
+                    },
+                },
+                wgpu::Extent3d {
+                    width: W,
+                    height: H,
+                    depth_or_array_layers: 1,
+                },
+            );
+            Ok(())
+        },
+    );
+    let copied = g
+        .add_pass(
+            "copy",
+            copy,
+            Bindings::new()
+                .bind("color", drawn.texture("color").unwrap())
+                .bind("out", out),
+        )
+        .unwrap();
+    g.export(copied.buffer("out").unwrap());
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let ops = |slot: &str| {
+        compiled.plan.passes[0]
+            .slots
+            .iter()
+            .find(|s| s.slot == slot)
+            .and_then(|s| s.ops)
+            .map(|o| (o.load, o.store))
+    };
+    assert_eq!(
+        ops("color"),
+        Some((plan::LoadOp::Clear, plan::StoreOp::Store))
+    );
+    assert_eq!(
+        ops("depth"),
+        Some((plan::LoadOp::Clear, plan::StoreOp::Discard))
+    );
+    let buffer = gpu.buffer_with_data(
+        "rects",
+        bytemuck::cast_slice(&vertices),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let mut exec = Executor::new(gpu);
+    exec.execute(&compiled, &Imports::new().buffer("rects", &buffer))
+        .unwrap();
+    let got: Vec<u32> = read(&mut exec, "out");
+    let ids: Vec<u32> = got.iter().map(|px| px & 0xff).collect();
+    let want: Vec<u32> = cpu_rects()
+        .iter()
+        .map(|k| (k & 0xffff_ffff) as u32)
+        .collect();
+    assert_eq!(ids, want);
+}
