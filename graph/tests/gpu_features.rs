@@ -67,6 +67,22 @@ where
     }
 }
 
+/// Records one dispatch of the compute program `name` with bind group 0.
+fn dispatch_once(
+    ctx: &mut RecordContext<'_>,
+    name: &str,
+    uniforms: &[(u32, &[u8])],
+    groups: [u32; 3],
+) -> Result<()> {
+    let p = ctx.compute(name)?;
+    let bg = ctx.bind_group(&p, 0, uniforms)?;
+    let mut cp = ctx.compute_pass();
+    cp.set_pipeline(&p.pipeline);
+    cp.set_bind_group(0, &bg, &[]);
+    cp.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    Ok(())
+}
+
 fn read<T: bytemuck::Pod>(exec: &mut Executor, name: &str) -> Vec<T> {
     bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
 }
@@ -74,33 +90,6 @@ fn read<T: bytemuck::Pod>(exec: &mut Executor, name: &str) -> Vec<T> {
 // ---------------------------------------------------------------------------------------
 // A render pass with a masked dummy colour target whose fragment shader does a 64-bit
 // atomicMax into a storage buffer.
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct RectVertex {
-    pos: [f32; 4],
-    key: [u32; 4],
-}
-
-fn rect_vertices() -> Vec<RectVertex> {
-    let ndc = |x: u32, y: u32| {
-        [
-            x as f32 / W as f32 * 2.0 - 1.0,
-            1.0 - y.min(H) as f32 / H as f32 * 2.0,
-        ]
-    };
-    let mut v = Vec::new();
-    for ([x0, y0, x1, y1], depth, id) in RECTS {
-        let corners = [ndc(x0, y0), ndc(x1, y0), ndc(x1, y1), ndc(x0, y1)];
-        for i in [0, 1, 2, 0, 2, 3] {
-            v.push(RectVertex {
-                pos: [corners[i][0], corners[i][1], 0.0, 1.0],
-                key: [depth, id, 0, 0],
-            });
-        }
-    }
-    v
-}
 
 #[test]
 fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
@@ -286,15 +275,7 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
             );
             Ok(())
         },
-        |ctx| {
-            let p = ctx.compute("base")?;
-            let bg = ctx.bind_group(&p, 0, &[])?;
-            let mut cp = ctx.compute_pass();
-            cp.set_pipeline(&p.pipeline);
-            cp.set_bind_group(0, &bg, &[]);
-            cp.dispatch_workgroups(MIP_W.div_ceil(8), MIP_H.div_ceil(8), 1);
-            Ok(())
-        },
+        |ctx| dispatch_once(ctx, "base", &[], [MIP_W.div_ceil(8), MIP_H.div_ceil(8), 1]),
     );
     pyramid = g
         .add_pass(
@@ -335,15 +316,7 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
                 );
                 Ok(())
             },
-            move |ctx| {
-                let p = ctx.compute("downsample")?;
-                let bg = ctx.bind_group(&p, 0, &[])?;
-                let mut cp = ctx.compute_pass();
-                cp.set_pipeline(&p.pipeline);
-                cp.set_bind_group(0, &bg, &[]);
-                cp.dispatch_workgroups(dw.div_ceil(8), dh.div_ceil(8), 1);
-                Ok(())
-            },
+            move |ctx| dispatch_once(ctx, "downsample", &[], [dw.div_ceil(8), dh.div_ceil(8), 1]),
         );
         pyramid = g
             .add_pass(
@@ -592,13 +565,12 @@ fn stamp_graph(latency: u32) -> CompiledGraph {
         |ctx| {
             let value = ctx.frame_u32("value")?;
             let frame = ctx.frame_index() as u32;
-            let p = ctx.compute("stamp")?;
-            let bg = ctx.bind_group(&p, 0, &[(2, bytemuck::cast_slice(&params(value, frame)))])?;
-            let mut cp = ctx.compute_pass();
-            cp.set_pipeline(&p.pipeline);
-            cp.set_bind_group(0, &bg, &[]);
-            cp.dispatch_workgroups(1, 1, 1);
-            Ok(())
+            dispatch_once(
+                ctx,
+                "stamp",
+                &[(2, bytemuck::cast_slice(&params(value, frame)))],
+                [1, 1, 1],
+            )
         },
     );
     let out = g
@@ -714,13 +686,12 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
             let (_, bytes) = ctx.buffer("list")?;
             let n = (bytes / 4) as u32;
             let valid = ctx.history_valid("prev")? as u32;
-            let p = ctx.compute("grow")?;
-            let bg = ctx.bind_group(&p, 0, &[(2, bytemuck::cast_slice(&params(n, valid)))])?;
-            let mut cp = ctx.compute_pass();
-            cp.set_pipeline(&p.pipeline);
-            cp.set_bind_group(0, &bg, &[]);
-            cp.dispatch_workgroups(n.div_ceil(64), 1, 1);
-            Ok(())
+            dispatch_once(
+                ctx,
+                "grow",
+                &[(2, bytemuck::cast_slice(&params(n, valid)))],
+                [n.div_ceil(64), 1, 1],
+            )
         },
     );
     let out = g
@@ -914,15 +885,7 @@ fn sampled_import_graph(mips: u32) -> GraphBuilder {
             );
             Ok(())
         },
-        |ctx| {
-            let p = ctx.compute("down")?;
-            let bg = ctx.bind_group(&p, 0, &[])?;
-            let mut cp = ctx.compute_pass();
-            cp.set_pipeline(&p.pipeline);
-            cp.set_bind_group(0, &bg, &[]);
-            cp.dispatch_workgroups(1, 1, 1);
-            Ok(())
-        },
+        |ctx| dispatch_once(ctx, "down", &[], [1, 1, 1]),
     );
     let out = g
         .add_pass(
@@ -1027,17 +990,12 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
                 Ok(())
             },
             move |ctx| {
-                let p = ctx.compute("fill")?;
-                let bg = ctx.bind_group(
-                    &p,
-                    0,
+                dispatch_once(
+                    ctx,
+                    "fill",
                     &[(2, bytemuck::cast_slice(&params(100 * (layer + 1), 0)))],
-                )?;
-                let mut cp = ctx.compute_pass();
-                cp.set_pipeline(&p.pipeline);
-                cp.set_bind_group(0, &bg, &[]);
-                cp.dispatch_workgroups(1, 1, 1);
-                Ok(())
+                    [1, 1, 1],
+                )
             },
         );
         array = g
@@ -1070,15 +1028,7 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
             );
             Ok(())
         },
-        |ctx| {
-            let p = ctx.compute("flatten")?;
-            let bg = ctx.bind_group(&p, 0, &[])?;
-            let mut cp = ctx.compute_pass();
-            cp.set_pipeline(&p.pipeline);
-            cp.set_bind_group(0, &bg, &[]);
-            cp.dispatch_workgroups(1, 1, LAYERS);
-            Ok(())
-        },
+        |ctx| dispatch_once(ctx, "flatten", &[], [1, 1, LAYERS]),
     );
     let out = g
         .add_pass(

@@ -15,33 +15,6 @@ const SHADER: PassShader = PassShader {
     file_path: "graph/tests/support/texture_atomics.wgsl",
 };
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct RectVertex {
-    pos: [f32; 4],
-    key: [u32; 4],
-}
-
-fn rect_vertices() -> Vec<RectVertex> {
-    let ndc = |x: u32, y: u32| {
-        [
-            x as f32 / W as f32 * 2.0 - 1.0,
-            1.0 - y.min(H) as f32 / H as f32 * 2.0,
-        ]
-    };
-    let mut v = Vec::new();
-    for ([x0, y0, x1, y1], depth, id) in RECTS {
-        let c = [ndc(x0, y0), ndc(x1, y0), ndc(x1, y1), ndc(x0, y1)];
-        for i in [0, 1, 2, 0, 2, 3] {
-            v.push(RectVertex {
-                pos: [c[i][0], c[i][1], 0.0, 1.0],
-                key: [depth, id, 0, 0],
-            });
-        }
-    }
-    v
-}
-
 /// Stage `raster` with a visibility target that may be a buffer or a texture; this
 /// implementation takes the texture.
 struct TextureRaster {

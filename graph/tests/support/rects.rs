@@ -1,5 +1,6 @@
 //! Pixel-aligned rectangles and their CPU visibility: what the raster tests draw. Edges
 //! lie on pixel boundaries, so no pixel centre is ambiguous and every rasteriser agrees.
+#![allow(dead_code)]
 
 /// Pixel rectangles (x0, y0, x1, y1) with a depth word and an id.
 pub const RECTS: [([u32; 4], u32, u32); 4] = [
@@ -23,4 +24,33 @@ pub fn cpu_rects() -> Vec<u64> {
         }
     }
     vis
+}
+
+/// One vertex of the rectangles as the raster shaders read it from storage.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct RectVertex {
+    pub pos: [f32; 4],
+    pub key: [u32; 4],
+}
+
+/// Two triangles per rectangle, clockwise in clip space, keyed `[depth, id]`.
+pub fn rect_vertices() -> Vec<RectVertex> {
+    let ndc = |x: u32, y: u32| {
+        [
+            x as f32 / W as f32 * 2.0 - 1.0,
+            1.0 - y.min(H) as f32 / H as f32 * 2.0,
+        ]
+    };
+    let mut v = Vec::new();
+    for ([x0, y0, x1, y1], depth, id) in RECTS {
+        let corners = [ndc(x0, y0), ndc(x1, y0), ndc(x1, y1), ndc(x0, y1)];
+        for i in [0, 1, 2, 0, 2, 3] {
+            v.push(RectVertex {
+                pos: [corners[i][0], corners[i][1], 0.0, 1.0],
+                key: [depth, id, 0, 0],
+            });
+        }
+    }
+    v
 }
