@@ -86,6 +86,12 @@ impl MeshletAsset {
             .par_iter()
             .map(|&p| quant.quantize(p))
             .collect();
+        // Once per vertex, not per copy in each meshlet (about three copies each).
+        let octahedral: Vec<[i32; 2]> = mesh
+            .normals
+            .par_iter()
+            .map(|&n| encode_octahedral(n, NORMAL_BITS))
+            .collect();
         let pad = quant.max_error();
 
         let encoded: Vec<(MeshletRecord, Vec<u32>)> = dag
@@ -118,10 +124,7 @@ impl MeshletAsset {
                     [m[0].max(q[0]), m[1].max(q[1]), m[2].max(q[2])]
                 });
                 let bits = [0, 1, 2].map(|k| bits_for(hi[k] - lo[k]));
-                let oct: Vec<[i32; 2]> = locals
-                    .iter()
-                    .map(|&v| encode_octahedral(mesh.normals[v as usize], NORMAL_BITS))
-                    .collect();
+                let oct: Vec<[i32; 2]> = locals.iter().map(|&v| octahedral[v as usize]).collect();
                 let oct_lo = oct
                     .iter()
                     .fold([i32::MAX; 2], |m, o| [m[0].min(o[0]), m[1].min(o[1])]);
