@@ -3,6 +3,7 @@
 mod common;
 
 use meshlight_scene::dag::Dag;
+use meshlight_scene::simplify::Mode;
 use meshlight_scene::verify::{expected_levels, quality, verify};
 use meshlight_scene::{
     BuildOptions, Built, Grouping, Mesh, build_asset, load::load_mesh, procedural_mesh,
@@ -86,9 +87,12 @@ fn check(name: &str, built: &Built) {
         "{name}: {q:?}"
     );
     assert!(h.level_count <= q.level_limit, "{name}: {q:?}");
+    let modes = [Mode::Regular, Mode::Permissive, Mode::Sloppy]
+        .map(|m| built.dag.groups.iter().filter(|g| g.mode == m).count());
     println!(
         "{name}: {} triangles, {} LOD-0 meshlets, {} levels (expected {:.1}, limit {}), \
-         root {} meshlets, worst level ratio {:.2}, all levels {:.2}x LOD 0",
+         root {} meshlets, worst level ratio {:.2}, all levels {:.2}x LOD 0, groups \
+         regular/permissive/sloppy {modes:?}",
         h.lod0_triangles,
         h.lod0_meshlets,
         h.level_count,
@@ -277,4 +281,22 @@ fn invariants_hold_on_shapes_the_builder_was_not_tuned_on() {
         );
     }
     check("debris (300 pieces)", &build(&debris, Grouping::Metis));
+}
+
+/// A faceted mesh (every triangle its own three vertices with its face normal): every
+/// vertex is on a normal seam, so regular and permissive simplification (seams kept)
+/// get stuck, and groups escalate to sloppy simplification in the same iteration. The
+/// DAG still halves every level and ends in one root.
+#[test]
+fn faceted_meshes_escalate_to_sloppy_and_still_halve() {
+    let faceted = common::faceted(&procedural_mesh(24));
+    let built = build(&faceted, Grouping::Metis);
+    check("faceted", &built);
+    let sloppy = built
+        .dag
+        .groups
+        .iter()
+        .filter(|g| g.mode == Mode::Sloppy)
+        .count();
+    assert!(sloppy > 0, "no group escalated to sloppy simplification");
 }

@@ -67,3 +67,21 @@ pub fn tetrahedron() -> (Vec<[f32; 3]>, Vec<u16>) {
         vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
     )
 }
+
+/// `smooth` with every triangle given its own three vertices and its face normal: a
+/// mesh whose every vertex lies on a normal seam.
+pub fn faceted(smooth: &meshlight_scene::Mesh) -> meshlight_scene::Mesh {
+    let mut faceted = meshlight_scene::Mesh {
+        source: "faceted".into(),
+        ..Default::default()
+    };
+    for t in smooth.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| smooth.positions[i as usize]);
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        let base = faceted.positions.len() as u32;
+        faceted.positions.extend([a, b, c]);
+        faceted.normals.extend([n; 3]);
+        faceted.indices.extend([base, base + 1, base + 2]);
+    }
+    faceted
+}
