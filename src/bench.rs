@@ -206,14 +206,8 @@ fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
     let view_proj = crate::demo::camera_for(&mesh.positions, width, height);
     let adapter = GpuAdapter::select()?;
     let device = adapter.info().name;
-    let compiled = crate::demo::graph(
-        padded.len() as u64 * 16,
-        triangles,
-        width,
-        height,
-        view_proj,
-    )?
-    .compile(&CompileOptions::for_adapter(&adapter))?;
+    let compiled = crate::demo::graph(padded.len() as u64 * 16, triangles, width, height)?
+        .compile(&CompileOptions::for_adapter(&adapter))?;
     let gpu = adapter.open(compiled.plan.enabled_features)?;
     let usage = wgpu::BufferUsages::STORAGE;
     let pos = gpu.buffer_with_data("positions", bytemuck::cast_slice(&padded), usage);
@@ -229,22 +223,33 @@ fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
         .buffer("indices", &idx)
         .buffer("image", &image);
     let mut exec = Executor::new(gpu);
-    exec.execute(&compiled, &imports)?;
+    // The mesh turns a little every frame: the view is frame data, nothing recompiles.
+    let mut data = crate::demo::frame_data(view_proj);
+    let turn = |data: &mut FrameData, f: u32| {
+        let m = view_proj * glam::Mat4::from_rotation_y(f as f32 * 0.01);
+        data.set(
+            crate::demo::VIEW_INPUT,
+            bytemuck::bytes_of(&m.to_cols_array()),
+        );
+    };
+    exec.execute_frame(&compiled, &imports, &data)?;
     exec.finish()?;
     let frames = if quick { 20 } else { 100 };
     let case = format!("default scene, {triangles} tris {width}x{height}, {frames} frames");
 
     let start = Instant::now();
-    for _ in 0..frames {
-        exec.execute(&compiled, &imports)?;
+    for f in 0..frames {
+        turn(&mut data, f);
+        exec.execute_frame(&compiled, &imports, &data)?;
         exec.finish()?;
     }
     let waited = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
 
     let start = Instant::now();
     let mut most_in_flight = 0;
-    for _ in 0..frames {
-        let s = exec.execute(&compiled, &imports)?;
+    for f in 0..frames {
+        turn(&mut data, f);
+        let s = exec.execute_frame(&compiled, &imports, &data)?;
         most_in_flight = most_in_flight.max(s.frames_in_flight);
     }
     exec.finish()?;

@@ -36,7 +36,6 @@ fn gpu_visibility_matches_the_cpu_reference() {
     g.add_pass(
         "raster",
         demo::DemoRaster {
-            view_proj,
             width: w,
             height: h,
             triangle_count: tris,
@@ -57,11 +56,12 @@ fn gpu_visibility_matches_the_cpu_reference() {
         wgpu::BufferUsages::STORAGE,
     );
     let mut exec = Executor::new(gpu);
-    exec.execute(
+    exec.execute_frame(
         &compiled,
         &Imports::new()
             .buffer("positions", &pos)
             .buffer("indices", &idx),
+        &demo::frame_data(view_proj),
     )
     .unwrap();
     let bytes = exec.read_buffer("visbuffer").unwrap();
@@ -112,7 +112,7 @@ fn gpu_shading_matches_the_cpu_reference() {
     let (w, h) = (96, 64);
     let view_proj = demo::camera_for(&m.positions, w, h);
     let tris = (m.indices.len() / 3) as u32;
-    let mut g = demo::graph(m.positions.len() as u64 * 16, tris, w, h, view_proj).unwrap();
+    let mut g = demo::graph(m.positions.len() as u64 * 16, tris, w, h).unwrap();
     // Keep the visibility buffer, so the CPU shades exactly what the GPU saw.
     let vis = g.resource("visbuffer").unwrap();
     g.export(vis);
@@ -136,12 +136,13 @@ fn gpu_shading_matches_the_cpu_reference() {
         wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
     );
     let mut exec = Executor::new(gpu);
-    exec.execute(
+    exec.execute_frame(
         &compiled,
         &Imports::new()
             .buffer("positions", &pos)
             .buffer("indices", &idx)
             .buffer("image", &image),
+        &demo::frame_data(view_proj),
     )
     .unwrap();
     let vis: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("visbuffer").unwrap());

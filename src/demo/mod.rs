@@ -42,9 +42,17 @@ struct RasterParams {
     threads_per_row: u32,
 }
 
-/// Stage `demo_raster`: triangles → visibility buffer.
+/// The frame input holding the view-projection matrix (16 f32, column-major): the camera
+/// changes every frame without the graph being rebuilt.
+pub const VIEW_INPUT: &str = "view";
+
+/// The frame inputs of the default-scene graph for a camera.
+pub fn frame_data(view_proj: Mat4) -> FrameData {
+    FrameData::new().with(VIEW_INPUT, bytemuck::bytes_of(&view_proj.to_cols_array()))
+}
+
+/// Stage `demo_raster`: triangles → visibility buffer, seen through the frame's view.
 pub struct DemoRaster {
-    pub view_proj: Mat4,
     pub width: u32,
     pub height: u32,
     pub triangle_count: u32,
@@ -89,6 +97,7 @@ impl Pass for DemoRaster {
         );
         ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
         ctx.min_bytes("indices", self.triangle_count as u64 * 12);
+        ctx.frame_input(VIEW_INPUT);
         let layout = BindingLayout::compute("demo_raster")
             .slot(0, "positions")
             .slot(1, "indices")
@@ -111,8 +120,16 @@ impl Pass for DemoRaster {
         let raster = ctx.compute("raster")?;
         let (cx, cy, c_row) = dispatch_size(self.width * self.height);
         let (rx, ry, r_row) = dispatch_size(self.triangle_count);
+        let view: [f32; 16] = ctx
+            .frame_bytes(VIEW_INPUT)?
+            .get(..64)
+            .map(bytemuck::pod_read_unaligned)
+            .ok_or_else(|| GraphError::Record {
+                pass: ctx.pass_name().to_string(),
+                message: format!("frame input `{VIEW_INPUT}` must hold 16 f32 (64 bytes)"),
+            })?;
         let params = |threads_per_row| RasterParams {
-            view_proj: self.view_proj.to_cols_array(),
+            view_proj: view,
             width: self.width,
             height: self.height,
             triangle_count: self.triangle_count,
@@ -242,13 +259,13 @@ pub fn camera_for(positions: &[Vec3], width: u32, height: u32) -> Mat4 {
 
 pub const LIGHT_DIR: Vec3 = Vec3::new(0.4, 0.8, 0.5);
 
-/// The default-scene graph: positions and indices imported, visibility transient, image imported.
+/// The default-scene graph: positions and indices imported, visibility transient, image
+/// imported; the camera comes with each frame ([`frame_data`]).
 pub fn graph(
     positions_bytes: u64,
     triangles: u32,
     width: u32,
     height: u32,
-    view_proj: Mat4,
 ) -> Result<GraphBuilder> {
     let mut g = GraphBuilder::new();
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
@@ -274,7 +291,6 @@ pub fn graph(
     g.add_pass(
         "raster",
         DemoRaster {
-            view_proj,
             width,
             height,
             triangle_count: triangles,
@@ -308,14 +324,8 @@ pub fn render(positions: &[Vec3], indices: &[u32], width: u32, height: u32) -> R
     let view_proj = camera_for(positions, width, height);
     let padded: Vec<[f32; 4]> = positions.iter().map(|p| [p.x, p.y, p.z, 1.0]).collect();
     let triangles = (indices.len() / 3) as u32;
-    let compiled = graph(
-        padded.len() as u64 * 16,
-        triangles,
-        width,
-        height,
-        view_proj,
-    )?
-    .compile(&CompileOptions::for_adapter(&adapter))?;
+    let compiled = graph(padded.len() as u64 * 16, triangles, width, height)?
+        .compile(&CompileOptions::for_adapter(&adapter))?;
     let gpu = adapter.open(compiled.plan.enabled_features)?;
     let name = gpu.info.name.clone();
     let usage = wgpu::BufferUsages::STORAGE;
@@ -341,7 +351,7 @@ pub fn render(positions: &[Vec3], indices: &[u32], width: u32, height: u32) -> R
         .buffer("positions", &pos)
         .buffer("indices", &idx)
         .buffer("image", &image);
-    exec.execute(&compiled, &imports)?;
+    exec.execute_frame(&compiled, &imports, &frame_data(view_proj))?;
     let stats = exec
         .finish()?
         .expect("a frame was executed, so its statistics exist");
