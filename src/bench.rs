@@ -21,7 +21,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub quick: bool,
     /// Mesh files the `builder` scenario measures besides the procedural mesh
-    /// (repeatable), e.g. `--mesh ../shared/meshes/stanford-bunny.obj`.
+    /// (repeatable), e.g. `--mesh assets/meshes/stanford-bunny.obj`.
     #[arg(long = "mesh")]
     pub meshes: Vec<std::path::PathBuf>,
 }
