@@ -42,7 +42,7 @@ fn mesh_stage_wgsl_composes_and_validates_through_the_shader_library() {
     assert!(plain.compose(&MESH, &[]).is_err());
 }
 
-fn mesh_graph() -> GraphBuilder {
+fn mesh_graph(task: bool) -> GraphBuilder {
     let mut g = GraphBuilder::new();
     let rects = g.import_buffer(
         "rects",
@@ -53,7 +53,7 @@ fn mesh_graph() -> GraphBuilder {
     let out = g
         .add_pass(
             "mesh_raster",
-            MeshRaster,
+            MeshRaster { task },
             Bindings::new().bind("rects", rects).bind("vis", vis),
         )
         .unwrap();
@@ -61,7 +61,10 @@ fn mesh_graph() -> GraphBuilder {
     g
 }
 
-struct MeshRaster;
+/// Draws the rectangles with a mesh program, with or without a task stage.
+struct MeshRaster {
+    task: bool,
+}
 
 impl Pass for MeshRaster {
     fn contract(&self) -> StageContract {
@@ -87,19 +90,23 @@ impl Pass for MeshRaster {
         );
         let layout = BindingLayout::with_visibility(
             "mesh_raster",
-            wgpu::ShaderStages::MESH | wgpu::ShaderStages::FRAGMENT,
+            wgpu::ShaderStages::TASK | wgpu::ShaderStages::MESH | wgpu::ShaderStages::FRAGMENT,
         )
         .slot(0, "rects")
-        .visible_in(wgpu::ShaderStages::MESH)
+        .visible_in(wgpu::ShaderStages::TASK | wgpu::ShaderStages::MESH)
         .slot(1, "vis")
         .visible_in(wgpu::ShaderStages::FRAGMENT)
         .uniform(2);
         ctx.program(
             "rects",
-            ProgramDesc::mesh(&MESH, None, "rect_ms")
-                .fragment("rect_fs")
-                .target(ColorTarget::masked("dummy"))
-                .layout(layout),
+            if self.task {
+                ProgramDesc::mesh(&MESH, Some("rect_ts"), "rect_ms_task")
+            } else {
+                ProgramDesc::mesh(&MESH, None, "rect_ms")
+            }
+            .fragment("rect_fs")
+            .target(ColorTarget::masked("dummy"))
+            .layout(layout),
         );
         Ok(())
     }
@@ -111,7 +118,11 @@ impl Pass for MeshRaster {
         let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
         rp.set_pipeline(&program.pipeline);
         rp.set_bind_group(0, &bg, &[]);
-        rp.draw_mesh_tasks(RECTS.len() as u32, 1, 1);
+        if self.task {
+            rp.draw_mesh_tasks(1, 1, 1);
+        } else {
+            rp.draw_mesh_tasks(RECTS.len() as u32, 1, 1);
+        }
         Ok(())
     }
 }
@@ -122,7 +133,13 @@ fn a_mesh_pass_draws_like_the_cpu_where_the_adapter_has_mesh_shaders() {
     let has_mesh = adapter
         .features()
         .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER);
-    let compiled = mesh_graph().compile(&CompileOptions::for_adapter(&adapter));
+    for task in [false, true] {
+        mesh_pass_against_the_cpu(&adapter, has_mesh, task);
+    }
+}
+
+fn mesh_pass_against_the_cpu(adapter: &GpuAdapter, has_mesh: bool, task: bool) {
+    let compiled = mesh_graph(task).compile(&CompileOptions::for_adapter(adapter));
     eprintln!(
         "{}: mesh shaders {}",
         adapter.info().name,
@@ -146,7 +163,7 @@ fn a_mesh_pass_draws_like_the_cpu_where_the_adapter_has_mesh_shaders() {
         return;
     }
     let compiled = compiled.unwrap();
-    let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
+    let gpu = GpuContext::with_available(compiled.plan.enabled_features).unwrap();
     let data: Vec<[u32; 8]> = RECTS
         .iter()
         .map(|([x0, y0, x1, y1], depth, id)| [*x0, *y0, *x1, *y1, *depth, *id, 0, 0])
@@ -160,5 +177,5 @@ fn a_mesh_pass_draws_like_the_cpu_where_the_adapter_has_mesh_shaders() {
     exec.execute(&compiled, &Imports::new().buffer("rects", &rects))
         .unwrap();
     let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("vis").unwrap());
-    assert_eq!(got, cpu_rects());
+    assert_eq!(got, cpu_rects(), "task stage: {task}");
 }

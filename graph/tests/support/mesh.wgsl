@@ -46,10 +46,8 @@ fn clip(x: u32, y: u32) -> vec4<f32> {
     return vec4<f32>(saturate(ndc.x) * 2.0 - 1.0, 1.0 - ndc.y * 2.0, 0.5, 1.0);
 }
 
-@mesh(mesh_out)
-@workgroup_size(4)
-fn rect_ms(@builtin(local_invocation_index) lane: u32, @builtin(workgroup_id) wg: vec3<u32>) {
-    let r = rects[wg.x];
+fn emit_rect(lane: u32, index: u32) {
+    let r = rects[index];
     let x = select(r.edges.x, r.edges.z, lane == 1u || lane == 2u);
     let y = select(r.edges.y, r.edges.w, lane >= 2u);
     mesh_out.vertices[lane] = VertexOut(clip(x, y), r.key.xy);
@@ -58,6 +56,38 @@ fn rect_ms(@builtin(local_invocation_index) lane: u32, @builtin(workgroup_id) wg
         mesh_out.primitive_count = 2u;
         mesh_out.primitives[0].indices = vec3<u32>(0u, 1u, 2u);
         mesh_out.primitives[1].indices = vec3<u32>(0u, 2u, 3u);
+    }
+}
+
+// Without a task stage: one mesh workgroup per rectangle, straight from the draw.
+@mesh(mesh_out)
+@workgroup_size(4)
+fn rect_ms(@builtin(local_invocation_index) lane: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    emit_rect(lane, wg.x);
+}
+
+struct TaskPayload {
+    // Rectangles the task launched mesh workgroups for.
+    count: u32,
+}
+
+var<task_payload> payload: TaskPayload;
+
+// With a task stage: one task workgroup launches a mesh workgroup per rectangle.
+@task
+@payload(payload)
+@workgroup_size(1)
+fn rect_ts() -> @builtin(mesh_task_size) vec3<u32> {
+    payload.count = arrayLength(&rects);
+    return vec3<u32>(payload.count, 1u, 1u);
+}
+
+@mesh(mesh_out)
+@payload(payload)
+@workgroup_size(4)
+fn rect_ms_task(@builtin(local_invocation_index) lane: u32, @builtin(workgroup_id) wg: vec3<u32>) {
+    if wg.x < payload.count {
+        emit_rect(lane, wg.x);
     }
 }
 
