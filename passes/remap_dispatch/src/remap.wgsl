@@ -1,0 +1,33 @@
+// One thread turns a workgroup count written by an earlier pass into the arguments of a
+// 2-D indirect dispatch whose x and y both stay under the per-dimension limit. The count
+// itself stays where it was: the consumer's workgroups compute their linear index
+// (y * x_size + x) and those at or past the count return at once.
+
+struct Params {
+    // Word of `count` that holds the workgroup count.
+    count_word: u32,
+    // The adapter's limit on workgroups per dimension (or a smaller test value).
+    max_per_dimension: u32,
+    _pad: vec2<u32>,
+}
+
+// The workgroup count, at word `params.count_word`.
+@group(0) @binding(0) var<storage, read> count: array<u32>;
+// The dispatch arguments: x, y, z.
+@group(0) @binding(1) var<storage, read_write> args: array<u32, 3>;
+@group(0) @binding(2) var<uniform> params: Params;
+
+@compute @workgroup_size(1)
+fn remap() {
+    let n = count[params.count_word];
+    let max_dim = max(params.max_per_dimension, 1u);
+    let x = min(n, max_dim);
+    // x == 0 only when n == 0; then y is 0 too and the dispatch does nothing.
+    var y = 0u;
+    if x > 0u {
+        y = min((n + x - 1u) / x, max_dim);
+    }
+    args[0] = x;
+    args[1] = y;
+    args[2] = 1u;
+}
