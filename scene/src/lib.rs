@@ -21,6 +21,7 @@ pub mod pipeline;
 pub mod procedural;
 pub mod simplify;
 pub mod verify;
+pub mod watertight;
 
 pub use asset::MeshletAsset;
 pub use dag::{Dag, DagOptions, build_dag};

@@ -1,5 +1,6 @@
 //! The DAG checks on a packed asset, in two kinds: [`verify`] finds structural
-//! violations (the asset would draw wrongly: bounds, error monotonicity, parent links),
+//! violations (the asset would draw wrongly: bounds, error monotonicity, parent links,
+//! cracks in LOD cuts, triangle records),
 //! which make `meshlight inspect` fail; [`quality`] finds a valid DAG that is merely poor
 //! (too deep, too many roots, levels that do not halve), which it reports as warnings.
 
@@ -179,6 +180,7 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
     if roots == 0 {
         problems.push("no root meshlet; the coarsest level must have one".to_owned());
     }
+    problems.extend(crate::watertight::crack_problems(asset));
     if roots as u32 != h.root_count {
         problems.push(format!("header says {} roots, found {roots}", h.root_count));
     }
