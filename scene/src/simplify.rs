@@ -63,7 +63,7 @@ pub struct VertexFlags<'a> {
 }
 
 /// Simplifies `indices` (global vertex ids) to about half. Returns `None` when even the
-/// sloppy fallback cannot remove [`STUCK_RATIO`] of the triangles.
+/// sloppy fallback cannot remove 15% of the triangles (`STUCK_RATIO`).
 ///
 /// Works on a compact copy of the group's vertices: meshoptimizer's cost is per vertex
 /// of the buffer it is given, and a group is a tiny part of the mesh.

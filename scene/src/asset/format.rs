@@ -10,9 +10,10 @@
 //! so that a GPU thread per vertex or per triangle finds its record by multiplying:
 //! - vertices: grid offsets from `grid_min` at the meshlet's bits per axis, then the
 //!   two octahedral normal components (of [`crate::compress::NORMAL_BITS`]) as offsets
-//!   from `normal_min` at the meshlet's normal bits. A meshlet is a small patch whose
-//!   normals span a fraction of the sphere, so this takes 14 to 20 bits where the full
-//!   components took 24;
+//!   from the meshlet's smallest components at its normal bits (both in
+//!   [`MeshletRecord::normals`]). A meshlet is a small patch whose
+//!   normals span a fraction of the sphere, so this takes 19 to 23 bits on the test
+//!   meshes (the smoother the surface, the fewer) where the full components took 24;
 //! - UVs (when the asset has them): 2 × 16-bit unorm per vertex, one word;
 //! - triangles: fixed-width records of about 16 bits, see [`super::triangles`].
 
@@ -22,7 +23,7 @@ pub const MAGIC: [u8; 8] = *b"MLASSET\0";
 /// Bumped on any layout change; older files are refused, not misread.
 pub const VERSION: u32 = 3;
 
-/// Header flag: the payload holds UVs after the normals.
+/// Header flag: each meshlet's payload holds UVs after its vertex records.
 pub const FLAG_UVS: u32 = 1;
 
 /// Section order in [`AssetHeader::sections`].
