@@ -76,11 +76,16 @@ pub fn simplify_group(
     let crate::meshlets::Localised { globals, local } = crate::meshlets::localise(indices);
     let pos: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
     let attrs: Vec<Vec3> = globals.iter().map(|&g| normals[g as usize]).collect();
+    // Welded ids for the fold check: seams must not count as separate edges.
+    let weld = crate::mesh::position_remap(&pos);
+    let mut locked: Vec<bool> = globals.iter().map(|&g| (flags.locked)(g)).collect();
+    lock_lone_corners(&local, &weld, &mut locked);
     let locks: Vec<SimplifyVertex> = globals
         .iter()
-        .map(|&g| {
+        .zip(&locked)
+        .map(|(&g, &lock)| {
             let mut f = SimplifyVertex::None;
-            if (flags.locked)(g) {
+            if lock {
                 f |= SimplifyVertex::Lock;
             }
             if flags.seam[g as usize] {
@@ -95,8 +100,6 @@ pub fn simplify_group(
     let target = (triangles / 2).max(1) * 3;
     let good = (triangles as f32 * GOOD_RATIO) as usize;
     let stuck = (triangles as f32 * STUCK_RATIO) as usize;
-    // Welded ids for the fold check: seams must not count as separate edges.
-    let weld = crate::mesh::position_remap(&pos);
     let allowed_folds = 1 + triangles / 64 * FOLDS_PER_64_TRIANGLES;
     // The input's own folds, counted only when an output has any (most have none).
     let mut folds_before: Option<usize> = None;
@@ -162,6 +165,41 @@ pub fn simplify_group(
         error,
         mode,
     })
+}
+
+/// Locks the other corners of every triangle at a locked vertex that has at most two
+/// triangles in the piece. Locking keeps a vertex in place but not its triangles:
+/// collapsing one of the other corners onto another removes the triangle, and when the
+/// locked vertex loses all of them it leaves the piece and the edges it shares with the
+/// neighbouring group open a crack. Found by the crack check on the bunny grouped with
+/// `partition_clusters`: a vertex with one triangle in its group, then one with two
+/// triangles that met only at it.
+fn lock_lone_corners(indices: &[u32], weld: &[u32], locked: &mut [bool]) {
+    let mut uses = vec![0u32; weld.len()];
+    for &v in indices {
+        uses[weld[v as usize] as usize] += 1;
+    }
+    let lone: Vec<[u32; 3]> = indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .filter(|t| {
+            t.iter()
+                .any(|&v| locked[v as usize] && uses[weld[v as usize] as usize] <= 2)
+        })
+        .collect();
+    for t in lone {
+        for v in t {
+            locked[v as usize] = true;
+        }
+    }
+    // Copies of one position are locked together.
+    let mut welded_locked = vec![false; weld.len()];
+    for (v, &l) in locked.iter().enumerate() {
+        welded_locked[weld[v] as usize] |= l;
+    }
+    for (v, l) in locked.iter_mut().enumerate() {
+        *l = welded_locked[weld[v] as usize];
+    }
 }
 
 /// Edges (between welded vertices) used by more than two triangles: a fold or a
