@@ -310,3 +310,32 @@ fn gltf_reads_buffers_from_files_beside_it() {
     let err = load_mesh(&path).unwrap_err();
     assert!(err.to_string().contains("byteLength"), "{err}");
 }
+
+#[test]
+fn obj_face_indices_past_either_end_are_refused() {
+    // A relative index before the first texture coordinate (overflowed inside tobj),
+    // and an absurdly large one.
+    for (text, what) in [
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-11 2/1 3/1\n",
+            "texture coordinate index -11",
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//9223372036854775807 2//1 3//1\n",
+            "normal index 9223372036854775807",
+        ),
+        ("v 0 0 0\nv 1 0 0\nf 1 2 -3\n", "vertex index -3"),
+    ] {
+        let err = parse_obj(Path::new("bad-face.obj"), text.as_bytes()).unwrap_err();
+        assert!(matches!(err, SceneError::Obj { .. }), "{err:?}");
+        let msg = err.to_string();
+        assert!(msg.contains("bad-face.obj") && msg.contains(what), "{msg}");
+    }
+    // Relative indices within range still load.
+    let mesh = parse_obj(
+        Path::new("rel.obj"),
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n",
+    )
+    .unwrap();
+    assert_eq!(mesh.triangle_count(), 1);
+}

@@ -23,6 +23,10 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
         ignore_points: true,
         ignore_lines: true,
     };
+    check_face_indices(bytes).map_err(|reason| SceneError::Obj {
+        path: path.to_owned(),
+        reason,
+    })?;
     let mut reader = BufReader::new(bytes);
     // Materials do not matter to geometry; a missing .mtl must not fail the load.
     let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
@@ -66,6 +70,67 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
         mesh.indices.extend(m.indices.iter().map(|&i| i + base));
     }
     Ok(mesh)
+}
+
+/// Checks every face index against the `v`, `vt` and `vn` lines before `tobj` sees it:
+/// `tobj` turns an index before the start of the file (`-11` with three entries) into a
+/// huge one and overflows multiplying it, and so would an absurdly large index.
+fn check_face_indices(bytes: &[u8]) -> Result<(), String> {
+    // Totals first: a face may refer to entries listed after it.
+    let mut totals = [0i64; 3];
+    for line in bytes.split(|&b| b == b'\n') {
+        match line
+            .split(|b| b.is_ascii_whitespace())
+            .find(|w| !w.is_empty())
+        {
+            Some(b"v") => totals[0] += 1,
+            Some(b"vt") => totals[1] += 1,
+            Some(b"vn") => totals[2] += 1,
+            _ => {}
+        }
+    }
+    let names = ["vertex", "texture coordinate", "normal"];
+    let mut seen = [0i64; 3];
+    for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let mut words = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|w| !w.is_empty());
+        match words.next() {
+            Some(b"v") => seen[0] += 1,
+            Some(b"vt") => seen[1] += 1,
+            Some(b"vn") => seen[2] += 1,
+            Some(b"f") => {
+                for corner in words {
+                    for (k, part) in corner.split(|&b| b == b'/').enumerate().take(3) {
+                        let Some(i) = std::str::from_utf8(part)
+                            .ok()
+                            .filter(|p| !p.is_empty())
+                            .and_then(|p| p.parse::<i64>().ok())
+                        else {
+                            continue; // empty (`1//1`) or malformed: tobj reports those
+                        };
+                        let valid = if i < 0 {
+                            seen[k] + i >= 0
+                        } else {
+                            i >= 1 && i <= totals[k]
+                        };
+                        if !valid {
+                            return Err(format!(
+                                "line {}: a face refers to {} index {i}, but the file has {} \
+                                 ({} before this line); the file is truncated or corrupt",
+                                n + 1,
+                                names[k],
+                                totals[k],
+                                seen[k]
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 fn describe(e: tobj::LoadError) -> String {
