@@ -27,6 +27,7 @@ fn benchmark_rows_cover_every_implementation_and_size() {
                 row.gpu_ms > 0.0
                     && row.gb_per_s.is_finite()
                     && row.copy_gb_per_s > 0.0
+                    && row.copy_command_gb_per_s > 0.0
                     && row.cpu_ms >= 0.0,
                 "{row:?}"
             );
