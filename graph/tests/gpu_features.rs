@@ -67,6 +67,17 @@ where
     }
 }
 
+/// Declares the compute program `name` running `entry` of the test kernels.
+fn declare(
+    ctx: &mut SetupContext,
+    name: &str,
+    entry: &'static str,
+    layout: BindingLayout,
+) -> Result<()> {
+    ctx.program(name, ProgramDesc::compute(&COMPUTE, entry).layout(layout));
+    Ok(())
+}
+
 /// Records one dispatch of the compute program `name` with bind group 0.
 fn dispatch_once(
     ctx: &mut RecordContext<'_>,
@@ -269,11 +280,7 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
             let layout = BindingLayout::compute("base")
                 .slot(0, "source")
                 .slot(1, "mip");
-            ctx.program(
-                "base",
-                ProgramDesc::compute(&COMPUTE, "write_base").layout(layout),
-            );
-            Ok(())
+            declare(ctx, "base", "write_base", layout)
         },
         |ctx| dispatch_once(ctx, "base", &[], [MIP_W.div_ceil(8), MIP_H.div_ceil(8), 1]),
     );
@@ -310,11 +317,7 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
                 let layout = BindingLayout::compute("downsample")
                     .slot(3, "src")
                     .slot(4, "dst");
-                ctx.program(
-                    "downsample",
-                    ProgramDesc::compute(&COMPUTE, "downsample").layout(layout),
-                );
-                Ok(())
+                declare(ctx, "downsample", "downsample", layout)
             },
             move |ctx| dispatch_once(ctx, "downsample", &[], [dw.div_ceil(8), dh.div_ceil(8), 1]),
         );
@@ -343,11 +346,7 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
                 .slot(5, "pyramid")
                 .sampler(6, SamplerKind::Nearest)
                 .slot(7, "gathered");
-            ctx.program(
-                "gather",
-                ProgramDesc::compute(&COMPUTE, "gather").layout(layout),
-            );
-            Ok(())
+            declare(ctx, "gather", "gather", layout)
         },
         move |ctx| {
             let desc = match ctx.desc("pyramid")? {
@@ -441,8 +440,7 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
                 "append",
                 ProgramDesc::compute(&COMPUTE, "append").layout(append),
             );
-            ctx.program("mark", ProgramDesc::compute(&COMPUTE, "mark").layout(mark));
-            Ok(())
+            declare(ctx, "mark", "mark", mark)
         },
         |ctx| {
             ctx.clear("args")?;
@@ -485,11 +483,7 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
             let layout = BindingLayout::compute("count")
                 .slot(12, "args")
                 .slot(13, "seen");
-            ctx.program(
-                "count",
-                ProgramDesc::compute(&COMPUTE, "count_groups").layout(layout),
-            );
-            Ok(())
+            declare(ctx, "count", "count_groups", layout)
         },
         |ctx| {
             ctx.clear("seen")?;
@@ -556,11 +550,7 @@ fn stamp_graph(latency: u32) -> CompiledGraph {
         |ctx| {
             ctx.frame_input("value");
             let layout = BindingLayout::compute("stamp").uniform(2).slot(14, "stamp");
-            ctx.program(
-                "stamp",
-                ProgramDesc::compute(&COMPUTE, "write_stamp").layout(layout),
-            );
-            Ok(())
+            declare(ctx, "stamp", "write_stamp", layout)
         },
         |ctx| {
             let value = ctx.frame_u32("value")?;
@@ -676,11 +666,7 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
                 .slot(15, "list")
                 .slot(16, "prev")
                 .slot(17, "hist");
-            ctx.program(
-                "grow",
-                ProgramDesc::compute(&COMPUTE, "grow").layout(layout),
-            );
-            Ok(())
+            declare(ctx, "grow", "grow", layout)
         },
         |ctx| {
             let (_, bytes) = ctx.buffer("list")?;
@@ -879,11 +865,7 @@ fn sampled_import_graph(mips: u32) -> GraphBuilder {
             let layout = BindingLayout::compute("downsample")
                 .slot(3, "src")
                 .slot(4, "dst");
-            ctx.program(
-                "down",
-                ProgramDesc::compute(&COMPUTE, "downsample").layout(layout),
-            );
-            Ok(())
+            declare(ctx, "down", "downsample", layout)
         },
         |ctx| dispatch_once(ctx, "down", &[], [1, 1, 1]),
     );
@@ -983,11 +965,7 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
                 let layout = BindingLayout::compute("fill_layer")
                     .uniform(2)
                     .slot(18, "layer");
-                ctx.program(
-                    "fill",
-                    ProgramDesc::compute(&COMPUTE, "fill_layer").layout(layout),
-                );
-                Ok(())
+                declare(ctx, "fill", "fill_layer", layout)
             },
             move |ctx| {
                 dispatch_once(
@@ -1022,11 +1000,7 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
             let layout = BindingLayout::compute("flatten")
                 .slot(19, "array")
                 .slot(20, "flat");
-            ctx.program(
-                "flatten",
-                ProgramDesc::compute(&COMPUTE, "flatten_layers").layout(layout),
-            );
-            Ok(())
+            declare(ctx, "flatten", "flatten_layers", layout)
         },
         |ctx| dispatch_once(ctx, "flatten", &[], [1, 1, LAYERS]),
     );

@@ -215,27 +215,47 @@ impl<'a> RecordContext<'a> {
             ))),
         }
     }
-    /// A slot's texture and the view of the part it binds; scratch textures by name when
-    /// no slot has that name.
-    fn target_view(&mut self, name: &str) -> Result<(wgpu::Texture, wgpu::TextureView, usize)> {
-        let (r, range) = match self.slot_use(name) {
-            Ok(s) => (s.resource, s.range),
-            Err(e) => match self.scratch_resource(name) {
-                Ok(r) => (r, None),
-                Err(_) => return Err(e),
+    /// The resource a name refers to, with the texture range a slot binds: a slot of the
+    /// pass, else a scratch resource it declared (render targets may be either).
+    fn named(&self, name: &str) -> Result<(usize, Option<TextureRange>)> {
+        match self.slot_use(name) {
+            Ok(s) => Ok((s.resource, s.range)),
+            Err(e) => self
+                .scratch_resource(name)
+                .map(|r| (r, None))
+                .map_err(|_| e),
+        }
+    }
+
+    /// What a binding of the named slot or scratch resource binds: the buffer, or the view
+    /// of the part of the texture it binds.
+    fn bound(&mut self, name: &str) -> Result<BoundResource> {
+        let (r, range) = self.named(name)?;
+        Ok(match self.physical(r)? {
+            Physical::Buffer { buffer, size } => BoundResource::Buffer {
+                buffer: buffer.clone(),
+                offset: 0,
+                size: (*size).max(4),
             },
-        };
-        match self.physical(r)? {
-            Physical::Texture { texture, view } => {
-                let view = match range {
-                    Some(range) => self.views.range(texture, range, self.frame_index),
-                    None => view.clone(),
-                };
-                Ok((texture.clone(), view, r))
-            }
+            Physical::Texture { texture, view } => BoundResource::View(match range {
+                Some(range) => self.views.range(texture, range, self.frame_index),
+                None => view.clone(),
+            }),
+        })
+    }
+
+    /// A slot's (or scratch) texture and the view of the part it binds.
+    fn target_view(&mut self, name: &str) -> Result<(wgpu::Texture, wgpu::TextureView)> {
+        let (r, _) = self.named(name)?;
+        let texture = match self.physical(r)? {
+            Physical::Texture { texture, .. } => texture.clone(),
             Physical::Buffer { .. } => {
-                Err(self.err(format!("`{name}` is a buffer, not a texture")))
+                return Err(self.err(format!("`{name}` is a buffer, not a texture")));
             }
+        };
+        match self.bound(name)? {
+            BoundResource::View(view) => Ok((texture, view)),
+            _ => unreachable!("a texture binds a view"),
         }
     }
 
@@ -254,7 +274,7 @@ impl<'a> RecordContext<'a> {
     /// The texture bound to `slot` and the view of the mips and layers it binds.
     pub fn texture(&mut self, slot: &str) -> Result<(wgpu::Texture, wgpu::TextureView)> {
         self.slot_use(slot)?;
-        self.target_view(slot).map(|(t, v, _)| (t, v))
+        self.target_view(slot)
     }
     /// The descriptor of the resource bound to `slot`.
     pub fn desc(&self, slot: &str) -> Result<&'a ResourceDesc> {
@@ -326,40 +346,10 @@ impl<'a> RecordContext<'a> {
                             slot: name.to_string(),
                             available: contract.slot_names().join(", "),
                         })?;
-                        let access = if e.read_only {
-                            crate::access::Access::StorageRead
-                        } else {
-                            slot.access
-                        };
-                        match self.desc(name)? {
-                            ResourceDesc::Buffer(_) => buffer_binding_type(access),
-                            ResourceDesc::Texture(t) => {
-                                texture_binding_type(access, t.format, t.layers > 1)
-                            }
-                        }
-                        .ok_or_else(|| {
-                            self.err(format!(
-                                "slot `{name}` ({}) cannot be bound in a bind group",
-                                slot.access.name()
-                            ))
-                        })?
+                        self.binding_type(name, slot.access, e.read_only)?
                     }
                     BindingSource::Scratch(name, access) => {
-                        let access = &if e.read_only {
-                            crate::access::Access::StorageRead
-                        } else {
-                            *access
-                        };
-                        let r = self.scratch_resource(name)?;
-                        match &self.plan.resources[r].info.desc {
-                            ResourceDesc::Buffer(_) => buffer_binding_type(*access),
-                            ResourceDesc::Texture(t) => {
-                                texture_binding_type(*access, t.format, t.layers > 1)
-                            }
-                        }
-                        .ok_or_else(|| {
-                            self.err(format!("scratch access {} cannot be bound", access.name()))
-                        })?
+                        self.binding_type(name, *access, e.read_only)?
                     }
                     BindingSource::Uniform => buffer_binding_type(crate::access::Access::Uniform)
                         .expect("uniform is a buffer binding"),
@@ -373,6 +363,32 @@ impl<'a> RecordContext<'a> {
                 })
             })
             .collect()
+    }
+
+    /// The binding type of the named slot or scratch resource used with `access` (as
+    /// read-only storage when the layout says so).
+    fn binding_type(
+        &self,
+        name: &str,
+        access: crate::access::Access,
+        read_only: bool,
+    ) -> Result<wgpu::BindingType> {
+        let access = if read_only {
+            crate::access::Access::StorageRead
+        } else {
+            access
+        };
+        let (r, _) = self.named(name)?;
+        match &self.plan.resources[r].info.desc {
+            ResourceDesc::Buffer(_) => buffer_binding_type(access),
+            ResourceDesc::Texture(t) => texture_binding_type(access, t.format, t.layers > 1),
+        }
+        .ok_or_else(|| {
+            self.err(format!(
+                "`{name}` ({}) cannot be bound in a bind group",
+                access.name()
+            ))
+        })
     }
 
     fn declared(&self, name: &str) -> Result<&'a Arc<ProgramDesc>> {
@@ -395,10 +411,7 @@ impl<'a> RecordContext<'a> {
     }
 
     fn target_format(&self, name: &str) -> Result<wgpu::TextureFormat> {
-        let r = match self.slot_resource(name) {
-            Ok(r) => r,
-            Err(e) => self.scratch_resource(name).map_err(|_| e)?,
-        };
+        let (r, _) = self.named(name)?;
         match &self.plan.resources[r].info.desc {
             ResourceDesc::Texture(TextureDesc { format, .. }) => Ok(*format),
             ResourceDesc::Buffer(_) => Err(self.err(format!(
@@ -668,27 +681,7 @@ impl<'a> RecordContext<'a> {
         let mut entries = Vec::with_capacity(layout.entries.len());
         for e in &layout.entries {
             let bound = match &e.source {
-                BindingSource::Slot(name) => {
-                    let r = self.slot_resource(name)?;
-                    match self.physical(r)? {
-                        Physical::Buffer { buffer, size } => BoundResource::Buffer {
-                            buffer: buffer.clone(),
-                            offset: 0,
-                            size: (*size).max(4),
-                        },
-                        Physical::Texture { .. } => BoundResource::View(self.target_view(name)?.1),
-                    }
-                }
-                BindingSource::Scratch(name, _) => {
-                    match self.physical(self.scratch_resource(name)?)? {
-                        Physical::Buffer { buffer, size } => BoundResource::Buffer {
-                            buffer: buffer.clone(),
-                            offset: 0,
-                            size: (*size).max(4),
-                        },
-                        Physical::Texture { view, .. } => BoundResource::View(view.clone()),
-                    }
-                }
+                BindingSource::Slot(name) | BindingSource::Scratch(name, _) => self.bound(name)?,
                 BindingSource::Uniform => {
                     let bytes = uniforms
                         .iter()
@@ -822,12 +815,12 @@ impl<'a> RecordContext<'a> {
         };
         let mut color_views = Vec::with_capacity(colors.len());
         for c in colors {
-            let (_, view, _) = self.target_view(c.target)?;
+            let (_, view) = self.target_view(c.target)?;
             color_views.push((view, ops_of(self, c.target), c.clear));
         }
         let depth_view = match depth {
             Some(d) => {
-                let (_, view, _) = self.target_view(d.target)?;
+                let (_, view) = self.target_view(d.target)?;
                 Some((view, ops_of(self, d.target), d.clear))
             }
             None => None,
