@@ -10,7 +10,7 @@
 //! validated `naga::Module` ready for `wgpu::ShaderSource::Naga`.
 //!
 //! [`cpu`] mirrors the bit-exact encodings (visibility packing, octahedral normals,
-//! quantised positions) in Rust, so pass tests and the asset builder share one reference.
+//! layouts) in Rust, so pass tests and the asset builder share one reference.
 
 pub mod cpu;
 mod defs;

@@ -48,7 +48,8 @@ fn every_module_composes_and_validates_without_int64() {
     for needle in [
         "sphere_in_frustum",
         "octahedral_decode",
-        "meshlet_in_lod_cut",
+        "lod_cut",
+        "meshlet_triangle",
         "read_bits",
         "instance_transform_normal",
         "visbuffer_pack",
@@ -110,7 +111,10 @@ const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
         "meshlight::octahedral",
         "octahedral::unpack_octahedral_normal(0u)",
     ),
-    ("meshlight::meshlet", "meshlet::meshlet_local_index(0u, 1u)"),
+    (
+        "meshlight::meshlet",
+        "meshlet::meshlet_level(meshlet::Meshlet())",
+    ),
     (
         "meshlight::instance",
         "instance::instance_max_scale(instance::Instance())",

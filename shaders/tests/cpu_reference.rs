@@ -1,6 +1,6 @@
 //! Round trips and ordering of the Rust references for the bit-exact encodings.
 
-use meshlight_shaders::cpu::{octahedral, positions, visbuffer};
+use meshlight_shaders::cpu::{octahedral, visbuffer};
 use proptest::prelude::*;
 
 fn unit(v: [f32; 3]) -> Option<[f32; 3]> {
@@ -52,27 +52,6 @@ proptest! {
         let (va, vb) = (visbuffer::pack(a, ca, ta), visbuffer::pack(b, cb, tb));
         prop_assert_eq!(va > vb, a > b);
     }
-
-    #[test]
-    fn bit_packed_positions_round_trip(
-        bits in proptest::array::uniform3(0u32..=32),
-        seed in any::<u64>(),
-        count in 1usize..=255,
-        lead in 0usize..3,
-    ) {
-        let mut state = seed | 1;
-        let mut next = move || { state ^= state << 13; state ^= state >> 7; state ^= state << 17; state };
-        let mask = |b: u32| if b == 32 { u32::MAX } else { (1u32 << b) - 1 };
-        let deltas: Vec<[u32; 3]> = (0..count)
-            .map(|_| std::array::from_fn(|axis| next() as u32 & mask(bits[axis])))
-            .collect();
-        let mut stream = vec![0xdead_beef; lead];
-        let offset = positions::pack_positions(&deltas, bits, &mut stream);
-        prop_assert_eq!(offset as usize, lead);
-        for (vertex, delta) in deltas.iter().enumerate() {
-            prop_assert_eq!(positions::read_position(&stream, offset, bits, vertex as u32), *delta);
-        }
-    }
 }
 
 #[test]
@@ -112,67 +91,6 @@ fn snorm16_rounds_half_up_and_clamps() {
     assert_eq!(octahedral::snorm16(-2.0) as i16, -32767);
     assert_eq!(octahedral::snorm16(0.5 / 32767.0), 1);
     assert_eq!(octahedral::snorm16_to_f32(0x8000), -1.0);
-}
-
-#[test]
-fn grid_decodes_shared_vertices_identically() {
-    let grid = positions::Grid {
-        origin: [-1.5, 0.25, 3.0],
-        step: 1.0 / 1024.0,
-    };
-    let p = [0.123_456, 1.5, 3.75];
-    let q = grid.quantize(p);
-    let back = grid.dequantize(q);
-    for axis in 0..3 {
-        assert!((back[axis] - p[axis]).abs() <= grid.step * 0.5 + 1e-6);
-    }
-    assert_eq!(positions::bits_for(0), 0);
-    assert_eq!(positions::bits_for(1), 1);
-    assert_eq!(positions::bits_for(255), 8);
-    assert_eq!(positions::bits_for(256), 9);
-    assert_eq!(positions::bits_for(u32::MAX), 32);
-}
-
-#[test]
-fn indices_pack_four_per_word_low_byte_first() {
-    let triangles = [[0u8, 1, 2], [2, 1, 254]];
-    let mut stream = vec![7];
-    let offset = positions::pack_indices(&triangles, &mut stream);
-    assert_eq!(offset, 1);
-    assert_eq!(stream[1], u32::from_le_bytes([0, 1, 2, 2]));
-    for (t, triangle) in triangles.iter().enumerate() {
-        for corner in 0..3 {
-            assert_eq!(
-                positions::read_index(&stream, offset, t as u32, corner),
-                u32::from(triangle[corner as usize])
-            );
-        }
-    }
-}
-
-#[test]
-fn read_bits_handles_straddling_and_full_words() {
-    let words = [0xF000_0000u32, 0x0000_000A];
-    assert_eq!(positions::read_bits(words, 28, 8), 0xAF);
-    assert_eq!(positions::read_bits([0x1234_5678, 0], 0, 32), 0x1234_5678);
-    assert_eq!(positions::read_bits([0xFFFF_FFFF, 0], 31, 0), 0);
-    assert_eq!(
-        positions::read_bits([0x8000_0000, 0x7FFF_FFFF], 31, 32),
-        u32::MAX
-    );
-}
-
-#[test]
-fn a_zero_width_axis_at_a_word_boundary_stays_in_bounds() {
-    // 32 + 0 + 0 bits per vertex: the last vertex's y and z fields start exactly at the
-    // end of the data, and their two-word reads must still hit padding.
-    let bits = [32, 0, 0];
-    let mut stream = Vec::new();
-    let offset = positions::pack_positions(&[[7, 0, 0], [9, 0, 0]], bits, &mut stream);
-    assert_eq!(
-        positions::read_position(&stream, offset, bits, 1),
-        [9, 0, 0]
-    );
 }
 
 mod light {

@@ -4,7 +4,7 @@
 use std::mem::{offset_of, size_of};
 
 use meshlight_shaders::cpu::layout::{
-    Cluster, ClusterGrid, ClusterableObject, Instance, Meshlet, View,
+    Cluster, ClusterGrid, ClusterableObject, Instance, Material, Mesh, View,
 };
 use meshlight_shaders::{Capabilities, PassShader, ShaderLibrary};
 
@@ -79,24 +79,19 @@ fn rust_mirrors_match_the_wgsl_layouts() {
     );
     assert_layout!(
         &module,
-        "Meshlet",
-        Meshlet,
+        "Mesh",
+        Mesh,
         [
+            position_grid,
+            uv_grid,
             bounding_sphere,
-            lod_sphere,
-            parent_lod_sphere,
-            lod_error,
-            parent_lod_error,
-            position_offset,
-            vertex_offset,
-            index_offset,
-            vertex_count,
-            triangle_count,
-            position_bits,
-            position_min,
-            padding,
+            first_meshlet,
+            meshlet_count,
+            flags,
+            level_count,
         ]
     );
+    assert_layout!(&module, "Material", Material, [base_color]);
     assert_layout!(&module, "Cluster", Cluster, [instance, meshlet]);
     assert_layout!(
         &module,
@@ -110,7 +105,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
             material,
             first_meshlet,
             meshlet_count,
-            padding,
+            mesh,
         ]
     );
     assert_layout!(

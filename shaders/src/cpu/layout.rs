@@ -29,25 +29,25 @@ pub struct View {
     pub padding: [u32; 2],
 }
 
-/// `meshlight::meshlet::Meshlet`.
+/// `meshlight::meshlet::Mesh`: one loaded mesh asset in the GPU scene.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Meshlet {
+pub struct Mesh {
+    /// xyz origin, w step: `position = origin + step * q`.
+    pub position_grid: [f32; 4],
+    /// xy minimum, zw step of the 16-bit UV values.
+    pub uv_grid: [f32; 4],
+    /// Mesh-space sphere around the whole mesh: centre, radius.
     pub bounding_sphere: [f32; 4],
-    pub lod_sphere: [f32; 4],
-    pub parent_lod_sphere: [f32; 4],
-    pub lod_error: f32,
-    pub parent_lod_error: f32,
-    pub position_offset: u32,
-    pub vertex_offset: u32,
-    pub index_offset: u32,
-    pub vertex_count: u32,
-    pub triangle_count: u32,
-    /// `x | y << 8 | z << 16`; see [`super::positions::pack_bit_widths`].
-    pub position_bits: u32,
-    pub position_min: [u32; 3],
-    pub padding: u32,
+    pub first_meshlet: u32,
+    pub meshlet_count: u32,
+    /// `MESH_FLAG_UVS` (1) when the payload holds UVs.
+    pub flags: u32,
+    pub level_count: u32,
 }
+
+/// `MESH_FLAG_UVS` of [`Mesh::flags`].
+pub const MESH_FLAG_UVS: u32 = 1;
 
 /// `meshlight::meshlet::Cluster`.
 #[repr(C)]
@@ -64,12 +64,21 @@ pub struct Instance {
     pub world_from_local: [[f32; 4]; 4],
     pub previous_world_from_local: [[f32; 4]; 4],
     pub local_from_world: [[f32; 4]; 4],
-    /// xyz origin, w step; see [`super::positions::Grid::to_vec4`].
+    /// xyz origin, w step: the mesh's [`Mesh::position_grid`].
     pub position_grid: [f32; 4],
     pub material: u32,
     pub first_meshlet: u32,
     pub meshlet_count: u32,
-    pub padding: u32,
+    /// Index into the mesh table.
+    pub mesh: u32,
+}
+
+/// `meshlight::instance::Material`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Material {
+    /// Linear RGB albedo; alpha unused.
+    pub base_color: [f32; 4],
 }
 
 /// The `kind` values of [`ClusterableObject`], as the `CLUSTERABLE_*` WGSL constants.

@@ -6,5 +6,4 @@
 pub mod layout;
 pub mod light;
 pub mod octahedral;
-pub mod positions;
 pub mod visbuffer;

@@ -17,8 +17,14 @@ struct Instance {
     first_meshlet: u32,
     // How many meshlets the mesh has (all LOD levels).
     meshlet_count: u32,
-    // Padding to a 16-byte multiple.
-    padding: u32,
+    // Index into the mesh table (`meshlight::meshlet::Mesh`).
+    mesh: u32,
+}
+
+// One entry of the material table. Layout matches `cpu::layout::Material`.
+struct Material {
+    // Linear RGB albedo; alpha unused (opaque geometry only).
+    base_color: vec4<f32>,
 }
 
 fn instance_transform_point(instance: Instance, p: vec3<f32>) -> vec3<f32> {

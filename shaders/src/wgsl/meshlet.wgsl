@@ -1,126 +1,243 @@
 #define_import_path meshlight::meshlet
 
-// The GPU layout of meshlets and clusters, and the decoding of their compressed data.
-// Layouts match `cpu::layout::Meshlet`; a test checks every offset.
+// Meshlets as the asset format (version 3) stores them, and their decoding on the GPU.
+// `Meshlet` and `MeshletGroup` are the asset's `MeshletRecord` and `GroupRecord` byte
+// for byte, so the GPU scene uploads the asset's sections as they are (offsets rebased
+// when several assets share the buffers); a test checks the layouts.
 //
-// Positions: every mesh is quantised on one grid (origin, step), so a vertex shared by
-// neighbouring meshlets has the same integer coordinate q in each and decodes to the same
-// float bits — no cracks. Each meshlet stores its minimum q and the fewest bits per axis
-// that hold q - min; vertex v occupies bits [v * stride, (v + 1) * stride) of the
-// meshlet's part of the u32 position stream, x then y then z, least significant bit
-// first, where stride = bits.x + bits.y + bits.z.
-//
-// Indices: three u8 local vertex indices per triangle, packed four per u32, the first in
-// the low byte; triangle t uses bytes 3t, 3t + 1, 3t + 2 of the meshlet's index words.
+// A meshlet's payload, from word `data_offset` of the shared payload buffer:
+// - vertex records of `meshlet_vertex_stride` bits each: the grid offsets x, y, z at the
+//   meshlet's bits per axis, then the two octahedral normal components as offsets from
+//   the meshlet's smallest ones at its normal bits;
+// - when the mesh has UVs (`MESH_FLAG_UVS`), one word per vertex: two 16-bit unorms;
+// - triangle records of `meshlet_triangle_stride` bits each (at most 25): the largest
+//   corner as a biased offset from its prediction `(t + 1) * vertices / triangles`, then
+//   the two other corners, in winding order, as distances below it.
+// Every field is found by multiplying, so a thread per vertex or per triangle decodes
+// its own record with no serial state. Read a field with `read_bits` from the two words
+// at its location; the GPU scene pads the payload so the second word always exists.
+// `meshlight_scene::asset::MeshletAsset::decode_meshlet` is the CPU reference.
 
-#import meshlight::math::{read_bits, unpack_u8}
+#import meshlight::math::{read_bits, F32_MAX}
 #import meshlight::view::{View, project_error_to_pixels}
 
 // Triangles per meshlet at most; the visibility buffer gives the triangle index 7 bits.
 const MESHLET_MAX_TRIANGLES: u32 = 128u;
 // Vertices per meshlet at most, so a local index fits a byte.
 const MESHLET_MAX_VERTICES: u32 = 255u;
+// `source_group` of a LOD-0 meshlet and `parent_group` of a root.
+const MESHLET_NO_GROUP: u32 = 0xffffffffu;
+// Bits per octahedral normal component before the per-meshlet offsets.
+const MESHLET_NORMAL_BITS: u32 = 12u;
+// Added to a signed octahedral component to store its minimum unsigned.
+const MESHLET_NORMAL_BIAS: i32 = 2048;
+// `Mesh::flags`: each meshlet's payload holds UVs after its vertex records.
+const MESH_FLAG_UVS: u32 = 1u;
 
+// 52 bytes; the asset's `MeshletRecord`.
 struct Meshlet {
-    // Culling sphere in mesh space: xyz centre, w radius.
-    bounding_sphere: vec4<f32>,
-    // Sphere of the group this meshlet was simplified in (xyz centre, w radius), mesh
-    // space; together with lod_error it decides whether this meshlet is detailed enough.
-    lod_sphere: vec4<f32>,
-    // Sphere of the group this meshlet's simplification went into; equal for all
-    // meshlets of that group so they switch together.
-    parent_lod_sphere: vec4<f32>,
-    // Simplification error of this meshlet in mesh units (0 at full detail).
-    lod_error: f32,
-    // Error of the coarser meshlets replacing this one; F32_MAX for roots.
-    parent_lod_error: f32,
-    // First u32 of this meshlet's bit-packed positions in the position stream.
-    position_offset: u32,
-    // First vertex of this meshlet in the per-vertex attribute arrays (normals, uvs).
-    vertex_offset: u32,
-    // First u32 of this meshlet's packed u8 local indices.
-    index_offset: u32,
-    // Vertices in this meshlet (1..=255).
-    vertex_count: u32,
-    // Triangles in this meshlet (1..=128).
-    triangle_count: u32,
-    // Bits per axis of the quantised position deltas: x | y << 8 | z << 16, each 0..=32.
-    position_bits: u32,
-    // Smallest quantised grid coordinate of the meshlet's vertices, per axis.
-    position_min: vec3<u32>,
-    // Padding to a 16-byte multiple.
-    padding: u32,
+    // Culling sphere around the decoded vertices, mesh space: centre xyz, radius.
+    bounds: array<f32, 4>,
+    // The group whose simplification produced this meshlet (its LOD sphere and error
+    // are this meshlet's own), or MESHLET_NO_GROUP at LOD 0 (error 0, sphere `bounds`).
+    source_group: u32,
+    // The group this meshlet was simplified in (its parent's sphere and error), or
+    // MESHLET_NO_GROUP for a root (an infinite parent error).
+    parent_group: u32,
+    // First payload word of this meshlet, in the shared payload buffer.
+    data_offset: u32,
+    // Vertex count (bits 0..8), triangle count (8..16), LOD level (16..24).
+    counts: u32,
+    // Smallest grid coordinate of the meshlet's vertices; vertices store offsets from it.
+    grid_min: array<u32, 3>,
+    // Bits per axis x (0..8), y (8..16), z (16..24); triangle record fields: corner
+    // offset (24..28), corner distances (28..32).
+    bits: u32,
+    // Smallest octahedral components plus MESHLET_NORMAL_BIAS: x (0..12), y (12..24);
+    // bits of each component's offset: x (24..28), y (28..32).
+    normals: u32,
 }
 
-// One entry of the cluster list: which instance draws which meshlet.
+// 32 bytes; the asset's `GroupRecord`. Meshlets refer to groups for their LOD spheres
+// and errors, which all meshlets of a group share so that they switch together.
+struct MeshletGroup {
+    // Mesh space: centre xyz, radius; encloses the spheres of the group's children.
+    lod_sphere: vec4<f32>,
+    // Simplification error in mesh units, at least that of every child.
+    error: f32,
+    level: u32,
+    first_child: u32,
+    child_count: u32,
+}
+
+// One loaded mesh asset in the GPU scene. Layout matches `cpu::layout::Mesh`.
+struct Mesh {
+    // Position grid: position = xyz + w * (grid_min + offset).
+    position_grid: vec4<f32>,
+    // UV rectangle: uv = xy + zw * (the two 16-bit values).
+    uv_grid: vec4<f32>,
+    // Mesh-space sphere around the whole mesh (centre xyz, radius), to cull instances.
+    bounding_sphere: vec4<f32>,
+    // The mesh's meshlets are [first_meshlet, first_meshlet + meshlet_count).
+    first_meshlet: u32,
+    meshlet_count: u32,
+    // MESH_FLAG_UVS or 0.
+    flags: u32,
+    // LOD levels of the mesh's DAG.
+    level_count: u32,
+}
+
+// One entry of a cluster list: which instance draws which meshlet.
 struct Cluster {
     // Index into the instance array.
     instance: u32,
-    // Index into the meshlet array (already offset by the instance's first meshlet).
+    // Index into the shared meshlet array.
     meshlet: u32,
 }
 
-fn meshlet_position_bits(meshlet: Meshlet) -> vec3<u32> {
-    return vec3(
-        extractBits(meshlet.position_bits, 0u, 8u),
-        extractBits(meshlet.position_bits, 8u, 8u),
-        extractBits(meshlet.position_bits, 16u, 8u),
+fn meshlet_vertex_count(m: Meshlet) -> u32 {
+    return extractBits(m.counts, 0u, 8u);
+}
+
+fn meshlet_triangle_count(m: Meshlet) -> u32 {
+    return extractBits(m.counts, 8u, 8u);
+}
+
+fn meshlet_level(m: Meshlet) -> u32 {
+    return extractBits(m.counts, 16u, 8u);
+}
+
+fn meshlet_bounds(m: Meshlet) -> vec4<f32> {
+    return vec4(m.bounds[0], m.bounds[1], m.bounds[2], m.bounds[3]);
+}
+
+// Bits per axis of the grid offsets (x, y, z).
+fn meshlet_axis_bits(m: Meshlet) -> vec3<u32> {
+    return vec3(extractBits(m.bits, 0u, 8u), extractBits(m.bits, 8u, 8u), extractBits(m.bits, 16u, 8u));
+}
+
+// Bits of the two octahedral offsets.
+fn meshlet_normal_bits(m: Meshlet) -> vec2<u32> {
+    return vec2(extractBits(m.normals, 24u, 4u), extractBits(m.normals, 28u, 4u));
+}
+
+fn meshlet_vertex_stride(m: Meshlet) -> u32 {
+    let a = meshlet_axis_bits(m);
+    let n = meshlet_normal_bits(m);
+    return a.x + a.y + a.z + n.x + n.y;
+}
+
+// Bits of the triangle records' fields: x = corner offset, y = each corner distance.
+fn meshlet_triangle_field_bits(m: Meshlet) -> vec2<u32> {
+    return vec2(extractBits(m.bits, 24u, 4u), extractBits(m.bits, 28u, 4u));
+}
+
+fn meshlet_triangle_stride(m: Meshlet) -> u32 {
+    let t = meshlet_triangle_field_bits(m);
+    return t.x + 2u * t.y;
+}
+
+// First payload word of the UV block (meaningful only when the mesh has UVs).
+fn meshlet_uv_word(m: Meshlet) -> u32 {
+    return m.data_offset + (meshlet_vertex_count(m) * meshlet_vertex_stride(m) + 31u) / 32u;
+}
+
+// First payload word of the triangle records.
+fn meshlet_triangle_word(m: Meshlet, mesh_flags: u32) -> u32 {
+    let uvs = select(0u, meshlet_vertex_count(m), (mesh_flags & MESH_FLAG_UVS) != 0u);
+    return meshlet_uv_word(m) + uvs;
+}
+
+// Where field `field` of vertex `vertex` lies: x = payload word, y = bit in it, z = bit
+// count. Fields: 0, 1, 2 = grid offsets x, y, z; 3, 4 = octahedral offsets x, y. Read
+// words x and x + 1 and pass them, with y and z, to `read_bits`.
+fn meshlet_vertex_field(m: Meshlet, vertex: u32, field: u32) -> vec3<u32> {
+    let a = meshlet_axis_bits(m);
+    let n = meshlet_normal_bits(m);
+    let widths = array(a.x, a.y, a.z, n.x, n.y);
+    var bit = vertex * meshlet_vertex_stride(m);
+    for (var f = 0u; f < field; f += 1u) {
+        bit += widths[f];
+    }
+    return vec3(m.data_offset + bit / 32u, bit % 32u, widths[field]);
+}
+
+// Mesh-space position from the three grid offsets. The integer add comes first, so a
+// vertex shared by neighbouring meshlets decodes to identical bits in each: no cracks.
+fn meshlet_position(m: Meshlet, position_grid: vec4<f32>, offset: vec3<u32>) -> vec3<f32> {
+    let q = vec3(m.grid_min[0], m.grid_min[1], m.grid_min[2]) + offset;
+    return position_grid.xyz + vec3<f32>(q) * position_grid.w;
+}
+
+// Mesh-space unit normal from the two octahedral offsets.
+fn meshlet_normal(m: Meshlet, offset: vec2<u32>) -> vec3<f32> {
+    let base = vec2(
+        i32(extractBits(m.normals, 0u, 12u)) - MESHLET_NORMAL_BIAS,
+        i32(extractBits(m.normals, 12u, 12u)) - MESHLET_NORMAL_BIAS,
     );
+    let max_value = f32((1 << (MESHLET_NORMAL_BITS - 1u)) - 1);
+    let e = clamp(vec2<f32>(base + vec2<i32>(offset)) / max_value, vec2(-1.0), vec2(1.0));
+    var n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    let t = max(-n.z, 0.0);
+    n.x += select(t, -t, n.x >= 0.0);
+    n.y += select(t, -t, n.y >= 0.0);
+    return normalize(n);
 }
 
-// Where axis `axis` (0 = x, 1 = y, 2 = z) of local vertex `vertex` begins: x = index of
-// the first u32 in the position stream, y = bit within it. Read words x and x + 1 and
-// pass them to `meshlet_read_position_axis` (`cpu::positions::pack_positions` pads each
-// meshlet's part so x + 1 is always in bounds).
-fn meshlet_position_location(meshlet: Meshlet, vertex: u32, axis: u32) -> vec2<u32> {
-    let bits = meshlet_position_bits(meshlet);
-    let stride = bits.x + bits.y + bits.z;
-    let before = select(0u, bits.x, axis > 0u) + select(0u, bits.y, axis > 1u);
-    let bit = vertex * stride + before;
-    return vec2(meshlet.position_offset + bit / 32u, bit % 32u);
+// Texture coordinates from a vertex's UV word (at `meshlet_uv_word(m) + vertex`).
+fn meshlet_uv(uv_grid: vec4<f32>, word: u32) -> vec2<f32> {
+    return uv_grid.xy + vec2(f32(word & 0xffffu), f32(word >> 16u)) * uv_grid.zw;
 }
 
-// The quantised delta of one axis, from the two words at its location.
-fn meshlet_read_position_axis(meshlet: Meshlet, axis: u32, words: vec2<u32>, bit: u32) -> u32 {
-    let count = extractBits(meshlet.position_bits, axis * 8u, 8u);
-    return read_bits(words, bit, count);
+// Where triangle `triangle`'s record begins: x = payload word, y = bit in it. A record
+// fits in the two words x and x + 1.
+fn meshlet_triangle_location(m: Meshlet, mesh_flags: u32, triangle: u32) -> vec2<u32> {
+    let bit = triangle * meshlet_triangle_stride(m);
+    return vec2(meshlet_triangle_word(m, mesh_flags) + bit / 32u, bit % 32u);
 }
 
-// Mesh-space position from the per-axis deltas and the mesh grid (xyz origin, w step).
-// The integer add comes first so shared vertices decode to identical bits.
-fn meshlet_dequantize_position(meshlet: Meshlet, delta: vec3<u32>, grid: vec4<f32>) -> vec3<f32> {
-    let q = meshlet.position_min + delta;
-    return grid.xyz + vec3<f32>(q) * grid.w;
+// The three local vertex indices of triangle `triangle`, in winding order, from the two
+// words at its location. Corners are clamped into the meshlet, as the CPU decoder
+// clamps them, so no record, however damaged, reads another meshlet's vertices.
+fn meshlet_triangle(m: Meshlet, triangle: u32, words: vec2<u32>, bit: u32) -> vec3<u32> {
+    let widths = meshlet_triangle_field_bits(m);
+    let record = read_bits(words, bit, widths.x + 2u * widths.y);
+    let vertices = meshlet_vertex_count(m);
+    let triangles = max(meshlet_triangle_count(m), 1u);
+    let predicted = i32(((triangle + 1u) * vertices) / triangles);
+    let bias = 1 << (max(widths.x, 1u) - 1u);
+    let first = predicted + i32(extractBits(record, 0u, widths.x)) - bias;
+    let d1 = i32(extractBits(record, widths.x, widths.y));
+    let d2 = i32(extractBits(record, widths.x + widths.y, widths.y));
+    let last = i32(max(vertices, 1u)) - 1;
+    return vec3<u32>(clamp(vec3(first, first - d1, first - d2), vec3(0), vec3(last)));
 }
 
-// Where corner `corner` (0..2) of triangle `triangle` is: x = index of the u32 in the
-// index stream, y = byte within it.
-fn meshlet_index_location(meshlet: Meshlet, triangle: u32, corner: u32) -> vec2<u32> {
-    let byte = triangle * 3u + corner;
-    return vec2(meshlet.index_offset + byte / 4u, byte % 4u);
-}
-
-// The local vertex index stored at byte `byte` of `word`.
-fn meshlet_local_index(word: u32, byte: u32) -> u32 {
-    return unpack_u8(word, byte);
-}
-
-// The LOD cut: draw this meshlet when its own error is imperceptible and its parent's is
-// not. Spheres and errors are in mesh space; `world_from_mesh` and its largest axis
-// scale `scale` bring them to world space. Because parent errors and spheres are
-// monotonic along the DAG, exactly one level of each region passes.
-fn meshlet_in_lod_cut(
+// The LOD cut: draw a meshlet when its own error is imperceptible and its parent's is
+// not. Spheres (centre xyz, radius w) and errors are mesh space; `world_from_mesh` and
+// its largest axis scale `scale` bring them to world space. Because errors and spheres
+// grow monotonically up the DAG, exactly one level of each region passes.
+fn lod_cut(
     view: View,
     world_from_mesh: mat4x4<f32>,
     scale: f32,
-    meshlet: Meshlet,
+    own_sphere: vec4<f32>,
+    own_error: f32,
+    parent_sphere: vec4<f32>,
+    parent_error: f32,
     threshold_pixels: f32,
 ) -> bool {
-    let own_center = (world_from_mesh * vec4(meshlet.lod_sphere.xyz, 1.0)).xyz;
-    let own = project_error_to_pixels(
-        view, own_center, meshlet.lod_sphere.w * scale, meshlet.lod_error * scale);
-    let parent_center = (world_from_mesh * vec4(meshlet.parent_lod_sphere.xyz, 1.0)).xyz;
+    let own_center = (world_from_mesh * vec4(own_sphere.xyz, 1.0)).xyz;
+    let own = project_error_to_pixels(view, own_center, own_sphere.w * scale, own_error * scale);
+    if own > threshold_pixels {
+        return false;
+    }
+    // A root has no parent: it is drawn whenever its own error passes.
+    if parent_error >= F32_MAX {
+        return true;
+    }
+    let parent_center = (world_from_mesh * vec4(parent_sphere.xyz, 1.0)).xyz;
     let parent = project_error_to_pixels(
-        view, parent_center, meshlet.parent_lod_sphere.w * scale, meshlet.parent_lod_error * scale);
-    return own <= threshold_pixels && parent > threshold_pixels;
+        view, parent_center, parent_sphere.w * scale, parent_error * scale);
+    return parent > threshold_pixels;
 }

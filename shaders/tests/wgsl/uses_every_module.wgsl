@@ -4,8 +4,8 @@
 #import meshlight::math
 #import meshlight::view::{View, sphere_in_frustum, project_error_to_pixels, world_to_screen, position_from_depth, view_z_from_depth, pixel_to_uv}
 #import meshlight::octahedral::{pack_octahedral_normal, unpack_octahedral_normal}
-#import meshlight::meshlet::{Meshlet, Cluster, meshlet_position_location, meshlet_read_position_axis, meshlet_dequantize_position, meshlet_index_location, meshlet_local_index, meshlet_in_lod_cut}
-#import meshlight::instance::{Instance, instance_transform_point, instance_transform_normal, instance_transform_sphere, instance_max_scale}
+#import meshlight::meshlet::{Meshlet, MeshletGroup, Mesh, Cluster, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, meshlet_triangle_location, meshlet_triangle, meshlet_bounds, meshlet_level, lod_cut}
+#import meshlight::instance::{Instance, Material, instance_transform_point, instance_transform_normal, instance_transform_sphere, instance_max_scale}
 #import meshlight::visbuffer::{visbuffer_pack, visbuffer_depth, visbuffer_cluster, visbuffer_triangle, visbuffer_nearer, visbuffer_is_empty}
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_aabb, cluster_index, cluster_of_pixel, clusterable_intersects_cluster, z_slice_of_depth}
 
@@ -17,6 +17,9 @@
 @group(0) @binding(5) var<uniform> grid: ClusterGrid;
 @group(0) @binding(6) var<storage, read> objects: array<ClusterableObject>;
 @group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read> meshes: array<Mesh>;
+@group(0) @binding(9) var<storage, read> groups: array<MeshletGroup>;
+@group(0) @binding(10) var<storage, read> materials: array<Material>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -24,21 +27,29 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let meshlet = meshlets[cluster.meshlet];
     let instance = instances[cluster.instance];
 
-    var delta = vec3(0u);
+    let mesh = meshes[instance.mesh];
+    var offset = vec3(0u);
     for (var axis = 0u; axis < 3u; axis += 1u) {
-        let at = meshlet_position_location(meshlet, id.y, axis);
-        delta[axis] = meshlet_read_position_axis(meshlet, axis, vec2(words[at.x], words[at.x + 1u]), at.y);
+        let at = meshlet_vertex_field(meshlet, id.y, axis);
+        offset[axis] = math::read_bits(vec2(words[at.x], words[at.x + 1u]), at.y, at.z);
     }
-    let local = meshlet_dequantize_position(meshlet, delta, instance.position_grid);
+    let local = meshlet_position(meshlet, mesh.position_grid, offset);
+    let nx = meshlet_vertex_field(meshlet, id.y, 3u);
+    let ny = meshlet_vertex_field(meshlet, id.y, 4u);
+    let mesh_normal = meshlet_normal(meshlet, vec2(
+        math::read_bits(vec2(words[nx.x], words[nx.x + 1u]), nx.y, nx.z),
+        math::read_bits(vec2(words[ny.x], words[ny.x + 1u]), ny.y, ny.z)));
+    let uv = meshlet_uv(mesh.uv_grid, words[meshlet_uv_word(meshlet) + id.y]);
     let world = instance_transform_point(instance, local);
-    let corner = meshlet_index_location(meshlet, id.z, 1u);
-    let index = meshlet_local_index(words[corner.x], corner.y);
+    let at = meshlet_triangle_location(meshlet, mesh.flags, id.z);
+    let index = meshlet_triangle(meshlet, id.z, vec2(words[at.x], words[at.x + 1u]), at.y).y;
+    let group = groups[meshlet.source_group];
 
     let normal = unpack_octahedral_normal(pack_octahedral_normal(
         instance_transform_normal(instance, math::safe_normalize(world, vec3(0.0, 0.0, 1.0)))));
-    let sphere = instance_transform_sphere(instance, meshlet.bounding_sphere);
+    let sphere = instance_transform_sphere(instance, meshlet_bounds(meshlet));
     let visible = sphere_in_frustum(view, sphere.xyz, sphere.w)
-        && meshlet_in_lod_cut(view, instance.world_from_local, instance_max_scale(instance), meshlet, 1.0);
+        && lod_cut(view, instance.world_from_local, instance_max_scale(instance), group.lod_sphere, group.error, group.lod_sphere, group.error, 1.0);
     let screen = world_to_screen(view, world);
     let vis = visbuffer_pack(screen.z, id.x, index);
     let other = visbuffer_pack(0.5, 3u, 2u);
@@ -48,11 +59,11 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let back = position_from_depth(view, pixel_to_uv(view, screen.xy), screen.z);
 
     out[id.x] = vec4(
-        normal + back,
+        normal + back + mesh_normal + materials[instance.material].base_color.xyz + vec3(uv, f32(meshlet_level(meshlet))),
         f32(visible) + visbuffer_depth(vis) + f32(visbuffer_cluster(vis) + visbuffer_triangle(vis))
             + f32(visbuffer_nearer(vis, other)) + f32(visbuffer_is_empty(vis))
             + f32(cluster_index(grid, c)) + f32(hit) + f32(z_slice_of_depth(grid, screen.z))
-            + project_error_to_pixels(view, sphere.xyz, sphere.w, meshlet.lod_error)
+            + project_error_to_pixels(view, sphere.xyz, sphere.w, group.error)
             + math::saturate(math::PI) + f32(math::div_ceil(id.x, 64u)),
     );
 }

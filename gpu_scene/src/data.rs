@@ -1,0 +1,319 @@
+//! The CPU side of the GPU scene: what the buffers hold, and what changed since the last
+//! upload. CPU references of the passes read these vectors directly.
+
+use crate::error::SceneDataError;
+use glam::{Mat4, Vec3};
+use meshlight_scene::MeshletAsset;
+use meshlight_scene::asset::format::{GroupRecord, MeshletRecord, NO_GROUP};
+use meshlight_shaders::cpu::layout::{self, MESH_FLAG_UVS};
+use std::ops::Range;
+
+/// A mesh added with [`SceneData::add_mesh`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct MeshId(pub u32);
+
+/// An instance added with [`SceneData::add_instance`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct InstanceId(pub u32);
+
+/// A material: what shading needs to colour a surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Linear RGB albedo.
+    pub base_color: [f32; 3],
+}
+
+/// Element counts the buffers may not exceed. Each buffer is bound whole, so the binding
+/// limit of the device bounds it; [`Limits::for_device`] derives them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limits {
+    pub max_instances: u32,
+    pub max_meshlets: u32,
+    pub max_payload_words: u32,
+}
+
+impl Limits {
+    /// The counts whose buffers fit `max_storage_buffer_binding_size` bytes.
+    pub fn for_binding_size(bytes: u64) -> Self {
+        let count = |size: usize| (bytes / size as u64).min(u32::MAX as u64) as u32;
+        Self {
+            max_instances: count(size_of::<layout::Instance>()),
+            max_meshlets: count(size_of::<MeshletRecord>()),
+            // Two words of padding follow the payload (see `GpuScene`).
+            max_payload_words: count(4).saturating_sub(2),
+        }
+    }
+    pub fn for_device(limits: &wgpu::Limits) -> Self {
+        Self::for_binding_size(limits.max_storage_buffer_binding_size as u64)
+    }
+}
+
+impl Default for Limits {
+    /// wgpu's default binding limit (128 MiB).
+    fn default() -> Self {
+        Self::for_device(&wgpu::Limits::default())
+    }
+}
+
+/// Everything the GPU scene uploads, with change tracking.
+#[derive(Clone, Debug, Default)]
+pub struct SceneData {
+    pub meshes: Vec<layout::Mesh>,
+    /// Every asset's meshlet records; `data_offset`, `source_group` and `parent_group`
+    /// are rebased onto the shared payload and group arrays.
+    pub meshlets: Vec<MeshletRecord>,
+    pub groups: Vec<GroupRecord>,
+    pub payload: Vec<u32>,
+    pub instances: Vec<layout::Instance>,
+    pub materials: Vec<layout::Material>,
+    mesh_names: Vec<String>,
+    limits: Limits,
+    /// Instances refused because their transform was singular or not finite.
+    skipped_instances: u32,
+    /// Bumped whenever meshes are added (geometry buffers must be uploaded again).
+    pub(crate) geometry_version: u64,
+    pub(crate) materials_version: u64,
+    /// Instances changed since the last upload.
+    pub(crate) dirty_instances: Option<Range<usize>>,
+}
+
+impl SceneData {
+    pub fn new(limits: Limits) -> Self {
+        Self {
+            limits,
+            ..Default::default()
+        }
+    }
+
+    pub fn limits(&self) -> Limits {
+        self.limits
+    }
+
+    /// Appends an asset's meshlets, groups and payload to the shared arrays.
+    pub fn add_mesh(&mut self, name: &str, asset: &MeshletAsset) -> Result<MeshId, SceneDataError> {
+        let header = asset.header();
+        let meshlet_total = self.meshlets.len() as u64 + asset.meshlets().len() as u64;
+        check_limit(
+            "meshlets",
+            meshlet_total,
+            self.limits.max_meshlets as u64,
+            "load fewer or smaller meshes, or use a device with a larger storage binding",
+        )?;
+        let payload_total = self.payload.len() as u64 + asset.payload().len() as u64;
+        check_limit(
+            "payload words",
+            payload_total,
+            self.limits.max_payload_words as u64,
+            "load fewer or smaller meshes, or use a device with a larger storage binding",
+        )?;
+        if asset.meshlets().is_empty() {
+            return Err(SceneDataError::InvalidAsset {
+                name: name.to_string(),
+                reason: "it has no meshlets".into(),
+            });
+        }
+        let first_meshlet = self.meshlets.len() as u32;
+        let payload_base = self.payload.len() as u32;
+        let group_base = self.groups.len() as u32;
+        let rebase_group = |g: u32| {
+            if g == NO_GROUP {
+                NO_GROUP
+            } else {
+                g + group_base
+            }
+        };
+        self.meshlets
+            .extend(asset.meshlets().iter().map(|m| MeshletRecord {
+                data_offset: m.data_offset + payload_base,
+                source_group: rebase_group(m.source_group),
+                parent_group: rebase_group(m.parent_group),
+                ..*m
+            }));
+        // `first_child` and `child_count` still index the asset's own children section,
+        // which no pass reads; they are kept for inspection.
+        self.groups.extend_from_slice(asset.groups());
+        self.payload.extend_from_slice(asset.payload());
+        let min = Vec3::from(header.bounds_min);
+        let max = Vec3::from(header.bounds_max);
+        let center = (min + max) * 0.5;
+        // The decoded vertices lie within half a grid step of the bounds.
+        let radius = (max - min).length() * 0.5 + header.quant_step;
+        self.meshes.push(layout::Mesh {
+            position_grid: [
+                header.quant_origin[0],
+                header.quant_origin[1],
+                header.quant_origin[2],
+                header.quant_step,
+            ],
+            uv_grid: [
+                header.uv_min[0],
+                header.uv_min[1],
+                header.uv_step[0],
+                header.uv_step[1],
+            ],
+            bounding_sphere: [center.x, center.y, center.z, radius],
+            first_meshlet,
+            meshlet_count: asset.meshlets().len() as u32,
+            flags: if header.has_uvs() { MESH_FLAG_UVS } else { 0 },
+            level_count: header.level_count,
+        });
+        self.mesh_names.push(name.to_string());
+        self.geometry_version += 1;
+        Ok(MeshId(self.meshes.len() as u32 - 1))
+    }
+
+    pub fn mesh_name(&self, mesh: MeshId) -> Option<&str> {
+        self.mesh_names.get(mesh.0 as usize).map(String::as_str)
+    }
+
+    pub fn add_material(&mut self, material: Material) -> u32 {
+        let [r, g, b] = material.base_color;
+        self.materials.push(layout::Material {
+            base_color: [r, g, b, 1.0],
+        });
+        self.materials_version += 1;
+        self.materials.len() as u32 - 1
+    }
+
+    /// Places `mesh` with `world_from_local`. A transform that is singular or not finite
+    /// cannot be drawn (its normals and LOD scale are undefined): the instance is
+    /// skipped, counted in [`Self::skipped_instances`], and `Ok(None)` returned.
+    pub fn add_instance(
+        &mut self,
+        mesh: MeshId,
+        world_from_local: Mat4,
+        material: u32,
+    ) -> Result<Option<InstanceId>, SceneDataError> {
+        let info = *self
+            .meshes
+            .get(mesh.0 as usize)
+            .ok_or(SceneDataError::UnknownMesh(mesh.0))?;
+        if material as usize >= self.materials.len() {
+            return Err(SceneDataError::UnknownMaterial(material));
+        }
+        check_limit(
+            "instances",
+            self.instances.len() as u64 + 1,
+            self.limits.max_instances as u64,
+            "place fewer instances (the instance buffer is bound whole)",
+        )?;
+        if !drawable(world_from_local) {
+            self.skipped_instances += 1;
+            return Ok(None);
+        }
+        let m = world_from_local.to_cols_array_2d();
+        self.instances.push(layout::Instance {
+            world_from_local: m,
+            previous_world_from_local: m,
+            local_from_world: world_from_local.inverse().to_cols_array_2d(),
+            position_grid: info.position_grid,
+            material,
+            first_meshlet: info.first_meshlet,
+            meshlet_count: info.meshlet_count,
+            mesh: mesh.0,
+        });
+        let i = self.instances.len() - 1;
+        self.mark_instance(i);
+        Ok(Some(InstanceId(i as u32)))
+    }
+
+    /// Moves an instance; its previous transform becomes the one it had. A singular or
+    /// non-finite transform is refused (the instance keeps its place) and counted.
+    pub fn set_transform(
+        &mut self,
+        id: InstanceId,
+        world_from_local: Mat4,
+    ) -> Result<bool, SceneDataError> {
+        let i = id.0 as usize;
+        let instance = self
+            .instances
+            .get_mut(i)
+            .ok_or(SceneDataError::UnknownInstance(id.0))?;
+        if !drawable(world_from_local) {
+            self.skipped_instances += 1;
+            return Ok(false);
+        }
+        instance.previous_world_from_local = instance.world_from_local;
+        instance.world_from_local = world_from_local.to_cols_array_2d();
+        instance.local_from_world = world_from_local.inverse().to_cols_array_2d();
+        self.mark_instance(i);
+        Ok(true)
+    }
+
+    /// Instances refused for a singular or non-finite transform.
+    pub fn skipped_instances(&self) -> u32 {
+        self.skipped_instances
+    }
+
+    /// Meshlets over all instances: the clusters `fill_clusters` writes for a view that
+    /// sees everything.
+    pub fn total_clusters(&self) -> u64 {
+        self.instances.iter().map(|i| i.meshlet_count as u64).sum()
+    }
+
+    /// LOD-0 triangles over all instances (the "source triangles" of the scene).
+    pub fn source_triangles(&self) -> u64 {
+        let per_mesh: Vec<u64> = self
+            .meshes
+            .iter()
+            .map(|m| {
+                let range = m.first_meshlet as usize..(m.first_meshlet + m.meshlet_count) as usize;
+                self.meshlets[range]
+                    .iter()
+                    .filter(|r| r.level() == 0)
+                    .map(|r| r.triangle_count() as u64)
+                    .sum()
+            })
+            .collect();
+        self.instances
+            .iter()
+            .map(|i| per_mesh[i.mesh as usize])
+            .sum()
+    }
+
+    /// A meshlet's own LOD sphere and error (its source group's; its bounds and 0 at
+    /// LOD 0), as the shaders find them.
+    pub fn own_lod(&self, meshlet: &MeshletRecord) -> ([f32; 4], f32) {
+        match self.groups.get(meshlet.source_group as usize) {
+            Some(g) => (g.lod_sphere, g.error),
+            None => (meshlet.bounds, 0.0),
+        }
+    }
+
+    /// A meshlet's parent LOD sphere and error (`f32::MAX` for roots).
+    pub fn parent_lod(&self, meshlet: &MeshletRecord) -> ([f32; 4], f32) {
+        match self.groups.get(meshlet.parent_group as usize) {
+            Some(g) => (g.lod_sphere, g.error),
+            None => ([0.0; 4], f32::MAX),
+        }
+    }
+
+    fn mark_instance(&mut self, i: usize) {
+        self.dirty_instances = Some(match self.dirty_instances.take() {
+            Some(r) => r.start.min(i)..r.end.max(i + 1),
+            None => i..i + 1,
+        });
+    }
+}
+
+/// A transform that can be drawn: finite, with a determinant far from zero.
+pub fn drawable(m: Mat4) -> bool {
+    m.is_finite() && m.determinant().abs() > 1e-20 && m.inverse().is_finite()
+}
+
+fn check_limit(
+    what: &'static str,
+    requested: u64,
+    limit: u64,
+    advice: &'static str,
+) -> Result<(), SceneDataError> {
+    if requested > limit {
+        return Err(SceneDataError::Limit {
+            what,
+            requested,
+            limit,
+            advice,
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,207 @@
+//! The GPU buffers of a [`SceneData`], uploaded only where something changed, and their
+//! declaration as imported graph resources.
+
+use crate::data::SceneData;
+use crate::names;
+use meshlight_graph::{Buffer, BufferDesc, Element, GpuContext, GraphBuilder, Handle, Imports};
+use meshlight_scene::asset::format::{GroupRecord, MeshletRecord};
+use meshlight_shaders::cpu::layout;
+
+const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_DST)
+    .union(wgpu::BufferUsages::COPY_SRC);
+
+/// Element types of the scene buffers, as graph dumps name them.
+pub mod elements {
+    use super::*;
+    pub const MESHLET: Element = Element::named("Meshlet", size_of::<MeshletRecord>() as u32);
+    pub const GROUP: Element = Element::named("MeshletGroup", size_of::<GroupRecord>() as u32);
+    pub const MESH: Element = Element::named("Mesh", size_of::<layout::Mesh>() as u32);
+    pub const INSTANCE: Element = Element::named("Instance", size_of::<layout::Instance>() as u32);
+    pub const MATERIAL: Element = Element::named("Material", size_of::<layout::Material>() as u32);
+    pub const CLUSTER: Element = Element::named("Cluster", size_of::<layout::Cluster>() as u32);
+    pub const VIEW: Element = Element::named("View", size_of::<layout::View>() as u32);
+}
+
+/// The graph handles of the scene buffers, returned by [`GpuScene::import`].
+#[derive(Clone, Copy, Debug)]
+pub struct SceneHandles {
+    pub meshlets: Handle<Buffer>,
+    pub groups: Handle<Buffer>,
+    pub payload: Handle<Buffer>,
+    pub meshes: Handle<Buffer>,
+    pub instances: Handle<Buffer>,
+    pub materials: Handle<Buffer>,
+}
+
+struct SceneBuffer {
+    name: &'static str,
+    element: Element,
+    buffer: wgpu::Buffer,
+    /// Elements the buffer can hold.
+    capacity: u64,
+}
+
+/// Bytes written by one [`GpuScene::upload`], to show that unchanged data stays put.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct UploadStats {
+    pub bytes: u64,
+    /// Buffers created (first upload, or a buffer outgrown).
+    pub created: u32,
+}
+
+/// The scene's GPU buffers. Create once, then call [`Self::upload`] whenever the
+/// [`SceneData`] may have changed; it writes only what did.
+pub struct GpuScene {
+    buffers: Vec<SceneBuffer>,
+    geometry_version: u64,
+    materials_version: u64,
+}
+
+/// Every buffer holds at least one element (wgpu refuses empty bindings); the payload
+/// carries two words of padding so a two-word field read never leaves it.
+fn contents(data: &SceneData) -> [(&'static str, Element, Vec<u8>); 6] {
+    let mut payload = data.payload.clone();
+    payload.extend([0, 0]);
+    [
+        (
+            names::MESHLETS,
+            elements::MESHLET,
+            bytemuck::cast_slice(&data.meshlets).to_vec(),
+        ),
+        (
+            names::GROUPS,
+            elements::GROUP,
+            bytemuck::cast_slice(&data.groups).to_vec(),
+        ),
+        (
+            names::PAYLOAD,
+            Element::U32,
+            bytemuck::cast_slice(&payload).to_vec(),
+        ),
+        (
+            names::MESHES,
+            elements::MESH,
+            bytemuck::cast_slice(&data.meshes).to_vec(),
+        ),
+        (
+            names::INSTANCES,
+            elements::INSTANCE,
+            bytemuck::cast_slice(&data.instances).to_vec(),
+        ),
+        (
+            names::MATERIALS,
+            elements::MATERIAL,
+            bytemuck::cast_slice(&data.materials).to_vec(),
+        ),
+    ]
+}
+
+impl GpuScene {
+    /// Creates the buffers and uploads everything.
+    pub fn new(gpu: &GpuContext, data: &mut SceneData) -> Self {
+        let buffers = contents(data)
+            .into_iter()
+            .map(|(name, element, bytes)| create(gpu, name, element, &bytes))
+            .collect();
+        data.dirty_instances = None;
+        Self {
+            buffers,
+            geometry_version: data.geometry_version,
+            materials_version: data.materials_version,
+        }
+    }
+
+    /// Writes what changed since the last upload: geometry when meshes were added, the
+    /// dirty instance range, materials. A buffer too small is replaced (then the graph
+    /// must be recompiled with the new [`Self::import`] sizes).
+    pub fn upload(&mut self, gpu: &GpuContext, data: &mut SceneData) -> UploadStats {
+        let mut stats = UploadStats::default();
+        let geometry = data.geometry_version != self.geometry_version;
+        let materials = data.materials_version != self.materials_version;
+        let dirty = data.dirty_instances.take();
+        for (i, (name, element, bytes)) in contents(data).into_iter().enumerate() {
+            let changed = match name {
+                names::INSTANCES => dirty.is_some(),
+                names::MATERIALS => materials,
+                _ => geometry,
+            };
+            if !changed {
+                continue;
+            }
+            let slot = &mut self.buffers[i];
+            let elements = (bytes.len() / element.size as usize).max(1) as u64;
+            if elements > slot.capacity {
+                *slot = create(gpu, name, element, &bytes);
+                stats.created += 1;
+                stats.bytes += bytes.len() as u64;
+                continue;
+            }
+            let range = match (name, &dirty) {
+                (names::INSTANCES, Some(r)) => {
+                    let size = element.size as usize;
+                    r.start * size..r.end * size
+                }
+                _ => 0..bytes.len(),
+            };
+            if !range.is_empty() {
+                gpu.queue
+                    .write_buffer(&slot.buffer, range.start as u64, &bytes[range.clone()]);
+                stats.bytes += range.len() as u64;
+            }
+        }
+        self.geometry_version = data.geometry_version;
+        self.materials_version = data.materials_version;
+        stats
+    }
+
+    pub fn buffer(&self, name: &str) -> Option<&wgpu::Buffer> {
+        self.buffers
+            .iter()
+            .find(|b| b.name == name)
+            .map(|b| &b.buffer)
+    }
+
+    /// Declares the buffers as imported resources of a graph.
+    pub fn import(&self, g: &mut GraphBuilder) -> SceneHandles {
+        let mut h = |name: &str| {
+            let b = self
+                .buffers
+                .iter()
+                .find(|b| b.name == name)
+                .expect("every name has a buffer");
+            g.import_buffer(
+                name,
+                BufferDesc::array(b.element.clone(), b.capacity),
+                USAGE,
+            )
+        };
+        SceneHandles {
+            meshlets: h(names::MESHLETS),
+            groups: h(names::GROUPS),
+            payload: h(names::PAYLOAD),
+            meshes: h(names::MESHES),
+            instances: h(names::INSTANCES),
+            materials: h(names::MATERIALS),
+        }
+    }
+
+    /// The buffers for [`meshlight_graph::Executor::execute`].
+    pub fn imports(&self) -> Imports {
+        self.buffers.iter().fold(Imports::new(), |imports, b| {
+            imports.buffer(b.name, &b.buffer)
+        })
+    }
+}
+
+fn create(gpu: &GpuContext, name: &'static str, element: Element, bytes: &[u8]) -> SceneBuffer {
+    let capacity = (bytes.len() / element.size as usize).max(1) as u64;
+    let mut padded = bytes.to_vec();
+    padded.resize((capacity * element.size as u64) as usize, 0);
+    SceneBuffer {
+        name,
+        element,
+        buffer: gpu.buffer_with_data(name, &padded, USAGE),
+        capacity,
+    }
+}

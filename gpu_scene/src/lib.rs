@@ -1,0 +1,39 @@
+//! The GPU scene: every loaded meshlet asset packed into shared buffers, the instances
+//! that place them, a material table, and the view.
+//!
+//! Passes never see an asset file. They read six imported graph buffers, named by the
+//! constants in [`names`], whose element layouts are the shared WGSL structs:
+//!
+//! | buffer          | WGSL                          | holds |
+//! |-----------------|-------------------------------|-------|
+//! | `meshlets`      | `array<meshlet::Meshlet>`     | every asset's meshlet records, offsets rebased |
+//! | `meshlet_groups`| `array<meshlet::MeshletGroup>`| every asset's simplification groups |
+//! | `payload`       | `array<u32>`                  | packed vertices, UVs and triangles |
+//! | `meshes`        | `array<meshlet::Mesh>`        | per asset: grids, bounds, meshlet range |
+//! | `instances`     | `array<instance::Instance>`   | transforms, material, mesh, meshlet range |
+//! | `materials`     | `array<instance::Material>`   | base colour |
+//!
+//! [`SceneData`] is the CPU side (what CPU references read); [`GpuScene`] owns the
+//! buffers and re-uploads only what changed. [`view`] builds the per-frame `View`.
+
+pub mod data;
+pub mod error;
+pub mod gpu;
+pub mod view;
+
+pub use data::{InstanceId, Material, MeshId, SceneData};
+pub use error::SceneDataError;
+pub use gpu::GpuScene;
+pub use view::{Camera, Projection};
+
+/// Names of the imported buffers (and of the pass slots that read them).
+pub mod names {
+    pub const MESHLETS: &str = "meshlets";
+    pub const GROUPS: &str = "meshlet_groups";
+    pub const PAYLOAD: &str = "payload";
+    pub const MESHES: &str = "meshes";
+    pub const INSTANCES: &str = "instances";
+    pub const MATERIALS: &str = "materials";
+    /// The frame input holding the `View` bytes.
+    pub const VIEW: &str = "view";
+}

@@ -1,0 +1,124 @@
+//! The camera and the per-frame `View` every pass binds.
+
+use glam::{Mat4, Vec3, Vec4};
+use meshlight_shaders::cpu::layout::View;
+
+/// How the camera projects; both are reverse-Z (depth 1 at the near plane).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Infinite far plane; `fov_y` in radians.
+    Perspective { fov_y: f32, near: f32 },
+    /// `height` world units fill the viewport vertically; depth spans near..far.
+    Orthographic { height: f32, near: f32, far: f32 },
+}
+
+/// A camera looking from `position` towards `target`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    pub projection: Projection,
+}
+
+impl Camera {
+    pub fn perspective(position: Vec3, target: Vec3, fov_y: f32, near: f32) -> Self {
+        Self {
+            position,
+            target,
+            up: Vec3::Y,
+            projection: Projection::Perspective { fov_y, near },
+        }
+    }
+
+    pub fn view_matrix(&self) -> Mat4 {
+        glam::camera::rh::view::look_at_mat4(self.position, self.target, self.up)
+    }
+
+    pub fn projection_matrix(&self, viewport: [u32; 2]) -> Mat4 {
+        let aspect = viewport[0].max(1) as f32 / viewport[1].max(1) as f32;
+        match self.projection {
+            Projection::Perspective { fov_y, near } => {
+                glam::camera::rh::proj::directx::perspective_infinite_reverse(fov_y, aspect, near)
+            }
+            Projection::Orthographic { height, near, far } => {
+                let (h, w) = (height * 0.5, height * 0.5 * aspect);
+                // Swapping near and far maps the near plane to depth 1.
+                glam::camera::rh::proj::directx::orthographic(-w, w, -h, h, far, near)
+            }
+        }
+    }
+
+    fn near(&self) -> f32 {
+        match self.projection {
+            Projection::Perspective { near, .. } | Projection::Orthographic { near, .. } => near,
+        }
+    }
+
+    /// The view of this camera for a viewport of `viewport` pixels. `previous` is last
+    /// frame's world-to-clip (this frame's when there is none).
+    pub fn view(&self, viewport: [u32; 2], frame_index: u32, previous: Option<Mat4>) -> View {
+        let view = self.view_matrix();
+        let projection = self.projection_matrix(viewport);
+        let view_projection = projection * view;
+        let size = [viewport[0].max(1) as f32, viewport[1].max(1) as f32];
+        View {
+            view: view.to_cols_array_2d(),
+            projection: projection.to_cols_array_2d(),
+            view_projection: view_projection.to_cols_array_2d(),
+            inverse_view: view.inverse().to_cols_array_2d(),
+            inverse_projection: projection.inverse().to_cols_array_2d(),
+            inverse_view_projection: view_projection.inverse().to_cols_array_2d(),
+            previous_view_projection: previous.unwrap_or(view_projection).to_cols_array_2d(),
+            frustum: frustum_planes(view_projection),
+            camera_position: self.position.to_array(),
+            near: self.near(),
+            viewport_size: size,
+            inverse_viewport_size: [1.0 / size[0], 1.0 / size[1]],
+            lod_scale: 0.5 * projection.y_axis.y * size[1],
+            frame_index,
+            padding: [0; 2],
+        }
+    }
+}
+
+/// World-space planes (inward unit normal, distance) of a reverse-Z world-to-clip
+/// matrix: left, right, bottom, top, near, far. The far plane of an infinite projection
+/// has no normal and becomes (0, 0, 0, 1), which keeps every point.
+pub fn frustum_planes(view_projection: Mat4) -> [[f32; 4]; 6] {
+    let m = view_projection.transpose();
+    let (r0, r1, r2, r3) = (m.x_axis, m.y_axis, m.z_axis, m.w_axis);
+    // Inside: -w <= x <= w, -w <= y <= w, 0 <= z <= w.
+    [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r3 - r2, r2].map(|p: Vec4| {
+        let len = p.truncate().length();
+        if len > 1e-12 {
+            (p / len).to_array()
+        } else {
+            [0.0, 0.0, 0.0, 1.0]
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn planes_keep_what_the_projection_shows_and_reject_the_rest() {
+        let camera = Camera::perspective(Vec3::new(0.0, 1.0, 5.0), Vec3::ZERO, 1.0, 0.1);
+        let view = camera.view([1280, 720], 0, None);
+        let inside = |p: Vec3| {
+            view.frustum
+                .iter()
+                .all(|pl| Vec3::from_slice(&pl[..3]).dot(p) + pl[3] >= 0.0)
+        };
+        assert!(inside(Vec3::ZERO));
+        assert!(inside(Vec3::new(0.0, 0.0, -1000.0)), "no far plane");
+        assert!(!inside(Vec3::new(0.0, 1.0, 6.0)), "behind the camera");
+        assert!(!inside(Vec3::new(100.0, 0.0, 0.0)), "far to the right");
+        assert_eq!(view.frustum[5], [0.0, 0.0, 0.0, 1.0]);
+        // The projected centre lands mid-screen at depth in (0, 1].
+        let clip = Mat4::from_cols_array_2d(&view.view_projection) * camera.target.extend(1.0);
+        assert!((clip.x / clip.w).abs() < 1e-6 && clip.z / clip.w > 0.0 && clip.z / clip.w <= 1.0);
+    }
+}

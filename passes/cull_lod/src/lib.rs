@@ -1,0 +1,1 @@
+//! Stage `cull_lod` (being built).

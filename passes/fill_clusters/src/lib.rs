@@ -1,0 +1,1 @@
+//! Stage `fill_clusters` (being built).

@@ -1,0 +1,1 @@
+//! Stage `hw_raster` (being built).

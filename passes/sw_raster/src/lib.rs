@@ -1,0 +1,1 @@
+//! Stage `sw_raster` (being built).
