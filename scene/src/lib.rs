@@ -8,6 +8,7 @@
 pub mod asset;
 pub mod bench;
 pub mod bounds;
+pub mod cache;
 pub mod cli;
 pub mod compress;
 pub mod dag;

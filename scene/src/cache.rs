@@ -1,0 +1,192 @@
+//! Baked assets cached on disk, so that rendering the same mesh twice bakes it once.
+//!
+//! The key is an XXH3 hash of everything the asset depends on: the source file's bytes
+//! (or the procedural mesh's segment count), the build options, the asset format
+//! version and this crate's version (a builder change must not serve stale assets).
+//! A cached file is loaded with the same validation as any asset; one that fails it is
+//! baked again and replaced, never used.
+
+use std::path::{Path, PathBuf};
+
+use xxhash_rust::xxh3::xxh3_64;
+
+use crate::asset::MeshletAsset;
+use crate::asset::format::VERSION;
+use crate::dag::LevelProgress;
+use crate::error::SceneError;
+use crate::load::load_mesh;
+use crate::mesh::Mesh;
+use crate::pipeline::{BuildOptions, build_asset};
+use crate::procedural::procedural_mesh;
+
+/// Environment variable naming the cache directory (default: the user cache directory).
+pub const CACHE_DIR_ENV: &str = "MESHLIGHT_CACHE_DIR";
+
+/// What to bake: a mesh file or the procedural mesh.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Source {
+    File(PathBuf),
+    Procedural { segments: u32 },
+}
+
+impl Source {
+    pub fn name(&self) -> String {
+        match self {
+            Source::File(p) => p.display().to_string(),
+            Source::Procedural { segments } => format!("procedural mesh ({segments} segments)"),
+        }
+    }
+}
+
+/// Whether [`load_or_bake`] found the asset in the cache.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    Hit,
+    /// Baked and written to the cache.
+    Baked,
+    /// Baked; the cache could not be written (the reason was logged).
+    BakedUncached,
+}
+
+/// The cache directory: `$MESHLIGHT_CACHE_DIR`, else `$XDG_CACHE_HOME/meshlight`, else
+/// `~/.cache/meshlight`, else a directory under the system temporary directory.
+pub fn cache_dir() -> PathBuf {
+    if let Some(dir) = std::env::var_os(CACHE_DIR_ENV) {
+        return PathBuf::from(dir);
+    }
+    if let Some(dir) = std::env::var_os("XDG_CACHE_HOME") {
+        return PathBuf::from(dir).join("meshlight");
+    }
+    match std::env::var_os("HOME") {
+        Some(home) => PathBuf::from(home).join(".cache").join("meshlight"),
+        None => std::env::temp_dir().join("meshlight-cache"),
+    }
+}
+
+/// The cache key of a source baked with `options`; reads the source file.
+pub fn key(source: &Source, options: &BuildOptions) -> Result<u64, SceneError> {
+    let mut bytes = match source {
+        Source::File(path) => std::fs::read(path).map_err(|e| SceneError::io(path, e))?,
+        Source::Procedural { segments } => format!("procedural:{segments}").into_bytes(),
+    };
+    bytes.extend(
+        format!(
+            "|{:?}|{}|format {VERSION}|builder {}",
+            options.grouping,
+            options.position_bits,
+            env!("CARGO_PKG_VERSION")
+        )
+        .into_bytes(),
+    );
+    Ok(xxh3_64(&bytes))
+}
+
+/// The asset of `source` from the cache in `dir`, or baked (with `progress` after each
+/// level) and stored there.
+pub fn load_or_bake(
+    source: &Source,
+    options: &BuildOptions,
+    dir: &Path,
+    progress: &mut dyn FnMut(LevelProgress),
+) -> Result<(MeshletAsset, Outcome), SceneError> {
+    let path = dir.join(format!("{:016x}.mlasset", key(source, options)?));
+    if path.exists() {
+        match MeshletAsset::load(&path) {
+            Ok(asset) => return Ok((asset, Outcome::Hit)),
+            Err(e) => log::warn!("cached asset {} is unusable ({e}); baking again", path.display()),
+        }
+    }
+    let mesh = load_source(source)?;
+    let built = build_asset(&mesh, options, progress)?;
+    let outcome = match store(&built.asset, dir, &path) {
+        Ok(()) => Outcome::Baked,
+        Err(e) => {
+            log::warn!("could not cache the baked asset in {}: {e}", dir.display());
+            Outcome::BakedUncached
+        }
+    };
+    Ok((built.asset, outcome))
+}
+
+fn load_source(source: &Source) -> Result<Mesh, SceneError> {
+    match source {
+        Source::File(path) => load_mesh(path),
+        Source::Procedural { segments } => Ok(procedural_mesh(*segments)),
+    }
+}
+
+/// Writes through a temporary file and a rename, so a concurrent reader or an
+/// interrupted write never leaves a half-written asset under the final name.
+fn store(asset: &MeshletAsset, dir: &Path, path: &Path) -> Result<(), SceneError> {
+    std::fs::create_dir_all(dir).map_err(|e| SceneError::io(dir, e))?;
+    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
+    asset.save(&tmp)?;
+    std::fs::rename(&tmp, path).map_err(|e| SceneError::io(path, e))
+}
+
+/// A progress bar for bakes started from the command line: a spinner with the level
+/// and the triangles left (the total is unknown until the mesh is loaded). Hidden when
+/// standard error is not a terminal.
+pub struct BakeProgress {
+    bar: indicatif::ProgressBar,
+}
+
+impl BakeProgress {
+    pub fn new(name: &str) -> Self {
+        let bar = indicatif::ProgressBar::new_spinner();
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} baking {prefix}: {msg} ({elapsed})")
+                .expect("valid template"),
+        );
+        bar.set_prefix(name.to_string());
+        bar.enable_steady_tick(std::time::Duration::from_millis(120));
+        Self { bar }
+    }
+
+    pub fn report(&self, p: LevelProgress) {
+        self.bar.set_message(format!(
+            "level {}, {} clusters, {} triangles left",
+            p.level, p.active_clusters, p.active_triangles
+        ));
+    }
+}
+
+impl Drop for BakeProgress {
+    fn drop(&mut self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_second_load_hits_and_a_corrupt_entry_is_rebaked() {
+        let dir = std::env::temp_dir().join(format!("meshlight-cache-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let source = Source::Procedural { segments: 6 };
+        let options = BuildOptions::default();
+        let (a, first) = load_or_bake(&source, &options, &dir, &mut |_| {}).unwrap();
+        assert_eq!(first, Outcome::Baked);
+        let (b, second) = load_or_bake(&source, &options, &dir, &mut |_| {}).unwrap();
+        assert_eq!(second, Outcome::Hit);
+        assert_eq!(a.bytes(), b.bytes());
+        // Other options are another key.
+        let other = BuildOptions {
+            grouping: crate::grouping::Grouping::Partition,
+            ..options
+        };
+        assert_ne!(key(&source, &options).unwrap(), key(&source, &other).unwrap());
+        // A damaged cache entry is not used: it is baked again and replaced.
+        let path = dir.join(format!("{:016x}.mlasset", key(&source, &options).unwrap()));
+        let mut bytes = std::fs::read(&path).unwrap();
+        let n = bytes.len();
+        bytes[n - 5] ^= 0xff;
+        std::fs::write(&path, &bytes).unwrap();
+        let (c, third) = load_or_bake(&source, &options, &dir, &mut |_| {}).unwrap();
+        assert_eq!(third, Outcome::Baked);
+        assert_eq!(c.bytes(), a.bytes());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
