@@ -44,7 +44,7 @@ impl Limits {
         }
     }
     pub fn for_device(limits: &wgpu::Limits) -> Self {
-        Self::for_binding_size(limits.max_storage_buffer_binding_size as u64)
+        Self::for_binding_size(limits.max_storage_buffer_binding_size)
     }
 }
 

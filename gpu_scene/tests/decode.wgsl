@@ -1,0 +1,44 @@
+// Decodes every vertex and triangle of every meshlet with the shared meshlet module,
+// one thread per (meshlet, vertex) and per (meshlet, triangle), for comparison with the
+// asset's CPU decoder.
+
+#import meshlight::math::read_bits
+#import meshlight::meshlet::{Meshlet, Mesh, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, meshlet_triangle_location, meshlet_triangle, MESH_FLAG_UVS}
+
+@group(0) @binding(0) var<storage, read> meshlets: array<Meshlet>;
+@group(0) @binding(1) var<storage, read> payload: array<u32>;
+@group(0) @binding(2) var<storage, read> meshes: array<Mesh>;
+// Per meshlet × 255 vertices: position xyz + uv.x, normal xyz + uv.y.
+@group(0) @binding(3) var<storage, read_write> vertices: array<vec4<f32>>;
+// Per meshlet × 128 triangles: the three local indices.
+@group(0) @binding(4) var<storage, read_write> triangles: array<vec4<u32>>;
+
+fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
+    let at = meshlet_vertex_field(m, vertex, f);
+    return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
+}
+
+@compute @workgroup_size(128)
+fn decode(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    let index = wg.x + wg.y * 65535u;
+    if index >= arrayLength(&meshlets) {
+        return;
+    }
+    let m = meshlets[index];
+    let mesh = meshes[0];
+    for (var v = t; v < meshlet_vertex_count(m); v += 128u) {
+        let p = meshlet_position(m, mesh.position_grid, vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u)));
+        let n = meshlet_normal(m, vec2(field(m, v, 3u), field(m, v, 4u)));
+        var uv = vec2(0.0);
+        if (mesh.flags & MESH_FLAG_UVS) != 0u {
+            uv = meshlet_uv(mesh.uv_grid, payload[meshlet_uv_word(m) + v]);
+        }
+        vertices[(index * 255u + v) * 2u] = vec4(p, uv.x);
+        vertices[(index * 255u + v) * 2u + 1u] = vec4(n, uv.y);
+    }
+    if t < meshlet_triangle_count(m) {
+        let at = meshlet_triangle_location(m, mesh.flags, t);
+        let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+        triangles[index * 128u + t] = vec4(c, 1u);
+    }
+}

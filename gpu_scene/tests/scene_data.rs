@@ -1,0 +1,144 @@
+//! Packing several assets, instance validation, limits, and uploads of only what changed.
+
+use glam::{Mat4, Vec3};
+use meshlight_gpu_scene::data::Limits;
+use meshlight_gpu_scene::{GpuScene, Material, MeshId, SceneData, SceneDataError};
+use meshlight_graph::GpuContext;
+use meshlight_scene::asset::format::NO_GROUP;
+use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
+
+fn asset(segments: u32) -> MeshletAsset {
+    build_asset(
+        &procedural_mesh(segments),
+        &BuildOptions::default(),
+        &mut |_| {},
+    )
+    .unwrap()
+    .asset
+}
+
+#[test]
+fn a_second_asset_is_rebased_onto_the_shared_arrays() {
+    let (a, b) = (asset(6), asset(8));
+    let mut data = SceneData::new(Limits::default());
+    let ma = data.add_mesh("a", &a).unwrap();
+    let mb = data.add_mesh("b", &b).unwrap();
+    assert_eq!((ma, mb), (MeshId(0), MeshId(1)));
+    let (na, ga, pa) = (
+        a.meshlets().len(),
+        a.groups().len(),
+        a.payload().len() as u32,
+    );
+    assert_eq!(data.meshes[1].first_meshlet as usize, na);
+    for (i, m) in b.meshlets().iter().enumerate() {
+        let r = data.meshlets[na + i];
+        assert_eq!(r.data_offset, m.data_offset + pa);
+        for (got, was) in [
+            (r.source_group, m.source_group),
+            (r.parent_group, m.parent_group),
+        ] {
+            let want = if was == NO_GROUP {
+                NO_GROUP
+            } else {
+                was + ga as u32
+            };
+            assert_eq!(got, want);
+        }
+        // The payload words the rebased offset points at are the asset's own.
+        let at = r.data_offset as usize;
+        assert_eq!(data.payload[at], b.payload()[m.data_offset as usize]);
+    }
+}
+
+#[test]
+fn singular_and_nan_transforms_are_skipped_and_counted() {
+    let mut data = SceneData::new(Limits::default());
+    let mesh = data.add_mesh("a", &asset(6)).unwrap();
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let ok = data
+        .add_instance(mesh, Mat4::from_translation(Vec3::X), material)
+        .unwrap();
+    assert!(ok.is_some());
+    assert_eq!(
+        data.add_instance(mesh, Mat4::from_scale(Vec3::new(1.0, 0.0, 1.0)), material),
+        Ok(None)
+    );
+    let mut nan = Mat4::IDENTITY;
+    nan.x_axis.x = f32::NAN;
+    assert_eq!(data.add_instance(mesh, nan, material), Ok(None));
+    assert_eq!(data.instances.len(), 1);
+    assert_eq!(data.skipped_instances(), 2);
+    assert_eq!(data.set_transform(ok.unwrap(), Mat4::ZERO), Ok(false));
+    assert_eq!(data.skipped_instances(), 3);
+    assert_eq!(
+        data.add_instance(MeshId(7), Mat4::IDENTITY, material),
+        Err(SceneDataError::UnknownMesh(7))
+    );
+}
+
+#[test]
+fn more_instances_than_the_buffer_holds_is_an_error_naming_the_limit() {
+    let limits = Limits {
+        max_instances: 2,
+        ..Limits::default()
+    };
+    let mut data = SceneData::new(limits);
+    let mesh = data.add_mesh("a", &asset(6)).unwrap();
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    for _ in 0..2 {
+        data.add_instance(mesh, Mat4::IDENTITY, material).unwrap();
+    }
+    let err = data
+        .add_instance(mesh, Mat4::IDENTITY, material)
+        .unwrap_err();
+    assert!(
+        matches!(err, SceneDataError::Limit { limit: 2, .. }),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("limit of 2"), "{err}");
+}
+
+#[test]
+fn uploads_write_only_what_changed() {
+    let gpu = GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"));
+    let mut data = SceneData::new(Limits::default());
+    let mesh = data.add_mesh("a", &asset(6)).unwrap();
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let ids: Vec<_> = (0..10)
+        .map(|i| {
+            data.add_instance(mesh, Mat4::from_translation(Vec3::X * i as f32), material)
+                .unwrap()
+                .unwrap()
+        })
+        .collect();
+    let mut scene = GpuScene::new(&gpu, &mut data);
+    assert_eq!(scene.upload(&gpu, &mut data).bytes, 0, "nothing changed");
+    data.set_transform(ids[3], Mat4::from_translation(Vec3::Y))
+        .unwrap();
+    data.set_transform(ids[4], Mat4::from_translation(Vec3::Y))
+        .unwrap();
+    let instance = size_of::<meshlight_shaders::cpu::layout::Instance>() as u64;
+    let stats = scene.upload(&gpu, &mut data);
+    assert_eq!((stats.bytes, stats.created), (2 * instance, 0));
+    // The GPU copy holds the new transform and the previous one.
+    let buffer = scene.buffer("instances").unwrap();
+    let bytes = gpu.read_buffer(buffer, 3 * instance, instance).unwrap();
+    let got: meshlight_shaders::cpu::layout::Instance = bytemuck::pod_read_unaligned(&bytes);
+    assert_eq!(
+        got.world_from_local,
+        Mat4::from_translation(Vec3::Y).to_cols_array_2d()
+    );
+    assert_eq!(
+        got.previous_world_from_local,
+        Mat4::from_translation(Vec3::X * 3.0).to_cols_array_2d()
+    );
+    // A new instance outgrows the buffer: it is recreated.
+    data.add_instance(mesh, Mat4::IDENTITY, material).unwrap();
+    assert_eq!(scene.upload(&gpu, &mut data).created, 1);
+}
