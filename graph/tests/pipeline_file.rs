@@ -160,3 +160,67 @@ fn bad_parameters_and_syntax_are_typed_errors() {
         other => panic!("{:?}", other.err()),
     }
 }
+
+/// `[params]` overridden by the caller reach buffer counts, texture sizes and `"$name"`
+/// pass parameters; a misspelt override or reference is an error naming it.
+#[test]
+fn caller_parameters_size_textures_and_reach_pass_parameters() {
+    use meshlight_graph::file::parse_pipeline_with;
+    use std::collections::BTreeMap;
+    let text = r#"
+[params]
+n = 1000
+width = 8
+height = 4
+
+[[resource]]
+name = "a"
+kind = "exported"
+buffer = { element = "u32", count_param = "n" }
+
+[[resource]]
+name = "image"
+kind = "exported"
+texture = { format = "rgba8unorm", width_param = "width", height_param = "height" }
+
+[[pass]]
+name = "fill"
+stage = "produce"
+implementation = "fill"
+params = { count = "$n", k = 3 }
+bind = { output = "a" }
+"#;
+    let overrides = BTreeMap::from([("n".to_string(), 500u64), ("width".to_string(), 16)]);
+    let g = parse_pipeline_with(text, "t.toml", &registry(), &overrides).unwrap();
+    let plan = g
+        .compile(&CompileOptions::new(wgpu::Features::all()))
+        .unwrap()
+        .plan;
+    let json = dump::to_json(&plan, None);
+    assert!(
+        json.contains("\"width\": 16") || json.contains("\"width\":16"),
+        "{json}"
+    );
+    let a = plan.resources.iter().find(|r| r.info.name == "a").unwrap();
+    assert!(
+        format!("{a:?}").contains("2000"),
+        "500 u32 = 2000 bytes: {a:?}"
+    );
+    let bad = BTreeMap::from([("widht".to_string(), 16u64)]);
+    let Err(e) = parse_pipeline_with(text, "t.toml", &registry(), &bad) else {
+        panic!("a misspelt override was accepted")
+    };
+    assert!(e.to_string().contains("`widht`"), "{e}");
+    let Err(e) = parse_pipeline(&text.replace("$n", "$m"), "t.toml", &registry()) else {
+        panic!("an unknown $ reference was accepted")
+    };
+    assert!(e.to_string().contains("`$m`"), "{e}");
+    let Err(e) = parse_pipeline(
+        &text.replace("width_param = \"width\"", "width_param = \"w\""),
+        "t.toml",
+        &registry(),
+    ) else {
+        panic!("an unknown width parameter was accepted")
+    };
+    assert!(e.to_string().contains("names no entry"), "{e}");
+}

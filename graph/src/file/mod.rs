@@ -5,5 +5,8 @@ mod pipeline;
 mod registry;
 
 pub use params::Params;
-pub use pipeline::{PipelineFile, load_pipeline, parse_format, parse_pipeline};
+pub use pipeline::{
+    PipelineFile, load_pipeline, load_pipeline_with, parse_format, parse_pipeline,
+    parse_pipeline_with,
+};
 pub use registry::{Factory, Registry};

@@ -50,8 +50,12 @@ pub struct BufferEntry {
 #[serde(deny_unknown_fields)]
 pub struct TextureEntry {
     pub format: String,
-    pub width: u32,
-    pub height: u32,
+    /// A fixed width, or `width_param`: a size parameter from `[params]` (read when the
+    /// file is loaded, so a renderer sets the viewport through the parameters).
+    pub width: Option<u32>,
+    pub width_param: Option<String>,
+    pub height: Option<u32>,
+    pub height_param: Option<String>,
     #[serde(default = "one")]
     pub mip_levels: u32,
     /// Array layers (1: a plain 2-D texture).
@@ -88,25 +92,60 @@ pub struct PassEntry {
 }
 
 pub fn load_pipeline(path: &Path, registry: &Registry) -> Result<GraphBuilder> {
+    load_pipeline_with(path, registry, &BTreeMap::new())
+}
+
+/// Loads a pipeline file with some of its `[params]` replaced: a renderer sets the
+/// viewport and the scene's buffer sizes this way. An override of a parameter the file
+/// does not declare is an error (a misspelt name would otherwise be ignored).
+pub fn load_pipeline_with(
+    path: &Path,
+    registry: &Registry,
+    overrides: &BTreeMap<String, u64>,
+) -> Result<GraphBuilder> {
     let text = std::fs::read_to_string(path).map_err(|e| GraphError::PipelineFile {
         file: path.display().to_string(),
         message: format!("cannot read it: {e}"),
     })?;
-    parse_pipeline(&text, &path.display().to_string(), registry)
+    parse_pipeline_with(&text, &path.display().to_string(), registry, overrides)
 }
 
 pub fn parse_pipeline(text: &str, file: &str, registry: &Registry) -> Result<GraphBuilder> {
+    parse_pipeline_with(text, file, registry, &BTreeMap::new())
+}
+
+pub fn parse_pipeline_with(
+    text: &str,
+    file: &str,
+    registry: &Registry,
+    overrides: &BTreeMap<String, u64>,
+) -> Result<GraphBuilder> {
     let ferr = |message: String| GraphError::PipelineFile {
         file: file.to_string(),
         message,
     };
-    let parsed: PipelineFile = toml::from_str(text).map_err(|e| ferr(e.to_string()))?;
+    let mut parsed: PipelineFile = toml::from_str(text).map_err(|e| ferr(e.to_string()))?;
+    for (name, value) in overrides {
+        match parsed.params.get_mut(name) {
+            Some(v) => *v = *value,
+            None => {
+                return Err(ferr(format!(
+                    "the caller sets parameter `{name}`, which the file does not declare; add `{name} = <default>` to its [params]"
+                )));
+            }
+        }
+    }
     let mut g = GraphBuilder::new();
     for (name, value) in &parsed.params {
         g.size_param(name, *value);
     }
     for r in &parsed.resources {
-        declare(&mut g, r).map_err(|m| ferr(format!("resource `{}`: {m}", r.name)))?;
+        declare(&mut g, r, &parsed.params)
+            .map_err(|m| ferr(format!("resource `{}`: {m}", r.name)))?;
+    }
+    for p in &mut parsed.passes {
+        substitute_params(&mut p.params, &parsed.params)
+            .map_err(|m| ferr(format!("pass `{}`: {m}", p.name)))?;
     }
     for p in &parsed.passes {
         if registry.implementations(&p.stage).is_empty() {
@@ -212,7 +251,51 @@ fn parse_range(text: &str) -> std::result::Result<TextureRange, String> {
     Ok(range)
 }
 
-fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), String> {
+/// Pass parameters written `"$name"` take the value of size parameter `name`, so one
+/// `[params]` entry (the viewport, say) reaches resources and passes alike.
+fn substitute_params(
+    table: &mut toml::Table,
+    params: &BTreeMap<String, u64>,
+) -> std::result::Result<(), String> {
+    for (key, value) in table.iter_mut() {
+        if let toml::Value::String(s) = value
+            && let Some(name) = s.strip_prefix('$')
+        {
+            let v = params.get(name).ok_or_else(|| {
+                format!("parameter `{key}` refers to `${name}`, which [params] does not declare")
+            })?;
+            let v = i64::try_from(*v)
+                .map_err(|_| format!("`${name}` = {v} is too large for parameter `{key}`"))?;
+            *value = toml::Value::Integer(v);
+        }
+    }
+    Ok(())
+}
+
+/// A texture dimension: fixed, or from a size parameter.
+fn dimension(
+    what: &str,
+    fixed: Option<u32>,
+    param: &Option<String>,
+    params: &BTreeMap<String, u64>,
+) -> std::result::Result<u32, String> {
+    match (fixed, param) {
+        (Some(v), None) => Ok(v),
+        (None, Some(p)) => {
+            let v = params
+                .get(p)
+                .ok_or_else(|| format!("`{what}_param = \"{p}\"` names no entry of [params]"))?;
+            u32::try_from(*v).map_err(|_| format!("{what} `{p}` = {v} does not fit 32 bits"))
+        }
+        _ => Err(format!("give exactly one of `{what}` or `{what}_param`")),
+    }
+}
+
+fn declare(
+    g: &mut GraphBuilder,
+    r: &ResourceEntry,
+    params: &BTreeMap<String, u64>,
+) -> std::result::Result<(), String> {
     match (&r.buffer, &r.texture) {
         (Some(b), None) => {
             let element = match (Element::from_known_name(&b.element), b.element_size) {
@@ -249,8 +332,8 @@ fn declare(g: &mut GraphBuilder, r: &ResourceEntry) -> std::result::Result<(), S
             let format = parse_format(&t.format)?;
             let desc = TextureDesc {
                 format,
-                width: t.width,
-                height: t.height,
+                width: dimension("width", t.width, &t.width_param, params)?,
+                height: dimension("height", t.height, &t.height_param, params)?,
                 mip_levels: t.mip_levels,
                 layers: t.layers,
             };
