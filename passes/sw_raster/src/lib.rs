@@ -1,1 +1,325 @@
-//! Stage `sw_raster` (being built).
+//! Stage `sw_raster`, implementation `buffer`: clusters too small for the hardware
+//! rasteriser drawn in a compute shader into a storage-buffer visibility buffer.
+//!
+//! One workgroup per cluster (linear id `wg.y * sw_args[0] + wg.x`; ids at or past
+//! `raster_counts[0]` return). The meshlet's vertices are decoded from the payload,
+//! transformed (instance `world_from_local`, then `view_projection`) and snapped into
+//! workgroup memory; then one thread per triangle culls back faces and covers pixels
+//! with fixed-point edge functions, writing `visbuffer64_pack(depth, cluster, triangle)`
+//! with a 64-bit atomicMax.
+//!
+//! # Contract
+//!
+//! | slot | access | holds | |
+//! |------|--------|-------|---|
+//! | `raster_clusters` | storage read | Cluster | software clusters in slots `0..raster_counts[0]` |
+//! | `raster_counts` | storage read | u32 | word 0: software cluster count |
+//! | `sw_args` | storage read + indirect | DispatchIndirectArgs | `[x, y, 1]` from `remap_dispatch` |
+//! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
+//! | `visbuffer` | cleared read-write | u64 | `width × height`, row-major; cleared (a fill) then atomicMax |
+//!
+//! Frame input `view` (`meshlight_shaders::cpu::layout::View`): its `viewport_size` must
+//! equal the params `width` × `height` (a record error names both otherwise).
+//! Needs `SHADER_INT64 | SHADER_INT64_ATOMIC_MIN_MAX`. A texture-atomics implementation
+//! shares this contract: [`register`] maps the implementation name to its builder.
+//!
+//! # Definitions the tests pin down
+//!
+//! - Screen: `((ndc.x * 0.5 + 0.5) * width, (0.5 - ndc.y * 0.5) * height)`, snapped to
+//!   8 sub-pixel bits with round-half-even; pixel (x, y) is sampled at its centre.
+//! - Vertices with clip w <= 0 or a screen coordinate of magnitude >= 2^20 pixels are
+//!   unusable and their triangles skipped: culling sends clusters crossing the near
+//!   plane to the hardware rasteriser. Below 2^20 the fixed-point coordinates are under
+//!   2^28 and every edge-function product under 2^58, computed in i64: no overflow.
+//! - Front faces are clockwise on the y-down screen (edge area > 0); others are culled.
+//! - Top-left rule (Vulkan/D3D, y down): a pixel centre exactly on an edge is covered
+//!   only when the edge is a top edge (horizontal, going right) or a left edge (going up).
+//! - Depth: `z0 + b1 (z1 - z0) + b2 (z2 - z0)`, `b = edge / area` in f32.
+//! - Loop shape: if the widest clipped triangle box of the workgroup is at least
+//!   `scanline_width` pixels (param, default 16) every thread loops per scanline over
+//!   that row's edge span, else over its whole box; both cover the same pixels.
+//! - [`cpu::rasterize`] is the reference.
+
+pub mod cpu;
+
+use meshlight_gpu_scene::gpu::elements;
+use meshlight_graph::file::{Params, Registry};
+use meshlight_graph::{
+    Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
+    SetupContext, Slot, StageContract,
+};
+use meshlight_shaders::cpu::layout::View;
+use meshlight_shaders::{PassShader, pass_shader};
+
+/// The stage name pipelines use.
+pub const STAGE: &str = "sw_raster";
+/// The frame input holding the `View`.
+pub const VIEW_INPUT: &str = "view";
+
+pub const SHADER: PassShader = pass_shader!("sw_raster::raster", "raster.wgsl");
+
+/// The slots every implementation of `sw_raster` shares.
+pub fn contract() -> StageContract {
+    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
+    StageContract {
+        stage: STAGE,
+        slots: vec![
+            read(
+                "raster_clusters",
+                elements::CLUSTER,
+                "software clusters first",
+            ),
+            read(
+                "raster_counts",
+                Element::U32,
+                "word 0: software cluster count",
+            ),
+            read(
+                "sw_args",
+                Element::DISPATCH_ARGS,
+                "[x, y, 1] over the software clusters",
+            )
+            .also(Access::Indirect),
+            read("instances", elements::INSTANCE, "the scene's instances"),
+            read("meshes", elements::MESH, "the scene's meshes"),
+            read("meshlets", elements::MESHLET, "the scene's meshlets"),
+            read("payload", Element::U32, "the scene's meshlet payload"),
+            Slot::buffer(
+                "visbuffer",
+                Access::ClearedReadWrite,
+                Element::U64,
+                "width × height visibility values; cleared, then atomicMax",
+            ),
+        ],
+    }
+}
+
+/// The `buffer` implementation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SwRaster {
+    pub width: u32,
+    pub height: u32,
+    /// Workgroups whose widest triangle box reaches this many pixels loop per scanline.
+    pub scanline_width: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParams {
+    width: u32,
+    height: u32,
+    scanline_width: u32,
+    _pad: u32,
+}
+
+const PARAM_KEYS: [&str; 3] = ["width", "height", "scanline_width"];
+
+impl SwRaster {
+    /// Reads `width`, `height` (required, > 0) and `scanline_width` (default 16).
+    pub fn from_params(params: &Params) -> Result<Self> {
+        params.only(&PARAM_KEYS)?;
+        let width = params.u32("width", 0)?;
+        let height = params.u32("height", 0)?;
+        if width == 0 || height == 0 {
+            return Err(GraphError::Parameter {
+                pass: String::new(),
+                message: format!(
+                    "`width` and `height` (the visibility buffer size) must both be > 0, got {width} × {height}"
+                ),
+            });
+        }
+        Ok(Self {
+            width,
+            height,
+            scanline_width: params.u32("scanline_width", 16)?,
+        })
+    }
+}
+
+impl Pass for SwRaster {
+    fn contract(&self) -> StageContract {
+        contract()
+    }
+    fn implementation(&self) -> &'static str {
+        "buffer"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.require_features(
+            wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
+        );
+        ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
+        ctx.min_bytes("raster_counts", 4);
+        ctx.min_bytes("sw_args", 12);
+        ctx.frame_input(VIEW_INPUT);
+        let layout = BindingLayout::compute("sw_raster")
+            .slot(0, "raster_clusters")
+            .slot(1, "raster_counts")
+            .slot(2, "sw_args")
+            .slot(3, "instances")
+            .slot(4, "meshes")
+            .slot(5, "meshlets")
+            .slot(6, "payload")
+            .slot(7, "visbuffer")
+            .uniform(8)
+            .uniform(9);
+        ctx.program(
+            "raster",
+            ProgramDesc::compute(&SHADER, "raster").layout(layout),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let bytes = ctx.frame_bytes(VIEW_INPUT)?;
+        let view: View = bytes
+            .get(..size_of::<View>())
+            .map(bytemuck::pod_read_unaligned)
+            .ok_or_else(|| GraphError::Record {
+                pass: ctx.pass_name().to_string(),
+                message: format!(
+                    "frame input `{VIEW_INPUT}` must hold a View ({} bytes), got {}",
+                    size_of::<View>(),
+                    bytes.len()
+                ),
+            })?;
+        if view.viewport_size != [self.width as f32, self.height as f32] {
+            return Err(GraphError::Record {
+                pass: ctx.pass_name().to_string(),
+                message: format!(
+                    "the view's viewport {:?} differs from the visibility buffer's {} × {}; make the params match the camera's viewport",
+                    view.viewport_size, self.width, self.height
+                ),
+            });
+        }
+        let params = GpuParams {
+            width: self.width,
+            height: self.height,
+            scanline_width: self.scanline_width,
+            _pad: 0,
+        };
+        ctx.clear("visbuffer")?;
+        let program = ctx.compute("raster")?;
+        let bind_group = ctx.bind_group(
+            &program,
+            0,
+            &[
+                (8, bytemuck::bytes_of(&view)),
+                (9, bytemuck::bytes_of(&params)),
+            ],
+        )?;
+        let (args, offset) = ctx.buffer("sw_args")?;
+        let mut pass = ctx.compute_pass();
+        pass.set_pipeline(&program.pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.dispatch_workgroups_indirect(args, offset);
+        Ok(())
+    }
+}
+
+fn build(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(SwRaster::from_params(params)?))
+}
+
+/// Registers `sw_raster` (implementation `buffer`) for pipeline files.
+pub fn register(registry: &mut Registry) {
+    registry.register(STAGE, "buffer", build);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cpu::{cover_triangle, edge};
+
+    fn px(x: i32, y: i32) -> [i32; 2] {
+        [x * 256 + 128, y * 256 + 128]
+    }
+
+    fn covered(v: [[i32; 2]; 3], w: u32, h: u32) -> Vec<u32> {
+        let mut out = vec![0; (w * h) as usize];
+        cover_triangle(v.map(|p| (p, 0.5)), w, h, |x, y, _| {
+            out[(y * w + x) as usize] += 1
+        });
+        out
+    }
+
+    #[test]
+    fn top_left_rule_on_edges_through_pixel_centres() {
+        // Clockwise on the y-down screen: (0,0) → (4,0) → (0,4), corners at pixel centres.
+        let tri = [px(0, 0), px(4, 0), px(0, 4)];
+        assert!(edge(tri[0], tri[1], tri[2]) > 0);
+        let c = covered(tri, 8, 8);
+        let at = |x: usize, y: usize| c[y * 8 + x];
+        // Top edge (y = 0, going right) and left edge (x = 0, going up) are included.
+        assert_eq!(at(1, 0), 1);
+        assert_eq!(at(0, 2), 1);
+        assert_eq!(at(0, 0), 1);
+        // The hypotenuse x + y = 4 goes down-left: a right edge, excluded.
+        assert_eq!(at(2, 2), 0);
+        assert_eq!(at(4, 0), 0);
+        assert_eq!(at(1, 2), 1);
+        // The other half of the square, (4,0) → (4,4) → (0,4): its right edge x = 4
+        // (going down) and bottom edge y = 4 (going left) are excluded.
+        let other = covered([px(4, 0), px(4, 4), px(0, 4)], 8, 8);
+        assert_eq!(other[2 * 8 + 4], 0, "right edge");
+        assert_eq!(other[4 * 8 + 2], 0, "bottom edge");
+        assert_eq!(other[2 * 8 + 2], 1, "shared hypotenuse belongs to this one");
+        assert_eq!(other[3 * 8 + 3], 1);
+    }
+
+    #[test]
+    fn back_faces_cover_nothing() {
+        let c = covered([px(0, 0), px(0, 4), px(4, 0)], 8, 8);
+        assert!(c.iter().all(|&n| n == 0));
+    }
+
+    #[test]
+    fn shared_edges_and_fans_cover_every_pixel_once() {
+        let (w, h) = (16u32, 16u32);
+        // A quad split along a diagonal, then a fan of 8 triangles around a vertex on a
+        // pixel centre; corners on and off pixel centres, sub-pixel positions.
+        let quads = [
+            vec![
+                [[3, 5], [1000, 300], [200, 2000]],
+                [[1000, 300], [1200, 2100], [200, 2000]],
+            ],
+            vec![
+                [[px(1, 1)[0], px(1, 1)[1]], px(12, 1), px(12, 12)],
+                [px(1, 1), px(12, 12), px(1, 12)],
+            ],
+        ];
+        for tris in quads {
+            let mut total = vec![0u32; (w * h) as usize];
+            for t in &tris {
+                for (i, n) in covered(*t, w, h).into_iter().enumerate() {
+                    total[i] += n;
+                }
+            }
+            assert!(total.iter().all(|&n| n <= 1), "a pixel covered twice");
+            assert!(total.iter().any(|&n| n == 1));
+        }
+        // Fan around (8, 8) through 8 rim points: together they cover the octagon.
+        let c = px(8, 8);
+        let rim = [
+            [128 + 256 * 8, 0],
+            [3900, 200],
+            [4000, 2048 + 128],
+            [3900, 3900],
+            [128 + 256 * 8, 4000],
+            [300, 3900],
+            [100, 2048 + 128],
+            [200, 300],
+        ];
+        let mut total = vec![0u32; (w * h) as usize];
+        for k in 0..rim.len() {
+            let t = [c, rim[k], rim[(k + 1) % rim.len()]];
+            for (i, n) in covered(t, w, h).into_iter().enumerate() {
+                total[i] += n;
+            }
+        }
+        assert!(total.iter().all(|&n| n <= 1), "a pixel covered twice");
+        // Pixels well inside the octagon are all covered.
+        for y in 4..12 {
+            for x in 4..12 {
+                assert_eq!(total[(y * w + x) as usize], 1, "pixel ({x}, {y}) skipped");
+            }
+        }
+    }
+}

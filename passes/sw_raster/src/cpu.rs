@@ -1,0 +1,199 @@
+//! The reference rasteriser: the WGSL kernel's steps on the CPU, in the same order and
+//! with the same integer and float operations, producing the visibility buffer.
+
+use glam::{Mat4, Vec4};
+use meshlight_gpu_scene::SceneData;
+use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::visbuffer;
+
+/// Screen coordinates (pixels) at or beyond this make a vertex unusable; see the crate
+/// docs for why it keeps every edge-function product inside i64.
+pub const MAX_SCREEN: f32 = 1_048_576.0;
+
+/// `count` bits from bit `bit` of the little-endian word pair, as `meshlight::math::read_bits`.
+fn read_bits(words: [u32; 2], bit: u32, count: u32) -> u32 {
+    let value = (u64::from(words[1]) << 32 | u64::from(words[0])) >> bit;
+    if count >= 32 {
+        value as u32
+    } else {
+        (value as u32) & ((1u32 << count) - 1)
+    }
+}
+
+fn bits(word: u32, offset: u32, count: u32) -> u32 {
+    (word >> offset) & ((1u32 << count) - 1)
+}
+
+fn word(payload: &[u32], i: u32) -> u32 {
+    payload.get(i as usize).copied().unwrap_or(0)
+}
+
+/// A vertex after the transform: 8-bit fixed-point screen position and NDC depth, or
+/// `None` when it is behind the camera (w <= 0) or too far off screen.
+pub type ScreenVertex = Option<([i32; 2], f32)>;
+
+/// The snapped screen vertex of a clip-space position for a `size` pixel viewport.
+pub fn snap(clip: Vec4, size: [f32; 2]) -> ScreenVertex {
+    let ndc = clip.truncate() / clip.w;
+    let s = [(ndc.x * 0.5 + 0.5) * size[0], (0.5 - ndc.y * 0.5) * size[1]];
+    let ok = clip.w > 0.0 && s[0].abs() < MAX_SCREEN && s[1].abs() < MAX_SCREEN;
+    // WGSL `round` rounds half to even.
+    ok.then(|| {
+        (
+            [
+                (s[0] * 256.0).round_ties_even() as i32,
+                (s[1] * 256.0).round_ties_even() as i32,
+            ],
+            ndc.z,
+        )
+    })
+}
+
+/// Twice the signed area of (a, b, p): positive right of a→b on the y-down screen.
+pub fn edge(a: [i32; 2], b: [i32; 2], p: [i32; 2]) -> i64 {
+    i64::from(b[0] - a[0]) * i64::from(p[1] - a[1])
+        - i64::from(b[1] - a[1]) * i64::from(p[0] - a[0])
+}
+
+/// A top or left edge of a clockwise (front-facing) triangle on the y-down screen.
+pub fn top_left(a: [i32; 2], b: [i32; 2]) -> bool {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    d[1] < 0 || (d[1] == 0 && d[0] > 0)
+}
+
+/// Calls `f(x, y, depth)` for every pixel of a `width` × `height` viewport a screen
+/// triangle covers, with the top-left rule; back faces and degenerate triangles cover
+/// nothing.
+pub fn cover_triangle(
+    v: [([i32; 2], f32); 3],
+    width: u32,
+    height: u32,
+    mut f: impl FnMut(u32, u32, f32),
+) {
+    let [(p0, z0), (p1, z1), (p2, z2)] = v;
+    let area = edge(p0, p1, p2);
+    if area <= 0 || width == 0 || height == 0 {
+        return;
+    }
+    let bias = [
+        if top_left(p1, p2) { 0 } else { -1 },
+        if top_left(p2, p0) { 0 } else { -1 },
+        if top_left(p0, p1) { 0 } else { -1 },
+    ];
+    let mn = [p0[0].min(p1[0]).min(p2[0]), p0[1].min(p1[1]).min(p2[1])];
+    let mx = [p0[0].max(p1[0]).max(p2[0]), p0[1].max(p1[1]).max(p2[1])];
+    let lo = [
+        ((mn[0] - 128 + 255) >> 8).max(0),
+        ((mn[1] - 128 + 255) >> 8).max(0),
+    ];
+    let hi = [
+        ((mx[0] - 128) >> 8).min(width as i32 - 1),
+        ((mx[1] - 128) >> 8).min(height as i32 - 1),
+    ];
+    let fa = area as f32;
+    for y in lo[1]..=hi[1] {
+        for x in lo[0]..=hi[0] {
+            let p = [x * 256 + 128, y * 256 + 128];
+            let e0 = edge(p1, p2, p);
+            let e1 = edge(p2, p0, p);
+            let e2 = edge(p0, p1, p);
+            if e0 + bias[0] < 0 || e1 + bias[1] < 0 || e2 + bias[2] < 0 {
+                continue;
+            }
+            let b1 = e1 as f32 / fa;
+            let b2 = e2 as f32 / fa;
+            let depth = z0 + b1 * (z1 - z0) + b2 * (z2 - z0);
+            f(x as u32, y as u32, depth);
+        }
+    }
+}
+
+/// The visibility buffer (row-major, `width` × `height`, 0 = empty) of `clusters` drawn
+/// from `scene` through `view`; the visibility cluster id is the index into `clusters`.
+/// Clusters naming a missing instance or meshlet draw nothing.
+pub fn rasterize(
+    scene: &SceneData,
+    view: &View,
+    clusters: &[Cluster],
+    width: u32,
+    height: u32,
+) -> Vec<u64> {
+    let mut out = vec![visbuffer::EMPTY; width as usize * height as usize];
+    let size = [width as f32, height as f32];
+    let view_projection = Mat4::from_cols_array_2d(&view.view_projection);
+    for (id, cluster) in clusters.iter().enumerate() {
+        let (Some(instance), Some(m)) = (
+            scene.instances.get(cluster.instance as usize),
+            scene.meshlets.get(cluster.meshlet as usize),
+        ) else {
+            continue;
+        };
+        let Some(mesh) = scene.meshes.get(instance.mesh as usize) else {
+            continue;
+        };
+        let world_from_local = Mat4::from_cols_array_2d(&instance.world_from_local);
+        let grid = mesh.position_grid;
+        let vertex_count = bits(m.counts, 0, 8);
+        let triangle_count = bits(m.counts, 8, 8);
+        let axis = [bits(m.bits, 0, 8), bits(m.bits, 8, 8), bits(m.bits, 16, 8)];
+        let normal = [bits(m.normals, 24, 4), bits(m.normals, 28, 4)];
+        let stride = axis.iter().sum::<u32>() + normal[0] + normal[1];
+        let screen: Vec<ScreenVertex> = (0..vertex_count)
+            .map(|v| {
+                let mut bit = v * stride;
+                let mut q = [0u32; 3];
+                for a in 0..3 {
+                    let w = m.data_offset + bit / 32;
+                    let offset = read_bits(
+                        [word(&scene.payload, w), word(&scene.payload, w + 1)],
+                        bit % 32,
+                        axis[a],
+                    );
+                    q[a] = m.grid_min[a].wrapping_add(offset);
+                    bit += axis[a];
+                }
+                let p = [
+                    grid[0] + q[0] as f32 * grid[3],
+                    grid[1] + q[1] as f32 * grid[3],
+                    grid[2] + q[2] as f32 * grid[3],
+                ];
+                let world = world_from_local * Vec4::new(p[0], p[1], p[2], 1.0);
+                let clip = view_projection * world.truncate().extend(1.0);
+                snap(clip, size)
+            })
+            .collect();
+        let uv_word = m.data_offset + (vertex_count * stride).div_ceil(32);
+        let triangle_word = uv_word + if mesh.flags & 1 != 0 { vertex_count } else { 0 };
+        let field_bits = [bits(m.bits, 24, 4), bits(m.bits, 28, 4)];
+        let triangle_stride = field_bits[0] + 2 * field_bits[1];
+        for t in 0..triangle_count {
+            let bit = t * triangle_stride;
+            let w = triangle_word + bit / 32;
+            let record = read_bits(
+                [word(&scene.payload, w), word(&scene.payload, w + 1)],
+                bit % 32,
+                triangle_stride,
+            );
+            let predicted = (((t + 1) * vertex_count) / triangle_count.max(1)) as i32;
+            let bias = 1i32 << (field_bits[0].max(1) - 1);
+            let first = predicted + bits(record, 0, field_bits[0]) as i32 - bias;
+            let d1 = bits(record, field_bits[0], field_bits[1]) as i32;
+            let d2 = bits(record, field_bits[0] + field_bits[1], field_bits[1]) as i32;
+            let last = vertex_count.max(1) as i32 - 1;
+            let corners = [first, first - d1, first - d2].map(|c| c.clamp(0, last) as usize);
+            let (Some(Some(a)), Some(Some(b)), Some(Some(c))) = (
+                screen.get(corners[0]),
+                screen.get(corners[1]),
+                screen.get(corners[2]),
+            ) else {
+                continue;
+            };
+            let value_of = |depth| visbuffer::pack(depth, id as u32, t);
+            cover_triangle([*a, *b, *c], width, height, |x, y, depth| {
+                let px = &mut out[(y * width + x) as usize];
+                *px = (*px).max(value_of(depth));
+            });
+        }
+    }
+    out
+}

@@ -1,0 +1,186 @@
+// Software rasteriser for small clusters: one workgroup per cluster, one thread per
+// triangle, 64-bit atomicMax into a storage-buffer visibility buffer.
+// `cpu::rasterize` (Rust) is the reference; every step below has its mirror there.
+
+#import meshlight::math::read_bits
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle}
+#import meshlight::instance::Instance
+#import meshlight::view::View
+#import meshlight::visbuffer64::visbuffer64_pack
+
+struct Params {
+    // Visibility buffer size in pixels.
+    width: u32,
+    height: u32,
+    // Workgroups whose widest triangle box reaches this many pixels loop per scanline.
+    scanline_width: u32,
+    _pad: u32,
+}
+
+@group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
+@group(0) @binding(1) var<storage, read> raster_counts: array<u32>;
+@group(0) @binding(2) var<storage, read> sw_args: array<u32>;
+@group(0) @binding(3) var<storage, read> instances: array<Instance>;
+@group(0) @binding(4) var<storage, read> meshes: array<Mesh>;
+@group(0) @binding(5) var<storage, read> meshlets: array<Meshlet>;
+@group(0) @binding(6) var<storage, read> payload: array<u32>;
+@group(0) @binding(7) var<storage, read_write> visbuffer: array<atomic<u64>>;
+@group(0) @binding(8) var<uniform> view: View;
+@group(0) @binding(9) var<uniform> params: Params;
+
+// Vertices whose screen position reaches 2^20 pixels are unusable: below it the 8-bit
+// fixed-point coordinates stay under 2^28, their differences under 2^29, and every
+// edge-function product under 2^58, inside i64.
+const MAX_SCREEN: f32 = 1048576.0;
+
+var<workgroup> screen_xy: array<vec2<i32>, 255>;
+var<workgroup> screen_z: array<f32, 255>;
+var<workgroup> usable: array<u32, 255>;
+var<workgroup> widest: atomic<u32>;
+
+fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
+    let at = meshlet_vertex_field(m, vertex, f);
+    return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
+}
+
+// Twice the signed area of (a, b, p); positive when p lies right of a→b on the y-down
+// screen, i.e. inside a clockwise (front-facing) triangle.
+fn edge(a: vec2<i32>, b: vec2<i32>, p: vec2<i32>) -> i64 {
+    return i64(b.x - a.x) * i64(p.y - a.y) - i64(b.y - a.y) * i64(p.x - a.x);
+}
+
+// Top or left edge of a clockwise triangle on the y-down screen.
+fn top_left(a: vec2<i32>, b: vec2<i32>) -> bool {
+    let d = b - a;
+    return d.y < 0 || (d.y == 0 && d.x > 0);
+}
+
+struct Tri {
+    v0: vec2<i32>,
+    v1: vec2<i32>,
+    v2: vec2<i32>,
+    z: vec3<f32>,
+    area: i64,
+    bias: vec3<i32>,
+    value_cluster: u32,
+    triangle: u32,
+}
+
+fn shade(tri: Tri, x: i32, y: i32) {
+    let p = vec2(x * 256 + 128, y * 256 + 128);
+    let e0 = edge(tri.v1, tri.v2, p);
+    let e1 = edge(tri.v2, tri.v0, p);
+    let e2 = edge(tri.v0, tri.v1, p);
+    if e0 + i64(tri.bias.x) < 0li || e1 + i64(tri.bias.y) < 0li || e2 + i64(tri.bias.z) < 0li {
+        return;
+    }
+    let fa = f32(tri.area);
+    let b1 = f32(e1) / fa;
+    let b2 = f32(e2) / fa;
+    let depth = tri.z.x + b1 * (tri.z.y - tri.z.x) + b2 * (tri.z.z - tri.z.x);
+    let index = u32(y) * params.width + u32(x);
+    atomicMax(&visbuffer[index], visbuffer64_pack(depth, tri.value_cluster, tri.triangle));
+}
+
+@compute @workgroup_size(128)
+fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    let i = wg.y * sw_args[0] + wg.x;
+    if i >= raster_counts[0] {
+        return;
+    }
+    let cluster = raster_clusters[i];
+    let instance = instances[cluster.instance];
+    let m = meshlets[cluster.meshlet];
+    let mesh = meshes[instance.mesh];
+    let size = vec2(f32(params.width), f32(params.height));
+    if t == 0u {
+        atomicStore(&widest, 0u);
+    }
+    for (var v = t; v < meshlet_vertex_count(m); v += 128u) {
+        let p = meshlet_position(m, mesh.position_grid, vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u)));
+        let world = instance.world_from_local * vec4(p, 1.0);
+        let clip = view.view_projection * vec4(world.xyz, 1.0);
+        let ndc = clip.xyz / clip.w;
+        let s = vec2((ndc.x * 0.5 + 0.5) * size.x, (0.5 - ndc.y * 0.5) * size.y);
+        let ok = clip.w > 0.0 && abs(s.x) < MAX_SCREEN && abs(s.y) < MAX_SCREEN;
+        usable[v] = select(0u, 1u, ok);
+        screen_xy[v] = select(vec2(0), vec2<i32>(round(s * 256.0)), ok);
+        screen_z[v] = ndc.z;
+    }
+    workgroupBarrier();
+
+    var tri: Tri;
+    var lo = vec2(0);
+    var hi = vec2(-1);
+    if t < meshlet_triangle_count(m) {
+        let at = meshlet_triangle_location(m, mesh.flags, t);
+        let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+        if (usable[c.x] & usable[c.y] & usable[c.z]) != 0u {
+            tri.v0 = screen_xy[c.x];
+            tri.v1 = screen_xy[c.y];
+            tri.v2 = screen_xy[c.z];
+            tri.z = vec3(screen_z[c.x], screen_z[c.y], screen_z[c.z]);
+            tri.area = edge(tri.v0, tri.v1, tri.v2);
+            tri.bias = vec3(
+                select(-1, 0, top_left(tri.v1, tri.v2)),
+                select(-1, 0, top_left(tri.v2, tri.v0)),
+                select(-1, 0, top_left(tri.v0, tri.v1)),
+            );
+            tri.value_cluster = i;
+            tri.triangle = t;
+            // Back faces and degenerate triangles have area <= 0.
+            if tri.area > 0li {
+                let mn = min(tri.v0, min(tri.v1, tri.v2));
+                let mx = max(tri.v0, max(tri.v1, tri.v2));
+                // Pixels whose centre x * 256 + 128 lies in [mn, mx], clipped to the viewport.
+                lo = max((mn - vec2(128) + vec2(255)) >> vec2(8u), vec2(0));
+                hi = min((mx - vec2(128)) >> vec2(8u), vec2<i32>(params.width, params.height) - vec2(1));
+            }
+        }
+    }
+    let visible = all(lo <= hi);
+    if visible {
+        atomicMax(&widest, u32(hi.x - lo.x + 1));
+    }
+    workgroupBarrier();
+    // One choice for the whole workgroup, so its threads run the same loop shape.
+    let scanline = atomicLoad(&widest) >= params.scanline_width;
+    if !visible {
+        return;
+    }
+    if !scanline {
+        for (var y = lo.y; y <= hi.y; y += 1) {
+            for (var x = lo.x; x <= hi.x; x += 1) {
+                shade(tri, x, y);
+            }
+        }
+        return;
+    }
+    // Scanline: per row, the span where each edge can be non-negative, widened by one
+    // pixel on each side (the exact test in `shade` decides), so pixels outside the
+    // triangle's row span are never visited.
+    let edges = array(vec2(tri.v1, tri.v2), vec2(tri.v2, tri.v0), vec2(tri.v0, tri.v1));
+    for (var y = lo.y; y <= hi.y; y += 1) {
+        var x0 = lo.x;
+        var x1 = hi.x;
+        let py = y * 256 + 128;
+        for (var k = 0; k < 3; k += 1) {
+            let a = edges[k][0];
+            let b = edges[k][1];
+            // edge(a, b, (px, py)) = c + s * px with s = -(b.y - a.y).
+            let s = -i64(b.y - a.y);
+            let c = i64(b.x - a.x) * i64(py - a.y) + i64(b.y - a.y) * i64(a.x);
+            if s > 0li {
+                // px >= -c / s, px = x * 256 + 128.
+                let px = -c / s;
+                x0 = max(x0, i32((px - 128li) >> 8u) - 1);
+            } else if s < 0li {
+                let px = c / -s;
+                x1 = min(x1, i32((px - 128li) >> 8u) + 1);
+            }
+        }
+        for (var x = x0; x <= x1; x += 1) {
+            shade(tri, x, y);
+        }
+    }
+}
