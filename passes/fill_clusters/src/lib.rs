@@ -1,1 +1,297 @@
-//! Stage `fill_clusters` (being built).
+//! Stage `fill_clusters`, implementation `workgroup_per_instance`: the per-frame list of
+//! candidate clusters, every meshlet (all LOD levels) of every instance the camera may see.
+//!
+//! Culling works per cluster, but most of the scene is usually rejected a whole instance
+//! at a time; doing that here keeps the list short. Cluster ids in the visibility buffer
+//! index this per-frame list, so its 25 bits bound the clusters of one frame, not the
+//! scene. One workgroup per instance reserves its range with one atomic, so the list is
+//! built without a prefix sum and each instance's clusters stay together.
+//!
+//! # Contract
+//!
+//! | slot            | access             | holds   | |
+//! |-----------------|--------------------|---------|---|
+//! | `instances`     | storage read       | Instance | the GPU scene's instances; one workgroup each |
+//! | `meshes`        | storage read       | Mesh    | each instance's mesh bounding sphere |
+//! | `clusters`      | storage write      | Cluster | `(instance, meshlet)`; capacity = its size / 8, or the `capacity` param if smaller |
+//! | `cluster_count` | cleared read-write | u32 × 2 | `[0]` clusters written = `min([1], capacity)`, `[1]` clusters requested |
+//!
+//! Frame input `view` (`meshlight_shaders::cpu::layout::View`).
+//!
+//! | param            | default | |
+//! |------------------|---------|---|
+//! | `capacity`       | 0 (the whole `clusters` buffer) | clusters the list may hold, at most the buffer's |
+//! | `instance_count` | 0 (every bound instance) | instances to visit, at most the bound count |
+//!
+//! # Definitions the tests pin down
+//!
+//! - An instance is visible when `sphere_in_frustum(view, s.xyz, s.w)` holds for
+//!   `s = instance_transform_sphere(instance, mesh.bounding_sphere)` (radius times the
+//!   largest axis scale). An invisible instance, or one with no meshlets, requests nothing.
+//! - A visible instance requests `meshlet_count` clusters `(i, first_meshlet + k)`,
+//!   `k = 0, 1, …` in that order, at `start + k` where `start = atomicAdd(&[1], count)`.
+//!   Slots at or past the capacity are not written: the instance straddling the capacity
+//!   writes the prefix that fits, later ones nothing. No slot outside `0..capacity` is
+//!   touched.
+//! - After every workgroup, one thread sets `[0] = min([1], capacity)`; the overflow is
+//!   `[1] - [0]`.
+//! - Instances are dispatched one workgroup each, as `x × y` workgroups with x under the
+//!   per-dimension limit, so any instance count the buffer holds is visited.
+//! - [`cpu::cpu_fill`] is the reference (which instances, which clusters, the two words).
+
+pub mod cpu;
+
+pub use cpu::{FillResult, cpu_fill};
+
+use meshlight_gpu_scene::gpu::elements;
+use meshlight_graph::file::{Params, Registry};
+use meshlight_graph::{
+    Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
+    SetupContext, Slot, StageContract,
+};
+use meshlight_shaders::cpu::layout::{Instance, View};
+use meshlight_shaders::{PassShader, pass_shader};
+
+/// The stage name pipelines use.
+pub const STAGE: &str = "fill_clusters";
+/// The implementation name pipelines use.
+pub const IMPLEMENTATION: &str = "workgroup_per_instance";
+/// The frame input holding the `View`.
+pub const VIEW_INPUT: &str = "view";
+
+pub const SHADER: PassShader = pass_shader!("fill_clusters::fill", "fill.wgsl");
+
+/// The slots every implementation of `fill_clusters` shares.
+pub fn contract() -> StageContract {
+    StageContract {
+        stage: STAGE,
+        slots: vec![
+            Slot::buffer(
+                "instances",
+                Access::StorageRead,
+                elements::INSTANCE,
+                "the scene's instances",
+            ),
+            Slot::buffer(
+                "meshes",
+                Access::StorageRead,
+                elements::MESH,
+                "the scene's meshes (bounding spheres)",
+            ),
+            Slot::buffer(
+                "clusters",
+                Access::StorageWrite,
+                elements::CLUSTER,
+                "(instance, meshlet) of every visible instance's meshlets, below the capacity",
+            ),
+            Slot::buffer(
+                "cluster_count",
+                Access::ClearedReadWrite,
+                Element::U32,
+                "[0] clusters written = min(requested, capacity), [1] clusters requested",
+            ),
+        ],
+    }
+}
+
+/// The `workgroup_per_instance` implementation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FillClusters {
+    /// Clusters the list may hold; `None`: as many as the `clusters` buffer holds.
+    pub capacity: Option<u32>,
+    /// Instances to visit; `None`: every instance the `instances` buffer holds.
+    pub instance_count: Option<u32>,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParams {
+    capacity: u32,
+    instance_count: u32,
+    groups_x: u32,
+    _pad: u32,
+}
+
+const PARAM_KEYS: [&str; 2] = ["capacity", "instance_count"];
+
+impl FillClusters {
+    /// Reads `capacity` and `instance_count` (0 or absent: the bound buffer's size).
+    pub fn from_params(params: &Params) -> Result<Self> {
+        params.only(&PARAM_KEYS)?;
+        let nonzero = |v: u32| (v > 0).then_some(v);
+        Ok(Self {
+            capacity: nonzero(params.u32("capacity", 0)?),
+            instance_count: nonzero(params.u32("instance_count", 0)?),
+        })
+    }
+}
+
+/// The `View` in the frame input, or a record error saying what it held instead.
+fn view_input(ctx: &RecordContext<'_>) -> Result<View> {
+    let bytes = ctx.frame_bytes(VIEW_INPUT)?;
+    bytes
+        .get(..size_of::<View>())
+        .map(bytemuck::pod_read_unaligned)
+        .ok_or_else(|| GraphError::Record {
+            pass: ctx.pass_name().to_string(),
+            message: format!(
+                "frame input `{VIEW_INPUT}` must hold a View ({} bytes), got {}",
+                size_of::<View>(),
+                bytes.len()
+            ),
+        })
+}
+
+/// `n` workgroups as `[x, y]` with both under `limit` (x as wide as allowed).
+pub fn workgroup_grid(n: u32, limit: u32) -> [u32; 2] {
+    let x = n.min(limit.max(1));
+    let y = if x == 0 { 0 } else { n.div_ceil(x) };
+    [x, y]
+}
+
+impl Pass for FillClusters {
+    fn contract(&self) -> StageContract {
+        contract()
+    }
+    fn implementation(&self) -> &'static str {
+        IMPLEMENTATION
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.min_bytes("cluster_count", 8);
+        ctx.frame_input(VIEW_INPUT);
+        let layout = BindingLayout::compute("fill_clusters")
+            .slot(0, "instances")
+            .slot(1, "meshes")
+            .slot(2, "clusters")
+            .slot(3, "cluster_count")
+            .uniform(4)
+            .uniform(5);
+        ctx.program(
+            "fill",
+            ProgramDesc::compute(&SHADER, "fill").layout(layout.clone()),
+        );
+        ctx.program(
+            "finish",
+            ProgramDesc::compute(&SHADER, "finish").layout(layout),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let view = view_input(ctx)?;
+        let (_, instance_bytes) = ctx.buffer("instances")?;
+        let bound = (instance_bytes / size_of::<Instance>() as u64).min(u32::MAX as u64) as u32;
+        let instance_count = self.instance_count.unwrap_or(bound).min(bound);
+        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
+        let [x, y] = workgroup_grid(instance_count, limit);
+        if y > limit {
+            return Err(GraphError::Record {
+                pass: ctx.pass_name().to_string(),
+                message: format!(
+                    "{instance_count} instances need more than {limit}² workgroups; set `instance_count` lower"
+                ),
+            });
+        }
+        let params = GpuParams {
+            capacity: self.capacity.unwrap_or(u32::MAX),
+            instance_count,
+            groups_x: x,
+            _pad: 0,
+        };
+        ctx.clear("cluster_count")?;
+        let fill = ctx.compute("fill")?;
+        let finish = ctx.compute("finish")?;
+        let uniforms: [(u32, &[u8]); 2] = [
+            (4, bytemuck::bytes_of(&view)),
+            (5, bytemuck::bytes_of(&params)),
+        ];
+        let fill_group = ctx.bind_group(&fill, 0, &uniforms)?;
+        let finish_group = ctx.bind_group(&finish, 0, &uniforms)?;
+        {
+            let mut pass = ctx.compute_pass();
+            pass.set_pipeline(&fill.pipeline);
+            pass.set_bind_group(0, &fill_group, &[]);
+            if x > 0 {
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+        // A separate compute pass, so the requested count is final when it is read.
+        let mut pass = ctx.compute_pass();
+        pass.set_pipeline(&finish.pipeline);
+        pass.set_bind_group(0, &finish_group, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        Ok(())
+    }
+}
+
+fn build(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(FillClusters::from_params(params)?))
+}
+
+/// Registers `fill_clusters` (implementation `workgroup_per_instance`) for pipeline files.
+pub fn register(registry: &mut Registry) {
+    registry.register(STAGE, IMPLEMENTATION, build);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grids_cover_every_instance_under_the_limit() {
+        for limit in [1u32, 3, 65_535] {
+            for n in [0u32, 1, 2, limit, limit + 1, 3 * limit + 2, 100_000] {
+                let [x, y] = workgroup_grid(n, limit);
+                assert!(x <= limit, "{n} under {limit}");
+                assert!(x as u64 * y as u64 >= n as u64, "{n} under {limit}");
+                assert!(n == 0 || (x as u64 * y as u64) < n as u64 + x as u64);
+            }
+        }
+    }
+
+    #[test]
+    fn params_are_read_and_misspellings_refused() {
+        let mut registry = Registry::new();
+        register(&mut registry);
+        let pipeline = |params: &str| {
+            let text = format!(
+                r#"
+[[resource]]
+name = "instances"
+kind = "imported"
+buffer = {{ element = "Instance", element_size = 224, count = 4 }}
+usage = ["STORAGE"]
+[[resource]]
+name = "meshes"
+kind = "imported"
+buffer = {{ element = "Mesh", element_size = 64, count = 1 }}
+usage = ["STORAGE"]
+[[resource]]
+name = "clusters"
+kind = "exported"
+buffer = {{ element = "Cluster", element_size = 8, count = 100 }}
+[[resource]]
+name = "cluster_count"
+kind = "exported"
+buffer = {{ element = "u32", count = 2 }}
+[[pass]]
+name = "fill"
+stage = "fill_clusters"
+implementation = "workgroup_per_instance"
+params = {{ {params} }}
+"#
+            );
+            meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry).map(|_| ())
+        };
+        if let Err(e) = pipeline("capacity = 10, instance_count = 3") {
+            panic!("{e}");
+        }
+        for (params, key) in [("capcity = 10", "capcity"), ("capacity = -1", "capacity")] {
+            match pipeline(params) {
+                Err(GraphError::Parameter { message, .. }) => {
+                    assert!(message.contains(key), "{message}")
+                }
+                other => panic!("{params}: {:?}", other.err()),
+            }
+        }
+    }
+}

@@ -1,0 +1,79 @@
+// One workgroup per instance: an instance whose mesh's bounding sphere touches the
+// frustum reserves one contiguous range of the cluster list with a single atomicAdd and
+// writes (instance, meshlet) for each of its meshlets, in meshlet order, threads striding
+// so consecutive threads write consecutive clusters. A second, one-thread dispatch
+// finalises the count of clusters written. `cpu::cpu_fill` (Rust) is the reference.
+
+#import meshlight::meshlet::{Mesh, Cluster}
+#import meshlight::instance::{Instance, instance_transform_sphere}
+#import meshlight::view::{View, sphere_in_frustum}
+
+struct Params {
+    // Clusters the list may hold; the shader also clamps it to the bound list's length.
+    capacity: u32,
+    // Instances to visit (at most the bound instance count).
+    instance_count: u32,
+    // x size of the dispatch, to linearise the workgroup id.
+    groups_x: u32,
+    _pad: u32,
+}
+
+// The scene's instances; one workgroup each.
+@group(0) @binding(0) var<storage, read> instances: array<Instance>;
+// The scene's meshes, for each instance's bounding sphere.
+@group(0) @binding(1) var<storage, read> meshes: array<Mesh>;
+// The cluster list: written below the capacity only.
+@group(0) @binding(2) var<storage, read_write> clusters: array<Cluster>;
+// [0] clusters written = min(requested, capacity), [1] clusters requested.
+@group(0) @binding(3) var<storage, read_write> cluster_count: array<atomic<u32>>;
+@group(0) @binding(4) var<uniform> view: View;
+@group(0) @binding(5) var<uniform> params: Params;
+
+const WORKGROUP_SIZE: u32 = 64u;
+
+// The first slot of the workgroup's range, reserved by thread 0.
+var<workgroup> range_start: u32;
+
+fn capacity() -> u32 {
+    return min(params.capacity, arrayLength(&clusters));
+}
+
+@compute @workgroup_size(64)
+fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    let index = wg.y * params.groups_x + wg.x;
+    // Every thread reaches the barrier: visibility only decides how many clusters the
+    // workgroup asks for (0 when the instance is outside the frustum or past the count).
+    var count = 0u;
+    var first_meshlet = 0u;
+    if index < min(params.instance_count, arrayLength(&instances)) {
+        let instance = instances[index];
+        let sphere = instance_transform_sphere(instance, meshes[instance.mesh].bounding_sphere);
+        if sphere_in_frustum(view, sphere.xyz, sphere.w) {
+            count = instance.meshlet_count;
+            first_meshlet = instance.first_meshlet;
+        }
+    }
+    if t == 0u && count > 0u {
+        range_start = atomicAdd(&cluster_count[1], count);
+    }
+    workgroupBarrier();
+    if count == 0u {
+        return;
+    }
+    let start = range_start;
+    let cap = capacity();
+    if start >= cap {
+        return;
+    }
+    // The part of the range below the capacity; nothing is written past it.
+    let written = min(count, cap - start);
+    for (var k = t; k < written; k += WORKGROUP_SIZE) {
+        clusters[start + k] = Cluster(index, first_meshlet + k);
+    }
+}
+
+@compute @workgroup_size(1)
+fn finish() {
+    let requested = atomicLoad(&cluster_count[1]);
+    atomicStore(&cluster_count[0], min(requested, capacity()));
+}

@@ -1,0 +1,305 @@
+//! `fill_clusters` on the GPU against `cpu_fill`: which instances request clusters, the
+//! clusters themselves (as a multiset: the order of the runs follows the atomics), each
+//! instance's run contiguous and in meshlet order, and with a small capacity the two
+//! count words, the straddling instance's prefix and an untouched guard region after
+//! the capacity.
+
+use glam::{Mat4, Quat, Vec3};
+use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, data::Limits};
+use meshlight_graph::*;
+use meshlight_pass_fill_clusters::{FillClusters, FillResult, cpu_fill};
+use meshlight_scene::{BuildOptions, build_asset, procedural_mesh};
+use meshlight_shaders::cpu::layout::{Cluster, View};
+use std::collections::BTreeMap;
+
+const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_DST)
+    .union(wgpu::BufferUsages::COPY_SRC);
+
+/// What the GPU leaves in slots nothing may write.
+const SENTINEL: Cluster = Cluster {
+    instance: 0xdead_beef,
+    meshlet: 0xfeed_f00d,
+};
+
+/// Slots after the capacity that must keep the sentinel.
+const GUARD: u32 = 64;
+
+fn gpu() -> GpuContext {
+    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Two meshes of different sizes (the larger with more meshlets than a workgroup has
+/// threads, so threads write several clusters each); instances in view, behind the camera, far to the
+/// side, rotated and scaled unevenly, and one whose sphere reaches into the view only
+/// because of its scale.
+fn scene() -> SceneData {
+    let mut data = SceneData::new(Limits::default());
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let mut meshes = Vec::new();
+    for segments in [4, 20] {
+        let built = build_asset(
+            &procedural_mesh(segments),
+            &BuildOptions::default(),
+            &mut |_| {},
+        )
+        .unwrap();
+        meshes.push(data.add_mesh("knot", &built.asset).unwrap());
+    }
+    let placements = [
+        (0, Mat4::from_translation(Vec3::new(-8.0, 0.0, 0.0))),
+        (1, Mat4::from_translation(Vec3::new(0.0, 0.0, 0.0))),
+        (0, Mat4::from_translation(Vec3::new(0.0, 0.0, 40.0))), // behind the camera
+        (
+            1,
+            Mat4::from_scale_rotation_translation(
+                Vec3::new(0.5, 2.0, 1.0),
+                Quat::from_rotation_y(0.7),
+                Vec3::new(8.0, 0.0, -4.0),
+            ),
+        ),
+        (1, Mat4::from_translation(Vec3::new(-300.0, 0.0, 0.0))), // far left
+        (0, Mat4::from_translation(Vec3::new(0.0, 6.0, -20.0))),
+        (1, Mat4::from_translation(Vec3::new(0.0, -200.0, 0.0))), // far below
+        (
+            1,
+            // Off to the right at 40 units, pulled into view by a scale of 20.
+            Mat4::from_scale_rotation_translation(
+                Vec3::splat(20.0),
+                Quat::IDENTITY,
+                Vec3::new(60.0, 0.0, 0.0),
+            ),
+        ),
+        (0, Mat4::from_translation(Vec3::new(4.0, -3.0, 2.0))),
+    ];
+    for (mesh, transform) in placements {
+        data.add_instance(meshes[mesh], transform, material)
+            .unwrap()
+            .expect("an invertible transform");
+    }
+    data
+}
+
+fn view() -> View {
+    Camera::perspective(Vec3::new(0.0, 2.0, 20.0), Vec3::ZERO, 1.0, 0.1).view([320, 240], 0, None)
+}
+
+struct GpuFill {
+    /// The whole `clusters` buffer: capacity slots, then the guard.
+    clusters: Vec<Cluster>,
+    count: [u32; 2],
+}
+
+/// Runs the pass over a sentinel-filled list of `capacity + GUARD` slots.
+fn run(
+    gpu: GpuContext,
+    data: &mut SceneData,
+    view: &View,
+    pass: FillClusters,
+    slots: u32,
+) -> GpuFill {
+    let scene = GpuScene::new(&gpu, data);
+    let mut g = GraphBuilder::new();
+    let h = scene.import(&mut g);
+    let clusters = g.import_buffer(
+        "clusters",
+        BufferDesc::array(elements::CLUSTER, slots as u64),
+        USAGE,
+    );
+    let count = g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
+    let out = g
+        .add_pass(
+            "fill",
+            pass,
+            Bindings::new()
+                .bind("instances", h.instances)
+                .bind("meshes", h.meshes)
+                .bind("clusters", clusters)
+                .bind("cluster_count", count),
+        )
+        .unwrap();
+    g.export(out.buffer("clusters").unwrap());
+    g.export(out.buffer("cluster_count").unwrap());
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let list = gpu.buffer_with_data(
+        "clusters",
+        bytemuck::cast_slice(&vec![SENTINEL; slots as usize]),
+        USAGE,
+    );
+    let mut exec = Executor::new(gpu);
+    let frame = FrameData::new().with("view", bytemuck::bytes_of(view));
+    exec.execute_frame(
+        &compiled,
+        &scene.imports().buffer("clusters", &list),
+        &frame,
+    )
+    .unwrap();
+    let count: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("cluster_count").unwrap());
+    // The list is imported: read the caller's buffer (after the count, so the frame ran).
+    let clusters =
+        bytemuck::pod_collect_to_vec(&exec.gpu.read_buffer(&list, 0, list.size()).unwrap());
+    GpuFill {
+        clusters,
+        count: [count[0], count[1]],
+    }
+}
+
+/// The written slots as runs per instance: instance → (first slot, clusters in order).
+fn runs(written: &[Cluster]) -> BTreeMap<u32, (usize, Vec<Cluster>)> {
+    let mut runs: BTreeMap<u32, (usize, Vec<Cluster>)> = BTreeMap::new();
+    for (slot, c) in written.iter().enumerate() {
+        let run = runs.entry(c.instance).or_insert((slot, Vec::new()));
+        assert_eq!(
+            run.0 + run.1.len(),
+            slot,
+            "instance {}'s clusters are not contiguous (slot {slot})",
+            c.instance
+        );
+        run.1.push(*c);
+    }
+    runs
+}
+
+/// Each run is a prefix of its visible instance's reference clusters, in meshlet order;
+/// returns how many runs are partial (cut by the capacity).
+fn check_runs(reference: &FillResult, written: &[Cluster]) -> usize {
+    let mut want: BTreeMap<u32, Vec<Cluster>> = BTreeMap::new();
+    for c in &reference.clusters {
+        want.entry(c.instance).or_default().push(*c);
+    }
+    let mut partial = 0;
+    for (instance, (_, got)) in runs(written) {
+        let want = want
+            .get(&instance)
+            .unwrap_or_else(|| panic!("instance {instance} is not visible but wrote clusters"));
+        assert!(
+            got.len() <= want.len() && got[..] == want[..got.len()],
+            "instance {instance}: clusters out of meshlet order or wrong"
+        );
+        partial += usize::from(got.len() < want.len());
+    }
+    partial
+}
+
+#[test]
+fn clusters_equal_the_reference_when_the_capacity_suffices() {
+    let gpu = gpu();
+    let mut data = scene();
+    let view = view();
+    let reference = cpu_fill(&data, &view, u32::MAX);
+    // The scene exercises both outcomes, with no instance within rounding of a plane.
+    assert!(
+        reference.visible_instances.len() >= 5,
+        "{:?}",
+        reference.visible_instances
+    );
+    assert!(reference.visible_instances.len() < data.instances.len());
+    assert!(
+        reference.visible_instances.contains(&7),
+        "the scaled instance is visible"
+    );
+    assert!(
+        data.meshes[1].meshlet_count > 64,
+        "{}",
+        data.meshes[1].meshlet_count
+    );
+    for (i, instance) in data.instances.iter().enumerate() {
+        let s = meshlight_pass_fill_clusters::cpu::instance_sphere(&data, instance);
+        let margin =
+            meshlight_pass_fill_clusters::cpu::frustum_margin(&view, [s[0], s[1], s[2]], s[3]);
+        assert!(margin.abs() > 0.1, "instance {i} lies on a plane: {margin}");
+    }
+    let capacity = reference.requested + 5;
+    let got = run(gpu, &mut data, &view, FillClusters::default(), capacity);
+    assert_eq!(got.count, [reference.written, reference.requested]);
+    let n = reference.requested as usize;
+    let written = &got.clusters[..n];
+    let mut sorted = written.to_vec();
+    sorted.sort_by_key(|c| (c.instance, c.meshlet));
+    assert_eq!(sorted, reference.clusters, "the multiset of clusters");
+    assert_eq!(check_runs(&reference, written), 0);
+    assert!(
+        got.clusters[n..].iter().all(|c| *c == SENTINEL),
+        "a slot past the requested ones was written"
+    );
+}
+
+/// Subset sums of the visible instances' cluster counts: a capacity that is none of
+/// them must cut some instance's run.
+fn subset_sums(counts: &[u32]) -> Vec<bool> {
+    let total: u32 = counts.iter().sum();
+    let mut reachable = vec![false; total as usize + 1];
+    reachable[0] = true;
+    for &c in counts {
+        for s in (c as usize..=total as usize).rev() {
+            reachable[s] |= reachable[s - c as usize];
+        }
+    }
+    reachable
+}
+
+#[test]
+fn a_small_capacity_writes_exactly_the_capacity_and_nothing_past_it() {
+    let mut data = scene();
+    let view = view();
+    let full = cpu_fill(&data, &view, u32::MAX);
+    let counts: Vec<u32> = full
+        .visible_instances
+        .iter()
+        .map(|&i| data.instances[i as usize].meshlet_count)
+        .collect();
+    let sums = subset_sums(&counts);
+    // Near half the clusters, at a count no set of whole instances adds up to.
+    let capacity = (full.requested / 2..full.requested)
+        .find(|&c| !sums[c as usize])
+        .expect("a capacity that cuts an instance");
+    let reference = cpu_fill(&data, &view, capacity);
+    assert_eq!(reference.written, capacity);
+    // The list is longer than the capacity: the pass is told the capacity by parameter,
+    // so a write past it lands in the guard instead of being dropped by bounds checks.
+    let pass = FillClusters {
+        capacity: Some(capacity),
+        instance_count: None,
+    };
+    let got = run(gpu(), &mut data, &view, pass, capacity + GUARD);
+    assert_eq!(got.count, [capacity, full.requested]);
+    let written = &got.clusters[..capacity as usize];
+    assert!(
+        written.iter().all(|c| *c != SENTINEL),
+        "a slot below the capacity was left unwritten"
+    );
+    assert!(
+        got.clusters[capacity as usize..]
+            .iter()
+            .all(|c| *c == SENTINEL),
+        "a slot past the capacity was written"
+    );
+    assert_eq!(
+        check_runs(&full, written),
+        1,
+        "exactly one instance straddles"
+    );
+}
+
+#[test]
+fn instance_count_limits_the_instances_visited() {
+    let mut data = scene();
+    let view = view();
+    let full = cpu_fill(&data, &view, u32::MAX);
+    let mut first_four = data.clone();
+    first_four.instances.truncate(4);
+    let reference = cpu_fill(&first_four, &view, u32::MAX);
+    assert!(reference.requested < full.requested);
+    let pass = FillClusters {
+        capacity: None,
+        instance_count: Some(4),
+    };
+    let got = run(gpu(), &mut data, &view, pass, full.requested);
+    assert_eq!(got.count, [reference.requested, reference.requested]);
+    let mut sorted = got.clusters[..reference.requested as usize].to_vec();
+    sorted.sort_by_key(|c| (c.instance, c.meshlet));
+    assert_eq!(sorted, reference.clusters);
+}
