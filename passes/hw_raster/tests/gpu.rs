@@ -1,0 +1,447 @@
+//! `hw_raster` on the GPU (lavapipe in CI) against `cpu::rasterize` and against the
+//! software rasteriser's reference, on two instances of the procedural mesh; surplus
+//! triangles, the software slots, the earlier contents of the visibility buffer and the
+//! errors.
+
+use glam::{Mat4, Quat, Vec3};
+use meshlight_gpu_scene::data::Limits;
+use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
+use meshlight_graph::*;
+use meshlight_pass_hw_raster::{HwRaster, VERTICES_PER_CLUSTER, cpu};
+use meshlight_scene::asset::format::MeshletRecord;
+use meshlight_scene::{BuildOptions, build_asset, procedural_mesh};
+use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::visbuffer;
+
+const W: u32 = 128;
+const H: u32 = 96;
+/// Software slots at the left of the slot buffer: real clusters the pass must not draw.
+const SOFTWARE: u32 = 3;
+/// Unused slots between the software and hardware ones.
+const GAP: u32 = 2;
+
+const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::INDIRECT)
+    .union(wgpu::BufferUsages::COPY_DST)
+    .union(wgpu::BufferUsages::COPY_SRC);
+
+fn gpu() -> GpuContext {
+    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A scene, a camera, and the slot buffer culling would have left.
+struct Frame {
+    scene: SceneData,
+    view: View,
+    raster_clusters: Vec<Cluster>,
+    hw_count: u32,
+    /// What the software pass left in the visibility buffer.
+    initial: Vec<u64>,
+}
+
+fn scene() -> SceneData {
+    let asset = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {})
+        .unwrap()
+        .asset;
+    let mut scene = SceneData::new(Limits::default());
+    let mesh = scene.add_mesh("knot", &asset).unwrap();
+    let material = scene.add_material(Material {
+        base_color: [0.8, 0.5, 0.3],
+    });
+    scene
+        .add_instance(mesh, Mat4::IDENTITY, material)
+        .unwrap()
+        .unwrap();
+    let moved = Mat4::from_scale_rotation_translation(
+        Vec3::splat(0.6),
+        Quat::from_rotation_y(0.7),
+        Vec3::new(2.5, 1.0, 2.0),
+    );
+    scene.add_instance(mesh, moved, material).unwrap().unwrap();
+    scene
+}
+
+/// The meshlets `pick` chooses, of every instance, in hardware slots; `SOFTWARE` real clusters in
+/// the software slots; a visibility buffer holding a near band (which must survive) and
+/// a far band (which must be overdrawn) from the "software" pass.
+fn frame(
+    scene: SceneData,
+    camera: Camera,
+    pick: impl Fn(&Cluster, &MeshletRecord) -> bool,
+) -> Frame {
+    let view = camera.view([W, H], 0, None);
+    let mut hardware = Vec::new();
+    for (i, instance) in scene.instances.iter().enumerate() {
+        for m in instance.first_meshlet..instance.first_meshlet + instance.meshlet_count {
+            let c = Cluster {
+                instance: i as u32,
+                meshlet: m,
+            };
+            if pick(&c, &scene.meshlets[m as usize]) {
+                hardware.push(c);
+            }
+        }
+    }
+    let hw_count = hardware.len() as u32;
+    let capacity = SOFTWARE + GAP + hw_count;
+    let mut raster_clusters = vec![
+        Cluster {
+            instance: 0,
+            meshlet: 0
+        };
+        capacity as usize
+    ];
+    for (j, c) in hardware.into_iter().enumerate() {
+        raster_clusters[(capacity - 1) as usize - j] = c;
+    }
+    let initial = (0..W * H)
+        .map(|i| match (i % W) / 8 {
+            3 => visbuffer::pack(0.9999, 1, 5),
+            9 => visbuffer::pack(1e-6, 2, 9),
+            _ => visbuffer::EMPTY,
+        })
+        .collect();
+    Frame {
+        scene,
+        view,
+        raster_clusters,
+        hw_count,
+        initial,
+    }
+}
+
+fn camera() -> Camera {
+    Camera::perspective(
+        Vec3::new(1.0, 3.0, 12.0),
+        Vec3::new(0.5, 0.2, 0.0),
+        0.8,
+        0.5,
+    )
+}
+
+/// Runs the pass over `frame` and reads the visibility buffer back.
+fn run(frame: &mut Frame) -> Vec<u64> {
+    let gpu = gpu();
+    let scene = GpuScene::new(&gpu, &mut frame.scene);
+    let capacity = frame.raster_clusters.len() as u32;
+    let counts: [u32; 8] = [SOFTWARE, frame.hw_count, 0, capacity, 0, 0, 0, 0];
+    let args = [VERTICES_PER_CLUSTER, frame.hw_count, 0, 0];
+    let mut g = GraphBuilder::new();
+    let h = scene.import(&mut g);
+    let clusters = g.import_buffer(
+        "raster_clusters",
+        BufferDesc::array(meshlight_gpu_scene::gpu::elements::CLUSTER, capacity as u64),
+        USAGE,
+    );
+    let counts_h = g.import_buffer("raster_counts", BufferDesc::array(Element::U32, 8), USAGE);
+    let args_h = g.import_buffer("hw_args", BufferDesc::array(Element::DRAW_ARGS, 1), USAGE);
+    let vis = g.import_buffer(
+        "visbuffer",
+        BufferDesc::array(Element::U64, (W * H) as u64),
+        USAGE,
+    );
+    g.add_pass(
+        "hw_raster",
+        HwRaster {
+            width: W,
+            height: H,
+        },
+        Bindings::new()
+            .bind("raster_clusters", clusters)
+            .bind("raster_counts", counts_h)
+            .bind("hw_args", args_h)
+            .bind("instances", h.instances)
+            .bind("meshes", h.meshes)
+            .bind("meshlets", h.meshlets)
+            .bind("payload", h.payload)
+            .bind("visbuffer", vis),
+    )
+    .unwrap();
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let buffers = [
+        gpu.buffer_with_data(
+            "raster_clusters",
+            bytemuck::cast_slice(&frame.raster_clusters),
+            USAGE,
+        ),
+        gpu.buffer_with_data("raster_counts", bytemuck::cast_slice(&counts), USAGE),
+        gpu.buffer_with_data("hw_args", bytemuck::cast_slice(&args), USAGE),
+        gpu.buffer_with_data("visbuffer", bytemuck::cast_slice(&frame.initial), USAGE),
+    ];
+    let imports = scene
+        .imports()
+        .buffer("raster_clusters", &buffers[0])
+        .buffer("raster_counts", &buffers[1])
+        .buffer("hw_args", &buffers[2])
+        .buffer("visbuffer", &buffers[3]);
+    let mut exec = Executor::new(gpu);
+    let data = FrameData::new().with("view", bytemuck::bytes_of(&frame.view));
+    exec.execute_frame(&compiled, &imports, &data).unwrap();
+    exec.finish().unwrap();
+    let bytes = exec
+        .gpu
+        .read_buffer(&buffers[3], 0, (W * H) as u64 * 8)
+        .unwrap();
+    bytemuck::pod_collect_to_vec(&bytes)
+}
+
+/// How two visibility buffers agree: pixels covered by either, of those the ones with
+/// the same id, and the depth differences on those.
+struct Agreement {
+    covered: usize,
+    same_id: usize,
+    depth_diffs: Vec<f32>,
+}
+
+impl Agreement {
+    fn depth_within(&self, tolerance: f32) -> usize {
+        self.depth_diffs.iter().filter(|&&d| d <= tolerance).count()
+    }
+    fn max_depth_diff(&self) -> f32 {
+        self.depth_diffs.iter().copied().fold(0.0, f32::max)
+    }
+}
+
+fn agreement(got: &[u64], want: &[u64]) -> Agreement {
+    let mut a = Agreement {
+        covered: 0,
+        same_id: 0,
+        depth_diffs: Vec::new(),
+    };
+    for (&g, &w) in got.iter().zip(want) {
+        if g == visbuffer::EMPTY && w == visbuffer::EMPTY {
+            continue;
+        }
+        a.covered += 1;
+        if g as u32 == w as u32 && (g == visbuffer::EMPTY) == (w == visbuffer::EMPTY) {
+            a.same_id += 1;
+            a.depth_diffs
+                .push((visbuffer::depth(g) - visbuffer::depth(w)).abs());
+        }
+    }
+    a
+}
+
+/// At least `min_covered` pixels covered, ≥ 99% of them with identical ids, and depth
+/// on those within `depth_tolerance` on ≥ 99.9% of them and within 1e-4 on all.
+fn check(name: &str, got: &[u64], want: &[u64], min_covered: usize, depth_tolerance: f32) {
+    let a = agreement(got, want);
+    let share = a.same_id as f64 / a.covered.max(1) as f64;
+    let depth_share = a.depth_within(depth_tolerance) as f64 / a.same_id.max(1) as f64;
+    eprintln!(
+        "{name}: {} covered pixels, {} with the same id ({:.3}%), depth within {:e} on {:.3}% of those, largest difference {:e}",
+        a.covered,
+        a.same_id,
+        share * 100.0,
+        depth_tolerance,
+        depth_share * 100.0,
+        a.max_depth_diff()
+    );
+    assert!(
+        a.covered >= min_covered,
+        "{name}: only {} pixels covered",
+        a.covered
+    );
+    assert!(
+        share >= 0.99,
+        "{name}: only {:.3}% identical ids",
+        share * 100.0
+    );
+    assert!(
+        depth_share >= 0.999,
+        "{name}: depth within {depth_tolerance:e} on only {:.3}%",
+        depth_share * 100.0
+    );
+    assert!(
+        a.max_depth_diff() <= 1e-4,
+        "{name}: depth differs by {:e}",
+        a.max_depth_diff()
+    );
+}
+
+/// Every drawn value names a hardware slot and a triangle the meshlet has, or is one
+/// the software pass left.
+fn check_ids(frame: &Frame, got: &[u64]) {
+    let slots = cpu::hardware_slots(frame.raster_clusters.len() as u32, frame.hw_count);
+    for (i, (&g, &before)) in got.iter().zip(&frame.initial).enumerate() {
+        assert!(g >= before, "pixel {i} lost the software pass's value");
+        if g == visbuffer::EMPTY || g == before {
+            continue;
+        }
+        let slot = visbuffer::cluster(g);
+        assert!(
+            slots.contains(&slot),
+            "pixel {i}: slot {slot} is not hardware"
+        );
+        let c = frame.raster_clusters[slot as usize];
+        let count = frame.scene.meshlets[c.meshlet as usize].triangle_count();
+        let t = visbuffer::triangle(g);
+        assert!(
+            t < count,
+            "pixel {i}: triangle {t} of a {count}-triangle meshlet"
+        );
+    }
+}
+
+/// The software rasteriser's fixed-point reference (`meshlight_pass_sw_raster::cpu`:
+/// its snapping, edge functions, top-left rule and depth) over the hardware slots, onto
+/// `initial`. Its `cover_triangle` keeps triangles clockwise on the y-down screen, so
+/// corners go in as (0, 2, 1): the contract's front faces are counter-clockwise in NDC,
+/// the mesh's outside, which the hardware keeps with `FrontFace::Ccw`.
+fn fixed_point_reference(f: &Frame) -> Vec<u64> {
+    use meshlight_pass_sw_raster::cpu::{cover_triangle, snap};
+    let mut out = f.initial.clone();
+    let view_projection = Mat4::from_cols_array_2d(&f.view.view_projection);
+    for slot in cpu::hardware_slots(f.raster_clusters.len() as u32, f.hw_count) {
+        let c = f.raster_clusters[slot as usize];
+        let instance = &f.scene.instances[c.instance as usize];
+        let mesh = &f.scene.meshes[instance.mesh as usize];
+        let m = &f.scene.meshlets[c.meshlet as usize];
+        let world_from_local = Mat4::from_cols_array_2d(&instance.world_from_local);
+        let (positions, corners) = cpu::decode_geometry(&f.scene, mesh, m);
+        let screen: Vec<_> = positions
+            .iter()
+            .map(|&p| {
+                let clip = cpu::clip_position(&world_from_local, &view_projection, p);
+                snap(clip, [W as f32, H as f32])
+            })
+            .collect();
+        for (t, k) in corners.iter().enumerate() {
+            let [Some(a), Some(b), Some(c)] = [k[0], k[2], k[1]].map(|i| screen[i as usize]) else {
+                continue;
+            };
+            cover_triangle([a, b, c], W, H, |x, y, depth| {
+                let px = &mut out[(y * W + x) as usize];
+                *px = (*px).max(visbuffer::pack(depth, slot, t as u32));
+            });
+        }
+    }
+    out
+}
+
+#[test]
+fn hardware_raster_matches_both_references_and_keeps_the_software_values() {
+    let mut f = frame(scene(), camera(), |_, m| m.level() == 0);
+    let got = run(&mut f);
+    let want = cpu::rasterize(
+        &f.scene,
+        &f.view,
+        &f.raster_clusters,
+        f.hw_count,
+        &f.initial,
+        W,
+        H,
+    );
+    // The float reference interpolates depth from the unsnapped corners, as lavapipe
+    // does: within 1e-5 everywhere.
+    check("float reference", &got, &want, 2000, 1e-5);
+    assert!(agreement(&got, &want).max_depth_diff() <= 1e-5);
+    check_ids(&f, &got);
+
+    let fixed = fixed_point_reference(&f);
+    // The software rasteriser interpolates from corners snapped to 1/256 pixel: on
+    // steep triangles that moves depth by up to the depth gradient × 1/512 pixel.
+    check(
+        "software rasteriser's fixed point",
+        &got,
+        &fixed,
+        2000,
+        1e-5,
+    );
+
+    // Both instances are seen, the near band survives, the far band is overdrawn.
+    let slots = cpu::hardware_slots(f.raster_clusters.len() as u32, f.hw_count);
+    let instances: std::collections::BTreeSet<u32> = got
+        .iter()
+        .filter(|&&g| slots.contains(&visbuffer::cluster(g)) && g != visbuffer::EMPTY)
+        .map(|&g| f.raster_clusters[visbuffer::cluster(g) as usize].instance)
+        .collect();
+    assert_eq!(instances.len(), 2, "{instances:?}");
+    let near = visbuffer::pack(0.9999, 1, 5);
+    let far = visbuffer::pack(1e-6, 2, 9);
+    assert!(
+        got.iter()
+            .zip(&f.initial)
+            .all(|(g, i)| *i != near || g == i)
+    );
+    let overdrawn = got
+        .iter()
+        .zip(&f.initial)
+        .filter(|(g, i)| **i == far && g > i)
+        .count();
+    assert!(overdrawn > 0, "the far band was never drawn over");
+}
+
+#[test]
+fn meshlets_with_fewer_than_128_triangles_draw_nothing_past_their_count() {
+    let scene = scene();
+    // The meshlet of instance 0 with the fewest triangles (LOD-0 ones are full), seen
+    // up close.
+    let first = scene.instances[0].first_meshlet;
+    let (index, m) = scene
+        .meshlets
+        .iter()
+        .enumerate()
+        .skip(first as usize)
+        .take(scene.instances[0].meshlet_count as usize)
+        .min_by_key(|(_, m)| m.triangle_count())
+        .unwrap();
+    assert!(m.triangle_count() < 128, "{}", m.triangle_count());
+    let centre = Vec3::from_slice(&m.bounds[..3]);
+    let radius = m.bounds[3];
+    let mut best = None;
+    // Look from the side that shows the most of it.
+    for dir in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
+        let camera = Camera::perspective(centre + dir * radius * 3.0, centre, 0.9, radius * 0.5);
+        let mut f = frame(scene.clone(), camera, |c, _| {
+            c.instance == 0 && c.meshlet == index as u32
+        });
+        f.initial = vec![visbuffer::EMPTY; (W * H) as usize];
+        let want = cpu::rasterize(
+            &f.scene,
+            &f.view,
+            &f.raster_clusters,
+            f.hw_count,
+            &f.initial,
+            W,
+            H,
+        );
+        let covered = want.iter().filter(|&&v| v != visbuffer::EMPTY).count();
+        if best.as_ref().is_none_or(|(n, _, _)| covered > *n) {
+            best = Some((covered, f, want));
+        }
+    }
+    let (covered, mut f, want) = best.unwrap();
+    assert_eq!(f.hw_count, 1);
+    assert!(covered > 300, "{covered}");
+    let got = run(&mut f);
+    check("one small meshlet", &got, &want, 300, 1e-5);
+    check_ids(&f, &got);
+}
+
+#[test]
+fn a_viewport_other_than_the_params_is_a_record_error_and_zero_size_a_parameter_error() {
+    let mut f = frame(scene(), camera(), |_, m| m.level() == 0);
+    f.view = camera().view([W + 1, H], 0, None);
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(&mut f)));
+    let message = match result {
+        Err(e) => e
+            .downcast_ref::<String>()
+            .cloned()
+            .unwrap_or_else(|| "?".into()),
+        Ok(_) => panic!("a mismatched viewport ran"),
+    };
+    assert!(
+        message.contains("viewport") && message.contains(&format!("{W} × {H}")),
+        "{message}"
+    );
+
+    // Registered for pipeline files; a file that leaves the size out is refused.
+    let mut registry = file::Registry::new();
+    meshlight_pass_hw_raster::register(&mut registry);
+    match registry.build("hw_raster", "indirect_draw", &file::Params::default()) {
+        Err(GraphError::Parameter { message, .. }) => assert!(message.contains("width")),
+        Err(other) => panic!("{other}"),
+        Ok(_) => panic!("a zero-sized visibility buffer was accepted"),
+    }
+}
