@@ -1,0 +1,305 @@
+//! The CPU reference of `cull_lod`: the shared WGSL it calls (`instance_max_scale`,
+//! `instance_transform_point`, `sphere_in_frustum`, `project_error_to_pixels`,
+//! `lod_cut`) and its own `is_software`, mirrored operation for operation in f32
+//! (matrix times vector summed column by column, dot products left to right).
+//!
+//! A decision can still differ from the GPU's when a value lies within rounding of its
+//! threshold (a GPU may fuse a multiply and an add); [`Decision`] keeps the values each
+//! decision compared, so a test can tell such a cluster from a real disagreement.
+
+use meshlight_gpu_scene::SceneData;
+use meshlight_scene::asset::format::NO_GROUP;
+use meshlight_shaders::cpu::layout::{Cluster, Instance, View};
+
+/// `draw_indirect` vertex count of one hardware cluster (128 triangles × 3).
+pub const HW_VERTICES: u32 = 384;
+
+/// The thresholds the pass compares with (its params).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Thresholds {
+    pub lod_threshold_px: f32,
+    pub sw_threshold_px: f32,
+    /// `false`: every cluster of the cut goes to software, for pipelines with no
+    /// hardware rasteriser (clusters crossing the near plane then lose the triangles
+    /// the software rasteriser cannot draw).
+    pub hardware: bool,
+}
+
+impl Default for Thresholds {
+    fn default() -> Self {
+        Self {
+            lod_threshold_px: 1.0,
+            sw_threshold_px: 32.0,
+            hardware: true,
+        }
+    }
+}
+
+/// What the pass decides for one cluster, with the values it compared.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Decision {
+    /// Smallest `dot(plane.xyz, centre) + plane.w + radius`: in the frustum when >= 0.
+    pub frustum_margin: f32,
+    pub in_frustum: bool,
+    /// Own and parent error in pixels (`f32::MAX` parent for a root: never projected).
+    pub own_px: f32,
+    pub parent_px: f32,
+    pub in_cut: bool,
+    /// Distance of the sphere's centre beyond the near plane, minus its radius.
+    pub near_margin: f32,
+    /// Screen box of the sphere (0 when it reaches the near plane: not computed).
+    pub box_size: [f32; 2],
+    pub software: bool,
+    /// The world-space radius, for scaling the frustum and near margins.
+    pub radius: f32,
+}
+
+impl Decision {
+    /// How close the decisions that matter for this cluster came to flipping, relative to
+    /// what was compared: the smallest of the frustum margin (over the radius), and, once
+    /// in the frustum, each error's distance from the LOD threshold and, once in the cut,
+    /// the near margin and the box sizes' distance from the software threshold (all over
+    /// their thresholds).
+    pub fn closeness(&self, t: &Thresholds) -> f32 {
+        let rel = |v: f32, to: f32| (v - to).abs() / to.abs().max(f32::MIN_POSITIVE);
+        let mut c = self.frustum_margin.abs() / self.radius.max(f32::MIN_POSITIVE);
+        if !self.in_frustum {
+            return c;
+        }
+        c = c.min(rel(self.own_px, t.lod_threshold_px));
+        if self.parent_px < f32::MAX {
+            c = c.min(rel(self.parent_px, t.lod_threshold_px));
+        }
+        if !self.in_cut {
+            return c;
+        }
+        c = c.min(self.near_margin.abs() / self.radius.max(f32::MIN_POSITIVE));
+        if self.near_margin > 0.0 {
+            c = c
+                .min(rel(self.box_size[0], t.sw_threshold_px))
+                .min(rel(self.box_size[1], t.sw_threshold_px));
+        }
+        c
+    }
+}
+
+/// What `cull_lod` produces for a cluster list.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct CullResult {
+    /// Clusters whose bounding sphere touches the frustum, in list order.
+    pub frustum: Vec<Cluster>,
+    /// Of those, the ones in the LOD cut (each wants a raster slot), in list order.
+    pub cut: Vec<Cluster>,
+    /// The cut split by rasteriser (every cut cluster, whether or not a slot was free).
+    pub software: Vec<Cluster>,
+    pub hardware: Vec<Cluster>,
+    /// `raster_counts`. Words 0, 1, 5 and 6 count the clusters that got a slot; when the
+    /// cut exceeds the capacity, which ones do depends on the GPU's atomics, and the
+    /// reference gives the slots in list order.
+    pub counts: [u32; 8],
+    /// `hw_args`: `[384, counts[1], 0, 0]`.
+    pub hw_args: [u32; 4],
+}
+
+/// `m * v` for a column-major matrix, summed column by column as the WGSL does.
+pub fn mat_vec(m: &[[f32; 4]; 4], v: [f32; 4]) -> [f32; 4] {
+    std::array::from_fn(|r| m[0][r] * v[0] + m[1][r] * v[1] + m[2][r] * v[2] + m[3][r] * v[3])
+}
+
+pub fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn sub3(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn xyz(v: [f32; 4]) -> [f32; 3] {
+    [v[0], v[1], v[2]]
+}
+
+/// `instance_max_scale`.
+pub fn instance_max_scale(instance: &Instance) -> f32 {
+    let m = &instance.world_from_local;
+    let axis = |c: usize| dot3(xyz(m[c]), xyz(m[c]));
+    let (x, y, z) = (axis(0), axis(1), axis(2));
+    x.max(y.max(z)).sqrt()
+}
+
+/// `instance_transform_point`.
+pub fn transform_point(m: &[[f32; 4]; 4], p: [f32; 3]) -> [f32; 3] {
+    xyz(mat_vec(m, [p[0], p[1], p[2], 1.0]))
+}
+
+/// `sphere_in_frustum` (a NaN distance keeps the sphere, as the WGSL's `<` does) and the
+/// smallest margin over the planes.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn sphere_in_frustum(view: &View, center: [f32; 3], radius: f32) -> (bool, f32) {
+    let mut inside = true;
+    let mut margin = f32::INFINITY;
+    for p in &view.frustum {
+        let d = dot3(xyz(*p), center) + p[3];
+        inside &= !(d < -radius);
+        margin = margin.min(d + radius);
+    }
+    (inside, margin)
+}
+
+/// `project_error_to_pixels`.
+pub fn project_error_to_pixels(view: &View, center: [f32; 3], radius: f32, error: f32) -> f32 {
+    let d = sub3(center, view.camera_position);
+    let distance = dot3(d, d).sqrt() - radius;
+    error / distance.max(view.near) * view.lod_scale
+}
+
+/// `lod_cut` with the projected errors it compared: (in the cut, own px, parent px).
+#[allow(clippy::too_many_arguments)]
+pub fn lod_cut(
+    view: &View,
+    world_from_mesh: &[[f32; 4]; 4],
+    scale: f32,
+    own_sphere: [f32; 4],
+    own_error: f32,
+    parent_sphere: [f32; 4],
+    parent_error: f32,
+    threshold: f32,
+) -> (bool, f32, f32) {
+    let own_center = transform_point(world_from_mesh, xyz(own_sphere));
+    let own = project_error_to_pixels(view, own_center, own_sphere[3] * scale, own_error * scale);
+    if own > threshold {
+        return (false, own, f32::MAX);
+    }
+    if parent_error >= f32::MAX {
+        return (true, own, f32::MAX);
+    }
+    let parent_center = transform_point(world_from_mesh, xyz(parent_sphere));
+    let parent = project_error_to_pixels(
+        view,
+        parent_center,
+        parent_sphere[3] * scale,
+        parent_error * scale,
+    );
+    (parent > threshold, own, parent)
+}
+
+/// `is_software`: (software, near margin, screen box size).
+pub fn is_software(
+    view: &View,
+    center: [f32; 3],
+    radius: f32,
+    threshold: f32,
+) -> (bool, f32, [f32; 2]) {
+    let near = view.frustum[4];
+    let near_distance = dot3(xyz(near), center) + near[3];
+    if near_distance <= radius {
+        return (false, near_distance - radius, [0.0; 2]);
+    }
+    let c = transform_point(&view.view, center);
+    let mut lo = [f32::MAX; 2];
+    let mut hi = [-f32::MAX; 2];
+    for k in 0..8u32 {
+        let pick = |bit: u32| if k & bit != 0 { radius } else { -radius };
+        let corner = [c[0] + pick(1), c[1] + pick(2), c[2] + pick(4), 1.0];
+        let clip = mat_vec(&view.projection, corner);
+        let ndc = [clip[0] / clip[3], clip[1] / clip[3]];
+        let screen = [
+            (ndc[0] * 0.5 + 0.5) * view.viewport_size[0],
+            (0.5 - ndc[1] * 0.5) * view.viewport_size[1],
+        ];
+        for a in 0..2 {
+            lo[a] = lo[a].min(screen[a]);
+            hi[a] = hi[a].max(screen[a]);
+        }
+    }
+    let size = [hi[0] - lo[0], hi[1] - lo[1]];
+    (
+        size[0] < threshold && size[1] < threshold,
+        near_distance - radius,
+        size,
+    )
+}
+
+/// Everything the pass decides for one cluster.
+pub fn classify(scene: &SceneData, view: &View, cluster: Cluster, t: &Thresholds) -> Decision {
+    let instance = &scene.instances[cluster.instance as usize];
+    let meshlet = &scene.meshlets[cluster.meshlet as usize];
+    let scale = instance_max_scale(instance);
+    let bounds = meshlet.bounds;
+    let center = transform_point(&instance.world_from_local, xyz(bounds));
+    let radius = bounds[3] * scale;
+    let (in_frustum, frustum_margin) = sphere_in_frustum(view, center, radius);
+    let mut d = Decision {
+        frustum_margin,
+        in_frustum,
+        radius,
+        ..Decision::default()
+    };
+    if !in_frustum {
+        return d;
+    }
+    let group = |g: u32| scene.groups.get(g as usize).filter(|_| g != NO_GROUP);
+    let (own_sphere, own_error) =
+        group(meshlet.source_group).map_or((bounds, 0.0), |g| (g.lod_sphere, g.error));
+    let (parent_sphere, parent_error) =
+        group(meshlet.parent_group).map_or(([0.0; 4], f32::MAX), |g| (g.lod_sphere, g.error));
+    let (in_cut, own_px, parent_px) = lod_cut(
+        view,
+        &instance.world_from_local,
+        scale,
+        own_sphere,
+        own_error,
+        parent_sphere,
+        parent_error,
+        t.lod_threshold_px,
+    );
+    d.in_cut = in_cut;
+    d.own_px = own_px;
+    d.parent_px = parent_px;
+    if !in_cut {
+        return d;
+    }
+    let (software, near_margin, box_size) = is_software(view, center, radius, t.sw_threshold_px);
+    d.software = software || !t.hardware;
+    d.near_margin = near_margin;
+    d.box_size = box_size;
+    d
+}
+
+/// The reference over a cluster list, for a raster list of `capacity` slots.
+pub fn cpu_cull(
+    scene: &SceneData,
+    view: &View,
+    clusters: &[Cluster],
+    thresholds: &Thresholds,
+    capacity: u32,
+) -> CullResult {
+    let mut r = CullResult::default();
+    for &cluster in clusters {
+        let d = classify(scene, view, cluster, thresholds);
+        if !d.in_frustum {
+            continue;
+        }
+        r.frustum.push(cluster);
+        if !d.in_cut {
+            continue;
+        }
+        let slot_free = (r.cut.len() as u64) < capacity as u64;
+        r.cut.push(cluster);
+        let triangles = scene.meshlets[cluster.meshlet as usize].triangle_count();
+        let (side, count, tris) = if d.software {
+            (&mut r.software, 0, 5)
+        } else {
+            (&mut r.hardware, 1, 6)
+        };
+        side.push(cluster);
+        if slot_free {
+            r.counts[count] += 1;
+            r.counts[tris] += triangles;
+        }
+    }
+    r.counts[2] = r.cut.len() as u32;
+    r.counts[3] = capacity;
+    r.counts[4] = r.frustum.len() as u32;
+    r.hw_args = [HW_VERTICES, r.counts[1], 0, 0];
+    r
+}
