@@ -1,0 +1,474 @@
+//! The reference: depth.wgsl and shade.wgsl step by step on the CPU, in f32 and in the
+//! same order, so the GPU test can hold the pass to exact results where the shader's
+//! arithmetic is exact (ids, depths) and to a stated tolerance where drivers may round
+//! differently (the shaded view).
+
+use crate::settings::{DebugView, Settings};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use meshlight_gpu_scene::SceneData;
+use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout};
+use meshlight_scene::asset::triangles;
+use meshlight_scene::compress::{NORMAL_BITS, decode_octahedral, get_bits};
+use meshlight_shaders::cpu::layout::{Cluster, Instance, MESH_FLAG_UVS, Mesh, View};
+use meshlight_shaders::cpu::visbuffer;
+
+/// shade.wgsl's `SKY_ZENITH` and `SKY_HORIZON`.
+pub const SKY_ZENITH: Vec3 = Vec3::new(0.25, 0.45, 0.8);
+pub const SKY_HORIZON: Vec3 = Vec3::new(0.75, 0.85, 0.95);
+/// The `raster` view's colours (`SOFTWARE_COLOR`, `HARDWARE_COLOR`).
+pub const SOFTWARE_COLOR: [u8; 3] = [230, 90, 50];
+pub const HARDWARE_COLOR: [u8; 3] = [50, 120, 230];
+/// Dark checker squares multiply the base colour by this (`CHECKER_DARK`).
+pub const CHECKER_DARK: f32 = 0.55;
+
+/// Everything the pass reads, as the CPU holds it.
+#[derive(Clone, Copy, Debug)]
+pub struct Frame<'a> {
+    pub scene: &'a SceneData,
+    pub view: &'a View,
+    /// The slots visibility cluster ids index.
+    pub raster_clusters: &'a [Cluster],
+    /// `raster_counts[0]`: ids below it were drawn by the software rasteriser.
+    pub software_clusters: u32,
+    /// `width × height` values, row-major.
+    pub visbuffer: &'a [u64],
+    pub width: u32,
+    pub height: u32,
+}
+
+/// lowbias32, the hash of shade.wgsl's `hash`.
+pub fn hash(x: u32) -> u32 {
+    let mut h = x;
+    h ^= h >> 16;
+    h = h.wrapping_mul(0x7feb_352d);
+    h ^= h >> 15;
+    h = h.wrapping_mul(0x846c_a68b);
+    h ^= h >> 16;
+    h
+}
+
+/// The colour of an id in the debug views: three bytes of its hash lifted to 64..=255.
+pub fn id_color(id: u32) -> [u8; 3] {
+    let h = hash(id);
+    [0, 8, 16].map(|shift| (64 + ((h >> shift) & 0xff) * 3 / 4) as u8)
+}
+
+/// The `depth` target: each pixel's reverse-Z depth, 0 where empty.
+pub fn depth(visbuffer: &[u64], width: u32, height: u32) -> Vec<f32> {
+    assert_eq!(
+        visbuffer.len(),
+        width as usize * height as usize,
+        "the visibility buffer must hold width × height values"
+    );
+    visbuffer
+        .iter()
+        .map(|&v| {
+            if is_empty(v) {
+                0.0
+            } else {
+                visbuffer::depth(v)
+            }
+        })
+        .collect()
+}
+
+/// The `material_depth` target: [`crate::material_depth`] of the material of the
+/// instance each pixel's cluster draws, 0 where empty.
+pub fn material_depth(
+    scene: &SceneData,
+    raster_clusters: &[Cluster],
+    visbuffer: &[u64],
+) -> Vec<f32> {
+    visbuffer
+        .iter()
+        .map(|&v| {
+            if is_empty(v) {
+                return 0.0;
+            }
+            let cluster = cluster_of(raster_clusters, v);
+            crate::material_depth(instance_of(scene, &cluster).material)
+        })
+        .collect()
+}
+
+/// The `color` target for `settings.view`, RGBA8 row-major, alpha 255.
+pub fn shade(frame: &Frame, settings: &Settings) -> Vec<[u8; 4]> {
+    let light = ShadeLight {
+        direction: settings.light_direction.normalize_or_zero(),
+        color: settings.light_color,
+        ambient: settings.ambient_color,
+        checker_scale: settings.checker_scale,
+    };
+    let mut out = Vec::with_capacity(frame.visbuffer.len());
+    for y in 0..frame.height {
+        for x in 0..frame.width {
+            let value = frame.visbuffer[(y * frame.width + x) as usize];
+            let pixel = Vec2::new(x as f32, y as f32) + Vec2::splat(0.5);
+            let rgb = pixel_color(frame, &light, settings.view, value, pixel);
+            let [r, g, b] = rgb.clamp(Vec3::ZERO, Vec3::ONE).to_array().map(unorm8);
+            out.push([r, g, b, 255]);
+        }
+    }
+    out
+}
+
+/// The light as the shader's `Params` holds it (direction already normalised).
+struct ShadeLight {
+    direction: Vec3,
+    color: Vec3,
+    ambient: Vec3,
+    checker_scale: f32,
+}
+
+/// shade.wgsl's `shade_pixels` before the clamp and the store.
+fn pixel_color(
+    frame: &Frame,
+    light: &ShadeLight,
+    view: DebugView,
+    value: u64,
+    pixel: Vec2,
+) -> Vec3 {
+    let empty = is_empty(value);
+    let id = visbuffer::cluster(value);
+    match view {
+        _ if empty && view != DebugView::Shaded && view != DebugView::Depth => Vec3::ZERO,
+        DebugView::Clusters => unorm(id_color(id)),
+        DebugView::Triangles => unorm(id_color(value as u32)),
+        DebugView::Lod => {
+            let cluster = cluster_of(frame.raster_clusters, value);
+            unorm(id_color(meshlet_of(frame.scene, &cluster).level()))
+        }
+        DebugView::Raster => unorm(if id < frame.software_clusters {
+            SOFTWARE_COLOR
+        } else {
+            HARDWARE_COLOR
+        }),
+        // Reverse-Z depth falls off as 1 / distance; the fourth root spreads it.
+        DebugView::Depth => Vec3::splat(visbuffer::depth(value).sqrt().sqrt()),
+        DebugView::Shaded if empty => {
+            let t = 1.0 - pixel.y / frame.height as f32;
+            mix(SKY_HORIZON, SKY_ZENITH, t)
+        }
+        DebugView::Shaded => shade_surface(frame, light, value, pixel),
+    }
+}
+
+/// GLSL's and WGSL's `mix`: `a · (1 − t) + b · t`.
+fn mix(a: Vec3, b: Vec3, t: f32) -> Vec3 {
+    a * (1.0 - t) + b * t
+}
+
+fn unorm(c: [u8; 3]) -> Vec3 {
+    Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) / 255.0
+}
+
+/// A [0, 1] float to an 8-bit unorm, round to nearest.
+fn unorm8(x: f32) -> u8 {
+    (x * 255.0).round() as u8
+}
+
+/// The depth bits are 0 only for the cleared value (`visbuffer_is_empty`).
+fn is_empty(value: u64) -> bool {
+    value >> 32 == 0
+}
+
+// Out-of-range indices read zeros, as robust buffer access does on the GPU; the
+// rasterisers never write such ids.
+fn cluster_of(raster_clusters: &[Cluster], value: u64) -> Cluster {
+    raster_clusters
+        .get(visbuffer::cluster(value) as usize)
+        .copied()
+        .unwrap_or_default()
+}
+
+fn instance_of(scene: &SceneData, cluster: &Cluster) -> Instance {
+    scene
+        .instances
+        .get(cluster.instance as usize)
+        .copied()
+        .unwrap_or_default()
+}
+
+fn meshlet_of(scene: &SceneData, cluster: &Cluster) -> MeshletRecord {
+    scene
+        .meshlets
+        .get(cluster.meshlet as usize)
+        .copied()
+        .unwrap_or_else(bytemuck::Zeroable::zeroed)
+}
+
+/// One corner of a triangle, decoded from the payload as shade.wgsl decodes it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Corner {
+    /// Mesh space: `grid.xyz + (grid_min + offset) · grid.w`, the integer add first.
+    pub position: Vec3,
+    /// Mesh-space unit normal.
+    pub normal: Vec3,
+    /// `uv_grid.xy + (u16, u16) · uv_grid.zw`, or 0 when the mesh has no UVs.
+    pub uv: Vec2,
+}
+
+/// The three corners of triangle `t` of meshlet `m`, in winding order.
+pub fn triangle_corners(scene: &SceneData, mesh: &Mesh, m: &MeshletRecord, t: u32) -> [Corner; 3] {
+    let has_uvs = mesh.flags & MESH_FLAG_UVS != 0;
+    let layout = PayloadLayout::of(m, has_uvs);
+    let start = (m.data_offset as usize).min(scene.payload.len());
+    let data = &scene.payload[start..];
+    let block = data.get(layout.triangles as usize..).unwrap_or(&[]);
+    let (vc, tc) = (m.vertex_count(), m.triangle_count());
+    let corners = triangles::decode(block, t, m.triangle_bits(), vc, tc);
+    let axis = m.axis_bits();
+    let (normal_min, normal_bits) = (m.normal_min(), m.normal_bits());
+    let stride = m.vertex_stride() as usize;
+    let grid = mesh.position_grid;
+    let uv_grid = mesh.uv_grid;
+    corners.map(|v| {
+        let mut at = v as usize * stride;
+        let mut field = |bits: u32| {
+            let d = get_bits(data, at, bits).unwrap_or(0);
+            at += bits as usize;
+            d
+        };
+        let q = [0, 1, 2].map(|k| m.grid_min[k].wrapping_add(field(axis[k])));
+        let position = Vec3::new(grid[0], grid[1], grid[2])
+            + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * grid[3];
+        let oct = [0, 1].map(|k| normal_min[k] + field(normal_bits[k]) as i32);
+        let normal = decode_octahedral(oct, NORMAL_BITS);
+        let uv = if has_uvs {
+            let word = data.get((layout.uvs + v) as usize).copied().unwrap_or(0);
+            Vec2::new(uv_grid[0], uv_grid[1])
+                + Vec2::new((word & 0xffff) as f32, (word >> 16) as f32)
+                    * Vec2::new(uv_grid[2], uv_grid[3])
+        } else {
+            Vec2::ZERO
+        };
+        Corner {
+            position,
+            normal,
+            uv,
+        }
+    })
+}
+
+/// Perspective-correct barycentrics at a pixel and their change per pixel step in x
+/// and y (`Barycentrics` in shade.wgsl).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Barycentrics {
+    pub b: Vec3,
+    pub ddx: Vec3,
+    pub ddy: Vec3,
+}
+
+/// shade.wgsl's `barycentrics`: the clip-space corners, the pixel position (centres at
+/// +0.5) and the viewport size in pixels.
+pub fn barycentrics(clip: [Vec4; 3], pixel: Vec2, size: Vec2) -> Barycentrics {
+    let [c0, c1, c2] = clip;
+    let p = Vec2::new(pixel.x * 2.0 / size.x - 1.0, 1.0 - pixel.y * 2.0 / size.y);
+    let step = Vec2::new(2.0 / size.x, -2.0 / size.y);
+    let iw = Vec3::new(1.0 / c0.w, 1.0 / c1.w, 1.0 / c2.w);
+    let n0 = c0.truncate().truncate() * iw.x;
+    let d1 = c1.truncate().truncate() * iw.y - n0;
+    let d2 = c2.truncate().truncate() * iw.z - n0;
+    let dp = p - n0;
+    let det = d1.x * d2.y - d1.y * d2.x;
+    if det.abs() < 1e-30 {
+        return Barycentrics {
+            b: Vec3::X,
+            ..Default::default()
+        };
+    }
+    let inv_det = 1.0 / det;
+    let l1 = (dp.x * d2.y - dp.y * d2.x) * inv_det;
+    let l2 = (d1.x * dp.y - d1.y * dp.x) * inv_det;
+    let l = Vec3::new(1.0 - l1 - l2, l1, l2);
+    let gx = Vec3::new(d1.y - d2.y, d2.y, -d1.y) * inv_det * step.x;
+    let gy = Vec3::new(d2.x - d1.x, -d2.x, d1.x) * inv_det * step.y;
+    let q = l * iw;
+    let s = 1.0 / (q.x + q.y + q.z);
+    let b = q * s;
+    let sx = gx.dot(iw);
+    let sy = gy.dot(iw);
+    Barycentrics {
+        b,
+        ddx: (gx * iw - b * sx) * s,
+        ddy: (gy * iw - b * sy) * s,
+    }
+}
+
+/// WGSL's `fract`: `x − floor(x)`, in [0, 1) for negative x too (unlike `f32::fract`).
+fn fract(v: Vec2) -> Vec2 {
+    v - v.floor()
+}
+
+/// shade.wgsl's `filtered_checker`: the square wave (1 on one colour of squares, 0 on
+/// the other) averaged over the box `p ± w / 2`, `w` the larger footprint per axis.
+pub fn filtered_checker(p: Vec2, ddx: Vec2, ddy: Vec2) -> f32 {
+    let w = ddx.abs().max(ddy.abs()) + Vec2::splat(1e-4);
+    let i = 2.0
+        * ((fract((p - 0.5 * w) * 0.5) - Vec2::splat(0.5)).abs()
+            - (fract((p + 0.5 * w) * 0.5) - Vec2::splat(0.5)).abs())
+        / w;
+    0.5 - 0.5 * i.x * i.y
+}
+
+/// `instance_transform_normal`: the transposed upper 3×3 of `local_from_world` (the
+/// inverse transpose of `world_from_local`), then normalised.
+pub fn transform_normal(instance: &Instance, n: Vec3) -> Vec3 {
+    let m = Mat4::from_cols_array_2d(&instance.local_from_world);
+    (Mat3::from_mat4(m).transpose() * n).normalize()
+}
+
+/// shade.wgsl's `shade`: the lit, checkered surface of the pixel's triangle.
+fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> Vec3 {
+    let scene = frame.scene;
+    let cluster = cluster_of(frame.raster_clusters, value);
+    let instance = instance_of(scene, &cluster);
+    let m = meshlet_of(scene, &cluster);
+    let mesh = scene
+        .meshes
+        .get(instance.mesh as usize)
+        .copied()
+        .unwrap_or_default();
+    let corners = triangle_corners(scene, &mesh, &m, visbuffer::triangle(value));
+    let world_from_local = Mat4::from_cols_array_2d(&instance.world_from_local);
+    let view_projection = Mat4::from_cols_array_2d(&frame.view.view_projection);
+    let clip = corners.map(|c| {
+        let world = world_from_local * c.position.extend(1.0);
+        view_projection * world.truncate().extend(1.0)
+    });
+    let size = Vec2::new(frame.width as f32, frame.height as f32);
+    let bary = barycentrics(clip, pixel, size);
+    let b = bary.b;
+    let [k0, k1, k2] = corners;
+    let n = transform_normal(
+        &instance,
+        k0.normal * b.x + k1.normal * b.y + k2.normal * b.z,
+    );
+    let scale = light.checker_scale;
+    let weigh = |w: Vec3| (k0.uv * w.x + k1.uv * w.y + k2.uv * w.z) * scale;
+    let checker = filtered_checker(weigh(b), weigh(bary.ddx), weigh(bary.ddy));
+    let base = scene
+        .materials
+        .get(instance.material as usize)
+        .map_or(Vec3::ZERO, |m| Vec4::from_array(m.base_color).truncate());
+    let albedo = base * (CHECKER_DARK * (1.0 - checker) + checker);
+    let diffuse = n.dot(light.direction).max(0.0);
+    albedo * (light.ambient + light.color * diffuse)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn clip_of(ndc: Vec2, w: f32) -> Vec4 {
+        Vec4::new(ndc.x * w, ndc.y * w, 0.5, w)
+    }
+
+    fn pixel_of(ndc: Vec2, size: Vec2) -> Vec2 {
+        Vec2::new((ndc.x + 1.0) * 0.5 * size.x, (1.0 - ndc.y) * 0.5 * size.y)
+    }
+
+    #[test]
+    fn id_colours_are_lifted_hash_bytes() {
+        // lowbias32 of 1, computed by hand from the constants.
+        let mut h: u32 = 1;
+        h ^= h >> 16;
+        h = h.wrapping_mul(0x7feb352d);
+        h ^= h >> 15;
+        h = h.wrapping_mul(0x846ca68b);
+        h ^= h >> 16;
+        assert_eq!(hash(1), h);
+        assert_ne!(hash(1), hash(2));
+        let c = id_color(1);
+        assert_eq!(c[0] as u32, 64 + (h & 0xff) * 3 / 4);
+        assert_eq!(c[2] as u32, 64 + ((h >> 16) & 0xff) * 3 / 4);
+        for id in 0..1000 {
+            assert!(id_color(id).iter().all(|&b| b >= 64));
+        }
+        // Neighbouring ids get visibly different colours.
+        let far = (0..200u32)
+            .filter(|&i| {
+                let (a, b) = (id_color(i), id_color(i + 1));
+                (0..3).map(|k| a[k].abs_diff(b[k]) as u32).sum::<u32>() > 30
+            })
+            .count();
+        assert!(far > 180, "{far}");
+    }
+
+    #[test]
+    fn barycentrics_are_perspective_correct_and_their_derivatives_match_differences() {
+        let size = Vec2::new(64.0, 48.0);
+        let ndc = [
+            Vec2::new(-0.8, -0.6),
+            Vec2::new(0.7, -0.5),
+            Vec2::new(0.1, 0.9),
+        ];
+        let w = [1.0, 3.0, 7.0];
+        let clip = [0, 1, 2].map(|i| clip_of(ndc[i], w[i]));
+        // At a corner the weights are that corner's.
+        for (i, unit) in [Vec3::X, Vec3::Y, Vec3::Z].into_iter().enumerate() {
+            let b = barycentrics(clip, pixel_of(ndc[i], size), size).b;
+            assert!((b - unit).abs().max_element() < 1e-4, "{i}: {b}");
+        }
+        // The screen midpoint of a far and a near corner lies nearer the near one in
+        // 3-D: weights w_far / (w_near + w_far) for the near corner.
+        let mid = (ndc[0] + ndc[2]) * 0.5;
+        let b = barycentrics(clip, pixel_of(mid, size), size).b;
+        let want = Vec3::new(7.0 / 8.0, 0.0, 1.0 / 8.0);
+        assert!((b - want).abs().max_element() < 1e-5, "{b}");
+        // Derivatives against central differences of the weights.
+        let p = pixel_of(Vec2::new(0.0, -0.1), size);
+        let at = |q: Vec2| barycentrics(clip, q, size).b;
+        let got = barycentrics(clip, p, size);
+        let dx = (at(p + Vec2::X * 0.01) - at(p - Vec2::X * 0.01)) / 0.02;
+        let dy = (at(p + Vec2::Y * 0.01) - at(p - Vec2::Y * 0.01)) / 0.02;
+        assert!(
+            (got.ddx - dx).abs().max_element() < 1e-3,
+            "{} vs {dx}",
+            got.ddx
+        );
+        assert!(
+            (got.ddy - dy).abs().max_element() < 1e-3,
+            "{} vs {dy}",
+            got.ddy
+        );
+        assert!(got.ddx.abs().max_element() > 1e-3 && got.ddy.abs().max_element() > 1e-3);
+        // Weights always sum to 1; a degenerate triangle falls back to corner 0.
+        assert!((got.b.element_sum() - 1.0).abs() < 1e-6);
+        let flat = [clip[0], clip[0], clip[1]];
+        assert_eq!(barycentrics(flat, p, size).b, Vec3::X);
+    }
+
+    #[test]
+    fn the_checker_is_a_square_wave_that_fades_to_grey_when_filtered() {
+        let tiny = Vec2::splat(1e-6);
+        // Squares of one unit: (0.5, 0.5) and (1.5, 1.5) are one colour, (1.5, 0.5) the other.
+        let a = filtered_checker(Vec2::new(0.5, 0.5), tiny, tiny);
+        let b = filtered_checker(Vec2::new(1.5, 1.5), tiny, tiny);
+        let c = filtered_checker(Vec2::new(1.5, 0.5), tiny, tiny);
+        let d = filtered_checker(Vec2::new(-0.5, 0.5), tiny, tiny);
+        assert!((a - b).abs() < 1e-2 && (a - c).abs() > 0.98, "{a} {b} {c}");
+        assert!(
+            (c - d).abs() < 1e-2,
+            "negative coordinates continue the pattern"
+        );
+        // A footprint of many squares averages to half.
+        let wide = Vec2::splat(20.0);
+        assert!((filtered_checker(Vec2::new(0.3, 0.7), wide, wide) - 0.5).abs() < 0.05);
+    }
+
+    #[test]
+    fn normals_use_the_inverse_transpose() {
+        // A non-uniform scale: the plane x = y through the origin has normal (1, -1, 0)
+        // before; after stretching x by 2 the plane is x = 2y, normal (1, -2, 0).
+        let world_from_local = Mat4::from_scale(Vec3::new(2.0, 1.0, 1.0));
+        let instance = Instance {
+            world_from_local: world_from_local.to_cols_array_2d(),
+            local_from_world: world_from_local.inverse().to_cols_array_2d(),
+            ..Default::default()
+        };
+        let n = transform_normal(&instance, Vec3::new(1.0, -1.0, 0.0).normalize());
+        let want = Vec3::new(1.0, -2.0, 0.0).normalize();
+        assert!((n - want).length() < 1e-6, "{n}");
+    }
+}

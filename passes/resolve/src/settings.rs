@@ -1,0 +1,356 @@
+//! What the resolve pass is asked for: its size, the debug view shown in `color`, and
+//! the light of the shaded view; read from code or from a pipeline file's params.
+
+use glam::Vec3;
+use meshlight_graph::file::Params;
+use meshlight_graph::{GraphError, Result};
+use std::fmt;
+use std::str::FromStr;
+
+/// What the `color` target shows. The discriminants are the `VIEW_*` constants of
+/// shade.wgsl, which the pass hands to the shader as they are.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum DebugView {
+    /// The lit, checkered surface over a sky gradient.
+    #[default]
+    Shaded = 0,
+    /// A colour per visibility cluster id (per slot of `raster_clusters`).
+    Clusters = 1,
+    /// A colour per triangle: the visibility value's low word.
+    Triangles = 2,
+    /// A colour per LOD level of the pixel's meshlet.
+    Lod = 3,
+    /// Which rasteriser drew the pixel: software or hardware.
+    Raster = 4,
+    /// The reverse-Z depth as grey, `depth^(1/4)`.
+    Depth = 5,
+}
+
+impl DebugView {
+    /// Every view, in discriminant order.
+    pub const ALL: [DebugView; 6] = [
+        DebugView::Shaded,
+        DebugView::Clusters,
+        DebugView::Triangles,
+        DebugView::Lod,
+        DebugView::Raster,
+        DebugView::Depth,
+    ];
+
+    /// The name pipeline files and the command line use.
+    pub fn name(self) -> &'static str {
+        match self {
+            DebugView::Shaded => "shaded",
+            DebugView::Clusters => "clusters",
+            DebugView::Triangles => "triangles",
+            DebugView::Lod => "lod",
+            DebugView::Raster => "raster",
+            DebugView::Depth => "depth",
+        }
+    }
+
+    /// The view called `name` (as [`DebugView::name`] spells it).
+    pub fn parse(name: &str) -> std::result::Result<Self, UnknownView> {
+        Self::ALL
+            .into_iter()
+            .find(|v| v.name() == name)
+            .ok_or_else(|| UnknownView(name.to_string()))
+    }
+}
+
+impl fmt::Display for DebugView {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for DebugView {
+    type Err = UnknownView;
+    fn from_str(s: &str) -> std::result::Result<Self, UnknownView> {
+        Self::parse(s)
+    }
+}
+
+/// A view name that is none of [`DebugView::ALL`]; its message lists the valid ones.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnknownView(pub String);
+
+impl fmt::Display for UnknownView {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let names: Vec<&str> = DebugView::ALL.iter().map(|v| v.name()).collect();
+        write!(
+            f,
+            "unknown view `{}`; use one of: {}",
+            self.0,
+            names.join(", ")
+        )
+    }
+}
+
+impl std::error::Error for UnknownView {}
+
+/// How the shaded view lights the surface, and which view `color` shows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// World-space direction towards the light; normalised when the pass records.
+    pub light_direction: Vec3,
+    /// Linear RGB radiance of the light.
+    pub light_color: Vec3,
+    /// Linear RGB ambient term, so faces turned away from the light keep their shape.
+    pub ambient_color: Vec3,
+    pub view: DebugView,
+    /// Checker squares per UV unit.
+    pub checker_scale: f32,
+}
+
+impl Default for Settings {
+    /// A sun from the upper left, in front of a camera looking down −z; a slightly blue
+    /// ambient, as from the sky.
+    fn default() -> Self {
+        Self {
+            light_direction: Vec3::new(-0.5, 0.8, 0.35),
+            light_color: Vec3::splat(1.0),
+            ambient_color: Vec3::new(0.22, 0.25, 0.3),
+            view: DebugView::Shaded,
+            checker_scale: 8.0,
+        }
+    }
+}
+
+/// The `compute` implementation of `resolve`: `width` × `height` is the visibility
+/// buffer's size and the size of the three targets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resolve {
+    pub width: u32,
+    pub height: u32,
+    pub settings: Settings,
+}
+
+/// The params a pipeline file may give; any other key is an error.
+pub const KEYS: [&str; 7] = [
+    "width",
+    "height",
+    "view",
+    "checker_scale",
+    "light_direction",
+    "light_color",
+    "ambient_color",
+];
+
+fn parameter_error(message: String) -> GraphError {
+    GraphError::Parameter {
+        pass: String::new(),
+        message,
+    }
+}
+
+/// The TOML text of parameter `key`, or `None` when it is absent. `Params` has getters
+/// for integers, booleans and strings only; any other value comes back in the string
+/// getter's error as its TOML text, which is taken from there.
+fn value_text(params: &Params, key: &str) -> Result<Option<String>> {
+    if !params.keys().any(|k| k == key) {
+        return Ok(None);
+    }
+    match params.string(key, "") {
+        Ok(s) => Ok(Some(s)),
+        Err(GraphError::Parameter { message, .. }) => Ok(Some(
+            message.rsplit('`').nth(1).unwrap_or_default().to_string(),
+        )),
+        Err(e) => Err(e),
+    }
+}
+
+/// A finite number parameter (integer or float in the file).
+fn float_param(params: &Params, key: &str, default: f32) -> Result<f32> {
+    let Some(text) = value_text(params, key)? else {
+        return Ok(default);
+    };
+    text.trim()
+        .parse::<f32>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| parameter_error(format!("`{key}` must be a finite number, not `{text}`")))
+}
+
+/// A parameter of three finite numbers, written as a TOML array `[x, y, z]`.
+fn vec3_param(params: &Params, key: &str, default: Vec3) -> Result<Vec3> {
+    let Some(text) = value_text(params, key)? else {
+        return Ok(default);
+    };
+    let parsed: Option<Vec<f32>> = text
+        .trim()
+        .strip_prefix('[')
+        .and_then(|t| t.strip_suffix(']'))
+        .map(|inner| {
+            inner
+                .split(',')
+                .map(|c| c.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
+                .collect::<Option<Vec<f32>>>()
+                .unwrap_or_default()
+        });
+    match parsed.as_deref() {
+        Some(&[x, y, z]) => Ok(Vec3::new(x, y, z)),
+        _ => Err(parameter_error(format!(
+            "`{key}` must be an array of three finite numbers such as [0.5, 1.0, 0.25], not `{text}`"
+        ))),
+    }
+}
+
+impl Resolve {
+    /// A `width` × `height` resolve with the default [`Settings`].
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            settings: Settings::default(),
+        }
+    }
+
+    /// The same pass showing `view`.
+    pub fn with_view(mut self, view: DebugView) -> Self {
+        self.settings.view = view;
+        self
+    }
+
+    /// Reads `width`, `height` (required, > 0), `view` (a [`DebugView`] name, default
+    /// `shaded`), `checker_scale` (> 0, default 8), and `light_direction` (non-zero),
+    /// `light_color`, `ambient_color` (non-negative) as `[x, y, z]` arrays.
+    pub fn from_params(params: &Params) -> Result<Self> {
+        params.only(&KEYS)?;
+        let width = params.u32("width", 0)?;
+        let height = params.u32("height", 0)?;
+        if width == 0 || height == 0 {
+            return Err(parameter_error(format!(
+                "`width` and `height` (the visibility buffer size) must both be > 0, got {width} × {height}"
+            )));
+        }
+        let defaults = Settings::default();
+        let view = DebugView::parse(&params.string("view", defaults.view.name())?)
+            .map_err(|e| parameter_error(format!("`view`: {e}")))?;
+        let checker_scale = float_param(params, "checker_scale", defaults.checker_scale)?;
+        if checker_scale <= 0.0 {
+            return Err(parameter_error(format!(
+                "`checker_scale` (checker squares per UV unit) must be > 0, got {checker_scale}"
+            )));
+        }
+        let light_direction = vec3_param(params, "light_direction", defaults.light_direction)?;
+        if light_direction.normalize_or_zero() == Vec3::ZERO {
+            return Err(parameter_error(format!(
+                "`light_direction` (towards the light) must not be zero, got {light_direction}"
+            )));
+        }
+        let colour = |key: &str, default: Vec3| -> Result<Vec3> {
+            let c = vec3_param(params, key, default)?;
+            if c.min_element() < 0.0 {
+                return Err(parameter_error(format!(
+                    "`{key}` (linear RGB) must not be negative, got {c}"
+                )));
+            }
+            Ok(c)
+        };
+        Ok(Self {
+            width,
+            height,
+            settings: Settings {
+                light_direction,
+                light_color: colour("light_color", defaults.light_color)?,
+                ambient_color: colour("ambient_color", defaults.ambient_color)?,
+                view,
+                checker_scale,
+            },
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(text: &str) -> Params {
+        // `Params::new` names the table type, so no direct toml dependency is needed.
+        Params::new(text.parse().unwrap())
+    }
+
+    fn message(r: Result<Resolve>) -> String {
+        match r {
+            Err(GraphError::Parameter { message, .. }) => message,
+            Err(other) => panic!("not a parameter error: {other}"),
+            Ok(r) => panic!("accepted: {r:?}"),
+        }
+    }
+
+    #[test]
+    fn names_round_trip_and_match_the_shader_constants() {
+        for (i, v) in DebugView::ALL.into_iter().enumerate() {
+            assert_eq!(v as u32, i as u32);
+            assert_eq!(v.name().parse::<DebugView>(), Ok(v));
+            assert_eq!(v.to_string(), v.name());
+        }
+        let e = "normals".parse::<DebugView>().unwrap_err().to_string();
+        assert!(e.contains("`normals`"), "{e}");
+        for v in DebugView::ALL {
+            assert!(e.contains(v.name()), "{e} lacks {v}");
+        }
+    }
+
+    #[test]
+    fn params_are_read_with_their_defaults() {
+        let r = Resolve::from_params(&params("width = 64\nheight = 48")).unwrap();
+        assert_eq!(r, Resolve::new(64, 48));
+        let r = Resolve::from_params(&params(
+            "width = 8\nheight = 4\nview = \"lod\"\nchecker_scale = 2.5\n\
+             light_direction = [0, 1, 0]\nlight_color = [2, 1.5, 1]\nambient_color = [0.0, 0.0, 0.1]",
+        ))
+        .unwrap();
+        assert_eq!((r.width, r.height), (8, 4));
+        let s = r.settings;
+        assert_eq!(s.view, DebugView::Lod);
+        assert_eq!(s.checker_scale, 2.5);
+        assert_eq!(s.light_direction, Vec3::Y);
+        assert_eq!(s.light_color, Vec3::new(2.0, 1.5, 1.0));
+        assert_eq!(s.ambient_color, Vec3::new(0.0, 0.0, 0.1));
+        // An integer scale is a number too.
+        let r = Resolve::from_params(&params("width = 8\nheight = 4\nchecker_scale = 3"));
+        assert_eq!(r.unwrap().settings.checker_scale, 3.0);
+    }
+
+    #[test]
+    fn bad_params_are_errors_that_name_what_to_change() {
+        let m = message(Resolve::from_params(&params("width = 0\nheight = 48")));
+        assert!(m.contains("`width`") && m.contains("0 × 48"), "{m}");
+        let m = message(Resolve::from_params(&params("height = 48")));
+        assert!(m.contains("`width`"), "{m}");
+        let m = message(Resolve::from_params(&params(
+            "width = 4\nheight = 4\nview = \"normal\"",
+        )));
+        assert!(
+            m.contains("`normal`") && m.contains("shaded, clusters"),
+            "{m}"
+        );
+        let m = message(Resolve::from_params(&params(
+            "width = 4\nheight = 4\nwidht = 4",
+        )));
+        assert!(m.contains("`widht`"), "{m}");
+        let m = message(Resolve::from_params(&params(
+            "width = 4\nheight = 4\nchecker_scale = \"big\"",
+        )));
+        assert!(m.contains("`checker_scale`") && m.contains("big"), "{m}");
+        let m = message(Resolve::from_params(&params(
+            "width = 4\nheight = 4\nchecker_scale = 0",
+        )));
+        assert!(m.contains("> 0"), "{m}");
+        let m = message(Resolve::from_params(&params(
+            "width = 4\nheight = 4\nlight_direction = [1, 2]",
+        )));
+        assert!(m.contains("three finite numbers"), "{m}");
+        let m = message(Resolve::from_params(&params(
+            "width = 4\nheight = 4\nlight_direction = [0, 0, 0]",
+        )));
+        assert!(m.contains("must not be zero"), "{m}");
+        let m = message(Resolve::from_params(&params(
+            "width = 4\nheight = 4\nlight_color = [1, -1, 1]",
+        )));
+        assert!(m.contains("`light_color`") && m.contains("negative"), "{m}");
+    }
+}

@@ -1,0 +1,214 @@
+// Material shading from the visibility buffer, one thread per pixel: the triangle is
+// fetched again from the payload, its corners transformed again, and perspective-correct
+// barycentrics and their screen-space derivatives reconstructed at the pixel centre from
+// the three clip-space corners. `cpu::shade` is the reference; every step has its mirror
+// there.
+
+#import meshlight::math::read_bits
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv, meshlet_triangle_location, meshlet_triangle}
+#import meshlight::instance::{Instance, Material, instance_transform_normal}
+#import meshlight::view::View
+#import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
+
+// What the colour target shows (`DebugView` on the Rust side).
+const VIEW_SHADED: u32 = 0u;
+const VIEW_CLUSTERS: u32 = 1u;
+const VIEW_TRIANGLES: u32 = 2u;
+const VIEW_LOD: u32 = 3u;
+const VIEW_RASTER: u32 = 4u;
+const VIEW_DEPTH: u32 = 5u;
+
+const SKY_ZENITH: vec3<f32> = vec3(0.25, 0.45, 0.8);
+const SKY_HORIZON: vec3<f32> = vec3(0.75, 0.85, 0.95);
+const SOFTWARE_COLOR: vec3<u32> = vec3(230u, 90u, 50u);
+const HARDWARE_COLOR: vec3<u32> = vec3(50u, 120u, 230u);
+// Checker squares: dark ones multiply the base colour by this.
+const CHECKER_DARK: f32 = 0.55;
+
+struct Params {
+    // Unit vector towards the light, world space.
+    light_direction: vec4<f32>,
+    // Linear RGB radiance of the light and of the ambient term.
+    light_color: vec4<f32>,
+    ambient_color: vec4<f32>,
+    width: u32,
+    height: u32,
+    view_mode: u32,
+    // Checker squares per UV unit.
+    checker_scale: f32,
+}
+
+@group(0) @binding(0) var<storage, read> visbuffer: array<vec2<u32>>;
+@group(0) @binding(1) var<storage, read> raster_clusters: array<Cluster>;
+// Word 0: software clusters; ids below it were drawn in software.
+@group(0) @binding(2) var<storage, read> raster_counts: array<u32>;
+@group(0) @binding(3) var<storage, read> instances: array<Instance>;
+@group(0) @binding(4) var<storage, read> meshes: array<Mesh>;
+@group(0) @binding(5) var<storage, read> meshlets: array<Meshlet>;
+@group(0) @binding(6) var<storage, read> payload: array<u32>;
+@group(0) @binding(7) var<storage, read> materials: array<Material>;
+@group(0) @binding(8) var color: texture_storage_2d<rgba8unorm, write>;
+@group(0) @binding(9) var<uniform> view: View;
+@group(0) @binding(10) var<uniform> params: Params;
+
+fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
+    let at = meshlet_vertex_field(m, vertex, f);
+    return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
+}
+
+// A well-mixed 32-bit hash (lowbias32), for colours that tell neighbouring ids apart.
+fn hash(x: u32) -> u32 {
+    var h = x;
+    h ^= h >> 16u;
+    h *= 0x7feb352du;
+    h ^= h >> 15u;
+    h *= 0x846ca68bu;
+    h ^= h >> 16u;
+    return h;
+}
+
+// The colour of an id: three bytes of its hash, lifted to 64..255 so none is too dark.
+fn id_color(id: u32) -> vec3<u32> {
+    let h = hash(id);
+    let bytes = vec3(h & 0xffu, (h >> 8u) & 0xffu, (h >> 16u) & 0xffu);
+    return vec3(64u) + bytes * 3u / 4u;
+}
+
+fn byte_color(c: vec3<u32>) -> vec3<f32> {
+    return vec3<f32>(c) / 255.0;
+}
+
+// Perspective-correct barycentrics at a pixel and their derivatives per pixel step in
+// x and y, from the clip-space corners.
+struct Barycentrics {
+    b: vec3<f32>,
+    ddx: vec3<f32>,
+    ddy: vec3<f32>,
+}
+
+fn barycentrics(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, pixel: vec2<f32>) -> Barycentrics {
+    var out: Barycentrics;
+    let size = vec2(f32(params.width), f32(params.height));
+    // NDC of the pixel centre, and NDC per pixel step (y goes down the screen).
+    let p = vec2(pixel.x * 2.0 / size.x - 1.0, 1.0 - pixel.y * 2.0 / size.y);
+    let step = vec2(2.0 / size.x, -2.0 / size.y);
+    let iw = vec3(1.0 / c0.w, 1.0 / c1.w, 1.0 / c2.w);
+    let n0 = c0.xy * iw.x;
+    let d1 = c1.xy * iw.y - n0;
+    let d2 = c2.xy * iw.z - n0;
+    let dp = p - n0;
+    let det = d1.x * d2.y - d1.y * d2.x;
+    if abs(det) < 1e-30 {
+        out.b = vec3(1.0, 0.0, 0.0);
+        return out;
+    }
+    let inv_det = 1.0 / det;
+    // Screen-linear barycentrics and their NDC gradients.
+    let l1 = (dp.x * d2.y - dp.y * d2.x) * inv_det;
+    let l2 = (d1.x * dp.y - d1.y * dp.x) * inv_det;
+    let l = vec3(1.0 - l1 - l2, l1, l2);
+    let gx = vec3(d1.y - d2.y, d2.y, -d1.y) * inv_det * step.x;
+    let gy = vec3(d2.x - d1.x, -d2.x, d1.x) * inv_det * step.y;
+    // Perspective correction: b = l·iw / Σ l·iw, differentiated by the quotient rule.
+    let q = l * iw;
+    let s = 1.0 / (q.x + q.y + q.z);
+    out.b = q * s;
+    let sx = dot(gx, iw);
+    let sy = dot(gy, iw);
+    out.ddx = (gx * iw - out.b * sx) * s;
+    out.ddy = (gy * iw - out.b * sy) * s;
+    return out;
+}
+
+// A checkerboard box-filtered over the pixel's footprint in checker space (the
+// analytic integral of the square wave), so it fades to grey instead of aliasing.
+fn filtered_checker(p: vec2<f32>, ddx: vec2<f32>, ddy: vec2<f32>) -> f32 {
+    let w = max(abs(ddx), abs(ddy)) + vec2(1e-4);
+    let i = 2.0 * (abs(fract((p - 0.5 * w) * 0.5) - 0.5) - abs(fract((p + 0.5 * w) * 0.5) - 0.5)) / w;
+    return 0.5 - 0.5 * i.x * i.y;
+}
+
+fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
+    let id = visbuffer_cluster(value);
+    let t = visbuffer_triangle(value);
+    let cluster = raster_clusters[id];
+    let instance = instances[cluster.instance];
+    let m = meshlets[cluster.meshlet];
+    let mesh = meshes[instance.mesh];
+    let at = meshlet_triangle_location(m, mesh.flags, t);
+    let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+    var clip: array<vec4<f32>, 3>;
+    var normal: array<vec3<f32>, 3>;
+    var uv: array<vec2<f32>, 3>;
+    let has_uvs = (mesh.flags & MESH_FLAG_UVS) != 0u;
+    for (var k = 0u; k < 3u; k += 1u) {
+        let v = corners[k];
+        let p = meshlet_position(m, mesh.position_grid, vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u)));
+        let world = instance.world_from_local * vec4(p, 1.0);
+        clip[k] = view.view_projection * vec4(world.xyz, 1.0);
+        normal[k] = meshlet_normal(m, vec2(field(m, v, 3u), field(m, v, 4u)));
+        uv[k] = vec2(0.0);
+        if has_uvs {
+            uv[k] = meshlet_uv(mesh.uv_grid, payload[meshlet_uv_word(m) + v]);
+        }
+    }
+    let bary = barycentrics(clip[0], clip[1], clip[2], pixel);
+    let b = bary.b;
+    let n = instance_transform_normal(instance, normal[0] * b.x + normal[1] * b.y + normal[2] * b.z);
+    let st = (uv[0] * b.x + uv[1] * b.y + uv[2] * b.z) * params.checker_scale;
+    let st_dx = (uv[0] * bary.ddx.x + uv[1] * bary.ddx.y + uv[2] * bary.ddx.z) * params.checker_scale;
+    let st_dy = (uv[0] * bary.ddy.x + uv[1] * bary.ddy.y + uv[2] * bary.ddy.z) * params.checker_scale;
+    let checker = filtered_checker(st, st_dx, st_dy);
+    let base = materials[instance.material].base_color.rgb;
+    let albedo = base * mix(CHECKER_DARK, 1.0, checker);
+    let diffuse = max(dot(n, params.light_direction.xyz), 0.0);
+    return albedo * (params.ambient_color.rgb + params.light_color.rgb * diffuse);
+}
+
+@compute @workgroup_size(8, 8)
+fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= params.width || gid.y >= params.height {
+        return;
+    }
+    let value = visbuffer[gid.y * params.width + gid.x];
+    let pixel = vec2<f32>(gid.xy) + vec2(0.5);
+    var rgb = vec3(0.0);
+    let empty = visbuffer_is_empty(value);
+    switch params.view_mode {
+        case VIEW_CLUSTERS: {
+            if !empty {
+                rgb = byte_color(id_color(visbuffer_cluster(value)));
+            }
+        }
+        case VIEW_TRIANGLES: {
+            if !empty {
+                rgb = byte_color(id_color(value.x));
+            }
+        }
+        case VIEW_LOD: {
+            if !empty {
+                let m = meshlets[raster_clusters[visbuffer_cluster(value)].meshlet];
+                rgb = byte_color(id_color(meshlet_level(m)));
+            }
+        }
+        case VIEW_RASTER: {
+            if !empty {
+                let software = visbuffer_cluster(value) < raster_counts[0];
+                rgb = byte_color(select(HARDWARE_COLOR, SOFTWARE_COLOR, software));
+            }
+        }
+        case VIEW_DEPTH: {
+            // Reverse-Z depth falls off as 1 / distance; the fourth root spreads it.
+            rgb = vec3(sqrt(sqrt(visbuffer_depth(value))));
+        }
+        default: {
+            if empty {
+                let t = 1.0 - pixel.y / f32(params.height);
+                rgb = mix(SKY_HORIZON, SKY_ZENITH, t);
+            } else {
+                rgb = shade(value, pixel);
+            }
+        }
+    }
+    textureStore(color, vec2<i32>(gid.xy), vec4(clamp(rgb, vec3(0.0), vec3(1.0)), 1.0));
+}
