@@ -1,7 +1,7 @@
 //! The reference rasteriser: the WGSL kernel's steps on the CPU, in the same order and
 //! with the same integer and float operations, producing the visibility buffer.
 
-use glam::{Mat4, Vec4};
+use glam::Vec4;
 use meshlight_gpu_scene::SceneData;
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::visbuffer;
@@ -108,65 +108,81 @@ pub fn cover_triangle(
     }
 }
 
-/// The visibility buffer (row-major, `width` × `height`, 0 = empty) of `clusters` drawn
-/// from `scene` through `view`; the visibility cluster id is the index into `clusters`.
-/// Clusters naming a missing instance or meshlet draw nothing.
-pub fn rasterize(
+/// `m * (p, 1)` for a column-major matrix, summed column by column in the order the
+/// kernel writes it (`m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3]`), so that both round
+/// alike; a matrix-vector product of a math library may sum in another order.
+pub fn affine(m: &[[f32; 4]; 4], p: [f32; 3]) -> [f32; 4] {
+    std::array::from_fn(|k| m[0][k] * p[0] + m[1][k] * p[1] + m[2][k] * p[2] + m[3][k])
+}
+
+/// One triangle of a cluster as the kernel rasterises it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenTriangle {
+    /// The triangle's index in its meshlet (the visibility buffer's triangle field).
+    pub index: u32,
+    /// Snapped corners with NDC depth, ready for [`cover_triangle`]: the meshlet's
+    /// corners (0, 2, 1), because the mesh's front faces are counter-clockwise in NDC
+    /// (y up) and so counter-clockwise on the screen, while `cover_triangle` keeps
+    /// clockwise ones.
+    pub corners: [([i32; 2], f32); 3],
+}
+
+/// The triangles of `cluster` whose corners are all usable (see [`snap`]), in meshlet
+/// order, for a `width` × `height` viewport. A cluster naming a missing instance,
+/// meshlet or mesh has none.
+pub fn screen_triangles(
     scene: &SceneData,
     view: &View,
-    clusters: &[Cluster],
+    cluster: &Cluster,
     width: u32,
     height: u32,
-) -> Vec<u64> {
-    let mut out = vec![visbuffer::EMPTY; width as usize * height as usize];
+) -> Vec<ScreenTriangle> {
+    let (Some(instance), Some(m)) = (
+        scene.instances.get(cluster.instance as usize),
+        scene.meshlets.get(cluster.meshlet as usize),
+    ) else {
+        return Vec::new();
+    };
+    let Some(mesh) = scene.meshes.get(instance.mesh as usize) else {
+        return Vec::new();
+    };
     let size = [width as f32, height as f32];
-    let view_projection = Mat4::from_cols_array_2d(&view.view_projection);
-    for (id, cluster) in clusters.iter().enumerate() {
-        let (Some(instance), Some(m)) = (
-            scene.instances.get(cluster.instance as usize),
-            scene.meshlets.get(cluster.meshlet as usize),
-        ) else {
-            continue;
-        };
-        let Some(mesh) = scene.meshes.get(instance.mesh as usize) else {
-            continue;
-        };
-        let world_from_local = Mat4::from_cols_array_2d(&instance.world_from_local);
-        let grid = mesh.position_grid;
-        let vertex_count = bits(m.counts, 0, 8);
-        let triangle_count = bits(m.counts, 8, 8);
-        let axis = [bits(m.bits, 0, 8), bits(m.bits, 8, 8), bits(m.bits, 16, 8)];
-        let normal = [bits(m.normals, 24, 4), bits(m.normals, 28, 4)];
-        let stride = axis.iter().sum::<u32>() + normal[0] + normal[1];
-        let screen: Vec<ScreenVertex> = (0..vertex_count)
-            .map(|v| {
-                let mut bit = v * stride;
-                let mut q = [0u32; 3];
-                for a in 0..3 {
-                    let w = m.data_offset + bit / 32;
-                    let offset = read_bits(
-                        [word(&scene.payload, w), word(&scene.payload, w + 1)],
-                        bit % 32,
-                        axis[a],
-                    );
-                    q[a] = m.grid_min[a].wrapping_add(offset);
-                    bit += axis[a];
-                }
-                let p = [
-                    grid[0] + q[0] as f32 * grid[3],
-                    grid[1] + q[1] as f32 * grid[3],
-                    grid[2] + q[2] as f32 * grid[3],
-                ];
-                let world = world_from_local * Vec4::new(p[0], p[1], p[2], 1.0);
-                let clip = view_projection * world.truncate().extend(1.0);
-                snap(clip, size)
-            })
-            .collect();
-        let uv_word = m.data_offset + (vertex_count * stride).div_ceil(32);
-        let triangle_word = uv_word + if mesh.flags & 1 != 0 { vertex_count } else { 0 };
-        let field_bits = [bits(m.bits, 24, 4), bits(m.bits, 28, 4)];
-        let triangle_stride = field_bits[0] + 2 * field_bits[1];
-        for t in 0..triangle_count {
+    let grid = mesh.position_grid;
+    let vertex_count = bits(m.counts, 0, 8);
+    let triangle_count = bits(m.counts, 8, 8);
+    let axis = [bits(m.bits, 0, 8), bits(m.bits, 8, 8), bits(m.bits, 16, 8)];
+    let normal = [bits(m.normals, 24, 4), bits(m.normals, 28, 4)];
+    let stride = axis.iter().sum::<u32>() + normal[0] + normal[1];
+    let screen: Vec<ScreenVertex> = (0..vertex_count)
+        .map(|v| {
+            let mut bit = v * stride;
+            let mut q = [0u32; 3];
+            for a in 0..3 {
+                let w = m.data_offset + bit / 32;
+                let offset = read_bits(
+                    [word(&scene.payload, w), word(&scene.payload, w + 1)],
+                    bit % 32,
+                    axis[a],
+                );
+                q[a] = m.grid_min[a].wrapping_add(offset);
+                bit += axis[a];
+            }
+            let p = [
+                grid[0] + q[0] as f32 * grid[3],
+                grid[1] + q[1] as f32 * grid[3],
+                grid[2] + q[2] as f32 * grid[3],
+            ];
+            let world = affine(&instance.world_from_local, p);
+            let clip = affine(&view.view_projection, [world[0], world[1], world[2]]);
+            snap(Vec4::from_array(clip), size)
+        })
+        .collect();
+    let uv_word = m.data_offset + (vertex_count * stride).div_ceil(32);
+    let triangle_word = uv_word + if mesh.flags & 1 != 0 { vertex_count } else { 0 };
+    let field_bits = [bits(m.bits, 24, 4), bits(m.bits, 28, 4)];
+    let triangle_stride = field_bits[0] + 2 * field_bits[1];
+    (0..triangle_count)
+        .filter_map(|t| {
             let bit = t * triangle_stride;
             let w = triangle_word + bit / 32;
             let record = read_bits(
@@ -180,18 +196,36 @@ pub fn rasterize(
             let d1 = bits(record, field_bits[0], field_bits[1]) as i32;
             let d2 = bits(record, field_bits[0] + field_bits[1], field_bits[1]) as i32;
             let last = vertex_count.max(1) as i32 - 1;
-            let corners = [first, first - d1, first - d2].map(|c| c.clamp(0, last) as usize);
-            let (Some(Some(a)), Some(Some(b)), Some(Some(c))) = (
-                screen.get(corners[0]),
-                screen.get(corners[1]),
-                screen.get(corners[2]),
-            ) else {
-                continue;
+            let corners = [first, first - d2, first - d1].map(|c| c.clamp(0, last) as usize);
+            let [Some(Some(a)), Some(Some(b)), Some(Some(c))] =
+                corners.map(|k| screen.get(k).copied())
+            else {
+                return None;
             };
-            let value_of = |depth| visbuffer::pack(depth, id as u32, t);
-            cover_triangle([*a, *b, *c], width, height, |x, y, depth| {
+            Some(ScreenTriangle {
+                index: t,
+                corners: [a, b, c],
+            })
+        })
+        .collect()
+}
+
+/// The visibility buffer (row-major, `width` × `height`, 0 = empty) of `clusters` drawn
+/// from `scene` through `view`; the visibility cluster id is the index into `clusters`.
+/// Clusters naming a missing instance or meshlet draw nothing.
+pub fn rasterize(
+    scene: &SceneData,
+    view: &View,
+    clusters: &[Cluster],
+    width: u32,
+    height: u32,
+) -> Vec<u64> {
+    let mut out = vec![visbuffer::EMPTY; width as usize * height as usize];
+    for (id, cluster) in clusters.iter().enumerate() {
+        for tri in screen_triangles(scene, view, cluster, width, height) {
+            cover_triangle(tri.corners, width, height, |x, y, depth| {
                 let px = &mut out[(y * width + x) as usize];
-                *px = (*px).max(value_of(depth));
+                *px = (*px).max(visbuffer::pack(depth, id as u32, tri.index));
             });
         }
     }

@@ -227,6 +227,17 @@ pub fn register(registry: &mut Registry) {
 #[cfg(test)]
 mod tests {
     use super::cpu::{cover_triangle, edge};
+    use meshlight_shaders::{Capabilities, ShaderLibrary, validate};
+
+    #[test]
+    fn the_kernel_composes_and_validates_with_int64_atomics() {
+        let caps = Capabilities::SHADER_INT64 | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX;
+        let mut library = ShaderLibrary::new(caps).unwrap_or_else(|e| panic!("{e}"));
+        let module = library
+            .compose(&super::SHADER, &[])
+            .unwrap_or_else(|e| panic!("{e}"));
+        validate(super::SHADER.name, &module, caps).unwrap_or_else(|e| panic!("{e}"));
+    }
 
     fn px(x: i32, y: i32) -> [i32; 2] {
         [x * 256 + 128, y * 256 + 128]

@@ -43,6 +43,12 @@ fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
     return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
 }
 
+// `m * vec4(p, 1.0)` summed column by column in a fixed order, which `cpu::affine`
+// repeats; a matrix-vector product may be summed in any order by the driver.
+fn affine(m: mat4x4<f32>, p: vec3<f32>) -> vec4<f32> {
+    return m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3];
+}
+
 // Twice the signed area of (a, b, p); positive when p lies right of a→b on the y-down
 // screen, i.e. inside a clockwise (front-facing) triangle.
 fn edge(a: vec2<i32>, b: vec2<i32>, p: vec2<i32>) -> i64 {
@@ -98,8 +104,8 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     }
     for (var v = t; v < meshlet_vertex_count(m); v += 128u) {
         let p = meshlet_position(m, mesh.position_grid, vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u)));
-        let world = instance.world_from_local * vec4(p, 1.0);
-        let clip = view.view_projection * vec4(world.xyz, 1.0);
+        let world = affine(instance.world_from_local, p);
+        let clip = affine(view.view_projection, world.xyz);
         let ndc = clip.xyz / clip.w;
         let s = vec2((ndc.x * 0.5 + 0.5) * size.x, (0.5 - ndc.y * 0.5) * size.y);
         let ok = clip.w > 0.0 && abs(s.x) < MAX_SCREEN && abs(s.y) < MAX_SCREEN;
@@ -116,10 +122,12 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
         let at = meshlet_triangle_location(m, mesh.flags, t);
         let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
         if (usable[c.x] & usable[c.y] & usable[c.z]) != 0u {
+            // Front faces are counter-clockwise in NDC (y up), so counter-clockwise on
+            // the y-down screen too; corners (0, 2, 1) make them clockwise there.
             tri.v0 = screen_xy[c.x];
-            tri.v1 = screen_xy[c.y];
-            tri.v2 = screen_xy[c.z];
-            tri.z = vec3(screen_z[c.x], screen_z[c.y], screen_z[c.z]);
+            tri.v1 = screen_xy[c.z];
+            tri.v2 = screen_xy[c.y];
+            tri.z = vec3(screen_z[c.x], screen_z[c.z], screen_z[c.y]);
             tri.area = edge(tri.v0, tri.v1, tri.v2);
             tri.bias = vec3(
                 select(-1, 0, top_left(tri.v1, tri.v2)),
@@ -134,7 +142,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
                 let mx = max(tri.v0, max(tri.v1, tri.v2));
                 // Pixels whose centre x * 256 + 128 lies in [mn, mx], clipped to the viewport.
                 lo = max((mn - vec2(128) + vec2(255)) >> vec2(8u), vec2(0));
-                hi = min((mx - vec2(128)) >> vec2(8u), vec2<i32>(params.width, params.height) - vec2(1));
+                hi = min((mx - vec2(128)) >> vec2(8u), vec2(i32(params.width), i32(params.height)) - vec2(1));
             }
         }
     }
@@ -159,24 +167,30 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     // Scanline: per row, the span where each edge can be non-negative, widened by one
     // pixel on each side (the exact test in `shade` decides), so pixels outside the
     // triangle's row span are never visited.
-    let edges = array(vec2(tri.v1, tri.v2), vec2(tri.v2, tri.v0), vec2(tri.v0, tri.v1));
+    // Edge k runs from `starts[k]` to `ends[k]`, as edge function k in `shade`.
+    var starts = array(tri.v1, tri.v2, tri.v0);
+    var ends = array(tri.v2, tri.v0, tri.v1);
     for (var y = lo.y; y <= hi.y; y += 1) {
         var x0 = lo.x;
         var x1 = hi.x;
         let py = y * 256 + 128;
         for (var k = 0; k < 3; k += 1) {
-            let a = edges[k][0];
-            let b = edges[k][1];
+            let a = starts[k];
+            let b = ends[k];
             // edge(a, b, (px, py)) = c + s * px with s = -(b.y - a.y).
             let s = -i64(b.y - a.y);
             let c = i64(b.x - a.x) * i64(py - a.y) + i64(b.y - a.y) * i64(a.x);
+            // The bound is clamped to the box (one pixel out) before it becomes an i32:
+            // for a nearly horizontal edge it can lie billions of pixels away.
+            let low = i64(lo.x) - 1li;
+            let high = i64(hi.x) + 1li;
             if s > 0li {
                 // px >= -c / s, px = x * 256 + 128.
                 let px = -c / s;
-                x0 = max(x0, i32((px - 128li) >> 8u) - 1);
+                x0 = max(x0, i32(clamp(((px - 128li) >> 8u) - 1li, low, high)));
             } else if s < 0li {
                 let px = c / -s;
-                x1 = min(x1, i32((px - 128li) >> 8u) + 1);
+                x1 = min(x1, i32(clamp(((px - 128li) >> 8u) + 1li, low, high)));
             }
         }
         for (var x = x0; x <= x1; x += 1) {
