@@ -257,6 +257,24 @@ impl GraphBuilder {
         .map(drop)
     }
 
+    /// [`Self::readback`] of the newest version of the buffer named `resource`, for
+    /// graphs loaded from pipeline files, where the caller has names, not handles.
+    pub fn readback_named(
+        &mut self,
+        name: &str,
+        resource: &str,
+        range: Option<std::ops::Range<u64>>,
+        latency: u32,
+    ) -> Result<()> {
+        let pass = crate::readback::ReadbackPass::new(name, range, latency);
+        self.add_pass(
+            &format!("readback:{name}"),
+            pass,
+            Bindings::new().bind_named("source", resource),
+        )
+        .map(drop)
+    }
+
     /// Looks a resource up by name, at its newest version.
     pub fn resource(&self, name: &str) -> Option<AnyHandle> {
         let i = self.resources.iter().position(|r| r.name == name)?;

@@ -634,13 +634,18 @@ fn readback_of_frame_k_is_taken_at_frame_k_plus_latency_without_waiting() {
     for &(k, at) in &taken {
         assert!(at >= k + LATENCY as u64, "frame {k} taken at {at}");
     }
-    // Once the GPU is drained, every frame old enough has come back, in order.
+    // Before the wait the last `LATENCY` frames are still held back; once `finish` has
+    // drained the GPU every frame has come back, in order, the last ones included.
+    let before: Vec<u64> = taken.iter().map(|(k, _)| *k).collect();
+    assert!(before.iter().all(|&k| k < (FRAMES - LATENCY) as u64));
     exec.finish().unwrap();
     while let Some(r) = exec.take_readback("stamp").unwrap() {
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&r.bytes);
+        assert_eq!(words, [1000 + r.frame as u32, r.frame as u32]);
         taken.push((r.frame, FRAMES as u64));
     }
     let frames: Vec<u64> = taken.iter().map(|(k, _)| *k).collect();
-    let want: Vec<u64> = (0..(FRAMES - LATENCY) as u64).collect();
+    let want: Vec<u64> = (0..FRAMES as u64).collect();
     assert_eq!(frames, want);
 }
 

@@ -154,6 +154,59 @@ impl GpuContext {
         self.map_and_read(&staging)
     }
 
+    /// Copies mip 0, layer 0 of `texture` (which needs COPY_SRC) to the CPU, rows tightly
+    /// packed (the copy's 256-byte row alignment removed).
+    pub fn read_texture(&self, texture: &wgpu::Texture) -> Result<Vec<u8>> {
+        let format = texture.format();
+        let texel = format
+            .block_copy_size(Some(wgpu::TextureAspect::All))
+            .ok_or_else(|| {
+                GraphError::Readback(format!("{format:?} cannot be copied whole to a buffer"))
+            })?;
+        let (width, height) = (texture.width(), texture.height());
+        let row = width * texel;
+        let padded_row = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("meshlight texture readback"),
+            size: (padded_row as u64 * height as u64).max(4),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("texture readback"),
+            });
+        enc.copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded_row),
+                    rows_per_image: Some(height),
+                },
+            },
+            wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+        );
+        self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GraphError::Readback(e.to_string()));
+        }
+        let padded = self.map_and_read(&staging)?;
+        Ok(padded
+            .chunks(padded_row as usize)
+            .take(height as usize)
+            .flat_map(|r| &r[..row as usize])
+            .copied()
+            .collect())
+    }
+
     /// Waits for a MAP_READ buffer and returns its bytes.
     pub fn map_and_read(&self, staging: &wgpu::Buffer) -> Result<Vec<u8>> {
         let (tx, rx) = std::sync::mpsc::channel();

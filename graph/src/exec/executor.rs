@@ -152,6 +152,26 @@ impl Executor {
     /// by the last frame. Waits for the GPU: for tests and one-shot tools; frames use
     /// `GraphBuilder::readback` and [`Executor::take_readback`].
     pub fn read_buffer(&mut self, name: &str) -> Result<Vec<u8>> {
+        match self.last_physical(name)? {
+            Physical::Buffer { buffer, size } => self.gpu.read_buffer(&buffer, 0, size),
+            Physical::Texture { .. } => Err(GraphError::Readback(format!(
+                "`{name}` is a texture; read it with Executor::read_texture"
+            ))),
+        }
+    }
+
+    /// Reads back mip 0, layer 0 of an exported or history texture as the last frame left
+    /// it, rows tightly packed. Waits for the GPU, like [`Self::read_buffer`].
+    pub fn read_texture(&mut self, name: &str) -> Result<Vec<u8>> {
+        match self.last_physical(name)? {
+            Physical::Texture { texture, .. } => self.gpu.read_texture(&texture),
+            Physical::Buffer { .. } => Err(GraphError::Readback(format!(
+                "`{name}` is a buffer; read it with Executor::read_buffer"
+            ))),
+        }
+    }
+
+    fn last_physical(&mut self, name: &str) -> Result<Physical> {
         let physical = self
             .exported
             .get(name)
@@ -167,12 +187,7 @@ impl Executor {
             })?
             .clone();
         self.blocking_waits += 1;
-        match physical {
-            Physical::Buffer { buffer, size } => self.gpu.read_buffer(&buffer, 0, size),
-            Physical::Texture { .. } => Err(GraphError::Readback(format!(
-                "`{name}` is a texture; copy it to a buffer in a pass"
-            ))),
-        }
+        Ok(physical)
     }
 
     /// Lets finished GPU work report back (map callbacks), without waiting.
@@ -229,7 +244,8 @@ impl Executor {
     }
 
     /// Waits until the GPU has finished every submitted frame, and returns the last
-    /// frame's statistics with its GPU timings filled in. For tools and tests that need
+    /// frame's statistics with its GPU timings filled in; every frame's readbacks become
+    /// takeable, whatever their latency. For tools and tests that need
     /// this frame's results now; a render loop never calls it.
     pub fn finish(&mut self) -> Result<Option<FrameStats>> {
         self.blocking_waits += 1;
@@ -237,6 +253,9 @@ impl Executor {
             .device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| GraphError::Readback(e.to_string()))?;
+        // Everything submitted has finished: the latency that keeps a render loop from
+        // waiting has no purpose any more, so every frame's readbacks are released.
+        self.readbacks.collect(u64::MAX);
         self.collect();
         Ok(self.last_stats.clone())
     }
