@@ -58,6 +58,56 @@ pub struct GpuScene {
     materials_version: u64,
 }
 
+/// The element count of each scene buffer as [`GpuScene::new`] would create it for
+/// `data`, by buffer name. A graph can then be declared and compiled (which picks the
+/// device's features) before the device, and so the buffers, exist.
+pub fn buffer_lengths(data: &SceneData) -> [(&'static str, Element, u64); 6] {
+    let count = |n: usize| (n as u64).max(1);
+    [
+        (
+            names::MESHLETS,
+            elements::MESHLET,
+            count(data.meshlets.len()),
+        ),
+        (names::GROUPS, elements::GROUP, count(data.groups.len())),
+        // The two padding words of `contents`.
+        (names::PAYLOAD, Element::U32, data.payload.len() as u64 + 2),
+        (names::MESHES, elements::MESH, count(data.meshes.len())),
+        (
+            names::INSTANCES,
+            elements::INSTANCE,
+            count(data.instances.len()),
+        ),
+        (
+            names::MATERIALS,
+            elements::MATERIAL,
+            count(data.materials.len()),
+        ),
+    ]
+}
+
+/// Declares the scene buffers `data` will need as imported resources of a graph, sized
+/// by [`buffer_lengths`]; bind them later with [`GpuScene::imports`].
+pub fn import_for(data: &SceneData, g: &mut GraphBuilder) -> SceneHandles {
+    let lengths = buffer_lengths(data);
+    let mut h = |name: &str| {
+        let (_, element, count) = lengths
+            .iter()
+            .find(|(n, ..)| *n == name)
+            .expect("every name has a length")
+            .clone();
+        g.import_buffer(name, BufferDesc::array(element, count), USAGE)
+    };
+    SceneHandles {
+        meshlets: h(names::MESHLETS),
+        groups: h(names::GROUPS),
+        payload: h(names::PAYLOAD),
+        meshes: h(names::MESHES),
+        instances: h(names::INSTANCES),
+        materials: h(names::MATERIALS),
+    }
+}
+
 /// Every buffer holds at least one element (wgpu refuses empty bindings); the payload
 /// carries two words of padding so a two-word field read never leaves it.
 fn contents(data: &SceneData) -> [(&'static str, Element, Vec<u8>); 6] {

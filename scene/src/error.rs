@@ -124,7 +124,7 @@ pub enum SceneError {
 
     #[error(
         "{path}: asset format version {found}, this build reads version {expected}; \
-         re-bake the asset from its source mesh"
+         re-bake it from its source mesh with `meshlight bake MESH -o {path}`"
     )]
     AssetVersion {
         path: PathBuf,
