@@ -10,8 +10,9 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct BenchArgs {
-    /// Scenarios to run (default: all that need no mesh files). Known: graph-compile,
-    /// graph-execute, pool-reuse, render, builder, scan-fan.
+    /// Scenarios to run (default: all). Known: graph-compile, graph-execute, pool-reuse,
+    /// render (the default scene at 1920x1080), virtual-geometry (15³ meshes at
+    /// 2240x1260, the first --mesh or the bunny), builder, scan-fan.
     #[arg(long = "scenario", value_delimiter = ',')]
     pub scenarios: Vec<String>,
     /// Write the rows as JSON here too.
@@ -21,7 +22,8 @@ pub struct BenchArgs {
     #[arg(long)]
     pub quick: bool,
     /// Mesh files the `builder` scenario measures besides the procedural mesh
-    /// (repeatable), e.g. `--mesh assets/meshes/stanford-bunny.obj`.
+    /// (repeatable), e.g. `--mesh assets/meshes/stanford-bunny.obj`; the first is also
+    /// the mesh of the `virtual-geometry` scenario.
     #[arg(long = "mesh")]
     pub meshes: Vec<std::path::PathBuf>,
 }
@@ -44,6 +46,7 @@ const ALL: &[&str] = &[
     "graph-execute",
     "pool-reuse",
     "render",
+    "virtual-geometry",
     "builder",
     "scan-fan",
 ];
@@ -61,6 +64,9 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
             "graph-execute" => graph_execute(args.quick)?,
             "pool-reuse" => pool_reuse(),
             "render" => render(args.quick)?,
+            "virtual-geometry" => {
+                crate::virtual_geometry::bench::lattice(args.quick, &args.meshes)?
+            }
             "builder" => builder(args.quick, &args.meshes)?,
             "scan-fan" => scan_fan(args.quick)?,
             other => {
@@ -93,7 +99,14 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
     Ok(())
 }
 
-fn row(scenario: &str, case: String, metric: &str, value: f64, unit: &str, device: &str) -> Row {
+pub(crate) fn row(
+    scenario: &str,
+    case: String,
+    metric: &str,
+    value: f64,
+    unit: &str,
+    device: &str,
+) -> Row {
     Row {
         scenario: scenario.into(),
         case,
@@ -105,7 +118,7 @@ fn row(scenario: &str, case: String, metric: &str, value: f64, unit: &str, devic
     }
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
@@ -138,7 +151,7 @@ fn graph_compile(quick: bool) -> Vec<Row> {
     rows
 }
 
-fn graph_execute(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
+fn graph_execute(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::error::Error>> {
     let adapter = GpuAdapter::select()?;
     let device = adapter.info().name;
     let mut rows = Vec::new();
@@ -191,70 +204,56 @@ fn graph_execute(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
     Ok(rows)
 }
 
-/// Whether the CPU records ahead while the GPU works: the default-scene frame run back to
-/// back, against the same frames each waited for (the behaviour before timestamps and
-/// readbacks went through rings), measured in the same run.
-fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
-    let mesh = crate::scene::procedural_mesh(if quick { 32 } else { 128 });
+/// Whether the CPU records ahead while the GPU works: the virtual-geometry frame of a
+/// small field of procedural meshes with the camera moving every frame, run back to back,
+/// against the same frames each waited for (the behaviour before timestamps and readbacks
+/// went through rings), measured in the same run.
+fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::error::Error>> {
+    use crate::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
+    let segments = if quick { 32 } else { 128 };
+    let asset = scenes::load_asset(std::path::Path::new("procedural"), segments)?;
+    let placed = scenes::field(
+        crate::gpu_scene::SceneData::new(Default::default()),
+        &asset,
+        16,
+    )?;
     let (width, height) = (1280, 720);
-    let padded: Vec<[f32; 4]> = mesh
-        .positions
-        .iter()
-        .map(|p| [p.x, p.y, p.z, 1.0])
-        .collect();
-    let triangles = (mesh.indices.len() / 3) as u32;
-    let view_proj = crate::demo::camera_for(&mesh.positions, width, height);
-    let adapter = GpuAdapter::select()?;
-    let device = adapter.info().name;
-    let compiled = crate::demo::graph(padded.len() as u64 * 16, triangles, width, height)?
-        .compile(&CompileOptions::for_adapter(&adapter))?;
-    let gpu = adapter.open(compiled.plan.enabled_features)?;
-    let usage = wgpu::BufferUsages::STORAGE;
-    let pos = gpu.buffer_with_data("positions", bytemuck::cast_slice(&padded), usage);
-    let idx = gpu.buffer_with_data("indices", bytemuck::cast_slice(&mesh.indices), usage);
-    let image = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("image"),
-        size: width as u64 * height as u64 * 4,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let imports = Imports::new()
-        .buffer("positions", &pos)
-        .buffer("indices", &idx)
-        .buffer("image", &image);
-    let mut exec = Executor::new(gpu);
-    // The mesh turns a little every frame: the view is frame data, nothing recompiles.
-    let mut data = crate::demo::frame_data(view_proj);
-    let turn = |data: &mut FrameData, f: u32| {
-        let m = view_proj * glam::Mat4::from_rotation_y(f as f32 * 0.01);
-        data.set(
-            crate::demo::VIEW_INPUT,
-            bytemuck::bytes_of(&m.to_cols_array()),
-        );
+    let mut renderer = Renderer::new(
+        placed.data,
+        FrameSettings::new(width, height),
+        &GraphSource::Code,
+    )?;
+    let device = renderer.adapter.clone();
+    let base = placed.camera;
+    // The camera slides a little every frame: the view is frame data, nothing recompiles.
+    let camera = |f: u32| {
+        let mut c = base;
+        c.position += glam::Vec3::X * (f as f32 * 0.01);
+        c
     };
-    exec.execute_frame(&compiled, &imports, &data)?;
-    exec.finish()?;
+    // Warm up, and let any list grow to what the view needs.
+    renderer.render_still(&camera(0))?;
     let frames = if quick { 20 } else { 100 };
-    let case = format!("default scene, {triangles} tris {width}x{height}, {frames} frames");
+    let case = format!("virtual geometry, 16 meshes {width}x{height}, {frames} frames");
 
     let start = Instant::now();
     for f in 0..frames {
-        turn(&mut data, f);
-        exec.execute_frame(&compiled, &imports, &data)?;
-        exec.finish()?;
+        renderer.frame(&camera(f))?;
+        renderer.executor.finish()?;
     }
     let waited = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
+    renderer.executor.take_gpu_timings()?;
 
     let start = Instant::now();
     let mut most_in_flight = 0;
     for f in 0..frames {
-        turn(&mut data, f);
-        let s = exec.execute_frame(&compiled, &imports, &data)?;
+        let s = renderer.frame(&camera(f))?;
         most_in_flight = most_in_flight.max(s.frames_in_flight);
     }
-    exec.finish()?;
+    renderer.executor.finish()?;
     let overlapped = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
-    let gpu_ms: Vec<f64> = exec
+    let gpu_ms: Vec<f64> = renderer
+        .executor
         .take_gpu_timings()?
         .iter()
         .map(|t| t.total_us / 1e3)
@@ -395,28 +394,8 @@ fn pool_reuse() -> Vec<Row> {
     ]
 }
 
-fn render(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
-    let mesh = crate::scene::procedural_mesh(if quick {
-        64
-    } else {
-        crate::scene::DEFAULT_SEGMENTS
-    });
-    let tris = (mesh.indices.len() / 3) as f64;
-    let r = crate::demo::render(&mesh.positions, &mesh.indices, 1920, 1080)?;
-    let mut rows = Vec::new();
-    for p in &r.stats.passes {
-        if let Some(us) = p.gpu_us {
-            rows.push(row(
-                "render",
-                format!("{} tris 1920x1080", tris),
-                &format!("{} GPU (first frame)", p.name),
-                us / 1e3,
-                "ms",
-                &r.adapter,
-            ));
-        }
-    }
-    Ok(rows)
+fn render(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::error::Error>> {
+    crate::virtual_geometry::bench::default_scene(quick)
 }
 
 fn builder(

@@ -3,16 +3,24 @@
 //! - [`graph`]: declare resources and passes, compile without a device, run on wgpu, dump.
 //! - [`shaders`]: the shared WGSL library and the composer.
 //! - [`scene`]: mesh loading, the meshlet LOD DAG builder and the asset format.
+//! - [`gpu_scene`]: assets packed into shared GPU buffers, instances, materials, the view.
+//! - The virtual-geometry stages: [`fill_clusters`], [`cull_lod`], [`remap_dispatch`],
+//!   [`sw_raster`], [`hw_raster`], [`resolve`]; [`virtual_geometry`] wires them into a
+//!   frame and runs it.
 //! - [`scan_fan`]: GPU prefix sum (stage `scan_fan`: `scan_fan` and `two_step`).
-//! - [`remap_dispatch`]: a GPU workgroup count as a 2-D indirect dispatch under the limit.
-//! - [`demo`]: the built-in default-scene renderer used by `meshlight render`.
 
 pub mod bench;
-pub mod demo;
+pub mod virtual_geometry;
 
+pub use meshlight_gpu_scene as gpu_scene;
 pub use meshlight_graph as graph;
+pub use meshlight_pass_cull_lod as cull_lod;
+pub use meshlight_pass_fill_clusters as fill_clusters;
+pub use meshlight_pass_hw_raster as hw_raster;
 pub use meshlight_pass_remap_dispatch as remap_dispatch;
+pub use meshlight_pass_resolve as resolve;
 pub use meshlight_pass_scan_fan as scan_fan;
+pub use meshlight_pass_sw_raster as sw_raster;
 pub use meshlight_scene as scene;
 pub use meshlight_shaders as shaders;
 
@@ -21,5 +29,10 @@ pub fn registry() -> graph::file::Registry {
     let mut r = graph::file::Registry::new();
     scan_fan::register(&mut r);
     remap_dispatch::register(&mut r);
+    fill_clusters::register(&mut r);
+    cull_lod::register(&mut r);
+    sw_raster::register(&mut r);
+    hw_raster::register(&mut r);
+    resolve::register(&mut r);
     r
 }

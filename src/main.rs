@@ -32,22 +32,43 @@ enum Command {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Mesh file (.obj, .gltf, .glb, .stl), or `procedural` for the default scene.
+    /// Mesh file (.obj, .gltf, .glb, .stl, or a baked .mlasset), or `procedural`.
     #[arg(long, default_value = "procedural")]
     mesh: PathBuf,
     /// Tube segments of the procedural mesh (16 × segments² triangles; 256 ≈ 1M).
     #[arg(long, default_value_t = meshlight::scene::DEFAULT_SEGMENTS)]
     segments: u32,
+    /// Copies of the mesh on the ground (1: one copy, framed by the camera).
+    #[arg(long, default_value_t = meshlight::virtual_geometry::scenes::DEFAULT_INSTANCES)]
+    instances: u32,
+    /// A pipeline file to render with instead of the graph built in code, e.g.
+    /// pipelines/virtual_geometry.toml or your own composition of the same resources.
+    #[arg(long)]
+    pipeline: Option<PathBuf>,
+    /// What the image shows.
+    #[arg(long, default_value = "shaded", value_parser = parse_view)]
+    view: meshlight::resolve::DebugView,
     #[arg(long, default_value_t = 1280)]
     width: u32,
     #[arg(long, default_value_t = 720)]
     height: u32,
+    /// Initial size of the candidate-cluster list (grown when a frame overflows it).
+    #[arg(long)]
+    clusters: Option<u64>,
+    /// Initial number of raster slots (grown when a frame overflows them).
+    #[arg(long)]
+    slots: Option<u64>,
     /// Output PNG.
     #[arg(short, long, default_value = "out/default.png")]
     output: PathBuf,
-    /// Also write the graph with this frame's timings as a self-contained HTML page.
+    /// Also write the graph with this frame's timings and counters as a self-contained
+    /// HTML page.
     #[arg(long)]
     html: Option<PathBuf>,
+}
+
+fn parse_view(name: &str) -> Result<meshlight::resolve::DebugView, String> {
+    meshlight::resolve::DebugView::parse(name).map_err(|e| e.to_string())
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -99,44 +120,90 @@ fn main() -> ExitCode {
 }
 
 fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
-    let mesh = if a.mesh.as_os_str() == "procedural" {
-        meshlight::scene::procedural_mesh(a.segments)
+    use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
+    let asset = scenes::load_asset(&a.mesh, a.segments)?;
+    let data = meshlight::gpu_scene::SceneData::new(Default::default());
+    let placed = if a.instances == 1 {
+        scenes::single(data, &asset)?
     } else {
-        meshlight::scene::load::load_mesh(&a.mesh)?
+        scenes::field(data, &asset, a.instances)?
     };
-    let r = meshlight::demo::render(&mesh.positions, &mesh.indices, a.width, a.height)?;
+    let mut settings = FrameSettings::new(a.width, a.height);
+    settings.view = a.view;
+    settings.clusters = a.clusters.unwrap_or(settings.clusters);
+    settings.slots = a.slots.unwrap_or(settings.slots);
+    let source = match &a.pipeline {
+        Some(path) => GraphSource::File(path.clone()),
+        None => GraphSource::Code,
+    };
+    let skipped = placed.data.skipped_instances();
+    let instances = placed.data.instances.len();
+    let source_triangles = placed.data.source_triangles();
+    let mut renderer = Renderer::new(placed.data, settings, &source)?;
+    let still = renderer.render_still(&placed.camera)?;
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
     let file = std::io::BufWriter::new(std::fs::File::create(&a.output)?);
-    let mut enc = png::Encoder::new(file, r.width, r.height);
+    let mut enc = png::Encoder::new(file, still.width, still.height);
     enc.set_color(png::ColorType::Rgba);
     enc.set_depth(png::BitDepth::Eight);
-    enc.write_header()?.write_image_data(&r.rgba)?;
+    enc.write_header()?.write_image_data(&still.rgba)?;
     println!(
-        "rendered {} ({} triangles) at {}x{} on {} → {}",
-        mesh.source,
-        mesh.indices.len() / 3,
-        r.width,
-        r.height,
-        r.adapter,
+        "rendered {instances} instances of {} ({source_triangles} source triangles) at {}x{} on {} → {}",
+        a.mesh.display(),
+        still.width,
+        still.height,
+        renderer.adapter,
         a.output.display()
     );
-    for p in &r.stats.passes {
-        let gpu = p
-            .gpu_us
-            .map(|g| format!("{:.0} µs GPU", g))
-            .unwrap_or_else(|| "no timestamps".into());
+    if skipped > 0 {
+        println!("  {skipped} instances skipped: their transforms were singular or not finite");
+    }
+    if still.frames > 1 {
         println!(
-            "  {:<8} {gpu}, {:.0} µs CPU record (first frame: includes pipeline creation)",
-            p.name, p.cpu_record_us
+            "  {} frames: the lists grew ({})",
+            still.frames,
+            renderer
+                .growths
+                .iter()
+                .map(|g| format!("{} {} → {}", g.param, g.from, g.to))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
+    for (label, value) in still.counts.rows() {
+        println!("  {label:<30} {value}");
+    }
+    for p in &still.stats.passes {
+        let gpu = p
+            .gpu_us
+            .map(|g| format!("{g:.0} µs GPU"))
+            .unwrap_or_else(|| "no timestamps".into());
+        println!("  {:<22} {gpu}", p.name);
+    }
+    if let Some(total) = still.stats.gpu_total_us {
+        println!("  {:<22} {total:.0} µs GPU", "frame");
+    }
     if let Some(html) = a.html {
-        std::fs::write(
-            &html,
-            dump::to_html(&r.plan, "meshlight default scene", Some(&r.stats)),
-        )?;
+        let page = dump::to_html(
+            &renderer.compiled.plan,
+            &format!("meshlight: {}", a.mesh.display()),
+            Some(&still.stats),
+        );
+        let page = match page.rfind("</body>") {
+            Some(at) => format!(
+                "{}{}{}",
+                &page[..at],
+                still.counts.html_table(),
+                &page[at..]
+            ),
+            None => page + &still.counts.html_table(),
+        };
+        if let Some(dir) = html.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        std::fs::write(&html, page)?;
         println!("graph: {}", html.display());
     }
     Ok(())

@@ -21,9 +21,18 @@ fn check(shader: &PassShader, defs: &dyn ShaderDefs) {
 }
 
 #[test]
-fn demo_shaders_compose_and_validate() {
-    check(&meshlight::demo::RASTER_SHADER, &());
-    check(&meshlight::demo::SHADE_SHADER, &());
+fn virtual_geometry_shaders_compose_and_validate() {
+    for shader in [
+        &meshlight::fill_clusters::SHADER,
+        &meshlight::cull_lod::SHADER,
+        &meshlight::remap_dispatch::SHADER,
+        &meshlight::sw_raster::SHADER,
+        &meshlight::hw_raster::SHADER,
+        &meshlight::resolve::DEPTH_SHADER,
+        &meshlight::resolve::SHADE_SHADER,
+    ] {
+        check(shader, &());
+    }
 }
 
 #[test]
@@ -46,10 +55,10 @@ fn scan_fan_shader_variants_compose_and_validate() {
 }
 
 #[test]
-fn the_demo_raster_needs_int64_atomics() {
+fn the_software_raster_needs_int64_atomics() {
     // Without the capability the composer must refuse it, not hand wgpu an invalid module.
     let mut lib = ShaderLibrary::new(Capabilities::empty()).unwrap();
-    let composed = lib.compose(&meshlight::demo::RASTER_SHADER, &[]);
-    let validated = composed.and_then(|m| validate("demo::raster", &m, Capabilities::empty()));
+    let composed = lib.compose(&meshlight::sw_raster::SHADER, &[]);
+    let validated = composed.and_then(|m| validate("sw_raster::raster", &m, Capabilities::empty()));
     assert!(validated.is_err());
 }

@@ -1,0 +1,205 @@
+//! Benchmark scenarios of the virtual-geometry frame: per-pass GPU times from
+//! timestamps, the frame's counters, and rasteriser throughput with every cluster sent
+//! to one rasteriser, all measured in the same run.
+
+use super::scenes::{self, Placed};
+use super::{FrameSettings, GraphSource, Renderer};
+use crate::bench::{Row, median, row};
+use meshlight_gpu_scene::SceneData;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+type BenchResult = std::result::Result<Vec<Row>, Box<dyn std::error::Error>>;
+
+/// Median GPU times over `frames` back-to-back frames after one still frame (which lets
+/// the lists grow to what the view needs).
+pub struct Measured {
+    pub passes: Vec<(String, f64)>,
+    pub total_ms: f64,
+    pub counts: super::FrameCounts,
+    pub device: String,
+}
+
+pub fn measure(
+    placed: &Placed,
+    settings: FrameSettings,
+    frames: u32,
+) -> Result<Measured, Box<dyn std::error::Error>> {
+    let mut renderer = Renderer::new(placed.data.clone(), settings, &GraphSource::Code)?;
+    let still = renderer.render_still(&placed.camera)?;
+    renderer.executor.take_gpu_timings()?;
+    for _ in 0..frames {
+        renderer.frame(&placed.camera)?;
+    }
+    renderer.executor.finish()?;
+    let timings = renderer.executor.take_gpu_timings()?;
+    if timings.is_empty() {
+        return Err(format!(
+            "{} has no GPU timestamps; nothing to measure",
+            renderer.adapter
+        )
+        .into());
+    }
+    let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut order = Vec::new();
+    for t in &timings {
+        for (name, us) in &t.passes {
+            if !per_pass.contains_key(name) {
+                order.push(name.clone());
+            }
+            per_pass.entry(name.clone()).or_default().push(us / 1e3);
+        }
+    }
+    let passes = order
+        .into_iter()
+        .map(|n| {
+            let v = per_pass.remove(&n).unwrap_or_default();
+            (n, median(v))
+        })
+        .collect();
+    Ok(Measured {
+        passes,
+        total_ms: median(timings.iter().map(|t| t.total_us / 1e3).collect()),
+        counts: still.counts,
+        device: renderer.adapter.clone(),
+    })
+}
+
+fn rows_of(scenario: &str, case: &str, m: &Measured) -> Vec<Row> {
+    let mut rows: Vec<Row> = m
+        .passes
+        .iter()
+        .filter(|(name, _)| !name.starts_with("readback:"))
+        .map(|(name, ms)| {
+            row(
+                scenario,
+                case.into(),
+                &format!("GPU {name}"),
+                *ms,
+                "ms",
+                &m.device,
+            )
+        })
+        .collect();
+    rows.push(row(
+        scenario,
+        case.into(),
+        "GPU frame",
+        m.total_ms,
+        "ms",
+        &m.device,
+    ));
+    for (label, value) in m.counts.rows() {
+        rows.push(row(
+            scenario,
+            case.into(),
+            label,
+            value as f64,
+            "",
+            &m.device,
+        ));
+    }
+    rows
+}
+
+fn pass_ms(m: &Measured, pass: &str) -> f64 {
+    m.passes
+        .iter()
+        .find(|(n, _)| n == pass)
+        .map_or(f64::NAN, |(_, ms)| *ms)
+}
+
+/// The default scene (a field of procedural meshes) at 1920×1080.
+pub fn default_scene(quick: bool) -> BenchResult {
+    let (segments, instances) = if quick {
+        (64, 64)
+    } else {
+        (meshlight_scene::DEFAULT_SEGMENTS, scenes::DEFAULT_INSTANCES)
+    };
+    let asset = scenes::load_asset(Path::new("procedural"), segments)?;
+    let placed = scenes::field(SceneData::new(Default::default()), &asset, instances)?;
+    let case = format!(
+        "{instances} procedural meshes, {} source tris, 1920x1080",
+        placed.data.source_triangles()
+    );
+    let m = measure(
+        &placed,
+        FrameSettings::new(1920, 1080),
+        if quick { 5 } else { 50 },
+    )?;
+    Ok(rows_of("render", &case, &m))
+}
+
+/// 15 × 15 × 15 copies of a mesh (the Stanford bunny unless `meshes` names another) at
+/// 2240×1260: the frame, then the same cluster set drawn all in software and all in
+/// hardware for each rasteriser's throughput.
+pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    let mesh = meshes
+        .first()
+        .cloned()
+        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+    let n = if quick { 5 } else { 15 };
+    let asset = scenes::load_asset(&mesh, 0)?;
+    let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
+    let (width, height) = if quick { (1280, 720) } else { (2240, 1260) };
+    let frames = if quick { 5 } else { 50 };
+    let case = format!(
+        "{n}³ {}, {} source tris, {width}x{height}",
+        mesh.file_stem().unwrap_or_default().to_string_lossy(),
+        placed.data.source_triangles()
+    );
+    let settings = FrameSettings::new(width, height);
+    let frame = measure(&placed, settings.clone(), frames)?;
+    let mut rows = rows_of("virtual-geometry", &case, &frame);
+
+    // The same cut, every cluster to one rasteriser.
+    let software = measure(
+        &placed,
+        FrameSettings {
+            hardware: false,
+            ..settings.clone()
+        },
+        frames,
+    )?;
+    let hardware = measure(
+        &placed,
+        FrameSettings {
+            sw_threshold_px: 0.0,
+            ..settings
+        },
+        frames,
+    )?;
+    let sw_rate = software.counts.triangles() as f64 / (pass_ms(&software, "sw_raster") * 1e-3);
+    let hw_rate =
+        hardware.counts.hardware_triangles as f64 / (pass_ms(&hardware, "hw_raster") * 1e-3);
+    let device = frame.device.clone();
+    rows.push(row(
+        "virtual-geometry",
+        format!("{case}, all software"),
+        "software raster",
+        sw_rate / 1e9,
+        "Gtri/s",
+        &device,
+    ));
+    let mut hw_row = row(
+        "virtual-geometry",
+        format!("{case}, all hardware"),
+        "hardware raster",
+        hw_rate / 1e9,
+        "Gtri/s",
+        &device,
+    );
+    hw_row.vs_baseline = Some(hw_rate / sw_rate);
+    rows.push(hw_row);
+    let mut ratio = row(
+        "virtual-geometry",
+        case,
+        "software / hardware throughput",
+        sw_rate / hw_rate,
+        "x",
+        &device,
+    );
+    ratio.vs_baseline = Some(sw_rate / hw_rate);
+    rows.push(ratio);
+    Ok(rows)
+}

@@ -1,0 +1,236 @@
+//! The virtual-geometry frame as a graph: built in code ([`build`]) or loaded from a
+//! pipeline file ([`load`]); both declare the same resources under the same names, so a
+//! file a user edits renders with the same renderer.
+
+use super::counts::{CLUSTER_COUNT_READBACK, RASTER_COUNTS_READBACK};
+use crate::graph::{Bindings, BufferDesc, Element, GraphBuilder, GraphError, Result, TextureDesc};
+use meshlight_gpu_scene::SceneData;
+use meshlight_gpu_scene::gpu::{buffer_lengths, elements, import_for};
+use meshlight_pass_cull_lod::{CullLod, Thresholds};
+use meshlight_pass_fill_clusters::FillClusters;
+use meshlight_pass_hw_raster::HwRaster;
+use meshlight_pass_remap_dispatch::RemapDispatch;
+use meshlight_pass_resolve::{DebugView, Resolve};
+use meshlight_pass_sw_raster::SwRaster;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Size parameter: candidate clusters the per-frame list holds.
+pub const CLUSTERS_PARAM: &str = "clusters";
+/// Size parameter: raster slots (clusters in the LOD cut) one frame holds.
+pub const SLOTS_PARAM: &str = "slots";
+/// A visibility id has 25 bits for the slot: more slots could not be told apart.
+pub const MAX_SLOTS: u64 = 1 << 25;
+/// How many frames later the counters come back to the CPU.
+pub const COUNTS_LATENCY: u32 = 2;
+
+/// What a frame is asked for; the same for both ways of building the graph.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameSettings {
+    pub width: u32,
+    pub height: u32,
+    pub view: DebugView,
+    /// Screen-space error (pixels) the LOD cut may show.
+    pub lod_threshold_px: f32,
+    /// Screen-box size under which a cluster is rasterised in software.
+    pub sw_threshold_px: f32,
+    /// `false`: no `hw_raster` pass; culling sends every cluster to software.
+    pub hardware: bool,
+    /// Initial candidate-list and raster-slot sizes; the renderer grows them on
+    /// overflow.
+    pub clusters: u64,
+    pub slots: u64,
+}
+
+impl FrameSettings {
+    pub fn new(width: u32, height: u32) -> Self {
+        let t = Thresholds::default();
+        Self {
+            width,
+            height,
+            view: DebugView::Shaded,
+            lod_threshold_px: t.lod_threshold_px,
+            sw_threshold_px: t.sw_threshold_px,
+            hardware: true,
+            clusters: 1 << 20,
+            slots: 1 << 18,
+        }
+    }
+
+    /// A viewport of 0, or past the device's 2-D texture limit, named with what to do.
+    pub fn check_viewport(&self, max_dimension: u32) -> Result<()> {
+        let (w, h) = (self.width, self.height);
+        if w == 0 || h == 0 || w > max_dimension || h > max_dimension {
+            return Err(GraphError::Parameter {
+                pass: "(viewport)".into(),
+                message: format!(
+                    "the viewport {w} × {h} must be at least 1 × 1 and at most {max_dimension} on each side (this device's 2-D texture limit); change --width/--height"
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Where the frame graph comes from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum GraphSource {
+    /// [`build`]: the stages wired in Rust.
+    Code,
+    /// [`load`]: a pipeline file.
+    File(PathBuf),
+}
+
+impl GraphSource {
+    pub fn graph(&self, data: &SceneData, settings: &FrameSettings) -> Result<GraphBuilder> {
+        match self {
+            GraphSource::Code => build(data, settings),
+            GraphSource::File(path) => load(path, data, settings),
+        }
+    }
+}
+
+/// The frame built in code: the scene imported, the lists transient and sized by the
+/// [`CLUSTERS_PARAM`] and [`SLOTS_PARAM`] parameters, depth, material depth and colour
+/// exported, the counters read back.
+pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
+    let mut g = GraphBuilder::new();
+    g.size_param(CLUSTERS_PARAM, s.clusters);
+    g.size_param(SLOTS_PARAM, s.slots.min(MAX_SLOTS));
+    import_for(data, &mut g);
+    let pixels = s.width as u64 * s.height as u64;
+    for (name, desc) in [
+        (
+            "clusters",
+            BufferDesc::array_param(elements::CLUSTER, CLUSTERS_PARAM),
+        ),
+        ("cluster_count", BufferDesc::array(Element::U32, 2)),
+        (
+            "raster_clusters",
+            BufferDesc::array_param(elements::CLUSTER, SLOTS_PARAM),
+        ),
+        ("raster_counts", BufferDesc::array(Element::U32, 8)),
+        ("hw_args", BufferDesc::array(Element::DRAW_ARGS, 1)),
+        ("sw_args", BufferDesc::array(Element::DISPATCH_ARGS, 1)),
+        ("visbuffer", BufferDesc::array(Element::U64, pixels)),
+    ] {
+        g.create_buffer(name, desc);
+    }
+    for (name, format) in [
+        ("depth", meshlight_pass_resolve::DEPTH_FORMAT),
+        ("material_depth", meshlight_pass_resolve::DEPTH_FORMAT),
+        ("color", meshlight_pass_resolve::COLOR_FORMAT),
+    ] {
+        let t = g.create_texture(name, TextureDesc::d2(format, s.width, s.height));
+        g.export(t);
+    }
+    // Slots not bound here bind to the resource of the same name.
+    g.add_pass("fill", FillClusters::default(), Bindings::new())?;
+    let cull = CullLod {
+        thresholds: Thresholds {
+            lod_threshold_px: s.lod_threshold_px,
+            sw_threshold_px: s.sw_threshold_px,
+            hardware: s.hardware,
+        },
+        ..CullLod::default()
+    };
+    g.add_pass("cull", cull, Bindings::new())?;
+    let remap = RemapDispatch {
+        count_word: 0,
+        max_per_dimension: None,
+    };
+    let remap_bindings = Bindings::new()
+        .bind_named("count", "raster_counts")
+        .bind_named("args", "sw_args");
+    g.add_pass("remap", remap, remap_bindings)?;
+    let (width, height) = (s.width, s.height);
+    let sw = SwRaster {
+        width,
+        height,
+        scanline_width: 16,
+    };
+    g.add_pass("sw_raster", sw, Bindings::new())?;
+    if s.hardware {
+        g.add_pass("hw_raster", HwRaster { width, height }, Bindings::new())?;
+    }
+    let mut resolve = Resolve::new(width, height);
+    resolve.settings.view = s.view;
+    g.add_pass("resolve", resolve, Bindings::new())?;
+    add_readbacks(&mut g)?;
+    Ok(g)
+}
+
+/// A pipeline file with the renderer's sizes (viewport, lists, scene buffers) set in
+/// its `[params]` and every `resolve` pass showing `settings.view`, then the counters'
+/// readbacks added. Everything else (thresholds, which stages run) is the file's.
+pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| GraphError::PipelineFile {
+        file: file.clone(),
+        message: format!("cannot read it: {e}"),
+    })?;
+    let text = with_view(&text, &file, s.view)?;
+    let mut g = crate::graph::file::parse_pipeline_with(
+        &text,
+        &file,
+        &crate::registry(),
+        &overrides(data, s),
+    )?;
+    add_readbacks(&mut g)?;
+    Ok(g)
+}
+
+/// The `[params]` the renderer sets in a pipeline file.
+pub fn overrides(data: &SceneData, s: &FrameSettings) -> BTreeMap<String, u64> {
+    let mut o: BTreeMap<String, u64> = buffer_lengths(data)
+        .into_iter()
+        .map(|(name, _, count)| (name.to_string(), count))
+        .collect();
+    o.insert("width".into(), s.width as u64);
+    o.insert("height".into(), s.height as u64);
+    o.insert("pixels".into(), s.width as u64 * s.height as u64);
+    o.insert(CLUSTERS_PARAM.into(), s.clusters);
+    o.insert(SLOTS_PARAM.into(), s.slots.min(MAX_SLOTS));
+    o
+}
+
+/// The file's text with `view` set in the params of every pass of stage `resolve`.
+fn with_view(text: &str, file: &str, view: DebugView) -> Result<String> {
+    let ferr = |message: String| GraphError::PipelineFile {
+        file: file.to_string(),
+        message,
+    };
+    let mut doc: toml::Table = toml::from_str(text).map_err(|e| ferr(e.to_string()))?;
+    if let Some(toml::Value::Array(passes)) = doc.get_mut("pass") {
+        for pass in passes.iter_mut().filter_map(toml::Value::as_table_mut) {
+            if pass.get("stage").and_then(toml::Value::as_str) != Some("resolve") {
+                continue;
+            }
+            let params = pass
+                .entry("params")
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            let Some(params) = params.as_table_mut() else {
+                return Err(ferr("a resolve pass's `params` is not a table".into()));
+            };
+            params.insert("view".into(), toml::Value::String(view.name().into()));
+        }
+    }
+    toml::to_string(&doc).map_err(|e| ferr(e.to_string()))
+}
+
+/// The counters come back [`COUNTS_LATENCY`] frames later; the graph needs resources
+/// named `cluster_count` and `raster_counts` (a pipeline file too).
+fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
+    g.readback_named(
+        CLUSTER_COUNT_READBACK,
+        "cluster_count",
+        Some(0..8),
+        COUNTS_LATENCY,
+    )?;
+    g.readback_named(
+        RASTER_COUNTS_READBACK,
+        "raster_counts",
+        Some(0..32),
+        COUNTS_LATENCY,
+    )
+}

@@ -1,0 +1,22 @@
+//! The virtual-geometry renderer: a GPU scene, the frame graph that draws it (built in
+//! code by [`frame_graph::build`], or loaded from a pipeline file such as
+//! `pipelines/virtual_geometry.toml`), and the frame loop that reads the GPU's counters
+//! back and grows the cluster lists when a frame overflowed them.
+//!
+//! ```text
+//! fill_clusters → cull_lod → remap_dispatch → sw_raster → hw_raster → resolve
+//! ```
+//!
+//! Nothing here decides what a pass does; the passes are the crates under `passes/`.
+//! This module only wires them, sizes what they share, and turns the counters into
+//! numbers a person reads.
+
+pub mod bench;
+pub mod counts;
+pub mod frame_graph;
+pub mod renderer;
+pub mod scenes;
+
+pub use counts::FrameCounts;
+pub use frame_graph::{FrameSettings, GraphSource};
+pub use renderer::{Renderer, Still};

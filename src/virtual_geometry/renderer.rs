@@ -1,0 +1,254 @@
+//! The frame loop: the graph compiled for the adapter, the scene uploaded, one
+//! `execute_frame` per camera, the counters taken back without waiting, and the
+//! candidate list and raster slots grown when a frame reports it dropped clusters.
+
+use super::counts::{CLUSTER_COUNT_READBACK, FrameCounts, RASTER_COUNTS_READBACK};
+use super::frame_graph::{CLUSTERS_PARAM, FrameSettings, GraphSource, MAX_SLOTS, SLOTS_PARAM};
+use crate::graph::{
+    CompileOptions, CompiledGraph, Executor, FrameData, FrameStats, GpuAdapter, GraphError, Result,
+};
+use glam::Mat4;
+use meshlight_gpu_scene::{Camera, GpuScene, SceneData};
+use std::collections::BTreeMap;
+
+/// How many frames [`Renderer::render_still`] runs, at most, to reach a frame that
+/// dropped nothing: each overflowing frame grows the lists to what it asked for, so one
+/// grow per list suffices unless the view changes.
+pub const MAX_STILL_FRAMES: u32 = 4;
+
+/// A finished image.
+pub struct Still {
+    pub width: u32,
+    pub height: u32,
+    /// RGBA8, rows top to bottom.
+    pub rgba: Vec<u8>,
+    /// The frame's statistics, with GPU timings where the adapter has timestamps.
+    pub stats: FrameStats,
+    pub counts: FrameCounts,
+    /// Frames run to get there (more than 1 when a list had to grow).
+    pub frames: u32,
+}
+
+/// One grow of a list, for logs and tests.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Growth {
+    pub frame: u64,
+    pub param: &'static str,
+    pub from: u64,
+    pub to: u64,
+}
+
+pub struct Renderer {
+    pub data: SceneData,
+    pub settings: FrameSettings,
+    pub compiled: CompiledGraph,
+    pub executor: Executor,
+    scene: GpuScene,
+    /// The largest list a binding can hold, in elements of 8 bytes.
+    max_elements: u64,
+    frame_index: u32,
+    previous_view_projection: Option<Mat4>,
+    /// Counters by frame, until both readbacks of a frame are in.
+    pending: BTreeMap<u64, PendingCounts>,
+    latest: Option<FrameCounts>,
+    pub growths: Vec<Growth>,
+    pub adapter: String,
+}
+
+#[derive(Default)]
+struct PendingCounts {
+    cluster_count: Option<Vec<u8>>,
+    raster_counts: Option<Vec<u8>>,
+}
+
+impl Renderer {
+    /// Selects the adapter, builds and compiles the graph for it (which decides the
+    /// device's features), opens the device and uploads the scene.
+    pub fn new(mut data: SceneData, settings: FrameSettings, source: &GraphSource) -> Result<Self> {
+        let adapter = GpuAdapter::select()?;
+        let limits = adapter.adapter.limits();
+        settings.check_viewport(limits.max_texture_dimension_2d)?;
+        let compiled = source
+            .graph(&data, &settings)?
+            .compile(&CompileOptions::for_adapter(&adapter))?;
+        let gpu = adapter.open(compiled.plan.enabled_features)?;
+        let name = gpu.info.name.clone();
+        let scene = GpuScene::new(&gpu, &mut data);
+        let max_elements = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            / 8;
+        Ok(Self {
+            data,
+            settings,
+            compiled,
+            executor: Executor::new(gpu),
+            scene,
+            max_elements,
+            frame_index: 0,
+            previous_view_projection: None,
+            pending: BTreeMap::new(),
+            latest: None,
+            growths: Vec::new(),
+            adapter: name,
+        })
+    }
+
+    /// Records and submits one frame seen by `camera`; never waits for the GPU. Counters
+    /// of earlier frames that have come back are taken, and a list that overflowed is
+    /// grown for the next frame.
+    pub fn frame(&mut self, camera: &Camera) -> Result<FrameStats> {
+        let viewport = [self.settings.width, self.settings.height];
+        let view = camera.view(viewport, self.frame_index, self.previous_view_projection);
+        self.previous_view_projection = Some(Mat4::from_cols_array_2d(&view.view_projection));
+        self.frame_index = self.frame_index.wrapping_add(1);
+        self.scene.upload(&self.executor.gpu, &mut self.data);
+        let frame =
+            FrameData::new().with(meshlight_gpu_scene::names::VIEW, bytemuck::bytes_of(&view));
+        let stats = self
+            .executor
+            .execute_frame(&self.compiled, &self.scene.imports(), &frame)?;
+        self.take_counts()?;
+        Ok(stats)
+    }
+
+    /// The newest frame whose counters are back.
+    pub fn latest_counts(&self) -> Option<FrameCounts> {
+        self.latest
+    }
+
+    /// Renders until a frame drops no cluster (at most [`MAX_STILL_FRAMES`]), waiting for
+    /// each, and returns that frame's image, statistics and counters.
+    pub fn render_still(&mut self, camera: &Camera) -> Result<Still> {
+        for attempt in 1..=MAX_STILL_FRAMES {
+            let submitted = self.frame(camera)?.frame;
+            let stats = self
+                .executor
+                .finish()?
+                .expect("a frame was executed, so its statistics exist");
+            self.take_counts()?;
+            let counts = self
+                .latest
+                .filter(|c| c.frame == submitted)
+                .ok_or_else(|| {
+                    GraphError::Readback(format!(
+                        "frame {submitted}'s counters did not come back after the GPU finished it"
+                    ))
+                })?;
+            if !counts.overflowed() || attempt == MAX_STILL_FRAMES {
+                if counts.overflowed() {
+                    log::error!(
+                        "frame {submitted} still drops clusters after {attempt} frames: {counts:?}"
+                    );
+                }
+                let rgba = self.executor.read_texture("color")?;
+                return Ok(Still {
+                    width: self.settings.width,
+                    height: self.settings.height,
+                    rgba,
+                    stats,
+                    counts,
+                    frames: attempt,
+                });
+            }
+        }
+        unreachable!("the last attempt returns")
+    }
+
+    /// Takes every readback that has come back; grows the lists for frames that
+    /// overflowed.
+    fn take_counts(&mut self) -> Result<()> {
+        for (name, is_clusters) in [
+            (CLUSTER_COUNT_READBACK, true),
+            (RASTER_COUNTS_READBACK, false),
+        ] {
+            while let Some(r) = self.executor.take_readback(name)? {
+                let entry = self.pending.entry(r.frame).or_default();
+                if is_clusters {
+                    entry.cluster_count = Some(r.bytes);
+                } else {
+                    entry.raster_counts = Some(r.bytes);
+                }
+            }
+        }
+        let complete: Vec<u64> = self
+            .pending
+            .iter()
+            .filter(|(_, p)| p.cluster_count.is_some() && p.raster_counts.is_some())
+            .map(|(f, _)| *f)
+            .collect();
+        for frame in complete {
+            let p = self.pending.remove(&frame).expect("listed above");
+            let counts = FrameCounts::from_words(
+                frame,
+                p.cluster_count.as_deref().unwrap_or_default(),
+                p.raster_counts.as_deref().unwrap_or_default(),
+            )
+            .ok_or_else(|| GraphError::Readback(format!("frame {frame}'s counters are short")))?;
+            self.grow_for(&counts)?;
+            if self.latest.is_none_or(|l| l.frame < frame) {
+                self.latest = Some(counts);
+            }
+        }
+        // A frame whose other half never comes (dropped by a full ring) is forgotten.
+        while self.pending.len() > 16 {
+            self.pending.pop_first();
+        }
+        Ok(())
+    }
+
+    /// Raises `clusters` or `slots` to the next power of two above what `counts` asked
+    /// for, when it asked for more than the list holds.
+    fn grow_for(&mut self, counts: &FrameCounts) -> Result<()> {
+        let wants = [
+            (
+                CLUSTERS_PARAM,
+                counts.clusters_requested as u64,
+                self.max_elements,
+                "--clusters",
+            ),
+            (
+                SLOTS_PARAM,
+                counts.visible as u64,
+                self.max_elements.min(MAX_SLOTS),
+                "--slots",
+            ),
+        ];
+        for (param, wanted, limit, flag) in wants {
+            let now = self.param(param);
+            if wanted <= now {
+                continue;
+            }
+            let to = wanted.next_power_of_two().min(limit);
+            if to <= now {
+                log::error!(
+                    "frame {}: {wanted} {param} wanted, but {now} is the most this device binds; clusters are dropped (raise the LOD threshold or draw fewer instances)",
+                    counts.frame
+                );
+                continue;
+            }
+            log::warn!(
+                "frame {}: {wanted} {param} wanted but the list holds {now}; raised `{param}` to {to} (start there with {flag} {to} or `{param} = {to}` in the pipeline's [params])",
+                counts.frame
+            );
+            self.compiled.set_param(param, to)?;
+            self.growths.push(Growth {
+                frame: counts.frame,
+                param,
+                from: now,
+                to,
+            });
+        }
+        Ok(())
+    }
+
+    /// The current value of a size parameter.
+    pub fn param(&self, name: &str) -> u64 {
+        self.compiled
+            .plan
+            .params
+            .iter()
+            .find(|(n, _)| n == name)
+            .map_or(0, |(_, v)| *v)
+    }
+}
