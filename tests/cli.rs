@@ -73,3 +73,46 @@ fn every_command_has_help() {
         assert!(out.status.success() && !out.stdout.is_empty(), "{cmd}");
     }
 }
+
+#[test]
+fn render_draws_a_mesh_file_through_the_shipped_pipeline_and_reports_its_counters() {
+    let dir = std::env::temp_dir().join(format!("meshlight-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (png, html) = (dir.join("spot.png"), dir.join("spot.html"));
+    let out = meshlight(&[
+        "render",
+        "--mesh",
+        "assets/meshes/spot.obj",
+        "--instances",
+        "4",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--view",
+        "lod",
+        "--pipeline",
+        "pipelines/virtual_geometry.toml",
+        "-o",
+        png.to_str().unwrap(),
+        "--html",
+        html.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("clusters visible (LOD cut)"), "{stdout}");
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("sw_raster") && page.contains("triangles rasterised"));
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let info = decoder.read_info().unwrap();
+    assert_eq!((info.info().width, info.info().height), (96, 64));
+    // A misspelt view is refused with the names that exist.
+    let out = meshlight(&["render", "--view", "normals"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("clusters") && err.contains("shaded"), "{err}");
+}
