@@ -20,9 +20,10 @@ pub struct Image {
     pub depth: Vec<f32>,
     /// [`instance_id`] of the nearest surface; [`EMPTY_ID`] where empty.
     pub ids: Vec<u32>,
-    /// Triangles left out because a corner lies behind the camera or nearer than the
-    /// near plane (`w <= 0` or `z > w`): the hardware clips those, this reference does
-    /// not, so scenes compared with it keep this at 0.
+    /// Triangles left out because a corner lies outside the depth range (`w <= 0`,
+    /// `z > w` nearer than the near plane, `z < 0` beyond a finite far plane): the
+    /// hardware clips those, this reference does not, so scenes compared with it keep
+    /// this at 0.
     pub clipped_triangles: u64,
 }
 
@@ -62,14 +63,15 @@ pub fn draw(
         let screen: Vec<Option<([f64; 2], f64)>> = positions
             .iter()
             .map(|p| {
-                let c = clip_position(&world_from_local, &view_projection, Vec3::new(p[0], p[1], p[2]));
+                let c = clip_position(
+                    &world_from_local,
+                    &view_projection,
+                    Vec3::new(p[0], p[1], p[2]),
+                );
                 let (x, y, z, w) = (c.x as f64, c.y as f64, c.z as f64, c.w as f64);
-                (w > 0.0 && z <= w).then(|| {
+                (w > 0.0 && (0.0..=w).contains(&z)).then(|| {
                     (
-                        [
-                            (x / w * 0.5 + 0.5) * size[0],
-                            (0.5 - y / w * 0.5) * size[1],
-                        ],
+                        [(x / w * 0.5 + 0.5) * size[0], (0.5 - y / w * 0.5) * size[1]],
                         z / w,
                     )
                 })
@@ -77,9 +79,11 @@ pub fn draw(
             .collect();
         for t in indices.chunks_exact(3) {
             let corners = [t[0], t[1], t[2]].map(|k| screen.get(k as usize).copied());
+            // An index past the end of `positions`.
             let [Some(a), Some(b), Some(c)] = corners else {
                 continue;
             };
+            // A corner the hardware would clip.
             let [Some(a), Some(b), Some(c)] = [a, b, c] else {
                 image.clipped_triangles += 1;
                 continue;
@@ -103,8 +107,11 @@ mod tests {
     /// A camera at the origin looking down -z, 90° vertical field of view, near 1, for
     /// a square viewport: the plane z = -d shows x, y in -d..d.
     fn view(size: u32) -> View {
-        let projection =
-            glam::camera::rh::proj::directx::perspective_infinite_reverse(90f32.to_radians(), 1.0, 1.0);
+        let projection = glam::camera::rh::proj::directx::perspective_infinite_reverse(
+            90f32.to_radians(),
+            1.0,
+            1.0,
+        );
         View {
             view_projection: projection.to_cols_array_2d(),
             viewport_size: [size as f32; 2],
@@ -144,14 +151,24 @@ mod tests {
                 let k = y * 16 + x;
                 let in_far = (4..12).contains(&x) && (4..12).contains(&y);
                 let in_near = x >= 8;
-                let want = if in_near { 2 } else if in_far { 1 } else { EMPTY_ID };
+                let want = if in_near {
+                    2
+                } else if in_far {
+                    1
+                } else {
+                    EMPTY_ID
+                };
                 assert_eq!(image.ids[k], want, "({x}, {y})");
                 let other = [EMPTY_ID, 2, 1][want as usize];
                 assert_eq!(swapped.ids[k], other, "swapped ({x}, {y})");
                 assert_eq!(image.depth[k], swapped.depth[k]);
                 // Reverse-Z with near 1: depth = near / distance.
                 let d = [0.0, 0.5, 0.8][want as usize];
-                assert!((image.depth[k] - d).abs() < 1e-6, "({x}, {y}) {}", image.depth[k]);
+                assert!(
+                    (image.depth[k] - d).abs() < 1e-6,
+                    "({x}, {y}) {}",
+                    image.depth[k]
+                );
             }
         }
         assert_eq!(image.covered(), 8 * 16 + 4 * 8);

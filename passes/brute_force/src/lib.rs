@@ -5,8 +5,8 @@
 //!
 //! It answers "what does the naive renderer cost for this scene and camera", so it is
 //! kept as plain as a renderer without virtual geometry would be: indices from an index
-//! buffer (the hardware's post-transform vertex cache applies), one vertex-shader
-//! invocation per unique index per instance, the depth test in fixed function.
+//! buffer, so the hardware's post-transform vertex cache shares vertices between
+//! triangles as it would for any indexed mesh, and the depth test in fixed function.
 //!
 //! # Contract
 //!
@@ -145,7 +145,11 @@ impl Lod0Buffers {
 /// builder only drops degenerate triangles, which cover nothing).
 pub fn lod0_buffers(mesh: &Mesh) -> Lod0Buffers {
     Lod0Buffers {
-        positions: mesh.positions.iter().map(|p| p.extend(1.0).into()).collect(),
+        positions: mesh
+            .positions
+            .iter()
+            .map(|p| p.extend(1.0).into())
+            .collect(),
         indices: mesh.indices.clone(),
     }
 }
@@ -435,7 +439,11 @@ mod tests {
         let module = library
             .compose(&SHADER, &[])
             .unwrap_or_else(|e| panic!("{e}"));
-        let entries: Vec<_> = module.entry_points.iter().map(|e| e.name.as_str()).collect();
+        let entries: Vec<_> = module
+            .entry_points
+            .iter()
+            .map(|e| e.name.as_str())
+            .collect();
         assert_eq!(entries, ["draw_vs", "draw_fs"]);
     }
 }
