@@ -1,0 +1,497 @@
+//! `resolve` on the GPU (lavapipe in CI) against `cpu`: a scene of a mesh with UVs
+//! (spot) and one without (the procedural knot), rasterised into a visibility buffer by
+//! the software rasteriser's CPU reference, resolved into depth, material depth and
+//! every debug view; then the errors.
+
+use glam::{Mat4, Quat, Vec3};
+use meshlight_gpu_scene::data::Limits;
+use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
+use meshlight_graph::*;
+use meshlight_pass_resolve::settings::Settings;
+use meshlight_pass_resolve::{COLOR_FORMAT, DEPTH_FORMAT, DebugView, Resolve, cpu};
+use meshlight_scene::load::load_obj;
+use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
+use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::visbuffer;
+use std::collections::BTreeSet;
+use std::path::Path;
+
+const W: u32 = 64;
+const H: u32 = 48;
+
+const BUFFER_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_DST)
+    .union(wgpu::BufferUsages::COPY_SRC);
+const DEPTH_USAGE: wgpu::TextureUsages =
+    wgpu::TextureUsages::RENDER_ATTACHMENT.union(wgpu::TextureUsages::COPY_SRC);
+const COLOR_USAGE: wgpu::TextureUsages =
+    wgpu::TextureUsages::STORAGE_BINDING.union(wgpu::TextureUsages::COPY_SRC);
+
+fn gpu() -> GpuContext {
+    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn asset(mesh: &meshlight_scene::Mesh) -> MeshletAsset {
+    build_asset(mesh, &BuildOptions::default(), &mut |_| {})
+        .unwrap()
+        .asset
+}
+
+/// `mesh`'s bounding sphere moved to `at` with radius `radius`, turned and stretched.
+fn place(scene: &SceneData, mesh: u32, at: Vec3, radius: f32, turn: Quat, stretch: Vec3) -> Mat4 {
+    let [x, y, z, r] = scene.meshes[mesh as usize].bounding_sphere;
+    Mat4::from_scale_rotation_translation(stretch * (radius / r), turn, at)
+        * Mat4::from_translation(-Vec3::new(x, y, z))
+}
+
+/// What the pass reads: the scene, the camera, the slot buffer and the visibility
+/// buffer the software rasteriser's reference draws from it.
+struct Frame {
+    scene: SceneData,
+    view: View,
+    raster_clusters: Vec<Cluster>,
+    /// `raster_counts[0]`.
+    software: u32,
+    visbuffer: Vec<u64>,
+}
+
+impl Frame {
+    fn cpu(&self) -> cpu::Frame<'_> {
+        cpu::Frame {
+            scene: &self.scene,
+            view: &self.view,
+            raster_clusters: &self.raster_clusters,
+            software_clusters: self.software,
+            visbuffer: &self.visbuffer,
+            width: W,
+            height: H,
+        }
+    }
+}
+
+/// Spot (with UVs) twice, once stretched so normals need the inverse transpose, and the
+/// knot (no UVs) behind, three materials; each instance draws one LOD level, so the
+/// `lod` view has several. The first half of the slots count as software clusters.
+fn frame() -> Frame {
+    let spot_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/meshes/spot.obj");
+    let spot = load_obj(&spot_path).unwrap();
+    assert!(!spot.uvs.is_empty(), "spot.obj should have UVs");
+    let mut scene = SceneData::new(Limits::default());
+    let spot = scene.add_mesh("spot", &asset(&spot)).unwrap();
+    let knot = scene
+        .add_mesh("knot", &asset(&procedural_mesh(12)))
+        .unwrap();
+    let materials = [[0.9, 0.6, 0.4], [0.4, 0.8, 0.5], [0.7, 0.7, 0.9]]
+        .map(|base_color| scene.add_material(Material { base_color }));
+    let instances = [
+        (
+            spot,
+            place(
+                &scene,
+                spot.0,
+                Vec3::new(-0.7, 0.0, 0.0),
+                1.0,
+                Quat::from_rotation_y(2.0),
+                Vec3::ONE,
+            ),
+            materials[0],
+            0,
+        ),
+        (
+            spot,
+            place(
+                &scene,
+                spot.0,
+                Vec3::new(0.8, 0.0, 0.2),
+                0.8,
+                Quat::from_rotation_y(-1.3),
+                Vec3::new(1.0, 1.6, 0.7),
+            ),
+            materials[1],
+            1,
+        ),
+        (
+            knot,
+            place(
+                &scene,
+                knot.0,
+                Vec3::new(0.0, 0.4, -2.0),
+                1.4,
+                Quat::from_rotation_x(0.4),
+                Vec3::ONE,
+            ),
+            materials[2],
+            0,
+        ),
+    ];
+    let mut raster_clusters = Vec::new();
+    for (mesh, transform, material, level) in instances {
+        let id = scene
+            .add_instance(mesh, transform, material)
+            .unwrap()
+            .unwrap();
+        let instance = scene.instances[id.0 as usize];
+        let first = instance.first_meshlet;
+        for m in first..first + instance.meshlet_count {
+            if scene.meshlets[m as usize].level() == level {
+                raster_clusters.push(Cluster {
+                    instance: id.0,
+                    meshlet: m,
+                });
+            }
+        }
+    }
+    let camera = Camera::perspective(
+        Vec3::new(0.1, 0.6, 2.7),
+        Vec3::new(0.0, 0.1, -0.5),
+        0.9,
+        0.1,
+    );
+    let view = camera.view([W, H], 0, None);
+    let visbuffer = meshlight_pass_sw_raster::cpu::rasterize(&scene, &view, &raster_clusters, W, H);
+    let software = raster_clusters.len() as u32 / 2;
+    Frame {
+        scene,
+        view,
+        raster_clusters,
+        software,
+        visbuffer,
+    }
+}
+
+/// What the pass wrote.
+struct Resolved {
+    depth: Vec<f32>,
+    material_depth: Vec<f32>,
+    color: Vec<[u8; 4]>,
+}
+
+/// Copies a `W × H` texture of 4-byte texels to the CPU.
+fn read_texture(gpu: &GpuContext, texture: &wgpu::Texture, aspect: wgpu::TextureAspect) -> Vec<u8> {
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size: (W * H * 4) as u64,
+        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                // 64 texels of 4 bytes: the 256-byte row alignment copies need.
+                bytes_per_row: Some(W * 4),
+                rows_per_image: Some(H),
+            },
+        },
+        wgpu::Extent3d {
+            width: W,
+            height: H,
+            depth_or_array_layers: 1,
+        },
+    );
+    gpu.queue.submit([encoder.finish()]);
+    gpu.read_buffer(&buffer, 0, (W * H * 4) as u64).unwrap()
+}
+
+fn texture(
+    gpu: &GpuContext,
+    label: &str,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: W,
+            height: H,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+/// Runs `pass` over `frame` with `view` as the frame's camera, and reads the three
+/// targets back.
+fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolved> {
+    let gpu = gpu();
+    let scene = GpuScene::new(&gpu, &mut frame.scene);
+    let slots = frame.raster_clusters.len() as u64;
+    let mut g = GraphBuilder::new();
+    let h = scene.import(&mut g);
+    let clusters = g.import_buffer(
+        "raster_clusters",
+        BufferDesc::array(elements::CLUSTER, slots),
+        BUFFER_USAGE,
+    );
+    let counts = g.import_buffer(
+        "raster_counts",
+        BufferDesc::array(Element::U32, 4),
+        BUFFER_USAGE,
+    );
+    let vis = g.import_buffer(
+        "visbuffer",
+        BufferDesc::array(Element::U64, (W * H) as u64),
+        BUFFER_USAGE,
+    );
+    let depth = g.import_texture("depth", TextureDesc::d2(DEPTH_FORMAT, W, H), DEPTH_USAGE);
+    let material_depth = g.import_texture(
+        "material_depth",
+        TextureDesc::d2(DEPTH_FORMAT, W, H),
+        DEPTH_USAGE,
+    );
+    let color = g.import_texture("color", TextureDesc::d2(COLOR_FORMAT, W, H), COLOR_USAGE);
+    g.add_pass(
+        "resolve",
+        pass,
+        Bindings::new()
+            .bind("visbuffer", vis)
+            .bind("raster_clusters", clusters)
+            .bind("raster_counts", counts)
+            .bind("instances", h.instances)
+            .bind("meshes", h.meshes)
+            .bind("meshlets", h.meshlets)
+            .bind("payload", h.payload)
+            .bind("materials", h.materials)
+            .bind("depth", depth)
+            .bind("material_depth", material_depth)
+            .bind("color", color),
+    )?;
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
+    // Words past the first are other counters of the slot buffer; the pass reads word 0.
+    let count_words = [frame.software, 7, 0, slots as u32];
+    let buffers = [
+        gpu.buffer_with_data(
+            "raster_clusters",
+            bytemuck::cast_slice(&frame.raster_clusters),
+            BUFFER_USAGE,
+        ),
+        gpu.buffer_with_data(
+            "raster_counts",
+            bytemuck::cast_slice(&count_words),
+            BUFFER_USAGE,
+        ),
+        gpu.buffer_with_data(
+            "visbuffer",
+            bytemuck::cast_slice(&frame.visbuffer),
+            BUFFER_USAGE,
+        ),
+    ];
+    let targets = [
+        texture(&gpu, "depth", DEPTH_FORMAT, DEPTH_USAGE),
+        texture(&gpu, "material_depth", DEPTH_FORMAT, DEPTH_USAGE),
+        texture(&gpu, "color", COLOR_FORMAT, COLOR_USAGE),
+    ];
+    let imports = scene
+        .imports()
+        .buffer("raster_clusters", &buffers[0])
+        .buffer("raster_counts", &buffers[1])
+        .buffer("visbuffer", &buffers[2])
+        .texture("depth", &targets[0])
+        .texture("material_depth", &targets[1])
+        .texture("color", &targets[2]);
+    let mut exec = Executor::new(gpu);
+    let data = FrameData::new().with("view", bytemuck::bytes_of(view));
+    exec.execute_frame(&compiled, &imports, &data)?;
+    exec.finish()?;
+    let floats = |bytes: Vec<u8>| bytemuck::pod_collect_to_vec::<u8, f32>(&bytes);
+    Ok(Resolved {
+        depth: floats(read_texture(
+            &exec.gpu,
+            &targets[0],
+            wgpu::TextureAspect::DepthOnly,
+        )),
+        material_depth: floats(read_texture(
+            &exec.gpu,
+            &targets[1],
+            wgpu::TextureAspect::DepthOnly,
+        )),
+        color: bytemuck::pod_collect_to_vec(&read_texture(
+            &exec.gpu,
+            &targets[2],
+            wgpu::TextureAspect::All,
+        )),
+    })
+}
+
+fn run(frame: &mut Frame, pass: Resolve) -> Resolved {
+    let view = frame.view;
+    run_with_view(frame, pass, &view).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The first pixel where two float targets differ in their bits.
+fn first_difference(got: &[f32], want: &[f32]) -> Option<(usize, f32, f32)> {
+    got.iter()
+        .zip(want)
+        .enumerate()
+        .find(|(_, (g, w))| g.to_bits() != w.to_bits())
+        .map(|(i, (g, w))| (i, *g, *w))
+}
+
+/// Pixels whose largest channel difference exceeds `tolerance`, and the largest one.
+fn color_differences(got: &[[u8; 4]], want: &[[u8; 4]], tolerance: u8) -> (usize, u8) {
+    assert_eq!(got.len(), want.len());
+    let mut over = 0;
+    let mut largest = 0;
+    for (g, w) in got.iter().zip(want) {
+        let d = (0..4).map(|k| g[k].abs_diff(w[k])).max().unwrap();
+        largest = largest.max(d);
+        if d > tolerance {
+            over += 1;
+        }
+    }
+    (over, largest)
+}
+
+#[test]
+fn depth_material_depth_and_every_view_match_the_reference() {
+    let mut f = frame();
+    let covered = f
+        .visbuffer
+        .iter()
+        .filter(|&&v| v != visbuffer::EMPTY)
+        .count();
+    let pixels = (W * H) as usize;
+    assert!(
+        covered > pixels / 4 && covered < pixels * 19 / 20,
+        "the scene should cover part of the screen, covers {covered} of {pixels}"
+    );
+
+    let depth = cpu::depth(&f.visbuffer, W, H);
+    let material_depth = cpu::material_depth(&f.scene, &f.raster_clusters, &f.visbuffer);
+    let materials: BTreeSet<u32> = material_depth.iter().map(|d| d.to_bits()).collect();
+    assert!(
+        materials.len() >= 4,
+        "empty and three materials: {materials:?}"
+    );
+
+    for view in DebugView::ALL {
+        let got = run(&mut f, Resolve::new(W, H).with_view(view));
+        // Depth and material depth do not depend on the view: check them every time.
+        if let Some((i, g, w)) = first_difference(&got.depth, &depth) {
+            panic!("{view}: depth at pixel {i} is {g}, the reference {w}");
+        }
+        if let Some((i, g, w)) = first_difference(&got.material_depth, &material_depth) {
+            panic!("{view}: material depth at pixel {i} is {g}, the reference {w}");
+        }
+        let want = cpu::shade(
+            &f.cpu(),
+            &Settings {
+                view,
+                ..Settings::default()
+            },
+        );
+        let distinct: BTreeSet<[u8; 4]> = want.iter().copied().collect();
+        let (tolerance, share) = match view {
+            DebugView::Shaded => (2, 0.99),
+            DebugView::Depth => (1, 1.0),
+            _ => (0, 1.0),
+        };
+        let (over, largest) = color_differences(&got.color, &want, tolerance);
+        eprintln!(
+            "{view}: {} distinct colours, {over} pixels differ by more than {tolerance}, largest difference {largest}",
+            distinct.len()
+        );
+        assert!(
+            (pixels - over) as f64 >= share * pixels as f64,
+            "{view}: {over} of {pixels} pixels differ from the reference by more than {tolerance} (largest {largest})"
+        );
+        assert!(
+            got.color.iter().all(|c| c[3] == 255),
+            "{view}: alpha must be 1"
+        );
+        // Every view shows something that tells pixels apart, so a constant image fails.
+        let least = match view {
+            DebugView::Raster | DebugView::Lod => 3,
+            DebugView::Depth => 10,
+            _ => 20,
+        };
+        assert!(
+            distinct.len() >= least,
+            "{view}: only {} distinct colours in the reference",
+            distinct.len()
+        );
+    }
+}
+
+#[test]
+fn the_shaded_view_follows_the_settings_from_params() {
+    let mut f = frame();
+    let text = format!(
+        "width = {W}\nheight = {H}\nview = \"shaded\"\nchecker_scale = 3.5\n\
+         light_direction = [0.6, 0.2, 0.8]\nlight_color = [1.2, 0.9, 0.6]\nambient_color = [0.05, 0.1, 0.2]"
+    );
+    let params = file::Params::new(text.parse().unwrap_or_else(|e| panic!("{e}")));
+    let mut registry = file::Registry::new();
+    meshlight_pass_resolve::register(&mut registry);
+    let pass = Resolve::from_params(&params).unwrap();
+    assert!(registry.build("resolve", "compute", &params).is_ok());
+    let settings = pass.settings;
+    let got = run(&mut f, pass);
+    let want = cpu::shade(&f.cpu(), &settings);
+    let defaults = cpu::shade(&f.cpu(), &Settings::default());
+    let pixels = (W * H) as usize;
+    let (over, largest) = color_differences(&got.color, &want, 2);
+    assert!(
+        over * 100 <= pixels,
+        "{over} of {pixels} pixels differ from the reference by more than 2 (largest {largest})"
+    );
+    // The settings matter: the default light gives a different image.
+    let (changed, _) = color_differences(&want, &defaults, 2);
+    assert!(changed > pixels / 10, "only {changed} pixels changed");
+}
+
+#[test]
+fn a_viewport_other_than_the_params_is_a_record_error() {
+    let mut f = frame();
+    let camera = Camera::perspective(Vec3::new(0.3, 1.2, 4.0), Vec3::ZERO, 0.9, 0.1);
+    let wrong = camera.view([W, H + 1], 0, None);
+    match run_with_view(&mut f, Resolve::new(W, H), &wrong) {
+        Err(GraphError::Record { message, .. }) => assert!(
+            message.contains("viewport") && message.contains(&format!("{W} × {H}")),
+            "{message}"
+        ),
+        Err(other) => panic!("not a record error: {other}"),
+        Ok(_) => panic!("a viewport of {W} × {} ran", H + 1),
+    }
+}
+
+#[test]
+fn bad_params_are_refused_with_what_to_change() {
+    let mut registry = file::Registry::new();
+    meshlight_pass_resolve::register(&mut registry);
+    let build = |text: &str| {
+        let params = file::Params::new(text.parse().unwrap_or_else(|e| panic!("{e}")));
+        match registry.build("resolve", "compute", &params) {
+            Err(GraphError::Parameter { message, .. }) => message,
+            Err(other) => panic!("not a parameter error: {other}"),
+            Ok(_) => panic!("`{text}` was accepted"),
+        }
+    };
+    let m = build("width = 0\nheight = 48");
+    assert!(m.contains("`width`") && m.contains("> 0"), "{m}");
+    let m = build("height = 48");
+    assert!(m.contains("`width`"), "{m}");
+    let m = build("width = 64\nheight = 48\nview = \"normals\"");
+    for v in DebugView::ALL {
+        assert!(m.contains(v.name()), "{m} does not name `{v}`");
+    }
+    assert!(m.contains("`normals`"), "{m}");
+    let m = build("width = 64\nheight = 48\ncheker_scale = 2");
+    assert!(m.contains("`cheker_scale`"), "{m}");
+}
