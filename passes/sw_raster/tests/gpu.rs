@@ -1,0 +1,646 @@
+//! `sw_raster` on the GPU (lavapipe in CI) against `cpu::rasterize`, bit for bit on every
+//! pixel: seeded views of three instances of the procedural mesh at several LOD levels,
+//! a 1-D and a 2-D dispatch with ids past the count, both loop shapes, a flat
+//! tessellated quad whose shared edges must cover every pixel once, the per-frame clear
+//! and the errors.
+
+use glam::{Mat4, Quat, Vec3};
+use meshlight_gpu_scene::data::Limits;
+use meshlight_gpu_scene::{Camera, GpuScene, Material, Projection, SceneData};
+use meshlight_graph::*;
+use meshlight_pass_sw_raster::{SwRaster, cpu};
+use meshlight_scene::{BuildOptions, Mesh, build_asset, procedural_mesh};
+use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::visbuffer;
+
+const W: u32 = 96;
+const H: u32 = 64;
+/// Below every triangle box: every workgroup loops per scanline.
+const SCANLINES: u32 = 1;
+/// Above every triangle box: every workgroup loops over its whole box.
+const BOXES: u32 = 1 << 20;
+
+const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::INDIRECT)
+    .union(wgpu::BufferUsages::COPY_DST)
+    .union(wgpu::BufferUsages::COPY_SRC);
+
+fn gpu() -> GpuContext {
+    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+// ---------------------------------------------------------------------------------------
+// Scenes and views
+
+fn add_mesh(scene: &mut SceneData, name: &str, mesh: &Mesh) -> meshlight_gpu_scene::MeshId {
+    let asset = build_asset(mesh, &BuildOptions::default(), &mut |_| {})
+        .unwrap_or_else(|e| panic!("{e}"))
+        .asset;
+    scene.add_mesh(name, &asset).unwrap()
+}
+
+/// Three instances of the torus knot (one at its place, two moved, scaled and turned).
+fn knot_scene() -> SceneData {
+    let mut scene = SceneData::new(Limits::default());
+    let mesh = add_mesh(&mut scene, "knot", &procedural_mesh(12));
+    let material = scene.add_material(Material {
+        base_color: [0.8, 0.5, 0.3],
+    });
+    let transforms = [
+        Mat4::IDENTITY,
+        Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.6),
+            Quat::from_rotation_y(0.7),
+            Vec3::new(2.5, 1.0, 2.0),
+        ),
+        Mat4::from_scale_rotation_translation(
+            Vec3::new(0.5, 0.7, 0.6),
+            Quat::from_rotation_x(-1.1),
+            Vec3::new(-2.0, -1.5, 1.0),
+        ),
+    ];
+    for t in transforms {
+        scene.add_instance(mesh, t, material).unwrap().unwrap();
+    }
+    scene
+}
+
+/// The meshlets of `instance` for which `pick` holds, as clusters.
+fn clusters_of(scene: &SceneData, instance: u32, pick: impl Fn(u32) -> bool) -> Vec<Cluster> {
+    let i = &scene.instances[instance as usize];
+    (i.first_meshlet..i.first_meshlet + i.meshlet_count)
+        .filter(|&m| pick(scene.meshlets[m as usize].level()))
+        .map(|meshlet| Cluster { instance, meshlet })
+        .collect()
+}
+
+/// A small deterministic generator, so the views are the same on every run.
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+/// `n` perspective views from seeded points around the knot scene.
+fn seeded_views(seed: u64, n: usize) -> Vec<View> {
+    let mut rng = Lcg(seed);
+    (0..n)
+        .map(|_| {
+            let yaw = rng.range(0.0, std::f32::consts::TAU);
+            let pitch = rng.range(-0.9, 0.9);
+            let distance = rng.range(7.0, 12.0);
+            let dir = Vec3::new(
+                pitch.cos() * yaw.cos(),
+                pitch.sin(),
+                pitch.cos() * yaw.sin(),
+            );
+            let target = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.5);
+            Camera::perspective(target + dir * distance, target, 0.8, 0.5).view([W, H], 0, None)
+        })
+        .collect()
+}
+
+// ---------------------------------------------------------------------------------------
+// Running the pass
+
+/// What the pass is given: the slot buffer (clusters past `count` must not be drawn) and
+/// the dispatch shape.
+struct Input {
+    slots: Vec<Cluster>,
+    count: u32,
+    args: [u32; 3],
+}
+
+impl Input {
+    /// The first `count` slots drawn; `x` workgroups per row, enough rows for `count`.
+    fn new(slots: Vec<Cluster>, count: u32, x: u32) -> Self {
+        assert!(count as usize <= slots.len());
+        Self {
+            args: [x, count.div_ceil(x), 1],
+            slots,
+            count,
+        }
+    }
+
+    fn reference(&self, scene: &SceneData, view: &View) -> Vec<u64> {
+        cpu::rasterize(scene, view, &self.slots[..self.count as usize], W, H)
+    }
+}
+
+/// Values the visibility buffer holds before the first frame: the nearest depth, so any
+/// of them left by a missing clear would win every atomicMax.
+fn stale_contents() -> Vec<u64> {
+    (0..W * H)
+        .map(|i| visbuffer::pack(1.0, i % 4096, i % 128))
+        .collect()
+}
+
+/// Runs one frame per view through one graph and executor, and reads the visibility
+/// buffer back after each.
+fn run(
+    scene: &mut SceneData,
+    input: &Input,
+    views: &[View],
+    pass: SwRaster,
+) -> Result<Vec<Vec<u64>>> {
+    let gpu = gpu();
+    let gpu_scene = GpuScene::new(&gpu, scene);
+    let counts = [input.count, 0, 0, 0];
+    let mut g = GraphBuilder::new();
+    let h = gpu_scene.import(&mut g);
+    let slots = g.import_buffer(
+        "raster_clusters",
+        BufferDesc::array(
+            meshlight_gpu_scene::gpu::elements::CLUSTER,
+            input.slots.len() as u64,
+        ),
+        USAGE,
+    );
+    let counts_h = g.import_buffer("raster_counts", BufferDesc::array(Element::U32, 4), USAGE);
+    let args_h = g.import_buffer(
+        "sw_args",
+        BufferDesc::array(Element::DISPATCH_ARGS, 1),
+        USAGE,
+    );
+    let vis = g.import_buffer(
+        "visbuffer",
+        BufferDesc::array(Element::U64, (W * H) as u64),
+        USAGE,
+    );
+    g.add_pass(
+        "sw_raster",
+        pass,
+        Bindings::new()
+            .bind("raster_clusters", slots)
+            .bind("raster_counts", counts_h)
+            .bind("sw_args", args_h)
+            .bind("instances", h.instances)
+            .bind("meshes", h.meshes)
+            .bind("meshlets", h.meshlets)
+            .bind("payload", h.payload)
+            .bind("visbuffer", vis),
+    )?;
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
+    let buffers = [
+        gpu.buffer_with_data("raster_clusters", bytemuck::cast_slice(&input.slots), USAGE),
+        gpu.buffer_with_data("raster_counts", bytemuck::cast_slice(&counts), USAGE),
+        gpu.buffer_with_data("sw_args", bytemuck::cast_slice(&input.args), USAGE),
+        gpu.buffer_with_data("visbuffer", bytemuck::cast_slice(&stale_contents()), USAGE),
+    ];
+    let imports = gpu_scene
+        .imports()
+        .buffer("raster_clusters", &buffers[0])
+        .buffer("raster_counts", &buffers[1])
+        .buffer("sw_args", &buffers[2])
+        .buffer("visbuffer", &buffers[3]);
+    let mut exec = Executor::new(gpu);
+    let mut out = Vec::new();
+    for view in views {
+        let data = FrameData::new().with("view", bytemuck::bytes_of(view));
+        exec.execute_frame(&compiled, &imports, &data)?;
+        exec.finish()?;
+        let bytes = exec.gpu.read_buffer(&buffers[3], 0, (W * H) as u64 * 8)?;
+        out.push(bytemuck::pod_collect_to_vec(&bytes));
+    }
+    Ok(out)
+}
+
+fn pass(scanline_width: u32) -> SwRaster {
+    SwRaster {
+        width: W,
+        height: H,
+        scanline_width,
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Comparing
+
+fn covered(v: &[u64]) -> usize {
+    v.iter().filter(|&&p| p != visbuffer::EMPTY).count()
+}
+
+fn describe(v: u64) -> String {
+    if v == visbuffer::EMPTY {
+        "empty".into()
+    } else {
+        format!(
+            "depth {:e} ({:#010x}) cluster {} triangle {}",
+            visbuffer::depth(v),
+            v >> 32,
+            visbuffer::cluster(v),
+            visbuffer::triangle(v)
+        )
+    }
+}
+
+/// Every pixel identical; the first differences are named by pixel.
+fn assert_identical(name: &str, got: &[u64], want: &[u64]) {
+    assert_eq!(got.len(), want.len());
+    let diffs: Vec<usize> = (0..got.len()).filter(|&i| got[i] != want[i]).collect();
+    let shown: Vec<String> = diffs
+        .iter()
+        .take(8)
+        .map(|&i| {
+            format!(
+                "({}, {}): GPU {} / CPU {}",
+                i as u32 % W,
+                i as u32 / W,
+                describe(got[i]),
+                describe(want[i])
+            )
+        })
+        .collect();
+    assert!(
+        diffs.is_empty(),
+        "{name}: {} of {} pixels differ ({} covered by the reference):\n{}",
+        diffs.len(),
+        got.len(),
+        covered(want),
+        shown.join("\n")
+    );
+}
+
+// ---------------------------------------------------------------------------------------
+// Tests
+
+#[test]
+fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
+    let mut scene = knot_scene();
+    // LOD 0 of the first instance, levels 1 and 2 of the second, level 3 and up of the
+    // third: overlapping surfaces of several levels.
+    let mut slots: Vec<Cluster> = [
+        clusters_of(&scene, 0, |l| l == 0),
+        clusters_of(&scene, 1, |l| l == 1 || l == 2),
+        clusters_of(&scene, 2, |l| l >= 3),
+    ]
+    .concat();
+    let levels: std::collections::BTreeSet<u32> = slots
+        .iter()
+        .map(|c| scene.meshlets[c.meshlet as usize].level())
+        .collect();
+    assert!(levels.len() >= 4, "levels {levels:?}");
+    let count = slots.len() as u32;
+    // Real clusters past the count: drawing any of them would show.
+    slots.extend(clusters_of(&scene, 0, |l| l == 0).into_iter().take(8));
+    let views = seeded_views(7, 4);
+
+    let linear = Input::new(slots.clone(), count, count);
+    // A few workgroups per row: ids `y * x_count + x`, the last row partly past the count.
+    let x_count = (7..).find(|x| !count.is_multiple_of(*x)).unwrap();
+    let folded = Input::new(slots, count, x_count);
+    assert!(folded.args[0] * folded.args[1] > count && folded.args[1] > 1);
+
+    let want: Vec<Vec<u64>> = views.iter().map(|v| linear.reference(&scene, v)).collect();
+    for (k, w) in want.iter().enumerate() {
+        assert!(
+            covered(w) > 600,
+            "view {k} covers only {} pixels",
+            covered(w)
+        );
+        // Every drawn slot is below the count, and every instance appears in some view.
+        assert!(w.iter().all(|&p| visbuffer::cluster(p) < count));
+    }
+    let seen: std::collections::BTreeSet<u32> = want
+        .iter()
+        .flatten()
+        .filter(|&&p| p != visbuffer::EMPTY)
+        .map(|&p| linear.slots[visbuffer::cluster(p) as usize].instance)
+        .collect();
+    assert_eq!(seen.len(), 3, "instances seen: {seen:?}");
+
+    for (shape, input) in [("1-D", &linear), ("2-D", &folded)] {
+        let mut results = Vec::new();
+        for (loop_name, width) in [("scanline", SCANLINES), ("box", BOXES)] {
+            let got = run(&mut scene, input, &views, pass(width)).unwrap_or_else(|e| panic!("{e}"));
+            for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+                assert_identical(
+                    &format!("{shape} dispatch, {loop_name} loop, view {k}"),
+                    g,
+                    w,
+                );
+            }
+            results.push(got);
+        }
+        assert_eq!(results[0], results[1], "{shape}: the loop shapes disagree");
+    }
+}
+
+/// The knot is closed and its outside is counter-clockwise: with back faces culled, the
+/// nearest surface along every pixel is a front face, so drawing front faces alone gives
+/// the depth that drawing both windings gives. Drawing the back faces instead would show
+/// the inside of the far wall.
+#[test]
+fn front_faces_are_the_mesh_outside() {
+    let mut scene = knot_scene();
+    let slots: Vec<Cluster> = clusters_of(&scene, 0, |l| l == 0);
+    let count = slots.len() as u32;
+    let input = Input::new(slots, count, count);
+    let views = seeded_views(11, 2);
+    let got = run(&mut scene, &input, &views, pass(16)).unwrap_or_else(|e| panic!("{e}"));
+    for (k, view) in views.iter().enumerate() {
+        let want = input.reference(&scene, view);
+        assert_identical(&format!("view {k}"), &got[k], &want);
+        // Both windings of every triangle.
+        let mut nearest = vec![0f32; (W * H) as usize];
+        for c in &input.slots {
+            for t in cpu::screen_triangles(&scene, view, c, W, H) {
+                let [a, b, c] = t.corners;
+                for corners in [[a, b, c], [a, c, b]] {
+                    cpu::cover_triangle(corners, W, H, |x, y, d| {
+                        let p = &mut nearest[(y * W + x) as usize];
+                        *p = p.max(d);
+                    });
+                }
+            }
+        }
+        let drawn: Vec<usize> = (0..want.len())
+            .filter(|&i| want[i] != visbuffer::EMPTY)
+            .collect();
+        assert!(drawn.len() > 500, "view {k}: {} pixels", drawn.len());
+        let same = drawn
+            .iter()
+            .filter(|&&i| visbuffer::depth(want[i]) == nearest[i])
+            .count();
+        eprintln!(
+            "view {k}: {same} of {} pixels show the nearest surface",
+            drawn.len()
+        );
+        // Triangles seen edge-on at the silhouette may flip winding when their corners
+        // snap; a handful of pixels, never a share.
+        assert!(
+            same as f64 >= 0.99 * drawn.len() as f64,
+            "view {k}: only {same} of {} pixels show the nearest surface",
+            drawn.len()
+        );
+    }
+}
+
+/// A flat square in the plane z = 0 (facing +z), `n` × `n` cells, diagonals alternating,
+/// inner vertices moved in the plane by `jitter` cells so edges cross pixels at odd
+/// angles.
+fn flat_quad(n: u32, jitter: f32) -> Mesh {
+    let mut rng = Lcg(3);
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let inner = i > 0 && i < n && j > 0 && j < n;
+            let (dx, dy) = if inner {
+                (rng.range(-jitter, jitter), rng.range(-jitter, jitter))
+            } else {
+                (0.0, 0.0)
+            };
+            positions.push(Vec3::new(
+                -1.0 + 2.0 * (i as f32 + dx) / n as f32,
+                -1.0 + 2.0 * (j as f32 + dy) / n as f32,
+                0.0,
+            ));
+        }
+    }
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    let mut indices = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+            // Counter-clockwise seen from +z.
+            if (i + j) % 2 == 0 {
+                indices.extend([a, b, c, a, c, d]);
+            } else {
+                indices.extend([a, b, d, b, c, d]);
+            }
+        }
+    }
+    Mesh {
+        source: "flat quad".into(),
+        normals: vec![Vec3::Z; positions.len()],
+        positions,
+        uvs: Vec::new(),
+        indices,
+    }
+}
+
+/// Pixels whose centre lies at least one pixel inside the screen quadrilateral of the
+/// square's corners.
+fn inside_square(view: &View) -> Vec<bool> {
+    let corners = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]].map(|[x, y]| {
+        let clip = cpu::affine(&view.view_projection, [x, y, 0.0]);
+        let (p, _) = cpu::snap(glam::Vec4::from_array(clip), [W as f32, H as f32]).unwrap();
+        [p[0] as f64 / 256.0, p[1] as f64 / 256.0]
+    });
+    (0..W * H)
+        .map(|i| {
+            let p = [(i % W) as f64 + 0.5, (i / W) as f64 + 0.5];
+            (0..4).all(|k| {
+                let (a, b) = (corners[k], corners[(k + 1) % 4]);
+                let len = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+                // Counter-clockwise on the y-down screen: inside is left of each edge.
+                let cross = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+                -cross / len >= 1.0
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn shared_edges_of_a_flat_quad_cover_every_pixel_exactly_once() {
+    let mut scene = SceneData::new(Limits::default());
+    let material = scene.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let regular = add_mesh(&mut scene, "regular", &flat_quad(16, 0.0));
+    let jittered = add_mesh(&mut scene, "jittered", &flat_quad(20, 0.35));
+    scene
+        .add_instance(regular, Mat4::IDENTITY, material)
+        .unwrap()
+        .unwrap();
+    scene
+        .add_instance(jittered, Mat4::IDENTITY, material)
+        .unwrap()
+        .unwrap();
+
+    // Orthographic, 24 pixels per unit, the origin on a pixel centre: the regular grid
+    // (3 pixels a cell) puts vertices on pixel centres and edges through them, where
+    // only the top-left rule decides. Then perspective views, one rolled.
+    let ortho = Camera {
+        position: Vec3::new(-1.0 / 48.0, 1.0 / 48.0, 5.0),
+        target: Vec3::new(-1.0 / 48.0, 1.0 / 48.0, 0.0),
+        up: Vec3::Y,
+        projection: Projection::Orthographic {
+            height: H as f32 / 24.0,
+            near: 1.0,
+            far: 10.0,
+        },
+    };
+    let mut rolled = Camera::perspective(Vec3::new(0.3, -0.4, 2.6), Vec3::ZERO, 0.9, 0.5);
+    rolled.up = Vec3::new(0.6, 0.8, 0.0);
+    let cameras = [
+        ortho,
+        Camera::perspective(
+            Vec3::new(-0.2, 0.3, 2.7),
+            Vec3::new(0.1, 0.0, 0.0),
+            0.9,
+            0.5,
+        ),
+        rolled,
+    ];
+    let views: Vec<View> = cameras.iter().map(|c| c.view([W, H], 0, None)).collect();
+
+    for instance in 0..2 {
+        let slots: Vec<Cluster> = clusters_of(&scene, instance, |l| l == 0);
+        assert!(slots.len() >= 2, "the square fits one meshlet");
+        let count = slots.len() as u32;
+        let input = Input::new(slots, count, 3);
+        for (loop_name, width) in [("scanline", SCANLINES), ("box", BOXES)] {
+            let got =
+                run(&mut scene, &input, &views, pass(width)).unwrap_or_else(|e| panic!("{e}"));
+            for (k, view) in views.iter().enumerate() {
+                let name = format!("instance {instance}, {loop_name} loop, view {k}");
+                // Coverage counted per triangle from the reference's own edge tests.
+                let mut coverage = vec![0u32; (W * H) as usize];
+                let mut on_centres = 0;
+                for c in &input.slots {
+                    for t in cpu::screen_triangles(&scene, view, c, W, H) {
+                        on_centres += t
+                            .corners
+                            .iter()
+                            .filter(|(p, _)| p[0] % 256 == 128 && p[1] % 256 == 128)
+                            .count();
+                        cpu::cover_triangle(t.corners, W, H, |x, y, _| {
+                            coverage[(y * W + x) as usize] += 1
+                        });
+                    }
+                }
+                if instance == 0 && k == 0 {
+                    assert!(
+                        on_centres > 500,
+                        "{name}: {on_centres} corners on pixel centres"
+                    );
+                }
+                let twice = coverage.iter().filter(|&&n| n > 1).count();
+                assert_eq!(twice, 0, "{name}: {twice} pixels covered more than once");
+                let inside = inside_square(view);
+                let inner = inside.iter().filter(|&&b| b).count();
+                assert!(
+                    inner > 1500,
+                    "{name}: only {inner} pixels inside the square"
+                );
+                let holes = (0..inside.len())
+                    .filter(|&i| inside[i] && coverage[i] == 0)
+                    .count();
+                assert_eq!(holes, 0, "{name}: {holes} pixels inside the square skipped");
+
+                let want = input.reference(&scene, view);
+                assert_identical(&name, &got[k], &want);
+                let gpu_holes = (0..inside.len())
+                    .filter(|&i| inside[i] && got[k][i] == visbuffer::EMPTY)
+                    .count();
+                assert_eq!(gpu_holes, 0, "{name}: background inside the square");
+            }
+        }
+    }
+}
+
+#[test]
+fn each_frame_starts_from_a_cleared_visibility_buffer() {
+    let mut scene = knot_scene();
+    let slots = [
+        clusters_of(&scene, 0, |l| l == 0),
+        clusters_of(&scene, 1, |l| l == 0),
+    ]
+    .concat();
+    let count = slots.len() as u32;
+    let input = Input::new(slots, count, 5);
+    let near = Camera::perspective(Vec3::new(1.0, 2.0, 6.0), Vec3::ZERO, 0.8, 0.5);
+    let far = Camera::perspective(
+        Vec3::new(-9.0, 4.0, -10.0),
+        Vec3::new(1.0, 0.0, 1.0),
+        0.8,
+        0.5,
+    );
+    let views = [near.view([W, H], 0, None), far.view([W, H], 1, None)];
+    let got = run(&mut scene, &input, &views, pass(16)).unwrap_or_else(|e| panic!("{e}"));
+    let first = input.reference(&scene, &views[0]);
+    let second = input.reference(&scene, &views[1]);
+    // Frame 1 leaves pixels the second view does not draw, and pixels nearer than the
+    // second view's: a missing clear would keep both.
+    let left = (0..first.len())
+        .filter(|&i| first[i] != visbuffer::EMPTY && second[i] == visbuffer::EMPTY)
+        .count();
+    let nearer = (0..first.len())
+        .filter(|&i| second[i] != visbuffer::EMPTY && first[i] > second[i])
+        .count();
+    assert!(left > 200 && nearer > 100, "{left} / {nearer}");
+    assert_identical("frame 1", &got[0], &first);
+    assert_identical("frame 2", &got[1], &second);
+}
+
+#[test]
+fn a_viewport_other_than_the_params_is_a_record_error_naming_both() {
+    let mut scene = knot_scene();
+    let slots: Vec<Cluster> = clusters_of(&scene, 0, |l| l == 0);
+    let count = slots.len() as u32;
+    let input = Input::new(slots, count, count);
+    let camera = Camera::perspective(Vec3::new(1.0, 2.0, 8.0), Vec3::ZERO, 0.8, 0.5);
+    let view = camera.view([W + 1, H], 0, None);
+    match run(&mut scene, &input, &[view], pass(16)) {
+        Err(GraphError::Record { pass, message }) => {
+            assert_eq!(pass, "sw_raster");
+            assert!(
+                message.contains(&format!("{:?}", [(W + 1) as f32, H as f32])),
+                "{message}"
+            );
+            assert!(message.contains(&format!("{W} × {H}")), "{message}");
+        }
+        Err(other) => panic!("not a record error: {other}"),
+        Ok(_) => panic!(
+            "a {} × {H} view ran on a {W} × {H} visibility buffer",
+            W + 1
+        ),
+    }
+}
+
+#[test]
+fn a_zero_width_in_a_pipeline_file_is_a_parameter_error() {
+    let mut registry = file::Registry::new();
+    meshlight_pass_sw_raster::register(&mut registry);
+    let text = |width: u32| {
+        format!(
+            "[[pass]]\nname = \"raster\"\nstage = \"sw_raster\"\nimplementation = \"buffer\"\n\
+             params = {{ width = {width}, height = {H} }}\n"
+        )
+    };
+    match file::parse_pipeline(&text(0), "p.toml", &registry) {
+        Err(GraphError::Parameter { pass, message }) => {
+            assert_eq!(pass, "raster");
+            assert!(
+                message.contains("`width`") && message.contains("0 × 64"),
+                "{message}"
+            );
+        }
+        Err(other) => panic!("not a parameter error: {other}"),
+        Ok(_) => panic!("a zero-width visibility buffer was accepted"),
+    }
+    // A height of 0 is refused the same way, and a positive size passes the parameters.
+    let text_h0 = text(W).replace(&format!("height = {H}"), "height = 0");
+    match file::parse_pipeline(&text_h0, "p.toml", &registry) {
+        Err(GraphError::Parameter { message, .. }) => {
+            assert!(message.contains("`height`"), "{message}")
+        }
+        Err(other) => panic!("not a parameter error: {other}"),
+        Ok(_) => panic!("a zero-height visibility buffer was accepted"),
+    }
+    if let Err(GraphError::Parameter { message, .. }) =
+        file::parse_pipeline(&text(W), "p.toml", &registry)
+    {
+        panic!("{W} × {H} refused: {message}");
+    }
+}
