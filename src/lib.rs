@@ -6,7 +6,7 @@
 //! - [`gpu_scene`]: assets packed into shared GPU buffers, instances, materials, the view.
 //! - The virtual-geometry stages: [`fill_clusters`], [`cull_lod`], [`remap_dispatch`],
 //!   [`sw_raster`], [`hw_raster`], [`resolve`]; [`virtual_geometry`] wires them into a
-//!   frame and runs it.
+//!   frame and runs it; [`brute_force`] is the baseline it is measured against.
 //! - [`scan_fan`]: GPU prefix sum (stage `scan_fan`: `scan_fan` and `two_step`).
 
 pub mod bench;
@@ -14,6 +14,7 @@ pub mod virtual_geometry;
 
 pub use meshlight_gpu_scene as gpu_scene;
 pub use meshlight_graph as graph;
+pub use meshlight_pass_brute_force as brute_force;
 pub use meshlight_pass_cull_lod as cull_lod;
 pub use meshlight_pass_fill_clusters as fill_clusters;
 pub use meshlight_pass_hw_raster as hw_raster;
@@ -34,5 +35,6 @@ pub fn registry() -> graph::file::Registry {
     sw_raster::register(&mut r);
     hw_raster::register(&mut r);
     resolve::register(&mut r);
+    brute_force::register(&mut r);
     r
 }

@@ -193,7 +193,7 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     rows.push(hw_row);
     let mut ratio = row(
         "virtual-geometry",
-        case,
+        case.clone(),
         "software / hardware throughput",
         sw_rate / hw_rate,
         "x",
@@ -201,5 +201,96 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     );
     ratio.vs_baseline = Some(sw_rate / hw_rate);
     rows.push(ratio);
+
+    // The baseline: every instance's LOD 0 in one instanced draw, same scene and camera.
+    let source = meshlight_scene::load::load_mesh(&mesh)?;
+    let baseline_ms = brute_force(&placed, &source, width, height, frames)?;
+    rows.push(row(
+        "virtual-geometry",
+        format!("{case}, brute force"),
+        "GPU brute_force (LOD 0, one instanced draw)",
+        baseline_ms,
+        "ms",
+        &device,
+    ));
+    let mut speedup = row(
+        "virtual-geometry",
+        case,
+        "GPU frame vs brute force",
+        baseline_ms / frame.total_ms,
+        "x",
+        &device,
+    );
+    speedup.vs_baseline = Some(baseline_ms / frame.total_ms);
+    rows.push(speedup);
     Ok(rows)
+}
+
+/// Median GPU time of the brute-force baseline over `frames` frames: `mesh` (the source
+/// of the scene's one asset) drawn whole for every instance.
+pub fn brute_force(
+    placed: &Placed,
+    mesh: &meshlight_scene::Mesh,
+    width: u32,
+    height: u32,
+    frames: u32,
+) -> Result<f64, Box<dyn std::error::Error>> {
+    use crate::brute_force::{BruteForce, DEPTH_FORMAT, IDS_FORMAT, lod0_buffers};
+    use crate::graph::*;
+    let lod0 = lod0_buffers(mesh);
+    let mut data = placed.data.clone();
+    let mut g = GraphBuilder::new();
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+    let index_usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
+    g.import_buffer(
+        "positions",
+        BufferDesc::array(Element::VEC4_F32, lod0.positions.len() as u64),
+        usage,
+    );
+    g.import_buffer(
+        "indices",
+        BufferDesc::array(Element::U32, lod0.indices.len() as u64),
+        index_usage,
+    );
+    meshlight_gpu_scene::gpu::import_for(&data, &mut g);
+    for (name, format) in [("depth", DEPTH_FORMAT), ("ids", IDS_FORMAT)] {
+        let t = g.create_texture(name, TextureDesc::d2(format, width, height));
+        g.export(t);
+    }
+    let pass = BruteForce {
+        width,
+        height,
+        index_count: lod0.index_count(),
+        instance_count: data.instances.len() as u32,
+    };
+    g.add_pass("brute_force", pass, Bindings::new())?;
+    let adapter = GpuAdapter::select()?;
+    let compiled = g.compile(&CompileOptions::for_adapter(&adapter))?;
+    let gpu = adapter.open(compiled.plan.enabled_features)?;
+    let scene = meshlight_gpu_scene::GpuScene::new(&gpu, &mut data);
+    let positions = gpu.buffer_with_data("positions", lod0.position_bytes(), usage);
+    let indices = gpu.buffer_with_data("indices", lod0.index_bytes(), index_usage);
+    let imports = scene
+        .imports()
+        .buffer("positions", &positions)
+        .buffer("indices", &indices);
+    let mut exec = Executor::new(gpu);
+    let view = placed.camera.view([width, height], 0, None);
+    let frame = FrameData::new().with("view", bytemuck::bytes_of(&view));
+    exec.execute_frame(&compiled, &imports, &frame)?;
+    exec.finish()?;
+    exec.take_gpu_timings()?;
+    for _ in 0..frames {
+        exec.execute_frame(&compiled, &imports, &frame)?;
+    }
+    exec.finish()?;
+    let times: Vec<f64> = exec
+        .take_gpu_timings()?
+        .iter()
+        .map(|t| t.total_us / 1e3)
+        .collect();
+    if times.is_empty() {
+        return Err("the adapter has no GPU timestamps; nothing to measure".into());
+    }
+    Ok(median(times))
 }
