@@ -1,5 +1,7 @@
 //! The reference rasteriser: the WGSL kernel's steps on the CPU, in the same order and
-//! with the same integer and float operations, producing the visibility buffer.
+//! with the same integer and float operations, producing the visibility buffer. Each
+//! f32 operation here rounds once, as IEEE 754 says; the kernel makes its own do the
+//! same on any driver (see the crate docs), which is what lets the test compare bits.
 
 use glam::Vec4;
 use meshlight_gpu_scene::SceneData;
@@ -91,6 +93,7 @@ pub fn cover_triangle(
         ((mx[1] - 128) >> 8).min(height as i32 - 1),
     ];
     let fa = area as f32;
+    let gradient = [(z1 - z0) / fa, (z2 - z0) / fa];
     for y in lo[1]..=hi[1] {
         for x in lo[0]..=hi[0] {
             let p = [x * 256 + 128, y * 256 + 128];
@@ -100,9 +103,7 @@ pub fn cover_triangle(
             if e0 + bias[0] < 0 || e1 + bias[1] < 0 || e2 + bias[2] < 0 {
                 continue;
             }
-            let b1 = e1 as f32 / fa;
-            let b2 = e2 as f32 / fa;
-            let depth = z0 + b1 * (z1 - z0) + b2 * (z2 - z0);
+            let depth = z0 + e1 as f32 * gradient[0] + e2 as f32 * gradient[1];
             f(x as u32, y as u32, depth);
         }
     }

@@ -3,7 +3,7 @@
 // `cpu::rasterize` (Rust) is the reference; every step below has its mirror there.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle}
 #import meshlight::instance::Instance
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
@@ -14,7 +14,8 @@ struct Params {
     height: u32,
     // Workgroups whose widest triangle box reaches this many pixels loop per scanline.
     scanline_width: u32,
-    _pad: u32,
+    // Always 0; see `unfused`.
+    zero: u32,
 }
 
 @group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
@@ -46,7 +47,51 @@ fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
 // `m * vec4(p, 1.0)` summed column by column in a fixed order, which `cpu::affine`
 // repeats; a matrix-vector product may be summed in any order by the driver.
 fn affine(m: mat4x4<f32>, p: vec3<f32>) -> vec4<f32> {
-    return m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3];
+    return unfused4(m[0] * p.x) + unfused4(m[1] * p.y) + unfused4(m[2] * p.z) + m[3];
+}
+
+// `x` itself, through an operation on a value the compiler cannot know (params.zero),
+// so a product passed through it is rounded on its own and never fused into an fma
+// with the add that follows (the reference rounds every product).
+fn unfused(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ params.zero);
+}
+
+fn unfused3(x: vec3<f32>) -> vec3<f32> {
+    return bitcast<vec3<f32>>(bitcast<vec3<u32>>(x) ^ vec3(params.zero));
+}
+
+fn unfused4(x: vec4<f32>) -> vec4<f32> {
+    return bitcast<vec4<f32>>(bitcast<vec4<u32>>(x) ^ vec4(params.zero));
+}
+
+// `a / b` rounded to nearest (ties to even), as IEEE 754 and the reference divide, from
+// integer operations: Vulkan lets a driver divide within 2.5 ulp, and some do. Zeros,
+// subnormals, infinities, NaNs and quotients outside the normal range take the driver's
+// division instead; none of them reaches a visible pixel's depth or position.
+fn divide(a: f32, b: f32) -> f32 {
+    let ua = bitcast<u32>(a);
+    let ub = bitcast<u32>(b);
+    let ea = i32(extractBits(ua, 23u, 8u));
+    let eb = i32(extractBits(ub, 23u, 8u));
+    if ea == 0 || ea == 255 || eb == 0 || eb == 255 {
+        return a / b;
+    }
+    // Significands as 24-bit integers; their quotient, scaled by 2^40, has 40 or 41
+    // bits, and a remainder sets the lowest one so that rounding to 24 bits in the
+    // conversion below sees it (it lies far below the rounding bit).
+    let na = u64(extractBits(ua, 0u, 23u) | 0x800000u) << 40u;
+    let mb = u64(extractBits(ub, 0u, 23u) | 0x800000u);
+    let n = na / mb;
+    let f = f32(n | select(0lu, 1lu, n * mb != na));
+    // The quotient is f * 2^(ea - eb - 40): an exponent add when it stays normal.
+    let shift = ea - eb - 40;
+    let exponent = i32(extractBits(bitcast<u32>(f), 23u, 8u)) + shift;
+    if exponent < 1 || exponent > 254 {
+        return a / b;
+    }
+    let magnitude = bitcast<u32>(f) + bitcast<u32>(shift << 23u);
+    return bitcast<f32>(magnitude | ((ua ^ ub) & 0x80000000u));
 }
 
 // Twice the signed area of (a, b, p); positive when p lies right of a→b on the y-down
@@ -66,6 +111,8 @@ struct Tri {
     v1: vec2<i32>,
     v2: vec2<i32>,
     z: vec3<f32>,
+    // Depth per unit of edge functions 1 and 2: (z1 - z0) / area, (z2 - z0) / area.
+    gradient: vec2<f32>,
     area: i64,
     bias: vec3<i32>,
     value_cluster: u32,
@@ -80,10 +127,7 @@ fn shade(tri: Tri, x: i32, y: i32) {
     if e0 + i64(tri.bias.x) < 0li || e1 + i64(tri.bias.y) < 0li || e2 + i64(tri.bias.z) < 0li {
         return;
     }
-    let fa = f32(tri.area);
-    let b1 = f32(e1) / fa;
-    let b2 = f32(e2) / fa;
-    let depth = tri.z.x + b1 * (tri.z.y - tri.z.x) + b2 * (tri.z.z - tri.z.x);
+    let depth = tri.z.x + unfused(f32(e1) * tri.gradient.x) + unfused(f32(e2) * tri.gradient.y);
     let index = u32(y) * params.width + u32(x);
     atomicMax(&visbuffer[index], visbuffer64_pack(depth, tri.value_cluster, tri.triangle));
 }
@@ -103,10 +147,12 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
         atomicStore(&widest, 0u);
     }
     for (var v = t; v < meshlet_vertex_count(m); v += 128u) {
-        let p = meshlet_position(m, mesh.position_grid, vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u)));
+        // `meshlet_position`, with the product kept apart from the add.
+        let q = vec3(m.grid_min[0], m.grid_min[1], m.grid_min[2]) + vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u));
+        let p = mesh.position_grid.xyz + unfused3(vec3<f32>(q) * mesh.position_grid.w);
         let world = affine(instance.world_from_local, p);
         let clip = affine(view.view_projection, world.xyz);
-        let ndc = clip.xyz / clip.w;
+        let ndc = vec3(divide(clip.x, clip.w), divide(clip.y, clip.w), divide(clip.z, clip.w));
         let s = vec2((ndc.x * 0.5 + 0.5) * size.x, (0.5 - ndc.y * 0.5) * size.y);
         let ok = clip.w > 0.0 && abs(s.x) < MAX_SCREEN && abs(s.y) < MAX_SCREEN;
         usable[v] = select(0u, 1u, ok);
@@ -129,6 +175,8 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
             tri.v2 = screen_xy[c.y];
             tri.z = vec3(screen_z[c.x], screen_z[c.z], screen_z[c.y]);
             tri.area = edge(tri.v0, tri.v1, tri.v2);
+            let fa = f32(tri.area);
+            tri.gradient = vec2(divide(tri.z.y - tri.z.x, fa), divide(tri.z.z - tri.z.x, fa));
             tri.bias = vec3(
                 select(-1, 0, top_left(tri.v1, tri.v2)),
                 select(-1, 0, top_left(tri.v2, tri.v0)),
