@@ -81,7 +81,12 @@ fn empty(rgba: &[u8], i: usize) -> bool {
 #[test]
 fn the_pipeline_file_and_the_graph_built_in_code_give_identical_images() {
     let placed = field(16);
-    for view in [DebugView::Shaded, DebugView::Clusters, DebugView::Raster] {
+    for view in [
+        DebugView::Shaded,
+        DebugView::Clusters,
+        DebugView::Lod,
+        DebugView::Raster,
+    ] {
         let (code, _) = render(&placed, settings(view), &GraphSource::Code);
         let (file, r) = render(&placed, settings(view), &pipeline_file());
         assert_eq!(code.counts, file.counts, "{view:?}");
@@ -140,11 +145,16 @@ fn drawing_everything_in_software_changes_only_pixels_on_edges() {
     // The shaded view: the cluster and triangle views name slots, which differ when the
     // split differs.
     let placed = field(16);
-    let (mixed, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    // A low software threshold, so that at this small size both rasterisers draw.
+    let mixed_settings = FrameSettings {
+        sw_threshold_px: 16.0,
+        ..settings(DebugView::Shaded)
+    };
+    let (mixed, _) = render(&placed, mixed_settings.clone(), &GraphSource::Code);
     assert!(mixed.counts.hardware > 0, "{:?}", mixed.counts);
     let all_sw = FrameSettings {
         hardware: false,
-        ..settings(DebugView::Shaded)
+        ..mixed_settings
     };
     let (software, r) = render(&placed, all_sw, &GraphSource::Code);
     assert!(!runs(&r, "hw_raster"));

@@ -202,6 +202,35 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     ratio.vs_baseline = Some(sw_rate / hw_rate);
     rows.push(ratio);
 
+    // Where to split: the frame at other software thresholds (few units of these GPUs
+    // run graphics, so the hardware side may be worth keeping small).
+    let thresholds: &[f32] = if quick {
+        &[64.0]
+    } else {
+        &[16.0, 64.0, 128.0, 256.0]
+    };
+    for &sw_threshold_px in thresholds {
+        let m = measure(
+            &placed,
+            FrameSettings {
+                sw_threshold_px,
+                ..FrameSettings::new(width, height)
+            },
+            frames,
+        )?;
+        let label = format!("GPU frame, sw_threshold_px = {sw_threshold_px}");
+        let mut r = row(
+            "virtual-geometry",
+            case.clone(),
+            &label,
+            m.total_ms,
+            "ms",
+            &device,
+        );
+        r.vs_baseline = Some(frame.total_ms / m.total_ms);
+        rows.push(r);
+    }
+
     // The baseline: every instance's LOD 0 in one instanced draw, same scene and camera.
     let source = meshlight_scene::load::load_mesh(&mesh)?;
     let baseline_ms = brute_force(&placed, &source, width, height, frames)?;

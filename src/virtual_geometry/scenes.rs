@@ -97,7 +97,7 @@ pub fn field(
     }
     let extent = side as f32 * spacing;
     let camera = Camera::perspective(
-        Vec3::new(-0.6 * radius, radius * 2.2, -0.6 * radius),
+        Vec3::new(-1.5 * radius, radius * 2.6, -1.5 * radius),
         Vec3::new(extent * 0.7, radius * 0.4, extent),
         55f32.to_radians(),
         radius * 0.05,

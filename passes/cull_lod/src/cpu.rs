@@ -29,7 +29,7 @@ impl Default for Thresholds {
     fn default() -> Self {
         Self {
             lod_threshold_px: 1.0,
-            sw_threshold_px: 32.0,
+            sw_threshold_px: 128.0,
             hardware: true,
         }
     }

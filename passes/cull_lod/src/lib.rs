@@ -31,7 +31,7 @@
 //! | param               | default | |
 //! |---------------------|---------|---|
 //! | `lod_threshold_px`  | 1.0     | screen-space error (pixels) a cluster may show |
-//! | `sw_threshold_px`   | 32.0    | screen-box size under which a cluster goes to software |
+//! | `sw_threshold_px`   | 128.0   | screen-box size under which a cluster goes to software (tuned on an H100, where few units run graphics: docs/BENCHMARKS.md) |
 //! | `hardware`          | true    | false: every cluster to software (a pipeline with no `hw_raster`) |
 //! | `mode`              | `"first"` | `first`: every candidate, no occlusion. Reserved: `second`, the re-test of the first pass's occluded clusters against this frame's depth pyramid |
 //! | `capacity`          | 0 (all of `raster_clusters`) | `C`, at most the buffer's size / 8 |

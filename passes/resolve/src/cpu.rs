@@ -48,6 +48,12 @@ pub fn hash(x: u32) -> u32 {
 }
 
 /// The colour of an id in the debug views: three bytes of its hash lifted to 64..=255.
+/// shade.wgsl's `cluster_key`: the scene cluster (instance, meshlet) as one word, so
+/// its colour is the same whichever raster slot the atomics gave it this frame.
+pub fn cluster_key(c: &Cluster) -> u32 {
+    hash(c.instance) ^ c.meshlet
+}
+
 pub fn id_color(id: u32) -> [u8; 3] {
     let h = hash(id);
     [0, 8, 16].map(|shift| (64 + ((h >> shift) & 0xff) * 3 / 4) as u8)
@@ -132,8 +138,15 @@ fn pixel_color(
     let id = visbuffer::cluster(value);
     match view {
         _ if empty && view != DebugView::Shaded && view != DebugView::Depth => Vec3::ZERO,
-        DebugView::Clusters => unorm(id_color(id)),
-        DebugView::Triangles => unorm(id_color(value as u32)),
+        DebugView::Clusters => unorm(id_color(cluster_key(&cluster_of(
+            frame.raster_clusters,
+            value,
+        )))),
+        DebugView::Triangles => unorm(id_color(
+            cluster_key(&cluster_of(frame.raster_clusters, value))
+                .wrapping_mul(131)
+                .wrapping_add(visbuffer::triangle(value)),
+        )),
         DebugView::Lod => {
             let cluster = cluster_of(frame.raster_clusters, value);
             unorm(id_color(meshlet_of(frame.scene, &cluster).level()))

@@ -41,8 +41,10 @@
 //!   footprint), `albedo = base · mix(0.55, 1, checker)`, `colour = albedo · (ambient +
 //!   light · max(n · l, 0))`, clamped, stored linear. Empty pixels: a vertical sky
 //!   gradient from the horizon colour at the bottom to the zenith colour at the top.
-//! - Debug views: `clusters` = colour of the cluster id, `triangles` = of the low word
-//!   (cluster << 7 | triangle), `lod` = of the meshlet's LOD level, `raster` = two fixed
+//! - Debug views: `clusters` = colour of the scene cluster, `cluster_key` =
+//!   `hash(instance) ^ meshlet` of the slot the id names (raster slots come from atomics
+//!   and change from frame to frame; the scene cluster does not), `triangles` = of
+//!   `cluster_key · 131 + triangle`, `lod` = of the meshlet's LOD level, `raster` = two fixed
 //!   colours (software: id < `raster_counts[0]`), `depth` = `depth^(1/4)` grey; id
 //!   colours are [`cpu::id_color`], empty pixels black.
 //! - [`cpu`] is the reference: depth, material depth and debug views exact (the depth

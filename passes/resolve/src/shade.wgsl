@@ -67,6 +67,12 @@ fn hash(x: u32) -> u32 {
     return h;
 }
 
+// The scene cluster (instance, meshlet) as one word: its colour stays the same whichever
+// raster slot the atomics gave it this frame (`cpu::cluster_key`).
+fn cluster_key(c: Cluster) -> u32 {
+    return hash(c.instance) ^ c.meshlet;
+}
+
 // The colour of an id: three bytes of its hash, lifted to 64..255 so none is too dark.
 fn id_color(id: u32) -> vec3<u32> {
     let h = hash(id);
@@ -177,12 +183,13 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
     switch params.view_mode {
         case VIEW_CLUSTERS: {
             if !empty {
-                rgb = byte_color(id_color(visbuffer_cluster(value)));
+                rgb = byte_color(id_color(cluster_key(raster_clusters[visbuffer_cluster(value)])));
             }
         }
         case VIEW_TRIANGLES: {
             if !empty {
-                rgb = byte_color(id_color(value.x));
+                let key = cluster_key(raster_clusters[visbuffer_cluster(value)]);
+                rgb = byte_color(id_color(key * 131u + visbuffer_triangle(value)));
             }
         }
         case VIEW_LOD: {
