@@ -93,7 +93,10 @@ pub fn load_or_bake(
     if path.exists() {
         match MeshletAsset::load(&path) {
             Ok(asset) => return Ok((asset, Outcome::Hit)),
-            Err(e) => log::warn!("cached asset {} is unusable ({e}); baking again", path.display()),
+            Err(e) => log::warn!(
+                "cached asset {} is unusable ({e}); baking again",
+                path.display()
+            ),
         }
     }
     let mesh = load_source(source)?;
@@ -177,7 +180,10 @@ mod tests {
             grouping: crate::grouping::Grouping::Partition,
             ..options
         };
-        assert_ne!(key(&source, &options).unwrap(), key(&source, &other).unwrap());
+        assert_ne!(
+            key(&source, &options).unwrap(),
+            key(&source, &other).unwrap()
+        );
         // A damaged cache entry is not used: it is baked again and replaced.
         let path = dir.join(format!("{:016x}.mlasset", key(&source, &options).unwrap()));
         let mut bytes = std::fs::read(&path).unwrap();
