@@ -401,3 +401,27 @@ fn a_viewport_of_zero_or_past_the_texture_limit_is_an_error_saying_what_to_chang
         }
     }
 }
+
+#[test]
+fn a_frame_without_depth_targets_shades_the_same_image() {
+    // The depth targets are optional slots of `resolve`: left out, their fullscreen
+    // passes do not run, and the colour does not depend on them.
+    let placed = field(16);
+    let (full, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let colour_only = FrameSettings {
+        depth: false,
+        material_depth: false,
+        ..settings(DebugView::Shaded)
+    };
+    let (bare, mut r) = render(&placed, colour_only, &GraphSource::Code);
+    assert_eq!(differing(&full.rgba, &bare.rgba, 0), 0);
+    assert!(
+        r.compiled
+            .plan
+            .resources
+            .iter()
+            .all(|res| res.info.name != "depth"),
+        "a depth target was declared"
+    );
+    assert!(r.executor.read_texture("depth").is_err());
+}

@@ -231,6 +231,41 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         rows.push(r);
     }
 
+    // What the depth targets cost: each is a fullscreen fragment pass.
+    for (label, depth, material_depth) in [
+        ("GPU frame, no material-depth target", true, false),
+        ("GPU frame, colour only (no depth targets)", false, false),
+    ] {
+        let m = measure(
+            &placed,
+            FrameSettings {
+                depth,
+                material_depth,
+                ..FrameSettings::new(width, height)
+            },
+            frames,
+        )?;
+        let mut r = row(
+            "virtual-geometry",
+            case.clone(),
+            label,
+            m.total_ms,
+            "ms",
+            &device,
+        );
+        r.vs_baseline = Some(frame.total_ms / m.total_ms);
+        rows.push(r);
+        let resolve = pass_ms(&m, "resolve");
+        rows.push(row(
+            "virtual-geometry",
+            case.clone(),
+            &format!("{label}: GPU resolve"),
+            resolve,
+            "ms",
+            &device,
+        ));
+    }
+
     // The baseline: every instance's LOD 0 in one instanced draw, same scene and camera.
     let source = meshlight_scene::load::load_mesh(&mesh)?;
     let baseline_ms = brute_force(&placed, &source, width, height, frames)?;

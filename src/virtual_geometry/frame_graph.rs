@@ -40,6 +40,10 @@ pub struct FrameSettings {
     /// overflow.
     pub clusters: u64,
     pub slots: u64,
+    /// Resolve the `depth` and `material_depth` targets (fullscreen fragment passes);
+    /// off, the frame resolves colour only.
+    pub depth: bool,
+    pub material_depth: bool,
 }
 
 impl FrameSettings {
@@ -54,6 +58,8 @@ impl FrameSettings {
             hardware: true,
             clusters: 1 << 20,
             slots: 1 << 18,
+            depth: true,
+            material_depth: true,
         }
     }
 
@@ -116,11 +122,15 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     ] {
         g.create_buffer(name, desc);
     }
-    for (name, format) in [
-        ("depth", meshlight_pass_resolve::DEPTH_FORMAT),
-        ("material_depth", meshlight_pass_resolve::DEPTH_FORMAT),
-        ("color", meshlight_pass_resolve::COLOR_FORMAT),
+    let depth = meshlight_pass_resolve::DEPTH_FORMAT;
+    for (name, format, wanted) in [
+        ("depth", depth, s.depth),
+        ("material_depth", depth, s.material_depth),
+        ("color", meshlight_pass_resolve::COLOR_FORMAT, true),
     ] {
+        if !wanted {
+            continue;
+        }
         let t = g.create_texture(name, TextureDesc::d2(format, s.width, s.height));
         g.export(t);
     }

@@ -19,12 +19,15 @@
 //! | `raster_clusters` | storage read | Cluster | the slots the visibility ids index |
 //! | `raster_counts` | storage read | u32 | word 0: software clusters (ids below it) |
 //! | `instances`, `meshes`, `meshlets`, `payload`, `materials` | storage read | scene | the GPU scene |
-//! | `depth` | depth target | Depth32Float | reverse-Z NDC depth; 0 where empty |
-//! | `material_depth` | depth target | Depth32Float | [`material_depth`] of the instance's material; 0 where empty |
+//! | `depth` | depth target (optional) | Depth32Float | reverse-Z NDC depth; 0 where empty |
+//! | `material_depth` | depth target (optional) | Depth32Float | [`material_depth`] of the instance's material; 0 where empty |
 //! | `color` | storage write | Rgba8Unorm | the [`DebugView`] chosen; alpha 1 |
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`), whose `viewport_size`
 //! must equal the params `width` × `height`. The three targets are `width` × `height`.
+//! A depth target left out of the graph (no resource of its name) is not resolved: each
+//! is a fullscreen fragment pass, which on GPUs where few units run fragment work costs
+//! more than the shading (docs/BENCHMARKS.md).
 //!
 //! # Definitions the tests pin down
 //!
@@ -76,6 +79,15 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 pub const DEPTH_SHADER: PassShader = pass_shader!("resolve::depth", "depth.wgsl");
 pub const SHADE_SHADER: PassShader = pass_shader!("resolve::shade", "shade.wgsl");
 
+/// The fullscreen passes that write the depth targets: (program, fragment entry, slot).
+/// Each runs only when its slot is bound: on GPUs where few units run fragment work they
+/// cost more than the shading itself, and a frame with no later depth-tested pass or no
+/// material passes needs neither.
+const DEPTH_RESOLVES: [(&str, &str, &str); 2] = [
+    ("depth", "depth_fs", "depth"),
+    ("material_depth", "material_depth_fs", "material_depth"),
+];
+
 /// Pixels per shading workgroup side.
 const TILE: u32 = 8;
 
@@ -116,13 +128,15 @@ pub fn contract() -> StageContract {
                 Access::DepthTarget,
                 Some(DEPTH_FORMAT),
                 "reverse-Z depth; 0 where empty",
-            ),
+            )
+            .optional(),
             Slot::texture(
                 "material_depth",
                 Access::DepthTarget,
                 Some(DEPTH_FORMAT),
                 "(material + 1) · 2^-24; 0 where empty",
-            ),
+            )
+            .optional(),
             Slot::texture(
                 "color",
                 Access::StorageWrite,
@@ -201,10 +215,10 @@ impl Pass for Resolve {
             .visible_in(fragment)
             .uniform(3)
             .visible_in(fragment);
-        for (program, entry, target) in [
-            ("depth", "depth_fs", "depth"),
-            ("material_depth", "material_depth_fs", "material_depth"),
-        ] {
+        for (program, entry, target) in DEPTH_RESOLVES {
+            if !ctx.is_bound(target) {
+                continue;
+            }
             ctx.program(
                 program,
                 ProgramDesc::render(&DEPTH_SHADER, "fullscreen_vs")
@@ -246,7 +260,10 @@ impl Pass for Resolve {
             height: self.height,
             _pad: [0; 2],
         };
-        for (program, target) in [("depth", "depth"), ("material_depth", "material_depth")] {
+        for (program, _, target) in DEPTH_RESOLVES {
+            if !ctx.is_bound(target) {
+                continue;
+            }
             let program = ctx.render(program)?;
             let bind_group =
                 ctx.bind_group(&program, 0, &[(3, bytemuck::bytes_of(&depth_params))])?;
