@@ -1,7 +1,43 @@
 //! The camera and the per-frame `View` every pass binds.
 
 use glam::{Mat4, Vec3, Vec4};
+use meshlight_graph::{GraphError, RecordContext, Result};
 use meshlight_shaders::cpu::layout::View;
+
+/// The `View` a pass reads from its frame input `input`, during `record`. With
+/// `viewport`, the size the pass was set up for (its targets or visibility buffer), the
+/// view must have been made for that size: a camera and params that disagree are a
+/// record error naming both, not an image squeezed into the wrong grid.
+pub fn frame_view(
+    ctx: &RecordContext<'_>,
+    input: &str,
+    viewport: Option<[u32; 2]>,
+) -> Result<View> {
+    let error = |message: String| GraphError::Record {
+        pass: ctx.pass_name().to_string(),
+        message,
+    };
+    let bytes = ctx.frame_bytes(input)?;
+    let view: View = bytes
+        .get(..size_of::<View>())
+        .map(bytemuck::pod_read_unaligned)
+        .ok_or_else(|| {
+            error(format!(
+                "frame input `{input}` must hold a View ({} bytes), got {}",
+                size_of::<View>(),
+                bytes.len()
+            ))
+        })?;
+    if let Some([width, height]) = viewport
+        && view.viewport_size != [width as f32, height as f32]
+    {
+        return Err(error(format!(
+            "the view's viewport {:?} differs from the pass's {width} × {height} (its targets or visibility buffer); make the params match the camera's viewport",
+            view.viewport_size
+        )));
+    }
+    Ok(view)
+}
 
 /// How the camera projects; both are reverse-Z (depth 1 at the near plane).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -45,6 +45,7 @@
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::plan::StoreOp;
 use meshlight_graph::{
@@ -52,7 +53,7 @@ use meshlight_graph::{
     ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
 };
 use meshlight_scene::Mesh;
-use meshlight_shaders::cpu::layout::{Instance, View};
+use meshlight_shaders::cpu::layout::Instance;
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
@@ -212,32 +213,6 @@ impl BruteForce {
     }
 }
 
-/// The frame's `View`, checked against the targets' size.
-fn frame_view(ctx: &RecordContext<'_>, width: u32, height: u32) -> Result<View> {
-    let bytes = ctx.frame_bytes(VIEW_INPUT)?;
-    let view: View = bytes
-        .get(..size_of::<View>())
-        .map(bytemuck::pod_read_unaligned)
-        .ok_or_else(|| GraphError::Record {
-            pass: ctx.pass_name().to_string(),
-            message: format!(
-                "frame input `{VIEW_INPUT}` must hold a View ({} bytes), got {}",
-                size_of::<View>(),
-                bytes.len()
-            ),
-        })?;
-    if view.viewport_size != [width as f32, height as f32] {
-        return Err(GraphError::Record {
-            pass: ctx.pass_name().to_string(),
-            message: format!(
-                "the view's viewport {:?} differs from the targets' {width} × {height}; make the params match the camera's viewport",
-                view.viewport_size
-            ),
-        });
-    }
-    Ok(view)
-}
-
 /// Checks that the texture bound to `slot` has the params' size: the draw maps NDC to the
 /// attachment, so a target of another size would hold a stretched image.
 fn check_target(ctx: &RecordContext<'_>, slot: &str, width: u32, height: u32) -> Result<()> {
@@ -307,7 +282,7 @@ impl Pass for BruteForce {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let view = frame_view(ctx, self.width, self.height)?;
+        let view = frame_view(ctx, VIEW_INPUT, Some([self.width, self.height]))?;
         check_target(ctx, "depth", self.width, self.height)?;
         check_target(ctx, "ids", self.width, self.height)?;
         let program = ctx.render("draw")?;

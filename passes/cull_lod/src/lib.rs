@@ -66,12 +66,12 @@ pub mod cpu;
 pub use cpu::{CullResult, Decision, Thresholds, cpu_cull};
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
     Result, SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::cpu::layout::View;
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
@@ -245,22 +245,6 @@ impl CullLod {
     }
 }
 
-/// The `View` in the frame input, or a record error saying what it held instead.
-fn view_input(ctx: &RecordContext<'_>) -> Result<View> {
-    let bytes = ctx.frame_bytes(VIEW_INPUT)?;
-    bytes
-        .get(..size_of::<View>())
-        .map(bytemuck::pod_read_unaligned)
-        .ok_or_else(|| GraphError::Record {
-            pass: ctx.pass_name().to_string(),
-            message: format!(
-                "frame input `{VIEW_INPUT}` must hold a View ({} bytes), got {}",
-                size_of::<View>(),
-                bytes.len()
-            ),
-        })
-}
-
 impl Pass for CullLod {
     fn contract(&self) -> StageContract {
         contract()
@@ -315,7 +299,7 @@ impl Pass for CullLod {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let view = view_input(ctx)?;
+        let view = frame_view(ctx, VIEW_INPUT, None)?;
         let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
         let params = GpuParams {
             capacity: self.capacity.unwrap_or(u32::MAX),

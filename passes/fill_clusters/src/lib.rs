@@ -44,12 +44,13 @@ pub mod cpu;
 pub use cpu::{FillResult, cpu_fill};
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
     SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::cpu::layout::{Instance, View};
+use meshlight_shaders::cpu::layout::Instance;
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
@@ -126,22 +127,6 @@ impl FillClusters {
     }
 }
 
-/// The `View` in the frame input, or a record error saying what it held instead.
-fn view_input(ctx: &RecordContext<'_>) -> Result<View> {
-    let bytes = ctx.frame_bytes(VIEW_INPUT)?;
-    bytes
-        .get(..size_of::<View>())
-        .map(bytemuck::pod_read_unaligned)
-        .ok_or_else(|| GraphError::Record {
-            pass: ctx.pass_name().to_string(),
-            message: format!(
-                "frame input `{VIEW_INPUT}` must hold a View ({} bytes), got {}",
-                size_of::<View>(),
-                bytes.len()
-            ),
-        })
-}
-
 /// `n` workgroups as `[x, y]` with both under `limit` (x as wide as allowed).
 pub fn workgroup_grid(n: u32, limit: u32) -> [u32; 2] {
     let x = n.min(limit.max(1));
@@ -177,7 +162,7 @@ impl Pass for FillClusters {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let view = view_input(ctx)?;
+        let view = frame_view(ctx, VIEW_INPUT, None)?;
         let (_, instance_bytes) = ctx.buffer("instances")?;
         let bound = (instance_bytes / size_of::<Instance>() as u64).min(u32::MAX as u64) as u32;
         let instance_count = self.instance_count.unwrap_or(bound).min(bound);

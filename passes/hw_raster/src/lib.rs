@@ -45,12 +45,12 @@
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, ColorAttachment, ColorTarget, Element, GraphError, Pass, Primitive,
     ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
 };
-use meshlight_shaders::cpu::layout::View;
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
@@ -134,32 +134,6 @@ impl HwRaster {
     }
 }
 
-/// The frame's `View`, checked against the visibility buffer size.
-fn frame_view(ctx: &RecordContext<'_>, width: u32, height: u32) -> Result<View> {
-    let bytes = ctx.frame_bytes(VIEW_INPUT)?;
-    let view: View = bytes
-        .get(..size_of::<View>())
-        .map(bytemuck::pod_read_unaligned)
-        .ok_or_else(|| GraphError::Record {
-            pass: ctx.pass_name().to_string(),
-            message: format!(
-                "frame input `{VIEW_INPUT}` must hold a View ({} bytes), got {}",
-                size_of::<View>(),
-                bytes.len()
-            ),
-        })?;
-    if view.viewport_size != [width as f32, height as f32] {
-        return Err(GraphError::Record {
-            pass: ctx.pass_name().to_string(),
-            message: format!(
-                "the view's viewport {:?} differs from the visibility buffer's {width} × {height}; make the params match the camera's viewport",
-                view.viewport_size
-            ),
-        });
-    }
-    Ok(view)
-}
-
 impl Pass for HwRaster {
     fn contract(&self) -> StageContract {
         contract()
@@ -216,7 +190,7 @@ impl Pass for HwRaster {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let view = frame_view(ctx, self.width, self.height)?;
+        let view = frame_view(ctx, VIEW_INPUT, Some([self.width, self.height]))?;
         let params = GpuParams {
             width: self.width,
             height: self.height,

@@ -54,12 +54,12 @@
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
     SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::cpu::layout::View;
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
@@ -182,27 +182,7 @@ impl Pass for SwRaster {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let bytes = ctx.frame_bytes(VIEW_INPUT)?;
-        let view: View = bytes
-            .get(..size_of::<View>())
-            .map(bytemuck::pod_read_unaligned)
-            .ok_or_else(|| GraphError::Record {
-                pass: ctx.pass_name().to_string(),
-                message: format!(
-                    "frame input `{VIEW_INPUT}` must hold a View ({} bytes), got {}",
-                    size_of::<View>(),
-                    bytes.len()
-                ),
-            })?;
-        if view.viewport_size != [self.width as f32, self.height as f32] {
-            return Err(GraphError::Record {
-                pass: ctx.pass_name().to_string(),
-                message: format!(
-                    "the view's viewport {:?} differs from the visibility buffer's {} × {}; make the params match the camera's viewport",
-                    view.viewport_size, self.width, self.height
-                ),
-            });
-        }
+        let view = frame_view(ctx, VIEW_INPUT, Some([self.width, self.height]))?;
         let params = GpuParams {
             width: self.width,
             height: self.height,
