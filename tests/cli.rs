@@ -12,20 +12,24 @@ fn meshlight(args: &[&str]) -> std::process::Output {
 }
 
 #[test]
-fn graph_dumps_the_shipped_pipeline_in_every_format() {
+fn graph_dumps_the_shipped_pipelines_in_every_format() {
+    for (file, pass) in [
+        ("pipelines/prefix_sum.toml", "scan"),
+        ("pipelines/virtual_geometry.toml", "sw_raster"),
+        ("pipelines/brute_force.toml", "brute_force"),
+    ] {
+        dumps_in_every_format(file, pass);
+    }
+}
+
+fn dumps_in_every_format(file: &str, pass: &str) {
     for (format, marker) in [
         ("dot", "digraph meshlight"),
         ("json", "\"order\""),
         ("mermaid", "flowchart LR"),
         ("html", "<!DOCTYPE html>"),
     ] {
-        let out = meshlight(&[
-            "graph",
-            "--pipeline",
-            "pipelines/prefix_sum.toml",
-            "--format",
-            format,
-        ]);
+        let out = meshlight(&["graph", "--pipeline", file, "--format", format]);
         assert!(
             out.status.success(),
             "{format}: {}",
@@ -33,8 +37,8 @@ fn graph_dumps_the_shipped_pipeline_in_every_format() {
         );
         let text = String::from_utf8(out.stdout).unwrap();
         assert!(
-            text.contains(marker) && text.contains("scan"),
-            "{format}:\n{text}"
+            text.contains(marker) && text.contains(pass),
+            "{file} {format}:\n{text}"
         );
     }
 }

@@ -299,35 +299,29 @@ pub fn brute_force(
     height: u32,
     frames: u32,
 ) -> Result<f64, Box<dyn std::error::Error>> {
-    use crate::brute_force::{BruteForce, DEPTH_FORMAT, IDS_FORMAT, lod0_buffers};
+    use crate::brute_force::lod0_buffers;
     use crate::graph::*;
     let lod0 = lod0_buffers(mesh);
     let mut data = placed.data.clone();
-    let mut g = GraphBuilder::new();
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
     let index_usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
-    g.import_buffer(
-        "positions",
-        BufferDesc::array(Element::VEC4_F32, lod0.positions.len() as u64),
-        usage,
-    );
-    g.import_buffer(
-        "indices",
-        BufferDesc::array(Element::U32, lod0.indices.len() as u64),
-        index_usage,
-    );
-    meshlight_gpu_scene::gpu::import_for(&data, &mut g);
-    for (name, format) in [("depth", DEPTH_FORMAT), ("ids", IDS_FORMAT)] {
-        let t = g.create_texture(name, TextureDesc::d2(format, width, height));
-        g.export(t);
-    }
-    let pass = BruteForce {
-        width,
-        height,
-        index_count: lod0.index_count(),
-        instance_count: data.instances.len() as u32,
-    };
-    g.add_pass("brute_force", pass, Bindings::new())?;
+    // The shipped pipeline file, sized for this mesh, scene and viewport.
+    let sizes: std::collections::BTreeMap<String, u64> = [
+        ("width", width as u64),
+        ("height", height as u64),
+        ("vertices", lod0.positions.len() as u64),
+        ("indices", lod0.indices.len() as u64),
+        ("instances", data.instances.len() as u64),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    let g = crate::graph::file::parse_pipeline_with(
+        include_str!("../../pipelines/brute_force.toml"),
+        "pipelines/brute_force.toml",
+        &crate::registry(),
+        &sizes,
+    )?;
     let adapter = GpuAdapter::select()?;
     let compiled = g.compile(&CompileOptions::for_adapter(&adapter))?;
     let gpu = adapter.open(compiled.plan.enabled_features)?;
