@@ -248,13 +248,7 @@ impl GraphBuilder {
         range: Option<std::ops::Range<u64>>,
         latency: u32,
     ) -> Result<()> {
-        let pass = crate::readback::ReadbackPass::new(name, range, latency);
-        self.add_pass(
-            &format!("readback:{name}"),
-            pass,
-            Bindings::new().bind("source", handle),
-        )
-        .map(drop)
+        self.add_readback(name, range, latency, Bindings::new().bind("source", handle))
     }
 
     /// [`Self::readback`] of the newest version of the buffer named `resource`, for
@@ -266,13 +260,20 @@ impl GraphBuilder {
         range: Option<std::ops::Range<u64>>,
         latency: u32,
     ) -> Result<()> {
+        let source = Bindings::new().bind_named("source", resource);
+        self.add_readback(name, range, latency, source)
+    }
+
+    fn add_readback(
+        &mut self,
+        name: &str,
+        range: Option<std::ops::Range<u64>>,
+        latency: u32,
+        source: Bindings,
+    ) -> Result<()> {
         let pass = crate::readback::ReadbackPass::new(name, range, latency);
-        self.add_pass(
-            &format!("readback:{name}"),
-            pass,
-            Bindings::new().bind_named("source", resource),
-        )
-        .map(drop)
+        self.add_pass(&format!("readback:{name}"), pass, source)
+            .map(drop)
     }
 
     /// Looks a resource up by name, at its newest version.
