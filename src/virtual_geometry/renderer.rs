@@ -39,6 +39,9 @@ pub struct Growth {
 }
 
 pub struct Renderer {
+    /// The scene. Moving instances and changing materials is uploaded by the next
+    /// frame; a scene that outgrows its buffers (more meshes or instances) needs a new
+    /// renderer, whose graph is sized for it.
     pub data: SceneData,
     pub settings: FrameSettings,
     pub compiled: CompiledGraph,
@@ -120,12 +123,13 @@ impl Renderer {
     /// Renders until a frame drops no cluster (at most [`MAX_STILL_FRAMES`]), waiting for
     /// each, and returns that frame's image, statistics and counters.
     pub fn render_still(&mut self, camera: &Camera) -> Result<Still> {
-        for attempt in 1..=MAX_STILL_FRAMES {
+        let mut attempt = 0;
+        loop {
+            attempt += 1;
             let submitted = self.frame(camera)?.frame;
-            let stats = self
-                .executor
-                .finish()?
-                .expect("a frame was executed, so its statistics exist");
+            let stats = self.executor.finish()?.ok_or_else(|| {
+                GraphError::Readback(format!("frame {submitted} left no statistics"))
+            })?;
             self.take_counts()?;
             let counts = self
                 .latest
@@ -152,7 +156,6 @@ impl Renderer {
                 });
             }
         }
-        unreachable!("the last attempt returns")
     }
 
     /// Takes every readback that has come back; grows the lists for frames that
