@@ -72,6 +72,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         width,
         height,
         scanline_width: 16,
+        exact_division: false,
     };
     g.add_pass("sw_raster", sw, Bindings::new())?;
     g.add_pass("hw_raster", HwRaster { width, height }, Bindings::new())?;

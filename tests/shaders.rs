@@ -26,12 +26,17 @@ fn virtual_geometry_shaders_compose_and_validate() {
         &meshlight::fill_clusters::SHADER,
         &meshlight::cull_lod::SHADER,
         &meshlight::remap_dispatch::SHADER,
-        &meshlight::sw_raster::SHADER,
         &meshlight::hw_raster::SHADER,
         &meshlight::resolve::DEPTH_SHADER,
         &meshlight::resolve::SHADE_SHADER,
     ] {
         check(shader, &());
+    }
+    for exact_division in [false, true] {
+        check(
+            &meshlight::sw_raster::SHADER,
+            &meshlight::sw_raster::RasterDefs { exact_division },
+        );
     }
 }
 

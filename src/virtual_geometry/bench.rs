@@ -231,6 +231,40 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         rows.push(r);
     }
 
+    // What bit-exact division costs the software rasteriser (all software, so every
+    // cluster goes through it).
+    let exact = measure(
+        &placed,
+        FrameSettings {
+            hardware: false,
+            exact_division: true,
+            ..FrameSettings::new(width, height)
+        },
+        frames,
+    )?;
+    let (fast_ms, exact_ms) = (
+        pass_ms(&software, "sw_raster"),
+        pass_ms(&exact, "sw_raster"),
+    );
+    rows.push(row(
+        "virtual-geometry",
+        format!("{case}, all software"),
+        "GPU sw_raster, driver division",
+        fast_ms,
+        "ms",
+        &device,
+    ));
+    let mut r = row(
+        "virtual-geometry",
+        format!("{case}, all software"),
+        "GPU sw_raster, exact division",
+        exact_ms,
+        "ms",
+        &device,
+    );
+    r.vs_baseline = Some(fast_ms / exact_ms);
+    rows.push(r);
+
     // What the depth targets cost: each is a fullscreen fragment pass.
     for (label, depth, material_depth) in [
         ("GPU frame, no material-depth target", true, false),

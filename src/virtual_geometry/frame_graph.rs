@@ -44,6 +44,9 @@ pub struct FrameSettings {
     /// off, the frame resolves colour only.
     pub depth: bool,
     pub material_depth: bool,
+    /// The software rasteriser divides exactly in integers (bit-exact on every driver,
+    /// slower); see `SwRaster::exact_division`.
+    pub exact_division: bool,
 }
 
 impl FrameSettings {
@@ -60,6 +63,7 @@ impl FrameSettings {
             slots: 1 << 18,
             depth: true,
             material_depth: true,
+            exact_division: false,
         }
     }
 
@@ -158,6 +162,7 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         width,
         height,
         scanline_width: 16,
+        exact_division: s.exact_division,
     };
     g.add_pass("sw_raster", sw, Bindings::new())?;
     if s.hardware {

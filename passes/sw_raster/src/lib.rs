@@ -47,9 +47,11 @@
 //!   pixel). Every f32 operation is rounded as IEEE 754 rounds it, on any driver:
 //!   Vulkan requires that of adds and multiplies, but lets a compiler fuse a multiply
 //!   and an add into one rounding and lets a division be 2.5 ulp off. So products pass
-//!   through an xor with a uniform zero before they are added (no fusing), and
-//!   divisions are done on the significands in integers. Without these an NVIDIA H100
-//!   moved hundreds of depths per 96 × 64 frame by an ulp; lavapipe matched either way.
+//!   through an xor with a uniform zero before they are added (no fusing), and with
+//!   `exact_division` (param, default false) divisions are done on the significands in
+//!   integers. Without that an NVIDIA H100 moved hundreds of depths per 96 × 64 frame
+//!   by an ulp; lavapipe matches either way. Off by default because it costs: the
+//!   H100 figures are in docs/BENCHMARKS.md.
 
 pub mod cpu;
 
@@ -60,7 +62,7 @@ use meshlight_graph::{
     Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
     SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::{PassShader, pass_shader};
+use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "sw_raster";
@@ -112,6 +114,22 @@ pub struct SwRaster {
     pub height: u32,
     /// Workgroups whose widest triangle box reaches this many pixels loop per scanline.
     pub scanline_width: u32,
+    /// Divide in integers, rounded as IEEE 754 divides, so every driver matches the
+    /// reference bit for bit; off, the driver's division (within 2.5 ulp on some).
+    pub exact_division: bool,
+}
+
+/// The variant of raster.wgsl a pass runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct RasterDefs {
+    /// `EXACT_DIVISION`: see [`SwRaster::exact_division`].
+    pub exact_division: bool,
+}
+
+impl ShaderDefs for RasterDefs {
+    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
+        vec![("EXACT_DIVISION", ShaderDef::Bool(self.exact_division))]
+    }
 }
 
 #[repr(C)]
@@ -125,10 +143,11 @@ struct GpuParams {
     zero: u32,
 }
 
-const PARAM_KEYS: [&str; 3] = ["width", "height", "scanline_width"];
+const PARAM_KEYS: [&str; 4] = ["width", "height", "scanline_width", "exact_division"];
 
 impl SwRaster {
-    /// Reads `width`, `height` (required, > 0) and `scanline_width` (default 16).
+    /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16) and
+    /// `exact_division` (default false).
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let width = params.u32("width", 0)?;
@@ -145,6 +164,7 @@ impl SwRaster {
             width,
             height,
             scanline_width: params.u32("scanline_width", 16)?,
+            exact_division: params.bool("exact_division", false)?,
         })
     }
 }
@@ -175,9 +195,15 @@ impl Pass for SwRaster {
             .slot(7, "visbuffer")
             .uniform(8)
             .uniform(9);
+        let defs = RasterDefs {
+            exact_division: self.exact_division,
+        };
+        ctx.shader_defs(&defs);
         ctx.program(
             "raster",
-            ProgramDesc::compute(&SHADER, "raster").layout(layout),
+            ProgramDesc::compute(&SHADER, "raster")
+                .defs(&defs)
+                .layout(layout),
         );
         Ok(())
     }

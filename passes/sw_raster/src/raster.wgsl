@@ -65,11 +65,13 @@ fn unfused4(x: vec4<f32>) -> vec4<f32> {
     return bitcast<vec4<f32>>(bitcast<vec4<u32>>(x) ^ vec4(params.zero));
 }
 
-// `a / b` rounded to nearest (ties to even), as IEEE 754 and the reference divide, from
-// integer operations: Vulkan lets a driver divide within 2.5 ulp, and some do. Zeros,
+// `a / b`. With EXACT_DIVISION: rounded to nearest (ties to even), as IEEE 754 and the
+// reference divide, from integer operations: Vulkan lets a driver divide within 2.5 ulp,
+// and some do. Without it, the driver's division (exact on lavapipe). Zeros,
 // subnormals, infinities, NaNs and quotients outside the normal range take the driver's
 // division instead; none of them reaches a visible pixel's depth or position.
 fn divide(a: f32, b: f32) -> f32 {
+#ifdef EXACT_DIVISION
     let ua = bitcast<u32>(a);
     let ub = bitcast<u32>(b);
     let ea = i32(extractBits(ua, 23u, 8u));
@@ -92,6 +94,9 @@ fn divide(a: f32, b: f32) -> f32 {
     }
     let magnitude = bitcast<u32>(f) + bitcast<u32>(shift << 23u);
     return bitcast<f32>(magnitude | ((ua ^ ub) & 0x80000000u));
+#else
+    return a / b;
+#endif
 }
 
 // Twice the signed area of (a, b, p); positive when p lies right of a→b on the y-down

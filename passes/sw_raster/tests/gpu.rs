@@ -219,6 +219,7 @@ fn pass(scanline_width: u32) -> SwRaster {
         width: W,
         height: H,
         scanline_width,
+        exact_division: false,
     }
 }
 
@@ -320,8 +321,20 @@ fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
 
     for (shape, input) in [("1-D", &linear), ("2-D", &folded)] {
         let mut results = Vec::new();
-        for (loop_name, width) in [("scanline", SCANLINES), ("box", BOXES)] {
-            let got = run(&mut scene, input, &views, pass(width)).unwrap_or_else(|e| panic!("{e}"));
+        // The driver's division and the exact one in integers (which other drivers need
+        // for bit-exact depth; lavapipe divides exactly either way).
+        for (loop_name, raster) in [
+            ("scanline", pass(SCANLINES)),
+            ("box", pass(BOXES)),
+            (
+                "scanline, exact division",
+                SwRaster {
+                    exact_division: true,
+                    ..pass(SCANLINES)
+                },
+            ),
+        ] {
+            let got = run(&mut scene, input, &views, raster).unwrap_or_else(|e| panic!("{e}"));
             for (k, (g, w)) in got.iter().zip(&want).enumerate() {
                 assert_identical(
                     &format!("{shape} dispatch, {loop_name} loop, view {k}"),
@@ -332,6 +345,7 @@ fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
             results.push(got);
         }
         assert_eq!(results[0], results[1], "{shape}: the loop shapes disagree");
+        assert_eq!(results[0], results[2], "{shape}: the divisions disagree");
     }
 }
 
