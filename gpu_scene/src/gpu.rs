@@ -6,6 +6,7 @@ use crate::names;
 use meshlight_graph::{Buffer, BufferDesc, Element, GpuContext, GraphBuilder, Handle, Imports};
 use meshlight_scene::asset::format::{GroupRecord, MeshletRecord};
 use meshlight_shaders::cpu::layout;
+use std::borrow::Cow;
 
 const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_DST)
@@ -108,51 +109,57 @@ pub fn import_for(data: &SceneData, g: &mut GraphBuilder) -> SceneHandles {
     }
 }
 
-/// Every buffer holds at least one element (wgpu refuses empty bindings); the payload
-/// carries two words of padding so a two-word field read never leaves it.
-fn contents(data: &SceneData) -> [(&'static str, Element, Vec<u8>); 6] {
-    let mut payload = data.payload.clone();
-    payload.extend([0, 0]);
-    [
-        (
-            names::MESHLETS,
+/// The buffers in their order in [`GpuScene`].
+const ORDER: [&str; 6] = [
+    names::MESHLETS,
+    names::GROUPS,
+    names::PAYLOAD,
+    names::MESHES,
+    names::INSTANCES,
+    names::MATERIALS,
+];
+
+/// What buffer `name` holds, borrowed from `data` (only the payload is copied, to append
+/// its padding): a frame that changed nothing copies nothing. Every buffer holds at
+/// least one element (wgpu refuses empty bindings); the payload carries two words of
+/// padding so a two-word field read never leaves it.
+fn content<'a>(data: &'a SceneData, name: &str) -> (Element, Cow<'a, [u8]>) {
+    let borrowed = |bytes: &'a [u8]| Cow::Borrowed(bytes);
+    match name {
+        names::MESHLETS => (
             elements::MESHLET,
-            bytemuck::cast_slice(&data.meshlets).to_vec(),
+            borrowed(bytemuck::cast_slice(&data.meshlets)),
         ),
-        (
-            names::GROUPS,
+        names::GROUPS => (
             elements::GROUP,
-            bytemuck::cast_slice(&data.groups).to_vec(),
+            borrowed(bytemuck::cast_slice(&data.groups)),
         ),
-        (
-            names::PAYLOAD,
-            Element::U32,
-            bytemuck::cast_slice(&payload).to_vec(),
-        ),
-        (
-            names::MESHES,
-            elements::MESH,
-            bytemuck::cast_slice(&data.meshes).to_vec(),
-        ),
-        (
-            names::INSTANCES,
+        names::PAYLOAD => {
+            let mut payload = bytemuck::cast_slice::<u32, u8>(&data.payload).to_vec();
+            payload.extend([0; 8]);
+            (Element::U32, Cow::Owned(payload))
+        }
+        names::MESHES => (elements::MESH, borrowed(bytemuck::cast_slice(&data.meshes))),
+        names::INSTANCES => (
             elements::INSTANCE,
-            bytemuck::cast_slice(&data.instances).to_vec(),
+            borrowed(bytemuck::cast_slice(&data.instances)),
         ),
-        (
-            names::MATERIALS,
+        _ => (
             elements::MATERIAL,
-            bytemuck::cast_slice(&data.materials).to_vec(),
+            borrowed(bytemuck::cast_slice(&data.materials)),
         ),
-    ]
+    }
 }
 
 impl GpuScene {
     /// Creates the buffers and uploads everything.
     pub fn new(gpu: &GpuContext, data: &mut SceneData) -> Self {
-        let buffers = contents(data)
-            .into_iter()
-            .map(|(name, element, bytes)| create(gpu, name, element, &bytes))
+        let buffers = ORDER
+            .iter()
+            .map(|name| {
+                let (element, bytes) = content(data, name);
+                create(gpu, name, element, &bytes)
+            })
             .collect();
         data.dirty_instances = None;
         Self {
@@ -170,7 +177,7 @@ impl GpuScene {
         let geometry = data.geometry_version != self.geometry_version;
         let materials = data.materials_version != self.materials_version;
         let dirty = data.dirty_instances.take();
-        for (i, (name, element, bytes)) in contents(data).into_iter().enumerate() {
+        for (i, &name) in ORDER.iter().enumerate() {
             let changed = match name {
                 names::INSTANCES => dirty.is_some(),
                 names::MATERIALS => materials,
@@ -179,6 +186,7 @@ impl GpuScene {
             if !changed {
                 continue;
             }
+            let (element, bytes) = content(data, name);
             let slot = &mut self.buffers[i];
             let elements = (bytes.len() / element.size as usize).max(1) as u64;
             if elements > slot.capacity {
