@@ -248,11 +248,18 @@ fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::e
     let mut most_in_flight = 0;
     // Of the wall time, what the executor spends in `execute_frame` and in its submit.
     let (mut executor_ms, mut submit_ms) = (Vec::new(), Vec::new());
+    let mut record_us: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
     for f in 0..frames {
         let s = renderer.frame(&camera(f))?;
         most_in_flight = most_in_flight.max(s.frames_in_flight);
         executor_ms.push(s.cpu_frame_us / 1e3);
         submit_ms.push(s.cpu_submit_us / 1e3);
+        for p in &s.passes {
+            record_us
+                .entry(p.name.clone())
+                .or_default()
+                .push(p.cpu_record_us);
+        }
     }
     renderer.executor.finish()?;
     let overlapped = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
@@ -310,6 +317,17 @@ fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::e
             metric,
             median(values),
             "ms",
+            &device,
+        ));
+    }
+    for (pass, values) in record_us {
+        let metric = format!("CPU record {pass}");
+        rows.push(row(
+            "graph-execute",
+            case.clone(),
+            &metric,
+            median(values),
+            "µs",
             &device,
         ));
     }
