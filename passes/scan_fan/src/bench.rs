@@ -9,7 +9,7 @@
 //! Absolute figures mean something only on a real GPU; on lavapipe the run checks that the
 //! benchmark works, not how fast anything is.
 
-use crate::{MAX_COUNT, ScanFan, ScanOptions, TwoStep, cpu_scan_into};
+use crate::{DecoupledLookback, MAX_COUNT, ScanFan, ScanOptions, TwoStep, cpu_scan_into};
 use meshlight_graph::{
     Access, BindingLayout, Bindings, BufferDesc, CompileOptions, Element, Executor, GraphBuilder,
     GraphError, Imports, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
@@ -79,6 +79,15 @@ fn variants(count: u32) -> Vec<(&'static str, Box<dyn Pass>)> {
         ),
         // Bigger tiles: fewer workgroups and a smaller fan, to tune the default.
         ("scan_fan/items16", Box::new(ScanFan::with_options(items16))),
+        // The single pass: 8 bytes per element, the goal is ≥ 0.8× the compute copy.
+        (
+            "decoupled_lookback",
+            Box::new(DecoupledLookback::new(count)),
+        ),
+        (
+            "decoupled_lookback/items16",
+            Box::new(DecoupledLookback::with_options(items16)),
+        ),
     ]
 }
 
@@ -400,7 +409,7 @@ pub fn run(exec: &mut Executor, sizes: &[u64], repeats: u32) -> Result<Vec<Row>>
 /// The rows as a fixed-width text table.
 pub fn table(rows: &[Row]) -> String {
     let mut s = format!(
-        "{:<18} {:>11} {:>10} {:>12} {:>9} {:>10} {:>10} {:>9} {:>8}\n",
+        "{:<26} {:>11} {:>10} {:>12} {:>9} {:>10} {:>10} {:>9} {:>8}\n",
         "implementation",
         "elements",
         "gpu ms",
@@ -413,7 +422,7 @@ pub fn table(rows: &[Row]) -> String {
     );
     for r in rows {
         s += &format!(
-            "{:<18} {:>11} {:>10.4} {:>12.2} {:>9.1} {:>10.1} {:>10.1} {:>9.2} {:>8.2}\n",
+            "{:<26} {:>11} {:>10.4} {:>12.2} {:>9.1} {:>10.1} {:>10.1} {:>9.2} {:>8.2}\n",
             r.implementation,
             r.elements,
             r.gpu_ms,

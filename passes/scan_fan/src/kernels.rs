@@ -1,4 +1,4 @@
-//! What both implementations share: the shader, its typed defs, the level layout of the
+//! What the implementations share: the shader, its typed defs, the level layout of the
 //! fan buffer, scratch declarations, and the recording of a list of dispatches.
 
 use crate::{ScanOptions, Subgroups};
@@ -15,6 +15,7 @@ pub(crate) mod entry {
     pub const SCAN_ADD: &str = "scan_add";
     pub const WALK: &str = "walk";
     pub const DISPATCH_ARGS: &str = "dispatch_args";
+    pub const LOOKBACK: &str = "lookback";
 }
 
 /// Mirrors the WGSL `FLAG_*` constants.
@@ -22,6 +23,7 @@ pub(crate) mod flag {
     pub const INCLUSIVE: u32 = 1;
     pub const CARRY: u32 = 2;
     pub const TOTAL: u32 = 4;
+    pub const ONE_GROUP_AT_LEAST: u32 = 8;
 }
 
 /// The API's cap on workgroups per dispatch dimension; larger grids are split into rows.
@@ -166,13 +168,15 @@ pub(crate) struct Step {
     pub grid: Grid,
 }
 
-/// Setup shared by both implementations: validation, the variant, the scratch buffers,
+/// Setup shared by the implementations: validation, the variant, the scratch buffers,
 /// and one program per kernel the steps use, with the layout the bound slots give.
+/// `state_words`, for the single-pass scan, sizes its tile-state buffer.
 pub(crate) fn setup(
     ctx: &mut SetupContext,
     options: &ScanOptions,
     levels: &Levels,
     steps: &[Step],
+    state_words: Option<u64>,
 ) -> Result<()> {
     options.validate()?;
     ctx.optional_features(wgpu::Features::SUBGROUP);
@@ -198,6 +202,13 @@ pub(crate) fn setup(
         BufferDesc::array(Element::U32, 1),
         &[Access::StorageReadWrite],
     );
+    if let Some(words) = state_words {
+        ctx.scratch_buffer(
+            "state",
+            BufferDesc::array(Element::U32, words),
+            &[Access::CopyDst, Access::StorageReadWrite],
+        );
+    }
     let bytes = options.count as u64 * 4;
     ctx.min_bytes("input", bytes);
     ctx.min_bytes("output", bytes);
@@ -205,10 +216,10 @@ pub(crate) fn setup(
     ctx.min_bytes("count", 4);
     let scan = scan_layout(ctx.is_bound("total"), gpu_count);
     for step in steps {
-        let layout = if step.entry == entry::DISPATCH_ARGS {
-            args_layout()
-        } else {
-            scan.clone()
+        let layout = match step.entry {
+            entry::DISPATCH_ARGS => args_layout(),
+            entry::LOOKBACK => scan.clone().scratch(7, "state", Access::StorageReadWrite),
+            _ => scan.clone(),
         };
         ctx.program(
             step.entry,
@@ -262,8 +273,13 @@ pub(crate) fn gpu_count(ctx: &SetupContext) -> bool {
 }
 
 /// Encodes `steps` in order in one compute pass; wgpu orders the storage writes of one
-/// dispatch before the reads of the next.
-pub(crate) fn record(ctx: &mut RecordContext<'_>, steps: &[Step]) -> Result<()> {
+/// dispatch before the reads of the next. With `clear_state`, the single-pass scan's tile
+/// counter and flags are zeroed first (a fill), so every frame starts from tile 0.
+pub(crate) fn record(ctx: &mut RecordContext<'_>, steps: &[Step], clear_state: bool) -> Result<()> {
+    if clear_state {
+        let (state, bytes) = ctx.scratch("state")?;
+        ctx.encoder().clear_buffer(state, 0, Some(bytes));
+    }
     let mut encoded = Vec::with_capacity(steps.len());
     for step in steps {
         let program = ctx.compute(step.entry)?;

@@ -31,8 +31,13 @@
 //!   scanned recursively (any number of levels), then each tile scanned with its carry.
 //! - [`TwoStep`] (`two_step`): the same first and last steps, with one workgroup walking
 //!   all tile totals in order in between — simpler, and the comparison for the benchmark.
+//! - [`DecoupledLookback`] (`decoupled_lookback`): one dispatch that reads and writes each
+//!   element once, each tile finding its carry from its predecessors' published totals.
+//!   Its wait on a predecessor is bounded (then it reduces that tile itself), so it is
+//!   correct on any adapter, but fast only where workgroups run side by side (NVIDIA; see
+//!   its module), so nothing picks it automatically: a pipeline names it.
 //!
-//! Both share this contract and [`ScanOptions`], so swapping them is a one-line change.
+//! All share this contract and [`ScanOptions`], so swapping them is a one-line change.
 //!
 //! # Why reduce-then-scan
 //!
@@ -47,11 +52,13 @@ use meshlight_graph::{Access, Element, GraphError, Pass, Result, Slot, StageCont
 
 pub mod bench;
 mod cpu;
+mod decoupled_lookback;
 mod kernels;
 mod scan_fan;
 mod two_step;
 
 pub use cpu::{cpu_scan, cpu_scan_into};
+pub use decoupled_lookback::DecoupledLookback;
 pub use kernels::{SHADER, ScanDefs};
 pub use scan_fan::ScanFan;
 pub use two_step::TwoStep;
@@ -117,7 +124,7 @@ impl Subgroups {
     }
 }
 
-/// What both implementations are configured with.
+/// What every implementation is configured with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ScanOptions {
     /// Elements to scan; with the `count` slot bound, the most the GPU count may say.
@@ -199,8 +206,15 @@ fn build_two_step(params: &Params) -> Result<Box<dyn Pass>> {
     )?)))
 }
 
-/// Registers both implementations of stage `scan_fan` for pipeline files.
+fn build_decoupled_lookback(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(DecoupledLookback::with_options(
+        ScanOptions::from_params(params)?,
+    )))
+}
+
+/// Registers the implementations of stage `scan_fan` for pipeline files.
 pub fn register(registry: &mut Registry) {
     registry.register(STAGE, "scan_fan", build_scan_fan);
     registry.register(STAGE, "two_step", build_two_step);
+    registry.register(STAGE, "decoupled_lookback", build_decoupled_lookback);
 }

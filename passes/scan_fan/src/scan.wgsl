@@ -34,6 +34,9 @@ const FLAG_INCLUSIVE: u32 = 1u;
 const FLAG_CARRY: u32 = 2u;
 // Write the sum of the whole level to `total[0]` (the top level, a single tile).
 const FLAG_TOTAL: u32 = 4u;
+// `dispatch_args`: launch at least one workgroup for level 0 even when the count is 0, so
+// a single-pass scan still writes `total[0]`.
+const FLAG_ONE_GROUP_AT_LEAST: u32 = 8u;
 
 const WG: u32 = 256u;
 const ITEMS: u32 = #{ITEMS};
@@ -312,7 +315,10 @@ fn walk(inv: Invocation) {
 fn dispatch_args() {
     var n = min(gpu_count[0], params.capacity);
     for (var l = 0u; l < params.indirect_levels; l++) {
-        let tiles = div_ceil(n, TILE);
+        var tiles = div_ceil(n, TILE);
+        if l == 0u && (params.flags & FLAG_ONE_GROUP_AT_LEAST) != 0u {
+            tiles = max(tiles, 1u);
+        }
         let rows = max(div_ceil(tiles, MAX_GROUPS_PER_DIM), 1u);
         args[3u * l] = div_ceil(tiles, rows);
         args[3u * l + 1u] = rows;
@@ -321,3 +327,150 @@ fn dispatch_args() {
     }
 }
 #endif
+
+// ---------------------------------------------------------------------------------------
+// Single pass: Merrill and Garland's decoupled look-back.
+//
+// Each workgroup takes the next tile from a counter, so tiles are handed out in the order
+// workgroups start and a workgroup only ever waits on tiles that started before it. It
+// reduces its tile, publishes the tile's total (AGGREGATE), walks back over its
+// predecessors adding their totals until one has published its inclusive prefix (PREFIX),
+// publishes its own inclusive prefix, then scans the tile with that carry. Each element is
+// read once and written once. A predecessor silent for too long has its tile reduced by
+// the waiting workgroup instead (a bounded wait, so correctness never depends on how the
+// device schedules workgroups).
+//
+// A tile's state is 32 bits of sum plus a flag, which one u32 cannot hold, and 64-bit
+// atomics are not everywhere. So the sum is split into two 16-bit halves, each in its own
+// word beside a copy of the flag. Every flag value is written once per word, so a reader
+// that sees the same flag in both words has both halves of one publication; on a mismatch
+// it reads again.
+
+// state[0]: the tile counter; state[1 + 2t], state[2 + 2t]: tile t's low and high halves,
+// each `flag << 16 | half`. Cleared to 0 (no flag) before every dispatch.
+@group(0) @binding(7) var<storage, read_write> state: array<atomic<u32>>;
+
+const STATE_NONE: u32 = 0u;
+const STATE_AGGREGATE: u32 = 1u;
+const STATE_PREFIX: u32 = 2u;
+
+// The tile this workgroup took from the counter.
+var<workgroup> taken_tile: u32;
+// The sum of every tile before it, found by the look-back.
+var<workgroup> tile_carry: u32;
+
+fn publish(t: u32, flag: u32, value: u32) {
+    atomicStore(&state[1u + 2u * t], (flag << 16u) | (value & 0xffffu));
+    atomicStore(&state[2u + 2u * t], (flag << 16u) | (value >> 16u));
+}
+
+// (flag, value) of tile t; STATE_NONE while nothing consistent is published.
+fn observe(t: u32) -> vec2<u32> {
+    let low = atomicLoad(&state[1u + 2u * t]);
+    let high = atomicLoad(&state[2u + 2u * t]);
+    if (low >> 16u) != (high >> 16u) {
+        return vec2(STATE_NONE, 0u);
+    }
+    return vec2(low >> 16u, (high << 16u) | (low & 0xffffu));
+}
+
+// Looks at a silent predecessor this many times before reducing its tile itself. Far
+// longer than a running workgroup takes to publish on a GPU; on lavapipe, whose loops are
+// also cut off after 65,535 iterations, it keeps every loop short.
+const SPIN_LIMIT: u32 = 1024u;
+
+// The sum of tile t's elements, by one lane: the fallback when its workgroup has not
+// published (it may not be running, or not yet started), so no workgroup ever depends on
+// another one making progress.
+fn reduce_tile_alone(t: u32, n: u32) -> u32 {
+    var sum = 0u;
+    let end = min(t * TILE + TILE, n);
+    for (var i = t * TILE; i < end; i++) {
+        sum += input[i];
+    }
+    return sum;
+}
+
+// The exclusive prefix of tile t: its predecessors' totals back to the nearest published
+// inclusive prefix (or to tile 0).
+fn look_back(t: u32, n: u32) -> u32 {
+    var sum = 0u;
+    for (var i = t; i > 0u; i--) {
+        var seen = vec2(STATE_NONE, 0u);
+        for (var spin = 0u; spin < SPIN_LIMIT && seen.x == STATE_NONE; spin++) {
+            seen = observe(i - 1u);
+        }
+        if seen.x == STATE_NONE {
+            seen = vec2(STATE_AGGREGATE, reduce_tile_alone(i - 1u, n));
+        }
+        sum += seen.y;
+        if seen.x == STATE_PREFIX {
+            break;
+        }
+    }
+    return sum;
+}
+
+@compute @workgroup_size(256)
+fn lookback(inv: Invocation) {
+    let n = level_count(0u);
+    let tiles = max(div_ceil(n, TILE), 1u);
+    if inv.index == 0u {
+        taken_tile = atomicAdd(&state[0], 1u);
+    }
+    let t = workgroupUniformLoad(&taken_tile);
+    // The surplus of the last row of a split grid.
+    if t >= tiles {
+        return;
+    }
+    let base = t * TILE;
+    for (var k = 0u; k < ITEMS; k++) {
+        let j = k * WG + inv.index;
+        var v = 0u;
+        if base + j < n {
+            v = input[base + j];
+        }
+        tile[padded(j)] = v;
+    }
+    workgroupBarrier();
+    let position = lane_position(inv);
+    let first = position * ITEMS;
+    var own = 0u;
+    for (var k = 0u; k < ITEMS; k++) {
+        own += tile[padded(first + k)];
+    }
+    let scanned = scan_lanes(inv, position, own);
+    if inv.index == 0u {
+        let aggregate = scanned.y;
+        var carry = 0u;
+        if t > 0u {
+            publish(t, STATE_AGGREGATE, aggregate);
+            carry = look_back(t, n);
+        }
+        publish(t, STATE_PREFIX, carry + aggregate);
+        if t == tiles - 1u {
+            total[0] = carry + aggregate;
+        }
+        tile_carry = carry;
+    }
+    let carry = workgroupUniformLoad(&tile_carry);
+    let inclusive = (params.flags & FLAG_INCLUSIVE) != 0u;
+    var running = carry + scanned.x;
+    for (var k = 0u; k < ITEMS; k++) {
+        let v = tile[padded(first + k)];
+        if inclusive {
+            running += v;
+            tile[padded(first + k)] = running;
+        } else {
+            tile[padded(first + k)] = running;
+            running += v;
+        }
+    }
+    workgroupBarrier();
+    for (var k = 0u; k < ITEMS; k++) {
+        let j = k * WG + inv.index;
+        if base + j < n {
+            output[base + j] = tile[padded(j)];
+        }
+    }
+}

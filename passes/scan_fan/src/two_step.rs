@@ -80,9 +80,9 @@ impl Pass for TwoStep {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let steps = self.steps(kernels::gpu_count(ctx));
-        kernels::setup(ctx, &self.options, &self.levels(), &steps)
+        kernels::setup(ctx, &self.options, &self.levels(), &steps, None)
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        kernels::record(ctx, &self.steps(ctx.is_bound("count")))
+        kernels::record(ctx, &self.steps(ctx.is_bound("count")), false)
     }
 }

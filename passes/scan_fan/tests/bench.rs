@@ -11,13 +11,15 @@ fn benchmark_rows_cover_every_implementation_and_size() {
     }
     let sizes = [1 << 12, 70_001];
     let rows = bench::run(&mut exec, &sizes, 3).expect("benchmark");
-    assert_eq!(rows.len(), sizes.len() * 4);
+    assert_eq!(rows.len(), sizes.len() * 6);
     for size in sizes {
         for name in [
             "scan_fan",
             "two_step",
             "scan_fan/chunk256",
             "scan_fan/items16",
+            "decoupled_lookback",
+            "decoupled_lookback/items16",
         ] {
             let row = rows
                 .iter()

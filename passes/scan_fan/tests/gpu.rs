@@ -1,4 +1,4 @@
-//! Both implementations on a real Vulkan adapter (lavapipe in CI) against `cpu_scan`.
+//! Every implementation on a real Vulkan adapter (lavapipe in CI) against `cpu_scan`.
 
 mod support;
 use meshlight_pass_scan_fan::Subgroups;
@@ -12,7 +12,7 @@ fn counts_at_chunk_boundaries_match_the_cpu_reference() {
     let mut exec = executor();
     let mut rng = XorShift(0x5eed_0001);
     let input = rng.values(65_537, 1000);
-    for implementation in Implementation::BOTH {
+    for implementation in Implementation::ALL {
         // 1: a tile is one 256-element Hillis–Steele chunk, three levels at 65,537;
         // 8: the default 2,048-element tile.
         for items in [1, 8] {
@@ -35,7 +35,7 @@ fn counts_at_chunk_boundaries_match_the_cpu_reference() {
 fn values_near_u32_max_wrap_modulo_two_to_the_32() {
     let mut exec = executor();
     let input = XorShift(0x5eed_0002).near_max(65_537);
-    for implementation in Implementation::BOTH {
+    for implementation in Implementation::ALL {
         for inclusive in [false, true] {
             for subgroups in [Subgroups::Auto, Subgroups::Off] {
                 for count in [1, 257, 65_537] {
@@ -55,7 +55,7 @@ fn gpu_count_gives_the_cpu_count_result_and_leaves_the_tail() {
     let mut exec = executor();
     const CAPACITY: u32 = 70_000;
     let input = XorShift(0x5eed_0003).values(CAPACITY as usize, u32::MAX);
-    for implementation in Implementation::BOTH {
+    for implementation in Implementation::ALL {
         for items in [1, 8] {
             for inclusive in [false, true] {
                 // 0 and 1: below one tile; 65,537: several levels; CAPACITY + 5: clamped.
@@ -87,7 +87,7 @@ fn gpu_count_gives_the_cpu_count_result_and_leaves_the_tail() {
 fn capacity_below_one_tile_with_a_gpu_count() {
     let mut exec = executor();
     let input = XorShift(0x5eed_0004).values(300, 1 << 20);
-    for implementation in Implementation::BOTH {
+    for implementation in Implementation::ALL {
         for count in [0, 7, 300, 1_000] {
             check(
                 &mut exec,
@@ -129,6 +129,108 @@ fn sixteen_million_elements() {
         &Case::new(Implementation::TwoStep, n).inclusive(true),
         &input,
     );
+    // 65,537 tiles of 256: a 2-D grid, and thousands of look-backs in flight.
+    check(
+        &mut exec,
+        &Case::new(Implementation::DecoupledLookback, n).items(1),
+        &input,
+    );
+    check(
+        &mut exec,
+        &Case::new(Implementation::DecoupledLookback, n)
+            .items(1)
+            .inclusive(true)
+            .gpu_count(n - 3),
+        &input,
+    );
+}
+
+/// The single-pass scan around its tile boundaries and at 2^20, every tile size, both
+/// modes, with the count from the CPU and from the GPU; many tiles, so workgroups
+/// really do wait on each other's published totals.
+#[test]
+fn decoupled_lookback_at_tile_boundaries_and_two_to_the_20() {
+    let mut exec = executor();
+    let n = 1 << 20;
+    let input = XorShift(0x5eed_0007).values(n as usize, u32::MAX);
+    for items in [1, 4, 16] {
+        let tile = 256 * items;
+        for inclusive in [false, true] {
+            for count in [1, tile - 1, tile, tile + 1, 5 * tile + 3, n] {
+                let case = Case::new(Implementation::DecoupledLookback, count)
+                    .items(items)
+                    .inclusive(inclusive);
+                check(&mut exec, &case, &input);
+                let indirect = Case::new(Implementation::DecoupledLookback, n)
+                    .items(items)
+                    .inclusive(inclusive)
+                    .gpu_count(count);
+                check(&mut exec, &indirect, &input);
+            }
+        }
+    }
+}
+
+/// The tile counter and flags are cleared every frame: a second frame of the same graph
+/// must give the same result, not wait on flags left from the first or start past tile 0.
+#[test]
+fn decoupled_lookback_runs_frame_after_frame() {
+    let mut exec = executor();
+    let n = 100_000u32;
+    let input = XorShift(0x5eed_0008).values(n as usize, 1000);
+    let (expected, total) = meshlight_pass_scan_fan::cpu_scan(&input, false);
+    let mut g = meshlight_graph::GraphBuilder::new();
+    let desc = meshlight_graph::BufferDesc::array(meshlight_graph::Element::U32, n as u64);
+    let input_h = g.import_buffer("input", desc.clone(), USAGE);
+    let output_h = g.import_buffer("output", desc, USAGE);
+    let total_h = g.import_buffer(
+        "total",
+        meshlight_graph::BufferDesc::array(meshlight_graph::Element::U32, 1),
+        USAGE,
+    );
+    g.add_boxed_pass(
+        "scan",
+        Implementation::DecoupledLookback.pass(meshlight_pass_scan_fan::ScanOptions {
+            items_per_thread: 2,
+            ..meshlight_pass_scan_fan::ScanOptions::new(n)
+        }),
+        meshlight_graph::Bindings::new()
+            .bind("input", input_h)
+            .bind("output", output_h)
+            .bind("total", total_h),
+    )
+    .unwrap();
+    let compiled = g
+        .compile(&meshlight_graph::CompileOptions::for_gpu(&exec.gpu))
+        .unwrap();
+    let input_buf = exec
+        .gpu
+        .buffer_with_data("input", bytemuck::cast_slice(&input), USAGE);
+    for frame in 0..3 {
+        let output_buf = exec.gpu.buffer_with_data(
+            "output",
+            bytemuck::cast_slice(&vec![POISON; n as usize]),
+            USAGE,
+        );
+        let total_buf = exec
+            .gpu
+            .buffer_with_data("total", bytemuck::bytes_of(&POISON), USAGE);
+        let imports = meshlight_graph::Imports::new()
+            .buffer("input", &input_buf)
+            .buffer("output", &output_buf)
+            .buffer("total", &total_buf);
+        exec.execute(&compiled, &imports).unwrap();
+        let output = read_u32s(&exec.gpu, &output_buf, n as usize);
+        assert!(
+            output == expected,
+            "frame {frame}: output differs from the CPU"
+        );
+        assert_eq!(
+            read_u32s(&exec.gpu, &total_buf, 1)[0],
+            total,
+            "frame {frame}"
+        );
+    }
 }
 
 #[test]
@@ -139,7 +241,7 @@ fn random_sizes_values_and_options() {
     let strategy = (
         1u32..300_000,
         any::<u64>(),
-        any::<bool>(),
+        prop::sample::select(Implementation::ALL.to_vec()),
         any::<bool>(),
         any::<bool>(),
         prop::sample::select(vec![1u32, 2, 4, 8, 16]),
@@ -153,18 +255,14 @@ fn random_sizes_values_and_options() {
     runner
         .run(
             &strategy,
-            |(count, seed, two_step, inclusive, subgroups_off, items, near_max)| {
+            |(count, seed, which, inclusive, subgroups_off, items, near_max)| {
                 let mut rng = XorShift(seed | 1);
                 let input = if near_max {
                     rng.near_max(count as usize)
                 } else {
                     rng.values(count as usize, u32::MAX)
                 };
-                let implementation = if two_step {
-                    Implementation::TwoStep
-                } else {
-                    Implementation::ScanFan
-                };
+                let implementation = which;
                 let subgroups = if subgroups_off {
                     Subgroups::Off
                 } else {
@@ -181,10 +279,10 @@ fn random_sizes_values_and_options() {
         .unwrap();
 }
 
-/// The registry builds both implementations from a pipeline file, and swapping the
+/// The registry builds every implementation from a pipeline file, and swapping the
 /// `implementation` line gives the same result.
 #[test]
-fn pipeline_file_builds_both_implementations() {
+fn pipeline_file_builds_every_implementation() {
     use meshlight_graph::file::{Registry, parse_pipeline};
     use meshlight_graph::*;
     let mut registry = Registry::new();
@@ -193,7 +291,7 @@ fn pipeline_file_builds_both_implementations() {
     let input = XorShift(0x5eed_0006).values(n as usize, 100);
     let (expected, total) = meshlight_pass_scan_fan::cpu_scan(&input, true);
     let mut exec = executor();
-    for implementation in ["scan_fan", "two_step"] {
+    for implementation in ["scan_fan", "two_step", "decoupled_lookback"] {
         let text = format!(
             r#"
 [[resource]]

@@ -38,13 +38,17 @@ fn bad_parameters_say_what_to_change() {
 }
 
 #[test]
-fn registry_knows_both_implementations() {
+fn registry_knows_every_implementation() {
     let mut registry = Registry::new();
     register(&mut registry);
     assert_eq!(
         registry.implementations("scan_fan"),
-        ["scan_fan", "two_step"]
+        ["decoupled_lookback", "scan_fan", "two_step"]
     );
+    let pass = registry
+        .build("scan_fan", "decoupled_lookback", &params("count = 3"))
+        .unwrap();
+    assert_eq!(pass.implementation(), "decoupled_lookback");
     let pass = registry
         .build("scan_fan", "two_step", &params("count = 3"))
         .unwrap();

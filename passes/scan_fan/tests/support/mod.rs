@@ -2,7 +2,9 @@
 #![allow(dead_code)]
 
 use meshlight_graph::*;
-use meshlight_pass_scan_fan::{ScanFan, ScanOptions, Subgroups, TwoStep, cpu_scan};
+use meshlight_pass_scan_fan::{
+    DecoupledLookback, ScanFan, ScanOptions, Subgroups, TwoStep, cpu_scan,
+};
 
 /// Written over `output` and `total` before every run, so an element the scan should have
 /// written and did not shows up as a mismatch.
@@ -24,14 +26,20 @@ pub fn executor() -> Executor {
 pub enum Implementation {
     ScanFan,
     TwoStep,
+    DecoupledLookback,
 }
 
 impl Implementation {
-    pub const BOTH: [Implementation; 2] = [Implementation::ScanFan, Implementation::TwoStep];
+    pub const ALL: [Implementation; 3] = [
+        Implementation::ScanFan,
+        Implementation::TwoStep,
+        Implementation::DecoupledLookback,
+    ];
     pub fn pass(self, options: ScanOptions) -> Box<dyn Pass> {
         match self {
             Implementation::ScanFan => Box::new(ScanFan::with_options(options)),
             Implementation::TwoStep => Box::new(TwoStep::with_options(options)),
+            Implementation::DecoupledLookback => Box::new(DecoupledLookback::with_options(options)),
         }
     }
 }

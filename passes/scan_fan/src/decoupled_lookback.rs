@@ -1,0 +1,116 @@
+//! Implementation `decoupled_lookback`: one dispatch, each tile read once and written once
+//! (8 bytes per element against the fan scan's 12), after Merrill and Garland's
+//! single-pass scan with decoupled look-back.
+//!
+//! # Forward progress
+//!
+//! A workgroup waits for earlier tiles to publish their totals, so on its own the scheme
+//! relies on those earlier workgroups running while it waits. Two things take that away:
+//!
+//! - Tiles come from a counter in the order workgroups start, not from the workgroup id,
+//!   so a workgroup only ever waits on one that has already started.
+//! - The wait is bounded: after 1,024 looks at a silent predecessor the waiting workgroup
+//!   reduces that tile's input itself and goes on. A scheduler that starves the
+//!   predecessor makes the scan slower, never wrong or hung.
+//!
+//! Where it is fast:
+//!
+//! - NVIDIA (Vulkan): resident workgroups run independently and a started one runs to
+//!   completion, so predecessors publish within microseconds and the fallback is rare.
+//! - lavapipe (llvmpipe): each worker thread runs one workgroup to its end before taking
+//!   the next, so a started predecessor owns a thread and does finish. Yet an unbounded
+//!   spin there gave a few tiles a carry of 0 with two worker threads (never with one):
+//!   the loop ended without its predecessor's total, as gallivm's loop limiter (65,535
+//!   iterations) would end it. So the wait is bounded and every loop here stays short; the
+//!   tests run it there with the default worker threads.
+//! - Elsewhere (mobile GPUs, some integrated ones) workgroups may be run in turn; the
+//!   scan stays correct but falls back often and is slower than `scan_fan`.
+//!
+//! So nothing chooses this implementation for the user: a pipeline names it.
+
+use crate::kernels::{self, Grid, Levels, Step, entry, flag};
+use crate::{ScanOptions, contract};
+use meshlight_graph::{Pass, RecordContext, Result, SetupContext, StageContract};
+
+/// The single-pass scan (implementation `decoupled_lookback` of stage `scan_fan`).
+#[derive(Clone, Debug)]
+pub struct DecoupledLookback {
+    pub options: ScanOptions,
+}
+
+impl DecoupledLookback {
+    /// An exclusive scan of `count` elements (or at most `count`, with a GPU count).
+    pub fn new(count: u32) -> Self {
+        Self::with_options(ScanOptions::new(count))
+    }
+    pub fn with_options(options: ScanOptions) -> Self {
+        Self { options }
+    }
+    pub fn inclusive(mut self, inclusive: bool) -> Self {
+        self.options.inclusive = inclusive;
+        self
+    }
+
+    /// Only level 0 is scanned; the level above sizes the tile grid of `dispatch_args`.
+    fn levels(&self) -> Levels {
+        Levels::single_fan(self.options.count, self.options.tile())
+    }
+
+    /// Tiles at capacity, at least one so an empty scan still writes its total.
+    fn tiles(&self) -> u32 {
+        self.options.count.div_ceil(self.options.tile()).max(1)
+    }
+
+    /// The tile counter, then two words per tile.
+    fn state_words(&self) -> u64 {
+        1 + 2 * self.tiles() as u64
+    }
+
+    fn steps(&self, gpu_count: bool) -> Vec<Step> {
+        let o = &self.options;
+        let levels = self.levels();
+        let inclusive = if o.inclusive { flag::INCLUSIVE } else { 0 };
+        let mut args = levels.params(o, 0, flag::ONE_GROUP_AT_LEAST);
+        // `dispatch_args` writes only the level-0 grid.
+        args.indirect_levels = 1;
+        let mut steps = Vec::with_capacity(2);
+        let grid = if gpu_count {
+            steps.push(Step {
+                entry: entry::DISPATCH_ARGS,
+                params: args,
+                grid: Grid::ONE,
+            });
+            Grid::Indirect { level: 0 }
+        } else {
+            Grid::Direct(kernels::grid(self.tiles()))
+        };
+        steps.push(Step {
+            entry: entry::LOOKBACK,
+            params: levels.params(o, 0, inclusive),
+            grid,
+        });
+        steps
+    }
+}
+
+impl Pass for DecoupledLookback {
+    fn contract(&self) -> StageContract {
+        contract()
+    }
+    fn implementation(&self) -> &'static str {
+        "decoupled_lookback"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        let steps = self.steps(kernels::gpu_count(ctx));
+        kernels::setup(
+            ctx,
+            &self.options,
+            &self.levels(),
+            &steps,
+            Some(self.state_words()),
+        )
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        kernels::record(ctx, &self.steps(ctx.is_bound("count")), true)
+    }
+}
