@@ -9,7 +9,10 @@
 //! Absolute figures mean something only on a real GPU; on lavapipe the run checks that the
 //! benchmark works, not how fast anything is.
 
-use crate::{DecoupledLookback, MAX_COUNT, ScanFan, ScanOptions, TwoStep, cpu_scan_into};
+use crate::{
+    DecoupledLookback, MAX_COUNT, ScanFan, ScanOptions, Subgroups, TileAccess, TwoStep,
+    cpu_scan_into,
+};
 use meshlight_graph::{
     Access, BindingLayout, Bindings, BufferDesc, CompileOptions, Element, Executor, GraphBuilder,
     GraphError, Imports, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
@@ -68,6 +71,18 @@ fn variants(count: u32) -> Vec<(&'static str, Box<dyn Pass>)> {
         items_per_thread: 16,
         ..ScanOptions::new(count)
     };
+    let direct = ScanOptions {
+        tile_access: TileAccess::Direct,
+        ..ScanOptions::new(count)
+    };
+    let direct16 = ScanOptions {
+        items_per_thread: 16,
+        ..direct
+    };
+    let serial = ScanOptions {
+        subgroups: Subgroups::Off,
+        ..ScanOptions::new(count)
+    };
     vec![
         ("scan_fan", Box::new(ScanFan::new(count))),
         ("two_step", Box::new(TwoStep::new(count))),
@@ -79,6 +94,12 @@ fn variants(count: u32) -> Vec<(&'static str, Box<dyn Pass>)> {
         ),
         // Bigger tiles: fewer workgroups and a smaller fan, to tune the default.
         ("scan_fan/items16", Box::new(ScanFan::with_options(items16))),
+        // Each lane loads and stores its own run, no workgroup-memory staging.
+        ("scan_fan/direct", Box::new(ScanFan::with_options(direct))),
+        (
+            "scan_fan/direct16",
+            Box::new(ScanFan::with_options(direct16)),
+        ),
         // The single pass: 8 bytes per element, the goal is ≥ 0.8× the compute copy.
         (
             "decoupled_lookback",
@@ -87,6 +108,19 @@ fn variants(count: u32) -> Vec<(&'static str, Box<dyn Pass>)> {
         (
             "decoupled_lookback/items16",
             Box::new(DecoupledLookback::with_options(items16)),
+        ),
+        (
+            "decoupled_lookback/direct",
+            Box::new(DecoupledLookback::with_options(direct)),
+        ),
+        (
+            "decoupled_lookback/direct16",
+            Box::new(DecoupledLookback::with_options(direct16)),
+        ),
+        // No subgroups: one lane looks back one tile at a time, the shared-memory scan.
+        (
+            "decoupled_lookback/serial",
+            Box::new(DecoupledLookback::with_options(serial)),
         ),
     ]
 }

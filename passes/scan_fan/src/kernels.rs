@@ -1,7 +1,7 @@
 //! What the implementations share: the shader, its typed defs, the level layout of the
 //! fan buffer, scratch declarations, and the recording of a list of dispatches.
 
-use crate::{ScanOptions, Subgroups};
+use crate::{ScanOptions, Subgroups, TileAccess};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, ProgramDesc, RecordContext, Result, SetupContext,
 };
@@ -38,6 +38,9 @@ pub struct ScanDefs {
     pub subgroups: bool,
     /// The element count comes from the `count` slot (`GPU_COUNT`).
     pub gpu_count: bool,
+    /// Each lane loads and stores its own run of the tile, not staged through workgroup
+    /// memory (`DIRECT`).
+    pub direct: bool,
 }
 
 impl ShaderDefs for ScanDefs {
@@ -46,6 +49,7 @@ impl ShaderDefs for ScanDefs {
             ("ITEMS", ShaderDef::UInt(self.items_per_thread)),
             ("SUBGROUPS", ShaderDef::Bool(self.subgroups)),
             ("GPU_COUNT", ShaderDef::Bool(self.gpu_count)),
+            ("DIRECT", ShaderDef::Bool(self.direct)),
         ]
     }
 }
@@ -185,6 +189,7 @@ pub(crate) fn setup(
         items_per_thread: options.items_per_thread,
         subgroups: options.subgroups == Subgroups::Auto && ctx.has(wgpu::Features::SUBGROUP),
         gpu_count,
+        direct: options.tile_access == TileAccess::Direct,
     };
     ctx.shader_defs(&defs);
     ctx.scratch_buffer(

@@ -124,6 +124,32 @@ impl Subgroups {
     }
 }
 
+/// How a lane reaches its run of the tile in the scan kernels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TileAccess {
+    /// Consecutive lanes load consecutive elements into workgroup memory (fully coalesced),
+    /// and each lane reads its run from there.
+    #[default]
+    Staged,
+    /// Each lane loads and stores its run itself: no workgroup-memory round trip, strided
+    /// accesses that the cache merges. Slower on the H100 (0.9 against 0.63 ms for
+    /// `scan_fan` at 2^26, docs/BENCHMARKS.md): kept to compare on other GPUs.
+    Direct,
+}
+
+impl TileAccess {
+    fn parse(value: &str) -> Result<Self> {
+        match value {
+            "staged" => Ok(Self::Staged),
+            "direct" => Ok(Self::Direct),
+            other => Err(GraphError::Parameter {
+                pass: String::new(),
+                message: format!("`tile_access` must be \"staged\" or \"direct\", not {other:?}"),
+            }),
+        }
+    }
+}
+
 /// What every implementation is configured with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ScanOptions {
@@ -136,10 +162,17 @@ pub struct ScanOptions {
     /// 256 × this. 1 gives the plain 256-element Hillis–Steele chunk; larger values cut the
     /// barriers and the fan per element, which is what makes the scan bandwidth-bound.
     pub items_per_thread: u32,
+    pub tile_access: TileAccess,
 }
 
 /// Parameter names a pipeline file may use.
-const PARAM_KEYS: [&str; 4] = ["count", "inclusive", "subgroups", "items_per_thread"];
+const PARAM_KEYS: [&str; 5] = [
+    "count",
+    "inclusive",
+    "subgroups",
+    "items_per_thread",
+    "tile_access",
+];
 
 impl ScanOptions {
     pub const DEFAULT_ITEMS_PER_THREAD: u32 = 8;
@@ -150,10 +183,12 @@ impl ScanOptions {
             inclusive: false,
             subgroups: Subgroups::Auto,
             items_per_thread: Self::DEFAULT_ITEMS_PER_THREAD,
+            tile_access: TileAccess::Staged,
         }
     }
 
-    /// Reads `count`, `inclusive`, `subgroups` ("auto" | "off") and `items_per_thread`.
+    /// Reads `count`, `inclusive`, `subgroups` ("auto" | "off"), `items_per_thread` and
+    /// `tile_access` ("staged" | "direct").
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let options = Self {
@@ -161,6 +196,7 @@ impl ScanOptions {
             inclusive: params.bool("inclusive", false)?,
             subgroups: Subgroups::parse(&params.string("subgroups", "auto")?)?,
             items_per_thread: params.u32("items_per_thread", Self::DEFAULT_ITEMS_PER_THREAD)?,
+            tile_access: TileAccess::parse(&params.string("tile_access", "staged")?)?,
         };
         options.validate()?;
         Ok(options)

@@ -205,11 +205,29 @@ fn scan_lanes_subgroups(inv: Invocation, value: u32) -> vec2<u32> {
 }
 #endif
 
-// Scans tile `t` of the current level (n elements) with `carry` added to every element.
-// Returns the tile's own total (without the carry).
-fn scan_tile(inv: Invocation, t: u32, n: u32, carry: u32, inclusive: bool) -> u32 {
-    let base = t * TILE;
-    // Coalesced: consecutive lanes load consecutive elements.
+#ifdef DIRECT
+// The lane's ITEMS elements, held in registers between `gather` and `scatter`.
+var<private> items: array<u32, ITEMS>;
+#endif
+
+// Reads the tile at `base` and returns the sum of the lane's ITEMS consecutive elements
+// (from `position * ITEMS`). Staged: consecutive lanes load consecutive elements into
+// workgroup memory, then each lane sums its run there. Direct: each lane loads its own
+// run straight into registers, which saves two passes over workgroup memory and a
+// barrier, and relies on the cache to merge the lanes' strided loads.
+fn gather(inv: Invocation, position: u32, base: u32, n: u32) -> u32 {
+    let first = position * ITEMS;
+    var own = 0u;
+#ifdef DIRECT
+    for (var k = 0u; k < ITEMS; k++) {
+        var v = 0u;
+        if base + first + k < n {
+            v = load(base + first + k);
+        }
+        items[k] = v;
+        own += v;
+    }
+#else
     for (var k = 0u; k < ITEMS; k++) {
         let j = k * WG + inv.index;
         var v = 0u;
@@ -219,14 +237,31 @@ fn scan_tile(inv: Invocation, t: u32, n: u32, carry: u32, inclusive: bool) -> u3
         tile[padded(j)] = v;
     }
     workgroupBarrier();
-    let position = lane_position(inv);
-    let first = position * ITEMS;
-    var own = 0u;
     for (var k = 0u; k < ITEMS; k++) {
         own += tile[padded(first + k)];
     }
-    let scanned = scan_lanes(inv, position, own);
-    var running = carry + scanned.x;
+#endif
+    return own;
+}
+
+// Writes the lane's run of the tile gathered by `gather` as running sums from `start`,
+// the same way it was read. Every lane of the workgroup must call it.
+fn scatter(inv: Invocation, position: u32, base: u32, n: u32, start: u32, inclusive: bool) {
+    let first = position * ITEMS;
+    var running = start;
+#ifdef DIRECT
+    for (var k = 0u; k < ITEMS; k++) {
+        let v = items[k];
+        var out = running;
+        running += v;
+        if inclusive {
+            out = running;
+        }
+        if base + first + k < n {
+            store(base + first + k, out);
+        }
+    }
+#else
     for (var k = 0u; k < ITEMS; k++) {
         let v = tile[padded(first + k)];
         if inclusive {
@@ -246,6 +281,16 @@ fn scan_tile(inv: Invocation, t: u32, n: u32, carry: u32, inclusive: bool) -> u3
     }
     // The tile is reused by the caller's next iteration.
     workgroupBarrier();
+#endif
+}
+
+// Scans tile `t` of the current level (n elements) with `carry` added to every element.
+// Returns the tile's own total (without the carry).
+fn scan_tile(inv: Invocation, t: u32, n: u32, carry: u32, inclusive: bool) -> u32 {
+    let position = lane_position(inv);
+    let own = gather(inv, position, t * TILE, n);
+    let scanned = scan_lanes(inv, position, own);
+    scatter(inv, position, t * TILE, n, carry + scanned.x, inclusive);
     return scanned.y;
 }
 
@@ -411,6 +456,60 @@ fn look_back(t: u32, n: u32) -> u32 {
     return sum;
 }
 
+#ifdef SUBGROUPS
+// No lane: larger than any subgroup lane index.
+const NO_LANE: u32 = 0xffffffffu;
+
+// `look_back` by a whole subgroup: lane k looks at tile i - 1 - k, so one round trip to
+// memory covers as many predecessors as the subgroup has lanes. Lanes past tile 0 see an
+// inclusive prefix of 0. Every lane of the subgroup must call it.
+fn look_back_subgroup(inv: Invocation, t: u32, n: u32) -> u32 {
+    let k = inv.subgroup_lane;
+    var sum = 0u;
+    var i = t;
+    loop {
+        if i == 0u {
+            break;
+        }
+        var seen = vec2(STATE_PREFIX, 0u);
+        var first_prefix = NO_LANE;
+        var first_none = NO_LANE;
+        for (var spin = 0u; spin < SPIN_LIMIT; spin++) {
+            if k < i {
+                seen = observe(i - 1u - k);
+            }
+            first_prefix = subgroupMin(select(NO_LANE, k, seen.x == STATE_PREFIX));
+            first_none = subgroupMin(select(NO_LANE, k, seen.x == STATE_NONE));
+            // Every tile back to the nearest prefix has its total.
+            if first_none == NO_LANE || first_none > first_prefix {
+                break;
+            }
+        }
+        if seen.x == STATE_NONE && k < first_prefix {
+            seen = vec2(STATE_AGGREGATE, reduce_tile_alone(i - 1u - k, n));
+        }
+        sum += subgroupAdd(select(0u, seen.y, k <= first_prefix));
+        if first_prefix != NO_LANE {
+            break;
+        }
+        i -= inv.subgroup_size;
+    }
+    return sum;
+}
+#endif
+
+// Publishes tile t's total, finds its carry and publishes its inclusive prefix; the carry
+// goes to `tile_carry`. Called by the lanes that do the look-back, `leader` among them.
+fn resolve_carry(t: u32, tiles: u32, aggregate: u32, carry: u32, leader: bool) {
+    if leader {
+        publish(t, STATE_PREFIX, carry + aggregate);
+        if t == tiles - 1u {
+            total[0] = carry + aggregate;
+        }
+        tile_carry = carry;
+    }
+}
+
 @compute @workgroup_size(256)
 fn lookback(inv: Invocation) {
     let n = level_count(0u);
@@ -423,54 +522,36 @@ fn lookback(inv: Invocation) {
     if t >= tiles {
         return;
     }
-    let base = t * TILE;
-    for (var k = 0u; k < ITEMS; k++) {
-        let j = k * WG + inv.index;
-        var v = 0u;
-        if base + j < n {
-            v = input[base + j];
-        }
-        tile[padded(j)] = v;
-    }
-    workgroupBarrier();
     let position = lane_position(inv);
-    let first = position * ITEMS;
-    var own = 0u;
-    for (var k = 0u; k < ITEMS; k++) {
-        own += tile[padded(first + k)];
-    }
+    let own = gather(inv, position, t * TILE, n);
     let scanned = scan_lanes(inv, position, own);
-    if inv.index == 0u {
-        let aggregate = scanned.y;
-        var carry = 0u;
-        if t > 0u {
-            publish(t, STATE_AGGREGATE, aggregate);
-            carry = look_back(t, n);
+    let aggregate = scanned.y;
+#ifdef SUBGROUPS
+    if full_subgroups(inv) {
+        if inv.subgroup == 0u {
+            let leader = inv.subgroup_lane == 0u;
+            if leader && t > 0u {
+                publish(t, STATE_AGGREGATE, aggregate);
+            }
+            var carry = 0u;
+            if t > 0u {
+                carry = look_back_subgroup(inv, t, n);
+            }
+            resolve_carry(t, tiles, aggregate, carry, leader);
         }
-        publish(t, STATE_PREFIX, carry + aggregate);
-        if t == tiles - 1u {
-            total[0] = carry + aggregate;
+    } else {
+#endif
+        if inv.index == 0u {
+            var carry = 0u;
+            if t > 0u {
+                publish(t, STATE_AGGREGATE, aggregate);
+                carry = look_back(t, n);
+            }
+            resolve_carry(t, tiles, aggregate, carry, true);
         }
-        tile_carry = carry;
+#ifdef SUBGROUPS
     }
+#endif
     let carry = workgroupUniformLoad(&tile_carry);
-    let inclusive = (params.flags & FLAG_INCLUSIVE) != 0u;
-    var running = carry + scanned.x;
-    for (var k = 0u; k < ITEMS; k++) {
-        let v = tile[padded(first + k)];
-        if inclusive {
-            running += v;
-            tile[padded(first + k)] = running;
-        } else {
-            tile[padded(first + k)] = running;
-            running += v;
-        }
-    }
-    workgroupBarrier();
-    for (var k = 0u; k < ITEMS; k++) {
-        let j = k * WG + inv.index;
-        if base + j < n {
-            output[base + j] = tile[padded(j)];
-        }
-    }
+    scatter(inv, position, t * TILE, n, carry + scanned.x, (params.flags & FLAG_INCLUSIVE) != 0u);
 }

@@ -1,7 +1,7 @@
 //! Every implementation on a real Vulkan adapter (lavapipe in CI) against `cpu_scan`.
 
 mod support;
-use meshlight_pass_scan_fan::Subgroups;
+use meshlight_pass_scan_fan::{Subgroups, TileAccess};
 use support::*;
 
 /// The counts the issue names, around tile and level boundaries (16,777,217 has its own test).
@@ -145,26 +145,63 @@ fn sixteen_million_elements() {
     );
 }
 
-/// The single-pass scan around its tile boundaries and at 2^20, every tile size, both
-/// modes, with the count from the CPU and from the GPU; many tiles, so workgroups
-/// really do wait on each other's published totals.
+/// The single-pass scan around its tile boundaries and at 2^20: tile sizes, both modes,
+/// the subgroup look-back and the one-lane one, staged and direct tiles, the count from
+/// the CPU and from the GPU; many tiles, so workgroups really do wait on each other's
+/// published totals.
 #[test]
 fn decoupled_lookback_at_tile_boundaries_and_two_to_the_20() {
     let mut exec = executor();
     let n = 1 << 20;
     let input = XorShift(0x5eed_0007).values(n as usize, u32::MAX);
-    for items in [1, 4, 16] {
+    for (items, subgroups, access) in [
+        (1, Subgroups::Auto, TileAccess::Staged),
+        (4, Subgroups::Off, TileAccess::Staged),
+        (16, Subgroups::Auto, TileAccess::Direct),
+        (8, Subgroups::Off, TileAccess::Direct),
+    ] {
         let tile = 256 * items;
         for inclusive in [false, true] {
             for count in [1, tile - 1, tile, tile + 1, 5 * tile + 3, n] {
                 let case = Case::new(Implementation::DecoupledLookback, count)
                     .items(items)
+                    .subgroups(subgroups)
+                    .access(access)
                     .inclusive(inclusive);
                 check(&mut exec, &case, &input);
                 let indirect = Case::new(Implementation::DecoupledLookback, n)
                     .items(items)
+                    .subgroups(subgroups)
+                    .access(access)
                     .inclusive(inclusive)
                     .gpu_count(count);
+                check(&mut exec, &indirect, &input);
+            }
+        }
+    }
+}
+
+/// Direct tile access (each lane its own run) in the fan scans, at the counts around
+/// tile and level boundaries, both modes, with a GPU count too.
+#[test]
+fn direct_tile_access_matches_the_cpu_reference() {
+    let mut exec = executor();
+    let input = XorShift(0x5eed_0009).values(70_000, u32::MAX);
+    for implementation in [Implementation::ScanFan, Implementation::TwoStep] {
+        for items in [1, 8, 16] {
+            for inclusive in [false, true] {
+                for count in COUNTS {
+                    let case = Case::new(implementation, count)
+                        .items(items)
+                        .access(TileAccess::Direct)
+                        .inclusive(inclusive);
+                    check(&mut exec, &case, &input);
+                }
+                let indirect = Case::new(implementation, 70_000)
+                    .items(items)
+                    .access(TileAccess::Direct)
+                    .inclusive(inclusive)
+                    .gpu_count(65_537);
                 check(&mut exec, &indirect, &input);
             }
         }
@@ -246,6 +283,7 @@ fn random_sizes_values_and_options() {
         any::<bool>(),
         prop::sample::select(vec![1u32, 2, 4, 8, 16]),
         any::<bool>(),
+        any::<bool>(),
     );
     let mut runner = TestRunner::new(Config {
         cases: 24,
@@ -255,7 +293,7 @@ fn random_sizes_values_and_options() {
     runner
         .run(
             &strategy,
-            |(count, seed, which, inclusive, subgroups_off, items, near_max)| {
+            |(count, seed, which, inclusive, subgroups_off, items, near_max, direct)| {
                 let mut rng = XorShift(seed | 1);
                 let input = if near_max {
                     rng.near_max(count as usize)
@@ -268,10 +306,16 @@ fn random_sizes_values_and_options() {
                 } else {
                     Subgroups::Auto
                 };
+                let access = if direct {
+                    TileAccess::Direct
+                } else {
+                    TileAccess::Staged
+                };
                 let case = Case::new(implementation, count)
                     .inclusive(inclusive)
                     .subgroups(subgroups)
-                    .items(items);
+                    .items(items)
+                    .access(access);
                 check(&mut exec.borrow_mut(), &case, &input);
                 Ok(())
             },

@@ -2,7 +2,7 @@
 
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::*;
-use meshlight_pass_scan_fan::{ScanFan, ScanOptions, Subgroups, register};
+use meshlight_pass_scan_fan::{ScanFan, ScanOptions, Subgroups, TileAccess, register};
 
 fn params(text: &str) -> Params {
     Params::new(text.parse().expect("toml"))
@@ -13,12 +13,18 @@ fn parameters_parse_with_defaults() {
     let o = ScanOptions::from_params(&params("count = 10")).unwrap();
     assert_eq!(o, ScanOptions::new(10));
     let o = ScanOptions::from_params(&params(
-        "count = 7\ninclusive = true\nsubgroups = \"off\"\nitems_per_thread = 2",
+        "count = 7\ninclusive = true\nsubgroups = \"off\"\nitems_per_thread = 2\ntile_access = \"direct\"",
     ))
     .unwrap();
     assert_eq!(
-        (o.count, o.inclusive, o.subgroups, o.items_per_thread),
-        (7, true, Subgroups::Off, 2)
+        (
+            o.count,
+            o.inclusive,
+            o.subgroups,
+            o.items_per_thread,
+            o.tile_access
+        ),
+        (7, true, Subgroups::Off, 2, TileAccess::Direct)
     );
 }
 
@@ -27,6 +33,7 @@ fn bad_parameters_say_what_to_change() {
     for (text, needle) in [
         ("subgroups = \"on\"", "\"auto\" or \"off\""),
         ("items_per_thread = 3", "1, 2, 4, 8 or 16"),
+        ("tile_access = \"blocked\"", "\"staged\" or \"direct\""),
         ("count = 4294967295", "largest supported"),
         ("cuont = 5", "unknown parameter `cuont`"),
         ("inclusive = 1", "true or false"),

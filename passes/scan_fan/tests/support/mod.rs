@@ -3,7 +3,7 @@
 
 use meshlight_graph::*;
 use meshlight_pass_scan_fan::{
-    DecoupledLookback, ScanFan, ScanOptions, Subgroups, TwoStep, cpu_scan,
+    DecoupledLookback, ScanFan, ScanOptions, Subgroups, TileAccess, TwoStep, cpu_scan,
 };
 
 /// Written over `output` and `total` before every run, so an element the scan should have
@@ -71,6 +71,10 @@ impl Case {
     }
     pub fn items(mut self, items_per_thread: u32) -> Self {
         self.options.items_per_thread = items_per_thread;
+        self
+    }
+    pub fn access(mut self, tile_access: TileAccess) -> Self {
+        self.options.tile_access = tile_access;
         self
     }
     pub fn gpu_count(mut self, count: u32) -> Self {
