@@ -1,0 +1,554 @@
+//! Stage `z_slice`, implementation `compute`: the first stage of light clustering. Per
+//! clusterable object, the range of depth slices of the froxel grid its bounds touch, as
+//! one instance per (object, slice) for the count and populate stages.
+//!
+//! A froxel test is cheap but there are `W × H × D` froxels; slicing in depth first
+//! means the later stages only walk, or draw one screen quad for, the slices an object
+//! can touch. Each object reserves all its slices with one atomic, so its slices are
+//! contiguous in the list; past the capacity they are counted, never written.
+//!
+//! # Contract
+//!
+//! | slot                  | access             | holds   | |
+//! |-----------------------|--------------------|---------|---|
+//! | `objects`             | storage read       | ClusterableObject | `object_count[0]` of them are valid |
+//! | `object_count`        | storage read       | u32     | `[0]`: objects in the list |
+//! | `slice_instances`     | storage write      | SliceInstance | `(object, slice)` pairs; capacity = its length (or `capacity`) |
+//! | `slice_counts`        | cleared read-write | u32 × 8 | the words below |
+//! | `slice_draw_args`     | storage write      | DrawIndirectArgs | `[quad_vertices, instances written, 0, 0]` for the raster draws |
+//! | `slice_dispatch_args` | storage write      | DispatchIndirectArgs | one workgroup per instance written, `[x, y, 1]`, for the compute implementations |
+//! | `cluster_grid`        | storage write      | ClusterGrid | the grid of this frame, for the later stages |
+//!
+//! `slice_counts`: `[0]` instances requested (may exceed the capacity), `[1]` the
+//! capacity, `[2]` invalid objects skipped, `[3]` objects culled (range 0, outside the
+//! frustum, wholly nearer than the near plane), `[4 + kind]` objects of each
+//! `ClusterableKind` given slices. Overflow = `max(0, [0] − [1])`. Frame input `view`
+//! (`meshlight_shaders::cpu::layout::View`).
+//!
+//! | param               | default | |
+//! |---------------------|---------|---|
+//! | `width`             | 16      | tile columns of the grid |
+//! | `height`            | 9       | tile rows of the grid |
+//! | `depth`             | 24      | depth slices |
+//! | `first_slice_end`   | 5.0     | view-space distance where slice 0 ends; every nearer depth is in slice 0 (Bevy's `first_slice_depth`) |
+//! | `far`               | 1000.0  | where the last slice ends; farther depths are in it |
+//! | `capacity`          | 0 (all of `slice_instances`) | instances the list may hold |
+//! | `quad_vertices`     | 4       | vertices per instance in the draw arguments: 4 (triangle strip) or 6 (list) |
+//! | `max_per_dimension` | 0 (the adapter's) | workgroup limit per dimension of the dispatches this pass sizes; objects past `64 × limit²` are not visited, nor instances past `limit²` in the dispatch arguments |
+//!
+//! # Definitions the tests pin down
+//!
+//! - The grid ([`ZSlice::grid`]): `ClusterGrid::new(dims, viewport, n, far)` with
+//!   `n = first_slice_end^(D/(D−1)) / far^(1/(D−1))` (f64, then f32; `first_slice_end`
+//!   when `D = 1`), so `z_slice_start(1) = first_slice_end` and slices `1..D` are spaced
+//!   exponentially up to `far` (to f32 rounding). It is written to `cluster_grid`.
+//! - Invalid (counted in `[2]`): a NaN or infinite position component, a NaN or negative
+//!   range (by its bits; `-0.0` is range 0), a kind ≥ 4, a spot or decal direction that
+//!   is not finite or has squared length < 1e-12, a spot with a non-finite cos or sin.
+//! - Range 0 is culled. Ranges above 1e30 (infinity) are 1e30.
+//! - Bounds, all in view space, `c` the position, `r` the range: point light — sphere
+//!   `(c, r)`; spot light — the spherical sector of radius `r` around the normalised
+//!   view-space direction with the given half-angle (the sphere ∩ cone that
+//!   `clusterable_intersects_cluster` tests); probe — the world-axis-aligned cube of
+//!   half-extent `r`; decal — the cube of half-extent `r` with one axis along its
+//!   direction, bounded by the cylinder of radius `r√2` and half-length `r` around that
+//!   axis, since the layout holds no rotation about it. Probes and decals enclose the
+//!   sphere `(c, r)`, so later stages that test the sphere find a subset of these slices.
+//! - Culled (counted in `[3]`) when `sphere_in_frustum(view, c, bound)` fails (bound `r`
+//!   for lights, `r√3` for boxes) or the bounds' far depth is below `view.near`.
+//! - Slices `z_slice_of_depth(near depth) ..= max(z_slice_of_depth(far depth), first)`:
+//!   a light containing the camera starts at slice 0, one past `far` ends at `D − 1`.
+//! - [`cpu::cpu_z_slice`] is the reference, mirroring the WGSL's f32 operations in order.
+//!   The GPU tests compare the (object, slice) sets exactly, allowing only objects whose
+//!   deciding value lies within a relative 1e-5 of a threshold
+//!   ([`cpu::Extent::closeness`]); they count such pairs and assert a small bound.
+
+pub mod cpu;
+
+pub use cpu::{Extent, Outcome, SliceInstance, ZSliceResult, cpu_z_slice};
+
+use meshlight_gpu_scene::view::frame_view;
+use meshlight_graph::file::{Params, Registry};
+use meshlight_graph::{
+    Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
+    Result, SetupContext, Slot, StageContract,
+};
+use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
+use meshlight_shaders::{PassShader, pass_shader};
+
+/// The stage name pipelines use.
+pub const STAGE: &str = "z_slice";
+/// The implementation name pipelines use.
+pub const IMPLEMENTATION: &str = "compute";
+/// The frame input holding the `View`.
+pub const VIEW_INPUT: &str = "view";
+/// Threads per object workgroup.
+pub const WORKGROUP_SIZE: u32 = 64;
+
+/// `meshlight::light::ClusterableObject`.
+pub const CLUSTERABLE_OBJECT: Element =
+    Element::named("ClusterableObject", size_of::<ClusterableObject>() as u32);
+/// `meshlight::light::ClusterGrid`.
+pub const CLUSTER_GRID: Element = Element::named("ClusterGrid", size_of::<ClusterGrid>() as u32);
+/// [`SliceInstance`]: `(object, slice)`.
+pub const SLICE_INSTANCE: Element =
+    Element::named("SliceInstance", size_of::<SliceInstance>() as u32);
+
+pub const SHADER: PassShader = pass_shader!("z_slice::z_slice", "z_slice.wgsl");
+
+/// The slots every implementation of `z_slice` shares.
+pub fn contract() -> StageContract {
+    let write = |name, element, doc| Slot::buffer(name, Access::StorageWrite, element, doc);
+    StageContract {
+        stage: STAGE,
+        slots: vec![
+            Slot::buffer(
+                "objects",
+                Access::StorageRead,
+                CLUSTERABLE_OBJECT,
+                "lights, probes and decals",
+            ),
+            Slot::buffer(
+                "object_count",
+                Access::StorageRead,
+                Element::U32,
+                "[0]: valid entries of `objects`",
+            ),
+            write(
+                "slice_instances",
+                SLICE_INSTANCE,
+                "(object, slice) pairs, each object's slices together",
+            ),
+            Slot::buffer(
+                "slice_counts",
+                Access::ClearedReadWrite,
+                Element::U32,
+                "requested, capacity, invalid, culled, visible per kind",
+            ),
+            write(
+                "slice_draw_args",
+                Element::DRAW_ARGS,
+                "[quad vertices, instances, 0, 0]",
+            ),
+            write(
+                "slice_dispatch_args",
+                Element::DISPATCH_ARGS,
+                "one workgroup per instance",
+            ),
+            write("cluster_grid", CLUSTER_GRID, "the grid of this frame"),
+        ],
+    }
+}
+
+/// The froxel grid's shape, as the params give it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridSettings {
+    /// Tile columns, tile rows, depth slices.
+    pub dims: [u32; 3],
+    pub first_slice_end: f32,
+    pub far: f32,
+}
+
+impl Default for GridSettings {
+    /// About Bevy's defaults for a 16:9 view: 16 × 9 × 24, slice 0 up to 5 m.
+    fn default() -> Self {
+        Self {
+            dims: [16, 9, 24],
+            first_slice_end: 5.0,
+            far: 1000.0,
+        }
+    }
+}
+
+impl GridSettings {
+    fn check(&self) -> Result<()> {
+        for (key, d) in ["width", "height", "depth"].iter().zip(self.dims) {
+            if d == 0 {
+                return Err(parameter_error(format!(
+                    "`{key}` = 0: the cluster grid needs at least one cluster along each axis"
+                )));
+            }
+        }
+        let [w, h, d] = self.dims.map(u64::from);
+        if w * h * d > u64::from(u32::MAX) {
+            return Err(parameter_error(format!(
+                "a grid of `width` × `height` × `depth` = {w} × {h} × {d} clusters does not fit in 32 bits; make it smaller"
+            )));
+        }
+        let (first, far) = (self.first_slice_end, self.far);
+        if !(first.is_finite() && first > 0.0) {
+            return Err(parameter_error(format!(
+                "`first_slice_end` = {first} must be a finite distance > 0"
+            )));
+        }
+        if !(far.is_finite() && far > first) {
+            return Err(parameter_error(format!(
+                "`far` = {far} must be finite and beyond `first_slice_end` = {first}"
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The `compute` implementation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ZSlice {
+    pub grid: GridSettings,
+    /// List entries; `None`: as many as `slice_instances` holds.
+    pub capacity: Option<u32>,
+    /// 4 (triangle strip) or 6 (triangle list).
+    pub quad_vertices: u32,
+    /// A per-dimension limit below the adapter's (tests use small ones); `None`: the
+    /// adapter's `max_compute_workgroups_per_dimension`.
+    pub max_per_dimension: Option<u32>,
+}
+
+impl Default for ZSlice {
+    fn default() -> Self {
+        Self {
+            grid: GridSettings::default(),
+            capacity: None,
+            quad_vertices: 4,
+            max_per_dimension: None,
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParams {
+    capacity: u32,
+    max_per_dimension: u32,
+    quad_vertices: u32,
+    _pad: u32,
+}
+
+const PARAM_KEYS: [&str; 8] = [
+    "width",
+    "height",
+    "depth",
+    "first_slice_end",
+    "far",
+    "capacity",
+    "quad_vertices",
+    "max_per_dimension",
+];
+
+fn parameter_error(message: String) -> GraphError {
+    GraphError::Parameter {
+        pass: String::new(),
+        message,
+    }
+}
+
+/// A number parameter. `Params` has no float getter; a value that is not a string comes
+/// back in the getter's error as its TOML text, which is parsed here (integers and
+/// floats alike), so `far = 500` and `= 500.0` both work.
+fn float_param(params: &Params, key: &str, default: f32) -> Result<f32> {
+    let text = match params.string(key, &default.to_string()) {
+        Ok(s) => s,
+        Err(GraphError::Parameter { message, .. }) => {
+            message.rsplit('`').nth(1).unwrap_or_default().to_string()
+        }
+        Err(e) => return Err(e),
+    };
+    text.trim()
+        .parse::<f32>()
+        .map_err(|_| parameter_error(format!("`{key}` must be a number, not `{text}`")))
+}
+
+impl ZSlice {
+    /// Reads the params of the table in the crate docs.
+    pub fn from_params(params: &Params) -> Result<Self> {
+        params.only(&PARAM_KEYS)?;
+        let defaults = GridSettings::default();
+        let nonzero = |v: u32| (v > 0).then_some(v);
+        let pass = Self {
+            grid: GridSettings {
+                dims: [
+                    params.u32("width", defaults.dims[0])?,
+                    params.u32("height", defaults.dims[1])?,
+                    params.u32("depth", defaults.dims[2])?,
+                ],
+                first_slice_end: float_param(params, "first_slice_end", defaults.first_slice_end)?,
+                far: float_param(params, "far", defaults.far)?,
+            },
+            capacity: nonzero(params.u32("capacity", 0)?),
+            quad_vertices: params.u32("quad_vertices", 4)?,
+            max_per_dimension: nonzero(params.u32("max_per_dimension", 0)?),
+        };
+        pass.check()?;
+        Ok(pass)
+    }
+
+    fn check(&self) -> Result<()> {
+        self.grid.check()?;
+        if !matches!(self.quad_vertices, 4 | 6) {
+            return Err(parameter_error(format!(
+                "`quad_vertices` = {} must be 4 (triangle strip) or 6 (triangle list)",
+                self.quad_vertices
+            )));
+        }
+        Ok(())
+    }
+
+    /// The grid over a viewport of `viewport` pixels (see the crate docs).
+    pub fn grid(&self, viewport: [u32; 2]) -> ClusterGrid {
+        let GridSettings {
+            dims,
+            first_slice_end,
+            far,
+        } = self.grid;
+        let near = if dims[2] > 1 {
+            let d = f64::from(dims[2]);
+            ((d * f64::from(first_slice_end).ln() - f64::from(far).ln()) / (d - 1.0)).exp() as f32
+        } else {
+            first_slice_end
+        };
+        ClusterGrid::new(dims, viewport, near, far)
+    }
+}
+
+impl Pass for ZSlice {
+    fn contract(&self) -> StageContract {
+        contract()
+    }
+    fn implementation(&self) -> &'static str {
+        IMPLEMENTATION
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        self.check()?;
+        let limit = ctx.limits().max_compute_workgroups_per_dimension;
+        if let Some(m) = self.max_per_dimension
+            && m > limit
+        {
+            return Err(parameter_error(format!(
+                "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
+            )));
+        }
+        ctx.min_bytes("object_count", 4);
+        ctx.min_bytes("slice_counts", 4 * cpu::COUNT_WORDS as u64);
+        ctx.min_bytes("slice_draw_args", 16);
+        ctx.min_bytes("slice_dispatch_args", 12);
+        ctx.min_bytes("cluster_grid", size_of::<ClusterGrid>() as u64);
+        ctx.frame_input(VIEW_INPUT);
+        ctx.scratch_buffer(
+            "dispatch",
+            BufferDesc::array(Element::DISPATCH_ARGS, 1),
+            &[Access::StorageWrite, Access::StorageRead, Access::Indirect],
+        );
+        let prepare = BindingLayout::compute("z_slice::prepare")
+            .slot(0, "objects")
+            .slot(1, "object_count")
+            .slot(2, "slice_instances")
+            .slot(3, "slice_counts")
+            .slot(6, "cluster_grid")
+            .scratch(7, "dispatch", Access::StorageWrite)
+            .uniform(10)
+            .uniform(11);
+        let slice = BindingLayout::compute("z_slice::slice")
+            .slot(0, "objects")
+            .slot(1, "object_count")
+            .slot(2, "slice_instances")
+            .slot(3, "slice_counts")
+            .scratch(8, "dispatch", Access::StorageRead)
+            .uniform(9)
+            .uniform(10)
+            .uniform(11);
+        let finish = BindingLayout::compute("z_slice::finish")
+            .slot(3, "slice_counts")
+            .slot(4, "slice_draw_args")
+            .slot(5, "slice_dispatch_args")
+            .uniform(11);
+        ctx.program(
+            "prepare",
+            ProgramDesc::compute(&SHADER, "prepare").layout(prepare),
+        );
+        ctx.program(
+            "slice",
+            ProgramDesc::compute(&SHADER, "slice").layout(slice),
+        );
+        ctx.program(
+            "finish",
+            ProgramDesc::compute(&SHADER, "finish").layout(finish),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let view = frame_view(ctx, VIEW_INPUT, None)?;
+        let [w, h] = view.viewport_size;
+        let grid = self.grid([w as u32, h as u32]);
+        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
+        let params = GpuParams {
+            capacity: self.capacity.unwrap_or(u32::MAX),
+            max_per_dimension: self.max_per_dimension.unwrap_or(limit).min(limit),
+            quad_vertices: self.quad_vertices,
+            _pad: 0,
+        };
+        let (view, grid, params) = (
+            bytemuck::bytes_of(&view),
+            bytemuck::bytes_of(&grid),
+            bytemuck::bytes_of(&params),
+        );
+        let prepare = ctx.compute("prepare")?;
+        let slice = ctx.compute("slice")?;
+        let finish = ctx.compute("finish")?;
+        let prepare_group = ctx.bind_group(&prepare, 0, &[(10, grid), (11, params)])?;
+        let slice_group = ctx.bind_group(&slice, 0, &[(9, view), (10, grid), (11, params)])?;
+        let finish_group = ctx.bind_group(&finish, 0, &[(11, params)])?;
+        let (dispatch, _) = ctx.scratch("dispatch")?;
+        // Three compute passes: the counters are reset before any object counts, and
+        // every object has counted before the arguments are written.
+        {
+            let mut pass = ctx.compute_pass();
+            pass.set_pipeline(&prepare.pipeline);
+            pass.set_bind_group(0, &prepare_group, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        {
+            let mut pass = ctx.compute_pass();
+            pass.set_pipeline(&slice.pipeline);
+            pass.set_bind_group(0, &slice_group, &[]);
+            pass.dispatch_workgroups_indirect(dispatch, 0);
+        }
+        let mut pass = ctx.compute_pass();
+        pass.set_pipeline(&finish.pipeline);
+        pass.set_bind_group(0, &finish_group, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        Ok(())
+    }
+}
+
+fn build(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(ZSlice::from_params(params)?))
+}
+
+/// Registers `z_slice` (implementation `compute`) for pipeline files.
+pub fn register(registry: &mut Registry) {
+    registry.register(STAGE, IMPLEMENTATION, build);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshlight_shaders::cpu::light::{z_slice_of_depth, z_slice_start};
+
+    /// Builds a one-pass pipeline with `params` for the pass (`{ … }` contents).
+    fn pipeline(params: &str) -> Result<()> {
+        let mut registry = Registry::new();
+        register(&mut registry);
+        let buffer = |name: &str, kind: &str, element: &str, size: u32, count: u32| {
+            let usage = if kind == "imported" {
+                "usage = [\"STORAGE\"]\n"
+            } else {
+                ""
+            };
+            format!(
+                "[[resource]]\nname = \"{name}\"\nkind = \"{kind}\"\nbuffer = {{ element = \"{element}\", element_size = {size}, count = {count} }}\n{usage}"
+            )
+        };
+        let text = [
+            buffer("objects", "imported", "ClusterableObject", 64, 4),
+            buffer("object_count", "imported", "u32", 4, 1),
+            buffer("slice_instances", "exported", "SliceInstance", 8, 64),
+            buffer("slice_counts", "exported", "u32", 4, 8),
+            buffer("slice_draw_args", "exported", "DrawIndirectArgs", 16, 1),
+            buffer("slice_dispatch_args", "exported", "DispatchIndirectArgs", 12, 1),
+            buffer("cluster_grid", "exported", "ClusterGrid", 48, 1),
+            format!(
+                "[[pass]]\nname = \"z_slice\"\nstage = \"z_slice\"\nimplementation = \"compute\"\nparams = {{ {params} }}\n"
+            ),
+        ]
+        .concat();
+        meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry).map(drop)
+    }
+
+    #[test]
+    fn params_parse_and_bad_ones_name_what_to_change() {
+        for ok in [
+            "",
+            "width = 32, height = 18, depth = 32",
+            "first_slice_end = 2, far = 500.5",
+            "capacity = 100, quad_vertices = 6, max_per_dimension = 7",
+            "depth = 1",
+        ] {
+            if let Err(e) = pipeline(ok) {
+                panic!("{ok}: {e}");
+            }
+        }
+        for (bad, key) in [
+            ("widht = 16", "widht"),
+            ("width = 0", "width"),
+            ("height = 0", "height"),
+            ("depth = 0", "depth"),
+            ("width = 65536, height = 65536, depth = 2", "width"),
+            ("first_slice_end = 0", "first_slice_end"),
+            ("first_slice_end = nan", "first_slice_end"),
+            ("far = 4.0", "far"),
+            ("far = inf", "far"),
+            ("far = \"x\"", "far"),
+            ("quad_vertices = 3", "quad_vertices"),
+            ("capacity = 1.5", "capacity"),
+        ] {
+            match pipeline(bad) {
+                Err(GraphError::Parameter { message, .. }) => {
+                    assert!(message.contains(key), "{bad}: {message}")
+                }
+                other => panic!("{bad}: {:?}", other.err()),
+            }
+        }
+    }
+
+    #[test]
+    fn slice_zero_ends_at_first_slice_end_and_the_last_at_far() {
+        for (dims, first, far) in [
+            ([16, 9, 24], 5.0f32, 1000.0f32),
+            ([8, 8, 2], 1.0, 100.0),
+            ([4, 4, 1], 2.0, 50.0),
+        ] {
+            let pass = ZSlice {
+                grid: GridSettings {
+                    dims,
+                    first_slice_end: first,
+                    far,
+                },
+                ..ZSlice::default()
+            };
+            let grid = pass.grid([1280, 720]);
+            let d = dims[2];
+            if d > 1 {
+                let end = z_slice_start(&grid, 1);
+                assert!((end - first).abs() / first < 1e-5, "{end} vs {first}");
+                assert_eq!(z_slice_of_depth(&grid, first * 0.999), 0);
+                assert_eq!(z_slice_of_depth(&grid, first * 1.001), 1);
+                let before_far = z_slice_start(&grid, d - 1);
+                assert!(before_far < far && before_far >= first * 0.99999);
+            }
+            assert_eq!(z_slice_of_depth(&grid, 1e-3), 0);
+            assert_eq!(z_slice_of_depth(&grid, far * 0.999), d - 1);
+            assert_eq!(z_slice_of_depth(&grid, far * 10.0), d - 1);
+            let tiles = [1280u32.div_ceil(dims[0]), 720u32.div_ceil(dims[1])];
+            assert_eq!(grid.tile_size, tiles.map(|t| t as f32));
+        }
+    }
+
+    #[test]
+    fn the_wgsl_constants_are_the_reference_s() {
+        let value = |name: &str| -> f32 {
+            let line = SHADER
+                .source
+                .lines()
+                .find(|l| l.starts_with(&format!("const {name}: f32 = ")))
+                .unwrap_or_else(|| panic!("no `const {name}` in the WGSL"));
+            line.rsplit(' ')
+                .next()
+                .unwrap()
+                .trim_end_matches(';')
+                .parse()
+                .unwrap()
+        };
+        assert_eq!(value("SQRT_2").to_bits(), cpu::SQRT_2.to_bits());
+        assert_eq!(value("SQRT_3").to_bits(), cpu::SQRT_3.to_bits());
+        assert_eq!(value("RANGE_LIMIT").to_bits(), cpu::RANGE_LIMIT.to_bits());
+    }
+}
