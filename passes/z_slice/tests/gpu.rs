@@ -461,6 +461,11 @@ fn special_objects_get_the_slices_they_must() {
             None,
         ),
         (
+            "spot between the camera and the near plane, pointing back",
+            spot(at(0.05), Vec3::Z, 5.0, 0.3),
+            None,
+        ),
+        (
             "spot pointing forward from behind",
             spot(at(-0.5), -Vec3::Z, 50.0, 0.3),
             Some((0, 10)),
@@ -521,7 +526,7 @@ fn special_objects_get_the_slices_they_must() {
     );
     assert_eq!(near, 0);
     assert_eq!(got.counts[WORD_INVALID], invalid as u32);
-    assert_eq!(got.counts[WORD_CULLED], 5);
+    assert_eq!(got.counts[WORD_CULLED], 6);
     let pairs: BTreeSet<SliceInstance> = got.written().iter().copied().collect();
     for (i, (name, _, want)) in cases.iter().enumerate() {
         let slices: Vec<u32> = pairs
