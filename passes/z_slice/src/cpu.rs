@@ -4,7 +4,7 @@
 //! threshold may come out differently there; [`Extent::closeness`] measures that hair.
 
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableKind, ClusterableObject, View};
-use meshlight_shaders::cpu::light::{z_slice_of_depth, z_slice_start};
+use meshlight_shaders::cpu::light::z_slice_of_depth;
 
 /// Count words of `slice_counts` (see the crate docs).
 pub const COUNT_WORDS: usize = 8;
@@ -270,9 +270,4 @@ pub fn cpu_z_slice(
         draw_args: [quad_vertices, written, 0, 0],
         dispatch_args: fold_dispatch(written, max_per_dimension),
     }
-}
-
-/// Where slice `slice` begins and ends, `z_slice_start` of `slice` and `slice + 1`.
-pub fn slice_bounds(grid: &ClusterGrid, slice: u32) -> (f32, f32) {
-    (z_slice_start(grid, slice), z_slice_start(grid, slice + 1))
 }
