@@ -7,7 +7,10 @@
 //! - The virtual-geometry stages: [`fill_clusters`], [`cull_lod`], [`remap_dispatch`],
 //!   [`sw_raster`], [`hw_raster`], [`resolve`]; [`virtual_geometry`] wires them into a
 //!   frame and runs it; [`brute_force`] is the baseline it is measured against.
-//! - [`scan_fan`]: GPU prefix sum (stage `scan_fan`: `scan_fan` and `two_step`).
+//! - [`scan_fan`]: GPU prefix sum (stage `scan_fan`: `scan_fan`, `two_step`,
+//!   `decoupled_lookback`).
+//! - [`z_slice`]: light clustering's first stage, the depth slices each clusterable
+//!   object touches.
 
 pub mod bench;
 pub mod virtual_geometry;
@@ -22,6 +25,7 @@ pub use meshlight_pass_remap_dispatch as remap_dispatch;
 pub use meshlight_pass_resolve as resolve;
 pub use meshlight_pass_scan_fan as scan_fan;
 pub use meshlight_pass_sw_raster as sw_raster;
+pub use meshlight_pass_z_slice as z_slice;
 pub use meshlight_scene as scene;
 pub use meshlight_shaders as shaders;
 
@@ -36,5 +40,6 @@ pub fn registry() -> graph::file::Registry {
     hw_raster::register(&mut r);
     resolve::register(&mut r);
     brute_force::register(&mut r);
+    z_slice::register(&mut r);
     r
 }

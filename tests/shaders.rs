@@ -29,6 +29,7 @@ fn virtual_geometry_shaders_compose_and_validate() {
         &meshlight::hw_raster::SHADER,
         &meshlight::resolve::DEPTH_SHADER,
         &meshlight::resolve::SHADE_SHADER,
+        &meshlight::z_slice::SHADER,
     ] {
         check(shader, &());
     }
@@ -46,14 +47,17 @@ fn scan_fan_shader_variants_compose_and_validate() {
     for items_per_thread in [1, 2, 4, 8, 16] {
         for subgroups in [false, true] {
             for gpu_count in [false, true] {
-                check(
-                    &meshlight::scan_fan::SHADER,
-                    &ScanDefs {
-                        items_per_thread,
-                        subgroups,
-                        gpu_count,
-                    },
-                );
+                for direct in [false, true] {
+                    check(
+                        &meshlight::scan_fan::SHADER,
+                        &ScanDefs {
+                            items_per_thread,
+                            subgroups,
+                            gpu_count,
+                            direct,
+                        },
+                    );
+                }
             }
         }
     }
