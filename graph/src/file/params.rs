@@ -42,6 +42,41 @@ impl Params {
             Some(v) => Err(Self::err(key, "true or false", v)),
         }
     }
+    /// A finite number, written as an integer or a float (`far = 500` and `= 500.0`).
+    pub fn f32(&self, key: &str, default: f32) -> Result<f32> {
+        match self.table.get(key) {
+            None => Ok(default),
+            Some(v) => Self::finite(v).ok_or_else(|| Self::err(key, "a finite number", v)),
+        }
+    }
+    /// `N` finite numbers, written as a TOML array (`light_color = [1.0, 0.9, 0.8]`).
+    pub fn f32_array<const N: usize>(&self, key: &str, default: [f32; N]) -> Result<[f32; N]> {
+        let Some(v) = self.table.get(key) else {
+            return Ok(default);
+        };
+        let count = match N {
+            2 => "two".to_string(),
+            3 => "three".to_string(),
+            4 => "four".to_string(),
+            n => n.to_string(),
+        };
+        let wanted = || Self::err(key, &format!("an array of {count} finite numbers"), v);
+        let toml::Value::Array(items) = v else {
+            return Err(wanted());
+        };
+        let numbers: Option<Vec<f32>> = items.iter().map(Self::finite).collect();
+        numbers
+            .and_then(|n| <[f32; N]>::try_from(n).ok())
+            .ok_or_else(wanted)
+    }
+    fn finite(v: &toml::Value) -> Option<f32> {
+        let x = match v {
+            toml::Value::Integer(i) => *i as f32,
+            toml::Value::Float(f) => *f as f32,
+            _ => return None,
+        };
+        x.is_finite().then_some(x)
+    }
     pub fn string(&self, key: &str, default: &str) -> Result<String> {
         match self.table.get(key) {
             None => Ok(default.to_string()),
@@ -61,6 +96,41 @@ impl Params {
                 message: format!("unknown parameter `{k}`; known: {}", known.join(", ")),
             }),
             None => Ok(()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(text: &str) -> Params {
+        Params::new(toml::from_str(text).unwrap())
+    }
+
+    #[test]
+    fn numbers_take_integers_and_floats_and_refuse_the_rest() {
+        let p = params(
+            "a = 2\nb = 1.5\nc = nan\nd = \"x\"\ne = [1, 2.5, 3]\nf = [1, 2]\ng = [1, true, 3]",
+        );
+        assert_eq!(p.f32("a", 0.0).unwrap(), 2.0);
+        assert_eq!(p.f32("b", 0.0).unwrap(), 1.5);
+        assert_eq!(p.f32("missing", 7.0).unwrap(), 7.0);
+        assert_eq!(p.f32_array("e", [0.0; 3]).unwrap(), [1.0, 2.5, 3.0]);
+        assert_eq!(p.f32_array("missing", [4.0; 3]).unwrap(), [4.0; 3]);
+        for (key, bad) in [
+            ("c", p.f32("c", 0.0).err()),
+            ("d", p.f32("d", 0.0).err()),
+            ("f", p.f32_array("f", [0.0; 3]).err()),
+            ("g", p.f32_array("g", [0.0; 3]).err()),
+            ("b", p.f32_array("b", [0.0; 3]).err()),
+        ] {
+            match bad {
+                Some(GraphError::Parameter { message, .. }) => {
+                    assert!(message.contains(&format!("`{key}`")), "{message}")
+                }
+                other => panic!("{key}: {other:?}"),
+            }
         }
     }
 }

@@ -182,22 +182,6 @@ fn parameter_error(message: String) -> GraphError {
     }
 }
 
-/// A number parameter. `Params` has no float getter; a value that is not a string comes
-/// back in the getter's error as its TOML text, which is parsed here (integers and
-/// floats alike), so `lod_threshold_px = 2` and `= 1.5` both work.
-fn float_param(params: &Params, key: &str, default: f32) -> Result<f32> {
-    let text = match params.string(key, &default.to_string()) {
-        Ok(s) => s,
-        Err(GraphError::Parameter { message, .. }) => {
-            message.rsplit('`').nth(1).unwrap_or_default().to_string()
-        }
-        Err(e) => return Err(e),
-    };
-    text.trim()
-        .parse::<f32>()
-        .map_err(|_| parameter_error(format!("`{key}` must be a number, not `{text}`")))
-}
-
 impl CullLod {
     /// Reads the params of the table in the crate docs.
     pub fn from_params(params: &Params) -> Result<Self> {
@@ -214,12 +198,8 @@ impl CullLod {
         let nonzero = |v: u32| (v > 0).then_some(v);
         let pass = Self {
             thresholds: Thresholds {
-                lod_threshold_px: float_param(
-                    params,
-                    "lod_threshold_px",
-                    defaults.lod_threshold_px,
-                )?,
-                sw_threshold_px: float_param(params, "sw_threshold_px", defaults.sw_threshold_px)?,
+                lod_threshold_px: params.f32("lod_threshold_px", defaults.lod_threshold_px)?,
+                sw_threshold_px: params.f32("sw_threshold_px", defaults.sw_threshold_px)?,
                 hardware: params.bool("hardware", true)?,
             },
             mode,

@@ -145,58 +145,6 @@ fn parameter_error(message: String) -> GraphError {
     }
 }
 
-/// The TOML text of parameter `key`, or `None` when it is absent. `Params` has getters
-/// for integers, booleans and strings only; any other value comes back in the string
-/// getter's error as its TOML text, which is taken from there.
-fn value_text(params: &Params, key: &str) -> Result<Option<String>> {
-    if !params.keys().any(|k| k == key) {
-        return Ok(None);
-    }
-    match params.string(key, "") {
-        Ok(s) => Ok(Some(s)),
-        Err(GraphError::Parameter { message, .. }) => Ok(Some(
-            message.rsplit('`').nth(1).unwrap_or_default().to_string(),
-        )),
-        Err(e) => Err(e),
-    }
-}
-
-/// A finite number parameter (integer or float in the file).
-fn float_param(params: &Params, key: &str, default: f32) -> Result<f32> {
-    let Some(text) = value_text(params, key)? else {
-        return Ok(default);
-    };
-    text.trim()
-        .parse::<f32>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| parameter_error(format!("`{key}` must be a finite number, not `{text}`")))
-}
-
-/// A parameter of three finite numbers, written as a TOML array `[x, y, z]`.
-fn vec3_param(params: &Params, key: &str, default: Vec3) -> Result<Vec3> {
-    let Some(text) = value_text(params, key)? else {
-        return Ok(default);
-    };
-    let parsed: Option<Vec<f32>> = text
-        .trim()
-        .strip_prefix('[')
-        .and_then(|t| t.strip_suffix(']'))
-        .map(|inner| {
-            inner
-                .split(',')
-                .map(|c| c.trim().parse::<f32>().ok().filter(|v| v.is_finite()))
-                .collect::<Option<Vec<f32>>>()
-                .unwrap_or_default()
-        });
-    match parsed.as_deref() {
-        Some(&[x, y, z]) => Ok(Vec3::new(x, y, z)),
-        _ => Err(parameter_error(format!(
-            "`{key}` must be an array of three finite numbers such as [0.5, 1.0, 0.25], not `{text}`"
-        ))),
-    }
-}
-
 impl Resolve {
     /// A `width` × `height` resolve with the default [`Settings`].
     pub fn new(width: u32, height: u32) -> Self {
@@ -228,20 +176,22 @@ impl Resolve {
         let defaults = Settings::default();
         let view = DebugView::parse(&params.string("view", defaults.view.name())?)
             .map_err(|e| parameter_error(format!("`view`: {e}")))?;
-        let checker_scale = float_param(params, "checker_scale", defaults.checker_scale)?;
+        let checker_scale = params.f32("checker_scale", defaults.checker_scale)?;
         if checker_scale <= 0.0 {
             return Err(parameter_error(format!(
                 "`checker_scale` (checker squares per UV unit) must be > 0, got {checker_scale}"
             )));
         }
-        let light_direction = vec3_param(params, "light_direction", defaults.light_direction)?;
+        let light_direction = Vec3::from_array(
+            params.f32_array("light_direction", defaults.light_direction.to_array())?,
+        );
         if light_direction.normalize_or_zero() == Vec3::ZERO {
             return Err(parameter_error(format!(
                 "`light_direction` (towards the light) must not be zero, got {light_direction}"
             )));
         }
         let colour = |key: &str, default: Vec3| -> Result<Vec3> {
-            let c = vec3_param(params, key, default)?;
+            let c = Vec3::from_array(params.f32_array(key, default.to_array())?);
             if c.min_element() < 0.0 {
                 return Err(parameter_error(format!(
                     "`{key}` (linear RGB) must not be negative, got {c}"

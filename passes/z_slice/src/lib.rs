@@ -241,22 +241,6 @@ fn parameter_error(message: String) -> GraphError {
     }
 }
 
-/// A number parameter. `Params` has no float getter; a value that is not a string comes
-/// back in the getter's error as its TOML text, which is parsed here (integers and
-/// floats alike), so `far = 500` and `= 500.0` both work.
-fn float_param(params: &Params, key: &str, default: f32) -> Result<f32> {
-    let text = match params.string(key, &default.to_string()) {
-        Ok(s) => s,
-        Err(GraphError::Parameter { message, .. }) => {
-            message.rsplit('`').nth(1).unwrap_or_default().to_string()
-        }
-        Err(e) => return Err(e),
-    };
-    text.trim()
-        .parse::<f32>()
-        .map_err(|_| parameter_error(format!("`{key}` must be a number, not `{text}`")))
-}
-
 impl ZSlice {
     /// Reads the params of the table in the crate docs.
     pub fn from_params(params: &Params) -> Result<Self> {
@@ -270,8 +254,8 @@ impl ZSlice {
                     params.u32("height", defaults.dims[1])?,
                     params.u32("depth", defaults.dims[2])?,
                 ],
-                first_slice_end: float_param(params, "first_slice_end", defaults.first_slice_end)?,
-                far: float_param(params, "far", defaults.far)?,
+                first_slice_end: params.f32("first_slice_end", defaults.first_slice_end)?,
+                far: params.f32("far", defaults.far)?,
             },
             capacity: nonzero(params.u32("capacity", 0)?),
             quad_vertices: params.u32("quad_vertices", 4)?,
