@@ -29,7 +29,7 @@ macro_rules! shared {
     };
 }
 
-static SHARED_MODULES: [SharedModule; 8] = [
+static SHARED_MODULES: [SharedModule; 9] = [
     shared!("meshlight::math", "math.wgsl"),
     shared!("meshlight::view", "view.wgsl"),
     shared!("meshlight::octahedral", "octahedral.wgsl"),
@@ -42,6 +42,7 @@ static SHARED_MODULES: [SharedModule; 8] = [
         Capabilities::SHADER_INT64
     ),
     shared!("meshlight::light", "light.wgsl"),
+    shared!("meshlight::froxel", "froxel.wgsl"),
 ];
 
 /// Every shared module, imports before importers.

@@ -53,8 +53,10 @@ fn every_module_composes_and_validates_without_int64() {
         "read_bits",
         "instance_transform_normal",
         "visbuffer_pack",
-        "cluster_aabb",
-        "cone_intersects_sphere",
+        "froxel_aabb",
+        "froxel_rect",
+        "box_touches_aabb",
+        "cone_touches_sphere",
     ] {
         assert!(
             names.iter().any(|name| name.starts_with(needle)),
@@ -130,6 +132,10 @@ const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
     (
         "meshlight::light",
         "light::cluster_index(light::ClusterGrid(), vec3(0u))",
+    ),
+    (
+        "meshlight::froxel",
+        "froxel::froxel_aabb(meshlight::view::View(), meshlight::light::ClusterGrid(), vec3(0u))",
     ),
 ];
 

@@ -124,23 +124,27 @@ mod light {
     }
 
     #[test]
-    fn sphere_and_cone_tests() {
-        assert!(sphere_intersects_aabb(
-            [2.0, 0.5, 0.5],
-            1.01,
-            [0.0; 3],
-            [1.0; 3]
-        ));
-        assert!(!sphere_intersects_aabb(
-            [2.0, 0.5, 0.5],
-            0.99,
-            [0.0; 3],
-            [1.0; 3]
-        ));
-        let (cos, sin) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
-        let cone = |center, radius| {
-            cone_intersects_sphere([0.0; 3], [0.0, 0.0, -1.0], 10.0, cos, sin, center, radius)
+    fn sphere_cone_and_box_tests() {
+        use meshlight_shaders::cpu::froxel::*;
+        use meshlight_shaders::cpu::layout::ClusterableKind;
+        let unit_box = Aabb {
+            min: [0.0; 3],
+            max: [1.0; 3],
         };
+        assert!(sphere_touches_aabb([2.0, 0.5, 0.5], 1.01, &unit_box).value);
+        assert!(!sphere_touches_aabb([2.0, 0.5, 0.5], 0.99, &unit_box).value);
+        let close = sphere_touches_aabb([2.0, 0.5, 0.5], 1.0 + 1e-7, &unit_box);
+        assert!(close.closeness < 1e-6, "{close:?}");
+        let (cos, sin) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
+        let spot = ViewObject {
+            center: [0.0; 3],
+            range: 10.0,
+            axes: [[0.0; 3], [0.0; 3], [0.0, 0.0, -1.0]],
+            kind: ClusterableKind::SpotLight as u32,
+            cos_angle: cos,
+            sin_angle: sin,
+        };
+        let cone = |center, radius| cone_touches_sphere(&spot, center, radius).value;
         assert!(cone([0.0, 0.0, -5.0], 0.1), "on the axis");
         assert!(!cone([0.0, 0.0, 5.0], 1.0), "behind the apex");
         assert!(!cone([0.0, 0.0, -12.0], 1.0), "beyond the cap");
@@ -148,5 +152,33 @@ mod light {
         // (4 - 2.89) * cos 30° ≈ 0.96 outside it.
         assert!(!cone([4.0, 0.0, -5.0], 0.9));
         assert!(cone([4.0, 0.0, -5.0], 1.0));
+        // A cube of half-extent 1 turned 45° about z: its corner reaches x = 2 + √2.
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        let turned = |x: f32| ViewObject {
+            center: [x, 0.5, 0.5],
+            range: 1.0,
+            axes: [[h, h, 0.0], [-h, h, 0.0], [0.0, 0.0, 1.0]],
+            kind: ClusterableKind::Probe as u32,
+            cos_angle: 1.0,
+            sin_angle: 0.0,
+        };
+        assert!(box_touches_aabb(&turned(2.4), &unit_box).value);
+        assert!(!box_touches_aabb(&turned(2.45), &unit_box).value);
+        // A thin slab facing the box's (1, 1) corner: apart at (2, 2), across the corner at
+        // (1.1, 1.1).
+        let edge = ViewObject {
+            center: [2.0, 2.0, 0.5],
+            range: 1.0,
+            axes: [[h, -h, 0.0], [0.0, 0.0, 0.2], [0.2 * h, 0.2 * h, 0.0]],
+            kind: ClusterableKind::Decal as u32,
+            cos_angle: 1.0,
+            sin_angle: 0.0,
+        };
+        assert!(!box_touches_aabb(&edge, &unit_box).value);
+        let nearer = ViewObject {
+            center: [1.1, 1.1, 0.5],
+            ..edge
+        };
+        assert!(box_touches_aabb(&nearer, &unit_box).value);
     }
 }

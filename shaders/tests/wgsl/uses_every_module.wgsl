@@ -7,7 +7,8 @@
 #import meshlight::meshlet::{Meshlet, MeshletGroup, Mesh, Cluster, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, meshlet_triangle_location, meshlet_triangle, meshlet_bounds, meshlet_level, lod_cut}
 #import meshlight::instance::{Instance, Material, instance_transform_point, instance_transform_normal, instance_transform_sphere, instance_max_scale}
 #import meshlight::visbuffer::{visbuffer_pack, visbuffer_depth, visbuffer_cluster, visbuffer_triangle, visbuffer_nearer, visbuffer_is_empty}
-#import meshlight::light::{ClusterableObject, ClusterGrid, cluster_aabb, cluster_index, cluster_of_pixel, clusterable_intersects_cluster, z_slice_of_depth}
+#import meshlight::light::{ClusterableObject, ClusterGrid, cluster_index, cluster_of_pixel, z_slice_of_depth}
+#import meshlight::froxel::{view_object, froxel_aabb, froxel_rect, rect_is_empty, object_touches_froxel}
 
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> meshlets: array<Meshlet>;
@@ -55,7 +56,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let other = visbuffer_pack(0.5, 3u, 2u);
 
     let c = cluster_of_pixel(grid, screen.xy, view_z_from_depth(view, screen.z));
-    let hit = clusterable_intersects_cluster(view, objects[id.y], cluster_aabb(view, grid, c));
+    let o = view_object(view, objects[id.y]);
+    let hit = object_touches_froxel(o, froxel_aabb(view, grid, c)) && !rect_is_empty(froxel_rect(view, grid, o, c.z));
     let back = position_from_depth(view, pixel_to_uv(view, screen.xy), screen.z);
 
     out[id.x] = vec4(
