@@ -64,6 +64,7 @@
 //!   ([`cpu::Extent::closeness`]); they count such pairs and assert a small bound.
 
 pub mod cpu;
+pub mod scenes;
 
 pub use cpu::{Extent, Outcome, SliceInstance, ZSliceResult, cpu_z_slice};
 

@@ -143,8 +143,9 @@ pub fn froxel_depths(view: &View, grid: &ClusterGrid, slice: u32) -> [f32; 2] {
 
 fn unproject(view: &View, ndc: [f32; 2], depth: f32) -> Vec3 {
     let ip = &view.inverse_projection;
-    let p: [f32; 4] =
-        std::array::from_fn(|i| ip[0][i] * ndc[0] + ip[1][i] * ndc[1] + ip[2][i] * depth + ip[3][i]);
+    let p: [f32; 4] = std::array::from_fn(|i| {
+        ip[0][i] * ndc[0] + ip[1][i] * ndc[1] + ip[2][i] * depth + ip[3][i]
+    });
     [p[0] / p[3], p[1] / p[3], p[2] / p[3]]
 }
 
@@ -187,8 +188,16 @@ pub fn froxel_aabb(view: &View, grid: &ClusterGrid, froxel: [u32; 3]) -> Aabb {
     let mut hi = [-3.4e38f32; 3];
     for corner in 0..4 {
         let pixel = [
-            if corner & 1 != 0 { tile_max[0] } else { tile_min[0] },
-            if corner & 2 != 0 { tile_max[1] } else { tile_min[1] },
+            if corner & 1 != 0 {
+                tile_max[0]
+            } else {
+                tile_min[0]
+            },
+            if corner & 2 != 0 {
+                tile_max[1]
+            } else {
+                tile_min[1]
+            },
         ];
         let line = pixel_line(view, pixel);
         let (p0, p1) = (line_at_depth(line, z0), line_at_depth(line, z1));
@@ -218,7 +227,7 @@ impl TileRect {
     /// The tiles, row by row.
     pub fn tiles(&self) -> impl Iterator<Item = [u32; 2]> + '_ {
         let rows = if self.is_empty() {
-            1..0
+            0..0
         } else {
             self.min[1]..self.max[1] + 1
         };
@@ -287,7 +296,8 @@ pub fn froxel_rect(view: &View, grid: &ClusterGrid, o: &ViewObject, slice: u32) 
         let x = if corner & 1 != 0 { hi[0] } else { lo[0] };
         let y = if corner & 2 != 0 { hi[1] } else { lo[1] };
         let z = -(if corner & 4 != 0 { z_hi } else { z_lo });
-        let clip: [f32; 4] = std::array::from_fn(|i| p[0][i] * x + p[1][i] * y + p[2][i] * z + p[3][i]);
+        let clip: [f32; 4] =
+            std::array::from_fn(|i| p[0][i] * x + p[1][i] * y + p[2][i] * z + p[3][i]);
         let ndc = [clip[0] / clip[3], clip[1] / clip[3]];
         let pixel = [
             (ndc[0] * 0.5 + 0.5) * view.viewport_size[0],
@@ -320,7 +330,10 @@ pub fn froxel_rect(view: &View, grid: &ClusterGrid, o: &ViewObject, slice: u32) 
 /// `sphere_touches_aabb`.
 pub fn sphere_touches_aabb(center: Vec3, radius: f32, aabb: &Aabb) -> Decision {
     let d: Vec3 = std::array::from_fn(|i| center[i] - center[i].clamp(aabb.min[i], aabb.max[i]));
-    let magnitude = max_abs(center).max(max_abs(aabb.min)).max(max_abs(aabb.max)) + radius;
+    let magnitude = max_abs(center)
+        .max(max_abs(aabb.min))
+        .max(max_abs(aabb.max))
+        + radius;
     let squared = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
     // Compared as distances, so the closeness is linear in the coordinates.
     let decision = Decision::at_most(squared.sqrt(), radius, magnitude);
@@ -334,9 +347,8 @@ pub fn sphere_touches_aabb(center: Vec3, radius: f32, aabb: &Aabb) -> Decision {
 fn separates(axis: Vec3, t: Vec3, e: Vec3, o: &ViewObject) -> Decision {
     let distance = (t[0] * axis[0] + t[1] * axis[1] + t[2] * axis[2]).abs();
     let froxel_reach = e[0] * axis[0].abs() + e[1] * axis[1].abs() + e[2] * axis[2].abs();
-    let object_reach = dot(o.axes[0], axis).abs()
-        + dot(o.axes[1], axis).abs()
-        + dot(o.axes[2], axis).abs();
+    let object_reach =
+        dot(o.axes[0], axis).abs() + dot(o.axes[1], axis).abs() + dot(o.axes[2], axis).abs();
     let magnitude = (max_abs(t) + max_abs(e) + o.axes.iter().map(|a| max_abs(*a)).sum::<f32>())
         * (axis[0].abs() + axis[1].abs() + axis[2].abs());
     Decision::at_most(distance, froxel_reach + object_reach, magnitude).not()
@@ -404,4 +416,49 @@ pub fn object_touches_froxel(o: &ViewObject, aabb: &Aabb) -> Decision {
         center,
         (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt(),
     ))
+}
+
+/// What one instance `(o, slice)` tests.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstanceFroxels {
+    pub rect: TileRect,
+    /// How close the rectangle's edges (or its depth cut) came to going otherwise.
+    pub rect_closeness: f32,
+    /// Every froxel walked, as `cluster_index`, in rectangle order, with its decision; on
+    /// the rectangle's edge a true decision's closeness includes `rect_closeness`.
+    pub tested: Vec<(u32, Decision)>,
+}
+
+impl InstanceFroxels {
+    /// The froxels the object touches.
+    pub fn touched(&self) -> impl Iterator<Item = u32> + '_ {
+        self.tested.iter().filter(|(_, d)| d.value).map(|(f, _)| *f)
+    }
+}
+
+/// The froxels instance `(o, slice)` walks and which of them it touches.
+pub fn instance_froxels(
+    view: &View,
+    grid: &ClusterGrid,
+    o: &ViewObject,
+    slice: u32,
+) -> InstanceFroxels {
+    let (rect, rect_closeness) = froxel_rect(view, grid, o, slice);
+    let tested = rect
+        .tiles()
+        .map(|[x, y]| {
+            let mut decision = object_touches_froxel(o, &froxel_aabb(view, grid, [x, y, slice]));
+            let on_edge =
+                x == rect.min[0] || x == rect.max[0] || y == rect.min[1] || y == rect.max[1];
+            if on_edge && decision.value {
+                decision.closeness = decision.closeness.min(rect_closeness);
+            }
+            (super::light::cluster_index(grid, [x, y, slice]), decision)
+        })
+        .collect();
+    InstanceFroxels {
+        rect,
+        rect_closeness,
+        tested,
+    }
 }

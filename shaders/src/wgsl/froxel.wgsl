@@ -263,3 +263,20 @@ fn object_touches_froxel(o: ViewObject, aabb: Aabb) -> bool {
     }
     return true;
 }
+
+// Clip-space corner `vertex` of the quad covering a tile rectangle on a viewport of
+// `grid.dims.xy` pixels, one pixel per tile, drawn as a triangle strip. Vertices past the
+// fourth repeat it (zero-area triangles), so draws of 4 or 6 vertices per quad both work;
+// an empty rectangle collapses to a point.
+fn froxel_quad_corner(grid: ClusterGrid, rect: TileRect, vertex: u32) -> vec4<f32> {
+    if rect_is_empty(rect) {
+        return vec4(2.0, 2.0, 0.5, 1.0);
+    }
+    let corner = min(vertex, 3u);
+    let tile = vec2(
+        select(rect.min_tile.x, rect.max_tile.x + 1u, (corner & 1u) != 0u),
+        select(rect.min_tile.y, rect.max_tile.y + 1u, (corner & 2u) != 0u),
+    );
+    let uv = vec2<f32>(tile) / vec2<f32>(grid.dims.xy);
+    return vec4(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.5, 1.0);
+}

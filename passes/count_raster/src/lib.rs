@@ -1,0 +1,270 @@
+//! Stage `count_raster`: per froxel and per object kind, how many clusterable objects
+//! touch it — the counts light clustering's prefix sum turns into list offsets.
+//!
+//! Each (object, slice) instance `z_slice` wrote covers a rectangle of tiles
+//! (`meshlight::froxel::froxel_rect`: the screen bounds of the object's box cut to the
+//! slice's depths); every froxel of it is tested exactly with `object_touches_froxel`
+//! (sphere–box for point lights, sphere–box and cone–sphere for spot lights, oriented box
+//! against the froxel box for probes and decals, all in view space) and counted with an
+//! atomic. The rectangle only bounds the work: which froxels count is the test's answer.
+//!
+//! # Contract
+//!
+//! | slot                  | access             | holds | |
+//! |-----------------------|--------------------|-------|---|
+//! | `objects`             | storage read       | ClusterableObject | what `slice_instances` refers to |
+//! | `slice_instances`     | storage read       | SliceInstance | z_slice's `(object, slice)` list |
+//! | `slice_counts`        | storage read       | u32 | z_slice's words: `[0]` requested, `[1]` capacity |
+//! | `slice_draw_args`     | indirect           | DrawIndirectArgs | z_slice's draw (the `raster` implementation draws it) |
+//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch (the `compute` implementation) |
+//! | `cluster_grid`        | storage read       | ClusterGrid | the grid z_slice published |
+//! | `cluster_counts`      | cleared read-write | u32 | `[froxel × 4 + kind]`, froxels in `cluster_index` order |
+//!
+//! Frame input `view`. Both argument slots are in the contract, so a pipeline binds both
+//! and swapping the implementation stays one line.
+//!
+//! # Implementations
+//!
+//! - [`Raster`] (`raster`): one instanced indirect draw of a quad per instance on a
+//!   `width × height` viewport (one pixel per tile, `width` and `height` equal to the
+//!   grid's), colour writes off; the fragment shader tests and counts. Where every unit
+//!   of the GPU rasterises, the rasteriser does the rectangle walk for free.
+//! - [`Compute`] (`compute`): one workgroup of 64 per instance walks its rectangle, a
+//!   froxel per thread. No fixed-function work: the fast path where few units run
+//!   graphics (the H100/H200 have two).
+//!
+//! Both count exactly the pairs [`cpu::cpu_count`] counts, except pairs whose deciding
+//! value lies within a hair of its threshold (`meshlight_shaders::cpu::froxel::Decision`),
+//! where the GPU's rounding may go the other way.
+
+pub mod cpu;
+
+use meshlight_gpu_scene::view::frame_view;
+use meshlight_graph::file::{Params, Registry};
+use meshlight_graph::{
+    Access, BindingLayout, ColorAttachment, ColorTarget, Element, GraphError, Pass, Primitive,
+    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
+};
+use meshlight_pass_z_slice::{CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE};
+use meshlight_shaders::{PassShader, pass_shader};
+
+/// The stage name pipelines use.
+pub const STAGE: &str = "count_raster";
+/// The frame input holding the `View`.
+pub const VIEW_INPUT: &str = "view";
+/// Counts per froxel: one per `ClusterableKind`.
+pub const KINDS: u32 = 4;
+/// The raster implementation's scratch target.
+const TARGET: &str = "target";
+
+pub const SHADER: PassShader = pass_shader!("count_raster::count", "count.wgsl");
+
+/// The slots every implementation of `count_raster` shares.
+pub fn contract() -> StageContract {
+    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
+    StageContract {
+        stage: STAGE,
+        slots: vec![
+            read("objects", CLUSTERABLE_OBJECT, "lights, probes and decals"),
+            read(
+                "slice_instances",
+                SLICE_INSTANCE,
+                "z_slice's (object, slice) list",
+            ),
+            read("slice_counts", Element::U32, "[0] requested, [1] capacity"),
+            Slot::buffer(
+                "slice_draw_args",
+                Access::Indirect,
+                Element::DRAW_ARGS,
+                "a quad per instance (raster)",
+            ),
+            Slot::buffer(
+                "slice_dispatch_args",
+                Access::Indirect,
+                Element::DISPATCH_ARGS,
+                "a workgroup per instance (compute)",
+            ),
+            read("cluster_grid", CLUSTER_GRID, "the grid z_slice published"),
+            Slot::buffer(
+                "cluster_counts",
+                Access::ClearedReadWrite,
+                Element::U32,
+                "[froxel × 4 + kind]: objects touching it",
+            ),
+        ],
+    }
+}
+
+/// The raster implementation's bindings: the quad's vertices need the instance, object
+/// and grid; only the fragment shader counts.
+fn raster_layout() -> BindingLayout {
+    let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
+    BindingLayout::render("count_raster::raster")
+        .slot(0, "objects")
+        .visible_in(both)
+        .slot(1, "slice_instances")
+        .visible_in(both)
+        .slot(3, "cluster_grid")
+        .visible_in(both)
+        .slot(4, "cluster_counts")
+        .visible_in(wgpu::ShaderStages::FRAGMENT)
+        .uniform(5)
+        .visible_in(both)
+}
+
+fn compute_layout() -> BindingLayout {
+    BindingLayout::compute("count_raster::compute")
+        .slot(0, "objects")
+        .slot(1, "slice_instances")
+        .slot(2, "slice_counts")
+        .slot(3, "cluster_grid")
+        .slot(4, "cluster_counts")
+        .uniform(5)
+}
+
+fn setup_common(ctx: &mut SetupContext) {
+    ctx.min_bytes("slice_counts", 8);
+    ctx.min_bytes("cluster_grid", CLUSTER_GRID.size as u64);
+    ctx.frame_input(VIEW_INPUT);
+}
+
+/// The `raster` implementation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Raster {
+    /// The grid's tile columns and rows: the viewport, one pixel per tile.
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Default for Raster {
+    /// z_slice's default grid.
+    fn default() -> Self {
+        Self {
+            width: 16,
+            height: 9,
+        }
+    }
+}
+
+impl Raster {
+    /// Reads `width` and `height` (default 16 × 9; both must equal z_slice's).
+    pub fn from_params(params: &Params) -> Result<Self> {
+        params.only(&["width", "height"])?;
+        let pass = Self {
+            width: params.u32("width", 16)?,
+            height: params.u32("height", 9)?,
+        };
+        if pass.width == 0 || pass.height == 0 {
+            return Err(GraphError::Parameter {
+                pass: String::new(),
+                message: format!(
+                    "`width` × `height` = {} × {}: the grid needs at least one tile each way; set both to z_slice's",
+                    pass.width, pass.height
+                ),
+            });
+        }
+        Ok(pass)
+    }
+}
+
+impl Pass for Raster {
+    fn contract(&self) -> StageContract {
+        contract()
+    }
+    fn implementation(&self) -> &'static str {
+        "raster"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        setup_common(ctx);
+        ctx.min_bytes("slice_draw_args", 16);
+        let limit = ctx.limits().max_texture_dimension_2d;
+        if self.width > limit || self.height > limit {
+            return Err(GraphError::Parameter {
+                pass: String::new(),
+                message: format!(
+                    "a {} × {} grid is past the adapter's {limit}-pixel viewport; use the `compute` implementation or fewer tiles",
+                    self.width, self.height
+                ),
+            });
+        }
+        ctx.scratch_texture(
+            TARGET,
+            TextureDesc::d2(wgpu::TextureFormat::R8Unorm, self.width, self.height),
+            &[Access::RenderTarget],
+        );
+        ctx.program(
+            "count",
+            ProgramDesc::render(&SHADER, "count_vs")
+                .fragment("count_fs")
+                .target(ColorTarget::masked(TARGET))
+                .primitive(Primitive {
+                    topology: wgpu::PrimitiveTopology::TriangleStrip,
+                    cull_mode: None,
+                    ..Primitive::default()
+                })
+                .layout(raster_layout()),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let view = frame_view(ctx, VIEW_INPUT, None)?;
+        ctx.clear("cluster_counts")?;
+        let program = ctx.render("count")?;
+        let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
+        let (args, _) = ctx.buffer("slice_draw_args")?;
+        let mut pass = ctx.render_pass(&[ColorAttachment::new(TARGET)], None)?;
+        pass.set_pipeline(&program.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.draw_indirect(args, 0);
+        Ok(())
+    }
+}
+
+/// The `compute` implementation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Compute;
+
+impl Pass for Compute {
+    fn contract(&self) -> StageContract {
+        contract()
+    }
+    fn implementation(&self) -> &'static str {
+        "compute"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        setup_common(ctx);
+        ctx.min_bytes("slice_dispatch_args", 12);
+        ctx.program(
+            "count",
+            ProgramDesc::compute(&SHADER, "count_cs").layout(compute_layout()),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let view = frame_view(ctx, VIEW_INPUT, None)?;
+        ctx.clear("cluster_counts")?;
+        let program = ctx.compute("count")?;
+        let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
+        let (args, _) = ctx.buffer("slice_dispatch_args")?;
+        let mut pass = ctx.compute_pass();
+        pass.set_pipeline(&program.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups_indirect(args, 0);
+        Ok(())
+    }
+}
+
+fn build_raster(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(Raster::from_params(params)?))
+}
+
+fn build_compute(params: &Params) -> Result<Box<dyn Pass>> {
+    params.only(&[])?;
+    Ok(Box::new(Compute))
+}
+
+/// Registers `count_raster` (implementations `raster` and `compute`) for pipeline files.
+pub fn register(registry: &mut Registry) {
+    registry.register(STAGE, "raster", build_raster);
+    registry.register(STAGE, "compute", build_compute);
+}

@@ -1,0 +1,422 @@
+//! Stage `populate`: the last stage of light clustering. Writes each froxel's object
+//! lists where the prefix sum of `count_raster`'s counts placed them.
+//!
+//! It walks the same (object, slice) instances, rectangles and froxel test as
+//! `count_raster` (`meshlight::froxel`), and claims a place in each (froxel, kind) list
+//! with an atomic cursor. A list never receives more entries than it was counted, places
+//! past the capacity are claimed and not written, and a last step lowers each count to
+//! the entries really written, so whatever the GPU does, no list spills into another, no
+//! entry is written out of bounds, and no unwritten place is ever read as an entry.
+//!
+//! # Contract
+//!
+//! | slot                  | access             | holds | |
+//! |-----------------------|--------------------|-------|---|
+//! | `objects`             | storage read       | ClusterableObject | what `slice_instances` refers to |
+//! | `slice_instances`     | storage read       | SliceInstance | z_slice's `(object, slice)` list |
+//! | `slice_counts`        | storage read       | u32 | z_slice's words: `[0]` requested, `[1]` capacity |
+//! | `slice_draw_args`     | indirect           | DrawIndirectArgs | z_slice's draw (`raster`) |
+//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch (`compute`) |
+//! | `cluster_grid`        | storage read       | ClusterGrid | the grid z_slice published |
+//! | `cluster_offsets`     | storage read       | u32 | `[froxel × 4 + kind]`: where that list starts (exclusive prefix sum of the counts) |
+//! | `cluster_counts`      | storage read-write | u32 | in: count_raster's counts; out: the entries each list holds |
+//! | `cluster_cursors`     | cleared read-write | u32 | one per list, as many as `cluster_counts` (working memory) |
+//! | `list_total`          | storage read       | u32 | `[0]`: the prefix sum's total, the entries all lists need |
+//! | `cluster_objects`     | storage write      | u32 | the lists back to back: indices into `objects` |
+//! | `list_counts`         | storage write      | u32 × 2 | `[0]` entries needed, `[1]` the capacity |
+//!
+//! Frame input `view`. A froxel's lists: kind `k` holds `cluster_counts[f × 4 + k]`
+//! entries from `cluster_objects[cluster_offsets[f × 4 + k]]`, kinds in
+//! `ClusterableKind` order (point lights, spot lights, probes, decals). **Order within a
+//! list is unspecified** (the atomics decide it); lists compare as sets.
+//!
+//! Overflow: when `list_counts[0] > list_counts[1]` the lists that end past the capacity
+//! are cut short (their counts say so); the caller reads `list_counts` back and grows
+//! `cluster_objects`.
+//!
+//! | param      | default | |
+//! |------------|---------|---|
+//! | `capacity` | 0 (all of `cluster_objects`) | entries the lists may hold |
+//! | `width`, `height` | 16, 9 | `raster` only: the grid's tiles, one pixel each (z_slice's) |
+//!
+//! # Implementations
+//!
+//! [`Raster`] (`raster`, an instanced indirect draw of a quad per instance, the fragment
+//! shader writes) and [`Compute`] (`compute`, a workgroup per instance walks its tiles),
+//! as in `count_raster`; pair each with the same implementation of that stage, so both
+//! stages decide every pair with the same code.
+
+pub mod cpu;
+
+use meshlight_gpu_scene::view::frame_view;
+use meshlight_graph::file::{Params, Registry};
+use meshlight_graph::{
+    Access, BindingLayout, ColorAttachment, ColorTarget, Element, GraphError, Pass, Primitive,
+    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
+};
+use meshlight_pass_z_slice::{CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE};
+use meshlight_shaders::{PassShader, pass_shader};
+
+/// The stage name pipelines use.
+pub const STAGE: &str = "populate";
+/// The frame input holding the `View`.
+pub const VIEW_INPUT: &str = "view";
+/// Threads per workgroup of the compute steps.
+const WORKGROUP: u32 = 64;
+/// The raster implementation's scratch target.
+const TARGET: &str = "target";
+
+pub const SHADER: PassShader = pass_shader!("populate::populate", "populate.wgsl");
+
+/// The slots every implementation of `populate` shares.
+pub fn contract() -> StageContract {
+    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
+    StageContract {
+        stage: STAGE,
+        slots: vec![
+            read("objects", CLUSTERABLE_OBJECT, "lights, probes and decals"),
+            read(
+                "slice_instances",
+                SLICE_INSTANCE,
+                "z_slice's (object, slice) list",
+            ),
+            read("slice_counts", Element::U32, "[0] requested, [1] capacity"),
+            Slot::buffer(
+                "slice_draw_args",
+                Access::Indirect,
+                Element::DRAW_ARGS,
+                "a quad per instance (raster)",
+            ),
+            Slot::buffer(
+                "slice_dispatch_args",
+                Access::Indirect,
+                Element::DISPATCH_ARGS,
+                "a workgroup per instance (compute)",
+            ),
+            read("cluster_grid", CLUSTER_GRID, "the grid z_slice published"),
+            read("cluster_offsets", Element::U32, "where each list starts"),
+            Slot::buffer(
+                "cluster_counts",
+                Access::StorageReadWrite,
+                Element::U32,
+                "in: counted; out: entries each list holds",
+            ),
+            Slot::buffer(
+                "cluster_cursors",
+                Access::ClearedReadWrite,
+                Element::U32,
+                "places claimed per list",
+            ),
+            read("list_total", Element::U32, "[0]: entries needed"),
+            Slot::buffer(
+                "cluster_objects",
+                Access::StorageWrite,
+                Element::U32,
+                "the lists: object indices",
+            ),
+            Slot::buffer(
+                "list_counts",
+                Access::StorageWrite,
+                Element::U32,
+                "[0] needed, [1] capacity",
+            ),
+        ],
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuParams {
+    capacity: u32,
+    _pad: [u32; 3],
+}
+
+/// What both implementations share: the capacity and the two compute steps around the
+/// walk.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Steps {
+    capacity: Option<u32>,
+}
+
+impl Steps {
+    fn setup(&self, ctx: &mut SetupContext) {
+        ctx.min_bytes("slice_counts", 8);
+        ctx.min_bytes("cluster_grid", CLUSTER_GRID.size as u64);
+        ctx.min_bytes("list_total", 4);
+        ctx.min_bytes("list_counts", 8);
+        ctx.frame_input(VIEW_INPUT);
+        let publish = BindingLayout::compute("populate::publish")
+            .slot(6, "cluster_objects")
+            .slot(7, "list_total")
+            .slot(8, "list_counts")
+            .uniform(10);
+        let settle = BindingLayout::compute("populate::settle")
+            .slot(4, "cluster_offsets")
+            .slot(5, "cluster_cursors")
+            .slot(6, "cluster_objects")
+            .slot(11, "cluster_counts")
+            .uniform(10);
+        ctx.program(
+            "publish",
+            ProgramDesc::compute(&SHADER, "publish").layout(publish),
+        );
+        ctx.program(
+            "settle",
+            ProgramDesc::compute(&SHADER, "settle").layout(settle),
+        );
+    }
+
+    fn params(&self) -> GpuParams {
+        GpuParams {
+            capacity: self.capacity.unwrap_or(u32::MAX),
+            _pad: [0; 3],
+        }
+    }
+
+    /// Clears the cursors and publishes the counts, before the walk.
+    fn before(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        ctx.clear("cluster_cursors")?;
+        let params = self.params();
+        let publish = ctx.compute("publish")?;
+        let group = ctx.bind_group(&publish, 0, &[(10, bytemuck::bytes_of(&params))])?;
+        let mut pass = ctx.compute_pass();
+        pass.set_pipeline(&publish.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        Ok(())
+    }
+
+    /// Lowers every count to the entries written, after the walk.
+    fn after(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let params = self.params();
+        let (_, bytes) = ctx.buffer("cluster_counts")?;
+        let lists = (bytes / 4) as u32;
+        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
+        let groups = lists.div_ceil(WORKGROUP).clamp(1, limit);
+        let settle = ctx.compute("settle")?;
+        let group = ctx.bind_group(&settle, 0, &[(10, bytemuck::bytes_of(&params))])?;
+        let mut pass = ctx.compute_pass();
+        pass.set_pipeline(&settle.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(groups, 1, 1);
+        Ok(())
+    }
+}
+
+fn parameter_error(message: String) -> GraphError {
+    GraphError::Parameter {
+        pass: String::new(),
+        message,
+    }
+}
+
+fn capacity_param(params: &Params) -> Result<Option<u32>> {
+    Ok(Some(params.u32("capacity", 0)?).filter(|&c| c > 0))
+}
+
+/// The `raster` implementation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Raster {
+    /// The grid's tile columns and rows: the viewport, one pixel per tile.
+    pub width: u32,
+    pub height: u32,
+    /// Entries the lists may hold; `None`: all of `cluster_objects`.
+    pub capacity: Option<u32>,
+}
+
+impl Default for Raster {
+    fn default() -> Self {
+        Self {
+            width: 16,
+            height: 9,
+            capacity: None,
+        }
+    }
+}
+
+impl Raster {
+    /// Reads the params of the table in the crate docs.
+    pub fn from_params(params: &Params) -> Result<Self> {
+        params.only(&["width", "height", "capacity"])?;
+        let pass = Self {
+            width: params.u32("width", 16)?,
+            height: params.u32("height", 9)?,
+            capacity: capacity_param(params)?,
+        };
+        if pass.width == 0 || pass.height == 0 {
+            return Err(parameter_error(format!(
+                "`width` × `height` = {} × {}: the grid needs at least one tile each way; set both to z_slice's",
+                pass.width, pass.height
+            )));
+        }
+        Ok(pass)
+    }
+}
+
+impl Pass for Raster {
+    fn contract(&self) -> StageContract {
+        contract()
+    }
+    fn implementation(&self) -> &'static str {
+        "raster"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        let steps = Steps {
+            capacity: self.capacity,
+        };
+        steps.setup(ctx);
+        ctx.min_bytes("slice_draw_args", 16);
+        let limit = ctx.limits().max_texture_dimension_2d;
+        if self.width > limit || self.height > limit {
+            return Err(parameter_error(format!(
+                "a {} × {} grid is past the adapter's {limit}-pixel viewport; use the `compute` implementation or fewer tiles",
+                self.width, self.height
+            )));
+        }
+        ctx.scratch_texture(
+            TARGET,
+            TextureDesc::d2(wgpu::TextureFormat::R8Unorm, self.width, self.height),
+            &[Access::RenderTarget],
+        );
+        let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let fragment = wgpu::ShaderStages::FRAGMENT;
+        let layout = BindingLayout::render("populate::raster")
+            .slot(0, "objects")
+            .visible_in(both)
+            .slot(1, "slice_instances")
+            .visible_in(both)
+            .slot(3, "cluster_grid")
+            .visible_in(both)
+            .slot(4, "cluster_offsets")
+            .visible_in(fragment)
+            .slot(5, "cluster_cursors")
+            .visible_in(fragment)
+            .slot(6, "cluster_objects")
+            .visible_in(fragment)
+            .slot(11, "cluster_counts")
+            .visible_in(fragment)
+            .uniform(9)
+            .visible_in(both)
+            .uniform(10)
+            .visible_in(fragment);
+        ctx.program(
+            "populate",
+            ProgramDesc::render(&SHADER, "populate_vs")
+                .fragment("populate_fs")
+                .target(ColorTarget::masked(TARGET))
+                .primitive(Primitive {
+                    topology: wgpu::PrimitiveTopology::TriangleStrip,
+                    cull_mode: None,
+                    ..Primitive::default()
+                })
+                .layout(layout),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let steps = Steps {
+            capacity: self.capacity,
+        };
+        let view = frame_view(ctx, VIEW_INPUT, None)?;
+        steps.before(ctx)?;
+        let params = steps.params();
+        let program = ctx.render("populate")?;
+        let group = ctx.bind_group(
+            &program,
+            0,
+            &[
+                (9, bytemuck::bytes_of(&view)),
+                (10, bytemuck::bytes_of(&params)),
+            ],
+        )?;
+        let (args, _) = ctx.buffer("slice_draw_args")?;
+        {
+            let mut pass = ctx.render_pass(&[ColorAttachment::new(TARGET)], None)?;
+            pass.set_pipeline(&program.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.draw_indirect(args, 0);
+        }
+        steps.after(ctx)
+    }
+}
+
+/// The `compute` implementation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Compute {
+    /// Entries the lists may hold; `None`: all of `cluster_objects`.
+    pub capacity: Option<u32>,
+}
+
+impl Pass for Compute {
+    fn contract(&self) -> StageContract {
+        contract()
+    }
+    fn implementation(&self) -> &'static str {
+        "compute"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        let steps = Steps {
+            capacity: self.capacity,
+        };
+        steps.setup(ctx);
+        ctx.min_bytes("slice_dispatch_args", 12);
+        let layout = BindingLayout::compute("populate::compute")
+            .slot(0, "objects")
+            .slot(1, "slice_instances")
+            .slot(2, "slice_counts")
+            .slot(3, "cluster_grid")
+            .slot(4, "cluster_offsets")
+            .slot(5, "cluster_cursors")
+            .slot(6, "cluster_objects")
+            .slot(11, "cluster_counts")
+            .uniform(9)
+            .uniform(10);
+        ctx.program(
+            "populate",
+            ProgramDesc::compute(&SHADER, "populate_cs").layout(layout),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let steps = Steps {
+            capacity: self.capacity,
+        };
+        let view = frame_view(ctx, VIEW_INPUT, None)?;
+        steps.before(ctx)?;
+        let params = steps.params();
+        let program = ctx.compute("populate")?;
+        let group = ctx.bind_group(
+            &program,
+            0,
+            &[
+                (9, bytemuck::bytes_of(&view)),
+                (10, bytemuck::bytes_of(&params)),
+            ],
+        )?;
+        let (args, _) = ctx.buffer("slice_dispatch_args")?;
+        {
+            let mut pass = ctx.compute_pass();
+            pass.set_pipeline(&program.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups_indirect(args, 0);
+        }
+        steps.after(ctx)
+    }
+}
+
+fn build_raster(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(Raster::from_params(params)?))
+}
+
+fn build_compute(params: &Params) -> Result<Box<dyn Pass>> {
+    params.only(&["capacity"])?;
+    Ok(Box::new(Compute {
+        capacity: capacity_param(params)?,
+    }))
+}
+
+/// Registers `populate` (implementations `raster` and `compute`) for pipeline files.
+pub fn register(registry: &mut Registry) {
+    registry.register(STAGE, "raster", build_raster);
+    registry.register(STAGE, "compute", build_compute);
+}

@@ -1,0 +1,138 @@
+// Writes each froxel's object lists: the same instances, rectangles and froxel test as
+// `count_raster` (through `meshlight::froxel`), but where the count stage added one, this
+// stage claims a place in the (froxel, kind) list with an atomic cursor and writes the
+// object's index there. Places at or past the capacity are claimed, never written.
+//
+// A list only ever receives as many entries as its count: a place past it (should the
+// GPU decide a pair here otherwise than in the count stage) is claimed and not written,
+// so no list spills into the next. `settle` then lowers each count to the entries really
+// written: never past the capacity, never an unwritten place.
+//
+// `raster`: one quad per instance on a viewport of one pixel per tile, colour writes
+// off. `compute`: one workgroup per instance walks its rectangle. `publish` (one thread)
+// writes the needed and available entries for the growth readback.
+
+#import meshlight::view::View
+#import meshlight::light::{ClusterableObject, ClusterGrid, cluster_index, CLUSTERABLE_TYPE_COUNT}
+#import meshlight::froxel::{ViewObject, view_object, froxel_aabb, froxel_rect, rect_is_empty, object_touches_froxel, froxel_quad_corner}
+
+struct SliceInstance {
+    object: u32,
+    slice: u32,
+}
+
+struct Params {
+    // Entries the list may hold; clamped to the bound list's length.
+    capacity: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// The objects `slice_instances` refers to.
+@group(0) @binding(0) var<storage, read> objects: array<ClusterableObject>;
+// z_slice's (object, slice) list.
+@group(0) @binding(1) var<storage, read> slice_instances: array<SliceInstance>;
+// z_slice's count words: [0] instances requested, [1] the list's capacity.
+@group(0) @binding(2) var<storage, read> slice_counts: array<u32>;
+@group(0) @binding(3) var<storage, read> cluster_grid: ClusterGrid;
+// Exclusive prefix sum of count_raster's counts: where each (froxel, kind) list starts.
+@group(0) @binding(4) var<storage, read> cluster_offsets: array<u32>;
+// In: count_raster's counts. Out (after `settle`): the entries each list holds.
+@group(0) @binding(11) var<storage, read_write> cluster_counts: array<u32>;
+// Places claimed so far in each (froxel, kind) list; zero before the stage.
+@group(0) @binding(5) var<storage, read_write> cluster_cursors: array<atomic<u32>>;
+// The lists, back to back: object indices.
+@group(0) @binding(6) var<storage, read_write> cluster_objects: array<u32>;
+// [0]: entries every list together needs (the prefix sum's total).
+@group(0) @binding(7) var<storage, read> list_total: array<u32>;
+// [0] entries needed, [1] the capacity: overflow when [0] > [1].
+@group(0) @binding(8) var<storage, read_write> list_counts: array<u32>;
+@group(0) @binding(9) var<uniform> view: View;
+@group(0) @binding(10) var<uniform> params: Params;
+
+const WORKGROUP_SIZE: u32 = 64u;
+
+fn capacity() -> u32 {
+    return min(params.capacity, arrayLength(&cluster_objects));
+}
+
+fn instances_written() -> u32 {
+    return min(min(slice_counts[0], slice_counts[1]), arrayLength(&slice_instances));
+}
+
+fn add_to_froxel(o: ViewObject, object: u32, froxel: vec3<u32>) {
+    if object_touches_froxel(o, froxel_aabb(view, cluster_grid, froxel)) {
+        let list = cluster_index(cluster_grid, froxel) * CLUSTERABLE_TYPE_COUNT + o.kind;
+        if list < lists() {
+            let place = atomicAdd(&cluster_cursors[list], 1u);
+            let at = cluster_offsets[list] + place;
+            if place < cluster_counts[list] && at < capacity() {
+                cluster_objects[at] = object;
+            }
+        }
+    }
+}
+
+fn lists() -> u32 {
+    return min(min(arrayLength(&cluster_offsets), arrayLength(&cluster_cursors)), arrayLength(&cluster_counts));
+}
+
+@compute @workgroup_size(64)
+fn settle(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    for (var list = id.x; list < lists(); list += groups.x * WORKGROUP_SIZE) {
+        let offset = min(cluster_offsets[list], capacity());
+        let written = min(atomicLoad(&cluster_cursors[list]), capacity() - offset);
+        cluster_counts[list] = min(cluster_counts[list], written);
+    }
+}
+
+@compute @workgroup_size(1)
+fn publish() {
+    list_counts[0] = list_total[0];
+    list_counts[1] = capacity();
+}
+
+struct Varyings {
+    @builtin(position) position: vec4<f32>,
+    @location(0) @interpolate(flat) instance: u32,
+}
+
+@vertex
+fn populate_vs(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance: u32) -> Varyings {
+    let pair = slice_instances[instance];
+    let o = view_object(view, objects[pair.object]);
+    let rect = froxel_rect(view, cluster_grid, o, pair.slice);
+    return Varyings(froxel_quad_corner(cluster_grid, rect, vertex), instance);
+}
+
+@fragment
+fn populate_fs(in: Varyings) {
+    let pair = slice_instances[in.instance];
+    let o = view_object(view, objects[pair.object]);
+    add_to_froxel(o, pair.object, vec3(vec2<u32>(in.position.xy), pair.slice));
+}
+
+@compute @workgroup_size(64)
+fn populate_cs(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) t: u32,
+) {
+    let instance = wg.y * groups.x + wg.x;
+    if instance >= instances_written() {
+        return;
+    }
+    let pair = slice_instances[instance];
+    let o = view_object(view, objects[pair.object]);
+    let rect = froxel_rect(view, cluster_grid, o, pair.slice);
+    if rect_is_empty(rect) {
+        return;
+    }
+    let width = rect.max_tile.x - rect.min_tile.x + 1u;
+    let tiles = width * (rect.max_tile.y - rect.min_tile.y + 1u);
+    for (var i = t; i < tiles; i += WORKGROUP_SIZE) {
+        let tile = rect.min_tile + vec2(i % width, i / width);
+        add_to_froxel(o, pair.object, vec3(tile, pair.slice));
+    }
+}
