@@ -9,18 +9,22 @@
 //!   frame and runs it; [`brute_force`] is the baseline it is measured against.
 //! - [`scan_fan`]: GPU prefix sum (stage `scan_fan`: `scan_fan`, `two_step`,
 //!   `decoupled_lookback`).
-//! - [`z_slice`]: light clustering's first stage, the depth slices each clusterable
-//!   object touches.
+//! - Light clustering: [`z_slice`], [`count_raster`], [`populate`] (with [`scan_fan`]
+//!   between them); [`light_clustering`] wires them into a graph, runs it with overflow
+//!   growth, and holds the CPU reference of the whole assignment.
 
 pub mod bench;
+pub mod light_clustering;
 pub mod virtual_geometry;
 
 pub use meshlight_gpu_scene as gpu_scene;
 pub use meshlight_graph as graph;
 pub use meshlight_pass_brute_force as brute_force;
+pub use meshlight_pass_count_raster as count_raster;
 pub use meshlight_pass_cull_lod as cull_lod;
 pub use meshlight_pass_fill_clusters as fill_clusters;
 pub use meshlight_pass_hw_raster as hw_raster;
+pub use meshlight_pass_populate as populate;
 pub use meshlight_pass_remap_dispatch as remap_dispatch;
 pub use meshlight_pass_resolve as resolve;
 pub use meshlight_pass_scan_fan as scan_fan;
@@ -41,5 +45,7 @@ pub fn registry() -> graph::file::Registry {
     resolve::register(&mut r);
     brute_force::register(&mut r);
     z_slice::register(&mut r);
+    count_raster::register(&mut r);
+    populate::register(&mut r);
     r
 }

@@ -37,7 +37,7 @@
 //! | param      | default | |
 //! |------------|---------|---|
 //! | `capacity` | 0 (all of `cluster_objects`) | entries the lists may hold |
-//! | `width`, `height` | 16, 9 | `raster` only: the grid's tiles, one pixel each (z_slice's) |
+//! | `width`, `height` | 16, 9 | the grid's tiles (z_slice's): `raster`'s viewport, one pixel each; `compute` checks and ignores them |
 //!
 //! # Implementations
 //!
@@ -409,9 +409,11 @@ fn build_raster(params: &Params) -> Result<Box<dyn Pass>> {
 }
 
 fn build_compute(params: &Params) -> Result<Box<dyn Pass>> {
-    params.only(&["capacity"])?;
+    // `width` and `height` are accepted (and checked) so a file swaps implementations by
+    // changing one line.
+    let raster = Raster::from_params(params)?;
     Ok(Box::new(Compute {
-        capacity: capacity_param(params)?,
+        capacity: raster.capacity,
     }))
 }
 
