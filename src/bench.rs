@@ -12,7 +12,9 @@ use std::time::Instant;
 pub struct BenchArgs {
     /// Scenarios to run (default: all). Known: graph-compile, graph-execute, pool-reuse,
     /// render (the default scene at 1920x1080), virtual-geometry (15³ meshes at
-    /// 2240x1260, the first --mesh or the bunny), builder, scan-fan.
+    /// 2240x1260, the first --mesh or the bunny), builder, scan-fan, light-clustering
+    /// (1,000 to 1,000,000 point lights at 1920x1080, both implementations, against the
+    /// CPU reference).
     #[arg(long = "scenario", value_delimiter = ',')]
     pub scenarios: Vec<String>,
     /// Write the rows as JSON here too.
@@ -49,6 +51,7 @@ const ALL: &[&str] = &[
     "virtual-geometry",
     "builder",
     "scan-fan",
+    "light-clustering",
 ];
 
 pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Error>> {
@@ -69,6 +72,7 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
             }
             "builder" => builder(args.quick, &args.meshes)?,
             "scan-fan" => scan_fan(args.quick)?,
+            "light-clustering" => crate::light_clustering::bench::run(args.quick)?,
             other => {
                 return Err(
                     format!("unknown scenario `{other}`; known: {}", ALL.join(", ")).into(),
