@@ -9,7 +9,10 @@ use meshlight_gpu_scene::SceneData;
 use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout};
 use meshlight_scene::asset::triangles;
 use meshlight_scene::compress::{NORMAL_BITS, decode_octahedral, get_bits};
-use meshlight_shaders::cpu::layout::{Cluster, Instance, MESH_FLAG_UVS, Mesh, View};
+use meshlight_shaders::cpu::layout::{
+    Cluster, ClusterGrid, ClusterableKind, ClusterableObject, Instance, MESH_FLAG_UVS, Mesh, View,
+};
+use meshlight_shaders::cpu::light::{cluster_index, z_slice_of_depth};
 use meshlight_shaders::cpu::visbuffer;
 
 /// shade.wgsl's `SKY_ZENITH` and `SKY_HORIZON`.
@@ -34,6 +37,102 @@ pub struct Frame<'a> {
     pub visbuffer: &'a [u64],
     pub width: u32,
     pub height: u32,
+    /// Light clustering's output, when the frame has it.
+    pub lights: Option<ClusteredLights<'a>>,
+}
+
+/// Light clustering's five outputs, as the pass binds them.
+#[derive(Clone, Copy, Debug)]
+pub struct ClusteredLights<'a> {
+    pub objects: &'a [ClusterableObject],
+    pub grid: &'a ClusterGrid,
+    /// Per froxel and kind: where its list starts, and its length.
+    pub offsets: &'a [u32],
+    pub counts: &'a [u32],
+    pub list: &'a [u32],
+}
+
+/// The light-count view's hottest count (`LIGHT_COUNT_FULL`).
+pub const LIGHT_COUNT_FULL: f32 = 32.0;
+
+impl ClusteredLights<'_> {
+    /// `froxel_list`: start and length of a pixel's (froxel, kind) list, clamped.
+    fn froxel_list(&self, pixel: Vec2, view_z: f32, kind: u32) -> (u32, u32) {
+        let g = self.grid;
+        let tile = |i: usize| (((pixel[i] / g.tile_size[i]).max(0.0)) as u32).min(g.dims[i] - 1);
+        let froxel = [tile(0), tile(1), z_slice_of_depth(g, view_z)];
+        let at = (cluster_index(g, froxel) * ClusterableKind::COUNT + kind) as usize;
+        if at >= self.offsets.len().min(self.counts.len()) {
+            return (0, 0);
+        }
+        let len = self.list.len() as u32;
+        let start = self.offsets[at].min(len);
+        (start, self.counts[at].min(len - start))
+    }
+
+    /// `light_count`: point and spot lights of the pixel's froxel.
+    fn light_count(&self, view: &View, pixel: Vec2, value: u64) -> u32 {
+        let view_z = if is_empty(value) {
+            3.4e38
+        } else {
+            view_z_from_depth(view, visbuffer::depth(value))
+        };
+        [ClusterableKind::PointLight, ClusterableKind::SpotLight]
+            .map(|k| self.froxel_list(pixel, view_z, k as u32).1)
+            .iter()
+            .sum()
+    }
+
+    /// `clustered_lighting`: radiance from the point and spot lights of the froxel.
+    fn lighting(&self, view: &View, pixel: Vec2, depth: f32, n: Vec3) -> Vec3 {
+        let uv = pixel * Vec2::from_array(view.inverse_viewport_size);
+        let ndc = uv * Vec2::new(2.0, -2.0) + Vec2::new(-1.0, 1.0);
+        let w = Mat4::from_cols_array_2d(&view.inverse_view_projection)
+            * Vec4::new(ndc.x, ndc.y, depth, 1.0);
+        let world = w.truncate() / w.w;
+        let view_z = view_z_from_depth(view, depth);
+        let mut sum = Vec3::ZERO;
+        for kind in [ClusterableKind::PointLight, ClusterableKind::SpotLight] {
+            let (start, len) = self.froxel_list(pixel, view_z, kind as u32);
+            for &index in &self.list[start as usize..(start + len) as usize] {
+                let light = &self.objects[index as usize];
+                let [x, y, z, range] = light.position_range;
+                let to_light = Vec3::new(x, y, z) - world;
+                let d2 = to_light.dot(to_light).max(1e-4);
+                let l = to_light / d2.sqrt();
+                let ratio = d2 / (range * range).max(1e-8);
+                let window = (1.0 - ratio * ratio).clamp(0.0, 1.0);
+                let mut falloff = window * window / d2;
+                if kind == ClusterableKind::SpotLight {
+                    let [dx, dy, dz, cos_outer] = light.direction_cos_angle;
+                    let cd = (-l).dot(Vec3::new(dx, dy, dz).normalize());
+                    falloff *= smoothstep(cos_outer, cos_outer + (1.0 - cos_outer) * 0.2, cd);
+                }
+                let [r, g, b, intensity] = light.color_intensity;
+                sum += Vec3::new(r, g, b) * intensity * falloff * n.dot(l).max(0.0);
+            }
+        }
+        sum
+    }
+}
+
+/// `view_z_from_depth`: the positive view-space distance of a reverse-Z depth.
+fn view_z_from_depth(view: &View, depth: f32) -> f32 {
+    let v = Mat4::from_cols_array_2d(&view.inverse_projection) * Vec4::new(0.0, 0.0, depth, 1.0);
+    -v.z / v.w
+}
+
+/// WGSL's `smoothstep`.
+fn smoothstep(edge0: f32, edge1: f32, x: f32) -> f32 {
+    let t = ((x - edge0) / (edge1 - edge0)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// shade.wgsl's `heat`: black through blue, green and yellow to red.
+pub fn heat(t: f32) -> Vec3 {
+    let x = t.clamp(0.0, 1.0);
+    let band = |c: f32| (1.5 - (4.0 * x - c).abs()).clamp(0.0, 1.0);
+    Vec3::new(band(3.0), band(2.0), band(1.0)) * (x * 8.0).min(1.0)
 }
 
 /// lowbias32, the hash of shade.wgsl's `hash`.
@@ -137,6 +236,9 @@ fn pixel_color(
     let empty = is_empty(value);
     let id = visbuffer::cluster(value);
     match view {
+        DebugView::LightCount => frame.lights.map_or(Vec3::ZERO, |lights| {
+            heat(lights.light_count(frame.view, pixel, value) as f32 / LIGHT_COUNT_FULL)
+        }),
         _ if empty && view != DebugView::Shaded && view != DebugView::Depth => Vec3::ZERO,
         DebugView::Clusters => unorm(id_color(cluster_key(&cluster_of(
             frame.raster_clusters,
@@ -366,7 +468,11 @@ fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> 
         .map_or(Vec3::ZERO, |m| Vec4::from_array(m.base_color).truncate());
     let albedo = base * (CHECKER_DARK * (1.0 - checker) + checker);
     let diffuse = n.dot(light.direction).max(0.0);
-    albedo * (light.ambient + light.color * diffuse)
+    let mut radiance = light.ambient + light.color * diffuse;
+    if let Some(lights) = frame.lights {
+        radiance += lights.lighting(frame.view, pixel, visbuffer::depth(value), n.normalize());
+    }
+    albedo * radiance
 }
 
 #[cfg(test)]

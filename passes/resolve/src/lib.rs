@@ -22,6 +22,13 @@
 //! | `depth` | depth target (optional) | Depth32Float | reverse-Z NDC depth; 0 where empty |
 //! | `material_depth` | depth target (optional) | Depth32Float | [`material_depth`] of the instance's material; 0 where empty |
 //! | `color` | storage write | Rgba8Unorm | the [`DebugView`] chosen; alpha 1 |
+//! | `objects` | storage read (optional) | ClusterableObject | light clustering's objects |
+//! | `cluster_grid` | storage read (optional) | ClusterGrid | the froxel grid |
+//! | `cluster_offsets`, `cluster_counts` | storage read (optional) | u32 | per froxel and kind: list start and length |
+//! | `cluster_objects` | storage read (optional) | u32 | the lists: indices into `objects` |
+//!
+//! With light clustering's five outputs bound (all or none), the shaded view adds the point
+//! and spot lights of each pixel's froxel, and the `light-count` view can show them.
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`), whose `viewport_size`
 //! must equal the params `width` × `height`. The three targets are `width` × `height`.
@@ -42,7 +49,11 @@
 //!   uv_i` (0 without UVs), checker `filtered_checker(uv · checker_scale, ∂uv/∂x ·
 //!   scale, ∂uv/∂y · scale)` (a box filter of the square wave over the pixel's
 //!   footprint), `albedo = base · mix(0.55, 1, checker)`, `colour = albedo · (ambient +
-//!   light · max(n · l, 0))`, clamped, stored linear. Empty pixels: a vertical sky
+//!   light · max(n · l, 0) + lights)`, clamped, stored linear. `lights` (with clustering
+//!   bound): over the point and spot lists of the froxel `cluster_of_pixel(pixel,
+//!   view_z)`, `colour · intensity · window² / d² · max(n̂ · l, 0)` with `window =
+//!   saturate(1 − (d² / range²)²)`, spots also times `smoothstep(cos_outer, mix(cos_outer,
+//!   1, 0.2), −l · axis)`. Empty pixels: a vertical sky
 //!   gradient from the horizon colour at the bottom to the zenith colour at the top.
 //! - Debug views: `clusters` = colour of the scene cluster, `cluster_key` =
 //!   `hash(instance) ^ meshlet` of the slot the id names (raster slots come from atomics
@@ -62,10 +73,17 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, DepthAttachment, DepthTarget, Element, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, Slot, StageContract,
+    Access, BindingLayout, DepthAttachment, DepthTarget, Element, GraphError, Pass, ProgramDesc,
+    RecordContext, Result, SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::{PassShader, pass_shader};
+use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
+use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
+
+/// `meshlight::light::ClusterableObject`, as light clustering's stages declare it.
+const CLUSTERABLE_OBJECT: Element =
+    Element::named("ClusterableObject", size_of::<ClusterableObject>() as u32);
+/// `meshlight::light::ClusterGrid`.
+const CLUSTER_GRID: Element = Element::named("ClusterGrid", size_of::<ClusterGrid>() as u32);
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "resolve";
@@ -143,6 +161,21 @@ pub fn contract() -> StageContract {
                 Some(COLOR_FORMAT),
                 "shaded colour or a debug view",
             ),
+            read("objects", CLUSTERABLE_OBJECT, "light clustering's objects").optional(),
+            read("cluster_grid", CLUSTER_GRID, "the froxel grid").optional(),
+            read(
+                "cluster_offsets",
+                Element::U32,
+                "per froxel and kind: list start",
+            )
+            .optional(),
+            read(
+                "cluster_counts",
+                Element::U32,
+                "per froxel and kind: list length",
+            )
+            .optional(),
+            read("cluster_objects", Element::U32, "the lists: object indices").optional(),
         ],
     }
 }
@@ -205,6 +238,11 @@ impl Pass for Resolve {
                     .layout(depth_layout.clone()),
             );
         }
+        let lit = self.clustered_lights(ctx)?;
+        let defs = ShadeDefs {
+            clustered_lights: lit,
+        };
+        ctx.shader_defs(&defs);
         let shade_layout = BindingLayout::compute("resolve_shade")
             .slot(0, "visbuffer")
             .slot(1, "raster_clusters")
@@ -217,9 +255,21 @@ impl Pass for Resolve {
             .slot(8, "color")
             .uniform(9)
             .uniform(10);
+        let shade_layout = if lit {
+            LIGHT_SLOTS
+                .iter()
+                .zip(11..)
+                .fold(shade_layout, |layout, (slot, binding)| {
+                    layout.slot(binding, slot)
+                })
+        } else {
+            shade_layout
+        };
         ctx.program(
             "shade",
-            ProgramDesc::compute(&SHADE_SHADER, "shade_pixels").layout(shade_layout),
+            ProgramDesc::compute(&SHADE_SHADER, "shade_pixels")
+                .defs(&defs)
+                .layout(shade_layout),
         );
         ctx.dispatch(
             "shade",
@@ -270,6 +320,64 @@ impl Pass for Resolve {
         pass.set_bind_group(0, &bind_group, &[]);
         pass.dispatch_workgroups(self.width.div_ceil(TILE), self.height.div_ceil(TILE), 1);
         Ok(())
+    }
+}
+
+/// Light clustering's outputs the shading reads, at bindings 11 to 15.
+const LIGHT_SLOTS: [&str; 5] = [
+    "objects",
+    "cluster_grid",
+    "cluster_offsets",
+    "cluster_counts",
+    "cluster_objects",
+];
+
+/// The variant of shade.wgsl a pass runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct ShadeDefs {
+    /// `CLUSTERED_LIGHTS`: the froxel lists are bound.
+    clustered_lights: bool,
+}
+
+impl ShaderDefs for ShadeDefs {
+    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
+        vec![("CLUSTERED_LIGHTS", ShaderDef::Bool(self.clustered_lights))]
+    }
+}
+
+impl Resolve {
+    /// Whether light clustering's outputs are bound: all five or none, and the
+    /// `light-count` view only with them.
+    fn clustered_lights(&self, ctx: &SetupContext) -> Result<bool> {
+        let bound: Vec<&str> = LIGHT_SLOTS
+            .into_iter()
+            .filter(|s| ctx.is_bound(s))
+            .collect();
+        let lit = bound.len() == LIGHT_SLOTS.len();
+        if !bound.is_empty() && !lit {
+            let missing: Vec<&str> = LIGHT_SLOTS
+                .into_iter()
+                .filter(|s| !bound.contains(s))
+                .collect();
+            return Err(GraphError::Parameter {
+                pass: String::new(),
+                message: format!(
+                    "light clustering's outputs are bound only in part: {} bound, {} missing; bind all five (or none)",
+                    bound.join(", "),
+                    missing.join(", ")
+                ),
+            });
+        }
+        if self.settings.view.needs_lights() && !lit {
+            return Err(GraphError::Parameter {
+                pass: String::new(),
+                message: format!(
+                    "the `{}` view shows light clustering's lists, and this frame has none; add the clustering stages (pipelines/light_clustering.toml) or pick another view",
+                    self.settings.view
+                ),
+            });
+        }
+        Ok(lit)
     }
 }
 

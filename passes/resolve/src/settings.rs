@@ -25,17 +25,21 @@ pub enum DebugView {
     Raster = 4,
     /// The reverse-Z depth as grey, `depth^(1/4)`.
     Depth = 5,
+    /// A heat map of the point and spot lights in each pixel's froxel (black: none; red:
+    /// 32 or more). Needs light clustering in the frame.
+    LightCount = 6,
 }
 
 impl DebugView {
     /// Every view, in discriminant order.
-    pub const ALL: [DebugView; 6] = [
+    pub const ALL: [DebugView; 7] = [
         DebugView::Shaded,
         DebugView::Clusters,
         DebugView::Triangles,
         DebugView::Lod,
         DebugView::Raster,
         DebugView::Depth,
+        DebugView::LightCount,
     ];
 
     /// The name pipeline files and the command line use.
@@ -47,7 +51,13 @@ impl DebugView {
             DebugView::Lod => "lod",
             DebugView::Raster => "raster",
             DebugView::Depth => "depth",
+            DebugView::LightCount => "light-count",
         }
+    }
+
+    /// True for views that show light clustering's lists.
+    pub fn needs_lights(self) -> bool {
+        self == DebugView::LightCount
     }
 
     /// The view called `name` (as [`DebugView::name`] spells it).

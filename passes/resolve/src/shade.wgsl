@@ -9,6 +9,10 @@
 #import meshlight::instance::{Instance, Material, instance_transform_normal}
 #import meshlight::view::View
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
+#ifdef CLUSTERED_LIGHTS
+#import meshlight::view::{position_from_depth, view_z_from_depth, pixel_to_uv}
+#import meshlight::light::{ClusterableObject, ClusterGrid, cluster_of_pixel, cluster_index, CLUSTERABLE_POINT_LIGHT, CLUSTERABLE_SPOT_LIGHT, CLUSTERABLE_TYPE_COUNT}
+#endif
 
 // What the colour target shows (`DebugView` on the Rust side).
 const VIEW_SHADED: u32 = 0u;
@@ -17,6 +21,9 @@ const VIEW_TRIANGLES: u32 = 2u;
 const VIEW_LOD: u32 = 3u;
 const VIEW_RASTER: u32 = 4u;
 const VIEW_DEPTH: u32 = 5u;
+const VIEW_LIGHT_COUNT: u32 = 6u;
+// The light-count view's scale: this many lights in a froxel is the hottest colour.
+const LIGHT_COUNT_FULL: f32 = 32.0;
 
 const SKY_ZENITH: vec3<f32> = vec3(0.25, 0.45, 0.8);
 const SKY_HORIZON: vec3<f32> = vec3(0.75, 0.85, 0.95);
@@ -50,6 +57,75 @@ struct Params {
 @group(0) @binding(8) var color: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(9) var<uniform> view: View;
 @group(0) @binding(10) var<uniform> params: Params;
+
+#ifdef CLUSTERED_LIGHTS
+// Light clustering's output: the objects, the grid, and per froxel and kind an offset
+// and a count into one list of object indices.
+@group(0) @binding(11) var<storage, read> objects: array<ClusterableObject>;
+@group(0) @binding(12) var<storage, read> cluster_grid: ClusterGrid;
+@group(0) @binding(13) var<storage, read> cluster_offsets: array<u32>;
+@group(0) @binding(14) var<storage, read> cluster_counts: array<u32>;
+@group(0) @binding(15) var<storage, read> cluster_objects: array<u32>;
+
+// The (froxel, kind) list of a pixel: start and length, clamped to the buffers.
+fn froxel_list(pixel: vec2<f32>, view_z: f32, kind: u32) -> vec2<u32> {
+    let froxel = cluster_of_pixel(cluster_grid, pixel, view_z);
+    let at = cluster_index(cluster_grid, froxel) * CLUSTERABLE_TYPE_COUNT + kind;
+    if at >= min(arrayLength(&cluster_offsets), arrayLength(&cluster_counts)) {
+        return vec2(0u);
+    }
+    let start = min(cluster_offsets[at], arrayLength(&cluster_objects));
+    return vec2(start, min(cluster_counts[at], arrayLength(&cluster_objects) - start));
+}
+
+// Radiance from the point and spot lights of the pixel's froxel: inverse-square falloff
+// windowed to reach zero at the range, spots faded over the outer fifth of the cone.
+fn clustered_lighting(pixel: vec2<f32>, depth: f32, n: vec3<f32>) -> vec3<f32> {
+    let world = position_from_depth(view, pixel_to_uv(view, pixel), depth);
+    let view_z = view_z_from_depth(view, depth);
+    var sum = vec3(0.0);
+    for (var kind = CLUSTERABLE_POINT_LIGHT; kind <= CLUSTERABLE_SPOT_LIGHT; kind += 1u) {
+        let list = froxel_list(pixel, view_z, kind);
+        for (var i = 0u; i < list.y; i += 1u) {
+            let light = objects[cluster_objects[list.x + i]];
+            let to_light = light.position_range.xyz - world;
+            let d2 = max(dot(to_light, to_light), 1e-4);
+            let l = to_light * inverseSqrt(d2);
+            let range = light.position_range.w;
+            let ratio = d2 / max(range * range, 1e-8);
+            let window = saturate(1.0 - ratio * ratio);
+            var falloff = window * window / d2;
+            if kind == CLUSTERABLE_SPOT_LIGHT {
+                let cos_outer = light.direction_cos_angle.w;
+                let cd = dot(-l, normalize(light.direction_cos_angle.xyz));
+                falloff *= smoothstep(cos_outer, mix(cos_outer, 1.0, 0.2), cd);
+            }
+            sum += light.color_intensity.rgb * light.color_intensity.w * falloff * max(dot(n, l), 0.0);
+        }
+    }
+    return sum;
+}
+
+// Point and spot lights in the pixel's froxel (the last slice for the sky).
+fn light_count(pixel: vec2<f32>, depth: f32, empty: bool) -> u32 {
+    var view_z = 3.4e38;
+    if !empty {
+        view_z = view_z_from_depth(view, depth);
+    }
+    return froxel_list(pixel, view_z, CLUSTERABLE_POINT_LIGHT).y
+        + froxel_list(pixel, view_z, CLUSTERABLE_SPOT_LIGHT).y;
+}
+#endif
+
+// Black through blue, green and yellow to red as `t` goes from 0 to 1.
+fn heat(t: f32) -> vec3<f32> {
+    let x = saturate(t);
+    return saturate(vec3(
+        1.5 - abs(4.0 * x - 3.0),
+        1.5 - abs(4.0 * x - 2.0),
+        1.5 - abs(4.0 * x - 1.0),
+    )) * min(x * 8.0, 1.0);
+}
 
 fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
     let at = meshlet_vertex_field(m, vertex, f);
@@ -168,7 +244,11 @@ fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
     let base = materials[instance.material].base_color.rgb;
     let albedo = base * mix(CHECKER_DARK, 1.0, checker);
     let diffuse = max(dot(n, params.light_direction.xyz), 0.0);
-    return albedo * (params.ambient_color.rgb + params.light_color.rgb * diffuse);
+    var radiance = params.ambient_color.rgb + params.light_color.rgb * diffuse;
+#ifdef CLUSTERED_LIGHTS
+    radiance += clustered_lighting(pixel, visbuffer_depth(value), normalize(n));
+#endif
+    return albedo * radiance;
 }
 
 @compute @workgroup_size(8, 8)
@@ -207,6 +287,11 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
         case VIEW_DEPTH: {
             // Reverse-Z depth falls off as 1 / distance; the fourth root spreads it.
             rgb = vec3(sqrt(sqrt(visbuffer_depth(value))));
+        }
+        case VIEW_LIGHT_COUNT: {
+#ifdef CLUSTERED_LIGHTS
+            rgb = heat(f32(light_count(pixel, visbuffer_depth(value), empty)) / LIGHT_COUNT_FULL);
+#endif
         }
         default: {
             if empty {

@@ -1,18 +1,23 @@
 //! `resolve` on the GPU (lavapipe in CI) against `cpu`: a scene of a mesh with UVs
 //! (spot) and one without (the procedural knot), rasterised into a visibility buffer by
 //! the software rasteriser's CPU reference, resolved into depth, material depth and
-//! every debug view; then the errors.
+//! every debug view; the same frame lit by clustered point and spot lights and shown as
+//! the light-count view; then the errors.
 
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::data::Limits;
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
 use meshlight_graph::*;
+use meshlight_pass_populate::cpu::{ClusterLists, cpu_populate};
 use meshlight_pass_resolve::settings::Settings;
 use meshlight_pass_resolve::{COLOR_FORMAT, DEPTH_FORMAT, DebugView, Resolve, cpu};
+use meshlight_pass_z_slice::{ZSlice, cpu_z_slice};
 use meshlight_scene::load::load_obj;
 use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
-use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::layout::{
+    Cluster, ClusterGrid, ClusterableKind, ClusterableObject, View,
+};
 use meshlight_shaders::cpu::visbuffer;
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -54,6 +59,14 @@ struct Frame {
     /// `raster_counts[0]`.
     software: u32,
     visbuffer: Vec<u64>,
+    lights: Option<Lights>,
+}
+
+/// Light clustering's output for the frame, from the CPU references of its stages.
+struct Lights {
+    objects: Vec<ClusterableObject>,
+    grid: ClusterGrid,
+    lists: ClusterLists,
 }
 
 impl Frame {
@@ -66,7 +79,70 @@ impl Frame {
             visbuffer: &self.visbuffer,
             width: W,
             height: H,
+            lights: self.lights.as_ref().map(|l| cpu::ClusteredLights {
+                objects: &l.objects,
+                grid: &l.grid,
+                offsets: &l.lists.offsets,
+                counts: &l.lists.counts,
+                list: &l.lists.objects,
+            }),
         }
+    }
+
+    /// Thirty coloured point lights and ten spot lights around the meshes, clustered on
+    /// an 8 × 6 × 16 grid.
+    fn light(&mut self) {
+        let mut objects = Vec::new();
+        for i in 0..40 {
+            let a = i as f32 * 2.4;
+            let p = Vec3::new(
+                a.cos() * (0.5 + 0.04 * i as f32),
+                0.9 - 0.05 * i as f32,
+                a.sin() * 0.9 - 0.6,
+            );
+            let color = [
+                0.5 + 0.5 * a.cos(),
+                0.5 + 0.5 * (a + 2.1).cos(),
+                0.5 + 0.5 * (a + 4.2).cos(),
+                0.6,
+            ];
+            let spot = i % 4 == 3;
+            let d = (Vec3::new(0.0, 0.0, -0.5) - p).normalize();
+            let half_angle: f32 = 0.5;
+            objects.push(ClusterableObject {
+                position_range: [p.x, p.y, p.z, 0.6 + 0.05 * (i % 7) as f32],
+                direction_cos_angle: [d.x, d.y, d.z, half_angle.cos()],
+                color_intensity: color,
+                kind: if spot {
+                    ClusterableKind::SpotLight
+                } else {
+                    ClusterableKind::PointLight
+                } as u32,
+                sin_angle: half_angle.sin(),
+                ..ClusterableObject::default()
+            });
+        }
+        let z_slice = ZSlice {
+            grid: meshlight_pass_z_slice::GridSettings {
+                dims: [8, 6, 16],
+                first_slice_end: 1.0,
+                far: 100.0,
+            },
+            ..ZSlice::default()
+        };
+        let grid = z_slice.grid([W, H]);
+        let slices = cpu_z_slice(&self.view, &grid, &objects, u32::MAX, 4, 65535);
+        let (lists, _) = cpu_populate(&self.view, &grid, &objects, &slices.pairs, u32::MAX);
+        assert!(
+            lists.needed > 100,
+            "the lights touch {} froxels",
+            lists.needed
+        );
+        self.lights = Some(Lights {
+            objects,
+            grid,
+            lists,
+        });
     }
 }
 
@@ -157,6 +233,7 @@ fn frame() -> Frame {
         raster_clusters,
         software,
         visbuffer,
+        lights: None,
     }
 }
 
@@ -256,10 +333,41 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
         DEPTH_USAGE,
     );
     let color = g.import_texture("color", TextureDesc::d2(COLOR_FORMAT, W, H), COLOR_USAGE);
+    let light_buffers: Vec<(&str, Vec<u8>)> = match &frame.lights {
+        Some(l) => vec![
+            ("objects", bytemuck::cast_slice(&l.objects).to_vec()),
+            ("cluster_grid", bytemuck::bytes_of(&l.grid).to_vec()),
+            (
+                "cluster_offsets",
+                bytemuck::cast_slice(&l.lists.offsets).to_vec(),
+            ),
+            (
+                "cluster_counts",
+                bytemuck::cast_slice(&l.lists.counts).to_vec(),
+            ),
+            // A zero-length binding is not allowed.
+            (
+                "cluster_objects",
+                bytemuck::cast_slice(&[l.lists.objects.as_slice(), &[0]].concat()).to_vec(),
+            ),
+        ],
+        None => Vec::new(),
+    };
+    let mut light_bindings = Bindings::new();
+    for (name, bytes) in &light_buffers {
+        let element = match *name {
+            "objects" => Element::named("ClusterableObject", 64),
+            "cluster_grid" => Element::named("ClusterGrid", 48),
+            _ => Element::U32,
+        };
+        let count = bytes.len() as u64 / u64::from(element.size);
+        let handle = g.import_buffer(name, BufferDesc::array(element, count), BUFFER_USAGE);
+        light_bindings = light_bindings.bind(name, handle);
+    }
     g.add_pass(
         "resolve",
         pass,
-        Bindings::new()
+        light_bindings
             .bind("visbuffer", vis)
             .bind("raster_clusters", clusters)
             .bind("raster_counts", counts)
@@ -297,7 +405,11 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
         texture(&gpu, "material_depth", DEPTH_FORMAT, DEPTH_USAGE),
         texture(&gpu, "color", COLOR_FORMAT, COLOR_USAGE),
     ];
-    let imports = scene
+    let light_data: Vec<(&str, wgpu::Buffer)> = light_buffers
+        .iter()
+        .map(|(name, bytes)| (*name, gpu.buffer_with_data(name, bytes, BUFFER_USAGE)))
+        .collect();
+    let mut imports = scene
         .imports()
         .buffer("raster_clusters", &buffers[0])
         .buffer("raster_counts", &buffers[1])
@@ -305,6 +417,9 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
         .texture("depth", &targets[0])
         .texture("material_depth", &targets[1])
         .texture("color", &targets[2]);
+    for (name, buffer) in &light_data {
+        imports = imports.buffer(name, buffer);
+    }
     let mut exec = Executor::new(gpu);
     let data = FrameData::new().with("view", bytemuck::bytes_of(view));
     exec.execute_frame(&compiled, &imports, &data)?;
@@ -380,7 +495,7 @@ fn depth_material_depth_and_every_view_match_the_reference() {
         "empty and three materials: {materials:?}"
     );
 
-    for view in DebugView::ALL {
+    for view in DebugView::ALL.into_iter().filter(|v| !v.needs_lights()) {
         let got = run(&mut f, Resolve::new(W, H).with_view(view));
         // Depth and material depth do not depend on the view: check them every time.
         if let Some((i, g, w)) = first_difference(&got.depth, &depth) {
@@ -494,4 +609,57 @@ fn bad_params_are_refused_with_what_to_change() {
     assert!(m.contains("`normals`"), "{m}");
     let m = build("width = 64\nheight = 48\ncheker_scale = 2");
     assert!(m.contains("`cheker_scale`"), "{m}");
+}
+
+#[test]
+fn clustered_lights_shade_and_count_like_the_reference() {
+    let mut f = frame();
+    let unlit = run(&mut f, Resolve::new(W, H));
+    f.light();
+    let pixels = (W * H) as usize;
+    for view in [DebugView::Shaded, DebugView::LightCount] {
+        let got = run(&mut f, Resolve::new(W, H).with_view(view));
+        let want = cpu::shade(
+            &f.cpu(),
+            &Settings {
+                view,
+                ..Settings::default()
+            },
+        );
+        // A pixel whose depth lies on a slice boundary may read the neighbouring froxel.
+        let (over, largest) = color_differences(&got.color, &want, 2);
+        eprintln!("{view}: {over} pixels differ by more than 2, largest {largest}");
+        assert!(
+            over * 100 <= pixels,
+            "{view}: {over} of {pixels} pixels differ from the reference by more than 2/255"
+        );
+        let distinct: BTreeSet<[u8; 4]> = got.color.iter().copied().collect();
+        assert!(distinct.len() >= 4, "{view}: {} colours", distinct.len());
+    }
+    // The lights change the image.
+    let lit = run(&mut f, Resolve::new(W, H));
+    let (brighter, _) = color_differences(&lit.color, &unlit.color, 8);
+    assert!(
+        brighter * 10 >= pixels,
+        "only {brighter} pixels changed under the lights"
+    );
+}
+
+#[test]
+fn the_light_count_view_without_clustering_is_an_error() {
+    let mut f = frame();
+    let view = f.view;
+    match run_with_view(
+        &mut f,
+        Resolve::new(W, H).with_view(DebugView::LightCount),
+        &view,
+    ) {
+        Err(GraphError::Parameter { message, .. }) => {
+            assert!(
+                message.contains("light-count") && message.contains("light_clustering.toml"),
+                "{message}"
+            )
+        }
+        other => panic!("{:?}", other.err()),
+    }
 }
