@@ -41,6 +41,10 @@ struct RenderArgs {
     /// Copies of the mesh on the ground (1: one copy, framed by the camera).
     #[arg(long, default_value_t = meshlight::virtual_geometry::scenes::DEFAULT_INSTANCES)]
     instances: u32,
+    /// Coloured point lights over the field, clustered on the GPU and shaded per pixel
+    /// (0: none; a single instance has none). `--view light-count` shows them per froxel.
+    #[arg(long, default_value_t = meshlight::virtual_geometry::scenes::DEFAULT_LIGHTS)]
+    lights: u32,
     /// A pipeline file to render with instead of the graph built in code, e.g.
     /// pipelines/virtual_geometry.toml or your own composition of the same resources.
     #[arg(long)]
@@ -130,6 +134,18 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     };
     let mut settings = FrameSettings::new(a.width, a.height);
     settings.view = a.view;
+    // A pipeline file brings its own stages; lights are clustered in the coded frame.
+    let lights = if a.instances > 1 && a.pipeline.is_none() {
+        scenes::field_lights(&placed, a.lights)
+    } else {
+        Vec::new()
+    };
+    if !lights.is_empty() || a.view.needs_lights() {
+        settings.clustering = Some(meshlight::light_clustering::ClusteringSettings::new(
+            [a.width, a.height],
+            lights.len().max(1) as u64,
+        ));
+    }
     settings.clusters = a.clusters.unwrap_or(settings.clusters);
     settings.slots = a.slots.unwrap_or(settings.slots);
     let source = match &a.pipeline {
@@ -139,7 +155,9 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     let skipped = placed.data.skipped_instances();
     let instances = placed.data.instances.len();
     let source_triangles = placed.data.source_triangles();
+    let light_count = lights.len();
     let mut renderer = Renderer::new(placed.data, settings, &source)?;
+    renderer.lights = lights;
     let still = renderer.render_still(&placed.camera)?;
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
@@ -157,6 +175,9 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         renderer.adapter,
         a.output.display()
     );
+    if light_count > 0 {
+        println!("  {light_count} point lights clustered on the GPU");
+    }
     if skipped > 0 {
         println!("  {skipped} instances skipped: their transforms were singular or not finite");
     }
@@ -167,7 +188,15 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             renderer
                 .growths
                 .iter()
-                .map(|g| format!("{} {} → {}", g.param, g.from, g.to))
+                .map(|g| (g.param, g.from, g.to))
+                .chain(
+                    renderer
+                        .clustering
+                        .growths
+                        .iter()
+                        .map(|g| (g.param, g.from, g.to))
+                )
+                .map(|(param, from, to)| format!("{param} {from} → {to}"))
                 .collect::<Vec<_>>()
                 .join(", ")
         );

@@ -212,7 +212,7 @@ fn overflowing_lists_grow_and_are_exact_within_three_frames() {
         let got = clusterer.cluster_still(&view, &objects).unwrap();
         let label = format!("{implementation:?}");
         assert!(got.frames <= 3, "{label}: {} frames", got.frames);
-        let params: Vec<&str> = clusterer.growths.iter().map(|g| g.param).collect();
+        let params: Vec<&str> = clusterer.counters.growths.iter().map(|g| g.param).collect();
         assert!(params.contains(&"slice_instances"), "{label}: {params:?}");
         assert!(params.contains(&"cluster_entries"), "{label}: {params:?}");
         compare(&view, &got, &want, &objects, &label);
@@ -257,11 +257,12 @@ fn bad_objects_are_skipped_counted_and_warned_about() {
     assert_eq!(got.counts.invalid, 2);
     assert!(
         clusterer
+            .counters
             .warnings
             .iter()
             .any(|w| matches!(w, ClusteringWarning::InvalidObjects { count: 2, .. })),
         "{:?}",
-        clusterer.warnings
+        clusterer.counters.warnings
     );
     let froxels = want.grid.cluster_count;
     for froxel in 0..froxels {

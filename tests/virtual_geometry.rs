@@ -467,3 +467,73 @@ fn a_frame_without_depth_targets_shades_the_same_image() {
     );
     assert!(r.executor.read_texture("depth").is_err());
 }
+
+#[test]
+fn clustered_lights_shade_the_field_and_the_light_count_view_shows_them() {
+    let placed = field(64);
+    let lights = scenes::field_lights(&placed, 48);
+    assert_eq!(lights.len(), 48);
+    let lit_settings = |view| FrameSettings {
+        clustering: Some(meshlight::light_clustering::ClusteringSettings {
+            // Small lists, so the frame also shows the clustering's lists growing.
+            slice_instances: 8,
+            entries: 8,
+            ..meshlight::light_clustering::ClusteringSettings::new([W, H], 64)
+        }),
+        ..settings(view)
+    };
+    let (unlit, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let still = |view| {
+        let mut r = Renderer::new(placed.data.clone(), lit_settings(view), &GraphSource::Code)
+            .unwrap_or_else(|e| panic!("{e}"));
+        r.lights = lights.clone();
+        let s = r
+            .render_still(&placed.camera)
+            .unwrap_or_else(|e| panic!("{e}"));
+        (s, r)
+    };
+    let (lit, r) = still(DebugView::Shaded);
+    assert!(runs(&r, "z_slice") && runs(&r, "populate"));
+    let grown: Vec<&str> = r.clustering.growths.iter().map(|g| g.param).collect();
+    assert!(grown.contains(&"cluster_entries"), "{grown:?}");
+    let latest = r
+        .clustering
+        .latest
+        .expect("the clustering's counters came back");
+    assert!(
+        !latest.overflowed() && latest.entries_needed > 8,
+        "{latest:?}"
+    );
+    let changed = differing(&lit.rgba, &unlit.rgba, 4);
+    let pixels = (W * H) as usize;
+    assert!(
+        changed * 20 > pixels,
+        "the lights changed only {changed} of {pixels} pixels"
+    );
+    // Light only adds: no channel of a lit pixel is darker than unlit.
+    let darker = lit
+        .rgba
+        .iter()
+        .zip(&unlit.rgba)
+        .filter(|(l, u)| u16::from(**l) + 1 < u16::from(**u))
+        .count();
+    assert_eq!(darker, 0);
+    let (count_view, _) = still(DebugView::LightCount);
+    let colours: std::collections::BTreeSet<&[u8]> = count_view.rgba.chunks(4).collect();
+    assert!(
+        colours.len() >= 3,
+        "{} colours in the light-count view",
+        colours.len()
+    );
+    // Without lights in the frame the view is an error naming what to add.
+    match Renderer::new(
+        placed.data.clone(),
+        settings(DebugView::LightCount),
+        &GraphSource::Code,
+    ) {
+        Err(GraphError::Parameter { message, .. }) => {
+            assert!(message.contains("light_clustering.toml"), "{message}")
+        }
+        other => panic!("{:?}", other.err().map(|e| e.to_string())),
+    }
+}

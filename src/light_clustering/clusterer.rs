@@ -85,12 +85,7 @@ pub struct Clusterer {
     pub executor: Executor,
     objects: wgpu::Buffer,
     object_count: wgpu::Buffer,
-    /// The largest list a binding holds, in 4-byte entries.
-    max_entries: u64,
-    pending: BTreeMap<u64, [Option<Vec<u8>>; 2]>,
-    latest: Option<ClusteringCounts>,
-    pub growths: Vec<Growth>,
-    pub warnings: Vec<ClusteringWarning>,
+    pub counters: Counters,
 }
 
 impl Clusterer {
@@ -127,11 +122,7 @@ impl Clusterer {
             executor: Executor::new(gpu),
             objects,
             object_count,
-            max_entries,
-            pending: BTreeMap::new(),
-            latest: None,
-            growths: Vec::new(),
-            warnings: Vec::new(),
+            counters: Counters::new(max_entries),
         })
     }
 
@@ -165,7 +156,7 @@ impl Clusterer {
 
     /// The newest frame whose counters are back.
     pub fn latest_counts(&self) -> Option<ClusteringCounts> {
-        self.latest
+        self.counters.latest
     }
 
     /// Clusters until a frame loses nothing (at most [`MAX_STILL_FRAMES`]), waiting for
@@ -184,6 +175,7 @@ impl Clusterer {
             })?;
             self.take_counts()?;
             let counts = self
+                .counters
                 .latest
                 .filter(|c| c.frame == submitted)
                 .ok_or_else(|| {
@@ -229,11 +221,39 @@ impl Clusterer {
     }
 
     fn take_counts(&mut self) -> Result<()> {
+        self.counters.take(&mut self.executor, &mut self.compiled)
+    }
+}
+
+/// The clustering's counters as they come back, frame by frame, and what they caused:
+/// grown lists and warnings. The [`Clusterer`] and the virtual-geometry renderer (when
+/// its frame clusters lights) share it.
+#[derive(Debug, Default)]
+pub struct Counters {
+    /// The largest list a binding holds, in 4-byte entries.
+    max_entries: u64,
+    pending: BTreeMap<u64, [Option<Vec<u8>>; 2]>,
+    pub latest: Option<ClusteringCounts>,
+    pub growths: Vec<Growth>,
+    pub warnings: Vec<ClusteringWarning>,
+}
+
+impl Counters {
+    pub fn new(max_entries: u64) -> Self {
+        Self {
+            max_entries,
+            ..Self::default()
+        }
+    }
+
+    /// Takes every counter readback that has come back; grows the lists for frames
+    /// that overflowed and records skipped objects.
+    pub fn take(&mut self, executor: &mut Executor, compiled: &mut CompiledGraph) -> Result<()> {
         for (slot, name) in [SLICE_COUNTS_READBACK, LIST_COUNTS_READBACK]
             .into_iter()
             .enumerate()
         {
-            while let Some(r) = self.executor.take_readback(name)? {
+            while let Some(r) = executor.take_readback(name)? {
                 self.pending.entry(r.frame).or_default()[slot] = Some(r.bytes);
             }
         }
@@ -275,7 +295,7 @@ impl Clusterer {
                     count: counts.invalid,
                 });
             }
-            self.grow_for(&counts)?;
+            self.grow_for(compiled, &counts)?;
             if self.latest.is_none_or(|l| l.frame < frame) {
                 self.latest = Some(counts);
             }
@@ -287,13 +307,13 @@ impl Clusterer {
     }
 
     /// Raises a list's size to the next power of two above what a frame asked for.
-    fn grow_for(&mut self, counts: &ClusteringCounts) -> Result<()> {
+    fn grow_for(&mut self, compiled: &mut CompiledGraph, counts: &ClusteringCounts) -> Result<()> {
         let wants = [
             (SLICE_INSTANCES_PARAM, u64::from(counts.slice_requested)),
             (ENTRIES_PARAM, u64::from(counts.entries_needed)),
         ];
         for (param, wanted) in wants {
-            let now = self.param(param);
+            let now = param_value(compiled, param);
             if wanted <= now {
                 continue;
             }
@@ -309,7 +329,7 @@ impl Clusterer {
                 "frame {}: {wanted} `{param}` wanted but the list holds {now}; raised `{param}` to {to} (start there with `{param} = {to}` in the pipeline's [params] or ClusteringSettings)",
                 counts.frame
             );
-            self.compiled.set_param(param, to)?;
+            compiled.set_param(param, to)?;
             self.growths.push(Growth {
                 frame: counts.frame,
                 param,
@@ -319,14 +339,14 @@ impl Clusterer {
         }
         Ok(())
     }
+}
 
-    /// The current value of a size parameter.
-    pub fn param(&self, name: &str) -> u64 {
-        self.compiled
-            .plan
-            .params
-            .iter()
-            .find(|(n, _)| n == name)
-            .map_or(0, |(_, v)| *v)
-    }
+/// The current value of a size parameter of a compiled graph.
+pub fn param_value(compiled: &CompiledGraph, name: &str) -> u64 {
+    compiled
+        .plan
+        .params
+        .iter()
+        .find(|(n, _)| n == name)
+        .map_or(0, |(_, v)| *v)
 }

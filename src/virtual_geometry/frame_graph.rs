@@ -4,6 +4,8 @@
 
 use super::counts::{CLUSTER_COUNT_READBACK, RASTER_COUNTS_READBACK};
 use crate::graph::{Bindings, BufferDesc, Element, GraphBuilder, GraphError, Result, TextureDesc};
+use crate::light_clustering::ClusteringSettings;
+use crate::light_clustering::frame_graph as clustering;
 use meshlight_gpu_scene::SceneData;
 use meshlight_gpu_scene::gpu::{buffer_lengths, elements, import_for};
 use meshlight_pass_cull_lod::{CullLod, Thresholds};
@@ -47,6 +49,8 @@ pub struct FrameSettings {
     /// The software rasteriser divides exactly in integers (bit-exact on every driver,
     /// slower); see `SwRaster::exact_division`.
     pub exact_division: bool,
+    /// Cluster the renderer's lights and shade with them (the graph built in code only).
+    pub clustering: Option<ClusteringSettings>,
 }
 
 impl FrameSettings {
@@ -64,6 +68,7 @@ impl FrameSettings {
             depth: true,
             material_depth: true,
             exact_division: false,
+            clustering: None,
         }
     }
 
@@ -168,6 +173,12 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     if s.hardware {
         g.add_pass("hw_raster", HwRaster { width, height }, Bindings::new())?;
     }
+    if let Some(c) = &s.clustering {
+        // The light clustering's outputs bind to resolve's slots of the same names.
+        clustering::import_objects(&mut g, c);
+        clustering::add_stages(&mut g, c)?;
+        clustering::add_readbacks(&mut g)?;
+    }
     let mut resolve = Resolve::new(width, height);
     resolve.settings.view = s.view;
     g.add_pass("resolve", resolve, Bindings::new())?;
@@ -180,6 +191,12 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
 /// readbacks added. Everything else (thresholds, which stages run) is the file's.
 pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     let file = path.display().to_string();
+    if s.clustering.is_some() {
+        return Err(GraphError::PipelineFile {
+            file,
+            message: "lights are clustered only in the frame built in code; render without lights (`--lights 0`) or without --pipeline".into(),
+        });
+    }
     let text = std::fs::read_to_string(path).map_err(|e| GraphError::PipelineFile {
         file: file.clone(),
         message: format!("cannot read it: {e}"),

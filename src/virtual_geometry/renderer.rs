@@ -1,14 +1,19 @@
 //! The frame loop: the graph compiled for the adapter, the scene uploaded, one
 //! `execute_frame` per camera, the counters taken back without waiting, and the
-//! candidate list and raster slots grown when a frame reports it dropped clusters.
+//! candidate list and raster slots grown when a frame reports it dropped clusters. With
+//! `FrameSettings::clustering`, the renderer's lights are uploaded and clustered every
+//! frame, and the clustering's lists grow the same way.
 
 use super::counts::{CLUSTER_COUNT_READBACK, FrameCounts, RASTER_COUNTS_READBACK};
 use super::frame_graph::{CLUSTERS_PARAM, FrameSettings, GraphSource, MAX_SLOTS, SLOTS_PARAM};
 use crate::graph::{
     CompileOptions, CompiledGraph, Executor, FrameData, FrameStats, GpuAdapter, GraphError, Result,
 };
+use crate::light_clustering::clusterer::Counters;
+use crate::light_clustering::frame_graph::OBJECT_USAGE;
 use glam::Mat4;
 use meshlight_gpu_scene::{Camera, GpuScene, SceneData};
+use meshlight_shaders::cpu::layout::ClusterableObject;
 use std::collections::BTreeMap;
 
 /// How many frames [`Renderer::render_still`] runs, at most, to reach a frame that
@@ -56,6 +61,18 @@ pub struct Renderer {
     latest: Option<FrameCounts>,
     pub growths: Vec<Growth>,
     pub adapter: String,
+    /// The lights the frame clusters and shades with (with `settings.clustering`; at
+    /// most its `objects`). Uploaded by every frame.
+    pub lights: Vec<ClusterableObject>,
+    light_buffers: Option<LightBuffers>,
+    /// The clustering's counters, growths and warnings.
+    pub clustering: Counters,
+}
+
+/// The imported object list of the light clustering and its count.
+struct LightBuffers {
+    objects: wgpu::Buffer,
+    object_count: wgpu::Buffer,
 }
 
 #[derive(Default)]
@@ -81,6 +98,15 @@ impl Renderer {
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size)
             / 8;
+        let light_buffers = settings.clustering.as_ref().map(|c| LightBuffers {
+            objects: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("objects"),
+                size: c.objects.max(1) * size_of::<ClusterableObject>() as u64,
+                usage: OBJECT_USAGE,
+                mapped_at_creation: false,
+            }),
+            object_count: gpu.buffer_with_data("object_count", &[0; 4], OBJECT_USAGE),
+        });
         Ok(Self {
             data,
             settings,
@@ -94,6 +120,9 @@ impl Renderer {
             latest: None,
             growths: Vec::new(),
             adapter: name,
+            lights: Vec::new(),
+            light_buffers,
+            clustering: Counters::new(max_elements * 2),
         })
     }
 
@@ -108,9 +137,34 @@ impl Renderer {
         self.scene.upload(&self.executor.gpu, &mut self.data);
         let frame =
             FrameData::new().with(meshlight_gpu_scene::names::VIEW, bytemuck::bytes_of(&view));
+        let mut imports = self.scene.imports();
+        if let Some(b) = &self.light_buffers {
+            let limit = self.settings.clustering.as_ref().map_or(0, |c| c.objects);
+            if self.lights.len() as u64 > limit {
+                return Err(GraphError::Parameter {
+                    pass: "(light clustering)".into(),
+                    message: format!(
+                        "{} lights, but the object buffer holds {limit}; raise `FrameSettings::clustering.objects` (`--lights` sizes it) or use fewer",
+                        self.lights.len()
+                    ),
+                });
+            }
+            let queue = &self.executor.gpu.queue;
+            if !self.lights.is_empty() {
+                queue.write_buffer(&b.objects, 0, bytemuck::cast_slice(&self.lights));
+            }
+            queue.write_buffer(
+                &b.object_count,
+                0,
+                &(self.lights.len() as u32).to_le_bytes(),
+            );
+            imports = imports
+                .buffer("objects", &b.objects)
+                .buffer("object_count", &b.object_count);
+        }
         let stats = self
             .executor
-            .execute_frame(&self.compiled, &self.scene.imports(), &frame)?;
+            .execute_frame(&self.compiled, &imports, &frame)?;
         self.take_counts()?;
         Ok(stats)
     }
@@ -139,7 +193,12 @@ impl Renderer {
                         "frame {submitted}'s counters did not come back after the GPU finished it"
                     ))
                 })?;
-            if !counts.overflowed() || attempt == MAX_STILL_FRAMES {
+            let lights_lost = self.settings.clustering.is_some()
+                && self
+                    .clustering
+                    .latest
+                    .is_none_or(|c| c.frame != submitted || c.overflowed());
+            if !(counts.overflowed() || lights_lost) || attempt == MAX_STILL_FRAMES {
                 if counts.overflowed() {
                     log::error!(
                         "frame {submitted} still drops clusters after {attempt} frames: {counts:?}"
@@ -161,6 +220,10 @@ impl Renderer {
     /// Takes every readback that has come back; grows the lists for frames that
     /// overflowed.
     fn take_counts(&mut self) -> Result<()> {
+        if self.settings.clustering.is_some() {
+            self.clustering
+                .take(&mut self.executor, &mut self.compiled)?;
+        }
         for (name, is_clusters) in [
             (CLUSTER_COUNT_READBACK, true),
             (RASTER_COUNTS_READBACK, false),

@@ -5,11 +5,14 @@ use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::{Camera, Material, MeshId, SceneData};
 use meshlight_scene::cache::{self, BakeProgress, Source};
 use meshlight_scene::{BuildOptions, MeshletAsset, SceneError};
+use meshlight_shaders::cpu::layout::{ClusterableKind, ClusterableObject};
 use std::path::Path;
 
 /// Instances of the default scene: with the 1,048,576-triangle procedural mesh, a little
 /// over 10^9 source triangles.
 pub const DEFAULT_INSTANCES: u32 = 1024;
+/// Point lights of the default scene ([`field_lights`]).
+pub const DEFAULT_LIGHTS: u32 = 256;
 
 /// The asset of a mesh argument: `procedural` (the default mesh with `segments`), a
 /// baked `.mlasset` file, or a mesh file baked on first use and cached (keyed by the
@@ -154,4 +157,38 @@ pub fn single(
 
 fn mesh_radius(data: &SceneData, mesh: MeshId) -> f32 {
     data.meshes[mesh.0 as usize].bounding_sphere[3].max(1e-6)
+}
+
+/// Lights of the default scene: `count` coloured point lights hovering over instances of
+/// a [`field`], spread evenly over it, each reaching its neighbours' instances.
+pub fn field_lights(placed: &Placed, count: u32) -> Vec<ClusterableObject> {
+    let instances = &placed.data.instances;
+    if instances.is_empty() || count == 0 {
+        return Vec::new();
+    }
+    let radius = placed
+        .data
+        .meshes
+        .first()
+        .map_or(1.0, |m| m.bounding_sphere[3].max(1e-6));
+    let mut rng = Rng(0x6c69_6768_7473_0001);
+    (0..count)
+        .map(|i| {
+            let instance = &instances[(i as usize * instances.len()) / count as usize];
+            let at = Mat4::from_cols_array_2d(&instance.world_from_local)
+                .w_axis
+                .truncate();
+            let offset = Vec3::new(rng.unit() - 0.5, 0.0, rng.unit() - 0.5) * radius * 2.0;
+            let p = at + offset + Vec3::Y * radius * (1.2 + rng.unit());
+            let hue = rng.unit() * std::f32::consts::TAU;
+            let color = [0.0f32, 2.1, 4.2].map(|phase| 0.55 + 0.45 * (hue + phase).cos());
+            ClusterableObject {
+                position_range: [p.x, p.y, p.z, radius * 3.5],
+                direction_cos_angle: [0.0, -1.0, 0.0, 1.0],
+                color_intensity: [color[0], color[1], color[2], radius * radius * 4.0],
+                kind: ClusterableKind::PointLight as u32,
+                ..ClusterableObject::default()
+            }
+        })
+        .collect()
 }
