@@ -321,3 +321,17 @@ fn too_many_objects_and_an_empty_grid_are_typed_errors() {
         }
     }
 }
+
+#[test]
+fn the_single_pass_scan_gives_the_same_lists() {
+    let mut rng = Rng(0x5ca7_0000_0000_0001);
+    let (view, objects) = random_scene(&mut rng, 1);
+    let s = ClusteringSettings {
+        scan: meshlight::light_clustering::ScanImplementation::DecoupledLookback,
+        ..settings([320, 180], Implementation::Compute)
+    };
+    let want = cpu_assign(&view, &s, &objects);
+    let mut clusterer = Clusterer::new(s, &ClusteringSource::Code).unwrap();
+    let got = clusterer.cluster_still(&view, &objects).unwrap();
+    compare(&view, &got, &want, &objects, "decoupled_lookback scan");
+}

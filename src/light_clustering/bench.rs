@@ -5,7 +5,7 @@
 //! measured in the same run, single-threaded and with rayon.
 
 use super::reference::{cpu_assign, cpu_assign_parallel};
-use super::{Clusterer, ClusteringSettings, ClusteringSource, Implementation};
+use super::{Clusterer, ClusteringSettings, ClusteringSource, Implementation, ScanImplementation};
 use crate::bench::{Row, median, row};
 use glam::Vec3;
 use meshlight_gpu_scene::Camera;
@@ -62,10 +62,12 @@ fn measure_gpu(
     view: &View,
     lights: &[ClusterableObject],
     implementation: Implementation,
+    scan: ScanImplementation,
     frames: u32,
 ) -> Result<GpuRun, Box<dyn std::error::Error>> {
     let settings = ClusteringSettings {
         implementation,
+        scan,
         ..ClusteringSettings::new(VIEWPORT, lights.len() as u64)
     };
     let mut clusterer = Clusterer::new(settings, &ClusteringSource::Code)?;
@@ -109,7 +111,10 @@ fn measure_gpu(
     })
 }
 
+/// The median of `repeats` timed calls, after one untimed call that warms the caches
+/// and rayon's thread pool.
 fn time_ms<T>(repeats: u32, mut f: impl FnMut() -> T) -> (f64, T) {
+    f();
     let mut times = Vec::new();
     let mut last = None;
     for _ in 0..repeats {
@@ -131,13 +136,22 @@ pub fn run(quick: bool) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
     for &n in counts {
         let (view, lights) = many_lights(n);
         let settings = ClusteringSettings::new(VIEWPORT, n as u64);
-        let repeats = if n >= 1_000_000 { 3 } else { 7 };
+        let repeats = if n >= 1_000_000 { 5 } else { 21 };
         let (serial_ms, want) = time_ms(repeats, || cpu_assign(&view, &settings, &lights));
         let (parallel_ms, _) = time_ms(repeats, || cpu_assign_parallel(&view, &settings, &lights));
         let case = format!("{n} lights");
-        for implementation in [Implementation::Compute, Implementation::Raster] {
-            let gpu = measure_gpu(&view, &lights, implementation, frames)?;
-            let case = format!("{case}, {}", implementation.name());
+        let variants = [
+            (Implementation::Compute, ScanImplementation::ScanFan, ""),
+            (Implementation::Raster, ScanImplementation::ScanFan, ""),
+            (
+                Implementation::Compute,
+                ScanImplementation::DecoupledLookback,
+                " + decoupled_lookback scan",
+            ),
+        ];
+        for (implementation, scan, suffix) in variants {
+            let gpu = measure_gpu(&view, &lights, implementation, scan, frames)?;
+            let case = format!("{case}, {}{suffix}", implementation.name());
             let mut total = row(
                 SCENARIO,
                 case.clone(),

@@ -5,7 +5,7 @@
 
 use crate::graph::{Bindings, BufferDesc, Element, GraphBuilder, GraphError, Result};
 use meshlight_pass_count_raster::KINDS;
-use meshlight_pass_scan_fan::ScanFan;
+use meshlight_pass_scan_fan::{DecoupledLookback, ScanFan};
 use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, GridSettings, SLICE_INSTANCE, ZSlice, cpu::COUNT_WORDS,
 };
@@ -48,6 +48,15 @@ impl Implementation {
     }
 }
 
+/// Which `scan_fan` implementation turns the counts into offsets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScanImplementation {
+    /// Reduce, scan of the tile totals, scan-and-add: three dispatches, any adapter.
+    ScanFan,
+    /// One dispatch with decoupled look-back: fast where workgroups run side by side.
+    DecoupledLookback,
+}
+
 /// What the clustering is asked for; the same for both ways of building the graph.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ClusteringSettings {
@@ -55,6 +64,7 @@ pub struct ClusteringSettings {
     pub viewport: [u32; 2],
     pub grid: GridSettings,
     pub implementation: Implementation,
+    pub scan: ScanImplementation,
     /// Objects the object buffer holds; more in a frame is an error naming this.
     pub objects: u64,
     /// Initial sizes of z_slice's list and of the froxel lists; grown on overflow.
@@ -68,6 +78,7 @@ impl ClusteringSettings {
             viewport,
             grid: GridSettings::default(),
             implementation: Implementation::Compute,
+            scan: ScanImplementation::ScanFan,
             objects,
             slice_instances: (objects * 4).max(1024),
             entries: (objects * 16).max(4096),
@@ -173,7 +184,12 @@ pub fn add_stages(g: &mut GraphBuilder, s: &ClusteringSettings) -> Result<()> {
         .bind_named("input", "cluster_counts")
         .bind_named("output", "cluster_offsets")
         .bind_named("total", "list_total");
-    g.add_pass("scan", ScanFan::new(lists as u32), scan)?;
+    match s.scan {
+        ScanImplementation::ScanFan => g.add_pass("scan", ScanFan::new(lists as u32), scan)?,
+        ScanImplementation::DecoupledLookback => {
+            g.add_pass("scan", DecoupledLookback::new(lists as u32), scan)?
+        }
+    };
     match s.implementation {
         Implementation::Raster => {
             let populate = meshlight_pass_populate::Raster {
