@@ -335,3 +335,15 @@ fn the_single_pass_scan_gives_the_same_lists() {
     let got = clusterer.cluster_still(&view, &objects).unwrap();
     compare(&view, &got, &want, &objects, "decoupled_lookback scan");
 }
+
+#[test]
+fn one_command_buffer_per_frame_gives_the_same_lists() {
+    let mut rng = Rng(0x0c0b_0000_0000_0001);
+    let (view, objects) = random_scene(&mut rng, 0);
+    let s = settings([320, 180], Implementation::Raster);
+    let want = cpu_assign(&view, &s, &objects);
+    let mut clusterer = Clusterer::new(s, &ClusteringSource::Code).unwrap();
+    clusterer.executor.one_command_buffer = true;
+    let got = clusterer.cluster_still(&view, &objects).unwrap();
+    compare(&view, &got, &want, &objects, "one command buffer");
+}

@@ -63,6 +63,7 @@ fn measure_gpu(
     lights: &[ClusterableObject],
     implementation: Implementation,
     scan: ScanImplementation,
+    one_command_buffer: bool,
     frames: u32,
 ) -> Result<GpuRun, Box<dyn std::error::Error>> {
     let settings = ClusteringSettings {
@@ -71,6 +72,7 @@ fn measure_gpu(
         ..ClusteringSettings::new(VIEWPORT, lights.len() as u64)
     };
     let mut clusterer = Clusterer::new(settings, &ClusteringSource::Code)?;
+    clusterer.executor.one_command_buffer = one_command_buffer;
     let still = clusterer.cluster_still(view, lights)?;
     clusterer.executor.take_gpu_timings()?;
     for _ in 0..frames {
@@ -140,17 +142,25 @@ pub fn run(quick: bool) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
         let (serial_ms, want) = time_ms(repeats, || cpu_assign(&view, &settings, &lights));
         let (parallel_ms, _) = time_ms(repeats, || cpu_assign_parallel(&view, &settings, &lights));
         let case = format!("{n} lights");
+        let (compute, raster) = (Implementation::Compute, Implementation::Raster);
+        let (fan, lookback) = (
+            ScanImplementation::ScanFan,
+            ScanImplementation::DecoupledLookback,
+        );
         let variants = [
-            (Implementation::Compute, ScanImplementation::ScanFan, ""),
-            (Implementation::Raster, ScanImplementation::ScanFan, ""),
+            (compute, fan, false, ""),
+            (raster, fan, false, ""),
+            (compute, lookback, false, " + decoupled_lookback scan"),
+            (compute, fan, true, ", one command buffer"),
             (
-                Implementation::Compute,
-                ScanImplementation::DecoupledLookback,
-                " + decoupled_lookback scan",
+                compute,
+                lookback,
+                true,
+                " + decoupled_lookback scan, one command buffer",
             ),
         ];
-        for (implementation, scan, suffix) in variants {
-            let gpu = measure_gpu(&view, &lights, implementation, scan, frames)?;
+        for (implementation, scan, one_buffer, suffix) in variants {
+            let gpu = measure_gpu(&view, &lights, implementation, scan, one_buffer, frames)?;
             let case = format!("{case}, {}{suffix}", implementation.name());
             let mut total = row(
                 SCENARIO,

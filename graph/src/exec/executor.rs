@@ -111,6 +111,11 @@ pub struct Executor {
     pub blocking_waits: u64,
     /// Write per-pass timestamps where the adapter has them (off for CPU-overhead runs).
     pub gpu_timing: bool,
+    /// Record every pass of a frame into one command buffer instead of one each. Off by
+    /// default: a pass's own buffer lets a validation error that wgpu defers to
+    /// `finish` name that pass; on, such an error names the frame. For measuring what the
+    /// command-buffer boundaries cost.
+    pub one_command_buffer: bool,
 }
 
 impl Executor {
@@ -129,6 +134,7 @@ impl Executor {
             frame: 0,
             blocking_waits: 0,
             gpu_timing: true,
+            one_command_buffer: false,
         }
     }
 
@@ -326,26 +332,37 @@ impl Executor {
         let device = &self.gpu.device;
         let mut command_buffers = Vec::with_capacity(plan.order.len() + 1);
         let mut timings = Vec::with_capacity(plan.order.len());
+        let mut shared = self.one_command_buffer.then(|| {
+            device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("meshlight frame"),
+            })
+        });
         for (i, &p) in plan.order.iter().enumerate() {
             let node = &graph.passes[p];
             let t0 = Instant::now();
             let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some(&node.name),
+            let mut own = shared.is_none().then(|| {
+                device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some(&node.name),
+                })
             });
+            let encoder = match (own.as_mut(), shared.as_mut()) {
+                (Some(e), _) | (None, Some(e)) => e,
+                (None, None) => unreachable!("one of the two encoders exists"),
+            };
             let ts = if timing {
                 self.timestamps.as_ref()
             } else {
                 None
             };
             if let Some(ts) = ts {
-                ts.write(&mut encoder, 2 * i as u32);
+                ts.write(encoder, 2 * i as u32);
             }
             let mut ctx = RecordContext {
                 device,
                 queue: &self.gpu.queue,
                 features: self.gpu.features,
-                encoder: &mut encoder,
+                encoder,
                 node,
                 setup: &graph.setups[p],
                 pass_index: p,
@@ -360,9 +377,9 @@ impl Executor {
             };
             let recorded = node.pass.record(&mut ctx);
             if let Some(ts) = ts {
-                ts.write(&mut encoder, 2 * i as u32 + 1);
+                ts.write(ctx.encoder, 2 * i as u32 + 1);
             }
-            let cb = encoder.finish();
+            let cb = own.map(wgpu::CommandEncoder::finish);
             let failed = match pollster::block_on(scope.pop()) {
                 Some(e) => Err(GraphError::Validation {
                     pass: node.name.clone(),
@@ -374,7 +391,7 @@ impl Executor {
                 self.readbacks.abandon();
                 return Err(e);
             }
-            command_buffers.push(cb);
+            command_buffers.extend(cb);
             timings.push(PassTiming {
                 name: node.name.clone(),
                 gpu_us: None,
@@ -382,6 +399,18 @@ impl Executor {
             });
         }
 
+        if let Some(encoder) = shared {
+            let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+            let cb = encoder.finish();
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                self.readbacks.abandon();
+                return Err(GraphError::Validation {
+                    pass: "(the frame's command buffer)".into(),
+                    message: e.to_string(),
+                });
+            }
+            command_buffers.push(cb);
+        }
         if let Some(ts) = self.timestamps.as_mut().filter(|_| timing) {
             let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("meshlight timestamps"),

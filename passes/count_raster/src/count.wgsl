@@ -43,6 +43,15 @@ fn count_froxel(o: ViewObject, froxel: vec3<u32>) {
     }
 }
 
+// Zeroes the counts before the walk: a dispatch, where a buffer fill would need a
+// transfer and its barriers between two compute steps.
+@compute @workgroup_size(64)
+fn zero(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    for (var i = id.x; i < arrayLength(&cluster_counts); i += groups.x * WORKGROUP_SIZE) {
+        atomicStore(&cluster_counts[i], 0u);
+    }
+}
+
 struct Varyings {
     @builtin(position) position: vec4<f32>,
     @location(0) @interpolate(flat) instance: u32,

@@ -126,6 +126,22 @@ fn setup_common(ctx: &mut SetupContext) {
     ctx.min_bytes("slice_counts", 8);
     ctx.min_bytes("cluster_grid", CLUSTER_GRID.size as u64);
     ctx.frame_input(VIEW_INPUT);
+    let zero = BindingLayout::compute("count_raster::zero").slot(4, "cluster_counts");
+    ctx.program("zero", ProgramDesc::compute(&SHADER, "zero").layout(zero));
+}
+
+/// Zeroes `cluster_counts` with a dispatch (see `zero` in count.wgsl).
+fn record_zero(ctx: &mut RecordContext<'_>) -> Result<()> {
+    let (_, bytes) = ctx.buffer("cluster_counts")?;
+    let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
+    let groups = ((bytes / 4) as u32).div_ceil(64).clamp(1, limit);
+    let program = ctx.compute("zero")?;
+    let group = ctx.bind_group(&program, 0, &[])?;
+    let mut pass = ctx.compute_pass();
+    pass.set_pipeline(&program.pipeline);
+    pass.set_bind_group(0, &group, &[]);
+    pass.dispatch_workgroups(groups, 1, 1);
+    Ok(())
 }
 
 /// The `raster` implementation.
@@ -209,7 +225,7 @@ impl Pass for Raster {
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
-        ctx.clear("cluster_counts")?;
+        record_zero(ctx)?;
         let program = ctx.render("count")?;
         let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
         let (args, _) = ctx.buffer("slice_draw_args")?;
@@ -243,7 +259,7 @@ impl Pass for Compute {
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
-        ctx.clear("cluster_counts")?;
+        record_zero(ctx)?;
         let program = ctx.compute("count")?;
         let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
         let (args, _) = ctx.buffer("slice_dispatch_args")?;

@@ -146,6 +146,7 @@ impl Steps {
         ctx.min_bytes("list_counts", 8);
         ctx.frame_input(VIEW_INPUT);
         let publish = BindingLayout::compute("populate::publish")
+            .slot(5, "cluster_cursors")
             .slot(6, "cluster_objects")
             .slot(7, "list_total")
             .slot(8, "list_counts")
@@ -173,16 +174,18 @@ impl Steps {
         }
     }
 
-    /// Clears the cursors and publishes the counts, before the walk.
+    /// Zeroes the cursors and publishes the counts, before the walk.
     fn before(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        ctx.clear("cluster_cursors")?;
+        let (_, bytes) = ctx.buffer("cluster_cursors")?;
+        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
+        let groups = ((bytes / 4) as u32).div_ceil(WORKGROUP).clamp(1, limit);
         let params = self.params();
         let publish = ctx.compute("publish")?;
         let group = ctx.bind_group(&publish, 0, &[(10, bytemuck::bytes_of(&params))])?;
         let mut pass = ctx.compute_pass();
         pass.set_pipeline(&publish.pipeline);
         pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.dispatch_workgroups(groups, 1, 1);
         Ok(())
     }
 

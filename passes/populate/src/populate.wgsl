@@ -87,10 +87,17 @@ fn settle(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
-@compute @workgroup_size(1)
-fn publish() {
-    list_counts[0] = list_total[0];
-    list_counts[1] = capacity();
+// Zeroes the cursors (a dispatch, where a buffer fill would need a transfer and its
+// barriers) and publishes the counts for the readback.
+@compute @workgroup_size(64)
+fn publish(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    for (var i = id.x; i < arrayLength(&cluster_cursors); i += groups.x * WORKGROUP_SIZE) {
+        atomicStore(&cluster_cursors[i], 0u);
+    }
+    if id.x == 0u {
+        list_counts[0] = list_total[0];
+        list_counts[1] = capacity();
+    }
 }
 
 struct Varyings {
