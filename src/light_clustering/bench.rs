@@ -53,6 +53,8 @@ pub fn many_lights(n: usize) -> (View, Vec<ClusterableObject>) {
 struct GpuRun {
     passes: Vec<(String, f64)>,
     total_ms: f64,
+    /// From the first stage's start to the last one's end, gaps between passes included.
+    span_ms: f64,
     visible: u32,
     entries: u32,
     device: String,
@@ -87,7 +89,18 @@ fn measure_gpu(
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut order = Vec::new();
     let mut totals = Vec::new();
+    let mut spans = Vec::new();
     for t in &timings {
+        let stages: Vec<[f64; 2]> = t
+            .passes
+            .iter()
+            .zip(&t.intervals)
+            .filter(|((n, _), _)| !n.starts_with("readback:"))
+            .map(|(_, i)| *i)
+            .collect();
+        if let (Some(first), Some(last)) = (stages.first(), stages.last()) {
+            spans.push((last[1] - first[0]) / 1e3);
+        }
         let mut total = 0.0;
         for (name, us) in t.passes.iter().filter(|(n, _)| !n.starts_with("readback:")) {
             if !per_pass.contains_key(name) {
@@ -107,6 +120,7 @@ fn measure_gpu(
             })
             .collect(),
         total_ms: median(totals),
+        span_ms: median(spans),
         visible: still.counts.visible.iter().sum(),
         entries: still.counts.entries_needed,
         device,
@@ -127,6 +141,58 @@ fn time_ms<T>(repeats: u32, mut f: impl FnMut() -> T) -> (f64, T) {
     (median(times), last.expect("at least one repeat"))
 }
 
+/// The floor the stages stand on: four passes of one one-thread dispatch each
+/// (`remap_dispatch`, reading one word and writing three), timed like the clustering. Returns the median per pass and
+/// the median span of the four.
+fn pass_floor(frames: u32) -> Result<(f64, f64, String), Box<dyn std::error::Error>> {
+    use crate::graph::*;
+    let gpu = GpuContext::with_available(wgpu::Features::all())?;
+    let device = gpu.info.name.clone();
+    let mut g = GraphBuilder::new();
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+    let count = g.import_buffer("seed", BufferDesc::array(Element::U32, 4), usage);
+    for i in 0..4 {
+        let args = g.create_buffer(
+            &format!("args{i}"),
+            BufferDesc::array(Element::DISPATCH_ARGS, 1),
+        );
+        let pass = crate::remap_dispatch::RemapDispatch {
+            count_word: 0,
+            max_per_dimension: None,
+        };
+        let out = g.add_pass(
+            &format!("one_thread_{i}"),
+            pass,
+            Bindings::new().bind("count", count).bind("args", args),
+        )?;
+        g.export(out.buffer("args")?);
+    }
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
+    let seed = gpu.buffer_with_data(
+        "seed",
+        &[7, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0],
+        usage,
+    );
+    let mut exec = Executor::new(gpu);
+    let imports = Imports::new().buffer("seed", &seed);
+    for _ in 0..frames {
+        exec.execute_frame(&compiled, &imports, &FrameData::new())?;
+    }
+    exec.finish()?;
+    let timings = exec.take_gpu_timings()?;
+    let per_pass = median(
+        timings
+            .iter()
+            .flat_map(|t| t.passes.iter().map(|(_, us)| us / 1e3))
+            .collect(),
+    );
+    let spans = timings
+        .iter()
+        .filter_map(|t| Some((t.intervals.last()?[1] - t.intervals.first()?[0]) / 1e3))
+        .collect();
+    Ok((per_pass, median(spans), device))
+}
+
 pub fn run(quick: bool) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
     let counts: &[usize] = if quick {
         &[1_000, 10_000]
@@ -135,6 +201,23 @@ pub fn run(quick: bool) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
     };
     let frames = if quick { 5 } else { 50 };
     let mut rows = Vec::new();
+    let (per_pass, span, device) = pass_floor(frames)?;
+    rows.push(row(
+        SCENARIO,
+        "floor: 4 passes of a 1-thread dispatch".into(),
+        "GPU per pass",
+        per_pass,
+        "ms",
+        &device,
+    ));
+    rows.push(row(
+        SCENARIO,
+        "floor: 4 passes of a 1-thread dispatch".into(),
+        "GPU span of the 4",
+        span,
+        "ms",
+        &device,
+    ));
     for &n in counts {
         let (view, lights) = many_lights(n);
         let settings = ClusteringSettings::new(VIEWPORT, n as u64);
@@ -172,6 +255,14 @@ pub fn run(quick: bool) -> Result<Vec<Row>, Box<dyn std::error::Error>> {
             );
             total.vs_baseline = Some(parallel_ms / gpu.total_ms);
             rows.push(total);
+            rows.push(row(
+                SCENARIO,
+                case.clone(),
+                "GPU span, first stage's start to last stage's end",
+                gpu.span_ms,
+                "ms",
+                &gpu.device,
+            ));
             for (name, ms) in &gpu.passes {
                 rows.push(row(
                     SCENARIO,

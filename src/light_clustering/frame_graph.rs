@@ -35,7 +35,7 @@ pub const OBJECT_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
 pub enum Implementation {
     /// Instanced quads through the rasteriser: where every unit rasterises.
     Raster,
-    /// A workgroup per instance: where few units run graphics (H100/H200).
+    /// Compute walks over the instances' tiles: where few units run graphics (H100/H200).
     Compute,
 }
 

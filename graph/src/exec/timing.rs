@@ -12,6 +12,9 @@ pub struct GpuTimings {
     /// (pass, µs) in execution order.
     pub passes: Vec<(String, f64)>,
     pub total_us: f64,
+    /// Per pass, when its timestamps were written, in µs after the frame's first one: the
+    /// span of a run of passes, gaps included, is `end of the last − start of the first`.
+    pub intervals: Vec<[f64; 2]>,
 }
 
 pub(crate) struct Timestamps {
@@ -123,10 +126,16 @@ impl Timestamps {
                     })
                     .collect();
                 let total_us = passes.iter().map(|(_, us)| us).sum();
+                let origin = ticks.first().copied().unwrap_or(0);
+                let at = |t: u64| t.saturating_sub(origin) as f64 * period_ns / 1000.0;
+                let intervals = (0..passes.len())
+                    .map(|i| [at(ticks[2 * i]), at(ticks[2 * i + 1])])
+                    .collect();
                 Some(GpuTimings {
                     frame,
                     passes,
                     total_us,
+                    intervals,
                 })
             })
             .collect()

@@ -29,9 +29,10 @@
 //!   `width × height` viewport (one pixel per tile, `width` and `height` equal to the
 //!   grid's), colour writes off; the fragment shader tests and counts. Where every unit
 //!   of the GPU rasterises, the rasteriser does the rectangle walk for free.
-//! - [`Compute`] (`compute`): one workgroup of 64 per instance walks its rectangle, a
-//!   froxel per thread. No fixed-function work: the fast path where few units run
-//!   graphics (the H100/H200 have two).
+//! - [`Compute`] (`compute`): each workgroup of 64 lanes takes up to 64 instances and
+//!   shares its lanes out over all their tiles (a prefix sum of the tile counts in
+//!   workgroup memory, a binary search per tile), a froxel per lane. No fixed-function
+//!   work: the fast path where few units run graphics (the H100/H200 have two).
 //!
 //! Both count exactly the pairs [`cpu::cpu_count`] counts, except pairs whose deciding
 //! value lies within a hair of its threshold (`meshlight_shaders::cpu::froxel::Decision`),
@@ -82,7 +83,7 @@ pub fn contract() -> StageContract {
                 "slice_dispatch_args",
                 Access::Indirect,
                 Element::DISPATCH_ARGS,
-                "a workgroup per instance (compute)",
+                "a workgroup per 64 instances (compute)",
             ),
             read("cluster_grid", CLUSTER_GRID, "the grid z_slice published"),
             Slot::buffer(

@@ -42,7 +42,8 @@
 //! # Implementations
 //!
 //! [`Raster`] (`raster`, an instanced indirect draw of a quad per instance, the fragment
-//! shader writes) and [`Compute`] (`compute`, a workgroup per instance walks its tiles),
+//! shader writes) and [`Compute`] (`compute`, workgroups share their lanes out over the
+//! tiles of up to 64 instances each),
 //! as in `count_raster`; pair each with the same implementation of that stage, so both
 //! stages decide every pair with the same code.
 
@@ -91,7 +92,7 @@ pub fn contract() -> StageContract {
                 "slice_dispatch_args",
                 Access::Indirect,
                 Element::DISPATCH_ARGS,
-                "a workgroup per instance (compute)",
+                "a workgroup per 64 instances (compute)",
             ),
             read("cluster_grid", CLUSTER_GRID, "the grid z_slice published"),
             read("cluster_offsets", Element::U32, "where each list starts"),

@@ -225,6 +225,9 @@ pub struct ZSliceResult {
     pub dispatch_args: [u32; 3],
 }
 
+/// Instances per workgroup in the dispatch arguments (`INSTANCES_PER_GROUP`).
+pub const INSTANCES_PER_GROUP: u32 = 64;
+
 /// `fold_dispatch` of the WGSL: `groups` workgroups as `[x, y, 1]` under the limit.
 pub fn fold_dispatch(groups: u32, max_per_dimension: u32) -> [u32; 3] {
     let max_dim = max_per_dimension.max(1);
@@ -268,6 +271,6 @@ pub fn cpu_z_slice(
         pairs,
         counts,
         draw_args: [quad_vertices, written, 0, 0],
-        dispatch_args: fold_dispatch(written, max_per_dimension),
+        dispatch_args: fold_dispatch(written.div_ceil(INSTANCES_PER_GROUP), max_per_dimension),
     }
 }

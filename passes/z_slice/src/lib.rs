@@ -4,8 +4,10 @@
 //!
 //! A froxel test is cheap but there are `W × H × D` froxels; slicing in depth first
 //! means the later stages only walk, or draw one screen quad for, the slices an object
-//! can touch. Each object reserves all its slices with one atomic, so its slices are
-//! contiguous in the list; past the capacity they are counted, never written.
+//! can touch. Each object reserves all its slices with one atomic in workgroup memory and
+//! each workgroup its objects' with one global atomic (likewise the count words), so an
+//! object's slices are contiguous in the list and a million objects do not serialise on
+//! one word; past the capacity they are counted, never written.
 //!
 //! # Contract
 //!
@@ -16,7 +18,7 @@
 //! | `slice_instances`     | storage write      | SliceInstance | `(object, slice)` pairs; capacity = its length (or `capacity`) |
 //! | `slice_counts`        | cleared read-write | u32 × 8 | the words below |
 //! | `slice_draw_args`     | storage write      | DrawIndirectArgs | `[quad_vertices, instances written, 0, 0]` for the raster draws |
-//! | `slice_dispatch_args` | storage write      | DispatchIndirectArgs | one workgroup per instance written, `[x, y, 1]`, for the compute implementations |
+//! | `slice_dispatch_args` | storage write      | DispatchIndirectArgs | a workgroup per 64 instances written, `[x, y, 1]`, for the compute implementations |
 //! | `cluster_grid`        | storage write      | ClusterGrid | the grid of this frame, for the later stages |
 //!
 //! `slice_counts`: `[0]` instances requested (may exceed the capacity), `[1]` the
@@ -134,7 +136,7 @@ pub fn contract() -> StageContract {
             write(
                 "slice_dispatch_args",
                 Element::DISPATCH_ARGS,
-                "one workgroup per instance",
+                "a workgroup per 64 instances",
             ),
             write("cluster_grid", CLUSTER_GRID, "the grid of this frame"),
         ],

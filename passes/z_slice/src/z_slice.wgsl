@@ -36,7 +36,7 @@ struct SliceInstance {
 @group(0) @binding(3) var<storage, read_write> slice_counts: array<atomic<u32>>;
 // draw_indirect arguments: [quad vertices, instances written, 0, 0].
 @group(0) @binding(4) var<storage, read_write> slice_draw_args: array<u32>;
-// dispatch_workgroups_indirect arguments: one workgroup per instance written, [x, y, 1].
+// dispatch_workgroups_indirect arguments: a workgroup per 64 instances written, [x, y, 1].
 @group(0) @binding(5) var<storage, read_write> slice_dispatch_args: array<u32>;
 // The grid this frame was sliced with, for the passes after this one.
 @group(0) @binding(6) var<storage, read_write> cluster_grid: ClusterGrid;
@@ -49,6 +49,9 @@ struct SliceInstance {
 @group(0) @binding(11) var<uniform> params: Params;
 
 const WORKGROUP_SIZE: u32 = 64u;
+// Instances per workgroup in the dispatch arguments: the compute walks of the later
+// stages take up to this many (object, slice) instances per workgroup.
+const INSTANCES_PER_GROUP: u32 = 64u;
 const COUNT_WORDS: u32 = 8u;
 const WORD_REQUESTED: u32 = 0u;
 const WORD_CAPACITY: u32 = 1u;
@@ -191,30 +194,52 @@ fn prepare() {
     cluster_grid = grid;
 }
 
+// The workgroup's counts, summed in workgroup memory so each workgroup adds to the global
+// words once: a million objects adding one each to the same word serialised on it.
+var<workgroup> group_counts: array<atomic<u32>, 8>;
+// Where the workgroup's instances start in the list.
+var<workgroup> group_base: u32;
+
 @compute @workgroup_size(64)
 fn slice(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    if t < COUNT_WORDS {
+        atomicStore(&group_counts[t], 0u);
+    }
+    workgroupBarrier();
     let i = (wg.y * dispatch_in[0] + wg.x) * WORKGROUP_SIZE + t;
-    if i >= object_total() {
-        return;
+    var first = 0u;
+    var n = 0u;
+    var local = 0u;
+    if i < object_total() {
+        let object = objects[i];
+        let extent = object_extent(object);
+        if extent.outcome == OUTCOME_INVALID {
+            atomicAdd(&group_counts[WORD_INVALID], 1u);
+        } else if extent.outcome == OUTCOME_CULLED {
+            atomicAdd(&group_counts[WORD_CULLED], 1u);
+        } else {
+            atomicAdd(&group_counts[WORD_VISIBLE + object.kind], 1u);
+            first = z_slice_of_depth(grid, extent.near_depth);
+            // `max`: log2 is not correctly rounded, so two depths an ulp apart must not cross.
+            let last = max(z_slice_of_depth(grid, extent.far_depth), first);
+            n = last - first + 1u;
+            // One reservation per object keeps its slices together.
+            local = atomicAdd(&group_counts[WORD_REQUESTED], n);
+        }
     }
-    let object = objects[i];
-    let extent = object_extent(object);
-    if extent.outcome == OUTCOME_INVALID {
-        atomicAdd(&slice_counts[WORD_INVALID], 1u);
-        return;
+    workgroupBarrier();
+    if t == 0u {
+        group_base = atomicAdd(&slice_counts[WORD_REQUESTED], atomicLoad(&group_counts[WORD_REQUESTED]));
+        for (var w = WORD_INVALID; w < COUNT_WORDS; w += 1u) {
+            let c = atomicLoad(&group_counts[w]);
+            if c > 0u {
+                atomicAdd(&slice_counts[w], c);
+            }
+        }
     }
-    if extent.outcome == OUTCOME_CULLED {
-        atomicAdd(&slice_counts[WORD_CULLED], 1u);
-        return;
-    }
-    atomicAdd(&slice_counts[WORD_VISIBLE + object.kind], 1u);
-    let first = z_slice_of_depth(grid, extent.near_depth);
-    // `max`: log2 is not correctly rounded, so two depths an ulp apart must not cross.
-    let last = max(z_slice_of_depth(grid, extent.far_depth), first);
-    let n = last - first + 1u;
-    // One reservation per object keeps its slices together; past the capacity they are
-    // counted and not written.
-    let base = atomicAdd(&slice_counts[WORD_REQUESTED], n);
+    workgroupBarrier();
+    // Past the capacity the instances are counted, not written.
+    let base = group_base + local;
     let cap = capacity();
     var room = 0u;
     if base < cap {
@@ -232,7 +257,7 @@ fn finish() {
     slice_draw_args[1] = written;
     slice_draw_args[2] = 0u;
     slice_draw_args[3] = 0u;
-    let d = fold_dispatch(written);
+    let d = fold_dispatch((written + INSTANCES_PER_GROUP - 1u) / INSTANCES_PER_GROUP);
     slice_dispatch_args[0] = d.x;
     slice_dispatch_args[1] = d.y;
     slice_dispatch_args[2] = d.z;

@@ -178,7 +178,7 @@ fn compare(
     );
     assert_eq!(
         got.dispatch_args,
-        cpu::fold_dispatch(written, limit),
+        cpu::fold_dispatch(written.div_ceil(cpu::INSTANCES_PER_GROUP), limit),
         "{label}: dispatch arguments"
     );
     assert!(
@@ -468,8 +468,8 @@ fn an_overflowing_list_counts_everything_and_writes_only_its_capacity() {
     let mut rng = Rng(0x0f10_2030);
     let camera = perspective(Vec3::new(0.0, 5.0, 30.0), Vec3::ZERO, 1.2);
     let view = camera.view([320, 180], 0, None);
-    let objects = random_objects(&mut rng, 200, Vec3::ZERO, 20.0);
-    const C: u32 = 50;
+    let objects = random_objects(&mut rng, 2000, Vec3::ZERO, 20.0);
+    const C: u32 = 577;
     let pass = ZSlice {
         max_per_dimension: Some(8),
         ..pass_with(C)
@@ -487,8 +487,8 @@ fn an_overflowing_list_counts_everything_and_writes_only_its_capacity() {
     assert!(near <= MAX_NEAR_PER_SCENE);
     assert!(got.counts[WORD_REQUESTED] > C);
     assert_eq!(got.draw_args[1], C);
-    // 50 workgroups under a limit of 8: 8 × 7.
-    assert_eq!(got.dispatch_args, [8, 7, 1]);
+    // 577 instances, 64 per workgroup: 10 workgroups under a limit of 8, 8 × 2.
+    assert_eq!(got.dispatch_args, [8, 2, 1]);
     assert!(got.list[..C as usize].iter().all(|e| *e != SENTINEL));
     assert!(got.list[C as usize..].iter().all(|e| *e == SENTINEL));
     // Without the capacity param, the buffer's length is the capacity.

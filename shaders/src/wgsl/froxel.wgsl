@@ -280,3 +280,17 @@ fn froxel_quad_corner(grid: ClusterGrid, rect: TileRect, vertex: u32) -> vec4<f3
     let uv = vec2<f32>(tile) / vec2<f32>(grid.dims.xy);
     return vec4(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0, 0.5, 1.0);
 }
+
+// Tiles of a rectangle (0 when empty).
+fn rect_tiles(rect: TileRect) -> u32 {
+    if rect_is_empty(rect) {
+        return 0u;
+    }
+    return (rect.max_tile.x - rect.min_tile.x + 1u) * (rect.max_tile.y - rect.min_tile.y + 1u);
+}
+
+// The rectangle's tile number `index`, row by row.
+fn rect_tile(rect: TileRect, index: u32) -> vec2<u32> {
+    let width = rect.max_tile.x - rect.min_tile.x + 1u;
+    return rect.min_tile + vec2(index % width, index / width);
+}
