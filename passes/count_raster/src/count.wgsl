@@ -8,7 +8,7 @@
 
 #import meshlight::view::View
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_index, CLUSTERABLE_TYPE_COUNT}
-#import meshlight::froxel::{ViewObject, TileRect, view_object, froxel_aabb, froxel_rect, rect_is_empty, object_touches_froxel, froxel_quad_corner, rect_tiles, rect_tile}
+#import meshlight::froxel::{ViewObject, TileRect, view_object, froxel_aabb, froxel_rect, rect_is_empty, object_touches_froxel, froxel_quad_corner, walk_instance, walk_layout, walk_tile, WALK_GROUP}
 
 // One (object, slice) pair of `z_slice`'s list.
 struct SliceInstance {
@@ -72,76 +72,23 @@ fn count_fs(in: Varyings) {
     count_froxel(o, vec3(vec2<u32>(in.position.xy), pair.slice));
 }
 
-// The compute walk shares a workgroup's lanes out over the tiles of all its instances,
-// not a workgroup per instance: most rectangles hold a tile or two, and a workgroup per
-// instance left most lanes idle. Each workgroup takes an equal share of the instances (at
-// most WALK_GROUP), prefix-sums their tile counts, and each lane walks every
-// WALK_GROUP-th tile of the run, finding its instance by binary search.
-const WALK_GROUP: u32 = 64u;
-
-var<workgroup> walk_rects: array<TileRect, 64>;
-var<workgroup> walk_pairs: array<SliceInstance, 64>;
-// walk_starts[k]: the first tile of instance k in the workgroup's run; [64]: the total.
-var<workgroup> walk_starts: array<u32, 65>;
-
-// Sets up the workgroup's instances; returns the tiles of all of them.
-fn walk_begin(wg: vec3<u32>, groups: vec3<u32>, t: u32) -> u32 {
-    let written = instances_written();
-    let group = wg.y * groups.x + wg.x;
-    let share = (written + groups.x * groups.y - 1u) / (groups.x * groups.y);
-    let instance = group * share + t;
-    var tiles = 0u;
-    if t < min(share, WALK_GROUP) && instance < written {
-        let pair = slice_instances[instance];
-        let rect = froxel_rect(view, cluster_grid, view_object(view, objects[pair.object]), pair.slice);
-        walk_rects[t] = rect;
-        walk_pairs[t] = pair;
-        tiles = rect_tiles(rect);
-    }
-    if t == 0u {
-        walk_starts[0] = 0u;
-    }
-    walk_starts[t + 1u] = tiles;
-    workgroupBarrier();
-    // Inclusive Hillis–Steele sums over walk_starts[1..=64].
-    for (var d = 1u; d < WALK_GROUP; d <<= 1u) {
-        var add = 0u;
-        if t >= d {
-            add = walk_starts[t + 1u - d];
-        }
-        workgroupBarrier();
-        walk_starts[t + 1u] += add;
-        workgroupBarrier();
-    }
-    return walk_starts[WALK_GROUP];
-}
-
-// The instance whose tiles hold the run's tile `i`: the last k with walk_starts[k] <= i.
-fn walk_owner(i: u32) -> u32 {
-    var lo = 0u;
-    var hi = WALK_GROUP;
-    while hi - lo > 1u {
-        let mid = (lo + hi) / 2u;
-        if walk_starts[mid] <= i {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
-}
-
 @compute @workgroup_size(64)
 fn count_cs(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) t: u32,
 ) {
-    let total = walk_begin(wg, groups, t);
+    let written = instances_written();
+    let instance = walk_instance(wg, groups, t, written);
+    var pair = SliceInstance(0u, 0u);
+    var rect = TileRect(vec2(1u, 0u), vec2(0u));
+    if instance < written {
+        pair = slice_instances[instance];
+        rect = froxel_rect(view, cluster_grid, view_object(view, objects[pair.object]), pair.slice);
+    }
+    let total = walk_layout(t, pair.object, pair.slice, rect);
     for (var i = t; i < total; i += WALK_GROUP) {
-        let k = walk_owner(i);
-        let pair = walk_pairs[k];
-        let tile = rect_tile(walk_rects[k], i - walk_starts[k]);
-        count_froxel(view_object(view, objects[pair.object]), vec3(tile, pair.slice));
+        let w = walk_tile(i);
+        count_froxel(view_object(view, objects[w.object]), vec3(w.tile, w.slice));
     }
 }

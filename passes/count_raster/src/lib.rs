@@ -60,39 +60,46 @@ const TARGET: &str = "target";
 
 pub const SHADER: PassShader = pass_shader!("count_raster::count", "count.wgsl");
 
+/// The slots through which a walking stage reads z_slice's instances: `count_raster`'s,
+/// and `populate`'s, which walks the same instances.
+pub fn instance_slots() -> Vec<Slot> {
+    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
+    vec![
+        read("objects", CLUSTERABLE_OBJECT, "lights, probes and decals"),
+        read(
+            "slice_instances",
+            SLICE_INSTANCE,
+            "z_slice's (object, slice) list",
+        ),
+        read("slice_counts", Element::U32, "[0] requested, [1] capacity"),
+        Slot::buffer(
+            "slice_draw_args",
+            Access::Indirect,
+            Element::DRAW_ARGS,
+            "a quad per instance (raster)",
+        ),
+        Slot::buffer(
+            "slice_dispatch_args",
+            Access::Indirect,
+            Element::DISPATCH_ARGS,
+            "a workgroup per 64 instances (compute)",
+        ),
+        read("cluster_grid", CLUSTER_GRID, "the grid z_slice published"),
+    ]
+}
+
 /// The slots every implementation of `count_raster` shares.
 pub fn contract() -> StageContract {
-    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
+    let mut slots = instance_slots();
+    slots.push(Slot::buffer(
+        "cluster_counts",
+        Access::ClearedReadWrite,
+        Element::U32,
+        "[froxel × 4 + kind]: objects touching it",
+    ));
     StageContract {
         stage: STAGE,
-        slots: vec![
-            read("objects", CLUSTERABLE_OBJECT, "lights, probes and decals"),
-            read(
-                "slice_instances",
-                SLICE_INSTANCE,
-                "z_slice's (object, slice) list",
-            ),
-            read("slice_counts", Element::U32, "[0] requested, [1] capacity"),
-            Slot::buffer(
-                "slice_draw_args",
-                Access::Indirect,
-                Element::DRAW_ARGS,
-                "a quad per instance (raster)",
-            ),
-            Slot::buffer(
-                "slice_dispatch_args",
-                Access::Indirect,
-                Element::DISPATCH_ARGS,
-                "a workgroup per 64 instances (compute)",
-            ),
-            read("cluster_grid", CLUSTER_GRID, "the grid z_slice published"),
-            Slot::buffer(
-                "cluster_counts",
-                Access::ClearedReadWrite,
-                Element::U32,
-                "[froxel × 4 + kind]: objects touching it",
-            ),
-        ],
+        slots,
     }
 }
 

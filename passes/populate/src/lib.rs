@@ -55,7 +55,7 @@ use meshlight_graph::{
     Access, BindingLayout, ColorAttachment, ColorTarget, Element, GraphError, Pass, Primitive,
     ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
 };
-use meshlight_pass_z_slice::{CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE};
+use meshlight_pass_z_slice::CLUSTER_GRID;
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
@@ -72,56 +72,38 @@ pub const SHADER: PassShader = pass_shader!("populate::populate", "populate.wgsl
 /// The slots every implementation of `populate` shares.
 pub fn contract() -> StageContract {
     let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
+    let mut slots = meshlight_pass_count_raster::instance_slots();
+    slots.extend([
+        read("cluster_offsets", Element::U32, "where each list starts"),
+        Slot::buffer(
+            "cluster_counts",
+            Access::StorageReadWrite,
+            Element::U32,
+            "in: counted; out: entries each list holds",
+        ),
+        Slot::buffer(
+            "cluster_cursors",
+            Access::ClearedReadWrite,
+            Element::U32,
+            "places claimed per list",
+        ),
+        read("list_total", Element::U32, "[0]: entries needed"),
+        Slot::buffer(
+            "cluster_objects",
+            Access::StorageWrite,
+            Element::U32,
+            "the lists: object indices",
+        ),
+        Slot::buffer(
+            "list_counts",
+            Access::StorageWrite,
+            Element::U32,
+            "[0] needed, [1] capacity",
+        ),
+    ]);
     StageContract {
         stage: STAGE,
-        slots: vec![
-            read("objects", CLUSTERABLE_OBJECT, "lights, probes and decals"),
-            read(
-                "slice_instances",
-                SLICE_INSTANCE,
-                "z_slice's (object, slice) list",
-            ),
-            read("slice_counts", Element::U32, "[0] requested, [1] capacity"),
-            Slot::buffer(
-                "slice_draw_args",
-                Access::Indirect,
-                Element::DRAW_ARGS,
-                "a quad per instance (raster)",
-            ),
-            Slot::buffer(
-                "slice_dispatch_args",
-                Access::Indirect,
-                Element::DISPATCH_ARGS,
-                "a workgroup per 64 instances (compute)",
-            ),
-            read("cluster_grid", CLUSTER_GRID, "the grid z_slice published"),
-            read("cluster_offsets", Element::U32, "where each list starts"),
-            Slot::buffer(
-                "cluster_counts",
-                Access::StorageReadWrite,
-                Element::U32,
-                "in: counted; out: entries each list holds",
-            ),
-            Slot::buffer(
-                "cluster_cursors",
-                Access::ClearedReadWrite,
-                Element::U32,
-                "places claimed per list",
-            ),
-            read("list_total", Element::U32, "[0]: entries needed"),
-            Slot::buffer(
-                "cluster_objects",
-                Access::StorageWrite,
-                Element::U32,
-                "the lists: object indices",
-            ),
-            Slot::buffer(
-                "list_counts",
-                Access::StorageWrite,
-                Element::U32,
-                "[0] needed, [1] capacity",
-            ),
-        ],
+        slots,
     }
 }
 

@@ -294,3 +294,74 @@ fn rect_tile(rect: TileRect, index: u32) -> vec2<u32> {
     let width = rect.max_tile.x - rect.min_tile.x + 1u;
     return rect.min_tile + vec2(index % width, index / width);
 }
+
+// The compute walks share a workgroup's lanes out over the tiles of all its instances,
+// not a workgroup per instance: most rectangles hold a tile or two, and a workgroup per
+// instance left most lanes idle. Workgroups take equal shares of the instances (at most
+// WALK_GROUP each); a prefix sum of the tile counts lays the workgroup's tiles out in
+// one run, and each lane walks every WALK_GROUP-th tile of it, finding the tile's
+// instance by binary search.
+const WALK_GROUP: u32 = 64u;
+
+// Per lane: its instance's (object, slice) and tile rectangle.
+var<workgroup> walk_items: array<vec2<u32>, 64>;
+var<workgroup> walk_rects: array<TileRect, 64>;
+// walk_starts[k]: where lane k's tiles start in the run; [WALK_GROUP]: the total.
+var<workgroup> walk_starts: array<u32, 65>;
+
+// The instance lane `t` takes, or `written` when it takes none.
+fn walk_instance(wg: vec3<u32>, groups: vec3<u32>, t: u32, written: u32) -> u32 {
+    let share = (written + groups.x * groups.y - 1u) / (groups.x * groups.y);
+    let instance = (wg.y * groups.x + wg.x) * share + t;
+    if t < min(share, WALK_GROUP) && instance < written {
+        return instance;
+    }
+    return written;
+}
+
+// Lays the workgroup's tiles out: lane `t` brings its instance's (object, slice) and
+// rectangle (an empty one when it has none). Returns the tiles of the run. Every lane of
+// the workgroup calls it.
+fn walk_layout(t: u32, object: u32, slice: u32, rect: TileRect) -> u32 {
+    walk_items[t] = vec2(object, slice);
+    walk_rects[t] = rect;
+    if t == 0u {
+        walk_starts[0] = 0u;
+    }
+    walk_starts[t + 1u] = rect_tiles(rect);
+    workgroupBarrier();
+    // Inclusive Hillis–Steele sums over walk_starts[1..=WALK_GROUP].
+    for (var d = 1u; d < WALK_GROUP; d <<= 1u) {
+        var add = 0u;
+        if t >= d {
+            add = walk_starts[t + 1u - d];
+        }
+        workgroupBarrier();
+        walk_starts[t + 1u] += add;
+        workgroupBarrier();
+    }
+    return walk_starts[WALK_GROUP];
+}
+
+// The run's tile `i`: its lane's (object, slice) and the tile.
+struct WalkTile {
+    object: u32,
+    slice: u32,
+    tile: vec2<u32>,
+}
+
+fn walk_tile(i: u32) -> WalkTile {
+    // The last lane k with walk_starts[k] <= i.
+    var lo = 0u;
+    var hi = WALK_GROUP;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if walk_starts[mid] <= i {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let item = walk_items[lo];
+    return WalkTile(item.x, item.y, rect_tile(walk_rects[lo], i - walk_starts[lo]));
+}
