@@ -61,6 +61,11 @@ impl DecoupledLookback {
         self.options.count.div_ceil(self.options.tile()).max(1)
     }
 
+    /// True when tiles may wait on each other: more than one tile, or a count from the GPU.
+    fn waits(&self, gpu_count: bool) -> bool {
+        gpu_count || self.tiles() > 1
+    }
+
     /// The tile counter, then two words per tile.
     fn state_words(&self) -> u64 {
         1 + 2 * self.tiles() as u64
@@ -70,6 +75,11 @@ impl DecoupledLookback {
         let o = &self.options;
         let levels = self.levels();
         let inclusive = if o.inclusive { flag::INCLUSIVE } else { 0 };
+        let counter = if self.waits(gpu_count) {
+            flag::TILE_COUNTER
+        } else {
+            0
+        };
         let mut args = levels.params(o, 0, flag::ONE_GROUP_AT_LEAST);
         // `dispatch_args` writes only the level-0 grid.
         args.indirect_levels = 1;
@@ -86,7 +96,7 @@ impl DecoupledLookback {
         };
         steps.push(Step {
             entry: entry::LOOKBACK,
-            params: levels.params(o, 0, inclusive),
+            params: levels.params(o, 0, inclusive | counter),
             grid,
         });
         steps
@@ -111,6 +121,10 @@ impl Pass for DecoupledLookback {
         )
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        kernels::record(ctx, &self.steps(ctx.is_bound("count")), true)
+        let gpu_count = ctx.is_bound("count");
+        // With vector tiles, one tile and a count known here, the kernel takes tile 0 and
+        // waits on nothing: no state to clear. The staged kernel always takes the counter.
+        let clear = self.waits(gpu_count) || !kernels::uses_vector_kernels(&self.options);
+        kernels::record(ctx, &self.steps(gpu_count), clear)
     }
 }

@@ -59,7 +59,7 @@ mod two_step;
 
 pub use cpu::{cpu_scan, cpu_scan_into};
 pub use decoupled_lookback::DecoupledLookback;
-pub use kernels::{SHADER, ScanDefs};
+pub use kernels::{SHADER, ScanDefs, VECTOR_MIN_COUNT, VECTOR_SHADER, VectorDefs};
 pub use scan_fan::ScanFan;
 pub use two_step::TwoStep;
 
@@ -124,7 +124,7 @@ impl Subgroups {
     }
 }
 
-/// How a lane reaches its run of the tile in the scan kernels.
+/// How a lane reaches its part of the tile in the scan kernels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum TileAccess {
     /// Consecutive lanes load consecutive elements into workgroup memory (fully coalesced),
@@ -135,6 +135,13 @@ pub enum TileAccess {
     /// accesses that the cache merges. Slower on the H100 (0.9 against 0.63 ms for
     /// `scan_fan` at 2^26, docs/BENCHMARKS.md): kept to compare on other GPUs.
     Direct,
+    /// Each lane loads and stores 16-byte words (`vec4<u32>`, `items_per_thread / 4` of
+    /// them; one narrower word below 4 items) and keeps them in registers between the load
+    /// and the store. A subgroup owns a contiguous run of the tile, each of its loads one
+    /// coalesced stretch; rows of words are scanned across the subgroup, and workgroup
+    /// memory holds only one sum per subgroup. Capacities under [`VECTOR_MIN_COUNT`]
+    /// elements run the staged kernels (a vector view needs 16 bytes).
+    Vector,
 }
 
 impl TileAccess {
@@ -142,9 +149,12 @@ impl TileAccess {
         match value {
             "staged" => Ok(Self::Staged),
             "direct" => Ok(Self::Direct),
+            "vector" => Ok(Self::Vector),
             other => Err(GraphError::Parameter {
                 pass: String::new(),
-                message: format!("`tile_access` must be \"staged\" or \"direct\", not {other:?}"),
+                message: format!(
+                    "`tile_access` must be \"staged\", \"direct\" or \"vector\", not {other:?}"
+                ),
             }),
         }
     }
@@ -158,9 +168,9 @@ pub struct ScanOptions {
     /// Inclusive sums (`output[i]` includes `input[i]`) instead of exclusive ones.
     pub inclusive: bool,
     pub subgroups: Subgroups,
-    /// Consecutive elements each lane scans serially before the workgroup scan; a tile is
-    /// 256 × this. 1 gives the plain 256-element Hillis–Steele chunk; larger values cut the
-    /// barriers and the fan per element, which is what makes the scan bandwidth-bound.
+    /// Elements each lane scans; a tile is 256 × this. 1 gives the plain 256-element
+    /// chunk; larger values cut the barriers and the fan per element, which is what makes
+    /// the scan bandwidth-bound. 32 only with vector tiles.
     pub items_per_thread: u32,
     pub tile_access: TileAccess,
 }
@@ -188,7 +198,7 @@ impl ScanOptions {
     }
 
     /// Reads `count`, `inclusive`, `subgroups` ("auto" | "off"), `items_per_thread` and
-    /// `tile_access` ("staged" | "direct").
+    /// `tile_access` ("staged" | "direct" | "vector").
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let options = Self {
@@ -214,11 +224,18 @@ impl ScanOptions {
                 message,
             })
         };
-        if !matches!(self.items_per_thread, 1 | 2 | 4 | 8 | 16) {
+        if !matches!(self.items_per_thread, 1 | 2 | 4 | 8 | 16 | 32) {
             return bad(format!(
-                "`items_per_thread` = {} must be 1, 2, 4, 8 or 16",
+                "`items_per_thread` = {} must be 1, 2, 4, 8 or 16 (32 with vector tiles)",
                 self.items_per_thread
             ));
+        }
+        if self.items_per_thread == 32 && self.tile_access != TileAccess::Vector {
+            return bad(
+                "`items_per_thread` = 32 needs `tile_access = \"vector\"` (a staged tile of 8,192 \
+                 elements does not fit workgroup memory)"
+                    .to_string(),
+            );
         }
         if self.count > MAX_COUNT {
             return bad(format!(

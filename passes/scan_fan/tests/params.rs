@@ -33,7 +33,18 @@ fn bad_parameters_say_what_to_change() {
     for (text, needle) in [
         ("subgroups = \"on\"", "\"auto\" or \"off\""),
         ("items_per_thread = 3", "1, 2, 4, 8 or 16"),
-        ("tile_access = \"blocked\"", "\"staged\" or \"direct\""),
+        (
+            "items_per_thread = 64",
+            "1, 2, 4, 8 or 16 (32 with vector tiles)",
+        ),
+        (
+            "items_per_thread = 32\ntile_access = \"staged\"",
+            "needs `tile_access = \"vector\"`",
+        ),
+        (
+            "tile_access = \"blocked\"",
+            "\"staged\", \"direct\" or \"vector\"",
+        ),
         ("count = 4294967295", "largest supported"),
         ("cuont = 5", "unknown parameter `cuont`"),
         ("inclusive = 1", "true or false"),
