@@ -27,6 +27,23 @@
 //!   scan stays correct but falls back often and is slower than `scan_fan`.
 //!
 //! So nothing chooses this implementation for the user: a pipeline names it.
+//!
+//! # Tiles and what limits the speed
+//!
+//! With vector tiles (the default) a workgroup holds its whole tile in registers while it
+//! looks back, so its tile is big: 8,192 elements (32 per lane) by default, which halves
+//! the look-backs per byte against 4,096 and was the fastest measured (docs/BENCHMARKS.md).
+//! A scan of one tile whose count is known on the CPU takes tile 0 without the counter and
+//! waits on nothing, so its state is not even cleared: one dispatch.
+//!
+//! On the H100 the single pass reaches 0.70× of a compute copy at 2^26 elements, not the
+//! copy's speed: each workgroup spends part of its life with no loads in flight (taking a
+//! tile from the counter, then waiting for its predecessors), and its register footprint
+//! limits how many others can cover for it. Tried and slower there: a wider look-back (4
+//! or 8 predecessors per lane and round trip), parking the tile in workgroup memory or
+//! reading it again after the look-back (both to free registers), and taking the next tile
+//! and loading it before the current one's look-back (the prefetched tile then publishes
+//! late and the look-backs chain).
 
 use crate::kernels::{self, Grid, Levels, Step, entry, flag};
 use crate::{ScanOptions, contract};
@@ -39,9 +56,13 @@ pub struct DecoupledLookback {
 }
 
 impl DecoupledLookback {
-    /// An exclusive scan of `count` elements (or at most `count`, with a GPU count).
+    /// An exclusive scan of `count` elements (or at most `count`, with a GPU count), with
+    /// vector tiles of [`ScanOptions::DEFAULT_LOOKBACK_ITEMS_PER_THREAD`] elements per lane.
     pub fn new(count: u32) -> Self {
-        Self::with_options(ScanOptions::new(count))
+        Self::with_options(ScanOptions {
+            items_per_thread: ScanOptions::DEFAULT_LOOKBACK_ITEMS_PER_THREAD,
+            ..ScanOptions::new(count)
+        })
     }
     pub fn with_options(options: ScanOptions) -> Self {
         Self { options }

@@ -13,17 +13,20 @@ fn counts_at_chunk_boundaries_match_the_cpu_reference() {
     let mut rng = XorShift(0x5eed_0001);
     let input = rng.values(65_537, 1000);
     for implementation in Implementation::ALL {
-        // 1: a tile is one 256-element Hillis–Steele chunk, three levels at 65,537;
-        // 8: the default 2,048-element tile.
+        // 1: a tile is one 256-element chunk, three levels at 65,537; 8: the default
+        // 2,048-element tile. Vector tiles (the default) and staged ones.
         for items in [1, 8] {
             for inclusive in [false, true] {
                 for subgroups in [Subgroups::Auto, Subgroups::Off] {
-                    for count in COUNTS {
-                        let case = Case::new(implementation, count)
-                            .items(items)
-                            .inclusive(inclusive)
-                            .subgroups(subgroups);
-                        check(&mut exec, &case, &input);
+                    for access in [TileAccess::Vector, TileAccess::Staged] {
+                        for count in COUNTS {
+                            let case = Case::new(implementation, count)
+                                .items(items)
+                                .inclusive(inclusive)
+                                .subgroups(subgroups)
+                                .access(access);
+                            check(&mut exec, &case, &input);
+                        }
                     }
                 }
             }
