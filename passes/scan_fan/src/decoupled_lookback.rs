@@ -36,7 +36,7 @@
 //! A scan of one tile whose count is known on the CPU takes tile 0 without the counter and
 //! waits on nothing, so its state is not even cleared: one dispatch.
 //!
-//! On the H100 the single pass reaches 0.70× of a compute copy at 2^26 elements, not the
+//! On the H100 the single pass reaches 0.71× of a compute copy at 2^26 elements, not the
 //! copy's speed: each workgroup spends part of its life with no loads in flight (taking a
 //! tile from the counter, then waiting for its predecessors), and its register footprint
 //! limits how many others can cover for it. Tried and slower there: a wider look-back (4

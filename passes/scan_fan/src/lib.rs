@@ -61,7 +61,7 @@
 //! views, so elements past the count are never touched. A capacity under
 //! [`VECTOR_MIN_COUNT`] elements (a buffer under 16 bytes, too small for a vector view)
 //! runs the staged kernels. On the H100 this took `scan_fan` from 0.30× to 0.64× and the
-//! single pass from 0.28× to 0.70× of a compute copy at 2^26 elements (docs/BENCHMARKS.md).
+//! single pass from 0.28× to 0.71× of a compute copy at 2^26 elements (docs/BENCHMARKS.md).
 //!
 //! # Why reduce-then-scan
 //!
@@ -153,7 +153,7 @@ impl Subgroups {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum TileAccess {
     /// Consecutive lanes load consecutive elements into workgroup memory (fully coalesced),
-    /// and each lane reads its run from there. Scalar loads and eight barriers a tile: the
+    /// and each lane reads its run from there. Scalar loads and six barriers a tile: the
     /// default until vector tiles, half their speed on the H100.
     Staged,
     /// Each lane loads and stores its run itself: no workgroup-memory round trip, strided
