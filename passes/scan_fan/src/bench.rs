@@ -61,66 +61,48 @@ pub struct Row {
     pub ratio_to_copy: f64,
 }
 
-/// The implementations measured, by the name in the table.
+/// The implementations measured, by the name in the table: the three with their defaults
+/// (vector tiles), then the variants that show what each choice buys.
 fn variants(count: u32) -> Vec<(&'static str, Box<dyn Pass>)> {
-    let chunk256 = ScanOptions {
-        items_per_thread: 1,
+    let with = |tile_access: TileAccess, items_per_thread: u32| ScanOptions {
+        tile_access,
+        items_per_thread,
         ..ScanOptions::new(count)
     };
-    let items16 = ScanOptions {
-        items_per_thread: 16,
-        ..ScanOptions::new(count)
+    let lookback = |options: ScanOptions| -> Box<dyn Pass> {
+        Box::new(DecoupledLookback::with_options(options))
     };
-    let direct = ScanOptions {
-        tile_access: TileAccess::Direct,
-        ..ScanOptions::new(count)
-    };
-    let direct16 = ScanOptions {
-        items_per_thread: 16,
-        ..direct
-    };
-    let serial = ScanOptions {
-        subgroups: Subgroups::Off,
-        ..ScanOptions::new(count)
-    };
+    use TileAccess::{Staged, Vector};
     vec![
         ("scan_fan", Box::new(ScanFan::new(count))),
         ("two_step", Box::new(TwoStep::new(count))),
-        // The plain 256-element Hillis–Steele chunk, to show what the serial per-lane
-        // items buy.
-        (
-            "scan_fan/chunk256",
-            Box::new(ScanFan::with_options(chunk256)),
-        ),
-        // Bigger tiles: fewer workgroups and a smaller fan, to tune the default.
-        ("scan_fan/items16", Box::new(ScanFan::with_options(items16))),
-        // Each lane loads and stores its own run, no workgroup-memory staging.
-        ("scan_fan/direct", Box::new(ScanFan::with_options(direct))),
-        (
-            "scan_fan/direct16",
-            Box::new(ScanFan::with_options(direct16)),
-        ),
-        // The single pass: 8 bytes per element, the goal is ≥ 0.8× the compute copy.
         (
             "decoupled_lookback",
             Box::new(DecoupledLookback::new(count)),
         ),
+        // The default before vector tiles: scalar loads staged through workgroup memory.
         (
-            "decoupled_lookback/items16",
-            Box::new(DecoupledLookback::with_options(items16)),
+            "scan_fan/staged",
+            Box::new(ScanFan::with_options(with(Staged, 8))),
         ),
         (
-            "decoupled_lookback/direct",
-            Box::new(DecoupledLookback::with_options(direct)),
+            "scan_fan/vector4",
+            Box::new(ScanFan::with_options(with(Vector, 4))),
         ),
         (
-            "decoupled_lookback/direct16",
-            Box::new(DecoupledLookback::with_options(direct16)),
+            "scan_fan/vector16",
+            Box::new(ScanFan::with_options(with(Vector, 16))),
         ),
-        // No subgroups: one lane looks back one tile at a time, the shared-memory scan.
+        ("decoupled_lookback/staged", lookback(with(Staged, 8))),
+        ("decoupled_lookback/vector8", lookback(with(Vector, 8))),
+        ("decoupled_lookback/vector16", lookback(with(Vector, 16))),
+        // No subgroups: the shared-memory row scans and the one-lane look-back.
         (
             "decoupled_lookback/serial",
-            Box::new(DecoupledLookback::with_options(serial)),
+            lookback(ScanOptions {
+                subgroups: Subgroups::Off,
+                ..with(Vector, 32)
+            }),
         ),
     ]
 }

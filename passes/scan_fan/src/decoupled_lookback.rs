@@ -27,6 +27,23 @@
 //!   scan stays correct but falls back often and is slower than `scan_fan`.
 //!
 //! So nothing chooses this implementation for the user: a pipeline names it.
+//!
+//! # Tiles and what limits the speed
+//!
+//! With vector tiles (the default) a workgroup holds its whole tile in registers while it
+//! looks back, so its tile is big: 8,192 elements (32 per lane) by default, which halves
+//! the look-backs per byte against 4,096 and was the fastest measured (docs/BENCHMARKS.md).
+//! A scan of one tile whose count is known on the CPU takes tile 0 without the counter and
+//! waits on nothing, so its state is not even cleared: one dispatch.
+//!
+//! On the H100 the single pass reaches 0.71× of a compute copy at 2^26 elements, not the
+//! copy's speed: each workgroup spends part of its life with no loads in flight (taking a
+//! tile from the counter, then waiting for its predecessors), and its register footprint
+//! limits how many others can cover for it. Tried and slower there: a wider look-back (4
+//! or 8 predecessors per lane and round trip), parking the tile in workgroup memory or
+//! reading it again after the look-back (both to free registers), and taking the next tile
+//! and loading it before the current one's look-back (the prefetched tile then publishes
+//! late and the look-backs chain).
 
 use crate::kernels::{self, Grid, Levels, Step, entry, flag};
 use crate::{ScanOptions, contract};
@@ -39,9 +56,13 @@ pub struct DecoupledLookback {
 }
 
 impl DecoupledLookback {
-    /// An exclusive scan of `count` elements (or at most `count`, with a GPU count).
+    /// An exclusive scan of `count` elements (or at most `count`, with a GPU count), with
+    /// vector tiles of [`ScanOptions::DEFAULT_LOOKBACK_ITEMS_PER_THREAD`] elements per lane.
     pub fn new(count: u32) -> Self {
-        Self::with_options(ScanOptions::new(count))
+        Self::with_options(ScanOptions {
+            items_per_thread: ScanOptions::DEFAULT_LOOKBACK_ITEMS_PER_THREAD,
+            ..ScanOptions::new(count)
+        })
     }
     pub fn with_options(options: ScanOptions) -> Self {
         Self { options }
@@ -61,6 +82,11 @@ impl DecoupledLookback {
         self.options.count.div_ceil(self.options.tile()).max(1)
     }
 
+    /// True when tiles may wait on each other: more than one tile, or a count from the GPU.
+    fn waits(&self, gpu_count: bool) -> bool {
+        gpu_count || self.tiles() > 1
+    }
+
     /// The tile counter, then two words per tile.
     fn state_words(&self) -> u64 {
         1 + 2 * self.tiles() as u64
@@ -70,6 +96,11 @@ impl DecoupledLookback {
         let o = &self.options;
         let levels = self.levels();
         let inclusive = if o.inclusive { flag::INCLUSIVE } else { 0 };
+        let counter = if self.waits(gpu_count) {
+            flag::TILE_COUNTER
+        } else {
+            0
+        };
         let mut args = levels.params(o, 0, flag::ONE_GROUP_AT_LEAST);
         // `dispatch_args` writes only the level-0 grid.
         args.indirect_levels = 1;
@@ -86,7 +117,7 @@ impl DecoupledLookback {
         };
         steps.push(Step {
             entry: entry::LOOKBACK,
-            params: levels.params(o, 0, inclusive),
+            params: levels.params(o, 0, inclusive | counter),
             grid,
         });
         steps
@@ -111,6 +142,10 @@ impl Pass for DecoupledLookback {
         )
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        kernels::record(ctx, &self.steps(ctx.is_bound("count")), true)
+        let gpu_count = ctx.is_bound("count");
+        // With vector tiles, one tile and a count known here, the kernel takes tile 0 and
+        // waits on nothing: no state to clear. The staged kernel always takes the counter.
+        let clear = self.waits(gpu_count) || !kernels::uses_vector_kernels(&self.options);
+        kernels::record(ctx, &self.steps(gpu_count), clear)
     }
 }

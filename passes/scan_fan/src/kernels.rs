@@ -9,6 +9,11 @@ use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
 pub const SHADER: PassShader = pass_shader!("scan_fan::scan", "scan.wgsl");
 
+/// The kernels of `tile_access = "vector"`: the same entry points, bindings 0–7 and
+/// parameters as [`SHADER`], plus 16-byte views of the input, output and fan (bindings
+/// 8–10) through which a lane moves its words of the tile.
+pub const VECTOR_SHADER: PassShader = pass_shader!("scan_fan::scan_vec4", "scan_vec4.wgsl");
+
 /// Kernel entry points in `scan.wgsl`.
 pub(crate) mod entry {
     pub const REDUCE: &str = "reduce";
@@ -24,6 +29,7 @@ pub(crate) mod flag {
     pub const CARRY: u32 = 2;
     pub const TOTAL: u32 = 4;
     pub const ONE_GROUP_AT_LEAST: u32 = 8;
+    pub const TILE_COUNTER: u32 = 32;
 }
 
 /// The API's cap on workgroups per dispatch dimension; larger grids are split into rows.
@@ -53,6 +59,56 @@ impl ShaderDefs for ScanDefs {
         ]
     }
 }
+
+/// The variant of `scan_vec4.wgsl` a pass runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct VectorDefs {
+    /// Elements each lane scans (`ITEMS`): `items_per_thread / 4` words of 4 (fewer than
+    /// 4: one word of that many, read element by element).
+    pub items_per_thread: u32,
+    /// Subgroup scans (`SUBGROUPS`).
+    pub subgroups: bool,
+    /// The element count comes from the `count` slot (`GPU_COUNT`).
+    pub gpu_count: bool,
+}
+
+impl VectorDefs {
+    /// Elements per word (`WIDTH`).
+    pub fn width(&self) -> u32 {
+        self.items_per_thread.min(4)
+    }
+}
+
+impl ShaderDefs for VectorDefs {
+    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
+        vec![
+            ("ITEMS", ShaderDef::UInt(self.items_per_thread)),
+            ("WIDTH", ShaderDef::UInt(self.width())),
+            ("SUBGROUPS", ShaderDef::Bool(self.subgroups)),
+            ("GPU_COUNT", ShaderDef::Bool(self.gpu_count)),
+        ]
+    }
+}
+
+/// The defs of whichever shader a pass runs.
+#[derive(Clone, Copy, Debug)]
+enum Defs {
+    Staged(ScanDefs),
+    Vector(VectorDefs),
+}
+
+impl ShaderDefs for Defs {
+    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
+        match self {
+            Defs::Staged(d) => d.shader_defs(),
+            Defs::Vector(d) => d.shader_defs(),
+        }
+    }
+}
+
+/// The smallest capacity the vector kernels take: below 16 bytes a buffer cannot be
+/// bound as an array of `vec4<u32>`, so smaller scans run the staged kernels.
+pub const VECTOR_MIN_COUNT: u32 = 4;
 
 /// The uniform block of every dispatch; mirrors `Params` in `scan.wgsl`.
 #[repr(C)]
@@ -101,9 +157,10 @@ impl Levels {
     }
 
     fn with_offsets(sizes: Vec<u32>) -> Self {
+        // Every level starts on a 16-byte word, for the vector views.
         let mut offsets = vec![0; sizes.len()];
         for l in 2..sizes.len() {
-            offsets[l] = offsets[l - 1] + sizes[l - 1];
+            offsets[l] = offsets[l - 1] + sizes[l - 1].next_multiple_of(4);
         }
         Self { sizes, offsets }
     }
@@ -112,13 +169,14 @@ impl Levels {
         self.sizes.len() - 1
     }
 
-    /// Words of `fan`: every level above 0 (at least one, so the buffer exists).
+    /// Words of `fan`: every level above 0, each padded to a multiple of 4 (at least 4,
+    /// so the buffer exists and has a whole vector word).
     pub fn fan_words(&self) -> u64 {
         self.sizes[1..]
             .iter()
-            .map(|&n| n as u64)
+            .map(|&n| (n as u64).next_multiple_of(4))
             .sum::<u64>()
-            .max(1)
+            .max(4)
     }
 
     /// The uniform block for a dispatch on `level`.
@@ -185,11 +243,23 @@ pub(crate) fn setup(
     options.validate()?;
     ctx.optional_features(wgpu::Features::SUBGROUP);
     let gpu_count = gpu_count(ctx);
-    let defs = ScanDefs {
-        items_per_thread: options.items_per_thread,
-        subgroups: options.subgroups == Subgroups::Auto && ctx.has(wgpu::Features::SUBGROUP),
-        gpu_count,
-        direct: options.tile_access == TileAccess::Direct,
+    let subgroups = options.subgroups == Subgroups::Auto && ctx.has(wgpu::Features::SUBGROUP);
+    let vector = uses_vector_kernels(options);
+    let (shader, defs) = if vector {
+        let defs = VectorDefs {
+            items_per_thread: options.items_per_thread,
+            subgroups,
+            gpu_count,
+        };
+        (&VECTOR_SHADER, Defs::Vector(defs))
+    } else {
+        let defs = ScanDefs {
+            items_per_thread: options.items_per_thread,
+            subgroups,
+            gpu_count,
+            direct: options.tile_access == TileAccess::Direct,
+        };
+        (&SHADER, Defs::Staged(defs))
     };
     ctx.shader_defs(&defs);
     ctx.scratch_buffer(
@@ -219,7 +289,7 @@ pub(crate) fn setup(
     ctx.min_bytes("output", bytes);
     ctx.min_bytes("total", 4);
     ctx.min_bytes("count", 4);
-    let scan = scan_layout(ctx.is_bound("total"), gpu_count);
+    let scan = scan_layout(ctx.is_bound("total"), gpu_count, vector);
     for step in steps {
         let layout = match step.entry {
             entry::DISPATCH_ARGS => args_layout(),
@@ -228,7 +298,7 @@ pub(crate) fn setup(
         };
         ctx.program(
             step.entry,
-            ProgramDesc::compute(&SHADER, step.entry)
+            ProgramDesc::compute(shader, step.entry)
                 .defs(&defs)
                 .layout(layout),
         );
@@ -239,8 +309,15 @@ pub(crate) fn setup(
     Ok(())
 }
 
-/// The bind group every kernel but `dispatch_args` uses, from the bound slots.
-fn scan_layout(total_bound: bool, gpu_count: bool) -> BindingLayout {
+/// True when `options` run `scan_vec4.wgsl`: vector tile access and a capacity of at
+/// least [`VECTOR_MIN_COUNT`] elements.
+pub(crate) fn uses_vector_kernels(options: &ScanOptions) -> bool {
+    options.tile_access == TileAccess::Vector && options.count >= VECTOR_MIN_COUNT
+}
+
+/// The bind group every kernel but `dispatch_args` uses, from the bound slots; with
+/// `vector`, the input, output and fan once more as 16-byte words (bindings 8–10).
+fn scan_layout(total_bound: bool, gpu_count: bool, vector: bool) -> BindingLayout {
     let layout = BindingLayout::compute("scan_fan")
         .slot(0, "input")
         .slot(1, "output")
@@ -251,8 +328,16 @@ fn scan_layout(total_bound: bool, gpu_count: bool) -> BindingLayout {
         layout.scratch(3, "total", Access::StorageReadWrite)
     };
     let layout = layout.uniform(4);
-    if gpu_count {
+    let layout = if gpu_count {
         layout.slot(5, "count")
+    } else {
+        layout
+    };
+    if vector {
+        layout
+            .slot(8, "input")
+            .slot(9, "output")
+            .scratch(10, "fan", Access::StorageReadWrite)
     } else {
         layout
     }

@@ -39,13 +39,38 @@
 //!
 //! All share this contract and [`ScanOptions`], so swapping them is a one-line change.
 //!
+//! # Parameters
+//!
+//! | parameter | values | default | |
+//! |---|---|---|---|
+//! | `count` | 0 ..= 2^31 | 0 | elements to scan (the capacity, with a GPU count) |
+//! | `inclusive` | bool | false | inclusive sums instead of exclusive ones |
+//! | `subgroups` | `"auto"`, `"off"` | `"auto"` | subgroup scans where the device has them |
+//! | `items_per_thread` | 1, 2, 4, 8, 16; 32 with vector tiles | 8; 32 for `decoupled_lookback` with vector tiles | elements per lane, a tile is 256 × this |
+//! | `tile_access` | `"vector"`, `"staged"`, `"direct"` | `"vector"` | how a lane reaches its part of a tile ([`TileAccess`]) |
+//!
+//! # Tiles
+//!
+//! With vector tiles (the default, `scan_vec4.wgsl`) a lane moves its part of a tile as
+//! `items_per_thread / 4` words of 16 bytes (`vec4<u32>`) and keeps them in registers from
+//! the load to the store; a subgroup owns a contiguous run of the tile, so every load and
+//! store of a row of words is one coalesced stretch. The words are views of the same
+//! buffers: the graph binds whole buffers at offset 0, so the vector views are 16-byte
+//! aligned, each fan level starts at a multiple of 4 words, and a level's last partial
+//! word (`count % 4` elements) is read and written element by element through the `u32`
+//! views, so elements past the count are never touched. A capacity under
+//! [`VECTOR_MIN_COUNT`] elements (a buffer under 16 bytes, too small for a vector view)
+//! runs the staged kernels. On the H100 this took `scan_fan` from 0.30× to 0.64× and the
+//! single pass from 0.28× to 0.71× of a compute copy at 2^26 elements (docs/BENCHMARKS.md).
+//!
 //! # Why reduce-then-scan
 //!
 //! The textbook order (scan each chunk and write it, scan the chunk totals, then read and
 //! rewrite every element to add its chunk's carry) moves 16 bytes per element; the best it
 //! can reach is half of copy bandwidth. Here step 1 only reduces each tile to its total
-//! (4 bytes read per element) and step 3 does the Hillis–Steele tile scan and the carry add
-//! in one read and one write (8 bytes), 12 bytes in all.
+//! (4 bytes read per element) and step 3 does the tile scan and the carry add in one read
+//! and one write (8 bytes), 12 bytes in all. Counts of at most [`WALK_TILES`] tiles known on
+//! the CPU take one dispatch instead: one workgroup walks the tiles in order.
 
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{Access, Element, GraphError, Pass, Result, Slot, StageContract};
@@ -59,8 +84,8 @@ mod two_step;
 
 pub use cpu::{cpu_scan, cpu_scan_into};
 pub use decoupled_lookback::DecoupledLookback;
-pub use kernels::{SHADER, ScanDefs};
-pub use scan_fan::ScanFan;
+pub use kernels::{SHADER, ScanDefs, VECTOR_MIN_COUNT, VECTOR_SHADER, VectorDefs};
+pub use scan_fan::{ScanFan, WALK_TILES};
 pub use two_step::TwoStep;
 
 /// The stage name pipelines use.
@@ -124,17 +149,25 @@ impl Subgroups {
     }
 }
 
-/// How a lane reaches its run of the tile in the scan kernels.
+/// How a lane reaches its part of the tile in the scan kernels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum TileAccess {
     /// Consecutive lanes load consecutive elements into workgroup memory (fully coalesced),
-    /// and each lane reads its run from there.
-    #[default]
+    /// and each lane reads its run from there. Scalar loads and six barriers a tile: the
+    /// default until vector tiles, half their speed on the H100.
     Staged,
     /// Each lane loads and stores its run itself: no workgroup-memory round trip, strided
     /// accesses that the cache merges. Slower on the H100 (0.9 against 0.63 ms for
     /// `scan_fan` at 2^26, docs/BENCHMARKS.md): kept to compare on other GPUs.
     Direct,
+    /// Each lane loads and stores 16-byte words (`vec4<u32>`, `items_per_thread / 4` of
+    /// them; one narrower word below 4 items) and keeps them in registers between the load
+    /// and the store. A subgroup owns a contiguous run of the tile, each of its loads one
+    /// coalesced stretch; rows of words are scanned across the subgroup, and workgroup
+    /// memory holds only one sum per subgroup. Capacities under [`VECTOR_MIN_COUNT`]
+    /// elements run the staged kernels (a vector view needs 16 bytes).
+    #[default]
+    Vector,
 }
 
 impl TileAccess {
@@ -142,9 +175,12 @@ impl TileAccess {
         match value {
             "staged" => Ok(Self::Staged),
             "direct" => Ok(Self::Direct),
+            "vector" => Ok(Self::Vector),
             other => Err(GraphError::Parameter {
                 pass: String::new(),
-                message: format!("`tile_access` must be \"staged\" or \"direct\", not {other:?}"),
+                message: format!(
+                    "`tile_access` must be \"staged\", \"direct\" or \"vector\", not {other:?}"
+                ),
             }),
         }
     }
@@ -158,9 +194,9 @@ pub struct ScanOptions {
     /// Inclusive sums (`output[i]` includes `input[i]`) instead of exclusive ones.
     pub inclusive: bool,
     pub subgroups: Subgroups,
-    /// Consecutive elements each lane scans serially before the workgroup scan; a tile is
-    /// 256 × this. 1 gives the plain 256-element Hillis–Steele chunk; larger values cut the
-    /// barriers and the fan per element, which is what makes the scan bandwidth-bound.
+    /// Elements each lane scans; a tile is 256 × this. 1 gives the plain 256-element
+    /// chunk; larger values cut the barriers and the fan per element, which is what makes
+    /// the scan bandwidth-bound. 32 only with vector tiles.
     pub items_per_thread: u32,
     pub tile_access: TileAccess,
 }
@@ -175,28 +211,53 @@ const PARAM_KEYS: [&str; 5] = [
 ];
 
 impl ScanOptions {
+    /// Elements per lane of `scan_fan` and `two_step` (2,048-element tiles), and of any
+    /// implementation with staged or direct tiles.
     pub const DEFAULT_ITEMS_PER_THREAD: u32 = 8;
+    /// Elements per lane of `decoupled_lookback` with vector tiles (8,192-element tiles):
+    /// the bigger the tile, the fewer look-backs per byte (0.27 ms at 2^26 on the H100
+    /// against 0.29 with 16 and 0.34 with 8).
+    pub const DEFAULT_LOOKBACK_ITEMS_PER_THREAD: u32 = 32;
 
+    /// Vector tiles of [`Self::DEFAULT_ITEMS_PER_THREAD`] elements per lane.
     pub fn new(count: u32) -> Self {
         Self {
             count,
             inclusive: false,
             subgroups: Subgroups::Auto,
             items_per_thread: Self::DEFAULT_ITEMS_PER_THREAD,
-            tile_access: TileAccess::Staged,
+            tile_access: TileAccess::Vector,
         }
     }
 
     /// Reads `count`, `inclusive`, `subgroups` ("auto" | "off"), `items_per_thread` and
-    /// `tile_access` ("staged" | "direct").
+    /// `tile_access` ("vector" | "staged" | "direct"), with the defaults of `scan_fan`.
     pub fn from_params(params: &Params) -> Result<Self> {
+        Self::from_params_with(params, |_| Self::DEFAULT_ITEMS_PER_THREAD)
+    }
+
+    /// [`Self::from_params`] with the defaults of `decoupled_lookback`.
+    pub fn from_params_for_lookback(params: &Params) -> Result<Self> {
+        Self::from_params_with(params, Self::lookback_items)
+    }
+
+    /// The default `items_per_thread` of `decoupled_lookback` with `tile_access`.
+    pub fn lookback_items(tile_access: TileAccess) -> u32 {
+        match tile_access {
+            TileAccess::Vector => Self::DEFAULT_LOOKBACK_ITEMS_PER_THREAD,
+            TileAccess::Staged | TileAccess::Direct => Self::DEFAULT_ITEMS_PER_THREAD,
+        }
+    }
+
+    fn from_params_with(params: &Params, default_items: fn(TileAccess) -> u32) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
+        let tile_access = TileAccess::parse(&params.string("tile_access", "vector")?)?;
         let options = Self {
             count: params.u32("count", 0)?,
             inclusive: params.bool("inclusive", false)?,
             subgroups: Subgroups::parse(&params.string("subgroups", "auto")?)?,
-            items_per_thread: params.u32("items_per_thread", Self::DEFAULT_ITEMS_PER_THREAD)?,
-            tile_access: TileAccess::parse(&params.string("tile_access", "staged")?)?,
+            items_per_thread: params.u32("items_per_thread", default_items(tile_access))?,
+            tile_access,
         };
         options.validate()?;
         Ok(options)
@@ -214,11 +275,18 @@ impl ScanOptions {
                 message,
             })
         };
-        if !matches!(self.items_per_thread, 1 | 2 | 4 | 8 | 16) {
+        if !matches!(self.items_per_thread, 1 | 2 | 4 | 8 | 16 | 32) {
             return bad(format!(
-                "`items_per_thread` = {} must be 1, 2, 4, 8 or 16",
+                "`items_per_thread` = {} must be 1, 2, 4, 8 or 16 (32 with vector tiles)",
                 self.items_per_thread
             ));
+        }
+        if self.items_per_thread == 32 && self.tile_access != TileAccess::Vector {
+            return bad(
+                "`items_per_thread` = 32 needs `tile_access = \"vector\"` (a staged tile of 8,192 \
+                 elements does not fit workgroup memory)"
+                    .to_string(),
+            );
         }
         if self.count > MAX_COUNT {
             return bad(format!(
@@ -244,7 +312,7 @@ fn build_two_step(params: &Params) -> Result<Box<dyn Pass>> {
 
 fn build_decoupled_lookback(params: &Params) -> Result<Box<dyn Pass>> {
     Ok(Box::new(DecoupledLookback::with_options(
-        ScanOptions::from_params(params)?,
+        ScanOptions::from_params_for_lookback(params)?,
     )))
 }
 

@@ -336,14 +336,16 @@ fn scan_add(inv: Invocation) {
     }
 }
 
-// The two-step scheme's middle step: one workgroup walks all tiles of level 1 in order,
-// scanning each exclusively with the running total of the tiles before it.
+// One workgroup walks all tiles of a level in order, scanning each with the running
+// total of the tiles before it: the two-step scheme's middle step (level 1), and the
+// whole scan of a few tiles (level 0) in one dispatch.
 @compute @workgroup_size(256)
 fn walk(inv: Invocation) {
     let n = level_count(params.level);
+    let inclusive = (params.flags & FLAG_INCLUSIVE) != 0u;
     var running = 0u;
     for (var t = 0u; t < div_ceil(n, TILE); t++) {
-        running += scan_tile(inv, t, n, running, false);
+        running += scan_tile(inv, t, n, running, inclusive);
     }
     if inv.index == 0u {
         total[0] = running;

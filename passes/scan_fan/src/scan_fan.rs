@@ -8,6 +8,10 @@ use crate::kernels::{self, Grid, Levels, Step, entry, flag};
 use crate::{ScanOptions, contract};
 use meshlight_graph::{Pass, RecordContext, Result, SetupContext, StageContract};
 
+/// Counts of at most this many tiles, known on the CPU, are scanned by one workgroup
+/// walking the tiles in order (one dispatch), not by the fan.
+pub const WALK_TILES: u32 = 4;
+
 /// The multi-level fan scan (the default implementation of stage `scan_fan`).
 #[derive(Clone, Debug)]
 pub struct ScanFan {
@@ -43,6 +47,15 @@ impl ScanFan {
                 0
             }
         };
+        if !gpu_count && top > 0 && levels.sizes[1] <= WALK_TILES {
+            // A few tiles: one workgroup scans them in order, one dispatch instead of
+            // three (a third of the time at 4,096 elements on the H100).
+            return vec![Step {
+                entry: entry::WALK,
+                params: levels.params(o, 0, flag::TOTAL | inclusive_at(0)),
+                grid: Grid::ONE,
+            }];
+        }
         let mut steps = Vec::with_capacity(2 * top + 2);
         if gpu_count && top > 0 {
             steps.push(Step {

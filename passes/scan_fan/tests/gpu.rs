@@ -13,17 +13,20 @@ fn counts_at_chunk_boundaries_match_the_cpu_reference() {
     let mut rng = XorShift(0x5eed_0001);
     let input = rng.values(65_537, 1000);
     for implementation in Implementation::ALL {
-        // 1: a tile is one 256-element Hillis–Steele chunk, three levels at 65,537;
-        // 8: the default 2,048-element tile.
+        // 1: a tile is one 256-element chunk, three levels at 65,537; 8: the default
+        // 2,048-element tile. Vector tiles (the default) and staged ones.
         for items in [1, 8] {
             for inclusive in [false, true] {
                 for subgroups in [Subgroups::Auto, Subgroups::Off] {
-                    for count in COUNTS {
-                        let case = Case::new(implementation, count)
-                            .items(items)
-                            .inclusive(inclusive)
-                            .subgroups(subgroups);
-                        check(&mut exec, &case, &input);
+                    for access in [TileAccess::Vector, TileAccess::Staged] {
+                        for count in COUNTS {
+                            let case = Case::new(implementation, count)
+                                .items(items)
+                                .inclusive(inclusive)
+                                .subgroups(subgroups)
+                                .access(access);
+                            check(&mut exec, &case, &input);
+                        }
                     }
                 }
             }
@@ -370,5 +373,55 @@ bind = {{ input = "counts", output = "offsets" }}
         let got_total: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("total").unwrap());
         assert_eq!(offsets, expected, "{implementation}");
         assert_eq!(got_total[0], total, "{implementation}");
+    }
+}
+
+/// Vector tiles (16-byte words held in registers) in every implementation: counts that are
+/// and are not multiples of 4 around word, tile and level boundaries (a partial last word
+/// goes through the u32 view), capacities under 4 (the staged kernels run), every
+/// `items_per_thread` (below 4 a lane's one word is narrower), both modes, subgroups on and
+/// off, a GPU count that leaves a partial word, and `scan_fan`'s one-workgroup walk of up
+/// to four tiles (`4 × tile`) and the fan just past it.
+#[test]
+fn vector_tile_access_matches_the_cpu_reference() {
+    let mut exec = executor();
+    let input = XorShift(0x5eed_000a).values(140_000, u32::MAX);
+    for implementation in Implementation::ALL {
+        for items in [1, 2, 4, 8, 16, 32] {
+            let tile = 256 * items;
+            for inclusive in [false, true] {
+                for subgroups in [Subgroups::Auto, Subgroups::Off] {
+                    for count in [
+                        0,
+                        1,
+                        3,
+                        4,
+                        5,
+                        7,
+                        tile - 1,
+                        tile + 2,
+                        3 * tile + 1,
+                        4 * tile,
+                        4 * tile + 1,
+                        131_075,
+                    ] {
+                        let case = Case::new(implementation, count)
+                            .items(items)
+                            .access(TileAccess::Vector)
+                            .subgroups(subgroups)
+                            .inclusive(inclusive);
+                        check(&mut exec, &case, &input);
+                    }
+                }
+                for count in [0, 2, 6, tile + 3, 131_073] {
+                    let indirect = Case::new(implementation, 131_075)
+                        .items(items)
+                        .access(TileAccess::Vector)
+                        .inclusive(inclusive)
+                        .gpu_count(count);
+                    check(&mut exec, &indirect, &input);
+                }
+            }
+        }
     }
 }

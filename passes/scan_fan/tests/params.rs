@@ -2,7 +2,9 @@
 
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::*;
-use meshlight_pass_scan_fan::{ScanFan, ScanOptions, Subgroups, TileAccess, register};
+use meshlight_pass_scan_fan::{
+    DecoupledLookback, ScanFan, ScanOptions, Subgroups, TileAccess, register,
+};
 
 fn params(text: &str) -> Params {
     Params::new(text.parse().expect("toml"))
@@ -29,11 +31,41 @@ fn parameters_parse_with_defaults() {
 }
 
 #[test]
+fn vector_tiles_are_the_default_and_the_single_pass_takes_bigger_ones() {
+    let o = ScanOptions::from_params(&params("count = 10")).unwrap();
+    assert_eq!((o.tile_access, o.items_per_thread), (TileAccess::Vector, 8));
+    let o = ScanOptions::from_params_for_lookback(&params("count = 10")).unwrap();
+    assert_eq!(
+        (o.tile_access, o.items_per_thread),
+        (TileAccess::Vector, 32)
+    );
+    assert_eq!(o, DecoupledLookback::new(10).options);
+    // A named size or staged tiles keep their own default.
+    let o = ScanOptions::from_params_for_lookback(&params("items_per_thread = 4")).unwrap();
+    assert_eq!(o.items_per_thread, 4);
+    let o = ScanOptions::from_params_for_lookback(&params("tile_access = \"staged\"")).unwrap();
+    assert_eq!((o.tile_access, o.items_per_thread), (TileAccess::Staged, 8));
+    let o = ScanOptions::from_params(&params("items_per_thread = 32")).unwrap();
+    assert_eq!(o.tile(), 8192);
+}
+
+#[test]
 fn bad_parameters_say_what_to_change() {
     for (text, needle) in [
         ("subgroups = \"on\"", "\"auto\" or \"off\""),
         ("items_per_thread = 3", "1, 2, 4, 8 or 16"),
-        ("tile_access = \"blocked\"", "\"staged\" or \"direct\""),
+        (
+            "items_per_thread = 64",
+            "1, 2, 4, 8 or 16 (32 with vector tiles)",
+        ),
+        (
+            "items_per_thread = 32\ntile_access = \"staged\"",
+            "needs `tile_access = \"vector\"`",
+        ),
+        (
+            "tile_access = \"blocked\"",
+            "\"staged\", \"direct\" or \"vector\"",
+        ),
         ("count = 4294967295", "largest supported"),
         ("cuont = 5", "unknown parameter `cuont`"),
         ("inclusive = 1", "true or false"),
