@@ -1,5 +1,6 @@
 //! The code-first API: declare resources, add passes with slot bindings, compile.
 
+use crate::choice::{Choice, Selection};
 use crate::compile::{CompileOptions, CompiledGraph, compile};
 use crate::contract::StageContract;
 use crate::error::{GraphError, Result};
@@ -68,6 +69,9 @@ pub struct PassNode {
     pub bindings: Vec<AnyHandle>,
     /// Per slot, the texture range it binds (`None`: the whole resource).
     pub ranges: Vec<Option<TextureRange>>,
+    /// The stage's other implementations, when the pass was added as a [`Choice`]:
+    /// compile keeps `pass` or one of these.
+    pub(crate) alternatives: Option<(Selection, Vec<Box<dyn Pass>>)>,
 }
 
 /// A resource written this frame and read next frame.
@@ -128,6 +132,16 @@ pub struct GraphBuilder {
     pub(crate) deferred: Vec<GraphError>,
     /// Size parameters and their values, in declaration order.
     pub(crate) params: Vec<(String, u64)>,
+    /// Visibility targets whose form (buffer or texture) the pass clearing them decides.
+    pub(crate) visibility: Vec<VisibilityDecl>,
+}
+
+/// A 64-bit visibility target declared with [`GraphBuilder::create_visibility64`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct VisibilityDecl {
+    pub id: ResourceId,
+    pub width: u32,
+    pub height: u32,
 }
 
 impl GraphBuilder {
@@ -162,6 +176,17 @@ impl GraphBuilder {
             self.add_resource(name, ResourceDesc::Texture(desc), ResourceKind::Transient),
             0,
         )
+    }
+    /// A transient `width × height` 64-bit visibility target whose form follows the pass
+    /// that clears it ([`crate::Pass::visibility64`]): a buffer of `u64` for a rasteriser
+    /// on storage-buffer atomics, an `R64Uint` texture for one on texture atomics. Every
+    /// other pass bound to it sees that form, so swapping the rasteriser is one change.
+    pub fn create_visibility64(&mut self, name: &str, width: u32, height: u32) -> AnyHandle {
+        let pixels = width as u64 * height as u64;
+        let desc = ResourceDesc::Buffer(BufferDesc::array(Element::U64, pixels));
+        let id = self.add_resource(name, desc, ResourceKind::Transient);
+        self.visibility.push(VisibilityDecl { id, width, height });
+        AnyHandle { id, version: 0 }
     }
     /// A caller-owned buffer; `usage` is what the caller created it with.
     pub fn import_buffer(
@@ -307,6 +332,50 @@ impl GraphBuilder {
         self.add_boxed_pass(name, Box::new(pass), bindings)
     }
 
+    /// Adds a pass instance whose implementation compile picks among `choice`'s candidates
+    /// (see [`Choice`]); every candidate must implement the same stage with the same slots.
+    pub fn add_choice(
+        &mut self,
+        name: &str,
+        choice: Choice,
+        bindings: Bindings,
+    ) -> Result<PassOutputs> {
+        let Choice {
+            selection,
+            mut candidates,
+        } = choice;
+        if candidates.is_empty() {
+            return Err(GraphError::Parameter {
+                pass: name.to_string(),
+                message: "a choice needs at least one candidate implementation".into(),
+            });
+        }
+        let first = candidates.remove(0);
+        let contract = first.contract();
+        for c in &candidates {
+            let other = c.contract();
+            if other.stage != contract.stage || other.slot_names() != contract.slot_names() {
+                return Err(GraphError::Parameter {
+                    pass: name.to_string(),
+                    message: format!(
+                        "candidate `{}` implements stage `{}` with slots [{}], but `{}` implements `{}` with [{}]; a choice's candidates must share one contract",
+                        c.implementation(),
+                        other.stage,
+                        other.slot_names().join(", "),
+                        first.implementation(),
+                        contract.stage,
+                        contract.slot_names().join(", ")
+                    ),
+                });
+            }
+        }
+        let outputs = self.add_boxed_pass(name, first, bindings)?;
+        if let Some(node) = self.passes.last_mut() {
+            node.alternatives = Some((selection, candidates));
+        }
+        Ok(outputs)
+    }
+
     pub fn add_boxed_pass(
         &mut self,
         name: &str,
@@ -392,6 +461,7 @@ impl GraphBuilder {
             contract,
             bindings: resolved,
             ranges,
+            alternatives: None,
         });
         Ok(PassOutputs {
             pass: name.to_string(),

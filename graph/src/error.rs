@@ -57,12 +57,14 @@ pub enum GraphError {
     DuplicateName { what: &'static str, name: String },
 
     #[error(
-        "pass `{pass}` requires the adapter feature(s) {features}, which this adapter lacks; pick another implementation of stage `{stage}` or another adapter (MESHLIGHT_ADAPTER)"
+        "pass `{pass}` (stage `{stage}`) requires the adapter feature(s) {features}, which this adapter lacks; {instead}"
     )]
     MissingFeature {
         pass: String,
         stage: String,
         features: String,
+        /// What would run instead, or what to change.
+        instead: String,
     },
 
     #[error("pass `{pass}` (stage `{stage}`) has no slot `{slot}`; its slots are: {available}")]

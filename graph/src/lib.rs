@@ -6,6 +6,7 @@
 
 pub mod access;
 pub mod builder;
+pub mod choice;
 pub mod compile;
 pub mod contract;
 pub mod dump;
@@ -21,6 +22,7 @@ pub mod synthetic;
 
 pub use access::Access;
 pub use builder::{Bindings, GraphBuilder, History, PassNode, PassOutputs};
+pub use choice::{CandidatePlan, Choice, ChoicePlan, Selection};
 pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
@@ -30,7 +32,7 @@ pub use exec::{
     RenderProgram, SamplerKind,
 };
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
-pub use pass::{Pass, SetupContext};
+pub use pass::{Pass, SetupContext, Visibility64};
 pub use plan::Plan;
 pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};
 pub use resource::{

@@ -23,6 +23,22 @@ pub trait Pass: Send + Sync {
     fn setup(&self, ctx: &mut SetupContext) -> Result<()>;
     /// Encodes the pass's commands.
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()>;
+    /// The form in which this pass writes a 64-bit visibility target it clears. A
+    /// target declared with `GraphBuilder::create_visibility64` takes it, so every other
+    /// pass bound there (which reads [`SetupContext::is_texture`]) follows. `None`: the
+    /// pass adapts to whatever is bound.
+    fn visibility64(&self) -> Option<Visibility64> {
+        None
+    }
+}
+
+/// How a 64-bit visibility target is held.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Visibility64 {
+    /// A buffer of `u64`, written with 64-bit buffer atomics.
+    Buffer,
+    /// An `R64Uint` storage texture, written with 64-bit texture atomics.
+    Texture,
 }
 
 /// A scratch buffer or texture private to one pass.
@@ -40,6 +56,7 @@ pub struct SetupContext<'a> {
     limits: &'a wgpu::Limits,
     params: &'a [(String, u64)],
     bound: Vec<&'static str>,
+    textures: Vec<&'static str>,
     pub(crate) required: wgpu::Features,
     pub(crate) optional: wgpu::Features,
     pub(crate) shader_defs: Vec<(String, ShaderDef)>,
@@ -63,6 +80,7 @@ impl<'a> SetupContext<'a> {
             limits,
             params,
             bound,
+            textures: Vec::new(),
             required: wgpu::Features::empty(),
             optional: wgpu::Features::empty(),
             shader_defs: Vec::new(),
@@ -90,6 +108,15 @@ impl<'a> SetupContext<'a> {
     /// the variant that uses it.
     pub fn is_bound(&self, slot: &str) -> bool {
         self.bound.contains(&slot)
+    }
+    /// True when `slot` is bound to a texture, so a pass whose slot takes a buffer or a
+    /// texture (a 64-bit visibility target) picks the matching shader variant.
+    pub fn is_texture(&self, slot: &str) -> bool {
+        self.textures.contains(&slot)
+    }
+    pub(crate) fn with_textures(mut self, textures: Vec<&'static str>) -> Self {
+        self.textures = textures;
+        self
     }
     /// True when the feature will be enabled if the pass asks for it as optional.
     pub fn has(&self, feature: wgpu::Features) -> bool {

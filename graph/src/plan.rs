@@ -76,6 +76,10 @@ pub struct PassPlan {
     pub name: String,
     pub stage: &'static str,
     pub implementation: &'static str,
+    /// How the implementation was picked, when the pass had several (`auto`, or a named
+    /// one with alternatives).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub choice: Option<crate::choice::ChoicePlan>,
     pub slots: Vec<SlotUse>,
     /// Scratch resources this pass declared.
     pub scratch: Vec<usize>,
@@ -90,6 +94,22 @@ pub struct PassPlan {
     #[serde(serialize_with = "ser_features")]
     pub optional_features: wgpu::Features,
     pub side_effect: bool,
+}
+
+impl PassPlan {
+    /// `implementation`, marked `(auto)` when compile picked it by the adapter.
+    pub fn implementation_label(&self) -> String {
+        match &self.choice {
+            Some(c) if c.selection == crate::choice::Selection::Auto => {
+                format!("{} (auto)", self.implementation)
+            }
+            _ => self.implementation.to_string(),
+        }
+    }
+    /// Why compile picked this implementation, for passes with several.
+    pub fn choice_reason(&self) -> Option<&str> {
+        self.choice.as_ref().map(|c| c.reason.as_str())
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]

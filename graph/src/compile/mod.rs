@@ -9,9 +9,11 @@ pub mod slots;
 pub mod versions;
 
 use crate::access::{Access, texture_usage_for};
-use crate::builder::{GraphBuilder, PassNode};
+use crate::builder::{GraphBuilder, PassNode, VisibilityDecl};
+use crate::choice::{Choice, ChoicePlan};
 use crate::error::{GraphError, Result};
 use crate::pass::SetupContext;
+use crate::pass::Visibility64;
 use crate::plan::*;
 use crate::program::{ProgramDesc, ProgramPlan};
 use crate::resource::*;
@@ -182,23 +184,82 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         passes,
         deferred,
         params,
+        visibility,
         ..
     } = builder;
     if let Some(e) = deferred.into_iter().next() {
         return Err(e);
     }
 
+    // Keep, for each pass given several implementations, the one the adapter runs.
+    let mut choices: Vec<Option<ChoicePlan>> = Vec::with_capacity(passes.len());
+    let mut chosen_passes = Vec::with_capacity(passes.len());
+    for node in passes {
+        let PassNode {
+            name,
+            pass,
+            contract,
+            bindings,
+            ranges,
+            alternatives,
+        } = node;
+        let pass = match alternatives {
+            None => {
+                choices.push(None);
+                pass
+            }
+            Some((selection, rest)) => {
+                let mut candidates = vec![pass];
+                candidates.extend(rest);
+                let choice = Choice {
+                    selection,
+                    candidates,
+                };
+                let (pass, plan) = crate::choice::resolve(&name, choice, |c| {
+                    crate::choice::missing_features(
+                        c,
+                        options.adapter_features,
+                        &options.limits,
+                        &params,
+                        contract.slot_names(),
+                    )
+                })?;
+                choices.push(Some(plan));
+                pass
+            }
+        };
+        chosen_passes.push(PassNode {
+            name,
+            pass,
+            contract,
+            bindings,
+            ranges,
+            alternatives: None,
+        });
+    }
+    let passes = chosen_passes;
+    visibility_forms(&mut resources, &passes, &visibility)?;
+
     // Setup each pass against the adapter's features and limits.
     let mut setups = Vec::with_capacity(passes.len());
     let mut enabled = wgpu::Features::empty();
     let mut scratch_of: Vec<Vec<usize>> = Vec::with_capacity(passes.len());
     for (p, node) in passes.iter().enumerate() {
+        let textures = node
+            .contract
+            .slots
+            .iter()
+            .zip(&node.bindings)
+            .filter(|(_, h)| matches!(resources[h.id.index()].desc, ResourceDesc::Texture(_)))
+            .map(|(s, _)| s.name)
+            .collect();
         let mut ctx = SetupContext::new(
             options.adapter_features,
             &options.limits,
             &params,
             node.contract.slot_names(),
-        );
+        )
+        .with_textures(textures);
         node.pass.setup(&mut ctx).map_err(|e| match e {
             GraphError::Parameter { message, .. } => GraphError::Parameter {
                 pass: node.name.clone(),
@@ -226,6 +287,10 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
                 pass: node.name.clone(),
                 stage: node.contract.stage.to_string(),
                 features: feature_names(missing),
+                instead: format!(
+                    "pick another implementation of stage `{}` (or `auto`) or another adapter (MESHLIGHT_ADAPTER)",
+                    node.contract.stage
+                ),
             });
         }
         enabled |= ctx.required | (ctx.optional & options.adapter_features);
@@ -307,6 +372,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             name: node.name.clone(),
             stage: node.contract.stage,
             implementation: node.pass.implementation(),
+            choice: choices[p].clone(),
             slots: slot_uses(&resources, &table, &live, node),
             scratch: scratch_of[p].clone(),
             shader_defs: setup
@@ -497,4 +563,80 @@ fn slot_uses(
             }
         })
         .collect()
+}
+
+/// Gives each target declared with `create_visibility64` the form its clearing pass
+/// writes (a `u64` buffer unless that pass writes an `R64Uint` texture), and checks that
+/// a pass writing one form is not bound to a resource declared as the other.
+fn visibility_forms(
+    resources: &mut [ResourceInfo],
+    passes: &[PassNode],
+    declared: &[VisibilityDecl],
+) -> Result<()> {
+    for decl in declared {
+        let mut form: Option<(Visibility64, &str)> = None;
+        for node in passes {
+            let Some(wants) = node.pass.visibility64() else {
+                continue;
+            };
+            if !node.bindings.iter().any(|h| h.id == decl.id) {
+                continue;
+            }
+            match form {
+                Some((other, by)) if other != wants => {
+                    return Err(GraphError::Parameter {
+                        pass: node.name.clone(),
+                        message: format!(
+                            "it writes the visibility target `{}` as a {}, but pass `{by}` writes it as a {}; pick implementations that agree (both on buffers or both on textures, or `auto` for both)",
+                            resources[decl.id.index()].name,
+                            form_name(wants),
+                            form_name(other)
+                        ),
+                    });
+                }
+                _ => form = Some((wants, &node.name)),
+            }
+        }
+        if let Some((Visibility64::Texture, _)) = form {
+            resources[decl.id.index()].desc = ResourceDesc::Texture(TextureDesc::d2(
+                wgpu::TextureFormat::R64Uint,
+                decl.width,
+                decl.height,
+            ));
+        }
+    }
+    for node in passes {
+        let Some(wants) = node.pass.visibility64() else {
+            continue;
+        };
+        for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+            if slot.kind != crate::contract::SlotKind::Visibility64 {
+                continue;
+            }
+            let res = &resources[h.id.index()];
+            let is_texture = matches!(res.desc, ResourceDesc::Texture(_));
+            if is_texture != (wants == Visibility64::Texture) {
+                return Err(GraphError::DescriptorMismatch {
+                    pass: node.name.clone(),
+                    slot: slot.name.to_string(),
+                    resource: res.name.clone(),
+                    expected: format!(
+                        "a {} (implementation `{}` writes one); declare `{}` with `visibility = {{ width_param = ..., height_param = ... }}` (`create_visibility64` in code) so it follows the implementation",
+                        form_name(wants),
+                        node.pass.implementation(),
+                        res.name
+                    ),
+                    found: format!("a {}", res.desc.kind_name()),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+fn form_name(v: Visibility64) -> &'static str {
+    match v {
+        Visibility64::Buffer => "buffer of u64",
+        Visibility64::Texture => "r64uint texture",
+    }
 }

@@ -30,11 +30,15 @@ pub fn to_dot(plan: &Plan) -> String {
             let names: Vec<&str> = p.programs.iter().map(|x| x.name.as_str()).collect();
             format!("\nprograms: {}", names.join(", "))
         };
+        let why = p
+            .choice_reason()
+            .map(|r| format!("\nchosen: {r}"))
+            .unwrap_or_default();
         let label = format!(
-            "{order}{}\n{}/{}{programs}{}",
+            "{order}{}\n{}/{}{why}{programs}{}",
             p.name,
             p.stage,
-            p.implementation,
+            p.implementation_label(),
             if culled { "\n(culled)" } else { "" }
         );
         let style = if culled {

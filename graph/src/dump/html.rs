@@ -57,10 +57,13 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
         };
         let _ = writeln!(
             h,
-            "<tr><td>{o}</td><td>{}</td><td>{} / {}</td><td>{}</td><td><div class=\"bar\" style=\"width:{width}px\"></div></td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{o}</td><td>{}</td><td>{} / {}{}</td><td>{}</td><td><div class=\"bar\" style=\"width:{width}px\"></div></td><td>{}</td><td>{}</td></tr>",
             esc(&pass.name),
             esc(pass.stage),
-            esc(pass.implementation),
+            esc(&pass.implementation_label()),
+            pass.choice_reason()
+                .map(|r| format!("<br><small>{}</small>", esc(r)))
+                .unwrap_or_default(),
             gpu.map(|g| format!("{g:.1}")).unwrap_or_else(|| "–".into()),
             timing
                 .map(|t| format!("{:.1}", t.cpu_record_us))

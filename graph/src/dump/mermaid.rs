@@ -19,7 +19,7 @@ pub fn to_mermaid(plan: &Plan) -> String {
             "  p{i}[\"{}<br/>{}/{}{culled}\"]",
             esc(&p.name),
             esc(p.stage),
-            esc(p.implementation)
+            esc(&p.implementation_label())
         );
     }
     for (r, v) in version_nodes(plan) {

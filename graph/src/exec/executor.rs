@@ -288,6 +288,8 @@ impl Executor {
                 pass: "(graph)".into(),
                 stage: "(device)".into(),
                 features: crate::compile::feature_names(missing),
+                instead: "open the device with the plan's `enabled_features` (GpuAdapter::open)"
+                    .into(),
             });
         }
         for &p in &plan.order {

@@ -634,6 +634,7 @@ impl<'a> RecordContext<'a> {
                         pass: self.node.name.clone(),
                         stage: self.node.contract.stage.to_string(),
                         features: "EXPERIMENTAL_MESH_SHADER".into(),
+                        instead: "open the device with the plan's `enabled_features`".into(),
                     });
                 }
                 self.device

@@ -66,6 +66,18 @@ fn one() -> u32 {
     1
 }
 
+/// A 64-bit visibility target of `width × height` values, held as a `u64` buffer or an
+/// `R64Uint` texture as the rasteriser that clears it writes (see
+/// `GraphBuilder::create_visibility64`), so swapping that rasteriser is one line.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VisibilityEntry {
+    pub width: Option<u32>,
+    pub width_param: Option<String>,
+    pub height: Option<u32>,
+    pub height_param: Option<String>,
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ResourceEntry {
@@ -73,6 +85,7 @@ pub struct ResourceEntry {
     pub kind: EntryKind,
     pub buffer: Option<BufferEntry>,
     pub texture: Option<TextureEntry>,
+    pub visibility: Option<VisibilityEntry>,
     /// Imported only: the usages the caller creates it with (`STORAGE`, `COPY_SRC`, …).
     #[serde(default)]
     pub usage: Vec<String>,
@@ -161,15 +174,25 @@ pub fn parse_pipeline_with(
                 },
             });
         }
-        let pass = registry
-            .build(&p.stage, &p.implementation, &Params::new(p.params.clone()))
-            .map_err(|e| match e {
-                GraphError::Parameter { message, .. } => GraphError::Parameter {
-                    pass: p.name.clone(),
-                    message,
-                },
-                other => other,
-            })?;
+        let params = Params::new(p.params.clone());
+        let with_pass = |e| match e {
+            GraphError::Parameter { message, .. } => GraphError::Parameter {
+                pass: p.name.clone(),
+                message,
+            },
+            other => other,
+        };
+        let pass = match registry
+            .build_choice(&p.stage, &p.implementation, &params)
+            .map_err(with_pass)?
+        {
+            Some(choice) => Built::Choice(choice),
+            None => Built::One(
+                registry
+                    .build(&p.stage, &p.implementation, &params)
+                    .map_err(with_pass)?,
+            ),
+        };
         let mut bindings = Bindings::new();
         for (slot, target) in &p.bind {
             let bad = |m: String| ferr(format!("pass `{}` slot `{slot}`: {m}", p.name));
@@ -207,9 +230,18 @@ pub fn parse_pipeline_with(
                 },
             };
         }
-        g.add_boxed_pass(&p.name, pass, bindings)?;
+        match pass {
+            Built::One(pass) => g.add_boxed_pass(&p.name, pass, bindings)?,
+            Built::Choice(choice) => g.add_choice(&p.name, choice, bindings)?,
+        };
     }
     Ok(g)
+}
+
+/// A pipeline entry's pass: one implementation, or several for compile to pick from.
+enum Built {
+    One(Box<dyn crate::pass::Pass>),
+    Choice(crate::choice::Choice),
 }
 
 /// `mip=N`, `mips=A..B`, `layer=N`, `layers=A..B`, joined with `,`: the part of a texture
@@ -296,6 +328,34 @@ fn declare(
     r: &ResourceEntry,
     params: &BTreeMap<String, u64>,
 ) -> std::result::Result<(), String> {
+    if let Some(v) = &r.visibility {
+        if r.buffer.is_some() || r.texture.is_some() {
+            return Err(
+                "give exactly one of `buffer = {..}`, `texture = {..}` or `visibility = {..}`"
+                    .into(),
+            );
+        }
+        let width = dimension("width", v.width, &v.width_param, params)?;
+        let height = dimension("height", v.height, &v.height_param, params)?;
+        match r.kind {
+            EntryKind::Transient => drop(g.create_visibility64(&r.name, width, height)),
+            EntryKind::Exported => {
+                let h = g.create_visibility64(&r.name, width, height);
+                g.export(h);
+            }
+            other => {
+                return Err(format!(
+                    "a visibility target is `transient` or `exported`, not {other:?}; declare a {} as `buffer` or `texture` instead",
+                    if other == EntryKind::Imported {
+                        "caller-owned one"
+                    } else {
+                        "history"
+                    }
+                ));
+            }
+        }
+        return Ok(());
+    }
     match (&r.buffer, &r.texture) {
         (Some(b), None) => {
             let element = match (Element::from_known_name(&b.element), b.element_size) {
@@ -349,7 +409,12 @@ fn declare(
                 EntryKind::History => drop(g.history_texture(&r.name, desc)),
             }
         }
-        _ => return Err("give exactly one of `buffer = {..}` or `texture = {..}`".into()),
+        _ => {
+            return Err(
+                "give exactly one of `buffer = {..}`, `texture = {..}` or `visibility = {..}`"
+                    .into(),
+            );
+        }
     }
     Ok(())
 }

@@ -1,5 +1,6 @@
 //! The registry: (stage, implementation) → a factory building the pass from parameters.
 
+use crate::choice::Choice;
 use crate::error::{GraphError, Result};
 use crate::file::Params;
 use crate::pass::Pass;
@@ -7,9 +8,14 @@ use std::collections::BTreeMap;
 
 pub type Factory = fn(&Params) -> Result<Box<dyn Pass>>;
 
+/// The implementation name that lets compile pick by the adapter's features.
+pub const AUTO: &str = "auto";
+
 #[derive(Default, Clone)]
 pub struct Registry {
     factories: BTreeMap<(String, String), Factory>,
+    /// Per stage, its implementations best first, for `auto`.
+    preferences: BTreeMap<String, Vec<String>>,
 }
 
 impl Registry {
@@ -25,6 +31,59 @@ impl Registry {
         self.factories
             .insert((stage.to_string(), implementation.to_string()), factory);
     }
+    /// Makes `auto` available for `stage`: compile keeps the first of `best_first` the
+    /// adapter runs. Every name must be registered (checked when a file uses it).
+    pub fn prefer(&mut self, stage: &'static str, best_first: &[&'static str]) {
+        self.preferences.insert(
+            stage.to_string(),
+            best_first.iter().map(|s| s.to_string()).collect(),
+        );
+    }
+
+    /// The stage's implementations best first, when it has an `auto`.
+    pub fn preference(&self, stage: &str) -> Option<&[String]> {
+        self.preferences.get(stage).map(Vec::as_slice)
+    }
+
+    /// The pass for a pipeline entry as a [`Choice`]: for `auto`, every preferred
+    /// implementation built from the same parameters; for a named implementation of a
+    /// stage with an `auto`, the named one plus the others (built where the parameters
+    /// suit them), so a missing feature's error names what would run instead.
+    pub fn build_choice(
+        &self,
+        stage: &str,
+        implementation: &str,
+        params: &Params,
+    ) -> Result<Option<Choice>> {
+        let Some(order) = self.preferences.get(stage) else {
+            if implementation == AUTO {
+                return Err(GraphError::UnknownImplementation {
+                    stage: stage.to_string(),
+                    implementation: AUTO.to_string(),
+                    known: format!(
+                        "{} (stage `{stage}` has no `auto`: name one)",
+                        self.implementations(stage).join(", ")
+                    ),
+                });
+            }
+            return Ok(None);
+        };
+        if implementation == AUTO {
+            let candidates = order
+                .iter()
+                .map(|i| self.build(stage, i, params))
+                .collect::<Result<Vec<_>>>()?;
+            return Ok(Some(Choice::auto(candidates)));
+        }
+        let named = self.build(stage, implementation, params)?;
+        let alternatives = order
+            .iter()
+            .filter(|i| *i != implementation)
+            .filter_map(|i| self.build(stage, i, params).ok())
+            .collect();
+        Ok(Some(Choice::named(named, alternatives)))
+    }
+
     pub fn build(
         &self,
         stage: &str,
@@ -41,12 +100,18 @@ impl Registry {
             })?;
         factory(params)
     }
+    /// The stage's implementation names, `auto` last when the stage has one.
     pub fn implementations(&self, stage: &str) -> Vec<String> {
-        self.factories
+        let mut names: Vec<String> = self
+            .factories
             .keys()
             .filter(|(s, _)| s == stage)
             .map(|(_, i)| i.clone())
-            .collect()
+            .collect();
+        if self.preferences.contains_key(stage) {
+            names.push(AUTO.to_string());
+        }
+        names
     }
     /// The registered stage names, each once, sorted.
     pub fn stage_names(&self) -> Vec<String> {

@@ -1,0 +1,186 @@
+//! Implementation choice: a pass instance may hold several implementations of its stage,
+//! best first, and compile keeps the one the adapter runs.
+//!
+//! The strongest reason to swap an implementation is the adapter: 64-bit texture atomics
+//! or mesh shaders where it has them, the portable buffer and indirect-draw paths where
+//! it has not. With [`Selection::Auto`] compile picks the first candidate whose setup
+//! asks for nothing the adapter lacks; with [`Selection::Named`] the pipeline named one,
+//! and the others only let a missing feature's error say which implementation would run.
+//! The needs come from each candidate's own `setup`, so they cannot drift from what the
+//! pass really requires. The plan keeps a [`ChoicePlan`] so dumps show what was chosen
+//! and why.
+
+use crate::compile::feature_names;
+use crate::error::{GraphError, Result};
+use crate::pass::{Pass, SetupContext};
+use serde::Serialize;
+
+/// How a pass instance's implementation was decided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Selection {
+    /// The one implementation the graph was given.
+    Fixed,
+    /// `auto`: the best candidate the adapter runs.
+    Auto,
+    /// The pipeline named the first candidate; the rest are alternatives for messages.
+    Named,
+}
+
+/// Several implementations of one stage for one pass instance, in preference order.
+pub struct Choice {
+    pub(crate) selection: Selection,
+    pub(crate) candidates: Vec<Box<dyn Pass>>,
+}
+
+impl Choice {
+    /// `auto`: compile keeps the first of `candidates` (best first) the adapter runs.
+    pub fn auto(candidates: Vec<Box<dyn Pass>>) -> Self {
+        Self {
+            selection: Selection::Auto,
+            candidates,
+        }
+    }
+    /// `named` runs; `alternatives` (the stage's other implementations, best first) are
+    /// only named in the error when the adapter cannot run `named`.
+    pub fn named(named: Box<dyn Pass>, alternatives: Vec<Box<dyn Pass>>) -> Self {
+        let mut candidates = vec![named];
+        candidates.extend(alternatives);
+        Self {
+            selection: Selection::Named,
+            candidates,
+        }
+    }
+    pub fn selection(&self) -> Selection {
+        self.selection
+    }
+    /// The candidates' implementation names, in order.
+    pub fn implementations(&self) -> Vec<&'static str> {
+        self.candidates.iter().map(|c| c.implementation()).collect()
+    }
+}
+
+/// One candidate as compile judged it.
+#[derive(Clone, Debug, Serialize)]
+pub struct CandidatePlan {
+    pub implementation: &'static str,
+    /// Features its setup asked for that the adapter lacks (empty: it runs here).
+    pub missing: Vec<String>,
+}
+
+/// What compile decided for a pass with several candidates, for dumps and `info`.
+#[derive(Clone, Debug, Serialize)]
+pub struct ChoicePlan {
+    pub selection: Selection,
+    pub chosen: &'static str,
+    /// One sentence: why this one.
+    pub reason: String,
+    pub candidates: Vec<CandidatePlan>,
+}
+
+/// The features `pass` asks for in setup that `adapter` lacks. Setup runs as it will for
+/// real (same adapter features, limits, parameters and bound slots), so a pass that
+/// picks a variant by feature reports the variant it would pick.
+pub(crate) fn missing_features(
+    pass: &dyn Pass,
+    adapter: wgpu::Features,
+    limits: &wgpu::Limits,
+    params: &[(String, u64)],
+    bound: Vec<&'static str>,
+) -> Result<wgpu::Features> {
+    let mut ctx = SetupContext::new(adapter, limits, params, bound);
+    pass.setup(&mut ctx)?;
+    Ok(ctx.required - adapter)
+}
+
+/// Keeps the candidate `choice` selects on this adapter; returns it and the plan of the
+/// choice. An `auto` with no runnable candidate, or a named one the adapter cannot run,
+/// is [`GraphError::MissingFeature`] naming what is missing and what would run.
+pub(crate) fn resolve(
+    pass_name: &str,
+    choice: Choice,
+    mut missing: impl FnMut(&dyn Pass) -> Result<wgpu::Features>,
+) -> Result<(Box<dyn Pass>, ChoicePlan)> {
+    let Choice {
+        selection,
+        candidates,
+    } = choice;
+    let mut judged = Vec::with_capacity(candidates.len());
+    for c in &candidates {
+        judged.push(missing(c.as_ref())?);
+    }
+    let plans: Vec<CandidatePlan> = candidates
+        .iter()
+        .zip(&judged)
+        .map(|(c, m)| CandidatePlan {
+            implementation: c.implementation(),
+            missing: m.iter_names().map(|(n, _)| n.to_string()).collect(),
+        })
+        .collect();
+    let runnable = judged.iter().position(|m| m.is_empty());
+    let stage = candidates[0].contract().stage.to_string();
+    let order = plans
+        .iter()
+        .map(|p| format!("`{}`", p.implementation))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let chosen = match (selection, runnable) {
+        (Selection::Named, _) if !judged[0].is_empty() => {
+            return Err(GraphError::MissingFeature {
+                pass: pass_name.to_string(),
+                stage: stage.clone(),
+                features: feature_names(judged[0]),
+                instead: match runnable {
+                    Some(i) => format!(
+                        "implementation `{}` of stage `{stage}` runs on it: name it, or `auto`, in the pipeline",
+                        plans[i].implementation
+                    ),
+                    None => format!(
+                        "no implementation of stage `{stage}` runs on it ({order}); use another adapter (MESHLIGHT_ADAPTER)"
+                    ),
+                },
+            });
+        }
+        (Selection::Auto, None) => {
+            return Err(GraphError::MissingFeature {
+                pass: pass_name.to_string(),
+                stage: stage.clone(),
+                features: feature_names(judged.iter().fold(wgpu::Features::empty(), |a, m| a | *m)),
+                instead: format!(
+                    "`auto` found no implementation of stage `{stage}` this adapter runs ({order}); use another adapter (MESHLIGHT_ADAPTER)"
+                ),
+            });
+        }
+        (Selection::Auto, Some(i)) => i,
+        _ => 0,
+    };
+    let name = plans[chosen].implementation;
+    let reason = match selection {
+        Selection::Auto => {
+            let skipped: Vec<String> = plans[..chosen]
+                .iter()
+                .map(|p| format!("`{}` needs {}", p.implementation, p.missing.join(", ")))
+                .collect();
+            if skipped.is_empty() {
+                format!("`{name}` is the first of {order} and the adapter has all it needs")
+            } else {
+                format!(
+                    "{}, which the adapter lacks; `{name}` is the next of {order}",
+                    skipped.join("; ")
+                )
+            }
+        }
+        Selection::Named | Selection::Fixed => format!("`{name}` is named in the pipeline"),
+    };
+    let mut candidates = candidates;
+    let pass = candidates.swap_remove(chosen);
+    Ok((
+        pass,
+        ChoicePlan {
+            selection,
+            chosen: name,
+            reason,
+            candidates: plans,
+        },
+    ))
+}
