@@ -71,11 +71,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let sw = SwRaster {
         width,
         height,
+        target: meshlight::graph::Visibility64::Buffer,
         scanline_width: 16,
         exact_division: false,
     };
     g.add_pass("sw_raster", sw, Bindings::new())?;
-    g.add_pass("hw_raster", HwRaster { width, height }, Bindings::new())?;
+    g.add_pass(
+        "hw_raster",
+        HwRaster::indirect(width, height),
+        Bindings::new(),
+    )?;
     g.add_pass("resolve", Resolve::new(width, height), Bindings::new())?;
     // Compile for the adapter, open the device with the features the passes asked for.
     let adapter = GpuAdapter::select()?;

@@ -12,7 +12,9 @@ use std::time::Instant;
 pub struct BenchArgs {
     /// Scenarios to run (default: all). Known: graph-compile, graph-execute, pool-reuse,
     /// render (the default scene at 1920x1080), virtual-geometry (15³ meshes at
-    /// 2240x1260, the first --mesh or the bunny), builder, scan-fan, light-clustering
+    /// 2240x1260, the first --mesh or the bunny), rasterisers (the same scene: each
+    /// implementation of sw_raster and hw_raster, and the software/hardware split
+    /// sweep), builder, scan-fan, light-clustering
     /// (1,000 to 1,000,000 point lights at 1920x1080, both implementations, against the
     /// CPU reference).
     #[arg(long = "scenario", value_delimiter = ',')]
@@ -49,6 +51,7 @@ const ALL: &[&str] = &[
     "pool-reuse",
     "render",
     "virtual-geometry",
+    "rasterisers",
     "builder",
     "scan-fan",
     "light-clustering",
@@ -70,6 +73,7 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
             "virtual-geometry" => {
                 crate::virtual_geometry::bench::lattice(args.quick, &args.meshes)?
             }
+            "rasterisers" => crate::virtual_geometry::bench::rasterisers(args.quick, &args.meshes)?,
             "builder" => builder(args.quick, &args.meshes)?,
             "scan-fan" => scan_fan(args.quick)?,
             "light-clustering" => crate::light_clustering::bench::run(args.quick)?,

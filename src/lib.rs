@@ -14,6 +14,7 @@
 //!   growth, and holds the CPU reference of the whole assignment.
 
 pub mod bench;
+pub mod info;
 pub mod light_clustering;
 pub mod virtual_geometry;
 

@@ -28,6 +28,9 @@ enum Command {
     Bake(meshlight::scene::cli::BakeArgs),
     /// Print an asset's header and DAG statistics and verify its invariants.
     Inspect(meshlight::scene::cli::InspectArgs),
+    /// Print the adapter, the features and limits meshlight uses, and which
+    /// implementation `auto` picks for each stage on it.
+    Info,
 }
 
 #[derive(clap::Args)]
@@ -62,6 +65,18 @@ struct RenderArgs {
     /// Initial number of raster slots (grown when a frame overflows them).
     #[arg(long)]
     slots: Option<u64>,
+    /// The software rasteriser: auto (64-bit texture atomics where the adapter has
+    /// them), texture or buffer. Ignored with --pipeline (the file names its own).
+    #[arg(long, default_value = "auto")]
+    sw_raster: String,
+    /// The hardware rasteriser: auto (mesh shaders where the adapter has them),
+    /// mesh_shader or indirect_draw. Ignored with --pipeline.
+    #[arg(long, default_value = "auto")]
+    hw_raster: String,
+    /// Clusters whose screen box is smaller than this many pixels are rasterised in
+    /// software (default: the adapter class's, see `meshlight info`).
+    #[arg(long)]
+    sw_threshold: Option<f32>,
     /// Output PNG.
     #[arg(short, long, default_value = "out/default.png")]
     output: PathBuf,
@@ -107,6 +122,7 @@ fn main() -> ExitCode {
         Command::Bench(a) => meshlight::bench::run(&a),
         Command::Bake(a) => meshlight::scene::cli::run_bake(&a).map_err(Into::into),
         Command::Inspect(a) => meshlight::scene::cli::run_inspect(&a).map_err(Into::into),
+        Command::Info => meshlight::info::report().map(|text| print!("{text}")),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -146,6 +162,9 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             lights.len().max(1) as u64,
         ));
     }
+    settings.sw_raster = a.sw_raster.clone();
+    settings.hw_raster = a.hw_raster.clone();
+    settings.sw_threshold_px = a.sw_threshold;
     settings.clusters = a.clusters.unwrap_or(settings.clusters);
     settings.slots = a.slots.unwrap_or(settings.slots);
     let source = match &a.pipeline {
@@ -175,6 +194,11 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         renderer.adapter,
         a.output.display()
     );
+    for p in &renderer.compiled.plan.passes {
+        if let Some(reason) = p.choice_reason() {
+            println!("  {:<22} {}: {reason}", p.name, p.implementation_label());
+        }
+    }
     if light_count > 0 {
         println!("  {light_count} point lights clustered on the GPU");
     }

@@ -36,7 +36,10 @@ fn virtual_geometry_shaders_compose_and_validate() {
     for exact_division in [false, true] {
         check(
             &meshlight::sw_raster::SHADER,
-            &meshlight::sw_raster::RasterDefs { exact_division },
+            &meshlight::sw_raster::RasterDefs {
+                exact_division,
+                texture: false,
+            },
         );
     }
 }

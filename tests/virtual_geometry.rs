@@ -147,7 +147,7 @@ fn drawing_everything_in_software_changes_only_pixels_on_edges() {
     let placed = field(16);
     // A low software threshold, so that at this small size both rasterisers draw.
     let mixed_settings = FrameSettings {
-        sw_threshold_px: 16.0,
+        sw_threshold_px: Some(16.0),
         ..settings(DebugView::Shaded)
     };
     let (mixed, _) = render(&placed, mixed_settings.clone(), &GraphSource::Code);

@@ -51,6 +51,33 @@ impl Choice {
             candidates,
         }
     }
+    /// `auto` over `candidates` (best first) when `wanted` is `auto`, else the candidate
+    /// named `wanted` with the others as alternatives; an unknown name is an error
+    /// listing the known ones.
+    pub fn select(wanted: &str, mut candidates: Vec<Box<dyn Pass>>) -> Result<Self> {
+        if wanted == crate::file::AUTO {
+            return Ok(Self::auto(candidates));
+        }
+        match candidates.iter().position(|c| c.implementation() == wanted) {
+            Some(i) => {
+                let named = candidates.remove(i);
+                Ok(Self::named(named, candidates))
+            }
+            None => Err(GraphError::UnknownImplementation {
+                stage: candidates
+                    .first()
+                    .map(|c| c.contract().stage.to_string())
+                    .unwrap_or_default(),
+                implementation: wanted.to_string(),
+                known: candidates
+                    .iter()
+                    .map(|c| c.implementation())
+                    .chain([crate::file::AUTO])
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            }),
+        }
+    }
     pub fn selection(&self) -> Selection {
         self.selection
     }

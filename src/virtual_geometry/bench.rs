@@ -164,7 +164,7 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     let hardware = measure(
         &placed,
         FrameSettings {
-            sw_threshold_px: 0.0,
+            sw_threshold_px: Some(0.0),
             ..settings
         },
         frames,
@@ -213,7 +213,7 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         let m = measure(
             &placed,
             FrameSettings {
-                sw_threshold_px,
+                sw_threshold_px: Some(sw_threshold_px),
                 ..FrameSettings::new(width, height)
             },
             frames,
@@ -321,6 +321,189 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     );
     speedup.vs_baseline = Some(baseline_ms / frame.total_ms);
     rows.push(speedup);
+    Ok(rows)
+}
+
+/// The 15³ lattice of [`lattice`], once per rasteriser implementation and split:
+/// `sw_raster` `buffer` against `texture` with every cluster in software; `hw_raster`
+/// `indirect_draw` against `mesh_shader` with every cluster in hardware, and the software
+/// rasteriser on the same clusters; then the whole frame (with `auto`'s choices) at each
+/// split threshold and all in software. Implementations the adapter lacks are skipped
+/// with a note on stderr.
+pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    let mesh = meshes
+        .first()
+        .cloned()
+        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+    let n = if quick { 5 } else { 15 };
+    let asset = scenes::load_asset(&mesh, 0)?;
+    let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
+    let (width, height) = if quick { (1280, 720) } else { (2240, 1260) };
+    let frames = if quick { 5 } else { 50 };
+    let case = format!(
+        "{n}³ {}, {} source tris, {width}x{height}",
+        mesh.file_stem().unwrap_or_default().to_string_lossy(),
+        placed.data.source_triangles()
+    );
+    let base = FrameSettings::new(width, height);
+    let scenario = "rasterisers";
+    let mut rows = Vec::new();
+    // One measurement, or `None` where the adapter cannot run the implementation.
+    let try_measure = |settings: FrameSettings,
+                       what: &str|
+     -> Result<Option<Measured>, Box<dyn std::error::Error>> {
+        match measure(&placed, settings, frames) {
+            Ok(m) => Ok(Some(m)),
+            Err(e) => match e.downcast_ref::<crate::graph::GraphError>() {
+                Some(crate::graph::GraphError::MissingFeature { .. }) => {
+                    eprintln!("{what}: skipped, {e}");
+                    Ok(None)
+                }
+                _ => Err(e),
+            },
+        }
+    };
+
+    // Software rasteriser: every cluster to it, on each target.
+    let mut software = Vec::new();
+    for sw in ["buffer", "texture"] {
+        let settings = FrameSettings {
+            hardware: false,
+            sw_raster: sw.into(),
+            ..base.clone()
+        };
+        if let Some(m) = try_measure(settings, &format!("sw_raster {sw}"))? {
+            software.push((sw, m));
+        }
+    }
+    let buffer_ms = software.first().map(|(_, m)| pass_ms(m, "sw_raster"));
+    for (sw, m) in &software {
+        let ms = pass_ms(m, "sw_raster");
+        let mut r = row(
+            scenario,
+            format!("{case}, all software"),
+            &format!("GPU sw_raster, {sw}"),
+            ms,
+            "ms",
+            &m.device,
+        );
+        r.vs_baseline = buffer_ms.map(|b| b / ms);
+        rows.push(r);
+        rows.push(row(
+            scenario,
+            format!("{case}, all software"),
+            &format!("GPU frame, sw_raster {sw}"),
+            m.total_ms,
+            "ms",
+            &m.device,
+        ));
+    }
+
+    // Hardware rasteriser: every cluster to it, each way of feeding it; the software
+    // rasteriser's time on the same clusters is the baseline.
+    let fastest_software = software
+        .iter()
+        .map(|(_, m)| pass_ms(m, "sw_raster"))
+        .fold(f64::INFINITY, f64::min);
+    for hw in ["indirect_draw", "mesh_shader"] {
+        let settings = FrameSettings {
+            sw_threshold_px: Some(0.0),
+            hw_raster: hw.into(),
+            ..base.clone()
+        };
+        let Some(m) = try_measure(settings, &format!("hw_raster {hw}"))? else {
+            continue;
+        };
+        let ms = pass_ms(&m, "hw_raster");
+        let mut r = row(
+            scenario,
+            format!("{case}, all hardware"),
+            &format!("GPU hw_raster, {hw}"),
+            ms,
+            "ms",
+            &m.device,
+        );
+        // Above 1: the software rasteriser is that much faster on the same clusters.
+        r.vs_baseline = Some(ms / fastest_software);
+        rows.push(r);
+        rows.push(row(
+            scenario,
+            format!("{case}, all hardware"),
+            &format!("hw_raster {hw}, triangles"),
+            m.counts.hardware_triangles as f64,
+            "",
+            &m.device,
+        ));
+    }
+    if let Some((_, m)) = software.first() {
+        rows.push(row(
+            scenario,
+            format!("{case}, all software"),
+            "GPU sw_raster, fastest target (baseline of the hardware rows)",
+            fastest_software,
+            "ms",
+            &m.device,
+        ));
+    }
+
+    // The split: the whole frame with `auto`'s implementations at each threshold.
+    let thresholds: &[f32] = if quick {
+        &[32.0, 128.0]
+    } else {
+        &[8.0, 16.0, 32.0, 64.0, 128.0, 256.0]
+    };
+    let mut splits: Vec<(String, Measured)> = Vec::new();
+    for &t in thresholds {
+        let settings = FrameSettings {
+            sw_threshold_px: Some(t),
+            ..base.clone()
+        };
+        if let Some(m) = try_measure(settings, &format!("split {t} px"))? {
+            splits.push((format!("sw_threshold_px = {t}"), m));
+        }
+    }
+    let all_software = FrameSettings {
+        hardware: false,
+        ..base.clone()
+    };
+    if let Some(m) = try_measure(all_software, "all software")? {
+        splits.push(("all software".into(), m));
+    }
+    let best = splits
+        .iter()
+        .map(|(_, m)| m.total_ms)
+        .fold(f64::INFINITY, f64::min);
+    for (label, m) in &splits {
+        let mut r = row(
+            scenario,
+            case.clone(),
+            &format!("GPU frame, {label}"),
+            m.total_ms,
+            "ms",
+            &m.device,
+        );
+        // 1 for the fastest split, above 1 for slower ones.
+        r.vs_baseline = Some(m.total_ms / best);
+        rows.push(r);
+        for pass in ["sw_raster", "hw_raster"] {
+            rows.push(row(
+                scenario,
+                case.clone(),
+                &format!("{label}: GPU {pass}"),
+                pass_ms(m, pass),
+                "ms",
+                &m.device,
+            ));
+        }
+        rows.push(row(
+            scenario,
+            case.clone(),
+            &format!("{label}: hardware clusters"),
+            m.counts.hardware as f64,
+            "",
+            &m.device,
+        ));
+    }
     Ok(rows)
 }
 

@@ -3,14 +3,18 @@
 //! file a user edits renders with the same renderer.
 
 use super::counts::{CLUSTER_COUNT_READBACK, RASTER_COUNTS_READBACK};
-use crate::graph::{Bindings, BufferDesc, Element, GraphBuilder, GraphError, Result, TextureDesc};
+use crate::graph::file::AUTO;
+use crate::graph::{
+    Bindings, BufferDesc, Choice, Element, GraphBuilder, GraphError, Pass, Result, TextureDesc,
+    Visibility64,
+};
 use crate::light_clustering::ClusteringSettings;
 use crate::light_clustering::frame_graph as clustering;
 use meshlight_gpu_scene::SceneData;
 use meshlight_gpu_scene::gpu::{buffer_lengths, elements, import_for};
 use meshlight_pass_cull_lod::{CullLod, Thresholds};
 use meshlight_pass_fill_clusters::FillClusters;
-use meshlight_pass_hw_raster::HwRaster;
+use meshlight_pass_hw_raster::{Feed, HwRaster};
 use meshlight_pass_remap_dispatch::RemapDispatch;
 use meshlight_pass_resolve::{DebugView, Resolve};
 use meshlight_pass_sw_raster::SwRaster;
@@ -34,8 +38,15 @@ pub struct FrameSettings {
     pub view: DebugView,
     /// Screen-space error (pixels) the LOD cut may show.
     pub lod_threshold_px: f32,
-    /// Screen-box size under which a cluster is rasterised in software.
-    pub sw_threshold_px: f32,
+    /// Screen-box size under which a cluster is rasterised in software; `None`: the
+    /// adapter class's default ([`super::split::AdapterClass::sw_threshold_px`]).
+    pub sw_threshold_px: Option<f32>,
+    /// `sw_raster`'s implementation: `auto` (texture atomics where the adapter has
+    /// them), `texture` or `buffer`.
+    pub sw_raster: String,
+    /// `hw_raster`'s implementation: `auto` (mesh shaders where the adapter has them),
+    /// `mesh_shader` or `indirect_draw`.
+    pub hw_raster: String,
     /// `false`: no `hw_raster` pass; culling sends every cluster to software.
     pub hardware: bool,
     /// Initial candidate-list and raster-slot sizes; the renderer grows them on
@@ -61,7 +72,9 @@ impl FrameSettings {
             height,
             view: DebugView::Shaded,
             lod_threshold_px: t.lod_threshold_px,
-            sw_threshold_px: t.sw_threshold_px,
+            sw_threshold_px: None,
+            sw_raster: AUTO.into(),
+            hw_raster: AUTO.into(),
             hardware: true,
             clusters: 1 << 20,
             slots: 1 << 18,
@@ -70,6 +83,12 @@ impl FrameSettings {
             exact_division: false,
             clustering: None,
         }
+    }
+
+    /// The split threshold this frame uses on an adapter of `class`.
+    pub fn sw_threshold_on(&self, class: super::split::AdapterClass) -> f32 {
+        self.sw_threshold_px
+            .unwrap_or_else(|| class.sw_threshold_px().0)
     }
 
     /// A viewport of 0, or past the device's 2-D texture limit, named with what to do.
@@ -113,7 +132,6 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     g.size_param(CLUSTERS_PARAM, s.clusters);
     g.size_param(SLOTS_PARAM, s.slots.min(MAX_SLOTS));
     import_for(data, &mut g);
-    let pixels = s.width as u64 * s.height as u64;
     for (name, desc) in [
         (
             "clusters",
@@ -127,10 +145,11 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         ("raster_counts", BufferDesc::array(Element::U32, 8)),
         ("hw_args", BufferDesc::array(Element::DRAW_ARGS, 1)),
         ("sw_args", BufferDesc::array(Element::DISPATCH_ARGS, 1)),
-        ("visbuffer", BufferDesc::array(Element::U64, pixels)),
     ] {
         g.create_buffer(name, desc);
     }
+    // A u64 buffer or an R64Uint texture, as the chosen software rasteriser writes it.
+    g.create_visibility64("visbuffer", s.width, s.height);
     let depth = meshlight_pass_resolve::DEPTH_FORMAT;
     for (name, format, wanted) in [
         ("depth", depth, s.depth),
@@ -148,7 +167,11 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     let cull = CullLod {
         thresholds: Thresholds {
             lod_threshold_px: s.lod_threshold_px,
-            sw_threshold_px: s.sw_threshold_px,
+            // The renderer fills in its adapter's default; a graph built elsewhere
+            // without one takes cull_lod's.
+            sw_threshold_px: s
+                .sw_threshold_px
+                .unwrap_or(Thresholds::default().sw_threshold_px),
             hardware: s.hardware,
         },
         ..CullLod::default()
@@ -163,15 +186,36 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         .bind_named("args", "sw_args");
     g.add_pass("remap", remap, remap_bindings)?;
     let (width, height) = (s.width, s.height);
-    let sw = SwRaster {
-        width,
-        height,
-        scanline_width: 16,
-        exact_division: s.exact_division,
+    let software = |target| -> Box<dyn Pass> {
+        Box::new(SwRaster {
+            width,
+            height,
+            target,
+            scanline_width: 16,
+            exact_division: s.exact_division,
+        })
     };
-    g.add_pass("sw_raster", sw, Bindings::new())?;
+    let sw = Choice::select(
+        &s.sw_raster,
+        vec![
+            software(Visibility64::Texture),
+            software(Visibility64::Buffer),
+        ],
+    )?;
+    g.add_choice("sw_raster", sw, Bindings::new())?;
     if s.hardware {
-        g.add_pass("hw_raster", HwRaster { width, height }, Bindings::new())?;
+        let hardware = |feed| -> Box<dyn Pass> {
+            Box::new(HwRaster {
+                width,
+                height,
+                feed,
+            })
+        };
+        let hw = Choice::select(
+            &s.hw_raster,
+            vec![hardware(Feed::MeshShader), hardware(Feed::IndirectDraw)],
+        )?;
+        g.add_choice("hw_raster", hw, Bindings::new())?;
     }
     if let Some(c) = &s.clustering {
         // The light clustering's outputs bind to resolve's slots of the same names.

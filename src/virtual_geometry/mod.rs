@@ -16,6 +16,7 @@ pub mod counts;
 pub mod frame_graph;
 pub mod renderer;
 pub mod scenes;
+pub mod split;
 
 pub use counts::FrameCounts;
 pub use frame_graph::{FrameSettings, GraphSource};

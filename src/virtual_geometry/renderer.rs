@@ -84,8 +84,14 @@ struct PendingCounts {
 impl Renderer {
     /// Selects the adapter, builds and compiles the graph for it (which decides the
     /// device's features), opens the device and uploads the scene.
-    pub fn new(mut data: SceneData, settings: FrameSettings, source: &GraphSource) -> Result<Self> {
+    pub fn new(
+        mut data: SceneData,
+        mut settings: FrameSettings,
+        source: &GraphSource,
+    ) -> Result<Self> {
         let adapter = GpuAdapter::select()?;
+        let class = super::split::AdapterClass::of(&adapter.info());
+        settings.sw_threshold_px = Some(settings.sw_threshold_on(class));
         let limits = adapter.adapter.limits();
         settings.check_viewport(limits.max_texture_dimension_2d)?;
         let compiled = source

@@ -67,6 +67,10 @@ pub struct LayoutEntry {
     /// Bound read-only although the slot writes: a later dispatch of the same pass reads
     /// what an earlier one wrote (`var<storage, read>` in its shader).
     pub read_only: bool,
+    /// Bound write-only although the slot also reads: a clearing dispatch stores into a
+    /// texture the pass then uses with atomics (an `R64Uint` target has no render-pass
+    /// clear, and wgpu's texture clear copies from a buffer).
+    pub write_only: bool,
 }
 
 /// One bind group of a pipeline, as a labelled list of slot bindings.
@@ -102,6 +106,7 @@ impl BindingLayout {
             source,
             visibility: None,
             read_only: false,
+            write_only: false,
         });
         self
     }
@@ -121,6 +126,13 @@ impl BindingLayout {
     pub fn read_only(mut self) -> Self {
         if let Some(e) = self.entries.last_mut() {
             e.read_only = true;
+        }
+        self
+    }
+    /// Binds the entry added last as write-only storage, whatever the slot's access.
+    pub fn write_only(mut self) -> Self {
+        if let Some(e) = self.entries.last_mut() {
+            e.write_only = true;
         }
         self
     }

@@ -346,11 +346,9 @@ impl<'a> RecordContext<'a> {
                             slot: name.to_string(),
                             available: contract.slot_names().join(", "),
                         })?;
-                        self.binding_type(name, slot.access, e.read_only)?
+                        self.binding_type(name, slot.access, e)?
                     }
-                    BindingSource::Scratch(name, access) => {
-                        self.binding_type(name, *access, e.read_only)?
-                    }
+                    BindingSource::Scratch(name, access) => self.binding_type(name, *access, e)?,
                     BindingSource::Uniform => buffer_binding_type(crate::access::Access::Uniform)
                         .expect("uniform is a buffer binding"),
                     BindingSource::Sampler(kind) => kind.binding_type(),
@@ -366,15 +364,17 @@ impl<'a> RecordContext<'a> {
     }
 
     /// The binding type of the named slot or scratch resource used with `access` (as
-    /// read-only storage when the layout says so).
+    /// read-only or write-only storage when the layout entry says so).
     fn binding_type(
         &self,
         name: &str,
         access: crate::access::Access,
-        read_only: bool,
+        entry: &crate::exec::layout::LayoutEntry,
     ) -> Result<wgpu::BindingType> {
-        let access = if read_only {
+        let access = if entry.read_only {
             crate::access::Access::StorageRead
+        } else if entry.write_only {
+            crate::access::Access::StorageWrite
         } else {
             access
         };

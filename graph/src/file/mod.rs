@@ -9,4 +9,4 @@ pub use pipeline::{
     PipelineFile, load_pipeline, load_pipeline_with, parse_format, parse_pipeline,
     parse_pipeline_with,
 };
-pub use registry::{Factory, Registry};
+pub use registry::{AUTO, Factory, Registry};

@@ -1,34 +1,49 @@
-//! Stage `hw_raster`, implementation `indirect_draw`: the clusters culling sent to the
-//! hardware rasteriser (large on screen, or crossing the near plane) drawn with one
-//! indirect draw into the same 64-bit visibility buffer the software rasteriser fills.
+//! Stage `hw_raster`: the clusters culling sent to the hardware rasteriser (large on
+//! screen, or crossing the near plane) drawn into the same 64-bit visibility buffer the
+//! software rasteriser fills, with no count read back to the CPU. Two implementations:
 //!
-//! Culling appends hardware clusters from the right end of the shared slot buffer and
-//! counts them in `hw_args[1]`, so `draw_indirect` of `[384, count, 0, 0]` draws one
-//! instance of 128 × 3 vertices per cluster, with no count read back to the CPU.
-//! Instance `j` draws slot `C - 1 - j` (`C = raster_counts[3]`); the vertex shader pulls
-//! its corner from the compressed payload, and corners of triangles past the meshlet's
-//! triangle count become NaN, which the rasteriser drops. The fragment shader does the
-//! software rasteriser's `atomicMax(depth << 32 | slot << 7 | triangle)`; the colour
-//! target exists only because a render pipeline needs one and is never written.
+//! - `indirect_draw`: culling appends hardware clusters from the right end of the shared
+//!   slot buffer and counts them in `hw_args[1]`, so `draw_indirect` of
+//!   `[384, count, 0, 0]` draws one instance of 128 × 3 vertices per cluster. Instance
+//!   `j` draws slot `C - 1 - j` (`C = raster_counts[3]`); the vertex shader pulls its
+//!   corner from the compressed payload, and corners of triangles past the meshlet's
+//!   triangle count become NaN, which the rasteriser drops. Every vertex is transformed
+//!   once per triangle using it.
+//! - `mesh_shader` (`EXPERIMENTAL_MESH_SHADER`): one mesh workgroup (a warp of 32
+//!   threads) per hardware cluster decodes and transforms each of the meshlet's vertices
+//!   once and
+//!   emits its triangles, with the slot and triangle as per-primitive values. A
+//!   one-thread dispatch first turns `raster_counts[1]` into a mesh dispatch
+//!   `[row, rows, 1]` under the adapter's mesh-dispatch limits (a scratch buffer), so
+//!   cluster `j` is workgroup `wg.y * row + wg.x`. No task stage: culling already chose
+//!   the clusters.
+//!
+//! The fragment shader of both does the software rasteriser's
+//! `atomicMax(depth << 32 | slot << 7 | triangle)`, into a `u64` buffer or, where the
+//! target is an `R64Uint` texture (bound by a `texture` software rasteriser), with a
+//! 64-bit texture atomic. The colour target exists only because a render pipeline needs
+//! one and is never written. `auto` takes `mesh_shader` where the adapter has it.
 //!
 //! # Contract
 //!
 //! | slot | access | holds | |
 //! |------|--------|-------|---|
 //! | `raster_clusters` | storage read | Cluster | hardware clusters in slots `C - hw_count .. C` |
-//! | `raster_counts` | storage read | u32 | word 3: `C`, the slot capacity |
+//! | `raster_counts` | storage read | u32 | word 1: hardware clusters, word 3: `C`, the slot capacity |
 //! | `hw_args` | indirect | DrawIndirectArgs | `[384, hw_count, 0, 0]` from `cull_lod` |
 //! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
-//! | `visbuffer` | storage read-write | u64 | `width × height`, row-major; atomicMax onto what `sw_raster` left |
+//! | `visbuffer` | storage read-write | u64 / r64uint | `width × height`, row-major buffer or texture; atomicMax onto what `sw_raster` left |
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`): its `viewport_size` must
 //! equal the params `width` × `height` (a record error names both otherwise).
 //! Scratch: `target`, an `R8Unorm` colour target of the viewport size, masked, cleared
-//! and discarded. Needs `SHADER_INT64 | SHADER_INT64_ATOMIC_MIN_MAX`.
+//! and discarded; `mesh_shader` also `mesh_args`. Needs `SHADER_INT64` and
+//! `SHADER_INT64_ATOMIC_MIN_MAX` (buffer target) or `TEXTURE_ATOMIC |
+//! TEXTURE_INT64_ATOMIC` (texture target).
 //!
 //! # Definitions the tests pin down
 //!
-//! - The visibility id of a hardware cluster is its slot, `C - 1 - j` for instance `j`.
+//! - The visibility id of a hardware cluster is its slot, `C - 1 - j` for cluster `j`.
 //! - Clip position: `view_projection * (world_from_local * position).xyz1`, the software
 //!   rasteriser's operations, so both rasterisers start from the same bits.
 //! - Front faces are counter-clockwise in NDC (clockwise on the y-down screen); back
@@ -40,6 +55,8 @@
 //!   pixels whose centre lies within rounding of an edge and in the last bits of depth;
 //!   the GPU test states the tolerance. Unlike the software rasteriser, the hardware
 //!   clips triangles at the near plane instead of skipping them.
+//! - The two implementations feed the rasteriser the same triangles in the same
+//!   positions; they may differ only where the hardware orders equal-depth writes.
 //! - [`cpu::rasterize`] is the reference (float edge functions at pixel centres).
 
 pub mod cpu;
@@ -48,10 +65,10 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, ColorAttachment, ColorTarget, Element, GraphError, Pass, Primitive,
-    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
+    Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, Element, GraphError, Pass,
+    Primitive, ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
 };
-use meshlight_shaders::{PassShader, pass_shader};
+use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "hw_raster";
@@ -66,6 +83,14 @@ const TARGET: &str = "target";
 
 pub const SHADER: PassShader = pass_shader!("hw_raster::raster", "raster.wgsl");
 
+/// raster.wgsl with the mesh-shader extension enabled (compose it with `MESH_SHADER`):
+/// an `enable` directive must be the first line and cannot depend on a def.
+pub const MESH_SHADER_SOURCE: PassShader = PassShader {
+    name: "hw_raster::raster_mesh",
+    source: concat!("enable wgpu_mesh_shader;\n", include_str!("raster.wgsl")),
+    file_path: concat!(env!("CARGO_PKG_NAME"), "/raster.wgsl (mesh variant)"),
+};
+
 /// The slots every implementation of `hw_raster` shares.
 pub fn contract() -> StageContract {
     let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
@@ -77,7 +102,11 @@ pub fn contract() -> StageContract {
                 elements::CLUSTER,
                 "hardware clusters from the right end",
             ),
-            read("raster_counts", Element::U32, "word 3: the slot capacity C"),
+            read(
+                "raster_counts",
+                Element::U32,
+                "word 1: hardware clusters, word 3: the slot capacity C",
+            ),
             Slot::buffer(
                 "hw_args",
                 Access::Indirect,
@@ -88,21 +117,62 @@ pub fn contract() -> StageContract {
             read("meshes", elements::MESH, "the scene's meshes"),
             read("meshlets", elements::MESHLET, "the scene's meshlets"),
             read("payload", Element::U32, "the scene's meshlet payload"),
-            Slot::buffer(
+            Slot::visibility64(
                 "visbuffer",
                 Access::StorageReadWrite,
-                Element::U64,
-                "width × height visibility values; atomicMax onto the software raster's",
+                "width × height visibility values (u64 buffer or r64uint texture); atomicMax onto the software raster's",
             ),
         ],
     }
 }
 
-/// The `indirect_draw` implementation.
+/// The implementation names, best first (the order `auto` tries them in).
+pub const IMPLEMENTATIONS: [&str; 2] = ["mesh_shader", "indirect_draw"];
+
+/// How clusters reach the rasteriser.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Feed {
+    /// `indirect_draw`: 384 vertices per cluster instance.
+    IndirectDraw,
+    /// `mesh_shader`: one mesh workgroup per cluster.
+    MeshShader,
+}
+
+/// The `indirect_draw` and `mesh_shader` implementations ([`HwRaster::feed`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HwRaster {
     pub width: u32,
     pub height: u32,
+    pub feed: Feed,
+}
+
+impl HwRaster {
+    /// The `indirect_draw` implementation.
+    pub fn indirect(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            feed: Feed::IndirectDraw,
+        }
+    }
+}
+
+/// The variant of raster.wgsl a pass runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct RasterDefs {
+    /// `MESH_SHADER`: the mesh-stage entry points exist (they need the extension).
+    pub mesh_shader: bool,
+    /// `VIS_TEXTURE`: the visibility buffer is an R64Uint storage texture.
+    pub texture: bool,
+}
+
+impl ShaderDefs for RasterDefs {
+    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
+        vec![
+            ("MESH_SHADER", ShaderDef::Bool(self.mesh_shader)),
+            ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
+        ]
+    }
 }
 
 #[repr(C)]
@@ -111,14 +181,17 @@ struct GpuParams {
     width: u32,
     height: u32,
     nan_bits: u32,
-    _pad: u32,
+    /// Mesh workgroups per row of the mesh dispatch, and at most in all.
+    row: u32,
+    total: u32,
+    _pad: [u32; 3],
 }
 
 const PARAM_KEYS: [&str; 2] = ["width", "height"];
 
 impl HwRaster {
     /// Reads `width` and `height` (required, > 0: the visibility buffer size).
-    pub fn from_params(params: &Params) -> Result<Self> {
+    pub fn from_params(params: &Params, feed: Feed) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let width = params.u32("width", 0)?;
         let height = params.u32("height", 0)?;
@@ -130,7 +203,11 @@ impl HwRaster {
                 ),
             });
         }
-        Ok(Self { width, height })
+        Ok(Self {
+            width,
+            height,
+            feed,
+        })
     }
 }
 
@@ -139,12 +216,20 @@ impl Pass for HwRaster {
         contract()
     }
     fn implementation(&self) -> &'static str {
-        "indirect_draw"
+        match self.feed {
+            Feed::IndirectDraw => "indirect_draw",
+            Feed::MeshShader => "mesh_shader",
+        }
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        ctx.require_features(
-            wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
-        );
+        let texture = ctx.is_texture("visbuffer");
+        ctx.require_features(if texture {
+            wgpu::Features::SHADER_INT64
+                | wgpu::Features::TEXTURE_ATOMIC
+                | wgpu::Features::TEXTURE_INT64_ATOMIC
+        } else {
+            wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
+        });
         ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
         ctx.min_bytes("raster_counts", 16);
         ctx.min_bytes("hw_args", 16);
@@ -154,58 +239,105 @@ impl Pass for HwRaster {
             TextureDesc::d2(wgpu::TextureFormat::R8Unorm, self.width, self.height),
             &[Access::RenderTarget],
         );
-        let vertex = wgpu::ShaderStages::VERTEX;
-        let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let mesh = self.feed == Feed::MeshShader;
+        let defs = RasterDefs {
+            mesh_shader: mesh,
+            texture,
+        };
+        ctx.shader_defs(&defs);
+        // The stages that read the scene: the vertex stage, or the mesh stage.
+        let geometry = if mesh {
+            wgpu::ShaderStages::MESH
+        } else {
+            wgpu::ShaderStages::VERTEX
+        };
         let layout = BindingLayout::render("hw_raster")
             .slot(0, "raster_clusters")
-            .visible_in(vertex)
+            .visible_in(geometry)
             .slot(1, "raster_counts")
-            .visible_in(vertex)
+            .visible_in(geometry)
             .slot(2, "instances")
-            .visible_in(vertex)
+            .visible_in(geometry)
             .slot(3, "meshes")
-            .visible_in(vertex)
+            .visible_in(geometry)
             .slot(4, "meshlets")
-            .visible_in(vertex)
+            .visible_in(geometry)
             .slot(5, "payload")
-            .visible_in(vertex)
+            .visible_in(geometry)
             .slot(6, "visbuffer")
             .visible_in(wgpu::ShaderStages::FRAGMENT)
             .uniform(7)
-            .visible_in(vertex)
+            .visible_in(geometry)
             .uniform(8)
-            .visible_in(both);
+            .visible_in(geometry | wgpu::ShaderStages::FRAGMENT);
+        let primitive = Primitive {
+            cull_mode: Some(wgpu::Face::Back),
+            front_face: wgpu::FrontFace::Ccw,
+            ..Primitive::default()
+        };
+        let program = if mesh {
+            ProgramDesc::mesh(&MESH_SHADER_SOURCE, None, "raster_ms").fragment("raster_mesh_fs")
+        } else {
+            ProgramDesc::render(&SHADER, "raster_vs").fragment("raster_fs")
+        };
         ctx.program(
             "raster",
-            ProgramDesc::render(&SHADER, "raster_vs")
-                .fragment("raster_fs")
+            program
+                .defs(&defs)
                 .target(ColorTarget::masked(TARGET))
-                .primitive(Primitive {
-                    cull_mode: Some(wgpu::Face::Back),
-                    front_face: wgpu::FrontFace::Ccw,
-                    ..Primitive::default()
-                })
+                .primitive(primitive)
                 .layout(layout),
         );
+        if mesh {
+            ctx.scratch_buffer(
+                MESH_ARGS,
+                BufferDesc::array(Element::DISPATCH_ARGS, 1),
+                &[Access::StorageWrite, Access::Indirect],
+            );
+            let args = BindingLayout::compute("hw_raster::mesh_dispatch")
+                .slot(1, "raster_counts")
+                .uniform(8)
+                .scratch(9, MESH_ARGS, Access::StorageWrite);
+            ctx.program(
+                "mesh_dispatch",
+                ProgramDesc::compute(&MESH_SHADER_SOURCE, "mesh_dispatch")
+                    .defs(&defs)
+                    .layout(args),
+            );
+        }
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, Some([self.width, self.height]))?;
+        let limits = ctx.device().limits();
         let params = GpuParams {
             width: self.width,
             height: self.height,
             nan_bits: NAN_BITS,
-            _pad: 0,
+            row: limits.max_mesh_workgroups_per_dimension.max(1),
+            total: limits.max_mesh_workgroup_total_count,
+            _pad: [0; 3],
         };
+        let params = bytemuck::bytes_of(&params);
         let program = ctx.render("raster")?;
-        let bind_group = ctx.bind_group(
-            &program,
-            0,
-            &[
-                (7, bytemuck::bytes_of(&view)),
-                (8, bytemuck::bytes_of(&params)),
-            ],
-        )?;
+        let bind_group =
+            ctx.bind_group(&program, 0, &[(7, bytemuck::bytes_of(&view)), (8, params)])?;
+        if self.feed == Feed::MeshShader {
+            let dispatch = ctx.compute("mesh_dispatch")?;
+            let dispatch_group = ctx.bind_group(&dispatch, 0, &[(8, params)])?;
+            {
+                let mut pass = ctx.compute_pass();
+                pass.set_pipeline(&dispatch.pipeline);
+                pass.set_bind_group(0, &dispatch_group, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            let (args, _) = ctx.scratch(MESH_ARGS)?;
+            let mut pass = ctx.render_pass(&[ColorAttachment::new(TARGET)], None)?;
+            pass.set_pipeline(&program.pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.draw_mesh_tasks_indirect(args, 0);
+            return Ok(());
+        }
         let (args, _) = ctx.buffer("hw_args")?;
         let mut pass = ctx.render_pass(&[ColorAttachment::new(TARGET)], None)?;
         pass.set_pipeline(&program.pipeline);
@@ -215,11 +347,69 @@ impl Pass for HwRaster {
     }
 }
 
-fn build(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(HwRaster::from_params(params)?))
+/// The mesh dispatch's arguments (`mesh_shader` only).
+const MESH_ARGS: &str = "mesh_args";
+
+fn build_indirect(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(HwRaster::from_params(params, Feed::IndirectDraw)?))
 }
 
-/// Registers `hw_raster` (implementation `indirect_draw`) for pipeline files.
+fn build_mesh(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(HwRaster::from_params(params, Feed::MeshShader)?))
+}
+
+/// Registers `hw_raster` (implementations `indirect_draw`, `mesh_shader` and `auto`) for
+/// pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "indirect_draw", build);
+    registry.register(STAGE, "indirect_draw", build_indirect);
+    registry.register(STAGE, "mesh_shader", build_mesh);
+    registry.prefer(STAGE, &IMPLEMENTATIONS);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::RasterDefs;
+    use meshlight_shaders::{Capabilities, ShaderDefs, ShaderLibrary, validate};
+
+    fn compose(defs: RasterDefs, caps: Capabilities) -> Result<(), String> {
+        let mut library = ShaderLibrary::new(caps).map_err(|e| e.to_string())?;
+        let shader = if defs.mesh_shader {
+            &super::MESH_SHADER_SOURCE
+        } else {
+            &super::SHADER
+        };
+        let module = library
+            .compose(shader, &defs.shader_defs())
+            .map_err(|e| e.to_string())?;
+        validate(shader.name, &module, caps)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn every_variant_composes_and_validates_with_its_capabilities() {
+        let int64 = Capabilities::SHADER_INT64 | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX;
+        let texture = Capabilities::SHADER_INT64
+            | Capabilities::TEXTURE_ATOMIC
+            | Capabilities::TEXTURE_INT64_ATOMIC;
+        for mesh_shader in [false, true] {
+            for on_texture in [false, true] {
+                let defs = RasterDefs {
+                    mesh_shader,
+                    texture: on_texture,
+                };
+                let mut caps = if on_texture { texture } else { int64 };
+                if mesh_shader {
+                    caps |= Capabilities::MESH_SHADER;
+                }
+                compose(defs, caps).unwrap_or_else(|e| panic!("{defs:?}: {e}"));
+            }
+        }
+        // The mesh variant needs the mesh-shader capability.
+        let defs = RasterDefs {
+            mesh_shader: true,
+            texture: false,
+        };
+        assert!(compose(defs, int64).is_err());
+    }
 }

@@ -1,10 +1,16 @@
-// Hardware rasteriser for the clusters culling sent right of the slot buffer: one
-// instance of 128 × 3 vertices per cluster, drawn indirectly; the fragment shader writes
-// the same 64-bit visibility value as the software rasteriser with atomicMax.
-// `cpu::rasterize` (Rust) is the reference.
+// Hardware rasteriser for the clusters culling sent right of the slot buffer. Two ways to
+// feed the rasteriser, one fragment stage:
+// - `indirect_draw`: one instance of 128 × 3 vertices per cluster, drawn indirectly;
+// - `mesh_shader` (MESH_SHADER): one mesh workgroup per cluster emits the meshlet's
+//   vertices and triangles once each.
+// The fragment shader writes the software rasteriser's 64-bit visibility value with
+// atomicMax into a storage buffer, or with VIS_TEXTURE into an R64Uint texture.
+// `cpu::rasterize` (Rust) is the reference. The mesh variant is this file behind
+// `enable wgpu_mesh_shader;` (`MESH_SHADER_SOURCE` in lib.rs): a directive must come
+// first, and cannot sit behind an #ifdef.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESHLET_MAX_TRIANGLES, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESHLET_MAX_TRIANGLES, MESHLET_MAX_VERTICES, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle}
 #import meshlight::instance::Instance
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
@@ -16,31 +22,65 @@ struct Params {
     // 0x7fc00000, a quiet NaN: discarded vertices take it as every coordinate. It comes
     // from the uniform because shader validation refuses a NaN constant.
     nan_bits: u32,
-    _pad: u32,
+    // Mesh workgroups per row of the mesh dispatch, and at most in all (the adapter's
+    // mesh-dispatch limits).
+    row: u32,
+    total: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // Cluster slots; hardware clusters fill them from the right end, C - 1 downwards.
 @group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
-// Word 3: C, the slot capacity.
+// Word 1: hardware cluster count; word 3: C, the slot capacity.
 @group(0) @binding(1) var<storage, read> raster_counts: array<u32>;
 @group(0) @binding(2) var<storage, read> instances: array<Instance>;
 @group(0) @binding(3) var<storage, read> meshes: array<Mesh>;
 @group(0) @binding(4) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(5) var<storage, read> payload: array<u32>;
 // width × height visibility values, row-major; the software rasteriser wrote first.
+#ifdef VIS_TEXTURE
+@group(0) @binding(6) var visbuffer: texture_storage_2d<r64uint, atomic>;
+#else
 @group(0) @binding(6) var<storage, read_write> visbuffer: array<atomic<u64>>;
+#endif
 @group(0) @binding(7) var<uniform> view: View;
 @group(0) @binding(8) var<uniform> params: Params;
+
+fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
+    let at = meshlet_vertex_field(m, vertex, f);
+    return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
+}
+
+// Clip position of vertex `k` of the cluster's meshlet, with the software rasteriser's
+// operations, so both rasterisers start from the same bits.
+fn clip_position(instance: Instance, mesh: Mesh, m: Meshlet, k: u32) -> vec4<f32> {
+    let p = meshlet_position(m, mesh.position_grid, vec3(field(m, k, 0u), field(m, k, 1u), field(m, k, 2u)));
+    let world = instance.world_from_local * vec4(p, 1.0);
+    return view.view_projection * vec4(world.xyz, 1.0);
+}
+
+// The visibility write of one fragment; position.z is the NDC depth, since the
+// viewport's depth range is 0..1.
+fn write_visibility(position: vec4<f32>, id: vec2<u32>) {
+    let x = u32(position.x);
+    let y = u32(position.y);
+    if x >= params.width || y >= params.height {
+        return;
+    }
+    let value = visbuffer64_pack(position.z, id.x, id.y);
+#ifdef VIS_TEXTURE
+    textureAtomicMax(visbuffer, vec2(x, y), value);
+#else
+    atomicMax(&visbuffer[y * params.width + x], value);
+#endif
+}
 
 struct VertexOut {
     @builtin(position) position: vec4<f32>,
     // x: the cluster's slot (its visibility id), y: the triangle in the meshlet.
     @location(0) @interpolate(flat) id: vec2<u32>,
-}
-
-fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
-    let at = meshlet_vertex_field(m, vertex, f);
-    return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
 }
 
 @vertex
@@ -65,22 +105,99 @@ fn raster_vs(@builtin(vertex_index) v: u32, @builtin(instance_index) j: u32) -> 
     let mesh = meshes[instance.mesh];
     let at = meshlet_triangle_location(m, mesh.flags, t);
     let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
-    let k = corners[v % 3u];
-    let p = meshlet_position(m, mesh.position_grid, vec3(field(m, k, 0u), field(m, k, 1u), field(m, k, 2u)));
-    // The same operations as the software rasteriser, so both see the same clip position.
-    let world = instance.world_from_local * vec4(p, 1.0);
-    out.position = view.view_projection * vec4(world.xyz, 1.0);
+    out.position = clip_position(instance, mesh, m, corners[v % 3u]);
     return out;
 }
 
-// Writes nothing to its (masked) colour target; position.z is the NDC depth, since the
-// viewport's depth range is 0..1.
+// Writes nothing to its (masked) colour target.
 @fragment
 fn raster_fs(in: VertexOut) -> @location(0) vec4<f32> {
-    let x = u32(in.position.x);
-    let y = u32(in.position.y);
-    if x < params.width && y < params.height {
-        atomicMax(&visbuffer[y * params.width + x], visbuffer64_pack(in.position.z, in.id.x, in.id.y));
-    }
+    write_visibility(in.position, in.id);
     return vec4(0.0);
 }
+
+#ifdef MESH_SHADER
+struct MeshVertex {
+    @builtin(position) position: vec4<f32>,
+}
+
+struct MeshPrimitive {
+    @builtin(triangle_indices) indices: vec3<u32>,
+    // x: the cluster's slot, y: the triangle in the meshlet.
+    @per_primitive @location(0) @interpolate(flat) id: vec2<u32>,
+}
+
+struct MeshOutput {
+    @builtin(vertices) vertices: array<MeshVertex, MESHLET_MAX_VERTICES>,
+    @builtin(primitives) primitives: array<MeshPrimitive, MESHLET_MAX_TRIANGLES>,
+    @builtin(vertex_count) vertex_count: u32,
+    @builtin(primitive_count) primitive_count: u32,
+}
+
+var<workgroup> mesh_out: MeshOutput;
+
+// Threads of a mesh workgroup: one warp, each looping over vertices and triangles
+// (NVIDIA's advice for mesh shaders; 128 threads measured slower on the H100).
+const MESH_GROUP: u32 = 32u;
+
+// One workgroup per hardware cluster: linear id `wg.y * params.row + wg.x`, hardware
+// cluster j in slot C - 1 - j; ids at or past the count emit nothing.
+@mesh(mesh_out)
+@workgroup_size(MESH_GROUP)
+fn raster_ms(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let j = wg.y * params.row + wg.x;
+    let capacity = raster_counts[3];
+    let live = j < raster_counts[1] && j < capacity;
+    var vertices = 0u;
+    var triangles = 0u;
+    if live {
+        let slot = capacity - 1u - j;
+        let cluster = raster_clusters[slot];
+        let m = meshlets[cluster.meshlet];
+        let instance = instances[cluster.instance];
+        let mesh = meshes[instance.mesh];
+        vertices = meshlet_vertex_count(m);
+        triangles = meshlet_triangle_count(m);
+        for (var v = lane; v < vertices; v += MESH_GROUP) {
+            mesh_out.vertices[v].position = clip_position(instance, mesh, m, v);
+        }
+        for (var t = lane; t < triangles; t += MESH_GROUP) {
+            let at = meshlet_triangle_location(m, mesh.flags, t);
+            let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+            mesh_out.primitives[t].indices = corners;
+            mesh_out.primitives[t].id = vec2(slot, t);
+        }
+    }
+    if lane == 0u {
+        mesh_out.vertex_count = vertices;
+        mesh_out.primitive_count = triangles;
+    }
+}
+
+struct MeshFragment {
+    @builtin(position) position: vec4<f32>,
+}
+
+struct MeshFragmentPrimitive {
+    @per_primitive @location(0) @interpolate(flat) id: vec2<u32>,
+}
+
+@fragment
+fn raster_mesh_fs(in: MeshFragment, primitive: MeshFragmentPrimitive) -> @location(0) vec4<f32> {
+    write_visibility(in.position, primitive.id);
+    return vec4(0.0);
+}
+
+// The mesh dispatch `[row, rows, 1]` over the hardware clusters, written by `mesh_args`.
+@group(0) @binding(9) var<storage, read_write> mesh_args: array<u32>;
+
+// One thread: `min(count, total)` workgroups as rows of `params.row`, both under the
+// adapter's mesh-dispatch limits (per dimension, and in all).
+@compute @workgroup_size(1)
+fn mesh_dispatch() {
+    let count = min(min(raster_counts[1], raster_counts[3]), params.total);
+    mesh_args[0] = min(count, params.row);
+    mesh_args[1] = (count + params.row - 1u) / params.row;
+    mesh_args[2] = 1u;
+}
+#endif

@@ -7,7 +7,7 @@ use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::data::Limits;
 use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
 use meshlight_graph::*;
-use meshlight_pass_hw_raster::{HwRaster, VERTICES_PER_CLUSTER, cpu};
+use meshlight_pass_hw_raster::{Feed, HwRaster, VERTICES_PER_CLUSTER, cpu};
 use meshlight_scene::asset::format::MeshletRecord;
 use meshlight_scene::{BuildOptions, build_asset, procedural_mesh};
 use meshlight_shaders::cpu::layout::{Cluster, View};
@@ -121,6 +121,11 @@ fn camera() -> Camera {
 
 /// Runs the pass over `frame` and reads the visibility buffer back.
 fn run(frame: &mut Frame) -> Vec<u64> {
+    run_fed(frame, Feed::IndirectDraw).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// [`run`] with either implementation; compile and frame errors come back.
+fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
     let gpu = gpu();
     let scene = GpuScene::new(&gpu, &mut frame.scene);
     let capacity = frame.raster_clusters.len() as u32;
@@ -145,6 +150,7 @@ fn run(frame: &mut Frame) -> Vec<u64> {
         HwRaster {
             width: W,
             height: H,
+            feed,
         },
         Bindings::new()
             .bind("raster_clusters", clusters)
@@ -155,9 +161,8 @@ fn run(frame: &mut Frame) -> Vec<u64> {
             .bind("meshlets", h.meshlets)
             .bind("payload", h.payload)
             .bind("visbuffer", vis),
-    )
-    .unwrap();
-    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    )?;
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
     let buffers = [
         gpu.buffer_with_data(
             "raster_clusters",
@@ -176,13 +181,10 @@ fn run(frame: &mut Frame) -> Vec<u64> {
         .buffer("visbuffer", &buffers[3]);
     let mut exec = Executor::new(gpu);
     let data = FrameData::new().with("view", bytemuck::bytes_of(&frame.view));
-    exec.execute_frame(&compiled, &imports, &data).unwrap();
-    exec.finish().unwrap();
-    let bytes = exec
-        .gpu
-        .read_buffer(&buffers[3], 0, (W * H) as u64 * 8)
-        .unwrap();
-    bytemuck::pod_collect_to_vec(&bytes)
+    exec.execute_frame(&compiled, &imports, &data)?;
+    exec.finish()?;
+    let bytes = exec.gpu.read_buffer(&buffers[3], 0, (W * H) as u64 * 8)?;
+    Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
 /// How two visibility buffers agree: pixels covered by either, of those the ones with
@@ -417,6 +419,57 @@ fn meshlets_with_fewer_than_128_triangles_draw_nothing_past_their_count() {
     let got = run(&mut f);
     check("one small meshlet", &got, &want, 300, 1e-5);
     check_ids(&f, &got);
+}
+
+/// `mesh_shader` draws the clusters `indirect_draw` draws, where the adapter has mesh
+/// shaders (NVIDIA through Vulkan): ≥ 99% identical ids and both within the float
+/// reference's tolerance. Where it has not (lavapipe), compiling it is the typed error
+/// naming the feature.
+#[test]
+fn mesh_shader_draws_what_the_indirect_draw_draws_or_names_the_missing_feature() {
+    let mut f = frame(scene(), camera(), |_, m| m.level() <= 1);
+    let has = gpu()
+        .adapter
+        .features()
+        .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER);
+    let mesh = run_fed(&mut f, Feed::MeshShader);
+    if !has {
+        match mesh {
+            Err(GraphError::MissingFeature { pass, features, .. }) => {
+                assert_eq!(pass, "hw_raster");
+                assert!(features.contains("EXPERIMENTAL_MESH_SHADER"), "{features}");
+                eprintln!("no mesh shaders here: the typed error, as expected");
+            }
+            other => panic!("expected the missing-feature error, got {:?}", other.err()),
+        }
+        return;
+    }
+    let mesh = mesh.unwrap_or_else(|e| panic!("{e}"));
+    let indirect = run(&mut f);
+    check(
+        "mesh shader against indirect draw",
+        &mesh,
+        &indirect,
+        2000,
+        1e-6,
+    );
+    let want = cpu::rasterize(
+        &f.scene,
+        &f.view,
+        &f.raster_clusters,
+        f.hw_count,
+        &f.initial,
+        W,
+        H,
+    );
+    check(
+        "mesh shader against the float reference",
+        &mesh,
+        &want,
+        2000,
+        1e-5,
+    );
+    check_ids(&f, &mesh);
 }
 
 #[test]

@@ -15,7 +15,12 @@ struct Params {
 
 // width × height visibility values in the pair form (low word, high word), so reading
 // them needs no 64-bit integers.
+#ifdef VIS_TEXTURE
+// The software rasteriser's `texture` target: an R64Uint storage texture.
+@group(0) @binding(0) var visbuffer: texture_storage_2d<r64uint, read>;
+#else
 @group(0) @binding(0) var<storage, read> visbuffer: array<vec2<u32>>;
+#endif
 @group(0) @binding(1) var<storage, read> raster_clusters: array<Cluster>;
 @group(0) @binding(2) var<storage, read> instances: array<Instance>;
 @group(0) @binding(3) var<uniform> params: Params;
@@ -39,7 +44,12 @@ fn fullscreen_vs(@builtin(vertex_index) v: u32) -> @builtin(position) vec4<f32> 
 fn value_at(position: vec4<f32>) -> vec2<u32> {
     let x = min(u32(position.x), params.width - 1u);
     let y = min(u32(position.y), params.height - 1u);
+#ifdef VIS_TEXTURE
+    let v = textureLoad(visbuffer, vec2(x, y)).x;
+    return vec2(u32(v & 0xfffffffflu), u32(v >> 32u));
+#else
     return visbuffer[y * params.width + x];
+#endif
 }
 
 @fragment

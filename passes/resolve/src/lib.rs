@@ -121,10 +121,10 @@ pub fn contract() -> StageContract {
     StageContract {
         stage: STAGE,
         slots: vec![
-            read(
+            Slot::visibility64(
                 "visbuffer",
-                Element::U64,
-                "width × height visibility values from the rasterisers",
+                Access::StorageRead,
+                "width × height visibility values from the rasterisers (u64 buffer or r64uint texture)",
             ),
             read(
                 "raster_clusters",
@@ -212,6 +212,13 @@ impl Pass for Resolve {
         ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
         ctx.min_bytes("raster_counts", 4);
         ctx.frame_input(VIEW_INPUT);
+        // A `texture` software rasteriser's target: read as an R64Uint storage texture.
+        let texture = ctx.is_texture("visbuffer");
+        if texture {
+            ctx.require_features(
+                wgpu::Features::SHADER_INT64 | wgpu::Features::TEXTURE_INT64_ATOMIC,
+            );
+        }
         let fragment = wgpu::ShaderStages::FRAGMENT;
         let depth_layout = BindingLayout::render("resolve_depth")
             .slot(0, "visbuffer")
@@ -229,6 +236,7 @@ impl Pass for Resolve {
             ctx.program(
                 program,
                 ProgramDesc::render(&DEPTH_SHADER, "fullscreen_vs")
+                    .defs(&DepthDefs { texture })
                     .fragment(entry)
                     .depth(DepthTarget {
                         target,
@@ -241,6 +249,7 @@ impl Pass for Resolve {
         let lit = self.clustered_lights(ctx)?;
         let defs = ShadeDefs {
             clustered_lights: lit,
+            texture,
         };
         ctx.shader_defs(&defs);
         let shade_layout = BindingLayout::compute("resolve_shade")
@@ -337,11 +346,28 @@ const LIGHT_SLOTS: [&str; 5] = [
 struct ShadeDefs {
     /// `CLUSTERED_LIGHTS`: the froxel lists are bound.
     clustered_lights: bool,
+    /// `VIS_TEXTURE`: the visibility buffer is an R64Uint texture (depth.wgsl too).
+    texture: bool,
 }
 
 impl ShaderDefs for ShadeDefs {
     fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![("CLUSTERED_LIGHTS", ShaderDef::Bool(self.clustered_lights))]
+        vec![
+            ("CLUSTERED_LIGHTS", ShaderDef::Bool(self.clustered_lights)),
+            ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
+        ]
+    }
+}
+
+/// The variant of depth.wgsl a pass runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct DepthDefs {
+    texture: bool,
+}
+
+impl ShaderDefs for DepthDefs {
+    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
+        vec![("VIS_TEXTURE", ShaderDef::Bool(self.texture))]
     }
 }
 
@@ -414,6 +440,25 @@ mod tests {
                 .map(|e| e.name.as_str())
                 .collect();
             assert_eq!(entries, want);
+        }
+    }
+
+    #[test]
+    fn the_texture_variants_compose_and_validate_with_64_bit_texture_reads() {
+        let caps = Capabilities::SHADER_INT64 | Capabilities::TEXTURE_INT64_ATOMIC;
+        let mut library = ShaderLibrary::new(caps).unwrap();
+        let depth = DepthDefs { texture: true }.shader_defs();
+        let shade = ShadeDefs {
+            clustered_lights: true,
+            texture: true,
+        }
+        .shader_defs();
+        for (shader, defs) in [(&DEPTH_SHADER, &depth), (&SHADE_SHADER, &shade)] {
+            let module = library
+                .compose(shader, defs)
+                .unwrap_or_else(|e| panic!("{e}"));
+            meshlight_shaders::validate(shader.name, &module, caps)
+                .unwrap_or_else(|e| panic!("{e}"));
         }
     }
 

@@ -45,7 +45,12 @@ struct Params {
     checker_scale: f32,
 }
 
+#ifdef VIS_TEXTURE
+// The software rasteriser's `texture` target: an R64Uint storage texture.
+@group(0) @binding(0) var visbuffer: texture_storage_2d<r64uint, read>;
+#else
 @group(0) @binding(0) var<storage, read> visbuffer: array<vec2<u32>>;
+#endif
 @group(0) @binding(1) var<storage, read> raster_clusters: array<Cluster>;
 // Word 0: software clusters; ids below it were drawn in software.
 @group(0) @binding(2) var<storage, read> raster_counts: array<u32>;
@@ -256,7 +261,12 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height {
         return;
     }
+#ifdef VIS_TEXTURE
+    let v = textureLoad(visbuffer, gid.xy).x;
+    let value = vec2(u32(v & 0xfffffffflu), u32(v >> 32u));
+#else
     let value = visbuffer[gid.y * params.width + gid.x];
+#endif
     let pixel = vec2<f32>(gid.xy) + vec2(0.5);
     var rgb = vec3(0.0);
     let empty = visbuffer_is_empty(value);

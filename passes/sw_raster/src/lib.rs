@@ -1,5 +1,13 @@
-//! Stage `sw_raster`, implementation `buffer`: clusters too small for the hardware
-//! rasteriser drawn in a compute shader into a storage-buffer visibility buffer.
+//! Stage `sw_raster`: clusters too small for the hardware rasteriser drawn in a compute
+//! shader into the 64-bit visibility buffer. Two implementations share everything but
+//! the target: `buffer` (a storage buffer of `u64`, 64-bit buffer atomics: every adapter
+//! with `SHADER_INT64_ATOMIC_MIN_MAX`, lavapipe too) and `texture` (an `R64Uint` storage
+//! texture, 64-bit texture atomics: `TEXTURE_INT64_ATOMIC`, cleared by a dispatch of
+//! stores, since wgpu clears a texture that cannot be a render target by copying from a
+//! buffer, which costs several times more).
+//! `auto` takes `texture` where the adapter has it. Declare the target as `visibility`
+//! in a pipeline file and it takes the form the implementation writes, so the swap is one
+//! line and `hw_raster` and `resolve` follow.
 //!
 //! One workgroup per cluster (linear id `wg.y * sw_args[0] + wg.x`; ids at or past
 //! `raster_counts[0]` return). The meshlet's vertices are decoded from the payload,
@@ -17,12 +25,13 @@
 //! | `raster_counts` | storage read | u32 | word 0: software cluster count |
 //! | `sw_args` | storage read + indirect | DispatchIndirectArgs | `[x, y, 1]` from `remap_dispatch` |
 //! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
-//! | `visbuffer` | cleared read-write | u64 | `width × height`, row-major; cleared (a fill) then atomicMax |
+//! | `visbuffer` | cleared read-write | u64 / r64uint | `width × height`, row-major buffer or texture; cleared (a buffer fill, or a dispatch for the texture) then atomicMax |
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`): its `viewport_size` must
 //! equal the params `width` × `height` (a record error names both otherwise).
-//! Needs `SHADER_INT64 | SHADER_INT64_ATOMIC_MIN_MAX`. A texture-atomics implementation
-//! shares this contract: [`register`] maps the implementation name to its builder.
+//! `buffer` needs `SHADER_INT64 | SHADER_INT64_ATOMIC_MIN_MAX`; `texture` needs
+//! `SHADER_INT64 | TEXTURE_ATOMIC | TEXTURE_INT64_ATOMIC`. Both give the
+//! same values pixel for pixel: only the atomic's target differs.
 //!
 //! # Definitions the tests pin down
 //!
@@ -59,8 +68,8 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
-    SetupContext, Slot, StageContract,
+    Access, BindingLayout, GraphError, Pass, ProgramDesc, RecordContext, Result, SetupContext,
+    Slot, StageContract, Visibility64,
 };
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
@@ -70,6 +79,10 @@ pub const STAGE: &str = "sw_raster";
 pub const VIEW_INPUT: &str = "view";
 
 pub const SHADER: PassShader = pass_shader!("sw_raster::raster", "raster.wgsl");
+/// The `texture` implementation's clear: a dispatch of plain stores.
+pub const CLEAR_SHADER: PassShader = pass_shader!("sw_raster::clear", "clear.wgsl");
+/// The clear's workgroup edge (16 × 16 pixels).
+const CLEAR_TILE: u32 = 16;
 
 /// The slots every implementation of `sw_raster` shares.
 pub fn contract() -> StageContract {
@@ -84,34 +97,43 @@ pub fn contract() -> StageContract {
             ),
             read(
                 "raster_counts",
-                Element::U32,
+                meshlight_graph::Element::U32,
                 "word 0: software cluster count",
             ),
             read(
                 "sw_args",
-                Element::DISPATCH_ARGS,
+                meshlight_graph::Element::DISPATCH_ARGS,
                 "[x, y, 1] over the software clusters",
             )
             .also(Access::Indirect),
             read("instances", elements::INSTANCE, "the scene's instances"),
             read("meshes", elements::MESH, "the scene's meshes"),
             read("meshlets", elements::MESHLET, "the scene's meshlets"),
-            read("payload", Element::U32, "the scene's meshlet payload"),
-            Slot::buffer(
+            read(
+                "payload",
+                meshlight_graph::Element::U32,
+                "the scene's meshlet payload",
+            ),
+            Slot::visibility64(
                 "visbuffer",
                 Access::ClearedReadWrite,
-                Element::U64,
-                "width × height visibility values; cleared, then atomicMax",
+                "width × height visibility values (u64 buffer or r64uint texture); cleared, then atomicMax",
             ),
         ],
     }
 }
 
-/// The `buffer` implementation.
+/// The implementation names, best first (the order `auto` tries them in).
+pub const IMPLEMENTATIONS: [&str; 2] = ["texture", "buffer"];
+
+/// The `buffer` and `texture` implementations ([`SwRaster::target`] tells them apart).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SwRaster {
     pub width: u32,
     pub height: u32,
+    /// What the visibility buffer is: `Buffer` (implementation `buffer`) or `Texture`
+    /// (`texture`).
+    pub target: Visibility64,
     /// Workgroups whose widest triangle box reaches this many pixels loop per scanline.
     pub scanline_width: u32,
     /// Divide in integers, rounded as IEEE 754 divides, so every driver matches the
@@ -124,13 +146,22 @@ pub struct SwRaster {
 pub struct RasterDefs {
     /// `EXACT_DIVISION`: see [`SwRaster::exact_division`].
     pub exact_division: bool,
+    /// `VIS_TEXTURE`: the visibility buffer is an R64Uint storage texture.
+    pub texture: bool,
 }
 
 impl ShaderDefs for RasterDefs {
     fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![("EXACT_DIVISION", ShaderDef::Bool(self.exact_division))]
+        vec![
+            ("EXACT_DIVISION", ShaderDef::Bool(self.exact_division)),
+            ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
+        ]
     }
 }
+
+/// What the `texture` implementation asks of the adapter besides 64-bit integers.
+pub const TEXTURE_FEATURES: wgpu::Features =
+    wgpu::Features::TEXTURE_ATOMIC.union(wgpu::Features::TEXTURE_INT64_ATOMIC);
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -147,8 +178,8 @@ const PARAM_KEYS: [&str; 4] = ["width", "height", "scanline_width", "exact_divis
 
 impl SwRaster {
     /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16) and
-    /// `exact_division` (default false).
-    pub fn from_params(params: &Params) -> Result<Self> {
+    /// `exact_division` (default false); `target` picks the implementation.
+    pub fn from_params(params: &Params, target: Visibility64) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let width = params.u32("width", 0)?;
         let height = params.u32("height", 0)?;
@@ -163,6 +194,7 @@ impl SwRaster {
         Ok(Self {
             width,
             height,
+            target,
             scanline_width: params.u32("scanline_width", 16)?,
             exact_division: params.bool("exact_division", false)?,
         })
@@ -174,12 +206,21 @@ impl Pass for SwRaster {
         contract()
     }
     fn implementation(&self) -> &'static str {
-        "buffer"
+        match self.target {
+            Visibility64::Buffer => "buffer",
+            Visibility64::Texture => "texture",
+        }
+    }
+    fn visibility64(&self) -> Option<Visibility64> {
+        Some(self.target)
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        ctx.require_features(
-            wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
-        );
+        let texture = self.target == Visibility64::Texture;
+        ctx.require_features(if texture {
+            wgpu::Features::SHADER_INT64 | TEXTURE_FEATURES
+        } else {
+            wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
+        });
         ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
         ctx.min_bytes("raster_counts", 4);
         ctx.min_bytes("sw_args", 12);
@@ -197,6 +238,7 @@ impl Pass for SwRaster {
             .uniform(9);
         let defs = RasterDefs {
             exact_division: self.exact_division,
+            texture,
         };
         ctx.shader_defs(&defs);
         ctx.program(
@@ -205,6 +247,15 @@ impl Pass for SwRaster {
                 .defs(&defs)
                 .layout(layout),
         );
+        if texture {
+            let clear = BindingLayout::compute("sw_raster::clear")
+                .slot(0, "visbuffer")
+                .write_only();
+            ctx.program(
+                "clear",
+                ProgramDesc::compute(&CLEAR_SHADER, "clear").layout(clear),
+            );
+        }
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
@@ -215,7 +266,17 @@ impl Pass for SwRaster {
             scanline_width: self.scanline_width,
             zero: 0,
         };
-        ctx.clear("visbuffer")?;
+        let clear = match self.target {
+            Visibility64::Buffer => {
+                ctx.clear("visbuffer")?;
+                None
+            }
+            Visibility64::Texture => {
+                let program = ctx.compute("clear")?;
+                let group = ctx.bind_group(&program, 0, &[])?;
+                Some((program, group))
+            }
+        };
         let program = ctx.compute("raster")?;
         let bind_group = ctx.bind_group(
             &program,
@@ -227,6 +288,17 @@ impl Pass for SwRaster {
         )?;
         // `buffer` gives the buffer and its size; the arguments start at its beginning.
         let (args, _) = ctx.buffer("sw_args")?;
+        if let Some((clear, group)) = clear {
+            let mut pass = ctx.compute_pass();
+            pass.set_pipeline(&clear.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(
+                self.width.div_ceil(CLEAR_TILE),
+                self.height.div_ceil(CLEAR_TILE),
+                1,
+            );
+        }
+        // A second compute pass: the clear is visible before any cluster writes.
         let mut pass = ctx.compute_pass();
         pass.set_pipeline(&program.pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
@@ -235,13 +307,26 @@ impl Pass for SwRaster {
     }
 }
 
-fn build(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(SwRaster::from_params(params)?))
+fn build_buffer(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(SwRaster::from_params(
+        params,
+        Visibility64::Buffer,
+    )?))
 }
 
-/// Registers `sw_raster` (implementation `buffer`) for pipeline files.
+fn build_texture(params: &Params) -> Result<Box<dyn Pass>> {
+    Ok(Box::new(SwRaster::from_params(
+        params,
+        Visibility64::Texture,
+    )?))
+}
+
+/// Registers `sw_raster` (implementations `buffer`, `texture` and `auto`) for pipeline
+/// files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "buffer", build);
+    registry.register(STAGE, "buffer", build_buffer);
+    registry.register(STAGE, "texture", build_texture);
+    registry.prefer(STAGE, &IMPLEMENTATIONS);
 }
 
 #[cfg(test)]
@@ -257,6 +342,30 @@ mod tests {
             .compose(&super::SHADER, &[])
             .unwrap_or_else(|e| panic!("{e}"));
         validate(super::SHADER.name, &module, caps).unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    #[test]
+    fn the_texture_variant_composes_and_validates_with_texture_atomics() {
+        use meshlight_shaders::ShaderDefs;
+        let caps = Capabilities::SHADER_INT64
+            | Capabilities::TEXTURE_ATOMIC
+            | Capabilities::TEXTURE_INT64_ATOMIC;
+        let defs = super::RasterDefs {
+            exact_division: false,
+            texture: true,
+        };
+        let mut library = ShaderLibrary::new(caps).unwrap_or_else(|e| panic!("{e}"));
+        let module = library
+            .compose(&super::SHADER, &defs.shader_defs())
+            .unwrap_or_else(|e| panic!("{e}"));
+        validate(super::SHADER.name, &module, caps).unwrap_or_else(|e| panic!("{e}"));
+        // Without texture atomics the variant is refused.
+        let plain = Capabilities::SHADER_INT64 | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX;
+        let mut library = ShaderLibrary::new(plain).unwrap_or_else(|e| panic!("{e}"));
+        let refused = library
+            .compose(&super::SHADER, &defs.shader_defs())
+            .and_then(|m| validate(super::SHADER.name, &m, plain));
+        assert!(refused.is_err());
     }
 
     fn px(x: i32, y: i32) -> [i32; 2] {

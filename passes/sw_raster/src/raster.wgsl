@@ -1,5 +1,6 @@
 // Software rasteriser for small clusters: one workgroup per cluster, one thread per
-// triangle, 64-bit atomicMax into a storage-buffer visibility buffer.
+// triangle, 64-bit atomicMax into the visibility buffer (a storage buffer, or with
+// VIS_TEXTURE an R64Uint storage texture).
 // `cpu::rasterize` (Rust) is the reference; every step below has its mirror there.
 
 #import meshlight::math::read_bits
@@ -25,7 +26,13 @@ struct Params {
 @group(0) @binding(4) var<storage, read> meshes: array<Mesh>;
 @group(0) @binding(5) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(6) var<storage, read> payload: array<u32>;
+#ifdef VIS_TEXTURE
+// `texture`: an R64Uint storage texture with 64-bit texture atomics.
+@group(0) @binding(7) var visbuffer: texture_storage_2d<r64uint, atomic>;
+#else
+// `buffer`: width × height values, row-major, with 64-bit buffer atomics.
 @group(0) @binding(7) var<storage, read_write> visbuffer: array<atomic<u64>>;
+#endif
 @group(0) @binding(8) var<uniform> view: View;
 @group(0) @binding(9) var<uniform> params: Params;
 
@@ -133,8 +140,12 @@ fn shade(tri: Tri, x: i32, y: i32) {
         return;
     }
     let depth = tri.z.x + unfused(f32(e1) * tri.gradient.x) + unfused(f32(e2) * tri.gradient.y);
-    let index = u32(y) * params.width + u32(x);
-    atomicMax(&visbuffer[index], visbuffer64_pack(depth, tri.value_cluster, tri.triangle));
+    let value = visbuffer64_pack(depth, tri.value_cluster, tri.triangle);
+#ifdef VIS_TEXTURE
+    textureAtomicMax(visbuffer, vec2(u32(x), u32(y)), value);
+#else
+    atomicMax(&visbuffer[u32(y) * params.width + u32(x)], value);
+#endif
 }
 
 @compute @workgroup_size(128)

@@ -171,12 +171,19 @@ fn run(
         BufferDesc::array(Element::DISPATCH_ARGS, 1),
         USAGE,
     );
-    let vis = g.import_buffer(
+    let out = g.import_buffer(
         "visbuffer",
         BufferDesc::array(Element::U64, (W * H) as u64),
         USAGE,
     );
-    g.add_pass(
+    // The `texture` target is a transient R64Uint texture, copied out after the raster.
+    let texture = pass.target == Visibility64::Texture;
+    let vis: AnyHandle = if texture {
+        g.create_visibility64("visbuffer_texture", W, H)
+    } else {
+        out.into()
+    };
+    let drawn = g.add_pass(
         "sw_raster",
         pass,
         Bindings::new()
@@ -189,6 +196,12 @@ fn run(
             .bind("payload", h.payload)
             .bind("visbuffer", vis),
     )?;
+    if texture {
+        let copy = Bindings::new()
+            .bind("vis", drawn.texture("visbuffer")?)
+            .bind("out", out);
+        g.add_pass("copy_out", CopyOut, copy)?;
+    }
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
     let buffers = [
         gpu.buffer_with_data("raster_clusters", bytemuck::cast_slice(&input.slots), USAGE),
@@ -214,10 +227,59 @@ fn run(
     Ok(out)
 }
 
+/// Copies the `texture` implementation's visibility texture into the buffer the test
+/// reads (row pitch `W * 8` = 768 bytes, a multiple of 256 as copies require).
+struct CopyOut;
+
+impl Pass for CopyOut {
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: "copy_out",
+            slots: vec![
+                Slot::texture(
+                    "vis",
+                    Access::CopySrc,
+                    Some(wgpu::TextureFormat::R64Uint),
+                    "",
+                ),
+                Slot::buffer("out", Access::CopyDst, Element::U64, ""),
+            ],
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "copy"
+    }
+    fn setup(&self, _: &mut SetupContext) -> Result<()> {
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let (texture, _) = ctx.texture("vis")?;
+        let (buffer, _) = ctx.buffer("out")?;
+        ctx.encoder().copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(W * 8),
+                    rows_per_image: Some(H),
+                },
+            },
+            wgpu::Extent3d {
+                width: W,
+                height: H,
+                depth_or_array_layers: 1,
+            },
+        );
+        Ok(())
+    }
+}
+
 fn pass(scanline_width: u32) -> SwRaster {
     SwRaster {
         width: W,
         height: H,
+        target: Visibility64::Buffer,
         scanline_width,
         exact_division: false,
     }
@@ -347,6 +409,63 @@ fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
         assert_eq!(results[0], results[1], "{shape}: the loop shapes disagree");
         assert_eq!(results[0], results[2], "{shape}: the divisions disagree");
     }
+}
+
+/// The `texture` implementation writes the same values as the reference (and so as
+/// `buffer`) where the adapter has 64-bit texture atomics (NVIDIA through Vulkan); where
+/// it has not (lavapipe), compiling it is the typed error naming the feature.
+#[test]
+fn the_texture_target_holds_the_reference_values_or_names_the_missing_feature() {
+    let mut scene = knot_scene();
+    let slots: Vec<Cluster> = [
+        clusters_of(&scene, 0, |l| l == 0),
+        clusters_of(&scene, 1, |l| l >= 1),
+    ]
+    .concat();
+    let count = slots.len() as u32;
+    let input = Input::new(slots, count, 7);
+    let views = seeded_views(5, 3);
+    // Exact division: bit for bit on every driver, so the reference is the yardstick on
+    // NVIDIA too.
+    let exact = SwRaster {
+        exact_division: true,
+        ..pass(SCANLINES)
+    };
+    let textured = SwRaster {
+        target: Visibility64::Texture,
+        ..exact
+    };
+    let has = gpu()
+        .adapter
+        .features()
+        .contains(meshlight_pass_sw_raster::TEXTURE_FEATURES);
+    let got = run(&mut scene, &input, &views, textured);
+    if !has {
+        match got {
+            Err(GraphError::MissingFeature { pass, features, .. }) => {
+                assert_eq!(pass, "sw_raster");
+                assert!(features.contains("TEXTURE_INT64_ATOMIC"), "{features}");
+                eprintln!("no 64-bit texture atomics here: the typed error, as expected");
+            }
+            other => panic!("expected the missing-feature error, got {:?}", other.err()),
+        }
+        return;
+    }
+    let got = got.unwrap_or_else(|e| panic!("{e}"));
+    let buffer = run(&mut scene, &input, &views, exact).unwrap_or_else(|e| panic!("{e}"));
+    for (k, view) in views.iter().enumerate() {
+        let want = input.reference(&scene, view);
+        assert!(covered(&want) > 600, "view {k}");
+        assert_identical(&format!("texture, view {k}"), &got[k], &want);
+        assert_eq!(
+            got[k], buffer[k],
+            "view {k}: texture and buffer targets differ"
+        );
+    }
+    eprintln!(
+        "texture target: {} views equal to the reference and to the buffer target",
+        views.len()
+    );
 }
 
 /// The knot is closed and its outside is counter-clockwise: with back faces culled, the

@@ -1,0 +1,106 @@
+//! Where clusters switch from the software to the hardware rasteriser, per adapter class.
+//!
+//! The split is a cluster's screen-box size (`cull_lod`'s `sw_threshold_px`): smaller
+//! clusters go to the compute rasteriser. Where it pays to switch depends on how many of
+//! the GPU's units run graphics work. The NVIDIA H100 and H200 run vertex and fragment
+//! work on 2 of their TPCs only, so the compute rasteriser wins up to large clusters;
+//! GPUs built for graphics rasterise big triangles faster in hardware. The defaults here
+//! come from the split sweep of `meshlight bench --scenario virtual-geometry` (the
+//! 3,375-bunny scene; docs/BENCHMARKS.md has the numbers).
+
+/// Adapters grouped by how their rasterisers compare.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AdapterClass {
+    /// Data-centre GPUs on which few units run graphics (NVIDIA H100, H200, A100, …).
+    FewGraphicsUnits,
+    /// A CPU implementation (lavapipe): both rasterisers run on the CPU.
+    Cpu,
+    /// Every other GPU.
+    Graphics,
+}
+
+const NVIDIA: u32 = 0x10de;
+/// Name fragments of NVIDIA's compute-first data-centre parts.
+const FEW_GRAPHICS_UNITS: [&str; 6] = ["H100", "H200", "H800", "H20", "A100", "A800"];
+
+impl AdapterClass {
+    pub fn of(info: &wgpu::AdapterInfo) -> Self {
+        Self::classify(&info.name, info.vendor, info.device_type)
+    }
+
+    /// The class of an adapter with this name, PCI vendor id and device type.
+    pub fn classify(name: &str, vendor: u32, device_type: wgpu::DeviceType) -> Self {
+        if device_type == wgpu::DeviceType::Cpu {
+            return Self::Cpu;
+        }
+        let name = name.to_uppercase();
+        if vendor == NVIDIA && FEW_GRAPHICS_UNITS.iter().any(|n| name.contains(n)) {
+            return Self::FewGraphicsUnits;
+        }
+        Self::Graphics
+    }
+
+    /// The default `sw_threshold_px` for this class, and why.
+    pub fn sw_threshold_px(self) -> (f32, &'static str) {
+        match self {
+            // Measured: the frame time falls until 128 px and is flat beyond.
+            Self::FewGraphicsUnits => (
+                128.0,
+                "measured on an H100 and an H200: hardware raster runs on 2 TPCs, so software wins up to 128 px clusters, and larger thresholds change nothing",
+            ),
+            Self::Cpu => (
+                128.0,
+                "a CPU adapter runs both rasterisers on the CPU; the data-centre default keeps its images comparable",
+            ),
+            // Not measured here: Nanite's rule of thumb sends clusters whose triangles
+            // are about a pixel or smaller to software; a 128-triangle cluster under 32 px
+            // has triangles of a few pixels.
+            Self::Graphics => (
+                32.0,
+                "not measured on such a GPU: hardware raster is fast where every unit runs graphics, so only small clusters go to software",
+            ),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::FewGraphicsUnits => "data-centre GPU with few graphics units",
+            Self::Cpu => "CPU adapter",
+            Self::Graphics => "graphics GPU",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn classes_follow_the_adapter() {
+        let discrete = wgpu::DeviceType::DiscreteGpu;
+        assert_eq!(
+            AdapterClass::classify("NVIDIA H100 80GB HBM3", NVIDIA, discrete),
+            AdapterClass::FewGraphicsUnits
+        );
+        assert_eq!(
+            AdapterClass::classify("NVIDIA H200", NVIDIA, discrete),
+            AdapterClass::FewGraphicsUnits
+        );
+        assert_eq!(
+            AdapterClass::classify("NVIDIA GeForce RTX 4090", NVIDIA, discrete),
+            AdapterClass::Graphics
+        );
+        assert_eq!(
+            AdapterClass::classify(
+                "llvmpipe (LLVM 15.0.6, 256 bits)",
+                0x10005,
+                wgpu::DeviceType::Cpu
+            ),
+            AdapterClass::Cpu
+        );
+        assert!(
+            AdapterClass::Graphics.sw_threshold_px().0
+                < AdapterClass::FewGraphicsUnits.sw_threshold_px().0
+        );
+    }
+}
