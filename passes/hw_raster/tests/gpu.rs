@@ -187,6 +187,17 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
+/// Depth agreement with the float reference: 1e-5 on lavapipe, which interpolates from
+/// the unsnapped corners in f32 as the reference does; 4e-5 on a GPU's fixed-function
+/// interpolation (an NVIDIA H100 reached 2e-5 on steep triangles).
+fn depth_tolerance() -> f32 {
+    if gpu().adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+        1e-5
+    } else {
+        4e-5
+    }
+}
+
 /// How two visibility buffers agree: pixels covered by either, of those the ones with
 /// the same id, and the depth differences on those.
 struct Agreement {
@@ -336,8 +347,8 @@ fn hardware_raster_matches_both_references_and_keeps_the_software_values() {
     );
     // The float reference interpolates depth from the unsnapped corners, as lavapipe
     // does: within 1e-5 everywhere.
-    check("float reference", &got, &want, 2000, 1e-5);
-    assert!(agreement(&got, &want).max_depth_diff() <= 1e-5);
+    check("float reference", &got, &want, 2000, depth_tolerance());
+    assert!(agreement(&got, &want).max_depth_diff() <= depth_tolerance());
     check_ids(&f, &got);
 
     let fixed = fixed_point_reference(&f);
@@ -348,7 +359,7 @@ fn hardware_raster_matches_both_references_and_keeps_the_software_values() {
         &got,
         &fixed,
         2000,
-        1e-5,
+        depth_tolerance(),
     );
 
     // Both instances are seen, the near band survives, the far band is overdrawn.
@@ -417,7 +428,7 @@ fn meshlets_with_fewer_than_128_triangles_draw_nothing_past_their_count() {
     assert_eq!(f.hw_count, 1);
     assert!(covered > 300, "{covered}");
     let got = run(&mut f);
-    check("one small meshlet", &got, &want, 300, 1e-5);
+    check("one small meshlet", &got, &want, 300, depth_tolerance());
     check_ids(&f, &got);
 }
 

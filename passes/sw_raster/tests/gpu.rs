@@ -275,13 +275,15 @@ impl Pass for CopyOut {
     }
 }
 
+/// The pass with exact division, so that every driver matches the reference bit for bit
+/// (lavapipe divides exactly either way; NVIDIA's division moves some depths by an ulp).
 fn pass(scanline_width: u32) -> SwRaster {
     SwRaster {
         width: W,
         height: H,
         target: Visibility64::Buffer,
         scanline_width,
-        exact_division: false,
+        exact_division: true,
     }
 }
 
@@ -383,19 +385,7 @@ fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
 
     for (shape, input) in [("1-D", &linear), ("2-D", &folded)] {
         let mut results = Vec::new();
-        // The driver's division and the exact one in integers (which other drivers need
-        // for bit-exact depth; lavapipe divides exactly either way).
-        for (loop_name, raster) in [
-            ("scanline", pass(SCANLINES)),
-            ("box", pass(BOXES)),
-            (
-                "scanline, exact division",
-                SwRaster {
-                    exact_division: true,
-                    ..pass(SCANLINES)
-                },
-            ),
-        ] {
+        for (loop_name, raster) in [("scanline", pass(SCANLINES)), ("box", pass(BOXES))] {
             let got = run(&mut scene, input, &views, raster).unwrap_or_else(|e| panic!("{e}"));
             for (k, (g, w)) in got.iter().zip(&want).enumerate() {
                 assert_identical(
@@ -407,8 +397,63 @@ fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
             results.push(got);
         }
         assert_eq!(results[0], results[1], "{shape}: the loop shapes disagree");
-        assert_eq!(results[0], results[2], "{shape}: the divisions disagree");
+        // The driver's division: exact on lavapipe, within an ulp or so elsewhere.
+        let driver = SwRaster {
+            exact_division: false,
+            ..pass(SCANLINES)
+        };
+        let got = run(&mut scene, input, &views, driver).unwrap_or_else(|e| panic!("{e}"));
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            let name = format!("{shape} dispatch, driver division, view {k}");
+            if exact_divider() {
+                assert_identical(&name, g, w);
+            } else {
+                assert_near(&name, g, w);
+            }
+        }
     }
+}
+
+/// True where the driver divides as IEEE 754 does (lavapipe, a CPU adapter).
+fn exact_divider() -> bool {
+    gpu().adapter.get_info().device_type == wgpu::DeviceType::Cpu
+}
+
+/// The driver's division against the reference: coverage identical, every depth within
+/// 1e-5 (an ulp of a quotient moves a depth by about that much at most), and where two
+/// surfaces are that close the winner may change: ids differ on at most 2% of the
+/// covered pixels.
+fn assert_near(name: &str, got: &[u64], want: &[u64]) {
+    let mut covered = 0;
+    let mut other_id = 0;
+    let mut depths_moved = 0;
+    for (i, (&g, &w)) in got.iter().zip(want).enumerate() {
+        assert_eq!(
+            g == visbuffer::EMPTY,
+            w == visbuffer::EMPTY,
+            "{name}: pixel {i} coverage"
+        );
+        if w == visbuffer::EMPTY {
+            continue;
+        }
+        covered += 1;
+        other_id += (g as u32 != w as u32) as usize;
+        depths_moved += (g >> 32 != w >> 32) as usize;
+        let d = (visbuffer::depth(g) - visbuffer::depth(w)).abs();
+        assert!(
+            d <= 1e-5,
+            "{name}: pixel {i}: {} against {}",
+            describe(g),
+            describe(w)
+        );
+    }
+    eprintln!(
+        "{name}: of {covered} covered pixels, {depths_moved} with a moved depth, {other_id} with another id"
+    );
+    assert!(
+        other_id * 50 <= covered,
+        "{name}: {other_id} of {covered} pixels with another id"
+    );
 }
 
 /// The `texture` implementation writes the same values as the reference (and so as
@@ -425,12 +470,9 @@ fn the_texture_target_holds_the_reference_values_or_names_the_missing_feature() 
     let count = slots.len() as u32;
     let input = Input::new(slots, count, 7);
     let views = seeded_views(5, 3);
-    // Exact division: bit for bit on every driver, so the reference is the yardstick on
-    // NVIDIA too.
-    let exact = SwRaster {
-        exact_division: true,
-        ..pass(SCANLINES)
-    };
+    // `pass` divides exactly: bit for bit on every driver, so the reference is the
+    // yardstick on NVIDIA too.
+    let exact = pass(SCANLINES);
     let textured = SwRaster {
         target: Visibility64::Texture,
         ..exact
