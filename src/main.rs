@@ -108,6 +108,10 @@ struct GraphArgs {
     /// Write to this file instead of standard output.
     #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Plan for this machine's adapter (its features decide `auto`) instead of one with
+    /// every feature.
+    #[arg(long)]
+    for_adapter: bool,
 }
 
 /// Exit code when no Vulkan adapter exists, so scripts can install lavapipe and retry.
@@ -265,9 +269,12 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
 fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
     let builder = meshlight::graph::file::load_pipeline(&a.pipeline, &meshlight::registry())?;
     // Planning without a device assumes every feature; running checks the real adapter.
-    let plan = builder
-        .compile(&CompileOptions::new(wgpu::Features::all()))?
-        .plan;
+    let options = if a.for_adapter {
+        CompileOptions::for_adapter(&meshlight::graph::GpuAdapter::select()?)
+    } else {
+        CompileOptions::new(wgpu::Features::all())
+    };
+    let plan = builder.compile(&options)?.plan;
     let title = a.pipeline.display().to_string();
     let text = match a.format {
         Format::Dot => dump::to_dot(&plan),
