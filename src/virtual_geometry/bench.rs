@@ -130,24 +130,55 @@ pub fn default_scene(quick: bool) -> BenchResult {
     Ok(rows_of("render", &case, &m))
 }
 
+/// The scene of [`lattice`] and [`rasterisers`]: 15³ copies of a mesh (5³ at 1280×720
+/// with `quick`), its viewport, frame count and the case label of its rows.
+struct Lattice {
+    mesh: PathBuf,
+    placed: Placed,
+    width: u32,
+    height: u32,
+    frames: u32,
+    case: String,
+}
+
+impl Lattice {
+    fn new(quick: bool, meshes: &[PathBuf]) -> Result<Self, Box<dyn std::error::Error>> {
+        let mesh = meshes
+            .first()
+            .cloned()
+            .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+        let n = if quick { 5 } else { 15 };
+        let asset = scenes::load_asset(&mesh, 0)?;
+        let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
+        let (width, height) = if quick { (1280, 720) } else { (2240, 1260) };
+        let case = format!(
+            "{n}³ {}, {} source tris, {width}x{height}",
+            mesh.file_stem().unwrap_or_default().to_string_lossy(),
+            placed.data.source_triangles()
+        );
+        Ok(Self {
+            mesh,
+            placed,
+            width,
+            height,
+            frames: if quick { 5 } else { 50 },
+            case,
+        })
+    }
+}
+
 /// 15 × 15 × 15 copies of a mesh (the Stanford bunny unless `meshes` names another) at
 /// 2240×1260: the frame, then the same cluster set drawn all in software and all in
 /// hardware for each rasteriser's throughput.
 pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
-    let mesh = meshes
-        .first()
-        .cloned()
-        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
-    let n = if quick { 5 } else { 15 };
-    let asset = scenes::load_asset(&mesh, 0)?;
-    let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
-    let (width, height) = if quick { (1280, 720) } else { (2240, 1260) };
-    let frames = if quick { 5 } else { 50 };
-    let case = format!(
-        "{n}³ {}, {} source tris, {width}x{height}",
-        mesh.file_stem().unwrap_or_default().to_string_lossy(),
-        placed.data.source_triangles()
-    );
+    let Lattice {
+        mesh,
+        placed,
+        width,
+        height,
+        frames,
+        case,
+    } = Lattice::new(quick, meshes)?;
     let settings = FrameSettings::new(width, height);
     let frame = measure(&placed, settings.clone(), frames)?;
     let mut rows = rows_of("virtual-geometry", &case, &frame);
@@ -331,20 +362,14 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
 /// split threshold and all in software. Implementations the adapter lacks are skipped
 /// with a note on stderr.
 pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
-    let mesh = meshes
-        .first()
-        .cloned()
-        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
-    let n = if quick { 5 } else { 15 };
-    let asset = scenes::load_asset(&mesh, 0)?;
-    let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
-    let (width, height) = if quick { (1280, 720) } else { (2240, 1260) };
-    let frames = if quick { 5 } else { 50 };
-    let case = format!(
-        "{n}³ {}, {} source tris, {width}x{height}",
-        mesh.file_stem().unwrap_or_default().to_string_lossy(),
-        placed.data.source_triangles()
-    );
+    let Lattice {
+        placed,
+        width,
+        height,
+        frames,
+        case,
+        ..
+    } = Lattice::new(quick, meshes)?;
     let base = FrameSettings::new(width, height);
     let scenario = "rasterisers";
     let mut rows = Vec::new();
