@@ -1,5 +1,5 @@
-//! Synthetic graphs for benchmarks and property tests: passes that record nothing, and
-//! random layered DAGs of any size.
+//! Synthetic graphs for benchmarks and property tests: passes that record nothing, a pass
+//! that copies a texture out for a test to read, and random layered DAGs of any size.
 
 use crate::access::Access;
 use crate::builder::{Bindings, GraphBuilder};
@@ -28,6 +28,58 @@ impl Pass for NoopPass {
         Ok(())
     }
     fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// Copies a whole 2-D texture (slot `texture`) into a buffer (slot `buffer`), rows packed,
+/// so a test can read back what a pass wrote into a texture. A row must be a multiple of
+/// 256 bytes, as texture copies require.
+pub struct CopyTextureToBuffer {
+    pub format: wgpu::TextureFormat,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Pass for CopyTextureToBuffer {
+    fn contract(&self) -> StageContract {
+        // Any buffer: the test reads it as whatever the texels are.
+        let mut buffer = Slot::buffer("buffer", Access::CopyDst, Element::BYTES, "");
+        buffer.kind = crate::contract::SlotKind::Buffer { element: None };
+        StageContract {
+            stage: "copy_texture_to_buffer",
+            slots: vec![
+                Slot::texture("texture", Access::CopySrc, Some(self.format), ""),
+                buffer,
+            ],
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "copy"
+    }
+    fn setup(&self, _: &mut SetupContext) -> Result<()> {
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let texel = self.format.block_copy_size(None).unwrap_or(4);
+        let (texture, _) = ctx.texture("texture")?;
+        let (buffer, _) = ctx.buffer("buffer")?;
+        ctx.encoder().copy_texture_to_buffer(
+            texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.width * texel),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
         Ok(())
     }
 }

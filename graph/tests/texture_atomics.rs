@@ -72,53 +72,6 @@ impl Pass for TextureRaster {
     }
 }
 
-/// Copies the visibility texture into a buffer the test reads.
-struct CopyOut;
-
-impl Pass for CopyOut {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "copy_out",
-            slots: vec![
-                Slot::texture(
-                    "vis",
-                    Access::CopySrc,
-                    Some(wgpu::TextureFormat::R64Uint),
-                    "",
-                ),
-                Slot::buffer("out", Access::CopyDst, Element::U64, ""),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "copy"
-    }
-    fn setup(&self, _: &mut SetupContext) -> Result<()> {
-        Ok(())
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let (texture, _) = ctx.texture("vis")?;
-        let (buffer, _) = ctx.buffer("out")?;
-        ctx.encoder().copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(W * 8),
-                    rows_per_image: Some(H),
-                },
-            },
-            wgpu::Extent3d {
-                width: W,
-                height: H,
-                depth_or_array_layers: 1,
-            },
-        );
-        Ok(())
-    }
-}
-
 fn graph(vertices: u32) -> GraphBuilder {
     let mut g = GraphBuilder::new();
     let rects = g.import_buffer(
@@ -138,13 +91,17 @@ fn graph(vertices: u32) -> GraphBuilder {
     let copied = g
         .add_pass(
             "copy_out",
-            CopyOut,
+            synthetic::CopyTextureToBuffer {
+                format: wgpu::TextureFormat::R64Uint,
+                width: W,
+                height: H,
+            },
             Bindings::new()
-                .bind("vis", drawn.texture("vis").unwrap())
-                .bind("out", out),
+                .bind("texture", drawn.texture("vis").unwrap())
+                .bind("buffer", out),
         )
         .unwrap();
-    g.export(copied.buffer("out").unwrap());
+    g.export(copied.buffer("buffer").unwrap());
     g
 }
 

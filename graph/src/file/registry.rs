@@ -68,20 +68,24 @@ impl Registry {
             }
             return Ok(None);
         };
-        if implementation == AUTO {
-            let candidates = order
-                .iter()
-                .map(|i| self.build(stage, i, params))
-                .collect::<Result<Vec<_>>>()?;
-            return Ok(Some(Choice::auto(candidates)));
+        // The named one must build (its errors are the user's); the others are built
+        // where the parameters suit them, only to be named as what would run.
+        let named = (implementation != AUTO)
+            .then(|| self.build(stage, implementation, params))
+            .transpose()?;
+        let mut candidates = Vec::with_capacity(order.len() + 1);
+        for i in order {
+            match self.build(stage, i, params) {
+                Ok(pass) => candidates.push(pass),
+                Err(e) if named.is_none() => return Err(e),
+                Err(_) => {}
+            }
         }
-        let named = self.build(stage, implementation, params)?;
-        let alternatives = order
-            .iter()
-            .filter(|i| *i != implementation)
-            .filter_map(|i| self.build(stage, i, params).ok())
-            .collect();
-        Ok(Some(Choice::named(named, alternatives)))
+        if let Some(named) = named {
+            candidates.retain(|c| c.implementation() != implementation);
+            candidates.insert(0, named);
+        }
+        Choice::select(implementation, candidates).map(Some)
     }
 
     pub fn build(

@@ -198,9 +198,14 @@ fn run(
     )?;
     if texture {
         let copy = Bindings::new()
-            .bind("vis", drawn.texture("visbuffer")?)
-            .bind("out", out);
-        g.add_pass("copy_out", CopyOut, copy)?;
+            .bind("texture", drawn.texture("visbuffer")?)
+            .bind("buffer", out);
+        let copy_out = synthetic::CopyTextureToBuffer {
+            format: wgpu::TextureFormat::R64Uint,
+            width: W,
+            height: H,
+        };
+        g.add_pass("copy_out", copy_out, copy)?;
     }
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
     let buffers = [
@@ -225,54 +230,6 @@ fn run(
         out.push(bytemuck::pod_collect_to_vec(&bytes));
     }
     Ok(out)
-}
-
-/// Copies the `texture` implementation's visibility texture into the buffer the test
-/// reads (row pitch `W * 8` = 768 bytes, a multiple of 256 as copies require).
-struct CopyOut;
-
-impl Pass for CopyOut {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "copy_out",
-            slots: vec![
-                Slot::texture(
-                    "vis",
-                    Access::CopySrc,
-                    Some(wgpu::TextureFormat::R64Uint),
-                    "",
-                ),
-                Slot::buffer("out", Access::CopyDst, Element::U64, ""),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "copy"
-    }
-    fn setup(&self, _: &mut SetupContext) -> Result<()> {
-        Ok(())
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let (texture, _) = ctx.texture("vis")?;
-        let (buffer, _) = ctx.buffer("out")?;
-        ctx.encoder().copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(W * 8),
-                    rows_per_image: Some(H),
-                },
-            },
-            wgpu::Extent3d {
-                width: W,
-                height: H,
-                depth_or_array_layers: 1,
-            },
-        );
-        Ok(())
-    }
 }
 
 /// The pass with exact division, so that every driver matches the reference bit for bit
