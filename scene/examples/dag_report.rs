@@ -71,11 +71,10 @@ fn main() {
             built.asset.bytes().len() as f64 / h.lod0_triangles as f64,
             ratios.join(" ")
         );
-        let modes = [Mode::Regular, Mode::Permissive, Mode::Sloppy]
-            .map(|m| built.dag.groups.iter().filter(|g| g.mode == m).count());
+        let modes = Mode::ALL.map(|m| built.dag.groups.iter().filter(|g| g.mode == m).count());
         println!(
-            "  groups: {} regular, {} permissive, {} sloppy",
-            modes[0], modes[1], modes[2]
+            "  groups: {} regular, {} permissive, {} welded, {} sloppy",
+            modes[0], modes[1], modes[2], modes[3]
         );
         let b = built.asset.size_breakdown();
         let per = |bytes: usize| bytes as f64 / h.lod0_triangles as f64;

@@ -3,8 +3,9 @@
 //!
 //! A group that regular simplification cannot halve is pushed harder in the same build
 //! iteration, as meshoptimizer's clusterlod does: first permissive mode (collapses
-//! across attribute seams, seam vertices protected), then sloppy simplification with
-//! its error scaled up. Retrying the group at a later level instead, with other
+//! across attribute seams, seam vertices protected), then the group welded by position
+//! (seams ignored, each output corner given the copy whose normal best fits its
+//! triangle), then sloppy simplification with its error scaled up. Retrying the group at a later level instead, with other
 //! neighbours, mixed levels and let some groups go round for ever.
 
 use glam::Vec3;
@@ -40,7 +41,15 @@ pub const FOLDS_PER_64_TRIANGLES: usize = 1;
 pub enum Mode {
     Regular,
     Permissive,
+    /// Simplified as if every attribute seam were welded: needed where nearly every
+    /// vertex is on a seam (a faceted mesh), where the modes that keep seams are stuck.
+    Welded,
     Sloppy,
+}
+
+impl Mode {
+    /// Every mode, in the order a stuck group escalates.
+    pub const ALL: [Mode; 4] = [Mode::Regular, Mode::Permissive, Mode::Welded, Mode::Sloppy];
 }
 
 /// One simplified group in the group's own (global) vertex ids.
@@ -105,9 +114,45 @@ pub fn simplify_group(
     let mut folds_before: Option<usize> = None;
 
     let mut best: Option<(Vec<u32>, f32, Mode)> = None;
-    for mode in [Mode::Regular, Mode::Permissive, Mode::Sloppy] {
+    for mode in Mode::ALL {
         let mut error = 0.0f32;
         let out = match mode {
+            Mode::Welded => {
+                let welded: Vec<u32> = local.iter().map(|&v| weld[v as usize]).collect();
+                if welded == local {
+                    // No seam in the group: the same input regular mode had.
+                    continue;
+                }
+                // A buffer of the welded vertices alone: meshoptimizer treats vertices
+                // at one position as seams (or locks them) even when unreferenced.
+                let crate::meshlets::Localised {
+                    globals: reps,
+                    local: compact,
+                } = crate::meshlets::localise(&welded);
+                let rep_pos: Vec<Vec3> = reps.iter().map(|&r| pos[r as usize]).collect();
+                // Seams are gone once welded, so nothing is protected; the border stays.
+                let border: Vec<SimplifyVertex> = reps
+                    .iter()
+                    .map(|&r| match locked[r as usize] {
+                        true => SimplifyVertex::Lock,
+                        false => SimplifyVertex::None,
+                    })
+                    .collect();
+                let rep_adapter =
+                    meshopt::VertexDataAdapter::new(bytemuck::cast_slice(&rep_pos), 12, 0)
+                        .expect("Vec3 is 12 bytes");
+                let out = meshopt::simplify_with_locks(
+                    &compact,
+                    &rep_adapter,
+                    &border,
+                    target,
+                    f32::MAX,
+                    SimplifyOptions::ErrorAbsolute,
+                    Some(&mut error),
+                );
+                let out: Vec<u32> = out.iter().map(|&c| reps[c as usize]).collect();
+                unweld(&out, &pos, &attrs, &weld)
+            }
             Mode::Regular | Mode::Permissive => {
                 let mut options = SimplifyOptions::ErrorAbsolute | SimplifyOptions::ErrorClamped;
                 if mode == Mode::Permissive {
@@ -165,6 +210,45 @@ pub fn simplify_group(
         error,
         mode,
     })
+}
+
+/// Gives each corner of the welded triangles `out` the copy of its position whose normal
+/// is closest to its triangle's face normal, so that a faceted piece keeps facets that
+/// face the right way after its seams were ignored.
+fn unweld(out: &[u32], pos: &[Vec3], normals: &[Vec3], weld: &[u32]) -> Vec<u32> {
+    // Copies of each welded vertex, in CSR form.
+    let mut start = vec![0u32; weld.len() + 1];
+    for &w in weld {
+        start[w as usize + 1] += 1;
+    }
+    for i in 0..weld.len() {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut copies = vec![0u32; weld.len()];
+    for (v, &w) in weld.iter().enumerate() {
+        copies[fill[w as usize] as usize] = v as u32;
+        fill[w as usize] += 1;
+    }
+    let mut result = Vec::with_capacity(out.len());
+    for t in out.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|v| pos[v as usize]);
+        let face = (b - a).cross(c - a).normalize_or_zero();
+        for &w in t {
+            let run = &copies[start[w as usize] as usize..start[w as usize + 1] as usize];
+            let best = run
+                .iter()
+                .copied()
+                .max_by(|&x, &y| {
+                    normals[x as usize]
+                        .dot(face)
+                        .total_cmp(&normals[y as usize].dot(face))
+                })
+                .unwrap_or(w);
+            result.push(best);
+        }
+    }
+    result
 }
 
 /// Locks the other corners of every triangle at a locked vertex that has at most two

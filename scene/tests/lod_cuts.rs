@@ -216,7 +216,7 @@ fn check_lod_quality(name: &str, built: &Built) -> f32 {
 #[test]
 fn simplified_levels_stay_within_their_stored_error() {
     check_lod_quality("procedural", &build(&procedural_mesh(32)));
-    // Faceted: most groups go through sloppy simplification, whose error is measured too.
+    // Faceted: every group goes through the welded mode, whose error is measured too.
     check_lod_quality("faceted", &build(&common::faceted(&procedural_mesh(24))));
     {
         let dir = common::shared_meshes();
