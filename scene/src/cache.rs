@@ -2,7 +2,8 @@
 //!
 //! The key is an XXH3 hash of everything the asset depends on: the source file's bytes
 //! (or the procedural mesh's segment count), the build options, the asset format
-//! version and this crate's version (a builder change must not serve stale assets).
+//! version, this crate's version and the builder's revision (a builder change must not
+//! serve stale assets).
 //! A cached file is loaded with the same validation as any asset; one that fails it is
 //! baked again and replaced, never used.
 
@@ -18,6 +19,11 @@ use crate::load::load_mesh;
 use crate::mesh::Mesh;
 use crate::pipeline::{BuildOptions, build_asset};
 use crate::procedural::procedural_mesh;
+
+/// Raised whenever the builder makes different assets from the same input and options
+/// within one crate version: 2 = meshlets grown by `greedy_meshlets`, groups by
+/// meshoptimizer's partitioner, the welded escalation step.
+pub const BUILDER_REVISION: u32 = 2;
 
 /// Environment variable naming the cache directory (default: the user cache directory).
 pub const CACHE_DIR_ENV: &str = "MESHLIGHT_CACHE_DIR";
@@ -71,7 +77,7 @@ pub fn key(source: &Source, options: &BuildOptions) -> Result<u64, SceneError> {
     };
     bytes.extend(
         format!(
-            "|{:?}|{}|format {VERSION}|builder {}",
+            "|{:?}|{}|format {VERSION}|builder {} r{BUILDER_REVISION}",
             options.grouping,
             options.position_bits,
             env!("CARGO_PKG_VERSION")
@@ -177,7 +183,7 @@ mod tests {
         assert_eq!(a.bytes(), b.bytes());
         // Other options are another key.
         let other = BuildOptions {
-            grouping: crate::grouping::Grouping::Partition,
+            grouping: crate::grouping::Grouping::Metis,
             ..options
         };
         assert_ne!(

@@ -14,6 +14,7 @@ pub mod compress;
 pub mod dag;
 pub mod deviation;
 pub mod error;
+pub mod greedy_meshlets;
 pub mod grouping;
 pub mod load;
 pub mod mesh;

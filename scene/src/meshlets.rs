@@ -1,7 +1,10 @@
-//! Splitting triangles into meshlets with meshoptimizer.
+//! Splitting triangles into meshlets: whole meshes in parallel chunks, groups on their
+//! own vertices.
 
 use glam::Vec3;
 use rayon::prelude::*;
+
+use crate::greedy_meshlets::{SeedOrder, grow_meshlets};
 
 /// Most vertices per meshlet: local indices are `u8`, and 255 leaves 255 free as a
 /// sentinel for the GPU.
@@ -16,8 +19,7 @@ pub const CHUNK_TRIANGLES: usize = 1 << 15;
 
 /// Splits a whole mesh into meshlets, in parallel: the triangles are put in Morton order
 /// of their centroids and cut into chunks of [`CHUNK_TRIANGLES`], which are spatially
-/// compact, and each chunk is split on its own. meshoptimizer's splitter is serial and
-/// was the largest serial step of a build.
+/// compact, and each chunk is split on its own.
 pub fn split_mesh_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<u32>> {
     if indices.len() <= CHUNK_TRIANGLES * 3 {
         return split_into_meshlets(positions, indices);
@@ -25,7 +27,21 @@ pub fn split_mesh_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<
     let ordered = morton_ordered(positions, indices);
     let chunks: Vec<Vec<Vec<u32>>> = ordered
         .par_chunks(CHUNK_TRIANGLES * 3)
-        .map(|chunk| split_into_meshlets(positions, chunk))
+        .map(|chunk| {
+            // Already along the curve: the chunk's own order seeds its meshlets.
+            let Localised { globals, local } = localise(chunk);
+            let compact: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
+            grow_meshlets(
+                &compact,
+                &local,
+                MAX_VERTICES,
+                MAX_TRIANGLES,
+                SeedOrder::AsGiven,
+            )
+            .into_iter()
+            .map(|m| m.into_iter().map(|l| globals[l as usize]).collect())
+            .collect::<Vec<_>>()
+        })
         .collect();
     chunks.into_iter().flatten().collect()
 }
@@ -62,7 +78,7 @@ fn morton_ordered(positions: &[Vec3], indices: &[u32]) -> Vec<u32> {
 }
 
 /// Interleaves the low 10 bits of three coordinates into a 30-bit Morton code.
-fn morton3(x: u32, y: u32, z: u32) -> u32 {
+pub(crate) fn morton3(x: u32, y: u32, z: u32) -> u32 {
     fn spread(v: u32) -> u32 {
         let mut v = v & 0x3ff;
         v = (v | (v << 16)) & 0x0300_00ff;
@@ -73,15 +89,14 @@ fn morton3(x: u32, y: u32, z: u32) -> u32 {
     spread(x) | (spread(y) << 1) | (spread(z) << 2)
 }
 
-/// Splits an indexed triangle list into meshlets; each returned list indexes
-/// `positions` like the input does. The cone weight is zero: the renderer culls by
-/// sphere and occlusion, and favouring cones costs fill.
+/// Splits an indexed triangle list into meshlets (see [`crate::greedy_meshlets`]); each
+/// returned list indexes `positions` like the input does.
 pub fn split_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<u32>> {
     if indices.is_empty() {
         return Vec::new();
     }
-    // meshoptimizer's cost grows with the vertex buffer it is handed; a group of a large
-    // mesh touches a few hundred vertices, so hand it a compact copy.
+    // The splitter's per-vertex arrays are the size of the buffer it is handed; a group
+    // of a large mesh touches a few hundred vertices, so hand it a compact copy.
     if indices.len() * 4 < positions.len() {
         let Localised { globals, local } = localise(indices);
         let compact: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
@@ -90,18 +105,13 @@ pub fn split_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<u32>>
             .map(|m| m.into_iter().map(|l| globals[l as usize]).collect())
             .collect();
     }
-    let adapter = meshopt::VertexDataAdapter::new(bytemuck::cast_slice(positions), 12, 0)
-        .expect("Vec3 is 12 bytes");
-    let meshlets = meshopt::build_meshlets(indices, &adapter, MAX_VERTICES, MAX_TRIANGLES, 0.0);
-    meshlets
-        .iter()
-        .map(|m| {
-            m.triangles
-                .iter()
-                .map(|&t| m.vertices[t as usize])
-                .collect()
-        })
-        .collect()
+    grow_meshlets(
+        positions,
+        indices,
+        MAX_VERTICES,
+        MAX_TRIANGLES,
+        SeedOrder::Morton,
+    )
 }
 
 /// A triangle list re-indexed over only the vertices it uses.

@@ -298,3 +298,27 @@ fn overused_edges(indices: &[u32], weld: &[u32]) -> usize {
         .filter(|run| run.len() > 2)
         .count()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unwelding_gives_each_corner_the_copy_facing_its_triangle() {
+        // A ridge: two copies of each of the points 0 and 1, one per side; the copies
+        // 2 and 3 have normals facing down (-Z), 0 and 1 up (+Z); 4 and 5 are the tips.
+        let pos = [
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(0.5, 1.0, 0.0),
+            Vec3::new(0.5, -1.0, 0.0),
+        ];
+        let normals = [Vec3::Z, Vec3::Z, -Vec3::Z, -Vec3::Z, Vec3::Z, -Vec3::Z];
+        let weld = [0, 1, 0, 1, 4, 5];
+        // Welded triangles: one facing +Z (0, 1, 4), one facing -Z (0, 1, 5).
+        let out = unweld(&[0, 1, 4, 0, 1, 5], &pos, &normals, &weld);
+        assert_eq!(out, vec![0, 1, 4, 2, 3, 5]);
+    }
+}

@@ -70,7 +70,7 @@ pub fn quality(asset: &MeshletAsset) -> Quality {
     let stats = level_stats(asset);
     let limit = level_limit(h.lod0_meshlets);
     let mut warnings = Vec::new();
-    let try_this = "try `--grouping partition`, or check the mesh for non-manifold edges and \
+    let try_this = "try the other `--grouping`, or check the mesh for non-manifold edges and \
                     disconnected slivers";
     let mut worst_ratio = 0.0f64;
     let last = stats.len().saturating_sub(1);
