@@ -252,11 +252,14 @@ impl TriangleGrid {
             let hi: [i32; 3] = std::array::from_fn(|k| (c[k] + ring).min(self.dims[k] - 1));
             for z in lo[2]..=hi[2] {
                 for y in lo[1]..=hi[1] {
-                    for x in lo[0]..=hi[0] {
-                        let shell = (x - c[0]).abs().max((y - c[1]).abs()).max((z - c[2]).abs());
-                        if shell != ring {
-                            continue;
-                        }
+                    // Only the cells on this ring's shell: all of a row on a face of the
+                    // cube, its two ends elsewhere (iterating the whole cube and
+                    // skipping the inside cost most of the search's time).
+                    let face = (z - c[2]).abs() == ring || (y - c[1]).abs() == ring;
+                    let ends = [c[0] - ring, c[0] + ring];
+                    let row = lo[0]..=hi[0];
+                    let xs = row.filter(|&x| face || ends.contains(&x));
+                    for x in xs {
                         let box_lo =
                             self.origin + Vec3::new(x as f32, y as f32, z as f32) * self.cell;
                         let gap = (box_lo - p).max(p - (box_lo + self.cell)).max(Vec3::ZERO);
