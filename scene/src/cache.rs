@@ -21,8 +21,8 @@ use crate::pipeline::{BuildOptions, build_asset};
 use crate::procedural::procedural_mesh;
 
 /// Raised whenever the builder makes different assets from the same input and options
-/// within one crate version: 2 = meshlets grown by `greedy_meshlets`, groups by
-/// meshoptimizer's partitioner, the welded escalation step.
+/// within one crate version: 2 = meshlets grown by `greedy_meshlets` across seams,
+/// groups by meshoptimizer's partitioner, the welded escalation step.
 pub const BUILDER_REVISION: u32 = 2;
 
 /// Environment variable naming the cache directory (default: the user cache directory).

@@ -27,7 +27,7 @@ pub struct BakeArgs {
     #[arg(short, long)]
     pub output: PathBuf,
     /// How meshlets are grouped for simplification.
-    #[arg(long, value_enum, default_value_t = Grouping::Auto)]
+    #[arg(long, value_enum, default_value_t = Grouping::Partition)]
     pub grouping: Grouping,
     /// Bits per axis of the mesh-wide position grid: 4 to 24, or `auto` for the fewest
     /// whose error is at most 1/8 of the LOD-0 error.

@@ -103,8 +103,14 @@ pub fn build_dag(
     let positions = &mesh.positions;
     let normals = &mesh.normals;
     let remap = position_remap(positions);
+    // Meshlets grow across attribute seams, where there are any.
+    let weld = remap
+        .iter()
+        .enumerate()
+        .any(|(v, &r)| r != v as u32)
+        .then_some(remap.as_slice());
 
-    let mut clusters: Vec<DagCluster> = split_mesh_into_meshlets(positions, &mesh.indices)
+    let mut clusters: Vec<DagCluster> = split_mesh_into_meshlets(positions, &mesh.indices, weld)
         .into_par_iter()
         .map(|indices| {
             let bounds = sphere_of(positions, &indices);
@@ -179,7 +185,7 @@ pub fn build_dag(
                     })
                     .collect();
                 let simplified = simplify_group(positions, normals, &indices, &flags)?;
-                let meshlets = split_into_meshlets(positions, &simplified.indices);
+                let meshlets = split_into_meshlets(positions, &simplified.indices, weld);
                 let bounds: Vec<_> = meshlets.iter().map(|m| sphere_of(positions, m)).collect();
                 Some((simplified, meshlets, bounds))
             })

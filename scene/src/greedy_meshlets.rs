@@ -22,6 +22,12 @@ use glam::Vec3;
 /// distinct vertices and `max_triangles` triangles; each returned list indexes
 /// `positions` like the input. Deterministic: the same input gives the same meshlets.
 ///
+/// `weld`, where given, maps each vertex to one vertex at the same position: meshlets
+/// then grow across attribute seams (ranked by welded vertices, limited by real ones).
+/// Without it a faceted mesh, whose triangles share no vertex, has no adjacency at all,
+/// and its meshlets were strips along the seed curve whose long borders left groups
+/// mostly locked.
+///
 /// The first meshlet starts at the first triangle of `seeds`' order; each next one on the
 /// last one's frontier, at the candidate with the fewest unassigned triangles around
 /// its corners (so corners are not left behind as fragments). A meshlet grows by the
@@ -31,6 +37,7 @@ use glam::Vec3;
 pub fn grow_meshlets(
     positions: &[Vec3],
     indices: &[u32],
+    weld: Option<&[u32]>,
     max_vertices: usize,
     max_triangles: usize,
     seeds: SeedOrder,
@@ -44,7 +51,12 @@ pub fn grow_meshlets(
         "split large meshes in chunks (see split_mesh_into_meshlets)"
     );
     let vertices = positions.len();
-    let fans = Fans::new(vertices, indices);
+    // The corners that make triangles neighbours and rank them.
+    let links: std::borrow::Cow<[u32]> = match weld {
+        Some(weld) => indices.iter().map(|&v| weld[v as usize]).collect(),
+        None => std::borrow::Cow::Borrowed(indices),
+    };
+    let fans = Fans::new(vertices, &links);
     let centroids: Vec<Vec3> = indices
         .chunks_exact(3)
         .map(|t| {
@@ -61,8 +73,10 @@ pub fn grow_meshlets(
     let mut live: Vec<u32> = (0..vertices as u32)
         .map(|v| fans.of(v).len() as u32)
         .collect();
-    // The meshlet (counted from 1) each vertex was last added to.
+    // The meshlet (counted from 1) each welded vertex was last added to, and each real
+    // vertex (what the vertex limit counts).
     let mut member = vec![0u32; vertices];
+    let mut stored = vec![0u32; vertices];
     // Candidates, fewest new vertices first, then nearest the meshlet's seed; a triangle
     // may be queued more than once, and stale entries are skipped when taken.
     let mut queue: BinaryHeap<Reverse<u64>> = BinaryHeap::new();
@@ -75,10 +89,13 @@ pub fn grow_meshlets(
 
     let corners = |t: u32| {
         let t = 3 * t as usize;
+        [links[t], links[t + 1], links[t + 2]]
+    };
+    let real = |t: u32| {
+        let t = 3 * t as usize;
         [indices[t], indices[t + 1], indices[t + 2]]
     };
-    let new_vertices = |t: u32, member: &[u32], stamp: u32| {
-        let [a, b, c] = corners(t);
+    let count_new = |[a, b, c]: [u32; 3], member: &[u32], stamp: u32| {
         let mut n = (member[a as usize] != stamp) as u8;
         n += (b != a && member[b as usize] != stamp) as u8;
         n += (c != a && c != b && member[c as usize] != stamp) as u8;
@@ -87,9 +104,10 @@ pub fn grow_meshlets(
     // Lower is taken first: no new vertex; then a triangle left dangling (a corner with
     // no other unassigned triangle), which would be costly to start a meshlet with;
     // then by new vertices, a step earlier where taking it leaves another dangling.
+    // New vertices are real ones (what the meshlet stores), neighbours welded ones.
     // Only ever falls as the meshlet grows, so a stale queue entry is too high.
-    let priority = |t: u32, member: &[u32], live: &[u32], stamp: u32| -> u8 {
-        let extra = new_vertices(t, member, stamp);
+    let priority = |t: u32, stored: &[u32], live: &[u32], stamp: u32| -> u8 {
+        let extra = count_new(real(t), stored, stamp);
         if extra == 0 {
             return 0;
         }
@@ -132,23 +150,24 @@ pub fn grow_meshlets(
         let mut next = Some(start);
         while let Some(t) = next.take() {
             assigned[t as usize] = true;
-            let [a, b, c] = corners(t);
-            meshlet.extend([a, b, c]);
-            for v in [a, b, c] {
-                live[v as usize] -= 1;
-                let joined = member[v as usize] != stamp;
-                if joined {
-                    member[v as usize] = stamp;
+            meshlet.extend(real(t));
+            for (r, v) in real(t).into_iter().zip(corners(t)) {
+                let stored_now = stored[r as usize] != stamp;
+                if stored_now {
+                    stored[r as usize] = stamp;
                     used += 1;
                 }
+                live[v as usize] -= 1;
+                let joined = member[v as usize] != stamp;
+                member[v as usize] = stamp;
                 // The triangles around a vertex that joined, or whose live count fell
                 // to where it counts, have a new priority.
-                if joined || matches!(live[v as usize], 1 | 2) {
+                if joined || stored_now || matches!(live[v as usize], 1 | 2) {
                     for &u in fans.of(v) {
-                        if assigned[u as usize] || new_vertices(u, &member, stamp) == 3 {
+                        if assigned[u as usize] {
                             continue;
                         }
-                        let p = priority(u, &member, &live, stamp);
+                        let p = priority(u, &stored, &live, stamp);
                         let q = &mut queued[u as usize];
                         if q.0 == stamp && q.1 <= p {
                             continue;
@@ -164,10 +183,10 @@ pub fn grow_meshlets(
             }
             while let Some(Reverse(k)) = queue.pop() {
                 let (p, u) = ((k >> 59) as u8, key_triangle(k));
-                if assigned[u as usize] || priority(u, &member, &live, stamp) != p {
+                if assigned[u as usize] || priority(u, &stored, &live, stamp) != p {
                     continue;
                 }
-                if used + new_vertices(u, &member, stamp) as usize > max_vertices {
+                if used + count_new(real(u), &stored, stamp) as usize > max_vertices {
                     continue;
                 }
                 next = Some(u);
@@ -267,7 +286,14 @@ mod tests {
     #[test]
     fn every_triangle_lands_in_exactly_one_meshlet_within_the_limits() {
         let mesh = crate::procedural_mesh(24);
-        let meshlets = grow_meshlets(&mesh.positions, &mesh.indices, 255, 128, SeedOrder::Morton);
+        let meshlets = grow_meshlets(
+            &mesh.positions,
+            &mesh.indices,
+            None,
+            255,
+            128,
+            SeedOrder::Morton,
+        );
         let mut seen: Vec<[u32; 3]> = meshlets
             .iter()
             .flat_map(|m| m.chunks_exact(3).map(|t| [t[0], t[1], t[2]]))
@@ -300,8 +326,71 @@ mod tests {
         // Triangles sharing no vertex: 3 new vertices each, so 64 vertices hold 21.
         let positions: Vec<Vec3> = (0..300).map(|i| Vec3::new(i as f32, 0.0, 0.0)).collect();
         let indices: Vec<u32> = (0..300).collect();
-        let meshlets = grow_meshlets(&positions, &indices, 64, 128, SeedOrder::AsGiven);
+        let meshlets = grow_meshlets(&positions, &indices, None, 64, 128, SeedOrder::AsGiven);
         assert_eq!(meshlets.len(), 5);
         assert!(meshlets.iter().all(|m| m.len() / 3 <= 21));
+    }
+
+    /// Pieces of a meshlet connected through shared (welded) vertices.
+    fn pieces(meshlet: &[u32], weld: &[u32]) -> usize {
+        let mut parent: std::collections::HashMap<u32, u32> = Default::default();
+        fn find(parent: &mut std::collections::HashMap<u32, u32>, v: u32) -> u32 {
+            let p = *parent.entry(v).or_insert(v);
+            if p == v {
+                v
+            } else {
+                let r = find(parent, p);
+                parent.insert(v, r);
+                r
+            }
+        }
+        for t in meshlet.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|v| find(&mut parent, weld[v as usize]));
+            parent.insert(b, a);
+            let c = find(&mut parent, c);
+            parent.insert(c, a);
+        }
+        let roots: std::collections::HashSet<u32> = meshlet
+            .iter()
+            .map(|&v| find(&mut parent, weld[v as usize]))
+            .collect();
+        roots.len()
+    }
+
+    #[test]
+    fn with_the_weld_meshlets_of_a_faceted_mesh_are_connected_patches() {
+        // Every triangle its own three vertices: no adjacency without the weld.
+        let smooth = crate::procedural_mesh(24);
+        let positions: Vec<Vec3> = smooth
+            .indices
+            .iter()
+            .map(|&v| smooth.positions[v as usize])
+            .collect();
+        let indices: Vec<u32> = (0..positions.len() as u32).collect();
+        let weld = crate::mesh::position_remap(&positions);
+        let welded = grow_meshlets(
+            &positions,
+            &indices,
+            Some(&weld),
+            255,
+            128,
+            SeedOrder::Morton,
+        );
+        let loose = grow_meshlets(&positions, &indices, None, 255, 128, SeedOrder::Morton);
+        let connected = |ms: &[Vec<u32>]| ms.iter().filter(|m| pieces(m, &weld) == 1).count();
+        assert!(
+            connected(&welded) * 100 >= welded.len() * 95,
+            "{} of {}",
+            connected(&welded),
+            welded.len()
+        );
+        assert!(
+            connected(&loose) * 2 < loose.len(),
+            "{} of {}",
+            connected(&loose),
+            loose.len()
+        );
+        // The vertex limit counts real vertices: 85 triangles of 3 own vertices each.
+        assert!(welded.iter().all(|m| m.len() / 3 <= 85));
     }
 }

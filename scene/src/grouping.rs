@@ -17,24 +17,16 @@ const METIS_SEED: i32 = 0x6d6c;
 /// How clusters are grouped; swappable so the two can be compared on the same input.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Grouping {
-    /// METIS on levels of up to [`AUTO_METIS_MAX_CLUSTERS`] clusters, the partitioner on
-    /// larger ones (the default). The partitioner takes a quarter of METIS's time on a
-    /// big level (21 against 82 ms on the 8,192 LOD-0 clusters of the procedural mesh),
-    /// and METIS runs one call at a time (see `metis_parts`), so on big levels it was
-    /// the largest serial step of a two-core build. On small levels METIS's balanced
-    /// parts matter more: the partitioner leaves a few groups of three or four clusters,
-    /// mostly border, and on a faceted mesh such groups held a level at 0.56× the one
-    /// before.
+    /// meshoptimizer's `partition_clusters` (shared vertices and spatial proximity), the
+    /// default. Both groupings meet every DAG target on every test mesh, and this one
+    /// takes a quarter of METIS's time (21 against 82 ms on the 8,192 LOD-0 clusters of
+    /// the procedural mesh); METIS also runs one call at a time (see `metis_parts`), so
+    /// it was the largest serial step of a two-core build.
     #[default]
-    Auto,
+    Partition,
     /// METIS recursive bisection of the cluster graph, edge weight = shared edges.
     Metis,
-    /// meshoptimizer's `partition_clusters` (shared vertices and spatial proximity).
-    Partition,
 }
-
-/// The largest level that [`Grouping::Auto`] groups with METIS.
-pub const AUTO_METIS_MAX_CLUSTERS: usize = 1024;
 
 /// Groups `clusters` (triangle lists over position-welded vertex ids, so that copies of
 /// one position on a UV seam count as one vertex). Returns the groups as lists of
@@ -50,9 +42,8 @@ pub fn group_clusters(
         return Ok(vec![(0..n as u32).collect()]);
     }
     let parts = match method {
-        Grouping::Auto if n <= AUTO_METIS_MAX_CLUSTERS => metis_parts(clusters, source)?,
         Grouping::Metis => metis_parts(clusters, source)?,
-        Grouping::Auto | Grouping::Partition => partition_parts(clusters, positions),
+        Grouping::Partition => partition_parts(clusters, positions),
     };
     let count = parts.iter().copied().max().map_or(0, |m| m as usize + 1);
     let mut groups = vec![Vec::new(); count];

@@ -19,28 +19,21 @@ pub const CHUNK_TRIANGLES: usize = 1 << 15;
 
 /// Splits a whole mesh into meshlets, in parallel: the triangles are put in Morton order
 /// of their centroids and cut into chunks of [`CHUNK_TRIANGLES`], which are spatially
-/// compact, and each chunk is split on its own.
-pub fn split_mesh_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<u32>> {
+/// compact, and each chunk is split on its own. `weld`: see [`split_into_meshlets`].
+pub fn split_mesh_into_meshlets(
+    positions: &[Vec3],
+    indices: &[u32],
+    weld: Option<&[u32]>,
+) -> Vec<Vec<u32>> {
     if indices.len() <= CHUNK_TRIANGLES * 3 {
-        return split_into_meshlets(positions, indices);
+        return split_into_meshlets(positions, indices, weld);
     }
     let ordered = morton_ordered(positions, indices);
     let chunks: Vec<Vec<Vec<u32>>> = ordered
         .par_chunks(CHUNK_TRIANGLES * 3)
         .map(|chunk| {
             // Already along the curve: the chunk's own order seeds its meshlets.
-            let Localised { globals, local } = localise(chunk);
-            let compact: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
-            grow_meshlets(
-                &compact,
-                &local,
-                MAX_VERTICES,
-                MAX_TRIANGLES,
-                SeedOrder::AsGiven,
-            )
-            .into_iter()
-            .map(|m| m.into_iter().map(|l| globals[l as usize]).collect())
-            .collect::<Vec<_>>()
+            split_compact(positions, chunk, weld, SeedOrder::AsGiven)
         })
         .collect();
     chunks.into_iter().flatten().collect()
@@ -90,28 +83,60 @@ pub(crate) fn morton3(x: u32, y: u32, z: u32) -> u32 {
 }
 
 /// Splits an indexed triangle list into meshlets (see [`crate::greedy_meshlets`]); each
-/// returned list indexes `positions` like the input does.
-pub fn split_into_meshlets(positions: &[Vec3], indices: &[u32]) -> Vec<Vec<u32>> {
+/// returned list indexes `positions` like the input does. `weld`, where the mesh has
+/// attribute seams, maps each vertex to one at the same position.
+pub fn split_into_meshlets(
+    positions: &[Vec3],
+    indices: &[u32],
+    weld: Option<&[u32]>,
+) -> Vec<Vec<u32>> {
     if indices.is_empty() {
         return Vec::new();
     }
     // The splitter's per-vertex arrays are the size of the buffer it is handed; a group
     // of a large mesh touches a few hundred vertices, so hand it a compact copy.
     if indices.len() * 4 < positions.len() {
-        let Localised { globals, local } = localise(indices);
-        let compact: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
-        return split_into_meshlets(&compact, &local)
-            .into_iter()
-            .map(|m| m.into_iter().map(|l| globals[l as usize]).collect())
-            .collect();
+        return split_compact(positions, indices, weld, SeedOrder::Morton);
     }
     grow_meshlets(
         positions,
         indices,
+        weld,
         MAX_VERTICES,
         MAX_TRIANGLES,
         SeedOrder::Morton,
     )
+}
+
+/// [`grow_meshlets`] on a compact copy of the vertices `indices` use.
+fn split_compact(
+    positions: &[Vec3],
+    indices: &[u32],
+    weld: Option<&[u32]>,
+    seeds: SeedOrder,
+) -> Vec<Vec<u32>> {
+    let Localised { globals, local } = localise(indices);
+    let compact: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
+    // The weld in local ids: each local vertex maps to the first local vertex welded to
+    // the same one.
+    let local_weld: Option<Vec<u32>> = weld.map(|weld| {
+        let mut first: rustc_hash::FxHashMap<u32, u32> =
+            rustc_hash::FxHashMap::with_capacity_and_hasher(globals.len(), Default::default());
+        (0..globals.len() as u32)
+            .map(|l| *first.entry(weld[globals[l as usize] as usize]).or_insert(l))
+            .collect()
+    });
+    grow_meshlets(
+        &compact,
+        &local,
+        local_weld.as_deref(),
+        MAX_VERTICES,
+        MAX_TRIANGLES,
+        seeds,
+    )
+    .into_iter()
+    .map(|m| m.into_iter().map(|l| globals[l as usize]).collect())
+    .collect()
 }
 
 /// A triangle list re-indexed over only the vertices it uses.
@@ -156,7 +181,7 @@ mod tests {
     #[test]
     fn chunked_split_keeps_every_triangle_once() {
         let mesh = crate::procedural_mesh(48);
-        let meshlets = split_mesh_into_meshlets(&mesh.positions, &mesh.indices);
+        let meshlets = split_mesh_into_meshlets(&mesh.positions, &mesh.indices, None);
         let mut seen: Vec<[u32; 3]> = meshlets
             .iter()
             .flat_map(|m| m.chunks_exact(3).map(|t| canonical([t[0], t[1], t[2]])))

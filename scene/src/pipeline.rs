@@ -20,7 +20,7 @@ pub struct BuildOptions {
 impl Default for BuildOptions {
     fn default() -> Self {
         Self {
-            grouping: Grouping::Auto,
+            grouping: Grouping::Partition,
             position_bits: PositionBits::Auto,
         }
     }
