@@ -10,7 +10,7 @@
 
 use glam::Vec3;
 
-use crate::mesh::{edge_key, triangle_edges};
+use crate::mesh::{Fans, edge_key, triangle_edges};
 
 /// Grid cells allowed per source triangle; more only costs memory without pruning more.
 const CELLS_PER_TRIANGLE: usize = 4;
@@ -96,32 +96,8 @@ pub fn simplified_deviation(positions: &[Vec3], source: &[u32], simplified: &[u3
     worst.sqrt()
 }
 
-/// The source triangles around each vertex.
-struct Fans {
-    /// Vertex `v`'s triangles are `triangles[start[v]..start[v + 1]]`.
-    start: Vec<u32>,
-    triangles: Vec<u32>,
-}
-
+/// Lookups on the source triangles around each vertex.
 impl Fans {
-    fn new(vertices: usize, indices: &[u32]) -> Self {
-        let mut start = vec![0u32; vertices + 1];
-        for &v in indices {
-            start[v as usize + 1] += 1;
-        }
-        for v in 0..vertices {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut triangles = vec![0u32; indices.len()];
-        for (i, &v) in indices.iter().enumerate() {
-            let f = &mut fill[v as usize];
-            triangles[*f as usize] = (i / 3) as u32;
-            *f += 1;
-        }
-        Self { start, triangles }
-    }
-
     /// Whether some source triangle has the edge `i`–`j`.
     fn has_edge(&self, source: &[u32], i: u32, j: u32) -> bool {
         self.of(i)
@@ -135,10 +111,6 @@ impl Fans {
             let s = &source[3 * t as usize..3 * t as usize + 3];
             s.contains(&b) && s.contains(&c)
         })
-    }
-
-    fn of(&self, v: u32) -> &[u32] {
-        &self.triangles[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
     }
 }
 

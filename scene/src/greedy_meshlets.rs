@@ -18,6 +18,8 @@ use std::collections::BinaryHeap;
 
 use glam::Vec3;
 
+use crate::mesh::Fans;
+
 /// Splits `indices` (which index `positions`) into meshlets of at most `max_vertices`
 /// distinct vertices and `max_triangles` triangles; each returned list indexes
 /// `positions` like the input. Deterministic: the same input gives the same meshlets.
@@ -215,36 +217,6 @@ fn key(priority: u8, distance_squared: f32, triangle: u32) -> u64 {
 
 fn key_triangle(key: u64) -> u32 {
     (key & ((1 << 27) - 1)) as u32
-}
-
-/// The triangles around each vertex, in compressed rows.
-struct Fans {
-    start: Vec<u32>,
-    triangles: Vec<u32>,
-}
-
-impl Fans {
-    fn new(vertices: usize, indices: &[u32]) -> Self {
-        let mut start = vec![0u32; vertices + 1];
-        for &v in indices {
-            start[v as usize + 1] += 1;
-        }
-        for v in 0..vertices {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut triangles = vec![0u32; indices.len()];
-        for (i, &v) in indices.iter().enumerate() {
-            let f = &mut fill[v as usize];
-            triangles[*f as usize] = (i / 3) as u32;
-            *f += 1;
-        }
-        Self { start, triangles }
-    }
-
-    fn of(&self, v: u32) -> &[u32] {
-        &self.triangles[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
-    }
 }
 
 /// Where meshlets start when nothing is left on the last one's frontier.

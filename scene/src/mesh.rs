@@ -220,6 +220,38 @@ pub fn position_remap(positions: &[Vec3]) -> Vec<u32> {
         .collect()
 }
 
+/// The triangles around each vertex, in compressed rows: vertex `v`'s triangles are
+/// `triangles[start[v]..start[v + 1]]`, in input order.
+pub(crate) struct Fans {
+    start: Vec<u32>,
+    triangles: Vec<u32>,
+}
+
+impl Fans {
+    pub(crate) fn new(vertices: usize, indices: &[u32]) -> Self {
+        let mut start = vec![0u32; vertices + 1];
+        for &v in indices {
+            start[v as usize + 1] += 1;
+        }
+        for v in 0..vertices {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut triangles = vec![0u32; indices.len()];
+        for (i, &v) in indices.iter().enumerate() {
+            let f = &mut fill[v as usize];
+            triangles[*f as usize] = (i / 3) as u32;
+            *f += 1;
+        }
+        Self { start, triangles }
+    }
+
+    /// The triangles that have `v` as a corner.
+    pub(crate) fn of(&self, v: u32) -> &[u32] {
+        &self.triangles[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
+
 /// The three edges of every triangle, as (from, to) in winding order.
 pub(crate) fn triangle_edges(indices: &[u32]) -> impl Iterator<Item = (u32, u32)> + '_ {
     indices
