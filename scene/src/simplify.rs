@@ -5,8 +5,9 @@
 //! iteration, as meshoptimizer's clusterlod does: first permissive mode (collapses
 //! across attribute seams, seam vertices protected), then the group welded by position
 //! (seams ignored, each output corner given the copy whose normal best fits its
-//! triangle), then sloppy simplification with its error scaled up. Retrying the group at a later level instead, with other
-//! neighbours, mixed levels and let some groups go round for ever.
+//! triangle), then sloppy simplification with its error scaled up. Retrying the group
+//! at a later level instead, with other neighbours, mixed levels and let some groups go
+//! round for ever.
 
 use glam::Vec3;
 use meshopt::{SimplifyOptions, SimplifyVertex};
