@@ -231,21 +231,11 @@ pub enum SeedOrder {
 /// Triangle ids along a Morton curve through their centroids (10 bits per axis over the
 /// piece's bounds); ties keep input order.
 fn morton_order(centroids: &[Vec3]) -> Vec<u32> {
-    let (lo, hi) = centroids
-        .iter()
-        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &c| {
-            (lo.min(c), hi.max(c))
-        });
-    let extent = (hi - lo).max_element();
-    let scale = if extent > 0.0 { 1023.0 / extent } else { 0.0 };
+    let grid = crate::meshlets::MortonGrid::around(centroids.iter().copied());
     let mut keyed: Vec<u64> = centroids
         .iter()
         .enumerate()
-        .map(|(i, &c)| {
-            let q = ((c - lo) * scale).clamp(Vec3::ZERO, Vec3::splat(1023.0));
-            let code = crate::meshlets::morton3(q.x as u32, q.y as u32, q.z as u32);
-            ((code as u64) << 32) | i as u64
-        })
+        .map(|(i, &c)| ((grid.code(c) as u64) << 32) | i as u64)
         .collect();
     keyed.sort_unstable();
     keyed.into_iter().map(|k| k as u32).collect()

@@ -40,15 +40,9 @@ pub fn split_mesh_into_meshlets(
 }
 
 /// The triangle list reordered along a Morton curve through the triangles' centroids
-/// (10 bits per axis over the mesh bounds); ties keep input order.
+/// (over the mesh bounds); ties keep input order.
 fn morton_ordered(positions: &[Vec3], indices: &[u32]) -> Vec<u32> {
-    let (lo, hi) = positions
-        .iter()
-        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        });
-    let extent = (hi - lo).max_element();
-    let scale = if extent > 0.0 { 1023.0 / extent } else { 0.0 };
+    let grid = MortonGrid::around(positions.iter().copied());
     let mut keyed: Vec<(u32, u32)> = indices
         .par_chunks_exact(3)
         .enumerate()
@@ -56,8 +50,7 @@ fn morton_ordered(positions: &[Vec3], indices: &[u32]) -> Vec<u32> {
             let centroid =
                 (positions[t[0] as usize] + positions[t[1] as usize] + positions[t[2] as usize])
                     / 3.0;
-            let q = ((centroid - lo) * scale).clamp(Vec3::ZERO, Vec3::splat(1023.0));
-            (morton3(q.x as u32, q.y as u32, q.z as u32), i as u32)
+            (grid.code(centroid), i as u32)
         })
         .collect();
     keyed.par_sort_unstable();
@@ -70,8 +63,29 @@ fn morton_ordered(positions: &[Vec3], indices: &[u32]) -> Vec<u32> {
         .collect()
 }
 
+/// Morton codes of points in a box: 10 bits per axis over its longest side.
+pub(crate) struct MortonGrid {
+    lo: Vec3,
+    scale: f32,
+}
+
+impl MortonGrid {
+    /// The grid over the bounds of `points`.
+    pub(crate) fn around(points: impl Iterator<Item = Vec3>) -> Self {
+        let (lo, hi) = points.fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let extent = (hi - lo).max_element();
+        let scale = if extent > 0.0 { 1023.0 / extent } else { 0.0 };
+        Self { lo, scale }
+    }
+
+    pub(crate) fn code(&self, p: Vec3) -> u32 {
+        let q = ((p - self.lo) * self.scale).clamp(Vec3::ZERO, Vec3::splat(1023.0));
+        morton3(q.x as u32, q.y as u32, q.z as u32)
+    }
+}
+
 /// Interleaves the low 10 bits of three coordinates into a 30-bit Morton code.
-pub(crate) fn morton3(x: u32, y: u32, z: u32) -> u32 {
+fn morton3(x: u32, y: u32, z: u32) -> u32 {
     fn spread(v: u32) -> u32 {
         let mut v = v & 0x3ff;
         v = (v | (v << 16)) & 0x0300_00ff;
