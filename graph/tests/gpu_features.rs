@@ -1139,45 +1139,20 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
         )
         .unwrap();
     let out = g.create_buffer("out", BufferDesc::array(Element::U32, (W * H) as u64));
-    let copy = pass(
-        "copy",
-        vec![
-            Slot::texture("color", Access::CopySrc, None, ""),
-            Slot::buffer("out", Access::CopyDst, Element::U32, ""),
-        ],
-        |_| Ok(()),
-        |ctx| {
-            let (texture, _) = ctx.texture("color")?;
-            let (buffer, _) = ctx.buffer("out")?;
-            ctx.encoder().copy_texture_to_buffer(
-                texture.as_image_copy(),
-                wgpu::TexelCopyBufferInfo {
-                    buffer,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(W * 4),
-                        rows_per_image: Some(H),
-                    },
-                },
-                wgpu::Extent3d {
-                    width: W,
-                    height: H,
-                    depth_or_array_layers: 1,
-                },
-            );
-            Ok(())
-        },
-    );
     let copied = g
         .add_pass(
             "copy",
-            copy,
+            synthetic::CopyTextureToBuffer {
+                format: wgpu::TextureFormat::Rgba8Unorm,
+                width: W,
+                height: H,
+            },
             Bindings::new()
-                .bind("color", drawn.texture("color").unwrap())
-                .bind("out", out),
+                .bind("texture", drawn.texture("color").unwrap())
+                .bind("buffer", out),
         )
         .unwrap();
-    g.export(copied.buffer("out").unwrap());
+    g.export(copied.buffer("buffer").unwrap());
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let ops = |slot: &str| {
         compiled.plan.passes[0]
