@@ -28,7 +28,7 @@ pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
     BindingLayout, ColorAttachment, ComputeProgram, DepthAttachment, Executor, FrameData,
-    FrameStats, GpuAdapter, GpuContext, GpuTimings, Imports, Readback, RecordContext,
+    FrameStats, GpuAdapter, GpuContext, GpuTimings, Imports, Program, Readback, RecordContext,
     RenderProgram, SamplerKind,
 };
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};

@@ -53,7 +53,7 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, ColorAttachment, ColorTarget, Element, GraphError, Pass, Primitive,
-    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
+    Program, ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
 };
 use meshlight_pass_z_slice::CLUSTER_GRID;
 use meshlight_shaders::{PassShader, pass_shader};
@@ -159,33 +159,50 @@ impl Steps {
 
     /// Zeroes the cursors and publishes the counts, before the walk.
     fn before(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let (_, bytes) = ctx.buffer("cluster_cursors")?;
+        self.dispatch_per_word(ctx, "publish", "cluster_cursors")
+    }
+
+    /// Lowers every count to the entries written, after the walk.
+    fn after(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        self.dispatch_per_word(ctx, "settle", "cluster_counts")
+    }
+
+    /// Runs `program` with a thread per u32 of `buffer` (grid-stride past the limit).
+    fn dispatch_per_word(
+        &self,
+        ctx: &mut RecordContext<'_>,
+        program: &str,
+        buffer: &str,
+    ) -> Result<()> {
+        let (_, bytes) = ctx.buffer(buffer)?;
         let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
         let groups = ((bytes / 4) as u32).div_ceil(WORKGROUP).clamp(1, limit);
         let params = self.params();
-        let publish = ctx.compute("publish")?;
-        let group = ctx.bind_group(&publish, 0, &[(10, bytemuck::bytes_of(&params))])?;
+        let program = ctx.compute(program)?;
+        let group = ctx.bind_group(&program, 0, &[(10, bytemuck::bytes_of(&params))])?;
         let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&publish.pipeline);
+        pass.set_pipeline(&program.pipeline);
         pass.set_bind_group(0, &group, &[]);
         pass.dispatch_workgroups(groups, 1, 1);
         Ok(())
     }
 
-    /// Lowers every count to the entries written, after the walk.
-    fn after(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+    /// The walk's bind group: its slots, the view and the capacity.
+    fn walk_group(
+        &self,
+        ctx: &mut RecordContext<'_>,
+        program: &impl Program,
+    ) -> Result<wgpu::BindGroup> {
+        let view = frame_view(ctx, VIEW_INPUT, None)?;
         let params = self.params();
-        let (_, bytes) = ctx.buffer("cluster_counts")?;
-        let lists = (bytes / 4) as u32;
-        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
-        let groups = lists.div_ceil(WORKGROUP).clamp(1, limit);
-        let settle = ctx.compute("settle")?;
-        let group = ctx.bind_group(&settle, 0, &[(10, bytemuck::bytes_of(&params))])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&settle.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(groups, 1, 1);
-        Ok(())
+        ctx.bind_group(
+            program,
+            0,
+            &[
+                (9, bytemuck::bytes_of(&view)),
+                (10, bytemuck::bytes_of(&params)),
+            ],
+        )
     }
 }
 
@@ -303,18 +320,9 @@ impl Pass for Raster {
         let steps = Steps {
             capacity: self.capacity,
         };
-        let view = frame_view(ctx, VIEW_INPUT, None)?;
         steps.before(ctx)?;
-        let params = steps.params();
         let program = ctx.render("populate")?;
-        let group = ctx.bind_group(
-            &program,
-            0,
-            &[
-                (9, bytemuck::bytes_of(&view)),
-                (10, bytemuck::bytes_of(&params)),
-            ],
-        )?;
+        let group = steps.walk_group(ctx, &*program)?;
         let (args, _) = ctx.buffer("slice_draw_args")?;
         {
             let mut pass = ctx.render_pass(&[ColorAttachment::new(TARGET)], None)?;
@@ -367,18 +375,9 @@ impl Pass for Compute {
         let steps = Steps {
             capacity: self.capacity,
         };
-        let view = frame_view(ctx, VIEW_INPUT, None)?;
         steps.before(ctx)?;
-        let params = steps.params();
         let program = ctx.compute("populate")?;
-        let group = ctx.bind_group(
-            &program,
-            0,
-            &[
-                (9, bytemuck::bytes_of(&view)),
-                (10, bytemuck::bytes_of(&params)),
-            ],
-        )?;
+        let group = steps.walk_group(ctx, &*program)?;
         let (args, _) = ctx.buffer("slice_dispatch_args")?;
         {
             let mut pass = ctx.compute_pass();
