@@ -184,4 +184,15 @@ pub enum GraphError {
     Readback(String),
 }
 
+impl GraphError {
+    /// A pass's parameter error, before the pass has a name: the pipeline-file loader
+    /// and the compiler fill in the pass it belongs to.
+    pub fn parameter(message: impl Into<String>) -> Self {
+        GraphError::Parameter {
+            pass: String::new(),
+            message: message.into(),
+        }
+    }
+}
+
 pub type Result<T, E = GraphError> = std::result::Result<T, E>;

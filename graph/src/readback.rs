@@ -45,23 +45,17 @@ impl Pass for ReadbackPass {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         if self.latency == 0 {
-            return Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!(
-                    "readback `{}` has latency 0, which would make the CPU wait for the GPU; use 1 or more frames",
-                    self.name
-                ),
-            });
+            return Err(GraphError::parameter(format!(
+                "readback `{}` has latency 0, which would make the CPU wait for the GPU; use 1 or more frames",
+                self.name
+            )));
         }
         if let Some(r) = &self.range {
             if r.start % 4 != 0 || r.end % 4 != 0 || r.end <= r.start {
-                return Err(GraphError::Parameter {
-                    pass: String::new(),
-                    message: format!(
-                        "readback `{}` range {r:?} must be non-empty and start and end on multiples of 4 bytes",
-                        self.name
-                    ),
-                });
+                return Err(GraphError::parameter(format!(
+                    "readback `{}` range {r:?} must be non-empty and start and end on multiples of 4 bytes",
+                    self.name
+                )));
             }
             ctx.min_bytes("source", r.end);
         }

@@ -15,10 +15,7 @@ impl Params {
     }
 
     fn err(key: &str, wanted: &str, got: &toml::Value) -> GraphError {
-        GraphError::Parameter {
-            pass: String::new(),
-            message: format!("`{key}` must be {wanted}, not `{got}`"),
-        }
+        GraphError::parameter(format!("`{key}` must be {wanted}, not `{got}`"))
     }
 
     pub fn u64(&self, key: &str, default: u64) -> Result<u64> {
@@ -30,10 +27,8 @@ impl Params {
     }
     pub fn u32(&self, key: &str, default: u32) -> Result<u32> {
         let v = self.u64(key, default as u64)?;
-        u32::try_from(v).map_err(|_| GraphError::Parameter {
-            pass: String::new(),
-            message: format!("`{key}` = {v} does not fit in 32 bits"),
-        })
+        u32::try_from(v)
+            .map_err(|_| GraphError::parameter(format!("`{key}` = {v} does not fit in 32 bits")))
     }
     pub fn bool(&self, key: &str, default: bool) -> Result<bool> {
         match self.table.get(key) {
@@ -91,10 +86,10 @@ impl Params {
     /// Fails if any key is not in `known`: a misspelt parameter should not be ignored.
     pub fn only(&self, known: &[&str]) -> Result<()> {
         match self.keys().find(|k| !known.contains(k)) {
-            Some(k) => Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!("unknown parameter `{k}`; known: {}", known.join(", ")),
-            }),
+            Some(k) => Err(GraphError::parameter(format!(
+                "unknown parameter `{k}`; known: {}",
+                known.join(", ")
+            ))),
             None => Ok(()),
         }
     }

@@ -169,13 +169,6 @@ pub struct BruteForce {
 
 const PARAM_KEYS: [&str; 4] = ["width", "height", "index_count", "instance_count"];
 
-fn parameter_error(message: String) -> GraphError {
-    GraphError::Parameter {
-        pass: String::new(),
-        message,
-    }
-}
-
 impl BruteForce {
     /// Reads `width`, `height`, `index_count` and `instance_count` (all required).
     pub fn from_params(params: &Params) -> Result<Self> {
@@ -194,19 +187,19 @@ impl BruteForce {
     pub fn validate(&self) -> Result<()> {
         let (width, height) = (self.width, self.height);
         if width == 0 || height == 0 {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`width` and `height` (the size of the depth and id targets) must both be > 0, got {width} × {height}"
             )));
         }
         let n = self.index_count;
         if n == 0 || !n.is_multiple_of(3) {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`index_count` must be a positive multiple of 3 (three indices per triangle), got {n}; use the mesh's index count (`Lod0Buffers::index_count`)"
             )));
         }
         if self.instance_count == 0 {
-            return Err(parameter_error(
-                "`instance_count` must be > 0; set it to the number of instances in the scene's `instances` buffer".into(),
+            return Err(GraphError::parameter(
+                "`instance_count` must be > 0; set it to the number of instances in the scene's `instances` buffer",
             ));
         }
         Ok(())

@@ -180,13 +180,10 @@ impl Raster {
             height: params.u32("height", 9)?,
         };
         if pass.width == 0 || pass.height == 0 {
-            return Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!(
-                    "`width` × `height` = {} × {}: the grid needs at least one tile each way; set both to z_slice's",
-                    pass.width, pass.height
-                ),
-            });
+            return Err(GraphError::parameter(format!(
+                "`width` × `height` = {} × {}: the grid needs at least one tile each way; set both to z_slice's",
+                pass.width, pass.height
+            )));
         }
         Ok(pass)
     }
@@ -204,13 +201,10 @@ impl Pass for Raster {
         ctx.min_bytes("slice_draw_args", 16);
         let limit = ctx.limits().max_texture_dimension_2d;
         if self.width > limit || self.height > limit {
-            return Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!(
-                    "a {} × {} grid is past the adapter's {limit}-pixel viewport; use the `compute` implementation or fewer tiles",
-                    self.width, self.height
-                ),
-            });
+            return Err(GraphError::parameter(format!(
+                "a {} × {} grid is past the adapter's {limit}-pixel viewport; use the `compute` implementation or fewer tiles",
+                self.width, self.height
+            )));
         }
         ctx.scratch_texture(
             TARGET,

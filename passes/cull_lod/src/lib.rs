@@ -175,13 +175,6 @@ const PARAM_KEYS: [&str; 6] = [
     "max_per_dimension",
 ];
 
-fn parameter_error(message: String) -> GraphError {
-    GraphError::Parameter {
-        pass: String::new(),
-        message,
-    }
-}
-
 impl CullLod {
     /// Reads the params of the table in the crate docs.
     pub fn from_params(params: &Params) -> Result<Self> {
@@ -190,7 +183,7 @@ impl CullLod {
         let mode = match params.string("mode", "first")?.as_str() {
             "first" => Mode::First,
             other => {
-                return Err(parameter_error(format!(
+                return Err(GraphError::parameter(format!(
                     "`mode` = \"{other}\" is not built; the only mode is \"first\" (the second, occlusion pass is not available yet)"
                 )));
             }
@@ -216,7 +209,7 @@ impl CullLod {
             ("sw_threshold_px", self.thresholds.sw_threshold_px),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(parameter_error(format!(
+                return Err(GraphError::parameter(format!(
                     "`{key}` = {v} must be a finite number of pixels >= 0"
                 )));
             }
@@ -238,7 +231,7 @@ impl Pass for CullLod {
         if let Some(m) = self.max_per_dimension
             && m > limit
         {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
             )));
         }

@@ -196,12 +196,9 @@ impl HwRaster {
         let width = params.u32("width", 0)?;
         let height = params.u32("height", 0)?;
         if width == 0 || height == 0 {
-            return Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!(
-                    "`width` and `height` (the visibility buffer size) must both be > 0, got {width} × {height}"
-                ),
-            });
+            return Err(GraphError::parameter(format!(
+                "`width` and `height` (the visibility buffer size) must both be > 0, got {width} × {height}"
+            )));
         }
         Ok(Self {
             width,

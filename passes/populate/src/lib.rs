@@ -206,13 +206,6 @@ impl Steps {
     }
 }
 
-fn parameter_error(message: String) -> GraphError {
-    GraphError::Parameter {
-        pass: String::new(),
-        message,
-    }
-}
-
 fn capacity_param(params: &Params) -> Result<Option<u32>> {
     Ok(Some(params.u32("capacity", 0)?).filter(|&c| c > 0))
 }
@@ -247,7 +240,7 @@ impl Raster {
             capacity: capacity_param(params)?,
         };
         if pass.width == 0 || pass.height == 0 {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`width` × `height` = {} × {}: the grid needs at least one tile each way; set both to z_slice's",
                 pass.width, pass.height
             )));
@@ -271,7 +264,7 @@ impl Pass for Raster {
         ctx.min_bytes("slice_draw_args", 16);
         let limit = ctx.limits().max_texture_dimension_2d;
         if self.width > limit || self.height > limit {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "a {} × {} grid is past the adapter's {limit}-pixel viewport; use the `compute` implementation or fewer tiles",
                 self.width, self.height
             )));

@@ -107,12 +107,9 @@ impl Pass for RemapDispatch {
         if let Some(m) = self.max_per_dimension
             && m > limit
         {
-            return Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!(
-                    "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
-                ),
-            });
+            return Err(GraphError::parameter(format!(
+                "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
+            )));
         }
         ctx.min_bytes("count", (self.count_word as u64 + 1) * 4);
         ctx.min_bytes("args", 12);

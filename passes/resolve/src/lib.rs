@@ -385,23 +385,17 @@ impl Resolve {
                 .into_iter()
                 .filter(|s| !bound.contains(s))
                 .collect();
-            return Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!(
-                    "light clustering's outputs are bound only in part: {} bound, {} missing; bind all five (or none)",
-                    bound.join(", "),
-                    missing.join(", ")
-                ),
-            });
+            return Err(GraphError::parameter(format!(
+                "light clustering's outputs are bound only in part: {} bound, {} missing; bind all five (or none)",
+                bound.join(", "),
+                missing.join(", ")
+            )));
         }
         if self.settings.view.needs_lights() && !lit {
-            return Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!(
-                    "the `{}` view shows light clustering's lists, and this frame has none; add the clustering stages (pipelines/light_clustering.toml) or pick another view",
-                    self.settings.view
-                ),
-            });
+            return Err(GraphError::parameter(format!(
+                "the `{}` view shows light clustering's lists, and this frame has none; add the clustering stages (pipelines/light_clustering.toml) or pick another view",
+                self.settings.view
+            )));
         }
         Ok(lit)
     }

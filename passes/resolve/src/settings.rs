@@ -148,13 +148,6 @@ pub const KEYS: [&str; 7] = [
     "ambient_color",
 ];
 
-fn parameter_error(message: String) -> GraphError {
-    GraphError::Parameter {
-        pass: String::new(),
-        message,
-    }
-}
-
 impl Resolve {
     /// A `width` × `height` resolve with the default [`Settings`].
     pub fn new(width: u32, height: u32) -> Self {
@@ -179,16 +172,16 @@ impl Resolve {
         let width = params.u32("width", 0)?;
         let height = params.u32("height", 0)?;
         if width == 0 || height == 0 {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`width` and `height` (the visibility buffer size) must both be > 0, got {width} × {height}"
             )));
         }
         let defaults = Settings::default();
         let view = DebugView::parse(&params.string("view", defaults.view.name())?)
-            .map_err(|e| parameter_error(format!("`view`: {e}")))?;
+            .map_err(|e| GraphError::parameter(format!("`view`: {e}")))?;
         let checker_scale = params.f32("checker_scale", defaults.checker_scale)?;
         if checker_scale <= 0.0 {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`checker_scale` (checker squares per UV unit) must be > 0, got {checker_scale}"
             )));
         }
@@ -196,14 +189,14 @@ impl Resolve {
             params.f32_array("light_direction", defaults.light_direction.to_array())?,
         );
         if light_direction.normalize_or_zero() == Vec3::ZERO {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`light_direction` (towards the light) must not be zero, got {light_direction}"
             )));
         }
         let colour = |key: &str, default: Vec3| -> Result<Vec3> {
             let c = Vec3::from_array(params.f32_array(key, default.to_array())?);
             if c.min_element() < 0.0 {
-                return Err(parameter_error(format!(
+                return Err(GraphError::parameter(format!(
                     "`{key}` (linear RGB) must not be negative, got {c}"
                 )));
             }

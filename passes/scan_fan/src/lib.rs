@@ -137,10 +137,9 @@ impl Subgroups {
         match value {
             "auto" => Ok(Self::Auto),
             "off" => Ok(Self::Off),
-            other => Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!("`subgroups` must be \"auto\" or \"off\", not {other:?}"),
-            }),
+            other => Err(GraphError::parameter(format!(
+                "`subgroups` must be \"auto\" or \"off\", not {other:?}"
+            ))),
         }
     }
     /// True when this mode uses subgroups on a device with `features`.
@@ -176,12 +175,9 @@ impl TileAccess {
             "staged" => Ok(Self::Staged),
             "direct" => Ok(Self::Direct),
             "vector" => Ok(Self::Vector),
-            other => Err(GraphError::Parameter {
-                pass: String::new(),
-                message: format!(
-                    "`tile_access` must be \"staged\", \"direct\" or \"vector\", not {other:?}"
-                ),
-            }),
+            other => Err(GraphError::parameter(format!(
+                "`tile_access` must be \"staged\", \"direct\" or \"vector\", not {other:?}"
+            ))),
         }
     }
 }
@@ -269,12 +265,7 @@ impl ScanOptions {
     }
 
     pub fn validate(&self) -> Result<()> {
-        let bad = |message: String| {
-            Err(GraphError::Parameter {
-                pass: String::new(),
-                message,
-            })
-        };
+        let bad = |message: String| Err(GraphError::parameter(message));
         if !matches!(self.items_per_thread, 1 | 2 | 4 | 8 | 16 | 32) {
             return bad(format!(
                 "`items_per_thread` = {} must be 1, 2, 4, 8 or 16 (32 with vector tiles)",

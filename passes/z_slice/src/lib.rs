@@ -167,25 +167,25 @@ impl GridSettings {
     fn check(&self) -> Result<()> {
         for (key, d) in ["width", "height", "depth"].iter().zip(self.dims) {
             if d == 0 {
-                return Err(parameter_error(format!(
+                return Err(GraphError::parameter(format!(
                     "`{key}` = 0: the cluster grid needs at least one cluster along each axis"
                 )));
             }
         }
         let [w, h, d] = self.dims.map(u64::from);
         if w * h * d > u64::from(u32::MAX) {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "a grid of `width` × `height` × `depth` = {w} × {h} × {d} clusters does not fit in 32 bits; make it smaller"
             )));
         }
         let (first, far) = (self.first_slice_end, self.far);
         if !(first.is_finite() && first > 0.0) {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`first_slice_end` = {first} must be a finite distance > 0"
             )));
         }
         if !(far.is_finite() && far > first) {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`far` = {far} must be finite and beyond `first_slice_end` = {first}"
             )));
         }
@@ -237,13 +237,6 @@ const PARAM_KEYS: [&str; 8] = [
     "max_per_dimension",
 ];
 
-fn parameter_error(message: String) -> GraphError {
-    GraphError::Parameter {
-        pass: String::new(),
-        message,
-    }
-}
-
 impl ZSlice {
     /// Reads the params of the table in the crate docs.
     pub fn from_params(params: &Params) -> Result<Self> {
@@ -271,7 +264,7 @@ impl ZSlice {
     fn check(&self) -> Result<()> {
         self.grid.check()?;
         if !matches!(self.quad_vertices, 4 | 6) {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`quad_vertices` = {} must be 4 (triangle strip) or 6 (triangle list)",
                 self.quad_vertices
             )));
@@ -309,7 +302,7 @@ impl Pass for ZSlice {
         if let Some(m) = self.max_per_dimension
             && m > limit
         {
-            return Err(parameter_error(format!(
+            return Err(GraphError::parameter(format!(
                 "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
             )));
         }
