@@ -43,10 +43,12 @@ pub mod cpu;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, ColorAttachment, ColorTarget, Element, GraphError, Pass, Primitive,
-    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
+    Access, BindingLayout, ColorAttachment, ColorTarget, Element, Pass, Primitive, ProgramDesc,
+    RecordContext, Result, SetupContext, Slot, StageContract,
 };
-use meshlight_pass_z_slice::{CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE};
+use meshlight_pass_z_slice::{
+    CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE, check_tiles, declare_tile_target,
+};
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
@@ -179,12 +181,7 @@ impl Raster {
             width: params.u32("width", 16)?,
             height: params.u32("height", 9)?,
         };
-        if pass.width == 0 || pass.height == 0 {
-            return Err(GraphError::parameter(format!(
-                "`width` × `height` = {} × {}: the grid needs at least one tile each way; set both to z_slice's",
-                pass.width, pass.height
-            )));
-        }
+        check_tiles(pass.width, pass.height)?;
         Ok(pass)
     }
 }
@@ -199,18 +196,7 @@ impl Pass for Raster {
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         setup_common(ctx);
         ctx.min_bytes("slice_draw_args", 16);
-        let limit = ctx.limits().max_texture_dimension_2d;
-        if self.width > limit || self.height > limit {
-            return Err(GraphError::parameter(format!(
-                "a {} × {} grid is past the adapter's {limit}-pixel viewport; use the `compute` implementation or fewer tiles",
-                self.width, self.height
-            )));
-        }
-        ctx.scratch_texture(
-            TARGET,
-            TextureDesc::d2(wgpu::TextureFormat::R8Unorm, self.width, self.height),
-            &[Access::RenderTarget],
-        );
+        declare_tile_target(ctx, TARGET, self.width, self.height)?;
         ctx.program(
             "count",
             ProgramDesc::render(&SHADER, "count_vs")

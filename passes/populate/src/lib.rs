@@ -52,10 +52,10 @@ pub mod cpu;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, ColorAttachment, ColorTarget, Element, GraphError, Pass, Primitive,
-    Program, ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
+    Access, BindingLayout, ColorAttachment, ColorTarget, Element, Pass, Primitive, Program,
+    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract,
 };
-use meshlight_pass_z_slice::CLUSTER_GRID;
+use meshlight_pass_z_slice::{CLUSTER_GRID, check_tiles, declare_tile_target};
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
@@ -239,12 +239,7 @@ impl Raster {
             height: params.u32("height", 9)?,
             capacity: capacity_param(params)?,
         };
-        if pass.width == 0 || pass.height == 0 {
-            return Err(GraphError::parameter(format!(
-                "`width` × `height` = {} × {}: the grid needs at least one tile each way; set both to z_slice's",
-                pass.width, pass.height
-            )));
-        }
+        check_tiles(pass.width, pass.height)?;
         Ok(pass)
     }
 }
@@ -262,18 +257,7 @@ impl Pass for Raster {
         };
         steps.setup(ctx);
         ctx.min_bytes("slice_draw_args", 16);
-        let limit = ctx.limits().max_texture_dimension_2d;
-        if self.width > limit || self.height > limit {
-            return Err(GraphError::parameter(format!(
-                "a {} × {} grid is past the adapter's {limit}-pixel viewport; use the `compute` implementation or fewer tiles",
-                self.width, self.height
-            )));
-        }
-        ctx.scratch_texture(
-            TARGET,
-            TextureDesc::d2(wgpu::TextureFormat::R8Unorm, self.width, self.height),
-            &[Access::RenderTarget],
-        );
+        declare_tile_target(ctx, TARGET, self.width, self.height)?;
         let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let fragment = wgpu::ShaderStages::FRAGMENT;
         let layout = BindingLayout::render("populate::raster")

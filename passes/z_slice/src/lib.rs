@@ -74,7 +74,7 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, Slot, StageContract,
+    Result, SetupContext, Slot, StageContract, TextureDesc,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
 use meshlight_shaders::{PassShader, pass_shader};
@@ -404,6 +404,40 @@ fn build(params: &Params) -> Result<Box<dyn Pass>> {
 }
 
 /// Registers `z_slice` (implementation `compute`) for pipeline files.
+/// Checks a tile grid read from a pipeline file by a stage that walks froxels: at least
+/// one tile each way.
+pub fn check_tiles(width: u32, height: u32) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(GraphError::parameter(format!(
+            "`width` × `height` = {width} × {height}: the grid needs at least one tile each way; set both to z_slice's"
+        )));
+    }
+    Ok(())
+}
+
+/// For implementations that walk froxels by drawing one pixel per tile: refuses a grid
+/// past the adapter's viewport and declares the scratch target `name` they draw into
+/// (write-masked: the drawing is only a way to visit the tiles).
+pub fn declare_tile_target(
+    ctx: &mut SetupContext,
+    name: &str,
+    width: u32,
+    height: u32,
+) -> Result<()> {
+    let limit = ctx.limits().max_texture_dimension_2d;
+    if width > limit || height > limit {
+        return Err(GraphError::parameter(format!(
+            "a {width} × {height} grid is past the adapter's {limit}-pixel viewport; use the `compute` implementation or fewer tiles"
+        )));
+    }
+    ctx.scratch_texture(
+        name,
+        TextureDesc::d2(wgpu::TextureFormat::R8Unorm, width, height),
+        &[Access::RenderTarget],
+    );
+    Ok(())
+}
+
 pub fn register(registry: &mut Registry) {
     registry.register(STAGE, IMPLEMENTATION, build);
 }
