@@ -16,6 +16,7 @@
 pub mod bench;
 pub mod info;
 pub mod light_clustering;
+mod still;
 pub mod virtual_geometry;
 
 pub use meshlight_gpu_scene as gpu_scene;

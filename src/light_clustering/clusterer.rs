@@ -170,19 +170,9 @@ impl Clusterer {
         loop {
             attempt += 1;
             let submitted = self.frame(view, objects)?.frame;
-            let stats = self.executor.finish()?.ok_or_else(|| {
-                GraphError::Readback(format!("frame {submitted} left no statistics"))
-            })?;
+            let stats = crate::still::finish(&mut self.executor, submitted)?;
             self.take_counts()?;
-            let counts = self
-                .counters
-                .latest
-                .filter(|c| c.frame == submitted)
-                .ok_or_else(|| {
-                    GraphError::Readback(format!(
-                        "frame {submitted}'s counters did not come back after the GPU finished it"
-                    ))
-                })?;
+            let counts = crate::still::counters_of(self.counters.latest, |c| c.frame, submitted)?;
             if !counts.overflowed() || attempt == MAX_STILL_FRAMES {
                 return Ok(Clustered {
                     grid: self.read_grid()?,

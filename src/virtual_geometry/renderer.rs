@@ -187,18 +187,9 @@ impl Renderer {
         loop {
             attempt += 1;
             let submitted = self.frame(camera)?.frame;
-            let stats = self.executor.finish()?.ok_or_else(|| {
-                GraphError::Readback(format!("frame {submitted} left no statistics"))
-            })?;
+            let stats = crate::still::finish(&mut self.executor, submitted)?;
             self.take_counts()?;
-            let counts = self
-                .latest
-                .filter(|c| c.frame == submitted)
-                .ok_or_else(|| {
-                    GraphError::Readback(format!(
-                        "frame {submitted}'s counters did not come back after the GPU finished it"
-                    ))
-                })?;
+            let counts = crate::still::counters_of(self.latest, |c| c.frame, submitted)?;
             let lights_lost = self.settings.clustering.is_some()
                 && self
                     .clustering
