@@ -49,12 +49,33 @@
 //!   writes them; the last workgroup to finish (a global atomic counter) reduces all the
 //!   tiles' results through the remaining levels and sets the counter back to 0. No
 //!   workgroup waits on another, so it needs no forward-progress guarantee and runs on
-//!   every adapter, lavapipe included; how the tile results are handed over is in
-//!   pyramid.wgsl. It binds a view of all 14 possible levels: adapters need 14 storage
-//!   textures per stage (every desktop Vulkan driver has far more).
+//!   every adapter, lavapipe included. It binds a view of all 14 possible levels:
+//!   adapters need 14 storage textures per stage (every desktop Vulkan driver has far
+//!   more; wgpu's default limits say 4, so plans made without an adapter do not check it,
+//!   and record does).
 //! - `two_pass`: the tiles in one dispatch, the levels above them in a second dispatch of
 //!   one workgroup (none when one tile covers the image). Seven storage textures per
 //!   dispatch, and no counter; for comparison, and for adapters with fewer than 14.
+//!
+//! ## How the single pass hands the tile results over
+//!
+//! Each workgroup stores its tile's result with an atomic store, passes
+//! `storageBarrier()`, and only then counts itself in with `atomicAdd`; the workgroup
+//! that counts last passes `storageBarrier()` again and reads the results with
+//! `atomicLoad`. Texels other workgroups wrote to the texture are never read.
+//! WGSL's memory model on its own does not order this: its atomics are relaxed and its
+//! barriers are scoped to the workgroup. What orders it is how every backend lowers
+//! `storageBarrier()`: with device scope (naga emits SPIR-V `OpControlBarrier` with
+//! `Device` memory scope and acquire-release on uniform memory, MSL
+//! `threadgroup_barrier(mem_flags::mem_device)`, HLSL
+//! `DeviceMemoryBarrierWithGroupSync()`), which makes the store-barrier-count and
+//! count-barrier-load pairs a release and an acquire at device scope; the results
+//! themselves are atomics, so no incoherent cache can hold a stale copy. That holds on
+//! every adapter meshlight runs on (Vulkan). An adapter or translation layer that lowered
+//! `storageBarrier()` to a workgroup-scope barrier would break it; `two_pass` depends on
+//! nothing of the kind (the dispatch boundary orders its steps).
+//!
+//! ## The counter
 //!
 //! The counter has to read 0 when the dispatch starts. Bound to the `counter` slot (an
 //! imported 4-byte buffer, zeroed at creation), it persists and the last workgroup's reset
@@ -248,6 +269,14 @@ impl DepthPyramid {
                     self.width, self.height
                 )));
             }
+        }
+        if let Some(range) = ctx.range(PYRAMID)?
+            && range.resolve(&want) != want.full_range()
+        {
+            return Err(record(format!(
+                "`{PYRAMID}` is bound to {} of its texture; bind the whole texture, the pass writes every level",
+                range.label()
+            )));
         }
         if let ResourceDesc::Texture(t) = ctx.desc(VISIBILITY)?
             && (t.width < self.width || t.height < self.height)

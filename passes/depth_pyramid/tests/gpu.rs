@@ -420,3 +420,62 @@ fn a_pyramid_not_declared_with_texture_desc_is_an_error_naming_it() {
         "{e}"
     );
 }
+
+#[test]
+fn a_history_pyramid_is_right_in_both_textures_it_alternates_between() {
+    // A history resource is written into one texture one frame and the other the next,
+    // so the pass's per-level views must follow the bound texture.
+    let (w, h) = (280, 158);
+    for method in [Method::SinglePass, Method::TwoPass] {
+        let gpu = gpu();
+        let mut g = GraphBuilder::new();
+        let vis = g.import_buffer(
+            "visibility",
+            BufferDesc::array(Element::U64, (w * h) as u64),
+            VIS_USAGE,
+        );
+        let pyramid = g.history_texture("pyramid", texture_desc(w, h));
+        g.add_pass(
+            "pyramid",
+            DepthPyramid::new(w, h, method),
+            Bindings::new()
+                .bind("visibility", vis)
+                .bind("pyramid", pyramid.current),
+        )
+        .unwrap();
+        let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("visibility"),
+            size: (w * h * 8) as u64,
+            usage: VIS_USAGE,
+            mapped_at_creation: false,
+        });
+        let imports = Imports::new().buffer("visibility", &buffer);
+        let mut exec = Executor::new(gpu);
+        let padded_width = texture_desc(w, h).width as usize;
+        for frame in 0..4 {
+            let values = if frame % 2 == 0 {
+                visibility(w, h, Depths::WithEmpty(frame))
+            } else {
+                visibility(w, h, Depths::Near(frame))
+            };
+            exec.queue()
+                .write_buffer(&buffer, 0, bytemuck::cast_slice(&values));
+            exec.execute(&compiled, &imports)
+                .unwrap_or_else(|e| panic!("{e}"));
+            exec.finish().unwrap();
+            let bytes = exec.read_texture("pyramid").unwrap();
+            let texels: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
+            let want = cpu::build(&values, w, h);
+            let [lw, lh] = want.extent.level_size(0);
+            let level0: Vec<f32> = (0..lh as usize)
+                .flat_map(|y| texels[y * padded_width..y * padded_width + lw as usize].to_vec())
+                .collect();
+            let want0 = cpu::Pyramid {
+                extent: want.extent,
+                levels: vec![want.levels[0].clone()],
+            };
+            assert_levels_equal(&[level0], &want0, &format!("{method:?} frame {frame}"));
+        }
+    }
+}
