@@ -479,3 +479,34 @@ fn a_history_pyramid_is_right_in_both_textures_it_alternates_between() {
         }
     }
 }
+
+#[test]
+fn random_sizes_match_the_reference() {
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, TestRunner};
+    // Sides across tile boundaries (128) and up to three tiles, odd and even.
+    let strategy = (1u32..400, 1u32..400, any::<bool>(), any::<u64>());
+    let mut runner = TestRunner::new(Config {
+        cases: 12,
+        failure_persistence: None,
+        ..Config::default()
+    });
+    runner
+        .run(&strategy, |(w, h, single, seed)| {
+            let method = if single {
+                Method::SinglePass
+            } else {
+                Method::TwoPass
+            };
+            let frames = [visibility(w, h, Depths::WithEmpty(seed))];
+            let got = run(DepthPyramid::new(w, h, method), BUFFER, &frames)
+                .map_err(|e| TestCaseError::fail(e.to_string()))?;
+            let want = cpu::build(&frames[0], w, h);
+            for (l, (g, r)) in got.levels[0].iter().zip(&want.levels).enumerate() {
+                let same = g.iter().zip(r).all(|(a, b)| a.to_bits() == b.to_bits());
+                prop_assert!(same, "{method:?} {w}×{h} seed {seed}: level {l} differs");
+            }
+            Ok(())
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+}
