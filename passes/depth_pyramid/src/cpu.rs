@@ -22,8 +22,37 @@ pub struct Pyramid {
 impl Pyramid {
     /// Texel `(x, y)` of level `level`.
     pub fn texel(&self, level: u32, x: u32, y: u32) -> f32 {
-        let [w, _] = self.extent.level_size(level);
+        let [w, h] = self.extent.level_size(level);
+        assert!(
+            x < w && y < h,
+            "texel ({x}, {y}) outside level {level}'s {w} × {h}"
+        );
         self.levels[level as usize][(y * w + x) as usize]
+    }
+}
+
+impl Pyramid {
+    /// A conservative depth for the pixel rectangle `[x0, x1] × [y0, y1]` (inclusive, in
+    /// source pixels, clamped to the image): the min of the at most 2 × 2 texels of the
+    /// lowest level where the rectangle spans at most two texels a side. Their footprints
+    /// cover the rectangle, so this is never nearer than any pixel in it; and since the
+    /// rectangle lies in the image, those texels lie inside the level. One way to read
+    /// the pyramid for an occlusion test; the tests use it to show both properties.
+    pub fn farthest_under(&self, [x0, y0]: [u32; 2], [x1, y1]: [u32; 2]) -> f32 {
+        let top = self.extent.mip_levels - 1;
+        let level = (0..=top)
+            .find(|&l| {
+                (x1 >> (l + 1)) - (x0 >> (l + 1)) <= 1 && (y1 >> (l + 1)) - (y0 >> (l + 1)) <= 1
+            })
+            .unwrap_or(top);
+        let shift = level + 1;
+        let mut m = f32::INFINITY;
+        for y in (y0 >> shift)..=(y1 >> shift) {
+            for x in (x0 >> shift)..=(x1 >> shift) {
+                m = m.min(self.texel(level, x, y));
+            }
+        }
+        m
     }
 }
 
@@ -164,6 +193,53 @@ mod tests {
                 }
             }
             prop_assert_eq!(p.levels.last().map(Vec::len), Some(1));
+        }
+
+        /// A rectangle read through the pyramid is never nearer than its farthest pixel,
+        /// and the texels it reads are inside their level (`texel` would index past the
+        /// level otherwise and panic).
+        #[test]
+        fn a_rectangle_read_is_conservative(
+            w in 1u32..300,
+            h in 1u32..300,
+            corners in any::<[u32; 4]>(),
+            seed in any::<u64>(),
+        ) {
+            let mut s = seed | 1;
+            let vis: Vec<u64> = (0..w * h)
+                .map(|_| {
+                    s ^= s << 13;
+                    s ^= s >> 7;
+                    s ^= s << 17;
+                    if s % 50 == 0 { 0 } else { value((s >> 40) as f32 / (1u64 << 24) as f32, 0) }
+                })
+                .collect();
+            let p = build(&vis, w, h);
+            let [a, b, c, d] = corners;
+            let (xa, xb) = (a % w, b % w);
+            let (ya, yb) = (c % h, d % h);
+            let (x0, x1, y0, y1) = (xa.min(xb), xa.max(xb), ya.min(yb), ya.max(yb));
+            let got = p.farthest_under([x0, y0], [x1, y1]);
+            let mut farthest = f32::INFINITY;
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    farthest = farthest.min(depth(vis[(y * w + x) as usize]));
+                }
+            }
+            prop_assert!(got <= farthest, "{w}×{h} [{x0}, {x1}] × [{y0}, {y1}]: {got} > {farthest}");
+            // And exactly the min over the footprints of the texels read: the smallest
+            // aligned square blocks of 2^(L+1) pixels, at most 2 × 2 of them, that hold
+            // the rectangle.
+            let shift = (1..=p.extent.mip_levels)
+                .find(|&s| (x1 >> s) - (x0 >> s) <= 1 && (y1 >> s) - (y0 >> s) <= 1)
+                .unwrap_or(p.extent.mip_levels);
+            let mut covered = f32::INFINITY;
+            for y in (y0 >> shift << shift)..(((y1 >> shift) + 1) << shift).min(h) {
+                for x in (x0 >> shift << shift)..(((x1 >> shift) + 1) << shift).min(w) {
+                    covered = covered.min(depth(vis[(y * w + x) as usize]));
+                }
+            }
+            prop_assert_eq!(got.to_bits(), covered.to_bits());
         }
     }
 }
