@@ -120,8 +120,6 @@ pub const SHADER: PassShader = pass_shader!("depth_pyramid", "pyramid.wgsl");
 const TILE_RESULTS: &str = "tile_results";
 /// Scratch: the arrival counter when the `counter` slot is unbound.
 const ARRIVALS: &str = "arrivals";
-/// Threads per workgroup (pyramid.wgsl's `@workgroup_size`).
-pub const WORKGROUP: u32 = 256;
 
 /// The slots every implementation of `depth_pyramid` shares.
 pub fn contract() -> StageContract {
