@@ -32,6 +32,11 @@ pub struct Terrain {
     pub seed: u32,
     /// Texture coordinates per world unit (`uv = (x, z) · uv_scale`).
     pub uv_scale: f32,
+    /// A calm spot, e.g. where a camera stands: within `calm_radius` of `calm_centre`
+    /// the ground is flat at height 0, and the hills rise to their full height by three
+    /// times that distance (a smoothstep). 0: no calm spot.
+    pub calm_centre: Vec2,
+    pub calm_radius: f32,
 }
 
 impl Terrain {
@@ -40,8 +45,24 @@ impl Terrain {
         2 * self.cells as u64 * self.cells as u64
     }
 
-    /// The noise height at world `(x, z)` (defined everywhere, also off the square).
+    /// The height at world `(x, z)` (defined everywhere, also off the square): the
+    /// noise, faded out around the calm spot.
     pub fn height(&self, x: f32, z: f32) -> f32 {
+        self.noise(x, z) * self.calm(x, z)
+    }
+
+    /// 0 within `calm_radius` of the calm spot, 1 from three times that on.
+    fn calm(&self, x: f32, z: f32) -> f32 {
+        if self.calm_radius <= 0.0 {
+            return 1.0;
+        }
+        let d = (Vec2::new(x, z) - self.calm_centre).length();
+        let t = ((d - self.calm_radius) / (2.0 * self.calm_radius)).clamp(0.0, 1.0);
+        t * t * (3.0 - 2.0 * t)
+    }
+
+    /// Fractal gradient noise, about ±`amplitude`.
+    fn noise(&self, x: f32, z: f32) -> f32 {
         let octaves = self.octaves.max(1);
         // Amplitudes 1, 1/2, 1/4, … scaled so that they sum to `amplitude`.
         let norm = self.amplitude / (2.0 - 0.5f32.powi(octaves as i32 - 1));
@@ -101,6 +122,9 @@ impl Terrain {
             self.amplitude,
             self.wavelength,
             self.uv_scale,
+            self.calm_centre.x,
+            self.calm_centre.y,
+            self.calm_radius,
         ]
         .iter()
         .all(|v| v.is_finite());
@@ -231,6 +255,8 @@ mod tests {
             octaves: 4,
             seed: 7,
             uv_scale: 0.25,
+            calm_centre: Vec2::ZERO,
+            calm_radius: 0.0,
         }
     }
 
@@ -255,6 +281,26 @@ mod tests {
         // Hills, not a plane, and within the stated amplitude (with the noise's peaks).
         assert!(max.y - min.y > 1.0, "{min} {max}");
         assert!(max.y.abs().max(min.y.abs()) <= 1.5 * t.amplitude);
+    }
+
+    #[test]
+    fn the_calm_spot_is_flat_and_the_hills_rise_around_it() {
+        let t = Terrain {
+            calm_centre: Vec2::new(5.0, 5.0),
+            calm_radius: 4.0,
+            ..small()
+        };
+        for (dx, dz) in [(0.0, 0.0), (3.9, 0.0), (-1.0, 2.5)] {
+            assert_eq!(t.height(5.0 + dx, 5.0 + dz), 0.0);
+        }
+        // From three radii on, the hills are the uncalmed ones.
+        let free = small();
+        for p in [Vec2::new(-8.0, 20.0), Vec2::new(25.0, 30.0)] {
+            assert_eq!(t.height(p.x, p.y), free.height(p.x, p.y));
+        }
+        // In between, calmer.
+        let p = Vec2::new(5.0 + 8.0, 5.0);
+        assert!(t.height(p.x, p.y).abs() < free.height(p.x, p.y).abs());
     }
 
     #[test]
