@@ -338,3 +338,79 @@ pub fn field_lights(placed: &Placed, count: u32) -> Vec<ClusterableObject> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshlight_gpu_scene::data::Limits;
+    use meshlight_scene::procedural_mesh;
+
+    fn small_asset() -> MeshletAsset {
+        build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {})
+            .unwrap()
+            .asset
+    }
+
+    #[test]
+    fn the_copies_stand_on_the_ground_which_is_the_last_instance() {
+        let asset = small_asset();
+        let placed = field(SceneData::new(Limits::default()), &asset, 25).unwrap();
+        let data = &placed.data;
+        assert_eq!(data.instances.len(), 26);
+        assert_eq!(data.meshes.len(), 2);
+        let ground = data.instances[25];
+        assert_eq!(ground.mesh, 1);
+        let radius = data.meshes[0].bounding_sphere[3];
+        let terrain = field_ground(radius, 25);
+        let h = asset.header();
+        assert_eq!(
+            data.source_triangles(),
+            25 * h.lod0_triangles as u64 + terrain.triangle_count()
+        );
+        let mut sunk = 0;
+        for instance in &data.instances[..25] {
+            assert_eq!(instance.mesh, 0);
+            let m = Mat4::from_cols_array_2d(&instance.world_from_local);
+            let centre = m.w_axis.truncate();
+            let scale = m.x_axis.truncate().length();
+            let lowest = centre.y + h.bounds_min[1] * scale;
+            let below = terrain.surface_height(centre.x, centre.z);
+            // Never above the ground under its middle: no copy floats.
+            assert!(lowest <= below + 1e-4, "{lowest} over {below}");
+            // Never buried: the lowest point is within a slope's reach of the ground.
+            assert!(below - lowest < radius, "{lowest} under {below}");
+            sunk += (below - lowest > 1e-3) as u32;
+        }
+        // The hills are real: some copies stand on slopes.
+        assert!(sunk > 0);
+    }
+
+    #[test]
+    fn the_default_fields_hills_hide_copies_from_the_camera_and_the_near_ones_do_not() {
+        // Without baking: the ground's heights along the line from the camera to each
+        // copy's middle (a radius above the ground), as placed for 1,024 copies.
+        let radius = 1.0;
+        let terrain = field_ground(radius, DEFAULT_INSTANCES);
+        assert_eq!(terrain.cells, MAX_GROUND_CELLS);
+        let eye = Vec3::new(FIELD_EYE.0, 0.0, FIELD_EYE.1) * radius;
+        let eye = eye + Vec3::Y * (terrain.surface_height(eye.x, eye.z) + 3.0 * radius);
+        let hidden = |x: f32, z: f32| {
+            let target = Vec3::new(x, terrain.surface_height(x, z) + radius, z);
+            (1..64).any(|k| {
+                let p = eye.lerp(target, k as f32 / 64.0);
+                terrain.surface_height(p.x, p.z) > p.y
+            })
+        };
+        let spacing = radius * FIELD_SPACING;
+        let side = 32;
+        let count = (0..side * side)
+            .filter(|i| hidden((i % side) as f32 * spacing, (i / side) as f32 * spacing))
+            .count();
+        eprintln!("{count} of 1,024 copies are behind hills");
+        assert!(
+            (200..900).contains(&count),
+            "{count} of 1,024 copies are behind hills"
+        );
+        assert!((0..4).all(|i| !hidden(i as f32 * spacing, 0.0)));
+    }
+}
