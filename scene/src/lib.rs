@@ -22,6 +22,7 @@ pub mod meshlets;
 pub mod pipeline;
 pub mod procedural;
 pub mod simplify;
+pub mod terrain;
 pub mod verify;
 pub mod watertight;
 
@@ -32,3 +33,4 @@ pub use grouping::Grouping;
 pub use mesh::{CleanReport, Mesh};
 pub use pipeline::{BuildOptions, Built, build_asset};
 pub use procedural::{DEFAULT_SEGMENTS, procedural_mesh};
+pub use terrain::Terrain;

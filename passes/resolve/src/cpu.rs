@@ -39,6 +39,30 @@ pub struct Frame<'a> {
     pub height: u32,
     /// Light clustering's output, when the frame has it.
     pub lights: Option<ClusteredLights<'a>>,
+    /// The `pyramid` slot's mips, finest first, when the frame binds one.
+    pub pyramid: Option<&'a [PyramidMip]>,
+}
+
+/// One mip of a depth pyramid as the texture holds it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PyramidMip {
+    pub width: u32,
+    pub height: u32,
+    /// `width × height` reverse-Z depths, row-major.
+    pub texels: Vec<f32>,
+}
+
+/// shade.wgsl's `pyramid_depth`: the texel of mip `level` (clamped to the chain) that
+/// covers `pixel`, `pixel >> (level + 1)` clamped to the mip's size.
+pub fn pyramid_depth(mips: &[PyramidMip], pixel: [u32; 2], level: u32) -> f32 {
+    let Some(last) = mips.len().checked_sub(1) else {
+        return 0.0;
+    };
+    let mip = &mips[(level as usize).min(last)];
+    let shift = (level as usize).min(last) as u32 + 1;
+    let x = (pixel[0] >> shift).min(mip.width - 1);
+    let y = (pixel[1] >> shift).min(mip.height - 1);
+    mip.texels[(y * mip.width + x) as usize]
 }
 
 /// Light clustering's five outputs, as the pass binds them.
@@ -203,13 +227,13 @@ pub fn shade(frame: &Frame, settings: &Settings) -> Vec<[u8; 4]> {
         color: settings.light_color,
         ambient: settings.ambient_color,
         checker_scale: settings.checker_scale,
+        pyramid_mip: settings.pyramid_mip,
     };
     let mut out = Vec::with_capacity(frame.visbuffer.len());
     for y in 0..frame.height {
         for x in 0..frame.width {
             let value = frame.visbuffer[(y * frame.width + x) as usize];
-            let pixel = Vec2::new(x as f32, y as f32) + Vec2::splat(0.5);
-            let rgb = pixel_color(frame, &light, settings.view, value, pixel);
+            let rgb = pixel_color(frame, &light, settings.view, value, [x, y]);
             let [r, g, b] = rgb.clamp(Vec3::ZERO, Vec3::ONE).to_array().map(unorm8);
             out.push([r, g, b, 255]);
         }
@@ -217,12 +241,14 @@ pub fn shade(frame: &Frame, settings: &Settings) -> Vec<[u8; 4]> {
     out
 }
 
-/// The light as the shader's `Params` holds it (direction already normalised).
+/// The shader's `Params`: the light (direction already normalised) and the views'
+/// settings.
 struct ShadeLight {
     direction: Vec3,
     color: Vec3,
     ambient: Vec3,
     checker_scale: f32,
+    pyramid_mip: u32,
 }
 
 /// shade.wgsl's `shade_pixels` before the clamp and the store.
@@ -231,13 +257,22 @@ fn pixel_color(
     light: &ShadeLight,
     view: DebugView,
     value: u64,
-    pixel: Vec2,
+    at: [u32; 2],
 ) -> Vec3 {
+    let pixel = Vec2::new(at[0] as f32, at[1] as f32) + Vec2::splat(0.5);
     let empty = is_empty(value);
     let id = visbuffer::cluster(value);
     match view {
         DebugView::LightCount => frame.lights.map_or(Vec3::ZERO, |lights| {
             heat(lights.light_count(frame.view, pixel, value) as f32 / LIGHT_COUNT_FULL)
+        }),
+        DebugView::Pyramid => frame.pyramid.map_or(Vec3::ZERO, |mips| {
+            Vec3::splat(
+                pyramid_depth(mips, at, light.pyramid_mip)
+                    .max(0.0)
+                    .sqrt()
+                    .sqrt(),
+            )
         }),
         _ if empty && view != DebugView::Shaded && view != DebugView::Depth => Vec3::ZERO,
         DebugView::Clusters => unorm(id_color(cluster_key(&cluster_of(

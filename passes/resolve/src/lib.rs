@@ -1,15 +1,39 @@
 //! Stage `resolve`, implementation `compute`: the visibility buffer turned into what
-//! later passes and the screen use: a depth buffer, a material-depth buffer, and a
-//! shaded colour image (or a debug view of the ids).
+//! the screen and later passes use: a shaded colour image (or a debug view of the ids),
+//! and, only where a pipeline asks for them, a depth buffer and a material-depth buffer.
 //!
 //! The rasterisers store only `depth | cluster | triangle` per pixel; everything else is
-//! recomputed here once per pixel instead of once per overdrawn fragment. Depth and
-//! material depth are written by fullscreen render passes with `frag_depth`, because
-//! depth formats cannot be storage textures; shading is a compute pass that fetches the
+//! recomputed here once per pixel instead of once per overdrawn fragment. Shading is a
+//! compute pass that fetches the
 //! pixel's triangle from the payload again, transforms its three corners again, and
 //! reconstructs perspective-correct barycentrics and their screen-space derivatives at
 //! the pixel centre analytically from the clip-space corners (no quad neighbours
 //! exist in a compute shader). The derivatives box-filter a UV checkerboard.
+//!
+//! # Depth targets: off unless a pipeline composites with raster geometry
+//!
+//! `depth` and `material_depth` are optional slots. Depth formats cannot be storage
+//! textures, so each is written by a fullscreen render pass with `frag_depth`; on GPUs
+//! where few units run fragment work (an H100 or H200: two TPCs) the two cost ~6× the
+//! shading itself (docs/BENCHMARKS.md). The frame needs neither: the depth pyramid is
+//! built in compute from the visibility buffer. Left unbound, the pass declares no
+//! render program and records no render pass: the frame's resolve is one compute
+//! dispatch. A pipeline that draws raster geometry over the image (depth-tested
+//! overlays, transparent passes, material passes with `CompareFunction::Equal`) turns
+//! them on by declaring a resource of the slot's name, which binds it; in a pipeline
+//! file:
+//!
+//! ```toml
+//! [[resource]]
+//! name = "depth"            # and/or "material_depth"
+//! kind = "exported"
+//! texture = { format = "depth32float", width_param = "width", height_param = "height" }
+//! ```
+//!
+//! and in code `g.create_texture("depth", TextureDesc::d2(DEPTH_FORMAT, w, h))` (exported,
+//! or read by a later pass) before `add_pass`, or `.bind("depth", handle)` in the
+//! pass's bindings. Each bound target adds one fullscreen pass and nothing else changes:
+//! the colour is the same either way (tested).
 //!
 //! # Contract
 //!
@@ -26,15 +50,20 @@
 //! | `cluster_grid` | storage read (optional) | ClusterGrid | the froxel grid |
 //! | `cluster_offsets`, `cluster_counts` | storage read (optional) | u32 | per froxel and kind: list start and length |
 //! | `cluster_objects` | storage read (optional) | u32 | the lists: indices into `objects` |
+//! | `pyramid` | sampled (optional) | R32Float, mip chain | a depth pyramid, for the `pyramid` view |
 //!
 //! With light clustering's five outputs bound (all or none), the shaded view adds the point
 //! and spot lights of each pixel's froxel, and the `light-count` view can show them.
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`), whose `viewport_size`
 //! must equal the params `width` × `height`. The three targets are `width` × `height`.
-//! A depth target left out of the graph (no resource of its name) is not resolved: each
-//! is a fullscreen fragment pass, which on GPUs where few units run fragment work costs
-//! more than the shading (docs/BENCHMARKS.md).
+//!
+//! The `pyramid` view reads the depth pyramid's convention: reverse-Z minimum depth; mip
+//! `L` is `⌈width / 2^(L+1)⌉ × ⌈height / 2^(L+1)⌉` and its texel `(x, y)` covers pixels
+//! `[x·2^(L+1), (x+1)·2^(L+1))` on each axis, so pixel `p` shows texel `p >> (L+1)` of
+//! mip `pyramid_mip` (clamped to the mip's size), as `depth^(1/4)` grey like the
+//! `depth` view. A `pyramid_mip` past the bound chain is a record error naming its
+//! length; the view without a `pyramid` bound is a setup error.
 //!
 //! # Definitions the tests pin down
 //!
@@ -60,9 +89,10 @@
 //!   and change from frame to frame; the scene cluster does not), `triangles` = of
 //!   `cluster_key · 131 + triangle`, `lod` = of the meshlet's LOD level, `raster` = two fixed
 //!   colours (software: id < `raster_counts[0]`), `depth` = `depth^(1/4)` grey; id
-//!   colours are [`cpu::id_color`], empty pixels black.
+//!   colours are [`cpu::id_color`], empty pixels black; `pyramid` as above.
 //! - [`cpu`] is the reference: depth, material depth and debug views exact (the depth
-//!   view within 1/255), shading within 2/255 per channel on ≥ 99% of pixels.
+//!   and pyramid views within 1/255), shading within 2/255 per channel on ≥ 99% of
+//!   pixels.
 
 pub mod cpu;
 pub mod settings;
@@ -74,7 +104,7 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, DepthAttachment, DepthTarget, Element, GraphError, Pass, ProgramDesc,
-    RecordContext, Result, SetupContext, Slot, StageContract,
+    RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
@@ -93,14 +123,14 @@ pub const VIEW_INPUT: &str = "view";
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// The format of `depth` and `material_depth`.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// The format of the `pyramid` the `pyramid` view reads.
+pub const PYRAMID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
 pub const DEPTH_SHADER: PassShader = pass_shader!("resolve::depth", "depth.wgsl");
 pub const SHADE_SHADER: PassShader = pass_shader!("resolve::shade", "shade.wgsl");
 
 /// The fullscreen passes that write the depth targets: (program, fragment entry, slot).
-/// Each runs only when its slot is bound: on GPUs where few units run fragment work they
-/// cost more than the shading itself, and a frame with no later depth-tested pass or no
-/// material passes needs neither.
+/// Each is declared and recorded only when its slot is bound (see the crate docs).
 const DEPTH_RESOLVES: [(&str, &str, &str); 2] = [
     ("depth", "depth_fs", "depth"),
     ("material_depth", "material_depth_fs", "material_depth"),
@@ -176,6 +206,13 @@ pub fn contract() -> StageContract {
             )
             .optional(),
             read("cluster_objects", Element::U32, "the lists: object indices").optional(),
+            Slot::texture(
+                "pyramid",
+                Access::Sampled,
+                Some(PYRAMID_FORMAT),
+                "a reverse-Z min-depth pyramid (mip L: ⌈size / 2^(L+1)⌉), for the `pyramid` view",
+            )
+            .optional(),
         ],
     }
 }
@@ -199,6 +236,8 @@ struct ShadeParams {
     height: u32,
     view_mode: u32,
     checker_scale: f32,
+    pyramid_mip: u32,
+    _pad: [u32; 3],
 }
 
 impl Pass for Resolve {
@@ -247,9 +286,16 @@ impl Pass for Resolve {
             );
         }
         let lit = self.clustered_lights(ctx)?;
+        let pyramid = ctx.is_bound("pyramid");
+        if self.settings.view.needs_pyramid() && !pyramid {
+            return Err(GraphError::parameter(
+                "the `pyramid` view shows a depth pyramid, and none is bound; bind an R32Float mip chain (the depth_pyramid stage's output) to the `pyramid` slot or pick another view",
+            ));
+        }
         let defs = ShadeDefs {
             clustered_lights: lit,
             texture,
+            pyramid,
         };
         ctx.shader_defs(&defs);
         let shade_layout = BindingLayout::compute("resolve_shade")
@@ -271,6 +317,11 @@ impl Pass for Resolve {
                 .fold(shade_layout, |layout, (slot, binding)| {
                     layout.slot(binding, slot)
                 })
+        } else {
+            shade_layout
+        };
+        let shade_layout = if pyramid {
+            shade_layout.slot(PYRAMID_BINDING, "pyramid")
         } else {
             shade_layout
         };
@@ -314,7 +365,20 @@ impl Pass for Resolve {
             height: self.height,
             view_mode: s.view as u32,
             checker_scale: s.checker_scale,
+            pyramid_mip: s.pyramid_mip,
+            _pad: [0; 3],
         };
+        if s.view.needs_pyramid()
+            && let ResourceDesc::Texture(t) = ctx.desc("pyramid")?
+            && s.pyramid_mip >= t.mip_levels
+        {
+            return Err(GraphError::parameter(format!(
+                "`pyramid_mip` = {} is past the bound pyramid, which has {} mips (0 to {}); pick one of those",
+                s.pyramid_mip,
+                t.mip_levels,
+                t.mip_levels - 1
+            )));
+        }
         let program = ctx.compute("shade")?;
         let bind_group = ctx.bind_group(
             &program,
@@ -332,6 +396,9 @@ impl Pass for Resolve {
     }
 }
 
+/// The binding of the `pyramid` texture in shade.wgsl.
+const PYRAMID_BINDING: u32 = 16;
+
 /// Light clustering's outputs the shading reads, at bindings 11 to 15.
 const LIGHT_SLOTS: [&str; 5] = [
     "objects",
@@ -348,6 +415,8 @@ struct ShadeDefs {
     clustered_lights: bool,
     /// `VIS_TEXTURE`: the visibility buffer is an R64Uint texture (depth.wgsl too).
     texture: bool,
+    /// `PYRAMID`: a depth pyramid is bound, for the `pyramid` view.
+    pyramid: bool,
 }
 
 impl ShaderDefs for ShadeDefs {
@@ -355,6 +424,7 @@ impl ShaderDefs for ShadeDefs {
         vec![
             ("CLUSTERED_LIGHTS", ShaderDef::Bool(self.clustered_lights)),
             ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
+            ("PYRAMID", ShaderDef::Bool(self.pyramid)),
         ]
     }
 }
@@ -445,6 +515,7 @@ mod tests {
         let shade = ShadeDefs {
             clustered_lights: true,
             texture: true,
+            pyramid: true,
         }
         .shader_defs();
         for (shader, defs) in [(&DEPTH_SHADER, &depth), (&SHADE_SHADER, &shade)] {

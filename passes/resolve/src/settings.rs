@@ -28,11 +28,14 @@ pub enum DebugView {
     /// A heat map of the point and spot lights in each pixel's froxel (black: none; red:
     /// 32 or more). Needs light clustering in the frame.
     LightCount = 6,
+    /// Mip `pyramid_mip` of the depth pyramid bound to the `pyramid` slot, as grey
+    /// `depth^(1/4)`: each pixel shows the texel of that mip that covers it.
+    Pyramid = 7,
 }
 
 impl DebugView {
     /// Every view, in discriminant order.
-    pub const ALL: [DebugView; 7] = [
+    pub const ALL: [DebugView; 8] = [
         DebugView::Shaded,
         DebugView::Clusters,
         DebugView::Triangles,
@@ -40,6 +43,7 @@ impl DebugView {
         DebugView::Raster,
         DebugView::Depth,
         DebugView::LightCount,
+        DebugView::Pyramid,
     ];
 
     /// The name pipeline files and the command line use.
@@ -52,12 +56,18 @@ impl DebugView {
             DebugView::Raster => "raster",
             DebugView::Depth => "depth",
             DebugView::LightCount => "light-count",
+            DebugView::Pyramid => "pyramid",
         }
     }
 
     /// True for views that show light clustering's lists.
     pub fn needs_lights(self) -> bool {
         self == DebugView::LightCount
+    }
+
+    /// True for views that show a depth pyramid (the `pyramid` slot).
+    pub fn needs_pyramid(self) -> bool {
+        self == DebugView::Pyramid
     }
 
     /// The view called `name` (as [`DebugView::name`] spells it).
@@ -112,6 +122,8 @@ pub struct Settings {
     pub view: DebugView,
     /// Checker squares per UV unit.
     pub checker_scale: f32,
+    /// The mip the `pyramid` view shows (0: the finest, half the viewport's size).
+    pub pyramid_mip: u32,
 }
 
 impl Default for Settings {
@@ -124,6 +136,7 @@ impl Default for Settings {
             ambient_color: Vec3::new(0.22, 0.25, 0.3),
             view: DebugView::Shaded,
             checker_scale: 8.0,
+            pyramid_mip: 0,
         }
     }
 }
@@ -138,7 +151,7 @@ pub struct Resolve {
 }
 
 /// The params a pipeline file may give; any other key is an error.
-pub const KEYS: [&str; 7] = [
+pub const KEYS: [&str; 8] = [
     "width",
     "height",
     "view",
@@ -146,6 +159,7 @@ pub const KEYS: [&str; 7] = [
     "light_direction",
     "light_color",
     "ambient_color",
+    "pyramid_mip",
 ];
 
 impl Resolve {
@@ -166,7 +180,8 @@ impl Resolve {
 
     /// Reads `width`, `height` (required, > 0), `view` (a [`DebugView`] name, default
     /// `shaded`), `checker_scale` (> 0, default 8), and `light_direction` (non-zero),
-    /// `light_color`, `ambient_color` (non-negative) as `[x, y, z]` arrays.
+    /// `light_color`, `ambient_color` (non-negative) as `[x, y, z]` arrays, and
+    /// `pyramid_mip` (default 0; checked against the bound pyramid when the pass records).
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&KEYS)?;
         let width = params.u32("width", 0)?;
@@ -211,6 +226,7 @@ impl Resolve {
                 ambient_color: colour("ambient_color", defaults.ambient_color)?,
                 view,
                 checker_scale,
+                pyramid_mip: params.u32("pyramid_mip", defaults.pyramid_mip)?,
             },
         })
     }
@@ -253,7 +269,8 @@ mod tests {
         assert_eq!(r, Resolve::new(64, 48));
         let r = Resolve::from_params(&params(
             "width = 8\nheight = 4\nview = \"lod\"\nchecker_scale = 2.5\n\
-             light_direction = [0, 1, 0]\nlight_color = [2, 1.5, 1]\nambient_color = [0.0, 0.0, 0.1]",
+             light_direction = [0, 1, 0]\nlight_color = [2, 1.5, 1]\nambient_color = [0.0, 0.0, 0.1]\n\
+             pyramid_mip = 3",
         ))
         .unwrap();
         assert_eq!((r.width, r.height), (8, 4));
@@ -263,6 +280,7 @@ mod tests {
         assert_eq!(s.light_direction, Vec3::Y);
         assert_eq!(s.light_color, Vec3::new(2.0, 1.5, 1.0));
         assert_eq!(s.ambient_color, Vec3::new(0.0, 0.0, 0.1));
+        assert_eq!(s.pyramid_mip, 3);
         // An integer scale is a number too.
         let r = Resolve::from_params(&params("width = 8\nheight = 4\nchecker_scale = 3"));
         assert_eq!(r.unwrap().settings.checker_scale, 3.0);

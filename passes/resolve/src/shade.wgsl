@@ -22,6 +22,7 @@ const VIEW_LOD: u32 = 3u;
 const VIEW_RASTER: u32 = 4u;
 const VIEW_DEPTH: u32 = 5u;
 const VIEW_LIGHT_COUNT: u32 = 6u;
+const VIEW_PYRAMID: u32 = 7u;
 // The light-count view's scale: this many lights in a froxel is the hottest colour.
 const LIGHT_COUNT_FULL: f32 = 32.0;
 
@@ -43,6 +44,12 @@ struct Params {
     view_mode: u32,
     // Checker squares per UV unit.
     checker_scale: f32,
+    // The mip the pyramid view shows.
+    pyramid_mip: u32,
+    // Scalars, not a vec3 (whose 16-byte alignment would grow the struct).
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 #ifdef VIS_TEXTURE
@@ -62,6 +69,19 @@ struct Params {
 @group(0) @binding(8) var color: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(9) var<uniform> view: View;
 @group(0) @binding(10) var<uniform> params: Params;
+
+#ifdef PYRAMID
+// A reverse-Z min-depth pyramid: mip L is ceil(size / 2^(L+1)), its texel (x, y) covers
+// pixels [x, x + 1) · 2^(L+1) on each axis.
+@group(0) @binding(16) var pyramid: texture_2d<f32>;
+
+// The texel of mip `level` covering `pixel`, clamped to the mip's size.
+fn pyramid_depth(pixel: vec2<u32>, level: u32) -> f32 {
+    let mip = min(level, textureNumLevels(pyramid) - 1u);
+    let last = textureDimensions(pyramid, mip) - vec2(1u);
+    return textureLoad(pyramid, min(pixel >> vec2(mip + 1u), last), mip).x;
+}
+#endif
 
 #ifdef CLUSTERED_LIGHTS
 // Light clustering's output: the objects, the grid, and per froxel and kind an offset
@@ -301,6 +321,11 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
         case VIEW_LIGHT_COUNT: {
 #ifdef CLUSTERED_LIGHTS
             rgb = heat(f32(light_count(pixel, visbuffer_depth(value), empty)) / LIGHT_COUNT_FULL);
+#endif
+        }
+        case VIEW_PYRAMID: {
+#ifdef PYRAMID
+            rgb = vec3(sqrt(sqrt(max(pyramid_depth(gid.xy, params.pyramid_mip), 0.0))));
 #endif
         }
         default: {

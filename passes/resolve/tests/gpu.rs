@@ -1,8 +1,9 @@
 //! `resolve` on the GPU (lavapipe in CI) against `cpu`: a scene of a mesh with UVs
 //! (spot) and one without (the procedural knot), rasterised into a visibility buffer by
 //! the software rasteriser's CPU reference, resolved into depth, material depth and
-//! every debug view; the same frame lit by clustered point and spot lights and shown as
-//! the light-count view; then the errors.
+//! every debug view; the same frame with no depth targets bound (colour alone, no render
+//! program); a depth pyramid shown mip by mip; the same frame lit by clustered point and
+//! spot lights and shown as the light-count view; then the errors.
 
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::data::Limits;
@@ -11,7 +12,7 @@ use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_populate::cpu::{ClusterLists, cpu_populate};
 use meshlight_pass_resolve::settings::Settings;
-use meshlight_pass_resolve::{COLOR_FORMAT, DEPTH_FORMAT, DebugView, Resolve, cpu};
+use meshlight_pass_resolve::{COLOR_FORMAT, DEPTH_FORMAT, DebugView, PYRAMID_FORMAT, Resolve, cpu};
 use meshlight_pass_z_slice::{ZSlice, cpu_z_slice};
 use meshlight_scene::load::load_obj;
 use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
@@ -60,6 +61,8 @@ struct Frame {
     software: u32,
     visbuffer: Vec<u64>,
     lights: Option<Lights>,
+    /// A depth pyramid for the `pyramid` slot, finest mip first.
+    pyramid: Option<Vec<cpu::PyramidMip>>,
 }
 
 /// Light clustering's output for the frame, from the CPU references of its stages.
@@ -86,6 +89,7 @@ impl Frame {
                 counts: &l.lists.counts,
                 list: &l.lists.objects,
             }),
+            pyramid: self.pyramid.as_deref(),
         }
     }
 
@@ -234,15 +238,30 @@ fn frame() -> Frame {
         software,
         visbuffer,
         lights: None,
+        pyramid: None,
     }
 }
 
-/// What the pass wrote.
+/// What the pass wrote; a depth target only where it was bound.
 struct Resolved {
-    depth: Vec<f32>,
-    material_depth: Vec<f32>,
+    depth: Option<Vec<f32>>,
+    material_depth: Option<Vec<f32>>,
     color: Vec<[u8; 4]>,
+    /// The compiled frame, to see what the pass declared.
+    plan: Plan,
 }
+
+/// Which optional targets the graph binds.
+#[derive(Clone, Copy)]
+struct Targets {
+    depth: bool,
+    material_depth: bool,
+}
+
+const BOTH: Targets = Targets {
+    depth: true,
+    material_depth: true,
+};
 
 /// Copies a `W × H` texture of 4-byte texels to the CPU.
 fn read_texture(gpu: &GpuContext, texture: &wgpu::Texture, aspect: wgpu::TextureAspect) -> Vec<u8> {
@@ -303,9 +322,15 @@ fn texture(
     })
 }
 
-/// Runs `pass` over `frame` with `view` as the frame's camera, and reads the three
-/// targets back.
+/// Runs `pass` over `frame` with `view` as the frame's camera and both depth targets
+/// bound, and reads the targets back.
 fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolved> {
+    run_with(frame, pass, view, BOTH)
+}
+
+/// Runs `pass` with the depth targets `targets` names bound (and the frame's pyramid,
+/// if it has one), and reads back what was bound.
+fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> Result<Resolved> {
     let gpu = gpu();
     let scene = GpuScene::new(&gpu, &mut frame.scene);
     let slots = frame.raster_clusters.len() as u64;
@@ -326,12 +351,23 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
         BufferDesc::array(Element::U64, (W * H) as u64),
         BUFFER_USAGE,
     );
-    let depth = g.import_texture("depth", TextureDesc::d2(DEPTH_FORMAT, W, H), DEPTH_USAGE);
-    let material_depth = g.import_texture(
-        "material_depth",
-        TextureDesc::d2(DEPTH_FORMAT, W, H),
-        DEPTH_USAGE,
-    );
+    let mut bindings = Bindings::new();
+    for (name, wanted) in [
+        ("depth", targets.depth),
+        ("material_depth", targets.material_depth),
+    ] {
+        if wanted {
+            let t = g.import_texture(name, TextureDesc::d2(DEPTH_FORMAT, W, H), DEPTH_USAGE);
+            bindings = bindings.bind(name, t);
+        }
+    }
+    let pyramid = frame.pyramid.as_ref();
+    if let Some(mips) = pyramid {
+        let desc = TextureDesc::d2(PYRAMID_FORMAT, mips[0].width, mips[0].height)
+            .with_mips(mips.len() as u32);
+        let handle = g.import_texture("pyramid", desc, PYRAMID_USAGE);
+        bindings = bindings.bind("pyramid", handle);
+    }
     let color = g.import_texture("color", TextureDesc::d2(COLOR_FORMAT, W, H), COLOR_USAGE);
     let light_buffers: Vec<(&str, Vec<u8>)> = match &frame.lights {
         Some(l) => vec![
@@ -353,7 +389,7 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
         ],
         None => Vec::new(),
     };
-    let mut light_bindings = Bindings::new();
+    let mut light_bindings = bindings;
     for (name, bytes) in &light_buffers {
         let element = match *name {
             "objects" => Element::named("ClusterableObject", 64),
@@ -376,8 +412,6 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
             .bind("meshlets", h.meshlets)
             .bind("payload", h.payload)
             .bind("materials", h.materials)
-            .bind("depth", depth)
-            .bind("material_depth", material_depth)
             .bind("color", color),
     )?;
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
@@ -400,7 +434,7 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
             BUFFER_USAGE,
         ),
     ];
-    let targets = [
+    let textures = [
         texture(&gpu, "depth", DEPTH_FORMAT, DEPTH_USAGE),
         texture(&gpu, "material_depth", DEPTH_FORMAT, DEPTH_USAGE),
         texture(&gpu, "color", COLOR_FORMAT, COLOR_USAGE),
@@ -409,14 +443,22 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
         .iter()
         .map(|(name, bytes)| (*name, gpu.buffer_with_data(name, bytes, BUFFER_USAGE)))
         .collect();
+    let pyramid_texture = pyramid.map(|mips| upload_pyramid(&gpu, mips));
     let mut imports = scene
         .imports()
         .buffer("raster_clusters", &buffers[0])
         .buffer("raster_counts", &buffers[1])
         .buffer("visbuffer", &buffers[2])
-        .texture("depth", &targets[0])
-        .texture("material_depth", &targets[1])
-        .texture("color", &targets[2]);
+        .texture("color", &textures[2]);
+    if targets.depth {
+        imports = imports.texture("depth", &textures[0]);
+    }
+    if targets.material_depth {
+        imports = imports.texture("material_depth", &textures[1]);
+    }
+    if let Some(t) = &pyramid_texture {
+        imports = imports.texture("pyramid", t);
+    }
     for (name, buffer) in &light_data {
         imports = imports.buffer(name, buffer);
     }
@@ -424,24 +466,95 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
     let data = FrameData::new().with("view", bytemuck::bytes_of(view));
     exec.execute_frame(&compiled, &imports, &data)?;
     exec.finish()?;
-    let floats = |bytes: Vec<u8>| bytemuck::pod_collect_to_vec::<u8, f32>(&bytes);
+    let depth_of = |wanted: bool, texture: &wgpu::Texture| {
+        wanted.then(|| {
+            let bytes = read_texture(&exec.gpu, texture, wgpu::TextureAspect::DepthOnly);
+            bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)
+        })
+    };
     Ok(Resolved {
-        depth: floats(read_texture(
-            &exec.gpu,
-            &targets[0],
-            wgpu::TextureAspect::DepthOnly,
-        )),
-        material_depth: floats(read_texture(
-            &exec.gpu,
-            &targets[1],
-            wgpu::TextureAspect::DepthOnly,
-        )),
+        depth: depth_of(targets.depth, &textures[0]),
+        material_depth: depth_of(targets.material_depth, &textures[1]),
         color: bytemuck::pod_collect_to_vec(&read_texture(
             &exec.gpu,
-            &targets[2],
+            &textures[2],
             wgpu::TextureAspect::All,
         )),
+        plan: compiled.plan.clone(),
     })
+}
+
+const PYRAMID_USAGE: wgpu::TextureUsages =
+    wgpu::TextureUsages::TEXTURE_BINDING.union(wgpu::TextureUsages::COPY_DST);
+
+/// An R32Float texture holding `mips`.
+fn upload_pyramid(gpu: &GpuContext, mips: &[cpu::PyramidMip]) -> wgpu::Texture {
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("pyramid"),
+        size: wgpu::Extent3d {
+            width: mips[0].width,
+            height: mips[0].height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: mips.len() as u32,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: PYRAMID_FORMAT,
+        usage: PYRAMID_USAGE,
+        view_formats: &[],
+    });
+    for (level, mip) in mips.iter().enumerate() {
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: level as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(&mip.texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(mip.width * 4),
+                rows_per_image: Some(mip.height),
+            },
+            wgpu::Extent3d {
+                width: mip.width,
+                height: mip.height,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    texture
+}
+
+/// The pyramid's rule on the CPU, at the sizes a texture's mip chain has (`floor`
+/// halving from a base of `⌈W/2⌉ × ⌈H/2⌉`): texel `(x, y)` of mip `L` is the minimum
+/// reverse-Z depth over pixels `[x, x + 1) · 2^(L+1)` (those inside the image).
+fn min_pyramid(depth: &[f32], levels: u32) -> Vec<cpu::PyramidMip> {
+    let (bw, bh) = (W.div_ceil(2), H.div_ceil(2));
+    (0..levels)
+        .map(|level| {
+            let (w, h) = ((bw >> level).max(1), (bh >> level).max(1));
+            let span = 2u32 << level;
+            let mut texels = Vec::with_capacity((w * h) as usize);
+            for y in 0..h {
+                for x in 0..w {
+                    let mut least = f32::INFINITY;
+                    for py in y * span..((y + 1) * span).min(H) {
+                        for px in x * span..((x + 1) * span).min(W) {
+                            least = least.min(depth[(py * W + px) as usize]);
+                        }
+                    }
+                    texels.push(least);
+                }
+            }
+            cpu::PyramidMip {
+                width: w,
+                height: h,
+                texels,
+            }
+        })
+        .collect()
 }
 
 fn run(frame: &mut Frame, pass: Resolve) -> Resolved {
@@ -495,13 +608,22 @@ fn depth_material_depth_and_every_view_match_the_reference() {
         "empty and three materials: {materials:?}"
     );
 
-    for view in DebugView::ALL.into_iter().filter(|v| !v.needs_lights()) {
+    let needs_more = |v: &DebugView| v.needs_lights() || v.needs_pyramid();
+    for view in DebugView::ALL.into_iter().filter(|v| !needs_more(v)) {
         let got = run(&mut f, Resolve::new(W, H).with_view(view));
         // Depth and material depth do not depend on the view: check them every time.
-        if let Some((i, g, w)) = first_difference(&got.depth, &depth) {
+        let plan = &got.plan.passes[0];
+        let render: Vec<_> = plan
+            .programs
+            .iter()
+            .filter(|p| p.kind == "render")
+            .collect();
+        assert_eq!(render.len(), 2, "{view}: {:?}", plan.programs);
+        if let Some((i, g, w)) = first_difference(got.depth.as_ref().unwrap(), &depth) {
             panic!("{view}: depth at pixel {i} is {g}, the reference {w}");
         }
-        if let Some((i, g, w)) = first_difference(&got.material_depth, &material_depth) {
+        let got_material = got.material_depth.as_ref().unwrap();
+        if let Some((i, g, w)) = first_difference(got_material, &material_depth) {
             panic!("{view}: material depth at pixel {i} is {g}, the reference {w}");
         }
         let want = cpu::shade(
@@ -541,6 +663,135 @@ fn depth_material_depth_and_every_view_match_the_reference() {
             "{view}: only {} distinct colours in the reference",
             distinct.len()
         );
+    }
+}
+
+#[test]
+fn without_depth_targets_only_the_shading_dispatch_runs_and_the_colour_is_the_same() {
+    let mut f = frame();
+    let view = f.view;
+    let pixels = (W * H) as usize;
+    let depth = cpu::depth(&f.visbuffer, W, H);
+    let material_depth = cpu::material_depth(&f.scene, &f.raster_clusters, &f.visbuffer);
+    for view_mode in [DebugView::Shaded, DebugView::Clusters, DebugView::Depth] {
+        let pass = Resolve::new(W, H).with_view(view_mode);
+        let both = run_with(&mut f, pass, &view, BOTH).unwrap_or_else(|e| panic!("{e}"));
+        let none = Targets {
+            depth: false,
+            material_depth: false,
+        };
+        let bare = run_with(&mut f, pass, &view, none).unwrap_or_else(|e| panic!("{e}"));
+        // Colour alone: one compute program, no render program, nothing else declared.
+        let programs = &bare.plan.passes[0].programs;
+        let kinds: Vec<_> = programs.iter().map(|p| (p.name.as_str(), p.kind)).collect();
+        assert_eq!(kinds, [("shade", "compute")], "{view_mode}");
+        assert!(bare.depth.is_none() && bare.material_depth.is_none());
+        // The same image as with the targets, and the reference's.
+        assert_eq!(bare.color, both.color, "{view_mode}");
+        let want = cpu::shade(
+            &f.cpu(),
+            &Settings {
+                view: view_mode,
+                ..Settings::default()
+            },
+        );
+        let (over, largest) = color_differences(&bare.color, &want, 2);
+        assert!(
+            over * 100 <= pixels,
+            "{view_mode}: {over} pixels differ by more than 2 (largest {largest})"
+        );
+    }
+    // One target alone: its own fullscreen pass, exact, and not the other's.
+    for (targets, name) in [
+        (
+            Targets {
+                depth: true,
+                material_depth: false,
+            },
+            "depth",
+        ),
+        (
+            Targets {
+                depth: false,
+                material_depth: true,
+            },
+            "material_depth",
+        ),
+    ] {
+        let got =
+            run_with(&mut f, Resolve::new(W, H), &view, targets).unwrap_or_else(|e| panic!("{e}"));
+        let render: Vec<_> = got.plan.passes[0]
+            .programs
+            .iter()
+            .filter(|p| p.kind == "render")
+            .map(|p| p.name.as_str())
+            .collect();
+        assert_eq!(render, [name]);
+        let (values, want) = match name {
+            "depth" => (got.depth.unwrap(), &depth),
+            _ => (got.material_depth.unwrap(), &material_depth),
+        };
+        assert_eq!(first_difference(&values, want), None, "{name}");
+    }
+}
+
+#[test]
+fn the_pyramid_view_shows_each_mip_of_a_bound_pyramid_like_the_reference() {
+    let mut f = frame();
+    let view = f.view;
+    let depth = cpu::depth(&f.visbuffer, W, H);
+    let mips = min_pyramid(&depth, 4);
+    assert_eq!(
+        mips.iter().map(|m| (m.width, m.height)).collect::<Vec<_>>(),
+        [(32, 24), (16, 12), (8, 6), (4, 3)]
+    );
+    f.pyramid = Some(mips);
+    let mut images = Vec::new();
+    for mip in 0..4 {
+        let mut pass = Resolve::new(W, H).with_view(DebugView::Pyramid);
+        pass.settings.pyramid_mip = mip;
+        let got = run_with(&mut f, pass, &view, BOTH).unwrap_or_else(|e| panic!("{e}"));
+        let want = cpu::shade(&f.cpu(), &pass.settings);
+        let (over, largest) = color_differences(&got.color, &want, 1);
+        assert_eq!(over, 0, "mip {mip}: largest difference {largest}");
+        // A pixel shows the texel covering it: blocks of 2^(mip+1) pixels are one grey.
+        let block = 2u32 << mip;
+        let at = |x: u32, y: u32| got.color[(y * W + x) as usize];
+        for y in 0..H {
+            for x in 0..W {
+                assert_eq!(at(x, y), at(x / block * block, y / block * block));
+            }
+        }
+        images.push(got.color);
+    }
+    // Coarser mips are darker (min depth) and differ from the finer ones.
+    let brightness = |img: &[[u8; 4]]| img.iter().map(|c| c[0] as u64).sum::<u64>();
+    for k in 1..images.len() {
+        assert!(
+            brightness(&images[k]) < brightness(&images[k - 1]),
+            "mip {k}"
+        );
+    }
+    // A mip past the chain is a record error naming its length; the view without a
+    // pyramid a setup error naming the slot.
+    let mut pass = Resolve::new(W, H).with_view(DebugView::Pyramid);
+    pass.settings.pyramid_mip = 4;
+    match run_with(&mut f, pass, &view, BOTH) {
+        Err(GraphError::Record { message, .. } | GraphError::Parameter { message, .. }) => {
+            assert!(
+                message.contains("`pyramid_mip` = 4") && message.contains("4 mips"),
+                "{message}"
+            )
+        }
+        other => panic!("{:?}", other.err()),
+    }
+    f.pyramid = None;
+    let pass = Resolve::new(W, H).with_view(DebugView::Pyramid);
+    match run_with(&mut f, pass, &view, BOTH) {
+        Err(GraphError::Parameter { message, .. }) => {
+            assert!(message.contains("`pyramid` slot"), "{message}")
+        }
+        other => panic!("{:?}", other.err()),
     }
 }
 
