@@ -24,6 +24,7 @@ pub use meshlight_graph as graph;
 pub use meshlight_pass_brute_force as brute_force;
 pub use meshlight_pass_count_raster as count_raster;
 pub use meshlight_pass_cull_lod as cull_lod;
+pub use meshlight_pass_depth_pyramid as depth_pyramid;
 pub use meshlight_pass_fill_clusters as fill_clusters;
 pub use meshlight_pass_hw_raster as hw_raster;
 pub use meshlight_pass_populate as populate;
@@ -45,6 +46,7 @@ pub fn registry() -> graph::file::Registry {
     sw_raster::register(&mut r);
     hw_raster::register(&mut r);
     resolve::register(&mut r);
+    depth_pyramid::register(&mut r);
     brute_force::register(&mut r);
     z_slice::register(&mut r);
     count_raster::register(&mut r);
