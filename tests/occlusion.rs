@@ -264,3 +264,45 @@ fn two_pass_occlusion_never_culls_what_the_frame_without_it_draws() {
     eprintln!("exact depth ties that went the other way: {ties} of {pixels} pixels");
     assert!(ties * 200 <= pixels, "{ties} ties in {pixels} pixels");
 }
+
+fn pipeline(name: &str) -> GraphSource {
+    GraphSource::File(std::path::PathBuf::from(format!(
+        "{}/pipelines/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    )))
+}
+
+#[test]
+fn the_pipeline_files_run_the_frames_built_in_code() {
+    let (w, h) = (160, 96);
+    let steps = path();
+    for (file, occlusion) in [
+        ("virtual_geometry.toml", true),
+        ("virtual_geometry_one_pass.toml", false),
+    ] {
+        let settings = FrameSettings {
+            occlusion,
+            ..FrameSettings::new(w, h)
+        };
+        let mut code = Renderer::new(scene(), settings.clone(), &GraphSource::Code).unwrap();
+        let mut loaded = Renderer::new(scene(), settings, &pipeline(file)).unwrap();
+        // Moving frames, so the two-pass frame has history to test against.
+        for step in &steps[..5] {
+            let a = code.render_still(&step.camera).unwrap();
+            let b = loaded.render_still(&step.camera).unwrap();
+            assert_eq!(a.counts, b.counts, "{file}, {}", step.label);
+            assert_eq!(a.counts.occlusion.is_some(), occlusion, "{file}");
+            assert!(
+                a.rgba == b.rgba,
+                "{file}, {}: the images differ",
+                step.label
+            );
+        }
+        let tested = code
+            .latest_counts()
+            .unwrap()
+            .occlusion
+            .map(|o| o.first_tested);
+        assert!(!occlusion || tested > Some(0), "{file}: {tested:?}");
+    }
+}

@@ -359,12 +359,18 @@ pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBui
         message: format!("cannot read it: {e}"),
     })?;
     let text = with_view(&text, &file, s)?;
-    let mut g = crate::graph::file::parse_pipeline_with(
-        &text,
-        &file,
-        &crate::registry(),
-        &overrides(data, s),
-    )?;
+    let mut params = overrides(data, s);
+    // A file without a depth pyramid (one culling pass) does not declare its size.
+    let declared: toml::Table = toml::from_str(&text).unwrap_or_default();
+    let sizes_pyramid = declared
+        .get("params")
+        .and_then(toml::Value::as_table)
+        .is_some_and(|p| p.contains_key(PYRAMID_WIDTH_PARAM));
+    if !sizes_pyramid {
+        params.remove(PYRAMID_WIDTH_PARAM);
+        params.remove(PYRAMID_HEIGHT_PARAM);
+    }
+    let mut g = crate::graph::file::parse_pipeline_with(&text, &file, &crate::registry(), &params)?;
     add_readbacks(&mut g)?;
     Ok(g)
 }
