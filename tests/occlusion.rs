@@ -169,7 +169,7 @@ fn compare(
     frame: usize,
 ) -> (OcclusionCounts, usize) {
     for r in [&mut *with, &mut *without] {
-        r.data.set_transform(MOVER, mover_at(step.mover)).unwrap();
+        r.set_transform(MOVER, mover_at(step.mover)).unwrap();
     }
     if step.cut {
         with.camera_cut();
@@ -244,6 +244,9 @@ fn two_pass_occlusion_never_culls_what_the_frame_without_it_draws() {
         totals.second_occluded += c.second_occluded;
         ties += t;
     }
+    // The mover's last move was drawn: its previous transform is now that one.
+    let mover = &with.data.instances[MOVER.0 as usize];
+    assert_eq!(mover.previous_world_from_local, mover.world_from_local);
     // A resize: new targets, a new history; its first frame tests nothing.
     let (w2, h2) = (128, 120);
     let mut with = renderer(true, w2, h2);

@@ -62,6 +62,8 @@ pub struct Renderer {
     cut: bool,
     /// The graph culls in two passes and reads the second pass's counters back.
     two_pass: bool,
+    /// Instances moved through [`Renderer::set_transform`] since the last frame.
+    moved: Vec<meshlight_gpu_scene::InstanceId>,
     /// Counters by frame, until both readbacks of a frame are in.
     pending: BTreeMap<u64, PendingCounts>,
     latest: Option<FrameCounts>,
@@ -129,6 +131,7 @@ impl Renderer {
             settings,
             two_pass,
             cut: false,
+            moved: Vec::new(),
             compiled,
             executor: Executor::new(gpu),
             scene,
@@ -200,24 +203,30 @@ impl Renderer {
         self.cut = true;
     }
 
-    /// After a frame, every instance's previous transform is the one that frame drew it
-    /// with, so the next frame's first culling pass projects it where last frame's depth
-    /// has it, also when it stopped moving (moving it sets the previous transform again).
-    fn settle_previous_transforms(&mut self) {
-        if !self.two_pass {
-            return;
+    /// Moves an instance (see `SceneData::set_transform`) and remembers it, so that
+    /// after the next frame its previous transform becomes the one that frame drew it
+    /// with. Moving it through `data` directly works too, but its previous transform then
+    /// stays where it was before, and the first culling pass of later frames projects it
+    /// there: never a wrong image (the second pass re-tests with the current transform),
+    /// only work moved to the second pass.
+    pub fn set_transform(
+        &mut self,
+        id: meshlight_gpu_scene::InstanceId,
+        world_from_local: Mat4,
+    ) -> std::result::Result<bool, meshlight_gpu_scene::SceneDataError> {
+        let moved = self.data.set_transform(id, world_from_local)?;
+        if moved {
+            self.moved.push(id);
         }
-        let moved: Vec<u32> = self
-            .data
-            .instances
-            .iter()
-            .enumerate()
-            .filter(|(_, i)| i.previous_world_from_local != i.world_from_local)
-            .map(|(k, _)| k as u32)
-            .collect();
-        for k in moved {
-            let id = meshlight_gpu_scene::data::InstanceId(k);
-            let now = Mat4::from_cols_array_2d(&self.data.instances[k as usize].world_from_local);
+        Ok(moved)
+    }
+
+    /// After a frame, the instances moved before it get the transform it drew them with
+    /// as their previous one (uploaded by the next frame).
+    fn settle_previous_transforms(&mut self) {
+        for id in std::mem::take(&mut self.moved) {
+            let now = &self.data.instances[id.0 as usize].world_from_local;
+            let now = Mat4::from_cols_array_2d(now);
             // The transform was drawable when it was set, so this cannot be refused.
             let _ = self.data.set_transform(id, now);
         }
