@@ -61,6 +61,14 @@
 //! visibility target and numbers its clusters from slot 0, so a second software pass
 //! would erase the first's; a second pass therefore needs `hardware = true`.
 //!
+//! The candidates are a list, not a bitmask over the first pass's input: the second
+//! pass then runs over the candidates alone (usually a few per cent of the cut), not over
+//! every cluster again, and needs no scan to find them.
+//!
+//! The pyramid is read by the rule of `depth_pyramid` (level `L` is `ceil(W / 2^(L+1))`
+//! × `ceil(H / 2^(L+1))`, each texel the farthest depth of its footprint); each mip of the
+//! texture must be at least its level's size, as `depth_pyramid::texture_desc` pads it.
+//!
 //! The test (`meshlight::occlusion`): the eight corners of the sphere's world-space
 //! bounding cube (radius grown by 1e-5 of the coordinates) projected; any corner not in
 //! front of the near plane, or the rectangle (grown by a pixel) not wholly on the screen:
