@@ -85,8 +85,9 @@ pub struct FrameSettings {
     pub exact_division: bool,
     /// Cluster the renderer's lights and shade with them (the graph built in code only).
     pub clustering: Option<ClusteringSettings>,
-    /// Keep the visibility target (`visbuffer`) and the slot list (`raster_clusters`)
-    /// after the frame, for `Executor::read_buffer` (tests, debugging).
+    /// Keep the visibility target (`visbuffer`), the slot list (`raster_clusters`) and
+    /// the culling passes' counters (`raster_counts`, `raster_counts_second`) after the
+    /// frame, for `Executor::read_buffer` (tests, debugging).
     pub keep_visibility: bool,
     /// Two-pass occlusion culling against the depth pyramid (needs `hardware`: the
     /// second pass draws with the hardware rasteriser; without it the frame has one
@@ -192,12 +193,6 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     }
     // A u64 buffer or an R64Uint texture, as the chosen software rasteriser writes it.
     let visbuffer = g.create_visibility64("visbuffer", s.width, s.height);
-    if s.keep_visibility {
-        g.export(visbuffer);
-        if let Some(list) = g.resource("raster_clusters") {
-            g.export(list);
-        }
-    }
     let depth = meshlight_pass_resolve::DEPTH_FORMAT;
     for (name, format, wanted) in [
         ("depth", depth, s.depth),
@@ -338,6 +333,14 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             .bind_named("visibility", "visbuffer")
             .bind("pyramid", h.current);
         g.add_choice("history_pyramid", pyramid()?, bindings)?;
+    }
+    if s.keep_visibility {
+        g.export(visbuffer);
+        for name in ["raster_clusters", "raster_counts", SECOND_COUNTS] {
+            if let Some(h) = g.resource(name) {
+                g.export(h);
+            }
+        }
     }
     add_readbacks(&mut g)?;
     Ok(g)
