@@ -122,6 +122,10 @@ const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
         "instance::instance_max_scale(instance::Instance())",
     ),
     (
+        "meshlight::occlusion",
+        "occlusion::occlusion_level(vec4(0u, 0u, 5u, 9u))",
+    ),
+    (
         "meshlight::visbuffer",
         "visbuffer::visbuffer_pack(0.5, 1u, 2u)",
     ),

@@ -26,13 +26,16 @@ pub fn measure(
     frames: u32,
 ) -> Result<Measured, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new(placed.data.clone(), settings, &GraphSource::Code)?;
-    let still = renderer.render_still(&placed.camera)?;
+    renderer.render_still(&placed.camera)?;
     renderer.executor.take_gpu_timings()?;
     for _ in 0..frames {
         renderer.frame(&placed.camera)?;
     }
     renderer.executor.finish()?;
     let timings = renderer.executor.take_gpu_timings()?;
+    // The counters of a frame like the timed ones: with occlusion, the still's are
+    // those of a first frame, which has no history to test against.
+    let counts = renderer.render_still(&placed.camera)?.counts;
     if timings.is_empty() {
         return Err(format!(
             "{} has no GPU timestamps; nothing to measure",
@@ -60,7 +63,7 @@ pub fn measure(
     Ok(Measured {
         passes,
         total_ms: median(timings.iter().map(|t| t.total_us / 1e3).collect()),
-        counts: still.counts,
+        counts,
         device: renderer.adapter.clone(),
     })
 }
@@ -182,6 +185,17 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     let settings = FrameSettings::new(width, height);
     let frame = measure(&placed, settings.clone(), frames)?;
     let mut rows = rows_of("virtual-geometry", &case, &frame);
+    // The same frame with one culling pass and no occlusion test.
+    let one_pass = FrameSettings {
+        occlusion: false,
+        ..settings.clone()
+    };
+    let without = measure(&placed, one_pass.clone(), frames)?;
+    rows.extend(rows_of(
+        "virtual-geometry",
+        &format!("{case}, no occlusion"),
+        &without,
+    ));
 
     // The same cut, every cluster to one rasteriser.
     let software = measure(
@@ -192,11 +206,12 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         },
         frames,
     )?;
+    // The whole cut, so no occlusion (which would split it over two passes).
     let hardware = measure(
         &placed,
         FrameSettings {
             sw_threshold_px: Some(0.0),
-            ..settings
+            ..one_pass
         },
         frames,
     )?;
@@ -370,7 +385,11 @@ pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         case,
         ..
     } = Lattice::new(quick, meshes)?;
-    let base = FrameSettings::new(width, height);
+    // Every rasteriser draws the whole cut: one culling pass.
+    let base = FrameSettings {
+        occlusion: false,
+        ..FrameSettings::new(width, height)
+    };
     let scenario = "rasterisers";
     let mut rows = Vec::new();
     // One measurement, or `None` where the adapter cannot run the implementation.

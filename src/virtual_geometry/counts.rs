@@ -6,8 +6,11 @@ use serde::Serialize;
 
 /// The readback of `fill_clusters`' `cluster_count` (words: written, requested).
 pub const CLUSTER_COUNT_READBACK: &str = "cluster_count";
-/// The readback of `cull_lod`'s `raster_counts` (eight words, see that crate).
+/// The readback of `cull_lod`'s `raster_counts` (eight words, twelve with occlusion;
+/// see that crate).
 pub const RASTER_COUNTS_READBACK: &str = "raster_counts";
+/// The readback of the second culling pass's `raster_counts` (twelve words).
+pub const SECOND_COUNTS_READBACK: &str = "raster_counts_second";
 
 /// One frame's counters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -30,17 +33,46 @@ pub struct FrameCounts {
     /// Triangles of those clusters.
     pub software_triangles: u32,
     pub hardware_triangles: u32,
+    /// Clusters the raster slots had no room for (both culling passes).
+    pub slots_dropped: u32,
+    /// The two culling passes' occlusion counters; `None` for a one-pass frame.
+    pub occlusion: Option<OcclusionCounts>,
+}
+
+/// What two-pass occlusion culling did in one frame. The totals of [`FrameCounts`]
+/// (`visible`, `hardware`, triangles) include the second pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct OcclusionCounts {
+    /// First pass: clusters in the LOD cut, those whose sphere could be tested against
+    /// last frame's pyramid (0 without valid history or on a camera cut), and those it
+    /// hid (the second pass's candidates).
+    pub first_cut: u32,
+    pub first_tested: u32,
+    pub first_occluded: u32,
+    /// Second pass: candidates considered, tested against this frame's pyramid, still
+    /// hidden (culled for good), and drawn.
+    pub second_considered: u32,
+    pub second_tested: u32,
+    pub second_occluded: u32,
+    pub second_drawn: u32,
+    pub second_triangles: u32,
 }
 
 impl FrameCounts {
-    /// From the two readbacks' bytes; `None` when either is shorter than its words.
-    pub fn from_words(frame: u64, cluster_count: &[u8], raster_counts: &[u8]) -> Option<Self> {
+    /// From the readbacks' bytes (`second`: the second culling pass's, in a two-pass
+    /// frame); `None` when one is shorter than its words.
+    pub fn from_words(
+        frame: u64,
+        cluster_count: &[u8],
+        raster_counts: &[u8],
+        second: Option<&[u8]>,
+    ) -> Option<Self> {
         let words = |bytes: &[u8], n: usize| -> Option<Vec<u32>> {
             (bytes.len() >= n * 4).then(|| bytemuck::pod_collect_to_vec(&bytes[..n * 4]))
         };
         let c = words(cluster_count, 2)?;
         let r = words(raster_counts, 8)?;
-        Some(Self {
+        let mut counts = Self {
             frame,
             clusters_considered: c[0],
             clusters_requested: c[1],
@@ -51,7 +83,29 @@ impl FrameCounts {
             in_frustum: r[4],
             software_triangles: r[5],
             hardware_triangles: r[6],
-        })
+            slots_dropped: r[2].saturating_sub(r[3]),
+            occlusion: None,
+        };
+        if let Some(second) = second {
+            let r = words(raster_counts, 12)?;
+            let s = words(second, 12)?;
+            counts.slots = r[10];
+            counts.slots_dropped = r[2].saturating_sub(r[10]) + s[2].saturating_sub(s[10]);
+            counts.visible += s[2];
+            counts.hardware += s[1];
+            counts.hardware_triangles += s[6];
+            counts.occlusion = Some(OcclusionCounts {
+                first_cut: r[8],
+                first_tested: r[11],
+                first_occluded: r[9],
+                second_considered: s[4],
+                second_tested: s[11],
+                second_occluded: s[9],
+                second_drawn: s[1],
+                second_triangles: s[6],
+            });
+        }
+        Some(counts)
     }
 
     /// Candidates the cluster list had no room for.
@@ -62,7 +116,7 @@ impl FrameCounts {
 
     /// Visible clusters the raster slots had no room for.
     pub fn slots_dropped(&self) -> u32 {
-        self.visible.saturating_sub(self.slots)
+        self.slots_dropped
     }
 
     /// Whether anything was dropped: the frame's image may miss geometry.
@@ -76,6 +130,26 @@ impl FrameCounts {
 
     /// Rows of `(label, value)` for reports.
     pub fn rows(&self) -> Vec<(&'static str, u64)> {
+        let mut rows = self.totals();
+        if let Some(o) = self.occlusion {
+            rows.extend([
+                ("first pass: clusters in the LOD cut", o.first_cut as u64),
+                ("first pass: tested for occlusion", o.first_tested as u64),
+                ("first pass: occluded (candidates)", o.first_occluded as u64),
+                (
+                    "second pass: candidates considered",
+                    o.second_considered as u64,
+                ),
+                ("second pass: tested for occlusion", o.second_tested as u64),
+                ("second pass: occluded (culled)", o.second_occluded as u64),
+                ("second pass: clusters drawn", o.second_drawn as u64),
+                ("second pass: triangles drawn", o.second_triangles as u64),
+            ]);
+        }
+        rows
+    }
+
+    fn totals(&self) -> Vec<(&'static str, u64)> {
         vec![
             ("clusters requested", self.clusters_requested as u64),
             ("clusters considered", self.clusters_considered as u64),
@@ -115,19 +189,20 @@ mod tests {
     fn words_map_to_counters_and_overflow_is_the_excess() {
         let cluster_count: Vec<u8> = bytemuck::cast_slice(&[90u32, 100]).to_vec();
         let raster: Vec<u8> = bytemuck::cast_slice(&[3u32, 4, 9, 7, 20, 300, 400, 0]).to_vec();
-        let c = FrameCounts::from_words(5, &cluster_count, &raster).unwrap();
+        let c = FrameCounts::from_words(5, &cluster_count, &raster, None).unwrap();
         assert_eq!((c.clusters_considered, c.clusters_requested), (90, 100));
         assert_eq!((c.software, c.hardware, c.visible, c.slots), (3, 4, 9, 7));
         assert_eq!(c.in_frustum, 20);
         assert_eq!(c.triangles(), 700);
         assert_eq!((c.clusters_dropped(), c.slots_dropped()), (10, 2));
         assert!(c.overflowed());
-        assert!(FrameCounts::from_words(5, &cluster_count[..4], &raster).is_none());
+        assert!(FrameCounts::from_words(5, &cluster_count[..4], &raster, None).is_none());
         let fits = FrameCounts {
             clusters_requested: 5,
             clusters_considered: 5,
             visible: 3,
             slots: 3,
+            slots_dropped: 0,
             ..c
         };
         assert!(!fits.overflowed());
@@ -135,5 +210,38 @@ mod tests {
             c.html_table()
                 .contains("<td>clusters dropped (slots full)</td>")
         );
+    }
+
+    #[test]
+    fn a_second_pass_adds_its_clusters_and_its_own_overflow() {
+        let cluster_count: Vec<u8> = bytemuck::cast_slice(&[100u32, 100]).to_vec();
+        // First: 3 sw, 4 hw, 9 wanting slots, C 10, 20 in frustum, triangles, 0, cut 15,
+        // occluded 6, 10 slots, 12 tested.
+        let first: Vec<u8> =
+            bytemuck::cast_slice(&[3u32, 4, 9, 10, 20, 300, 400, 0, 15, 6, 10, 12]).to_vec();
+        // Second: 0 sw, 1 hw, 5 wanting slots of the 3 left, C2 6, 6 considered, …
+        let second: Vec<u8> =
+            bytemuck::cast_slice(&[0u32, 1, 5, 6, 6, 0, 50, 0, 6, 1, 3, 6]).to_vec();
+        let c = FrameCounts::from_words(7, &cluster_count, &first, Some(&second)).unwrap();
+        assert_eq!((c.hardware, c.visible, c.hardware_triangles), (5, 14, 450));
+        assert_eq!(c.slots, 10);
+        assert_eq!(
+            c.slots_dropped(),
+            2,
+            "the second pass wanted 5 of its 3 slots"
+        );
+        let o = c.occlusion.unwrap();
+        assert_eq!((o.first_cut, o.first_tested, o.first_occluded), (15, 12, 6));
+        assert_eq!(
+            (o.second_considered, o.second_occluded, o.second_drawn),
+            (6, 1, 1)
+        );
+        assert!(
+            c.rows()
+                .iter()
+                .any(|(l, v)| l.contains("second pass: occluded") && *v == 1)
+        );
+        // A first pass's eight words are too short for a two-pass frame.
+        assert!(FrameCounts::from_words(7, &cluster_count, &first[..32], Some(&second)).is_none());
     }
 }

@@ -1,8 +1,21 @@
 //! The virtual-geometry frame as a graph: built in code ([`build`]) or loaded from a
 //! pipeline file ([`load`]); both declare the same resources under the same names, so a
 //! file a user edits renders with the same renderer.
+//!
+//! With occlusion (the default), two culling passes (DESIGN §5):
+//!
+//! ```text
+//! fill → cull (first, last frame's pyramid) → remap → sw_raster → hw_raster
+//!      → depth_pyramid → cull_second (the first's candidates, this frame's pyramid)
+//!      → hw_raster_second → resolve → depth_pyramid (history for the next frame)
+//! ```
+//!
+//! Both rasterisations accumulate into one visibility target and one slot list, so a
+//! visibility id means the same to resolve whichever pass drew it. The second pass has
+//! no software rasteriser: `sw_raster` clears the target and numbers its clusters from
+//! slot 0, so its second run would erase the first pass's work (see `cull_lod`).
 
-use super::counts::{CLUSTER_COUNT_READBACK, RASTER_COUNTS_READBACK};
+use super::counts::{CLUSTER_COUNT_READBACK, RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK};
 use crate::graph::file::AUTO;
 use crate::graph::{
     Bindings, BufferDesc, Choice, Element, GraphBuilder, GraphError, Pass, Result, TextureDesc,
@@ -12,7 +25,8 @@ use crate::light_clustering::ClusteringSettings;
 use crate::light_clustering::frame_graph as clustering;
 use meshlight_gpu_scene::SceneData;
 use meshlight_gpu_scene::gpu::{buffer_lengths, elements, import_for};
-use meshlight_pass_cull_lod::{CullLod, Thresholds};
+use meshlight_pass_cull_lod::{CullLod, Mode, OCCLUSION_COUNT_WORDS, Thresholds};
+use meshlight_pass_depth_pyramid::DepthPyramid;
 use meshlight_pass_fill_clusters::FillClusters;
 use meshlight_pass_hw_raster::{Feed, HwRaster};
 use meshlight_pass_remap_dispatch::RemapDispatch;
@@ -29,6 +43,15 @@ pub const SLOTS_PARAM: &str = "slots";
 pub const MAX_SLOTS: u64 = 1 << 25;
 /// How many frames later the counters come back to the CPU.
 pub const COUNTS_LATENCY: u32 = 2;
+/// The history resource holding the frame's final depth pyramid, read by the next
+/// frame's first culling pass as `pyramid_history.prev`.
+pub const PYRAMID_HISTORY: &str = "pyramid_history";
+/// Resources of the two-pass frame, named unlike `cull_lod`'s slots so that each pass
+/// binds them where the frame says (a slot binds a same-named resource by default).
+pub const CANDIDATES: &str = "candidates";
+pub const CANDIDATE_COUNT: &str = "candidate_count";
+pub const SECOND_COUNTS: &str = "raster_counts_second";
+pub const SECOND_HW_ARGS: &str = "hw_args_second";
 
 /// What a frame is asked for; the same for both ways of building the graph.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,6 +85,14 @@ pub struct FrameSettings {
     pub exact_division: bool,
     /// Cluster the renderer's lights and shade with them (the graph built in code only).
     pub clustering: Option<ClusteringSettings>,
+    /// Keep the visibility target (`visbuffer`), the slot list (`raster_clusters`) and
+    /// the culling passes' counters (`raster_counts`, `raster_counts_second`) after the
+    /// frame, for `Executor::read_buffer` (tests, debugging).
+    pub keep_visibility: bool,
+    /// Two-pass occlusion culling against the depth pyramid (needs `hardware`: the
+    /// second pass draws with the hardware rasteriser; without it the frame has one
+    /// culling pass). Off: one pass, everything in the LOD cut drawn.
+    pub occlusion: bool,
 }
 
 impl FrameSettings {
@@ -82,7 +113,14 @@ impl FrameSettings {
             material_depth: true,
             exact_division: false,
             clustering: None,
+            occlusion: true,
+            keep_visibility: false,
         }
+    }
+
+    /// Whether the frame built in code culls by occlusion.
+    pub fn two_pass(&self) -> bool {
+        self.occlusion && self.hardware
     }
 
     /// The split threshold this frame uses on an adapter of `class`.
@@ -132,6 +170,8 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     g.size_param(CLUSTERS_PARAM, s.clusters);
     g.size_param(SLOTS_PARAM, s.slots.min(MAX_SLOTS));
     import_for(data, &mut g);
+    let occlusion = s.two_pass();
+    let count_words = if occlusion { OCCLUSION_COUNT_WORDS } else { 8 };
     for (name, desc) in [
         (
             "clusters",
@@ -142,14 +182,17 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             "raster_clusters",
             BufferDesc::array_param(elements::CLUSTER, SLOTS_PARAM),
         ),
-        ("raster_counts", BufferDesc::array(Element::U32, 8)),
+        (
+            "raster_counts",
+            BufferDesc::array(Element::U32, count_words),
+        ),
         ("hw_args", BufferDesc::array(Element::DRAW_ARGS, 1)),
         ("sw_args", BufferDesc::array(Element::DISPATCH_ARGS, 1)),
     ] {
         g.create_buffer(name, desc);
     }
     // A u64 buffer or an R64Uint texture, as the chosen software rasteriser writes it.
-    g.create_visibility64("visbuffer", s.width, s.height);
+    let visbuffer = g.create_visibility64("visbuffer", s.width, s.height);
     let depth = meshlight_pass_resolve::DEPTH_FORMAT;
     for (name, format, wanted) in [
         ("depth", depth, s.depth),
@@ -162,21 +205,48 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         let t = g.create_texture(name, TextureDesc::d2(format, s.width, s.height));
         g.export(t);
     }
+    let history = occlusion.then(|| {
+        for (name, desc) in [
+            (
+                CANDIDATES,
+                BufferDesc::array_param(elements::CLUSTER, CLUSTERS_PARAM),
+            ),
+            (CANDIDATE_COUNT, BufferDesc::array(Element::U32, 2)),
+            (
+                SECOND_COUNTS,
+                BufferDesc::array(Element::U32, OCCLUSION_COUNT_WORDS),
+            ),
+            (SECOND_HW_ARGS, BufferDesc::array(Element::DRAW_ARGS, 1)),
+        ] {
+            g.create_buffer(name, desc);
+        }
+        let desc = meshlight_pass_depth_pyramid::texture_desc(s.width, s.height);
+        g.create_texture("pyramid", desc.clone());
+        g.history_texture(PYRAMID_HISTORY, desc)
+    });
     // Slots not bound here bind to the resource of the same name.
     g.add_pass("fill", FillClusters::default(), Bindings::new())?;
+    let thresholds = Thresholds {
+        lod_threshold_px: s.lod_threshold_px,
+        // The renderer fills in its adapter's default; a graph built elsewhere
+        // without one takes cull_lod's.
+        sw_threshold_px: s
+            .sw_threshold_px
+            .unwrap_or(Thresholds::default().sw_threshold_px),
+        hardware: s.hardware,
+    };
     let cull = CullLod {
-        thresholds: Thresholds {
-            lod_threshold_px: s.lod_threshold_px,
-            // The renderer fills in its adapter's default; a graph built elsewhere
-            // without one takes cull_lod's.
-            sw_threshold_px: s
-                .sw_threshold_px
-                .unwrap_or(Thresholds::default().sw_threshold_px),
-            hardware: s.hardware,
-        },
+        thresholds,
         ..CullLod::default()
     };
-    g.add_pass("cull", cull, Bindings::new())?;
+    let first = match &history {
+        Some(h) => Bindings::new()
+            .bind("pyramid", h.prev)
+            .bind_named("occluded", CANDIDATES)
+            .bind_named("occluded_count", CANDIDATE_COUNT),
+        None => Bindings::new(),
+    };
+    g.add_pass("cull", cull, first)?;
     let remap = RemapDispatch {
         count_word: 0,
         max_per_dimension: None,
@@ -203,19 +273,50 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         ],
     )?;
     g.add_choice("sw_raster", sw, Bindings::new())?;
-    if s.hardware {
-        let hardware = |feed| -> Box<dyn Pass> {
-            Box::new(HwRaster {
-                width,
-                height,
-                feed,
-            })
-        };
-        let hw = Choice::select(
+    let hardware = |feed| -> Box<dyn Pass> {
+        Box::new(HwRaster {
+            width,
+            height,
+            feed,
+        })
+    };
+    let hw_choice = || {
+        Choice::select(
             &s.hw_raster,
             vec![hardware(Feed::MeshShader), hardware(Feed::IndirectDraw)],
-        )?;
-        g.add_choice("hw_raster", hw, Bindings::new())?;
+        )
+    };
+    if s.hardware {
+        g.add_choice("hw_raster", hw_choice()?, Bindings::new())?;
+    }
+    let pyramid = || -> Result<Choice> {
+        Choice::select(
+            AUTO,
+            vec![
+                Box::new(DepthPyramid::single_pass(width, height)) as Box<dyn Pass>,
+                Box::new(DepthPyramid::two_pass(width, height)),
+            ],
+        )
+    };
+    if history.is_some() {
+        let visibility = Bindings::new().bind_named("visibility", "visbuffer");
+        g.add_choice("depth_pyramid", pyramid()?, visibility)?;
+        let second = CullLod {
+            thresholds,
+            mode: Mode::Second,
+            ..CullLod::default()
+        };
+        let bindings = Bindings::new()
+            .bind_named("clusters", CANDIDATES)
+            .bind_named("cluster_count", CANDIDATE_COUNT)
+            .bind_named("first_counts", "raster_counts")
+            .bind_named("raster_counts", SECOND_COUNTS)
+            .bind_named("hw_args", SECOND_HW_ARGS);
+        g.add_pass("cull_second", second, bindings)?;
+        let bindings = Bindings::new()
+            .bind_named("raster_counts", SECOND_COUNTS)
+            .bind_named("hw_args", SECOND_HW_ARGS);
+        g.add_choice("hw_raster_second", hw_choice()?, bindings)?;
     }
     if let Some(c) = &s.clustering {
         // The light clustering's outputs bind to resolve's slots of the same names.
@@ -226,6 +327,21 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     let mut resolve = Resolve::new(width, height);
     resolve.settings.view = s.view;
     g.add_pass("resolve", resolve, Bindings::new())?;
+    if let Some(h) = history {
+        // The frame's final depth, for the next frame's first pass.
+        let bindings = Bindings::new()
+            .bind_named("visibility", "visbuffer")
+            .bind("pyramid", h.current);
+        g.add_choice("history_pyramid", pyramid()?, bindings)?;
+    }
+    if s.keep_visibility {
+        g.export(visbuffer);
+        for name in ["raster_clusters", "raster_counts", SECOND_COUNTS] {
+            if let Some(h) = g.resource(name) {
+                g.export(h);
+            }
+        }
+    }
     add_readbacks(&mut g)?;
     Ok(g)
 }
@@ -245,13 +361,19 @@ pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBui
         file: file.clone(),
         message: format!("cannot read it: {e}"),
     })?;
-    let text = with_view(&text, &file, s.view)?;
-    let mut g = crate::graph::file::parse_pipeline_with(
-        &text,
-        &file,
-        &crate::registry(),
-        &overrides(data, s),
-    )?;
+    let text = with_view(&text, &file, s)?;
+    let mut params = overrides(data, s);
+    // A file without a depth pyramid (one culling pass) does not declare its size.
+    let declared: toml::Table = toml::from_str(&text).unwrap_or_default();
+    let sizes_pyramid = declared
+        .get("params")
+        .and_then(toml::Value::as_table)
+        .is_some_and(|p| p.contains_key(PYRAMID_WIDTH_PARAM));
+    if !sizes_pyramid {
+        params.remove(PYRAMID_WIDTH_PARAM);
+        params.remove(PYRAMID_HEIGHT_PARAM);
+    }
+    let mut g = crate::graph::file::parse_pipeline_with(&text, &file, &crate::registry(), &params)?;
     add_readbacks(&mut g)?;
     Ok(g)
 }
@@ -267,16 +389,38 @@ pub fn overrides(data: &SceneData, s: &FrameSettings) -> BTreeMap<String, u64> {
     o.insert("pixels".into(), s.width as u64 * s.height as u64);
     o.insert(CLUSTERS_PARAM.into(), s.clusters);
     o.insert(SLOTS_PARAM.into(), s.slots.min(MAX_SLOTS));
+    let pyramid = meshlight_pass_depth_pyramid::pyramid_extent(s.width, s.height);
+    let [w, h] = pyramid.texture_size();
+    o.insert(PYRAMID_WIDTH_PARAM.into(), w as u64);
+    o.insert(PYRAMID_HEIGHT_PARAM.into(), h as u64);
     o
 }
 
-/// The file's text with `view` set in the params of every pass of stage `resolve`.
-fn with_view(text: &str, file: &str, view: DebugView) -> Result<String> {
+/// The `[params]` giving a pyramid texture's size in a pipeline file; the renderer also
+/// sets `mip_levels` of every texture whose width is `$pyramid_width`.
+pub const PYRAMID_WIDTH_PARAM: &str = "pyramid_width";
+pub const PYRAMID_HEIGHT_PARAM: &str = "pyramid_height";
+
+/// The file's text with `view` set in the params of every pass of stage `resolve`, and
+/// the mip count of the pyramid textures (those sized by `pyramid_width`) set for the
+/// viewport, which the file format cannot derive from a parameter.
+fn with_view(text: &str, file: &str, s: &FrameSettings) -> Result<String> {
+    let view = s.view;
     let ferr = |message: String| GraphError::PipelineFile {
         file: file.to_string(),
         message,
     };
     let mut doc: toml::Table = toml::from_str(text).map_err(|e| ferr(e.to_string()))?;
+    let levels = meshlight_pass_depth_pyramid::pyramid_extent(s.width, s.height).mip_levels;
+    if let Some(toml::Value::Array(resources)) = doc.get_mut("resource") {
+        for r in resources.iter_mut().filter_map(toml::Value::as_table_mut) {
+            if let Some(toml::Value::Table(t)) = r.get_mut("texture")
+                && t.get("width_param").and_then(toml::Value::as_str) == Some(PYRAMID_WIDTH_PARAM)
+            {
+                t.insert("mip_levels".into(), toml::Value::Integer(levels.into()));
+            }
+        }
+    }
     if let Some(toml::Value::Array(passes)) = doc.get_mut("pass") {
         for pass in passes.iter_mut().filter_map(toml::Value::as_table_mut) {
             if pass.get("stage").and_then(toml::Value::as_str) != Some("resolve") {
@@ -296,6 +440,8 @@ fn with_view(text: &str, file: &str, view: DebugView) -> Result<String> {
 
 /// The counters come back [`COUNTS_LATENCY`] frames later; the graph needs resources
 /// named `cluster_count` and `raster_counts` (a pipeline file too).
+/// With a second culling pass (a resource named [`SECOND_COUNTS`]) both passes' words
+/// come back, twelve each.
 fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
     g.readback_named(
         CLUSTER_COUNT_READBACK,
@@ -303,10 +449,25 @@ fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
         Some(0..8),
         COUNTS_LATENCY,
     )?;
+    let two_pass = g.resource(SECOND_COUNTS).is_some();
+    let bytes = if two_pass {
+        OCCLUSION_COUNT_WORDS * 4
+    } else {
+        32
+    };
     g.readback_named(
         RASTER_COUNTS_READBACK,
         "raster_counts",
-        Some(0..32),
+        Some(0..bytes),
         COUNTS_LATENCY,
-    )
+    )?;
+    if two_pass {
+        g.readback_named(
+            SECOND_COUNTS_READBACK,
+            SECOND_COUNTS,
+            Some(0..bytes),
+            COUNTS_LATENCY,
+        )?;
+    }
+    Ok(())
 }

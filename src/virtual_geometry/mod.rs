@@ -4,8 +4,13 @@
 //! back and grows the cluster lists when a frame overflowed them.
 //!
 //! ```text
-//! fill_clusters → cull_lod → remap_dispatch → sw_raster → hw_raster → resolve
+//! fill_clusters → cull_lod (first) → remap_dispatch → sw_raster → hw_raster
+//!   → depth_pyramid → cull_lod (second) → hw_raster → resolve → depth_pyramid (history)
 //! ```
+//!
+//! Two culling passes (occlusion, [`FrameSettings::occlusion`], on by default): the
+//! first against last frame's depth pyramid, the second, over what the first found
+//! hidden, against this frame's; see [`frame_graph`]. Off, one pass draws the LOD cut.
 //!
 //! Nothing here decides what a pass does; the passes are the crates under `passes/`.
 //! This module only wires them, sizes what they share, and turns the counters into

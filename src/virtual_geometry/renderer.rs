@@ -4,7 +4,9 @@
 //! `FrameSettings::clustering`, the renderer's lights are uploaded and clustered every
 //! frame, and the clustering's lists grow the same way.
 
-use super::counts::{CLUSTER_COUNT_READBACK, FrameCounts, RASTER_COUNTS_READBACK};
+use super::counts::{
+    CLUSTER_COUNT_READBACK, FrameCounts, RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK,
+};
 use super::frame_graph::{CLUSTERS_PARAM, FrameSettings, GraphSource, MAX_SLOTS, SLOTS_PARAM};
 use crate::graph::{
     CompileOptions, CompiledGraph, Executor, FrameData, FrameStats, GpuAdapter, GraphError, Result,
@@ -56,6 +58,12 @@ pub struct Renderer {
     max_elements: u64,
     frame_index: u32,
     previous_view_projection: Option<Mat4>,
+    /// The next frame's camera does not follow from the last (see [`Renderer::camera_cut`]).
+    cut: bool,
+    /// The graph culls in two passes and reads the second pass's counters back.
+    two_pass: bool,
+    /// Instances moved through [`Renderer::set_transform`] since the last frame.
+    moved: Vec<meshlight_gpu_scene::InstanceId>,
     /// Counters by frame, until both readbacks of a frame are in.
     pending: BTreeMap<u64, PendingCounts>,
     latest: Option<FrameCounts>,
@@ -79,6 +87,7 @@ struct LightBuffers {
 struct PendingCounts {
     cluster_count: Option<Vec<u8>>,
     raster_counts: Option<Vec<u8>>,
+    second: Option<Vec<u8>>,
 }
 
 impl Renderer {
@@ -113,9 +122,16 @@ impl Renderer {
             }),
             object_count: gpu.buffer_with_data("object_count", &[0; 4], OBJECT_USAGE),
         });
+        let two_pass = compiled
+            .plan
+            .pass_index(&format!("readback:{SECOND_COUNTS_READBACK}"))
+            .is_some();
         Ok(Self {
             data,
             settings,
+            two_pass,
+            cut: false,
+            moved: Vec::new(),
             compiled,
             executor: Executor::new(gpu),
             scene,
@@ -141,8 +157,13 @@ impl Renderer {
         self.previous_view_projection = Some(Mat4::from_cols_array_2d(&view.view_projection));
         self.frame_index = self.frame_index.wrapping_add(1);
         self.scene.upload(&self.executor.gpu, &mut self.data);
-        let frame =
-            FrameData::new().with(meshlight_gpu_scene::names::VIEW, bytemuck::bytes_of(&view));
+        let cut = u32::from(std::mem::take(&mut self.cut));
+        let frame = FrameData::new()
+            .with(meshlight_gpu_scene::names::VIEW, bytemuck::bytes_of(&view))
+            .with(
+                meshlight_pass_cull_lod::CAMERA_CUT_INPUT,
+                &cut.to_le_bytes(),
+            );
         let mut imports = self.scene.imports();
         if let Some(b) = &self.light_buffers {
             let limit = self.settings.clustering.as_ref().map_or(0, |c| c.objects);
@@ -171,8 +192,44 @@ impl Renderer {
         let stats = self
             .executor
             .execute_frame(&self.compiled, &imports, &frame)?;
+        self.settle_previous_transforms();
         self.take_counts()?;
         Ok(stats)
+    }
+
+    /// Tells the next frame that its camera does not continue the last one's (a jump, a
+    /// new shot): its first culling pass then tests nothing against last frame's depth.
+    pub fn camera_cut(&mut self) {
+        self.cut = true;
+    }
+
+    /// Moves an instance (see `SceneData::set_transform`) and remembers it, so that
+    /// after the next frame its previous transform becomes the one that frame drew it
+    /// with. Moving it through `data` directly works too, but its previous transform then
+    /// stays where it was before, and the first culling pass of later frames projects it
+    /// there: never a wrong image (the second pass re-tests with the current transform),
+    /// only work moved to the second pass.
+    pub fn set_transform(
+        &mut self,
+        id: meshlight_gpu_scene::InstanceId,
+        world_from_local: Mat4,
+    ) -> std::result::Result<bool, meshlight_gpu_scene::SceneDataError> {
+        let moved = self.data.set_transform(id, world_from_local)?;
+        if moved {
+            self.moved.push(id);
+        }
+        Ok(moved)
+    }
+
+    /// After a frame, the instances moved before it get the transform it drew them with
+    /// as their previous one (uploaded by the next frame).
+    fn settle_previous_transforms(&mut self) {
+        for id in std::mem::take(&mut self.moved) {
+            let now = &self.data.instances[id.0 as usize].world_from_local;
+            let now = Mat4::from_cols_array_2d(now);
+            // The transform was drawable when it was set, so this cannot be refused.
+            let _ = self.data.set_transform(id, now);
+        }
     }
 
     /// The newest frame whose counters are back.
@@ -221,23 +278,30 @@ impl Renderer {
             self.clustering
                 .take(&mut self.executor, &mut self.compiled)?;
         }
-        for (name, is_clusters) in [
-            (CLUSTER_COUNT_READBACK, true),
-            (RASTER_COUNTS_READBACK, false),
-        ] {
+        let mut names = vec![CLUSTER_COUNT_READBACK, RASTER_COUNTS_READBACK];
+        if self.two_pass {
+            names.push(SECOND_COUNTS_READBACK);
+        }
+        for name in names {
             while let Some(r) = self.executor.take_readback(name)? {
                 let entry = self.pending.entry(r.frame).or_default();
-                if is_clusters {
-                    entry.cluster_count = Some(r.bytes);
-                } else {
-                    entry.raster_counts = Some(r.bytes);
-                }
+                let part = match name {
+                    CLUSTER_COUNT_READBACK => &mut entry.cluster_count,
+                    RASTER_COUNTS_READBACK => &mut entry.raster_counts,
+                    _ => &mut entry.second,
+                };
+                *part = Some(r.bytes);
             }
         }
+        let two_pass = self.two_pass;
         let complete: Vec<u64> = self
             .pending
             .iter()
-            .filter(|(_, p)| p.cluster_count.is_some() && p.raster_counts.is_some())
+            .filter(|(_, p)| {
+                p.cluster_count.is_some()
+                    && p.raster_counts.is_some()
+                    && (p.second.is_some() || !two_pass)
+            })
             .map(|(f, _)| *f)
             .collect();
         for frame in complete {
@@ -246,6 +310,7 @@ impl Renderer {
                 frame,
                 p.cluster_count.as_deref().unwrap_or_default(),
                 p.raster_counts.as_deref().unwrap_or_default(),
+                p.second.as_deref(),
             )
             .ok_or_else(|| GraphError::Readback(format!("frame {frame}'s counters are short")))?;
             self.grow_for(&counts)?;

@@ -10,6 +10,7 @@
 use meshlight_gpu_scene::SceneData;
 use meshlight_scene::asset::format::NO_GROUP;
 use meshlight_shaders::cpu::layout::{Cluster, Instance, View};
+use meshlight_shaders::cpu::occlusion::{DepthPyramid, OcclusionRect, occlusion_rect};
 
 /// `draw_indirect` vertex count of one hardware cluster (128 triangles × 3).
 pub const HW_VERTICES: u32 = 384;
@@ -52,6 +53,10 @@ pub struct Decision {
     pub software: bool,
     /// The world-space radius, for scaling the frustum and near margins.
     pub radius: f32,
+    /// Once in the cut with the occlusion test on: the sphere's rectangle, and the
+    /// farthest depth the pyramid holds under it (when testable).
+    pub occlusion: Option<(OcclusionRect, f32)>,
+    pub occluded: bool,
 }
 
 impl Decision {
@@ -73,6 +78,23 @@ impl Decision {
         if !self.in_cut {
             return c;
         }
+        if let Some((rect, farthest)) = self.occlusion
+            && rect.testable
+        {
+            // The depth comparison, and each rectangle edge's distance from the pixel
+            // boundary where its truncation would change.
+            let nearest = rect.depth * meshlight_shaders::cpu::occlusion::DEPTH_SLACK;
+            c = c.min(rel(nearest, farthest));
+            let margin = meshlight_shaders::cpu::occlusion::MARGIN_PX;
+            for (v, m) in rect.screen.iter().zip([-margin, -margin, margin, margin]) {
+                let edge = v + m;
+                let frac = (edge - edge.round()).abs();
+                c = c.min(frac / edge.abs().max(1.0));
+            }
+        }
+        if self.occluded {
+            return c;
+        }
         c = c.min(self.near_margin.abs() / self.radius.max(f32::MIN_POSITIVE));
         if self.near_margin > 0.0 {
             c = c
@@ -88,15 +110,19 @@ impl Decision {
 pub struct CullResult {
     /// Clusters whose bounding sphere touches the frustum, in list order.
     pub frustum: Vec<Cluster>,
-    /// Of those, the ones in the LOD cut (each wants a raster slot), in list order.
+    /// Of those, the ones in the LOD cut that the occlusion test kept (each wants a
+    /// raster slot), in list order.
     pub cut: Vec<Cluster>,
     /// The cut split by rasteriser (every cut cluster, whether or not a slot was free).
     pub software: Vec<Cluster>,
     pub hardware: Vec<Cluster>,
+    /// Cut clusters the pyramid proved hidden, in list order: the first pass's
+    /// candidates (`occluded`), or what the second pass culled.
+    pub occluded: Vec<Cluster>,
     /// `raster_counts`. Words 0, 1, 5 and 6 count the clusters that got a slot; when the
     /// cut exceeds the capacity, which ones do depends on the GPU's atomics, and the
-    /// reference gives the slots in list order.
-    pub counts: [u32; 8],
+    /// reference gives the slots in list order. Words 8..12 are 0 without occlusion.
+    pub counts: [u32; 12],
     /// `hw_args`: `[384, counts[1], 0, 0]`.
     pub hw_args: [u32; 4],
 }
@@ -219,8 +245,65 @@ pub fn is_software(
     )
 }
 
-/// Everything the pass decides for one cluster.
+/// The occlusion side of a culling pass.
+#[derive(Clone, Copy, Debug, Default)]
+pub enum Occlusion<'a> {
+    /// No pyramid bound, or the first pass skipping the test (no valid history, camera
+    /// cut): nothing is occluded.
+    #[default]
+    Off,
+    /// A pyramid bound but the first pass's test skipped (no valid history, camera cut):
+    /// nothing is occluded, and the occlusion words are counted.
+    Skipped,
+    /// The first pass against last frame's pyramid (previous view-projection and
+    /// instance transforms).
+    First(&'a DepthPyramid),
+    /// The second pass against this frame's, given the first pass's `raster_counts`.
+    Second {
+        pyramid: &'a DepthPyramid,
+        first_counts: [u32; 12],
+    },
+}
+
+/// `is_occluded`: the rectangle, the pyramid's farthest depth under it, and the verdict.
+pub fn occlusion_test(
+    scene: &SceneData,
+    view: &View,
+    cluster: Cluster,
+    pyramid: &DepthPyramid,
+    previous: bool,
+) -> (OcclusionRect, f32, bool) {
+    let mut seen = scene.instances[cluster.instance as usize];
+    let mut view_projection = view.view_projection;
+    if previous {
+        seen.world_from_local = seen.previous_world_from_local;
+        view_projection = view.previous_view_projection;
+    }
+    let bounds = scene.meshlets[cluster.meshlet as usize].bounds;
+    let center = transform_point(&seen.world_from_local, xyz(bounds));
+    let radius = bounds[3] * instance_max_scale(&seen);
+    let rect = occlusion_rect(&view_projection, view.viewport_size, center, radius);
+    let farthest = if rect.testable {
+        pyramid.farthest(rect.pixels)
+    } else {
+        0.0
+    };
+    (rect, farthest, pyramid.occludes(&rect))
+}
+
+/// Everything the pass decides for one cluster (no occlusion test).
 pub fn classify(scene: &SceneData, view: &View, cluster: Cluster, t: &Thresholds) -> Decision {
+    classify_with(scene, view, cluster, t, Occlusion::Off)
+}
+
+/// Everything the pass decides for one cluster.
+pub fn classify_with(
+    scene: &SceneData,
+    view: &View,
+    cluster: Cluster,
+    t: &Thresholds,
+    occlusion: Occlusion,
+) -> Decision {
     let instance = &scene.instances[cluster.instance as usize];
     let meshlet = &scene.meshlets[cluster.meshlet as usize];
     let scale = instance_max_scale(instance);
@@ -258,8 +341,21 @@ pub fn classify(scene: &SceneData, view: &View, cluster: Cluster, t: &Thresholds
     if !in_cut {
         return d;
     }
+    let tested = match occlusion {
+        Occlusion::Off | Occlusion::Skipped => None,
+        Occlusion::First(pyramid) => Some((pyramid, true)),
+        Occlusion::Second { pyramid, .. } => Some((pyramid, false)),
+    };
+    if let Some((pyramid, previous)) = tested {
+        let (rect, farthest, occluded) = occlusion_test(scene, view, cluster, pyramid, previous);
+        d.occlusion = Some((rect, farthest));
+        d.occluded = occluded;
+        if occluded {
+            return d;
+        }
+    }
     let (software, near_margin, box_size) = is_software(view, center, radius, t.sw_threshold_px);
-    d.software = software || !t.hardware;
+    d.software = (software || !t.hardware) && !matches!(occlusion, Occlusion::Second { .. });
     d.near_margin = near_margin;
     d.box_size = box_size;
     d
@@ -273,9 +369,38 @@ pub fn cpu_cull(
     thresholds: &Thresholds,
     capacity: u32,
 ) -> CullResult {
+    cpu_cull_with(scene, view, clusters, thresholds, capacity, Occlusion::Off)
+}
+
+/// The slots a pass may fill, `[start, end)`: `slot_range` of the WGSL.
+pub fn slot_range(capacity: u32, occlusion: Occlusion) -> (u32, u32) {
+    match occlusion {
+        Occlusion::Second { first_counts, .. } => {
+            let c = first_counts[3].min(capacity);
+            let top = c - first_counts[1].min(c);
+            (first_counts[0].min(top), top)
+        }
+        _ => (0, capacity),
+    }
+}
+
+/// The reference with the occlusion test: `clusters` is the first pass's candidate list
+/// (`fill_clusters`' output) or the second pass's (the first pass's `occluded`);
+/// `capacity` is the pass's own (`C`, the list's length unless the param lowers it).
+pub fn cpu_cull_with(
+    scene: &SceneData,
+    view: &View,
+    clusters: &[Cluster],
+    thresholds: &Thresholds,
+    capacity: u32,
+    occlusion: Occlusion,
+) -> CullResult {
     let mut r = CullResult::default();
+    let (start, end) = slot_range(capacity, occlusion);
+    let slots = end - start;
+    let mut wanted = 0u32;
     for &cluster in clusters {
-        let d = classify(scene, view, cluster, thresholds);
+        let d = classify_with(scene, view, cluster, thresholds, occlusion);
         if !d.in_frustum {
             continue;
         }
@@ -283,7 +408,16 @@ pub fn cpu_cull(
         if !d.in_cut {
             continue;
         }
-        let slot_free = (r.cut.len() as u64) < capacity as u64;
+        r.counts[8] += 1;
+        if d.occlusion.is_some_and(|(rect, _)| rect.testable) {
+            r.counts[11] += 1;
+        }
+        if d.occluded {
+            r.occluded.push(cluster);
+            continue;
+        }
+        let slot_free = wanted < slots;
+        wanted += 1;
         r.cut.push(cluster);
         let triangles = scene.meshlets[cluster.meshlet as usize].triangle_count();
         let (side, count, tris) = if d.software {
@@ -298,8 +432,14 @@ pub fn cpu_cull(
         }
     }
     r.counts[2] = r.cut.len() as u32;
-    r.counts[3] = capacity;
+    r.counts[3] = end;
     r.counts[4] = r.frustum.len() as u32;
+    if !matches!(occlusion, Occlusion::Off) {
+        r.counts[9] = r.occluded.len() as u32;
+        r.counts[10] = slots;
+    } else {
+        r.counts[8] = 0;
+    }
     r.hw_args = [HW_VERTICES, r.counts[1], 0, 0];
     r
 }

@@ -1,13 +1,24 @@
-// Per-cluster culling: frustum, LOD cut, then the split between the software and the
-// hardware rasteriser in one shared slot buffer (software from the left, hardware from
-// the right). `prepare` (one thread) turns the cluster count into an indirect dispatch
-// and resets the counters; `cull` runs one thread per cluster. `cpu::cpu_cull` (Rust) is
-// the reference; every float operation below has its mirror there, in the same order.
+// Per-cluster culling: frustum, LOD cut, with OCCLUSION the test against a depth
+// pyramid, then the split between the software and the hardware rasteriser in one
+// shared slot buffer (software from the left, hardware from the right). `prepare` (one
+// thread) turns the cluster count into an indirect dispatch and resets the counters;
+// `cull` runs one thread per cluster. `cpu::cpu_cull` (Rust) is the reference; every
+// float operation below has its mirror there, in the same order.
+//
+// Two passes per frame with OCCLUSION (`params.mode`): the first tests against last
+// frame's pyramid, through last frame's view-projection and each instance's previous
+// transform, and appends what it finds hidden to `occluded`; the second takes that list
+// as its clusters and tests it against this frame's pyramid with the current view, and
+// puts what survives into the slots the first pass left free, every one on the hardware
+// side (see lib.rs for why).
 
 #import meshlight::math::F32_MAX
 #import meshlight::meshlet::{Meshlet, MeshletGroup, Cluster, meshlet_bounds, meshlet_triangle_count, lod_cut, MESHLET_NO_GROUP}
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
 #import meshlight::view::{View, sphere_in_frustum}
+#ifdef OCCLUSION
+#import meshlight::occlusion::{occlusion_rect, sphere_occluded}
+#endif
 
 struct Params {
     // Slots the raster list may use; clamped to the bound list's length.
@@ -21,9 +32,10 @@ struct Params {
     sw_threshold_px: f32,
     // 0: every cluster of the cut goes to software (no hardware rasteriser).
     hardware: u32,
+    // 1: test occlusion against `pyramid`; 0: skip it (no valid history, camera cut).
+    test_occlusion: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 
 // The candidate clusters, `fill_clusters`' list.
@@ -46,6 +58,21 @@ struct Params {
 @group(0) @binding(9) var<storage, read> dispatch_in: array<u32>;
 @group(0) @binding(10) var<uniform> view: View;
 @group(0) @binding(11) var<uniform> params: Params;
+#ifdef OCCLUSION
+// The depth pyramid (R32Float, farthest depth per texel, full mip chain): last frame's
+// in the first pass, this frame's in the second.
+@group(0) @binding(12) var pyramid: texture_2d<f32>;
+#ifdef SECOND_PASS
+// The first pass's `raster_counts`, for the slots it left free.
+@group(0) @binding(15) var<storage, read> first_counts: array<u32>;
+#else
+// The clusters the first pass found hidden: the second pass's candidates.
+@group(0) @binding(13) var<storage, read_write> occluded: array<Cluster>;
+// [0] candidates written, [1] candidates found: the layout of `cluster_count`, so the
+// second pass takes it as its count.
+@group(0) @binding(14) var<storage, read_write> occluded_count: array<atomic<u32>>;
+#endif
+#endif
 
 const WORKGROUP_SIZE: u32 = 64u;
 // Vertices of one hardware-rasterised cluster: 128 triangles × 3.
@@ -54,6 +81,46 @@ const HW_VERTICES: u32 = 384u;
 fn capacity() -> u32 {
     return min(params.capacity, arrayLength(&raster_clusters));
 }
+
+#ifdef OCCLUSION
+const COUNT_WORDS: u32 = 12u;
+
+// The slots this pass may fill, [x, y): the whole list in the first pass; in the
+// second, what lies between the first pass's software clusters and its hardware ones.
+// The second pass fills it from the right, so hardware rasteriser instance j draws slot
+// y - 1 - j (`raster_counts[3]` = y is the `C` it reads).
+fn slot_range() -> vec2<u32> {
+#ifdef SECOND_PASS
+    let c = min(first_counts[3], capacity());
+    let top = c - min(first_counts[1], c);
+    return vec2(min(first_counts[0], top), top);
+#else
+    return vec2(0u, capacity());
+#endif
+}
+
+// The occlusion test of one cluster sphere (mesh space), through last frame's camera
+// and transform in the first pass, this frame's in the second. Counts the clusters it
+// could test.
+fn is_occluded(instance: Instance, bounds: vec4<f32>) -> bool {
+    var seen = instance;
+#ifdef SECOND_PASS
+    let view_projection = view.view_projection;
+#else
+    seen.world_from_local = instance.previous_world_from_local;
+    let view_projection = view.previous_view_projection;
+#endif
+    let center = instance_transform_point(seen, bounds.xyz);
+    let radius = bounds.w * instance_max_scale(seen);
+    let rect = occlusion_rect(view_projection, view.viewport_size, center, radius);
+    if rect.testable {
+        atomicAdd(&raster_counts[11], 1u);
+    }
+    return sphere_occluded(pyramid, rect);
+}
+#else
+const COUNT_WORDS: u32 = 8u;
+#endif
 
 fn cluster_total() -> u32 {
     return min(cluster_count[0], arrayLength(&clusters));
@@ -71,10 +138,19 @@ fn prepare() {
     dispatch_out[0] = x;
     dispatch_out[1] = y;
     dispatch_out[2] = 1u;
-    for (var i = 0u; i < 8u; i += 1u) {
+    for (var i = 0u; i < COUNT_WORDS; i += 1u) {
         atomicStore(&raster_counts[i], 0u);
     }
     atomicStore(&raster_counts[3], capacity());
+#ifdef OCCLUSION
+    let range = slot_range();
+    atomicStore(&raster_counts[3], range.y);
+    atomicStore(&raster_counts[10], range.y - range.x);
+#ifndef SECOND_PASS
+    atomicStore(&occluded_count[0], 0u);
+    atomicStore(&occluded_count[1], 0u);
+#endif
+#endif
     atomicStore(&hw_args[0], HW_VERTICES);
     atomicStore(&hw_args[1], 0u);
     atomicStore(&hw_args[2], 0u);
@@ -148,18 +224,40 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
         return;
     }
 
+#ifdef OCCLUSION
+    atomicAdd(&raster_counts[8], 1u);
+    if params.test_occlusion != 0u && is_occluded(instance, bounds) {
+        atomicAdd(&raster_counts[9], 1u);
+#ifndef SECOND_PASS
+        let k = atomicAdd(&occluded_count[1], 1u);
+        if k < arrayLength(&occluded) {
+            occluded[k] = cluster;
+            atomicAdd(&occluded_count[0], 1u);
+        }
+#endif
+        return;
+    }
+    let range = slot_range();
+#ifdef SECOND_PASS
+    let software = false;
+#else
     let software = params.hardware == 0u || is_software(center, radius);
+#endif
+#else
+    let range = vec2(0u, capacity());
+    let software = params.hardware == 0u || is_software(center, radius);
+#endif
     // One reservation per cluster, whichever side it goes to: the two sides can never
     // meet, and past the capacity the cluster is dropped and counted.
     let total = atomicAdd(&raster_counts[2], 1u);
-    let cap = capacity();
-    if total >= cap {
+    let cap = range.y;
+    if total >= range.y - range.x {
         return;
     }
     let triangles = meshlet_triangle_count(meshlet);
     if software {
         let s = atomicAdd(&raster_counts[0], 1u);
-        raster_clusters[s] = cluster;
+        raster_clusters[range.x + s] = cluster;
         atomicAdd(&raster_counts[5], triangles);
     } else {
         let h = atomicAdd(&hw_args[1], 1u);

@@ -1,5 +1,6 @@
 //! Stage `cull_lod`, implementation `compute`: per cluster, the frustum test, the LOD
-//! cut, and the choice of rasteriser, into one shared slot buffer.
+//! cut, the occlusion test against a depth pyramid, and the choice of rasteriser, into
+//! one shared slot buffer.
 //!
 //! Every cluster of every level arrives here (from `fill_clusters`); exactly one level of
 //! each part of a mesh survives the LOD cut, because errors and LOD spheres grow up the
@@ -21,19 +22,66 @@
 //! | `raster_clusters` | storage write      | Cluster | `C` slots: software in `0..[0]`, hardware in `C-[1]..C` |
 //! | `raster_counts`   | cleared read-write | u32 × 8 | the words below |
 //! | `hw_args`         | cleared read-write | DrawIndirectArgs | `[384, hardware clusters, 0, 0]` for `draw_indirect` |
+//! | `pyramid`         | sampled (optional) | R32Float, all mips | the depth pyramid; bound: occlusion is tested |
+//! | `occluded`        | storage write (optional) | Cluster | `first` with a pyramid: the clusters found hidden, the second pass's candidates |
+//! | `occluded_count`  | cleared read-write (optional) | u32 × 2 | `first` with a pyramid: `[0]` candidates written, `[1]` found (`cluster_count`'s layout) |
+//! | `first_counts`    | storage read (optional) | u32 × 12 | `second`: the first pass's `raster_counts` |
 //!
 //! `raster_counts`: `[0]` software clusters, `[1]` hardware clusters, `[2]` clusters
-//! that passed frustum and LOD (slots requested, may exceed `C`), `[3]` `C`, `[4]`
-//! clusters that passed the frustum test, `[5]` software triangles, `[6]` hardware
-//! triangles, `[7]` 0. Overflow = `max(0, [2] - [3])`. Frame input `view`
-//! (`meshlight_shaders::cpu::layout::View`).
+//! that passed frustum, LOD and occlusion (slots requested, may exceed the slots the
+//! pass has), `[3]` `C`, `[4]` clusters that passed the frustum test, `[5]` software
+//! triangles, `[6]` hardware triangles, `[7]` 0. Overflow = `max(0, [2] - [3])`.
+//! With a pyramid the buffer has 12 words: `[8]` clusters in the LOD cut, `[9]` of
+//! those found hidden, `[10]` the slots this pass has (overflow = `max(0, [2] - [10])`),
+//! `[11]` clusters whose sphere could be tested (in front of the near plane, wholly on
+//! the screen; 0 when the test is skipped). Frame input `view`
+//! (`meshlight_shaders::cpu::layout::View`); a `first` pass with a pyramid also reads
+//! frame input `camera_cut` (u32, non-zero: last frame's depth says nothing of this one).
+//!
+//! # Two-pass occlusion
+//!
+//! `mode = "first"` with `pyramid` bound to a history's `prev` (last frame's pyramid)
+//! projects each cluster in the LOD cut with `View::previous_view_projection` and the
+//! instance's `previous_world_from_local`, and sends it to `occluded` instead of a raster
+//! slot when the pyramid proves it hidden. When the history is not valid (first frame,
+//! resize; `RecordContext::history_valid`) or the frame input `camera_cut` is set, it
+//! tests nothing and behaves as without a pyramid. A pyramid that is not a history
+//! resource is never valid for the first pass.
+//!
+//! `mode = "second"` takes the first pass's `occluded` list as its `clusters` and
+//! `occluded_count` as its `cluster_count`, binds this frame's pyramid (built from what
+//! the first pass drew) and the first pass's `raster_counts` as `first_counts`, and has
+//! its own `raster_counts` and `hw_args`. It tests with the current view and transforms
+//! and appends what is visible to the same `raster_clusters`, in the free slots between
+//! the first pass's software clusters (`[0, sw1)`) and hardware clusters
+//! (`[C - hw1, C)`), from the right: its `raster_counts[3]` is `C - hw1`, so
+//! `hw_raster` bound to its `raster_counts` and `hw_args` draws instance `j` into slot
+//! `C - hw1 - 1 - j`, and every visibility id of the frame indexes one list. Every
+//! second-pass cluster goes to the hardware rasteriser: `sw_raster` clears the
+//! visibility target and numbers its clusters from slot 0, so a second software pass
+//! would erase the first's; a second pass therefore needs `hardware = true`.
+//!
+//! The candidates are a list, not a bitmask over the first pass's input: the second
+//! pass then runs over the candidates alone (usually a few per cent of the cut), not over
+//! every cluster again, and needs no scan to find them.
+//!
+//! The pyramid is read by the rule of `depth_pyramid` (level `L` is `ceil(W / 2^(L+1))`
+//! × `ceil(H / 2^(L+1))`, each texel the farthest depth of its footprint); each mip of the
+//! texture must be at least its level's size, as `depth_pyramid::texture_desc` pads it.
+//!
+//! The test (`meshlight::occlusion`): the eight corners of the sphere's world-space
+//! bounding cube (radius grown by 1e-5 of the coordinates) projected; any corner not in
+//! front of the near plane, or the rectangle (grown by a pixel) not wholly on the screen:
+//! not tested, kept. Else the pyramid level where the rectangle spans at most 2 × 2
+//! texels, and the cluster is hidden when its nearest depth times 1 + 2^-8 is farther
+//! than the farthest depth of those texels.
 //!
 //! | param               | default | |
 //! |---------------------|---------|---|
 //! | `lod_threshold_px`  | 1.0     | screen-space error (pixels) a cluster may show |
 //! | `sw_threshold_px`   | 128.0   | screen-box size under which a cluster goes to software (tuned on an H100, where few units run graphics: docs/BENCHMARKS.md) |
 //! | `hardware`          | true    | false: every cluster to software (a pipeline with no `hw_raster`) |
-//! | `mode`              | `"first"` | `first`: every candidate, no occlusion. Reserved: `second`, the re-test of the first pass's occluded clusters against this frame's depth pyramid |
+//! | `mode`              | `"first"` | `first`: every candidate, occlusion against last frame's pyramid when one is bound; `second`: the re-test of the first pass's occluded clusters against this frame's |
 //! | `capacity`          | 0 (all of `raster_clusters`) | `C`, at most the buffer's size / 8 |
 //! | `max_per_dimension` | 0 (the adapter's) | workgroup limit per dimension of the indirect cull dispatch |
 //!
@@ -72,7 +120,7 @@ use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
     Result, SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::{PassShader, pass_shader};
+use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "cull_lod";
@@ -80,6 +128,13 @@ pub const STAGE: &str = "cull_lod";
 pub const IMPLEMENTATION: &str = "compute";
 /// The frame input holding the `View`.
 pub const VIEW_INPUT: &str = "view";
+/// The frame input (u32) a `first` pass with a pyramid reads: non-zero when the camera
+/// jumped, so last frame's depth cannot hide anything.
+pub const CAMERA_CUT_INPUT: &str = "camera_cut";
+/// The pyramid's format.
+pub const PYRAMID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+/// Words of `raster_counts` with occlusion (8 without).
+pub const OCCLUSION_COUNT_WORDS: u64 = 12;
 /// Threads per cull workgroup.
 pub const WORKGROUP_SIZE: u32 = 64;
 
@@ -123,6 +178,33 @@ pub fn contract() -> StageContract {
                 Element::DRAW_ARGS,
                 "[384, hardware clusters, 0, 0]",
             ),
+            Slot::texture(
+                "pyramid",
+                Access::Sampled,
+                Some(PYRAMID_FORMAT),
+                "depth pyramid (farthest depth per texel, all mips): last frame's in the first pass, this frame's in the second",
+            )
+            .optional(),
+            Slot::buffer(
+                "occluded",
+                Access::StorageWrite,
+                elements::CLUSTER,
+                "first pass: clusters found hidden, the second pass's candidates",
+            )
+            .optional(),
+            Slot::buffer(
+                "occluded_count",
+                Access::ClearedReadWrite,
+                Element::U32,
+                "first pass: [0] candidates written, [1] found",
+            )
+            .optional(),
+            read(
+                "first_counts",
+                Element::U32,
+                "second pass: the first pass's raster_counts",
+            )
+            .optional(),
         ],
     }
 }
@@ -130,16 +212,37 @@ pub fn contract() -> StageContract {
 /// Which culling pass of the frame this is.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Mode {
-    /// Every candidate, with no occlusion test.
+    /// Every candidate; with a pyramid, occlusion against last frame's.
     #[default]
     First,
+    /// The first pass's occluded clusters against this frame's pyramid.
+    Second,
 }
 
 impl Mode {
     pub fn name(self) -> &'static str {
         match self {
             Mode::First => "first",
+            Mode::Second => "second",
         }
+    }
+}
+
+/// The variant of cull.wgsl a pass runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct CullDefs {
+    /// `OCCLUSION`: a pyramid is bound and tested.
+    pub occlusion: bool,
+    /// `SECOND_PASS`: [`Mode::Second`].
+    pub second: bool,
+}
+
+impl ShaderDefs for CullDefs {
+    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
+        vec![
+            ("OCCLUSION", ShaderDef::Bool(self.occlusion)),
+            ("SECOND_PASS", ShaderDef::Bool(self.second)),
+        ]
     }
 }
 
@@ -163,7 +266,8 @@ struct GpuParams {
     lod_threshold_px: f32,
     sw_threshold_px: f32,
     hardware: u32,
-    _pad: [u32; 3],
+    test_occlusion: u32,
+    _pad: [u32; 2],
 }
 
 const PARAM_KEYS: [&str; 6] = [
@@ -182,9 +286,10 @@ impl CullLod {
         let defaults = Thresholds::default();
         let mode = match params.string("mode", "first")?.as_str() {
             "first" => Mode::First,
+            "second" => Mode::Second,
             other => {
                 return Err(GraphError::parameter(format!(
-                    "`mode` = \"{other}\" is not built; the only mode is \"first\" (the second, occlusion pass is not available yet)"
+                    "`mode` = \"{other}\" is not a mode; use \"first\" or \"second\""
                 )));
             }
         };
@@ -201,6 +306,38 @@ impl CullLod {
         };
         pass.check_thresholds()?;
         Ok(pass)
+    }
+
+    fn check_mode(&self, ctx: &SetupContext) -> Result<bool> {
+        let bound = |slot| ctx.is_bound(slot);
+        let occlusion = bound("pyramid");
+        match self.mode {
+            Mode::First if occlusion && !(bound("occluded") && bound("occluded_count")) => {
+                Err(GraphError::parameter(
+                    "a first pass with a `pyramid` needs `occluded` and `occluded_count` bound: the clusters it finds hidden go there for the second pass",
+                ))
+            }
+            Mode::First if !occlusion && (bound("occluded") || bound("first_counts")) => {
+                Err(GraphError::parameter(
+                    "`occluded` or `first_counts` is bound but `pyramid` is not: bind last frame's pyramid to test occlusion, or unbind them",
+                ))
+            }
+            Mode::First if bound("first_counts") => Err(GraphError::parameter(
+                "`first_counts` is for `mode = \"second\"`; unbind it from the first pass",
+            )),
+            Mode::Second if !(occlusion && bound("first_counts")) => Err(GraphError::parameter(
+                "`mode = \"second\"` needs `pyramid` (this frame's) and `first_counts` (the first pass's raster_counts) bound",
+            )),
+            Mode::Second if !self.thresholds.hardware => Err(GraphError::parameter(
+                "`mode = \"second\"` draws its clusters with the hardware rasteriser (a second sw_raster would clear the first pass's visibility); set `hardware = true` and add hw_raster, or run without occlusion",
+            )),
+            Mode::Second if bound("occluded") || bound("occluded_count") => {
+                Err(GraphError::parameter(
+                    "`occluded` and `occluded_count` are the first pass's outputs, to bind to the second pass as `clusters` and `cluster_count`; give them resource names other than the slots' (e.g. `candidates`, `candidate_count`), or the second pass binds them by name",
+                ))
+            }
+            _ => Ok(occlusion),
+        }
     }
 
     fn check_thresholds(&self) -> Result<()> {
@@ -235,16 +372,28 @@ impl Pass for CullLod {
                 "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
             )));
         }
+        let occlusion = self.check_mode(ctx)?;
+        let second = self.mode == Mode::Second;
+        let defs = CullDefs { occlusion, second };
+        ctx.shader_defs(&defs);
         ctx.min_bytes("cluster_count", 4);
-        ctx.min_bytes("raster_counts", 32);
+        let words = if occlusion { OCCLUSION_COUNT_WORDS } else { 8 };
+        ctx.min_bytes("raster_counts", words * 4);
         ctx.min_bytes("hw_args", 16);
         ctx.frame_input(VIEW_INPUT);
+        if occlusion && !second {
+            ctx.min_bytes("occluded_count", 8);
+            ctx.frame_input(CAMERA_CUT_INPUT);
+        }
+        if second {
+            ctx.min_bytes("first_counts", OCCLUSION_COUNT_WORDS * 4);
+        }
         ctx.scratch_buffer(
             "dispatch",
             BufferDesc::array(Element::DISPATCH_ARGS, 1),
             &[Access::StorageWrite, Access::StorageRead, Access::Indirect],
         );
-        let prepare = BindingLayout::compute("cull_lod::prepare")
+        let mut prepare = BindingLayout::compute("cull_lod::prepare")
             .slot(0, "clusters")
             .slot(1, "cluster_count")
             .slot(5, "raster_clusters")
@@ -252,7 +401,7 @@ impl Pass for CullLod {
             .slot(7, "hw_args")
             .scratch(8, "dispatch", Access::StorageWrite)
             .uniform(11);
-        let cull = BindingLayout::compute("cull_lod::cull")
+        let mut cull = BindingLayout::compute("cull_lod::cull")
             .slot(0, "clusters")
             .slot(1, "cluster_count")
             .slot(2, "instances")
@@ -264,15 +413,39 @@ impl Pass for CullLod {
             .scratch(9, "dispatch", Access::StorageRead)
             .uniform(10)
             .uniform(11);
+        if occlusion {
+            cull = cull.slot(12, "pyramid");
+            if second {
+                prepare = prepare.slot(15, "first_counts");
+                cull = cull.slot(15, "first_counts");
+            } else {
+                prepare = prepare.slot(14, "occluded_count");
+                cull = cull.slot(13, "occluded").slot(14, "occluded_count");
+            }
+        }
         ctx.program(
             "prepare",
-            ProgramDesc::compute(&SHADER, "prepare").layout(prepare),
+            ProgramDesc::compute(&SHADER, "prepare")
+                .defs(&defs)
+                .layout(prepare),
         );
-        ctx.program("cull", ProgramDesc::compute(&SHADER, "cull").layout(cull));
+        ctx.program(
+            "cull",
+            ProgramDesc::compute(&SHADER, "cull")
+                .defs(&defs)
+                .layout(cull),
+        );
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
+        let test_occlusion = ctx.is_bound("pyramid")
+            && match self.mode {
+                Mode::Second => true,
+                Mode::First => {
+                    ctx.history_valid("pyramid")? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
+                }
+            };
         let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
         let params = GpuParams {
             capacity: self.capacity.unwrap_or(u32::MAX),
@@ -280,7 +453,8 @@ impl Pass for CullLod {
             lod_threshold_px: self.thresholds.lod_threshold_px,
             sw_threshold_px: self.thresholds.sw_threshold_px,
             hardware: self.thresholds.hardware as u32,
-            _pad: [0; 3],
+            test_occlusion: test_occlusion as u32,
+            _pad: [0; 2],
         };
         let prepare = ctx.compute("prepare")?;
         let cull = ctx.compute("cull")?;
@@ -372,7 +546,7 @@ mod tests {
             ("lod_threshold_px = -1.0", "lod_threshold_px"),
             ("sw_threshold_px = nan", "sw_threshold_px"),
             ("sw_threshold_px = true", "sw_threshold_px"),
-            ("mode = \"second\"", "mode"),
+            ("mode = \"third\"", "mode"),
             ("capacity = 1.5", "capacity"),
             ("hardware = 1", "hardware"),
         ] {

@@ -6,5 +6,6 @@
 pub mod froxel;
 pub mod layout;
 pub mod light;
+pub mod occlusion;
 pub mod octahedral;
 pub mod visbuffer;
