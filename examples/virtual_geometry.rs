@@ -6,7 +6,7 @@
 use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::{Camera, GpuScene, Material, SceneData, gpu::elements::CLUSTER};
 use meshlight::graph::*;
-use meshlight::resolve::{COLOR_FORMAT, DEPTH_FORMAT, Resolve};
+use meshlight::resolve::{COLOR_FORMAT, Resolve};
 use meshlight::{cull_lod::CullLod, fill_clusters::FillClusters, hw_raster::HwRaster};
 use meshlight::{remap_dispatch::RemapDispatch, sw_raster::SwRaster};
 
@@ -51,9 +51,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("visbuffer", BufferDesc::array(Element::U64, pixels)),
     ] {
         g.create_buffer(name, desc);
-    }
-    for (name, format) in [("depth", DEPTH_FORMAT), ("material_depth", DEPTH_FORMAT)] {
-        g.create_texture(name, TextureDesc::d2(format, width, height));
     }
     let color = g.create_texture("color", TextureDesc::d2(COLOR_FORMAT, width, height));
     g.export(color);

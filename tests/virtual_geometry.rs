@@ -243,6 +243,7 @@ fn under_one_pixel_of_error_the_depth_agrees_with_lod_zero() {
     let depth_of = |threshold: f32| {
         let s = FrameSettings {
             lod_threshold_px: threshold,
+            depth: true,
             ..settings(DebugView::Shaded)
         };
         let (_, mut r) = render(&placed, s, &GraphSource::Code);
@@ -450,27 +451,39 @@ fn a_viewport_of_zero_or_past_the_texture_limit_is_an_error_saying_what_to_chang
 }
 
 #[test]
-fn a_frame_without_depth_targets_shades_the_same_image() {
-    // The depth targets are optional slots of `resolve`: left out, their fullscreen
-    // passes do not run, and the colour does not depend on them.
+fn the_default_frame_has_no_depth_targets_and_turning_them_on_keeps_the_image() {
+    // The depth targets are optional slots of `resolve`, off by default: the default
+    // frame declares neither and runs no fragment pass in resolve; a frame that asks for
+    // them gets them readable, and the colour does not depend on them.
     let placed = field(16);
-    let (full, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
-    let colour_only = FrameSettings {
-        depth: false,
-        material_depth: false,
-        ..settings(DebugView::Shaded)
-    };
-    let (bare, mut r) = render(&placed, colour_only, &GraphSource::Code);
-    assert_eq!(differing(&full.rgba, &bare.rgba, 0), 0);
+    let (bare, mut r) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let plan = &r.compiled.plan;
     assert!(
-        r.compiled
-            .plan
-            .resources
+        plan.resources
             .iter()
-            .all(|res| res.info.name != "depth"),
-        "a depth target was declared"
+            .all(|res| res.info.name != "depth" && res.info.name != "material_depth"),
+        "the default frame declared a depth target"
+    );
+    let resolve = plan
+        .passes
+        .iter()
+        .find(|p| p.stage == "resolve")
+        .expect("a resolve pass");
+    assert!(
+        resolve.programs.iter().all(|p| p.kind == "compute"),
+        "resolve declares a render program by default: {:?}",
+        resolve.programs
     );
     assert!(r.executor.read_texture("depth").is_err());
+    let with_targets = FrameSettings {
+        depth: true,
+        material_depth: true,
+        ..settings(DebugView::Shaded)
+    };
+    let (full, mut r) = render(&placed, with_targets, &GraphSource::Code);
+    assert_eq!(differing(&full.rgba, &bare.rgba, 0), 0);
+    assert!(r.executor.read_texture("depth").is_ok());
+    assert!(r.executor.read_texture("material_depth").is_ok());
 }
 
 #[test]

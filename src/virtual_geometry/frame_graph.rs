@@ -76,8 +76,9 @@ pub struct FrameSettings {
     /// overflow.
     pub clusters: u64,
     pub slots: u64,
-    /// Resolve the `depth` and `material_depth` targets (fullscreen fragment passes);
-    /// off, the frame resolves colour only.
+    /// Resolve the `depth` and `material_depth` targets: a fullscreen fragment pass
+    /// each, which only a frame compositing raster geometry over the image needs. Off
+    /// by default: the frame resolves colour alone, in one compute dispatch.
     pub depth: bool,
     pub material_depth: bool,
     /// The software rasteriser divides exactly in integers (bit-exact on every driver,
@@ -109,8 +110,8 @@ impl FrameSettings {
             hardware: true,
             clusters: 1 << 20,
             slots: 1 << 18,
-            depth: true,
-            material_depth: true,
+            depth: false,
+            material_depth: false,
             exact_division: false,
             clustering: None,
             occlusion: true,
