@@ -71,6 +71,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         target: meshlight::graph::Visibility64::Buffer,
         scanline_width: 16,
         exact_division: false,
+        accumulate: false,
     };
     g.add_pass("sw_raster", sw, Bindings::new())?;
     g.add_pass(

@@ -33,12 +33,13 @@ fn virtual_geometry_shaders_compose_and_validate() {
     ] {
         check(shader, &());
     }
-    for exact_division in [false, true] {
+    for (exact_division, slot_base) in [(false, false), (true, false), (false, true)] {
         check(
             &meshlight::sw_raster::SHADER,
             &meshlight::sw_raster::RasterDefs {
                 exact_division,
                 texture: false,
+                slot_base,
             },
         );
     }

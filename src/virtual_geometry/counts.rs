@@ -40,7 +40,7 @@ pub struct FrameCounts {
 }
 
 /// What two-pass occlusion culling did in one frame. The totals of [`FrameCounts`]
-/// (`visible`, `hardware`, triangles) include the second pass.
+/// (`visible`, `software`, `hardware`, triangles) include the second pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct OcclusionCounts {
     /// First pass: clusters in the LOD cut, those whose sphere could be tested against
@@ -92,7 +92,9 @@ impl FrameCounts {
             counts.slots = r[10];
             counts.slots_dropped = r[2].saturating_sub(r[10]) + s[2].saturating_sub(s[10]);
             counts.visible += s[2];
+            counts.software += s[0];
             counts.hardware += s[1];
+            counts.software_triangles += s[5];
             counts.hardware_triangles += s[6];
             counts.occlusion = Some(OcclusionCounts {
                 first_cut: r[8],
@@ -101,8 +103,8 @@ impl FrameCounts {
                 second_considered: s[4],
                 second_tested: s[11],
                 second_occluded: s[9],
-                second_drawn: s[1],
-                second_triangles: s[6],
+                second_drawn: s[0] + s[1],
+                second_triangles: s[5] + s[6],
             });
         }
         Some(counts)

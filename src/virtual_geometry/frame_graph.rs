@@ -7,13 +7,15 @@
 //! ```text
 //! fill → cull (first, last frame's pyramid) → remap → sw_raster → hw_raster
 //!      → depth_pyramid → cull_second (the first's candidates, this frame's pyramid)
-//!      → hw_raster_second → resolve → depth_pyramid (history for the next frame)
+//!      → remap_second → sw_raster_second → hw_raster_second → resolve
+//!      → depth_pyramid (history for the next frame)
 //! ```
 //!
 //! Both rasterisations accumulate into one visibility target and one slot list, so a
-//! visibility id means the same to resolve whichever pass drew it. The second pass has
-//! no software rasteriser: `sw_raster` clears the target and numbers its clusters from
-//! slot 0, so its second run would erase the first pass's work (see `cull_lod`).
+//! visibility id means the same to resolve whichever pass drew it: the second software
+//! pass (`accumulate`) keeps the target and draws the slots `cull_second` put after the
+//! first pass's software clusters; the second hardware pass draws the slots below the
+//! first's hardware clusters.
 
 use super::counts::{CLUSTER_COUNT_READBACK, RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK};
 use crate::graph::file::AUTO;
@@ -52,6 +54,7 @@ pub const CANDIDATES: &str = "candidates";
 pub const CANDIDATE_COUNT: &str = "candidate_count";
 pub const SECOND_COUNTS: &str = "raster_counts_second";
 pub const SECOND_HW_ARGS: &str = "hw_args_second";
+pub const SECOND_SW_ARGS: &str = "sw_args_second";
 
 /// What a frame is asked for; the same for both ways of building the graph.
 #[derive(Clone, Debug, PartialEq)]
@@ -90,9 +93,8 @@ pub struct FrameSettings {
     /// the culling passes' counters (`raster_counts`, `raster_counts_second`) after the
     /// frame, for `Executor::read_buffer` (tests, debugging).
     pub keep_visibility: bool,
-    /// Two-pass occlusion culling against the depth pyramid (needs `hardware`: the
-    /// second pass draws with the hardware rasteriser; without it the frame has one
-    /// culling pass). Off: one pass, everything in the LOD cut drawn.
+    /// Two-pass occlusion culling against the depth pyramid. Off: one pass, everything
+    /// in the LOD cut drawn.
     pub occlusion: bool,
 }
 
@@ -121,7 +123,7 @@ impl FrameSettings {
 
     /// Whether the frame built in code culls by occlusion.
     pub fn two_pass(&self) -> bool {
-        self.occlusion && self.hardware
+        self.occlusion
     }
 
     /// The split threshold this frame uses on an adapter of `class`.
@@ -218,6 +220,7 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
                 BufferDesc::array(Element::U32, OCCLUSION_COUNT_WORDS),
             ),
             (SECOND_HW_ARGS, BufferDesc::array(Element::DRAW_ARGS, 1)),
+            (SECOND_SW_ARGS, BufferDesc::array(Element::DISPATCH_ARGS, 1)),
         ] {
             g.create_buffer(name, desc);
         }
@@ -257,23 +260,26 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         .bind_named("args", "sw_args");
     g.add_pass("remap", remap, remap_bindings)?;
     let (width, height) = (s.width, s.height);
-    let software = |target| -> Box<dyn Pass> {
+    let software = |target, accumulate| -> Box<dyn Pass> {
         Box::new(SwRaster {
             width,
             height,
             target,
             scanline_width: 16,
             exact_division: s.exact_division,
+            accumulate,
         })
     };
-    let sw = Choice::select(
-        &s.sw_raster,
-        vec![
-            software(Visibility64::Texture),
-            software(Visibility64::Buffer),
-        ],
-    )?;
-    g.add_choice("sw_raster", sw, Bindings::new())?;
+    let sw_choice = |accumulate| {
+        Choice::select(
+            &s.sw_raster,
+            vec![
+                software(Visibility64::Texture, accumulate),
+                software(Visibility64::Buffer, accumulate),
+            ],
+        )
+    };
+    g.add_choice("sw_raster", sw_choice(false)?, Bindings::new())?;
     let hardware = |feed| -> Box<dyn Pass> {
         Box::new(HwRaster {
             width,
@@ -315,9 +321,19 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             .bind_named("hw_args", SECOND_HW_ARGS);
         g.add_pass("cull_second", second, bindings)?;
         let bindings = Bindings::new()
+            .bind_named("count", SECOND_COUNTS)
+            .bind_named("args", SECOND_SW_ARGS);
+        g.add_pass("remap_second", remap, bindings)?;
+        let bindings = Bindings::new()
             .bind_named("raster_counts", SECOND_COUNTS)
-            .bind_named("hw_args", SECOND_HW_ARGS);
-        g.add_choice("hw_raster_second", hw_choice()?, bindings)?;
+            .bind_named("sw_args", SECOND_SW_ARGS);
+        g.add_choice("sw_raster_second", sw_choice(true)?, bindings)?;
+        if s.hardware {
+            let bindings = Bindings::new()
+                .bind_named("raster_counts", SECOND_COUNTS)
+                .bind_named("hw_args", SECOND_HW_ARGS);
+            g.add_choice("hw_raster_second", hw_choice()?, bindings)?;
+        }
     }
     if let Some(c) = &s.clustering {
         // The light clustering's outputs bind to resolve's slots of the same names.

@@ -355,7 +355,7 @@ pub fn classify_with(
         }
     }
     let (software, near_margin, box_size) = is_software(view, center, radius, t.sw_threshold_px);
-    d.software = (software || !t.hardware) && !matches!(occlusion, Occlusion::Second { .. });
+    d.software = software || !t.hardware;
     d.near_margin = near_margin;
     d.box_size = box_size;
     d
@@ -433,6 +433,7 @@ pub fn cpu_cull_with(
     }
     r.counts[2] = r.cut.len() as u32;
     r.counts[3] = end;
+    r.counts[7] = start;
     r.counts[4] = r.frustum.len() as u32;
     if !matches!(occlusion, Occlusion::Off) {
         r.counts[9] = r.occluded.len() as u32;

@@ -145,6 +145,9 @@ fn prepare() {
 #ifdef OCCLUSION
     let range = slot_range();
     atomicStore(&raster_counts[3], range.y);
+    // Where this pass's software clusters start (0 in the first pass): sw_raster's
+    // `accumulate` reads it.
+    atomicStore(&raster_counts[7], range.x);
     atomicStore(&raster_counts[10], range.y - range.x);
 #ifndef SECOND_PASS
     atomicStore(&occluded_count[0], 0u);
@@ -238,11 +241,7 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
         return;
     }
     let range = slot_range();
-#ifdef SECOND_PASS
-    let software = false;
-#else
     let software = params.hardware == 0u || is_software(center, radius);
-#endif
 #else
     let range = vec2(0u, capacity());
     let software = params.hardware == 0u || is_software(center, radius);

@@ -30,7 +30,8 @@
 //! `raster_counts`: `[0]` software clusters, `[1]` hardware clusters, `[2]` clusters
 //! that passed frustum, LOD and occlusion (slots requested, may exceed the slots the
 //! pass has), `[3]` `C`, `[4]` clusters that passed the frustum test, `[5]` software
-//! triangles, `[6]` hardware triangles, `[7]` 0. Overflow = `max(0, [2] - [3])`.
+//! triangles, `[6]` hardware triangles, `[7]` the first slot of this pass's software
+//! clusters (0 but in a second pass). Overflow = `max(0, [2] - [3])`.
 //! With a pyramid the buffer has 12 words: `[8]` clusters in the LOD cut, `[9]` of
 //! those found hidden, `[10]` the slots this pass has (overflow = `max(0, [2] - [10])`),
 //! `[11]` clusters whose sphere could be tested (in front of the near plane, wholly on
@@ -51,15 +52,14 @@
 //! `mode = "second"` takes the first pass's `occluded` list as its `clusters` and
 //! `occluded_count` as its `cluster_count`, binds this frame's pyramid (built from what
 //! the first pass drew) and the first pass's `raster_counts` as `first_counts`, and has
-//! its own `raster_counts` and `hw_args`. It tests with the current view and transforms
-//! and appends what is visible to the same `raster_clusters`, in the free slots between
-//! the first pass's software clusters (`[0, sw1)`) and hardware clusters
-//! (`[C - hw1, C)`), from the right: its `raster_counts[3]` is `C - hw1`, so
-//! `hw_raster` bound to its `raster_counts` and `hw_args` draws instance `j` into slot
-//! `C - hw1 - 1 - j`, and every visibility id of the frame indexes one list. Every
-//! second-pass cluster goes to the hardware rasteriser: `sw_raster` clears the
-//! visibility target and numbers its clusters from slot 0, so a second software pass
-//! would erase the first's; a second pass therefore needs `hardware = true`.
+//! its own `raster_counts`, `hw_args` (and `sw_args` from its own `remap_dispatch`). It
+//! tests with the current view and transforms and appends what is visible to the same
+//! `raster_clusters`, in the free slots between the first pass's software clusters
+//! (`[0, sw1)`) and hardware clusters (`[C - hw1, C)`), split as the first pass splits:
+//! software from the left (its `raster_counts[7]` is `sw1`, where `sw_raster` with
+//! `accumulate` starts), hardware from the right (its `raster_counts[3]` is `C - hw1`,
+//! so `hw_raster` bound to its `raster_counts` and `hw_args` draws instance `j` into
+//! slot `C - hw1 - 1 - j`). Every visibility id of the frame indexes one list.
 //!
 //! The candidates are a list, not a bitmask over the first pass's input: the second
 //! pass then runs over the candidates alone (usually a few per cent of the cut), not over
@@ -327,9 +327,6 @@ impl CullLod {
             )),
             Mode::Second if !(occlusion && bound("first_counts")) => Err(GraphError::parameter(
                 "`mode = \"second\"` needs `pyramid` (this frame's) and `first_counts` (the first pass's raster_counts) bound",
-            )),
-            Mode::Second if !self.thresholds.hardware => Err(GraphError::parameter(
-                "`mode = \"second\"` draws its clusters with the hardware rasteriser (a second sw_raster would clear the first pass's visibility); set `hardware = true` and add hw_raster, or run without occlusion",
             )),
             Mode::Second if bound("occluded") || bound("occluded_count") => {
                 Err(GraphError::parameter(

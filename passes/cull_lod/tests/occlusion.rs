@@ -377,10 +377,20 @@ fn first_lists(f: &Frame) -> (Vec<Cluster>, Vec<Cluster>) {
     (software, hardware)
 }
 
-/// The second pass's clusters: `[C2 - hw2, C2)` with `C2 = second[3]`.
-fn second_list(f: &Frame) -> Vec<Cluster> {
+/// The second pass's lists: software from its first slot `second[7]`, hardware
+/// `[C2 - hw2, C2)` with `C2 = second[3]`.
+fn second_lists(f: &Frame) -> (Vec<Cluster>, Vec<Cluster>) {
+    let base = f.second[7] as usize;
+    let software = f.slots[base..base + f.second[0] as usize].to_vec();
     let top = f.second[3] as usize;
-    f.slots[top - f.second[1] as usize..top].to_vec()
+    let hardware = f.slots[top - f.second[1] as usize..top].to_vec();
+    (software, hardware)
+}
+
+/// Both of the second pass's lists in one.
+fn second_list(f: &Frame) -> Vec<Cluster> {
+    let (software, hardware) = second_lists(f);
+    [software, hardware].concat()
 }
 
 fn check_words(label: &str, got: &[u32; 12], want: &CullResult, near: usize) {
@@ -513,15 +523,15 @@ fn both_passes_match_the_reference_on_random_views_and_walls() {
             first_counts: f.first,
         };
         let want2 = cpu::cpu_cull_with(&data, &view, &f.candidates, &T, harness.capacity, second);
-        let drawn = second_list(&f);
+        let (software2, hardware2) = second_lists(&f);
         let near2 = differing(
             &data,
             &view,
             second,
             &format!("{label} second"),
             [
-                (&drawn, &want2.hardware),
-                (&[], &want2.software),
+                (&hardware2, &want2.hardware),
+                (&software2, &want2.software),
                 (&[], &[]),
             ],
         );
@@ -530,15 +540,18 @@ fn both_passes_match_the_reference_on_random_views_and_walls() {
             "{label}: {near2} near a threshold"
         );
         check_words(&format!("{label} second"), &f.second, &want2, near2);
-        assert_eq!(f.second[0], 0, "{label}: the second pass drew in software");
+        assert_eq!(
+            f.second[7], f.first[0],
+            "{label}: second software slots start"
+        );
         assert_eq!(f.second_hw_args, [HW_VERTICES, f.second[1], 0, 0]);
         eprintln!(
-            "{label}: first cut {} occluded {} tested {}; second considered {} drawn {} occluded {}",
-            f.first[8], f.first[9], f.first[11], f.second[4], f.second[1], f.second[9]
+            "{label}: first cut {} occluded {} tested {}; second considered {} drawn {} + {} occluded {}",
+            f.first[8], f.first[9], f.first[11], f.second[4], f.second[0], f.second[1], f.second[9]
         );
         totals[0] += f.first[9];
         totals[1] += f.first[2];
-        totals[2] += f.second[1];
+        totals[2] += f.second[0] + f.second[1];
         totals[3] += f.second[9];
     }
     // The views and walls exercise every outcome of both passes.
@@ -580,19 +593,30 @@ fn the_second_pass_tests_only_the_first_passs_candidates_in_the_free_slots() {
     );
     assert_eq!(f.second[8], candidates, "of them in the LOD cut");
     assert_eq!(f.second[9], 0, "nothing hides them this frame");
-    assert_eq!(f.second[1], candidates, "every candidate drawn");
+    assert_eq!(
+        f.second[0] + f.second[1],
+        candidates,
+        "every candidate drawn"
+    );
+    assert!(
+        f.second[0] > 0 && f.second[1] > 0,
+        "the second pass splits like the first: {} software, {} hardware",
+        f.second[0],
+        f.second[1]
+    );
     assert_eq!(set(&second_list(&f)), set(&f.candidates));
-    // Disjoint slots: first software, free, second (from the right of the free range),
-    // first hardware; the sentinel in between.
+    // Disjoint slots: first software, second software, free, second hardware (from the
+    // right of the free range), first hardware; the sentinel in between.
     let c = f.first[3];
     let (sw1, hw1) = (f.first[0], f.first[1]);
     assert_eq!(f.second[3], c - hw1);
+    assert_eq!(f.second[7], sw1);
     assert_eq!(f.second[10], c - hw1 - sw1);
     let (software, hardware) = first_lists(&f);
     let all: Vec<Cluster> = [software, hardware, second_list(&f)].concat();
     assert_eq!(set(&all).len(), all.len(), "a cluster drawn twice");
     assert!(all.iter().all(|c| *c != SENTINEL));
-    let free = &f.slots[sw1 as usize..(c - hw1 - f.second[1]) as usize];
+    let free = &f.slots[(sw1 + f.second[0]) as usize..(c - hw1 - f.second[1]) as usize];
     assert!(
         free.iter().all(|c| *c == SENTINEL),
         "a free slot was written"

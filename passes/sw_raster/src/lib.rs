@@ -10,7 +10,10 @@
 //! line and `hw_raster` and `resolve` follow.
 //!
 //! One workgroup per cluster (linear id `wg.y * sw_args[0] + wg.x`; ids at or past
-//! `raster_counts[0]` return). The meshlet's vertices are decoded from the payload,
+//! `raster_counts[0]` return). With `accumulate` (the second pass of two-pass occlusion
+//! culling) the visibility buffer is not cleared and workgroup `j` draws slot
+//! `raster_counts[7] + j`, the first slot `cull_lod`'s second pass gave its software
+//! clusters; the slot is the cluster id written, so resolve reads one list. The meshlet's vertices are decoded from the payload,
 //! transformed (instance `world_from_local`, then `view_projection`, each product summed
 //! column by column as `m[0] * x + m[1] * y + m[2] * z + m[3]`, [`cpu::affine`]) and
 //! snapped into workgroup memory; then one thread per triangle culls back faces and covers pixels
@@ -22,7 +25,7 @@
 //! | slot | access | holds | |
 //! |------|--------|-------|---|
 //! | `raster_clusters` | storage read | Cluster | software clusters in slots `0..raster_counts[0]` |
-//! | `raster_counts` | storage read | u32 | word 0: software cluster count |
+//! | `raster_counts` | storage read | u32 | word 0: software cluster count; with `accumulate`, word 7: their first slot |
 //! | `sw_args` | storage read + indirect | DispatchIndirectArgs | `[x, y, 1]` from `remap_dispatch` |
 //! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
 //! | `visbuffer` | cleared read-write | u64 / r64uint | `width × height`, row-major buffer or texture; cleared (a buffer fill, or a dispatch for the texture) then atomicMax |
@@ -139,6 +142,12 @@ pub struct SwRaster {
     /// Divide in integers, rounded as IEEE 754 divides, so every driver matches the
     /// reference bit for bit; off, the driver's division (within 2.5 ulp on some).
     pub exact_division: bool,
+    /// Draw on top of what the visibility buffer holds instead of clearing it, taking
+    /// the clusters from slot `raster_counts[7]` on: the second pass of two-pass
+    /// occlusion culling, whose software clusters `cull_lod` (mode `second`) puts after
+    /// the first pass's and whose first slot it writes into word 7. Off: cleared, slots
+    /// from 0.
+    pub accumulate: bool,
 }
 
 /// The variant of raster.wgsl a pass runs.
@@ -148,6 +157,8 @@ pub struct RasterDefs {
     pub exact_division: bool,
     /// `VIS_TEXTURE`: the visibility buffer is an R64Uint storage texture.
     pub texture: bool,
+    /// `SLOT_BASE`: clusters start at slot `raster_counts[7]` ([`SwRaster::accumulate`]).
+    pub slot_base: bool,
 }
 
 impl ShaderDefs for RasterDefs {
@@ -155,6 +166,7 @@ impl ShaderDefs for RasterDefs {
         vec![
             ("EXACT_DIVISION", ShaderDef::Bool(self.exact_division)),
             ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
+            ("SLOT_BASE", ShaderDef::Bool(self.slot_base)),
         ]
     }
 }
@@ -174,11 +186,18 @@ struct GpuParams {
     zero: u32,
 }
 
-const PARAM_KEYS: [&str; 4] = ["width", "height", "scanline_width", "exact_division"];
+const PARAM_KEYS: [&str; 5] = [
+    "width",
+    "height",
+    "scanline_width",
+    "exact_division",
+    "accumulate",
+];
 
 impl SwRaster {
     /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16) and
-    /// `exact_division` (default false); `target` picks the implementation.
+    /// `exact_division` and `accumulate` (default false); `target` picks the
+    /// implementation.
     pub fn from_params(params: &Params, target: Visibility64) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let width = params.u32("width", 0)?;
@@ -194,6 +213,7 @@ impl SwRaster {
             target,
             scanline_width: params.u32("scanline_width", 16)?,
             exact_division: params.bool("exact_division", false)?,
+            accumulate: params.bool("accumulate", false)?,
         })
     }
 }
@@ -219,7 +239,8 @@ impl Pass for SwRaster {
             wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
         });
         ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
-        ctx.min_bytes("raster_counts", 4);
+        // With a slot base the first slot is word 7.
+        ctx.min_bytes("raster_counts", if self.accumulate { 32 } else { 4 });
         ctx.min_bytes("sw_args", 12);
         ctx.frame_input(VIEW_INPUT);
         let layout = BindingLayout::compute("sw_raster")
@@ -236,6 +257,7 @@ impl Pass for SwRaster {
         let defs = RasterDefs {
             exact_division: self.exact_division,
             texture,
+            slot_base: self.accumulate,
         };
         ctx.shader_defs(&defs);
         ctx.program(
@@ -244,7 +266,7 @@ impl Pass for SwRaster {
                 .defs(&defs)
                 .layout(layout),
         );
-        if texture {
+        if texture && !self.accumulate {
             let clear = BindingLayout::compute("sw_raster::clear")
                 .slot(0, "visbuffer")
                 .write_only();
@@ -264,6 +286,7 @@ impl Pass for SwRaster {
             zero: 0,
         };
         let clear = match self.target {
+            _ if self.accumulate => None,
             Visibility64::Buffer => {
                 ctx.clear("visbuffer")?;
                 None
@@ -350,6 +373,7 @@ mod tests {
         let defs = super::RasterDefs {
             exact_division: false,
             texture: true,
+            slot_base: true,
         };
         let mut library = ShaderLibrary::new(caps).unwrap_or_else(|e| panic!("{e}"));
         let module = library

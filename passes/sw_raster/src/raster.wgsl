@@ -150,10 +150,16 @@ fn shade(tri: Tri, x: i32, y: i32) {
 
 @compute @workgroup_size(128)
 fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
-    let i = wg.y * sw_args[0] + wg.x;
-    if i >= raster_counts[0] {
+    let j = wg.y * sw_args[0] + wg.x;
+    if j >= raster_counts[0] {
         return;
     }
+    // The slot, which is also the cluster id the visibility buffer holds.
+#ifdef SLOT_BASE
+    let i = raster_counts[7] + j;
+#else
+    let i = j;
+#endif
     let cluster = raster_clusters[i];
     let instance = instances[cluster.instance];
     let m = meshlets[cluster.meshlet];

@@ -241,6 +241,7 @@ fn pass(scanline_width: u32) -> SwRaster {
         target: Visibility64::Buffer,
         scanline_width,
         exact_division: true,
+        accumulate: false,
     }
 }
 
@@ -774,5 +775,113 @@ fn a_zero_width_in_a_pipeline_file_is_a_parameter_error() {
         file::parse_pipeline(&text(W), "p.toml", &registry)
     {
         panic!("{W} × {H} refused: {message}");
+    }
+}
+
+/// Two passes over one visibility buffer: the first clears it and draws slots `0..k`,
+/// the second (`accumulate`) keeps it and draws slots `k..n` from the base in word 7 of
+/// its counts. Together they equal one pass over `0..n`, ids included; a second pass that
+/// cleared, or numbered its clusters from 0, or started elsewhere, would differ.
+#[test]
+fn an_accumulating_pass_draws_its_slots_over_the_first_passs_image() {
+    let mut scene = knot_scene();
+    let mut slots = [
+        clusters_of(&scene, 0, |l| l == 0),
+        clusters_of(&scene, 1, |l| l == 1),
+        clusters_of(&scene, 2, |l| l >= 2),
+    ]
+    .concat();
+    let n = slots.len() as u32;
+    let k = n / 2;
+    // A real cluster past the second pass's slots: drawing it would show.
+    slots.extend(clusters_of(&scene, 0, |l| l == 0).into_iter().take(4));
+    let views = seeded_views(11, 3);
+    let whole = Input::new(slots.clone(), n, n);
+    let gpu = gpu();
+    let gpu_scene = GpuScene::new(&gpu, &mut scene);
+    let mut g = GraphBuilder::new();
+    let h = gpu_scene.import(&mut g);
+    let slots_h = g.import_buffer(
+        "raster_clusters",
+        BufferDesc::array(
+            meshlight_gpu_scene::gpu::elements::CLUSTER,
+            slots.len() as u64,
+        ),
+        USAGE,
+    );
+    let vis = g.create_buffer("visbuffer", BufferDesc::array(Element::U64, (W * H) as u64));
+    let mut vis: AnyHandle = vis.into();
+    let mut inputs = Vec::new();
+    for (pass_name, count, base, accumulate) in [("first", k, 0, false), ("second", n - k, k, true)]
+    {
+        let counts = g.import_buffer(
+            &format!("counts_{pass_name}"),
+            BufferDesc::array(Element::U32, 8),
+            USAGE,
+        );
+        let args = g.import_buffer(
+            &format!("args_{pass_name}"),
+            BufferDesc::array(Element::DISPATCH_ARGS, 1),
+            USAGE,
+        );
+        let drawn = g
+            .add_pass(
+                pass_name,
+                SwRaster {
+                    accumulate,
+                    ..pass(16)
+                },
+                Bindings::new()
+                    .bind("raster_clusters", slots_h)
+                    .bind("raster_counts", counts)
+                    .bind("sw_args", args)
+                    .bind("instances", h.instances)
+                    .bind("meshes", h.meshes)
+                    .bind("meshlets", h.meshlets)
+                    .bind("payload", h.payload)
+                    .bind("visbuffer", vis),
+            )
+            .unwrap_or_else(|e| panic!("{e}"));
+        vis = drawn.buffer("visbuffer").unwrap().into();
+        let words = [count, 0, 0, 0, 0, 0, 0, base];
+        let x = 5;
+        inputs.push((pass_name, words, [x, count.div_ceil(x), 1]));
+    }
+    g.export(vis);
+    let compiled = g
+        .compile(&CompileOptions::for_gpu(&gpu))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut imports = gpu_scene.imports().buffer(
+        "raster_clusters",
+        &gpu.buffer_with_data("raster_clusters", bytemuck::cast_slice(&slots), USAGE),
+    );
+    for (pass_name, words, args) in &inputs {
+        imports = imports
+            .buffer(
+                &format!("counts_{pass_name}"),
+                &gpu.buffer_with_data("counts", bytemuck::cast_slice(words), USAGE),
+            )
+            .buffer(
+                &format!("args_{pass_name}"),
+                &gpu.buffer_with_data("args", bytemuck::cast_slice(args), USAGE),
+            );
+    }
+    let mut exec = Executor::new(gpu);
+    for (i, view) in views.iter().enumerate() {
+        let data = FrameData::new().with("view", bytemuck::bytes_of(view));
+        exec.execute_frame(&compiled, &imports, &data)
+            .unwrap_or_else(|e| panic!("{e}"));
+        exec.finish().unwrap();
+        let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("visbuffer").unwrap());
+        let want = whole.reference(&scene, view);
+        let second_ids = want
+            .iter()
+            .filter(|&&v| v != visbuffer::EMPTY && visbuffer::cluster(v) >= k)
+            .count();
+        assert!(
+            second_ids > 100,
+            "view {i}: the second pass owns {second_ids} pixels"
+        );
+        assert_identical(&format!("view {i}"), &got, &want);
     }
 }
