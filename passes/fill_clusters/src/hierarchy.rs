@@ -246,3 +246,101 @@ impl Pass for HierarchyFill {
 pub(crate) fn build(params: &Params) -> Result<Box<dyn Pass>> {
     Ok(Box::new(HierarchyFill::from_params(params)?))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshlight_scene::asset::format::NodeRecord;
+    use meshlight_shaders::{Capabilities, ShaderLibrary};
+
+    /// The GPU scene uploads the asset's node records as they are: the WGSL struct must
+    /// have their size and field offsets, and the shader's constants the Rust ones.
+    #[test]
+    fn the_wgsl_node_is_the_asset_record_and_the_constants_agree() {
+        let mut lib = ShaderLibrary::new(Capabilities::empty()).unwrap();
+        let module = lib.compose(&SHADER, &[]).unwrap();
+        let node = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("HierarchyNode"))
+            .map(|(_, t)| t)
+            .expect("HierarchyNode in the shader");
+        let naga::TypeInner::Struct { members, span } = &node.inner else {
+            panic!("HierarchyNode is not a struct");
+        };
+        assert_eq!(*span as usize, size_of::<NodeRecord>());
+        let offsets: Vec<(String, u32)> = members
+            .iter()
+            .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+            .collect();
+        let want = [
+            ("bounds", std::mem::offset_of!(NodeRecord, bounds)),
+            ("lod_sphere", std::mem::offset_of!(NodeRecord, lod_sphere)),
+            ("min_error", std::mem::offset_of!(NodeRecord, min_error)),
+            (
+                "max_parent_error",
+                std::mem::offset_of!(NodeRecord, max_parent_error),
+            ),
+            ("first_child", std::mem::offset_of!(NodeRecord, first_child)),
+            ("child_count", std::mem::offset_of!(NodeRecord, child_count)),
+            (
+                "first_cluster",
+                std::mem::offset_of!(NodeRecord, first_cluster),
+            ),
+            (
+                "cluster_count",
+                std::mem::offset_of!(NodeRecord, cluster_count),
+            ),
+            ("reserved", std::mem::offset_of!(NodeRecord, reserved)),
+        ];
+        let want: Vec<(String, u32)> = want
+            .iter()
+            .map(|(n, o)| (n.to_string(), *o as u32))
+            .collect();
+        assert_eq!(offsets, want);
+        let constant = |name: &str| -> f64 {
+            let line = SHADER
+                .source
+                .lines()
+                .find(|l| l.starts_with(&format!("const {name}:")))
+                .unwrap_or_else(|| panic!("no const {name}"));
+            let text = line.split('=').nth(1).unwrap().trim();
+            text.trim_end_matches(';')
+                .trim_end_matches('u')
+                .parse()
+                .unwrap()
+        };
+        assert_eq!(constant("QUEUE"), QUEUE as f64);
+        assert_eq!(constant("MAX_ROUNDS"), MAX_ROUNDS as f64);
+        assert_eq!(constant("SLACK"), SLACK as f64);
+    }
+
+    #[test]
+    fn params_are_read_and_bad_ones_refused() {
+        use meshlight_graph::file::Registry;
+        let mut registry = Registry::new();
+        crate::register(&mut registry);
+        let pass = |params: &str| {
+            let text = format!(
+                "[[pass]]\nname = \"fill\"\nstage = \"fill_clusters\"\nimplementation = \"hierarchy\"\nparams = {{ {params} }}\n"
+            );
+            meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry).map(|_| ())
+        };
+        match pass("lod_threshold_px = 2.0, queue_capacity = 16, capacity = 100") {
+            Ok(()) | Err(GraphError::UnboundSlot { .. }) => {}
+            Err(e) => panic!("{e}"),
+        }
+        for (params, key) in [
+            ("lod_threshold_px = -1.0", "lod_threshold_px"),
+            ("queue_capacity = 5000", "queue_capacity"),
+            ("queu_capacity = 4", "queu_capacity"),
+        ] {
+            match pass(params) {
+                Err(GraphError::Parameter { message, .. }) => {
+                    assert!(message.contains(key), "{message}")
+                }
+                other => panic!("{params}: {:?}", other.err()),
+            }
+        }
+    }
+}

@@ -228,10 +228,10 @@ fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
             for (var e = 0u; e < WORKGROUP_SIZE; e += 1u) {
                 let c = emit_count[e];
                 let start = chunk_base + emit_offset[e];
-                let from = emit_first[e];
+                let range_first = emit_first[e];
                 for (var k = t; k < c; k += WORKGROUP_SIZE) {
                     if start + k < cap {
-                        clusters[start + k] = Cluster(index, hierarchy_clusters[from + k]);
+                        clusters[start + k] = Cluster(index, hierarchy_clusters[range_first + k]);
                     }
                 }
             }

@@ -126,10 +126,14 @@ pub fn node_test(view: &View, w: &Walker, node: &NodeRecord, threshold: f32) -> 
     let lod_radius = node.lod_sphere[3] * w.scale;
     let s = w.slack(node.lod_sphere);
     let c = view.camera_position;
-    let d = length3([lod_centre[0] - c[0], lod_centre[1] - c[1], lod_centre[2] - c[2]]);
+    let d = length3([
+        lod_centre[0] - c[0],
+        lod_centre[1] - c[1],
+        lod_centre[2] - c[2],
+    ]);
     if node.max_parent_error < f32::MAX {
-        let parent_px =
-            (node.max_parent_error * w.scale) / (d - lod_radius - s).max(view.near) * view.lod_scale;
+        let parent_px = (node.max_parent_error * w.scale) / (d - lod_radius - s).max(view.near)
+            * view.lod_scale;
         closeness = closeness.min(rel(parent_px, threshold));
         if parent_px <= threshold {
             return NodeTest {
@@ -158,15 +162,14 @@ pub fn cpu_walk(scene: &SceneData, view: &View, params: &WalkParams, near: f32) 
         };
         let w = Walker::new(instance, view);
         let emit = |r: &mut HierarchyWalk, first: u32, end: u32| {
-            r.clusters
-                .extend(
-                    scene.hierarchy_clusters[first as usize..end as usize]
-                        .iter()
-                        .map(|&meshlet| Cluster {
-                            instance: index as u32,
-                            meshlet,
-                        }),
-                );
+            r.clusters.extend(
+                scene.hierarchy_clusters[first as usize..end as usize]
+                    .iter()
+                    .map(|&meshlet| Cluster {
+                        instance: index as u32,
+                        meshlet,
+                    }),
+            );
         };
         let mut frontier = vec![root];
         let mut round = 0;
@@ -191,7 +194,11 @@ pub fn cpu_walk(scene: &SceneData, view: &View, params: &WalkParams, near: f32) 
                 }
                 if node.is_leaf() {
                     r.counts[1] += 1;
-                    emit(&mut r, node.first_cluster, node.first_cluster + node.cluster_count);
+                    emit(
+                        &mut r,
+                        node.first_cluster,
+                        node.first_cluster + node.cluster_count,
+                    );
                     continue;
                 }
                 let slot = reserved;

@@ -94,10 +94,17 @@ fn set(clusters: &[Cluster]) -> BTreeSet<(u32, u32)> {
 /// A random view of `data`'s field: from inside it to 60 mesh radii away.
 fn random_view(data: &SceneData, rng: &mut Rng, v: u32) -> (View, f32) {
     let radius = data.meshes[0].bounding_sphere[3];
-    let target = Vec3::new(rng.range(-1.0, 10.0), rng.range(-0.5, 1.5), rng.range(-1.0, 10.0))
-        * radius;
-    let direction = Vec3::new(rng.range(-1.0, 1.0), rng.range(-0.4, 1.0), rng.range(-1.0, 1.0))
-        .normalize_or(Vec3::Z);
+    let target = Vec3::new(
+        rng.range(-1.0, 10.0),
+        rng.range(-0.5, 1.5),
+        rng.range(-1.0, 10.0),
+    ) * radius;
+    let direction = Vec3::new(
+        rng.range(-1.0, 1.0),
+        rng.range(-0.4, 1.0),
+        rng.range(-1.0, 1.0),
+    )
+    .normalize_or(Vec3::Z);
     let distance = radius * 0.3 * (200.0f32).powf(rng.unit());
     let viewport = [[320, 240], [1280, 720], [2240, 1260]][rng.below(3) as usize];
     let camera = Camera::perspective(
@@ -198,7 +205,14 @@ fn a_walk_with_another_threshold_than_cull_loses_clusters_of_the_cut() {
             lod_threshold_px: threshold,
             ..Thresholds::default()
         };
-        let want = set(&cpu_cull(&data, &view, &cpu_fill(&data, &view, u32::MAX).clusters, &t, u32::MAX).cut);
+        let want = set(&cpu_cull(
+            &data,
+            &view,
+            &cpu_fill(&data, &view, u32::MAX).clusters,
+            &t,
+            u32::MAX,
+        )
+        .cut);
         for factor in [0.5, 2.0] {
             let params = WalkParams {
                 lod_threshold_px: threshold * factor,
@@ -210,7 +224,10 @@ fn a_walk_with_another_threshold_than_cull_loses_clusters_of_the_cut() {
             differing += usize::from(got != want);
         }
     }
-    assert!(differing >= 10, "only {differing} of 40 walks lost clusters");
+    assert!(
+        differing >= 10,
+        "only {differing} of 40 walks lost clusters"
+    );
 }
 
 /// The virtual-geometry benchmark's scene: 15³ bunnies in a lattice 2.5 mesh radii
