@@ -153,7 +153,11 @@ impl SceneData {
         self.hierarchy_roots.push(node_base);
         self.hierarchy_nodes
             .extend(asset.nodes().iter().map(|n| NodeRecord {
-                first_child: if n.is_leaf() { 0 } else { n.first_child + node_base },
+                first_child: if n.is_leaf() {
+                    0
+                } else {
+                    n.first_child + node_base
+                },
                 first_cluster: n.first_cluster + list_base,
                 ..*n
             }));

@@ -125,10 +125,9 @@ pub fn hierarchy_lengths(data: &SceneData) -> [(&'static str, Element, u64); 3] 
 /// Declares the culling-hierarchy buffers `data` will need as imported resources of a
 /// graph, sized by [`hierarchy_lengths`]; [`GpuScene::imports`] binds them.
 pub fn import_hierarchy_for(data: &SceneData, g: &mut GraphBuilder) -> HierarchyHandles {
-    let [nodes, clusters, roots] =
-        hierarchy_lengths(data).map(|(name, element, count)| {
-            g.import_buffer(name, BufferDesc::array(element, count), USAGE)
-        });
+    let [nodes, clusters, roots] = hierarchy_lengths(data).map(|(name, element, count)| {
+        g.import_buffer(name, BufferDesc::array(element, count), USAGE)
+    });
     HierarchyHandles {
         nodes,
         clusters,

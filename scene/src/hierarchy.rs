@@ -220,7 +220,9 @@ fn split(mut items: Vec<Tree>, parts: usize) -> Vec<Vec<Tree>> {
     // Stable: equal centres keep their (deterministic) order.
     items.sort_by(|a, b| a.b.bounds[axis].total_cmp(&b.b.bounds[axis]));
     let left_parts = parts / 2;
-    let mid = (items.len() * left_parts).div_ceil(parts).clamp(1, items.len() - 1);
+    let mid = (items.len() * left_parts)
+        .div_ceil(parts)
+        .clamp(1, items.len() - 1);
     let right = items.split_off(mid);
     let mut out = split(items, left_parts);
     out.extend(split(right, parts - left_parts));

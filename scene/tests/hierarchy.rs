@@ -11,9 +11,8 @@ use std::path::Path;
 
 use meshlight_scene::asset::checksum::file_checksum;
 use meshlight_scene::asset::format::{
-    AssetHeader, MAGIC, NO_GROUP, NodeRecord, ROOT_PARENT_ERROR, SECTION_CHILDREN,
-    SECTION_GROUPS, SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES, SECTION_PAYLOAD,
-    VERSION,
+    AssetHeader, MAGIC, NO_GROUP, NodeRecord, ROOT_PARENT_ERROR, SECTION_CHILDREN, SECTION_GROUPS,
+    SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES, SECTION_PAYLOAD, VERSION,
 };
 use meshlight_scene::hierarchy::{MAX_CHILDREN, depth, encloses, meshlet_lod};
 use meshlight_scene::load::load_mesh;
@@ -45,7 +44,10 @@ fn check_tree(asset: &MeshletAsset) {
         if n.is_leaf() {
             let below = asset.node_meshlets(n);
             let parent = meshlets[below[0] as usize].parent_group;
-            assert!(leaf_groups.insert(parent), "two leaves of group {parent:#x}");
+            assert!(
+                leaf_groups.insert(parent),
+                "two leaves of group {parent:#x}"
+            );
             if parent != NO_GROUP {
                 let mut want: Vec<u32> = asset.group_children(&groups[parent as usize]).to_vec();
                 let mut got = below.to_vec();
@@ -80,7 +82,10 @@ fn check_tree(asset: &MeshletAsset) {
         }
     }
     assert!(visited.iter().all(|&v| v), "a node is unreachable");
-    assert!(reached.iter().all(|&r| r == 1), "a meshlet not reached once");
+    assert!(
+        reached.iter().all(|&r| r == 1),
+        "a meshlet not reached once"
+    );
     let groups_with_leaf = leaf_groups.iter().filter(|&&g| g != NO_GROUP).count();
     assert_eq!(groups_with_leaf, groups.len(), "every group is one leaf");
 }
@@ -257,9 +262,11 @@ fn damaged_cluster_lists_are_refused() {
         let i = first_leaf(w);
         node(w, i).cluster_count = 0;
     });
-    refused("a root not covering the list", "node[0].cluster_count", |w| {
-        node(w, 0).cluster_count -= 1
-    });
+    refused(
+        "a root not covering the list",
+        "node[0].cluster_count",
+        |w| node(w, 0).cluster_count -= 1,
+    );
     refused("children not tiling their parent", "node[", |w| {
         let i = first_inner(w);
         let first = node(w, i).first_child as usize;
@@ -278,7 +285,9 @@ fn damaged_cluster_lists_are_refused() {
 
 #[test]
 fn bounds_and_errors_that_do_not_hold_what_is_below_are_refused() {
-    refused("a NaN sphere", "bounds", |w| node(w, 2).bounds[1] = f32::NAN);
+    refused("a NaN sphere", "bounds", |w| {
+        node(w, 2).bounds[1] = f32::NAN
+    });
     refused("a leaf sphere too small", "bounds", |w| {
         let i = first_leaf(w);
         node(w, i).bounds[3] *= 0.5;
@@ -292,14 +301,18 @@ fn bounds_and_errors_that_do_not_hold_what_is_below_are_refused() {
         let r = &mut node(w, 0).bounds[3];
         *r = r.next_down();
     });
-    refused("a root error below a child's", "node[0].max_parent_error", |w| {
-        node(w, 0).max_parent_error = 0.0
-    });
+    refused(
+        "a root error below a child's",
+        "node[0].max_parent_error",
+        |w| node(w, 0).max_parent_error = 0.0,
+    );
     refused("a leaf minimum above its meshlets'", "min_error", |w| {
         let i = first_leaf(w);
         node(w, i).min_error = 1e30;
     });
-    refused("a negative error", "min_error", |w| node(w, 3).min_error = -1.0);
+    refused("a negative error", "min_error", |w| {
+        node(w, 3).min_error = -1.0
+    });
     refused("an infinite error", "max_parent_error", |w| {
         node(w, 3).max_parent_error = f32::INFINITY
     });
@@ -308,18 +321,19 @@ fn bounds_and_errors_that_do_not_hold_what_is_below_are_refused() {
         let ns = nodes(w);
         let leaf = ns
             .iter()
-            .position(|n| n.is_leaf() && n.cluster_count > 1 && n.max_parent_error < ROOT_PARENT_ERROR)
+            .position(|n| {
+                n.is_leaf() && n.cluster_count > 1 && n.max_parent_error < ROOT_PARENT_ERROR
+            })
             .unwrap();
         let m = list(w)[ns[leaf].first_cluster as usize] as usize;
         let s = header(w).sections[SECTION_MESHLETS];
         let n = size_of::<meshlight_scene::asset::format::MeshletRecord>() / 4;
-        let parent = std::mem::offset_of!(
-            meshlight_scene::asset::format::MeshletRecord,
-            parent_group
-        ) / 4;
+        let parent =
+            std::mem::offset_of!(meshlight_scene::asset::format::MeshletRecord, parent_group) / 4;
         let g = w[s.offset as usize + m * n + parent] as usize;
         let groups = header(w).sections[SECTION_GROUPS].offset as usize;
-        let count = std::mem::offset_of!(meshlight_scene::asset::format::GroupRecord, child_count) / 4;
+        let count =
+            std::mem::offset_of!(meshlight_scene::asset::format::GroupRecord, child_count) / 4;
         w[groups + g * 8 + count] -= 1;
     });
 }
@@ -341,7 +355,12 @@ fn format_3_file(asset: &MeshletAsset) -> Vec<u8> {
     head.extend_from_slice(&[h.meshlet_count, h.group_count, h.level_count, h.root_count]);
     head.extend_from_slice(&[h.lod0_meshlets, h.lod0_triangles, h.total_triangles]);
     head.extend_from_slice(&[h.total_vertices, h.input_vertices, h.dropped_degenerate]);
-    for v in h.bounds_min.iter().chain(&h.bounds_max).chain(&h.quant_origin) {
+    for v in h
+        .bounds_min
+        .iter()
+        .chain(&h.bounds_max)
+        .chain(&h.quant_origin)
+    {
         head.push(v.to_bits());
     }
     head.push(h.quant_step.to_bits());

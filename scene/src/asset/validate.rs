@@ -335,7 +335,10 @@ fn hierarchy(
             None => {
                 return Err(bad(
                     format!("node_clusters[{k}]"),
-                    format!("refers to meshlet {m}, past the {} meshlets", meshlets.len()),
+                    format!(
+                        "refers to meshlet {m}, past the {} meshlets",
+                        meshlets.len()
+                    ),
                 ));
             }
             Some(true) => {
@@ -396,8 +399,7 @@ fn hierarchy(
             }
             leaf_group(i, n, &below, groups, &mut group_leaf)?;
             for m in &below {
-                let ((own_sphere, own_error), parent) =
-                    crate::hierarchy::meshlet_lod(m, groups);
+                let ((own_sphere, own_error), parent) = crate::hierarchy::meshlet_lod(m, groups);
                 let (parent_sphere, parent_error) =
                     parent.unwrap_or((own_sphere, crate::asset::format::ROOT_PARENT_ERROR));
                 if !encloses(n.bounds, m.bounds)
@@ -456,10 +458,7 @@ fn hierarchy(
                 ));
             }
             if child.min_error < n.min_error {
-                return Err(bad(
-                    f("min_error"),
-                    format!("is above child node {c}'s"),
-                ));
+                return Err(bad(f("min_error"), format!("is above child node {c}'s")));
             }
             if child.max_parent_error > n.max_parent_error {
                 return Err(bad(
@@ -469,16 +468,16 @@ fn hierarchy(
             }
         }
         if at != n.first_cluster + n.cluster_count {
-            return Err(bad(
-                f("cluster_count"),
-                "is not the sum of its children's",
-            ));
+            return Err(bad(f("cluster_count"), "is not the sum of its children's"));
         }
     }
     if let Some(k) = (1..nodes.len()).find(|&k| parents[k] != 1) {
         return Err(bad(
             format!("node[{k}]"),
-            format!("is a child of {} nodes; every node but the root has one parent", parents[k]),
+            format!(
+                "is a child of {} nodes; every node but the root has one parent",
+                parents[k]
+            ),
         ));
     }
     if let Some(g) = group_leaf.iter().position(|&reached| !reached) {
