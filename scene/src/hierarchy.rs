@@ -86,11 +86,12 @@ struct Tree {
     cluster_count: u32,
 }
 
+/// A LOD sphere (mesh space: centre, radius) and the error measured inside it, as
+/// [`crate::MeshletAsset::lod`] returns them.
+pub type Lod = ([f32; 4], f32);
+
 /// A meshlet's own LOD sphere and error, and its parent's (`None` for a root).
-pub fn meshlet_lod(
-    m: &MeshletRecord,
-    groups: &[GroupRecord],
-) -> (([f32; 4], f32), Option<([f32; 4], f32)>) {
+pub fn meshlet_lod(m: &MeshletRecord, groups: &[GroupRecord]) -> (Lod, Option<Lod>) {
     let own = match groups.get(m.source_group as usize) {
         Some(g) if m.source_group != NO_GROUP => (g.lod_sphere, g.error),
         _ => (m.bounds, 0.0),
