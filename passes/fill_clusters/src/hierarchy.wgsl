@@ -84,12 +84,14 @@ const SLACK: f32 = 1.220703125e-4;
 var<workgroup> frontier: array<array<u32, QUEUE>, 2>;
 var<workgroup> frontier_len: u32;
 var<workgroup> next_len: atomic<u32>;
-// What each thread of a chunk emits: a range of hierarchy_clusters and its offset in
-// the chunk's reservation.
+// The ranges of hierarchy_clusters a chunk emits, packed (one per emitting thread), each
+// with its offset in the chunk's reservation.
 var<workgroup> emit_first: array<u32, WORKGROUP_SIZE>;
 var<workgroup> emit_count: array<u32, WORKGROUP_SIZE>;
 var<workgroup> emit_offset: array<u32, WORKGROUP_SIZE>;
+var<workgroup> emit_ranges: atomic<u32>;
 var<workgroup> emit_total: atomic<u32>;
+var<workgroup> emit_len: u32;
 var<workgroup> emit_base: u32;
 var<workgroup> leaves: atomic<u32>;
 var<workgroup> spilled: atomic<u32>;
@@ -172,6 +174,7 @@ fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
         frontier_len = select(0u, 1u, has_root);
         frontier[0][0] = root;
         atomicStore(&next_len, 0u);
+        atomicStore(&emit_ranges, 0u);
         atomicStore(&emit_total, 0u);
         atomicStore(&leaves, 0u);
         atomicStore(&spilled, 0u);
@@ -214,18 +217,24 @@ fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
                     }
                 }
             }
-            emit_first[t] = first;
-            emit_count[t] = count;
-            emit_offset[t] = atomicAdd(&emit_total, count);
+            if count > 0u {
+                let e = atomicAdd(&emit_ranges, 1u);
+                emit_first[e] = first;
+                emit_count[e] = count;
+                emit_offset[e] = atomicAdd(&emit_total, count);
+            }
             workgroupBarrier();
             if t == 0u {
+                emit_len = atomicExchange(&emit_ranges, 0u);
                 let total = atomicExchange(&emit_total, 0u);
                 if total > 0u {
                     emit_base = atomicAdd(&cluster_count[1], total);
                 }
             }
-            let chunk_base = workgroupUniformLoad(&emit_base);
-            for (var e = 0u; e < WORKGROUP_SIZE; e += 1u) {
+            // One range after another, consecutive threads on consecutive slots.
+            let ranges = workgroupUniformLoad(&emit_len);
+            let chunk_base = emit_base;
+            for (var e = 0u; e < ranges; e += 1u) {
                 let c = emit_count[e];
                 let start = chunk_base + emit_offset[e];
                 let range_first = emit_first[e];
