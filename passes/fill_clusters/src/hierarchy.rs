@@ -43,6 +43,17 @@
 //! synchronisation and takes one dispatch; its limit is a single huge instance close up,
 //! whose walk runs on one compute unit (the scenes the renderer draws have thousands).
 //!
+//! # Measured
+//!
+//! The benchmark's 15³ bunny lattice at 2240×1260, threshold 1 px (`cpu_walk` and
+//! lavapipe give the same counts; `examples/walk_vs_flat.rs` and the test
+//! `on_the_bunny_lattice_clusters_and_nodes_tested_stay_within_three_times_the_cut`):
+//! the flat fill lists 3,771,520 clusters for a cut of 123,090 (30.6×); the walk tests
+//! 81,477 nodes and lists 148,255 clusters, 229,732 tests in all, 1.87× the cut. On
+//! lavapipe (two CPU cores shared with other work, so only the order of magnitude
+//! holds) fill + cull takes about 0.6 s flat and 0.17–0.4 s with the walk; no GPU figure
+//! has been taken yet.
+//!
 //! # Why skipping is exact
 //!
 //! `node_visible` compares the node's bounds as `cull_lod` compares each cluster's
