@@ -24,6 +24,7 @@ fn check(shader: &PassShader, defs: &dyn ShaderDefs) {
 fn virtual_geometry_shaders_compose_and_validate() {
     for shader in [
         &meshlight::fill_clusters::SHADER,
+        &meshlight::fill_clusters::hierarchy::SHADER,
         &meshlight::cull_lod::SHADER,
         &meshlight::remap_dispatch::SHADER,
         &meshlight::hw_raster::SHADER,

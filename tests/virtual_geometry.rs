@@ -555,3 +555,66 @@ fn clustered_lights_shade_the_field_and_the_light_count_view_shows_them() {
         other => panic!("{:?}", other.err().map(|e| e.to_string())),
     }
 }
+
+/// The shipped pipeline file with `fill` switched to the hierarchy walk: the three
+/// hierarchy buffers declared as imports (sized for `data`), the implementation named,
+/// cull's threshold passed on. What the lead's edit of the file amounts to.
+fn hierarchy_pipeline(data: &SceneData) -> GraphSource {
+    let shipped = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/pipelines/virtual_geometry.toml"
+    );
+    let mut text = std::fs::read_to_string(shipped).unwrap();
+    let flat = "implementation = \"workgroup_per_instance\"";
+    assert!(text.contains(flat));
+    text = text.replace(
+        flat,
+        "implementation = \"hierarchy\"\nparams = { lod_threshold_px = 1.0 }",
+    );
+    let resources: String = meshlight::gpu_scene::gpu::hierarchy_lengths(data)
+        .iter()
+        .map(|(name, element, count)| {
+            format!(
+                "[[resource]]\nname = \"{name}\"\nkind = \"imported\"\nbuffer = {{ element = \"{}\", element_size = {}, count = {count} }}\nusage = [\"STORAGE\", \"COPY_DST\", \"COPY_SRC\"]\n\n",
+                element.name, element.size
+            )
+        })
+        .collect();
+    let at = text.find("[[resource]]").unwrap();
+    text.insert_str(at, &resources);
+    let path =
+        std::env::temp_dir().join(format!("meshlight-hierarchy-{}.toml", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    GraphSource::File(path)
+}
+
+#[test]
+fn the_hierarchy_walk_draws_the_flat_fills_image_from_fewer_candidates() {
+    let placed = field(16);
+    let source = hierarchy_pipeline(&placed.data);
+    let (flat, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let (walk, r) = render(&placed, settings(DebugView::Shaded), &source);
+    assert!(runs(&r, "fill"));
+    // The same cut, from a shorter candidate list.
+    assert_eq!(walk.counts.visible, flat.counts.visible);
+    assert_eq!(walk.counts.software, flat.counts.software);
+    assert_eq!(walk.counts.hardware, flat.counts.hardware);
+    assert_eq!(
+        walk.counts.software_triangles + walk.counts.hardware_triangles,
+        flat.counts.software_triangles + flat.counts.hardware_triangles
+    );
+    assert!(
+        walk.counts.clusters_requested * 2 < flat.counts.clusters_requested,
+        "{} candidates from the walk, {} flat",
+        walk.counts.clusters_requested,
+        flat.counts.clusters_requested
+    );
+    // The same triangles drawn: pixels differ only where two triangles tie in depth and
+    // the tie is broken by the cluster's place in the list, which the walk changes.
+    let changed = differing(&flat.rgba, &walk.rgba, 0);
+    eprintln!(
+        "cut {} clusters; candidates {} flat, {} from the walk; {changed} pixels differ",
+        flat.counts.visible, flat.counts.clusters_requested, walk.counts.clusters_requested
+    );
+    assert!(changed <= (W * H / 500) as usize, "{changed} pixels differ");
+}

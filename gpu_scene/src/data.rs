@@ -4,7 +4,7 @@
 use crate::error::SceneDataError;
 use glam::{Mat4, Vec3};
 use meshlight_scene::MeshletAsset;
-use meshlight_scene::asset::format::{GroupRecord, MeshletRecord, NO_GROUP};
+use meshlight_scene::asset::format::{GroupRecord, MeshletRecord, NO_GROUP, NodeRecord};
 use meshlight_shaders::cpu::layout::{self, MESH_FLAG_UVS};
 use std::ops::Range;
 
@@ -30,6 +30,7 @@ pub struct Limits {
     pub max_instances: u32,
     pub max_meshlets: u32,
     pub max_payload_words: u32,
+    pub max_hierarchy_nodes: u32,
 }
 
 impl Limits {
@@ -41,6 +42,7 @@ impl Limits {
             max_meshlets: count(size_of::<MeshletRecord>()),
             // Two words of padding follow the payload (see `GpuScene`).
             max_payload_words: count(4).saturating_sub(2),
+            max_hierarchy_nodes: count(size_of::<NodeRecord>()),
         }
     }
     pub fn for_device(limits: &wgpu::Limits) -> Self {
@@ -64,6 +66,13 @@ pub struct SceneData {
     pub meshlets: Vec<MeshletRecord>,
     pub groups: Vec<GroupRecord>,
     pub payload: Vec<u32>,
+    /// Every asset's culling-hierarchy nodes; `first_child` and `first_cluster` rebased
+    /// onto these shared arrays.
+    pub hierarchy_nodes: Vec<NodeRecord>,
+    /// Every asset's hierarchy cluster list, as indices into `meshlets`.
+    pub hierarchy_clusters: Vec<u32>,
+    /// Per mesh: the index of its hierarchy's root in `hierarchy_nodes`.
+    pub hierarchy_roots: Vec<u32>,
     pub instances: Vec<layout::Instance>,
     pub materials: Vec<layout::Material>,
     mesh_names: Vec<String>,
@@ -106,6 +115,12 @@ impl SceneData {
             self.limits.max_payload_words as u64,
             "load fewer or smaller meshes, or use a device with a larger storage binding",
         )?;
+        check_limit(
+            "hierarchy nodes",
+            self.hierarchy_nodes.len() as u64 + asset.nodes().len() as u64,
+            self.limits.max_hierarchy_nodes as u64,
+            "load fewer or smaller meshes, or use a device with a larger storage binding",
+        )?;
         if asset.meshlets().is_empty() {
             return Err(SceneDataError::InvalidAsset {
                 name: name.to_string(),
@@ -133,6 +148,21 @@ impl SceneData {
         // which no pass reads; they are kept for inspection.
         self.groups.extend_from_slice(asset.groups());
         self.payload.extend_from_slice(asset.payload());
+        let node_base = self.hierarchy_nodes.len() as u32;
+        let list_base = self.hierarchy_clusters.len() as u32;
+        self.hierarchy_roots.push(node_base);
+        self.hierarchy_nodes
+            .extend(asset.nodes().iter().map(|n| NodeRecord {
+                first_child: if n.is_leaf() {
+                    0
+                } else {
+                    n.first_child + node_base
+                },
+                first_cluster: n.first_cluster + list_base,
+                ..*n
+            }));
+        self.hierarchy_clusters
+            .extend(asset.node_clusters().iter().map(|&m| m + first_meshlet));
         let min = Vec3::from(header.bounds_min);
         let max = Vec3::from(header.bounds_max);
         let center = (min + max) * 0.5;

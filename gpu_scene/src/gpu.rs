@@ -4,7 +4,7 @@
 use crate::data::SceneData;
 use crate::names;
 use meshlight_graph::{Buffer, BufferDesc, Element, GpuContext, GraphBuilder, Handle, Imports};
-use meshlight_scene::asset::format::{GroupRecord, MeshletRecord};
+use meshlight_scene::asset::format::{GroupRecord, MeshletRecord, NodeRecord};
 use meshlight_shaders::cpu::layout;
 use std::borrow::Cow;
 
@@ -22,6 +22,8 @@ pub mod elements {
     pub const MATERIAL: Element = Element::named("Material", size_of::<layout::Material>() as u32);
     pub const CLUSTER: Element = Element::named("Cluster", size_of::<layout::Cluster>() as u32);
     pub const VIEW: Element = Element::named("View", size_of::<layout::View>() as u32);
+    pub const HIERARCHY_NODE: Element =
+        Element::named("HierarchyNode", size_of::<NodeRecord>() as u32);
 }
 
 /// The graph handles of the scene buffers, returned by [`GpuScene::import`].
@@ -33,6 +35,15 @@ pub struct SceneHandles {
     pub meshes: Handle<Buffer>,
     pub instances: Handle<Buffer>,
     pub materials: Handle<Buffer>,
+}
+
+/// The graph handles of the culling-hierarchy buffers, returned by
+/// [`GpuScene::import_hierarchy`] and [`import_hierarchy_for`].
+#[derive(Clone, Copy, Debug)]
+pub struct HierarchyHandles {
+    pub nodes: Handle<Buffer>,
+    pub clusters: Handle<Buffer>,
+    pub roots: Handle<Buffer>,
 }
 
 struct SceneBuffer {
@@ -87,6 +98,43 @@ pub fn buffer_lengths(data: &SceneData) -> [(&'static str, Element, u64); 6] {
     ]
 }
 
+/// The element count of each culling-hierarchy buffer as [`GpuScene::new`] would create
+/// it for `data`, by buffer name (kept apart from [`buffer_lengths`], whose names a
+/// pipeline file declares as parameters).
+pub fn hierarchy_lengths(data: &SceneData) -> [(&'static str, Element, u64); 3] {
+    let count = |n: usize| (n as u64).max(1);
+    [
+        (
+            names::HIERARCHY_NODES,
+            elements::HIERARCHY_NODE,
+            count(data.hierarchy_nodes.len()),
+        ),
+        (
+            names::HIERARCHY_CLUSTERS,
+            Element::U32,
+            count(data.hierarchy_clusters.len()),
+        ),
+        (
+            names::HIERARCHY_ROOTS,
+            Element::U32,
+            count(data.hierarchy_roots.len()),
+        ),
+    ]
+}
+
+/// Declares the culling-hierarchy buffers `data` will need as imported resources of a
+/// graph, sized by [`hierarchy_lengths`]; [`GpuScene::imports`] binds them.
+pub fn import_hierarchy_for(data: &SceneData, g: &mut GraphBuilder) -> HierarchyHandles {
+    let [nodes, clusters, roots] = hierarchy_lengths(data).map(|(name, element, count)| {
+        g.import_buffer(name, BufferDesc::array(element, count), USAGE)
+    });
+    HierarchyHandles {
+        nodes,
+        clusters,
+        roots,
+    }
+}
+
 /// Declares the scene buffers `data` will need as imported resources of a graph, sized
 /// by [`buffer_lengths`]; bind them later with [`GpuScene::imports`].
 pub fn import_for(data: &SceneData, g: &mut GraphBuilder) -> SceneHandles {
@@ -110,13 +158,16 @@ pub fn import_for(data: &SceneData, g: &mut GraphBuilder) -> SceneHandles {
 }
 
 /// The buffers in their order in [`GpuScene`].
-const ORDER: [&str; 6] = [
+const ORDER: [&str; 9] = [
     names::MESHLETS,
     names::GROUPS,
     names::PAYLOAD,
     names::MESHES,
     names::INSTANCES,
     names::MATERIALS,
+    names::HIERARCHY_NODES,
+    names::HIERARCHY_CLUSTERS,
+    names::HIERARCHY_ROOTS,
 ];
 
 /// What buffer `name` holds, borrowed from `data` (only the payload is copied, to append
@@ -143,6 +194,18 @@ fn content<'a>(data: &'a SceneData, name: &str) -> (Element, Cow<'a, [u8]>) {
         names::INSTANCES => (
             elements::INSTANCE,
             borrowed(bytemuck::cast_slice(&data.instances)),
+        ),
+        names::HIERARCHY_NODES => (
+            elements::HIERARCHY_NODE,
+            borrowed(bytemuck::cast_slice(&data.hierarchy_nodes)),
+        ),
+        names::HIERARCHY_CLUSTERS => (
+            Element::U32,
+            borrowed(bytemuck::cast_slice(&data.hierarchy_clusters)),
+        ),
+        names::HIERARCHY_ROOTS => (
+            Element::U32,
+            borrowed(bytemuck::cast_slice(&data.hierarchy_roots)),
         ),
         _ => (
             elements::MATERIAL,
@@ -244,7 +307,30 @@ impl GpuScene {
         }
     }
 
-    /// The buffers for [`meshlight_graph::Executor::execute`].
+    /// Declares the culling-hierarchy buffers as imported resources of a graph (for
+    /// `fill_clusters`' `hierarchy` implementation).
+    pub fn import_hierarchy(&self, g: &mut GraphBuilder) -> HierarchyHandles {
+        let mut h = |name: &str| {
+            let b = self
+                .buffers
+                .iter()
+                .find(|b| b.name == name)
+                .expect("every name has a buffer");
+            g.import_buffer(
+                name,
+                BufferDesc::array(b.element.clone(), b.capacity),
+                USAGE,
+            )
+        };
+        HierarchyHandles {
+            nodes: h(names::HIERARCHY_NODES),
+            clusters: h(names::HIERARCHY_CLUSTERS),
+            roots: h(names::HIERARCHY_ROOTS),
+        }
+    }
+
+    /// The buffers for [`meshlight_graph::Executor::execute`] (the hierarchy's too; a
+    /// graph that does not declare them ignores them).
     pub fn imports(&self) -> Imports {
         self.buffers.iter().fold(Imports::new(), |imports, b| {
             imports.buffer(b.name, &b.buffer)

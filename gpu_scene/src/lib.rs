@@ -13,6 +13,16 @@
 //! | `instances`     | `array<instance::Instance>`   | transforms, material, mesh, meshlet range |
 //! | `materials`     | `array<instance::Material>`   | base colour |
 //!
+//! Three more hold the meshes' culling hierarchies (`meshlight_scene::hierarchy`), for
+//! the `hierarchy` implementation of `fill_clusters`; a graph imports them with
+//! [`gpu::import_hierarchy_for`] or [`GpuScene::import_hierarchy`]:
+//!
+//! | buffer               | element        | holds |
+//! |----------------------|----------------|-------|
+//! | `hierarchy_nodes`    | `HierarchyNode` (64 bytes, the asset's `NodeRecord`) | every asset's nodes, child and cluster ranges rebased |
+//! | `hierarchy_clusters` | `u32`          | the leaves' meshlets, as indices into `meshlets` |
+//! | `hierarchy_roots`    | `u32`          | per mesh, its root node |
+//!
 //! [`SceneData`] is the CPU side (what CPU references read); [`GpuScene`] owns the
 //! buffers and re-uploads only what changed. [`view`] builds the per-frame `View`.
 
@@ -34,6 +44,9 @@ pub mod names {
     pub const MESHES: &str = "meshes";
     pub const INSTANCES: &str = "instances";
     pub const MATERIALS: &str = "materials";
+    pub const HIERARCHY_NODES: &str = "hierarchy_nodes";
+    pub const HIERARCHY_CLUSTERS: &str = "hierarchy_clusters";
+    pub const HIERARCHY_ROOTS: &str = "hierarchy_roots";
     /// The frame input holding the `View` bytes.
     pub const VIEW: &str = "view";
 }

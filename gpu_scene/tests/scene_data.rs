@@ -50,6 +50,51 @@ fn a_second_asset_is_rebased_onto_the_shared_arrays() {
     }
 }
 
+/// Each mesh's culling hierarchy lands in the shared buffers with its root in
+/// `hierarchy_roots`, children and cluster ranges rebased, and its leaves listing that
+/// mesh's meshlets (every one once) as indices into the shared meshlet array.
+#[test]
+fn hierarchies_are_rebased_onto_the_shared_arrays() {
+    let (a, b) = (asset(6), asset(8));
+    let mut data = SceneData::new(Limits::default());
+    for (name, asset) in [("a", &a), ("b", &b)] {
+        data.add_mesh(name, asset).unwrap();
+    }
+    assert_eq!(
+        data.hierarchy_roots,
+        vec![0, a.nodes().len() as u32],
+        "each root at its mesh's first node"
+    );
+    assert_eq!(
+        data.hierarchy_nodes.len(),
+        a.nodes().len() + b.nodes().len()
+    );
+    assert_eq!(data.hierarchy_clusters.len(), data.meshlets.len());
+    for (mesh, asset) in [&a, &b].into_iter().enumerate() {
+        let first_meshlet = data.meshes[mesh].first_meshlet;
+        let range = first_meshlet..first_meshlet + data.meshes[mesh].meshlet_count;
+        let mut stack = vec![data.hierarchy_roots[mesh] as usize];
+        let mut reached = Vec::new();
+        let mut nodes = 0;
+        while let Some(i) = stack.pop() {
+            nodes += 1;
+            let n = &data.hierarchy_nodes[i];
+            if n.is_leaf() {
+                reached.extend_from_slice(&data.hierarchy_clusters[n.clusters()]);
+            } else {
+                stack.extend(n.children());
+            }
+        }
+        assert_eq!(nodes, asset.nodes().len(), "mesh {mesh}: nodes reached");
+        reached.sort();
+        assert_eq!(
+            reached,
+            range.collect::<Vec<u32>>(),
+            "mesh {mesh}: meshlets reached"
+        );
+    }
+}
+
 #[test]
 fn singular_and_nan_transforms_are_skipped_and_counted() {
     let mut data = SceneData::new(Limits::default());

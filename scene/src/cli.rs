@@ -263,13 +263,22 @@ fn dag_table(asset: &MeshletAsset) -> String {
         asset.bytes().len() as f64 / h.lod0_triangles.max(1) as f64,
         h.total_triangles
     );
+    let nodes = asset.nodes();
+    let _ = writeln!(
+        s,
+        "  culling hierarchy: {} nodes, {} leaves (one per group, one of roots), depth {}",
+        nodes.len(),
+        crate::hierarchy::leaf_count(nodes),
+        crate::hierarchy::depth(nodes)
+    );
     let b = asset.size_breakdown();
     let per = |bytes: usize| bytes as f64 / h.lod0_triangles.max(1) as f64;
     let _ = writeln!(
         s,
-        "  bytes per LOD-0 triangle: records {:.2}, groups {:.2}, positions {:.2}, normals {:.2}, UVs {:.2}, indices {:.2}; {:.2} vertex copies per triangle",
+        "  bytes per LOD-0 triangle: records {:.2}, groups {:.2}, hierarchy {:.2}, positions {:.2}, normals {:.2}, UVs {:.2}, indices {:.2}; {:.2} vertex copies per triangle",
         per(b.meshlet_records),
         per(b.groups),
+        per(b.hierarchy),
         per(b.positions),
         per(b.normals),
         per(b.uvs),

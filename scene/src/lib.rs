@@ -16,6 +16,7 @@ pub mod deviation;
 pub mod error;
 pub mod greedy_meshlets;
 pub mod grouping;
+pub mod hierarchy;
 pub mod load;
 pub mod mesh;
 pub mod meshlets;

@@ -1,5 +1,8 @@
-//! Stage `fill_clusters`, implementation `workgroup_per_instance`: the per-frame list of
-//! candidate clusters, every meshlet (all LOD levels) of every instance the camera may see.
+//! Stage `fill_clusters`: the per-frame list of candidate clusters for `cull_lod`.
+//! Implementation `workgroup_per_instance` (this module) lists every meshlet (all LOD
+//! levels) of every instance the camera may see; implementation `hierarchy`
+//! ([`hierarchy`]) walks each visible instance's culling hierarchy and lists only the
+//! meshlets of the leaves that may hold clusters of the LOD cut.
 //!
 //! Culling works per cluster, but most of the scene is usually rejected a whole instance
 //! at a time; doing that here keeps the list short. Cluster ids in the visibility buffer
@@ -15,6 +18,10 @@
 //! | `meshes`        | storage read       | Mesh    | each instance's mesh bounding sphere |
 //! | `clusters`      | storage write      | Cluster | `(instance, meshlet)`; capacity = its size / 8, or the `capacity` param if smaller |
 //! | `cluster_count` | cleared read-write | u32 × 2 | `[0]` clusters written = `min([1], capacity)`, `[1]` clusters requested |
+//! | `hierarchy_nodes` | storage read, optional | HierarchyNode | the GPU scene's hierarchy nodes (`hierarchy` only) |
+//! | `hierarchy_clusters` | storage read, optional | u32 | the leaves' meshlets (`hierarchy` only) |
+//! | `hierarchy_roots` | storage read, optional | u32 | per mesh, its root node (`hierarchy` only) |
+//! | `hierarchy_counts` | cleared read-write, optional | u32 × 4 | nodes tested, leaves accepted, subtrees emitted whole, walks unfinished (`hierarchy` only) |
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`).
 //!
@@ -38,10 +45,25 @@
 //! - Instances are dispatched one workgroup each, as `x × y` workgroups with x under the
 //!   per-dimension limit, so any instance count the buffer holds is visited.
 //! - [`cpu::cpu_fill`] is the reference (which instances, which clusters, the two words).
+//!
+//! # Switching a pipeline to `hierarchy`
+//!
+//! Import the hierarchy buffers (`GpuScene::import_hierarchy`, or
+//! `gpu::import_hierarchy_for` before the device exists; `GpuScene::imports` already
+//! binds them), add the pass as `HierarchyFill { lod_threshold_px, .. }` with cull's
+//! threshold, and bind `hierarchy_counts` to a 4-word buffer to read the counters. In a
+//! pipeline file: three imported resources named like the slots (`HierarchyNode`,
+//! element size 64; `u32`; `u32`) sized by parameters the renderer sets from
+//! `gpu::hierarchy_lengths`, and `implementation = "hierarchy"` with
+//! `params = { lod_threshold_px = <cull's> }`.
 
 pub mod cpu;
+pub mod hierarchy;
+pub mod hierarchy_cpu;
 
 pub use cpu::{FillResult, cpu_fill};
+pub use hierarchy::HierarchyFill;
+pub use hierarchy_cpu::{HierarchyWalk, WalkParams, cpu_walk};
 
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::view::frame_view;
@@ -91,6 +113,34 @@ pub fn contract() -> StageContract {
                 Element::U32,
                 "[0] clusters written = min(requested, capacity), [1] clusters requested",
             ),
+            Slot::buffer(
+                "hierarchy_nodes",
+                Access::StorageRead,
+                elements::HIERARCHY_NODE,
+                "the scene's culling-hierarchy nodes (implementation `hierarchy`)",
+            )
+            .optional(),
+            Slot::buffer(
+                "hierarchy_clusters",
+                Access::StorageRead,
+                Element::U32,
+                "the hierarchy leaves' meshlets (implementation `hierarchy`)",
+            )
+            .optional(),
+            Slot::buffer(
+                "hierarchy_roots",
+                Access::StorageRead,
+                Element::U32,
+                "per mesh, its hierarchy's root node (implementation `hierarchy`)",
+            )
+            .optional(),
+            Slot::buffer(
+                "hierarchy_counts",
+                Access::ClearedReadWrite,
+                Element::U32,
+                "nodes tested, leaves accepted, subtrees emitted whole, walks unfinished",
+            )
+            .optional(),
         ],
     }
 }
@@ -212,9 +262,11 @@ fn build(params: &Params) -> Result<Box<dyn Pass>> {
     Ok(Box::new(FillClusters::from_params(params)?))
 }
 
-/// Registers `fill_clusters` (implementation `workgroup_per_instance`) for pipeline files.
+/// Registers `fill_clusters` (implementations `workgroup_per_instance` and `hierarchy`)
+/// for pipeline files.
 pub fn register(registry: &mut Registry) {
     registry.register(STAGE, IMPLEMENTATION, build);
+    registry.register(STAGE, hierarchy::IMPLEMENTATION, hierarchy::build);
 }
 
 #[cfg(test)]

@@ -2,9 +2,12 @@
 //! plain old data of 4-byte fields, so a loaded file is used in place through bytemuck
 //! casts and uploaded to the GPU as is.
 //!
-//! File = [`AssetHeader`] then four sections, each a whole number of 32-bit words:
+//! File = [`AssetHeader`] then six sections, each a whole number of 32-bit words:
 //! meshlets ([`MeshletRecord`]), groups ([`GroupRecord`]), group children (`u32`
-//! meshlet ids) and the payload (`u32` words of packed vertex and index data).
+//! meshlet ids), the payload (`u32` words of packed vertex and index data), the culling
+//! hierarchy's nodes ([`NodeRecord`]) and its cluster list (`u32` meshlet ids, every
+//! meshlet once, in the order the hierarchy's leaves take them; see
+//! [`crate::hierarchy`]).
 //!
 //! A meshlet's payload is three blocks of fixed-width records (see [`PayloadLayout`]),
 //! so that a GPU thread per vertex or per triangle finds its record by multiplying:
@@ -20,8 +23,9 @@
 use bytemuck::{Pod, Zeroable};
 
 pub const MAGIC: [u8; 8] = *b"MLASSET\0";
-/// Bumped on any layout change; older files are refused, not misread.
-pub const VERSION: u32 = 3;
+/// Bumped on any layout change; older files are refused, not misread. 4: the culling
+/// hierarchy (`node_count`, two more sections).
+pub const VERSION: u32 = 4;
 
 /// Header flag: each meshlet's payload holds UVs after its vertex records.
 pub const FLAG_UVS: u32 = 1;
@@ -31,7 +35,9 @@ pub const SECTION_MESHLETS: usize = 0;
 pub const SECTION_GROUPS: usize = 1;
 pub const SECTION_CHILDREN: usize = 2;
 pub const SECTION_PAYLOAD: usize = 3;
-pub const SECTION_COUNT: usize = 4;
+pub const SECTION_NODES: usize = 4;
+pub const SECTION_NODE_CLUSTERS: usize = 5;
+pub const SECTION_COUNT: usize = 6;
 
 /// Where a section lies, in 32-bit words from the start of the file.
 #[repr(C)]
@@ -53,6 +59,8 @@ pub struct AssetHeader {
     pub checksum: [u32; 2],
     pub meshlet_count: u32,
     pub group_count: u32,
+    /// Nodes of the culling hierarchy (at least one: the root).
+    pub node_count: u32,
     pub level_count: u32,
     pub root_count: u32,
     pub lod0_meshlets: u32,
@@ -169,7 +177,8 @@ impl MeshletRecord {
     }
 }
 
-/// One simplification group: for checking the DAG, and for hierarchical culling later.
+/// One simplification group: for checking the DAG, and the leaves of the culling
+/// hierarchy (a leaf holds the meshlets simplified in one group).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct GroupRecord {
@@ -204,5 +213,51 @@ impl PayloadLayout {
             triangles,
             end,
         }
+    }
+}
+
+/// `max_parent_error` of a node with a root meshlet below: roots have no parent, so
+/// their parent error is infinite (the shaders' `F32_MAX`), and such a node is never
+/// too fine to visit.
+pub const ROOT_PARENT_ERROR: f32 = f32::MAX;
+
+/// One node of the culling hierarchy, 64 bytes (the WGSL struct's size, so the section
+/// is uploaded as it is). A node bounds every meshlet below it, so that one test can
+/// reject them all; see [`crate::hierarchy`] for why each field makes that test
+/// conservative.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct NodeRecord {
+    /// Encloses the culling spheres ([`MeshletRecord::bounds`]) of every meshlet below:
+    /// outside the frustum, none of them is in it.
+    pub bounds: [f32; 4],
+    /// Encloses the own and parent LOD spheres of every meshlet below, so that its
+    /// distance from the camera bounds theirs from both sides.
+    pub lod_sphere: [f32; 4],
+    /// Smallest own error of a meshlet below (0 when a LOD-0 meshlet is below).
+    pub min_error: f32,
+    /// Largest parent error of a meshlet below; [`ROOT_PARENT_ERROR`] with a root below.
+    pub max_parent_error: f32,
+    /// Internal nodes: the children are nodes `first_child .. first_child + child_count`
+    /// of the same mesh, all after this one. Leaves: `child_count` = 0, `first_child` = 0.
+    pub first_child: u32,
+    pub child_count: u32,
+    /// The meshlets below, as a range of the cluster list: a leaf's own, an internal
+    /// node's the concatenation of its children's (the list is in depth-first order).
+    pub first_cluster: u32,
+    pub cluster_count: u32,
+    /// Zero.
+    pub reserved: [u32; 2],
+}
+
+impl NodeRecord {
+    pub fn is_leaf(&self) -> bool {
+        self.child_count == 0
+    }
+    pub fn children(&self) -> std::ops::Range<usize> {
+        self.first_child as usize..self.first_child as usize + self.child_count as usize
+    }
+    pub fn clusters(&self) -> std::ops::Range<usize> {
+        self.first_cluster as usize..self.first_cluster as usize + self.cluster_count as usize
     }
 }

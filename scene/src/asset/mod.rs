@@ -49,6 +49,8 @@ pub struct SizeBreakdown {
     pub uvs: usize,
     /// Local indices, including the padding of each meshlet's list to whole words.
     pub indices: usize,
+    /// The culling hierarchy: nodes and cluster list.
+    pub hierarchy: usize,
 }
 
 impl SizeBreakdown {
@@ -60,6 +62,7 @@ impl SizeBreakdown {
             + self.normals
             + self.uvs
             + self.indices
+            + self.hierarchy
     }
 }
 
@@ -206,12 +209,15 @@ impl MeshletAsset {
             })
             .collect();
 
+        let hierarchy = crate::hierarchy::build(&meshlets, &groups, &children);
+
         let mut header = <AssetHeader as bytemuck::Zeroable>::zeroed();
         header.magic = MAGIC;
         header.version = VERSION;
         header.flags = if has_uvs { FLAG_UVS } else { 0 };
         header.meshlet_count = meshlets.len() as u32;
         header.group_count = groups.len() as u32;
+        header.node_count = hierarchy.nodes.len() as u32;
         header.level_count = dag.level_count;
         header.root_count = dag.roots().count() as u32;
         let lod0 = dag.clusters.iter().filter(|c| c.level == 0);
@@ -242,6 +248,8 @@ impl MeshletAsset {
         header.sections[SECTION_GROUPS] = push(&mut words, bytemuck::cast_slice(&groups));
         header.sections[SECTION_CHILDREN] = push(&mut words, &children);
         header.sections[SECTION_PAYLOAD] = push(&mut words, &payload);
+        header.sections[SECTION_NODES] = push(&mut words, bytemuck::cast_slice(&hierarchy.nodes));
+        header.sections[SECTION_NODE_CLUSTERS] = push(&mut words, &hierarchy.clusters);
         let size = words.len() as u64 * 4;
         header.file_size = [size as u32, (size >> 32) as u32];
         let sum = checksum::file_checksum(
@@ -270,6 +278,16 @@ impl MeshletAsset {
                     path: path.to_owned(),
                 });
             }
+            if let Some(v) = start.get(8..12) {
+                let found = u32::from_le_bytes([v[0], v[1], v[2], v[3]]);
+                if found != VERSION {
+                    return Err(SceneError::AssetVersion {
+                        path: path.to_owned(),
+                        found,
+                        expected: VERSION,
+                    });
+                }
+            }
             return Err(SceneError::AssetTruncated {
                 path: path.to_owned(),
                 expected: header_bytes,
@@ -289,6 +307,21 @@ impl MeshletAsset {
         let p = || path.to_owned();
         let corrupt = |reason: String| SceneError::AssetCorrupt { path: p(), reason };
         let header_words = AssetHeader::WORDS;
+        // Magic and version first: an older format's header may be shorter than this
+        // one's, and its file must still get the re-bake message.
+        if len >= 12 && words.len() >= 3 {
+            let magic: &[u8] = bytemuck::cast_slice(&words[..2]);
+            if magic != MAGIC {
+                return Err(SceneError::AssetMagic { path: p() });
+            }
+            if words[2] != VERSION {
+                return Err(SceneError::AssetVersion {
+                    path: p(),
+                    found: words[2],
+                    expected: VERSION,
+                });
+            }
+        }
         if (words.len() as u64) < header_words as u64 || len < (header_words * 4) as u64 {
             return Err(SceneError::AssetTruncated {
                 path: p(),
@@ -385,6 +418,22 @@ impl MeshletAsset {
         self.section(SECTION_PAYLOAD)
     }
 
+    /// The culling hierarchy's nodes, root first (see [`crate::hierarchy`]).
+    pub fn nodes(&self) -> &[NodeRecord] {
+        bytemuck::cast_slice(self.section(SECTION_NODES))
+    }
+
+    /// The meshlet ids the hierarchy's leaves take, each meshlet once, in depth-first
+    /// order ([`NodeRecord::first_cluster`] indexes it).
+    pub fn node_clusters(&self) -> &[u32] {
+        self.section(SECTION_NODE_CLUSTERS)
+    }
+
+    /// The meshlets below `node`.
+    pub fn node_meshlets(&self, node: &NodeRecord) -> &[u32] {
+        &self.node_clusters()[node.clusters()]
+    }
+
     /// A meshlet's own LOD sphere and error: its source group's, or its bounds and zero
     /// at LOD 0.
     pub fn lod(&self, m: &MeshletRecord) -> ([f32; 4], f32) {
@@ -419,6 +468,7 @@ impl MeshletAsset {
             header: AssetHeader::WORDS * 4,
             meshlet_records: self.section(SECTION_MESHLETS).len() * 4,
             groups: (self.section(SECTION_GROUPS).len() + self.children().len()) * 4,
+            hierarchy: (self.section(SECTION_NODES).len() + self.node_clusters().len()) * 4,
             ..Default::default()
         };
         for m in self.meshlets() {

@@ -293,6 +293,229 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ),
         ));
     }
+    record(
+        SECTION_NODES,
+        size_of::<NodeRecord>() / 4,
+        h.node_count,
+        "node",
+    )?;
+    let nodes: &[NodeRecord] = bytemuck::cast_slice(section(SECTION_NODES));
+    hierarchy(meshlets, groups, nodes, section(SECTION_NODE_CLUSTERS))
+}
+
+/// The culling hierarchy (see [`crate::hierarchy`]): a tree rooted at node 0 whose
+/// children come after their parent (so no walk can cycle) and whose every other node
+/// has exactly one parent; the cluster list a permutation of the meshlets, tiled by the
+/// leaves in depth-first order; each leaf the meshlets of one group (or roots), every
+/// group in exactly one leaf; and every node's spheres and errors bounding everything
+/// below it, which the GPU's conservative skipping relies on.
+fn hierarchy(
+    meshlets: &[MeshletRecord],
+    groups: &[GroupRecord],
+    nodes: &[NodeRecord],
+    list: &[u32],
+) -> Result<(), Invalid> {
+    use crate::hierarchy::{MAX_CHILDREN, encloses};
+    if nodes.is_empty() {
+        return Err(bad("header.node_count", "is 0; the hierarchy has a root"));
+    }
+    if list.len() != meshlets.len() {
+        return Err(bad(
+            "header.sections[5].words",
+            format!(
+                "the hierarchy's cluster list holds {} entries for {} meshlets; it lists each once",
+                list.len(),
+                meshlets.len()
+            ),
+        ));
+    }
+    let mut seen = vec![false; meshlets.len()];
+    for (k, &m) in list.iter().enumerate() {
+        match seen.get_mut(m as usize) {
+            None => {
+                return Err(bad(
+                    format!("node_clusters[{k}]"),
+                    format!(
+                        "refers to meshlet {m}, past the {} meshlets",
+                        meshlets.len()
+                    ),
+                ));
+            }
+            Some(true) => {
+                return Err(bad(
+                    format!("node_clusters[{k}]"),
+                    format!("lists meshlet {m} a second time; each meshlet is listed once"),
+                ));
+            }
+            Some(s) => *s = true,
+        }
+    }
+    let mut parents = vec![0u32; nodes.len()];
+    let mut group_leaf = vec![false; groups.len()];
+    for (i, n) in nodes.iter().enumerate() {
+        let f = |name: &str| format!("node[{i}].{name}");
+        if n.reserved != [0; 2] {
+            return Err(bad(f("reserved"), "is not zero"));
+        }
+        for (name, s) in [("bounds", n.bounds), ("lod_sphere", n.lod_sphere)] {
+            if !finite_sphere(s) {
+                return Err(bad(f(name), format!("{s:?} is not a finite sphere")));
+            }
+        }
+        for (name, e) in [
+            ("min_error", n.min_error),
+            ("max_parent_error", n.max_parent_error),
+        ] {
+            if !(e.is_finite() && e >= 0.0) {
+                return Err(bad(f(name), format!("is {e}")));
+            }
+        }
+        if n.first_cluster as u64 + n.cluster_count as u64 > list.len() as u64
+            || n.cluster_count == 0
+        {
+            return Err(bad(
+                f("first_cluster"),
+                format!(
+                    "meshlets {}..+{} are empty or outside the cluster list's {}",
+                    n.first_cluster,
+                    n.cluster_count,
+                    list.len()
+                ),
+            ));
+        }
+        if i == 0 && (n.first_cluster != 0 || n.cluster_count as usize != list.len()) {
+            return Err(bad(
+                f("cluster_count"),
+                "the root does not cover the whole cluster list",
+            ));
+        }
+        if n.is_leaf() {
+            let below: Vec<&MeshletRecord> = list[n.clusters()]
+                .iter()
+                .map(|&m| &meshlets[m as usize])
+                .collect();
+            if n.first_child != 0 {
+                return Err(bad(f("first_child"), "is not 0 in a leaf"));
+            }
+            leaf_group(i, n, &below, groups, &mut group_leaf)?;
+            for m in &below {
+                let ((own_sphere, own_error), parent) = crate::hierarchy::meshlet_lod(m, groups);
+                let (parent_sphere, parent_error) =
+                    parent.unwrap_or((own_sphere, crate::asset::format::ROOT_PARENT_ERROR));
+                if !encloses(n.bounds, m.bounds)
+                    || !encloses(n.lod_sphere, own_sphere)
+                    || !encloses(n.lod_sphere, parent_sphere)
+                {
+                    return Err(bad(
+                        f("bounds"),
+                        "does not enclose the spheres of a meshlet below it",
+                    ));
+                }
+                if own_error < n.min_error {
+                    return Err(bad(
+                        f("min_error"),
+                        format!("is above the own error {own_error} of a meshlet below it"),
+                    ));
+                }
+                if parent_error > n.max_parent_error {
+                    return Err(bad(
+                        f("max_parent_error"),
+                        format!("is below the parent error {parent_error} of a meshlet below it"),
+                    ));
+                }
+            }
+            continue;
+        }
+        if n.child_count > MAX_CHILDREN
+            || (n.first_child as usize) <= i
+            || n.first_child as u64 + n.child_count as u64 > nodes.len() as u64
+        {
+            return Err(bad(
+                f("first_child"),
+                format!(
+                    "children {}..+{} are not after the node, within the {} nodes, at most {MAX_CHILDREN}",
+                    n.first_child,
+                    n.child_count,
+                    nodes.len()
+                ),
+            ));
+        }
+        let mut at = n.first_cluster;
+        for c in n.children() {
+            parents[c] += 1;
+            let child = &nodes[c];
+            if child.first_cluster != at {
+                return Err(bad(
+                    f("first_cluster"),
+                    format!("its children's meshlets do not follow each other at child {c}"),
+                ));
+            }
+            at = at.saturating_add(child.cluster_count);
+            if !encloses(n.bounds, child.bounds) || !encloses(n.lod_sphere, child.lod_sphere) {
+                return Err(bad(
+                    f("bounds"),
+                    format!("does not enclose child node {c}'s spheres"),
+                ));
+            }
+            if child.min_error < n.min_error {
+                return Err(bad(f("min_error"), format!("is above child node {c}'s")));
+            }
+            if child.max_parent_error > n.max_parent_error {
+                return Err(bad(
+                    f("max_parent_error"),
+                    format!("is below child node {c}'s"),
+                ));
+            }
+        }
+        if at != n.first_cluster + n.cluster_count {
+            return Err(bad(f("cluster_count"), "is not the sum of its children's"));
+        }
+    }
+    if let Some(k) = (1..nodes.len()).find(|&k| parents[k] != 1) {
+        return Err(bad(
+            format!("node[{k}]"),
+            format!(
+                "is a child of {} nodes; every node but the root has one parent",
+                parents[k]
+            ),
+        ));
+    }
+    if let Some(g) = group_leaf.iter().position(|&reached| !reached) {
+        return Err(bad(
+            format!("group[{g}]"),
+            "is in no leaf of the hierarchy; each group is one leaf",
+        ));
+    }
+    Ok(())
+}
+
+/// A leaf holds the children of one group, all of them (or only roots), and no group
+/// has two leaves.
+fn leaf_group(
+    i: usize,
+    n: &NodeRecord,
+    below: &[&MeshletRecord],
+    groups: &[GroupRecord],
+    group_leaf: &mut [bool],
+) -> Result<(), Invalid> {
+    let parent = below[0].parent_group;
+    if below.iter().any(|m| m.parent_group != parent) {
+        return Err(bad(
+            format!("node[{i}]"),
+            "is a leaf whose meshlets have different parent groups; a leaf holds one group",
+        ));
+    }
+    if parent == NO_GROUP {
+        return Ok(());
+    }
+    let g = parent as usize;
+    if group_leaf[g] || groups[g].child_count != n.cluster_count {
+        return Err(bad(
+            format!("node[{i}]"),
+            format!("is a leaf of group {g}, which has another leaf or other children"),
+        ));
+    }
+    group_leaf[g] = true;
     Ok(())
 }
 

@@ -1,0 +1,269 @@
+// fill_clusters, implementation `hierarchy`: one workgroup per instance walks its mesh's
+// culling hierarchy breadth-first with a queue in workgroup memory, testing each node
+// once (frustum, then the conservative LOD tests), and writes (instance, meshlet) for
+// the meshlets of every accepted leaf. A workgroup depends on no other, so nothing here
+// assumes that workgroups make progress together. `hierarchy_cpu` (Rust) is the
+// reference.
+//
+// Per round, the frontier is tested 64 nodes at a time; an accepted inner node appends
+// its children to the next frontier, and when that is full the children that do not fit
+// are emitted whole (every meshlet below them: one range of the depth-first cluster
+// list), so a full queue costs pruning, never a cluster of the cut. The meshlets a chunk
+// of 64 nodes emits are reserved with one global atomic and written cooperatively, one
+// leaf after another, consecutive threads writing consecutive slots.
+
+#import meshlight::meshlet::Cluster
+#import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
+#import meshlight::view::View
+#import meshlight::math::F32_MAX
+
+// 64 bytes: the asset's `NodeRecord`, with `first_child` and `first_cluster` rebased
+// onto the shared buffers by the GPU scene.
+struct HierarchyNode {
+    // Mesh space: encloses the culling spheres of every meshlet below.
+    bounds: vec4<f32>,
+    // Mesh space: encloses the own and parent LOD spheres of every meshlet below.
+    lod_sphere: vec4<f32>,
+    // Smallest own error of a meshlet below (mesh units).
+    min_error: f32,
+    // Largest parent error of a meshlet below; F32_MAX with a root below.
+    max_parent_error: f32,
+    // Children: nodes first_child .. first_child + child_count; none for a leaf.
+    first_child: u32,
+    child_count: u32,
+    // The meshlets below: hierarchy_clusters[first_cluster .. + cluster_count].
+    first_cluster: u32,
+    cluster_count: u32,
+    reserved: vec2<u32>,
+}
+
+struct Params {
+    // Clusters the list may hold; the shader also clamps it to the bound list's length.
+    capacity: u32,
+    // Instances to visit (at most the bound instance count).
+    instance_count: u32,
+    // x size of the dispatch, to linearise the workgroup id.
+    groups_x: u32,
+    // Nodes a frontier may hold, at most QUEUE (smaller in tests, to reach the spill).
+    queue_capacity: u32,
+    // cull_lod's `lod_threshold_px`: the two must agree, or the cut loses clusters.
+    lod_threshold_px: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// The scene's instances; one workgroup each.
+@group(0) @binding(0) var<storage, read> instances: array<Instance>;
+// The cluster list: written below the capacity only.
+@group(0) @binding(1) var<storage, read_write> clusters: array<Cluster>;
+// [0] clusters written = min(requested, capacity), [1] clusters requested.
+@group(0) @binding(2) var<storage, read_write> cluster_count: array<atomic<u32>>;
+@group(0) @binding(3) var<uniform> view: View;
+@group(0) @binding(4) var<uniform> params: Params;
+// Every mesh's hierarchy nodes.
+@group(0) @binding(5) var<storage, read> hierarchy_nodes: array<HierarchyNode>;
+// The leaves' meshlets, as indices into the scene's meshlets.
+@group(0) @binding(6) var<storage, read> hierarchy_clusters: array<u32>;
+// Per mesh, its root node.
+@group(0) @binding(7) var<storage, read> hierarchy_roots: array<u32>;
+// [0] nodes tested, [1] leaves accepted, [2] subtrees emitted whole (queue full),
+// [3] instances whose walk hit the round limit (0 unless the data is damaged).
+@group(0) @binding(8) var<storage, read_write> hierarchy_counts: array<atomic<u32>>;
+
+const WORKGROUP_SIZE: u32 = 64u;
+// Nodes a frontier holds; two frontiers take 8 KiB of workgroup memory.
+const QUEUE: u32 = 1024u;
+// More rounds than any stored tree has levels (the loader bounds nothing deeper than the
+// node count, but a walk must end even on damaged data).
+const MAX_ROUNDS: u32 = 256u;
+// Rounding slack of a node test, relative to the magnitudes the world transform and
+// the projection combine (2^-13: about 1000 times the f32 rounding of those steps).
+const SLACK: f32 = 1.220703125e-4;
+
+var<workgroup> frontier: array<array<u32, QUEUE>, 2>;
+var<workgroup> frontier_len: u32;
+var<workgroup> next_len: atomic<u32>;
+// The ranges of hierarchy_clusters a chunk emits, packed (one per emitting thread), each
+// with its offset in the chunk's reservation.
+var<workgroup> emit_first: array<u32, WORKGROUP_SIZE>;
+var<workgroup> emit_count: array<u32, WORKGROUP_SIZE>;
+var<workgroup> emit_offset: array<u32, WORKGROUP_SIZE>;
+var<workgroup> emit_ranges: atomic<u32>;
+var<workgroup> emit_total: atomic<u32>;
+var<workgroup> emit_len: u32;
+var<workgroup> emit_base: u32;
+var<workgroup> leaves: atomic<u32>;
+var<workgroup> spilled: atomic<u32>;
+
+fn capacity() -> u32 {
+    return min(params.capacity, arrayLength(&clusters));
+}
+
+// What stays the same for every node of one instance.
+struct Walker {
+    instance: Instance,
+    scale: f32,
+    // |translation| + |camera|: with the sphere's own size, the magnitudes a test adds.
+    reach: f32,
+}
+
+fn slack(w: Walker, sphere: vec4<f32>) -> f32 {
+    return (w.reach + w.scale * (length(sphere.xyz) + sphere.w)) * SLACK;
+}
+
+// Whether any meshlet below `node` can be in cull_lod's cut: its culling sphere in the
+// frustum, its parent perceptible and its own error imperceptible. Every comparison is
+// the per-cluster one with the node's bounds, shifted by the slack toward keeping.
+fn node_visible(node: HierarchyNode, w: Walker) -> bool {
+    let centre = instance_transform_point(w.instance, node.bounds.xyz);
+    let radius = node.bounds.w * w.scale + slack(w, node.bounds);
+    for (var p = 0u; p < 6u; p += 1u) {
+        let plane = view.frustum[p];
+        if dot(plane.xyz, centre) + plane.w < -(radius + SLACK * abs(plane.w)) {
+            return false;
+        }
+    }
+    let lod_centre = instance_transform_point(w.instance, node.lod_sphere.xyz);
+    let lod_radius = node.lod_sphere.w * w.scale;
+    let s = slack(w, node.lod_sphere);
+    let d = length(lod_centre - view.camera_position);
+    // Too fine: the largest parent error, seen from the sphere's nearest point, is
+    // imperceptible, so every parent below is.
+    if node.max_parent_error < F32_MAX {
+        let parent_px = (node.max_parent_error * w.scale) / max(d - lod_radius - s, view.near)
+            * view.lod_scale;
+        if parent_px <= params.lod_threshold_px {
+            return false;
+        }
+    }
+    // Too coarse: the smallest own error, seen from the sphere's farthest point, is
+    // perceptible, so every own error below is.
+    let own_px = (node.min_error * w.scale) / max(d + lod_radius + s, view.near) * view.lod_scale;
+    return !(own_px > params.lod_threshold_px);
+}
+
+@compute @workgroup_size(1)
+fn prepare() {
+    atomicStore(&cluster_count[0], 0u);
+    atomicStore(&cluster_count[1], 0u);
+    for (var i = 0u; i < 4u; i += 1u) {
+        atomicStore(&hierarchy_counts[i], 0u);
+    }
+}
+
+@compute @workgroup_size(64)
+fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    let index = wg.y * params.groups_x + wg.x;
+    var w: Walker;
+    var root = 0u;
+    var has_root = false;
+    if index < min(params.instance_count, arrayLength(&instances)) {
+        w.instance = instances[index];
+        has_root = w.instance.mesh < arrayLength(&hierarchy_roots);
+        if has_root {
+            root = hierarchy_roots[w.instance.mesh];
+        }
+    }
+    w.scale = instance_max_scale(w.instance);
+    w.reach = length(w.instance.world_from_local[3].xyz) + length(view.camera_position);
+    let queue_capacity = clamp(params.queue_capacity, 1u, QUEUE);
+    let cap = capacity();
+    if t == 0u {
+        // The root's test is the instance's: a culled instance costs one node.
+        frontier_len = select(0u, 1u, has_root);
+        frontier[0][0] = root;
+        atomicStore(&next_len, 0u);
+        atomicStore(&emit_ranges, 0u);
+        atomicStore(&emit_total, 0u);
+        atomicStore(&leaves, 0u);
+        atomicStore(&spilled, 0u);
+    }
+    var tested = 0u;
+    var left = 0u;
+    var cur = 0u;
+    for (var round = 0u; round <= MAX_ROUNDS; round += 1u) {
+        let n = workgroupUniformLoad(&frontier_len);
+        left = n;
+        if n == 0u || round == MAX_ROUNDS {
+            break;
+        }
+        tested += n;
+        for (var base = 0u; base < n; base += WORKGROUP_SIZE) {
+            let i = base + t;
+            var first = 0u;
+            var count = 0u;
+            if i < n {
+                let id = frontier[cur][i];
+                if id < arrayLength(&hierarchy_nodes) && node_visible(hierarchy_nodes[id], w) {
+                    let node = hierarchy_nodes[id];
+                    if node.child_count == 0u {
+                        first = node.first_cluster;
+                        count = node.cluster_count;
+                        atomicAdd(&leaves, 1u);
+                    } else {
+                        let slot = atomicAdd(&next_len, node.child_count);
+                        let fit = min(node.child_count, queue_capacity - min(slot, queue_capacity));
+                        for (var k = 0u; k < fit; k += 1u) {
+                            frontier[1u - cur][slot + k] = node.first_child + k;
+                        }
+                        if fit < node.child_count {
+                            // The children that did not fit, with everything below them.
+                            let end = node.first_cluster + node.cluster_count;
+                            first = hierarchy_nodes[node.first_child + fit].first_cluster;
+                            count = select(0u, end - first, first < end);
+                            atomicAdd(&spilled, 1u);
+                        }
+                    }
+                }
+            }
+            if count > 0u {
+                let e = atomicAdd(&emit_ranges, 1u);
+                emit_first[e] = first;
+                emit_count[e] = count;
+                emit_offset[e] = atomicAdd(&emit_total, count);
+            }
+            workgroupBarrier();
+            if t == 0u {
+                emit_len = atomicExchange(&emit_ranges, 0u);
+                let total = atomicExchange(&emit_total, 0u);
+                if total > 0u {
+                    emit_base = atomicAdd(&cluster_count[1], total);
+                }
+            }
+            // One range after another, consecutive threads on consecutive slots.
+            let ranges = workgroupUniformLoad(&emit_len);
+            let chunk_base = emit_base;
+            for (var e = 0u; e < ranges; e += 1u) {
+                let c = emit_count[e];
+                let start = chunk_base + emit_offset[e];
+                let range_first = emit_first[e];
+                for (var k = t; k < c; k += WORKGROUP_SIZE) {
+                    if start + k < cap {
+                        clusters[start + k] = Cluster(index, hierarchy_clusters[range_first + k]);
+                    }
+                }
+            }
+            workgroupBarrier();
+        }
+        if t == 0u {
+            frontier_len = min(atomicLoad(&next_len), queue_capacity);
+            atomicStore(&next_len, 0u);
+        }
+        cur = 1u - cur;
+    }
+    if t == 0u {
+        atomicAdd(&hierarchy_counts[0], tested);
+        atomicAdd(&hierarchy_counts[1], atomicLoad(&leaves));
+        atomicAdd(&hierarchy_counts[2], atomicLoad(&spilled));
+        if left > 0u {
+            atomicAdd(&hierarchy_counts[3], 1u);
+        }
+    }
+}
+
+@compute @workgroup_size(1)
+fn finish() {
+    let requested = atomicLoad(&cluster_count[1]);
+    atomicStore(&cluster_count[0], min(requested, capacity()));
+}

@@ -1,0 +1,225 @@
+//! The CPU reference of the `hierarchy` implementation: the same node test, operation for
+//! operation in f32 (matrix times vector summed column by column, dot products and
+//! lengths left to right), and the same breadth-first rounds with the same queue limit.
+//!
+//! A node test can still decide differently from a GPU's when a value lies within
+//! rounding of its threshold; [`NodeTest::closeness`] says how close each came, so a test
+//! can tell such a node from a real disagreement. Which subtrees a full frontier emits
+//! whole depends on the order of the GPU's atomics; the reference appends children in
+//! frontier order and says when a frontier filled ([`HierarchyWalk::queue_full`]).
+
+use crate::cpu::{instance_max_scale, mat_vec};
+use crate::hierarchy::{MAX_ROUNDS, QUEUE, SLACK};
+use meshlight_gpu_scene::SceneData;
+use meshlight_scene::asset::format::NodeRecord;
+use meshlight_shaders::cpu::layout::{Cluster, Instance, View};
+
+/// The pass's parameters that change what it emits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WalkParams {
+    pub capacity: u32,
+    pub lod_threshold_px: f32,
+    pub queue_capacity: u32,
+}
+
+impl Default for WalkParams {
+    fn default() -> Self {
+        Self {
+            capacity: u32::MAX,
+            lod_threshold_px: 1.0,
+            queue_capacity: QUEUE,
+        }
+    }
+}
+
+/// What the walk produces for a scene and a view.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct HierarchyWalk {
+    /// Every requested cluster, instance by instance, each instance's in the order its
+    /// rounds emitted them (the GPU's order differs; compare as sets).
+    pub clusters: Vec<Cluster>,
+    /// Instances whose root passed its test.
+    pub visible_instances: Vec<u32>,
+    /// `hierarchy_counts`: nodes tested, leaves accepted, subtrees emitted whole, walks
+    /// unfinished.
+    pub counts: [u32; 4],
+    /// `cluster_count[1]` and `[0]`.
+    pub requested: u32,
+    pub written: u32,
+    /// Some frontier was full: which subtrees were emitted whole then depends on the
+    /// order the GPU appended children in.
+    pub queue_full: bool,
+    /// `(instance, node)` of every test decided within `near` (the argument of
+    /// [`cpu_walk`]) of a threshold, relative to what it compared.
+    pub near_threshold: Vec<(u32, u32)>,
+}
+
+/// One node test: whether the walk goes on below the node, and how close the deciding
+/// comparisons came to flipping (relative to their scale; `f32::INFINITY` when no
+/// comparison was made).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeTest {
+    pub visible: bool,
+    pub closeness: f32,
+}
+
+fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn length3(a: [f32; 3]) -> f32 {
+    dot3(a, a).sqrt()
+}
+
+fn xyz(v: [f32; 4]) -> [f32; 3] {
+    [v[0], v[1], v[2]]
+}
+
+/// What stays the same for every node of one instance (`Walker` in the shader).
+#[derive(Clone, Copy, Debug)]
+pub struct Walker<'a> {
+    pub instance: &'a Instance,
+    pub scale: f32,
+    pub reach: f32,
+}
+
+impl<'a> Walker<'a> {
+    pub fn new(instance: &'a Instance, view: &View) -> Self {
+        Self {
+            instance,
+            scale: instance_max_scale(instance),
+            reach: length3(xyz(instance.world_from_local[3])) + length3(view.camera_position),
+        }
+    }
+
+    fn slack(&self, sphere: [f32; 4]) -> f32 {
+        (self.reach + self.scale * (length3(xyz(sphere)) + sphere[3])) * SLACK
+    }
+
+    fn transform(&self, p: [f32; 4]) -> [f32; 3] {
+        xyz(mat_vec(
+            &self.instance.world_from_local,
+            [p[0], p[1], p[2], 1.0],
+        ))
+    }
+}
+
+/// `node_visible`, with how close it came to deciding otherwise.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub fn node_test(view: &View, w: &Walker, node: &NodeRecord, threshold: f32) -> NodeTest {
+    let rel = |v: f32, to: f32| (v - to).abs() / to.abs().max(f32::MIN_POSITIVE);
+    let centre = w.transform(node.bounds);
+    let radius = node.bounds[3] * w.scale + w.slack(node.bounds);
+    let mut closeness = f32::INFINITY;
+    for p in &view.frustum {
+        let keep = radius + SLACK * p[3].abs();
+        let d = dot3(xyz(*p), centre) + p[3];
+        closeness = closeness.min((d + keep).abs() / keep.max(f32::MIN_POSITIVE));
+        if d < -keep {
+            return NodeTest {
+                visible: false,
+                closeness,
+            };
+        }
+    }
+    let lod_centre = w.transform(node.lod_sphere);
+    let lod_radius = node.lod_sphere[3] * w.scale;
+    let s = w.slack(node.lod_sphere);
+    let c = view.camera_position;
+    let d = length3([
+        lod_centre[0] - c[0],
+        lod_centre[1] - c[1],
+        lod_centre[2] - c[2],
+    ]);
+    if node.max_parent_error < f32::MAX {
+        let parent_px = (node.max_parent_error * w.scale) / (d - lod_radius - s).max(view.near)
+            * view.lod_scale;
+        closeness = closeness.min(rel(parent_px, threshold));
+        if parent_px <= threshold {
+            return NodeTest {
+                visible: false,
+                closeness,
+            };
+        }
+    }
+    let own_px = (node.min_error * w.scale) / (d + lod_radius + s).max(view.near) * view.lod_scale;
+    closeness = closeness.min(rel(own_px, threshold));
+    NodeTest {
+        visible: !(own_px > threshold),
+        closeness,
+    }
+}
+
+/// The reference walk over every instance. Tests deciding within `near` of a threshold
+/// are listed in [`HierarchyWalk::near_threshold`].
+pub fn cpu_walk(scene: &SceneData, view: &View, params: &WalkParams, near: f32) -> HierarchyWalk {
+    let nodes = &scene.hierarchy_nodes;
+    let queue = params.queue_capacity.clamp(1, QUEUE) as usize;
+    let mut r = HierarchyWalk::default();
+    for (index, instance) in scene.instances.iter().enumerate() {
+        let Some(&root) = scene.hierarchy_roots.get(instance.mesh as usize) else {
+            continue;
+        };
+        let w = Walker::new(instance, view);
+        let emit = |r: &mut HierarchyWalk, first: u32, end: u32| {
+            r.clusters.extend(
+                scene.hierarchy_clusters[first as usize..end as usize]
+                    .iter()
+                    .map(|&meshlet| Cluster {
+                        instance: index as u32,
+                        meshlet,
+                    }),
+            );
+        };
+        let mut frontier = vec![root];
+        let mut round = 0;
+        while !frontier.is_empty() && round < MAX_ROUNDS {
+            r.counts[0] += frontier.len() as u32;
+            let mut next = Vec::new();
+            // Children reserved so far, counting those past the queue (the GPU's atomic).
+            let mut reserved = 0usize;
+            for &id in &frontier {
+                let Some(node) = nodes.get(id as usize) else {
+                    continue;
+                };
+                let test = node_test(view, &w, node, params.lod_threshold_px);
+                if test.closeness < near {
+                    r.near_threshold.push((index as u32, id));
+                }
+                if !test.visible {
+                    continue;
+                }
+                if id == root {
+                    r.visible_instances.push(index as u32);
+                }
+                if node.is_leaf() {
+                    r.counts[1] += 1;
+                    emit(
+                        &mut r,
+                        node.first_cluster,
+                        node.first_cluster + node.cluster_count,
+                    );
+                    continue;
+                }
+                let slot = reserved;
+                reserved += node.child_count as usize;
+                let fit = (node.child_count as usize).min(queue - slot.min(queue));
+                next.extend((0..fit as u32).map(|k| node.first_child + k));
+                if fit < node.child_count as usize {
+                    r.queue_full = true;
+                    r.counts[2] += 1;
+                    let first = nodes[node.first_child as usize + fit].first_cluster;
+                    emit(&mut r, first, node.first_cluster + node.cluster_count);
+                }
+            }
+            frontier = next;
+            round += 1;
+        }
+        if !frontier.is_empty() {
+            r.counts[3] += 1;
+        }
+    }
+    r.requested = r.clusters.len() as u32;
+    r.written = r.requested.min(params.capacity);
+    r
+}

@@ -1,0 +1,282 @@
+//! The hierarchy walk on the CPU: `cull_lod`'s reference finds exactly the same LOD cut
+//! after the walk's list as after the flat list, on seeded random views (near, far,
+//! inside the field of instances, every threshold) of the Stanford bunny and of the
+//! procedural mesh; the walk lists each cluster once and far fewer than the flat fill;
+//! the comparison does notice a walk that drops clusters of the cut; and on the bunny
+//! lattice of the benchmarks, clusters + nodes tested stay within 3× the cut.
+
+use glam::{Mat4, Quat, Vec3};
+use meshlight_gpu_scene::{Camera, Material, SceneData, data::Limits};
+use meshlight_pass_cull_lod::{Thresholds, cpu_cull};
+use meshlight_pass_fill_clusters::{WalkParams, cpu_fill, cpu_walk};
+use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
+use meshlight_shaders::cpu::layout::{Cluster, View};
+use std::collections::BTreeSet;
+use std::sync::OnceLock;
+
+fn bunny() -> &'static MeshletAsset {
+    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
+    ASSET.get_or_init(|| {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../assets/meshes/stanford-bunny.obj"
+        );
+        let mesh = meshlight_scene::load::load_mesh(std::path::Path::new(path)).unwrap();
+        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
+            .unwrap()
+            .asset
+    })
+}
+
+fn procedural() -> &'static MeshletAsset {
+    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
+    ASSET.get_or_init(|| {
+        build_asset(&procedural_mesh(40), &BuildOptions::default(), &mut |_| {})
+            .unwrap()
+            .asset
+    })
+}
+
+/// xorshift64*: seeded, reproducible views.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+    fn below(&mut self, n: u32) -> u32 {
+        (self.next() % n as u64) as u32
+    }
+}
+
+/// A 4 × 4 field of `asset`, one unit of mesh radius apart scaled by `radius`, turned,
+/// scaled (one unevenly) and lifted differently, so instances are near and far from any
+/// camera among them.
+fn field(asset: &MeshletAsset) -> SceneData {
+    let mut data = SceneData::new(Limits::default());
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let mesh = data.add_mesh("mesh", asset).unwrap();
+    let radius = data.meshes[0].bounding_sphere[3];
+    for i in 0..16 {
+        let (x, z) = ((i % 4) as f32, (i / 4) as f32);
+        let scale = if i == 5 {
+            Vec3::new(1.6, 0.6, 1.0)
+        } else {
+            Vec3::splat(0.6 + 0.1 * (i % 7) as f32)
+        };
+        let transform = Mat4::from_scale_rotation_translation(
+            scale,
+            Quat::from_rotation_y(i as f32 * 0.9),
+            Vec3::new(x * 3.0, (i % 3) as f32 * 0.4, z * 3.0) * radius,
+        );
+        data.add_instance(mesh, transform, material)
+            .unwrap()
+            .expect("an invertible transform");
+    }
+    data
+}
+
+fn set(clusters: &[Cluster]) -> BTreeSet<(u32, u32)> {
+    clusters.iter().map(|c| (c.instance, c.meshlet)).collect()
+}
+
+/// A random view of `data`'s field: from inside it to 60 mesh radii away.
+fn random_view(data: &SceneData, rng: &mut Rng, v: u32) -> (View, f32) {
+    let radius = data.meshes[0].bounding_sphere[3];
+    let target = Vec3::new(
+        rng.range(-1.0, 10.0),
+        rng.range(-0.5, 1.5),
+        rng.range(-1.0, 10.0),
+    ) * radius;
+    let direction = Vec3::new(
+        rng.range(-1.0, 1.0),
+        rng.range(-0.4, 1.0),
+        rng.range(-1.0, 1.0),
+    )
+    .normalize_or(Vec3::Z);
+    let distance = radius * 0.3 * (200.0f32).powf(rng.unit());
+    let viewport = [[320, 240], [1280, 720], [2240, 1260]][rng.below(3) as usize];
+    let camera = Camera::perspective(
+        target + direction * distance,
+        target,
+        rng.range(0.4, 1.6),
+        radius * 0.02,
+    );
+    let threshold = [0.5, 1.0, 2.0, 4.0][rng.below(4) as usize];
+    (camera.view(viewport, v, None), threshold)
+}
+
+/// Per view: the flat list and the walk's, each through `cpu_cull`; the cuts must be
+/// equal. Returns (flat clusters, walk clusters + nodes, cut clusters) over all views.
+fn compare_cuts(name: &str, data: &SceneData, seed: u64, views: u32) -> [usize; 3] {
+    let mut rng = Rng(seed);
+    let mut totals = [0usize; 3];
+    let mut levels_in_cuts = BTreeSet::new();
+    for v in 0..views {
+        let (view, threshold) = random_view(data, &mut rng, v);
+        let t = Thresholds {
+            lod_threshold_px: threshold,
+            ..Thresholds::default()
+        };
+        let flat = cpu_fill(data, &view, u32::MAX);
+        let want = cpu_cull(data, &view, &flat.clusters, &t, u32::MAX);
+        let params = WalkParams {
+            lod_threshold_px: threshold,
+            ..WalkParams::default()
+        };
+        let walk = cpu_walk(data, &view, &params, 0.0);
+        assert!(!walk.queue_full && walk.counts[3] == 0, "{name} view {v}");
+        let listed = set(&walk.clusters);
+        assert_eq!(
+            listed.len(),
+            walk.clusters.len(),
+            "{name} view {v}: a cluster listed twice"
+        );
+        let got = cpu_cull(data, &view, &walk.clusters, &t, u32::MAX);
+        let (want_cut, got_cut) = (set(&want.cut), set(&got.cut));
+        let missing: Vec<_> = want_cut.difference(&got_cut).take(5).collect();
+        assert!(
+            want_cut == got_cut,
+            "{name} view {v} (threshold {threshold}): cut of {} clusters, the walk's {}; missing {missing:?}",
+            want_cut.len(),
+            got_cut.len()
+        );
+        for c in &want.cut {
+            levels_in_cuts.insert(data.meshlets[c.meshlet as usize].level());
+        }
+        totals[0] += flat.clusters.len();
+        totals[1] += walk.clusters.len() + walk.counts[0] as usize;
+        totals[2] += want.cut.len();
+    }
+    eprintln!(
+        "{name}: {views} views, flat list {} clusters, walk {} clusters + nodes, cut {}; cut levels {levels_in_cuts:?}",
+        totals[0], totals[1], totals[2]
+    );
+    assert!(
+        levels_in_cuts.len() >= 4,
+        "{name}: the views reach only levels {levels_in_cuts:?}"
+    );
+    totals
+}
+
+#[test]
+fn the_walk_and_the_flat_list_give_the_same_cut_on_random_views_of_the_bunny() {
+    let data = field(bunny());
+    let [flat, walk, cut] = compare_cuts("bunny", &data, 0xb0_0b1e5, 60);
+    assert!(cut > 0);
+    assert!(
+        walk * 3 < flat,
+        "the walk tests {walk} clusters + nodes, the flat list {flat}"
+    );
+}
+
+#[test]
+fn the_walk_and_the_flat_list_give_the_same_cut_on_random_views_of_the_procedural_mesh() {
+    let data = field(procedural());
+    let [flat, walk, cut] = compare_cuts("procedural", &data, 0x9e0_3e7c, 60);
+    assert!(cut > 0);
+    assert!(
+        walk * 3 < flat,
+        "the walk tests {walk} clusters + nodes, the flat list {flat}"
+    );
+}
+
+/// The comparison above notices a walk that loses clusters of the cut: with a threshold
+/// other than cull's, the walk prunes what cull would keep, and the cuts differ.
+#[test]
+fn a_walk_with_another_threshold_than_cull_loses_clusters_of_the_cut() {
+    let data = field(bunny());
+    let mut rng = Rng(0x5eed_0002);
+    let mut differing = 0;
+    for v in 0..20 {
+        let (view, threshold) = random_view(&data, &mut rng, v);
+        let t = Thresholds {
+            lod_threshold_px: threshold,
+            ..Thresholds::default()
+        };
+        let want = set(&cpu_cull(
+            &data,
+            &view,
+            &cpu_fill(&data, &view, u32::MAX).clusters,
+            &t,
+            u32::MAX,
+        )
+        .cut);
+        for factor in [0.5, 2.0] {
+            let params = WalkParams {
+                lod_threshold_px: threshold * factor,
+                ..WalkParams::default()
+            };
+            let walk = cpu_walk(&data, &view, &params, 0.0);
+            let got = set(&cpu_cull(&data, &view, &walk.clusters, &t, u32::MAX).cut);
+            assert!(got.is_subset(&want));
+            differing += usize::from(got != want);
+        }
+    }
+    assert!(
+        differing >= 10,
+        "only {differing} of 40 walks lost clusters"
+    );
+}
+
+/// The virtual-geometry benchmark's scene: 15³ bunnies in a lattice 2.5 mesh radii
+/// apart, seen from outside one corner at 2240×1260 (`scenes::lattice`), threshold 1 px.
+#[test]
+fn on_the_bunny_lattice_clusters_and_nodes_tested_stay_within_three_times_the_cut() {
+    let mut data = SceneData::new(Limits::default());
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let mesh = data.add_mesh("bunny", bunny()).unwrap();
+    let radius = data.meshes[0].bounding_sphere[3];
+    let spacing = radius * 2.5;
+    let n = 15u32;
+    for i in 0..n * n * n {
+        let cell = Vec3::new((i % n) as f32, (i / n % n) as f32, (i / (n * n)) as f32);
+        data.add_instance(mesh, Mat4::from_translation(cell * spacing), material)
+            .unwrap();
+    }
+    let centre = Vec3::splat((n as f32 - 1.0) * 0.5 * spacing);
+    let extent = n as f32 * spacing;
+    let camera = Camera::perspective(
+        centre + Vec3::new(0.9, 0.6, 1.2).normalize() * extent * 1.3,
+        centre,
+        50f32.to_radians(),
+        radius * 0.05,
+    );
+    let view = camera.view([2240, 1260], 0, None);
+    let t = Thresholds::default();
+    let flat = cpu_fill(&data, &view, u32::MAX);
+    let want = cpu_cull(&data, &view, &flat.clusters, &t, u32::MAX);
+    let walk = cpu_walk(&data, &view, &WalkParams::default(), 0.0);
+    let got = cpu_cull(&data, &view, &walk.clusters, &t, u32::MAX);
+    assert_eq!(set(&want.cut), set(&got.cut));
+    let tested = walk.clusters.len() + walk.counts[0] as usize;
+    let cut = want.cut.len();
+    eprintln!(
+        "bunny lattice 15³ at 2240x1260: cut {cut} clusters; flat fill lists {} (cull tests {}); \
+         the walk tests {} nodes and lists {} clusters ({} leaves), {tested} in all = {:.2}x the cut",
+        flat.clusters.len(),
+        flat.clusters.len(),
+        walk.counts[0],
+        walk.clusters.len(),
+        walk.counts[1],
+        tested as f64 / cut as f64
+    );
+    assert!(!walk.queue_full);
+    assert!(
+        tested <= 3 * cut,
+        "{tested} clusters + nodes tested for a cut of {cut}"
+    );
+}

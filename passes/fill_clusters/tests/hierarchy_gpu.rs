@@ -1,0 +1,563 @@
+//! The `hierarchy` implementation on the GPU: its list against `cpu_walk` (the set of
+//! clusters, each once, and every count word) on seeded random views; `cull_lod` after it
+//! against `cull_lod` after `workgroup_per_instance` (the same cut, exactly); a full
+//! queue that emits whole subtrees and still gives the same cut; a small capacity counted
+//! like the flat fill's; instances behind the camera costing one node each; and the
+//! typed error of a graph that leaves the hierarchy unbound.
+
+use glam::{Mat4, Quat, Vec3};
+use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, data::Limits};
+use meshlight_graph::*;
+use meshlight_pass_cull_lod::{CullLod, Thresholds};
+use meshlight_pass_fill_clusters::{
+    FillClusters, HierarchyFill, HierarchyWalk, WalkParams, cpu_walk,
+};
+use meshlight_scene::{BuildOptions, MeshletAsset, build_asset};
+use meshlight_shaders::cpu::layout::{Cluster, View};
+use std::collections::BTreeSet;
+use std::sync::OnceLock;
+
+const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_DST)
+    .union(wgpu::BufferUsages::COPY_SRC);
+
+/// What the GPU leaves in slots nothing may write.
+const SENTINEL: Cluster = Cluster {
+    instance: 0xdead_beef,
+    meshlet: 0xfeed_f00d,
+};
+
+/// Slots after the list that must keep the sentinel.
+const GUARD: u32 = 64;
+
+/// A node the GPU and the reference decide differently must have a deciding value
+/// within this relative distance of its threshold (f32 rounding, fused multiply-adds).
+const NEAR_THRESHOLD: f32 = 1e-5;
+
+fn gpu() -> GpuContext {
+    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn bunny() -> &'static MeshletAsset {
+    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
+    ASSET.get_or_init(|| {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../assets/meshes/stanford-bunny.obj"
+        );
+        let mesh = meshlight_scene::load::load_mesh(std::path::Path::new(path)).unwrap();
+        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
+            .unwrap()
+            .asset
+    })
+}
+
+fn spot() -> &'static MeshletAsset {
+    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
+    ASSET.get_or_init(|| {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/spot.obj");
+        let mesh = meshlight_scene::load::load_mesh(std::path::Path::new(path)).unwrap();
+        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
+            .unwrap()
+            .asset
+    })
+}
+
+/// Two meshes (the bunny and spot, so hierarchies are rebased in the shared buffers) on
+/// a 4 × 3 field, turned and scaled differently (one unevenly), in bunny radii.
+fn scene() -> SceneData {
+    let mut data = SceneData::new(Limits::default());
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let meshes = [
+        data.add_mesh("bunny", bunny()).unwrap(),
+        data.add_mesh("spot", spot()).unwrap(),
+    ];
+    let radius = data.meshes[0].bounding_sphere[3];
+    let spot_scale = radius / data.meshes[1].bounding_sphere[3];
+    for i in 0..12 {
+        let (x, z) = ((i % 4) as f32, (i / 4) as f32);
+        let mesh = i % 2;
+        let mut scale = Vec3::splat(0.7 + 0.1 * (i % 5) as f32);
+        if i == 5 {
+            scale = Vec3::new(1.5, 0.6, 1.0);
+        }
+        if mesh == 1 {
+            scale *= spot_scale;
+        }
+        let transform = Mat4::from_scale_rotation_translation(
+            scale,
+            Quat::from_rotation_y(i as f32 * 1.3),
+            Vec3::new(x * 3.0, 0.0, z * 3.0) * radius,
+        );
+        data.add_instance(meshes[mesh as usize], transform, material)
+            .unwrap()
+            .expect("an invertible transform");
+    }
+    data
+}
+
+/// xorshift64*: seeded, reproducible views.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+    fn below(&mut self, n: u32) -> u32 {
+        (self.next() % n as u64) as u32
+    }
+}
+
+fn random_view(data: &SceneData, rng: &mut Rng, v: u32) -> (View, f32) {
+    let radius = data.meshes[0].bounding_sphere[3];
+    let target = Vec3::new(
+        rng.range(-1.0, 10.0),
+        rng.range(-0.5, 1.0),
+        rng.range(-1.0, 7.0),
+    ) * radius;
+    let direction = Vec3::new(
+        rng.range(-1.0, 1.0),
+        rng.range(-0.3, 1.0),
+        rng.range(-1.0, 1.0),
+    )
+    .normalize_or(Vec3::Z);
+    let distance = radius * 0.4 * (120.0f32).powf(rng.unit());
+    let viewport = [[320, 240], [640, 360], [1280, 720]][rng.below(3) as usize];
+    let camera = Camera::perspective(
+        target + direction * distance,
+        target,
+        rng.range(0.5, 1.5),
+        radius * 0.02,
+    );
+    let threshold = [0.5, 1.0, 2.0][rng.below(3) as usize];
+    (camera.view(viewport, v, None), threshold)
+}
+
+/// What one frame left: the fill's list and words, and the cut when cull ran after it.
+struct Frame {
+    /// The whole list buffer: `slots` entries then the guard.
+    list: Vec<Cluster>,
+    cluster_count: [u32; 2],
+    /// `hierarchy_counts` (zeros for the flat fill).
+    counts: [u32; 4],
+    /// Software and hardware sides of cull's raster list.
+    cut: Option<BTreeSet<(u32, u32)>>,
+}
+
+impl Frame {
+    fn listed(&self) -> &[Cluster] {
+        &self.list[..self.cluster_count[0] as usize]
+    }
+}
+
+enum Fill {
+    Flat,
+    Hierarchy(HierarchyFill),
+}
+
+/// Runs `fill` (and `cull` after it) for one view over a sentinel-filled list of `slots`.
+fn run(data: &mut SceneData, view: &View, fill: Fill, cull: Option<f32>, slots: u32) -> Frame {
+    let gpu = gpu();
+    let scene = GpuScene::new(&gpu, data);
+    let mut g = GraphBuilder::new();
+    let h = scene.import(&mut g);
+    let list = g.import_buffer(
+        "clusters",
+        BufferDesc::array(elements::CLUSTER, (slots + GUARD) as u64),
+        USAGE,
+    );
+    let count = g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
+    let mut bindings = Bindings::new()
+        .bind("instances", h.instances)
+        .bind("meshes", h.meshes)
+        .bind("clusters", list)
+        .bind("cluster_count", count);
+    let hierarchy = matches!(fill, Fill::Hierarchy(_));
+    let pass: Box<dyn Pass> = match fill {
+        Fill::Flat => Box::new(FillClusters {
+            capacity: Some(slots),
+            instance_count: None,
+        }),
+        Fill::Hierarchy(pass) => {
+            let t = scene.import_hierarchy(&mut g);
+            let counts = g.create_buffer("hierarchy_counts", BufferDesc::array(Element::U32, 4));
+            bindings = bindings
+                .bind("hierarchy_nodes", t.nodes)
+                .bind("hierarchy_clusters", t.clusters)
+                .bind("hierarchy_roots", t.roots)
+                .bind("hierarchy_counts", counts);
+            Box::new(HierarchyFill {
+                capacity: Some(slots),
+                ..pass
+            })
+        }
+    };
+    let out = g.add_boxed_pass("fill", pass, bindings).unwrap();
+    g.export(out.buffer("clusters").unwrap());
+    g.export(out.buffer("cluster_count").unwrap());
+    if hierarchy {
+        g.export(out.buffer("hierarchy_counts").unwrap());
+    }
+    if let Some(threshold) = cull {
+        let raster = g.create_buffer(
+            "raster_clusters",
+            BufferDesc::array(elements::CLUSTER, slots as u64),
+        );
+        let counts = g.create_buffer("raster_counts", BufferDesc::array(Element::U32, 8));
+        let hw_args = g.create_buffer("hw_args", BufferDesc::array(Element::DRAW_ARGS, 1));
+        let pass = CullLod {
+            thresholds: Thresholds {
+                lod_threshold_px: threshold,
+                ..Thresholds::default()
+            },
+            ..CullLod::default()
+        };
+        let culled = g
+            .add_pass(
+                "cull",
+                pass,
+                Bindings::new()
+                    .bind("clusters", out.buffer("clusters").unwrap())
+                    .bind("cluster_count", out.buffer("cluster_count").unwrap())
+                    .bind("instances", h.instances)
+                    .bind("meshes", h.meshes)
+                    .bind("meshlets", h.meshlets)
+                    .bind("meshlet_groups", h.groups)
+                    .bind("raster_clusters", raster)
+                    .bind("raster_counts", counts)
+                    .bind("hw_args", hw_args),
+            )
+            .unwrap();
+        g.export(culled.buffer("raster_clusters").unwrap());
+        g.export(culled.buffer("raster_counts").unwrap());
+    }
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let list_buffer = gpu.buffer_with_data(
+        "clusters",
+        bytemuck::cast_slice(&vec![SENTINEL; (slots + GUARD) as usize]),
+        USAGE,
+    );
+    let mut exec = Executor::new(gpu);
+    let frame = FrameData::new().with("view", bytemuck::bytes_of(view));
+    exec.execute_frame(
+        &compiled,
+        &scene.imports().buffer("clusters", &list_buffer),
+        &frame,
+    )
+    .unwrap();
+    let words = |exec: &mut Executor, name: &str| -> Vec<u32> {
+        bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
+    };
+    let cluster_count = words(&mut exec, "cluster_count");
+    let counts = if hierarchy {
+        words(&mut exec, "hierarchy_counts")
+    } else {
+        vec![0; 4]
+    };
+    let cut = cull.map(|_| {
+        let raster: Vec<Cluster> =
+            bytemuck::pod_collect_to_vec(&exec.read_buffer("raster_clusters").unwrap());
+        let c = words(&mut exec, "raster_counts");
+        let (sw, hw, total) = (c[0] as usize, c[1] as usize, c[2] as usize);
+        assert!(total <= slots as usize, "the raster list overflowed");
+        raster[..sw]
+            .iter()
+            .chain(&raster[slots as usize - hw..])
+            .map(|c| (c.instance, c.meshlet))
+            .collect()
+    });
+    let list = bytemuck::pod_collect_to_vec(
+        &exec
+            .gpu
+            .read_buffer(&list_buffer, 0, list_buffer.size())
+            .unwrap(),
+    );
+    Frame {
+        list,
+        cluster_count: [cluster_count[0], cluster_count[1]],
+        counts: counts[..4].try_into().unwrap(),
+        cut,
+    }
+}
+
+fn set(clusters: &[Cluster]) -> BTreeSet<(u32, u32)> {
+    clusters.iter().map(|c| (c.instance, c.meshlet)).collect()
+}
+
+/// Where each meshlet stands in the shared hierarchy cluster list.
+fn list_positions(data: &SceneData) -> Vec<usize> {
+    let mut at = vec![usize::MAX; data.meshlets.len()];
+    for (k, &m) in data.hierarchy_clusters.iter().enumerate() {
+        at[m as usize] = k;
+    }
+    at
+}
+
+/// The GPU's list against the reference: the same set, each cluster once, nothing past
+/// it written; a cluster in one and not the other must lie below a node whose test was
+/// within rounding of a threshold. Returns how many differed.
+fn compare(data: &SceneData, reference: &HierarchyWalk, got: &Frame, label: &str) -> usize {
+    let listed = got.listed();
+    let gpu = set(listed);
+    assert_eq!(gpu.len(), listed.len(), "{label}: a cluster written twice");
+    assert!(
+        got.list[listed.len()..].iter().all(|c| *c == SENTINEL),
+        "{label}: a slot past the list was written"
+    );
+    let want = set(&reference.clusters);
+    let positions = list_positions(data);
+    let differing: Vec<(u32, u32)> = gpu.symmetric_difference(&want).copied().collect();
+    for &(instance, meshlet) in &differing {
+        let at = positions[meshlet as usize];
+        let explained = reference.near_threshold.iter().any(|&(i, node)| {
+            i == instance && data.hierarchy_nodes[node as usize].clusters().contains(&at)
+        });
+        assert!(
+            explained,
+            "{label}: cluster ({instance}, {meshlet}) listed differently, under no node near a threshold"
+        );
+    }
+    if differing.is_empty() {
+        assert_eq!(
+            got.cluster_count,
+            [reference.written, reference.requested],
+            "{label}: count words"
+        );
+        assert_eq!(got.counts, reference.counts, "{label}: hierarchy counts");
+    }
+    differing.len()
+}
+
+#[test]
+fn lists_equal_the_reference_on_random_views() {
+    let mut data = scene();
+    let mut rng = Rng(0x41e7_a7c4_0001);
+    let (mut nodes, mut clusters, mut invisible) = (0, 0, 0);
+    let mut differing = 0;
+    for v in 0..12 {
+        let (view, threshold) = random_view(&data, &mut rng, v);
+        let params = WalkParams {
+            lod_threshold_px: threshold,
+            ..WalkParams::default()
+        };
+        let reference = cpu_walk(&data, &view, &params, NEAR_THRESHOLD);
+        assert!(!reference.queue_full);
+        let slots = reference.requested + 16;
+        let pass = HierarchyFill {
+            lod_threshold_px: threshold,
+            ..HierarchyFill::default()
+        };
+        let got = run(&mut data, &view, Fill::Hierarchy(pass), None, slots);
+        let label = format!("view {v} (threshold {threshold})");
+        differing += compare(&data, &reference, &got, &label);
+        nodes += reference.counts[0];
+        clusters += reference.requested;
+        invisible += data.instances.len() - reference.visible_instances.len();
+        eprintln!(
+            "{label}: {} nodes tested, {} leaves, {} clusters listed, {} instances visible",
+            got.counts[0],
+            got.counts[1],
+            got.cluster_count[1],
+            reference.visible_instances.len()
+        );
+    }
+    assert!(nodes > 0 && clusters > 0);
+    assert!(invisible > 0, "no view culled an instance");
+    assert!(differing <= 12, "{differing} clusters differed");
+}
+
+#[test]
+fn after_cull_lod_the_cut_equals_the_flat_fills_cut() {
+    let mut data = scene();
+    let mut rng = Rng(0x41e7_a7c4_0002);
+    let total: u32 = data.instances.iter().map(|i| i.meshlet_count).sum();
+    let mut cut_sizes = Vec::new();
+    for v in 0..8 {
+        let (view, threshold) = random_view(&data, &mut rng, v);
+        let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
+        let pass = HierarchyFill {
+            lod_threshold_px: threshold,
+            ..HierarchyFill::default()
+        };
+        let walk = run(
+            &mut data,
+            &view,
+            Fill::Hierarchy(pass),
+            Some(threshold),
+            total,
+        );
+        let (want, got) = (flat.cut.unwrap(), walk.cut.unwrap());
+        assert_eq!(
+            got.len(),
+            want.len(),
+            "view {v}: cut of {} after the flat fill, {} after the walk",
+            want.len(),
+            got.len()
+        );
+        assert!(got == want, "view {v}: the cuts differ");
+        assert!(walk.cluster_count[1] <= flat.cluster_count[1]);
+        cut_sizes.push(want.len());
+    }
+    assert!(
+        cut_sizes.iter().filter(|&&n| n > 0).count() >= 6,
+        "{cut_sizes:?}"
+    );
+}
+
+#[test]
+fn a_full_queue_emits_whole_subtrees_and_keeps_the_cut() {
+    let mut data = scene();
+    let radius = data.meshes[0].bounding_sphere[3];
+    // Close over the field: many leaves at several levels.
+    let camera = Camera::perspective(
+        Vec3::new(-1.0, 2.0, -1.0) * radius,
+        Vec3::new(5.0, 0.0, 4.0) * radius,
+        1.2,
+        radius * 0.02,
+    );
+    let view = camera.view([1280, 720], 0, None);
+    let threshold = 1.0;
+    let total: u32 = data.instances.iter().map(|i| i.meshlet_count).sum();
+    let unlimited = cpu_walk(&data, &view, &WalkParams::default(), NEAR_THRESHOLD);
+    let small = WalkParams {
+        queue_capacity: 4,
+        ..WalkParams::default()
+    };
+    let reference = cpu_walk(&data, &view, &small, NEAR_THRESHOLD);
+    assert!(reference.queue_full && reference.counts[2] > 0);
+    let pass = HierarchyFill {
+        lod_threshold_px: threshold,
+        queue_capacity: Some(4),
+        ..HierarchyFill::default()
+    };
+    let got = run(
+        &mut data,
+        &view,
+        Fill::Hierarchy(pass),
+        Some(threshold),
+        total,
+    );
+    assert!(got.counts[2] > 0, "no subtree was emitted whole");
+    assert_eq!(got.counts[3], 0);
+    let listed = set(got.listed());
+    assert_eq!(listed.len(), got.listed().len(), "a cluster written twice");
+    // Emitting whole subtrees only adds: everything the unlimited walk lists is there.
+    assert!(set(&unlimited.clusters).is_subset(&listed));
+    assert!(listed.len() > unlimited.clusters.len());
+    let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
+    assert!(got.cut.unwrap() == flat.cut.unwrap(), "the cuts differ");
+}
+
+#[test]
+fn a_small_capacity_is_counted_like_the_flat_fill() {
+    let mut data = scene();
+    let radius = data.meshes[0].bounding_sphere[3];
+    let camera = Camera::perspective(
+        Vec3::new(-2.0, 3.0, -2.0) * radius,
+        Vec3::new(5.0, 0.0, 4.0) * radius,
+        1.0,
+        radius * 0.02,
+    );
+    let view = camera.view([640, 360], 0, None);
+    let reference = cpu_walk(&data, &view, &WalkParams::default(), NEAR_THRESHOLD);
+    assert!(reference.near_threshold.is_empty());
+    let capacity = reference.requested / 2 + 3;
+    let got = run(
+        &mut data,
+        &view,
+        Fill::Hierarchy(HierarchyFill::default()),
+        None,
+        capacity,
+    );
+    assert_eq!(got.cluster_count, [capacity, reference.requested]);
+    let written = &got.list[..capacity as usize];
+    assert!(
+        written.iter().all(|c| *c != SENTINEL),
+        "a slot below the capacity was left unwritten"
+    );
+    assert!(
+        got.list[capacity as usize..].iter().all(|c| *c == SENTINEL),
+        "a slot past the capacity was written"
+    );
+    assert_eq!(set(written).len(), written.len(), "a cluster written twice");
+    assert!(set(written).is_subset(&set(&reference.clusters)));
+    assert_eq!(got.counts, reference.counts);
+}
+
+#[test]
+fn instances_behind_the_camera_cost_one_node_each() {
+    let mut data = scene();
+    let radius = data.meshes[0].bounding_sphere[3];
+    // Looking away from the whole field.
+    let camera = Camera::perspective(
+        Vec3::new(-5.0, 1.0, -5.0) * radius,
+        Vec3::new(-20.0, 1.0, -20.0) * radius,
+        1.0,
+        radius * 0.02,
+    );
+    let view = camera.view([640, 360], 0, None);
+    let got = run(
+        &mut data,
+        &view,
+        Fill::Hierarchy(HierarchyFill::default()),
+        None,
+        64,
+    );
+    assert_eq!(got.cluster_count, [0, 0]);
+    assert_eq!(got.counts, [data.instances.len() as u32, 0, 0, 0]);
+}
+
+#[test]
+fn a_graph_without_the_hierarchy_is_refused_naming_the_slot() {
+    let data = scene();
+    let mut g = GraphBuilder::new();
+    meshlight_gpu_scene::gpu::import_for(&data, &mut g);
+    g.create_buffer("clusters", BufferDesc::array(elements::CLUSTER, 64));
+    g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
+    let out = g
+        .add_pass("fill", HierarchyFill::default(), Bindings::new())
+        .unwrap();
+    g.export(out.buffer("clusters").unwrap());
+    let Err(err) = g.compile(&CompileOptions::new(wgpu::Features::empty())) else {
+        panic!("a graph with the hierarchy unbound compiled");
+    };
+    let text = err.to_string();
+    assert!(text.contains("hierarchy_nodes"), "{text}");
+    // With them imported, the same graph compiles.
+    let mut g = GraphBuilder::new();
+    meshlight_gpu_scene::gpu::import_for(&data, &mut g);
+    meshlight_gpu_scene::gpu::import_hierarchy_for(&data, &mut g);
+    g.create_buffer("clusters", BufferDesc::array(elements::CLUSTER, 64));
+    g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
+    let out = g
+        .add_pass("fill", HierarchyFill::default(), Bindings::new())
+        .unwrap();
+    g.export(out.buffer("clusters").unwrap());
+    g.compile(&CompileOptions::new(wgpu::Features::empty()))
+        .unwrap();
+    // A graph that imports them for other passes still compiles the flat fill, which
+    // leaves the optional slots it does not read aside.
+    let mut g = GraphBuilder::new();
+    meshlight_gpu_scene::gpu::import_for(&data, &mut g);
+    meshlight_gpu_scene::gpu::import_hierarchy_for(&data, &mut g);
+    g.create_buffer("clusters", BufferDesc::array(elements::CLUSTER, 64));
+    g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
+    let out = g
+        .add_pass("fill", FillClusters::default(), Bindings::new())
+        .unwrap();
+    g.export(out.buffer("clusters").unwrap());
+    g.compile(&CompileOptions::new(wgpu::Features::empty()))
+        .unwrap();
+}
