@@ -556,45 +556,25 @@ fn clustered_lights_shade_the_field_and_the_light_count_view_shows_them() {
     }
 }
 
-/// The shipped pipeline file with `fill` switched to the hierarchy walk: the three
-/// hierarchy buffers declared as imports (sized for `data`), the implementation named,
-/// cull's threshold passed on. What the lead's edit of the file amounts to.
-fn hierarchy_pipeline(data: &SceneData) -> GraphSource {
-    let shipped = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/pipelines/virtual_geometry.toml"
-    );
-    let mut text = std::fs::read_to_string(shipped).unwrap();
-    let flat = "implementation = \"workgroup_per_instance\"";
-    assert!(text.contains(flat));
-    text = text.replace(
-        flat,
-        "implementation = \"hierarchy\"\nparams = { lod_threshold_px = 1.0 }",
-    );
-    let resources: String = meshlight::gpu_scene::gpu::hierarchy_lengths(data)
-        .iter()
-        .map(|(name, element, count)| {
-            format!(
-                "[[resource]]\nname = \"{name}\"\nkind = \"imported\"\nbuffer = {{ element = \"{}\", element_size = {}, count = {count} }}\nusage = [\"STORAGE\", \"COPY_DST\", \"COPY_SRC\"]\n\n",
-                element.name, element.size
-            )
-        })
-        .collect();
-    let at = text.find("[[resource]]").unwrap();
-    text.insert_str(at, &resources);
-    let path =
-        std::env::temp_dir().join(format!("meshlight-hierarchy-{}.toml", std::process::id()));
-    std::fs::write(&path, text).unwrap();
-    GraphSource::File(path)
-}
-
 #[test]
 fn the_hierarchy_walk_draws_the_flat_fills_image_from_fewer_candidates() {
     let placed = field(16);
-    let source = hierarchy_pipeline(&placed.data);
-    let (flat, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
-    let (walk, r) = render(&placed, settings(DebugView::Shaded), &source);
+    let flat_fill = FrameSettings {
+        hierarchy: false,
+        ..settings(DebugView::Shaded)
+    };
+    let (flat, _) = render(&placed, flat_fill, &GraphSource::Code);
+    // The shipped file walks the hierarchy, as the frame built in code does by default.
+    let (walk, r) = render(&placed, settings(DebugView::Shaded), &pipeline_file());
     assert!(runs(&r, "fill"));
+    let (code, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    assert_eq!(code.counts, walk.counts);
+    let h = walk
+        .counts
+        .hierarchy
+        .expect("the walk's counters read back");
+    assert!(h.nodes_tested > 0 && h.leaves_accepted > 0, "{h:?}");
+    assert!(flat.counts.hierarchy.is_none());
     // The same cut, from a shorter candidate list.
     assert_eq!(walk.counts.visible, flat.counts.visible);
     assert_eq!(walk.counts.software, flat.counts.software);

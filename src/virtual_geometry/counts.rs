@@ -11,6 +11,9 @@ pub const CLUSTER_COUNT_READBACK: &str = "cluster_count";
 pub const RASTER_COUNTS_READBACK: &str = "raster_counts";
 /// The readback of the second culling pass's `raster_counts` (twelve words).
 pub const SECOND_COUNTS_READBACK: &str = "raster_counts_second";
+/// The readback of the hierarchy walk's `hierarchy_counts` (four words; see
+/// `fill_clusters`' `hierarchy`).
+pub const HIERARCHY_COUNTS_READBACK: &str = "hierarchy_counts";
 
 /// One frame's counters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -37,6 +40,36 @@ pub struct FrameCounts {
     pub slots_dropped: u32,
     /// The two culling passes' occlusion counters; `None` for a one-pass frame.
     pub occlusion: Option<OcclusionCounts>,
+    /// The hierarchy walk's counters; `None` when `fill` visits every cluster.
+    pub hierarchy: Option<HierarchyCounts>,
+}
+
+/// What the walk of the culling hierarchy did in one frame (`fill_clusters`'
+/// `hierarchy`): the work that replaces testing every cluster of every instance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct HierarchyCounts {
+    /// Nodes whose bounds were tested (a culled instance costs one).
+    pub nodes_tested: u32,
+    /// Leaves (groups) accepted, whose clusters became candidates.
+    pub leaves_accepted: u32,
+    /// Subtrees emitted whole because the walk's queue was full (costs pruning only).
+    pub subtrees_whole: u32,
+    /// Walks that did not finish (0 unless a list overflowed).
+    pub unfinished: u32,
+}
+
+impl HierarchyCounts {
+    /// From the readback's bytes; `None` when shorter than four words.
+    pub fn from_words(bytes: &[u8]) -> Option<Self> {
+        let w: Vec<u32> =
+            (bytes.len() >= 16).then(|| bytemuck::pod_collect_to_vec(&bytes[..16]))?;
+        Some(Self {
+            nodes_tested: w[0],
+            leaves_accepted: w[1],
+            subtrees_whole: w[2],
+            unfinished: w[3],
+        })
+    }
 }
 
 /// What two-pass occlusion culling did in one frame. The totals of [`FrameCounts`]
@@ -85,6 +118,7 @@ impl FrameCounts {
             hardware_triangles: r[6],
             slots_dropped: r[2].saturating_sub(r[3]),
             occlusion: None,
+            hierarchy: None,
         };
         if let Some(second) = second {
             let r = words(raster_counts, 12)?;
@@ -133,6 +167,16 @@ impl FrameCounts {
     /// Rows of `(label, value)` for reports.
     pub fn rows(&self) -> Vec<(&'static str, u64)> {
         let mut rows = self.totals();
+        if let Some(h) = self.hierarchy {
+            rows.extend([
+                ("hierarchy: nodes tested", h.nodes_tested as u64),
+                ("hierarchy: leaves accepted", h.leaves_accepted as u64),
+                (
+                    "hierarchy: nodes + candidate clusters tested",
+                    h.nodes_tested as u64 + self.clusters_considered as u64,
+                ),
+            ]);
+        }
         if let Some(o) = self.occlusion {
             rows.extend([
                 ("first pass: clusters in the LOD cut", o.first_cut as u64),

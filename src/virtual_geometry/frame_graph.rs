@@ -17,7 +17,10 @@
 //! first pass's software clusters; the second hardware pass draws the slots below the
 //! first's hardware clusters.
 
-use super::counts::{CLUSTER_COUNT_READBACK, RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK};
+use super::counts::{
+    CLUSTER_COUNT_READBACK, HIERARCHY_COUNTS_READBACK, RASTER_COUNTS_READBACK,
+    SECOND_COUNTS_READBACK,
+};
 use crate::graph::file::AUTO;
 use crate::graph::{
     Bindings, BufferDesc, Choice, Element, GraphBuilder, GraphError, Pass, Result, TextureDesc,
@@ -26,10 +29,12 @@ use crate::graph::{
 use crate::light_clustering::ClusteringSettings;
 use crate::light_clustering::frame_graph as clustering;
 use meshlight_gpu_scene::SceneData;
-use meshlight_gpu_scene::gpu::{buffer_lengths, elements, import_for};
+use meshlight_gpu_scene::gpu::{
+    buffer_lengths, elements, hierarchy_lengths, import_for, import_hierarchy_for,
+};
 use meshlight_pass_cull_lod::{CullLod, Mode, OCCLUSION_COUNT_WORDS, Thresholds};
 use meshlight_pass_depth_pyramid::DepthPyramid;
-use meshlight_pass_fill_clusters::FillClusters;
+use meshlight_pass_fill_clusters::{FillClusters, HierarchyFill};
 use meshlight_pass_hw_raster::{Feed, HwRaster};
 use meshlight_pass_remap_dispatch::RemapDispatch;
 use meshlight_pass_resolve::{DebugView, Resolve};
@@ -96,6 +101,10 @@ pub struct FrameSettings {
     /// Two-pass occlusion culling against the depth pyramid. Off: one pass, everything
     /// in the LOD cut drawn.
     pub occlusion: bool,
+    /// `fill` walks each visible instance's culling hierarchy (the frustum and LOD tested
+    /// per node), so only clusters that may be in the LOD cut become candidates. Off:
+    /// every cluster of every instance in view is a candidate (`workgroup_per_instance`).
+    pub hierarchy: bool,
 }
 
 impl FrameSettings {
@@ -117,6 +126,7 @@ impl FrameSettings {
             exact_division: false,
             clustering: None,
             occlusion: true,
+            hierarchy: true,
             keep_visibility: false,
         }
     }
@@ -229,7 +239,22 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         g.history_texture(PYRAMID_HISTORY, desc)
     });
     // Slots not bound here bind to the resource of the same name.
-    g.add_pass("fill", FillClusters::default(), Bindings::new())?;
+    if s.hierarchy {
+        import_hierarchy_for(data, &mut g);
+        g.create_buffer(
+            HIERARCHY_COUNTS_READBACK,
+            BufferDesc::array(Element::U32, 4),
+        );
+        // The walk prunes by the LOD threshold cull tests with: they must agree, or
+        // clusters of the cut would be pruned.
+        let walk = HierarchyFill {
+            lod_threshold_px: s.lod_threshold_px,
+            ..HierarchyFill::default()
+        };
+        g.add_pass("fill", walk, Bindings::new())?;
+    } else {
+        g.add_pass("fill", FillClusters::default(), Bindings::new())?;
+    }
     let thresholds = Thresholds {
         lod_threshold_px: s.lod_threshold_px,
         // The renderer fills in its adapter's default; a graph built elsewhere
@@ -380,15 +405,22 @@ pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBui
     })?;
     let text = with_view(&text, &file, s)?;
     let mut params = overrides(data, s);
-    // A file without a depth pyramid (one culling pass) does not declare its size.
+    // A file without a depth pyramid (one culling pass) does not declare its size, nor
+    // one whose `fill` visits every cluster the hierarchy's.
     let declared: toml::Table = toml::from_str(&text).unwrap_or_default();
-    let sizes_pyramid = declared
-        .get("params")
-        .and_then(toml::Value::as_table)
-        .is_some_and(|p| p.contains_key(PYRAMID_WIDTH_PARAM));
-    if !sizes_pyramid {
-        params.remove(PYRAMID_WIDTH_PARAM);
-        params.remove(PYRAMID_HEIGHT_PARAM);
+    let declares = |name: &str| {
+        declared
+            .get("params")
+            .and_then(toml::Value::as_table)
+            .is_some_and(|p| p.contains_key(name))
+    };
+    let optional = [PYRAMID_WIDTH_PARAM, PYRAMID_HEIGHT_PARAM]
+        .into_iter()
+        .chain(hierarchy_lengths(data).map(|(name, _, _)| name));
+    for name in optional {
+        if !declares(name) {
+            params.remove(name);
+        }
     }
     let mut g = crate::graph::file::parse_pipeline_with(&text, &file, &crate::registry(), &params)?;
     add_readbacks(&mut g)?;
@@ -399,6 +431,7 @@ pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBui
 pub fn overrides(data: &SceneData, s: &FrameSettings) -> BTreeMap<String, u64> {
     let mut o: BTreeMap<String, u64> = buffer_lengths(data)
         .into_iter()
+        .chain(hierarchy_lengths(data))
         .map(|(name, _, count)| (name.to_string(), count))
         .collect();
     o.insert("width".into(), s.width as u64);
@@ -483,6 +516,14 @@ fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
             SECOND_COUNTS_READBACK,
             SECOND_COUNTS,
             Some(0..bytes),
+            COUNTS_LATENCY,
+        )?;
+    }
+    if g.resource(HIERARCHY_COUNTS_READBACK).is_some() {
+        g.readback_named(
+            HIERARCHY_COUNTS_READBACK,
+            HIERARCHY_COUNTS_READBACK,
+            Some(0..16),
             COUNTS_LATENCY,
         )?;
     }

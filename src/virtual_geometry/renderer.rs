@@ -5,7 +5,8 @@
 //! frame, and the clustering's lists grow the same way.
 
 use super::counts::{
-    CLUSTER_COUNT_READBACK, FrameCounts, RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK,
+    CLUSTER_COUNT_READBACK, FrameCounts, HIERARCHY_COUNTS_READBACK, HierarchyCounts,
+    RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK,
 };
 use super::frame_graph::{CLUSTERS_PARAM, FrameSettings, GraphSource, MAX_SLOTS, SLOTS_PARAM};
 use crate::graph::{
@@ -62,6 +63,8 @@ pub struct Renderer {
     cut: bool,
     /// The graph culls in two passes and reads the second pass's counters back.
     two_pass: bool,
+    /// `fill` walks the culling hierarchy and its counters come back.
+    walks_hierarchy: bool,
     /// Instances moved through [`Renderer::set_transform`] since the last frame.
     moved: Vec<meshlight_gpu_scene::InstanceId>,
     /// Counters by frame, until both readbacks of a frame are in.
@@ -88,6 +91,7 @@ struct PendingCounts {
     cluster_count: Option<Vec<u8>>,
     raster_counts: Option<Vec<u8>>,
     second: Option<Vec<u8>>,
+    hierarchy: Option<Vec<u8>>,
 }
 
 impl Renderer {
@@ -126,10 +130,15 @@ impl Renderer {
             .plan
             .pass_index(&format!("readback:{SECOND_COUNTS_READBACK}"))
             .is_some();
+        let walks_hierarchy = compiled
+            .plan
+            .pass_index(&format!("readback:{HIERARCHY_COUNTS_READBACK}"))
+            .is_some();
         Ok(Self {
             data,
             settings,
             two_pass,
+            walks_hierarchy,
             cut: false,
             moved: Vec::new(),
             compiled,
@@ -282,18 +291,22 @@ impl Renderer {
         if self.two_pass {
             names.push(SECOND_COUNTS_READBACK);
         }
+        if self.walks_hierarchy {
+            names.push(HIERARCHY_COUNTS_READBACK);
+        }
         for name in names {
             while let Some(r) = self.executor.take_readback(name)? {
                 let entry = self.pending.entry(r.frame).or_default();
                 let part = match name {
                     CLUSTER_COUNT_READBACK => &mut entry.cluster_count,
                     RASTER_COUNTS_READBACK => &mut entry.raster_counts,
+                    HIERARCHY_COUNTS_READBACK => &mut entry.hierarchy,
                     _ => &mut entry.second,
                 };
                 *part = Some(r.bytes);
             }
         }
-        let two_pass = self.two_pass;
+        let (two_pass, walks) = (self.two_pass, self.walks_hierarchy);
         let complete: Vec<u64> = self
             .pending
             .iter()
@@ -301,18 +314,23 @@ impl Renderer {
                 p.cluster_count.is_some()
                     && p.raster_counts.is_some()
                     && (p.second.is_some() || !two_pass)
+                    && (p.hierarchy.is_some() || !walks)
             })
             .map(|(f, _)| *f)
             .collect();
         for frame in complete {
             let p = self.pending.remove(&frame).expect("listed above");
-            let counts = FrameCounts::from_words(
+            let short = || GraphError::Readback(format!("frame {frame}'s counters are short"));
+            let mut counts = FrameCounts::from_words(
                 frame,
                 p.cluster_count.as_deref().unwrap_or_default(),
                 p.raster_counts.as_deref().unwrap_or_default(),
                 p.second.as_deref(),
             )
-            .ok_or_else(|| GraphError::Readback(format!("frame {frame}'s counters are short")))?;
+            .ok_or_else(short)?;
+            if let Some(bytes) = &p.hierarchy {
+                counts.hierarchy = Some(HierarchyCounts::from_words(bytes).ok_or_else(short)?);
+            }
             self.grow_for(&counts)?;
             if self.latest.is_none_or(|l| l.frame < frame) {
                 self.latest = Some(counts);
