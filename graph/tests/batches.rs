@@ -724,3 +724,39 @@ fn frame_timing_gives_a_time_per_batch_and_passes_timing_one_per_pass() {
     exec.finish().unwrap();
     assert!(exec.take_gpu_timings().unwrap().is_empty());
 }
+
+#[test]
+fn timings_come_back_after_the_mode_changes_and_the_ring_reuses_larger_buffers() {
+    // Per-pass timing of a long chain leaves ring buffers larger than a frame-timed
+    // frame needs; the frame's timings must still come back from them.
+    let ks: Vec<u32> = (0..16).collect();
+    let long = chain(&ks)
+        .compile(&CompileOptions::for_gpu(&gpu()))
+        .unwrap();
+    let short = chain(&ks[..2])
+        .compile(&CompileOptions::for_gpu(&gpu()))
+        .unwrap();
+    let gpu = gpu();
+    let data = gpu.buffer_with_data("data", &[0u8; N as usize * 4], USAGE);
+    let imports = Imports::new().buffer("data", &data);
+    let mut exec = Executor::new(gpu);
+    exec.timing = TimingMode::Passes;
+    for _ in 0..3 {
+        exec.execute(&long, &imports).unwrap();
+        exec.finish().unwrap();
+    }
+    assert_eq!(exec.take_gpu_timings().unwrap().len(), 3);
+    exec.timing = TimingMode::Frame;
+    for _ in 0..3 {
+        exec.execute(&short, &imports).unwrap();
+        let stats = exec.finish().unwrap().unwrap();
+        assert!(stats.gpu_frame_us.is_some());
+    }
+    let timings = exec.take_gpu_timings().unwrap();
+    assert_eq!(timings.len(), 3);
+    assert!(
+        timings
+            .iter()
+            .all(|t| t.mode == TimingMode::Frame && t.passes.len() == 1)
+    );
+}

@@ -67,6 +67,9 @@ pub(crate) struct PassSetup {
 /// A plan plus the passes it runs.
 pub struct CompiledGraph {
     pub plan: Plan,
+    /// Unique per compiled graph: the executor keeps what it resolved for each pass (its
+    /// programs) under it, so a steady frame finds them without building keys.
+    pub(crate) id: u64,
     pub(crate) passes: Vec<PassNode>,
     pub(crate) setups: Vec<PassSetup>,
     /// Descriptors as declared, before size parameters were applied.
@@ -421,7 +424,9 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         })
         .collect();
 
+    static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     Ok(CompiledGraph {
+        id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         plan: Plan {
             passes: pass_plans,
             order,

@@ -493,6 +493,7 @@ impl Executor {
                     shared: &mut shared,
                     batched,
                     fill,
+                    graph_id: graph.id,
                 };
                 let recorded = node.pass.record(&mut ctx);
                 if batched {
@@ -689,6 +690,7 @@ impl Executor {
                 shared: &mut shared,
                 batched: false,
                 fill,
+                graph_id: graph.id,
             };
             let recorded = node.pass.record(&mut ctx);
             drop(encoder.finish());

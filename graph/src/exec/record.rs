@@ -105,6 +105,8 @@ pub struct RecordContext<'a> {
     /// True when this pass records into the batch's shared compute pass.
     pub(crate) batched: bool,
     pub(crate) fill: &'a Fill,
+    /// `CompiledGraph::id`, under which the programs this pass resolved are kept.
+    pub(crate) graph_id: u64,
 }
 
 impl<'a> RecordContext<'a> {
@@ -471,12 +473,13 @@ impl<'a> RecordContext<'a> {
         })
     }
 
-    fn declared(&self, name: &str) -> Result<&'a Arc<ProgramDesc>> {
+    fn declared(&self, name: &str) -> Result<(usize, &'a Arc<ProgramDesc>)> {
         self.setup
             .programs
             .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, d)| d)
+            .enumerate()
+            .find(|(_, (n, _))| n == name)
+            .map(|(i, (_, d))| (i, d))
             .ok_or_else(|| {
                 self.err(format!(
                     "no program `{name}`; declare it in setup with SetupContext::program (declared: {})",
@@ -601,12 +604,24 @@ impl<'a> RecordContext<'a> {
 
     /// The compute program declared in setup as `name`, built once and cached.
     pub fn compute(&mut self, name: &str) -> Result<Arc<ComputeProgram>> {
-        let desc = self.declared(name)?;
+        let (index, desc) = self.declared(name)?;
         let ProgramKind::Compute { entry } = desc.kind else {
             return Err(self.err(format!("program `{name}` is not a compute program")));
         };
+        if let Some(AnyProgram::Compute(p)) =
+            self.programs
+                .resolved(self.graph_id, self.pass_index, index)
+        {
+            return Ok(p.clone());
+        }
         let key = self.program_key(desc)?;
         if let Some(p) = self.programs.compute(&key) {
+            self.programs.resolve(
+                self.graph_id,
+                self.pass_index,
+                index,
+                AnyProgram::Compute(p.clone()),
+            );
             return Ok(p);
         }
         let (module, layouts, layout) = self.build_layouts(&key)?;
@@ -624,13 +639,25 @@ impl<'a> RecordContext<'a> {
         let program = Arc::new(ComputeProgram { pipeline, layouts });
         self.programs
             .insert(key, AnyProgram::Compute(program.clone()));
+        self.programs.resolve(
+            self.graph_id,
+            self.pass_index,
+            index,
+            AnyProgram::Compute(program.clone()),
+        );
         Ok(program)
     }
 
     /// The render (vertex or mesh) program declared in setup as `name`, built once and
     /// cached.
     pub fn render(&mut self, name: &str) -> Result<Arc<RenderProgram>> {
-        let desc = self.declared(name)?;
+        let (index, desc) = self.declared(name)?;
+        if let Some(AnyProgram::Render(p)) =
+            self.programs
+                .resolved(self.graph_id, self.pass_index, index)
+        {
+            return Ok(p.clone());
+        }
         let ProgramKind::Render {
             geometry,
             fragment,
@@ -643,6 +670,12 @@ impl<'a> RecordContext<'a> {
         };
         let key = self.program_key(desc)?;
         if let Some(p) = self.programs.render(&key) {
+            self.programs.resolve(
+                self.graph_id,
+                self.pass_index,
+                index,
+                AnyProgram::Render(p.clone()),
+            );
             return Ok(p);
         }
         let (module, layouts, layout) = self.build_layouts(&key)?;
@@ -743,6 +776,12 @@ impl<'a> RecordContext<'a> {
         let program = Arc::new(RenderProgram { pipeline, layouts });
         self.programs
             .insert(key, AnyProgram::Render(program.clone()));
+        self.programs.resolve(
+            self.graph_id,
+            self.pass_index,
+            index,
+            AnyProgram::Render(program.clone()),
+        );
         Ok(program)
     }
 
