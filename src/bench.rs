@@ -260,12 +260,15 @@ fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::e
     let mut most_in_flight = 0;
     // Of the wall time, what the executor spends in `execute_frame` and in its submit.
     let (mut executor_ms, mut submit_ms) = (Vec::new(), Vec::new());
+    let (mut finish_ms, mut records_ms) = (Vec::new(), Vec::new());
     let mut record_us: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
     for f in 0..frames {
         let s = renderer.frame(&camera(f))?;
         most_in_flight = most_in_flight.max(s.frames_in_flight);
         executor_ms.push(s.cpu_frame_us / 1e3);
         submit_ms.push(s.cpu_submit_us / 1e3);
+        finish_ms.push(s.cpu_finish_us / 1e3);
+        records_ms.push(s.passes.iter().map(|p| p.cpu_record_us).sum::<f64>() / 1e3);
         for p in &s.passes {
             record_us
                 .entry(p.name.clone())
@@ -322,6 +325,8 @@ fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::e
     for (metric, values) in [
         ("CPU execute_frame per frame", executor_ms),
         ("CPU queue.submit per frame", submit_ms),
+        ("CPU encoder.finish per frame", finish_ms),
+        ("CPU records of all passes per frame", records_ms),
     ] {
         rows.push(row(
             "graph-execute",

@@ -107,6 +107,9 @@ pub struct FrameStats {
     pub cpu_frame_us: f64,
     /// The part of `cpu_frame_us` spent in `queue.submit` (mostly driver work).
     pub cpu_submit_us: f64,
+    /// The part of `cpu_frame_us` spent in `CommandEncoder::finish`, where wgpu encodes
+    /// what the passes recorded (its validation, barriers and the driver's commands).
+    pub cpu_finish_us: f64,
     /// Sum of the timed units' GPU times (batches or passes), when known.
     pub gpu_total_us: Option<f64>,
     /// From the first timestamp to the last: the frame's GPU time, gaps included.
@@ -568,7 +571,9 @@ impl Executor {
             };
             ts.resolve(device, &mut encoder, frame, mode, names);
         }
+        let finish_start = Instant::now();
         command_buffers.push(encoder.finish());
+        let cpu_finish_us = finish_start.elapsed().as_secs_f64() * 1e6;
         let invalid = pollster::block_on(frame_scope.pop());
         if let Some(e) = failed {
             self.readbacks.abandon();
@@ -634,6 +639,7 @@ impl Executor {
             unplanned_splits,
             cpu_frame_us: frame_start.elapsed().as_secs_f64() * 1e6,
             cpu_submit_us,
+            cpu_finish_us,
             gpu_total_us: None,
             gpu_frame_us: None,
             gpu_latest: self.timings.back().cloned(),
