@@ -628,6 +628,7 @@ fn a_batched_pass_that_takes_the_encoder_is_an_error_when_checked_and_right_when
     let data = gpu.buffer_with_data("data", &[1u8; N as usize * 4], USAGE);
     let imports = Imports::new().buffer("data", &data);
     let mut exec = Executor::new(gpu);
+    exec.batching = true;
     exec.checked = true;
     match exec.execute(&compiled, &imports) {
         Err(GraphError::Record { pass, message }) => {
