@@ -761,3 +761,75 @@ fn timings_come_back_after_the_mode_changes_and_the_ring_reuses_larger_buffers()
             .all(|t| t.mode == TimingMode::Frame && t.passes.len() == 1)
     );
 }
+
+/// Zeroes its scratch buffer (storage only, no COPY_DST) and steps it: a `clear_buffer`
+/// on it would be a validation error, so the clear must be a fill dispatch whether the
+/// pass is batched or not. `data` only keeps the pass from being culled.
+struct ScratchClear {
+    k: u32,
+}
+
+impl Pass for ScratchClear {
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: "scratch_clear",
+            slots: vec![Slot::buffer("data", Access::StorageWrite, Element::U32, "")],
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "fill"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.scratch_buffer(
+            "words",
+            BufferDesc::array(Element::U32, N as u64),
+            &[Access::StorageReadWrite],
+        );
+        let on_scratch = BindingLayout::compute("step")
+            .scratch(0, "words", Access::StorageReadWrite)
+            .uniform(1);
+        ctx.program(
+            "step",
+            ProgramDesc::compute(&KERNELS, "step").layout(on_scratch),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        ctx.clear_scratch("words")?;
+        let step = ctx.compute("step")?;
+        let params = [self.k, N, 0, 0];
+        let group = ctx.bind_group(&step, 0, &[(1, bytemuck::cast_slice(&params))])?;
+        let mut pass = ctx.compute_pass();
+        pass.set_pipeline(&step.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(N.div_ceil(64), 1, 1);
+        Ok(())
+    }
+}
+
+#[test]
+fn a_scratch_buffer_without_copy_dst_is_cleared_batched_and_unbatched() {
+    let mut g = GraphBuilder::new();
+    g.import_buffer("data", BufferDesc::array(Element::U32, N as u64), USAGE);
+    g.add_pass("scratch_clear", ScratchClear { k: 5 }, Bindings::new())
+        .unwrap();
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu())).unwrap();
+    assert!(compiled.plan.batches[0].compute);
+    for batching in [true, false] {
+        let gpu = gpu();
+        let data = gpu.buffer_with_data("data", &[0u8; N as usize * 4], USAGE);
+        let mut exec = Executor::new(gpu);
+        exec.batching = batching;
+        exec.checked = true;
+        for _ in 0..2 {
+            exec.execute(&compiled, &Imports::new().buffer("data", &data))
+                .unwrap_or_else(|e| panic!("batching {batching}: {e}"));
+        }
+        let r = compiled.plan.resource_index("scratch_clear/words").unwrap();
+        assert!(
+            !compiled.plan.resources[r]
+                .buffer_usage
+                .contains(wgpu::BufferUsages::COPY_DST)
+        );
+    }
+}

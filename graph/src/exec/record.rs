@@ -349,7 +349,10 @@ impl<'a> RecordContext<'a> {
         match self.physical(r)? {
             Physical::Buffer { buffer, size } => {
                 let bytes = size.next_multiple_of(4).min(buffer.size());
-                if self.batched && buffer.usage().contains(wgpu::BufferUsages::STORAGE) {
+                let usage = buffer.usage();
+                let fill = usage.contains(wgpu::BufferUsages::STORAGE)
+                    && (self.batched || !usage.contains(wgpu::BufferUsages::COPY_DST));
+                if fill {
                     self.fill_dispatch(buffer, bytes);
                 } else {
                     self.leave_batch("clear_buffer");
@@ -376,7 +379,8 @@ impl<'a> RecordContext<'a> {
         Ok(())
     }
 
-    /// Zeroes `bytes` of `buffer` with the fill program in the shared compute pass.
+    /// Zeroes `bytes` of `buffer` with the fill program: in the shared compute pass inside a
+    /// batch, else in a compute pass of its own.
     fn fill_dispatch(&mut self, buffer: &wgpu::Buffer, bytes: u64) {
         if bytes == 0 {
             return;
@@ -402,7 +406,8 @@ impl<'a> RecordContext<'a> {
             groups.push((group, Fill::grid(size)));
         }
         let pipeline = &self.fill.pipeline;
-        let pass = self.shared.get(self.encoder);
+        // Outside a batch (a buffer without COPY_DST) the fill gets a compute pass of its own.
+        let mut pass = self.compute_pass();
         pass.set_pipeline(pipeline);
         for (group, [x, y]) in &groups {
             pass.set_bind_group(0, group, &[]);
