@@ -10,7 +10,9 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct BenchArgs {
-    /// Scenarios to run (default: all). Known: graph-compile, graph-execute, pool-reuse,
+    /// Scenarios to run (default: all). Known: graph-compile, graph-execute, graph-floor
+    /// (1, 16 and 256 dependent one-thread passes through the graph against the same
+    /// dispatches in one raw wgpu compute pass), pool-reuse,
     /// render (the default scene at 1920x1080), virtual-geometry (15³ meshes at
     /// 2240x1260, the first --mesh or the bunny), rasterisers (the same scene: each
     /// implementation of sw_raster and hw_raster, and the software/hardware split
@@ -48,6 +50,7 @@ pub struct Row {
 const ALL: &[&str] = &[
     "graph-compile",
     "graph-execute",
+    "graph-floor",
     "pool-reuse",
     "render",
     "virtual-geometry",
@@ -68,6 +71,7 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
         let new = match s.as_str() {
             "graph-compile" => graph_compile(args.quick),
             "graph-execute" => graph_execute(args.quick)?,
+            "graph-floor" => graph_floor(args.quick)?,
             "pool-reuse" => pool_reuse(),
             "render" => render(args.quick)?,
             "virtual-geometry" => {
@@ -256,12 +260,15 @@ fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::e
     let mut most_in_flight = 0;
     // Of the wall time, what the executor spends in `execute_frame` and in its submit.
     let (mut executor_ms, mut submit_ms) = (Vec::new(), Vec::new());
+    let (mut finish_ms, mut records_ms) = (Vec::new(), Vec::new());
     let mut record_us: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
     for f in 0..frames {
         let s = renderer.frame(&camera(f))?;
         most_in_flight = most_in_flight.max(s.frames_in_flight);
         executor_ms.push(s.cpu_frame_us / 1e3);
         submit_ms.push(s.cpu_submit_us / 1e3);
+        finish_ms.push(s.cpu_finish_us / 1e3);
+        records_ms.push(s.passes.iter().map(|p| p.cpu_record_us).sum::<f64>() / 1e3);
         for p in &s.passes {
             record_us
                 .entry(p.name.clone())
@@ -318,6 +325,8 @@ fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::e
     for (metric, values) in [
         ("CPU execute_frame per frame", executor_ms),
         ("CPU queue.submit per frame", submit_ms),
+        ("CPU encoder.finish per frame", finish_ms),
+        ("CPU records of all passes per frame", records_ms),
     ] {
         rows.push(row(
             "graph-execute",
@@ -582,4 +591,273 @@ fn scan_fan(quick: bool) -> std::result::Result<Vec<Row>, GraphError> {
         out.push(cpu);
     }
     Ok(out)
+}
+
+/// The one-thread step of `graph-floor`: each dispatch reads what the one before wrote.
+const FLOOR_WGSL: &str = "
+// The counter every step increments: read-write, so each dispatch depends on the last.
+@group(0) @binding(0) var<storage, read_write> counter: array<u32>;
+
+@compute @workgroup_size(1)
+fn step() {
+    counter[0] = counter[0] + 1u;
+}
+";
+
+static FLOOR_SHADER: PassShader = PassShader {
+    name: "bench::floor_step",
+    source: FLOOR_WGSL,
+    file_path: "meshlight/src/bench.rs",
+};
+
+/// A graph pass that dispatches one thread of `FLOOR_WGSL` on its `counter` slot.
+struct FloorStep;
+
+impl Pass for FloorStep {
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: "floor_step",
+            slots: vec![Slot::buffer(
+                "counter",
+                Access::StorageReadWrite,
+                Element::U32,
+                "incremented by each step",
+            )],
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "one_thread"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.program(
+            "step",
+            ProgramDesc::compute(&FLOOR_SHADER, "step")
+                .layout(BindingLayout::compute("floor_step").slot(0, "counter")),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let program = ctx.compute("step")?;
+        let group = ctx.bind_group(&program, 0, &[])?;
+        let mut pass = ctx.compute_pass();
+        pass.set_pipeline(&program.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        Ok(())
+    }
+}
+
+/// GPU µs of `n` dependent one-thread dispatches in one raw wgpu compute pass with one
+/// timestamp pair around them: the floor a graph's pass boundary is measured against.
+fn raw_floor(
+    gpu: &GpuContext,
+    counter: &wgpu::Buffer,
+    n: usize,
+    frames: usize,
+) -> std::result::Result<f64, Box<dyn std::error::Error>> {
+    let device = &gpu.device;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("floor step (raw)"),
+        source: wgpu::ShaderSource::Wgsl(FLOOR_WGSL.into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("floor step (raw)"),
+        layout: None,
+        module: &module,
+        entry_point: Some("step"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("floor step (raw)"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: counter.as_entire_binding(),
+        }],
+    });
+    let queries = device.create_query_set(&wgpu::QuerySetDescriptor {
+        label: Some("floor (raw)"),
+        ty: wgpu::QueryType::Timestamp,
+        count: 2,
+    });
+    let resolve = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("floor resolve"),
+        size: 16,
+        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let period = gpu.queue.get_timestamp_period() as f64;
+    let mut times = Vec::with_capacity(frames);
+    for _ in 0..frames + 1 {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("floor (raw)"),
+                timestamp_writes: Some(wgpu::ComputePassTimestampWrites {
+                    query_set: &queries,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                }),
+            });
+            for _ in 0..n {
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+        }
+        encoder.resolve_query_set(&queries, 0..2, &resolve, 0);
+        gpu.queue.submit([encoder.finish()]);
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&gpu.read_buffer(&resolve, 0, 16)?);
+        times.push(ticks[1].saturating_sub(ticks[0]) as f64 * period / 1e3);
+    }
+    // The first frame builds the pipeline's driver state; leave it out.
+    times.remove(0);
+    Ok(median(times))
+}
+
+/// What a graph pass boundary costs against wgpu's own floor: N dependent one-thread
+/// passes through the graph (default `frame` timing: one timestamp pair around the batch),
+/// against the same dispatches in one raw compute pass, same run; and, for context, the
+/// graph with batching off (a compute pass per pass) and in `passes` timing mode.
+fn graph_floor(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::error::Error>> {
+    let adapter = GpuAdapter::select()?;
+    let device_name = adapter.info().name;
+    let frames = if quick { 10 } else { 100 };
+    let mut rows = Vec::new();
+    let gpu = GpuContext::with_available(wgpu::Features::all())?;
+    if !gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
+        return Err("graph-floor needs TIMESTAMP_QUERY".into());
+    }
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    let counter = gpu.buffer_with_data("floor counter", &[0u8; 16], usage);
+    let raw_counter = gpu.buffer_with_data("floor counter (raw)", &[0u8; 16], usage);
+    let inside = gpu
+        .features
+        .contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
+    let mut exec = Executor::new(gpu);
+    let mut dispatched = 0u64;
+    for n in [1usize, 16, 256] {
+        let raw = raw_floor(&exec.gpu, &raw_counter, n, frames)? / n as f64;
+        let mut g = GraphBuilder::new();
+        g.import_buffer("counter", BufferDesc::array(Element::U32, 4), usage);
+        for i in 0..n {
+            g.add_pass(&format!("step{i}"), FloorStep, Bindings::new())?;
+        }
+        let compiled = g.compile(&CompileOptions::for_gpu(&exec.gpu))?;
+        if compiled.plan.batches.len() != 1 {
+            return Err(format!(
+                "{n} floor steps planned as {} batches, not one",
+                compiled.plan.batches.len()
+            )
+            .into());
+        }
+        let imports = Imports::new().buffer("counter", &counter);
+        let case = format!("{n} dependent passes");
+        rows.push(Row {
+            vs_baseline: Some(1.0),
+            ..row(
+                "graph-floor",
+                case.clone(),
+                "GPU per pass, raw compute pass",
+                raw,
+                "µs",
+                &device_name,
+            )
+        });
+        // (metric, timing, batching, per-pass stamps inside the shared pass)
+        let mut arrangements = vec![
+            (
+                "GPU per pass, graph (frame timing)",
+                TimingMode::Frame,
+                true,
+                true,
+            ),
+            (
+                "GPU per pass, graph unbatched",
+                TimingMode::Frame,
+                false,
+                true,
+            ),
+            (
+                "GPU per pass, graph (passes timing, a compute pass each)",
+                TimingMode::Passes,
+                true,
+                false,
+            ),
+        ];
+        if inside {
+            arrangements.push((
+                "GPU per pass, graph (passes timing, stamps inside the batch)",
+                TimingMode::Passes,
+                true,
+                true,
+            ));
+        }
+        for (metric, mode, batching, stamp_inside) in arrangements {
+            exec.timing = mode;
+            exec.batching = batching;
+            exec.stamp_inside_passes = stamp_inside;
+            exec.execute(&compiled, &imports)?;
+            exec.finish()?;
+            exec.take_gpu_timings()?;
+            dispatched += n as u64;
+            let mut record = Vec::new();
+            let mut cpu_frame = Vec::new();
+            for _ in 0..frames {
+                let s = exec.execute(&compiled, &imports)?;
+                exec.finish()?;
+                dispatched += n as u64;
+                record.push(s.passes.iter().map(|p| p.cpu_record_us).sum::<f64>() / n as f64);
+                cpu_frame.push(s.cpu_frame_us / n as f64);
+            }
+            let taken = exec.take_gpu_timings()?;
+            let gpu: Vec<f64> = taken.iter().map(|t| t.frame_us / n as f64).collect();
+            if gpu.is_empty() {
+                return Err(format!("no GPU timings came back ({metric}, {n} passes)").into());
+            }
+            let per_pass = median(gpu);
+            rows.push(Row {
+                vs_baseline: Some(per_pass / raw),
+                ..row(
+                    "graph-floor",
+                    case.clone(),
+                    metric,
+                    per_pass,
+                    "µs",
+                    &device_name,
+                )
+            });
+            if mode == TimingMode::Frame && batching {
+                rows.push(row(
+                    "graph-floor",
+                    case.clone(),
+                    "CPU record per pass (graph)",
+                    median(record),
+                    "µs",
+                    &device_name,
+                ));
+                rows.push(row(
+                    "graph-floor",
+                    case.clone(),
+                    "CPU frame per pass (graph)",
+                    median(cpu_frame),
+                    "µs",
+                    &device_name,
+                ));
+            }
+        }
+    }
+    exec.timing = TimingMode::Frame;
+    exec.batching = true;
+    exec.stamp_inside_passes = true;
+    let got: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.gpu.read_buffer(&counter, 0, 4)?);
+    if got[0] as u64 != dispatched {
+        return Err(format!(
+            "the graph's steps counted {} dispatches of {dispatched}: some did not run",
+            got[0]
+        )
+        .into());
+    }
+    Ok(rows)
 }

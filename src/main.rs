@@ -84,6 +84,19 @@ struct RenderArgs {
     /// HTML page.
     #[arg(long)]
     html: Option<PathBuf>,
+    /// GPU timing: `frame` (one timestamp pair per batch, the default), `passes` (per
+    /// pass, for profiling: each pair costs GPU time) or `off`. Default: MESHLIGHT_TIMING.
+    #[arg(long, value_parser = parse_timing)]
+    timing: Option<meshlight::graph::TimingMode>,
+    /// Checked mode: a validation error names the pass that caused it (default: on in
+    /// debug builds, or MESHLIGHT_CHECKED).
+    #[arg(long)]
+    checked: bool,
+}
+
+fn parse_timing(name: &str) -> Result<meshlight::graph::TimingMode, String> {
+    meshlight::graph::TimingMode::parse(name)
+        .ok_or_else(|| format!("unknown timing mode `{name}`; use off, frame or passes"))
 }
 
 fn parse_view(name: &str) -> Result<meshlight::resolve::DebugView, String> {
@@ -181,6 +194,10 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     let light_count = lights.len();
     let mut renderer = Renderer::new(placed.data, settings, &source)?;
     renderer.lights = lights;
+    if let Some(mode) = a.timing {
+        renderer.executor.timing = mode;
+    }
+    renderer.executor.checked |= a.checked;
     let still = renderer.render_still(&placed.camera)?;
     if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
@@ -239,8 +256,17 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             .unwrap_or_else(|| "no timestamps".into());
         println!("  {:<22} {gpu}", p.name);
     }
-    if let Some(total) = still.stats.gpu_total_us {
-        println!("  {:<22} {total:.0} µs GPU", "frame");
+    for b in &still.stats.batches {
+        if let Some(us) = b.gpu_us {
+            println!("  {:<22} {us:.0} µs GPU ({})", b.label, b.passes.join(", "));
+        }
+    }
+    if let Some(total) = still.stats.gpu_frame_us {
+        println!(
+            "  {:<22} {total:.0} µs GPU (timing mode {})",
+            "frame",
+            still.stats.timing.name()
+        );
     }
     if let Some(html) = a.html {
         let page = dump::to_html(

@@ -27,13 +27,13 @@ pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
-    BindingLayout, ColorAttachment, ComputeProgram, DepthAttachment, Executor, FrameData,
-    FrameStats, GpuAdapter, GpuContext, GpuTimings, Imports, Program, Readback, RecordContext,
-    RenderProgram, SamplerKind,
+    BatchStats, BindingLayout, ColorAttachment, ComputePassGuard, ComputeProgram, DepthAttachment,
+    Executor, FrameData, FrameStats, GpuAdapter, GpuContext, GpuTimings, Imports, Program,
+    Readback, RecordContext, RenderProgram, SamplerKind, TimingMode,
 };
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
 pub use pass::{Pass, SetupContext, Visibility64};
-pub use plan::Plan;
+pub use plan::{Batch, Plan, Recording};
 pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};
 pub use resource::{
     AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture,

@@ -66,6 +66,8 @@ pub struct SetupContext<'a> {
     pub(crate) programs: Vec<(String, ProgramDesc)>,
     pub(crate) frame_inputs: Vec<String>,
     pub(crate) dispatches: Vec<(String, [u32; 3])>,
+    pub(crate) needs_encoder: Option<String>,
+    pub(crate) clears_itself: Vec<String>,
 }
 
 impl<'a> SetupContext<'a> {
@@ -90,6 +92,8 @@ impl<'a> SetupContext<'a> {
             programs: Vec::new(),
             frame_inputs: Vec::new(),
             dispatches: Vec::new(),
+            needs_encoder: None,
+            clears_itself: Vec::new(),
         }
     }
     /// The adapter's features, to choose between variants.
@@ -179,6 +183,19 @@ impl<'a> SetupContext<'a> {
     /// the adapter's per-dimension limit is a compile error instead of a device error.
     pub fn dispatch(&mut self, label: &str, groups: [u32; 3]) {
         self.dispatches.push((label.to_string(), groups));
+    }
+    /// Declares that `record` takes the command encoder (`RecordContext::encoder`) for
+    /// something compile cannot see from slots and programs (a query, a debug copy), so
+    /// the pass is recorded on the encoder instead of inside a batch's shared compute
+    /// pass. `why` is shown in the plan and its dumps.
+    pub fn needs_encoder(&mut self, why: &str) {
+        self.needs_encoder = Some(why.to_string());
+    }
+    /// Declares that the pass clears the texture bound to `slot` (a `ClearedReadWrite`
+    /// slot) with its own dispatch and never calls `RecordContext::clear` on it, so the
+    /// slot does not take the pass out of its batch.
+    pub fn clears_itself(&mut self, slot: &str) {
+        self.clears_itself.push(slot.to_string());
     }
     /// Marks the pass as having an effect outside the graph (readback, logging), so it is
     /// never culled.

@@ -94,6 +94,70 @@ pub struct PassPlan {
     #[serde(serialize_with = "ser_features")]
     pub optional_features: wgpu::Features,
     pub side_effect: bool,
+    /// How the executor records the pass: inside a batch's shared compute pass, or on the
+    /// frame's command encoder.
+    pub recording: Recording,
+}
+
+/// How a pass is recorded.
+///
+/// A pass is `Compute` (batched) unless compile sees it needs the command encoder: it
+/// declared a render or mesh program, a slot or scratch resource is used as a copy
+/// source or destination, render or depth target, vertex or index buffer, it clears a
+/// texture (`ClearedReadWrite` on a texture slot, which `RecordContext::clear` turns into
+/// a texture clear), or its setup called `SetupContext::needs_encoder`. A `Compute` pass
+/// records its dispatches into the batch's shared compute pass, and its buffer clears
+/// become dispatches of the graph's fill program there.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Recording {
+    Compute,
+    /// Why the pass needs the encoder.
+    Encoder(String),
+}
+
+impl Recording {
+    pub fn is_compute(&self) -> bool {
+        matches!(self, Recording::Compute)
+    }
+}
+
+/// A run of consecutive passes in execution order that the executor records together:
+/// compute-only passes share one wgpu compute pass (wgpu puts the barrier each dependent
+/// dispatch needs inside it); a pass that needs the encoder is a batch of its own.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Batch {
+    /// Indices into `Plan::passes`, in execution order.
+    pub passes: Vec<usize>,
+    /// True for a shared compute pass, false for one pass recorded on the encoder.
+    pub compute: bool,
+}
+
+impl Batch {
+    /// `batch 3` for an encoder pass, `batch 3 (compute ×5)` for a shared compute pass.
+    pub fn label(&self, index: usize) -> String {
+        if self.compute {
+            format!("batch {index} (compute ×{})", self.passes.len())
+        } else {
+            format!("batch {index} (encoder)")
+        }
+    }
+}
+
+/// Groups `order` into batches by each pass's recording.
+pub fn batches_of(passes: &[PassPlan], order: &[usize]) -> Vec<Batch> {
+    let mut batches: Vec<Batch> = Vec::new();
+    for &p in order {
+        let compute = passes[p].recording.is_compute();
+        match batches.last_mut() {
+            Some(b) if compute && b.compute => b.passes.push(p),
+            _ => batches.push(Batch {
+                passes: vec![p],
+                compute,
+            }),
+        }
+    }
+    batches
 }
 
 impl PassPlan {
@@ -131,6 +195,8 @@ pub struct Plan {
     pub passes: Vec<PassPlan>,
     /// Indices into `passes`, in execution order (culled passes left out).
     pub order: Vec<usize>,
+    /// `order` grouped into what the executor records together (see [`Batch`]).
+    pub batches: Vec<Batch>,
     pub culled: Vec<usize>,
     pub resources: Vec<ResourcePlan>,
     pub edges: Vec<Edge>,
@@ -155,6 +221,10 @@ impl Plan {
     }
     pub fn is_culled(&self, pass: usize) -> bool {
         self.culled.contains(&pass)
+    }
+    /// The batch a pass runs in, `None` for culled passes.
+    pub fn batch_of(&self, pass: usize) -> Option<usize> {
+        self.batches.iter().position(|b| b.passes.contains(&pass))
     }
 }
 

@@ -67,6 +67,9 @@ pub(crate) struct PassSetup {
 /// A plan plus the passes it runs.
 pub struct CompiledGraph {
     pub plan: Plan,
+    /// Unique per compiled graph: the executor keeps what it resolved for each pass (its
+    /// programs) under it, so a steady frame finds them without building keys.
+    pub(crate) id: u64,
     pub(crate) passes: Vec<PassNode>,
     pub(crate) setups: Vec<PassSetup>,
     /// Descriptors as declared, before size parameters were applied.
@@ -389,8 +392,10 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             required_features: setup.required,
             optional_features: setup.optional,
             side_effect: setup.side_effect,
+            recording: recording(&resources, node, setup, &scratch_of[p]),
         })
-        .collect();
+        .collect::<Vec<_>>();
+    let batches = batches_of(&pass_plans, &order);
 
     let pass_setups: Vec<PassSetup> = setups
         .into_iter()
@@ -419,10 +424,13 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         })
         .collect();
 
+    static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
     Ok(CompiledGraph {
+        id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
         plan: Plan {
             passes: pass_plans,
             order,
+            batches,
             culled,
             resources: resource_plans,
             edges: table.edges,
@@ -438,6 +446,55 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         declared,
         limits: options.limits.clone(),
     })
+}
+
+/// Whether a pass can be recorded inside a batch's shared compute pass (see
+/// [`Recording`]): the first thing found that needs the command encoder, else `Compute`.
+fn recording(
+    resources: &[ResourceInfo],
+    node: &PassNode,
+    setup: &SetupContext<'_>,
+    scratch: &[usize],
+) -> Recording {
+    if let Some(why) = &setup.needs_encoder {
+        return Recording::Encoder(why.clone());
+    }
+    if let Some((name, _)) = setup
+        .programs
+        .iter()
+        .find(|(_, d)| !matches!(d.kind, crate::program::ProgramKind::Compute { .. }))
+    {
+        return Recording::Encoder(format!("render program `{name}`"));
+    }
+    let encoder_access = |a: Access| {
+        matches!(
+            a,
+            Access::CopySrc
+                | Access::CopyDst
+                | Access::RenderTarget
+                | Access::DepthTarget
+                | Access::Vertex
+                | Access::Index
+        )
+    };
+    for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+        if let Some(a) = slot.accesses().find(|&a| encoder_access(a)) {
+            return Recording::Encoder(format!("slot `{}` is {}", slot.name, a.name()));
+        }
+        let texture = matches!(resources[h.id.index()].desc, ResourceDesc::Texture(_));
+        if texture
+            && slot.accesses().any(|a| a == Access::ClearedReadWrite)
+            && !setup.clears_itself.iter().any(|s| s == slot.name)
+        {
+            return Recording::Encoder(format!("clears texture slot `{}`", slot.name));
+        }
+    }
+    for (decl, _) in setup.scratch.iter().zip(scratch) {
+        if let Some(a) = decl.accesses.iter().copied().find(|&a| encoder_access(a)) {
+            return Recording::Encoder(format!("scratch `{}` is {}", decl.name, a.name()));
+        }
+    }
+    Recording::Compute
 }
 
 pub(crate) fn feature_names(f: wgpu::Features) -> String {

@@ -1,5 +1,6 @@
 //! Graphviz DOT: passes as boxes, resource versions as ellipses, edges labelled with the
-//! access; culled passes greyed, history resources double-ringed, imports bold.
+//! access; culled passes greyed, history resources double-ringed, imports bold; each of
+//! the plan's batches a cluster around its passes (compute batches shaded).
 
 use super::{kind_tag, version_nodes};
 use crate::plan::Plan;
@@ -34,8 +35,12 @@ pub fn to_dot(plan: &Plan) -> String {
             .choice_reason()
             .map(|r| format!("\nchosen: {r}"))
             .unwrap_or_default();
+        let encoder = match &p.recording {
+            crate::plan::Recording::Encoder(why) if !culled => format!("\nencoder: {why}"),
+            _ => String::new(),
+        };
         let label = format!(
-            "{order}{}\n{}/{}{why}{programs}{}",
+            "{order}{}\n{}/{}{why}{programs}{encoder}{}",
             p.name,
             p.stage,
             p.implementation_label(),
@@ -47,6 +52,20 @@ pub fn to_dot(plan: &Plan) -> String {
             ", style=filled, fillcolor=\"#dde8f7\""
         };
         let _ = writeln!(out, "  p{i} [shape=box, label=\"{}\"{style}];", esc(&label));
+    }
+    for (b, batch) in plan.batches.iter().enumerate() {
+        let style = if batch.compute {
+            "style=\"rounded,filled\"; fillcolor=\"#f3f7ee\"; color=\"#6a9a3a\""
+        } else {
+            "style=\"rounded,dashed\"; color=\"#999999\""
+        };
+        let members: Vec<String> = batch.passes.iter().map(|p| format!("p{p};")).collect();
+        let _ = writeln!(
+            out,
+            "  subgraph cluster_batch{b} {{ label=\"{}\"; {style}; {} }}",
+            esc(&batch.label(b)),
+            members.join(" ")
+        );
     }
     for (r, v) in version_nodes(plan) {
         let res = &plan.resources[r];

@@ -1,5 +1,6 @@
-//! One self-contained HTML page (no scripts, no network): the pass order with per-pass GPU
-//! time bars, and the resource-lifetime chart (rows = resources, columns = passes).
+//! One self-contained HTML page (no scripts, no network): the batches and the pass order
+//! with GPU time bars (per batch in `frame` timing mode, per pass in `passes` mode, the
+//! mode named), and the resource-lifetime chart (rows = resources, columns = passes).
 
 use super::kind_tag;
 use crate::exec::FrameStats;
@@ -43,7 +44,8 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
         bytes(plan.bytes_without_reuse)
     );
 
-    h.push_str("<h2>Pass order</h2>\n<table><tr><th>#</th><th>pass</th><th>stage / implementation</th><th>GPU µs</th><th></th><th>CPU record µs</th><th>programs (kind, entries, defs)</th></tr>\n");
+    batches(&mut h, plan, last_frame);
+    h.push_str("<h2>Pass order</h2>\n<table><tr><th>#</th><th>batch</th><th>pass</th><th>stage / implementation</th><th>GPU µs</th><th></th><th>CPU record µs</th><th>programs (kind, entries, defs)</th></tr>\n");
     let max_gpu = last_frame
         .map(|f| f.passes.iter().filter_map(|p| p.gpu_us).fold(0.0, f64::max))
         .unwrap_or(0.0);
@@ -57,7 +59,8 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
         };
         let _ = writeln!(
             h,
-            "<tr><td>{o}</td><td>{}</td><td>{} / {}{}</td><td>{}</td><td><div class=\"bar\" style=\"width:{width}px\"></div></td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{o}</td><td>{}</td><td>{}</td><td>{} / {}{}</td><td>{}</td><td><div class=\"bar\" style=\"width:{width}px\"></div></td><td>{}</td><td>{}</td></tr>",
+            plan.batch_of(p).map(|b| b.to_string()).unwrap_or_default(),
             esc(&pass.name),
             esc(pass.stage),
             esc(&pass.implementation_label()),
@@ -89,7 +92,7 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
     for &p in &plan.culled {
         let _ = writeln!(
             h,
-            "<tr class=\"culled\"><td></td><td>{}</td><td colspan=\"5\">culled: nothing it writes is used</td></tr>",
+            "<tr class=\"culled\"><td></td><td></td><td>{}</td><td colspan=\"6\">culled: nothing it writes is used</td></tr>",
             esc(&plan.passes[p].name)
         );
     }
@@ -126,4 +129,62 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
     }
     h.push_str("</table>\n</body></html>\n");
     h
+}
+
+/// The batches: what shares a compute pass, what needs the encoder and why, and each
+/// batch's GPU time when the frame was timed per batch.
+fn batches(h: &mut String, plan: &Plan, last_frame: Option<&FrameStats>) {
+    let mode = last_frame.map_or("no frame run", |f| f.timing.name());
+    let _ = writeln!(
+        h,
+        "<h2>Batches</h2>\n<p>{} batches, {} of them shared compute passes; GPU times from timing mode <b>{}</b>{}.</p>",
+        plan.batches.len(),
+        plan.batches.iter().filter(|b| b.compute).count(),
+        esc(mode),
+        last_frame
+            .and_then(|f| f.gpu_frame_us)
+            .map(|us| format!(", frame {us:.1} µs on the GPU"))
+            .unwrap_or_default()
+    );
+    h.push_str("<table><tr><th>batch</th><th>passes</th><th>GPU µs</th><th></th></tr>\n");
+    let times: Vec<Option<f64>> = plan
+        .batches
+        .iter()
+        .enumerate()
+        .map(|(b, _)| {
+            last_frame
+                .and_then(|f| f.batches.get(b))
+                .and_then(|s| s.gpu_us)
+        })
+        .collect();
+    let max = times.iter().flatten().fold(0.0, |a: f64, &b| a.max(b));
+    for (b, batch) in plan.batches.iter().enumerate() {
+        let passes = batch
+            .passes
+            .iter()
+            .map(|&p| {
+                let pass = &plan.passes[p];
+                match &pass.recording {
+                    crate::plan::Recording::Encoder(why) => {
+                        format!("{} <small>(encoder: {})</small>", esc(&pass.name), esc(why))
+                    }
+                    crate::plan::Recording::Compute => esc(&pass.name),
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        let width = match times[b] {
+            Some(t) if max > 0.0 => (t / max * 300.0).round() as u32,
+            _ => 0,
+        };
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td>{passes}</td><td>{}</td><td><div class=\"bar\" style=\"width:{width}px\"></div></td></tr>",
+            esc(&batch.label(b)),
+            times[b]
+                .map(|t| format!("{t:.1}"))
+                .unwrap_or_else(|| "–".into()),
+        );
+    }
+    h.push_str("</table>\n");
 }

@@ -1,4 +1,4 @@
-//! Mermaid flowchart of the same graph as the DOT dump.
+//! Mermaid flowchart of the same graph as the DOT dump, each batch a subgraph.
 
 use super::{kind_tag, version_nodes};
 use crate::plan::Plan;
@@ -21,6 +21,13 @@ pub fn to_mermaid(plan: &Plan) -> String {
             esc(p.stage),
             esc(&p.implementation_label())
         );
+    }
+    for (b, batch) in plan.batches.iter().enumerate() {
+        let _ = writeln!(out, "  subgraph batch{b} [\"{}\"]", esc(&batch.label(b)));
+        for p in &batch.passes {
+            let _ = writeln!(out, "    p{p}");
+        }
+        out.push_str("  end\n");
     }
     for (r, v) in version_nodes(plan) {
         let res = &plan.resources[r];

@@ -5,9 +5,18 @@ use crate::error::{GraphError, Result};
 /// The environment variable that picks an adapter by a substring of its name.
 pub const ADAPTER_ENV: &str = "MESHLIGHT_ADAPTER";
 
+/// The environment variable that turns wgpu's indirect-call validation off (`off`, `0`).
+///
+/// wgpu checks the arguments of every indirect dispatch and draw on the GPU with an extra
+/// dispatch of its own (and clamps out-of-range ones). A graph whose indirect arguments
+/// are all written by its own passes, which bound them with the limits in mind (as
+/// `remap_dispatch` does), may turn it off; it stays on by default.
+pub const INDIRECT_VALIDATION_ENV: &str = "MESHLIGHT_INDIRECT_VALIDATION";
+
 /// Features the executor itself uses when the adapter has them (per-pass GPU timing).
-pub const TIMING_FEATURES: wgpu::Features =
-    wgpu::Features::TIMESTAMP_QUERY.union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
+pub const TIMING_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
+    .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS)
+    .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
 
 /// Every feature wgpu marks experimental (the ones that need the opt-in).
 pub fn experimental_features() -> wgpu::Features {
@@ -24,10 +33,27 @@ pub struct GpuAdapter {
 }
 
 impl GpuAdapter {
-    /// The adapter named by `MESHLIGHT_ADAPTER`, else the first Vulkan adapter.
+    /// The adapter named by `MESHLIGHT_ADAPTER`, else the first Vulkan adapter, with
+    /// indirect-call validation as `MESHLIGHT_INDIRECT_VALIDATION` says (on by default).
     pub fn select() -> Result<Self> {
+        let off = std::env::var(INDIRECT_VALIDATION_ENV).is_ok_and(|v| {
+            matches!(
+                v.trim().to_ascii_lowercase().as_str(),
+                "0" | "off" | "false" | "no"
+            )
+        });
+        Self::select_with_indirect_validation(!off)
+    }
+
+    /// [`Self::select`] with wgpu's indirect-call validation on or off (see
+    /// [`INDIRECT_VALIDATION_ENV`]).
+    pub fn select_with_indirect_validation(indirect_validation: bool) -> Result<Self> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::VULKAN;
+        desc.flags.set(
+            wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL,
+            indirect_validation,
+        );
         let instance = wgpu::Instance::new(desc);
         let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
         let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();

@@ -1,17 +1,20 @@
 //! Runs compiled graphs frame after frame: allocates pooled resources, swaps history,
-//! records each live pass into its own labelled encoder inside an error scope, submits
-//! once, and reports per-pass timings. Nothing here waits for the GPU: timestamps and
-//! readbacks come back through rings of map-read buffers frames later.
+//! records the plan's batches into one command encoder (each compute batch into one
+//! shared compute pass), submits one command buffer, and reports timings per batch or
+//! per pass. Nothing here waits for the GPU: timestamps and readbacks come back through
+//! rings of map-read buffers frames later.
 
 use crate::compile::CompiledGraph;
 use crate::error::{GraphError, Result};
 use crate::exec::context::GpuContext;
+use crate::exec::fill::Fill;
 use crate::exec::frame::FrameData;
 use crate::exec::physical::{self, Physical, PhysicalPool};
 use crate::exec::programs::Programs;
 use crate::exec::readback::{Readback, Readbacks};
 use crate::exec::record::RecordContext;
-use crate::exec::timing::{GpuTimings, Timestamps};
+use crate::exec::shared::{BatchStamps, SharedPass};
+use crate::exec::timing::{GpuTimings, Timestamps, TimingMode};
 use crate::exec::views::ViewCache;
 use crate::resource::{ImportedUsage, ResourceDesc, ResourceKind};
 use serde::Serialize;
@@ -48,26 +51,69 @@ impl Imports {
     }
 }
 
+/// The environment variable that turns batched recording off (`off`, `0`, `false`).
+pub const BATCHING_ENV: &str = "MESHLIGHT_BATCHING";
+/// The environment variable that turns checked mode on (`1`, `on`) or off (`0`, `off`).
+pub const CHECKED_ENV: &str = "MESHLIGHT_CHECKED";
+
+fn env_switch(name: &str) -> Option<bool> {
+    match std::env::var(name)
+        .ok()?
+        .trim()
+        .to_ascii_lowercase()
+        .as_str()
+    {
+        "0" | "off" | "false" | "no" => Some(false),
+        "1" | "on" | "true" | "yes" => Some(true),
+        _ => None,
+    }
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct PassTiming {
     pub name: String,
-    /// GPU time between the pass's timestamps; known once the GPU has finished the frame
-    /// (see [`Executor::finish`]), `None` before and on adapters without timestamps.
+    /// The plan's batch the pass ran in.
+    pub batch: usize,
+    /// GPU time between the pass's timestamps, in `passes` timing mode only; known once
+    /// the GPU has finished the frame (see [`Executor::finish`]), `None` before, in other
+    /// modes and on adapters without timestamps.
     pub gpu_us: Option<f64>,
     /// CPU time spent in the pass's `record`, including pipeline creation on first use.
     pub cpu_record_us: f64,
+}
+
+/// One batch of a frame (see [`crate::plan::Batch`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct BatchStats {
+    pub label: String,
+    pub passes: Vec<String>,
+    /// GPU time between the batch's timestamps, in `frame` timing mode only, once known.
+    pub gpu_us: Option<f64>,
 }
 
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameStats {
     pub frame: u64,
     pub passes: Vec<PassTiming>,
+    /// The timing mode this frame ran with: which of `gpu_us` (per pass or per batch) fill in.
+    pub timing: TimingMode,
+    pub batches: Vec<BatchStats>,
+    /// wgpu compute passes the shared batches opened (one per compute batch, more when a
+    /// batched pass took the encoder).
+    pub compute_passes: u32,
+    /// Batched passes that took the encoder this frame (an error in checked mode).
+    pub unplanned_splits: u32,
     /// CPU time of the whole frame on the executor's side (it never waits for the GPU).
     pub cpu_frame_us: f64,
     /// The part of `cpu_frame_us` spent in `queue.submit` (mostly driver work).
     pub cpu_submit_us: f64,
-    /// Sum of `gpu_us`, when known.
+    /// The part of `cpu_frame_us` spent in `CommandEncoder::finish`, where wgpu encodes
+    /// what the passes recorded (its validation, barriers and the driver's commands).
+    pub cpu_finish_us: f64,
+    /// Sum of the timed units' GPU times (batches or passes), when known.
     pub gpu_total_us: Option<f64>,
+    /// From the first timestamp to the last: the frame's GPU time, gaps included.
+    pub gpu_frame_us: Option<f64>,
     /// The newest earlier frame whose GPU timings had come back when this one was recorded.
     pub gpu_latest: Option<GpuTimings>,
     /// Frames submitted whose timestamps the GPU had not yet delivered, this one included:
@@ -109,13 +155,30 @@ pub struct Executor {
     /// Calls that waited for the GPU ([`Executor::finish`], [`Executor::read_buffer`]):
     /// frames themselves never do, and tests check this stays zero while frames run.
     pub blocking_waits: u64,
-    /// Write per-pass timestamps where the adapter has them (off for CPU-overhead runs).
+    /// What to time on the GPU where the adapter has timestamps (`MESHLIGHT_TIMING`,
+    /// default `frame`).
+    pub timing: TimingMode,
+    /// False turns timing off whatever `timing` says (CPU-overhead runs).
     pub gpu_timing: bool,
-    /// Record every pass of a frame into one command buffer instead of one each. Off by
-    /// default: a pass's own buffer lets a validation error that wgpu defers to
-    /// `finish` name that pass; on, such an error names the frame. For measuring what the
-    /// command-buffer boundaries cost.
+    /// In `passes` timing mode, write the stamps inside the batch's shared compute pass
+    /// where the adapter has `TIMESTAMP_QUERY_INSIDE_PASSES` (else every pass gets a
+    /// compute pass of its own).
+    pub stamp_inside_passes: bool,
+    /// Record consecutive compute-only passes into one shared compute pass (the plan's
+    /// batches). On unless `MESHLIGHT_BATCHING=off`; off records every pass into compute
+    /// passes of its own, for comparing the two paths.
+    pub batching: bool,
+    /// Checked mode: a validation error is traced to the pass that caused it (the frame is
+    /// recorded again, a pass per encoder and error scope, and not submitted), and a
+    /// batched pass that takes the encoder is an error. On in debug builds, or by
+    /// `MESHLIGHT_CHECKED`. Unchecked, the frame costs one error scope and an error names
+    /// the frame.
+    pub checked: bool,
+    /// One command buffer per frame (the default); false gives each batch its own, to
+    /// measure what command-buffer boundaries cost.
     pub one_command_buffer: bool,
+    shared: SharedPass,
+    fill: Option<Fill>,
 }
 
 impl Executor {
@@ -133,8 +196,14 @@ impl Executor {
             last_stats: None,
             frame: 0,
             blocking_waits: 0,
+            timing: TimingMode::from_env(),
             gpu_timing: true,
-            one_command_buffer: false,
+            stamp_inside_passes: true,
+            batching: env_switch(BATCHING_ENV).unwrap_or(true),
+            checked: env_switch(CHECKED_ENV).unwrap_or(cfg!(debug_assertions)),
+            one_command_buffer: true,
+            shared: SharedPass::default(),
+            fill: None,
         }
     }
 
@@ -144,6 +213,16 @@ impl Executor {
     pub fn queue(&self) -> &wgpu::Queue {
         &self.gpu.queue
     }
+    /// The timing mode frames run with: `timing`, or `Off` where timing is switched off
+    /// or the adapter has no timestamps.
+    pub fn timing_mode(&self) -> TimingMode {
+        if self.gpu_timing && self.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
+            self.timing
+        } else {
+            TimingMode::Off
+        }
+    }
+
     /// Frames executed so far (the index the next frame gets).
     pub fn frame_index(&self) -> u64 {
         self.frame
@@ -212,10 +291,20 @@ impl Executor {
             let period = self.gpu.queue.get_timestamp_period() as f64;
             for t in ts.harvest(period) {
                 if let Some(stats) = self.last_stats.as_mut().filter(|s| s.frame == t.frame) {
-                    for (p, (_, us)) in stats.passes.iter_mut().zip(&t.passes) {
-                        p.gpu_us = Some(*us);
+                    match t.mode {
+                        TimingMode::Passes => {
+                            for (p, (_, us)) in stats.passes.iter_mut().zip(&t.passes) {
+                                p.gpu_us = Some(*us);
+                            }
+                        }
+                        _ => {
+                            for (b, (_, us)) in stats.batches.iter_mut().zip(&t.passes) {
+                                b.gpu_us = Some(*us);
+                            }
+                        }
                     }
                     stats.gpu_total_us = Some(t.total_us);
+                    stats.gpu_frame_us = Some(t.frame_us);
                 }
                 self.timings.push_back(t);
                 if self.timings.len() > 256 {
@@ -313,117 +402,197 @@ impl Executor {
         let bind_groups_before = self.programs.bind_groups_created;
         let (physical, history_valid) = self.resolve_resources(graph, imports)?;
 
-        let timing = self.gpu_timing && self.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY);
-        if timing
+        let mode = self.timing_mode();
+        let inside_passes = self.stamp_inside_passes
+            && self
+                .gpu
+                .features
+                .contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
+        // Per-pass stamps split every batch unless they can go inside the shared pass.
+        let batching = self.batching && (mode != TimingMode::Passes || inside_passes);
+        let units = match mode {
+            TimingMode::Off => 0,
+            TimingMode::Frame => plan.batches.len(),
+            TimingMode::Passes => plan.order.len(),
+        } as u32;
+        if units > 0
             && self
                 .timestamps
                 .as_ref()
-                .is_none_or(|t| t.capacity() < plan.order.len() as u32 * 2)
+                .is_none_or(|t| t.capacity() < units * 2)
         {
             let inside = self
                 .gpu
                 .features
                 .contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
-            self.timestamps = Some(Timestamps::new(
-                &self.gpu.device,
-                plan.order.len() as u32,
-                inside,
-            ));
+            self.timestamps = Some(Timestamps::new(&self.gpu.device, units, inside));
         }
 
         let device = &self.gpu.device;
-        let mut command_buffers = Vec::with_capacity(plan.order.len() + 1);
+        let frame_scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut command_buffers = Vec::with_capacity(2);
         let mut timings = Vec::with_capacity(plan.order.len());
-        let mut shared = self.one_command_buffer.then(|| {
+        let mut batch_stats = Vec::with_capacity(plan.batches.len());
+        let new_encoder = || {
             device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("meshlight frame"),
             })
-        });
-        for (i, &p) in plan.order.iter().enumerate() {
-            let node = &graph.passes[p];
-            let t0 = Instant::now();
-            let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let mut own = shared.is_none().then(|| {
-                device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some(&node.name),
-                })
+        };
+        let mut encoder = new_encoder();
+        let mut shared = std::mem::take(&mut self.shared);
+        shared.unplanned.clear();
+        shared.opened = 0;
+        let ts = self.timestamps.as_ref().filter(|_| mode != TimingMode::Off);
+        let fill = self.fill.get_or_insert_with(|| Fill::new(device));
+        let mut at = 0;
+        let mut failed = None;
+        'batches: for (b, batch) in plan.batches.iter().enumerate() {
+            let batched = batching && batch.compute;
+            let label = batch.label(b);
+            let batch_stamps = ts.filter(|_| mode == TimingMode::Frame);
+            if batched {
+                shared.begin_batch(
+                    label.clone(),
+                    batch_stamps.map(|t| BatchStamps {
+                        query_set: t.query_set.clone(),
+                        begin: Some(2 * b as u32),
+                        end: 2 * b as u32 + 1,
+                    }),
+                );
+            } else if let Some(t) = batch_stamps {
+                t.write(&mut encoder, 2 * b as u32);
+            }
+            for &p in &batch.passes {
+                let node = &graph.passes[p];
+                let t0 = Instant::now();
+                let pass_stamps = ts.filter(|_| mode == TimingMode::Passes);
+                if batched {
+                    shared.enter(&mut encoder, &node.name);
+                    if let Some(t) = pass_stamps {
+                        shared
+                            .get(&mut encoder)
+                            .write_timestamp(&t.query_set, 2 * at);
+                    }
+                } else if let Some(t) = pass_stamps {
+                    t.write(&mut encoder, 2 * at);
+                }
+                let splits_before = shared.unplanned.len();
+                let mut ctx = RecordContext {
+                    device,
+                    queue: &self.gpu.queue,
+                    features: self.gpu.features,
+                    encoder: &mut encoder,
+                    node,
+                    setup: &graph.setups[p],
+                    pass_index: p,
+                    plan,
+                    physical: &physical,
+                    programs: &mut self.programs,
+                    views: &mut self.views,
+                    readbacks: &mut self.readbacks,
+                    frame_data,
+                    frame_index: frame,
+                    history_valid: &history_valid,
+                    shared: &mut shared,
+                    batched,
+                    fill,
+                    graph_id: graph.id,
+                };
+                let recorded = node.pass.record(&mut ctx);
+                if batched {
+                    if let Some(t) = pass_stamps {
+                        shared
+                            .get(&mut encoder)
+                            .write_timestamp(&t.query_set, 2 * at + 1);
+                    }
+                    shared.leave();
+                } else if let Some(t) = pass_stamps {
+                    t.write(&mut encoder, 2 * at + 1);
+                }
+                let split = shared.unplanned.get(splits_before).cloned();
+                let recorded = match (recorded, split) {
+                    (Err(e), _) => Err(e),
+                    (Ok(()), Some(u)) if self.checked => Err(GraphError::Record {
+                        pass: u.pass,
+                        message: format!(
+                            "called {} inside a compute batch, which ended the batch's compute pass; declare it in setup with SetupContext::needs_encoder",
+                            u.what
+                        ),
+                    }),
+                    (Ok(()), _) => Ok(()),
+                };
+                if let Err(e) = recorded {
+                    failed = Some(e);
+                    break 'batches;
+                }
+                timings.push(PassTiming {
+                    name: node.name.clone(),
+                    batch: b,
+                    gpu_us: None,
+                    cpu_record_us: t0.elapsed().as_secs_f64() * 1e6,
+                });
+                at += 1;
+            }
+            if batched {
+                shared.end_batch();
+            } else if let Some(t) = batch_stamps {
+                t.write(&mut encoder, 2 * b as u32 + 1);
+            }
+            batch_stats.push(BatchStats {
+                label,
+                passes: batch
+                    .passes
+                    .iter()
+                    .map(|&p| plan.passes[p].name.clone())
+                    .collect(),
+                gpu_us: None,
             });
-            let encoder = match (own.as_mut(), shared.as_mut()) {
-                (Some(e), _) | (None, Some(e)) => e,
-                (None, None) => unreachable!("one of the two encoders exists"),
+            if !self.one_command_buffer && b + 1 < plan.batches.len() {
+                let done = std::mem::replace(&mut encoder, new_encoder());
+                command_buffers.push(done.finish());
+            }
+        }
+        shared.end_batch();
+        let unplanned_splits = shared.unplanned.len() as u32;
+        let compute_passes = shared.opened;
+        self.shared = shared;
+        if let Some(ts) = self
+            .timestamps
+            .as_mut()
+            .filter(|_| units > 0 && failed.is_none())
+        {
+            let names = match mode {
+                TimingMode::Frame => batch_stats.iter().map(|b| b.label.clone()).collect(),
+                _ => plan
+                    .order
+                    .iter()
+                    .map(|&p| plan.passes[p].name.clone())
+                    .collect(),
             };
-            let ts = if timing {
-                self.timestamps.as_ref()
+            ts.resolve(device, &mut encoder, frame, mode, names);
+        }
+        let finish_start = Instant::now();
+        command_buffers.push(encoder.finish());
+        let cpu_finish_us = finish_start.elapsed().as_secs_f64() * 1e6;
+        let invalid = pollster::block_on(frame_scope.pop());
+        if let Some(e) = failed {
+            self.readbacks.abandon();
+            return Err(e);
+        }
+        if let Some(e) = invalid {
+            self.readbacks.abandon();
+            if let Some(ts) = &mut self.timestamps {
+                ts.abandon(frame);
+            }
+            let named = if self.checked {
+                self.name_failing_pass(graph, &physical, &history_valid, frame_data)
             } else {
                 None
             };
-            if let Some(ts) = ts {
-                ts.write(encoder, 2 * i as u32);
-            }
-            let mut ctx = RecordContext {
-                device,
-                queue: &self.gpu.queue,
-                features: self.gpu.features,
-                encoder,
-                node,
-                setup: &graph.setups[p],
-                pass_index: p,
-                plan,
-                physical: &physical,
-                programs: &mut self.programs,
-                views: &mut self.views,
-                readbacks: &mut self.readbacks,
-                frame_data,
-                frame_index: frame,
-                history_valid: &history_valid,
-            };
-            let recorded = node.pass.record(&mut ctx);
-            if let Some(ts) = ts {
-                ts.write(ctx.encoder, 2 * i as u32 + 1);
-            }
-            let cb = own.map(wgpu::CommandEncoder::finish);
-            let failed = match pollster::block_on(scope.pop()) {
-                Some(e) => Err(GraphError::Validation {
-                    pass: node.name.clone(),
-                    message: e.to_string(),
-                }),
-                None => recorded,
-            };
-            if let Err(e) = failed {
-                self.readbacks.abandon();
-                return Err(e);
-            }
-            command_buffers.extend(cb);
-            timings.push(PassTiming {
-                name: node.name.clone(),
-                gpu_us: None,
-                cpu_record_us: t0.elapsed().as_secs_f64() * 1e6,
-            });
-        }
-
-        if let Some(encoder) = shared {
-            let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let cb = encoder.finish();
-            if let Some(e) = pollster::block_on(scope.pop()) {
-                self.readbacks.abandon();
-                return Err(GraphError::Validation {
-                    pass: "(the frame's command buffer)".into(),
-                    message: e.to_string(),
-                });
-            }
-            command_buffers.push(cb);
-        }
-        if let Some(ts) = self.timestamps.as_mut().filter(|_| timing) {
-            let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("meshlight timestamps"),
-            });
-            let names = plan
-                .order
-                .iter()
-                .map(|&p| plan.passes[p].name.clone())
-                .collect();
-            ts.resolve(device, &mut enc, frame, names);
-            command_buffers.push(enc.finish());
+            return Err(named.unwrap_or(GraphError::Validation {
+                pass: "(frame; checked mode names the pass)".into(),
+                message: e.to_string(),
+            }));
         }
         self.programs.uniforms.flush(&self.gpu.queue);
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -457,16 +626,22 @@ impl Executor {
         let frames_in_flight = self
             .timestamps
             .as_ref()
-            .filter(|_| timing)
+            .filter(|_| units > 0)
             .map_or(0, |t| t.in_flight())
             .max(self.readbacks.in_flight()) as u32;
         self.frame += 1;
         let stats = FrameStats {
             frame,
             passes: timings,
+            timing: mode,
+            batches: batch_stats,
+            compute_passes,
+            unplanned_splits,
             cpu_frame_us: frame_start.elapsed().as_secs_f64() * 1e6,
             cpu_submit_us,
+            cpu_finish_us,
             gpu_total_us: None,
+            gpu_frame_us: None,
             gpu_latest: self.timings.back().cloned(),
             frames_in_flight,
             bytes_with_reuse: plan.bytes_with_reuse,
@@ -478,6 +653,67 @@ impl Executor {
         };
         self.last_stats = Some(stats.clone());
         Ok(stats)
+    }
+
+    /// Records the frame again, unbatched, each pass into an encoder of its own inside an
+    /// error scope, and submits nothing: the first pass whose commands fail validation is
+    /// the one to name. Only after a frame failed, so the good path pays nothing for it.
+    fn name_failing_pass(
+        &mut self,
+        graph: &CompiledGraph,
+        physical: &[Option<Physical>],
+        history_valid: &[bool],
+        frame_data: &FrameData,
+    ) -> Option<GraphError> {
+        let plan = &graph.plan;
+        let device = &self.gpu.device;
+        let fill = self.fill.get_or_insert_with(|| Fill::new(device));
+        self.programs.uniforms.begin_frame();
+        let mut shared = SharedPass::default();
+        let mut found = None;
+        for &p in &plan.order {
+            let node = &graph.passes[p];
+            let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some(&node.name),
+            });
+            let mut ctx = RecordContext {
+                device,
+                queue: &self.gpu.queue,
+                features: self.gpu.features,
+                encoder: &mut encoder,
+                node,
+                setup: &graph.setups[p],
+                pass_index: p,
+                plan,
+                physical,
+                programs: &mut self.programs,
+                views: &mut self.views,
+                readbacks: &mut self.readbacks,
+                frame_data,
+                frame_index: self.frame,
+                history_valid,
+                shared: &mut shared,
+                batched: false,
+                fill,
+                graph_id: graph.id,
+            };
+            let recorded = node.pass.record(&mut ctx);
+            drop(encoder.finish());
+            let invalid = pollster::block_on(scope.pop());
+            if let Some(e) = invalid {
+                found = Some(GraphError::Validation {
+                    pass: node.name.clone(),
+                    message: e.to_string(),
+                });
+                break;
+            }
+            if recorded.is_err() {
+                break;
+            }
+        }
+        self.readbacks.abandon();
+        found
     }
 
     /// The physical object behind every resource this frame, and per resource whether a

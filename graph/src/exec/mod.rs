@@ -2,6 +2,7 @@
 
 pub mod context;
 pub mod executor;
+mod fill;
 pub mod frame;
 pub mod layout;
 pub mod physical;
@@ -9,14 +10,18 @@ pub mod programs;
 pub mod readback;
 pub mod record;
 mod ring;
+pub mod shared;
 pub mod timing;
 mod views;
 
-pub use context::{ADAPTER_ENV, GpuAdapter, GpuContext};
-pub use executor::{Executor, FrameStats, Imports, PassTiming};
+pub use context::{ADAPTER_ENV, GpuAdapter, GpuContext, INDIRECT_VALIDATION_ENV};
+pub use executor::{
+    BATCHING_ENV, BatchStats, CHECKED_ENV, Executor, FrameStats, Imports, PassTiming,
+};
 pub use frame::FrameData;
 pub use layout::{BindingLayout, BindingSource, LayoutEntry, SamplerKind};
 pub use programs::{ComputeProgram, Program, RenderProgram};
 pub use readback::Readback;
 pub use record::{ColorAttachment, DepthAttachment, Immediates, RecordContext};
-pub use timing::GpuTimings;
+pub use shared::ComputePassGuard;
+pub use timing::{GpuTimings, TIMING_ENV, TimingMode};

@@ -97,6 +97,7 @@ pub(crate) struct BindGroupKey {
     pub entries: Vec<(u32, BoundResource)>,
 }
 
+#[derive(Clone)]
 pub(crate) enum AnyProgram {
     Compute(Arc<ComputeProgram>),
     Render(Arc<RenderProgram>),
@@ -106,6 +107,10 @@ pub(crate) struct Programs {
     pub library: Option<ShaderLibrary>,
     modules: HashMap<ModuleKey, wgpu::ShaderModule>,
     programs: HashMap<ProgramKey, AnyProgram>,
+    /// Per (compiled graph, pass): its declared programs, by declaration index, once
+    /// built or found. Layout entries and formats are fixed by the compiled graph, so a
+    /// steady frame skips building and hashing a `ProgramKey`.
+    resolved: HashMap<(u64, usize), Vec<Option<AnyProgram>>>,
     layouts: HashMap<Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroupLayout>,
     samplers: HashMap<SamplerKind, wgpu::Sampler>,
     /// Bind groups by the exact objects they bind, with the frame that last used each;
@@ -123,6 +128,7 @@ impl Programs {
             library: None,
             modules: HashMap::new(),
             programs: HashMap::new(),
+            resolved: HashMap::new(),
             layouts: HashMap::new(),
             samplers: HashMap::new(),
             bind_groups: HashMap::new(),
@@ -215,6 +221,17 @@ impl Programs {
             _ => None,
         }
     }
+    pub fn resolved(&self, graph: u64, pass: usize, index: usize) -> Option<&AnyProgram> {
+        self.resolved.get(&(graph, pass))?.get(index)?.as_ref()
+    }
+    pub fn resolve(&mut self, graph: u64, pass: usize, index: usize, program: AnyProgram) {
+        let slots = self.resolved.entry((graph, pass)).or_default();
+        if slots.len() <= index {
+            slots.resize(index + 1, None);
+        }
+        slots[index] = Some(program);
+    }
+
     pub fn insert(&mut self, key: ProgramKey, program: AnyProgram) {
         self.pipelines_created += 1;
         self.programs.insert(key, program);

@@ -3,6 +3,7 @@
 
 use crate::compile::PassSetup;
 use crate::error::{GraphError, Result};
+use crate::exec::fill::Fill;
 use crate::exec::frame::FrameData;
 use crate::exec::layout::{BindingSource, buffer_binding_type, texture_binding_type};
 use crate::exec::physical::Physical;
@@ -11,6 +12,7 @@ use crate::exec::programs::{
     Program, ProgramKey, ProgramLayouts, Programs, RenderProgram,
 };
 use crate::exec::readback::Readbacks;
+use crate::exec::shared::{ComputePassGuard, SharedPass, Unplanned};
 use crate::exec::views::ViewCache;
 use crate::plan::{AttachmentOps, LoadOp, Plan, StoreOp};
 use crate::program::{Geometry, ProgramDesc, ProgramKind};
@@ -98,6 +100,13 @@ pub struct RecordContext<'a> {
     pub(crate) frame_index: u64,
     /// Per resource: for a history pair, whether `prev` holds last frame's contents.
     pub(crate) history_valid: &'a [bool],
+    /// The batch's shared compute pass; used only when `batched`.
+    pub(crate) shared: &'a mut SharedPass,
+    /// True when this pass records into the batch's shared compute pass.
+    pub(crate) batched: bool,
+    pub(crate) fill: &'a Fill,
+    /// `CompiledGraph::id`, under which the programs this pass resolved are kept.
+    pub(crate) graph_id: u64,
 }
 
 impl<'a> RecordContext<'a> {
@@ -111,8 +120,28 @@ impl<'a> RecordContext<'a> {
     pub fn features(&self) -> wgpu::Features {
         self.features
     }
+    /// The frame's command encoder. A batched pass (the plan says `Compute`) that takes it
+    /// ends its batch's compute pass here, so the commands stay in order; that costs a
+    /// pass boundary the plan does not show, and checked mode reports it as an error:
+    /// declare such a pass with `SetupContext::needs_encoder`.
     pub fn encoder(&mut self) -> &mut wgpu::CommandEncoder {
+        self.leave_batch("encoder()");
         self.encoder
+    }
+
+    /// True when the pass records into its batch's shared compute pass.
+    pub fn is_batched(&self) -> bool {
+        self.batched
+    }
+
+    /// Ends the shared compute pass before an encoder command, noting the split.
+    fn leave_batch(&mut self, what: &'static str) {
+        if self.batched && self.shared.split() {
+            self.shared.unplanned.push(Unplanned {
+                pass: self.node.name.clone(),
+                what,
+            });
+        }
     }
     pub fn pass_name(&self) -> &str {
         &self.node.name
@@ -302,14 +331,36 @@ impl<'a> RecordContext<'a> {
 
     /// Clears what `slot` binds to zero (a fill command): the first step of a
     /// `ClearedReadWrite` slot. A pass that clears with its own dispatch need not call it.
+    /// Inside a batch a buffer is zeroed by the graph's fill dispatch in the shared compute
+    /// pass (a `clear_buffer` would end it); a texture clear needs the encoder, which is
+    /// why a `ClearedReadWrite` texture slot makes compile record the pass on the encoder.
     pub fn clear(&mut self, slot: &str) -> Result<()> {
         let r = self.slot_resource(slot)?;
+        self.clear_resource(r, slot)
+    }
+
+    /// Zeroes a scratch buffer declared in setup, as [`Self::clear`] does a slot.
+    pub fn clear_scratch(&mut self, name: &str) -> Result<()> {
+        let r = self.scratch_resource(name)?;
+        self.clear_resource(r, name)
+    }
+
+    fn clear_resource(&mut self, r: usize, slot: &str) -> Result<()> {
         match self.physical(r)? {
             Physical::Buffer { buffer, size } => {
                 let bytes = size.next_multiple_of(4).min(buffer.size());
-                self.encoder.clear_buffer(buffer, 0, Some(bytes));
+                let usage = buffer.usage();
+                let fill = usage.contains(wgpu::BufferUsages::STORAGE)
+                    && (self.batched || !usage.contains(wgpu::BufferUsages::COPY_DST));
+                if fill {
+                    self.fill_dispatch(buffer, bytes);
+                } else {
+                    self.leave_batch("clear_buffer");
+                    self.encoder.clear_buffer(buffer, 0, Some(bytes));
+                }
             }
             Physical::Texture { texture, .. } => {
+                self.leave_batch("clear_texture");
                 let range = self
                     .range(slot)?
                     .unwrap_or_else(|| TextureRange::mips(0, 1));
@@ -326,6 +377,42 @@ impl<'a> RecordContext<'a> {
             }
         }
         Ok(())
+    }
+
+    /// Zeroes `bytes` of `buffer` with the fill program: in the shared compute pass inside a
+    /// batch, else in a compute pass of its own.
+    fn fill_dispatch(&mut self, buffer: &wgpu::Buffer, bytes: u64) {
+        if bytes == 0 {
+            return;
+        }
+        let limits = self.device.limits();
+        let chunks = Fill::chunks(
+            bytes,
+            limits.max_storage_buffer_binding_size,
+            limits.min_storage_buffer_offset_alignment as u64,
+        );
+        let mut groups = Vec::with_capacity(chunks.len());
+        for (offset, size) in chunks {
+            let bound = BoundResource::Buffer {
+                buffer: buffer.clone(),
+                offset,
+                size,
+            };
+            let group = self.cached_bind_group(
+                "meshlight fill",
+                self.fill.layout.clone(),
+                vec![(0, bound)],
+            );
+            groups.push((group, Fill::grid(size)));
+        }
+        let pipeline = &self.fill.pipeline;
+        // Outside a batch (a buffer without COPY_DST) the fill gets a compute pass of its own.
+        let mut pass = self.compute_pass();
+        pass.set_pipeline(pipeline);
+        for (group, [x, y]) in &groups {
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(*x, *y, 1);
+        }
     }
 
     /// The wgpu layout entries of a declared layout, from the bound resources.
@@ -391,12 +478,13 @@ impl<'a> RecordContext<'a> {
         })
     }
 
-    fn declared(&self, name: &str) -> Result<&'a Arc<ProgramDesc>> {
+    fn declared(&self, name: &str) -> Result<(usize, &'a Arc<ProgramDesc>)> {
         self.setup
             .programs
             .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, d)| d)
+            .enumerate()
+            .find(|(_, (n, _))| n == name)
+            .map(|(i, (_, d))| (i, d))
             .ok_or_else(|| {
                 self.err(format!(
                     "no program `{name}`; declare it in setup with SetupContext::program (declared: {})",
@@ -521,12 +609,24 @@ impl<'a> RecordContext<'a> {
 
     /// The compute program declared in setup as `name`, built once and cached.
     pub fn compute(&mut self, name: &str) -> Result<Arc<ComputeProgram>> {
-        let desc = self.declared(name)?;
+        let (index, desc) = self.declared(name)?;
         let ProgramKind::Compute { entry } = desc.kind else {
             return Err(self.err(format!("program `{name}` is not a compute program")));
         };
+        if let Some(AnyProgram::Compute(p)) =
+            self.programs
+                .resolved(self.graph_id, self.pass_index, index)
+        {
+            return Ok(p.clone());
+        }
         let key = self.program_key(desc)?;
         if let Some(p) = self.programs.compute(&key) {
+            self.programs.resolve(
+                self.graph_id,
+                self.pass_index,
+                index,
+                AnyProgram::Compute(p.clone()),
+            );
             return Ok(p);
         }
         let (module, layouts, layout) = self.build_layouts(&key)?;
@@ -544,13 +644,25 @@ impl<'a> RecordContext<'a> {
         let program = Arc::new(ComputeProgram { pipeline, layouts });
         self.programs
             .insert(key, AnyProgram::Compute(program.clone()));
+        self.programs.resolve(
+            self.graph_id,
+            self.pass_index,
+            index,
+            AnyProgram::Compute(program.clone()),
+        );
         Ok(program)
     }
 
     /// The render (vertex or mesh) program declared in setup as `name`, built once and
     /// cached.
     pub fn render(&mut self, name: &str) -> Result<Arc<RenderProgram>> {
-        let desc = self.declared(name)?;
+        let (index, desc) = self.declared(name)?;
+        if let Some(AnyProgram::Render(p)) =
+            self.programs
+                .resolved(self.graph_id, self.pass_index, index)
+        {
+            return Ok(p.clone());
+        }
         let ProgramKind::Render {
             geometry,
             fragment,
@@ -563,6 +675,12 @@ impl<'a> RecordContext<'a> {
         };
         let key = self.program_key(desc)?;
         if let Some(p) = self.programs.render(&key) {
+            self.programs.resolve(
+                self.graph_id,
+                self.pass_index,
+                index,
+                AnyProgram::Render(p.clone()),
+            );
             return Ok(p);
         }
         let (module, layouts, layout) = self.build_layouts(&key)?;
@@ -663,6 +781,12 @@ impl<'a> RecordContext<'a> {
         let program = Arc::new(RenderProgram { pipeline, layouts });
         self.programs
             .insert(key, AnyProgram::Render(program.clone()));
+        self.programs.resolve(
+            self.graph_id,
+            self.pass_index,
+            index,
+            AnyProgram::Render(program.clone()),
+        );
         Ok(program)
     }
 
@@ -791,13 +915,24 @@ impl<'a> RecordContext<'a> {
         Ok(Immediates { inner })
     }
 
-    /// Begins a compute pass labelled with this pass's name.
-    pub fn compute_pass(&mut self) -> wgpu::ComputePass<'_> {
-        self.encoder
-            .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(&self.node.name),
-                timestamp_writes: None,
-            })
+    /// The compute pass to dispatch in. For a batched pass it is the batch's shared compute
+    /// pass (dispatches of consecutive passes then need no pass boundary; wgpu still puts
+    /// the barrier each dependent dispatch needs between them), and dropping the guard
+    /// leaves it open. Otherwise a compute pass labelled with this pass's name begins, and
+    /// ends when the guard drops. Either way the commands go in the order they are given.
+    pub fn compute_pass(&mut self) -> ComputePassGuard<'_> {
+        if self.batched {
+            ComputePassGuard::shared(self.shared.get(self.encoder))
+        } else {
+            ComputePassGuard::own(
+                self.encoder
+                    .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some(&self.node.name),
+                        timestamp_writes: None,
+                    })
+                    .forget_lifetime(),
+            )
+        }
     }
 
     /// Begins a render pass labelled with this pass's name over `colors` and `depth`
@@ -861,6 +996,7 @@ impl<'a> RecordContext<'a> {
                     stencil_ops: None,
                 },
             );
+        self.leave_batch("render_pass()");
         Ok(self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(&self.node.name),
             color_attachments: &attachments,
@@ -880,6 +1016,7 @@ impl<'a> RecordContext<'a> {
         range: Option<std::ops::Range<u64>>,
     ) -> Result<()> {
         let (buffer, size) = self.buffer(slot)?;
+        self.leave_batch("readback copy");
         let range = range.unwrap_or(0..size.next_multiple_of(4).min(buffer.size()));
         let copy = crate::exec::readback::ReadbackCopy {
             name,

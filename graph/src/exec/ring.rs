@@ -141,9 +141,14 @@ impl MapRing {
             }
             match flag.load(Ordering::Acquire) {
                 MAPPED => {
+                    // Only the copied bytes were mapped: a buffer reused from a larger
+                    // copy is longer than that, and its whole range is not mapped.
+                    let mapped = bytes
+                        .next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT)
+                        .min(s.buffer.size());
                     let data = s
                         .buffer
-                        .get_mapped_range(..)
+                        .get_mapped_range(..mapped)
                         .map(|m| m[..*bytes as usize].to_vec());
                     s.buffer.unmap();
                     if let Ok(data) = data {

@@ -1,17 +1,74 @@
-//! One GPU timestamp pair per pass, resolved every frame into a ring of map-read buffers
-//! and read frames later, so timing never makes the CPU wait for the GPU.
+//! GPU timestamp pairs, one per timed unit (a batch in `frame` mode, a pass in `passes`
+//! mode), resolved every frame into a ring of map-read buffers and read frames later, so
+//! timing never makes the CPU wait for the GPU.
 
 use crate::exec::ring::MapRing;
 use serde::Serialize;
 use std::collections::HashMap;
 
-/// GPU time of each pass of one frame.
+/// The environment variable that sets an executor's timing mode (`off`, `frame`, `passes`).
+pub const TIMING_ENV: &str = "MESHLIGHT_TIMING";
+
+/// What an executor times on the GPU.
+///
+/// A timestamp written at a compute-pass boundary is a bottom-of-pipe stamp after an
+/// in-band query reset, so every pair serialises the GPU around it: `frame` pays that once
+/// per batch, `passes` once per pass (about 7–9 µs of GPU time per pass on an H200), which
+/// is why per-pass profiles come only from `passes` and frame times from `frame`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TimingMode {
+    /// No timestamps.
+    Off,
+    /// One pair per batch: the frame's GPU time and each batch's (the default).
+    #[default]
+    Frame,
+    /// One pair per pass, for profiling. Where the adapter has
+    /// `TIMESTAMP_QUERY_INSIDE_PASSES` the stamps go inside the batch's shared compute
+    /// pass (`Executor::stamp_inside_passes`); elsewhere every pass gets a compute pass of
+    /// its own with stamps around it.
+    Passes,
+}
+
+impl TimingMode {
+    pub fn parse(s: &str) -> Option<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "off" | "none" | "0" => Some(Self::Off),
+            "frame" | "batch" | "batches" => Some(Self::Frame),
+            "passes" | "pass" => Some(Self::Passes),
+            _ => None,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Off => "off",
+            Self::Frame => "frame",
+            Self::Passes => "passes",
+        }
+    }
+    /// `MESHLIGHT_TIMING` when set to a known mode, else `frame`.
+    pub fn from_env() -> Self {
+        std::env::var(TIMING_ENV)
+            .ok()
+            .and_then(|s| Self::parse(&s))
+            .unwrap_or_default()
+    }
+}
+
+/// GPU time of each timed unit of one frame.
 #[derive(Clone, Debug, Serialize)]
 pub struct GpuTimings {
     pub frame: u64,
-    /// (pass, µs) in execution order.
+    /// The mode that produced these figures.
+    pub mode: TimingMode,
+    /// (unit, µs) in execution order: batches (`batch 2 (compute ×5)`, `batch 3 (encoder)`)
+    /// in `frame` mode, pass names in `passes` mode.
     pub passes: Vec<(String, f64)>,
+    /// Sum of the units' times.
     pub total_us: f64,
+    /// From the first unit's start to the last one's end: the frame's GPU time, gaps
+    /// between units included.
+    pub frame_us: f64,
     /// Per pass, when its timestamps were written, in µs after the frame's first one: the
     /// span of a run of passes, gaps included, is `end of the last − start of the first`.
     pub intervals: Vec<[f64; 2]>,
@@ -24,13 +81,13 @@ pub(crate) struct Timestamps {
     capacity: u32,
     /// True when timestamps may be written between passes on the encoder itself.
     inside_encoders: bool,
-    /// Pass names of frames whose timestamps are in flight.
-    pending: HashMap<u64, Vec<String>>,
+    /// Unit names and mode of frames whose timestamps are in flight.
+    pending: HashMap<u64, (TimingMode, Vec<String>)>,
 }
 
 impl Timestamps {
-    pub fn new(device: &wgpu::Device, passes: u32, inside_encoders: bool) -> Self {
-        let capacity = (passes * 2).max(2);
+    pub fn new(device: &wgpu::Device, units: u32, inside_encoders: bool) -> Self {
+        let capacity = (units * 2).max(2);
         let bytes = capacity as u64 * 8;
         Self {
             query_set: device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -79,6 +136,7 @@ impl Timestamps {
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         frame: u64,
+        mode: TimingMode,
         passes: Vec<String>,
     ) {
         let count = passes.len() as u32 * 2;
@@ -89,7 +147,7 @@ impl Timestamps {
         encoder.resolve_query_set(&self.query_set, 0..count, &self.resolve, 0);
         if let Some(dst) = self.ring.acquire(device, bytes, frame) {
             encoder.copy_buffer_to_buffer(&self.resolve, 0, dst, 0, bytes);
-            self.pending.insert(frame, passes);
+            self.pending.insert(frame, (mode, passes));
         }
     }
 
@@ -113,7 +171,7 @@ impl Timestamps {
             .take_ready(u64::MAX)
             .into_iter()
             .filter_map(|(frame, bytes)| {
-                let names = self.pending.remove(&frame)?;
+                let (mode, names) = self.pending.remove(&frame)?;
                 // Mapped bytes carry no alignment guarantee for u64: copy rather than cast.
                 let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
                 let passes: Vec<(String, f64)> = names
@@ -128,13 +186,16 @@ impl Timestamps {
                 let total_us = passes.iter().map(|(_, us)| us).sum();
                 let origin = ticks.first().copied().unwrap_or(0);
                 let at = |t: u64| t.saturating_sub(origin) as f64 * period_ns / 1000.0;
-                let intervals = (0..passes.len())
+                let intervals: Vec<[f64; 2]> = (0..passes.len())
                     .map(|i| [at(ticks[2 * i]), at(ticks[2 * i + 1])])
                     .collect();
+                let frame_us = intervals.last().map_or(0.0, |l| l[1]);
                 Some(GpuTimings {
                     frame,
+                    mode,
                     passes,
                     total_us,
+                    frame_us,
                     intervals,
                 })
             })

@@ -254,7 +254,11 @@ pub fn run(exec: &mut Executor, sizes: &[u64], repeats: u32) -> Result<Vec<Row>>
     if !exec.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
         return Err(GraphError::Device("the benchmark needs TIMESTAMP_QUERY; open the device with it (GpuContext::with_available)".into()));
     }
+    // Per-pass stamps, each pass in a compute pass of its own: every implementation is
+    // timed alone, as it would run by itself.
     exec.gpu_timing = true;
+    exec.timing = meshlight_graph::TimingMode::Passes;
+    exec.stamp_inside_passes = false;
     let repeats = repeats.max(1);
     let mut rows = Vec::new();
     for &size in sizes {

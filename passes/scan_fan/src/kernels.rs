@@ -281,7 +281,7 @@ pub(crate) fn setup(
         ctx.scratch_buffer(
             "state",
             BufferDesc::array(Element::U32, words),
-            &[Access::CopyDst, Access::StorageReadWrite],
+            &[Access::StorageReadWrite],
         );
     }
     let bytes = options.count as u64 * 4;
@@ -364,11 +364,11 @@ pub(crate) fn gpu_count(ctx: &SetupContext) -> bool {
 
 /// Encodes `steps` in order in one compute pass; wgpu orders the storage writes of one
 /// dispatch before the reads of the next. With `clear_state`, the single-pass scan's tile
-/// counter and flags are zeroed first (a fill), so every frame starts from tile 0.
+/// counter and flags are zeroed first (the graph's fill, a dispatch in the same compute
+/// pass), so every frame starts from tile 0.
 pub(crate) fn record(ctx: &mut RecordContext<'_>, steps: &[Step], clear_state: bool) -> Result<()> {
     if clear_state {
-        let (state, bytes) = ctx.scratch("state")?;
-        ctx.encoder().clear_buffer(state, 0, Some(bytes));
+        ctx.clear_scratch("state")?;
     }
     let mut encoded = Vec::with_capacity(steps.len());
     for step in steps {
