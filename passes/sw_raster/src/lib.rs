@@ -243,6 +243,11 @@ impl Pass for SwRaster {
         ctx.min_bytes("raster_counts", if self.accumulate { 32 } else { 4 });
         ctx.min_bytes("sw_args", 12);
         ctx.frame_input(VIEW_INPUT);
+        if texture {
+            // The texture is cleared by the `clear` dispatch below (or, accumulating,
+            // not at all), never by a clear command: the pass stays in its batch.
+            ctx.clears_itself("visbuffer");
+        }
         let layout = BindingLayout::compute("sw_raster")
             .slot(0, "raster_clusters")
             .slot(1, "raster_counts")
