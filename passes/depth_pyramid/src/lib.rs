@@ -425,8 +425,8 @@ impl Pass for DepthPyramid {
                 dispatches.push(self.dispatch(ctx, program, 0, [tx, ty])?);
                 if self.has_top() && !ctx.is_bound(COUNTER) {
                     // Pooled scratch may hold another pass's data: start the count at 0.
-                    let (arrivals, _) = ctx.scratch(ARRIVALS)?;
-                    ctx.encoder().clear_buffer(arrivals, 0, Some(4));
+                    // A fill dispatch inside the batch, not a clear command.
+                    ctx.clear_scratch(ARRIVALS)?;
                 }
             }
             Method::TwoPass => {
