@@ -14,7 +14,8 @@ pub struct BenchArgs {
     /// (1, 16 and 256 dependent one-thread passes through the graph against the same
     /// dispatches in one raw wgpu compute pass), pool-reuse,
     /// render (the default scene at 1920x1080), virtual-geometry (15³ meshes at
-    /// 2240x1260, the first --mesh or the bunny), rasterisers (the same scene: each
+    /// 2240x1260, the first --mesh or the bunny), vg-scale (1 to 32,768 copies of that
+    /// mesh at 2240x1260: frame time and work tested), rasterisers (the same scene: each
     /// implementation of sw_raster and hw_raster, and the software/hardware split
     /// sweep), builder, scan-fan, light-clustering
     /// (1,000 to 1,000,000 point lights at 1920x1080, both implementations, against the
@@ -54,6 +55,7 @@ const ALL: &[&str] = &[
     "pool-reuse",
     "render",
     "virtual-geometry",
+    "vg-scale",
     "rasterisers",
     "builder",
     "scan-fan",
@@ -78,6 +80,7 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
                 crate::virtual_geometry::bench::lattice(args.quick, &args.meshes)?
             }
             "rasterisers" => crate::virtual_geometry::bench::rasterisers(args.quick, &args.meshes)?,
+            "vg-scale" => crate::virtual_geometry::bench::scale(args.quick, &args.meshes)?,
             "builder" => builder(args.quick, &args.meshes)?,
             "scan-fan" => scan_fan(args.quick)?,
             "light-clustering" => crate::light_clustering::bench::run(args.quick)?,

@@ -398,6 +398,60 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     Ok(rows)
 }
 
+/// How the frame's cost grows with the scene: n³ copies of a mesh (the bunny unless
+/// `meshes` names another) for n = 1, 2, 4, 8, 16, 32 (1 to 32,768 copies) at 2240×1260,
+/// each framed by the lattice's camera. Per size: the frame's GPU time, the work tested
+/// (hierarchy nodes and candidate clusters), the LOD cut and the triangles rasterised.
+pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    let mesh = meshes
+        .first()
+        .cloned()
+        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+    let asset = scenes::load_asset(&mesh, 0)?;
+    let sides: &[u32] = if quick {
+        &[1, 2, 4]
+    } else {
+        &[1, 2, 4, 8, 16, 32]
+    };
+    let (width, height) = (2240, 1260);
+    let mut rows = Vec::new();
+    for &n in sides {
+        let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
+        let case = format!(
+            "{} copies, {} source tris, {width}x{height}",
+            n * n * n,
+            placed.data.source_triangles()
+        );
+        let m = measure(
+            &placed,
+            FrameSettings::new(width, height),
+            if quick { 3 } else { 30 },
+        )?;
+        let c = &m.counts;
+        let nodes = c.hierarchy.map_or(0, |h| h.nodes_tested);
+        for (metric, value, unit) in [
+            ("GPU frame (timing mode frame)", m.total_ms, "ms"),
+            (
+                "nodes + candidate clusters tested",
+                (nodes + c.clusters_considered) as f64,
+                "",
+            ),
+            ("clusters in the LOD cut", c.visible as f64, ""),
+            ("triangles rasterised", c.triangles() as f64, ""),
+        ] {
+            rows.push(row(
+                "vg-scale",
+                case.clone(),
+                metric,
+                value,
+                unit,
+                &m.device,
+            ));
+        }
+    }
+    Ok(rows)
+}
+
 /// The 15³ lattice of [`lattice`], once per rasteriser implementation and split:
 /// `sw_raster` `buffer` against `texture` with every cluster in software; `hw_raster`
 /// `indirect_draw` against `mesh_shader` with every cluster in hardware, and the software
