@@ -16,7 +16,7 @@
 //! | `slice_instances`     | storage read       | SliceInstance | z_slice's `(object, slice)` list |
 //! | `slice_counts`        | storage read       | u32 | z_slice's words: `[0]` requested, `[1]` capacity |
 //! | `slice_draw_args`     | indirect           | DrawIndirectArgs | z_slice's draw (the `raster` implementation draws it) |
-//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch (the `compute` implementation) |
+//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch; `compute` sizes a direct dispatch from `slice_instances`' length instead ([`walk_grid`]) |
 //! | `cluster_grid`        | storage read       | ClusterGrid | the grid z_slice published |
 //! | `cluster_counts`      | cleared read-write | u32 | `[froxel × 4 + kind]`, froxels in `cluster_index` order |
 //!
@@ -48,6 +48,7 @@ use meshlight_graph::{
 };
 use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE, check_tiles, declare_tile_target,
+    workgroup_grid,
 };
 use meshlight_shaders::{PassShader, pass_shader};
 
@@ -250,13 +251,25 @@ impl Pass for Compute {
         record_zero(ctx)?;
         let program = ctx.compute("count")?;
         let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
-        let (args, _) = ctx.buffer("slice_dispatch_args")?;
+        let [x, y] = walk_grid(ctx)?;
         let mut pass = ctx.compute_pass();
         pass.set_pipeline(&program.pipeline);
         pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups_indirect(args, 0);
+        pass.dispatch_workgroups(x, y, 1);
         Ok(())
     }
+}
+
+/// The `compute` walks' dispatch: a workgroup per 64 instances the bound list can hold,
+/// direct. The walk spreads the instances written over however many workgroups run
+/// (`walk_instance`), so a list that is not full only gives each workgroup fewer; an
+/// indirect dispatch sized by z_slice's arguments would cost wgpu's argument check, a
+/// dependent dispatch of its own. `populate`'s walk uses the same grid.
+pub fn walk_grid(ctx: &RecordContext<'_>) -> Result<[u32; 2]> {
+    let (_, bytes) = ctx.buffer("slice_instances")?;
+    let instances = bytes / u64::from(SLICE_INSTANCE.size);
+    let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
+    Ok(workgroup_grid(instances.div_ceil(64), limit))
 }
 
 fn build_raster(params: &Params) -> Result<Box<dyn Pass>> {

@@ -78,7 +78,6 @@ fn run(
     let counts = buffer(&mut g, "cluster_counts", Element::U32, u64::from(lists));
     let offsets = buffer(&mut g, "cluster_offsets", Element::U32, u64::from(lists));
     let total = buffer(&mut g, "list_total", Element::U32, 1);
-    let cursors = buffer(&mut g, "cluster_cursors", Element::U32, u64::from(lists));
     let list_counts = buffer(&mut g, "list_counts", Element::U32, 2);
     let sliced = g
         .add_pass(
@@ -139,7 +138,6 @@ fn run(
             .bind("cluster_offsets", scanned.buffer("output").unwrap())
             .bind("list_total", scanned.buffer("total").unwrap())
             .bind("cluster_counts", counted.buffer("cluster_counts").unwrap())
-            .bind("cluster_cursors", cursors)
             .bind("cluster_objects", list_buffer)
             .bind("list_counts", list_counts),
     );
