@@ -18,7 +18,7 @@
 //! | `slice_instances`     | storage read       | SliceInstance | z_slice's `(object, slice)` list |
 //! | `slice_counts`        | storage read       | u32 | z_slice's words: `[0]` requested, `[1]` capacity |
 //! | `slice_draw_args`     | indirect           | DrawIndirectArgs | z_slice's draw (`raster`) |
-//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch; `compute` dispatches count_raster's direct grid instead |
+//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch (`compute`, for long lists: count_raster's `WalkGrid`) |
 //! | `cluster_grid`        | storage read       | ClusterGrid | the grid z_slice published |
 //! | `cluster_offsets`     | storage read       | u32 | `[froxel × 4 + kind]`: where that list starts (exclusive prefix sum of the counts) |
 //! | `cluster_counts`      | storage read-write | u32 | in: count_raster's counts; out: the entries each list holds |
@@ -334,13 +334,13 @@ impl Pass for Compute {
         };
         let program = ctx.compute("populate")?;
         let group = steps.walk_group(ctx, &*program)?;
-        // count_raster's grid: a direct dispatch, no argument check (see `walk_grid`).
-        let [x, y] = meshlight_pass_count_raster::walk_grid(ctx)?;
+        // count_raster's grid: direct for a short list, else z_slice's arguments.
+        let grid = meshlight_pass_count_raster::WalkGrid::of(ctx)?;
         {
             let mut pass = ctx.compute_pass();
             pass.set_pipeline(&program.pipeline);
             pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(x, y, 1);
+            grid.dispatch(&mut pass);
         }
         steps.after(ctx)
     }
