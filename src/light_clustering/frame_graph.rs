@@ -5,7 +5,7 @@
 
 use crate::graph::{Bindings, BufferDesc, Element, GraphBuilder, GraphError, Result};
 use meshlight_pass_count_raster::KINDS;
-use meshlight_pass_scan_fan::{DecoupledLookback, ScanFan};
+use meshlight_pass_scan_fan::{DecoupledLookback, ScanFan, ScanOptions, WALK_TILES, WORKGROUP};
 use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, GridSettings, SLICE_INSTANCE, ZSlice, cpu::COUNT_WORDS,
 };
@@ -154,7 +154,6 @@ pub fn add_stages(g: &mut GraphBuilder, s: &ClusteringSettings) -> Result<()> {
         ("cluster_grid", BufferDesc::array(CLUSTER_GRID, 1)),
         ("cluster_counts", BufferDesc::array(Element::U32, lists)),
         ("cluster_offsets", BufferDesc::array(Element::U32, lists)),
-        ("cluster_cursors", BufferDesc::array(Element::U32, lists)),
         ("list_total", BufferDesc::array(Element::U32, 1)),
         (
             "cluster_objects",
@@ -185,7 +184,7 @@ pub fn add_stages(g: &mut GraphBuilder, s: &ClusteringSettings) -> Result<()> {
         .bind_named("output", "cluster_offsets")
         .bind_named("total", "list_total");
     match s.scan {
-        ScanImplementation::ScanFan => g.add_pass("scan", ScanFan::new(lists as u32), scan)?,
+        ScanImplementation::ScanFan => g.add_pass("scan", scan_fan(lists as u32), scan)?,
         ScanImplementation::DecoupledLookback => {
             g.add_pass("scan", DecoupledLookback::new(lists as u32), scan)?
         }
@@ -205,6 +204,21 @@ pub fn add_stages(g: &mut GraphBuilder, s: &ClusteringSettings) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Lanes' elements of the scan when the lists fit in [`WALK_TILES`] tiles of that size:
+/// one workgroup then walks the tiles in one dispatch instead of the fan's three
+/// dependent ones (the default grid's 13,824 lists are two tiles of 8,192).
+pub const WALK_ITEMS_PER_THREAD: u32 = 32;
+
+/// `scan_fan` over `lists` counts: with tiles large enough for the single-dispatch walk
+/// where the lists fit, else the default tiles.
+pub fn scan_fan(lists: u32) -> ScanFan {
+    let mut options = ScanOptions::new(lists);
+    if lists <= WALK_TILES * WORKGROUP * WALK_ITEMS_PER_THREAD {
+        options.items_per_thread = WALK_ITEMS_PER_THREAD;
+    }
+    ScanFan::with_options(options)
 }
 
 /// The clustering on its own: objects imported, the lists exported, counters read back.

@@ -7,7 +7,7 @@
 use glam::Vec3;
 use meshlight_graph::*;
 use meshlight_pass_count_raster::cpu::{CountResult, cpu_count};
-use meshlight_pass_count_raster::{Compute, KINDS, Raster};
+use meshlight_pass_count_raster::{Compute, DIRECT_WALK_GROUPS, KINDS, Raster};
 use meshlight_pass_z_slice::cpu::{WORD_CAPACITY, WORD_REQUESTED};
 use meshlight_pass_z_slice::scenes::{Rng, object, orthographic, perspective, random_objects};
 use meshlight_pass_z_slice::{
@@ -26,6 +26,9 @@ const NEAR: f32 = 1e-5;
 enum Implementation {
     Raster,
     Compute,
+    /// `compute` with a list longer than [`DIRECT_WALK_GROUPS`] workgroups take: the
+    /// walk is dispatched through z_slice's indirect arguments.
+    ComputeLongList,
 }
 
 struct GpuCounts {
@@ -43,7 +46,10 @@ fn run(
     let gpu = GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"));
     let [w, h] = view.viewport_size.map(|v| v as u32);
     let grid = z_slice.grid([w, h]);
-    let capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
+    let mut capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
+    if implementation == Implementation::ComputeLongList {
+        capacity = capacity.max((DIRECT_WALK_GROUPS + 1) * 64);
+    }
     let mut g = GraphBuilder::new();
     let stored = objects.len().max(1) as u64;
     let list = g.import_buffer(
@@ -101,7 +107,9 @@ fn run(
             },
             bindings,
         ),
-        Implementation::Compute => g.add_pass("count", Compute, bindings),
+        Implementation::Compute | Implementation::ComputeLongList => {
+            g.add_pass("count", Compute, bindings)
+        }
     }
     .unwrap();
     g.export(sliced.buffer("slice_instances").unwrap());
@@ -228,6 +236,11 @@ fn random_scenes_count_like_the_reference_in_both_implementations() {
         let grid = z_slice.grid([w, h]);
         let raster = run(&objects, &view, z_slice, Implementation::Raster);
         let compute = run(&objects, &view, z_slice, Implementation::Compute);
+        let long = run(&objects, &view, z_slice, Implementation::ComputeLongList);
+        assert!(
+            long.counts == compute.counts,
+            "scene {index}: the indirect walk counted otherwise than the direct one"
+        );
         let sorted = |list: &[SliceInstance]| {
             let mut list = list.to_vec();
             list.sort();
@@ -298,7 +311,11 @@ fn lights_around_the_camera_count_where_they_must() {
         // A small light on the view axis at 10 m: the centre tiles of its slices only.
         object(p, Vec3::new(0.0, 0.0, -10.0), 0.5),
     ];
-    for implementation in [Implementation::Raster, Implementation::Compute] {
+    for implementation in [
+        Implementation::Raster,
+        Implementation::Compute,
+        Implementation::ComputeLongList,
+    ] {
         let got = run(&objects, &view, z_slice, implementation);
         let label = format!("{implementation:?}");
         let (differing, _) = compare(&view, &objects, &got, &grid, &label);
@@ -329,7 +346,11 @@ fn lights_around_the_camera_count_where_they_must() {
 #[test]
 fn no_objects_count_nothing() {
     let view = perspective(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 1.2).view([320, 180], 0, None);
-    for implementation in [Implementation::Raster, Implementation::Compute] {
+    for implementation in [
+        Implementation::Raster,
+        Implementation::Compute,
+        Implementation::ComputeLongList,
+    ] {
         let got = run(&[], &view, ZSlice::default(), implementation);
         assert!(got.instances.is_empty());
         assert!(got.counts.iter().all(|&c| c == 0), "{implementation:?}");

@@ -3,7 +3,9 @@
 //!
 //! It walks the same (object, slice) instances, rectangles and froxel test as
 //! `count_raster` (`meshlight::froxel`), and claims a place in each (froxel, kind) list
-//! with an atomic cursor. A list never receives more entries than it was counted, places
+//! by taking one from its count with an atomic: the count is the cursor, so no cursor
+//! buffer needs zeroing in a step of its own, and the place follows from what is left and
+//! what was counted (the difference of neighbouring offsets). A list never receives more entries than it was counted, places
 //! past the capacity are claimed and not written, and a last step lowers each count to
 //! the entries really written, so whatever the GPU does, no list spills into another, no
 //! entry is written out of bounds, and no unwritten place is ever read as an entry.
@@ -16,11 +18,10 @@
 //! | `slice_instances`     | storage read       | SliceInstance | z_slice's `(object, slice)` list |
 //! | `slice_counts`        | storage read       | u32 | z_slice's words: `[0]` requested, `[1]` capacity |
 //! | `slice_draw_args`     | indirect           | DrawIndirectArgs | z_slice's draw (`raster`) |
-//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch (`compute`) |
+//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch (`compute`, for long lists: count_raster's `WalkGrid`) |
 //! | `cluster_grid`        | storage read       | ClusterGrid | the grid z_slice published |
 //! | `cluster_offsets`     | storage read       | u32 | `[froxel × 4 + kind]`: where that list starts (exclusive prefix sum of the counts) |
 //! | `cluster_counts`      | storage read-write | u32 | in: count_raster's counts; out: the entries each list holds |
-//! | `cluster_cursors`     | cleared read-write | u32 | one per list, as many as `cluster_counts` (working memory) |
 //! | `list_total`          | storage read       | u32 | `[0]`: the prefix sum's total, the entries all lists need |
 //! | `cluster_objects`     | storage write      | u32 | the lists back to back: indices into `objects` |
 //! | `list_counts`         | storage write      | u32 × 2 | `[0]` entries needed, `[1]` the capacity |
@@ -81,12 +82,6 @@ pub fn contract() -> StageContract {
             Element::U32,
             "in: counted; out: entries each list holds",
         ),
-        Slot::buffer(
-            "cluster_cursors",
-            Access::ClearedReadWrite,
-            Element::U32,
-            "places claimed per list",
-        ),
         read("list_total", Element::U32, "[0]: entries needed"),
         Slot::buffer(
             "cluster_objects",
@@ -114,8 +109,7 @@ struct GpuParams {
     _pad: [u32; 3],
 }
 
-/// What both implementations share: the capacity and the two compute steps around the
-/// walk.
+/// What both implementations share: the capacity and the compute step after the walk.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct Steps {
     capacity: Option<u32>,
@@ -128,22 +122,13 @@ impl Steps {
         ctx.min_bytes("list_total", 4);
         ctx.min_bytes("list_counts", 8);
         ctx.frame_input(VIEW_INPUT);
-        let publish = BindingLayout::compute("populate::publish")
-            .slot(5, "cluster_cursors")
+        let settle = BindingLayout::compute("populate::settle")
+            .slot(4, "cluster_offsets")
             .slot(6, "cluster_objects")
             .slot(7, "list_total")
             .slot(8, "list_counts")
-            .uniform(10);
-        let settle = BindingLayout::compute("populate::settle")
-            .slot(4, "cluster_offsets")
-            .slot(5, "cluster_cursors")
-            .slot(6, "cluster_objects")
             .slot(11, "cluster_counts")
             .uniform(10);
-        ctx.program(
-            "publish",
-            ProgramDesc::compute(&SHADER, "publish").layout(publish),
-        );
         ctx.program(
             "settle",
             ProgramDesc::compute(&SHADER, "settle").layout(settle),
@@ -157,12 +142,8 @@ impl Steps {
         }
     }
 
-    /// Zeroes the cursors and publishes the counts, before the walk.
-    fn before(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        self.dispatch_per_word(ctx, "publish", "cluster_cursors")
-    }
-
-    /// Lowers every count to the entries written, after the walk.
+    /// Sets every count to the entries written and publishes the needed and available
+    /// entries, after the walk.
     fn after(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         self.dispatch_per_word(ctx, "settle", "cluster_counts")
     }
@@ -269,7 +250,7 @@ impl Pass for Raster {
             .visible_in(both)
             .slot(4, "cluster_offsets")
             .visible_in(fragment)
-            .slot(5, "cluster_cursors")
+            .slot(7, "list_total")
             .visible_in(fragment)
             .slot(6, "cluster_objects")
             .visible_in(fragment)
@@ -297,7 +278,6 @@ impl Pass for Raster {
         let steps = Steps {
             capacity: self.capacity,
         };
-        steps.before(ctx)?;
         let program = ctx.render("populate")?;
         let group = steps.walk_group(ctx, &*program)?;
         let (args, _) = ctx.buffer("slice_draw_args")?;
@@ -337,8 +317,8 @@ impl Pass for Compute {
             .slot(2, "slice_counts")
             .slot(3, "cluster_grid")
             .slot(4, "cluster_offsets")
-            .slot(5, "cluster_cursors")
             .slot(6, "cluster_objects")
+            .slot(7, "list_total")
             .slot(11, "cluster_counts")
             .uniform(9)
             .uniform(10);
@@ -352,15 +332,15 @@ impl Pass for Compute {
         let steps = Steps {
             capacity: self.capacity,
         };
-        steps.before(ctx)?;
         let program = ctx.compute("populate")?;
         let group = steps.walk_group(ctx, &*program)?;
-        let (args, _) = ctx.buffer("slice_dispatch_args")?;
+        // count_raster's grid: direct for a short list, else z_slice's arguments.
+        let grid = meshlight_pass_count_raster::WalkGrid::of(ctx)?;
         {
             let mut pass = ctx.compute_pass();
             pass.set_pipeline(&program.pipeline);
             pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups_indirect(args, 0);
+            grid.dispatch(&mut pass);
         }
         steps.after(ctx)
     }

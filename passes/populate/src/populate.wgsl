@@ -1,17 +1,21 @@
 // Writes each froxel's object lists: the same instances, rectangles and froxel test as
 // `count_raster` (through `meshlight::froxel`), but where the count stage added one, this
-// stage claims a place in the (froxel, kind) list with an atomic cursor and writes the
-// object's index there. Places at or past the capacity are claimed, never written.
+// stage claims a place in the (froxel, kind) list and writes the object's index there.
+// A claim takes one from the list's count (`atomicSub`), so the count itself is the
+// cursor, counting down: the place is how many were counted minus how many were left,
+// and the number counted is known without it, from the prefix sum (the next list's
+// offset, or the total, minus this one's). No cursor buffer has to be zeroed first.
+// Places at or past the capacity are claimed, never written.
 //
 // A list only ever receives as many entries as its count: a place past it (should the
 // GPU decide a pair here otherwise than in the count stage) is claimed and not written,
-// so no list spills into the next. `settle` then lowers each count to the entries really
-// written: never past the capacity, never an unwritten place.
+// so no list spills into the next. `settle` then sets each count to the entries really
+// written: never past the capacity, never an unwritten place; it also writes the needed
+// and available entries for the growth readback.
 //
 // `raster`: one quad per instance on a viewport of one pixel per tile, colour writes
 // off. `compute`: workgroups share their lanes out over the tiles of up to 64
-// instances each. `publish` (one thread)
-// writes the needed and available entries for the growth readback.
+// instances each.
 
 #import meshlight::view::View
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_index, CLUSTERABLE_TYPE_COUNT}
@@ -39,10 +43,10 @@ struct Params {
 @group(0) @binding(3) var<storage, read> cluster_grid: ClusterGrid;
 // Exclusive prefix sum of count_raster's counts: where each (froxel, kind) list starts.
 @group(0) @binding(4) var<storage, read> cluster_offsets: array<u32>;
-// In: count_raster's counts. Out (after `settle`): the entries each list holds.
-@group(0) @binding(11) var<storage, read_write> cluster_counts: array<u32>;
-// Places claimed so far in each (froxel, kind) list; zero before the stage.
-@group(0) @binding(5) var<storage, read_write> cluster_cursors: array<atomic<u32>>;
+// In: count_raster's counts; during the walk: places left to claim (wrapping below
+// zero when the walk finds more pairs than were counted). Out (after `settle`): the
+// entries each list holds.
+@group(0) @binding(11) var<storage, read_write> cluster_counts: array<atomic<u32>>;
 // The lists, back to back: object indices.
 @group(0) @binding(6) var<storage, read_write> cluster_objects: array<u32>;
 // [0]: entries every list together needs (the prefix sum's total).
@@ -66,9 +70,13 @@ fn add_to_froxel(o: ViewObject, object: u32, froxel: vec3<u32>) {
     if object_touches_froxel(o, froxel_aabb(view, cluster_grid, froxel)) {
         let list = cluster_index(cluster_grid, froxel) * CLUSTERABLE_TYPE_COUNT + o.kind;
         if list < lists() {
-            let place = atomicAdd(&cluster_cursors[list], 1u);
+            // Places left before this claim: `counted` down to 1 for the counted ones,
+            // then 0 and (wrapped) above `counted` for any past them.
+            let left = atomicSub(&cluster_counts[list], 1u);
+            let counted = counted_in(list);
+            let place = counted - left;
             let at = cluster_offsets[list] + place;
-            if place < cluster_counts[list] && at < capacity() {
+            if left > 0u && left <= counted && at < capacity() {
                 cluster_objects[at] = object;
             }
         }
@@ -76,24 +84,30 @@ fn add_to_froxel(o: ViewObject, object: u32, froxel: vec3<u32>) {
 }
 
 fn lists() -> u32 {
-    return min(min(arrayLength(&cluster_offsets), arrayLength(&cluster_cursors)), arrayLength(&cluster_counts));
+    return min(arrayLength(&cluster_offsets), arrayLength(&cluster_counts));
 }
 
+// What count_raster counted for `list`, from the exclusive prefix sum: the next list's
+// offset, or the total after the last list, minus this list's (u32, wrapping as the sums do).
+fn counted_in(list: u32) -> u32 {
+    var end = list_total[0];
+    if list + 1u < lists() {
+        end = cluster_offsets[list + 1u];
+    }
+    return end - cluster_offsets[list];
+}
+
+// After the walk: each count becomes the entries written (the places claimed, at most
+// the places counted and the room below the capacity), and the needed and available
+// entries go out for the readback.
 @compute @workgroup_size(64)
 fn settle(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     for (var list = id.x; list < lists(); list += groups.x * WORKGROUP_SIZE) {
+        let counted = counted_in(list);
+        // Wraps to above `counted` when more were claimed than counted.
+        let claimed = counted - atomicLoad(&cluster_counts[list]);
         let offset = min(cluster_offsets[list], capacity());
-        let written = min(atomicLoad(&cluster_cursors[list]), capacity() - offset);
-        cluster_counts[list] = min(cluster_counts[list], written);
-    }
-}
-
-// Zeroes the cursors (a dispatch, where a buffer fill would need a transfer and its
-// barriers) and publishes the counts for the readback.
-@compute @workgroup_size(64)
-fn publish(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    for (var i = id.x; i < arrayLength(&cluster_cursors); i += groups.x * WORKGROUP_SIZE) {
-        atomicStore(&cluster_cursors[i], 0u);
+        atomicStore(&cluster_counts[list], min(min(claimed, counted), capacity() - offset));
     }
     if id.x == 0u {
         list_counts[0] = list_total[0];

@@ -30,6 +30,9 @@ const GUARD: u32 = 64;
 enum Implementation {
     Raster,
     Compute,
+    /// `compute` with a list longer than count_raster's `DIRECT_WALK_GROUPS` workgroups
+    /// take: both walks are dispatched through z_slice's indirect arguments.
+    ComputeLongList,
 }
 
 struct GpuLists {
@@ -69,7 +72,11 @@ fn run(
     let buffer = |g: &mut GraphBuilder, name: &str, element: Element, n: u64| {
         g.create_buffer(name, BufferDesc::array(element, n))
     };
-    let slice_capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
+    let mut slice_capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
+    if implementation == Implementation::ComputeLongList {
+        let long = (meshlight_pass_count_raster::DIRECT_WALK_GROUPS + 1) * 64;
+        slice_capacity = slice_capacity.max(long);
+    }
     let instances = buffer(&mut g, "slice_instances", SLICE_INSTANCE, slice_capacity);
     let slice_counts = buffer(&mut g, "slice_counts", Element::U32, 8);
     let draw = buffer(&mut g, "slice_draw_args", Element::DRAW_ARGS, 1);
@@ -78,7 +85,6 @@ fn run(
     let counts = buffer(&mut g, "cluster_counts", Element::U32, u64::from(lists));
     let offsets = buffer(&mut g, "cluster_offsets", Element::U32, u64::from(lists));
     let total = buffer(&mut g, "list_total", Element::U32, 1);
-    let cursors = buffer(&mut g, "cluster_cursors", Element::U32, u64::from(lists));
     let list_counts = buffer(&mut g, "list_counts", Element::U32, 2);
     let sliced = g
         .add_pass(
@@ -117,7 +123,7 @@ fn run(
             },
             count_bindings,
         ),
-        Implementation::Compute => g.add_pass(
+        Implementation::Compute | Implementation::ComputeLongList => g.add_pass(
             "count",
             meshlight_pass_count_raster::Compute,
             count_bindings,
@@ -139,7 +145,6 @@ fn run(
             .bind("cluster_offsets", scanned.buffer("output").unwrap())
             .bind("list_total", scanned.buffer("total").unwrap())
             .bind("cluster_counts", counted.buffer("cluster_counts").unwrap())
-            .bind("cluster_cursors", cursors)
             .bind("cluster_objects", list_buffer)
             .bind("list_counts", list_counts),
     );
@@ -153,7 +158,7 @@ fn run(
             },
             populate_bindings,
         ),
-        Implementation::Compute => g.add_pass(
+        Implementation::Compute | Implementation::ComputeLongList => g.add_pass(
             "populate",
             meshlight_pass_populate::Compute {
                 capacity: Some(capacity),
@@ -316,7 +321,11 @@ fn lists_equal_the_reference_as_sets_in_both_implementations() {
     let mut differing = 0;
     for index in 0..4 {
         let (view, objects, z_slice) = scene(&mut rng, index);
-        for implementation in [Implementation::Raster, Implementation::Compute] {
+        for implementation in [
+            Implementation::Raster,
+            Implementation::Compute,
+            Implementation::ComputeLongList,
+        ] {
             let got = run(&objects, &view, z_slice, implementation, 1 << 18);
             let label = format!("scene {index} {implementation:?}");
             assert!(
@@ -338,7 +347,11 @@ fn lists_equal_the_reference_as_sets_in_both_implementations() {
 fn a_small_capacity_cuts_lists_and_writes_nothing_past_it() {
     let mut rng = Rng(0x0bad_cafe_f00d_0002);
     let (view, objects, z_slice) = scene(&mut rng, 0);
-    for implementation in [Implementation::Raster, Implementation::Compute] {
+    for implementation in [
+        Implementation::Raster,
+        Implementation::Compute,
+        Implementation::ComputeLongList,
+    ] {
         let got = run(&objects, &view, z_slice, implementation, 100);
         let label = format!("{implementation:?} at capacity 100");
         assert!(got.list_counts[0] > 100, "{label}: no overflow to test");

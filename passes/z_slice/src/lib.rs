@@ -313,9 +313,9 @@ impl Pass for ZSlice {
         ctx.min_bytes("cluster_grid", size_of::<ClusterGrid>() as u64);
         ctx.frame_input(VIEW_INPUT);
         ctx.scratch_buffer(
-            "dispatch",
-            BufferDesc::array(Element::DISPATCH_ARGS, 1),
-            &[Access::StorageWrite, Access::StorageRead, Access::Indirect],
+            "arrivals",
+            BufferDesc::array(Element::U32, 1),
+            &[Access::StorageReadWrite],
         );
         let prepare = BindingLayout::compute("z_slice::prepare")
             .slot(0, "objects")
@@ -323,7 +323,7 @@ impl Pass for ZSlice {
             .slot(2, "slice_instances")
             .slot(3, "slice_counts")
             .slot(6, "cluster_grid")
-            .scratch(7, "dispatch", Access::StorageWrite)
+            .scratch(7, "arrivals", Access::StorageReadWrite)
             .uniform(10)
             .uniform(11);
         let slice = BindingLayout::compute("z_slice::slice")
@@ -331,14 +331,11 @@ impl Pass for ZSlice {
             .slot(1, "object_count")
             .slot(2, "slice_instances")
             .slot(3, "slice_counts")
-            .scratch(8, "dispatch", Access::StorageRead)
-            .uniform(9)
-            .uniform(10)
-            .uniform(11);
-        let finish = BindingLayout::compute("z_slice::finish")
-            .slot(3, "slice_counts")
             .slot(4, "slice_draw_args")
             .slot(5, "slice_dispatch_args")
+            .scratch(7, "arrivals", Access::StorageReadWrite)
+            .uniform(9)
+            .uniform(10)
             .uniform(11);
         ctx.program(
             "prepare",
@@ -348,10 +345,6 @@ impl Pass for ZSlice {
             "slice",
             ProgramDesc::compute(&SHADER, "slice").layout(slice),
         );
-        ctx.program(
-            "finish",
-            ProgramDesc::compute(&SHADER, "finish").layout(finish),
-        );
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
@@ -359,12 +352,23 @@ impl Pass for ZSlice {
         let [w, h] = view.viewport_size;
         let grid = self.grid([w as u32, h as u32]);
         let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
+        let max_per_dimension = self.max_per_dimension.unwrap_or(limit).min(limit);
         let params = GpuParams {
             capacity: self.capacity.unwrap_or(u32::MAX),
-            max_per_dimension: self.max_per_dimension.unwrap_or(limit).min(limit),
+            max_per_dimension,
             quad_vertices: self.quad_vertices,
             _pad: 0,
         };
+        // A workgroup per 64 objects the bound list holds: `object_count[0]` may be fewer,
+        // and those workgroups' lanes find no object, which costs less than the extra
+        // dependent step (and wgpu's argument check) an indirect dispatch sized on the GPU
+        // would.
+        let (_, object_bytes) = ctx.buffer("objects")?;
+        let objects = object_bytes / u64::from(CLUSTERABLE_OBJECT.size);
+        let groups = workgroup_grid(
+            objects.div_ceil(u64::from(WORKGROUP_SIZE)),
+            max_per_dimension,
+        );
         let (view, grid, params) = (
             bytemuck::bytes_of(&view),
             bytemuck::bytes_of(&grid),
@@ -372,31 +376,33 @@ impl Pass for ZSlice {
         );
         let prepare = ctx.compute("prepare")?;
         let slice = ctx.compute("slice")?;
-        let finish = ctx.compute("finish")?;
         let prepare_group = ctx.bind_group(&prepare, 0, &[(10, grid), (11, params)])?;
         let slice_group = ctx.bind_group(&slice, 0, &[(9, view), (10, grid), (11, params)])?;
-        let finish_group = ctx.bind_group(&finish, 0, &[(11, params)])?;
-        let (dispatch, _) = ctx.scratch("dispatch")?;
-        // Three compute passes: the counters are reset before any object counts, and
-        // every object has counted before the arguments are written.
+        // Two dispatches: the counters are reset before any object counts; the arguments
+        // are written by the last workgroup of the second, once every object has counted.
         {
             let mut pass = ctx.compute_pass();
             pass.set_pipeline(&prepare.pipeline);
             pass.set_bind_group(0, &prepare_group, &[]);
             pass.dispatch_workgroups(1, 1, 1);
         }
-        {
-            let mut pass = ctx.compute_pass();
-            pass.set_pipeline(&slice.pipeline);
-            pass.set_bind_group(0, &slice_group, &[]);
-            pass.dispatch_workgroups_indirect(dispatch, 0);
-        }
         let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&finish.pipeline);
-        pass.set_bind_group(0, &finish_group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipeline(&slice.pipeline);
+        pass.set_bind_group(0, &slice_group, &[]);
+        pass.dispatch_workgroups(groups[0], groups[1], 1);
         Ok(())
     }
+}
+
+/// `groups` workgroups as a direct dispatch `[x, y]` under `max_per_dimension` each way
+/// (as the WGSL's `fold_dispatch` folds them): past `max_per_dimension²` the rest are not
+/// dispatched. Always at least one workgroup, so a stage whose last workgroup writes
+/// results runs even for an empty list. The compute walks of count_raster and populate
+/// size their dispatches with it too.
+pub fn workgroup_grid(groups: u64, max_per_dimension: u32) -> [u32; 2] {
+    let max = u64::from(max_per_dimension.max(1));
+    let x = groups.clamp(1, max);
+    [x as u32, groups.div_ceil(x).clamp(1, max) as u32]
 }
 
 fn build(params: &Params) -> Result<Box<dyn Pass>> {

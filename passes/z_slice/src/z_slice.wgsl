@@ -1,8 +1,9 @@
 // Per clusterable object, the range of depth slices of the froxel grid its bounds touch,
 // appended as one instance per (object, slice) for the count and populate draws.
-// `prepare` (one thread) resets the counters, publishes the grid and sizes the object
-// dispatch; `slice` runs one thread per object; `finish` (one thread) turns the totals
-// into draw and dispatch arguments. `cpu::cpu_z_slice` (Rust) is the reference: every
+// `prepare` (one thread) resets the counters and publishes the grid; `slice` runs one
+// thread per object of the bound list (a direct dispatch: its length is known on the
+// CPU), and its last workgroup to arrive turns the totals into draw and dispatch
+// arguments, so the stage is two dependent dispatches, neither indirect. `cpu::cpu_z_slice` (Rust) is the reference: every
 // float operation below has its mirror there, in the same order.
 
 #import meshlight::light::{ClusterableObject, ClusterGrid, z_slice_of_depth, CLUSTERABLE_SPOT_LIGHT, CLUSTERABLE_PROBE, CLUSTERABLE_DECAL, CLUSTERABLE_TYPE_COUNT}
@@ -40,10 +41,8 @@ struct SliceInstance {
 @group(0) @binding(5) var<storage, read_write> slice_dispatch_args: array<u32>;
 // The grid this frame was sliced with, for the passes after this one.
 @group(0) @binding(6) var<storage, read_write> cluster_grid: ClusterGrid;
-// The object dispatch [x, y, 1], written by `prepare`...
-@group(0) @binding(7) var<storage, read_write> dispatch_out: array<u32>;
-// ... and read by `slice` to linearise its workgroup id.
-@group(0) @binding(8) var<storage, read> dispatch_in: array<u32>;
+// [0]: workgroups of `slice` that have added their counts; zeroed by `prepare`.
+@group(0) @binding(7) var<storage, read_write> arrivals: array<atomic<u32>>;
 @group(0) @binding(9) var<uniform> view: View;
 @group(0) @binding(10) var<uniform> grid: ClusterGrid;
 @group(0) @binding(11) var<uniform> params: Params;
@@ -182,11 +181,7 @@ fn object_extent(object: ClusterableObject) -> Extent {
 
 @compute @workgroup_size(1)
 fn prepare() {
-    let groups = (object_total() + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
-    let d = fold_dispatch(groups);
-    dispatch_out[0] = d.x;
-    dispatch_out[1] = d.y;
-    dispatch_out[2] = d.z;
+    atomicStore(&arrivals[0], 0u);
     for (var i = 0u; i < COUNT_WORDS; i += 1u) {
         atomicStore(&slice_counts[i], 0u);
     }
@@ -199,14 +194,20 @@ fn prepare() {
 var<workgroup> group_counts: array<atomic<u32>, 8>;
 // Where the workgroup's instances start in the list.
 var<workgroup> group_base: u32;
+// Whether this workgroup was the last to add its counts.
+var<workgroup> group_last: bool;
 
 @compute @workgroup_size(64)
-fn slice(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+fn slice(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) t: u32,
+) {
     if t < COUNT_WORDS {
         atomicStore(&group_counts[t], 0u);
     }
     workgroupBarrier();
-    let i = (wg.y * dispatch_in[0] + wg.x) * WORKGROUP_SIZE + t;
+    let i = (wg.y * groups.x + wg.x) * WORKGROUP_SIZE + t;
     var first = 0u;
     var n = 0u;
     var local = 0u;
@@ -237,6 +238,12 @@ fn slice(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) 
             }
         }
     }
+    // The counts are added before the arrival is: the last workgroup to arrive reads
+    // every workgroup's.
+    storageBarrier();
+    if t == 0u {
+        group_last = atomicAdd(&arrivals[0], 1u) + 1u == groups.x * groups.y;
+    }
     workgroupBarrier();
     // Past the capacity the instances are counted, not written.
     let base = group_base + local;
@@ -248,9 +255,15 @@ fn slice(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) 
     for (var k = 0u; k < min(n, room); k += 1u) {
         slice_instances[base + k] = SliceInstance(i, first + k);
     }
+    if workgroupUniformLoad(&group_last) {
+        storageBarrier();
+        if t == 0u {
+            finish();
+        }
+    }
 }
 
-@compute @workgroup_size(1)
+// The draw and dispatch arguments from the totals, once every object has counted.
 fn finish() {
     let written = min(atomicLoad(&slice_counts[WORD_REQUESTED]), atomicLoad(&slice_counts[WORD_CAPACITY]));
     slice_draw_args[0] = params.quad_vertices;
