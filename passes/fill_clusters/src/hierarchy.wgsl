@@ -14,8 +14,9 @@
 // never a cluster of the cut. A step only reads the list the previous dispatch finished,
 // so nothing here assumes that workgroups make progress together.
 //
-// Per round, the frontier is tested 64 nodes at a time; an accepted inner node appends
-// its children to the next frontier. The meshlets a chunk of 64 nodes emits are reserved
+// Per round, the frontier is tested 64 nodes at a time, and the thread that accepts an
+// inner node tests its children too (two levels a round); an accepted inner child
+// appends its children to the next frontier. The meshlets a chunk of 64 nodes emits are reserved
 // with one global atomic and written cooperatively, one leaf after another, consecutive
 // threads writing consecutive slots.
 
@@ -108,22 +109,70 @@ const SLACK: f32 = 1.220703125e-4;
 var<workgroup> frontier: array<array<u32, QUEUE>, 2>;
 var<workgroup> frontier_len: u32;
 var<workgroup> next_len: atomic<u32>;
-// The ranges of hierarchy_clusters a chunk emits, packed (one per emitting thread), each
-// with its offset in the chunk's reservation.
-var<workgroup> emit_first: array<u32, WORKGROUP_SIZE>;
-var<workgroup> emit_count: array<u32, WORKGROUP_SIZE>;
-var<workgroup> emit_offset: array<u32, WORKGROUP_SIZE>;
+// The ranges of hierarchy_clusters a chunk emits, packed, each with its offset in the
+// chunk's reservation. A thread emits up to 1 + MAX_CHILDREN ranges (fewer: adjacent
+// leaves merge); past EMIT_SLOTS it reserves and writes its range alone.
+const EMIT_SLOTS: u32 = 256u;
+var<workgroup> emit_first: array<u32, EMIT_SLOTS>;
+var<workgroup> emit_count: array<u32, EMIT_SLOTS>;
+var<workgroup> emit_offset: array<u32, EMIT_SLOTS>;
 var<workgroup> emit_ranges: atomic<u32>;
 var<workgroup> emit_total: atomic<u32>;
 var<workgroup> emit_len: u32;
 var<workgroup> emit_base: u32;
 var<workgroup> leaves: atomic<u32>;
+var<workgroup> tested_nodes: atomic<u32>;
 var<workgroup> spilled: atomic<u32>;
 // Entries this step walks (instances in step 0, the list's length after).
 var<workgroup> entry_total: u32;
 
 fn capacity() -> u32 {
     return min(params.capacity, arrayLength(&clusters));
+}
+
+// This thread's range not yet handed to the chunk (adjacent leaves extend it), and the
+// instance the workgroup walks.
+var<private> pending_first: u32;
+var<private> pending_count: u32;
+var<private> walk_instance: u32;
+
+// Hands the pending range to the chunk's emission, or, when the chunk's slots are
+// taken, reserves and writes it alone.
+fn flush() {
+    let count = pending_count;
+    pending_count = 0u;
+    if count == 0u {
+        return;
+    }
+    let e = atomicAdd(&emit_ranges, 1u);
+    if e < EMIT_SLOTS {
+        emit_first[e] = pending_first;
+        emit_count[e] = count;
+        emit_offset[e] = atomicAdd(&emit_total, count);
+        return;
+    }
+    let cap = capacity();
+    let start = atomicAdd(&cluster_count[1], count);
+    let written = min(count, cap - min(start, cap));
+    if written > 0u {
+        atomicAdd(&cluster_count[0], written);
+    }
+    for (var k = 0u; k < written; k += 1u) {
+        clusters[start + k] = Cluster(walk_instance, hierarchy_clusters[pending_first + k]);
+    }
+}
+
+fn emit_range(first: u32, count: u32) {
+    if count == 0u {
+        return;
+    }
+    if pending_count > 0u && pending_first + pending_count == first {
+        pending_count += count;
+        return;
+    }
+    flush();
+    pending_first = first;
+    pending_count = count;
 }
 
 // What stays the same for every node of one instance.
@@ -198,6 +247,24 @@ fn hand_on(instance: u32, first: u32, count: u32) -> bool {
     return true;
 }
 
+// Appends an accepted inner node's children to the next frontier (`into`); those that
+// do not fit are handed on to the next step or, when that cannot be, emitted whole.
+fn enqueue(node: HierarchyNode, into: u32, width: u32, spreading: bool, index: u32) {
+    let slot = atomicAdd(&next_len, node.child_count);
+    let fit = min(node.child_count, width - min(slot, width));
+    for (var k = 0u; k < fit; k += 1u) {
+        frontier[into][slot + k] = node.first_child + k;
+    }
+    let rest = node.child_count - fit;
+    if rest > 0u && !(spreading && hand_on(index, node.first_child + fit, rest)) {
+        // The children that did not fit, with everything below them.
+        let end = node.first_cluster + node.cluster_count;
+        let from_cluster = hierarchy_nodes[node.first_child + fit].first_cluster;
+        emit_range(from_cluster, select(0u, end - from_cluster, from_cluster < end));
+        atomicAdd(&spilled, 1u);
+    }
+}
+
 @compute @workgroup_size(64)
 fn fill(
     @builtin(workgroup_id) wg: vec3<u32>,
@@ -229,10 +296,10 @@ fn fill(
         atomicStore(&emit_ranges, 0u);
         atomicStore(&emit_total, 0u);
         atomicStore(&leaves, 0u);
+        atomicStore(&tested_nodes, 0u);
         atomicStore(&spilled, 0u);
     }
     let entries = workgroupUniformLoad(&entry_total);
-    var tested = 0u;
     var unfinished = 0u;
     for (var entry = first_entry; entry < entries; entry += stride) {
         // The entry: an instance's root (step 0) or a handed-on range of children.
@@ -257,6 +324,7 @@ fn fill(
                 count = 0u;
             }
         }
+        walk_instance = index;
         var w: Walker;
         w.instance = instances[min(index, arrayLength(&instances) - 1u)];
         w.scale = instance_max_scale(w.instance);
@@ -275,45 +343,48 @@ fn fill(
             if n == 0u || round == MAX_ROUNDS {
                 break;
             }
-            tested += n;
             for (var base = 0u; base < n; base += WORKGROUP_SIZE) {
                 let i = base + t;
-                var range_from = 0u;
-                var emit = 0u;
+                var tests = 0u;
                 if i < n {
+                    // Two levels a round: the node, and at once the children of an
+                    // accepted inner node (the same nodes a level-by-level walk tests,
+                    // in half the dependent rounds).
                     let id = frontier[cur][i];
+                    tests = 1u;
                     if id < arrayLength(&hierarchy_nodes) && node_visible(hierarchy_nodes[id], w) {
                         let node = hierarchy_nodes[id];
                         if node.child_count == 0u {
-                            range_from = node.first_cluster;
-                            emit = node.cluster_count;
+                            emit_range(node.first_cluster, node.cluster_count);
                             atomicAdd(&leaves, 1u);
                         } else {
-                            let slot = atomicAdd(&next_len, node.child_count);
-                            let fit = min(node.child_count, width - min(slot, width));
-                            for (var k = 0u; k < fit; k += 1u) {
-                                frontier[1u - cur][slot + k] = node.first_child + k;
-                            }
-                            let rest = node.child_count - fit;
-                            if rest > 0u && !(spreading && hand_on(index, node.first_child + fit, rest)) {
-                                // The children that did not fit, with everything below them.
-                                let end = node.first_cluster + node.cluster_count;
-                                range_from = hierarchy_nodes[node.first_child + fit].first_cluster;
-                                emit = select(0u, end - range_from, range_from < end);
-                                atomicAdd(&spilled, 1u);
+                            for (var c = 0u; c < node.child_count; c += 1u) {
+                                let child_id = node.first_child + c;
+                                tests += 1u;
+                                if child_id >= arrayLength(&hierarchy_nodes) {
+                                    continue;
+                                }
+                                let child = hierarchy_nodes[child_id];
+                                if !node_visible(child, w) {
+                                    continue;
+                                }
+                                if child.child_count == 0u {
+                                    emit_range(child.first_cluster, child.cluster_count);
+                                    atomicAdd(&leaves, 1u);
+                                } else {
+                                    enqueue(child, 1u - cur, width, spreading, index);
+                                }
                             }
                         }
                     }
+                    flush();
                 }
-                if emit > 0u {
-                    let e = atomicAdd(&emit_ranges, 1u);
-                    emit_first[e] = range_from;
-                    emit_count[e] = emit;
-                    emit_offset[e] = atomicAdd(&emit_total, emit);
+                if tests > 0u {
+                    atomicAdd(&tested_nodes, tests);
                 }
                 workgroupBarrier();
                 if t == 0u {
-                    emit_len = atomicExchange(&emit_ranges, 0u);
+                    emit_len = min(atomicExchange(&emit_ranges, 0u), EMIT_SLOTS);
                     let total = atomicExchange(&emit_total, 0u);
                     if total > 0u {
                         emit_base = atomicAdd(&cluster_count[1], total);
@@ -354,7 +425,7 @@ fn fill(
         workgroupBarrier();
     }
     if t == 0u {
-        atomicAdd(&hierarchy_counts[0], tested);
+        atomicAdd(&hierarchy_counts[0], atomicLoad(&tested_nodes));
         atomicAdd(&hierarchy_counts[1], atomicLoad(&leaves));
         atomicAdd(&hierarchy_counts[2], atomicLoad(&spilled));
         atomicAdd(&hierarchy_counts[3], unfinished);

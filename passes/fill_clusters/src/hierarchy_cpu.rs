@@ -1,7 +1,7 @@
 //! The CPU reference of the `hierarchy` implementation: the same node test, operation for
 //! operation in f32 (matrix times vector summed column by column, dot products and
-//! lengths left to right), and the same steps: breadth-first rounds with the same queue
-//! limits, children that do not fit in a spreading step handed on to the next step's list.
+//! lengths left to right), and the same steps: breadth-first rounds of two levels (a
+//! frontier node and, when it is accepted, its children) with the same queue limits, children that do not fit in a spreading step handed on to the next step's list.
 //!
 //! A node test can still decide differently from a GPU's when a value lies within
 //! rounding of its threshold; [`NodeTest::closeness`] says how close each came, so a test
@@ -60,6 +60,9 @@ pub struct HierarchyWalk {
     /// Subtrees handed on, per spreading step (the GPU's numbers may differ: which
     /// children fit in a frontier depends on the order of its atomics).
     pub handed_on: Vec<u32>,
+    /// Per step, the most rounds one of its walks took: each round waits for the one
+    /// before, so their sum over the steps is the walk's critical path.
+    pub rounds: Vec<u32>,
     /// `(instance, node)` of every test decided within `near` (the argument of
     /// [`cpu_walk`]) of a threshold, relative to what it compared.
     pub near_threshold: Vec<(u32, u32)>,
@@ -193,6 +196,7 @@ pub fn cpu_walk(scene: &SceneData, view: &View, params: &WalkParams, near: f32) 
         let spreading = step < params.spread_steps;
         let width = if spreading { queue.min(64) } else { queue };
         let mut list = Vec::new();
+        let mut most_rounds = 0;
         for entry in &entries {
             let index = entry.instance;
             let instance = &scene.instances[index as usize];
@@ -237,32 +241,58 @@ pub fn cpu_walk(scene: &SceneData, view: &View, params: &WalkParams, near: f32) 
                         );
                         continue;
                     }
-                    let slot = reserved;
-                    reserved += node.child_count as usize;
-                    let fit = (node.child_count as usize).min(width - slot.min(width));
-                    next.extend((0..fit as u32).map(|k| node.first_child + k));
-                    if fit < node.child_count as usize {
-                        if spreading && list.len() < params.subtree_capacity as usize {
-                            list.push(Entry {
-                                instance: index,
-                                first: node.first_child + fit as u32,
-                                count: node.child_count - fit as u32,
-                            });
+                    // Two levels a round: the children of an accepted node are tested
+                    // by the same thread, in the same round.
+                    for child_id in node.first_child..node.first_child + node.child_count {
+                        r.counts[0] += 1;
+                        let Some(child) = nodes.get(child_id as usize) else {
+                            continue;
+                        };
+                        let test = node_test(view, &w, child, params.lod_threshold_px);
+                        if test.closeness < near {
+                            r.near_threshold.push((index, child_id));
+                        }
+                        if !test.visible {
                             continue;
                         }
-                        r.queue_full = true;
-                        r.counts[2] += 1;
-                        let first = nodes[node.first_child as usize + fit].first_cluster;
-                        emit(&mut r, first, node.first_cluster + node.cluster_count);
+                        if child.is_leaf() {
+                            r.counts[1] += 1;
+                            emit(
+                                &mut r,
+                                child.first_cluster,
+                                child.first_cluster + child.cluster_count,
+                            );
+                            continue;
+                        }
+                        let slot = reserved;
+                        reserved += child.child_count as usize;
+                        let fit = (child.child_count as usize).min(width - slot.min(width));
+                        next.extend((0..fit as u32).map(|k| child.first_child + k));
+                        if fit < child.child_count as usize {
+                            if spreading && list.len() < params.subtree_capacity as usize {
+                                list.push(Entry {
+                                    instance: index,
+                                    first: child.first_child + fit as u32,
+                                    count: child.child_count - fit as u32,
+                                });
+                                continue;
+                            }
+                            r.queue_full = true;
+                            r.counts[2] += 1;
+                            let first = nodes[child.first_child as usize + fit].first_cluster;
+                            emit(&mut r, first, child.first_cluster + child.cluster_count);
+                        }
                     }
                 }
                 frontier = next;
                 round += 1;
             }
+            most_rounds = most_rounds.max(round);
             if !frontier.is_empty() {
                 r.counts[3] += 1;
             }
         }
+        r.rounds.push(most_rounds);
         if spreading {
             r.handed_on.push(list.len() as u32);
         }

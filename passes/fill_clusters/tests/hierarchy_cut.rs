@@ -266,13 +266,16 @@ fn on_the_bunny_lattice_clusters_and_nodes_tested_stay_within_three_times_the_cu
     let cut = want.cut.len();
     eprintln!(
         "bunny lattice 15³ at 2240x1260: cut {cut} clusters; flat fill lists {} (cull tests {}); \
-         the walk tests {} nodes and lists {} clusters ({} leaves), {tested} in all = {:.2}x the cut",
+         the walk tests {} nodes and lists {} clusters ({} leaves), {tested} in all = {:.2}x the cut; \
+         rounds per step {:?}, subtrees handed on per step {:?}",
         flat.clusters.len(),
         flat.clusters.len(),
         walk.counts[0],
         walk.clusters.len(),
         walk.counts[1],
-        tested as f64 / cut as f64
+        tested as f64 / cut as f64,
+        walk.rounds,
+        walk.handed_on
     );
     assert!(!walk.queue_full);
     assert!(

@@ -433,8 +433,10 @@ fn a_full_queue_emits_whole_subtrees_and_keeps_the_cut() {
     let threshold = 1.0;
     let total: u32 = data.instances.iter().map(|i| i.meshlet_count).sum();
     let unlimited = cpu_walk(&data, &view, &WalkParams::default(), NEAR_THRESHOLD);
+    // No spreading step: every child that does not fit is emitted whole.
     let small = WalkParams {
         queue_capacity: 4,
+        spread_steps: 0,
         ..WalkParams::default()
     };
     let reference = cpu_walk(&data, &view, &small, NEAR_THRESHOLD);
@@ -442,6 +444,7 @@ fn a_full_queue_emits_whole_subtrees_and_keeps_the_cut() {
     let pass = HierarchyFill {
         lod_threshold_px: threshold,
         queue_capacity: Some(4),
+        spread_steps: 0,
         ..HierarchyFill::default()
     };
     let got = run(
@@ -634,8 +637,12 @@ fn one_large_instance_near_and_far_spreads_its_walk_and_keeps_the_cut() {
         );
         assert_eq!(set(&single.clusters), set(&reference.clusters), "{label}");
         eprintln!(
-            "{label}: counts {:?}, handed on per step {:?}, {} clusters listed",
-            reference.counts, reference.handed_on, reference.requested
+            "{label}: counts {:?}, handed on per step {:?}, rounds per step {:?} ({:?} without spreading), {} clusters listed",
+            reference.counts,
+            reference.handed_on,
+            reference.rounds,
+            single.rounds,
+            reference.requested
         );
         let pass = HierarchyFill {
             lod_threshold_px: threshold,
@@ -670,7 +677,7 @@ fn one_large_instance_near_and_far_spreads_its_walk_and_keeps_the_cut() {
     // Seen from nearby a frontier outgrows one chunk: the first step hands subtrees on.
     assert!(near.1[0] > 0, "near: {near:?}");
     // From afar it stays within one workgroup's chunk and costs a few nodes.
-    assert_eq!(far.1, vec![0, 0], "far: {far:?}");
+    assert!(far.1.iter().all(|&n| n == 0), "far: {far:?}");
     assert!(far.0 * 10 < near.0, "near {near:?}, far {far:?}");
 }
 
