@@ -13,7 +13,7 @@ use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, data::Limits};
 use meshlight_graph::*;
 use meshlight_pass_cull_lod::{CullLod, Thresholds};
 use meshlight_pass_fill_clusters::{
-    FillClusters, HierarchyFill, HierarchyWalk, WalkParams, cpu_walk,
+    FillClusters, HierarchyFill, HierarchyWalk, WalkParams, cpu_walk, hierarchy::MAX_STEPS,
 };
 use meshlight_scene::{BuildOptions, MeshletAsset, build_asset};
 use meshlight_shaders::cpu::layout::{Cluster, View};
@@ -720,6 +720,55 @@ fn a_full_subtree_list_emits_whole_subtrees_and_keeps_the_cut() {
     assert_eq!(listed.len(), got.listed().len(), "a cluster written twice");
     assert!(set(&unlimited.clusters).is_subset(&listed));
     assert!(listed.len() > unlimited.clusters.len());
+    let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
+    assert!(got.cut.unwrap() == flat.cut.unwrap(), "the cuts differ");
+}
+
+/// Narrow frontiers and every spreading step: the near terrain's walk is handed on from
+/// step to step (each step reading the list the one before wrote), and the list, the
+/// counters and the cut are still the reference's and the flat fill's.
+#[test]
+fn a_walk_handed_on_over_every_step_keeps_the_reference_and_the_cut() {
+    let mut data = terrain_scene();
+    let total = data.instances[0].meshlet_count;
+    let threshold = 1.0;
+    let camera = Camera::perspective(
+        Vec3::new(0.0, 1.5, -48.0),
+        Vec3::new(0.0, 0.0, 20.0),
+        1.0,
+        0.05,
+    );
+    let view = camera.view([1280, 720], 0, None);
+    let params = WalkParams {
+        queue_capacity: 16,
+        spread_steps: MAX_STEPS,
+        ..WalkParams::default()
+    };
+    let reference = cpu_walk(&data, &view, &params, NEAR_THRESHOLD);
+    eprintln!(
+        "narrow: counts {:?}, handed on per step {:?}, rounds per step {:?}",
+        reference.counts, reference.handed_on, reference.rounds
+    );
+    assert!(!reference.queue_full);
+    assert!(
+        reference.handed_on.iter().filter(|&&n| n > 0).count() >= 2,
+        "{:?}",
+        reference.handed_on
+    );
+    let pass = HierarchyFill {
+        lod_threshold_px: threshold,
+        queue_capacity: Some(16),
+        spread_steps: MAX_STEPS,
+        ..HierarchyFill::default()
+    };
+    let got = run(
+        &mut data,
+        &view,
+        Fill::Hierarchy(pass),
+        Some(threshold),
+        total,
+    );
+    assert_eq!(compare(&data, &reference, &got, "narrow"), 0);
     let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
     assert!(got.cut.unwrap() == flat.cut.unwrap(), "the cuts differ");
 }
