@@ -44,25 +44,26 @@
 //! work, not the instance: step 0 is one workgroup per instance starting at its root;
 //! step k ≥ 1 is `spread_groups` workgroups striding over the list of subtrees step
 //! k − 1 handed on. In a spreading step (all but the last) a frontier holds one chunk
-//! (64 nodes, so a round is one test and two barriers); an accepted node's children that
-//! do not fit are handed on as one list entry `(instance, first child, count)`. So a
-//! bunny of the lattice, whose frontiers stay under a chunk, is walked by its step-0
-//! workgroup as before, while a terrain seen from nearby keeps one chunk per round in
-//! its own workgroup and hands every wider part on: at step 1 its walk runs on as many
-//! workgroups as it had chunks of width, and every step multiplies that again (up to 64
-//! entries per chunk). The last step walks each entry to the end with a frontier of
-//! `queue_capacity`, and there, or when a list is full, the children that do not fit are
-//! emitted whole (their meshlets are one range of the depth-first cluster list), so a
-//! full queue costs pruning, never a cluster of the cut.
+//! (64 nodes, so a round is one pass of tests and two barriers); an accepted node's
+//! children that do not fit are handed on as one list entry `(instance, first child,
+//! count)`. So a bunny of the lattice, whose frontiers stay under a chunk, is walked by
+//! its step-0 workgroup as before, while a terrain seen from nearby keeps one chunk per
+//! round in its own workgroup and hands every wider part on: at step 1 its walk runs on
+//! as many workgroups as it handed entries on (up to one per accepted node of a
+//! round), and each further step spreads again what stays wide. The last step walks
+//! each entry to the end with a frontier of `queue_capacity`, and there, or when a list
+//! is full, the children that do not fit are emitted whole (their meshlets are one range
+//! of the depth-first cluster list), so a full queue costs pruning, never a cluster of
+//! the cut.
 //!
 //! Rounds on the critical path (`HierarchyWalk::rounds`, the reference's count; a level
 //! by level walk needs about twice as many): the 15³ bunny lattice 6; a terrain of
 //! 524,288 triangles (the default scene's ground) seen from 1.5 units above it, 8
 //! unspread (16 level by level), 7 + 2 spread (2 subtrees handed on), and from far away
-//! 4 (7 level by level). So on these
-//! scenes the gain is the halved rounds, while a step costs a dispatch and a round: the
-//! spreading pays for an instance whose frontier spans many chunks (a denser ground, a
-//! larger viewport), where step 1 runs each handed-on part on its own compute unit.
+//! 4 (7 level by level). So on these scenes the gain is the halved rounds, while a step
+//! costs a dispatch and may add a round: the spreading pays for an instance whose
+//! frontier spans many chunks (a denser ground, a larger viewport), where step 1 runs
+//! each handed-on part on its own compute unit instead of queueing them behind one.
 //!
 //! Why not one global work queue: workgroups that wait for work pushed by others assume
 //! that workgroups make progress together — lavapipe and other drivers give no such
