@@ -111,8 +111,10 @@ var<workgroup> frontier_len: u32;
 var<workgroup> next_len: atomic<u32>;
 // The ranges of hierarchy_clusters a chunk emits, packed, each with its offset in the
 // chunk's reservation. A thread emits up to 1 + MAX_CHILDREN ranges (fewer: adjacent
-// leaves merge); past EMIT_SLOTS it reserves and writes its range alone.
-const EMIT_SLOTS: u32 = 256u;
+// leaves merge); past EMIT_SLOTS it reserves and writes its range alone. One slot per
+// thread keeps the workgroup's memory, and so the workgroups resident per compute unit,
+// what they were with one range per thread (about 9 KiB with the frontiers).
+const EMIT_SLOTS: u32 = 64u;
 var<workgroup> emit_first: array<u32, EMIT_SLOTS>;
 var<workgroup> emit_count: array<u32, EMIT_SLOTS>;
 var<workgroup> emit_offset: array<u32, EMIT_SLOTS>;
