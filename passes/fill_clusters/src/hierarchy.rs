@@ -17,31 +17,63 @@
 //! | `capacity`         | 0 (the whole `clusters` buffer) | clusters the list may hold |
 //! | `instance_count`   | 0 (every bound instance) | instances to visit |
 //! | `lod_threshold_px` | 1.0     | must equal `cull_lod`'s: a larger or smaller one drops clusters of the cut |
-//! | `queue_capacity`   | 0 ([`QUEUE`]) | nodes one round's frontier holds, at most [`QUEUE`] |
+//! | `queue_capacity`   | 0 ([`QUEUE`]) | nodes one round's frontier holds, at most [`QUEUE`] (a spreading step's at most 64) |
+//! | `spread_steps`     | [`SPREAD_STEPS`] | steps that hand wide walks on to more workgroups, at most [`MAX_STEPS`]; 0: one workgroup per instance walks it all |
+//! | `subtree_capacity` | 0 ([`SUBTREE_CAPACITY`]) | entries each step's list of handed-on subtrees holds |
+//! | `spread_groups`    | 0 ([`SPREAD_GROUPS`]) | workgroups of each step after the first |
 //!
 //! `hierarchy_counts`: `[0]` nodes tested, `[1]` leaves accepted, `[2]` subtrees emitted
-//! whole because a frontier was full, `[3]` instances whose walk hit the round limit
-//! (0 unless the data is damaged). Clusters + nodes tested = `cluster_count[1] + [0]`.
+//! whole because a frontier and the next step's list were full, `[3]` walks (of an
+//! instance or of a handed-on subtree) that hit the round limit (0 unless the data is
+//! damaged). Every node is tested by exactly one workgroup, so `[0]` and `[1]` do not
+//! depend on how the walk was split. Clusters + nodes tested = `cluster_count[1] + [0]`.
 //!
 //! # The walk
 //!
-//! One workgroup per instance, like `workgroup_per_instance`: the root's test (frustum
-//! and LOD) is the instance test, so a culled instance costs one node. The walk is
-//! breadth-first with two frontiers in workgroup memory; each round tests its frontier 64
-//! nodes at a time; an accepted leaf emits its meshlets, an accepted inner node appends
-//! its children to the next frontier. A frontier that would overflow emits the children
-//! that do not fit whole (their meshlets are one range of the depth-first cluster list),
-//! so a full queue costs pruning, never a cluster of the cut.
+//! Breadth-first, with two frontiers in workgroup memory, two levels a round: each round
+//! tests its frontier 64 nodes at a time, and the thread that accepts an inner node tests
+//! its children at once; an accepted leaf emits its meshlets, an accepted inner child
+//! appends its children to the next frontier. The nodes tested are those of a
+//! level-by-level walk, but each round waits on the round before (a dependent load, two
+//! barriers, a global reservation), and a walk is latency-bound: the frontiers of the
+//! scenes measured stay within one or two chunks, so halving the rounds is what shortens
+//! it. The root's test (frustum and LOD) is the instance test, so a culled instance costs
+//! one node.
 //!
-//! Why a workgroup per instance and not a global work queue: a queue shared by all
-//! workgroups needs persistent threads that wait for each other's work, which assumes
-//! workgroups make progress together — lavapipe and other drivers give no such promise,
-//! and a wrong guess hangs the device. One dispatch per tree level driven by indirect
-//! arguments needs no such promise but costs two dependent dispatches per level (about
-//! 4 µs on an H200, DESIGN §9) over the 15 to 25 levels of the chain and the level trees:
-//! more than the whole walk. A workgroup owns its instance's walk, needs no inter-group
-//! synchronisation and takes one dispatch; its limit is a single huge instance close up,
-//! whose walk runs on one compute unit (the scenes the renderer draws have thousands).
+//! The walk is split over `spread_steps + 1` dispatches so that its cost follows the
+//! work, not the instance: step 0 is one workgroup per instance starting at its root;
+//! step k ≥ 1 is `spread_groups` workgroups striding over the list of subtrees step
+//! k − 1 handed on. In a spreading step (all but the last) a frontier holds one chunk
+//! (64 nodes, so a round is one pass of tests and two barriers); an accepted node's
+//! children that do not fit are handed on as one list entry `(instance, first child,
+//! count)`. So a bunny of the lattice, whose frontiers stay under a chunk, is walked by
+//! its step-0 workgroup as before, while a terrain seen from nearby keeps one chunk per
+//! round in its own workgroup and hands every wider part on: at step 1 its walk runs on
+//! as many workgroups as it handed entries on (up to one per accepted node of a
+//! round), and each further step spreads again what stays wide. The last step walks
+//! each entry to the end with a frontier of `queue_capacity`, and there, or when a list
+//! is full, the children that do not fit are emitted whole (their meshlets are one range
+//! of the depth-first cluster list), so a full queue costs pruning, never a cluster of
+//! the cut.
+//!
+//! Rounds on the critical path (`HierarchyWalk::rounds`, the reference's count; a level
+//! by level walk needs about twice as many): the 15³ bunny lattice 6; a terrain of
+//! 524,288 triangles (the default scene's ground) seen from 1.5 units above it, 8
+//! unspread (16 level by level), 7 + 2 spread (2 subtrees handed on), and from far away
+//! 4 (7 level by level). So on these scenes the gain is the halved rounds, while a step
+//! costs a dispatch and may add a round: the spreading pays for an instance whose
+//! frontier spans many chunks (a denser ground, a larger viewport), where step 1 runs
+//! each handed-on part on its own compute unit instead of queueing them behind one.
+//!
+//! Why not one global work queue: workgroups that wait for work pushed by others assume
+//! that workgroups make progress together — lavapipe and other drivers give no such
+//! promise, and a wrong guess hangs the device. Here a step reads only the list the
+//! previous dispatch finished. One dispatch per tree level costs two dependent dispatches
+//! per level (about 4 µs on an H200, DESIGN §9) over the 15 to 25 levels of the chain and
+//! the level trees: more than the whole walk; a few spreading steps cost one dispatch
+//! each. The written word `cluster_count[0]` is summed by the reservations themselves
+//! (each adds its part below the capacity), so no dispatch follows the walk: the chain
+//! is one clearing dispatch and `spread_steps + 1` walks.
 //!
 //! # Measured
 //!
@@ -51,8 +83,10 @@
 //! the flat fill lists 3,771,520 clusters for a cut of 123,090 (30.6×); the walk tests
 //! 81,477 nodes and lists 148,255 clusters, 229,732 tests in all, 1.87× the cut. On
 //! lavapipe (two CPU cores shared with other work, so only the order of magnitude
-//! holds) fill + cull takes about 0.6 s flat and 0.17–0.4 s with the walk; no GPU figure
-//! has been taken yet.
+//! holds) fill + cull takes about 0.6 s flat and 0.17–0.4 s with the walk. On an H200
+//! the walk of one workgroup per instance and a level a round took 0.091 ms on this
+//! lattice and 0.167 ms on the default scene (1,024 knots and the ground, 1920×1080);
+//! the two-level rounds and the spreading step have not been timed on a GPU yet.
 //!
 //! # Why skipping is exact
 //!
@@ -84,6 +118,17 @@ pub const SHADER: PassShader = pass_shader!("fill_clusters::hierarchy", "hierarc
 pub const QUEUE: u32 = 1024;
 /// Rounds after which a walk stops and counts itself unfinished (`MAX_ROUNDS`).
 pub const MAX_ROUNDS: u32 = 256;
+/// Spreading steps by default: one hand-off, then the last step. Each step is a
+/// dispatch the whole walk waits for; the scenes measured so far seldom have a frontier
+/// wider than a chunk, so more steps would cost more than they spread.
+pub const SPREAD_STEPS: u32 = 1;
+/// Spreading steps at most (`MAX_STEPS`).
+pub const MAX_STEPS: u32 = 4;
+/// Entries a step's list of handed-on subtrees holds by default.
+pub const SUBTREE_CAPACITY: u32 = 1 << 16;
+/// Workgroups of each step after the first by default: several per compute unit of the
+/// largest GPUs (132 SMs on an H100/H200), few enough that an empty list costs little.
+pub const SPREAD_GROUPS: u32 = 1024;
 /// The slack of a node test, relative to the magnitudes it combines (`SLACK`).
 pub const SLACK: f32 = 1.0 / 8192.0;
 
@@ -91,6 +136,10 @@ pub const SLACK: f32 = 1.0 / 8192.0;
 pub const DATA_SLOTS: [&str; 3] = ["hierarchy_nodes", "hierarchy_clusters", "hierarchy_roots"];
 /// The counters' slot; a scratch buffer when it is left unbound.
 pub const COUNTS_SLOT: &str = "hierarchy_counts";
+/// Scratch: the lists' lengths, one word per spreading step.
+const LIST_COUNTS: &str = "hierarchy_subtree_counts";
+/// Scratch: the lists of handed-on subtrees, 12 bytes an entry.
+const LISTS: &str = "hierarchy_subtrees";
 
 /// The `hierarchy` implementation.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -103,6 +152,12 @@ pub struct HierarchyFill {
     pub lod_threshold_px: f32,
     /// Nodes a frontier holds; `None`: [`QUEUE`].
     pub queue_capacity: Option<u32>,
+    /// Steps that hand wide walks on to more workgroups; 0: one workgroup per instance.
+    pub spread_steps: u32,
+    /// Entries of each step's list; `None`: [`SUBTREE_CAPACITY`].
+    pub subtree_capacity: Option<u32>,
+    /// Workgroups of each step after the first; `None`: [`SPREAD_GROUPS`].
+    pub spread_groups: Option<u32>,
 }
 
 impl Default for HierarchyFill {
@@ -112,6 +167,9 @@ impl Default for HierarchyFill {
             instance_count: None,
             lod_threshold_px: 1.0,
             queue_capacity: None,
+            spread_steps: SPREAD_STEPS,
+            subtree_capacity: None,
+            spread_groups: None,
         }
     }
 }
@@ -124,14 +182,19 @@ struct GpuParams {
     groups_x: u32,
     queue_capacity: u32,
     lod_threshold_px: f32,
-    _pad: [u32; 3],
+    step: u32,
+    steps: u32,
+    list_capacity: u32,
 }
 
-const PARAM_KEYS: [&str; 4] = [
+const PARAM_KEYS: [&str; 7] = [
     "capacity",
     "instance_count",
     "lod_threshold_px",
     "queue_capacity",
+    "spread_steps",
+    "subtree_capacity",
+    "spread_groups",
 ];
 
 impl HierarchyFill {
@@ -144,6 +207,9 @@ impl HierarchyFill {
             instance_count: nonzero(params.u32("instance_count", 0)?),
             lod_threshold_px: params.f32("lod_threshold_px", 1.0)?,
             queue_capacity: nonzero(params.u32("queue_capacity", 0)?),
+            spread_steps: params.u32("spread_steps", SPREAD_STEPS)?,
+            subtree_capacity: nonzero(params.u32("subtree_capacity", 0)?),
+            spread_groups: nonzero(params.u32("spread_groups", 0)?),
         };
         pass.check()?;
         Ok(pass)
@@ -163,7 +229,32 @@ impl HierarchyFill {
                 "`queue_capacity` = {q} is above the {QUEUE} nodes a frontier holds; leave it out for {QUEUE}"
             )));
         }
+        if self.spread_steps > MAX_STEPS {
+            return Err(GraphError::parameter(format!(
+                "`spread_steps` = {} is above the {MAX_STEPS} steps the walk hands subtrees on over; use at most {MAX_STEPS}",
+                self.spread_steps
+            )));
+        }
+        if self.spread_groups.is_some_and(|g| g > u16::MAX as u32) {
+            return Err(GraphError::parameter(format!(
+                "`spread_groups` = {} is above the {} workgroups one dispatch dimension holds everywhere; use fewer",
+                self.spread_groups.unwrap_or(0),
+                u16::MAX
+            )));
+        }
+        let entries = self.list_capacity() as u64 * self.spread_steps as u64 * 3;
+        if entries > u32::MAX as u64 / 4 {
+            return Err(GraphError::parameter(format!(
+                "`subtree_capacity` = {} times {} steps is more than a buffer holds; lower it",
+                self.list_capacity(),
+                self.spread_steps
+            )));
+        }
         Ok(())
+    }
+
+    fn list_capacity(&self) -> u32 {
+        self.subtree_capacity.unwrap_or(SUBTREE_CAPACITY)
     }
 }
 
@@ -203,7 +294,22 @@ impl Pass for HierarchyFill {
             );
             layout = layout.scratch(8, COUNTS_SLOT, Access::ClearedReadWrite);
         }
-        for entry in ["prepare", "fill", "finish"] {
+        // The lists (at least one entry, so the binding exists with no spreading step).
+        ctx.scratch_buffer(
+            LIST_COUNTS,
+            BufferDesc::array(Element::U32, MAX_STEPS as u64),
+            &[Access::ClearedReadWrite],
+        );
+        let words = (self.list_capacity() as u64 * self.spread_steps as u64).max(1) * 3;
+        ctx.scratch_buffer(
+            LISTS,
+            BufferDesc::array(Element::U32, words),
+            &[Access::ClearedReadWrite],
+        );
+        layout = layout
+            .scratch(9, LIST_COUNTS, Access::ClearedReadWrite)
+            .scratch(10, LISTS, Access::ClearedReadWrite);
+        for entry in ["prepare", "fill"] {
             ctx.program(
                 entry,
                 ProgramDesc::compute(&SHADER, entry).layout(layout.clone()),
@@ -226,21 +332,30 @@ impl Pass for HierarchyFill {
                 ),
             });
         }
-        let params = GpuParams {
-            capacity: self.capacity.unwrap_or(u32::MAX),
-            instance_count,
-            groups_x: x,
-            queue_capacity: self.queue_capacity.unwrap_or(QUEUE).min(QUEUE),
-            lod_threshold_px: self.lod_threshold_px,
-            _pad: [0; 3],
-        };
-        let uniforms: [(u32, &[u8]); 2] = [
-            (3, bytemuck::bytes_of(&view)),
-            (4, bytemuck::bytes_of(&params)),
-        ];
-        // Three dispatches, each in its own compute pass so the next sees its writes:
-        // the counters zeroed, the walks, the written count.
-        for (entry, grid) in [("prepare", [1, 1]), ("fill", [x, y]), ("finish", [1, 1])] {
+        let spread = self.spread_groups.unwrap_or(SPREAD_GROUPS).min(limit);
+        // The counters and list lengths zeroed, then step 0 (a workgroup per instance),
+        // then each later step over the list the one before wrote; each dispatch in its
+        // own compute pass so the next sees its writes.
+        let mut dispatches = vec![("prepare", 0, [1, 1])];
+        dispatches.push(("fill", 0, [x, y]));
+        for step in 1..=self.spread_steps {
+            dispatches.push(("fill", step, [spread, 1]));
+        }
+        for (entry, step, grid) in dispatches {
+            let params = GpuParams {
+                capacity: self.capacity.unwrap_or(u32::MAX),
+                instance_count,
+                groups_x: grid[0],
+                queue_capacity: self.queue_capacity.unwrap_or(QUEUE).min(QUEUE),
+                lod_threshold_px: self.lod_threshold_px,
+                step,
+                steps: self.spread_steps,
+                list_capacity: self.list_capacity(),
+            };
+            let uniforms: [(u32, &[u8]); 2] = [
+                (3, bytemuck::bytes_of(&view)),
+                (4, bytemuck::bytes_of(&params)),
+            ];
             let program = ctx.compute(entry)?;
             let group = ctx.bind_group(&program, 0, &uniforms)?;
             let mut pass = ctx.compute_pass();
@@ -324,6 +439,7 @@ mod tests {
         assert_eq!(constant("QUEUE"), QUEUE as f64);
         assert_eq!(constant("MAX_ROUNDS"), MAX_ROUNDS as f64);
         assert_eq!(constant("SLACK"), SLACK as f64);
+        assert_eq!(constant("MAX_STEPS"), MAX_STEPS as f64);
     }
 
     #[test]
@@ -345,6 +461,8 @@ mod tests {
             ("lod_threshold_px = -1.0", "lod_threshold_px"),
             ("queue_capacity = 5000", "queue_capacity"),
             ("queu_capacity = 4", "queu_capacity"),
+            ("spread_steps = 5", "spread_steps"),
+            ("spread_groups = 70000", "spread_groups"),
         ] {
             match pass(params) {
                 Err(GraphError::Parameter { message, .. }) => {

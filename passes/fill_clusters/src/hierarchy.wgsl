@@ -1,16 +1,24 @@
-// fill_clusters, implementation `hierarchy`: one workgroup per instance walks its mesh's
-// culling hierarchy breadth-first with a queue in workgroup memory, testing each node
-// once (frustum, then the conservative LOD tests), and writes (instance, meshlet) for
-// the meshlets of every accepted leaf. A workgroup depends on no other, so nothing here
-// assumes that workgroups make progress together. `hierarchy_cpu` (Rust) is the
-// reference.
+// fill_clusters, implementation `hierarchy`: the visible instances' culling hierarchies
+// walked breadth-first with queues in workgroup memory, each node tested once (frustum,
+// then the conservative LOD tests), writing (instance, meshlet) for the meshlets of every
+// accepted leaf. `hierarchy_cpu` (Rust) is the reference.
 //
-// Per round, the frontier is tested 64 nodes at a time; an accepted inner node appends
-// its children to the next frontier, and when that is full the children that do not fit
-// are emitted whole (every meshlet below them: one range of the depth-first cluster
-// list), so a full queue costs pruning, never a cluster of the cut. The meshlets a chunk
-// of 64 nodes emits are reserved with one global atomic and written cooperatively, one
-// leaf after another, consecutive threads writing consecutive slots.
+// The walk is split over `steps + 1` dispatches of this entry point so that a large
+// instance's walk spreads over many workgroups. Step 0 starts one workgroup per instance
+// at its root; each later step's workgroups take the subtrees the step before handed on,
+// striding over that list. In a spreading step (every step but the last) a frontier
+// holds at most one chunk of nodes; the children that do not fit are handed on to the
+// next step's list as one entry (instance, first child, count). In the last step, and
+// when a list is full, the children that do not fit are emitted whole (every meshlet
+// below them: one range of the depth-first cluster list), so a full queue costs pruning,
+// never a cluster of the cut. A step only reads the list the previous dispatch finished,
+// so nothing here assumes that workgroups make progress together.
+//
+// Per round, the frontier is tested 64 nodes at a time, and the thread that accepts an
+// inner node tests its children too (two levels a round); an accepted inner child
+// appends its children to the next frontier. The meshlets a chunk of 64 nodes emits are reserved
+// with one global atomic and written cooperatively, one leaf after another, consecutive
+// threads writing consecutive slots.
 
 #import meshlight::meshlet::Cluster
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
@@ -48,9 +56,20 @@ struct Params {
     queue_capacity: u32,
     // cull_lod's `lod_threshold_px`: the two must agree, or the cut loses clusters.
     lod_threshold_px: f32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // This dispatch's step: 0 starts at the instances' roots, `steps` is the last.
+    step: u32,
+    // Spreading steps: lists of subtrees handed from one step to the next.
+    steps: u32,
+    // Entries each list holds.
+    list_capacity: u32,
+}
+
+// Children `first .. first + count` of one node of `instance`'s hierarchy, handed to the
+// next step to walk.
+struct Subtree {
+    instance: u32,
+    first: u32,
+    count: u32,
 }
 
 // The scene's instances; one workgroup each.
@@ -70,10 +89,16 @@ struct Params {
 // [0] nodes tested, [1] leaves accepted, [2] subtrees emitted whole (queue full),
 // [3] instances whose walk hit the round limit (0 unless the data is damaged).
 @group(0) @binding(8) var<storage, read_write> hierarchy_counts: array<atomic<u32>>;
+// [k] entries requested in the list step k + 1 reads (at most list_capacity written).
+@group(0) @binding(9) var<storage, read_write> subtree_counts: array<atomic<u32>>;
+// The lists, step k + 1's at [k * list_capacity ..].
+@group(0) @binding(10) var<storage, read_write> subtrees: array<Subtree>;
 
 const WORKGROUP_SIZE: u32 = 64u;
 // Nodes a frontier holds; two frontiers take 8 KiB of workgroup memory.
 const QUEUE: u32 = 1024u;
+// Lists of subtrees at most (spreading steps).
+const MAX_STEPS: u32 = 4u;
 // More rounds than any stored tree has levels (the loader bounds nothing deeper than the
 // node count, but a walk must end even on damaged data).
 const MAX_ROUNDS: u32 = 256u;
@@ -84,20 +109,72 @@ const SLACK: f32 = 1.220703125e-4;
 var<workgroup> frontier: array<array<u32, QUEUE>, 2>;
 var<workgroup> frontier_len: u32;
 var<workgroup> next_len: atomic<u32>;
-// The ranges of hierarchy_clusters a chunk emits, packed (one per emitting thread), each
-// with its offset in the chunk's reservation.
-var<workgroup> emit_first: array<u32, WORKGROUP_SIZE>;
-var<workgroup> emit_count: array<u32, WORKGROUP_SIZE>;
-var<workgroup> emit_offset: array<u32, WORKGROUP_SIZE>;
+// The ranges of hierarchy_clusters a chunk emits, packed, each with its offset in the
+// chunk's reservation. A thread emits up to 1 + MAX_CHILDREN ranges (fewer: adjacent
+// leaves merge); past EMIT_SLOTS it reserves and writes its range alone. One slot per
+// thread keeps the workgroup's memory, and so the workgroups resident per compute unit,
+// what they were with one range per thread (about 9 KiB with the frontiers).
+const EMIT_SLOTS: u32 = 64u;
+var<workgroup> emit_first: array<u32, EMIT_SLOTS>;
+var<workgroup> emit_count: array<u32, EMIT_SLOTS>;
+var<workgroup> emit_offset: array<u32, EMIT_SLOTS>;
 var<workgroup> emit_ranges: atomic<u32>;
 var<workgroup> emit_total: atomic<u32>;
 var<workgroup> emit_len: u32;
 var<workgroup> emit_base: u32;
 var<workgroup> leaves: atomic<u32>;
+var<workgroup> tested_nodes: atomic<u32>;
 var<workgroup> spilled: atomic<u32>;
+// Entries this step walks (instances in step 0, the list's length after).
+var<workgroup> entry_total: u32;
 
 fn capacity() -> u32 {
     return min(params.capacity, arrayLength(&clusters));
+}
+
+// This thread's range not yet handed to the chunk (adjacent leaves extend it), and the
+// instance the workgroup walks.
+var<private> pending_first: u32;
+var<private> pending_count: u32;
+var<private> walk_instance: u32;
+
+// Hands the pending range to the chunk's emission, or, when the chunk's slots are
+// taken, reserves and writes it alone.
+fn flush() {
+    let count = pending_count;
+    pending_count = 0u;
+    if count == 0u {
+        return;
+    }
+    let e = atomicAdd(&emit_ranges, 1u);
+    if e < EMIT_SLOTS {
+        emit_first[e] = pending_first;
+        emit_count[e] = count;
+        emit_offset[e] = atomicAdd(&emit_total, count);
+        return;
+    }
+    let cap = capacity();
+    let start = atomicAdd(&cluster_count[1], count);
+    let written = min(count, cap - min(start, cap));
+    if written > 0u {
+        atomicAdd(&cluster_count[0], written);
+    }
+    for (var k = 0u; k < written; k += 1u) {
+        clusters[start + k] = Cluster(walk_instance, hierarchy_clusters[pending_first + k]);
+    }
+}
+
+fn emit_range(first: u32, count: u32) {
+    if count == 0u {
+        return;
+    }
+    if pending_count > 0u && pending_first + pending_count == first {
+        pending_count += count;
+        return;
+    }
+    flush();
+    pending_first = first;
+    pending_count = count;
 }
 
 // What stays the same for every node of one instance.
@@ -150,120 +227,209 @@ fn prepare() {
     for (var i = 0u; i < 4u; i += 1u) {
         atomicStore(&hierarchy_counts[i], 0u);
     }
+    for (var i = 0u; i < min(MAX_STEPS, arrayLength(&subtree_counts)); i += 1u) {
+        atomicStore(&subtree_counts[i], 0u);
+    }
+}
+
+// Hands children `first .. first + count` of `instance` to the next step as one entry;
+// false when the list is full. The length word may pass the capacity; readers clamp it,
+// and every slot below the clamped length was written by the call that reserved it.
+fn hand_on(instance: u32, first: u32, count: u32) -> bool {
+    let list = params.step;
+    if list >= params.steps || list >= arrayLength(&subtree_counts) {
+        return false;
+    }
+    let at = atomicAdd(&subtree_counts[list], 1u);
+    let slot = list * params.list_capacity + at;
+    if at >= params.list_capacity || slot >= arrayLength(&subtrees) {
+        return false;
+    }
+    subtrees[slot] = Subtree(instance, first, count);
+    return true;
+}
+
+// Appends an accepted inner node's children to the next frontier (`into`); those that
+// do not fit are handed on to the next step or, when that cannot be, emitted whole.
+fn enqueue(node: HierarchyNode, into: u32, width: u32, spreading: bool, index: u32) {
+    let slot = atomicAdd(&next_len, node.child_count);
+    let fit = min(node.child_count, width - min(slot, width));
+    for (var k = 0u; k < fit; k += 1u) {
+        frontier[into][slot + k] = node.first_child + k;
+    }
+    let rest = node.child_count - fit;
+    if rest > 0u && !(spreading && hand_on(index, node.first_child + fit, rest)) {
+        // The children that did not fit, with everything below them.
+        let end = node.first_cluster + node.cluster_count;
+        let from_cluster = hierarchy_nodes[node.first_child + fit].first_cluster;
+        emit_range(from_cluster, select(0u, end - from_cluster, from_cluster < end));
+        atomicAdd(&spilled, 1u);
+    }
 }
 
 @compute @workgroup_size(64)
-fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
-    let index = wg.y * params.groups_x + wg.x;
-    var w: Walker;
-    var root = 0u;
-    var has_root = false;
-    if index < min(params.instance_count, arrayLength(&instances)) {
-        w.instance = instances[index];
-        has_root = w.instance.mesh < arrayLength(&hierarchy_roots);
-        if has_root {
-            root = hierarchy_roots[w.instance.mesh];
-        }
-    }
-    w.scale = instance_max_scale(w.instance);
-    w.reach = length(w.instance.world_from_local[3].xyz) + length(view.camera_position);
-    let queue_capacity = clamp(params.queue_capacity, 1u, QUEUE);
+fn fill(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) t: u32,
+) {
+    let first_entry = wg.y * params.groups_x + wg.x;
+    let stride = groups.x * groups.y;
+    let spreading = params.step < params.steps;
+    // A spreading step's frontier is one chunk: a wide walk is handed on, not queued.
+    let width = select(
+        clamp(params.queue_capacity, 1u, QUEUE),
+        clamp(params.queue_capacity, 1u, WORKGROUP_SIZE),
+        spreading,
+    );
     let cap = capacity();
     if t == 0u {
-        // The root's test is the instance's: a culled instance costs one node.
-        frontier_len = select(0u, 1u, has_root);
-        frontier[0][0] = root;
+        if params.step == 0u {
+            entry_total = min(params.instance_count, arrayLength(&instances));
+        } else {
+            let list = params.step - 1u;
+            var n = 0u;
+            if list < arrayLength(&subtree_counts) {
+                n = min(atomicLoad(&subtree_counts[list]), params.list_capacity);
+            }
+            entry_total = n;
+        }
         atomicStore(&next_len, 0u);
         atomicStore(&emit_ranges, 0u);
         atomicStore(&emit_total, 0u);
         atomicStore(&leaves, 0u);
+        atomicStore(&tested_nodes, 0u);
         atomicStore(&spilled, 0u);
     }
-    var tested = 0u;
-    var left = 0u;
-    var cur = 0u;
-    for (var round = 0u; round <= MAX_ROUNDS; round += 1u) {
-        let n = workgroupUniformLoad(&frontier_len);
-        left = n;
-        if n == 0u || round == MAX_ROUNDS {
-            break;
+    let entries = workgroupUniformLoad(&entry_total);
+    var unfinished = 0u;
+    for (var entry = first_entry; entry < entries; entry += stride) {
+        // The entry: an instance's root (step 0) or a handed-on range of children.
+        var index = entry;
+        var first = 0u;
+        var count = 0u;
+        if params.step == 0u {
+            let mesh = instances[index].mesh;
+            if mesh < arrayLength(&hierarchy_roots) {
+                first = hierarchy_roots[mesh];
+                count = 1u;
+            }
+        } else {
+            let at = (params.step - 1u) * params.list_capacity + entry;
+            if at < arrayLength(&subtrees) {
+                let s = subtrees[at];
+                index = s.instance;
+                first = s.first;
+                count = min(s.count, QUEUE);
+            }
+            if index >= arrayLength(&instances) {
+                count = 0u;
+            }
         }
-        tested += n;
-        for (var base = 0u; base < n; base += WORKGROUP_SIZE) {
-            let i = base + t;
-            var first = 0u;
-            var count = 0u;
-            if i < n {
-                let id = frontier[cur][i];
-                if id < arrayLength(&hierarchy_nodes) && node_visible(hierarchy_nodes[id], w) {
-                    let node = hierarchy_nodes[id];
-                    if node.child_count == 0u {
-                        first = node.first_cluster;
-                        count = node.cluster_count;
-                        atomicAdd(&leaves, 1u);
-                    } else {
-                        let slot = atomicAdd(&next_len, node.child_count);
-                        let fit = min(node.child_count, queue_capacity - min(slot, queue_capacity));
-                        for (var k = 0u; k < fit; k += 1u) {
-                            frontier[1u - cur][slot + k] = node.first_child + k;
-                        }
-                        if fit < node.child_count {
-                            // The children that did not fit, with everything below them.
-                            let end = node.first_cluster + node.cluster_count;
-                            first = hierarchy_nodes[node.first_child + fit].first_cluster;
-                            count = select(0u, end - first, first < end);
-                            atomicAdd(&spilled, 1u);
-                        }
-                    }
-                }
-            }
-            if count > 0u {
-                let e = atomicAdd(&emit_ranges, 1u);
-                emit_first[e] = first;
-                emit_count[e] = count;
-                emit_offset[e] = atomicAdd(&emit_total, count);
-            }
-            workgroupBarrier();
-            if t == 0u {
-                emit_len = atomicExchange(&emit_ranges, 0u);
-                let total = atomicExchange(&emit_total, 0u);
-                if total > 0u {
-                    emit_base = atomicAdd(&cluster_count[1], total);
-                }
-            }
-            // One range after another, consecutive threads on consecutive slots.
-            let ranges = workgroupUniformLoad(&emit_len);
-            let chunk_base = emit_base;
-            for (var e = 0u; e < ranges; e += 1u) {
-                let c = emit_count[e];
-                let start = chunk_base + emit_offset[e];
-                let range_first = emit_first[e];
-                for (var k = t; k < c; k += WORKGROUP_SIZE) {
-                    if start + k < cap {
-                        clusters[start + k] = Cluster(index, hierarchy_clusters[range_first + k]);
-                    }
-                }
-            }
-            workgroupBarrier();
-        }
+        walk_instance = index;
+        var w: Walker;
+        w.instance = instances[min(index, arrayLength(&instances) - 1u)];
+        w.scale = instance_max_scale(w.instance);
+        w.reach = length(w.instance.world_from_local[3].xyz) + length(view.camera_position);
         if t == 0u {
-            frontier_len = min(atomicLoad(&next_len), queue_capacity);
-            atomicStore(&next_len, 0u);
+            frontier_len = count;
         }
-        cur = 1u - cur;
+        for (var k = t; k < count; k += WORKGROUP_SIZE) {
+            frontier[0][k] = first + k;
+        }
+        var left = 0u;
+        var cur = 0u;
+        for (var round = 0u; round <= MAX_ROUNDS; round += 1u) {
+            let n = workgroupUniformLoad(&frontier_len);
+            left = n;
+            if n == 0u || round == MAX_ROUNDS {
+                break;
+            }
+            for (var base = 0u; base < n; base += WORKGROUP_SIZE) {
+                let i = base + t;
+                var tests = 0u;
+                if i < n {
+                    // Two levels a round: the node, and at once the children of an
+                    // accepted inner node (the same nodes a level-by-level walk tests,
+                    // in half the dependent rounds).
+                    let id = frontier[cur][i];
+                    tests = 1u;
+                    if id < arrayLength(&hierarchy_nodes) && node_visible(hierarchy_nodes[id], w) {
+                        let node = hierarchy_nodes[id];
+                        if node.child_count == 0u {
+                            emit_range(node.first_cluster, node.cluster_count);
+                            atomicAdd(&leaves, 1u);
+                        } else {
+                            for (var c = 0u; c < node.child_count; c += 1u) {
+                                let child_id = node.first_child + c;
+                                tests += 1u;
+                                if child_id >= arrayLength(&hierarchy_nodes) {
+                                    continue;
+                                }
+                                let child = hierarchy_nodes[child_id];
+                                if !node_visible(child, w) {
+                                    continue;
+                                }
+                                if child.child_count == 0u {
+                                    emit_range(child.first_cluster, child.cluster_count);
+                                    atomicAdd(&leaves, 1u);
+                                } else {
+                                    enqueue(child, 1u - cur, width, spreading, index);
+                                }
+                            }
+                        }
+                    }
+                    flush();
+                }
+                if tests > 0u {
+                    atomicAdd(&tested_nodes, tests);
+                }
+                workgroupBarrier();
+                if t == 0u {
+                    emit_len = min(atomicExchange(&emit_ranges, 0u), EMIT_SLOTS);
+                    let total = atomicExchange(&emit_total, 0u);
+                    if total > 0u {
+                        emit_base = atomicAdd(&cluster_count[1], total);
+                        // The written word grows by the part below the capacity: the
+                        // reservations tile [0, requested), so the sum is min(requested,
+                        // capacity) once every step is done, with no dispatch after.
+                        let written = min(total, cap - min(emit_base, cap));
+                        if written > 0u {
+                            atomicAdd(&cluster_count[0], written);
+                        }
+                    }
+                }
+                // One range after another, consecutive threads on consecutive slots.
+                let ranges = workgroupUniformLoad(&emit_len);
+                let chunk_base = emit_base;
+                for (var e = 0u; e < ranges; e += 1u) {
+                    let c = emit_count[e];
+                    let start = chunk_base + emit_offset[e];
+                    let range_first = emit_first[e];
+                    for (var k = t; k < c; k += WORKGROUP_SIZE) {
+                        if start + k < cap {
+                            clusters[start + k] = Cluster(index, hierarchy_clusters[range_first + k]);
+                        }
+                    }
+                }
+                workgroupBarrier();
+            }
+            if t == 0u {
+                frontier_len = min(atomicLoad(&next_len), width);
+                atomicStore(&next_len, 0u);
+            }
+            cur = 1u - cur;
+        }
+        if left > 0u {
+            unfinished += 1u;
+        }
+        // Every thread is done with this entry's frontier before the next one is written.
+        workgroupBarrier();
     }
     if t == 0u {
-        atomicAdd(&hierarchy_counts[0], tested);
+        atomicAdd(&hierarchy_counts[0], atomicLoad(&tested_nodes));
         atomicAdd(&hierarchy_counts[1], atomicLoad(&leaves));
         atomicAdd(&hierarchy_counts[2], atomicLoad(&spilled));
-        if left > 0u {
-            atomicAdd(&hierarchy_counts[3], 1u);
-        }
+        atomicAdd(&hierarchy_counts[3], unfinished);
     }
-}
-
-@compute @workgroup_size(1)
-fn finish() {
-    let requested = atomicLoad(&cluster_count[1]);
-    atomicStore(&cluster_count[0], min(requested, capacity()));
 }

@@ -1,15 +1,19 @@
 //! The CPU reference of the `hierarchy` implementation: the same node test, operation for
 //! operation in f32 (matrix times vector summed column by column, dot products and
-//! lengths left to right), and the same breadth-first rounds with the same queue limit.
+//! lengths left to right), and the same steps: breadth-first rounds of two levels (a
+//! frontier node and, when it is accepted, its children) with the same queue limits, children that do not fit in a spreading step handed on to the next step's list.
 //!
 //! A node test can still decide differently from a GPU's when a value lies within
 //! rounding of its threshold; [`NodeTest::closeness`] says how close each came, so a test
 //! can tell such a node from a real disagreement. Which subtrees a full frontier emits
 //! whole depends on the order of the GPU's atomics; the reference appends children in
-//! frontier order and says when a frontier filled ([`HierarchyWalk::queue_full`]).
+//! frontier order and walks each list in order, and says when something was emitted
+//! whole ([`HierarchyWalk::queue_full`]). Which children are handed on also depends on
+//! that order, but not which nodes are tested: every node is tested by one walk, so the
+//! counts and the list agree with the GPU's whenever nothing was emitted whole.
 
 use crate::cpu::{instance_max_scale, mat_vec};
-use crate::hierarchy::{MAX_ROUNDS, QUEUE, SLACK};
+use crate::hierarchy::{MAX_ROUNDS, QUEUE, SLACK, SPREAD_STEPS, SUBTREE_CAPACITY};
 use meshlight_gpu_scene::SceneData;
 use meshlight_scene::asset::format::NodeRecord;
 use meshlight_shaders::cpu::layout::{Cluster, Instance, View};
@@ -20,6 +24,8 @@ pub struct WalkParams {
     pub capacity: u32,
     pub lod_threshold_px: f32,
     pub queue_capacity: u32,
+    pub spread_steps: u32,
+    pub subtree_capacity: u32,
 }
 
 impl Default for WalkParams {
@@ -28,6 +34,8 @@ impl Default for WalkParams {
             capacity: u32::MAX,
             lod_threshold_px: 1.0,
             queue_capacity: QUEUE,
+            spread_steps: SPREAD_STEPS,
+            subtree_capacity: SUBTREE_CAPACITY,
         }
     }
 }
@@ -46,9 +54,15 @@ pub struct HierarchyWalk {
     /// `cluster_count[1]` and `[0]`.
     pub requested: u32,
     pub written: u32,
-    /// Some frontier was full: which subtrees were emitted whole then depends on the
-    /// order the GPU appended children in.
+    /// Some subtree was emitted whole (a frontier and the next list full): which then
+    /// depends on the order the GPU appended children in.
     pub queue_full: bool,
+    /// Subtrees handed on, per spreading step (the GPU's numbers may differ: which
+    /// children fit in a frontier depends on the order of its atomics).
+    pub handed_on: Vec<u32>,
+    /// Per step, the most rounds one of its walks took: each round waits for the one
+    /// before, so their sum over the steps is the walk's critical path.
+    pub rounds: Vec<u32>,
     /// `(instance, node)` of every test decided within `near` (the argument of
     /// [`cpu_walk`]) of a threshold, relative to what it compared.
     pub near_threshold: Vec<(u32, u32)>,
@@ -150,74 +164,139 @@ pub fn node_test(view: &View, w: &Walker, node: &NodeRecord, threshold: f32) -> 
     }
 }
 
+/// Children `first .. first + count` of one node of `instance`'s hierarchy (a root:
+/// the node alone), walked by one workgroup of a step.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    instance: u32,
+    first: u32,
+    count: u32,
+}
+
 /// The reference walk over every instance. Tests deciding within `near` of a threshold
 /// are listed in [`HierarchyWalk::near_threshold`].
 pub fn cpu_walk(scene: &SceneData, view: &View, params: &WalkParams, near: f32) -> HierarchyWalk {
     let nodes = &scene.hierarchy_nodes;
     let queue = params.queue_capacity.clamp(1, QUEUE) as usize;
     let mut r = HierarchyWalk::default();
-    for (index, instance) in scene.instances.iter().enumerate() {
-        let Some(&root) = scene.hierarchy_roots.get(instance.mesh as usize) else {
-            continue;
-        };
-        let w = Walker::new(instance, view);
-        let emit = |r: &mut HierarchyWalk, first: u32, end: u32| {
-            r.clusters.extend(
-                scene.hierarchy_clusters[first as usize..end as usize]
-                    .iter()
-                    .map(|&meshlet| Cluster {
-                        instance: index as u32,
-                        meshlet,
-                    }),
-            );
-        };
-        let mut frontier = vec![root];
-        let mut round = 0;
-        while !frontier.is_empty() && round < MAX_ROUNDS {
-            r.counts[0] += frontier.len() as u32;
-            let mut next = Vec::new();
-            // Children reserved so far, counting those past the queue (the GPU's atomic).
-            let mut reserved = 0usize;
-            for &id in &frontier {
-                let Some(node) = nodes.get(id as usize) else {
-                    continue;
-                };
-                let test = node_test(view, &w, node, params.lod_threshold_px);
-                if test.closeness < near {
-                    r.near_threshold.push((index as u32, id));
+    let mut entries: Vec<Entry> = scene
+        .instances
+        .iter()
+        .enumerate()
+        .filter_map(|(index, instance)| {
+            let &root = scene.hierarchy_roots.get(instance.mesh as usize)?;
+            Some(Entry {
+                instance: index as u32,
+                first: root,
+                count: 1,
+            })
+        })
+        .collect();
+    for step in 0..=params.spread_steps {
+        let spreading = step < params.spread_steps;
+        let width = if spreading { queue.min(64) } else { queue };
+        let mut list = Vec::new();
+        let mut most_rounds = 0;
+        for entry in &entries {
+            let index = entry.instance;
+            let instance = &scene.instances[index as usize];
+            let w = Walker::new(instance, view);
+            let emit = |r: &mut HierarchyWalk, first: u32, end: u32| {
+                r.clusters.extend(
+                    scene.hierarchy_clusters[first as usize..end as usize]
+                        .iter()
+                        .map(|&meshlet| Cluster {
+                            instance: index,
+                            meshlet,
+                        }),
+                );
+            };
+            let mut frontier: Vec<u32> = (entry.first..entry.first + entry.count).collect();
+            let mut round = 0;
+            while !frontier.is_empty() && round < MAX_ROUNDS {
+                r.counts[0] += frontier.len() as u32;
+                let mut next = Vec::new();
+                // Children reserved so far, counting those past the queue (the GPU's atomic).
+                let mut reserved = 0usize;
+                for &id in &frontier {
+                    let Some(node) = nodes.get(id as usize) else {
+                        continue;
+                    };
+                    let test = node_test(view, &w, node, params.lod_threshold_px);
+                    if test.closeness < near {
+                        r.near_threshold.push((index, id));
+                    }
+                    if !test.visible {
+                        continue;
+                    }
+                    if step == 0 && round == 0 {
+                        r.visible_instances.push(index);
+                    }
+                    if node.is_leaf() {
+                        r.counts[1] += 1;
+                        emit(
+                            &mut r,
+                            node.first_cluster,
+                            node.first_cluster + node.cluster_count,
+                        );
+                        continue;
+                    }
+                    // Two levels a round: the children of an accepted node are tested
+                    // by the same thread, in the same round.
+                    for child_id in node.first_child..node.first_child + node.child_count {
+                        r.counts[0] += 1;
+                        let Some(child) = nodes.get(child_id as usize) else {
+                            continue;
+                        };
+                        let test = node_test(view, &w, child, params.lod_threshold_px);
+                        if test.closeness < near {
+                            r.near_threshold.push((index, child_id));
+                        }
+                        if !test.visible {
+                            continue;
+                        }
+                        if child.is_leaf() {
+                            r.counts[1] += 1;
+                            emit(
+                                &mut r,
+                                child.first_cluster,
+                                child.first_cluster + child.cluster_count,
+                            );
+                            continue;
+                        }
+                        let slot = reserved;
+                        reserved += child.child_count as usize;
+                        let fit = (child.child_count as usize).min(width - slot.min(width));
+                        next.extend((0..fit as u32).map(|k| child.first_child + k));
+                        if fit < child.child_count as usize {
+                            if spreading && list.len() < params.subtree_capacity as usize {
+                                list.push(Entry {
+                                    instance: index,
+                                    first: child.first_child + fit as u32,
+                                    count: child.child_count - fit as u32,
+                                });
+                                continue;
+                            }
+                            r.queue_full = true;
+                            r.counts[2] += 1;
+                            let first = nodes[child.first_child as usize + fit].first_cluster;
+                            emit(&mut r, first, child.first_cluster + child.cluster_count);
+                        }
+                    }
                 }
-                if !test.visible {
-                    continue;
-                }
-                if id == root {
-                    r.visible_instances.push(index as u32);
-                }
-                if node.is_leaf() {
-                    r.counts[1] += 1;
-                    emit(
-                        &mut r,
-                        node.first_cluster,
-                        node.first_cluster + node.cluster_count,
-                    );
-                    continue;
-                }
-                let slot = reserved;
-                reserved += node.child_count as usize;
-                let fit = (node.child_count as usize).min(queue - slot.min(queue));
-                next.extend((0..fit as u32).map(|k| node.first_child + k));
-                if fit < node.child_count as usize {
-                    r.queue_full = true;
-                    r.counts[2] += 1;
-                    let first = nodes[node.first_child as usize + fit].first_cluster;
-                    emit(&mut r, first, node.first_cluster + node.cluster_count);
-                }
+                frontier = next;
+                round += 1;
             }
-            frontier = next;
-            round += 1;
+            most_rounds = most_rounds.max(round);
+            if !frontier.is_empty() {
+                r.counts[3] += 1;
+            }
         }
-        if !frontier.is_empty() {
-            r.counts[3] += 1;
+        r.rounds.push(most_rounds);
+        if spreading {
+            r.handed_on.push(list.len() as u32);
         }
+        entries = list;
     }
     r.requested = r.clusters.len() as u32;
     r.written = r.requested.min(params.capacity);

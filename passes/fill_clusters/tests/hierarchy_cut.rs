@@ -266,17 +266,54 @@ fn on_the_bunny_lattice_clusters_and_nodes_tested_stay_within_three_times_the_cu
     let cut = want.cut.len();
     eprintln!(
         "bunny lattice 15³ at 2240x1260: cut {cut} clusters; flat fill lists {} (cull tests {}); \
-         the walk tests {} nodes and lists {} clusters ({} leaves), {tested} in all = {:.2}x the cut",
+         the walk tests {} nodes and lists {} clusters ({} leaves), {tested} in all = {:.2}x the cut; \
+         rounds per step {:?}, subtrees handed on per step {:?}",
         flat.clusters.len(),
         flat.clusters.len(),
         walk.counts[0],
         walk.clusters.len(),
         walk.counts[1],
-        tested as f64 / cut as f64
+        tested as f64 / cut as f64,
+        walk.rounds,
+        walk.handed_on
     );
     assert!(!walk.queue_full);
     assert!(
         tested <= 3 * cut,
         "{tested} clusters + nodes tested for a cut of {cut}"
     );
+}
+
+/// How the walk is split does not change what it tests or lists: with no spreading
+/// step, the default one, or every step with narrow frontiers (so subtrees are handed on
+/// from step to step), the counts and the clusters are the same, while the narrow split
+/// really hands subtrees on.
+#[test]
+fn the_walk_tests_and_lists_the_same_however_it_is_spread() {
+    let data = field(bunny());
+    let mut rng = Rng(0x5b1e_ad00);
+    let mut handed_on = 0;
+    for v in 0..24 {
+        let (view, threshold) = random_view(&data, &mut rng, v);
+        let walk = |spread_steps: u32, queue_capacity: u32| {
+            let params = WalkParams {
+                lod_threshold_px: threshold,
+                spread_steps,
+                queue_capacity,
+                ..WalkParams::default()
+            };
+            cpu_walk(&data, &view, &params, 0.0)
+        };
+        let alone = walk(0, 1024);
+        let default = walk(WalkParams::default().spread_steps, 1024);
+        let narrow = walk(4, 16);
+        for (label, w) in [("default", &default), ("narrow", &narrow)] {
+            assert!(!w.queue_full, "view {v} {label}");
+            assert_eq!(w.counts, alone.counts, "view {v} {label}");
+            assert_eq!(set(&w.clusters), set(&alone.clusters), "view {v} {label}");
+            assert_eq!(w.clusters.len(), alone.clusters.len(), "view {v} {label}");
+        }
+        handed_on += narrow.handed_on.iter().sum::<u32>();
+    }
+    assert!(handed_on > 0, "no view handed a subtree on");
 }

@@ -2,8 +2,10 @@
 //! clusters, each once, and every count word) on seeded random views; `cull_lod` after it
 //! against `cull_lod` after `workgroup_per_instance` (the same cut, exactly); a full
 //! queue that emits whole subtrees and still gives the same cut; a small capacity counted
-//! like the flat fill's; instances behind the camera costing one node each; and the
-//! typed error of a graph that leaves the hierarchy unbound.
+//! like the flat fill's; instances behind the camera costing one node each; the typed
+//! error of a graph that leaves the hierarchy unbound; and one large terrain instance
+//! seen from near (its walk handed on over the spreading steps) and far, and with lists
+//! too short for what is handed on.
 
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::gpu::elements;
@@ -11,7 +13,7 @@ use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, data::Limits};
 use meshlight_graph::*;
 use meshlight_pass_cull_lod::{CullLod, Thresholds};
 use meshlight_pass_fill_clusters::{
-    FillClusters, HierarchyFill, HierarchyWalk, WalkParams, cpu_walk,
+    FillClusters, HierarchyFill, HierarchyWalk, WalkParams, cpu_walk, hierarchy::MAX_STEPS,
 };
 use meshlight_scene::{BuildOptions, MeshletAsset, build_asset};
 use meshlight_shaders::cpu::layout::{Cluster, View};
@@ -431,8 +433,10 @@ fn a_full_queue_emits_whole_subtrees_and_keeps_the_cut() {
     let threshold = 1.0;
     let total: u32 = data.instances.iter().map(|i| i.meshlet_count).sum();
     let unlimited = cpu_walk(&data, &view, &WalkParams::default(), NEAR_THRESHOLD);
+    // No spreading step: every child that does not fit is emitted whole.
     let small = WalkParams {
         queue_capacity: 4,
+        spread_steps: 0,
         ..WalkParams::default()
     };
     let reference = cpu_walk(&data, &view, &small, NEAR_THRESHOLD);
@@ -440,6 +444,7 @@ fn a_full_queue_emits_whole_subtrees_and_keeps_the_cut() {
     let pass = HierarchyFill {
         lod_threshold_px: threshold,
         queue_capacity: Some(4),
+        spread_steps: 0,
         ..HierarchyFill::default()
     };
     let got = run(
@@ -560,4 +565,210 @@ fn a_graph_without_the_hierarchy_is_refused_naming_the_slot() {
     g.export(out.buffer("clusters").unwrap());
     g.compile(&CompileOptions::new(wgpu::Features::empty()))
         .unwrap();
+}
+
+/// A terrain of 524,288 triangles: one instance whose walk, seen from nearby, is far
+/// wider than one workgroup's chunk.
+fn terrain() -> &'static MeshletAsset {
+    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
+    ASSET.get_or_init(|| {
+        let terrain = meshlight_scene::Terrain {
+            origin: glam::Vec2::splat(-50.0),
+            size: 100.0,
+            cells: 512,
+            amplitude: 4.0,
+            wavelength: 30.0,
+            octaves: 4,
+            seed: 7,
+            uv_scale: 0.1,
+            calm_centre: glam::Vec2::ZERO,
+            calm_radius: 0.0,
+        };
+        let mesh = terrain.mesh().unwrap();
+        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
+            .unwrap()
+            .asset
+    })
+}
+
+fn terrain_scene() -> SceneData {
+    let mut data = SceneData::new(Limits::default());
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let mesh = data.add_mesh("terrain", terrain()).unwrap();
+    data.add_instance(mesh, Mat4::IDENTITY, material)
+        .unwrap()
+        .expect("an invertible transform");
+    data
+}
+
+/// One large instance seen from just above its ground (its walk is wide: handed on over
+/// the spreading steps) and from far away (a few nodes): the list and every counter equal
+/// the reference's, equal those of the unspread walk (one workgroup), and `cull_lod`
+/// after it finds the flat fill's cut exactly.
+#[test]
+fn one_large_instance_near_and_far_spreads_its_walk_and_keeps_the_cut() {
+    let mut data = terrain_scene();
+    let total = data.instances[0].meshlet_count;
+    let threshold = 1.0;
+    let views = [
+        (
+            "near",
+            Vec3::new(0.0, 1.5, -48.0),
+            Vec3::new(0.0, 0.0, 20.0),
+        ),
+        ("far", Vec3::new(0.0, 900.0, -900.0), Vec3::ZERO),
+    ];
+    let mut tested = Vec::new();
+    for (label, eye, target) in views {
+        let camera = Camera::perspective(eye, target, 1.0, 0.05);
+        let view = camera.view([1280, 720], 0, None);
+        let reference = cpu_walk(&data, &view, &WalkParams::default(), NEAR_THRESHOLD);
+        assert!(!reference.queue_full, "{label}");
+        let unspread = WalkParams {
+            spread_steps: 0,
+            ..WalkParams::default()
+        };
+        let single = cpu_walk(&data, &view, &unspread, NEAR_THRESHOLD);
+        assert_eq!(
+            single.counts, reference.counts,
+            "{label}: counts depend on the split"
+        );
+        assert_eq!(set(&single.clusters), set(&reference.clusters), "{label}");
+        eprintln!(
+            "{label}: counts {:?}, handed on per step {:?}, rounds per step {:?} ({:?} without spreading), {} clusters listed",
+            reference.counts,
+            reference.handed_on,
+            reference.rounds,
+            single.rounds,
+            reference.requested
+        );
+        let pass = HierarchyFill {
+            lod_threshold_px: threshold,
+            ..HierarchyFill::default()
+        };
+        let got = run(
+            &mut data,
+            &view,
+            Fill::Hierarchy(pass),
+            Some(threshold),
+            total,
+        );
+        assert_eq!(compare(&data, &reference, &got, label), 0, "{label}");
+        let one_group = HierarchyFill {
+            lod_threshold_px: threshold,
+            spread_steps: 0,
+            ..HierarchyFill::default()
+        };
+        let alone = run(&mut data, &view, Fill::Hierarchy(one_group), None, total);
+        assert_eq!(
+            alone.counts, got.counts,
+            "{label}: spread and unspread counts"
+        );
+        assert_eq!(set(alone.listed()), set(got.listed()), "{label}: lists");
+        let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
+        let (want, cut) = (flat.cut.unwrap(), got.cut.unwrap());
+        assert!(!want.is_empty(), "{label}: nothing in the cut");
+        assert!(cut == want, "{label}: the cuts differ");
+        tested.push((reference.counts[0], reference.handed_on.clone()));
+    }
+    let (near, far) = (&tested[0], &tested[1]);
+    // Seen from nearby a frontier outgrows one chunk: the first step hands subtrees on.
+    assert!(near.1[0] > 0, "near: {near:?}");
+    // From afar it stays within one workgroup's chunk and costs a few nodes.
+    assert!(far.1.iter().all(|&n| n == 0), "far: {far:?}");
+    assert!(far.0 * 10 < near.0, "near {near:?}, far {far:?}");
+}
+
+/// Lists too short for what is handed on: the rest is emitted whole (counted), the
+/// walk still ends, and the cut is the flat fill's.
+#[test]
+fn a_full_subtree_list_emits_whole_subtrees_and_keeps_the_cut() {
+    let mut data = terrain_scene();
+    let total = data.instances[0].meshlet_count;
+    let threshold = 1.0;
+    let camera = Camera::perspective(
+        Vec3::new(0.0, 1.5, -48.0),
+        Vec3::new(0.0, 0.0, 20.0),
+        1.0,
+        0.05,
+    );
+    let view = camera.view([1280, 720], 0, None);
+    let short = WalkParams {
+        subtree_capacity: 1,
+        ..WalkParams::default()
+    };
+    let reference = cpu_walk(&data, &view, &short, NEAR_THRESHOLD);
+    assert!(reference.queue_full && reference.counts[2] > 0);
+    let unlimited = cpu_walk(&data, &view, &WalkParams::default(), NEAR_THRESHOLD);
+    let pass = HierarchyFill {
+        lod_threshold_px: threshold,
+        subtree_capacity: Some(1),
+        ..HierarchyFill::default()
+    };
+    let got = run(
+        &mut data,
+        &view,
+        Fill::Hierarchy(pass),
+        Some(threshold),
+        total,
+    );
+    assert!(got.counts[2] > 0, "no subtree was emitted whole");
+    assert_eq!(got.counts[3], 0);
+    let listed = set(got.listed());
+    assert_eq!(listed.len(), got.listed().len(), "a cluster written twice");
+    assert!(set(&unlimited.clusters).is_subset(&listed));
+    assert!(listed.len() > unlimited.clusters.len());
+    let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
+    assert!(got.cut.unwrap() == flat.cut.unwrap(), "the cuts differ");
+}
+
+/// Narrow frontiers and every spreading step: the near terrain's walk is handed on from
+/// step to step (each step reading the list the one before wrote), and the list, the
+/// counters and the cut are still the reference's and the flat fill's.
+#[test]
+fn a_walk_handed_on_over_every_step_keeps_the_reference_and_the_cut() {
+    let mut data = terrain_scene();
+    let total = data.instances[0].meshlet_count;
+    let threshold = 1.0;
+    let camera = Camera::perspective(
+        Vec3::new(0.0, 1.5, -48.0),
+        Vec3::new(0.0, 0.0, 20.0),
+        1.0,
+        0.05,
+    );
+    let view = camera.view([1280, 720], 0, None);
+    let params = WalkParams {
+        queue_capacity: 16,
+        spread_steps: MAX_STEPS,
+        ..WalkParams::default()
+    };
+    let reference = cpu_walk(&data, &view, &params, NEAR_THRESHOLD);
+    eprintln!(
+        "narrow: counts {:?}, handed on per step {:?}, rounds per step {:?}",
+        reference.counts, reference.handed_on, reference.rounds
+    );
+    assert!(!reference.queue_full);
+    assert!(
+        reference.handed_on.iter().filter(|&&n| n > 0).count() >= 2,
+        "{:?}",
+        reference.handed_on
+    );
+    let pass = HierarchyFill {
+        lod_threshold_px: threshold,
+        queue_capacity: Some(16),
+        spread_steps: MAX_STEPS,
+        ..HierarchyFill::default()
+    };
+    let got = run(
+        &mut data,
+        &view,
+        Fill::Hierarchy(pass),
+        Some(threshold),
+        total,
+    );
+    assert_eq!(compare(&data, &reference, &got, "narrow"), 0);
+    let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
+    assert!(got.cut.unwrap() == flat.cut.unwrap(), "the cuts differ");
 }
