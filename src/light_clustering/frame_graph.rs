@@ -174,7 +174,7 @@ pub fn add_stages(g: &mut GraphBuilder, s: &ClusteringSettings) -> Result<()> {
         Implementation::Compute => {
             g.add_pass(
                 "count",
-                meshlight_pass_count_raster::Compute,
+                meshlight_pass_count_raster::Compute::default(),
                 Bindings::new(),
             )?;
         }
@@ -199,7 +199,7 @@ pub fn add_stages(g: &mut GraphBuilder, s: &ClusteringSettings) -> Result<()> {
             g.add_pass("populate", populate, Bindings::new())?;
         }
         Implementation::Compute => {
-            let populate = meshlight_pass_populate::Compute { capacity: None };
+            let populate = meshlight_pass_populate::Compute::default();
             g.add_pass("populate", populate, Bindings::new())?;
         }
     }

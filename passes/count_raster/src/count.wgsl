@@ -4,11 +4,11 @@
 //
 // `raster`: one quad per instance on a viewport of one pixel per tile, colour writes off;
 // the fragment shader tests and counts. `compute`: workgroups share their lanes out over
-// the tiles of up to 64 instances each. Both call `count_froxel`, so they count the same pairs.
+// the tiles of 64 instances a round. Both call `count_froxel`, so they count the same pairs.
 
 #import meshlight::view::View
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_index, CLUSTERABLE_TYPE_COUNT}
-#import meshlight::froxel::{ViewObject, TileRect, view_object, froxel_aabb, froxel_rect, rect_is_empty, object_touches_froxel, froxel_quad_corner, walk_instance, walk_layout, walk_tile, WALK_GROUP}
+#import meshlight::froxel::{ViewObject, TileRect, view_object, froxel_aabb, froxel_rect, rect_is_empty, object_touches_froxel, froxel_quad_corner, walk_rounds, walk_instance, walk_layout, walk_tile, WALK_GROUP}
 
 // One (object, slice) pair of `z_slice`'s list.
 struct SliceInstance {
@@ -79,16 +79,20 @@ fn count_cs(
     @builtin(local_invocation_index) t: u32,
 ) {
     let written = instances_written();
-    let instance = walk_instance(wg, groups, t, written);
-    var pair = SliceInstance(0u, 0u);
-    var rect = TileRect(vec2(1u, 0u), vec2(0u));
-    if instance < written {
-        pair = slice_instances[instance];
-        rect = froxel_rect(view, cluster_grid, view_object(view, objects[pair.object]), pair.slice);
-    }
-    let total = walk_layout(t, pair.object, pair.slice, rect);
-    for (var i = t; i < total; i += WALK_GROUP) {
-        let w = walk_tile(i);
-        count_froxel(view_object(view, objects[w.object]), vec3(w.tile, w.slice));
+    // A direct dispatch of a fixed size: each workgroup walks 64 instances a round.
+    let rounds = walk_rounds(groups, written);
+    for (var round = 0u; round < rounds; round += 1u) {
+        let instance = walk_instance(wg, groups, round, t, written);
+        var pair = SliceInstance(0u, 0u);
+        var rect = TileRect(vec2(1u, 0u), vec2(0u));
+        if instance < written {
+            pair = slice_instances[instance];
+            rect = froxel_rect(view, cluster_grid, view_object(view, objects[pair.object]), pair.slice);
+        }
+        let total = walk_layout(t, pair.object, pair.slice, rect);
+        for (var i = t; i < total; i += WALK_GROUP) {
+            let w = walk_tile(i);
+            count_froxel(view_object(view, objects[w.object]), vec3(w.tile, w.slice));
+        }
     }
 }

@@ -16,7 +16,7 @@
 //! | `slice_instances`     | storage read       | SliceInstance | z_slice's `(object, slice)` list |
 //! | `slice_counts`        | storage read       | u32 | z_slice's words: `[0]` requested, `[1]` capacity |
 //! | `slice_draw_args`     | indirect           | DrawIndirectArgs | z_slice's draw (the `raster` implementation draws it) |
-//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch (the `compute` implementation, for lists too long for a direct one: [`WalkGrid`]) |
+//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch, for a walk sized on the GPU (the `compute` implementation here dispatches directly: [`walk_grid`]) |
 //! | `cluster_grid`        | storage read       | ClusterGrid | the grid z_slice published |
 //! | `cluster_counts`      | cleared read-write | u32 | `[froxel × 4 + kind]`, froxels in `cluster_index` order |
 //!
@@ -29,8 +29,9 @@
 //!   `width × height` viewport (one pixel per tile, `width` and `height` equal to the
 //!   grid's), colour writes off; the fragment shader tests and counts. Where every unit
 //!   of the GPU rasterises, the rasteriser does the rectangle walk for free.
-//! - [`Compute`] (`compute`): each workgroup of 64 lanes takes up to 64 instances and
-//!   shares its lanes out over all their tiles (a prefix sum of the tile counts in
+//! - [`Compute`] (`compute`): a direct dispatch of at most [`WALK_GROUPS`] workgroups;
+//!   each workgroup of 64 lanes takes 64 instances a round and shares its lanes out over
+//!   all their tiles (a prefix sum of the tile counts in
 //!   workgroup memory, a binary search per tile), a froxel per lane. No fixed-function
 //!   work: the fast path where few units run graphics (the H100/H200 have two).
 //!
@@ -227,8 +228,20 @@ impl Pass for Raster {
 }
 
 /// The `compute` implementation.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Compute;
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Compute {
+    /// Workgroups the walk is dispatched with at most ([`WALK_GROUPS`]; tests use a few
+    /// to walk a list in many rounds).
+    pub walk_groups: u32,
+}
+
+impl Default for Compute {
+    fn default() -> Self {
+        Self {
+            walk_groups: WALK_GROUPS,
+        }
+    }
+}
 
 impl Pass for Compute {
     fn contract(&self) -> StageContract {
@@ -239,7 +252,6 @@ impl Pass for Compute {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         setup_common(ctx);
-        ctx.min_bytes("slice_dispatch_args", 12);
         ctx.program(
             "count",
             ProgramDesc::compute(&SHADER, "count_cs").layout(compute_layout()),
@@ -251,52 +263,35 @@ impl Pass for Compute {
         record_zero(ctx)?;
         let program = ctx.compute("count")?;
         let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
-        let grid = WalkGrid::of(ctx)?;
+        let [x, y] = walk_grid(ctx, self.walk_groups)?;
         let mut pass = ctx.compute_pass();
         pass.set_pipeline(&program.pipeline);
         pass.set_bind_group(0, &group, &[]);
-        grid.dispatch(&mut pass);
+        pass.dispatch_workgroups(x, y, 1);
         Ok(())
     }
 }
 
-/// Workgroups (one per 64 instances the bound list holds) up to which the compute walks
-/// dispatch directly instead of through z_slice's arguments.
-pub const DIRECT_WALK_GROUPS: u64 = 256;
+/// Workgroups a compute walk (this stage's and `populate`'s) is dispatched with at most:
+/// about as many 64-lane workgroups as an H100 or H200 holds at once (32 on each of its
+/// 132 SMs is 4,224), so a long list is walked in rounds by resident workgroups.
+pub const WALK_GROUPS: u32 = 2048;
 
-/// How the `compute` walks (this stage's and `populate`'s) are dispatched.
-///
-/// A short list gets a direct dispatch of a workgroup per 64 instances it can hold: the
-/// walk spreads the instances written over every workgroup that runs (`walk_instance`),
-/// and there is no indirect dispatch, whose argument check wgpu records as a dependent
-/// dispatch of its own (at 1,000 lights on the H200 the count went from 19 to 12 µs). A
-/// long list gets z_slice's indirect arguments, a workgroup per 64 instances written: a
-/// direct grid over its whole capacity spread the instances a few per workgroup and
-/// took the count from 0.049 to 0.177 ms at 1,000,000 lights.
-pub enum WalkGrid<'a> {
-    Direct([u32; 2]),
-    Indirect(&'a wgpu::Buffer),
-}
-
-impl<'a> WalkGrid<'a> {
-    /// The grid for the list bound to `slice_instances` (see the type's docs).
-    pub fn of(ctx: &RecordContext<'a>) -> Result<Self> {
-        let (_, bytes) = ctx.buffer("slice_instances")?;
-        let groups = (bytes / u64::from(SLICE_INSTANCE.size)).div_ceil(64);
-        if groups <= DIRECT_WALK_GROUPS {
-            let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
-            return Ok(Self::Direct(workgroup_grid(groups, limit)));
-        }
-        let (args, _) = ctx.buffer("slice_dispatch_args")?;
-        Ok(Self::Indirect(args))
-    }
-
-    pub fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>) {
-        match self {
-            Self::Direct([x, y]) => pass.dispatch_workgroups(*x, *y, 1),
-            Self::Indirect(args) => pass.dispatch_workgroups_indirect(args, 0),
-        }
-    }
+/// The direct grid of a compute walk over the list bound to `slice_instances`: a
+/// workgroup per 64 instances the list can hold, at most `max_groups` (each then walks
+/// 64 instances a round until the instances written are done: `walk_rounds` in
+/// `meshlight::froxel`). No indirect dispatch: wgpu checks indirect arguments with a
+/// dispatch of its own, a dependent step, and the arguments would be one more. A fixed
+/// share per workgroup keeps the lanes busy on a list written far below its capacity;
+/// sharing the instances out over a grid sized for the capacity spread them a few per
+/// workgroup (count 0.177 against 0.049 ms at 1,000,000 lights on the H200).
+pub fn walk_grid(ctx: &RecordContext<'_>, max_groups: u32) -> Result<[u32; 2]> {
+    let (_, bytes) = ctx.buffer("slice_instances")?;
+    let groups = (bytes / u64::from(SLICE_INSTANCE.size))
+        .div_ceil(64)
+        .min(u64::from(max_groups.max(1)));
+    let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
+    Ok(workgroup_grid(groups, limit))
 }
 
 fn build_raster(params: &Params) -> Result<Box<dyn Pass>> {
@@ -307,7 +302,7 @@ fn build_compute(params: &Params) -> Result<Box<dyn Pass>> {
     // The grid's tiles are accepted (and checked) so a file swaps implementations by
     // changing one line; the compute walk does not need them.
     Raster::from_params(params)?;
-    Ok(Box::new(Compute))
+    Ok(Box::new(Compute::default()))
 }
 
 /// Registers `count_raster` (implementations `raster` and `compute`) for pipeline files.

@@ -7,7 +7,7 @@
 use glam::Vec3;
 use meshlight_graph::*;
 use meshlight_pass_count_raster::cpu::{CountResult, cpu_count};
-use meshlight_pass_count_raster::{Compute, DIRECT_WALK_GROUPS, KINDS, Raster};
+use meshlight_pass_count_raster::{Compute, KINDS, Raster};
 use meshlight_pass_z_slice::cpu::{WORD_CAPACITY, WORD_REQUESTED};
 use meshlight_pass_z_slice::scenes::{Rng, object, orthographic, perspective, random_objects};
 use meshlight_pass_z_slice::{
@@ -26,9 +26,8 @@ const NEAR: f32 = 1e-5;
 enum Implementation {
     Raster,
     Compute,
-    /// `compute` with a list longer than [`DIRECT_WALK_GROUPS`] workgroups take: the
-    /// walk is dispatched through z_slice's indirect arguments.
-    ComputeLongList,
+    /// `compute` dispatched with one workgroup: the walk takes a round per 64 instances.
+    ComputeRounds,
 }
 
 struct GpuCounts {
@@ -46,10 +45,7 @@ fn run(
     let gpu = GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"));
     let [w, h] = view.viewport_size.map(|v| v as u32);
     let grid = z_slice.grid([w, h]);
-    let mut capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
-    if implementation == Implementation::ComputeLongList {
-        capacity = capacity.max((DIRECT_WALK_GROUPS + 1) * 64);
-    }
+    let capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
     let mut g = GraphBuilder::new();
     let stored = objects.len().max(1) as u64;
     let list = g.import_buffer(
@@ -107,9 +103,8 @@ fn run(
             },
             bindings,
         ),
-        Implementation::Compute | Implementation::ComputeLongList => {
-            g.add_pass("count", Compute, bindings)
-        }
+        Implementation::Compute => g.add_pass("count", Compute::default(), bindings),
+        Implementation::ComputeRounds => g.add_pass("count", Compute { walk_groups: 1 }, bindings),
     }
     .unwrap();
     g.export(sliced.buffer("slice_instances").unwrap());
@@ -229,17 +224,20 @@ fn scene(rng: &mut Rng, index: u32) -> (View, Vec<ClusterableObject>, ZSlice) {
 fn random_scenes_count_like_the_reference_in_both_implementations() {
     let mut rng = Rng(0xc0ff_ee00_1234_5678);
     let mut per_kind = [0u32; 4];
-    let (mut differing, mut orthographic_scenes) = (0, 0);
+    let (mut differing, mut orthographic_scenes, mut scenes_in_rounds) = (0, 0, 0);
     for index in 0..6 {
         let (view, objects, z_slice) = scene(&mut rng, index);
         let [w, h] = view.viewport_size.map(|v| v as u32);
         let grid = z_slice.grid([w, h]);
         let raster = run(&objects, &view, z_slice, Implementation::Raster);
         let compute = run(&objects, &view, z_slice, Implementation::Compute);
-        let long = run(&objects, &view, z_slice, Implementation::ComputeLongList);
+        let rounds = run(&objects, &view, z_slice, Implementation::ComputeRounds);
+        if rounds.instances.len() > 2 * 64 {
+            scenes_in_rounds += 1;
+        }
         assert!(
-            long.counts == compute.counts,
-            "scene {index}: the indirect walk counted otherwise than the direct one"
+            rounds.counts == compute.counts,
+            "scene {index}: the walk in rounds counted otherwise than the one-round walk"
         );
         let sorted = |list: &[SliceInstance]| {
             let mut list = list.to_vec();
@@ -292,6 +290,10 @@ fn random_scenes_count_like_the_reference_in_both_implementations() {
     }
     assert!(per_kind.iter().all(|&c| c > 0), "{per_kind:?}");
     assert!(orthographic_scenes > 0);
+    assert!(
+        scenes_in_rounds >= 3,
+        "only {scenes_in_rounds} scenes took the one workgroup three rounds or more"
+    );
     assert!(differing <= 12, "{differing} pairs decided otherwise");
 }
 
@@ -314,7 +316,7 @@ fn lights_around_the_camera_count_where_they_must() {
     for implementation in [
         Implementation::Raster,
         Implementation::Compute,
-        Implementation::ComputeLongList,
+        Implementation::ComputeRounds,
     ] {
         let got = run(&objects, &view, z_slice, implementation);
         let label = format!("{implementation:?}");
@@ -349,7 +351,7 @@ fn no_objects_count_nothing() {
     for implementation in [
         Implementation::Raster,
         Implementation::Compute,
-        Implementation::ComputeLongList,
+        Implementation::ComputeRounds,
     ] {
         let got = run(&[], &view, ZSlice::default(), implementation);
         assert!(got.instances.is_empty());

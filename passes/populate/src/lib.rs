@@ -18,7 +18,7 @@
 //! | `slice_instances`     | storage read       | SliceInstance | z_slice's `(object, slice)` list |
 //! | `slice_counts`        | storage read       | u32 | z_slice's words: `[0]` requested, `[1]` capacity |
 //! | `slice_draw_args`     | indirect           | DrawIndirectArgs | z_slice's draw (`raster`) |
-//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch (`compute`, for long lists: count_raster's `WalkGrid`) |
+//! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch, for a walk sized on the GPU (`compute` dispatches directly: count_raster's `walk_grid`) |
 //! | `cluster_grid`        | storage read       | ClusterGrid | the grid z_slice published |
 //! | `cluster_offsets`     | storage read       | u32 | `[froxel × 4 + kind]`: where that list starts (exclusive prefix sum of the counts) |
 //! | `cluster_counts`      | storage read-write | u32 | in: count_raster's counts; out: the entries each list holds |
@@ -43,8 +43,8 @@
 //! # Implementations
 //!
 //! [`Raster`] (`raster`, an instanced indirect draw of a quad per instance, the fragment
-//! shader writes) and [`Compute`] (`compute`, workgroups share their lanes out over the
-//! tiles of up to 64 instances each),
+//! shader writes) and [`Compute`] (`compute`, a direct dispatch whose workgroups share
+//! their lanes out over the tiles of 64 instances a round),
 //! as in `count_raster`; pair each with the same implementation of that stage, so both
 //! stages decide every pair with the same code.
 
@@ -292,10 +292,22 @@ impl Pass for Raster {
 }
 
 /// The `compute` implementation.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Compute {
     /// Entries the lists may hold; `None`: all of `cluster_objects`.
     pub capacity: Option<u32>,
+    /// Workgroups the walk is dispatched with at most (count_raster's `WALK_GROUPS`;
+    /// tests use a few to walk a list in many rounds).
+    pub walk_groups: u32,
+}
+
+impl Default for Compute {
+    fn default() -> Self {
+        Self {
+            capacity: None,
+            walk_groups: meshlight_pass_count_raster::WALK_GROUPS,
+        }
+    }
 }
 
 impl Pass for Compute {
@@ -310,7 +322,6 @@ impl Pass for Compute {
             capacity: self.capacity,
         };
         steps.setup(ctx);
-        ctx.min_bytes("slice_dispatch_args", 12);
         let layout = BindingLayout::compute("populate::compute")
             .slot(0, "objects")
             .slot(1, "slice_instances")
@@ -334,13 +345,13 @@ impl Pass for Compute {
         };
         let program = ctx.compute("populate")?;
         let group = steps.walk_group(ctx, &*program)?;
-        // count_raster's grid: direct for a short list, else z_slice's arguments.
-        let grid = meshlight_pass_count_raster::WalkGrid::of(ctx)?;
+        // count_raster's direct grid: 64 instances a workgroup a round.
+        let [x, y] = meshlight_pass_count_raster::walk_grid(ctx, self.walk_groups)?;
         {
             let mut pass = ctx.compute_pass();
             pass.set_pipeline(&program.pipeline);
             pass.set_bind_group(0, &group, &[]);
-            grid.dispatch(&mut pass);
+            pass.dispatch_workgroups(x, y, 1);
         }
         steps.after(ctx)
     }
@@ -356,6 +367,7 @@ fn build_compute(params: &Params) -> Result<Box<dyn Pass>> {
     let raster = Raster::from_params(params)?;
     Ok(Box::new(Compute {
         capacity: raster.capacity,
+        ..Compute::default()
     }))
 }
 

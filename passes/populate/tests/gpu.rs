@@ -30,9 +30,8 @@ const GUARD: u32 = 64;
 enum Implementation {
     Raster,
     Compute,
-    /// `compute` with a list longer than count_raster's `DIRECT_WALK_GROUPS` workgroups
-    /// take: both walks are dispatched through z_slice's indirect arguments.
-    ComputeLongList,
+    /// `compute` with both walks dispatched with one workgroup: a round per 64 instances.
+    ComputeRounds,
 }
 
 struct GpuLists {
@@ -72,11 +71,11 @@ fn run(
     let buffer = |g: &mut GraphBuilder, name: &str, element: Element, n: u64| {
         g.create_buffer(name, BufferDesc::array(element, n))
     };
-    let mut slice_capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
-    if implementation == Implementation::ComputeLongList {
-        let long = (meshlight_pass_count_raster::DIRECT_WALK_GROUPS + 1) * 64;
-        slice_capacity = slice_capacity.max(long);
-    }
+    let slice_capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
+    let walk_groups = match implementation {
+        Implementation::ComputeRounds => 1,
+        _ => meshlight_pass_count_raster::WALK_GROUPS,
+    };
     let instances = buffer(&mut g, "slice_instances", SLICE_INSTANCE, slice_capacity);
     let slice_counts = buffer(&mut g, "slice_counts", Element::U32, 8);
     let draw = buffer(&mut g, "slice_draw_args", Element::DRAW_ARGS, 1);
@@ -123,9 +122,9 @@ fn run(
             },
             count_bindings,
         ),
-        Implementation::Compute | Implementation::ComputeLongList => g.add_pass(
+        Implementation::Compute | Implementation::ComputeRounds => g.add_pass(
             "count",
-            meshlight_pass_count_raster::Compute,
+            meshlight_pass_count_raster::Compute { walk_groups },
             count_bindings,
         ),
     }
@@ -158,10 +157,11 @@ fn run(
             },
             populate_bindings,
         ),
-        Implementation::Compute | Implementation::ComputeLongList => g.add_pass(
+        Implementation::Compute | Implementation::ComputeRounds => g.add_pass(
             "populate",
             meshlight_pass_populate::Compute {
                 capacity: Some(capacity),
+                walk_groups,
             },
             populate_bindings,
         ),
@@ -324,7 +324,7 @@ fn lists_equal_the_reference_as_sets_in_both_implementations() {
         for implementation in [
             Implementation::Raster,
             Implementation::Compute,
-            Implementation::ComputeLongList,
+            Implementation::ComputeRounds,
         ] {
             let got = run(&objects, &view, z_slice, implementation, 1 << 18);
             let label = format!("scene {index} {implementation:?}");
@@ -350,7 +350,7 @@ fn a_small_capacity_cuts_lists_and_writes_nothing_past_it() {
     for implementation in [
         Implementation::Raster,
         Implementation::Compute,
-        Implementation::ComputeLongList,
+        Implementation::ComputeRounds,
     ] {
         let got = run(&objects, &view, z_slice, implementation, 100);
         let label = format!("{implementation:?} at capacity 100");

@@ -297,8 +297,10 @@ fn rect_tile(rect: TileRect, index: u32) -> vec2<u32> {
 
 // The compute walks share a workgroup's lanes out over the tiles of all its instances,
 // not a workgroup per instance: most rectangles hold a tile or two, and a workgroup per
-// instance left most lanes idle. Workgroups take equal shares of the instances (at most
-// WALK_GROUP each); a prefix sum of the tile counts lays the workgroup's tiles out in
+// instance left most lanes idle. A workgroup takes WALK_GROUP instances a round, the
+// rounds striding over the list by the whole grid's share (`walk_rounds`), so a direct
+// dispatch of a fixed size walks a list of any length and a workgroup past the instances
+// written leaves at once; a prefix sum of the tile counts lays the round's tiles out in
 // one run, and each lane walks every WALK_GROUP-th tile of it, finding the tile's
 // instance by binary search.
 const WALK_GROUP: u32 = 64u;
@@ -309,20 +311,29 @@ var<workgroup> walk_rects: array<TileRect, 64>;
 // walk_starts[k]: where lane k's tiles start in the run; [WALK_GROUP]: the total.
 var<workgroup> walk_starts: array<u32, 65>;
 
-// The instance lane `t` takes, or `written` when it takes none.
-fn walk_instance(wg: vec3<u32>, groups: vec3<u32>, t: u32, written: u32) -> u32 {
-    let share = (written + groups.x * groups.y - 1u) / (groups.x * groups.y);
-    let instance = (wg.y * groups.x + wg.x) * share + t;
-    if t < min(share, WALK_GROUP) && instance < written {
-        return instance;
+// Rounds of WALK_GROUP instances per workgroup the grid `groups` takes to walk `written`
+// instances (the same in every workgroup: the loop around `walk_layout` stays uniform).
+fn walk_rounds(groups: vec3<u32>, written: u32) -> u32 {
+    let per_round = groups.x * groups.y * WALK_GROUP;
+    return written / per_round + select(0u, 1u, written % per_round != 0u);
+}
+
+// The instance lane `t` takes in round `round`, or `written` when it takes none.
+fn walk_instance(wg: vec3<u32>, groups: vec3<u32>, round: u32, t: u32, written: u32) -> u32 {
+    let group = wg.y * groups.x + wg.x;
+    let first = (round * groups.x * groups.y + group) * WALK_GROUP;
+    if first < written && t < written - first {
+        return first + t;
     }
     return written;
 }
 
 // Lays the workgroup's tiles out: lane `t` brings its instance's (object, slice) and
 // rectangle (an empty one when it has none). Returns the tiles of the run. Every lane of
-// the workgroup calls it.
+// the workgroup calls it, once a round.
 fn walk_layout(t: u32, object: u32, slice: u32, rect: TileRect) -> u32 {
+    // Every lane has finished the previous round's tiles before they are replaced.
+    workgroupBarrier();
     walk_items[t] = vec2(object, slice);
     walk_rects[t] = rect;
     if t == 0u {
