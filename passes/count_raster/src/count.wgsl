@@ -24,11 +24,11 @@ struct SliceInstance {
 @group(0) @binding(2) var<storage, read> slice_counts: array<u32>;
 // The grid z_slice sliced with.
 @group(0) @binding(3) var<storage, read> cluster_grid: ClusterGrid;
-// Per froxel and kind: `cluster_counts[froxel * CLUSTERABLE_TYPE_COUNT + kind]`.
+// Per froxel and kind: `cluster_counts[froxel * CLUSTERABLE_TYPE_COUNT + kind]`; zeroed
+// by z_slice's `prepare`.
 @group(0) @binding(4) var<storage, read_write> cluster_counts: array<atomic<u32>>;
 @group(0) @binding(5) var<uniform> view: View;
 
-const WORKGROUP_SIZE: u32 = 64u;
 
 fn instances_written() -> u32 {
     return min(min(slice_counts[0], slice_counts[1]), arrayLength(&slice_instances));
@@ -40,15 +40,6 @@ fn count_froxel(o: ViewObject, froxel: vec3<u32>) {
         if at < arrayLength(&cluster_counts) {
             atomicAdd(&cluster_counts[at], 1u);
         }
-    }
-}
-
-// Zeroes the counts before the walk: a dispatch, where a buffer fill would need a
-// transfer and its barriers between two compute steps.
-@compute @workgroup_size(64)
-fn zero(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    for (var i = id.x; i < arrayLength(&cluster_counts); i += groups.x * WORKGROUP_SIZE) {
-        atomicStore(&cluster_counts[i], 0u);
     }
 }
 

@@ -18,7 +18,7 @@
 //! | `slice_draw_args`     | indirect           | DrawIndirectArgs | z_slice's draw (the `raster` implementation draws it) |
 //! | `slice_dispatch_args` | indirect           | DispatchIndirectArgs | z_slice's dispatch, for a walk sized on the GPU (the `compute` implementation here dispatches directly: [`walk_grid`]) |
 //! | `cluster_grid`        | storage read       | ClusterGrid | the grid z_slice published |
-//! | `cluster_counts`      | cleared read-write | u32 | `[froxel × 4 + kind]`, froxels in `cluster_index` order |
+//! | `cluster_counts`      | storage read-write | u32 | `[froxel × 4 + kind]`, froxels in `cluster_index` order; zeroed on entry (z_slice's `prepare` zeroes it) |
 //!
 //! Frame input `view`. Both argument slots are in the contract, so a pipeline binds both
 //! and swapping the implementation stays one line.
@@ -97,9 +97,9 @@ pub fn contract() -> StageContract {
     let mut slots = instance_slots();
     slots.push(Slot::buffer(
         "cluster_counts",
-        Access::ClearedReadWrite,
+        Access::StorageReadWrite,
         Element::U32,
-        "[froxel × 4 + kind]: objects touching it",
+        "[froxel × 4 + kind]: objects touching it (zeroed by z_slice)",
     ));
     StageContract {
         stage: STAGE,
@@ -138,22 +138,6 @@ fn setup_common(ctx: &mut SetupContext) {
     ctx.min_bytes("slice_counts", 8);
     ctx.min_bytes("cluster_grid", CLUSTER_GRID.size as u64);
     ctx.frame_input(VIEW_INPUT);
-    let zero = BindingLayout::compute("count_raster::zero").slot(4, "cluster_counts");
-    ctx.program("zero", ProgramDesc::compute(&SHADER, "zero").layout(zero));
-}
-
-/// Zeroes `cluster_counts` with a dispatch (see `zero` in count.wgsl).
-fn record_zero(ctx: &mut RecordContext<'_>) -> Result<()> {
-    let (_, bytes) = ctx.buffer("cluster_counts")?;
-    let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
-    let groups = ((bytes / 4) as u32).div_ceil(64).clamp(1, limit);
-    let program = ctx.compute("zero")?;
-    let group = ctx.bind_group(&program, 0, &[])?;
-    let mut pass = ctx.compute_pass();
-    pass.set_pipeline(&program.pipeline);
-    pass.set_bind_group(0, &group, &[]);
-    pass.dispatch_workgroups(groups, 1, 1);
-    Ok(())
 }
 
 /// The `raster` implementation.
@@ -215,7 +199,6 @@ impl Pass for Raster {
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
-        record_zero(ctx)?;
         let program = ctx.render("count")?;
         let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
         let (args, _) = ctx.buffer("slice_draw_args")?;
@@ -260,7 +243,6 @@ impl Pass for Compute {
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
-        record_zero(ctx)?;
         let program = ctx.compute("count")?;
         let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
         let [x, y] = walk_grid(ctx, self.walk_groups)?;

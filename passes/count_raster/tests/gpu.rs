@@ -80,7 +80,8 @@ fn run(
                 .bind("slice_counts", slice_counts)
                 .bind("slice_draw_args", draw)
                 .bind("slice_dispatch_args", dispatch)
-                .bind("cluster_grid", grid_buffer),
+                .bind("cluster_grid", grid_buffer)
+                .bind("cluster_counts", counts),
         )
         .unwrap();
     let bindings = Bindings::new()
@@ -93,7 +94,7 @@ fn run(
             sliced.buffer("slice_dispatch_args").unwrap(),
         )
         .bind("cluster_grid", sliced.buffer("cluster_grid").unwrap())
-        .bind("cluster_counts", counts);
+        .bind("cluster_counts", sliced.buffer("cluster_counts").unwrap());
     let counted = match implementation {
         Implementation::Raster => g.add_pass(
             "count",

@@ -96,7 +96,8 @@ fn run(
                 .bind("slice_counts", slice_counts)
                 .bind("slice_draw_args", draw)
                 .bind("slice_dispatch_args", dispatch)
-                .bind("cluster_grid", grid_buffer),
+                .bind("cluster_grid", grid_buffer)
+                .bind("cluster_counts", counts),
         )
         .unwrap();
     let from_slices = |b: Bindings| {
@@ -112,7 +113,9 @@ fn run(
         }
         b
     };
-    let count_bindings = from_slices(Bindings::new().bind("cluster_counts", counts));
+    let count_bindings = from_slices(
+        Bindings::new().bind("cluster_counts", sliced.buffer("cluster_counts").unwrap()),
+    );
     let counted = match implementation {
         Implementation::Raster => g.add_pass(
             "count",

@@ -20,6 +20,10 @@
 //! | `slice_draw_args`     | storage write      | DrawIndirectArgs | `[quad_vertices, instances written, 0, 0]` for the raster draws |
 //! | `slice_dispatch_args` | storage write      | DispatchIndirectArgs | a workgroup per 64 instances written, `[x, y, 1]`, for the compute implementations |
 //! | `cluster_grid`        | storage write      | ClusterGrid | the grid of this frame, for the later stages |
+//! | `cluster_counts`      | storage write      | u32     | zeroed, every word: count_raster counts into it |
+//!
+//! `cluster_counts` is zeroed here, by the dispatch that resets the counters, rather than
+//! by a dispatch of count_raster's own: that was one more dependent step of the frame.
 //!
 //! `slice_counts`: `[0]` instances requested (may exceed the capacity), `[1]` the
 //! capacity, `[2]` invalid objects skipped, `[3]` objects culled (range 0, outside the
@@ -36,7 +40,7 @@
 //! | `far`               | 1000.0  | where the last slice ends; farther depths are in it |
 //! | `capacity`          | 0 (all of `slice_instances`) | instances the list may hold |
 //! | `quad_vertices`     | 4       | vertices per instance in the draw arguments: 4 (triangle strip) or 6 (list) |
-//! | `max_per_dimension` | 0 (the adapter's) | workgroup limit per dimension of the dispatches this pass sizes; objects past `64 × limit²` are not visited, nor instances past `limit²` in the dispatch arguments |
+//! | `max_per_dimension` | 0 (the adapter's) | workgroup limit per dimension of the dispatches this pass sizes; objects past `64 × limit²` are not visited, nor instances past `limit²` in the dispatch arguments; `prepare` zeroes `cluster_counts` with at most `limit` workgroups, each lane looping over every `64 × limit`-th word |
 //!
 //! # Definitions the tests pin down
 //!
@@ -139,6 +143,11 @@ pub fn contract() -> StageContract {
                 "a workgroup per 64 instances",
             ),
             write("cluster_grid", CLUSTER_GRID, "the grid of this frame"),
+            write(
+                "cluster_counts",
+                Element::U32,
+                "zeroed for count_raster to count into",
+            ),
         ],
     }
 }
@@ -324,6 +333,7 @@ impl Pass for ZSlice {
             .slot(3, "slice_counts")
             .slot(6, "cluster_grid")
             .scratch(7, "arrivals", Access::StorageReadWrite)
+            .slot(8, "cluster_counts")
             .uniform(10)
             .uniform(11);
         let slice = BindingLayout::compute("z_slice::slice")
@@ -369,6 +379,11 @@ impl Pass for ZSlice {
             objects.div_ceil(u64::from(WORKGROUP_SIZE)),
             max_per_dimension,
         );
+        // `prepare`: a lane per word of `cluster_counts` (grid-stride past the limit).
+        let (_, count_bytes) = ctx.buffer("cluster_counts")?;
+        let prepare_groups = (count_bytes / 4)
+            .div_ceil(u64::from(WORKGROUP_SIZE))
+            .clamp(1, u64::from(max_per_dimension)) as u32;
         let (view, grid, params) = (
             bytemuck::bytes_of(&view),
             bytemuck::bytes_of(&grid),
@@ -378,13 +393,14 @@ impl Pass for ZSlice {
         let slice = ctx.compute("slice")?;
         let prepare_group = ctx.bind_group(&prepare, 0, &[(10, grid), (11, params)])?;
         let slice_group = ctx.bind_group(&slice, 0, &[(9, view), (10, grid), (11, params)])?;
-        // Two dispatches: the counters are reset before any object counts; the arguments
-        // are written by the last workgroup of the second, once every object has counted.
+        // Two dispatches: the counters are reset (and the froxel counts zeroed) before any
+        // object counts; the arguments are written by the last workgroup of the second,
+        // once every object has counted.
         {
             let mut pass = ctx.compute_pass();
             pass.set_pipeline(&prepare.pipeline);
             pass.set_bind_group(0, &prepare_group, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
+            pass.dispatch_workgroups(prepare_groups, 1, 1);
         }
         let mut pass = ctx.compute_pass();
         pass.set_pipeline(&slice.pipeline);
@@ -475,6 +491,7 @@ mod tests {
             buffer("slice_draw_args", "exported", "DrawIndirectArgs", 16, 1),
             buffer("slice_dispatch_args", "exported", "DispatchIndirectArgs", 12, 1),
             buffer("cluster_grid", "exported", "ClusterGrid", 48, 1),
+            buffer("cluster_counts", "exported", "u32", 4, 64),
             format!(
                 "[[pass]]\nname = \"z_slice\"\nstage = \"z_slice\"\nimplementation = \"compute\"\nparams = {{ {params} }}\n"
             ),

@@ -1,6 +1,6 @@
 // Per clusterable object, the range of depth slices of the froxel grid its bounds touch,
 // appended as one instance per (object, slice) for the count and populate draws.
-// `prepare` (one thread) resets the counters and publishes the grid; `slice` runs one
+// `prepare` resets the counters, publishes the grid and zeroes count_raster's counts; `slice` runs one
 // thread per object of the bound list (a direct dispatch: its length is known on the
 // CPU), and its last workgroup to arrive turns the totals into draw and dispatch
 // arguments, so the stage is two dependent dispatches, neither indirect. `cpu::cpu_z_slice` (Rust) is the reference: every
@@ -43,6 +43,8 @@ struct SliceInstance {
 @group(0) @binding(6) var<storage, read_write> cluster_grid: ClusterGrid;
 // [0]: workgroups of `slice` that have added their counts; zeroed by `prepare`.
 @group(0) @binding(7) var<storage, read_write> arrivals: array<atomic<u32>>;
+// Per froxel and kind, count_raster's counts: zeroed by `prepare`.
+@group(0) @binding(8) var<storage, read_write> cluster_counts: array<u32>;
 @group(0) @binding(9) var<uniform> view: View;
 @group(0) @binding(10) var<uniform> grid: ClusterGrid;
 @group(0) @binding(11) var<uniform> params: Params;
@@ -179,8 +181,16 @@ fn object_extent(object: ClusterableObject) -> Extent {
     return Extent(OUTCOME_VISIBLE, depth - reach_near, far_depth);
 }
 
-@compute @workgroup_size(1)
-fn prepare() {
+// A lane per word of `cluster_counts` (grid-stride past the dispatch), which it zeroes;
+// the first lane also resets the counters and publishes the grid.
+@compute @workgroup_size(64)
+fn prepare(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    for (var i = id.x; i < arrayLength(&cluster_counts); i += groups.x * WORKGROUP_SIZE) {
+        cluster_counts[i] = 0u;
+    }
+    if id.x != 0u {
+        return;
+    }
     atomicStore(&arrivals[0], 0u);
     for (var i = 0u; i < COUNT_WORDS; i += 1u) {
         atomicStore(&slice_counts[i], 0u);

@@ -30,6 +30,8 @@ const SENTINEL: SliceInstance = SliceInstance {
 };
 /// Entries after the list that must keep the sentinel.
 const GUARD: u32 = 32;
+/// Words of the `cluster_counts` buffer `prepare` must zero (filled with garbage first).
+const FROXEL_COUNT_WORDS: u64 = 64 * 70 + 3;
 /// A pair the GPU and the reference decide differently must belong to an object whose
 /// deciding value lies within this relative distance of its threshold.
 const NEAR_THRESHOLD: f32 = 1e-5;
@@ -90,6 +92,12 @@ fn run(
         BufferDesc::array(Element::DISPATCH_ARGS, 1),
     );
     let grid = g.create_buffer("cluster_grid", BufferDesc::array(CLUSTER_GRID, 1));
+    // Not a multiple of the workgroup: every word, the last ones too, must be zeroed.
+    let froxel_counts = g.import_buffer(
+        "cluster_counts",
+        BufferDesc::array(Element::U32, FROXEL_COUNT_WORDS),
+        USAGE,
+    );
     let out = g
         .add_pass(
             "z_slice",
@@ -101,9 +109,11 @@ fn run(
                 .bind("slice_counts", counts)
                 .bind("slice_draw_args", draw)
                 .bind("slice_dispatch_args", dispatch)
-                .bind("cluster_grid", grid),
+                .bind("cluster_grid", grid)
+                .bind("cluster_counts", froxel_counts),
         )
         .unwrap();
+    g.export(out.buffer("cluster_counts").unwrap());
     for name in [
         "slice_instances",
         "slice_counts",
@@ -123,10 +133,16 @@ fn run(
         bytemuck::cast_slice(&vec![SENTINEL; entries as usize]),
         USAGE,
     );
+    let froxel_count_buffer = gpu.buffer_with_data(
+        "cluster_counts",
+        bytemuck::cast_slice(&vec![0xdead_beef_u32; FROXEL_COUNT_WORDS as usize]),
+        USAGE,
+    );
     let imports = Imports::new()
         .buffer("objects", &object_buffer)
         .buffer("object_count", &count_data)
-        .buffer("slice_instances", &list_buffer);
+        .buffer("slice_instances", &list_buffer)
+        .buffer("cluster_counts", &froxel_count_buffer);
     let mut exec = Executor::new(gpu);
     let frame = FrameData::new().with("view", bytemuck::bytes_of(view));
     exec.execute_frame(&compiled, &imports, &frame).unwrap();
@@ -142,6 +158,16 @@ fn run(
         .gpu
         .read_buffer(&list_buffer, 0, list_buffer.size())
         .unwrap();
+    let froxel_counts: Vec<u32> = bytemuck::pod_collect_to_vec(
+        &exec
+            .gpu
+            .read_buffer(&froxel_count_buffer, 0, froxel_count_buffer.size())
+            .unwrap(),
+    );
+    assert!(
+        froxel_counts.iter().all(|&w| w == 0),
+        "prepare left words of cluster_counts unzeroed"
+    );
     GpuSlices {
         list: bytemuck::pod_collect_to_vec(&list),
         counts: counts[..cpu::COUNT_WORDS].try_into().unwrap(),
