@@ -4,7 +4,7 @@
 //
 // `raster`: one quad per instance on a viewport of one pixel per tile, colour writes off;
 // the fragment shader tests and counts. `compute`: workgroups share their lanes out over
-// the tiles of 64 instances a round. Both call `count_froxel`, so they count the same pairs.
+// the tiles of their share of the instances (at most 64) a round. Both call `count_froxel`, so they count the same pairs.
 
 #import meshlight::view::View
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_index, CLUSTERABLE_TYPE_COUNT}
@@ -70,7 +70,8 @@ fn count_cs(
     @builtin(local_invocation_index) t: u32,
 ) {
     let written = instances_written();
-    // A direct dispatch of a fixed size: each workgroup walks 64 instances a round.
+    // A direct dispatch of a fixed size: each workgroup walks its share of the instances
+    // (at most 64) a round.
     let rounds = walk_rounds(groups, written);
     for (var round = 0u; round < rounds; round += 1u) {
         let instance = walk_instance(wg, groups, round, t, written);

@@ -44,7 +44,7 @@
 //!
 //! [`Raster`] (`raster`, an instanced indirect draw of a quad per instance, the fragment
 //! shader writes) and [`Compute`] (`compute`, a direct dispatch whose workgroups share
-//! their lanes out over the tiles of 64 instances a round),
+//! their lanes out over the tiles of their share of the instances, at most 64, a round),
 //! as in `count_raster`; pair each with the same implementation of that stage, so both
 //! stages decide every pair with the same code.
 
@@ -345,7 +345,7 @@ impl Pass for Compute {
         };
         let program = ctx.compute("populate")?;
         let group = steps.walk_group(ctx, &*program)?;
-        // count_raster's direct grid: 64 instances a workgroup a round.
+        // count_raster's direct grid: a share of at most 64 instances a workgroup a round.
         let [x, y] = meshlight_pass_count_raster::walk_grid(ctx, self.walk_groups)?;
         {
             let mut pass = ctx.compute_pass();

@@ -297,10 +297,11 @@ fn rect_tile(rect: TileRect, index: u32) -> vec2<u32> {
 
 // The compute walks share a workgroup's lanes out over the tiles of all its instances,
 // not a workgroup per instance: most rectangles hold a tile or two, and a workgroup per
-// instance left most lanes idle. A workgroup takes WALK_GROUP instances a round, the
-// rounds striding over the list by the whole grid's share (`walk_rounds`), so a direct
-// dispatch of a fixed size walks a list of any length and a workgroup past the instances
-// written leaves at once; a prefix sum of the tile counts lays the round's tiles out in
+// instance left most lanes idle. A workgroup takes `walk_share` instances a round: the
+// instances written shared out over the grid, so a short list spreads over every
+// workgroup (a few tiles per lane), but at most WALK_GROUP, so a direct dispatch of a
+// fixed size walks a long list in rounds (`walk_rounds`), each striding over the list by
+// the whole grid's share. A prefix sum of the tile counts lays the round's tiles out in
 // one run, and each lane walks every WALK_GROUP-th tile of it, finding the tile's
 // instance by binary search.
 const WALK_GROUP: u32 = 64u;
@@ -311,18 +312,26 @@ var<workgroup> walk_rects: array<TileRect, 64>;
 // walk_starts[k]: where lane k's tiles start in the run; [WALK_GROUP]: the total.
 var<workgroup> walk_starts: array<u32, 65>;
 
-// Rounds of WALK_GROUP instances per workgroup the grid `groups` takes to walk `written`
-// instances (the same in every workgroup: the loop around `walk_layout` stays uniform).
+// Instances each workgroup of the grid `groups` takes a round: `written` shared out over
+// the workgroups, 1 ..= WALK_GROUP.
+fn walk_share(groups: vec3<u32>, written: u32) -> u32 {
+    let n = groups.x * groups.y;
+    return clamp(written / n + select(0u, 1u, written % n != 0u), 1u, WALK_GROUP);
+}
+
+// Rounds the grid `groups` takes to walk `written` instances (the same in every
+// workgroup: the loop around `walk_layout` stays uniform).
 fn walk_rounds(groups: vec3<u32>, written: u32) -> u32 {
-    let per_round = groups.x * groups.y * WALK_GROUP;
+    let per_round = groups.x * groups.y * walk_share(groups, written);
     return written / per_round + select(0u, 1u, written % per_round != 0u);
 }
 
 // The instance lane `t` takes in round `round`, or `written` when it takes none.
 fn walk_instance(wg: vec3<u32>, groups: vec3<u32>, round: u32, t: u32, written: u32) -> u32 {
+    let share = walk_share(groups, written);
     let group = wg.y * groups.x + wg.x;
-    let first = (round * groups.x * groups.y + group) * WALK_GROUP;
-    if first < written && t < written - first {
+    let first = (round * groups.x * groups.y + group) * share;
+    if t < share && first < written && t < written - first {
         return first + t;
     }
     return written;
