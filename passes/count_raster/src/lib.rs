@@ -262,13 +262,15 @@ pub const WALK_GROUPS: u32 = 2048;
 
 /// The direct grid of a compute walk over the list bound to `slice_instances`: a
 /// workgroup per 64 instances the list can hold, at most `max_groups`. Each workgroup
-/// takes its share of the instances written a round, at most 64 (`walk_share` and
-/// `walk_rounds` in `meshlight::froxel`): a short list spreads over every workgroup, a
-/// long one is walked in rounds. No indirect dispatch: wgpu checks indirect arguments
+/// takes its share of the instances written a round, shared over the grid or 128
+/// workgroups of it, at most 64 (`walk_share` and `walk_rounds` in `meshlight::froxel`):
+/// a short list spreads over many workgroups, a long one is walked in rounds. No indirect dispatch: wgpu checks indirect arguments
 /// with a dispatch of its own, a dependent step. On the H200 a share of 64 from a
 /// 2,048-workgroup grid took the clustering from 0.061 to 0.051 ms at 100,000 lights and
 /// 0.179 to 0.164 ms at 1,000,000, but from 0.038 to 0.043 ms at 1,000 lights, where the
-/// few hundred instances then sat in a few workgroups; hence the spread for short lists.
+/// hundred or so instances then sat in two workgroups; hence the spread for short lists
+/// (over at most 128 workgroups: spread a few per workgroup over thousands, the walks
+/// of 100,000 lights were slower than 64 a workgroup).
 /// (Sharing over a grid sized for the whole capacity, with no cap, spread a long list a
 /// few instances per workgroup over tens of thousands: 0.177 against 0.049 ms for count
 /// at 1,000,000 lights.)

@@ -298,8 +298,9 @@ fn rect_tile(rect: TileRect, index: u32) -> vec2<u32> {
 // The compute walks share a workgroup's lanes out over the tiles of all its instances,
 // not a workgroup per instance: most rectangles hold a tile or two, and a workgroup per
 // instance left most lanes idle. A workgroup takes `walk_share` instances a round: the
-// instances written shared out over the grid, so a short list spreads over every
-// workgroup (a few tiles per lane), but at most WALK_GROUP, so a direct dispatch of a
+// instances written shared out over the grid (or WALK_SPREAD workgroups of it), so a
+// short list spreads over many workgroups (a few tiles per lane), but at most
+// WALK_GROUP, so a direct dispatch of a
 // fixed size walks a long list in rounds (`walk_rounds`), each striding over the list by
 // the whole grid's share. A prefix sum of the tile counts lays the round's tiles out in
 // one run, and each lane walks every WALK_GROUP-th tile of it, finding the tile's
@@ -312,10 +313,16 @@ var<workgroup> walk_rects: array<TileRect, 64>;
 // walk_starts[k]: where lane k's tiles start in the run; [WALK_GROUP]: the total.
 var<workgroup> walk_starts: array<u32, 65>;
 
+// Workgroups a list is spread over before each takes more than its share, about one per
+// SM of an H100 or H200 (132): on the H200, 63 workgroups of one or two instances
+// (1,000 lights) beat two of 64, but the list of 100,000 lights (over 9,000 instances) was
+// slower spread a few per workgroup over thousands than 64 each in a few hundred.
+const WALK_SPREAD: u32 = 128u;
+
 // Instances each workgroup of the grid `groups` takes a round: `written` shared out over
-// the workgroups, 1 ..= WALK_GROUP.
+// the workgroups, or over WALK_SPREAD of them when the grid is larger; 1 ..= WALK_GROUP.
 fn walk_share(groups: vec3<u32>, written: u32) -> u32 {
-    let n = groups.x * groups.y;
+    let n = min(groups.x * groups.y, WALK_SPREAD);
     return clamp(written / n + select(0u, 1u, written % n != 0u), 1u, WALK_GROUP);
 }
 
