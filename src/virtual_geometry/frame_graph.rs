@@ -32,12 +32,14 @@ use meshlight_gpu_scene::SceneData;
 use meshlight_gpu_scene::gpu::{
     buffer_lengths, elements, hierarchy_lengths, import_for, import_hierarchy_for,
 };
-use meshlight_pass_cull_lod::{CullLod, Mode, OCCLUSION_COUNT_WORDS, Thresholds};
+use meshlight_pass_cull_lod::{
+    CullLod, Mode, OCCLUSION_COUNT_WORDS, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND, Thresholds,
+};
 use meshlight_pass_depth_pyramid::DepthPyramid;
 use meshlight_pass_fill_clusters::{FillClusters, HierarchyFill};
 use meshlight_pass_hw_raster::{Feed, HwRaster};
 use meshlight_pass_remap_dispatch::RemapDispatch;
-use meshlight_pass_resolve::{DebugView, Resolve};
+use meshlight_pass_resolve::{DebugView, OCCLUDED_PER_INSTANCE, Resolve};
 use meshlight_pass_sw_raster::SwRaster;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -60,6 +62,10 @@ pub const CANDIDATE_COUNT: &str = "candidate_count";
 pub const SECOND_COUNTS: &str = "raster_counts_second";
 pub const SECOND_HW_ARGS: &str = "hw_args_second";
 pub const SECOND_SW_ARGS: &str = "sw_args_second";
+/// The per-instance occlusion counters (two words per instance), created only for the
+/// `occlusion` view: the first cull clears and fills them, the second updates them,
+/// resolve reads them (named unlike all three slots).
+pub const INSTANCE_OCCLUSION: &str = "instance_occlusion";
 
 /// What a frame is asked for; the same for both ways of building the graph.
 #[derive(Clone, Debug, PartialEq)]
@@ -268,12 +274,24 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         thresholds,
         ..CullLod::default()
     };
+    // The occlusion view's records: a clear and two atomics per cluster of the cut, so
+    // only that view pays for them.
+    let records = history.is_some() && s.view.needs_occlusion_records();
+    if records {
+        let words = data.instances.len().max(1) as u64 * 2;
+        g.create_buffer(INSTANCE_OCCLUSION, BufferDesc::array(Element::U32, words));
+    }
     let first = match &history {
         Some(h) => Bindings::new()
             .bind("pyramid", h.prev)
             .bind_named("occluded", CANDIDATES)
             .bind_named("occluded_count", CANDIDATE_COUNT),
         None => Bindings::new(),
+    };
+    let first = if records {
+        first.bind_named(PER_INSTANCE_FIRST, INSTANCE_OCCLUSION)
+    } else {
+        first
     };
     g.add_pass("cull", cull, first)?;
     let remap = RemapDispatch {
@@ -344,6 +362,11 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             .bind_named("first_counts", "raster_counts")
             .bind_named("raster_counts", SECOND_COUNTS)
             .bind_named("hw_args", SECOND_HW_ARGS);
+        let bindings = if records {
+            bindings.bind_named(PER_INSTANCE_SECOND, INSTANCE_OCCLUSION)
+        } else {
+            bindings
+        };
         g.add_pass("cull_second", second, bindings)?;
         let bindings = Bindings::new()
             .bind_named("count", SECOND_COUNTS)
@@ -368,7 +391,14 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     }
     let mut resolve = Resolve::new(width, height);
     resolve.settings.view = s.view;
-    g.add_pass("resolve", resolve, Bindings::new())?;
+    let bindings = if records {
+        Bindings::new()
+            .bind_named(meshlight_pass_resolve::SECOND_COUNTS, SECOND_COUNTS)
+            .bind_named(OCCLUDED_PER_INSTANCE, INSTANCE_OCCLUSION)
+    } else {
+        Bindings::new()
+    };
+    g.add_pass("resolve", resolve, bindings)?;
     if let Some(h) = history {
         // The frame's final depth, for the next frame's first pass.
         let bindings = Bindings::new()
