@@ -363,36 +363,44 @@ fn golden_image_of_the_occlusion_view() {
         view: DebugView::Occlusion,
         ..FrameSettings::new(320, 180)
     };
-    let mut r = Renderer::new(walled_scene(), settings, &GraphSource::Code)
-        .unwrap_or_else(|e| panic!("{e}"));
-    // Last frame the camera stood close to the wall (not told it was a cut) and the
-    // mover was behind it: this frame the second pass draws what last frame's depth hid
-    // and this frame's shows (the mover, out beside the wall, and the grid), and what
-    // the wall hides stays culled.
-    let look = |x: f32| {
-        Camera::perspective(
-            Vec3::new(x, 1.5, 14.0),
-            Vec3::new(0.0, 0.0, -3.0),
+    // The frame built in code, and the shipped pipeline file with the view's records
+    // added when it loads: the same two frames give the same image.
+    let mut stills = [GraphSource::Code, pipeline_file()].map(|source| {
+        let mut r = Renderer::new(walled_scene(), settings.clone(), &source)
+            .unwrap_or_else(|e| panic!("{e}"));
+        // Last frame the camera stood close to the wall (not told it was a cut) and the
+        // mover was behind it: this frame the second pass draws what last frame's depth hid
+        // and this frame's shows (the mover, out beside the wall, and the grid), and what
+        // the wall hides stays culled.
+        let look = |x: f32| {
+            Camera::perspective(
+                Vec3::new(x, 1.5, 14.0),
+                Vec3::new(0.0, 0.0, -3.0),
+                0.9,
+                0.05,
+            )
+        };
+        let near = Camera::perspective(
+            Vec3::new(0.0, 0.3, 4.0),
+            Vec3::new(0.0, 0.3, -3.0),
             0.9,
             0.05,
-        )
-    };
-    let near = Camera::perspective(
-        Vec3::new(0.0, 0.3, 4.0),
-        Vec3::new(0.0, 0.3, -3.0),
-        0.9,
-        0.05,
-    );
-    r.render_still(&near).unwrap_or_else(|e| panic!("{e}"));
-    r.set_transform(MOVER, mover_at(1.0)).unwrap();
-    let still = r.render_still(&look(0.0)).unwrap_or_else(|e| panic!("{e}"));
+        );
+        r.render_still(&near).unwrap_or_else(|e| panic!("{e}"));
+        r.set_transform(MOVER, mover_at(1.0)).unwrap();
+        r.render_still(&look(0.0)).unwrap_or_else(|e| panic!("{e}"))
+    });
+    let [still, file] = &mut stills;
+    assert_eq!(still.counts, file.counts);
+    assert_eq!(differing(&still.rgba, &file.rgba, 0), 0, "the file's image");
+    let still = &*still;
     let counts = still.counts.occlusion.expect("both passes' counters");
     eprintln!("{counts:?}");
     assert!(
         counts.second_drawn > 0 && counts.second_occluded > 0,
         "{counts:?}"
     );
-    check_golden("occlusion_view", &still);
+    check_golden("occlusion_view", still);
     // Covered pixels are first-pass green, second-pass blue or tinted towards red (red
     // above blue, which neither pass colour has): never the sky or the shaded colours.
     let covered: Vec<&[u8]> = still
