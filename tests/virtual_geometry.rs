@@ -317,7 +317,8 @@ fn golden_images_of_the_shaded_and_cluster_views() {
 }
 
 /// A wall of three layers of 3 × 2 flattened knots at z = 0 and a 5 × 4 grid of knots
-/// behind it, wider than the wall, and one more knot behind the wall's middle.
+/// behind it, wider than the wall, one more knot behind the wall's middle and two
+/// behind its edges.
 fn walled_scene() -> SceneData {
     let mut data = SceneData::new(Limits::default());
     let material = data.add_material(Material {
@@ -344,6 +345,14 @@ fn walled_scene() -> SceneData {
     }
     // The mover, behind the wall's middle until the test moves it out.
     place(mover_at(0.0));
+    // Half behind the wall's edge: partly culled for good.
+    for x in [-2.4, 2.4] {
+        place(Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.9),
+            Quat::from_rotation_x(x),
+            Vec3::new(x, 0.2, -1.6),
+        ));
+    }
     data
 }
 
@@ -416,13 +425,16 @@ fn golden_image_of_the_occlusion_view() {
         .iter()
         .filter(|c| c[2] > c[0] && c[2] > c[1])
         .count();
+    let tinted = covered.iter().filter(|c| c[0] > c[2]).count();
     eprintln!(
-        "{pass_coloured} of {} covered pixels, {second} drawn by the second pass",
+        "{pass_coloured} of {} covered pixels, {second} drawn by the second pass, {tinted} tinted",
         covered.len()
     );
     assert!(covered.len() > 1000 && pass_coloured == covered.len());
-    // What moved out from behind the wall is the second pass's.
+    // What moved out from behind the wall is the second pass's; the knots behind its
+    // edges are partly culled and tinted.
     assert!(second > 50, "{second} second-pass pixels");
+    assert!(tinted > 50, "{tinted} tinted pixels");
 }
 
 #[test]
