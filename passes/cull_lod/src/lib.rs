@@ -573,6 +573,11 @@ mod tests {
 
     /// Builds a one-pass pipeline with `params` for the pass (`{ … }` contents).
     fn pipeline(params: &str) -> Result<()> {
+        pipeline_with(params, &[]).map(drop)
+    }
+
+    /// The same with more u32 buffers, which bind to the slots of their names.
+    fn pipeline_with(params: &str, extra: &[&str]) -> Result<meshlight_graph::GraphBuilder> {
         let mut registry = Registry::new();
         register(&mut registry);
         let buffer = |name: &str, kind: &str, element: &str, size: u32, count: u32| {
@@ -595,12 +600,16 @@ mod tests {
             buffer("raster_clusters", "exported", "Cluster", 8, 16),
             buffer("raster_counts", "exported", "u32", 4, 8),
             buffer("hw_args", "exported", "DrawIndirectArgs", 16, 1),
+            extra
+                .iter()
+                .map(|name| buffer(name, "exported", "u32", 4, 2))
+                .collect(),
             format!(
                 "[[pass]]\nname = \"cull\"\nstage = \"cull_lod\"\nimplementation = \"compute\"\nparams = {{ {params} }}\n"
             ),
         ]
         .concat();
-        meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry).map(drop)
+        meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry)
     }
 
     #[test]
@@ -629,6 +638,28 @@ mod tests {
                     assert!(message.contains(key), "{bad}: {message}")
                 }
                 other => panic!("{bad}: {:?}", other.err()),
+            }
+        }
+    }
+
+    #[test]
+    fn per_instance_counters_need_a_pyramid_and_the_slot_of_their_mode() {
+        for (extra, wanted) in [
+            // Without a pyramid nothing is culled by occlusion: nothing to count.
+            (PER_INSTANCE_FIRST, "no `pyramid`"),
+            // The second pass's slot bound to a first pass.
+            (
+                PER_INSTANCE_SECOND,
+                "`still_occluded_per_instance` is bound",
+            ),
+        ] {
+            // Setup runs when the graph compiles (planning needs no device).
+            let options = meshlight_graph::CompileOptions::new(wgpu::Features::empty());
+            match pipeline_with("", &[extra]).and_then(|g| g.compile(&options)) {
+                Err(GraphError::Parameter { message, .. }) => {
+                    assert!(message.contains(wanted), "{extra}: {message}")
+                }
+                other => panic!("{extra}: {:?}", other.err()),
             }
         }
     }
