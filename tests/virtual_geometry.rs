@@ -367,6 +367,34 @@ fn mover_at(t: f32) -> Mat4 {
 }
 
 #[test]
+fn a_still_of_the_occlusion_view_culls_against_a_history() {
+    let settings = FrameSettings {
+        view: DebugView::Occlusion,
+        ..FrameSettings::new(320, 180)
+    };
+    let camera = Camera::perspective(
+        Vec3::new(0.0, 1.5, 14.0),
+        Vec3::new(0.0, 0.0, -3.0),
+        0.9,
+        0.05,
+    );
+    let mut r = Renderer::new(walled_scene(), settings.clone(), &GraphSource::Code)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let still = r.render_still(&camera).unwrap_or_else(|e| panic!("{e}"));
+    let counts = still.counts.occlusion.expect("both passes' counters");
+    assert!(counts.first_occluded > 0, "{counts:?}");
+    // Other views keep the first frame.
+    let shaded = FrameSettings {
+        view: DebugView::Shaded,
+        ..settings
+    };
+    let mut r =
+        Renderer::new(walled_scene(), shaded, &GraphSource::Code).unwrap_or_else(|e| panic!("{e}"));
+    let still = r.render_still(&camera).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(still.counts.occlusion.map(|c| c.first_tested), Some(0));
+}
+
+#[test]
 fn golden_image_of_the_occlusion_view() {
     let settings = FrameSettings {
         view: DebugView::Occlusion,
