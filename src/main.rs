@@ -54,7 +54,8 @@ struct RenderArgs {
     pipeline: Option<PathBuf>,
     /// What the image shows. `occlusion`: green where the first culling pass drew the
     /// cluster, blue where the second did, redder the more of the instance occlusion
-    /// culled (a still is the first frame, with no history to cull against: all green).
+    /// culled (a still renders one frame before, so the frame has a history to cull
+    /// against).
     #[arg(long, default_value = "shaded", value_parser = parse_view)]
     view: meshlight::resolve::DebugView,
     #[arg(long, default_value_t = 1280)]
