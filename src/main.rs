@@ -52,7 +52,10 @@ struct RenderArgs {
     /// pipelines/virtual_geometry.toml or your own composition of the same resources.
     #[arg(long)]
     pipeline: Option<PathBuf>,
-    /// What the image shows.
+    /// What the image shows. `occlusion`: green where the first culling pass drew the
+    /// cluster, blue where the second did, redder the more of the instance occlusion
+    /// culled (a still renders one frame before, so the frame has a history to cull
+    /// against).
     #[arg(long, default_value = "shaded", value_parser = parse_view)]
     view: meshlight::resolve::DebugView,
     #[arg(long, default_value_t = 1280)]

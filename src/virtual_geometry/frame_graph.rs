@@ -32,12 +32,14 @@ use meshlight_gpu_scene::SceneData;
 use meshlight_gpu_scene::gpu::{
     buffer_lengths, elements, hierarchy_lengths, import_for, import_hierarchy_for,
 };
-use meshlight_pass_cull_lod::{CullLod, Mode, OCCLUSION_COUNT_WORDS, Thresholds};
+use meshlight_pass_cull_lod::{
+    CullLod, Mode, OCCLUSION_COUNT_WORDS, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND, Thresholds,
+};
 use meshlight_pass_depth_pyramid::DepthPyramid;
 use meshlight_pass_fill_clusters::{FillClusters, HierarchyFill};
 use meshlight_pass_hw_raster::{Feed, HwRaster};
 use meshlight_pass_remap_dispatch::RemapDispatch;
-use meshlight_pass_resolve::{DebugView, Resolve};
+use meshlight_pass_resolve::{DebugView, OCCLUDED_PER_INSTANCE, Resolve};
 use meshlight_pass_sw_raster::SwRaster;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -60,6 +62,10 @@ pub const CANDIDATE_COUNT: &str = "candidate_count";
 pub const SECOND_COUNTS: &str = "raster_counts_second";
 pub const SECOND_HW_ARGS: &str = "hw_args_second";
 pub const SECOND_SW_ARGS: &str = "sw_args_second";
+/// The per-instance occlusion counters (two words per instance), created only for the
+/// `occlusion` view: the first cull clears and fills them, the second updates them,
+/// resolve reads them (named unlike all three slots).
+pub const INSTANCE_OCCLUSION: &str = "instance_occlusion";
 
 /// What a frame is asked for; the same for both ways of building the graph.
 #[derive(Clone, Debug, PartialEq)]
@@ -268,12 +274,24 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         thresholds,
         ..CullLod::default()
     };
+    // The occlusion view's records: a clear and two atomics per cluster of the cut, so
+    // only that view pays for them.
+    let records = history.is_some() && s.view.needs_occlusion_records();
+    if records {
+        let words = data.instances.len().max(1) as u64 * 2;
+        g.create_buffer(INSTANCE_OCCLUSION, BufferDesc::array(Element::U32, words));
+    }
     let first = match &history {
         Some(h) => Bindings::new()
             .bind("pyramid", h.prev)
             .bind_named("occluded", CANDIDATES)
             .bind_named("occluded_count", CANDIDATE_COUNT),
         None => Bindings::new(),
+    };
+    let first = if records {
+        first.bind_named(PER_INSTANCE_FIRST, INSTANCE_OCCLUSION)
+    } else {
+        first
     };
     g.add_pass("cull", cull, first)?;
     let remap = RemapDispatch {
@@ -344,6 +362,11 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             .bind_named("first_counts", "raster_counts")
             .bind_named("raster_counts", SECOND_COUNTS)
             .bind_named("hw_args", SECOND_HW_ARGS);
+        let bindings = if records {
+            bindings.bind_named(PER_INSTANCE_SECOND, INSTANCE_OCCLUSION)
+        } else {
+            bindings
+        };
         g.add_pass("cull_second", second, bindings)?;
         let bindings = Bindings::new()
             .bind_named("count", SECOND_COUNTS)
@@ -368,7 +391,14 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     }
     let mut resolve = Resolve::new(width, height);
     resolve.settings.view = s.view;
-    g.add_pass("resolve", resolve, Bindings::new())?;
+    let bindings = if records {
+        Bindings::new()
+            .bind_named(meshlight_pass_resolve::SECOND_COUNTS, SECOND_COUNTS)
+            .bind_named(OCCLUDED_PER_INSTANCE, INSTANCE_OCCLUSION)
+    } else {
+        Bindings::new()
+    };
+    g.add_pass("resolve", resolve, bindings)?;
     if let Some(h) = history {
         // The frame's final depth, for the next frame's first pass.
         let bindings = Bindings::new()
@@ -403,7 +433,7 @@ pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBui
         file: file.clone(),
         message: format!("cannot read it: {e}"),
     })?;
-    let text = with_view(&text, &file, s)?;
+    let text = with_view(&text, &file, s, data.instances.len())?;
     let mut params = overrides(data, s);
     // A file without a depth pyramid (one culling pass) does not declare its size, nor
     // one whose `fill` visits every cluster the hierarchy's.
@@ -453,8 +483,10 @@ pub const PYRAMID_HEIGHT_PARAM: &str = "pyramid_height";
 
 /// The file's text with `view` set in the params of every pass of stage `resolve`, and
 /// the mip count of the pyramid textures (those sized by `pyramid_width`) set for the
-/// viewport, which the file format cannot derive from a parameter.
-fn with_view(text: &str, file: &str, s: &FrameSettings) -> Result<String> {
+/// viewport, which the file format cannot derive from a parameter. For the `occlusion`
+/// view of a two-pass file, the view's records are bound as in the frame built in code
+/// (see [`with_occlusion_records`]).
+fn with_view(text: &str, file: &str, s: &FrameSettings, instances: usize) -> Result<String> {
     let view = s.view;
     let ferr = |message: String| GraphError::PipelineFile {
         file: file.to_string(),
@@ -485,7 +517,91 @@ fn with_view(text: &str, file: &str, s: &FrameSettings) -> Result<String> {
             params.insert("view".into(), toml::Value::String(view.name().into()));
         }
     }
+    if view.needs_occlusion_records() {
+        with_occlusion_records(&mut doc, instances).map_err(ferr)?;
+    }
     toml::to_string(&doc).map_err(|e| ferr(e.to_string()))
+}
+
+/// Adds the `occlusion` view's records to a two-pass file (one with a `cull_lod` pass of
+/// `mode = "second"`; others are left as they are): a transient [`INSTANCE_OCCLUSION`]
+/// buffer of two words per instance, bound to the first cull (the one with a `pyramid`)
+/// as `occluded_per_instance`, to the second as `still_occluded_per_instance`, and to
+/// every `resolve` as `occluded_per_instance`, with the second cull's `raster_counts` as
+/// resolve's `second_counts`. The shipped file leaves them out: they cost a clear and two
+/// atomics per cluster of the cut that no other view reads.
+fn with_occlusion_records(
+    doc: &mut toml::Table,
+    instances: usize,
+) -> std::result::Result<(), String> {
+    let str_of =
+        |t: &toml::Table, key: &str| t.get(key).and_then(toml::Value::as_str).map(String::from);
+    let Some(toml::Value::Array(passes)) = doc.get_mut("pass") else {
+        return Ok(());
+    };
+    let mode = |pass: &toml::Table| {
+        pass.get("params")
+            .and_then(toml::Value::as_table)
+            .and_then(|p| str_of(p, "mode"))
+    };
+    let is_cull = |pass: &toml::Table| {
+        str_of(pass, "stage").as_deref() == Some(meshlight_pass_cull_lod::STAGE)
+    };
+    let Some(second_counts) = passes
+        .iter()
+        .filter_map(toml::Value::as_table)
+        .find(|p| is_cull(p) && mode(p).as_deref() == Some("second"))
+        .map(|p| {
+            p.get("bind")
+                .and_then(toml::Value::as_table)
+                .and_then(|b| str_of(b, "raster_counts"))
+                .unwrap_or_else(|| "raster_counts".into())
+        })
+    else {
+        return Ok(());
+    };
+    for pass in passes.iter_mut().filter_map(toml::Value::as_table_mut) {
+        let stage = str_of(pass, "stage");
+        let second = mode(pass).as_deref() == Some("second");
+        let binds_pyramid = pass
+            .get("bind")
+            .and_then(toml::Value::as_table)
+            .is_some_and(|b| b.contains_key("pyramid"));
+        let slots: Vec<(&str, String)> = match stage.as_deref() {
+            Some(meshlight_pass_cull_lod::STAGE) if second => {
+                vec![(PER_INSTANCE_SECOND, INSTANCE_OCCLUSION.into())]
+            }
+            Some(meshlight_pass_cull_lod::STAGE) if binds_pyramid => {
+                vec![(PER_INSTANCE_FIRST, INSTANCE_OCCLUSION.into())]
+            }
+            Some(meshlight_pass_resolve::STAGE) => vec![
+                (meshlight_pass_resolve::SECOND_COUNTS, second_counts.clone()),
+                (OCCLUDED_PER_INSTANCE, INSTANCE_OCCLUSION.into()),
+            ],
+            _ => continue,
+        };
+        let bind = pass
+            .entry("bind")
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+            .ok_or("a pass's `bind` is not a table")?;
+        for (slot, resource) in slots {
+            bind.insert(slot.into(), toml::Value::String(resource));
+        }
+    }
+    let resource: toml::Table = toml::from_str(&format!(
+        "name = \"{INSTANCE_OCCLUSION}\"\nkind = \"transient\"\nbuffer = {{ element = \"u32\", count = {} }}\n",
+        instances.max(1) * 2
+    ))
+    .map_err(|e| e.to_string())?;
+    match doc
+        .entry("resource")
+        .or_insert_with(|| toml::Value::Array(Vec::new()))
+    {
+        toml::Value::Array(resources) => resources.push(toml::Value::Table(resource)),
+        _ => return Err("`resource` is not an array of tables".into()),
+    }
+    Ok(())
 }
 
 /// The counters come back [`COUNTS_LATENCY`] frames later; the graph needs resources

@@ -247,8 +247,16 @@ impl Renderer {
     }
 
     /// Renders until a frame drops no cluster (at most [`MAX_STILL_FRAMES`]), waiting for
-    /// each, and returns that frame's image, statistics and counters.
+    /// each, and returns that frame's image, statistics and counters. The `occlusion`
+    /// view of a two-pass frame first renders one frame more when nothing was rendered
+    /// yet, so the image shows what the frame culls against its own history rather than
+    /// a first frame, which has none.
     pub fn render_still(&mut self, camera: &Camera) -> Result<Still> {
+        if self.two_pass && self.settings.view.needs_occlusion_records() && self.frame_index == 0 {
+            let submitted = self.frame(camera)?.frame;
+            crate::still::finish(&mut self.executor, submitted)?;
+            self.take_counts()?;
+        }
         let mut attempt = 0;
         loop {
             attempt += 1;

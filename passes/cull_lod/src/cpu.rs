@@ -444,3 +444,30 @@ pub fn cpu_cull_with(
     r.hw_args = [HW_VERTICES, r.counts[1], 0, 0];
     r
 }
+
+/// The per-instance occlusion counters after a first pass (`first`) and, if one ran, a
+/// second (`second`, over the first's `occluded`): per instance `i` of `instances`,
+/// `[2i]` the first pass's LOD cut (drawn or not, hidden or not) and `[2i + 1]` the
+/// clusters it found hidden less those the second pass found visible.
+pub fn occluded_per_instance(
+    first: &CullResult,
+    second: Option<&CullResult>,
+    instances: usize,
+) -> Vec<u32> {
+    let mut words = vec![0u32; instances * 2];
+    let mut add = |clusters: &[Cluster], word: usize, delta: i64| {
+        for c in clusters {
+            let at = c.instance as usize * 2 + word;
+            if at < words.len() {
+                words[at] = (words[at] as i64 + delta) as u32;
+            }
+        }
+    };
+    add(&first.cut, 0, 1);
+    add(&first.occluded, 0, 1);
+    add(&first.occluded, 1, 1);
+    if let Some(second) = second {
+        add(&second.cut, 1, -1);
+    }
+    words
+}

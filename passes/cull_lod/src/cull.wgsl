@@ -72,6 +72,16 @@ struct Params {
 // second pass takes it as its count.
 @group(0) @binding(14) var<storage, read_write> occluded_count: array<atomic<u32>>;
 #endif
+#ifdef PER_INSTANCE
+// Per instance i: [2i] clusters of the first pass's LOD cut, [2i + 1] of those hidden;
+// the first pass adds to both (from zero), the second takes back the ones it finds
+// visible, so after both passes [2i + 1] counts what occlusion culled.
+@group(0) @binding(16) var<storage, read_write> per_instance: array<atomic<u32>>;
+
+fn per_instance_word(instance: u32, word: u32) -> u32 {
+    return instance * 2u + word;
+}
+#endif
 #endif
 
 const WORKGROUP_SIZE: u32 = 64u;
@@ -229,8 +239,24 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
 
 #ifdef OCCLUSION
     atomicAdd(&raster_counts[8], 1u);
+#ifdef PER_INSTANCE
+    let at = per_instance_word(cluster.instance, 0u);
+    let in_bounds = at + 1u < arrayLength(&per_instance);
+#ifndef SECOND_PASS
+    if in_bounds {
+        atomicAdd(&per_instance[at], 1u);
+    }
+#endif
+#endif
     if params.test_occlusion != 0u && is_occluded(instance, bounds) {
         atomicAdd(&raster_counts[9], 1u);
+#ifdef PER_INSTANCE
+#ifndef SECOND_PASS
+        if in_bounds {
+            atomicAdd(&per_instance[at + 1u], 1u);
+        }
+#endif
+#endif
 #ifndef SECOND_PASS
         let k = atomicAdd(&occluded_count[1], 1u);
         if k < arrayLength(&occluded) {
@@ -240,6 +266,13 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
 #endif
         return;
     }
+#ifdef PER_INSTANCE
+#ifdef SECOND_PASS
+    if in_bounds {
+        atomicSub(&per_instance[at + 1u], 1u);
+    }
+#endif
+#endif
     let range = slot_range();
     let software = params.hardware == 0u || is_software(center, radius);
 #else

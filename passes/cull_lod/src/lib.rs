@@ -26,6 +26,8 @@
 //! | `occluded`        | storage write (optional) | Cluster | `first` with a pyramid: the clusters found hidden, the second pass's candidates |
 //! | `occluded_count`  | cleared read-write (optional) | u32 × 2 | `first` with a pyramid: `[0]` candidates written, `[1]` found (`cluster_count`'s layout) |
 //! | `first_counts`    | storage read (optional) | u32 × 12 | `second`: the first pass's `raster_counts` |
+//! | `occluded_per_instance` | cleared read-write (optional) | u32 × 2 per instance | `first` with a pyramid: `[2i]` clusters of instance `i` in the LOD cut, `[2i + 1]` of those found hidden |
+//! | `still_occluded_per_instance` | storage read-write (optional) | u32 × 2 per instance | `second`: the same buffer; `[2i + 1]` less each candidate found visible |
 //!
 //! `raster_counts`: `[0]` software clusters, `[1]` hardware clusters, `[2]` clusters
 //! that passed frustum, LOD and occlusion (slots requested, may exceed the slots the
@@ -60,6 +62,18 @@
 //! `accumulate` starts), hardware from the right (its `raster_counts[3]` is `C - hw1`,
 //! so `hw_raster` bound to its `raster_counts` and `hw_args` draws instance `j` into
 //! slot `C - hw1 - 1 - j`). Every visibility id of the frame indexes one list.
+//!
+//! # Per-instance occlusion counters (for the `occlusion` debug view)
+//!
+//! With `occluded_per_instance` bound, the first pass clears it (a fill inside the
+//! batch) and, per cluster of instance `i` in the LOD cut, adds 1 to `[2i]` and, when
+//! the pyramid hides it, 1 to `[2i + 1]`. The second pass, given the same buffer as
+//! `still_occluded_per_instance`, subtracts 1 from `[2i + 1]` per candidate it finds
+//! visible. After both, `[2i + 1]` is what occlusion culled of instance `i` this
+//! frame and `[2i + 1] / [2i]` its share, which `resolve`'s `occlusion` view shows.
+//! Instances past the buffer's length are not counted. Two atomics per cluster of the
+//! cut plus a clear: a frame binds the buffer only for that view.
+//! [`cpu::occluded_per_instance`] is the reference.
 //!
 //! The candidates are a list, not a bitmask over the first pass's input: the second
 //! pass then runs over the candidates alone (usually a few per cent of the cut), not over
@@ -135,6 +149,13 @@ pub const CAMERA_CUT_INPUT: &str = "camera_cut";
 pub const PYRAMID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 /// Words of `raster_counts` with occlusion (8 without).
 pub const OCCLUSION_COUNT_WORDS: u64 = 12;
+/// The first pass's per-instance counter slot (see the crate docs).
+pub const PER_INSTANCE_FIRST: &str = "occluded_per_instance";
+/// The second pass's slot for the same buffer, read-write and not cleared.
+pub const PER_INSTANCE_SECOND: &str = "still_occluded_per_instance";
+/// The binding of the per-instance counters in cull.wgsl.
+const PER_INSTANCE_BINDING: u32 = 16;
+
 /// Threads per cull workgroup.
 pub const WORKGROUP_SIZE: u32 = 64;
 
@@ -205,6 +226,20 @@ pub fn contract() -> StageContract {
                 "second pass: the first pass's raster_counts",
             )
             .optional(),
+            Slot::buffer(
+                PER_INSTANCE_FIRST,
+                Access::ClearedReadWrite,
+                Element::U32,
+                "first pass: per instance [2i] clusters in the LOD cut, [2i+1] found hidden",
+            )
+            .optional(),
+            Slot::buffer(
+                PER_INSTANCE_SECOND,
+                Access::StorageReadWrite,
+                Element::U32,
+                "second pass: the first pass's per-instance counters; [2i+1] less the candidates drawn",
+            )
+            .optional(),
         ],
     }
 }
@@ -235,6 +270,8 @@ pub struct CullDefs {
     pub occlusion: bool,
     /// `SECOND_PASS`: [`Mode::Second`].
     pub second: bool,
+    /// `PER_INSTANCE`: the per-instance occlusion counters are bound.
+    pub per_instance: bool,
 }
 
 impl ShaderDefs for CullDefs {
@@ -242,6 +279,7 @@ impl ShaderDefs for CullDefs {
         vec![
             ("OCCLUSION", ShaderDef::Bool(self.occlusion)),
             ("SECOND_PASS", ShaderDef::Bool(self.second)),
+            ("PER_INSTANCE", ShaderDef::Bool(self.per_instance)),
         ]
     }
 }
@@ -337,6 +375,34 @@ impl CullLod {
         }
     }
 
+    /// The per-instance counter slot this pass uses, if bound: `occluded_per_instance`
+    /// in a first pass with a pyramid, `still_occluded_per_instance` in a second.
+    fn per_instance_slot(
+        &self,
+        ctx: &SetupContext,
+        occlusion: bool,
+    ) -> Result<Option<&'static str>> {
+        let (mine, other) = match self.mode {
+            Mode::First => (PER_INSTANCE_FIRST, PER_INSTANCE_SECOND),
+            Mode::Second => (PER_INSTANCE_SECOND, PER_INSTANCE_FIRST),
+        };
+        if ctx.is_bound(other) {
+            return Err(GraphError::parameter(format!(
+                "`{other}` is bound to a `mode = \"{}\"` pass, which counts per instance in `{mine}`; a first pass clears and fills `{PER_INSTANCE_FIRST}`, the second updates the same buffer as `{PER_INSTANCE_SECOND}` (name the resource unlike both slots, or the second pass binds it by name)",
+                self.mode.name()
+            )));
+        }
+        if !ctx.is_bound(mine) {
+            return Ok(None);
+        }
+        if !occlusion {
+            return Err(GraphError::parameter(format!(
+                "`{mine}` counts what occlusion culls, and this pass has no `pyramid` bound; bind one or unbind `{mine}`"
+            )));
+        }
+        Ok(Some(mine))
+    }
+
     fn check_thresholds(&self) -> Result<()> {
         for (key, v) in [
             ("lod_threshold_px", self.thresholds.lod_threshold_px),
@@ -371,7 +437,12 @@ impl Pass for CullLod {
         }
         let occlusion = self.check_mode(ctx)?;
         let second = self.mode == Mode::Second;
-        let defs = CullDefs { occlusion, second };
+        let per_instance = self.per_instance_slot(ctx, occlusion)?;
+        let defs = CullDefs {
+            occlusion,
+            second,
+            per_instance: per_instance.is_some(),
+        };
         ctx.shader_defs(&defs);
         ctx.min_bytes("cluster_count", 4);
         let words = if occlusion { OCCLUSION_COUNT_WORDS } else { 8 };
@@ -419,6 +490,9 @@ impl Pass for CullLod {
                 prepare = prepare.slot(14, "occluded_count");
                 cull = cull.slot(13, "occluded").slot(14, "occluded_count");
             }
+            if let Some(slot) = per_instance {
+                cull = cull.slot(PER_INSTANCE_BINDING, slot);
+            }
         }
         ctx.program(
             "prepare",
@@ -464,6 +538,9 @@ impl Pass for CullLod {
                 (11, bytemuck::bytes_of(&params)),
             ],
         )?;
+        if self.mode == Mode::First && ctx.is_bound(PER_INSTANCE_FIRST) {
+            ctx.clear(PER_INSTANCE_FIRST)?;
+        }
         let (dispatch, _) = ctx.scratch("dispatch")?;
         {
             let mut pass = ctx.compute_pass();
@@ -496,6 +573,11 @@ mod tests {
 
     /// Builds a one-pass pipeline with `params` for the pass (`{ … }` contents).
     fn pipeline(params: &str) -> Result<()> {
+        pipeline_with(params, &[]).map(drop)
+    }
+
+    /// The same with more u32 buffers, which bind to the slots of their names.
+    fn pipeline_with(params: &str, extra: &[&str]) -> Result<meshlight_graph::GraphBuilder> {
         let mut registry = Registry::new();
         register(&mut registry);
         let buffer = |name: &str, kind: &str, element: &str, size: u32, count: u32| {
@@ -518,12 +600,16 @@ mod tests {
             buffer("raster_clusters", "exported", "Cluster", 8, 16),
             buffer("raster_counts", "exported", "u32", 4, 8),
             buffer("hw_args", "exported", "DrawIndirectArgs", 16, 1),
+            extra
+                .iter()
+                .map(|name| buffer(name, "exported", "u32", 4, 2))
+                .collect(),
             format!(
                 "[[pass]]\nname = \"cull\"\nstage = \"cull_lod\"\nimplementation = \"compute\"\nparams = {{ {params} }}\n"
             ),
         ]
         .concat();
-        meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry).map(drop)
+        meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry)
     }
 
     #[test]
@@ -552,6 +638,28 @@ mod tests {
                     assert!(message.contains(key), "{bad}: {message}")
                 }
                 other => panic!("{bad}: {:?}", other.err()),
+            }
+        }
+    }
+
+    #[test]
+    fn per_instance_counters_need_a_pyramid_and_the_slot_of_their_mode() {
+        for (extra, wanted) in [
+            // Without a pyramid nothing is culled by occlusion: nothing to count.
+            (PER_INSTANCE_FIRST, "no `pyramid`"),
+            // The second pass's slot bound to a first pass.
+            (
+                PER_INSTANCE_SECOND,
+                "`still_occluded_per_instance` is bound",
+            ),
+        ] {
+            // Setup runs when the graph compiles (planning needs no device).
+            let options = meshlight_graph::CompileOptions::new(wgpu::Features::empty());
+            match pipeline_with("", &[extra]).and_then(|g| g.compile(&options)) {
+                Err(GraphError::Parameter { message, .. }) => {
+                    assert!(message.contains(wanted), "{extra}: {message}")
+                }
+                other => panic!("{extra}: {:?}", other.err()),
             }
         }
     }

@@ -13,7 +13,10 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::{Camera, GpuScene, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_cull_lod::cpu::{self, HW_VERTICES, Occlusion};
-use meshlight_pass_cull_lod::{CAMERA_CUT_INPUT, CullLod, CullResult, Mode, Thresholds};
+use meshlight_pass_cull_lod::{
+    CAMERA_CUT_INPUT, CullLod, CullResult, Mode, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND,
+    Thresholds,
+};
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
 use std::collections::BTreeSet;
@@ -148,6 +151,8 @@ struct Frame {
     candidate_count: [u32; 2],
     second: [u32; 12],
     second_hw_args: [u32; 4],
+    /// The per-instance counters after both passes.
+    per_instance: Vec<u32>,
 }
 
 impl Harness {
@@ -173,6 +178,11 @@ impl Harness {
         let occluded = g.create_buffer("candidates", BufferDesc::array(elements::CLUSTER, n));
         let occluded_count = g.create_buffer("candidate_count", BufferDesc::array(Element::U32, 2));
         let counts2 = g.create_buffer("raster_counts_second", words);
+        // Named unlike both of its slots, for the same reason.
+        let per_instance = g.create_buffer(
+            "instance_occlusion",
+            BufferDesc::array(Element::U32, data.instances.len() as u64 * 2),
+        );
         let hw_args2 = g.create_buffer("hw_args_second", args);
         let (desc, levels) = pyramid_desc();
         let usage = wgpu::TextureUsages::TEXTURE_BINDING
@@ -204,7 +214,8 @@ impl Harness {
                     .bind("hw_args", hw_args)
                     .bind("pyramid", history.prev)
                     .bind("occluded", occluded)
-                    .bind("occluded_count", occluded_count),
+                    .bind("occluded_count", occluded_count)
+                    .bind(PER_INSTANCE_FIRST, per_instance),
             )
             .unwrap();
         let second = CullLod {
@@ -223,7 +234,8 @@ impl Harness {
                     .bind("raster_counts", counts2)
                     .bind("hw_args", hw_args2)
                     .bind("pyramid", now_handle)
-                    .bind("first_counts", out.buffer("raster_counts").unwrap()),
+                    .bind("first_counts", out.buffer("raster_counts").unwrap())
+                    .bind(PER_INSTANCE_SECOND, out.buffer(PER_INSTANCE_FIRST).unwrap()),
             )
             .unwrap();
         let copy = CopyPyramid {
@@ -244,6 +256,7 @@ impl Harness {
         g.export(out2.buffer("raster_counts").unwrap());
         g.export(out2.buffer("hw_args").unwrap());
         g.export(out2.buffer("raster_clusters").unwrap());
+        g.export(out2.buffer(PER_INSTANCE_SECOND).unwrap());
         let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
         let clusters_buffer =
             gpu.buffer_with_data("clusters", bytemuck::cast_slice(clusters), USAGE);
@@ -318,6 +331,7 @@ impl Harness {
         let candidate_count = words(&mut self.exec, "candidate_count");
         let second = words(&mut self.exec, "raster_counts_second");
         let second_hw_args = words(&mut self.exec, "hw_args_second");
+        let per_instance = words(&mut self.exec, "instance_occlusion");
         let raster = self
             .exec
             .gpu
@@ -333,6 +347,7 @@ impl Harness {
             candidate_count: candidate_count[..2].try_into().unwrap(),
             second: second[..12].try_into().unwrap(),
             second_hw_args: second_hw_args[..4].try_into().unwrap(),
+            per_instance,
         }
     }
 }
@@ -391,6 +406,27 @@ fn second_lists(f: &Frame) -> (Vec<Cluster>, Vec<Cluster>) {
 fn second_list(f: &Frame) -> Vec<Cluster> {
     let (software, hardware) = second_lists(f);
     [software, hardware].concat()
+}
+
+/// The per-instance counters against the reference over the lists the GPU wrote, and
+/// their sums against the passes' totals: `[2i]` adds up to the first pass's cut,
+/// `[2i + 1]` to what the second pass still found hidden.
+fn check_per_instance(label: &str, f: &Frame, instances: usize) {
+    let (software, hardware) = first_lists(f);
+    let first = CullResult {
+        cut: [software, hardware].concat(),
+        occluded: f.candidates.clone(),
+        ..CullResult::default()
+    };
+    let second = CullResult {
+        cut: second_list(f),
+        ..CullResult::default()
+    };
+    let want = cpu::occluded_per_instance(&first, Some(&second), instances);
+    assert_eq!(f.per_instance, want, "{label}: per-instance counters");
+    let sum = |word: usize| f.per_instance.iter().skip(word).step_by(2).sum::<u32>();
+    assert_eq!(sum(0), f.first[8], "{label}: cut per instance");
+    assert_eq!(sum(1), f.second[9], "{label}: culled per instance");
 }
 
 fn check_words(label: &str, got: &[u32; 12], want: &CullResult, near: usize) {
@@ -545,6 +581,11 @@ fn both_passes_match_the_reference_on_random_views_and_walls() {
             "{label}: second software slots start"
         );
         assert_eq!(f.second_hw_args, [HW_VERTICES, f.second[1], 0, 0]);
+        check_per_instance(&label, &f, data.instances.len());
+        if near == 0 && near2 == 0 {
+            let want_words = cpu::occluded_per_instance(&want, Some(&want2), data.instances.len());
+            assert_eq!(f.per_instance, want_words, "{label}: per instance");
+        }
         eprintln!(
             "{label}: first cut {} occluded {} tested {}; second considered {} drawn {} + {} occluded {}",
             f.first[8], f.first[9], f.first[11], f.second[4], f.second[0], f.second[1], f.second[9]
@@ -624,6 +665,9 @@ fn the_second_pass_tests_only_the_first_passs_candidates_in_the_free_slots() {
     // Both passes together draw what one pass without occlusion draws.
     let plain = cpu::cpu_cull(&data, &view, &clusters, &T, harness.capacity);
     assert_eq!(set(&all), set(&plain.cut));
+    // Every candidate came back: the counters of every instance say nothing was culled.
+    check_per_instance("wall", &f, data.instances.len());
+    assert!(f.per_instance.iter().skip(1).step_by(2).all(|&w| w == 0));
 }
 
 #[test]

@@ -41,6 +41,48 @@ pub struct Frame<'a> {
     pub lights: Option<ClusteredLights<'a>>,
     /// The `pyramid` slot's mips, finest first, when the frame binds one.
     pub pyramid: Option<&'a [PyramidMip]>,
+    /// The `second_counts` slot (the second culling pass's `raster_counts`), if bound.
+    pub second_counts: Option<&'a [u32]>,
+    /// The `occluded_per_instance` slot, if bound: `[2i]` cut, `[2i + 1]` left hidden.
+    pub occluded_per_instance: Option<&'a [u32]>,
+}
+
+/// The `occlusion` view's colours (`FIRST_PASS_COLOR`, `SECOND_PASS_COLOR`,
+/// `CULLED_COLOR`) and how far a wholly culled instance goes towards red (`CULLED_TINT`).
+pub const FIRST_PASS_COLOR: Vec3 = Vec3::new(0.35, 0.85, 0.4);
+pub const SECOND_PASS_COLOR: Vec3 = Vec3::new(0.3, 0.55, 1.0);
+pub const CULLED_COLOR: Vec3 = Vec3::new(1.0, 0.2, 0.15);
+pub const CULLED_TINT: f32 = 0.7;
+
+/// shade.wgsl's `drawn_by_second_pass`: slot `id` lies between the first pass's
+/// software and hardware clusters, where the second pass writes (`[7] <= id < [3]`).
+pub fn drawn_by_second_pass(second_counts: Option<&[u32]>, id: u32) -> bool {
+    second_counts.is_some_and(|c| id >= c[7] && id < c[3])
+}
+
+/// shade.wgsl's `culled_share`: left hidden / cut of `instance`, 0 when unknown.
+pub fn culled_share(occluded_per_instance: Option<&[u32]>, instance: u32) -> f32 {
+    let Some(words) = occluded_per_instance else {
+        return 0.0;
+    };
+    let at = instance as usize * 2;
+    if at + 1 >= words.len() || words[at] == 0 {
+        return 0.0;
+    }
+    words[at + 1].min(words[at]) as f32 / words[at] as f32
+}
+
+/// The `occlusion` view's colour of a covered pixel before the clamp: the pass colour,
+/// tinted towards red by the culled share, times `0.45 + 0.55 · min(luma(shaded), 1)`.
+pub fn occlusion_color(second_pass: bool, culled_share: f32, shaded: Vec3) -> Vec3 {
+    let base = if second_pass {
+        SECOND_PASS_COLOR
+    } else {
+        FIRST_PASS_COLOR
+    };
+    let tint = mix(base, CULLED_COLOR, CULLED_TINT * culled_share);
+    let lit = shaded.dot(Vec3::new(0.2126, 0.7152, 0.0722)).min(1.0);
+    tint * (0.45 + 0.55 * lit)
 }
 
 /// One mip of a depth pyramid as the texture holds it.
@@ -295,6 +337,14 @@ fn pixel_color(
         }),
         // Reverse-Z depth falls off as 1 / distance; the fourth root spreads it.
         DebugView::Depth => Vec3::splat(visbuffer::depth(value).sqrt().sqrt()),
+        DebugView::Occlusion => {
+            let cluster = cluster_of(frame.raster_clusters, value);
+            occlusion_color(
+                drawn_by_second_pass(frame.second_counts, id),
+                culled_share(frame.occluded_per_instance, cluster.instance),
+                shade_surface(frame, light, value, pixel),
+            )
+        }
         DebugView::Shaded if empty => {
             let t = 1.0 - pixel.y / frame.height as f32;
             mix(SKY_HORIZON, SKY_ZENITH, t)

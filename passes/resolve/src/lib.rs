@@ -51,6 +51,8 @@
 //! | `cluster_offsets`, `cluster_counts` | storage read (optional) | u32 | per froxel and kind: list start and length |
 //! | `cluster_objects` | storage read (optional) | u32 | the lists: indices into `objects` |
 //! | `pyramid` | sampled (optional) | R32Float, mip chain | a depth pyramid, for the `pyramid` view |
+//! | `second_counts` | storage read (optional) | u32 × 8 or 12 | the second `cull_lod` pass's `raster_counts`, for the `occlusion` view |
+//! | `occluded_per_instance` | storage read (optional) | u32 × 2 per instance | `[2i]` clusters of instance `i` in the first pass's LOD cut, `[2i + 1]` of those left hidden after both passes |
 //!
 //! With light clustering's five outputs bound (all or none), the shaded view adds the point
 //! and spot lights of each pixel's froxel, and the `light-count` view can show them.
@@ -64,6 +66,28 @@
 //! mip `pyramid_mip` (clamped to the mip's size), as `depth^(1/4)` grey like the
 //! `depth` view. A `pyramid_mip` past the bound chain is a record error naming its
 //! length; the view without a `pyramid` bound is a setup error.
+//!
+//! # The `occlusion` view
+//!
+//! Each covered pixel is coloured by the culling pass that drew its cluster, tinted by
+//! how much of its instance occlusion culled, and scaled by the shaded image's
+//! brightness (`0.45 + 0.55 · min(luma(shaded), 1)`) so shapes stay readable:
+//!
+//! | colour | meaning |
+//! |--------|---------|
+//! | green `(0.35, 0.85, 0.4)` | drawn by the first pass (visible in last frame's pyramid, or not testable) |
+//! | blue `(0.3, 0.55, 1.0)` | drawn by the second pass: hidden last frame, visible in this frame's pyramid |
+//! | towards red `(1.0, 0.2, 0.15)` | `mix(pass colour, red, 0.7 · culled / cut)`: the share of the instance's LOD cut left hidden after both passes |
+//! | black | empty |
+//!
+//! The pass is read from the pixel's slot: the second pass writes the free slots
+//! between the first pass's software clusters (`[0, sw1)`) and hardware clusters
+//! (`[C − hw1, C)`), and its counts hold both ends (`[7]` = `sw1`, `[3]` = `C − hw1`),
+//! so slot `id` is the second pass's iff `[7] ≤ id < [3]`. Without `second_counts`
+//! bound (a one-pass frame) every pixel is first-pass green; without
+//! `occluded_per_instance` nothing is tinted (an instance with a zero cut neither).
+//! Both slots are optional and cost one binding each; a frame binds them only for this
+//! view.
 //!
 //! # Definitions the tests pin down
 //!
@@ -213,6 +237,18 @@ pub fn contract() -> StageContract {
                 "a reverse-Z min-depth pyramid (mip L: ⌈size / 2^(L+1)⌉), for the `pyramid` view",
             )
             .optional(),
+            read(
+                SECOND_COUNTS,
+                Element::U32,
+                "the second culling pass's raster_counts ([3], [7]), for the `occlusion` view",
+            )
+            .optional(),
+            read(
+                OCCLUDED_PER_INSTANCE,
+                Element::U32,
+                "per instance: [2i] clusters in the LOD cut, [2i+1] left hidden, for the `occlusion` view",
+            )
+            .optional(),
         ],
     }
 }
@@ -292,10 +328,17 @@ impl Pass for Resolve {
                 "the `pyramid` view shows a depth pyramid, and none is bound; bind an R32Float mip chain (the depth_pyramid stage's output) to the `pyramid` slot or pick another view",
             ));
         }
+        let second_counts = ctx.is_bound(SECOND_COUNTS);
+        if second_counts {
+            ctx.min_bytes(SECOND_COUNTS, 32);
+        }
+        let occluded_per_instance = ctx.is_bound(OCCLUDED_PER_INSTANCE);
         let defs = ShadeDefs {
             clustered_lights: lit,
             texture,
             pyramid,
+            second_counts,
+            occluded_per_instance,
         };
         ctx.shader_defs(&defs);
         let shade_layout = BindingLayout::compute("resolve_shade")
@@ -322,6 +365,16 @@ impl Pass for Resolve {
         };
         let shade_layout = if pyramid {
             shade_layout.slot(PYRAMID_BINDING, "pyramid")
+        } else {
+            shade_layout
+        };
+        let shade_layout = if second_counts {
+            shade_layout.slot(SECOND_COUNTS_BINDING, SECOND_COUNTS)
+        } else {
+            shade_layout
+        };
+        let shade_layout = if occluded_per_instance {
+            shade_layout.slot(OCCLUDED_PER_INSTANCE_BINDING, OCCLUDED_PER_INSTANCE)
         } else {
             shade_layout
         };
@@ -398,6 +451,14 @@ impl Pass for Resolve {
 
 /// The binding of the `pyramid` texture in shade.wgsl.
 const PYRAMID_BINDING: u32 = 16;
+/// The bindings of the occlusion view's two records in shade.wgsl.
+const SECOND_COUNTS_BINDING: u32 = 17;
+const OCCLUDED_PER_INSTANCE_BINDING: u32 = 18;
+
+/// The slot of the second culling pass's `raster_counts`, read by the `occlusion` view.
+pub const SECOND_COUNTS: &str = "second_counts";
+/// The slot of the per-instance occlusion counters, read by the `occlusion` view.
+pub const OCCLUDED_PER_INSTANCE: &str = "occluded_per_instance";
 
 /// Light clustering's outputs the shading reads, at bindings 11 to 15.
 const LIGHT_SLOTS: [&str; 5] = [
@@ -417,6 +478,10 @@ struct ShadeDefs {
     texture: bool,
     /// `PYRAMID`: a depth pyramid is bound, for the `pyramid` view.
     pyramid: bool,
+    /// `SECOND_COUNTS`: the second culling pass's counts are bound.
+    second_counts: bool,
+    /// `OCCLUDED_PER_INSTANCE`: the per-instance occlusion counters are bound.
+    occluded_per_instance: bool,
 }
 
 impl ShaderDefs for ShadeDefs {
@@ -425,6 +490,11 @@ impl ShaderDefs for ShadeDefs {
             ("CLUSTERED_LIGHTS", ShaderDef::Bool(self.clustered_lights)),
             ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
             ("PYRAMID", ShaderDef::Bool(self.pyramid)),
+            ("SECOND_COUNTS", ShaderDef::Bool(self.second_counts)),
+            (
+                "OCCLUDED_PER_INSTANCE",
+                ShaderDef::Bool(self.occluded_per_instance),
+            ),
         ]
     }
 }
@@ -516,6 +586,8 @@ mod tests {
             clustered_lights: true,
             texture: true,
             pyramid: true,
+            second_counts: true,
+            occluded_per_instance: true,
         }
         .shader_defs();
         for (shader, defs) in [(&DEPTH_SHADER, &depth), (&SHADE_SHADER, &shade)] {

@@ -31,11 +31,15 @@ pub enum DebugView {
     /// Mip `pyramid_mip` of the depth pyramid bound to the `pyramid` slot, as grey
     /// `depth^(1/4)`: each pixel shows the texel of that mip that covers it.
     Pyramid = 7,
+    /// Which culling pass drew each pixel's cluster (first: green, second: blue, from
+    /// the `second_counts` slot), tinted red by the share of the pixel's instance that
+    /// occlusion culled (the `occluded_per_instance` slot), over the shaded brightness.
+    Occlusion = 8,
 }
 
 impl DebugView {
     /// Every view, in discriminant order.
-    pub const ALL: [DebugView; 8] = [
+    pub const ALL: [DebugView; 9] = [
         DebugView::Shaded,
         DebugView::Clusters,
         DebugView::Triangles,
@@ -44,6 +48,7 @@ impl DebugView {
         DebugView::Depth,
         DebugView::LightCount,
         DebugView::Pyramid,
+        DebugView::Occlusion,
     ];
 
     /// The name pipeline files and the command line use.
@@ -57,6 +62,7 @@ impl DebugView {
             DebugView::Depth => "depth",
             DebugView::LightCount => "light-count",
             DebugView::Pyramid => "pyramid",
+            DebugView::Occlusion => "occlusion",
         }
     }
 
@@ -68,6 +74,12 @@ impl DebugView {
     /// True for views that show a depth pyramid (the `pyramid` slot).
     pub fn needs_pyramid(self) -> bool {
         self == DebugView::Pyramid
+    }
+
+    /// True for views that read the culling passes' records (`second_counts`,
+    /// `occluded_per_instance`), which a frame binds only for them.
+    pub fn needs_occlusion_records(self) -> bool {
+        self == DebugView::Occlusion
     }
 
     /// The view called `name` (as [`DebugView::name`] spells it).

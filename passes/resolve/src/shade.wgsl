@@ -23,6 +23,7 @@ const VIEW_RASTER: u32 = 4u;
 const VIEW_DEPTH: u32 = 5u;
 const VIEW_LIGHT_COUNT: u32 = 6u;
 const VIEW_PYRAMID: u32 = 7u;
+const VIEW_OCCLUSION: u32 = 8u;
 // The light-count view's scale: this many lights in a froxel is the hottest colour.
 const LIGHT_COUNT_FULL: f32 = 32.0;
 
@@ -30,6 +31,12 @@ const SKY_ZENITH: vec3<f32> = vec3(0.25, 0.45, 0.8);
 const SKY_HORIZON: vec3<f32> = vec3(0.75, 0.85, 0.95);
 const SOFTWARE_COLOR: vec3<u32> = vec3(230u, 90u, 50u);
 const HARDWARE_COLOR: vec3<u32> = vec3(50u, 120u, 230u);
+// The occlusion view: the pass that drew the cluster, the colour an instance wholly
+// culled by occlusion tends to, and how far (`cpu::occlusion_color`).
+const FIRST_PASS_COLOR: vec3<f32> = vec3(0.35, 0.85, 0.4);
+const SECOND_PASS_COLOR: vec3<f32> = vec3(0.3, 0.55, 1.0);
+const CULLED_COLOR: vec3<f32> = vec3(1.0, 0.2, 0.15);
+const CULLED_TINT: f32 = 0.7;
 // Checker squares: dark ones multiply the base colour by this.
 const CHECKER_DARK: f32 = 0.55;
 
@@ -82,6 +89,44 @@ fn pyramid_depth(pixel: vec2<u32>, level: u32) -> f32 {
     return textureLoad(pyramid, min(pixel >> vec2(mip + 1u), last), mip).x;
 }
 #endif
+
+#ifdef SECOND_COUNTS
+// The second culling pass's `raster_counts`: `[7]` its first software slot (the first
+// pass's software count) and `[3]` one past its last hardware slot (`C` minus the first
+// pass's hardware count), so ids in `[7], [3])` are the second pass's.
+@group(0) @binding(17) var<storage, read> second_counts: array<u32>;
+#endif
+#ifdef OCCLUDED_PER_INSTANCE
+// Per instance `i`: `[2i]` clusters of the first pass's LOD cut, `[2i + 1]` of those
+// left hidden after both passes.
+@group(0) @binding(18) var<storage, read> occluded_per_instance: array<u32>;
+#endif
+
+// True when the second culling pass drew the cluster in slot `id`.
+fn drawn_by_second_pass(id: u32) -> bool {
+#ifdef SECOND_COUNTS
+    return id >= second_counts[7] && id < second_counts[3];
+#else
+    return false;
+#endif
+}
+
+// The share of an instance's LOD cut that occlusion culled (0 without the counters).
+fn culled_share(instance: u32) -> f32 {
+#ifdef OCCLUDED_PER_INSTANCE
+    let at = instance * 2u;
+    if at + 1u >= arrayLength(&occluded_per_instance) {
+        return 0.0;
+    }
+    let cut = occluded_per_instance[at];
+    if cut == 0u {
+        return 0.0;
+    }
+    return f32(min(occluded_per_instance[at + 1u], cut)) / f32(cut);
+#else
+    return 0.0;
+#endif
+}
 
 #ifdef CLUSTERED_LIGHTS
 // Light clustering's output: the objects, the grid, and per froxel and kind an offset
@@ -327,6 +372,16 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
 #ifdef PYRAMID
             rgb = vec3(sqrt(sqrt(max(pyramid_depth(gid.xy, params.pyramid_mip), 0.0))));
 #endif
+        }
+        case VIEW_OCCLUSION: {
+            if !empty {
+                let id = visbuffer_cluster(value);
+                let base = select(FIRST_PASS_COLOR, SECOND_PASS_COLOR, drawn_by_second_pass(id));
+                let tint = mix(base, CULLED_COLOR, CULLED_TINT * culled_share(raster_clusters[id].instance));
+                // The shaded image's brightness, lifted, so shapes stay readable.
+                let lit = min(dot(shade(value, pixel), vec3(0.2126, 0.7152, 0.0722)), 1.0);
+                rgb = tint * (0.45 + 0.55 * lit);
+            }
         }
         default: {
             if empty {

@@ -12,7 +12,10 @@ use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_populate::cpu::{ClusterLists, cpu_populate};
 use meshlight_pass_resolve::settings::Settings;
-use meshlight_pass_resolve::{COLOR_FORMAT, DEPTH_FORMAT, DebugView, PYRAMID_FORMAT, Resolve, cpu};
+use meshlight_pass_resolve::{
+    COLOR_FORMAT, DEPTH_FORMAT, DebugView, OCCLUDED_PER_INSTANCE, PYRAMID_FORMAT, Resolve,
+    SECOND_COUNTS, cpu,
+};
 use meshlight_pass_z_slice::{ZSlice, cpu_z_slice};
 use meshlight_scene::load::load_obj;
 use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
@@ -63,6 +66,9 @@ struct Frame {
     lights: Option<Lights>,
     /// A depth pyramid for the `pyramid` slot, finest mip first.
     pyramid: Option<Vec<cpu::PyramidMip>>,
+    /// The `second_counts` and `occluded_per_instance` slots, for the `occlusion` view.
+    second_counts: Option<Vec<u32>>,
+    occluded_per_instance: Option<Vec<u32>>,
 }
 
 /// Light clustering's output for the frame, from the CPU references of its stages.
@@ -90,6 +96,8 @@ impl Frame {
                 list: &l.lists.objects,
             }),
             pyramid: self.pyramid.as_deref(),
+            second_counts: self.second_counts.as_deref(),
+            occluded_per_instance: self.occluded_per_instance.as_deref(),
         }
     }
 
@@ -239,6 +247,8 @@ fn frame() -> Frame {
         visbuffer,
         lights: None,
         pyramid: None,
+        second_counts: None,
+        occluded_per_instance: None,
     }
 }
 
@@ -369,7 +379,7 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
         bindings = bindings.bind("pyramid", handle);
     }
     let color = g.import_texture("color", TextureDesc::d2(COLOR_FORMAT, W, H), COLOR_USAGE);
-    let light_buffers: Vec<(&str, Vec<u8>)> = match &frame.lights {
+    let mut light_buffers: Vec<(&str, Vec<u8>)> = match &frame.lights {
         Some(l) => vec![
             ("objects", bytemuck::cast_slice(&l.objects).to_vec()),
             ("cluster_grid", bytemuck::bytes_of(&l.grid).to_vec()),
@@ -389,6 +399,15 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
         ],
         None => Vec::new(),
     };
+    // The occlusion view's records travel the same way: plain u32 buffers.
+    for (name, words) in [
+        (SECOND_COUNTS, &frame.second_counts),
+        (OCCLUDED_PER_INSTANCE, &frame.occluded_per_instance),
+    ] {
+        if let Some(words) = words {
+            light_buffers.push((name, bytemuck::cast_slice(words).to_vec()));
+        }
+    }
     let mut light_bindings = bindings;
     for (name, bytes) in &light_buffers {
         let element = match *name {
@@ -608,7 +627,8 @@ fn depth_material_depth_and_every_view_match_the_reference() {
         "empty and three materials: {materials:?}"
     );
 
-    let needs_more = |v: &DebugView| v.needs_lights() || v.needs_pyramid();
+    let needs_more =
+        |v: &DebugView| v.needs_lights() || v.needs_pyramid() || v.needs_occlusion_records();
     for view in DebugView::ALL.into_iter().filter(|v| !needs_more(v)) {
         let got = run(&mut f, Resolve::new(W, H).with_view(view));
         // Depth and material depth do not depend on the view: check them every time.
@@ -792,6 +812,84 @@ fn the_pyramid_view_shows_each_mip_of_a_bound_pyramid_like_the_reference() {
             assert!(message.contains("`pyramid` slot"), "{message}")
         }
         other => panic!("{:?}", other.err()),
+    }
+}
+
+/// The share of `color`'s covered pixels whose strongest channel is `channel`.
+fn dominant(color: &[[u8; 4]], visbuffer: &[u64], channel: usize) -> usize {
+    color
+        .iter()
+        .zip(visbuffer)
+        .filter(|(c, v)| {
+            **v != visbuffer::EMPTY && (0..3).all(|k| k == channel || c[channel] > c[k])
+        })
+        .count()
+}
+
+#[test]
+fn the_occlusion_view_colours_by_pass_and_culled_share_like_the_reference() {
+    let mut f = frame();
+    let view = f.view;
+    let slots = f.raster_clusters.len() as u32;
+    let pass = Resolve::new(W, H).with_view(DebugView::Occlusion);
+    let covered = f
+        .visbuffer
+        .iter()
+        .filter(|&&v| v != visbuffer::EMPTY)
+        .count();
+    // Without the records every covered pixel is first-pass green, untinted.
+    let plain = run_with(&mut f, pass, &view, BOTH).unwrap_or_else(|e| panic!("{e}"));
+    let want = cpu::shade(&f.cpu(), &pass.settings);
+    let (over, largest) = color_differences(&plain.color, &want, 2);
+    assert!(
+        over * 100 <= covered,
+        "no records: {over} pixels differ (largest {largest})"
+    );
+    assert_eq!(dominant(&plain.color, &f.visbuffer, 1), covered);
+
+    // Slots [slots/4, slots/2) as the second pass's: `[7]` its first software slot,
+    // `[3]` one past its last hardware slot. Instance 0 none culled, 1 half, 2 all.
+    let mut counts = vec![0u32; 12];
+    counts[7] = slots / 4;
+    counts[3] = slots / 2;
+    f.second_counts = Some(counts);
+    f.occluded_per_instance = Some(vec![10, 0, 10, 5, 4, 4]);
+    let got = run_with(&mut f, pass, &view, BOTH).unwrap_or_else(|e| panic!("{e}"));
+    let want = cpu::shade(&f.cpu(), &pass.settings);
+    let (over, largest) = color_differences(&got.color, &want, 2);
+    assert!(
+        over * 100 <= covered,
+        "{over} of {covered} pixels differ (largest {largest})"
+    );
+    // Each meaning is on screen: first pass (green), second pass (blue), culled (red).
+    let second: usize = f
+        .visbuffer
+        .iter()
+        .filter(|&&v| v != visbuffer::EMPTY)
+        .filter(|&&v| cpu::drawn_by_second_pass(f.second_counts.as_deref(), visbuffer::cluster(v)))
+        .count();
+    assert!(
+        second > 0 && second < covered,
+        "{second} of {covered} second-pass pixels"
+    );
+    for (channel, name) in [(0, "red"), (1, "green"), (2, "blue")] {
+        let n = dominant(&got.color, &f.visbuffer, channel);
+        eprintln!("{name}: {n} of {covered} pixels");
+        assert!(n > covered / 50, "only {n} {name} pixels of {covered}");
+    }
+    // Pixels of the wholly culled instance are redder than untinted ones, so a shader
+    // that ignores the counters fails.
+    let redness = |c: &[u8; 4]| c[0] as i32 - c[1] as i32;
+    for (i, v) in f.visbuffer.iter().enumerate() {
+        if *v != visbuffer::EMPTY
+            && f.raster_clusters[visbuffer::cluster(*v) as usize].instance == 2
+            && got.color[i] != [0, 0, 0, 255]
+        {
+            assert!(
+                redness(&got.color[i]) > redness(&plain.color[i]),
+                "pixel {i}"
+            );
+        }
     }
 }
 
