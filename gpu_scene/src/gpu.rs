@@ -285,18 +285,7 @@ impl GpuScene {
 
     /// Declares the buffers as imported resources of a graph.
     pub fn import(&self, g: &mut GraphBuilder) -> SceneHandles {
-        let mut h = |name: &str| {
-            let b = self
-                .buffers
-                .iter()
-                .find(|b| b.name == name)
-                .expect("every name has a buffer");
-            g.import_buffer(
-                name,
-                BufferDesc::array(b.element.clone(), b.capacity),
-                USAGE,
-            )
-        };
+        let mut h = |name: &str| self.import_one(g, name);
         SceneHandles {
             meshlets: h(names::MESHLETS),
             groups: h(names::GROUPS),
@@ -310,23 +299,27 @@ impl GpuScene {
     /// Declares the culling-hierarchy buffers as imported resources of a graph (for
     /// `fill_clusters`' `hierarchy` implementation).
     pub fn import_hierarchy(&self, g: &mut GraphBuilder) -> HierarchyHandles {
-        let mut h = |name: &str| {
-            let b = self
-                .buffers
-                .iter()
-                .find(|b| b.name == name)
-                .expect("every name has a buffer");
-            g.import_buffer(
-                name,
-                BufferDesc::array(b.element.clone(), b.capacity),
-                USAGE,
-            )
-        };
+        let mut h = |name: &str| self.import_one(g, name);
         HierarchyHandles {
             nodes: h(names::HIERARCHY_NODES),
             clusters: h(names::HIERARCHY_CLUSTERS),
             roots: h(names::HIERARCHY_ROOTS),
         }
+    }
+
+    /// Declares the buffer `name` (one of [`names`]) as an imported resource, sized as
+    /// the scene holds it.
+    fn import_one(&self, g: &mut GraphBuilder, name: &str) -> Handle<Buffer> {
+        let b = self
+            .buffers
+            .iter()
+            .find(|b| b.name == name)
+            .expect("every name has a buffer");
+        g.import_buffer(
+            name,
+            BufferDesc::array(b.element.clone(), b.capacity),
+            USAGE,
+        )
     }
 
     /// The buffers for [`meshlight_graph::Executor::execute`] (the hierarchy's too; a

@@ -99,14 +99,13 @@
 //! cut, and `cull_lod` after this list keeps exactly the clusters it keeps after the flat
 //! list. [`crate::hierarchy_cpu`] mirrors the shader.
 
-use crate::{STAGE, VIEW_INPUT, contract, workgroup_grid};
+use crate::{InstanceGrid, STAGE, VIEW_INPUT, contract, instance_grid};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::Params;
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
     Result, SetupContext, StageContract,
 };
-use meshlight_shaders::cpu::layout::Instance;
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The implementation name pipelines use.
@@ -319,19 +318,11 @@ impl Pass for HierarchyFill {
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
-        let (_, instance_bytes) = ctx.buffer("instances")?;
-        let bound = (instance_bytes / size_of::<Instance>() as u64).min(u32::MAX as u64) as u32;
-        let instance_count = self.instance_count.unwrap_or(bound).min(bound);
-        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
-        let [x, y] = workgroup_grid(instance_count, limit);
-        if y > limit {
-            return Err(GraphError::Record {
-                pass: ctx.pass_name().to_string(),
-                message: format!(
-                    "{instance_count} instances need more than {limit}² workgroups; set `instance_count` lower"
-                ),
-            });
-        }
+        let InstanceGrid {
+            instance_count,
+            groups: [x, y],
+            limit,
+        } = instance_grid(ctx, self.instance_count)?;
         let spread = self.spread_groups.unwrap_or(SPREAD_GROUPS).min(limit);
         // The counters and list lengths zeroed, then step 0 (a workgroup per instance),
         // then each later step over the list the one before wrote; each dispatch in its

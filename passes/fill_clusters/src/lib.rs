@@ -177,6 +177,39 @@ impl FillClusters {
     }
 }
 
+/// The instances a fill visits (`instance_count`, else as many as the `instances` buffer
+/// holds) and a workgroup per instance laid out under the adapter's per-dimension limit.
+pub(crate) struct InstanceGrid {
+    pub instance_count: u32,
+    pub groups: [u32; 2],
+    /// The adapter's workgroups per dimension.
+    pub limit: u32,
+}
+
+pub(crate) fn instance_grid(
+    ctx: &RecordContext<'_>,
+    instance_count: Option<u32>,
+) -> Result<InstanceGrid> {
+    let (_, instance_bytes) = ctx.buffer("instances")?;
+    let bound = (instance_bytes / size_of::<Instance>() as u64).min(u32::MAX as u64) as u32;
+    let instance_count = instance_count.unwrap_or(bound).min(bound);
+    let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
+    let groups = workgroup_grid(instance_count, limit);
+    if groups[1] > limit {
+        return Err(GraphError::Record {
+            pass: ctx.pass_name().to_string(),
+            message: format!(
+                "{instance_count} instances need more than {limit}² workgroups; set `instance_count` lower"
+            ),
+        });
+    }
+    Ok(InstanceGrid {
+        instance_count,
+        groups,
+        limit,
+    })
+}
+
 /// `n` workgroups as `[x, y]` with both under `limit` (x as wide as allowed).
 pub fn workgroup_grid(n: u32, limit: u32) -> [u32; 2] {
     let x = n.min(limit.max(1));
@@ -213,19 +246,11 @@ impl Pass for FillClusters {
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
-        let (_, instance_bytes) = ctx.buffer("instances")?;
-        let bound = (instance_bytes / size_of::<Instance>() as u64).min(u32::MAX as u64) as u32;
-        let instance_count = self.instance_count.unwrap_or(bound).min(bound);
-        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
-        let [x, y] = workgroup_grid(instance_count, limit);
-        if y > limit {
-            return Err(GraphError::Record {
-                pass: ctx.pass_name().to_string(),
-                message: format!(
-                    "{instance_count} instances need more than {limit}² workgroups; set `instance_count` lower"
-                ),
-            });
-        }
+        let InstanceGrid {
+            instance_count,
+            groups: [x, y],
+            ..
+        } = instance_grid(ctx, self.instance_count)?;
         let params = GpuParams {
             capacity: self.capacity.unwrap_or(u32::MAX),
             instance_count,
