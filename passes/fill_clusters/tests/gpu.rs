@@ -4,6 +4,8 @@
 //! count words, the straddling instance's prefix and an untouched guard region after
 //! the capacity.
 
+mod support;
+
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, data::Limits};
@@ -12,23 +14,7 @@ use meshlight_pass_fill_clusters::{FillClusters, FillResult, cpu_fill};
 use meshlight_scene::{BuildOptions, build_asset, procedural_mesh};
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use std::collections::BTreeMap;
-
-const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
-
-/// What the GPU leaves in slots nothing may write.
-const SENTINEL: Cluster = Cluster {
-    instance: 0xdead_beef,
-    meshlet: 0xfeed_f00d,
-};
-
-/// Slots after the capacity that must keep the sentinel.
-const GUARD: u32 = 64;
-
-fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
+use support::*;
 
 /// Two meshes of different sizes (the larger with more meshlets than a workgroup has
 /// threads, so threads write several clusters each); instances in view, behind the camera, far to the

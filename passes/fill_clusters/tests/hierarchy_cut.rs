@@ -5,28 +5,17 @@
 //! the comparison does notice a walk that drops clusters of the cut; and on the bunny
 //! lattice of the benchmarks, clusters + nodes tested stay within 3× the cut.
 
+mod support;
+
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::{Camera, Material, SceneData, data::Limits};
 use meshlight_pass_cull_lod::{Thresholds, cpu_cull};
 use meshlight_pass_fill_clusters::{WalkParams, cpu_fill, cpu_walk};
 use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
-use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::layout::View;
 use std::collections::BTreeSet;
 use std::sync::OnceLock;
-
-fn bunny() -> &'static MeshletAsset {
-    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
-    ASSET.get_or_init(|| {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../assets/meshes/stanford-bunny.obj"
-        );
-        let mesh = meshlight_scene::load::load_mesh(std::path::Path::new(path)).unwrap();
-        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
-            .unwrap()
-            .asset
-    })
-}
+use support::*;
 
 fn procedural() -> &'static MeshletAsset {
     static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
@@ -35,27 +24,6 @@ fn procedural() -> &'static MeshletAsset {
             .unwrap()
             .asset
     })
-}
-
-/// xorshift64*: seeded, reproducible views.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn below(&mut self, n: u32) -> u32 {
-        (self.next() % n as u64) as u32
-    }
 }
 
 /// A 4 × 4 field of `asset`, one unit of mesh radius apart scaled by `radius`, turned,
@@ -85,10 +53,6 @@ fn field(asset: &MeshletAsset) -> SceneData {
             .expect("an invertible transform");
     }
     data
-}
-
-fn set(clusters: &[Cluster]) -> BTreeSet<(u32, u32)> {
-    clusters.iter().map(|c| (c.instance, c.meshlet)).collect()
 }
 
 /// A random view of `data`'s field: from inside it to 60 mesh radii away.

@@ -7,6 +7,8 @@
 //! seen from near (its walk handed on over the spreading steps) and far, and with lists
 //! too short for what is handed on.
 
+mod support;
+
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, data::Limits};
@@ -19,52 +21,11 @@ use meshlight_scene::{BuildOptions, MeshletAsset, build_asset};
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use std::collections::BTreeSet;
 use std::sync::OnceLock;
-
-const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
-
-/// What the GPU leaves in slots nothing may write.
-const SENTINEL: Cluster = Cluster {
-    instance: 0xdead_beef,
-    meshlet: 0xfeed_f00d,
-};
-
-/// Slots after the list that must keep the sentinel.
-const GUARD: u32 = 64;
+use support::*;
 
 /// A node the GPU and the reference decide differently must have a deciding value
 /// within this relative distance of its threshold (f32 rounding, fused multiply-adds).
 const NEAR_THRESHOLD: f32 = 1e-5;
-
-fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn bunny() -> &'static MeshletAsset {
-    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
-    ASSET.get_or_init(|| {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../assets/meshes/stanford-bunny.obj"
-        );
-        let mesh = meshlight_scene::load::load_mesh(std::path::Path::new(path)).unwrap();
-        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
-            .unwrap()
-            .asset
-    })
-}
-
-fn spot() -> &'static MeshletAsset {
-    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
-    ASSET.get_or_init(|| {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/spot.obj");
-        let mesh = meshlight_scene::load::load_mesh(std::path::Path::new(path)).unwrap();
-        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
-            .unwrap()
-            .asset
-    })
-}
 
 /// Two meshes (the bunny and spot, so hierarchies are rebased in the shared buffers) on
 /// a 4 × 3 field, turned and scaled differently (one unevenly), in bunny radii.
@@ -99,27 +60,6 @@ fn scene() -> SceneData {
             .expect("an invertible transform");
     }
     data
-}
-
-/// xorshift64*: seeded, reproducible views.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn below(&mut self, n: u32) -> u32 {
-        (self.next() % n as u64) as u32
-    }
 }
 
 fn random_view(data: &SceneData, rng: &mut Rng, v: u32) -> (View, f32) {
@@ -292,10 +232,6 @@ fn run(data: &mut SceneData, view: &View, fill: Fill, cull: Option<f32>, slots: 
         counts: counts[..4].try_into().unwrap(),
         cut,
     }
-}
-
-fn set(clusters: &[Cluster]) -> BTreeSet<(u32, u32)> {
-    clusters.iter().map(|c| (c.instance, c.meshlet)).collect()
 }
 
 /// Where each meshlet stands in the shared hierarchy cluster list.
