@@ -116,18 +116,23 @@ impl Pass for Step {
     }
 }
 
+/// A stage that copies its slot `from` into its slot `to`.
+fn copy_contract(stage: &'static str) -> StageContract {
+    StageContract {
+        stage,
+        slots: vec![
+            Slot::buffer("from", Access::CopySrc, Element::U32, ""),
+            Slot::buffer("to", Access::CopyDst, Element::U32, ""),
+        ],
+    }
+}
+
 /// Copies slot `from` into slot `to` with a copy command (the encoder).
 struct Copy;
 
 impl Pass for Copy {
     fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "copy",
-            slots: vec![
-                Slot::buffer("from", Access::CopySrc, Element::U32, ""),
-                Slot::buffer("to", Access::CopyDst, Element::U32, ""),
-            ],
-        }
+        copy_contract("copy")
     }
     fn implementation(&self) -> &'static str {
         "copy"
@@ -508,13 +513,7 @@ fn history_carries_through_a_batch_from_frame_to_frame() {
     struct Carry;
     impl Pass for Carry {
         fn contract(&self) -> StageContract {
-            StageContract {
-                stage: "carry",
-                slots: vec![
-                    Slot::buffer("from", Access::CopySrc, Element::U32, ""),
-                    Slot::buffer("to", Access::CopyDst, Element::U32, ""),
-                ],
-            }
+            copy_contract("carry")
         }
         fn implementation(&self) -> &'static str {
             "copy"
