@@ -1,6 +1,6 @@
 //! No false culling: two-pass occlusion culling draws, on every frame of a scripted camera
 //! path, the same visibility target as the frame without occlusion. The path orbits a
-//! wall with instances behind it, pans fast, teleports (with and without telling the
+//! wall with instances behind it (three small ones wholly hidden), pans fast, teleports (with and without telling the
 //! renderer it was a cut), moves an instance out from behind the wall, and changes the
 //! viewport size. At every pixel the depth and the scene triangle (instance, meshlet,
 //! triangle) must be the same; only pixels where two triangles tie exactly in depth may
@@ -10,9 +10,10 @@
 //! does, so each cluster is rasterised the same way in both frames: the comparison holds
 //! with every cluster sent to the hardware rasteriser and with the shipped split.
 
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Quat, Vec2, Vec3};
 use meshlight::gpu_scene::data::{InstanceId, Limits};
 use meshlight::gpu_scene::{Camera, Material, SceneData};
+use meshlight::scene::terrain::Terrain;
 use meshlight::scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
 use meshlight::shaders::cpu::layout::Cluster;
 use meshlight::shaders::cpu::visbuffer;
@@ -24,6 +25,29 @@ fn asset() -> &'static MeshletAsset {
     static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
     ASSET.get_or_init(|| {
         build_asset(&procedural_mesh(24), &BuildOptions::default(), &mut |_| {})
+            .unwrap()
+            .asset
+    })
+}
+
+/// A flat 4 × 4 square on the x–z plane, facing +y: a solid occluder.
+fn panel_asset() -> &'static MeshletAsset {
+    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
+    ASSET.get_or_init(|| {
+        let terrain = Terrain {
+            origin: Vec2::splat(-2.0),
+            size: 4.0,
+            cells: 16,
+            amplitude: 0.0,
+            wavelength: 4.0,
+            octaves: 1,
+            seed: 7,
+            uv_scale: 1.0,
+            calm_centre: Vec2::ZERO,
+            calm_radius: 0.0,
+        };
+        let mesh = terrain.mesh().unwrap();
+        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
             .unwrap()
             .asset
     })
@@ -53,6 +77,29 @@ fn scene() -> SceneData {
             Vec3::splat(0.8),
             Quat::from_rotation_y(i as f32),
             Vec3::new(x, (i % 3) as f32 * 0.6 - 0.6, z),
+        ));
+    }
+    // A solid panel (the wall has holes: it is a flattened knot) standing behind the
+    // wall, facing the orbit, and three small instances right behind it: whole
+    // instances the pyramid hides, so the walk hides nodes, not only cull clusters.
+    let panel = data.add_mesh("panel", panel_asset()).unwrap();
+    data.add_instance(
+        panel,
+        Mat4::from_scale_rotation_translation(
+            Vec3::new(2.0, 1.0, 1.5),
+            Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+            Vec3::new(0.0, 0.5, -0.7),
+        ),
+        material,
+    )
+    .unwrap()
+    .unwrap();
+    let mut place = |m: Mat4| data.add_instance(mesh, m, material).unwrap().unwrap();
+    for k in 0..3 {
+        place(Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.08),
+            Quat::from_rotation_y(k as f32),
+            Vec3::new(k as f32 * 1.2 - 1.2, 0.5, -2.2),
         ));
     }
     data
@@ -240,12 +287,28 @@ fn no_false_culling(split: Option<f32>) {
     let mut second_software = 0;
     let mut totals = OcclusionCounts::default();
     let mut ties = 0;
+    // The walks' node-level occlusion: nodes handed to the second walk, those it found
+    // still hidden, and the clusters it listed below the others.
+    let mut walk = [0u32; 3];
     let steps = path();
     for (frame, step) in steps.iter().enumerate() {
         let (c, t) = compare(&mut with, &mut without, step, frame);
         let counts = with.latest_counts().expect("counters read back");
         rasterisers[0] += counts.software;
         rasterisers[1] += counts.hardware;
+        let h = counts
+            .hierarchy
+            .expect("the default frame walks the hierarchy");
+        let second_walk = h.second.expect("a two-pass frame walks twice");
+        walk[0] += h.hidden_nodes;
+        walk[1] += second_walk.still_hidden;
+        walk[2] += second_walk.clusters_listed;
+        if frame == 0 || step.cut {
+            assert_eq!(
+                h.hidden_nodes, 0,
+                "frame {frame} hid nodes without a history"
+            );
+        }
         let second: Vec<u32> = bytemuck::pod_collect_to_vec(
             &with.executor.read_buffer("raster_counts_second").unwrap(),
         );
@@ -283,6 +346,12 @@ fn no_false_culling(split: Option<f32>) {
     assert!(totals.first_occluded > 0, "{totals:?}");
     assert!(totals.second_drawn > 0, "{totals:?}");
     assert!(totals.second_occluded > 0, "{totals:?}");
+    // The same at the node level: whole subtrees (instances) hidden by last frame's
+    // depth, some still hidden in this frame's, some listed again for the second cull.
+    assert!(
+        walk.iter().all(|&n| n > 0),
+        "hidden, still hidden, listed: {walk:?}"
+    );
     // The split under test: all hardware, or both rasterisers drawing.
     if split == Some(0.0) {
         assert_eq!(

@@ -11,9 +11,13 @@ pub const CLUSTER_COUNT_READBACK: &str = "cluster_count";
 pub const RASTER_COUNTS_READBACK: &str = "raster_counts";
 /// The readback of the second culling pass's `raster_counts` (twelve words).
 pub const SECOND_COUNTS_READBACK: &str = "raster_counts_second";
-/// The readback of the hierarchy walk's `hierarchy_counts` (four words; see
-/// `fill_clusters`' `hierarchy`).
+/// The readback of the hierarchy walk's `hierarchy_counts` (four words, five with
+/// occlusion; see `fill_clusters`' `hierarchy`).
 pub const HIERARCHY_COUNTS_READBACK: &str = "hierarchy_counts";
+/// The readback of the second walk's counters (five words).
+pub const SECOND_HIERARCHY_COUNTS_READBACK: &str = "hierarchy_counts_second";
+/// The readback of the second walk's list count (written, requested).
+pub const SECOND_WALK_COUNT_READBACK: &str = "second_walk_count";
 
 /// One frame's counters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -56,19 +60,58 @@ pub struct HierarchyCounts {
     pub subtrees_whole: u32,
     /// Walks that did not finish (0 unless a list overflowed).
     pub unfinished: u32,
+    /// Nodes last frame's pyramid hid, handed to the second walk (0 without
+    /// occlusion).
+    pub hidden_nodes: u32,
+    /// The second walk, from those nodes against this frame's pyramid (two-pass
+    /// frames).
+    pub second: Option<SecondWalkCounts>,
+}
+
+/// What the second walk of the hierarchy did: the nodes the first found hidden,
+/// re-tested against this frame's pyramid.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct SecondWalkCounts {
+    pub nodes_tested: u32,
+    pub leaves_accepted: u32,
+    /// Nodes still hidden: culled for good, with everything below them.
+    pub still_hidden: u32,
+    /// Clusters the walk listed for the second culling pass, and asked for.
+    pub clusters_listed: u32,
+    pub clusters_requested: u32,
 }
 
 impl HierarchyCounts {
-    /// From the readback's bytes; `None` when shorter than four words.
+    /// From the readback's bytes; `None` when shorter than four words. A fifth word is
+    /// the hidden-node count.
     pub fn from_words(bytes: &[u8]) -> Option<Self> {
         let w: Vec<u32> =
             (bytes.len() >= 16).then(|| bytemuck::pod_collect_to_vec(&bytes[..16]))?;
+        let hidden_nodes = (bytes.len() >= 20)
+            .then(|| bytemuck::pod_read_unaligned::<u32>(&bytes[16..20]))
+            .unwrap_or(0);
         Some(Self {
             nodes_tested: w[0],
             leaves_accepted: w[1],
             subtrees_whole: w[2],
             unfinished: w[3],
+            hidden_nodes,
+            second: None,
         })
+    }
+
+    /// The second walk's counters from its two readbacks; `None` when one is short.
+    pub fn with_second(mut self, counts: &[u8], list: &[u8]) -> Option<Self> {
+        let c = Self::from_words(counts)?;
+        let l: Vec<u32> = (list.len() >= 8).then(|| bytemuck::pod_collect_to_vec(&list[..8]))?;
+        self.second = Some(SecondWalkCounts {
+            nodes_tested: c.nodes_tested,
+            leaves_accepted: c.leaves_accepted,
+            still_hidden: c.hidden_nodes,
+            clusters_listed: l[0],
+            clusters_requested: l[1],
+        });
+        Some(self)
     }
 }
 
@@ -168,14 +211,30 @@ impl FrameCounts {
     pub fn rows(&self) -> Vec<(&'static str, u64)> {
         let mut rows = self.totals();
         if let Some(h) = self.hierarchy {
+            let second = h.second.unwrap_or_default();
             rows.extend([
                 ("hierarchy: nodes tested", h.nodes_tested as u64),
                 ("hierarchy: leaves accepted", h.leaves_accepted as u64),
                 (
                     "hierarchy: nodes + candidate clusters tested",
-                    h.nodes_tested as u64 + self.clusters_considered as u64,
+                    (h.nodes_tested + second.nodes_tested) as u64
+                        + (self.clusters_considered + second.clusters_listed) as u64,
                 ),
             ]);
+            if h.second.is_some() {
+                rows.extend([
+                    ("first walk: nodes hidden", h.hidden_nodes as u64),
+                    ("second walk: nodes tested", second.nodes_tested as u64),
+                    (
+                        "second walk: nodes still hidden",
+                        second.still_hidden as u64,
+                    ),
+                    (
+                        "second walk: clusters listed",
+                        second.clusters_listed as u64,
+                    ),
+                ]);
+            }
         }
         if let Some(o) = self.occlusion {
             rows.extend([

@@ -19,7 +19,7 @@
 
 use super::counts::{
     CLUSTER_COUNT_READBACK, HIERARCHY_COUNTS_READBACK, RASTER_COUNTS_READBACK,
-    SECOND_COUNTS_READBACK,
+    SECOND_COUNTS_READBACK, SECOND_HIERARCHY_COUNTS_READBACK, SECOND_WALK_COUNT_READBACK,
 };
 use crate::graph::file::AUTO;
 use crate::graph::{
@@ -34,9 +34,11 @@ use meshlight_gpu_scene::gpu::{
 };
 use meshlight_pass_cull_lod::{
     CullLod, Mode, OCCLUSION_COUNT_WORDS, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND, Thresholds,
+    WALKED_COUNT_SLOT, WALKED_SLOT,
 };
 use meshlight_pass_depth_pyramid::DepthPyramid;
-use meshlight_pass_fill_clusters::{FillClusters, HierarchyFill};
+use meshlight_pass_fill_clusters::hierarchy::OCCLUSION_COUNT_WORDS as WALK_OCCLUSION_COUNT_WORDS;
+use meshlight_pass_fill_clusters::{FillClusters, HIDDEN_NODE, HierarchyFill, Mode as WalkMode};
 use meshlight_pass_hw_raster::{Feed, HwRaster};
 use meshlight_pass_remap_dispatch::RemapDispatch;
 use meshlight_pass_resolve::{DebugView, OCCLUDED_PER_INSTANCE, Resolve};
@@ -66,6 +68,23 @@ pub const SECOND_SW_ARGS: &str = "sw_args_second";
 /// `occlusion` view: the first cull clears and fills them, the second updates them,
 /// resolve reads them (named unlike all three slots).
 pub const INSTANCE_OCCLUSION: &str = "instance_occlusion";
+/// Resources of the two walks of the hierarchy: the nodes the first walk found hidden
+/// (three words each) and their count, the second walk's cluster list and count, and its
+/// counters; each named unlike the slots it is bound to.
+pub const HIDDEN_NODES: &str = "hidden_nodes";
+pub const HIDDEN_NODE_COUNT: &str = "hidden_node_count";
+pub const SECOND_WALK_CLUSTERS: &str = "second_walk_clusters";
+pub const SECOND_WALK_COUNT: &str = "second_walk_count";
+pub const SECOND_HIERARCHY_COUNTS: &str = "hierarchy_counts_second";
+/// Size parameter: entries of [`HIDDEN_NODES`]. A full list costs no correctness (the
+/// first walk then walks on below the node), only pruning.
+pub const HIDDEN_NODES_PARAM: &str = "hidden_nodes";
+
+/// [`HIDDEN_NODES_PARAM`] for a scene: room for every instance's root and then some,
+/// within 4 Mi entries (48 MiB).
+pub fn hidden_node_capacity(instances: usize) -> u64 {
+    (instances as u64 * 4).clamp(1 << 16, 1 << 22)
+}
 
 /// What a frame is asked for; the same for both ways of building the graph.
 #[derive(Clone, Debug, PartialEq)]
@@ -245,19 +264,56 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         g.history_texture(PYRAMID_HISTORY, desc)
     });
     // Slots not bound here bind to the resource of the same name.
+    // The walk prunes by the LOD threshold cull tests with: they must agree, or
+    // clusters of the cut would be pruned.
+    let walk = HierarchyFill {
+        lod_threshold_px: s.lod_threshold_px,
+        ..HierarchyFill::default()
+    };
+    let walk_counts = if history.is_some() {
+        WALK_OCCLUSION_COUNT_WORDS
+    } else {
+        4
+    };
     if s.hierarchy {
         import_hierarchy_for(data, &mut g);
         g.create_buffer(
             HIERARCHY_COUNTS_READBACK,
-            BufferDesc::array(Element::U32, 4),
+            BufferDesc::array(Element::U32, walk_counts),
         );
-        // The walk prunes by the LOD threshold cull tests with: they must agree, or
-        // clusters of the cut would be pruned.
-        let walk = HierarchyFill {
-            lod_threshold_px: s.lod_threshold_px,
-            ..HierarchyFill::default()
+        let bindings = match &history {
+            // Nodes last frame's pyramid hides wait for the second walk.
+            Some(h) => {
+                g.size_param(
+                    HIDDEN_NODES_PARAM,
+                    hidden_node_capacity(data.instances.len()),
+                );
+                for (name, desc) in [
+                    (
+                        HIDDEN_NODES,
+                        BufferDesc::array_param(HIDDEN_NODE, HIDDEN_NODES_PARAM),
+                    ),
+                    (HIDDEN_NODE_COUNT, BufferDesc::array(Element::U32, 2)),
+                    (
+                        SECOND_WALK_CLUSTERS,
+                        BufferDesc::array_param(elements::CLUSTER, CLUSTERS_PARAM),
+                    ),
+                    (SECOND_WALK_COUNT, BufferDesc::array(Element::U32, 2)),
+                    (
+                        SECOND_HIERARCHY_COUNTS,
+                        BufferDesc::array(Element::U32, walk_counts),
+                    ),
+                ] {
+                    g.create_buffer(name, desc);
+                }
+                Bindings::new()
+                    .bind("pyramid", h.prev)
+                    .bind_named("occluded_nodes", HIDDEN_NODES)
+                    .bind_named("occluded_node_count", HIDDEN_NODE_COUNT)
+            }
+            None => Bindings::new(),
         };
-        g.add_pass("fill", walk, Bindings::new())?;
+        g.add_pass("fill", walk, bindings)?;
     } else {
         g.add_pass("fill", FillClusters::default(), Bindings::new())?;
     }
@@ -351,6 +407,21 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     if history.is_some() {
         let visibility = Bindings::new().bind_named("visibility", "visbuffer");
         g.add_choice("depth_pyramid", pyramid()?, visibility)?;
+        if s.hierarchy {
+            // The nodes the first walk found hidden, walked again against this frame's
+            // pyramid; cull_second takes the clusters below those still visible.
+            let second_walk = HierarchyFill {
+                mode: WalkMode::Second,
+                ..walk
+            };
+            let bindings = Bindings::new()
+                .bind_named("candidate_nodes", HIDDEN_NODES)
+                .bind_named("candidate_node_count", HIDDEN_NODE_COUNT)
+                .bind_named("clusters", SECOND_WALK_CLUSTERS)
+                .bind_named("cluster_count", SECOND_WALK_COUNT)
+                .bind_named("hierarchy_counts", SECOND_HIERARCHY_COUNTS);
+            g.add_pass("fill_second", second_walk, bindings)?;
+        }
         let second = CullLod {
             thresholds,
             mode: Mode::Second,
@@ -362,6 +433,13 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             .bind_named("first_counts", "raster_counts")
             .bind_named("raster_counts", SECOND_COUNTS)
             .bind_named("hw_args", SECOND_HW_ARGS);
+        let bindings = if s.hierarchy {
+            bindings
+                .bind_named(WALKED_SLOT, SECOND_WALK_CLUSTERS)
+                .bind_named(WALKED_COUNT_SLOT, SECOND_WALK_COUNT)
+        } else {
+            bindings
+        };
         let bindings = if records {
             bindings.bind_named(PER_INSTANCE_SECOND, INSTANCE_OCCLUSION)
         } else {
@@ -444,9 +522,13 @@ pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBui
             .and_then(toml::Value::as_table)
             .is_some_and(|p| p.contains_key(name))
     };
-    let optional = [PYRAMID_WIDTH_PARAM, PYRAMID_HEIGHT_PARAM]
-        .into_iter()
-        .chain(hierarchy_lengths(data).map(|(name, _, _)| name));
+    let optional = [
+        PYRAMID_WIDTH_PARAM,
+        PYRAMID_HEIGHT_PARAM,
+        HIDDEN_NODES_PARAM,
+    ]
+    .into_iter()
+    .chain(hierarchy_lengths(data).map(|(name, _, _)| name));
     for name in optional {
         if !declares(name) {
             params.remove(name);
@@ -469,6 +551,10 @@ pub fn overrides(data: &SceneData, s: &FrameSettings) -> BTreeMap<String, u64> {
     o.insert("pixels".into(), s.width as u64 * s.height as u64);
     o.insert(CLUSTERS_PARAM.into(), s.clusters);
     o.insert(SLOTS_PARAM.into(), s.slots.min(MAX_SLOTS));
+    o.insert(
+        HIDDEN_NODES_PARAM.into(),
+        hidden_node_capacity(data.instances.len()),
+    );
     let pyramid = meshlight_pass_depth_pyramid::pyramid_extent(s.width, s.height);
     let [w, h] = pyramid.texture_size();
     o.insert(PYRAMID_WIDTH_PARAM.into(), w as u64);
@@ -636,12 +722,33 @@ fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
         )?;
     }
     if g.resource(HIERARCHY_COUNTS_READBACK).is_some() {
+        // The walk's five words with occlusion (a second walk), four without.
+        let second_walk = g.resource(SECOND_HIERARCHY_COUNTS).is_some();
+        let bytes = if second_walk {
+            WALK_OCCLUSION_COUNT_WORDS * 4
+        } else {
+            16
+        };
         g.readback_named(
             HIERARCHY_COUNTS_READBACK,
             HIERARCHY_COUNTS_READBACK,
-            Some(0..16),
+            Some(0..bytes),
             COUNTS_LATENCY,
         )?;
+        if second_walk {
+            g.readback_named(
+                SECOND_HIERARCHY_COUNTS_READBACK,
+                SECOND_HIERARCHY_COUNTS,
+                Some(0..bytes),
+                COUNTS_LATENCY,
+            )?;
+            g.readback_named(
+                SECOND_WALK_COUNT_READBACK,
+                SECOND_WALK_COUNT,
+                Some(0..8),
+                COUNTS_LATENCY,
+            )?;
+        }
     }
     Ok(())
 }

@@ -6,7 +6,8 @@
 
 use super::counts::{
     CLUSTER_COUNT_READBACK, FrameCounts, HIERARCHY_COUNTS_READBACK, HierarchyCounts,
-    RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK,
+    RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK, SECOND_HIERARCHY_COUNTS_READBACK,
+    SECOND_WALK_COUNT_READBACK,
 };
 use super::frame_graph::{CLUSTERS_PARAM, FrameSettings, GraphSource, MAX_SLOTS, SLOTS_PARAM};
 use crate::graph::{
@@ -65,6 +66,8 @@ pub struct Renderer {
     two_pass: bool,
     /// `fill` walks the culling hierarchy and its counters come back.
     walks_hierarchy: bool,
+    /// A second walk (from the nodes the first found hidden) and its counters.
+    walks_twice: bool,
     /// Instances moved through [`Renderer::set_transform`] since the last frame.
     moved: Vec<meshlight_gpu_scene::InstanceId>,
     /// Counters by frame, until both readbacks of a frame are in.
@@ -92,6 +95,8 @@ struct PendingCounts {
     raster_counts: Option<Vec<u8>>,
     second: Option<Vec<u8>>,
     hierarchy: Option<Vec<u8>>,
+    second_walk: Option<Vec<u8>>,
+    second_walk_list: Option<Vec<u8>>,
 }
 
 impl Renderer {
@@ -134,11 +139,16 @@ impl Renderer {
             .plan
             .pass_index(&format!("readback:{HIERARCHY_COUNTS_READBACK}"))
             .is_some();
+        let walks_twice = compiled
+            .plan
+            .pass_index(&format!("readback:{SECOND_WALK_COUNT_READBACK}"))
+            .is_some();
         Ok(Self {
             data,
             settings,
             two_pass,
             walks_hierarchy,
+            walks_twice,
             cut: false,
             moved: Vec::new(),
             compiled,
@@ -302,6 +312,9 @@ impl Renderer {
         if self.walks_hierarchy {
             names.push(HIERARCHY_COUNTS_READBACK);
         }
+        if self.walks_twice {
+            names.extend([SECOND_HIERARCHY_COUNTS_READBACK, SECOND_WALK_COUNT_READBACK]);
+        }
         for name in names {
             while let Some(r) = self.executor.take_readback(name)? {
                 let entry = self.pending.entry(r.frame).or_default();
@@ -309,12 +322,14 @@ impl Renderer {
                     CLUSTER_COUNT_READBACK => &mut entry.cluster_count,
                     RASTER_COUNTS_READBACK => &mut entry.raster_counts,
                     HIERARCHY_COUNTS_READBACK => &mut entry.hierarchy,
+                    SECOND_HIERARCHY_COUNTS_READBACK => &mut entry.second_walk,
+                    SECOND_WALK_COUNT_READBACK => &mut entry.second_walk_list,
                     _ => &mut entry.second,
                 };
                 *part = Some(r.bytes);
             }
         }
-        let (two_pass, walks) = (self.two_pass, self.walks_hierarchy);
+        let (two_pass, walks, twice) = (self.two_pass, self.walks_hierarchy, self.walks_twice);
         let complete: Vec<u64> = self
             .pending
             .iter()
@@ -323,6 +338,7 @@ impl Renderer {
                     && p.raster_counts.is_some()
                     && (p.second.is_some() || !two_pass)
                     && (p.hierarchy.is_some() || !walks)
+                    && (p.second_walk.is_some() && p.second_walk_list.is_some() || !twice)
             })
             .map(|(f, _)| *f)
             .collect();
@@ -337,7 +353,11 @@ impl Renderer {
             )
             .ok_or_else(short)?;
             if let Some(bytes) = &p.hierarchy {
-                counts.hierarchy = Some(HierarchyCounts::from_words(bytes).ok_or_else(short)?);
+                let mut h = HierarchyCounts::from_words(bytes).ok_or_else(short)?;
+                if let (Some(c), Some(l)) = (&p.second_walk, &p.second_walk_list) {
+                    h = h.with_second(c, l).ok_or_else(short)?;
+                }
+                counts.hierarchy = Some(h);
             }
             self.grow_for(&counts)?;
             if self.latest.is_none_or(|l| l.frame < frame) {
@@ -357,7 +377,13 @@ impl Renderer {
         let wants = [
             (
                 CLUSTERS_PARAM,
-                counts.clusters_requested as u64,
+                // The second walk's list is sized by the same parameter.
+                (counts.clusters_requested as u64).max(
+                    counts
+                        .hierarchy
+                        .and_then(|h| h.second)
+                        .map_or(0, |w| w.clusters_requested as u64),
+                ),
                 self.max_elements,
                 "--clusters",
             ),

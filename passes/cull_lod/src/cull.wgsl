@@ -10,7 +10,9 @@
 // transform, and appends what it finds hidden to `occluded`; the second takes that list
 // as its clusters and tests it against this frame's pyramid with the current view, and
 // puts what survives into the slots the first pass left free, every one on the hardware
-// side (see lib.rs for why).
+// side (see lib.rs for why). With WALKED, the second pass also takes the clusters the
+// second hierarchy walk listed (below the nodes the first walk found hidden), after its
+// own list: those were never tested, and are tested like the rest.
 
 #import meshlight::math::F32_MAX
 #import meshlight::meshlet::{Meshlet, MeshletGroup, Cluster, meshlet_bounds, meshlet_triangle_count, lod_cut, MESHLET_NO_GROUP}
@@ -82,11 +84,24 @@ fn per_instance_word(instance: u32, word: u32) -> u32 {
     return instance * 2u + word;
 }
 #endif
+#ifdef WALKED
+// The second walk's list and its count words (`fill_clusters`' layout).
+@group(0) @binding(17) var<storage, read> walked_clusters: array<Cluster>;
+@group(0) @binding(18) var<storage, read> walked_cluster_count: array<u32>;
+#endif
 #endif
 
 const WORKGROUP_SIZE: u32 = 64u;
 // Vertices of one hardware-rasterised cluster: 128 triangles × 3.
 const HW_VERTICES: u32 = 384u;
+
+fn is_second_pass() -> bool {
+#ifdef SECOND_PASS
+    return true;
+#else
+    return false;
+#endif
+}
 
 fn capacity() -> u32 {
     return min(params.capacity, arrayLength(&raster_clusters));
@@ -132,8 +147,31 @@ fn is_occluded(instance: Instance, bounds: vec4<f32>) -> bool {
 const COUNT_WORDS: u32 = 8u;
 #endif
 
-fn cluster_total() -> u32 {
+fn listed_total() -> u32 {
     return min(cluster_count[0], arrayLength(&clusters));
+}
+
+fn walked_total() -> u32 {
+#ifdef WALKED
+    return min(walked_cluster_count[0], arrayLength(&walked_clusters));
+#else
+    return 0u;
+#endif
+}
+
+fn cluster_total() -> u32 {
+    return listed_total() + walked_total();
+}
+
+// Cluster i of the pass: `clusters` first, then the second walk's.
+fn cluster_at(i: u32) -> Cluster {
+#ifdef WALKED
+    let listed = listed_total();
+    if i >= listed {
+        return walked_clusters[i - listed];
+    }
+#endif
+    return clusters[i];
 }
 
 @compute @workgroup_size(1)
@@ -206,7 +244,9 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
     if i >= cluster_total() {
         return;
     }
-    let cluster = clusters[i];
+    let cluster = cluster_at(i);
+    // A cluster of the second walk: the first pass never saw it.
+    let walked = i >= listed_total();
     let instance = instances[cluster.instance];
     let meshlet = meshlets[cluster.meshlet];
     let scale = instance_max_scale(instance);
@@ -242,20 +282,17 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
 #ifdef PER_INSTANCE
     let at = per_instance_word(cluster.instance, 0u);
     let in_bounds = at + 1u < arrayLength(&per_instance);
-#ifndef SECOND_PASS
-    if in_bounds {
+    // The first pass counts its cut; the second, the cut of what the second walk found.
+    if in_bounds && (!is_second_pass() || walked) {
         atomicAdd(&per_instance[at], 1u);
     }
-#endif
 #endif
     if params.test_occlusion != 0u && is_occluded(instance, bounds) {
         atomicAdd(&raster_counts[9], 1u);
 #ifdef PER_INSTANCE
-#ifndef SECOND_PASS
-        if in_bounds {
+        if in_bounds && (!is_second_pass() || walked) {
             atomicAdd(&per_instance[at + 1u], 1u);
         }
-#endif
 #endif
 #ifndef SECOND_PASS
         let k = atomicAdd(&occluded_count[1], 1u);
@@ -267,11 +304,10 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
         return;
     }
 #ifdef PER_INSTANCE
-#ifdef SECOND_PASS
-    if in_bounds {
+    // A first-pass candidate found visible after all.
+    if in_bounds && is_second_pass() && !walked {
         atomicSub(&per_instance[at + 1u], 1u);
     }
-#endif
 #endif
     let range = slot_range();
     let software = params.hardware == 0u || is_software(center, radius);

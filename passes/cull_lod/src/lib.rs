@@ -28,6 +28,8 @@
 //! | `first_counts`    | storage read (optional) | u32 × 12 | `second`: the first pass's `raster_counts` |
 //! | `occluded_per_instance` | cleared read-write (optional) | u32 × 2 per instance | `first` with a pyramid: `[2i]` clusters of instance `i` in the LOD cut, `[2i + 1]` of those found hidden |
 //! | `still_occluded_per_instance` | storage read-write (optional) | u32 × 2 per instance | `second`: the same buffer; `[2i + 1]` less each candidate found visible |
+//! | `walked_clusters` | storage read (optional) | Cluster | `second`: the second hierarchy walk's list (`fill_clusters` `hierarchy`, `mode = "second"`), tested after `clusters` |
+//! | `walked_cluster_count` | storage read (optional) | u32 × 2 | `second`: its `cluster_count` |
 //!
 //! `raster_counts`: `[0]` software clusters, `[1]` hardware clusters, `[2]` clusters
 //! that passed frustum, LOD and occlusion (slots requested, may exceed the slots the
@@ -63,13 +65,22 @@
 //! so `hw_raster` bound to its `raster_counts` and `hw_args` draws instance `j` into
 //! slot `C - hw1 - 1 - j`). Every visibility id of the frame indexes one list.
 //!
+//! With the hierarchy walk testing occlusion per node (`fill_clusters` `hierarchy`), the
+//! first walk hands the nodes last frame's pyramid hides to a second walk, which runs
+//! after this frame's pyramid is built and lists the clusters below the nodes still
+//! visible. The second pass takes that list as `walked_clusters` and
+//! `walked_cluster_count`, after its candidates: its clusters were never tested, and get
+//! every test (frustum, LOD, occlusion against this frame's pyramid).
+//!
 //! # Per-instance occlusion counters (for the `occlusion` debug view)
 //!
 //! With `occluded_per_instance` bound, the first pass clears it (a fill inside the
 //! batch) and, per cluster of instance `i` in the LOD cut, adds 1 to `[2i]` and, when
 //! the pyramid hides it, 1 to `[2i + 1]`. The second pass, given the same buffer as
 //! `still_occluded_per_instance`, subtracts 1 from `[2i + 1]` per candidate it finds
-//! visible. After both, `[2i + 1]` is what occlusion culled of instance `i` this
+//! visible, and for each cluster of `walked_clusters` in the cut adds 1 to `[2i]` and,
+//! when it is still hidden, 1 to `[2i + 1]`. After both, `[2i + 1]` is what occlusion
+//! culled of instance `i` at the cluster level this
 //! frame and `[2i + 1] / [2i]` its share, which `resolve`'s `occlusion` view shows.
 //! Instances past the buffer's length are not counted. Two atomics per cluster of the
 //! cut plus a clear: a frame binds the buffer only for that view.
@@ -153,6 +164,9 @@ pub const OCCLUSION_COUNT_WORDS: u64 = 12;
 pub const PER_INSTANCE_FIRST: &str = "occluded_per_instance";
 /// The second pass's slot for the same buffer, read-write and not cleared.
 pub const PER_INSTANCE_SECOND: &str = "still_occluded_per_instance";
+/// The second pass's optional second list: the second hierarchy walk's clusters.
+pub const WALKED_SLOT: &str = "walked_clusters";
+pub const WALKED_COUNT_SLOT: &str = "walked_cluster_count";
 /// The binding of the per-instance counters in cull.wgsl.
 const PER_INSTANCE_BINDING: u32 = 16;
 
@@ -233,6 +247,18 @@ pub fn contract() -> StageContract {
                 "first pass: per instance [2i] clusters in the LOD cut, [2i+1] found hidden",
             )
             .optional(),
+            read(
+                WALKED_SLOT,
+                elements::CLUSTER,
+                "second pass: the second hierarchy walk's clusters, tested after `clusters`",
+            )
+            .optional(),
+            read(
+                WALKED_COUNT_SLOT,
+                Element::U32,
+                "second pass: the second walk's cluster_count",
+            )
+            .optional(),
             Slot::buffer(
                 PER_INSTANCE_SECOND,
                 Access::StorageReadWrite,
@@ -272,6 +298,8 @@ pub struct CullDefs {
     pub second: bool,
     /// `PER_INSTANCE`: the per-instance occlusion counters are bound.
     pub per_instance: bool,
+    /// `WALKED`: a second pass with the second walk's list bound.
+    pub walked: bool,
 }
 
 impl ShaderDefs for CullDefs {
@@ -280,6 +308,7 @@ impl ShaderDefs for CullDefs {
             ("OCCLUSION", ShaderDef::Bool(self.occlusion)),
             ("SECOND_PASS", ShaderDef::Bool(self.second)),
             ("PER_INSTANCE", ShaderDef::Bool(self.per_instance)),
+            ("WALKED", ShaderDef::Bool(self.walked)),
         ]
     }
 }
@@ -371,6 +400,16 @@ impl CullLod {
                     "`occluded` and `occluded_count` are the first pass's outputs, to bind to the second pass as `clusters` and `cluster_count`; give them resource names other than the slots' (e.g. `candidates`, `candidate_count`), or the second pass binds them by name",
                 ))
             }
+            _ if self.mode == Mode::First && (bound(WALKED_SLOT) || bound(WALKED_COUNT_SLOT)) => {
+                Err(GraphError::parameter(format!(
+                    "`{WALKED_SLOT}` is the second walk's list, for `mode = \"second\"`; unbind it from the first pass"
+                )))
+            }
+            _ if bound(WALKED_SLOT) != bound(WALKED_COUNT_SLOT) => {
+                Err(GraphError::parameter(format!(
+                    "bind `{WALKED_SLOT}` and `{WALKED_COUNT_SLOT}` together (the second walk's `clusters` and `cluster_count`), or neither"
+                )))
+            }
             _ => Ok(occlusion),
         }
     }
@@ -438,10 +477,12 @@ impl Pass for CullLod {
         let occlusion = self.check_mode(ctx)?;
         let second = self.mode == Mode::Second;
         let per_instance = self.per_instance_slot(ctx, occlusion)?;
+        let walked = second && ctx.is_bound(WALKED_SLOT);
         let defs = CullDefs {
             occlusion,
             second,
             per_instance: per_instance.is_some(),
+            walked,
         };
         ctx.shader_defs(&defs);
         ctx.min_bytes("cluster_count", 4);
@@ -486,6 +527,13 @@ impl Pass for CullLod {
             if second {
                 prepare = prepare.slot(15, "first_counts");
                 cull = cull.slot(15, "first_counts");
+                if walked {
+                    ctx.min_bytes(WALKED_COUNT_SLOT, 4);
+                    for (binding, slot) in [(17, WALKED_SLOT), (18, WALKED_COUNT_SLOT)] {
+                        prepare = prepare.slot(binding, slot);
+                        cull = cull.slot(binding, slot);
+                    }
+                }
             } else {
                 prepare = prepare.slot(14, "occluded_count");
                 cull = cull.slot(13, "occluded").slot(14, "occluded_count");

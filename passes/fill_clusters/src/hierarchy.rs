@@ -99,14 +99,18 @@
 //! cut, and `cull_lod` after this list keeps exactly the clusters it keeps after the flat
 //! list. [`crate::hierarchy_cpu`] mirrors the shader.
 
-use crate::{InstanceGrid, STAGE, VIEW_INPUT, contract, instance_grid};
+use crate::{
+    CAMERA_CUT_INPUT, CANDIDATE_NODE_COUNT_SLOT, CANDIDATE_NODES_SLOT, InstanceGrid,
+    OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT,
+    hierarchy_contract, instance_grid,
+};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::Params;
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
     Result, SetupContext, StageContract,
 };
-use meshlight_shaders::{PassShader, pass_shader};
+use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
 /// The implementation name pipelines use.
 pub const IMPLEMENTATION: &str = "hierarchy";
@@ -140,6 +144,48 @@ const LIST_COUNTS: &str = "hierarchy_subtree_counts";
 /// Scratch: the lists of handed-on subtrees, 12 bytes an entry.
 const LISTS: &str = "hierarchy_subtrees";
 
+/// Which walk of the frame this is (two-pass occlusion culling, DESIGN §5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Mode {
+    /// From every instance's root; with a pyramid bound (last frame's), the nodes it
+    /// proves hidden go to `occluded_nodes` instead of being walked.
+    #[default]
+    First,
+    /// From the first walk's hidden nodes (`candidate_nodes`), against this frame's
+    /// pyramid: what is still hidden is dropped.
+    Second,
+}
+
+impl Mode {
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::First => "first",
+            Mode::Second => "second",
+        }
+    }
+}
+
+/// The variant of hierarchy.wgsl a pass runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct WalkDefs {
+    /// `OCCLUSION`: a pyramid is bound and tested per node.
+    pub occlusion: bool,
+    /// `SECOND_PASS`: [`Mode::Second`].
+    pub second: bool,
+}
+
+impl ShaderDefs for WalkDefs {
+    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
+        vec![
+            ("OCCLUSION", ShaderDef::Bool(self.occlusion)),
+            ("SECOND_PASS", ShaderDef::Bool(self.second)),
+        ]
+    }
+}
+
+/// Words of `hierarchy_counts` with occlusion: `[4]` nodes the pyramid hid.
+pub const OCCLUSION_COUNT_WORDS: u64 = 5;
+
 /// The `hierarchy` implementation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HierarchyFill {
@@ -157,6 +203,8 @@ pub struct HierarchyFill {
     pub subtree_capacity: Option<u32>,
     /// Workgroups of each step after the first; `None`: [`SPREAD_GROUPS`].
     pub spread_groups: Option<u32>,
+    /// The first walk of the frame or the second (occlusion culling).
+    pub mode: Mode,
 }
 
 impl Default for HierarchyFill {
@@ -169,6 +217,7 @@ impl Default for HierarchyFill {
             spread_steps: SPREAD_STEPS,
             subtree_capacity: None,
             spread_groups: None,
+            mode: Mode::First,
         }
     }
 }
@@ -184,9 +233,13 @@ struct GpuParams {
     step: u32,
     steps: u32,
     list_capacity: u32,
+    test_occlusion: u32,
+    node_capacity: u32,
+    _pad: [u32; 2],
 }
 
-const PARAM_KEYS: [&str; 7] = [
+const PARAM_KEYS: [&str; 8] = [
+    "mode",
     "capacity",
     "instance_count",
     "lod_threshold_px",
@@ -209,6 +262,15 @@ impl HierarchyFill {
             spread_steps: params.u32("spread_steps", SPREAD_STEPS)?,
             subtree_capacity: nonzero(params.u32("subtree_capacity", 0)?),
             spread_groups: nonzero(params.u32("spread_groups", 0)?),
+            mode: match params.string("mode", "first")?.as_str() {
+                "first" => Mode::First,
+                "second" => Mode::Second,
+                other => {
+                    return Err(GraphError::parameter(format!(
+                        "`mode` = \"{other}\" is not a mode; use \"first\" or \"second\""
+                    )));
+                }
+            },
         };
         pass.check()?;
         Ok(pass)
@@ -255,11 +317,54 @@ impl HierarchyFill {
     fn list_capacity(&self) -> u32 {
         self.subtree_capacity.unwrap_or(SUBTREE_CAPACITY)
     }
+
+    /// Whether the walk tests occlusion (a pyramid is bound), after checking that the
+    /// slots of the mode are bound and the other mode's are not.
+    fn check_mode(&self, ctx: &SetupContext) -> Result<bool> {
+        let bound = |slot| ctx.is_bound(slot);
+        let occlusion = bound(PYRAMID_SLOT);
+        let (mine, other) = match self.mode {
+            Mode::First => (
+                [OCCLUDED_NODES_SLOT, OCCLUDED_NODE_COUNT_SLOT],
+                [CANDIDATE_NODES_SLOT, CANDIDATE_NODE_COUNT_SLOT],
+            ),
+            Mode::Second => (
+                [CANDIDATE_NODES_SLOT, CANDIDATE_NODE_COUNT_SLOT],
+                [OCCLUDED_NODES_SLOT, OCCLUDED_NODE_COUNT_SLOT],
+            ),
+        };
+        let mode = self.mode.name();
+        if let Some(slot) = other.iter().find(|s| bound(s)) {
+            return Err(GraphError::parameter(format!(
+                "`{slot}` is bound to a `mode = \"{mode}\"` walk, which uses `{}` and `{}`; the first walk writes `{OCCLUDED_NODES_SLOT}`, the second reads the same list as `{CANDIDATE_NODES_SLOT}` (name the resources unlike both slots, or the second walk binds them by name)",
+                mine[0], mine[1]
+            )));
+        }
+        let listed = mine.iter().filter(|s| bound(s)).count();
+        if occlusion && listed < 2 || self.mode == Mode::Second && !occlusion {
+            return Err(GraphError::parameter(format!(
+                "a `mode = \"{mode}\"` walk with occlusion needs `{PYRAMID_SLOT}`, `{}` and `{}` bound ({})",
+                mine[0],
+                mine[1],
+                match self.mode {
+                    Mode::First => "last frame's pyramid; the nodes it hides go to the list",
+                    Mode::Second => "this frame's pyramid; the first walk's hidden nodes",
+                }
+            )));
+        }
+        if !occlusion && listed > 0 {
+            return Err(GraphError::parameter(format!(
+                "`{}` is bound but `{PYRAMID_SLOT}` is not: bind last frame's pyramid to test occlusion, or unbind it",
+                mine[0]
+            )));
+        }
+        Ok(occlusion)
+    }
 }
 
 impl Pass for HierarchyFill {
     fn contract(&self) -> StageContract {
-        contract()
+        hierarchy_contract()
     }
     fn implementation(&self) -> &'static str {
         IMPLEMENTATION
@@ -271,8 +376,13 @@ impl Pass for HierarchyFill {
                 "`{STAGE}` implementation `{IMPLEMENTATION}` walks the culling hierarchy: bind slot `{slot}` to the GPU scene's buffer of that name (GpuScene::import_hierarchy, or gpu::import_hierarchy_for)"
             )));
         }
+        let occlusion = self.check_mode(ctx)?;
+        let second = self.mode == Mode::Second;
+        let defs = WalkDefs { occlusion, second };
+        ctx.shader_defs(&defs);
         ctx.min_bytes("cluster_count", 8);
         ctx.frame_input(VIEW_INPUT);
+        let count_words = if occlusion { OCCLUSION_COUNT_WORDS } else { 4 };
         let mut layout = BindingLayout::compute("fill_clusters::hierarchy")
             .slot(0, "instances")
             .slot(1, "clusters")
@@ -283,12 +393,12 @@ impl Pass for HierarchyFill {
             .slot(6, "hierarchy_clusters")
             .slot(7, "hierarchy_roots");
         if ctx.is_bound(COUNTS_SLOT) {
-            ctx.min_bytes(COUNTS_SLOT, 16);
+            ctx.min_bytes(COUNTS_SLOT, count_words * 4);
             layout = layout.slot(8, COUNTS_SLOT);
         } else {
             ctx.scratch_buffer(
                 COUNTS_SLOT,
-                BufferDesc::array(Element::U32, 4),
+                BufferDesc::array(Element::U32, count_words),
                 &[Access::ClearedReadWrite],
             );
             layout = layout.scratch(8, COUNTS_SLOT, Access::ClearedReadWrite);
@@ -308,10 +418,27 @@ impl Pass for HierarchyFill {
         layout = layout
             .scratch(9, LIST_COUNTS, Access::ClearedReadWrite)
             .scratch(10, LISTS, Access::ClearedReadWrite);
+        if occlusion {
+            layout = layout.slot(11, PYRAMID_SLOT);
+            if second {
+                ctx.min_bytes(CANDIDATE_NODE_COUNT_SLOT, 4);
+                layout = layout
+                    .slot(12, CANDIDATE_NODES_SLOT)
+                    .slot(13, CANDIDATE_NODE_COUNT_SLOT);
+            } else {
+                ctx.min_bytes(OCCLUDED_NODE_COUNT_SLOT, 8);
+                ctx.frame_input(CAMERA_CUT_INPUT);
+                layout = layout
+                    .slot(12, OCCLUDED_NODES_SLOT)
+                    .slot(13, OCCLUDED_NODE_COUNT_SLOT);
+            }
+        }
         for entry in ["prepare", "fill"] {
             ctx.program(
                 entry,
-                ProgramDesc::compute(&SHADER, entry).layout(layout.clone()),
+                ProgramDesc::compute(&SHADER, entry)
+                    .defs(&defs)
+                    .layout(layout.clone()),
             );
         }
         Ok(())
@@ -324,11 +451,25 @@ impl Pass for HierarchyFill {
             limit,
         } = instance_grid(ctx, self.instance_count)?;
         let spread = self.spread_groups.unwrap_or(SPREAD_GROUPS).min(limit);
+        let occlusion = ctx.is_bound(PYRAMID_SLOT);
+        let test_occlusion = occlusion
+            && match self.mode {
+                Mode::Second => true,
+                Mode::First => {
+                    ctx.history_valid(PYRAMID_SLOT)? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
+                }
+            };
+        // The second walk starts from a list whose length only the GPU knows: its
+        // first step strides over it like the later steps.
+        let first_grid = match self.mode {
+            Mode::First => [x, y],
+            Mode::Second => [spread, 1],
+        };
         // The counters and list lengths zeroed, then step 0 (a workgroup per instance),
         // then each later step over the list the one before wrote; each dispatch in its
         // own compute pass so the next sees its writes.
         let mut dispatches = vec![("prepare", 0, [1, 1])];
-        dispatches.push(("fill", 0, [x, y]));
+        dispatches.push(("fill", 0, first_grid));
         for step in 1..=self.spread_steps {
             dispatches.push(("fill", step, [spread, 1]));
         }
@@ -342,6 +483,9 @@ impl Pass for HierarchyFill {
                 step,
                 steps: self.spread_steps,
                 list_capacity: self.list_capacity(),
+                test_occlusion: test_occlusion as u32,
+                node_capacity: u32::MAX,
+                _pad: [0; 2],
             };
             let uniforms: [(u32, &[u8]); 2] = [
                 (3, bytemuck::bytes_of(&view)),

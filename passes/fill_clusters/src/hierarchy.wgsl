@@ -19,11 +19,22 @@
 // appends its children to the next frontier. The meshlets a chunk of 64 nodes emits are reserved
 // with one global atomic and written cooperatively, one leaf after another, consecutive
 // threads writing consecutive slots.
+//
+// With OCCLUSION (two-pass occlusion culling, DESIGN §5), an accepted node is also tested
+// against a depth pyramid. The first pass (last frame's pyramid, through last frame's
+// view and the instance's previous transform) hands a node it proves hidden to the
+// second pass as one entry of `node_list` and goes no deeper; the second pass
+// (SECOND_PASS: this frame's pyramid and view) starts its walk from that list instead
+// of the instances' roots and drops what is still hidden. A root is the instance, so a
+// hidden instance costs one node test per pass and emits nothing.
 
 #import meshlight::meshlet::Cluster
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
 #import meshlight::view::View
 #import meshlight::math::F32_MAX
+#ifdef OCCLUSION
+#import meshlight::occlusion::{occlusion_rect, sphere_occluded}
+#endif
 
 // 64 bytes: the asset's `NodeRecord`, with `first_child` and `first_cluster` rebased
 // onto the shared buffers by the GPU scene.
@@ -62,6 +73,12 @@ struct Params {
     steps: u32,
     // Entries each list holds.
     list_capacity: u32,
+    // 1: test occlusion against `pyramid`; 0: skip it (no valid history, camera cut).
+    test_occlusion: u32,
+    // Entries `node_list` may hold (clamped to its length too).
+    node_capacity: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 // Children `first .. first + count` of one node of `instance`'s hierarchy, handed to the
@@ -93,12 +110,33 @@ struct Subtree {
 @group(0) @binding(9) var<storage, read_write> subtree_counts: array<atomic<u32>>;
 // The lists, step k + 1's at [k * list_capacity ..].
 @group(0) @binding(10) var<storage, read_write> subtrees: array<Subtree>;
+#ifdef OCCLUSION
+// The depth pyramid (R32Float, farthest depth per texel): last frame's in the first
+// pass, this frame's in the second.
+@group(0) @binding(11) var pyramid: texture_2d<f32>;
+#ifdef SECOND_PASS
+// The first pass's hidden nodes, (instance, node, 1) each: where this walk starts.
+@group(0) @binding(12) var<storage, read> node_list: array<Subtree>;
+// [0] entries written, [1] found.
+@group(0) @binding(13) var<storage, read> node_list_count: array<u32>;
+#else
+// The nodes this pass finds hidden, for the second pass; [0] written, [1] found.
+@group(0) @binding(12) var<storage, read_write> node_list: array<Subtree>;
+@group(0) @binding(13) var<storage, read_write> node_list_count: array<atomic<u32>>;
+#endif
+#endif
 
 const WORKGROUP_SIZE: u32 = 64u;
 // Nodes a frontier holds; two frontiers take 8 KiB of workgroup memory.
 const QUEUE: u32 = 1024u;
 // Lists of subtrees at most (spreading steps).
 const MAX_STEPS: u32 = 4u;
+// Words of `hierarchy_counts`: with OCCLUSION, [4] counts the nodes the pyramid hid.
+#ifdef OCCLUSION
+const COUNT_WORDS: u32 = 5u;
+#else
+const COUNT_WORDS: u32 = 4u;
+#endif
 // More rounds than any stored tree has levels (the loader bounds nothing deeper than the
 // node count, but a walk must end even on damaged data).
 const MAX_ROUNDS: u32 = 256u;
@@ -125,6 +163,7 @@ var<workgroup> emit_base: u32;
 var<workgroup> leaves: atomic<u32>;
 var<workgroup> tested_nodes: atomic<u32>;
 var<workgroup> spilled: atomic<u32>;
+var<workgroup> hidden_nodes: atomic<u32>;
 // Entries this step walks (instances in step 0, the list's length after).
 var<workgroup> entry_total: u32;
 
@@ -220,13 +259,69 @@ fn node_visible(node: HierarchyNode, w: Walker) -> bool {
     return !(own_px > params.lod_threshold_px);
 }
 
+#ifdef OCCLUSION
+// Whether the pyramid proves a node's bounding sphere (which encloses the culling
+// sphere of every meshlet below) hidden: cull_lod's cluster test on the node's sphere.
+fn node_occluded(node: HierarchyNode, w: Walker) -> bool {
+    var seen = w.instance;
+#ifdef SECOND_PASS
+    let view_projection = view.view_projection;
+#else
+    seen.world_from_local = w.instance.previous_world_from_local;
+    let view_projection = view.previous_view_projection;
+#endif
+    let centre = instance_transform_point(seen, node.bounds.xyz);
+    let radius = node.bounds.w * instance_max_scale(seen);
+    return sphere_occluded(pyramid, occlusion_rect(view_projection, view.viewport_size, centre, radius));
+}
+
+#ifndef SECOND_PASS
+// Hands a hidden node to the second pass; false when the list is full (the walk then
+// goes on below it, as without occlusion).
+fn defer_node(id: u32) -> bool {
+    let at = atomicAdd(&node_list_count[1], 1u);
+    if at >= min(params.node_capacity, arrayLength(&node_list)) {
+        return false;
+    }
+    node_list[at] = Subtree(walk_instance, id, 1u);
+    atomicAdd(&node_list_count[0], 1u);
+    return true;
+}
+#endif
+#endif
+
+// Whether the walk goes on below a node `node_visible` accepted: with OCCLUSION, not
+// when the pyramid hides it (the first pass hands it to the second, the second drops it).
+fn node_seen(node: HierarchyNode, id: u32, w: Walker) -> bool {
+#ifdef OCCLUSION
+    if params.test_occlusion != 0u && node_occluded(node, w) {
+#ifdef SECOND_PASS
+        atomicAdd(&hidden_nodes, 1u);
+        return false;
+#else
+        if defer_node(id) {
+            atomicAdd(&hidden_nodes, 1u);
+            return false;
+        }
+#endif
+    }
+#endif
+    return true;
+}
+
 @compute @workgroup_size(1)
 fn prepare() {
     atomicStore(&cluster_count[0], 0u);
     atomicStore(&cluster_count[1], 0u);
-    for (var i = 0u; i < 4u; i += 1u) {
+    for (var i = 0u; i < COUNT_WORDS; i += 1u) {
         atomicStore(&hierarchy_counts[i], 0u);
     }
+#ifdef OCCLUSION
+#ifndef SECOND_PASS
+    atomicStore(&node_list_count[0], 0u);
+    atomicStore(&node_list_count[1], 0u);
+#endif
+#endif
     for (var i = 0u; i < min(MAX_STEPS, arrayLength(&subtree_counts)); i += 1u) {
         atomicStore(&subtree_counts[i], 0u);
     }
@@ -285,7 +380,12 @@ fn fill(
     let cap = capacity();
     if t == 0u {
         if params.step == 0u {
+#ifdef SECOND_PASS
+            let listed = min(node_list_count[0], params.node_capacity);
+            entry_total = min(listed, arrayLength(&node_list));
+#else
             entry_total = min(params.instance_count, arrayLength(&instances));
+#endif
         } else {
             let list = params.step - 1u;
             var n = 0u;
@@ -300,6 +400,7 @@ fn fill(
         atomicStore(&leaves, 0u);
         atomicStore(&tested_nodes, 0u);
         atomicStore(&spilled, 0u);
+        atomicStore(&hidden_nodes, 0u);
     }
     let entries = workgroupUniformLoad(&entry_total);
     var unfinished = 0u;
@@ -309,11 +410,21 @@ fn fill(
         var first = 0u;
         var count = 0u;
         if params.step == 0u {
+#ifdef SECOND_PASS
+            let s = node_list[entry];
+            index = s.instance;
+            first = s.first;
+            count = min(s.count, QUEUE);
+            if index >= arrayLength(&instances) {
+                count = 0u;
+            }
+#else
             let mesh = instances[index].mesh;
             if mesh < arrayLength(&hierarchy_roots) {
                 first = hierarchy_roots[mesh];
                 count = 1u;
             }
+#endif
         } else {
             let at = (params.step - 1u) * params.list_capacity + entry;
             if at < arrayLength(&subtrees) {
@@ -354,7 +465,8 @@ fn fill(
                     // in half the dependent rounds).
                     let id = frontier[cur][i];
                     tests = 1u;
-                    if id < arrayLength(&hierarchy_nodes) && node_visible(hierarchy_nodes[id], w) {
+                    if id < arrayLength(&hierarchy_nodes) && node_visible(hierarchy_nodes[id], w)
+                        && node_seen(hierarchy_nodes[id], id, w) {
                         let node = hierarchy_nodes[id];
                         if node.child_count == 0u {
                             emit_range(node.first_cluster, node.cluster_count);
@@ -367,7 +479,7 @@ fn fill(
                                     continue;
                                 }
                                 let child = hierarchy_nodes[child_id];
-                                if !node_visible(child, w) {
+                                if !node_visible(child, w) || !node_seen(child, child_id, w) {
                                     continue;
                                 }
                                 if child.child_count == 0u {
@@ -431,5 +543,8 @@ fn fill(
         atomicAdd(&hierarchy_counts[1], atomicLoad(&leaves));
         atomicAdd(&hierarchy_counts[2], atomicLoad(&spilled));
         atomicAdd(&hierarchy_counts[3], unfinished);
+#ifdef OCCLUSION
+        atomicAdd(&hierarchy_counts[4], atomicLoad(&hidden_nodes));
+#endif
     }
 }

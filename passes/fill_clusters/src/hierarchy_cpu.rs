@@ -17,6 +17,7 @@ use crate::hierarchy::{MAX_ROUNDS, QUEUE, SLACK, SPREAD_STEPS, SUBTREE_CAPACITY}
 use meshlight_gpu_scene::SceneData;
 use meshlight_scene::asset::format::NodeRecord;
 use meshlight_shaders::cpu::layout::{Cluster, Instance, View};
+use meshlight_shaders::cpu::occlusion::{DEPTH_SLACK, DepthPyramid, MARGIN_PX, occlusion_rect};
 
 /// The pass's parameters that change what it emits.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,6 +67,68 @@ pub struct HierarchyWalk {
     /// `(instance, node)` of every test decided within `near` (the argument of
     /// [`cpu_walk`]) of a threshold, relative to what it compared.
     pub near_threshold: Vec<(u32, u32)>,
+    /// With occlusion, `(instance, node)` of every node the pyramid hid (its count is
+    /// `hierarchy_counts[4]`): the first walk's `occluded_nodes`, in walk order (the
+    /// GPU's order differs), or what the second walk dropped.
+    pub hidden_nodes: Vec<(u32, u32)>,
+}
+
+/// The occlusion side of a walk.
+#[derive(Clone, Copy, Debug, Default)]
+pub enum WalkOcclusion<'a> {
+    /// No pyramid, or the first walk's test skipped (no valid history, camera cut).
+    #[default]
+    Off,
+    /// The first walk against last frame's pyramid (previous view-projection and
+    /// instance transforms); `capacity` entries of `occluded_nodes`.
+    First {
+        pyramid: &'a DepthPyramid,
+        capacity: u32,
+    },
+    /// The second walk from the first's hidden nodes against this frame's pyramid.
+    Second {
+        pyramid: &'a DepthPyramid,
+        nodes: &'a [(u32, u32)],
+    },
+}
+
+/// `node_occluded`, with how close it came to deciding otherwise (as
+/// [`NodeTest::closeness`]).
+pub fn node_occlusion(
+    view: &View,
+    instance: &Instance,
+    node: &NodeRecord,
+    pyramid: &DepthPyramid,
+    previous: bool,
+) -> NodeTest {
+    let mut seen = *instance;
+    let mut view_projection = view.view_projection;
+    if previous {
+        seen.world_from_local = seen.previous_world_from_local;
+        view_projection = view.previous_view_projection;
+    }
+    let w = Walker::new(&seen, view);
+    let centre = w.transform(node.bounds);
+    let radius = node.bounds[3] * w.scale;
+    let rect = occlusion_rect(&view_projection, view.viewport_size, centre, radius);
+    let mut closeness = f32::INFINITY;
+    if rect.testable {
+        let farthest = pyramid.farthest(rect.pixels);
+        let nearest = rect.depth * DEPTH_SLACK;
+        closeness = (nearest - farthest).abs() / farthest.abs().max(f32::MIN_POSITIVE);
+        for (v, m) in rect
+            .screen
+            .iter()
+            .zip([-MARGIN_PX, -MARGIN_PX, MARGIN_PX, MARGIN_PX])
+        {
+            let edge = v + m;
+            closeness = closeness.min((edge - edge.round()).abs() / edge.abs().max(1.0));
+        }
+    }
+    NodeTest {
+        visible: !pyramid.occludes(&rect),
+        closeness,
+    }
 }
 
 /// One node test: whether the walk goes on below the node, and how close the deciding
@@ -176,22 +239,69 @@ struct Entry {
 /// The reference walk over every instance. Tests deciding within `near` of a threshold
 /// are listed in [`HierarchyWalk::near_threshold`].
 pub fn cpu_walk(scene: &SceneData, view: &View, params: &WalkParams, near: f32) -> HierarchyWalk {
+    cpu_walk_with(scene, view, params, near, WalkOcclusion::Off)
+}
+
+/// The reference walk with occlusion: the first walk from every instance's root, the
+/// second from the first's hidden nodes.
+pub fn cpu_walk_with(
+    scene: &SceneData,
+    view: &View,
+    params: &WalkParams,
+    near: f32,
+    occlusion: WalkOcclusion,
+) -> HierarchyWalk {
     let nodes = &scene.hierarchy_nodes;
     let queue = params.queue_capacity.clamp(1, QUEUE) as usize;
     let mut r = HierarchyWalk::default();
-    let mut entries: Vec<Entry> = scene
-        .instances
-        .iter()
-        .enumerate()
-        .filter_map(|(index, instance)| {
-            let &root = scene.hierarchy_roots.get(instance.mesh as usize)?;
-            Some(Entry {
-                instance: index as u32,
-                first: root,
+    let mut entries: Vec<Entry> = match occlusion {
+        WalkOcclusion::Second { nodes: hidden, .. } => hidden
+            .iter()
+            .filter(|(instance, _)| (*instance as usize) < scene.instances.len())
+            .map(|&(instance, node)| Entry {
+                instance,
+                first: node,
                 count: 1,
             })
-        })
-        .collect();
+            .collect(),
+        _ => scene
+            .instances
+            .iter()
+            .enumerate()
+            .filter_map(|(index, instance)| {
+                let &root = scene.hierarchy_roots.get(instance.mesh as usize)?;
+                Some(Entry {
+                    instance: index as u32,
+                    first: root,
+                    count: 1,
+                })
+            })
+            .collect(),
+    };
+    // `node_seen`: false when the pyramid hides the node (the first walk hands it on
+    // while its list has room; the second drops it).
+    let seen =
+        |r: &mut HierarchyWalk, index: u32, instance: &Instance, id: u32, node: &NodeRecord| {
+            let (pyramid, previous) = match occlusion {
+                WalkOcclusion::Off => return true,
+                WalkOcclusion::First { pyramid, .. } => (pyramid, true),
+                WalkOcclusion::Second { pyramid, .. } => (pyramid, false),
+            };
+            let test = node_occlusion(view, instance, node, pyramid, previous);
+            if test.closeness < near {
+                r.near_threshold.push((index, id));
+            }
+            if test.visible {
+                return true;
+            }
+            if let WalkOcclusion::First { capacity, .. } = occlusion
+                && r.hidden_nodes.len() >= capacity as usize
+            {
+                return true;
+            }
+            r.hidden_nodes.push((index, id));
+            false
+        };
     for step in 0..=params.spread_steps {
         let spreading = step < params.spread_steps;
         let width = if spreading { queue.min(64) } else { queue };
@@ -226,7 +336,7 @@ pub fn cpu_walk(scene: &SceneData, view: &View, params: &WalkParams, near: f32) 
                     if test.closeness < near {
                         r.near_threshold.push((index, id));
                     }
-                    if !test.visible {
+                    if !test.visible || !seen(&mut r, index, instance, id, node) {
                         continue;
                     }
                     if step == 0 && round == 0 {
@@ -252,7 +362,7 @@ pub fn cpu_walk(scene: &SceneData, view: &View, params: &WalkParams, near: f32) 
                         if test.closeness < near {
                             r.near_threshold.push((index, child_id));
                         }
-                        if !test.visible {
+                        if !test.visible || !seen(&mut r, index, instance, child_id, child) {
                             continue;
                         }
                         if child.is_leaf() {

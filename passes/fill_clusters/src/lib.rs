@@ -62,8 +62,8 @@ pub mod hierarchy;
 pub mod hierarchy_cpu;
 
 pub use cpu::{FillResult, cpu_fill};
-pub use hierarchy::HierarchyFill;
-pub use hierarchy_cpu::{HierarchyWalk, WalkParams, cpu_walk};
+pub use hierarchy::{HierarchyFill, Mode};
+pub use hierarchy_cpu::{HierarchyWalk, WalkOcclusion, WalkParams, cpu_walk, cpu_walk_with};
 
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::view::frame_view;
@@ -83,6 +83,21 @@ pub const IMPLEMENTATION: &str = "workgroup_per_instance";
 pub const VIEW_INPUT: &str = "view";
 
 pub const SHADER: PassShader = pass_shader!("fill_clusters::fill", "fill.wgsl");
+
+/// The depth pyramid's slot (`hierarchy` with occlusion).
+pub const PYRAMID_SLOT: &str = "pyramid";
+/// The first pass's output: the nodes the pyramid hid.
+pub const OCCLUDED_NODES_SLOT: &str = "occluded_nodes";
+pub const OCCLUDED_NODE_COUNT_SLOT: &str = "occluded_node_count";
+/// The second pass's input: the same list, bound under another name.
+pub const CANDIDATE_NODES_SLOT: &str = "candidate_nodes";
+pub const CANDIDATE_NODE_COUNT_SLOT: &str = "candidate_node_count";
+/// An entry of the hidden-node list: `(instance, node, 1)`, three u32 (the walk's
+/// `Subtree`).
+pub const HIDDEN_NODE: Element = Element::named("HiddenNode", 12);
+/// The frame input (u32) a first pass with a pyramid reads: non-zero when the camera
+/// jumped, so last frame's depth cannot hide anything (`cull_lod`'s).
+pub const CAMERA_CUT_INPUT: &str = "camera_cut";
 
 /// The slots every implementation of `fill_clusters` shares.
 pub fn contract() -> StageContract {
@@ -138,11 +153,56 @@ pub fn contract() -> StageContract {
                 "hierarchy_counts",
                 Access::ClearedReadWrite,
                 Element::U32,
-                "nodes tested, leaves accepted, subtrees emitted whole, walks unfinished",
+                "nodes tested, leaves accepted, subtrees emitted whole, walks unfinished, nodes hidden",
             )
             .optional(),
         ],
     }
+}
+
+/// The `hierarchy` implementation's slots: the stage's, and those of occlusion per node.
+/// `workgroup_per_instance` has no occlusion slots, so a `pyramid` in the pipeline is
+/// not bound to it by name (and binding one to it is an unknown-slot error).
+pub fn hierarchy_contract() -> StageContract {
+    let mut c = contract();
+    c.slots.extend([
+            Slot::texture(
+                PYRAMID_SLOT,
+                Access::Sampled,
+                Some(wgpu::TextureFormat::R32Float),
+                "depth pyramid (`hierarchy`): last frame's in the first pass, this frame's in the second",
+            )
+            .optional(),
+            Slot::buffer(
+                OCCLUDED_NODES_SLOT,
+                Access::StorageWrite,
+                HIDDEN_NODE,
+                "first pass: (instance, node, 1) of every node the pyramid hid, three words each",
+            )
+            .optional(),
+            Slot::buffer(
+                OCCLUDED_NODE_COUNT_SLOT,
+                Access::ClearedReadWrite,
+                Element::U32,
+                "first pass: [0] hidden nodes written, [1] found",
+            )
+            .optional(),
+            Slot::buffer(
+                CANDIDATE_NODES_SLOT,
+                Access::StorageRead,
+                HIDDEN_NODE,
+                "second pass: the first pass's hidden nodes, where the walk starts",
+            )
+            .optional(),
+            Slot::buffer(
+                CANDIDATE_NODE_COUNT_SLOT,
+                Access::StorageRead,
+                Element::U32,
+                "second pass: the first pass's hidden-node count",
+            )
+            .optional(),
+    ]);
+    c
 }
 
 /// The `workgroup_per_instance` implementation.
