@@ -136,7 +136,8 @@ fn pass_ms(m: &Measured, pass: &str) -> f64 {
         .map_or(f64::NAN, |(_, ms)| *ms)
 }
 
-/// The default scene (a field of procedural meshes) at 1920×1080.
+/// The default scene (a field of procedural meshes on the ground) at 1920×1080 and
+/// 3840×2160 (1080p alone with `quick`).
 pub fn default_scene(quick: bool) -> BenchResult {
     let (segments, instances) = if quick {
         (64, 64)
@@ -145,16 +146,25 @@ pub fn default_scene(quick: bool) -> BenchResult {
     };
     let asset = scenes::load_asset(Path::new("procedural"), segments)?;
     let placed = scenes::field(SceneData::new(Default::default()), &asset, instances)?;
-    let case = format!(
-        "{instances} procedural meshes, {} source tris, 1920x1080",
-        placed.data.source_triangles()
-    );
-    let m = measure(
-        &placed,
-        FrameSettings::new(1920, 1080),
-        if quick { 5 } else { 50 },
-    )?;
-    Ok(rows_of("render", &case, &m))
+    let sizes: &[(u32, u32)] = if quick {
+        &[(1920, 1080)]
+    } else {
+        &[(1920, 1080), (3840, 2160)]
+    };
+    let mut rows = Vec::new();
+    for &(width, height) in sizes {
+        let case = format!(
+            "{instances} procedural meshes, {} source tris, {width}x{height}",
+            placed.data.source_triangles()
+        );
+        let m = measure(
+            &placed,
+            FrameSettings::new(width, height),
+            if quick { 5 } else { 50 },
+        )?;
+        rows.extend(rows_of("render", &case, &m));
+    }
+    Ok(rows)
 }
 
 /// The scene of [`lattice`] and [`rasterisers`]: 15³ copies of a mesh (5³ at 1280×720

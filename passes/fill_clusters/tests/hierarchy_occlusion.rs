@@ -1,0 +1,287 @@
+//! The `hierarchy` walk with occlusion on the GPU against `cpu_walk_with`: the second
+//! walk (`mode = "second"`, this frame's pyramid) started from every instance's root,
+//! on seeded random views with random walls of depth in front of the instances. The
+//! list (as a set), the node counters and the count of hidden nodes must equal the
+//! reference's, apart from nodes whose test lies within rounding of a threshold. The
+//! first walk runs the same node test through the previous transforms; the frame-level
+//! test `tests/occlusion.rs` of the workspace covers it end to end (no false culling).
+
+mod support;
+
+use glam::{Mat4, Quat, Vec3};
+use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, data::Limits};
+use meshlight_graph::*;
+use meshlight_pass_fill_clusters::hierarchy::{Mode, OCCLUSION_COUNT_WORDS};
+use meshlight_pass_fill_clusters::{
+    HIDDEN_NODE, HierarchyFill, WalkOcclusion, WalkParams, cpu_walk_with,
+};
+use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::occlusion::DepthPyramid;
+use support::*;
+
+const VIEWPORT: [u32; 2] = [320, 200];
+const NEAR_THRESHOLD: f32 = 1e-5;
+
+/// A 5 × 4 field of bunnies.
+fn scene() -> SceneData {
+    let mut data = SceneData::new(Limits::default());
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let mesh = data.add_mesh("bunny", bunny()).unwrap();
+    let radius = data.meshes[0].bounding_sphere[3];
+    for i in 0..20 {
+        let (x, z) = ((i % 5) as f32, (i / 5) as f32);
+        let transform = Mat4::from_scale_rotation_translation(
+            Vec3::splat(0.6 + 0.1 * (i % 4) as f32),
+            Quat::from_rotation_y(i as f32 * 0.7),
+            Vec3::new(x * 2.5, 0.0, z * 2.5) * radius,
+        );
+        data.add_instance(mesh, transform, material)
+            .unwrap()
+            .expect("an invertible transform");
+    }
+    data
+}
+
+fn random_view(data: &SceneData, rng: &mut Rng, v: u32) -> View {
+    let radius = data.meshes[0].bounding_sphere[3];
+    let target = Vec3::new(rng.range(3.0, 7.0), 0.0, rng.range(2.0, 5.0)) * radius;
+    let direction = Vec3::new(
+        rng.range(-1.0, 1.0),
+        rng.range(0.2, 1.0),
+        rng.range(-1.0, 1.0),
+    )
+    .normalize_or(Vec3::Y);
+    let camera = Camera::perspective(
+        target + direction * radius * rng.range(8.0, 20.0),
+        target,
+        1.0,
+        radius * 0.05,
+    );
+    camera.view(VIEWPORT, v, None)
+}
+
+/// Rectangles of depth, each nearer than a random instance, on an empty image.
+fn walls(rng: &mut Rng, data: &SceneData, view: &View, count: u32) -> DepthPyramid {
+    let [w, h] = VIEWPORT;
+    let mut depth = vec![0.0f32; (w * h) as usize];
+    let eye = Vec3::from(view.camera_position);
+    for _ in 0..count {
+        let instance = &data.instances[rng.below(data.instances.len() as u32) as usize];
+        let at = Vec3::from_slice(&instance.world_from_local[3][..3]);
+        let d = view.near / ((at - eye).length() * rng.range(0.3, 0.9));
+        let (x0, y0) = (rng.below(w / 2), rng.below(h / 2));
+        let (x1, y1) = (
+            (x0 + w / 4 + rng.below(w / 2)).min(w),
+            (y0 + h / 4 + rng.below(h / 2)).min(h),
+        );
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let p = &mut depth[(y * w + x) as usize];
+                *p = p.max(d);
+            }
+        }
+    }
+    DepthPyramid::from_depth(w, h, &depth)
+}
+
+fn write_pyramid(queue: &wgpu::Queue, texture: &wgpu::Texture, p: &DepthPyramid) {
+    for (level, (w, h, texels)) in p.levels.iter().enumerate() {
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: level as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 4),
+                rows_per_image: Some(*h),
+            },
+            wgpu::Extent3d {
+                width: *w,
+                height: *h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+}
+
+/// What the second walk left on the GPU.
+struct Walked {
+    clusters: Vec<Cluster>,
+    counts: Vec<u32>,
+}
+
+fn run_second_walk(
+    data: &mut SceneData,
+    view: &View,
+    pyramid: &DepthPyramid,
+    nodes: &[(u32, u32)],
+) -> Walked {
+    let gpu = gpu();
+    let scene = GpuScene::new(&gpu, data);
+    let slots = 1 << 16;
+    let mut g = GraphBuilder::new();
+    let h = scene.import(&mut g);
+    let t = scene.import_hierarchy(&mut g);
+    let list = g.create_buffer("clusters", BufferDesc::array(elements::CLUSTER, slots));
+    let count = g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
+    let counts = g.create_buffer(
+        "hierarchy_counts",
+        BufferDesc::array(Element::U32, OCCLUSION_COUNT_WORDS),
+    );
+    let node_words: Vec<u32> = nodes.iter().flat_map(|&(i, n)| [i, n, 1]).collect();
+    let node_list = g.import_buffer(
+        "node_list",
+        BufferDesc::array(HIDDEN_NODE, nodes.len().max(1) as u64),
+        USAGE,
+    );
+    let node_count = g.import_buffer("node_count", BufferDesc::array(Element::U32, 2), USAGE);
+    let (w, h0, _) = pyramid.levels[0];
+    let levels = pyramid.levels.len() as u32;
+    let desc = TextureDesc::d2(
+        wgpu::TextureFormat::R32Float,
+        w.next_power_of_two(),
+        h0.next_power_of_two(),
+    )
+    .with_mips(levels);
+    let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
+    let pyramid_handle = g.import_texture("pyramid_now", desc.clone(), usage);
+    let walk = HierarchyFill {
+        mode: Mode::Second,
+        ..HierarchyFill::default()
+    };
+    let out = g
+        .add_pass(
+            "fill_second",
+            walk,
+            Bindings::new()
+                .bind("instances", h.instances)
+                .bind("meshes", h.meshes)
+                .bind("clusters", list)
+                .bind("cluster_count", count)
+                .bind("hierarchy_nodes", t.nodes)
+                .bind("hierarchy_clusters", t.clusters)
+                .bind("hierarchy_roots", t.roots)
+                .bind("hierarchy_counts", counts)
+                .bind("pyramid", pyramid_handle)
+                .bind("candidate_nodes", node_list)
+                .bind("candidate_node_count", node_count),
+        )
+        .unwrap();
+    for name in ["clusters", "cluster_count", "hierarchy_counts"] {
+        g.export(out.buffer(name).unwrap());
+    }
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let nodes_buffer = gpu.buffer_with_data("node_list", bytemuck::cast_slice(&node_words), USAGE);
+    let n = nodes.len() as u32;
+    let count_buffer = gpu.buffer_with_data("node_count", bytemuck::cast_slice(&[n, n]), USAGE);
+    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("pyramid_now"),
+        size: wgpu::Extent3d {
+            width: desc.width,
+            height: desc.height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: levels,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::R32Float,
+        usage,
+        view_formats: &[],
+    });
+    write_pyramid(&gpu.queue, &texture, pyramid);
+    let mut exec = Executor::new(gpu);
+    let imports = scene
+        .imports()
+        .buffer("node_list", &nodes_buffer)
+        .buffer("node_count", &count_buffer)
+        .texture("pyramid_now", &texture);
+    let frame = FrameData::new().with("view", bytemuck::bytes_of(view));
+    exec.execute_frame(&compiled, &imports, &frame).unwrap();
+    let words = |exec: &mut Executor, name: &str| -> Vec<u32> {
+        bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
+    };
+    let cluster_count = words(&mut exec, "cluster_count");
+    assert_eq!(cluster_count[0], cluster_count[1], "the list overflowed");
+    let all: Vec<Cluster> = bytemuck::pod_collect_to_vec(&exec.read_buffer("clusters").unwrap());
+    Walked {
+        clusters: all[..cluster_count[0] as usize].to_vec(),
+        counts: words(&mut exec, "hierarchy_counts"),
+    }
+}
+
+#[test]
+fn the_second_walk_matches_the_reference_on_random_views_and_walls() {
+    let mut data = scene();
+    let mut rng = Rng(0x0cc1_0de5);
+    let roots: Vec<(u32, u32)> = data
+        .instances
+        .iter()
+        .enumerate()
+        .map(|(i, inst)| (i as u32, data.hierarchy_roots[inst.mesh as usize]))
+        .collect();
+    let (mut hidden, mut compared) = (0, 0);
+    for v in 0..6 {
+        let view = random_view(&data, &mut rng, v);
+        let count = 1 + rng.below(4);
+        let pyramid = walls(&mut rng, &data, &view, count);
+        let want = cpu_walk_with(
+            &data,
+            &view,
+            &WalkParams::default(),
+            NEAR_THRESHOLD,
+            WalkOcclusion::Second {
+                pyramid: &pyramid,
+                nodes: &roots,
+            },
+        );
+        let got = run_second_walk(&mut data, &view, &pyramid, &roots);
+        // Instances with a decision within rounding are left out of the comparison.
+        let near: std::collections::BTreeSet<u32> =
+            want.near_threshold.iter().map(|&(i, _)| i).collect();
+        let keep = |c: &&Cluster| !near.contains(&c.instance);
+        let got_set = set(&got
+            .clusters
+            .iter()
+            .filter(keep)
+            .copied()
+            .collect::<Vec<_>>());
+        let want_set = set(&want
+            .clusters
+            .iter()
+            .filter(keep)
+            .copied()
+            .collect::<Vec<_>>());
+        assert_eq!(got_set, want_set, "view {v}: the listed clusters differ");
+        assert_eq!(
+            got.clusters.len(),
+            set(&got.clusters).len(),
+            "view {v}: a cluster twice"
+        );
+        if near.is_empty() {
+            assert_eq!(
+                (got.counts[0], got.counts[1], got.counts[4]),
+                (
+                    want.counts[0],
+                    want.counts[1],
+                    want.hidden_nodes.len() as u32
+                ),
+                "view {v}: nodes tested, leaves accepted, nodes hidden"
+            );
+            compared += 1;
+        }
+        hidden += want.hidden_nodes.len();
+    }
+    // The walls hid something, and the counters were compared on most views.
+    assert!(hidden > 0, "no node was hidden on any view");
+    assert!(
+        compared >= 3,
+        "only {compared} views without near decisions"
+    );
+}
