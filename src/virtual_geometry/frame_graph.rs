@@ -37,7 +37,9 @@ use meshlight_pass_cull_lod::{
     WALKED_COUNT_SLOT, WALKED_SLOT,
 };
 use meshlight_pass_depth_pyramid::DepthPyramid;
-use meshlight_pass_fill_clusters::hierarchy::OCCLUSION_COUNT_WORDS as WALK_OCCLUSION_COUNT_WORDS;
+use meshlight_pass_fill_clusters::hierarchy::{
+    OCCLUSION_COUNT_WORDS as WALK_OCCLUSION_COUNT_WORDS, OCCLUSION_MIN_CLUSTERS,
+};
 use meshlight_pass_fill_clusters::{FillClusters, HIDDEN_NODE, HierarchyFill, Mode as WalkMode};
 use meshlight_pass_hw_raster::{Feed, HwRaster};
 use meshlight_pass_remap_dispatch::RemapDispatch;
@@ -130,6 +132,10 @@ pub struct FrameSettings {
     /// per node), so only clusters that may be in the LOD cut become candidates. Off:
     /// every cluster of every instance in view is a candidate (`workgroup_per_instance`).
     pub hierarchy: bool,
+    /// With both, the walk tests a node against the pyramid only when it has at least
+    /// this many meshlets below (`HierarchyFill::occlusion_min_clusters`; the
+    /// environment variable `MESHLIGHT_OCCLUSION_MIN_CLUSTERS` sets it, for sweeps).
+    pub occlusion_min_clusters: u32,
 }
 
 impl FrameSettings {
@@ -152,6 +158,10 @@ impl FrameSettings {
             clustering: None,
             occlusion: true,
             hierarchy: true,
+            occlusion_min_clusters: std::env::var("MESHLIGHT_OCCLUSION_MIN_CLUSTERS")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(OCCLUSION_MIN_CLUSTERS),
             keep_visibility: false,
         }
     }
@@ -268,6 +278,7 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     // clusters of the cut would be pruned.
     let walk = HierarchyFill {
         lod_threshold_px: s.lod_threshold_px,
+        occlusion_min_clusters: s.occlusion_min_clusters,
         ..HierarchyFill::default()
     };
     let walk_counts = if history.is_some() {

@@ -205,7 +205,17 @@ pub struct HierarchyFill {
     pub spread_groups: Option<u32>,
     /// The first walk of the frame or the second (occlusion culling).
     pub mode: Mode,
+    /// With occlusion, the walk's entries (instance roots; the second walk's nodes) and
+    /// the inner nodes with at least this many meshlets below are tested against the
+    /// pyramid ([`OCCLUSION_MIN_CLUSTERS`] by default; `u32::MAX`: entries only).
+    pub occlusion_min_clusters: u32,
 }
+
+/// Inner nodes with fewer meshlets below are left to `cull_lod`'s per-cluster test by
+/// default: a node test costs the walk a dependent texture read in its round, and on
+/// the scenes measured (the bunny lattice, the default scene; docs/BENCHMARKS.md has
+/// the sweep) testing smaller subtrees cost the walk more than it saved the cull.
+pub const OCCLUSION_MIN_CLUSTERS: u32 = 1024;
 
 impl Default for HierarchyFill {
     fn default() -> Self {
@@ -218,6 +228,7 @@ impl Default for HierarchyFill {
             subtree_capacity: None,
             spread_groups: None,
             mode: Mode::First,
+            occlusion_min_clusters: OCCLUSION_MIN_CLUSTERS,
         }
     }
 }
@@ -235,11 +246,13 @@ struct GpuParams {
     list_capacity: u32,
     test_occlusion: u32,
     node_capacity: u32,
-    _pad: [u32; 2],
+    occlusion_min_clusters: u32,
+    _pad: u32,
 }
 
-const PARAM_KEYS: [&str; 8] = [
+const PARAM_KEYS: [&str; 9] = [
     "mode",
+    "occlusion_min_clusters",
     "capacity",
     "instance_count",
     "lod_threshold_px",
@@ -262,6 +275,7 @@ impl HierarchyFill {
             spread_steps: params.u32("spread_steps", SPREAD_STEPS)?,
             subtree_capacity: nonzero(params.u32("subtree_capacity", 0)?),
             spread_groups: nonzero(params.u32("spread_groups", 0)?),
+            occlusion_min_clusters: params.u32("occlusion_min_clusters", OCCLUSION_MIN_CLUSTERS)?,
             mode: match params.string("mode", "first")?.as_str() {
                 "first" => Mode::First,
                 "second" => Mode::Second,
@@ -485,7 +499,8 @@ impl Pass for HierarchyFill {
                 list_capacity: self.list_capacity(),
                 test_occlusion: test_occlusion as u32,
                 node_capacity: u32::MAX,
-                _pad: [0; 2],
+                occlusion_min_clusters: self.occlusion_min_clusters,
+                _pad: 0,
             };
             let uniforms: [(u32, &[u8]); 2] = [
                 (3, bytemuck::bytes_of(&view)),

@@ -77,8 +77,11 @@ struct Params {
     test_occlusion: u32,
     // Entries `node_list` may hold (clamped to its length too).
     node_capacity: u32,
+    // Inner nodes with fewer meshlets below are not tested for occlusion (cull_lod
+    // tests their clusters): each test costs the walk a dependent texture read. A
+    // walk's entries (instance roots, the second walk's nodes) always are.
+    occlusion_min_clusters: u32,
     _pad0: u32,
-    _pad1: u32,
 }
 
 // Children `first .. first + count` of one node of `instance`'s hierarchy, handed to the
@@ -292,9 +295,10 @@ fn defer_node(id: u32) -> bool {
 
 // Whether the walk goes on below a node `node_visible` accepted: with OCCLUSION, not
 // when the pyramid hides it (the first pass hands it to the second, the second drops it).
-fn node_seen(node: HierarchyNode, id: u32, w: Walker) -> bool {
+fn node_seen(node: HierarchyNode, id: u32, w: Walker, entry: bool) -> bool {
 #ifdef OCCLUSION
-    if params.test_occlusion != 0u && node_occluded(node, w) {
+    let tested = entry || node.cluster_count >= params.occlusion_min_clusters;
+    if params.test_occlusion != 0u && tested && node_occluded(node, w) {
 #ifdef SECOND_PASS
         atomicAdd(&hidden_nodes, 1u);
         return false;
@@ -466,7 +470,7 @@ fn fill(
                     let id = frontier[cur][i];
                     tests = 1u;
                     if id < arrayLength(&hierarchy_nodes) && node_visible(hierarchy_nodes[id], w)
-                        && node_seen(hierarchy_nodes[id], id, w) {
+                        && node_seen(hierarchy_nodes[id], id, w, params.step == 0u && round == 0u) {
                         let node = hierarchy_nodes[id];
                         if node.child_count == 0u {
                             emit_range(node.first_cluster, node.cluster_count);
@@ -479,7 +483,7 @@ fn fill(
                                     continue;
                                 }
                                 let child = hierarchy_nodes[child_id];
-                                if !node_visible(child, w) || !node_seen(child, child_id, w) {
+                                if !node_visible(child, w) || !node_seen(child, child_id, w, false) {
                                     continue;
                                 }
                                 if child.child_count == 0u {

@@ -27,6 +27,8 @@ pub struct WalkParams {
     pub queue_capacity: u32,
     pub spread_steps: u32,
     pub subtree_capacity: u32,
+    /// `occlusion_min_clusters`.
+    pub occlusion_min_clusters: u32,
 }
 
 impl Default for WalkParams {
@@ -37,6 +39,7 @@ impl Default for WalkParams {
             queue_capacity: QUEUE,
             spread_steps: SPREAD_STEPS,
             subtree_capacity: SUBTREE_CAPACITY,
+            occlusion_min_clusters: crate::hierarchy::OCCLUSION_MIN_CLUSTERS,
         }
     }
 }
@@ -280,28 +283,33 @@ pub fn cpu_walk_with(
     };
     // `node_seen`: false when the pyramid hides the node (the first walk hands it on
     // while its list has room; the second drops it).
-    let seen =
-        |r: &mut HierarchyWalk, index: u32, instance: &Instance, id: u32, node: &NodeRecord| {
-            let (pyramid, previous) = match occlusion {
-                WalkOcclusion::Off => return true,
-                WalkOcclusion::First { pyramid, .. } => (pyramid, true),
-                WalkOcclusion::Second { pyramid, .. } => (pyramid, false),
-            };
-            let test = node_occlusion(view, instance, node, pyramid, previous);
-            if test.closeness < near {
-                r.near_threshold.push((index, id));
-            }
-            if test.visible {
-                return true;
-            }
-            if let WalkOcclusion::First { capacity, .. } = occlusion
-                && r.hidden_nodes.len() >= capacity as usize
-            {
-                return true;
-            }
-            r.hidden_nodes.push((index, id));
-            false
+    let seen = |r: &mut HierarchyWalk,
+                index: u32,
+                instance: &Instance,
+                id: u32,
+                node: &NodeRecord,
+                entry: bool| {
+        let (pyramid, previous) = match occlusion {
+            WalkOcclusion::Off => return true,
+            _ if !entry && node.cluster_count < params.occlusion_min_clusters => return true,
+            WalkOcclusion::First { pyramid, .. } => (pyramid, true),
+            WalkOcclusion::Second { pyramid, .. } => (pyramid, false),
         };
+        let test = node_occlusion(view, instance, node, pyramid, previous);
+        if test.closeness < near {
+            r.near_threshold.push((index, id));
+        }
+        if test.visible {
+            return true;
+        }
+        if let WalkOcclusion::First { capacity, .. } = occlusion
+            && r.hidden_nodes.len() >= capacity as usize
+        {
+            return true;
+        }
+        r.hidden_nodes.push((index, id));
+        false
+    };
     for step in 0..=params.spread_steps {
         let spreading = step < params.spread_steps;
         let width = if spreading { queue.min(64) } else { queue };
@@ -336,7 +344,8 @@ pub fn cpu_walk_with(
                     if test.closeness < near {
                         r.near_threshold.push((index, id));
                     }
-                    if !test.visible || !seen(&mut r, index, instance, id, node) {
+                    let entry = step == 0 && round == 0;
+                    if !test.visible || !seen(&mut r, index, instance, id, node, entry) {
                         continue;
                     }
                     if step == 0 && round == 0 {
@@ -362,7 +371,7 @@ pub fn cpu_walk_with(
                         if test.closeness < near {
                             r.near_threshold.push((index, child_id));
                         }
-                        if !test.visible || !seen(&mut r, index, instance, child_id, child) {
+                        if !test.visible || !seen(&mut r, index, instance, child_id, child, false) {
                             continue;
                         }
                         if child.is_leaf() {
