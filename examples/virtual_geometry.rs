@@ -72,6 +72,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         scanline_width: 16,
         exact_division: false,
         accumulate: false,
+        big_triangle_px: meshlight::sw_raster::BIG_TRIANGLE_PX,
     };
     g.add_pass("sw_raster", sw, Bindings::new())?;
     g.add_pass(

@@ -136,6 +136,10 @@ pub struct FrameSettings {
     /// this many meshlets below (`HierarchyFill::occlusion_min_clusters`; the
     /// environment variable `MESHLIGHT_OCCLUSION_MIN_CLUSTERS` sets it, for sweeps).
     pub occlusion_min_clusters: u32,
+    /// `sw_raster`'s `big_triangle_px`: triangles whose box is this many pixels wide or
+    /// tall are covered a tile per workgroup (0: by their thread). The environment
+    /// variable `MESHLIGHT_BIG_TRIANGLE_PX` sets it, for sweeps.
+    pub big_triangle_px: u32,
 }
 
 impl FrameSettings {
@@ -146,7 +150,10 @@ impl FrameSettings {
             height,
             view: DebugView::Shaded,
             lod_threshold_px: t.lod_threshold_px,
-            sw_threshold_px: None,
+            // `MESHLIGHT_SW_THRESHOLD_PX` overrides the adapter class's split, for sweeps.
+            sw_threshold_px: std::env::var("MESHLIGHT_SW_THRESHOLD_PX")
+                .ok()
+                .and_then(|v| v.parse().ok()),
             sw_raster: AUTO.into(),
             hw_raster: AUTO.into(),
             hardware: true,
@@ -162,6 +169,10 @@ impl FrameSettings {
                 .ok()
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(OCCLUSION_MIN_CLUSTERS),
+            big_triangle_px: std::env::var("MESHLIGHT_BIG_TRIANGLE_PX")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(meshlight_pass_sw_raster::BIG_TRIANGLE_PX),
             keep_visibility: false,
         }
     }
@@ -378,6 +389,7 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             scanline_width: 16,
             exact_division: s.exact_division,
             accumulate,
+            big_triangle_px: s.big_triangle_px,
         })
     };
     let sw_choice = |accumulate| {

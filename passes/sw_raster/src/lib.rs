@@ -55,6 +55,16 @@
 //! - Loop shape: if the widest clipped triangle box of the workgroup is at least
 //!   `scanline_width` pixels (param, default 16) every thread loops per scanline over
 //!   that row's edge span, else over its whole box; both cover the same pixels.
+//! - Big triangles (param `big_triangle_px`, default [`BIG_TRIANGLE_PX`]; 0: off): a
+//!   triangle whose clipped box is at least that many pixels wide or tall is cut into
+//!   64 × 64-pixel tiles of its box, listed, and covered by a second dispatch, a
+//!   workgroup per tile and a pixel per thread, instead of by its one thread. It writes
+//!   the pixels and values the thread would have (the same setup, the same edge and
+//!   depth arithmetic), so the reference is unchanged. This is what lets culling send
+//!   large clusters to software on GPUs where few units run graphics. When the list
+//!   (a scratch buffer of [`BIG_TILE_CAPACITY`] tiles) is full, the thread covers its
+//!   triangle itself. The optional slot `big_triangle_count` (u32 × 2) receives `[0]`
+//!   tiles listed and `[1]` tiles asked for.
 //! - [`cpu::rasterize`] is the reference, equal bit for bit (the GPU test checks every
 //!   pixel). Every f32 operation is rounded as IEEE 754 rounds it, on any driver:
 //!   Vulkan requires that of adds and multiplies, but lets a compiler fuse a multiply
@@ -122,9 +132,27 @@ pub fn contract() -> StageContract {
                 Access::ClearedReadWrite,
                 "width × height visibility values (u64 buffer or r64uint texture); cleared, then atomicMax",
             ),
+            Slot::buffer(
+                BIG_COUNT_SLOT,
+                Access::ClearedReadWrite,
+                meshlight_graph::Element::U32,
+                "[0] big-triangle tiles listed, [1] asked for (a scratch buffer when unbound)",
+            )
+            .optional(),
         ],
     }
 }
+
+/// The optional slot of the big-triangle counters.
+pub const BIG_COUNT_SLOT: &str = "big_triangle_count";
+/// Scratch: the big triangles' tiles, two words each.
+const BIG_TILES: &str = "big_triangle_tiles";
+/// Boxes this many pixels wide or tall are tiled by default.
+pub const BIG_TRIANGLE_PX: u32 = 64;
+/// Tiles the list holds: a 3840 × 2160 triangle is 2,040 of them.
+pub const BIG_TILE_CAPACITY: u32 = 1 << 18;
+/// Workgroups of the big-triangle dispatch, striding over the tiles listed.
+const BIG_GROUPS: u32 = 2048;
 
 /// The implementation names, best first (the order `auto` tries them in).
 pub const IMPLEMENTATIONS: [&str; 2] = ["texture", "buffer"];
@@ -148,6 +176,9 @@ pub struct SwRaster {
     /// the first pass's and whose first slot it writes into word 7. Off: cleared, slots
     /// from 0.
     pub accumulate: bool,
+    /// Triangles whose box is this many pixels wide or tall are tiled and covered by a
+    /// workgroup per tile; 0: every triangle by its thread.
+    pub big_triangle_px: u32,
 }
 
 /// The variant of raster.wgsl a pass runs.
@@ -159,6 +190,8 @@ pub struct RasterDefs {
     pub texture: bool,
     /// `SLOT_BASE`: clusters start at slot `raster_counts[7]` ([`SwRaster::accumulate`]).
     pub slot_base: bool,
+    /// `BIG_TRIANGLES`: [`SwRaster::big_triangle_px`] is not 0.
+    pub big_triangles: bool,
 }
 
 impl ShaderDefs for RasterDefs {
@@ -167,6 +200,7 @@ impl ShaderDefs for RasterDefs {
             ("EXACT_DIVISION", ShaderDef::Bool(self.exact_division)),
             ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
             ("SLOT_BASE", ShaderDef::Bool(self.slot_base)),
+            ("BIG_TRIANGLES", ShaderDef::Bool(self.big_triangles)),
         ]
     }
 }
@@ -184,9 +218,13 @@ struct GpuParams {
     /// Always 0: the kernel xors products with it so that no compiler fuses them into
     /// an fma the reference does not do.
     zero: u32,
+    big_triangle_px: u32,
+    big_capacity: u32,
+    _pad: [u32; 2],
 }
 
-const PARAM_KEYS: [&str; 5] = [
+const PARAM_KEYS: [&str; 6] = [
+    "big_triangle_px",
     "width",
     "height",
     "scanline_width",
@@ -214,6 +252,7 @@ impl SwRaster {
             scanline_width: params.u32("scanline_width", 16)?,
             exact_division: params.bool("exact_division", false)?,
             accumulate: params.bool("accumulate", false)?,
+            big_triangle_px: params.u32("big_triangle_px", BIG_TRIANGLE_PX)?,
         })
     }
 }
@@ -248,7 +287,8 @@ impl Pass for SwRaster {
             // not at all), never by a clear command: the pass stays in its batch.
             ctx.clears_itself("visbuffer");
         }
-        let layout = BindingLayout::compute("sw_raster")
+        let big = self.big_triangle_px > 0;
+        let mut layout = BindingLayout::compute("sw_raster")
             .slot(0, "raster_clusters")
             .slot(1, "raster_counts")
             .slot(2, "sw_args")
@@ -259,18 +299,49 @@ impl Pass for SwRaster {
             .slot(7, "visbuffer")
             .uniform(8)
             .uniform(9);
+        if big {
+            ctx.scratch_buffer(
+                BIG_TILES,
+                meshlight_graph::BufferDesc::array(
+                    meshlight_graph::Element::U64,
+                    BIG_TILE_CAPACITY as u64,
+                ),
+                &[Access::StorageReadWrite],
+            );
+            layout = layout.scratch(10, BIG_TILES, Access::StorageReadWrite);
+            if ctx.is_bound(BIG_COUNT_SLOT) {
+                ctx.min_bytes(BIG_COUNT_SLOT, 8);
+                layout = layout.slot(11, BIG_COUNT_SLOT);
+            } else {
+                ctx.scratch_buffer(
+                    BIG_COUNT_SLOT,
+                    meshlight_graph::BufferDesc::array(meshlight_graph::Element::U32, 2),
+                    &[Access::ClearedReadWrite],
+                );
+                layout = layout.scratch(11, BIG_COUNT_SLOT, Access::ClearedReadWrite);
+            }
+        }
         let defs = RasterDefs {
             exact_division: self.exact_division,
             texture,
             slot_base: self.accumulate,
+            big_triangles: big,
         };
         ctx.shader_defs(&defs);
         ctx.program(
             "raster",
             ProgramDesc::compute(&SHADER, "raster")
                 .defs(&defs)
-                .layout(layout),
+                .layout(layout.clone()),
         );
+        if big {
+            ctx.program(
+                "raster_big",
+                ProgramDesc::compute(&SHADER, "raster_big")
+                    .defs(&defs)
+                    .layout(layout),
+            );
+        }
         if texture && !self.accumulate {
             let clear = BindingLayout::compute("sw_raster::clear")
                 .slot(0, "visbuffer")
@@ -289,7 +360,18 @@ impl Pass for SwRaster {
             height: self.height,
             scanline_width: self.scanline_width,
             zero: 0,
+            big_triangle_px: self.big_triangle_px,
+            big_capacity: BIG_TILE_CAPACITY,
+            _pad: [0; 2],
         };
+        let big = self.big_triangle_px > 0;
+        if big {
+            if ctx.is_bound(BIG_COUNT_SLOT) {
+                ctx.clear(BIG_COUNT_SLOT)?;
+            } else {
+                ctx.clear_scratch(BIG_COUNT_SLOT)?;
+            }
+        }
         let clear = match self.target {
             _ if self.accumulate => None,
             Visibility64::Buffer => {
@@ -323,11 +405,21 @@ impl Pass for SwRaster {
                 1,
             );
         }
+        let big_program = if big {
+            Some(ctx.compute("raster_big")?)
+        } else {
+            None
+        };
         // A second compute pass: the clear is visible before any cluster writes.
         let mut pass = ctx.compute_pass();
         pass.set_pipeline(&program.pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.dispatch_workgroups_indirect(args, 0);
+        // Then the tiles the clusters listed.
+        if let Some(big) = big_program {
+            pass.set_pipeline(&big.pipeline);
+            pass.dispatch_workgroups(BIG_GROUPS, 1, 1);
+        }
         Ok(())
     }
 }
@@ -379,6 +471,7 @@ mod tests {
             exact_division: false,
             texture: true,
             slot_base: true,
+            big_triangles: true,
         };
         let mut library = ShaderLibrary::new(caps).unwrap_or_else(|e| panic!("{e}"));
         let module = library

@@ -1,7 +1,15 @@
-// Software rasteriser for small clusters: one workgroup per cluster, one thread per
-// triangle, 64-bit atomicMax into the visibility buffer (a storage buffer, or with
-// VIS_TEXTURE an R64Uint storage texture).
+// Software rasteriser: one workgroup per cluster, one thread per triangle, 64-bit
+// atomicMax into the visibility buffer (a storage buffer, or with VIS_TEXTURE an R64Uint
+// storage texture).
 // `cpu::rasterize` (Rust) is the reference; every step below has its mirror there.
+//
+// With BIG_TRIANGLES, a triangle whose clipped box reaches `big_triangle_px` pixels in
+// width or height is not covered by its thread: it is cut into tiles of TILE × TILE
+// pixels of its box, listed in `big`, and `raster_big` covers each tile with a
+// workgroup, a pixel per thread. The pixels, depths and values are the ones the thread
+// would have written (the same setup and the same `shade`), so the reference does not
+// change; only who covers them does. When the list is full the thread covers its
+// triangle itself (atomicMax makes a pixel written twice harmless).
 
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle}
@@ -17,6 +25,12 @@ struct Params {
     scanline_width: u32,
     // Always 0; see `unfused`.
     zero: u32,
+    // BIG_TRIANGLES: boxes this wide or tall are tiled for `raster_big`.
+    big_triangle_px: u32,
+    // Entries `big` may hold (clamped to its length too).
+    big_capacity: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 @group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
@@ -35,6 +49,15 @@ struct Params {
 #endif
 @group(0) @binding(8) var<uniform> view: View;
 @group(0) @binding(9) var<uniform> params: Params;
+#ifdef BIG_TRIANGLES
+// One tile of a big triangle each: x = slot << 7 | triangle, y = tile x | tile y << 16.
+@group(0) @binding(10) var<storage, read_write> big: array<vec2<u32>>;
+// [0] tiles listed, [1] tiles asked for (more than [0] when the list was full).
+@group(0) @binding(11) var<storage, read_write> big_count: array<atomic<u32>>;
+#endif
+
+// A big triangle's tiles are TILE × TILE pixels: 32 pixels per thread of `raster_big`.
+const TILE: i32 = 64;
 
 // Vertices whose screen position reaches 2^20 pixels are unusable: below it the 8-bit
 // fixed-point coordinates stay under 2^28, their differences under 2^29, and every
@@ -118,6 +141,67 @@ fn top_left(a: vec2<i32>, b: vec2<i32>) -> bool {
     return d.y < 0 || (d.y == 0 && d.x > 0);
 }
 
+// One vertex on the screen: 8-bit fixed-point position, NDC depth, and whether it is
+// usable (in front of the eye, within 2^20 pixels).
+struct ScreenVertex {
+    xy: vec2<i32>,
+    z: f32,
+    ok: bool,
+}
+
+// Vertex `v` of meshlet `m` transformed and snapped.
+fn screen_vertex(m: Meshlet, mesh: Mesh, instance: Instance, v: u32) -> ScreenVertex {
+    let size = vec2(f32(params.width), f32(params.height));
+    // `meshlet_position`, with the product kept apart from the add.
+    let q = vec3(m.grid_min[0], m.grid_min[1], m.grid_min[2]) + vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u));
+    let p = mesh.position_grid.xyz + unfused3(vec3<f32>(q) * mesh.position_grid.w);
+    let world = affine(instance.world_from_local, p);
+    let clip = affine(view.view_projection, world.xyz);
+    let ndc = vec3(divide(clip.x, clip.w), divide(clip.y, clip.w), divide(clip.z, clip.w));
+    let s = vec2((ndc.x * 0.5 + 0.5) * size.x, (0.5 - ndc.y * 0.5) * size.y);
+    let ok = clip.w > 0.0 && abs(s.x) < MAX_SCREEN && abs(s.y) < MAX_SCREEN;
+    return ScreenVertex(select(vec2(0), vec2<i32>(round(s * 256.0)), ok), ndc.z, ok);
+}
+
+// A triangle ready to cover, with its clipped pixel box [lo, hi] (empty when it is a
+// back face, degenerate, or off the screen).
+struct Setup {
+    tri: Tri,
+    lo: vec2<i32>,
+    hi: vec2<i32>,
+}
+
+fn triangle_setup(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex, slot: u32, t: u32) -> Setup {
+    var tri: Tri;
+    var lo = vec2(0);
+    var hi = vec2(-1);
+    // Front faces are counter-clockwise in NDC (y up), so counter-clockwise on the
+    // y-down screen too; corners (0, 2, 1) make them clockwise there.
+    tri.v0 = a.xy;
+    tri.v1 = c.xy;
+    tri.v2 = b.xy;
+    tri.z = vec3(a.z, c.z, b.z);
+    tri.area = edge(tri.v0, tri.v1, tri.v2);
+    let fa = f32(tri.area);
+    tri.gradient = vec2(divide(tri.z.y - tri.z.x, fa), divide(tri.z.z - tri.z.x, fa));
+    tri.bias = vec3(
+        select(-1, 0, top_left(tri.v1, tri.v2)),
+        select(-1, 0, top_left(tri.v2, tri.v0)),
+        select(-1, 0, top_left(tri.v0, tri.v1)),
+    );
+    tri.value_cluster = slot;
+    tri.triangle = t;
+    // Back faces and degenerate triangles have area <= 0.
+    if tri.area > 0li {
+        let mn = min(tri.v0, min(tri.v1, tri.v2));
+        let mx = max(tri.v0, max(tri.v1, tri.v2));
+        // Pixels whose centre x * 256 + 128 lies in [mn, mx], clipped to the viewport.
+        lo = max((mn - vec2(128) + vec2(255)) >> vec2(8u), vec2(0));
+        hi = min((mx - vec2(128)) >> vec2(8u), vec2(i32(params.width), i32(params.height)) - vec2(1));
+    }
+    return Setup(tri, lo, hi);
+}
+
 struct Tri {
     v0: vec2<i32>,
     v1: vec2<i32>,
@@ -164,59 +248,40 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     let instance = instances[cluster.instance];
     let m = meshlets[cluster.meshlet];
     let mesh = meshes[instance.mesh];
-    let size = vec2(f32(params.width), f32(params.height));
     if t == 0u {
         atomicStore(&widest, 0u);
     }
     for (var v = t; v < meshlet_vertex_count(m); v += 128u) {
-        // `meshlet_position`, with the product kept apart from the add.
-        let q = vec3(m.grid_min[0], m.grid_min[1], m.grid_min[2]) + vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u));
-        let p = mesh.position_grid.xyz + unfused3(vec3<f32>(q) * mesh.position_grid.w);
-        let world = affine(instance.world_from_local, p);
-        let clip = affine(view.view_projection, world.xyz);
-        let ndc = vec3(divide(clip.x, clip.w), divide(clip.y, clip.w), divide(clip.z, clip.w));
-        let s = vec2((ndc.x * 0.5 + 0.5) * size.x, (0.5 - ndc.y * 0.5) * size.y);
-        let ok = clip.w > 0.0 && abs(s.x) < MAX_SCREEN && abs(s.y) < MAX_SCREEN;
-        usable[v] = select(0u, 1u, ok);
-        screen_xy[v] = select(vec2(0), vec2<i32>(round(s * 256.0)), ok);
-        screen_z[v] = ndc.z;
+        let s = screen_vertex(m, mesh, instance, v);
+        usable[v] = select(0u, 1u, s.ok);
+        screen_xy[v] = s.xy;
+        screen_z[v] = s.z;
     }
     workgroupBarrier();
 
-    var tri: Tri;
-    var lo = vec2(0);
-    var hi = vec2(-1);
+    var setup = Setup(Tri(), vec2(0), vec2(-1));
     if t < meshlet_triangle_count(m) {
         let at = meshlet_triangle_location(m, mesh.flags, t);
         let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
         if (usable[c.x] & usable[c.y] & usable[c.z]) != 0u {
-            // Front faces are counter-clockwise in NDC (y up), so counter-clockwise on
-            // the y-down screen too; corners (0, 2, 1) make them clockwise there.
-            tri.v0 = screen_xy[c.x];
-            tri.v1 = screen_xy[c.z];
-            tri.v2 = screen_xy[c.y];
-            tri.z = vec3(screen_z[c.x], screen_z[c.z], screen_z[c.y]);
-            tri.area = edge(tri.v0, tri.v1, tri.v2);
-            let fa = f32(tri.area);
-            tri.gradient = vec2(divide(tri.z.y - tri.z.x, fa), divide(tri.z.z - tri.z.x, fa));
-            tri.bias = vec3(
-                select(-1, 0, top_left(tri.v1, tri.v2)),
-                select(-1, 0, top_left(tri.v2, tri.v0)),
-                select(-1, 0, top_left(tri.v0, tri.v1)),
+            setup = triangle_setup(
+                ScreenVertex(screen_xy[c.x], screen_z[c.x], true),
+                ScreenVertex(screen_xy[c.y], screen_z[c.y], true),
+                ScreenVertex(screen_xy[c.z], screen_z[c.z], true),
+                i,
+                t,
             );
-            tri.value_cluster = i;
-            tri.triangle = t;
-            // Back faces and degenerate triangles have area <= 0.
-            if tri.area > 0li {
-                let mn = min(tri.v0, min(tri.v1, tri.v2));
-                let mx = max(tri.v0, max(tri.v1, tri.v2));
-                // Pixels whose centre x * 256 + 128 lies in [mn, mx], clipped to the viewport.
-                lo = max((mn - vec2(128) + vec2(255)) >> vec2(8u), vec2(0));
-                hi = min((mx - vec2(128)) >> vec2(8u), vec2(i32(params.width), i32(params.height)) - vec2(1));
-            }
         }
     }
-    let visible = all(lo <= hi);
+    let tri = setup.tri;
+    let lo = setup.lo;
+    let hi = setup.hi;
+    var visible = all(lo <= hi);
+#ifdef BIG_TRIANGLES
+    if visible && list_big(i, t, lo, hi) {
+        visible = false;
+    }
+#endif
     if visible {
         atomicMax(&widest, u32(hi.x - lo.x + 1));
     }
@@ -268,3 +333,65 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
         }
     }
 }
+
+#ifdef BIG_TRIANGLES
+// Lists the tiles of a big triangle's box for `raster_big`; false when it is not big,
+// or the list has no room for all its tiles (its thread then covers it).
+fn list_big(slot: u32, t: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool {
+    let extent = hi - lo + vec2(1);
+    if u32(max(extent.x, extent.y)) < params.big_triangle_px {
+        return false;
+    }
+    let tiles = (extent + vec2(TILE - 1)) / TILE;
+    let n = u32(tiles.x * tiles.y);
+    let base = atomicAdd(&big_count[1], n);
+    let cap = min(params.big_capacity, arrayLength(&big));
+    if base >= cap || n > cap - base {
+        return false;
+    }
+    atomicAdd(&big_count[0], n);
+    for (var k = 0u; k < n; k += 1u) {
+        let tile = vec2(k % u32(tiles.x), k / u32(tiles.x));
+        big[base + k] = vec2((slot << 7u) | t, tile.x | (tile.y << 16u));
+    }
+    return true;
+}
+
+// One tile of a big triangle per workgroup (strided), a pixel per thread: the triangle
+// is set up again from its cluster (every thread alike), then each thread shades the
+// tile's pixels k, k + 128, … that lie in the box.
+@compute @workgroup_size(128)
+fn raster_big(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) t: u32,
+) {
+    let listed = min(atomicLoad(&big_count[0]), min(params.big_capacity, arrayLength(&big)));
+    for (var e = wg.x; e < listed; e += groups.x) {
+        let entry = big[e];
+        let slot = entry.x >> 7u;
+        let triangle = entry.x & 127u;
+        let cluster = raster_clusters[slot];
+        let instance = instances[cluster.instance];
+        let m = meshlets[cluster.meshlet];
+        let mesh = meshes[instance.mesh];
+        let at = meshlet_triangle_location(m, mesh.flags, triangle);
+        let c = meshlet_triangle(m, triangle, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+        let setup = triangle_setup(
+            screen_vertex(m, mesh, instance, c.x),
+            screen_vertex(m, mesh, instance, c.y),
+            screen_vertex(m, mesh, instance, c.z),
+            slot,
+            triangle,
+        );
+        let origin = setup.lo + vec2(i32(entry.y & 0xffffu), i32(entry.y >> 16u)) * TILE;
+        for (var k = t; k < u32(TILE * TILE); k += 128u) {
+            let x = origin.x + i32(k % u32(TILE));
+            let y = origin.y + i32(k / u32(TILE));
+            if x <= setup.hi.x && y <= setup.hi.y {
+                shade(setup.tri, x, y);
+            }
+        }
+    }
+}
+#endif

@@ -8,7 +8,7 @@ use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::data::Limits;
 use meshlight_gpu_scene::{Camera, GpuScene, Material, Projection, SceneData};
 use meshlight_graph::*;
-use meshlight_pass_sw_raster::{SwRaster, cpu};
+use meshlight_pass_sw_raster::{BIG_COUNT_SLOT, SwRaster, cpu};
 use meshlight_scene::{BuildOptions, Mesh, build_asset, procedural_mesh};
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::visbuffer;
@@ -183,19 +183,24 @@ fn run(
     } else {
         out.into()
     };
-    let drawn = g.add_pass(
-        "sw_raster",
-        pass,
-        Bindings::new()
-            .bind("raster_clusters", slots)
-            .bind("raster_counts", counts_h)
-            .bind("sw_args", args_h)
-            .bind("instances", h.instances)
-            .bind("meshes", h.meshes)
-            .bind("meshlets", h.meshlets)
-            .bind("payload", h.payload)
-            .bind("visbuffer", vis),
-    )?;
+    let mut bindings = Bindings::new()
+        .bind("raster_clusters", slots)
+        .bind("raster_counts", counts_h)
+        .bind("sw_args", args_h)
+        .bind("instances", h.instances)
+        .bind("meshes", h.meshes)
+        .bind("meshlets", h.meshlets)
+        .bind("payload", h.payload)
+        .bind("visbuffer", vis);
+    let tiled = pass.big_triangle_px > 0;
+    if tiled {
+        let count = g.create_buffer(BIG_COUNT_SLOT, BufferDesc::array(Element::U32, 2));
+        bindings = bindings.bind(BIG_COUNT_SLOT, count);
+    }
+    let drawn = g.add_pass("sw_raster", pass, bindings)?;
+    if tiled {
+        g.export(drawn.buffer(BIG_COUNT_SLOT)?);
+    }
     if texture {
         let copy = Bindings::new()
             .bind("texture", drawn.texture("visbuffer")?)
@@ -227,6 +232,14 @@ fn run(
         exec.execute_frame(&compiled, &imports, &data)?;
         exec.finish()?;
         let bytes = exec.gpu.read_buffer(&buffers[3], 0, (W * H) as u64 * 8)?;
+        if tiled {
+            // Big triangles were tiled, and every tile found room in the list.
+            let c: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer(BIG_COUNT_SLOT)?);
+            assert!(
+                c[0] > 0 && c[0] == c[1],
+                "big-triangle tiles listed, asked for: {c:?}"
+            );
+        }
         out.push(bytemuck::pod_collect_to_vec(&bytes));
     }
     Ok(out)
@@ -242,6 +255,7 @@ fn pass(scanline_width: u32) -> SwRaster {
         scanline_width,
         exact_division: true,
         accumulate: false,
+        big_triangle_px: 0,
     }
 }
 
@@ -343,7 +357,17 @@ fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
 
     for (shape, input) in [("1-D", &linear), ("2-D", &folded)] {
         let mut results = Vec::new();
-        for (loop_name, raster) in [("scanline", pass(SCANLINES)), ("box", pass(BOXES))] {
+        // Tiled: nearly every triangle (boxes of 3 pixels or more) covered a tile per
+        // workgroup.
+        let tiled = SwRaster {
+            big_triangle_px: 3,
+            ..pass(SCANLINES)
+        };
+        for (loop_name, raster) in [
+            ("scanline", pass(SCANLINES)),
+            ("box", pass(BOXES)),
+            ("tiled", tiled),
+        ] {
             let got = run(&mut scene, input, &views, raster).unwrap_or_else(|e| panic!("{e}"));
             for (k, (g, w)) in got.iter().zip(&want).enumerate() {
                 assert_identical(
@@ -355,6 +379,10 @@ fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
             results.push(got);
         }
         assert_eq!(results[0], results[1], "{shape}: the loop shapes disagree");
+        assert_eq!(
+            results[0], results[2],
+            "{shape}: the tiled triangles disagree"
+        );
         // The driver's division: exact on lavapipe, within an ulp or so elsewhere.
         let driver = SwRaster {
             exact_division: false,
