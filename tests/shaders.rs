@@ -34,13 +34,18 @@ fn virtual_geometry_shaders_compose_and_validate() {
     ] {
         check(shader, &());
     }
-    for (exact_division, slot_base) in [(false, false), (true, false), (false, true)] {
+    for (exact_division, slot_base, big_triangles) in [
+        (false, false, false),
+        (true, false, true),
+        (false, true, true),
+    ] {
         check(
             &meshlight::sw_raster::SHADER,
             &meshlight::sw_raster::RasterDefs {
                 exact_division,
                 texture: false,
                 slot_base,
+                big_triangles,
             },
         );
     }

@@ -5,8 +5,9 @@
 //! the GPU's units run graphics work. The NVIDIA H100 and H200 run vertex and fragment
 //! work on 2 of their TPCs only, so the compute rasteriser wins up to large clusters;
 //! GPUs built for graphics rasterise big triangles faster in hardware. The defaults here
-//! come from the split sweep of `meshlight bench --scenario virtual-geometry` (the
-//! 3,375-bunny scene; docs/BENCHMARKS.md has the numbers).
+//! come from split sweeps on an H200 (the 3,375-bunny scene and the default scene at
+//! 1080p and 4K, with `sw_raster` tiling big triangles; docs/BENCHMARKS.md has the
+//! numbers).
 
 /// Adapters grouped by how their rasterisers compare.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -22,6 +23,10 @@ pub enum AdapterClass {
 const NVIDIA: u32 = 0x10de;
 /// Name fragments of NVIDIA's compute-first data-centre parts.
 const FEW_GRAPHICS_UNITS: [&str; 6] = ["H100", "H200", "H800", "H20", "A100", "A800"];
+
+/// A split larger than any viewport: every cluster to software but those crossing the
+/// near plane.
+pub const EVERY_CLUSTER_PX: f32 = 16384.0;
 
 impl AdapterClass {
     pub fn of(info: &wgpu::AdapterInfo) -> Self {
@@ -41,15 +46,19 @@ impl AdapterClass {
     }
 
     /// The default `sw_threshold_px` for this class, and why.
+    /// [`EVERY_CLUSTER_PX`]: every cluster not crossing the near plane to software.
     pub fn sw_threshold_px(self) -> (f32, &'static str) {
         match self {
-            // Measured: the frame time falls until 128 px and is flat beyond.
+            // Measured on an H200 (docs/BENCHMARKS.md): with big triangles tiled in
+            // software, sending every cluster there (all but those crossing the near
+            // plane, which only hardware clips) took the default scene at 3840×2160
+            // from 3.49 to 1.62 ms and at 1920×1080 from 1.28 to 0.87 ms.
             Self::FewGraphicsUnits => (
-                128.0,
-                "measured on an H100 and an H200: hardware raster runs on 2 TPCs, so software wins up to 128 px clusters, and larger thresholds change nothing",
+                EVERY_CLUSTER_PX,
+                "measured on an H200: hardware raster runs on 2 TPCs, and software with big triangles tiled wins at every cluster size, so only clusters crossing the near plane go to hardware",
             ),
             Self::Cpu => (
-                128.0,
+                EVERY_CLUSTER_PX,
                 "a CPU adapter runs both rasterisers on the CPU; the data-centre default keeps its images comparable",
             ),
             // Not measured here: Nanite's rule of thumb sends clusters whose triangles

@@ -147,8 +147,10 @@ pub fn contract() -> StageContract {
 pub const BIG_COUNT_SLOT: &str = "big_triangle_count";
 /// Scratch: the big triangles' tiles, two words each.
 const BIG_TILES: &str = "big_triangle_tiles";
-/// Boxes this many pixels wide or tall are tiled by default.
-pub const BIG_TRIANGLE_PX: u32 = 64;
+/// Boxes this many pixels wide or tall are tiled by default: the best of 8 to 64 px on
+/// an H200 (the default scene at 3840×2160: sw_raster 0.72 ms at 24 px, 0.74 at 32,
+/// 0.81 at 48, 1.57 at 8, 2.11 untiled; docs/BENCHMARKS.md).
+pub const BIG_TRIANGLE_PX: u32 = 24;
 /// Tiles the list holds: a 3840 × 2160 triangle is 2,040 of them.
 pub const BIG_TILE_CAPACITY: u32 = 1 << 18;
 /// Workgroups of the big-triangle dispatch, striding over the tiles listed.

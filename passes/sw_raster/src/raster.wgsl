@@ -384,13 +384,11 @@ fn raster_big(
             slot,
             triangle,
         );
+        // The part of the box this tile covers, a pixel per thread, row by row.
         let origin = setup.lo + vec2(i32(entry.y & 0xffffu), i32(entry.y >> 16u)) * TILE;
-        for (var k = t; k < u32(TILE * TILE); k += 128u) {
-            let x = origin.x + i32(k % u32(TILE));
-            let y = origin.y + i32(k / u32(TILE));
-            if x <= setup.hi.x && y <= setup.hi.y {
-                shade(setup.tri, x, y);
-            }
+        let extent = vec2<u32>(clamp(setup.hi - origin + vec2(1), vec2(0), vec2(TILE)));
+        for (var k = t; k < extent.x * extent.y; k += 128u) {
+            shade(setup.tri, origin.x + i32(k % extent.x), origin.y + i32(k / extent.x));
         }
     }
 }
