@@ -24,13 +24,24 @@ enum Command {
     Graph(GraphArgs),
     /// Run benchmark scenarios and print a table (and JSON).
     Bench(meshlight::bench::BenchArgs),
-    /// Build a meshlet LOD asset from a mesh file.
-    Bake(meshlight::scene::cli::BakeArgs),
+    /// Build a meshlet LOD asset from a mesh file, or every mesh file under a directory
+    /// (mirrored under the output directory, up-to-date outputs skipped).
+    Bake(LibraryBakeArgs),
     /// Print an asset's header and DAG statistics and verify its invariants.
     Inspect(meshlight::scene::cli::InspectArgs),
     /// Print the adapter, the features and limits meshlight uses, and which
     /// implementation `auto` picks for each stage on it.
     Info,
+}
+
+#[derive(clap::Args)]
+struct LibraryBakeArgs {
+    #[command(flatten)]
+    bake: meshlight::scene::cli::BakeArgs,
+    /// Meshes baked at once, and threads in all (default: every core). The outputs are
+    /// the same bytes whatever the number.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    jobs: Option<u32>,
 }
 
 #[derive(clap::Args)]
@@ -134,13 +145,14 @@ struct GraphArgs {
 const EXIT_NO_ADAPTER: u8 = 3;
 
 fn main() -> ExitCode {
+    quiet_on_closed_stdout();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     let result: Result<(), Box<dyn std::error::Error>> = match cli.command {
         Command::Render(a) => render(a),
         Command::Graph(a) => graph(a),
         Command::Bench(a) => meshlight::bench::run(&a),
-        Command::Bake(a) => meshlight::scene::cli::run_bake(&a).map_err(Into::into),
+        Command::Bake(a) => bake(a),
         Command::Inspect(a) => meshlight::scene::cli::run_inspect(&a).map_err(Into::into),
         Command::Info => meshlight::info::report().map(|text| print!("{text}")),
     };
@@ -159,8 +171,64 @@ fn main() -> ExitCode {
     }
 }
 
+/// Rust ignores SIGPIPE, so a write to a closed pipe (`meshlight inspect … | head -1`)
+/// returns an error that `print!` turns into a panic. The default action ends the
+/// process quietly with the status a shell expects of a broken pipe, as other tools do.
+fn quiet_on_closed_stdout() {
+    #[cfg(unix)]
+    // SAFETY: called first in `main`, before any thread exists; SIG_DFL is a valid action.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+/// A directory is baked as a library; a file (or `procedural`) as before. Both run in a
+/// pool of `--jobs` threads.
+fn bake(a: LibraryBakeArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let threads = match a.jobs {
+        Some(n) => n as usize,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    if a.bake.input.is_dir() {
+        let options = meshlight::scene::BuildOptions {
+            grouping: a.bake.grouping,
+            position_bits: a.bake.position_bits,
+        };
+        pool.install(|| {
+            meshlight::bake_library::run(&a.bake.input, &a.bake.output, &options, threads)
+        })
+        .map_err(Into::into)
+    } else {
+        pool.install(|| meshlight::scene::cli::run_bake(&a.bake))
+            .map_err(Into::into)
+    }
+}
+
 fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
+    use meshlight::still::{create_parent, write_file, write_png};
     use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
+    // Everything the command line bounds is checked before a mesh is baked or an adapter
+    // requested, and the outputs' directories are made, so a mistake costs no render.
+    meshlight::render_bounds::RenderNumbers {
+        segments: a.segments,
+        instances: a.instances,
+        lights: a.lights,
+        width: a.width,
+        height: a.height,
+        clusters: a.clusters,
+        slots: a.slots,
+    }
+    .check()?;
+    if let Some(path) = &a.pipeline {
+        meshlight::graph::file::read_pipeline_text(path)?;
+    }
+    create_parent(&a.output)?;
+    if let Some(html) = &a.html {
+        create_parent(html)?;
+    }
     let asset = scenes::load_asset(&a.mesh, a.segments)?;
     let data = meshlight::gpu_scene::SceneData::new(Default::default());
     let placed = if a.instances == 1 {
@@ -202,14 +270,7 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     renderer.executor.checked |= a.checked;
     let still = renderer.render_still(&placed.camera)?;
-    if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)?;
-    }
-    let file = std::io::BufWriter::new(std::fs::File::create(&a.output)?);
-    let mut enc = png::Encoder::new(file, still.width, still.height);
-    enc.set_color(png::ColorType::Rgba);
-    enc.set_depth(png::BitDepth::Eight);
-    enc.write_header()?.write_image_data(&still.rgba)?;
+    write_png(&a.output, still.width, still.height, &still.rgba)?;
     println!(
         "rendered {instances} instances of {} ({source_triangles} source triangles) at {}x{} on {} → {}",
         a.mesh.display(),
@@ -286,10 +347,7 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             ),
             None => page + &still.counts.html_table(),
         };
-        if let Some(dir) = html.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)?;
-        }
-        std::fs::write(&html, page)?;
+        write_file(&html, page.as_bytes())?;
         println!("graph: {}", html.display());
     }
     Ok(())
@@ -312,7 +370,7 @@ fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
         Format::Html => dump::to_html(&plan, &title, None),
     };
     match a.output {
-        Some(path) => std::fs::write(path, text)?,
+        Some(path) => meshlight::still::write_file(&path, text.as_bytes())?,
         None => print!("{text}"),
     }
     Ok(())
