@@ -90,73 +90,68 @@ pub fn max_slots() -> u64 {
     max_clusters().min(MAX_SLOTS)
 }
 
+/// Every flag's bound, for `meshlight info`.
+pub fn bounds() -> [(&'static str, RangeInclusive<u64>); 7] {
+    [
+        ("segments", SEGMENTS),
+        ("instances", 0..=max_instances()),
+        ("lights", 0..=max_lights()),
+        ("width", 1..=max_side()),
+        ("height", 1..=max_side()),
+        ("clusters", 1..=max_clusters()),
+        ("slots", 1..=max_slots()),
+    ]
+}
+
+/// What holds the number a flag gives, and what to change when it is out of bounds.
+fn why(flag: &str) -> String {
+    let binding = wgpu::Limits::default().max_storage_buffer_binding_size;
+    match flag {
+        "segments" => "the procedural mesh has 16 × segments² triangles and needs 3 segments to close; `bake` takes the same range".into(),
+        "instances" => format!(
+            "the instance buffer holds {} instances (one is the ground) in wgpu's default binding of {binding} bytes; place fewer copies",
+            max_instances() + 1
+        ),
+        "lights" => format!(
+            "the light clustering's object, slice and froxel lists grow with the light count and each must fit wgpu's default binding of {binding} bytes; use fewer lights"
+        ),
+        "width" | "height" => "an image side is at least 1 pixel and at most wgpu's default 2-D texture limit; change --width/--height".into(),
+        "clusters" => format!(
+            "the candidate list holds at least one cluster and at most one binding of {}-byte records; it grows by itself when a frame overflows it, so the default is a fine start",
+            CLUSTER.size
+        ),
+        _ => format!(
+            "the raster slots hold at least one cluster and at most one binding of {}-byte records (and 2^25, the slot bits of a visibility id); they grow by themselves when a frame overflows them",
+            CLUSTER.size
+        ),
+    }
+}
+
 impl RenderNumbers {
-    /// The first number outside its bound, in the order of the flags' help.
+    /// The first number outside its bound, in the order of [`bounds`].
     pub fn check(&self) -> Result<(), OutOfRange> {
-        let range = |flag, requested: u64, bound: RangeInclusive<u64>, why: String| {
-            if bound.contains(&requested) {
-                Ok(())
-            } else {
-                Err(OutOfRange {
-                    flag,
-                    requested,
-                    min: *bound.start(),
-                    max: *bound.end(),
-                    why,
-                })
+        let given = [
+            Some(self.segments.into()),
+            Some(self.instances.into()),
+            Some(self.lights.into()),
+            Some(self.width.into()),
+            Some(self.height.into()),
+            self.clusters,
+            self.slots,
+        ];
+        for ((flag, bound), value) in bounds().into_iter().zip(given) {
+            match value {
+                Some(requested) if !bound.contains(&requested) => {
+                    return Err(OutOfRange {
+                        flag,
+                        requested,
+                        min: *bound.start(),
+                        max: *bound.end(),
+                        why: why(flag),
+                    });
+                }
+                _ => {}
             }
-        };
-        range(
-            "segments",
-            self.segments.into(),
-            SEGMENTS,
-            "the procedural mesh has 16 × segments² triangles and needs 3 segments to close; `bake` takes the same range".into(),
-        )?;
-        range(
-            "instances",
-            self.instances.into(),
-            0..=max_instances(),
-            format!(
-                "the instance buffer holds {} instances (one is the ground) in wgpu's default binding of {} bytes; place fewer copies",
-                max_instances() + 1,
-                wgpu::Limits::default().max_storage_buffer_binding_size
-            ),
-        )?;
-        range(
-            "lights",
-            self.lights.into(),
-            0..=max_lights(),
-            "the light clustering's object, slice and froxel lists grow with the light count and each must fit one buffer binding of wgpu's default limits; use fewer lights".into(),
-        )?;
-        for (flag, side) in [("width", self.width), ("height", self.height)] {
-            range(
-                flag,
-                side.into(),
-                1..=max_side(),
-                "an image side must be at least 1 pixel and at most wgpu's default 2-D texture limit; change --width/--height".into(),
-            )?;
-        }
-        if let Some(clusters) = self.clusters {
-            range(
-                "clusters",
-                clusters,
-                1..=max_clusters(),
-                format!(
-                    "the candidate list holds at least one cluster and at most one buffer binding of {}-byte records; it grows on its own when a frame overflows it, so the default is a fine start",
-                    CLUSTER.size
-                ),
-            )?;
-        }
-        if let Some(slots) = self.slots {
-            range(
-                "slots",
-                slots,
-                1..=max_slots(),
-                format!(
-                    "the raster slots hold at least one cluster and at most one buffer binding of {}-byte records (and 2^25, the slot bits of a visibility id); they grow on their own when a frame overflows them",
-                    CLUSTER.size
-                ),
-            )?;
         }
         Ok(())
     }
