@@ -161,7 +161,7 @@ pub fn run(
         bar.inc(1);
     });
     bar.finish_and_clear();
-    print!("{}", summary(&rows, jobs, start.elapsed().as_secs_f64()));
+    crate::still::write_stdout(&summary(&rows, jobs, start.elapsed().as_secs_f64()))?;
     let failed = rows
         .iter()
         .filter(|r| matches!(r.status, Status::Refused(_) | Status::Failed(_)))

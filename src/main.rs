@@ -154,7 +154,8 @@ fn main() -> ExitCode {
         Command::Bench(a) => meshlight::bench::run(&a),
         Command::Bake(a) => bake(a),
         Command::Inspect(a) => meshlight::scene::cli::run_inspect(&a).map_err(Into::into),
-        Command::Info => meshlight::info::report().map(|text| print!("{text}")),
+        Command::Info => meshlight::info::report()
+            .and_then(|text| meshlight::still::write_stdout(&text).map_err(Into::into)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -208,8 +209,9 @@ fn bake(a: LibraryBakeArgs) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
-    use meshlight::still::{create_parent, write_file, write_png};
+    use meshlight::still::{create_parent, write_file, write_png, write_stdout};
     use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
+    use std::fmt::Write as _;
     // Everything the command line bounds is checked before a mesh is baked or an adapter
     // requested, and the outputs' directories are made, so a mistake costs no render.
     meshlight::render_bounds::RenderNumbers {
@@ -271,7 +273,10 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     renderer.executor.checked |= a.checked;
     let still = renderer.render_still(&placed.camera)?;
     write_png(&a.output, still.width, still.height, &still.rgba)?;
-    println!(
+    // Written at once, so that a failing standard output is one error naming it.
+    let mut report = String::new();
+    let _ = writeln!(
+        report,
         "rendered {instances} instances of {} ({source_triangles} source triangles) at {}x{} on {} → {}",
         a.mesh.display(),
         still.width,
@@ -281,17 +286,26 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     );
     for p in &renderer.compiled.plan.passes {
         if let Some(reason) = p.choice_reason() {
-            println!("  {:<22} {}: {reason}", p.name, p.implementation_label());
+            let _ = writeln!(
+                report,
+                "  {:<22} {}: {reason}",
+                p.name,
+                p.implementation_label()
+            );
         }
     }
     if light_count > 0 {
-        println!("  {light_count} point lights clustered on the GPU");
+        let _ = writeln!(report, "  {light_count} point lights clustered on the GPU");
     }
     if skipped > 0 {
-        println!("  {skipped} instances skipped: their transforms were singular or not finite");
+        let _ = writeln!(
+            report,
+            "  {skipped} instances skipped: their transforms were singular or not finite"
+        );
     }
     if still.frames > 1 {
-        println!(
+        let _ = writeln!(
+            report,
             "  {} frames: the lists grew ({})",
             still.frames,
             renderer
@@ -311,22 +325,28 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     for (label, value) in still.counts.rows() {
-        println!("  {label:<30} {value}");
+        let _ = writeln!(report, "  {label:<30} {value}");
     }
     for p in &still.stats.passes {
         let gpu = p
             .gpu_us
             .map(|g| format!("{g:.0} µs GPU"))
             .unwrap_or_else(|| "no timestamps".into());
-        println!("  {:<22} {gpu}", p.name);
+        let _ = writeln!(report, "  {:<22} {gpu}", p.name);
     }
     for b in &still.stats.batches {
         if let Some(us) = b.gpu_us {
-            println!("  {:<22} {us:.0} µs GPU ({})", b.label, b.passes.join(", "));
+            let _ = writeln!(
+                report,
+                "  {:<22} {us:.0} µs GPU ({})",
+                b.label,
+                b.passes.join(", ")
+            );
         }
     }
     if let Some(total) = still.stats.gpu_frame_us {
-        println!(
+        let _ = writeln!(
+            report,
             "  {:<22} {total:.0} µs GPU (timing mode {})",
             "frame",
             still.stats.timing.name()
@@ -348,8 +368,9 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             None => page + &still.counts.html_table(),
         };
         write_file(&html, page.as_bytes())?;
-        println!("graph: {}", html.display());
+        let _ = writeln!(report, "graph: {}", html.display());
     }
+    write_stdout(&report)?;
     Ok(())
 }
 
@@ -371,7 +392,7 @@ fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
     };
     match a.output {
         Some(path) => meshlight::still::write_file(&path, text.as_bytes())?,
-        None => print!("{text}"),
+        None => meshlight::still::write_stdout(&text)?,
     }
     Ok(())
 }

@@ -1,5 +1,6 @@
-//! What a still render waits for: the frame it submitted finished on the GPU, and that
-//! frame's counters back.
+//! What a still render waits for (the frame it submitted finished on the GPU, and that
+//! frame's counters back), and where the command line's results go: files and standard
+//! output, every error naming where.
 
 use crate::graph::{Executor, FrameStats, GraphError, Result};
 
@@ -78,4 +79,15 @@ pub fn write_png(
     writer.write_image_data(rgba).map_err(|e| write(&e))?;
     writer.finish().map_err(|e| write(&e))?;
     Ok(())
+}
+
+/// Writes `text` to standard output and flushes it. A closed pipe ends the process
+/// quietly by SIGPIPE (the binary restores its default action); any other failure (a
+/// full device) is an error naming standard output, where `print!` would panic.
+pub fn write_stdout(text: &str) -> std::result::Result<(), OutputError> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .map_err(|e| OutputError::new(std::path::Path::new("standard output"), "write", e))
 }

@@ -248,6 +248,23 @@ fn inputs_and_outputs_that_cannot_be_used_are_named() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(err.contains("cannot write /dev/full"), "{err}");
+    // Standard output on a full device: an error naming it, not a panic.
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_meshlight"))
+        .args(["graph", "--pipeline", "pipelines/prefix_sum.toml"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(full)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot write standard output") && !err.contains("panicked"),
+        "{err}"
+    );
     // The directory of the output cannot be made: refused before any rendering.
     let out = meshlight_env(
         &["render", "-o", "/dev/null/out/image.png"],
