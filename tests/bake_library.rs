@@ -224,3 +224,76 @@ fn a_refused_mesh_is_named_in_the_table_and_fails_the_command() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A `.gltf` of a wavy `n × n` grid whose positions and indices are in `grid.bin` beside
+/// it; `shift` moves an inner vertex along x (inside the bounds the `.gltf` declares),
+/// so that only the `.bin` changes.
+fn write_gltf_grid(dir: &Path, n: u32, shift: f32) {
+    let mut bin: Vec<u8> = Vec::new();
+    let (mut min, mut max) = ([f32::MAX; 3], [f32::MIN; 3]);
+    for y in 0..n {
+        for x in 0..n {
+            let mut p = [x as f32, ((x * 7 + y * 3) % 5) as f32 * 0.1, y as f32];
+            if (x, y) == (n / 2, n / 2) {
+                p[0] += shift;
+            }
+            for k in 0..3 {
+                min[k] = min[k].min(p[k]);
+                max[k] = max[k].max(p[k]);
+                bin.extend(p[k].to_le_bytes());
+            }
+        }
+    }
+    let positions = bin.len();
+    let mut indices = 0;
+    for y in 0..n - 1 {
+        for x in 0..n - 1 {
+            let i = y * n + x;
+            for v in [i, i + n, i + 1, i + 1, i + n, i + n + 1] {
+                bin.extend(v.to_le_bytes());
+                indices += 1;
+            }
+        }
+    }
+    std::fs::write(dir.join("grid.bin"), &bin).unwrap();
+    let gltf = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+"buffers":[{{"uri":"grid.bin","byteLength":{len}}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{positions}}},{{"buffer":0,"byteOffset":{positions},"byteLength":{index_bytes}}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":{count},"type":"VEC3","min":{min:?},"max":{max:?}}},
+{{"bufferView":1,"componentType":5125,"count":{indices},"type":"SCALAR"}}]}}"#,
+        len = bin.len(),
+        index_bytes = bin.len() - positions,
+        count = n * n,
+    );
+    std::fs::write(dir.join("grid.gltf"), gltf).unwrap();
+}
+
+/// A `.gltf` is up to date only while the buffer file it names is unchanged too.
+#[test]
+fn a_gltf_is_baked_again_when_only_its_buffer_file_changed() {
+    let dir = scratch("gltf");
+    let lib = dir.join("lib");
+    std::fs::create_dir_all(&lib).unwrap();
+    write_gltf_grid(&lib, 24, 0.0);
+    let out = dir.join("out");
+    let (o, table) = bake(&lib, &out, &[]);
+    assert!(
+        o.status.success(),
+        "{table}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(status(&table, "grid.gltf"), "baked", "{table}");
+    let first = std::fs::read(out.join("grid.mlasset")).unwrap();
+    let (_, table) = bake(&lib, &out, &[]);
+    assert_eq!(status(&table, "grid.gltf"), "up to date", "{table}");
+    let gltf_before = std::fs::read(lib.join("grid.gltf")).unwrap();
+    write_gltf_grid(&lib, 24, 0.4);
+    assert_eq!(std::fs::read(lib.join("grid.gltf")).unwrap(), gltf_before);
+    let (o, table) = bake(&lib, &out, &[]);
+    assert!(o.status.success(), "{table}");
+    assert_eq!(status(&table, "grid.gltf"), "baked", "{table}");
+    assert_ne!(std::fs::read(out.join("grid.mlasset")).unwrap(), first);
+    let _ = std::fs::remove_dir_all(&dir);
+}

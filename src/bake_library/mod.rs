@@ -1,17 +1,14 @@
 //! `meshlight bake DIR -o OUTDIR`: every mesh file under a directory baked at once, the
 //! tree mirrored under the output directory (`DIR/props/crate.glb` →
-//! `OUTDIR/props/crate.mlasset`), outputs already up to date skipped, and a table of
-//! what happened to each file.
+//! `OUTDIR/props/crate.mlasset`), outputs already up to date skipped ([`stamp`]), and a
+//! table of what happened to each file.
 //!
-//! An output is a pure function of its input's bytes and the build options: the
-//! scene crate's cache key ([`crate::scene::cache::key`]) hashes both with the asset
-//! format and builder revision. Each output has a stamp beside it
-//! (`crate.mlasset.key`) holding that key and the asset's checksum; an output whose
-//! stamp matches the key and whose asset loads (checksum and structure validated) with
-//! that checksum is up to date. The builder is deterministic, so the bytes do not
-//! depend on the number of threads or on the order the files finish in.
+//! An output is a pure function of its input's bytes and the build options, the same
+//! bytes a single-file bake writes. The builder is deterministic, so they do not depend
+//! on the number of threads or on the order the files finish in.
 
-use crate::scene::cache::{self, Source};
+pub mod stamp;
+
 use crate::scene::load::load_mesh;
 use crate::scene::{BuildOptions, Built, MeshletAsset, build_asset};
 use crate::still::{OutputError, create_parent};
@@ -23,11 +20,8 @@ use std::time::Instant;
 
 /// File extensions baked (compared without regard to case).
 pub const MESH_EXTENSIONS: [&str; 4] = ["obj", "gltf", "glb", "stl"];
-/// Extension of an output asset; its stamp adds [`STAMP_SUFFIX`].
+/// Extension of an output asset; its stamp adds [`stamp::STAMP_SUFFIX`].
 pub const ASSET_EXTENSION: &str = "mlasset";
-pub const STAMP_SUFFIX: &str = ".key";
-/// First line of a stamp, so that a stray file of the same name is not taken for one.
-const STAMP_HEADER: &str = "meshlight bake stamp 1";
 
 /// Why a directory bake as a whole did not succeed.
 #[derive(Debug, thiserror::Error)]
@@ -125,12 +119,6 @@ pub fn output_of(input: &Path) -> PathBuf {
     input.with_extension(ASSET_EXTENSION)
 }
 
-fn stamp_of(output: &Path) -> PathBuf {
-    let mut name = output.as_os_str().to_owned();
-    name.push(STAMP_SUFFIX);
-    PathBuf::from(name)
-}
-
 /// Bakes every mesh under `input_dir` into `output_dir` on the current rayon pool
 /// (`jobs` is its size, for the summary) with one progress bar, prints the summary
 /// table and fails if any mesh was not baked.
@@ -224,12 +212,11 @@ pub fn bake_all(
 
 /// Bakes one file unless its output is up to date.
 fn bake_one(input: &Path, output: &Path, options: &BuildOptions) -> (Option<AssetStats>, Status) {
-    let key = match cache::key(&Source::File(input.to_path_buf()), options) {
+    let key = match stamp::input_key(input, options) {
         Ok(key) => key,
         Err(e) => return (None, Status::Refused(e.to_string())),
     };
-    let stamp = stamp_of(output);
-    if let Some(stats) = up_to_date(output, &stamp, key) {
+    if let Some(stats) = stamp::up_to_date(output, &key) {
         return (Some(stats), Status::UpToDate);
     }
     let built = match load_mesh(input).and_then(|mesh| build_asset(&mesh, options, &mut |_| {})) {
@@ -243,9 +230,9 @@ fn bake_one(input: &Path, output: &Path, options: &BuildOptions) -> (Option<Asse
     if let Some(why) = fails_its_checks(&built.asset) {
         return (Some(stats), Status::Refused(why));
     }
-    let text = stamp_text(key, &built.asset, stats.fallback_groups);
+    let text = stamp::stamp_text(&key, &built.asset, stats.fallback_groups);
     match write_replacing(output, built.asset.bytes())
-        .and_then(|()| write_replacing(&stamp, text.as_bytes()))
+        .and_then(|()| write_replacing(&stamp::stamp_of(output), text.as_bytes()))
     {
         Ok(()) => (Some(stats), Status::Baked),
         Err(e) => (Some(stats), Status::Failed(e.to_string())),
@@ -260,6 +247,7 @@ fn fallback_groups(_built: &Built) -> Option<u32> {
     None
 }
 
+/// The numbers of a baked or loaded asset (the fallback count is not in the asset).
 fn stats_of(asset: &MeshletAsset) -> AssetStats {
     let h = asset.header();
     AssetStats {
@@ -268,11 +256,6 @@ fn stats_of(asset: &MeshletAsset) -> AssetStats {
         levels: h.level_count,
         fallback_groups: None,
     }
-}
-
-fn checksum(asset: &MeshletAsset) -> u64 {
-    let c = asset.header().checksum;
-    u64::from(c[0]) | (u64::from(c[1]) << 32)
 }
 
 /// What `inspect` would reject, checked before writing as the single-file bake does.
@@ -289,40 +272,6 @@ fn fails_its_checks(asset: &MeshletAsset) -> Option<String> {
             "the built asset fails its own checks ({} problems, first: {first}); please report this with the input mesh",
             problems.len()
         )
-    })
-}
-
-fn stamp_text(key: u64, asset: &MeshletAsset, fallback_groups: Option<u32>) -> String {
-    let mut s = format!(
-        "{STAMP_HEADER}\nkey {key:016x}\nchecksum {:016x}\n",
-        checksum(asset)
-    );
-    if let Some(n) = fallback_groups {
-        let _ = writeln!(s, "fallback_groups {n}");
-    }
-    s
-}
-
-/// The output's numbers if its stamp holds `key` and the asset it names loads with the
-/// stamped checksum; `None` means bake it.
-fn up_to_date(output: &Path, stamp: &Path, key: u64) -> Option<AssetStats> {
-    let text = std::fs::read_to_string(stamp).ok()?;
-    let mut lines = text.lines();
-    if lines.next()? != STAMP_HEADER {
-        return None;
-    }
-    let fields: BTreeMap<&str, &str> = lines.filter_map(|l| l.split_once(' ')).collect();
-    let hex = |name| u64::from_str_radix(fields.get(name)?, 16).ok();
-    if hex("key")? != key {
-        return None;
-    }
-    let asset = MeshletAsset::load(output).ok()?;
-    if hex("checksum")? != checksum(&asset) {
-        return None;
-    }
-    Some(AssetStats {
-        fallback_groups: fields.get("fallback_groups").and_then(|n| n.parse().ok()),
-        ..stats_of(&asset)
     })
 }
 
