@@ -188,7 +188,7 @@ pub fn bake_all(
                 .map(|other| other.display().to_string())
                 .collect();
             let (stats, status) = if others.is_empty() {
-                bake_one(&input_dir.join(input), &output_dir.join(&output), options)
+                bake_guarded(&input_dir.join(input), &output_dir.join(&output), options)
             } else {
                 let why = format!(
                     "{} bakes to the same output {}; rename one of them",
@@ -208,6 +208,28 @@ pub fn bake_all(
             row
         })
         .collect()
+}
+
+/// [`bake_one`], with a panic in the builder reported as that file's failure: the other
+/// files of a library still bake, and the table says which input to report.
+fn bake_guarded(
+    input: &Path,
+    output: &Path,
+    options: &BuildOptions,
+) -> (Option<AssetStats>, Status) {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        bake_one(input, output, options)
+    }))
+    .unwrap_or_else(|panic| {
+        let message = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        let why =
+            format!("the builder panicked ({message}); please report this with the input mesh");
+        (None, Status::Failed(why))
+    })
 }
 
 /// Bakes one file unless its output is up to date.
