@@ -17,8 +17,9 @@ pub mod bake_library;
 pub mod bench;
 pub mod info;
 pub mod light_clustering;
+pub mod output;
 pub mod render_bounds;
-pub mod still;
+mod still;
 pub mod virtual_geometry;
 
 pub use meshlight_gpu_scene as gpu_scene;

@@ -155,7 +155,7 @@ fn main() -> ExitCode {
         Command::Bake(a) => bake(a),
         Command::Inspect(a) => meshlight::scene::cli::run_inspect(&a).map_err(Into::into),
         Command::Info => meshlight::info::report()
-            .and_then(|text| meshlight::still::write_stdout(&text).map_err(Into::into)),
+            .and_then(|text| meshlight::output::write_stdout(&text).map_err(Into::into)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -209,7 +209,7 @@ fn bake(a: LibraryBakeArgs) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
-    use meshlight::still::{create_parent, write_file, write_png, write_stdout};
+    use meshlight::output::{create_parent, write_file, write_png, write_stdout};
     use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
     use std::fmt::Write as _;
     // Everything the command line bounds is checked before a mesh is baked or an adapter
@@ -391,8 +391,8 @@ fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
         Format::Html => dump::to_html(&plan, &title, None),
     };
     match a.output {
-        Some(path) => meshlight::still::write_file(&path, text.as_bytes())?,
-        None => meshlight::still::write_stdout(&text)?,
+        Some(path) => meshlight::output::write_file(&path, text.as_bytes())?,
+        None => meshlight::output::write_stdout(&text)?,
     }
     Ok(())
 }

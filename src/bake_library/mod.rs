@@ -9,9 +9,9 @@
 
 pub mod stamp;
 
+use crate::output::{OutputError, create_parent};
 use crate::scene::load::load_mesh;
 use crate::scene::{BuildOptions, Built, MeshletAsset, build_asset};
-use crate::still::{OutputError, create_parent};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -149,7 +149,7 @@ pub fn run(
         bar.inc(1);
     });
     bar.finish_and_clear();
-    crate::still::write_stdout(&summary(&rows, jobs, start.elapsed().as_secs_f64()))?;
+    crate::output::write_stdout(&summary(&rows, jobs, start.elapsed().as_secs_f64()))?;
     let failed = rows
         .iter()
         .filter(|r| matches!(r.status, Status::Refused(_) | Status::Failed(_)))
