@@ -123,6 +123,43 @@ fn a_visibility_target_with_a_zero_side_is_refused_naming_it() {
 }
 
 #[test]
+fn a_buffer_of_zero_bytes_written_in_the_file_is_refused_naming_it() {
+    let buffer = |fields: &str| {
+        format!(
+            "[params]\nn = 0\n[[resource]]\nname = \"image\"\nkind = \"transient\"\nbuffer = {{ {fields} }}\n"
+        )
+    };
+    let registry = Registry::new();
+    for (fields, count, element_size) in [
+        ("element = \"u32\", count = 0", Some(0), 4),
+        (
+            "element = \"blob\", element_size = 0, count = 8",
+            Some(8),
+            0,
+        ),
+        (
+            "element = \"blob\", element_size = 0, count_param = \"n\"",
+            None,
+            0,
+        ),
+    ] {
+        assert_eq!(
+            resource_problem(parse_pipeline(&buffer(fields), "t.toml", &registry)),
+            ResourceProblem::EmptyBuffer {
+                count,
+                element_size
+            },
+            "{fields}"
+        );
+    }
+    // A parameter may be 0 until the caller sets it: checked where it is resolved.
+    let by_param = buffer("element = \"u32\", count_param = \"n\"");
+    assert!(parse_pipeline(&by_param, "t.toml", &registry).is_ok());
+    let fine = buffer("element = \"u32\", count = 1");
+    assert!(parse_pipeline(&fine, "t.toml", &registry).is_ok());
+}
+
+#[test]
 fn an_unknown_usage_is_refused_on_every_kind_of_resource() {
     let registry = Registry::new();
     let size = "width = 8, height = 4";

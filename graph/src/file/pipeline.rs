@@ -511,6 +511,15 @@ fn declare(
                 }
             };
             let usage = buffer_usage(&r.usage)?;
+            // A count from a parameter may be 0 for a while (no instances yet) and is
+            // checked where it is resolved; one written in the file never changes.
+            if element.size == 0 || b.count == Some(0) {
+                return Err(ResourceProblem::EmptyBuffer {
+                    count: b.count,
+                    element_size: element.size,
+                }
+                .into());
+            }
             let desc = match (b.count, &b.count_param) {
                 (Some(n), None) => BufferDesc::array(element, n),
                 (None, Some(p)) => BufferDesc::array_param(element, p),

@@ -40,6 +40,17 @@ pub enum ResourceProblem {
         layers: u32,
     },
 
+    /// A buffer of zero bytes written in the file: `count = 0` or `element_size = 0`
+    /// (wgpu refuses to bind it only when a frame runs).
+    #[error(
+        "a buffer of {} elements of {element_size} bytes holds nothing; give a count and an element size of at least 1",
+        count.map_or_else(|| "`count_param`".to_string(), |n| n.to_string())
+    )]
+    EmptyBuffer {
+        count: Option<u64>,
+        element_size: u32,
+    },
+
     /// A `usage` name wgpu does not know, on any kind of resource.
     #[error("unknown {kind} usage `{usage}`; known: {known}")]
     UnknownUsage {
