@@ -122,6 +122,14 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
     }
     writeln!(
         out,
+        "\nrender bounds (what the renderer holds with wgpu's default limits; checked before a render asks for the adapter):"
+    )?;
+    let bounds = crate::render_bounds::bounds();
+    for (flag, range) in &bounds {
+        writeln!(out, "  --{flag:<12} {}..={}", range.start(), range.end())?;
+    }
+    writeln!(
+        out,
         "\nauto picks (pipelines/virtual_geometry.toml compiled for this adapter):"
     )?;
     let graph = crate::graph::file::parse_pipeline(

@@ -13,9 +13,12 @@
 //!   between them); [`light_clustering`] wires them into a graph, runs it with overflow
 //!   growth, and holds the CPU reference of the whole assignment.
 
+pub mod bake_library;
 pub mod bench;
 pub mod info;
 pub mod light_clustering;
+pub mod output;
+pub mod render_bounds;
 mod still;
 pub mod virtual_geometry;
 

@@ -24,13 +24,24 @@ enum Command {
     Graph(GraphArgs),
     /// Run benchmark scenarios and print a table (and JSON).
     Bench(meshlight::bench::BenchArgs),
-    /// Build a meshlet LOD asset from a mesh file.
-    Bake(meshlight::scene::cli::BakeArgs),
+    /// Build a meshlet LOD asset from a mesh file, or every mesh file under a directory
+    /// (mirrored under the output directory, up-to-date outputs skipped).
+    Bake(LibraryBakeArgs),
     /// Print an asset's header and DAG statistics and verify its invariants.
     Inspect(meshlight::scene::cli::InspectArgs),
     /// Print the adapter, the features and limits meshlight uses, and which
     /// implementation `auto` picks for each stage on it.
     Info,
+}
+
+#[derive(clap::Args)]
+struct LibraryBakeArgs {
+    #[command(flatten)]
+    bake: meshlight::scene::cli::BakeArgs,
+    /// Meshes baked at once, and threads in all (default: every core). The outputs are
+    /// the same bytes whatever the number.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    jobs: Option<u32>,
 }
 
 #[derive(clap::Args)]
@@ -134,15 +145,17 @@ struct GraphArgs {
 const EXIT_NO_ADAPTER: u8 = 3;
 
 fn main() -> ExitCode {
+    quiet_on_closed_stdout();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     let result: Result<(), Box<dyn std::error::Error>> = match cli.command {
         Command::Render(a) => render(a),
         Command::Graph(a) => graph(a),
         Command::Bench(a) => meshlight::bench::run(&a),
-        Command::Bake(a) => meshlight::scene::cli::run_bake(&a).map_err(Into::into),
+        Command::Bake(a) => bake(a),
         Command::Inspect(a) => meshlight::scene::cli::run_inspect(&a).map_err(Into::into),
-        Command::Info => meshlight::info::report().map(|text| print!("{text}")),
+        Command::Info => meshlight::info::report()
+            .and_then(|text| meshlight::output::write_stdout(&text).map_err(Into::into)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -159,8 +172,65 @@ fn main() -> ExitCode {
     }
 }
 
+/// Rust ignores SIGPIPE, so a write to a closed pipe (`meshlight inspect … | head -1`)
+/// returns an error that `print!` turns into a panic. The default action ends the
+/// process quietly with the status a shell expects of a broken pipe, as other tools do.
+fn quiet_on_closed_stdout() {
+    #[cfg(unix)]
+    // SAFETY: called first in `main`, before any thread exists; SIG_DFL is a valid action.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+/// A directory is baked as a library; a file (or `procedural`) as before. Both run in a
+/// pool of `--jobs` threads.
+fn bake(a: LibraryBakeArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let threads = match a.jobs {
+        Some(n) => n as usize,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    if a.bake.input.is_dir() {
+        let options = meshlight::scene::BuildOptions {
+            grouping: a.bake.grouping,
+            position_bits: a.bake.position_bits,
+        };
+        pool.install(|| {
+            meshlight::bake_library::run(&a.bake.input, &a.bake.output, &options, threads)
+        })
+        .map_err(Into::into)
+    } else {
+        pool.install(|| meshlight::scene::cli::run_bake(&a.bake))
+            .map_err(Into::into)
+    }
+}
+
 fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
+    use meshlight::output::{create_parent, write_file, write_png, write_stdout};
     use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
+    use std::fmt::Write as _;
+    // Everything the command line bounds is checked before a mesh is baked or an adapter
+    // requested, and the outputs' directories are made, so a mistake costs no render.
+    meshlight::render_bounds::RenderNumbers {
+        segments: a.segments,
+        instances: a.instances,
+        lights: a.lights,
+        width: a.width,
+        height: a.height,
+        clusters: a.clusters,
+        slots: a.slots,
+    }
+    .check()?;
+    if let Some(path) = &a.pipeline {
+        meshlight::graph::file::read_pipeline_text(path)?;
+    }
+    create_parent(&a.output)?;
+    if let Some(html) = &a.html {
+        create_parent(html)?;
+    }
     let asset = scenes::load_asset(&a.mesh, a.segments)?;
     let data = meshlight::gpu_scene::SceneData::new(Default::default());
     let placed = if a.instances == 1 {
@@ -202,15 +272,11 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     renderer.executor.checked |= a.checked;
     let still = renderer.render_still(&placed.camera)?;
-    if let Some(dir) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)?;
-    }
-    let file = std::io::BufWriter::new(std::fs::File::create(&a.output)?);
-    let mut enc = png::Encoder::new(file, still.width, still.height);
-    enc.set_color(png::ColorType::Rgba);
-    enc.set_depth(png::BitDepth::Eight);
-    enc.write_header()?.write_image_data(&still.rgba)?;
-    println!(
+    write_png(&a.output, still.width, still.height, &still.rgba)?;
+    // Written at once, so that a failing standard output is one error naming it.
+    let mut report = String::new();
+    let _ = writeln!(
+        report,
         "rendered {instances} instances of {} ({source_triangles} source triangles) at {}x{} on {} → {}",
         a.mesh.display(),
         still.width,
@@ -220,17 +286,26 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     );
     for p in &renderer.compiled.plan.passes {
         if let Some(reason) = p.choice_reason() {
-            println!("  {:<22} {}: {reason}", p.name, p.implementation_label());
+            let _ = writeln!(
+                report,
+                "  {:<22} {}: {reason}",
+                p.name,
+                p.implementation_label()
+            );
         }
     }
     if light_count > 0 {
-        println!("  {light_count} point lights clustered on the GPU");
+        let _ = writeln!(report, "  {light_count} point lights clustered on the GPU");
     }
     if skipped > 0 {
-        println!("  {skipped} instances skipped: their transforms were singular or not finite");
+        let _ = writeln!(
+            report,
+            "  {skipped} instances skipped: their transforms were singular or not finite"
+        );
     }
     if still.frames > 1 {
-        println!(
+        let _ = writeln!(
+            report,
             "  {} frames: the lists grew ({})",
             still.frames,
             renderer
@@ -250,22 +325,28 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     for (label, value) in still.counts.rows() {
-        println!("  {label:<30} {value}");
+        let _ = writeln!(report, "  {label:<30} {value}");
     }
     for p in &still.stats.passes {
         let gpu = p
             .gpu_us
             .map(|g| format!("{g:.0} µs GPU"))
             .unwrap_or_else(|| "no timestamps".into());
-        println!("  {:<22} {gpu}", p.name);
+        let _ = writeln!(report, "  {:<22} {gpu}", p.name);
     }
     for b in &still.stats.batches {
         if let Some(us) = b.gpu_us {
-            println!("  {:<22} {us:.0} µs GPU ({})", b.label, b.passes.join(", "));
+            let _ = writeln!(
+                report,
+                "  {:<22} {us:.0} µs GPU ({})",
+                b.label,
+                b.passes.join(", ")
+            );
         }
     }
     if let Some(total) = still.stats.gpu_frame_us {
-        println!(
+        let _ = writeln!(
+            report,
             "  {:<22} {total:.0} µs GPU (timing mode {})",
             "frame",
             still.stats.timing.name()
@@ -286,12 +367,10 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             ),
             None => page + &still.counts.html_table(),
         };
-        if let Some(dir) = html.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)?;
-        }
-        std::fs::write(&html, page)?;
-        println!("graph: {}", html.display());
+        write_file(&html, page.as_bytes())?;
+        let _ = writeln!(report, "graph: {}", html.display());
     }
+    write_stdout(&report)?;
     Ok(())
 }
 
@@ -312,8 +391,8 @@ fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
         Format::Html => dump::to_html(&plan, &title, None),
     };
     match a.output {
-        Some(path) => std::fs::write(path, text)?,
-        None => print!("{text}"),
+        Some(path) => meshlight::output::write_file(&path, text.as_bytes())?,
+        None => meshlight::output::write_stdout(&text)?,
     }
     Ok(())
 }

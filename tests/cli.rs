@@ -120,3 +120,241 @@ fn render_draws_a_mesh_file_through_the_shipped_pipeline_and_reports_its_counter
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("clusters") && err.contains("shaded"), "{err}");
 }
+
+/// `meshlight` with extra environment variables.
+fn meshlight_env(args: &[&str], env: &[(&str, &std::path::Path)]) -> std::process::Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_meshlight"));
+    cmd.args(args).current_dir(env!("CARGO_MANIFEST_DIR"));
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("runs")
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("meshlight-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Each bounded number is refused with the number and the limit, before a mesh is baked
+/// (the cache stays empty) or an adapter is requested (one that cannot exist is named,
+/// which would fail with the no-adapter exit code 3 if it were looked for).
+#[test]
+fn render_refuses_numbers_it_cannot_hold_before_baking_or_asking_for_an_adapter() {
+    let dir = scratch("bounds");
+    let cache = dir.join("cache");
+    let max_lights = meshlight::render_bounds::max_lights().to_string();
+    let max_instances = meshlight::render_bounds::max_instances().to_string();
+    let max_clusters = meshlight::render_bounds::max_clusters().to_string();
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["--lights", "4294967295"],
+            &format!("--lights 4294967295 is outside 0..={max_lights}"),
+        ),
+        (
+            &["--segments", "100000"],
+            "--segments 100000 is outside 3..=1024",
+        ),
+        (&["--segments", "0"], "--segments 0 is outside 3..=1024"),
+        (&["--segments", "1"], "--segments 1 is outside 3..=1024"),
+        (
+            &["--instances", "4294967295"],
+            &format!("--instances 4294967295 is outside 0..={max_instances}"),
+        ),
+        (&["--width", "0"], "--width 0 is outside 1..=8192"),
+        (
+            &["--height", "100000"],
+            "--height 100000 is outside 1..=8192",
+        ),
+        (
+            &["--clusters", "0"],
+            &format!("--clusters 0 is outside 1..={max_clusters}"),
+        ),
+        (&["--slots", "0"], "--slots 0 is outside 1..="),
+    ];
+    for (args, expected) in cases {
+        let mut all = vec!["render"];
+        all.extend_from_slice(args);
+        let out = meshlight_env(
+            &all,
+            &[
+                ("MESHLIGHT_CACHE_DIR", &cache),
+                (
+                    "MESHLIGHT_ADAPTER",
+                    std::path::Path::new("no adapter is called this"),
+                ),
+            ],
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!cache.exists(), "{args:?} baked before refusing");
+    }
+    // At a bound, the check passes and the render goes on to ask for the adapter.
+    let out = meshlight_env(
+        &[
+            "render",
+            "--segments",
+            "3",
+            "--instances",
+            "0",
+            "--lights",
+            &max_lights,
+            "--width",
+            "8",
+            "--height",
+            "8",
+        ],
+        &[
+            ("MESHLIGHT_CACHE_DIR", &cache),
+            (
+                "MESHLIGHT_ADAPTER",
+                std::path::Path::new("no adapter is called this"),
+            ),
+        ],
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A pipeline file that is a device is refused by `render` and `graph` without reading
+/// it; an output that cannot be written names its path, before rendering where it can.
+#[test]
+fn inputs_and_outputs_that_cannot_be_used_are_named() {
+    for cmd in ["render", "graph"] {
+        let out = meshlight(&[cmd, "--pipeline", "/dev/zero"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{cmd}");
+        assert!(
+            err.contains("/dev/zero") && err.contains("not a regular file"),
+            "{cmd}: {err}"
+        );
+    }
+    let out = meshlight(&[
+        "graph",
+        "--pipeline",
+        "pipelines/prefix_sum.toml",
+        "-o",
+        "/dev/full",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("cannot write /dev/full"), "{err}");
+    // Standard output on a full device: an error naming it, not a panic.
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_meshlight"))
+        .args(["graph", "--pipeline", "pipelines/prefix_sum.toml"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(full)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot write standard output") && !err.contains("panicked"),
+        "{err}"
+    );
+    // The directory of the output cannot be made: refused before any rendering.
+    let out = meshlight_env(
+        &["render", "-o", "/dev/null/out/image.png"],
+        &[(
+            "MESHLIGHT_ADAPTER",
+            std::path::Path::new("no adapter is called this"),
+        )],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot create the directory /dev/null/out"),
+        "{err}"
+    );
+}
+
+/// A PNG small enough to sit in the write buffer until the end used to be lost there
+/// with exit 0 and "rendered" printed (GPU: lavapipe).
+#[test]
+fn rendering_to_a_full_device_fails_naming_it() {
+    let out = meshlight(&[
+        "render",
+        "--mesh",
+        "assets/meshes/spot.obj",
+        "--instances",
+        "1",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "-o",
+        "/dev/full",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}{err}");
+    assert!(err.contains("cannot write /dev/full"), "{err}");
+    assert!(!stdout.contains("rendered"), "{stdout}");
+}
+
+/// The exit status of a process `meshlight args` whose standard output is a pipe
+/// nobody reads (its read end closed before it starts), and its standard error.
+fn with_closed_stdout(args: &[&str]) -> (std::process::ExitStatus, String) {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_meshlight"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .expect("runs");
+    (
+        out.status,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// `meshlight inspect … | head -1` and `meshlight graph … | head -1`: the writer ends
+/// as a broken pipe ends any tool (by SIGPIPE), with nothing on standard error.
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_ends_quietly_as_a_broken_pipe() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = scratch("pipe");
+    let asset = dir.join("knot.mlasset");
+    let out = meshlight(&[
+        "bake",
+        "procedural",
+        "--segments",
+        "4",
+        "-o",
+        asset.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for args in [
+        vec!["inspect", asset.to_str().unwrap()],
+        vec!["graph", "--pipeline", "pipelines/virtual_geometry.toml"],
+    ] {
+        let (status, err) = with_closed_stdout(&args);
+        assert_eq!(
+            status.signal(),
+            Some(libc::SIGPIPE),
+            "{args:?}: {status:?} {err}"
+        );
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -153,6 +153,19 @@ pub enum GraphError {
     #[error("pipeline file {file}: {message}")]
     PipelineFile { file: String, message: String },
 
+    #[error("pipeline file {file}: {problem}")]
+    PipelineSource {
+        file: String,
+        problem: crate::file::SourceProblem,
+    },
+
+    #[error("pipeline file {file}: resource `{resource}`: {problem}")]
+    PipelineResource {
+        file: String,
+        resource: String,
+        problem: crate::file::ResourceProblem,
+    },
+
     #[error("imported resource `{resource}` was not supplied to the frame; pass it in the imports")]
     MissingImport { resource: String },
 

@@ -3,10 +3,12 @@
 
 use crate::builder::{Bindings, GraphBuilder};
 use crate::error::{GraphError, Result};
+use crate::file::problem::{MAX_PIPELINE_FILE_BYTES, ResourceProblem, SourceProblem};
 use crate::file::{Params, Registry};
 use crate::resource::{BufferDesc, Element, TextureDesc, TextureRange};
 use serde::Deserialize;
 use std::collections::BTreeMap;
+use std::io::Read;
 use std::path::Path;
 
 #[derive(Debug, Deserialize)]
@@ -87,6 +89,7 @@ pub struct ResourceEntry {
     pub texture: Option<TextureEntry>,
     pub visibility: Option<VisibilityEntry>,
     /// Imported only: the usages the caller creates it with (`STORAGE`, `COPY_SRC`, …).
+    /// The names are checked on every kind, so a misspelt one is never ignored.
     #[serde(default)]
     pub usage: Vec<String>,
 }
@@ -116,11 +119,79 @@ pub fn load_pipeline_with(
     registry: &Registry,
     overrides: &BTreeMap<String, u64>,
 ) -> Result<GraphBuilder> {
-    let text = std::fs::read_to_string(path).map_err(|e| GraphError::PipelineFile {
-        file: path.display().to_string(),
-        message: format!("cannot read it: {e}"),
-    })?;
+    let text = read_pipeline_text(path)?;
     parse_pipeline_with(&text, &path.display().to_string(), registry, overrides)
+}
+
+/// The text of a pipeline file: a regular file of at most [`MAX_PIPELINE_FILE_BYTES`].
+/// A device, FIFO or directory is refused before it is opened (`/dev/zero` would
+/// otherwise be read until memory runs out), and the read stops past the limit even if
+/// the file grows while it is read.
+pub fn read_pipeline_text(path: &Path) -> Result<String> {
+    let refuse = |problem| GraphError::PipelineSource {
+        file: path.display().to_string(),
+        problem,
+    };
+    let unreadable = |e: std::io::Error| {
+        refuse(SourceProblem::Unreadable {
+            reason: e.to_string(),
+        })
+    };
+    let meta = std::fs::metadata(path).map_err(unreadable)?;
+    if !meta.is_file() {
+        return Err(refuse(SourceProblem::NotARegularFile {
+            what: file_kind(&meta.file_type()),
+        }));
+    }
+    let too_large = |bytes| {
+        refuse(SourceProblem::TooLarge {
+            bytes,
+            limit: MAX_PIPELINE_FILE_BYTES,
+        })
+    };
+    if meta.len() > MAX_PIPELINE_FILE_BYTES {
+        return Err(too_large(meta.len()));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_PIPELINE_FILE_BYTES + 1).read_to_end(&mut bytes))
+        .map_err(unreadable)?;
+    if bytes.len() as u64 > MAX_PIPELINE_FILE_BYTES {
+        return Err(too_large(bytes.len() as u64));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        refuse(SourceProblem::Unreadable {
+            reason: format!(
+                "it is not UTF-8 text (byte {})",
+                e.utf8_error().valid_up_to()
+            ),
+        })
+    })
+}
+
+/// What a path that is not a regular file is, for the error.
+fn file_kind(t: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+        if t.is_fifo() {
+            return "a FIFO";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_dir() {
+        "a directory"
+    } else {
+        "not a regular file"
+    }
 }
 
 pub fn parse_pipeline(text: &str, file: &str, registry: &Registry) -> Result<GraphBuilder> {
@@ -153,8 +224,14 @@ pub fn parse_pipeline_with(
         g.size_param(name, *value);
     }
     for r in &parsed.resources {
-        declare(&mut g, r, &parsed.params)
-            .map_err(|m| ferr(format!("resource `{}`: {m}", r.name)))?;
+        declare(&mut g, r, &parsed.params).map_err(|refusal| match refusal {
+            Refusal::Text(m) => ferr(format!("resource `{}`: {m}", r.name)),
+            Refusal::Problem(problem) => GraphError::PipelineResource {
+                file: file.to_string(),
+                resource: r.name.clone(),
+                problem,
+            },
+        })?;
     }
     for p in &mut parsed.passes {
         substitute_params(&mut p.params, &parsed.params)
@@ -323,11 +400,54 @@ fn dimension(
     }
 }
 
+/// Why [`declare`] refused an entry: a typed problem, or a message about the entry's
+/// shape.
+enum Refusal {
+    Text(String),
+    Problem(ResourceProblem),
+}
+
+impl From<String> for Refusal {
+    fn from(m: String) -> Self {
+        Refusal::Text(m)
+    }
+}
+impl From<&str> for Refusal {
+    fn from(m: &str) -> Self {
+        Refusal::Text(m.to_string())
+    }
+}
+impl From<ResourceProblem> for Refusal {
+    fn from(p: ResourceProblem) -> Self {
+        Refusal::Problem(p)
+    }
+}
+
+/// Refuses an extent with a zero dimension, whether written or read from `[params]`.
+fn nonzero_extent(
+    what: &'static str,
+    width: u32,
+    height: u32,
+    mip_levels: u32,
+    layers: u32,
+) -> std::result::Result<(), ResourceProblem> {
+    if [width, height, mip_levels, layers].contains(&0) {
+        return Err(ResourceProblem::ZeroExtent {
+            what,
+            width,
+            height,
+            mip_levels,
+            layers,
+        });
+    }
+    Ok(())
+}
+
 fn declare(
     g: &mut GraphBuilder,
     r: &ResourceEntry,
     params: &BTreeMap<String, u64>,
-) -> std::result::Result<(), String> {
+) -> std::result::Result<(), Refusal> {
     if let Some(v) = &r.visibility {
         if r.buffer.is_some() || r.texture.is_some() {
             return Err(
@@ -335,8 +455,25 @@ fn declare(
                     .into(),
             );
         }
+        // Held as a buffer or a texture, as the rasteriser decides: a name either knows.
+        if let Some(n) = r.usage.iter().find(|n| {
+            wgpu::BufferUsages::from_name(n).is_none()
+                && wgpu::TextureUsages::from_name(n).is_none()
+        }) {
+            return Err(ResourceProblem::UnknownUsage {
+                kind: "buffer or texture",
+                usage: n.clone(),
+                known: format!(
+                    "{}; {}",
+                    known_names(wgpu::BufferUsages::all().iter_names()),
+                    known_names(wgpu::TextureUsages::all().iter_names())
+                ),
+            }
+            .into());
+        }
         let width = dimension("width", v.width, &v.width_param, params)?;
         let height = dimension("height", v.height, &v.height_param, params)?;
+        nonzero_extent("visibility target", width, height, 1, 1)?;
         match r.kind {
             EntryKind::Transient => drop(g.create_visibility64(&r.name, width, height)),
             EntryKind::Exported => {
@@ -351,7 +488,8 @@ fn declare(
                     } else {
                         "history"
                     }
-                ));
+                )
+                .into());
             }
         }
         return Ok(());
@@ -368,9 +506,20 @@ fn declare(
                     return Err(format!(
                         "element `{}` is not a known type; give `element_size` in bytes",
                         b.element
-                    ));
+                    )
+                    .into());
                 }
             };
+            let usage = buffer_usage(&r.usage)?;
+            // A count from a parameter may be 0 for a while (no instances yet) and is
+            // checked where it is resolved; one written in the file never changes.
+            if element.size == 0 || b.count == Some(0) {
+                return Err(ResourceProblem::EmptyBuffer {
+                    count: b.count,
+                    element_size: element.size,
+                }
+                .into());
+            }
             let desc = match (b.count, &b.count_param) {
                 (Some(n), None) => BufferDesc::array(element, n),
                 (None, Some(p)) => BufferDesc::array_param(element, p),
@@ -383,12 +532,13 @@ fn declare(
                     g.export(h);
                 }
                 EntryKind::Imported => {
-                    let _ = g.import_buffer(&r.name, desc, buffer_usage(&r.usage)?);
+                    let _ = g.import_buffer(&r.name, desc, usage);
                 }
                 EntryKind::History => drop(g.history_buffer(&r.name, desc)),
             }
         }
         (None, Some(t)) => {
+            let usage = texture_usage(&r.usage)?;
             let format = parse_format(&t.format)?;
             let desc = TextureDesc {
                 format,
@@ -397,6 +547,13 @@ fn declare(
                 mip_levels: t.mip_levels,
                 layers: t.layers,
             };
+            nonzero_extent(
+                "texture",
+                desc.width,
+                desc.height,
+                desc.mip_levels,
+                desc.layers,
+            )?;
             match r.kind {
                 EntryKind::Transient => drop(g.create_texture(&r.name, desc)),
                 EntryKind::Exported => {
@@ -404,7 +561,7 @@ fn declare(
                     g.export(h);
                 }
                 EntryKind::Imported => {
-                    let _ = g.import_texture(&r.name, desc, texture_usage(&r.usage)?);
+                    let _ = g.import_texture(&r.name, desc, usage);
                 }
                 EntryKind::History => drop(g.history_texture(&r.name, desc)),
             }
@@ -419,23 +576,36 @@ fn declare(
     Ok(())
 }
 
-fn buffer_usage(names: &[String]) -> std::result::Result<wgpu::BufferUsages, String> {
+fn buffer_usage(names: &[String]) -> std::result::Result<wgpu::BufferUsages, ResourceProblem> {
     names
         .iter()
         .try_fold(wgpu::BufferUsages::empty(), |acc, n| {
             wgpu::BufferUsages::from_name(n)
                 .map(|u| acc | u)
-                .ok_or_else(|| format!("unknown buffer usage `{n}`"))
+                .ok_or_else(|| ResourceProblem::UnknownUsage {
+                    kind: "buffer",
+                    usage: n.clone(),
+                    known: known_names(wgpu::BufferUsages::all().iter_names()),
+                })
         })
 }
-fn texture_usage(names: &[String]) -> std::result::Result<wgpu::TextureUsages, String> {
+fn texture_usage(names: &[String]) -> std::result::Result<wgpu::TextureUsages, ResourceProblem> {
     names
         .iter()
         .try_fold(wgpu::TextureUsages::empty(), |acc, n| {
             wgpu::TextureUsages::from_name(n)
                 .map(|u| acc | u)
-                .ok_or_else(|| format!("unknown texture usage `{n}`"))
+                .ok_or_else(|| ResourceProblem::UnknownUsage {
+                    kind: "texture",
+                    usage: n.clone(),
+                    known: known_names(wgpu::TextureUsages::all().iter_names()),
+                })
         })
+}
+
+/// The flag names a `usage` list may hold, as wgpu spells them.
+fn known_names<T>(names: impl Iterator<Item = (&'static str, T)>) -> String {
+    names.map(|(n, _)| n).collect::<Vec<_>>().join(", ")
 }
 
 /// Texture formats by their WGSL spelling (`rgba8unorm`, `r32uint`, `depth32float`, …).
