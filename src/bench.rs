@@ -56,6 +56,7 @@ const ALL: &[&str] = &[
     "render",
     "virtual-geometry",
     "vg-scale",
+    "vg-million",
     "rasterisers",
     "builder",
     "scan-fan",
@@ -81,6 +82,7 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
             }
             "rasterisers" => crate::virtual_geometry::bench::rasterisers(args.quick, &args.meshes)?,
             "vg-scale" => crate::virtual_geometry::bench::scale(args.quick, &args.meshes)?,
+            "vg-million" => crate::virtual_geometry::bench::million(args.quick, &args.meshes)?,
             "builder" => builder(args.quick, &args.meshes)?,
             "scan-fan" => scan_fan(args.quick)?,
             "light-clustering" => crate::light_clustering::bench::run(args.quick)?,

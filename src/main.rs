@@ -232,7 +232,11 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         create_parent(html)?;
     }
     let asset = scenes::load_asset(&a.mesh, a.segments)?;
-    let data = meshlight::gpu_scene::SceneData::new(Default::default());
+    // The scene's buffers are bound whole: sized for the adapter the frame will run on.
+    let adapter = meshlight::graph::GpuAdapter::select()?;
+    let limits = meshlight::gpu_scene::data::Limits::for_device(&adapter.adapter.limits());
+    drop(adapter);
+    let data = meshlight::gpu_scene::SceneData::new(limits);
     let placed = if a.instances == 1 {
         scenes::single(data, &asset)?
     } else {

@@ -69,9 +69,16 @@ pub fn max_lights() -> u64 {
     lo
 }
 
-/// The most copies of the mesh: the instance buffer holds them and the field's ground.
+/// Instances the command line places at most, before the device is known: 4 Mi copies
+/// (940 MB of instance records on the CPU). The device's own binding limit is checked
+/// when the scene is built for the chosen adapter ([`crate::gpu_scene::data::Limits::for_device`]):
+/// 599,186 instance records fit wgpu's default 128 MiB binding, and a data-centre GPU
+/// binds far more.
+pub const MAX_INSTANCES: u64 = 1 << 22;
+
+/// The most copies of the mesh: [`MAX_INSTANCES`] less the field's ground.
 pub fn max_instances() -> u64 {
-    u64::from(SceneLimits::default().max_instances).saturating_sub(1)
+    MAX_INSTANCES - 1
 }
 
 /// The largest side of the image: wgpu's default 2-D texture limit, which every device
@@ -109,8 +116,8 @@ fn why(flag: &str) -> String {
     match flag {
         "segments" => "the procedural mesh has 16 × segments² triangles and needs 3 segments to close; `bake` takes the same range".into(),
         "instances" => format!(
-            "the instance buffer holds {} instances (one is the ground) in wgpu's default binding of {binding} bytes; place fewer copies",
-            max_instances() + 1
+            "the command line places at most {MAX_INSTANCES} instances (one is the ground), and the device's binding limit may allow fewer ({} in wgpu's default binding of {binding} bytes); place fewer copies",
+            SceneLimits::default().max_instances
         ),
         "lights" => format!(
             "the light clustering's object, slice and froxel lists grow with the light count and each must fit wgpu's default binding of {binding} bytes; use fewer lights"

@@ -462,6 +462,34 @@ pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     Ok(rows)
 }
 
+/// 1,048,576 copies of a mesh (the Stanford bunny unless `meshes` names another; 4,096
+/// with `quick`) on the default scene's field and ground at 2560×1440: scale, where the
+/// instance records alone are 224 MiB, bound whole as the adapter's limits allow.
+pub fn million(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    let mesh = meshes
+        .first()
+        .cloned()
+        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+    let asset = scenes::load_asset(&mesh, 0)?;
+    let instances = if quick { 4096 } else { 1 << 20 };
+    let adapter = crate::graph::GpuAdapter::select()?;
+    let limits = meshlight_gpu_scene::data::Limits::for_device(&adapter.adapter.limits());
+    drop(adapter);
+    let placed = scenes::field(SceneData::new(limits), &asset, instances)?;
+    let (width, height) = (2560, 1440);
+    let case = format!(
+        "{instances} {} on the field, {} source tris, {width}x{height}",
+        mesh.file_stem().unwrap_or_default().to_string_lossy(),
+        placed.data.source_triangles()
+    );
+    let m = measure(
+        &placed,
+        FrameSettings::new(width, height),
+        if quick { 3 } else { 30 },
+    )?;
+    Ok(rows_of("vg-million", &case, &m))
+}
+
 /// The 15³ lattice of [`lattice`], once per rasteriser implementation and split:
 /// `sw_raster` `buffer` against `texture` with every cluster in software; `hw_raster`
 /// `indirect_draw` against `mesh_shader` with every cluster in hardware, and the software

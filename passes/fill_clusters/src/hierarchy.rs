@@ -139,8 +139,16 @@ pub const SLACK: f32 = 1.0 / 8192.0;
 pub const DATA_SLOTS: [&str; 3] = ["hierarchy_nodes", "hierarchy_clusters", "hierarchy_roots"];
 /// The counters' slot; a scratch buffer when it is left unbound.
 pub const COUNTS_SLOT: &str = "hierarchy_counts";
-/// Scratch: the lists' lengths, one word per spreading step.
+/// Scratch: the lists' lengths, one word per spreading step, then the roots list's.
 const LIST_COUNTS: &str = "hierarchy_subtree_counts";
+/// Scratch: the roots list, step 0's entries, 12 bytes each.
+const ROOTS: &str = "hierarchy_roots_list";
+/// Scratch: step 0's indirect dispatch.
+const WALK_ARGS: &str = "hierarchy_walk_args";
+/// Entries of the roots list: a root that finds it full emits every meshlet below it.
+pub const ROOT_CAPACITY: u32 = 1 << 20;
+/// Workgroups (of 64 threads) the second walk's roots pass strides with.
+const ROOT_GROUPS: u32 = 1024;
 /// Scratch: the lists of handed-on subtrees, 12 bytes an entry.
 const LISTS: &str = "hierarchy_subtrees";
 
@@ -246,8 +254,10 @@ struct GpuParams {
     list_capacity: u32,
     test_occlusion: u32,
     node_capacity: u32,
+    root_capacity: u32,
+    max_per_dimension: u32,
     occlusion_min_clusters: u32,
-    _pad: u32,
+    _pad: [u32; 3],
 }
 
 const PARAM_KEYS: [&str; 9] = [
@@ -420,8 +430,18 @@ impl Pass for HierarchyFill {
         // The lists (at least one entry, so the binding exists with no spreading step).
         ctx.scratch_buffer(
             LIST_COUNTS,
-            BufferDesc::array(Element::U32, MAX_STEPS as u64),
+            BufferDesc::array(Element::U32, MAX_STEPS as u64 + 1),
             &[Access::ClearedReadWrite],
+        );
+        ctx.scratch_buffer(
+            ROOTS,
+            BufferDesc::array(Element::U32, ROOT_CAPACITY as u64 * 3),
+            &[Access::StorageReadWrite],
+        );
+        ctx.scratch_buffer(
+            WALK_ARGS,
+            BufferDesc::array(Element::DISPATCH_ARGS, 1),
+            &[Access::StorageWrite, Access::Indirect],
         );
         let words = (self.list_capacity() as u64 * self.spread_steps as u64).max(1) * 3;
         ctx.scratch_buffer(
@@ -431,7 +451,8 @@ impl Pass for HierarchyFill {
         );
         layout = layout
             .scratch(9, LIST_COUNTS, Access::ClearedReadWrite)
-            .scratch(10, LISTS, Access::ClearedReadWrite);
+            .scratch(10, LISTS, Access::ClearedReadWrite)
+            .scratch(14, ROOTS, Access::StorageReadWrite);
         if occlusion {
             layout = layout.slot(11, PYRAMID_SLOT);
             if second {
@@ -447,7 +468,16 @@ impl Pass for HierarchyFill {
                     .slot(13, OCCLUDED_NODE_COUNT_SLOT);
             }
         }
-        for entry in ["prepare", "fill"] {
+        // `walk_dispatch` writes the arguments `fill` is dispatched with: only its layout
+        // binds them as storage.
+        let dispatch = layout.clone().scratch(15, WALK_ARGS, Access::StorageWrite);
+        ctx.program(
+            "walk_dispatch",
+            ProgramDesc::compute(&SHADER, "walk_dispatch")
+                .defs(&defs)
+                .layout(dispatch),
+        );
+        for entry in ["prepare", "roots", "fill"] {
             ctx.program(
                 entry,
                 ProgramDesc::compute(&SHADER, entry)
@@ -461,8 +491,8 @@ impl Pass for HierarchyFill {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
         let InstanceGrid {
             instance_count,
-            groups: [x, y],
             limit,
+            ..
         } = instance_grid(ctx, self.instance_count)?;
         let spread = self.spread_groups.unwrap_or(SPREAD_GROUPS).min(limit);
         let occlusion = ctx.is_bound(PYRAMID_SLOT);
@@ -473,25 +503,32 @@ impl Pass for HierarchyFill {
                     ctx.history_valid(PYRAMID_SLOT)? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
                 }
             };
-        // The second walk starts from a list whose length only the GPU knows: its
-        // first step strides over it like the later steps.
-        let first_grid = match self.mode {
-            Mode::First => [x, y],
-            Mode::Second => [spread, 1],
+        // The roots a thread each: every instance's (a grid over them), or the second
+        // walk's nodes, whose count only the GPU knows (a fixed grid striding over them).
+        let roots_grid = match self.mode {
+            Mode::First => crate::workgroup_grid(instance_count.div_ceil(64), limit),
+            Mode::Second => [ROOT_GROUPS.min(limit), 1],
         };
-        // The counters and list lengths zeroed, then step 0 (a workgroup per instance),
-        // then each later step over the list the one before wrote; each dispatch in its
-        // own compute pass so the next sees its writes.
-        let mut dispatches = vec![("prepare", 0, [1, 1])];
-        dispatches.push(("fill", 0, first_grid));
+        // The counters and list lengths zeroed, the roots, step 0's arguments, step 0
+        // (a workgroup per entry of the roots list), then each later step over the list
+        // the one before wrote; each dispatch sees the writes of those before it.
+        let (args, _) = ctx.scratch(WALK_ARGS)?;
+        let args = args.clone();
+        let mut dispatches = vec![
+            ("prepare", 0, Some([1, 1])),
+            ("roots", 0, Some(roots_grid)),
+            ("walk_dispatch", 0, Some([1, 1])),
+            ("fill", 0, None),
+        ];
         for step in 1..=self.spread_steps {
-            dispatches.push(("fill", step, [spread, 1]));
+            dispatches.push(("fill", step, Some([spread, 1])));
         }
         for (entry, step, grid) in dispatches {
+            let grid_x = grid.map_or(0, |g| g[0]);
             let params = GpuParams {
                 capacity: self.capacity.unwrap_or(u32::MAX),
                 instance_count,
-                groups_x: grid[0],
+                groups_x: grid_x,
                 queue_capacity: self.queue_capacity.unwrap_or(QUEUE).min(QUEUE),
                 lod_threshold_px: self.lod_threshold_px,
                 step,
@@ -499,8 +536,10 @@ impl Pass for HierarchyFill {
                 list_capacity: self.list_capacity(),
                 test_occlusion: test_occlusion as u32,
                 node_capacity: u32::MAX,
+                root_capacity: ROOT_CAPACITY,
+                max_per_dimension: limit,
                 occlusion_min_clusters: self.occlusion_min_clusters,
-                _pad: 0,
+                _pad: [0; 3],
             };
             let uniforms: [(u32, &[u8]); 2] = [
                 (3, bytemuck::bytes_of(&view)),
@@ -511,8 +550,10 @@ impl Pass for HierarchyFill {
             let mut pass = ctx.compute_pass();
             pass.set_pipeline(&program.pipeline);
             pass.set_bind_group(0, &group, &[]);
-            if grid[0] > 0 {
-                pass.dispatch_workgroups(grid[0], grid[1], 1);
+            match grid {
+                Some([x, y]) if x > 0 => pass.dispatch_workgroups(x, y, 1),
+                Some(_) => {}
+                None => pass.dispatch_workgroups_indirect(&args, 0),
             }
         }
         Ok(())

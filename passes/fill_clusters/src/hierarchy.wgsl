@@ -3,10 +3,14 @@
 // then the conservative LOD tests), writing (instance, meshlet) for the meshlets of every
 // accepted leaf. `hierarchy_cpu` (Rust) is the reference.
 //
-// The walk is split over `steps + 1` dispatches of this entry point so that a large
-// instance's walk spreads over many workgroups. Step 0 starts one workgroup per instance
-// at its root; each later step's workgroups take the subtrees the step before handed on,
-// striding over that list. In a spreading step (every step but the last) a frontier
+// Roots first, a thread each (`roots`): every instance's root (or, in the second walk,
+// every node the first walk found hidden) is tested on its own, so an instance that is
+// culled or hidden costs one thread, not a workgroup; a root that passes hands its
+// children on as one entry of the roots list (a leaf root emits its meshlets at once).
+// Then the walk is split over `steps + 1` dispatches of `fill` so that a large
+// instance's walk spreads over many workgroups: step 0 takes the roots list, a workgroup
+// per entry (an indirect dispatch `walk_args` writes); each later step's workgroups take
+// the subtrees the step before handed on, striding over that list. In a spreading step (every step but the last) a frontier
 // holds at most one chunk of nodes; the children that do not fit are handed on to the
 // next step's list as one entry (instance, first child, count). In the last step, and
 // when a list is full, the children that do not fit are emitted whole (every meshlet
@@ -77,11 +81,17 @@ struct Params {
     test_occlusion: u32,
     // Entries `node_list` may hold (clamped to its length too).
     node_capacity: u32,
+    // Entries the roots list holds (clamped to its length too).
+    root_capacity: u32,
+    // The per-dimension workgroup limit step 0's indirect dispatch stays under.
+    max_per_dimension: u32,
     // Inner nodes with fewer meshlets below are not tested for occlusion (cull_lod
     // tests their clusters): each test costs the walk a dependent texture read. A
     // walk's entries (instance roots, the second walk's nodes) always are.
     occlusion_min_clusters: u32,
     _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // Children `first .. first + count` of one node of `instance`'s hierarchy, handed to the
@@ -109,10 +119,15 @@ struct Subtree {
 // [0] nodes tested, [1] leaves accepted, [2] subtrees emitted whole (queue full),
 // [3] instances whose walk hit the round limit (0 unless the data is damaged).
 @group(0) @binding(8) var<storage, read_write> hierarchy_counts: array<atomic<u32>>;
-// [k] entries requested in the list step k + 1 reads (at most list_capacity written).
+// [k] entries requested in the list step k + 1 reads (at most list_capacity written);
+// [MAX_STEPS] the roots list's.
 @group(0) @binding(9) var<storage, read_write> subtree_counts: array<atomic<u32>>;
 // The lists, step k + 1's at [k * list_capacity ..].
 @group(0) @binding(10) var<storage, read_write> subtrees: array<Subtree>;
+// The roots list: the children of every root that passed, step 0's entries.
+@group(0) @binding(14) var<storage, read_write> root_list: array<Subtree>;
+// Step 0's indirect dispatch, [x, y, 1], from the roots list's length.
+@group(0) @binding(15) var<storage, read_write> walk_args: array<u32>;
 #ifdef OCCLUSION
 // The depth pyramid (R32Float, farthest depth per texel): last frame's in the first
 // pass, this frame's in the second.
@@ -326,7 +341,7 @@ fn prepare() {
     atomicStore(&node_list_count[1], 0u);
 #endif
 #endif
-    for (var i = 0u; i < min(MAX_STEPS, arrayLength(&subtree_counts)); i += 1u) {
+    for (var i = 0u; i < min(MAX_STEPS + 1u, arrayLength(&subtree_counts)); i += 1u) {
         atomicStore(&subtree_counts[i], 0u);
     }
 }
@@ -366,13 +381,126 @@ fn enqueue(node: HierarchyNode, into: u32, width: u32, spreading: bool, index: u
     }
 }
 
+// The roots list's length, clamped to what it holds.
+fn root_total() -> u32 {
+    let held = min(params.root_capacity, arrayLength(&root_list));
+    return min(atomicLoad(&subtree_counts[MAX_STEPS]), held);
+}
+
+// Writes meshlets `first .. first + count` of hierarchy_clusters for instance `index` at
+// once: a root that is a leaf, or one the roots list has no room for (then every
+// meshlet below it, as a full queue emits a subtree whole).
+fn emit_now(index: u32, first: u32, count: u32) {
+    let cap = capacity();
+    let start = atomicAdd(&cluster_count[1], count);
+    let written = min(count, cap - min(start, cap));
+    if written > 0u {
+        atomicAdd(&cluster_count[0], written);
+    }
+    for (var k = 0u; k < written; k += 1u) {
+        clusters[start + k] = Cluster(index, hierarchy_clusters[first + k]);
+    }
+}
+
+fn walker(index: u32) -> Walker {
+    var w: Walker;
+    w.instance = instances[min(index, arrayLength(&instances) - 1u)];
+    w.scale = instance_max_scale(w.instance);
+    w.reach = length(w.instance.world_from_local[3].xyz) + length(view.camera_position);
+    return w;
+}
+
+// A thread per root, striding: each instance's root (the second walk: each node the
+// first found hidden) tested; one that passes hands its children to the roots list.
+@compute @workgroup_size(64)
+fn roots(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) t: u32,
+) {
+    if t == 0u {
+        atomicStore(&tested_nodes, 0u);
+        atomicStore(&leaves, 0u);
+        atomicStore(&spilled, 0u);
+        atomicStore(&hidden_nodes, 0u);
+    }
+    workgroupBarrier();
+    let threads = groups.x * groups.y * WORKGROUP_SIZE;
+#ifdef SECOND_PASS
+    let total = min(min(node_list_count[0], params.node_capacity), arrayLength(&node_list));
+#else
+    let total = min(params.instance_count, arrayLength(&instances));
+#endif
+    let held = min(params.root_capacity, arrayLength(&root_list));
+    for (var e = (wg.y * groups.x + wg.x) * WORKGROUP_SIZE + t; e < total; e += threads) {
+        var index = e;
+        var id = 0xffffffffu;
+#ifdef SECOND_PASS
+        let entry = node_list[e];
+        index = entry.instance;
+        id = entry.first;
+#else
+        let mesh = instances[e].mesh;
+        if mesh < arrayLength(&hierarchy_roots) {
+            id = hierarchy_roots[mesh];
+        }
+#endif
+        if index >= arrayLength(&instances) || id >= arrayLength(&hierarchy_nodes) {
+            continue;
+        }
+        walk_instance = index;
+        let w = walker(index);
+        let node = hierarchy_nodes[id];
+        atomicAdd(&tested_nodes, 1u);
+        if !(node_visible(node, w) && node_seen(node, id, w, true)) {
+            continue;
+        }
+        if node.child_count == 0u {
+            atomicAdd(&leaves, 1u);
+            emit_now(index, node.first_cluster, node.cluster_count);
+            continue;
+        }
+        let at = atomicAdd(&subtree_counts[MAX_STEPS], 1u);
+        if at < held {
+            root_list[at] = Subtree(index, node.first_child, node.child_count);
+        } else {
+            atomicAdd(&spilled, 1u);
+            emit_now(index, node.first_cluster, node.cluster_count);
+        }
+    }
+    workgroupBarrier();
+    if t == 0u {
+        atomicAdd(&hierarchy_counts[0], atomicLoad(&tested_nodes));
+        atomicAdd(&hierarchy_counts[1], atomicLoad(&leaves));
+        atomicAdd(&hierarchy_counts[2], atomicLoad(&spilled));
+#ifdef OCCLUSION
+        atomicAdd(&hierarchy_counts[4], atomicLoad(&hidden_nodes));
+#endif
+    }
+}
+
+// Step 0's indirect dispatch: a workgroup per entry of the roots list.
+@compute @workgroup_size(1)
+fn walk_dispatch() {
+    let n = root_total();
+    let max_dim = max(params.max_per_dimension, 1u);
+    let x = min(n, max_dim);
+    var y = 0u;
+    if x > 0u {
+        y = min((n + x - 1u) / x, max_dim);
+    }
+    walk_args[0] = x;
+    walk_args[1] = y;
+    walk_args[2] = 1u;
+}
+
 @compute @workgroup_size(64)
 fn fill(
     @builtin(workgroup_id) wg: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) t: u32,
 ) {
-    let first_entry = wg.y * params.groups_x + wg.x;
+    let first_entry = wg.y * groups.x + wg.x;
     let stride = groups.x * groups.y;
     let spreading = params.step < params.steps;
     // A spreading step's frontier is one chunk: a wide walk is handed on, not queued.
@@ -384,12 +512,7 @@ fn fill(
     let cap = capacity();
     if t == 0u {
         if params.step == 0u {
-#ifdef SECOND_PASS
-            let listed = min(node_list_count[0], params.node_capacity);
-            entry_total = min(listed, arrayLength(&node_list));
-#else
-            entry_total = min(params.instance_count, arrayLength(&instances));
-#endif
+            entry_total = root_total();
         } else {
             let list = params.step - 1u;
             var n = 0u;
@@ -413,39 +536,23 @@ fn fill(
         var index = entry;
         var first = 0u;
         var count = 0u;
+        var s = Subtree(0u, 0u, 0u);
         if params.step == 0u {
-#ifdef SECOND_PASS
-            let s = node_list[entry];
-            index = s.instance;
-            first = s.first;
-            count = min(s.count, QUEUE);
-            if index >= arrayLength(&instances) {
-                count = 0u;
-            }
-#else
-            let mesh = instances[index].mesh;
-            if mesh < arrayLength(&hierarchy_roots) {
-                first = hierarchy_roots[mesh];
-                count = 1u;
-            }
-#endif
+            s = root_list[entry];
         } else {
             let at = (params.step - 1u) * params.list_capacity + entry;
             if at < arrayLength(&subtrees) {
-                let s = subtrees[at];
-                index = s.instance;
-                first = s.first;
-                count = min(s.count, QUEUE);
-            }
-            if index >= arrayLength(&instances) {
-                count = 0u;
+                s = subtrees[at];
             }
         }
+        index = s.instance;
+        first = s.first;
+        count = min(s.count, QUEUE);
+        if index >= arrayLength(&instances) {
+            count = 0u;
+        }
         walk_instance = index;
-        var w: Walker;
-        w.instance = instances[min(index, arrayLength(&instances) - 1u)];
-        w.scale = instance_max_scale(w.instance);
-        w.reach = length(w.instance.world_from_local[3].xyz) + length(view.camera_position);
+        let w = walker(index);
         if t == 0u {
             frontier_len = count;
         }
@@ -470,7 +577,7 @@ fn fill(
                     let id = frontier[cur][i];
                     tests = 1u;
                     if id < arrayLength(&hierarchy_nodes) && node_visible(hierarchy_nodes[id], w)
-                        && node_seen(hierarchy_nodes[id], id, w, params.step == 0u && round == 0u) {
+                        && node_seen(hierarchy_nodes[id], id, w, false) {
                         let node = hierarchy_nodes[id];
                         if node.child_count == 0u {
                             emit_range(node.first_cluster, node.cluster_count);

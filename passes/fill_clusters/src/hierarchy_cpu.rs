@@ -257,7 +257,8 @@ pub fn cpu_walk_with(
     let nodes = &scene.hierarchy_nodes;
     let queue = params.queue_capacity.clamp(1, QUEUE) as usize;
     let mut r = HierarchyWalk::default();
-    let mut entries: Vec<Entry> = match occlusion {
+    // The roots (`roots` in the shader): each instance's, or the second walk's nodes.
+    let roots: Vec<Entry> = match occlusion {
         WalkOcclusion::Second { nodes: hidden, .. } => hidden
             .iter()
             .filter(|(instance, _)| (*instance as usize) < scene.instances.len())
@@ -310,6 +311,44 @@ pub fn cpu_walk_with(
         r.hidden_nodes.push((index, id));
         false
     };
+    // Each root tested on its own; one that passes hands its children on as step 0's
+    // entry (a leaf root emits its meshlets; the list is never full here).
+    let mut entries = Vec::new();
+    for root in &roots {
+        let (index, id) = (root.instance, root.first);
+        let instance = &scene.instances[index as usize];
+        let Some(node) = nodes.get(id as usize) else {
+            continue;
+        };
+        let w = Walker::new(instance, view);
+        r.counts[0] += 1;
+        let test = node_test(view, &w, node, params.lod_threshold_px);
+        if test.closeness < near {
+            r.near_threshold.push((index, id));
+        }
+        if !test.visible || !seen(&mut r, index, instance, id, node, true) {
+            continue;
+        }
+        r.visible_instances.push(index);
+        if node.is_leaf() {
+            r.counts[1] += 1;
+            r.clusters.extend(
+                scene.hierarchy_clusters[node.first_cluster as usize
+                    ..(node.first_cluster + node.cluster_count) as usize]
+                    .iter()
+                    .map(|&meshlet| Cluster {
+                        instance: index,
+                        meshlet,
+                    }),
+            );
+            continue;
+        }
+        entries.push(Entry {
+            instance: index,
+            first: node.first_child,
+            count: node.child_count,
+        });
+    }
     for step in 0..=params.spread_steps {
         let spreading = step < params.spread_steps;
         let width = if spreading { queue.min(64) } else { queue };
@@ -344,12 +383,8 @@ pub fn cpu_walk_with(
                     if test.closeness < near {
                         r.near_threshold.push((index, id));
                     }
-                    let entry = step == 0 && round == 0;
-                    if !test.visible || !seen(&mut r, index, instance, id, node, entry) {
+                    if !test.visible || !seen(&mut r, index, instance, id, node, false) {
                         continue;
-                    }
-                    if step == 0 && round == 0 {
-                        r.visible_instances.push(index);
                     }
                     if node.is_leaf() {
                         r.counts[1] += 1;
