@@ -72,6 +72,15 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
         out,
         "software/hardware split: clusters under {threshold} px go to sw_raster ({why})"
     )?;
+    let (hardware, why) = class.hardware_raster();
+    if hardware {
+        writeln!(out, "hw_raster: in the frame ({why})")?;
+    } else {
+        writeln!(
+            out,
+            "hw_raster: not in the frame; sw_raster clips clusters crossing the near plane ({why})"
+        )?;
+    }
     writeln!(out, "\nfeatures:")?;
     for (feature, what) in FEATURES {
         let mark = if features.contains(feature) {

@@ -163,6 +163,14 @@ pub fn default_scene(quick: bool) -> BenchResult {
             if quick { 5 } else { 50 },
         )?;
         rows.extend(rows_of("render", &case, &m));
+        // The same frame with the clusters crossing the near plane (and, on a graphics
+        // GPU, the large ones) drawn by the hardware rasteriser.
+        let hardware = FrameSettings {
+            hardware: Some(true),
+            ..FrameSettings::new(width, height)
+        };
+        let m = measure(&placed, hardware, if quick { 5 } else { 50 })?;
+        rows.extend(rows_of("render", &format!("{case}, with hw_raster"), &m));
     }
     Ok(rows)
 }
@@ -235,7 +243,7 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     let software = measure(
         &placed,
         FrameSettings {
-            hardware: false,
+            hardware: Some(false),
             ..settings.clone()
         },
         frames,
@@ -316,7 +324,7 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     let exact = measure(
         &placed,
         FrameSettings {
-            hardware: false,
+            hardware: Some(false),
             exact_division: true,
             ..FrameSettings::new(width, height)
         },
@@ -532,7 +540,7 @@ pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     let mut software = Vec::new();
     for sw in ["buffer", "texture"] {
         let settings = FrameSettings {
-            hardware: false,
+            hardware: Some(false),
             sw_raster: sw.into(),
             ..base.clone()
         };
@@ -627,7 +635,7 @@ pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         }
     }
     let all_software = FrameSettings {
-        hardware: false,
+        hardware: Some(false),
         ..base.clone()
     };
     if let Some(m) = try_measure(all_software, "all software")? {

@@ -105,8 +105,13 @@ pub struct FrameSettings {
     /// `hw_raster`'s implementation: `auto` (mesh shaders where the adapter has them),
     /// `mesh_shader` or `indirect_draw`.
     pub hw_raster: String,
-    /// `false`: no `hw_raster` pass; culling sends every cluster to software.
-    pub hardware: bool,
+    /// `Some(false)`: no `hw_raster` pass; culling sends every cluster to software,
+    /// which clips those crossing the near plane. `None`: with a split given, the pass
+    /// is there; else the adapter class decides
+    /// ([`super::split::AdapterClass::hardware_raster`]; the environment variable
+    /// `MESHLIGHT_HARDWARE_RASTER=on|off` sets it, for sweeps). A graph built without a
+    /// renderer has the pass.
+    pub hardware: Option<bool>,
     /// Initial candidate-list and raster-slot sizes; the renderer grows them on
     /// overflow.
     pub clusters: u64,
@@ -156,7 +161,13 @@ impl FrameSettings {
                 .and_then(|v| v.parse().ok()),
             sw_raster: AUTO.into(),
             hw_raster: AUTO.into(),
-            hardware: true,
+            hardware: std::env::var("MESHLIGHT_HARDWARE_RASTER")
+                .ok()
+                .and_then(|v| match v.as_str() {
+                    "on" | "1" | "true" => Some(true),
+                    "off" | "0" | "false" => Some(false),
+                    _ => None,
+                }),
             clusters: 1 << 20,
             slots: 1 << 18,
             depth: false,
@@ -180,6 +191,19 @@ impl FrameSettings {
     /// Whether the frame built in code culls by occlusion.
     pub fn two_pass(&self) -> bool {
         self.occlusion
+    }
+
+    /// Whether this frame has a hardware rasteriser on an adapter of `class`: as set,
+    /// else with a split given (it asks for both rasterisers), else the class's choice.
+    pub fn hardware_on(&self, class: super::split::AdapterClass) -> bool {
+        self.hardware
+            .unwrap_or_else(|| self.sw_threshold_px.is_some() || class.hardware_raster().0)
+    }
+
+    /// Whether the graph has a `hw_raster` pass (the class's choice filled in by the
+    /// renderer; with none, it has).
+    pub fn has_hardware(&self) -> bool {
+        self.hardware.unwrap_or(true)
     }
 
     /// The split threshold this frame uses on an adapter of `class`.
@@ -346,7 +370,7 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         sw_threshold_px: s
             .sw_threshold_px
             .unwrap_or(Thresholds::default().sw_threshold_px),
-        hardware: s.hardware,
+        hardware: s.has_hardware(),
     };
     let cull = CullLod {
         thresholds,
@@ -415,7 +439,7 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             vec![hardware(Feed::MeshShader), hardware(Feed::IndirectDraw)],
         )
     };
-    if s.hardware {
+    if s.has_hardware() {
         g.add_choice("hw_raster", hw_choice()?, Bindings::new())?;
     }
     let pyramid = || -> Result<Choice> {
@@ -477,7 +501,7 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             .bind_named("raster_counts", SECOND_COUNTS)
             .bind_named("sw_args", SECOND_SW_ARGS);
         g.add_choice("sw_raster_second", sw_choice(true)?, bindings)?;
-        if s.hardware {
+        if s.has_hardware() {
             let bindings = Bindings::new()
                 .bind_named("raster_counts", SECOND_COUNTS)
                 .bind_named("hw_args", SECOND_HW_ARGS);

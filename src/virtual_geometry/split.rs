@@ -71,6 +71,31 @@ impl AdapterClass {
         }
     }
 
+    /// Whether the frame has a hardware rasteriser at all, and why. Without one,
+    /// culling sends every cluster to software, which clips clusters crossing the near
+    /// plane itself.
+    pub fn hardware_raster(self) -> (bool, &'static str) {
+        match self {
+            // Measured on an H200 (docs/BENCHMARKS.md): the default scene at 3840×2160
+            // and 1920×1080 is faster with the near clusters clipped in software than
+            // drawn by the 2 TPCs that run graphics, and the frame loses a render pass.
+            Self::FewGraphicsUnits => (
+                false,
+                "measured on an H200: software clips the clusters crossing the near plane faster than the 2 graphics TPCs draw them",
+            ),
+            // Both rasterisers run on the CPU; the frame keeps both halves of the split
+            // (near clusters to hardware), so the default frame exercises both.
+            Self::Cpu => (
+                true,
+                "a CPU adapter: clusters crossing the near plane go to the hardware rasteriser, so the default frame runs both",
+            ),
+            Self::Graphics => (
+                true,
+                "hardware raster is fast where every unit runs graphics: large clusters and those crossing the near plane go there",
+            ),
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Self::FewGraphicsUnits => "data-centre GPU with few graphics units",

@@ -30,9 +30,66 @@ fn word(payload: &[u32], i: u32) -> u32 {
     payload.get(i as usize).copied().unwrap_or(0)
 }
 
+/// Clip-space |x| and |y| up to `GUARD * w`: the guard band triangles are clipped to
+/// (see the crate docs).
+pub const GUARD: f32 = 63.0;
+
 /// A vertex after the transform: 8-bit fixed-point screen position and NDC depth, or
 /// `None` when it is behind the camera (w <= 0) or too far off screen.
 pub type ScreenVertex = Option<([i32; 2], f32)>;
+
+/// Signed distance of a clip-space position to clipping plane `k` (inside when >= 0):
+/// 0 the near plane (depth z / w at most 1 in reverse Z), 1 to 4 the guard band's sides.
+pub fn plane_distance(c: Vec4, k: usize) -> f32 {
+    let band = GUARD * c.w;
+    match k {
+        0 => c.w - c.z,
+        1 => band + c.x,
+        2 => band - c.x,
+        3 => band + c.y,
+        _ => band - c.y,
+    }
+}
+
+/// Inside every clipping plane: the triangle is drawn without clipping.
+pub fn inside(c: Vec4) -> bool {
+    c.w > 0.0 && (0..5).all(|k| plane_distance(c, k) >= 0.0)
+}
+
+/// Where the edge from inside corner `a` to outside corner `b` crosses a plane; always
+/// from the inside corner, so neighbours sharing the edge find the same point.
+fn crossing(a: Vec4, b: Vec4, da: f32, db: f32) -> Vec4 {
+    let t = da / (da - db);
+    let d = b - a;
+    Vec4::new(a.x + t * d.x, a.y + t * d.y, a.z + t * d.z, a.w + t * d.w)
+}
+
+/// A triangle clipped to the near plane and the guard band (Sutherland–Hodgman, planes
+/// in that order): a convex polygon in the triangle's winding, empty when nothing is
+/// left.
+pub fn clip_triangle(corners: [Vec4; 3]) -> Vec<Vec4> {
+    let mut poly = corners.to_vec();
+    for k in 0..5 {
+        let mut out = Vec::with_capacity(poly.len() + 1);
+        for i in 0..poly.len() {
+            let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+            let (dp, dq) = (plane_distance(p, k), plane_distance(q, k));
+            if dp >= 0.0 {
+                out.push(p);
+                if dq < 0.0 {
+                    out.push(crossing(p, q, dp, dq));
+                }
+            } else if dq >= 0.0 {
+                out.push(crossing(q, p, dq, dp));
+            }
+        }
+        if out.len() < 3 {
+            return Vec::new();
+        }
+        poly = out;
+    }
+    poly
+}
 
 /// The snapped screen vertex of a clip-space position for a `size` pixel viewport.
 pub fn snap(clip: Vec4, size: [f32; 2]) -> ScreenVertex {
@@ -128,9 +185,10 @@ pub struct ScreenTriangle {
     pub corners: [([i32; 2], f32); 3],
 }
 
-/// The triangles of `cluster` whose corners are all usable (see [`snap`]), in meshlet
-/// order, for a `width` × `height` viewport. A cluster naming a missing instance,
-/// meshlet or mesh has none.
+/// The triangles of `cluster` in meshlet order, for a `width` × `height` viewport: as
+/// they are when every corner is inside the clip volume (see [`inside`]) and snaps,
+/// else the pieces of the clipped polygon (several with one index). A cluster naming a
+/// missing instance, meshlet or mesh has none.
 pub fn screen_triangles(
     scene: &SceneData,
     view: &View,
@@ -154,7 +212,7 @@ pub fn screen_triangles(
     let axis = [bits(m.bits, 0, 8), bits(m.bits, 8, 8), bits(m.bits, 16, 8)];
     let normal = [bits(m.normals, 24, 4), bits(m.normals, 28, 4)];
     let stride = axis.iter().sum::<u32>() + normal[0] + normal[1];
-    let screen: Vec<ScreenVertex> = (0..vertex_count)
+    let clip: Vec<Vec4> = (0..vertex_count)
         .map(|v| {
             let mut bit = v * stride;
             let mut q = [0u32; 3];
@@ -174,16 +232,23 @@ pub fn screen_triangles(
                 grid[2] + q[2] as f32 * grid[3],
             ];
             let world = affine(&instance.world_from_local, p);
-            let clip = affine(&view.view_projection, [world[0], world[1], world[2]]);
-            snap(Vec4::from_array(clip), size)
+            Vec4::from_array(affine(
+                &view.view_projection,
+                [world[0], world[1], world[2]],
+            ))
         })
+        .collect();
+    // Usable as they are: snapped, and inside the clip volume.
+    let screen: Vec<ScreenVertex> = clip
+        .iter()
+        .map(|&c| snap(c, size).filter(|_| inside(c)))
         .collect();
     let uv_word = m.data_offset + (vertex_count * stride).div_ceil(32);
     let triangle_word = uv_word + if mesh.flags & 1 != 0 { vertex_count } else { 0 };
     let field_bits = [bits(m.bits, 24, 4), bits(m.bits, 28, 4)];
     let triangle_stride = field_bits[0] + 2 * field_bits[1];
     (0..triangle_count)
-        .filter_map(|t| {
+        .flat_map(|t| {
             let bit = t * triangle_stride;
             let w = triangle_word + bit / 32;
             let record = read_bits(
@@ -198,15 +263,42 @@ pub fn screen_triangles(
             let d2 = bits(record, field_bits[0] + field_bits[1], field_bits[1]) as i32;
             let last = vertex_count.max(1) as i32 - 1;
             let corners = [first, first - d2, first - d1].map(|c| c.clamp(0, last) as usize);
-            let [Some(Some(a)), Some(Some(b)), Some(Some(c))] =
+            if let [Some(Some(a)), Some(Some(b)), Some(Some(c))] =
                 corners.map(|k| screen.get(k).copied())
+            {
+                return vec![ScreenTriangle {
+                    index: t,
+                    corners: [a, b, c],
+                }];
+            }
+            let Some(corners) = corners
+                .iter()
+                .map(|&k| clip.get(k).copied())
+                .collect::<Option<Vec<Vec4>>>()
             else {
-                return None;
+                return Vec::new();
             };
-            Some(ScreenTriangle {
-                index: t,
-                corners: [a, b, c],
-            })
+            // Clipped in the meshlet's corner order, as the kernel clips.
+            clipped_pieces(&clip_triangle([corners[0], corners[2], corners[1]]), size)
+                .into_iter()
+                .map(|corners| ScreenTriangle { index: t, corners })
+                .collect()
+        })
+        .collect()
+}
+
+/// The fan of a polygon clipped from a triangle in the meshlet's corner order: pieces
+/// (0, k + 1, k + 2), snapped and given to [`cover_triangle`] as (0, k + 2, k + 1), as
+/// the kernel turns every triangle; pieces with a corner that does not snap (a viewport
+/// past 16,384 pixels) are left out.
+pub fn clipped_pieces(poly: &[Vec4], size: [f32; 2]) -> Vec<[([i32; 2], f32); 3]> {
+    (0..poly.len().saturating_sub(2))
+        .filter_map(|k| {
+            Some([
+                snap(poly[0], size)?,
+                snap(poly[k + 2], size)?,
+                snap(poly[k + 1], size)?,
+            ])
         })
         .collect()
 }

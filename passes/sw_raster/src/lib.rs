@@ -40,10 +40,17 @@
 //!
 //! - Screen: `((ndc.x * 0.5 + 0.5) * width, (0.5 - ndc.y * 0.5) * height)`, snapped to
 //!   8 sub-pixel bits with round-half-even; pixel (x, y) is sampled at its centre.
-//! - Vertices with clip w <= 0 or a screen coordinate of magnitude >= 2^20 pixels are
-//!   unusable and their triangles skipped: culling sends clusters crossing the near
-//!   plane to the hardware rasteriser. Below 2^20 the fixed-point coordinates are under
-//!   2^28 and every edge-function product under 2^58, computed in i64: no overflow.
+//! - Clipping, as a hardware rasteriser clips: a triangle with a corner outside the
+//!   clip volume — in front of the near plane (reverse Z: `z > w`), or past the guard
+//!   band `|x|, |y| <= 63 w` — is clipped in clip space against the near plane, then
+//!   the band's left, right, bottom and top sides (Sutherland–Hodgman; an edge's
+//!   crossing is always found from its inside corner, so neighbours agree), and its
+//!   polygon is covered as a fan of pieces `(0, k + 1, k + 2)` with the triangle's id.
+//!   So clusters crossing the near plane, and triangles reaching far off screen, need
+//!   no hardware rasteriser. The band keeps every snapped coordinate under 2^20 pixels
+//!   for viewports up to 16,384 pixels; below 2^20 the fixed-point coordinates are
+//!   under 2^28 and every edge-function product under 2^58, computed in i64: no
+//!   overflow. (A corner that still does not snap drops its piece.)
 //! - Front faces are the mesh's: counter-clockwise in NDC (y up), which is
 //!   counter-clockwise as the screen shows it too. Corners go to the edge functions as
 //!   (0, 2, 1), which makes front faces clockwise on the y-down screen (edge area > 0);
@@ -60,7 +67,8 @@
 //!   64 × 64-pixel tiles of its box, listed, and covered by a second dispatch, a
 //!   workgroup per tile and a pixel per thread, instead of by its one thread. It writes
 //!   the pixels and values the thread would have (the same setup, the same edge and
-//!   depth arithmetic), so the reference is unchanged. This is what lets culling send
+//!   depth arithmetic), so the reference is unchanged; a clipped triangle's pieces are
+//!   tiled one by one. This is what lets culling send
 //!   large clusters to software on GPUs where few units run graphics. When the list
 //!   (a scratch buffer of [`BIG_TILE_CAPACITY`] tiles) is full, the thread covers its
 //!   triangle itself. The optional slot `big_triangle_count` (u32 × 2) receives `[0]`

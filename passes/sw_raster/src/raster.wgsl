@@ -10,6 +10,11 @@
 // would have written (the same setup and the same `shade`), so the reference does not
 // change; only who covers them does. When the list is full the thread covers its
 // triangle itself (atomicMax makes a pixel written twice harmless).
+//
+// A triangle with a corner outside the clip volume (in front of the near plane, or past
+// the guard band GUARD screens out) is clipped in clip space, as a hardware rasteriser
+// clips, and the pieces of its polygon (a fan) are covered one by one; each piece may be
+// tiled like any triangle. So clusters crossing the near plane need no hardware raster.
 
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle}
@@ -50,7 +55,8 @@ struct Params {
 @group(0) @binding(8) var<uniform> view: View;
 @group(0) @binding(9) var<uniform> params: Params;
 #ifdef BIG_TRIANGLES
-// One tile of a big triangle each: x = slot << 7 | triangle, y = tile x | tile y << 16.
+// One tile of a big triangle each: x = slot << 7 | triangle, y = tile x | tile y << 14
+// | piece << 28 (the piece of a clipped triangle's fan; 0 when it was not clipped).
 @group(0) @binding(10) var<storage, read_write> big: array<vec2<u32>>;
 // [0] tiles listed, [1] tiles asked for (more than [0] when the list was full).
 @group(0) @binding(11) var<storage, read_write> big_count: array<atomic<u32>>;
@@ -63,6 +69,13 @@ const TILE: i32 = 64;
 // fixed-point coordinates stay under 2^28, their differences under 2^29, and every
 // edge-function product under 2^58, inside i64.
 const MAX_SCREEN: f32 = 1048576.0;
+
+// The guard band: clip-space |x| and |y| up to GUARD * w. Its screen coordinates stay
+// under MAX_SCREEN (at most 32 viewports of 16,384 pixels out), so clipping against it
+// keeps every piece usable while the pixels of the viewport are the same.
+const GUARD: f32 = 63.0;
+// A polygon clipped by five planes from a triangle has at most 8 corners: 6 pieces.
+const MAX_CORNERS: u32 = 8u;
 
 var<workgroup> screen_xy: array<vec2<i32>, 255>;
 var<workgroup> screen_z: array<f32, 255>;
@@ -149,18 +162,124 @@ struct ScreenVertex {
     ok: bool,
 }
 
-// Vertex `v` of meshlet `m` transformed and snapped.
-fn screen_vertex(m: Meshlet, mesh: Mesh, instance: Instance, v: u32) -> ScreenVertex {
-    let size = vec2(f32(params.width), f32(params.height));
+// Vertex `v` of meshlet `m` in clip space.
+fn clip_vertex(m: Meshlet, mesh: Mesh, instance: Instance, v: u32) -> vec4<f32> {
     // `meshlet_position`, with the product kept apart from the add.
     let q = vec3(m.grid_min[0], m.grid_min[1], m.grid_min[2]) + vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u));
     let p = mesh.position_grid.xyz + unfused3(vec3<f32>(q) * mesh.position_grid.w);
     let world = affine(instance.world_from_local, p);
-    let clip = affine(view.view_projection, world.xyz);
+    return affine(view.view_projection, world.xyz);
+}
+
+// A clip-space position projected and snapped.
+fn snap(clip: vec4<f32>) -> ScreenVertex {
+    let size = vec2(f32(params.width), f32(params.height));
     let ndc = vec3(divide(clip.x, clip.w), divide(clip.y, clip.w), divide(clip.z, clip.w));
     let s = vec2((ndc.x * 0.5 + 0.5) * size.x, (0.5 - ndc.y * 0.5) * size.y);
     let ok = clip.w > 0.0 && abs(s.x) < MAX_SCREEN && abs(s.y) < MAX_SCREEN;
     return ScreenVertex(select(vec2(0), vec2<i32>(round(s * 256.0)), ok), ndc.z, ok);
+}
+
+// Vertex `v` of meshlet `m` transformed and snapped.
+fn screen_vertex(m: Meshlet, mesh: Mesh, instance: Instance, v: u32) -> ScreenVertex {
+    return snap(clip_vertex(m, mesh, instance, v));
+}
+
+// Signed distance of a clip-space position to clipping plane k (inside when >= 0):
+// 0 the near plane (reverse Z: depth z / w at most 1), 1-4 the guard band's sides.
+fn plane_distance(c: vec4<f32>, k: u32) -> f32 {
+    let band = unfused(GUARD * c.w);
+    switch k {
+        case 0u: { return c.w - c.z; }
+        case 1u: { return band + c.x; }
+        case 2u: { return band - c.x; }
+        case 3u: { return band + c.y; }
+        default: { return band - c.y; }
+    }
+}
+
+// Inside every clipping plane: drawn as it is, without clipping.
+fn inside(c: vec4<f32>) -> bool {
+    var ok = c.w > 0.0;
+    for (var k = 0u; k < 5u; k += 1u) {
+        ok = ok && plane_distance(c, k) >= 0.0;
+    }
+    return ok;
+}
+
+// A triangle clipped to the clip volume: a convex polygon in the triangle's winding.
+struct Polygon {
+    corners: array<vec4<f32>, 8>,
+    count: u32,
+}
+
+// Where the edge from an inside corner `a` (distance `da` >= 0) to an outside corner `b`
+// (`db` < 0) crosses the plane. Always from the inside corner: a triangle and its
+// neighbour walk a shared edge in opposite directions, and must find the same point.
+fn crossing(a: vec4<f32>, b: vec4<f32>, da: f32, db: f32) -> vec4<f32> {
+    let t = divide(da, da - db);
+    return a + unfused4(t * (b - a));
+}
+
+// Sutherland-Hodgman against the near plane and the guard band's four sides, in that
+// order.
+fn clip_triangle(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>) -> Polygon {
+    var poly: Polygon;
+    poly.corners[0] = a;
+    poly.corners[1] = b;
+    poly.corners[2] = c;
+    poly.count = 3u;
+    for (var k = 0u; k < 5u; k += 1u) {
+        var out: Polygon;
+        out.count = 0u;
+        for (var i = 0u; i < poly.count; i += 1u) {
+            let p = poly.corners[i];
+            let q = poly.corners[(i + 1u) % poly.count];
+            let dp = plane_distance(p, k);
+            let dq = plane_distance(q, k);
+            if dp >= 0.0 {
+                out.corners[out.count] = p;
+                out.count += 1u;
+                if dq < 0.0 {
+                    out.corners[out.count] = crossing(p, q, dp, dq);
+                    out.count += 1u;
+                }
+            } else if dq >= 0.0 {
+                out.corners[out.count] = crossing(q, p, dq, dp);
+                out.count += 1u;
+            }
+        }
+        poly = out;
+        if poly.count < 3u {
+            poly.count = 0u;
+            break;
+        }
+    }
+    return poly;
+}
+
+// Piece `k` of a clipped polygon's fan, (0, k + 1, k + 2), set up like a triangle; an
+// empty box when the polygon has no such piece.
+fn piece_setup(poly: Polygon, k: u32, slot: u32, t: u32) -> Setup {
+    if k + 2u >= poly.count {
+        return Setup(Tri(), vec2(0), vec2(-1));
+    }
+    let a = snap(poly.corners[0]);
+    let b = snap(poly.corners[k + 1u]);
+    let c = snap(poly.corners[k + 2u]);
+    if !(a.ok && b.ok && c.ok) {
+        return Setup(Tri(), vec2(0), vec2(-1));
+    }
+    return triangle_setup(a, b, c, slot, t);
+}
+
+// The triangle with these meshlet corners, clipped to the clip volume.
+fn clip_meshlet_triangle(m: Meshlet, mesh: Mesh, instance: Instance, corners: vec3<u32>) -> Polygon {
+    return clip_triangle(
+        clip_vertex(m, mesh, instance, corners.x),
+        clip_vertex(m, mesh, instance, corners.y),
+        clip_vertex(m, mesh, instance, corners.z),
+    );
 }
 
 // A triangle ready to cover, with its clipped pixel box [lo, hi] (empty when it is a
@@ -252,17 +371,22 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
         atomicStore(&widest, 0u);
     }
     for (var v = t; v < meshlet_vertex_count(m); v += 128u) {
-        let s = screen_vertex(m, mesh, instance, v);
-        usable[v] = select(0u, 1u, s.ok);
+        let clip = clip_vertex(m, mesh, instance, v);
+        let s = snap(clip);
+        usable[v] = select(0u, 1u, s.ok && inside(clip));
         screen_xy[v] = s.xy;
         screen_z[v] = s.z;
     }
     workgroupBarrier();
 
     var setup = Setup(Tri(), vec2(0), vec2(-1));
+    // A triangle with a corner outside the clip volume is clipped after the barrier.
+    var clipped = false;
+    var corners = vec3(0u);
     if t < meshlet_triangle_count(m) {
         let at = meshlet_triangle_location(m, mesh.flags, t);
-        let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+        corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+        let c = corners;
         if (usable[c.x] & usable[c.y] & usable[c.z]) != 0u {
             setup = triangle_setup(
                 ScreenVertex(screen_xy[c.x], screen_z[c.x], true),
@@ -271,6 +395,8 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
                 i,
                 t,
             );
+        } else {
+            clipped = true;
         }
     }
     let tri = setup.tri;
@@ -278,7 +404,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     let hi = setup.hi;
     var visible = all(lo <= hi);
 #ifdef BIG_TRIANGLES
-    if visible && list_big(i, t, lo, hi) {
+    if visible && list_big(i, t, 0u, lo, hi) {
         visible = false;
     }
 #endif
@@ -288,9 +414,30 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     workgroupBarrier();
     // One choice for the whole workgroup, so its threads run the same loop shape.
     let scanline = atomicLoad(&widest) >= params.scanline_width;
-    if !visible {
-        return;
+    if visible {
+        cover(tri, lo, hi, scanline);
     }
+    if clipped {
+        // The pieces of the clipped polygon, each tiled when big, else covered here.
+        let poly = clip_meshlet_triangle(m, mesh, instance, corners);
+        for (var k = 0u; k + 2u < poly.count; k += 1u) {
+            let piece = piece_setup(poly, k, i, t);
+            if any(piece.lo > piece.hi) {
+                continue;
+            }
+#ifdef BIG_TRIANGLES
+            if list_big(i, t, k, piece.lo, piece.hi) {
+                continue;
+            }
+#endif
+            cover(piece.tri, piece.lo, piece.hi, true);
+        }
+    }
+}
+
+// Every pixel of the box [lo, hi] the triangle covers: per scanline over each row's
+// edge span, or over the whole box; both cover the same pixels.
+fn cover(tri: Tri, lo: vec2<i32>, hi: vec2<i32>, scanline: bool) {
     if !scanline {
         for (var y = lo.y; y <= hi.y; y += 1) {
             for (var x = lo.x; x <= hi.x; x += 1) {
@@ -337,7 +484,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
 #ifdef BIG_TRIANGLES
 // Lists the tiles of a big triangle's box for `raster_big`; false when it is not big,
 // or the list has no room for all its tiles (its thread then covers it).
-fn list_big(slot: u32, t: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool {
+fn list_big(slot: u32, t: u32, piece: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool {
     let extent = hi - lo + vec2(1);
     if u32(max(extent.x, extent.y)) < params.big_triangle_px {
         return false;
@@ -352,7 +499,7 @@ fn list_big(slot: u32, t: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool {
     atomicAdd(&big_count[0], n);
     for (var k = 0u; k < n; k += 1u) {
         let tile = vec2(k % u32(tiles.x), k / u32(tiles.x));
-        big[base + k] = vec2((slot << 7u) | t, tile.x | (tile.y << 16u));
+        big[base + k] = vec2((slot << 7u) | t, tile.x | (tile.y << 14u) | (piece << 28u));
     }
     return true;
 }
@@ -377,15 +524,21 @@ fn raster_big(
         let mesh = meshes[instance.mesh];
         let at = meshlet_triangle_location(m, mesh.flags, triangle);
         let c = meshlet_triangle(m, triangle, vec2(payload[at.x], payload[at.x + 1u]), at.y);
-        let setup = triangle_setup(
-            screen_vertex(m, mesh, instance, c.x),
-            screen_vertex(m, mesh, instance, c.y),
-            screen_vertex(m, mesh, instance, c.z),
-            slot,
-            triangle,
-        );
+        let a = clip_vertex(m, mesh, instance, c.x);
+        let b = clip_vertex(m, mesh, instance, c.y);
+        let d = clip_vertex(m, mesh, instance, c.z);
+        var setup: Setup;
+        let sa = snap(a);
+        let sb = snap(b);
+        let sd = snap(d);
+        if inside(a) && inside(b) && inside(d) && sa.ok && sb.ok && sd.ok {
+            setup = triangle_setup(sa, sb, sd, slot, triangle);
+        } else {
+            setup = piece_setup(clip_triangle(a, b, d), entry.y >> 28u, slot, triangle);
+        }
         // The part of the box this tile covers, a pixel per thread, row by row.
-        let origin = setup.lo + vec2(i32(entry.y & 0xffffu), i32(entry.y >> 16u)) * TILE;
+        let tile = vec2(i32(entry.y & 0x3fffu), i32((entry.y >> 14u) & 0x3fffu));
+        let origin = setup.lo + tile * TILE;
         let extent = vec2<u32>(clamp(setup.hi - origin + vec2(1), vec2(0), vec2(TILE)));
         for (var k = t; k < extent.x * extent.y; k += 128u) {
             shade(setup.tri, origin.x + i32(k % extent.x), origin.y + i32(k / extent.x));

@@ -913,3 +913,210 @@ fn an_accumulating_pass_draws_its_slots_over_the_first_passs_image() {
         assert_identical(&format!("view {i}"), &got, &want);
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// Clipping
+
+/// Views from just outside the first knot's tube (its centre line is the procedural
+/// mesh's torus-knot curve, its radius about 0.45), looking obliquely along it with the
+/// near plane cutting into the tube: many triangles cross the near plane, some reach
+/// behind the eye and some far past the screen's sides.
+fn near_views() -> Vec<View> {
+    let curve = |t: f32| {
+        let r = 2.0 + (5.0 * t).cos();
+        Vec3::new(r * (3.0 * t).cos(), r * (3.0 * t).sin(), -(5.0 * t).sin())
+    };
+    let mut rng = Lcg(11);
+    (0..6)
+        .map(|k| {
+            let t = rng.range(0.0, std::f32::consts::TAU);
+            let c = curve(t);
+            let tangent = (curve(t + 1e-3) - curve(t - 1e-3)).normalize();
+            let side = tangent.cross(Vec3::Z).normalize();
+            let up = side.cross(tangent);
+            let s = rng.range(0.0, std::f32::consts::TAU);
+            let out = side * s.cos() + up * s.sin();
+            let position = c + out * 0.62;
+            let target = c + tangent * rng.range(0.5, 1.2);
+            let near = [0.3, 0.25, 0.4][k % 3];
+            Camera::perspective(position, target, 1.2, near).view([W, H], 0, None)
+        })
+        .collect()
+}
+
+/// Pieces of clipped triangles (more than one piece per triangle index, or a corner on
+/// the near plane) among the reference's triangles of `slots` for `view`.
+fn clipped_pieces(scene: &SceneData, view: &View, slots: &[Cluster]) -> usize {
+    let mut pieces = 0;
+    for c in slots {
+        let tris = cpu::screen_triangles(scene, view, c, W, H);
+        for t in &tris {
+            let siblings = tris.iter().filter(|u| u.index == t.index).count();
+            if siblings > 1 || t.corners.iter().any(|(_, z)| *z >= 0.999_999) {
+                pieces += 1;
+            }
+        }
+    }
+    pieces
+}
+
+#[test]
+fn triangles_crossing_the_near_plane_are_clipped_as_the_reference_clips_them() {
+    let mut scene = knot_scene();
+    let slots: Vec<Cluster> = [
+        clusters_of(&scene, 0, |l| l == 0),
+        clusters_of(&scene, 1, |l| l <= 1),
+    ]
+    .concat();
+    let count = slots.len() as u32;
+    let input = Input::new(slots, count, 7);
+    let views = near_views();
+    let mut clipped = 0;
+    for view in &views {
+        clipped += clipped_pieces(&scene, view, &input.slots);
+    }
+    assert!(clipped > 50, "only {clipped} clipped pieces over the views");
+    let want: Vec<Vec<u64>> = views.iter().map(|v| input.reference(&scene, v)).collect();
+    for (k, w) in want.iter().enumerate() {
+        // Close to the surface, most of the screen is covered.
+        assert!(
+            covered(w) > (W * H / 3) as usize,
+            "view {k}: {}",
+            covered(w)
+        );
+    }
+    for (shape, pass) in [
+        ("scanline", pass(SCANLINES)),
+        ("box", pass(BOXES)),
+        (
+            "tiled",
+            SwRaster {
+                big_triangle_px: 8,
+                ..pass(SCANLINES)
+            },
+        ),
+    ] {
+        let got = run(&mut scene, &input, &views, pass).unwrap_or_else(|e| panic!("{e}"));
+        for k in 0..views.len() {
+            assert_identical(&format!("{shape}, view {k}"), &got[k], &want[k]);
+        }
+    }
+}
+
+/// A flat square seen from just above with the near plane cutting it: every pixel
+/// whose ray meets the square well inside its edges and well past the near plane is
+/// covered exactly once, clipped pieces and unclipped triangles alike.
+#[test]
+fn a_square_cut_by_the_near_plane_has_no_holes_and_no_overlaps() {
+    let mut scene = SceneData::new(Limits::default());
+    let material = scene.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let quad = add_mesh(&mut scene, "jittered", &flat_quad(20, 0.35));
+    scene
+        .add_instance(quad, Mat4::IDENTITY, material)
+        .unwrap()
+        .unwrap();
+    // Low over the square (z = 0, front face +z), looking along it and down a little,
+    // the near plane cutting it; one camera rolled, one reaching past the sides.
+    let mut rolled = Camera::perspective(
+        Vec3::new(-0.2, -0.9, 0.12),
+        Vec3::new(0.1, 1.0, -0.3),
+        1.4,
+        0.2,
+    );
+    rolled.up = Vec3::new(0.4, 0.0, 1.0);
+    let cameras = [
+        Camera::perspective(
+            Vec3::new(0.0, -0.8, 0.1),
+            Vec3::new(0.0, 1.0, -0.25),
+            1.0,
+            0.3,
+        ),
+        Camera::perspective(
+            Vec3::new(0.3, -0.3, 0.08),
+            Vec3::new(-0.2, 1.0, -0.3),
+            2.0,
+            0.12,
+        ),
+        rolled,
+    ];
+    let views: Vec<View> = cameras.iter().map(|c| c.view([W, H], 0, None)).collect();
+    let slots = clusters_of(&scene, 0, |l| l == 0);
+    let count = slots.len() as u32;
+    let input = Input::new(slots, count, 2);
+    let got = run(&mut scene, &input, &views, pass(SCANLINES)).unwrap_or_else(|e| panic!("{e}"));
+    for (k, view) in views.iter().enumerate() {
+        let name = format!("view {k}");
+        assert!(
+            clipped_pieces(&scene, view, &input.slots) > 0,
+            "{name}: the near plane cuts nothing"
+        );
+        let mut coverage = vec![0u32; (W * H) as usize];
+        for c in &input.slots {
+            for t in cpu::screen_triangles(&scene, view, c, W, H) {
+                cpu::cover_triangle(t.corners, W, H, |x, y, _| {
+                    coverage[(y * W + x) as usize] += 1
+                });
+            }
+        }
+        let twice = coverage.iter().filter(|&&n| n > 1).count();
+        assert_eq!(twice, 0, "{name}: {twice} pixels covered more than once");
+        // The ray through each pixel centre, met with the plane z = 0.
+        let vp = Mat4::from_cols_array_2d(&view.view_projection);
+        let inverse = vp.inverse();
+        let mut inner = 0;
+        let mut holes = 0;
+        for i in 0..W * H {
+            let ndc = glam::Vec2::new(
+                ((i % W) as f32 + 0.5) / W as f32 * 2.0 - 1.0,
+                1.0 - ((i / W) as f32 + 0.5) / H as f32 * 2.0,
+            );
+            let a = inverse.project_point3(ndc.extend(1.0));
+            let b = inverse.project_point3(ndc.extend(0.01));
+            let t = a.z / (a.z - b.z);
+            if !(0.0..=1.0).contains(&t) {
+                continue;
+            }
+            let p = a + (b - a) * t;
+            let depth = vp.project_point3(p).z;
+            if p.x.abs() < 0.95 && p.y.abs() < 0.95 && depth < 0.98 {
+                inner += 1;
+                if coverage[i as usize] == 0 {
+                    holes += 1;
+                }
+            }
+        }
+        assert!(inner > 600, "{name}: only {inner} pixels see the square");
+        assert_eq!(holes, 0, "{name}: {holes} pixels inside the square skipped");
+        assert_identical(&name, &got[k], &input.reference(&scene, view));
+    }
+}
+
+#[test]
+fn clipping_keeps_a_crossing_edge_shared_by_two_triangles_identical() {
+    // Two triangles sharing the edge (a, b), which crosses the near plane: each finds
+    // the crossing from the edge's inside corner, so both pieces meet at one point.
+    let a = glam::Vec4::new(0.3, -0.2, 0.5, 2.0);
+    let b = glam::Vec4::new(-0.1, 0.4, 0.5, 0.2);
+    let c = glam::Vec4::new(1.0, 1.0, 0.5, 3.0);
+    let d = glam::Vec4::new(-1.5, -0.5, 0.5, 1.5);
+    let first = cpu::clip_triangle([a, b, c]);
+    let second = cpu::clip_triangle([b, a, d]);
+    let on_plane = |p: &Vec<glam::Vec4>| -> Vec<[u32; 4]> {
+        p.iter()
+            .filter(|v| cpu::plane_distance(**v, 0).abs() < 1e-3)
+            .map(|v| v.to_array().map(f32::to_bits))
+            .collect()
+    };
+    let shared: Vec<[u32; 4]> = on_plane(&first)
+        .into_iter()
+        .filter(|v| on_plane(&second).contains(v))
+        .collect();
+    assert_eq!(shared.len(), 1, "{first:?} / {second:?}");
+    assert!(
+        first
+            .iter()
+            .all(|v| cpu::inside(*v) || cpu::plane_distance(*v, 0).abs() < 1e-5)
+    );
+}
