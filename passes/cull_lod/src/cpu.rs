@@ -21,8 +21,7 @@ pub struct Thresholds {
     pub lod_threshold_px: f32,
     pub sw_threshold_px: f32,
     /// `false`: every cluster of the cut goes to software, for pipelines with no
-    /// hardware rasteriser (clusters crossing the near plane then lose the triangles
-    /// the software rasteriser cannot draw).
+    /// hardware rasteriser (sw_raster clips the clusters crossing the near plane).
     pub hardware: bool,
 }
 

@@ -105,7 +105,7 @@
 //! |---------------------|---------|---|
 //! | `lod_threshold_px`  | 1.0     | screen-space error (pixels) a cluster may show |
 //! | `sw_threshold_px`   | 128.0   | screen-box size under which a cluster goes to software (tuned on an H100, where few units run graphics: docs/BENCHMARKS.md) |
-//! | `hardware`          | true    | false: every cluster to software (a pipeline with no `hw_raster`) |
+//! | `hardware`          | true    | false: every cluster to software, those crossing the near plane too (sw_raster clips them; a pipeline with no `hw_raster`) |
 //! | `mode`              | `"first"` | `first`: every candidate, occlusion against last frame's pyramid when one is bound; `second`: the re-test of the first pass's occluded clusters against this frame's |
 //! | `capacity`          | 0 (all of `raster_clusters`) | `C`, at most the buffer's size / 8 |
 //! | `max_per_dimension` | 0 (the adapter's) | workgroup limit per dimension of the indirect cull dispatch |

@@ -47,7 +47,9 @@
 //!   crossing is always found from its inside corner, so neighbours agree), and its
 //!   polygon is covered as a fan of pieces `(0, k + 1, k + 2)` with the triangle's id.
 //!   So clusters crossing the near plane, and triangles reaching far off screen, need
-//!   no hardware rasteriser. The band keeps every snapped coordinate under 2^20 pixels
+//!   no hardware rasteriser. The main dispatch only lists the clusters holding such a
+//!   triangle (at most [`CLIP_CLUSTERS`] a frame); a second dispatch clips them, so the
+//!   clipping code's registers never slow the main kernel (they did, by 40%, inline). The band keeps every snapped coordinate under 2^20 pixels
 //!   for viewports up to 16,384 pixels; below 2^20 the fixed-point coordinates are
 //!   under 2^28 and every edge-function product under 2^58, computed in i64: no
 //!   overflow. (A corner that still does not snap drops its piece.)
@@ -163,6 +165,20 @@ pub const BIG_TRIANGLE_PX: u32 = 24;
 pub const BIG_TILE_CAPACITY: u32 = 1 << 18;
 /// Workgroups of the big-triangle dispatch, striding over the tiles listed.
 const BIG_GROUPS: u32 = 2048;
+/// Scratch: the clusters with a triangle to clip, then the big pieces of clipped
+/// triangles (raster.wgsl's `clip_list`, sized by the same constants).
+const CLIP_LIST: &str = "clip_list";
+/// Scratch: `[0]` clusters listed, `[1]` asked for, `[2]` pieces stored, `[3]` asked for.
+const CLIP_COUNT: &str = "clip_count";
+/// Clusters with a triangle crossing the near plane or the guard band one frame can
+/// clip; the clipped triangles of clusters past it are not drawn. Such clusters lie
+/// along the near plane's slice of the scene: thousands at most.
+pub const CLIP_CLUSTERS: u32 = 16_384;
+/// Big pieces of clipped triangles stored for tiling; past it their thread covers them.
+const CLIP_PIECES: u32 = 16_384;
+const PIECE_WORDS: u32 = 10;
+/// Workgroups of the clipping dispatch, striding over the clusters listed.
+const CLIP_GROUPS: u32 = 256;
 
 /// The implementation names, best first (the order `auto` tries them in).
 pub const IMPLEMENTATIONS: [&str; 2] = ["texture", "buffer"];
@@ -331,6 +347,22 @@ impl Pass for SwRaster {
                 layout = layout.scratch(11, BIG_COUNT_SLOT, Access::ClearedReadWrite);
             }
         }
+        ctx.scratch_buffer(
+            CLIP_LIST,
+            meshlight_graph::BufferDesc::array(
+                meshlight_graph::Element::U32,
+                u64::from(CLIP_CLUSTERS + CLIP_PIECES * PIECE_WORDS),
+            ),
+            &[Access::StorageReadWrite],
+        );
+        ctx.scratch_buffer(
+            CLIP_COUNT,
+            meshlight_graph::BufferDesc::array(meshlight_graph::Element::U32, 4),
+            &[Access::ClearedReadWrite],
+        );
+        layout = layout
+            .scratch(12, CLIP_LIST, Access::StorageReadWrite)
+            .scratch(13, CLIP_COUNT, Access::ClearedReadWrite);
         let defs = RasterDefs {
             exact_division: self.exact_division,
             texture,
@@ -341,6 +373,12 @@ impl Pass for SwRaster {
         ctx.program(
             "raster",
             ProgramDesc::compute(&SHADER, "raster")
+                .defs(&defs)
+                .layout(layout.clone()),
+        );
+        ctx.program(
+            "raster_clipped",
+            ProgramDesc::compute(&SHADER, "raster_clipped")
                 .defs(&defs)
                 .layout(layout.clone()),
         );
@@ -375,6 +413,7 @@ impl Pass for SwRaster {
             _pad: [0; 2],
         };
         let big = self.big_triangle_px > 0;
+        ctx.clear_scratch(CLIP_COUNT)?;
         if big {
             if ctx.is_bound(BIG_COUNT_SLOT) {
                 ctx.clear(BIG_COUNT_SLOT)?;
@@ -415,6 +454,7 @@ impl Pass for SwRaster {
                 1,
             );
         }
+        let clipped = ctx.compute("raster_clipped")?;
         let big_program = if big {
             Some(ctx.compute("raster_big")?)
         } else {
@@ -425,7 +465,9 @@ impl Pass for SwRaster {
         pass.set_pipeline(&program.pipeline);
         pass.set_bind_group(0, &bind_group, &[]);
         pass.dispatch_workgroups_indirect(args, 0);
-        // Then the tiles the clusters listed.
+        // Then the clusters with triangles to clip, then the tiles both listed.
+        pass.set_pipeline(&clipped.pipeline);
+        pass.dispatch_workgroups(CLIP_GROUPS, 1, 1);
         if let Some(big) = big_program {
             pass.set_pipeline(&big.pipeline);
             pass.dispatch_workgroups(BIG_GROUPS, 1, 1);

@@ -15,6 +15,8 @@
 // the guard band GUARD screens out) is clipped in clip space, as a hardware rasteriser
 // clips, and the pieces of its polygon (a fan) are covered one by one; each piece may be
 // tiled like any triangle. So clusters crossing the near plane need no hardware raster.
+// `raster` only lists the clusters holding such triangles; `raster_clipped` clips them,
+// so the clipping code (and the registers it needs) stays out of the main kernel.
 
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle}
@@ -55,12 +57,19 @@ struct Params {
 @group(0) @binding(8) var<uniform> view: View;
 @group(0) @binding(9) var<uniform> params: Params;
 #ifdef BIG_TRIANGLES
-// One tile of a big triangle each: x = slot << 7 | triangle, y = tile x | tile y << 14
-// | piece << 28 (the piece of a clipped triangle's fan; 0 when it was not clipped).
+// One tile of a big triangle each: x = slot << 7 | triangle, y = tile x | tile y << 14;
+// for a piece of a clipped triangle, x = the piece's index in `clip_list` and bit 31 of
+// y set.
 @group(0) @binding(10) var<storage, read_write> big: array<vec2<u32>>;
 // [0] tiles listed, [1] tiles asked for (more than [0] when the list was full).
 @group(0) @binding(11) var<storage, read_write> big_count: array<atomic<u32>>;
 #endif
+// Words [0, CLIP_CLUSTERS): the slots of clusters with a triangle to clip; then, with
+// BIG_TRIANGLES, PIECE_WORDS words per big piece of a clipped triangle: its three
+// snapped corners (x, y, depth bits) and `slot << 7 | triangle`.
+@group(0) @binding(12) var<storage, read_write> clip_list: array<u32>;
+// [0] clusters listed, [1] asked for, [2] pieces stored, [3] asked for.
+@group(0) @binding(13) var<storage, read_write> clip_count: array<atomic<u32>>;
 
 // A big triangle's tiles are TILE × TILE pixels: 32 pixels per thread of `raster_big`.
 const TILE: i32 = 64;
@@ -74,13 +83,20 @@ const MAX_SCREEN: f32 = 1048576.0;
 // under MAX_SCREEN (at most 32 viewports of 16,384 pixels out), so clipping against it
 // keeps every piece usable while the pixels of the viewport are the same.
 const GUARD: f32 = 63.0;
-// A polygon clipped by five planes from a triangle has at most 8 corners: 6 pieces.
-const MAX_CORNERS: u32 = 8u;
+// Clusters `clip_list` holds, and big clipped pieces after them, PIECE_WORDS words each
+// (the Rust side sizes the buffer from the same numbers).
+const CLIP_CLUSTERS: u32 = 16384u;
+const CLIP_PIECES: u32 = 16384u;
+const PIECE_WORDS: u32 = 10u;
+// Bit 31 of a tile entry's y: the entry is a stored piece.
+const PIECE_TILE: u32 = 0x80000000u;
 
 var<workgroup> screen_xy: array<vec2<i32>, 255>;
 var<workgroup> screen_z: array<f32, 255>;
 var<workgroup> usable: array<u32, 255>;
 var<workgroup> widest: atomic<u32>;
+// Set when a triangle of the cluster needs clipping.
+var<workgroup> needs_clip: atomic<u32>;
 
 fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
     let at = meshlet_vertex_field(m, vertex, f);
@@ -258,28 +274,14 @@ fn clip_triangle(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>) -> Polygon {
     return poly;
 }
 
-// Piece `k` of a clipped polygon's fan, (0, k + 1, k + 2), set up like a triangle; an
-// empty box when the polygon has no such piece.
-fn piece_setup(poly: Polygon, k: u32, slot: u32, t: u32) -> Setup {
-    if k + 2u >= poly.count {
-        return Setup(Tri(), vec2(0), vec2(-1));
+// The snapped corners of piece `k` of a clipped polygon's fan, (0, k + 1, k + 2);
+// `ok` is false for all three when one does not snap.
+fn piece_corners(poly: Polygon, k: u32) -> array<ScreenVertex, 3> {
+    var v = array(snap(poly.corners[0]), snap(poly.corners[k + 1u]), snap(poly.corners[k + 2u]));
+    if !(v[0].ok && v[1].ok && v[2].ok) {
+        v[0].ok = false;
     }
-    let a = snap(poly.corners[0]);
-    let b = snap(poly.corners[k + 1u]);
-    let c = snap(poly.corners[k + 2u]);
-    if !(a.ok && b.ok && c.ok) {
-        return Setup(Tri(), vec2(0), vec2(-1));
-    }
-    return triangle_setup(a, b, c, slot, t);
-}
-
-// The triangle with these meshlet corners, clipped to the clip volume.
-fn clip_meshlet_triangle(m: Meshlet, mesh: Mesh, instance: Instance, corners: vec3<u32>) -> Polygon {
-    return clip_triangle(
-        clip_vertex(m, mesh, instance, corners.x),
-        clip_vertex(m, mesh, instance, corners.y),
-        clip_vertex(m, mesh, instance, corners.z),
-    );
+    return v;
 }
 
 // A triangle ready to cover, with its clipped pixel box [lo, hi] (empty when it is a
@@ -369,6 +371,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     let mesh = meshes[instance.mesh];
     if t == 0u {
         atomicStore(&widest, 0u);
+        atomicStore(&needs_clip, 0u);
     }
     for (var v = t; v < meshlet_vertex_count(m); v += 128u) {
         let clip = clip_vertex(m, mesh, instance, v);
@@ -380,13 +383,9 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     workgroupBarrier();
 
     var setup = Setup(Tri(), vec2(0), vec2(-1));
-    // A triangle with a corner outside the clip volume is clipped after the barrier.
-    var clipped = false;
-    var corners = vec3(0u);
     if t < meshlet_triangle_count(m) {
         let at = meshlet_triangle_location(m, mesh.flags, t);
-        corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
-        let c = corners;
+        let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
         if (usable[c.x] & usable[c.y] & usable[c.z]) != 0u {
             setup = triangle_setup(
                 ScreenVertex(screen_xy[c.x], screen_z[c.x], true),
@@ -396,7 +395,8 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
                 t,
             );
         } else {
-            clipped = true;
+            // Clipped by `raster_clipped`.
+            atomicStore(&needs_clip, 1u);
         }
     }
     let tri = setup.tri;
@@ -404,7 +404,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     let hi = setup.hi;
     var visible = all(lo <= hi);
 #ifdef BIG_TRIANGLES
-    if visible && list_big(i, t, 0u, lo, hi) {
+    if visible && list_big(i, t, lo, hi) {
         visible = false;
     }
 #endif
@@ -412,21 +412,59 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
         atomicMax(&widest, u32(hi.x - lo.x + 1));
     }
     workgroupBarrier();
+    if t == 0u && atomicLoad(&needs_clip) != 0u {
+        let k = atomicAdd(&clip_count[1], 1u);
+        if k < CLIP_CLUSTERS {
+            clip_list[k] = i;
+            atomicAdd(&clip_count[0], 1u);
+        }
+    }
     // One choice for the whole workgroup, so its threads run the same loop shape.
     let scanline = atomicLoad(&widest) >= params.scanline_width;
     if visible {
         cover(tri, lo, hi, scanline);
     }
-    if clipped {
-        // The pieces of the clipped polygon, each tiled when big, else covered here.
-        let poly = clip_meshlet_triangle(m, mesh, instance, corners);
+}
+
+// The clusters `raster` listed, a workgroup each (strided) and a thread per triangle:
+// the triangles with a corner outside the clip volume (`raster` drew the others) are
+// clipped and the pieces of their fan covered, each tiled when big.
+@compute @workgroup_size(128)
+fn raster_clipped(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) t: u32,
+) {
+    let listed = min(atomicLoad(&clip_count[0]), CLIP_CLUSTERS);
+    for (var e = wg.x; e < listed; e += groups.x) {
+        let slot = clip_list[e];
+        let cluster = raster_clusters[slot];
+        let instance = instances[cluster.instance];
+        let m = meshlets[cluster.meshlet];
+        let mesh = meshes[instance.mesh];
+        if t >= meshlet_triangle_count(m) {
+            continue;
+        }
+        let at = meshlet_triangle_location(m, mesh.flags, t);
+        let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+        let a = clip_vertex(m, mesh, instance, c.x);
+        let b = clip_vertex(m, mesh, instance, c.y);
+        let d = clip_vertex(m, mesh, instance, c.z);
+        if inside(a) && inside(b) && inside(d) && snap(a).ok && snap(b).ok && snap(d).ok {
+            continue;
+        }
+        let poly = clip_triangle(a, b, d);
         for (var k = 0u; k + 2u < poly.count; k += 1u) {
-            let piece = piece_setup(poly, k, i, t);
+            let v = piece_corners(poly, k);
+            if !v[0].ok {
+                continue;
+            }
+            let piece = triangle_setup(v[0], v[1], v[2], slot, t);
             if any(piece.lo > piece.hi) {
                 continue;
             }
 #ifdef BIG_TRIANGLES
-            if list_big(i, t, k, piece.lo, piece.hi) {
+            if list_piece(v, slot, t, piece.lo, piece.hi) {
                 continue;
             }
 #endif
@@ -484,12 +522,19 @@ fn cover(tri: Tri, lo: vec2<i32>, hi: vec2<i32>, scanline: bool) {
 #ifdef BIG_TRIANGLES
 // Lists the tiles of a big triangle's box for `raster_big`; false when it is not big,
 // or the list has no room for all its tiles (its thread then covers it).
-fn list_big(slot: u32, t: u32, piece: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool {
+fn list_big(slot: u32, t: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool {
+    return is_big(lo, hi) && list_tiles((slot << 7u) | t, 0u, lo, hi);
+}
+
+fn is_big(lo: vec2<i32>, hi: vec2<i32>) -> bool {
     let extent = hi - lo + vec2(1);
-    if u32(max(extent.x, extent.y)) < params.big_triangle_px {
-        return false;
-    }
-    let tiles = (extent + vec2(TILE - 1)) / TILE;
+    return u32(max(extent.x, extent.y)) >= params.big_triangle_px;
+}
+
+// The tiles of the box [lo, hi], each listed as (x, its tile | flag); false when the
+// list has no room for all of them.
+fn list_tiles(x: u32, flag: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool {
+    let tiles = (hi - lo + vec2(TILE)) / TILE;
     let n = u32(tiles.x * tiles.y);
     let base = atomicAdd(&big_count[1], n);
     let cap = min(params.big_capacity, arrayLength(&big));
@@ -499,9 +544,30 @@ fn list_big(slot: u32, t: u32, piece: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool
     atomicAdd(&big_count[0], n);
     for (var k = 0u; k < n; k += 1u) {
         let tile = vec2(k % u32(tiles.x), k / u32(tiles.x));
-        big[base + k] = vec2((slot << 7u) | t, tile.x | (tile.y << 14u) | (piece << 28u));
+        big[base + k] = vec2(x, tile.x | (tile.y << 14u) | flag);
     }
     return true;
+}
+
+// A big piece of a clipped triangle: its corners stored in `clip_list` and its tiles
+// listed; false when it is not big or there is no room (its thread then covers it).
+fn list_piece(v: array<ScreenVertex, 3>, slot: u32, t: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool {
+    if !is_big(lo, hi) {
+        return false;
+    }
+    let p = atomicAdd(&clip_count[3], 1u);
+    let base = CLIP_CLUSTERS + p * PIECE_WORDS;
+    if p >= CLIP_PIECES || base + PIECE_WORDS > arrayLength(&clip_list) {
+        return false;
+    }
+    atomicAdd(&clip_count[2], 1u);
+    for (var k = 0u; k < 3u; k += 1u) {
+        clip_list[base + 3u * k] = bitcast<u32>(v[k].xy.x);
+        clip_list[base + 3u * k + 1u] = bitcast<u32>(v[k].xy.y);
+        clip_list[base + 3u * k + 2u] = bitcast<u32>(v[k].z);
+    }
+    clip_list[base + 9u] = (slot << 7u) | t;
+    return list_tiles(p, PIECE_TILE, lo, hi);
 }
 
 // One tile of a big triangle per workgroup (strided), a pixel per thread: the triangle
@@ -516,25 +582,33 @@ fn raster_big(
     let listed = min(atomicLoad(&big_count[0]), min(params.big_capacity, arrayLength(&big)));
     for (var e = wg.x; e < listed; e += groups.x) {
         let entry = big[e];
-        let slot = entry.x >> 7u;
-        let triangle = entry.x & 127u;
-        let cluster = raster_clusters[slot];
-        let instance = instances[cluster.instance];
-        let m = meshlets[cluster.meshlet];
-        let mesh = meshes[instance.mesh];
-        let at = meshlet_triangle_location(m, mesh.flags, triangle);
-        let c = meshlet_triangle(m, triangle, vec2(payload[at.x], payload[at.x + 1u]), at.y);
-        let a = clip_vertex(m, mesh, instance, c.x);
-        let b = clip_vertex(m, mesh, instance, c.y);
-        let d = clip_vertex(m, mesh, instance, c.z);
         var setup: Setup;
-        let sa = snap(a);
-        let sb = snap(b);
-        let sd = snap(d);
-        if inside(a) && inside(b) && inside(d) && sa.ok && sb.ok && sd.ok {
-            setup = triangle_setup(sa, sb, sd, slot, triangle);
+        if (entry.y & PIECE_TILE) != 0u {
+            // A stored piece of a clipped triangle.
+            let base = CLIP_CLUSTERS + entry.x * PIECE_WORDS;
+            var v: array<ScreenVertex, 3>;
+            for (var k = 0u; k < 3u; k += 1u) {
+                let xy = vec2(bitcast<i32>(clip_list[base + 3u * k]), bitcast<i32>(clip_list[base + 3u * k + 1u]));
+                v[k] = ScreenVertex(xy, bitcast<f32>(clip_list[base + 3u * k + 2u]), true);
+            }
+            let id = clip_list[base + 9u];
+            setup = triangle_setup(v[0], v[1], v[2], id >> 7u, id & 127u);
         } else {
-            setup = piece_setup(clip_triangle(a, b, d), entry.y >> 28u, slot, triangle);
+            let slot = entry.x >> 7u;
+            let triangle = entry.x & 127u;
+            let cluster = raster_clusters[slot];
+            let instance = instances[cluster.instance];
+            let m = meshlets[cluster.meshlet];
+            let mesh = meshes[instance.mesh];
+            let at = meshlet_triangle_location(m, mesh.flags, triangle);
+            let c = meshlet_triangle(m, triangle, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+            setup = triangle_setup(
+                screen_vertex(m, mesh, instance, c.x),
+                screen_vertex(m, mesh, instance, c.y),
+                screen_vertex(m, mesh, instance, c.z),
+                slot,
+                triangle,
+            );
         }
         // The part of the box this tile covers, a pixel per thread, row by row.
         let tile = vec2(i32(entry.y & 0x3fffu), i32((entry.y >> 14u) & 0x3fffu));
