@@ -51,9 +51,11 @@ pub fn plane_distance(c: Vec4, k: usize) -> f32 {
     }
 }
 
-/// Inside every clipping plane: the triangle is drawn without clipping.
+/// Inside every clipping plane (each [`plane_distance`] >= 0): the triangle is drawn
+/// without clipping.
 pub fn inside(c: Vec4) -> bool {
-    c.w > 0.0 && (0..5).all(|k| plane_distance(c, k) >= 0.0)
+    let band = GUARD * c.w;
+    c.w > 0.0 && c.z <= c.w && c.x.abs() <= band && c.y.abs() <= band
 }
 
 /// Where the edge from inside corner `a` to outside corner `b` crosses a plane; always

@@ -214,13 +214,12 @@ fn plane_distance(c: vec4<f32>, k: u32) -> f32 {
     }
 }
 
-// Inside every clipping plane: drawn as it is, without clipping.
+// Inside every clipping plane (each plane_distance >= 0): drawn as it is, without
+// clipping. Written as comparisons, not through plane_distance: it runs for every
+// vertex of every cluster, and the loop over the planes cost the kernel 10%.
 fn inside(c: vec4<f32>) -> bool {
-    var ok = c.w > 0.0;
-    for (var k = 0u; k < 5u; k += 1u) {
-        ok = ok && plane_distance(c, k) >= 0.0;
-    }
-    return ok;
+    let band = unfused(GUARD * c.w);
+    return c.w > 0.0 && c.z <= c.w && abs(c.x) <= band && abs(c.y) <= band;
 }
 
 // A triangle clipped to the clip volume: a convex polygon in the triangle's winding.
