@@ -71,6 +71,7 @@ pub fn run_bake(args: &BakeArgs) -> Result<(), SceneError> {
         &BuildOptions {
             grouping: args.grouping,
             position_bits: args.position_bits,
+            ..BuildOptions::default()
         },
         &mut |p| {
             // Triangles left shrink by about half per level; show progress toward zero.
@@ -129,12 +130,27 @@ pub fn bake_summary(input: &Path, output: &Path, built: &Built, load_seconds: f6
     let h = built.asset.header();
     let mut s = String::new();
     let _ = writeln!(s, "baked {} -> {}", input.display(), output.display());
+    let c = &built.clean;
     let _ = writeln!(
         s,
-        "  input: {} triangles, {} vertices; {} degenerate triangles dropped",
+        "  input: {} triangles, {} vertices; {} degenerate and {} duplicate triangles dropped, \
+         {} vertices welded to a neighbour{}",
         built.mesh.triangle_count(),
         built.mesh.positions.len(),
-        built.clean.dropped_degenerate
+        c.dropped_degenerate,
+        c.dropped_duplicate,
+        c.welded_vertices,
+        if built.snapped_to_grid {
+            "; snapped to the position grid"
+        } else {
+            ""
+        }
+    );
+    let _ = writeln!(
+        s,
+        "  crack repairs: {} groups kept unsimplified (fallback), {} simplified again with \
+         their border triangles locked",
+        built.fallbacks.unsimplified, built.fallbacks.relocked
     );
     s += &dag_table(&built.asset);
     let seconds = built.total_time.as_secs_f64();

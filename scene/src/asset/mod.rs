@@ -78,10 +78,23 @@ pub struct DecodedMeshlet {
 }
 
 impl MeshletAsset {
-    /// Quantises and packs a DAG of `mesh` (the cleaned mesh it was built from).
+    /// Quantises and packs a DAG of `mesh` (the cleaned mesh it was built from) on a
+    /// grid of `position_bits` over the mesh's bounds.
     pub fn from_dag(mesh: &Mesh, dag: &Dag, position_bits: u32, dropped_degenerate: usize) -> Self {
         let (min, max) = mesh.bounds();
         let quant = Quantization::new(min, max, position_bits);
+        Self::from_dag_on_grid(mesh, dag, quant, dropped_degenerate)
+    }
+
+    /// Quantises and packs a DAG of `mesh` on the given grid, which must cover the
+    /// mesh's bounds (a mesh snapped to a grid keeps the grid it was snapped to).
+    pub fn from_dag_on_grid(
+        mesh: &Mesh,
+        dag: &Dag,
+        quant: Quantization,
+        dropped_degenerate: usize,
+    ) -> Self {
+        let (min, max) = mesh.bounds();
         let uvq = UvQuantization::new(&mesh.uvs);
         let has_uvs = mesh.has_uvs();
         let grid: Vec<[u32; 3]> = mesh
