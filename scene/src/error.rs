@@ -69,6 +69,21 @@ pub enum SceneError {
     },
 
     #[error(
+        "{source_name}: {location}: {attribute} has the value {value}, which is not a finite \
+         number; fix or remove it in the source file (or re-export the mesh)"
+    )]
+    NonFiniteAttribute {
+        /// The file (or in-memory source).
+        source_name: String,
+        /// Where in it: `line 12`, `accessor 3, element 7`, `triangle 5`, `vertex 9`.
+        location: String,
+        /// What holds the value: `position`, `normal`, `texture coordinate`, with the
+        /// format's name for it where it has one (`vt`, `TEXCOORD_0`).
+        attribute: String,
+        value: f32,
+    },
+
+    #[error(
         "{source_name}: vertex {vertex} at {position:?} lies beyond ±{limit:e}, the largest \
          coordinate the position grid and bounding spheres represent; scale the mesh down or \
          move it nearer the origin"

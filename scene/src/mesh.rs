@@ -126,6 +126,19 @@ impl Mesh {
             });
         }
         if let Some(vertex) = self
+            .uvs
+            .iter()
+            .position(|t| !(t[0].is_finite() && t[1].is_finite()))
+        {
+            let t = self.uvs[vertex];
+            return Err(SceneError::NonFiniteAttribute {
+                source_name: self.source.clone(),
+                location: format!("vertex {vertex}"),
+                attribute: "texture coordinate".into(),
+                value: if t[0].is_finite() { t[1] } else { t[0] },
+            });
+        }
+        if let Some(vertex) = self
             .positions
             .iter()
             .position(|p| p.abs().max_element() > MAX_COORDINATE)

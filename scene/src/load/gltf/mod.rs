@@ -134,7 +134,29 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
             .map_err(at)?;
             let count = pos.count;
             Mesh::check_limits(&mesh.source, (mesh.positions.len() + count) as u64, 0)?;
+            let accessor_of = |semantic: &Checked<gltf::Semantic>| p.attributes[semantic].value();
+            let finite = |values: &[f32], width: usize, accessor: usize, role: &str| match values
+                .iter()
+                .position(|v| !v.is_finite())
+            {
+                None => Ok(()),
+                Some(k) => Err(SceneError::NonFiniteAttribute {
+                    source_name: path.display().to_string(),
+                    location: format!(
+                        "mesh {name:?} primitive {pi}, accessor {accessor}, element {}",
+                        k / width
+                    ),
+                    attribute: role.to_owned(),
+                    value: values[k],
+                }),
+            };
             let positions = pos.read_vec3(&buffers);
+            finite(
+                positions.as_flattened(),
+                3,
+                accessor_of(&position),
+                "POSITION",
+            )?;
             let base = mesh.positions.len() as u32;
             let normal_matrix = Mat3::from_mat4(*transform).inverse().transpose();
             match p.attributes.get(&normal) {
@@ -146,9 +168,10 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
                             n.count
                         )));
                     }
+                    let read = n.read_vec3(&buffers);
+                    finite(read.as_flattened(), 3, accessor_of(&normal), "NORMAL")?;
                     mesh.normals.extend(
-                        n.read_vec3(&buffers)
-                            .into_iter()
+                        read.into_iter()
                             .map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero()),
                     );
                 }
@@ -160,7 +183,9 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
             let uvs = match p.attributes.get(&texcoord) {
                 Some(t) => {
                     let t = check(root, &buffers, t.value(), Role::TexCoord).map_err(at)?;
-                    Some(t.read_vec2(&buffers))
+                    let read = t.read_vec2(&buffers);
+                    finite(read.as_flattened(), 2, accessor_of(&texcoord), "TEXCOORD_0")?;
+                    Some(read)
                 }
                 None => None,
             };
