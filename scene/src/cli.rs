@@ -9,7 +9,8 @@ use crate::asset::MeshletAsset;
 use crate::compress::PositionBits;
 use crate::error::SceneError;
 use crate::grouping::Grouping;
-use crate::load::load_mesh;
+use crate::load::{DEFAULT_TRIANGLE_BUDGET, LoadOptions, load_mesh_with};
+use crate::mesh::MAX_TRIANGLES;
 use crate::mesh::Mesh;
 use crate::pipeline::{BuildOptions, Built, build_asset};
 use crate::procedural::{DEFAULT_SEGMENTS, procedural_mesh};
@@ -37,6 +38,11 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = DEFAULT_SEGMENTS,
           value_parser = clap::value_parser!(u32).range(3..=1024))]
     pub segments: u32,
+    /// Most triangles a glTF scene's node tree may expand to (instances × their
+    /// meshes' triangles), checked before anything is expanded.
+    #[arg(long, default_value_t = DEFAULT_TRIANGLE_BUDGET,
+          value_parser = clap::value_parser!(u64).range(1..=MAX_TRIANGLES))]
+    pub max_triangles: u64,
 }
 
 /// Print an asset's header and DAG statistics and verify its invariants.
@@ -50,7 +56,10 @@ pub struct InspectArgs {
 /// bake summary.
 pub fn run_bake(args: &BakeArgs) -> Result<(), SceneError> {
     let load_start = Instant::now();
-    let mesh = load_input(&args.input, args.segments)?;
+    let load = LoadOptions {
+        max_triangles: args.max_triangles,
+    };
+    let mesh = load_input(&args.input, args.segments, &load)?;
     let load_time = load_start.elapsed();
 
     let bar = indicatif::ProgressBar::new(mesh.triangle_count() as u64);
@@ -118,11 +127,11 @@ fn check_before_writing(input: &Path, asset: &MeshletAsset) -> Result<(), SceneE
     }
 }
 
-fn load_input(input: &Path, segments: u32) -> Result<Mesh, SceneError> {
+fn load_input(input: &Path, segments: u32, options: &LoadOptions) -> Result<Mesh, SceneError> {
     if input.as_os_str() == PROCEDURAL_INPUT && !input.exists() {
         return Ok(procedural_mesh(segments));
     }
-    load_mesh(input)
+    load_mesh_with(input, options)
 }
 
 /// The text `meshlight bake` prints.

@@ -26,6 +26,34 @@ pub enum SceneError {
     },
 
     #[error(
+        "{path}: is {kind}, not a regular file; give the path of a mesh file (devices, pipes \
+         and folders are not read)"
+    )]
+    NotARegularFile { path: PathBuf, kind: &'static str },
+
+    #[error(
+        "{path}: the file is {size} bytes, more than the {limit} bytes a mesh input may have; \
+         split the mesh into several files"
+    )]
+    FileTooLarge {
+        path: PathBuf,
+        size: u64,
+        limit: u64,
+    },
+
+    #[error(
+        "{path}: the glTF node tree expands to {count} triangles, more than the budget of \
+         {budget}; if the scene really instances that much, raise the budget (`--max-triangles`, \
+         `LoadOptions::max_triangles`, at most {limit}), else fix the node tree's shared subtrees"
+    )]
+    TriangleBudget {
+        path: PathBuf,
+        count: u64,
+        budget: u64,
+        limit: u64,
+    },
+
+    #[error(
         "{path}: unsupported file type {extension:?}; give a mesh ending in .obj, .gltf, .glb or .stl"
     )]
     UnsupportedFormat { path: PathBuf, extension: String },

@@ -42,6 +42,7 @@ fn bakes(dir: &Path, path: &Path) {
             grouping,
             position_bits: Default::default(),
             segments: 8,
+            max_triangles: meshlight_scene::load::DEFAULT_TRIANGLE_BUDGET,
         };
         run_bake(&args).unwrap_or_else(|e| panic!("{name} ({grouping:?}): {e}"));
         run_inspect(&InspectArgs { file: output }).unwrap_or_else(|e| panic!("{name}: {e}"));
