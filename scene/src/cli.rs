@@ -198,14 +198,7 @@ pub fn run_inspect(args: &InspectArgs) -> Result<(), SceneError> {
         for p in &problems {
             println!("  violated: {p}");
         }
-        Err(SceneError::AssetCorrupt {
-            path: args.file.clone(),
-            reason: format!(
-                "{} DAG invariant violations, first: {}",
-                problems.len(),
-                problems[0]
-            ),
-        })
+        crate::asset::dag_error(&args.file, &problems)
     }
 }
 

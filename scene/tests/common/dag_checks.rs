@@ -37,6 +37,9 @@ pub fn check(name: &str, built: &Built) {
 /// The invariants that make a DAG draw correctly (those `verify` checks, crack-freedom
 /// included), and LOD 0 holding exactly the input triangles.
 pub fn check_structure(name: &str, built: &Built) {
+    if let Err(e) = built.asset.validate() {
+        panic!("{name}: {} {}", e.field, e.problem);
+    }
     let problems = verify(&built.asset);
     assert!(problems.is_empty(), "{name}: {problems:#?}");
     assert_eq!(
