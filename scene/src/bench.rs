@@ -27,6 +27,9 @@ pub struct BuilderBench {
     pub asset_bytes: usize,
     /// Load (read + checksum + validation) from the page cache, bytes per second.
     pub load_bytes_per_second: f64,
+    /// The same through [`MeshletAsset::load_verified`] (every check `inspect` runs,
+    /// the DAG invariants included), bytes per second.
+    pub verified_load_bytes_per_second: f64,
 }
 
 impl BuilderBench {
@@ -75,6 +78,13 @@ pub fn builder_scenario(
         load_best = load_best.min(start.elapsed().as_secs_f64());
         std::hint::black_box(loaded);
     }
+    let mut verified_best = f64::INFINITY;
+    for _ in 0..3 {
+        let start = Instant::now();
+        let loaded = MeshletAsset::load_verified(&path)?;
+        verified_best = verified_best.min(start.elapsed().as_secs_f64());
+        std::hint::black_box(loaded);
+    }
     let _ = std::fs::remove_file(&path);
 
     Ok(BuilderBench {
@@ -89,6 +99,7 @@ pub fn builder_scenario(
         bytes_per_lod0_triangle: bytes as f64 / h.lod0_triangles as f64,
         asset_bytes: bytes,
         load_bytes_per_second: bytes as f64 / load_best,
+        verified_load_bytes_per_second: bytes as f64 / verified_best,
     })
 }
 
@@ -131,11 +142,11 @@ fn clod_baseline(mesh: &Mesh, repeats: usize) -> (f64, u32, usize) {
 /// A table of scenario results.
 pub fn format_table(rows: &[BuilderBench]) -> String {
     let mut s = String::from(
-        "scenario                 input tris   build s  Mtris/s  levels root | clod_build s  Mtris/s  levels root | ratio | B/tri | load GB/s\n",
+        "scenario                 input tris   build s  Mtris/s  levels root | clod_build s  Mtris/s  levels root | ratio | B/tri | load GB/s | verified MB/s\n",
     );
     for r in rows {
         s += &format!(
-            "{:<24} {:>10} {:>9.3} {:>8.3} {:>7} {:>4} | {:>12.3} {:>8.3} {:>7} {:>4} | {:>5.2} | {:>5.2} | {:>9.2}\n",
+            "{:<24} {:>10} {:>9.3} {:>8.3} {:>7} {:>4} | {:>12.3} {:>8.3} {:>7} {:>4} | {:>5.2} | {:>5.2} | {:>9.2} | {:>13.1}\n",
             r.name,
             r.input_triangles,
             r.build_seconds,
@@ -148,7 +159,8 @@ pub fn format_table(rows: &[BuilderBench]) -> String {
             r.clod_root_clusters,
             r.clod_seconds / r.build_seconds,
             r.bytes_per_lod0_triangle,
-            r.load_bytes_per_second / 1e9
+            r.load_bytes_per_second / 1e9,
+            r.verified_load_bytes_per_second / 1e6
         );
     }
     s

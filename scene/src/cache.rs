@@ -22,8 +22,9 @@ use crate::procedural::procedural_mesh;
 
 /// Raised whenever the builder makes different assets from the same input and options
 /// within one crate version: 2 = meshlets grown by `greedy_meshlets` across seams,
-/// groups by meshoptimizer's partitioner, the welded escalation step.
-pub const BUILDER_REVISION: u32 = 2;
+/// groups by meshoptimizer's partitioner, the welded escalation step; 3 = positions
+/// welded within a tolerance, duplicate faces dropped, cracking groups repaired.
+pub const BUILDER_REVISION: u32 = 3;
 
 /// Environment variable naming the cache directory (default: the user cache directory).
 pub const CACHE_DIR_ENV: &str = "MESHLIGHT_CACHE_DIR";
@@ -77,9 +78,10 @@ pub fn key(source: &Source, options: &BuildOptions) -> Result<u64, SceneError> {
     };
     bytes.extend(
         format!(
-            "|{:?}|{}|format {VERSION}|builder {} r{BUILDER_REVISION}",
+            "|{:?}|{}|weld {:e}|format {VERSION}|builder {} r{BUILDER_REVISION}",
             options.grouping,
             options.position_bits,
+            options.weld_tolerance,
             env!("CARGO_PKG_VERSION")
         )
         .into_bytes(),

@@ -9,7 +9,8 @@ use crate::asset::MeshletAsset;
 use crate::compress::PositionBits;
 use crate::error::SceneError;
 use crate::grouping::Grouping;
-use crate::load::load_mesh;
+use crate::load::{DEFAULT_TRIANGLE_BUDGET, LoadOptions, load_mesh_with};
+use crate::mesh::MAX_TRIANGLES;
 use crate::mesh::Mesh;
 use crate::pipeline::{BuildOptions, Built, build_asset};
 use crate::procedural::{DEFAULT_SEGMENTS, procedural_mesh};
@@ -37,6 +38,11 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = DEFAULT_SEGMENTS,
           value_parser = clap::value_parser!(u32).range(3..=1024))]
     pub segments: u32,
+    /// Most triangles a glTF scene's node tree may expand to (instances × their
+    /// meshes' triangles), checked before anything is expanded.
+    #[arg(long, default_value_t = DEFAULT_TRIANGLE_BUDGET,
+          value_parser = clap::value_parser!(u64).range(1..=MAX_TRIANGLES))]
+    pub max_triangles: u64,
 }
 
 /// Print an asset's header and DAG statistics and verify its invariants.
@@ -50,7 +56,10 @@ pub struct InspectArgs {
 /// bake summary.
 pub fn run_bake(args: &BakeArgs) -> Result<(), SceneError> {
     let load_start = Instant::now();
-    let mesh = load_input(&args.input, args.segments)?;
+    let load = LoadOptions {
+        max_triangles: args.max_triangles,
+    };
+    let mesh = load_input(&args.input, args.segments, &load)?;
     let load_time = load_start.elapsed();
 
     let bar = indicatif::ProgressBar::new(mesh.triangle_count() as u64);
@@ -71,6 +80,7 @@ pub fn run_bake(args: &BakeArgs) -> Result<(), SceneError> {
         &BuildOptions {
             grouping: args.grouping,
             position_bits: args.position_bits,
+            ..BuildOptions::default()
         },
         &mut |p| {
             // Triangles left shrink by about half per level; show progress toward zero.
@@ -117,11 +127,11 @@ fn check_before_writing(input: &Path, asset: &MeshletAsset) -> Result<(), SceneE
     }
 }
 
-fn load_input(input: &Path, segments: u32) -> Result<Mesh, SceneError> {
+fn load_input(input: &Path, segments: u32, options: &LoadOptions) -> Result<Mesh, SceneError> {
     if input.as_os_str() == PROCEDURAL_INPUT && !input.exists() {
         return Ok(procedural_mesh(segments));
     }
-    load_mesh(input)
+    load_mesh_with(input, options)
 }
 
 /// The text `meshlight bake` prints.
@@ -129,12 +139,27 @@ pub fn bake_summary(input: &Path, output: &Path, built: &Built, load_seconds: f6
     let h = built.asset.header();
     let mut s = String::new();
     let _ = writeln!(s, "baked {} -> {}", input.display(), output.display());
+    let c = &built.clean;
     let _ = writeln!(
         s,
-        "  input: {} triangles, {} vertices; {} degenerate triangles dropped",
+        "  input: {} triangles, {} vertices; {} degenerate and {} duplicate triangles dropped, \
+         {} vertices welded to a neighbour{}",
         built.mesh.triangle_count(),
         built.mesh.positions.len(),
-        built.clean.dropped_degenerate
+        c.dropped_degenerate,
+        c.dropped_duplicate,
+        c.welded_vertices,
+        if built.snapped_to_grid {
+            "; snapped to the position grid"
+        } else {
+            ""
+        }
+    );
+    let _ = writeln!(
+        s,
+        "  crack repairs: {} groups kept unsimplified (fallback), {} simplified again with \
+         their border triangles locked",
+        built.fallbacks.unsimplified, built.fallbacks.relocked
     );
     s += &dag_table(&built.asset);
     let seconds = built.total_time.as_secs_f64();
@@ -173,14 +198,7 @@ pub fn run_inspect(args: &InspectArgs) -> Result<(), SceneError> {
         for p in &problems {
             println!("  violated: {p}");
         }
-        Err(SceneError::AssetCorrupt {
-            path: args.file.clone(),
-            reason: format!(
-                "{} DAG invariant violations, first: {}",
-                problems.len(),
-                problems[0]
-            ),
-        })
+        crate::asset::dag_error(&args.file, &problems)
     }
 }
 

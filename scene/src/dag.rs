@@ -13,11 +13,12 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::bounds::{LodBounds, merge_spheres, sphere_of_points};
 use crate::error::SceneError;
 use crate::grouping::{Grouping, group_clusters};
-use crate::mesh::{Mesh, position_remap};
+use crate::mesh::{Mesh, edge_key, position_remap, triangle_edges};
 use crate::meshlets::{split_into_meshlets, split_mesh_into_meshlets};
 use crate::simplify::{Mode, VertexFlags, simplify_group};
 
@@ -77,6 +78,23 @@ pub struct Dag {
     pub groups: Vec<DagGroup>,
     /// Number of cluster levels (max level + 1).
     pub level_count: u32,
+    /// Groups whose first result would have cracked a LOD cut, and what was done.
+    pub fallbacks: Fallbacks,
+}
+
+/// Groups whose simplified result used an edge shared with a neighbouring group
+/// differently from their children (a crack in some LOD cut), repaired locally.
+///
+/// Border locking alone does not always prevent this: where an edge has more than two
+/// triangles, or a locked vertex's last triangles collapse, the simplifier may drop or
+/// add a use of a border edge. Such a group is simplified again with every corner of
+/// its border triangles locked (`relocked`); if that still cracks or is stuck, the
+/// group is not formed (`unsimplified`): its children stay the cut there and are tried
+/// once more at the next level with other neighbours, like a stuck group's.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Fallbacks {
+    pub relocked: usize,
+    pub unsimplified: usize,
 }
 
 /// How to build the DAG.
@@ -138,6 +156,7 @@ pub fn build_dag(
     // Which group uses each welded vertex this level; shared ones are the borders.
     let mut owner = vec![u32::MAX; positions.len()];
     let mut border = vec![false; positions.len()];
+    let mut fallbacks = Fallbacks::default();
 
     while active.len() > 1 {
         let keyed: Vec<Vec<u32>> = active
@@ -167,6 +186,7 @@ pub fn build_dag(
             }
         }
 
+        let shared = shared_edges(&level_groups, &keyed, &border);
         let locked = |v: u32| border[remap[v as usize] as usize];
         let flags = VertexFlags {
             locked: &locked,
@@ -184,15 +204,43 @@ pub fn build_dag(
                             .copied()
                     })
                     .collect();
-                let simplified = simplify_group(positions, normals, &indices, &flags)?;
+                let seals = |out: &[u32]| seals_borders(&indices, out, &remap, &border, &shared);
+                let mut fallback = None;
+                let simplified = match simplify_group(positions, normals, &indices, &flags) {
+                    Some(s) if seals(&s.indices) => s,
+                    None => return (None, None),
+                    Some(_) => {
+                        let relocked = border_triangle_corners(&indices, &remap, &border, &shared);
+                        let locked = |v: u32| {
+                            let w = remap[v as usize];
+                            border[w as usize] || relocked.contains(&w)
+                        };
+                        let flags = VertexFlags {
+                            locked: &locked,
+                            seam: &seam,
+                        };
+                        match simplify_group(positions, normals, &indices, &flags) {
+                            Some(s) if seals(&s.indices) => {
+                                fallback = Some(Fallback::Relocked);
+                                s
+                            }
+                            _ => return (None, Some(Fallback::Unsimplified)),
+                        }
+                    }
+                };
                 let meshlets = split_into_meshlets(positions, &simplified.indices, weld);
                 let bounds: Vec<_> = meshlets.iter().map(|m| sphere_of(positions, m)).collect();
-                Some((simplified, meshlets, bounds))
+                (Some((simplified, meshlets, bounds)), fallback)
             })
             .collect();
 
         let mut next = Vec::with_capacity(active.len() / 2);
-        for (members, result) in level_groups.iter().zip(results) {
+        for (members, (result, fallback)) in level_groups.iter().zip(results) {
+            match fallback {
+                Some(Fallback::Relocked) => fallbacks.relocked += 1,
+                Some(Fallback::Unsimplified) => fallbacks.unsimplified += 1,
+                None => {}
+            }
             let children: Vec<u32> = members.iter().map(|&m| active[m as usize]).collect();
             let Some((simplified, meshlets, bounds)) = result else {
                 // Stuck even with the sloppy fallback: once more with other neighbours,
@@ -261,7 +309,84 @@ pub fn build_dag(
         clusters,
         groups,
         level_count,
+        fallbacks,
     })
+}
+
+enum Fallback {
+    Relocked,
+    Unsimplified,
+}
+
+/// The edges (between welded vertices) that the children of more than one group of
+/// this level use: where neighbouring groups meet. Both ends of such an edge are
+/// border vertices, so only those edges are looked up.
+fn shared_edges(level_groups: &[Vec<u32>], keyed: &[Vec<u32>], border: &[bool]) -> FxHashSet<u64> {
+    let mut first_user: FxHashMap<u64, u32> = FxHashMap::default();
+    let mut shared = FxHashSet::default();
+    for (g, members) in level_groups.iter().enumerate() {
+        for &m in members {
+            for (a, b) in triangle_edges(&keyed[m as usize]) {
+                if a == b || !border[a as usize] || !border[b as usize] {
+                    continue;
+                }
+                let key = edge_key(a, b);
+                if *first_user.entry(key).or_insert(g as u32) != g as u32 {
+                    shared.insert(key);
+                }
+            }
+        }
+    }
+    shared
+}
+
+/// Whether `output` uses every shared edge the same net number of times in each
+/// direction as `input` (both in global vertex ids): then any cut mixing this group's
+/// children or output with its neighbours' closes up. The same rule as
+/// [`crate::watertight`] applies to the packed asset, here on welded vertices.
+fn seals_borders(
+    input: &[u32],
+    output: &[u32],
+    remap: &[u32],
+    border: &[bool],
+    shared: &FxHashSet<u64>,
+) -> bool {
+    let mut net: FxHashMap<u64, i32> = FxHashMap::default();
+    for (indices, sign) in [(input, 1), (output, -1)] {
+        for (a, b) in triangle_edges(indices) {
+            let (a, b) = (remap[a as usize], remap[b as usize]);
+            if a == b || !border[a as usize] || !border[b as usize] {
+                continue;
+            }
+            let key = edge_key(a, b);
+            if shared.contains(&key) {
+                *net.entry(key).or_default() += if a < b { sign } else { -sign };
+            }
+        }
+    }
+    net.values().all(|&n| n == 0)
+}
+
+/// Every corner (welded) of the group's triangles that have an edge on a shared
+/// border: locked, those triangles cannot change, so neither can the border.
+fn border_triangle_corners(
+    indices: &[u32],
+    remap: &[u32],
+    border: &[bool],
+    shared: &FxHashSet<u64>,
+) -> FxHashSet<u32> {
+    let mut corners = FxHashSet::default();
+    for t in indices.chunks_exact(3) {
+        let w = [t[0], t[1], t[2]].map(|v| remap[v as usize]);
+        let on_border = (0..3).any(|k| {
+            let (a, b) = (w[k], w[(k + 1) % 3]);
+            a != b && border[a as usize] && border[b as usize] && shared.contains(&edge_key(a, b))
+        });
+        if on_border {
+            corners.extend(w);
+        }
+    }
+    corners
 }
 
 /// Vertices on an attribute seam: another vertex at the same position has a different
@@ -324,5 +449,29 @@ impl Dag {
     /// The clusters with no parent.
     pub fn roots(&self) -> impl Iterator<Item = &DagCluster> {
         self.clusters.iter().filter(|c| c.parent_group == NO_GROUP)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles of one group along a border edge (0, 1) shared with a neighbour:
+    /// the output must keep using that edge once, in the same direction.
+    #[test]
+    fn a_result_that_drops_or_flips_a_shared_edge_does_not_seal() {
+        let remap: Vec<u32> = (0..5).collect();
+        let border = [true, true, false, false, true];
+        let shared: FxHashSet<u64> = [edge_key(0, 1)].into_iter().collect();
+        let input = [0, 1, 2, 0, 2, 3];
+        let seal = |out: &[u32]| seals_borders(&input, out, &remap, &border, &shared);
+        assert!(seal(&[0, 1, 3]));
+        assert!(!seal(&[0, 2, 3]), "the shared edge is gone");
+        assert!(!seal(&[1, 0, 3]), "the shared edge is reversed");
+        assert!(!seal(&[0, 1, 3, 0, 1, 2]), "the shared edge is used twice");
+        // An edge between border vertices that no neighbour uses may change.
+        assert!(seal(&[0, 1, 3, 4, 0, 3]));
+        let corners = border_triangle_corners(&input, &remap, &border, &shared);
+        assert_eq!(corners, [0, 1, 2].into_iter().collect());
     }
 }

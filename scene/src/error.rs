@@ -26,6 +26,34 @@ pub enum SceneError {
     },
 
     #[error(
+        "{path}: is {kind}, not a regular file; give the path of a mesh file (devices, pipes \
+         and folders are not read)"
+    )]
+    NotARegularFile { path: PathBuf, kind: &'static str },
+
+    #[error(
+        "{path}: the file is {size} bytes, more than the {limit} bytes a mesh input may have; \
+         split the mesh into several files"
+    )]
+    FileTooLarge {
+        path: PathBuf,
+        size: u64,
+        limit: u64,
+    },
+
+    #[error(
+        "{path}: the glTF node tree expands to {count} triangles, more than the budget of \
+         {budget}; if the scene really instances that much, raise the budget (`--max-triangles`, \
+         `LoadOptions::max_triangles`, at most {limit}), else fix the node tree's shared subtrees"
+    )]
+    TriangleBudget {
+        path: PathBuf,
+        count: u64,
+        budget: u64,
+        limit: u64,
+    },
+
+    #[error(
         "{path}: unsupported file type {extension:?}; give a mesh ending in .obj, .gltf, .glb or .stl"
     )]
     UnsupportedFormat { path: PathBuf, extension: String },
@@ -66,6 +94,21 @@ pub enum SceneError {
         source_name: String,
         vertex: usize,
         position: [f32; 3],
+    },
+
+    #[error(
+        "{source_name}: {location}: {attribute} has the value {value}, which is not a finite \
+         number; fix or remove it in the source file (or re-export the mesh)"
+    )]
+    NonFiniteAttribute {
+        /// The file (or in-memory source).
+        source_name: String,
+        /// Where in it: `line 12`, `accessor 3, element 7`, `triangle 5`, `vertex 9`.
+        location: String,
+        /// What holds the value: `position`, `normal`, `texture coordinate`, with the
+        /// format's name for it where it has one (`vt`, `TEXCOORD_0`).
+        attribute: String,
+        value: f32,
     },
 
     #[error(

@@ -26,6 +26,7 @@ pub mod simplify;
 pub mod terrain;
 pub mod verify;
 pub mod watertight;
+pub mod weld;
 
 pub use asset::MeshletAsset;
 pub use dag::{Dag, DagOptions, build_dag};

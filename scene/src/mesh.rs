@@ -34,11 +34,18 @@ pub struct Mesh {
     pub indices: Vec<u32>,
 }
 
-/// What [`Mesh::clean`] removed, for the bake summary.
+/// What [`Mesh::clean`] changed, for the bake summary.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct CleanReport {
-    /// Triangles that repeated a vertex or had zero area; dropped before building.
+    /// Triangles that repeated a vertex or had zero area (after welding); dropped
+    /// before building.
     pub dropped_degenerate: usize,
+    /// Triangles with the same three points in the same winding as an earlier one
+    /// (after welding): drawn twice they only z-fight, and no simplification can halve
+    /// a stack of identical faces, so only the first is kept.
+    pub dropped_duplicate: usize,
+    /// Vertices moved onto a near vertex by welding (see [`crate::weld`]).
+    pub welded_vertices: usize,
 }
 
 impl Mesh {
@@ -71,12 +78,20 @@ impl Mesh {
         Ok(())
     }
 
-    /// Validates the mesh and drops degenerate triangles, so that the builder only ever
-    /// sees finite positions, in-range indices and triangles with area.
+    /// [`Mesh::clean_with`] at the default weld distance
+    /// ([`crate::weld::DEFAULT_WELD_TOLERANCE`] of the extent).
+    pub fn clean(&mut self) -> Result<CleanReport, SceneError> {
+        self.clean_with(crate::weld::DEFAULT_WELD_TOLERANCE)
+    }
+
+    /// Validates the mesh, welds positions within `weld_tolerance` × its extent (the
+    /// largest bounding-box side; 0 joins only identical positions), then drops
+    /// degenerate and duplicate triangles, so that the builder only ever sees finite
+    /// positions, in-range indices, and distinct triangles with area.
     ///
     /// Errors: empty mesh, non-finite position, index out of range, attribute arrays of
     /// the wrong length, counts beyond the format's limits.
-    pub fn clean(&mut self) -> Result<CleanReport, SceneError> {
+    pub fn clean_with(&mut self, weld_tolerance: f32) -> Result<CleanReport, SceneError> {
         let n = self.positions.len();
         if !self.indices.len().is_multiple_of(3) {
             return Err(SceneError::AttributeMismatch {
@@ -111,6 +126,19 @@ impl Mesh {
             });
         }
         if let Some(vertex) = self
+            .uvs
+            .iter()
+            .position(|t| !(t[0].is_finite() && t[1].is_finite()))
+        {
+            let t = self.uvs[vertex];
+            return Err(SceneError::NonFiniteAttribute {
+                source_name: self.source.clone(),
+                location: format!("vertex {vertex}"),
+                attribute: "texture coordinate".into(),
+                value: if t[0].is_finite() { t[1] } else { t[0] },
+            });
+        }
+        if let Some(vertex) = self
             .positions
             .iter()
             .position(|p| p.abs().max_element() > MAX_COORDINATE)
@@ -132,8 +160,16 @@ impl Mesh {
                 });
             }
         }
+        let (min, max) = self.bounds();
+        let welded_vertices = crate::weld::weld_positions(
+            &mut self.positions,
+            weld_tolerance * (max - min).max_element(),
+        );
         let before = self.triangle_count();
         let positions = &self.positions;
+        let point = position_remap(positions);
+        let mut seen = rustc_hash::FxHashSet::default();
+        let mut dropped_duplicate = 0;
         let mut kept = Vec::with_capacity(self.indices.len());
         for t in self.indices.chunks_exact(3) {
             let (a, b, c) = (t[0], t[1], t[2]);
@@ -150,11 +186,20 @@ impl Mesh {
             if (pb - pa).cross(pc - pa) == Vec3::ZERO {
                 continue;
             }
+            // The same points in the same winding, whichever corner comes first.
+            let p = [a, b, c].map(|v| point[v as usize]);
+            let r = (0..3).min_by_key(|&k| p[k]).unwrap_or(0);
+            if !seen.insert([p[r], p[(r + 1) % 3], p[(r + 2) % 3]]) {
+                dropped_duplicate += 1;
+                continue;
+            }
             kept.extend_from_slice(t);
         }
         self.indices = kept;
         let report = CleanReport {
-            dropped_degenerate: before - self.triangle_count(),
+            dropped_degenerate: before - self.triangle_count() - dropped_duplicate,
+            dropped_duplicate,
+            welded_vertices,
         };
         if self.indices.is_empty() {
             let detail = if before == 0 {

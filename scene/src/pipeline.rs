@@ -3,11 +3,17 @@
 use std::time::{Duration, Instant};
 
 use crate::asset::MeshletAsset;
-use crate::compress::{MAX_POSITION_BITS, MIN_POSITION_BITS, PositionBits, auto_position_bits};
-use crate::dag::{Dag, DagOptions, LevelProgress, build_dag};
+use glam::Vec3;
+use rustc_hash::FxHashMap;
+
+use crate::compress::{
+    MAX_POSITION_BITS, MIN_POSITION_BITS, PositionBits, Quantization, auto_position_bits,
+};
+use crate::dag::{Dag, DagOptions, Fallbacks, LevelProgress, build_dag};
 use crate::error::SceneError;
 use crate::grouping::Grouping;
 use crate::mesh::{CleanReport, Mesh};
+use crate::weld::{DEFAULT_WELD_TOLERANCE, MAX_WELD_TOLERANCE};
 
 /// Options of [`build_asset`].
 #[derive(Debug, Clone, Copy)]
@@ -15,6 +21,11 @@ pub struct BuildOptions {
     pub grouping: Grouping,
     /// Bits per axis of the mesh-wide position grid.
     pub position_bits: PositionBits,
+    /// Positions closer than this share of the mesh's extent (its largest bounding-box
+    /// side) are welded into one before building (see [`crate::weld`]); 0 joins only
+    /// identical positions. Default [`DEFAULT_WELD_TOLERANCE`], at most
+    /// [`MAX_WELD_TOLERANCE`].
+    pub weld_tolerance: f32,
 }
 
 impl Default for BuildOptions {
@@ -22,6 +33,7 @@ impl Default for BuildOptions {
         Self {
             grouping: Grouping::Partition,
             position_bits: PositionBits::Auto,
+            weld_tolerance: DEFAULT_WELD_TOLERANCE,
         }
     }
 }
@@ -35,6 +47,15 @@ pub struct Built {
     /// The cleaned mesh the DAG refers to.
     pub mesh: Mesh,
     pub clean: CleanReport,
+    /// Groups whose simplification would have cracked a LOD cut and were repaired
+    /// (also in `dag.fallbacks`).
+    pub fallbacks: Fallbacks,
+    /// Groups kept unsimplified to avoid a crack: `fallbacks.unsimplified`, the number
+    /// a bake summary reports per mesh.
+    pub fallback_groups: u32,
+    /// Whether distinct positions met on the position grid, so that the mesh was
+    /// snapped to the grid and built again (see [`build_asset`]).
+    pub snapped_to_grid: bool,
     pub dag_time: Duration,
     pub total_time: Duration,
 }
@@ -53,25 +74,21 @@ pub fn build_asset(
              give a value in that range or `auto`"
         )));
     }
+    if !(0.0..=MAX_WELD_TOLERANCE).contains(&options.weld_tolerance) {
+        return Err(SceneError::InvalidOption(format!(
+            "weld tolerance {} is outside 0..={MAX_WELD_TOLERANCE} (a share of the mesh's \
+             extent); give a value in that range, e.g. the default {DEFAULT_WELD_TOLERANCE}",
+            options.weld_tolerance
+        )));
+    }
     let start = Instant::now();
     let mut mesh = mesh.clone();
-    let clean = mesh.clean()?;
-    if clean.dropped_degenerate > 0 {
-        log::info!(
-            "{}: dropped {} degenerate triangles",
-            mesh.source,
-            clean.dropped_degenerate
-        );
-    }
+    let mut clean = mesh.clean_with(options.weld_tolerance)?;
+    let dag_options = DagOptions {
+        grouping: options.grouping,
+    };
     let dag_start = Instant::now();
-    let dag = build_dag(
-        &mesh,
-        &DagOptions {
-            grouping: options.grouping,
-        },
-        progress,
-    )?;
-    let dag_time = dag_start.elapsed();
+    let mut dag = build_dag(&mesh, &dag_options, progress)?;
     let position_bits = match options.position_bits {
         PositionBits::Fixed(bits) => bits,
         PositionBits::Auto => {
@@ -85,13 +102,51 @@ pub fn build_asset(
             auto_position_bits((max - min).max_element(), &lod0_errors)
         }
     };
-    let asset = MeshletAsset::from_dag(&mesh, &dag, position_bits, clean.dropped_degenerate);
+    let (min, max) = mesh.bounds();
+    let grid = Quantization::new(min, max, position_bits);
+    // The asset stores grid points, and the GPU (and the crack check) joins vertices by
+    // them: two positions the builder kept apart but the grid merges would make border
+    // edges the builder never locked. Rare (points closer than a grid step); then the
+    // mesh is snapped to the grid and built again, so both see the same points.
+    let snapped_to_grid = grid_merges_points(&mesh, &grid);
+    if snapped_to_grid {
+        for p in &mut mesh.positions {
+            *p = grid.dequantize(grid.quantize(*p));
+        }
+        let again = mesh.clean_with(0.0)?;
+        clean.dropped_degenerate += again.dropped_degenerate;
+        clean.dropped_duplicate += again.dropped_duplicate;
+        dag = build_dag(&mesh, &dag_options, &mut |_| {})?;
+    }
+    let dag_time = dag_start.elapsed();
+    if clean.dropped_degenerate + clean.dropped_duplicate > 0 {
+        log::info!(
+            "{}: dropped {} degenerate and {} duplicate triangles",
+            mesh.source,
+            clean.dropped_degenerate,
+            clean.dropped_duplicate
+        );
+    }
+    let asset = MeshletAsset::from_dag_on_grid(&mesh, &dag, grid, clean.dropped_degenerate);
     Ok(Built {
         asset,
+        fallbacks: dag.fallbacks,
+        fallback_groups: dag.fallbacks.unsimplified as u32,
+        snapped_to_grid,
         dag,
         mesh,
         clean,
         dag_time,
         total_time: start.elapsed(),
+    })
+}
+
+/// Whether two distinct positions used by triangles fall on one grid point.
+fn grid_merges_points(mesh: &Mesh, grid: &Quantization) -> bool {
+    let mut first: FxHashMap<[u32; 3], Vec3> = FxHashMap::default();
+    mesh.indices.iter().any(|&v| {
+        let p = mesh.positions[v as usize];
+        let q = grid.quantize(p);
+        *first.entry(q).or_insert(p) != p
     })
 }

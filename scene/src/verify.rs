@@ -5,6 +5,7 @@
 //! (too deep, too many roots, levels that do not halve), which it reports as warnings.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::asset::MeshletAsset;
 use crate::asset::format::NO_GROUP;
@@ -155,28 +156,39 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
             (true, n) => problems.push(format!("root meshlet {i} is a child of {n} groups")),
             (false, n) => problems.push(format!("meshlet {i} is a child of {n} groups, not one")),
         }
-        let (vc, tc) = (m.vertex_count(), m.triangle_count());
-        if let Some(t) = first_out_of_range(asset.triangle_block(m), m.triangle_bits(), vc, tc) {
-            problems.push(format!(
-                "meshlet {i}: triangle {t} refers past its {vc} vertices (decoded clamped)"
-            ));
-        }
-        // The culling sphere holds every decoded vertex: what the renderer culls by.
-        let d = asset.decode_meshlet(i);
-        let centre = Vec3::new(m.bounds[0], m.bounds[1], m.bounds[2]);
-        let outside = d
-            .positions
-            .iter()
-            .map(|p| p.distance(centre))
-            .fold(0.0f32, f32::max);
-        if outside > m.bounds[3] * (1.0 + 1e-5) + 1e-6 * centre.abs().max_element() {
-            problems.push(format!(
-                "meshlet {i}: a vertex lies {outside} from the centre of its culling sphere of \
-                 radius {}",
-                m.bounds[3]
-            ));
-        }
     }
+    // Decoding every meshlet is most of the cost: in parallel, findings kept in order.
+    let quant = asset.quantization();
+    let decoded: Vec<Vec<String>> = (0..meshlets.len())
+        .into_par_iter()
+        .map(|i| {
+            let m = &meshlets[i];
+            let mut found = Vec::new();
+            let (vc, tc) = (m.vertex_count(), m.triangle_count());
+            if let Some(t) = first_out_of_range(asset.triangle_block(m), m.triangle_bits(), vc, tc)
+            {
+                found.push(format!(
+                    "meshlet {i}: triangle {t} refers past its {vc} vertices (decoded clamped)"
+                ));
+            }
+            // The culling sphere holds every decoded vertex: what the renderer culls by.
+            let (grid, _) = asset.decode_topology(i);
+            let centre = Vec3::new(m.bounds[0], m.bounds[1], m.bounds[2]);
+            let outside = grid
+                .iter()
+                .map(|&q| quant.dequantize(q).distance(centre))
+                .fold(0.0f32, f32::max);
+            if outside > m.bounds[3] * (1.0 + 1e-5) + 1e-6 * centre.abs().max_element() {
+                found.push(format!(
+                    "meshlet {i}: a vertex lies {outside} from the centre of its culling sphere \
+                     of radius {}",
+                    m.bounds[3]
+                ));
+            }
+            found
+        })
+        .collect();
+    problems.extend(decoded.into_iter().flatten());
     if roots == 0 {
         problems.push("no root meshlet; the coarsest level must have one".to_owned());
     }

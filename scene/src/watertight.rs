@@ -9,6 +9,7 @@
 //! seams inside the group) may change. Edges are compared by their grid coordinates, as
 //! the GPU decodes them.
 
+use rayon::prelude::*;
 use rustc_hash::{FxHashMap, FxHashSet};
 
 use crate::asset::MeshletAsset;
@@ -35,8 +36,9 @@ pub fn crack_problems(asset: &MeshletAsset) -> Vec<String> {
     let mut problems = Vec::new();
     for level in levels {
         let at_level = &by_level[&level];
+        // Groups are independent once the level's shared edges are known: in parallel.
         let before: Vec<FxHashMap<Edge, i32>> = at_level
-            .iter()
+            .par_iter()
             .map(|&g| directed_uses(asset, asset.group_children(&groups[g])))
             .collect();
         // Which groups of this iteration use each edge: shared ones are the borders.
@@ -49,14 +51,21 @@ pub fn crack_problems(asset: &MeshletAsset) -> Vec<String> {
                 }
             }
         }
-        for (k, &g) in at_level.iter().enumerate() {
-            let after = directed_uses(asset, &outputs[g]);
-            let keys: FxHashSet<&Edge> = before[k].keys().chain(after.keys()).collect();
-            let cracked = keys
-                .into_iter()
-                .filter(|e| users.get(*e).is_some_and(|u| u.1))
-                .filter(|e| net(&before[k], e) != net(&after, e))
-                .count();
+        let cracked: Vec<(usize, usize)> = at_level
+            .par_iter()
+            .enumerate()
+            .map(|(k, &g)| {
+                let after = directed_uses(asset, &outputs[g]);
+                let keys: FxHashSet<&Edge> = before[k].keys().chain(after.keys()).collect();
+                let cracked = keys
+                    .into_iter()
+                    .filter(|e| users.get(*e).is_some_and(|u| u.1))
+                    .filter(|e| net(&before[k], e) != net(&after, e))
+                    .count();
+                (g, cracked)
+            })
+            .collect();
+        for (g, cracked) in cracked {
             if cracked > 0 {
                 problems.push(format!(
                     "group {g}: its simplified meshlets use {cracked} edges shared with \
@@ -78,10 +87,10 @@ fn net(uses: &FxHashMap<Edge, i32>, e: &Edge) -> i32 {
 fn directed_uses(asset: &MeshletAsset, meshlets: &[u32]) -> FxHashMap<Edge, i32> {
     let mut net: FxHashMap<Edge, i32> = FxHashMap::default();
     for &m in meshlets {
-        let d = asset.decode_meshlet(m as usize);
-        for t in &d.triangles {
+        let (grid, triangles) = asset.decode_topology(m as usize);
+        for t in &triangles {
             for k in 0..3 {
-                let (a, b) = (d.grid[t[k] as usize], d.grid[t[(k + 1) % 3] as usize]);
+                let (a, b) = (grid[t[k] as usize], grid[t[(k + 1) % 3] as usize]);
                 if a == b {
                     continue;
                 }

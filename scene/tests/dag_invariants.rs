@@ -2,9 +2,11 @@
 
 mod common;
 
+use common::dag_checks::check;
+
 use meshlight_scene::dag::Dag;
 use meshlight_scene::simplify::Mode;
-use meshlight_scene::verify::{expected_levels, quality, verify};
+use meshlight_scene::verify::{quality, verify};
 use meshlight_scene::{
     BuildOptions, Built, Grouping, Mesh, build_asset, load::load_mesh, procedural_mesh,
 };
@@ -15,104 +17,6 @@ fn build(mesh: &Mesh, grouping: Grouping) -> Built {
         ..BuildOptions::default()
     };
     build_asset(mesh, &options, &mut |_| {}).unwrap()
-}
-
-/// Triangles as sorted-rotation triples, so that reordering inside meshlets is allowed
-/// but any lost, duplicated or re-wound triangle is not.
-fn canonical(indices: &[u32]) -> Vec<[u32; 3]> {
-    let mut tris: Vec<[u32; 3]> = indices
-        .chunks_exact(3)
-        .map(|t| {
-            let r = (0..3).min_by_key(|&k| t[k]).unwrap();
-            [t[r], t[(r + 1) % 3], t[(r + 2) % 3]]
-        })
-        .collect();
-    tris.sort_unstable();
-    tris
-}
-
-fn lod0_indices(dag: &Dag) -> Vec<u32> {
-    dag.clusters
-        .iter()
-        .filter(|c| c.level == 0)
-        .flat_map(|c| c.indices.iter().copied())
-        .collect()
-}
-
-fn check(name: &str, built: &Built) {
-    let cracks = check_allowing_cracks(name, built);
-    assert!(cracks.is_empty(), "{name}: {cracks:#?}");
-}
-
-/// Every invariant except crack-freedom (see [`meshlight_scene::watertight`]), whose
-/// findings are returned for [`check`] to assert on.
-fn check_allowing_cracks(name: &str, built: &Built) -> Vec<String> {
-    let cracks = meshlight_scene::watertight::crack_problems(&built.asset);
-    let problems: Vec<String> = verify(&built.asset)
-        .into_iter()
-        .filter(|p| !cracks.contains(p))
-        .collect();
-    assert!(problems.is_empty(), "{name}: {problems:#?}");
-    assert_eq!(
-        canonical(&lod0_indices(&built.dag)),
-        canonical(&built.mesh.indices),
-        "{name}: LOD-0 meshlets must hold exactly the input triangles"
-    );
-    let h = built.asset.header();
-    for c in &built.dag.clusters {
-        assert!(
-            c.triangle_count() <= 128 && c.triangle_count() > 0,
-            "{name}: meshlet of {} triangles",
-            c.triangle_count()
-        );
-    }
-    // Directly, not only through verify(): the DAG itself satisfies the group rules.
-    for g in &built.dag.groups {
-        for &c in &g.children {
-            let child = &built.dag.clusters[c as usize];
-            assert!(
-                g.lod.error >= child.lod.error,
-                "{name}: group error below a child's"
-            );
-            assert!(
-                meshlight_scene::bounds::contains(
-                    (g.lod.center, g.lod.radius),
-                    (child.lod.center, child.lod.radius)
-                ),
-                "{name}: group sphere does not contain a child's"
-            );
-        }
-    }
-    // The quality targets: every level ≤ 0.55× the one before (the last step to the
-    // root aside), levels ≤ ⌈log2(LOD-0 meshlets)⌉ + 2, 1 to 3 roots, all levels
-    // ≤ 2.1× LOD 0.
-    assert!(
-        (1..=3).contains(&h.root_count),
-        "{name}: {} roots",
-        h.root_count
-    );
-    let q = quality(&built.asset);
-    assert!(q.warnings.is_empty(), "{name}: {:#?}", q.warnings);
-    assert!(
-        q.worst_ratio <= 0.55 && q.total_ratio <= 2.1,
-        "{name}: {q:?}"
-    );
-    assert!(h.level_count <= q.level_limit, "{name}: {q:?}");
-    let modes = Mode::ALL.map(|m| built.dag.groups.iter().filter(|g| g.mode == m).count());
-    println!(
-        "{name}: {} triangles, {} LOD-0 meshlets, {} levels (expected {:.1}, limit {}), \
-         root {} meshlets, worst level ratio {:.2}, all levels {:.2}x LOD 0, groups \
-         regular/permissive/welded/sloppy {modes:?}",
-        h.lod0_triangles,
-        h.lod0_meshlets,
-        h.level_count,
-        expected_levels(h.lod0_meshlets),
-        q.level_limit,
-        h.root_count,
-        q.worst_ratio,
-        q.total_ratio
-    );
-    cracks
 }
 
 /// Both groupings; the default first.

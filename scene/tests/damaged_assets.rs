@@ -8,7 +8,9 @@ mod common;
 use std::path::Path;
 
 use meshlight_scene::asset::checksum::file_checksum;
-use meshlight_scene::asset::format::{AssetHeader, MeshletRecord, SECTION_MESHLETS};
+use meshlight_scene::asset::format::{
+    AssetHeader, GroupRecord, MeshletRecord, SECTION_GROUPS, SECTION_MESHLETS, SECTION_PAYLOAD,
+};
 use meshlight_scene::load::parse_obj;
 use meshlight_scene::mesh::MAX_COORDINATE;
 use meshlight_scene::{BuildOptions, MeshletAsset, SceneError, build_asset, procedural_mesh};
@@ -226,4 +228,224 @@ fn coordinates_beyond_the_quantiser_are_refused_at_bake_time() {
     built.asset.save(&path).unwrap();
     let loaded = MeshletAsset::load(&path).unwrap();
     assert!(meshlight_scene::verify::verify(&loaded).is_empty());
+}
+
+fn group(words: &mut [u32], i: usize) -> &mut GroupRecord {
+    let first = header(words).sections[SECTION_GROUPS].offset as usize;
+    let n = size_of::<GroupRecord>() / 4;
+    bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
+        &mut words[first + i * n..first + (i + 1) * n],
+    ))
+}
+
+fn records(words: &[u32]) -> (Vec<MeshletRecord>, Vec<GroupRecord>) {
+    let h: &AssetHeader = bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
+    let section = |i: usize| {
+        let s = h.sections[i];
+        &words[s.offset as usize..(s.offset + s.words) as usize]
+    };
+    (
+        bytemuck::cast_slice(section(SECTION_MESHLETS)).to_vec(),
+        bytemuck::cast_slice(section(SECTION_GROUPS)).to_vec(),
+    )
+}
+
+/// Like [`refused`], and the message also says `needle`.
+fn refused_saying(what: &str, field: &str, needle: &str, edit: impl FnOnce(&mut Vec<u32>)) {
+    let mut w = good_words();
+    edit(&mut w);
+    reseal(&mut w);
+    let len = w.len() as u64 * 4;
+    let err = MeshletAsset::from_words(w, len, Path::new("bad.mlasset")).unwrap_err();
+    let msg = err.to_string();
+    match &err {
+        SceneError::AssetField { field: f, .. } => {
+            assert!(
+                f.contains(field),
+                "{what}: named {f:?}, expected {field:?}: {msg}"
+            )
+        }
+        other => panic!("{what}: {other:?}"),
+    }
+    assert!(
+        msg.contains(needle),
+        "{what}: {needle:?} missing from: {msg}"
+    );
+    assert!(msg.contains("re-bake"), "{msg}");
+}
+
+#[test]
+fn meshlets_are_stored_level_by_level() {
+    refused_saying(
+        "a level-1 meshlet raised to 2",
+        "counts",
+        "level by level",
+        |w| {
+            let (meshlets, _) = records(w);
+            let i = meshlets.iter().position(|m| m.level() == 1).unwrap();
+            let m = meshlet(w, i);
+            m.counts = (m.counts & 0xffff) | (2 << 16);
+        },
+    );
+}
+
+#[test]
+fn group_links_must_be_consistent() {
+    refused_saying(
+        "a child above its group",
+        "group[",
+        "below its child",
+        |w| {
+            let (_, groups) = records(w);
+            let g = groups.iter().position(|g| g.level > 0).unwrap();
+            group(w, g).level = 0;
+        },
+    );
+    refused_saying(
+        "a source group of the wrong level",
+        "source_group",
+        "one level above",
+        |w| {
+            let (meshlets, groups) = records(w);
+            let i = meshlets.iter().position(|m| m.level() == 1).unwrap();
+            let other = groups.iter().position(|g| g.level == 1).unwrap();
+            meshlet(w, i).source_group = other as u32;
+        },
+    );
+    refused_saying(
+        "a group without outputs",
+        "group[0]",
+        "no simplified meshlets",
+        |w| {
+            let (meshlets, groups) = records(w);
+            let other = (1..groups.len()).find(|&g| groups[g].level == 0).unwrap();
+            for (i, m) in meshlets.iter().enumerate() {
+                if m.source_group == 0 {
+                    meshlet(w, i).source_group = other as u32;
+                }
+            }
+        },
+    );
+    refused_saying(
+        "a child naming another parent",
+        "parent_group",
+        "lists the meshlet",
+        |w| {
+            let (meshlets, _) = records(w);
+            let i = meshlets.iter().position(|m| m.parent_group == 0).unwrap();
+            meshlet(w, i).parent_group = 1;
+        },
+    );
+}
+
+#[test]
+fn bounds_and_grid_must_be_in_range() {
+    refused_saying(
+        "bounds whose size overflows",
+        "header.bounds",
+        "finite and positive",
+        |w| {
+            let h = header(w);
+            h.bounds_min[0] = -3e38;
+            h.bounds_max[0] = 3e38;
+        },
+    );
+    refused_saying("a denormal step", "header.quant_step", "extent", |w| {
+        header(w).quant_step = 1e-40
+    });
+    refused_saying(
+        "a step twice the grid's",
+        "header.quant_step",
+        "extent",
+        |w| header(w).quant_step *= 2.0,
+    );
+    refused("a step of 1e38", "header.quant_", |w| {
+        header(w).quant_step = 1e38
+    });
+}
+
+#[test]
+fn spheres_must_lie_around_the_mesh() {
+    refused_saying(
+        "a culling radius of f32::MAX",
+        "meshlet[2].bounds",
+        "beyond the mesh",
+        |w| meshlet(w, 2).bounds[3] = f32::MAX,
+    );
+    refused_saying(
+        "a culling sphere far away",
+        "meshlet[3].bounds",
+        "beyond the mesh",
+        |w| meshlet(w, 3).bounds[1] = 1e30,
+    );
+    refused_saying(
+        "a LOD radius of 1e30",
+        "group[1].lod_sphere",
+        "beyond the mesh",
+        |w| group(w, 1).lod_sphere[3] = 1e30,
+    );
+}
+
+#[test]
+fn every_payload_word_belongs_to_one_meshlet() {
+    refused_saying(
+        "a word no meshlet refers to",
+        "sections[3]",
+        "belongs to one meshlet",
+        |w| {
+            let s = header(w).sections;
+            let end = (s[SECTION_PAYLOAD].offset + s[SECTION_PAYLOAD].words) as usize;
+            w.insert(end, 0);
+            let h = header(w);
+            h.sections[SECTION_PAYLOAD].words += 1;
+            for later in SECTION_PAYLOAD + 1..h.sections.len() {
+                h.sections[later].offset += 1;
+            }
+        },
+    );
+    refused_saying(
+        "two meshlets sharing words",
+        "meshlet[1].data_offset",
+        "follows",
+        |w| meshlet(w, 1).data_offset -= 1,
+    );
+}
+
+/// What `inspect` rejects for a DAG violation (here a group whose error is below its
+/// child's, which the structural checks cannot see), loading for the renderer refuses
+/// with the same message.
+#[test]
+fn loading_for_the_renderer_refuses_what_inspect_rejects() {
+    use meshlight_scene::cli::{InspectArgs, run_inspect};
+    let dir = common::scratch("load-verified");
+    let good = dir.join("good.mlasset");
+    let built = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {}).unwrap();
+    built.asset.save(&good).unwrap();
+    MeshletAsset::load_verified(&good).unwrap();
+    built.asset.check_all(&good).unwrap();
+
+    let mut dag = built.dag.clone();
+    let g = dag
+        .groups
+        .iter()
+        .position(|g| {
+            g.children
+                .iter()
+                .any(|&c| dag.clusters[c as usize].level > 0)
+        })
+        .unwrap();
+    dag.groups[g].lod.error = 0.0;
+    let broken = MeshletAsset::from_dag(&built.mesh, &dag, 16, 0);
+    let bad = dir.join("bad.mlasset");
+    broken.save(&bad).unwrap();
+    MeshletAsset::load(&bad).expect("structurally sound");
+    let inspect = run_inspect(&InspectArgs { file: bad.clone() }).unwrap_err();
+    let load = MeshletAsset::load_verified(&bad).unwrap_err();
+    assert!(matches!(load, SceneError::AssetCorrupt { .. }), "{load:?}");
+    assert_eq!(load.to_string(), inspect.to_string());
+    assert!(load.to_string().contains("below child"), "{load}");
+    assert_eq!(
+        broken.check_all(&bad).unwrap_err().to_string(),
+        load.to_string()
+    );
 }

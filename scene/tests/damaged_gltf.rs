@@ -269,3 +269,58 @@ fn glb_header_lengths_are_checked_before_parsing() {
         assert!(err.to_string().contains("truncated"), "{name}: {err}");
     }
 }
+
+/// A tetrahedron with normals whose `poison` (0 = POSITION, 2 = TEXCOORD_0, 3 = NORMAL)
+/// accessor holds one NaN or infinity in element 2.
+fn poisoned(poison: usize, value: f32) -> String {
+    let (mut p, idx) = common::tetrahedron();
+    let mut uvs: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]];
+    let mut normals = [[0.0f32, 0.0, 1.0]; 4];
+    match poison {
+        0 => p[2][1] = value,
+        2 => uvs[2][0] = value,
+        _ => normals[2][2] = value,
+    }
+    let mut buf: Vec<u8> = bytemuck::cast_slice(&p).to_vec();
+    buf.extend_from_slice(bytemuck::cast_slice(&idx));
+    buf.extend_from_slice(bytemuck::cast_slice(&uvs));
+    buf.extend_from_slice(bytemuck::cast_slice(&normals));
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"name":"tet","primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":2,"NORMAL":3}},"indices":1}}]}}],
+        "buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":24}},
+        {{"buffer":0,"byteOffset":72,"byteLength":32}},{{"buffer":0,"byteOffset":104,"byteLength":48}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3"}},
+        {{"bufferView":1,"componentType":5123,"count":12,"type":"SCALAR"}},
+        {{"bufferView":2,"componentType":5126,"count":4,"type":"VEC2"}},
+        {{"bufferView":3,"componentType":5126,"count":4,"type":"VEC3"}}]}}"#,
+        buf.len(),
+        common::base64(&buf)
+    )
+}
+
+#[test]
+fn non_finite_accessor_values_are_refused_naming_the_accessor() {
+    assert!(load_mesh(&write("fine.gltf", &poisoned(0, 0.5))).is_ok());
+    for (accessor, role) in [(0, "POSITION"), (2, "TEXCOORD_0"), (3, "NORMAL")] {
+        for value in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let name = format!("{role}.gltf");
+            let err = load_mesh(&write(&name, &poisoned(accessor, value))).unwrap_err();
+            let msg = err.to_string();
+            assert!(
+                matches!(err, SceneError::NonFiniteAttribute { .. }),
+                "{role}: {err:?}"
+            );
+            for needle in [
+                name.as_str(),
+                role,
+                &format!("accessor {accessor}, element 2"),
+                "mesh \"tet\" primitive 0",
+            ] {
+                assert!(msg.contains(needle), "{needle:?} missing from: {msg}");
+            }
+            assert!(!msg.contains("report"), "{msg}");
+        }
+    }
+}

@@ -348,7 +348,12 @@ fn format_3_file(asset: &MeshletAsset) -> Vec<u8> {
         &words[s.offset as usize..(s.offset + s.words) as usize]
     };
     let mut head: Vec<u32> = Vec::new();
-    head.extend_from_slice(bytemuck::cast_slice(&MAGIC));
+    // By value: a byte array's address need not be aligned for a cast to words.
+    head.extend(
+        MAGIC
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])),
+    );
     head.push(3);
     head.push(h.flags);
     head.extend_from_slice(&[0; 4]); // file size and checksum, set below

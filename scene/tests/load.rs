@@ -191,18 +191,90 @@ fn empty_mesh_is_refused() {
     assert!(err.to_string().contains("empty.obj"));
 }
 
-#[test]
-fn non_finite_positions_are_refused() {
-    for bad in ["nan", "inf", "-inf"] {
-        let text = format!("v 0 0 0\nv 1 {bad} 0\nv 0 1 0\nf 1 2 3\n");
-        let mesh = parse_obj(Path::new("bad.obj"), text.as_bytes()).unwrap();
-        let err = build(&mesh).unwrap_err();
-        assert!(
-            matches!(err, SceneError::NonFinitePosition { vertex: 1, .. }),
-            "{bad}: {err:?}"
-        );
-        assert!(err.to_string().contains("bad.obj"));
+/// The error every loader gives for a value that is not a finite number: typed, naming
+/// the file, where in it, and the attribute; never an internal failure.
+fn non_finite(err: SceneError, file: &str, location: &str, attribute: &str) {
+    let msg = err.to_string();
+    match &err {
+        SceneError::NonFiniteAttribute {
+            location: l,
+            attribute: a,
+            ..
+        } => {
+            assert_eq!(l, location, "{msg}");
+            assert!(a.contains(attribute), "{msg}");
+        }
+        other => panic!("{file}: expected NonFiniteAttribute, got {other:?}"),
     }
+    assert!(msg.contains(file) && msg.contains(location), "{msg}");
+    assert!(!msg.contains("report"), "{msg}");
+}
+
+#[test]
+fn non_finite_obj_values_are_refused_with_their_line() {
+    let face = "f 1/1/1 2/2/1 3/3/1\n";
+    for bad in ["nan", "inf", "-inf", "1e39", "NaN"] {
+        let v = format!("v 0 0 0\nv 1 {bad} 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\n{face}");
+        let err = parse_obj(Path::new("v.obj"), v.as_bytes()).unwrap_err();
+        non_finite(err, "v.obj", "line 2", "`v`");
+        let vt = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 {bad}\nvn 0 0 1\n{face}");
+        let err = parse_obj(Path::new("vt.obj"), vt.as_bytes()).unwrap_err();
+        non_finite(err, "vt.obj", "line 6", "`vt`");
+        let vn = format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 {bad} 1\n{face}");
+        let err = parse_obj(Path::new("vn.obj"), vn.as_bytes()).unwrap_err();
+        non_finite(err, "vn.obj", "line 7", "`vn`");
+    }
+}
+
+#[test]
+fn non_finite_stl_corners_are_refused() {
+    for bad in ["nan", "inf", "-1e39"] {
+        let ascii = format!(
+            "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 {bad} 0\n\
+             endloop\nendfacet\nendsolid s\n"
+        );
+        let err = parse_stl(Path::new("a.stl"), ascii.as_bytes()).unwrap_err();
+        non_finite(err, "a.stl", "line 6", "position");
+    }
+    let mut binary = vec![0u8; 80];
+    binary.extend_from_slice(&2u32.to_le_bytes());
+    for t in 0..2 {
+        binary.extend_from_slice(&[0u8; 12]);
+        for (k, corner) in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+            .iter()
+            .enumerate()
+        {
+            let mut c = *corner;
+            if t == 1 && k == 2 {
+                c[2] = f32::NAN;
+            }
+            binary.extend_from_slice(bytemuck::cast_slice(&c));
+        }
+        binary.extend_from_slice(&[0u8; 2]);
+    }
+    let err = parse_stl(Path::new("b.stl"), &binary).unwrap_err();
+    non_finite(err, "b.stl", "triangle 1, corner 2", "position");
+}
+
+/// A mesh built in memory has no file lines: the vertex is named instead.
+#[test]
+fn non_finite_positions_and_uvs_in_memory_are_refused() {
+    let mut mesh = procedural_mesh(8);
+    mesh.positions[1].y = f32::NAN;
+    let err = build(&mesh).unwrap_err();
+    assert!(
+        matches!(err, SceneError::NonFinitePosition { vertex: 1, .. }),
+        "{err:?}"
+    );
+    let mut mesh = procedural_mesh(8);
+    mesh.uvs = vec![[0.5, 0.5]; mesh.positions.len()];
+    mesh.uvs[7][1] = f32::INFINITY;
+    non_finite(
+        build(&mesh).unwrap_err(),
+        "procedural",
+        "vertex 7",
+        "texture",
+    );
 }
 
 #[test]

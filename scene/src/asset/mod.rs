@@ -66,6 +66,21 @@ impl SizeBreakdown {
     }
 }
 
+/// The error for DAG invariant violations (`Ok` for none), worded the same for
+/// `inspect` and for loading.
+pub fn dag_error(path: &Path, problems: &[String]) -> Result<(), SceneError> {
+    match problems.first() {
+        None => Ok(()),
+        Some(first) => Err(SceneError::AssetCorrupt {
+            path: path.to_owned(),
+            reason: format!(
+                "{} DAG invariant violations, first: {first}",
+                problems.len()
+            ),
+        }),
+    }
+}
+
 /// One meshlet decoded back to floats, for tests, tools and CPU references.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DecodedMeshlet {
@@ -78,10 +93,23 @@ pub struct DecodedMeshlet {
 }
 
 impl MeshletAsset {
-    /// Quantises and packs a DAG of `mesh` (the cleaned mesh it was built from).
+    /// Quantises and packs a DAG of `mesh` (the cleaned mesh it was built from) on a
+    /// grid of `position_bits` over the mesh's bounds.
     pub fn from_dag(mesh: &Mesh, dag: &Dag, position_bits: u32, dropped_degenerate: usize) -> Self {
         let (min, max) = mesh.bounds();
         let quant = Quantization::new(min, max, position_bits);
+        Self::from_dag_on_grid(mesh, dag, quant, dropped_degenerate)
+    }
+
+    /// Quantises and packs a DAG of `mesh` on the given grid, which must cover the
+    /// mesh's bounds (a mesh snapped to a grid keeps the grid it was snapped to).
+    pub fn from_dag_on_grid(
+        mesh: &Mesh,
+        dag: &Dag,
+        quant: Quantization,
+        dropped_degenerate: usize,
+    ) -> Self {
+        let (min, max) = mesh.bounds();
         let uvq = UvQuantization::new(&mesh.uvs);
         let has_uvs = mesh.has_uvs();
         let grid: Vec<[u32; 3]> = mesh
@@ -369,6 +397,36 @@ impl MeshletAsset {
         Ok(Self { words })
     }
 
+    /// Loads an asset and runs every check `meshlight inspect` runs: what
+    /// [`MeshletAsset::load`] checks (magic, version, size, checksum, structure and the
+    /// cross-checks of [`validate`]) and the DAG invariants of [`crate::verify::verify`]
+    /// (parent links, error monotonicity, spheres, triangle records, cracks). The
+    /// renderer loads through this, so nothing `inspect` rejects reaches the GPU, and
+    /// it is refused with the same message.
+    pub fn load_verified(path: &Path) -> Result<Self, SceneError> {
+        let asset = Self::load(path)?;
+        asset.verify_dag(path)?;
+        Ok(asset)
+    }
+
+    /// Every check of [`MeshletAsset::load_verified`] on an asset already in memory
+    /// (built, or read from a cache): the structural checks and the DAG invariants.
+    /// `path` names it in errors.
+    pub fn check_all(&self, path: &Path) -> Result<(), SceneError> {
+        self.validate().map_err(|e| SceneError::AssetField {
+            path: path.to_owned(),
+            field: e.field,
+            problem: e.problem,
+        })?;
+        self.verify_dag(path)
+    }
+
+    /// The DAG invariants, as an error naming the first violation and how many there
+    /// are: what `inspect` and [`MeshletAsset::load_verified`] report.
+    pub fn verify_dag(&self, path: &Path) -> Result<(), SceneError> {
+        dag_error(path, &crate::verify::verify(self))
+    }
+
     /// The structural checks [`MeshletAsset::load`] applies, for an asset built in
     /// memory: `bake` runs them before writing, so it never writes what `load` refuses.
     pub fn validate(&self) -> Result<(), validate::Invalid> {
@@ -491,6 +549,35 @@ impl MeshletAsset {
         let layout = PayloadLayout::of(m, self.header().has_uvs());
         &self.payload()
             [(m.data_offset + layout.triangles) as usize..(m.data_offset + layout.end) as usize]
+    }
+
+    /// One meshlet's grid points and triangles only: what the DAG checks compare, without
+    /// decoding normals and UVs.
+    pub fn decode_topology(&self, index: usize) -> (Vec<[u32; 3]>, Vec<[u8; 3]>) {
+        let m = &self.meshlets()[index];
+        let layout = PayloadLayout::of(m, self.header().has_uvs());
+        let data = &self.payload()[m.data_offset as usize..(m.data_offset + layout.end) as usize];
+        let bits = m.axis_bits();
+        let vertex_block = &data[..layout.uvs as usize];
+        let stride = m.vertex_stride() as usize;
+        let (vc, tc) = (m.vertex_count(), m.triangle_count());
+        let grid = (0..vc as usize)
+            .map(|v| {
+                let mut at = v * stride;
+                [0, 1, 2].map(|k| {
+                    let d = get_bits(vertex_block, at, bits[k]).unwrap_or(0);
+                    at += bits[k] as usize;
+                    m.grid_min[k] + d
+                })
+            })
+            .collect();
+        let triangle_block = &data[layout.triangles as usize..];
+        let triangles = (0..tc)
+            .map(|t| {
+                triangles::decode(triangle_block, t, m.triangle_bits(), vc, tc).map(|i| i as u8)
+            })
+            .collect();
+        (grid, triangles)
     }
 
     /// Decodes one meshlet (as the GPU would).

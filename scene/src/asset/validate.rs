@@ -117,8 +117,13 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         ));
     }
     header_floats(h)?;
+    let sphere_limit = SphereLimit::of(h);
 
     let has_uvs = h.has_uvs();
+    // Where the next meshlet's payload must start: meshlets' data follow each other
+    // and together fill the payload, so no word is unreferenced or shared.
+    let mut payload_end = 0u64;
+    let mut previous_level = 0;
     let grid_max = (1u64 << h.quant_bits) - 1;
     let (mut lod0_meshlets, mut lod0_triangles, mut triangles, mut vertices, mut roots) =
         (0u64, 0u64, 0u64, 0u64, 0u64);
@@ -146,6 +151,16 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
                 ),
             ));
         }
+        if level < previous_level {
+            return Err(bad(
+                f("counts"),
+                format!(
+                    "level {level} follows a meshlet of level {previous_level}; meshlets are \
+                     stored level by level, from LOD 0 up"
+                ),
+            ));
+        }
+        previous_level = level;
         max_level = max_level.max(level);
         if m.normal_bits()
             .iter()
@@ -196,6 +211,7 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
                 format!("{:?} is not a finite sphere", m.bounds),
             ));
         }
+        sphere_limit.check(m.bounds, 1.0, || f("bounds"))?;
         for (name, g) in [
             ("source_group", m.source_group),
             ("parent_group", m.parent_group),
@@ -220,6 +236,17 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         if m.data_offset as u64 + layout.end as u64 > payload.len() as u64 {
             return Err(bad(f("data_offset"), "puts its data outside the payload"));
         }
+        if m.data_offset as u64 != payload_end {
+            return Err(bad(
+                f("data_offset"),
+                format!(
+                    "is {}, but the previous meshlet's data ends at word {payload_end}; each \
+                     meshlet's data follows the one before",
+                    m.data_offset
+                ),
+            ));
+        }
+        payload_end += layout.end as u64;
         if level == 0 {
             lod0_meshlets += 1;
             lod0_triangles += tc as u64;
@@ -227,6 +254,16 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         triangles += tc as u64;
         vertices += vc as u64;
         roots += (m.parent_group == NO_GROUP) as u64;
+    }
+    if payload_end != payload.len() as u64 {
+        return Err(bad(
+            "header.sections[3].words",
+            format!(
+                "the payload holds {} words, but the meshlets' data ends at word {payload_end}; \
+                 every payload word belongs to one meshlet",
+                payload.len()
+            ),
+        ));
     }
     if max_level + 1 != h.level_count {
         return Err(bad(
@@ -259,6 +296,7 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
                 format!("{:?} is not a finite sphere", g.lod_sphere),
             ));
         }
+        sphere_limit.check(g.lod_sphere, LOD_SPHERE_SLACK, || f("lod_sphere"))?;
         if !(g.error.is_finite() && g.error >= 0.0) {
             return Err(bad(f("error"), format!("is {}", g.error)));
         }
@@ -293,6 +331,7 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ),
         ));
     }
+    group_links(meshlets, groups, children)?;
     record(
         SECTION_NODES,
         size_of::<NodeRecord>() / 4,
@@ -301,6 +340,132 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
     )?;
     let nodes: &[NodeRecord] = bytemuck::cast_slice(section(SECTION_NODES));
     hierarchy(meshlets, groups, nodes, section(SECTION_NODE_CLUSTERS))
+}
+
+/// How far a group's LOD sphere may reach beyond the mesh's bounds, in multiples of
+/// their diagonal. A group's sphere encloses its children's and each merge adds a
+/// little: the largest radius on the test meshes and the procedural mesh is 0.48 to
+/// 0.68 of the diagonal. 4 leaves room for any mesh and still refuses a radius that
+/// would overflow projecting it.
+const LOD_SPHERE_SLACK: f64 = 4.0;
+
+/// Spheres must lie around the mesh: a culling sphere (around decoded vertices) within
+/// its bounds, padded by the grid's rounding, and a LOD sphere within a few diagonals.
+/// A radius of `f32::MAX` would make every cull and error projection overflow.
+struct SphereLimit {
+    lo: [f64; 3],
+    hi: [f64; 3],
+    diagonal: f64,
+    pad: f64,
+}
+
+impl SphereLimit {
+    fn of(h: &AssetHeader) -> Self {
+        let lo = h.bounds_min.map(f64::from);
+        let hi = h.bounds_max.map(f64::from);
+        let diagonal = (0..3).map(|k| (hi[k] - lo[k]).powi(2)).sum::<f64>().sqrt();
+        // The quantiser's largest error, plus float rounding of the coordinates.
+        let magnitude = lo.iter().chain(&hi).fold(0.0f64, |m, &c| m.max(c.abs()));
+        let pad = h.quant_step as f64 * 3f64.sqrt() + magnitude * 1e-6;
+        Self {
+            lo,
+            hi,
+            diagonal,
+            pad,
+        }
+    }
+
+    fn check(
+        &self,
+        sphere: [f32; 4],
+        slack: f64,
+        field: impl Fn() -> String,
+    ) -> Result<(), Invalid> {
+        let reach = self.diagonal * slack + self.pad;
+        let radius = sphere[3] as f64;
+        let outside = (0..3).any(|k| {
+            let c = sphere[k] as f64;
+            c < self.lo[k] - reach || c > self.hi[k] + reach
+        });
+        if radius > reach || outside {
+            return Err(bad(
+                field(),
+                format!(
+                    "{sphere:?} reaches beyond the mesh's bounds {:?} .. {:?} (diagonal {:e})",
+                    self.lo, self.hi, self.diagonal
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The DAG's links, as the builder makes them: a group's children are meshlets that
+/// name it as their parent and lie at or below its level; its outputs (meshlets naming
+/// it as their source) lie one level above it, and it has at least one.
+fn group_links(
+    meshlets: &[MeshletRecord],
+    groups: &[GroupRecord],
+    children: &[u32],
+) -> Result<(), Invalid> {
+    for (g, group) in groups.iter().enumerate() {
+        let range = group.first_child as usize..(group.first_child + group.child_count) as usize;
+        for &c in &children[range] {
+            let child = &meshlets[c as usize];
+            if child.parent_group != g as u32 {
+                return Err(bad(
+                    format!("meshlet[{c}].parent_group"),
+                    format!(
+                        "is {:#x}, but group {g} lists the meshlet as its child",
+                        child.parent_group
+                    ),
+                ));
+            }
+            if child.level() > group.level {
+                return Err(bad(
+                    format!("group[{g}].level"),
+                    format!(
+                        "is {}, below its child meshlet {c}'s level {}; a group is formed at \
+                         or above its children's level",
+                        group.level,
+                        child.level()
+                    ),
+                ));
+            }
+        }
+    }
+    let mut outputs = vec![0u32; groups.len()];
+    for (i, m) in meshlets.iter().enumerate() {
+        let Some(group) = groups.get(m.source_group as usize) else {
+            continue;
+        };
+        outputs[m.source_group as usize] += 1;
+        if m.level() != group.level + 1 {
+            return Err(bad(
+                format!("meshlet[{i}].source_group"),
+                format!(
+                    "is group {}, of level {}, but the meshlet is at level {}; a group's \
+                     simplified meshlets are one level above it",
+                    m.source_group,
+                    group.level,
+                    m.level()
+                ),
+            ));
+        }
+        if m.parent_group == m.source_group {
+            return Err(bad(
+                format!("meshlet[{i}].parent_group"),
+                "is its source group; a meshlet cannot be simplified in the group that made it",
+            ));
+        }
+    }
+    if let Some(g) = outputs.iter().position(|&n| n == 0) {
+        return Err(bad(
+            format!("group[{g}]"),
+            "has no simplified meshlets (none names it as its source group)",
+        ));
+    }
+    Ok(())
 }
 
 /// The culling hierarchy (see [`crate::hierarchy`]): a tree rooted at node 0 whose
@@ -557,6 +722,29 @@ fn header_floats(h: &AssetHeader) -> Result<(), Invalid> {
         return Err(bad(
             "header.bounds_min/bounds_max",
             format!("{lo:?} .. {hi:?} is not a finite, ordered box"),
+        ));
+    }
+    // The extent is computed in f32 by the quantiser and the renderer: it must not
+    // overflow, and a mesh with triangles has one.
+    let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0f32, f32::max);
+    if !extent.is_finite() || extent <= 0.0 {
+        return Err(bad(
+            "header.bounds_min/bounds_max",
+            format!("{lo:?} .. {hi:?} has the size {extent}; it must be finite and positive"),
+        ));
+    }
+    // The grid spans the bounds: its step is the extent over the grid's cells. A step far
+    // off (1e38, or a denormal) decodes every vertex to the origin or to infinity.
+    let cells = ((1u64 << h.quant_bits) - 1) as f64;
+    let span = h.quant_step as f64 * cells;
+    if !h.quant_step.is_normal() || span < extent as f64 * 0.999 || span > extent as f64 * 1.001 {
+        return Err(bad(
+            "header.quant_step",
+            format!(
+                "is {:e}: {} bits of it span {span:e}, but the bounds' extent is {extent:e}; \
+                 the grid's step is the extent over its {cells} cells",
+                h.quant_step, h.quant_bits
+            ),
         ));
     }
     if h.has_uvs()

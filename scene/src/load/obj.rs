@@ -23,6 +23,7 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
         ignore_points: true,
         ignore_lines: true,
     };
+    check_finite(path, bytes)?;
     check_face_indices(bytes).map_err(|reason| SceneError::Obj {
         path: path.to_owned(),
         reason,
@@ -70,6 +71,42 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
         mesh.indices.extend(m.indices.iter().map(|&i| i + base));
     }
     Ok(mesh)
+}
+
+/// Refuses a `v`, `vt` or `vn` line holding a number that is not finite: `inf`, `nan`,
+/// or one too large for single precision (`1e39` reads as infinity). The mesh would
+/// otherwise reach the builder with a NaN texture coordinate silently accepted, or an
+/// infinity found only later without its line.
+fn check_finite(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
+    for (n, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let mut words = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|w| !w.is_empty());
+        let attribute = match words.next() {
+            Some(b"v") => "position (`v`)",
+            Some(b"vt") => "texture coordinate (`vt`)",
+            Some(b"vn") => "normal (`vn`)",
+            _ => continue,
+        };
+        for word in words {
+            // Malformed numbers are tobj's to report.
+            let Some(value) = std::str::from_utf8(word)
+                .ok()
+                .and_then(|w| w.parse::<f32>().ok())
+            else {
+                continue;
+            };
+            if !value.is_finite() {
+                return Err(SceneError::NonFiniteAttribute {
+                    source_name: path.display().to_string(),
+                    location: format!("line {}", n + 1),
+                    attribute: attribute.into(),
+                    value,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Checks every face index against the `v`, `vt` and `vn` lines before `tobj` sees it:

@@ -65,13 +65,19 @@ pub fn parse_stl(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
 fn parse_binary(path: &Path, source: &str, body: &[u8], count: u64) -> Result<Mesh, SceneError> {
     Mesh::check_limits(source, count * 3, count)?;
     let mut welder = Welder::new(source, count as usize);
-    for record in body.chunks_exact(50) {
+    for (t, record) in body.chunks_exact(50).enumerate() {
         let f = |o: usize| f32::from_le_bytes(record[o..o + 4].try_into().unwrap());
         // Bytes 0..12 hold the facet normal, ignored (see the module doc).
         let corners = [12, 24, 36].map(|o| Vec3::new(f(o), f(o + 4), f(o + 8)));
+        if let Some((k, c)) = corners.iter().enumerate().find(|(_, c)| !c.is_finite()) {
+            return Err(non_finite(
+                path,
+                format!("triangle {t}, corner {k}"),
+                c.to_array(),
+            ));
+        }
         welder.polygon(&corners);
     }
-    let _ = path;
     Ok(welder.finish())
 }
 
@@ -98,6 +104,9 @@ fn parse_ascii(path: &Path, source: &str, text: &str) -> Result<Mesh, SceneError
                         .next()
                         .and_then(|w| w.parse().ok())
                         .ok_or_else(|| err(line_no, "a `vertex` needs 3 numbers".into()))?;
+                }
+                if !Vec3::from(c).is_finite() {
+                    return Err(non_finite(path, format!("line {line_no}"), c));
                 }
                 polygon.push(Vec3::from(c));
             }
@@ -133,6 +142,20 @@ fn parse_ascii(path: &Path, source: &str, text: &str) -> Result<Mesh, SceneError
         ));
     }
     Ok(welder.finish())
+}
+
+/// A corner with an infinite or NaN coordinate (`inf` and `1e39` parse as infinity).
+fn non_finite(path: &Path, location: String, corner: [f32; 3]) -> SceneError {
+    let value = corner
+        .into_iter()
+        .find(|c| !c.is_finite())
+        .unwrap_or(f32::NAN);
+    SceneError::NonFiniteAttribute {
+        source_name: path.display().to_string(),
+        location,
+        attribute: "vertex position".into(),
+        value,
+    }
 }
 
 /// Joins corners with bit-identical positions into one vertex.

@@ -1,6 +1,9 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod dag_checks;
+pub mod generators;
+
 use std::path::PathBuf;
 
 /// The project's test meshes (`assets/meshes`, with their origin and licence in its

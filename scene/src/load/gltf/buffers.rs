@@ -1,54 +1,113 @@
 //! The buffers of a glTF file: the GLB binary chunk, base64 `data:` URIs, or files beside
 //! the `.gltf`. Read here rather than by the glTF crate's importer, which also decodes
 //! images and would bring an image library into the build for nothing.
+//!
+//! A model is untrusted input, so a buffer URI may only name a file inside the model's
+//! own folder (relative, no `..`, no absolute path or other URI scheme, not through a
+//! link that leads outside), and that file must be a regular file under the input size
+//! limit: otherwise a downloaded model could pull `/etc/passwd` into an asset, or name
+//! `/dev/zero` and never finish loading.
 
-use std::path::Path;
+use std::path::{Component, Path, PathBuf};
 
 use gltf::json::Root;
 
-/// Every buffer of `root`, each at least as long as its declared `byteLength`.
+use crate::error::SceneError;
+use crate::load::read_file;
+
+/// Every buffer of `root`, each at least as long as its declared `byteLength`; `model`
+/// is the glTF file, whose folder external buffers must lie in.
 pub fn load_buffers(
     root: &Root,
     mut blob: Option<Vec<u8>>,
-    base: Option<&Path>,
-) -> Result<Vec<Vec<u8>>, String> {
+    model: &Path,
+) -> Result<Vec<Vec<u8>>, SceneError> {
+    let err = |reason: String| SceneError::Gltf {
+        path: model.to_owned(),
+        reason,
+    };
     let mut out = Vec::with_capacity(root.buffers.len());
     for (i, b) in root.buffers.iter().enumerate() {
         let data = match b.uri.as_deref() {
             None => blob.take().ok_or_else(|| {
-                format!(
+                err(format!(
                     "buffer {i} has no uri and the file has no binary chunk (only a .glb has one)"
-                )
+                ))
             })?,
             Some(uri) if uri.starts_with("data:") => {
                 let (_, payload) = uri.split_once(";base64,").ok_or_else(|| {
-                    format!("buffer {i} has a data URI that is not base64; embed it as `data:...;base64,`")
+                    err(format!("buffer {i} has a data URI that is not base64; embed it as `data:...;base64,`"))
                 })?;
                 decode_base64(payload)
-                    .ok_or_else(|| format!("buffer {i} has a data URI with invalid base64"))?
+                    .ok_or_else(|| err(format!("buffer {i} has a data URI with invalid base64")))?
             }
             Some(uri) => {
-                let relative = percent_decode(uri)
-                    .ok_or_else(|| format!("buffer {i} has a malformed uri {uri:?}"))?;
-                let path = base.unwrap_or(Path::new(".")).join(&relative);
-                std::fs::read(&path).map_err(|e| {
-                    format!(
-                        "cannot read buffer {i} from {} ({e}); keep .bin files beside the .gltf",
-                        path.display()
-                    )
+                let path = buffer_path(model, uri).map_err(|reason| {
+                    err(format!(
+                        "buffer {i} has the uri {uri:?}, which {reason}; a buffer is a `data:` \
+                         URI or a file in the model's folder named relative to it (`mesh.bin`, \
+                         `buffers/mesh.bin`)"
+                    ))
+                })?;
+                read_file(&path).map_err(|e| {
+                    err(format!(
+                        "cannot read buffer {i} ({e}); keep .bin files beside the .gltf"
+                    ))
                 })?
             }
         };
         if (data.len() as u64) < b.byte_length.0 {
-            return Err(format!(
+            return Err(err(format!(
                 "buffer {i} holds {} bytes but declares byteLength {}",
                 data.len(),
                 b.byte_length.0
-            ));
+            )));
         }
         out.push(data);
     }
     Ok(out)
+}
+
+/// The file a non-`data:` buffer URI names, or why it may not be read: it must be a
+/// relative path without `..` that, with links resolved, stays inside the model's
+/// folder.
+fn buffer_path(model: &Path, uri: &str) -> Result<PathBuf, String> {
+    let relative = percent_decode(uri).ok_or("is malformed (a bad %-escape)")?;
+    // `file:`, `http:`, `C:` and the like: a scheme or a drive, not a relative path.
+    let first = relative.split(['/', '\\']).next().unwrap_or("");
+    if first.contains(':') {
+        return Err("names a URI scheme or drive, not a relative path".into());
+    }
+    if relative.starts_with(['/', '\\']) {
+        return Err("is an absolute path".into());
+    }
+    for c in Path::new(&relative).components() {
+        match c {
+            Component::Normal(_) | Component::CurDir => {}
+            Component::ParentDir => return Err("leaves the model's folder with `..`".into()),
+            Component::RootDir | Component::Prefix(_) => {
+                return Err("is an absolute path".into());
+            }
+        }
+    }
+    if relative.split(['/', '\\']).any(|part| part == "..") {
+        return Err("leaves the model's folder with `..`".into());
+    }
+    let folder = match model.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let path = folder.join(&relative);
+    // A link inside the folder may still lead out of it.
+    if let (Ok(folder), Ok(target)) = (folder.canonicalize(), path.canonicalize())
+        && !target.starts_with(&folder)
+    {
+        return Err(format!(
+            "leads outside the model's folder (to {})",
+            target.display()
+        ));
+    }
+    Ok(path)
 }
 
 /// Standard base64 (RFC 4648), padding optional; `None` on any other character.

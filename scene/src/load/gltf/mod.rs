@@ -20,10 +20,16 @@ use self::accessor::{Role, check, declared_count};
 use self::buffers::load_buffers;
 use self::nodes::{Instance, NodeError, expand};
 use crate::error::SceneError;
-use crate::load::read_file;
+use crate::load::{LoadOptions, read_file};
 use crate::mesh::Mesh;
 
+/// [`load_gltf_with`] with the default [`LoadOptions`].
 pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
+    load_gltf_with(path, &LoadOptions::default())
+}
+
+pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneError> {
+    let budget = options.max_triangles;
     let bytes = read_file(path)?;
     let err = |reason: String| SceneError::Gltf {
         path: path.to_owned(),
@@ -78,12 +84,16 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
                 ))
             })?;
             let roots: Vec<usize> = scene.nodes.iter().map(|n| n.value()).collect();
-            expand(root, &roots, &mesh_triangles).map_err(|e| node_error(path, root, e))?
+            expand(root, &roots, &mesh_triangles, budget)
+                .map_err(|e| node_error(path, root, e, budget))?
         }
         // No scene: every mesh untransformed rather than nothing.
         None => {
             let total: u64 = mesh_triangles.iter().fold(0, |a, &t| a.saturating_add(t));
             Mesh::check_limits(&path.display().to_string(), 0, total)?;
+            if total > budget {
+                return Err(over_budget(path, total, budget));
+            }
             (0..root.meshes.len())
                 .map(|mesh| Instance {
                     mesh,
@@ -93,7 +103,7 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
         }
     };
 
-    let buffers = load_buffers(root, gltf.blob.clone(), path.parent()).map_err(err)?;
+    let buffers = load_buffers(root, gltf.blob.clone(), path)?;
 
     let mut mesh = Mesh {
         source: path.display().to_string(),
@@ -134,7 +144,29 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
             .map_err(at)?;
             let count = pos.count;
             Mesh::check_limits(&mesh.source, (mesh.positions.len() + count) as u64, 0)?;
+            let accessor_of = |semantic: &Checked<gltf::Semantic>| p.attributes[semantic].value();
+            let finite = |values: &[f32], width: usize, accessor: usize, role: &str| match values
+                .iter()
+                .position(|v| !v.is_finite())
+            {
+                None => Ok(()),
+                Some(k) => Err(SceneError::NonFiniteAttribute {
+                    source_name: path.display().to_string(),
+                    location: format!(
+                        "mesh {name:?} primitive {pi}, accessor {accessor}, element {}",
+                        k / width
+                    ),
+                    attribute: role.to_owned(),
+                    value: values[k],
+                }),
+            };
             let positions = pos.read_vec3(&buffers);
+            finite(
+                positions.as_flattened(),
+                3,
+                accessor_of(&position),
+                "POSITION",
+            )?;
             let base = mesh.positions.len() as u32;
             let normal_matrix = Mat3::from_mat4(*transform).inverse().transpose();
             match p.attributes.get(&normal) {
@@ -146,9 +178,10 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
                             n.count
                         )));
                     }
+                    let read = n.read_vec3(&buffers);
+                    finite(read.as_flattened(), 3, accessor_of(&normal), "NORMAL")?;
                     mesh.normals.extend(
-                        n.read_vec3(&buffers)
-                            .into_iter()
+                        read.into_iter()
                             .map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero()),
                     );
                 }
@@ -160,7 +193,9 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
             let uvs = match p.attributes.get(&texcoord) {
                 Some(t) => {
                     let t = check(root, &buffers, t.value(), Role::TexCoord).map_err(at)?;
-                    Some(t.read_vec2(&buffers))
+                    let read = t.read_vec2(&buffers);
+                    finite(read.as_flattened(), 2, accessor_of(&texcoord), "TEXCOORD_0")?;
+                    Some(read)
                 }
                 None => None,
             };
@@ -237,7 +272,16 @@ fn check_glb_header(bytes: &[u8]) -> Result<(), String> {
     Ok(())
 }
 
-fn node_error(path: &Path, root: &Root, e: NodeError) -> SceneError {
+fn over_budget(path: &Path, count: u64, budget: u64) -> SceneError {
+    SceneError::TriangleBudget {
+        path: path.to_owned(),
+        count,
+        budget,
+        limit: crate::mesh::MAX_TRIANGLES,
+    }
+}
+
+fn node_error(path: &Path, root: &Root, e: NodeError, budget: u64) -> SceneError {
     let source = path.display().to_string();
     let reason = match e {
         NodeError::MissingNode { parent, node } => format!(
@@ -261,6 +305,9 @@ fn node_error(path: &Path, root: &Root, e: NodeError) -> SceneError {
              subtrees are shared too many times over",
             nodes::MAX_NODE_INSTANCES
         ),
+        NodeError::TooManyTriangles { count } if count <= crate::mesh::MAX_TRIANGLES => {
+            return over_budget(path, count, budget);
+        }
         NodeError::TooManyTriangles { count } => {
             return SceneError::TooLarge {
                 source_name: format!("{source} (expanded node tree)"),

@@ -31,11 +31,13 @@ pub enum NodeError {
 }
 
 /// The mesh instances of the scene rooted at `roots`. `mesh_triangles[m]` is mesh `m`'s
-/// triangle count as its accessors declare it, which bounds the expansion.
+/// triangle count as its accessors declare it, which bounds the expansion: more than
+/// `budget` triangles in all is refused before anything is expanded.
 pub fn expand(
     root: &Root,
     roots: &[usize],
     mesh_triangles: &[u64],
+    budget: u64,
 ) -> Result<Vec<Instance>, NodeError> {
     let nodes = &root.nodes;
     let children = |n: usize| -> &[gltf::json::Index<gltf::json::Node>] {
@@ -117,7 +119,7 @@ pub fn expand(
     if instances > MAX_NODE_INSTANCES {
         return Err(NodeError::TooManyInstances { count: instances });
     }
-    if triangles > MAX_TRIANGLES {
+    if triangles > MAX_TRIANGLES.min(budget) {
         return Err(NodeError::TooManyTriangles { count: triangles });
     }
 

@@ -1,0 +1,221 @@
+//! Meshes of the kinds users bring that the builder once refused, written the way
+//! exporters write them (full-precision text, unwelded binary STL, GLB), so that the
+//! tests go through the same loaders as `meshlight bake`.
+
+use std::fmt::Write as _;
+
+/// A UV sphere of `rings` × `segments` as an exporter writes one: a grid of
+/// `(rings + 1) × (segments + 1)` vertices computed in double precision and printed at
+/// full precision, so the seam column and every pole row are separate vertices whose
+/// positions differ by about 1e-16 (sin(2π), sin(π)) rather than repeat bit for bit.
+/// Texture coordinates follow the grid, so the seam is also a real UV seam.
+pub struct Sphere {
+    pub rings: u32,
+    pub segments: u32,
+    pub radius: f64,
+    pub centre: [f64; 3],
+}
+
+impl Sphere {
+    pub fn unit(rings: u32, segments: u32) -> Self {
+        Self {
+            rings,
+            segments,
+            radius: 1.0,
+            centre: [0.0; 3],
+        }
+    }
+
+    fn vertex(&self, r: u32, s: u32) -> [f64; 3] {
+        let theta = std::f64::consts::PI * r as f64 / self.rings as f64;
+        let phi = std::f64::consts::TAU * s as f64 / self.segments as f64;
+        [
+            self.centre[0] + self.radius * theta.sin() * phi.cos(),
+            self.centre[1] + self.radius * theta.sin() * phi.sin(),
+            self.centre[2] + self.radius * theta.cos(),
+        ]
+    }
+
+    /// Appends the sphere to an OBJ text whose `v` lines so far number `base`; returns
+    /// the new count. Quads are split in two, so the pole rows give slivers whose two
+    /// pole corners differ by 1e-16.
+    pub fn write_obj(&self, obj: &mut String, base: u32) -> u32 {
+        let row = self.segments + 1;
+        for r in 0..=self.rings {
+            for s in 0..=self.segments {
+                let [x, y, z] = self.vertex(r, s);
+                let _ = writeln!(obj, "v {x:?} {y:?} {z:?}");
+                let (u, v) = (
+                    s as f64 / self.segments as f64,
+                    r as f64 / self.rings as f64,
+                );
+                let _ = writeln!(obj, "vt {u:?} {v:?}");
+            }
+        }
+        let id = |r: u32, s: u32| base + r * row + s + 1;
+        for r in 0..self.rings {
+            for s in 0..self.segments {
+                let (a, b, c, d) = (id(r, s), id(r + 1, s), id(r + 1, s + 1), id(r, s + 1));
+                let _ = writeln!(obj, "f {a}/{a} {b}/{b} {c}/{c}");
+                let _ = writeln!(obj, "f {a}/{a} {c}/{c} {d}/{d}");
+            }
+        }
+        base + (self.rings + 1) * row
+    }
+
+    pub fn obj(&self) -> String {
+        let mut obj = String::new();
+        self.write_obj(&mut obj, 0);
+        obj
+    }
+
+    /// The sphere's triangles as corner positions in single precision.
+    pub fn triangles(&self) -> Vec<[[f32; 3]; 3]> {
+        let p = |r, s| self.vertex(r, s).map(|c| c as f32);
+        let mut out = Vec::new();
+        for r in 0..self.rings {
+            for s in 0..self.segments {
+                let (a, b, c, d) = (p(r, s), p(r + 1, s), p(r + 1, s + 1), p(r, s + 1));
+                out.push([a, b, c]);
+                out.push([a, c, d]);
+            }
+        }
+        out
+    }
+}
+
+/// Several spheres in one OBJ.
+pub fn spheres_obj(spheres: &[Sphere]) -> String {
+    let mut obj = String::new();
+    let mut base = 0;
+    for s in spheres {
+        base = s.write_obj(&mut obj, base);
+    }
+    obj
+}
+
+/// A deterministic hash of `i` into 0..1.
+pub fn hash01(i: u32, salt: u32) -> f32 {
+    let mut x = i.wrapping_mul(0x9e37_79b9) ^ salt.wrapping_mul(0x85eb_ca6b);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x2c1b_3c6d);
+    x ^= x >> 12;
+    (x % 1_000_003) as f32 / 1_000_003.0
+}
+
+/// A binary STL of `triangles`, each written with its own three corners (STL has no
+/// shared vertices). Each corner is nudged by a few units in the last place, as corners
+/// recomputed per triangle by an exporter are, so exact welding does not join them.
+pub fn soup_stl(triangles: &[[[f32; 3]; 3]]) -> Vec<u8> {
+    let mut out = vec![0u8; 80];
+    out.extend_from_slice(&(triangles.len() as u32).to_le_bytes());
+    for (t, tri) in triangles.iter().enumerate() {
+        out.extend_from_slice(&[0u8; 12]);
+        for (k, corner) in tri.iter().enumerate() {
+            for (axis, &c) in corner.iter().enumerate() {
+                let ulps = (hash01(t as u32 * 9 + k as u32 * 3 + axis as u32, 7) * 7.0) as i32 - 3;
+                let nudged = if c == 0.0 {
+                    c
+                } else {
+                    f32::from_bits((c.to_bits() as i32 + ulps) as u32)
+                };
+                out.extend_from_slice(&nudged.to_le_bytes());
+            }
+        }
+        out.extend_from_slice(&[0u8; 2]);
+    }
+    out
+}
+
+/// A GLB holding one mesh of `positions` and u32 `indices`.
+pub fn glb(positions: &[[f32; 3]], indices: &[u32]) -> Vec<u8> {
+    let mut bin: Vec<u8> = bytemuck::cast_slice(positions).to_vec();
+    let index_offset = bin.len();
+    bin.extend_from_slice(bytemuck::cast_slice(indices));
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let (lo, hi) = positions.iter().fold(
+        ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
+        |(lo, hi), p| {
+            (
+                [0, 1, 2].map(|k| lo[k].min(p[k])),
+                [0, 1, 2].map(|k| hi[k].max(p[k])),
+            )
+        },
+    );
+    let mut json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+        "buffers":[{{"byteLength":{}}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{index_offset}}},{{"buffer":0,"byteOffset":{index_offset},"byteLength":{}}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":{},"type":"VEC3","min":{lo:?},"max":{hi:?}}},
+        {{"bufferView":1,"componentType":5125,"count":{},"type":"SCALAR"}}]}}"#,
+        bin.len(),
+        indices.len() * 4,
+        positions.len(),
+        indices.len()
+    );
+    while !json.len().is_multiple_of(4) {
+        json.push(' ');
+    }
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(json.as_bytes());
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+/// A closed sphere (welded: one pole vertex, no seam column) with fins like a scan's
+/// debris: on every `fin_every`-th of its edges a thin triangle stands out, sharing the
+/// edge, so that edge has three triangles (non-manifold) and each fin adds two open
+/// border edges. Returns positions and indices.
+pub fn finned_sphere(rings: u32, segments: u32, fin_every: usize) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut positions = vec![[0.0f32, 0.0, 1.0]];
+    for r in 1..rings {
+        let theta = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..segments {
+            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+            positions.push([
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            ]);
+        }
+    }
+    positions.push([0.0, 0.0, -1.0]);
+    let bottom = positions.len() as u32 - 1;
+    let ring = |r: u32, s: u32| 1 + (r - 1) * segments + s % segments;
+    let mut indices = Vec::new();
+    for s in 0..segments {
+        indices.extend_from_slice(&[0, ring(1, s), ring(1, s + 1)]);
+        indices.extend_from_slice(&[bottom, ring(rings - 1, s + 1), ring(rings - 1, s)]);
+        for r in 1..rings - 1 {
+            let (a, b, c, d) = (
+                ring(r, s),
+                ring(r, s + 1),
+                ring(r + 1, s),
+                ring(r + 1, s + 1),
+            );
+            indices.extend_from_slice(&[a, c, d, a, d, b]);
+        }
+    }
+    let closed = indices.len() / 3;
+    for t in (0..closed).step_by(fin_every) {
+        let (a, b) = (indices[t * 3], indices[t * 3 + 1]);
+        let [pa, pb] = [a, b].map(|v| glam::Vec3::from(positions[v as usize]));
+        let mid = (pa + pb) * 0.5;
+        let tip = mid + mid.normalize() * 0.05 * (1.0 + hash01(t as u32, 3));
+        positions.push(tip.to_array());
+        let tip = positions.len() as u32 - 1;
+        indices.extend_from_slice(&[a, b, tip]);
+    }
+    (positions, indices)
+}
