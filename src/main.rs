@@ -197,6 +197,7 @@ fn bake(a: LibraryBakeArgs) -> Result<(), Box<dyn std::error::Error>> {
         let options = meshlight::scene::BuildOptions {
             grouping: a.bake.grouping,
             position_bits: a.bake.position_bits,
+            ..Default::default()
         };
         pool.install(|| {
             meshlight::bake_library::run(&a.bake.input, &a.bake.output, &options, threads)
@@ -331,6 +332,12 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     for (label, value) in still.counts.rows() {
         let _ = writeln!(report, "  {label:<30} {value}");
     }
+    let _ = writeln!(
+        report,
+        "  {:<30} {:.2}",
+        meshlight::virtual_geometry::counts::PER_PIXEL,
+        still.counts.triangles_per_pixel(a.width, a.height)
+    );
     for p in &still.stats.passes {
         let gpu = p
             .gpu_us
@@ -366,10 +373,10 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             Some(at) => format!(
                 "{}{}{}",
                 &page[..at],
-                still.counts.html_table(),
+                still.counts.html_table(Some((a.width, a.height))),
                 &page[at..]
             ),
-            None => page + &still.counts.html_table(),
+            None => page + &still.counts.html_table(Some((a.width, a.height))),
         };
         write_file(&html, page.as_bytes())?;
         let _ = writeln!(report, "graph: {}", html.display());

@@ -145,6 +145,23 @@ fn a_slot_buffer_far_too_small_overflows_grows_and_then_renders_the_right_image(
     assert_eq!(differing(&got.rgba, &want.rgba, 0), 0);
 }
 
+/// The frame with `settings`, where both rasterisers draw, and the same frame with no
+/// hardware rasteriser, which draws the same clusters in software.
+fn with_and_without_hardware(placed: &Placed, settings: FrameSettings) -> (Still, Still) {
+    let (mixed, r) = render(placed, settings.clone(), &GraphSource::Code);
+    assert!(runs(&r, "hw_raster"));
+    assert!(mixed.counts.hardware > 0, "{:?}", mixed.counts);
+    let all_sw = FrameSettings {
+        hardware: Some(false),
+        ..settings
+    };
+    let (software, r) = render(placed, all_sw, &GraphSource::Code);
+    assert!(!runs(&r, "hw_raster"));
+    assert_eq!(software.counts.hardware, 0);
+    assert_eq!(software.counts.visible, mixed.counts.visible);
+    (mixed, software)
+}
+
 #[test]
 fn drawing_everything_in_software_changes_only_pixels_on_edges() {
     // The shaded view: the cluster and triangle views name slots, which differ when the
@@ -155,16 +172,7 @@ fn drawing_everything_in_software_changes_only_pixels_on_edges() {
         sw_threshold_px: Some(16.0),
         ..settings(DebugView::Shaded)
     };
-    let (mixed, _) = render(&placed, mixed_settings.clone(), &GraphSource::Code);
-    assert!(mixed.counts.hardware > 0, "{:?}", mixed.counts);
-    let all_sw = FrameSettings {
-        hardware: Some(false),
-        ..mixed_settings
-    };
-    let (software, r) = render(&placed, all_sw, &GraphSource::Code);
-    assert!(!runs(&r, "hw_raster"));
-    assert_eq!(software.counts.hardware, 0);
-    assert_eq!(software.counts.visible, mixed.counts.visible);
+    let (mixed, software) = with_and_without_hardware(&placed, mixed_settings);
     // The two rasterisers round edges differently (see hw_raster's docs): the stated
     // tolerance is 2% of the pixels differing by more than 2/255.
     let pixels = (W * H) as usize;
@@ -186,17 +194,7 @@ fn clusters_crossing_the_near_plane_clip_in_software_as_the_hardware_rasteriser_
         p.camera = Camera::perspective(eye, centre, 1.3, s[3] * 0.12);
         p
     };
-    let (mixed, r) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
-    assert!(runs(&r, "hw_raster"));
-    assert!(mixed.counts.hardware > 0, "{:?}", mixed.counts);
-    let all_sw = FrameSettings {
-        hardware: Some(false),
-        ..settings(DebugView::Shaded)
-    };
-    let (software, r) = render(&placed, all_sw, &GraphSource::Code);
-    assert!(!runs(&r, "hw_raster"));
-    assert_eq!(software.counts.hardware, 0);
-    assert_eq!(software.counts.visible, mixed.counts.visible);
+    let (mixed, software) = with_and_without_hardware(&placed, settings(DebugView::Shaded));
     // Only pixels on the edges of clipped triangles may differ, and few do: skipping
     // the triangles that cross the near plane (as before clipping) changed 1.7%.
     let pixels = (W * H) as usize;

@@ -261,12 +261,10 @@ fn bake_one(input: &Path, output: &Path, options: &BuildOptions) -> (Option<Asse
     }
 }
 
-/// Groups the builder kept unsimplified to avoid a crack, for the table's `fallback`
-/// column and the stamp. `Built` does not report the count yet: this is the one place
-/// to read it (`Some(built.fallback_groups)`) once it does; until then the column
-/// shows `-`.
-fn fallback_groups(_built: &Built) -> Option<u32> {
-    None
+/// Groups the builder kept unsimplified to avoid a crack (see `Built::fallback_groups`),
+/// for the summary's column and the stamp.
+fn fallback_groups(built: &Built) -> Option<u32> {
+    Some(built.fallback_groups)
 }
 
 /// The numbers of a baked or loaded asset (the fallback count is not in the asset).

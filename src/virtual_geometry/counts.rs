@@ -87,9 +87,10 @@ impl HierarchyCounts {
     pub fn from_words(bytes: &[u8]) -> Option<Self> {
         let w: Vec<u32> =
             (bytes.len() >= 16).then(|| bytemuck::pod_collect_to_vec(&bytes[..16]))?;
-        let hidden_nodes = (bytes.len() >= 20)
-            .then(|| bytemuck::pod_read_unaligned::<u32>(&bytes[16..20]))
-            .unwrap_or(0);
+        let hidden_nodes = match bytes.get(16..20) {
+            Some(word) => bytemuck::pod_read_unaligned::<u32>(word),
+            None => 0,
+        };
         Some(Self {
             nodes_tested: w[0],
             leaves_accepted: w[1],
@@ -273,8 +274,15 @@ impl FrameCounts {
         ]
     }
 
-    /// The counters as an HTML table, for the graph report.
-    pub fn html_table(&self) -> String {
+    /// Triangles rasterised per pixel of a `width` × `height` viewport: how close the
+    /// LOD cut and the culling come to drawing one triangle per pixel.
+    pub fn triangles_per_pixel(&self, width: u32, height: u32) -> f64 {
+        self.triangles() as f64 / (f64::from(width) * f64::from(height)).max(1.0)
+    }
+
+    /// The counters as an HTML table, for the graph report; with the viewport, the
+    /// triangles rasterised per pixel too.
+    pub fn html_table(&self, viewport: Option<(u32, u32)>) -> String {
         let mut h = format!(
             "<h2>Frame {} counters</h2>\n<table>\n<tr><th>counter</th><th>value</th></tr>\n",
             self.frame
@@ -282,9 +290,18 @@ impl FrameCounts {
         for (label, value) in self.rows() {
             h += &format!("<tr><td>{label}</td><td style=\"text-align:right\">{value}</td></tr>\n");
         }
+        if let Some((w, h_px)) = viewport {
+            h += &format!(
+                "<tr><td>{PER_PIXEL}</td><td style=\"text-align:right\">{:.2}</td></tr>\n",
+                self.triangles_per_pixel(w, h_px)
+            );
+        }
         h + "</table>\n"
     }
 }
+
+/// The label of [`FrameCounts::triangles_per_pixel`] in reports.
+pub const PER_PIXEL: &str = "triangles rasterised per pixel";
 
 #[cfg(test)]
 mod tests {
@@ -312,8 +329,16 @@ mod tests {
         };
         assert!(!fits.overflowed());
         assert!(
-            c.html_table()
+            c.html_table(None)
                 .contains("<td>clusters dropped (slots full)</td>")
+        );
+        let table = c.html_table(Some((10, 5)));
+        let per_pixel = format!("{:.2}", c.triangles() as f64 / 50.0);
+        assert!(
+            table.contains(&format!(
+                "<td>{PER_PIXEL}</td><td style=\"text-align:right\">{per_pixel}</td>"
+            )),
+            "{table}"
         );
     }
 
