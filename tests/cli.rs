@@ -358,3 +358,52 @@ fn a_closed_stdout_ends_quietly_as_a_broken_pipe() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An asset whose structure is sound but whose DAG is not (a group's error below its
+/// child's): `inspect` rejects it, and `render` refuses it with the same message before
+/// anything reaches the GPU.
+#[test]
+fn render_refuses_an_asset_that_inspect_rejects_with_the_same_message() {
+    use meshlight::scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
+    let dir = scratch("damaged-dag");
+    let built = build_asset(&procedural_mesh(8), &BuildOptions::default(), &mut |_| {}).unwrap();
+    let mut dag = built.dag.clone();
+    let g = dag
+        .groups
+        .iter()
+        .position(|g| {
+            g.children
+                .iter()
+                .any(|&c| dag.clusters[c as usize].level > 0)
+        })
+        .unwrap();
+    dag.groups[g].lod.error = 0.0;
+    let bad = dir.join("bad.mlasset");
+    MeshletAsset::from_dag(&built.mesh, &dag, 16, 0)
+        .save(&bad)
+        .unwrap();
+    let bad = bad.to_str().unwrap();
+    let inspect = meshlight(&["inspect", bad]);
+    assert!(!inspect.status.success());
+    let render = meshlight(&[
+        "render",
+        "--mesh",
+        bad,
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "-o",
+        &dir.join("bad.png").to_string_lossy(),
+    ]);
+    assert!(!render.status.success());
+    let said = |o: &std::process::Output| {
+        let text = String::from_utf8_lossy(&o.stderr).to_string();
+        text.lines()
+            .find(|l| l.contains("below child"))
+            .map(|l| l[l.find(bad).unwrap_or(0)..].to_string())
+            .unwrap_or_else(|| panic!("no DAG error in: {text}"))
+    };
+    assert_eq!(said(&render), said(&inspect));
+    assert!(!dir.join("bad.png").exists());
+}

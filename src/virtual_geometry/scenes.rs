@@ -21,7 +21,8 @@ pub const DEFAULT_LIGHTS: u32 = 256;
 /// file's bytes and the bake options), with a progress spinner while it bakes.
 pub fn load_asset(mesh: &Path, segments: u32) -> Result<MeshletAsset, SceneError> {
     if mesh.extension().is_some_and(|e| e == "mlasset") {
-        return MeshletAsset::load(mesh);
+        // Every check `meshlight inspect` runs, so nothing it rejects reaches the GPU.
+        return MeshletAsset::load_verified(mesh);
     }
     let source = if mesh.as_os_str() == "procedural" {
         Source::Procedural { segments }
