@@ -290,6 +290,7 @@ fn no_false_culling(split: Option<f32>) {
     // The walks' node-level occlusion: nodes handed to the second walk, those it found
     // still hidden, and the clusters it listed below the others.
     let mut walk = [0u32; 3];
+    let mut instances_culled = 0;
     let steps = path();
     for (frame, step) in steps.iter().enumerate() {
         let (c, t) = compare(&mut with, &mut without, step, frame);
@@ -300,6 +301,12 @@ fn no_false_culling(split: Option<f32>) {
             .hierarchy
             .expect("the default frame walks the hierarchy");
         let second_walk = h.second.expect("a two-pass frame walks twice");
+        // Every instance's root is tested once, before any of its clusters; those out
+        // of view or hidden by last frame's depth go no further.
+        let instances = h.instances.expect("room for the instance counters");
+        assert_eq!(instances.tested as usize, with.data.instances.len());
+        assert!(instances.visible <= instances.tested, "{instances:?}");
+        instances_culled += instances.tested - instances.visible;
         walk[0] += h.hidden_nodes;
         walk[1] += second_walk.still_hidden;
         walk[2] += second_walk.clusters_listed;
@@ -352,6 +359,7 @@ fn no_false_culling(split: Option<f32>) {
         walk.iter().all(|&n| n > 0),
         "hidden, still hidden, listed: {walk:?}"
     );
+    assert!(instances_culled > 0, "no instance culled at its root");
     // The split under test: all hardware, or both rasterisers drawing.
     if split == Some(0.0) {
         assert_eq!(

@@ -63,9 +63,20 @@ pub struct HierarchyCounts {
     /// Nodes last frame's pyramid hid, handed to the second walk (0 without
     /// occlusion).
     pub hidden_nodes: u32,
+    /// Instances whose root was tested, and those whose root passed the frustum (and,
+    /// with occlusion, last frame's pyramid): `None` when the counters' buffer has no
+    /// room for them.
+    pub instances: Option<InstanceCounts>,
     /// The second walk, from those nodes against this frame's pyramid (two-pass
     /// frames).
     pub second: Option<SecondWalkCounts>,
+}
+
+/// Instances the hierarchy walk tested at their root, and those it went on into.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct InstanceCounts {
+    pub tested: u32,
+    pub visible: u32,
 }
 
 /// What the second walk of the hierarchy did: the nodes the first found hidden,
@@ -83,7 +94,8 @@ pub struct SecondWalkCounts {
 
 impl HierarchyCounts {
     /// From the readback's bytes; `None` when shorter than four words. A fifth word is
-    /// the hidden-node count.
+    /// the hidden-node count; the sixth and seventh, the walk's entries tested and
+    /// passed (`fill_clusters::hierarchy::ENTRY_COUNT_WORDS`).
     pub fn from_words(bytes: &[u8]) -> Option<Self> {
         let w: Vec<u32> =
             (bytes.len() >= 16).then(|| bytemuck::pod_collect_to_vec(&bytes[..16]))?;
@@ -97,6 +109,10 @@ impl HierarchyCounts {
             subtrees_whole: w[2],
             unfinished: w[3],
             hidden_nodes,
+            instances: bytes.get(20..28).map(|w| {
+                let [tested, visible]: [u32; 2] = bytemuck::pod_read_unaligned(w);
+                InstanceCounts { tested, visible }
+            }),
             second: None,
         })
     }
@@ -213,6 +229,12 @@ impl FrameCounts {
         let mut rows = self.totals();
         if let Some(h) = self.hierarchy {
             let second = h.second.unwrap_or_default();
+            if let Some(i) = h.instances {
+                rows.extend([
+                    ("instances tested", i.tested as u64),
+                    ("instances visible", i.visible as u64),
+                ]);
+            }
             rows.extend([
                 ("hierarchy: nodes tested", h.nodes_tested as u64),
                 ("hierarchy: leaves accepted", h.leaves_accepted as u64),
@@ -373,5 +395,34 @@ mod tests {
         );
         // A first pass's eight words are too short for a two-pass frame.
         assert!(FrameCounts::from_words(7, &cluster_count, &first[..32], Some(&second)).is_none());
+    }
+
+    #[test]
+    fn the_walks_counters_read_as_many_words_as_the_buffer_has() {
+        let words =
+            |n: usize| -> Vec<u8> { bytemuck::cast_slice(&[9u32, 8, 7, 6, 5, 4, 3][..n]).to_vec() };
+        assert!(HierarchyCounts::from_words(&words(3)).is_none());
+        let four = HierarchyCounts::from_words(&words(4)).unwrap();
+        assert_eq!(
+            (four.nodes_tested, four.hidden_nodes, four.instances),
+            (9, 0, None)
+        );
+        let five = HierarchyCounts::from_words(&words(5)).unwrap();
+        assert_eq!((five.hidden_nodes, five.instances), (5, None));
+        let seven = HierarchyCounts::from_words(&words(7)).unwrap();
+        assert_eq!(
+            seven.instances,
+            Some(InstanceCounts {
+                tested: 4,
+                visible: 3
+            })
+        );
+        let counts = FrameCounts {
+            hierarchy: Some(seven),
+            ..FrameCounts::default()
+        };
+        let rows = counts.rows();
+        assert!(rows.contains(&("instances tested", 4)), "{rows:?}");
+        assert!(rows.contains(&("instances visible", 3)), "{rows:?}");
     }
 }

@@ -37,9 +37,7 @@ use meshlight_pass_cull_lod::{
     WALKED_COUNT_SLOT, WALKED_SLOT,
 };
 use meshlight_pass_depth_pyramid::DepthPyramid;
-use meshlight_pass_fill_clusters::hierarchy::{
-    OCCLUSION_COUNT_WORDS as WALK_OCCLUSION_COUNT_WORDS, OCCLUSION_MIN_CLUSTERS,
-};
+use meshlight_pass_fill_clusters::hierarchy::{ENTRY_COUNT_WORDS, OCCLUSION_MIN_CLUSTERS};
 use meshlight_pass_fill_clusters::{FillClusters, HIDDEN_NODE, HierarchyFill, Mode as WalkMode};
 use meshlight_pass_hw_raster::{Feed, HwRaster};
 use meshlight_pass_remap_dispatch::RemapDispatch;
@@ -316,11 +314,8 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         occlusion_min_clusters: s.occlusion_min_clusters,
         ..HierarchyFill::default()
     };
-    let walk_counts = if history.is_some() {
-        WALK_OCCLUSION_COUNT_WORDS
-    } else {
-        4
-    };
+    // Room for the entry counters: instances tested and visible.
+    let walk_counts = ENTRY_COUNT_WORDS;
     if s.hierarchy {
         import_hierarchy_for(data, &mut g);
         g.create_buffer(
@@ -769,13 +764,15 @@ fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
         )?;
     }
     if g.resource(HIERARCHY_COUNTS_READBACK).is_some() {
-        // The walk's five words with occlusion (a second walk), four without.
+        // As many of the walk's words as the buffer holds, up to the entry counters
+        // (a pipeline file may declare it shorter: four words, five with occlusion).
         let second_walk = g.resource(SECOND_HIERARCHY_COUNTS).is_some();
-        let bytes = if second_walk {
-            WALK_OCCLUSION_COUNT_WORDS * 4
-        } else {
-            16
-        };
+        let bytes = g
+            .resources()
+            .iter()
+            .find(|r| r.name == HIERARCHY_COUNTS_READBACK)
+            .map_or(16, |r| r.desc.bytes())
+            .min(ENTRY_COUNT_WORDS * 4);
         g.readback_named(
             HIERARCHY_COUNTS_READBACK,
             HIERARCHY_COUNTS_READBACK,

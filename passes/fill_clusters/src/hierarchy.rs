@@ -26,7 +26,8 @@
 //! whole because a frontier and the next step's list were full, `[3]` walks (of an
 //! instance or of a handed-on subtree) that hit the round limit (0 unless the data is
 //! damaged). Every node is tested by exactly one workgroup, so `[0]` and `[1]` do not
-//! depend on how the walk was split. Clusters + nodes tested = `cluster_count[1] + [0]`.
+//! depend on how the walk was split. With room for [`ENTRY_COUNT_WORDS`], `[5]` and
+//! `[6]` count the walk's entries tested and passed: instances tested and visible. Clusters + nodes tested = `cluster_count[1] + [0]`.
 //!
 //! # The walk
 //!
@@ -193,6 +194,11 @@ impl ShaderDefs for WalkDefs {
 
 /// Words of `hierarchy_counts` with occlusion: `[4]` nodes the pyramid hid.
 pub const OCCLUSION_COUNT_WORDS: u64 = 5;
+/// Words of `hierarchy_counts` with the entry counters: `[5]` the walk's entries tested
+/// (the first walk's: one root per instance, so instances tested) and `[6]` those that
+/// passed (instances visible, or nodes found visible by the second walk). Bound
+/// shorter, they are not counted.
+pub const ENTRY_COUNT_WORDS: u64 = 7;
 
 /// The `hierarchy` implementation.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -407,6 +413,8 @@ impl Pass for HierarchyFill {
         ctx.min_bytes("cluster_count", 8);
         ctx.frame_input(VIEW_INPUT);
         let count_words = if occlusion { OCCLUSION_COUNT_WORDS } else { 4 };
+        // A scratch buffer holds the entry counters too; a bound one holds them when
+        // it has room (the kernel checks its length).
         let mut layout = BindingLayout::compute("fill_clusters::hierarchy")
             .slot(0, "instances")
             .slot(1, "clusters")
@@ -422,7 +430,7 @@ impl Pass for HierarchyFill {
         } else {
             ctx.scratch_buffer(
                 COUNTS_SLOT,
-                BufferDesc::array(Element::U32, count_words),
+                BufferDesc::array(Element::U32, ENTRY_COUNT_WORDS),
                 &[Access::ClearedReadWrite],
             );
             layout = layout.scratch(8, COUNTS_SLOT, Access::ClearedReadWrite);

@@ -150,6 +150,9 @@ const QUEUE: u32 = 1024u;
 // Lists of subtrees at most (spreading steps).
 const MAX_STEPS: u32 = 4u;
 // Words of `hierarchy_counts`: with OCCLUSION, [4] counts the nodes the pyramid hid.
+// With room for them (ENTRY_WORDS words bound), [5] counts the walk's entries tested
+// (the first walk: instances) and [6] those that passed.
+const ENTRY_WORDS: u32 = 7u;
 #ifdef OCCLUSION
 const COUNT_WORDS: u32 = 5u;
 #else
@@ -180,6 +183,9 @@ var<workgroup> emit_len: u32;
 var<workgroup> emit_base: u32;
 var<workgroup> leaves: atomic<u32>;
 var<workgroup> tested_nodes: atomic<u32>;
+// The walk's entries (instance roots; the second walk's hidden nodes) tested and passed.
+var<workgroup> entries_tested: atomic<u32>;
+var<workgroup> entries_passed: atomic<u32>;
 var<workgroup> spilled: atomic<u32>;
 var<workgroup> hidden_nodes: atomic<u32>;
 // Entries this step walks (instances in step 0, the list's length after).
@@ -332,7 +338,7 @@ fn node_seen(node: HierarchyNode, id: u32, w: Walker, entry: bool) -> bool {
 fn prepare() {
     atomicStore(&cluster_count[0], 0u);
     atomicStore(&cluster_count[1], 0u);
-    for (var i = 0u; i < COUNT_WORDS; i += 1u) {
+    for (var i = 0u; i < min(ENTRY_WORDS, arrayLength(&hierarchy_counts)); i += 1u) {
         atomicStore(&hierarchy_counts[i], 0u);
     }
 #ifdef OCCLUSION
@@ -423,6 +429,8 @@ fn roots(
         atomicStore(&leaves, 0u);
         atomicStore(&spilled, 0u);
         atomicStore(&hidden_nodes, 0u);
+        atomicStore(&entries_tested, 0u);
+        atomicStore(&entries_passed, 0u);
     }
     workgroupBarrier();
     let threads = groups.x * groups.y * WORKGROUP_SIZE;
@@ -452,9 +460,11 @@ fn roots(
         let w = walker(index);
         let node = hierarchy_nodes[id];
         atomicAdd(&tested_nodes, 1u);
+        atomicAdd(&entries_tested, 1u);
         if !(node_visible(node, w) && node_seen(node, id, w, true)) {
             continue;
         }
+        atomicAdd(&entries_passed, 1u);
         if node.child_count == 0u {
             atomicAdd(&leaves, 1u);
             emit_now(index, node.first_cluster, node.cluster_count);
@@ -476,6 +486,10 @@ fn roots(
 #ifdef OCCLUSION
         atomicAdd(&hierarchy_counts[4], atomicLoad(&hidden_nodes));
 #endif
+        if arrayLength(&hierarchy_counts) >= ENTRY_WORDS {
+            atomicAdd(&hierarchy_counts[5], atomicLoad(&entries_tested));
+            atomicAdd(&hierarchy_counts[6], atomicLoad(&entries_passed));
+        }
     }
 }
 
