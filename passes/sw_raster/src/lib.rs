@@ -501,6 +501,19 @@ pub fn register(registry: &mut Registry) {
 #[cfg(test)]
 mod tests {
     use super::cpu::{cover_triangle, edge};
+
+    #[test]
+    fn the_kernel_sizes_its_clip_list_as_the_pass_allocates_it() {
+        let source = include_str!("raster.wgsl");
+        for (name, value) in [
+            ("CLIP_CLUSTERS", super::CLIP_CLUSTERS),
+            ("CLIP_PIECES", super::CLIP_PIECES),
+            ("PIECE_WORDS", super::PIECE_WORDS),
+        ] {
+            let line = format!("const {name}: u32 = {value}u;");
+            assert!(source.contains(&line), "raster.wgsl lacks `{line}`");
+        }
+    }
     use meshlight_shaders::{Capabilities, ShaderLibrary, validate};
 
     #[test]
