@@ -25,6 +25,13 @@ use crate::meshlets::MAX_VERTICES;
 const WORDS: usize = 256;
 const _: () = assert!(MAX_VERTICES < WORDS);
 
+/// One meshlet's decoded vertices: their fingerprint words, and their grid points an
+/// axis at a time.
+struct Decoded {
+    words: [(u64, u64); WORDS],
+    axes: [[i32; WORDS]; 3],
+}
+
 /// What the DAG checks need of one meshlet's payload.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeshletScan {
@@ -56,9 +63,12 @@ pub fn scan_meshlets(asset: &MeshletAsset, keys: &ChainKeys) -> Vec<MeshletScan>
         .par_chunks_mut(CHUNK)
         .enumerate()
         .for_each(|(c, out)| {
-            let mut words = [(0u64, 0u64); WORDS];
+            let mut decoded = Decoded {
+                words: [(0, 0); WORDS],
+                axes: [[0; WORDS]; 3],
+            };
             for (k, scan) in out.iter_mut().enumerate() {
-                *scan = scan_meshlet(asset, payload, &meshlets[c * CHUNK + k], keys, &mut words);
+                *scan = scan_meshlet(asset, payload, &meshlets[c * CHUNK + k], keys, &mut decoded);
             }
         });
     scans
@@ -69,23 +79,35 @@ fn scan_meshlet(
     payload: &[u8],
     m: &MeshletRecord,
     keys: &ChainKeys,
-    words: &mut [(u64, u64); WORDS],
+    decoded: &mut Decoded,
 ) -> MeshletScan {
     let layout = PayloadLayout::of(m, asset.header().has_uvs());
     // From the meshlet's data to the payload's end: windows read past a block's last
     // field, and the masks drop what they read there.
     let data = &payload[m.data_offset as usize * 4..];
     let quant = asset.quantization();
-    let centre = glam::Vec3::new(m.bounds[0], m.bounds[1], m.bounds[2]);
+    let centre = [m.bounds[0], m.bounds[1], m.bounds[2]];
     let (vc, tc) = (m.vertex_count() as usize, m.triangle_count());
-    let mut farthest_squared = 0.0f32;
+    let Decoded { words, axes } = decoded;
     asset.for_each_grid_point(m, |v, grid| {
-        let d = quant.dequantize(grid).distance_squared(centre);
-        if d > farthest_squared {
-            farthest_squared = d;
+        for k in 0..3 {
+            axes[k][v] = grid[k] as i32;
         }
         words[v] = keys.point(grid);
     });
+    // The distances in a loop of their own, which the compiler vectorises: what
+    // `quant.dequantize(grid).distance_squared(centre)` computes, operation for
+    // operation. Squares are not negative, so their bits order as they do.
+    let (origin, step) = (quant.origin.to_array(), quant.step);
+    let mut farthest_bits = 0u32;
+    let [xs, ys, zs] = axes.each_ref().map(|a| &a[..vc]);
+    for ((&x, &y), &z) in xs.iter().zip(ys).zip(zs) {
+        let d = [x, y, z].map(|q| q as f32);
+        let d = [0, 1, 2].map(|k| (origin[k] + d[k] * step) - centre[k]);
+        let squared = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        farthest_bits = farthest_bits.max(squared.to_bits());
+    }
+    let farthest_squared = f32::from_bits(farthest_bits);
 
     let triangle_bits = m.triangle_bits();
     let block = &data[layout.triangles as usize * 4..];
