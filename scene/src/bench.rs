@@ -142,11 +142,11 @@ fn clod_baseline(mesh: &Mesh, repeats: usize) -> (f64, u32, usize) {
 /// A table of scenario results.
 pub fn format_table(rows: &[BuilderBench]) -> String {
     let mut s = String::from(
-        "scenario                 input tris   build s  Mtris/s  levels root | clod_build s  Mtris/s  levels root | ratio | B/tri | load GB/s | verified MB/s\n",
+        "scenario                 input tris   build s  Mtris/s  levels root | clod_build s  Mtris/s  levels root | ratio | B/tri | load GB/s | verified GB/s\n",
     );
     for r in rows {
         s += &format!(
-            "{:<24} {:>10} {:>9.3} {:>8.3} {:>7} {:>4} | {:>12.3} {:>8.3} {:>7} {:>4} | {:>5.2} | {:>5.2} | {:>9.2} | {:>13.1}\n",
+            "{:<24} {:>10} {:>9.3} {:>8.3} {:>7} {:>4} | {:>12.3} {:>8.3} {:>7} {:>4} | {:>5.2} | {:>5.2} | {:>9.2} | {:>13.2}\n",
             r.name,
             r.input_triangles,
             r.build_seconds,
@@ -160,7 +160,7 @@ pub fn format_table(rows: &[BuilderBench]) -> String {
             r.clod_seconds / r.build_seconds,
             r.bytes_per_lod0_triangle,
             r.load_bytes_per_second / 1e9,
-            r.verified_load_bytes_per_second / 1e6
+            r.verified_load_bytes_per_second / 1e9
         );
     }
     s

@@ -161,6 +161,30 @@ impl<'a> BitWriter<'a> {
     }
 }
 
+/// The 57 bits of a little-endian bitstream (as bytes) from bit `at` on, zeros past the
+/// end: one unaligned read that holds a whole vertex's grid offsets or a triangle record,
+/// where [`get_bits`] reads a field at a time. Fields are then masked out of it.
+#[inline]
+pub fn bit_window(bytes: &[u8], at: usize) -> u64 {
+    let i = at / 8;
+    let word = match bytes.get(i..i + 8) {
+        Some(b) => u64::from_le_bytes(b.try_into().expect("eight bytes")),
+        None => {
+            let mut b = [0u8; 8];
+            let tail = bytes.get(i..).unwrap_or(&[]);
+            b[..tail.len()].copy_from_slice(tail);
+            u64::from_le_bytes(b)
+        }
+    };
+    word >> (at % 8)
+}
+
+/// The lowest `bits` set (all of them from 64 on).
+#[inline]
+pub fn low_bits(bits: u32) -> u64 {
+    1u64.checked_shl(bits).map_or(u64::MAX, |b| b - 1)
+}
+
 /// Reads `bits` at `bit_offset` of a little-endian bitstream; `None` past the end.
 pub fn get_bits(words: &[u32], bit_offset: usize, bits: u32) -> Option<u32> {
     if bits == 0 {

@@ -9,6 +9,7 @@ pub mod asset;
 pub mod bench;
 pub mod bounds;
 pub mod cache;
+pub mod chain_fingerprint;
 pub mod cli;
 pub mod compress;
 pub mod dag;

@@ -5,12 +5,12 @@
 //! (too deep, too many roots, levels that do not halve), which it reports as warnings.
 
 use glam::Vec3;
-use rayon::prelude::*;
 
 use crate::asset::MeshletAsset;
 use crate::asset::format::NO_GROUP;
-use crate::asset::triangles::first_out_of_range;
+use crate::asset::scan::scan_meshlets;
 use crate::bounds::contains;
+use crate::chain_fingerprint::ChainKeys;
 
 /// Per-level counts of an asset.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -157,42 +157,29 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
             (false, n) => problems.push(format!("meshlet {i} is a child of {n} groups, not one")),
         }
     }
-    // Decoding every meshlet is most of the cost: in parallel, findings kept in order.
-    let quant = asset.quantization();
-    let decoded: Vec<Vec<String>> = (0..meshlets.len())
-        .into_par_iter()
-        .map(|i| {
-            let m = &meshlets[i];
-            let mut found = Vec::new();
-            let (vc, tc) = (m.vertex_count(), m.triangle_count());
-            if let Some(t) = first_out_of_range(asset.triangle_block(m), m.triangle_bits(), vc, tc)
-            {
-                found.push(format!(
-                    "meshlet {i}: triangle {t} refers past its {vc} vertices (decoded clamped)"
-                ));
-            }
-            // The culling sphere holds every decoded vertex: what the renderer culls by.
-            let (grid, _) = asset.decode_topology(i);
-            let centre = Vec3::new(m.bounds[0], m.bounds[1], m.bounds[2]);
-            let outside = grid
-                .iter()
-                .map(|&q| quant.dequantize(q).distance(centre))
-                .fold(0.0f32, f32::max);
-            if outside > m.bounds[3] * (1.0 + 1e-5) + 1e-6 * centre.abs().max_element() {
-                found.push(format!(
-                    "meshlet {i}: a vertex lies {outside} from the centre of its culling sphere \
-                     of radius {}",
-                    m.bounds[3]
-                ));
-            }
-            found
-        })
-        .collect();
-    problems.extend(decoded.into_iter().flatten());
+    // One decoding pass gives the per-meshlet checks and the crack check's fingerprints.
+    let scans = scan_meshlets(asset, &ChainKeys::random());
+    for (i, (m, scan)) in meshlets.iter().zip(&scans).enumerate() {
+        if let Some(t) = scan.first_out_of_range {
+            problems.push(format!(
+                "meshlet {i}: triangle {t} refers past its {} vertices (decoded clamped)",
+                m.vertex_count()
+            ));
+        }
+        // The culling sphere holds every decoded vertex: what the renderer culls by.
+        let centre = Vec3::new(m.bounds[0], m.bounds[1], m.bounds[2]);
+        if scan.farthest > m.bounds[3] * (1.0 + 1e-5) + 1e-6 * centre.abs().max_element() {
+            problems.push(format!(
+                "meshlet {i}: a vertex lies {} from the centre of its culling sphere of \
+                 radius {}",
+                scan.farthest, m.bounds[3]
+            ));
+        }
+    }
     if roots == 0 {
         problems.push("no root meshlet; the coarsest level must have one".to_owned());
     }
-    problems.extend(crate::watertight::crack_problems(asset));
+    problems.extend(crate::watertight::crack_problems_scanned(asset, &scans));
     if roots as u32 != h.root_count {
         problems.push(format!("header says {} roots, found {roots}", h.root_count));
     }

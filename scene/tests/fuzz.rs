@@ -2,17 +2,24 @@
 //! loader. A case passes when loading returns (an error or a value) without panicking,
 //! and whatever loads can be built, verified, decoded and summarised without panicking.
 //!
-//! `MESHLIGHT_FUZZ_CASES=N` sets the cases per target (default 300, which keeps the
-//! suite short); each target prints how many ran and fails if fewer did.
+//! `MESHLIGHT_FUZZ_CASES=N` sets the random cases per target (default 300, which keeps the
+//! suite short); each target prints how many ran and fails if fewer did. The field-by-field
+//! asset target also runs every field of two small assets through every fixed mutation
+//! first, whatever N is.
 
 mod common;
 
 use std::path::Path;
 
 use meshlight_scene::asset::checksum::file_checksum;
-use meshlight_scene::asset::format::{AssetHeader, SECTION_MESHLETS};
+use meshlight_scene::asset::format::{
+    AssetHeader, GroupRecord, MeshletRecord, NodeRecord, SECTION_CHILDREN, SECTION_GROUPS,
+    SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES, SECTION_PAYLOAD,
+};
 use meshlight_scene::load::{load_mesh, parse_obj, parse_stl};
-use meshlight_scene::{BuildOptions, Mesh, MeshletAsset, build_asset, procedural_mesh};
+use meshlight_scene::{
+    BuildOptions, Mesh, MeshletAsset, SceneError, Terrain, build_asset, procedural_mesh,
+};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 
@@ -112,14 +119,502 @@ fn fuzz_asset_loader() {
         }
         let len = w.len() as u64 * 4;
         if let Ok(asset) = MeshletAsset::from_words(w, len, Path::new("fuzz.mlasset")) {
-            let _ = meshlight_scene::verify::verify(&asset);
-            let _ = meshlight_scene::verify::quality(&asset);
-            let _ = meshlight_scene::cli::inspect_summary(Path::new("fuzz.mlasset"), &asset);
-            for i in 0..asset.meshlets().len() {
-                let _ = asset.decode_meshlet(i);
-            }
+            use_everything(&asset);
         }
     });
+}
+
+/// What a tool may do with an asset that loads: none of it may panic, whether or not the
+/// DAG checks pass.
+fn use_everything(asset: &MeshletAsset) {
+    let _ = meshlight_scene::verify::verify(asset);
+    let _ = meshlight_scene::verify::quality(asset);
+    let _ = meshlight_scene::cli::inspect_summary(Path::new("fuzz.mlasset"), asset);
+    let _ = asset.size_breakdown();
+    for i in 0..asset.meshlets().len() {
+        let _ = asset.decode_meshlet(i);
+    }
+    for m in asset.meshlets() {
+        let _ = (asset.lod(m), asset.parent_lod(m));
+    }
+    for n in asset.nodes() {
+        let _ = asset.node_meshlets(n);
+    }
+}
+
+/// One 32-bit field of an asset file: what it is called in errors, its word in the file,
+/// whether it holds a float, and for a field of a record, the record kind and index (so
+/// that a mutation can swap it with the same field of another record).
+#[derive(Debug, Clone)]
+struct Field {
+    name: String,
+    word: usize,
+    float: bool,
+    record: Option<(usize, usize)>,
+    /// Which part of the file: the header, a record kind or a word section (see
+    /// [`REGIONS`]), so that random cases pick parts evenly, not mostly payload words.
+    region: usize,
+}
+
+/// The parts of a file [`Field::region`] numbers.
+const REGIONS: usize = 7;
+
+/// A record's fields: name, byte offset, 32-bit words, float or not.
+type Layout = &'static [(&'static str, usize, usize, bool)];
+
+macro_rules! at {
+    ($t:ty, $f:ident) => {
+        std::mem::offset_of!($t, $f)
+    };
+}
+
+const HEADER: Layout = &[
+    ("magic", at!(AssetHeader, magic), 2, false),
+    ("version", at!(AssetHeader, version), 1, false),
+    ("flags", at!(AssetHeader, flags), 1, false),
+    ("file_size", at!(AssetHeader, file_size), 2, false),
+    ("checksum", at!(AssetHeader, checksum), 2, false),
+    ("meshlet_count", at!(AssetHeader, meshlet_count), 1, false),
+    ("group_count", at!(AssetHeader, group_count), 1, false),
+    ("node_count", at!(AssetHeader, node_count), 1, false),
+    ("level_count", at!(AssetHeader, level_count), 1, false),
+    ("root_count", at!(AssetHeader, root_count), 1, false),
+    ("lod0_meshlets", at!(AssetHeader, lod0_meshlets), 1, false),
+    ("lod0_triangles", at!(AssetHeader, lod0_triangles), 1, false),
+    (
+        "total_triangles",
+        at!(AssetHeader, total_triangles),
+        1,
+        false,
+    ),
+    ("total_vertices", at!(AssetHeader, total_vertices), 1, false),
+    ("input_vertices", at!(AssetHeader, input_vertices), 1, false),
+    (
+        "dropped_degenerate",
+        at!(AssetHeader, dropped_degenerate),
+        1,
+        false,
+    ),
+    ("bounds_min", at!(AssetHeader, bounds_min), 3, true),
+    ("bounds_max", at!(AssetHeader, bounds_max), 3, true),
+    ("quant_origin", at!(AssetHeader, quant_origin), 3, true),
+    ("quant_step", at!(AssetHeader, quant_step), 1, true),
+    ("quant_bits", at!(AssetHeader, quant_bits), 1, false),
+    ("uv_min", at!(AssetHeader, uv_min), 2, true),
+    ("uv_step", at!(AssetHeader, uv_step), 2, true),
+    ("sections", at!(AssetHeader, sections), 12, false),
+];
+
+const MESHLET: Layout = &[
+    ("bounds", at!(MeshletRecord, bounds), 4, true),
+    ("source_group", at!(MeshletRecord, source_group), 1, false),
+    ("parent_group", at!(MeshletRecord, parent_group), 1, false),
+    ("data_offset", at!(MeshletRecord, data_offset), 1, false),
+    ("counts", at!(MeshletRecord, counts), 1, false),
+    ("grid_min", at!(MeshletRecord, grid_min), 3, false),
+    ("bits", at!(MeshletRecord, bits), 1, false),
+    ("normals", at!(MeshletRecord, normals), 1, false),
+];
+
+const GROUP: Layout = &[
+    ("lod_sphere", at!(GroupRecord, lod_sphere), 4, true),
+    ("error", at!(GroupRecord, error), 1, true),
+    ("level", at!(GroupRecord, level), 1, false),
+    ("first_child", at!(GroupRecord, first_child), 1, false),
+    ("child_count", at!(GroupRecord, child_count), 1, false),
+];
+
+const NODE: Layout = &[
+    ("bounds", at!(NodeRecord, bounds), 4, true),
+    ("lod_sphere", at!(NodeRecord, lod_sphere), 4, true),
+    ("min_error", at!(NodeRecord, min_error), 1, true),
+    (
+        "max_parent_error",
+        at!(NodeRecord, max_parent_error),
+        1,
+        true,
+    ),
+    ("first_child", at!(NodeRecord, first_child), 1, false),
+    ("child_count", at!(NodeRecord, child_count), 1, false),
+    ("first_cluster", at!(NodeRecord, first_cluster), 1, false),
+    ("cluster_count", at!(NodeRecord, cluster_count), 1, false),
+    ("reserved", at!(NodeRecord, reserved), 2, false),
+];
+
+/// Every 32-bit field of a valid asset: the header's, every record's, and every word of
+/// the child lists, the payload and the cluster list.
+fn fields(words: &[u32]) -> Vec<Field> {
+    let h: &AssetHeader = bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
+    let mut out = Vec::new();
+    let mut layout = |name: &str, base: usize, layout: Layout, record: Option<(usize, usize)>| {
+        for &(field, offset, count, float) in layout {
+            for k in 0..count {
+                out.push(Field {
+                    name: format!("{name}.{field}[{k}]"),
+                    word: base + offset / 4 + k,
+                    float,
+                    record,
+                    region: record.map_or(0, |(kind, _)| 1 + kind),
+                });
+            }
+        }
+    };
+    layout("header", 0, HEADER, None);
+    for (kind, (section, name, record)) in [
+        (SECTION_MESHLETS, "meshlet", MESHLET),
+        (SECTION_GROUPS, "group", GROUP),
+        (SECTION_NODES, "node", NODE),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let s = h.sections[section];
+        let size = record
+            .iter()
+            .map(|&(_, o, c, _)| o / 4 + c)
+            .max()
+            .unwrap_or(1);
+        for i in 0..s.words as usize / size {
+            layout(
+                &format!("{name}[{i}]"),
+                s.offset as usize + i * size,
+                record,
+                Some((kind, i)),
+            );
+        }
+    }
+    for (region, (section, name)) in [
+        (SECTION_CHILDREN, "children"),
+        (SECTION_PAYLOAD, "payload"),
+        (SECTION_NODE_CLUSTERS, "node_clusters"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let s = h.sections[section];
+        for k in 0..s.words as usize {
+            out.push(Field {
+                name: format!("{name}[{k}]"),
+                word: s.offset as usize + k,
+                float: false,
+                record: None,
+                region: 4 + region,
+            });
+        }
+    }
+    out
+}
+
+/// A change to one field.
+#[derive(Debug, Clone, Copy)]
+enum Mutation {
+    Set(u32),
+    Add(i32),
+    FlipBit(u32),
+    SetFloat(f32),
+    ScaleFloat(f32),
+    /// Exchange with the same field of another record of the kind (the number picks
+    /// which), or, for a field of no record, with the field that many fields on.
+    Swap(usize),
+}
+
+/// Float values that break comparisons, products and ranges.
+const SPECIAL_FLOATS: [f32; 12] = [
+    f32::NAN,
+    f32::INFINITY,
+    f32::NEG_INFINITY,
+    -0.0,
+    0.0,
+    f32::MAX,
+    f32::MIN,
+    f32::MIN_POSITIVE,
+    1e-45,
+    -1.0,
+    1e30,
+    1e-30,
+];
+
+/// The mutations every field goes through in the systematic pass (payload words, which
+/// are most of a file and alike, through fewer).
+fn fixed_mutations(field: &Field) -> Vec<Mutation> {
+    if field.name.starts_with("payload") {
+        return vec![
+            Mutation::Set(0),
+            Mutation::Set(u32::MAX),
+            Mutation::FlipBit(0),
+            Mutation::FlipBit(31),
+            Mutation::Swap(1),
+        ];
+    }
+    let mut m = vec![
+        Mutation::Set(0),
+        Mutation::Set(u32::MAX),
+        Mutation::Set(1),
+        Mutation::Add(1),
+        Mutation::Add(-1),
+        Mutation::FlipBit(0),
+        Mutation::FlipBit(31),
+        Mutation::Swap(1),
+    ];
+    if field.float {
+        m.extend(SPECIAL_FLOATS.map(Mutation::SetFloat));
+        m.extend([0.5, 2.0, -1.0, 1.0 + f32::EPSILON].map(Mutation::ScaleFloat));
+    } else {
+        m.extend([
+            Mutation::Set(0x8000_0000),
+            Mutation::Set(0xff),
+            Mutation::Set(1 << 24),
+        ]);
+    }
+    m
+}
+
+/// Applies `mutation` to field `f` of `words`.
+fn mutate(words: &mut [u32], fields: &[Field], f: usize, mutation: Mutation) {
+    let field = &fields[f];
+    let w = &mut words[field.word];
+    match mutation {
+        Mutation::Set(v) => *w = v,
+        Mutation::Add(d) => *w = w.wrapping_add_signed(d),
+        Mutation::FlipBit(b) => *w ^= 1 << (b % 32),
+        Mutation::SetFloat(v) => *w = v.to_bits(),
+        Mutation::ScaleFloat(s) => *w = (f32::from_bits(*w) * s).to_bits(),
+        Mutation::Swap(step) => {
+            // The same field of another record of the kind, or the next field's word.
+            let other = match field.record {
+                Some((kind, i)) => {
+                    let suffix = &field.name[field.name.find('.').unwrap_or(0)..];
+                    let same: Vec<usize> = fields
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, g)| {
+                            g.record.is_some_and(|(k, j)| k == kind && j != i)
+                                && g.name.ends_with(suffix)
+                        })
+                        .map(|(k, _)| k)
+                        .collect();
+                    same.get(step % same.len().max(1)).copied()
+                }
+                None => Some((f + step) % fields.len()),
+            };
+            if let Some(o) = other {
+                words.swap(field.word, fields[o].word);
+            }
+        }
+    }
+}
+
+/// Recomputes what the header sums up from the meshlet records (LOD-0 counts, totals,
+/// roots, levels) and chains the records' data offsets where their payload still adds up
+/// to the section, so that a changed record passes the sums and reaches the checks after
+/// them. Does nothing where the sections no longer lie within the file.
+fn repair_sums(words: &mut [u32]) {
+    let h: AssetHeader = *bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
+    let (records, payload) = (h.sections[SECTION_MESHLETS], h.sections[SECTION_PAYLOAD]);
+    let size = size_of::<MeshletRecord>() / 4;
+    let end = records.offset as u64 + records.words as u64;
+    if end > words.len() as u64 || !(records.words as usize).is_multiple_of(size) {
+        return;
+    }
+    let mut meshlets: Vec<MeshletRecord> =
+        bytemuck::cast_slice(&words[records.offset as usize..end as usize]).to_vec();
+    let (mut lod0_meshlets, mut lod0_triangles, mut triangles, mut vertices, mut roots) =
+        (0u32, 0u32, 0u32, 0u32, 0u32);
+    let mut top = 0;
+    let mut at = 0u64;
+    for m in &meshlets {
+        if m.level() == 0 {
+            lod0_meshlets += 1;
+            lod0_triangles = lod0_triangles.wrapping_add(m.triangle_count());
+        }
+        triangles = triangles.wrapping_add(m.triangle_count());
+        vertices = vertices.wrapping_add(m.vertex_count());
+        roots += (m.parent_group == u32::MAX) as u32;
+        top = top.max(m.level());
+        at += meshlight_scene::asset::format::PayloadLayout::of(m, h.has_uvs()).end as u64;
+    }
+    if at == payload.words as u64 {
+        let mut at = 0;
+        for m in &mut meshlets {
+            m.data_offset = at;
+            at += meshlight_scene::asset::format::PayloadLayout::of(m, h.has_uvs()).end;
+        }
+        words[records.offset as usize..end as usize]
+            .copy_from_slice(bytemuck::cast_slice(&meshlets));
+    }
+    let header: &mut AssetHeader =
+        bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut words[..AssetHeader::WORDS]));
+    header.lod0_meshlets = lod0_meshlets;
+    header.lod0_triangles = lod0_triangles;
+    header.total_triangles = triangles;
+    header.total_vertices = vertices;
+    header.root_count = roots;
+    header.level_count = top + 1;
+}
+
+/// Rewrites the checksum over the mutated file, so that the checks after it see the
+/// mutation (a mutation of the checksum itself is kept: the checksum check sees that).
+fn reseal(words: &mut [u32], fields: &[Field], mutated: &[usize]) {
+    let at = std::mem::offset_of!(AssetHeader, checksum) / 4;
+    if mutated
+        .iter()
+        .any(|&f| (at..at + 2).contains(&fields[f].word))
+    {
+        return;
+    }
+    let sum = file_checksum(&words[..AssetHeader::WORDS], &words[AssetHeader::WORDS..]);
+    words[at] = sum as u32;
+    words[at + 1] = (sum >> 32) as u32;
+}
+
+/// How a mutated file fared.
+#[derive(Debug, Default)]
+struct Outcomes {
+    /// Loaded and passed every check (a change no check can see, such as a normal's bit).
+    loaded: u64,
+    /// Refused, by the kind of error.
+    refused: std::collections::BTreeMap<&'static str, u64>,
+}
+
+/// Loads `words` as the renderer does (the structural checks, then the DAG checks) and
+/// holds the result to the contract: a typed asset error naming the file, or an asset
+/// that `check_all` accepts and every tool can use.
+fn load_mutated(words: Vec<u32>, outcomes: &mut Outcomes) {
+    let path = Path::new("fuzz.mlasset");
+    let len = words.len() as u64 * 4;
+    let loaded = MeshletAsset::from_words(words, len, path).and_then(|asset| {
+        use_everything(&asset);
+        asset.verify_dag(path).map(|()| asset)
+    });
+    match loaded {
+        Ok(asset) => {
+            if let Err(e) = asset.check_all(path) {
+                panic!("loaded, but check_all refuses it: {e}");
+            }
+            outcomes.loaded += 1;
+        }
+        Err(e) => {
+            let kind = match &e {
+                SceneError::AssetMagic { .. } => "magic",
+                SceneError::AssetVersion { .. } => "version",
+                SceneError::AssetTruncated { .. } => "truncated",
+                SceneError::AssetChecksum { .. } => "checksum",
+                SceneError::AssetField { .. } => "field",
+                SceneError::AssetCorrupt { .. } => "DAG",
+                other => panic!("not an asset error: {other:?}"),
+            };
+            assert!(e.to_string().contains("fuzz.mlasset"), "{e}");
+            *outcomes.refused.entry(kind).or_default() += 1;
+        }
+    }
+}
+
+/// Two small valid assets: the procedural mesh's (no UVs) and a height field's (UVs).
+fn base_assets() -> Vec<Vec<u32>> {
+    let terrain = Terrain {
+        origin: glam::Vec2::new(-4.0, -4.0),
+        size: 8.0,
+        cells: 12,
+        amplitude: 1.0,
+        wavelength: 4.0,
+        octaves: 2,
+        seed: 1,
+        uv_scale: 0.5,
+        calm_centre: glam::Vec2::ZERO,
+        calm_radius: 0.0,
+    };
+    [procedural_mesh(6), terrain.mesh().unwrap()]
+        .iter()
+        .map(|mesh| {
+            let built = build_asset(mesh, &BuildOptions::default(), &mut |_| {}).unwrap();
+            bytemuck::cast_slice(built.asset.bytes()).to_vec()
+        })
+        .collect()
+}
+
+/// Valid assets changed field by field, checksum rewritten: first every field of both
+/// assets through every fixed mutation, then random combinations of up to four
+/// mutations (any value, any bit, any special float, swaps), half of them with the
+/// header's sums made to agree with the changed records.
+#[test]
+fn fuzz_asset_fields() {
+    let start = std::time::Instant::now();
+    let bases = base_assets();
+    let catalogs: Vec<Vec<Field>> = bases.iter().map(|w| fields(w)).collect();
+    // Per asset, its fields by region.
+    let regions: Vec<Vec<Vec<usize>>> = catalogs
+        .iter()
+        .map(|fields| {
+            let mut r = vec![Vec::new(); REGIONS];
+            for (f, field) in fields.iter().enumerate() {
+                r[field.region].push(f);
+            }
+            r
+        })
+        .collect();
+    let mut outcomes = Outcomes::default();
+    let mut systematic = 0u64;
+    for (good, fields) in bases.iter().zip(&catalogs) {
+        for f in 0..fields.len() {
+            // A meshlet record's change also with the header's sums made to agree.
+            let repairs: &[bool] = match fields[f].record {
+                Some((0, _)) => &[false, true],
+                _ => &[false],
+            };
+            for mutation in fixed_mutations(&fields[f]) {
+                for &repair in repairs {
+                    let mut w = good.clone();
+                    mutate(&mut w, fields, f, mutation);
+                    if repair {
+                        repair_sums(&mut w);
+                    }
+                    reseal(&mut w, fields, &[f]);
+                    load_mutated(w, &mut outcomes);
+                    systematic += 1;
+                }
+            }
+        }
+    }
+    let outcomes = std::cell::RefCell::new(outcomes);
+    let mutation = prop_oneof![
+        interesting_word().prop_map(Mutation::Set),
+        (-2i32..=2).prop_map(Mutation::Add),
+        (0u32..32).prop_map(Mutation::FlipBit),
+        prop::sample::select(SPECIAL_FLOATS.to_vec()).prop_map(Mutation::SetFloat),
+        prop::sample::select(vec![0.5f32, 2.0, -1.0, 1.0 + f32::EPSILON, 1e10])
+            .prop_map(Mutation::ScaleFloat),
+        (1usize..8).prop_map(Mutation::Swap),
+    ];
+    let strategy = (
+        0..bases.len(),
+        prop::collection::vec((0..REGIONS, any::<prop::sample::Index>(), mutation), 1..=4),
+        any::<bool>(),
+    );
+    fuzz("asset fields", strategy, |(base, edits, repair)| {
+        let fields = &catalogs[base];
+        let mut w = bases[base].clone();
+        let mut mutated = Vec::new();
+        for (region, at, mutation) in edits {
+            let in_region = &regions[base][region];
+            let f = in_region[at.index(in_region.len())];
+            mutate(&mut w, fields, f, mutation);
+            mutated.push(f);
+        }
+        if repair {
+            repair_sums(&mut w);
+        }
+        reseal(&mut w, fields, &mutated);
+        load_mutated(w, &mut outcomes.borrow_mut());
+    });
+    let outcomes = outcomes.into_inner();
+    println!(
+        "asset fields: {systematic} systematic and {} random cases in {:.1} s: {} loaded, \
+         refused {:?}",
+        cases(),
+        start.elapsed().as_secs_f64(),
+        outcomes.loaded,
+        outcomes.refused
+    );
 }
 
 const OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\n\

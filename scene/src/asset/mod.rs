@@ -3,6 +3,7 @@
 
 pub mod checksum;
 pub mod format;
+pub mod scan;
 pub mod triangles;
 pub mod validate;
 
@@ -13,8 +14,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::compress::{
-    BitWriter, NORMAL_BITS, Quantization, UvQuantization, bits_for, decode_octahedral,
-    encode_octahedral, get_bits,
+    BitWriter, NORMAL_BITS, Quantization, UvQuantization, bit_window, bits_for, decode_octahedral,
+    encode_octahedral, get_bits, low_bits,
 };
 use crate::dag::Dag;
 use crate::error::SceneError;
@@ -554,30 +555,65 @@ impl MeshletAsset {
     /// One meshlet's grid points and triangles only: what the DAG checks compare, without
     /// decoding normals and UVs.
     pub fn decode_topology(&self, index: usize) -> (Vec<[u32; 3]>, Vec<[u8; 3]>) {
+        (self.decode_grid(index), self.decode_triangles(index))
+    }
+
+    /// One meshlet's grid points, in local vertex order.
+    pub fn decode_grid(&self, index: usize) -> Vec<[u32; 3]> {
         let m = &self.meshlets()[index];
-        let layout = PayloadLayout::of(m, self.header().has_uvs());
-        let data = &self.payload()[m.data_offset as usize..(m.data_offset + layout.end) as usize];
-        let bits = m.axis_bits();
-        let vertex_block = &data[..layout.uvs as usize];
+        let mut grid = Vec::with_capacity(m.vertex_count() as usize);
+        self.for_each_grid_point(m, |_, p| grid.push(p));
+        grid
+    }
+
+    /// Calls `each` with every vertex's local index and grid point, reading positions only
+    /// and a whole vertex record at a time: what the load-time checks decode every
+    /// vertex of an asset with.
+    pub fn for_each_grid_point(&self, m: &MeshletRecord, mut each: impl FnMut(usize, [u32; 3])) {
+        // From the meshlet's data on: a record's window may reach past its block, and the
+        // masks drop what it reads there.
+        let data: &[u8] = bytemuck::cast_slice(&self.payload()[m.data_offset as usize..]);
+        let [bx, by, bz] = m.axis_bits();
+        let masks = [bx, by, bz].map(low_bits);
         let stride = m.vertex_stride() as usize;
+        let point =
+            |o: [u64; 3]| [0, 1, 2].map(|k| m.grid_min[k].wrapping_add((o[k] & masks[k]) as u32));
+        if bx + by + bz <= 57 {
+            for v in 0..m.vertex_count() as usize {
+                let w = bit_window(data, v * stride);
+                each(v, point([w, w >> bx, w >> (bx + by)]));
+            }
+        } else {
+            for v in 0..m.vertex_count() as usize {
+                let at = v * stride;
+                each(
+                    v,
+                    point([
+                        bit_window(data, at),
+                        bit_window(data, at + bx as usize),
+                        bit_window(data, at + (bx + by) as usize),
+                    ]),
+                );
+            }
+        }
+    }
+
+    /// One meshlet's triangles as local vertex indices, clamped as the GPU clamps them.
+    pub fn decode_triangles(&self, index: usize) -> Vec<[u8; 3]> {
+        let m = &self.meshlets()[index];
+        let mut out = Vec::with_capacity(m.triangle_count() as usize);
+        self.for_each_triangle(m, |t| out.push(t));
+        out
+    }
+
+    /// Calls `each` with every triangle's local corners in order, clamped as the GPU
+    /// clamps them.
+    pub fn for_each_triangle(&self, m: &MeshletRecord, mut each: impl FnMut([u8; 3])) {
         let (vc, tc) = (m.vertex_count(), m.triangle_count());
-        let grid = (0..vc as usize)
-            .map(|v| {
-                let mut at = v * stride;
-                [0, 1, 2].map(|k| {
-                    let d = get_bits(vertex_block, at, bits[k]).unwrap_or(0);
-                    at += bits[k] as usize;
-                    m.grid_min[k] + d
-                })
-            })
-            .collect();
-        let triangle_block = &data[layout.triangles as usize..];
-        let triangles = (0..tc)
-            .map(|t| {
-                triangles::decode(triangle_block, t, m.triangle_bits(), vc, tc).map(|i| i as u8)
-            })
-            .collect();
-        (grid, triangles)
+        let last = vc.max(1) as i64 - 1;
+        triangles::for_each_stored(self.triangle_block(m), m.triangle_bits(), vc, tc, |_, c| {
+            each(c.map_or([0; 3], |c| c.map(|c| c.clamp(0, last) as u8)))
+        });
     }
 
     /// Decodes one meshlet (as the GPU would).

@@ -9,7 +9,7 @@
 //! triangle, against 18.7 for the smallest corner plus two offsets and 24 for three
 //! bytes.
 
-use crate::compress::{BitWriter, bits_for};
+use crate::compress::{BitWriter, bit_window, bits_for, low_bits};
 
 /// Field widths of one meshlet's triangle records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -97,6 +97,47 @@ fn stored_corners(
     Some([first, first - d1, first - d2])
 }
 
+/// The multiplier that divides a prediction's numerator `(t + 1) · vertices` by the
+/// triangle count: `n / d = n · ⌈2^32 / d⌉ >> 32` exactly for `n` below `2^32 / d`,
+/// and counts are 8-bit, so numerators stay below 2^16.
+pub fn prediction_reciprocal(triangles: u32) -> u64 {
+    (1u64 << 32).div_ceil(triangles.clamp(1, 255) as u64)
+}
+
+/// Calls `each` with every triangle's index and stored corners in order, as
+/// [`stored_corners`] gives them one at a time, but with the prediction's division done
+/// as a multiplication: the load-time checks visit every triangle of an asset, and a
+/// division per triangle cost as much as the rest of decoding it.
+pub fn for_each_stored(
+    block: &[u32],
+    bits: TriangleBits,
+    vertices: u32,
+    triangles: u32,
+    mut each: impl FnMut(u32, Option<[i64; 3]>),
+) {
+    let bytes: &[u8] = bytemuck::cast_slice(block);
+    let stride = bits.stride() as usize;
+    let bias = 1i64 << (bits.offset.max(1) - 1);
+    let (offset_mask, delta_mask) = (low_bits(bits.offset), low_bits(bits.delta));
+    let reciprocal = prediction_reciprocal(triangles);
+    let vertices = vertices.min(255) as u64;
+    let mut numerator = vertices;
+    for t in 0..triangles.min(255) {
+        let at = t as usize * stride;
+        let predicted = ((numerator * reciprocal) >> 32) as i64;
+        // A record starting past the block is missing (the block is too short).
+        let corners = (at / 32 < block.len()).then(|| {
+            let record = bit_window(bytes, at);
+            let first = predicted + (record & offset_mask) as i64 - bias;
+            let d1 = ((record >> bits.offset) & delta_mask) as i64;
+            let d2 = ((record >> (bits.offset + bits.delta)) & delta_mask) as i64;
+            [first, first - d1, first - d2]
+        });
+        each(t, corners);
+        numerator += vertices;
+    }
+}
+
 /// Decodes triangle `t` from a meshlet's triangle `block`. Corners are clamped into
 /// `0..vertices`, as the GPU decoder clamps them: no record, however damaged, can
 /// index outside its meshlet, so loading need not decode every triangle to check it
@@ -132,6 +173,33 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_stepped_prediction_is_the_divided_one() {
+        for triangles in 1..=255u32 {
+            for vertices in [1u32, 2, 7, 64, 128, 200, 254, 255] {
+                let bits = TriangleBits {
+                    offset: 9,
+                    delta: 0,
+                };
+                // One record per triangle with offset field = bias: corner = prediction.
+                let mut words = Vec::new();
+                {
+                    let mut w = crate::compress::BitWriter::new(&mut words);
+                    for _ in 0..triangles {
+                        w.put(1 << 8, 9);
+                    }
+                }
+                for_each_stored(&words, bits, vertices, triangles, |t, corners| {
+                    assert_eq!(
+                        corners.map(|c| c[0]),
+                        Some(predicted_corner(t, vertices, triangles)),
+                        "{vertices} vertices, {triangles} triangles, triangle {t}"
+                    );
+                });
+            }
+        }
+    }
+
+    #[test]
     fn records_round_trip_with_winding_kept() {
         let triangles = [[0, 1, 2], [2, 1, 3], [3, 4, 2], [5, 0, 4], [1, 5, 3]];
         let mut words = Vec::new();
@@ -142,6 +210,18 @@ mod tests {
             assert_eq!([d[r], d[(r + 1) % 3], d[(r + 2) % 3]], *tri);
         }
         assert_eq!(first_out_of_range(&words, bits, 6, 5), None);
+        for (vertices, triangles) in [(6, 5), (5, 5), (6, 3), (200, 5), (255, 1), (1, 255)] {
+            let mut visited = 0;
+            for_each_stored(&words, bits, vertices, triangles, |t, corners| {
+                assert_eq!(
+                    corners,
+                    stored_corners(&words, t, bits, vertices, triangles),
+                    "{vertices} vertices, {triangles} triangles: triangle {t}"
+                );
+                visited += 1;
+            });
+            assert_eq!(visited, triangles);
+        }
         // One vertex fewer: some corner falls outside; it is found, and decodes clamped.
         let t = first_out_of_range(&words, bits, 5, 5).unwrap();
         assert!(decode(&words, t, bits, 5, 5).iter().all(|&c| c < 5));

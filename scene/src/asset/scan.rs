@@ -1,0 +1,257 @@
+//! One pass over every meshlet's packed vertices and triangles, gathering what the DAG
+//! checks ([`crate::verify`]) need from the payload: whether every triangle's stored
+//! corners lie within the meshlet, how far its farthest vertex lies from the centre of
+//! its culling sphere, and the fingerprint of its triangles' boundary
+//! ([`crate::chain_fingerprint`]) for the crack check.
+//!
+//! The renderer runs these checks on every asset it loads, so the pass decodes each
+//! meshlet once, into arrays on the stack (a meshlet has at most 255 vertices), skips
+//! normals and UVs, and runs on every core; the checks then work on one small record per
+//! meshlet. Decoding follows [`MeshletAsset::decode_meshlet`], which is what the GPU
+//! does: corners clamped into the meshlet, grid points from `grid_min` plus the packed
+//! offsets.
+
+use rayon::prelude::*;
+
+use super::MeshletAsset;
+use super::format::{MeshletRecord, PayloadLayout};
+use super::triangles::{TriangleBits, for_each_stored, prediction_reciprocal};
+use crate::chain_fingerprint::{ChainKeys, triangle};
+use crate::compress::{bit_window, low_bits};
+use crate::meshlets::MAX_VERTICES;
+
+/// Vertex words a meshlet can have: one more than its 8-bit vertex count allows, so
+/// that an index taken modulo it needs no bounds check.
+const WORDS: usize = 256;
+const _: () = assert!(MAX_VERTICES < WORDS);
+
+/// One meshlet's decoded vertices: their fingerprint words, and their grid points an
+/// axis at a time.
+struct Decoded {
+    words: [(u64, u64); WORDS],
+    axes: [[i32; WORDS]; 3],
+}
+
+/// What the DAG checks need of one meshlet's payload.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeshletScan {
+    /// The first triangle whose stored corners fall outside the meshlet's vertices (the
+    /// GPU clamps them, so the record is damaged).
+    pub first_out_of_range: Option<u32>,
+    /// Largest distance of a decoded vertex from the culling sphere's centre.
+    pub farthest: f32,
+    /// Fingerprint of the boundary of the meshlet's triangles, as decoded.
+    pub boundary: u64,
+}
+
+/// Scans every meshlet, in parallel; the result is in meshlet order.
+pub fn scan_meshlets(asset: &MeshletAsset, keys: &ChainKeys) -> Vec<MeshletScan> {
+    let meshlets = asset.meshlets();
+    // Chunks of meshlets keep rayon's per-item overhead off meshlets this small, and
+    // share one array of vertex words.
+    const CHUNK: usize = 64;
+    let mut scans = vec![
+        MeshletScan {
+            first_out_of_range: None,
+            farthest: 0.0,
+            boundary: 0,
+        };
+        meshlets.len()
+    ];
+    let payload: &[u8] = bytemuck::cast_slice(asset.payload());
+    scans
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .for_each(|(c, out)| {
+            let mut decoded = Decoded {
+                words: [(0, 0); WORDS],
+                axes: [[0; WORDS]; 3],
+            };
+            for (k, scan) in out.iter_mut().enumerate() {
+                *scan = scan_meshlet(asset, payload, &meshlets[c * CHUNK + k], keys, &mut decoded);
+            }
+        });
+    scans
+}
+
+fn scan_meshlet(
+    asset: &MeshletAsset,
+    payload: &[u8],
+    m: &MeshletRecord,
+    keys: &ChainKeys,
+    decoded: &mut Decoded,
+) -> MeshletScan {
+    let layout = PayloadLayout::of(m, asset.header().has_uvs());
+    // From the meshlet's data to the payload's end: windows read past a block's last
+    // field, and the masks drop what they read there.
+    let data = &payload[m.data_offset as usize * 4..];
+    let quant = asset.quantization();
+    let centre = [m.bounds[0], m.bounds[1], m.bounds[2]];
+    let (vc, tc) = (m.vertex_count() as usize, m.triangle_count());
+    let Decoded { words, axes } = decoded;
+    asset.for_each_grid_point(m, |v, grid| {
+        for k in 0..3 {
+            axes[k][v] = grid[k] as i32;
+        }
+        words[v] = keys.point(grid);
+    });
+    // The distances in a loop of their own, which the compiler vectorises: what
+    // `quant.dequantize(grid).distance_squared(centre)` computes, operation for
+    // operation. Squares are not negative, so their bits order as they do.
+    let (origin, step) = (quant.origin.to_array(), quant.step);
+    let mut farthest_bits = 0u32;
+    let [xs, ys, zs] = axes.each_ref().map(|a| &a[..vc]);
+    for ((&x, &y), &z) in xs.iter().zip(ys).zip(zs) {
+        let d = [x, y, z].map(|q| q as f32);
+        let d = [0, 1, 2].map(|k| (origin[k] + d[k] * step) - centre[k]);
+        let squared = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        farthest_bits = farthest_bits.max(squared.to_bits());
+    }
+    let farthest_squared = f32::from_bits(farthest_bits);
+
+    let triangle_bits = m.triangle_bits();
+    let block = &data[layout.triangles as usize * 4..];
+    let (boundary, in_range) = fast_triangles(block, triangle_bits, vc as u32, tc, words);
+    let (first_out_of_range, boundary) = if in_range {
+        (None, boundary)
+    } else {
+        // A damaged record: again, as the GPU decodes it (corners clamped), finding it.
+        let block = &asset.payload()[(m.data_offset + layout.triangles) as usize..];
+        clamped_triangles(block, triangle_bits, vc as u32, tc, words)
+    };
+    MeshletScan {
+        first_out_of_range,
+        farthest: farthest_squared.sqrt(),
+        boundary,
+    }
+}
+
+/// The boundary fingerprint of a meshlet whose triangle records all lie in range (a
+/// valid asset's), and whether they do: no clamping and no branch per triangle.
+fn fast_triangles(
+    block: &[u8],
+    bits: TriangleBits,
+    vertices: u32,
+    triangles: u32,
+    words: &[(u64, u64); WORDS],
+) -> (u64, bool) {
+    let stride = bits.stride() as usize;
+    let bias = 1i64 << (bits.offset.max(1) - 1);
+    let reciprocal = prediction_reciprocal(triangles);
+    let (offset_mask, delta_mask) = (low_bits(bits.offset), low_bits(bits.delta));
+    let mut numerator = vertices as u64;
+    let mut out_of_range = false;
+    let mut boundary = 0u64;
+    for t in 0..triangles as usize {
+        let record = bit_window(block, t * stride);
+        let predicted = ((numerator * reciprocal) >> 32) as i64;
+        numerator += vertices as u64;
+        let first = predicted + (record & offset_mask) as i64 - bias;
+        let second = first - ((record >> bits.offset) & delta_mask) as i64;
+        let third = first - ((record >> (bits.offset + bits.delta)) & delta_mask) as i64;
+        // The other corners lie at or below the first.
+        out_of_range |= (first >= vertices as i64) | (second.min(third) < 0);
+        boundary = boundary.wrapping_add(triangle(
+            words[first as usize % WORDS],
+            words[second as usize % WORDS],
+            words[third as usize % WORDS],
+        ));
+    }
+    (boundary, !out_of_range)
+}
+
+/// The first triangle whose corners fall outside the meshlet, and the boundary
+/// fingerprint of the triangles with their corners clamped, as the GPU decodes them.
+fn clamped_triangles(
+    block: &[u32],
+    bits: TriangleBits,
+    vertices: u32,
+    triangles: u32,
+    words: &[(u64, u64); WORDS],
+) -> (Option<u32>, u64) {
+    let mut first_out_of_range = None;
+    let mut boundary = 0u64;
+    let last = vertices.max(1) as i64 - 1;
+    for_each_stored(block, bits, vertices, triangles, |t, stored| {
+        let corners = match stored {
+            Some(c) => {
+                if c.iter().any(|&c| !(0..vertices as i64).contains(&c)) {
+                    first_out_of_range.get_or_insert(t);
+                }
+                c.map(|c| c.clamp(0, last) as usize)
+            }
+            None => {
+                first_out_of_range.get_or_insert(t);
+                [0; 3]
+            }
+        };
+        boundary = boundary.wrapping_add(triangle(
+            words[corners[0]],
+            words[corners[1]],
+            words[corners[2]],
+        ));
+    });
+    (first_out_of_range, boundary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::asset::triangles::first_out_of_range;
+    use crate::chain_fingerprint::triangle;
+    use crate::{BuildOptions, build_asset, procedural_mesh};
+
+    /// What the scan finds, from the decoder the tools and tests use.
+    fn reference(asset: &MeshletAsset, i: usize, keys: &ChainKeys) -> MeshletScan {
+        let m = &asset.meshlets()[i];
+        let d = asset.decode_meshlet(i);
+        let centre = glam::Vec3::new(m.bounds[0], m.bounds[1], m.bounds[2]);
+        let words: Vec<(u64, u64)> = d.grid.iter().map(|&p| keys.point(p)).collect();
+        MeshletScan {
+            first_out_of_range: first_out_of_range(
+                asset.triangle_block(m),
+                m.triangle_bits(),
+                m.vertex_count(),
+                m.triangle_count(),
+            ),
+            farthest: d
+                .positions
+                .iter()
+                .map(|p| p.distance(centre))
+                .fold(0.0, f32::max),
+            boundary: d.triangles.iter().fold(0u64, |sum, t| {
+                let [a, b, c] = t.map(|v| words[v as usize]);
+                sum.wrapping_add(triangle(a, b, c))
+            }),
+        }
+    }
+
+    #[test]
+    fn the_scan_finds_what_the_decoder_gives() {
+        let mut asset = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {})
+            .unwrap()
+            .asset;
+        let keys = ChainKeys::fixed(3);
+        let check = |asset: &MeshletAsset| {
+            let scans = scan_meshlets(asset, &keys);
+            for (i, scan) in scans.iter().enumerate() {
+                assert_eq!(*scan, reference(asset, i, &keys), "meshlet {i}");
+            }
+            scans
+        };
+        assert!(check(&asset).iter().all(|s| s.first_out_of_range.is_none()));
+        // Damage the triangle records of a few meshlets (all their bits set: corners
+        // past the vertices) and move a vertex far from its meshlet's sphere.
+        for i in [0, 5, 9] {
+            let m = asset.meshlets()[i];
+            let layout = PayloadLayout::of(&m, asset.header().has_uvs());
+            let at = asset.header().sections[super::super::format::SECTION_PAYLOAD].offset
+                + m.data_offset;
+            asset.words[(at + layout.triangles) as usize] = u32::MAX;
+            asset.words[at as usize] ^= 0x3ff;
+        }
+        let scans = check(&asset);
+        assert!(scans[5].first_out_of_range.is_some());
+        assert!(scans[5].farthest > asset.meshlets()[5].bounds[3]);
+    }
+}
