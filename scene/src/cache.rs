@@ -99,7 +99,10 @@ pub fn load_or_bake(
 ) -> Result<(MeshletAsset, Outcome), SceneError> {
     let path = dir.join(format!("{:016x}.mlasset", key(source, options)?));
     if path.exists() {
-        match MeshletAsset::load(&path) {
+        // Every check `inspect` runs (a few times the plain load): a cache entry that a
+        // bug or a disk damaged in a way the checksum cannot see is baked again, never
+        // drawn.
+        match MeshletAsset::load_verified(&path) {
             Ok(asset) => return Ok((asset, Outcome::Hit)),
             Err(e) => log::warn!(
                 "cached asset {} is unusable ({e}); baking again",
@@ -201,6 +204,28 @@ mod tests {
         let (c, third) = load_or_bake(&source, &options, &dir, &mut |_| {}).unwrap();
         assert_eq!(third, Outcome::Baked);
         assert_eq!(c.bytes(), a.bytes());
+        // So is one whose checksum holds but whose DAG does not (a group's error
+        // below its child's, written with a valid checksum).
+        let mesh = crate::procedural_mesh(12);
+        let built = build_asset(&mesh, &options, &mut |_| {}).unwrap();
+        let mut dag = built.dag.clone();
+        let g = dag
+            .groups
+            .iter()
+            .position(|g| {
+                g.children
+                    .iter()
+                    .any(|&k| dag.clusters[k as usize].level > 0)
+            })
+            .unwrap();
+        dag.groups[g].lod.error = 0.0;
+        MeshletAsset::from_dag(&built.mesh, &dag, 16, 0)
+            .save(&path)
+            .unwrap();
+        assert!(MeshletAsset::load(&path).is_ok(), "structurally sound");
+        let (d, fourth) = load_or_bake(&source, &options, &dir, &mut |_| {}).unwrap();
+        assert_eq!(fourth, Outcome::Baked);
+        assert_eq!(d.bytes(), a.bytes());
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
