@@ -364,22 +364,12 @@ fn a_closed_stdout_ends_quietly_as_a_broken_pipe() {
 /// anything reaches the GPU.
 #[test]
 fn render_refuses_an_asset_that_inspect_rejects_with_the_same_message() {
-    use meshlight::scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
+    use meshlight::scene::{BuildOptions, build_asset, procedural_mesh};
     let dir = scratch("damaged-dag");
     let built = build_asset(&procedural_mesh(8), &BuildOptions::default(), &mut |_| {}).unwrap();
-    let mut dag = built.dag.clone();
-    let g = dag
-        .groups
-        .iter()
-        .position(|g| {
-            g.children
-                .iter()
-                .any(|&c| dag.clusters[c as usize].level > 0)
-        })
-        .unwrap();
-    dag.groups[g].lod.error = 0.0;
     let bad = dir.join("bad.mlasset");
-    MeshletAsset::from_dag(&built.mesh, &dag, 16, 0)
+    meshlight::scene::damaged::error_below_child(&built)
+        .unwrap()
         .save(&bad)
         .unwrap();
     let bad = bad.to_str().unwrap();

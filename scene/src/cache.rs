@@ -208,18 +208,8 @@ mod tests {
         // below its child's, written with a valid checksum).
         let mesh = crate::procedural_mesh(12);
         let built = build_asset(&mesh, &options, &mut |_| {}).unwrap();
-        let mut dag = built.dag.clone();
-        let g = dag
-            .groups
-            .iter()
-            .position(|g| {
-                g.children
-                    .iter()
-                    .any(|&k| dag.clusters[k as usize].level > 0)
-            })
-            .unwrap();
-        dag.groups[g].lod.error = 0.0;
-        MeshletAsset::from_dag(&built.mesh, &dag, 16, 0)
+        crate::damaged::error_below_child(&built)
+            .unwrap()
             .save(&path)
             .unwrap();
         assert!(MeshletAsset::load(&path).is_ok(), "structurally sound");

@@ -316,18 +316,7 @@ mod tests {
         let built =
             crate::build_asset(&procedural_mesh(8), &Default::default(), &mut |_| {}).unwrap();
         assert!(check_before_writing(Path::new("m.obj"), &built.asset).is_ok());
-        let mut dag = built.dag.clone();
-        let g = dag
-            .groups
-            .iter()
-            .position(|g| {
-                g.children
-                    .iter()
-                    .any(|&c| dag.clusters[c as usize].level > 0)
-            })
-            .unwrap();
-        dag.groups[g].lod.error = 0.0;
-        let broken = MeshletAsset::from_dag(&built.mesh, &dag, 16, 0);
+        let broken = crate::damaged::error_below_child(&built).unwrap();
         let err = check_before_writing(Path::new("m.obj"), &broken).unwrap_err();
         assert!(matches!(err, SceneError::Build { .. }), "{err:?}");
         assert!(err.to_string().contains("not written"), "{err}");

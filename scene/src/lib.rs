@@ -13,6 +13,7 @@ pub mod chain_fingerprint;
 pub mod cli;
 pub mod compress;
 pub mod dag;
+pub mod damaged;
 pub mod deviation;
 pub mod error;
 pub mod greedy_meshlets;

@@ -102,18 +102,7 @@ fn inspect_warns_on_poor_dags_and_fails_only_on_broken_ones() {
     run_inspect(&InspectArgs { file: path }).unwrap();
 
     // Broken: a group error below its children's. Not loadable by inspect's rules.
-    let mut dag = built.dag.clone();
-    let g = dag
-        .groups
-        .iter()
-        .position(|g| {
-            g.children
-                .iter()
-                .any(|&c| built.dag.clusters[c as usize].level > 0)
-        })
-        .unwrap();
-    dag.groups[g].lod.error = 0.0;
-    let broken = MeshletAsset::from_dag(&built.mesh, &dag, 16, 0);
+    let broken = meshlight_scene::damaged::error_below_child(&built).unwrap();
     let path = dir.join("broken.mlasset");
     broken.save(&path).unwrap();
     let err = run_inspect(&InspectArgs { file: path }).unwrap_err();

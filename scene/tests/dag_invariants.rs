@@ -63,18 +63,7 @@ fn verify_reports_broken_invariants() {
     assert!(verify(&rebuild(&built.dag)).is_empty());
 
     // A group whose error is below a (simplified) child's.
-    let mut dag = built.dag.clone();
-    let g = dag
-        .groups
-        .iter()
-        .position(|g| {
-            g.children
-                .iter()
-                .any(|&c| built.dag.clusters[c as usize].level > 0)
-        })
-        .unwrap();
-    dag.groups[g].lod.error = 0.0;
-    let problems = verify(&rebuild(&dag));
+    let problems = verify(&meshlight_scene::damaged::error_below_child(&built).unwrap());
     assert!(
         problems.iter().any(|p| p.contains("below child")),
         "{problems:?}"

@@ -424,18 +424,7 @@ fn loading_for_the_renderer_refuses_what_inspect_rejects() {
     MeshletAsset::load_verified(&good).unwrap();
     built.asset.check_all(&good).unwrap();
 
-    let mut dag = built.dag.clone();
-    let g = dag
-        .groups
-        .iter()
-        .position(|g| {
-            g.children
-                .iter()
-                .any(|&c| dag.clusters[c as usize].level > 0)
-        })
-        .unwrap();
-    dag.groups[g].lod.error = 0.0;
-    let broken = MeshletAsset::from_dag(&built.mesh, &dag, 16, 0);
+    let broken = meshlight_scene::damaged::error_below_child(&built).unwrap();
     let bad = dir.join("bad.mlasset");
     broken.save(&bad).unwrap();
     MeshletAsset::load(&bad).expect("structurally sound");
