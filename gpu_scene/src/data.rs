@@ -98,8 +98,19 @@ impl SceneData {
         self.limits
     }
 
-    /// Appends an asset's meshlets, groups and payload to the shared arrays.
+    /// Appends an asset's meshlets, groups and payload to the shared arrays. An asset
+    /// not yet verified (built in memory, or read with `MeshletAsset::load`) is first
+    /// put through every check `meshlight inspect` runs, so nothing it rejects reaches
+    /// the GPU; one loaded with `MeshletAsset::load_verified` is not checked twice.
     pub fn add_mesh(&mut self, name: &str, asset: &MeshletAsset) -> Result<MeshId, SceneDataError> {
+        if !asset.is_verified() {
+            asset.check_all(std::path::Path::new(name)).map_err(|e| {
+                SceneDataError::InvalidAsset {
+                    name: name.to_string(),
+                    reason: e.to_string(),
+                }
+            })?;
+        }
         let header = asset.header();
         let meshlet_total = self.meshlets.len() as u64 + asset.meshlets().len() as u64;
         check_limit(

@@ -187,3 +187,24 @@ fn uploads_write_only_what_changed() {
     data.add_instance(mesh, Mat4::IDENTITY, material).unwrap();
     assert_eq!(scene.upload(&gpu, &mut data).created, 1);
 }
+
+/// An asset `inspect` rejects (sound in structure, not as a DAG) is refused by the GPU
+/// scene with inspect's finding; a verified one is accepted without a second check.
+#[test]
+fn an_asset_inspect_rejects_never_reaches_the_gpu_scene() {
+    let built = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {}).unwrap();
+    let broken = meshlight_scene::damaged::error_below_child(&built).unwrap();
+    let mut data = SceneData::new(Limits::default());
+    let err = data.add_mesh("broken", &broken).unwrap_err();
+    match &err {
+        SceneDataError::InvalidAsset { name, reason } => {
+            assert_eq!(name, "broken");
+            assert!(reason.contains("below child"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(data.meshes.is_empty(), "nothing of it was added");
+    let verified = built.asset.verified(std::path::Path::new("good")).unwrap();
+    assert!(verified.is_verified());
+    assert_eq!(data.add_mesh("good", &verified).unwrap(), MeshId(0));
+}

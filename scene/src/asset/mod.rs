@@ -24,9 +24,19 @@ use format::*;
 
 /// A meshlet asset, validated: every accessor below is infallible because loading
 /// refused anything inconsistent.
-#[derive(Clone, PartialEq)]
+#[derive(Clone)]
 pub struct MeshletAsset {
     words: Vec<u32>,
+    /// Passed every check `inspect` runs ([`MeshletAsset::load_verified`],
+    /// [`MeshletAsset::verified`]), so whoever uploads it need not check it again.
+    dag_verified: bool,
+}
+
+/// Assets are equal when their bytes are: whether one was verified is not part of it.
+impl PartialEq for MeshletAsset {
+    fn eq(&self, other: &Self) -> bool {
+        self.words == other.words
+    }
 }
 
 impl std::fmt::Debug for MeshletAsset {
@@ -288,7 +298,10 @@ impl MeshletAsset {
         header.checksum = [sum as u32, (sum >> 32) as u32];
         words[..AssetHeader::WORDS]
             .copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(&header)));
-        Self { words }
+        Self {
+            words,
+            dag_verified: false,
+        }
     }
 
     /// Reads and validates an asset file. Any inconsistency is an error; nothing of a
@@ -395,7 +408,10 @@ impl MeshletAsset {
             field: e.field,
             problem: e.problem,
         })?;
-        Ok(Self { words })
+        Ok(Self {
+            words,
+            dag_verified: false,
+        })
     }
 
     /// Loads an asset and runs every check `meshlight inspect` runs: what
@@ -405,9 +421,24 @@ impl MeshletAsset {
     /// renderer loads through this, so nothing `inspect` rejects reaches the GPU, and
     /// it is refused with the same message.
     pub fn load_verified(path: &Path) -> Result<Self, SceneError> {
-        let asset = Self::load(path)?;
+        let mut asset = Self::load(path)?;
         asset.verify_dag(path)?;
+        asset.dag_verified = true;
         Ok(asset)
+    }
+
+    /// This asset after every check of [`MeshletAsset::check_all`], marked so that
+    /// [`MeshletAsset::is_verified`] says so; `path` names it in errors.
+    pub fn verified(mut self, path: &Path) -> Result<Self, SceneError> {
+        self.check_all(path)?;
+        self.dag_verified = true;
+        Ok(self)
+    }
+
+    /// Whether it passed every check `inspect` runs (loaded with
+    /// [`MeshletAsset::load_verified`] or returned by [`MeshletAsset::verified`]).
+    pub fn is_verified(&self) -> bool {
+        self.dag_verified
     }
 
     /// Every check of [`MeshletAsset::load_verified`] on an asset already in memory
