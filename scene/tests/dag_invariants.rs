@@ -130,40 +130,13 @@ fn sheet(mesh: &mut Mesh, origin: glam::Vec3, u: glam::Vec3, v: glam::Vec3, n: u
 /// A closed UV sphere of `rings` × `segments` around `centre`.
 fn sphere(mesh: &mut Mesh, centre: glam::Vec3, radius: f32, rings: u32, segments: u32) {
     let base = mesh.positions.len() as u32;
-    mesh.positions.push(centre + glam::Vec3::Z * radius);
-    for r in 1..rings {
-        let theta = std::f32::consts::PI * r as f32 / rings as f32;
-        for s in 0..segments {
-            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
-            mesh.positions.push(
-                centre
-                    + radius
-                        * glam::Vec3::new(
-                            theta.sin() * phi.cos(),
-                            theta.sin() * phi.sin(),
-                            theta.cos(),
-                        ),
-            );
-        }
-    }
-    mesh.positions.push(centre - glam::Vec3::Z * radius);
-    let ring = |r: u32, s: u32| base + 1 + (r - 1) * segments + s % segments;
-    let bottom = mesh.positions.len() as u32 - 1;
-    for s in 0..segments {
-        mesh.indices
-            .extend_from_slice(&[base, ring(1, s), ring(1, s + 1)]);
-        mesh.indices
-            .extend_from_slice(&[bottom, ring(rings - 1, s + 1), ring(rings - 1, s)]);
-        for r in 1..rings - 1 {
-            let (a, b, c, d) = (
-                ring(r, s),
-                ring(r, s + 1),
-                ring(r + 1, s),
-                ring(r + 1, s + 1),
-            );
-            mesh.indices.extend_from_slice(&[a, c, d, a, d, b]);
-        }
-    }
+    let (positions, indices) = common::generators::welded_sphere(rings, segments);
+    mesh.positions.extend(
+        positions
+            .iter()
+            .map(|&p| centre + radius * glam::Vec3::from(p)),
+    );
+    mesh.indices.extend(indices.iter().map(|&i| base + i));
 }
 
 /// Shapes unlike the test meshes the builder was measured on: non-manifold edges (three

@@ -173,11 +173,9 @@ pub fn glb(positions: &[[f32; 3]], indices: &[u32]) -> Vec<u8> {
     out
 }
 
-/// A closed sphere (welded: one pole vertex, no seam column) with fins like a scan's
-/// debris: on every `fin_every`-th of its edges a thin triangle stands out, sharing the
-/// edge, so that edge has three triangles (non-manifold) and each fin adds two open
-/// border edges. Returns positions and indices.
-pub fn finned_sphere(rings: u32, segments: u32, fin_every: usize) -> (Vec<[f32; 3]>, Vec<u32>) {
+/// A closed unit UV sphere, welded: one vertex per pole, no seam column; triangles
+/// counter-clockwise from outside. Returns positions and indices.
+pub fn welded_sphere(rings: u32, segments: u32) -> (Vec<[f32; 3]>, Vec<u32>) {
     let mut positions = vec![[0.0f32, 0.0, 1.0]];
     for r in 1..rings {
         let theta = std::f32::consts::PI * r as f32 / rings as f32;
@@ -207,6 +205,15 @@ pub fn finned_sphere(rings: u32, segments: u32, fin_every: usize) -> (Vec<[f32; 
             indices.extend_from_slice(&[a, c, d, a, d, b]);
         }
     }
+    (positions, indices)
+}
+
+/// A closed sphere (welded: one pole vertex, no seam column) with fins like a scan's
+/// debris: on every `fin_every`-th of its edges a thin triangle stands out, sharing the
+/// edge, so that edge has three triangles (non-manifold) and each fin adds two open
+/// border edges. Returns positions and indices.
+pub fn finned_sphere(rings: u32, segments: u32, fin_every: usize) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let (mut positions, mut indices) = welded_sphere(rings, segments);
     let closed = indices.len() / 3;
     for t in (0..closed).step_by(fin_every) {
         let (a, b) = (indices[t * 3], indices[t * 3 + 1]);
