@@ -425,6 +425,25 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     }
 }
 
+// Triangle `t` of the cluster in raster slot `slot`: what transforms and decodes it.
+struct SlotTriangle {
+    instance: Instance,
+    m: Meshlet,
+    mesh: Mesh,
+    // Its corners' vertex indices in the meshlet.
+    corners: vec3<u32>,
+}
+
+fn slot_triangle(slot: u32, t: u32) -> SlotTriangle {
+    let cluster = raster_clusters[slot];
+    let instance = instances[cluster.instance];
+    let m = meshlets[cluster.meshlet];
+    let mesh = meshes[instance.mesh];
+    let at = meshlet_triangle_location(m, mesh.flags, t);
+    let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+    return SlotTriangle(instance, m, mesh, corners);
+}
+
 // The clusters `raster` listed, a workgroup each (strided) and a thread per triangle:
 // the triangles with a corner outside the clip volume (`raster` drew the others) are
 // clipped and the pieces of their fan covered, each tiled when big.
@@ -437,18 +456,13 @@ fn raster_clipped(
     let listed = min(atomicLoad(&clip_count[0]), CLIP_CLUSTERS);
     for (var e = wg.x; e < listed; e += groups.x) {
         let slot = clip_list[e];
-        let cluster = raster_clusters[slot];
-        let instance = instances[cluster.instance];
-        let m = meshlets[cluster.meshlet];
-        let mesh = meshes[instance.mesh];
-        if t >= meshlet_triangle_count(m) {
+        if t >= meshlet_triangle_count(meshlets[raster_clusters[slot].meshlet]) {
             continue;
         }
-        let at = meshlet_triangle_location(m, mesh.flags, t);
-        let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
-        let a = clip_vertex(m, mesh, instance, c.x);
-        let b = clip_vertex(m, mesh, instance, c.y);
-        let d = clip_vertex(m, mesh, instance, c.z);
+        let s = slot_triangle(slot, t);
+        let a = clip_vertex(s.m, s.mesh, s.instance, s.corners.x);
+        let b = clip_vertex(s.m, s.mesh, s.instance, s.corners.y);
+        let d = clip_vertex(s.m, s.mesh, s.instance, s.corners.z);
         if inside(a) && inside(b) && inside(d) && snap(a).ok && snap(b).ok && snap(d).ok {
             continue;
         }
@@ -595,16 +609,11 @@ fn raster_big(
         } else {
             let slot = entry.x >> 7u;
             let triangle = entry.x & 127u;
-            let cluster = raster_clusters[slot];
-            let instance = instances[cluster.instance];
-            let m = meshlets[cluster.meshlet];
-            let mesh = meshes[instance.mesh];
-            let at = meshlet_triangle_location(m, mesh.flags, triangle);
-            let c = meshlet_triangle(m, triangle, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+            let s = slot_triangle(slot, triangle);
             setup = triangle_setup(
-                screen_vertex(m, mesh, instance, c.x),
-                screen_vertex(m, mesh, instance, c.y),
-                screen_vertex(m, mesh, instance, c.z),
+                screen_vertex(s.m, s.mesh, s.instance, s.corners.x),
+                screen_vertex(s.m, s.mesh, s.instance, s.corners.y),
+                screen_vertex(s.m, s.mesh, s.instance, s.corners.z),
                 slot,
                 triangle,
             );
