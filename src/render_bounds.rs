@@ -72,8 +72,8 @@ pub fn max_lights() -> u64 {
 /// Instances the command line places at most, before the device is known: 4 Mi copies
 /// (940 MB of instance records on the CPU). The device's own binding limit is checked
 /// when the scene is built for the chosen adapter ([`crate::gpu_scene::data::Limits::for_device`]):
-/// 599,186 instance records fit wgpu's default 128 MiB binding, and a data-centre GPU
-/// binds far more.
+/// the instance table takes two bindings at most, 1,198,372 instance records with wgpu's
+/// default 128 MiB binding, and a data-centre GPU binds far more.
 pub const MAX_INSTANCES: u64 = 1 << 22;
 
 /// The most copies of the mesh: [`MAX_INSTANCES`] less the field's ground.
@@ -116,7 +116,7 @@ fn why(flag: &str) -> String {
     match flag {
         "segments" => "the procedural mesh has 16 × segments² triangles and needs 3 segments to close; `bake` takes the same range".into(),
         "instances" => format!(
-            "the command line places at most {MAX_INSTANCES} instances (one is the ground), and the device's binding limit may allow fewer ({} in wgpu's default binding of {binding} bytes); place fewer copies",
+            "the command line places at most {MAX_INSTANCES} instances (one is the ground), and the device's binding limit may allow fewer ({} in two of wgpu's default bindings of {binding} bytes); place fewer copies",
             SceneLimits::default().max_instances
         ),
         "lights" => format!(

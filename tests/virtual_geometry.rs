@@ -592,6 +592,111 @@ fn more_instances_than_the_buffer_holds_is_an_error_naming_the_limit() {
     }
 }
 
+/// Instances past what one binding holds continue in `instances_high`: with a binding
+/// of 7 instances, a field of 13 (and its ground) takes both, and every pass that reads instances (both
+/// fills and culls, both rasterisers, resolve) draws what one binding draws.
+#[test]
+fn instances_past_one_binding_take_a_second_and_draw_the_same_frame() {
+    let limits = Limits {
+        instances_per_binding: 7,
+        max_instances: 14,
+        ..Limits::default()
+    };
+    let split = scenes::field(SceneData::new(limits), asset(), 13).unwrap();
+    assert!(split.data.instances_split());
+    assert_eq!(split.data.instance_split(), 7);
+    let whole = field(13);
+    assert!(!whole.data.instances_split());
+    assert_eq!(whole.data.instances.len(), split.data.instances.len());
+    // Shaded (colours) and clusters (which cluster and triangle each pixel holds); the
+    // second with both rasterisers drawing.
+    let cases = [
+        settings(DebugView::Shaded),
+        FrameSettings {
+            sw_threshold_px: Some(16.0),
+            ..settings(DebugView::Clusters)
+        },
+    ];
+    for source in [GraphSource::Code, pipeline_file()] {
+        for s in &cases {
+            let (want, _) = render(&whole, s.clone(), &source);
+            let (got, r) = render(&split, s.clone(), &source);
+            let binds_high = r
+                .compiled
+                .plan
+                .resources
+                .iter()
+                .any(|res| res.info.name == "instances_high");
+            assert!(
+                binds_high,
+                "{source:?}: the split frame imports no `instances_high`"
+            );
+            let split_passes: Vec<&str> = r
+                .compiled
+                .plan
+                .passes
+                .iter()
+                .filter(|p| p.shader_defs.iter().any(|(d, _)| d == "INSTANCES_HIGH"))
+                .map(|p| p.name.as_str())
+                .collect();
+            for stage in ["fill", "cull", "sw_raster", "resolve"] {
+                assert!(
+                    split_passes.iter().any(|p| p.contains(stage)),
+                    "{source:?}: no `{stage}` pass reads the second binding: {split_passes:?}"
+                );
+            }
+            assert_eq!(got.counts, want.counts, "{source:?} {:?}", s.view);
+            assert!(got.counts.visible > 0, "{:?}", got.counts);
+            assert_eq!(
+                differing(&got.rgba, &want.rgba, 0),
+                0,
+                "{source:?} {:?}",
+                s.view
+            );
+        }
+    }
+}
+
+/// A pipeline file that does not import the scene's instances as `instances` cannot
+/// take a split table: refused, naming the counts and what to import.
+#[test]
+fn a_split_instance_table_and_a_file_without_the_instances_import_is_an_error() {
+    let limits = Limits {
+        instances_per_binding: 2,
+        max_instances: 4,
+        ..Limits::default()
+    };
+    let split = scenes::field(SceneData::new(limits), asset(), 3).unwrap();
+    let GraphSource::File(shipped) = pipeline_file() else {
+        unreachable!()
+    };
+    let text = std::fs::read_to_string(shipped).unwrap();
+    let imported = "name = \"instances\"\nkind = \"imported\"";
+    assert!(text.contains(imported));
+    let dir = std::env::temp_dir().join(format!("meshlight-split-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("transient_instances.toml");
+    std::fs::write(
+        &path,
+        text.replace(imported, "name = \"instances\"\nkind = \"transient\""),
+    )
+    .unwrap();
+    match Renderer::new(
+        split.data.clone(),
+        settings(DebugView::Shaded),
+        &GraphSource::File(path),
+    ) {
+        Err(GraphError::PipelineFile { message, .. }) => assert!(
+            message.contains("4 instances")
+                && message.contains("one holds 2")
+                && message.contains("import the scene's instances as `instances`"),
+            "{message}"
+        ),
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("a split table ran without its import"),
+    }
+}
+
 #[test]
 fn an_asset_of_an_older_format_names_the_version_and_the_bake_command() {
     let dir = std::env::temp_dir().join(format!("meshlight-vg-{}", std::process::id()));

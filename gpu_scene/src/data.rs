@@ -24,9 +24,13 @@ pub struct Material {
 }
 
 /// Element counts the buffers may not exceed. Each buffer is bound whole, so the binding
-/// limit of the device bounds it; [`Limits::for_device`] derives them.
+/// limit of the device bounds it; [`Limits::for_device`] derives them. The instance
+/// table alone may take two bindings ([`crate::instance_table`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Limits {
+    /// Instances one binding holds: past this the table continues in `instances_high`.
+    pub instances_per_binding: u32,
+    /// Instances both bindings hold.
     pub max_instances: u32,
     pub max_meshlets: u32,
     pub max_payload_words: u32,
@@ -37,8 +41,10 @@ impl Limits {
     /// The counts whose buffers fit `max_storage_buffer_binding_size` bytes.
     pub fn for_binding_size(bytes: u64) -> Self {
         let count = |size: usize| (bytes / size as u64).min(u32::MAX as u64) as u32;
+        let instances_per_binding = count(size_of::<layout::Instance>());
         Self {
-            max_instances: count(size_of::<layout::Instance>()),
+            instances_per_binding,
+            max_instances: instances_per_binding.saturating_mul(2),
             max_meshlets: count(size_of::<MeshletRecord>()),
             // Two words of padding follow the payload (see `GpuScene`).
             max_payload_words: count(4).saturating_sub(2),
@@ -236,7 +242,7 @@ impl SceneData {
             "instances",
             self.instances.len() as u64 + 1,
             self.limits.max_instances as u64,
-            "place fewer instances (the instance buffer is bound whole)",
+            "place fewer instances (the instance table takes two storage bindings at most)",
         )?;
         if !drawable(world_from_local) {
             self.skipped_instances += 1;
@@ -327,6 +333,19 @@ impl SceneData {
             Some(g) => (g.lod_sphere, g.error),
             None => ([0.0; 4], f32::MAX),
         }
+    }
+
+    /// Where the instance table splits: `instances` holds `..split`, `instances_high`
+    /// the rest (none while the table fits one binding).
+    pub fn instance_split(&self) -> usize {
+        self.instances
+            .len()
+            .min(self.limits.instances_per_binding as usize)
+    }
+
+    /// True when the instances take two bindings (`instances_high` holds some).
+    pub fn instances_split(&self) -> bool {
+        self.instance_split() < self.instances.len()
     }
 
     fn mark_instance(&mut self, i: usize) {

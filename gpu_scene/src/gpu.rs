@@ -34,6 +34,8 @@ pub struct SceneHandles {
     pub payload: Handle<Buffer>,
     pub meshes: Handle<Buffer>,
     pub instances: Handle<Buffer>,
+    /// The instances past one binding's limit, when the scene has that many.
+    pub instances_high: Option<Handle<Buffer>>,
     pub materials: Handle<Buffer>,
 }
 
@@ -66,6 +68,8 @@ pub struct UploadStats {
 /// [`SceneData`] may have changed; it writes only what did.
 pub struct GpuScene {
     buffers: Vec<SceneBuffer>,
+    /// Whether `instances_high` holds instances (then graphs import it).
+    instances_split: bool,
     geometry_version: u64,
     materials_version: u64,
 }
@@ -73,8 +77,9 @@ pub struct GpuScene {
 /// The element count of each scene buffer as [`GpuScene::new`] would create it for
 /// `data`, by buffer name. A graph can then be declared and compiled (which picks the
 /// device's features) before the device, and so the buffers, exist.
-pub fn buffer_lengths(data: &SceneData) -> [(&'static str, Element, u64); 6] {
+pub fn buffer_lengths(data: &SceneData) -> [(&'static str, Element, u64); 7] {
     let count = |n: usize| (n as u64).max(1);
+    let split = data.instance_split();
     [
         (
             names::MESHLETS,
@@ -85,10 +90,11 @@ pub fn buffer_lengths(data: &SceneData) -> [(&'static str, Element, u64); 6] {
         // The two padding words of `contents`.
         (names::PAYLOAD, Element::U32, data.payload.len() as u64 + 2),
         (names::MESHES, elements::MESH, count(data.meshes.len())),
+        (names::INSTANCES, elements::INSTANCE, count(split)),
         (
-            names::INSTANCES,
+            names::INSTANCES_HIGH,
             elements::INSTANCE,
-            count(data.instances.len()),
+            count(data.instances.len() - split),
         ),
         (
             names::MATERIALS,
@@ -136,7 +142,8 @@ pub fn import_hierarchy_for(data: &SceneData, g: &mut GraphBuilder) -> Hierarchy
 }
 
 /// Declares the scene buffers `data` will need as imported resources of a graph, sized
-/// by [`buffer_lengths`]; bind them later with [`GpuScene::imports`].
+/// by [`buffer_lengths`]; bind them later with [`GpuScene::imports`]. `instances_high`
+/// is declared only when the instances need it.
 pub fn import_for(data: &SceneData, g: &mut GraphBuilder) -> SceneHandles {
     let lengths = buffer_lengths(data);
     let mut h = |name: &str| {
@@ -153,17 +160,19 @@ pub fn import_for(data: &SceneData, g: &mut GraphBuilder) -> SceneHandles {
         payload: h(names::PAYLOAD),
         meshes: h(names::MESHES),
         instances: h(names::INSTANCES),
+        instances_high: data.instances_split().then(|| h(names::INSTANCES_HIGH)),
         materials: h(names::MATERIALS),
     }
 }
 
 /// The buffers in their order in [`GpuScene`].
-const ORDER: [&str; 9] = [
+const ORDER: [&str; 10] = [
     names::MESHLETS,
     names::GROUPS,
     names::PAYLOAD,
     names::MESHES,
     names::INSTANCES,
+    names::INSTANCES_HIGH,
     names::MATERIALS,
     names::HIERARCHY_NODES,
     names::HIERARCHY_CLUSTERS,
@@ -193,7 +202,15 @@ fn content<'a>(data: &'a SceneData, name: &str) -> (Element, Cow<'a, [u8]>) {
         names::MESHES => (elements::MESH, borrowed(bytemuck::cast_slice(&data.meshes))),
         names::INSTANCES => (
             elements::INSTANCE,
-            borrowed(bytemuck::cast_slice(&data.instances)),
+            borrowed(bytemuck::cast_slice(
+                &data.instances[..data.instance_split()],
+            )),
+        ),
+        names::INSTANCES_HIGH => (
+            elements::INSTANCE,
+            borrowed(bytemuck::cast_slice(
+                &data.instances[data.instance_split()..],
+            )),
         ),
         names::HIERARCHY_NODES => (
             elements::HIERARCHY_NODE,
@@ -227,6 +244,7 @@ impl GpuScene {
         data.dirty_instances = None;
         Self {
             buffers,
+            instances_split: data.instances_split(),
             geometry_version: data.geometry_version,
             materials_version: data.materials_version,
         }
@@ -242,7 +260,7 @@ impl GpuScene {
         let dirty = data.dirty_instances.take();
         for (i, &name) in ORDER.iter().enumerate() {
             let changed = match name {
-                names::INSTANCES => dirty.is_some(),
+                names::INSTANCES | names::INSTANCES_HIGH => dirty.is_some(),
                 names::MATERIALS => materials,
                 _ => geometry,
             };
@@ -259,9 +277,17 @@ impl GpuScene {
                 continue;
             }
             let range = match (name, &dirty) {
-                (names::INSTANCES, Some(r)) => {
+                (names::INSTANCES | names::INSTANCES_HIGH, Some(r)) => {
+                    // The dirty range in this binding's own indices.
+                    let split = data.instance_split();
+                    let (first, end) = match name {
+                        names::INSTANCES => (0, split),
+                        _ => (split, data.instances.len()),
+                    };
                     let size = element.size as usize;
-                    r.start * size..r.end * size
+                    let start = r.start.clamp(first, end) - first;
+                    let stop = r.end.clamp(first, end) - first;
+                    start * size..stop.max(start) * size
                 }
                 _ => 0..bytes.len(),
             };
@@ -273,6 +299,7 @@ impl GpuScene {
         }
         self.geometry_version = data.geometry_version;
         self.materials_version = data.materials_version;
+        self.instances_split = data.instances_split();
         stats
     }
 
@@ -292,8 +319,14 @@ impl GpuScene {
             payload: h(names::PAYLOAD),
             meshes: h(names::MESHES),
             instances: h(names::INSTANCES),
+            instances_high: self.instances_split.then(|| h(names::INSTANCES_HIGH)),
             materials: h(names::MATERIALS),
         }
+    }
+
+    /// True when the instances take two bindings (graphs must import `instances_high`).
+    pub fn instances_split(&self) -> bool {
+        self.instances_split
     }
 
     /// Declares the culling-hierarchy buffers as imported resources of a graph (for

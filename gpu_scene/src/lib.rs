@@ -11,6 +11,7 @@
 //! | `payload`       | `array<u32>`                  | packed vertices, UVs and triangles |
 //! | `meshes`        | `array<meshlet::Mesh>`        | per asset: grids, bounds, meshlet range |
 //! | `instances`     | `array<instance::Instance>`   | transforms, material, mesh, meshlet range |
+//! | `instances_high`| `array<instance::Instance>`   | the instances past one binding's limit (see [`instance_table`]) |
 //! | `materials`     | `array<instance::Material>`   | base colour |
 //!
 //! Three more hold the meshes' culling hierarchies (`meshlight_scene::hierarchy`), for
@@ -29,6 +30,7 @@
 pub mod data;
 pub mod error;
 pub mod gpu;
+pub mod instance_table;
 pub mod view;
 
 pub use data::{InstanceId, Material, MeshId, SceneData};
@@ -43,6 +45,8 @@ pub mod names {
     pub const PAYLOAD: &str = "payload";
     pub const MESHES: &str = "meshes";
     pub const INSTANCES: &str = "instances";
+    /// The instances past what one binding holds (`instance_table`).
+    pub const INSTANCES_HIGH: &str = "instances_high";
     pub const MATERIALS: &str = "materials";
     pub const HIERARCHY_NODES: &str = "hierarchy_nodes";
     pub const HIERARCHY_CLUSTERS: &str = "hierarchy_clusters";

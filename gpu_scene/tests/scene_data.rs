@@ -188,6 +188,71 @@ fn uploads_write_only_what_changed() {
     assert_eq!(scene.upload(&gpu, &mut data).created, 1);
 }
 
+/// With a binding of 4 instances, 10 take two buffers: `instances` holds 0..4 and
+/// `instances_high` 4..10; a changed transform is written into the buffer that holds it.
+#[test]
+fn instances_past_one_binding_continue_in_the_second_buffer() {
+    let gpu = GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"));
+    let limits = Limits {
+        instances_per_binding: 4,
+        max_instances: 11,
+        ..Limits::default()
+    };
+    let mut data = SceneData::new(limits);
+    let mesh = data.add_mesh("a", &asset(6)).unwrap();
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let ids: Vec<_> = (0..10)
+        .map(|i| {
+            data.add_instance(mesh, Mat4::from_translation(Vec3::X * i as f32), material)
+                .unwrap()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!((data.instance_split(), data.instances_split()), (4, true));
+    let mut scene = GpuScene::new(&gpu, &mut data);
+    assert!(scene.instances_split());
+    let instance = size_of::<meshlight_shaders::cpu::layout::Instance>() as u64;
+    let translation = |gpu: &GpuContext, scene: &GpuScene, name: &str, at: u64| {
+        let bytes = gpu
+            .read_buffer(scene.buffer(name).unwrap(), at * instance, instance)
+            .unwrap();
+        let got: meshlight_shaders::cpu::layout::Instance = bytemuck::pod_read_unaligned(&bytes);
+        got.world_from_local[3]
+    };
+    assert_eq!(scene.buffer("instances").unwrap().size(), 4 * instance);
+    assert_eq!(scene.buffer("instances_high").unwrap().size(), 6 * instance);
+    assert_eq!(
+        translation(&gpu, &scene, "instances", 3),
+        [3.0, 0.0, 0.0, 1.0]
+    );
+    assert_eq!(
+        translation(&gpu, &scene, "instances_high", 0),
+        [4.0, 0.0, 0.0, 1.0]
+    );
+    data.set_transform(ids[3], Mat4::from_translation(Vec3::Y))
+        .unwrap();
+    data.set_transform(ids[6], Mat4::from_translation(Vec3::Z))
+        .unwrap();
+    // Instances 3..7 are dirty: one in the first buffer, three in the second.
+    let stats = scene.upload(&gpu, &mut data);
+    assert_eq!((stats.bytes, stats.created), (4 * instance, 0));
+    assert_eq!(
+        translation(&gpu, &scene, "instances", 3),
+        [0.0, 1.0, 0.0, 1.0]
+    );
+    assert_eq!(
+        translation(&gpu, &scene, "instances_high", 2),
+        [0.0, 0.0, 1.0, 1.0]
+    );
+    // One more instance outgrows the second buffer only.
+    data.add_instance(mesh, Mat4::IDENTITY, material).unwrap();
+    assert_eq!(scene.upload(&gpu, &mut data).created, 1);
+    assert_eq!(scene.buffer("instances").unwrap().size(), 4 * instance);
+    assert_eq!(scene.buffer("instances_high").unwrap().size(), 7 * instance);
+}
+
 /// An asset `inspect` rejects (sound in structure, not as a DAG) is refused by the GPU
 /// scene with inspect's finding; a verified one is accepted without a second check.
 #[test]

@@ -29,12 +29,13 @@ macro_rules! shared {
     };
 }
 
-static SHARED_MODULES: [SharedModule; 10] = [
+static SHARED_MODULES: [SharedModule; 11] = [
     shared!("meshlight::math", "math.wgsl"),
     shared!("meshlight::view", "view.wgsl"),
     shared!("meshlight::octahedral", "octahedral.wgsl"),
     shared!("meshlight::meshlet", "meshlet.wgsl"),
     shared!("meshlight::instance", "instance.wgsl"),
+    shared!("meshlight::instance_table", "instance_table.wgsl"),
     shared!("meshlight::occlusion", "occlusion.wgsl"),
     shared!("meshlight::visbuffer", "visbuffer.wgsl"),
     shared!(

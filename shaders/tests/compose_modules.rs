@@ -2,7 +2,7 @@
 //! it needs.
 
 use meshlight_shaders::{
-    Capabilities, PassShader, ShaderError, ShaderLibrary, shared_modules, validate,
+    Capabilities, PassShader, ShaderDef, ShaderError, ShaderLibrary, shared_modules, validate,
 };
 
 const EVERY_MODULE: PassShader = PassShader {
@@ -65,6 +65,32 @@ fn every_module_composes_and_validates_without_int64() {
     }
 }
 
+/// The instance table is one binding (30), or two (30 and 31) under `INSTANCES_HIGH`.
+#[test]
+fn the_instance_table_adds_its_second_binding_only_when_split() {
+    let bindings = |defs: &[(&'static str, ShaderDef)]| {
+        let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
+        let module = library
+            .compose(&EVERY_MODULE, defs)
+            .unwrap_or_else(|e| panic!("{e}"));
+        validate(EVERY_MODULE.name, &module, Capabilities::empty())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut bound: Vec<u32> = module
+            .global_variables
+            .iter()
+            .filter_map(|(_, g)| g.binding.as_ref().map(|b| b.binding))
+            .filter(|b| *b >= 30)
+            .collect();
+        bound.sort();
+        bound
+    };
+    assert_eq!(bindings(&[]), [30]);
+    assert_eq!(
+        bindings(&[("INSTANCES_HIGH", ShaderDef::Bool(true))]),
+        [30, 31]
+    );
+}
+
 #[test]
 fn visbuffer64_composes_with_int64_atomics() {
     let mut library = ShaderLibrary::new(int64()).unwrap();
@@ -120,6 +146,10 @@ const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
     (
         "meshlight::instance",
         "instance::instance_max_scale(instance::Instance())",
+    ),
+    (
+        "meshlight::instance_table",
+        "instance_table::instance_at(instance_table::instance_total())",
     ),
     (
         "meshlight::occlusion",

@@ -28,10 +28,10 @@ use crate::graph::{
 };
 use crate::light_clustering::ClusteringSettings;
 use crate::light_clustering::frame_graph as clustering;
-use meshlight_gpu_scene::SceneData;
 use meshlight_gpu_scene::gpu::{
     buffer_lengths, elements, hierarchy_lengths, import_for, import_hierarchy_for,
 };
+use meshlight_gpu_scene::{SceneData, names};
 use meshlight_pass_cull_lod::{
     CullLod, Mode, OCCLUSION_COUNT_WORDS, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND, Thresholds,
     WALKED_COUNT_SLOT, WALKED_SLOT,
@@ -554,6 +554,7 @@ pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBui
         message: format!("cannot read it: {e}"),
     })?;
     let text = with_view(&text, &file, s, data.instances.len())?;
+    let text = with_instance_table(&text, &file, data)?;
     let mut params = overrides(data, s);
     // A file without a depth pyramid (one culling pass) does not declare its size, nor
     // one whose `fill` visits every cluster the hierarchy's.
@@ -568,6 +569,7 @@ pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBui
         PYRAMID_WIDTH_PARAM,
         PYRAMID_HEIGHT_PARAM,
         HIDDEN_NODES_PARAM,
+        names::INSTANCES_HIGH,
     ]
     .into_iter()
     .chain(hierarchy_lengths(data).map(|(name, _, _)| name));
@@ -648,6 +650,57 @@ fn with_view(text: &str, file: &str, s: &FrameSettings, instances: usize) -> Res
     if view.needs_occlusion_records() {
         with_occlusion_records(&mut doc, instances).map_err(ferr)?;
     }
+    toml::to_string(&doc).map_err(|e| ferr(e.to_string()))
+}
+
+/// The file's text with the second binding of the instance table added when the scene
+/// needs it ([`meshlight_gpu_scene::instance_table`]): an imported `instances_high`
+/// like the file's `instances`, which every pass reading instances then binds by name.
+/// A file that declares `instances_high` itself is left as it is; one that does not
+/// import `instances` under that name cannot take a split table and is refused.
+fn with_instance_table(text: &str, file: &str, data: &SceneData) -> Result<String> {
+    if !data.instances_split() {
+        return Ok(text.to_string());
+    }
+    let ferr = |message: String| GraphError::PipelineFile {
+        file: file.to_string(),
+        message,
+    };
+    let mut doc: toml::Table = toml::from_str(text).map_err(|e| ferr(e.to_string()))?;
+    let Some(toml::Value::Array(resources)) = doc.get_mut("resource") else {
+        return Err(ferr("the file declares no resources".into()));
+    };
+    let named =
+        |r: &toml::Value, name: &str| r.get("name").and_then(toml::Value::as_str) == Some(name);
+    if resources.iter().any(|r| named(r, names::INSTANCES_HIGH)) {
+        return Ok(text.to_string());
+    }
+    let low = resources
+        .iter()
+        .find(|r| named(r, names::INSTANCES))
+        .filter(|r| r.get("kind").and_then(toml::Value::as_str) == Some("imported"))
+        .ok_or_else(|| {
+            ferr(format!(
+                "the scene's {} instances take two storage bindings on this adapter (one holds {}), and the file imports no `{}` buffer to split; import the scene's instances as `{}`",
+                data.instances.len(),
+                data.limits().instances_per_binding,
+                names::INSTANCES,
+                names::INSTANCES,
+            ))
+        })?;
+    let usage = low
+        .get("usage")
+        .cloned()
+        .unwrap_or_else(|| toml::Value::Array(Vec::new()));
+    let high = data.instances.len() - data.instance_split();
+    let mut resource: toml::Table = toml::from_str(&format!(
+        "name = \"{}\"\nkind = \"imported\"\nbuffer = {{ element = \"Instance\", element_size = {}, count = {high} }}\n",
+        names::INSTANCES_HIGH,
+        elements::INSTANCE.size,
+    ))
+    .map_err(|e| ferr(e.to_string()))?;
+    resource.insert("usage".into(), usage);
+    resources.push(toml::Value::Table(resource));
     toml::to_string(&doc).map_err(|e| ferr(e.to_string()))
 }
 

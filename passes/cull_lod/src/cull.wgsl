@@ -17,6 +17,7 @@
 #import meshlight::math::F32_MAX
 #import meshlight::meshlet::{Meshlet, MeshletGroup, Cluster, meshlet_bounds, meshlet_triangle_count, lod_cut, MESHLET_NO_GROUP}
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
+#import meshlight::instance_table::instance_at
 #import meshlight::view::{View, sphere_in_frustum}
 #ifdef OCCLUSION
 #import meshlight::occlusion::{occlusion_rect, sphere_occluded}
@@ -44,8 +45,8 @@ struct Params {
 @group(0) @binding(0) var<storage, read> clusters: array<Cluster>;
 // [0]: how many of `clusters` are valid.
 @group(0) @binding(1) var<storage, read> cluster_count: array<u32>;
-// The scene's instances, meshlets and simplification groups.
-@group(0) @binding(2) var<storage, read> instances: array<Instance>;
+// The scene's meshlets and simplification groups; its instances through `instance_at`
+// (meshlight::instance_table, bindings 30 and 31).
 @group(0) @binding(3) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(4) var<storage, read> meshlet_groups: array<MeshletGroup>;
 // Software clusters in slots 0, 1, …; hardware clusters in slots C-1, C-2, ….
@@ -247,7 +248,7 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
     let cluster = cluster_at(i);
     // A cluster of the second walk: the first pass never saw it.
     let walked = i >= listed_total();
-    let instance = instances[cluster.instance];
+    let instance = instance_at(cluster.instance);
     let meshlet = meshlets[cluster.meshlet];
     let scale = instance_max_scale(instance);
     let bounds = meshlet_bounds(meshlet);

@@ -16,6 +16,7 @@
 //! | `clusters`        | storage read       | Cluster | candidates; `cluster_count[0]` of them are valid |
 //! | `cluster_count`   | storage read       | u32     | `[0]`: clusters in the list |
 //! | `instances`       | storage read       | Instance | the GPU scene |
+//! | `instances_high`  | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
 //! | `meshes`          | storage read       | Mesh    | the GPU scene (reserved for the occlusion pass; `compute` binds it to nothing) |
 //! | `meshlets`        | storage read       | Meshlet | bounds, groups, triangle counts |
 //! | `meshlet_groups`  | storage read       | MeshletGroup | LOD spheres and errors |
@@ -139,6 +140,7 @@ pub mod cpu;
 pub use cpu::{CullResult, Decision, Thresholds, cpu_cull};
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
@@ -188,6 +190,7 @@ pub fn contract() -> StageContract {
                 "[0]: valid entries of `clusters`",
             ),
             read("instances", elements::INSTANCE, "the scene's instances"),
+            instance_table::high_slot(),
             read("meshes", elements::MESH, "the scene's meshes"),
             read("meshlets", elements::MESHLET, "the scene's meshlets"),
             read(
@@ -485,6 +488,8 @@ impl Pass for CullLod {
             walked,
         };
         ctx.shader_defs(&defs);
+        let table = InstanceTable::of(ctx);
+        ctx.shader_defs(&table);
         ctx.min_bytes("cluster_count", 4);
         let words = if occlusion { OCCLUSION_COUNT_WORDS } else { 8 };
         ctx.min_bytes("raster_counts", words * 4);
@@ -510,10 +515,10 @@ impl Pass for CullLod {
             .slot(7, "hw_args")
             .scratch(8, "dispatch", Access::StorageWrite)
             .uniform(11);
-        let mut cull = BindingLayout::compute("cull_lod::cull")
+        let mut cull = table
+            .bind(BindingLayout::compute("cull_lod::cull"))
             .slot(0, "clusters")
             .slot(1, "cluster_count")
-            .slot(2, "instances")
             .slot(3, "meshlets")
             .slot(4, "meshlet_groups")
             .slot(5, "raster_clusters")
@@ -546,12 +551,14 @@ impl Pass for CullLod {
             "prepare",
             ProgramDesc::compute(&SHADER, "prepare")
                 .defs(&defs)
+                .defs(&table)
                 .layout(prepare),
         );
         ctx.program(
             "cull",
             ProgramDesc::compute(&SHADER, "cull")
                 .defs(&defs)
+                .defs(&table)
                 .layout(cull),
         );
         Ok(())

@@ -6,6 +6,7 @@
 
 #import meshlight::meshlet::{Mesh, Cluster}
 #import meshlight::instance::{Instance, instance_transform_sphere}
+#import meshlight::instance_table::{instance_at, instance_total}
 #import meshlight::view::{View, sphere_in_frustum}
 
 struct Params {
@@ -18,8 +19,7 @@ struct Params {
     _pad: u32,
 }
 
-// The scene's instances; one workgroup each.
-@group(0) @binding(0) var<storage, read> instances: array<Instance>;
+// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
 // The scene's meshes, for each instance's bounding sphere.
 @group(0) @binding(1) var<storage, read> meshes: array<Mesh>;
 // The cluster list: written below the capacity only.
@@ -45,8 +45,8 @@ fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
     // workgroup asks for (0 when the instance is outside the frustum or past the count).
     var count = 0u;
     var first_meshlet = 0u;
-    if index < min(params.instance_count, arrayLength(&instances)) {
-        let instance = instances[index];
+    if index < min(params.instance_count, instance_total()) {
+        let instance = instance_at(index);
         let sphere = instance_transform_sphere(instance, meshes[instance.mesh].bounding_sphere);
         if sphere_in_frustum(view, sphere.xyz, sphere.w) {
             count = instance.meshlet_count;

@@ -105,6 +105,7 @@ use crate::{
     OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT,
     hierarchy_contract, instance_grid,
 };
+use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::Params;
 use meshlight_graph::{
@@ -410,13 +411,15 @@ impl Pass for HierarchyFill {
         let second = self.mode == Mode::Second;
         let defs = WalkDefs { occlusion, second };
         ctx.shader_defs(&defs);
+        let table = InstanceTable::of(ctx);
+        ctx.shader_defs(&table);
         ctx.min_bytes("cluster_count", 8);
         ctx.frame_input(VIEW_INPUT);
         let count_words = if occlusion { OCCLUSION_COUNT_WORDS } else { 4 };
         // A scratch buffer holds the entry counters too; a bound one holds them when
         // it has room (the kernel checks its length).
-        let mut layout = BindingLayout::compute("fill_clusters::hierarchy")
-            .slot(0, "instances")
+        let mut layout = table
+            .bind(BindingLayout::compute("fill_clusters::hierarchy"))
             .slot(1, "clusters")
             .slot(2, "cluster_count")
             .uniform(3)
@@ -483,6 +486,7 @@ impl Pass for HierarchyFill {
             "walk_dispatch",
             ProgramDesc::compute(&SHADER, "walk_dispatch")
                 .defs(&defs)
+                .defs(&table)
                 .layout(dispatch),
         );
         for entry in ["prepare", "roots", "fill"] {
@@ -490,6 +494,7 @@ impl Pass for HierarchyFill {
                 entry,
                 ProgramDesc::compute(&SHADER, entry)
                     .defs(&defs)
+                    .defs(&table)
                     .layout(layout.clone()),
             );
         }

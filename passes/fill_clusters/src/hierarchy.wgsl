@@ -34,6 +34,7 @@
 
 #import meshlight::meshlet::Cluster
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
+#import meshlight::instance_table::{instance_at, instance_total}
 #import meshlight::view::View
 #import meshlight::math::F32_MAX
 #ifdef OCCLUSION
@@ -102,8 +103,7 @@ struct Subtree {
     count: u32,
 }
 
-// The scene's instances; one workgroup each.
-@group(0) @binding(0) var<storage, read> instances: array<Instance>;
+// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
 // The cluster list: written below the capacity only.
 @group(0) @binding(1) var<storage, read_write> clusters: array<Cluster>;
 // [0] clusters written = min(requested, capacity), [1] clusters requested.
@@ -410,7 +410,7 @@ fn emit_now(index: u32, first: u32, count: u32) {
 
 fn walker(index: u32) -> Walker {
     var w: Walker;
-    w.instance = instances[min(index, arrayLength(&instances) - 1u)];
+    w.instance = instance_at(min(index, instance_total() - 1u));
     w.scale = instance_max_scale(w.instance);
     w.reach = length(w.instance.world_from_local[3].xyz) + length(view.camera_position);
     return w;
@@ -437,7 +437,7 @@ fn roots(
 #ifdef SECOND_PASS
     let total = min(min(node_list_count[0], params.node_capacity), arrayLength(&node_list));
 #else
-    let total = min(params.instance_count, arrayLength(&instances));
+    let total = min(params.instance_count, instance_total());
 #endif
     let held = min(params.root_capacity, arrayLength(&root_list));
     for (var e = (wg.y * groups.x + wg.x) * WORKGROUP_SIZE + t; e < total; e += threads) {
@@ -448,12 +448,14 @@ fn roots(
         index = entry.instance;
         id = entry.first;
 #else
-        let mesh = instances[e].mesh;
-        if mesh < arrayLength(&hierarchy_roots) {
-            id = hierarchy_roots[mesh];
+        let instance = instance_at(e);
+        // An instance without meshlets (a placeholder that only keeps a binding from
+        // being empty) has nothing to walk.
+        if instance.mesh < arrayLength(&hierarchy_roots) && instance.meshlet_count > 0u {
+            id = hierarchy_roots[instance.mesh];
         }
 #endif
-        if index >= arrayLength(&instances) || id >= arrayLength(&hierarchy_nodes) {
+        if index >= instance_total() || id >= arrayLength(&hierarchy_nodes) {
             continue;
         }
         walk_instance = index;
@@ -562,7 +564,7 @@ fn fill(
         index = s.instance;
         first = s.first;
         count = min(s.count, QUEUE);
-        if index >= arrayLength(&instances) {
+        if index >= instance_total() {
             count = 0u;
         }
         walk_instance = index;

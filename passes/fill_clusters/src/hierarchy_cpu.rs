@@ -272,6 +272,8 @@ pub fn cpu_walk_with(
             .instances
             .iter()
             .enumerate()
+            // An instance without meshlets has nothing to walk.
+            .filter(|(_, instance)| instance.meshlet_count > 0)
             .filter_map(|(index, instance)| {
                 let &root = scene.hierarchy_roots.get(instance.mesh as usize)?;
                 Some(Entry {

@@ -15,6 +15,7 @@
 //! | slot            | access             | holds   | |
 //! |-----------------|--------------------|---------|---|
 //! | `instances`     | storage read       | Instance | the GPU scene's instances; one workgroup each |
+//! | `instances_high`| storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
 //! | `meshes`        | storage read       | Mesh    | each instance's mesh bounding sphere |
 //! | `clusters`      | storage write      | Cluster | `(instance, meshlet)`; capacity = its size / 8, or the `capacity` param if smaller |
 //! | `cluster_count` | cleared read-write | u32 × 2 | `[0]` clusters written = `min([1], capacity)`, `[1]` clusters requested |
@@ -66,13 +67,13 @@ pub use hierarchy::{HierarchyFill, Mode};
 pub use hierarchy_cpu::{HierarchyWalk, WalkOcclusion, WalkParams, cpu_walk, cpu_walk_with};
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
     SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::cpu::layout::Instance;
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
@@ -110,6 +111,7 @@ pub fn contract() -> StageContract {
                 elements::INSTANCE,
                 "the scene's instances",
             ),
+            instance_table::high_slot(),
             Slot::buffer(
                 "meshes",
                 Access::StorageRead,
@@ -250,8 +252,7 @@ pub(crate) fn instance_grid(
     ctx: &RecordContext<'_>,
     instance_count: Option<u32>,
 ) -> Result<InstanceGrid> {
-    let (_, instance_bytes) = ctx.buffer("instances")?;
-    let bound = (instance_bytes / size_of::<Instance>() as u64).min(u32::MAX as u64) as u32;
+    let bound = instance_table::bound_instances(ctx)?;
     let instance_count = instance_count.unwrap_or(bound).min(bound);
     let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
     let groups = workgroup_grid(instance_count, limit);
@@ -287,8 +288,10 @@ impl Pass for FillClusters {
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("cluster_count", 8);
         ctx.frame_input(VIEW_INPUT);
-        let layout = BindingLayout::compute("fill_clusters")
-            .slot(0, "instances")
+        let table = InstanceTable::of(ctx);
+        ctx.shader_defs(&table);
+        let layout = table
+            .bind(BindingLayout::compute("fill_clusters"))
             .slot(1, "meshes")
             .slot(2, "clusters")
             .slot(3, "cluster_count")
@@ -296,11 +299,15 @@ impl Pass for FillClusters {
             .uniform(5);
         ctx.program(
             "fill",
-            ProgramDesc::compute(&SHADER, "fill").layout(layout.clone()),
+            ProgramDesc::compute(&SHADER, "fill")
+                .defs(&table)
+                .layout(layout.clone()),
         );
         ctx.program(
             "finish",
-            ProgramDesc::compute(&SHADER, "finish").layout(layout),
+            ProgramDesc::compute(&SHADER, "finish")
+                .defs(&table)
+                .layout(layout),
         );
         Ok(())
     }

@@ -32,6 +32,7 @@
 //! | `raster_counts` | storage read | u32 | word 1: hardware clusters, word 3: `C`, the slot capacity |
 //! | `hw_args` | indirect | DrawIndirectArgs | `[384, hw_count, 0, 0]` from `cull_lod` |
 //! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
+//! | `instances_high` | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
 //! | `visbuffer` | storage read-write | u64 / r64uint | `width × height`, row-major buffer or texture; atomicMax onto what `sw_raster` left |
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`): its `viewport_size` must
@@ -62,6 +63,7 @@
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
@@ -114,6 +116,7 @@ pub fn contract() -> StageContract {
                 "[384, hardware cluster count, 0, 0]",
             ),
             read("instances", elements::INSTANCE, "the scene's instances"),
+            instance_table::high_slot(),
             read("meshes", elements::MESH, "the scene's meshes"),
             read("meshlets", elements::MESHLET, "the scene's meshlets"),
             read("payload", Element::U32, "the scene's meshlet payload"),
@@ -242,6 +245,8 @@ impl Pass for HwRaster {
             texture,
         };
         ctx.shader_defs(&defs);
+        let table = InstanceTable::of(ctx);
+        ctx.shader_defs(&table);
         // The stages that read the scene: the vertex stage, or the mesh stage.
         let geometry = if mesh {
             wgpu::ShaderStages::MESH
@@ -252,8 +257,6 @@ impl Pass for HwRaster {
             .slot(0, "raster_clusters")
             .visible_in(geometry)
             .slot(1, "raster_counts")
-            .visible_in(geometry)
-            .slot(2, "instances")
             .visible_in(geometry)
             .slot(3, "meshes")
             .visible_in(geometry)
@@ -267,6 +270,7 @@ impl Pass for HwRaster {
             .visible_in(geometry)
             .uniform(8)
             .visible_in(geometry | wgpu::ShaderStages::FRAGMENT);
+        let layout = table.bind_visible_in(layout, geometry);
         let primitive = Primitive {
             cull_mode: Some(wgpu::Face::Back),
             front_face: wgpu::FrontFace::Ccw,
@@ -281,6 +285,7 @@ impl Pass for HwRaster {
             "raster",
             program
                 .defs(&defs)
+                .defs(&table)
                 .target(ColorTarget::masked(TARGET))
                 .primitive(primitive)
                 .layout(layout),

@@ -12,6 +12,7 @@
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESHLET_MAX_TRIANGLES, MESHLET_MAX_VERTICES, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle}
 #import meshlight::instance::Instance
+#import meshlight::instance_table::instance_at
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
 
@@ -35,7 +36,7 @@ struct Params {
 @group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
 // Word 1: hardware cluster count; word 3: C, the slot capacity.
 @group(0) @binding(1) var<storage, read> raster_counts: array<u32>;
-@group(0) @binding(2) var<storage, read> instances: array<Instance>;
+// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
 @group(0) @binding(3) var<storage, read> meshes: array<Mesh>;
 @group(0) @binding(4) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(5) var<storage, read> payload: array<u32>;
@@ -101,7 +102,7 @@ fn raster_vs(@builtin(vertex_index) v: u32, @builtin(instance_index) j: u32) -> 
     if t >= meshlet_triangle_count(m) {
         return out;
     }
-    let instance = instances[cluster.instance];
+    let instance = instance_at(cluster.instance);
     let mesh = meshes[instance.mesh];
     let at = meshlet_triangle_location(m, mesh.flags, t);
     let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
@@ -154,7 +155,7 @@ fn raster_ms(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
         let slot = capacity - 1u - j;
         let cluster = raster_clusters[slot];
         let m = meshlets[cluster.meshlet];
-        let instance = instances[cluster.instance];
+        let instance = instance_at(cluster.instance);
         let mesh = meshes[instance.mesh];
         vertices = meshlet_vertex_count(m);
         triangles = meshlet_triangle_count(m);

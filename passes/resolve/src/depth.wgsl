@@ -4,6 +4,7 @@
 
 #import meshlight::meshlet::Cluster
 #import meshlight::instance::Instance
+#import meshlight::instance_table::instance_at
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster}
 
 struct Params {
@@ -22,7 +23,7 @@ struct Params {
 @group(0) @binding(0) var<storage, read> visbuffer: array<vec2<u32>>;
 #endif
 @group(0) @binding(1) var<storage, read> raster_clusters: array<Cluster>;
-@group(0) @binding(2) var<storage, read> instances: array<Instance>;
+// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
 @group(0) @binding(3) var<uniform> params: Params;
 
 // 2^-24: material ids map to multiples of it, exact in f32 below 2^24.
@@ -65,5 +66,5 @@ fn material_depth_fs(@builtin(position) position: vec4<f32>) -> @builtin(frag_de
         return 0.0;
     }
     let cluster = raster_clusters[visbuffer_cluster(value)];
-    return material_depth(instances[cluster.instance].material);
+    return material_depth(instance_at(cluster.instance).material);
 }

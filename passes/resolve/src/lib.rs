@@ -43,6 +43,7 @@
 //! | `raster_clusters` | storage read | Cluster | the slots the visibility ids index |
 //! | `raster_counts` | storage read | u32 | word 0: software clusters (ids below it) |
 //! | `instances`, `meshes`, `meshlets`, `payload`, `materials` | storage read | scene | the GPU scene |
+//! | `instances_high` | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
 //! | `depth` | depth target (optional) | Depth32Float | reverse-Z NDC depth; 0 where empty |
 //! | `material_depth` | depth target (optional) | Depth32Float | [`material_depth`] of the instance's material; 0 where empty |
 //! | `color` | storage write | Rgba8Unorm | the [`DebugView`] chosen; alpha 1 |
@@ -124,6 +125,7 @@ pub mod settings;
 pub use settings::{DebugView, Resolve};
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
@@ -191,6 +193,7 @@ pub fn contract() -> StageContract {
                 "word 0: software clusters (ids below it)",
             ),
             read("instances", elements::INSTANCE, "the scene's instances"),
+            instance_table::high_slot(),
             read("meshes", elements::MESH, "the scene's meshes"),
             read("meshlets", elements::MESHLET, "the scene's meshlets"),
             read("payload", Element::U32, "the scene's meshlet payload"),
@@ -295,15 +298,16 @@ impl Pass for Resolve {
             );
         }
         let fragment = wgpu::ShaderStages::FRAGMENT;
+        let table = InstanceTable::of(ctx);
+        ctx.shader_defs(&table);
         let depth_layout = BindingLayout::render("resolve_depth")
             .slot(0, "visbuffer")
             .visible_in(fragment)
             .slot(1, "raster_clusters")
             .visible_in(fragment)
-            .slot(2, "instances")
-            .visible_in(fragment)
             .uniform(3)
             .visible_in(fragment);
+        let depth_layout = table.bind_visible_in(depth_layout, fragment);
         for (program, entry, target) in DEPTH_RESOLVES {
             if !ctx.is_bound(target) {
                 continue;
@@ -312,6 +316,7 @@ impl Pass for Resolve {
                 program,
                 ProgramDesc::render(&DEPTH_SHADER, "fullscreen_vs")
                     .defs(&DepthDefs { texture })
+                    .defs(&table)
                     .fragment(entry)
                     .depth(DepthTarget {
                         target,
@@ -341,11 +346,11 @@ impl Pass for Resolve {
             occluded_per_instance,
         };
         ctx.shader_defs(&defs);
-        let shade_layout = BindingLayout::compute("resolve_shade")
+        let shade_layout = table
+            .bind(BindingLayout::compute("resolve_shade"))
             .slot(0, "visbuffer")
             .slot(1, "raster_clusters")
             .slot(2, "raster_counts")
-            .slot(3, "instances")
             .slot(4, "meshes")
             .slot(5, "meshlets")
             .slot(6, "payload")
@@ -382,6 +387,7 @@ impl Pass for Resolve {
             "shade",
             ProgramDesc::compute(&SHADE_SHADER, "shade_pixels")
                 .defs(&defs)
+                .defs(&table)
                 .layout(shade_layout),
         );
         ctx.dispatch(

@@ -7,6 +7,7 @@
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv, meshlet_triangle_location, meshlet_triangle}
 #import meshlight::instance::{Instance, Material, instance_transform_normal}
+#import meshlight::instance_table::instance_at
 #import meshlight::view::View
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
 #ifdef CLUSTERED_LIGHTS
@@ -68,7 +69,7 @@ struct Params {
 @group(0) @binding(1) var<storage, read> raster_clusters: array<Cluster>;
 // Word 0: software clusters; ids below it were drawn in software.
 @group(0) @binding(2) var<storage, read> raster_counts: array<u32>;
-@group(0) @binding(3) var<storage, read> instances: array<Instance>;
+// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
 @group(0) @binding(4) var<storage, read> meshes: array<Mesh>;
 @group(0) @binding(5) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(6) var<storage, read> payload: array<u32>;
@@ -284,7 +285,7 @@ fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
     let id = visbuffer_cluster(value);
     let t = visbuffer_triangle(value);
     let cluster = raster_clusters[id];
-    let instance = instances[cluster.instance];
+    let instance = instance_at(cluster.instance);
     let m = meshlets[cluster.meshlet];
     let mesh = meshes[instance.mesh];
     let at = meshlet_triangle_location(m, mesh.flags, t);

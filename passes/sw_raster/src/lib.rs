@@ -28,6 +28,7 @@
 //! | `raster_counts` | storage read | u32 | word 0: software cluster count; with `accumulate`, word 7: their first slot |
 //! | `sw_args` | storage read + indirect | DispatchIndirectArgs | `[x, y, 1]` from `remap_dispatch` |
 //! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
+//! | `instances_high` | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
 //! | `visbuffer` | cleared read-write | u64 / r64uint | `width × height`, row-major buffer or texture; cleared (a buffer fill, or a dispatch for the texture) then atomicMax |
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`): its `viewport_size` must
@@ -88,6 +89,7 @@
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
@@ -130,6 +132,7 @@ pub fn contract() -> StageContract {
             )
             .also(Access::Indirect),
             read("instances", elements::INSTANCE, "the scene's instances"),
+            instance_table::high_slot(),
             read("meshes", elements::MESH, "the scene's meshes"),
             read("meshlets", elements::MESHLET, "the scene's meshlets"),
             read(
@@ -314,11 +317,13 @@ impl Pass for SwRaster {
             ctx.clears_itself("visbuffer");
         }
         let big = self.big_triangle_px > 0;
-        let mut layout = BindingLayout::compute("sw_raster")
+        let table = InstanceTable::of(ctx);
+        ctx.shader_defs(&table);
+        let mut layout = table
+            .bind(BindingLayout::compute("sw_raster"))
             .slot(0, "raster_clusters")
             .slot(1, "raster_counts")
             .slot(2, "sw_args")
-            .slot(3, "instances")
             .slot(4, "meshes")
             .slot(5, "meshlets")
             .slot(6, "payload")
@@ -374,12 +379,14 @@ impl Pass for SwRaster {
             "raster",
             ProgramDesc::compute(&SHADER, "raster")
                 .defs(&defs)
+                .defs(&table)
                 .layout(layout.clone()),
         );
         ctx.program(
             "raster_clipped",
             ProgramDesc::compute(&SHADER, "raster_clipped")
                 .defs(&defs)
+                .defs(&table)
                 .layout(layout.clone()),
         );
         if big {
@@ -387,6 +394,7 @@ impl Pass for SwRaster {
                 "raster_big",
                 ProgramDesc::compute(&SHADER, "raster_big")
                     .defs(&defs)
+                    .defs(&table)
                     .layout(layout),
             );
         }

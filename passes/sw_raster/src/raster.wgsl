@@ -21,6 +21,7 @@
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle}
 #import meshlight::instance::Instance
+#import meshlight::instance_table::instance_at
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
 
@@ -43,7 +44,7 @@ struct Params {
 @group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
 @group(0) @binding(1) var<storage, read> raster_counts: array<u32>;
 @group(0) @binding(2) var<storage, read> sw_args: array<u32>;
-@group(0) @binding(3) var<storage, read> instances: array<Instance>;
+// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
 @group(0) @binding(4) var<storage, read> meshes: array<Mesh>;
 @group(0) @binding(5) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(6) var<storage, read> payload: array<u32>;
@@ -365,7 +366,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     let i = j;
 #endif
     let cluster = raster_clusters[i];
-    let instance = instances[cluster.instance];
+    let instance = instance_at(cluster.instance);
     let m = meshlets[cluster.meshlet];
     let mesh = meshes[instance.mesh];
     if t == 0u {
@@ -436,7 +437,7 @@ struct SlotTriangle {
 
 fn slot_triangle(slot: u32, t: u32) -> SlotTriangle {
     let cluster = raster_clusters[slot];
-    let instance = instances[cluster.instance];
+    let instance = instance_at(cluster.instance);
     let m = meshlets[cluster.meshlet];
     let mesh = meshes[instance.mesh];
     let at = meshlet_triangle_location(m, mesh.flags, t);

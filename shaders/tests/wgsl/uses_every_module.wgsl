@@ -5,6 +5,7 @@
 #import meshlight::view::{View, sphere_in_frustum, project_error_to_pixels, world_to_screen, position_from_depth, view_z_from_depth, pixel_to_uv}
 #import meshlight::octahedral::{pack_octahedral_normal, unpack_octahedral_normal}
 #import meshlight::meshlet::{Meshlet, MeshletGroup, Mesh, Cluster, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, meshlet_triangle_location, meshlet_triangle, meshlet_bounds, meshlet_level, lod_cut}
+#import meshlight::instance_table::{instance_at, instance_total}
 #import meshlight::instance::{Instance, Material, instance_transform_point, instance_transform_normal, instance_transform_sphere, instance_max_scale}
 #import meshlight::visbuffer::{visbuffer_pack, visbuffer_depth, visbuffer_cluster, visbuffer_triangle, visbuffer_nearer, visbuffer_is_empty}
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_index, cluster_of_pixel, z_slice_of_depth}
@@ -13,7 +14,6 @@
 @group(0) @binding(0) var<uniform> view: View;
 @group(0) @binding(1) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(2) var<storage, read> clusters: array<Cluster>;
-@group(0) @binding(3) var<storage, read> instances: array<Instance>;
 @group(0) @binding(4) var<storage, read> words: array<u32>;
 @group(0) @binding(5) var<uniform> grid: ClusterGrid;
 @group(0) @binding(6) var<storage, read> objects: array<ClusterableObject>;
@@ -26,7 +26,7 @@
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let cluster = clusters[id.x];
     let meshlet = meshlets[cluster.meshlet];
-    let instance = instances[cluster.instance];
+    let instance = instance_at(cluster.instance);
 
     let mesh = meshes[instance.mesh];
     var offset = vec3(0u);
@@ -66,6 +66,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             + f32(visbuffer_nearer(vis, other)) + f32(visbuffer_is_empty(vis))
             + f32(cluster_index(grid, c)) + f32(hit) + f32(z_slice_of_depth(grid, screen.z))
             + project_error_to_pixels(view, sphere.xyz, sphere.w, group.error)
-            + math::saturate(math::PI) + f32(math::div_ceil(id.x, 64u)),
+            + math::saturate(math::PI) + f32(math::div_ceil(id.x, 64u)) + f32(instance_total()),
     );
 }
