@@ -419,7 +419,8 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
 /// How the frame's cost grows with the scene: n³ copies of a mesh (the bunny unless
 /// `meshes` names another) for n = 1, 2, 4, 8, 16, 32 (1 to 32,768 copies) at 2240×1260,
 /// each framed by the lattice's camera. Per size: the frame's GPU time, the work tested
-/// (hierarchy nodes and candidate clusters), the LOD cut and the triangles rasterised.
+/// (hierarchy nodes and candidate clusters), the LOD cut and the triangles rasterised;
+/// for one copy, the per-pass profile too (the frame's floor).
 pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     let mesh = meshes
         .first()
@@ -445,6 +446,14 @@ pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
             FrameSettings::new(width, height),
             if quick { 3 } else { 30 },
         )?;
+        if n == 1 {
+            // The floor of the frame, pass by pass: what a nearly empty scene costs.
+            rows.extend(
+                rows_of("vg-scale", &case, &m)
+                    .into_iter()
+                    .filter(|r| r.metric.contains("(timing mode passes)")),
+            );
+        }
         let c = &m.counts;
         let nodes = c.hierarchy.map_or(0, |h| h.nodes_tested);
         for (metric, value, unit) in [
@@ -473,8 +482,8 @@ pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
 /// 1,048,576 copies of a mesh (the Stanford bunny unless `meshes` names another; 4,096
 /// with `quick`) on the default scene's field and ground at 2560×1440: scale, where the
 /// instance records alone are 224 MiB. Measured twice: the table in one binding as the
-/// adapter's limits allow, and split in two at wgpu's default 128 MiB binding (599,186
-/// instances; half the instances with `quick`), as on an adapter with that limit.
+/// adapter's limits allow, and split in two bindings, the first holding wgpu's default
+/// binding of 599,186 instances or half the instances, whichever is fewer.
 pub fn million(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     let mesh = meshes
         .first()
