@@ -9,7 +9,7 @@ pub enum BindingSource {
     /// A contract slot.
     Slot(&'static str),
     /// A scratch buffer the pass declared in setup, used with this access.
-    Scratch(&'static str, Access),
+    Scratch(std::borrow::Cow<'static, str>, Access),
     /// A small uniform block whose bytes the pass passes when it builds the bind group.
     Uniform,
     /// A sampler the graph creates and caches.
@@ -74,26 +74,48 @@ pub struct LayoutEntry {
 }
 
 /// One bind group of a pipeline, as a labelled list of slot bindings.
+///
+/// A layout made [`Self::from_shader`] lists only what the shader cannot say (samplers);
+/// every other binding the program's entry points use is read from the composed module
+/// when the program is built: a WGSL global named like a slot binds that slot, one named
+/// like a scratch resource binds it, a `var<uniform>` takes the bytes the pass gives for
+/// its binding number. A global that matches nothing, or writes a read-only slot, or
+/// whose array element differs from the slot's, is an error naming the variable.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct BindingLayout {
     pub label: &'static str,
     pub visibility: wgpu::ShaderStages,
     pub entries: Vec<LayoutEntry>,
+    /// Fill in the shader's other bindings when the program is built.
+    pub reflect: bool,
 }
 
 impl BindingLayout {
     pub fn compute(label: &'static str) -> Self {
-        Self {
-            label,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            entries: Vec::new(),
-        }
+        Self::with_visibility(label, wgpu::ShaderStages::COMPUTE)
     }
     pub fn with_visibility(label: &'static str, visibility: wgpu::ShaderStages) -> Self {
         Self {
             label,
             visibility,
             entries: Vec::new(),
+            reflect: false,
+        }
+    }
+    /// The layout of group 0 read from the shader, for a compute program (see the type's
+    /// docs); chain `.sampler(..)` for what a name cannot say.
+    pub fn from_shader(label: &'static str) -> Self {
+        Self {
+            reflect: true,
+            ..Self::compute(label)
+        }
+    }
+    /// [`Self::from_shader`] for a render program (explicit entries default to vertex +
+    /// fragment; read ones get the stages that use them).
+    pub fn from_shader_render(label: &'static str) -> Self {
+        Self {
+            reflect: true,
+            ..Self::render(label)
         }
     }
     /// Vertex + fragment (+ mesh and task where a mesh program uses the layout).
@@ -114,7 +136,7 @@ impl BindingLayout {
         self.push(binding, BindingSource::Slot(slot))
     }
     pub fn scratch(self, binding: u32, name: &'static str, access: Access) -> Self {
-        self.push(binding, BindingSource::Scratch(name, access))
+        self.push(binding, BindingSource::Scratch(name.into(), access))
     }
     pub fn uniform(self, binding: u32) -> Self {
         self.push(binding, BindingSource::Uniform)

@@ -7,6 +7,7 @@ pub mod frame;
 pub mod layout;
 pub mod physical;
 pub mod programs;
+pub(crate) mod reflect;
 pub mod readback;
 pub mod record;
 mod ring;

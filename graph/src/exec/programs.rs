@@ -4,6 +4,7 @@
 
 use crate::error::{GraphError, Result};
 use crate::exec::layout::{BindingLayout, SamplerKind};
+use crate::exec::reflect::{ShaderGlobal, globals};
 use crate::program::ProgramDesc;
 use meshlight_shaders::{PassShader, ShaderDef, ShaderLibrary};
 use std::collections::HashMap;
@@ -74,6 +75,8 @@ pub(crate) struct ModuleKey {
 #[derive(Clone, PartialEq, Eq, Hash)]
 pub(crate) struct ProgramKey {
     pub desc: ProgramDesc,
+    /// The declared layouts with the bindings read from the shader filled in.
+    pub expanded: Vec<crate::exec::BindingLayout>,
     pub layouts: Vec<Vec<wgpu::BindGroupLayoutEntry>>,
     pub target_formats: Vec<wgpu::TextureFormat>,
     pub depth_format: Option<wgpu::TextureFormat>,
@@ -105,7 +108,7 @@ pub(crate) enum AnyProgram {
 
 pub(crate) struct Programs {
     pub library: Option<ShaderLibrary>,
-    modules: HashMap<ModuleKey, wgpu::ShaderModule>,
+    modules: HashMap<ModuleKey, (wgpu::ShaderModule, Arc<Vec<ShaderGlobal>>)>,
     programs: HashMap<ProgramKey, AnyProgram>,
     /// Per (compiled graph, pass): its declared programs, by declaration index, once
     /// built or found. Layout entries and formats are fixed by the compiled graph, so a
@@ -171,6 +174,8 @@ impl Programs {
             .clone()
     }
 
+    /// The composed module of `key`, and the resource globals it declares (for layouts
+    /// read from the shader).
     pub fn module(
         &mut self,
         device: &wgpu::Device,
@@ -178,7 +183,7 @@ impl Programs {
         pass: &str,
         shader: &PassShader,
         key: ModuleKey,
-    ) -> Result<wgpu::ShaderModule> {
+    ) -> Result<(wgpu::ShaderModule, Arc<Vec<ShaderGlobal>>)> {
         if let Some(m) = self.modules.get(&key) {
             return Ok(m.clone());
         }
@@ -201,12 +206,17 @@ impl Programs {
                 pass: pass.to_string(),
                 source,
             })?;
+        let globals = Arc::new(globals(&naga).map_err(|message| GraphError::Record {
+            pass: pass.to_string(),
+            message: format!("shader `{}` ({}): {message}", shader.name, shader.file_path),
+        })?);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(shader.name),
             source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(naga)),
         });
-        self.modules.insert(key, module.clone());
-        Ok(module)
+        self.modules
+            .insert(key, (module.clone(), globals.clone()));
+        Ok((module, globals))
     }
 
     pub fn compute(&self, key: &ProgramKey) -> Option<Arc<ComputeProgram>> {

@@ -435,7 +435,9 @@ impl<'a> RecordContext<'a> {
                         })?;
                         self.binding_type(name, slot.access, e)?
                     }
-                    BindingSource::Scratch(name, access) => self.binding_type(name, *access, e)?,
+                    BindingSource::Scratch(name, access) => {
+                        self.binding_type(name, *access, e)?
+                    }
                     BindingSource::Uniform => buffer_binding_type(crate::access::Access::Uniform)
                         .expect("uniform is a buffer binding"),
                     BindingSource::Sampler(kind) => kind.binding_type(),
@@ -508,9 +510,38 @@ impl<'a> RecordContext<'a> {
         }
     }
 
-    fn program_key(&self, desc: &ProgramDesc) -> Result<ProgramKey> {
-        let layouts = desc
-            .layouts
+    fn program_key(&mut self, desc: &ProgramDesc) -> Result<ProgramKey> {
+        let native_immediates = self.features.contains(wgpu::Features::IMMEDIATES);
+        let expanded = if desc.layouts.iter().any(|l| l.reflect) {
+            let (_, globals) = self.programs.module(
+                self.device,
+                self.features,
+                &self.node.name,
+                desc.shader,
+                module_key(desc, native_immediates),
+            )?;
+            let names = self.reflection_names();
+            let entries = desc.entries();
+            desc.layouts
+                .iter()
+                .enumerate()
+                .map(|(group, l)| {
+                    if !l.reflect {
+                        return Ok(l.clone());
+                    }
+                    crate::exec::reflect::expand(l, group as u32, &globals, &entries, &names)
+                        .map_err(|m| {
+                            self.err(format!(
+                                "shader {} variable `{}`: {}",
+                                desc.shader.file_path, m.variable, m.message
+                            ))
+                        })
+                })
+                .collect::<Result<Vec<_>>>()?
+        } else {
+            desc.layouts.clone()
+        };
+        let layouts = expanded
             .iter()
             .map(|l| self.layout_entries(l))
             .collect::<Result<Vec<_>>>()?;
@@ -529,11 +560,43 @@ impl<'a> RecordContext<'a> {
         };
         Ok(ProgramKey {
             desc: desc.clone(),
+            expanded,
             layouts,
             target_formats,
             depth_format,
-            native_immediates: self.features.contains(wgpu::Features::IMMEDIATES),
+            native_immediates,
         })
+    }
+
+    /// The pass's slots and scratch resources, for layouts read from the shader.
+    fn reflection_names(&self) -> crate::exec::reflect::Names {
+        let contract = &self.node.contract;
+        let slots = contract
+            .slots
+            .iter()
+            .map(|s| {
+                let element = match &s.kind {
+                    crate::contract::SlotKind::Buffer { element: Some(e) } => e.size,
+                    _ => 0,
+                };
+                (s.name, s.access, element)
+            })
+            .collect();
+        let prefix = format!("{}/", self.node.name);
+        let scratch = self.plan.passes[self.pass_index]
+            .scratch
+            .iter()
+            .filter_map(|&r| {
+                let name = self.plan.resources[r].info.name.strip_prefix(&prefix)?;
+                Some(name.to_string())
+            })
+            .collect();
+        crate::exec::reflect::Names {
+            stage: contract.stage,
+            slots,
+            all_slots: self.node.pass.contract().slot_names(),
+            scratch,
+        }
     }
 
     /// The module, bind-group layouts and pipeline layout of a program.
@@ -542,34 +605,26 @@ impl<'a> RecordContext<'a> {
         key: &ProgramKey,
     ) -> Result<(wgpu::ShaderModule, ProgramLayouts, wgpu::PipelineLayout)> {
         let desc = &key.desc;
-        let mut defs: Vec<(&'static str, ShaderDef)> = desc.defs.clone();
         let immediates = if desc.immediate_size == 0 {
             ImmediateMode::None
+        } else if key.native_immediates {
+            ImmediateMode::Native {
+                size: desc.immediate_size,
+            }
         } else {
-            defs.retain(|(n, _)| *n != "IMMEDIATES");
-            defs.push(("IMMEDIATES", ShaderDef::Bool(key.native_immediates)));
-            if key.native_immediates {
-                ImmediateMode::Native {
-                    size: desc.immediate_size,
-                }
-            } else {
-                ImmediateMode::Uniform {
-                    group: desc.layouts.len() as u32,
-                }
+            ImmediateMode::Uniform {
+                group: desc.layouts.len() as u32,
             }
         };
-        let module = self.programs.module(
+        let (module, _) = self.programs.module(
             self.device,
             self.features,
             &self.node.name,
             desc.shader,
-            ModuleKey {
-                shader: desc.shader.name,
-                defs,
-            },
+            module_key(desc, key.native_immediates),
         )?;
-        let mut groups: Vec<(crate::exec::BindingLayout, wgpu::BindGroupLayout)> = desc
-            .layouts
+        let mut groups: Vec<(crate::exec::BindingLayout, wgpu::BindGroupLayout)> = key
+            .expanded
             .iter()
             .zip(&key.layouts)
             .map(|(l, entries)| {
@@ -806,7 +861,8 @@ impl<'a> RecordContext<'a> {
         let mut entries = Vec::with_capacity(layout.entries.len());
         for e in &layout.entries {
             let bound = match &e.source {
-                BindingSource::Slot(name) | BindingSource::Scratch(name, _) => self.bound(name)?,
+                BindingSource::Slot(name) => self.bound(name)?,
+                BindingSource::Scratch(name, _) => self.bound(name)?,
                 BindingSource::Uniform => {
                     let bytes = uniforms
                         .iter()
@@ -1028,5 +1084,19 @@ impl<'a> RecordContext<'a> {
         self.readbacks
             .record(self.device, self.encoder, copy)
             .map_err(|m| self.err(m))
+    }
+}
+
+/// The module a program composes: its shader with its defs, and `IMMEDIATES` set for how
+/// immediate data reaches it.
+fn module_key(desc: &ProgramDesc, native_immediates: bool) -> ModuleKey {
+    let mut defs: Vec<(&'static str, ShaderDef)> = desc.defs.clone();
+    if desc.immediate_size != 0 {
+        defs.retain(|(n, _)| *n != "IMMEDIATES");
+        defs.push(("IMMEDIATES", ShaderDef::Bool(native_immediates)));
+    }
+    ModuleKey {
+        shader: desc.shader.name,
+        defs,
     }
 }

@@ -142,17 +142,17 @@ pub const DATA_SLOTS: [&str; 3] = ["hierarchy_nodes", "hierarchy_clusters", "hie
 /// The counters' slot; a scratch buffer when it is left unbound.
 pub const COUNTS_SLOT: &str = "hierarchy_counts";
 /// Scratch: the lists' lengths, one word per spreading step, then the roots list's.
-const LIST_COUNTS: &str = "hierarchy_subtree_counts";
+const LIST_COUNTS: &str = "subtree_counts";
 /// Scratch: the roots list, step 0's entries, 12 bytes each.
-const ROOTS: &str = "hierarchy_roots_list";
+const ROOTS: &str = "root_list";
 /// Scratch: step 0's indirect dispatch.
-const WALK_ARGS: &str = "hierarchy_walk_args";
+const WALK_ARGS: &str = "walk_args";
 /// Entries of the roots list: a root that finds it full emits every meshlet below it.
 pub const ROOT_CAPACITY: u32 = 1 << 20;
 /// Workgroups (of 64 threads) the second walk's roots pass strides with.
 const ROOT_GROUPS: u32 = 1024;
 /// Scratch: the lists of handed-on subtrees, 12 bytes an entry.
-const LISTS: &str = "hierarchy_subtrees";
+const LISTS: &str = "subtrees";
 
 /// Which walk of the frame this is (two-pass occlusion culling, DESIGN §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -417,26 +417,15 @@ impl Pass for HierarchyFill {
         ctx.frame_input(VIEW_INPUT);
         let count_words = if occlusion { OCCLUSION_COUNT_WORDS } else { 4 };
         // A scratch buffer holds the entry counters too; a bound one holds them when
-        // it has room (the kernel checks its length).
-        let mut layout = table
-            .bind(BindingLayout::compute("fill_clusters::hierarchy"))
-            .slot(1, "clusters")
-            .slot(2, "cluster_count")
-            .uniform(3)
-            .uniform(4)
-            .slot(5, "hierarchy_nodes")
-            .slot(6, "hierarchy_clusters")
-            .slot(7, "hierarchy_roots");
+        // it has room (the kernel checks its length). Either binds by its name.
         if ctx.is_bound(COUNTS_SLOT) {
             ctx.min_bytes(COUNTS_SLOT, count_words * 4);
-            layout = layout.slot(8, COUNTS_SLOT);
         } else {
             ctx.scratch_buffer(
                 COUNTS_SLOT,
                 BufferDesc::array(Element::U32, ENTRY_COUNT_WORDS),
                 &[Access::ClearedReadWrite],
             );
-            layout = layout.scratch(8, COUNTS_SLOT, Access::ClearedReadWrite);
         }
         // The lists (at least one entry, so the binding exists with no spreading step).
         ctx.scratch_buffer(
@@ -460,12 +449,10 @@ impl Pass for HierarchyFill {
             BufferDesc::array(Element::U32, words),
             &[Access::ClearedReadWrite],
         );
-        layout = layout
-            .scratch(9, LIST_COUNTS, Access::ClearedReadWrite)
-            .scratch(10, LISTS, Access::ClearedReadWrite)
-            .scratch(14, ROOTS, Access::StorageReadWrite);
+        // Bindings from the shader; one WGSL variable, `node_list`, is the first walk's
+        // output slot or the second walk's input slot, so those two are named here.
+        let mut layout = BindingLayout::from_shader("fill_clusters::hierarchy");
         if occlusion {
-            layout = layout.slot(11, PYRAMID_SLOT);
             if second {
                 ctx.min_bytes(CANDIDATE_NODE_COUNT_SLOT, 4);
                 layout = layout
@@ -479,15 +466,13 @@ impl Pass for HierarchyFill {
                     .slot(13, OCCLUDED_NODE_COUNT_SLOT);
             }
         }
-        // `walk_dispatch` writes the arguments `fill` is dispatched with: only its layout
-        // binds them as storage.
-        let dispatch = layout.clone().scratch(15, WALK_ARGS, Access::StorageWrite);
+        // Only `walk_dispatch` uses `walk_args` as storage; `fill` is dispatched with it.
         ctx.program(
             "walk_dispatch",
             ProgramDesc::compute(&SHADER, "walk_dispatch")
                 .defs(&defs)
                 .defs(&table)
-                .layout(dispatch),
+                .layout(layout.clone()),
         );
         for entry in ["prepare", "roots", "fill"] {
             ctx.program(

@@ -290,13 +290,7 @@ impl Pass for FillClusters {
         ctx.frame_input(VIEW_INPUT);
         let table = InstanceTable::of(ctx);
         ctx.shader_defs(&table);
-        let layout = table
-            .bind(BindingLayout::compute("fill_clusters"))
-            .slot(1, "meshes")
-            .slot(2, "clusters")
-            .slot(3, "cluster_count")
-            .uniform(4)
-            .uniform(5);
+        let layout = BindingLayout::from_shader("fill_clusters");
         ctx.program(
             "fill",
             ProgramDesc::compute(&SHADER, "fill")

@@ -1,0 +1,193 @@
+//! Layouts read from the shader (`BindingLayout::from_shader`): WGSL globals named like
+//! slots and scratch resources bind them, uniforms take the bytes given for their binding,
+//! and every mismatch is an error naming the file, the variable and the slot (lavapipe
+//! in CI).
+
+mod support;
+
+use meshlight_graph::*;
+use support::gpu;
+
+const N: u32 = 64;
+
+const GOOD: PassShader = PassShader {
+    name: "test::reflect_good",
+    source: "
+struct Params { scale: u32, add: u32, _a: u32, _b: u32 }
+@group(0) @binding(0) var<storage, read> input: array<u32>;
+@group(0) @binding(1) var<storage, read_write> output: array<u32>;
+@group(0) @binding(5) var<uniform> params: Params;
+@group(0) @binding(7) var<storage, read_write> words: array<u32>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if i >= arrayLength(&output) { return; }
+    words[i] = input[i] * params.scale;
+    output[i] = words[i] + params.add;
+}
+",
+    file_path: "graph/tests/bindings_from_shader.rs (good)",
+};
+
+/// A variable named after nothing the pass has.
+const STRAY: PassShader = PassShader {
+    name: "test::reflect_stray",
+    source: "
+@group(0) @binding(0) var<storage, read> input: array<u32>;
+@group(0) @binding(1) var<storage, read_write> output: array<u32>;
+@group(0) @binding(2) var<storage, read> stray: array<u32>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    output[id.x] = input[id.x] + stray[id.x];
+}
+",
+    file_path: "graph/tests/bindings_from_shader.rs (stray)",
+};
+
+/// Writes the slot the contract only reads.
+const WRITES_INPUT: PassShader = PassShader {
+    name: "test::reflect_writes_input",
+    source: "
+@group(0) @binding(0) var<storage, read_write> input: array<u32>;
+@group(0) @binding(1) var<storage, read_write> output: array<u32>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    input[id.x] = 1u;
+    output[id.x] = input[id.x];
+}
+",
+    file_path: "graph/tests/bindings_from_shader.rs (writes input)",
+};
+
+/// Reads the slot's u32 elements as vec2<u32>.
+const WIDE: PassShader = PassShader {
+    name: "test::reflect_wide",
+    source: "
+@group(0) @binding(0) var<storage, read> input: array<vec2<u32>>;
+@group(0) @binding(1) var<storage, read_write> output: array<u32>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    output[id.x] = input[id.x].x;
+}
+",
+    file_path: "graph/tests/bindings_from_shader.rs (wide)",
+};
+
+struct Reflected {
+    shader: &'static PassShader,
+}
+
+impl Pass for Reflected {
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: "scale",
+            slots: vec![
+                Slot::buffer("input", Access::StorageRead, Element::U32, "values"),
+                Slot::buffer("output", Access::StorageWrite, Element::U32, "scaled"),
+            ],
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "reflected"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        ctx.scratch_buffer(
+            "words",
+            BufferDesc::array(Element::U32, N as u64),
+            &[Access::StorageReadWrite],
+        );
+        ctx.program(
+            "main",
+            ProgramDesc::compute(self.shader, "main").layout(BindingLayout::from_shader("scale")),
+        );
+        Ok(())
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let program = ctx.compute("main")?;
+        let params = [3u32, 7, 0, 0];
+        let group = ctx.bind_group(&program, 0, &[(5, bytemuck::cast_slice(&params))])?;
+        let mut pass = ctx.compute_pass();
+        pass.set_pipeline(&program.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(N.div_ceil(64), 1, 1);
+        Ok(())
+    }
+}
+
+/// Runs the pass with `shader` once; the output, or the error.
+fn run(shader: &'static PassShader) -> std::result::Result<Vec<u32>, GraphError> {
+    let gpu = gpu();
+    let input: Vec<u32> = (0..N).collect();
+    let mut g = GraphBuilder::new();
+    let input_handle = g.import_buffer(
+        "input",
+        BufferDesc::array(Element::U32, N as u64),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let output = g.create_buffer("output", BufferDesc::array(Element::U32, N as u64));
+    let out = g.add_pass(
+        "scale",
+        Reflected { shader },
+        Bindings::new()
+            .bind("input", input_handle)
+            .bind("output", output),
+    )?;
+    g.export(out.buffer("output").unwrap());
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
+    let buffer = gpu.buffer_with_data(
+        "input",
+        bytemuck::cast_slice(&input),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let mut exec = Executor::new(gpu);
+    exec.execute(&compiled, &Imports::new().buffer("input", &buffer))?;
+    Ok(bytemuck::pod_collect_to_vec(&exec.read_buffer("output")?))
+}
+
+fn error_of(shader: &'static PassShader) -> String {
+    match run(shader) {
+        Err(e) => e.to_string(),
+        Ok(out) => panic!("{} ran: {out:?}", shader.name),
+    }
+}
+
+#[test]
+fn slots_scratch_and_uniforms_bind_by_their_names_in_the_shader() {
+    let out = run(&GOOD).unwrap_or_else(|e| panic!("{e}"));
+    let want: Vec<u32> = (0..N).map(|i| i * 3 + 7).collect();
+    assert_eq!(out, want);
+}
+
+#[test]
+fn a_variable_that_matches_nothing_is_named_with_what_it_could_be() {
+    let e = error_of(&STRAY);
+    assert!(
+        e.contains("(stray)")
+            && e.contains("`stray`")
+            && e.contains("matches no slot of stage `scale` (input, output)")
+            && e.contains("no scratch resource (words)"),
+        "{e}"
+    );
+}
+
+#[test]
+fn writing_a_read_only_slot_is_an_error_naming_the_slot() {
+    let e = error_of(&WRITES_INPUT);
+    assert!(
+        e.contains("(writes input)")
+            && e.contains("slot `input` is storage-read")
+            && e.contains("declares it writable"),
+        "{e}"
+    );
+}
+
+#[test]
+fn an_element_size_unlike_the_slots_is_an_error_naming_both_sizes() {
+    let e = error_of(&WIDE);
+    assert!(
+        e.contains("(wide)")
+            && e.contains("slot `input` holds elements of 4 bytes")
+            && e.contains("8-byte elements"),
+        "{e}"
+    );
+}
