@@ -214,8 +214,7 @@ impl Programs {
             label: Some(shader.name),
             source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(naga)),
         });
-        self.modules
-            .insert(key, (module.clone(), globals.clone()));
+        self.modules.insert(key, (module.clone(), globals.clone()));
         Ok((module, globals))
     }
 

@@ -435,9 +435,7 @@ impl<'a> RecordContext<'a> {
                         })?;
                         self.binding_type(name, slot.access, e)?
                     }
-                    BindingSource::Scratch(name, access) => {
-                        self.binding_type(name, *access, e)?
-                    }
+                    BindingSource::Scratch(name, access) => self.binding_type(name, *access, e)?,
                     BindingSource::Uniform => buffer_binding_type(crate::access::Access::Uniform)
                         .expect("uniform is a buffer binding"),
                     BindingSource::Sampler(kind) => kind.binding_type(),

@@ -79,9 +79,7 @@ pub(crate) fn globals(module: &naga::Module) -> Result<Vec<ShaderGlobal>, String
                 },
             ) => GlobalKind::StorageTexture {
                 reads: access.contains(naga::StorageAccess::LOAD),
-                writes: access.intersects(
-                    naga::StorageAccess::STORE | naga::StorageAccess::ATOMIC,
-                ),
+                writes: access.intersects(naga::StorageAccess::STORE | naga::StorageAccess::ATOMIC),
             },
             (_, naga::TypeInner::Image { .. }) => GlobalKind::Sampled,
             _ => continue,
@@ -260,12 +258,15 @@ fn check_slot(g: &ShaderGlobal, slot: &str, access: Access, element: u32) -> Res
             ),
         ));
     }
+    // A buffer of records may also be read as 4-byte words (indirect arguments as
+    // `array<atomic<u32>>`); any other stride must be the record's.
     if let GlobalKind::Buffer {
         element: Some(stride),
         ..
     } = g.kind
         && element > 0
         && stride != element
+        && !(stride == 4 && element % 4 == 0)
     {
         return Err(mismatch(
             g,

@@ -248,13 +248,7 @@ impl Pass for BruteForce {
         // so `lod0_buffers` keeps the two consistent.
         ctx.min_bytes("positions", 16);
         ctx.frame_input(VIEW_INPUT);
-        let layout = BindingLayout::render("brute_force")
-            .slot(0, "positions")
-            .visible_in(wgpu::ShaderStages::VERTEX)
-            .slot(1, "instances")
-            .visible_in(wgpu::ShaderStages::VERTEX)
-            .uniform(2)
-            .visible_in(wgpu::ShaderStages::VERTEX);
+        let layout = BindingLayout::from_shader_render("brute_force");
         ctx.program(
             "draw",
             ProgramDesc::render(&SHADER, "draw_vs")

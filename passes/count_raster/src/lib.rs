@@ -111,28 +111,11 @@ pub fn contract() -> StageContract {
 /// The raster implementation's bindings: the quad's vertices need the instance, object
 /// and grid; only the fragment shader counts.
 fn raster_layout() -> BindingLayout {
-    let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
-    BindingLayout::render("count_raster::raster")
-        .slot(0, "objects")
-        .visible_in(both)
-        .slot(1, "slice_instances")
-        .visible_in(both)
-        .slot(3, "cluster_grid")
-        .visible_in(both)
-        .slot(4, "cluster_counts")
-        .visible_in(wgpu::ShaderStages::FRAGMENT)
-        .uniform(5)
-        .visible_in(both)
+    BindingLayout::from_shader_render("count_raster::raster")
 }
 
 fn compute_layout() -> BindingLayout {
-    BindingLayout::compute("count_raster::compute")
-        .slot(0, "objects")
-        .slot(1, "slice_instances")
-        .slot(2, "slice_counts")
-        .slot(3, "cluster_grid")
-        .slot(4, "cluster_counts")
-        .uniform(5)
+    BindingLayout::from_shader("count_raster::compute")
 }
 
 fn setup_common(ctx: &mut SetupContext) {

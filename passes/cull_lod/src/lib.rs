@@ -507,41 +507,23 @@ impl Pass for CullLod {
             BufferDesc::array(Element::DISPATCH_ARGS, 1),
             &[Access::StorageWrite, Access::StorageRead, Access::Indirect],
         );
-        let mut prepare = BindingLayout::compute("cull_lod::prepare")
-            .slot(0, "clusters")
-            .slot(1, "cluster_count")
-            .slot(5, "raster_clusters")
-            .slot(6, "raster_counts")
-            .slot(7, "hw_args")
-            .scratch(8, "dispatch", Access::StorageWrite)
-            .uniform(11);
-        let mut cull = table
-            .bind(BindingLayout::compute("cull_lod::cull"))
-            .slot(0, "clusters")
-            .slot(1, "cluster_count")
-            .slot(3, "meshlets")
-            .slot(4, "meshlet_groups")
-            .slot(5, "raster_clusters")
-            .slot(6, "raster_counts")
-            .slot(7, "hw_args")
-            .scratch(9, "dispatch", Access::StorageRead)
-            .uniform(10)
-            .uniform(11);
+        // Bindings from the shader. Named here: the dispatch arguments, which `prepare`
+        // writes as `dispatch_out` and `cull` reads as `dispatch_in` (two variables, one
+        // scratch buffer), and the per-instance counters, one variable for the two slots
+        // of the two modes.
+        let prepare = BindingLayout::from_shader("cull_lod::prepare").scratch(
+            8,
+            "dispatch",
+            Access::StorageWrite,
+        );
+        let mut cull = BindingLayout::from_shader("cull_lod::cull").scratch(
+            9,
+            "dispatch",
+            Access::StorageRead,
+        );
         if occlusion {
-            cull = cull.slot(12, "pyramid");
-            if second {
-                prepare = prepare.slot(15, "first_counts");
-                cull = cull.slot(15, "first_counts");
-                if walked {
-                    ctx.min_bytes(WALKED_COUNT_SLOT, 4);
-                    for (binding, slot) in [(17, WALKED_SLOT), (18, WALKED_COUNT_SLOT)] {
-                        prepare = prepare.slot(binding, slot);
-                        cull = cull.slot(binding, slot);
-                    }
-                }
-            } else {
-                prepare = prepare.slot(14, "occluded_count");
-                cull = cull.slot(13, "occluded").slot(14, "occluded_count");
+            if second && walked {
+                ctx.min_bytes(WALKED_COUNT_SLOT, 4);
             }
             if let Some(slot) = per_instance {
                 cull = cull.slot(PER_INSTANCE_BINDING, slot);

@@ -247,30 +247,8 @@ impl Pass for HwRaster {
         ctx.shader_defs(&defs);
         let table = InstanceTable::of(ctx);
         ctx.shader_defs(&table);
-        // The stages that read the scene: the vertex stage, or the mesh stage.
-        let geometry = if mesh {
-            wgpu::ShaderStages::MESH
-        } else {
-            wgpu::ShaderStages::VERTEX
-        };
-        let layout = BindingLayout::render("hw_raster")
-            .slot(0, "raster_clusters")
-            .visible_in(geometry)
-            .slot(1, "raster_counts")
-            .visible_in(geometry)
-            .slot(3, "meshes")
-            .visible_in(geometry)
-            .slot(4, "meshlets")
-            .visible_in(geometry)
-            .slot(5, "payload")
-            .visible_in(geometry)
-            .slot(6, "visbuffer")
-            .visible_in(wgpu::ShaderStages::FRAGMENT)
-            .uniform(7)
-            .visible_in(geometry)
-            .uniform(8)
-            .visible_in(geometry | wgpu::ShaderStages::FRAGMENT);
-        let layout = table.bind_visible_in(layout, geometry);
+        // Bindings from the shader, each visible in the stages that use it.
+        let layout = BindingLayout::from_shader_render("hw_raster");
         let primitive = Primitive {
             cull_mode: Some(wgpu::Face::Back),
             front_face: wgpu::FrontFace::Ccw,
@@ -296,10 +274,7 @@ impl Pass for HwRaster {
                 BufferDesc::array(Element::DISPATCH_ARGS, 1),
                 &[Access::StorageWrite, Access::Indirect],
             );
-            let args = BindingLayout::compute("hw_raster::mesh_dispatch")
-                .slot(1, "raster_counts")
-                .uniform(8)
-                .scratch(9, MESH_ARGS, Access::StorageWrite);
+            let args = BindingLayout::from_shader("hw_raster::mesh_dispatch");
             ctx.program(
                 "mesh_dispatch",
                 ProgramDesc::compute(&MESH_SHADER_SOURCE, "mesh_dispatch")

@@ -122,13 +122,7 @@ impl Steps {
         ctx.min_bytes("list_total", 4);
         ctx.min_bytes("list_counts", 8);
         ctx.frame_input(VIEW_INPUT);
-        let settle = BindingLayout::compute("populate::settle")
-            .slot(4, "cluster_offsets")
-            .slot(6, "cluster_objects")
-            .slot(7, "list_total")
-            .slot(8, "list_counts")
-            .slot(11, "cluster_counts")
-            .uniform(10);
+        let settle = BindingLayout::from_shader("populate::settle");
         ctx.program(
             "settle",
             ProgramDesc::compute(&SHADER, "settle").layout(settle),
@@ -239,27 +233,7 @@ impl Pass for Raster {
         steps.setup(ctx);
         ctx.min_bytes("slice_draw_args", 16);
         declare_tile_target(ctx, TARGET, self.width, self.height)?;
-        let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
-        let fragment = wgpu::ShaderStages::FRAGMENT;
-        let layout = BindingLayout::render("populate::raster")
-            .slot(0, "objects")
-            .visible_in(both)
-            .slot(1, "slice_instances")
-            .visible_in(both)
-            .slot(3, "cluster_grid")
-            .visible_in(both)
-            .slot(4, "cluster_offsets")
-            .visible_in(fragment)
-            .slot(7, "list_total")
-            .visible_in(fragment)
-            .slot(6, "cluster_objects")
-            .visible_in(fragment)
-            .slot(11, "cluster_counts")
-            .visible_in(fragment)
-            .uniform(9)
-            .visible_in(both)
-            .uniform(10)
-            .visible_in(fragment);
+        let layout = BindingLayout::from_shader_render("populate::raster");
         ctx.program(
             "populate",
             ProgramDesc::render(&SHADER, "populate_vs")
@@ -322,17 +296,7 @@ impl Pass for Compute {
             capacity: self.capacity,
         };
         steps.setup(ctx);
-        let layout = BindingLayout::compute("populate::compute")
-            .slot(0, "objects")
-            .slot(1, "slice_instances")
-            .slot(2, "slice_counts")
-            .slot(3, "cluster_grid")
-            .slot(4, "cluster_offsets")
-            .slot(6, "cluster_objects")
-            .slot(7, "list_total")
-            .slot(11, "cluster_counts")
-            .uniform(9)
-            .uniform(10);
+        let layout = BindingLayout::from_shader("populate::compute");
         ctx.program(
             "populate",
             ProgramDesc::compute(&SHADER, "populate_cs").layout(layout),

@@ -113,10 +113,7 @@ impl Pass for RemapDispatch {
         }
         ctx.min_bytes("count", (self.count_word as u64 + 1) * 4);
         ctx.min_bytes("args", 12);
-        let layout = BindingLayout::compute("remap_dispatch")
-            .slot(0, "count")
-            .slot(1, "args")
-            .uniform(2);
+        let layout = BindingLayout::from_shader("remap_dispatch");
         ctx.program(
             "remap",
             ProgramDesc::compute(&SHADER, "remap").layout(layout),

@@ -297,17 +297,9 @@ impl Pass for Resolve {
                 wgpu::Features::SHADER_INT64 | wgpu::Features::TEXTURE_INT64_ATOMIC,
             );
         }
-        let fragment = wgpu::ShaderStages::FRAGMENT;
         let table = InstanceTable::of(ctx);
         ctx.shader_defs(&table);
-        let depth_layout = BindingLayout::render("resolve_depth")
-            .slot(0, "visbuffer")
-            .visible_in(fragment)
-            .slot(1, "raster_clusters")
-            .visible_in(fragment)
-            .uniform(3)
-            .visible_in(fragment);
-        let depth_layout = table.bind_visible_in(depth_layout, fragment);
+        let depth_layout = BindingLayout::from_shader_render("resolve_depth");
         for (program, entry, target) in DEPTH_RESOLVES {
             if !ctx.is_bound(target) {
                 continue;
@@ -346,43 +338,9 @@ impl Pass for Resolve {
             occluded_per_instance,
         };
         ctx.shader_defs(&defs);
-        let shade_layout = table
-            .bind(BindingLayout::compute("resolve_shade"))
-            .slot(0, "visbuffer")
-            .slot(1, "raster_clusters")
-            .slot(2, "raster_counts")
-            .slot(4, "meshes")
-            .slot(5, "meshlets")
-            .slot(6, "payload")
-            .slot(7, "materials")
-            .slot(8, "color")
-            .uniform(9)
-            .uniform(10);
-        let shade_layout = if lit {
-            LIGHT_SLOTS
-                .iter()
-                .zip(11..)
-                .fold(shade_layout, |layout, (slot, binding)| {
-                    layout.slot(binding, slot)
-                })
-        } else {
-            shade_layout
-        };
-        let shade_layout = if pyramid {
-            shade_layout.slot(PYRAMID_BINDING, "pyramid")
-        } else {
-            shade_layout
-        };
-        let shade_layout = if second_counts {
-            shade_layout.slot(SECOND_COUNTS_BINDING, SECOND_COUNTS)
-        } else {
-            shade_layout
-        };
-        let shade_layout = if occluded_per_instance {
-            shade_layout.slot(OCCLUDED_PER_INSTANCE_BINDING, OCCLUDED_PER_INSTANCE)
-        } else {
-            shade_layout
-        };
+        // Bindings from the shader: the defs above decide which of the optional slots
+        // (lights, pyramid, occlusion records) it declares.
+        let shade_layout = BindingLayout::from_shader("resolve_shade");
         ctx.program(
             "shade",
             ProgramDesc::compute(&SHADE_SHADER, "shade_pixels")
@@ -454,12 +412,6 @@ impl Pass for Resolve {
         Ok(())
     }
 }
-
-/// The binding of the `pyramid` texture in shade.wgsl.
-const PYRAMID_BINDING: u32 = 16;
-/// The bindings of the occlusion view's two records in shade.wgsl.
-const SECOND_COUNTS_BINDING: u32 = 17;
-const OCCLUDED_PER_INSTANCE_BINDING: u32 = 18;
 
 /// The slot of the second culling pass's `raster_counts`, read by the `occlusion` view.
 pub const SECOND_COUNTS: &str = "second_counts";

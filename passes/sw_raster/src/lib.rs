@@ -319,17 +319,9 @@ impl Pass for SwRaster {
         let big = self.big_triangle_px > 0;
         let table = InstanceTable::of(ctx);
         ctx.shader_defs(&table);
-        let mut layout = table
-            .bind(BindingLayout::compute("sw_raster"))
-            .slot(0, "raster_clusters")
-            .slot(1, "raster_counts")
-            .slot(2, "sw_args")
-            .slot(4, "meshes")
-            .slot(5, "meshlets")
-            .slot(6, "payload")
-            .slot(7, "visbuffer")
-            .uniform(8)
-            .uniform(9);
+        // Bindings from the shader; the big-triangle count is a slot when bound, else a
+        // scratch buffer of the same name.
+        let layout = BindingLayout::from_shader("sw_raster");
         if big {
             ctx.scratch_buffer(
                 BIG_TILES,
@@ -339,17 +331,14 @@ impl Pass for SwRaster {
                 ),
                 &[Access::StorageReadWrite],
             );
-            layout = layout.scratch(10, BIG_TILES, Access::StorageReadWrite);
             if ctx.is_bound(BIG_COUNT_SLOT) {
                 ctx.min_bytes(BIG_COUNT_SLOT, 8);
-                layout = layout.slot(11, BIG_COUNT_SLOT);
             } else {
                 ctx.scratch_buffer(
                     BIG_COUNT_SLOT,
                     meshlight_graph::BufferDesc::array(meshlight_graph::Element::U32, 2),
                     &[Access::ClearedReadWrite],
                 );
-                layout = layout.scratch(11, BIG_COUNT_SLOT, Access::ClearedReadWrite);
             }
         }
         ctx.scratch_buffer(
@@ -365,9 +354,6 @@ impl Pass for SwRaster {
             meshlight_graph::BufferDesc::array(meshlight_graph::Element::U32, 4),
             &[Access::ClearedReadWrite],
         );
-        layout = layout
-            .scratch(12, CLIP_LIST, Access::StorageReadWrite)
-            .scratch(13, CLIP_COUNT, Access::ClearedReadWrite);
         let defs = RasterDefs {
             exact_division: self.exact_division,
             texture,
@@ -399,9 +385,7 @@ impl Pass for SwRaster {
             );
         }
         if texture && !self.accumulate {
-            let clear = BindingLayout::compute("sw_raster::clear")
-                .slot(0, "visbuffer")
-                .write_only();
+            let clear = BindingLayout::from_shader("sw_raster::clear");
             ctx.program(
                 "clear",
                 ProgramDesc::compute(&CLEAR_SHADER, "clear").layout(clear),
@@ -441,15 +425,12 @@ impl Pass for SwRaster {
                 Some((program, group))
             }
         };
+        let uniforms: [(u32, &[u8]); 2] = [
+            (8, bytemuck::bytes_of(&view)),
+            (9, bytemuck::bytes_of(&params)),
+        ];
         let program = ctx.compute("raster")?;
-        let bind_group = ctx.bind_group(
-            &program,
-            0,
-            &[
-                (8, bytemuck::bytes_of(&view)),
-                (9, bytemuck::bytes_of(&params)),
-            ],
-        )?;
+        let bind_group = ctx.bind_group(&program, 0, &uniforms)?;
         // `buffer` gives the buffer and its size; the arguments start at its beginning.
         let (args, _) = ctx.buffer("sw_args")?;
         if let Some((clear, group)) = clear {
@@ -462,9 +443,13 @@ impl Pass for SwRaster {
                 1,
             );
         }
+        // Each program binds what its entry point uses: a bind group each.
         let clipped = ctx.compute("raster_clipped")?;
+        let clipped_group = ctx.bind_group(&clipped, 0, &uniforms)?;
         let big_program = if big {
-            Some(ctx.compute("raster_big")?)
+            let program = ctx.compute("raster_big")?;
+            let group = ctx.bind_group(&program, 0, &uniforms)?;
+            Some((program, group))
         } else {
             None
         };
@@ -475,9 +460,11 @@ impl Pass for SwRaster {
         pass.dispatch_workgroups_indirect(args, 0);
         // Then the clusters with triangles to clip, then the tiles both listed.
         pass.set_pipeline(&clipped.pipeline);
+        pass.set_bind_group(0, &clipped_group, &[]);
         pass.dispatch_workgroups(CLIP_GROUPS, 1, 1);
-        if let Some(big) = big_program {
+        if let Some((big, group)) = big_program {
             pass.set_pipeline(&big.pipeline);
+            pass.set_bind_group(0, &group, &[]);
             pass.dispatch_workgroups(BIG_GROUPS, 1, 1);
         }
         Ok(())

@@ -5,7 +5,7 @@
 //
 // With BIG_TRIANGLES, a triangle whose clipped box reaches `big_triangle_px` pixels in
 // width or height is not covered by its thread: it is cut into tiles of TILE × TILE
-// pixels of its box, listed in `big`, and `raster_big` covers each tile with a
+// pixels of its box, listed in `big_triangle_tiles`, and `raster_big` covers each tile with a
 // workgroup, a pixel per thread. The pixels, depths and values are the ones the thread
 // would have written (the same setup and the same `shade`), so the reference does not
 // change; only who covers them does. When the list is full the thread covers its
@@ -35,7 +35,7 @@ struct Params {
     zero: u32,
     // BIG_TRIANGLES: boxes this wide or tall are tiled for `raster_big`.
     big_triangle_px: u32,
-    // Entries `big` may hold (clamped to its length too).
+    // Entries `big_triangle_tiles` may hold (clamped to its length too).
     big_capacity: u32,
     _pad0: u32,
     _pad1: u32,
@@ -61,9 +61,9 @@ struct Params {
 // One tile of a big triangle each: x = slot << 7 | triangle, y = tile x | tile y << 14;
 // for a piece of a clipped triangle, x = the piece's index in `clip_list` and bit 31 of
 // y set.
-@group(0) @binding(10) var<storage, read_write> big: array<vec2<u32>>;
+@group(0) @binding(10) var<storage, read_write> big_triangle_tiles: array<vec2<u32>>;
 // [0] tiles listed, [1] tiles asked for (more than [0] when the list was full).
-@group(0) @binding(11) var<storage, read_write> big_count: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read_write> big_triangle_count: array<atomic<u32>>;
 #endif
 // Words [0, CLIP_CLUSTERS): the slots of clusters with a triangle to clip; then, with
 // BIG_TRIANGLES, PIECE_WORDS words per big piece of a clipped triangle: its three
@@ -550,15 +550,15 @@ fn is_big(lo: vec2<i32>, hi: vec2<i32>) -> bool {
 fn list_tiles(x: u32, flag: u32, lo: vec2<i32>, hi: vec2<i32>) -> bool {
     let tiles = (hi - lo + vec2(TILE)) / TILE;
     let n = u32(tiles.x * tiles.y);
-    let base = atomicAdd(&big_count[1], n);
-    let cap = min(params.big_capacity, arrayLength(&big));
+    let base = atomicAdd(&big_triangle_count[1], n);
+    let cap = min(params.big_capacity, arrayLength(&big_triangle_tiles));
     if base >= cap || n > cap - base {
         return false;
     }
-    atomicAdd(&big_count[0], n);
+    atomicAdd(&big_triangle_count[0], n);
     for (var k = 0u; k < n; k += 1u) {
         let tile = vec2(k % u32(tiles.x), k / u32(tiles.x));
-        big[base + k] = vec2(x, tile.x | (tile.y << 14u) | flag);
+        big_triangle_tiles[base + k] = vec2(x, tile.x | (tile.y << 14u) | flag);
     }
     return true;
 }
@@ -593,9 +593,9 @@ fn raster_big(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) t: u32,
 ) {
-    let listed = min(atomicLoad(&big_count[0]), min(params.big_capacity, arrayLength(&big)));
+    let listed = min(atomicLoad(&big_triangle_count[0]), min(params.big_capacity, arrayLength(&big_triangle_tiles)));
     for (var e = wg.x; e < listed; e += groups.x) {
-        let entry = big[e];
+        let entry = big_triangle_tiles[e];
         var setup: Setup;
         if (entry.y & PIECE_TILE) != 0u {
             // A stored piece of a clipped triangle.

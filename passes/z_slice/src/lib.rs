@@ -326,27 +326,8 @@ impl Pass for ZSlice {
             BufferDesc::array(Element::U32, 1),
             &[Access::StorageReadWrite],
         );
-        let prepare = BindingLayout::compute("z_slice::prepare")
-            .slot(0, "objects")
-            .slot(1, "object_count")
-            .slot(2, "slice_instances")
-            .slot(3, "slice_counts")
-            .slot(6, "cluster_grid")
-            .scratch(7, "arrivals", Access::StorageReadWrite)
-            .slot(8, "cluster_counts")
-            .uniform(10)
-            .uniform(11);
-        let slice = BindingLayout::compute("z_slice::slice")
-            .slot(0, "objects")
-            .slot(1, "object_count")
-            .slot(2, "slice_instances")
-            .slot(3, "slice_counts")
-            .slot(4, "slice_draw_args")
-            .slot(5, "slice_dispatch_args")
-            .scratch(7, "arrivals", Access::StorageReadWrite)
-            .uniform(9)
-            .uniform(10)
-            .uniform(11);
+        let prepare = BindingLayout::from_shader("z_slice::prepare");
+        let slice = BindingLayout::from_shader("z_slice::slice");
         ctx.program(
             "prepare",
             ProgramDesc::compute(&SHADER, "prepare").layout(prepare),
