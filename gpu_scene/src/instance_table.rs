@@ -6,22 +6,17 @@
 //! larger scene, [`crate::GpuScene`] fills `instances` to that limit and puts the rest
 //! in `instances_high`; every pass that reads instances imports the WGSL module
 //! `meshlight::instance_table` and reads them through `instance_at(i)`, which picks the
-//! binding. A pass declares the optional slot with [`high_slot`], and in setup calls
-//! [`InstanceTable::of`] and [`InstanceTable::bind`], which add the bindings and the
-//! shader def of the variant the pipeline needs. A scene that fits one binding binds
+//! binding. A pass declares the optional slot with [`high_slot`] and in setup composes its
+//! programs with the defs of [`InstanceTable::of`]; a layout read from the shader then
+//! binds `instances` (and `instances_high`) by name. A scene that fits one binding binds
 //! only `instances` and compiles without the branch.
 
 use crate::gpu::elements;
 use crate::names;
-use meshlight_graph::{
-    Access, BindingLayout, RecordContext, Result, SetupContext, ShaderDef, ShaderDefs, Slot,
-};
+use meshlight_graph::{Access, RecordContext, Result, SetupContext, ShaderDef, ShaderDefs, Slot};
 
 /// The optional second binding's slot (and the GPU scene's buffer of that name).
 pub const HIGH_SLOT: &str = names::INSTANCES_HIGH;
-/// The WGSL bindings of `meshlight::instance_table`.
-pub const BINDING: u32 = 30;
-pub const HIGH_BINDING: u32 = 31;
 /// The def that turns on the second binding in `meshlight::instance_table`.
 pub const HIGH_DEF: &str = "INSTANCES_HIGH";
 
@@ -47,30 +42,6 @@ impl InstanceTable {
     pub fn of(ctx: &SetupContext) -> Self {
         Self {
             split: ctx.is_bound(HIGH_SLOT),
-        }
-    }
-
-    /// Adds the table's slots to `layout` at the bindings the WGSL module declares.
-    pub fn bind(self, layout: BindingLayout) -> BindingLayout {
-        let layout = layout.slot(BINDING, names::INSTANCES);
-        if self.split {
-            layout.slot(HIGH_BINDING, HIGH_SLOT)
-        } else {
-            layout
-        }
-    }
-
-    /// [`Self::bind`] for a render layout whose instances only some stages read.
-    pub fn bind_visible_in(
-        self,
-        layout: BindingLayout,
-        stages: wgpu::ShaderStages,
-    ) -> BindingLayout {
-        let layout = layout.slot(BINDING, names::INSTANCES).visible_in(stages);
-        if self.split {
-            layout.slot(HIGH_BINDING, HIGH_SLOT).visible_in(stages)
-        } else {
-            layout
         }
     }
 }

@@ -331,7 +331,8 @@ impl ShaderDefs for PyramidDefs {
     }
 }
 
-/// Group 1: `views` write-only views of the pyramid's levels (built by [`mips`]).
+/// Group 1: `views` write-only views of the pyramid's levels (built by [`mips`]). Named
+/// here: the shader's `mip0`, `mip1`, … are each one level of the one `pyramid` slot.
 fn levels_layout(views: u32) -> BindingLayout {
     (0..views).fold(BindingLayout::compute("depth_pyramid_levels"), |l, b| {
         l.slot(b, PYRAMID)
@@ -366,10 +367,10 @@ impl Pass for DepthPyramid {
             texture,
         };
         ctx.shader_defs(&defs);
-        let common = BindingLayout::compute("depth_pyramid")
-            .slot(0, VISIBILITY)
-            .scratch(1, TILE_RESULTS, Access::StorageReadWrite)
-            .uniform(2);
+        // Group 0 from the shader; the arrival counter is named here when a `counter`
+        // slot is bound (the shader calls it `arrivals`, as the scratch buffer it is
+        // otherwise).
+        let common = BindingLayout::from_shader("depth_pyramid");
         let levels = levels_layout(self.method.level_bindings());
         match self.method {
             Method::SinglePass => {
@@ -382,7 +383,7 @@ impl Pass for DepthPyramid {
                         BufferDesc::array(Element::U32, 1),
                         &[Access::ClearedReadWrite],
                     );
-                    common.scratch(3, ARRIVALS, Access::ClearedReadWrite)
+                    common
                 };
                 ctx.program(
                     "single_pass",

@@ -158,6 +158,7 @@ impl Pass for ComputeCopy {
         "compute"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        // Named: the shader reads the same two slots as 16-byte and 4-byte words.
         let wide = BindingLayout::compute("copy4")
             .slot(0, "src")
             .slot(1, "dst")

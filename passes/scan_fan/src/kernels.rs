@@ -289,13 +289,9 @@ pub(crate) fn setup(
     ctx.min_bytes("output", bytes);
     ctx.min_bytes("total", 4);
     ctx.min_bytes("count", 4);
-    let scan = scan_layout(ctx.is_bound("total"), gpu_count, vector);
+    let scan = scan_layout(gpu_count, vector);
     for step in steps {
-        let layout = match step.entry {
-            entry::DISPATCH_ARGS => args_layout(),
-            entry::LOOKBACK => scan.clone().scratch(7, "state", Access::StorageReadWrite),
-            _ => scan.clone(),
-        };
+        let layout = scan.clone();
         ctx.program(
             step.entry,
             ProgramDesc::compute(shader, step.entry)
@@ -315,19 +311,12 @@ pub(crate) fn uses_vector_kernels(options: &ScanOptions) -> bool {
     options.tile_access == TileAccess::Vector && options.count >= VECTOR_MIN_COUNT
 }
 
-/// The bind group every kernel but `dispatch_args` uses, from the bound slots; with
-/// `vector`, the input, output and fan once more as 16-byte words (bindings 8–10).
-fn scan_layout(total_bound: bool, gpu_count: bool, vector: bool) -> BindingLayout {
-    let layout = BindingLayout::compute("scan_fan")
-        .slot(0, "input")
-        .slot(1, "output")
-        .scratch(2, "fan", Access::StorageReadWrite);
-    let layout = if total_bound {
-        layout.slot(3, "total")
-    } else {
-        layout.scratch(3, "total", Access::StorageReadWrite)
-    };
-    let layout = layout.uniform(4);
+/// The bind group of every kernel, from the shader. Named here what a name cannot say:
+/// the `count` slot, which the shader calls `gpu_count` (beside its locals named
+/// `count`), and, with `vector`, the input, output and fan once more as 16-byte words
+/// (`input4`, `output4`, `fan4` at bindings 8–10).
+fn scan_layout(gpu_count: bool, vector: bool) -> BindingLayout {
+    let layout = BindingLayout::from_shader("scan_fan");
     let layout = if gpu_count {
         layout.slot(5, "count")
     } else {
@@ -341,13 +330,6 @@ fn scan_layout(total_bound: bool, gpu_count: bool, vector: bool) -> BindingLayou
     } else {
         layout
     }
-}
-
-fn args_layout() -> BindingLayout {
-    BindingLayout::compute("scan_fan.args")
-        .uniform(4)
-        .slot(5, "count")
-        .scratch(6, "args", Access::StorageReadWrite)
 }
 
 /// A step with its pipeline and bind group resolved, ready to encode.

@@ -4,7 +4,7 @@
 // larger than one storage binding may be (the GPU scene then fills the first binding to
 // the limit and puts the rest in `instances_high`). A pass importing this module binds
 // slot `instances` at binding 30 and, when the def `INSTANCES_HIGH` is set, slot
-// `instances_high` at binding 31 (`meshlight_gpu_scene::instance_table` declares both),
+// `instances_high` at binding 31 (slots of those names; see `meshlight_gpu_scene::instance_table`),
 // and reads every instance through `instance_at`, so no pass sees the split.
 
 #import meshlight::instance::Instance
