@@ -100,9 +100,13 @@ pub struct FrameSettings {
     /// `sw_raster`'s implementation: `auto` (texture atomics where the adapter has
     /// them), `texture` or `buffer`.
     pub sw_raster: String,
-    /// `hw_raster`'s implementation: `auto` (mesh shaders where the adapter has them),
-    /// `mesh_shader` or `indirect_draw`.
+    /// `hw_raster`'s implementation: `auto` (the first of the adapter class's
+    /// [`super::split::AdapterClass::hardware_feeds`] the adapter runs), `mesh_shader`
+    /// or `indirect_draw`.
     pub hw_raster: String,
+    /// The adapter's class, which orders `auto`'s candidates; the renderer sets it.
+    /// `None`: mesh shaders first.
+    pub adapter_class: Option<super::split::AdapterClass>,
     /// `Some(false)`: no `hw_raster` pass; culling sends every cluster to software,
     /// which clips those crossing the near plane. `None`: with a split given, the pass
     /// is there; else the adapter class decides
@@ -159,6 +163,7 @@ impl FrameSettings {
                 .and_then(|v| v.parse().ok()),
             sw_raster: AUTO.into(),
             hw_raster: AUTO.into(),
+            adapter_class: None,
             hardware: std::env::var("MESHLIGHT_HARDWARE_RASTER")
                 .ok()
                 .and_then(|v| match v.as_str() {
@@ -428,12 +433,12 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             feed,
         })
     };
-    let hw_choice = || {
-        Choice::select(
-            &s.hw_raster,
-            vec![hardware(Feed::MeshShader), hardware(Feed::IndirectDraw)],
-        )
-    };
+    let feeds = s
+        .adapter_class
+        .map_or([Feed::MeshShader, Feed::IndirectDraw], |c| {
+            c.hardware_feeds()
+        });
+    let hw_choice = || Choice::select(&s.hw_raster, feeds.map(hardware).into());
     if s.has_hardware() {
         g.add_choice("hw_raster", hw_choice()?, Bindings::new())?;
     }

@@ -110,6 +110,7 @@ impl Renderer {
         let adapter = GpuAdapter::select()?;
         let class = super::split::AdapterClass::of(&adapter.info());
         settings.hardware = Some(settings.hardware_on(class));
+        settings.adapter_class = Some(class);
         settings.sw_threshold_px = Some(settings.sw_threshold_on(class));
         let limits = adapter.adapter.limits();
         settings.check_viewport(limits.max_texture_dimension_2d)?;

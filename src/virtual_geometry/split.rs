@@ -74,6 +74,18 @@ impl AdapterClass {
     /// Whether the frame has a hardware rasteriser at all, and why. Without one,
     /// culling sends every cluster to software, which clips clusters crossing the near
     /// plane itself.
+    /// `hw_raster`'s implementations in `auto`'s order of preference on this class.
+    pub fn hardware_feeds(self) -> [meshlight_pass_hw_raster::Feed; 2] {
+        use meshlight_pass_hw_raster::Feed;
+        match self {
+            // Measured on an H100 (docs/BENCHMARKS.md, rasterisers): the indirect draw
+            // ran the same clusters 1.19× faster than mesh shaders on the 2 TPCs that
+            // run graphics there.
+            Self::FewGraphicsUnits => [Feed::IndirectDraw, Feed::MeshShader],
+            Self::Cpu | Self::Graphics => [Feed::MeshShader, Feed::IndirectDraw],
+        }
+    }
+
     pub fn hardware_raster(self) -> (bool, &'static str) {
         match self {
             // Measured on an H100 (docs/BENCHMARKS.md): the default scene at 1920×1080
@@ -137,5 +149,46 @@ mod tests {
             AdapterClass::Graphics.sw_threshold_px().0
                 < AdapterClass::FewGraphicsUnits.sw_threshold_px().0
         );
+    }
+
+    /// `auto` takes the indirect draw where few units run graphics and mesh shaders
+    /// elsewhere, on an adapter that has both.
+    #[test]
+    fn auto_orders_the_hardware_rasterisers_by_class() {
+        use crate::virtual_geometry::frame_graph::{FrameSettings, build};
+        let asset = meshlight_scene::build_asset(
+            &meshlight_scene::procedural_mesh(6),
+            &meshlight_scene::BuildOptions::default(),
+            &mut |_| {},
+        )
+        .unwrap()
+        .asset;
+        let placed = crate::virtual_geometry::scenes::field(
+            meshlight_gpu_scene::SceneData::new(Default::default()),
+            &asset,
+            4,
+        )
+        .unwrap();
+        for (class, want) in [
+            (AdapterClass::FewGraphicsUnits, "indirect_draw"),
+            (AdapterClass::Graphics, "mesh_shader"),
+        ] {
+            let settings = FrameSettings {
+                hardware: Some(true),
+                adapter_class: Some(class),
+                ..FrameSettings::new(64, 64)
+            };
+            let compiled = build(&placed.data, &settings)
+                .unwrap()
+                .compile(&meshlight_graph::CompileOptions::new(wgpu::Features::all()))
+                .unwrap_or_else(|e| panic!("{e}"));
+            let plan = &compiled.plan;
+            let hw = plan
+                .passes
+                .iter()
+                .find(|p| p.name == "hw_raster")
+                .expect("a hw_raster pass");
+            assert_eq!(hw.implementation, want, "{class:?}");
+        }
     }
 }
