@@ -96,11 +96,10 @@ impl PassOutputs {
             .iter()
             .find(|(s, _)| *s == slot)
             .map(|(_, h)| *h)
-            .ok_or_else(|| GraphError::UnknownSlot {
+            .ok_or_else(|| GraphError::NotWritten {
                 pass: self.pass.clone(),
-                stage: "(written slots)".into(),
                 slot: slot.to_string(),
-                available: self
+                written: self
                     .written
                     .iter()
                     .map(|(s, _)| *s)

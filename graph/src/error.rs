@@ -140,6 +140,29 @@ pub enum GraphError {
     },
 
     #[error(
+        "wgpu validation error {when}: {message}; run the executor with `checked = true` to name the pass"
+    )]
+    FrameValidation { when: &'static str, message: String },
+
+    #[error("the device lacks {features}, which the compiled graph uses; {instead}")]
+    DeviceLacksFeatures { features: String, instead: String },
+
+    #[error("resource `{resource}`: {problem}")]
+    BadDeclaration { resource: String, problem: String },
+
+    #[error("the graph has no size parameter `{param}` to set; its parameters: {known}")]
+    NoSuchParam { param: String, known: String },
+
+    #[error(
+        "pass `{pass}` writes no slot `{slot}`, so it has no output of that name; it writes: {written}"
+    )]
+    NotWritten {
+        pass: String,
+        slot: String,
+        written: String,
+    },
+
+    #[error(
         "pass `{pass}` reads frame input `{input}`, which this frame does not supply; add it to the FrameData given to execute"
     )]
     MissingFrameInput { pass: String, input: String },

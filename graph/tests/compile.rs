@@ -352,6 +352,17 @@ fn unknown_and_unbound_slots_are_errors() {
         g.add_pass("p", Fake::rw(&[], &["out"]), Bindings::new()),
         Err(GraphError::UnboundSlot { .. })
     ));
+    // Asking a pass for an output it does not write names the pass and what it writes.
+    let out = g
+        .add_pass("q", Fake::rw(&[], &["out"]), Bindings::new().bind("out", x))
+        .unwrap();
+    match out.buffer("outt") {
+        Err(e @ GraphError::NotWritten { .. }) => assert_eq!(
+            e.to_string(),
+            "pass `q` writes no slot `outt`, so it has no output of that name; it writes: out"
+        ),
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]

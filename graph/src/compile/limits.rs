@@ -67,12 +67,12 @@ pub(crate) fn check(
                 }
                 let full = 32 - t.width.max(t.height).max(1).leading_zeros();
                 if t.mip_levels == 0 || t.mip_levels > full {
-                    return Err(GraphError::DescriptorMismatch {
-                        pass: "(declaration)".into(),
-                        slot: "-".into(),
+                    return Err(GraphError::BadDeclaration {
                         resource: res.name.clone(),
-                        expected: format!("1 to {full} mip levels for {}×{}", t.width, t.height),
-                        found: format!("{} mip levels", t.mip_levels),
+                        problem: format!(
+                            "{} mip levels; a {}×{} texture has 1 to {full}, declare a count in that range",
+                            t.mip_levels, t.width, t.height
+                        ),
                     });
                 }
             }

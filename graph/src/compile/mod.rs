@@ -97,8 +97,7 @@ impl CompiledGraph {
     pub fn set_param(&mut self, name: &str, value: u64) -> Result<()> {
         let mut params = self.plan.params.clone();
         let Some(p) = params.iter_mut().find(|(n, _)| n == name) else {
-            return Err(GraphError::UnknownParam {
-                resource: "(set_param)".into(),
+            return Err(GraphError::NoSuchParam {
                 param: name.to_string(),
                 known: param_names(&self.plan.params),
             });

@@ -373,9 +373,7 @@ impl Executor {
         let plan = &graph.plan;
         let missing = plan.enabled_features - self.gpu.features;
         if !missing.is_empty() {
-            return Err(GraphError::MissingFeature {
-                pass: "(graph)".into(),
-                stage: "(device)".into(),
+            return Err(GraphError::DeviceLacksFeatures {
                 features: crate::compile::feature_names(missing),
                 instead: "open the device with the plan's `enabled_features` (GpuAdapter::open)"
                     .into(),
@@ -589,8 +587,8 @@ impl Executor {
             } else {
                 None
             };
-            return Err(named.unwrap_or(GraphError::Validation {
-                pass: "(frame; checked mode names the pass)".into(),
+            return Err(named.unwrap_or(GraphError::FrameValidation {
+                when: "while recording the frame",
                 message: e.to_string(),
             }));
         }
@@ -604,8 +602,8 @@ impl Executor {
             if let Some(ts) = &mut self.timestamps {
                 ts.abandon(frame);
             }
-            return Err(GraphError::Validation {
-                pass: "(submit)".into(),
+            return Err(GraphError::FrameValidation {
+                when: "at submit",
                 message: e.to_string(),
             });
         }
