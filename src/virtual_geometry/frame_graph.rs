@@ -21,7 +21,7 @@ use super::counts::{
     CLUSTER_COUNT_READBACK, HIERARCHY_COUNTS_READBACK, RASTER_COUNTS_READBACK,
     SECOND_COUNTS_READBACK, SECOND_HIERARCHY_COUNTS_READBACK, SECOND_WALK_COUNT_READBACK,
 };
-use crate::graph::file::AUTO;
+use crate::graph::file::{AUTO, Registry};
 use crate::graph::{
     Bindings, BufferDesc, Choice, Element, GraphBuilder, GraphError, Pass, Result, TextureDesc,
     Visibility64,
@@ -231,19 +231,24 @@ impl FrameSettings {
 }
 
 /// Where the frame graph comes from.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug)]
 pub enum GraphSource {
     /// [`build`]: the stages wired in Rust.
     Code,
-    /// [`load`]: a pipeline file.
+    /// [`load`]: a pipeline file, its stages from [`crate::registry`].
     File(PathBuf),
+    /// A pipeline file whose stages come from the registry the function returns: the
+    /// built-in one with the caller's own implementations registered, e.g.
+    /// `|| { let mut r = meshlight::registry(); r.register(STAGE, "mine", build_mine); r }`.
+    FileWith(PathBuf, fn() -> Registry),
 }
 
 impl GraphSource {
     pub fn graph(&self, data: &SceneData, settings: &FrameSettings) -> Result<GraphBuilder> {
         match self {
             GraphSource::Code => build(data, settings),
-            GraphSource::File(path) => load(path, data, settings),
+            GraphSource::File(path) => load_with(path, data, settings, &crate::registry()),
+            GraphSource::FileWith(path, registry) => load_with(path, data, settings, &registry()),
         }
     }
 }
@@ -547,6 +552,16 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
 /// its `[params]` and every `resolve` pass showing `settings.view`, then the counters'
 /// readbacks added. Everything else (thresholds, which stages run) is the file's.
 pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
+    load_with(path, data, s, &crate::registry())
+}
+
+/// [`load`] with the stages of `registry`.
+pub fn load_with(
+    path: &Path,
+    data: &SceneData,
+    s: &FrameSettings,
+    registry: &Registry,
+) -> Result<GraphBuilder> {
     let file = path.display().to_string();
     if s.clustering.is_some() {
         return Err(GraphError::PipelineFile {
@@ -583,7 +598,7 @@ pub fn load(path: &Path, data: &SceneData, s: &FrameSettings) -> Result<GraphBui
             params.remove(name);
         }
     }
-    let mut g = crate::graph::file::parse_pipeline_with(&text, &file, &crate::registry(), &params)?;
+    let mut g = crate::graph::file::parse_pipeline_with(&text, &file, registry, &params)?;
     add_readbacks(&mut g)?;
     Ok(g)
 }
