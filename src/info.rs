@@ -137,6 +137,18 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
     for (flag, range) in &bounds {
         writeln!(out, "  --{flag:<12} {}..={}", range.start(), range.end())?;
     }
+    let registry = crate::registry();
+    writeln!(
+        out,
+        "\nstages and their implementations (the registry pipeline files and --sw-raster/--hw-raster name them from):"
+    )?;
+    for stage in registry.stage_names() {
+        writeln!(
+            out,
+            "  {stage:<16} {}",
+            registry.implementations(&stage).join(", ")
+        )?;
+    }
     writeln!(
         out,
         "\nauto picks (pipelines/virtual_geometry.toml compiled for this adapter):"
@@ -144,7 +156,7 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
     let graph = crate::graph::file::parse_pipeline(
         include_str!("../pipelines/virtual_geometry.toml"),
         "pipelines/virtual_geometry.toml",
-        &crate::registry(),
+        &registry,
     )?;
     let plan = graph.compile(&CompileOptions::for_adapter(&adapter))?.plan;
     for p in &plan.passes {

@@ -83,8 +83,9 @@ struct RenderArgs {
     /// them), texture or buffer. Ignored with --pipeline (the file names its own).
     #[arg(long, default_value = "auto")]
     sw_raster: String,
-    /// The hardware rasteriser: auto (mesh shaders where the adapter has them),
-    /// mesh_shader or indirect_draw. Ignored with --pipeline.
+    /// The hardware rasteriser: auto (in the adapter class's order: the indirect draw
+    /// first where few units run graphics, else mesh shaders where the adapter has
+    /// them), mesh_shader or indirect_draw. Ignored with --pipeline.
     #[arg(long, default_value = "auto")]
     hw_raster: String,
     /// Clusters whose screen box is smaller than this many pixels are rasterised in
