@@ -2,6 +2,7 @@
 
 use serde::Serialize;
 
+/// How a pass uses a resource through a slot: the graph derives barriers-free ordering, usages, load/store ops and binding types from it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Access {

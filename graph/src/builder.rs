@@ -22,6 +22,7 @@ pub struct Bindings {
 }
 
 impl Bindings {
+    /// No bindings: every slot binds the resource of its own name.
     pub fn new() -> Self {
         Self::default()
     }
@@ -144,6 +145,7 @@ pub(crate) struct VisibilityDecl {
 }
 
 impl GraphBuilder {
+    /// An empty graph.
     pub fn new() -> Self {
         Self::default()
     }

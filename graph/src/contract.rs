@@ -24,6 +24,7 @@ pub enum SlotKind {
     Visibility64,
 }
 
+/// One named input or output of a stage, with its access and what it holds.
 #[derive(Clone, Debug, Serialize)]
 pub struct Slot {
     pub name: &'static str,
@@ -40,6 +41,7 @@ pub struct Slot {
 }
 
 impl Slot {
+    /// A buffer slot holding `element`s.
     pub fn buffer(name: &'static str, access: Access, element: Element, doc: &'static str) -> Self {
         Self {
             name,
@@ -52,6 +54,7 @@ impl Slot {
             optional: false,
         }
     }
+    /// A texture slot, of `format` when one is required.
     pub fn texture(
         name: &'static str,
         access: Access,

@@ -3,6 +3,7 @@
 
 use thiserror::Error;
 
+/// Every error of the graph: building, compiling, loading a pipeline file and executing. Each says what is wrong and what to change.
 #[derive(Debug, Error)]
 pub enum GraphError {
     #[error("dependency cycle: {} -> {}; break it by reading an earlier version of one of these resources", path.join(" -> "), path.first().map(String::as_str).unwrap_or(""))]
@@ -231,4 +232,5 @@ impl GraphError {
     }
 }
 
+/// The graph's result type.
 pub type Result<T, E = GraphError> = std::result::Result<T, E>;

@@ -4,20 +4,20 @@
 //! to a [`Plan`] with no device, inspect or dump it, and run it frame after frame with an
 //! [`Executor`].
 
-pub mod access;
-pub mod builder;
-pub mod choice;
-pub mod compile;
-pub mod contract;
+mod access;
+mod builder;
+mod choice;
+mod compile;
+mod contract;
 pub mod dump;
-pub mod error;
-pub mod exec;
+mod error;
+mod exec;
 pub mod file;
-pub mod pass;
-pub mod plan;
-pub mod program;
-pub mod readback;
-pub mod resource;
+mod pass;
+mod plan;
+mod program;
+mod readback;
+mod resource;
 pub mod synthetic;
 
 pub use access::Access;
@@ -27,14 +27,17 @@ pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
-    BatchStats, BindingLayout, ColorAttachment, ComputePassGuard, ComputeProgram, DepthAttachment,
-    Executor, FrameData, FrameStats, GpuAdapter, GpuContext, GpuTimings, Imports, Program,
-    Readback, RecordContext, RenderProgram, SamplerKind, TimingMode,
+    ADAPTER_ENV, BATCHING_ENV, BatchStats, BindingLayout, BindingSource, CHECKED_ENV,
+    ColorAttachment, ComputePassGuard, ComputeProgram, DepthAttachment, Executor, FrameData,
+    FrameStats, GpuAdapter, GpuContext, GpuTimings, INDIRECT_VALIDATION_ENV, Immediates, Imports,
+    LayoutEntry, PassTiming, Program, Readback, RecordContext, RenderProgram, SamplerKind,
+    TIMING_ENV, TimingMode,
 };
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
 pub use pass::{Pass, SetupContext, Visibility64};
-pub use plan::{Batch, Plan, Recording};
+pub use plan::{Batch, LoadOp, Plan, Recording, StoreOp};
 pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};
+pub use readback::STAGE as READBACK_STAGE;
 pub use resource::{
     AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture,
     TextureDesc, TextureRange,

@@ -1,10 +1,8 @@
 //! The compiled plan as plain data: what dumps print and what the executor follows.
 
 use crate::access::Access;
-use crate::compile::pool::{Lifetime, PoolSlot};
-use crate::compile::versions::Edge;
 use crate::program::ProgramPlan;
-use crate::resource::{ImportedUsage, ResourceInfo, TextureRange};
+use crate::resource::{ImportedUsage, ResourceDesc, ResourceInfo, TextureRange};
 use serde::{Serialize, Serializer};
 
 /// How a render target is loaded and stored by one pass.
@@ -17,6 +15,7 @@ pub enum LoadOp {
     Clear,
 }
 
+/// What a render pass does with an attachment at its end.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StoreOp {
@@ -190,6 +189,7 @@ pub struct ResourcePlan {
     pub texture_usage: wgpu::TextureUsages,
 }
 
+/// A compiled graph's schedule: passes in order, resources with lifetimes and pool slots, edges, batches and parameters. Dumps read it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Plan {
     pub passes: Vec<PassPlan>,
@@ -271,4 +271,49 @@ pub(crate) fn ser_opt_format<S: Serializer>(
 /// A texture format as written in WGSL and pipeline files (`rgba8unorm`, `r32uint`, …).
 pub fn format_name(f: wgpu::TextureFormat) -> String {
     format!("{f:?}").to_lowercase()
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeKind {
+    /// The later pass reads what the earlier one wrote.
+    ReadAfterWrite,
+    /// The later pass overwrites what the earlier one read.
+    WriteAfterRead,
+    /// The later pass overwrites what the earlier one wrote.
+    WriteAfterWrite,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+pub struct Edge {
+    pub from: usize,
+    pub to: usize,
+    pub resource: usize,
+    pub version: u32,
+    pub kind: EdgeKind,
+}
+
+/// First and last position (in the executed order) at which a resource is used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Lifetime {
+    pub first: usize,
+    pub last: usize,
+}
+
+impl Lifetime {
+    pub fn overlaps(&self, other: &Lifetime) -> bool {
+        self.first <= other.last && other.first <= self.last
+    }
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PoolSlot {
+    pub index: usize,
+    /// Descriptor of the physical resource: the largest member for buffers.
+    pub desc: ResourceDesc,
+    pub bytes: u64,
+    /// Resource indices, in the order they use the slot.
+    pub members: Vec<usize>,
+    #[serde(skip)]
+    pub(crate) last_use: usize,
 }

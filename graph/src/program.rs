@@ -24,6 +24,7 @@ pub struct ColorTarget {
 }
 
 impl ColorTarget {
+    /// The colour target `target`, every channel written.
     pub fn new(target: TargetName) -> Self {
         Self {
             target,
@@ -113,6 +114,7 @@ pub struct ProgramDesc {
 }
 
 impl ProgramDesc {
+    /// A compute program running `entry` of `shader`.
     pub fn compute(shader: &'static PassShader, entry: &'static str) -> Self {
         Self {
             shader,

@@ -83,18 +83,22 @@ pub struct Element {
 }
 
 impl Element {
+    /// A 32-bit word.
     pub const U32: Element = Element {
         name: Cow::Borrowed("u32"),
         size: 4,
     };
+    /// A 64-bit word (visibility buffers).
     pub const U64: Element = Element {
         name: Cow::Borrowed("u64"),
         size: 8,
     };
+    /// A 32-bit float.
     pub const F32: Element = Element {
         name: Cow::Borrowed("f32"),
         size: 4,
     };
+    /// Four 32-bit floats.
     pub const VEC4_F32: Element = Element {
         name: Cow::Borrowed("vec4<f32>"),
         size: 16,
@@ -115,6 +119,7 @@ impl Element {
         size: 1,
     };
 
+    /// An element type of `size` bytes, named `name` in dumps and messages.
     pub const fn named(name: &'static str, size: u32) -> Element {
         Element {
             name: Cow::Borrowed(name),
@@ -138,6 +143,7 @@ impl Element {
     }
 }
 
+/// A buffer's element type and count (fixed, or from a size parameter).
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct BufferDesc {
     /// Bytes. `u64::MAX` marks a size that overflowed, which compile reports.
@@ -184,6 +190,7 @@ impl BufferDesc {
     }
 }
 
+/// A texture's format, size, mips and layers.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct TextureDesc {
     #[serde(serialize_with = "crate::plan::ser_format")]
@@ -196,6 +203,7 @@ pub struct TextureDesc {
 }
 
 impl TextureDesc {
+    /// A 2-D texture of one mip and one layer.
     pub fn d2(format: wgpu::TextureFormat, width: u32, height: u32) -> Self {
         Self {
             format,
@@ -338,6 +346,7 @@ impl TextureRange {
     }
 }
 
+/// A buffer or a texture, as declared.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum ResourceDesc {

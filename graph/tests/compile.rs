@@ -447,7 +447,7 @@ fn usages_and_render_target_ops_are_derived() {
             .ops
             .unwrap()
     };
-    use meshlight_graph::plan::{LoadOp, StoreOp};
+    use meshlight_graph::{LoadOp, StoreOp};
     assert_eq!(
         (ops("draw", "color").load, ops("draw", "color").store),
         (LoadOp::Clear, StoreOp::Store)

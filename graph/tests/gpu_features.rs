@@ -1162,14 +1162,8 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
             .and_then(|s| s.ops)
             .map(|o| (o.load, o.store))
     };
-    assert_eq!(
-        ops("color"),
-        Some((plan::LoadOp::Clear, plan::StoreOp::Store))
-    );
-    assert_eq!(
-        ops("depth"),
-        Some((plan::LoadOp::Clear, plan::StoreOp::Discard))
-    );
+    assert_eq!(ops("color"), Some((LoadOp::Clear, StoreOp::Store)));
+    assert_eq!(ops("depth"), Some((LoadOp::Clear, StoreOp::Discard)));
     let buffer = gpu.buffer_with_data(
         "rects",
         bytemuck::cast_slice(&vertices),

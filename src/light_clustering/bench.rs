@@ -97,7 +97,7 @@ fn measure_gpu(
         crate::graph::TimingMode::Frame => plan.batches.get(unit).is_some_and(|b| {
             b.passes
                 .iter()
-                .all(|&p| plan.passes[p].stage == crate::graph::readback::STAGE)
+                .all(|&p| plan.passes[p].stage == crate::graph::READBACK_STAGE)
         }),
         _ => name.starts_with("readback:"),
     };

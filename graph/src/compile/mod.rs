@@ -20,6 +20,7 @@ use crate::resource::*;
 use pool::Lifetime;
 use std::sync::Arc;
 
+/// What compile plans for: the adapter's features and limits (no device needed).
 #[derive(Clone, Debug)]
 pub struct CompileOptions {
     /// Features of the adapter the graph will run on (`Features::all()` to plan without one).

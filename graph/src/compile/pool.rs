@@ -4,33 +4,8 @@
 //! not overlap may live in the same physical buffer (sized for the larger) or the same
 //! texture (identical descriptor). Resources whose lifetimes overlap never share a slot.
 
+pub(crate) use crate::plan::{Lifetime, PoolSlot};
 use crate::resource::{ResourceDesc, ResourceInfo, ResourceKind};
-use serde::Serialize;
-
-/// First and last position (in the executed order) at which a resource is used.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-pub struct Lifetime {
-    pub first: usize,
-    pub last: usize,
-}
-
-impl Lifetime {
-    pub fn overlaps(&self, other: &Lifetime) -> bool {
-        self.first <= other.last && other.first <= self.last
-    }
-}
-
-#[derive(Clone, Debug, Serialize)]
-pub struct PoolSlot {
-    pub index: usize,
-    /// Descriptor of the physical resource: the largest member for buffers.
-    pub desc: ResourceDesc,
-    pub bytes: u64,
-    /// Resource indices, in the order they use the slot.
-    pub members: Vec<usize>,
-    #[serde(skip)]
-    last_use: usize,
-}
 
 /// True for resources the graph allocates (as opposed to the caller or the history store).
 pub fn is_pooled(kind: &ResourceKind) -> bool {

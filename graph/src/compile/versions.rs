@@ -3,29 +3,9 @@
 
 use crate::builder::PassNode;
 use crate::error::{GraphError, Result};
+pub(crate) use crate::plan::{Edge, EdgeKind};
 use crate::resource::{ResourceDesc, ResourceInfo, TextureRange};
-use serde::Serialize;
 use std::collections::HashMap;
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum EdgeKind {
-    /// The later pass reads what the earlier one wrote.
-    ReadAfterWrite,
-    /// The later pass overwrites what the earlier one read.
-    WriteAfterRead,
-    /// The later pass overwrites what the earlier one wrote.
-    WriteAfterWrite,
-}
-
-#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
-pub struct Edge {
-    pub from: usize,
-    pub to: usize,
-    pub resource: usize,
-    pub version: u32,
-    pub kind: EdgeKind,
-}
 
 /// Who wrote and who read each version of each resource.
 #[derive(Default)]

@@ -13,6 +13,7 @@ fn esc(s: &str) -> String {
         .replace('\n', "\\n")
 }
 
+/// The plan as a Graphviz DOT graph: passes, resources and their versions, edges by kind.
 pub fn to_dot(plan: &Plan) -> String {
     let mut out = String::from(
         "digraph meshlight {\n  rankdir=LR;\n  node [fontname=\"Helvetica\", fontsize=11];\n  edge [fontname=\"Helvetica\", fontsize=9];\n",

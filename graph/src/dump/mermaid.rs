@@ -10,6 +10,7 @@ fn esc(s: &str) -> String {
         .replace('>', "#gt;")
 }
 
+/// The plan as a Mermaid flowchart, for Markdown that renders it.
 pub fn to_mermaid(plan: &Plan) -> String {
     let mut out = String::from("flowchart LR\n");
     for (i, p) in plan.passes.iter().enumerate() {

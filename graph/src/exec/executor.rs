@@ -34,6 +34,7 @@ pub struct Imports {
 }
 
 impl Imports {
+    /// No timings yet.
     pub fn new() -> Self {
         Self::default()
     }
@@ -69,6 +70,7 @@ fn env_switch(name: &str) -> Option<bool> {
     }
 }
 
+/// One pass's GPU time in a frame measured per pass.
 #[derive(Clone, Debug, Serialize)]
 pub struct PassTiming {
     pub name: String,
@@ -91,6 +93,7 @@ pub struct BatchStats {
     pub gpu_us: Option<f64>,
 }
 
+/// What one executed frame cost and did: CPU times, batches, GPU timings when measured.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameStats {
     pub frame: u64,
@@ -140,6 +143,7 @@ struct HistoryEntry {
     created: u64,
 }
 
+/// Runs compiled graphs frame after frame on one device: allocates and pools the physical resources, caches programs and bind groups, times and reads back.
 pub struct Executor {
     pub gpu: GpuContext,
     pool: PhysicalPool,
@@ -182,6 +186,7 @@ pub struct Executor {
 }
 
 impl Executor {
+    /// An executor on `gpu`; the environment variables of this crate set its checked, batching and timing modes.
     pub fn new(gpu: GpuContext) -> Self {
         Self {
             gpu,

@@ -11,6 +11,7 @@ pub struct FrameData {
 }
 
 impl FrameData {
+    /// No frame inputs.
     pub fn new() -> Self {
         Self::default()
     }

@@ -4,6 +4,7 @@
 
 use crate::access::Access;
 
+/// What one binding of a layout binds.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum BindingSource {
     /// A contract slot.
@@ -58,6 +59,7 @@ impl SamplerKind {
     }
 }
 
+/// One binding of a [`BindingLayout`].
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct LayoutEntry {
     pub binding: u32,
@@ -91,9 +93,11 @@ pub struct BindingLayout {
 }
 
 impl BindingLayout {
+    /// An empty layout for a compute program, entries listed by hand.
     pub fn compute(label: &'static str) -> Self {
         Self::with_visibility(label, wgpu::ShaderStages::COMPUTE)
     }
+    /// An empty layout whose entries default to `visibility`.
     pub fn with_visibility(label: &'static str, visibility: wgpu::ShaderStages) -> Self {
         Self {
             label,

@@ -29,6 +29,7 @@ pub struct ColorAttachment {
 }
 
 impl ColorAttachment {
+    /// The colour target `target`, cleared to transparent black.
     pub fn new(target: &'static str) -> Self {
         Self {
             target,
@@ -83,6 +84,7 @@ impl Immediates {
     }
 }
 
+/// What `Pass::record` gets: the pass's bound resources, its programs, bind groups, the frame's inputs and the command encoder.
 pub struct RecordContext<'a> {
     pub(crate) device: &'a wgpu::Device,
     pub(crate) queue: &'a wgpu::Queue,

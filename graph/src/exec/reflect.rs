@@ -266,7 +266,7 @@ fn check_slot(g: &ShaderGlobal, slot: &str, access: Access, element: u32) -> Res
     } = g.kind
         && element > 0
         && stride != element
-        && !(stride == 4 && element % 4 == 0)
+        && !(stride == 4 && element.is_multiple_of(4))
     {
         return Err(mismatch(
             g,

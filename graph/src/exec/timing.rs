@@ -31,6 +31,7 @@ pub enum TimingMode {
 }
 
 impl TimingMode {
+    /// `off`, `frame` or `passes` (the values of the timing environment variable).
     pub fn parse(s: &str) -> Option<Self> {
         match s.trim().to_ascii_lowercase().as_str() {
             "off" | "none" | "0" => Some(Self::Off),

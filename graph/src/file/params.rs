@@ -10,6 +10,7 @@ pub struct Params {
 }
 
 impl Params {
+    /// A pass's `params` table from a pipeline file.
     pub fn new(table: toml::Table) -> Self {
         Self { table }
     }

@@ -11,6 +11,7 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
 
+/// A pipeline file as parsed, before its passes are built.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PipelineFile {
@@ -107,6 +108,7 @@ pub struct PassEntry {
     pub bind: BTreeMap<String, String>,
 }
 
+/// Reads and parses the pipeline file at `path` with `registry`'s stages.
 pub fn load_pipeline(path: &Path, registry: &Registry) -> Result<GraphBuilder> {
     load_pipeline_with(path, registry, &BTreeMap::new())
 }
@@ -194,10 +196,12 @@ fn file_kind(t: &std::fs::FileType) -> &'static str {
     }
 }
 
+/// Parses a pipeline file's text (`file` names it in errors) with `registry`'s stages.
 pub fn parse_pipeline(text: &str, file: &str, registry: &Registry) -> Result<GraphBuilder> {
     parse_pipeline_with(text, file, registry, &BTreeMap::new())
 }
 
+/// [`parse_pipeline`] with `overrides` replacing values of the file's `[params]`.
 pub fn parse_pipeline_with(
     text: &str,
     file: &str,

@@ -6,11 +6,13 @@ use crate::file::Params;
 use crate::pass::Pass;
 use std::collections::BTreeMap;
 
+/// Builds a pass from its `params` table.
 pub type Factory = fn(&Params) -> Result<Box<dyn Pass>>;
 
 /// The implementation name that lets compile pick by the adapter's features.
 pub const AUTO: &str = "auto";
 
+/// The stages and implementations pipeline files can name, each with its factory, and per stage the order `auto` tries them in.
 #[derive(Default, Clone)]
 pub struct Registry {
     factories: BTreeMap<(String, String), Factory>,
@@ -19,6 +21,7 @@ pub struct Registry {
 }
 
 impl Registry {
+    /// An empty registry.
     pub fn new() -> Self {
         Self::default()
     }

@@ -46,8 +46,8 @@ pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::view::frame_view;
+use meshlight_graph::StoreOp;
 use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::plan::StoreOp;
 use meshlight_graph::{
     Access, BindingLayout, ColorTarget, DepthTarget, Element, GraphError, Pass, Primitive,
     ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
