@@ -59,9 +59,7 @@ impl Pass for Decode {
     }
 }
 
-fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
+use meshlight_testing::gpu;
 
 fn check(asset: &MeshletAsset) {
     let gpu = gpu();

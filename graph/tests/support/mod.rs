@@ -139,13 +139,8 @@ impl Pass for AddTwice {
     }
 }
 
-/// Opens the first Vulkan adapter with everything it offers that tests may use.
-pub fn gpu() -> GpuContext {
-    match GpuContext::with_available(wgpu::Features::all()) {
-        Ok(g) => g,
-        Err(e) => panic!("{e}"),
-    }
-}
+#[allow(unused_imports)] // not every test binary that includes this module opens a GPU
+pub use meshlight_testing::gpu;
 
 pub fn storage_buffer(gpu: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buffer {
     gpu.buffer_with_data(

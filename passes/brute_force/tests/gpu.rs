@@ -23,9 +23,7 @@ const TEXTURE_USAGE: wgpu::TextureUsages = wgpu::TextureUsages::RENDER_ATTACHMEN
     .union(wgpu::TextureUsages::COPY_SRC)
     .union(wgpu::TextureUsages::COPY_DST);
 
-fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
+use meshlight_testing::gpu;
 
 /// The mesh's LOD 0 and a GPU scene of overlapping instances of its asset.
 struct Scene {

@@ -13,9 +13,7 @@ const VIS_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
 const PYRAMID_USAGE: wgpu::TextureUsages =
     wgpu::TextureUsages::STORAGE_BINDING.union(wgpu::TextureUsages::COPY_SRC);
 
-fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
+use meshlight_testing::gpu;
 
 /// What a frame's visibility target holds.
 #[derive(Clone, Copy, Debug)]

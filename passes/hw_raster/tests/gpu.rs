@@ -25,9 +25,7 @@ const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_DST)
     .union(wgpu::BufferUsages::COPY_SRC);
 
-fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
+use meshlight_testing::gpu;
 
 /// A scene, a camera, and the slot buffer culling would have left.
 struct Frame {

@@ -3,17 +3,11 @@
 
 use meshlight_graph::*;
 use meshlight_pass_remap_dispatch::{RemapDispatch, cpu_remap};
+use meshlight_testing::{Input, Output, executor, run_one_pass};
 
 const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_DST)
     .union(wgpu::BufferUsages::COPY_SRC);
-
-fn executor() -> Executor {
-    match GpuContext::with_available(wgpu::Features::all()) {
-        Ok(gpu) => Executor::new(gpu),
-        Err(e) => panic!("{e}"),
-    }
-}
 
 /// A consumer of the arguments: every workgroup below the count marks its linear index.
 const CONSUMER: PassShader = PassShader {
@@ -170,5 +164,35 @@ fn a_limit_above_the_adapters_is_a_parameter_error() {
             assert!(message.contains("max_per_dimension"), "{message}");
         }
         other => panic!("{:?}", other.err()),
+    }
+}
+
+/// The pass alone, its count at a word other than the first.
+#[test]
+fn the_count_is_read_at_its_word() {
+    let mut exec = executor();
+    for count in [0u32, 5, 1000, 70_000] {
+        let words = [9u32, 9, count, 9];
+        let remap = RemapDispatch {
+            count_word: 2,
+            max_per_dimension: Some(100),
+        };
+        let out = run_one_pass(
+            &mut exec,
+            remap,
+            &[Input {
+                name: "count",
+                desc: BufferDesc::array(Element::U32, 4),
+                bytes: bytemuck::cast_slice(&words),
+            }],
+            &[Output {
+                name: "args",
+                desc: BufferDesc::array(Element::DISPATCH_ARGS, 1),
+            }],
+            &FrameData::default(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let args: Vec<u32> = bytemuck::pod_collect_to_vec(&out[0]);
+        assert_eq!(args, cpu_remap(count, 100), "{count}");
     }
 }

@@ -37,9 +37,7 @@ const DEPTH_USAGE: wgpu::TextureUsages =
 const COLOR_USAGE: wgpu::TextureUsages =
     wgpu::TextureUsages::STORAGE_BINDING.union(wgpu::TextureUsages::COPY_SRC);
 
-fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
+use meshlight_testing::gpu;
 
 fn asset(mesh: &meshlight_scene::Mesh) -> MeshletAsset {
     build_asset(mesh, &BuildOptions::default(), &mut |_| {})

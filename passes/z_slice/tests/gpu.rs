@@ -38,9 +38,7 @@ const NEAR_THRESHOLD: f32 = 1e-5;
 /// At most this many such pairs per scene.
 const MAX_NEAR_PER_SCENE: usize = 4;
 
-fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
+use meshlight_testing::gpu;
 
 struct GpuSlices {
     /// The whole list: `capacity` entries, then the guard.

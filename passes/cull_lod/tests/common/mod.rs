@@ -4,7 +4,6 @@
 
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::{Material, SceneData, data::Limits};
-use meshlight_graph::GpuContext;
 use meshlight_scene::{BuildOptions, build_asset};
 use meshlight_shaders::cpu::layout::Cluster;
 use std::sync::OnceLock;
@@ -13,9 +12,8 @@ pub const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_DST)
     .union(wgpu::BufferUsages::COPY_SRC);
 
-pub fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
+#[allow(unused_imports)] // not every test binary that includes this module opens a GPU
+pub use meshlight_testing::gpu;
 
 /// spot.obj baked once per test binary.
 pub fn spot() -> &'static meshlight_scene::MeshletAsset {

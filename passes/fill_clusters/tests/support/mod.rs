@@ -2,7 +2,6 @@
 //! adapter, the test meshes baked once, a seeded generator and cluster sets.
 #![allow(dead_code)]
 
-use meshlight_graph::GpuContext;
 use meshlight_scene::{BuildOptions, MeshletAsset, build_asset};
 use meshlight_shaders::cpu::layout::Cluster;
 use std::collections::BTreeSet;
@@ -21,9 +20,8 @@ pub const SENTINEL: Cluster = Cluster {
 /// Slots after the capacity (or the list) that must keep the sentinel.
 pub const GUARD: u32 = 64;
 
-pub fn gpu() -> GpuContext {
-    GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"))
-}
+#[allow(unused_imports)] // not every test binary that includes this module opens a GPU
+pub use meshlight_testing::gpu;
 
 /// A mesh of assets/meshes baked with the default options.
 fn bake_file(name: &str) -> MeshletAsset {

@@ -14,13 +14,8 @@ pub const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
 
-/// Opens the first Vulkan adapter; with none, fails with the graph's install hint.
-pub fn executor() -> Executor {
-    match GpuContext::with_available(wgpu::Features::all()) {
-        Ok(gpu) => Executor::new(gpu),
-        Err(e) => panic!("{e}"),
-    }
-}
+#[allow(unused_imports)] // not every test binary that includes this module runs a pass
+pub use meshlight_testing::executor;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Implementation {
