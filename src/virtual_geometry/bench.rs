@@ -563,12 +563,21 @@ pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         }
     };
 
+    // Every registered implementation of both stages (the registry is the one list).
+    let registry = crate::registry();
+    let implementations = |stage: &str| -> Vec<String> {
+        registry
+            .implementations(stage)
+            .into_iter()
+            .filter(|i| i != crate::graph::file::AUTO)
+            .collect()
+    };
     // Software rasteriser: every cluster to it, on each target.
     let mut software = Vec::new();
-    for sw in ["buffer", "texture"] {
+    for sw in implementations(meshlight_pass_sw_raster::STAGE) {
         let settings = FrameSettings {
             hardware: Some(false),
-            sw_raster: sw.into(),
+            sw_raster: sw.clone(),
             ..base.clone()
         };
         if let Some(m) = try_measure(settings, &format!("sw_raster {sw}"))? {
@@ -604,7 +613,8 @@ pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         .iter()
         .map(|(_, m)| pass_ms(m, "sw_raster"))
         .fold(f64::INFINITY, f64::min);
-    for hw in ["indirect_draw", "mesh_shader"] {
+    for hw in implementations(meshlight_pass_hw_raster::STAGE) {
+        let hw = hw.as_str();
         let settings = FrameSettings {
             sw_threshold_px: Some(0.0),
             hw_raster: hw.into(),
