@@ -137,7 +137,10 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
     for (flag, range) in &bounds {
         writeln!(out, "  --{flag:<12} {}..={}", range.start(), range.end())?;
     }
-    let registry = crate::registry();
+    let mut registry = crate::registry();
+    // `auto` tries the hardware rasterisers in this class's order, as the renderer does.
+    let feeds = class.hardware_feeds().map(|f| f.implementation());
+    registry.prefer(meshlight_pass_hw_raster::STAGE, &feeds);
     writeln!(
         out,
         "\nstages and their implementations (the registry pipeline files and --sw-raster/--hw-raster name them from):"

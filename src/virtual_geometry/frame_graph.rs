@@ -598,7 +598,13 @@ pub fn load_with(
             params.remove(name);
         }
     }
-    let mut g = crate::graph::file::parse_pipeline_with(&text, &file, registry, &params)?;
+    // `auto` tries the hardware rasterisers in the adapter class's order, as in code.
+    let mut registry = registry.clone();
+    if let Some(class) = s.adapter_class {
+        let feeds = class.hardware_feeds().map(|f| f.implementation());
+        registry.prefer(meshlight_pass_hw_raster::STAGE, &feeds);
+    }
+    let mut g = crate::graph::file::parse_pipeline_with(&text, &file, &registry, &params)?;
     add_readbacks(&mut g)?;
     Ok(g)
 }

@@ -178,17 +178,27 @@ mod tests {
                 adapter_class: Some(class),
                 ..FrameSettings::new(64, 64)
             };
-            let compiled = build(&placed.data, &settings)
-                .unwrap()
-                .compile(&meshlight_graph::CompileOptions::new(wgpu::Features::all()))
-                .unwrap_or_else(|e| panic!("{e}"));
-            let plan = &compiled.plan;
-            let hw = plan
-                .passes
-                .iter()
-                .find(|p| p.name == "hw_raster")
-                .expect("a hw_raster pass");
-            assert_eq!(hw.implementation, want, "{class:?}");
+            let shipped = std::path::Path::new(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/pipelines/virtual_geometry.toml"
+            ));
+            // The frame built in code and the shipped file (whose hw_raster is `auto`).
+            for g in [
+                build(&placed.data, &settings).unwrap(),
+                crate::virtual_geometry::frame_graph::load(shipped, &placed.data, &settings)
+                    .unwrap_or_else(|e| panic!("{e}")),
+            ] {
+                let compiled = g
+                    .compile(&meshlight_graph::CompileOptions::new(wgpu::Features::all()))
+                    .unwrap_or_else(|e| panic!("{e}"));
+                let hw = compiled
+                    .plan
+                    .passes
+                    .iter()
+                    .find(|p| p.name == "hw_raster")
+                    .expect("a hw_raster pass");
+                assert_eq!(hw.implementation, want, "{class:?}");
+            }
         }
     }
 }

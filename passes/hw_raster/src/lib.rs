@@ -141,6 +141,16 @@ pub enum Feed {
     MeshShader,
 }
 
+impl Feed {
+    /// The implementation name pipelines use for this feed.
+    pub fn implementation(self) -> &'static str {
+        match self {
+            Feed::IndirectDraw => "indirect_draw",
+            Feed::MeshShader => "mesh_shader",
+        }
+    }
+}
+
 /// The `indirect_draw` and `mesh_shader` implementations ([`HwRaster::feed`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HwRaster {
@@ -216,10 +226,7 @@ impl Pass for HwRaster {
         contract()
     }
     fn implementation(&self) -> &'static str {
-        match self.feed {
-            Feed::IndirectDraw => "indirect_draw",
-            Feed::MeshShader => "mesh_shader",
-        }
+        self.feed.implementation()
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let texture = ctx.is_texture("visbuffer");
