@@ -29,8 +29,9 @@ macro_rules! shared {
     };
 }
 
-static SHARED_MODULES: [SharedModule; 11] = [
+static SHARED_MODULES: [SharedModule; 12] = [
     shared!("meshlight::math", "math.wgsl"),
+    shared!("meshlight::dispatch", "dispatch.wgsl"),
     shared!("meshlight::view", "view.wgsl"),
     shared!("meshlight::octahedral", "octahedral.wgsl"),
     shared!("meshlight::meshlet", "meshlet.wgsl"),

@@ -148,6 +148,10 @@ const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
         "instance::instance_max_scale(instance::Instance())",
     ),
     (
+        "meshlight::dispatch",
+        "dispatch::linear_workgroup(dispatch::fold_dispatch(5u, 2u), 2u)",
+    ),
+    (
         "meshlight::instance_table",
         "instance_table::instance_at(instance_table::instance_total())",
     ),

@@ -14,6 +14,7 @@
 // second hierarchy walk listed (below the nodes the first walk found hidden), after its
 // own list: those were never tested, and are tested like the rest.
 
+#import meshlight::dispatch::linear_workgroup
 #import meshlight::math::F32_MAX
 #import meshlight::meshlet::{Meshlet, MeshletGroup, Cluster, meshlet_bounds, meshlet_triangle_count, lod_cut, MESHLET_NO_GROUP}
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
@@ -241,7 +242,7 @@ fn is_software(center: vec3<f32>, radius: f32) -> bool {
 
 @compute @workgroup_size(64)
 fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
-    let i = (wg.y * dispatch_in[0] + wg.x) * WORKGROUP_SIZE + t;
+    let i = linear_workgroup(wg, dispatch_in[0]) * WORKGROUP_SIZE + t;
     if i >= cluster_total() {
         return;
     }

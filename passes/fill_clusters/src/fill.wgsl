@@ -4,6 +4,7 @@
 // so consecutive threads write consecutive clusters. A second, one-thread dispatch
 // finalises the count of clusters written. `cpu::cpu_fill` (Rust) is the reference.
 
+#import meshlight::dispatch::linear_workgroup
 #import meshlight::meshlet::{Mesh, Cluster}
 #import meshlight::instance::{Instance, instance_transform_sphere}
 #import meshlight::instance_table::{instance_at, instance_total}
@@ -40,7 +41,7 @@ fn capacity() -> u32 {
 
 @compute @workgroup_size(64)
 fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
-    let index = wg.y * params.groups_x + wg.x;
+    let index = linear_workgroup(wg, params.groups_x);
     // Every thread reaches the barrier: visibility only decides how many clusters the
     // workgroup asks for (0 when the instance is outside the frustum or past the count).
     var count = 0u;

@@ -32,6 +32,7 @@
 // of the instances' roots and drops what is still hidden. A root is the instance, so a
 // hidden instance costs one node test per pass and emits nothing.
 
+#import meshlight::dispatch::linear_workgroup
 #import meshlight::meshlet::Cluster
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
 #import meshlight::instance_table::{instance_at, instance_total}
@@ -440,7 +441,7 @@ fn roots(
     let total = min(params.instance_count, instance_total());
 #endif
     let held = min(params.root_capacity, arrayLength(&root_list));
-    for (var e = (wg.y * groups.x + wg.x) * WORKGROUP_SIZE + t; e < total; e += threads) {
+    for (var e = linear_workgroup(wg, groups.x) * WORKGROUP_SIZE + t; e < total; e += threads) {
         var index = e;
         var id = 0xffffffffu;
 #ifdef SECOND_PASS
@@ -516,7 +517,7 @@ fn fill(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) t: u32,
 ) {
-    let first_entry = wg.y * groups.x + wg.x;
+    let first_entry = linear_workgroup(wg, groups.x);
     let stride = groups.x * groups.y;
     let spreading = params.step < params.steps;
     // A spreading step's frontier is one chunk: a wide walk is handed on, not queued.

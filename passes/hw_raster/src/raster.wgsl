@@ -9,6 +9,7 @@
 // `enable wgpu_mesh_shader;` (`MESH_SHADER_SOURCE` in lib.rs): a directive must come
 // first, and cannot sit behind an #ifdef.
 
+#import meshlight::dispatch::linear_workgroup
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESHLET_MAX_TRIANGLES, MESHLET_MAX_VERTICES, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle}
 #import meshlight::instance::Instance
@@ -146,7 +147,7 @@ const MESH_GROUP: u32 = 32u;
 @mesh(mesh_out)
 @workgroup_size(MESH_GROUP)
 fn raster_ms(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
-    let j = wg.y * params.row + wg.x;
+    let j = linear_workgroup(wg, params.row);
     let capacity = raster_counts[3];
     let live = j < raster_counts[1] && j < capacity;
     var vertices = 0u;

@@ -57,10 +57,7 @@ pub fn contract() -> StageContract {
 /// The dispatch arguments for `count` workgroups under a per-dimension limit of
 /// `max_per_dimension` (the reference the GPU test compares with).
 pub fn cpu_remap(count: u32, max_per_dimension: u32) -> [u32; 3] {
-    let m = max_per_dimension.max(1);
-    let x = count.min(m);
-    let y = if x == 0 { 0 } else { count.div_ceil(x).min(m) };
-    [x, y, 1]
+    meshlight_shaders::cpu::dispatch::fold_dispatch(count, max_per_dimension)
 }
 
 /// The one implementation: a single-thread compute pass.

@@ -3,6 +3,8 @@
 // itself stays where it was: the consumer's workgroups compute their linear index
 // (y * x_size + x) and those at or past the count return at once.
 
+#import meshlight::dispatch::fold_dispatch
+
 struct Params {
     // Word of `count` that holds the workgroup count.
     count_word: u32,
@@ -19,15 +21,8 @@ struct Params {
 
 @compute @workgroup_size(1)
 fn remap() {
-    let n = count[params.count_word];
-    let max_dim = max(params.max_per_dimension, 1u);
-    let x = min(n, max_dim);
-    // x == 0 only when n == 0; then y is 0 too and the dispatch does nothing.
-    var y = 0u;
-    if x > 0u {
-        y = min((n + x - 1u) / x, max_dim);
-    }
-    args[0] = x;
-    args[1] = y;
-    args[2] = 1u;
+    let d = fold_dispatch(count[params.count_word], params.max_per_dimension);
+    args[0] = d.x;
+    args[1] = d.y;
+    args[2] = d.z;
 }

@@ -18,6 +18,7 @@
 // `raster` only lists the clusters holding such triangles; `raster_clipped` clips them,
 // so the clipping code (and the registers it needs) stays out of the main kernel.
 
+#import meshlight::dispatch::linear_workgroup
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle}
 #import meshlight::instance::Instance
@@ -355,7 +356,7 @@ fn shade(tri: Tri, x: i32, y: i32) {
 
 @compute @workgroup_size(128)
 fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t: u32) {
-    let j = wg.y * sw_args[0] + wg.x;
+    let j = linear_workgroup(wg, sw_args[0]);
     if j >= raster_counts[0] {
         return;
     }

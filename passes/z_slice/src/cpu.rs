@@ -230,14 +230,7 @@ pub const INSTANCES_PER_GROUP: u32 = 64;
 
 /// `fold_dispatch` of the WGSL: `groups` workgroups as `[x, y, 1]` under the limit.
 pub fn fold_dispatch(groups: u32, max_per_dimension: u32) -> [u32; 3] {
-    let max_dim = max_per_dimension.max(1);
-    let x = groups.min(max_dim);
-    let y = if x > 0 {
-        groups.div_ceil(x).min(max_dim)
-    } else {
-        0
-    };
-    [x, y, 1]
+    meshlight_shaders::cpu::dispatch::fold_dispatch(groups, max_per_dimension)
 }
 
 /// The whole pass over `objects` with a list of `capacity` entries.

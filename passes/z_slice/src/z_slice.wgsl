@@ -8,6 +8,7 @@
 
 #import meshlight::light::{ClusterableObject, ClusterGrid, z_slice_of_depth, CLUSTERABLE_SPOT_LIGHT, CLUSTERABLE_PROBE, CLUSTERABLE_DECAL, CLUSTERABLE_TYPE_COUNT}
 #import meshlight::view::{View, sphere_in_frustum}
+#import meshlight::dispatch::{fold_dispatch, linear_workgroup}
 
 struct Params {
     // Instances the list may hold; clamped to the bound list's length.
@@ -86,16 +87,6 @@ fn is_finite(x: f32) -> bool {
 
 fn is_finite3(v: vec3<f32>) -> bool {
     return is_finite(v.x) && is_finite(v.y) && is_finite(v.z);
-}
-
-fn fold_dispatch(groups: u32) -> vec3<u32> {
-    let max_dim = max(params.max_per_dimension, 1u);
-    let x = min(groups, max_dim);
-    var y = 0u;
-    if x > 0u {
-        y = min((groups + x - 1u) / x, max_dim);
-    }
-    return vec3(x, y, 1u);
 }
 
 fn capacity() -> u32 {
@@ -217,7 +208,7 @@ fn slice(
         atomicStore(&group_counts[t], 0u);
     }
     workgroupBarrier();
-    let i = (wg.y * groups.x + wg.x) * WORKGROUP_SIZE + t;
+    let i = linear_workgroup(wg, groups.x) * WORKGROUP_SIZE + t;
     var first = 0u;
     var n = 0u;
     var local = 0u;
@@ -280,7 +271,7 @@ fn finish() {
     slice_draw_args[1] = written;
     slice_draw_args[2] = 0u;
     slice_draw_args[3] = 0u;
-    let d = fold_dispatch((written + INSTANCES_PER_GROUP - 1u) / INSTANCES_PER_GROUP);
+    let d = fold_dispatch((written + INSTANCES_PER_GROUP - 1u) / INSTANCES_PER_GROUP, params.max_per_dimension);
     slice_dispatch_args[0] = d.x;
     slice_dispatch_args[1] = d.y;
     slice_dispatch_args[2] = d.z;

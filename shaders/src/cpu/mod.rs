@@ -3,6 +3,7 @@
 //! The asset builder encodes with these functions and pass tests compare GPU output
 //! against them, so each mirrors its WGSL counterpart operation for operation.
 
+pub mod dispatch;
 pub mod froxel;
 pub mod layout;
 pub mod light;

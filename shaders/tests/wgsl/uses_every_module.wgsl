@@ -2,6 +2,7 @@
 // writes their results to a buffer so nothing is pruned.
 
 #import meshlight::math
+#import meshlight::dispatch::{fold_dispatch, linear_workgroup}
 #import meshlight::view::{View, sphere_in_frustum, project_error_to_pixels, world_to_screen, position_from_depth, view_z_from_depth, pixel_to_uv}
 #import meshlight::octahedral::{pack_octahedral_normal, unpack_octahedral_normal}
 #import meshlight::meshlet::{Meshlet, MeshletGroup, Mesh, Cluster, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, meshlet_triangle_location, meshlet_triangle, meshlet_bounds, meshlet_level, lod_cut}
@@ -66,6 +67,6 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             + f32(visbuffer_nearer(vis, other)) + f32(visbuffer_is_empty(vis))
             + f32(cluster_index(grid, c)) + f32(hit) + f32(z_slice_of_depth(grid, screen.z))
             + project_error_to_pixels(view, sphere.xyz, sphere.w, group.error)
-            + math::saturate(math::PI) + f32(math::div_ceil(id.x, 64u)) + f32(instance_total()),
+            + math::saturate(math::PI) + f32(math::div_ceil(id.x, 64u)) + f32(instance_total()) + f32(linear_workgroup(fold_dispatch(id.x, 7u), 3u)),
     );
 }
