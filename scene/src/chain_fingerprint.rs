@@ -27,7 +27,7 @@ pub struct ChainKeys {
 }
 
 /// `a · b` folded to 64 bits: the mixing step of foldhash and wyhash.
-#[inline]
+#[inline(always)]
 fn fold(a: u64, b: u64) -> u64 {
     let p = a as u128 * b as u128;
     p as u64 ^ (p >> 64) as u64
@@ -50,7 +50,7 @@ impl ChainKeys {
     }
 
     /// The words `(r, s)` of a grid point.
-    #[inline]
+    #[inline(always)]
     pub fn point(&self, p: [u32; 3]) -> (u64, u64) {
         let xy = p[0] as u64 | (p[1] as u64) << 32;
         let z = p[2] as u64;
@@ -64,7 +64,7 @@ impl ChainKeys {
 /// The fingerprint of one triangle's boundary `a → b → c → a`, from its corners' words:
 /// the sum of its three edges' values, which is `(b − a) × (c − a)` of the words as
 /// plane vectors (two products where the sum takes three).
-#[inline]
+#[inline(always)]
 pub fn triangle(a: (u64, u64), b: (u64, u64), c: (u64, u64)) -> u64 {
     let (ab, ac) = (
         (b.0.wrapping_sub(a.0), b.1.wrapping_sub(a.1)),
@@ -75,7 +75,7 @@ pub fn triangle(a: (u64, u64), b: (u64, u64), c: (u64, u64)) -> u64 {
 }
 
 /// The fingerprint of one directed edge `a → b`.
-#[inline]
+#[inline(always)]
 pub fn edge(a: (u64, u64), b: (u64, u64)) -> u64 {
     a.0.wrapping_mul(b.1).wrapping_sub(b.0.wrapping_mul(a.1))
 }

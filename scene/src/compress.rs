@@ -164,7 +164,7 @@ impl<'a> BitWriter<'a> {
 /// The 57 bits of a little-endian bitstream (as bytes) from bit `at` on, zeros past the
 /// end: one unaligned read that holds a whole vertex's grid offsets or a triangle record,
 /// where [`get_bits`] reads a field at a time. Fields are then masked out of it.
-#[inline]
+#[inline(always)]
 pub fn bit_window(bytes: &[u8], at: usize) -> u64 {
     let i = at / 8;
     let word = match bytes.get(i..i + 8) {
@@ -180,7 +180,7 @@ pub fn bit_window(bytes: &[u8], at: usize) -> u64 {
 }
 
 /// The lowest `bits` set (all of them from 64 on).
-#[inline]
+#[inline(always)]
 pub fn low_bits(bits: u32) -> u64 {
     1u64.checked_shl(bits).map_or(u64::MAX, |b| b - 1)
 }

@@ -118,7 +118,10 @@ pub fn build_dag(
     options: &DagOptions,
     progress: &mut dyn FnMut(LevelProgress),
 ) -> Result<Dag, SceneError> {
-    let positions = &mesh.positions;
+    // Built at unit scale, and scaled back at the end (see `crate::mesh::unit_scale`).
+    let unit = crate::mesh::unit_scale(&mesh.positions);
+    let scaled: Vec<Vec3> = mesh.positions.iter().map(|&p| p * unit).collect();
+    let positions = &scaled;
     let normals = &mesh.normals;
     let remap = position_remap(positions);
     // Meshlets grow across attribute seams, where there are any.
@@ -305,6 +308,21 @@ pub fn build_dag(
         );
     }
     let level_count = clusters.iter().map(|c| c.level).max().unwrap_or(0) + 1;
+    let back = |b: LodBounds| LodBounds {
+        center: b.center / unit,
+        radius: b.radius / unit,
+        error: b.error / unit,
+    };
+    for c in &mut clusters {
+        c.bounds = (c.bounds.0 / unit, c.bounds.1 / unit);
+        c.lod = back(c.lod);
+        c.parent = back(c.parent);
+    }
+    for g in &mut groups {
+        g.lod = back(g.lod);
+        g.simplify_error /= unit;
+        g.deviation /= unit;
+    }
     Ok(Dag {
         clusters,
         groups,

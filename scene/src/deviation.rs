@@ -225,12 +225,19 @@ impl TriangleGrid {
             for z in lo[2]..=hi[2] {
                 for y in lo[1]..=hi[1] {
                     // Only the cells on this ring's shell: all of a row on a face of the
-                    // cube, its two ends elsewhere (iterating the whole cube and
-                    // skipping the inside cost most of the search's time).
+                    // cube, its two ends elsewhere, taken directly (iterating the whole
+                    // cube, or every row, and skipping the inside cost most of the
+                    // search's time).
                     let face = (z - c[2]).abs() == ring || (y - c[1]).abs() == ring;
                     let ends = [c[0] - ring, c[0] + ring];
-                    let row = lo[0]..=hi[0];
-                    let xs = row.filter(|&x| face || ends.contains(&x));
+                    // An end past the grid is not there; at ring 0 the ends are one.
+                    let end = |k: usize| {
+                        let x = ends[k];
+                        (!face && (0..self.dims[0]).contains(&x) && (k == 0 || ring > 0))
+                            .then_some(x)
+                    };
+                    let row = if face { lo[0]..hi[0] + 1 } else { 0..0 };
+                    let xs = row.chain(end(0)).chain(end(1));
                     for x in xs {
                         let box_lo =
                             self.origin + Vec3::new(x as f32, y as f32, z as f32) * self.cell;

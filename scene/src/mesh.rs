@@ -167,8 +167,15 @@ impl Mesh {
         );
         let before = self.triangle_count();
         let positions = &self.positions;
+        let unit = unit_scale(positions);
         let point = position_remap(positions);
-        let mut seen = rustc_hash::FxHashSet::default();
+        // Sized for every triangle up front, and keyed by the three points packed into
+        // one integer: FxHash mixes an integer well, where an array's bytes hashed in
+        // turn clustered and made this loop a third of cleaning.
+        let mut seen = rustc_hash::FxHashSet::with_capacity_and_hasher(
+            self.indices.len() / 3,
+            Default::default(),
+        );
         let mut dropped_duplicate = 0;
         let mut kept = Vec::with_capacity(self.indices.len());
         for t in self.indices.chunks_exact(3) {
@@ -182,14 +189,17 @@ impl Mesh {
                 positions[c as usize],
             );
             // Exact zero area: repeated positions or collinear points. A relative threshold
-            // would drop legitimate slivers of dense scans.
-            if (pb - pa).cross(pc - pa) == Vec3::ZERO {
+            // would drop legitimate slivers of dense scans. At unit scale, so that whether a
+            // sliver's area underflows to zero does not depend on the mesh's size.
+            if ((pb - pa) * unit).cross((pc - pa) * unit) == Vec3::ZERO {
                 continue;
             }
             // The same points in the same winding, whichever corner comes first.
             let p = [a, b, c].map(|v| point[v as usize]);
             let r = (0..3).min_by_key(|&k| p[k]).unwrap_or(0);
-            if !seen.insert([p[r], p[(r + 1) % 3], p[(r + 2) % 3]]) {
+            let key =
+                p[r] as u128 | (p[(r + 1) % 3] as u128) << 32 | (p[(r + 2) % 3] as u128) << 64;
+            if !seen.insert(key) {
                 dropped_duplicate += 1;
                 continue;
             }
@@ -227,8 +237,10 @@ impl Mesh {
     pub fn generate_normals(&mut self) {
         let remap = position_remap(&self.positions);
         let mut acc = vec![Vec3::ZERO; self.positions.len()];
+        // At unit scale: on a mesh scaled to 1e-10 the areas' squares underflow.
+        let unit = unit_scale(&self.positions);
         for t in self.indices.chunks_exact(3) {
-            let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize] * unit);
             // Unnormalised cross product = area weighting.
             let n = (b - a).cross(c - a);
             for &i in t {
@@ -247,6 +259,29 @@ impl Mesh {
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         )
     }
+}
+
+/// The power of two that brings the mesh's extent (its largest bounding-box side) to
+/// about 1, or 1 for a mesh of no extent.
+///
+/// The DAG is built on the positions times this, and its spheres and errors divided by
+/// it, and cleaning tests triangle areas on it: the products of coordinates (cross and
+/// dot products, squared distances) of the meshlet splitter, the simplifier and the
+/// area test then neither underflow into denormals on a mesh scaled to 1e-10 nor
+/// overflow on one scaled to 1e16, and a mesh scaled by a power of two gives the same
+/// DAG with its bounds and errors scaled alike. Multiplying by a power of two is exact,
+/// so nothing is lost on the way there and back.
+pub(crate) fn unit_scale(positions: &[Vec3]) -> f32 {
+    let (lo, hi) = positions
+        .iter()
+        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let extent = (hi - lo).max_element();
+    if !(extent.is_normal() && extent > 0.0) {
+        return 1.0;
+    }
+    2f32.powi(-(extent.log2().round() as i32))
 }
 
 /// For every vertex, the first vertex with a bit-identical position. Deterministic,

@@ -41,8 +41,10 @@ pub fn weld_positions(positions: &mut [Vec3], distance: f32) -> usize {
     let size = 2.0 * distance as f64;
     let scaled = |p: Vec3| [0, 1, 2].map(|k| (p[k] as f64 - min[k] as f64) / size);
     // Kept vertices per cell, as linked lists through `next` (oldest first).
-    let mut heads: FxHashMap<[i64; 3], u32> = FxHashMap::default();
-    let mut tails: FxHashMap<[i64; 3], u32> = FxHashMap::default();
+    // First and last kept vertex of each cell, in one table sized for every vertex
+    // having a cell of its own (the usual case at a tolerance this small).
+    let mut cells: FxHashMap<(i64, i64, i64), (u32, u32)> =
+        FxHashMap::with_capacity_and_hasher(positions.len(), Default::default());
     let mut next: Vec<u32> = vec![u32::MAX; positions.len()];
     // In f64: the squares of tiny distances underflow f32.
     let within = |a: Vec3, b: Vec3| a.as_dvec3().distance(b.as_dvec3()) <= distance as f64;
@@ -55,7 +57,9 @@ pub fn weld_positions(positions: &mut [Vec3], distance: f32) -> usize {
         let mut best: Option<u32> = None;
         for corner in 0..8 {
             let c = [0, 1, 2].map(|k| cell[k] + side[k] * ((corner >> k) & 1));
-            let mut k = heads.get(&c).copied().unwrap_or(u32::MAX);
+            let mut k = cells
+                .get(&(c[0], c[1], c[2]))
+                .map_or(u32::MAX, |&(head, _)| head);
             while k != u32::MAX {
                 if best.is_none_or(|b| k < b) && within(positions[k as usize], p) {
                     best = Some(k);
@@ -70,12 +74,15 @@ pub fn weld_positions(positions: &mut [Vec3], distance: f32) -> usize {
                     moved += 1;
                 }
             }
-            None => match tails.insert(cell, v as u32) {
-                Some(t) => next[t as usize] = v as u32,
-                None => {
-                    heads.insert(cell, v as u32);
+            None => {
+                let (_, tail) = cells
+                    .entry((cell[0], cell[1], cell[2]))
+                    .or_insert((v as u32, u32::MAX));
+                if *tail != u32::MAX {
+                    next[*tail as usize] = v as u32;
                 }
-            },
+                *tail = v as u32;
+            }
         }
     }
     moved

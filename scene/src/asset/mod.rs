@@ -307,6 +307,13 @@ impl MeshletAsset {
     /// Reads and validates an asset file. Any inconsistency is an error; nothing of a
     /// bad file is ever returned.
     pub fn load(path: &Path) -> Result<Self, SceneError> {
+        let (words, len) = Self::read_words(path)?;
+        Self::from_words(words, len, path)
+    }
+
+    /// A file's bytes as 32-bit words, and its length in bytes; a file too short for a
+    /// header is refused here, with the magic or version message where its start says so.
+    fn read_words(path: &Path) -> Result<(Vec<u32>, u64), SceneError> {
         let mut file = std::fs::File::open(path).map_err(|e| SceneError::io(path, e))?;
         let len = file.metadata().map_err(|e| SceneError::io(path, e))?.len();
         let header_bytes = (AssetHeader::WORDS * 4) as u64;
@@ -341,11 +348,25 @@ impl MeshletAsset {
         let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut words);
         file.read_exact(&mut bytes[..len as usize])
             .map_err(|e| SceneError::io(path, e))?;
-        Self::from_words(words, len, path)
+        Ok((words, len))
     }
 
     /// Validates a word buffer holding `len` bytes of an asset file.
     pub fn from_words(words: Vec<u32>, len: u64, path: &Path) -> Result<Self, SceneError> {
+        Self::from_words_checked(words, len, path, false)
+    }
+
+    /// [`MeshletAsset::from_words`], and with `dag` the DAG invariants too. The checksum
+    /// runs on one core while the structure (then the DAG) is checked on the other: the
+    /// checks never trust the checksum, only the structure, so they may run before it
+    /// is known, and the errors still come in the order a reader expects (checksum,
+    /// then structure, then DAG).
+    fn from_words_checked(
+        words: Vec<u32>,
+        len: u64,
+        path: &Path,
+        dag: bool,
+    ) -> Result<Self, SceneError> {
         let p = || path.to_owned();
         let corrupt = |reason: String| SceneError::AssetCorrupt { path: p(), reason };
         let header_words = AssetHeader::WORDS;
@@ -395,7 +416,24 @@ impl MeshletAsset {
             return Err(corrupt(format!("{len} bytes where the header says {size}")));
         }
         let stored = header.checksum[0] as u64 | ((header.checksum[1] as u64) << 32);
-        let found = checksum::file_checksum(&words[..header_words], &words[header_words..]);
+        let asset = Self {
+            words,
+            dag_verified: false,
+        };
+        let (found, checked) = rayon::join(
+            || checksum::file_checksum(&asset.words[..header_words], &asset.words[header_words..]),
+            || {
+                asset.validate().map_err(|e| SceneError::AssetField {
+                    path: p(),
+                    field: e.field,
+                    problem: e.problem,
+                })?;
+                if dag {
+                    asset.verify_dag(path)?;
+                }
+                Ok(())
+            },
+        );
         if found != stored {
             return Err(SceneError::AssetChecksum {
                 path: p(),
@@ -403,14 +441,10 @@ impl MeshletAsset {
                 found,
             });
         }
-        validate::validate(&words).map_err(|e| SceneError::AssetField {
-            path: p(),
-            field: e.field,
-            problem: e.problem,
-        })?;
+        checked?;
         Ok(Self {
-            words,
-            dag_verified: false,
+            dag_verified: dag,
+            ..asset
         })
     }
 
@@ -421,10 +455,8 @@ impl MeshletAsset {
     /// renderer loads through this, so nothing `inspect` rejects reaches the GPU, and
     /// it is refused with the same message.
     pub fn load_verified(path: &Path) -> Result<Self, SceneError> {
-        let mut asset = Self::load(path)?;
-        asset.verify_dag(path)?;
-        asset.dag_verified = true;
-        Ok(asset)
+        let (words, len) = Self::read_words(path)?;
+        Self::from_words_checked(words, len, path, true)
     }
 
     /// This asset after every check of [`MeshletAsset::check_all`], marked so that
@@ -600,6 +632,7 @@ impl MeshletAsset {
     /// Calls `each` with every vertex's local index and grid point, reading positions only
     /// and a whole vertex record at a time: what the load-time checks decode every
     /// vertex of an asset with.
+    #[inline(always)]
     pub fn for_each_grid_point(&self, m: &MeshletRecord, mut each: impl FnMut(usize, [u32; 3])) {
         // From the meshlet's data on: a record's window may reach past its block, and the
         // masks drop what it reads there.

@@ -63,18 +63,84 @@ pub fn scan_meshlets(asset: &MeshletAsset, keys: &ChainKeys) -> Vec<MeshletScan>
         .par_chunks_mut(CHUNK)
         .enumerate()
         .for_each(|(c, out)| {
-            let mut decoded = Decoded {
-                words: [(0, 0); WORDS],
-                axes: [[0; WORDS]; 3],
-            };
-            for (k, scan) in out.iter_mut().enumerate() {
-                *scan = scan_meshlet(asset, payload, &meshlets[c * CHUNK + k], keys, &mut decoded);
-            }
+            let meshlets = &meshlets[c * CHUNK..c * CHUNK + out.len()];
+            scan_chunk(asset, payload, meshlets, keys, out);
         });
     scans
 }
 
-fn scan_meshlet(
+/// Scans `meshlets` into `out`, with the instructions of the machine it runs on where it
+/// has them: BMI2's shifts by a register and AVX2 took about a fifth off the decoding,
+/// AVX-512's eight triangle records at a time a fifth more.
+fn scan_chunk(
+    asset: &MeshletAsset,
+    payload: &[u8],
+    meshlets: &[MeshletRecord],
+    keys: &ChainKeys,
+    out: &mut [MeshletScan],
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::is_x86_feature_detected as has;
+        if has!("avx512f") && has!("avx512dq") && has!("bmi2") {
+            // SAFETY: the features it is compiled for were just detected.
+            return unsafe { scan_chunk_avx512(asset, payload, meshlets, keys, out) };
+        }
+        if has!("avx2") && has!("bmi2") {
+            // SAFETY: as above.
+            return unsafe { scan_chunk_avx2(asset, payload, meshlets, keys, out) };
+        }
+    }
+    scan_chunk_portable::<false>(asset, payload, meshlets, keys, out)
+}
+
+/// [`scan_chunk_avx2`], with the triangle records decoded eight at a time
+/// ([`wide_triangles`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq,avx2,bmi1,bmi2,lzcnt,popcnt")]
+fn scan_chunk_avx512(
+    asset: &MeshletAsset,
+    payload: &[u8],
+    meshlets: &[MeshletRecord],
+    keys: &ChainKeys,
+    out: &mut [MeshletScan],
+) {
+    scan_chunk_portable::<true>(asset, payload, meshlets, keys, out)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+fn scan_chunk_avx2(
+    asset: &MeshletAsset,
+    payload: &[u8],
+    meshlets: &[MeshletRecord],
+    keys: &ChainKeys,
+    out: &mut [MeshletScan],
+) {
+    scan_chunk_portable::<false>(asset, payload, meshlets, keys, out)
+}
+
+/// `WIDE`: decode triangle records with AVX-512, which only [`scan_chunk_avx512`] asks
+/// for, having detected it.
+#[inline(always)]
+fn scan_chunk_portable<const WIDE: bool>(
+    asset: &MeshletAsset,
+    payload: &[u8],
+    meshlets: &[MeshletRecord],
+    keys: &ChainKeys,
+    out: &mut [MeshletScan],
+) {
+    let mut decoded = Decoded {
+        words: [(0, 0); WORDS],
+        axes: [[0; WORDS]; 3],
+    };
+    for (m, scan) in meshlets.iter().zip(out) {
+        *scan = scan_meshlet::<WIDE>(asset, payload, m, keys, &mut decoded);
+    }
+}
+
+#[inline(always)]
+fn scan_meshlet<const WIDE: bool>(
     asset: &MeshletAsset,
     payload: &[u8],
     m: &MeshletRecord,
@@ -111,7 +177,17 @@ fn scan_meshlet(
 
     let triangle_bits = m.triangle_bits();
     let block = &data[layout.triangles as usize * 4..];
-    let (boundary, in_range) = fast_triangles(block, triangle_bits, vc as u32, tc, words);
+    let (boundary, in_range) = if WIDE {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `WIDE` only from `scan_chunk_avx512`, after detecting its features.
+        unsafe {
+            wide_triangles(block, triangle_bits, vc as u32, tc, words)
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        fast_triangles(block, triangle_bits, vc as u32, tc, words, 0)
+    } else {
+        fast_triangles(block, triangle_bits, vc as u32, tc, words, 0)
+    };
     let (first_out_of_range, boundary) = if in_range {
         (None, boundary)
     } else {
@@ -126,23 +202,26 @@ fn scan_meshlet(
     }
 }
 
-/// The boundary fingerprint of a meshlet whose triangle records all lie in range (a
-/// valid asset's), and whether they do: no clamping and no branch per triangle.
+/// The boundary fingerprint of a meshlet's triangles from `start` on, when their records
+/// all lie in range (a valid asset's), and whether they do: no clamping and no branch
+/// per triangle.
+#[inline(always)]
 fn fast_triangles(
     block: &[u8],
     bits: TriangleBits,
     vertices: u32,
     triangles: u32,
     words: &[(u64, u64); WORDS],
+    start: usize,
 ) -> (u64, bool) {
     let stride = bits.stride() as usize;
     let bias = 1i64 << (bits.offset.max(1) - 1);
     let reciprocal = prediction_reciprocal(triangles);
     let (offset_mask, delta_mask) = (low_bits(bits.offset), low_bits(bits.delta));
-    let mut numerator = vertices as u64;
+    let mut numerator = vertices as u64 * (start as u64 + 1);
     let mut out_of_range = false;
     let mut boundary = 0u64;
-    for t in 0..triangles as usize {
+    for t in start..triangles as usize {
         let record = bit_window(block, t * stride);
         let predicted = ((numerator * reciprocal) >> 32) as i64;
         numerator += vertices as u64;
@@ -158,6 +237,81 @@ fn fast_triangles(
         ));
     }
     (boundary, !out_of_range)
+}
+
+/// [`fast_triangles`], eight triangles at a time in AVX-512 lanes: the same records
+/// read, the same arithmetic per lane (wrapping 64-bit products and sums), the lanes'
+/// fingerprints added up at the end. Triangles whose 8-byte window would reach past the
+/// block, at its end, are left to [`fast_triangles`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512dq")]
+fn wide_triangles(
+    block: &[u8],
+    bits: TriangleBits,
+    vertices: u32,
+    triangles: u32,
+    words: &[(u64, u64); WORDS],
+) -> (u64, bool) {
+    use std::arch::x86_64::*;
+    let stride = bits.stride().max(1) as u64;
+    // Triangle `t` reads bytes `(t · stride) / 8 ..+ 8`: inside the block up to here.
+    let inside = match block.len().checked_sub(8) {
+        Some(last) => ((last as u64 * 8) / stride + 1).min(triangles as u64) as usize,
+        None => 0,
+    };
+    let wide = inside / 8 * 8;
+    let splat = |v: u64| _mm512_set1_epi64(v as i64);
+    let lane = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
+    let (v_stride, v_vertices) = (splat(stride), splat(vertices as u64));
+    let v_reciprocal = splat(prediction_reciprocal(triangles));
+    let (v_offset_mask, v_delta_mask) = (splat(low_bits(bits.offset)), splat(low_bits(bits.delta)));
+    let v_bias = splat(1 << (bits.offset.max(1) - 1));
+    let (v_offset, v_second) = (
+        splat(bits.offset as u64),
+        splat((bits.offset + bits.delta) as u64),
+    );
+    let zero = _mm512_setzero_si512();
+    let mut sum = zero;
+    let mut out_of_range: __mmask8 = 0;
+    let base = words.as_ptr() as *const i64;
+    for t0 in (0..wide).step_by(8) {
+        let t = _mm512_add_epi64(splat(t0 as u64), lane);
+        let at = _mm512_mullo_epi64(t, v_stride);
+        // SAFETY: every lane's window lies inside the block (`inside`).
+        let raw = unsafe {
+            _mm512_i64gather_epi64::<1>(_mm512_srli_epi64::<3>(at), block.as_ptr() as *const i64)
+        };
+        let record = _mm512_srlv_epi64(raw, _mm512_and_si512(at, splat(7)));
+        let numerator = _mm512_mullo_epi64(_mm512_add_epi64(t, splat(1)), v_vertices);
+        let predicted = _mm512_srli_epi64::<32>(_mm512_mullo_epi64(numerator, v_reciprocal));
+        let first = _mm512_sub_epi64(
+            _mm512_add_epi64(predicted, _mm512_and_si512(record, v_offset_mask)),
+            v_bias,
+        );
+        let below = |shift| _mm512_and_si512(_mm512_srlv_epi64(record, shift), v_delta_mask);
+        let second = _mm512_sub_epi64(first, below(v_offset));
+        let third = _mm512_sub_epi64(first, below(v_second));
+        out_of_range |= _mm512_cmpge_epi64_mask(first, v_vertices)
+            | _mm512_cmplt_epi64_mask(_mm512_min_epi64(second, third), zero);
+        // Byte offsets of the corners' words, taken modulo their 256 entries.
+        let at = |corner| _mm512_slli_epi64::<4>(_mm512_and_si512(corner, splat(255)));
+        // SAFETY: offsets below 256 · 16 bytes, within `words`.
+        let word = |corner, half: usize| unsafe {
+            _mm512_i64gather_epi64::<1>(at(corner), base.add(half))
+        };
+        let (ra, sa) = (word(first, 0), word(first, 1));
+        let (rb, sb) = (word(second, 0), word(second, 1));
+        let (rc, sc) = (word(third, 0), word(third, 1));
+        let (ab0, ab1) = (_mm512_sub_epi64(rb, ra), _mm512_sub_epi64(sb, sa));
+        let (ac0, ac1) = (_mm512_sub_epi64(rc, ra), _mm512_sub_epi64(sc, sa));
+        let cross = _mm512_sub_epi64(_mm512_mullo_epi64(ab0, ac1), _mm512_mullo_epi64(ac0, ab1));
+        sum = _mm512_add_epi64(sum, cross);
+    }
+    let (tail, tail_in_range) = fast_triangles(block, bits, vertices, triangles, words, wide);
+    (
+        (_mm512_reduce_add_epi64(sum) as u64).wrapping_add(tail),
+        out_of_range == 0 && tail_in_range,
+    )
 }
 
 /// The first triangle whose corners fall outside the meshlet, and the boundary
@@ -237,6 +391,11 @@ mod tests {
             for (i, scan) in scans.iter().enumerate() {
                 assert_eq!(*scan, reference(asset, i, &keys), "meshlet {i}");
             }
+            // The portable decoder too, where the machine's own instructions were used.
+            let mut portable = scans.clone();
+            let payload: &[u8] = bytemuck::cast_slice(asset.payload());
+            scan_chunk_portable::<false>(asset, payload, asset.meshlets(), &keys, &mut portable);
+            assert_eq!(portable, scans);
             scans
         };
         assert!(check(&asset).iter().all(|s| s.first_out_of_range.is_none()));
