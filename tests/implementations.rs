@@ -166,5 +166,9 @@ fn every_combination_renders_the_same_frame_or_names_what_is_missing_and_what_ru
     let err = render(&placed, settings(view, "bufer", "auto"))
         .err()
         .unwrap();
-    assert!(err.to_string().contains("texture, buffer, auto"), "{err}");
+    let text = err.to_string();
+    assert!(
+        text.contains("`bufer`") && text.contains("known: buffer, texture, auto"),
+        "{text}"
+    );
 }

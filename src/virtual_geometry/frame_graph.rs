@@ -23,8 +23,7 @@ use super::counts::{
 };
 use crate::graph::file::{AUTO, Registry};
 use crate::graph::{
-    Bindings, BufferDesc, Choice, Element, GraphBuilder, GraphError, Pass, Result, TextureDesc,
-    Visibility64,
+    Bindings, BufferDesc, Choice, Element, GraphBuilder, GraphError, Result, TextureDesc,
 };
 use crate::light_clustering::ClusteringSettings;
 use crate::light_clustering::frame_graph as clustering;
@@ -36,13 +35,10 @@ use meshlight_pass_cull_lod::{
     CullLod, Mode, OCCLUSION_COUNT_WORDS, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND, Thresholds,
     WALKED_COUNT_SLOT, WALKED_SLOT,
 };
-use meshlight_pass_depth_pyramid::DepthPyramid;
 use meshlight_pass_fill_clusters::hierarchy::{ENTRY_COUNT_WORDS, OCCLUSION_MIN_CLUSTERS};
 use meshlight_pass_fill_clusters::{FillClusters, HIDDEN_NODE, HierarchyFill, Mode as WalkMode};
-use meshlight_pass_hw_raster::{Feed, HwRaster};
 use meshlight_pass_remap_dispatch::RemapDispatch;
 use meshlight_pass_resolve::{DebugView, OCCLUDED_PER_INSTANCE, Resolve};
-use meshlight_pass_sw_raster::SwRaster;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -410,50 +406,47 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         .bind_named("args", "sw_args");
     g.add_pass("remap", remap, remap_bindings)?;
     let (width, height) = (s.width, s.height);
-    let software = |target, accumulate| -> Box<dyn Pass> {
-        Box::new(SwRaster {
-            width,
-            height,
-            target,
-            scanline_width: 16,
-            exact_division: s.exact_division,
-            accumulate,
-            big_triangle_px: s.big_triangle_px,
-        })
-    };
-    let sw_choice = |accumulate| {
-        Choice::select(
+    // The stages with several implementations come from the registry, as in a pipeline
+    // file: the implementation named in the settings (or `auto`) with these parameters.
+    let registry = frame_registry(s);
+    let sw_choice = |accumulate: bool| {
+        registered(
+            &registry,
+            meshlight_pass_sw_raster::STAGE,
             &s.sw_raster,
-            vec![
-                software(Visibility64::Texture, accumulate),
-                software(Visibility64::Buffer, accumulate),
-            ],
+            toml::toml! {
+                width = (width)
+                height = (height)
+                exact_division = (s.exact_division)
+                accumulate = (accumulate)
+                big_triangle_px = (s.big_triangle_px)
+            },
         )
     };
     g.add_choice("sw_raster", sw_choice(false)?, Bindings::new())?;
-    let hardware = |feed| -> Box<dyn Pass> {
-        Box::new(HwRaster {
-            width,
-            height,
-            feed,
-        })
+    let hw_choice = || {
+        registered(
+            &registry,
+            meshlight_pass_hw_raster::STAGE,
+            &s.hw_raster,
+            toml::toml! {
+                width = (width)
+                height = (height)
+            },
+        )
     };
-    let feeds = s
-        .adapter_class
-        .map_or([Feed::MeshShader, Feed::IndirectDraw], |c| {
-            c.hardware_feeds()
-        });
-    let hw_choice = || Choice::select(&s.hw_raster, feeds.map(hardware).into());
     if s.has_hardware() {
         g.add_choice("hw_raster", hw_choice()?, Bindings::new())?;
     }
-    let pyramid = || -> Result<Choice> {
-        Choice::select(
+    let pyramid = || {
+        registered(
+            &registry,
+            meshlight_pass_depth_pyramid::STAGE,
             AUTO,
-            vec![
-                Box::new(DepthPyramid::single_pass(width, height)) as Box<dyn Pass>,
-                Box::new(DepthPyramid::two_pass(width, height)),
-            ],
+            toml::toml! {
+                width = (width)
+                height = (height)
+            },
         )
     };
     if history.is_some() {
@@ -548,6 +541,40 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
     Ok(g)
 }
 
+/// The registry a frame's stages come from: the built-in one, with `auto` trying the
+/// hardware rasterisers in the adapter class's order when the settings know the class.
+fn frame_registry(s: &FrameSettings) -> Registry {
+    let mut registry = crate::registry();
+    prefer_class_order(&mut registry, s);
+    registry
+}
+
+/// Orders `auto`'s hardware rasterisers as the settings' adapter class prefers them.
+fn prefer_class_order(registry: &mut Registry, s: &FrameSettings) {
+    if let Some(class) = s.adapter_class {
+        let feeds = class.hardware_feeds().map(|f| f.implementation());
+        registry.prefer(meshlight_pass_hw_raster::STAGE, &feeds);
+    }
+}
+
+/// Stage `stage` as the registry builds it for `implementation` (or `auto`) with these
+/// parameters, as a choice compile resolves.
+fn registered(
+    registry: &Registry,
+    stage: &str,
+    implementation: &str,
+    params: toml::Table,
+) -> Result<Choice> {
+    let params = crate::graph::file::Params::new(params);
+    match registry.build_choice(stage, implementation, &params)? {
+        Some(choice) => Ok(choice),
+        None => Choice::select(
+            implementation,
+            vec![registry.build(stage, implementation, &params)?],
+        ),
+    }
+}
+
 /// A pipeline file with the renderer's sizes (viewport, lists, scene buffers) set in
 /// its `[params]` and every `resolve` pass showing `settings.view`, then the counters'
 /// readbacks added. Everything else (thresholds, which stages run) is the file's.
@@ -600,10 +627,7 @@ pub fn load_with(
     }
     // `auto` tries the hardware rasterisers in the adapter class's order, as in code.
     let mut registry = registry.clone();
-    if let Some(class) = s.adapter_class {
-        let feeds = class.hardware_feeds().map(|f| f.implementation());
-        registry.prefer(meshlight_pass_hw_raster::STAGE, &feeds);
-    }
+    prefer_class_order(&mut registry, s);
     let mut g = crate::graph::file::parse_pipeline_with(&text, &file, &registry, &params)?;
     add_readbacks(&mut g)?;
     Ok(g)
