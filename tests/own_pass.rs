@@ -2,7 +2,8 @@
 //! the markers below is the README's, character for character.
 
 // walkthrough: start
-use meshlight::graph::*;
+use meshlight::graph::prelude::*;
+use meshlight::graph::{Bindings, CompileOptions, Executor, GpuContext, GraphBuilder, Imports};
 
 /// Stage `double`: `output[i] = 2 * input[i]`.
 struct Double {

@@ -42,3 +42,14 @@ pub use resource::{
     AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture,
     TextureDesc, TextureRange,
 };
+
+/// What a pass author uses, in one import: `use meshlight_graph::prelude::*;`. The
+/// contract (slots), setup (programs, scratch, defs) and record (bind groups, dispatches)
+/// of a stage implementation need nothing else from this crate.
+pub mod prelude {
+    pub use crate::{
+        Access, BindingLayout, BufferDesc, Element, GraphError, Pass, PassShader, ProgramDesc,
+        RecordContext, Result, SamplerKind, SetupContext, ShaderDef, ShaderDefs, Slot,
+        StageContract, TextureDesc, Visibility64,
+    };
+}
