@@ -2,7 +2,8 @@
 
 use serde::Serialize;
 
-/// How a pass uses a resource through a slot: the graph derives barriers-free ordering, usages, load/store ops and binding types from it.
+/// How a pass uses a resource through a slot: the graph derives barriers-free ordering,
+/// usages, load/store ops and binding types from it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Access {
@@ -96,7 +97,8 @@ impl Access {
             Access::Sampled | Access::RenderTarget | Access::DepthTarget => return None,
         })
     }
-    /// The texture usage this access needs, or `None` when a texture cannot be used this way.
+    /// The texture usage this access needs, or `None` when a texture cannot be used this
+    /// way.
     pub fn texture_usage(self) -> Option<wgpu::TextureUsages> {
         use wgpu::TextureUsages as U;
         Some(match self {

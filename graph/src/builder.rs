@@ -128,7 +128,8 @@ pub struct GraphBuilder {
     pub(crate) passes: Vec<PassNode>,
     /// The newest version of each resource seen so far, to resolve by-name bindings.
     current: Vec<u32>,
-    /// Errors found while declaring, reported by `compile` so declaration code stays linear.
+    /// Errors found while declaring, reported by `compile` so declaration code stays
+    /// linear.
     pub(crate) deferred: Vec<GraphError>,
     /// Size parameters and their values, in declaration order.
     pub(crate) params: Vec<(String, u64)>,

@@ -189,7 +189,8 @@ pub struct ResourcePlan {
     pub texture_usage: wgpu::TextureUsages,
 }
 
-/// A compiled graph's schedule: passes in order, resources with lifetimes and pool slots, edges, batches and parameters. Dumps read it.
+/// A compiled graph's schedule: passes in order, resources with lifetimes and pool slots,
+/// edges, batches and parameters. Dumps read it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Plan {
     pub passes: Vec<PassPlan>,

@@ -23,7 +23,8 @@ use std::sync::Arc;
 /// What compile plans for: the adapter's features and limits (no device needed).
 #[derive(Clone, Debug)]
 pub struct CompileOptions {
-    /// Features of the adapter the graph will run on (`Features::all()` to plan without one).
+    /// Features of the adapter the graph will run on (`Features::all()` to plan without
+    /// one).
     pub adapter_features: wgpu::Features,
     /// Limits of the adapter: buffer, binding and texture sizes, workgroups per dimension.
     pub limits: wgpu::Limits,

@@ -23,7 +23,8 @@ fn bytes(b: u64) -> String {
     }
 }
 
-/// The plan as one self-contained HTML page (batches, passes, resources, pool slots), with the last frame's timings when given.
+/// The plan as one self-contained HTML page (batches, passes, resources, pool slots), with
+/// the last frame's timings when given.
 pub fn to_html(plan: &Plan, title: &str, last_frame: Option<&FrameStats>) -> String {
     let mut h = String::new();
     let _ = write!(

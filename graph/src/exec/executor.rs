@@ -98,7 +98,8 @@ pub struct BatchStats {
 pub struct FrameStats {
     pub frame: u64,
     pub passes: Vec<PassTiming>,
-    /// The timing mode this frame ran with: which of `gpu_us` (per pass or per batch) fill in.
+    /// The timing mode this frame ran with: which of `gpu_us` (per pass or per batch) fill
+    /// in.
     pub timing: TimingMode,
     pub batches: Vec<BatchStats>,
     /// wgpu compute passes the shared batches opened (one per compute batch, more when a
@@ -129,7 +130,8 @@ pub struct FrameStats {
     /// GPU resources created this frame (zero once a steady graph has warmed up).
     pub allocations: u32,
     pub pipelines_created: u32,
-    /// Bind groups created this frame (zero once steady: they are cached by what they bind).
+    /// Bind groups created this frame (zero once steady: they are cached by what they
+    /// bind).
     pub bind_groups_created: u32,
 }
 
@@ -143,7 +145,8 @@ struct HistoryEntry {
     created: u64,
 }
 
-/// Runs compiled graphs frame after frame on one device: allocates and pools the physical resources, caches programs and bind groups, times and reads back.
+/// Runs compiled graphs frame after frame on one device: allocates and pools the physical
+/// resources, caches programs and bind groups, times and reads back.
 pub struct Executor {
     pub gpu: GpuContext,
     pool: PhysicalPool,
@@ -186,7 +189,8 @@ pub struct Executor {
 }
 
 impl Executor {
-    /// An executor on `gpu`; the environment variables of this crate set its checked, batching and timing modes.
+    /// An executor on `gpu`; the environment variables of this crate set its checked,
+    /// batching and timing modes.
     pub fn new(gpu: GpuContext) -> Self {
         Self {
             gpu,

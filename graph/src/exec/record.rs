@@ -84,7 +84,8 @@ impl Immediates {
     }
 }
 
-/// What `Pass::record` gets: the pass's bound resources, its programs, bind groups, the frame's inputs and the command encoder.
+/// What `Pass::record` gets: the pass's bound resources, its programs, bind groups, the
+/// frame's inputs and the command encoder.
 pub struct RecordContext<'a> {
     pub(crate) device: &'a wgpu::Device,
     pub(crate) queue: &'a wgpu::Queue,
@@ -381,7 +382,8 @@ impl<'a> RecordContext<'a> {
         Ok(())
     }
 
-    /// Zeroes `bytes` of `buffer` with the fill program: in the shared compute pass inside a
+    /// Zeroes `bytes` of `buffer` with the fill program: in the shared compute pass inside
+    /// a
     /// batch, else in a compute pass of its own.
     fn fill_dispatch(&mut self, buffer: &wgpu::Buffer, bytes: u64) {
         if bytes == 0 {
@@ -946,7 +948,8 @@ impl<'a> RecordContext<'a> {
     }
 
     /// Immediate data for `program`: set it on the pass with `set_on_compute` or
-    /// `set_on_render`. Natively where the device has `IMMEDIATES`, else as a uniform block.
+    /// `set_on_render`. Natively where the device has `IMMEDIATES`, else as a uniform
+    /// block.
     pub fn immediates(&mut self, program: &impl Program, bytes: &[u8]) -> Result<Immediates> {
         let layouts = program.layouts();
         let inner = match layouts.immediates {

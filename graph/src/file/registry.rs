@@ -12,7 +12,8 @@ pub type Factory = fn(&Params) -> Result<Box<dyn Pass>>;
 /// The implementation name that lets compile pick by the adapter's features.
 pub const AUTO: &str = "auto";
 
-/// The stages and implementations pipeline files can name, each with its factory, and per stage the order `auto` tries them in.
+/// The stages and implementations pipeline files can name, each with its factory, and per
+/// stage the order `auto` tries them in.
 #[derive(Default, Clone)]
 pub struct Registry {
     factories: BTreeMap<(String, String), Factory>,
