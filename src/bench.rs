@@ -613,6 +613,7 @@ static FLOOR_SHADER: PassShader = PassShader {
     name: "bench::floor_step",
     source: FLOOR_WGSL,
     file_path: "meshlight/src/bench.rs",
+    modules: &[],
 };
 
 /// A graph pass that dispatches one thread of `FLOOR_WGSL` on its `counter` slot.

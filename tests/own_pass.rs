@@ -14,6 +14,7 @@ const SHADER: PassShader = PassShader {
     name: "double",
     source: include_str!("walkthrough/double.wgsl"),
     file_path: "tests/walkthrough/double.wgsl",
+    modules: &[],
 };
 
 impl Pass for Double {

@@ -20,6 +20,7 @@ const SHADER: PassShader = PassShader {
     name: "toy::remap_square",
     source: include_str!("toy/remap_square.wgsl"),
     file_path: "tests/toy/remap_square.wgsl",
+    modules: &[],
 };
 
 /// `remap_dispatch`, implementation `square`.

@@ -13,6 +13,7 @@ const DECODE: PassShader = PassShader {
     name: "test::decode",
     source: include_str!("decode.wgsl"),
     file_path: "gpu_scene/tests/decode.wgsl",
+    modules: &[],
 };
 
 struct Decode {

@@ -60,6 +60,7 @@ fn read_back(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 "#,
     file_path: "graph/tests/batches.rs",
+    modules: &[],
 };
 
 const N: u32 = 4096;

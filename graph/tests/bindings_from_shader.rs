@@ -27,6 +27,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 ",
     file_path: "graph/tests/bindings_from_shader.rs (good)",
+    modules: &[],
 };
 
 /// A variable named after nothing the pass has.
@@ -42,6 +43,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 ",
     file_path: "graph/tests/bindings_from_shader.rs (stray)",
+    modules: &[],
 };
 
 /// Writes the slot the contract only reads.
@@ -57,6 +59,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 ",
     file_path: "graph/tests/bindings_from_shader.rs (writes input)",
+    modules: &[],
 };
 
 /// Reads the slot's u32 elements as vec2<u32>.
@@ -71,6 +74,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 ",
     file_path: "graph/tests/bindings_from_shader.rs (wide)",
+    modules: &[],
 };
 
 struct Reflected {

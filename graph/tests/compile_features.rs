@@ -487,6 +487,7 @@ const MESH: PassShader = PassShader {
     name: "test::mesh",
     source: "",
     file_path: "graph/tests/compile_features.rs",
+    modules: &[],
 };
 
 #[test]

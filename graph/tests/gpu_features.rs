@@ -13,11 +13,13 @@ const RASTER: PassShader = PassShader {
     name: "test::features",
     source: include_str!("support/features.wgsl"),
     file_path: "graph/tests/support/features.wgsl",
+    modules: &[],
 };
 const COMPUTE: PassShader = PassShader {
     name: "test::compute",
     source: include_str!("support/compute.wgsl"),
     file_path: "graph/tests/support/compute.wgsl",
+    modules: &[],
 };
 
 fn params(a: u32, b: u32) -> [u32; 4] {
@@ -756,6 +758,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 "#,
     file_path: "graph/tests/gpu_features.rs",
+    modules: &[],
 };
 
 fn run_immediates(features: wgpu::Features) -> (bool, Vec<u32>) {
@@ -1058,6 +1061,7 @@ fn fs(in: VOut) -> @location(0) vec4<f32> {
 }
 "#,
     file_path: "graph/tests/gpu_features.rs",
+    modules: &[],
 };
 
 #[test]

@@ -14,6 +14,7 @@ const MESH: PassShader = PassShader {
     name: "test::mesh",
     source: include_str!("support/mesh.wgsl"),
     file_path: "graph/tests/support/mesh.wgsl",
+    modules: &[],
 };
 
 #[test]

@@ -13,6 +13,7 @@ const SHADER: PassShader = PassShader {
     name: "test::texture_atomics",
     source: include_str!("support/texture_atomics.wgsl"),
     file_path: "graph/tests/support/texture_atomics.wgsl",
+    modules: &[],
 };
 
 /// Stage `raster` with a visibility target that may be a buffer or a texture; this

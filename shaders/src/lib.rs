@@ -20,7 +20,7 @@ mod modules;
 
 pub use defs::{ShaderDef, ShaderDefs};
 pub use error::ShaderError;
-pub use library::{PassShader, ShaderLibrary, validate};
+pub use library::{LocalModule, PassShader, ShaderLibrary, validate};
 pub use modules::{SharedModule, shared_modules};
 
 /// Re-exported so callers name capabilities without depending on naga themselves.

@@ -22,19 +22,42 @@ pub struct PassShader {
     pub source: &'static str,
     /// Where the source lives, for diagnostics.
     pub file_path: &'static str,
+    /// The crate's own modules the shader imports (`#import <name>`), added to the
+    /// library the first time a shader needs them; shaders of one crate share code
+    /// through them as all crates share the modules of this one.
+    pub modules: &'static [LocalModule],
+}
+
+/// A WGSL module of one pass crate, imported by its shaders as `#import <name>`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LocalModule {
+    /// The import path; equals the file's `#define_import_path`.
+    pub name: &'static str,
+    pub source: &'static str,
+    pub file_path: &'static str,
 }
 
 /// Builds a [`PassShader`] from a WGSL file beside the calling source file.
 ///
 /// `pass_shader!("sw_raster", "raster.wgsl")` embeds the file with `include_str!` and
-/// labels it with the calling crate's name and the file name.
+/// labels it with the calling crate's name and the file name. With
+/// `modules: [("scan_fan::common", "common.wgsl")]` the shader may import those files of
+/// the crate by their import paths.
 #[macro_export]
 macro_rules! pass_shader {
     ($name:expr, $file:literal) => {
+        $crate::pass_shader!($name, $file, modules: [])
+    };
+    ($name:expr, $file:literal, modules: [$(($import:literal, $module:literal)),* $(,)?]) => {
         $crate::PassShader {
             name: $name,
             source: include_str!($file),
             file_path: concat!(env!("CARGO_PKG_NAME"), "/", $file),
+            modules: &[$($crate::LocalModule {
+                name: $import,
+                source: include_str!($module),
+                file_path: concat!(env!("CARGO_PKG_NAME"), "/", $module),
+            }),*],
         }
     };
 }
@@ -47,6 +70,8 @@ pub struct ShaderLibrary {
     composer: Composer,
     capabilities: Capabilities,
     added: Vec<&'static SharedModule>,
+    /// Crate-local modules added so far, by import path.
+    local: HashMap<&'static str, LocalModule>,
     /// Modules left out because the device lacks what they need, so an import of one is
     /// reported as a missing capability instead of a missing module.
     unavailable: Vec<&'static SharedModule>,
@@ -96,6 +121,7 @@ impl ShaderLibrary {
             composer,
             capabilities,
             added,
+            local: HashMap::new(),
             unavailable,
         })
     }
@@ -116,6 +142,7 @@ impl ShaderLibrary {
         defs: &[(&'static str, ShaderDef)],
     ) -> Result<naga::Module, ShaderError> {
         let shader_defs = self.naga_oil_defs(shader, defs)?;
+        self.add_local_modules(shader)?;
         self.composer
             .make_naga_module(NagaModuleDescriptor {
                 source: shader.source,
@@ -124,6 +151,43 @@ impl ShaderLibrary {
                 ..Default::default()
             })
             .map_err(|error| self.compose_error(shader, error))
+    }
+
+    /// Adds the shader's crate-local modules not added yet; a second module under an
+    /// import path already taken by another source is an error.
+    fn add_local_modules(&mut self, shader: &PassShader) -> Result<(), ShaderError> {
+        for module in shader.modules {
+            match self.local.get(module.name) {
+                Some(known) if known.source == module.source => continue,
+                Some(known) => {
+                    return Err(ShaderError::AddModule {
+                        module: module.name.to_owned(),
+                        message: format!(
+                            "{} and {} both define it; give one another import path",
+                            known.file_path, module.file_path
+                        ),
+                    });
+                }
+                None => {}
+            }
+            let added = self
+                .composer
+                .add_composable_module(ComposableModuleDescriptor {
+                    source: module.source,
+                    file_path: module.file_path,
+                    as_name: Some(module.name.to_owned()),
+                    ..Default::default()
+                })
+                .map(|_| ());
+            if let Err(error) = added {
+                return Err(ShaderError::AddModule {
+                    module: module.name.to_owned(),
+                    message: error.emit_to_string(&self.composer),
+                });
+            }
+            self.local.insert(module.name, *module);
+        }
+        Ok(())
     }
 
     /// The import paths of the shared modules this library offers, in the order added.

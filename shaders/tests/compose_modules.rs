@@ -9,12 +9,14 @@ const EVERY_MODULE: PassShader = PassShader {
     name: "uses_every_module",
     source: include_str!("wgsl/uses_every_module.wgsl"),
     file_path: "shaders/tests/wgsl/uses_every_module.wgsl",
+    modules: &[],
 };
 
 const VISBUFFER64: PassShader = PassShader {
     name: "uses_visbuffer64",
     source: include_str!("wgsl/uses_visbuffer64.wgsl"),
     file_path: "shaders/tests/wgsl/uses_visbuffer64.wgsl",
+    modules: &[],
 };
 
 fn int64() -> Capabilities {
@@ -195,6 +197,7 @@ fn each_module_composes_on_its_own() {
             name: module.name,
             source: Box::leak(source.into_boxed_str()),
             file_path: "generated",
+            modules: &[],
         };
         let composed = compose(&mut library, &shader);
         validate(module.name, &composed, module.capabilities).unwrap_or_else(|e| panic!("{e}"));
@@ -214,4 +217,54 @@ fn composing_is_deterministic() {
     let third = compose(&mut library, &EVERY_MODULE);
     assert_eq!(format!("{first:?}"), format!("{second:?}"));
     assert_eq!(format!("{second:?}"), format!("{third:?}"));
+}
+
+const LOCAL_HELPERS: &str =
+    "#define_import_path test_crate::helpers\nfn twice(x: u32) -> u32 { return 2u * x; }\n";
+
+/// A crate's own module, imported by its shader and added to the library on first use.
+#[test]
+fn a_crate_local_module_is_imported_by_its_path() {
+    const SHADER: PassShader = PassShader {
+        name: "test::uses_local",
+        source: "#import test_crate::helpers::twice\n@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n@compute @workgroup_size(1)\nfn main() { out[0] = twice(21u); }\n",
+        file_path: "shaders/tests/compose_modules.rs (local)",
+        modules: &[meshlight_shaders::LocalModule {
+            name: "test_crate::helpers",
+            source: LOCAL_HELPERS,
+            file_path: "shaders/tests/compose_modules.rs (helpers)",
+        }],
+    };
+    let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
+    // Twice: the module is added once and reused.
+    for _ in 0..2 {
+        let module = library
+            .compose(&SHADER, &[])
+            .unwrap_or_else(|e| panic!("{e}"));
+        validate(SHADER.name, &module, Capabilities::empty()).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            module
+                .functions
+                .iter()
+                .any(|(_, f)| f.name.as_deref().is_some_and(|n| n.starts_with("twice")))
+        );
+    }
+    // Another source under the same import path is refused, naming both files.
+    const OTHER: PassShader = PassShader {
+        name: "test::other_local",
+        source: "#import test_crate::helpers::twice\n@compute @workgroup_size(1)\nfn main() { _ = twice(1u); }\n",
+        file_path: "shaders/tests/compose_modules.rs (other)",
+        modules: &[meshlight_shaders::LocalModule {
+            name: "test_crate::helpers",
+            source: "#define_import_path test_crate::helpers\nfn twice(x: u32) -> u32 { return x + x; }\n",
+            file_path: "shaders/tests/compose_modules.rs (other helpers)",
+        }],
+    };
+    let err = library.compose(&OTHER, &[]).unwrap_err().to_string();
+    assert!(
+        err.contains("test_crate::helpers")
+            && err.contains("(helpers)")
+            && err.contains("(other helpers)"),
+        "{err}"
+    );
 }

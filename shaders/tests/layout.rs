@@ -12,6 +12,7 @@ const STRUCTS: PassShader = PassShader {
     name: "layout",
     source: include_str!("wgsl/uses_every_module.wgsl"),
     file_path: "shaders/tests/wgsl/uses_every_module.wgsl",
+    modules: &[],
 };
 
 /// (member name, offset) of the WGSL struct whose name starts with `name`, and its size.

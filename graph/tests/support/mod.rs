@@ -7,6 +7,7 @@ pub const SHADER: PassShader = PassShader {
     name: "test::arith",
     source: include_str!("arith.wgsl"),
     file_path: "graph/tests/support/arith.wgsl",
+    modules: &[],
 };
 
 fn u32s(name: &'static str, access: Access, doc: &'static str) -> Slot {

@@ -91,6 +91,7 @@ pub const MESH_SHADER_SOURCE: PassShader = PassShader {
     name: "hw_raster::raster_mesh",
     source: concat!("enable wgpu_mesh_shader;\n", include_str!("raster.wgsl")),
     file_path: concat!(env!("CARGO_PKG_NAME"), "/raster.wgsl (mesh variant)"),
+    modules: &[],
 };
 
 /// The slots every implementation of `hw_raster` shares.

@@ -29,6 +29,7 @@ fn consume(@builtin(workgroup_id) wg: vec3<u32>) {
 }
 "#,
     file_path: "passes/remap_dispatch/tests/gpu.rs",
+    modules: &[],
 };
 
 struct Consume;
