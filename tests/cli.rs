@@ -397,3 +397,16 @@ fn render_refuses_an_asset_that_inspect_rejects_with_the_same_message() {
     assert_eq!(said(&render), said(&inspect));
     assert!(!dir.join("bad.png").exists());
 }
+
+/// `inspect` on a mesh file suggests baking it beside itself, never over itself.
+#[test]
+fn inspect_of_a_mesh_suggests_a_bake_that_keeps_the_mesh() {
+    let out = meshlight(&["inspect", "assets/meshes/spot.obj"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("meshlight bake assets/meshes/spot.obj -o assets/meshes/spot.mlasset"),
+        "{err}"
+    );
+    assert!(!err.contains("-o assets/meshes/spot.obj"), "{err}");
+}
