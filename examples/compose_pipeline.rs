@@ -27,8 +27,15 @@ fn main() -> Result<()> {
         "total {} (CPU: {expected}) on {}",
         total[0], exec.gpu.info.name
     );
+    // The default timing mode times each batch; MESHLIGHT_TIMING=passes times each pass.
+    match stats.gpu_frame_us {
+        Some(us) => println!("  frame: {us:.1} µs GPU"),
+        None => println!("  no GPU timings (timing off, or no timestamps on this adapter)"),
+    }
     for p in &stats.passes {
-        println!("  {}: {:?} µs GPU", p.name, p.gpu_us);
+        if let Some(us) = p.gpu_us {
+            println!("  {}: {us:.1} µs GPU", p.name);
+        }
     }
     Ok(())
 }

@@ -1,7 +1,10 @@
 //! The virtual-geometry frame composed in Rust: a mesh baked into a meshlet LOD asset,
 //! 400 copies placed, the six stages wired by hand, one frame rendered to a PNG.
 //!
-//! `cargo run --release --example virtual_geometry -- assets/meshes/spot.obj spot.png`
+//! `cargo run --release --example virtual_geometry -- assets/meshes/spot.obj [OUT.png]`
+//!
+//! Without `OUT.png`, the image goes to `target/example-output/virtual_geometry.png`
+//! (beside the build, out of the sources); the path written is printed.
 
 use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::{Camera, GpuScene, Material, SceneData, gpu::elements::CLUSTER};
@@ -13,7 +16,13 @@ use meshlight::{remap_dispatch::RemapDispatch, sw_raster::SwRaster};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let mesh = args.next().unwrap_or("assets/meshes/spot.obj".into());
-    let output = args.next().unwrap_or("virtual_geometry.png".into());
+    let output = args
+        .next()
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("target/example-output/virtual_geometry.png")
+        });
     let (width, height) = (1280, 720);
 
     // The scene: the mesh baked once, 20 × 20 copies on the ground.
@@ -92,9 +101,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     exec.execute_frame(&compiled, &scene.imports(), &frame)?;
     let rgba = exec.read_texture("color")?;
 
-    let mut png = png::Encoder::new(std::fs::File::create(&output)?, width, height);
-    png.set_color(png::ColorType::Rgba);
-    png.write_header()?.write_image_data(&rgba)?;
-    println!("{} source triangles → {output}", data.source_triangles());
+    meshlight::output::write_png(&output, width, height, &rgba)?;
+    println!(
+        "{} source triangles → {}",
+        data.source_triangles(),
+        output.display()
+    );
     Ok(())
 }

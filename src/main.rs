@@ -57,20 +57,28 @@ struct RenderArgs {
     instances: u32,
     /// Coloured point lights over the field, clustered on the GPU and shaded per pixel
     /// (0: none; a single instance has none). `--view light-count` shows them per froxel.
-    #[arg(long, default_value_t = meshlight::virtual_geometry::scenes::DEFAULT_LIGHTS)]
-    lights: u32,
+    /// Default: 256 with the frame built in code, 0 with --pipeline (lights are
+    /// clustered only in the frame built in code).
+    #[arg(long)]
+    lights: Option<u32>,
     /// A pipeline file to render with instead of the graph built in code, e.g.
     /// pipelines/virtual_geometry.toml or your own composition of the same resources.
+    /// The file's own settings stand unless a flag is given (--view overrides its
+    /// resolve's `view`). Lights are clustered only in the frame built in code, so a
+    /// file renders without them.
     #[arg(long)]
     pipeline: Option<PathBuf>,
-    /// What the image shows. `occlusion`: green where the first culling pass drew the
-    /// cluster, blue where the second did, redder the more of the instance occlusion
-    /// culled (a still renders one frame before, so the frame has a history to cull
-    /// against).
-    #[arg(long, default_value = "shaded", value_parser = parse_view)]
-    view: meshlight::resolve::DebugView,
+    /// What the image shows (default: shaded, or with --pipeline the view the file's
+    /// resolve names). `occlusion`: green where the first culling pass drew the cluster,
+    /// blue where the second did, redder the more of the instance occlusion culled (a
+    /// still renders one frame before, so the frame has a history to cull against).
+    /// `light-count` needs lights.
+    #[arg(long, value_parser = view_parser())]
+    view: Option<meshlight::resolve::DebugView>,
+    /// Image width in pixels.
     #[arg(long, default_value_t = 1280)]
     width: u32,
+    /// Image height in pixels.
     #[arg(long, default_value_t = 720)]
     height: u32,
     /// Initial size of the candidate-cluster list (grown when a frame overflows it).
@@ -92,11 +100,13 @@ struct RenderArgs {
     /// software (default: the adapter class's, see `meshlight info`).
     #[arg(long)]
     sw_threshold: Option<f32>,
-    /// Output PNG.
+    /// Output PNG (a path ending in .png, or one without an extension).
     #[arg(short, long, default_value = "out/default.png")]
     output: PathBuf,
     /// Also write the graph with this frame's timings and counters as a self-contained
-    /// HTML page.
+    /// HTML page. Without it, a page beside the output named like it (out/default.html
+    /// for out/default.png, left by an earlier render) is rewritten for this render,
+    /// so it never describes an image that is gone.
     #[arg(long)]
     html: Option<PathBuf>,
     /// GPU timing: `frame` (one timestamp pair per batch, the default), `passes` (per
@@ -114,8 +124,13 @@ fn parse_timing(name: &str) -> Result<meshlight::graph::TimingMode, String> {
         .ok_or_else(|| format!("unknown timing mode `{name}`; use off, frame or passes"))
 }
 
-fn parse_view(name: &str) -> Result<meshlight::resolve::DebugView, String> {
-    meshlight::resolve::DebugView::parse(name).map_err(|e| e.to_string())
+/// The views' names, listed by `render --help` and in the error for one that does not
+/// exist, taken from the views the resolve pass has.
+fn view_parser() -> impl clap::builder::TypedValueParser<Value = meshlight::resolve::DebugView> {
+    use clap::builder::TypedValueParser as _;
+    use meshlight::resolve::DebugView;
+    clap::builder::PossibleValuesParser::new(DebugView::ALL.map(DebugView::name))
+        .try_map(|name| DebugView::parse(&name))
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -142,11 +157,18 @@ struct GraphArgs {
     for_adapter: bool,
 }
 
+/// Froxel-list entries per light of the field ([`meshlight::virtual_geometry::scenes::field_lights`])
+/// the clustering starts with: the default scene's 256 lights fill 5,821 entries (about
+/// 23 froxels each, whatever the viewport, as the grid's size is fixed); a frame that
+/// needs more still grows the list.
+const FIELD_ENTRIES_PER_LIGHT: u64 = 32;
+
 /// Exit code when no Vulkan adapter exists, so scripts can install lavapipe and retry.
 const EXIT_NO_ADAPTER: u8 = 3;
 
 fn main() -> ExitCode {
     quiet_on_closed_stdout();
+    usable_runtime_dir();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     let result: Result<(), Box<dyn std::error::Error>> = match cli.command {
@@ -184,6 +206,45 @@ fn quiet_on_closed_stdout() {
     }
 }
 
+/// The Vulkan loader's window-system probing (libwayland) prints `error:
+/// XDG_RUNTIME_DIR is invalid or not set in the environment.` to standard error once per
+/// probe when the variable is unset or not an absolute path, as on a fresh container or a
+/// remote shell. meshlight opens no window, so the message only alarms: where the
+/// variable is unset or does not name a directory, it is pointed at a private directory
+/// (mode 0700, as the XDG spec asks) under the temporary directory before any wgpu call.
+/// A valid value is left as it is.
+fn usable_runtime_dir() {
+    const VAR: &str = "XDG_RUNTIME_DIR";
+    let valid = std::env::var_os(VAR)
+        .map(PathBuf::from)
+        .is_some_and(|dir| dir.is_absolute() && dir.is_dir());
+    if valid {
+        return;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::{DirBuilderExt, MetadataExt};
+        // SAFETY: getuid has no preconditions and cannot fail.
+        let uid = unsafe { libc::getuid() };
+        let dir = std::env::temp_dir().join(format!("meshlight-runtime-{uid}"));
+        let made = std::fs::DirBuilder::new()
+            .mode(0o700)
+            .create(&dir)
+            .or_else(|e| match e.kind() {
+                std::io::ErrorKind::AlreadyExists => Ok(()),
+                _ => Err(e),
+            });
+        // Only a directory this user owns is used; otherwise the loader's message stays,
+        // which costs nothing but noise.
+        let ours = made.is_ok()
+            && std::fs::symlink_metadata(&dir).is_ok_and(|m| m.is_dir() && m.uid() == uid);
+        if ours {
+            // SAFETY: called at the start of `main`, before any thread exists.
+            unsafe { std::env::set_var(VAR, &dir) };
+        }
+    }
+}
+
 /// A directory is baked as a library; a file (or `procedural`) as before. Both run in a
 /// pool of `--jobs` threads.
 fn bake(a: LibraryBakeArgs) -> Result<(), Box<dyn std::error::Error>> {
@@ -216,21 +277,44 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     use std::fmt::Write as _;
     // Everything the command line bounds is checked before a mesh is baked or an adapter
     // requested, and the outputs' directories are made, so a mistake costs no render.
+    // Lights are clustered in the frame built in code only: a pipeline file renders
+    // without them unless they are asked for, which is refused below.
+    let lights_asked = a.lights.unwrap_or(if a.pipeline.is_some() {
+        0
+    } else {
+        scenes::DEFAULT_LIGHTS
+    });
     meshlight::render_bounds::RenderNumbers {
         segments: a.segments,
         instances: a.instances,
-        lights: a.lights,
+        lights: lights_asked,
         width: a.width,
         height: a.height,
         clusters: a.clusters,
         slots: a.slots,
     }
     .check()?;
+    meshlight::output::check_png_path(&a.output)?;
     if let Some(path) = &a.pipeline {
         meshlight::graph::file::read_pipeline_text(path)?;
+        if lights_asked > 0 && a.instances > 1 {
+            return Err(GraphError::PipelineFile {
+                file: path.display().to_string(),
+                message: format!(
+                    "--lights {lights_asked}: lights are clustered only in the frame built in code; render with --lights 0 (the default with --pipeline) or without --pipeline"
+                ),
+            }
+            .into());
+        }
     }
+    // Without --html, a page beside the output named like it is this image's report
+    // from an earlier render: rewritten, so it never describes an image that is gone.
+    let html = a.html.clone().or_else(|| {
+        let beside = a.output.with_extension("html");
+        (beside != a.output && beside.is_file()).then_some(beside)
+    });
     create_parent(&a.output)?;
-    if let Some(html) = &a.html {
+    if let Some(html) = &html {
         create_parent(html)?;
     }
     let asset = scenes::load_asset(&a.mesh, a.segments)?;
@@ -245,18 +329,25 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         scenes::field(data, &asset, a.instances)?
     };
     let mut settings = FrameSettings::new(a.width, a.height);
-    settings.view = a.view;
-    // A pipeline file brings its own stages; lights are clustered in the coded frame.
-    let lights = if a.instances > 1 && a.pipeline.is_none() {
-        scenes::field_lights(&placed, a.lights)
+    // A view given wins over a pipeline file's; none given leaves the file's.
+    settings.view = a.view.unwrap_or_default();
+    settings.keep_file_view = a.view.is_none();
+    let lights = if a.instances > 1 {
+        scenes::field_lights(&placed, lights_asked)
     } else {
         Vec::new()
     };
-    if !lights.is_empty() || a.view.needs_lights() {
-        settings.clustering = Some(meshlight::light_clustering::ClusteringSettings::new(
+    if !lights.is_empty() || a.view.is_some_and(|v| v.needs_lights()) {
+        let mut clustering = meshlight::light_clustering::ClusteringSettings::new(
             [a.width, a.height],
             lights.len().max(1) as u64,
-        ));
+        );
+        // The froxel lists start large enough for the field's lights, so the default
+        // render runs one frame rather than warning that its lists grew.
+        clustering.entries = clustering
+            .entries
+            .max(lights.len() as u64 * FIELD_ENTRIES_PER_LIGHT);
+        settings.clustering = Some(clustering);
     }
     settings.sw_raster = a.sw_raster.clone();
     settings.hw_raster = a.hw_raster.clone();
@@ -364,7 +455,7 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             still.stats.timing.name()
         );
     }
-    if let Some(html) = a.html {
+    if let Some(html) = html {
         let page = dump::to_html(
             &renderer.compiled.plan,
             &format!("meshlight: {}", a.mesh.display()),

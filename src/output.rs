@@ -23,6 +23,30 @@ impl OutputError {
     }
 }
 
+/// An image path whose extension names a format other than PNG, the only one written:
+/// refused before rendering, so `-o x.jpg` never holds PNG bytes under a JPEG name.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{}: images are written as PNG only, not .{extension}; give a path ending in .png, e.g. -o {}",
+    path.display(),
+    path.with_extension("png").display()
+)]
+pub struct NotPngError {
+    pub path: PathBuf,
+    pub extension: String,
+}
+
+/// Accepts a path ending in `.png` (any case) or without an extension.
+pub fn check_png_path(path: &Path) -> Result<(), NotPngError> {
+    match path.extension() {
+        Some(ext) if !ext.eq_ignore_ascii_case("png") => Err(NotPngError {
+            path: path.to_path_buf(),
+            extension: ext.to_string_lossy().into_owned(),
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// Creates the directory `path` is to be written in, if it has one.
 pub fn create_parent(path: &Path) -> Result<(), OutputError> {
     match path.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -397,3 +397,231 @@ fn render_refuses_an_asset_that_inspect_rejects_with_the_same_message() {
     assert_eq!(said(&render), said(&inspect));
     assert!(!dir.join("bad.png").exists());
 }
+
+/// The Vulkan loader's window-system probing complains on standard error when
+/// XDG_RUNTIME_DIR is unset or not an absolute path; the binary points it at a private
+/// directory first, so a run says nothing of it (GPU: lavapipe).
+#[test]
+fn an_unset_or_invalid_runtime_dir_is_not_complained_about() {
+    for value in [None, Some(""), Some("relative/dir"), Some("/no/such/dir")] {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_meshlight"));
+        cmd.arg("info").current_dir(env!("CARGO_MANIFEST_DIR"));
+        match value {
+            None => cmd.env_remove("XDG_RUNTIME_DIR"),
+            Some(v) => cmd.env("XDG_RUNTIME_DIR", v),
+        };
+        let out = cmd.output().expect("runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{value:?}: {err}");
+        assert!(!err.contains("XDG_RUNTIME_DIR"), "{value:?}: {err}");
+    }
+}
+
+/// `render --help` names every view the resolve pass has, and says what the size is.
+#[test]
+fn render_help_lists_the_views_and_the_size() {
+    let out = meshlight(&["render", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    for view in meshlight::resolve::DebugView::ALL {
+        assert!(help.contains(view.name()), "{view:?} missing:\n{help}");
+    }
+    assert!(
+        help.contains("Image width in pixels") && help.contains("Image height in pixels"),
+        "{help}"
+    );
+}
+
+/// `inspect` on a mesh file suggests baking it beside itself, never over itself.
+#[test]
+fn inspect_of_a_mesh_suggests_a_bake_that_keeps_the_mesh() {
+    let out = meshlight(&["inspect", "assets/meshes/spot.obj"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("meshlight bake assets/meshes/spot.obj -o assets/meshes/spot.mlasset"),
+        "{err}"
+    );
+    assert!(!err.contains("-o assets/meshes/spot.obj"), "{err}");
+}
+
+/// An image path naming another format is refused, naming the path and the fix, before
+/// an adapter is asked for (one that cannot exist is named: exit 3 if it were).
+#[test]
+fn render_refuses_an_output_that_is_not_png() {
+    let dir = scratch("not-png");
+    for name in ["x.jpg", "x.PNG.webp"] {
+        let path = dir.join(name);
+        let out = meshlight_env(
+            &["render", "-o", path.to_str().unwrap()],
+            &[(
+                "MESHLIGHT_ADAPTER",
+                std::path::Path::new("no adapter is called this"),
+            )],
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {err}");
+        assert!(
+            err.contains(&path.display().to_string())
+                && err.contains("PNG only")
+                && err.contains(&path.with_extension("png").display().to_string()),
+            "{name}: {err}"
+        );
+        assert!(!path.exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Without --html, the page beside the image named like it (an earlier render's report)
+/// is rewritten for this render; where there is none, none is made (GPU: lavapipe).
+#[test]
+fn render_keeps_the_report_beside_the_image_in_step() {
+    let dir = scratch("report");
+    let (png, html) = (dir.join("a.png"), dir.join("a.html"));
+    std::fs::write(&html, "an earlier render's report").unwrap();
+    let small = [
+        "render",
+        "--mesh",
+        "assets/meshes/spot.obj",
+        "--instances",
+        "1",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "-o",
+    ];
+    let mut args = small.to_vec();
+    args.push(png.to_str().unwrap());
+    let out = meshlight(&args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(
+        page.contains("<!DOCTYPE html>") && page.contains("sw_raster"),
+        "{page}"
+    );
+    assert!(
+        stdout.contains(&format!("graph: {}", html.display())),
+        "{stdout}"
+    );
+    let other = dir.join("b.png");
+    let mut args = small.to_vec();
+    args.push(other.to_str().unwrap());
+    let out = meshlight(&args);
+    assert!(out.status.success());
+    assert!(other.exists() && !dir.join("b.html").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The pixels of a PNG.
+fn pixels(path: &std::path::Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    buf
+}
+
+/// `render --pipeline`: a file's own `view` stands when --view is not given, and --view
+/// wins over it when given; the shipped file renders with the default lights flag (none)
+/// and refuses lights asked for (GPU: lavapipe).
+#[test]
+fn render_pipeline_settings_yield_only_to_flags_given() {
+    let dir = scratch("precedence");
+    let shipped = "pipelines/virtual_geometry.toml";
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/pipelines/virtual_geometry.toml"
+    ))
+    .unwrap();
+    assert!(text.contains("view = \"shaded\""));
+    let lod_file = dir.join("lod.toml");
+    std::fs::write(
+        &lod_file,
+        text.replace("view = \"shaded\"", "view = \"lod\""),
+    )
+    .unwrap();
+    let lod_file = lod_file.to_str().unwrap();
+    let render = |file: &str, view: Option<&str>, name: &str| {
+        let png = dir.join(name);
+        let mut args = vec![
+            "render",
+            "--mesh",
+            "assets/meshes/spot.obj",
+            "--instances",
+            "4",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--pipeline",
+            file,
+            "-o",
+            png.to_str().unwrap(),
+        ];
+        if let Some(v) = view {
+            args.extend(["--view", v]);
+        }
+        let out = meshlight(&args);
+        assert!(
+            out.status.success(),
+            "{name}: {}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        pixels(&png)
+    };
+    let shaded = render(shipped, None, "shaded.png");
+    let lod = render(shipped, Some("lod"), "lod.png");
+    assert_ne!(shaded, lod, "the two views should differ");
+    // The file's view stands without --view …
+    assert!(render(lod_file, None, "file-lod.png") == lod);
+    // … and --view wins over it.
+    assert!(render(lod_file, Some("shaded"), "flag-shaded.png") == shaded);
+    // Lights asked for with a pipeline file are refused, naming the file and the fix.
+    let out = meshlight(&[
+        "render",
+        "--pipeline",
+        shipped,
+        "--lights",
+        "8",
+        "--instances",
+        "4",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains(shipped) && err.contains("--lights 0"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The default scene (at a small viewport: the light grid's size is fixed, so its lists
+/// fill the same) starts with lists large enough: one frame, no growth (GPU: lavapipe).
+#[test]
+fn the_default_render_needs_no_list_to_grow() {
+    let dir = scratch("default");
+    let png = dir.join("default.png");
+    let out = meshlight(&[
+        "render",
+        "--width",
+        "160",
+        "--height",
+        "90",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{stdout}{stderr}");
+    assert!(stdout.contains("point lights clustered"), "{stdout}");
+    assert!(!stderr.contains("wanted but the list holds"), "{stderr}");
+    assert!(!stdout.contains("the lists grew"), "{stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

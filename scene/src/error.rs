@@ -161,7 +161,8 @@ pub enum SceneError {
     Build { source_name: String, reason: String },
 
     #[error(
-        "{path}: not a meshlet asset (wrong magic bytes); bake one with `meshlight bake MESH -o {path}`"
+        "{path}: not a meshlet asset (wrong magic bytes); bake one with `{}`",
+        bake_command(path)
     )]
     AssetMagic { path: PathBuf },
 
@@ -212,5 +213,51 @@ impl SceneError {
             path: path.into(),
             source,
         }
+    }
+}
+
+/// The bake that makes an asset of what was read as one: a mesh file is baked into a
+/// `.mlasset` beside it, anything else from `MESH`; the suggested output is never the
+/// file read, which the command would otherwise overwrite.
+pub fn bake_command(path: &std::path::Path) -> String {
+    let is_mesh = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| ["obj", "gltf", "glb", "stl"].contains(&e.to_ascii_lowercase().as_str()));
+    let mut output = path.with_extension("mlasset");
+    if output == path {
+        output = path.with_extension("baked.mlasset");
+    }
+    let input = if is_mesh {
+        path.display().to_string()
+    } else {
+        "MESH".to_string()
+    };
+    format!("meshlight bake {input} -o {}", output.display())
+}
+
+#[cfg(test)]
+mod bake_command_tests {
+    use super::bake_command;
+    use std::path::Path;
+
+    #[test]
+    fn the_suggested_output_is_never_the_file_read() {
+        assert_eq!(
+            bake_command(Path::new("assets/spot.obj")),
+            "meshlight bake assets/spot.obj -o assets/spot.mlasset"
+        );
+        assert_eq!(
+            bake_command(Path::new("scene.GLB")),
+            "meshlight bake scene.GLB -o scene.mlasset"
+        );
+        assert_eq!(
+            bake_command(Path::new("broken.mlasset")),
+            "meshlight bake MESH -o broken.baked.mlasset"
+        );
+        assert_eq!(
+            bake_command(Path::new("noext")),
+            "meshlight bake MESH -o noext.mlasset"
+        );
     }
 }

@@ -88,6 +88,11 @@ pub struct FrameSettings {
     pub width: u32,
     pub height: u32,
     pub view: DebugView,
+    /// With a pipeline file, leave the `view` its `resolve` passes name (the renderer then
+    /// takes `view` from the file); off, every `resolve` pass shows `view`. A command
+    /// line sets it when no view was asked for, so the file's own choice stands. The
+    /// frame built in code always shows `view`.
+    pub keep_file_view: bool,
     /// Screen-space error (pixels) the LOD cut may show.
     pub lod_threshold_px: f32,
     /// Screen-box size under which a cluster is rasterised in software; `None`: the
@@ -152,6 +157,7 @@ impl FrameSettings {
             width,
             height,
             view: DebugView::Shaded,
+            keep_file_view: false,
             lod_threshold_px: t.lod_threshold_px,
             // `MESHLIGHT_SW_THRESHOLD_PX` overrides the adapter class's split, for sweeps.
             sw_threshold_px: std::env::var("MESHLIGHT_SW_THRESHOLD_PX")
@@ -661,13 +667,56 @@ pub fn overrides(data: &SceneData, s: &FrameSettings) -> BTreeMap<String, u64> {
 pub const PYRAMID_WIDTH_PARAM: &str = "pyramid_width";
 pub const PYRAMID_HEIGHT_PARAM: &str = "pyramid_height";
 
-/// The file's text with `view` set in the params of every pass of stage `resolve`, and
-/// the mip count of the pyramid textures (those sized by `pyramid_width`) set for the
-/// viewport, which the file format cannot derive from a parameter. For the `occlusion`
-/// view of a two-pass file, the view's records are bound as in the frame built in code
-/// (see [`with_occlusion_records`]).
+/// The view the file's first `resolve` pass names (`None`: it names none), read as
+/// [`load`] reads it when [`FrameSettings::keep_file_view`] is set.
+pub fn view_in_file(path: &Path) -> Result<Option<DebugView>> {
+    let file = path.display().to_string();
+    let ferr = |message: String| GraphError::PipelineFile {
+        file: file.clone(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| ferr(format!("cannot read it: {e}")))?;
+    let doc: toml::Table = toml::from_str(&text).map_err(|e| ferr(e.to_string()))?;
+    let Some(toml::Value::Array(passes)) = doc.get("pass") else {
+        return Ok(None);
+    };
+    for pass in passes.iter().filter_map(toml::Value::as_table) {
+        if let Some(view) = file_view_of(pass).map_err(&ferr)? {
+            return Ok(Some(view));
+        }
+    }
+    Ok(None)
+}
+
+/// The view a `resolve` pass of a pipeline file names, if it is one and names one.
+fn file_view_of(pass: &toml::Table) -> std::result::Result<Option<DebugView>, String> {
+    if pass.get("stage").and_then(toml::Value::as_str) != Some("resolve") {
+        return Ok(None);
+    }
+    match pass
+        .get("params")
+        .and_then(toml::Value::as_table)
+        .and_then(|p| p.get("view"))
+    {
+        None => Ok(None),
+        Some(toml::Value::String(name)) => DebugView::parse(name)
+            .map(Some)
+            .map_err(|e| format!("a resolve pass's `view`: {e}")),
+        Some(other) => Err(format!(
+            "a resolve pass's `view` is {other}, not a view's name"
+        )),
+    }
+}
+
+/// The file's text with `view` set in the params of every pass of stage `resolve`
+/// (unless [`FrameSettings::keep_file_view`] keeps the file's), and the mip count of the
+/// pyramid textures (those sized by `pyramid_width`) set for the viewport, which the
+/// file format cannot derive from a parameter. For the `occlusion` view of a two-pass
+/// file, the view's records are bound as in the frame built in code (see
+/// [`with_occlusion_records`]).
 fn with_view(text: &str, file: &str, s: &FrameSettings, instances: usize) -> Result<String> {
     let view = s.view;
+    let mut records = !s.keep_file_view && view.needs_occlusion_records();
     let ferr = |message: String| GraphError::PipelineFile {
         file: file.to_string(),
         message,
@@ -688,6 +737,11 @@ fn with_view(text: &str, file: &str, s: &FrameSettings, instances: usize) -> Res
             if pass.get("stage").and_then(toml::Value::as_str) != Some("resolve") {
                 continue;
             }
+            if s.keep_file_view {
+                let named = file_view_of(pass).map_err(ferr)?;
+                records |= named.is_some_and(DebugView::needs_occlusion_records);
+                continue;
+            }
             let params = pass
                 .entry("params")
                 .or_insert_with(|| toml::Value::Table(toml::Table::new()));
@@ -697,7 +751,7 @@ fn with_view(text: &str, file: &str, s: &FrameSettings, instances: usize) -> Res
             params.insert("view".into(), toml::Value::String(view.name().into()));
         }
     }
-    if view.needs_occlusion_records() {
+    if records {
         with_occlusion_records(&mut doc, instances).map_err(ferr)?;
     }
     toml::to_string(&doc).map_err(|e| ferr(e.to_string()))

@@ -107,6 +107,14 @@ impl Renderer {
         mut settings: FrameSettings,
         source: &GraphSource,
     ) -> Result<Self> {
+        if settings.keep_file_view
+            && let GraphSource::File(path) | GraphSource::FileWith(path, _) = source
+            && let Some(view) = super::frame_graph::view_in_file(path)?
+        {
+            // The frame loop's choices (an occlusion view's extra frame) follow the
+            // view the file shows.
+            settings.view = view;
+        }
         let adapter = GpuAdapter::select()?;
         let class = super::split::AdapterClass::of(&adapter.info());
         settings.hardware = Some(settings.hardware_on(class));
