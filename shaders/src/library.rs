@@ -101,20 +101,7 @@ impl ShaderLibrary {
                 unavailable.push(module);
                 continue;
             }
-            let result = composer
-                .add_composable_module(ComposableModuleDescriptor {
-                    source: module.source,
-                    file_path: module.file_path,
-                    as_name: Some(module.name.to_owned()),
-                    ..Default::default()
-                })
-                .map(|_| ());
-            if let Err(error) = result {
-                return Err(ShaderError::AddModule {
-                    module: module.name.to_owned(),
-                    message: error.emit_to_string(&composer),
-                });
-            }
+            add_module(&mut composer, module.name, module.source, module.file_path)?;
             added.push(module);
         }
         Ok(Self {
@@ -170,21 +157,12 @@ impl ShaderLibrary {
                 }
                 None => {}
             }
-            let added = self
-                .composer
-                .add_composable_module(ComposableModuleDescriptor {
-                    source: module.source,
-                    file_path: module.file_path,
-                    as_name: Some(module.name.to_owned()),
-                    ..Default::default()
-                })
-                .map(|_| ());
-            if let Err(error) = added {
-                return Err(ShaderError::AddModule {
-                    module: module.name.to_owned(),
-                    message: error.emit_to_string(&self.composer),
-                });
-            }
+            add_module(
+                &mut self.composer,
+                module.name,
+                module.source,
+                module.file_path,
+            )?;
             self.local.insert(module.name, *module);
         }
         Ok(())
@@ -278,4 +256,26 @@ pub fn validate(
                 message,
             }
         })
+}
+
+/// Adds one module to the composer under its import path; a module that does not parse
+/// is an error naming it, with naga_oil's report.
+fn add_module(
+    composer: &mut Composer,
+    name: &str,
+    source: &str,
+    file_path: &str,
+) -> Result<(), ShaderError> {
+    let added = composer
+        .add_composable_module(ComposableModuleDescriptor {
+            source,
+            file_path,
+            as_name: Some(name.to_owned()),
+            ..Default::default()
+        })
+        .map(|_| ());
+    added.map_err(|error| ShaderError::AddModule {
+        module: name.to_owned(),
+        message: error.emit_to_string(composer),
+    })
 }
