@@ -3,6 +3,19 @@
 
 use std::process::Command;
 
+/// One spot at 16×16: the smallest render that still writes a PNG.
+const SMALL_RENDER: [&str; 9] = [
+    "render",
+    "--mesh",
+    "assets/meshes/spot.obj",
+    "--instances",
+    "1",
+    "--width",
+    "16",
+    "--height",
+    "16",
+];
+
 fn meshlight(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_meshlight"))
         .args(args)
@@ -285,19 +298,9 @@ fn inputs_and_outputs_that_cannot_be_used_are_named() {
 /// with exit 0 and "rendered" printed (GPU: lavapipe).
 #[test]
 fn rendering_to_a_full_device_fails_naming_it() {
-    let out = meshlight(&[
-        "render",
-        "--mesh",
-        "assets/meshes/spot.obj",
-        "--instances",
-        "1",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "-o",
-        "/dev/full",
-    ]);
+    let mut args = SMALL_RENDER.to_vec();
+    args.extend(["-o", "/dev/full"]);
+    let out = meshlight(&args);
     let err = String::from_utf8_lossy(&out.stderr);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "{stdout}{err}");
@@ -479,19 +482,8 @@ fn render_keeps_the_report_beside_the_image_in_step() {
     let dir = scratch("report");
     let (png, html) = (dir.join("a.png"), dir.join("a.html"));
     std::fs::write(&html, "an earlier render's report").unwrap();
-    let small = [
-        "render",
-        "--mesh",
-        "assets/meshes/spot.obj",
-        "--instances",
-        "1",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "-o",
-    ];
-    let mut args = small.to_vec();
+    let mut args = SMALL_RENDER.to_vec();
+    args.push("-o");
     args.push(png.to_str().unwrap());
     let out = meshlight(&args);
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -510,8 +502,8 @@ fn render_keeps_the_report_beside_the_image_in_step() {
         "{stdout}"
     );
     let other = dir.join("b.png");
-    let mut args = small.to_vec();
-    args.push(other.to_str().unwrap());
+    let mut args = SMALL_RENDER.to_vec();
+    args.extend(["-o", other.to_str().unwrap()]);
     let out = meshlight(&args);
     assert!(out.status.success());
     assert!(other.exists() && !dir.join("b.html").exists());

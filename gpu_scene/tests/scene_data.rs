@@ -147,21 +147,27 @@ fn more_instances_than_the_buffer_holds_is_an_error_naming_the_limit() {
     assert!(err.to_string().contains("limit of 2"), "{err}");
 }
 
-#[test]
-fn uploads_write_only_what_changed() {
-    let gpu = GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"));
-    let mut data = SceneData::new(Limits::default());
+/// One mesh placed ten times along x (instance i at x = i), with one material.
+fn ten_in_a_row(data: &mut SceneData) -> (MeshId, u32, Vec<meshlight_gpu_scene::InstanceId>) {
     let mesh = data.add_mesh("a", &asset(6)).unwrap();
     let material = data.add_material(Material {
         base_color: [1.0; 3],
     });
-    let ids: Vec<_> = (0..10)
+    let ids = (0..10)
         .map(|i| {
             data.add_instance(mesh, Mat4::from_translation(Vec3::X * i as f32), material)
                 .unwrap()
                 .unwrap()
         })
         .collect();
+    (mesh, material, ids)
+}
+
+#[test]
+fn uploads_write_only_what_changed() {
+    let gpu = meshlight_testing::gpu();
+    let mut data = SceneData::new(Limits::default());
+    let (mesh, material, ids) = ten_in_a_row(&mut data);
     let mut scene = GpuScene::new(&gpu, &mut data);
     assert_eq!(scene.upload(&gpu, &mut data).bytes, 0, "nothing changed");
     data.set_transform(ids[3], Mat4::from_translation(Vec3::Y))
@@ -192,24 +198,14 @@ fn uploads_write_only_what_changed() {
 /// `instances_high` 4..10; a changed transform is written into the buffer that holds it.
 #[test]
 fn instances_past_one_binding_continue_in_the_second_buffer() {
-    let gpu = GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"));
+    let gpu = meshlight_testing::gpu();
     let limits = Limits {
         instances_per_binding: 4,
         max_instances: 11,
         ..Limits::default()
     };
     let mut data = SceneData::new(limits);
-    let mesh = data.add_mesh("a", &asset(6)).unwrap();
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-    });
-    let ids: Vec<_> = (0..10)
-        .map(|i| {
-            data.add_instance(mesh, Mat4::from_translation(Vec3::X * i as f32), material)
-                .unwrap()
-                .unwrap()
-        })
-        .collect();
+    let (mesh, material, ids) = ten_in_a_row(&mut data);
     assert_eq!((data.instance_split(), data.instances_split()), (4, true));
     let mut scene = GpuScene::new(&gpu, &mut data);
     assert!(scene.instances_split());
