@@ -31,11 +31,13 @@ pub mod data;
 pub mod error;
 pub mod gpu;
 pub mod instance_table;
+pub mod phase;
 pub mod view;
 
 pub use data::{InstanceId, Material, MeshId, SceneData};
 pub use error::SceneDataError;
 pub use gpu::GpuScene;
+pub use phase::Phase;
 pub use view::{Camera, Projection};
 
 /// Names of the imported buffers (and of the pass slots that read them).

@@ -40,13 +40,9 @@ pub fn run_one_pass(
     outputs: &[Output],
     frame: &FrameData,
 ) -> Result<Vec<Vec<u8>>> {
-    let usage = wgpu::BufferUsages::STORAGE
-        | wgpu::BufferUsages::COPY_DST
-        | wgpu::BufferUsages::COPY_SRC
-        | wgpu::BufferUsages::INDIRECT;
     let mut g = GraphBuilder::new();
     for i in inputs {
-        g.import_buffer(i.name, i.desc.clone(), usage);
+        g.import_buffer(i.name, i.desc.clone(), USAGE);
     }
     for o in outputs {
         g.create_buffer(o.name, o.desc.clone());
@@ -58,7 +54,7 @@ pub fn run_one_pass(
     let compiled = g.compile(&CompileOptions::for_gpu(&exec.gpu))?;
     let buffers: Vec<wgpu::Buffer> = inputs
         .iter()
-        .map(|i| exec.gpu.buffer_with_data(i.name, i.bytes, usage))
+        .map(|i| exec.gpu.buffer_with_data(i.name, i.bytes, USAGE))
         .collect();
     let imports = inputs
         .iter()
@@ -66,4 +62,75 @@ pub fn run_one_pass(
         .fold(Imports::new(), |imports, (i, b)| imports.buffer(i.name, b));
     exec.execute_frame(&compiled, &imports, frame)?;
     outputs.iter().map(|o| exec.read_buffer(o.name)).collect()
+}
+
+/// What test buffers are made with: bound as storage, filled, read back, and usable as
+/// indirect arguments, so one constant serves every pass's buffers.
+pub const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_DST)
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::INDIRECT);
+
+/// xorshift64*: seeded, reproducible random inputs (views, placements, shuffles), the
+/// same sequence on every machine.
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// The next 64 random bits.
+    pub fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+
+    /// Uniform in [0, 1), 24 bits.
+    pub fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+
+    /// Uniform in 0..n.
+    pub fn below(&mut self, n: u32) -> u32 {
+        (self.next() % n as u64) as u32
+    }
+}
+
+/// The test meshes shipped in `assets/meshes`, baked with the default options once per
+/// test binary.
+#[cfg(feature = "meshes")]
+pub mod meshes {
+    use meshlight_scene::{BuildOptions, MeshletAsset, build_asset};
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+
+    /// `assets/meshes/{file}` baked with [`BuildOptions::default`]; later calls return
+    /// the same asset.
+    pub fn baked(file: &'static str) -> &'static MeshletAsset {
+        static BAKED: OnceLock<Mutex<HashMap<&'static str, &'static MeshletAsset>>> =
+            OnceLock::new();
+        let mut baked = BAKED.get_or_init(Default::default).lock().unwrap();
+        baked.entry(file).or_insert_with(|| {
+            let path = format!("{}/../assets/meshes/{file}", env!("CARGO_MANIFEST_DIR"));
+            let mesh = meshlight_scene::load::load_mesh(std::path::Path::new(&path))
+                .unwrap_or_else(|e| panic!("{path}: {e}"));
+            let built = build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
+                .unwrap_or_else(|e| panic!("{path}: {e}"));
+            Box::leak(Box::new(built.asset))
+        })
+    }
+
+    /// The Stanford bunny.
+    pub fn bunny() -> &'static MeshletAsset {
+        baked("stanford-bunny.obj")
+    }
+
+    /// Keenan Crane's spot.
+    pub fn spot() -> &'static MeshletAsset {
+        baked("spot.obj")
+    }
 }

@@ -273,24 +273,8 @@ pub fn contract() -> StageContract {
     }
 }
 
-/// Which culling pass of the frame this is.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Mode {
-    /// Every candidate; with a pyramid, occlusion against last frame's.
-    #[default]
-    First,
-    /// The first pass's occluded clusters against this frame's pyramid.
-    Second,
-}
-
-impl Mode {
-    pub fn name(self) -> &'static str {
-        match self {
-            Mode::First => "first",
-            Mode::Second => "second",
-        }
-    }
-}
+/// Which culling pass of the frame this is; the hierarchy walk names its passes the same way.
+pub use meshlight_gpu_scene::Phase as Mode;
 
 /// The variant of cull.wgsl a pass runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -354,15 +338,7 @@ impl CullLod {
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let defaults = Thresholds::default();
-        let mode = match params.string("mode", "first")?.as_str() {
-            "first" => Mode::First,
-            "second" => Mode::Second,
-            other => {
-                return Err(GraphError::parameter(format!(
-                    "`mode` = \"{other}\" is not a mode; use \"first\" or \"second\""
-                )));
-            }
-        };
+        let mode = Mode::from_params(params)?;
         let nonzero = |v: u32| (v > 0).then_some(v);
         let pass = Self {
             thresholds: Thresholds {

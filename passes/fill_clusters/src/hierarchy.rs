@@ -154,26 +154,11 @@ const ROOT_GROUPS: u32 = 1024;
 /// Scratch: the lists of handed-on subtrees, 12 bytes an entry.
 const LISTS: &str = "subtrees";
 
-/// Which walk of the frame this is (two-pass occlusion culling, DESIGN §5).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Mode {
-    /// From every instance's root; with a pyramid bound (last frame's), the nodes it
-    /// proves hidden go to `occluded_nodes` instead of being walked.
-    #[default]
-    First,
-    /// From the first walk's hidden nodes (`candidate_nodes`), against this frame's
-    /// pyramid: what is still hidden is dropped.
-    Second,
-}
-
-impl Mode {
-    pub fn name(self) -> &'static str {
-        match self {
-            Mode::First => "first",
-            Mode::Second => "second",
-        }
-    }
-}
+/// Which walk of the frame this is (two-pass occlusion culling, DESIGN §5): the first
+/// walks from every instance's root and, with a pyramid bound (last frame's), sends the
+/// nodes it proves hidden to `occluded_nodes`; the second walks from those
+/// (`candidate_nodes`) against this frame's pyramid and drops what is still hidden.
+pub use meshlight_gpu_scene::Phase as Mode;
 
 /// The variant of hierarchy.wgsl a pass runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -293,15 +278,7 @@ impl HierarchyFill {
             subtree_capacity: nonzero(params.u32("subtree_capacity", 0)?),
             spread_groups: nonzero(params.u32("spread_groups", 0)?),
             occlusion_min_clusters: params.u32("occlusion_min_clusters", OCCLUSION_MIN_CLUSTERS)?,
-            mode: match params.string("mode", "first")?.as_str() {
-                "first" => Mode::First,
-                "second" => Mode::Second,
-                other => {
-                    return Err(GraphError::parameter(format!(
-                        "`mode` = \"{other}\" is not a mode; use \"first\" or \"second\""
-                    )));
-                }
-            },
+            mode: Mode::from_params(params)?,
         };
         pass.check()?;
         Ok(pass)

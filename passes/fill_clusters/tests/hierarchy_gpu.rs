@@ -368,28 +368,37 @@ fn a_full_queue_emits_whole_subtrees_and_keeps_the_cut() {
     let view = camera.view([1280, 720], 0, None);
     let threshold = 1.0;
     let total: u32 = data.instances.iter().map(|i| i.meshlet_count).sum();
-    let unlimited = cpu_walk(&data, &view, &WalkParams::default(), NEAR_THRESHOLD);
     // No spreading step: every child that does not fit is emitted whole.
     let small = WalkParams {
         queue_capacity: 4,
         spread_steps: 0,
         ..WalkParams::default()
     };
-    let reference = cpu_walk(&data, &view, &small, NEAR_THRESHOLD);
-    assert!(reference.queue_full && reference.counts[2] > 0);
     let pass = HierarchyFill {
         lod_threshold_px: threshold,
         queue_capacity: Some(4),
         spread_steps: 0,
         ..HierarchyFill::default()
     };
-    let got = run(
-        &mut data,
-        &view,
-        Fill::Hierarchy(pass),
-        Some(threshold),
-        total,
-    );
+    whole_subtrees_keep_the_cut(&mut data, &view, &small, pass, total);
+}
+
+/// Runs `pass` (whose lists are as short as `short`'s) and checks what a full list
+/// does: the reference fills it, subtrees that did not fit are emitted whole (counted,
+/// each cluster once, a superset of the unlimited walk's list), nothing overflows, and
+/// `cull_lod` after it finds the flat fill's cut exactly.
+fn whole_subtrees_keep_the_cut(
+    data: &mut SceneData,
+    view: &View,
+    short: &WalkParams,
+    pass: HierarchyFill,
+    total: u32,
+) {
+    let reference = cpu_walk(data, view, short, NEAR_THRESHOLD);
+    assert!(reference.queue_full && reference.counts[2] > 0);
+    let unlimited = cpu_walk(data, view, &WalkParams::default(), NEAR_THRESHOLD);
+    let threshold = pass.lod_threshold_px;
+    let got = run(data, view, Fill::Hierarchy(pass), Some(threshold), total);
     assert!(got.counts[2] > 0, "no subtree was emitted whole");
     assert_eq!(got.counts[3], 0);
     let listed = set(got.listed());
@@ -397,7 +406,7 @@ fn a_full_queue_emits_whole_subtrees_and_keeps_the_cut() {
     // Emitting whole subtrees only adds: everything the unlimited walk lists is there.
     assert!(set(&unlimited.clusters).is_subset(&listed));
     assert!(listed.len() > unlimited.clusters.len());
-    let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
+    let flat = run(data, view, Fill::Flat, Some(threshold), total);
     assert!(got.cut.unwrap() == flat.cut.unwrap(), "the cuts differ");
 }
 
@@ -463,44 +472,34 @@ fn instances_behind_the_camera_cost_one_node_each() {
 #[test]
 fn a_graph_without_the_hierarchy_is_refused_naming_the_slot() {
     let data = scene();
-    let mut g = GraphBuilder::new();
-    meshlight_gpu_scene::gpu::import_for(&data, &mut g);
-    g.create_buffer("clusters", BufferDesc::array(elements::CLUSTER, 64));
-    g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
-    let out = g
-        .add_pass("fill", HierarchyFill::default(), Bindings::new())
-        .unwrap();
-    g.export(out.buffer("clusters").unwrap());
-    let Err(err) = g.compile(&CompileOptions::new(wgpu::Features::empty())) else {
+    let Err(err) = compile_fill(&data, false, HierarchyFill::default()) else {
         panic!("a graph with the hierarchy unbound compiled");
     };
     let text = err.to_string();
     assert!(text.contains("hierarchy_nodes"), "{text}");
     // With them imported, the same graph compiles.
-    let mut g = GraphBuilder::new();
-    meshlight_gpu_scene::gpu::import_for(&data, &mut g);
-    meshlight_gpu_scene::gpu::import_hierarchy_for(&data, &mut g);
-    g.create_buffer("clusters", BufferDesc::array(elements::CLUSTER, 64));
-    g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
-    let out = g
-        .add_pass("fill", HierarchyFill::default(), Bindings::new())
-        .unwrap();
-    g.export(out.buffer("clusters").unwrap());
-    g.compile(&CompileOptions::new(wgpu::Features::empty()))
-        .unwrap();
+    compile_fill(&data, true, HierarchyFill::default()).unwrap();
     // A graph that imports them for other passes still compiles the flat fill, which
     // leaves the optional slots it does not read aside.
+    compile_fill(&data, true, FillClusters::default()).unwrap();
+}
+
+/// Compiles `fill` alone over `data`'s imports, with the hierarchy's when `hierarchy`.
+fn compile_fill(
+    data: &SceneData,
+    hierarchy: bool,
+    fill: impl Pass + 'static,
+) -> Result<CompiledGraph> {
     let mut g = GraphBuilder::new();
-    meshlight_gpu_scene::gpu::import_for(&data, &mut g);
-    meshlight_gpu_scene::gpu::import_hierarchy_for(&data, &mut g);
+    meshlight_gpu_scene::gpu::import_for(data, &mut g);
+    if hierarchy {
+        meshlight_gpu_scene::gpu::import_hierarchy_for(data, &mut g);
+    }
     g.create_buffer("clusters", BufferDesc::array(elements::CLUSTER, 64));
     g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
-    let out = g
-        .add_pass("fill", FillClusters::default(), Bindings::new())
-        .unwrap();
-    g.export(out.buffer("clusters").unwrap());
+    let out = g.add_pass("fill", fill, Bindings::new())?;
+    g.export(out.buffer("clusters")?);
     g.compile(&CompileOptions::new(wgpu::Features::empty()))
-        .unwrap();
 }
 
 /// A terrain of 524,288 triangles: one instance whose walk, seen from nearby, is far
@@ -525,6 +524,17 @@ fn terrain() -> &'static MeshletAsset {
             .unwrap()
             .asset
     })
+}
+
+/// Just above the terrain's ground, looking along it: a wide walk.
+fn terrain_near_view() -> View {
+    Camera::perspective(
+        Vec3::new(0.0, 1.5, -48.0),
+        Vec3::new(0.0, 0.0, 20.0),
+        1.0,
+        0.05,
+    )
+    .view([1280, 720], 0, None)
 }
 
 fn terrain_scene() -> SceneData {
@@ -623,41 +633,16 @@ fn one_large_instance_near_and_far_spreads_its_walk_and_keeps_the_cut() {
 fn a_full_subtree_list_emits_whole_subtrees_and_keeps_the_cut() {
     let mut data = terrain_scene();
     let total = data.instances[0].meshlet_count;
-    let threshold = 1.0;
-    let camera = Camera::perspective(
-        Vec3::new(0.0, 1.5, -48.0),
-        Vec3::new(0.0, 0.0, 20.0),
-        1.0,
-        0.05,
-    );
-    let view = camera.view([1280, 720], 0, None);
     let short = WalkParams {
         subtree_capacity: 1,
         ..WalkParams::default()
     };
-    let reference = cpu_walk(&data, &view, &short, NEAR_THRESHOLD);
-    assert!(reference.queue_full && reference.counts[2] > 0);
-    let unlimited = cpu_walk(&data, &view, &WalkParams::default(), NEAR_THRESHOLD);
     let pass = HierarchyFill {
-        lod_threshold_px: threshold,
+        lod_threshold_px: 1.0,
         subtree_capacity: Some(1),
         ..HierarchyFill::default()
     };
-    let got = run(
-        &mut data,
-        &view,
-        Fill::Hierarchy(pass),
-        Some(threshold),
-        total,
-    );
-    assert!(got.counts[2] > 0, "no subtree was emitted whole");
-    assert_eq!(got.counts[3], 0);
-    let listed = set(got.listed());
-    assert_eq!(listed.len(), got.listed().len(), "a cluster written twice");
-    assert!(set(&unlimited.clusters).is_subset(&listed));
-    assert!(listed.len() > unlimited.clusters.len());
-    let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
-    assert!(got.cut.unwrap() == flat.cut.unwrap(), "the cuts differ");
+    whole_subtrees_keep_the_cut(&mut data, &terrain_near_view(), &short, pass, total);
 }
 
 /// Narrow frontiers and every spreading step: the near terrain's walk is handed on from
@@ -668,13 +653,7 @@ fn a_walk_handed_on_over_every_step_keeps_the_reference_and_the_cut() {
     let mut data = terrain_scene();
     let total = data.instances[0].meshlet_count;
     let threshold = 1.0;
-    let camera = Camera::perspective(
-        Vec3::new(0.0, 1.5, -48.0),
-        Vec3::new(0.0, 0.0, 20.0),
-        1.0,
-        0.05,
-    );
-    let view = camera.view([1280, 720], 0, None);
+    let view = terrain_near_view();
     let params = WalkParams {
         queue_capacity: 16,
         spread_steps: MAX_STEPS,

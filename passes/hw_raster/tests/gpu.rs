@@ -20,12 +20,7 @@ const SOFTWARE: u32 = 3;
 /// Unused slots between the software and hardware ones.
 const GAP: u32 = 2;
 
-const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::INDIRECT)
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
-
-use meshlight_testing::gpu;
+use meshlight_testing::{USAGE, gpu};
 
 /// A scene, a camera, and the slot buffer culling would have left.
 struct Frame {

@@ -3,11 +3,7 @@
 
 use meshlight_graph::*;
 use meshlight_pass_remap_dispatch::{RemapDispatch, cpu_remap};
-use meshlight_testing::{Input, Output, executor, run_one_pass};
-
-const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
+use meshlight_testing::{Input, Output, USAGE, executor, run_one_pass};
 
 /// A consumer of the arguments: every workgroup below the count marks its linear index.
 const CONSUMER: PassShader = PassShader {

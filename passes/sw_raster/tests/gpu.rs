@@ -20,12 +20,7 @@ const SCANLINES: u32 = 1;
 /// Above every triangle box: every workgroup loops over its whole box.
 const BOXES: u32 = 1 << 20;
 
-const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::INDIRECT)
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
-
-use meshlight_testing::gpu;
+use meshlight_testing::{USAGE, gpu};
 
 // ---------------------------------------------------------------------------------------
 // Scenes and views

@@ -4,28 +4,10 @@
 
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::{Material, SceneData, data::Limits};
-use meshlight_scene::{BuildOptions, build_asset};
 use meshlight_shaders::cpu::layout::Cluster;
-use std::sync::OnceLock;
 
-pub const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
-
-#[allow(unused_imports)] // not every test binary that includes this module opens a GPU
-pub use meshlight_testing::gpu;
-
-/// spot.obj baked once per test binary.
-pub fn spot() -> &'static meshlight_scene::MeshletAsset {
-    static ASSET: OnceLock<meshlight_scene::MeshletAsset> = OnceLock::new();
-    ASSET.get_or_init(|| {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes/spot.obj");
-        let mesh = meshlight_scene::load::load_mesh(std::path::Path::new(path)).unwrap();
-        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
-            .unwrap()
-            .asset
-    })
-}
+#[allow(unused_imports)] // not every test binary that includes this module uses each
+pub use meshlight_testing::{Rng, USAGE, gpu, meshes::spot};
 
 pub fn scene_with(placements: &[Mat4]) -> SceneData {
     let mut data = SceneData::new(Limits::default());
@@ -78,25 +60,4 @@ pub fn all_clusters(data: &SceneData, rng: &mut Rng) -> Vec<Cluster> {
         clusters.swap(i, rng.below(i as u32 + 1) as usize);
     }
     clusters
-}
-
-/// xorshift64*: seeded, reproducible views.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    pub fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
-    }
-    pub fn below(&mut self, n: u32) -> u32 {
-        (self.next() % n as u64) as u32
-    }
 }
