@@ -77,7 +77,7 @@ pub struct Rng(pub u64);
 
 impl Rng {
     /// The next 64 random bits.
-    pub fn next(&mut self) -> u64 {
+    pub fn next_u64(&mut self) -> u64 {
         self.0 ^= self.0 >> 12;
         self.0 ^= self.0 << 25;
         self.0 ^= self.0 >> 27;
@@ -86,7 +86,7 @@ impl Rng {
 
     /// Uniform in [0, 1), 24 bits.
     pub fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
     }
 
     /// Uniform in [lo, hi).
@@ -96,7 +96,7 @@ impl Rng {
 
     /// Uniform in 0..n.
     pub fn below(&mut self, n: u32) -> u32 {
-        (self.next() % n as u64) as u32
+        (self.next_u64() % n as u64) as u32
     }
 }
 
