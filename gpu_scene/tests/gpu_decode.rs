@@ -69,7 +69,7 @@ fn check(asset: &MeshletAsset) {
     let scene = GpuScene::new(&gpu, &mut data);
     let n = asset.meshlets().len() as u32;
     let mut g = GraphBuilder::new();
-    let h = scene.import(&mut g);
+    scene.import(&mut g);
     let vertices = g.create_buffer(
         "vertices",
         BufferDesc::array(Element::VEC4_F32, n as u64 * 255 * 2),
@@ -83,9 +83,6 @@ fn check(asset: &MeshletAsset) {
             "decode",
             Decode { meshlets: n },
             Bindings::new()
-                .bind("meshlets", h.meshlets)
-                .bind("payload", h.payload)
-                .bind("meshes", h.meshes)
                 .bind("vertices", vertices)
                 .bind("triangles", triangles),
         )

@@ -5,33 +5,16 @@
 
 mod common;
 
+use common::damage::{good_words, refused, refused_saying, reseal};
+
 use std::path::Path;
 
-use meshlight_scene::asset::checksum::file_checksum;
 use meshlight_scene::asset::format::{
     AssetHeader, GroupRecord, MeshletRecord, SECTION_GROUPS, SECTION_MESHLETS, SECTION_PAYLOAD,
 };
 use meshlight_scene::load::parse_obj;
 use meshlight_scene::mesh::MAX_COORDINATE;
 use meshlight_scene::{BuildOptions, MeshletAsset, SceneError, build_asset, procedural_mesh};
-
-fn good_words() -> Vec<u32> {
-    let built = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {}).unwrap();
-    bytemuck::cast_slice(built.asset.bytes()).to_vec()
-}
-
-/// Rewrites the header's size and checksum so that only the structural checks can
-/// notice the damage.
-fn reseal(words: &mut [u32]) {
-    let size = words.len() as u64 * 4;
-    let h: &mut AssetHeader =
-        bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut words[..AssetHeader::WORDS]));
-    h.file_size = [size as u32, (size >> 32) as u32];
-    let sum = file_checksum(&words[..AssetHeader::WORDS], &words[AssetHeader::WORDS..]);
-    let at = std::mem::offset_of!(AssetHeader, checksum) / 4;
-    words[at] = sum as u32;
-    words[at + 1] = (sum >> 32) as u32;
-}
 
 fn header(words: &mut [u32]) -> &mut AssetHeader {
     bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut words[..AssetHeader::WORDS]))
@@ -43,29 +26,6 @@ fn meshlet(words: &mut [u32], i: usize) -> &mut MeshletRecord {
     bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
         &mut words[first + i * n..first + (i + 1) * n],
     ))
-}
-
-/// Applies `edit`, reseals, loads, and expects an `AssetField` error naming `field`.
-fn refused(what: &str, field: &str, edit: impl FnOnce(&mut Vec<u32>)) {
-    let mut w = good_words();
-    edit(&mut w);
-    reseal(&mut w);
-    let len = w.len() as u64 * 4;
-    let err = MeshletAsset::from_words(w, len, Path::new("bad.mlasset")).unwrap_err();
-    match &err {
-        SceneError::AssetField { field: f, .. } => {
-            assert!(
-                f.contains(field),
-                "{what}: named {f:?}, expected {field:?}: {err}"
-            )
-        }
-        other => panic!("{what}: {other:?}"),
-    }
-    let msg = err.to_string();
-    assert!(
-        msg.contains("bad.mlasset") && msg.contains("re-bake"),
-        "{msg}"
-    );
 }
 
 #[test]
@@ -248,30 +208,6 @@ fn records(words: &[u32]) -> (Vec<MeshletRecord>, Vec<GroupRecord>) {
         bytemuck::cast_slice(section(SECTION_MESHLETS)).to_vec(),
         bytemuck::cast_slice(section(SECTION_GROUPS)).to_vec(),
     )
-}
-
-/// Like [`refused`], and the message also says `needle`.
-fn refused_saying(what: &str, field: &str, needle: &str, edit: impl FnOnce(&mut Vec<u32>)) {
-    let mut w = good_words();
-    edit(&mut w);
-    reseal(&mut w);
-    let len = w.len() as u64 * 4;
-    let err = MeshletAsset::from_words(w, len, Path::new("bad.mlasset")).unwrap_err();
-    let msg = err.to_string();
-    match &err {
-        SceneError::AssetField { field: f, .. } => {
-            assert!(
-                f.contains(field),
-                "{what}: named {f:?}, expected {field:?}: {msg}"
-            )
-        }
-        other => panic!("{what}: {other:?}"),
-    }
-    assert!(
-        msg.contains(needle),
-        "{what}: {needle:?} missing from: {msg}"
-    );
-    assert!(msg.contains("re-bake"), "{msg}");
 }
 
 #[test]

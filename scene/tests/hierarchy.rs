@@ -6,10 +6,11 @@
 
 mod common;
 
+use common::damage::{good_words, refused, reseal};
+
 use std::collections::HashSet;
 use std::path::Path;
 
-use meshlight_scene::asset::checksum::file_checksum;
 use meshlight_scene::asset::format::{
     AssetHeader, MAGIC, NO_GROUP, NodeRecord, ROOT_PARENT_ERROR, SECTION_CHILDREN, SECTION_GROUPS,
     SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES, SECTION_PAYLOAD, VERSION,
@@ -128,21 +129,6 @@ fn the_hierarchy_is_byte_identical_whatever_the_thread_count() {
     assert_eq!(one.bytes(), many.bytes());
 }
 
-fn good_words() -> Vec<u32> {
-    bytemuck::cast_slice(bake(&procedural_mesh(12)).bytes()).to_vec()
-}
-
-fn reseal(words: &mut [u32]) {
-    let size = words.len() as u64 * 4;
-    let h: &mut AssetHeader =
-        bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut words[..AssetHeader::WORDS]));
-    h.file_size = [size as u32, (size >> 32) as u32];
-    let sum = file_checksum(&words[..AssetHeader::WORDS], &words[AssetHeader::WORDS..]);
-    let at = std::mem::offset_of!(AssetHeader, checksum) / 4;
-    words[at] = sum as u32;
-    words[at + 1] = (sum >> 32) as u32;
-}
-
 fn header(words: &[u32]) -> AssetHeader {
     *bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]))
 }
@@ -174,25 +160,6 @@ fn first_inner(words: &[u32]) -> usize {
     (1..nodes(words).len())
         .find(|&i| !nodes(words)[i].is_leaf())
         .unwrap()
-}
-
-/// Applies `edit`, reseals, loads, and expects an `AssetField` error naming `field`.
-fn refused(what: &str, field: &str, edit: impl FnOnce(&mut Vec<u32>)) {
-    let mut w = good_words();
-    edit(&mut w);
-    reseal(&mut w);
-    let len = w.len() as u64 * 4;
-    let err = MeshletAsset::from_words(w, len, Path::new("bad.mlasset")).unwrap_err();
-    match &err {
-        SceneError::AssetField { field: f, .. } => {
-            assert!(
-                f.contains(field),
-                "{what}: named {f:?}, expected {field:?}: {err}"
-            )
-        }
-        other => panic!("{what}: {other:?}"),
-    }
-    assert!(err.to_string().contains("re-bake"), "{err}");
 }
 
 #[test]

@@ -106,7 +106,7 @@ fn external_buffers(input: &Path) -> Vec<PathBuf> {
             if scheme {
                 return None;
             }
-            let relative = PathBuf::from(percent_decode(uri)?);
+            let relative = PathBuf::from(crate::scene::load::percent_decode(uri)?);
             let inside = relative
                 .components()
                 .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
@@ -131,24 +131,6 @@ fn gltf_json(bytes: &[u8]) -> Option<serde_json::Value> {
         bytes
     };
     serde_json::from_slice(json).ok()
-}
-
-/// A URI path with `%XX` escapes decoded, as glTF writes spaces and other characters.
-fn percent_decode(uri: &str) -> Option<String> {
-    let bytes = uri.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        if bytes[i] == b'%' {
-            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
-            out.push(u8::from_str_radix(hex, 16).ok()?);
-            i += 3;
-        } else {
-            out.push(bytes[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8(out).ok()
 }
 
 #[cfg(test)]

@@ -134,3 +134,33 @@ pub mod meshes {
         baked("spot.obj")
     }
 }
+
+/// Writes every level of a CPU-built depth pyramid into the mips of `texture` (R32Float,
+/// at least as large as level 0), so a pass can be tested against a known pyramid.
+pub fn write_pyramid(
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    pyramid: &meshlight_shaders::cpu::occlusion::DepthPyramid,
+) {
+    for (level, (w, h, texels)) in pyramid.levels.iter().enumerate() {
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: level as u32,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            bytemuck::cast_slice(texels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(w * 4),
+                rows_per_image: Some(*h),
+            },
+            wgpu::Extent3d {
+                width: *w,
+                height: *h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+}

@@ -143,7 +143,7 @@ fn run(
     let gpu = gpu();
     let gpu_scene = GpuScene::new(&gpu, &mut scene.data);
     let mut g = GraphBuilder::new();
-    let h = gpu_scene.import(&mut g);
+    gpu_scene.import(&mut g);
     let positions = g.import_buffer(
         "positions",
         BufferDesc::array(Element::VEC4_F32, scene.mesh.positions.len() as u64),
@@ -166,7 +166,6 @@ fn run(
         Bindings::new()
             .bind("positions", positions)
             .bind("indices", indices)
-            .bind("instances", h.instances)
             .bind("depth", depth)
             .bind("ids", ids),
     )?;

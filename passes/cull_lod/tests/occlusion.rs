@@ -19,6 +19,7 @@ use meshlight_pass_cull_lod::{
 };
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
+use meshlight_testing::write_pyramid;
 use std::collections::BTreeSet;
 
 mod common;
@@ -104,30 +105,6 @@ fn pixels() -> usize {
     (VIEWPORT[0] * VIEWPORT[1]) as usize
 }
 
-fn write_pyramid(queue: &wgpu::Queue, texture: &wgpu::Texture, p: &DepthPyramid) {
-    for (level, (w, h, texels)) in p.levels.iter().enumerate() {
-        queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture,
-                mip_level: level as u32,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            bytemuck::cast_slice(texels),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(w * 4),
-                rows_per_image: Some(*h),
-            },
-            wgpu::Extent3d {
-                width: *w,
-                height: *h,
-                depth_or_array_layers: 1,
-            },
-        );
-    }
-}
-
 /// The first and second pass chained as in the frame, over one imported candidate list,
 /// with last frame's pyramid a history filled from `upload` and this frame's imported.
 struct Harness {
@@ -191,13 +168,7 @@ impl Harness {
         let history = g.history_texture("pyramid", desc.clone());
         let upload_handle = g.import_texture("upload", desc.clone(), usage);
         let now_handle = g.import_texture("pyramid_now", desc.clone(), usage);
-        let scene_bindings = || {
-            Bindings::new()
-                .bind("instances", h.instances)
-                .bind("meshes", h.meshes)
-                .bind("meshlets", h.meshlets)
-                .bind("meshlet_groups", h.groups)
-        };
+        let scene_bindings = || Bindings::new().bind("meshlet_groups", h.groups);
         let first = CullLod {
             thresholds: T,
             ..CullLod::default()

@@ -63,8 +63,6 @@ fn main() -> std::result::Result<(), Box<dyn std::error::Error>> {
         let list = g.create_buffer("clusters", BufferDesc::array(elements::CLUSTER, clusters));
         let count = g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
         let mut bindings = Bindings::new()
-            .bind("instances", h.instances)
-            .bind("meshes", h.meshes)
             .bind("clusters", list)
             .bind("cluster_count", count);
         let pass: Box<dyn Pass> = if hierarchy {
@@ -97,9 +95,6 @@ fn main() -> std::result::Result<(), Box<dyn std::error::Error>> {
                 Bindings::new()
                     .bind("clusters", out.buffer("clusters")?)
                     .bind("cluster_count", out.buffer("cluster_count")?)
-                    .bind("instances", h.instances)
-                    .bind("meshes", h.meshes)
-                    .bind("meshlets", h.meshlets)
                     .bind("meshlet_groups", h.groups)
                     .bind("raster_clusters", slots)
                     .bind("raster_counts", counts)

@@ -89,7 +89,7 @@ fn run(
 ) -> GpuFill {
     let scene = GpuScene::new(&gpu, data);
     let mut g = GraphBuilder::new();
-    let h = scene.import(&mut g);
+    scene.import(&mut g);
     let clusters = g.import_buffer(
         "clusters",
         BufferDesc::array(elements::CLUSTER, slots as u64),
@@ -101,8 +101,6 @@ fn run(
             "fill",
             pass,
             Bindings::new()
-                .bind("instances", h.instances)
-                .bind("meshes", h.meshes)
                 .bind("clusters", clusters)
                 .bind("cluster_count", count),
         )

@@ -122,8 +122,6 @@ fn run(data: &mut SceneData, view: &View, fill: Fill, cull: Option<f32>, slots: 
     );
     let count = g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
     let mut bindings = Bindings::new()
-        .bind("instances", h.instances)
-        .bind("meshes", h.meshes)
         .bind("clusters", list)
         .bind("cluster_count", count);
     let hierarchy = matches!(fill, Fill::Hierarchy(_));
@@ -173,9 +171,6 @@ fn run(data: &mut SceneData, view: &View, fill: Fill, cull: Option<f32>, slots: 
                 Bindings::new()
                     .bind("clusters", out.buffer("clusters").unwrap())
                     .bind("cluster_count", out.buffer("cluster_count").unwrap())
-                    .bind("instances", h.instances)
-                    .bind("meshes", h.meshes)
-                    .bind("meshlets", h.meshlets)
                     .bind("meshlet_groups", h.groups)
                     .bind("raster_clusters", raster)
                     .bind("raster_counts", counts)

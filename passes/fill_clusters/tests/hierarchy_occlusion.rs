@@ -20,6 +20,7 @@ use meshlight_pass_fill_clusters::{
 };
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
+use meshlight_testing::write_pyramid;
 use support::*;
 
 const VIEWPORT: [u32; 2] = [320, 200];
@@ -89,30 +90,6 @@ fn walls(rng: &mut Rng, data: &SceneData, view: &View, count: u32) -> DepthPyram
     DepthPyramid::from_depth(w, h, &depth)
 }
 
-fn write_pyramid(queue: &wgpu::Queue, texture: &wgpu::Texture, p: &DepthPyramid) {
-    for (level, (w, h, texels)) in p.levels.iter().enumerate() {
-        queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture,
-                mip_level: level as u32,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            bytemuck::cast_slice(texels),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(w * 4),
-                rows_per_image: Some(*h),
-            },
-            wgpu::Extent3d {
-                width: *w,
-                height: *h,
-                depth_or_array_layers: 1,
-            },
-        );
-    }
-}
-
 /// What the second walk left on the GPU.
 struct Walked {
     clusters: Vec<Cluster>,
@@ -130,7 +107,7 @@ fn run_second_walk(
     let scene = GpuScene::new(&gpu, data);
     let slots = 1 << 16;
     let mut g = GraphBuilder::new();
-    let h = scene.import(&mut g);
+    scene.import(&mut g);
     let t = scene.import_hierarchy(&mut g);
     let list = g.create_buffer("clusters", BufferDesc::array(elements::CLUSTER, slots));
     let count = g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
@@ -165,8 +142,6 @@ fn run_second_walk(
             "fill_second",
             walk,
             Bindings::new()
-                .bind("instances", h.instances)
-                .bind("meshes", h.meshes)
                 .bind("clusters", list)
                 .bind("cluster_count", count)
                 .bind("hierarchy_nodes", t.nodes)

@@ -125,7 +125,7 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
     let counts: [u32; 8] = [SOFTWARE, frame.hw_count, 0, capacity, 0, 0, 0, 0];
     let args = [VERTICES_PER_CLUSTER, frame.hw_count, 0, 0];
     let mut g = GraphBuilder::new();
-    let h = scene.import(&mut g);
+    scene.import(&mut g);
     let clusters = g.import_buffer(
         "raster_clusters",
         BufferDesc::array(meshlight_gpu_scene::gpu::elements::CLUSTER, capacity as u64),
@@ -149,10 +149,6 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
             .bind("raster_clusters", clusters)
             .bind("raster_counts", counts_h)
             .bind("hw_args", args_h)
-            .bind("instances", h.instances)
-            .bind("meshes", h.meshes)
-            .bind("meshlets", h.meshlets)
-            .bind("payload", h.payload)
             .bind("visbuffer", vis),
     )?;
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;

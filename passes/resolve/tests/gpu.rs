@@ -343,7 +343,7 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
     let scene = GpuScene::new(&gpu, &mut frame.scene);
     let slots = frame.raster_clusters.len() as u64;
     let mut g = GraphBuilder::new();
-    let h = scene.import(&mut g);
+    scene.import(&mut g);
     let clusters = g.import_buffer(
         "raster_clusters",
         BufferDesc::array(elements::CLUSTER, slots),
@@ -424,11 +424,6 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
             .bind("visbuffer", vis)
             .bind("raster_clusters", clusters)
             .bind("raster_counts", counts)
-            .bind("instances", h.instances)
-            .bind("meshes", h.meshes)
-            .bind("meshlets", h.meshlets)
-            .bind("payload", h.payload)
-            .bind("materials", h.materials)
             .bind("color", color),
     )?;
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;

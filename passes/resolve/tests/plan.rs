@@ -16,7 +16,7 @@ const H: u32 = 64;
 /// (and exported, so nothing culls them).
 fn plan(pass: Resolve, optional: &[&str]) -> Result<Plan> {
     let mut g = GraphBuilder::new();
-    let scene = import_for(&SceneData::new(Limits::default()), &mut g);
+    import_for(&SceneData::new(Limits::default()), &mut g);
     let storage = wgpu::BufferUsages::STORAGE;
     let clusters = g.import_buffer(
         "raster_clusters",
@@ -35,11 +35,6 @@ fn plan(pass: Resolve, optional: &[&str]) -> Result<Plan> {
         .bind("visbuffer", vis)
         .bind("raster_clusters", clusters)
         .bind("raster_counts", counts)
-        .bind("instances", scene.instances)
-        .bind("meshes", scene.meshes)
-        .bind("meshlets", scene.meshlets)
-        .bind("payload", scene.payload)
-        .bind("materials", scene.materials)
         .bind("color", color);
     for &name in optional {
         let desc = match name {

@@ -149,7 +149,7 @@ fn run(
     let gpu_scene = GpuScene::new(&gpu, scene);
     let counts = [input.count, 0, 0, 0];
     let mut g = GraphBuilder::new();
-    let h = gpu_scene.import(&mut g);
+    gpu_scene.import(&mut g);
     let slots = g.import_buffer(
         "raster_clusters",
         BufferDesc::array(
@@ -180,10 +180,6 @@ fn run(
         .bind("raster_clusters", slots)
         .bind("raster_counts", counts_h)
         .bind("sw_args", args_h)
-        .bind("instances", h.instances)
-        .bind("meshes", h.meshes)
-        .bind("meshlets", h.meshlets)
-        .bind("payload", h.payload)
         .bind("visbuffer", vis);
     let tiled = pass.big_triangle_px > 0;
     if tiled {
@@ -821,7 +817,7 @@ fn an_accumulating_pass_draws_its_slots_over_the_first_passs_image() {
     let gpu = gpu();
     let gpu_scene = GpuScene::new(&gpu, &mut scene);
     let mut g = GraphBuilder::new();
-    let h = gpu_scene.import(&mut g);
+    gpu_scene.import(&mut g);
     let slots_h = g.import_buffer(
         "raster_clusters",
         BufferDesc::array(
@@ -856,10 +852,6 @@ fn an_accumulating_pass_draws_its_slots_over_the_first_passs_image() {
                     .bind("raster_clusters", slots_h)
                     .bind("raster_counts", counts)
                     .bind("sw_args", args)
-                    .bind("instances", h.instances)
-                    .bind("meshes", h.meshes)
-                    .bind("meshlets", h.meshlets)
-                    .bind("payload", h.payload)
                     .bind("visbuffer", vis),
             )
             .unwrap_or_else(|e| panic!("{e}"));

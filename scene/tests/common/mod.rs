@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod dag_checks;
+pub mod damage;
 pub mod generators;
 
 use std::path::PathBuf;

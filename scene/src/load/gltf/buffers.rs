@@ -140,8 +140,9 @@ fn decode_base64(text: &str) -> Option<Vec<u8>> {
     Some(out)
 }
 
-/// A URI path with `%XX` escapes decoded.
-fn percent_decode(uri: &str) -> Option<String> {
+/// A URI path with `%XX` escapes decoded, as glTF writes spaces and other characters;
+/// `None` for a malformed escape or bytes that are not UTF-8.
+pub fn percent_decode(uri: &str) -> Option<String> {
     let bytes = uri.as_bytes();
     let mut out = Vec::with_capacity(bytes.len());
     let mut i = 0;

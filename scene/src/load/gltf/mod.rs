@@ -8,6 +8,7 @@
 
 mod accessor;
 mod buffers;
+pub use buffers::percent_decode;
 mod nodes;
 
 use std::path::Path;
