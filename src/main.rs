@@ -81,10 +81,12 @@ struct RenderArgs {
     /// Image height in pixels.
     #[arg(long, default_value_t = 720)]
     height: u32,
-    /// Initial size of the candidate-cluster list (grown when a frame overflows it).
+    /// Initial size of the candidate-cluster list (grown when a frame overflows it);
+    /// given, it wins over a pipeline file's `clusters`.
     #[arg(long)]
     clusters: Option<u64>,
-    /// Initial number of raster slots (grown when a frame overflows them).
+    /// Initial number of raster slots (grown when a frame overflows them); given, it
+    /// wins over a pipeline file's `slots`.
     #[arg(long)]
     slots: Option<u64>,
     /// The software rasteriser: auto (64-bit texture atomics where the adapter has
@@ -354,6 +356,11 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     settings.sw_threshold_px = a.sw_threshold;
     settings.clusters = a.clusters.unwrap_or(settings.clusters);
     settings.slots = a.slots.unwrap_or(settings.slots);
+    // Sizes given win over a pipeline file's; none given leaves the file's.
+    settings.keep_file_lists = meshlight::virtual_geometry::frame_graph::KeepFileLists {
+        clusters: a.clusters.is_none(),
+        slots: a.slots.is_none(),
+    };
     let source = match &a.pipeline {
         Some(path) => GraphSource::File(path.clone()),
         None => GraphSource::Code,

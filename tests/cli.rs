@@ -520,8 +520,8 @@ fn pixels(path: &std::path::Path) -> Vec<u8> {
     buf
 }
 
-/// `render --pipeline`: a file's own `view` stands when --view is not given, and --view
-/// wins over it when given; the shipped file renders with the default lights flag (none)
+/// `render --pipeline`: a file's own `view` and `slots` stand when --view and --slots
+/// are not given, and the flags win over them when given; the shipped file renders with the default lights flag (none)
 /// and refuses lights asked for (GPU: lavapipe).
 #[test]
 fn render_pipeline_settings_yield_only_to_flags_given() {
@@ -576,6 +576,43 @@ fn render_pipeline_settings_yield_only_to_flags_given() {
     assert!(render(lod_file, None, "file-lod.png") == lod);
     // … and --view wins over it.
     assert!(render(lod_file, Some("shaded"), "flag-shaded.png") == shaded);
+    // The same both ways for the list sizes: a file's `slots` stands without --slots
+    // (two slots: the frame has to grow them) and --slots wins over it.
+    assert!(text.contains("slots = 262144"));
+    let small_file = dir.join("small.toml");
+    std::fs::write(&small_file, text.replace("slots = 262144", "slots = 2")).unwrap();
+    let small_file = small_file.to_str().unwrap();
+    let report = |extra: &[&str]| {
+        let png = dir.join("lists.png");
+        let mut args = vec![
+            "render",
+            "--mesh",
+            "assets/meshes/spot.obj",
+            "--instances",
+            "4",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--pipeline",
+            small_file,
+            "-o",
+            png.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let out = meshlight(&args);
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(
+            out.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        stdout
+    };
+    let kept = report(&[]);
+    assert!(kept.contains("the lists grew (slots 2 → "), "{kept}");
+    let flagged = report(&["--slots", "262144"]);
+    assert!(!flagged.contains("the lists grew"), "{flagged}");
     // Lights asked for with a pipeline file are refused, naming the file and the fix.
     let out = meshlight(&[
         "render",

@@ -119,6 +119,10 @@ pub struct FrameSettings {
     /// overflow.
     pub clusters: u64,
     pub slots: u64,
+    /// With a pipeline file, leave the `clusters` and `slots` its `[params]` give
+    /// (each one the file declares); off, `clusters` and `slots` above win. A command
+    /// line sets it for the lists no flag sized, as [`FrameSettings::keep_file_view`].
+    pub keep_file_lists: KeepFileLists,
     /// Resolve the `depth` and `material_depth` targets: a fullscreen fragment pass
     /// each, which only a frame compositing raster geometry over the image needs. Off
     /// by default: the frame resolves colour alone, in one compute dispatch.
@@ -158,6 +162,7 @@ impl FrameSettings {
             height,
             view: DebugView::Shaded,
             keep_file_view: false,
+            keep_file_lists: KeepFileLists::default(),
             lod_threshold_px: t.lod_threshold_px,
             // `MESHLIGHT_SW_THRESHOLD_PX` overrides the adapter class's split, for sweeps.
             sw_threshold_px: std::env::var("MESHLIGHT_SW_THRESHOLD_PX")
@@ -631,6 +636,21 @@ pub fn load_with(
             params.remove(name);
         }
     }
+    // The file's list sizes where it keeps them (slots still no more than an id holds).
+    let keep = s.keep_file_lists;
+    for (name, kept, most) in [
+        (CLUSTERS_PARAM, keep.clusters, u64::MAX),
+        (SLOTS_PARAM, keep.slots, MAX_SLOTS),
+    ] {
+        let declared = declared
+            .get("params")
+            .and_then(|p| p.get(name))
+            .and_then(toml::Value::as_integer)
+            .and_then(|v| u64::try_from(v).ok());
+        if let (true, Some(value)) = (kept, declared) {
+            params.insert(name.to_string(), value.min(most));
+        }
+    }
     // `auto` tries the hardware rasterisers in the adapter class's order, as in code.
     let mut registry = registry.clone();
     prefer_class_order(&mut registry, s);
@@ -660,6 +680,15 @@ pub fn overrides(data: &SceneData, s: &FrameSettings) -> BTreeMap<String, u64> {
     o.insert(PYRAMID_WIDTH_PARAM.into(), w as u64);
     o.insert(PYRAMID_HEIGHT_PARAM.into(), h as u64);
     o
+}
+
+/// Which list sizes of a pipeline file stand over [`FrameSettings`]' own.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KeepFileLists {
+    /// The file's [`CLUSTERS_PARAM`].
+    pub clusters: bool,
+    /// The file's [`SLOTS_PARAM`].
+    pub slots: bool,
 }
 
 /// The `[params]` giving a pyramid texture's size in a pipeline file; the renderer also
