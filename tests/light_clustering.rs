@@ -7,7 +7,7 @@
 use glam::Vec3;
 use meshlight::light_clustering::reference::{Assignment, cpu_assign, cpu_assign_parallel};
 use meshlight::light_clustering::{
-    Clustered, Clusterer, ClusteringSettings, ClusteringSource, ClusteringWarning, Implementation,
+    Clustered, Clusterer, ClusteringSettings, ClusteringSource, ClusteringWarning,
 };
 use meshlight::z_slice::scenes::{Rng, object, orthographic, perspective, random_objects};
 use meshlight_graph::GraphError;
@@ -22,9 +22,9 @@ fn pipeline_file() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("pipelines/light_clustering.toml")
 }
 
-fn settings(viewport: [u32; 2], implementation: Implementation) -> ClusteringSettings {
+fn settings(viewport: [u32; 2], implementation: &str) -> ClusteringSettings {
     ClusteringSettings {
-        implementation,
+        implementation: implementation.into(),
         ..ClusteringSettings::new(viewport, 1024)
     }
 }
@@ -106,18 +106,11 @@ fn the_lists_equal_the_reference_for_both_implementations_and_the_pipeline_file(
     for index in 0..4 {
         let (view, objects) = random_scene(&mut rng, index);
         let mut sources = vec![];
-        for implementation in [Implementation::Compute, Implementation::Raster] {
+        for implementation in ["compute", "raster"] {
             sources.push((implementation, ClusteringSource::Code));
         }
-        sources.push((
-            Implementation::Compute,
-            ClusteringSource::File(pipeline_file()),
-        ));
-        let want = cpu_assign(
-            &view,
-            &settings([320, 180], Implementation::Compute),
-            &objects,
-        );
+        sources.push(("compute", ClusteringSource::File(pipeline_file())));
+        let want = cpu_assign(&view, &settings([320, 180], "compute"), &objects);
         assert!(
             want.lists.needed > 500,
             "scene {index}: {} entries",
@@ -139,11 +132,7 @@ fn the_lists_equal_the_reference_for_both_implementations_and_the_pipeline_file(
 fn the_implementation_swap_is_one_line_of_the_pipeline_file() {
     let mut rng = Rng(0x5a4b_0001_0203_0405);
     let (view, objects) = random_scene(&mut rng, 0);
-    let want = cpu_assign(
-        &view,
-        &settings([320, 180], Implementation::Compute),
-        &objects,
-    );
+    let want = cpu_assign(&view, &settings([320, 180], "compute"), &objects);
     let text = std::fs::read_to_string(pipeline_file()).unwrap();
     for stage in ["count_raster", "populate"] {
         let from = format!("stage = \"{stage}\"\nimplementation = \"compute\"");
@@ -163,7 +152,7 @@ fn the_implementation_swap_is_one_line_of_the_pipeline_file() {
         std::fs::write(&path, swapped).unwrap();
         let label = format!("{stage} swapped to raster");
         let mut clusterer = Clusterer::new(
-            settings([320, 180], Implementation::Compute),
+            settings([320, 180], "compute"),
             &ClusteringSource::File(path.clone()),
         )
         .unwrap_or_else(|e| panic!("{label}: {e}"));
@@ -189,7 +178,7 @@ fn the_parallel_reference_equals_the_serial_one() {
     let mut rng = Rng(0x9a4a_11e1_0000_0001);
     for index in 0..4 {
         let (view, objects) = random_scene(&mut rng, index);
-        let s = settings([320, 180], Implementation::Compute);
+        let s = settings([320, 180], "compute");
         let serial = cpu_assign(&view, &s, &objects);
         let parallel = cpu_assign_parallel(&view, &s, &objects);
         assert_eq!(serial.instances, parallel.instances);
@@ -201,7 +190,7 @@ fn the_parallel_reference_equals_the_serial_one() {
 fn overflowing_lists_grow_and_are_exact_within_three_frames() {
     let mut rng = Rng(0x0f10_0f10_0f10_0f10);
     let (view, objects) = random_scene(&mut rng, 2);
-    for implementation in [Implementation::Compute, Implementation::Raster] {
+    for implementation in ["compute", "raster"] {
         let s = ClusteringSettings {
             slice_instances: 4,
             entries: 16,
@@ -249,7 +238,7 @@ fn bad_objects_are_skipped_counted_and_warned_about() {
         // Range 0: nothing, and no warning.
         object(p, Vec3::new(0.0, 0.0, -5.0), 0.0),
     ];
-    let s = settings([320, 180], Implementation::Compute);
+    let s = settings([320, 180], "compute");
     let want = cpu_assign(&view, &s, &objects);
     let mut clusterer = Clusterer::new(s, &ClusteringSource::Code).unwrap();
     let got = clusterer.cluster_still(&view, &objects).unwrap();
@@ -280,7 +269,7 @@ fn bad_objects_are_skipped_counted_and_warned_about() {
 #[test]
 fn zero_objects_give_empty_lists() {
     let view = perspective(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 1.2).view([320, 180], 0, None);
-    for implementation in [Implementation::Compute, Implementation::Raster] {
+    for implementation in ["compute", "raster"] {
         let mut clusterer = Clusterer::new(
             settings([320, 180], implementation),
             &ClusteringSource::Code,
@@ -327,8 +316,8 @@ fn the_single_pass_scan_gives_the_same_lists() {
     let mut rng = Rng(0x5ca7_0000_0000_0001);
     let (view, objects) = random_scene(&mut rng, 1);
     let s = ClusteringSettings {
-        scan: meshlight::light_clustering::ScanImplementation::DecoupledLookback,
-        ..settings([320, 180], Implementation::Compute)
+        scan: "decoupled_lookback".into(),
+        ..settings([320, 180], "compute")
     };
     let want = cpu_assign(&view, &s, &objects);
     let mut clusterer = Clusterer::new(s, &ClusteringSource::Code).unwrap();
@@ -340,10 +329,33 @@ fn the_single_pass_scan_gives_the_same_lists() {
 fn one_command_buffer_per_frame_gives_the_same_lists() {
     let mut rng = Rng(0x0c0b_0000_0000_0001);
     let (view, objects) = random_scene(&mut rng, 0);
-    let s = settings([320, 180], Implementation::Raster);
+    let s = settings([320, 180], "raster");
     let want = cpu_assign(&view, &s, &objects);
     let mut clusterer = Clusterer::new(s, &ClusteringSource::Code).unwrap();
     clusterer.executor.one_command_buffer = true;
     let got = clusterer.cluster_still(&view, &objects).unwrap();
     compare(&view, &got, &want, &objects, "one command buffer");
+}
+
+/// The stages with several implementations come from the registry in the frame built in
+/// code too: a name it does not hold is refused, naming the ones it does.
+#[test]
+fn an_implementation_the_registry_lacks_is_refused_naming_the_registered_ones() {
+    for (implementation, scan, stage) in [
+        ("quads", "scan_fan", "count_raster"),
+        ("compute", "blelloch", "scan_fan"),
+    ] {
+        let s = ClusteringSettings {
+            implementation: implementation.into(),
+            scan: scan.into(),
+            ..ClusteringSettings::new([320, 180], 16)
+        };
+        let Err(err) = meshlight::light_clustering::frame_graph::build(&s) else {
+            panic!("{implementation}/{scan} built");
+        };
+        let text = err.to_string();
+        assert!(text.contains(stage), "{text}");
+        let registered = meshlight::registry().implementations(stage);
+        assert!(registered.iter().all(|name| text.contains(name.as_str())), "{text}");
+    }
 }

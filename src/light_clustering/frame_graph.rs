@@ -3,9 +3,10 @@
 //! ([`load`]); both declare the same resources under the same names, so either runs with
 //! the same [`Clusterer`](super::Clusterer).
 
+use crate::graph::file::{Params, Registry};
 use crate::graph::{Bindings, BufferDesc, Element, GraphBuilder, GraphError, Result};
 use meshlight_pass_count_raster::KINDS;
-use meshlight_pass_scan_fan::{DecoupledLookback, ScanFan, ScanOptions, WALK_TILES, WORKGROUP};
+use meshlight_pass_scan_fan::{ScanFan, ScanOptions, WALK_TILES, WORKGROUP};
 use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, GridSettings, SLICE_INSTANCE, ZSlice, cpu::COUNT_WORDS,
 };
@@ -29,42 +30,21 @@ pub const OBJECT_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_DST)
     .union(wgpu::BufferUsages::COPY_SRC);
 
-/// Which implementation of `count_raster` and `populate` runs (the same for both, so the
-/// two stages decide every pair with the same code).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Implementation {
-    /// Instanced quads through the rasteriser: where every unit rasterises.
-    Raster,
-    /// Compute walks over the instances' tiles: where few units run graphics (H100/H200).
-    Compute,
-}
-
-impl Implementation {
-    pub fn name(self) -> &'static str {
-        match self {
-            Implementation::Raster => "raster",
-            Implementation::Compute => "compute",
-        }
-    }
-}
-
-/// Which `scan_fan` implementation turns the counts into offsets.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ScanImplementation {
-    /// Reduce, scan of the tile totals, scan-and-add: three dispatches, any adapter.
-    ScanFan,
-    /// One dispatch with decoupled look-back: fast where workgroups run side by side.
-    DecoupledLookback,
-}
-
 /// What the clustering is asked for; the same for both ways of building the graph.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ClusteringSettings {
     /// The view's size in pixels.
     pub viewport: [u32; 2],
     pub grid: GridSettings,
-    pub implementation: Implementation,
-    pub scan: ScanImplementation,
+    /// The implementation of `count_raster` and of `populate`, as registered: the same
+    /// for both, so the two stages decide every (object, froxel) pair with the same
+    /// code. Shipped: `compute` (workgroups walk the instances' tiles: the fast path
+    /// where few units run graphics) and `raster` (a quad per instance through the
+    /// rasteriser).
+    pub implementation: String,
+    /// The `scan_fan` implementation that turns the counts into offsets, as registered
+    /// (`scan_fan`, `two_step`, `decoupled_lookback`).
+    pub scan: String,
     /// Objects the object buffer holds; more in a frame is an error naming this.
     pub objects: u64,
     /// Initial sizes of z_slice's list and of the froxel lists; grown on overflow.
@@ -77,8 +57,8 @@ impl ClusteringSettings {
         Self {
             viewport,
             grid: GridSettings::default(),
-            implementation: Implementation::Compute,
-            scan: ScanImplementation::ScanFan,
+            implementation: "compute".into(),
+            scan: "scan_fan".into(),
             objects,
             slice_instances: (objects * 4).max(1024),
             entries: (objects * 16).max(4096),
@@ -133,6 +113,15 @@ impl ClusteringSettings {
 /// are `cluster_grid`, `cluster_offsets`, `cluster_counts` and `cluster_objects`; the
 /// counters `slice_counts` and `list_counts`.
 pub fn add_stages(g: &mut GraphBuilder, s: &ClusteringSettings) -> Result<()> {
+    add_stages_with(g, s, &crate::registry())
+}
+
+/// [`add_stages`] with the implementations of `registry`.
+pub fn add_stages_with(
+    g: &mut GraphBuilder,
+    s: &ClusteringSettings,
+    registry: &Registry,
+) -> Result<()> {
     s.check()?;
     g.size_param(SLICE_INSTANCES_PARAM, s.slice_instances);
     g.size_param(ENTRIES_PARAM, s.entries);
@@ -165,45 +154,44 @@ pub fn add_stages(g: &mut GraphBuilder, s: &ClusteringSettings) -> Result<()> {
     }
     // Slots not bound here bind to the resource of the same name.
     g.add_pass("z_slice", s.grid_pass(), Bindings::new())?;
+    // The stages with several implementations come from the registry, as in a file.
     let [width, height, _] = s.grid.dims;
-    match s.implementation {
-        Implementation::Raster => {
-            let count = meshlight_pass_count_raster::Raster { width, height };
-            g.add_pass("count", count, Bindings::new())?;
-        }
-        Implementation::Compute => {
-            g.add_pass(
-                "count",
-                meshlight_pass_count_raster::Compute::default(),
-                Bindings::new(),
-            )?;
-        }
+    let tiles = Params::new(toml::toml! {
+        width = (width)
+        height = (height)
+    });
+    let count = registry.build(
+        meshlight_pass_count_raster::STAGE,
+        &s.implementation,
+        &tiles,
+    )?;
+    g.add_boxed_pass("count", count, Bindings::new())?;
+    let mut scan_params = toml::toml! { count = (lists as i64) };
+    if s.scan == "scan_fan" && fits_one_walk(lists as u32) {
+        scan_params.insert(
+            "items_per_thread".into(),
+            toml::Value::Integer(WALK_ITEMS_PER_THREAD.into()),
+        );
     }
-    let scan = Bindings::new()
+    let scan = registry.build(
+        meshlight_pass_scan_fan::STAGE,
+        &s.scan,
+        &Params::new(scan_params),
+    )?;
+    let bindings = Bindings::new()
         .bind_named("input", "cluster_counts")
         .bind_named("output", "cluster_offsets")
         .bind_named("total", "list_total");
-    match s.scan {
-        ScanImplementation::ScanFan => g.add_pass("scan", scan_fan(lists as u32), scan)?,
-        ScanImplementation::DecoupledLookback => {
-            g.add_pass("scan", DecoupledLookback::new(lists as u32), scan)?
-        }
-    };
-    match s.implementation {
-        Implementation::Raster => {
-            let populate = meshlight_pass_populate::Raster {
-                width,
-                height,
-                capacity: None,
-            };
-            g.add_pass("populate", populate, Bindings::new())?;
-        }
-        Implementation::Compute => {
-            let populate = meshlight_pass_populate::Compute::default();
-            g.add_pass("populate", populate, Bindings::new())?;
-        }
-    }
+    g.add_boxed_pass("scan", scan, bindings)?;
+    let populate = registry.build(meshlight_pass_populate::STAGE, &s.implementation, &tiles)?;
+    g.add_boxed_pass("populate", populate, Bindings::new())?;
     Ok(())
+}
+
+/// Whether `lists` counts fit in [`WALK_TILES`] tiles of [`WALK_ITEMS_PER_THREAD`]
+/// elements a lane, so that one workgroup walks them in a single dispatch.
+fn fits_one_walk(lists: u32) -> bool {
+    lists <= WALK_TILES * WORKGROUP * WALK_ITEMS_PER_THREAD
 }
 
 /// Lanes' elements of the scan when the lists fit in [`WALK_TILES`] tiles of that size:
@@ -215,7 +203,7 @@ pub const WALK_ITEMS_PER_THREAD: u32 = 32;
 /// where the lists fit, else the default tiles.
 pub fn scan_fan(lists: u32) -> ScanFan {
     let mut options = ScanOptions::new(lists);
-    if lists <= WALK_TILES * WORKGROUP * WALK_ITEMS_PER_THREAD {
+    if fits_one_walk(lists) {
         options.items_per_thread = WALK_ITEMS_PER_THREAD;
     }
     ScanFan::with_options(options)

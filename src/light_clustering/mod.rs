@@ -11,4 +11,4 @@ pub mod reference;
 pub use clusterer::{
     Clustered, Clusterer, ClusteringCounts, ClusteringSource, ClusteringWarning, Growth,
 };
-pub use frame_graph::{ClusteringSettings, Implementation, ScanImplementation};
+pub use frame_graph::ClusteringSettings;
