@@ -57,15 +57,15 @@ struct RenderArgs {
     instances: u32,
     /// Coloured point lights over the field, clustered on the GPU and shaded per pixel
     /// (0: none; a single instance has none). `--view light-count` shows them per froxel.
-    /// Default: 256 with the frame built in code, 0 with --pipeline (lights are
-    /// clustered only in the frame built in code).
+    /// Default: 256, or 0 with a --pipeline file that clusters no lights (has no
+    /// `z_slice` pass).
     #[arg(long)]
     lights: Option<u32>,
     /// A pipeline file to render with instead of the graph built in code, e.g.
     /// pipelines/virtual_geometry.toml or your own composition of the same resources.
     /// The file's own settings stand unless a flag is given (--view overrides its
-    /// resolve's `view`). Lights are clustered only in the frame built in code, so a
-    /// file renders without them.
+    /// resolve's `view`, --clusters and --slots its list sizes). The shipped file
+    /// clusters the lights as the frame built in code does and renders the same image.
     #[arg(long)]
     pipeline: Option<PathBuf>,
     /// What the image shows (default: shaded, or with --pipeline the view the file's
@@ -279,12 +279,16 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     use std::fmt::Write as _;
     // Everything the command line bounds is checked before a mesh is baked or an adapter
     // requested, and the outputs' directories are made, so a mistake costs no render.
-    // Lights are clustered in the frame built in code only: a pipeline file renders
-    // without them unless they are asked for, which is refused below.
-    let lights_asked = a.lights.unwrap_or(if a.pipeline.is_some() {
-        0
-    } else {
+    // A pipeline file that clusters no lights renders without them unless they are
+    // asked for, which is refused below; one that does gets the default scene's.
+    let file_clusters_lights = a
+        .pipeline
+        .as_deref()
+        .is_none_or(meshlight::virtual_geometry::frame_graph::file_clusters_lights);
+    let lights_asked = a.lights.unwrap_or(if file_clusters_lights {
         scenes::DEFAULT_LIGHTS
+    } else {
+        0
     });
     meshlight::render_bounds::RenderNumbers {
         segments: a.segments,
@@ -299,11 +303,11 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     meshlight::output::check_png_path(&a.output)?;
     if let Some(path) = &a.pipeline {
         meshlight::graph::file::read_pipeline_text(path)?;
-        if lights_asked > 0 && a.instances > 1 {
+        if lights_asked > 0 && a.instances > 1 && !file_clusters_lights {
             return Err(GraphError::PipelineFile {
                 file: path.display().to_string(),
                 message: format!(
-                    "--lights {lights_asked}: lights are clustered only in the frame built in code; render with --lights 0 (the default with --pipeline) or without --pipeline"
+                    "--lights {lights_asked}: the file clusters no lights (it has no `z_slice` pass); render with --lights 0 (its default), or add the light clustering's passes as pipelines/virtual_geometry.toml does"
                 ),
             }
             .into());

@@ -594,6 +594,8 @@ fn render_pipeline_settings_yield_only_to_flags_given() {
             "48",
             "--height",
             "32",
+            "--lights",
+            "0",
             "--pipeline",
             small_file,
             "-o",
@@ -613,11 +615,13 @@ fn render_pipeline_settings_yield_only_to_flags_given() {
     assert!(kept.contains("the lists grew (slots 2 → "), "{kept}");
     let flagged = report(&["--slots", "262144"]);
     assert!(!flagged.contains("the lists grew"), "{flagged}");
-    // Lights asked for with a pipeline file are refused, naming the file and the fix.
+    // Lights asked for with a file that clusters none are refused, naming the file and
+    // the fix.
+    let one_pass = "pipelines/virtual_geometry_one_pass.toml";
     let out = meshlight(&[
         "render",
         "--pipeline",
-        shipped,
+        one_pass,
         "--lights",
         "8",
         "--instances",
@@ -625,7 +629,10 @@ fn render_pipeline_settings_yield_only_to_flags_given() {
     ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
-    assert!(err.contains(shipped) && err.contains("--lights 0"), "{err}");
+    assert!(
+        err.contains(one_pass) && err.contains("--lights 0"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -652,5 +659,37 @@ fn the_default_render_needs_no_list_to_grow() {
     assert!(stdout.contains("point lights clustered"), "{stdout}");
     assert!(!stderr.contains("wanted but the list holds"), "{stderr}");
     assert!(!stdout.contains("the lists grew"), "{stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The shipped pipeline file renders the default image: the default scene with its
+/// lights, clustered by the file's own passes, pixel for pixel the frame built in code;
+/// with `--lights 0` both render the field without them (GPU: lavapipe).
+#[test]
+fn the_shipped_pipeline_renders_the_default_image() {
+    let dir = scratch("shipped");
+    let render = |extra: &[&str], name: &str| {
+        let png = dir.join(name);
+        let mut args = vec!["render", "--width", "96", "--height", "64", "-o"];
+        args.push(png.to_str().unwrap());
+        args.extend(extra);
+        let out = meshlight(&args);
+        assert!(
+            out.status.success(),
+            "{name}: {}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        pixels(&png)
+    };
+    let file = ["--pipeline", "pipelines/virtual_geometry.toml"];
+    let code = render(&[], "code.png");
+    assert!(
+        render(&file, "file.png") == code,
+        "the shipped file's image differs"
+    );
+    let unlit = render(&["--lights", "0"], "code-unlit.png");
+    assert!(unlit != code, "the lights should show");
+    assert!(render(&[&file[..], &["--lights", "0"]].concat(), "file-unlit.png") == unlit);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -356,6 +356,9 @@ fn an_implementation_the_registry_lacks_is_refused_naming_the_registered_ones() 
         let text = err.to_string();
         assert!(text.contains(stage), "{text}");
         let registered = meshlight::registry().implementations(stage);
-        assert!(registered.iter().all(|name| text.contains(name.as_str())), "{text}");
+        assert!(
+            registered.iter().all(|name| text.contains(name.as_str())),
+            "{text}"
+        );
     }
 }

@@ -601,16 +601,20 @@ pub fn load_with(
     registry: &Registry,
 ) -> Result<GraphBuilder> {
     let file = path.display().to_string();
-    if s.clustering.is_some() {
-        return Err(GraphError::PipelineFile {
-            file,
-            message: "lights are clustered only in the frame built in code; render without lights (`--lights 0`) or without --pipeline".into(),
-        });
-    }
     let text = std::fs::read_to_string(path).map_err(|e| GraphError::PipelineFile {
         file: file.clone(),
         message: format!("cannot read it: {e}"),
     })?;
+    let clusters_lights = clusters_lights(&text);
+    if s.clustering.is_some() && !clusters_lights {
+        return Err(GraphError::PipelineFile {
+            file,
+            message: format!(
+                "lights are asked for, but the file clusters none (it has no `{}` pass); render with `--lights 0`, or add the light clustering's passes as pipelines/virtual_geometry.toml does",
+                meshlight_pass_z_slice::STAGE
+            ),
+        });
+    }
     let text = with_view(&text, &file, s, data.instances.len())?;
     let text = with_instance_table(&text, &file, data)?;
     let mut params = overrides(data, s);
@@ -636,6 +640,14 @@ pub fn load_with(
             params.remove(name);
         }
     }
+    // The light clustering's sizes, from the lights (none: the smallest lists).
+    if clusters_lights {
+        let lights = s
+            .clustering
+            .clone()
+            .unwrap_or_else(|| ClusteringSettings::new([s.width, s.height], 1));
+        params.extend(clustering::overrides(&lights));
+    }
     // The file's list sizes where it keeps them (slots still no more than an id holds).
     let keep = s.keep_file_lists;
     for (name, kept, most) in [
@@ -656,7 +668,29 @@ pub fn load_with(
     prefer_class_order(&mut registry, s);
     let mut g = crate::graph::file::parse_pipeline_with(&text, &file, &registry, &params)?;
     add_readbacks(&mut g)?;
+    if clusters_lights {
+        clustering::add_readbacks(&mut g)?;
+    }
     Ok(g)
+}
+
+/// Whether a pipeline file's text clusters lights (has a `z_slice` pass): the renderer
+/// then uploads its lights (none when none are asked for) and sizes the clustering.
+pub fn clusters_lights(text: &str) -> bool {
+    let doc: toml::Table = toml::from_str(text).unwrap_or_default();
+    doc.get("pass")
+        .and_then(toml::Value::as_array)
+        .is_some_and(|passes| {
+            passes.iter().any(|p| {
+                p.get("stage").and_then(toml::Value::as_str) == Some(meshlight_pass_z_slice::STAGE)
+            })
+        })
+}
+
+/// [`clusters_lights`] of the file at `path`; `false` when it is not a pipeline file
+/// that can be read (a device, too large: loading it reports why).
+pub fn file_clusters_lights(path: &Path) -> bool {
+    crate::graph::file::read_pipeline_text(path).is_ok_and(|text| clusters_lights(&text))
 }
 
 /// The `[params]` the renderer sets in a pipeline file.

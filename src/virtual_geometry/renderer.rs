@@ -13,6 +13,7 @@ use super::frame_graph::{CLUSTERS_PARAM, FrameSettings, GraphSource, MAX_SLOTS, 
 use crate::graph::{
     CompileOptions, CompiledGraph, Executor, FrameData, FrameStats, GpuAdapter, GraphError, Result,
 };
+use crate::light_clustering::ClusteringSettings;
 use crate::light_clustering::clusterer::Counters;
 use crate::light_clustering::frame_graph::OBJECT_USAGE;
 use glam::Mat4;
@@ -114,6 +115,16 @@ impl Renderer {
             // The frame loop's choices (an occlusion view's extra frame) follow the
             // view the file shows.
             settings.view = view;
+        }
+        if let GraphSource::File(path) | GraphSource::FileWith(path, _) = source
+            && settings.clustering.is_none()
+            && super::frame_graph::file_clusters_lights(path)
+        {
+            // A file that clusters lights runs its clustering with none: empty lists.
+            settings.clustering = Some(ClusteringSettings::new(
+                [settings.width, settings.height],
+                1,
+            ));
         }
         let adapter = GpuAdapter::select()?;
         let class = super::split::AdapterClass::of(&adapter.info());
