@@ -78,6 +78,7 @@ impl Choice {
             }),
         }
     }
+    /// How compile is to pick among the candidates.
     pub fn selection(&self) -> Selection {
         self.selection
     }
@@ -90,6 +91,7 @@ impl Choice {
 /// One candidate as compile judged it.
 #[derive(Clone, Debug, Serialize)]
 pub struct CandidatePlan {
+    /// The candidate's implementation name.
     pub implementation: &'static str,
     /// Features its setup asked for that the adapter lacks (empty: it runs here).
     pub missing: Vec<String>,
@@ -98,10 +100,13 @@ pub struct CandidatePlan {
 /// What compile decided for a pass with several candidates, for dumps and `info`.
 #[derive(Clone, Debug, Serialize)]
 pub struct ChoicePlan {
+    /// How the choice was made: auto, or named by the pipeline.
     pub selection: Selection,
+    /// The implementation compile kept.
     pub chosen: &'static str,
     /// One sentence: why this one.
     pub reason: String,
+    /// Every candidate, in preference order, with what it lacks here.
     pub candidates: Vec<CandidatePlan>,
 }
 

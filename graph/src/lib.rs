@@ -4,6 +4,8 @@
 //! to a [`Plan`] with no device, inspect or dump it, and run it frame after frame with an
 //! [`Executor`].
 
+#![warn(missing_docs)]
+
 mod access;
 mod builder;
 mod choice;
@@ -21,7 +23,7 @@ mod resource;
 pub mod synthetic;
 
 pub use access::Access;
-pub use builder::{Bindings, GraphBuilder, History, PassNode, PassOutputs};
+pub use builder::{Bindings, GraphBuilder, History, PassOutputs};
 pub use choice::{CandidatePlan, Choice, ChoicePlan, Selection};
 pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};

@@ -19,6 +19,7 @@ pub enum LoadOp {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StoreOp {
+    /// A later pass reads the result: keep it.
     Store,
     /// Nothing reads the result: let the GPU drop it.
     Discard,
@@ -110,12 +111,14 @@ pub struct PassPlan {
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Recording {
+    /// Recorded into its batch's shared compute pass.
     Compute,
     /// Why the pass needs the encoder.
     Encoder(String),
 }
 
 impl Recording {
+    /// True when the pass is batched with other compute passes.
     pub fn is_compute(&self) -> bool {
         matches!(self, Recording::Compute)
     }
@@ -193,17 +196,27 @@ pub struct ResourcePlan {
 /// edges, batches and parameters. Dumps read it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Plan {
+    /// Every pass, culled ones included, in the order they were added.
     pub passes: Vec<PassPlan>,
     /// Indices into `passes`, in execution order (culled passes left out).
     pub order: Vec<usize>,
     /// `order` grouped into what the executor records together (see [`Batch`]).
     pub batches: Vec<Batch>,
+    /// Indices into `passes` of the passes culled: nothing visible outside the frame
+    /// depends on them.
     pub culled: Vec<usize>,
+    /// Every resource, in declaration order, with its lifetime, pool slot and usages.
     pub resources: Vec<ResourcePlan>,
+    /// Dependencies between passes, labelled with the resource version and access.
     pub edges: Vec<Edge>,
+    /// The pool's slots: transients whose lifetimes do not overlap share one.
     pub pool_slots: Vec<PoolSlot>,
+    /// Transient bytes with a resource each.
     pub bytes_without_reuse: u64,
+    /// Transient bytes with pool slots shared: what the executor allocates.
     pub bytes_with_reuse: u64,
+    /// The features the device must have: every pass's required ones and the optional
+    /// ones the adapter has; open the device with these.
     #[serde(serialize_with = "ser_features")]
     pub enabled_features: wgpu::Features,
     /// Size parameters and their current values.
@@ -214,12 +227,15 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// The index in `passes` of the pass named `name`.
     pub fn pass_index(&self, name: &str) -> Option<usize> {
         self.passes.iter().position(|p| p.name == name)
     }
+    /// The index in `resources` of the resource named `name`.
     pub fn resource_index(&self, name: &str) -> Option<usize> {
         self.resources.iter().position(|r| r.info.name == name)
     }
+    /// True when compile culled the pass at index `pass`.
     pub fn is_culled(&self, pass: usize) -> bool {
         self.culled.contains(&pass)
     }

@@ -39,6 +39,7 @@ impl CompileOptions {
             limits: wgpu::Limits::default(),
         }
     }
+    /// Plans for these limits instead of wgpu's defaults, e.g. to test a limit check.
     pub fn with_limits(mut self, limits: wgpu::Limits) -> Self {
         self.limits = limits;
         self
@@ -68,6 +69,7 @@ pub(crate) struct PassSetup {
 
 /// A plan plus the passes it runs.
 pub struct CompiledGraph {
+    /// The plan: order, batches, lifetimes, pool slots and usages; serialisable for dumps.
     pub plan: Plan,
     /// Unique per compiled graph: the executor keeps what it resolved for each pass (its
     /// programs) under it, so a steady frame finds them without building keys.
@@ -80,10 +82,6 @@ pub struct CompiledGraph {
 }
 
 impl CompiledGraph {
-    pub fn pass_nodes(&self) -> &[PassNode] {
-        &self.passes
-    }
-
     /// The current value of a size parameter.
     pub fn param(&self, name: &str) -> Option<u64> {
         self.plan

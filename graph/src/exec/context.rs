@@ -28,7 +28,9 @@ pub fn experimental_features() -> wgpu::Features {
 
 /// A chosen adapter, before a device is created for it.
 pub struct GpuAdapter {
+    /// The instance the adapter came from; surfaces are made from it.
     pub instance: wgpu::Instance,
+    /// The adapter picked by [`crate::ADAPTER_ENV`], or the first Vulkan one.
     pub adapter: wgpu::Adapter,
 }
 
@@ -78,9 +80,11 @@ impl GpuAdapter {
         Ok(Self { instance, adapter })
     }
 
+    /// What the adapter supports; [`crate::CompileOptions::for_adapter`] plans for it.
     pub fn features(&self) -> wgpu::Features {
         self.adapter.features()
     }
+    /// Name, driver and backend, for logs and reports.
     pub fn info(&self) -> wgpu::AdapterInfo {
         self.adapter.get_info()
     }
@@ -134,12 +138,17 @@ impl GpuAdapter {
 
 /// An open device and its queue.
 pub struct GpuContext {
+    /// The instance the device came from; surfaces are made from it.
     pub instance: wgpu::Instance,
+    /// The adapter the device was opened on.
     pub adapter: wgpu::Adapter,
+    /// The device resources and pipelines are made on.
     pub device: wgpu::Device,
+    /// The queue frames are submitted to.
     pub queue: wgpu::Queue,
     /// Features enabled on the device.
     pub features: wgpu::Features,
+    /// The adapter's name, driver and backend.
     pub info: wgpu::AdapterInfo,
 }
 

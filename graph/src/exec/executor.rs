@@ -34,10 +34,11 @@ pub struct Imports {
 }
 
 impl Imports {
-    /// No timings yet.
+    /// No imports yet.
     pub fn new() -> Self {
         Self::default()
     }
+    /// Supplies a caller-owned buffer for the imported resource `name`.
     pub fn buffer(mut self, name: &str, buffer: &wgpu::Buffer) -> Self {
         self.entries
             .insert(name.to_string(), Import::Buffer(buffer.clone()));
@@ -73,6 +74,7 @@ fn env_switch(name: &str) -> Option<bool> {
 /// One pass's GPU time in a frame measured per pass.
 #[derive(Clone, Debug, Serialize)]
 pub struct PassTiming {
+    /// The pass, by name.
     pub name: String,
     /// The plan's batch the pass ran in.
     pub batch: usize,
@@ -87,7 +89,9 @@ pub struct PassTiming {
 /// One batch of a frame (see [`crate::plan::Batch`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct BatchStats {
+    /// The batch's label, as [`crate::Batch::label`] writes it.
     pub label: String,
+    /// Its passes, in order.
     pub passes: Vec<String>,
     /// GPU time between the batch's timestamps, in `frame` timing mode only, once known.
     pub gpu_us: Option<f64>,
@@ -96,11 +100,14 @@ pub struct BatchStats {
 /// What one executed frame cost and did: CPU times, batches, GPU timings when measured.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameStats {
+    /// The frame's index, counting from 0 since the executor was made.
     pub frame: u64,
+    /// Per pass, in plan order, with CPU record time and GPU time when measured.
     pub passes: Vec<PassTiming>,
     /// The timing mode this frame ran with: which of `gpu_us` (per pass or per batch) fill
     /// in.
     pub timing: TimingMode,
+    /// Per batch, in plan order.
     pub batches: Vec<BatchStats>,
     /// wgpu compute passes the shared batches opened (one per compute batch, more when a
     /// batched pass took the encoder).
@@ -123,12 +130,15 @@ pub struct FrameStats {
     /// Frames submitted whose timestamps the GPU had not yet delivered, this one included:
     /// above 1 means the CPU records ahead while the GPU works.
     pub frames_in_flight: u32,
+    /// Transient bytes the plan needs with pool slots shared (what it allocates).
     pub bytes_with_reuse: u64,
+    /// Transient bytes it would need with a resource each, to show what sharing saves.
     pub bytes_without_reuse: u64,
     /// Bytes the executor's pool holds, in use or kept for reuse.
     pub pool_bytes_held: u64,
     /// GPU resources created this frame (zero once a steady graph has warmed up).
     pub allocations: u32,
+    /// Render and compute pipelines created this frame (zero once steady: they are cached).
     pub pipelines_created: u32,
     /// Bind groups created this frame (zero once steady: they are cached by what they
     /// bind).
@@ -148,6 +158,7 @@ struct HistoryEntry {
 /// Runs compiled graphs frame after frame on one device: allocates and pools the physical
 /// resources, caches programs and bind groups, times and reads back.
 pub struct Executor {
+    /// The device the executor runs on; callers make imported resources and surfaces on it.
     pub gpu: GpuContext,
     pool: PhysicalPool,
     programs: Programs,
@@ -216,9 +227,11 @@ impl Executor {
         }
     }
 
+    /// The device, to create imported resources on.
     pub fn device(&self) -> &wgpu::Device {
         &self.gpu.device
     }
+    /// The queue, to upload to imported resources before a frame.
     pub fn queue(&self) -> &wgpu::Queue {
         &self.gpu.queue
     }

@@ -32,17 +32,21 @@ pub(crate) enum ImmediateMode {
 
 /// Anything with bind-group layouts: compute and render programs alike.
 pub trait Program {
+    /// The bind-group layouts the program was built with; bind groups for it are made from
+    /// these.
     fn layouts(&self) -> &ProgramLayouts;
 }
 
 /// A compute pipeline and the bind-group layouts it was built with.
 pub struct ComputeProgram {
+    /// The pipeline, to set on a compute pass.
     pub pipeline: wgpu::ComputePipeline,
     pub(crate) layouts: ProgramLayouts,
 }
 
 /// A render pipeline (vertex or mesh geometry) and the bind-group layouts it was built with.
 pub struct RenderProgram {
+    /// The pipeline, to set on a render pass.
     pub pipeline: wgpu::RenderPipeline,
     pub(crate) layouts: ProgramLayouts,
 }

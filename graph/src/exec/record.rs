@@ -24,7 +24,10 @@ use std::sync::Arc;
 /// texture, and the colour it is cleared to when the compiler chose to clear it.
 #[derive(Clone, Copy, Debug)]
 pub struct ColorAttachment {
+    /// The slot or scratch texture drawn into.
     pub target: &'static str,
+    /// The clear colour, used only when the compiler chose to clear (nothing written it
+    /// before).
     pub clear: wgpu::Color,
 }
 
@@ -36,6 +39,7 @@ impl ColorAttachment {
             clear: wgpu::Color::TRANSPARENT,
         }
     }
+    /// Clears to `color` instead of transparent black.
     pub fn clear(mut self, color: wgpu::Color) -> Self {
         self.clear = color;
         self
@@ -45,7 +49,9 @@ impl ColorAttachment {
 /// The depth attachment of [`RecordContext::render_pass`].
 #[derive(Clone, Copy, Debug)]
 pub struct DepthAttachment {
+    /// The depth slot or scratch texture.
     pub target: &'static str,
+    /// The depth it is cleared to, used only when the compiler chose to clear.
     pub clear: f32,
 }
 
@@ -64,6 +70,7 @@ enum ImmediatesInner {
 }
 
 impl Immediates {
+    /// Sets the data on a compute pass before its dispatches.
     pub fn set_on_compute(&self, pass: &mut wgpu::ComputePass<'_>) {
         match &self.inner {
             ImmediatesInner::None => {}
@@ -73,6 +80,7 @@ impl Immediates {
             }
         }
     }
+    /// Sets the data on a render pass before its draws.
     pub fn set_on_render(&self, pass: &mut wgpu::RenderPass<'_>) {
         match &self.inner {
             ImmediatesInner::None => {}
@@ -113,9 +121,11 @@ pub struct RecordContext<'a> {
 }
 
 impl<'a> RecordContext<'a> {
+    /// The device, to create what the pass makes per frame (buffers for uploads).
     pub fn device(&self) -> &wgpu::Device {
         self.device
     }
+    /// The queue, to upload per-frame data before the frame is submitted.
     pub fn queue(&self) -> &wgpu::Queue {
         self.queue
     }
@@ -146,6 +156,7 @@ impl<'a> RecordContext<'a> {
             });
         }
     }
+    /// The pass instance's name in the graph, for labels and messages.
     pub fn pass_name(&self) -> &str {
         &self.node.name
     }

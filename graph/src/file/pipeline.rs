@@ -23,8 +23,10 @@ pub struct PipelineFile {
     #[serde(default)]
     pub params: BTreeMap<String, u64>,
     #[serde(default, rename = "resource")]
+    /// The `[[resource]]` entries, in file order.
     pub resources: Vec<ResourceEntry>,
     #[serde(default, rename = "pass")]
+    /// The `[[pass]]` entries, in file order: the order passes are added to the graph.
     pub passes: Vec<PassEntry>,
 }
 

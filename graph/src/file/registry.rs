@@ -26,6 +26,8 @@ impl Registry {
     pub fn new() -> Self {
         Self::default()
     }
+    /// Adds the factory that builds `implementation` of `stage`; a second registration of the
+    /// same pair replaces the first.
     pub fn register(
         &mut self,
         stage: &'static str,
@@ -92,6 +94,8 @@ impl Registry {
         Choice::select(implementation, candidates).map(Some)
     }
 
+    /// Builds `implementation` of `stage` from `params`; an unknown pair is an error listing
+    /// the stage's implementations.
     pub fn build(
         &self,
         stage: &str,
@@ -127,6 +131,7 @@ impl Registry {
         v.dedup();
         v
     }
+    /// Every registered (stage, implementation) pair, sorted.
     pub fn stages(&self) -> Vec<(String, String)> {
         self.factories.keys().cloned().collect()
     }
