@@ -1,10 +1,10 @@
 //! The code-first API: declare resources, add passes with slot bindings, compile.
 
-use crate::choice::{Choice, Selection};
-use crate::compile::{CompileOptions, CompiledGraph, compile};
+use crate::choice::Choice;
 use crate::contract::StageContract;
 use crate::error::{GraphError, Result};
 use crate::pass::Pass;
+use crate::plan::Selection;
 use crate::resource::*;
 
 /// How a slot is bound when a pass is added.
@@ -265,7 +265,7 @@ impl GraphBuilder {
     }
 
     /// Declares a size parameter: buffers made with [`BufferDesc::array_param`] hold
-    /// `value` elements, and [`CompiledGraph::set_param`] changes it without rebuilding.
+    /// `value` elements, and [`crate::CompiledGraph::set_param`] changes it without rebuilding.
     pub fn size_param(&mut self, name: &str, value: u64) {
         match self.params.iter_mut().find(|(n, _)| n == name) {
             Some(p) => p.1 = value,
@@ -479,10 +479,5 @@ impl GraphBuilder {
             pass: name.to_string(),
             written,
         })
-    }
-
-    /// Checks and plans the graph for `options`' adapter; see [`CompileOptions`].
-    pub fn compile(self, options: &CompileOptions) -> Result<CompiledGraph> {
-        compile(self, options)
     }
 }

@@ -19,7 +19,7 @@ pub enum SlotKind {
     /// A texture; when `format` is set, the bound texture must have it.
     Texture {
         /// The format the bound texture must have; `None` accepts any.
-        #[serde(serialize_with = "crate::plan::ser_opt_format")]
+        #[serde(serialize_with = "crate::names::ser_opt_format")]
         format: Option<wgpu::TextureFormat>,
     },
     /// A 64-bit visibility target: a buffer of `u64` or an `R64Uint` texture. A software

@@ -320,7 +320,7 @@ pub enum GraphError {
         /// The pipeline file, as given to the loader.
         file: String,
         /// The problem and where in the text it is.
-        problem: crate::file::SourceProblem,
+        problem: crate::problem::SourceProblem,
     },
 
     /// A pipeline file's resource declaration is wrong (load).
@@ -331,7 +331,7 @@ pub enum GraphError {
         /// The resource's name in the file.
         resource: String,
         /// What is wrong with the declaration.
-        problem: crate::file::ResourceProblem,
+        problem: crate::problem::ResourceProblem,
     },
 
     /// An imported resource was not given to the frame (execute).

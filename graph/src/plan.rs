@@ -1,9 +1,10 @@
 //! The compiled plan as plain data: what dumps print and what the executor follows.
 
 use crate::access::Access;
+use crate::names::{ser_buffer_usages, ser_features, ser_texture_usages};
 use crate::program::ProgramPlan;
-use crate::resource::{ImportedUsage, ResourceDesc, ResourceInfo, TextureRange};
-use serde::{Serialize, Serializer};
+use crate::resource::{ResourceDesc, ResourceInfo, TextureRange};
+use serde::Serialize;
 
 /// How a render target is loaded and stored by one pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -79,7 +80,7 @@ pub struct PassPlan {
     /// How the implementation was picked, when the pass had several (`auto`, or a named
     /// one with alternatives).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub choice: Option<crate::choice::ChoicePlan>,
+    pub choice: Option<ChoicePlan>,
     pub slots: Vec<SlotUse>,
     /// Scratch resources this pass declared.
     pub scratch: Vec<usize>,
@@ -166,7 +167,7 @@ impl PassPlan {
     /// `implementation`, marked `(auto)` when compile picked it by the adapter.
     pub fn implementation_label(&self) -> String {
         match &self.choice {
-            Some(c) if c.selection == crate::choice::Selection::Auto => {
+            Some(c) if c.selection == Selection::Auto => {
                 format!("{} (auto)", self.implementation)
             }
             _ => self.implementation.to_string(),
@@ -245,51 +246,6 @@ impl Plan {
     }
 }
 
-fn flag_names<B: bitflags::Flags>(flags: &B) -> Vec<String> {
-    flags.iter_names().map(|(n, _)| n.to_string()).collect()
-}
-
-pub(crate) fn ser_features<S: Serializer>(f: &wgpu::Features, s: S) -> Result<S::Ok, S::Error> {
-    // Features print as their names; `iter_names` is stable in declaration order.
-    let names: Vec<String> = f.iter_names().map(|(n, _)| n.to_string()).collect();
-    names.serialize(s)
-}
-pub(crate) fn ser_buffer_usages<S: Serializer>(
-    u: &wgpu::BufferUsages,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    flag_names(u).serialize(s)
-}
-pub(crate) fn ser_texture_usages<S: Serializer>(
-    u: &wgpu::TextureUsages,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    flag_names(u).serialize(s)
-}
-pub(crate) fn ser_buffer_usage_or_texture<S: Serializer>(
-    u: &ImportedUsage,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    match u {
-        ImportedUsage::Buffer(b) => flag_names(b).serialize(s),
-        ImportedUsage::Texture(t) => flag_names(t).serialize(s),
-    }
-}
-pub(crate) fn ser_format<S: Serializer>(f: &wgpu::TextureFormat, s: S) -> Result<S::Ok, S::Error> {
-    format_name(*f).serialize(s)
-}
-pub(crate) fn ser_opt_format<S: Serializer>(
-    f: &Option<wgpu::TextureFormat>,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    f.map(format_name).serialize(s)
-}
-
-/// A texture format as written in WGSL and pipeline files (`rgba8unorm`, `r32uint`, …).
-pub fn format_name(f: wgpu::TextureFormat) -> String {
-    format!("{f:?}").to_lowercase()
-}
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EdgeKind {
@@ -333,4 +289,38 @@ pub struct PoolSlot {
     pub members: Vec<usize>,
     #[serde(skip)]
     pub(crate) last_use: usize,
+}
+
+/// How a pass instance's implementation was decided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Selection {
+    /// The one implementation the graph was given.
+    Fixed,
+    /// `auto`: the best candidate the adapter runs.
+    Auto,
+    /// The pipeline named the first candidate; the rest are alternatives for messages.
+    Named,
+}
+
+/// One candidate as compile judged it.
+#[derive(Clone, Debug, Serialize)]
+pub struct CandidatePlan {
+    /// The candidate's implementation name.
+    pub implementation: &'static str,
+    /// Features its setup asked for that the adapter lacks (empty: it runs here).
+    pub missing: Vec<String>,
+}
+
+/// What compile decided for a pass with several candidates, for dumps and `info`.
+#[derive(Clone, Debug, Serialize)]
+pub struct ChoicePlan {
+    /// How the choice was made: auto, or named by the pipeline.
+    pub selection: Selection,
+    /// The implementation compile kept.
+    pub chosen: &'static str,
+    /// One sentence: why this one.
+    pub reason: String,
+    /// Every candidate, in preference order, with what it lacks here.
+    pub candidates: Vec<CandidatePlan>,
 }

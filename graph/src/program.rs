@@ -4,7 +4,7 @@
 //! Declaring them at compile time puts the exact variant that runs (shader, entry points,
 //! defs) into the plan and its dumps, instead of deciding it again while recording.
 
-use crate::exec::BindingLayout;
+use crate::layout::BindingLayout;
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
 use serde::Serialize;
 

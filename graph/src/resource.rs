@@ -4,7 +4,7 @@
 //! pass that holds an old handle after someone else wrote the resource is caught at compile
 //! time instead of racing on the GPU.
 
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 use std::borrow::Cow;
 use std::marker::PhantomData;
 
@@ -203,7 +203,7 @@ impl BufferDesc {
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct TextureDesc {
     /// The format; a slot that declares one checks it.
-    #[serde(serialize_with = "crate::plan::ser_format")]
+    #[serde(serialize_with = "crate::names::ser_format")]
     pub format: wgpu::TextureFormat,
     /// Width of mip 0, in texels.
     pub width: u32,
@@ -404,7 +404,7 @@ pub enum ResourceKind {
     /// created with, so a pass cannot ask for more than the caller allowed.
     Imported {
         /// What the caller allowed, as buffer or texture usage flags.
-        #[serde(serialize_with = "crate::plan::ser_buffer_usage_or_texture")]
+        #[serde(serialize_with = "ser_imported_usage")]
         usage: ImportedUsage,
     },
     /// Written this frame and read next frame through its `prev` twin.
@@ -431,6 +431,14 @@ pub enum ResourceKind {
 pub enum ImportedUsage {
     Buffer(wgpu::BufferUsages),
     Texture(wgpu::TextureUsages),
+}
+
+/// Serialises an import's usage as the flag names of its buffer or texture usage.
+fn ser_imported_usage<S: Serializer>(u: &ImportedUsage, s: S) -> Result<S::Ok, S::Error> {
+    match u {
+        ImportedUsage::Buffer(b) => crate::names::flag_names(b).serialize(s),
+        ImportedUsage::Texture(t) => crate::names::flag_names(t).serialize(s),
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]

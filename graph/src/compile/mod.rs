@@ -10,8 +10,9 @@ pub mod versions;
 
 use crate::access::{Access, texture_usage_for};
 use crate::builder::{GraphBuilder, PassNode, VisibilityDecl};
-use crate::choice::{Choice, ChoicePlan};
+use crate::choice::Choice;
 use crate::error::{GraphError, Result};
+use crate::names::feature_names;
 use crate::pass::SetupContext;
 use crate::pass::Visibility64;
 use crate::plan::*;
@@ -44,19 +45,12 @@ impl CompileOptions {
         self.limits = limits;
         self
     }
-    /// The features enabled on an open device and its limits.
-    pub fn for_gpu(gpu: &crate::GpuContext) -> Self {
-        Self {
-            adapter_features: gpu.features,
-            limits: gpu.device.limits(),
-        }
-    }
-    /// The features and limits of `adapter`.
-    pub fn for_adapter(adapter: &crate::GpuAdapter) -> Self {
-        Self {
-            adapter_features: adapter.features(),
-            limits: adapter.adapter.limits(),
-        }
+}
+
+impl GraphBuilder {
+    /// Checks and plans the graph for `options`' adapter; see [`CompileOptions`].
+    pub fn compile(self, options: &CompileOptions) -> Result<CompiledGraph> {
+        compile(self, options)
     }
 }
 
@@ -494,13 +488,6 @@ fn recording(
         }
     }
     Recording::Compute
-}
-
-pub(crate) fn feature_names(f: wgpu::Features) -> String {
-    f.iter_names()
-        .map(|(n, _)| n)
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// Every access any live pass makes, plus what the executor itself needs.

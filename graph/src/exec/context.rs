@@ -1,5 +1,6 @@
 //! The headless device: adapter selection, feature negotiation, small blocking helpers.
 
+use crate::compile::CompileOptions;
 use crate::error::{GraphError, Result};
 
 /// The environment variable that picks an adapter by a substring of its name.
@@ -282,5 +283,22 @@ impl GpuContext {
             self.queue.write_buffer(&buffer, 0, &padded);
         }
         buffer
+    }
+}
+
+impl CompileOptions {
+    /// The features enabled on an open device and its limits.
+    pub fn for_gpu(gpu: &GpuContext) -> Self {
+        Self {
+            adapter_features: gpu.features,
+            limits: gpu.device.limits(),
+        }
+    }
+    /// The features and limits of `adapter`.
+    pub fn for_adapter(adapter: &GpuAdapter) -> Self {
+        Self {
+            adapter_features: adapter.features(),
+            limits: adapter.adapter.limits(),
+        }
     }
 }

@@ -396,7 +396,7 @@ impl Executor {
         let missing = plan.enabled_features - self.gpu.features;
         if !missing.is_empty() {
             return Err(GraphError::DeviceLacksFeatures {
-                features: crate::compile::feature_names(missing),
+                features: crate::names::feature_names(missing),
                 instead: "open the device with the plan's `enabled_features` (GpuAdapter::open)"
                     .into(),
             });

@@ -3,8 +3,8 @@
 //! the exact resources they bind; and a per-frame arena for small uniform blocks.
 
 use crate::error::{GraphError, Result};
-use crate::exec::layout::{BindingLayout, SamplerKind};
 use crate::exec::reflect::{ShaderGlobal, globals};
+use crate::layout::{BindingLayout, SamplerKind};
 use crate::program::ProgramDesc;
 use meshlight_shaders::{PassShader, ShaderDef, ShaderLibrary};
 use std::collections::HashMap;
@@ -80,7 +80,7 @@ pub(crate) struct ModuleKey {
 pub(crate) struct ProgramKey {
     pub desc: ProgramDesc,
     /// The declared layouts with the bindings read from the shader filled in.
-    pub expanded: Vec<crate::exec::BindingLayout>,
+    pub expanded: Vec<crate::layout::BindingLayout>,
     pub layouts: Vec<Vec<wgpu::BindGroupLayoutEntry>>,
     pub target_formats: Vec<wgpu::TextureFormat>,
     pub depth_format: Option<wgpu::TextureFormat>,

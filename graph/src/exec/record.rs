@@ -5,7 +5,6 @@ use crate::compile::PassSetup;
 use crate::error::{GraphError, Result};
 use crate::exec::fill::Fill;
 use crate::exec::frame::FrameData;
-use crate::exec::layout::{BindingSource, buffer_binding_type, texture_binding_type};
 use crate::exec::physical::Physical;
 use crate::exec::programs::{
     AnyProgram, BindGroupKey, BoundResource, CHUNK, ComputeProgram, ImmediateMode, ModuleKey,
@@ -14,6 +13,7 @@ use crate::exec::programs::{
 use crate::exec::readback::Readbacks;
 use crate::exec::shared::{ComputePassGuard, SharedPass, Unplanned};
 use crate::exec::views::ViewCache;
+use crate::layout::{BindingSource, buffer_binding_type, texture_binding_type};
 use crate::plan::{AttachmentOps, LoadOp, Plan, StoreOp};
 use crate::program::{Geometry, ProgramDesc, ProgramKind};
 use crate::resource::{ResourceDesc, ResourceKind, TextureDesc, TextureRange};
@@ -433,7 +433,7 @@ impl<'a> RecordContext<'a> {
     /// The wgpu layout entries of a declared layout, from the bound resources.
     fn layout_entries(
         &self,
-        layout: &crate::exec::BindingLayout,
+        layout: &crate::layout::BindingLayout,
     ) -> Result<Vec<wgpu::BindGroupLayoutEntry>> {
         let contract = &self.node.contract;
         layout
@@ -471,7 +471,7 @@ impl<'a> RecordContext<'a> {
         &self,
         name: &str,
         access: crate::access::Access,
-        entry: &crate::exec::layout::LayoutEntry,
+        entry: &crate::layout::LayoutEntry,
     ) -> Result<wgpu::BindingType> {
         let access = if entry.read_only {
             crate::access::Access::StorageRead
@@ -636,7 +636,7 @@ impl<'a> RecordContext<'a> {
             desc.shader,
             module_key(desc, key.native_immediates),
         )?;
-        let mut groups: Vec<(crate::exec::BindingLayout, wgpu::BindGroupLayout)> = key
+        let mut groups: Vec<(crate::layout::BindingLayout, wgpu::BindGroupLayout)> = key
             .expanded
             .iter()
             .zip(&key.layouts)
@@ -654,7 +654,7 @@ impl<'a> RecordContext<'a> {
                 .map(|l| l.visibility)
                 .unwrap_or(wgpu::ShaderStages::all());
             let l =
-                crate::exec::BindingLayout::with_visibility("immediates", visibility).uniform(0);
+                crate::layout::BindingLayout::with_visibility("immediates", visibility).uniform(0);
             let entries = self.layout_entries(&l)?;
             let bgl = self.programs.layout(self.device, l.label, entries);
             groups.push((l, bgl));

@@ -1,6 +1,6 @@
 //! The registry: (stage, implementation) → a factory building the pass from parameters.
 
-use crate::choice::Choice;
+use crate::choice::{AUTO, Choice};
 use crate::error::{GraphError, Result};
 use crate::file::Params;
 use crate::pass::Pass;
@@ -8,9 +8,6 @@ use std::collections::BTreeMap;
 
 /// Builds a pass from its `params` table.
 pub type Factory = fn(&Params) -> Result<Box<dyn Pass>>;
-
-/// The implementation name that lets compile pick by the adapter's features.
-pub const AUTO: &str = "auto";
 
 /// The stages and implementations pipeline files can name, each with its factory, and per
 /// stage the order `auto` tries them in.
