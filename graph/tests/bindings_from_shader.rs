@@ -107,14 +107,9 @@ impl Pass for Reflected {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let program = ctx.compute("main")?;
         let params = [3u32, 7, 0, 0];
-        let group = ctx.bind_group(&program, 0, &[(5, bytemuck::cast_slice(&params))])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(N.div_ceil(64), 1, 1);
-        Ok(())
+        let uniforms = [(5, bytemuck::cast_slice(&params))];
+        support::dispatch_once(ctx, "main", &uniforms, [N.div_ceil(64), 1, 1])
     }
 }
 

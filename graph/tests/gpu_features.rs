@@ -7,7 +7,7 @@ mod support;
 
 use meshlight_graph::*;
 use rects::*;
-use support::gpu;
+use support::{dispatch_once, gpu};
 
 const RASTER: PassShader = PassShader {
     name: "test::features",
@@ -77,22 +77,6 @@ fn declare(
     layout: BindingLayout,
 ) -> Result<()> {
     ctx.program(name, ProgramDesc::compute(&COMPUTE, entry).layout(layout));
-    Ok(())
-}
-
-/// Records one dispatch of the compute program `name` with bind group 0.
-fn dispatch_once(
-    ctx: &mut RecordContext<'_>,
-    name: &str,
-    uniforms: &[(u32, &[u8])],
-    groups: [u32; 3],
-) -> Result<()> {
-    let p = ctx.compute(name)?;
-    let bg = ctx.bind_group(&p, 0, uniforms)?;
-    let mut cp = ctx.compute_pass();
-    cp.set_pipeline(&p.pipeline);
-    cp.set_bind_group(0, &bg, &[]);
-    cp.dispatch_workgroups(groups[0], groups[1], groups[2]);
     Ok(())
 }
 

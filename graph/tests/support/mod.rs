@@ -63,15 +63,26 @@ fn program(entry: &'static str, layout: BindingLayout) -> ProgramDesc {
     ProgramDesc::compute(&SHADER, entry).layout(layout)
 }
 
-fn dispatch(ctx: &mut RecordContext<'_>, name: &str, count: u32, k: u32) -> Result<()> {
-    let program = ctx.compute(name)?;
-    let params = [count, k, 0, 0];
-    let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&params))])?;
-    let mut pass = ctx.compute_pass();
-    pass.set_pipeline(&program.pipeline);
-    pass.set_bind_group(0, &bg, &[]);
-    pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
+/// Records one dispatch of the compute program `name` with bind group 0.
+pub fn dispatch_once(
+    ctx: &mut RecordContext<'_>,
+    name: &str,
+    uniforms: &[(u32, &[u8])],
+    groups: [u32; 3],
+) -> Result<()> {
+    let p = ctx.compute(name)?;
+    let bg = ctx.bind_group(&p, 0, uniforms)?;
+    let mut cp = ctx.compute_pass();
+    cp.set_pipeline(&p.pipeline);
+    cp.set_bind_group(0, &bg, &[]);
+    cp.dispatch_workgroups(groups[0], groups[1], groups[2]);
     Ok(())
+}
+
+fn dispatch(ctx: &mut RecordContext<'_>, name: &str, count: u32, k: u32) -> Result<()> {
+    let params = [count, k, 0, 0];
+    let uniforms = [(2, bytemuck::cast_slice(&params))];
+    dispatch_once(ctx, name, &uniforms, [count.div_ceil(64), 1, 1])
 }
 
 impl Pass for Fill {
