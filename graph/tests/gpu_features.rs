@@ -1,26 +1,14 @@
 //! GPU tests of the frame graph's render passes, sub-resources, multi-access slots, frame
 //! data, async readback and growth, each against a CPU reference (lavapipe in CI).
 
-#[path = "support/rects.rs"]
-mod rects;
 mod support;
 
 use meshlight_graph::*;
-use rects::*;
+use support::rects::*;
 use support::{dispatch_once, gpu};
 
-const RASTER: PassShader = PassShader {
-    name: "test::features",
-    source: include_str!("support/features.wgsl"),
-    file_path: "graph/tests/support/features.wgsl",
-    modules: &[],
-};
-const COMPUTE: PassShader = PassShader {
-    name: "test::compute",
-    source: include_str!("support/compute.wgsl"),
-    file_path: "graph/tests/support/compute.wgsl",
-    modules: &[],
-};
+const RASTER: PassShader = support::support_shader!("test::features", "features.wgsl");
+const COMPUTE: PassShader = support::support_shader!("test::compute", "compute.wgsl");
 
 fn params(a: u32, b: u32) -> [u32; 4] {
     [a, b, 0, 0]
@@ -69,6 +57,18 @@ where
     }
 }
 
+/// Adds `pass` and exports the buffer it writes through `slot`, for the test to read.
+fn add_exported(
+    g: &mut GraphBuilder,
+    name: &str,
+    pass: impl Pass + 'static,
+    bindings: Bindings,
+    slot: &str,
+) {
+    let out = g.add_pass(name, pass, bindings).unwrap();
+    g.export(out.buffer(slot).unwrap());
+}
+
 /// Declares the compute program `name` running `entry` of the test kernels.
 fn declare(
     ctx: &mut SetupContext,
@@ -94,21 +94,12 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
     let vertices = rect_vertices();
     let vertex_count = vertices.len() as u32;
     let mut g = GraphBuilder::new();
-    let rects = g.import_buffer(
-        "rects",
-        BufferDesc::array(Element::named("RectVertex", 32), vertex_count as u64),
-        wgpu::BufferUsages::STORAGE,
-    );
+    let rects = import_rect_vertices(&mut g, vertex_count);
     let vis = g.create_buffer("vis", BufferDesc::array(Element::U64, (W * H) as u64));
     let raster = pass(
         "raster",
         vec![
-            Slot::buffer(
-                "rects",
-                Access::StorageRead,
-                Element::named("RectVertex", 32),
-                "",
-            ),
+            rects_slot(),
             Slot::buffer("vis", Access::ClearedReadWrite, Element::U64, ""),
         ],
         |ctx| {
@@ -148,14 +139,13 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
             Ok(())
         },
     );
-    let out = g
-        .add_pass(
-            "raster",
-            raster,
-            Bindings::new().bind("rects", rects).bind("vis", vis),
-        )
-        .unwrap();
-    g.export(out.buffer("vis").unwrap());
+    add_exported(
+        &mut g,
+        "raster",
+        raster,
+        Bindings::new().bind("rects", rects).bind("vis", vis),
+        "vis",
+    );
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     // The dummy target is cleared and never stored; the visibility buffer reads nothing.
     let plan = &compiled.plan;
@@ -168,11 +158,7 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
     let dot = dump::to_dot(plan);
     assert!(dot.contains("vis: cleared-read-write"), "{dot}");
 
-    let buffer = gpu.buffer_with_data(
-        "rects",
-        bytemuck::cast_slice(&vertices),
-        wgpu::BufferUsages::STORAGE,
-    );
+    let buffer = rects_buffer(&gpu, &vertices);
     let mut exec = Executor::new(gpu);
     let imports = Imports::new().buffer("rects", &buffer);
     // Twice: the second frame must clear what the first left.
@@ -193,6 +179,11 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
 
 const MIP_W: u32 = 37;
 const MIP_H: u32 = 23;
+
+/// A slot on an `R32Float` texture (the mip chain's format).
+fn r32f(name: &'static str, access: Access) -> Slot {
+    Slot::texture(name, access, Some(wgpu::TextureFormat::R32Float), "")
+}
 
 fn cpu_pyramid(base: &[f32]) -> Vec<Vec<f32>> {
     let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, MIP_W, MIP_H).with_full_mips();
@@ -255,12 +246,7 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
         "base",
         vec![
             Slot::buffer("source", Access::StorageRead, Element::F32, ""),
-            Slot::texture(
-                "mip",
-                Access::StorageWrite,
-                Some(wgpu::TextureFormat::R32Float),
-                "",
-            ),
+            r32f("mip", Access::StorageWrite),
         ],
         |ctx| {
             let layout = BindingLayout::compute("base")
@@ -286,18 +272,8 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
         let down = pass(
             "downsample",
             vec![
-                Slot::texture(
-                    "src",
-                    Access::Sampled,
-                    Some(wgpu::TextureFormat::R32Float),
-                    "",
-                ),
-                Slot::texture(
-                    "dst",
-                    Access::StorageWrite,
-                    Some(wgpu::TextureFormat::R32Float),
-                    "",
-                ),
+                r32f("src", Access::Sampled),
+                r32f("dst", Access::StorageWrite),
             ],
             |ctx| {
                 let layout = BindingLayout::compute("downsample")
@@ -358,16 +334,15 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
             Ok(())
         },
     );
-    let out = g
-        .add_pass(
-            "gather",
-            gather,
-            Bindings::new()
-                .bind("pyramid", pyramid)
-                .bind("gathered", gathered),
-        )
-        .unwrap();
-    g.export(out.buffer("gathered").unwrap());
+    add_exported(
+        &mut g,
+        "gather",
+        gather,
+        Bindings::new()
+            .bind("pyramid", pyramid)
+            .bind("gathered", gathered),
+        "gathered",
+    );
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let plan = &compiled.plan;
     assert_eq!(plan.order.len(), levels as usize + 1);
@@ -483,14 +458,13 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
             Ok(())
         },
     );
-    let out = g
-        .add_pass(
-            "count",
-            count,
-            Bindings::new().bind("args", args).bind("seen", seen),
-        )
-        .unwrap();
-    g.export(out.buffer("seen").unwrap());
+    add_exported(
+        &mut g,
+        "count",
+        count,
+        Bindings::new().bind("args", args).bind("seen", seen),
+        "seen",
+    );
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let plan = &compiled.plan;
     let args_plan = &plan.resources[plan.resource_index("args").unwrap()];
@@ -671,17 +645,16 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
             )
         },
     );
-    let out = g
-        .add_pass(
-            "grow",
-            grow,
-            Bindings::new()
-                .bind("list", list)
-                .bind("prev", hist.prev)
-                .bind("hist", hist.current),
-        )
-        .unwrap();
-    g.export(out.buffer("list").unwrap());
+    add_exported(
+        &mut g,
+        "grow",
+        grow,
+        Bindings::new()
+            .bind("list", list)
+            .bind("prev", hist.prev)
+            .bind("hist", hist.current),
+        "list",
+    );
     let mut compiled = g
         .compile(&CompileOptions::new(wgpu::Features::empty()))
         .unwrap();
@@ -817,10 +790,13 @@ fn an_allocation_the_device_refuses_is_an_error_naming_the_resource() {
         |_| Ok(()),
         |_| Ok(()),
     );
-    let out = g
-        .add_pass("fill", writer, Bindings::new().bind("big", big))
-        .unwrap();
-    g.export(out.buffer("big").unwrap());
+    add_exported(
+        &mut g,
+        "fill",
+        writer,
+        Bindings::new().bind("big", big),
+        "big",
+    );
     // Options that claim more than the device has, so compile lets the buffer through.
     let generous = wgpu::Limits {
         max_buffer_size: u64::MAX,
@@ -996,14 +972,13 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
         },
         |ctx| dispatch_once(ctx, "flatten", &[], [1, 1, LAYERS]),
     );
-    let out = g
-        .add_pass(
-            "flatten",
-            flatten,
-            Bindings::new().bind("array", array).bind("flat", flat),
-        )
-        .unwrap();
-    g.export(out.buffer("flat").unwrap());
+    add_exported(
+        &mut g,
+        "flatten",
+        flatten,
+        Bindings::new().bind("array", array).bind("flat", flat),
+        "flat",
+    );
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let mut exec = Executor::new(gpu);
     exec.execute(&compiled, &Imports::new()).unwrap();
@@ -1054,11 +1029,7 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
     let vertices = rect_vertices();
     let count = vertices.len() as u32;
     let mut g = GraphBuilder::new();
-    let rects = g.import_buffer(
-        "rects",
-        BufferDesc::array(Element::named("RectVertex", 32), count as u64),
-        wgpu::BufferUsages::STORAGE,
-    );
+    let rects = import_rect_vertices(&mut g, count);
     let color = g.create_texture(
         "color",
         TextureDesc::d2(wgpu::TextureFormat::Rgba8Unorm, W, H),
@@ -1070,12 +1041,7 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
     let draw = pass(
         "draw",
         vec![
-            Slot::buffer(
-                "rects",
-                Access::StorageRead,
-                Element::named("RectVertex", 32),
-                "",
-            ),
+            rects_slot(),
             Slot::texture("color", Access::RenderTarget, None, ""),
             Slot::texture("depth", Access::DepthTarget, None, ""),
         ],
@@ -1152,11 +1118,7 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
     };
     assert_eq!(ops("color"), Some((LoadOp::Clear, StoreOp::Store)));
     assert_eq!(ops("depth"), Some((LoadOp::Clear, StoreOp::Discard)));
-    let buffer = gpu.buffer_with_data(
-        "rects",
-        bytemuck::cast_slice(&vertices),
-        wgpu::BufferUsages::STORAGE,
-    );
+    let buffer = rects_buffer(&gpu, &vertices);
     let mut exec = Executor::new(gpu);
     exec.execute(&compiled, &Imports::new().buffer("rects", &buffer))
         .unwrap();

@@ -2,20 +2,13 @@
 //! draws like the CPU where the adapter has mesh shaders; where it has not (lavapipe),
 //! the graph reports the missing feature and everything else still opens and runs.
 
-#[path = "support/rects.rs"]
-mod rects;
 mod support;
 
 use meshlight_graph::*;
 use meshlight_shaders::{Capabilities, ShaderLibrary};
-use rects::*;
+use support::rects::*;
 
-const MESH: PassShader = PassShader {
-    name: "test::mesh",
-    source: include_str!("support/mesh.wgsl"),
-    file_path: "graph/tests/support/mesh.wgsl",
-    modules: &[],
-};
+const MESH: PassShader = support::support_shader!("test::mesh", "mesh.wgsl");
 
 #[test]
 fn mesh_stage_wgsl_composes_and_validates_through_the_shader_library() {

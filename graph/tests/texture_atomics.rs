@@ -2,19 +2,13 @@
 //! it `STORAGE_ATOMIC`, asks for the texture-atomic features, and the raster matches the
 //! CPU where the adapter has them; where it has not (lavapipe) compile names the feature.
 
-#[path = "support/rects.rs"]
-mod rects;
 mod support;
 
 use meshlight_graph::*;
-use rects::*;
+use support::rects::*;
 
-const SHADER: PassShader = PassShader {
-    name: "test::texture_atomics",
-    source: include_str!("support/texture_atomics.wgsl"),
-    file_path: "graph/tests/support/texture_atomics.wgsl",
-    modules: &[],
-};
+const SHADER: PassShader =
+    support::support_shader!("test::texture_atomics", "texture_atomics.wgsl");
 
 /// Stage `raster` with a visibility target that may be a buffer or a texture; this
 /// implementation takes the texture.
@@ -27,12 +21,7 @@ impl Pass for TextureRaster {
         StageContract {
             stage: "raster",
             slots: vec![
-                Slot::buffer(
-                    "rects",
-                    Access::StorageRead,
-                    Element::named("RectVertex", 32),
-                    "",
-                ),
+                rects_slot(),
                 Slot::visibility64("vis", Access::ClearedReadWrite, ""),
             ],
         }
@@ -75,11 +64,7 @@ impl Pass for TextureRaster {
 
 fn graph(vertices: u32) -> GraphBuilder {
     let mut g = GraphBuilder::new();
-    let rects = g.import_buffer(
-        "rects",
-        BufferDesc::array(Element::named("RectVertex", 32), vertices as u64),
-        wgpu::BufferUsages::STORAGE,
-    );
+    let rects = import_rect_vertices(&mut g, vertices);
     let vis = g.create_texture("vis", TextureDesc::d2(wgpu::TextureFormat::R64Uint, W, H));
     let out = g.create_buffer("out", BufferDesc::array(Element::U64, (W * H) as u64));
     let drawn = g
@@ -138,11 +123,7 @@ fn an_r64uint_visibility_texture_rasterises_like_the_cpu_where_atomics_exist() {
             .contains(wgpu::TextureUsages::STORAGE_ATOMIC)
     );
     let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
-    let buffer = gpu.buffer_with_data(
-        "rects",
-        bytemuck::cast_slice(&vertices),
-        wgpu::BufferUsages::STORAGE,
-    );
+    let buffer = rects_buffer(&gpu, &vertices);
     let mut exec = Executor::new(gpu);
     let imports = Imports::new().buffer("rects", &buffer);
     exec.execute(&compiled, &imports).unwrap();

@@ -3,12 +3,28 @@
 
 use meshlight_graph::*;
 
-pub const SHADER: PassShader = PassShader {
-    name: "test::arith",
-    source: include_str!("arith.wgsl"),
-    file_path: "graph/tests/support/arith.wgsl",
-    modules: &[],
-};
+pub mod rects;
+
+/// A pass shader read from `graph/tests/support/<file>`.
+#[allow(unused_macros)] // not every test binary reads a shader of its own
+macro_rules! support_shader {
+    ($name:literal, $file:literal) => {
+        PassShader {
+            name: $name,
+            source: include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/tests/support/",
+                $file
+            )),
+            file_path: concat!("graph/tests/support/", $file),
+            modules: &[],
+        }
+    };
+}
+#[allow(unused_imports)] // not every test binary reads a shader of its own
+pub(crate) use support_shader;
+
+pub const SHADER: PassShader = support_shader!("test::arith", "arith.wgsl");
 
 fn u32s(name: &'static str, access: Access, doc: &'static str) -> Slot {
     Slot::buffer(name, access, Element::U32, doc)

@@ -2,6 +2,10 @@
 //! lie on pixel boundaries, so no pixel centre is ambiguous and every rasteriser agrees.
 #![allow(dead_code)]
 
+use meshlight_graph::{
+    Access, Buffer, BufferDesc, Element, GpuContext, GraphBuilder, Handle, Slot,
+};
+
 /// Pixel rectangles (x0, y0, x1, y1) with a depth word and an id.
 pub const RECTS: [([u32; 4], u32, u32); 4] = [
     ([0, 0, 40, 30], 100, 1),
@@ -53,4 +57,27 @@ pub fn rect_vertices() -> Vec<RectVertex> {
         }
     }
     v
+}
+
+/// How the raster passes' slots name a [`RectVertex`].
+pub const RECT_VERTEX: Element = Element::named("RectVertex", 32);
+
+/// Imports the storage buffer `rects` of `count` vertices.
+pub fn import_rect_vertices(g: &mut GraphBuilder, count: u32) -> Handle<Buffer> {
+    let desc = BufferDesc::array(RECT_VERTEX, count as u64);
+    g.import_buffer("rects", desc, wgpu::BufferUsages::STORAGE)
+}
+
+/// The slot a raster pass reads the vertices through.
+pub fn rects_slot() -> Slot {
+    Slot::buffer("rects", Access::StorageRead, RECT_VERTEX, "")
+}
+
+/// The vertices on the GPU, to supply as the import `rects`.
+pub fn rects_buffer(gpu: &GpuContext, vertices: &[RectVertex]) -> wgpu::Buffer {
+    gpu.buffer_with_data(
+        "rects",
+        bytemuck::cast_slice(vertices),
+        wgpu::BufferUsages::STORAGE,
+    )
 }
