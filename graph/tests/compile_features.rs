@@ -13,10 +13,7 @@ fn limits() -> wgpu::Limits {
 fn one_writer(g: &mut GraphBuilder, name: &str) {
     g.add_pass(
         "w",
-        Fake::new(
-            "t",
-            vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
-        ),
+        Fake::new("t", vec![out_u32()]),
         Bindings::new().bind_named("out", name),
     )
     .unwrap();
@@ -163,31 +160,21 @@ fn a_texture_over_the_dimension_limit_is_a_compile_error() {
 
 #[test]
 fn a_declared_dispatch_over_the_per_dimension_limit_is_a_compile_error() {
-    struct Wide;
-    impl Pass for Wide {
-        fn contract(&self) -> StageContract {
-            StageContract {
-                stage: "wide",
-                slots: vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
-            }
-        }
-        fn implementation(&self) -> &'static str {
-            "wide"
-        }
-        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+    let wide = pass(
+        "wide",
+        vec![out_u32()],
+        |ctx| {
             ctx.dispatch(
                 "main",
                 [ctx.limits().max_compute_workgroups_per_dimension + 1, 1, 1],
             );
             Ok(())
-        }
-        fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
-            Ok(())
-        }
-    }
+        },
+        |_| Ok(()),
+    );
     let mut g = GraphBuilder::new();
     g.import_buffer("out", u32s(4), IMPORT_USAGE);
-    g.add_pass("wide", Wide, Bindings::new()).unwrap();
+    g.add_pass("wide", wide, Bindings::new()).unwrap();
     match g.compile(&opts()) {
         Err(GraphError::LimitExceeded { what, limit, .. }) => {
             assert!(what.contains("`main`") && what.contains("`wide`"), "{what}");
@@ -492,32 +479,24 @@ const MESH: PassShader = PassShader {
 
 #[test]
 fn a_mesh_program_requires_the_mesh_shader_feature() {
-    struct Meshy;
-    impl Pass for Meshy {
-        fn contract(&self) -> StageContract {
-            StageContract {
-                stage: "hw_raster",
-                slots: vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
-            }
-        }
-        fn implementation(&self) -> &'static str {
-            "mesh_shader"
-        }
-        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-            ctx.program(
-                "draw",
-                ProgramDesc::mesh(&MESH, Some("ts"), "ms").fragment("fs"),
-            );
-            Ok(())
-        }
-        fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
-            Ok(())
-        }
-    }
+    let meshy = || {
+        pass(
+            "hw_raster",
+            vec![out_u32()],
+            |ctx| {
+                ctx.program(
+                    "draw",
+                    ProgramDesc::mesh(&MESH, Some("ts"), "ms").fragment("fs"),
+                );
+                Ok(())
+            },
+            |_| Ok(()),
+        )
+    };
     let build = || {
         let mut g = GraphBuilder::new();
         g.import_buffer("out", u32s(4), IMPORT_USAGE);
-        g.add_pass("hw", Meshy, Bindings::new()).unwrap();
+        g.add_pass("hw", meshy(), Bindings::new()).unwrap();
         g
     };
     match build().compile(&opts()) {
@@ -601,10 +580,7 @@ fn pipeline_files_declare_size_parameters_and_texture_ranges() {
     let mut registry = file::Registry::new();
     registry.register("down", "fake", |_| Ok(Box::new(mip_pass())));
     registry.register("fill", "fake", |_| {
-        Ok(Box::new(Fake::new(
-            "fill",
-            vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
-        )))
+        Ok(Box::new(Fake::new("fill", vec![out_u32()])))
     });
     let text = r#"
 [params]

@@ -4,6 +4,7 @@
 mod support;
 
 use meshlight_graph::*;
+use support::fake::pass;
 use support::rects::*;
 use support::{dispatch_once, gpu};
 
@@ -12,49 +13,6 @@ const COMPUTE: PassShader = support::support_shader!("test::compute", "compute.w
 
 fn params(a: u32, b: u32) -> [u32; 4] {
     [a, b, 0, 0]
-}
-
-/// A pass built from closures, so each test states its contract, setup and record inline.
-struct TestPass<S, R> {
-    stage: &'static str,
-    slots: Vec<Slot>,
-    setup: S,
-    record: R,
-}
-
-impl<S, R> Pass for TestPass<S, R>
-where
-    S: Fn(&mut SetupContext) -> Result<()> + Send + Sync,
-    R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
-{
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: self.stage,
-            slots: self.slots.clone(),
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "test"
-    }
-    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        (self.setup)(ctx)
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        (self.record)(ctx)
-    }
-}
-
-fn pass<S, R>(stage: &'static str, slots: Vec<Slot>, setup: S, record: R) -> TestPass<S, R>
-where
-    S: Fn(&mut SetupContext) -> Result<()> + Send + Sync,
-    R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
-{
-    TestPass {
-        stage,
-        slots,
-        setup,
-        record,
-    }
 }
 
 /// Adds `pass` and exports the buffer it writes through `slot`, for the test to read.

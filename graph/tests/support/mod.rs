@@ -3,6 +3,7 @@
 
 use meshlight_graph::*;
 
+pub mod fake;
 pub mod rects;
 
 /// A pass shader read from `graph/tests/support/<file>`.
