@@ -10,13 +10,20 @@ fn limits() -> wgpu::Limits {
     wgpu::Limits::default()
 }
 
+/// Adds a pass `w` writing the resource `name` through its one slot.
+fn writer(g: &mut GraphBuilder, name: &str, slot: Slot) {
+    let bindings = Bindings::new().bind_named(slot.name, name);
+    g.add_pass("w", Fake::new("t", vec![slot]), bindings)
+        .unwrap();
+}
+
 fn one_writer(g: &mut GraphBuilder, name: &str) {
-    g.add_pass(
-        "w",
-        Fake::new("t", vec![out_u32()]),
-        Bindings::new().bind_named("out", name),
-    )
-    .unwrap();
+    writer(g, name, out_u32());
+}
+
+/// Adds a pass writing the texture `name` through a slot of any format.
+fn one_texture_writer(g: &mut GraphBuilder, name: &str) {
+    writer(g, name, Slot::texture("t", Access::StorageWrite, None, ""));
 }
 
 #[test]
@@ -38,15 +45,11 @@ fn a_buffer_over_max_buffer_size_is_a_compile_error() {
     let mut g = GraphBuilder::new();
     let h = g.create_buffer("four_tib", BufferDesc::array(Element::BYTES, 4 << 40));
     g.export(h);
-    g.add_pass(
-        "w",
-        Fake::new(
-            "t",
-            vec![Slot::buffer("out", Access::CopyDst, Element::BYTES, "")],
-        ),
-        Bindings::new().bind_named("out", "four_tib"),
-    )
-    .unwrap();
+    writer(
+        &mut g,
+        "four_tib",
+        Slot::buffer("out", Access::CopyDst, Element::BYTES, ""),
+    );
     match g.compile(&opts()) {
         Err(GraphError::LimitExceeded {
             what, limit, max, ..
@@ -93,15 +96,11 @@ fn a_storage_binding_over_its_limit_names_the_pass_slot_and_limit() {
     let mut g = GraphBuilder::new();
     let h = g.create_buffer("big", BufferDesc::array(Element::BYTES, bytes));
     g.export(h);
-    g.add_pass(
-        "w",
-        Fake::new(
-            "t",
-            vec![Slot::buffer("out", Access::CopyDst, Element::BYTES, "")],
-        ),
-        Bindings::new().bind_named("out", "big"),
-    )
-    .unwrap();
+    writer(
+        &mut g,
+        "big",
+        Slot::buffer("out", Access::CopyDst, Element::BYTES, ""),
+    );
     g.compile(&opts()).unwrap();
 }
 
@@ -113,15 +112,7 @@ fn more_mip_levels_than_the_size_has_is_an_error_naming_the_range() {
         TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 8).with_mips(6),
     );
     g.export(t);
-    g.add_pass(
-        "w",
-        Fake::new(
-            "t",
-            vec![Slot::texture("t", Access::StorageWrite, None, "")],
-        ),
-        Bindings::new().bind_named("t", "deep"),
-    )
-    .unwrap();
+    one_texture_writer(&mut g, "deep");
     match g.compile(&opts()) {
         Err(e @ GraphError::BadDeclaration { .. }) => assert_eq!(
             e.to_string(),
@@ -140,15 +131,7 @@ fn a_texture_over_the_dimension_limit_is_a_compile_error() {
         TextureDesc::d2(wgpu::TextureFormat::R32Float, wide, 4),
     );
     g.export(t);
-    g.add_pass(
-        "w",
-        Fake::new(
-            "t",
-            vec![Slot::texture("t", Access::StorageWrite, None, "")],
-        ),
-        Bindings::new().bind_named("t", "wide"),
-    )
-    .unwrap();
+    one_texture_writer(&mut g, "wide");
     match g.compile(&opts()) {
         Err(GraphError::LimitExceeded { what, limit, .. }) => {
             assert!(what.contains("wide"));
@@ -351,23 +334,24 @@ fn texture_arrays_and_layer_ranges_plan_like_mips() {
 
 #[test]
 fn cleared_read_write_needs_no_writer_and_a_second_use_adds_its_usage() {
-    let mut g = GraphBuilder::new();
-    let args = g.create_buffer("args", u32s(4));
-    let out = g
-        .add_pass(
-            "append",
-            Fake::new(
-                "a",
-                vec![
-                    Slot::buffer("args", Access::ClearedReadWrite, Element::U32, "")
-                        .also(Access::Indirect),
-                ],
-            ),
-            Bindings::new().bind("args", args),
-        )
+    // One pass appending to a fresh `args` through `slot`.
+    let append = |slot: Slot| {
+        let mut g = GraphBuilder::new();
+        let args = g.create_buffer("args", u32s(4));
+        let out = g
+            .add_pass(
+                "append",
+                Fake::new("a", vec![slot]),
+                Bindings::new().bind("args", args),
+            )
+            .unwrap();
+        g.export(out.buffer("args").unwrap());
+        g
+    };
+    let cleared = Slot::buffer("args", Access::ClearedReadWrite, Element::U32, "");
+    let c = append(cleared.also(Access::Indirect))
+        .compile(&opts())
         .unwrap();
-    g.export(out.buffer("args").unwrap());
-    let c = g.compile(&opts()).unwrap();
     let r = &c.plan.resources[c.plan.resource_index("args").unwrap()];
     assert_eq!(
         r.buffer_usage,
@@ -377,26 +361,9 @@ fn cleared_read_write_needs_no_writer_and_a_second_use_adds_its_usage() {
             | wgpu::BufferUsages::COPY_SRC
     );
     // The same slot as plain read-write is a read of a version nothing wrote.
-    let mut g = GraphBuilder::new();
-    let args = g.create_buffer("args", u32s(4));
-    let out = g
-        .add_pass(
-            "append",
-            Fake::new(
-                "a",
-                vec![Slot::buffer(
-                    "args",
-                    Access::StorageReadWrite,
-                    Element::U32,
-                    "",
-                )],
-            ),
-            Bindings::new().bind("args", args),
-        )
-        .unwrap();
-    g.export(out.buffer("args").unwrap());
+    let read_write = Slot::buffer("args", Access::StorageReadWrite, Element::U32, "");
     assert!(matches!(
-        g.compile(&opts()),
+        append(read_write).compile(&opts()),
         Err(GraphError::ReadWithoutWriter { .. })
     ));
 }
