@@ -240,6 +240,10 @@ impl Plan {
     pub fn is_culled(&self, pass: usize) -> bool {
         self.culled.contains(&pass)
     }
+    /// The current value of the size parameter `name`.
+    pub(crate) fn param(&self, name: &str) -> Option<u64> {
+        self.params.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+    }
     /// The batch a pass runs in, `None` for culled passes.
     pub fn batch_of(&self, pass: usize) -> Option<usize> {
         self.batches.iter().position(|b| b.passes.contains(&pass))

@@ -116,12 +116,9 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
     let dot = dump::to_dot(plan);
     assert!(dot.contains("vis: cleared-read-write"), "{dot}");
 
-    let buffer = rects_buffer(&gpu, &vertices);
-    let mut exec = Executor::new(gpu);
-    let imports = Imports::new().buffer("rects", &buffer);
     // Twice: the second frame must clear what the first left.
-    exec.execute(&compiled, &imports).unwrap();
-    exec.execute(&compiled, &imports).unwrap();
+    let rects = bytemuck::cast_slice(&vertices);
+    let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 2);
     let got: Vec<u64> = read(&mut exec, "vis");
     let want = cpu_rects();
     let wrong = got.iter().zip(&want).filter(|(a, b)| a != b).count();
@@ -311,14 +308,8 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
     );
     assert!(dump::to_dot(plan).contains("dst: storage-write [mip 2]"));
 
-    let source_buffer = gpu.buffer_with_data(
-        "source",
-        bytemuck::cast_slice(&base),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let mut exec = Executor::new(gpu);
-    exec.execute(&compiled, &Imports::new().buffer("source", &source_buffer))
-        .unwrap();
+    let source = bytemuck::cast_slice(&base);
+    let mut exec = support::run_frames(gpu, &compiled, ("source", source), 1);
     let got: Vec<f32> = read(&mut exec, "gathered");
     let want: Vec<f32> = cpu_pyramid(&base).concat();
     assert_eq!(got.len(), want.len());
@@ -1051,20 +1042,8 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
         )
         .unwrap();
     let out = g.create_buffer("out", BufferDesc::array(Element::U32, (W * H) as u64));
-    let copied = g
-        .add_pass(
-            "copy",
-            synthetic::CopyTextureToBuffer {
-                format: wgpu::TextureFormat::Rgba8Unorm,
-                width: W,
-                height: H,
-            },
-            Bindings::new()
-                .bind("texture", drawn.texture("color").unwrap())
-                .bind("buffer", out),
-        )
-        .unwrap();
-    g.export(copied.buffer("buffer").unwrap());
+    let color = drawn.texture("color").unwrap();
+    copy_out(&mut g, "copy", wgpu::TextureFormat::Rgba8Unorm, color, out);
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let ops = |slot: &str| {
         compiled.plan.passes[0]
@@ -1076,10 +1055,8 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
     };
     assert_eq!(ops("color"), Some((LoadOp::Clear, StoreOp::Store)));
     assert_eq!(ops("depth"), Some((LoadOp::Clear, StoreOp::Discard)));
-    let buffer = rects_buffer(&gpu, &vertices);
-    let mut exec = Executor::new(gpu);
-    exec.execute(&compiled, &Imports::new().buffer("rects", &buffer))
-        .unwrap();
+    let rects = bytemuck::cast_slice(&vertices);
+    let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 1);
     let got: Vec<u32> = read(&mut exec, "out");
     let ids: Vec<u32> = got.iter().map(|px| px & 0xff).collect();
     let want: Vec<u32> = cpu_rects()

@@ -162,14 +162,8 @@ fn mesh_pass_against_the_cpu(adapter: &GpuAdapter, has_mesh: bool, task: bool) {
         .iter()
         .map(|([x0, y0, x1, y1], depth, id)| [*x0, *y0, *x1, *y1, *depth, *id, 0, 0])
         .collect();
-    let rects = gpu.buffer_with_data(
-        "rects",
-        bytemuck::cast_slice(&data),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let mut exec = Executor::new(gpu);
-    exec.execute(&compiled, &Imports::new().buffer("rects", &rects))
-        .unwrap();
+    let rects = bytemuck::cast_slice(&data);
+    let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 1);
     let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("vis").unwrap());
     assert_eq!(got, cpu_rects(), "task stage: {task}");
 }

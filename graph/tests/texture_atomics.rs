@@ -74,20 +74,8 @@ fn graph(vertices: u32) -> GraphBuilder {
             Bindings::new().bind("rects", rects).bind("vis", vis),
         )
         .unwrap();
-    let copied = g
-        .add_pass(
-            "copy_out",
-            synthetic::CopyTextureToBuffer {
-                format: wgpu::TextureFormat::R64Uint,
-                width: W,
-                height: H,
-            },
-            Bindings::new()
-                .bind("texture", drawn.texture("vis").unwrap())
-                .bind("buffer", out),
-        )
-        .unwrap();
-    g.export(copied.buffer("buffer").unwrap());
+    let vis = drawn.texture("vis").unwrap();
+    copy_out(&mut g, "copy_out", wgpu::TextureFormat::R64Uint, vis, out);
     g
 }
 
@@ -123,11 +111,8 @@ fn an_r64uint_visibility_texture_rasterises_like_the_cpu_where_atomics_exist() {
             .contains(wgpu::TextureUsages::STORAGE_ATOMIC)
     );
     let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
-    let buffer = rects_buffer(&gpu, &vertices);
-    let mut exec = Executor::new(gpu);
-    let imports = Imports::new().buffer("rects", &buffer);
-    exec.execute(&compiled, &imports).unwrap();
-    exec.execute(&compiled, &imports).unwrap();
+    let rects = bytemuck::cast_slice(&vertices);
+    let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 2);
     let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("out").unwrap());
     assert_eq!(got, cpu_rects());
 }

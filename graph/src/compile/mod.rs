@@ -78,11 +78,7 @@ pub struct CompiledGraph {
 impl CompiledGraph {
     /// The current value of a size parameter.
     pub fn param(&self, name: &str) -> Option<u64> {
-        self.plan
-            .params
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| *v)
+        self.plan.param(name)
     }
 
     /// Changes a size parameter: buffers sized by it get the new size, the pool is planned

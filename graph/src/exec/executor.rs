@@ -905,18 +905,20 @@ fn check_import(
                 || texture.mip_level_count() != t.mip_levels
                 || texture.depth_or_array_layers() != t.layers
             {
+                let shape =
+                    |format: wgpu::TextureFormat, w: u32, h: u32, mips: u32, layers: u32| {
+                        format!("{format:?} {w}x{h} with {mips} mips and {layers} layers")
+                    };
                 return mismatch(format!(
-                    "declared {:?} {}x{} with {} mips and {} layers, the texture is {:?} {}x{} with {} mips and {} layers",
-                    t.format,
-                    t.width,
-                    t.height,
-                    t.mip_levels,
-                    t.layers,
-                    texture.format(),
-                    texture.width(),
-                    texture.height(),
-                    texture.mip_level_count(),
-                    texture.depth_or_array_layers()
+                    "declared {}, the texture is {}",
+                    shape(t.format, t.width, t.height, t.mip_levels, t.layers),
+                    shape(
+                        texture.format(),
+                        texture.width(),
+                        texture.height(),
+                        texture.mip_level_count(),
+                        texture.depth_or_array_layers()
+                    )
                 ));
             }
             if !texture.usage().contains(u) {

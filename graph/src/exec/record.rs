@@ -194,11 +194,7 @@ impl<'a> RecordContext<'a> {
     }
     /// The current value of a size parameter.
     pub fn param(&self, name: &str) -> Option<u64> {
-        self.plan
-            .params
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| *v)
+        self.plan.param(name)
     }
 
     fn err(&self, message: String) -> GraphError {

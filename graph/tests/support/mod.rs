@@ -179,6 +179,24 @@ pub fn storage_buffer(gpu: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buf
     )
 }
 
+/// Uploads `bytes` as the storage buffer imported as `import.0`, runs `frames` frames of
+/// `compiled` and returns the executor, to read the results from.
+pub fn run_frames(
+    gpu: GpuContext,
+    compiled: &CompiledGraph,
+    import: (&str, &[u8]),
+    frames: u32,
+) -> Executor {
+    let (name, bytes) = import;
+    let buffer = gpu.buffer_with_data(name, bytes, wgpu::BufferUsages::STORAGE);
+    let imports = Imports::new().buffer(name, &buffer);
+    let mut exec = Executor::new(gpu);
+    for _ in 0..frames {
+        exec.execute(compiled, &imports).unwrap();
+    }
+    exec
+}
+
 pub fn read_u32s(gpu: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Vec<u32> {
     let bytes = gpu
         .read_buffer(buffer, 0, count as u64 * 4)

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use meshlight_graph::{
-    Access, Buffer, BufferDesc, Element, GpuContext, GraphBuilder, Handle, Slot,
+    Access, Bindings, Buffer, BufferDesc, Element, GraphBuilder, Handle, Slot, Texture, synthetic,
 };
 
 /// Pixel rectangles (x0, y0, x1, y1) with a depth word and an id.
@@ -73,11 +73,21 @@ pub fn rects_slot() -> Slot {
     Slot::buffer("rects", Access::StorageRead, RECT_VERTEX, "")
 }
 
-/// The vertices on the GPU, to supply as the import `rects`.
-pub fn rects_buffer(gpu: &GpuContext, vertices: &[RectVertex]) -> wgpu::Buffer {
-    gpu.buffer_with_data(
-        "rects",
-        bytemuck::cast_slice(vertices),
-        wgpu::BufferUsages::STORAGE,
-    )
+/// Adds pass `name` copying the `W × H` texture `texture` of `format` into `out` and
+/// exports `out`, so the test can read what was drawn.
+pub fn copy_out(
+    g: &mut GraphBuilder,
+    name: &str,
+    format: wgpu::TextureFormat,
+    texture: Handle<Texture>,
+    out: Handle<Buffer>,
+) {
+    let copy = synthetic::CopyTextureToBuffer {
+        format,
+        width: W,
+        height: H,
+    };
+    let bindings = Bindings::new().bind("texture", texture).bind("buffer", out);
+    let copied = g.add_pass(name, copy, bindings).unwrap();
+    g.export(copied.buffer("buffer").unwrap());
 }
