@@ -886,13 +886,7 @@ fn check_import(
                     buffer.size()
                 ));
             }
-            if !buffer.usage().contains(u) {
-                return mismatch(format!(
-                    "declared usage {u:?}, the buffer has {:?}",
-                    buffer.usage()
-                ));
-            }
-            Ok(())
+            usage_covers(u, buffer.usage(), "buffer").or_else(mismatch)
         }
         (
             ResourceDesc::Texture(t),
@@ -921,14 +915,23 @@ fn check_import(
                     )
                 ));
             }
-            if !texture.usage().contains(u) {
-                return mismatch(format!(
-                    "declared usage {u:?}, the texture has {:?}",
-                    texture.usage()
-                ));
-            }
-            Ok(())
+            usage_covers(u, texture.usage(), "texture").or_else(mismatch)
         }
         _ => mismatch("a buffer was declared and a texture given, or the reverse".into()),
+    }
+}
+
+/// An error naming both usages when an imported object lacks part of its declared usage.
+fn usage_covers<U: bitflags::Flags + Copy + std::fmt::Debug>(
+    declared: U,
+    has: U,
+    what: &str,
+) -> std::result::Result<(), String> {
+    if has.contains(declared) {
+        Ok(())
+    } else {
+        Err(format!(
+            "declared usage {declared:?}, the {what} has {has:?}"
+        ))
     }
 }
