@@ -64,11 +64,6 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
             ctx.require_features(
                 wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
             );
-            ctx.scratch_texture(
-                "dummy",
-                TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
-                &[Access::RenderTarget],
-            );
             let layout = BindingLayout::render("raster")
                 .slot(0, "rects")
                 .visible_in(wgpu::ShaderStages::VERTEX)
@@ -76,25 +71,14 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
                 .visible_in(wgpu::ShaderStages::FRAGMENT)
                 .uniform(2)
                 .visible_in(wgpu::ShaderStages::FRAGMENT);
-            ctx.program(
-                "rects",
-                ProgramDesc::render(&RASTER, "rect_vs")
-                    .fragment("rect_fs")
-                    .target(ColorTarget::masked("dummy"))
-                    .layout(layout),
-            );
+            let program = ProgramDesc::render(&RASTER, "rect_vs").fragment("rect_fs");
+            declare_masked_raster(ctx, program.layout(layout));
             Ok(())
         },
         move |ctx| {
-            ctx.clear("vis")?;
-            let program = ctx.render("rects")?;
             let raster_params = [W, 0, 0, 0, 0, 0, 0, 0];
-            let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&raster_params))])?;
-            let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
-            rp.set_pipeline(&program.pipeline);
-            rp.set_bind_group(0, &bg, &[]);
-            rp.draw(0..vertex_count, 0..1);
-            Ok(())
+            let uniforms = [(2, bytemuck::cast_slice(&raster_params))];
+            record_masked_raster(ctx, &uniforms, |rp| rp.draw(0..vertex_count, 0..1))
         },
     );
     add_exported(

@@ -31,34 +31,17 @@ impl Pass for TextureRaster {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.require_features(wgpu::Features::SHADER_INT64);
-        ctx.scratch_texture(
-            "dummy",
-            TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
-            &[Access::RenderTarget],
-        );
         let layout = BindingLayout::render("raster")
             .slot(0, "rects")
             .visible_in(wgpu::ShaderStages::VERTEX)
             .slot(1, "vis")
             .visible_in(wgpu::ShaderStages::FRAGMENT);
-        ctx.program(
-            "rects",
-            ProgramDesc::render(&SHADER, "rect_vs")
-                .fragment("rect_fs")
-                .target(ColorTarget::masked("dummy"))
-                .layout(layout),
-        );
+        let program = ProgramDesc::render(&SHADER, "rect_vs").fragment("rect_fs");
+        declare_masked_raster(ctx, program.layout(layout));
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        ctx.clear("vis")?;
-        let program = ctx.render("rects")?;
-        let bg = ctx.bind_group(&program, 0, &[])?;
-        let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
-        rp.set_pipeline(&program.pipeline);
-        rp.set_bind_group(0, &bg, &[]);
-        rp.draw(0..self.vertices, 0..1);
-        Ok(())
+        record_masked_raster(ctx, &[], |rp| rp.draw(0..self.vertices, 0..1))
     }
 }
 

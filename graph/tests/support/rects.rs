@@ -3,7 +3,9 @@
 #![allow(dead_code)]
 
 use meshlight_graph::{
-    Access, Bindings, Buffer, BufferDesc, Element, GraphBuilder, Handle, Slot, Texture, synthetic,
+    Access, Bindings, Buffer, BufferDesc, ColorAttachment, ColorTarget, Element, GraphBuilder,
+    Handle, ProgramDesc, RecordContext, Result, SetupContext, Slot, Texture, TextureDesc,
+    synthetic,
 };
 
 /// Pixel rectangles (x0, y0, x1, y1) with a depth word and an id.
@@ -90,4 +92,32 @@ pub fn copy_out(
     let bindings = Bindings::new().bind("texture", texture).bind("buffer", out);
     let copied = g.add_pass(name, copy, bindings).unwrap();
     g.export(copied.buffer("buffer").unwrap());
+}
+
+/// Declares a raster into `vis` through a masked colour target: the `W × H` dummy target a
+/// render pipeline must have, and `program`, drawing into it, as the program `rects`.
+pub fn declare_masked_raster(ctx: &mut SetupContext, program: ProgramDesc) {
+    ctx.scratch_texture(
+        "dummy",
+        TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
+        &[Access::RenderTarget],
+    );
+    ctx.program("rects", program.target(ColorTarget::masked("dummy")));
+}
+
+/// Clears `vis` and records the program `rects` into the dummy target, bind group 0 built
+/// with `uniforms`; `draw` issues the draw.
+pub fn record_masked_raster(
+    ctx: &mut RecordContext<'_>,
+    uniforms: &[(u32, &[u8])],
+    draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
+) -> Result<()> {
+    ctx.clear("vis")?;
+    let program = ctx.render("rects")?;
+    let bg = ctx.bind_group(&program, 0, uniforms)?;
+    let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
+    rp.set_pipeline(&program.pipeline);
+    rp.set_bind_group(0, &bg, &[]);
+    draw(&mut rp);
+    Ok(())
 }
