@@ -229,6 +229,20 @@ fn size_parameters_resize_buffers_and_a_bad_value_leaves_the_plan_as_it_was() {
     }
 }
 
+/// Adds a `mip_pass` reading range `src` of `t` and writing range `dst` of it.
+fn add_mip_pass(
+    g: &mut GraphBuilder,
+    name: &str,
+    t: Handle<Texture>,
+    src: TextureRange,
+    dst: TextureRange,
+) -> Result<PassOutputs> {
+    let bindings = Bindings::new()
+        .bind_range("src", t, src)
+        .bind_range("dst", t, dst);
+    g.add_pass(name, mip_pass(), bindings)
+}
+
 fn mip_pass() -> Fake {
     Fake::new(
         "down",
@@ -244,23 +258,22 @@ fn disjoint_mips_of_one_texture_may_be_read_and_written_by_one_pass() {
     let mut g = GraphBuilder::new();
     let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_full_mips();
     let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
-    let out = g
-        .add_pass(
-            "mip1",
-            mip_pass(),
-            Bindings::new()
-                .bind_range("src", t, TextureRange::mip(0))
-                .bind_range("dst", t, TextureRange::mip(1)),
-        )
-        .unwrap();
+    let out = add_mip_pass(
+        &mut g,
+        "mip1",
+        t,
+        TextureRange::mip(0),
+        TextureRange::mip(1),
+    )
+    .unwrap();
     let t1 = out.texture("dst").unwrap();
     assert_eq!(t1.version(), 1);
-    g.add_pass(
+    add_mip_pass(
+        &mut g,
         "mip2",
-        mip_pass(),
-        Bindings::new()
-            .bind_range("src", t1, TextureRange::mip(1))
-            .bind_range("dst", t1, TextureRange::mip(2)),
+        t1,
+        TextureRange::mip(1),
+        TextureRange::mip(2),
     )
     .unwrap();
     let c = g.compile(&opts()).unwrap();
@@ -277,14 +290,7 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
         let mut g = GraphBuilder::new();
         let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_full_mips();
         let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
-        g.add_pass(
-            "bad",
-            mip_pass(),
-            Bindings::new()
-                .bind_range("src", t, src)
-                .bind_range("dst", t, dst),
-        )
-        .unwrap();
+        add_mip_pass(&mut g, "bad", t, src, dst).unwrap();
         match g.compile(&opts()) {
             Err(GraphError::UsageNotAllowed { pass, reason, .. }) => {
                 assert_eq!(pass, "bad");
@@ -297,14 +303,7 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
     let mut g = GraphBuilder::new();
     let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_mips(2);
     let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
-    g.add_pass(
-        "bad",
-        mip_pass(),
-        Bindings::new()
-            .bind_range("src", t, TextureRange::mip(0))
-            .bind_range("dst", t, TextureRange::mip(2)),
-    )
-    .unwrap();
+    add_mip_pass(&mut g, "bad", t, TextureRange::mip(0), TextureRange::mip(2)).unwrap();
     assert!(matches!(
         g.compile(&opts()),
         Err(GraphError::DescriptorMismatch { .. })
