@@ -371,33 +371,28 @@ fn vis_pass(access: Access) -> Fake {
     Fake::new("sw_raster", vec![Slot::visibility64("vis", access, "")])
 }
 
+/// Adds a raster that clears and writes `vis`, and exports what it writes.
+fn add_exported_raster(g: &mut GraphBuilder, vis: impl Into<AnyHandle>) {
+    let bindings = Bindings::new().bind("vis", vis);
+    let o = g
+        .add_pass("raster", vis_pass(Access::ClearedReadWrite), bindings)
+        .unwrap();
+    g.export(o.written()[0].1);
+}
+
 #[test]
 fn a_64_bit_visibility_slot_takes_a_u64_buffer_or_an_r64uint_texture() {
     // Buffer: fine anywhere.
     let mut g = GraphBuilder::new();
     let v = g.create_buffer("vis", BufferDesc::array(Element::U64, 64));
-    let o = g
-        .add_pass(
-            "raster",
-            vis_pass(Access::ClearedReadWrite),
-            Bindings::new().bind("vis", v),
-        )
-        .unwrap();
-    g.export(o.buffer("vis").unwrap());
+    add_exported_raster(&mut g, v);
     g.compile(&opts()).unwrap();
 
     // Texture: STORAGE_ATOMIC usage and the texture-atomic features, required.
     let build = || {
         let mut g = GraphBuilder::new();
         let v = g.create_texture("vis", TextureDesc::d2(wgpu::TextureFormat::R64Uint, 8, 8));
-        let o = g
-            .add_pass(
-                "raster",
-                vis_pass(Access::ClearedReadWrite),
-                Bindings::new().bind("vis", v),
-            )
-            .unwrap();
-        g.export(o.texture("vis").unwrap());
+        add_exported_raster(&mut g, v);
         g
     };
     let atomics = wgpu::Features::TEXTURE_ATOMIC | wgpu::Features::TEXTURE_INT64_ATOMIC;
