@@ -49,6 +49,7 @@ impl Access {
                 | Access::ClearedReadWrite
         )
     }
+    /// True when the pass makes a new version of the resource.
     pub fn writes(self) -> bool {
         matches!(
             self,
@@ -64,6 +65,7 @@ impl Access {
     pub fn read_write_storage(self) -> bool {
         matches!(self, Access::StorageReadWrite | Access::ClearedReadWrite)
     }
+    /// The access's name in dumps and messages, e.g. `storage-read`.
     pub fn name(self) -> &'static str {
         match self {
             Access::StorageRead => "storage-read",

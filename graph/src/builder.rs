@@ -1,10 +1,10 @@
 //! The code-first API: declare resources, add passes with slot bindings, compile.
 
-use crate::choice::{Choice, Selection};
-use crate::compile::{CompileOptions, CompiledGraph, compile};
+use crate::choice::Choice;
 use crate::contract::StageContract;
 use crate::error::{GraphError, Result};
 use crate::pass::Pass;
+use crate::plan::Selection;
 use crate::resource::*;
 
 /// How a slot is bound when a pass is added.
@@ -26,6 +26,7 @@ impl Bindings {
     pub fn new() -> Self {
         Self::default()
     }
+    /// Binds `slot` to this version of a resource; a stale version is caught at compile.
     pub fn bind(mut self, slot: &str, handle: impl Into<AnyHandle>) -> Self {
         self.entries
             .push((slot.to_string(), Target::Handle(handle.into()), None));
@@ -61,7 +62,7 @@ impl Bindings {
 }
 
 /// A pass as the graph keeps it: its instance name, implementation and bound slots.
-pub struct PassNode {
+pub(crate) struct PassNode {
     pub name: String,
     pub pass: Box<dyn Pass>,
     /// The stage contract with unbound optional slots removed.
@@ -87,6 +88,7 @@ pub struct History<K> {
 /// New versions of the resources a pass wrote.
 #[derive(Clone, Debug)]
 pub struct PassOutputs {
+    /// The pass that wrote them, named in errors.
     pub pass: String,
     written: Vec<(&'static str, AnyHandle)>,
 }
@@ -116,6 +118,7 @@ impl PassOutputs {
     pub fn texture(&self, slot: &str) -> Result<Handle<Texture>> {
         self.find(slot).map(|h| Handle::new(h.id, h.version))
     }
+    /// Each written slot with the new version it made, in contract slot order.
     pub fn written(&self) -> &[(&'static str, AnyHandle)] {
         &self.written
     }
@@ -167,12 +170,15 @@ impl GraphBuilder {
         ResourceId(self.resources.len() as u32 - 1)
     }
 
+    /// A transient buffer: the graph allocates it from its pool and may share the memory with
+    /// resources whose lifetimes do not overlap.
     pub fn create_buffer(&mut self, name: &str, desc: BufferDesc) -> Handle<Buffer> {
         Handle::new(
             self.add_resource(name, ResourceDesc::Buffer(desc), ResourceKind::Transient),
             0,
         )
     }
+    /// A transient texture; see [`GraphBuilder::create_buffer`].
     pub fn create_texture(&mut self, name: &str, desc: TextureDesc) -> Handle<Texture> {
         Handle::new(
             self.add_resource(name, ResourceDesc::Texture(desc), ResourceKind::Transient),
@@ -202,6 +208,7 @@ impl GraphBuilder {
         };
         Handle::new(self.add_resource(name, ResourceDesc::Buffer(desc), kind), 0)
     }
+    /// A caller-owned texture; `usage` is what the caller created it with.
     pub fn import_texture(
         &mut self,
         name: &str,
@@ -225,6 +232,7 @@ impl GraphBuilder {
             current: Handle::new(current, 0),
         }
     }
+    /// A texture carried to the next frame; see [`GraphBuilder::history_buffer`].
     pub fn history_texture(&mut self, name: &str, desc: TextureDesc) -> History<Texture> {
         let (prev, current) = self.history(name, ResourceDesc::Texture(desc));
         History {
@@ -257,7 +265,7 @@ impl GraphBuilder {
     }
 
     /// Declares a size parameter: buffers made with [`BufferDesc::array_param`] hold
-    /// `value` elements, and [`CompiledGraph::set_param`] changes it without rebuilding.
+    /// `value` elements, and [`crate::CompiledGraph::set_param`] changes it without rebuilding.
     pub fn size_param(&mut self, name: &str, value: u64) {
         match self.params.iter_mut().find(|(n, _)| n == name) {
             Some(p) => p.1 = value,
@@ -319,6 +327,7 @@ impl GraphBuilder {
             version,
         })
     }
+    /// Every resource declared so far, in declaration order (a handle's id indexes it).
     pub fn resources(&self) -> &[ResourceInfo] {
         &self.resources
     }
@@ -378,6 +387,7 @@ impl GraphBuilder {
         Ok(outputs)
     }
 
+    /// [`GraphBuilder::add_pass`] for a pass already boxed, e.g. one a registry made.
     pub fn add_boxed_pass(
         &mut self,
         name: &str,
@@ -469,9 +479,5 @@ impl GraphBuilder {
             pass: name.to_string(),
             written,
         })
-    }
-
-    pub fn compile(self, options: &CompileOptions) -> Result<CompiledGraph> {
-        compile(self, options)
     }
 }

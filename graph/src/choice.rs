@@ -10,22 +10,13 @@
 //! pass really requires. The plan keeps a [`ChoicePlan`] so dumps show what was chosen
 //! and why.
 
-use crate::compile::feature_names;
 use crate::error::{GraphError, Result};
+use crate::names::feature_names;
 use crate::pass::{Pass, SetupContext};
-use serde::Serialize;
+use crate::plan::{CandidatePlan, ChoicePlan, Selection};
 
-/// How a pass instance's implementation was decided.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Selection {
-    /// The one implementation the graph was given.
-    Fixed,
-    /// `auto`: the best candidate the adapter runs.
-    Auto,
-    /// The pipeline named the first candidate; the rest are alternatives for messages.
-    Named,
-}
+/// The implementation name that lets compile pick by the adapter's features.
+pub const AUTO: &str = "auto";
 
 /// Several implementations of one stage for one pass instance, in preference order.
 pub struct Choice {
@@ -55,7 +46,7 @@ impl Choice {
     /// named `wanted` with the others as alternatives; an unknown name is an error
     /// listing the known ones.
     pub fn select(wanted: &str, mut candidates: Vec<Box<dyn Pass>>) -> Result<Self> {
-        if wanted == crate::file::AUTO {
+        if wanted == AUTO {
             return Ok(Self::auto(candidates));
         }
         match candidates.iter().position(|c| c.implementation() == wanted) {
@@ -72,12 +63,13 @@ impl Choice {
                 known: candidates
                     .iter()
                     .map(|c| c.implementation())
-                    .chain([crate::file::AUTO])
+                    .chain([AUTO])
                     .collect::<Vec<_>>()
                     .join(", "),
             }),
         }
     }
+    /// How compile is to pick among the candidates.
     pub fn selection(&self) -> Selection {
         self.selection
     }
@@ -85,24 +77,6 @@ impl Choice {
     pub fn implementations(&self) -> Vec<&'static str> {
         self.candidates.iter().map(|c| c.implementation()).collect()
     }
-}
-
-/// One candidate as compile judged it.
-#[derive(Clone, Debug, Serialize)]
-pub struct CandidatePlan {
-    pub implementation: &'static str,
-    /// Features its setup asked for that the adapter lacks (empty: it runs here).
-    pub missing: Vec<String>,
-}
-
-/// What compile decided for a pass with several candidates, for dumps and `info`.
-#[derive(Clone, Debug, Serialize)]
-pub struct ChoicePlan {
-    pub selection: Selection,
-    pub chosen: &'static str,
-    /// One sentence: why this one.
-    pub reason: String,
-    pub candidates: Vec<CandidatePlan>,
 }
 
 /// The features `pass` asks for in setup that `adapter` lacks. Setup runs as it will for

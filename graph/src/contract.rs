@@ -12,10 +12,14 @@ use serde::Serialize;
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum SlotKind {
     /// A buffer; when `element` is set, the bound buffer must hold that element type.
-    Buffer { element: Option<Element> },
+    Buffer {
+        /// The element type the bound buffer must hold; `None` accepts any.
+        element: Option<Element>,
+    },
     /// A texture; when `format` is set, the bound texture must have it.
     Texture {
-        #[serde(serialize_with = "crate::plan::ser_opt_format")]
+        /// The format the bound texture must have; `None` accepts any.
+        #[serde(serialize_with = "crate::names::ser_opt_format")]
         format: Option<wgpu::TextureFormat>,
     },
     /// A 64-bit visibility target: a buffer of `u64` or an `R64Uint` texture. A software
@@ -27,12 +31,14 @@ pub enum SlotKind {
 /// One named input or output of a stage, with its access and what it holds.
 #[derive(Clone, Debug, Serialize)]
 pub struct Slot {
+    /// The slot's name: bindings and shader globals refer to it.
     pub name: &'static str,
     /// The access bind groups use.
     pub access: Access,
     /// Further uses in the same pass: the indirect arguments of a dispatch or draw, a copy.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub also: Vec<Access>,
+    /// What the bound resource must be.
     pub kind: SlotKind,
     /// One line for dumps and error messages.
     pub doc: &'static str,
@@ -97,6 +103,7 @@ impl Slot {
     pub fn reads(&self) -> bool {
         crate::access::reads_earlier(self.accesses())
     }
+    /// True when any use writes, so binding it makes a new version of the resource.
     pub fn writes(&self) -> bool {
         self.accesses().any(Access::writes)
     }
@@ -118,14 +125,18 @@ impl Slot {
 /// The slots of one stage kind, shared by all its implementations.
 #[derive(Clone, Debug, Serialize)]
 pub struct StageContract {
+    /// The stage kind, e.g. `sw_raster`; pipeline files and the registry name it.
     pub stage: &'static str,
+    /// The slots, in the order bindings and bind groups list them.
     pub slots: Vec<Slot>,
 }
 
 impl StageContract {
+    /// The slot named `name`, if the stage has one.
     pub fn slot(&self, name: &str) -> Option<&Slot> {
         self.slots.iter().find(|s| s.name == name)
     }
+    /// The slot names, in order, for messages.
     pub fn slot_names(&self) -> Vec<&'static str> {
         self.slots.iter().map(|s| s.name).collect()
     }

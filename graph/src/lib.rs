@@ -4,6 +4,8 @@
 //! to a [`Plan`] with no device, inspect or dump it, and run it frame after frame with an
 //! [`Executor`].
 
+#![warn(missing_docs)]
+
 mod access;
 mod builder;
 mod choice;
@@ -13,29 +15,32 @@ pub mod dump;
 mod error;
 mod exec;
 pub mod file;
+mod layout;
+mod names;
 mod pass;
 mod plan;
+mod problem;
 mod program;
 mod readback;
 mod resource;
 pub mod synthetic;
 
 pub use access::Access;
-pub use builder::{Bindings, GraphBuilder, History, PassNode, PassOutputs};
-pub use choice::{CandidatePlan, Choice, ChoicePlan, Selection};
+pub use builder::{Bindings, GraphBuilder, History, PassOutputs};
+pub use choice::Choice;
 pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
-    ADAPTER_ENV, BATCHING_ENV, BatchStats, BindingLayout, BindingSource, CHECKED_ENV,
-    ColorAttachment, ComputePassGuard, ComputeProgram, DepthAttachment, Executor, FrameData,
-    FrameStats, GpuAdapter, GpuContext, GpuTimings, INDIRECT_VALIDATION_ENV, Immediates, Imports,
-    LayoutEntry, PassTiming, Program, Readback, RecordContext, RenderProgram, SamplerKind,
-    TIMING_ENV, TimingMode,
+    ADAPTER_ENV, BATCHING_ENV, BatchStats, CHECKED_ENV, ColorAttachment, ComputePassGuard,
+    ComputeProgram, DepthAttachment, Executor, FrameData, FrameStats, GpuAdapter, GpuContext,
+    GpuTimings, INDIRECT_VALIDATION_ENV, Immediates, Imports, PassTiming, Program, Readback,
+    RecordContext, RenderProgram, TIMING_ENV, TimingMode,
 };
+pub use layout::{BindingLayout, BindingSource, LayoutEntry, SamplerKind};
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
 pub use pass::{Pass, SetupContext, Visibility64};
-pub use plan::{Batch, LoadOp, Plan, Recording, StoreOp};
+pub use plan::{Batch, CandidatePlan, ChoicePlan, LoadOp, Plan, Recording, Selection, StoreOp};
 pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};
 pub use readback::STAGE as READBACK_STAGE;
 pub use resource::{

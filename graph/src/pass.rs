@@ -126,9 +126,13 @@ impl<'a> SetupContext<'a> {
     pub fn has(&self, feature: wgpu::Features) -> bool {
         self.adapter_features.contains(feature)
     }
+    /// Features the pass cannot run without; compile fails with [`crate::GraphError::MissingFeature`]
+    /// where the adapter lacks one.
     pub fn require_features(&mut self, features: wgpu::Features) {
         self.required |= features;
     }
+    /// Features the pass uses where the adapter has them; check [`SetupContext::has`] to pick
+    /// the variant.
     pub fn optional_features(&mut self, features: wgpu::Features) {
         self.optional |= features;
     }

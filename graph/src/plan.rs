@@ -1,9 +1,10 @@
 //! The compiled plan as plain data: what dumps print and what the executor follows.
 
 use crate::access::Access;
+use crate::names::{ser_buffer_usages, ser_features, ser_texture_usages};
 use crate::program::ProgramPlan;
-use crate::resource::{ImportedUsage, ResourceDesc, ResourceInfo, TextureRange};
-use serde::{Serialize, Serializer};
+use crate::resource::{ResourceDesc, ResourceInfo, TextureRange};
+use serde::Serialize;
 
 /// How a render target is loaded and stored by one pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -19,6 +20,7 @@ pub enum LoadOp {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StoreOp {
+    /// A later pass reads the result: keep it.
     Store,
     /// Nothing reads the result: let the GPU drop it.
     Discard,
@@ -78,7 +80,7 @@ pub struct PassPlan {
     /// How the implementation was picked, when the pass had several (`auto`, or a named
     /// one with alternatives).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub choice: Option<crate::choice::ChoicePlan>,
+    pub choice: Option<ChoicePlan>,
     pub slots: Vec<SlotUse>,
     /// Scratch resources this pass declared.
     pub scratch: Vec<usize>,
@@ -110,12 +112,14 @@ pub struct PassPlan {
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Recording {
+    /// Recorded into its batch's shared compute pass.
     Compute,
     /// Why the pass needs the encoder.
     Encoder(String),
 }
 
 impl Recording {
+    /// True when the pass is batched with other compute passes.
     pub fn is_compute(&self) -> bool {
         matches!(self, Recording::Compute)
     }
@@ -163,7 +167,7 @@ impl PassPlan {
     /// `implementation`, marked `(auto)` when compile picked it by the adapter.
     pub fn implementation_label(&self) -> String {
         match &self.choice {
-            Some(c) if c.selection == crate::choice::Selection::Auto => {
+            Some(c) if c.selection == Selection::Auto => {
                 format!("{} (auto)", self.implementation)
             }
             _ => self.implementation.to_string(),
@@ -193,17 +197,27 @@ pub struct ResourcePlan {
 /// edges, batches and parameters. Dumps read it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Plan {
+    /// Every pass, culled ones included, in the order they were added.
     pub passes: Vec<PassPlan>,
     /// Indices into `passes`, in execution order (culled passes left out).
     pub order: Vec<usize>,
     /// `order` grouped into what the executor records together (see [`Batch`]).
     pub batches: Vec<Batch>,
+    /// Indices into `passes` of the passes culled: nothing visible outside the frame
+    /// depends on them.
     pub culled: Vec<usize>,
+    /// Every resource, in declaration order, with its lifetime, pool slot and usages.
     pub resources: Vec<ResourcePlan>,
+    /// Dependencies between passes, labelled with the resource version and access.
     pub edges: Vec<Edge>,
+    /// The pool's slots: transients whose lifetimes do not overlap share one.
     pub pool_slots: Vec<PoolSlot>,
+    /// Transient bytes with a resource each.
     pub bytes_without_reuse: u64,
+    /// Transient bytes with pool slots shared: what the executor allocates.
     pub bytes_with_reuse: u64,
+    /// The features the device must have: every pass's required ones and the optional
+    /// ones the adapter has; open the device with these.
     #[serde(serialize_with = "ser_features")]
     pub enabled_features: wgpu::Features,
     /// Size parameters and their current values.
@@ -214,64 +228,26 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// The index in `passes` of the pass named `name`.
     pub fn pass_index(&self, name: &str) -> Option<usize> {
         self.passes.iter().position(|p| p.name == name)
     }
+    /// The index in `resources` of the resource named `name`.
     pub fn resource_index(&self, name: &str) -> Option<usize> {
         self.resources.iter().position(|r| r.info.name == name)
     }
+    /// True when compile culled the pass at index `pass`.
     pub fn is_culled(&self, pass: usize) -> bool {
         self.culled.contains(&pass)
+    }
+    /// The current value of the size parameter `name`.
+    pub(crate) fn param(&self, name: &str) -> Option<u64> {
+        self.params.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
     }
     /// The batch a pass runs in, `None` for culled passes.
     pub fn batch_of(&self, pass: usize) -> Option<usize> {
         self.batches.iter().position(|b| b.passes.contains(&pass))
     }
-}
-
-fn flag_names<B: bitflags::Flags>(flags: &B) -> Vec<String> {
-    flags.iter_names().map(|(n, _)| n.to_string()).collect()
-}
-
-pub(crate) fn ser_features<S: Serializer>(f: &wgpu::Features, s: S) -> Result<S::Ok, S::Error> {
-    // Features print as their names; `iter_names` is stable in declaration order.
-    let names: Vec<String> = f.iter_names().map(|(n, _)| n.to_string()).collect();
-    names.serialize(s)
-}
-pub(crate) fn ser_buffer_usages<S: Serializer>(
-    u: &wgpu::BufferUsages,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    flag_names(u).serialize(s)
-}
-pub(crate) fn ser_texture_usages<S: Serializer>(
-    u: &wgpu::TextureUsages,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    flag_names(u).serialize(s)
-}
-pub(crate) fn ser_buffer_usage_or_texture<S: Serializer>(
-    u: &ImportedUsage,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    match u {
-        ImportedUsage::Buffer(b) => flag_names(b).serialize(s),
-        ImportedUsage::Texture(t) => flag_names(t).serialize(s),
-    }
-}
-pub(crate) fn ser_format<S: Serializer>(f: &wgpu::TextureFormat, s: S) -> Result<S::Ok, S::Error> {
-    format_name(*f).serialize(s)
-}
-pub(crate) fn ser_opt_format<S: Serializer>(
-    f: &Option<wgpu::TextureFormat>,
-    s: S,
-) -> Result<S::Ok, S::Error> {
-    f.map(format_name).serialize(s)
-}
-
-/// A texture format as written in WGSL and pipeline files (`rgba8unorm`, `r32uint`, …).
-pub fn format_name(f: wgpu::TextureFormat) -> String {
-    format!("{f:?}").to_lowercase()
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
@@ -317,4 +293,38 @@ pub struct PoolSlot {
     pub members: Vec<usize>,
     #[serde(skip)]
     pub(crate) last_use: usize,
+}
+
+/// How a pass instance's implementation was decided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Selection {
+    /// The one implementation the graph was given.
+    Fixed,
+    /// `auto`: the best candidate the adapter runs.
+    Auto,
+    /// The pipeline named the first candidate; the rest are alternatives for messages.
+    Named,
+}
+
+/// One candidate as compile judged it.
+#[derive(Clone, Debug, Serialize)]
+pub struct CandidatePlan {
+    /// The candidate's implementation name.
+    pub implementation: &'static str,
+    /// Features its setup asked for that the adapter lacks (empty: it runs here).
+    pub missing: Vec<String>,
+}
+
+/// What compile decided for a pass with several candidates, for dumps and `info`.
+#[derive(Clone, Debug, Serialize)]
+pub struct ChoicePlan {
+    /// How the choice was made: auto, or named by the pipeline.
+    pub selection: Selection,
+    /// The implementation compile kept.
+    pub chosen: &'static str,
+    /// One sentence: why this one.
+    pub reason: String,
+    /// Every candidate, in preference order, with what it lacks here.
+    pub candidates: Vec<CandidatePlan>,
 }

@@ -4,7 +4,7 @@
 //! Declaring them at compile time puts the exact variant that runs (shader, entry points,
 //! defs) into the plan and its dumps, instead of deciding it again while recording.
 
-use crate::exec::BindingLayout;
+use crate::layout::BindingLayout;
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
 use serde::Serialize;
 
@@ -16,10 +16,12 @@ pub type TargetName = &'static str;
 /// One colour target of a render program.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct ColorTarget {
+    /// The slot or scratch texture drawn into.
     pub target: TargetName,
     /// `ColorWrites::empty()` for a target that exists only because a render pipeline must
     /// have one.
     pub write_mask: wgpu::ColorWrites,
+    /// Blending with what the target holds; `None` replaces it.
     pub blend: Option<wgpu::BlendState>,
 }
 
@@ -45,16 +47,22 @@ impl ColorTarget {
 /// The depth target of a render program.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct DepthTarget {
+    /// The depth slot or scratch texture.
     pub target: TargetName,
+    /// The depth test; a fragment that fails it is dropped.
     pub compare: wgpu::CompareFunction,
+    /// Whether passing fragments write their depth; false tests against a prepass's depth.
     pub write: bool,
 }
 
 /// How primitives are assembled and rasterised.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Primitive {
+    /// How vertices form primitives; triangle list by default.
     pub topology: wgpu::PrimitiveTopology,
+    /// The face culled; `None` (the default) draws both.
     pub cull_mode: Option<wgpu::Face>,
+    /// The winding that faces the viewer; counter-clockwise by default.
     pub front_face: wgpu::FrontFace,
     /// Keep depth unclipped (`DEPTH_CLIP_CONTROL`); ignored where the device lacks it, and
     /// the plan records that the pass asked for it as optional.
@@ -76,10 +84,15 @@ impl Default for Primitive {
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Geometry {
     /// A vertex shader; vertices come from storage buffers (no vertex buffers).
-    Vertex { entry: &'static str },
+    Vertex {
+        /// The vertex entry point.
+        entry: &'static str,
+    },
     /// A mesh shader, optionally fed by a task shader (`EXPERIMENTAL_MESH_SHADER`).
     Mesh {
+        /// The task entry point, when a task shader launches the mesh workgroups.
         task: Option<&'static str>,
+        /// The mesh entry point.
         mesh: &'static str,
     },
 }
@@ -102,9 +115,14 @@ pub enum ProgramKind {
 /// A program as a pass declares it.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct ProgramDesc {
+    /// The pass's shader source the program is composed from.
     pub shader: &'static PassShader,
+    /// Compute or render, with entry points and render state.
     pub kind: ProgramKind,
+    /// Shader defs the program is composed with; programs that differ only here are
+    /// separate pipelines.
     pub defs: Vec<(&'static str, ShaderDef)>,
+    /// Bind groups 0, 1, … in order.
     pub layouts: Vec<BindingLayout>,
     /// Bytes of immediate data (push constants). Where the device has `IMMEDIATES` the
     /// shader is composed with `IMMEDIATES` defined and reads `var<immediate>`; elsewhere
@@ -151,6 +169,7 @@ impl ProgramDesc {
             immediate_size: 0,
         }
     }
+    /// Adds shader defs; a def set again replaces the earlier value.
     pub fn defs(mut self, defs: &impl ShaderDefs) -> Self {
         for (name, value) in defs.shader_defs() {
             self.defs.retain(|(n, _)| *n != name);
@@ -158,10 +177,12 @@ impl ProgramDesc {
         }
         self
     }
+    /// Adds the next bind group's layout.
     pub fn layout(mut self, layout: BindingLayout) -> Self {
         self.layouts.push(layout);
         self
     }
+    /// Sets the bytes of immediate data (see [`ProgramDesc::immediate_size`]).
     pub fn immediates(mut self, bytes: u32) -> Self {
         self.immediate_size = bytes;
         self
@@ -172,24 +193,28 @@ impl ProgramDesc {
             ProgramKind::Compute { .. } => None,
         }
     }
+    /// Sets the fragment entry point of a render program; ignored on a compute one.
     pub fn fragment(mut self, entry: &'static str) -> Self {
         if let Some(ProgramKind::Render { fragment, .. }) = self.render_mut() {
             *fragment = Some(entry);
         }
         self
     }
+    /// Adds a colour target to a render program; ignored on a compute one.
     pub fn target(mut self, target: ColorTarget) -> Self {
         if let Some(ProgramKind::Render { targets, .. }) = self.render_mut() {
             targets.push(target);
         }
         self
     }
+    /// Sets the depth target of a render program; ignored on a compute one.
     pub fn depth(mut self, depth: DepthTarget) -> Self {
         if let Some(ProgramKind::Render { depth: d, .. }) = self.render_mut() {
             *d = Some(depth);
         }
         self
     }
+    /// Sets primitive assembly of a render program; ignored on a compute one.
     pub fn primitive(mut self, primitive: Primitive) -> Self {
         if let Some(ProgramKind::Render { primitive: p, .. }) = self.render_mut() {
             *p = primitive;
@@ -213,6 +238,7 @@ impl ProgramDesc {
             }
         }
     }
+    /// `compute`, `render` or `mesh`, for dumps.
     pub fn kind_name(&self) -> &'static str {
         match &self.kind {
             ProgramKind::Compute { .. } => "compute",

@@ -4,7 +4,7 @@
 //! pass that holds an old handle after someone else wrote the resource is caught at compile
 //! time instead of racing on the GPU.
 
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 use std::borrow::Cow;
 use std::marker::PhantomData;
 
@@ -48,12 +48,15 @@ impl<K> Handle<K> {
             _kind: PhantomData,
         }
     }
+    /// Which resource this handle names, whatever its version.
     pub fn id(&self) -> ResourceId {
         self.id
     }
+    /// The version named: 0 is the resource as declared, each write adds one.
     pub fn version(&self) -> u32 {
         self.version
     }
+    /// Drops the kind, to bind buffers and textures in one list.
     pub fn erase(self) -> AnyHandle {
         AnyHandle {
             id: self.id,
@@ -65,7 +68,9 @@ impl<K> Handle<K> {
 /// A handle with its kind erased, used where slots of both kinds are bound together.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct AnyHandle {
+    /// Which resource.
     pub id: ResourceId,
+    /// The version named: 0 is the resource as declared, each write adds one.
     pub version: u32,
 }
 
@@ -78,7 +83,9 @@ impl<K> From<Handle<K>> for AnyHandle {
 /// What a buffer holds, so a slot can check it is bound to the right kind of data.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct Element {
+    /// The type's name, compared when a slot checks what it is bound to and shown in dumps.
     pub name: Cow<'static, str>,
+    /// Bytes per element.
     pub size: u32,
 }
 
@@ -148,6 +155,7 @@ impl Element {
 pub struct BufferDesc {
     /// Bytes. `u64::MAX` marks a size that overflowed, which compile reports.
     pub size: u64,
+    /// What the buffer holds; a slot bound to it checks this.
     pub element: Element,
     /// The element count comes from this size parameter, set at compile time and changeable
     /// at run time ([`crate::CompiledGraph::set_param`]); `size` is then resolved from it.
@@ -182,6 +190,7 @@ impl BufferDesc {
             count_param: None,
         }
     }
+    /// How many whole elements fit in `size`.
     pub fn elements(&self) -> u64 {
         self.size / self.element.size.max(1) as u64
     }
@@ -193,10 +202,14 @@ impl BufferDesc {
 /// A texture's format, size, mips and layers.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct TextureDesc {
-    #[serde(serialize_with = "crate::plan::ser_format")]
+    /// The format; a slot that declares one checks it.
+    #[serde(serialize_with = "crate::names::ser_format")]
     pub format: wgpu::TextureFormat,
+    /// Width of mip 0, in texels.
     pub width: u32,
+    /// Height of mip 0, in texels.
     pub height: u32,
+    /// Mip levels, at least 1.
     pub mip_levels: u32,
     /// Array layers; 1 is a plain 2-D texture, more make a 2-D array.
     pub layers: u32,
@@ -218,14 +231,17 @@ impl TextureDesc {
         self.mip_levels = 32 - self.width.max(self.height).max(1).leading_zeros();
         self
     }
+    /// Sets the mip count (see [`TextureDesc::with_full_mips`] for a whole chain).
     pub fn with_mips(mut self, mip_levels: u32) -> Self {
         self.mip_levels = mip_levels;
         self
     }
+    /// Sets the layer count; more than 1 makes a 2-D array.
     pub fn with_layers(mut self, layers: u32) -> Self {
         self.layers = layers;
         self
     }
+    /// Bytes of every mip and layer, for pool accounting.
     pub fn bytes(&self) -> u64 {
         let block = self.format.block_copy_size(None).unwrap_or(4) as u64;
         let per_layer: u64 = (0..self.mip_levels.min(32))
@@ -253,9 +269,13 @@ impl TextureDesc {
 /// their ranges are disjoint, so a pass can read mip N − 1 while writing mip N.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
 pub struct TextureRange {
+    /// First mip.
     pub base_mip: u32,
+    /// Mips from `base_mip`; `u32::MAX` means "to the last" until [`TextureRange::resolve`].
     pub mip_count: u32,
+    /// First array layer.
     pub base_layer: u32,
+    /// Layers from `base_layer`; `u32::MAX` means "to the last" until [`TextureRange::resolve`].
     pub layer_count: u32,
 }
 
@@ -305,6 +325,7 @@ impl TextureRange {
             ..self
         }
     }
+    /// True when the two ranges share a mip of a layer, so two slots cannot bind them apart.
     pub fn overlaps(&self, other: &TextureRange) -> bool {
         let span =
             |a: u32, n: u32, b: u32, m: u32| a < b.saturating_add(m) && b < a.saturating_add(n);
@@ -350,17 +371,21 @@ impl TextureRange {
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum ResourceDesc {
+    /// A buffer.
     Buffer(BufferDesc),
+    /// A texture.
     Texture(TextureDesc),
 }
 
 impl ResourceDesc {
+    /// Bytes it takes on the GPU (every mip and layer of a texture).
     pub fn bytes(&self) -> u64 {
         match self {
             ResourceDesc::Buffer(b) => b.size,
             ResourceDesc::Texture(t) => t.bytes(),
         }
     }
+    /// `"buffer"` or `"texture"`, for messages and dumps.
     pub fn kind_name(&self) -> &'static str {
         match self {
             ResourceDesc::Buffer(_) => "buffer",
@@ -378,17 +403,27 @@ pub enum ResourceKind {
     /// Owned by the caller, who passes it in when the frame runs; `usage` is what it was
     /// created with, so a pass cannot ask for more than the caller allowed.
     Imported {
-        #[serde(serialize_with = "crate::plan::ser_buffer_usage_or_texture")]
+        /// What the caller allowed, as buffer or texture usage flags.
+        #[serde(serialize_with = "ser_imported_usage")]
         usage: ImportedUsage,
     },
     /// Written this frame and read next frame through its `prev` twin.
-    History { prev: ResourceId },
+    History {
+        /// The `<name>.prev` resource that holds last frame's contents.
+        prev: ResourceId,
+    },
     /// Last frame's contents of a history resource; read-only.
-    HistoryPrev { current: ResourceId },
+    HistoryPrev {
+        /// The history resource this frame writes.
+        current: ResourceId,
+    },
     /// A transient the caller reads back after the frame; kept out of slot sharing.
     Exported,
     /// Scratch memory owned by a single pass, declared in its setup.
-    Scratch { pass: usize },
+    Scratch {
+        /// Index of the owning pass, in the order passes were added.
+        pass: usize,
+    },
 }
 
 /// The usage an imported resource was created with.
@@ -396,6 +431,14 @@ pub enum ResourceKind {
 pub enum ImportedUsage {
     Buffer(wgpu::BufferUsages),
     Texture(wgpu::TextureUsages),
+}
+
+/// Serialises an import's usage as the flag names of its buffer or texture usage.
+fn ser_imported_usage<S: Serializer>(u: &ImportedUsage, s: S) -> Result<S::Ok, S::Error> {
+    match u {
+        ImportedUsage::Buffer(b) => crate::names::flag_names(b).serialize(s),
+        ImportedUsage::Texture(t) => crate::names::flag_names(t).serialize(s),
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]

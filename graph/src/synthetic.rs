@@ -11,6 +11,7 @@ use crate::resource::{BufferDesc, Element};
 
 /// A pass with any slots that records nothing: compile and CPU-overhead benchmarks.
 pub struct NoopPass {
+    /// The stage's slots; compile treats them like a real pass's.
     pub slots: Vec<Slot>,
 }
 
@@ -36,8 +37,11 @@ impl Pass for NoopPass {
 /// so a test can read back what a pass wrote into a texture. A row must be a multiple of
 /// 256 bytes, as texture copies require.
 pub struct CopyTextureToBuffer {
+    /// The texture's format; the buffer gets its texels as they are.
     pub format: wgpu::TextureFormat,
+    /// Width, in texels; a row must be a multiple of 256 bytes.
     pub width: u32,
+    /// Height, in texels.
     pub height: u32,
 }
 

@@ -5,7 +5,7 @@
 mod support;
 
 use meshlight_graph::*;
-use support::gpu;
+use support::{dispatch_once, gpu};
 
 const KERNELS: PassShader = PassShader {
     name: "test::batches",
@@ -106,15 +106,19 @@ impl Pass for Step {
         if self.clear {
             ctx.clear("data")?;
         }
-        let program = ctx.compute("step")?;
-        let params = [self.k, N, 0, 0];
-        let group = ctx.bind_group(&program, 0, &[(1, bytemuck::cast_slice(&params))])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(N.div_ceil(64), 1, 1);
-        Ok(())
+        step_dispatch(ctx, self.k, N.div_ceil(64))
     }
+}
+
+/// Dispatches the program `step` (x ← 3x + k) over `groups` workgroups.
+fn step_dispatch(ctx: &mut RecordContext<'_>, k: u32, groups: u32) -> Result<()> {
+    let params = [k, N, 0, 0];
+    dispatch_once(
+        ctx,
+        "step",
+        &[(1, bytemuck::cast_slice(&params))],
+        [groups, 1, 1],
+    )
 }
 
 /// A stage that copies its slot `from` into its slot `to`.
@@ -191,13 +195,7 @@ impl Pass for Oversized {
         Step { k: 0, clear: false }.setup(ctx)
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let program = ctx.compute("step")?;
-        let group = ctx.bind_group(&program, 0, &[(1, bytemuck::cast_slice(&[0u32, N, 0, 0]))])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(u32::MAX, 1, 1);
-        Ok(())
+        step_dispatch(ctx, 0, u32::MAX)
     }
 }
 
@@ -245,6 +243,23 @@ fn run(
     (got, stats.unwrap(), extra)
 }
 
+/// Adds `step` on `data` as pass `name` and returns the version it writes.
+fn step_on(g: &mut GraphBuilder, name: &str, step: Step, data: Handle<Buffer>) -> Handle<Buffer> {
+    g.add_pass(name, step, Bindings::new().bind("data", data))
+        .unwrap()
+        .buffer("data")
+        .unwrap()
+}
+
+/// Each batch's pass count and whether it is a shared compute pass.
+fn batch_shape(compiled: &CompiledGraph) -> Vec<(usize, bool)> {
+    let batches = &compiled.plan.batches;
+    batches
+        .iter()
+        .map(|b| (b.passes.len(), b.compute))
+        .collect()
+}
+
 fn chain(ks: &[u32]) -> GraphBuilder {
     let mut g = GraphBuilder::new();
     g.import_buffer("data", BufferDesc::array(Element::U32, N as u64), USAGE);
@@ -281,33 +296,9 @@ fn a_clear_stays_in_the_batch_and_a_copy_splits_it() {
     let mut g = GraphBuilder::new();
     let data = g.import_buffer("data", BufferDesc::array(Element::U32, N as u64), USAGE);
     let copy = g.import_buffer("copy", BufferDesc::array(Element::U32, N as u64), USAGE);
-    let data = g
-        .add_pass(
-            "first",
-            Step { k: 5, clear: false },
-            Bindings::new().bind("data", data),
-        )
-        .unwrap()
-        .buffer("data")
-        .unwrap();
-    let data = g
-        .add_pass(
-            "cleared",
-            Step { k: 9, clear: true },
-            Bindings::new().bind("data", data),
-        )
-        .unwrap()
-        .buffer("data")
-        .unwrap();
-    let data = g
-        .add_pass(
-            "after",
-            Step { k: 4, clear: false },
-            Bindings::new().bind("data", data),
-        )
-        .unwrap()
-        .buffer("data")
-        .unwrap();
+    let data = step_on(&mut g, "first", Step { k: 5, clear: false }, data);
+    let data = step_on(&mut g, "cleared", Step { k: 9, clear: true }, data);
+    let data = step_on(&mut g, "after", Step { k: 4, clear: false }, data);
     let copy = g
         .add_pass(
             "copy",
@@ -317,19 +308,9 @@ fn a_clear_stays_in_the_batch_and_a_copy_splits_it() {
         .unwrap()
         .buffer("to")
         .unwrap();
-    g.add_pass(
-        "on_copy",
-        Step { k: 1, clear: false },
-        Bindings::new().bind("data", copy),
-    )
-    .unwrap();
+    step_on(&mut g, "on_copy", Step { k: 1, clear: false }, copy);
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu())).unwrap();
-    let shape: Vec<(usize, bool)> = compiled
-        .plan
-        .batches
-        .iter()
-        .map(|b| (b.passes.len(), b.compute))
-        .collect();
+    let shape = batch_shape(&compiled);
     assert_eq!(shape, [(3, true), (1, false), (1, true)]);
     let extra = [("copy", N as u64)];
     let (data_b, stats, copy_b) = run(&compiled, true, 1, &extra);
@@ -356,15 +337,7 @@ fn a_render_pass_between_compute_passes_sees_the_first_and_is_seen_by_the_next()
         "picture",
         TextureDesc::d2(wgpu::TextureFormat::Rgba8Unorm, SIDE, SIDE),
     );
-    let data = g
-        .add_pass(
-            "before",
-            Step { k: 7, clear: true },
-            Bindings::new().bind("data", data),
-        )
-        .unwrap()
-        .buffer("data")
-        .unwrap();
+    let data = step_on(&mut g, "before", Step { k: 7, clear: true }, data);
     struct Draw;
     impl Pass for Draw {
         fn contract(&self) -> StageContract {
@@ -433,13 +406,7 @@ fn a_render_pass_between_compute_passes_sees_the_first_and_is_seen_by_the_next()
             Ok(())
         }
         fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-            let p = ctx.compute("read_back")?;
-            let bg = ctx.bind_group(&p, 0, &[])?;
-            let mut pass = ctx.compute_pass();
-            pass.set_pipeline(&p.pipeline);
-            pass.set_bind_group(0, &bg, &[]);
-            pass.dispatch_workgroups(SIDE / 8, SIDE / 8, 1);
-            Ok(())
+            dispatch_once(ctx, "read_back", &[], [SIDE / 8, SIDE / 8, 1])
         }
     }
     g.add_pass(
@@ -464,22 +431,9 @@ fn a_render_pass_between_compute_passes_sees_the_first_and_is_seen_by_the_next()
 fn a_readback_between_compute_passes_returns_each_frames_value() {
     let mut g = GraphBuilder::new();
     let data = g.import_buffer("data", BufferDesc::array(Element::U32, N as u64), USAGE);
-    let data = g
-        .add_pass(
-            "before",
-            Step { k: 2, clear: false },
-            Bindings::new().bind("data", data),
-        )
-        .unwrap()
-        .buffer("data")
-        .unwrap();
+    let data = step_on(&mut g, "before", Step { k: 2, clear: false }, data);
     g.readback("snapshot", data, Some(0..16), 1).unwrap();
-    g.add_pass(
-        "after",
-        Step { k: 1, clear: false },
-        Bindings::new().bind("data", data),
-    )
-    .unwrap();
+    step_on(&mut g, "after", Step { k: 1, clear: false }, data);
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu())).unwrap();
     let kinds: Vec<bool> = compiled.plan.batches.iter().map(|b| b.compute).collect();
     assert_eq!(kinds, [true, false, true]);
@@ -523,13 +477,11 @@ fn history_carries_through_a_batch_from_frame_to_frame() {
             Ok(())
         }
         fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-            let (from, bytes) = ctx.buffer("from")?;
-            let (to, _) = ctx.buffer("to")?;
             if ctx.history_valid("from")? {
-                ctx.encoder().copy_buffer_to_buffer(from, 0, to, 0, bytes);
-            } else {
-                ctx.encoder().clear_buffer(to, 0, Some(bytes));
+                return Copy.record(ctx);
             }
+            let (to, bytes) = ctx.buffer("to")?;
+            ctx.encoder().clear_buffer(to, 0, Some(bytes));
             Ok(())
         }
     }
@@ -542,28 +494,10 @@ fn history_carries_through_a_batch_from_frame_to_frame() {
         .unwrap()
         .buffer("to")
         .unwrap();
-    let acc = g
-        .add_pass(
-            "a",
-            Step { k: 1, clear: false },
-            Bindings::new().bind("data", acc),
-        )
-        .unwrap()
-        .buffer("data")
-        .unwrap();
-    g.add_pass(
-        "b",
-        Step { k: 2, clear: false },
-        Bindings::new().bind("data", acc),
-    )
-    .unwrap();
+    let acc = step_on(&mut g, "a", Step { k: 1, clear: false }, acc);
+    step_on(&mut g, "b", Step { k: 2, clear: false }, acc);
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu())).unwrap();
-    let shape: Vec<(usize, bool)> = compiled
-        .plan
-        .batches
-        .iter()
-        .map(|b| (b.passes.len(), b.compute))
-        .collect();
+    let shape = batch_shape(&compiled);
     assert_eq!(shape, [(1, false), (2, true)]);
     for batching in [true, false] {
         let mut exec = Executor::new(gpu());
@@ -796,14 +730,7 @@ impl Pass for ScratchClear {
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         ctx.clear_scratch("words")?;
-        let step = ctx.compute("step")?;
-        let params = [self.k, N, 0, 0];
-        let group = ctx.bind_group(&step, 0, &[(1, bytemuck::cast_slice(&params))])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&step.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(N.div_ceil(64), 1, 1);
-        Ok(())
+        step_dispatch(ctx, self.k, N.div_ceil(64))
     }
 }
 

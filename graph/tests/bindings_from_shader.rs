@@ -107,14 +107,9 @@ impl Pass for Reflected {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let program = ctx.compute("main")?;
         let params = [3u32, 7, 0, 0];
-        let group = ctx.bind_group(&program, 0, &[(5, bytemuck::cast_slice(&params))])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(N.div_ceil(64), 1, 1);
-        Ok(())
+        let uniforms = [(5, bytemuck::cast_slice(&params))];
+        support::dispatch_once(ctx, "main", &uniforms, [N.div_ceil(64), 1, 1])
     }
 }
 
@@ -148,6 +143,14 @@ fn run(shader: &'static PassShader) -> std::result::Result<Vec<u32>, GraphError>
     Ok(bytemuck::pod_collect_to_vec(&exec.read_buffer("output")?))
 }
 
+/// Runs `shader` expecting an error whose message contains every one of `parts`.
+fn assert_error_names(shader: &'static PassShader, parts: &[&str]) {
+    let e = error_of(shader);
+    for part in parts {
+        assert!(e.contains(part), "`{part}` missing from: {e}");
+    }
+}
+
 fn error_of(shader: &'static PassShader) -> String {
     match run(shader) {
         Err(e) => e.to_string(),
@@ -164,34 +167,37 @@ fn slots_scratch_and_uniforms_bind_by_their_names_in_the_shader() {
 
 #[test]
 fn a_variable_that_matches_nothing_is_named_with_what_it_could_be() {
-    let e = error_of(&STRAY);
-    assert!(
-        e.contains("(stray)")
-            && e.contains("`stray`")
-            && e.contains("matches no slot of stage `scale` (input, output)")
-            && e.contains("no scratch resource (words)"),
-        "{e}"
+    assert_error_names(
+        &STRAY,
+        &[
+            "(stray)",
+            "`stray`",
+            "matches no slot of stage `scale` (input, output)",
+            "no scratch resource (words)",
+        ],
     );
 }
 
 #[test]
 fn writing_a_read_only_slot_is_an_error_naming_the_slot() {
-    let e = error_of(&WRITES_INPUT);
-    assert!(
-        e.contains("(writes input)")
-            && e.contains("slot `input` is storage-read")
-            && e.contains("declares it writable"),
-        "{e}"
+    assert_error_names(
+        &WRITES_INPUT,
+        &[
+            "(writes input)",
+            "slot `input` is storage-read",
+            "declares it writable",
+        ],
     );
 }
 
 #[test]
 fn an_element_size_unlike_the_slots_is_an_error_naming_both_sizes() {
-    let e = error_of(&WIDE);
-    assert!(
-        e.contains("(wide)")
-            && e.contains("slot `input` holds elements of 4 bytes")
-            && e.contains("8-byte elements"),
-        "{e}"
+    assert_error_names(
+        &WIDE,
+        &[
+            "(wide)",
+            "slot `input` holds elements of 4 bytes",
+            "8-byte elements",
+        ],
     );
 }

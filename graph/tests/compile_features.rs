@@ -10,16 +10,20 @@ fn limits() -> wgpu::Limits {
     wgpu::Limits::default()
 }
 
+/// Adds a pass `w` writing the resource `name` through its one slot.
+fn writer(g: &mut GraphBuilder, name: &str, slot: Slot) {
+    let bindings = Bindings::new().bind_named(slot.name, name);
+    g.add_pass("w", Fake::new("t", vec![slot]), bindings)
+        .unwrap();
+}
+
 fn one_writer(g: &mut GraphBuilder, name: &str) {
-    g.add_pass(
-        "w",
-        Fake::new(
-            "t",
-            vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
-        ),
-        Bindings::new().bind_named("out", name),
-    )
-    .unwrap();
+    writer(g, name, out_u32());
+}
+
+/// Adds a pass writing the texture `name` through a slot of any format.
+fn one_texture_writer(g: &mut GraphBuilder, name: &str) {
+    writer(g, name, Slot::texture("t", Access::StorageWrite, None, ""));
 }
 
 #[test]
@@ -41,15 +45,11 @@ fn a_buffer_over_max_buffer_size_is_a_compile_error() {
     let mut g = GraphBuilder::new();
     let h = g.create_buffer("four_tib", BufferDesc::array(Element::BYTES, 4 << 40));
     g.export(h);
-    g.add_pass(
-        "w",
-        Fake::new(
-            "t",
-            vec![Slot::buffer("out", Access::CopyDst, Element::BYTES, "")],
-        ),
-        Bindings::new().bind_named("out", "four_tib"),
-    )
-    .unwrap();
+    writer(
+        &mut g,
+        "four_tib",
+        Slot::buffer("out", Access::CopyDst, Element::BYTES, ""),
+    );
     match g.compile(&opts()) {
         Err(GraphError::LimitExceeded {
             what, limit, max, ..
@@ -96,15 +96,11 @@ fn a_storage_binding_over_its_limit_names_the_pass_slot_and_limit() {
     let mut g = GraphBuilder::new();
     let h = g.create_buffer("big", BufferDesc::array(Element::BYTES, bytes));
     g.export(h);
-    g.add_pass(
-        "w",
-        Fake::new(
-            "t",
-            vec![Slot::buffer("out", Access::CopyDst, Element::BYTES, "")],
-        ),
-        Bindings::new().bind_named("out", "big"),
-    )
-    .unwrap();
+    writer(
+        &mut g,
+        "big",
+        Slot::buffer("out", Access::CopyDst, Element::BYTES, ""),
+    );
     g.compile(&opts()).unwrap();
 }
 
@@ -116,15 +112,7 @@ fn more_mip_levels_than_the_size_has_is_an_error_naming_the_range() {
         TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 8).with_mips(6),
     );
     g.export(t);
-    g.add_pass(
-        "w",
-        Fake::new(
-            "t",
-            vec![Slot::texture("t", Access::StorageWrite, None, "")],
-        ),
-        Bindings::new().bind_named("t", "deep"),
-    )
-    .unwrap();
+    one_texture_writer(&mut g, "deep");
     match g.compile(&opts()) {
         Err(e @ GraphError::BadDeclaration { .. }) => assert_eq!(
             e.to_string(),
@@ -143,15 +131,7 @@ fn a_texture_over_the_dimension_limit_is_a_compile_error() {
         TextureDesc::d2(wgpu::TextureFormat::R32Float, wide, 4),
     );
     g.export(t);
-    g.add_pass(
-        "w",
-        Fake::new(
-            "t",
-            vec![Slot::texture("t", Access::StorageWrite, None, "")],
-        ),
-        Bindings::new().bind_named("t", "wide"),
-    )
-    .unwrap();
+    one_texture_writer(&mut g, "wide");
     match g.compile(&opts()) {
         Err(GraphError::LimitExceeded { what, limit, .. }) => {
             assert!(what.contains("wide"));
@@ -163,31 +143,21 @@ fn a_texture_over_the_dimension_limit_is_a_compile_error() {
 
 #[test]
 fn a_declared_dispatch_over_the_per_dimension_limit_is_a_compile_error() {
-    struct Wide;
-    impl Pass for Wide {
-        fn contract(&self) -> StageContract {
-            StageContract {
-                stage: "wide",
-                slots: vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
-            }
-        }
-        fn implementation(&self) -> &'static str {
-            "wide"
-        }
-        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+    let wide = pass(
+        "wide",
+        vec![out_u32()],
+        |ctx| {
             ctx.dispatch(
                 "main",
                 [ctx.limits().max_compute_workgroups_per_dimension + 1, 1, 1],
             );
             Ok(())
-        }
-        fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
-            Ok(())
-        }
-    }
+        },
+        |_| Ok(()),
+    );
     let mut g = GraphBuilder::new();
     g.import_buffer("out", u32s(4), IMPORT_USAGE);
-    g.add_pass("wide", Wide, Bindings::new()).unwrap();
+    g.add_pass("wide", wide, Bindings::new()).unwrap();
     match g.compile(&opts()) {
         Err(GraphError::LimitExceeded { what, limit, .. }) => {
             assert!(what.contains("`main`") && what.contains("`wide`"), "{what}");
@@ -259,6 +229,20 @@ fn size_parameters_resize_buffers_and_a_bad_value_leaves_the_plan_as_it_was() {
     }
 }
 
+/// Adds a `mip_pass` reading range `src` of `t` and writing range `dst` of it.
+fn add_mip_pass(
+    g: &mut GraphBuilder,
+    name: &str,
+    t: Handle<Texture>,
+    src: TextureRange,
+    dst: TextureRange,
+) -> Result<PassOutputs> {
+    let bindings = Bindings::new()
+        .bind_range("src", t, src)
+        .bind_range("dst", t, dst);
+    g.add_pass(name, mip_pass(), bindings)
+}
+
 fn mip_pass() -> Fake {
     Fake::new(
         "down",
@@ -274,23 +258,22 @@ fn disjoint_mips_of_one_texture_may_be_read_and_written_by_one_pass() {
     let mut g = GraphBuilder::new();
     let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_full_mips();
     let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
-    let out = g
-        .add_pass(
-            "mip1",
-            mip_pass(),
-            Bindings::new()
-                .bind_range("src", t, TextureRange::mip(0))
-                .bind_range("dst", t, TextureRange::mip(1)),
-        )
-        .unwrap();
+    let out = add_mip_pass(
+        &mut g,
+        "mip1",
+        t,
+        TextureRange::mip(0),
+        TextureRange::mip(1),
+    )
+    .unwrap();
     let t1 = out.texture("dst").unwrap();
     assert_eq!(t1.version(), 1);
-    g.add_pass(
+    add_mip_pass(
+        &mut g,
         "mip2",
-        mip_pass(),
-        Bindings::new()
-            .bind_range("src", t1, TextureRange::mip(1))
-            .bind_range("dst", t1, TextureRange::mip(2)),
+        t1,
+        TextureRange::mip(1),
+        TextureRange::mip(2),
     )
     .unwrap();
     let c = g.compile(&opts()).unwrap();
@@ -307,14 +290,7 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
         let mut g = GraphBuilder::new();
         let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_full_mips();
         let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
-        g.add_pass(
-            "bad",
-            mip_pass(),
-            Bindings::new()
-                .bind_range("src", t, src)
-                .bind_range("dst", t, dst),
-        )
-        .unwrap();
+        add_mip_pass(&mut g, "bad", t, src, dst).unwrap();
         match g.compile(&opts()) {
             Err(GraphError::UsageNotAllowed { pass, reason, .. }) => {
                 assert_eq!(pass, "bad");
@@ -327,14 +303,7 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
     let mut g = GraphBuilder::new();
     let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_mips(2);
     let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
-    g.add_pass(
-        "bad",
-        mip_pass(),
-        Bindings::new()
-            .bind_range("src", t, TextureRange::mip(0))
-            .bind_range("dst", t, TextureRange::mip(2)),
-    )
-    .unwrap();
+    add_mip_pass(&mut g, "bad", t, TextureRange::mip(0), TextureRange::mip(2)).unwrap();
     assert!(matches!(
         g.compile(&opts()),
         Err(GraphError::DescriptorMismatch { .. })
@@ -364,23 +333,24 @@ fn texture_arrays_and_layer_ranges_plan_like_mips() {
 
 #[test]
 fn cleared_read_write_needs_no_writer_and_a_second_use_adds_its_usage() {
-    let mut g = GraphBuilder::new();
-    let args = g.create_buffer("args", u32s(4));
-    let out = g
-        .add_pass(
-            "append",
-            Fake::new(
-                "a",
-                vec![
-                    Slot::buffer("args", Access::ClearedReadWrite, Element::U32, "")
-                        .also(Access::Indirect),
-                ],
-            ),
-            Bindings::new().bind("args", args),
-        )
+    // One pass appending to a fresh `args` through `slot`.
+    let append = |slot: Slot| {
+        let mut g = GraphBuilder::new();
+        let args = g.create_buffer("args", u32s(4));
+        let out = g
+            .add_pass(
+                "append",
+                Fake::new("a", vec![slot]),
+                Bindings::new().bind("args", args),
+            )
+            .unwrap();
+        g.export(out.buffer("args").unwrap());
+        g
+    };
+    let cleared = Slot::buffer("args", Access::ClearedReadWrite, Element::U32, "");
+    let c = append(cleared.also(Access::Indirect))
+        .compile(&opts())
         .unwrap();
-    g.export(out.buffer("args").unwrap());
-    let c = g.compile(&opts()).unwrap();
     let r = &c.plan.resources[c.plan.resource_index("args").unwrap()];
     assert_eq!(
         r.buffer_usage,
@@ -390,26 +360,9 @@ fn cleared_read_write_needs_no_writer_and_a_second_use_adds_its_usage() {
             | wgpu::BufferUsages::COPY_SRC
     );
     // The same slot as plain read-write is a read of a version nothing wrote.
-    let mut g = GraphBuilder::new();
-    let args = g.create_buffer("args", u32s(4));
-    let out = g
-        .add_pass(
-            "append",
-            Fake::new(
-                "a",
-                vec![Slot::buffer(
-                    "args",
-                    Access::StorageReadWrite,
-                    Element::U32,
-                    "",
-                )],
-            ),
-            Bindings::new().bind("args", args),
-        )
-        .unwrap();
-    g.export(out.buffer("args").unwrap());
+    let read_write = Slot::buffer("args", Access::StorageReadWrite, Element::U32, "");
     assert!(matches!(
-        g.compile(&opts()),
+        append(read_write).compile(&opts()),
         Err(GraphError::ReadWithoutWriter { .. })
     ));
 }
@@ -418,33 +371,28 @@ fn vis_pass(access: Access) -> Fake {
     Fake::new("sw_raster", vec![Slot::visibility64("vis", access, "")])
 }
 
+/// Adds a raster that clears and writes `vis`, and exports what it writes.
+fn add_exported_raster(g: &mut GraphBuilder, vis: impl Into<AnyHandle>) {
+    let bindings = Bindings::new().bind("vis", vis);
+    let o = g
+        .add_pass("raster", vis_pass(Access::ClearedReadWrite), bindings)
+        .unwrap();
+    g.export(o.written()[0].1);
+}
+
 #[test]
 fn a_64_bit_visibility_slot_takes_a_u64_buffer_or_an_r64uint_texture() {
     // Buffer: fine anywhere.
     let mut g = GraphBuilder::new();
     let v = g.create_buffer("vis", BufferDesc::array(Element::U64, 64));
-    let o = g
-        .add_pass(
-            "raster",
-            vis_pass(Access::ClearedReadWrite),
-            Bindings::new().bind("vis", v),
-        )
-        .unwrap();
-    g.export(o.buffer("vis").unwrap());
+    add_exported_raster(&mut g, v);
     g.compile(&opts()).unwrap();
 
     // Texture: STORAGE_ATOMIC usage and the texture-atomic features, required.
     let build = || {
         let mut g = GraphBuilder::new();
         let v = g.create_texture("vis", TextureDesc::d2(wgpu::TextureFormat::R64Uint, 8, 8));
-        let o = g
-            .add_pass(
-                "raster",
-                vis_pass(Access::ClearedReadWrite),
-                Bindings::new().bind("vis", v),
-            )
-            .unwrap();
-        g.export(o.texture("vis").unwrap());
+        add_exported_raster(&mut g, v);
         g
     };
     let atomics = wgpu::Features::TEXTURE_ATOMIC | wgpu::Features::TEXTURE_INT64_ATOMIC;
@@ -492,32 +440,24 @@ const MESH: PassShader = PassShader {
 
 #[test]
 fn a_mesh_program_requires_the_mesh_shader_feature() {
-    struct Meshy;
-    impl Pass for Meshy {
-        fn contract(&self) -> StageContract {
-            StageContract {
-                stage: "hw_raster",
-                slots: vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
-            }
-        }
-        fn implementation(&self) -> &'static str {
-            "mesh_shader"
-        }
-        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-            ctx.program(
-                "draw",
-                ProgramDesc::mesh(&MESH, Some("ts"), "ms").fragment("fs"),
-            );
-            Ok(())
-        }
-        fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
-            Ok(())
-        }
-    }
+    let meshy = || {
+        pass(
+            "hw_raster",
+            vec![out_u32()],
+            |ctx| {
+                ctx.program(
+                    "draw",
+                    ProgramDesc::mesh(&MESH, Some("ts"), "ms").fragment("fs"),
+                );
+                Ok(())
+            },
+            |_| Ok(()),
+        )
+    };
     let build = || {
         let mut g = GraphBuilder::new();
         g.import_buffer("out", u32s(4), IMPORT_USAGE);
-        g.add_pass("hw", Meshy, Bindings::new()).unwrap();
+        g.add_pass("hw", meshy(), Bindings::new()).unwrap();
         g
     };
     match build().compile(&opts()) {
@@ -601,10 +541,7 @@ fn pipeline_files_declare_size_parameters_and_texture_ranges() {
     let mut registry = file::Registry::new();
     registry.register("down", "fake", |_| Ok(Box::new(mip_pass())));
     registry.register("fill", "fake", |_| {
-        Ok(Box::new(Fake::new(
-            "fill",
-            vec![Slot::buffer("out", Access::StorageWrite, Element::U32, "")],
-        )))
+        Ok(Box::new(Fake::new("fill", vec![out_u32()])))
     });
     let text = r#"
 [params]

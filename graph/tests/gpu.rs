@@ -135,13 +135,9 @@ fn wgpu_validation_error_surfaces_as_an_error() {
             Ok(())
         }
         fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-            let program = ctx.compute("fill")?;
-            let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&[1u32, 1, 0, 0]))])?;
-            let mut pass = ctx.compute_pass();
-            pass.set_pipeline(&program.pipeline);
-            pass.set_bind_group(0, &bg, &[]);
-            pass.dispatch_workgroups(u32::MAX, 1, 1);
-            Ok(())
+            let params = [1u32, 1, 0, 0];
+            let uniforms = [(2, bytemuck::cast_slice(&params))];
+            support::dispatch_once(ctx, "fill", &uniforms, [u32::MAX, 1, 1])
         }
     }
     let gpu = gpu();

@@ -1,72 +1,30 @@
 //! GPU tests of the frame graph's render passes, sub-resources, multi-access slots, frame
 //! data, async readback and growth, each against a CPU reference (lavapipe in CI).
 
-#[path = "support/rects.rs"]
-mod rects;
 mod support;
 
 use meshlight_graph::*;
-use rects::*;
-use support::gpu;
+use support::fake::pass;
+use support::rects::*;
+use support::{dispatch_once, gpu};
 
-const RASTER: PassShader = PassShader {
-    name: "test::features",
-    source: include_str!("support/features.wgsl"),
-    file_path: "graph/tests/support/features.wgsl",
-    modules: &[],
-};
-const COMPUTE: PassShader = PassShader {
-    name: "test::compute",
-    source: include_str!("support/compute.wgsl"),
-    file_path: "graph/tests/support/compute.wgsl",
-    modules: &[],
-};
+const RASTER: PassShader = support::support_shader!("test::features", "features.wgsl");
+const COMPUTE: PassShader = support::support_shader!("test::compute", "compute.wgsl");
 
 fn params(a: u32, b: u32) -> [u32; 4] {
     [a, b, 0, 0]
 }
 
-/// A pass built from closures, so each test states its contract, setup and record inline.
-struct TestPass<S, R> {
-    stage: &'static str,
-    slots: Vec<Slot>,
-    setup: S,
-    record: R,
-}
-
-impl<S, R> Pass for TestPass<S, R>
-where
-    S: Fn(&mut SetupContext) -> Result<()> + Send + Sync,
-    R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
-{
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: self.stage,
-            slots: self.slots.clone(),
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "test"
-    }
-    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        (self.setup)(ctx)
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        (self.record)(ctx)
-    }
-}
-
-fn pass<S, R>(stage: &'static str, slots: Vec<Slot>, setup: S, record: R) -> TestPass<S, R>
-where
-    S: Fn(&mut SetupContext) -> Result<()> + Send + Sync,
-    R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
-{
-    TestPass {
-        stage,
-        slots,
-        setup,
-        record,
-    }
+/// Adds `pass` and exports the buffer it writes through `slot`, for the test to read.
+fn add_exported(
+    g: &mut GraphBuilder,
+    name: &str,
+    pass: impl Pass + 'static,
+    bindings: Bindings,
+    slot: &str,
+) {
+    let out = g.add_pass(name, pass, bindings).unwrap();
+    g.export(out.buffer(slot).unwrap());
 }
 
 /// Declares the compute program `name` running `entry` of the test kernels.
@@ -77,22 +35,6 @@ fn declare(
     layout: BindingLayout,
 ) -> Result<()> {
     ctx.program(name, ProgramDesc::compute(&COMPUTE, entry).layout(layout));
-    Ok(())
-}
-
-/// Records one dispatch of the compute program `name` with bind group 0.
-fn dispatch_once(
-    ctx: &mut RecordContext<'_>,
-    name: &str,
-    uniforms: &[(u32, &[u8])],
-    groups: [u32; 3],
-) -> Result<()> {
-    let p = ctx.compute(name)?;
-    let bg = ctx.bind_group(&p, 0, uniforms)?;
-    let mut cp = ctx.compute_pass();
-    cp.set_pipeline(&p.pipeline);
-    cp.set_bind_group(0, &bg, &[]);
-    cp.dispatch_workgroups(groups[0], groups[1], groups[2]);
     Ok(())
 }
 
@@ -110,31 +52,17 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
     let vertices = rect_vertices();
     let vertex_count = vertices.len() as u32;
     let mut g = GraphBuilder::new();
-    let rects = g.import_buffer(
-        "rects",
-        BufferDesc::array(Element::named("RectVertex", 32), vertex_count as u64),
-        wgpu::BufferUsages::STORAGE,
-    );
+    let rects = import_rect_vertices(&mut g, vertex_count);
     let vis = g.create_buffer("vis", BufferDesc::array(Element::U64, (W * H) as u64));
     let raster = pass(
         "raster",
         vec![
-            Slot::buffer(
-                "rects",
-                Access::StorageRead,
-                Element::named("RectVertex", 32),
-                "",
-            ),
+            rects_slot(),
             Slot::buffer("vis", Access::ClearedReadWrite, Element::U64, ""),
         ],
         |ctx| {
             ctx.require_features(
                 wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
-            );
-            ctx.scratch_texture(
-                "dummy",
-                TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
-                &[Access::RenderTarget],
             );
             let layout = BindingLayout::render("raster")
                 .slot(0, "rects")
@@ -143,35 +71,23 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
                 .visible_in(wgpu::ShaderStages::FRAGMENT)
                 .uniform(2)
                 .visible_in(wgpu::ShaderStages::FRAGMENT);
-            ctx.program(
-                "rects",
-                ProgramDesc::render(&RASTER, "rect_vs")
-                    .fragment("rect_fs")
-                    .target(ColorTarget::masked("dummy"))
-                    .layout(layout),
-            );
+            let program = ProgramDesc::render(&RASTER, "rect_vs").fragment("rect_fs");
+            declare_masked_raster(ctx, program.layout(layout));
             Ok(())
         },
         move |ctx| {
-            ctx.clear("vis")?;
-            let program = ctx.render("rects")?;
             let raster_params = [W, 0, 0, 0, 0, 0, 0, 0];
-            let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&raster_params))])?;
-            let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
-            rp.set_pipeline(&program.pipeline);
-            rp.set_bind_group(0, &bg, &[]);
-            rp.draw(0..vertex_count, 0..1);
-            Ok(())
+            let uniforms = [(2, bytemuck::cast_slice(&raster_params))];
+            record_masked_raster(ctx, &uniforms, |rp| rp.draw(0..vertex_count, 0..1))
         },
     );
-    let out = g
-        .add_pass(
-            "raster",
-            raster,
-            Bindings::new().bind("rects", rects).bind("vis", vis),
-        )
-        .unwrap();
-    g.export(out.buffer("vis").unwrap());
+    add_exported(
+        &mut g,
+        "raster",
+        raster,
+        Bindings::new().bind("rects", rects).bind("vis", vis),
+        "vis",
+    );
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     // The dummy target is cleared and never stored; the visibility buffer reads nothing.
     let plan = &compiled.plan;
@@ -184,16 +100,9 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
     let dot = dump::to_dot(plan);
     assert!(dot.contains("vis: cleared-read-write"), "{dot}");
 
-    let buffer = gpu.buffer_with_data(
-        "rects",
-        bytemuck::cast_slice(&vertices),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let mut exec = Executor::new(gpu);
-    let imports = Imports::new().buffer("rects", &buffer);
     // Twice: the second frame must clear what the first left.
-    exec.execute(&compiled, &imports).unwrap();
-    exec.execute(&compiled, &imports).unwrap();
+    let rects = bytemuck::cast_slice(&vertices);
+    let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 2);
     let got: Vec<u64> = read(&mut exec, "vis");
     let want = cpu_rects();
     let wrong = got.iter().zip(&want).filter(|(a, b)| a != b).count();
@@ -209,6 +118,11 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
 
 const MIP_W: u32 = 37;
 const MIP_H: u32 = 23;
+
+/// A slot on an `R32Float` texture (the mip chain's format).
+fn r32f(name: &'static str, access: Access) -> Slot {
+    Slot::texture(name, access, Some(wgpu::TextureFormat::R32Float), "")
+}
 
 fn cpu_pyramid(base: &[f32]) -> Vec<Vec<f32>> {
     let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, MIP_W, MIP_H).with_full_mips();
@@ -271,12 +185,7 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
         "base",
         vec![
             Slot::buffer("source", Access::StorageRead, Element::F32, ""),
-            Slot::texture(
-                "mip",
-                Access::StorageWrite,
-                Some(wgpu::TextureFormat::R32Float),
-                "",
-            ),
+            r32f("mip", Access::StorageWrite),
         ],
         |ctx| {
             let layout = BindingLayout::compute("base")
@@ -302,18 +211,8 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
         let down = pass(
             "downsample",
             vec![
-                Slot::texture(
-                    "src",
-                    Access::Sampled,
-                    Some(wgpu::TextureFormat::R32Float),
-                    "",
-                ),
-                Slot::texture(
-                    "dst",
-                    Access::StorageWrite,
-                    Some(wgpu::TextureFormat::R32Float),
-                    "",
-                ),
+                r32f("src", Access::Sampled),
+                r32f("dst", Access::StorageWrite),
             ],
             |ctx| {
                 let layout = BindingLayout::compute("downsample")
@@ -374,16 +273,15 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
             Ok(())
         },
     );
-    let out = g
-        .add_pass(
-            "gather",
-            gather,
-            Bindings::new()
-                .bind("pyramid", pyramid)
-                .bind("gathered", gathered),
-        )
-        .unwrap();
-    g.export(out.buffer("gathered").unwrap());
+    add_exported(
+        &mut g,
+        "gather",
+        gather,
+        Bindings::new()
+            .bind("pyramid", pyramid)
+            .bind("gathered", gathered),
+        "gathered",
+    );
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let plan = &compiled.plan;
     assert_eq!(plan.order.len(), levels as usize + 1);
@@ -394,14 +292,8 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
     );
     assert!(dump::to_dot(plan).contains("dst: storage-write [mip 2]"));
 
-    let source_buffer = gpu.buffer_with_data(
-        "source",
-        bytemuck::cast_slice(&base),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let mut exec = Executor::new(gpu);
-    exec.execute(&compiled, &Imports::new().buffer("source", &source_buffer))
-        .unwrap();
+    let source = bytemuck::cast_slice(&base);
+    let mut exec = support::run_frames(gpu, &compiled, ("source", source), 1);
     let got: Vec<f32> = read(&mut exec, "gathered");
     let want: Vec<f32> = cpu_pyramid(&base).concat();
     assert_eq!(got.len(), want.len());
@@ -499,14 +391,13 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
             Ok(())
         },
     );
-    let out = g
-        .add_pass(
-            "count",
-            count,
-            Bindings::new().bind("args", args).bind("seen", seen),
-        )
-        .unwrap();
-    g.export(out.buffer("seen").unwrap());
+    add_exported(
+        &mut g,
+        "count",
+        count,
+        Bindings::new().bind("args", args).bind("seen", seen),
+        "seen",
+    );
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let plan = &compiled.plan;
     let args_plan = &plan.resources[plan.resource_index("args").unwrap()];
@@ -687,17 +578,16 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
             )
         },
     );
-    let out = g
-        .add_pass(
-            "grow",
-            grow,
-            Bindings::new()
-                .bind("list", list)
-                .bind("prev", hist.prev)
-                .bind("hist", hist.current),
-        )
-        .unwrap();
-    g.export(out.buffer("list").unwrap());
+    add_exported(
+        &mut g,
+        "grow",
+        grow,
+        Bindings::new()
+            .bind("list", list)
+            .bind("prev", hist.prev)
+            .bind("hist", hist.current),
+        "list",
+    );
     let mut compiled = g
         .compile(&CompileOptions::new(wgpu::Features::empty()))
         .unwrap();
@@ -833,10 +723,13 @@ fn an_allocation_the_device_refuses_is_an_error_naming_the_resource() {
         |_| Ok(()),
         |_| Ok(()),
     );
-    let out = g
-        .add_pass("fill", writer, Bindings::new().bind("big", big))
-        .unwrap();
-    g.export(out.buffer("big").unwrap());
+    add_exported(
+        &mut g,
+        "fill",
+        writer,
+        Bindings::new().bind("big", big),
+        "big",
+    );
     // Options that claim more than the device has, so compile lets the buffer through.
     let generous = wgpu::Limits {
         max_buffer_size: u64::MAX,
@@ -1012,14 +905,13 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
         },
         |ctx| dispatch_once(ctx, "flatten", &[], [1, 1, LAYERS]),
     );
-    let out = g
-        .add_pass(
-            "flatten",
-            flatten,
-            Bindings::new().bind("array", array).bind("flat", flat),
-        )
-        .unwrap();
-    g.export(out.buffer("flat").unwrap());
+    add_exported(
+        &mut g,
+        "flatten",
+        flatten,
+        Bindings::new().bind("array", array).bind("flat", flat),
+        "flat",
+    );
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let mut exec = Executor::new(gpu);
     exec.execute(&compiled, &Imports::new()).unwrap();
@@ -1070,11 +962,7 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
     let vertices = rect_vertices();
     let count = vertices.len() as u32;
     let mut g = GraphBuilder::new();
-    let rects = g.import_buffer(
-        "rects",
-        BufferDesc::array(Element::named("RectVertex", 32), count as u64),
-        wgpu::BufferUsages::STORAGE,
-    );
+    let rects = import_rect_vertices(&mut g, count);
     let color = g.create_texture(
         "color",
         TextureDesc::d2(wgpu::TextureFormat::Rgba8Unorm, W, H),
@@ -1086,12 +974,7 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
     let draw = pass(
         "draw",
         vec![
-            Slot::buffer(
-                "rects",
-                Access::StorageRead,
-                Element::named("RectVertex", 32),
-                "",
-            ),
+            rects_slot(),
             Slot::texture("color", Access::RenderTarget, None, ""),
             Slot::texture("depth", Access::DepthTarget, None, ""),
         ],
@@ -1143,20 +1026,8 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
         )
         .unwrap();
     let out = g.create_buffer("out", BufferDesc::array(Element::U32, (W * H) as u64));
-    let copied = g
-        .add_pass(
-            "copy",
-            synthetic::CopyTextureToBuffer {
-                format: wgpu::TextureFormat::Rgba8Unorm,
-                width: W,
-                height: H,
-            },
-            Bindings::new()
-                .bind("texture", drawn.texture("color").unwrap())
-                .bind("buffer", out),
-        )
-        .unwrap();
-    g.export(copied.buffer("buffer").unwrap());
+    let color = drawn.texture("color").unwrap();
+    copy_out(&mut g, "copy", wgpu::TextureFormat::Rgba8Unorm, color, out);
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let ops = |slot: &str| {
         compiled.plan.passes[0]
@@ -1168,14 +1039,8 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
     };
     assert_eq!(ops("color"), Some((LoadOp::Clear, StoreOp::Store)));
     assert_eq!(ops("depth"), Some((LoadOp::Clear, StoreOp::Discard)));
-    let buffer = gpu.buffer_with_data(
-        "rects",
-        bytemuck::cast_slice(&vertices),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let mut exec = Executor::new(gpu);
-    exec.execute(&compiled, &Imports::new().buffer("rects", &buffer))
-        .unwrap();
+    let rects = bytemuck::cast_slice(&vertices);
+    let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 1);
     let got: Vec<u32> = read(&mut exec, "out");
     let ids: Vec<u32> = got.iter().map(|px| px & 0xff).collect();
     let want: Vec<u32> = cpu_rects()

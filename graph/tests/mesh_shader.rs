@@ -2,20 +2,13 @@
 //! draws like the CPU where the adapter has mesh shaders; where it has not (lavapipe),
 //! the graph reports the missing feature and everything else still opens and runs.
 
-#[path = "support/rects.rs"]
-mod rects;
 mod support;
 
 use meshlight_graph::*;
 use meshlight_shaders::{Capabilities, ShaderLibrary};
-use rects::*;
+use support::rects::*;
 
-const MESH: PassShader = PassShader {
-    name: "test::mesh",
-    source: include_str!("support/mesh.wgsl"),
-    file_path: "graph/tests/support/mesh.wgsl",
-    modules: &[],
-};
+const MESH: PassShader = support::support_shader!("test::mesh", "mesh.wgsl");
 
 #[test]
 fn mesh_stage_wgsl_composes_and_validates_through_the_shader_library() {
@@ -84,11 +77,6 @@ impl Pass for MeshRaster {
         ctx.require_features(
             wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
         );
-        ctx.scratch_texture(
-            "dummy",
-            TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
-            &[Access::RenderTarget],
-        );
         let layout = BindingLayout::with_visibility(
             "mesh_raster",
             wgpu::ShaderStages::TASK | wgpu::ShaderStages::MESH | wgpu::ShaderStages::FRAGMENT,
@@ -98,33 +86,20 @@ impl Pass for MeshRaster {
         .slot(1, "vis")
         .visible_in(wgpu::ShaderStages::FRAGMENT)
         .uniform(2);
-        ctx.program(
-            "rects",
-            if self.task {
-                ProgramDesc::mesh(&MESH, Some("rect_ts"), "rect_ms_task")
-            } else {
-                ProgramDesc::mesh(&MESH, None, "rect_ms")
-            }
-            .fragment("rect_fs")
-            .target(ColorTarget::masked("dummy"))
-            .layout(layout),
-        );
+        let program = if self.task {
+            ProgramDesc::mesh(&MESH, Some("rect_ts"), "rect_ms_task")
+        } else {
+            ProgramDesc::mesh(&MESH, None, "rect_ms")
+        };
+        declare_masked_raster(ctx, program.fragment("rect_fs").layout(layout));
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        ctx.clear("vis")?;
-        let program = ctx.render("rects")?;
         let params = [W, H, 0, 0];
-        let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&params))])?;
-        let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
-        rp.set_pipeline(&program.pipeline);
-        rp.set_bind_group(0, &bg, &[]);
-        if self.task {
-            rp.draw_mesh_tasks(1, 1, 1);
-        } else {
-            rp.draw_mesh_tasks(RECTS.len() as u32, 1, 1);
-        }
-        Ok(())
+        let uniforms = [(2, bytemuck::cast_slice(&params))];
+        // One task workgroup launches every rectangle's mesh workgroup.
+        let groups = if self.task { 1 } else { RECTS.len() as u32 };
+        record_masked_raster(ctx, &uniforms, |rp| rp.draw_mesh_tasks(groups, 1, 1))
     }
 }
 
@@ -169,14 +144,8 @@ fn mesh_pass_against_the_cpu(adapter: &GpuAdapter, has_mesh: bool, task: bool) {
         .iter()
         .map(|([x0, y0, x1, y1], depth, id)| [*x0, *y0, *x1, *y1, *depth, *id, 0, 0])
         .collect();
-    let rects = gpu.buffer_with_data(
-        "rects",
-        bytemuck::cast_slice(&data),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let mut exec = Executor::new(gpu);
-    exec.execute(&compiled, &Imports::new().buffer("rects", &rects))
-        .unwrap();
+    let rects = bytemuck::cast_slice(&data);
+    let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 1);
     let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("vis").unwrap());
     assert_eq!(got, cpu_rects(), "task stage: {task}");
 }

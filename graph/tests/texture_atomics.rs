@@ -2,19 +2,13 @@
 //! it `STORAGE_ATOMIC`, asks for the texture-atomic features, and the raster matches the
 //! CPU where the adapter has them; where it has not (lavapipe) compile names the feature.
 
-#[path = "support/rects.rs"]
-mod rects;
 mod support;
 
 use meshlight_graph::*;
-use rects::*;
+use support::rects::*;
 
-const SHADER: PassShader = PassShader {
-    name: "test::texture_atomics",
-    source: include_str!("support/texture_atomics.wgsl"),
-    file_path: "graph/tests/support/texture_atomics.wgsl",
-    modules: &[],
-};
+const SHADER: PassShader =
+    support::support_shader!("test::texture_atomics", "texture_atomics.wgsl");
 
 /// Stage `raster` with a visibility target that may be a buffer or a texture; this
 /// implementation takes the texture.
@@ -27,12 +21,7 @@ impl Pass for TextureRaster {
         StageContract {
             stage: "raster",
             slots: vec![
-                Slot::buffer(
-                    "rects",
-                    Access::StorageRead,
-                    Element::named("RectVertex", 32),
-                    "",
-                ),
+                rects_slot(),
                 Slot::visibility64("vis", Access::ClearedReadWrite, ""),
             ],
         }
@@ -42,44 +31,23 @@ impl Pass for TextureRaster {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.require_features(wgpu::Features::SHADER_INT64);
-        ctx.scratch_texture(
-            "dummy",
-            TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
-            &[Access::RenderTarget],
-        );
         let layout = BindingLayout::render("raster")
             .slot(0, "rects")
             .visible_in(wgpu::ShaderStages::VERTEX)
             .slot(1, "vis")
             .visible_in(wgpu::ShaderStages::FRAGMENT);
-        ctx.program(
-            "rects",
-            ProgramDesc::render(&SHADER, "rect_vs")
-                .fragment("rect_fs")
-                .target(ColorTarget::masked("dummy"))
-                .layout(layout),
-        );
+        let program = ProgramDesc::render(&SHADER, "rect_vs").fragment("rect_fs");
+        declare_masked_raster(ctx, program.layout(layout));
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        ctx.clear("vis")?;
-        let program = ctx.render("rects")?;
-        let bg = ctx.bind_group(&program, 0, &[])?;
-        let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
-        rp.set_pipeline(&program.pipeline);
-        rp.set_bind_group(0, &bg, &[]);
-        rp.draw(0..self.vertices, 0..1);
-        Ok(())
+        record_masked_raster(ctx, &[], |rp| rp.draw(0..self.vertices, 0..1))
     }
 }
 
 fn graph(vertices: u32) -> GraphBuilder {
     let mut g = GraphBuilder::new();
-    let rects = g.import_buffer(
-        "rects",
-        BufferDesc::array(Element::named("RectVertex", 32), vertices as u64),
-        wgpu::BufferUsages::STORAGE,
-    );
+    let rects = import_rect_vertices(&mut g, vertices);
     let vis = g.create_texture("vis", TextureDesc::d2(wgpu::TextureFormat::R64Uint, W, H));
     let out = g.create_buffer("out", BufferDesc::array(Element::U64, (W * H) as u64));
     let drawn = g
@@ -89,20 +57,8 @@ fn graph(vertices: u32) -> GraphBuilder {
             Bindings::new().bind("rects", rects).bind("vis", vis),
         )
         .unwrap();
-    let copied = g
-        .add_pass(
-            "copy_out",
-            synthetic::CopyTextureToBuffer {
-                format: wgpu::TextureFormat::R64Uint,
-                width: W,
-                height: H,
-            },
-            Bindings::new()
-                .bind("texture", drawn.texture("vis").unwrap())
-                .bind("buffer", out),
-        )
-        .unwrap();
-    g.export(copied.buffer("buffer").unwrap());
+    let vis = drawn.texture("vis").unwrap();
+    copy_out(&mut g, "copy_out", wgpu::TextureFormat::R64Uint, vis, out);
     g
 }
 
@@ -138,15 +94,8 @@ fn an_r64uint_visibility_texture_rasterises_like_the_cpu_where_atomics_exist() {
             .contains(wgpu::TextureUsages::STORAGE_ATOMIC)
     );
     let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
-    let buffer = gpu.buffer_with_data(
-        "rects",
-        bytemuck::cast_slice(&vertices),
-        wgpu::BufferUsages::STORAGE,
-    );
-    let mut exec = Executor::new(gpu);
-    let imports = Imports::new().buffer("rects", &buffer);
-    exec.execute(&compiled, &imports).unwrap();
-    exec.execute(&compiled, &imports).unwrap();
+    let rects = bytemuck::cast_slice(&vertices);
+    let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 2);
     let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("out").unwrap());
     assert_eq!(got, cpu_rects());
 }

@@ -10,8 +10,9 @@ pub mod versions;
 
 use crate::access::{Access, texture_usage_for};
 use crate::builder::{GraphBuilder, PassNode, VisibilityDecl};
-use crate::choice::{Choice, ChoicePlan};
+use crate::choice::Choice;
 use crate::error::{GraphError, Result};
+use crate::names::feature_names;
 use crate::pass::SetupContext;
 use crate::pass::Visibility64;
 use crate::plan::*;
@@ -39,23 +40,17 @@ impl CompileOptions {
             limits: wgpu::Limits::default(),
         }
     }
+    /// Plans for these limits instead of wgpu's defaults, e.g. to test a limit check.
     pub fn with_limits(mut self, limits: wgpu::Limits) -> Self {
         self.limits = limits;
         self
     }
-    /// The features enabled on an open device and its limits.
-    pub fn for_gpu(gpu: &crate::GpuContext) -> Self {
-        Self {
-            adapter_features: gpu.features,
-            limits: gpu.device.limits(),
-        }
-    }
-    /// The features and limits of `adapter`.
-    pub fn for_adapter(adapter: &crate::GpuAdapter) -> Self {
-        Self {
-            adapter_features: adapter.features(),
-            limits: adapter.adapter.limits(),
-        }
+}
+
+impl GraphBuilder {
+    /// Checks and plans the graph for `options`' adapter; see [`CompileOptions`].
+    pub fn compile(self, options: &CompileOptions) -> Result<CompiledGraph> {
+        compile(self, options)
     }
 }
 
@@ -68,6 +63,7 @@ pub(crate) struct PassSetup {
 
 /// A plan plus the passes it runs.
 pub struct CompiledGraph {
+    /// The plan: order, batches, lifetimes, pool slots and usages; serialisable for dumps.
     pub plan: Plan,
     /// Unique per compiled graph: the executor keeps what it resolved for each pass (its
     /// programs) under it, so a steady frame finds them without building keys.
@@ -80,17 +76,9 @@ pub struct CompiledGraph {
 }
 
 impl CompiledGraph {
-    pub fn pass_nodes(&self) -> &[PassNode] {
-        &self.passes
-    }
-
     /// The current value of a size parameter.
     pub fn param(&self, name: &str) -> Option<u64> {
-        self.plan
-            .params
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| *v)
+        self.plan.param(name)
     }
 
     /// Changes a size parameter: buffers sized by it get the new size, the pool is planned
@@ -496,13 +484,6 @@ fn recording(
         }
     }
     Recording::Compute
-}
-
-pub(crate) fn feature_names(f: wgpu::Features) -> String {
-    f.iter_names()
-        .map(|(n, _)| n)
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// Every access any live pass makes, plus what the executor itself needs.

@@ -4,7 +4,7 @@
 use crate::builder::PassNode;
 use crate::contract::{Slot, SlotKind};
 use crate::error::{GraphError, Result};
-use crate::plan::format_name;
+use crate::names::format_name;
 use crate::resource::*;
 
 pub(crate) fn check_slots(resources: &[ResourceInfo], node: &PassNode) -> Result<()> {

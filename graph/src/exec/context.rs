@@ -1,5 +1,6 @@
 //! The headless device: adapter selection, feature negotiation, small blocking helpers.
 
+use crate::compile::CompileOptions;
 use crate::error::{GraphError, Result};
 
 /// The environment variable that picks an adapter by a substring of its name.
@@ -28,7 +29,9 @@ pub fn experimental_features() -> wgpu::Features {
 
 /// A chosen adapter, before a device is created for it.
 pub struct GpuAdapter {
+    /// The instance the adapter came from; surfaces are made from it.
     pub instance: wgpu::Instance,
+    /// The adapter picked by [`crate::ADAPTER_ENV`], or the first Vulkan one.
     pub adapter: wgpu::Adapter,
 }
 
@@ -78,9 +81,11 @@ impl GpuAdapter {
         Ok(Self { instance, adapter })
     }
 
+    /// What the adapter supports; [`crate::CompileOptions::for_adapter`] plans for it.
     pub fn features(&self) -> wgpu::Features {
         self.adapter.features()
     }
+    /// Name, driver and backend, for logs and reports.
     pub fn info(&self) -> wgpu::AdapterInfo {
         self.adapter.get_info()
     }
@@ -134,12 +139,17 @@ impl GpuAdapter {
 
 /// An open device and its queue.
 pub struct GpuContext {
+    /// The instance the device came from; surfaces are made from it.
     pub instance: wgpu::Instance,
+    /// The adapter the device was opened on.
     pub adapter: wgpu::Adapter,
+    /// The device resources and pipelines are made on.
     pub device: wgpu::Device,
+    /// The queue frames are submitted to.
     pub queue: wgpu::Queue,
     /// Features enabled on the device.
     pub features: wgpu::Features,
+    /// The adapter's name, driver and backend.
     pub info: wgpu::AdapterInfo,
 }
 
@@ -160,8 +170,21 @@ impl GpuContext {
         if size == 0 {
             return Ok(Vec::new());
         }
+        self.copy_to_cpu("readback", size, |enc, staging| {
+            enc.copy_buffer_to_buffer(buffer, offset, staging, 0, size);
+        })
+    }
+
+    /// Records `copy` into a `size`-byte staging buffer, submits it and waits for the
+    /// bytes; a validation error of the copy is a readback error.
+    fn copy_to_cpu(
+        &self,
+        label: &str,
+        size: u64,
+        copy: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::Buffer),
+    ) -> Result<Vec<u8>> {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("meshlight readback"),
+            label: Some(&format!("meshlight {label}")),
             size,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
@@ -169,10 +192,8 @@ impl GpuContext {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut enc = self
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("readback"),
-            });
-        enc.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+        copy(&mut enc, &staging);
         self.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GraphError::Readback(e.to_string()));
@@ -192,39 +213,25 @@ impl GpuContext {
         let (width, height) = (texture.width(), texture.height());
         let row = width * texel;
         let padded_row = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("meshlight texture readback"),
-            size: (padded_row as u64 * height as u64).max(4),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let mut enc = self
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("texture readback"),
-            });
-        enc.copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &staging,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded_row),
-                    rows_per_image: Some(height),
+        let size = (padded_row as u64 * height as u64).max(4);
+        let padded = self.copy_to_cpu("texture readback", size, |enc, staging| {
+            enc.copy_texture_to_buffer(
+                texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: staging,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(padded_row),
+                        rows_per_image: Some(height),
+                    },
                 },
-            },
-            wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-        );
-        self.queue.submit([enc.finish()]);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GraphError::Readback(e.to_string()));
-        }
-        let padded = self.map_and_read(&staging)?;
+                wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+            );
+        })?;
         Ok(padded
             .chunks(padded_row as usize)
             .take(height as usize)
@@ -273,5 +280,22 @@ impl GpuContext {
             self.queue.write_buffer(&buffer, 0, &padded);
         }
         buffer
+    }
+}
+
+impl CompileOptions {
+    /// The features enabled on an open device and its limits.
+    pub fn for_gpu(gpu: &GpuContext) -> Self {
+        Self {
+            adapter_features: gpu.features,
+            limits: gpu.device.limits(),
+        }
+    }
+    /// The features and limits of `adapter`.
+    pub fn for_adapter(adapter: &GpuAdapter) -> Self {
+        Self {
+            adapter_features: adapter.features(),
+            limits: adapter.adapter.limits(),
+        }
     }
 }

@@ -34,10 +34,11 @@ pub struct Imports {
 }
 
 impl Imports {
-    /// No timings yet.
+    /// No imports yet.
     pub fn new() -> Self {
         Self::default()
     }
+    /// Supplies a caller-owned buffer for the imported resource `name`.
     pub fn buffer(mut self, name: &str, buffer: &wgpu::Buffer) -> Self {
         self.entries
             .insert(name.to_string(), Import::Buffer(buffer.clone()));
@@ -73,6 +74,7 @@ fn env_switch(name: &str) -> Option<bool> {
 /// One pass's GPU time in a frame measured per pass.
 #[derive(Clone, Debug, Serialize)]
 pub struct PassTiming {
+    /// The pass, by name.
     pub name: String,
     /// The plan's batch the pass ran in.
     pub batch: usize,
@@ -87,7 +89,9 @@ pub struct PassTiming {
 /// One batch of a frame (see [`crate::plan::Batch`]).
 #[derive(Clone, Debug, Serialize)]
 pub struct BatchStats {
+    /// The batch's label, as [`crate::Batch::label`] writes it.
     pub label: String,
+    /// Its passes, in order.
     pub passes: Vec<String>,
     /// GPU time between the batch's timestamps, in `frame` timing mode only, once known.
     pub gpu_us: Option<f64>,
@@ -96,11 +100,14 @@ pub struct BatchStats {
 /// What one executed frame cost and did: CPU times, batches, GPU timings when measured.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameStats {
+    /// The frame's index, counting from 0 since the executor was made.
     pub frame: u64,
+    /// Per pass, in plan order, with CPU record time and GPU time when measured.
     pub passes: Vec<PassTiming>,
     /// The timing mode this frame ran with: which of `gpu_us` (per pass or per batch) fill
     /// in.
     pub timing: TimingMode,
+    /// Per batch, in plan order.
     pub batches: Vec<BatchStats>,
     /// wgpu compute passes the shared batches opened (one per compute batch, more when a
     /// batched pass took the encoder).
@@ -123,12 +130,15 @@ pub struct FrameStats {
     /// Frames submitted whose timestamps the GPU had not yet delivered, this one included:
     /// above 1 means the CPU records ahead while the GPU works.
     pub frames_in_flight: u32,
+    /// Transient bytes the plan needs with pool slots shared (what it allocates).
     pub bytes_with_reuse: u64,
+    /// Transient bytes it would need with a resource each, to show what sharing saves.
     pub bytes_without_reuse: u64,
     /// Bytes the executor's pool holds, in use or kept for reuse.
     pub pool_bytes_held: u64,
     /// GPU resources created this frame (zero once a steady graph has warmed up).
     pub allocations: u32,
+    /// Render and compute pipelines created this frame (zero once steady: they are cached).
     pub pipelines_created: u32,
     /// Bind groups created this frame (zero once steady: they are cached by what they
     /// bind).
@@ -148,6 +158,7 @@ struct HistoryEntry {
 /// Runs compiled graphs frame after frame on one device: allocates and pools the physical
 /// resources, caches programs and bind groups, times and reads back.
 pub struct Executor {
+    /// The device the executor runs on; callers make imported resources and surfaces on it.
     pub gpu: GpuContext,
     pool: PhysicalPool,
     programs: Programs,
@@ -216,9 +227,11 @@ impl Executor {
         }
     }
 
+    /// The device, to create imported resources on.
     pub fn device(&self) -> &wgpu::Device {
         &self.gpu.device
     }
+    /// The queue, to upload to imported resources before a frame.
     pub fn queue(&self) -> &wgpu::Queue {
         &self.gpu.queue
     }
@@ -383,7 +396,7 @@ impl Executor {
         let missing = plan.enabled_features - self.gpu.features;
         if !missing.is_empty() {
             return Err(GraphError::DeviceLacksFeatures {
-                features: crate::compile::feature_names(missing),
+                features: crate::names::feature_names(missing),
                 instead: "open the device with the plan's `enabled_features` (GpuAdapter::open)"
                     .into(),
             });
@@ -873,13 +886,7 @@ fn check_import(
                     buffer.size()
                 ));
             }
-            if !buffer.usage().contains(u) {
-                return mismatch(format!(
-                    "declared usage {u:?}, the buffer has {:?}",
-                    buffer.usage()
-                ));
-            }
-            Ok(())
+            usage_covers(u, buffer.usage(), "buffer").or_else(mismatch)
         }
         (
             ResourceDesc::Texture(t),
@@ -892,28 +899,39 @@ fn check_import(
                 || texture.mip_level_count() != t.mip_levels
                 || texture.depth_or_array_layers() != t.layers
             {
+                let shape =
+                    |format: wgpu::TextureFormat, w: u32, h: u32, mips: u32, layers: u32| {
+                        format!("{format:?} {w}x{h} with {mips} mips and {layers} layers")
+                    };
                 return mismatch(format!(
-                    "declared {:?} {}x{} with {} mips and {} layers, the texture is {:?} {}x{} with {} mips and {} layers",
-                    t.format,
-                    t.width,
-                    t.height,
-                    t.mip_levels,
-                    t.layers,
-                    texture.format(),
-                    texture.width(),
-                    texture.height(),
-                    texture.mip_level_count(),
-                    texture.depth_or_array_layers()
+                    "declared {}, the texture is {}",
+                    shape(t.format, t.width, t.height, t.mip_levels, t.layers),
+                    shape(
+                        texture.format(),
+                        texture.width(),
+                        texture.height(),
+                        texture.mip_level_count(),
+                        texture.depth_or_array_layers()
+                    )
                 ));
             }
-            if !texture.usage().contains(u) {
-                return mismatch(format!(
-                    "declared usage {u:?}, the texture has {:?}",
-                    texture.usage()
-                ));
-            }
-            Ok(())
+            usage_covers(u, texture.usage(), "texture").or_else(mismatch)
         }
         _ => mismatch("a buffer was declared and a texture given, or the reverse".into()),
+    }
+}
+
+/// An error naming both usages when an imported object lacks part of its declared usage.
+fn usage_covers<U: bitflags::Flags + Copy + std::fmt::Debug>(
+    declared: U,
+    has: U,
+    what: &str,
+) -> std::result::Result<(), String> {
+    if has.contains(declared) {
+        Ok(())
+    } else {
+        Err(format!(
+            "declared usage {declared:?}, the {what} has {has:?}"
+        ))
     }
 }

@@ -28,6 +28,7 @@ impl FrameData {
         }
         self
     }
+    /// Sets `name` to one little-endian `u32` (a count, a frame index).
     pub fn set_u32(&mut self, name: &str, value: u32) -> &mut Self {
         self.set(name, &value.to_le_bytes())
     }
@@ -36,6 +37,7 @@ impl FrameData {
         self.set(name, bytes);
         self
     }
+    /// The bytes set for `name`, or `None` when this frame does not supply it.
     pub fn get(&self, name: &str) -> Option<&[u8]> {
         self.entries.get(name).map(Vec::as_slice)
     }

@@ -4,7 +4,6 @@ pub mod context;
 pub mod executor;
 mod fill;
 pub mod frame;
-pub mod layout;
 pub mod physical;
 pub mod programs;
 pub mod readback;
@@ -20,7 +19,6 @@ pub use executor::{
     BATCHING_ENV, BatchStats, CHECKED_ENV, Executor, FrameStats, Imports, PassTiming,
 };
 pub use frame::FrameData;
-pub use layout::{BindingLayout, BindingSource, LayoutEntry, SamplerKind};
 pub use programs::{ComputeProgram, Program, RenderProgram};
 pub use readback::Readback;
 pub use record::{ColorAttachment, DepthAttachment, Immediates, RecordContext};

@@ -3,8 +3,8 @@
 //! the exact resources they bind; and a per-frame arena for small uniform blocks.
 
 use crate::error::{GraphError, Result};
-use crate::exec::layout::{BindingLayout, SamplerKind};
 use crate::exec::reflect::{ShaderGlobal, globals};
+use crate::layout::{BindingLayout, SamplerKind};
 use crate::program::ProgramDesc;
 use meshlight_shaders::{PassShader, ShaderDef, ShaderLibrary};
 use std::collections::HashMap;
@@ -32,17 +32,21 @@ pub(crate) enum ImmediateMode {
 
 /// Anything with bind-group layouts: compute and render programs alike.
 pub trait Program {
+    /// The bind-group layouts the program was built with; bind groups for it are made from
+    /// these.
     fn layouts(&self) -> &ProgramLayouts;
 }
 
 /// A compute pipeline and the bind-group layouts it was built with.
 pub struct ComputeProgram {
+    /// The pipeline, to set on a compute pass.
     pub pipeline: wgpu::ComputePipeline,
     pub(crate) layouts: ProgramLayouts,
 }
 
 /// A render pipeline (vertex or mesh geometry) and the bind-group layouts it was built with.
 pub struct RenderProgram {
+    /// The pipeline, to set on a render pass.
     pub pipeline: wgpu::RenderPipeline,
     pub(crate) layouts: ProgramLayouts,
 }
@@ -76,7 +80,7 @@ pub(crate) struct ModuleKey {
 pub(crate) struct ProgramKey {
     pub desc: ProgramDesc,
     /// The declared layouts with the bindings read from the shader filled in.
-    pub expanded: Vec<crate::exec::BindingLayout>,
+    pub expanded: Vec<crate::layout::BindingLayout>,
     pub layouts: Vec<Vec<wgpu::BindGroupLayoutEntry>>,
     pub target_formats: Vec<wgpu::TextureFormat>,
     pub depth_format: Option<wgpu::TextureFormat>,

@@ -6,7 +6,9 @@ use std::collections::{HashMap, VecDeque};
 /// Bytes copied from the GPU in frame `frame`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Readback {
+    /// The frame the bytes were copied in, earlier than the one that delivered them.
     pub frame: u64,
+    /// The bytes of the range asked for.
     pub bytes: Vec<u8>,
 }
 

@@ -5,7 +5,6 @@ use crate::compile::PassSetup;
 use crate::error::{GraphError, Result};
 use crate::exec::fill::Fill;
 use crate::exec::frame::FrameData;
-use crate::exec::layout::{BindingSource, buffer_binding_type, texture_binding_type};
 use crate::exec::physical::Physical;
 use crate::exec::programs::{
     AnyProgram, BindGroupKey, BoundResource, CHUNK, ComputeProgram, ImmediateMode, ModuleKey,
@@ -14,6 +13,7 @@ use crate::exec::programs::{
 use crate::exec::readback::Readbacks;
 use crate::exec::shared::{ComputePassGuard, SharedPass, Unplanned};
 use crate::exec::views::ViewCache;
+use crate::layout::{BindingSource, buffer_binding_type, texture_binding_type};
 use crate::plan::{AttachmentOps, LoadOp, Plan, StoreOp};
 use crate::program::{Geometry, ProgramDesc, ProgramKind};
 use crate::resource::{ResourceDesc, ResourceKind, TextureDesc, TextureRange};
@@ -24,7 +24,10 @@ use std::sync::Arc;
 /// texture, and the colour it is cleared to when the compiler chose to clear it.
 #[derive(Clone, Copy, Debug)]
 pub struct ColorAttachment {
+    /// The slot or scratch texture drawn into.
     pub target: &'static str,
+    /// The clear colour, used only when the compiler chose to clear (nothing written it
+    /// before).
     pub clear: wgpu::Color,
 }
 
@@ -36,6 +39,7 @@ impl ColorAttachment {
             clear: wgpu::Color::TRANSPARENT,
         }
     }
+    /// Clears to `color` instead of transparent black.
     pub fn clear(mut self, color: wgpu::Color) -> Self {
         self.clear = color;
         self
@@ -45,7 +49,9 @@ impl ColorAttachment {
 /// The depth attachment of [`RecordContext::render_pass`].
 #[derive(Clone, Copy, Debug)]
 pub struct DepthAttachment {
+    /// The depth slot or scratch texture.
     pub target: &'static str,
+    /// The depth it is cleared to, used only when the compiler chose to clear.
     pub clear: f32,
 }
 
@@ -64,6 +70,7 @@ enum ImmediatesInner {
 }
 
 impl Immediates {
+    /// Sets the data on a compute pass before its dispatches.
     pub fn set_on_compute(&self, pass: &mut wgpu::ComputePass<'_>) {
         match &self.inner {
             ImmediatesInner::None => {}
@@ -73,6 +80,7 @@ impl Immediates {
             }
         }
     }
+    /// Sets the data on a render pass before its draws.
     pub fn set_on_render(&self, pass: &mut wgpu::RenderPass<'_>) {
         match &self.inner {
             ImmediatesInner::None => {}
@@ -113,9 +121,11 @@ pub struct RecordContext<'a> {
 }
 
 impl<'a> RecordContext<'a> {
+    /// The device, to create what the pass makes per frame (buffers for uploads).
     pub fn device(&self) -> &wgpu::Device {
         self.device
     }
+    /// The queue, to upload per-frame data before the frame is submitted.
     pub fn queue(&self) -> &wgpu::Queue {
         self.queue
     }
@@ -146,6 +156,7 @@ impl<'a> RecordContext<'a> {
             });
         }
     }
+    /// The pass instance's name in the graph, for labels and messages.
     pub fn pass_name(&self) -> &str {
         &self.node.name
     }
@@ -183,11 +194,7 @@ impl<'a> RecordContext<'a> {
     }
     /// The current value of a size parameter.
     pub fn param(&self, name: &str) -> Option<u64> {
-        self.plan
-            .params
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| *v)
+        self.plan.param(name)
     }
 
     fn err(&self, message: String) -> GraphError {
@@ -422,7 +429,7 @@ impl<'a> RecordContext<'a> {
     /// The wgpu layout entries of a declared layout, from the bound resources.
     fn layout_entries(
         &self,
-        layout: &crate::exec::BindingLayout,
+        layout: &crate::layout::BindingLayout,
     ) -> Result<Vec<wgpu::BindGroupLayoutEntry>> {
         let contract = &self.node.contract;
         layout
@@ -460,7 +467,7 @@ impl<'a> RecordContext<'a> {
         &self,
         name: &str,
         access: crate::access::Access,
-        entry: &crate::exec::layout::LayoutEntry,
+        entry: &crate::layout::LayoutEntry,
     ) -> Result<wgpu::BindingType> {
         let access = if entry.read_only {
             crate::access::Access::StorageRead
@@ -625,7 +632,7 @@ impl<'a> RecordContext<'a> {
             desc.shader,
             module_key(desc, key.native_immediates),
         )?;
-        let mut groups: Vec<(crate::exec::BindingLayout, wgpu::BindGroupLayout)> = key
+        let mut groups: Vec<(crate::layout::BindingLayout, wgpu::BindGroupLayout)> = key
             .expanded
             .iter()
             .zip(&key.layouts)
@@ -643,7 +650,7 @@ impl<'a> RecordContext<'a> {
                 .map(|l| l.visibility)
                 .unwrap_or(wgpu::ShaderStages::all());
             let l =
-                crate::exec::BindingLayout::with_visibility("immediates", visibility).uniform(0);
+                crate::layout::BindingLayout::with_visibility("immediates", visibility).uniform(0);
             let entries = self.layout_entries(&l)?;
             let bgl = self.programs.layout(self.device, l.label, entries);
             groups.push((l, bgl));

@@ -5,7 +5,7 @@
 //! texture) and the stages that use it come from the module.
 
 use crate::access::Access;
-use crate::exec::layout::{BindingLayout, BindingSource, LayoutEntry};
+use crate::layout::{BindingLayout, BindingSource, LayoutEntry};
 
 /// naga_oil appends this and an encoded module path to the names of items that come from
 /// an imported module; the name before it is the one written in WGSL.

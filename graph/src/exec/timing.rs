@@ -40,6 +40,7 @@ impl TimingMode {
             _ => None,
         }
     }
+    /// The mode's name, as [`crate::TIMING_ENV`] accepts it.
     pub fn name(self) -> &'static str {
         match self {
             Self::Off => "off",
@@ -59,6 +60,7 @@ impl TimingMode {
 /// GPU time of each timed unit of one frame.
 #[derive(Clone, Debug, Serialize)]
 pub struct GpuTimings {
+    /// The frame these timings belong to.
     pub frame: u64,
     /// The mode that produced these figures.
     pub mode: TimingMode,

@@ -19,6 +19,8 @@ impl Params {
         GraphError::parameter(format!("`{key}` must be {wanted}, not `{got}`"))
     }
 
+    /// The integer at `key`, or `default` when the table lacks it; an error names the key and
+    /// what it holds.
     pub fn u64(&self, key: &str, default: u64) -> Result<u64> {
         match self.table.get(key) {
             None => Ok(default),
@@ -26,11 +28,13 @@ impl Params {
             Some(v) => Err(Self::err(key, "a non-negative integer", v)),
         }
     }
+    /// [`Params::u64`] that must fit in 32 bits.
     pub fn u32(&self, key: &str, default: u32) -> Result<u32> {
         let v = self.u64(key, default as u64)?;
         u32::try_from(v)
             .map_err(|_| GraphError::parameter(format!("`{key}` = {v} does not fit in 32 bits")))
     }
+    /// The boolean at `key`, or `default` when the table lacks it.
     pub fn bool(&self, key: &str, default: bool) -> Result<bool> {
         match self.table.get(key) {
             None => Ok(default),
@@ -73,6 +77,7 @@ impl Params {
         };
         x.is_finite().then_some(x)
     }
+    /// The string at `key`, or `default` when the table lacks it.
     pub fn string(&self, key: &str, default: &str) -> Result<String> {
         match self.table.get(key) {
             None => Ok(default.to_string()),

@@ -3,8 +3,8 @@
 
 use crate::builder::{Bindings, GraphBuilder};
 use crate::error::{GraphError, Result};
-use crate::file::problem::{MAX_PIPELINE_FILE_BYTES, ResourceProblem, SourceProblem};
 use crate::file::{Params, Registry};
+use crate::problem::{MAX_PIPELINE_FILE_BYTES, ResourceProblem, SourceProblem};
 use crate::resource::{BufferDesc, Element, TextureDesc, TextureRange};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -23,8 +23,10 @@ pub struct PipelineFile {
     #[serde(default)]
     pub params: BTreeMap<String, u64>,
     #[serde(default, rename = "resource")]
+    /// The `[[resource]]` entries, in file order.
     pub resources: Vec<ResourceEntry>,
     #[serde(default, rename = "pass")]
+    /// The `[[pass]]` entries, in file order: the order passes are added to the graph.
     pub passes: Vec<PassEntry>,
 }
 
@@ -637,13 +639,13 @@ pub fn parse_format(name: &str) -> std::result::Result<wgpu::TextureFormat, Stri
     KNOWN
         .iter()
         .copied()
-        .find(|f| crate::plan::format_name(*f) == name.to_lowercase())
+        .find(|f| crate::names::format_name(*f) == name.to_lowercase())
         .ok_or_else(|| {
             format!(
                 "unknown texture format `{name}`; known: {}",
                 KNOWN
                     .iter()
-                    .map(|f| crate::plan::format_name(*f))
+                    .map(|f| crate::names::format_name(*f))
                     .collect::<Vec<_>>()
                     .join(", ")
             )

@@ -1,6 +1,6 @@
 //! The registry: (stage, implementation) → a factory building the pass from parameters.
 
-use crate::choice::Choice;
+use crate::choice::{AUTO, Choice};
 use crate::error::{GraphError, Result};
 use crate::file::Params;
 use crate::pass::Pass;
@@ -8,9 +8,6 @@ use std::collections::BTreeMap;
 
 /// Builds a pass from its `params` table.
 pub type Factory = fn(&Params) -> Result<Box<dyn Pass>>;
-
-/// The implementation name that lets compile pick by the adapter's features.
-pub const AUTO: &str = "auto";
 
 /// The stages and implementations pipeline files can name, each with its factory, and per
 /// stage the order `auto` tries them in.
@@ -26,6 +23,8 @@ impl Registry {
     pub fn new() -> Self {
         Self::default()
     }
+    /// Adds the factory that builds `implementation` of `stage`; a second registration of the
+    /// same pair replaces the first.
     pub fn register(
         &mut self,
         stage: &'static str,
@@ -92,6 +91,8 @@ impl Registry {
         Choice::select(implementation, candidates).map(Some)
     }
 
+    /// Builds `implementation` of `stage` from `params`; an unknown pair is an error listing
+    /// the stage's implementations.
     pub fn build(
         &self,
         stage: &str,
@@ -127,6 +128,7 @@ impl Registry {
         v.dedup();
         v
     }
+    /// Every registered (stage, implementation) pair, sorted.
     pub fn stages(&self) -> Vec<(String, String)> {
         self.factories.keys().cloned().collect()
     }

@@ -1,4 +1,5 @@
-//! A pass with any contract and no GPU work, for compile tests.
+//! Passes whose contract and work a test states inline: `Fake` with any contract and no
+//! GPU work, for compile tests, and `pass` built from closures.
 #![allow(dead_code)]
 
 use meshlight_graph::*;
@@ -74,4 +75,52 @@ pub const IMPORT_USAGE: wgpu::BufferUsages =
 
 pub fn opts() -> CompileOptions {
     CompileOptions::new(wgpu::Features::empty())
+}
+
+/// A pass built from closures, so each test states its contract, setup and record inline.
+pub struct TestPass<S, R> {
+    stage: &'static str,
+    slots: Vec<Slot>,
+    setup: S,
+    record: R,
+}
+
+impl<S, R> Pass for TestPass<S, R>
+where
+    S: Fn(&mut SetupContext) -> Result<()> + Send + Sync,
+    R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
+{
+    fn contract(&self) -> StageContract {
+        StageContract {
+            stage: self.stage,
+            slots: self.slots.clone(),
+        }
+    }
+    fn implementation(&self) -> &'static str {
+        "test"
+    }
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        (self.setup)(ctx)
+    }
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        (self.record)(ctx)
+    }
+}
+
+pub fn pass<S, R>(stage: &'static str, slots: Vec<Slot>, setup: S, record: R) -> TestPass<S, R>
+where
+    S: Fn(&mut SetupContext) -> Result<()> + Send + Sync,
+    R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
+{
+    TestPass {
+        stage,
+        slots,
+        setup,
+        record,
+    }
+}
+
+/// A `u32` buffer slot `out` the pass writes: what keeps a setup-only test pass alive.
+pub fn out_u32() -> Slot {
+    Slot::buffer("out", Access::StorageWrite, Element::U32, "")
 }

@@ -3,12 +3,29 @@
 
 use meshlight_graph::*;
 
-pub const SHADER: PassShader = PassShader {
-    name: "test::arith",
-    source: include_str!("arith.wgsl"),
-    file_path: "graph/tests/support/arith.wgsl",
-    modules: &[],
-};
+pub mod fake;
+pub mod rects;
+
+/// A pass shader read from `graph/tests/support/<file>`.
+#[allow(unused_macros)] // not every test binary reads a shader of its own
+macro_rules! support_shader {
+    ($name:literal, $file:literal) => {
+        PassShader {
+            name: $name,
+            source: include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/tests/support/",
+                $file
+            )),
+            file_path: concat!("graph/tests/support/", $file),
+            modules: &[],
+        }
+    };
+}
+#[allow(unused_imports)] // not every test binary reads a shader of its own
+pub(crate) use support_shader;
+
+pub const SHADER: PassShader = support_shader!("test::arith", "arith.wgsl");
 
 fn u32s(name: &'static str, access: Access, doc: &'static str) -> Slot {
     Slot::buffer(name, access, Element::U32, doc)
@@ -63,15 +80,26 @@ fn program(entry: &'static str, layout: BindingLayout) -> ProgramDesc {
     ProgramDesc::compute(&SHADER, entry).layout(layout)
 }
 
-fn dispatch(ctx: &mut RecordContext<'_>, name: &str, count: u32, k: u32) -> Result<()> {
-    let program = ctx.compute(name)?;
-    let params = [count, k, 0, 0];
-    let bg = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&params))])?;
-    let mut pass = ctx.compute_pass();
-    pass.set_pipeline(&program.pipeline);
-    pass.set_bind_group(0, &bg, &[]);
-    pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
+/// Records one dispatch of the compute program `name` with bind group 0.
+pub fn dispatch_once(
+    ctx: &mut RecordContext<'_>,
+    name: &str,
+    uniforms: &[(u32, &[u8])],
+    groups: [u32; 3],
+) -> Result<()> {
+    let p = ctx.compute(name)?;
+    let bg = ctx.bind_group(&p, 0, uniforms)?;
+    let mut cp = ctx.compute_pass();
+    cp.set_pipeline(&p.pipeline);
+    cp.set_bind_group(0, &bg, &[]);
+    cp.dispatch_workgroups(groups[0], groups[1], groups[2]);
     Ok(())
+}
+
+fn dispatch(ctx: &mut RecordContext<'_>, name: &str, count: u32, k: u32) -> Result<()> {
+    let params = [count, k, 0, 0];
+    let uniforms = [(2, bytemuck::cast_slice(&params))];
+    dispatch_once(ctx, name, &uniforms, [count.div_ceil(64), 1, 1])
 }
 
 impl Pass for Fill {
@@ -149,6 +177,24 @@ pub fn storage_buffer(gpu: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buf
         bytemuck::cast_slice(words),
         wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
     )
+}
+
+/// Uploads `bytes` as the storage buffer imported as `import.0`, runs `frames` frames of
+/// `compiled` and returns the executor, to read the results from.
+pub fn run_frames(
+    gpu: GpuContext,
+    compiled: &CompiledGraph,
+    import: (&str, &[u8]),
+    frames: u32,
+) -> Executor {
+    let (name, bytes) = import;
+    let buffer = gpu.buffer_with_data(name, bytes, wgpu::BufferUsages::STORAGE);
+    let imports = Imports::new().buffer(name, &buffer);
+    let mut exec = Executor::new(gpu);
+    for _ in 0..frames {
+        exec.execute(compiled, &imports).unwrap();
+    }
+    exec
 }
 
 pub fn read_u32s(gpu: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Vec<u32> {

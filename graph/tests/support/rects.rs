@@ -2,6 +2,12 @@
 //! lie on pixel boundaries, so no pixel centre is ambiguous and every rasteriser agrees.
 #![allow(dead_code)]
 
+use meshlight_graph::{
+    Access, Bindings, Buffer, BufferDesc, ColorAttachment, ColorTarget, Element, GraphBuilder,
+    Handle, ProgramDesc, RecordContext, Result, SetupContext, Slot, Texture, TextureDesc,
+    synthetic,
+};
+
 /// Pixel rectangles (x0, y0, x1, y1) with a depth word and an id.
 pub const RECTS: [([u32; 4], u32, u32); 4] = [
     ([0, 0, 40, 30], 100, 1),
@@ -53,4 +59,65 @@ pub fn rect_vertices() -> Vec<RectVertex> {
         }
     }
     v
+}
+
+/// How the raster passes' slots name a [`RectVertex`].
+pub const RECT_VERTEX: Element = Element::named("RectVertex", 32);
+
+/// Imports the storage buffer `rects` of `count` vertices.
+pub fn import_rect_vertices(g: &mut GraphBuilder, count: u32) -> Handle<Buffer> {
+    let desc = BufferDesc::array(RECT_VERTEX, count as u64);
+    g.import_buffer("rects", desc, wgpu::BufferUsages::STORAGE)
+}
+
+/// The slot a raster pass reads the vertices through.
+pub fn rects_slot() -> Slot {
+    Slot::buffer("rects", Access::StorageRead, RECT_VERTEX, "")
+}
+
+/// Adds pass `name` copying the `W × H` texture `texture` of `format` into `out` and
+/// exports `out`, so the test can read what was drawn.
+pub fn copy_out(
+    g: &mut GraphBuilder,
+    name: &str,
+    format: wgpu::TextureFormat,
+    texture: Handle<Texture>,
+    out: Handle<Buffer>,
+) {
+    let copy = synthetic::CopyTextureToBuffer {
+        format,
+        width: W,
+        height: H,
+    };
+    let bindings = Bindings::new().bind("texture", texture).bind("buffer", out);
+    let copied = g.add_pass(name, copy, bindings).unwrap();
+    g.export(copied.buffer("buffer").unwrap());
+}
+
+/// Declares a raster into `vis` through a masked colour target: the `W × H` dummy target a
+/// render pipeline must have, and `program`, drawing into it, as the program `rects`.
+pub fn declare_masked_raster(ctx: &mut SetupContext, program: ProgramDesc) {
+    ctx.scratch_texture(
+        "dummy",
+        TextureDesc::d2(wgpu::TextureFormat::R8Unorm, W, H),
+        &[Access::RenderTarget],
+    );
+    ctx.program("rects", program.target(ColorTarget::masked("dummy")));
+}
+
+/// Clears `vis` and records the program `rects` into the dummy target, bind group 0 built
+/// with `uniforms`; `draw` issues the draw.
+pub fn record_masked_raster(
+    ctx: &mut RecordContext<'_>,
+    uniforms: &[(u32, &[u8])],
+    draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
+) -> Result<()> {
+    ctx.clear("vis")?;
+    let program = ctx.render("rects")?;
+    let bg = ctx.bind_group(&program, 0, uniforms)?;
+    let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
+    rp.set_pipeline(&program.pipeline);
+    rp.set_bind_group(0, &bg, &[]);
+    draw(&mut rp);
+    Ok(())
 }

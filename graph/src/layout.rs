@@ -62,7 +62,9 @@ impl SamplerKind {
 /// One binding of a [`BindingLayout`].
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct LayoutEntry {
+    /// The `@binding` number in the group.
     pub binding: u32,
+    /// What is bound there.
     pub source: BindingSource,
     /// Stages that see this binding; `None`: the layout's default.
     pub visibility: Option<wgpu::ShaderStages>,
@@ -85,8 +87,11 @@ pub struct LayoutEntry {
 /// whose array element differs from the slot's, is an error naming the variable.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct BindingLayout {
+    /// The bind group layout's label, seen in wgpu's messages and GPU captures.
     pub label: &'static str,
+    /// Stages that see an entry that does not set its own.
     pub visibility: wgpu::ShaderStages,
+    /// The bindings, in the order they were listed.
     pub entries: Vec<LayoutEntry>,
     /// Fill in the shader's other bindings when the program is built.
     pub reflect: bool,
@@ -136,15 +141,20 @@ impl BindingLayout {
         });
         self
     }
+    /// Binds `slot` at `binding`.
     pub fn slot(self, binding: u32, slot: &'static str) -> Self {
         self.push(binding, BindingSource::Slot(slot))
     }
+    /// Binds the pass's scratch resource `name` at `binding`, used as `access`.
     pub fn scratch(self, binding: u32, name: &'static str, access: Access) -> Self {
         self.push(binding, BindingSource::Scratch(name.into(), access))
     }
+    /// Binds a uniform buffer at `binding`, filled with the bytes the pass gives when it
+    /// records.
     pub fn uniform(self, binding: u32) -> Self {
         self.push(binding, BindingSource::Uniform)
     }
+    /// Binds a sampler of `kind` at `binding`.
     pub fn sampler(self, binding: u32, kind: SamplerKind) -> Self {
         self.push(binding, BindingSource::Sampler(kind))
     }
