@@ -291,7 +291,7 @@ fn too_many_objects_and_an_empty_grid_are_typed_errors() {
     .unwrap();
     let five = vec![object(ClusterableKind::PointLight, Vec3::new(0.0, 0.0, -5.0), 1.0); 5];
     match clusterer.frame(&view, &five) {
-        Err(GraphError::Parameter { message, .. }) => {
+        Err(GraphError::Setting { message, .. }) => {
             assert!(
                 message.contains("holds 4") && message.contains("`objects`"),
                 "{message}"
@@ -303,7 +303,7 @@ fn too_many_objects_and_an_empty_grid_are_typed_errors() {
         let mut s = ClusteringSettings::new([320, 180], 4);
         s.grid.dims = dims;
         match Clusterer::new(s, &ClusteringSource::Code) {
-            Err(GraphError::Parameter { message, .. }) => {
+            Err(GraphError::Setting { message, .. }) => {
                 assert!(message.contains("at least 1"), "{message}")
             }
             other => panic!("{dims:?}: {:?}", other.err()),

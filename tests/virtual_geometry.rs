@@ -725,7 +725,8 @@ fn a_viewport_of_zero_or_past_the_texture_limit_is_an_error_saying_what_to_chang
             FrameSettings::new(w, h),
             &GraphSource::Code,
         ) {
-            Err(GraphError::Parameter { message, .. }) => {
+            Err(GraphError::Setting { setting, message }) => {
+                assert_eq!(setting, "the viewport");
                 assert!(message.contains("--width/--height"), "{message}")
             }
             Err(e) => panic!("{w} × {h}: {e}"),

@@ -296,6 +296,16 @@ pub enum GraphError {
         message: String,
     },
 
+    /// A setting of a whole frame (not of one pass) is out of range: the viewport, a
+    /// capacity, a grid. Raised by the renderers built on the graph.
+    #[error("{setting}: {message}")]
+    Setting {
+        /// What is set, as its owner names it (`the viewport`, `ClusteringSettings::objects`).
+        setting: String,
+        /// What is wrong and what to change.
+        message: String,
+    },
+
     /// A pass rejects its parameters (setup or load).
     #[error("pass `{pass}` parameter error: {message}")]
     Parameter {

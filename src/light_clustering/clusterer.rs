@@ -130,8 +130,8 @@ impl Clusterer {
     pub fn frame(&mut self, view: &View, objects: &[ClusterableObject]) -> Result<FrameStats> {
         let limit = self.settings.objects;
         if objects.len() as u64 > limit {
-            return Err(GraphError::Parameter {
-                pass: "(light clustering)".into(),
+            return Err(GraphError::Setting {
+                setting: "ClusteringSettings::objects".into(),
                 message: format!(
                     "{} clusterable objects, but the object buffer holds {limit}; raise `objects` (ClusteringSettings::objects, or `objects` in the pipeline's [params]) or cluster fewer",
                     objects.len()

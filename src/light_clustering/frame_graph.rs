@@ -73,8 +73,8 @@ impl ClusteringSettings {
 
     fn check(&self) -> Result<()> {
         let err = |message: String| {
-            Err(GraphError::Parameter {
-                pass: "(light clustering)".into(),
+            Err(GraphError::Setting {
+                setting: "the light clustering's settings".into(),
                 message,
             })
         };
@@ -240,8 +240,8 @@ fn export_and_read_back(g: &mut GraphBuilder) -> Result<()> {
         "cluster_counts",
         "cluster_objects",
     ] {
-        let handle = g.resource(name).ok_or_else(|| GraphError::PipelineFile {
-            file: "(light clustering)".into(),
+        let handle = g.resource(name).ok_or_else(|| GraphError::Setting {
+            setting: "the light clustering's graph".into(),
             message: format!(
                 "no resource `{name}`: the clustering's outputs must keep their names"
             ),

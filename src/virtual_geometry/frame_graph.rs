@@ -226,8 +226,8 @@ impl FrameSettings {
     pub fn check_viewport(&self, max_dimension: u32) -> Result<()> {
         let (w, h) = (self.width, self.height);
         if w == 0 || h == 0 || w > max_dimension || h > max_dimension {
-            return Err(GraphError::Parameter {
-                pass: "(viewport)".into(),
+            return Err(GraphError::Setting {
+                setting: "the viewport".into(),
                 message: format!(
                     "the viewport {w} × {h} must be at least 1 × 1 and at most {max_dimension} on each side (this device's 2-D texture limit); change --width/--height"
                 ),

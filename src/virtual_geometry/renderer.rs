@@ -208,8 +208,8 @@ impl Renderer {
         if let Some(b) = &self.light_buffers {
             let limit = self.settings.clustering.as_ref().map_or(0, |c| c.objects);
             if self.lights.len() as u64 > limit {
-                return Err(GraphError::Parameter {
-                    pass: "(light clustering)".into(),
+                return Err(GraphError::Setting {
+                    setting: "FrameSettings::clustering.objects".into(),
                     message: format!(
                         "{} lights, but the object buffer holds {limit}; raise `FrameSettings::clustering.objects` (`--lights` sizes it) or use fewer",
                         self.lights.len()
