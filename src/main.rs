@@ -141,6 +141,7 @@ enum Format {
     Json,
     Mermaid,
     Html,
+    Svg,
 }
 
 #[derive(clap::Args)]
@@ -167,6 +168,19 @@ const FIELD_ENTRIES_PER_LIGHT: u64 = 32;
 
 /// Exit code when no Vulkan adapter exists, so scripts can install lavapipe and retry.
 const EXIT_NO_ADAPTER: u8 = 3;
+
+/// How the report page at `page` links the image at `image`: by file name beside it,
+/// else by absolute path.
+fn image_link(page: &std::path::Path, image: &std::path::Path) -> String {
+    let folder = |p: &std::path::Path| p.parent().map(std::path::Path::to_path_buf);
+    match image.file_name() {
+        Some(name) if folder(page) == folder(image) => name.to_string_lossy().into_owned(),
+        _ => std::path::absolute(image)
+            .unwrap_or_else(|_| image.to_path_buf())
+            .display()
+            .to_string(),
+    }
+}
 
 fn main() -> ExitCode {
     quiet_on_closed_stdout();
@@ -467,10 +481,14 @@ fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     if let Some(html) = html {
-        let page = dump::to_html(
+        let image = image_link(&html, &a.output);
+        let page = dump::to_html_report(
             &renderer.compiled.plan,
             &format!("meshlight: {}", a.mesh.display()),
-            Some(&still.stats),
+            &dump::Report {
+                last_frame: Some(&still.stats),
+                image: Some(&image),
+            },
         );
         let page = match page.rfind("</body>") {
             Some(at) => format!(
@@ -503,6 +521,7 @@ fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
         Format::Json => dump::to_json(&plan, None),
         Format::Mermaid => dump::to_mermaid(&plan),
         Format::Html => dump::to_html(&plan, &title, None),
+        Format::Svg => dump::to_svg(&plan),
     };
     match a.output {
         Some(path) => meshlight::output::write_file(&path, text.as_bytes())?,

@@ -1,6 +1,7 @@
-//! One self-contained HTML page (no scripts, no network): the batches and the pass order
-//! with GPU time bars (per batch in `frame` timing mode, per pass in `passes` mode, the
-//! mode named), and the resource-lifetime chart (rows = resources, columns = passes).
+//! One self-contained HTML page (no scripts, no network): the frame's GPU time and image
+//! when given, a drawing of the graph, the batches and the pass order with GPU time bars
+//! (per batch in `frame` timing mode, per pass in `passes` mode, the mode named), and the
+//! resource-lifetime chart (rows = resources, columns = passes).
 
 use super::kind_tag;
 use crate::exec::FrameStats;
@@ -23,9 +24,31 @@ fn bytes(b: u64) -> String {
     }
 }
 
-/// The plan as one self-contained HTML page (batches, passes, resources, pool slots), with
-/// the last frame's timings when given.
+/// What a report shows besides the plan.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Report<'a> {
+    /// The last frame's timings: GPU times per batch or pass, the frame's total.
+    pub last_frame: Option<&'a FrameStats>,
+    /// The image the frame made, as the page links it (a path relative to the page).
+    pub image: Option<&'a str>,
+}
+
+/// The plan as one self-contained HTML page (graph, batches, passes, resources, pool
+/// slots), with the last frame's timings when given.
 pub fn to_html(plan: &Plan, title: &str, last_frame: Option<&FrameStats>) -> String {
+    to_html_report(
+        plan,
+        title,
+        &Report {
+            last_frame,
+            image: None,
+        },
+    )
+}
+
+/// [`to_html`] with everything a [`Report`] adds: the image above the graph.
+pub fn to_html_report(plan: &Plan, title: &str, report: &Report) -> String {
+    let last_frame = report.last_frame;
     let mut h = String::new();
     let _ = write!(
         h,
@@ -46,6 +69,27 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
         bytes(plan.bytes_without_reuse)
     );
 
+    if let Some(frame) = last_frame {
+        let gpu = frame
+            .gpu_frame_us
+            .map(|us| format!("<b>{:.3} ms</b> on the GPU ({})", us / 1000.0, esc(frame.timing.name())))
+            .unwrap_or_else(|| "no GPU time (timing off or not back yet)".into());
+        let _ = writeln!(
+            h,
+            "<p class=\"total\">Frame {}: {gpu}, {:.3} ms of CPU recording and submission.</p>",
+            frame.frame,
+            frame.cpu_frame_us / 1000.0
+        );
+    }
+    if let Some(image) = report.image {
+        let _ = writeln!(
+            h,
+            "<p><img src=\"{}\" alt=\"the frame's image\" style=\"max-width:100%\"></p>",
+            esc(image)
+        );
+    }
+    h.push_str("<h2>Graph</h2>\n");
+    h.push_str(&super::to_svg(plan));
     batches(&mut h, plan, last_frame);
     h.push_str("<h2>Pass order</h2>\n<table><tr><th>#</th><th>batch</th><th>pass</th><th>stage / implementation</th><th>GPU µs</th><th></th><th>CPU record µs</th><th>programs (kind, entries, defs)</th></tr>\n");
     let max_gpu = last_frame

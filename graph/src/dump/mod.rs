@@ -1,13 +1,15 @@
-//! Deterministic dumps of a compiled plan: DOT, JSON, Mermaid and a self-contained HTML
-//! page. Everything iterates in plan order, so equal plans give equal bytes.
+//! Deterministic dumps of a compiled plan: DOT, JSON, Mermaid, an SVG drawing and a
+//! self-contained HTML page. Everything iterates in plan order, so equal plans give equal bytes.
 
 mod dot;
 mod html;
 mod mermaid;
+mod svg;
 
 pub use dot::to_dot;
-pub use html::to_html;
+pub use html::{Report, to_html, to_html_report};
 pub use mermaid::to_mermaid;
+pub use svg::to_svg;
 
 use crate::exec::FrameStats;
 use crate::plan::Plan;
