@@ -46,7 +46,10 @@
 //! shader writes) and [`Compute`] (`compute`, a direct dispatch whose workgroups share
 //! their lanes out over the tiles of their share of the instances, at most 64, a round),
 //! as in `count_raster`; pair each with the same implementation of that stage, so both
-//! stages decide every pair with the same code.
+//! stages decide every pair with the same code. That code is one source: count_raster's
+//! walk module ([`meshlight_pass_count_raster::WALK_MODULES`]), which this stage's shader
+//! imports with `POPULATE` defined, and both record it through
+//! [`meshlight_pass_count_raster::Walk`].
 
 pub mod cpu;
 
