@@ -41,6 +41,7 @@
 //! where the GPU's rounding may go the other way.
 
 pub mod cpu;
+pub mod testbed;
 
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
@@ -52,7 +53,7 @@ use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE, check_tiles, declare_tile_target,
     workgroup_grid,
 };
-use meshlight_shaders::{PassShader, pass_shader};
+use meshlight_shaders::{LocalModule, PassShader, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "count_raster";
@@ -60,10 +61,28 @@ pub const STAGE: &str = "count_raster";
 pub const VIEW_INPUT: &str = "view";
 /// Counts per froxel: one per `ClusterableKind`.
 pub const KINDS: u32 = 4;
-/// The raster implementation's scratch target.
-const TARGET: &str = "target";
+/// The entry points of both implementations; the walk itself is the `count_raster::walk`
+/// module ([`WALK_MODULES`]).
+pub const SHADER: PassShader = pass_shader!(
+    "count_raster::count",
+    "count.wgsl",
+    modules: [("count_raster::walk", "walk.wgsl")]
+);
 
-pub const SHADER: PassShader = pass_shader!("count_raster::count", "count.wgsl");
+/// The walk over z_slice's instances and their froxels (`walk.wgsl`), for this stage and
+/// for `populate`, whose shader imports it too and defines `POPULATE` to claim list places
+/// where this stage counts.
+///
+/// Both stages must decide every (object, froxel) pair alike, or populate's lists would
+/// not match the counts its offsets were built from; one source for the walk makes that
+/// hold by construction. It lives here, in the first of the two stages, which populate
+/// already depends on for the instance slots ([`instance_slots`]) and the walk's grid
+/// ([`walk_grid`]). Only the entry points stay in each stage's shader (`count.wgsl`,
+/// populate's `populate.wgsl`), a call each, so pipelines and dumps still name them per
+/// stage. A stage's shader picks its work with a `#define` rather than a def given from
+/// Rust: a stage never runs the other's variant, so the choice belongs to the shader, not
+/// to the pipeline.
+pub const WALK_MODULES: &[LocalModule] = SHADER.modules;
 
 /// The slots through which a walking stage reads z_slice's instances: `count_raster`'s,
 /// and `populate`'s, which walks the same instances.
@@ -108,20 +127,29 @@ pub fn contract() -> StageContract {
     }
 }
 
-/// The raster implementation's bindings: the quad's vertices need the instance, object
-/// and grid; only the fragment shader counts.
-fn raster_layout() -> BindingLayout {
-    BindingLayout::from_shader_render("count_raster::raster")
-}
-
-fn compute_layout() -> BindingLayout {
-    BindingLayout::from_shader("count_raster::compute")
-}
-
 fn setup_common(ctx: &mut SetupContext) {
     ctx.min_bytes("slice_counts", 8);
     ctx.min_bytes("cluster_grid", CLUSTER_GRID.size as u64);
     ctx.frame_input(VIEW_INPUT);
+}
+
+/// The walk of this stage's implementations.
+const COUNT_WALK: WalkShader = WalkShader {
+    shader: &SHADER,
+    program: "count",
+    vertex: "count_vs",
+    fragment: "count_fs",
+    compute: "count_cs",
+    raster_layout: "count_raster::raster",
+    compute_layout: "count_raster::compute",
+};
+
+/// The grid's tiles a walking stage's params give: `width` and `height`, default 16 × 9
+/// (z_slice's), at least one each way.
+pub fn tiles_param(params: &Params) -> Result<[u32; 2]> {
+    let tiles = [params.u32("width", 16)?, params.u32("height", 9)?];
+    check_tiles(tiles[0], tiles[1])?;
+    Ok(tiles)
 }
 
 /// The `raster` implementation.
@@ -147,12 +175,15 @@ impl Raster {
     /// `compute` implementation accepts the same params and does not need them.
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&["width", "height"])?;
-        let pass = Self {
-            width: params.u32("width", 16)?,
-            height: params.u32("height", 9)?,
-        };
-        check_tiles(pass.width, pass.height)?;
-        Ok(pass)
+        let [width, height] = tiles_param(params)?;
+        Ok(Self { width, height })
+    }
+
+    fn walk(&self) -> Walk {
+        Walk::Raster {
+            width: self.width,
+            height: self.height,
+        }
     }
 }
 
@@ -165,32 +196,10 @@ impl Pass for Raster {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         setup_common(ctx);
-        ctx.min_bytes("slice_draw_args", 16);
-        declare_tile_target(ctx, TARGET, self.width, self.height)?;
-        ctx.program(
-            "count",
-            ProgramDesc::render(&SHADER, "count_vs")
-                .fragment("count_fs")
-                .target(ColorTarget::masked(TARGET))
-                .primitive(Primitive {
-                    topology: wgpu::PrimitiveTopology::TriangleStrip,
-                    cull_mode: None,
-                    ..Primitive::default()
-                })
-                .layout(raster_layout()),
-        );
-        Ok(())
+        self.walk().setup(ctx, &COUNT_WALK)
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let view = frame_view(ctx, VIEW_INPUT, None)?;
-        let program = ctx.render("count")?;
-        let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
-        let (args, _) = ctx.buffer("slice_draw_args")?;
-        let mut pass = ctx.render_pass(&[ColorAttachment::new(TARGET)], None)?;
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.draw_indirect(args, 0);
-        Ok(())
+        self.walk().record(ctx, &COUNT_WALK, &[])
     }
 }
 
@@ -219,21 +228,99 @@ impl Pass for Compute {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         setup_common(ctx);
-        ctx.program(
-            "count",
-            ProgramDesc::compute(&SHADER, "count_cs").layout(compute_layout()),
-        );
-        Ok(())
+        Walk::Compute(self.walk_groups).setup(ctx, &COUNT_WALK)
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        Walk::Compute(self.walk_groups).record(ctx, &COUNT_WALK, &[])
+    }
+}
+
+/// A walking stage's program: its shader, entry points and layout labels.
+#[derive(Clone, Copy, Debug)]
+pub struct WalkShader {
+    pub shader: &'static PassShader,
+    /// The program's name in the pass.
+    pub program: &'static str,
+    /// `raster`'s entry points: the instance's quad, the froxel of a pixel.
+    pub vertex: &'static str,
+    pub fragment: &'static str,
+    /// `compute`'s entry point.
+    pub compute: &'static str,
+    /// Labels of the bind-group layouts of each implementation.
+    pub raster_layout: &'static str,
+    pub compute_layout: &'static str,
+}
+
+/// How a stage walks the instances' froxels, the part of its `raster` and `compute`
+/// implementations this stage and `populate` share: both set up and record the walk of
+/// `walk.wgsl` alike, only their shaders and extra uniforms differ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Walk {
+    /// One instanced indirect draw of a quad per instance on a `width × height` viewport.
+    Raster { width: u32, height: u32 },
+    /// A direct dispatch of at most this many workgroups ([`walk_grid`]).
+    Compute(u32),
+}
+
+/// The raster walk's scratch target.
+const TARGET: &str = "target";
+
+impl Walk {
+    /// Declares the walk's program (and the raster walk's target and draw arguments).
+    pub fn setup(self, ctx: &mut SetupContext, shader: &WalkShader) -> Result<()> {
+        let program = match self {
+            Walk::Raster { width, height } => {
+                ctx.min_bytes("slice_draw_args", 16);
+                declare_tile_target(ctx, TARGET, width, height)?;
+                // The quad's vertices need the instance, object and grid; only the
+                // fragment shader visits froxels.
+                ProgramDesc::render(shader.shader, shader.vertex)
+                    .fragment(shader.fragment)
+                    .target(ColorTarget::masked(TARGET))
+                    .primitive(Primitive {
+                        topology: wgpu::PrimitiveTopology::TriangleStrip,
+                        cull_mode: None,
+                        ..Primitive::default()
+                    })
+                    .layout(BindingLayout::from_shader_render(shader.raster_layout))
+            }
+            Walk::Compute(_) => ProgramDesc::compute(shader.shader, shader.compute)
+                .layout(BindingLayout::from_shader(shader.compute_layout)),
+        };
+        ctx.program(shader.program, program);
+        Ok(())
+    }
+
+    /// Records the walk with the view (binding 5) and `uniforms` bound.
+    pub fn record(
+        self,
+        ctx: &mut RecordContext<'_>,
+        shader: &WalkShader,
+        uniforms: &[(u32, &[u8])],
+    ) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
-        let program = ctx.compute("count")?;
-        let group = ctx.bind_group(&program, 0, &[(5, bytemuck::bytes_of(&view))])?;
-        let [x, y] = walk_grid(ctx, self.walk_groups)?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
+        let mut bound = vec![(5, bytemuck::bytes_of(&view))];
+        bound.extend_from_slice(uniforms);
+        match self {
+            Walk::Raster { .. } => {
+                let program = ctx.render(shader.program)?;
+                let group = ctx.bind_group(&*program, 0, &bound)?;
+                let (args, _) = ctx.buffer("slice_draw_args")?;
+                let mut pass = ctx.render_pass(&[ColorAttachment::new(TARGET)], None)?;
+                pass.set_pipeline(&program.pipeline);
+                pass.set_bind_group(0, &group, &[]);
+                pass.draw_indirect(args, 0);
+            }
+            Walk::Compute(max_groups) => {
+                let program = ctx.compute(shader.program)?;
+                let group = ctx.bind_group(&*program, 0, &bound)?;
+                let [x, y] = walk_grid(ctx, max_groups)?;
+                let mut pass = ctx.compute_pass();
+                pass.set_pipeline(&program.pipeline);
+                pass.set_bind_group(0, &group, &[]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
         Ok(())
     }
 }
@@ -264,6 +351,14 @@ pub fn walk_grid(ctx: &RecordContext<'_>, max_groups: u32) -> Result<[u32; 2]> {
         .min(u64::from(max_groups.max(1)));
     let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
     Ok(workgroup_grid(groups, limit))
+}
+
+/// The implementation that walks as `walk`: [`Raster`] or [`Compute`].
+pub fn pass(walk: Walk) -> Box<dyn Pass> {
+    match walk {
+        Walk::Raster { width, height } => Box::new(Raster { width, height }),
+        Walk::Compute(walk_groups) => Box::new(Compute { walk_groups }),
+    }
 }
 
 fn build_raster(params: &Params) -> Result<Box<dyn Pass>> {

@@ -5,30 +5,18 @@
 //! threshold; such pairs are counted and bounded.
 
 use glam::Vec3;
-use meshlight_graph::*;
+use meshlight_graph::{GraphBuilder, Imports};
+use meshlight_pass_count_raster::KINDS;
 use meshlight_pass_count_raster::cpu::{CountResult, cpu_count};
-use meshlight_pass_count_raster::{Compute, KINDS, Raster};
-use meshlight_pass_z_slice::cpu::{WORD_CAPACITY, WORD_REQUESTED};
+use meshlight_pass_count_raster::testbed::{Implementation, add_count};
 use meshlight_pass_z_slice::scenes::{Rng, object, orthographic, perspective, random_objects};
-use meshlight_pass_z_slice::{
-    CLUSTER_GRID, CLUSTERABLE_OBJECT, GridSettings, SLICE_INSTANCE, SliceInstance, ZSlice,
-};
+use meshlight_pass_z_slice::testbed::{Sliced, read, read_written, run_frame};
+use meshlight_pass_z_slice::{GridSettings, SliceInstance, ZSlice};
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableKind, ClusterableObject, View};
-
-const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
+use meshlight_testing::executor;
 
 /// A pair decided differently from the reference must lie this close to its threshold.
 const NEAR: f32 = 1e-5;
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Implementation {
-    Raster,
-    Compute,
-    /// `compute` dispatched with one workgroup: the walk takes a round per 64 instances.
-    ComputeRounds,
-}
 
 struct GpuCounts {
     instances: Vec<SliceInstance>,
@@ -42,99 +30,19 @@ fn run(
     z_slice: ZSlice,
     implementation: Implementation,
 ) -> GpuCounts {
-    let gpu = GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"));
-    let [w, h] = view.viewport_size.map(|v| v as u32);
-    let grid = z_slice.grid([w, h]);
-    let capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
     let mut g = GraphBuilder::new();
-    let stored = objects.len().max(1) as u64;
-    let list = g.import_buffer(
-        "objects",
-        BufferDesc::array(CLUSTERABLE_OBJECT, stored),
-        USAGE,
-    );
-    let count = g.import_buffer("object_count", BufferDesc::array(Element::U32, 1), USAGE);
-    let instances = g.create_buffer(
-        "slice_instances",
-        BufferDesc::array(SLICE_INSTANCE, capacity),
-    );
-    let slice_counts = g.create_buffer("slice_counts", BufferDesc::array(Element::U32, 8));
-    let draw = g.create_buffer("slice_draw_args", BufferDesc::array(Element::DRAW_ARGS, 1));
-    let dispatch = g.create_buffer(
-        "slice_dispatch_args",
-        BufferDesc::array(Element::DISPATCH_ARGS, 1),
-    );
-    let grid_buffer = g.create_buffer("cluster_grid", BufferDesc::array(CLUSTER_GRID, 1));
-    let counts = g.create_buffer(
-        "cluster_counts",
-        BufferDesc::array(Element::U32, u64::from(grid.cluster_count * KINDS)),
-    );
-    let sliced = g
-        .add_pass(
-            "z_slice",
-            z_slice,
-            Bindings::new()
-                .bind("objects", list)
-                .bind("object_count", count)
-                .bind("slice_instances", instances)
-                .bind("slice_counts", slice_counts)
-                .bind("slice_draw_args", draw)
-                .bind("slice_dispatch_args", dispatch)
-                .bind("cluster_grid", grid_buffer)
-                .bind("cluster_counts", counts),
-        )
-        .unwrap();
-    let bindings = Bindings::new()
-        .bind("objects", list)
-        .bind("slice_instances", sliced.buffer("slice_instances").unwrap())
-        .bind("slice_counts", sliced.buffer("slice_counts").unwrap())
-        .bind("slice_draw_args", sliced.buffer("slice_draw_args").unwrap())
-        .bind(
-            "slice_dispatch_args",
-            sliced.buffer("slice_dispatch_args").unwrap(),
-        )
-        .bind("cluster_grid", sliced.buffer("cluster_grid").unwrap())
-        .bind("cluster_counts", sliced.buffer("cluster_counts").unwrap());
-    let counted = match implementation {
-        Implementation::Raster => g.add_pass(
-            "count",
-            Raster {
-                width: grid.dims[0],
-                height: grid.dims[1],
-            },
-            bindings,
-        ),
-        Implementation::Compute => g.add_pass("count", Compute::default(), bindings),
-        Implementation::ComputeRounds => g.add_pass("count", Compute { walk_groups: 1 }, bindings),
-    }
-    .unwrap();
-    g.export(sliced.buffer("slice_instances").unwrap());
-    g.export(sliced.buffer("slice_counts").unwrap());
-    g.export(sliced.buffer("cluster_grid").unwrap());
+    let (sliced, grid) = Sliced::add_for_walk(&mut g, z_slice, objects.len(), view).unwrap();
+    let counted = add_count(&mut g, &sliced, implementation.walk(&grid)).unwrap();
+    sliced.export_written(&mut g).unwrap();
     g.export(counted.buffer("cluster_counts").unwrap());
-    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
-    let mut padded = objects.to_vec();
-    padded.resize(stored as usize, ClusterableObject::default());
-    let object_buffer = gpu.buffer_with_data("objects", bytemuck::cast_slice(&padded), USAGE);
+    let mut exec = executor();
     let n = objects.len() as u32;
-    let count_buffer = gpu.buffer_with_data("object_count", bytemuck::bytes_of(&n), USAGE);
-    let imports = Imports::new()
-        .buffer("objects", &object_buffer)
-        .buffer("object_count", &count_buffer);
-    let mut exec = Executor::new(gpu);
-    let frame = FrameData::new().with("view", bytemuck::bytes_of(view));
-    exec.execute_frame(&compiled, &imports, &frame).unwrap();
-    let words: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("slice_counts").unwrap());
-    let written = words[WORD_REQUESTED].min(words[WORD_CAPACITY]) as usize;
-    let mut instances: Vec<SliceInstance> =
-        bytemuck::pod_collect_to_vec(&exec.read_buffer("slice_instances").unwrap());
-    instances.truncate(written);
-    let grid: Vec<ClusterGrid> =
-        bytemuck::pod_collect_to_vec(&exec.read_buffer("cluster_grid").unwrap());
+    run_frame(&mut exec, g, objects, n, view, Imports::new()).unwrap();
+    let (instances, grid) = read_written(&mut exec);
     GpuCounts {
         instances,
-        counts: bytemuck::pod_collect_to_vec(&exec.read_buffer("cluster_counts").unwrap()),
-        grid: grid[0],
+        counts: read(&mut exec, "cluster_counts"),
+        grid,
     }
 }
 
@@ -249,21 +157,14 @@ fn random_scenes_count_like_the_reference_in_both_implementations() {
             sorted(&raster.instances) == sorted(&compute.instances),
             "scene {index}: z_slice wrote different lists in two runs"
         );
-        let label = |i: Implementation| format!("scene {index} {i:?} ({:?})", z_slice.grid);
-        let (d_raster, total) = compare(
-            &view,
-            &objects,
-            &raster,
-            &grid,
-            &label(Implementation::Raster),
-        );
-        let (d_compute, _) = compare(
-            &view,
-            &objects,
-            &compute,
-            &grid,
-            &label(Implementation::Compute),
-        );
+        let [(d_raster, total), (d_compute, _)] = [
+            (&raster, Implementation::Raster),
+            (&compute, Implementation::Compute),
+        ]
+        .map(|(got, i)| {
+            let label = format!("scene {index} {i:?} ({:?})", z_slice.grid);
+            compare(&view, &objects, got, &grid, &label)
+        });
         assert!(
             total > 100,
             "scene {index}: only {total} pairs; the scene tests little"
@@ -314,11 +215,7 @@ fn lights_around_the_camera_count_where_they_must() {
         // A small light on the view axis at 10 m: the centre tiles of its slices only.
         object(p, Vec3::new(0.0, 0.0, -10.0), 0.5),
     ];
-    for implementation in [
-        Implementation::Raster,
-        Implementation::Compute,
-        Implementation::ComputeRounds,
-    ] {
+    for implementation in Implementation::ALL {
         let got = run(&objects, &view, z_slice, implementation);
         let label = format!("{implementation:?}");
         let (differing, _) = compare(&view, &objects, &got, &grid, &label);
@@ -349,11 +246,7 @@ fn lights_around_the_camera_count_where_they_must() {
 #[test]
 fn no_objects_count_nothing() {
     let view = perspective(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 1.2).view([320, 180], 0, None);
-    for implementation in [
-        Implementation::Raster,
-        Implementation::Compute,
-        Implementation::ComputeRounds,
-    ] {
+    for implementation in Implementation::ALL {
         let got = run(&[], &view, ZSlice::default(), implementation);
         assert!(got.instances.is_empty());
         assert!(got.counts.iter().all(|&c| c == 0), "{implementation:?}");

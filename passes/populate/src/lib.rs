@@ -46,29 +46,35 @@
 //! shader writes) and [`Compute`] (`compute`, a direct dispatch whose workgroups share
 //! their lanes out over the tiles of their share of the instances, at most 64, a round),
 //! as in `count_raster`; pair each with the same implementation of that stage, so both
-//! stages decide every pair with the same code.
+//! stages decide every pair with the same code. That code is one source: count_raster's
+//! walk module ([`meshlight_pass_count_raster::WALK_MODULES`]), which this stage's shader
+//! imports with `POPULATE` defined, and both record it through
+//! [`meshlight_pass_count_raster::Walk`].
 
 pub mod cpu;
 
-use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, ColorAttachment, ColorTarget, Element, Pass, Primitive, Program,
-    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract,
+    Access, BindingLayout, Element, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
+    StageContract,
 };
-use meshlight_pass_z_slice::{CLUSTER_GRID, check_tiles, declare_tile_target};
+use meshlight_pass_count_raster::{Walk, WalkShader};
+use meshlight_pass_z_slice::CLUSTER_GRID;
 use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "populate";
 /// The frame input holding the `View`.
 pub const VIEW_INPUT: &str = "view";
-/// Threads per workgroup of the compute steps.
+/// Threads per workgroup of `settle`.
 const WORKGROUP: u32 = 64;
-/// The raster implementation's scratch target.
-const TARGET: &str = "target";
 
-pub const SHADER: PassShader = pass_shader!("populate::populate", "populate.wgsl");
+/// The walk's entry points and `settle`; the walk is count_raster's
+/// ([`meshlight_pass_count_raster::WALK_MODULES`]), run here with `POPULATE` defined.
+pub const SHADER: PassShader = PassShader {
+    modules: meshlight_pass_count_raster::WALK_MODULES,
+    ..pass_shader!("populate::populate", "populate.wgsl")
+};
 
 /// The slots every implementation of `populate` shares.
 pub fn contract() -> StageContract {
@@ -109,14 +115,26 @@ struct GpuParams {
     _pad: [u32; 3],
 }
 
-/// What both implementations share: the capacity and the compute step after the walk.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// The walk of this stage's implementations: count_raster's, claiming list places.
+const POPULATE_WALK: WalkShader = WalkShader {
+    shader: &SHADER,
+    program: "populate",
+    vertex: "populate_vs",
+    fragment: "populate_fs",
+    compute: "populate_cs",
+    raster_layout: "populate::raster",
+    compute_layout: "populate::compute",
+};
+
+/// What both implementations run: the walk, then the compute step after it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Steps {
+    walk: Walk,
     capacity: Option<u32>,
 }
 
 impl Steps {
-    fn setup(&self, ctx: &mut SetupContext) {
+    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("slice_counts", 8);
         ctx.min_bytes("cluster_grid", CLUSTER_GRID.size as u64);
         ctx.min_bytes("list_total", 4);
@@ -127,6 +145,7 @@ impl Steps {
             "settle",
             ProgramDesc::compute(&SHADER, "settle").layout(settle),
         );
+        self.walk.setup(ctx, &POPULATE_WALK)
     }
 
     fn params(&self) -> GpuParams {
@@ -136,53 +155,24 @@ impl Steps {
         }
     }
 
-    /// Sets every count to the entries written and publishes the needed and available
-    /// entries, after the walk.
-    fn after(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        self.dispatch_per_word(ctx, "settle", "cluster_counts")
-    }
-
-    /// Runs `program` with a thread per u32 of `buffer` (grid-stride past the limit).
-    fn dispatch_per_word(
-        &self,
-        ctx: &mut RecordContext<'_>,
-        program: &str,
-        buffer: &str,
-    ) -> Result<()> {
-        let (_, bytes) = ctx.buffer(buffer)?;
+    /// The walk, then `settle`: every count set to the entries written, and the needed
+    /// and available entries published.
+    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        let params = self.params();
+        let params = bytemuck::bytes_of(&params);
+        self.walk.record(ctx, &POPULATE_WALK, &[(10, params)])?;
+        // A thread per list (grid-stride past the limit).
+        let (_, bytes) = ctx.buffer("cluster_counts")?;
         let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
         let groups = ((bytes / 4) as u32).div_ceil(WORKGROUP).clamp(1, limit);
-        let params = self.params();
-        let program = ctx.compute(program)?;
-        let group = ctx.bind_group(&program, 0, &[(10, bytemuck::bytes_of(&params))])?;
+        let program = ctx.compute("settle")?;
+        let group = ctx.bind_group(&program, 0, &[(10, params)])?;
         let mut pass = ctx.compute_pass();
         pass.set_pipeline(&program.pipeline);
         pass.set_bind_group(0, &group, &[]);
         pass.dispatch_workgroups(groups, 1, 1);
         Ok(())
     }
-
-    /// The walk's bind group: its slots, the view and the capacity.
-    fn walk_group(
-        &self,
-        ctx: &mut RecordContext<'_>,
-        program: &impl Program,
-    ) -> Result<wgpu::BindGroup> {
-        let view = frame_view(ctx, VIEW_INPUT, None)?;
-        let params = self.params();
-        ctx.bind_group(
-            program,
-            0,
-            &[
-                (9, bytemuck::bytes_of(&view)),
-                (10, bytemuck::bytes_of(&params)),
-            ],
-        )
-    }
-}
-
-fn capacity_param(params: &Params) -> Result<Option<u32>> {
-    Ok(Some(params.u32("capacity", 0)?).filter(|&c| c > 0))
 }
 
 /// The `raster` implementation.
@@ -209,13 +199,22 @@ impl Raster {
     /// Reads the params of the table in the crate docs.
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&["width", "height", "capacity"])?;
-        let pass = Self {
-            width: params.u32("width", 16)?,
-            height: params.u32("height", 9)?,
-            capacity: capacity_param(params)?,
-        };
-        check_tiles(pass.width, pass.height)?;
-        Ok(pass)
+        let [width, height] = meshlight_pass_count_raster::tiles_param(params)?;
+        Ok(Self {
+            width,
+            height,
+            capacity: Some(params.u32("capacity", 0)?).filter(|&c| c > 0),
+        })
+    }
+
+    fn steps(&self) -> Steps {
+        Steps {
+            walk: Walk::Raster {
+                width: self.width,
+                height: self.height,
+            },
+            capacity: self.capacity,
+        }
     }
 }
 
@@ -227,41 +226,10 @@ impl Pass for Raster {
         "raster"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        let steps = Steps {
-            capacity: self.capacity,
-        };
-        steps.setup(ctx);
-        ctx.min_bytes("slice_draw_args", 16);
-        declare_tile_target(ctx, TARGET, self.width, self.height)?;
-        let layout = BindingLayout::from_shader_render("populate::raster");
-        ctx.program(
-            "populate",
-            ProgramDesc::render(&SHADER, "populate_vs")
-                .fragment("populate_fs")
-                .target(ColorTarget::masked(TARGET))
-                .primitive(Primitive {
-                    topology: wgpu::PrimitiveTopology::TriangleStrip,
-                    cull_mode: None,
-                    ..Primitive::default()
-                })
-                .layout(layout),
-        );
-        Ok(())
+        self.steps().setup(ctx)
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let steps = Steps {
-            capacity: self.capacity,
-        };
-        let program = ctx.render("populate")?;
-        let group = steps.walk_group(ctx, &*program)?;
-        let (args, _) = ctx.buffer("slice_draw_args")?;
-        {
-            let mut pass = ctx.render_pass(&[ColorAttachment::new(TARGET)], None)?;
-            pass.set_pipeline(&program.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.draw_indirect(args, 0);
-        }
-        steps.after(ctx)
+        self.steps().record(ctx)
     }
 }
 
@@ -284,6 +252,17 @@ impl Default for Compute {
     }
 }
 
+impl Compute {
+    fn steps(&self) -> Steps {
+        Steps {
+            // count_raster's direct grid: a share of at most 64 instances a workgroup a
+            // round.
+            walk: Walk::Compute(self.walk_groups),
+            capacity: self.capacity,
+        }
+    }
+}
+
 impl Pass for Compute {
     fn contract(&self) -> StageContract {
         contract()
@@ -292,32 +271,25 @@ impl Pass for Compute {
         "compute"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        let steps = Steps {
-            capacity: self.capacity,
-        };
-        steps.setup(ctx);
-        let layout = BindingLayout::from_shader("populate::compute");
-        ctx.program(
-            "populate",
-            ProgramDesc::compute(&SHADER, "populate_cs").layout(layout),
-        );
-        Ok(())
+        self.steps().setup(ctx)
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let steps = Steps {
-            capacity: self.capacity,
-        };
-        let program = ctx.compute("populate")?;
-        let group = steps.walk_group(ctx, &*program)?;
-        // count_raster's direct grid: a share of at most 64 instances a workgroup a round.
-        let [x, y] = meshlight_pass_count_raster::walk_grid(ctx, self.walk_groups)?;
-        {
-            let mut pass = ctx.compute_pass();
-            pass.set_pipeline(&program.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-        }
-        steps.after(ctx)
+        self.steps().record(ctx)
+    }
+}
+
+/// The implementation that walks as `walk`: [`Raster`] or [`Compute`].
+pub fn pass(walk: Walk, capacity: Option<u32>) -> Box<dyn Pass> {
+    match walk {
+        Walk::Raster { width, height } => Box::new(Raster {
+            width,
+            height,
+            capacity,
+        }),
+        Walk::Compute(walk_groups) => Box::new(Compute {
+            capacity,
+            walk_groups,
+        }),
     }
 }
 

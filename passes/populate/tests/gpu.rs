@@ -5,34 +5,23 @@
 //! lists the way the reference does and writes nothing past it.
 
 use glam::Vec3;
-use meshlight_graph::*;
+use meshlight_graph::{Bindings, BufferDesc, Element, GraphBuilder, Imports};
 use meshlight_pass_count_raster::KINDS;
+use meshlight_pass_count_raster::testbed::{Implementation, add_count};
 use meshlight_pass_populate::cpu::{ClusterLists, cpu_populate};
 use meshlight_pass_scan_fan::ScanFan;
-use meshlight_pass_z_slice::cpu::{WORD_CAPACITY, WORD_REQUESTED};
 use meshlight_pass_z_slice::scenes::{Rng, orthographic, perspective, random_objects};
-use meshlight_pass_z_slice::{
-    CLUSTER_GRID, CLUSTERABLE_OBJECT, GridSettings, SLICE_INSTANCE, SliceInstance, ZSlice,
-};
+use meshlight_pass_z_slice::testbed::{Sliced, USAGE, read, read_written, run_frame};
+use meshlight_pass_z_slice::{GridSettings, SliceInstance, ZSlice};
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject, View};
+use meshlight_testing::executor;
 use std::collections::BTreeSet;
 
-const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
 const NEAR: f32 = 1e-5;
 /// What the GPU leaves in list entries nothing may write.
 const SENTINEL: u32 = 0xdead_beef;
 /// Entries after the capacity that must keep the sentinel.
 const GUARD: u32 = 64;
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Implementation {
-    Raster,
-    Compute,
-    /// `compute` with both walks dispatched with one workgroup: a round per 64 instances.
-    ComputeRounds,
-}
 
 struct GpuLists {
     instances: Vec<SliceInstance>,
@@ -51,87 +40,20 @@ fn run(
     implementation: Implementation,
     capacity: u32,
 ) -> GpuLists {
-    let gpu = GpuContext::with_available(wgpu::Features::all()).unwrap_or_else(|e| panic!("{e}"));
-    let [w, h] = view.viewport_size.map(|v| v as u32);
-    let grid = z_slice.grid([w, h]);
-    let lists = grid.cluster_count * KINDS;
     let mut g = GraphBuilder::new();
-    let stored = objects.len().max(1) as u64;
-    let object_list = g.import_buffer(
-        "objects",
-        BufferDesc::array(CLUSTERABLE_OBJECT, stored),
-        USAGE,
-    );
-    let object_count = g.import_buffer("object_count", BufferDesc::array(Element::U32, 1), USAGE);
+    let (sliced, grid) = Sliced::add_for_walk(&mut g, z_slice, objects.len(), view).unwrap();
+    let lists = grid.cluster_count * KINDS;
     let list_buffer = g.import_buffer(
         "cluster_objects",
         BufferDesc::array(Element::U32, u64::from(capacity + GUARD)),
         USAGE,
     );
-    let buffer = |g: &mut GraphBuilder, name: &str, element: Element, n: u64| {
-        g.create_buffer(name, BufferDesc::array(element, n))
-    };
-    let slice_capacity = (objects.len() as u64 * u64::from(grid.dims[2])).max(1);
-    let walk_groups = match implementation {
-        Implementation::ComputeRounds => 1,
-        _ => meshlight_pass_count_raster::WALK_GROUPS,
-    };
-    let instances = buffer(&mut g, "slice_instances", SLICE_INSTANCE, slice_capacity);
-    let slice_counts = buffer(&mut g, "slice_counts", Element::U32, 8);
-    let draw = buffer(&mut g, "slice_draw_args", Element::DRAW_ARGS, 1);
-    let dispatch = buffer(&mut g, "slice_dispatch_args", Element::DISPATCH_ARGS, 1);
-    let grid_buffer = buffer(&mut g, "cluster_grid", CLUSTER_GRID, 1);
-    let counts = buffer(&mut g, "cluster_counts", Element::U32, u64::from(lists));
-    let offsets = buffer(&mut g, "cluster_offsets", Element::U32, u64::from(lists));
-    let total = buffer(&mut g, "list_total", Element::U32, 1);
-    let list_counts = buffer(&mut g, "list_counts", Element::U32, 2);
-    let sliced = g
-        .add_pass(
-            "z_slice",
-            z_slice,
-            Bindings::new()
-                .bind("objects", object_list)
-                .bind("object_count", object_count)
-                .bind("slice_instances", instances)
-                .bind("slice_counts", slice_counts)
-                .bind("slice_draw_args", draw)
-                .bind("slice_dispatch_args", dispatch)
-                .bind("cluster_grid", grid_buffer)
-                .bind("cluster_counts", counts),
-        )
-        .unwrap();
-    let from_slices = |b: Bindings| {
-        let mut b = b.bind("objects", object_list);
-        for name in [
-            "slice_instances",
-            "slice_counts",
-            "slice_draw_args",
-            "slice_dispatch_args",
-            "cluster_grid",
-        ] {
-            b = b.bind(name, sliced.buffer(name).unwrap());
-        }
-        b
-    };
-    let count_bindings = from_slices(
-        Bindings::new().bind("cluster_counts", sliced.buffer("cluster_counts").unwrap()),
-    );
-    let counted = match implementation {
-        Implementation::Raster => g.add_pass(
-            "count",
-            meshlight_pass_count_raster::Raster {
-                width: grid.dims[0],
-                height: grid.dims[1],
-            },
-            count_bindings,
-        ),
-        Implementation::Compute | Implementation::ComputeRounds => g.add_pass(
-            "count",
-            meshlight_pass_count_raster::Compute { walk_groups },
-            count_bindings,
-        ),
-    }
-    .unwrap();
+    let mut buffer = |name: &str, n: u64| g.create_buffer(name, BufferDesc::array(Element::U32, n));
+    let offsets = buffer("cluster_offsets", u64::from(lists));
+    let total = buffer("list_total", 1);
+    let list_counts = buffer("list_counts", 2);
+    let walk = implementation.walk(&grid);
+    let counted = add_count(&mut g, &sliced, walk).unwrap();
     let scanned = g
         .add_pass(
             "scan",
@@ -142,85 +64,55 @@ fn run(
                 .bind("total", total),
         )
         .unwrap();
-    let populate_bindings = from_slices(
-        Bindings::new()
-            .bind("cluster_offsets", scanned.buffer("output").unwrap())
-            .bind("list_total", scanned.buffer("total").unwrap())
-            .bind("cluster_counts", counted.buffer("cluster_counts").unwrap())
-            .bind("cluster_objects", list_buffer)
-            .bind("list_counts", list_counts),
-    );
-    let populated = match implementation {
-        Implementation::Raster => g.add_pass(
+    let populate_bindings = sliced
+        .bind_walk(
+            Bindings::new()
+                .bind("cluster_offsets", scanned.buffer("output").unwrap())
+                .bind("list_total", scanned.buffer("total").unwrap())
+                .bind("cluster_counts", counted.buffer("cluster_counts").unwrap())
+                .bind("cluster_objects", list_buffer)
+                .bind("list_counts", list_counts),
+        )
+        .unwrap();
+    let populated = g
+        .add_boxed_pass(
             "populate",
-            meshlight_pass_populate::Raster {
-                width: grid.dims[0],
-                height: grid.dims[1],
-                capacity: Some(capacity),
-            },
+            meshlight_pass_populate::pass(walk, Some(capacity)),
             populate_bindings,
-        ),
-        Implementation::Compute | Implementation::ComputeRounds => g.add_pass(
-            "populate",
-            meshlight_pass_populate::Compute {
-                capacity: Some(capacity),
-                walk_groups,
-            },
-            populate_bindings,
-        ),
-    }
-    .unwrap();
-    g.export(sliced.buffer("slice_instances").unwrap());
-    g.export(sliced.buffer("slice_counts").unwrap());
-    g.export(sliced.buffer("cluster_grid").unwrap());
+        )
+        .unwrap();
+    sliced.export_written(&mut g).unwrap();
     g.export(scanned.buffer("output").unwrap());
     for name in ["cluster_counts", "cluster_objects", "list_counts"] {
         g.export(populated.buffer(name).unwrap());
     }
-    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
-    let mut padded = objects.to_vec();
-    padded.resize(stored as usize, ClusterableObject::default());
-    let object_buffer = gpu.buffer_with_data("objects", bytemuck::cast_slice(&padded), USAGE);
-    let n = objects.len() as u32;
-    let count_buffer = gpu.buffer_with_data("object_count", bytemuck::bytes_of(&n), USAGE);
+    let mut exec = executor();
     let sentinels = vec![SENTINEL; (capacity + GUARD) as usize];
     let lists_buffer =
-        gpu.buffer_with_data("cluster_objects", bytemuck::cast_slice(&sentinels), USAGE);
-    let imports = Imports::new()
-        .buffer("objects", &object_buffer)
-        .buffer("object_count", &count_buffer)
-        .buffer("cluster_objects", &lists_buffer);
-    let mut exec = Executor::new(gpu);
-    let frame = FrameData::new().with("view", bytemuck::bytes_of(view));
-    exec.execute_frame(&compiled, &imports, &frame).unwrap();
-    let words = |exec: &mut Executor, name: &str| -> Vec<u32> {
-        bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
-    };
-    let slice_words = words(&mut exec, "slice_counts");
-    let written = slice_words[WORD_REQUESTED].min(slice_words[WORD_CAPACITY]) as usize;
-    let mut instances: Vec<SliceInstance> =
-        bytemuck::pod_collect_to_vec(&exec.read_buffer("slice_instances").unwrap());
-    instances.truncate(written);
-    let grid: Vec<ClusterGrid> =
-        bytemuck::pod_collect_to_vec(&exec.read_buffer("cluster_grid").unwrap());
+        exec.gpu
+            .buffer_with_data("cluster_objects", bytemuck::cast_slice(&sentinels), USAGE);
+    let imports = Imports::new().buffer("cluster_objects", &lists_buffer);
+    let n = objects.len() as u32;
+    run_frame(&mut exec, g, objects, n, view, imports).unwrap();
+    let (instances, grid) = read_written(&mut exec);
     let raw: Vec<u32> = bytemuck::pod_collect_to_vec(
         &exec
             .gpu
             .read_buffer(&lists_buffer, 0, lists_buffer.size())
             .unwrap(),
     );
-    let list_counts = words(&mut exec, "list_counts");
+    let list_counts: Vec<u32> = read(&mut exec, "list_counts");
     GpuLists {
         instances,
         lists: ClusterLists {
-            offsets: words(&mut exec, "cluster_offsets"),
-            counts: words(&mut exec, "cluster_counts"),
+            offsets: read(&mut exec, "cluster_offsets"),
+            counts: read(&mut exec, "cluster_counts"),
             objects: raw[..capacity as usize].to_vec(),
             needed: list_counts[0],
         },
         list_counts: [list_counts[0], list_counts[1]],
         raw,
-        grid: grid[0],
+        grid,
     }
 }
 
@@ -324,11 +216,7 @@ fn lists_equal_the_reference_as_sets_in_both_implementations() {
     let mut differing = 0;
     for index in 0..4 {
         let (view, objects, z_slice) = scene(&mut rng, index);
-        for implementation in [
-            Implementation::Raster,
-            Implementation::Compute,
-            Implementation::ComputeRounds,
-        ] {
+        for implementation in Implementation::ALL {
             let got = run(&objects, &view, z_slice, implementation, 1 << 18);
             let label = format!("scene {index} {implementation:?}");
             assert!(
@@ -350,11 +238,7 @@ fn lists_equal_the_reference_as_sets_in_both_implementations() {
 fn a_small_capacity_cuts_lists_and_writes_nothing_past_it() {
     let mut rng = Rng(0x0bad_cafe_f00d_0002);
     let (view, objects, z_slice) = scene(&mut rng, 0);
-    for implementation in [
-        Implementation::Raster,
-        Implementation::Compute,
-        Implementation::ComputeRounds,
-    ] {
+    for implementation in Implementation::ALL {
         let got = run(&objects, &view, z_slice, implementation, 100);
         let label = format!("{implementation:?} at capacity 100");
         assert!(got.list_counts[0] > 100, "{label}: no overflow to test");

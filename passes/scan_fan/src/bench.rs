@@ -114,6 +114,17 @@ const COPY_SHADER: PassShader = pass_shader!("scan_fan::copy", "copy.wgsl");
 const COPY_GROUPS: u32 = 65_535;
 const COPY_WORKGROUP: u32 = 256;
 
+/// Stage `copy`: `src` to `dst`, read and written through `src` and `dst` access.
+fn copy_contract(src: Access, dst: Access) -> StageContract {
+    StageContract {
+        stage: "copy",
+        slots: vec![
+            Slot::buffer("src", src, Element::U32, "bytes to copy"),
+            Slot::buffer("dst", dst, Element::U32, "where they go"),
+        ],
+    }
+}
+
 /// Stage `copy`, implementation `compute`: the bandwidth yardstick.
 struct ComputeCopy {
     count: u32,
@@ -146,13 +157,7 @@ impl ComputeCopy {
 
 impl Pass for ComputeCopy {
     fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "copy",
-            slots: vec![
-                Slot::buffer("src", Access::StorageRead, Element::U32, "bytes to copy"),
-                Slot::buffer("dst", Access::StorageWrite, Element::U32, "where they go"),
-            ],
-        }
+        copy_contract(Access::StorageRead, Access::StorageWrite)
     }
     fn implementation(&self) -> &'static str {
         "compute"
@@ -202,13 +207,7 @@ struct CopyCommand;
 
 impl Pass for CopyCommand {
     fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "copy",
-            slots: vec![
-                Slot::buffer("src", Access::CopySrc, Element::U32, "bytes to copy"),
-                Slot::buffer("dst", Access::CopyDst, Element::U32, "where they go"),
-            ],
-        }
+        copy_contract(Access::CopySrc, Access::CopyDst)
     }
     fn implementation(&self) -> &'static str {
         "copy_buffer_to_buffer"
@@ -260,7 +259,6 @@ pub fn run(exec: &mut Executor, sizes: &[u64], repeats: u32) -> Result<Vec<Row>>
     exec.gpu_timing = true;
     exec.timing = meshlight_graph::TimingMode::Passes;
     exec.stamp_inside_passes = false;
-    let repeats = repeats.max(1);
     let mut rows = Vec::new();
     for &size in sizes {
         if size == 0 || size > MAX_COUNT as u64 {
@@ -269,162 +267,181 @@ pub fn run(exec: &mut Executor, sizes: &[u64], repeats: u32) -> Result<Vec<Row>>
                 message: format!("size {size} must be in 1..={MAX_COUNT}"),
             });
         }
-        let count = size as u32;
-        let input = data(size as usize);
+        rows.extend(measure(exec, size, repeats.max(1))?);
+    }
+    Ok(rows)
+}
 
-        let mut out = vec![0u32; input.len()];
-        let mut cpu_ms = Vec::new();
-        let mut cpu_total = 0;
-        for _ in 0..repeats.min(5) {
-            let t = Instant::now();
-            cpu_total = cpu_scan_into(&input, &mut out, false);
-            cpu_ms.push(t.elapsed().as_secs_f64() * 1e3);
-            std::hint::black_box(&out);
+/// The median time of the CPU prefix sum of `input` over at most five runs, and its total.
+fn time_cpu(input: &[u32], repeats: u32) -> (f64, u32) {
+    let mut out = vec![0u32; input.len()];
+    let mut cpu_ms = Vec::new();
+    let mut cpu_total = 0;
+    for _ in 0..repeats.min(5) {
+        let t = Instant::now();
+        cpu_total = cpu_scan_into(input, &mut out, false);
+        cpu_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        std::hint::black_box(&out);
+    }
+    (median(&mut cpu_ms), cpu_total)
+}
+
+/// The graph of one size: both copies and every implementation, all reading `input`;
+/// implementation `name` writes `{name}.output` and `{name}.total`.
+fn graph(count: u32) -> Result<GraphBuilder> {
+    let desc = BufferDesc::array(Element::U32, u64::from(count));
+    let mut g = GraphBuilder::new();
+    let input = g.import_buffer("input", desc.clone(), USAGE);
+    let copy = g.import_buffer("copy", desc.clone(), USAGE);
+    let command = g.import_buffer("copy_command", desc.clone(), USAGE);
+    g.add_pass(
+        "copy",
+        ComputeCopy { count },
+        Bindings::new().bind("src", input).bind("dst", copy),
+    )?;
+    g.add_pass(
+        "copy_command",
+        CopyCommand,
+        Bindings::new().bind("src", input).bind("dst", command),
+    )?;
+    for (name, pass) in variants(count) {
+        let output = g.import_buffer(&format!("{name}.output"), desc.clone(), USAGE);
+        let total = BufferDesc::array(Element::U32, 1);
+        let total = g.import_buffer(&format!("{name}.total"), total, USAGE);
+        let bindings = Bindings::new()
+            .bind("input", input)
+            .bind("output", output)
+            .bind("total", total);
+        g.add_boxed_pass(name, pass, bindings)?;
+    }
+    Ok(g)
+}
+
+/// Per pass, its GPU times in ms over the last `repeats` frames: slot 0 the compute copy,
+/// 1 the copy command, then the implementations in `names` order.
+fn pass_times(
+    frames: &[meshlight_graph::GpuTimings],
+    names: &[&str],
+    repeats: u32,
+) -> Vec<Vec<f64>> {
+    let mut times: Vec<Vec<f64>> = vec![Vec::new(); names.len() + 2];
+    for frame in frames.iter().rev().take(repeats as usize) {
+        for (name, us) in &frame.passes {
+            let slot = match name.as_str() {
+                "copy" => 0,
+                "copy_command" => 1,
+                name => {
+                    2 + names
+                        .iter()
+                        .position(|n| *n == name)
+                        .expect("a benchmarked pass")
+                }
+            };
+            times[slot].push(us / 1e3);
         }
-        drop(out);
-        let cpu_ms = median(&mut cpu_ms);
+    }
+    times
+}
 
-        let desc = BufferDesc::array(Element::U32, size);
-        let mut g = GraphBuilder::new();
-        let input_h = g.import_buffer("input", desc.clone(), USAGE);
-        let copy_h = g.import_buffer("copy", desc.clone(), USAGE);
-        let command_h = g.import_buffer("copy_command", desc.clone(), USAGE);
-        g.add_pass(
-            "copy",
-            ComputeCopy { count },
-            Bindings::new().bind("src", input_h).bind("dst", copy_h),
-        )?;
-        g.add_pass(
-            "copy_command",
-            CopyCommand,
-            Bindings::new().bind("src", input_h).bind("dst", command_h),
-        )?;
-        let names: Vec<&'static str> = variants(count).iter().map(|(name, _)| *name).collect();
-        for (name, pass) in variants(count) {
-            let output = g.import_buffer(&format!("{name}.output"), desc.clone(), USAGE);
-            let total = g.import_buffer(
-                &format!("{name}.total"),
-                BufferDesc::array(Element::U32, 1),
-                USAGE,
-            );
-            g.add_boxed_pass(
-                name,
-                pass,
-                Bindings::new()
-                    .bind("input", input_h)
-                    .bind("output", output)
-                    .bind("total", total),
-            )?;
-        }
-        let compiled = g.compile(&CompileOptions::for_gpu(&exec.gpu))?;
+/// One size: the CPU's time, then every implementation's and the copies' over `repeats`
+/// frames, their totals checked.
+fn measure(exec: &mut Executor, size: u64, repeats: u32) -> Result<Vec<Row>> {
+    let count = size as u32;
+    let input = data(size as usize);
+    let (cpu_ms, cpu_total) = time_cpu(&input, repeats);
+    let names: Vec<&'static str> = variants(count).iter().map(|(name, _)| *name).collect();
+    let compiled = graph(count)?.compile(&CompileOptions::for_gpu(&exec.gpu))?;
 
-        let gpu = &exec.gpu;
-        let input_buf = gpu.buffer_with_data("bench input", bytemuck::cast_slice(&input), USAGE);
-        drop(input);
-        let make = |label: &str, bytes: u64| {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage: USAGE,
-                mapped_at_creation: false,
-            })
-        };
-        let copy_buf = make("bench copy", size * 4);
-        let command_buf = make("bench copy command", size * 4);
-        let outputs: Vec<wgpu::Buffer> = names.iter().map(|n| make(n, size * 4)).collect();
-        let totals: Vec<wgpu::Buffer> = names.iter().map(|n| make(n, 4)).collect();
-        let mut imports = Imports::new()
-            .buffer("input", &input_buf)
-            .buffer("copy", &copy_buf)
-            .buffer("copy_command", &command_buf);
-        for ((name, output), total) in names.iter().zip(&outputs).zip(&totals) {
-            imports = imports
-                .buffer(&format!("{name}.output"), output)
-                .buffer(&format!("{name}.total"), total);
-        }
+    let gpu = &exec.gpu;
+    let input_buf = gpu.buffer_with_data("bench input", bytemuck::cast_slice(&input), USAGE);
+    drop(input);
+    let make = |label: &str, bytes: u64| {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: bytes,
+            usage: USAGE,
+            mapped_at_creation: false,
+        })
+    };
+    let copy_buf = make("bench copy", size * 4);
+    let command_buf = make("bench copy command", size * 4);
+    let outputs: Vec<wgpu::Buffer> = names.iter().map(|n| make(n, size * 4)).collect();
+    let totals: Vec<wgpu::Buffer> = names.iter().map(|n| make(n, 4)).collect();
+    let mut imports = Imports::new()
+        .buffer("input", &input_buf)
+        .buffer("copy", &copy_buf)
+        .buffer("copy_command", &command_buf);
+    for ((name, output), total) in names.iter().zip(&outputs).zip(&totals) {
+        imports = imports
+            .buffer(&format!("{name}.output"), output)
+            .buffer(&format!("{name}.total"), total);
+    }
 
-        // Slot 0: the compute copy, 1: the copy command, then the implementations.
-        let mut times: Vec<Vec<f64>> = vec![Vec::new(); names.len() + 2];
+    // A warm-up frame, then each frame waited for, so no timing is dropped however slow
+    // the GPU is.
+    exec.execute(&compiled, &imports)?;
+    exec.finish()?;
+    exec.take_gpu_timings()?;
+    for _ in 0..repeats {
         exec.execute(&compiled, &imports)?;
         exec.finish()?;
-        exec.take_gpu_timings()?;
-        // Each frame waited for, so no timing is dropped however slow the GPU is.
-        for _ in 0..repeats {
-            exec.execute(&compiled, &imports)?;
-            exec.finish()?;
-        }
-        let frames = exec.take_gpu_timings()?;
-        if frames.len() < repeats as usize {
-            return Err(GraphError::Device(format!(
-                "GPU timings came back for {} of {repeats} frames",
-                frames.len()
-            )));
-        }
-        for frame in frames.iter().rev().take(repeats as usize) {
-            for (name, us) in &frame.passes {
-                let pass = PassGpu { name, us: *us };
-                let slot = match pass.name {
-                    "copy" => 0,
-                    "copy_command" => 1,
-                    name => {
-                        2 + names
-                            .iter()
-                            .position(|n| *n == name)
-                            .expect("a benchmarked pass")
-                    }
-                };
-                times[slot].push(pass.us / 1e3);
-            }
-        }
+    }
+    let frames = exec.take_gpu_timings()?;
+    if frames.len() < repeats as usize {
+        return Err(GraphError::Device(format!(
+            "GPU timings came back for {} of {repeats} frames",
+            frames.len()
+        )));
+    }
+    let mut times = pass_times(&frames, &names, repeats);
 
-        for (name, total) in names.iter().zip(&totals) {
-            let got: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.gpu.read_buffer(total, 0, 4)?);
-            if got[0] != cpu_total {
-                return Err(GraphError::Record {
-                    pass: name.to_string(),
-                    message: format!(
-                        "total {} at {size} elements, the CPU says {cpu_total}",
-                        got[0]
-                    ),
-                });
-            }
-        }
-
-        // The yardstick must copy for real: its first and last words against the input's.
-        let last = (size - 1) * 4;
-        for at in [0, last] {
-            let want = exec.gpu.read_buffer(&input_buf, at, 4)?;
-            let got = exec.gpu.read_buffer(&copy_buf, at, 4)?;
-            if got != want {
-                return Err(GraphError::Record {
-                    pass: "copy".into(),
-                    message: format!("the compute copy differs from its input at byte {at}"),
-                });
-            }
-        }
-
-        let gb_per_s_of = |ms: f64| size as f64 * BYTES_PER_ELEMENT / (ms * 1e-3) / 1e9;
-        let copy_ms = median(&mut times[0]);
-        let copy_gb_per_s = gb_per_s_of(copy_ms);
-        let copy_command_gb_per_s = gb_per_s_of(median(&mut times[1]));
-        for (i, name) in names.iter().enumerate() {
-            let gpu_ms = median(&mut times[i + 2]);
-            let gb_per_s = size as f64 * BYTES_PER_ELEMENT / (gpu_ms * 1e-3) / 1e9;
-            rows.push(Row {
-                implementation: name.to_string(),
-                elements: size,
-                gpu_ms,
-                elements_per_s: size as f64 / (gpu_ms * 1e-3),
-                gb_per_s,
-                copy_gb_per_s,
-                copy_command_gb_per_s,
-                copy_ms,
-                cpu_ms,
-                ratio_to_copy: gb_per_s / copy_gb_per_s,
+    for (name, total) in names.iter().zip(&totals) {
+        let got: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.gpu.read_buffer(total, 0, 4)?);
+        if got[0] != cpu_total {
+            return Err(GraphError::Record {
+                pass: name.to_string(),
+                message: format!(
+                    "total {} at {size} elements, the CPU says {cpu_total}",
+                    got[0]
+                ),
             });
         }
     }
-    Ok(rows)
+
+    // The yardstick must copy for real: its first and last words against the input's.
+    let last = (size - 1) * 4;
+    for at in [0, last] {
+        let want = exec.gpu.read_buffer(&input_buf, at, 4)?;
+        let got = exec.gpu.read_buffer(&copy_buf, at, 4)?;
+        if got != want {
+            return Err(GraphError::Record {
+                pass: "copy".into(),
+                message: format!("the compute copy differs from its input at byte {at}"),
+            });
+        }
+    }
+
+    let gb_per_s_of = |ms: f64| size as f64 * BYTES_PER_ELEMENT / (ms * 1e-3) / 1e9;
+    let copy_ms = median(&mut times[0]);
+    let copy_gb_per_s = gb_per_s_of(copy_ms);
+    let copy_command_gb_per_s = gb_per_s_of(median(&mut times[1]));
+    let rows = names.iter().zip(&mut times[2..]).map(|(name, times)| {
+        let gpu_ms = median(times);
+        let gb_per_s = gb_per_s_of(gpu_ms);
+        Row {
+            implementation: name.to_string(),
+            elements: size,
+            gpu_ms,
+            elements_per_s: size as f64 / (gpu_ms * 1e-3),
+            gb_per_s,
+            copy_gb_per_s,
+            copy_command_gb_per_s,
+            copy_ms,
+            cpu_ms,
+            ratio_to_copy: gb_per_s / copy_gb_per_s,
+        }
+    });
+    Ok(rows.collect())
 }
 
 /// The rows as a fixed-width text table.
@@ -456,10 +473,4 @@ pub fn table(rows: &[Row]) -> String {
         );
     }
     s
-}
-
-/// One pass's GPU time in one frame.
-struct PassGpu<'a> {
-    name: &'a str,
-    us: f64,
 }

@@ -45,38 +45,17 @@
 //! and loading it before the current one's look-back (the prefetched tile then publishes
 //! late and the look-backs chain).
 
-use crate::kernels::{self, Grid, Levels, Step, entry, flag};
-use crate::{ScanOptions, contract};
-use meshlight_graph::{Pass, RecordContext, Result, SetupContext, StageContract};
+use crate::ScanOptions;
+use crate::kernels::{self, Grid, Scheme, Step, entry, flag};
 
-/// The single-pass scan (implementation `decoupled_lookback` of stage `scan_fan`).
-#[derive(Clone, Debug)]
-pub struct DecoupledLookback {
-    pub options: ScanOptions,
-}
+kernels::scan_implementation!(
+    /// The single-pass scan (implementation `decoupled_lookback` of stage `scan_fan`).
+    DecoupledLookback,
+    "decoupled_lookback",
+    ScanOptions::for_lookback
+);
 
 impl DecoupledLookback {
-    /// An exclusive scan of `count` elements (or at most `count`, with a GPU count), with
-    /// vector tiles of [`ScanOptions::DEFAULT_LOOKBACK_ITEMS_PER_THREAD`] elements per lane.
-    pub fn new(count: u32) -> Self {
-        Self::with_options(ScanOptions {
-            items_per_thread: ScanOptions::DEFAULT_LOOKBACK_ITEMS_PER_THREAD,
-            ..ScanOptions::new(count)
-        })
-    }
-    pub fn with_options(options: ScanOptions) -> Self {
-        Self { options }
-    }
-    pub fn inclusive(mut self, inclusive: bool) -> Self {
-        self.options.inclusive = inclusive;
-        self
-    }
-
-    /// Only level 0 is scanned; the level above sizes the tile grid of `dispatch_args`.
-    fn levels(&self) -> Levels {
-        Levels::single_fan(self.options.count, self.options.tile())
-    }
-
     /// Tiles at capacity, at least one so an empty scan still writes its total.
     fn tiles(&self) -> u32 {
         self.options.count.div_ceil(self.options.tile()).max(1)
@@ -86,12 +65,11 @@ impl DecoupledLookback {
     fn waits(&self, gpu_count: bool) -> bool {
         gpu_count || self.tiles() > 1
     }
+}
 
-    /// The tile counter, then two words per tile.
-    fn state_words(&self) -> u64 {
-        1 + 2 * self.tiles() as u64
-    }
-
+/// Only level 0 is scanned; the level above (the default levels) sizes the tile grid of
+/// `dispatch_args`.
+impl Scheme for DecoupledLookback {
     fn steps(&self, gpu_count: bool) -> Vec<Step> {
         let o = &self.options;
         let levels = self.levels();
@@ -106,11 +84,7 @@ impl DecoupledLookback {
         args.indirect_levels = 1;
         let mut steps = Vec::with_capacity(2);
         let grid = if gpu_count {
-            steps.push(Step {
-                entry: entry::DISPATCH_ARGS,
-                params: args,
-                grid: Grid::ONE,
-            });
+            steps.push(Step::once(entry::DISPATCH_ARGS, args));
             Grid::Indirect { level: 0 }
         } else {
             Grid::Direct(kernels::grid(self.tiles()))
@@ -122,30 +96,15 @@ impl DecoupledLookback {
         });
         steps
     }
-}
 
-impl Pass for DecoupledLookback {
-    fn contract(&self) -> StageContract {
-        contract()
+    /// The tile counter, then two words per tile.
+    fn state_words(&self) -> Option<u64> {
+        Some(1 + 2 * self.tiles() as u64)
     }
-    fn implementation(&self) -> &'static str {
-        "decoupled_lookback"
-    }
-    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        let steps = self.steps(kernels::gpu_count(ctx));
-        kernels::setup(
-            ctx,
-            &self.options,
-            &self.levels(),
-            &steps,
-            Some(self.state_words()),
-        )
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let gpu_count = ctx.is_bound("count");
-        // With vector tiles, one tile and a count known here, the kernel takes tile 0 and
-        // waits on nothing: no state to clear. The staged kernel always takes the counter.
-        let clear = self.waits(gpu_count) || !kernels::uses_vector_kernels(&self.options);
-        kernels::record(ctx, &self.steps(gpu_count), clear)
+
+    /// With one tile and a count known here, the kernel takes tile 0 and waits on
+    /// nothing: no state to clear.
+    fn clears_state(&self, gpu_count: bool) -> bool {
+        self.waits(gpu_count)
     }
 }

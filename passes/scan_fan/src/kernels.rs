@@ -7,12 +7,33 @@ use meshlight_graph::{
 };
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
-pub const SHADER: PassShader = pass_shader!("scan_fan::scan", "scan.wgsl");
+/// The kernels (`scan.wgsl`) and the tile layouts they run on, one module each.
+///
+/// The kernels (reduce, scan-and-add, the walk, the look-back) are the same whatever the
+/// tile layout; only how a lane reads, scans and writes its part of a tile differs. So
+/// `scan.wgsl` holds the kernels once and imports the layout, `scan_fan::vector_tile` when
+/// the vector width `WIDTH` is given ([`VectorDefs`]) and `scan_fan::staged_tile` without
+/// it ([`ScanDefs`]); both build on `scan_fan::common` (parameters, bindings, the
+/// Hillis–Steele scan). A `WIDTH` def rather than two entry files keeps every kernel in one
+/// place, and the layout modules keep the hot loops of each layout whole and unchanged.
+pub const SHADER: PassShader = pass_shader!(
+    "scan_fan::scan",
+    "scan.wgsl",
+    modules: [
+        ("scan_fan::common", "common.wgsl"),
+        ("scan_fan::staged_tile", "staged_tile.wgsl"),
+        ("scan_fan::vector_tile", "vector_tile.wgsl"),
+    ]
+);
 
-/// The kernels of `tile_access = "vector"`: the same entry points, bindings 0–7 and
-/// parameters as [`SHADER`], plus 16-byte views of the input, output and fan (bindings
-/// 8–10) through which a lane moves its words of the tile.
-pub const VECTOR_SHADER: PassShader = pass_shader!("scan_fan::scan_vec4", "scan_vec4.wgsl");
+/// The kernels of `tile_access = "vector"`: [`SHADER`] under a name of its own, so
+/// pipelines and dumps tell the layouts apart, composed with [`VectorDefs`]. The same
+/// entry points, bindings 0–7 and parameters, plus 16-byte views of the input, output and
+/// fan (bindings 8–10) through which a lane moves its words of the tile.
+pub const VECTOR_SHADER: PassShader = PassShader {
+    name: "scan_fan::scan_vec4",
+    ..SHADER
+};
 
 /// Kernel entry points in `scan.wgsl`.
 pub(crate) mod entry {
@@ -23,7 +44,7 @@ pub(crate) mod entry {
     pub const LOOKBACK: &str = "lookback";
 }
 
-/// Mirrors the WGSL `FLAG_*` constants.
+/// Mirrors the WGSL `FLAG_*` constants (`common.wgsl`).
 pub(crate) mod flag {
     pub const INCLUSIVE: u32 = 1;
     pub const CARRY: u32 = 2;
@@ -35,7 +56,7 @@ pub(crate) mod flag {
 /// The API's cap on workgroups per dispatch dimension; larger grids are split into rows.
 pub(crate) const MAX_GROUPS_PER_DIM: u32 = 65_535;
 
-/// The variant of `scan.wgsl` a pass runs.
+/// The variant of `scan.wgsl` with tiles of single elements (staged or direct).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ScanDefs {
     /// Elements each lane scans serially (`ITEMS`).
@@ -60,7 +81,7 @@ impl ShaderDefs for ScanDefs {
     }
 }
 
-/// The variant of `scan_vec4.wgsl` a pass runs.
+/// The variant of `scan.wgsl` with vector tiles (`WIDTH` given).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct VectorDefs {
     /// Elements each lane scans (`ITEMS`): `items_per_thread / 4` words of 4 (fewer than
@@ -110,7 +131,7 @@ impl ShaderDefs for Defs {
 /// bound as an array of `vec4<u32>`, so smaller scans run the staged kernels.
 pub const VECTOR_MIN_COUNT: u32 = 4;
 
-/// The uniform block of every dispatch; mirrors `Params` in `scan.wgsl`.
+/// The uniform block of every dispatch; mirrors `Params` in `common.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct GpuParams {
@@ -230,6 +251,122 @@ pub(crate) struct Step {
     pub grid: Grid,
 }
 
+impl Step {
+    /// `entry` run by one workgroup.
+    pub fn once(entry: &'static str, params: GpuParams) -> Self {
+        Self {
+            entry,
+            params,
+            grid: Grid::ONE,
+        }
+    }
+}
+
+/// An implementation's options; written by [`scan_implementation!`].
+pub(crate) trait Configured {
+    fn options(&self) -> &ScanOptions;
+}
+
+/// What tells the implementations apart: the levels, the dispatches, the tile state.
+/// Everything else, the constructors and the [`meshlight_graph::Pass`] impl, they share
+/// ([`scan_implementation!`]).
+pub(crate) trait Scheme: Configured {
+    /// Level 0 and, past one tile, one level of tile totals (the default).
+    fn levels(&self) -> Levels {
+        Levels::single_fan(self.options().count, self.options().tile())
+    }
+    /// The dispatches, in order.
+    fn steps(&self, gpu_count: bool) -> Vec<Step>;
+    /// Words of the single-pass scan's tile state; `None` without one.
+    fn state_words(&self) -> Option<u64> {
+        None
+    }
+    /// True when the tile state must be cleared before the steps.
+    fn clears_state(&self, _gpu_count: bool) -> bool {
+        false
+    }
+}
+
+/// `Pass::setup` of every implementation.
+pub(crate) fn setup_scheme(ctx: &mut SetupContext, scheme: &impl Scheme) -> Result<()> {
+    let steps = scheme.steps(gpu_count(ctx));
+    setup(
+        ctx,
+        scheme.options(),
+        &scheme.levels(),
+        &steps,
+        scheme.state_words(),
+    )
+}
+
+/// `Pass::record` of every implementation.
+pub(crate) fn record_scheme(ctx: &mut RecordContext<'_>, scheme: &impl Scheme) -> Result<()> {
+    let gpu_count = ctx.is_bound("count");
+    record(
+        ctx,
+        &scheme.steps(gpu_count),
+        scheme.clears_state(gpu_count),
+    )
+}
+
+/// Declares an implementation `$ty { options }` named `$name` whose `new(count)` takes
+/// `$defaults(count)`: the struct, its constructors and its `Pass` impl, around the
+/// [`Scheme`] the module implements for it.
+macro_rules! scan_implementation {
+    ($(#[$doc:meta])* $ty:ident, $name:literal, $defaults:path) => {
+        $(#[$doc])*
+        #[derive(Clone, Debug)]
+        pub struct $ty {
+            pub options: $crate::ScanOptions,
+        }
+
+        impl $ty {
+            #[doc = concat!(
+                "An exclusive scan of `count` elements (or at most `count`, with a GPU ",
+                "count), with the options of `",
+                stringify!($defaults),
+                "`."
+            )]
+            pub fn new(count: u32) -> Self {
+                Self::with_options($defaults(count))
+            }
+            pub fn with_options(options: $crate::ScanOptions) -> Self {
+                Self { options }
+            }
+            /// Inclusive sums instead of exclusive ones.
+            pub fn inclusive(mut self, inclusive: bool) -> Self {
+                self.options.inclusive = inclusive;
+                self
+            }
+        }
+
+        impl $crate::kernels::Configured for $ty {
+            fn options(&self) -> &$crate::ScanOptions {
+                &self.options
+            }
+        }
+
+        impl meshlight_graph::Pass for $ty {
+            fn contract(&self) -> meshlight_graph::StageContract {
+                $crate::contract()
+            }
+            fn implementation(&self) -> &'static str {
+                $name
+            }
+            fn setup(&self, ctx: &mut meshlight_graph::SetupContext) -> meshlight_graph::Result<()> {
+                $crate::kernels::setup_scheme(ctx, self)
+            }
+            fn record(
+                &self,
+                ctx: &mut meshlight_graph::RecordContext<'_>,
+            ) -> meshlight_graph::Result<()> {
+                $crate::kernels::record_scheme(ctx, self)
+            }
+        }
+    };
+}
+pub(crate) use scan_implementation;
+
 /// Setup shared by the implementations: validation, the variant, the scratch buffers,
 /// and one program per kernel the steps use, with the layout the bound slots give.
 /// `state_words`, for the single-pass scan, sizes its tile-state buffer.
@@ -305,7 +442,7 @@ pub(crate) fn setup(
     Ok(())
 }
 
-/// True when `options` run `scan_vec4.wgsl`: vector tile access and a capacity of at
+/// True when `options` run the vector tiles: vector tile access and a capacity of at
 /// least [`VECTOR_MIN_COUNT`] elements.
 pub(crate) fn uses_vector_kernels(options: &ScanOptions) -> bool {
     options.tile_access == TileAccess::Vector && options.count >= VECTOR_MIN_COUNT

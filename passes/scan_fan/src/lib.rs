@@ -51,7 +51,7 @@
 //!
 //! # Tiles
 //!
-//! With vector tiles (the default, `scan_vec4.wgsl`) a lane moves its part of a tile as
+//! With vector tiles (the default, `vector_tile.wgsl`) a lane moves its part of a tile as
 //! `items_per_thread / 4` words of 16 bytes (`vec4<u32>`) and keeps them in registers from
 //! the load to the store; a subgroup owns a contiguous run of the tile, so every load and
 //! store of a row of words is one coalesced stretch. The words are views of the same
@@ -223,6 +223,15 @@ impl ScanOptions {
             subgroups: Subgroups::Auto,
             items_per_thread: Self::DEFAULT_ITEMS_PER_THREAD,
             tile_access: TileAccess::Vector,
+        }
+    }
+
+    /// The defaults of `decoupled_lookback`: vector tiles of
+    /// [`Self::DEFAULT_LOOKBACK_ITEMS_PER_THREAD`] elements per lane.
+    pub fn for_lookback(count: u32) -> Self {
+        Self {
+            items_per_thread: Self::DEFAULT_LOOKBACK_ITEMS_PER_THREAD,
+            ..Self::new(count)
         }
     }
 

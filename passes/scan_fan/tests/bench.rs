@@ -1,11 +1,11 @@
 //! The benchmark runs end to end (on lavapipe: that it works, not how fast).
 
-mod support;
 use meshlight_pass_scan_fan::bench;
+use meshlight_testing::executor;
 
 #[test]
 fn benchmark_rows_cover_every_implementation_and_size() {
-    let mut exec = support::executor();
+    let mut exec = executor();
     if !exec.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
         panic!("this adapter has no TIMESTAMP_QUERY; the benchmark needs it (lavapipe has it)");
     }

@@ -12,45 +12,31 @@ fn counts_at_chunk_boundaries_match_the_cpu_reference() {
     let mut exec = executor();
     let mut rng = XorShift(0x5eed_0001);
     let input = rng.values(65_537, 1000);
-    for implementation in Implementation::ALL {
-        // 1: a tile is one 256-element chunk, three levels at 65,537; 8: the default
-        // 2,048-element tile. Vector tiles (the default) and staged ones.
-        for items in [1, 8] {
-            for inclusive in [false, true] {
-                for subgroups in [Subgroups::Auto, Subgroups::Off] {
-                    for access in [TileAccess::Vector, TileAccess::Staged] {
-                        for count in COUNTS {
-                            let case = Case::new(implementation, count)
-                                .items(items)
-                                .inclusive(inclusive)
-                                .subgroups(subgroups)
-                                .access(access);
-                            check(&mut exec, &case, &input);
-                        }
-                    }
-                }
+    // 1: a tile is one 256-element chunk, three levels at 65,537; 8: the default
+    // 2,048-element tile. Vector tiles (the default) and staged ones.
+    Matrix::new(&Implementation::ALL)
+        .items(&[1, 8])
+        .both_subgroups()
+        .access(&[TileAccess::Vector, TileAccess::Staged])
+        .each(|case| {
+            for count in COUNTS {
+                check(&mut exec, &case.count(count), &input);
             }
-        }
-    }
+        });
 }
 
 #[test]
 fn values_near_u32_max_wrap_modulo_two_to_the_32() {
     let mut exec = executor();
     let input = XorShift(0x5eed_0002).near_max(65_537);
-    for implementation in Implementation::ALL {
-        for inclusive in [false, true] {
-            for subgroups in [Subgroups::Auto, Subgroups::Off] {
-                for count in [1, 257, 65_537] {
-                    let case = Case::new(implementation, count)
-                        .items(1)
-                        .inclusive(inclusive)
-                        .subgroups(subgroups);
-                    check(&mut exec, &case, &input);
-                }
+    Matrix::new(&Implementation::ALL)
+        .items(&[1])
+        .both_subgroups()
+        .each(|case| {
+            for count in [1, 257, 65_537] {
+                check(&mut exec, &case.count(count), &input);
             }
-        }
-    }
+        });
 }
 
 #[test]
@@ -58,32 +44,25 @@ fn gpu_count_gives_the_cpu_count_result_and_leaves_the_tail() {
     let mut exec = executor();
     const CAPACITY: u32 = 70_000;
     let input = XorShift(0x5eed_0003).values(CAPACITY as usize, u32::MAX);
-    for implementation in Implementation::ALL {
-        for items in [1, 8] {
-            for inclusive in [false, true] {
-                // 0 and 1: below one tile; 65,537: several levels; CAPACITY + 5: clamped.
-                for count in [0, 1, 256, 2_049, 65_537, CAPACITY, CAPACITY + 5] {
-                    let indirect = Case::new(implementation, CAPACITY)
-                        .items(items)
-                        .inclusive(inclusive)
-                        .gpu_count(count);
-                    check(&mut exec, &indirect, &input);
-                    let direct = Case::new(implementation, count.min(CAPACITY))
-                        .items(items)
-                        .inclusive(inclusive);
-                    let a = run(&mut exec, &indirect, &input);
-                    let b = run(&mut exec, &direct, &input);
-                    let n = count.min(CAPACITY) as usize;
-                    assert_eq!(
-                        a.output[..n],
-                        b.output[..n],
-                        "{indirect:?} against {direct:?}"
-                    );
-                    assert_eq!(a.total, b.total, "{indirect:?} against {direct:?}");
-                }
+    Matrix::new(&Implementation::ALL)
+        .items(&[1, 8])
+        .each(|case| {
+            // 0 and 1: below one tile; 65,537: several levels; CAPACITY + 5: clamped.
+            for count in [0, 1, 256, 2_049, 65_537, CAPACITY, CAPACITY + 5] {
+                let indirect = case.count(CAPACITY).gpu_count(count);
+                check(&mut exec, &indirect, &input);
+                let direct = case.count(count.min(CAPACITY));
+                let a = run(&mut exec, &indirect, &input);
+                let b = run(&mut exec, &direct, &input);
+                let n = count.min(CAPACITY) as usize;
+                assert_eq!(
+                    a.output[..n],
+                    b.output[..n],
+                    "{indirect:?} against {direct:?}"
+                );
+                assert_eq!(a.total, b.total, "{indirect:?} against {direct:?}");
             }
-        }
-    }
+        });
 }
 
 #[test]
@@ -109,43 +88,22 @@ fn sixteen_million_elements() {
     let mut exec = executor();
     let n = 16_777_217;
     let input = XorShift(0x5eed_0005).values(n as usize, 1 << 12);
-    check(
-        &mut exec,
-        &Case::new(Implementation::ScanFan, n).items(1),
-        &input,
-    );
-    check(
-        &mut exec,
-        &Case::new(Implementation::ScanFan, n)
-            .items(1)
-            .gpu_count(n - 3),
-        &input,
-    );
-    check(
-        &mut exec,
-        &Case::new(Implementation::ScanFan, n).inclusive(true),
-        &input,
-    );
-    check(&mut exec, &Case::new(Implementation::TwoStep, n), &input);
-    check(
-        &mut exec,
-        &Case::new(Implementation::TwoStep, n).inclusive(true),
-        &input,
-    );
-    // 65,537 tiles of 256: a 2-D grid, and thousands of look-backs in flight.
-    check(
-        &mut exec,
-        &Case::new(Implementation::DecoupledLookback, n).items(1),
-        &input,
-    );
-    check(
-        &mut exec,
-        &Case::new(Implementation::DecoupledLookback, n)
+    use Implementation::{DecoupledLookback, ScanFan, TwoStep};
+    for case in [
+        Case::new(ScanFan, n).items(1),
+        Case::new(ScanFan, n).items(1).gpu_count(n - 3),
+        Case::new(ScanFan, n).inclusive(true),
+        Case::new(TwoStep, n),
+        Case::new(TwoStep, n).inclusive(true),
+        // 65,537 tiles of 256: a 2-D grid, and thousands of look-backs in flight.
+        Case::new(DecoupledLookback, n).items(1),
+        Case::new(DecoupledLookback, n)
             .items(1)
             .inclusive(true)
             .gpu_count(n - 3),
-        &input,
-    );
+    ] {
+        check(&mut exec, &case, &input);
+    }
 }
 
 /// The single-pass scan around its tile boundaries and at 2^20: tile sizes, both modes,
@@ -164,23 +122,16 @@ fn decoupled_lookback_at_tile_boundaries_and_two_to_the_20() {
         (8, Subgroups::Off, TileAccess::Direct),
     ] {
         let tile = 256 * items;
-        for inclusive in [false, true] {
-            for count in [1, tile - 1, tile, tile + 1, 5 * tile + 3, n] {
-                let case = Case::new(Implementation::DecoupledLookback, count)
-                    .items(items)
-                    .subgroups(subgroups)
-                    .access(access)
-                    .inclusive(inclusive);
-                check(&mut exec, &case, &input);
-                let indirect = Case::new(Implementation::DecoupledLookback, n)
-                    .items(items)
-                    .subgroups(subgroups)
-                    .access(access)
-                    .inclusive(inclusive)
-                    .gpu_count(count);
-                check(&mut exec, &indirect, &input);
-            }
-        }
+        Matrix::new(&[Implementation::DecoupledLookback])
+            .items(&[items])
+            .subgroups(&[subgroups])
+            .access(&[access])
+            .each(|case| {
+                for count in [1, tile - 1, tile, tile + 1, 5 * tile + 3, n] {
+                    check(&mut exec, &case.count(count), &input);
+                    check(&mut exec, &case.count(n).gpu_count(count), &input);
+                }
+            });
     }
 }
 
@@ -190,25 +141,15 @@ fn decoupled_lookback_at_tile_boundaries_and_two_to_the_20() {
 fn direct_tile_access_matches_the_cpu_reference() {
     let mut exec = executor();
     let input = XorShift(0x5eed_0009).values(70_000, u32::MAX);
-    for implementation in [Implementation::ScanFan, Implementation::TwoStep] {
-        for items in [1, 8, 16] {
-            for inclusive in [false, true] {
-                for count in COUNTS {
-                    let case = Case::new(implementation, count)
-                        .items(items)
-                        .access(TileAccess::Direct)
-                        .inclusive(inclusive);
-                    check(&mut exec, &case, &input);
-                }
-                let indirect = Case::new(implementation, 70_000)
-                    .items(items)
-                    .access(TileAccess::Direct)
-                    .inclusive(inclusive)
-                    .gpu_count(65_537);
-                check(&mut exec, &indirect, &input);
+    Matrix::new(&[Implementation::ScanFan, Implementation::TwoStep])
+        .items(&[1, 8, 16])
+        .access(&[TileAccess::Direct])
+        .each(|case| {
+            for count in COUNTS {
+                check(&mut exec, &case.count(count), &input);
             }
-        }
-    }
+            check(&mut exec, &case.count(70_000).gpu_count(65_537), &input);
+        });
 }
 
 /// The tile counter and flags are cleared every frame: a second frame of the same graph
@@ -219,57 +160,15 @@ fn decoupled_lookback_runs_frame_after_frame() {
     let n = 100_000u32;
     let input = XorShift(0x5eed_0008).values(n as usize, 1000);
     let (expected, total) = meshlight_pass_scan_fan::cpu_scan(&input, false);
-    let mut g = meshlight_graph::GraphBuilder::new();
-    let desc = meshlight_graph::BufferDesc::array(meshlight_graph::Element::U32, n as u64);
-    let input_h = g.import_buffer("input", desc.clone(), USAGE);
-    let output_h = g.import_buffer("output", desc, USAGE);
-    let total_h = g.import_buffer(
-        "total",
-        meshlight_graph::BufferDesc::array(meshlight_graph::Element::U32, 1),
-        USAGE,
-    );
-    g.add_boxed_pass(
-        "scan",
-        Implementation::DecoupledLookback.pass(meshlight_pass_scan_fan::ScanOptions {
-            items_per_thread: 2,
-            ..meshlight_pass_scan_fan::ScanOptions::new(n)
-        }),
-        meshlight_graph::Bindings::new()
-            .bind("input", input_h)
-            .bind("output", output_h)
-            .bind("total", total_h),
-    )
-    .unwrap();
-    let compiled = g
-        .compile(&meshlight_graph::CompileOptions::for_gpu(&exec.gpu))
-        .unwrap();
-    let input_buf = exec
-        .gpu
-        .buffer_with_data("input", bytemuck::cast_slice(&input), USAGE);
-    for frame in 0..3 {
-        let output_buf = exec.gpu.buffer_with_data(
-            "output",
-            bytemuck::cast_slice(&vec![POISON; n as usize]),
-            USAGE,
-        );
-        let total_buf = exec
-            .gpu
-            .buffer_with_data("total", bytemuck::bytes_of(&POISON), USAGE);
-        let imports = meshlight_graph::Imports::new()
-            .buffer("input", &input_buf)
-            .buffer("output", &output_buf)
-            .buffer("total", &total_buf);
-        exec.execute(&compiled, &imports).unwrap();
-        let output = read_u32s(&exec.gpu, &output_buf, n as usize);
+    let case = Case::new(Implementation::DecoupledLookback, n).items(2);
+    let compiled = graph(&exec, &case);
+    for frame_index in 0..3 {
+        let got = frame(&mut exec, &compiled, &case, &input);
         assert!(
-            output == expected,
-            "frame {frame}: output differs from the CPU"
+            got.output == expected,
+            "frame {frame_index}: output differs from the CPU"
         );
-        assert_eq!(
-            read_u32s(&exec.gpu, &total_buf, 1)[0],
-            total,
-            "frame {frame}"
-        );
+        assert_eq!(got.total, total, "frame {frame_index}");
     }
 }
 
@@ -386,42 +285,31 @@ bind = {{ input = "counts", output = "offsets" }}
 fn vector_tile_access_matches_the_cpu_reference() {
     let mut exec = executor();
     let input = XorShift(0x5eed_000a).values(140_000, u32::MAX);
-    for implementation in Implementation::ALL {
-        for items in [1, 2, 4, 8, 16, 32] {
-            let tile = 256 * items;
-            for inclusive in [false, true] {
-                for subgroups in [Subgroups::Auto, Subgroups::Off] {
-                    for count in [
-                        0,
-                        1,
-                        3,
-                        4,
-                        5,
-                        7,
-                        tile - 1,
-                        tile + 2,
-                        3 * tile + 1,
-                        4 * tile,
-                        4 * tile + 1,
-                        131_075,
-                    ] {
-                        let case = Case::new(implementation, count)
-                            .items(items)
-                            .access(TileAccess::Vector)
-                            .subgroups(subgroups)
-                            .inclusive(inclusive);
-                        check(&mut exec, &case, &input);
-                    }
-                }
+    Matrix::new(&Implementation::ALL)
+        .items(&[1, 2, 4, 8, 16, 32])
+        .both_subgroups()
+        .each(|case| {
+            let tile = case.options.tile();
+            for count in [
+                0,
+                1,
+                3,
+                4,
+                5,
+                7,
+                tile - 1,
+                tile + 2,
+                3 * tile + 1,
+                4 * tile,
+                4 * tile + 1,
+                131_075,
+            ] {
+                check(&mut exec, &case.count(count), &input);
+            }
+            if case.options.subgroups == Subgroups::Auto {
                 for count in [0, 2, 6, tile + 3, 131_073] {
-                    let indirect = Case::new(implementation, 131_075)
-                        .items(items)
-                        .access(TileAccess::Vector)
-                        .inclusive(inclusive)
-                        .gpu_count(count);
-                    check(&mut exec, &indirect, &input);
+                    check(&mut exec, &case.count(131_075).gpu_count(count), &input);
                 }
             }
-        }
-    }
+        });
 }

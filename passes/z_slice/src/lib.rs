@@ -71,6 +71,7 @@
 
 pub mod cpu;
 pub mod scenes;
+pub mod testbed;
 
 pub use cpu::{Extent, Outcome, SliceInstance, ZSliceResult, cpu_z_slice};
 
@@ -406,7 +407,6 @@ fn build(params: &Params) -> Result<Box<dyn Pass>> {
     Ok(Box::new(ZSlice::from_params(params)?))
 }
 
-/// Registers `z_slice` (implementation `compute`) for pipeline files.
 /// Checks a tile grid read from a pipeline file by a stage that walks froxels: at least
 /// one tile each way.
 pub fn check_tiles(width: u32, height: u32) -> Result<()> {
@@ -441,6 +441,7 @@ pub fn declare_tile_target(
     Ok(())
 }
 
+/// Registers `z_slice` (implementation `compute`) for pipeline files.
 pub fn register(registry: &mut Registry) {
     registry.register(STAGE, IMPLEMENTATION, build);
 }
@@ -450,35 +451,10 @@ mod tests {
     use super::*;
     use meshlight_shaders::cpu::light::{z_slice_of_depth, z_slice_start};
 
-    /// Builds a one-pass pipeline with `params` for the pass (`{ … }` contents).
+    /// Reads the pass from `params`, a pipeline file's `params = { … }` contents.
     fn pipeline(params: &str) -> Result<()> {
-        let mut registry = Registry::new();
-        register(&mut registry);
-        let buffer = |name: &str, kind: &str, element: &str, size: u32, count: u32| {
-            let usage = if kind == "imported" {
-                "usage = [\"STORAGE\"]\n"
-            } else {
-                ""
-            };
-            format!(
-                "[[resource]]\nname = \"{name}\"\nkind = \"{kind}\"\nbuffer = {{ element = \"{element}\", element_size = {size}, count = {count} }}\n{usage}"
-            )
-        };
-        let text = [
-            buffer("objects", "imported", "ClusterableObject", 64, 4),
-            buffer("object_count", "imported", "u32", 4, 1),
-            buffer("slice_instances", "exported", "SliceInstance", 8, 64),
-            buffer("slice_counts", "exported", "u32", 4, 8),
-            buffer("slice_draw_args", "exported", "DrawIndirectArgs", 16, 1),
-            buffer("slice_dispatch_args", "exported", "DispatchIndirectArgs", 12, 1),
-            buffer("cluster_grid", "exported", "ClusterGrid", 48, 1),
-            buffer("cluster_counts", "exported", "u32", 4, 64),
-            format!(
-                "[[pass]]\nname = \"z_slice\"\nstage = \"z_slice\"\nimplementation = \"compute\"\nparams = {{ {params} }}\n"
-            ),
-        ]
-        .concat();
-        meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry).map(drop)
+        let table = params.replace(", ", "\n").parse().expect("toml");
+        ZSlice::from_params(&Params::new(table)).map(drop)
     }
 
     #[test]

@@ -13,15 +13,10 @@ use meshlight_pass_z_slice::cpu::{
 use meshlight_pass_z_slice::scenes::{
     Rng, object, orthographic, perspective, random_objects, spot,
 };
-use meshlight_pass_z_slice::{
-    CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE, SliceInstance, ZSlice, cpu_z_slice,
-};
+use meshlight_pass_z_slice::testbed::{Sliced, USAGE, WALK_INPUTS, read, run_frame};
+use meshlight_pass_z_slice::{SLICE_INSTANCE, SliceInstance, ZSlice, cpu_z_slice};
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableKind, ClusterableObject, View};
 use std::collections::BTreeSet;
-
-const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
 
 /// What the GPU leaves in entries nothing may write.
 const SENTINEL: SliceInstance = SliceInstance {
@@ -38,7 +33,7 @@ const NEAR_THRESHOLD: f32 = 1e-5;
 /// At most this many such pairs per scene.
 const MAX_NEAR_PER_SCENE: usize = 4;
 
-use meshlight_testing::gpu;
+use meshlight_testing::executor;
 
 struct GpuSlices {
     /// The whole list: `capacity` entries, then the guard.
@@ -65,109 +60,48 @@ fn run(
     pass: ZSlice,
     entries: u32,
 ) -> GpuSlices {
-    let gpu = gpu();
     let mut g = GraphBuilder::new();
-    // A zero-length binding is not allowed: an empty scene keeps one unused object.
-    let stored = objects.len().max(1) as u64;
-    let list = g.import_buffer(
-        "objects",
-        BufferDesc::array(CLUSTERABLE_OBJECT, stored),
-        USAGE,
-    );
-    let count_buffer = g.import_buffer("object_count", BufferDesc::array(Element::U32, 1), USAGE);
     let instances = g.import_buffer(
         "slice_instances",
         BufferDesc::array(SLICE_INSTANCE, entries as u64),
         USAGE,
     );
-    let counts = g.create_buffer(
-        "slice_counts",
-        BufferDesc::array(Element::U32, cpu::COUNT_WORDS as u64),
-    );
-    let draw = g.create_buffer("slice_draw_args", BufferDesc::array(Element::DRAW_ARGS, 1));
-    let dispatch = g.create_buffer(
-        "slice_dispatch_args",
-        BufferDesc::array(Element::DISPATCH_ARGS, 1),
-    );
-    let grid = g.create_buffer("cluster_grid", BufferDesc::array(CLUSTER_GRID, 1));
     // Not a multiple of the workgroup: every word, the last ones too, must be zeroed.
     let froxel_counts = g.import_buffer(
         "cluster_counts",
         BufferDesc::array(Element::U32, FROXEL_COUNT_WORDS),
         USAGE,
     );
-    let out = g
-        .add_pass(
-            "z_slice",
-            pass,
-            Bindings::new()
-                .bind("objects", list)
-                .bind("object_count", count_buffer)
-                .bind("slice_instances", instances)
-                .bind("slice_counts", counts)
-                .bind("slice_draw_args", draw)
-                .bind("slice_dispatch_args", dispatch)
-                .bind("cluster_grid", grid)
-                .bind("cluster_counts", froxel_counts),
-        )
-        .unwrap();
-    g.export(out.buffer("cluster_counts").unwrap());
-    for name in [
-        "slice_instances",
-        "slice_counts",
-        "slice_draw_args",
-        "slice_dispatch_args",
-        "cluster_grid",
-    ] {
-        g.export(out.buffer(name).unwrap());
-    }
-    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
-    let mut padded = objects.to_vec();
-    padded.resize(stored as usize, ClusterableObject::default());
-    let object_buffer = gpu.buffer_with_data("objects", bytemuck::cast_slice(&padded), USAGE);
-    let count_data = gpu.buffer_with_data("object_count", bytemuck::bytes_of(&count), USAGE);
-    let list_buffer = gpu.buffer_with_data(
+    let sliced = Sliced::add(&mut g, pass, objects.len(), instances, froxel_counts).unwrap();
+    sliced.export(&mut g, &WALK_INPUTS).unwrap();
+    let mut exec = executor();
+    let list_buffer = exec.gpu.buffer_with_data(
         "slice_instances",
         bytemuck::cast_slice(&vec![SENTINEL; entries as usize]),
         USAGE,
     );
-    let froxel_count_buffer = gpu.buffer_with_data(
+    let froxel_count_buffer = exec.gpu.buffer_with_data(
         "cluster_counts",
         bytemuck::cast_slice(&vec![0xdead_beef_u32; FROXEL_COUNT_WORDS as usize]),
         USAGE,
     );
     let imports = Imports::new()
-        .buffer("objects", &object_buffer)
-        .buffer("object_count", &count_data)
         .buffer("slice_instances", &list_buffer)
         .buffer("cluster_counts", &froxel_count_buffer);
-    let mut exec = Executor::new(gpu);
-    let frame = FrameData::new().with("view", bytemuck::bytes_of(view));
-    exec.execute_frame(&compiled, &imports, &frame).unwrap();
-    let words = |exec: &mut Executor, name: &str| -> Vec<u32> {
-        bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
-    };
-    let counts = words(&mut exec, "slice_counts");
-    let draw_args = words(&mut exec, "slice_draw_args");
-    let dispatch_args = words(&mut exec, "slice_dispatch_args");
-    let grid: Vec<ClusterGrid> =
-        bytemuck::pod_collect_to_vec(&exec.read_buffer("cluster_grid").unwrap());
-    let list = exec
-        .gpu
-        .read_buffer(&list_buffer, 0, list_buffer.size())
-        .unwrap();
-    let froxel_counts: Vec<u32> = bytemuck::pod_collect_to_vec(
-        &exec
-            .gpu
-            .read_buffer(&froxel_count_buffer, 0, froxel_count_buffer.size())
-            .unwrap(),
-    );
+    run_frame(&mut exec, g, objects, count, view, imports).unwrap();
+    let counts: Vec<u32> = read(&mut exec, "slice_counts");
+    let draw_args: Vec<u32> = read(&mut exec, "slice_draw_args");
+    let dispatch_args: Vec<u32> = read(&mut exec, "slice_dispatch_args");
+    let grid: Vec<ClusterGrid> = read(&mut exec, "cluster_grid");
+    let whole = |buffer: &wgpu::Buffer| exec.gpu.read_buffer(buffer, 0, buffer.size()).unwrap();
+    let list: Vec<SliceInstance> = bytemuck::pod_collect_to_vec(&whole(&list_buffer));
+    let froxel_counts: Vec<u32> = bytemuck::pod_collect_to_vec(&whole(&froxel_count_buffer));
     assert!(
         froxel_counts.iter().all(|&w| w == 0),
         "prepare left words of cluster_counts unzeroed"
     );
     GpuSlices {
-        list: bytemuck::pod_collect_to_vec(&list),
+        list,
         counts: counts[..cpu::COUNT_WORDS].try_into().unwrap(),
         draw_args: draw_args[..4].try_into().unwrap(),
         dispatch_args: dispatch_args[..3].try_into().unwrap(),
@@ -256,6 +190,14 @@ fn pass_with(capacity: u32) -> ZSlice {
     ZSlice {
         capacity: Some(capacity),
         ..ZSlice::default()
+    }
+}
+
+/// [`pass_with`] under a per-dimension dispatch limit of `max_per_dimension`.
+fn limited_pass(capacity: u32, max_per_dimension: u32) -> ZSlice {
+    ZSlice {
+        max_per_dimension: Some(max_per_dimension),
+        ..pass_with(capacity)
     }
 }
 
@@ -494,10 +436,7 @@ fn an_overflowing_list_counts_everything_and_writes_only_its_capacity() {
     let view = camera.view([320, 180], 0, None);
     let objects = random_objects(&mut rng, 2000, Vec3::ZERO, 20.0);
     const C: u32 = 577;
-    let pass = ZSlice {
-        max_per_dimension: Some(8),
-        ..pass_with(C)
-    };
+    let pass = limited_pass(C, 8);
     let grid = pass.grid([320, 180]);
     let reference = cpu_z_slice(&view, &grid, &objects, C, 4, 8);
     assert!(
@@ -532,10 +471,7 @@ fn more_objects_than_one_dispatch_row_are_all_sliced() {
     let camera = orthographic(Vec3::new(0.0, 0.0, 50.0), Vec3::ZERO, 60.0);
     let view = camera.view([256, 256], 0, None);
     let objects = random_objects(&mut rng, 300, Vec3::ZERO, 25.0);
-    let pass = ZSlice {
-        max_per_dimension: Some(3),
-        ..pass_with(20_000)
-    };
+    let pass = limited_pass(20_000, 3);
     let got = run(&objects, objects.len() as u32, &view, pass, 20_000 + GUARD);
     let near = compare(&view, &pass, &objects, 20_000, &got, "2-D dispatch");
     assert!(near <= MAX_NEAR_PER_SCENE);

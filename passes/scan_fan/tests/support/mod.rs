@@ -14,7 +14,6 @@ pub const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
 
-#[allow(unused_imports)] // not every test binary that includes this module runs a pass
 pub use meshlight_testing::executor;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,6 +71,11 @@ impl Case {
         self.options.tile_access = tile_access;
         self
     }
+    /// The capacity: elements to scan, or the most a GPU count may say.
+    pub fn count(mut self, count: u32) -> Self {
+        self.options.count = count;
+        self
+    }
     pub fn gpu_count(mut self, count: u32) -> Self {
         self.gpu_count = Some(count);
         self
@@ -83,6 +87,63 @@ impl Case {
     }
 }
 
+/// Every combination of the options listed: the tables the tests walk instead of nested
+/// loops. Unlisted options keep [`Case::new`]'s defaults; both modes by default.
+#[derive(Clone, Debug)]
+pub struct Matrix {
+    implementations: Vec<Implementation>,
+    items: Vec<u32>,
+    inclusive: Vec<bool>,
+    subgroups: Vec<Subgroups>,
+    access: Vec<TileAccess>,
+}
+
+impl Matrix {
+    pub fn new(implementations: &[Implementation]) -> Self {
+        Self {
+            implementations: implementations.to_vec(),
+            items: vec![ScanOptions::DEFAULT_ITEMS_PER_THREAD],
+            inclusive: vec![false, true],
+            subgroups: vec![Subgroups::Auto],
+            access: vec![TileAccess::Vector],
+        }
+    }
+    pub fn items(mut self, items: &[u32]) -> Self {
+        self.items = items.to_vec();
+        self
+    }
+    pub fn subgroups(mut self, subgroups: &[Subgroups]) -> Self {
+        self.subgroups = subgroups.to_vec();
+        self
+    }
+    /// Subgroups where the device has them, and off.
+    pub fn both_subgroups(self) -> Self {
+        self.subgroups(&[Subgroups::Auto, Subgroups::Off])
+    }
+    pub fn access(mut self, access: &[TileAccess]) -> Self {
+        self.access = access.to_vec();
+        self
+    }
+    /// Calls `f` with every combination; the count is 0, for `f` to set.
+    pub fn each(&self, mut f: impl FnMut(Case)) {
+        for &implementation in &self.implementations {
+            for &items in &self.items {
+                for &inclusive in &self.inclusive {
+                    for &subgroups in &self.subgroups {
+                        for &access in &self.access {
+                            f(Case::new(implementation, 0)
+                                .items(items)
+                                .inclusive(inclusive)
+                                .subgroups(subgroups)
+                                .access(access));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// What one GPU run produced.
 pub struct Outcome {
     /// The whole output buffer (capacity elements).
@@ -90,57 +151,54 @@ pub struct Outcome {
     pub total: u32,
 }
 
-/// Runs `case` over `input` (at least capacity elements).
-pub fn run(exec: &mut Executor, case: &Case, input: &[u32]) -> Outcome {
+/// `case`'s graph on `exec`'s GPU: the scan over imported `input`, `output` and `total`
+/// (and `count` with a GPU count), each of the capacity.
+pub fn graph(exec: &Executor, case: &Case) -> CompiledGraph {
     let capacity = case.options.count as u64;
-    assert!(input.len() as u64 >= capacity);
     let mut g = GraphBuilder::new();
-    let input_h = g.import_buffer("input", BufferDesc::array(Element::U32, capacity), USAGE);
-    let output_h = g.import_buffer("output", BufferDesc::array(Element::U32, capacity), USAGE);
-    let total_h = g.import_buffer("total", BufferDesc::array(Element::U32, 1), USAGE);
-    let mut bindings = Bindings::new()
-        .bind("input", input_h)
-        .bind("output", output_h)
-        .bind("total", total_h);
+    let mut bindings = Bindings::new();
+    for (name, elements) in [("input", capacity), ("output", capacity), ("total", 1)] {
+        let desc = BufferDesc::array(Element::U32, elements);
+        bindings = bindings.bind(name, g.import_buffer(name, desc, USAGE));
+    }
     if case.gpu_count.is_some() {
-        bindings = bindings.bind(
-            "count",
-            g.import_buffer("count", BufferDesc::array(Element::U32, 1), USAGE),
-        );
+        let desc = BufferDesc::array(Element::U32, 1);
+        bindings = bindings.bind("count", g.import_buffer("count", desc, USAGE));
     }
     g.add_boxed_pass("scan", case.implementation.pass(case.options), bindings)
         .expect("add the scan pass");
-    let compiled = g
-        .compile(&CompileOptions::for_gpu(&exec.gpu))
-        .expect("compile");
+    g.compile(&CompileOptions::for_gpu(&exec.gpu))
+        .expect("compile")
+}
 
+/// Runs one frame of `compiled` (`case`'s [`graph`]) over `input` (at least capacity
+/// elements), into an output and a total poisoned first.
+pub fn frame(exec: &mut Executor, compiled: &CompiledGraph, case: &Case, input: &[u32]) -> Outcome {
+    let capacity = case.options.count as usize;
+    assert!(input.len() >= capacity);
     let gpu = &exec.gpu;
-    let input_buf = gpu.buffer_with_data(
-        "input",
-        bytemuck::cast_slice(&input[..capacity as usize]),
-        USAGE,
-    );
-    let output_buf = gpu.buffer_with_data(
-        "output",
-        bytemuck::cast_slice(&vec![POISON; capacity as usize]),
-        USAGE,
-    );
-    let total_buf = gpu.buffer_with_data("total", bytemuck::bytes_of(&POISON), USAGE);
-    let count_buf = gpu.buffer_with_data(
-        "count",
-        bytemuck::bytes_of(&case.gpu_count.unwrap_or(0)),
-        USAGE,
-    );
+    let upload =
+        |name: &str, words: &[u32]| gpu.buffer_with_data(name, bytemuck::cast_slice(words), USAGE);
+    let input_buf = upload("input", &input[..capacity]);
+    let output_buf = upload("output", &vec![POISON; capacity]);
+    let total_buf = upload("total", &[POISON]);
+    let count_buf = upload("count", &[case.gpu_count.unwrap_or(0)]);
     let imports = Imports::new()
         .buffer("input", &input_buf)
         .buffer("output", &output_buf)
         .buffer("total", &total_buf)
         .buffer("count", &count_buf);
-    exec.execute(&compiled, &imports)
+    exec.execute(compiled, &imports)
         .unwrap_or_else(|e| panic!("{case:?}: {e}"));
-    let output = read_u32s(&exec.gpu, &output_buf, capacity as usize);
+    let output = read_u32s(&exec.gpu, &output_buf, capacity);
     let total = read_u32s(&exec.gpu, &total_buf, 1)[0];
     Outcome { output, total }
+}
+
+/// Runs `case` over `input` (at least capacity elements).
+pub fn run(exec: &mut Executor, case: &Case, input: &[u32]) -> Outcome {
+    let compiled = graph(exec, case);
+    frame(exec, &compiled, case, input)
 }
 
 pub fn read_u32s(gpu: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Vec<u32> {
