@@ -101,5 +101,42 @@ fn html_dump_is_self_contained_and_matches_snapshot() {
     let html = dump::to_html(&sample(), "sample", None);
     assert!(!html.contains("http://") && !html.contains("https://") && !html.contains("<script"));
     assert!(html.contains("raster &lt;sw&gt;"));
-    check("sample.html", &html);
+    // Stored as `.html.snap`: a golden copy of generated output, not a page of the project.
+    check("sample.html.snap", &html);
+}
+
+/// The drawing: every pass once (the culled one dashed, named culled), each below every
+/// pass it depends on, and an arrow per pair of dependent passes carrying the resources'
+/// names; standalone, it is an SVG document.
+#[test]
+fn svg_draws_every_pass_below_what_it_depends_on() {
+    let plan = sample();
+    let svg = dump::to_svg(&plan);
+    assert!(
+        svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""),
+        "{svg}"
+    );
+    let rank = |name: &str| -> u32 {
+        let key = format!(
+            "data-pass=\"{}\" data-rank=\"",
+            name.replace('<', "&lt;").replace('>', "&gt;")
+        );
+        assert_eq!(svg.matches(&key).count(), 1, "{name} drawn once");
+        let at = svg.find(&key).unwrap() + key.len();
+        svg[at..].split('"').next().unwrap().parse().unwrap()
+    };
+    for e in &plan.edges {
+        let (from, to) = (&plan.passes[e.from].name, &plan.passes[e.to].name);
+        assert!(rank(from) < rank(to), "{from} → {to}");
+        assert!(svg.contains(&format!(
+            "<title>{} → {}: ",
+            from.replace('<', "&lt;").replace('>', "&gt;"),
+            to.replace('<', "&lt;").replace('>', "&gt;")
+        )));
+    }
+    assert!(svg.contains("class=\"pass culled\" data-pass=\"debug_view\""));
+    assert_eq!(svg.matches("<g class=\"pass").count(), plan.passes.len());
+    // The page embeds the same drawing, without the namespace.
+    let html = dump::to_html(&plan, "sample", None);
+    assert!(html.contains("<h2>Graph</h2>\n<svg width="), "{html}");
 }

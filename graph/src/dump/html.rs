@@ -72,7 +72,13 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
     if let Some(frame) = last_frame {
         let gpu = frame
             .gpu_frame_us
-            .map(|us| format!("<b>{:.3} ms</b> on the GPU ({})", us / 1000.0, esc(frame.timing.name())))
+            .map(|us| {
+                format!(
+                    "<b>{:.3} ms</b> on the GPU ({})",
+                    us / 1000.0,
+                    esc(frame.timing.name())
+                )
+            })
             .unwrap_or_else(|| "no GPU time (timing off or not back yet)".into());
         let _ = writeln!(
             h,
@@ -89,7 +95,8 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
         );
     }
     h.push_str("<h2>Graph</h2>\n");
-    h.push_str(&super::to_svg(plan));
+    // Inline SVG in HTML needs no namespace, and the page names no address.
+    h.push_str(&super::to_svg(plan).replacen(" xmlns=\"http://www.w3.org/2000/svg\"", "", 1));
     batches(&mut h, plan, last_frame);
     h.push_str("<h2>Pass order</h2>\n<table><tr><th>#</th><th>batch</th><th>pass</th><th>stage / implementation</th><th>GPU µs</th><th></th><th>CPU record µs</th><th>programs (kind, entries, defs)</th></tr>\n");
     let max_gpu = last_frame

@@ -106,9 +106,10 @@ pub fn to_svg(plan: &Plan) -> String {
     let mut carried: BTreeMap<(usize, usize), (Vec<String>, bool)> = BTreeMap::new();
     for e in &plan.edges {
         let entry = carried.entry((e.from, e.to)).or_default();
-        entry
-            .0
-            .push(format!("{}@{}", plan.resources[e.resource].info.name, e.version));
+        entry.0.push(format!(
+            "{}@{}",
+            plan.resources[e.resource].info.name, e.version
+        ));
         entry.1 |= e.kind == EdgeKind::ReadAfterWrite;
     }
     for ((from, to), (resources, raw)) in &carried {
@@ -118,7 +119,11 @@ pub fn to_svg(plan: &Plan) -> String {
         let (x0, y0) = (x0 + BOX_W / 2, y0 + BOX_H);
         let (x1, y1) = (x1 + BOX_W / 2, y1);
         let bend = (y1.saturating_sub(y0) / 2).max(12);
-        let dash = if *raw { "" } else { " stroke-dasharray=\"4 3\"" };
+        let dash = if *raw {
+            ""
+        } else {
+            " stroke-dasharray=\"4 3\""
+        };
         let _ = writeln!(
             s,
             "<path d=\"M{x0},{y0} C{x0},{} {x1},{} {x1},{y1}\" fill=\"none\" stroke=\"#888\"{dash} marker-end=\"url(#arrow)\"><title>{} → {}: {}</title></path>",
