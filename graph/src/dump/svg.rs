@@ -12,8 +12,10 @@ const BOX_H: u32 = 38;
 const GAP_X: u32 = 24;
 const GAP_Y: u32 = 34;
 const MARGIN: u32 = 16;
-/// Top band for the legend.
-const LEGEND_H: u32 = 26;
+/// Top band for the legend: two lines.
+const LEGEND_H: u32 = 40;
+/// The legend's lines fit in this width.
+const MIN_WIDTH: u32 = 520;
 /// Fills by batch, cycled: neighbouring batches always differ.
 const BATCH_FILLS: [&str; 6] = [
     "#dbe8fb", "#e3f4dc", "#fbeed8", "#efe1f7", "#d9f2f2", "#f8dede",
@@ -85,7 +87,7 @@ pub fn to_svg(plan: &Plan) -> String {
         .collect();
     let columns = nodes.iter().map(|n| n.column + 1).max().unwrap_or(1);
     let rows = nodes.iter().map(|n| n.rank + 1).max().unwrap_or(1);
-    let width = 2 * MARGIN + columns * (BOX_W + GAP_X) - GAP_X;
+    let width = (2 * MARGIN + columns * (BOX_W + GAP_X) - GAP_X).max(MIN_WIDTH);
     let height = 2 * MARGIN + LEGEND_H + rows * (BOX_H + GAP_Y) - GAP_Y;
     let mut s = String::new();
     let _ = writeln!(
@@ -97,10 +99,15 @@ pub fn to_svg(plan: &Plan) -> String {
     );
     let _ = writeln!(
         s,
-        "<text x=\"{MARGIN}\" y=\"{}\" fill=\"#555\">{} passes in {} batches (fill: batch; thick border: recorded on the encoder; dashed: culled); arrows: read after write, dashed: write after read</text>",
+        "<text x=\"{MARGIN}\" y=\"{}\" fill=\"#555\">{} passes in {} batches; fill: batch, thick border: on the encoder, dashed: culled</text>",
         MARGIN + 12,
         plan.order.len(),
         plan.batches.len()
+    );
+    let _ = writeln!(
+        s,
+        "<text x=\"{MARGIN}\" y=\"{}\" fill=\"#555\">arrows: read after write; dashed: write after read (hover: resources)</text>",
+        MARGIN + 28,
     );
     // Arrows first, so boxes cover their ends; one per pair of passes.
     let mut carried: BTreeMap<(usize, usize), (Vec<String>, bool)> = BTreeMap::new();
