@@ -34,6 +34,18 @@ impl Params {
         u32::try_from(v)
             .map_err(|_| GraphError::parameter(format!("`{key}` = {v} does not fit in 32 bits")))
     }
+    /// `width` and `height`, both required and above 0: the size of what the pass
+    /// draws into, which `what` names in the error (e.g. "the visibility buffer").
+    pub fn size(&self, what: &str) -> Result<[u32; 2]> {
+        let width = self.u32("width", 0)?;
+        let height = self.u32("height", 0)?;
+        if width == 0 || height == 0 {
+            return Err(GraphError::parameter(format!(
+                "`width` and `height` ({what}'s size) must both be > 0, got {width} × {height}"
+            )));
+        }
+        Ok([width, height])
+    }
     /// The boolean at `key`, or `default` when the table lacks it.
     pub fn bool(&self, key: &str, default: bool) -> Result<bool> {
         match self.table.get(key) {
@@ -132,6 +144,23 @@ mod tests {
                 }
                 other => panic!("{key}: {other:?}"),
             }
+        }
+    }
+
+    #[test]
+    fn a_size_needs_both_sides_above_zero_and_names_what_it_sizes() {
+        assert_eq!(
+            params("width = 64\nheight = 32")
+                .size("the target")
+                .unwrap(),
+            [64, 32]
+        );
+        for text in ["width = 64", "height = 32", "width = 0\nheight = 32", ""] {
+            let err = params(text).size("the target").unwrap_err().to_string();
+            assert!(
+                err.contains("the target's size") && err.contains("> 0"),
+                "{err}"
+            );
         }
     }
 }

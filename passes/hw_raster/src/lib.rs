@@ -67,8 +67,8 @@ use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, Element, GraphError, Pass,
-    Primitive, ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
+    Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, Element, Pass, Primitive,
+    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
 };
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
@@ -204,16 +204,10 @@ struct GpuParams {
 const PARAM_KEYS: [&str; 2] = ["width", "height"];
 
 impl HwRaster {
-    /// Reads `width` and `height` (required, > 0: the visibility buffer size).
+    /// Reads `width` and `height` (required, > 0: the visibility buffer's size).
     pub fn from_params(params: &Params, feed: Feed) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
-        let width = params.u32("width", 0)?;
-        let height = params.u32("height", 0)?;
-        if width == 0 || height == 0 {
-            return Err(GraphError::parameter(format!(
-                "`width` and `height` (the visibility buffer size) must both be > 0, got {width} × {height}"
-            )));
-        }
+        let [width, height] = params.size("the visibility buffer")?;
         Ok(Self {
             width,
             height,

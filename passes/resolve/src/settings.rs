@@ -196,13 +196,7 @@ impl Resolve {
     /// `pyramid_mip` (default 0; checked against the bound pyramid when the pass records).
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&KEYS)?;
-        let width = params.u32("width", 0)?;
-        let height = params.u32("height", 0)?;
-        if width == 0 || height == 0 {
-            return Err(GraphError::parameter(format!(
-                "`width` and `height` (the visibility buffer size) must both be > 0, got {width} × {height}"
-            )));
-        }
+        let [width, height] = params.size("the visibility buffer")?;
         let defaults = Settings::default();
         let view = DebugView::parse(&params.string("view", defaults.view.name())?)
             .map_err(|e| GraphError::parameter(format!("`view`: {e}")))?;

@@ -93,8 +93,8 @@ use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, GraphError, Pass, ProgramDesc, RecordContext, Result, SetupContext,
-    Slot, StageContract, Visibility64,
+    Access, BindingLayout, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
+    StageContract, Visibility64,
 };
 use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
 
@@ -267,13 +267,7 @@ impl SwRaster {
     /// implementation.
     pub fn from_params(params: &Params, target: Visibility64) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
-        let width = params.u32("width", 0)?;
-        let height = params.u32("height", 0)?;
-        if width == 0 || height == 0 {
-            return Err(GraphError::parameter(format!(
-                "`width` and `height` (the visibility buffer size) must both be > 0, got {width} × {height}"
-            )));
-        }
+        let [width, height] = params.size("the visibility buffer")?;
         Ok(Self {
             width,
             height,
