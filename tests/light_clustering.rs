@@ -9,7 +9,7 @@ use meshlight::light_clustering::reference::{Assignment, cpu_assign, cpu_assign_
 use meshlight::light_clustering::{
     Clustered, Clusterer, ClusteringSettings, ClusteringSource, ClusteringWarning,
 };
-use meshlight::z_slice::scenes::{Rng, object, orthographic, perspective, random_objects};
+use meshlight::z_slice::scenes::{Rng, object, perspective, random_camera, random_objects};
 use meshlight_graph::GraphError;
 use meshlight_shaders::cpu::layout::{ClusterableKind, ClusterableObject, View};
 use std::collections::BTreeSet;
@@ -86,13 +86,7 @@ fn compare(
 }
 
 fn random_scene(rng: &mut Rng, index: u32) -> (View, Vec<ClusterableObject>) {
-    let target = Vec3::new(rng.range(-5.0, 5.0), 0.0, rng.range(-5.0, 5.0));
-    let eye = target + rng.direction() * rng.range(5.0, 60.0);
-    let camera = if index % 2 == 1 {
-        orthographic(eye, target, rng.range(10.0, 80.0))
-    } else {
-        perspective(eye, target, rng.range(0.5, 1.5))
-    };
+    let (camera, target) = random_camera(rng, index % 2 == 1);
     (
         camera.view([320, 180], index, None),
         random_objects(rng, 200, target, 60.0),

@@ -9,7 +9,7 @@ use meshlight_graph::{GraphBuilder, Imports};
 use meshlight_pass_count_raster::KINDS;
 use meshlight_pass_count_raster::cpu::{CountResult, cpu_count};
 use meshlight_pass_count_raster::testbed::{Implementation, add_count};
-use meshlight_pass_z_slice::scenes::{Rng, object, orthographic, perspective, random_objects};
+use meshlight_pass_z_slice::scenes::{Rng, object, perspective, random_camera, random_objects};
 use meshlight_pass_z_slice::testbed::{Sliced, read, read_written, run_frame};
 use meshlight_pass_z_slice::{GridSettings, SliceInstance, ZSlice};
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableKind, ClusterableObject, View};
@@ -107,14 +107,8 @@ fn compare(
 }
 
 fn scene(rng: &mut Rng, index: u32) -> (View, Vec<ClusterableObject>, ZSlice) {
-    let target = Vec3::new(rng.range(-5.0, 5.0), 0.0, rng.range(-5.0, 5.0));
-    let eye = target + rng.direction() * rng.range(5.0, 60.0);
+    let (camera, target) = random_camera(rng, index % 2 == 1);
     let viewport = [[320, 180], [256, 256], [640, 360]][rng.below(3) as usize];
-    let camera = if index % 2 == 1 {
-        orthographic(eye, target, rng.range(10.0, 80.0))
-    } else {
-        perspective(eye, target, rng.range(0.5, 1.5))
-    };
     let view = camera.view(viewport, index, None);
     let objects = random_objects(rng, 200, target, 60.0);
     let z_slice = ZSlice {

@@ -4,13 +4,12 @@
 //! whose deciding value lies within `NEAR` of its threshold. A too-small capacity cuts
 //! lists the way the reference does and writes nothing past it.
 
-use glam::Vec3;
 use meshlight_graph::{Bindings, BufferDesc, Element, GraphBuilder, Imports};
 use meshlight_pass_count_raster::KINDS;
 use meshlight_pass_count_raster::testbed::{Implementation, add_count};
 use meshlight_pass_populate::cpu::{ClusterLists, cpu_populate};
 use meshlight_pass_scan_fan::ScanFan;
-use meshlight_pass_z_slice::scenes::{Rng, orthographic, perspective, random_objects};
+use meshlight_pass_z_slice::scenes::{Rng, random_camera, random_objects};
 use meshlight_pass_z_slice::testbed::{Sliced, USAGE, read, read_written, run_frame};
 use meshlight_pass_z_slice::{GridSettings, SliceInstance, ZSlice};
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject, View};
@@ -187,14 +186,8 @@ fn compare(
 }
 
 fn scene(rng: &mut Rng, index: u32) -> (View, Vec<ClusterableObject>, ZSlice) {
-    let target = Vec3::new(rng.range(-5.0, 5.0), 0.0, rng.range(-5.0, 5.0));
-    let eye = target + rng.direction() * rng.range(5.0, 60.0);
+    let (camera, target) = random_camera(rng, index % 2 == 1);
     let viewport = [[320, 180], [256, 256]][rng.below(2) as usize];
-    let camera = if index % 2 == 1 {
-        orthographic(eye, target, rng.range(10.0, 80.0))
-    } else {
-        perspective(eye, target, rng.range(0.5, 1.5))
-    };
     let z_slice = ZSlice {
         grid: GridSettings {
             dims: [[16, 9, 24], [8, 8, 16], [12, 7, 3]][index as usize % 3],

@@ -6,33 +6,17 @@ use glam::Vec3;
 use meshlight_gpu_scene::{Camera, Projection};
 use meshlight_shaders::cpu::layout::{ClusterableKind, ClusterableObject};
 
-/// xorshift64*: seeded, reproducible scenes.
-pub struct Rng(pub u64);
+pub use meshlight_shaders::cpu::rng::Rng;
 
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    pub fn unit(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
-    }
-    pub fn below(&mut self, n: u32) -> u32 {
-        (self.next_u64() % n as u64) as u32
-    }
-    pub fn direction(&mut self) -> Vec3 {
-        Vec3::new(
-            self.range(-1.0, 1.0),
-            self.range(-1.0, 1.0),
-            self.range(-1.0, 1.0),
-        )
-        .normalize_or(Vec3::Y)
-    }
+/// A direction drawn uniformly from the cube's corners' span, normalised (+Y when it
+/// comes out zero).
+pub fn direction(rng: &mut Rng) -> Vec3 {
+    Vec3::new(
+        rng.range(-1.0, 1.0),
+        rng.range(-1.0, 1.0),
+        rng.range(-1.0, 1.0),
+    )
+    .normalize_or(Vec3::Y)
 }
 
 pub fn object(kind: ClusterableKind, position: Vec3, range: f32) -> ClusterableObject {
@@ -79,18 +63,32 @@ pub fn random_objects(
             let range = 0.05 * 1000f32.powf(rng.unit());
             match KINDS[i % 4] {
                 ClusterableKind::SpotLight => {
-                    let d = rng.direction();
+                    let d = direction(rng);
                     spot(position, d, range, rng.range(0.05, 1.5))
                 }
                 kind => {
                     let mut o = object(kind, position, range);
-                    let d = rng.direction();
+                    let d = direction(rng);
                     o.direction_cos_angle = [d.x, d.y, d.z, 1.0];
                     o
                 }
             }
         })
         .collect()
+}
+
+/// A camera 5 to 60 units from a random target on the ground near the origin, looking
+/// at it: orthographic (10 to 80 units tall) or perspective (0.5 to 1.5 rad), with the
+/// target the scene's objects gather around.
+pub fn random_camera(rng: &mut Rng, ortho: bool) -> (Camera, Vec3) {
+    let target = Vec3::new(rng.range(-5.0, 5.0), 0.0, rng.range(-5.0, 5.0));
+    let eye = target + direction(rng) * rng.range(5.0, 60.0);
+    let camera = if ortho {
+        orthographic(eye, target, rng.range(10.0, 80.0))
+    } else {
+        perspective(eye, target, rng.range(0.5, 1.5))
+    };
+    (camera, target)
 }
 
 pub fn perspective(position: Vec3, target: Vec3, fov_y: f32) -> Camera {

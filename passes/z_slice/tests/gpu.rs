@@ -11,7 +11,7 @@ use meshlight_pass_z_slice::cpu::{
     self, Outcome, WORD_CAPACITY, WORD_CULLED, WORD_INVALID, WORD_REQUESTED, WORD_VISIBLE,
 };
 use meshlight_pass_z_slice::scenes::{
-    Rng, object, orthographic, perspective, random_objects, spot,
+    Rng, object, orthographic, perspective, random_camera, random_objects, spot,
 };
 use meshlight_pass_z_slice::testbed::{Sliced, USAGE, WALK_INPUTS, read, run_frame};
 use meshlight_pass_z_slice::{SLICE_INSTANCE, SliceInstance, ZSlice, cpu_z_slice};
@@ -208,15 +208,9 @@ fn random_scenes_of_every_kind_match_the_reference() {
     let mut visible_per_kind = [0u32; 4];
     let (mut culled, mut multi_slice, mut orthographic_scenes) = (0, 0, 0);
     for scene in 0..8 {
-        let target = Vec3::new(rng.range(-5.0, 5.0), 0.0, rng.range(-5.0, 5.0));
-        let eye = target + rng.direction() * rng.range(5.0, 60.0);
-        let viewport = [[320, 180], [256, 256], [640, 360]][rng.below(3) as usize];
         let ortho = scene % 2 == 1;
-        let camera = if ortho {
-            orthographic(eye, target, rng.range(10.0, 80.0))
-        } else {
-            perspective(eye, target, rng.range(0.5, 1.5))
-        };
+        let (camera, target) = random_camera(&mut rng, ortho);
+        let viewport = [[320, 180], [256, 256], [640, 360]][rng.below(3) as usize];
         let view = camera.view(viewport, scene, None);
         let objects = random_objects(&mut rng, 300, target, 80.0);
         let capacity = 300 * 40;
