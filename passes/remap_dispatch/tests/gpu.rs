@@ -46,10 +46,7 @@ impl Pass for Consume {
         "test"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        let layout = BindingLayout::compute("consume")
-            .slot(0, "count")
-            .slot(1, "args")
-            .slot(2, "hits");
+        let layout = BindingLayout::from_shader("consume");
         ctx.program(
             "consume",
             ProgramDesc::compute(&CONSUMER, "consume").layout(layout),
