@@ -1,0 +1,20 @@
+//! The README's library example is `examples/library.rs`, character for character from
+//! its first `use`, and it runs (lavapipe in CI).
+
+#[path = "../examples/library.rs"]
+mod library;
+
+#[test]
+fn the_readme_shows_the_library_example() {
+    let source = include_str!("../examples/library.rs");
+    let code = &source[source.find("use ").unwrap()..];
+    assert!(
+        include_str!("../README.md").contains(code),
+        "README.md's library example differs from examples/library.rs; copy the file from its first `use` into the README"
+    );
+}
+
+#[test]
+fn the_library_example_renders() {
+    library::main().unwrap_or_else(|e| panic!("{e}"));
+}
