@@ -33,10 +33,18 @@ pub struct BenchArgs {
     /// the mesh of the `virtual-geometry` scenario.
     #[arg(long = "mesh")]
     pub meshes: Vec<std::path::PathBuf>,
+    /// Write the rows as one page of charts here too (log-log lines for size sweeps,
+    /// stacked bars for per-pass profiles, bars for the rest).
+    #[arg(long)]
+    pub html: Option<std::path::PathBuf>,
+    /// Read the rows from these JSON files (written by `--json`) instead of measuring:
+    /// with --html, charts of an earlier run, e.g. the GPU runs under docs/.
+    #[arg(long = "from-json")]
+    pub from_json: Vec<std::path::PathBuf>,
 }
 
 /// One measured row: what was measured, the value, its unit, and optional context.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Row {
     pub scenario: String,
     pub case: String,
@@ -70,6 +78,22 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
         args.scenarios.clone()
     };
     let mut rows = Vec::new();
+    for path in &args.from_json {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("{}: cannot read it: {e}", path.display()))?;
+        let read: Vec<Row> = serde_json::from_str(&text).map_err(|e| {
+            format!(
+                "{}: not a list of bench rows ({e}); give a file `--json` wrote",
+                path.display()
+            )
+        })?;
+        rows.extend(read);
+    }
+    let scenarios = if args.from_json.is_empty() {
+        scenarios
+    } else {
+        Vec::new()
+    };
     for s in &scenarios {
         let new = match s.as_str() {
             "graph-compile" => graph_compile(args.quick),
@@ -112,6 +136,13 @@ pub fn run(args: &BenchArgs) -> std::result::Result<(), Box<dyn std::error::Erro
             std::fs::create_dir_all(dir)?;
         }
         std::fs::write(path, serde_json::to_string_pretty(&rows)?)?;
+    }
+    if let Some(path) = &args.html {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        std::fs::write(path, crate::bench_html::page("meshlight bench", &rows))?;
+        println!("charts: {}", path.display());
     }
     Ok(())
 }

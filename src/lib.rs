@@ -15,6 +15,7 @@
 
 pub mod bake_library;
 pub mod bench;
+pub mod bench_html;
 pub mod info;
 pub mod light_clustering;
 pub mod output;

@@ -693,3 +693,40 @@ fn the_shipped_pipeline_renders_the_default_image() {
     assert!(render(&[&file[..], &["--lights", "0"]].concat(), "file-unlit.png") == unlit);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `bench --from-json … --html`: the saved GPU rows under docs/ drawn as charts without a
+/// GPU; a file that is not a list of rows is named with what to give instead.
+#[test]
+fn bench_charts_saved_rows_and_names_a_file_it_cannot_read() {
+    let dir = scratch("bench-html");
+    let page = dir.join("charts.html");
+    let out = meshlight(&[
+        "bench",
+        "--from-json",
+        "docs/bench-h200-vg2.json",
+        "--html",
+        page.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains("<h2>vg-scale</h2>") && html.contains("<polyline"));
+    assert!(html.contains("GPU time per pass"));
+    let out = meshlight(&[
+        "bench",
+        "--from-json",
+        "Cargo.toml",
+        "--html",
+        page.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("Cargo.toml") && err.contains("--json"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
