@@ -92,12 +92,13 @@ pub fn locate(file: &Path, text: &str, message: &str) -> FileError {
 }
 
 fn line_named(message: &str) -> Option<usize> {
-    let at = message.find("line ")?;
-    let digits: String = message[at + 5..]
-        .chars()
-        .take_while(char::is_ascii_digit)
-        .collect();
-    digits.parse().ok()
+    message.match_indices("line ").find_map(|(at, _)| {
+        let digits: String = message[at + 5..]
+            .chars()
+            .take_while(char::is_ascii_digit)
+            .collect();
+        digits.parse().ok()
+    })
 }
 
 /// `text` with the `implementation` of every `[[pass]]` of a stage in `chosen` set to

@@ -45,6 +45,11 @@ pub struct FrameTime {
     pub cpu_ms: f32,
     /// The GPU time of the newest frame whose timestamps came back.
     pub gpu_ms: Option<f32>,
+    /// The part of `cpu_ms` spent on the overlay (egui's pass, tessellation, upload).
+    pub overlay_ms: f32,
+    /// The part of `cpu_ms` spent in the graph's frame (recording and `queue.submit`,
+    /// where a software driver such as lavapipe runs the work).
+    pub graph_ms: f32,
 }
 
 /// The window's side: the surface, the blit and egui.
@@ -432,8 +437,10 @@ impl Viewer {
                     &self.edited.display().to_string(),
                     &path.display().to_string(),
                 );
+                let prefix = format!("pipeline file {}: ", path.display());
+                let message = message.strip_prefix(&prefix).unwrap_or(&message);
                 let text = std::fs::read_to_string(path).unwrap_or_default();
-                let located = locate(path, &text, &message);
+                let located = locate(path, &text, message);
                 let shown = located.to_string();
                 self.file_error = Some(located);
                 return Err(shown);
@@ -476,13 +483,15 @@ impl Viewer {
             self.rig.rotate(turn / 0.004, 0.0);
         }
         let camera = self.rig.camera();
+        let graph_start = Instant::now();
         let stats = self.renderer.frame(&camera)?;
+        let graph_ms = graph_start.elapsed().as_secs_f32() * 1000.0;
         let gpu_ms = stats
             .gpu_latest
             .as_ref()
             .map(|t| t.frame_us as f32 / 1000.0);
         self.last_stats = Some(stats);
-        let actions = self.present_to_window()?;
+        let (actions, overlay_ms) = self.present_to_window()?;
         self.frames += 1;
         if self.times.len() == HISTORY {
             self.times.pop_front();
@@ -490,8 +499,24 @@ impl Viewer {
         self.times.push_back(FrameTime {
             cpu_ms: start.elapsed().as_secs_f32() * 1000.0,
             gpu_ms,
+            overlay_ms,
+            graph_ms,
         });
         self.act(actions);
+        if self.frames.is_multiple_of(100)
+            && let Some(s) = &self.last_stats
+        {
+            log::info!(
+                "frame {}: CPU {:.2} ms, graph {graph_ms:.2} ms, overlay {overlay_ms:.2} ms, RSS {} KiB, {} in flight, {} allocations, {} bind groups, pool {} B",
+                self.frames,
+                start.elapsed().as_secs_f32() * 1000.0,
+                resident_kib().unwrap_or(0),
+                s.frames_in_flight,
+                s.allocations,
+                s.bind_groups_created,
+                s.pool_bytes_held
+            );
+        }
         Ok(())
     }
 
@@ -515,14 +540,16 @@ impl Viewer {
         }
     }
 
-    fn present_to_window(&mut self) -> Result<OverlayActions, ViewerError> {
+    /// Presents the frame; returns what the overlay asked for and the milliseconds the
+    /// overlay took.
+    fn present_to_window(&mut self) -> Result<(OverlayActions, f32), ViewerError> {
         let choices = if self.overlay_on && self.window.is_some() {
             self.choices_with_current()
         } else {
             Vec::new()
         };
         let Some(w) = &mut self.window else {
-            return Ok(OverlayActions::default());
+            return Ok((OverlayActions::default(), 0.0));
         };
         let gpu = &self.renderer.executor.gpu;
         let frame = match w.surface.get_current_texture() {
@@ -530,11 +557,11 @@ impl Viewer {
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 w.surface.configure(&gpu.device, &w.config);
-                return Ok(OverlayActions::default());
+                return Ok((OverlayActions::default(), 0.0));
             }
             other => {
                 log::warn!("no surface texture this frame: {other:?}");
-                return Ok(OverlayActions::default());
+                return Ok((OverlayActions::default(), 0.0));
             }
         };
         let view = frame.texture.create_view(&wgpu::TextureViewDescriptor {
@@ -548,6 +575,7 @@ impl Viewer {
             });
         let mut actions = OverlayActions::default();
         let mut paint = None;
+        let overlay_start = Instant::now();
         if self.overlay_on {
             let input = w.egui_state.take_egui_input(&w.window);
             let facts = crate::overlay::Facts {
@@ -587,6 +615,7 @@ impl Viewer {
             );
             paint = Some((jobs, screen, extra, free));
         }
+        let mut overlay_ms = overlay_start.elapsed().as_secs_f32() * 1000.0;
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("viewer present"),
@@ -603,8 +632,10 @@ impl Viewer {
             });
             w.blit.draw(&gpu.device, &mut pass, &self.present);
             if let Some((jobs, screen, _, _)) = &paint {
+                let drawing = Instant::now();
                 let mut pass = pass.forget_lifetime();
                 w.egui_renderer.render(&mut pass, jobs, screen);
+                overlay_ms += drawing.elapsed().as_secs_f32() * 1000.0;
             }
         }
         let mut buffers = Vec::new();
@@ -620,7 +651,7 @@ impl Viewer {
         for id in free {
             w.egui_renderer.free_texture(&id);
         }
-        Ok(actions)
+        Ok((actions, overlay_ms))
     }
 
     fn choices_with_current(&self) -> Vec<(String, Vec<String>, String)> {
@@ -698,4 +729,11 @@ impl Drop for Viewer {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.edited);
     }
+}
+
+/// The process's resident memory in KiB (Linux), for the log and the tests.
+pub fn resident_kib() -> Option<u64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(pages * 4)
 }
