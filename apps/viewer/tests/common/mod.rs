@@ -111,3 +111,34 @@ pub fn colours(rgba: &[u8]) -> usize {
     c.dedup();
     c.len()
 }
+
+/// The scene of [`small_options`] (with its lights) in a bare renderer, as `meshlight
+/// render` builds it, and the scene's camera.
+pub fn bare_renderer() -> (
+    meshlight::virtual_geometry::Renderer,
+    meshlight::gpu_scene::Camera,
+) {
+    use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
+    let o = small_options();
+    let asset = scenes::load_asset(&o.mesh, o.segments).expect("mesh");
+    let adapter = meshlight::graph::GpuAdapter::select().expect("a Vulkan adapter");
+    let limits = meshlight::gpu_scene::data::Limits::for_device(&adapter.adapter.limits());
+    drop(adapter);
+    let placed = scenes::field(
+        meshlight::gpu_scene::SceneData::new(limits),
+        &asset,
+        o.instances,
+    )
+    .expect("scene");
+    let lights = scenes::field_lights(&placed, scenes::DEFAULT_LIGHTS);
+    let mut settings = FrameSettings::new(o.width, o.height);
+    let mut clustering = meshlight::light_clustering::ClusteringSettings::new(
+        [o.width, o.height],
+        lights.len() as u64,
+    );
+    clustering.entries = clustering.entries.max(lights.len() as u64 * 32);
+    settings.clustering = Some(clustering);
+    let mut renderer = Renderer::new(placed.data, settings, &GraphSource::Code).expect("renderer");
+    renderer.lights = lights;
+    (renderer, placed.camera)
+}
