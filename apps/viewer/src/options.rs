@@ -115,3 +115,24 @@ impl CameraSpec {
         Ok(Self { position, target })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn camera_specs_read_and_refuse() {
+        let c = CameraSpec::parse("1, 2,3:0,0.5,-4").expect("valid");
+        assert_eq!(c.position, Vec3::new(1.0, 2.0, 3.0));
+        assert_eq!(c.target, Vec3::new(0.0, 0.5, -4.0));
+        for bad in [
+            "1,2,3",
+            "1,2:0,0,0",
+            "1,2,3:1,2,3",
+            "a,b,c:0,0,0",
+            "1,2,inf:0,0,0",
+        ] {
+            assert!(CameraSpec::parse(bad).is_err(), "{bad} accepted");
+        }
+    }
+}

@@ -130,12 +130,19 @@ impl Overlay {
 
     fn counters(&self, ui: &mut egui::Ui, f: &Facts<'_>) {
         if let Some(c) = f.renderer.latest_counts() {
-            egui::Grid::new("counts").show(ui, |ui| {
-                for (label, value) in c.rows() {
-                    ui.label(label);
-                    ui.label(value.to_string());
-                    ui.end_row();
-                }
+            ui.label(format!(
+                "{} clusters visible, {} triangles rasterised",
+                c.visible,
+                u64::from(c.software_triangles) + u64::from(c.hardware_triangles)
+            ));
+            egui::CollapsingHeader::new("counters").show(ui, |ui| {
+                egui::Grid::new("counts").show(ui, |ui| {
+                    for (label, value) in c.rows() {
+                        ui.label(label);
+                        ui.label(value.to_string());
+                        ui.end_row();
+                    }
+                });
             });
         }
         if let Some(s) = f.stats {

@@ -152,3 +152,48 @@ pub fn with_implementations(text: &str, chosen: &BTreeMap<String, String>) -> St
     out.push('\n');
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FILE: &str = "name = \"f\"\n\n[[pass]]\nname = \"a\"\nstage = \"sw_raster\"\nimplementation = \"auto\" # best\n\n[[resource]]\nname = \"r\"\nimplementation = \"x\"\n\n[[pass]]\nimplementation = \"single_pass\"\nstage = \"depth_pyramid\"\nparams = { mip = 1 }\n";
+
+    #[test]
+    fn chosen_implementations_replace_their_stages_lines_only() {
+        let chosen = BTreeMap::from([
+            ("sw_raster".to_string(), "buffer".to_string()),
+            ("depth_pyramid".to_string(), "two_pass".to_string()),
+        ]);
+        let out = with_implementations(FILE, &chosen);
+        let lines: Vec<&str> = out.lines().collect();
+        assert_eq!(lines.len(), FILE.lines().count());
+        assert_eq!(lines[5], "implementation = \"buffer\"");
+        assert_eq!(
+            lines[9], "implementation = \"x\"",
+            "a resource's line changed"
+        );
+        assert_eq!(lines[12], "implementation = \"two_pass\"");
+        let parsed: toml::Table = toml::from_str(&out).expect("still TOML");
+        assert_eq!(parsed["pass"].as_array().map(Vec::len), Some(2));
+    }
+
+    #[test]
+    fn errors_are_placed_at_the_parsers_line_or_the_quoted_name() {
+        let at = locate(
+            Path::new("f.toml"),
+            FILE,
+            "TOML parse error at line 7, column 2",
+        );
+        assert_eq!(at.line, Some(7));
+        let at = locate(
+            Path::new("f.toml"),
+            FILE,
+            "no implementation `single_pass` of stage `depth_pyramid` is registered",
+        );
+        assert_eq!(at.line, Some(13));
+        assert_eq!(at.to_string(), format!("f.toml:13: {}", at.message));
+        let at = locate(Path::new("f.toml"), FILE, "the device is lost");
+        assert_eq!(at.line, None);
+    }
+}
