@@ -82,6 +82,8 @@ pub struct Renderer {
     light_buffers: Option<LightBuffers>,
     /// The clustering's counters, growths and warnings.
     pub clustering: Counters,
+    /// Textures of the caller's given to every frame (see [`Renderer::import_texture`]).
+    imported_textures: Vec<(String, wgpu::Texture)>,
 }
 
 /// The imported object list of the light clustering and its count.
@@ -185,6 +187,7 @@ impl Renderer {
             lights: Vec::new(),
             light_buffers,
             clustering: Counters::new(max_elements * 2),
+            imported_textures: Vec::new(),
         })
     }
 
@@ -228,6 +231,9 @@ impl Renderer {
             imports = imports
                 .buffer("objects", &b.objects)
                 .buffer("object_count", &b.object_count);
+        }
+        for (name, texture) in &self.imported_textures {
+            imports = imports.texture(name, texture);
         }
         let stats = self
             .executor
@@ -451,5 +457,73 @@ impl Renderer {
             .iter()
             .find(|(n, _)| n == name)
             .map_or(0, |(_, v)| *v)
+    }
+}
+
+/// Changing the frame while it runs: a window resized, an implementation or a threshold
+/// chosen, a pipeline file edited. The device, the scene and the pipelines already made
+/// stay; only the graph is built and compiled again.
+impl Renderer {
+    /// Builds the graph from `source` with `settings` (`extend` may add passes and
+    /// resources of the caller's, e.g. a copy of `color` into a window's texture) and
+    /// compiles it for the open device. On any error the renderer keeps its current
+    /// graph, so a caller can show the error and go on rendering. The lists keep the sizes
+    /// they grew to; the next frame is a camera cut (the history belongs to the old graph).
+    pub fn rebuild(
+        &mut self,
+        source: &GraphSource,
+        mut settings: FrameSettings,
+        extend: &dyn Fn(&mut crate::graph::GraphBuilder, &FrameSettings) -> Result<()>,
+    ) -> Result<()> {
+        if settings.keep_file_view
+            && let GraphSource::File(path) | GraphSource::FileWith(path, _) = source
+            && let Some(view) = super::frame_graph::view_in_file(path)?
+        {
+            settings.view = view;
+        }
+        let gpu = &self.executor.gpu;
+        settings.check_viewport(gpu.device.limits().max_texture_dimension_2d)?;
+        settings.clusters = settings.clusters.max(self.param(CLUSTERS_PARAM));
+        settings.slots = settings.slots.max(self.param(SLOTS_PARAM));
+        let mut builder = source.graph(&self.data, &settings)?;
+        extend(&mut builder, &settings)?;
+        let compiled = builder.compile(&CompileOptions::for_gpu(gpu))?;
+        let missing = compiled.plan.enabled_features - gpu.features;
+        if !missing.is_empty() {
+            return Err(GraphError::DeviceLacksFeatures {
+                features: missing
+                    .iter_names()
+                    .map(|(name, _)| name)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                instead:
+                    "the device was opened for the first graph; start with this choice instead"
+                        .into(),
+            });
+        }
+        let has = |name: &str| {
+            compiled
+                .plan
+                .pass_index(&format!("readback:{name}"))
+                .is_some()
+        };
+        self.two_pass = has(SECOND_COUNTS_READBACK);
+        self.walks_hierarchy = has(HIERARCHY_COUNTS_READBACK);
+        self.walks_twice = has(SECOND_WALK_COUNT_READBACK);
+        self.compiled = compiled;
+        self.settings = settings;
+        self.pending.clear();
+        self.latest = None;
+        self.previous_view_projection = None;
+        self.cut = true;
+        Ok(())
+    }
+
+    /// Gives `texture` to every frame as the imported resource `name` (replacing one of
+    /// that name), for passes a caller added through [`Renderer::rebuild`].
+    pub fn import_texture(&mut self, name: &str, texture: &wgpu::Texture) {
+        self.imported_textures.retain(|(n, _)| n != name);
+        self.imported_textures
+            .push((name.to_string(), texture.clone()));
     }
 }

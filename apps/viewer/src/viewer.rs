@@ -1,0 +1,739 @@
+//! The viewer: a renderer, the graph it runs (rebuilt when a choice changes), the
+//! camera, and optionally a window it presents to with the overlay on top. Everything a
+//! key or a widget does is a method here, so tests drive it without input events.
+
+use crate::camera::CameraRig;
+use crate::options::ViewerOptions;
+use crate::overlay::{Overlay, OverlayActions};
+use crate::present::{Blit, add_present, present_texture};
+use crate::reload::{FileError, PipelineWatch, locate, with_implementations};
+use meshlight::gpu_scene::Camera;
+use meshlight::graph::{FrameStats, GraphError};
+use meshlight::resolve::DebugView;
+use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+use winit::window::Window;
+
+/// What can stop the viewer (as opposed to an error it shows and renders through).
+#[derive(Debug, thiserror::Error)]
+pub enum ViewerError {
+    #[error(transparent)]
+    Graph(#[from] GraphError),
+    #[error(transparent)]
+    Scene(#[from] meshlight::scene::SceneError),
+    #[error(transparent)]
+    SceneData(#[from] meshlight::gpu_scene::SceneDataError),
+    #[error(transparent)]
+    Output(#[from] meshlight::output::OutputError),
+    #[error("{0}")]
+    Other(String),
+}
+
+/// Entries per light the froxel lists start with (as `meshlight render` does).
+const FIELD_ENTRIES_PER_LIGHT: u64 = 32;
+
+/// Frame times kept for the overlay's chart.
+pub const HISTORY: usize = 240;
+
+/// One frame's figures, for the overlay and for callers.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameTime {
+    /// CPU time of the whole frame on the viewer's side: graph, overlay, present.
+    pub cpu_ms: f32,
+    /// The GPU time of the newest frame whose timestamps came back.
+    pub gpu_ms: Option<f32>,
+    /// The part of `cpu_ms` spent on the overlay (egui's pass, tessellation, upload).
+    pub overlay_ms: f32,
+    /// The part of `cpu_ms` spent in the graph's frame (recording and `queue.submit`,
+    /// where a software driver such as lavapipe runs the work).
+    pub graph_ms: f32,
+}
+
+/// The window's side: the surface, the blit and egui.
+struct WindowTarget {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    blit: Blit,
+    egui: egui::Context,
+    egui_state: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+}
+
+pub struct Viewer {
+    pub renderer: Renderer,
+    pub rig: CameraRig,
+    options: ViewerOptions,
+    /// The settings the graph is built with (width, view, thresholds, implementations).
+    settings: FrameSettings,
+    /// Stage → implementation chosen in the overlay (or through the API).
+    chosen: BTreeMap<String, String>,
+    present: wgpu::Texture,
+    watch: Option<PipelineWatch>,
+    /// The last error a rebuild reported; the last good graph keeps rendering meanwhile.
+    pub error: Option<String>,
+    /// The same, placed in the pipeline file, when the file was at fault.
+    pub file_error: Option<FileError>,
+    pub times: std::collections::VecDeque<FrameTime>,
+    pub last_stats: Option<FrameStats>,
+    pub frames: u64,
+    pub overlay_on: bool,
+    overlay: Overlay,
+    window: Option<WindowTarget>,
+    registry: meshlight::graph::file::Registry,
+    /// Where the file with the overlay's choices written into it is kept.
+    edited: PathBuf,
+}
+
+impl Viewer {
+    /// Builds the scene and the renderer; with a window, presents to it.
+    pub fn new(options: ViewerOptions, window: Option<Arc<Window>>) -> Result<Self, ViewerError> {
+        let o = &options;
+        let lights_asked = o.lights.unwrap_or(if o.pipeline.is_some() {
+            0
+        } else {
+            scenes::DEFAULT_LIGHTS
+        });
+        let asset = scenes::load_asset(&o.mesh, o.segments)?;
+        let adapter = meshlight::graph::GpuAdapter::select()?;
+        let limits = meshlight::gpu_scene::data::Limits::for_device(&adapter.adapter.limits());
+        drop(adapter);
+        let data = meshlight::gpu_scene::SceneData::new(limits);
+        let placed = if o.instances == 1 {
+            scenes::single(data, &asset)?
+        } else {
+            scenes::field(data, &asset, o.instances)?
+        };
+        let mut settings = FrameSettings::new(o.width, o.height);
+        settings.view = o.view.unwrap_or_default();
+        settings.keep_file_view = o.view.is_none();
+        let lights = if o.instances > 1 && o.pipeline.is_none() {
+            scenes::field_lights(&placed, lights_asked)
+        } else {
+            Vec::new()
+        };
+        if !lights.is_empty() || o.view.is_some_and(|v| v.needs_lights()) {
+            let mut c = meshlight::light_clustering::ClusteringSettings::new(
+                [o.width, o.height],
+                lights.len().max(1) as u64,
+            );
+            c.entries = c.entries.max(lights.len() as u64 * FIELD_ENTRIES_PER_LIGHT);
+            settings.clustering = Some(c);
+        }
+        let source = match &o.pipeline {
+            Some(path) => GraphSource::File(path.clone()),
+            None => GraphSource::Code,
+        };
+        let mut renderer = Renderer::new(placed.data, settings, &source)?;
+        renderer.lights = lights;
+        let camera = match o.camera {
+            Some(c) => Camera {
+                position: c.position,
+                target: c.target,
+                ..placed.camera
+            },
+            None => placed.camera,
+        };
+        let device = renderer.executor.gpu.device.clone();
+        let present = present_texture(&device, o.width, o.height);
+        let settings = renderer.settings.clone();
+        let mut viewer = Self {
+            rig: CameraRig::new(camera),
+            settings,
+            chosen: BTreeMap::new(),
+            present,
+            watch: o.pipeline.clone().map(PipelineWatch::new),
+            error: None,
+            file_error: None,
+            times: std::collections::VecDeque::with_capacity(HISTORY),
+            last_stats: None,
+            frames: 0,
+            overlay_on: !o.no_overlay,
+            overlay: Overlay::default(),
+            window: None,
+            registry: meshlight::registry(),
+            edited: std::env::temp_dir().join(format!(
+                "meshlight-view-{}-{:p}.toml",
+                std::process::id(),
+                &device
+            )),
+            options,
+            renderer,
+        };
+        let texture = viewer.present.clone();
+        viewer
+            .renderer
+            .import_texture(crate::present::PRESENT, &texture);
+        // The first graph gets the copy into the viewer's texture.
+        viewer
+            .apply(viewer.settings.clone(), viewer.chosen.clone())
+            .map_err(ViewerError::Other)?;
+        if let Some(w) = window {
+            viewer.attach(w)?;
+        }
+        Ok(viewer)
+    }
+
+    fn attach(&mut self, window: Arc<Window>) -> Result<(), ViewerError> {
+        let gpu = &self.renderer.executor.gpu;
+        let surface = gpu
+            .instance
+            .create_surface(window.clone())
+            .map_err(|e| ViewerError::Other(format!("cannot draw into the window: {e}")))?;
+        let caps = surface.get_capabilities(&gpu.adapter);
+        // The image is sRGB-encoded already: a surface format without the encoding shows
+        // its bytes as they are, and egui draws for such a target by default.
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| {
+                !f.is_srgb()
+                    && matches!(
+                        f,
+                        wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Rgba8Unorm
+                    )
+            })
+            .or_else(|| caps.formats.first().map(|f| f.remove_srgb_suffix()))
+            .ok_or_else(|| ViewerError::Other("the window's surface offers no format".into()))?;
+        let size = window.inner_size();
+        let present_mode = if self.options.no_vsync {
+            wgpu::PresentMode::AutoNoVsync
+        } else {
+            wgpu::PresentMode::AutoVsync
+        };
+        let view_formats = if caps.formats.contains(&format) {
+            vec![]
+        } else {
+            vec![format]
+        };
+        let surface_format = if caps.formats.contains(&format) {
+            format
+        } else {
+            format.add_srgb_suffix()
+        };
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format: surface_format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps
+                .alpha_modes
+                .first()
+                .copied()
+                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            view_formats,
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        surface.configure(&gpu.device, &config);
+        let egui = egui::Context::default();
+        let egui_state = egui_winit::State::new(
+            egui.clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu.device.limits().max_texture_dimension_2d as usize),
+        );
+        let egui_renderer =
+            egui_wgpu::Renderer::new(&gpu.device, format, egui_wgpu::RendererOptions::default());
+        self.window = Some(WindowTarget {
+            blit: Blit::new(&gpu.device, format),
+            window,
+            surface,
+            config,
+            egui,
+            egui_state,
+            egui_renderer,
+        });
+        Ok(())
+    }
+
+    /// The window, when there is one.
+    pub fn window(&self) -> Option<&Arc<Window>> {
+        self.window.as_ref().map(|w| &w.window)
+    }
+
+    /// The settings the current graph was built with.
+    pub fn settings(&self) -> &FrameSettings {
+        &self.settings
+    }
+
+    /// The size the frame renders at.
+    pub fn size(&self) -> (u32, u32) {
+        (self.settings.width, self.settings.height)
+    }
+
+    /// Stage → implementation of every pass in the current plan (first pass of a stage).
+    pub fn implementations(&self) -> BTreeMap<String, String> {
+        let mut m = BTreeMap::new();
+        for p in &self.renderer.compiled.plan.passes {
+            m.entry(p.stage.to_string())
+                .or_insert_with(|| p.implementation.to_string());
+        }
+        m
+    }
+
+    /// Stages of the current plan with more than one registered implementation, and
+    /// those implementations.
+    pub fn choices(&self) -> Vec<(String, Vec<String>)> {
+        self.implementations()
+            .into_keys()
+            .filter_map(|stage| {
+                let names = self.registry.implementations(&stage);
+                (names.len() > 1).then_some((stage, names))
+            })
+            .collect()
+    }
+
+    /// Runs `stage` with `implementation` from now on. On an error (the adapter cannot
+    /// run it, the frame built in code does not choose it) the error is kept in
+    /// [`Self::error`] and returned, and the last good graph keeps rendering.
+    pub fn select_implementation(
+        &mut self,
+        stage: &str,
+        implementation: &str,
+    ) -> Result<(), String> {
+        let mut chosen = self.chosen.clone();
+        chosen.insert(stage.to_string(), implementation.to_string());
+        self.apply(self.settings.clone(), chosen)
+    }
+
+    /// Shows `view` (rebuilds the graph).
+    pub fn set_view(&mut self, view: DebugView) -> Result<(), String> {
+        let mut s = self.settings.clone();
+        s.view = view;
+        s.keep_file_view = false;
+        self.apply(s, self.chosen.clone())
+    }
+
+    /// Sets the LOD threshold and the software/hardware split (pixels) and rebuilds.
+    pub fn set_thresholds(&mut self, lod_px: f32, sw_px: f32) -> Result<(), String> {
+        let mut s = self.settings.clone();
+        s.lod_threshold_px = lod_px;
+        s.sw_threshold_px = Some(sw_px);
+        self.apply(s, self.chosen.clone())
+    }
+
+    /// Renders at `width` × `height` from the next frame (the graph rebuilt at that size;
+    /// the window's surface follows when there is one).
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<(), String> {
+        let (width, height) = (width.max(1), height.max(1));
+        if let Some(w) = &mut self.window {
+            w.config.width = width;
+            w.config.height = height;
+            w.surface
+                .configure(&self.renderer.executor.gpu.device, &w.config);
+        }
+        if (width, height) == self.size() {
+            return Ok(());
+        }
+        let mut s = self.settings.clone();
+        s.width = width;
+        s.height = height;
+        if let Some(c) = &mut s.clustering {
+            c.viewport = [width, height];
+        }
+        self.apply(s, self.chosen.clone())
+    }
+
+    /// Places the camera (a camera cut for the renderer).
+    pub fn set_camera(&mut self, position: glam::Vec3, target: glam::Vec3) {
+        self.rig.look_at(position, target);
+        self.renderer.camera_cut();
+    }
+
+    /// Re-reads the pipeline file now (as a change of it does), rebuilding the graph;
+    /// an error is shown and returned, the last good graph kept.
+    pub fn reload_pipeline(&mut self) -> Result<(), String> {
+        self.apply(self.settings.clone(), self.chosen.clone())
+    }
+
+    /// Builds the graph for `settings` and `chosen`; only a success replaces the
+    /// current graph, settings and choices.
+    fn apply(
+        &mut self,
+        mut settings: FrameSettings,
+        chosen: BTreeMap<String, String>,
+    ) -> Result<(), String> {
+        let result = self.try_apply(&mut settings, &chosen);
+        match result {
+            Ok(()) => {
+                self.settings = settings;
+                self.chosen = chosen;
+                self.error = None;
+                self.file_error = None;
+                Ok(())
+            }
+            Err(message) => {
+                self.error = Some(message.clone());
+                Err(message)
+            }
+        }
+    }
+
+    fn try_apply(
+        &mut self,
+        settings: &mut FrameSettings,
+        chosen: &BTreeMap<String, String>,
+    ) -> Result<(), String> {
+        let source = match &self.options.pipeline {
+            None => {
+                for (stage, name) in chosen {
+                    match stage.as_str() {
+                        "sw_raster" => settings.sw_raster = name.clone(),
+                        "hw_raster" => settings.hw_raster = name.clone(),
+                        "fill_clusters" => settings.hierarchy = name == "hierarchy",
+                        _ => {
+                            return Err(format!(
+                                "the frame built in code picks `{stage}` itself; to choose it, run with --pipeline (e.g. pipelines/virtual_geometry.toml) and pick it there"
+                            ));
+                        }
+                    }
+                }
+                GraphSource::Code
+            }
+            Some(path) => {
+                let text = std::fs::read_to_string(path).map_err(|e| {
+                    self.file_error = Some(FileError {
+                        file: path.clone(),
+                        line: None,
+                        message: format!("cannot read it: {e}"),
+                    });
+                    format!("{}: cannot read it: {e}", path.display())
+                })?;
+                if chosen.is_empty() {
+                    GraphSource::File(path.clone())
+                } else {
+                    std::fs::write(&self.edited, with_implementations(&text, chosen))
+                        .map_err(|e| format!("cannot write {}: {e}", self.edited.display()))?;
+                    GraphSource::File(self.edited.clone())
+                }
+            }
+        };
+        let size_changed =
+            (settings.width, settings.height) != (self.present.width(), self.present.height());
+        let present = if size_changed {
+            present_texture(
+                &self.renderer.executor.gpu.device,
+                settings.width,
+                settings.height,
+            )
+        } else {
+            self.present.clone()
+        };
+        let rebuilt = self
+            .renderer
+            .rebuild(&source, settings.clone(), &add_present);
+        if let Err(e) = rebuilt {
+            let message = e.to_string();
+            if let Some(path) = &self.options.pipeline {
+                let message = message.replace(
+                    &self.edited.display().to_string(),
+                    &path.display().to_string(),
+                );
+                let prefix = format!("pipeline file {}: ", path.display());
+                let message = message.strip_prefix(&prefix).unwrap_or(&message);
+                let text = std::fs::read_to_string(path).unwrap_or_default();
+                let located = locate(path, &text, message);
+                let shown = located.to_string();
+                self.file_error = Some(located);
+                return Err(shown);
+            }
+            return Err(message);
+        }
+        // The renderer took the view from the file where the file names one.
+        *settings = FrameSettings {
+            view: self.renderer.settings.view,
+            ..settings.clone()
+        };
+        if size_changed {
+            self.present = present;
+            let texture = self.present.clone();
+            self.renderer
+                .import_texture(crate::present::PRESENT, &texture);
+        }
+        Ok(())
+    }
+
+    /// Polls the pipeline file; a change rebuilds the graph (an error is shown).
+    pub fn poll_pipeline(&mut self, force: bool) -> bool {
+        let changed = self.watch.as_mut().is_some_and(|w| w.changed(force));
+        if changed {
+            let _ = self.reload_pipeline();
+        }
+        changed
+    }
+
+    /// One frame: the scripted camera moved, the pipeline file polled, the graph run,
+    /// and, with a window, the image and the overlay presented.
+    pub fn frame(&mut self) -> Result<(), ViewerError> {
+        let start = Instant::now();
+        self.poll_pipeline(false);
+        if let Some(n) = self.options.orbit_frames {
+            let turn = std::f32::consts::TAU / n.max(1) as f32;
+            if !self.rig.orbit {
+                self.rig.toggle_orbit();
+            }
+            self.rig.rotate(turn / 0.004, 0.0);
+        }
+        let camera = self.rig.camera();
+        let graph_start = Instant::now();
+        let stats = self.renderer.frame(&camera)?;
+        let graph_ms = graph_start.elapsed().as_secs_f32() * 1000.0;
+        let gpu_ms = stats
+            .gpu_latest
+            .as_ref()
+            .map(|t| t.frame_us as f32 / 1000.0);
+        self.last_stats = Some(stats);
+        let (actions, overlay_ms) = self.present_to_window()?;
+        self.frames += 1;
+        if self.times.len() == HISTORY {
+            self.times.pop_front();
+        }
+        self.times.push_back(FrameTime {
+            cpu_ms: start.elapsed().as_secs_f32() * 1000.0,
+            gpu_ms,
+            overlay_ms,
+            graph_ms,
+        });
+        self.act(actions);
+        if self.frames.is_multiple_of(100)
+            && let Some(s) = &self.last_stats
+        {
+            log::info!(
+                "frame {}: CPU {:.2} ms, graph {graph_ms:.2} ms, overlay {overlay_ms:.2} ms, RSS {} KiB, {} in flight, {} allocations, {} bind groups, pool {} B",
+                self.frames,
+                start.elapsed().as_secs_f32() * 1000.0,
+                resident_kib().unwrap_or(0),
+                s.frames_in_flight,
+                s.allocations,
+                s.bind_groups_created,
+                s.pool_bytes_held
+            );
+        }
+        Ok(())
+    }
+
+    /// Runs `n` frames.
+    pub fn run_frames(&mut self, n: u64) -> Result<(), ViewerError> {
+        for _ in 0..n {
+            self.frame()?;
+        }
+        Ok(())
+    }
+
+    fn act(&mut self, actions: OverlayActions) {
+        if let Some(v) = actions.view {
+            let _ = self.set_view(v);
+        }
+        if let Some((lod, sw)) = actions.thresholds {
+            let _ = self.set_thresholds(lod, sw);
+        }
+        if let Some((stage, name)) = actions.implementation {
+            let _ = self.select_implementation(&stage, &name);
+        }
+    }
+
+    /// Presents the frame; returns what the overlay asked for and the milliseconds the
+    /// overlay took.
+    fn present_to_window(&mut self) -> Result<(OverlayActions, f32), ViewerError> {
+        let choices = if self.overlay_on && self.window.is_some() {
+            self.choices_with_current()
+        } else {
+            Vec::new()
+        };
+        let Some(w) = &mut self.window else {
+            return Ok((OverlayActions::default(), 0.0));
+        };
+        let gpu = &self.renderer.executor.gpu;
+        let frame = match w.surface.get_current_texture() {
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                w.surface.configure(&gpu.device, &w.config);
+                return Ok((OverlayActions::default(), 0.0));
+            }
+            other => {
+                log::warn!("no surface texture this frame: {other:?}");
+                return Ok((OverlayActions::default(), 0.0));
+            }
+        };
+        let view = frame.texture.create_view(&wgpu::TextureViewDescriptor {
+            format: Some(w.blit_format()),
+            ..Default::default()
+        });
+        let mut encoder = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("viewer"),
+            });
+        let mut actions = OverlayActions::default();
+        let mut paint = None;
+        let overlay_start = Instant::now();
+        if self.overlay_on {
+            let input = w.egui_state.take_egui_input(&w.window);
+            let facts = crate::overlay::Facts {
+                renderer: &self.renderer,
+                settings: &self.settings,
+                times: &self.times,
+                stats: self.last_stats.as_ref(),
+                error: self.error.as_deref(),
+                choices,
+                pipeline: self.options.pipeline.as_deref(),
+                rig: &self.rig,
+            };
+            let mut output = w.egui.run_ui(input, |ui| {
+                actions = self.overlay.draw(ui, &facts);
+            });
+            w.egui_state
+                .handle_platform_output(&w.window, output.platform_output);
+            let jobs = w.egui.tessellate(output.shapes, output.pixels_per_point);
+            let set = std::mem::take(&mut output.textures_delta.set);
+            let free = std::mem::take(&mut output.textures_delta.free);
+            for (id, deltas) in &set {
+                for delta in deltas {
+                    w.egui_renderer
+                        .update_texture(&gpu.device, &gpu.queue, *id, delta);
+                }
+            }
+            let screen = egui_wgpu::ScreenDescriptor {
+                size_in_pixels: [w.config.width, w.config.height],
+                pixels_per_point: output.pixels_per_point,
+            };
+            let extra = w.egui_renderer.update_buffers(
+                &gpu.device,
+                &gpu.queue,
+                &mut encoder,
+                &jobs,
+                &screen,
+            );
+            paint = Some((jobs, screen, extra, free));
+        }
+        let mut overlay_ms = overlay_start.elapsed().as_secs_f32() * 1000.0;
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("viewer present"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                ..Default::default()
+            });
+            w.blit.draw(&gpu.device, &mut pass, &self.present);
+            if let Some((jobs, screen, _, _)) = &paint {
+                let drawing = Instant::now();
+                let mut pass = pass.forget_lifetime();
+                w.egui_renderer.render(&mut pass, jobs, screen);
+                overlay_ms += drawing.elapsed().as_secs_f32() * 1000.0;
+            }
+        }
+        let mut buffers = Vec::new();
+        let mut free = Default::default();
+        if let Some((_, _, extra, f)) = paint {
+            buffers = extra;
+            free = f;
+        }
+        buffers.push(encoder.finish());
+        gpu.queue.submit(buffers);
+        w.window.pre_present_notify();
+        gpu.queue.present(frame);
+        for id in free {
+            w.egui_renderer.free_texture(&id);
+        }
+        Ok((actions, overlay_ms))
+    }
+
+    fn choices_with_current(&self) -> Vec<(String, Vec<String>, String)> {
+        let current = self.implementations();
+        self.choices()
+            .into_iter()
+            .map(|(stage, names)| {
+                let now = self
+                    .chosen
+                    .get(&stage)
+                    .cloned()
+                    .or_else(|| current.get(&stage).cloned())
+                    .unwrap_or_default();
+                (stage, names, now)
+            })
+            .collect()
+    }
+
+    /// Lets egui see a window event; true when it used it (the camera then ignores it).
+    pub fn on_window_event(&mut self, event: &winit::event::WindowEvent) -> bool {
+        match &mut self.window {
+            Some(w) if self.overlay_on => w.egui_state.on_window_event(&w.window, event).consumed,
+            _ => false,
+        }
+    }
+
+    /// The last frame's image (the graph's `color`), waiting for the GPU: RGBA8 rows.
+    pub fn read_image(&mut self) -> Result<(u32, u32, Vec<u8>), ViewerError> {
+        self.renderer.executor.finish()?;
+        let rgba = self.renderer.executor.read_texture("color")?;
+        Ok((self.settings.width, self.settings.height, rgba))
+    }
+
+    /// Writes the last frame's image as PNG.
+    pub fn screenshot(&mut self, path: &Path) -> Result<(), ViewerError> {
+        meshlight::output::check_png_path(path).map_err(|e| ViewerError::Other(e.to_string()))?;
+        let (w, h, rgba) = self.read_image()?;
+        meshlight::output::write_png(path, w, h, &rgba)?;
+        Ok(())
+    }
+
+    /// Writes the current plan, with the last frame's timings, as a self-contained page.
+    pub fn write_html(&self, path: &Path) -> Result<(), ViewerError> {
+        let page = meshlight::graph::dump::to_html(
+            &self.renderer.compiled.plan,
+            &format!("meshlight-view: {}", self.options.mesh.display()),
+            self.last_stats.as_ref(),
+        );
+        meshlight::output::write_file(path, page.as_bytes())?;
+        Ok(())
+    }
+
+    /// The camera the next frame uses.
+    pub fn camera(&self) -> Camera {
+        self.rig.camera()
+    }
+
+    /// The options the viewer was opened with.
+    pub fn options(&self) -> &ViewerOptions {
+        &self.options
+    }
+}
+
+impl WindowTarget {
+    fn blit_format(&self) -> wgpu::TextureFormat {
+        self.config
+            .view_formats
+            .first()
+            .copied()
+            .unwrap_or(self.config.format)
+    }
+}
+
+impl Drop for Viewer {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.edited);
+    }
+}
+
+/// The process's resident memory in KiB (Linux), for the log and the tests.
+pub fn resident_kib() -> Option<u64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(pages * 4)
+}

@@ -1,0 +1,144 @@
+//! What the viewer's tests share: an X server of their own (Xvfb, started through
+//! scripts/ensure-xvfb.sh on a free display), a small scene, image comparison.
+
+#![allow(dead_code)]
+
+use meshlight_viewer::{Viewer, ViewerOptions};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The repository's root.
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// A running Xvfb, stopped when dropped.
+pub struct Xvfb {
+    pub display: String,
+    pid: u32,
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = Command::new("kill").arg(self.pid.to_string()).status();
+    }
+}
+
+/// Starts Xvfb on a free display; fails the test with the script's message if it
+/// cannot (a missing Xvfb is installed where the script may; never skipped).
+pub fn xvfb() -> Xvfb {
+    let dir = tempdir("xvfb");
+    let pid_file = dir.join("pid");
+    let out = Command::new("bash")
+        .arg(root().join("scripts/ensure-xvfb.sh"))
+        .arg("--start")
+        .env("XVFB_PID_FILE", &pid_file)
+        .output()
+        .expect("cannot run scripts/ensure-xvfb.sh");
+    assert!(
+        out.status.success(),
+        "the viewer's tests need an X server and could not start Xvfb: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let display = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    let pid = std::fs::read_to_string(&pid_file)
+        .expect("ensure-xvfb.sh wrote no pid")
+        .trim()
+        .parse()
+        .expect("a pid");
+    Xvfb { display, pid }
+}
+
+/// Points this process at `x` (call before any window is opened; each test binary has
+/// one test, so no other thread reads the environment meanwhile).
+pub fn use_display(x: &Xvfb) {
+    // SAFETY: called at the start of the test binary's only test, before any thread of
+    // it reads the environment.
+    unsafe { std::env::set_var("DISPLAY", &x.display) };
+    // The Vulkan loader's Wayland probe only needs a directory of our own.
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = tempdir("runtime");
+        // SAFETY: as above.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+    }
+}
+
+/// A fresh directory under the temporary directory.
+pub fn tempdir(what: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "meshlight-viewer-test-{what}-{}-{:?}",
+        std::process::id(),
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .expect("a clock after 1970")
+            .as_nanos()
+    ));
+    std::fs::create_dir_all(&dir).expect("cannot make a temporary directory");
+    dir
+}
+
+/// A small scene: 16 copies of a 4,096-triangle procedural mesh at 160 × 96.
+pub fn small_options() -> ViewerOptions {
+    let mut o = ViewerOptions::new(160, 96);
+    o.segments = 16;
+    o.instances = 16;
+    o.no_vsync = true;
+    o
+}
+
+/// A viewer in a window of its own on the test's X server.
+pub fn windowed(options: ViewerOptions) -> (winit::event_loop::EventLoop<()>, Viewer) {
+    let (event_loop, window) = meshlight_viewer::app::test_window(options.width, options.height)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let viewer = Viewer::new(options, Some(window)).unwrap_or_else(|e| panic!("{e}"));
+    (event_loop, viewer)
+}
+
+/// Pixels (of RGBA8 images of one size) whose channels differ by more than `tolerance`.
+pub fn differing(a: &[u8], b: &[u8], tolerance: u8) -> usize {
+    assert_eq!(a.len(), b.len(), "the images differ in size");
+    a.chunks(4)
+        .zip(b.chunks(4))
+        .filter(|(p, q)| p.iter().zip(*q).any(|(x, y)| x.abs_diff(*y) > tolerance))
+        .count()
+}
+
+/// Distinct colours of an RGBA8 image: a frame that rendered geometry has many.
+pub fn colours(rgba: &[u8]) -> usize {
+    let mut c: Vec<&[u8]> = rgba.chunks(4).collect();
+    c.sort_unstable();
+    c.dedup();
+    c.len()
+}
+
+/// The scene of [`small_options`] (with its lights) in a bare renderer, as `meshlight
+/// render` builds it, and the scene's camera.
+pub fn bare_renderer() -> (
+    meshlight::virtual_geometry::Renderer,
+    meshlight::gpu_scene::Camera,
+) {
+    use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
+    let o = small_options();
+    let asset = scenes::load_asset(&o.mesh, o.segments).expect("mesh");
+    let adapter = meshlight::graph::GpuAdapter::select().expect("a Vulkan adapter");
+    let limits = meshlight::gpu_scene::data::Limits::for_device(&adapter.adapter.limits());
+    drop(adapter);
+    let placed = scenes::field(
+        meshlight::gpu_scene::SceneData::new(limits),
+        &asset,
+        o.instances,
+    )
+    .expect("scene");
+    let lights = scenes::field_lights(&placed, scenes::DEFAULT_LIGHTS);
+    let mut settings = FrameSettings::new(o.width, o.height);
+    let mut clustering = meshlight::light_clustering::ClusteringSettings::new(
+        [o.width, o.height],
+        lights.len() as u64,
+    );
+    clustering.entries = clustering.entries.max(lights.len() as u64 * 32);
+    settings.clustering = Some(clustering);
+    let mut renderer = Renderer::new(placed.data, settings, &GraphSource::Code).expect("renderer");
+    renderer.lights = lights;
+    (renderer, placed.camera)
+}
