@@ -16,6 +16,18 @@ const SMALL_RENDER: [&str; 9] = [
     "16",
 ];
 
+/// [`meshlight`], failing the test with its standard error unless it succeeds.
+fn meshlight_ok(args: &[&str]) -> std::process::Output {
+    let out = meshlight(args);
+    assert!(
+        out.status.success(),
+        "meshlight {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn meshlight(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_meshlight"))
         .args(args)
@@ -334,7 +346,7 @@ fn a_closed_stdout_ends_quietly_as_a_broken_pipe() {
     use std::os::unix::process::ExitStatusExt;
     let dir = scratch("pipe");
     let asset = dir.join("knot.mlasset");
-    let out = meshlight(&[
+    meshlight_ok(&[
         "bake",
         "procedural",
         "--segments",
@@ -342,11 +354,6 @@ fn a_closed_stdout_ends_quietly_as_a_broken_pipe() {
         "-o",
         asset.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     for args in [
         vec!["inspect", asset.to_str().unwrap()],
         vec!["graph", "--pipeline", "pipelines/virtual_geometry.toml"],
@@ -700,18 +707,13 @@ fn the_shipped_pipeline_renders_the_default_image() {
 fn bench_charts_saved_rows_and_names_a_file_it_cannot_read() {
     let dir = scratch("bench-html");
     let page = dir.join("charts.html");
-    let out = meshlight(&[
+    meshlight_ok(&[
         "bench",
         "--from-json",
         "docs/bench-h200-vg2.json",
         "--html",
         page.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let html = std::fs::read_to_string(&page).unwrap();
     assert!(html.contains("<h2>vg-scale</h2>") && html.contains("<polyline"));
     assert!(html.contains("GPU time per pass"));
