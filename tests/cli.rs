@@ -547,7 +547,9 @@ fn render_pipeline_settings_yield_only_to_flags_given() {
     )
     .unwrap();
     let lod_file = lod_file.to_str().unwrap();
-    let render = |file: &str, view: Option<&str>, name: &str| {
+    // Spot four times at 48 × 32 through `file`, with `extra` flags: the image's pixels
+    // and the run's report.
+    let render = |file: &str, extra: &[&str], name: &str| {
         let png = dir.join(name);
         let mut args = vec![
             "render",
@@ -564,63 +566,37 @@ fn render_pipeline_settings_yield_only_to_flags_given() {
             "-o",
             png.to_str().unwrap(),
         ];
-        if let Some(v) = view {
-            args.extend(["--view", v]);
-        }
+        args.extend(extra);
         let out = meshlight(&args);
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
         assert!(
             out.status.success(),
-            "{name}: {}{}",
-            String::from_utf8_lossy(&out.stdout),
+            "{name}: {stdout}{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        pixels(&png)
+        (pixels(&png), stdout)
     };
-    let shaded = render(shipped, None, "shaded.png");
-    let lod = render(shipped, Some("lod"), "lod.png");
+    let shaded = render(shipped, &[], "shaded.png").0;
+    let lod = render(shipped, &["--view", "lod"], "lod.png").0;
     assert_ne!(shaded, lod, "the two views should differ");
     // The file's view stands without --view …
-    assert!(render(lod_file, None, "file-lod.png") == lod);
+    assert!(render(lod_file, &[], "file-lod.png").0 == lod);
     // … and --view wins over it.
-    assert!(render(lod_file, Some("shaded"), "flag-shaded.png") == shaded);
+    assert!(render(lod_file, &["--view", "shaded"], "flag-shaded.png").0 == shaded);
     // The same both ways for the list sizes: a file's `slots` stands without --slots
     // (two slots: the frame has to grow them) and --slots wins over it.
     assert!(text.contains("slots = 262144"));
     let small_file = dir.join("small.toml");
     std::fs::write(&small_file, text.replace("slots = 262144", "slots = 2")).unwrap();
     let small_file = small_file.to_str().unwrap();
-    let report = |extra: &[&str]| {
-        let png = dir.join("lists.png");
-        let mut args = vec![
-            "render",
-            "--mesh",
-            "assets/meshes/spot.obj",
-            "--instances",
-            "4",
-            "--width",
-            "48",
-            "--height",
-            "32",
-            "--lights",
-            "0",
-            "--pipeline",
-            small_file,
-            "-o",
-            png.to_str().unwrap(),
-        ];
-        args.extend(extra);
-        let out = meshlight(&args);
-        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-        assert!(
-            out.status.success(),
-            "{stdout}{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        stdout
-    };
-    let kept = report(&[]);
+    let kept = render(small_file, &["--lights", "0"], "lists.png").1;
     assert!(kept.contains("the lists grew (slots 2 → "), "{kept}");
-    let flagged = report(&["--slots", "262144"]);
+    let flagged = render(
+        small_file,
+        &["--lights", "0", "--slots", "262144"],
+        "lists.png",
+    )
+    .1;
     assert!(!flagged.contains("the lists grew"), "{flagged}");
     // Lights asked for with a file that clusters none are refused, naming the file and
     // the fix.
