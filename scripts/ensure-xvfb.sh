@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Makes sure Xvfb (the X server without a screen) exists, for the viewer's tests and for
-# running meshlight-view on a machine without a display. With none installed, installs
+# running `meshlight view` on a machine without a display. With none installed, installs
 # Debian's `xvfb` package; that needs root or sudo. Without either, or without apt-get,
 # it says what to install and exits with status 2.
 #

@@ -5,4 +5,4 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/ensure-vulkan.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-cargo run --release -- render -o out/default.png --html out/default.html "$@"
+cargo run --release -p meshlight-cli -- render -o out/default.png --html out/default.html "$@"

@@ -5,23 +5,23 @@
 //! - [`scene`]: mesh loading, the meshlet LOD DAG builder and the asset format.
 //! - [`gpu_scene`]: assets packed into shared GPU buffers, instances, materials, the view.
 //! - The virtual-geometry stages: [`fill_clusters`], [`cull_lod`], [`remap_dispatch`],
-//!   [`sw_raster`], [`hw_raster`], [`resolve`]; [`virtual_geometry`] wires them into a
-//!   frame and runs it; [`brute_force`] is the baseline it is measured against.
+//!   [`sw_raster`], [`hw_raster`], [`depth_pyramid`], [`resolve`]; [`brute_force`] is the
+//!   baseline they are measured against.
 //! - [`scan_fan`]: GPU prefix sum (stage `scan_fan`: `scan_fan`, `two_step`,
 //!   `decoupled_lookback`).
 //! - Light clustering: [`z_slice`], [`count_raster`], [`populate`] (with [`scan_fan`]
-//!   between them); [`light_clustering`] wires them into a graph, runs it with overflow
-//!   growth, and holds the CPU reference of the whole assignment.
+//!   between them).
+//! - [`registry()`]: every shipped implementation of every stage, for pipeline files and
+//!   for frames built in code.
+//!
+//! This crate is the library and nothing else. The renderers that wire the stages into
+//! frames are crates of their own beside the applications, under `apps/`:
+//! `meshlight-virtual-geometry` (the frame loop, its scenes and counters) and
+//! `meshlight-light-clustering` (the clustering's graph, its overflow growth and the CPU
+//! reference); `meshlight-cli` is the `meshlight` command, `meshlight-viewer` the live
+//! window and `meshlight-bench` the benchmark scenarios.
 
-pub mod bake_library;
-pub mod bench;
-pub mod bench_html;
-pub mod info;
-pub mod light_clustering;
-pub mod output;
-pub mod render_bounds;
-mod still;
-pub mod virtual_geometry;
+pub mod still;
 
 pub use meshlight_gpu_scene as gpu_scene;
 pub use meshlight_graph as graph;

@@ -4,7 +4,7 @@
 use crate::graph::{Executor, FrameStats, GraphError, Result};
 
 /// Waits for every submitted frame; the statistics are those of frame `submitted`.
-pub(crate) fn finish(executor: &mut Executor, submitted: u64) -> Result<FrameStats> {
+pub fn finish(executor: &mut Executor, submitted: u64) -> Result<FrameStats> {
     executor
         .finish()?
         .ok_or_else(|| GraphError::Readback(format!("frame {submitted} left no statistics")))
@@ -12,7 +12,7 @@ pub(crate) fn finish(executor: &mut Executor, submitted: u64) -> Result<FrameSta
 
 /// The counters of frame `submitted` from the newest ones taken back (`frame` names the
 /// frame they belong to); after [`finish`] they must be there.
-pub(crate) fn counters_of<C: Copy>(
+pub fn counters_of<C: Copy>(
     latest: Option<C>,
     frame: impl Fn(&C) -> u64,
     submitted: u64,

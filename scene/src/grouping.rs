@@ -15,7 +15,7 @@ static METIS_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
 const METIS_SEED: i32 = 0x6d6c;
 
 /// How clusters are grouped; swappable so the two can be compared on the same input.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Grouping {
     /// meshoptimizer's `partition_clusters` (shared vertices and spatial proximity), the
     /// default. Both groupings meet every DAG target on every test mesh, and this one
@@ -26,6 +26,24 @@ pub enum Grouping {
     Partition,
     /// METIS recursive bisection of the cluster graph, edge weight = shared edges.
     Metis,
+}
+
+impl Grouping {
+    /// Every grouping, in the order `meshlight bake --help` lists them.
+    pub const ALL: [Grouping; 2] = [Grouping::Partition, Grouping::Metis];
+
+    /// The name the command line takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Grouping::Partition => "partition",
+            Grouping::Metis => "metis",
+        }
+    }
+
+    /// The grouping named `name`, if there is one.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|g| g.name() == name)
+    }
 }
 
 /// Groups `clusters` (triangle lists over position-welded vertex ids, so that copies of

@@ -6,11 +6,10 @@
 //! the whole chain; [`procedural_mesh`] is the built-in default mesh.
 
 pub mod asset;
-pub mod bench;
+pub mod bake;
 pub mod bounds;
 pub mod cache;
 pub mod chain_fingerprint;
-pub mod cli;
 pub mod compress;
 pub mod dag;
 pub mod damaged;

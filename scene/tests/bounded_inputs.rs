@@ -7,9 +7,7 @@ mod common;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use clap::Parser;
 use meshlight_scene::SceneError;
-use meshlight_scene::cli::BakeArgs;
 use meshlight_scene::load::{
     DEFAULT_TRIANGLE_BUDGET, LoadOptions, MAX_INPUT_BYTES, load_mesh, load_mesh_with,
 };
@@ -239,20 +237,4 @@ fn node_tree_expansion_is_checked_against_the_triangle_budget_first() {
     )
     .unwrap_err();
     assert!(matches!(err, SceneError::InvalidOption(_)), "{err:?}");
-}
-
-#[derive(Parser)]
-struct Cli {
-    #[command(flatten)]
-    bake: BakeArgs,
-}
-
-#[test]
-fn bake_takes_the_budget_as_an_option_within_the_format_limit() {
-    let parse = |v: &str| Cli::try_parse_from(["bake", "m.gltf", "-o", "x", "--max-triangles", v]);
-    assert_eq!(parse("100").unwrap().bake.max_triangles, 100);
-    assert!(parse("0").is_err());
-    assert!(parse(&(MAX_TRIANGLES + 1).to_string()).is_err());
-    let default = Cli::try_parse_from(["bake", "m.gltf", "-o", "x"]).unwrap();
-    assert_eq!(default.bake.max_triangles, DEFAULT_TRIANGLE_BUDGET);
 }

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use common::dag_checks::{check, check_structure};
 use common::generators::{Sphere, finned_sphere, glb, soup_stl, spheres_obj};
-use meshlight_scene::cli::{BakeArgs, InspectArgs, run_bake, run_inspect};
+use meshlight_scene::bake::{BakeOptions, run_bake, run_inspect};
 use meshlight_scene::load::load_mesh;
 use meshlight_scene::{BuildOptions, Built, Grouping, Mesh, build_asset, procedural_mesh};
 
@@ -36,16 +36,13 @@ fn bakes(dir: &Path, path: &Path) {
     let mesh = load_mesh(path).unwrap_or_else(|e| panic!("{name}: {e}"));
     for grouping in GROUPINGS {
         let output = dir.join(format!("{name}.{grouping:?}.mlasset"));
-        let args = BakeArgs {
-            input: path.to_owned(),
-            output: output.clone(),
+        let args = BakeOptions {
             grouping,
-            position_bits: Default::default(),
             segments: 8,
-            max_triangles: meshlight_scene::load::DEFAULT_TRIANGLE_BUDGET,
+            ..BakeOptions::new(path, &output)
         };
         run_bake(&args).unwrap_or_else(|e| panic!("{name} ({grouping:?}): {e}"));
-        run_inspect(&InspectArgs { file: output }).unwrap_or_else(|e| panic!("{name}: {e}"));
+        run_inspect(&output).unwrap_or_else(|e| panic!("{name}: {e}"));
         check(&format!("{name} ({grouping:?})"), &build(&mesh, grouping));
     }
 }
@@ -258,7 +255,7 @@ fn cracking_groups_are_repaired_locally() {
     assert!(built.fallbacks.unsimplified > 0, "{:?}", built.fallbacks);
     assert_eq!(built.fallback_groups as usize, built.fallbacks.unsimplified);
     assert_eq!(built.dag.fallbacks, built.fallbacks);
-    let summary = meshlight_scene::cli::bake_summary(
+    let summary = meshlight_scene::bake::bake_summary(
         Path::new("fins.obj"),
         Path::new("fins.mlasset"),
         &built,

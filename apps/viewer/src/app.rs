@@ -35,7 +35,7 @@ pub fn run(options: ViewerOptions) -> Result<(), ViewerError> {
 
 fn no_display(e: &dyn std::fmt::Display) -> String {
     format!(
-        "cannot open a window ({e}); run under an X server (DISPLAY), e.g. `Xvfb :99 & DISPLAY=:99 meshlight-view …` (scripts/ensure-xvfb.sh installs Xvfb)"
+        "cannot open a window ({e}); run under an X server (DISPLAY), e.g. `Xvfb :99 & DISPLAY=:99 meshlight view …` (scripts/ensure-xvfb.sh installs Xvfb)"
     )
 }
 
@@ -57,7 +57,7 @@ pub fn test_window(width: u32, height: u32) -> Result<(EventLoop<()>, Arc<Window
 
 fn attributes(width: u32, height: u32) -> winit::window::WindowAttributes {
     Window::default_attributes()
-        .with_title("meshlight-view")
+        .with_title("meshlight view")
         .with_inner_size(PhysicalSize::new(width, height))
 }
 
@@ -157,10 +157,11 @@ impl ApplicationHandler for App {
         let Some(options) = self.options.take() else {
             return;
         };
-        let window = match event_loop.create_window(attributes(options.width, options.height)) {
-            Ok(w) => Arc::new(w),
-            Err(e) => return self.fail(event_loop, ViewerError::Other(no_display(&e))),
-        };
+        let window =
+            match event_loop.create_window(attributes(options.scene.width, options.scene.height)) {
+                Ok(w) => Arc::new(w),
+                Err(e) => return self.fail(event_loop, ViewerError::Other(no_display(&e))),
+            };
         match Viewer::new(options, Some(window)) {
             Ok(v) => self.viewer = Some(v),
             Err(e) => self.fail(event_loop, e),

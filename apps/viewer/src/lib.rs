@@ -11,6 +11,7 @@
 
 pub mod app;
 pub mod camera;
+pub mod offscreen;
 pub mod options;
 pub mod overlay;
 pub mod present;

@@ -1,58 +1,30 @@
-//! What the viewer is asked for on its command line: the scene and graph of
-//! `meshlight render`, plus the window's own choices.
+//! What the viewer is asked for: the scene and graph of `meshlight render`, plus the
+//! window's own choices (`meshlight view --help` describes each).
 
 use glam::Vec3;
-use meshlight::resolve::DebugView;
+use meshlight_virtual_geometry::SceneOptions;
 use std::path::PathBuf;
 
-/// The viewer's options; `meshlight-view --help` lists them.
-#[derive(Clone, Debug, clap::Args)]
+/// The viewer's options; `meshlight view` parses them from its command line.
+#[derive(Clone, Debug)]
 pub struct ViewerOptions {
-    /// Mesh file (.obj, .gltf, .glb, .stl, or a baked .mlasset), or `procedural`.
-    #[arg(long, default_value = "procedural")]
-    pub mesh: PathBuf,
-    /// Tube segments of the procedural mesh (16 × segments² triangles).
-    #[arg(long, default_value_t = meshlight::scene::DEFAULT_SEGMENTS)]
-    pub segments: u32,
-    /// Copies of the mesh on the ground (1: one copy, framed by the camera).
-    #[arg(long, default_value_t = meshlight::virtual_geometry::scenes::DEFAULT_INSTANCES)]
-    pub instances: u32,
-    /// Point lights over the field (default: 256 with the frame built in code, 0 with
-    /// --pipeline, which clusters none).
-    #[arg(long)]
-    pub lights: Option<u32>,
-    /// A pipeline file to render with instead of the graph built in code. It is watched:
-    /// saving it rebuilds the frame, and an error in it is shown while the last good graph
-    /// keeps rendering.
-    #[arg(long)]
-    pub pipeline: Option<PathBuf>,
-    /// Initial window (and rendering) width in pixels.
-    #[arg(long, default_value_t = 1280)]
-    pub width: u32,
-    /// Initial window (and rendering) height in pixels.
-    #[arg(long, default_value_t = 720)]
-    pub height: u32,
-    /// The debug view shown first (changed live in the overlay).
-    #[arg(long, value_parser = view_parser())]
-    pub view: Option<DebugView>,
+    /// The scene, its graph and the window's first size, as `meshlight render` takes
+    /// them. A pipeline file is watched: saving it rebuilds the frame, and an error in
+    /// it is shown while the last good graph keeps rendering. The view is the one shown
+    /// first (changed live in the overlay).
+    pub scene: SceneOptions,
     /// Exit after this many frames (with --screenshot, the last one is written).
-    #[arg(long)]
     pub frames: Option<u64>,
     /// Write the last frame's image (the graph's `color`, without the overlay) as PNG.
-    #[arg(long)]
     pub screenshot: Option<PathBuf>,
     /// A fixed camera, `x,y,z:tx,ty,tz` (position and target), instead of the scene's.
-    #[arg(long, value_parser = CameraSpec::parse)]
     pub camera: Option<CameraSpec>,
     /// A scripted camera: one revolution around the scene's target every this many
     /// frames (for demos and timing runs; input still works on top).
-    #[arg(long)]
     pub orbit_frames: Option<u32>,
     /// No overlay: the window shows the frame alone.
-    #[arg(long)]
     pub no_overlay: bool,
     /// Present without waiting for the display (for timing runs).
-    #[arg(long)]
     pub no_vsync: bool,
 }
 
@@ -60,14 +32,7 @@ impl ViewerOptions {
     /// The defaults of the command line at a given size.
     pub fn new(width: u32, height: u32) -> Self {
         Self {
-            mesh: PathBuf::from("procedural"),
-            segments: meshlight::scene::DEFAULT_SEGMENTS,
-            instances: meshlight::virtual_geometry::scenes::DEFAULT_INSTANCES,
-            lights: None,
-            pipeline: None,
-            width,
-            height,
-            view: None,
+            scene: SceneOptions::new(width, height),
             frames: None,
             screenshot: None,
             camera: None,
@@ -76,12 +41,6 @@ impl ViewerOptions {
             no_vsync: false,
         }
     }
-}
-
-fn view_parser() -> impl clap::builder::TypedValueParser<Value = DebugView> {
-    use clap::builder::TypedValueParser as _;
-    clap::builder::PossibleValuesParser::new(DebugView::ALL.map(DebugView::name))
-        .try_map(|name| DebugView::parse(&name))
 }
 
 /// A camera position and the point it looks at.

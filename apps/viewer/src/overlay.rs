@@ -7,7 +7,7 @@ use crate::camera::CameraRig;
 use crate::viewer::FrameTime;
 use meshlight::graph::FrameStats;
 use meshlight::resolve::DebugView;
-use meshlight::virtual_geometry::{FrameSettings, Renderer};
+use meshlight_virtual_geometry::{FrameSettings, Renderer};
 use std::collections::VecDeque;
 use std::path::Path;
 

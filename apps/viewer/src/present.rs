@@ -7,7 +7,7 @@ use meshlight::graph::{
     TextureDesc,
 };
 use meshlight::resolve::COLOR_FORMAT;
-use meshlight::virtual_geometry::FrameSettings;
+use meshlight_virtual_geometry::FrameSettings;
 
 /// The imported texture the frame's image is copied into.
 pub const PRESENT: &str = "present";

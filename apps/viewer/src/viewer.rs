@@ -10,7 +10,7 @@ use crate::reload::{FileError, PipelineWatch, locate, with_implementations};
 use meshlight::gpu_scene::Camera;
 use meshlight::graph::{FrameStats, GraphError};
 use meshlight::resolve::DebugView;
-use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
+use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer, setup};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -23,17 +23,12 @@ pub enum ViewerError {
     #[error(transparent)]
     Graph(#[from] GraphError),
     #[error(transparent)]
-    Scene(#[from] meshlight::scene::SceneError),
+    Setup(#[from] meshlight_virtual_geometry::SetupError),
     #[error(transparent)]
-    SceneData(#[from] meshlight::gpu_scene::SceneDataError),
-    #[error(transparent)]
-    Output(#[from] meshlight::output::OutputError),
+    Output(#[from] meshlight_output::OutputError),
     #[error("{0}")]
     Other(String),
 }
-
-/// Entries per light the froxel lists start with (as `meshlight render` does).
-const FIELD_ENTRIES_PER_LIGHT: u64 = 32;
 
 /// Frame times kept for the overlay's chart.
 pub const HISTORY: usize = 240;
@@ -52,15 +47,49 @@ pub struct FrameTime {
     pub graph_ms: f32,
 }
 
-/// The window's side: the surface, the blit and egui.
-struct WindowTarget {
-    window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
+/// What the image and the overlay are drawn into: the screen, its format (the blit's and
+/// egui's), the blit and egui.
+struct Target {
+    screen: Screen,
+    format: wgpu::TextureFormat,
     blit: Blit,
     egui: egui::Context,
-    egui_state: egui_winit::State,
     egui_renderer: egui_wgpu::Renderer,
+}
+
+/// A window, or a texture where no display exists.
+enum Screen {
+    /// The window's surface, presented each frame, and its input for egui.
+    Window {
+        window: Arc<Window>,
+        surface: wgpu::Surface<'static>,
+        config: wgpu::SurfaceConfiguration,
+        egui_state: egui_winit::State,
+    },
+    /// A texture of the viewer's own: the same drawing as into a window, nothing
+    /// presented, no input. It lets the overlay's cost be measured on a machine with no
+    /// display, such as a GPU server.
+    Offscreen { texture: wgpu::Texture },
+}
+
+/// The format of the off-screen target: what a window's surface offers first here.
+const OFFSCREEN_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+
+fn offscreen_texture(device: &wgpu::Device, width: u32, height: u32) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("viewer offscreen"),
+        size: wgpu::Extent3d {
+            width: width.max(1),
+            height: height.max(1),
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: OFFSCREEN_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    })
 }
 
 pub struct Viewer {
@@ -82,7 +111,7 @@ pub struct Viewer {
     pub frames: u64,
     pub overlay_on: bool,
     overlay: Overlay,
-    window: Option<WindowTarget>,
+    target: Option<Target>,
     registry: meshlight::graph::file::Registry,
     /// Where the file with the overlay's choices written into it is kept.
     edited: PathBuf,
@@ -92,60 +121,26 @@ impl Viewer {
     /// Builds the scene and the renderer; with a window, presents to it.
     pub fn new(options: ViewerOptions, window: Option<Arc<Window>>) -> Result<Self, ViewerError> {
         let o = &options;
-        let lights_asked = o.lights.unwrap_or(if o.pipeline.is_some() {
-            0
-        } else {
-            scenes::DEFAULT_LIGHTS
-        });
-        let asset = scenes::load_asset(&o.mesh, o.segments)?;
-        let adapter = meshlight::graph::GpuAdapter::select()?;
-        let limits = meshlight::gpu_scene::data::Limits::for_device(&adapter.adapter.limits());
-        drop(adapter);
-        let data = meshlight::gpu_scene::SceneData::new(limits);
-        let placed = if o.instances == 1 {
-            scenes::single(data, &asset)?
-        } else {
-            scenes::field(data, &asset, o.instances)?
-        };
-        let mut settings = FrameSettings::new(o.width, o.height);
-        settings.view = o.view.unwrap_or_default();
-        settings.keep_file_view = o.view.is_none();
-        let lights = if o.instances > 1 && o.pipeline.is_none() {
-            scenes::field_lights(&placed, lights_asked)
-        } else {
-            Vec::new()
-        };
-        if !lights.is_empty() || o.view.is_some_and(|v| v.needs_lights()) {
-            let mut c = meshlight::light_clustering::ClusteringSettings::new(
-                [o.width, o.height],
-                lights.len().max(1) as u64,
-            );
-            c.entries = c.entries.max(lights.len() as u64 * FIELD_ENTRIES_PER_LIGHT);
-            settings.clustering = Some(c);
-        }
-        let source = match &o.pipeline {
-            Some(path) => GraphSource::File(path.clone()),
-            None => GraphSource::Code,
-        };
-        let mut renderer = Renderer::new(placed.data, settings, &source)?;
-        renderer.lights = lights;
+        let scene = setup(&o.scene)?;
+        let mut renderer = Renderer::new(scene.data, scene.settings, &scene.source)?;
+        renderer.lights = scene.lights;
         let camera = match o.camera {
             Some(c) => Camera {
                 position: c.position,
                 target: c.target,
-                ..placed.camera
+                ..scene.camera
             },
-            None => placed.camera,
+            None => scene.camera,
         };
         let device = renderer.executor.gpu.device.clone();
-        let present = present_texture(&device, o.width, o.height);
+        let present = present_texture(&device, o.scene.width, o.scene.height);
         let settings = renderer.settings.clone();
         let mut viewer = Self {
             rig: CameraRig::new(camera),
             settings,
             chosen: BTreeMap::new(),
             present,
-            watch: o.pipeline.clone().map(PipelineWatch::new),
+            watch: o.scene.pipeline.clone().map(PipelineWatch::new),
             error: None,
             file_error: None,
             times: std::collections::VecDeque::with_capacity(HISTORY),
@@ -153,7 +148,7 @@ impl Viewer {
             frames: 0,
             overlay_on: !o.no_overlay,
             overlay: Overlay::default(),
-            window: None,
+            target: None,
             registry: meshlight::registry(),
             edited: std::env::temp_dir().join(format!(
                 "meshlight-view-{}-{:p}.toml",
@@ -240,23 +235,41 @@ impl Viewer {
             None,
             Some(gpu.device.limits().max_texture_dimension_2d as usize),
         );
-        let egui_renderer =
-            egui_wgpu::Renderer::new(&gpu.device, format, egui_wgpu::RendererOptions::default());
-        self.window = Some(WindowTarget {
-            blit: Blit::new(&gpu.device, format),
+        let screen = Screen::Window {
             window,
             surface,
             config,
-            egui,
             egui_state,
-            egui_renderer,
-        });
+        };
+        self.target = Some(Target::new(&gpu.device, screen, format, egui));
         Ok(())
+    }
+
+    /// A viewer drawing into a texture of its own instead of a window: every frame runs
+    /// the graph, the blit and (unless `no_overlay`) the overlay as a window would, and
+    /// presents nothing. For timing and memory runs on machines without a display.
+    pub fn offscreen(options: ViewerOptions) -> Result<Self, ViewerError> {
+        let mut viewer = Self::new(options, None)?;
+        let device = &viewer.renderer.executor.gpu.device;
+        let (width, height) = viewer.size();
+        let screen = Screen::Offscreen {
+            texture: offscreen_texture(device, width, height),
+        };
+        viewer.target = Some(Target::new(
+            device,
+            screen,
+            OFFSCREEN_FORMAT,
+            egui::Context::default(),
+        ));
+        Ok(viewer)
     }
 
     /// The window, when there is one.
     pub fn window(&self) -> Option<&Arc<Window>> {
-        self.window.as_ref().map(|w| &w.window)
+        match &self.target.as_ref()?.screen {
+            Screen::Window { window, .. } => Some(window),
+            Screen::Offscreen { .. } => None,
+        }
     }
 
     /// The settings the current graph was built with.
@@ -324,11 +337,19 @@ impl Viewer {
     /// the window's surface follows when there is one).
     pub fn resize(&mut self, width: u32, height: u32) -> Result<(), String> {
         let (width, height) = (width.max(1), height.max(1));
-        if let Some(w) = &mut self.window {
-            w.config.width = width;
-            w.config.height = height;
-            w.surface
-                .configure(&self.renderer.executor.gpu.device, &w.config);
+        let device = &self.renderer.executor.gpu.device;
+        match self.target.as_mut().map(|t| &mut t.screen) {
+            Some(Screen::Window {
+                surface, config, ..
+            }) => {
+                config.width = width;
+                config.height = height;
+                surface.configure(device, config);
+            }
+            Some(Screen::Offscreen { texture }) => {
+                *texture = offscreen_texture(device, width, height);
+            }
+            None => {}
         }
         if (width, height) == self.size() {
             return Ok(());
@@ -382,7 +403,7 @@ impl Viewer {
         settings: &mut FrameSettings,
         chosen: &BTreeMap<String, String>,
     ) -> Result<(), String> {
-        let source = match &self.options.pipeline {
+        let source = match &self.options.scene.pipeline {
             None => {
                 for (stage, name) in chosen {
                     match stage.as_str() {
@@ -432,7 +453,7 @@ impl Viewer {
             .rebuild(&source, settings.clone(), &add_present);
         if let Err(e) = rebuilt {
             let message = e.to_string();
-            if let Some(path) = &self.options.pipeline {
+            if let Some(path) = &self.options.scene.pipeline {
                 let message = message.replace(
                     &self.edited.display().to_string(),
                     &path.display().to_string(),
@@ -540,34 +561,46 @@ impl Viewer {
         }
     }
 
-    /// Presents the frame; returns what the overlay asked for and the milliseconds the
-    /// overlay took.
+    /// Draws the frame and the overlay into the target and presents a window's; returns
+    /// what the overlay asked for and the milliseconds the overlay took.
     fn present_to_window(&mut self) -> Result<(OverlayActions, f32), ViewerError> {
-        let choices = if self.overlay_on && self.window.is_some() {
+        let choices = if self.overlay_on && self.target.is_some() {
             self.choices_with_current()
         } else {
             Vec::new()
         };
-        let Some(w) = &mut self.window else {
+        let Some(t) = &mut self.target else {
             return Ok((OverlayActions::default(), 0.0));
         };
         let gpu = &self.renderer.executor.gpu;
-        let frame = match w.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                w.surface.configure(&gpu.device, &w.config);
-                return Ok((OverlayActions::default(), 0.0));
+        let (frame, view, size) = match &mut t.screen {
+            Screen::Window {
+                surface, config, ..
+            } => {
+                let frame = match surface.get_current_texture() {
+                    wgpu::CurrentSurfaceTexture::Success(t)
+                    | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+                    wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
+                        surface.configure(&gpu.device, config);
+                        return Ok((OverlayActions::default(), 0.0));
+                    }
+                    other => {
+                        log::warn!("no surface texture this frame: {other:?}");
+                        return Ok((OverlayActions::default(), 0.0));
+                    }
+                };
+                let view = frame.texture.create_view(&wgpu::TextureViewDescriptor {
+                    format: Some(t.format),
+                    ..Default::default()
+                });
+                (Some(frame), view, [config.width, config.height])
             }
-            other => {
-                log::warn!("no surface texture this frame: {other:?}");
-                return Ok((OverlayActions::default(), 0.0));
-            }
+            Screen::Offscreen { texture } => (
+                None,
+                texture.create_view(&Default::default()),
+                [texture.width(), texture.height()],
+            ),
         };
-        let view = frame.texture.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(w.blit_format()),
-            ..Default::default()
-        });
         let mut encoder = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -577,7 +610,18 @@ impl Viewer {
         let mut paint = None;
         let overlay_start = Instant::now();
         if self.overlay_on {
-            let input = w.egui_state.take_egui_input(&w.window);
+            let input = match &mut t.screen {
+                Screen::Window {
+                    window, egui_state, ..
+                } => egui_state.take_egui_input(window),
+                Screen::Offscreen { .. } => egui::RawInput {
+                    screen_rect: Some(egui::Rect::from_min_size(
+                        egui::Pos2::ZERO,
+                        egui::vec2(size[0] as f32, size[1] as f32),
+                    )),
+                    ..Default::default()
+                },
+            };
             let facts = crate::overlay::Facts {
                 renderer: &self.renderer,
                 settings: &self.settings,
@@ -585,28 +629,32 @@ impl Viewer {
                 stats: self.last_stats.as_ref(),
                 error: self.error.as_deref(),
                 choices,
-                pipeline: self.options.pipeline.as_deref(),
+                pipeline: self.options.scene.pipeline.as_deref(),
                 rig: &self.rig,
             };
-            let mut output = w.egui.run_ui(input, |ui| {
+            let mut output = t.egui.run_ui(input, |ui| {
                 actions = self.overlay.draw(ui, &facts);
             });
-            w.egui_state
-                .handle_platform_output(&w.window, output.platform_output);
-            let jobs = w.egui.tessellate(output.shapes, output.pixels_per_point);
+            if let Screen::Window {
+                window, egui_state, ..
+            } = &mut t.screen
+            {
+                egui_state.handle_platform_output(window, output.platform_output);
+            }
+            let jobs = t.egui.tessellate(output.shapes, output.pixels_per_point);
             let set = std::mem::take(&mut output.textures_delta.set);
             let free = std::mem::take(&mut output.textures_delta.free);
             for (id, deltas) in &set {
                 for delta in deltas {
-                    w.egui_renderer
+                    t.egui_renderer
                         .update_texture(&gpu.device, &gpu.queue, *id, delta);
                 }
             }
             let screen = egui_wgpu::ScreenDescriptor {
-                size_in_pixels: [w.config.width, w.config.height],
+                size_in_pixels: size,
                 pixels_per_point: output.pixels_per_point,
             };
-            let extra = w.egui_renderer.update_buffers(
+            let extra = t.egui_renderer.update_buffers(
                 &gpu.device,
                 &gpu.queue,
                 &mut encoder,
@@ -615,7 +663,11 @@ impl Viewer {
             );
             paint = Some((jobs, screen, extra, free));
         }
-        let mut overlay_ms = overlay_start.elapsed().as_secs_f32() * 1000.0;
+        // Without the overlay, nothing of its cost is counted.
+        let mut overlay_ms = match paint {
+            Some(_) => overlay_start.elapsed().as_secs_f32() * 1000.0,
+            None => 0.0,
+        };
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("viewer present"),
@@ -630,11 +682,11 @@ impl Viewer {
                 })],
                 ..Default::default()
             });
-            w.blit.draw(&gpu.device, &mut pass, &self.present);
+            t.blit.draw(&gpu.device, &mut pass, &self.present);
             if let Some((jobs, screen, _, _)) = &paint {
                 let drawing = Instant::now();
                 let mut pass = pass.forget_lifetime();
-                w.egui_renderer.render(&mut pass, jobs, screen);
+                t.egui_renderer.render(&mut pass, jobs, screen);
                 overlay_ms += drawing.elapsed().as_secs_f32() * 1000.0;
             }
         }
@@ -646,10 +698,12 @@ impl Viewer {
         }
         buffers.push(encoder.finish());
         gpu.queue.submit(buffers);
-        w.window.pre_present_notify();
-        gpu.queue.present(frame);
+        if let (Some(frame), Screen::Window { window, .. }) = (frame, &t.screen) {
+            window.pre_present_notify();
+            gpu.queue.present(frame);
+        }
         for id in free {
-            w.egui_renderer.free_texture(&id);
+            t.egui_renderer.free_texture(&id);
         }
         Ok((actions, overlay_ms))
     }
@@ -672,8 +726,10 @@ impl Viewer {
 
     /// Lets egui see a window event; true when it used it (the camera then ignores it).
     pub fn on_window_event(&mut self, event: &winit::event::WindowEvent) -> bool {
-        match &mut self.window {
-            Some(w) if self.overlay_on => w.egui_state.on_window_event(&w.window, event).consumed,
+        match self.target.as_mut().map(|t| &mut t.screen) {
+            Some(Screen::Window {
+                window, egui_state, ..
+            }) if self.overlay_on => egui_state.on_window_event(window, event).consumed,
             _ => false,
         }
     }
@@ -687,9 +743,9 @@ impl Viewer {
 
     /// Writes the last frame's image as PNG.
     pub fn screenshot(&mut self, path: &Path) -> Result<(), ViewerError> {
-        meshlight::output::check_png_path(path).map_err(|e| ViewerError::Other(e.to_string()))?;
+        meshlight_output::check_png_path(path).map_err(|e| ViewerError::Other(e.to_string()))?;
         let (w, h, rgba) = self.read_image()?;
-        meshlight::output::write_png(path, w, h, &rgba)?;
+        meshlight_output::write_png(path, w, h, &rgba)?;
         Ok(())
     }
 
@@ -697,10 +753,10 @@ impl Viewer {
     pub fn write_html(&self, path: &Path) -> Result<(), ViewerError> {
         let page = meshlight::graph::dump::to_html(
             &self.renderer.compiled.plan,
-            &format!("meshlight-view: {}", self.options.mesh.display()),
+            &format!("meshlight view: {}", self.options.scene.mesh.display()),
             self.last_stats.as_ref(),
         );
-        meshlight::output::write_file(path, page.as_bytes())?;
+        meshlight_output::write_file(path, page.as_bytes())?;
         Ok(())
     }
 
@@ -715,13 +771,24 @@ impl Viewer {
     }
 }
 
-impl WindowTarget {
-    fn blit_format(&self) -> wgpu::TextureFormat {
-        self.config
-            .view_formats
-            .first()
-            .copied()
-            .unwrap_or(self.config.format)
+impl Target {
+    fn new(
+        device: &wgpu::Device,
+        screen: Screen,
+        format: wgpu::TextureFormat,
+        egui: egui::Context,
+    ) -> Self {
+        Self {
+            screen,
+            format,
+            blit: Blit::new(device, format),
+            egui,
+            egui_renderer: egui_wgpu::Renderer::new(
+                device,
+                format,
+                egui_wgpu::RendererOptions::default(),
+            ),
+        }
     }
 }
 

@@ -4,7 +4,7 @@
 //! list (as a set), the node counters and the count of hidden nodes must equal the
 //! reference's, apart from nodes whose test lies within rounding of a threshold. The
 //! first walk runs the same node test through the previous transforms; the frame-level
-//! test `tests/occlusion.rs` of the workspace covers it end to end (no false culling).
+//! test `apps/virtual_geometry/tests/occlusion.rs` covers it end to end (no false culling).
 
 mod support;
 

@@ -75,7 +75,6 @@
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{Access, Element, GraphError, Pass, Result, Slot, StageContract};
 
-pub mod bench;
 mod cpu;
 mod decoupled_lookback;
 mod kernels;

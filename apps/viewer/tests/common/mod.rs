@@ -81,16 +81,17 @@ pub fn tempdir(what: &str) -> PathBuf {
 /// A small scene: 16 copies of a 4,096-triangle procedural mesh at 160 × 96.
 pub fn small_options() -> ViewerOptions {
     let mut o = ViewerOptions::new(160, 96);
-    o.segments = 16;
-    o.instances = 16;
+    o.scene.segments = 16;
+    o.scene.instances = 16;
     o.no_vsync = true;
     o
 }
 
 /// A viewer in a window of its own on the test's X server.
 pub fn windowed(options: ViewerOptions) -> (winit::event_loop::EventLoop<()>, Viewer) {
-    let (event_loop, window) = meshlight_viewer::app::test_window(options.width, options.height)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let (event_loop, window) =
+        meshlight_viewer::app::test_window(options.scene.width, options.scene.height)
+            .unwrap_or_else(|e| panic!("{e}"));
     let viewer = Viewer::new(options, Some(window)).unwrap_or_else(|e| panic!("{e}"));
     (event_loop, viewer)
 }
@@ -112,33 +113,15 @@ pub fn colours(rgba: &[u8]) -> usize {
     c.len()
 }
 
-/// The scene of [`small_options`] (with its lights) in a bare renderer, as `meshlight
-/// render` builds it, and the scene's camera.
+/// The scene of [`small_options`] (with its lights) in a bare renderer, set up as
+/// `meshlight render` sets it up, and the scene's camera.
 pub fn bare_renderer() -> (
-    meshlight::virtual_geometry::Renderer,
+    meshlight_virtual_geometry::Renderer,
     meshlight::gpu_scene::Camera,
 ) {
-    use meshlight::virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
-    let o = small_options();
-    let asset = scenes::load_asset(&o.mesh, o.segments).expect("mesh");
-    let adapter = meshlight::graph::GpuAdapter::select().expect("a Vulkan adapter");
-    let limits = meshlight::gpu_scene::data::Limits::for_device(&adapter.adapter.limits());
-    drop(adapter);
-    let placed = scenes::field(
-        meshlight::gpu_scene::SceneData::new(limits),
-        &asset,
-        o.instances,
-    )
-    .expect("scene");
-    let lights = scenes::field_lights(&placed, scenes::DEFAULT_LIGHTS);
-    let mut settings = FrameSettings::new(o.width, o.height);
-    let mut clustering = meshlight::light_clustering::ClusteringSettings::new(
-        [o.width, o.height],
-        lights.len() as u64,
-    );
-    clustering.entries = clustering.entries.max(lights.len() as u64 * 32);
-    settings.clustering = Some(clustering);
-    let mut renderer = Renderer::new(placed.data, settings, &GraphSource::Code).expect("renderer");
-    renderer.lights = lights;
-    (renderer, placed.camera)
+    use meshlight_virtual_geometry::{Renderer, setup};
+    let scene = setup(&small_options().scene).unwrap_or_else(|e| panic!("{e}"));
+    let mut renderer = Renderer::new(scene.data, scene.settings, &scene.source).expect("renderer");
+    renderer.lights = scene.lights;
+    (renderer, scene.camera)
 }

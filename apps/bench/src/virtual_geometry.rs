@@ -1,0 +1,783 @@
+//! Benchmark scenarios of the virtual-geometry frame: per-pass GPU times from
+//! timestamps, the frame's counters, and rasteriser throughput with every cluster sent
+//! to one rasteriser, all measured in the same run.
+
+use crate::{Row, median, row};
+use meshlight::gpu_scene::SceneData;
+use meshlight::graph::{GpuTimings, TimingMode};
+use meshlight_virtual_geometry::scenes::{self, Placed};
+use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+type BenchResult = std::result::Result<Vec<Row>, Box<dyn std::error::Error>>;
+
+/// Median GPU times over `frames` back-to-back frames after one still frame (which lets
+/// the lists grow to what the view needs). The frame's time comes from the default
+/// `frame` timing mode (a timestamp pair per batch, which barely disturbs the frame);
+/// the per-pass profile from a second run of as many frames in `passes` mode, which
+/// serialises every pass and so adds its own cost to each.
+pub struct Measured {
+    /// Per pass, from the `passes` timing mode.
+    pub passes: Vec<(String, f64)>,
+    /// The frame, from the `frame` timing mode.
+    pub total_ms: f64,
+    /// The frame as the sum of the `passes`-mode profile, for comparison.
+    pub profiled_total_ms: f64,
+    pub counts: meshlight_virtual_geometry::FrameCounts,
+    pub device: String,
+}
+
+pub fn measure(
+    placed: &Placed,
+    settings: FrameSettings,
+    frames: u32,
+) -> Result<Measured, Box<dyn std::error::Error>> {
+    let mut renderer = Renderer::new(placed.data.clone(), settings, &GraphSource::Code)?;
+    let mut run = |mode: TimingMode| -> Result<Vec<GpuTimings>, Box<dyn std::error::Error>> {
+        renderer.executor.timing = mode;
+        renderer.render_still(&placed.camera)?;
+        renderer.executor.take_gpu_timings()?;
+        for _ in 0..frames {
+            renderer.frame(&placed.camera)?;
+        }
+        renderer.executor.finish()?;
+        let timings = renderer.executor.take_gpu_timings()?;
+        if timings.is_empty() {
+            return Err(format!(
+                "{} has no GPU timestamps; nothing to measure",
+                renderer.adapter
+            )
+            .into());
+        }
+        Ok(timings)
+    };
+    let framed = run(TimingMode::Frame)?;
+    let profiled = run(TimingMode::Passes)?;
+    // The counters of a frame like the timed ones: with occlusion, the still's are
+    // those of a first frame, which has no history to test against.
+    let counts = renderer.render_still(&placed.camera)?.counts;
+    let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    let mut order = Vec::new();
+    for t in &profiled {
+        for (name, us) in &t.passes {
+            if !per_pass.contains_key(name) {
+                order.push(name.clone());
+            }
+            per_pass.entry(name.clone()).or_default().push(us / 1e3);
+        }
+    }
+    let passes = order
+        .into_iter()
+        .map(|n| {
+            let v = per_pass.remove(&n).unwrap_or_default();
+            (n, median(v))
+        })
+        .collect();
+    let total = |t: &[GpuTimings]| median(t.iter().map(|t| t.total_us / 1e3).collect());
+    Ok(Measured {
+        passes,
+        total_ms: total(&framed),
+        profiled_total_ms: total(&profiled),
+        counts,
+        device: renderer.adapter.clone(),
+    })
+}
+
+fn rows_of(scenario: &str, case: &str, m: &Measured) -> Vec<Row> {
+    let mut rows: Vec<Row> = m
+        .passes
+        .iter()
+        .filter(|(name, _)| !name.starts_with("readback:"))
+        .map(|(name, ms)| {
+            row(
+                scenario,
+                case.into(),
+                &format!("GPU {name} (timing mode passes)"),
+                *ms,
+                "ms",
+                &m.device,
+            )
+        })
+        .collect();
+    rows.push(row(
+        scenario,
+        case.into(),
+        "GPU frame (timing mode frame)",
+        m.total_ms,
+        "ms",
+        &m.device,
+    ));
+    rows.push(row(
+        scenario,
+        case.into(),
+        "GPU frame, sum of the per-pass profile (timing mode passes)",
+        m.profiled_total_ms,
+        "ms",
+        &m.device,
+    ));
+    for (label, value) in m.counts.rows() {
+        rows.push(row(
+            scenario,
+            case.into(),
+            label,
+            value as f64,
+            "",
+            &m.device,
+        ));
+    }
+    rows
+}
+
+fn pass_ms(m: &Measured, pass: &str) -> f64 {
+    m.passes
+        .iter()
+        .find(|(n, _)| n == pass)
+        .map_or(f64::NAN, |(_, ms)| *ms)
+}
+
+/// The default scene (a field of procedural meshes on the ground) at 1920×1080 and
+/// 3840×2160 (1080p alone with `quick`).
+pub fn default_scene(quick: bool) -> BenchResult {
+    let (segments, instances) = if quick {
+        (64, 64)
+    } else {
+        (
+            meshlight::scene::DEFAULT_SEGMENTS,
+            scenes::DEFAULT_INSTANCES,
+        )
+    };
+    let asset = scenes::load_asset(Path::new("procedural"), segments)?;
+    let placed = scenes::field(SceneData::new(Default::default()), &asset, instances)?;
+    let sizes: &[(u32, u32)] = if quick {
+        &[(1920, 1080)]
+    } else {
+        &[(1920, 1080), (3840, 2160)]
+    };
+    let mut rows = Vec::new();
+    for &(width, height) in sizes {
+        let case = format!(
+            "{instances} procedural meshes, {} source tris, {width}x{height}",
+            placed.data.source_triangles()
+        );
+        let m = measure(
+            &placed,
+            FrameSettings::new(width, height),
+            if quick { 5 } else { 50 },
+        )?;
+        rows.extend(rows_of("render", &case, &m));
+        // The same frame with the clusters crossing the near plane (and, on a graphics
+        // GPU, the large ones) drawn by the hardware rasteriser.
+        let hardware = FrameSettings {
+            hardware: Some(true),
+            ..FrameSettings::new(width, height)
+        };
+        let m = measure(&placed, hardware, if quick { 5 } else { 50 })?;
+        rows.extend(rows_of("render", &format!("{case}, with hw_raster"), &m));
+    }
+    Ok(rows)
+}
+
+/// The scene of [`lattice`] and [`rasterisers`]: 15³ copies of a mesh (5³ at 1280×720
+/// with `quick`), its viewport, frame count and the case label of its rows.
+struct Lattice {
+    mesh: PathBuf,
+    placed: Placed,
+    width: u32,
+    height: u32,
+    frames: u32,
+    case: String,
+}
+
+impl Lattice {
+    fn new(quick: bool, meshes: &[PathBuf]) -> Result<Self, Box<dyn std::error::Error>> {
+        let mesh = meshes
+            .first()
+            .cloned()
+            .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+        let n = if quick { 5 } else { 15 };
+        let asset = scenes::load_asset(&mesh, 0)?;
+        let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
+        let (width, height) = if quick { (1280, 720) } else { (2240, 1260) };
+        let case = format!(
+            "{n}³ {}, {} source tris, {width}x{height}",
+            mesh.file_stem().unwrap_or_default().to_string_lossy(),
+            placed.data.source_triangles()
+        );
+        Ok(Self {
+            mesh,
+            placed,
+            width,
+            height,
+            frames: if quick { 5 } else { 50 },
+            case,
+        })
+    }
+}
+
+/// 15 × 15 × 15 copies of a mesh (the Stanford bunny unless `meshes` names another) at
+/// 2240×1260: the frame, then the same cluster set drawn all in software and all in
+/// hardware for each rasteriser's throughput.
+pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    let Lattice {
+        mesh,
+        placed,
+        width,
+        height,
+        frames,
+        case,
+    } = Lattice::new(quick, meshes)?;
+    let settings = FrameSettings::new(width, height);
+    let frame = measure(&placed, settings.clone(), frames)?;
+    let mut rows = rows_of("virtual-geometry", &case, &frame);
+    // The same frame with one culling pass and no occlusion test.
+    let one_pass = FrameSettings {
+        occlusion: false,
+        ..settings.clone()
+    };
+    let without = measure(&placed, one_pass.clone(), frames)?;
+    rows.extend(rows_of(
+        "virtual-geometry",
+        &format!("{case}, no occlusion"),
+        &without,
+    ));
+
+    // The same cut, every cluster to one rasteriser.
+    let software = measure(
+        &placed,
+        FrameSettings {
+            hardware: Some(false),
+            ..settings.clone()
+        },
+        frames,
+    )?;
+    // The whole cut, so no occlusion (which would split it over two passes).
+    let hardware = measure(
+        &placed,
+        FrameSettings {
+            sw_threshold_px: Some(0.0),
+            ..one_pass
+        },
+        frames,
+    )?;
+    let sw_rate = software.counts.triangles() as f64 / (pass_ms(&software, "sw_raster") * 1e-3);
+    let hw_rate =
+        hardware.counts.hardware_triangles as f64 / (pass_ms(&hardware, "hw_raster") * 1e-3);
+    let device = frame.device.clone();
+    rows.push(row(
+        "virtual-geometry",
+        format!("{case}, all software"),
+        "software raster",
+        sw_rate / 1e9,
+        "Gtri/s",
+        &device,
+    ));
+    let mut hw_row = row(
+        "virtual-geometry",
+        format!("{case}, all hardware"),
+        "hardware raster",
+        hw_rate / 1e9,
+        "Gtri/s",
+        &device,
+    );
+    hw_row.vs_baseline = Some(hw_rate / sw_rate);
+    rows.push(hw_row);
+    let mut ratio = row(
+        "virtual-geometry",
+        case.clone(),
+        "software / hardware throughput",
+        sw_rate / hw_rate,
+        "x",
+        &device,
+    );
+    ratio.vs_baseline = Some(sw_rate / hw_rate);
+    rows.push(ratio);
+
+    // Where to split: the frame at other software thresholds (few units of these GPUs
+    // run graphics, so the hardware side may be worth keeping small).
+    let thresholds: &[f32] = if quick {
+        &[64.0]
+    } else {
+        &[16.0, 64.0, 128.0, 256.0]
+    };
+    for &sw_threshold_px in thresholds {
+        let m = measure(
+            &placed,
+            FrameSettings {
+                sw_threshold_px: Some(sw_threshold_px),
+                ..FrameSettings::new(width, height)
+            },
+            frames,
+        )?;
+        let label = format!("GPU frame, sw_threshold_px = {sw_threshold_px}");
+        let mut r = row(
+            "virtual-geometry",
+            case.clone(),
+            &label,
+            m.total_ms,
+            "ms",
+            &device,
+        );
+        r.vs_baseline = Some(frame.total_ms / m.total_ms);
+        rows.push(r);
+    }
+
+    // What bit-exact division costs the software rasteriser (all software, so every
+    // cluster goes through it).
+    let exact = measure(
+        &placed,
+        FrameSettings {
+            hardware: Some(false),
+            exact_division: true,
+            ..FrameSettings::new(width, height)
+        },
+        frames,
+    )?;
+    let (fast_ms, exact_ms) = (
+        pass_ms(&software, "sw_raster"),
+        pass_ms(&exact, "sw_raster"),
+    );
+    rows.push(row(
+        "virtual-geometry",
+        format!("{case}, all software"),
+        "GPU sw_raster, driver division",
+        fast_ms,
+        "ms",
+        &device,
+    ));
+    let mut r = row(
+        "virtual-geometry",
+        format!("{case}, all software"),
+        "GPU sw_raster, exact division",
+        exact_ms,
+        "ms",
+        &device,
+    );
+    r.vs_baseline = Some(fast_ms / exact_ms);
+    rows.push(r);
+
+    // What the optional depth targets cost: each is a fullscreen fragment pass.
+    for (label, depth, material_depth) in [
+        ("GPU frame, with the depth target", true, false),
+        (
+            "GPU frame, with depth and material-depth targets",
+            true,
+            true,
+        ),
+    ] {
+        let m = measure(
+            &placed,
+            FrameSettings {
+                depth,
+                material_depth,
+                ..FrameSettings::new(width, height)
+            },
+            frames,
+        )?;
+        let mut r = row(
+            "virtual-geometry",
+            case.clone(),
+            label,
+            m.total_ms,
+            "ms",
+            &device,
+        );
+        r.vs_baseline = Some(frame.total_ms / m.total_ms);
+        rows.push(r);
+        let resolve = pass_ms(&m, "resolve");
+        rows.push(row(
+            "virtual-geometry",
+            case.clone(),
+            &format!("{label}: GPU resolve"),
+            resolve,
+            "ms",
+            &device,
+        ));
+    }
+
+    // The baseline: every instance's LOD 0 in one instanced draw, same scene and camera.
+    let source = meshlight::scene::load::load_mesh(&mesh)?;
+    let baseline_ms = brute_force(&placed, &source, width, height, frames)?;
+    rows.push(row(
+        "virtual-geometry",
+        format!("{case}, brute force"),
+        "GPU brute_force (LOD 0, one instanced draw)",
+        baseline_ms,
+        "ms",
+        &device,
+    ));
+    let mut speedup = row(
+        "virtual-geometry",
+        case,
+        "GPU frame vs brute force",
+        baseline_ms / frame.total_ms,
+        "x",
+        &device,
+    );
+    speedup.vs_baseline = Some(baseline_ms / frame.total_ms);
+    rows.push(speedup);
+    Ok(rows)
+}
+
+/// How the frame's cost grows with the scene: n³ copies of a mesh (the bunny unless
+/// `meshes` names another) for n = 1, 2, 4, 8, 16, 32 (1 to 32,768 copies) at 2240×1260,
+/// each framed by the lattice's camera. Per size: the frame's GPU time, the work tested
+/// (hierarchy nodes and candidate clusters), the LOD cut and the triangles rasterised;
+/// for one copy, the per-pass profile too (the frame's floor).
+pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    let mesh = meshes
+        .first()
+        .cloned()
+        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+    let asset = scenes::load_asset(&mesh, 0)?;
+    let sides: &[u32] = if quick {
+        &[1, 2, 4]
+    } else {
+        &[1, 2, 4, 8, 16, 32]
+    };
+    let (width, height) = (2240, 1260);
+    let mut rows = Vec::new();
+    for &n in sides {
+        let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
+        let case = format!(
+            "{} copies, {} source tris, {width}x{height}",
+            n * n * n,
+            placed.data.source_triangles()
+        );
+        let m = measure(
+            &placed,
+            FrameSettings::new(width, height),
+            if quick { 3 } else { 30 },
+        )?;
+        if n == 1 {
+            // The floor of the frame, pass by pass: what a nearly empty scene costs.
+            rows.extend(
+                rows_of("vg-scale", &case, &m)
+                    .into_iter()
+                    .filter(|r| r.metric.contains("(timing mode passes)")),
+            );
+        }
+        let c = &m.counts;
+        let nodes = c.hierarchy.map_or(0, |h| h.nodes_tested);
+        for (metric, value, unit) in [
+            ("GPU frame (timing mode frame)", m.total_ms, "ms"),
+            (
+                "nodes + candidate clusters tested",
+                (nodes + c.clusters_considered) as f64,
+                "",
+            ),
+            ("clusters in the LOD cut", c.visible as f64, ""),
+            ("triangles rasterised", c.triangles() as f64, ""),
+        ] {
+            rows.push(row(
+                "vg-scale",
+                case.clone(),
+                metric,
+                value,
+                unit,
+                &m.device,
+            ));
+        }
+    }
+    Ok(rows)
+}
+
+/// 1,048,576 copies of a mesh (the Stanford bunny unless `meshes` names another; 4,096
+/// with `quick`) on the default scene's field and ground at 2560×1440: scale, where the
+/// instance records alone are 224 MiB. Measured twice: the table in one binding as the
+/// adapter's limits allow, and split in two bindings, the first holding wgpu's default
+/// binding of 599,186 instances or half the instances, whichever is fewer.
+pub fn million(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    let mesh = meshes
+        .first()
+        .cloned()
+        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+    let asset = scenes::load_asset(&mesh, 0)?;
+    let instances = if quick { 4096 } else { 1 << 20 };
+    let adapter = meshlight::graph::GpuAdapter::select()?;
+    let whole = meshlight::gpu_scene::data::Limits::for_device(&adapter.adapter.limits());
+    drop(adapter);
+    let default_binding = meshlight::gpu_scene::data::Limits::default().instances_per_binding;
+    let split = meshlight::gpu_scene::data::Limits {
+        instances_per_binding: default_binding.min(instances / 2),
+        max_instances: whole.max_instances.max(instances + 1),
+        ..whole
+    };
+    let (width, height) = (2560, 1440);
+    let mut rows = Vec::new();
+    for limits in [whole, split] {
+        let placed = scenes::field(SceneData::new(limits), &asset, instances)?;
+        let mut case = format!(
+            "{instances} {} on the field, {} source tris, {width}x{height}",
+            mesh.file_stem().unwrap_or_default().to_string_lossy(),
+            placed.data.source_triangles()
+        );
+        if placed.data.instances_split() {
+            case += &format!(
+                ", instance table split at {} instances",
+                placed.data.instance_split()
+            );
+        }
+        let m = measure(
+            &placed,
+            FrameSettings::new(width, height),
+            if quick { 3 } else { 30 },
+        )?;
+        rows.extend(rows_of("vg-million", &case, &m));
+    }
+    Ok(rows)
+}
+
+/// The 15³ lattice of [`lattice`], once per rasteriser implementation and split:
+/// `sw_raster` `buffer` against `texture` with every cluster in software; `hw_raster`
+/// `indirect_draw` against `mesh_shader` with every cluster in hardware, and the software
+/// rasteriser on the same clusters; then the whole frame (with `auto`'s choices) at each
+/// split threshold and all in software. Implementations the adapter lacks are skipped
+/// with a note on stderr.
+pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    let Lattice {
+        placed,
+        width,
+        height,
+        frames,
+        case,
+        ..
+    } = Lattice::new(quick, meshes)?;
+    // Every rasteriser draws the whole cut: one culling pass.
+    let base = FrameSettings {
+        occlusion: false,
+        ..FrameSettings::new(width, height)
+    };
+    let scenario = "rasterisers";
+    let mut rows = Vec::new();
+    // One measurement, or `None` where the adapter cannot run the implementation.
+    let try_measure = |settings: FrameSettings,
+                       what: &str|
+     -> Result<Option<Measured>, Box<dyn std::error::Error>> {
+        match measure(&placed, settings, frames) {
+            Ok(m) => Ok(Some(m)),
+            Err(e) => match e.downcast_ref::<meshlight::graph::GraphError>() {
+                Some(meshlight::graph::GraphError::MissingFeature { .. }) => {
+                    eprintln!("{what}: skipped, {e}");
+                    Ok(None)
+                }
+                _ => Err(e),
+            },
+        }
+    };
+
+    // Every registered implementation of both stages (the registry is the one list).
+    let registry = meshlight::registry();
+    let implementations = |stage: &str| -> Vec<String> {
+        registry
+            .implementations(stage)
+            .into_iter()
+            .filter(|i| i != meshlight::graph::file::AUTO)
+            .collect()
+    };
+    // Software rasteriser: every cluster to it, on each target.
+    let mut software = Vec::new();
+    for sw in implementations(meshlight::sw_raster::STAGE) {
+        let settings = FrameSettings {
+            hardware: Some(false),
+            sw_raster: sw.clone(),
+            ..base.clone()
+        };
+        if let Some(m) = try_measure(settings, &format!("sw_raster {sw}"))? {
+            software.push((sw, m));
+        }
+    }
+    let buffer_ms = software.first().map(|(_, m)| pass_ms(m, "sw_raster"));
+    for (sw, m) in &software {
+        let ms = pass_ms(m, "sw_raster");
+        let mut r = row(
+            scenario,
+            format!("{case}, all software"),
+            &format!("GPU sw_raster, {sw}"),
+            ms,
+            "ms",
+            &m.device,
+        );
+        r.vs_baseline = buffer_ms.map(|b| b / ms);
+        rows.push(r);
+        rows.push(row(
+            scenario,
+            format!("{case}, all software"),
+            &format!("GPU frame, sw_raster {sw}"),
+            m.total_ms,
+            "ms",
+            &m.device,
+        ));
+    }
+
+    // Hardware rasteriser: every cluster to it, each way of feeding it; the software
+    // rasteriser's time on the same clusters is the baseline.
+    let fastest_software = software
+        .iter()
+        .map(|(_, m)| pass_ms(m, "sw_raster"))
+        .fold(f64::INFINITY, f64::min);
+    for hw in implementations(meshlight::hw_raster::STAGE) {
+        let hw = hw.as_str();
+        let settings = FrameSettings {
+            sw_threshold_px: Some(0.0),
+            hw_raster: hw.into(),
+            ..base.clone()
+        };
+        let Some(m) = try_measure(settings, &format!("hw_raster {hw}"))? else {
+            continue;
+        };
+        let ms = pass_ms(&m, "hw_raster");
+        let mut r = row(
+            scenario,
+            format!("{case}, all hardware"),
+            &format!("GPU hw_raster, {hw}"),
+            ms,
+            "ms",
+            &m.device,
+        );
+        // Above 1: the software rasteriser is that much faster on the same clusters.
+        r.vs_baseline = Some(ms / fastest_software);
+        rows.push(r);
+        rows.push(row(
+            scenario,
+            format!("{case}, all hardware"),
+            &format!("hw_raster {hw}, triangles"),
+            m.counts.hardware_triangles as f64,
+            "",
+            &m.device,
+        ));
+    }
+    if let Some((_, m)) = software.first() {
+        rows.push(row(
+            scenario,
+            format!("{case}, all software"),
+            "GPU sw_raster, fastest target (baseline of the hardware rows)",
+            fastest_software,
+            "ms",
+            &m.device,
+        ));
+    }
+
+    // The split: the whole frame with `auto`'s implementations at each threshold.
+    let thresholds: &[f32] = if quick {
+        &[32.0, 128.0]
+    } else {
+        &[8.0, 16.0, 32.0, 64.0, 128.0, 256.0]
+    };
+    let mut splits: Vec<(String, Measured)> = Vec::new();
+    for &t in thresholds {
+        let settings = FrameSettings {
+            sw_threshold_px: Some(t),
+            ..base.clone()
+        };
+        if let Some(m) = try_measure(settings, &format!("split {t} px"))? {
+            splits.push((format!("sw_threshold_px = {t}"), m));
+        }
+    }
+    let all_software = FrameSettings {
+        hardware: Some(false),
+        ..base.clone()
+    };
+    if let Some(m) = try_measure(all_software, "all software")? {
+        splits.push(("all software".into(), m));
+    }
+    let best = splits
+        .iter()
+        .map(|(_, m)| m.total_ms)
+        .fold(f64::INFINITY, f64::min);
+    for (label, m) in &splits {
+        let mut r = row(
+            scenario,
+            case.clone(),
+            &format!("GPU frame, {label}"),
+            m.total_ms,
+            "ms",
+            &m.device,
+        );
+        // 1 for the fastest split, above 1 for slower ones.
+        r.vs_baseline = Some(m.total_ms / best);
+        rows.push(r);
+        for pass in ["sw_raster", "hw_raster"] {
+            rows.push(row(
+                scenario,
+                case.clone(),
+                &format!("{label}: GPU {pass}"),
+                pass_ms(m, pass),
+                "ms",
+                &m.device,
+            ));
+        }
+        rows.push(row(
+            scenario,
+            case.clone(),
+            &format!("{label}: hardware clusters"),
+            m.counts.hardware as f64,
+            "",
+            &m.device,
+        ));
+    }
+    Ok(rows)
+}
+
+/// Median GPU time of the brute-force baseline over `frames` frames: `mesh` (the source
+/// of the scene's one asset) drawn whole for every instance.
+pub fn brute_force(
+    placed: &Placed,
+    mesh: &meshlight::scene::Mesh,
+    width: u32,
+    height: u32,
+    frames: u32,
+) -> Result<f64, Box<dyn std::error::Error>> {
+    use meshlight::brute_force::lod0_buffers;
+    use meshlight::graph::*;
+    let lod0 = lod0_buffers(mesh);
+    let mut data = placed.data.clone();
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+    let index_usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
+    // The shipped pipeline file, sized for this mesh, scene and viewport.
+    let sizes: std::collections::BTreeMap<String, u64> = [
+        ("width", width as u64),
+        ("height", height as u64),
+        ("vertices", lod0.positions.len() as u64),
+        ("indices", lod0.indices.len() as u64),
+        ("instances", data.instances.len() as u64),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    let g = meshlight::graph::file::parse_pipeline_with(
+        include_str!("../../../pipelines/brute_force.toml"),
+        "pipelines/brute_force.toml",
+        &meshlight::registry(),
+        &sizes,
+    )?;
+    let adapter = GpuAdapter::select()?;
+    let compiled = g.compile(&CompileOptions::for_adapter(&adapter))?;
+    let gpu = adapter.open(compiled.plan.enabled_features)?;
+    let scene = meshlight::gpu_scene::GpuScene::new(&gpu, &mut data);
+    let positions = gpu.buffer_with_data("positions", lod0.position_bytes(), usage);
+    let indices = gpu.buffer_with_data("indices", lod0.index_bytes(), index_usage);
+    let imports = scene
+        .imports()
+        .buffer("positions", &positions)
+        .buffer("indices", &indices);
+    let mut exec = Executor::new(gpu);
+    let view = placed.camera.view([width, height], 0, None);
+    let frame = FrameData::new().with("view", bytemuck::bytes_of(&view));
+    exec.execute_frame(&compiled, &imports, &frame)?;
+    exec.finish()?;
+    exec.take_gpu_timings()?;
+    for _ in 0..frames {
+        exec.execute_frame(&compiled, &imports, &frame)?;
+    }
+    exec.finish()?;
+    let times: Vec<f64> = exec
+        .take_gpu_timings()?
+        .iter()
+        .map(|t| t.total_us / 1e3)
+        .collect();
+    if times.is_empty() {
+        return Err("the adapter has no GPU timestamps; nothing to measure".into());
+    }
+    Ok(median(times))
+}

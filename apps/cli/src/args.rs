@@ -1,0 +1,178 @@
+//! The command line's arguments that more than one command takes, and the parsers that
+//! turn names into the library's values (the lists in `--help` come from the library, so
+//! they cannot fall behind it).
+
+use meshlight::resolve::DebugView;
+use meshlight::scene::compress::PositionBits;
+use meshlight::scene::load::DEFAULT_TRIANGLE_BUDGET;
+use meshlight::scene::mesh::MAX_TRIANGLES;
+use meshlight::scene::{DEFAULT_SEGMENTS, Grouping};
+use meshlight_virtual_geometry::{SceneOptions, scenes};
+use std::path::PathBuf;
+
+/// The scene `render` and `view` draw.
+#[derive(clap::Args)]
+pub struct SceneArgs {
+    /// Mesh file (.obj, .gltf, .glb, .stl, or a baked .mlasset), or `procedural`.
+    #[arg(long, default_value = "procedural")]
+    pub mesh: PathBuf,
+    /// Tube segments of the procedural mesh (16 × segments² triangles; 256 ≈ 1M).
+    #[arg(long, default_value_t = DEFAULT_SEGMENTS)]
+    pub segments: u32,
+    /// Copies of the mesh on the ground (1: one copy, framed by the camera).
+    #[arg(long, default_value_t = scenes::DEFAULT_INSTANCES)]
+    pub instances: u32,
+    /// Coloured point lights over the field, clustered on the GPU and shaded per pixel
+    /// (0: none; a single instance has none). `--view light-count` shows them per froxel.
+    /// Default: 256, or 0 with a --pipeline file that clusters no lights (has no
+    /// `z_slice` pass).
+    #[arg(long)]
+    pub lights: Option<u32>,
+    /// A pipeline file to render with instead of the graph built in code, e.g.
+    /// pipelines/virtual_geometry.toml or your own composition of the same resources.
+    /// The file's own settings stand unless a flag is given (--view overrides its
+    /// resolve's `view`, --clusters and --slots its list sizes). The shipped file
+    /// clusters the lights as the frame built in code does and renders the same image.
+    /// `view` watches it: saving it rebuilds the frame, and an error in it is shown
+    /// while the last good graph keeps rendering.
+    #[arg(long)]
+    pub pipeline: Option<PathBuf>,
+    /// What the image shows (default: shaded, or with --pipeline the view the file's
+    /// resolve names; `view` changes it live in the overlay). `occlusion`: green where
+    /// the first culling pass drew the cluster, blue where the second did, redder the
+    /// more of the instance occlusion culled (a still renders one frame before, so the
+    /// frame has a history to cull against). `light-count` needs lights.
+    #[arg(long, value_parser = view_parser())]
+    pub view: Option<DebugView>,
+    /// Image width in pixels (with `view`, the window's first width).
+    #[arg(long, default_value_t = 1280)]
+    pub width: u32,
+    /// Image height in pixels (with `view`, the window's first height).
+    #[arg(long, default_value_t = 720)]
+    pub height: u32,
+}
+
+impl SceneArgs {
+    /// The library's options for this scene.
+    pub fn options(&self) -> SceneOptions {
+        SceneOptions {
+            mesh: self.mesh.clone(),
+            segments: self.segments,
+            instances: self.instances,
+            lights: self.lights,
+            pipeline: self.pipeline.clone(),
+            view: self.view,
+            width: self.width,
+            height: self.height,
+        }
+    }
+}
+
+/// The views' names, listed by `--help` and in the error for one that does not exist,
+/// taken from the views the resolve pass has.
+fn view_parser() -> impl clap::builder::TypedValueParser<Value = DebugView> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(DebugView::ALL.map(DebugView::name))
+        .try_map(|name| DebugView::parse(&name))
+}
+
+/// Build a meshlet LOD asset from a mesh file.
+#[derive(clap::Args, Debug, Clone)]
+pub struct BakeArgs {
+    /// Mesh to bake: .obj, .gltf, .glb or .stl; `procedural` for the built-in torus knot.
+    /// A directory bakes every mesh file under it.
+    pub input: PathBuf,
+    /// Asset file to write (conventionally *.mlasset), or the directory to mirror a
+    /// directory of meshes under.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// How meshlets are grouped for simplification.
+    #[arg(long, default_value = "partition", value_parser = grouping_parser())]
+    pub grouping: Grouping,
+    /// Bits per axis of the mesh-wide position grid: 4 to 24, or `auto` for the fewest
+    /// whose error is at most 1/8 of the LOD-0 error.
+    #[arg(long, default_value_t = PositionBits::Auto)]
+    pub position_bits: PositionBits,
+    /// Tube segments of the procedural mesh (16 × segments² triangles).
+    #[arg(long, default_value_t = DEFAULT_SEGMENTS,
+          value_parser = clap::value_parser!(u32).range(3..=1024))]
+    pub segments: u32,
+    /// Most triangles a glTF scene's node tree may expand to (instances × their
+    /// meshes' triangles), checked before anything is expanded.
+    #[arg(long, default_value_t = DEFAULT_TRIANGLE_BUDGET,
+          value_parser = clap::value_parser!(u64).range(1..=MAX_TRIANGLES))]
+    pub max_triangles: u64,
+    /// Meshes baked at once, and threads in all (default: every core). The outputs are
+    /// the same bytes whatever the number.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub jobs: Option<u32>,
+}
+
+impl BakeArgs {
+    /// The library's options for one mesh.
+    pub fn options(&self) -> meshlight::scene::bake::BakeOptions {
+        meshlight::scene::bake::BakeOptions {
+            input: self.input.clone(),
+            output: self.output.clone(),
+            grouping: self.grouping,
+            position_bits: self.position_bits,
+            segments: self.segments,
+            max_triangles: self.max_triangles,
+        }
+    }
+}
+
+fn grouping_parser() -> impl clap::builder::TypedValueParser<Value = Grouping> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(Grouping::ALL.map(Grouping::name))
+        .try_map(|name| Grouping::parse(&name).ok_or("unknown grouping"))
+}
+
+/// Run benchmark scenarios.
+#[derive(clap::Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Scenarios to run (default: all). Known: graph-compile, graph-execute, graph-floor
+    /// (1, 16 and 256 dependent one-thread passes through the graph against the same
+    /// dispatches in one raw wgpu compute pass), pool-reuse,
+    /// render (the default scene at 1920x1080), virtual-geometry (15³ meshes at
+    /// 2240x1260, the first --mesh or the bunny), vg-scale (1 to 32,768 copies of that
+    /// mesh at 2240x1260: frame time and work tested), vg-million, rasterisers (the same
+    /// scene: each implementation of sw_raster and hw_raster, and the software/hardware
+    /// split sweep), builder, scan-fan, light-clustering (1,000 to 1,000,000 point
+    /// lights at 1920x1080, both implementations, against the CPU reference).
+    #[arg(long = "scenario", value_delimiter = ',')]
+    pub scenarios: Vec<String>,
+    /// Write the rows as JSON here too.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Fewer repeats and smaller sizes, for a quick look.
+    #[arg(long)]
+    pub quick: bool,
+    /// Mesh files the `builder` scenario measures besides the procedural mesh
+    /// (repeatable), e.g. `--mesh assets/meshes/stanford-bunny.obj`; the first is also
+    /// the mesh of the `virtual-geometry` scenario.
+    #[arg(long = "mesh")]
+    pub meshes: Vec<PathBuf>,
+    /// Write the rows as one page of charts here too (log-log lines for size sweeps,
+    /// stacked bars for per-pass profiles, bars for the rest).
+    #[arg(long)]
+    pub html: Option<PathBuf>,
+    /// Read the rows from these JSON files (written by `--json`) instead of measuring:
+    /// with --html, charts of an earlier run, e.g. the GPU runs under docs/.
+    #[arg(long = "from-json")]
+    pub from_json: Vec<PathBuf>,
+}
+
+impl BenchArgs {
+    /// The bench's options.
+    pub fn options(self) -> meshlight_bench::BenchOptions {
+        meshlight_bench::BenchOptions {
+            scenarios: self.scenarios,
+            json: self.json,
+            quick: self.quick,
+            meshes: self.meshes,
+            html: self.html,
+            from_json: self.from_json,
+        }
+    }
+}

@@ -1,0 +1,175 @@
+//! `meshlight info`: the adapter, what of it meshlight uses, and what `auto` picks there.
+//!
+//! The choices are not predicted here: the shipped virtual-geometry pipeline is compiled
+//! for the adapter, and its plan says what compile picked and why, exactly as a render
+//! on that adapter would.
+
+use meshlight::graph::{CompileOptions, GpuAdapter};
+use meshlight_virtual_geometry::split::AdapterClass;
+use std::fmt::Write;
+
+/// Features that decide which implementations run, or how fast.
+const FEATURES: [(wgpu::Features, &str); 11] = [
+    (
+        wgpu::Features::SHADER_INT64,
+        "64-bit integers in shaders (every rasteriser)",
+    ),
+    (
+        wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
+        "64-bit buffer atomics (sw_raster `buffer`, hw_raster)",
+    ),
+    (
+        wgpu::Features::TEXTURE_ATOMIC,
+        "texture atomics (sw_raster `texture`)",
+    ),
+    (
+        wgpu::Features::TEXTURE_INT64_ATOMIC,
+        "64-bit texture atomics (sw_raster `texture`)",
+    ),
+    (
+        wgpu::Features::CLEAR_TEXTURE,
+        "texture clears (sw_raster `texture`)",
+    ),
+    (
+        wgpu::Features::EXPERIMENTAL_MESH_SHADER,
+        "mesh shaders (hw_raster `mesh_shader`)",
+    ),
+    (wgpu::Features::SUBGROUP, "subgroup operations (scan_fan)"),
+    (
+        wgpu::Features::TIMESTAMP_QUERY,
+        "GPU timestamps (timings, bench)",
+    ),
+    (
+        wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+        "timestamps between passes (per-pass timings)",
+    ),
+    (
+        wgpu::Features::INDIRECT_FIRST_INSTANCE,
+        "indirect draws with a first instance (count_raster `raster`)",
+    ),
+    (
+        wgpu::Features::MULTI_DRAW_INDIRECT_COUNT,
+        "indirect draw counts",
+    ),
+];
+
+/// The report `meshlight info` prints.
+pub fn report() -> Result<String, Box<dyn std::error::Error>> {
+    let adapter = GpuAdapter::select()?;
+    let info = adapter.info();
+    let features = adapter.features();
+    let limits = adapter.adapter.limits();
+    let mut out = String::new();
+    writeln!(
+        out,
+        "adapter: {} ({:?}, {:?}; driver {} {})",
+        info.name, info.backend, info.device_type, info.driver, info.driver_info
+    )?;
+    let class = AdapterClass::of(&info);
+    let (threshold, why) = class.sw_threshold_px();
+    writeln!(out, "class: {}", class.name())?;
+    writeln!(
+        out,
+        "software/hardware split: clusters under {threshold} px go to sw_raster ({why})"
+    )?;
+    let (hardware, why) = class.hardware_raster();
+    if hardware {
+        writeln!(out, "hw_raster: in the frame ({why})")?;
+    } else {
+        writeln!(
+            out,
+            "hw_raster: not in the frame; sw_raster clips clusters crossing the near plane ({why})"
+        )?;
+    }
+    writeln!(out, "\nfeatures:")?;
+    for (feature, what) in FEATURES {
+        let mark = if features.contains(feature) {
+            "yes"
+        } else {
+            "no "
+        };
+        let name = feature.iter_names().next().map(|(n, _)| n).unwrap_or("?");
+        writeln!(out, "  {mark}  {name:<34} {what}")?;
+    }
+    writeln!(out, "\nlimits:")?;
+    for (name, value) in [
+        (
+            "max_compute_workgroups_per_dimension",
+            limits.max_compute_workgroups_per_dimension as u64,
+        ),
+        (
+            "max_storage_buffer_binding_size",
+            limits.max_storage_buffer_binding_size,
+        ),
+        ("max_buffer_size", limits.max_buffer_size),
+        (
+            "max_texture_dimension_2d",
+            limits.max_texture_dimension_2d as u64,
+        ),
+        (
+            "max_compute_workgroup_storage_size",
+            limits.max_compute_workgroup_storage_size as u64,
+        ),
+        (
+            "max_mesh_output_vertices",
+            limits.max_mesh_output_vertices as u64,
+        ),
+        (
+            "max_mesh_output_primitives",
+            limits.max_mesh_output_primitives as u64,
+        ),
+        (
+            "max_mesh_workgroups_per_dimension",
+            limits.max_mesh_workgroups_per_dimension as u64,
+        ),
+        (
+            "max_mesh_workgroup_total_count",
+            limits.max_mesh_workgroup_total_count as u64,
+        ),
+    ] {
+        writeln!(out, "  {name:<38} {value}")?;
+    }
+    writeln!(
+        out,
+        "\nrender bounds (what the renderer holds with wgpu's default limits; checked before a render asks for the adapter):"
+    )?;
+    let bounds = crate::render_bounds::bounds();
+    for (flag, range) in &bounds {
+        writeln!(out, "  --{flag:<12} {}..={}", range.start(), range.end())?;
+    }
+    let mut registry = meshlight::registry();
+    // `auto` tries the hardware rasterisers in this class's order, as the renderer does.
+    let feeds = class.hardware_feeds().map(|f| f.implementation());
+    registry.prefer(meshlight::hw_raster::STAGE, &feeds);
+    writeln!(
+        out,
+        "\nstages and their implementations (the registry pipeline files and --sw-raster/--hw-raster name them from):"
+    )?;
+    for stage in registry.stage_names() {
+        writeln!(
+            out,
+            "  {stage:<16} {}",
+            registry.implementations(&stage).join(", ")
+        )?;
+    }
+    writeln!(
+        out,
+        "\nauto picks (pipelines/virtual_geometry.toml compiled for this adapter):"
+    )?;
+    let graph = meshlight::graph::file::parse_pipeline(
+        include_str!("../../../pipelines/virtual_geometry.toml"),
+        "pipelines/virtual_geometry.toml",
+        &registry,
+    )?;
+    let plan = graph.compile(&CompileOptions::for_adapter(&adapter))?.plan;
+    for p in &plan.passes {
+        if let Some(choice) = &p.choice {
+            writeln!(
+                out,
+                "  {:<12} {:<14} {}",
+                p.stage, choice.chosen, choice.reason
+            )?;
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,218 @@
+//! The `meshlight` command line.
+
+mod args;
+mod render;
+mod view;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use meshlight::graph::{CompileOptions, GraphError, dump};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "meshlight",
+    version,
+    about = "GPU render graphs on wgpu: virtual geometry and light clustering as swappable passes"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render the default scene (or a mesh) into a PNG.
+    Render(render::RenderArgs),
+    /// Compile a pipeline file without a GPU and dump the graph.
+    Graph(GraphArgs),
+    /// Run benchmark scenarios and print a table (and JSON).
+    Bench(args::BenchArgs),
+    /// Build a meshlet LOD asset from a mesh file, or every mesh file under a directory
+    /// (mirrored under the output directory, up-to-date outputs skipped).
+    Bake(args::BakeArgs),
+    /// Print an asset's header and DAG statistics and verify its invariants.
+    Inspect {
+        /// Asset file written by `meshlight bake`.
+        file: PathBuf,
+    },
+    /// Print the adapter, the features and limits meshlight uses, and which
+    /// implementation `auto` picks for each stage on it.
+    Info,
+    /// Open a window on the scene: fly through it, switch views and implementations in
+    /// the overlay, and edit the pipeline file while it runs (saved changes rebuild the
+    /// graph). Keys: WASD/QE move, right-drag looks, scroll sets the speed, O orbits, R
+    /// resets the camera, P or F12 writes a screenshot, H the HTML report, Tab hides the
+    /// overlay.
+    View(view::ViewArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Format {
+    Dot,
+    Json,
+    Mermaid,
+    Html,
+    Svg,
+}
+
+#[derive(clap::Args)]
+struct GraphArgs {
+    /// Pipeline file (TOML), e.g. pipelines/prefix_sum.toml.
+    #[arg(long)]
+    pipeline: PathBuf,
+    #[arg(long, value_enum, default_value_t = Format::Dot)]
+    format: Format,
+    /// Write to this file instead of standard output.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Plan for this machine's adapter (its features decide `auto`) instead of one with
+    /// every feature.
+    #[arg(long)]
+    for_adapter: bool,
+}
+
+/// Exit code when no Vulkan adapter exists, so scripts can install lavapipe and retry.
+const EXIT_NO_ADAPTER: u8 = 3;
+
+fn main() -> ExitCode {
+    quiet_on_closed_stdout();
+    usable_runtime_dir();
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = Cli::parse();
+    let result: Result<(), Box<dyn std::error::Error>> = match cli.command {
+        Command::Render(a) => render::render(a),
+        Command::Graph(a) => graph(a),
+        Command::Bench(a) => meshlight_bench::run(&a.options()),
+        Command::Bake(a) => bake(a),
+        Command::Inspect { file } => meshlight::scene::bake::run_inspect(&file).map_err(Into::into),
+        Command::Info => meshlight_cli::info::report()
+            .and_then(|text| meshlight_output::write_stdout(&text).map_err(Into::into)),
+        Command::View(a) => view::view(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            if no_adapter(e.as_ref()) {
+                return ExitCode::from(EXIT_NO_ADAPTER);
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Whether `e` is the adapter missing, however the command wrapped it.
+fn no_adapter(e: &(dyn std::error::Error + 'static)) -> bool {
+    use meshlight_viewer::ViewerError;
+    use meshlight_virtual_geometry::SetupError;
+    let graph = e
+        .downcast_ref::<GraphError>()
+        .or_else(|| match e.downcast_ref::<SetupError>()? {
+            SetupError::Graph(g) => Some(g),
+            _ => None,
+        })
+        .or_else(|| match e.downcast_ref::<ViewerError>()? {
+            ViewerError::Graph(g) | ViewerError::Setup(SetupError::Graph(g)) => Some(g),
+            _ => None,
+        });
+    matches!(graph, Some(GraphError::NoAdapter { .. }))
+}
+
+/// Rust ignores SIGPIPE, so a write to a closed pipe (`meshlight inspect … | head -1`)
+/// returns an error that `print!` turns into a panic. The default action ends the
+/// process quietly with the status a shell expects of a broken pipe, as other tools do.
+fn quiet_on_closed_stdout() {
+    #[cfg(unix)]
+    // SAFETY: called first in `main`, before any thread exists; SIG_DFL is a valid action.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+/// The Vulkan loader's window-system probing (libwayland) prints `error:
+/// XDG_RUNTIME_DIR is invalid or not set in the environment.` to standard error once per
+/// probe when the variable is unset or not an absolute path, as on a fresh container or a
+/// remote shell. meshlight opens no window, so the message only alarms: where the
+/// variable is unset or does not name a directory, it is pointed at a private directory
+/// (mode 0700, as the XDG spec asks) under the temporary directory before any wgpu call.
+/// A valid value is left as it is.
+fn usable_runtime_dir() {
+    const VAR: &str = "XDG_RUNTIME_DIR";
+    let valid = std::env::var_os(VAR)
+        .map(PathBuf::from)
+        .is_some_and(|dir| dir.is_absolute() && dir.is_dir());
+    if valid {
+        return;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::{DirBuilderExt, MetadataExt};
+        // SAFETY: getuid has no preconditions and cannot fail.
+        let uid = unsafe { libc::getuid() };
+        let dir = std::env::temp_dir().join(format!("meshlight-runtime-{uid}"));
+        let made = std::fs::DirBuilder::new()
+            .mode(0o700)
+            .create(&dir)
+            .or_else(|e| match e.kind() {
+                std::io::ErrorKind::AlreadyExists => Ok(()),
+                _ => Err(e),
+            });
+        // Only a directory this user owns is used; otherwise the loader's message stays,
+        // which costs nothing but noise.
+        let ours = made.is_ok()
+            && std::fs::symlink_metadata(&dir).is_ok_and(|m| m.is_dir() && m.uid() == uid);
+        if ours {
+            // SAFETY: called at the start of `main`, before any thread exists.
+            unsafe { std::env::set_var(VAR, &dir) };
+        }
+    }
+}
+
+/// A directory is baked as a library; a file (or `procedural`) as before. Both run in a
+/// pool of `--jobs` threads.
+fn bake(a: args::BakeArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let threads = match a.jobs {
+        Some(n) => n as usize,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    if a.input.is_dir() {
+        let options = meshlight::scene::BuildOptions {
+            grouping: a.grouping,
+            position_bits: a.position_bits,
+            ..Default::default()
+        };
+        pool.install(|| meshlight_cli::bake_library::run(&a.input, &a.output, &options, threads))
+            .map_err(Into::into)
+    } else {
+        pool.install(|| meshlight::scene::bake::run_bake(&a.options()))
+            .map_err(Into::into)
+    }
+}
+
+fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let builder = meshlight::graph::file::load_pipeline(&a.pipeline, &meshlight::registry())?;
+    // Planning without a device assumes every feature; running checks the real adapter.
+    let options = if a.for_adapter {
+        CompileOptions::for_adapter(&meshlight::graph::GpuAdapter::select()?)
+    } else {
+        CompileOptions::new(wgpu::Features::all())
+    };
+    let plan = builder.compile(&options)?.plan;
+    let title = a.pipeline.display().to_string();
+    let text = match a.format {
+        Format::Dot => dump::to_dot(&plan),
+        Format::Json => dump::to_json(&plan, None),
+        Format::Mermaid => dump::to_mermaid(&plan),
+        Format::Html => dump::to_html(&plan, &title, None),
+        Format::Svg => dump::to_svg(&plan),
+    };
+    match a.output {
+        Some(path) => meshlight_output::write_file(&path, text.as_bytes())?,
+        None => meshlight_output::write_stdout(&text)?,
+    }
+    Ok(())
+}

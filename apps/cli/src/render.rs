@@ -1,0 +1,246 @@
+//! `meshlight render`: one still of the scene through the frame graph, its counters and
+//! timings on standard output, and optionally the graph's HTML report.
+
+use crate::args::SceneArgs;
+use meshlight::graph::dump;
+use meshlight_cli::render_bounds::RenderNumbers;
+use meshlight_output::{create_parent, write_file, write_png, write_stdout};
+use meshlight_virtual_geometry::{Renderer, SceneOptions, SceneSetup, setup};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Render the default scene (or a mesh) into a PNG.
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Initial size of the candidate-cluster list (grown when a frame overflows it);
+    /// given, it wins over a pipeline file's `clusters`.
+    #[arg(long)]
+    pub clusters: Option<u64>,
+    /// Initial number of raster slots (grown when a frame overflows them); given, it
+    /// wins over a pipeline file's `slots`.
+    #[arg(long)]
+    pub slots: Option<u64>,
+    /// The software rasteriser: auto (64-bit texture atomics where the adapter has
+    /// them), texture or buffer. Ignored with --pipeline (the file names its own).
+    #[arg(long, default_value = "auto")]
+    pub sw_raster: String,
+    /// The hardware rasteriser: auto (in the adapter class's order: the indirect draw
+    /// first where few units run graphics, else mesh shaders where the adapter has
+    /// them), mesh_shader or indirect_draw. Ignored with --pipeline.
+    #[arg(long, default_value = "auto")]
+    pub hw_raster: String,
+    /// Clusters whose screen box is smaller than this many pixels are rasterised in
+    /// software (default: the adapter class's, see `meshlight info`).
+    #[arg(long)]
+    pub sw_threshold: Option<f32>,
+    /// Output PNG (a path ending in .png, or one without an extension).
+    #[arg(short, long, default_value = "out/default.png")]
+    pub output: PathBuf,
+    /// Also write the graph with this frame's timings and counters as a self-contained
+    /// HTML page. Without it, a page beside the output named like it (out/default.html
+    /// for out/default.png, left by an earlier render) is rewritten for this render,
+    /// so it never describes an image that is gone.
+    #[arg(long)]
+    pub html: Option<PathBuf>,
+    /// GPU timing: `frame` (one timestamp pair per batch, the default), `passes` (per
+    /// pass, for profiling: each pair costs GPU time) or `off`. Default: MESHLIGHT_TIMING.
+    #[arg(long, value_parser = parse_timing)]
+    pub timing: Option<meshlight::graph::TimingMode>,
+    /// Checked mode: a validation error names the pass that caused it (default: on in
+    /// debug builds, or MESHLIGHT_CHECKED).
+    #[arg(long)]
+    pub checked: bool,
+}
+
+pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let scene = a.scene.options();
+    // Everything the command line bounds is checked before a mesh is baked or an adapter
+    // requested, and the outputs' directories are made, so a mistake costs no render.
+    check_bounds(&a, &scene)?;
+    meshlight_output::check_png_path(&a.output)?;
+    scene.check_pipeline()?;
+    // Without --html, a page beside the output named like it is this image's report
+    // from an earlier render: rewritten, so it never describes an image that is gone.
+    let html = a.html.clone().or_else(|| {
+        let beside = a.output.with_extension("html");
+        (beside != a.output && beside.is_file()).then_some(beside)
+    });
+    create_parent(&a.output)?;
+    if let Some(html) = &html {
+        create_parent(html)?;
+    }
+    let SceneSetup {
+        data,
+        camera,
+        mut settings,
+        lights,
+        source,
+    } = setup(&scene)?;
+    settings.sw_raster = a.sw_raster.clone();
+    settings.hw_raster = a.hw_raster.clone();
+    settings.sw_threshold_px = a.sw_threshold;
+    settings.clusters = a.clusters.unwrap_or(settings.clusters);
+    settings.slots = a.slots.unwrap_or(settings.slots);
+    // Sizes given win over a pipeline file's; none given leaves the file's.
+    settings.keep_file_lists = meshlight_virtual_geometry::frame_graph::KeepFileLists {
+        clusters: a.clusters.is_none(),
+        slots: a.slots.is_none(),
+    };
+    let skipped = data.skipped_instances();
+    let instances = data.instances.len();
+    let source_triangles = data.source_triangles();
+    let light_count = lights.len();
+    let mut renderer = Renderer::new(data, settings, &source)?;
+    renderer.lights = lights;
+    if let Some(mode) = a.timing {
+        renderer.executor.timing = mode;
+    }
+    renderer.executor.checked |= a.checked;
+    let still = renderer.render_still(&camera)?;
+    write_png(&a.output, still.width, still.height, &still.rgba)?;
+    // Written at once, so that a failing standard output is one error naming it.
+    let mut report = String::new();
+    let _ = writeln!(
+        report,
+        "rendered {instances} instances of {} ({source_triangles} source triangles) at {}x{} on {} → {}",
+        scene.mesh.display(),
+        still.width,
+        still.height,
+        renderer.adapter,
+        a.output.display()
+    );
+    for p in &renderer.compiled.plan.passes {
+        if let Some(reason) = p.choice_reason() {
+            let _ = writeln!(
+                report,
+                "  {:<22} {}: {reason}",
+                p.name,
+                p.implementation_label()
+            );
+        }
+    }
+    if light_count > 0 {
+        let _ = writeln!(report, "  {light_count} point lights clustered on the GPU");
+    }
+    if skipped > 0 {
+        let _ = writeln!(
+            report,
+            "  {skipped} instances skipped: their transforms were singular or not finite"
+        );
+    }
+    if still.frames > 1 {
+        let _ = writeln!(
+            report,
+            "  {} frames: the lists grew ({})",
+            still.frames,
+            renderer
+                .growths
+                .iter()
+                .map(|g| (g.param, g.from, g.to))
+                .chain(
+                    renderer
+                        .clustering
+                        .growths
+                        .iter()
+                        .map(|g| (g.param, g.from, g.to))
+                )
+                .map(|(param, from, to)| format!("{param} {from} → {to}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    for (label, value) in still.counts.rows() {
+        let _ = writeln!(report, "  {label:<30} {value}");
+    }
+    let _ = writeln!(
+        report,
+        "  {:<30} {:.2}",
+        meshlight_virtual_geometry::counts::PER_PIXEL,
+        still.counts.triangles_per_pixel(scene.width, scene.height)
+    );
+    for p in &still.stats.passes {
+        let gpu = p
+            .gpu_us
+            .map(|g| format!("{g:.0} µs GPU"))
+            .unwrap_or_else(|| "no timestamps".into());
+        let _ = writeln!(report, "  {:<22} {gpu}", p.name);
+    }
+    for b in &still.stats.batches {
+        if let Some(us) = b.gpu_us {
+            let _ = writeln!(
+                report,
+                "  {:<22} {us:.0} µs GPU ({})",
+                b.label,
+                b.passes.join(", ")
+            );
+        }
+    }
+    if let Some(total) = still.stats.gpu_frame_us {
+        let _ = writeln!(
+            report,
+            "  {:<22} {total:.0} µs GPU (timing mode {})",
+            "frame",
+            still.stats.timing.name()
+        );
+    }
+    if let Some(html) = html {
+        let image = image_link(&html, &a.output);
+        let page = dump::to_html_report(
+            &renderer.compiled.plan,
+            &format!("meshlight: {}", scene.mesh.display()),
+            &dump::Report {
+                last_frame: Some(&still.stats),
+                image: Some(&image),
+            },
+        );
+        let page = match page.rfind("</body>") {
+            Some(at) => format!(
+                "{}{}{}",
+                &page[..at],
+                still.counts.html_table(Some((scene.width, scene.height))),
+                &page[at..]
+            ),
+            None => page + &still.counts.html_table(Some((scene.width, scene.height))),
+        };
+        write_file(&html, page.as_bytes())?;
+        let _ = writeln!(report, "graph: {}", html.display());
+    }
+    write_stdout(&report)?;
+    Ok(())
+}
+
+/// The numbers the command line bounds, checked against the limits of the formats and
+/// buffers they size.
+fn check_bounds(a: &RenderArgs, scene: &SceneOptions) -> Result<(), Box<dyn std::error::Error>> {
+    RenderNumbers {
+        segments: scene.segments,
+        instances: scene.instances,
+        lights: scene.lights_asked(),
+        width: scene.width,
+        height: scene.height,
+        clusters: a.clusters,
+        slots: a.slots,
+    }
+    .check()?;
+    Ok(())
+}
+
+fn parse_timing(name: &str) -> Result<meshlight::graph::TimingMode, String> {
+    meshlight::graph::TimingMode::parse(name)
+        .ok_or_else(|| format!("unknown timing mode `{name}`; use off, frame or passes"))
+}
+
+/// How the report page at `page` links the image at `image`: by file name beside it,
+/// else by absolute path.
+fn image_link(page: &Path, image: &Path) -> String {
+    let folder = |p: &Path| p.parent().map(Path::to_path_buf);
+    match image.file_name() {
+        Some(name) if folder(page) == folder(image) => name.to_string_lossy().into_owned(),
+        _ => std::path::absolute(image)
+            .unwrap_or_else(|_| image.to_path_buf())
+            .display()
+            .to_string(),
+    }
+}

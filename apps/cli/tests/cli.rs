@@ -1,0 +1,712 @@
+//! The `meshlight` binary: graph dumps of a shipped pipeline file, and typed errors for a
+//! miswired one.
+
+use std::process::Command;
+
+/// One spot at 16×16: the smallest render that still writes a PNG.
+const SMALL_RENDER: [&str; 9] = [
+    "render",
+    "--mesh",
+    "assets/meshes/spot.obj",
+    "--instances",
+    "1",
+    "--width",
+    "16",
+    "--height",
+    "16",
+];
+
+/// [`meshlight`], failing the test with its standard error unless it succeeds.
+fn meshlight_ok(args: &[&str]) -> std::process::Output {
+    let out = meshlight(args);
+    assert!(
+        out.status.success(),
+        "meshlight {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn meshlight(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_meshlight"))
+        .args(args)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+        .output()
+        .expect("runs")
+}
+
+#[test]
+fn graph_dumps_the_shipped_pipelines_in_every_format() {
+    for (file, pass) in [
+        ("pipelines/prefix_sum.toml", "scan"),
+        ("pipelines/virtual_geometry.toml", "sw_raster"),
+        ("pipelines/brute_force.toml", "brute_force"),
+    ] {
+        dumps_in_every_format(file, pass);
+    }
+}
+
+fn dumps_in_every_format(file: &str, pass: &str) {
+    for (format, marker) in [
+        ("dot", "digraph meshlight"),
+        ("json", "\"order\""),
+        ("mermaid", "flowchart LR"),
+        ("html", "<!DOCTYPE html>"),
+    ] {
+        let out = meshlight(&["graph", "--pipeline", file, "--format", format]);
+        assert!(
+            out.status.success(),
+            "{format}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(
+            text.contains(marker) && text.contains(pass),
+            "{file} {format}:\n{text}"
+        );
+    }
+}
+
+#[test]
+fn a_miswired_pipeline_file_is_a_clear_error() {
+    let dir = std::env::temp_dir().join(format!("meshlight-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../.."),
+        "/pipelines/prefix_sum.toml"
+    ))
+    .unwrap();
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        text.replace(
+            "bind = { input = \"counts\"",
+            "bind = { counts = \"counts\"",
+        ),
+    )
+    .unwrap();
+    let out = meshlight(&["graph", "--pipeline", bad.to_str().unwrap()]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("has no slot `counts`") && err.contains("input"),
+        "{err}"
+    );
+}
+
+#[test]
+fn every_command_has_help() {
+    for cmd in ["render", "graph", "bench", "bake", "inspect"] {
+        let out = meshlight(&[cmd, "--help"]);
+        assert!(out.status.success() && !out.stdout.is_empty(), "{cmd}");
+    }
+}
+
+#[test]
+fn render_draws_a_mesh_file_through_the_shipped_pipeline_and_reports_its_counters() {
+    let dir = std::env::temp_dir().join(format!("meshlight-render-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (png, html) = (dir.join("spot.png"), dir.join("spot.html"));
+    let out = meshlight(&[
+        "render",
+        "--mesh",
+        "assets/meshes/spot.obj",
+        "--instances",
+        "4",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--view",
+        "lod",
+        "--pipeline",
+        "pipelines/virtual_geometry.toml",
+        "-o",
+        png.to_str().unwrap(),
+        "--html",
+        html.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("clusters visible (LOD cut)"), "{stdout}");
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("sw_raster") && page.contains("triangles rasterised"));
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let info = decoder.read_info().unwrap();
+    assert_eq!((info.info().width, info.info().height), (96, 64));
+    // A misspelt view is refused with the names that exist.
+    let out = meshlight(&["render", "--view", "normals"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("clusters") && err.contains("shaded"), "{err}");
+}
+
+/// `meshlight` with extra environment variables.
+fn meshlight_env(args: &[&str], env: &[(&str, &std::path::Path)]) -> std::process::Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_meshlight"));
+    cmd.args(args)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("runs")
+}
+
+fn scratch(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("meshlight-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Each bounded number is refused with the number and the limit, before a mesh is baked
+/// (the cache stays empty) or an adapter is requested (one that cannot exist is named,
+/// which would fail with the no-adapter exit code 3 if it were looked for).
+#[test]
+fn render_refuses_numbers_it_cannot_hold_before_baking_or_asking_for_an_adapter() {
+    let dir = scratch("bounds");
+    let cache = dir.join("cache");
+    let max_lights = meshlight_cli::render_bounds::max_lights().to_string();
+    let max_instances = meshlight_cli::render_bounds::max_instances().to_string();
+    let max_clusters = meshlight_cli::render_bounds::max_clusters().to_string();
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["--lights", "4294967295"],
+            &format!("--lights 4294967295 is outside 0..={max_lights}"),
+        ),
+        (
+            &["--segments", "100000"],
+            "--segments 100000 is outside 3..=1024",
+        ),
+        (&["--segments", "0"], "--segments 0 is outside 3..=1024"),
+        (&["--segments", "1"], "--segments 1 is outside 3..=1024"),
+        (
+            &["--instances", "4294967295"],
+            &format!("--instances 4294967295 is outside 0..={max_instances}"),
+        ),
+        (&["--width", "0"], "--width 0 is outside 1..=8192"),
+        (
+            &["--height", "100000"],
+            "--height 100000 is outside 1..=8192",
+        ),
+        (
+            &["--clusters", "0"],
+            &format!("--clusters 0 is outside 1..={max_clusters}"),
+        ),
+        (&["--slots", "0"], "--slots 0 is outside 1..="),
+    ];
+    for (args, expected) in cases {
+        let mut all = vec!["render"];
+        all.extend_from_slice(args);
+        let out = meshlight_env(
+            &all,
+            &[
+                ("MESHLIGHT_CACHE_DIR", &cache),
+                (
+                    "MESHLIGHT_ADAPTER",
+                    std::path::Path::new("no adapter is called this"),
+                ),
+            ],
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!cache.exists(), "{args:?} baked before refusing");
+    }
+    // At a bound, the check passes and the render goes on to ask for the adapter.
+    let out = meshlight_env(
+        &[
+            "render",
+            "--segments",
+            "3",
+            "--instances",
+            "0",
+            "--lights",
+            &max_lights,
+            "--width",
+            "8",
+            "--height",
+            "8",
+        ],
+        &[
+            ("MESHLIGHT_CACHE_DIR", &cache),
+            (
+                "MESHLIGHT_ADAPTER",
+                std::path::Path::new("no adapter is called this"),
+            ),
+        ],
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A pipeline file that is a device is refused by `render` and `graph` without reading
+/// it; an output that cannot be written names its path, before rendering where it can.
+#[test]
+fn inputs_and_outputs_that_cannot_be_used_are_named() {
+    for cmd in ["render", "graph"] {
+        let out = meshlight(&[cmd, "--pipeline", "/dev/zero"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{cmd}");
+        assert!(
+            err.contains("/dev/zero") && err.contains("not a regular file"),
+            "{cmd}: {err}"
+        );
+    }
+    let out = meshlight(&[
+        "graph",
+        "--pipeline",
+        "pipelines/prefix_sum.toml",
+        "-o",
+        "/dev/full",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("cannot write /dev/full"), "{err}");
+    // Standard output on a full device: an error naming it, not a panic.
+    let full = std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_meshlight"))
+        .args(["graph", "--pipeline", "pipelines/prefix_sum.toml"])
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+        .stdout(full)
+        .output()
+        .expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot write standard output") && !err.contains("panicked"),
+        "{err}"
+    );
+    // The directory of the output cannot be made: refused before any rendering.
+    let out = meshlight_env(
+        &["render", "-o", "/dev/null/out/image.png"],
+        &[(
+            "MESHLIGHT_ADAPTER",
+            std::path::Path::new("no adapter is called this"),
+        )],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot create the directory /dev/null/out"),
+        "{err}"
+    );
+}
+
+/// A PNG small enough to sit in the write buffer until the end used to be lost there
+/// with exit 0 and "rendered" printed (GPU: lavapipe).
+#[test]
+fn rendering_to_a_full_device_fails_naming_it() {
+    let mut args = SMALL_RENDER.to_vec();
+    args.extend(["-o", "/dev/full"]);
+    let out = meshlight(&args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}{err}");
+    assert!(err.contains("cannot write /dev/full"), "{err}");
+    assert!(!stdout.contains("rendered"), "{stdout}");
+}
+
+/// The exit status of a process `meshlight args` whose standard output is a pipe
+/// nobody reads (its read end closed before it starts), and its standard error.
+fn with_closed_stdout(args: &[&str]) -> (std::process::ExitStatus, String) {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_meshlight"))
+        .args(args)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .expect("runs");
+    (
+        out.status,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// `meshlight inspect … | head -1` and `meshlight graph … | head -1`: the writer ends
+/// as a broken pipe ends any tool (by SIGPIPE), with nothing on standard error.
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_ends_quietly_as_a_broken_pipe() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = scratch("pipe");
+    let asset = dir.join("knot.mlasset");
+    meshlight_ok(&[
+        "bake",
+        "procedural",
+        "--segments",
+        "4",
+        "-o",
+        asset.to_str().unwrap(),
+    ]);
+    for args in [
+        vec!["inspect", asset.to_str().unwrap()],
+        vec!["graph", "--pipeline", "pipelines/virtual_geometry.toml"],
+    ] {
+        let (status, err) = with_closed_stdout(&args);
+        assert_eq!(
+            status.signal(),
+            Some(libc::SIGPIPE),
+            "{args:?}: {status:?} {err}"
+        );
+        assert!(err.is_empty(), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An asset whose structure is sound but whose DAG is not (a group's error below its
+/// child's): `inspect` rejects it, and `render` refuses it with the same message before
+/// anything reaches the GPU.
+#[test]
+fn render_refuses_an_asset_that_inspect_rejects_with_the_same_message() {
+    use meshlight::scene::{BuildOptions, build_asset, procedural_mesh};
+    let dir = scratch("damaged-dag");
+    let built = build_asset(&procedural_mesh(8), &BuildOptions::default(), &mut |_| {}).unwrap();
+    let bad = dir.join("bad.mlasset");
+    meshlight::scene::damaged::error_below_child(&built)
+        .unwrap()
+        .save(&bad)
+        .unwrap();
+    let bad = bad.to_str().unwrap();
+    let inspect = meshlight(&["inspect", bad]);
+    assert!(!inspect.status.success());
+    let render = meshlight(&[
+        "render",
+        "--mesh",
+        bad,
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "-o",
+        &dir.join("bad.png").to_string_lossy(),
+    ]);
+    assert!(!render.status.success());
+    let said = |o: &std::process::Output| {
+        let text = String::from_utf8_lossy(&o.stderr).to_string();
+        text.lines()
+            .find(|l| l.contains("below child"))
+            .map(|l| l[l.find(bad).unwrap_or(0)..].to_string())
+            .unwrap_or_else(|| panic!("no DAG error in: {text}"))
+    };
+    assert_eq!(said(&render), said(&inspect));
+    assert!(!dir.join("bad.png").exists());
+}
+
+/// The Vulkan loader's window-system probing complains on standard error when
+/// XDG_RUNTIME_DIR is unset or not an absolute path; the binary points it at a private
+/// directory first, so a run says nothing of it (GPU: lavapipe).
+#[test]
+fn an_unset_or_invalid_runtime_dir_is_not_complained_about() {
+    for value in [None, Some(""), Some("relative/dir"), Some("/no/such/dir")] {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_meshlight"));
+        cmd.arg("info")
+            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+        match value {
+            None => cmd.env_remove("XDG_RUNTIME_DIR"),
+            Some(v) => cmd.env("XDG_RUNTIME_DIR", v),
+        };
+        let out = cmd.output().expect("runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{value:?}: {err}");
+        assert!(!err.contains("XDG_RUNTIME_DIR"), "{value:?}: {err}");
+    }
+}
+
+/// `render --help` names every view the resolve pass has, and says what the size is.
+#[test]
+fn render_help_lists_the_views_and_the_size() {
+    let out = meshlight(&["render", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    for view in meshlight::resolve::DebugView::ALL {
+        assert!(help.contains(view.name()), "{view:?} missing:\n{help}");
+    }
+    assert!(
+        help.contains("Image width in pixels") && help.contains("Image height in pixels"),
+        "{help}"
+    );
+}
+
+/// `inspect` on a mesh file suggests baking it beside itself, never over itself.
+#[test]
+fn inspect_of_a_mesh_suggests_a_bake_that_keeps_the_mesh() {
+    let out = meshlight(&["inspect", "assets/meshes/spot.obj"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("meshlight bake assets/meshes/spot.obj -o assets/meshes/spot.mlasset"),
+        "{err}"
+    );
+    assert!(!err.contains("-o assets/meshes/spot.obj"), "{err}");
+}
+
+/// An image path naming another format is refused, naming the path and the fix, before
+/// an adapter is asked for (one that cannot exist is named: exit 3 if it were).
+#[test]
+fn render_refuses_an_output_that_is_not_png() {
+    let dir = scratch("not-png");
+    for name in ["x.jpg", "x.PNG.webp"] {
+        let path = dir.join(name);
+        let out = meshlight_env(
+            &["render", "-o", path.to_str().unwrap()],
+            &[(
+                "MESHLIGHT_ADAPTER",
+                std::path::Path::new("no adapter is called this"),
+            )],
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {err}");
+        assert!(
+            err.contains(&path.display().to_string())
+                && err.contains("PNG only")
+                && err.contains(&path.with_extension("png").display().to_string()),
+            "{name}: {err}"
+        );
+        assert!(!path.exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Without --html, the page beside the image named like it (an earlier render's report)
+/// is rewritten for this render; where there is none, none is made (GPU: lavapipe).
+#[test]
+fn render_keeps_the_report_beside_the_image_in_step() {
+    let dir = scratch("report");
+    let (png, html) = (dir.join("a.png"), dir.join("a.html"));
+    std::fs::write(&html, "an earlier render's report").unwrap();
+    let mut args = SMALL_RENDER.to_vec();
+    args.push("-o");
+    args.push(png.to_str().unwrap());
+    let out = meshlight(&args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(
+        page.contains("<!DOCTYPE html>") && page.contains("sw_raster"),
+        "{page}"
+    );
+    assert!(
+        stdout.contains(&format!("graph: {}", html.display())),
+        "{stdout}"
+    );
+    let other = dir.join("b.png");
+    let mut args = SMALL_RENDER.to_vec();
+    args.extend(["-o", other.to_str().unwrap()]);
+    let out = meshlight(&args);
+    assert!(out.status.success());
+    assert!(other.exists() && !dir.join("b.html").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The pixels of a PNG.
+fn pixels(path: &std::path::Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    buf
+}
+
+/// `render --pipeline`: a file's own `view` and `slots` stand when --view and --slots
+/// are not given, and the flags win over them when given; the shipped file renders with the default lights flag (none)
+/// and refuses lights asked for (GPU: lavapipe).
+#[test]
+fn render_pipeline_settings_yield_only_to_flags_given() {
+    let dir = scratch("precedence");
+    let shipped = "pipelines/virtual_geometry.toml";
+    let text = std::fs::read_to_string(concat!(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../.."),
+        "/pipelines/virtual_geometry.toml"
+    ))
+    .unwrap();
+    assert!(text.contains("view = \"shaded\""));
+    let lod_file = dir.join("lod.toml");
+    std::fs::write(
+        &lod_file,
+        text.replace("view = \"shaded\"", "view = \"lod\""),
+    )
+    .unwrap();
+    let lod_file = lod_file.to_str().unwrap();
+    // Spot four times at 48 × 32 through `file`, with `extra` flags: the image's pixels
+    // and the run's report.
+    let render = |file: &str, extra: &[&str], name: &str| {
+        let png = dir.join(name);
+        let mut args = vec![
+            "render",
+            "--mesh",
+            "assets/meshes/spot.obj",
+            "--instances",
+            "4",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--pipeline",
+            file,
+            "-o",
+            png.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let out = meshlight(&args);
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(
+            out.status.success(),
+            "{name}: {stdout}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        (pixels(&png), stdout)
+    };
+    let shaded = render(shipped, &[], "shaded.png").0;
+    let lod = render(shipped, &["--view", "lod"], "lod.png").0;
+    assert_ne!(shaded, lod, "the two views should differ");
+    // The file's view stands without --view …
+    assert!(render(lod_file, &[], "file-lod.png").0 == lod);
+    // … and --view wins over it.
+    assert!(render(lod_file, &["--view", "shaded"], "flag-shaded.png").0 == shaded);
+    // The same both ways for the list sizes: a file's `slots` stands without --slots
+    // (two slots: the frame has to grow them) and --slots wins over it.
+    assert!(text.contains("slots = 262144"));
+    let small_file = dir.join("small.toml");
+    std::fs::write(&small_file, text.replace("slots = 262144", "slots = 2")).unwrap();
+    let small_file = small_file.to_str().unwrap();
+    let kept = render(small_file, &["--lights", "0"], "lists.png").1;
+    assert!(kept.contains("the lists grew (slots 2 → "), "{kept}");
+    let flagged = render(
+        small_file,
+        &["--lights", "0", "--slots", "262144"],
+        "lists.png",
+    )
+    .1;
+    assert!(!flagged.contains("the lists grew"), "{flagged}");
+    // Lights asked for with a file that clusters none are refused, naming the file and
+    // the fix.
+    let one_pass = "pipelines/virtual_geometry_one_pass.toml";
+    let out = meshlight(&[
+        "render",
+        "--pipeline",
+        one_pass,
+        "--lights",
+        "8",
+        "--instances",
+        "4",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(one_pass) && err.contains("--lights 0"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The default scene (at a small viewport: the light grid's size is fixed, so its lists
+/// fill the same) starts with lists large enough: one frame, no growth (GPU: lavapipe).
+#[test]
+fn the_default_render_needs_no_list_to_grow() {
+    let dir = scratch("default");
+    let png = dir.join("default.png");
+    let out = meshlight(&[
+        "render",
+        "--width",
+        "160",
+        "--height",
+        "90",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(out.status.success(), "{stdout}{stderr}");
+    assert!(stdout.contains("point lights clustered"), "{stdout}");
+    assert!(!stderr.contains("wanted but the list holds"), "{stderr}");
+    assert!(!stdout.contains("the lists grew"), "{stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The shipped pipeline file renders the default image: the default scene with its
+/// lights, clustered by the file's own passes, pixel for pixel the frame built in code;
+/// with `--lights 0` both render the field without them (GPU: lavapipe).
+#[test]
+fn the_shipped_pipeline_renders_the_default_image() {
+    let dir = scratch("shipped");
+    let render = |extra: &[&str], name: &str| {
+        let png = dir.join(name);
+        let mut args = vec!["render", "--width", "96", "--height", "64", "-o"];
+        args.push(png.to_str().unwrap());
+        args.extend(extra);
+        let out = meshlight(&args);
+        assert!(
+            out.status.success(),
+            "{name}: {}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        pixels(&png)
+    };
+    let file = ["--pipeline", "pipelines/virtual_geometry.toml"];
+    let code = render(&[], "code.png");
+    assert!(
+        render(&file, "file.png") == code,
+        "the shipped file's image differs"
+    );
+    let unlit = render(&["--lights", "0"], "code-unlit.png");
+    assert!(unlit != code, "the lights should show");
+    assert!(render(&[&file[..], &["--lights", "0"]].concat(), "file-unlit.png") == unlit);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `bench --from-json … --html`: the saved GPU rows under docs/ drawn as charts without a
+/// GPU; a file that is not a list of rows is named with what to give instead.
+#[test]
+fn bench_charts_saved_rows_and_names_a_file_it_cannot_read() {
+    let dir = scratch("bench-html");
+    let page = dir.join("charts.html");
+    meshlight_ok(&[
+        "bench",
+        "--from-json",
+        "docs/bench-h200-vg2.json",
+        "--html",
+        page.to_str().unwrap(),
+    ]);
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains("<h2>vg-scale</h2>") && html.contains("<polyline"));
+    assert!(html.contains("GPU time per pass"));
+    let out = meshlight(&[
+        "bench",
+        "--from-json",
+        "Cargo.toml",
+        "--html",
+        page.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("Cargo.toml") && err.contains("--json"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,29 @@
+//! The virtual-geometry renderer: a GPU scene, the frame graph that draws it (built in
+//! code by [`frame_graph::build`], or loaded from a pipeline file such as
+//! `pipelines/virtual_geometry.toml`), and the frame loop that reads the GPU's counters
+//! back and grows the cluster lists when a frame overflowed them.
+//!
+//! ```text
+//! fill_clusters → cull_lod (first) → remap_dispatch → sw_raster → hw_raster
+//!   → depth_pyramid → cull_lod (second) → hw_raster → resolve → depth_pyramid (history)
+//! ```
+//!
+//! Two culling passes (occlusion, [`FrameSettings::occlusion`], on by default): the
+//! first against last frame's depth pyramid, the second, over what the first found
+//! hidden, against this frame's; see [`frame_graph`]. Off, one pass draws the LOD cut.
+//!
+//! Nothing here decides what a pass does; the passes are the crates under `passes/`.
+//! This crate only wires them, sizes what they share, and turns the counters into
+//! numbers a person reads.
+
+pub mod counts;
+pub mod frame_graph;
+pub mod renderer;
+pub mod scenes;
+pub mod setup;
+pub mod split;
+
+pub use counts::FrameCounts;
+pub use frame_graph::{FrameSettings, GraphSource};
+pub use renderer::{Renderer, Still};
+pub use setup::{SceneOptions, SceneSetup, SetupError, setup};

@@ -1,0 +1,526 @@
+//! The frame loop: the graph compiled for the adapter, the scene uploaded, one
+//! `execute_frame` per camera, the counters taken back without waiting, and the
+//! candidate list and raster slots grown when a frame reports it dropped clusters. With
+//! `FrameSettings::clustering`, the renderer's lights are uploaded and clustered every
+//! frame, and the clustering's lists grow the same way.
+
+use super::counts::{
+    CLUSTER_COUNT_READBACK, FrameCounts, HIERARCHY_COUNTS_READBACK, HierarchyCounts,
+    RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK, SECOND_HIERARCHY_COUNTS_READBACK,
+    SECOND_WALK_COUNT_READBACK,
+};
+use super::frame_graph::{CLUSTERS_PARAM, FrameSettings, GraphSource, MAX_SLOTS, SLOTS_PARAM};
+use glam::Mat4;
+use meshlight::gpu_scene::{Camera, GpuScene, SceneData};
+use meshlight::graph::{
+    CompileOptions, CompiledGraph, Executor, FrameData, FrameStats, GpuAdapter, GraphError, Result,
+};
+use meshlight::shaders::cpu::layout::ClusterableObject;
+use meshlight_light_clustering::ClusteringSettings;
+use meshlight_light_clustering::clusterer::Counters;
+use meshlight_light_clustering::frame_graph::OBJECT_USAGE;
+use std::collections::BTreeMap;
+
+/// How many frames [`Renderer::render_still`] runs, at most, to reach a frame that
+/// dropped nothing: each overflowing frame grows the lists to what it asked for, so one
+/// grow per list suffices unless the view changes.
+pub const MAX_STILL_FRAMES: u32 = 4;
+
+/// A finished image.
+pub struct Still {
+    pub width: u32,
+    pub height: u32,
+    /// RGBA8, rows top to bottom.
+    pub rgba: Vec<u8>,
+    /// The frame's statistics, with GPU timings where the adapter has timestamps.
+    pub stats: FrameStats,
+    pub counts: FrameCounts,
+    /// Frames run to get there (more than 1 when a list had to grow).
+    pub frames: u32,
+}
+
+/// One grow of a list, for logs and tests.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Growth {
+    pub frame: u64,
+    pub param: &'static str,
+    pub from: u64,
+    pub to: u64,
+}
+
+pub struct Renderer {
+    /// The scene. Moving instances and changing materials is uploaded by the next
+    /// frame; a scene that outgrows its buffers (more meshes or instances) needs a new
+    /// renderer, whose graph is sized for it.
+    pub data: SceneData,
+    pub settings: FrameSettings,
+    pub compiled: CompiledGraph,
+    pub executor: Executor,
+    scene: GpuScene,
+    /// The largest list a binding can hold, in elements of 8 bytes.
+    max_elements: u64,
+    frame_index: u32,
+    previous_view_projection: Option<Mat4>,
+    /// The next frame's camera does not follow from the last (see [`Renderer::camera_cut`]).
+    cut: bool,
+    /// The graph culls in two passes and reads the second pass's counters back.
+    two_pass: bool,
+    /// `fill` walks the culling hierarchy and its counters come back.
+    walks_hierarchy: bool,
+    /// A second walk (from the nodes the first found hidden) and its counters.
+    walks_twice: bool,
+    /// Instances moved through [`Renderer::set_transform`] since the last frame.
+    moved: Vec<meshlight::gpu_scene::InstanceId>,
+    /// Counters by frame, until both readbacks of a frame are in.
+    pending: BTreeMap<u64, PendingCounts>,
+    latest: Option<FrameCounts>,
+    pub growths: Vec<Growth>,
+    pub adapter: String,
+    /// The lights the frame clusters and shades with (with `settings.clustering`; at
+    /// most its `objects`). Uploaded by every frame.
+    pub lights: Vec<ClusterableObject>,
+    light_buffers: Option<LightBuffers>,
+    /// The clustering's counters, growths and warnings.
+    pub clustering: Counters,
+    /// Textures of the caller's given to every frame (see [`Renderer::import_texture`]).
+    imported_textures: Vec<(String, wgpu::Texture)>,
+}
+
+/// The imported object list of the light clustering and its count.
+struct LightBuffers {
+    objects: wgpu::Buffer,
+    object_count: wgpu::Buffer,
+}
+
+#[derive(Default)]
+struct PendingCounts {
+    cluster_count: Option<Vec<u8>>,
+    raster_counts: Option<Vec<u8>>,
+    second: Option<Vec<u8>>,
+    hierarchy: Option<Vec<u8>>,
+    second_walk: Option<Vec<u8>>,
+    second_walk_list: Option<Vec<u8>>,
+}
+
+impl Renderer {
+    /// Selects the adapter, builds and compiles the graph for it (which decides the
+    /// device's features), opens the device and uploads the scene.
+    pub fn new(
+        mut data: SceneData,
+        mut settings: FrameSettings,
+        source: &GraphSource,
+    ) -> Result<Self> {
+        if settings.keep_file_view
+            && let GraphSource::File(path) | GraphSource::FileWith(path, _) = source
+            && let Some(view) = super::frame_graph::view_in_file(path)?
+        {
+            // The frame loop's choices (an occlusion view's extra frame) follow the
+            // view the file shows.
+            settings.view = view;
+        }
+        if let GraphSource::File(path) | GraphSource::FileWith(path, _) = source
+            && settings.clustering.is_none()
+            && super::frame_graph::file_clusters_lights(path)
+        {
+            // A file that clusters lights runs its clustering with none: empty lists.
+            settings.clustering = Some(ClusteringSettings::new(
+                [settings.width, settings.height],
+                1,
+            ));
+        }
+        let adapter = GpuAdapter::select()?;
+        let class = super::split::AdapterClass::of(&adapter.info());
+        settings.hardware = Some(settings.hardware_on(class));
+        settings.adapter_class = Some(class);
+        settings.sw_threshold_px = Some(settings.sw_threshold_on(class));
+        let limits = adapter.adapter.limits();
+        settings.check_viewport(limits.max_texture_dimension_2d)?;
+        let compiled = source
+            .graph(&data, &settings)?
+            .compile(&CompileOptions::for_adapter(&adapter))?;
+        let gpu = adapter.open(compiled.plan.enabled_features)?;
+        let name = gpu.info.name.clone();
+        let scene = GpuScene::new(&gpu, &mut data);
+        let max_elements = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            / 8;
+        let light_buffers = settings.clustering.as_ref().map(|c| LightBuffers {
+            objects: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("objects"),
+                size: c.objects.max(1) * size_of::<ClusterableObject>() as u64,
+                usage: OBJECT_USAGE,
+                mapped_at_creation: false,
+            }),
+            object_count: gpu.buffer_with_data("object_count", &[0; 4], OBJECT_USAGE),
+        });
+        let two_pass = compiled
+            .plan
+            .pass_index(&format!("readback:{SECOND_COUNTS_READBACK}"))
+            .is_some();
+        let walks_hierarchy = compiled
+            .plan
+            .pass_index(&format!("readback:{HIERARCHY_COUNTS_READBACK}"))
+            .is_some();
+        let walks_twice = compiled
+            .plan
+            .pass_index(&format!("readback:{SECOND_WALK_COUNT_READBACK}"))
+            .is_some();
+        Ok(Self {
+            data,
+            settings,
+            two_pass,
+            walks_hierarchy,
+            walks_twice,
+            cut: false,
+            moved: Vec::new(),
+            compiled,
+            executor: Executor::new(gpu),
+            scene,
+            max_elements,
+            frame_index: 0,
+            previous_view_projection: None,
+            pending: BTreeMap::new(),
+            latest: None,
+            growths: Vec::new(),
+            adapter: name,
+            lights: Vec::new(),
+            light_buffers,
+            clustering: Counters::new(max_elements * 2),
+            imported_textures: Vec::new(),
+        })
+    }
+
+    /// Records and submits one frame seen by `camera`; never waits for the GPU. Counters
+    /// of earlier frames that have come back are taken, and a list that overflowed is
+    /// grown for the next frame.
+    pub fn frame(&mut self, camera: &Camera) -> Result<FrameStats> {
+        let viewport = [self.settings.width, self.settings.height];
+        let view = camera.view(viewport, self.frame_index, self.previous_view_projection);
+        self.previous_view_projection = Some(Mat4::from_cols_array_2d(&view.view_projection));
+        self.frame_index = self.frame_index.wrapping_add(1);
+        self.scene.upload(&self.executor.gpu, &mut self.data);
+        let cut = u32::from(std::mem::take(&mut self.cut));
+        let frame = FrameData::new()
+            .with(meshlight::gpu_scene::names::VIEW, bytemuck::bytes_of(&view))
+            .with(meshlight::cull_lod::CAMERA_CUT_INPUT, &cut.to_le_bytes());
+        let mut imports = self.scene.imports();
+        if let Some(b) = &self.light_buffers {
+            let limit = self.settings.clustering.as_ref().map_or(0, |c| c.objects);
+            if self.lights.len() as u64 > limit {
+                return Err(GraphError::Setting {
+                    setting: "FrameSettings::clustering.objects".into(),
+                    message: format!(
+                        "{} lights, but the object buffer holds {limit}; raise `FrameSettings::clustering.objects` (`--lights` sizes it) or use fewer",
+                        self.lights.len()
+                    ),
+                });
+            }
+            let queue = &self.executor.gpu.queue;
+            if !self.lights.is_empty() {
+                queue.write_buffer(&b.objects, 0, bytemuck::cast_slice(&self.lights));
+            }
+            queue.write_buffer(
+                &b.object_count,
+                0,
+                &(self.lights.len() as u32).to_le_bytes(),
+            );
+            imports = imports
+                .buffer("objects", &b.objects)
+                .buffer("object_count", &b.object_count);
+        }
+        for (name, texture) in &self.imported_textures {
+            imports = imports.texture(name, texture);
+        }
+        let stats = self
+            .executor
+            .execute_frame(&self.compiled, &imports, &frame)?;
+        self.settle_previous_transforms();
+        self.take_counts()?;
+        Ok(stats)
+    }
+
+    /// Tells the next frame that its camera does not continue the last one's (a jump, a
+    /// new shot): its first culling pass then tests nothing against last frame's depth.
+    pub fn camera_cut(&mut self) {
+        self.cut = true;
+    }
+
+    /// Moves an instance (see `SceneData::set_transform`) and remembers it, so that
+    /// after the next frame its previous transform becomes the one that frame drew it
+    /// with. Moving it through `data` directly works too, but its previous transform then
+    /// stays where it was before, and the first culling pass of later frames projects it
+    /// there: never a wrong image (the second pass re-tests with the current transform),
+    /// only work moved to the second pass.
+    pub fn set_transform(
+        &mut self,
+        id: meshlight::gpu_scene::InstanceId,
+        world_from_local: Mat4,
+    ) -> std::result::Result<bool, meshlight::gpu_scene::SceneDataError> {
+        let moved = self.data.set_transform(id, world_from_local)?;
+        if moved {
+            self.moved.push(id);
+        }
+        Ok(moved)
+    }
+
+    /// After a frame, the instances moved before it get the transform it drew them with
+    /// as their previous one (uploaded by the next frame).
+    fn settle_previous_transforms(&mut self) {
+        for id in std::mem::take(&mut self.moved) {
+            let now = &self.data.instances[id.0 as usize].world_from_local;
+            let now = Mat4::from_cols_array_2d(now);
+            // The transform was drawable when it was set, so this cannot be refused.
+            let _ = self.data.set_transform(id, now);
+        }
+    }
+
+    /// The newest frame whose counters are back.
+    pub fn latest_counts(&self) -> Option<FrameCounts> {
+        self.latest
+    }
+
+    /// Renders until a frame drops no cluster (at most [`MAX_STILL_FRAMES`]), waiting for
+    /// each, and returns that frame's image, statistics and counters. The `occlusion`
+    /// view of a two-pass frame first renders one frame more when nothing was rendered
+    /// yet, so the image shows what the frame culls against its own history rather than
+    /// a first frame, which has none.
+    pub fn render_still(&mut self, camera: &Camera) -> Result<Still> {
+        if self.two_pass && self.settings.view.needs_occlusion_records() && self.frame_index == 0 {
+            let submitted = self.frame(camera)?.frame;
+            meshlight::still::finish(&mut self.executor, submitted)?;
+            self.take_counts()?;
+        }
+        let mut attempt = 0;
+        loop {
+            attempt += 1;
+            let submitted = self.frame(camera)?.frame;
+            let stats = meshlight::still::finish(&mut self.executor, submitted)?;
+            self.take_counts()?;
+            let counts = meshlight::still::counters_of(self.latest, |c| c.frame, submitted)?;
+            let lights_lost = self.settings.clustering.is_some()
+                && self
+                    .clustering
+                    .latest
+                    .is_none_or(|c| c.frame != submitted || c.overflowed());
+            if !(counts.overflowed() || lights_lost) || attempt == MAX_STILL_FRAMES {
+                if counts.overflowed() {
+                    log::error!(
+                        "frame {submitted} still drops clusters after {attempt} frames: {counts:?}"
+                    );
+                }
+                let rgba = self.executor.read_texture("color")?;
+                return Ok(Still {
+                    width: self.settings.width,
+                    height: self.settings.height,
+                    rgba,
+                    stats,
+                    counts,
+                    frames: attempt,
+                });
+            }
+        }
+    }
+
+    /// Takes every readback that has come back; grows the lists for frames that
+    /// overflowed.
+    fn take_counts(&mut self) -> Result<()> {
+        if self.settings.clustering.is_some() {
+            self.clustering
+                .take(&mut self.executor, &mut self.compiled)?;
+        }
+        let mut names = vec![CLUSTER_COUNT_READBACK, RASTER_COUNTS_READBACK];
+        if self.two_pass {
+            names.push(SECOND_COUNTS_READBACK);
+        }
+        if self.walks_hierarchy {
+            names.push(HIERARCHY_COUNTS_READBACK);
+        }
+        if self.walks_twice {
+            names.extend([SECOND_HIERARCHY_COUNTS_READBACK, SECOND_WALK_COUNT_READBACK]);
+        }
+        for name in names {
+            while let Some(r) = self.executor.take_readback(name)? {
+                let entry = self.pending.entry(r.frame).or_default();
+                let part = match name {
+                    CLUSTER_COUNT_READBACK => &mut entry.cluster_count,
+                    RASTER_COUNTS_READBACK => &mut entry.raster_counts,
+                    HIERARCHY_COUNTS_READBACK => &mut entry.hierarchy,
+                    SECOND_HIERARCHY_COUNTS_READBACK => &mut entry.second_walk,
+                    SECOND_WALK_COUNT_READBACK => &mut entry.second_walk_list,
+                    _ => &mut entry.second,
+                };
+                *part = Some(r.bytes);
+            }
+        }
+        let (two_pass, walks, twice) = (self.two_pass, self.walks_hierarchy, self.walks_twice);
+        let complete: Vec<u64> = self
+            .pending
+            .iter()
+            .filter(|(_, p)| {
+                p.cluster_count.is_some()
+                    && p.raster_counts.is_some()
+                    && (p.second.is_some() || !two_pass)
+                    && (p.hierarchy.is_some() || !walks)
+                    && (p.second_walk.is_some() && p.second_walk_list.is_some() || !twice)
+            })
+            .map(|(f, _)| *f)
+            .collect();
+        for frame in complete {
+            let p = self.pending.remove(&frame).expect("listed above");
+            let short = || GraphError::Readback(format!("frame {frame}'s counters are short"));
+            let mut counts = FrameCounts::from_words(
+                frame,
+                p.cluster_count.as_deref().unwrap_or_default(),
+                p.raster_counts.as_deref().unwrap_or_default(),
+                p.second.as_deref(),
+            )
+            .ok_or_else(short)?;
+            if let Some(bytes) = &p.hierarchy {
+                let mut h = HierarchyCounts::from_words(bytes).ok_or_else(short)?;
+                if let (Some(c), Some(l)) = (&p.second_walk, &p.second_walk_list) {
+                    h = h.with_second(c, l).ok_or_else(short)?;
+                }
+                counts.hierarchy = Some(h);
+            }
+            self.grow_for(&counts)?;
+            if self.latest.is_none_or(|l| l.frame < frame) {
+                self.latest = Some(counts);
+            }
+        }
+        // A frame whose other half never comes (dropped by a full ring) is forgotten.
+        while self.pending.len() > 16 {
+            self.pending.pop_first();
+        }
+        Ok(())
+    }
+
+    /// Raises `clusters` or `slots` to the next power of two above what `counts` asked
+    /// for, when it asked for more than the list holds.
+    fn grow_for(&mut self, counts: &FrameCounts) -> Result<()> {
+        let wants = [
+            (
+                CLUSTERS_PARAM,
+                // The second walk's list is sized by the same parameter.
+                (counts.clusters_requested as u64).max(
+                    counts
+                        .hierarchy
+                        .and_then(|h| h.second)
+                        .map_or(0, |w| w.clusters_requested as u64),
+                ),
+                self.max_elements,
+                "--clusters",
+            ),
+            (
+                SLOTS_PARAM,
+                counts.visible as u64,
+                self.max_elements.min(MAX_SLOTS),
+                "--slots",
+            ),
+        ];
+        for (param, wanted, limit, flag) in wants {
+            let now = self.param(param);
+            if wanted <= now {
+                continue;
+            }
+            let to = wanted.next_power_of_two().min(limit);
+            if to <= now {
+                log::error!(
+                    "frame {}: {wanted} {param} wanted, but {now} is the most this device binds; clusters are dropped (raise the LOD threshold or draw fewer instances)",
+                    counts.frame
+                );
+                continue;
+            }
+            log::warn!(
+                "frame {}: {wanted} {param} wanted but the list holds {now}; raised `{param}` to {to} (start there with {flag} {to} or `{param} = {to}` in the pipeline's [params])",
+                counts.frame
+            );
+            self.compiled.set_param(param, to)?;
+            self.growths.push(Growth {
+                frame: counts.frame,
+                param,
+                from: now,
+                to,
+            });
+        }
+        Ok(())
+    }
+
+    /// The current value of a size parameter.
+    pub fn param(&self, name: &str) -> u64 {
+        self.compiled
+            .plan
+            .params
+            .iter()
+            .find(|(n, _)| n == name)
+            .map_or(0, |(_, v)| *v)
+    }
+}
+
+/// Changing the frame while it runs: a window resized, an implementation or a threshold
+/// chosen, a pipeline file edited. The device, the scene and the pipelines already made
+/// stay; only the graph is built and compiled again.
+impl Renderer {
+    /// Builds the graph from `source` with `settings` (`extend` may add passes and
+    /// resources of the caller's, e.g. a copy of `color` into a window's texture) and
+    /// compiles it for the open device. On any error the renderer keeps its current
+    /// graph, so a caller can show the error and go on rendering. The lists keep the sizes
+    /// they grew to; the next frame is a camera cut (the history belongs to the old graph).
+    pub fn rebuild(
+        &mut self,
+        source: &GraphSource,
+        mut settings: FrameSettings,
+        extend: &dyn Fn(&mut meshlight::graph::GraphBuilder, &FrameSettings) -> Result<()>,
+    ) -> Result<()> {
+        if settings.keep_file_view
+            && let GraphSource::File(path) | GraphSource::FileWith(path, _) = source
+            && let Some(view) = super::frame_graph::view_in_file(path)?
+        {
+            settings.view = view;
+        }
+        let gpu = &self.executor.gpu;
+        settings.check_viewport(gpu.device.limits().max_texture_dimension_2d)?;
+        settings.clusters = settings.clusters.max(self.param(CLUSTERS_PARAM));
+        settings.slots = settings.slots.max(self.param(SLOTS_PARAM));
+        let mut builder = source.graph(&self.data, &settings)?;
+        extend(&mut builder, &settings)?;
+        let compiled = builder.compile(&CompileOptions::for_gpu(gpu))?;
+        let missing = compiled.plan.enabled_features - gpu.features;
+        if !missing.is_empty() {
+            return Err(GraphError::DeviceLacksFeatures {
+                features: missing
+                    .iter_names()
+                    .map(|(name, _)| name)
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                instead:
+                    "the device was opened for the first graph; start with this choice instead"
+                        .into(),
+            });
+        }
+        let has = |name: &str| {
+            compiled
+                .plan
+                .pass_index(&format!("readback:{name}"))
+                .is_some()
+        };
+        self.two_pass = has(SECOND_COUNTS_READBACK);
+        self.walks_hierarchy = has(HIERARCHY_COUNTS_READBACK);
+        self.walks_twice = has(SECOND_WALK_COUNT_READBACK);
+        self.compiled = compiled;
+        self.settings = settings;
+        self.pending.clear();
+        self.latest = None;
+        self.previous_view_projection = None;
+        self.cut = true;
+        Ok(())
+    }
+
+    /// Gives `texture` to every frame as the imported resource `name` (replacing one of
+    /// that name), for passes a caller added through [`Renderer::rebuild`].
+    pub fn import_texture(&mut self, name: &str, texture: &wgpu::Texture) {
+        self.imported_textures.retain(|(n, _)| n != name);
+        self.imported_textures
+            .push((name.to_string(), texture.clone()));
+    }
+}

@@ -1,0 +1,167 @@
+//! The scene `meshlight render` and `meshlight view` draw, from the options they share:
+//! the mesh and its copies on the field, the lights over it, the graph (built in code or
+//! from a pipeline file) and the frame's settings. Both applications start from
+//! [`setup`], so a window and a still of the same options draw the same frame.
+
+use crate::frame_graph::{FrameSettings, GraphSource, file_clusters_lights};
+use crate::scenes;
+use meshlight::gpu_scene::{Camera, SceneData, SceneDataError, data::Limits};
+use meshlight::graph::{GpuAdapter, GraphError};
+use meshlight::resolve::DebugView;
+use meshlight::scene::SceneError;
+use meshlight::shaders::cpu::layout::ClusterableObject;
+use meshlight_light_clustering::ClusteringSettings;
+use std::path::PathBuf;
+
+/// Froxel-list entries per light of the field ([`scenes::field_lights`]) the clustering
+/// starts with: the default scene's 256 lights fill 5,821 entries (about 23 froxels each,
+/// whatever the viewport, as the grid's size is fixed); a frame that needs more still
+/// grows the list.
+pub const FIELD_ENTRIES_PER_LIGHT: u64 = 32;
+
+/// What to draw and at what size.
+#[derive(Clone, Debug)]
+pub struct SceneOptions {
+    /// Mesh file (.obj, .gltf, .glb, .stl, or a baked .mlasset), or `procedural`.
+    pub mesh: PathBuf,
+    /// Tube segments of the procedural mesh (16 × segments² triangles).
+    pub segments: u32,
+    /// Copies of the mesh on the ground (1: one copy, framed by the camera, no lights).
+    pub instances: u32,
+    /// Point lights over the field; `None`: [`scenes::DEFAULT_LIGHTS`], or none with a
+    /// pipeline file that clusters no lights.
+    pub lights: Option<u32>,
+    /// A pipeline file to render with instead of the graph built in code.
+    pub pipeline: Option<PathBuf>,
+    /// What the image shows; `None`: shaded, or the view a pipeline file's resolve names.
+    pub view: Option<DebugView>,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+impl SceneOptions {
+    /// The default scene at a given size.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            mesh: PathBuf::from("procedural"),
+            segments: meshlight::scene::DEFAULT_SEGMENTS,
+            instances: scenes::DEFAULT_INSTANCES,
+            lights: None,
+            pipeline: None,
+            view: None,
+            width,
+            height,
+        }
+    }
+
+    /// Whether the graph clusters lights: the frame built in code does, a pipeline file
+    /// does when it has the clustering's passes.
+    pub fn graph_clusters_lights(&self) -> bool {
+        self.pipeline.as_deref().is_none_or(file_clusters_lights)
+    }
+
+    /// The lights asked for, explicitly or by default.
+    pub fn lights_asked(&self) -> u32 {
+        match (self.lights, self.graph_clusters_lights()) {
+            (Some(n), _) => n,
+            (None, true) => scenes::DEFAULT_LIGHTS,
+            (None, false) => 0,
+        }
+    }
+
+    /// Refuses, before any mesh is baked or adapter asked for, a pipeline file that
+    /// cannot be read, and lights asked of a file that clusters none.
+    pub fn check_pipeline(&self) -> Result<(), GraphError> {
+        let Some(path) = &self.pipeline else {
+            return Ok(());
+        };
+        meshlight::graph::file::read_pipeline_text(path)?;
+        let lights = self.lights_asked();
+        if lights > 0 && self.instances > 1 && !self.graph_clusters_lights() {
+            return Err(GraphError::PipelineFile {
+                file: path.display().to_string(),
+                message: format!(
+                    "--lights {lights}: the file clusters no lights (it has no `z_slice` pass); render with --lights 0 (its default), or add the light clustering's passes as pipelines/virtual_geometry.toml does"
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Everything a renderer of the scene is made from.
+pub struct SceneSetup {
+    /// The GPU scene: meshes, instances, materials.
+    pub data: SceneData,
+    /// The camera that frames it.
+    pub camera: Camera,
+    /// The frame's settings: size, view, clustering; callers may change the rest.
+    pub settings: FrameSettings,
+    /// The lights over the field (none for a single copy).
+    pub lights: Vec<ClusterableObject>,
+    /// The graph: built in code or read from the pipeline file.
+    pub source: GraphSource,
+}
+
+/// What stops a scene from being set up.
+#[derive(Debug, thiserror::Error)]
+pub enum SetupError {
+    /// The adapter or the pipeline file.
+    #[error(transparent)]
+    Graph(#[from] GraphError),
+    /// The mesh.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The scene does not fit the GPU buffers.
+    #[error(transparent)]
+    SceneData(#[from] SceneDataError),
+}
+
+/// Checks the pipeline file, loads (or bakes) the mesh, places its copies and lights on
+/// the field, sized for the adapter the frame will run on, and fills the frame settings.
+pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
+    o.check_pipeline()?;
+    let asset = scenes::load_asset(&o.mesh, o.segments)?;
+    // The scene's buffers are bound whole: sized for the adapter the frame will run on.
+    let adapter = GpuAdapter::select()?;
+    let limits = Limits::for_device(&adapter.adapter.limits());
+    drop(adapter);
+    let data = SceneData::new(limits);
+    let placed = if o.instances == 1 {
+        scenes::single(data, &asset)?
+    } else {
+        scenes::field(data, &asset, o.instances)?
+    };
+    let mut settings = FrameSettings::new(o.width, o.height);
+    // A view given wins over a pipeline file's; none given leaves the file's.
+    settings.view = o.view.unwrap_or_default();
+    settings.keep_file_view = o.view.is_none();
+    let lights = if o.instances > 1 {
+        scenes::field_lights(&placed, o.lights_asked())
+    } else {
+        Vec::new()
+    };
+    if !lights.is_empty() || o.view.is_some_and(|v| v.needs_lights()) {
+        let mut clustering =
+            ClusteringSettings::new([o.width, o.height], lights.len().max(1) as u64);
+        // The froxel lists start large enough for the field's lights, so the default
+        // scene runs one frame rather than warning that its lists grew.
+        clustering.entries = clustering
+            .entries
+            .max(lights.len() as u64 * FIELD_ENTRIES_PER_LIGHT);
+        settings.clustering = Some(clustering);
+    }
+    let source = match &o.pipeline {
+        Some(path) => GraphSource::File(path.clone()),
+        None => GraphSource::Code,
+    };
+    Ok(SceneSetup {
+        data: placed.data,
+        camera: placed.camera,
+        settings,
+        lights,
+        source,
+    })
+}

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Fails when a library crate depends, directly or through another crate, on what only the
+# applications may use: an argument parser (clap), an image encoder (png) or a logger
+# (env_logger). The library crates are every workspace member except the applications
+# (apps/cli, apps/viewer, apps/bench, apps/output) and the dev-only test helpers, so a
+# new pass crate is checked without being named here.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+APPS='^(meshlight-cli|meshlight-viewer|meshlight-bench|meshlight-output|meshlight-testing)$'
+FORBIDDEN='^(clap|png|env_logger) '
+members=$(cargo metadata --no-deps --format-version 1 |
+    python3 -c 'import json,sys; print("\n".join(p["name"] for p in json.load(sys.stdin)["packages"]))' |
+    grep -Ev "$APPS")
+failed=0
+checked=0
+for crate in $members; do
+    found=$(cargo tree -p "$crate" -e normal,build --prefix none --format '{p}' | grep -E "$FORBIDDEN" | sort -u || true)
+    checked=$((checked + 1))
+    if [ -n "$found" ]; then
+        echo "$crate is a library crate but depends on: $(echo $found | tr '\n' ' ')" >&2
+        echo "  move the code that needs it into an application crate under apps/" >&2
+        failed=1
+    fi
+done
+[ "$checked" -gt 0 ] || { echo "no library crates found" >&2; exit 1; }
+[ "$failed" -eq 0 ] && echo "$checked library crates: no clap, png or env_logger"
+exit "$failed"
