@@ -17,11 +17,13 @@ mod exec;
 pub mod file;
 mod layout;
 mod names;
+mod node;
 mod pass;
 mod plan;
 mod problem;
 mod program;
 mod readback;
+mod record;
 mod resource;
 pub mod synthetic;
 
@@ -32,10 +34,8 @@ pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
-    ADAPTER_ENV, BATCHING_ENV, BatchStats, CHECKED_ENV, ColorAttachment, ComputePassGuard,
-    ComputeProgram, DepthAttachment, Executor, FrameData, FrameStats, GpuAdapter, GpuContext,
-    GpuTimings, INDIRECT_VALIDATION_ENV, Immediates, Imports, PassTiming, Program, Readback,
-    RecordContext, RenderProgram, TIMING_ENV, TimingMode,
+    ADAPTER_ENV, BATCHING_ENV, BatchStats, CHECKED_ENV, Executor, FrameStats, GpuAdapter,
+    GpuContext, GpuTimings, INDIRECT_VALIDATION_ENV, Imports, PassTiming, TIMING_ENV, TimingMode,
 };
 pub use layout::{BindingLayout, BindingSource, LayoutEntry, SamplerKind};
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
@@ -43,6 +43,10 @@ pub use pass::{Pass, SetupContext, Visibility64};
 pub use plan::{Batch, CandidatePlan, ChoicePlan, LoadOp, Plan, Recording, Selection, StoreOp};
 pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};
 pub use readback::STAGE as READBACK_STAGE;
+pub use record::{
+    ColorAttachment, ComputePassGuard, ComputeProgram, DepthAttachment, FrameData, Immediates,
+    Program, Readback, RecordContext, RenderProgram,
+};
 pub use resource::{
     AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture,
     TextureDesc, TextureRange,

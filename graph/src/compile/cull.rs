@@ -1,8 +1,8 @@
 //! Culling: a pass runs only if what it writes reaches something visible outside the frame
 //! (an imported, history or exported resource) or it declares a side effect.
 
-use crate::builder::PassNode;
 use crate::compile::versions::{Edge, EdgeKind};
+use crate::node::PassNode;
 use crate::resource::ResourceInfo;
 
 /// Returns, per pass, whether it is kept.

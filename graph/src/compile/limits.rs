@@ -2,9 +2,9 @@
 //! that would make wgpu panic) is a typed error naming the resource or pass and the limit.
 
 use crate::access::Access;
-use crate::builder::PassNode;
 use crate::compile::PassSetup;
 use crate::error::{GraphError, Result};
+use crate::node::PassNode;
 use crate::resource::{ResourceDesc, ResourceInfo};
 
 pub(crate) fn check(

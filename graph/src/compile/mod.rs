@@ -9,10 +9,11 @@ pub mod slots;
 pub mod versions;
 
 use crate::access::{Access, texture_usage_for};
-use crate::builder::{GraphBuilder, PassNode, VisibilityDecl};
+use crate::builder::{GraphBuilder, VisibilityDecl};
 use crate::choice::Choice;
 use crate::error::{GraphError, Result};
 use crate::names::feature_names;
+use crate::node::PassNode;
 use crate::pass::SetupContext;
 use crate::pass::Visibility64;
 use crate::plan::*;
@@ -191,6 +192,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             name,
             pass,
             contract,
+            stage_slots,
             bindings,
             ranges,
             alternatives,
@@ -224,6 +226,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             name,
             pass,
             contract,
+            stage_slots,
             bindings,
             ranges,
             alternatives: None,

@@ -1,10 +1,10 @@
 //! Each slot against the resource bound to it: kind, element or format, texture range,
 //! size, usage, and which slots of one pass may share a resource.
 
-use crate::builder::PassNode;
 use crate::contract::{Slot, SlotKind};
 use crate::error::{GraphError, Result};
 use crate::names::format_name;
+use crate::node::PassNode;
 use crate::resource::*;
 
 pub(crate) fn check_slots(resources: &[ResourceInfo], node: &PassNode) -> Result<()> {

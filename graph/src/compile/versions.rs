@@ -1,8 +1,8 @@
 //! Walks the passes in declaration order, checks every handle's version and derives the
 //! dependency edges: writer → reader, reader → next writer, writer → next writer.
 
-use crate::builder::PassNode;
 use crate::error::{GraphError, Result};
+use crate::node::PassNode;
 pub(crate) use crate::plan::{Edge, EdgeKind};
 use crate::resource::{ResourceDesc, ResourceInfo, TextureRange};
 use std::collections::HashMap;

@@ -7,15 +7,15 @@
 use crate::compile::CompiledGraph;
 use crate::error::{GraphError, Result};
 use crate::exec::context::GpuContext;
-use crate::exec::fill::Fill;
-use crate::exec::frame::FrameData;
-use crate::exec::physical::{self, Physical, PhysicalPool};
-use crate::exec::programs::Programs;
-use crate::exec::readback::{Readback, Readbacks};
-use crate::exec::record::RecordContext;
-use crate::exec::shared::{BatchStamps, SharedPass};
 use crate::exec::timing::{GpuTimings, Timestamps, TimingMode};
-use crate::exec::views::ViewCache;
+use crate::record::RecordContext;
+use crate::record::fill::Fill;
+use crate::record::frame::FrameData;
+use crate::record::physical::{self, Physical, PhysicalPool};
+use crate::record::programs::Programs;
+use crate::record::readback::{Readback, Readbacks};
+use crate::record::shared::{BatchStamps, SharedPass};
+use crate::record::views::ViewCache;
 use crate::resource::{ImportedUsage, ResourceDesc, ResourceKind};
 use serde::Serialize;
 use std::collections::{HashMap, VecDeque};
@@ -502,8 +502,10 @@ impl Executor {
                     queue: &self.gpu.queue,
                     features: self.gpu.features,
                     encoder: &mut encoder,
-                    node,
-                    setup: &graph.setups[p],
+                    name: &node.name,
+                    contract: &node.contract,
+                    stage_slots: &node.stage_slots,
+                    declared: &graph.setups[p].programs,
                     pass_index: p,
                     plan,
                     physical: &physical,
@@ -702,8 +704,10 @@ impl Executor {
                 queue: &self.gpu.queue,
                 features: self.gpu.features,
                 encoder: &mut encoder,
-                node,
-                setup: &graph.setups[p],
+                name: &node.name,
+                contract: &node.contract,
+                stage_slots: &node.stage_slots,
+                declared: &graph.setups[p].programs,
                 pass_index: p,
                 plan,
                 physical,

@@ -3,9 +3,9 @@
 //! the exact resources they bind; and a per-frame arena for small uniform blocks.
 
 use crate::error::{GraphError, Result};
-use crate::exec::reflect::{ShaderGlobal, globals};
 use crate::layout::{BindingLayout, SamplerKind};
 use crate::program::ProgramDesc;
+use crate::record::reflect::{ShaderGlobal, globals};
 use meshlight_shaders::{PassShader, ShaderDef, ShaderLibrary};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -150,7 +150,7 @@ impl Programs {
         self.frame = frame;
         self.uniforms.begin_frame();
         self.bind_groups.retain(|_, (_, last)| {
-            frame.saturating_sub(*last) <= crate::exec::physical::EVICT_AFTER_FRAMES
+            frame.saturating_sub(*last) <= crate::record::physical::EVICT_AFTER_FRAMES
         });
     }
 
