@@ -2,7 +2,7 @@
 //! choice, the implementations compile may keep instead. The builder makes nodes;
 //! compile and the executor read them, so the type sits below all three.
 
-use crate::contract::StageContract;
+use crate::contract::{Slot, StageContract};
 use crate::pass::Pass;
 use crate::plan::Selection;
 use crate::resource::{AnyHandle, TextureRange};
@@ -22,4 +22,12 @@ pub(crate) struct PassNode {
     /// The stage's other implementations, when the pass was added as a [`crate::Choice`]:
     /// compile keeps `pass` or one of these.
     pub(crate) alternatives: Option<(Selection, Vec<Box<dyn Pass>>)>,
+}
+
+impl PassNode {
+    /// Each bound slot with the resource version it binds, in contract order: what most
+    /// compile steps walk.
+    pub fn bound_slots(&self) -> impl Iterator<Item = (&Slot, &AnyHandle)> {
+        self.contract.slots.iter().zip(&self.bindings)
+    }
 }

@@ -16,10 +16,7 @@ pub fn live_passes(
     let mut stack: Vec<usize> = Vec::new();
     for (p, node) in passes.iter().enumerate() {
         let visible = node
-            .contract
-            .slots
-            .iter()
-            .zip(&node.bindings)
+            .bound_slots()
             .any(|(s, h)| s.writes() && resources[h.id.index()].is_visible_outside());
         if visible || side_effects[p] {
             live[p] = true;

@@ -80,7 +80,7 @@ pub(crate) fn check(
     }
     for &p in order {
         let node = &passes[p];
-        for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+        for (slot, h) in node.bound_slots() {
             let res = &resources[h.id.index()];
             let ResourceDesc::Buffer(b) = &res.desc else {
                 continue;

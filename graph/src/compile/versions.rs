@@ -24,10 +24,7 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
 
     for (p, node) in passes.iter().enumerate() {
         let slots: Vec<_> = node
-            .contract
-            .slots
-            .iter()
-            .zip(&node.bindings)
+            .bound_slots()
             .zip(&node.ranges)
             .map(|((s, h), range)| (s, h, range))
             .collect();
