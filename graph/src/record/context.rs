@@ -676,26 +676,31 @@ impl<'a> RecordContext<'a> {
         Ok((module, ProgramLayouts { groups, immediates }, layout))
     }
 
+    /// What this pass's declared program `index` resolved to on an earlier frame, so a
+    /// steady frame builds no key.
+    fn resolved(&self, index: usize) -> Option<&AnyProgram> {
+        self.programs
+            .resolved(self.graph_id, self.pass_index, index)
+    }
+
+    /// Notes what declared program `index` resolved to, for [`Self::resolved`].
+    fn remember(&mut self, index: usize, program: AnyProgram) {
+        self.programs
+            .resolve(self.graph_id, self.pass_index, index, program);
+    }
+
     /// The compute program declared in setup as `name`, built once and cached.
     pub fn compute(&mut self, name: &str) -> Result<Arc<ComputeProgram>> {
         let (index, desc) = self.declared(name)?;
         let ProgramKind::Compute { entry } = desc.kind else {
             return Err(self.err(format!("program `{name}` is not a compute program")));
         };
-        if let Some(AnyProgram::Compute(p)) =
-            self.programs
-                .resolved(self.graph_id, self.pass_index, index)
-        {
+        if let Some(AnyProgram::Compute(p)) = self.resolved(index) {
             return Ok(p.clone());
         }
         let key = self.program_key(desc)?;
         if let Some(p) = self.programs.compute(&key) {
-            self.programs.resolve(
-                self.graph_id,
-                self.pass_index,
-                index,
-                AnyProgram::Compute(p.clone()),
-            );
+            self.remember(index, AnyProgram::Compute(p.clone()));
             return Ok(p);
         }
         let (module, layouts, layout) = self.build_layouts(&key)?;
@@ -711,14 +716,9 @@ impl<'a> RecordContext<'a> {
                 cache: None,
             });
         let program = Arc::new(ComputeProgram { pipeline, layouts });
-        self.programs
-            .insert(key, AnyProgram::Compute(program.clone()));
-        self.programs.resolve(
-            self.graph_id,
-            self.pass_index,
-            index,
-            AnyProgram::Compute(program.clone()),
-        );
+        let built = AnyProgram::Compute(program.clone());
+        self.programs.insert(key, built.clone());
+        self.remember(index, built);
         Ok(program)
     }
 
@@ -726,10 +726,7 @@ impl<'a> RecordContext<'a> {
     /// cached.
     pub fn render(&mut self, name: &str) -> Result<Arc<RenderProgram>> {
         let (index, desc) = self.declared(name)?;
-        if let Some(AnyProgram::Render(p)) =
-            self.programs
-                .resolved(self.graph_id, self.pass_index, index)
-        {
+        if let Some(AnyProgram::Render(p)) = self.resolved(index) {
             return Ok(p.clone());
         }
         let ProgramKind::Render {
@@ -744,12 +741,7 @@ impl<'a> RecordContext<'a> {
         };
         let key = self.program_key(desc)?;
         if let Some(p) = self.programs.render(&key) {
-            self.programs.resolve(
-                self.graph_id,
-                self.pass_index,
-                index,
-                AnyProgram::Render(p.clone()),
-            );
+            self.remember(index, AnyProgram::Render(p.clone()));
             return Ok(p);
         }
         let (module, layouts, layout) = self.build_layouts(&key)?;
@@ -848,14 +840,9 @@ impl<'a> RecordContext<'a> {
             }
         };
         let program = Arc::new(RenderProgram { pipeline, layouts });
-        self.programs
-            .insert(key, AnyProgram::Render(program.clone()));
-        self.programs.resolve(
-            self.graph_id,
-            self.pass_index,
-            index,
-            AnyProgram::Render(program.clone()),
-        );
+        let built = AnyProgram::Render(program.clone());
+        self.programs.insert(key, built.clone());
+        self.remember(index, built);
         Ok(program)
     }
 
