@@ -85,8 +85,7 @@ fn history_resource_carries_from_frame_to_frame() {
     let mut exec = Executor::new(gpu);
     for frame in 1..=4u32 {
         exec.execute(&compiled, &Imports::new()).unwrap();
-        let bytes = exec.read_buffer("counter").unwrap();
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
+        let words: Vec<u32> = read_export(&mut exec, "counter");
         assert!(
             words.iter().all(|&w| w == frame),
             "frame {frame}: {:?}",
