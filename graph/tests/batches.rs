@@ -500,12 +500,8 @@ fn history_carries_through_a_batch_from_frame_to_frame() {
         for frame in 0..4 {
             exec.execute(&compiled, &Imports::new()).unwrap();
             want = cpu_steps(&[want], &[1, 2])[0];
-            let words: Vec<u32> = support::read_export(&mut exec, "acc");
-            assert!(
-                words.iter().all(|&w| w == want),
-                "batching {batching}, frame {frame}: {:?} want {want}",
-                &words[..4]
-            );
+            let case = format!("batching {batching}, frame {frame}");
+            support::assert_every_word(&mut exec, "acc", want, &case);
         }
     }
 }
