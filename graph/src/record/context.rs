@@ -689,6 +689,13 @@ impl<'a> RecordContext<'a> {
             .resolve(self.graph_id, self.pass_index, index, program);
     }
 
+    /// Caches a program just built under `key`, for any pass that asks for the same one,
+    /// and remembers it as what declared program `index` resolved to.
+    fn keep(&mut self, index: usize, key: ProgramKey, program: AnyProgram) {
+        self.programs.insert(key, program.clone());
+        self.remember(index, program);
+    }
+
     /// The compute program declared in setup as `name`, built once and cached.
     pub fn compute(&mut self, name: &str) -> Result<Arc<ComputeProgram>> {
         let (index, desc) = self.declared(name)?;
@@ -716,9 +723,7 @@ impl<'a> RecordContext<'a> {
                 cache: None,
             });
         let program = Arc::new(ComputeProgram { pipeline, layouts });
-        let built = AnyProgram::Compute(program.clone());
-        self.programs.insert(key, built.clone());
-        self.remember(index, built);
+        self.keep(index, key, AnyProgram::Compute(program.clone()));
         Ok(program)
     }
 
@@ -840,9 +845,7 @@ impl<'a> RecordContext<'a> {
             }
         };
         let program = Arc::new(RenderProgram { pipeline, layouts });
-        let built = AnyProgram::Render(program.clone());
-        self.programs.insert(key, built.clone());
-        self.remember(index, built);
+        self.keep(index, key, AnyProgram::Render(program.clone()));
         Ok(program)
     }
 
