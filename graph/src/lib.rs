@@ -6,6 +6,12 @@
 
 #![warn(missing_docs)]
 
+// The modules in layers, lowest first. A module imports only from layers before its
+// own, which keeps the crate free of import cycles:
+//   1 access, names, problem   2 error, layout, resource   3 contract, program   4 plan
+//   5 record (what a pass records against)   6 pass (the trait and its setup)
+//   7 choice, node, readback   8 builder   9 compile, file, synthetic   10 exec   11 dump
+
 mod access;
 mod builder;
 mod choice;
