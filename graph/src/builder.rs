@@ -1,10 +1,9 @@
 //! The code-first API: declare resources, add passes with slot bindings, compile.
 
 use crate::choice::Choice;
-use crate::contract::StageContract;
 use crate::error::{GraphError, Result};
+use crate::node::PassNode;
 use crate::pass::Pass;
-use crate::plan::Selection;
 use crate::resource::*;
 
 /// How a slot is bound when a pass is added.
@@ -59,21 +58,6 @@ impl Bindings {
         ));
         self
     }
-}
-
-/// A pass as the graph keeps it: its instance name, implementation and bound slots.
-pub(crate) struct PassNode {
-    pub name: String,
-    pub pass: Box<dyn Pass>,
-    /// The stage contract with unbound optional slots removed.
-    pub contract: StageContract,
-    /// In contract slot order.
-    pub bindings: Vec<AnyHandle>,
-    /// Per slot, the texture range it binds (`None`: the whole resource).
-    pub ranges: Vec<Option<TextureRange>>,
-    /// The stage's other implementations, when the pass was added as a [`Choice`]:
-    /// compile keeps `pass` or one of these.
-    pub(crate) alternatives: Option<(Selection, Vec<Box<dyn Pass>>)>,
 }
 
 /// A resource written this frame and read next frame.
@@ -449,6 +433,7 @@ impl GraphBuilder {
             resolved.push(handle);
             ranges.push(range);
         }
+        let stage_slots = contract.slot_names();
         // The node keeps only bound slots, so every later step sees slots and handles in step.
         contract
             .slots
@@ -471,6 +456,7 @@ impl GraphBuilder {
             name: name.to_string(),
             pass,
             contract,
+            stage_slots,
             bindings: resolved,
             ranges,
             alternatives: None,

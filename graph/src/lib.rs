@@ -6,6 +6,12 @@
 
 #![warn(missing_docs)]
 
+// The modules in layers, lowest first. A module imports only from layers before its
+// own, which keeps the crate free of import cycles:
+//   1 access, names, problem   2 error, layout, resource   3 contract, program   4 plan
+//   5 record (what a pass records against)   6 pass (the trait and its setup)
+//   7 choice, node, readback   8 builder   9 compile, file, synthetic   10 exec   11 dump
+
 mod access;
 mod builder;
 mod choice;
@@ -17,11 +23,13 @@ mod exec;
 pub mod file;
 mod layout;
 mod names;
+mod node;
 mod pass;
 mod plan;
 mod problem;
 mod program;
 mod readback;
+mod record;
 mod resource;
 pub mod synthetic;
 
@@ -32,10 +40,8 @@ pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
-    ADAPTER_ENV, BATCHING_ENV, BatchStats, CHECKED_ENV, ColorAttachment, ComputePassGuard,
-    ComputeProgram, DepthAttachment, Executor, FrameData, FrameStats, GpuAdapter, GpuContext,
-    GpuTimings, INDIRECT_VALIDATION_ENV, Immediates, Imports, PassTiming, Program, Readback,
-    RecordContext, RenderProgram, TIMING_ENV, TimingMode,
+    ADAPTER_ENV, BATCHING_ENV, BatchStats, CHECKED_ENV, Executor, FrameStats, GpuAdapter,
+    GpuContext, GpuTimings, INDIRECT_VALIDATION_ENV, Imports, PassTiming, TIMING_ENV, TimingMode,
 };
 pub use layout::{BindingLayout, BindingSource, LayoutEntry, SamplerKind};
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
@@ -43,6 +49,10 @@ pub use pass::{Pass, SetupContext, Visibility64};
 pub use plan::{Batch, CandidatePlan, ChoicePlan, LoadOp, Plan, Recording, Selection, StoreOp};
 pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};
 pub use readback::STAGE as READBACK_STAGE;
+pub use record::{
+    ColorAttachment, ComputePassGuard, ComputeProgram, DepthAttachment, FrameData, Immediates,
+    Program, Readback, RecordContext, RenderProgram,
+};
 pub use resource::{
     AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture,
     TextureDesc, TextureRange,

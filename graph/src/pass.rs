@@ -4,8 +4,8 @@
 use crate::access::Access;
 use crate::contract::StageContract;
 use crate::error::Result;
-use crate::exec::RecordContext;
 use crate::program::ProgramDesc;
+use crate::record::RecordContext;
 use crate::resource::{BufferDesc, ResourceDesc, TextureDesc};
 use meshlight_shaders::{ShaderDef, ShaderDefs};
 

@@ -4,8 +4,8 @@
 use crate::access::Access;
 use crate::contract::{Slot, SlotKind, StageContract};
 use crate::error::{GraphError, Result};
-use crate::exec::RecordContext;
 use crate::pass::{Pass, SetupContext};
+use crate::record::RecordContext;
 
 /// Stage name of readback passes in plans and dumps.
 pub const STAGE: &str = "readback";

@@ -91,40 +91,19 @@ pub struct Element {
 
 impl Element {
     /// A 32-bit word.
-    pub const U32: Element = Element {
-        name: Cow::Borrowed("u32"),
-        size: 4,
-    };
+    pub const U32: Element = Element::named("u32", 4);
     /// A 64-bit word (visibility buffers).
-    pub const U64: Element = Element {
-        name: Cow::Borrowed("u64"),
-        size: 8,
-    };
+    pub const U64: Element = Element::named("u64", 8);
     /// A 32-bit float.
-    pub const F32: Element = Element {
-        name: Cow::Borrowed("f32"),
-        size: 4,
-    };
+    pub const F32: Element = Element::named("f32", 4);
     /// Four 32-bit floats.
-    pub const VEC4_F32: Element = Element {
-        name: Cow::Borrowed("vec4<f32>"),
-        size: 16,
-    };
+    pub const VEC4_F32: Element = Element::named("vec4<f32>", 16);
     /// Three u32: `dispatch_workgroups_indirect` arguments.
-    pub const DISPATCH_ARGS: Element = Element {
-        name: Cow::Borrowed("DispatchIndirectArgs"),
-        size: 12,
-    };
+    pub const DISPATCH_ARGS: Element = Element::named("DispatchIndirectArgs", 12);
     /// Four u32: `draw_indirect` arguments.
-    pub const DRAW_ARGS: Element = Element {
-        name: Cow::Borrowed("DrawIndirectArgs"),
-        size: 16,
-    };
+    pub const DRAW_ARGS: Element = Element::named("DrawIndirectArgs", 16);
     /// Bytes with no structure (staging, readback).
-    pub const BYTES: Element = Element {
-        name: Cow::Borrowed("u8"),
-        size: 1,
-    };
+    pub const BYTES: Element = Element::named("u8", 1);
 
     /// An element type of `size` bytes, named `name` in dumps and messages.
     pub const fn named(name: &'static str, size: u32) -> Element {

@@ -5,8 +5,8 @@ use crate::access::Access;
 use crate::builder::{Bindings, GraphBuilder};
 use crate::contract::{Slot, StageContract};
 use crate::error::Result;
-use crate::exec::RecordContext;
 use crate::pass::{Pass, SetupContext};
+use crate::record::RecordContext;
 use crate::resource::{BufferDesc, Element};
 
 /// A pass with any slots that records nothing: compile and CPU-overhead benchmarks.

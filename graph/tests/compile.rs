@@ -102,10 +102,11 @@ fn cycle_reports_the_whole_path() {
         .unwrap();
     g.add_pass("c", Fake::rw(&["z"], &["y"]), Bindings::new())
         .unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::Cycle { path }) => assert_eq!(path, ["a", "b", "c"]),
-        other => panic!("expected a cycle, got {:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::Cycle { path } = e else {
+        panic!("expected a cycle, got {e:?}");
+    };
+    assert_eq!(path, ["a", "b", "c"]);
 }
 
 #[test]
@@ -119,13 +120,14 @@ fn read_of_a_transient_nothing_writes_is_an_error() {
         Bindings::new(),
     )
     .unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::ReadWithoutWriter { pass, resource, .. }) => assert_eq!(
-            (pass.as_str(), resource.as_str()),
-            ("reader", "never_written")
-        ),
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::ReadWithoutWriter { pass, resource, .. } = e else {
+        panic!("{e:?}");
+    };
+    assert_eq!(
+        (pass.as_str(), resource.as_str()),
+        ("reader", "never_written")
+    );
 }
 
 #[test]
@@ -154,28 +156,28 @@ fn stale_handle_is_an_error_naming_the_writer() {
         Bindings::new().bind("t", t1),
     )
     .unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::StaleVersion {
-            pass,
-            resource,
+    let e = compile_error(g);
+    let GraphError::StaleVersion {
+        pass,
+        resource,
+        given,
+        current,
+        writer,
+        ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert_eq!(
+        (
+            pass.as_str(),
+            resource.as_str(),
             given,
             current,
-            writer,
-            ..
-        }) => {
-            assert_eq!(
-                (
-                    pass.as_str(),
-                    resource.as_str(),
-                    given,
-                    current,
-                    writer.as_str()
-                ),
-                ("late", "t", 1, 2, "second")
-            );
-        }
-        other => panic!("{:?}", other.err()),
-    }
+            writer.as_str()
+        ),
+        ("late", "t", 1, 2, "second")
+    );
 }
 
 #[test]
@@ -184,22 +186,22 @@ fn element_and_kind_mismatches_are_errors() {
     g.import_buffer("out", BufferDesc::array(Element::F32, 4), IMPORT_USAGE);
     g.add_pass("writer", Fake::rw(&[], &["out"]), Bindings::new())
         .unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::DescriptorMismatch {
-            pass,
-            slot,
-            expected,
-            found,
-            ..
-        }) => {
-            assert_eq!((pass.as_str(), slot.as_str()), ("writer", "out"));
-            assert!(
-                expected.contains("u32") && found.contains("f32"),
-                "{expected} / {found}"
-            );
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::DescriptorMismatch {
+        pass,
+        slot,
+        expected,
+        found,
+        ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert_eq!((pass.as_str(), slot.as_str()), ("writer", "out"));
+    assert!(
+        expected.contains("u32") && found.contains("f32"),
+        "{expected} / {found}"
+    );
 
     let mut g = GraphBuilder::new();
     g.import_texture(
@@ -210,8 +212,8 @@ fn element_and_kind_mismatches_are_errors() {
     g.add_pass("writer", Fake::rw(&[], &["out"]), Bindings::new())
         .unwrap();
     assert!(matches!(
-        g.compile(&opts()),
-        Err(GraphError::DescriptorMismatch { .. })
+        compile_error(g),
+        GraphError::DescriptorMismatch { .. }
     ));
 
     let mut g = GraphBuilder::new();
@@ -228,15 +230,17 @@ fn element_and_kind_mismatches_are_errors() {
     );
     g.add_pass("writer", Fake::new("t", vec![slot]), Bindings::new())
         .unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::DescriptorMismatch {
-            expected, found, ..
-        }) => assert_eq!(
-            (expected.as_str(), found.as_str()),
-            ("a r32float texture", "a rgba8unorm texture")
-        ),
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::DescriptorMismatch {
+        expected, found, ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert_eq!(
+        (expected.as_str(), found.as_str()),
+        ("a r32float texture", "a rgba8unorm texture")
+    );
 }
 
 #[test]
@@ -245,15 +249,15 @@ fn usage_the_import_does_not_allow_is_an_error() {
     g.import_buffer("out", u32s(4), wgpu::BufferUsages::COPY_SRC);
     g.add_pass("writer", Fake::rw(&[], &["out"]), Bindings::new())
         .unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::UsageNotAllowed {
-            resource, reason, ..
-        }) => {
-            assert_eq!(resource, "out");
-            assert!(reason.contains("STORAGE"), "{reason}");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::UsageNotAllowed {
+        resource, reason, ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert_eq!(resource, "out");
+    assert!(reason.contains("STORAGE"), "{reason}");
     // A buffer in an indirect slot is fine; a texture there is not.
     let mut g = GraphBuilder::new();
     g.import_texture(
@@ -276,8 +280,8 @@ fn usage_the_import_does_not_allow_is_an_error() {
     g.add_pass("draw", Fake::new("t", slots), Bindings::new())
         .unwrap();
     assert!(matches!(
-        g.compile(&opts()),
-        Err(GraphError::UsageNotAllowed { .. })
+        compile_error(g),
+        GraphError::UsageNotAllowed { .. }
     ));
 }
 
@@ -292,8 +296,8 @@ fn writing_last_frames_history_is_an_error() {
     )
     .unwrap();
     assert!(matches!(
-        g.compile(&opts()),
-        Err(GraphError::ReadOnlyResource { .. })
+        compile_error(g),
+        GraphError::ReadOnlyResource { .. }
     ));
 }
 
@@ -302,12 +306,11 @@ fn duplicate_names_are_errors() {
     let mut g = GraphBuilder::new();
     g.create_buffer("x", u32s(4));
     g.create_buffer("x", u32s(4));
-    match g.compile(&opts()) {
-        Err(GraphError::DuplicateName { what, name }) => {
-            assert_eq!((what, name.as_str()), ("resource", "x"))
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::DuplicateName { what, name } = e else {
+        panic!("{e:?}");
+    };
+    assert_eq!((what, name.as_str()), ("resource", "x"));
     let mut g = GraphBuilder::new();
     g.create_buffer("x", u32s(4));
     g.add_pass("p", Fake::rw(&[], &["x"]), Bindings::new())
@@ -325,13 +328,14 @@ fn required_feature_missing_on_the_adapter_is_an_error() {
     let mut p = Fake::rw(&[], &["out"]);
     p.required = wgpu::Features::TEXTURE_INT64_ATOMIC;
     g.add_pass("raster", p, Bindings::new()).unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::MissingFeature { pass, features, .. }) => assert_eq!(
-            (pass.as_str(), features.as_str()),
-            ("raster", "TEXTURE_INT64_ATOMIC")
-        ),
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::MissingFeature { pass, features, .. } = e else {
+        panic!("{e:?}");
+    };
+    assert_eq!(
+        (pass.as_str(), features.as_str()),
+        ("raster", "TEXTURE_INT64_ATOMIC")
+    );
 }
 
 #[test]
@@ -485,16 +489,16 @@ fn one_resource_in_a_read_and_a_write_slot_of_one_pass_is_an_error() {
             .bind_named("w", "out"),
     )
     .unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::UsageNotAllowed {
-            pass,
-            resource,
-            reason,
-            ..
-        }) => {
-            assert_eq!((pass.as_str(), resource.as_str()), ("p", "out"));
-            assert!(reason.contains("another slot"), "{reason}");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::UsageNotAllowed {
+        pass,
+        resource,
+        reason,
+        ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert_eq!((pass.as_str(), resource.as_str()), ("p", "out"));
+    assert!(reason.contains("another slot"), "{reason}");
 }

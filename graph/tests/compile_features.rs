@@ -34,10 +34,11 @@ fn a_size_that_overflows_u64_is_an_error_not_a_wrapped_size() {
     let h = g.create_buffer("huge", desc);
     g.export(h);
     one_writer(&mut g, "huge");
-    match g.compile(&opts()) {
-        Err(GraphError::SizeOverflow { resource }) => assert_eq!(resource, "huge"),
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::SizeOverflow { resource } = e else {
+        panic!("{e:?}");
+    };
+    assert_eq!(resource, "huge");
 }
 
 #[test]
@@ -50,16 +51,16 @@ fn a_buffer_over_max_buffer_size_is_a_compile_error() {
         "four_tib",
         Slot::buffer("out", Access::CopyDst, Element::BYTES, ""),
     );
-    match g.compile(&opts()) {
-        Err(GraphError::LimitExceeded {
-            what, limit, max, ..
-        }) => {
-            assert!(what.contains("four_tib"), "{what}");
-            assert_eq!(limit, "max_buffer_size");
-            assert_eq!(max, limits().max_buffer_size);
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::LimitExceeded {
+        what, limit, max, ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert!(what.contains("four_tib"), "{what}");
+    assert_eq!(limit, "max_buffer_size");
+    assert_eq!(max, limits().max_buffer_size);
 }
 
 #[test]
@@ -82,16 +83,15 @@ fn a_storage_binding_over_its_limit_names_the_pass_slot_and_limit() {
         Bindings::new().bind_named("out", "big"),
     )
     .unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::LimitExceeded { what, limit, .. }) => {
-            assert!(
-                what.contains("`big`") && what.contains("`out`") && what.contains("`w`"),
-                "{what}"
-            );
-            assert_eq!(limit, "max_storage_buffer_binding_size");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::LimitExceeded { what, limit, .. } = e else {
+        panic!("{e:?}");
+    };
+    assert!(
+        what.contains("`big`") && what.contains("`out`") && what.contains("`w`"),
+        "{what}"
+    );
+    assert_eq!(limit, "max_storage_buffer_binding_size");
     // The same buffer as a copy destination is fine: only bindings have that limit.
     let mut g = GraphBuilder::new();
     let h = g.create_buffer("big", BufferDesc::array(Element::BYTES, bytes));
@@ -113,13 +113,12 @@ fn more_mip_levels_than_the_size_has_is_an_error_naming_the_range() {
     );
     g.export(t);
     one_texture_writer(&mut g, "deep");
-    match g.compile(&opts()) {
-        Err(e @ GraphError::BadDeclaration { .. }) => assert_eq!(
-            e.to_string(),
-            "resource `deep`: 6 mip levels; a 16×8 texture has 1 to 5, declare a count in that range"
-        ),
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    assert!(matches!(e, GraphError::BadDeclaration { .. }), "{e:?}");
+    assert_eq!(
+        e.to_string(),
+        "resource `deep`: 6 mip levels; a 16×8 texture has 1 to 5, declare a count in that range"
+    );
 }
 
 #[test]
@@ -132,13 +131,12 @@ fn a_texture_over_the_dimension_limit_is_a_compile_error() {
     );
     g.export(t);
     one_texture_writer(&mut g, "wide");
-    match g.compile(&opts()) {
-        Err(GraphError::LimitExceeded { what, limit, .. }) => {
-            assert!(what.contains("wide"));
-            assert_eq!(limit, "max_texture_dimension_2d");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::LimitExceeded { what, limit, .. } = e else {
+        panic!("{e:?}");
+    };
+    assert!(what.contains("wide"));
+    assert_eq!(limit, "max_texture_dimension_2d");
 }
 
 #[test]
@@ -158,13 +156,12 @@ fn a_declared_dispatch_over_the_per_dimension_limit_is_a_compile_error() {
     let mut g = GraphBuilder::new();
     g.import_buffer("out", u32s(4), IMPORT_USAGE);
     g.add_pass("wide", wide, Bindings::new()).unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::LimitExceeded { what, limit, .. }) => {
-            assert!(what.contains("`main`") && what.contains("`wide`"), "{what}");
-            assert_eq!(limit, "max_compute_workgroups_per_dimension");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::LimitExceeded { what, limit, .. } = e else {
+        panic!("{e:?}");
+    };
+    assert!(what.contains("`main`") && what.contains("`wide`"), "{what}");
+    assert_eq!(limit, "max_compute_workgroups_per_dimension");
 }
 
 #[test]
@@ -219,14 +216,14 @@ fn size_parameters_resize_buffers_and_a_bad_value_leaves_the_plan_as_it_was() {
     let h = g.create_buffer("list", BufferDesc::array_param(Element::U32, "slotz"));
     g.export(h);
     one_writer(&mut g, "list");
-    match g.compile(&opts()) {
-        Err(GraphError::UnknownParam {
-            resource, param, ..
-        }) => {
-            assert_eq!((resource.as_str(), param.as_str()), ("list", "slotz"))
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::UnknownParam {
+        resource, param, ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert_eq!((resource.as_str(), param.as_str()), ("list", "slotz"))
 }
 
 /// Adds a `mip_pass` reading range `src` of `t` and writing range `dst` of it.
@@ -291,13 +288,12 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
         let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_full_mips();
         let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
         add_mip_pass(&mut g, "bad", t, src, dst).unwrap();
-        match g.compile(&opts()) {
-            Err(GraphError::UsageNotAllowed { pass, reason, .. }) => {
-                assert_eq!(pass, "bad");
-                assert!(reason.contains("overlapping"), "{reason}");
-            }
-            other => panic!("{:?}", other.err()),
-        }
+        let e = compile_error(g);
+        let GraphError::UsageNotAllowed { pass, reason, .. } = e else {
+            panic!("{e:?}");
+        };
+        assert_eq!(pass, "bad");
+        assert!(reason.contains("overlapping"), "{reason}");
     }
     // A range outside the texture is a descriptor error.
     let mut g = GraphBuilder::new();
@@ -305,8 +301,8 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
     let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
     add_mip_pass(&mut g, "bad", t, TextureRange::mip(0), TextureRange::mip(2)).unwrap();
     assert!(matches!(
-        g.compile(&opts()),
-        Err(GraphError::DescriptorMismatch { .. })
+        compile_error(g),
+        GraphError::DescriptorMismatch { .. }
     ));
 }
 
@@ -326,8 +322,8 @@ fn texture_arrays_and_layer_ranges_plan_like_mips() {
     // Layer 1 has no writer yet.
     assert!(out.is_ok());
     assert!(matches!(
-        g.compile(&opts()),
-        Err(GraphError::ReadWithoutWriter { .. })
+        compile_error(g),
+        GraphError::ReadWithoutWriter { .. }
     ));
 }
 
@@ -403,13 +399,12 @@ fn a_64_bit_visibility_slot_takes_a_u64_buffer_or_an_r64uint_texture() {
             .contains(wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::STORAGE_ATOMIC)
     );
     assert!(c.plan.passes[0].required_features.contains(atomics));
-    match build().compile(&opts()) {
-        Err(GraphError::MissingFeature { pass, features, .. }) => {
-            assert_eq!(pass, "raster");
-            assert!(features.contains("TEXTURE_INT64_ATOMIC"), "{features}");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(build());
+    let GraphError::MissingFeature { pass, features, .. } = e else {
+        panic!("{e:?}");
+    };
+    assert_eq!(pass, "raster");
+    assert!(features.contains("TEXTURE_INT64_ATOMIC"), "{features}");
 
     // Anything else: a descriptor error naming both.
     let mut g = GraphBuilder::new();
@@ -420,15 +415,15 @@ fn a_64_bit_visibility_slot_takes_a_u64_buffer_or_an_r64uint_texture() {
         Bindings::new().bind("vis", v),
     )
     .unwrap();
-    match g.compile(&opts()) {
-        Err(GraphError::DescriptorMismatch {
-            expected, found, ..
-        }) => {
-            assert!(expected.contains("64-bit visibility"), "{expected}");
-            assert!(found.contains("u32"), "{found}");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(g);
+    let GraphError::DescriptorMismatch {
+        expected, found, ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert!(expected.contains("64-bit visibility"), "{expected}");
+    assert!(found.contains("u32"), "{found}");
 }
 
 const MESH: PassShader = PassShader {
@@ -460,13 +455,12 @@ fn a_mesh_program_requires_the_mesh_shader_feature() {
         g.add_pass("hw", meshy(), Bindings::new()).unwrap();
         g
     };
-    match build().compile(&opts()) {
-        Err(GraphError::MissingFeature { pass, features, .. }) => {
-            assert_eq!(pass, "hw");
-            assert!(features.contains("EXPERIMENTAL_MESH_SHADER"), "{features}");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let e = compile_error(build());
+    let GraphError::MissingFeature { pass, features, .. } = e else {
+        panic!("{e:?}");
+    };
+    assert_eq!(pass, "hw");
+    assert!(features.contains("EXPERIMENTAL_MESH_SHADER"), "{features}");
     let c = build()
         .compile(&CompileOptions::new(
             wgpu::Features::EXPERIMENTAL_MESH_SHADER,

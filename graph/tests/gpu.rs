@@ -85,13 +85,7 @@ fn history_resource_carries_from_frame_to_frame() {
     let mut exec = Executor::new(gpu);
     for frame in 1..=4u32 {
         exec.execute(&compiled, &Imports::new()).unwrap();
-        let bytes = exec.read_buffer("counter").unwrap();
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
-        assert!(
-            words.iter().all(|&w| w == frame),
-            "frame {frame}: {:?}",
-            &words[..4]
-        );
+        assert_every_word(&mut exec, "counter", frame, &format!("frame {frame}"));
     }
 }
 
@@ -121,29 +115,24 @@ fn steady_graph_allocates_nothing_after_the_first_frame() {
 #[test]
 fn wgpu_validation_error_surfaces_as_an_error() {
     // Dispatching more workgroups than the device allows is a validation error.
-    struct Oversized;
-    impl Pass for Oversized {
-        fn contract(&self) -> StageContract {
-            produce_contract()
-        }
-        fn implementation(&self) -> &'static str {
-            "oversized"
-        }
-        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+    let oversized = fake::pass(
+        "produce",
+        produce_contract().slots,
+        |ctx| {
             let layout = BindingLayout::compute("fill").slot(1, "output").uniform(2);
             ctx.program("fill", ProgramDesc::compute(&SHADER, "fill").layout(layout));
             Ok(())
-        }
-        fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        },
+        |ctx| {
             let params = [1u32, 1, 0, 0];
             let uniforms = [(2, bytemuck::cast_slice(&params))];
-            support::dispatch_once(ctx, "fill", &uniforms, [u32::MAX, 1, 1])
-        }
-    }
+            dispatch_once(ctx, "fill", &uniforms, [u32::MAX, 1, 1])
+        },
+    );
     let gpu = gpu();
     let mut g = GraphBuilder::new();
     let out = g.import_buffer("out", BufferDesc::array(Element::U32, 16), USAGE);
-    g.add_pass("too_big", Oversized, Bindings::new().bind("output", out))
+    g.add_pass("too_big", oversized, Bindings::new().bind("output", out))
         .unwrap();
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let buffer = gpu.buffer_with_data("out", &[0u8; 64], USAGE);

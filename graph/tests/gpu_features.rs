@@ -6,25 +6,13 @@ mod support;
 use meshlight_graph::*;
 use support::fake::pass;
 use support::rects::*;
-use support::{dispatch_once, gpu};
+use support::{add_exported, dispatch_once, gpu, read_export};
 
 const RASTER: PassShader = support::support_shader!("test::features", "features.wgsl");
 const COMPUTE: PassShader = support::support_shader!("test::compute", "compute.wgsl");
 
 fn params(a: u32, b: u32) -> [u32; 4] {
     [a, b, 0, 0]
-}
-
-/// Adds `pass` and exports the buffer it writes through `slot`, for the test to read.
-fn add_exported(
-    g: &mut GraphBuilder,
-    name: &str,
-    pass: impl Pass + 'static,
-    bindings: Bindings,
-    slot: &str,
-) {
-    let out = g.add_pass(name, pass, bindings).unwrap();
-    g.export(out.buffer(slot).unwrap());
 }
 
 /// Declares the compute program `name` running `entry` of the test kernels.
@@ -36,10 +24,6 @@ fn declare(
 ) -> Result<()> {
     ctx.program(name, ProgramDesc::compute(&COMPUTE, entry).layout(layout));
     Ok(())
-}
-
-fn read<T: bytemuck::Pod>(exec: &mut Executor, name: &str) -> Vec<T> {
-    bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
 }
 
 // ---------------------------------------------------------------------------------------
@@ -103,7 +87,7 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
     // Twice: the second frame must clear what the first left.
     let rects = bytemuck::cast_slice(&vertices);
     let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 2);
-    let got: Vec<u64> = read(&mut exec, "vis");
+    let got: Vec<u64> = read_export(&mut exec, "vis");
     let want = cpu_rects();
     let wrong = got.iter().zip(&want).filter(|(a, b)| a != b).count();
     assert_eq!(wrong, 0, "{wrong} of {} pixels differ", want.len());
@@ -294,7 +278,7 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
 
     let source = bytemuck::cast_slice(&base);
     let mut exec = support::run_frames(gpu, &compiled, ("source", source), 1);
-    let got: Vec<f32> = read(&mut exec, "gathered");
+    let got: Vec<f32> = read_export(&mut exec, "gathered");
     let want: Vec<f32> = cpu_pyramid(&base).concat();
     assert_eq!(got.len(), want.len());
     assert_eq!(got, want);
@@ -411,11 +395,11 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
         exec.execute(&compiled, &Imports::new()).unwrap();
     }
     let appended = N.div_ceil(3);
-    let marks: Vec<u32> = read(&mut exec, "marks");
+    let marks: Vec<u32> = read_export(&mut exec, "marks");
     for (i, m) in marks.iter().enumerate() {
         assert_eq!(*m, if i % 3 == 0 { 7 } else { 0 }, "mark {i}");
     }
-    let seen: Vec<u32> = read(&mut exec, "seen");
+    let seen: Vec<u32> = read_export(&mut exec, "seen");
     for (i, s) in seen.iter().enumerate() {
         let want = if (i as u32) < appended {
             appended * 1000 + i as u32
@@ -488,7 +472,7 @@ fn frame_data_changes_every_frame_without_recompiling_or_allocating() {
             );
         }
         if f % 10 == 9 {
-            let got: Vec<u32> = read(&mut exec, "stamp");
+            let got: Vec<u32> = read_export(&mut exec, "stamp");
             assert_eq!(got, [7919 * f + 3, f], "frame {f}");
         }
     }
@@ -597,7 +581,7 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
     }
     let small_pool = exec.pool_bytes_held();
     assert_eq!(small_pool, 1024 * 4);
-    let hist3: Vec<u32> = read(&mut exec, "hist");
+    let hist3: Vec<u32> = read_export(&mut exec, "hist");
     assert_eq!((hist3.len(), hist3[0], hist3[1023]), (1024, 3, 3));
 
     compiled.set_param("slots", 16384).unwrap();
@@ -605,11 +589,11 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
     assert_eq!(compiled.plan.bytes_with_reuse, 16384 * 4);
     let stats = exec.execute(&compiled, &Imports::new()).unwrap();
     assert!(stats.allocations > 0);
-    let list: Vec<u32> = read(&mut exec, "list");
+    let list: Vec<u32> = read_export(&mut exec, "list");
     assert_eq!(list.len(), 16384);
     assert!(list.iter().enumerate().all(|(i, &v)| v == i as u32 * 2 + 1));
     // History was resized and restarted: `prev` held nothing from before the resize.
-    let hist: Vec<u32> = read(&mut exec, "hist");
+    let hist: Vec<u32> = read_export(&mut exec, "hist");
     assert_eq!(hist.len(), 16384);
     assert!(hist.iter().all(|&v| v == 1), "{:?}", &hist[..4]);
     assert_eq!(exec.pool_bytes_held(), small_pool + 16384 * 4);
@@ -617,7 +601,7 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
         exec.execute(&compiled, &Imports::new()).unwrap();
     }
     assert_eq!(exec.pool_bytes_held(), 16384 * 4, "the old list was freed");
-    let hist: Vec<u32> = read(&mut exec, "hist");
+    let hist: Vec<u32> = read_export(&mut exec, "hist");
     assert!(hist.iter().all(|&v| v == 5));
 }
 
@@ -687,7 +671,7 @@ fn run_immediates(features: wgpu::Features) -> (bool, Vec<u32>) {
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let mut exec = Executor::new(gpu);
     exec.execute(&compiled, &Imports::new()).unwrap();
-    (native, read(&mut exec, "out"))
+    (native, read_export(&mut exec, "out"))
 }
 
 #[test]
@@ -915,7 +899,7 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let mut exec = Executor::new(gpu);
     exec.execute(&compiled, &Imports::new()).unwrap();
-    let got: Vec<f32> = read(&mut exec, "flat");
+    let got: Vec<f32> = read_export(&mut exec, "flat");
     let want: Vec<f32> = (0..LAYERS * SIDE * SIDE)
         .map(|i| (100 * (i / (SIDE * SIDE) + 1) + i % SIDE) as f32)
         .collect();
@@ -1041,7 +1025,7 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
     assert_eq!(ops("depth"), Some((LoadOp::Clear, StoreOp::Discard)));
     let rects = bytemuck::cast_slice(&vertices);
     let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 1);
-    let got: Vec<u32> = read(&mut exec, "out");
+    let got: Vec<u32> = read_export(&mut exec, "out");
     let ids: Vec<u32> = got.iter().map(|px| px & 0xff).collect();
     let want: Vec<u32> = cpu_rects()
         .iter()

@@ -44,14 +44,13 @@ fn mesh_graph(task: bool) -> GraphBuilder {
         wgpu::BufferUsages::STORAGE,
     );
     let vis = g.create_buffer("vis", BufferDesc::array(Element::U64, (W * H) as u64));
-    let out = g
-        .add_pass(
-            "mesh_raster",
-            MeshRaster { task },
-            Bindings::new().bind("rects", rects).bind("vis", vis),
-        )
-        .unwrap();
-    g.export(out.buffer("vis").unwrap());
+    support::add_exported(
+        &mut g,
+        "mesh_raster",
+        MeshRaster { task },
+        Bindings::new().bind("rects", rects).bind("vis", vis),
+        "vis",
+    );
     g
 }
 
@@ -146,6 +145,6 @@ fn mesh_pass_against_the_cpu(adapter: &GpuAdapter, has_mesh: bool, task: bool) {
         .collect();
     let rects = bytemuck::cast_slice(&data);
     let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 1);
-    let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("vis").unwrap());
+    let got: Vec<u64> = support::read_export(&mut exec, "vis");
     assert_eq!(got, cpu_rects(), "task stage: {task}");
 }

@@ -96,6 +96,6 @@ fn an_r64uint_visibility_texture_rasterises_like_the_cpu_where_atomics_exist() {
     let gpu = adapter.open(compiled.plan.enabled_features).unwrap();
     let rects = bytemuck::cast_slice(&vertices);
     let mut exec = support::run_frames(gpu, &compiled, ("rects", rects), 2);
-    let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("out").unwrap());
+    let got: Vec<u64> = support::read_export(&mut exec, "out");
     assert_eq!(got, cpu_rects());
 }

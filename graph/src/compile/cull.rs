@@ -1,8 +1,8 @@
 //! Culling: a pass runs only if what it writes reaches something visible outside the frame
 //! (an imported, history or exported resource) or it declares a side effect.
 
-use crate::builder::PassNode;
 use crate::compile::versions::{Edge, EdgeKind};
+use crate::node::PassNode;
 use crate::resource::ResourceInfo;
 
 /// Returns, per pass, whether it is kept.
@@ -16,10 +16,7 @@ pub fn live_passes(
     let mut stack: Vec<usize> = Vec::new();
     for (p, node) in passes.iter().enumerate() {
         let visible = node
-            .contract
-            .slots
-            .iter()
-            .zip(&node.bindings)
+            .bound_slots()
             .any(|(s, h)| s.writes() && resources[h.id.index()].is_visible_outside());
         if visible || side_effects[p] {
             live[p] = true;

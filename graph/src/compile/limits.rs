@@ -2,9 +2,9 @@
 //! that would make wgpu panic) is a typed error naming the resource or pass and the limit.
 
 use crate::access::Access;
-use crate::builder::PassNode;
 use crate::compile::PassSetup;
 use crate::error::{GraphError, Result};
+use crate::node::PassNode;
 use crate::resource::{ResourceDesc, ResourceInfo};
 
 pub(crate) fn check(
@@ -80,7 +80,7 @@ pub(crate) fn check(
     }
     for &p in order {
         let node = &passes[p];
-        for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+        for (slot, h) in node.bound_slots() {
             let res = &resources[h.id.index()];
             let ResourceDesc::Buffer(b) = &res.desc else {
                 continue;

@@ -9,10 +9,11 @@ pub mod slots;
 pub mod versions;
 
 use crate::access::{Access, texture_usage_for};
-use crate::builder::{GraphBuilder, PassNode, VisibilityDecl};
+use crate::builder::{GraphBuilder, VisibilityDecl};
 use crate::choice::Choice;
 use crate::error::{GraphError, Result};
 use crate::names::feature_names;
+use crate::node::PassNode;
 use crate::pass::SetupContext;
 use crate::pass::Visibility64;
 use crate::plan::*;
@@ -186,48 +187,30 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     // Keep, for each pass given several implementations, the one the adapter runs.
     let mut choices: Vec<Option<ChoicePlan>> = Vec::with_capacity(passes.len());
     let mut chosen_passes = Vec::with_capacity(passes.len());
-    for node in passes {
-        let PassNode {
-            name,
-            pass,
-            contract,
-            bindings,
-            ranges,
-            alternatives,
-        } = node;
-        let pass = match alternatives {
-            None => {
-                choices.push(None);
-                pass
-            }
+    for mut node in passes {
+        match node.alternatives.take() {
+            None => choices.push(None),
             Some((selection, rest)) => {
-                let mut candidates = vec![pass];
+                let mut candidates = vec![node.pass];
                 candidates.extend(rest);
                 let choice = Choice {
                     selection,
                     candidates,
                 };
-                let (pass, plan) = crate::choice::resolve(&name, choice, |c| {
+                let (pass, plan) = crate::choice::resolve(&node.name, choice, |c| {
                     crate::choice::missing_features(
                         c,
                         options.adapter_features,
                         &options.limits,
                         &params,
-                        contract.slot_names(),
+                        node.contract.slot_names(),
                     )
                 })?;
+                node.pass = pass;
                 choices.push(Some(plan));
-                pass
             }
-        };
-        chosen_passes.push(PassNode {
-            name,
-            pass,
-            contract,
-            bindings,
-            ranges,
-            alternatives: None,
-        });
+        }
+        chosen_passes.push(node);
     }
     let passes = chosen_passes;
     visibility_forms(&mut resources, &passes, &visibility)?;
@@ -238,10 +221,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     let mut scratch_of: Vec<Vec<usize>> = Vec::with_capacity(passes.len());
     for (p, node) in passes.iter().enumerate() {
         let textures = node
-            .contract
-            .slots
-            .iter()
-            .zip(&node.bindings)
+            .bound_slots()
             .filter(|(_, h)| matches!(resources[h.id.index()].desc, ResourceDesc::Texture(_)))
             .map(|(s, _)| s.name)
             .collect();
@@ -261,7 +241,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         })?;
         // 64-bit texture atomics on a bound R64Uint texture are a requirement of the
         // binding itself, whatever the pass declared.
-        for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+        for (slot, h) in node.bound_slots() {
             if let ResourceDesc::Texture(t) = &resources[h.id.index()].desc {
                 for a in slot.accesses() {
                     ctx.required |= crate::access::texture_features_for(a, t.format);
@@ -466,7 +446,7 @@ fn recording(
                 | Access::Index
         )
     };
-    for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+    for (slot, h) in node.bound_slots() {
         if let Some(a) = slot.accesses().find(|&a| encoder_access(a)) {
             return Recording::Encoder(format!("slot `{}` is {}", slot.name, a.name()));
         }
@@ -504,7 +484,7 @@ fn usages(
         }
     };
     for &p in order {
-        for (slot, h) in passes[p].contract.slots.iter().zip(&passes[p].bindings) {
+        for (slot, h) in passes[p].bound_slots() {
             for a in slot.accesses() {
                 add(h.id.index(), a);
             }
@@ -553,10 +533,7 @@ fn slot_uses(
     live: &[bool],
     node: &PassNode,
 ) -> Vec<SlotUse> {
-    node.contract
-        .slots
-        .iter()
-        .zip(&node.bindings)
+    node.bound_slots()
         .zip(&node.ranges)
         .map(|((slot, h), range)| {
             let r = h.id.index();
@@ -648,7 +625,7 @@ fn visibility_forms(
         let Some(wants) = node.pass.visibility64() else {
             continue;
         };
-        for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+        for (slot, h) in node.bound_slots() {
             if slot.kind != crate::contract::SlotKind::Visibility64 {
                 continue;
             }

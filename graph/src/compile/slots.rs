@@ -1,22 +1,16 @@
 //! Each slot against the resource bound to it: kind, element or format, texture range,
 //! size, usage, and which slots of one pass may share a resource.
 
-use crate::builder::PassNode;
 use crate::contract::{Slot, SlotKind};
 use crate::error::{GraphError, Result};
 use crate::names::format_name;
+use crate::node::PassNode;
 use crate::resource::*;
 
 pub(crate) fn check_slots(resources: &[ResourceInfo], node: &PassNode) -> Result<()> {
     // Per resource, the slots of this pass already seen on it: (slot, writes, range).
     let mut seen: Vec<(ResourceId, &Slot, Option<TextureRange>)> = Vec::new();
-    for ((slot, h), range) in node
-        .contract
-        .slots
-        .iter()
-        .zip(&node.bindings)
-        .zip(&node.ranges)
-    {
+    for ((slot, h), range) in node.bound_slots().zip(&node.ranges) {
         let res = &resources[h.id.index()];
         let mismatch = |expected: String, found: String| GraphError::DescriptorMismatch {
             pass: node.name.clone(),
@@ -162,6 +156,12 @@ fn check_usage(
         needed,
         reason,
     };
+    let imported_without = |need: &dyn std::fmt::Debug, have: &dyn std::fmt::Debug| {
+        usage_err(
+            format!("{need:?}"),
+            format!("it was imported with only {have:?}; create it with {need:?} too"),
+        )
+    };
     match &res.desc {
         ResourceDesc::Buffer(_) => {
             let Some(need) = access.buffer_usage() else {
@@ -175,10 +175,7 @@ fn check_usage(
             } = res.kind
                 && !have.contains(need)
             {
-                return Err(usage_err(
-                    format!("{need:?}"),
-                    format!("it was imported with only {have:?}; create it with {need:?} too"),
-                ));
+                return Err(imported_without(&need, &have));
             }
         }
         ResourceDesc::Texture(t) => {
@@ -204,10 +201,7 @@ fn check_usage(
             } = res.kind
                 && !have.contains(need)
             {
-                return Err(usage_err(
-                    format!("{need:?}"),
-                    format!("it was imported with only {have:?}; create it with {need:?} too"),
-                ));
+                return Err(imported_without(&need, &have));
             }
         }
     }
@@ -220,7 +214,7 @@ pub(crate) fn check_min_bytes(
     node: &PassNode,
     min_bytes: &[(String, u64)],
 ) -> Result<()> {
-    for (slot, h) in node.contract.slots.iter().zip(&node.bindings) {
+    for (slot, h) in node.bound_slots() {
         let res = &resources[h.id.index()];
         for (_, min) in min_bytes.iter().filter(|(s, _)| s == slot.name) {
             if res.desc.bytes() < *min {

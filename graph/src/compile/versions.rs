@@ -1,8 +1,8 @@
 //! Walks the passes in declaration order, checks every handle's version and derives the
 //! dependency edges: writer → reader, reader → next writer, writer → next writer.
 
-use crate::builder::PassNode;
 use crate::error::{GraphError, Result};
+use crate::node::PassNode;
 pub(crate) use crate::plan::{Edge, EdgeKind};
 use crate::resource::{ResourceDesc, ResourceInfo, TextureRange};
 use std::collections::HashMap;
@@ -16,18 +16,16 @@ pub struct VersionTable {
 }
 
 pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<VersionTable> {
+    let g = Graph { resources, passes };
     let mut t = VersionTable::default();
     let mut current = vec![0u32; resources.len()];
     // Reads of versions not yet written in declaration order (possible only with explicit
     // versions, as in pipeline files); resolved once every writer is known.
-    let mut forward: Vec<(usize, usize, &str, u32)> = Vec::new();
+    let mut forward: Vec<(SlotUse, u32)> = Vec::new();
 
     for (p, node) in passes.iter().enumerate() {
         let slots: Vec<_> = node
-            .contract
-            .slots
-            .iter()
-            .zip(&node.bindings)
+            .bound_slots()
             .zip(&node.ranges)
             .map(|((s, h), range)| (s, h, range))
             .collect();
@@ -35,15 +33,14 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
         // and writes mip N of one texture reads what came before it, whatever the slot order.
         for (slot, h, _) in slots.iter().filter(|(s, _, _)| !s.writes()) {
             let r = h.id.index();
+            let at = SlotUse::new(p, slot.name, r);
             let cur = current[r];
             if h.version < cur {
-                return Err(stale(
-                    &t, resources, passes, p, slot.name, r, h.version, cur,
-                ));
+                return Err(g.stale(&t, at, h.version, cur));
             } else if h.version > cur {
-                forward.push((p, r, slot.name, h.version));
+                forward.push((at, h.version));
             } else {
-                read_edge(&mut t, resources, passes, p, slot.name, r, cur)?;
+                g.read_edge(&mut t, at, cur)?;
                 t.readers.entry((r, cur)).or_default().push(p);
             }
         }
@@ -51,18 +48,17 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
         let mut written: Vec<usize> = Vec::new();
         for (slot, h, range) in slots.iter().filter(|(s, _, _)| s.writes()) {
             let r = h.id.index();
+            let at = SlotUse::new(p, slot.name, r);
             let cur = if written.contains(&r) {
                 current[r] - 1
             } else {
                 current[r]
             };
             if h.version != cur {
-                return Err(stale(
-                    &t, resources, passes, p, slot.name, r, h.version, current[r],
-                ));
+                return Err(g.stale(&t, at, h.version, current[r]));
             }
             if slot.reads() {
-                read_edge(&mut t, resources, passes, p, slot.name, r, cur)?;
+                g.read_edge(&mut t, at, cur)?;
             } else if partial(&resources[r], **range)
                 && let Some(&w) = t.writer.get(&(r, cur))
             {
@@ -84,9 +80,10 @@ pub fn derive_edges(resources: &[ResourceInfo], passes: &[PassNode]) -> Result<V
             written.push(r);
         }
     }
-    for (p, r, slot, v) in forward {
+    for (at, v) in forward {
+        let (p, r) = (at.pass, at.resource);
         let Some(&w) = t.writer.get(&(r, v)) else {
-            return Err(no_writer(resources, passes, p, slot, r, v));
+            return Err(g.no_writer(at, v));
         };
         push(&mut t.edges, w, p, r, v, EdgeKind::ReadAfterWrite);
         if let Some(&next) = t.writer.get(&(r, v + 1)) {
@@ -107,61 +104,67 @@ fn partial(res: &ResourceInfo, range: Option<TextureRange>) -> bool {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn stale(
-    t: &VersionTable,
-    resources: &[ResourceInfo],
-    passes: &[PassNode],
-    p: usize,
-    slot: &str,
-    r: usize,
-    given: u32,
-    current: u32,
-) -> GraphError {
-    GraphError::StaleVersion {
-        pass: passes[p].name.clone(),
-        slot: slot.to_string(),
-        resource: resources[r].name.clone(),
-        given,
-        current,
-        writer: t
-            .writer
-            .get(&(r, current))
-            .map(|&w| passes[w].name.clone())
-            .unwrap_or_default(),
+/// Pass `pass` binding resource `resource` through `slot`: where a version error points.
+#[derive(Clone, Copy)]
+struct SlotUse<'s> {
+    pass: usize,
+    slot: &'s str,
+    resource: usize,
+}
+
+impl<'s> SlotUse<'s> {
+    fn new(pass: usize, slot: &'s str, resource: usize) -> Self {
+        Self {
+            pass,
+            slot,
+            resource,
+        }
     }
 }
 
-fn read_edge(
-    t: &mut VersionTable,
-    resources: &[ResourceInfo],
-    passes: &[PassNode],
-    p: usize,
-    slot: &str,
-    r: usize,
-    v: u32,
-) -> Result<()> {
-    match t.writer.get(&(r, v)) {
-        Some(&w) => push(&mut t.edges, w, p, r, v, EdgeKind::ReadAfterWrite),
-        None if v == 0 && resources[r].starts_written() => {}
-        None => return Err(no_writer(resources, passes, p, slot, r, v)),
-    }
-    Ok(())
+/// The resources and passes being walked, whose names version errors give.
+#[derive(Clone, Copy)]
+struct Graph<'g> {
+    resources: &'g [ResourceInfo],
+    passes: &'g [PassNode],
 }
 
-fn no_writer(
-    resources: &[ResourceInfo],
-    passes: &[PassNode],
-    p: usize,
-    slot: &str,
-    r: usize,
-    v: u32,
-) -> GraphError {
-    GraphError::ReadWithoutWriter {
-        pass: passes[p].name.clone(),
-        slot: slot.to_string(),
-        resource: resources[r].name.clone(),
-        version: v,
+impl Graph<'_> {
+    /// `at` binds version `given` where `current` is the newest; names who wrote that.
+    fn stale(self, t: &VersionTable, at: SlotUse, given: u32, current: u32) -> GraphError {
+        GraphError::StaleVersion {
+            pass: self.passes[at.pass].name.clone(),
+            slot: at.slot.to_string(),
+            resource: self.resources[at.resource].name.clone(),
+            given,
+            current,
+            writer: t
+                .writer
+                .get(&(at.resource, current))
+                .map(|&w| self.passes[w].name.clone())
+                .unwrap_or_default(),
+        }
+    }
+
+    /// The read-after-write edge from the writer of version `v` to the pass reading it at
+    /// `at`; none for the first version of what starts written (imports, history).
+    fn read_edge(self, t: &mut VersionTable, at: SlotUse, v: u32) -> Result<()> {
+        let r = at.resource;
+        match t.writer.get(&(r, v)) {
+            Some(&w) => push(&mut t.edges, w, at.pass, r, v, EdgeKind::ReadAfterWrite),
+            None if v == 0 && self.resources[r].starts_written() => {}
+            None => return Err(self.no_writer(at, v)),
+        }
+        Ok(())
+    }
+
+    fn no_writer(self, at: SlotUse, version: u32) -> GraphError {
+        GraphError::ReadWithoutWriter {
+            pass: self.passes[at.pass].name.clone(),
+            slot: at.slot.to_string(),
+            resource: self.resources[at.resource].name.clone(),
+            version,
+        }
     }
 }
 

@@ -7,15 +7,15 @@
 use crate::compile::CompiledGraph;
 use crate::error::{GraphError, Result};
 use crate::exec::context::GpuContext;
-use crate::exec::fill::Fill;
-use crate::exec::frame::FrameData;
-use crate::exec::physical::{self, Physical, PhysicalPool};
-use crate::exec::programs::Programs;
-use crate::exec::readback::{Readback, Readbacks};
-use crate::exec::record::RecordContext;
-use crate::exec::shared::{BatchStamps, SharedPass};
 use crate::exec::timing::{GpuTimings, Timestamps, TimingMode};
-use crate::exec::views::ViewCache;
+use crate::record::RecordContext;
+use crate::record::fill::Fill;
+use crate::record::frame::FrameData;
+use crate::record::physical::{self, Physical, PhysicalPool};
+use crate::record::programs::Programs;
+use crate::record::readback::{Readback, Readbacks};
+use crate::record::shared::{BatchStamps, SharedPass};
+use crate::record::views::ViewCache;
 use crate::resource::{ImportedUsage, ResourceDesc, ResourceKind};
 use serde::Serialize;
 use std::collections::{HashMap, VecDeque};
@@ -463,7 +463,18 @@ impl Executor {
         shared.unplanned.clear();
         shared.opened = 0;
         let ts = self.timestamps.as_ref().filter(|_| mode != TimingMode::Off);
-        let fill = self.fill.get_or_insert_with(|| Fill::new(device));
+        let mut recorder = FrameRecord {
+            gpu: &self.gpu,
+            graph,
+            physical: &physical,
+            history_valid: &history_valid,
+            frame_data,
+            frame,
+            fill: self.fill.get_or_insert_with(|| Fill::new(device)),
+            programs: &mut self.programs,
+            views: &mut self.views,
+            readbacks: &mut self.readbacks,
+        };
         let mut at = 0;
         let mut failed = None;
         'batches: for (b, batch) in plan.batches.iter().enumerate() {
@@ -497,28 +508,7 @@ impl Executor {
                     t.write(&mut encoder, 2 * at);
                 }
                 let splits_before = shared.unplanned.len();
-                let mut ctx = RecordContext {
-                    device,
-                    queue: &self.gpu.queue,
-                    features: self.gpu.features,
-                    encoder: &mut encoder,
-                    node,
-                    setup: &graph.setups[p],
-                    pass_index: p,
-                    plan,
-                    physical: &physical,
-                    programs: &mut self.programs,
-                    views: &mut self.views,
-                    readbacks: &mut self.readbacks,
-                    frame_data,
-                    frame_index: frame,
-                    history_valid: &history_valid,
-                    shared: &mut shared,
-                    batched,
-                    fill,
-                    graph_id: graph.id,
-                };
-                let recorded = node.pass.record(&mut ctx);
+                let recorded = recorder.record(p, &mut encoder, &mut shared, batched);
                 if batched {
                     if let Some(t) = pass_stamps {
                         shared
@@ -687,8 +677,19 @@ impl Executor {
     ) -> Option<GraphError> {
         let plan = &graph.plan;
         let device = &self.gpu.device;
-        let fill = self.fill.get_or_insert_with(|| Fill::new(device));
         self.programs.uniforms.begin_frame();
+        let mut recorder = FrameRecord {
+            gpu: &self.gpu,
+            graph,
+            physical,
+            history_valid,
+            frame_data,
+            frame: self.frame,
+            fill: self.fill.get_or_insert_with(|| Fill::new(device)),
+            programs: &mut self.programs,
+            views: &mut self.views,
+            readbacks: &mut self.readbacks,
+        };
         let mut shared = SharedPass::default();
         let mut found = None;
         for &p in &plan.order {
@@ -697,28 +698,7 @@ impl Executor {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some(&node.name),
             });
-            let mut ctx = RecordContext {
-                device,
-                queue: &self.gpu.queue,
-                features: self.gpu.features,
-                encoder: &mut encoder,
-                node,
-                setup: &graph.setups[p],
-                pass_index: p,
-                plan,
-                physical,
-                programs: &mut self.programs,
-                views: &mut self.views,
-                readbacks: &mut self.readbacks,
-                frame_data,
-                frame_index: self.frame,
-                history_valid,
-                shared: &mut shared,
-                batched: false,
-                fill,
-                graph_id: graph.id,
-            };
-            let recorded = node.pass.record(&mut ctx);
+            let recorded = recorder.record(p, &mut encoder, &mut shared, false);
             drop(encoder.finish());
             let invalid = pollster::block_on(scope.pop());
             if let Some(e) = invalid {
@@ -933,5 +913,57 @@ fn usage_covers<U: bitflags::Flags + Copy + std::fmt::Debug>(
         Err(format!(
             "declared usage {declared:?}, the {what} has {has:?}"
         ))
+    }
+}
+
+/// What the passes of one frame record against: the frame's resources and inputs, and
+/// the executor's caches, lent to one pass at a time by [`FrameRecord::record`].
+struct FrameRecord<'f> {
+    gpu: &'f GpuContext,
+    graph: &'f CompiledGraph,
+    physical: &'f [Option<Physical>],
+    history_valid: &'f [bool],
+    frame_data: &'f FrameData,
+    frame: u64,
+    fill: &'f Fill,
+    programs: &'f mut Programs,
+    views: &'f mut ViewCache,
+    readbacks: &'f mut Readbacks,
+}
+
+impl FrameRecord<'_> {
+    /// Records pass `p` into `encoder`: into `shared`'s compute pass when `batched`.
+    fn record(
+        &mut self,
+        p: usize,
+        encoder: &mut wgpu::CommandEncoder,
+        shared: &mut SharedPass,
+        batched: bool,
+    ) -> Result<()> {
+        let node = &self.graph.passes[p];
+        let mut ctx = RecordContext {
+            device: &self.gpu.device,
+            queue: &self.gpu.queue,
+            features: self.gpu.features,
+            encoder,
+            name: &node.name,
+            contract: &node.contract,
+            stage_slots: &node.stage_slots,
+            declared: &self.graph.setups[p].programs,
+            pass_index: p,
+            plan: &self.graph.plan,
+            physical: self.physical,
+            programs: self.programs,
+            views: self.views,
+            readbacks: self.readbacks,
+            frame_data: self.frame_data,
+            frame_index: self.frame,
+            history_valid: self.history_valid,
+            shared,
+            batched,
+            fill: self.fill,
+            graph_id: self.graph.id,
+        };
+        node.pass.record(&mut ctx)
     }
 }

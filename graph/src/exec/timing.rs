@@ -2,7 +2,7 @@
 //! mode), resolved every frame into a ring of map-read buffers and read frames later, so
 //! timing never makes the CPU wait for the GPU.
 
-use crate::exec::ring::MapRing;
+use crate::record::ring::MapRing;
 use serde::Serialize;
 use std::collections::HashMap;
 

@@ -77,6 +77,14 @@ pub fn opts() -> CompileOptions {
     CompileOptions::new(wgpu::Features::empty())
 }
 
+/// The error compiling `g` with [`opts`] fails with, for a test to match; panics when the
+/// graph compiles.
+pub fn compile_error(g: GraphBuilder) -> GraphError {
+    g.compile(&opts())
+        .err()
+        .expect("the graph compiled; the test expects a compile error")
+}
+
 /// A pass built from closures, so each test states its contract, setup and record inline.
 pub struct TestPass<S, R> {
     stage: &'static str,

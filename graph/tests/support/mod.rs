@@ -197,6 +197,34 @@ pub fn run_frames(
     exec
 }
 
+/// Adds `pass` and exports the buffer it writes through `slot`, for the test to read.
+pub fn add_exported(
+    g: &mut GraphBuilder,
+    name: &str,
+    pass: impl Pass + 'static,
+    bindings: Bindings,
+    slot: &str,
+) {
+    let out = g.add_pass(name, pass, bindings).unwrap();
+    g.export(out.buffer(slot).unwrap());
+}
+
+/// The exported buffer `name` as the last frame left it, as `T`s.
+pub fn read_export<T: bytemuck::Pod>(exec: &mut Executor, name: &str) -> Vec<T> {
+    bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
+}
+
+/// Checks that every `u32` of the exported buffer `name` is `want`; a failure shows the
+/// first words and `case`.
+pub fn assert_every_word(exec: &mut Executor, name: &str, want: u32, case: &str) {
+    let words: Vec<u32> = read_export(exec, name);
+    assert!(
+        words.iter().all(|&w| w == want),
+        "{case}: {:?} want {want}",
+        &words[..words.len().min(4)]
+    );
+}
+
 pub fn read_u32s(gpu: &GpuContext, buffer: &wgpu::Buffer, count: usize) -> Vec<u32> {
     let bytes = gpu
         .read_buffer(buffer, 0, count as u64 * 4)

@@ -1,6 +1,6 @@
 //! Asynchronous readback of buffers the graph declared with `GraphBuilder::readback`.
 
-use crate::exec::ring::MapRing;
+use crate::record::ring::MapRing;
 use std::collections::{HashMap, VecDeque};
 
 /// Bytes copied from the GPU in frame `frame`.

@@ -1,21 +1,21 @@
 //! What a pass sees while recording: its bound resources by slot name, the programs it
 //! declared in setup, bind groups, the frame's inputs, and the command encoder.
 
-use crate::compile::PassSetup;
+use crate::contract::StageContract;
 use crate::error::{GraphError, Result};
-use crate::exec::fill::Fill;
-use crate::exec::frame::FrameData;
-use crate::exec::physical::Physical;
-use crate::exec::programs::{
-    AnyProgram, BindGroupKey, BoundResource, CHUNK, ComputeProgram, ImmediateMode, ModuleKey,
-    Program, ProgramKey, ProgramLayouts, Programs, RenderProgram,
-};
-use crate::exec::readback::Readbacks;
-use crate::exec::shared::{ComputePassGuard, SharedPass, Unplanned};
-use crate::exec::views::ViewCache;
 use crate::layout::{BindingSource, buffer_binding_type, texture_binding_type};
 use crate::plan::{AttachmentOps, LoadOp, Plan, StoreOp};
 use crate::program::{Geometry, ProgramDesc, ProgramKind};
+use crate::record::fill::Fill;
+use crate::record::frame::FrameData;
+use crate::record::physical::Physical;
+use crate::record::programs::{
+    AnyProgram, BindGroupKey, BoundResource, CHUNK, ComputeProgram, ImmediateMode, ModuleKey,
+    Program, ProgramKey, ProgramLayouts, Programs, RenderProgram,
+};
+use crate::record::readback::Readbacks;
+use crate::record::shared::{ComputePassGuard, SharedPass, Unplanned};
+use crate::record::views::ViewCache;
 use crate::resource::{ResourceDesc, ResourceKind, TextureDesc, TextureRange};
 use meshlight_shaders::ShaderDef;
 use std::sync::Arc;
@@ -99,8 +99,15 @@ pub struct RecordContext<'a> {
     pub(crate) queue: &'a wgpu::Queue,
     pub(crate) features: wgpu::Features,
     pub(crate) encoder: &'a mut wgpu::CommandEncoder,
-    pub(crate) node: &'a crate::builder::PassNode,
-    pub(crate) setup: &'a PassSetup,
+    /// The pass instance's name, for labels and errors.
+    pub(crate) name: &'a str,
+    /// The pass's stage contract with its unbound optional slots removed.
+    pub(crate) contract: &'a StageContract,
+    /// Every slot of the stage, bound or not, so a shader that uses an unbound one is
+    /// told to bind it instead of being told the slot does not exist.
+    pub(crate) stage_slots: &'a [&'static str],
+    /// The programs the pass declared in setup, in declaration order.
+    pub(crate) declared: &'a [(String, Arc<ProgramDesc>)],
     pub(crate) pass_index: usize,
     pub(crate) plan: &'a Plan,
     pub(crate) physical: &'a [Option<Physical>],
@@ -151,14 +158,14 @@ impl<'a> RecordContext<'a> {
     fn leave_batch(&mut self, what: &'static str) {
         if self.batched && self.shared.split() {
             self.shared.unplanned.push(Unplanned {
-                pass: self.node.name.clone(),
+                pass: self.name.to_string(),
                 what,
             });
         }
     }
     /// The pass instance's name in the graph, for labels and messages.
     pub fn pass_name(&self) -> &str {
-        &self.node.name
+        self.name
     }
     /// The executor's frame counter, from 0.
     pub fn frame_index(&self) -> u64 {
@@ -169,7 +176,7 @@ impl<'a> RecordContext<'a> {
         self.frame_data
             .get(name)
             .ok_or_else(|| GraphError::MissingFrameInput {
-                pass: self.node.name.clone(),
+                pass: self.name.to_string(),
                 input: name.to_string(),
             })
     }
@@ -199,7 +206,7 @@ impl<'a> RecordContext<'a> {
 
     fn err(&self, message: String) -> GraphError {
         GraphError::Record {
-            pass: self.node.name.clone(),
+            pass: self.name.to_string(),
             message,
         }
     }
@@ -210,7 +217,7 @@ impl<'a> RecordContext<'a> {
             .iter()
             .find(|s| s.slot == slot)
             .ok_or_else(|| GraphError::UnknownSlot {
-                pass: self.node.name.clone(),
+                pass: self.name.to_string(),
                 stage: pass.stage.to_string(),
                 slot: slot.to_string(),
                 available: pass
@@ -225,7 +232,7 @@ impl<'a> RecordContext<'a> {
         self.slot_use(slot).map(|s| s.resource)
     }
     fn scratch_resource(&self, name: &str) -> Result<usize> {
-        let full = format!("{}/{}", self.node.name, name);
+        let full = format!("{}/{}", self.name, name);
         self.plan.passes[self.pass_index]
             .scratch
             .iter()
@@ -300,7 +307,7 @@ impl<'a> RecordContext<'a> {
 
     /// True when `slot` is bound (always, unless the slot is optional).
     pub fn is_bound(&self, slot: &str) -> bool {
-        self.node.contract.slot(slot).is_some()
+        self.contract.slot(slot).is_some()
     }
     /// The buffer bound to `slot`, and its size in bytes (the pooled buffer may be larger).
     pub fn buffer(&self, slot: &str) -> Result<(&'a wgpu::Buffer, u64)> {
@@ -431,7 +438,7 @@ impl<'a> RecordContext<'a> {
         &self,
         layout: &crate::layout::BindingLayout,
     ) -> Result<Vec<wgpu::BindGroupLayoutEntry>> {
-        let contract = &self.node.contract;
+        let contract = &self.contract;
         layout
             .entries
             .iter()
@@ -439,7 +446,7 @@ impl<'a> RecordContext<'a> {
                 let ty = match &e.source {
                     BindingSource::Slot(name) => {
                         let slot = contract.slot(name).ok_or_else(|| GraphError::UnknownSlot {
-                            pass: self.node.name.clone(),
+                            pass: self.name.to_string(),
                             stage: contract.stage.to_string(),
                             slot: name.to_string(),
                             available: contract.slot_names().join(", "),
@@ -490,8 +497,7 @@ impl<'a> RecordContext<'a> {
     }
 
     fn declared(&self, name: &str) -> Result<(usize, &'a Arc<ProgramDesc>)> {
-        self.setup
-            .programs
+        self.declared
             .iter()
             .enumerate()
             .find(|(_, (n, _))| n == name)
@@ -499,8 +505,7 @@ impl<'a> RecordContext<'a> {
             .ok_or_else(|| {
                 self.err(format!(
                     "no program `{name}`; declare it in setup with SetupContext::program (declared: {})",
-                    self.setup
-                        .programs
+                    self.declared
                         .iter()
                         .map(|(n, _)| n.as_str())
                         .collect::<Vec<_>>()
@@ -525,7 +530,7 @@ impl<'a> RecordContext<'a> {
             let (_, globals) = self.programs.module(
                 self.device,
                 self.features,
-                &self.node.name,
+                self.name,
                 desc.shader,
                 module_key(desc, native_immediates),
             )?;
@@ -538,7 +543,7 @@ impl<'a> RecordContext<'a> {
                     if !l.reflect {
                         return Ok(l.clone());
                     }
-                    crate::exec::reflect::expand(l, group as u32, &globals, &entries, &names)
+                    crate::record::reflect::expand(l, group as u32, &globals, &entries, &names)
                         .map_err(|m| {
                             self.err(format!(
                                 "shader {} variable `{}`: {}",
@@ -578,8 +583,8 @@ impl<'a> RecordContext<'a> {
     }
 
     /// The pass's slots and scratch resources, for layouts read from the shader.
-    fn reflection_names(&self) -> crate::exec::reflect::Names {
-        let contract = &self.node.contract;
+    fn reflection_names(&self) -> crate::record::reflect::Names {
+        let contract = &self.contract;
         let slots = contract
             .slots
             .iter()
@@ -591,7 +596,7 @@ impl<'a> RecordContext<'a> {
                 (s.name, s.access, element)
             })
             .collect();
-        let prefix = format!("{}/", self.node.name);
+        let prefix = format!("{}/", self.name);
         let scratch = self.plan.passes[self.pass_index]
             .scratch
             .iter()
@@ -600,10 +605,10 @@ impl<'a> RecordContext<'a> {
                 Some(name.to_string())
             })
             .collect();
-        crate::exec::reflect::Names {
+        crate::record::reflect::Names {
             stage: contract.stage,
             slots,
-            all_slots: self.node.pass.contract().slot_names(),
+            all_slots: self.stage_slots.to_vec(),
             scratch,
         }
     }
@@ -628,7 +633,7 @@ impl<'a> RecordContext<'a> {
         let (module, _) = self.programs.module(
             self.device,
             self.features,
-            &self.node.name,
+            self.name,
             desc.shader,
             module_key(desc, key.native_immediates),
         )?;
@@ -671,26 +676,38 @@ impl<'a> RecordContext<'a> {
         Ok((module, ProgramLayouts { groups, immediates }, layout))
     }
 
+    /// What this pass's declared program `index` resolved to on an earlier frame, so a
+    /// steady frame builds no key.
+    fn resolved(&self, index: usize) -> Option<&AnyProgram> {
+        self.programs
+            .resolved(self.graph_id, self.pass_index, index)
+    }
+
+    /// Notes what declared program `index` resolved to, for [`Self::resolved`].
+    fn remember(&mut self, index: usize, program: AnyProgram) {
+        self.programs
+            .resolve(self.graph_id, self.pass_index, index, program);
+    }
+
+    /// Caches a program just built under `key`, for any pass that asks for the same one,
+    /// and remembers it as what declared program `index` resolved to.
+    fn keep(&mut self, index: usize, key: ProgramKey, program: AnyProgram) {
+        self.programs.insert(key, program.clone());
+        self.remember(index, program);
+    }
+
     /// The compute program declared in setup as `name`, built once and cached.
     pub fn compute(&mut self, name: &str) -> Result<Arc<ComputeProgram>> {
         let (index, desc) = self.declared(name)?;
         let ProgramKind::Compute { entry } = desc.kind else {
             return Err(self.err(format!("program `{name}` is not a compute program")));
         };
-        if let Some(AnyProgram::Compute(p)) =
-            self.programs
-                .resolved(self.graph_id, self.pass_index, index)
-        {
+        if let Some(AnyProgram::Compute(p)) = self.resolved(index) {
             return Ok(p.clone());
         }
         let key = self.program_key(desc)?;
         if let Some(p) = self.programs.compute(&key) {
-            self.programs.resolve(
-                self.graph_id,
-                self.pass_index,
-                index,
-                AnyProgram::Compute(p.clone()),
-            );
+            self.remember(index, AnyProgram::Compute(p.clone()));
             return Ok(p);
         }
         let (module, layouts, layout) = self.build_layouts(&key)?;
@@ -706,14 +723,7 @@ impl<'a> RecordContext<'a> {
                 cache: None,
             });
         let program = Arc::new(ComputeProgram { pipeline, layouts });
-        self.programs
-            .insert(key, AnyProgram::Compute(program.clone()));
-        self.programs.resolve(
-            self.graph_id,
-            self.pass_index,
-            index,
-            AnyProgram::Compute(program.clone()),
-        );
+        self.keep(index, key, AnyProgram::Compute(program.clone()));
         Ok(program)
     }
 
@@ -721,10 +731,7 @@ impl<'a> RecordContext<'a> {
     /// cached.
     pub fn render(&mut self, name: &str) -> Result<Arc<RenderProgram>> {
         let (index, desc) = self.declared(name)?;
-        if let Some(AnyProgram::Render(p)) =
-            self.programs
-                .resolved(self.graph_id, self.pass_index, index)
-        {
+        if let Some(AnyProgram::Render(p)) = self.resolved(index) {
             return Ok(p.clone());
         }
         let ProgramKind::Render {
@@ -739,12 +746,7 @@ impl<'a> RecordContext<'a> {
         };
         let key = self.program_key(desc)?;
         if let Some(p) = self.programs.render(&key) {
-            self.programs.resolve(
-                self.graph_id,
-                self.pass_index,
-                index,
-                AnyProgram::Render(p.clone()),
-            );
+            self.remember(index, AnyProgram::Render(p.clone()));
             return Ok(p);
         }
         let (module, layouts, layout) = self.build_layouts(&key)?;
@@ -813,8 +815,8 @@ impl<'a> RecordContext<'a> {
                     .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER)
                 {
                     return Err(GraphError::MissingFeature {
-                        pass: self.node.name.clone(),
-                        stage: self.node.contract.stage.to_string(),
+                        pass: self.name.to_string(),
+                        stage: self.contract.stage.to_string(),
                         features: "EXPERIMENTAL_MESH_SHADER".into(),
                         instead: "open the device with the plan's `enabled_features`".into(),
                     });
@@ -843,14 +845,7 @@ impl<'a> RecordContext<'a> {
             }
         };
         let program = Arc::new(RenderProgram { pipeline, layouts });
-        self.programs
-            .insert(key, AnyProgram::Render(program.clone()));
-        self.programs.resolve(
-            self.graph_id,
-            self.pass_index,
-            index,
-            AnyProgram::Render(program.clone()),
-        );
+        self.keep(index, key, AnyProgram::Render(program.clone()));
         Ok(program)
     }
 
@@ -993,7 +988,7 @@ impl<'a> RecordContext<'a> {
             ComputePassGuard::own(
                 self.encoder
                     .begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some(&self.node.name),
+                        label: Some(self.name),
                         timestamp_writes: None,
                     })
                     .forget_lifetime(),
@@ -1064,7 +1059,7 @@ impl<'a> RecordContext<'a> {
             );
         self.leave_batch("render_pass()");
         Ok(self.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(&self.node.name),
+            label: Some(self.name),
             color_attachments: &attachments,
             depth_stencil_attachment: depth_attachment,
             timestamp_writes: None,
@@ -1084,7 +1079,7 @@ impl<'a> RecordContext<'a> {
         let (buffer, size) = self.buffer(slot)?;
         self.leave_batch("readback copy");
         let range = range.unwrap_or(0..size.next_multiple_of(4).min(buffer.size()));
-        let copy = crate::exec::readback::ReadbackCopy {
+        let copy = crate::record::readback::ReadbackCopy {
             name,
             latency,
             source: buffer,

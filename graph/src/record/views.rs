@@ -1,7 +1,7 @@
 //! Texture views by (texture, range), created once and kept while frames use them, so bind
 //! groups over the same view are found in the cache frame after frame.
 
-use crate::exec::physical::{EVICT_AFTER_FRAMES, range_view, whole_view};
+use crate::record::physical::{EVICT_AFTER_FRAMES, range_view, whole_view};
 use crate::resource::TextureRange;
 use std::collections::HashMap;
 

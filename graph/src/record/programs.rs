@@ -3,9 +3,9 @@
 //! the exact resources they bind; and a per-frame arena for small uniform blocks.
 
 use crate::error::{GraphError, Result};
-use crate::exec::reflect::{ShaderGlobal, globals};
 use crate::layout::{BindingLayout, SamplerKind};
 use crate::program::ProgramDesc;
+use crate::record::reflect::{ShaderGlobal, globals};
 use meshlight_shaders::{PassShader, ShaderDef, ShaderLibrary};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -150,7 +150,7 @@ impl Programs {
         self.frame = frame;
         self.uniforms.begin_frame();
         self.bind_groups.retain(|_, (_, last)| {
-            frame.saturating_sub(*last) <= crate::exec::physical::EVICT_AFTER_FRAMES
+            frame.saturating_sub(*last) <= crate::record::physical::EVICT_AFTER_FRAMES
         });
     }
 
@@ -254,34 +254,36 @@ impl Programs {
 /// naga capabilities matching the device's enabled features, so the composer accepts
 /// exactly the shaders the device can run.
 pub fn capabilities_for(features: wgpu::Features) -> naga::valid::Capabilities {
-    use naga::valid::Capabilities as C;
-    let mut caps = C::empty();
-    if features.contains(wgpu::Features::SHADER_INT64) {
-        caps |= C::SHADER_INT64;
-    }
-    if features.contains(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX) {
-        caps |= C::SHADER_INT64_ATOMIC_MIN_MAX;
-    }
-    if features.contains(wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS) {
-        caps |= C::SHADER_INT64_ATOMIC_ALL_OPS;
-    }
-    if features.contains(wgpu::Features::SUBGROUP) {
-        caps |= C::SUBGROUP;
-    }
-    if features.contains(wgpu::Features::TEXTURE_ATOMIC) {
-        caps |= C::TEXTURE_ATOMIC;
-    }
-    if features.contains(wgpu::Features::TEXTURE_INT64_ATOMIC) {
-        caps |= C::TEXTURE_INT64_ATOMIC;
-    }
-    if features.contains(wgpu::Features::IMMEDIATES) {
-        caps |= C::IMMEDIATES;
-    }
-    if features.contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER) {
-        caps |= C::MESH_SHADER;
-    }
-    caps
+    FEATURE_CAPABILITIES
+        .iter()
+        .filter(|(feature, _)| features.contains(*feature))
+        .fold(naga::valid::Capabilities::empty(), |caps, (_, cap)| {
+            caps | *cap
+        })
 }
+
+/// Each device feature that lets a shader use more of naga, with the capability it
+/// grants.
+const FEATURE_CAPABILITIES: [(wgpu::Features, naga::valid::Capabilities); 8] = {
+    use naga::valid::Capabilities as C;
+    use wgpu::Features as F;
+    [
+        (F::SHADER_INT64, C::SHADER_INT64),
+        (
+            F::SHADER_INT64_ATOMIC_MIN_MAX,
+            C::SHADER_INT64_ATOMIC_MIN_MAX,
+        ),
+        (
+            F::SHADER_INT64_ATOMIC_ALL_OPS,
+            C::SHADER_INT64_ATOMIC_ALL_OPS,
+        ),
+        (F::SUBGROUP, C::SUBGROUP),
+        (F::TEXTURE_ATOMIC, C::TEXTURE_ATOMIC),
+        (F::TEXTURE_INT64_ATOMIC, C::TEXTURE_INT64_ATOMIC),
+        (F::IMMEDIATES, C::IMMEDIATES),
+        (F::EXPERIMENTAL_MESH_SHADER, C::MESH_SHADER),
+    ]
+};
 
 /// Uniform blocks of one frame, packed into shared buffers at 256-byte alignment and
 /// written once before the frame is submitted. Offsets repeat frame to frame, so bind

@@ -1,0 +1,33 @@
+//! A pass as the graph keeps it once added: the instance, its bound slots and, for a
+//! choice, the implementations compile may keep instead. The builder makes nodes;
+//! compile and the executor read them, so the type sits below all three.
+
+use crate::contract::{Slot, StageContract};
+use crate::pass::Pass;
+use crate::plan::Selection;
+use crate::resource::{AnyHandle, TextureRange};
+
+/// A pass as the graph keeps it: its instance name, implementation and bound slots.
+pub(crate) struct PassNode {
+    pub name: String,
+    pub pass: Box<dyn Pass>,
+    /// The stage contract with unbound optional slots removed.
+    pub contract: StageContract,
+    /// Every slot of the stage, bound or not.
+    pub stage_slots: Vec<&'static str>,
+    /// In contract slot order.
+    pub bindings: Vec<AnyHandle>,
+    /// Per slot, the texture range it binds (`None`: the whole resource).
+    pub ranges: Vec<Option<TextureRange>>,
+    /// The stage's other implementations, when the pass was added as a [`crate::Choice`]:
+    /// compile keeps `pass` or one of these.
+    pub(crate) alternatives: Option<(Selection, Vec<Box<dyn Pass>>)>,
+}
+
+impl PassNode {
+    /// Each bound slot with the resource version it binds, in contract order: what most
+    /// compile steps walk.
+    pub fn bound_slots(&self) -> impl Iterator<Item = (&Slot, &AnyHandle)> {
+        self.contract.slots.iter().zip(&self.bindings)
+    }
+}
