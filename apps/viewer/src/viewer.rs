@@ -58,6 +58,8 @@ struct Target {
 }
 
 /// A window, or a texture where no display exists.
+// One per viewer, made once and never moved: boxing the larger variant would buy nothing.
+#[allow(clippy::large_enum_variant)]
 enum Screen {
     /// The window's surface, presented each frame, and its input for egui.
     Window {
