@@ -5,6 +5,13 @@ mod render;
 mod view;
 
 use clap::{Parser, Subcommand, ValueEnum};
+
+/// The system allocator, counting what Rust code holds, so `view --offscreen` can tell
+/// the renderer's heap from the driver's; a relaxed atomic add per call costs nothing
+/// measurable beside the allocation itself.
+#[global_allocator]
+static ALLOCATOR: meshlight_viewer::offscreen::CountingAllocator =
+    meshlight_viewer::offscreen::CountingAllocator;
 use meshlight::graph::{CompileOptions, GraphError, dump};
 use std::path::PathBuf;
 use std::process::ExitCode;

@@ -15,6 +15,14 @@ pub struct MemorySample {
     pub frame: u64,
     /// The process's resident memory in KiB.
     pub resident_kib: u64,
+    /// Of it, what the C allocator has handed out and not had back, in KiB (where it can
+    /// be asked): Rust's, wgpu's and the driver's `malloc`s. Memory a driver maps for
+    /// itself is resident but not counted here.
+    pub heap_kib: Option<u64>,
+    /// Of that, what Rust code holds (meshlight, wgpu, egui), in KiB, where the binary
+    /// counts its allocations with [`CountingAllocator`]; the rest of the heap is the C
+    /// libraries' (the Vulkan driver's).
+    pub rust_heap_kib: Option<u64>,
     /// Bytes of GPU buffers and textures the graph's pool holds.
     pub pool_bytes: u64,
     /// GPU allocations the executor made in the sampled frame (0 once the pool has
@@ -76,10 +84,16 @@ impl OffscreenReport {
             }
         }
         for m in &self.memory {
+            let kib = |k: Option<u64>| k.map_or("unknown".to_string(), |k| k.to_string());
             let _ = writeln!(
                 s,
-                "memory frame {} resident_kib {} pool_bytes {} allocations {}",
-                m.frame, m.resident_kib, m.pool_bytes, m.allocations
+                "memory frame {} resident_kib {} heap_kib {} rust_heap_kib {} pool_bytes {} allocations {}",
+                m.frame,
+                m.resident_kib,
+                kib(m.heap_kib),
+                kib(m.rust_heap_kib),
+                m.pool_bytes,
+                m.allocations
             );
         }
         let _ = writeln!(
@@ -107,6 +121,8 @@ pub fn run_offscreen(
         MemorySample {
             frame: v.frames,
             resident_kib: resident_kib().unwrap_or(0),
+            heap_kib: heap_kib(),
+            rust_heap_kib: rust_heap_kib(),
             pool_bytes: stats.map_or(0, |s| s.pool_bytes_held),
             allocations: stats.map_or(0, |s| u64::from(s.allocations)),
         }
@@ -144,4 +160,73 @@ pub fn run_offscreen(
         memory,
     };
     Ok((viewer, report))
+}
+
+/// Bytes in use from glibc's allocator (its arenas and its mmapped blocks), in KiB.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn heap_kib() -> Option<u64> {
+    // SAFETY: mallinfo only reads the allocator's statistics. Its fields are C ints, so
+    // each wraps past 2 GiB; that is read as unsigned, which holds up to 4 GiB.
+    #[allow(deprecated)]
+    let info = unsafe { libc::mallinfo() };
+    Some((u64::from(info.uordblks as u32) + u64::from(info.hblkhd as u32)) / 1024)
+}
+
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn heap_kib() -> Option<u64> {
+    None
+}
+
+/// The system allocator, counting the bytes Rust code holds, so that a run can tell its
+/// own heap from the C libraries' (`meshlight` installs it as the global allocator).
+pub struct CountingAllocator;
+
+static RUST_HEAP_BYTES: std::sync::atomic::AtomicI64 = std::sync::atomic::AtomicI64::new(0);
+
+// SAFETY: every call is passed to the system allocator unchanged; the counter only
+// records the sizes.
+unsafe impl std::alloc::GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
+        // SAFETY: the caller's contract is the system allocator's.
+        let p = unsafe { std::alloc::System.alloc(layout) };
+        if !p.is_null() {
+            count(layout.size() as i64);
+        }
+        p
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: std::alloc::Layout) -> *mut u8 {
+        // SAFETY: as above.
+        let p = unsafe { std::alloc::System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            count(layout.size() as i64);
+        }
+        p
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
+        // SAFETY: as above.
+        unsafe { std::alloc::System.dealloc(ptr, layout) };
+        count(-(layout.size() as i64));
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: std::alloc::Layout, new: usize) -> *mut u8 {
+        // SAFETY: as above.
+        let p = unsafe { std::alloc::System.realloc(ptr, layout, new) };
+        if !p.is_null() {
+            count(new as i64 - layout.size() as i64);
+        }
+        p
+    }
+}
+
+fn count(bytes: i64) {
+    RUST_HEAP_BYTES.fetch_add(bytes, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// The bytes Rust code holds, in KiB; `None` where [`CountingAllocator`] is not the
+/// global allocator (nothing was ever counted).
+fn rust_heap_kib() -> Option<u64> {
+    let bytes = RUST_HEAP_BYTES.load(std::sync::atomic::Ordering::Relaxed);
+    (bytes > 0).then(|| bytes as u64 / 1024)
 }

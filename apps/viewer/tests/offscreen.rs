@@ -4,7 +4,10 @@
 
 mod common;
 
-use meshlight_viewer::offscreen::run_offscreen;
+use meshlight_viewer::offscreen::{CountingAllocator, run_offscreen};
+
+#[global_allocator]
+static ALLOCATOR: CountingAllocator = CountingAllocator;
 
 #[test]
 fn offscreen_runs_time_the_overlay_and_sample_memory() {
@@ -36,6 +39,15 @@ fn offscreen_runs_time_the_overlay_and_sample_memory() {
             .iter()
             .all(|m| m.resident_kib > 0 && m.pool_bytes > 0)
     );
+    // This binary counts Rust's allocations (as `meshlight` does): they are part of the
+    // C allocator's bytes in use, which include the driver's.
+    for m in &report.memory {
+        let (heap, rust) = (
+            m.heap_kib.expect("glibc"),
+            m.rust_heap_kib.expect("counted"),
+        );
+        assert!(rust > 0 && rust <= heap, "{m:?}");
+    }
     let text = report.text();
     assert!(
         text.contains("overlay_ms ") && text.contains("memory frame 8 "),
