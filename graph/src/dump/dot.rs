@@ -1,6 +1,13 @@
 //! Graphviz DOT: passes as boxes, resource versions as ellipses, edges labelled with the
 //! access; culled passes greyed, history resources double-ringed, imports bold; each of
 //! the plan's batches a cluster around its passes (compute batches shaded).
+//!
+//! Laid out top to bottom with each pass ranked one below the deepest pass it depends on
+//! (the rows of the SVG drawing), so a pipeline reads as a column of stages rather than
+//! one long line; why an implementation was chosen is each box's tooltip, not its label,
+//! so boxes stay narrow. Imports no pass writes (the scene's buffers, read by half the
+//! passes) are listed in each reader's box instead of drawn once with an edge to every
+//! reader, which would cross the whole drawing.
 
 use super::{kind_tag, version_nodes};
 use crate::plan::Plan;
@@ -15,8 +22,19 @@ fn esc(s: &str) -> String {
 
 /// The plan as a Graphviz DOT graph: passes, resources and their versions, edges by kind.
 pub fn to_dot(plan: &Plan) -> String {
+    // Imports that no pass writes: named in their readers' boxes, not drawn as nodes.
+    let mut listed: Vec<bool> = plan
+        .resources
+        .iter()
+        .map(|r| matches!(r.info.kind, ResourceKind::Imported { .. }))
+        .collect();
+    for s in plan.passes.iter().flat_map(|p| &p.slots) {
+        if s.writes_version.is_some() {
+            listed[s.resource] = false;
+        }
+    }
     let mut out = String::from(
-        "digraph meshlight {\n  rankdir=LR;\n  node [fontname=\"Helvetica\", fontsize=11];\n  edge [fontname=\"Helvetica\", fontsize=9];\n",
+        "digraph meshlight {\n  rankdir=TB;\n  newrank=true;\n  node [fontname=\"Helvetica\", fontsize=11];\n  edge [fontname=\"Helvetica\", fontsize=9];\n",
     );
     for (i, p) in plan.passes.iter().enumerate() {
         let culled = plan.is_culled(i);
@@ -32,16 +50,29 @@ pub fn to_dot(plan: &Plan) -> String {
             let names: Vec<&str> = p.programs.iter().map(|x| x.name.as_str()).collect();
             format!("\nprograms: {}", names.join(", "))
         };
-        let why = p
+        let tooltip = p
             .choice_reason()
-            .map(|r| format!("\nchosen: {r}"))
+            .map(|r| format!(", tooltip=\"chosen: {}\"", esc(&r)))
             .unwrap_or_default();
+        let mut inputs: Vec<&str> = p
+            .slots
+            .iter()
+            .filter(|s| listed[s.resource])
+            .map(|s| plan.resources[s.resource].info.name.as_str())
+            .collect();
+        inputs.sort_unstable();
+        inputs.dedup();
+        let inputs = if inputs.is_empty() {
+            String::new()
+        } else {
+            format!("\nimports: {}", inputs.join(", "))
+        };
         let encoder = match &p.recording {
             crate::plan::Recording::Encoder(why) if !culled => format!("\nencoder: {why}"),
             _ => String::new(),
         };
         let label = format!(
-            "{order}{}\n{}/{}{why}{programs}{encoder}{}",
+            "{order}{}\n{}/{}{programs}{inputs}{encoder}{}",
             p.name,
             p.stage,
             p.implementation_label(),
@@ -52,7 +83,21 @@ pub fn to_dot(plan: &Plan) -> String {
         } else {
             ", style=filled, fillcolor=\"#dde8f7\""
         };
-        let _ = writeln!(out, "  p{i} [shape=box, label=\"{}\"{style}];", esc(&label));
+        let _ = writeln!(
+            out,
+            "  p{i} [shape=box, label=\"{}\"{style}{tooltip}];",
+            esc(&label)
+        );
+    }
+    let ranks = super::pass_ranks(plan);
+    for rank in 0..=ranks.iter().copied().max().unwrap_or(0) {
+        let same: Vec<String> = (0..plan.passes.len())
+            .filter(|&i| ranks[i] == rank)
+            .map(|i| format!("p{i};"))
+            .collect();
+        if same.len() > 1 {
+            let _ = writeln!(out, "  {{ rank=same; {} }}", same.join(" "));
+        }
     }
     for (b, batch) in plan.batches.iter().enumerate() {
         let style = if batch.compute {
@@ -69,6 +114,9 @@ pub fn to_dot(plan: &Plan) -> String {
         );
     }
     for (r, v) in version_nodes(plan) {
+        if listed[r] {
+            continue;
+        }
         let res = &plan.resources[r];
         let style = match res.info.kind {
             ResourceKind::History { .. } | ResourceKind::HistoryPrev { .. } => {
@@ -86,7 +134,7 @@ pub fn to_dot(plan: &Plan) -> String {
         );
     }
     for (i, p) in plan.passes.iter().enumerate() {
-        for s in &p.slots {
+        for s in p.slots.iter().filter(|s| !listed[s.resource]) {
             let label = esc(&format!("{}: {}", s.slot, s.access_name()));
             if s.reads() {
                 let _ = writeln!(

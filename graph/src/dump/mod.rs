@@ -56,3 +56,24 @@ pub(crate) fn kind_tag(kind: &ResourceKind) -> &'static str {
         ResourceKind::Scratch { .. } => "scratch",
     }
 }
+
+/// Rank (row) of each pass, for the drawings: 0 for a pass that depends on none, else one past the deepest pass
+/// it depends on. Culled passes take part, so they sit beside what they would have read.
+pub(crate) fn pass_ranks(plan: &Plan) -> Vec<u32> {
+    let mut rank = vec![0u32; plan.passes.len()];
+    // Edges go from earlier to later passes of a valid plan: relaxing them as often as
+    // there are passes settles every chain.
+    for _ in 0..plan.passes.len() {
+        let mut changed = false;
+        for e in &plan.edges {
+            if e.from != e.to && rank[e.to] <= rank[e.from] {
+                rank[e.to] = rank[e.from] + 1;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    rank
+}

@@ -35,29 +35,8 @@ fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// Row of each pass: 0 for a pass that depends on none, else one past the deepest pass
-/// it depends on. Culled passes take part, so they sit beside what they would have read.
-fn ranks(plan: &Plan) -> Vec<u32> {
-    let mut rank = vec![0u32; plan.passes.len()];
-    // Edges go from earlier to later passes of a valid plan: relaxing them as often as
-    // there are passes settles every chain.
-    for _ in 0..plan.passes.len() {
-        let mut changed = false;
-        for e in &plan.edges {
-            if e.from != e.to && rank[e.to] <= rank[e.from] {
-                rank[e.to] = rank[e.from] + 1;
-                changed = true;
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
-    rank
-}
-
 fn layout(plan: &Plan) -> Vec<Node> {
-    let rank = ranks(plan);
+    let rank = super::pass_ranks(plan);
     let drawn = plan.order.iter().chain(&plan.culled).copied();
     let mut next_column: BTreeMap<u32, u32> = BTreeMap::new();
     drawn
