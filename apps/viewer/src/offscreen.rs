@@ -164,7 +164,7 @@ pub fn run_offscreen(
 
 /// Bytes in use from glibc's allocator (its arenas and its mmapped blocks), in KiB.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
-fn heap_kib() -> Option<u64> {
+pub fn heap_kib() -> Option<u64> {
     // SAFETY: mallinfo only reads the allocator's statistics. Its fields are C ints, so
     // each wraps past 2 GiB; that is read as unsigned, which holds up to 4 GiB.
     #[allow(deprecated)]
@@ -173,7 +173,7 @@ fn heap_kib() -> Option<u64> {
 }
 
 #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-fn heap_kib() -> Option<u64> {
+pub fn heap_kib() -> Option<u64> {
     None
 }
 
@@ -226,7 +226,7 @@ fn count(bytes: i64) {
 
 /// The bytes Rust code holds, in KiB; `None` where [`CountingAllocator`] is not the
 /// global allocator (nothing was ever counted).
-fn rust_heap_kib() -> Option<u64> {
+pub fn rust_heap_kib() -> Option<u64> {
     let bytes = RUST_HEAP_BYTES.load(std::sync::atomic::Ordering::Relaxed);
-    (bytes > 0).then(|| bytes as u64 / 1024)
+    (bytes > 0).then_some(bytes as u64 / 1024)
 }

@@ -52,7 +52,7 @@ pub fn to_dot(plan: &Plan) -> String {
         };
         let tooltip = p
             .choice_reason()
-            .map(|r| format!(", tooltip=\"chosen: {}\"", esc(&r)))
+            .map(|r| format!(", tooltip=\"chosen: {}\"", esc(r)))
             .unwrap_or_default();
         let mut inputs: Vec<&str> = p
             .slots
