@@ -710,3 +710,50 @@ fn bench_charts_saved_rows_and_names_a_file_it_cannot_read() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `bake`'s options are bounded where they are parsed: a bad value is clap's usage error
+/// (exit 2) naming the option, before any mesh is read; a good one gets past parsing to
+/// the missing file (exit 1).
+#[test]
+fn bake_refuses_options_out_of_bounds_when_parsing() {
+    use meshlight::scene::load::DEFAULT_TRIANGLE_BUDGET;
+    use meshlight::scene::mesh::MAX_TRIANGLES;
+    let bake = |extra: &[&str]| {
+        let mut args = vec!["bake", "no-such-mesh.gltf", "-o", "x.mlasset"];
+        args.extend_from_slice(extra);
+        meshlight(&args)
+    };
+    let over = (MAX_TRIANGLES + 1).to_string();
+    for (extra, option) in [
+        (&["--position-bits", "40"][..], "--position-bits"),
+        (&["--grouping", "random"][..], "--grouping"),
+        (&["--max-triangles", "0"][..], "--max-triangles"),
+        (&["--max-triangles", over.as_str()][..], "--max-triangles"),
+        (&["--segments", "2"][..], "--segments"),
+        (&["--jobs", "0"][..], "--jobs"),
+    ] {
+        let out = bake(extra);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?} accepted: {err}");
+        assert!(err.contains(option), "{extra:?}: {err}");
+    }
+    let missing_output = meshlight(&["bake", "no-such-mesh.gltf"]);
+    assert_eq!(missing_output.status.code(), Some(2), "-o is required");
+    for extra in [
+        &["--max-triangles", "100"][..],
+        &["--grouping", "metis", "--position-bits", "auto"][..],
+        &["--position-bits", "12"][..],
+    ] {
+        let out = bake(extra);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{extra:?}: {err}");
+        assert!(err.contains("no-such-mesh.gltf"), "{extra:?}: {err}");
+    }
+    let help = String::from_utf8_lossy(&meshlight_ok(&["bake", "--help"]).stdout).into_owned();
+    assert!(
+        help.contains(&format!("[default: {DEFAULT_TRIANGLE_BUDGET}]"))
+            && help.contains("partition")
+            && help.contains("metis"),
+        "{help}"
+    );
+}
