@@ -11,15 +11,9 @@ static ALLOCATOR: CountingAllocator = CountingAllocator;
 
 #[test]
 fn offscreen_runs_time_the_overlay_and_sample_memory() {
-    // No lights: a froxel's lights come in an order that varies from frame to frame
-    // (populate claims list slots with atomics), so two runs' images may differ by a
-    // rounding step; without them the images below compare exactly.
-    let unlit = || {
-        let mut o = common::small_options();
-        o.scene.lights = Some(0);
-        o
-    };
-    let (mut with, report) = run_offscreen(unlit(), 2, 6, 2).unwrap_or_else(|e| panic!("{e}"));
+    // Unlit, so the two runs' images below compare exactly.
+    let (mut with, report) =
+        run_offscreen(common::unlit_options(), 2, 6, 2).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!((report.warmup, report.frames), (2, 6));
     assert_eq!(with.frames, 8);
     assert!(report.wall_ms > 0.0 && report.cpu_ms > 0.0, "{report:?}");
@@ -54,7 +48,7 @@ fn offscreen_runs_time_the_overlay_and_sample_memory() {
         "{text}"
     );
 
-    let mut options = unlit();
+    let mut options = common::unlit_options();
     options.no_overlay = true;
     let (mut without, bare) = run_offscreen(options, 2, 4, 4).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(bare.overlay_ms, 0.0, "{bare:?}");

@@ -87,6 +87,16 @@ pub fn small_options() -> ViewerOptions {
     o
 }
 
+/// [`small_options`] without lights, for tests that compare frames exactly: populate
+/// claims froxel-list slots with atomics, so a froxel's lights come in an order that
+/// varies from frame to frame and their shading sums round differently (by one step of 8
+/// bits at most).
+pub fn unlit_options() -> ViewerOptions {
+    let mut o = small_options();
+    o.scene.lights = Some(0);
+    o
+}
+
 /// A viewer in a window of its own on the test's X server.
 pub fn windowed(options: ViewerOptions) -> (winit::event_loop::EventLoop<()>, Viewer) {
     let (event_loop, window) =
