@@ -118,26 +118,33 @@ impl SceneData {
             })?;
         }
         let header = asset.header();
-        let meshlet_total = self.meshlets.len() as u64 + asset.meshlets().len() as u64;
-        check_limit(
-            "meshlets",
-            meshlet_total,
-            self.limits.max_meshlets as u64,
-            "load fewer or smaller meshes, or use a device with a larger storage binding",
-        )?;
-        let payload_total = self.payload.len() as u64 + asset.payload().len() as u64;
-        check_limit(
-            "payload words",
-            payload_total,
-            self.limits.max_payload_words as u64,
-            "load fewer or smaller meshes, or use a device with a larger storage binding",
-        )?;
-        check_limit(
-            "hierarchy nodes",
-            self.hierarchy_nodes.len() as u64 + asset.nodes().len() as u64,
-            self.limits.max_hierarchy_nodes as u64,
-            "load fewer or smaller meshes, or use a device with a larger storage binding",
-        )?;
+        for (what, held, added, limit) in [
+            (
+                "meshlets",
+                self.meshlets.len(),
+                asset.meshlets().len(),
+                self.limits.max_meshlets,
+            ),
+            (
+                "payload words",
+                self.payload.len(),
+                asset.payload().len(),
+                self.limits.max_payload_words,
+            ),
+            (
+                "hierarchy nodes",
+                self.hierarchy_nodes.len(),
+                asset.nodes().len(),
+                self.limits.max_hierarchy_nodes,
+            ),
+        ] {
+            check_limit(
+                what,
+                held as u64 + added as u64,
+                limit as u64,
+                "load fewer or smaller meshes, or use a device with a larger storage binding",
+            )?;
+        }
         if asset.meshlets().is_empty() {
             return Err(SceneDataError::InvalidAsset {
                 name: name.to_string(),

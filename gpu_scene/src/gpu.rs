@@ -39,6 +39,23 @@ pub struct SceneHandles {
     pub materials: Handle<Buffer>,
 }
 
+impl SceneHandles {
+    /// The handles `import` gives each scene buffer, by name (the one place that pairs
+    /// fields with names); `instances_high` is imported only when the instances are
+    /// `split` over two bindings.
+    fn import_each(split: bool, mut import: impl FnMut(&str) -> Handle<Buffer>) -> Self {
+        Self {
+            meshlets: import(names::MESHLETS),
+            groups: import(names::GROUPS),
+            payload: import(names::PAYLOAD),
+            meshes: import(names::MESHES),
+            instances: import(names::INSTANCES),
+            instances_high: split.then(|| import(names::INSTANCES_HIGH)),
+            materials: import(names::MATERIALS),
+        }
+    }
+}
+
 /// The graph handles of the culling-hierarchy buffers, returned by
 /// [`GpuScene::import_hierarchy`] and [`import_hierarchy_for`].
 #[derive(Clone, Copy, Debug)]
@@ -146,23 +163,14 @@ pub fn import_hierarchy_for(data: &SceneData, g: &mut GraphBuilder) -> Hierarchy
 /// is declared only when the instances need it.
 pub fn import_for(data: &SceneData, g: &mut GraphBuilder) -> SceneHandles {
     let lengths = buffer_lengths(data);
-    let mut h = |name: &str| {
+    SceneHandles::import_each(data.instances_split(), |name| {
         let (_, element, count) = lengths
             .iter()
             .find(|(n, ..)| *n == name)
             .expect("every name has a length")
             .clone();
         g.import_buffer(name, BufferDesc::array(element, count), USAGE)
-    };
-    SceneHandles {
-        meshlets: h(names::MESHLETS),
-        groups: h(names::GROUPS),
-        payload: h(names::PAYLOAD),
-        meshes: h(names::MESHES),
-        instances: h(names::INSTANCES),
-        instances_high: data.instances_split().then(|| h(names::INSTANCES_HIGH)),
-        materials: h(names::MATERIALS),
-    }
+    })
 }
 
 /// The buffers in their order in [`GpuScene`].
@@ -184,50 +192,25 @@ const ORDER: [&str; 10] = [
 /// least one element (wgpu refuses empty bindings); the payload carries two words of
 /// padding so a two-word field read never leaves it.
 fn content<'a>(data: &'a SceneData, name: &str) -> (Element, Cow<'a, [u8]>) {
-    let borrowed = |bytes: &'a [u8]| Cow::Borrowed(bytes);
+    fn borrowed<T: bytemuck::Pod>(items: &[T]) -> Cow<'_, [u8]> {
+        Cow::Borrowed(bytemuck::cast_slice(items))
+    }
+    let split = data.instance_split();
     match name {
-        names::MESHLETS => (
-            elements::MESHLET,
-            borrowed(bytemuck::cast_slice(&data.meshlets)),
-        ),
-        names::GROUPS => (
-            elements::GROUP,
-            borrowed(bytemuck::cast_slice(&data.groups)),
-        ),
+        names::MESHLETS => (elements::MESHLET, borrowed(&data.meshlets)),
+        names::GROUPS => (elements::GROUP, borrowed(&data.groups)),
         names::PAYLOAD => {
             let mut payload = bytemuck::cast_slice::<u32, u8>(&data.payload).to_vec();
             payload.extend([0; 8]);
             (Element::U32, Cow::Owned(payload))
         }
-        names::MESHES => (elements::MESH, borrowed(bytemuck::cast_slice(&data.meshes))),
-        names::INSTANCES => (
-            elements::INSTANCE,
-            borrowed(bytemuck::cast_slice(
-                &data.instances[..data.instance_split()],
-            )),
-        ),
-        names::INSTANCES_HIGH => (
-            elements::INSTANCE,
-            borrowed(bytemuck::cast_slice(
-                &data.instances[data.instance_split()..],
-            )),
-        ),
-        names::HIERARCHY_NODES => (
-            elements::HIERARCHY_NODE,
-            borrowed(bytemuck::cast_slice(&data.hierarchy_nodes)),
-        ),
-        names::HIERARCHY_CLUSTERS => (
-            Element::U32,
-            borrowed(bytemuck::cast_slice(&data.hierarchy_clusters)),
-        ),
-        names::HIERARCHY_ROOTS => (
-            Element::U32,
-            borrowed(bytemuck::cast_slice(&data.hierarchy_roots)),
-        ),
-        _ => (
-            elements::MATERIAL,
-            borrowed(bytemuck::cast_slice(&data.materials)),
-        ),
+        names::MESHES => (elements::MESH, borrowed(&data.meshes)),
+        names::INSTANCES => (elements::INSTANCE, borrowed(&data.instances[..split])),
+        names::INSTANCES_HIGH => (elements::INSTANCE, borrowed(&data.instances[split..])),
+        names::HIERARCHY_NODES => (elements::HIERARCHY_NODE, borrowed(&data.hierarchy_nodes)),
+        names::HIERARCHY_CLUSTERS => (Element::U32, borrowed(&data.hierarchy_clusters)),
+        names::HIERARCHY_ROOTS => (Element::U32, borrowed(&data.hierarchy_roots)),
+        _ => (elements::MATERIAL, borrowed(&data.materials)),
     }
 }
 
@@ -312,16 +295,7 @@ impl GpuScene {
 
     /// Declares the buffers as imported resources of a graph.
     pub fn import(&self, g: &mut GraphBuilder) -> SceneHandles {
-        let mut h = |name: &str| self.import_one(g, name);
-        SceneHandles {
-            meshlets: h(names::MESHLETS),
-            groups: h(names::GROUPS),
-            payload: h(names::PAYLOAD),
-            meshes: h(names::MESHES),
-            instances: h(names::INSTANCES),
-            instances_high: self.instances_split.then(|| h(names::INSTANCES_HIGH)),
-            materials: h(names::MATERIALS),
-        }
+        SceneHandles::import_each(self.instances_split, |name| self.import_one(g, name))
     }
 
     /// True when the instances take two bindings (graphs must import `instances_high`).

@@ -3,7 +3,6 @@
 use glam::{Mat4, Vec3};
 use meshlight_gpu_scene::data::Limits;
 use meshlight_gpu_scene::{GpuScene, Material, MeshId, SceneData, SceneDataError};
-use meshlight_graph::GpuContext;
 use meshlight_scene::asset::format::NO_GROUP;
 use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
 
@@ -210,23 +209,18 @@ fn instances_past_one_binding_continue_in_the_second_buffer() {
     let mut scene = GpuScene::new(&gpu, &mut data);
     assert!(scene.instances_split());
     let instance = size_of::<meshlight_shaders::cpu::layout::Instance>() as u64;
-    let translation = |gpu: &GpuContext, scene: &GpuScene, name: &str, at: u64| {
+    // The translation column of instance `at` of buffer `name` as uploaded.
+    let translation_is = |scene: &GpuScene, name: &str, at: u64, want: [f32; 4]| {
         let bytes = gpu
             .read_buffer(scene.buffer(name).unwrap(), at * instance, instance)
             .unwrap();
         let got: meshlight_shaders::cpu::layout::Instance = bytemuck::pod_read_unaligned(&bytes);
-        got.world_from_local[3]
+        assert_eq!(got.world_from_local[3], want, "{name}[{at}]");
     };
     assert_eq!(scene.buffer("instances").unwrap().size(), 4 * instance);
     assert_eq!(scene.buffer("instances_high").unwrap().size(), 6 * instance);
-    assert_eq!(
-        translation(&gpu, &scene, "instances", 3),
-        [3.0, 0.0, 0.0, 1.0]
-    );
-    assert_eq!(
-        translation(&gpu, &scene, "instances_high", 0),
-        [4.0, 0.0, 0.0, 1.0]
-    );
+    translation_is(&scene, "instances", 3, [3.0, 0.0, 0.0, 1.0]);
+    translation_is(&scene, "instances_high", 0, [4.0, 0.0, 0.0, 1.0]);
     data.set_transform(ids[3], Mat4::from_translation(Vec3::Y))
         .unwrap();
     data.set_transform(ids[6], Mat4::from_translation(Vec3::Z))
@@ -234,14 +228,8 @@ fn instances_past_one_binding_continue_in_the_second_buffer() {
     // Instances 3..7 are dirty: one in the first buffer, three in the second.
     let stats = scene.upload(&gpu, &mut data);
     assert_eq!((stats.bytes, stats.created), (4 * instance, 0));
-    assert_eq!(
-        translation(&gpu, &scene, "instances", 3),
-        [0.0, 1.0, 0.0, 1.0]
-    );
-    assert_eq!(
-        translation(&gpu, &scene, "instances_high", 2),
-        [0.0, 0.0, 1.0, 1.0]
-    );
+    translation_is(&scene, "instances", 3, [0.0, 1.0, 0.0, 1.0]);
+    translation_is(&scene, "instances_high", 2, [0.0, 0.0, 1.0, 1.0]);
     // One more instance outgrows the second buffer only.
     data.add_instance(mesh, Mat4::IDENTITY, material).unwrap();
     assert_eq!(scene.upload(&gpu, &mut data).created, 1);

@@ -243,21 +243,19 @@ mod bake_command_tests {
 
     #[test]
     fn the_suggested_output_is_never_the_file_read() {
-        assert_eq!(
-            bake_command(Path::new("assets/spot.obj")),
-            "meshlight bake assets/spot.obj -o assets/spot.mlasset"
-        );
-        assert_eq!(
-            bake_command(Path::new("scene.GLB")),
-            "meshlight bake scene.GLB -o scene.mlasset"
-        );
-        assert_eq!(
-            bake_command(Path::new("broken.mlasset")),
-            "meshlight bake MESH -o broken.baked.mlasset"
-        );
-        assert_eq!(
-            bake_command(Path::new("noext")),
-            "meshlight bake MESH -o noext.mlasset"
-        );
+        for (read, command) in [
+            (
+                "assets/spot.obj",
+                "meshlight bake assets/spot.obj -o assets/spot.mlasset",
+            ),
+            ("scene.GLB", "meshlight bake scene.GLB -o scene.mlasset"),
+            (
+                "broken.mlasset",
+                "meshlight bake MESH -o broken.baked.mlasset",
+            ),
+            ("noext", "meshlight bake MESH -o noext.mlasset"),
+        ] {
+            assert_eq!(bake_command(Path::new(read)), command);
+        }
     }
 }

@@ -59,21 +59,18 @@ impl Mesh {
 
     /// Refuses counts beyond the asset format's limits before any large allocation.
     pub fn check_limits(source: &str, vertices: u64, triangles: u64) -> Result<(), SceneError> {
-        if triangles > MAX_TRIANGLES {
-            return Err(SceneError::TooLarge {
-                source_name: source.to_owned(),
-                what: "triangles",
-                count: triangles,
-                limit: MAX_TRIANGLES,
-            });
-        }
-        if vertices > MAX_VERTICES {
-            return Err(SceneError::TooLarge {
-                source_name: source.to_owned(),
-                what: "vertices",
-                count: vertices,
-                limit: MAX_VERTICES,
-            });
+        for (what, count, limit) in [
+            ("triangles", triangles, MAX_TRIANGLES),
+            ("vertices", vertices, MAX_VERTICES),
+        ] {
+            if count > limit {
+                return Err(SceneError::TooLarge {
+                    source_name: source.to_owned(),
+                    what,
+                    count,
+                    limit,
+                });
+            }
         }
         Ok(())
     }

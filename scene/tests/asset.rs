@@ -5,7 +5,6 @@ mod common;
 use std::collections::HashMap;
 use std::path::Path;
 
-use meshlight_scene::asset::checksum::file_checksum;
 use meshlight_scene::asset::format::{AssetHeader, MeshletRecord, SECTION_MESHLETS, VERSION};
 use meshlight_scene::compress::{AUTO_ERROR_SHARE, MAX_POSITION_BITS, PositionBits, Quantization};
 use meshlight_scene::{
@@ -265,10 +264,7 @@ fn structurally_broken_files_with_valid_checksums_are_refused() {
             &mut w[first..first + record_words],
         ));
         edit(rec);
-        let sum = file_checksum(&w[..AssetHeader::WORDS], &w[AssetHeader::WORDS..]);
-        let at = std::mem::offset_of!(AssetHeader, checksum) / 4;
-        w[at] = sum as u32;
-        w[at + 1] = (sum >> 32) as u32;
+        common::damage::reseal(&mut w);
         let len = w.len() as u64 * 4;
         let err = MeshletAsset::from_words(w, len, Path::new("x.mlasset")).unwrap_err();
         assert!(
@@ -292,10 +288,7 @@ fn damaged_triangle_records_decode_in_range_and_are_reported() {
     // field's range below the prediction (about 0 for the first triangle), below 0.
     let at = (payload.offset + m.data_offset + layout.triangles) as usize;
     w[at] &= !((1u32 << m.triangle_bits().offset) - 1);
-    let sum = file_checksum(&w[..AssetHeader::WORDS], &w[AssetHeader::WORDS..]);
-    let c = std::mem::offset_of!(AssetHeader, checksum) / 4;
-    w[c] = sum as u32;
-    w[c + 1] = (sum >> 32) as u32;
+    common::damage::reseal(&mut w);
     let len = w.len() as u64 * 4;
     let asset = MeshletAsset::from_words(w, len, Path::new("t.mlasset")).unwrap();
     let vc = m.vertex_count() as u8;

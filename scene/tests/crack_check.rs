@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::generators::finned_sphere;
+use common::generators::{finned_sphere, in_memory};
 use meshlight_scene::dag::Dag;
 use meshlight_scene::watertight::{crack_problems, exhaustive_crack_problems};
 use meshlight_scene::{BuildOptions, Built, Mesh, MeshletAsset, Terrain, build_asset};
@@ -28,17 +28,13 @@ fn meshes() -> Vec<(&'static str, Mesh)> {
         calm_centre: glam::Vec2::ZERO,
         calm_radius: 0.0,
     };
-    let (positions, indices) = finned_sphere(48, 64, 7);
-    let fins = Mesh {
-        source: "finned sphere".into(),
-        positions: positions.into_iter().map(glam::Vec3::from).collect(),
-        indices,
-        ..Mesh::default()
-    };
     vec![
         ("procedural", meshlight_scene::procedural_mesh(24)),
         ("terrain", terrain.mesh().unwrap()),
-        ("finned sphere", fins),
+        (
+            "finned sphere",
+            in_memory("finned sphere", finned_sphere(48, 64, 7)),
+        ),
     ]
 }
 

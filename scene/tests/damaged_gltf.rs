@@ -9,19 +9,9 @@ use meshlight_scene::SceneError;
 use meshlight_scene::load::load_mesh;
 use meshlight_scene::mesh::MAX_TRIANGLES;
 
-/// A tetrahedron's buffer: 4 positions (48 bytes), 12 u16 indices (24), 4 UVs (32).
-fn buffer() -> Vec<u8> {
-    let (p, idx) = common::tetrahedron();
-    let mut buf: Vec<u8> = bytemuck::cast_slice(&p).to_vec();
-    buf.extend_from_slice(bytemuck::cast_slice(&idx));
-    let uvs: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]];
-    buf.extend_from_slice(bytemuck::cast_slice(&uvs));
-    buf
-}
-
 /// A glTF with the given `nodes`, scene roots, primitive JSON and accessor list.
 fn gltf(nodes: &str, roots: &str, primitive: &str, accessors: &str) -> String {
-    let buf = buffer();
+    let buf = common::gltf::tetrahedron_buffer();
     format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":{roots}}}],
         "nodes":{nodes},
@@ -97,22 +87,8 @@ fn node_cycles_are_refused() {
         &["own descendant"],
     );
     // A chain far deeper than any stack: walked without recursion, and loads.
-    let depth = 200_000;
-    let nodes: Vec<String> = (0..depth)
-        .map(|i| {
-            if i + 1 < depth {
-                format!(r#"{{"children":[{}]}}"#, i + 1)
-            } else {
-                r#"{"mesh":0}"#.to_owned()
-            }
-        })
-        .collect();
-    let text = gltf(
-        &format!("[{}]", nodes.join(",")),
-        "[0]",
-        PRIMITIVE,
-        ACCESSORS,
-    );
+    let chain = node_chain(200_000, |next| next.to_string());
+    let text = gltf(&chain, "[0]", PRIMITIVE, ACCESSORS);
     assert_eq!(
         load_mesh(&write("deep.gltf", &text))
             .unwrap()
@@ -121,19 +97,25 @@ fn node_cycles_are_refused() {
     );
 }
 
-/// Node `i` lists node `i + 1` twice, so the last node (with the mesh) is reached by
-/// 2^(levels - 1) paths.
-fn doubling_tree(levels: usize) -> String {
+/// `levels` nodes, each but the last listing node `i + 1` as `children(i + 1)` says;
+/// the last holds the mesh.
+fn node_chain(levels: usize, children: impl Fn(usize) -> String) -> String {
     let nodes: Vec<String> = (0..levels)
         .map(|i| {
             if i + 1 < levels {
-                format!(r#"{{"children":[{0},{0}]}}"#, i + 1)
+                format!(r#"{{"children":[{}]}}"#, children(i + 1))
             } else {
                 r#"{"mesh":0}"#.to_owned()
             }
         })
         .collect();
     format!("[{}]", nodes.join(","))
+}
+
+/// Node `i` lists node `i + 1` twice, so the last node (with the mesh) is reached by
+/// 2^(levels - 1) paths.
+fn doubling_tree(levels: usize) -> String {
+    node_chain(levels, |next| format!("{next},{next}"))
 }
 
 #[test]

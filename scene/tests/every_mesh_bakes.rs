@@ -8,7 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::dag_checks::{check, check_structure};
-use common::generators::{Sphere, finned_sphere, glb, soup_stl, spheres_obj};
+use common::generators::{Sphere, finned_sphere, glb, in_memory, soup_stl, spheres_obj};
 use meshlight_scene::bake::{BakeOptions, run_bake, run_inspect};
 use meshlight_scene::load::load_mesh;
 use meshlight_scene::{BuildOptions, Built, Grouping, Mesh, build_asset, procedural_mesh};
@@ -242,13 +242,7 @@ fn fins_with_non_manifold_edges_and_open_borders() {
 /// second repair here, this test wants a mesh that still does.
 #[test]
 fn cracking_groups_are_repaired_locally() {
-    let (positions, indices) = finned_sphere(64, 96, 2);
-    let mesh = Mesh {
-        source: "fins on every second edge".into(),
-        positions: positions.into_iter().map(glam::Vec3::from).collect(),
-        indices,
-        ..Mesh::default()
-    };
+    let mesh = in_memory("fins on every second edge", finned_sphere(64, 96, 2));
     let built = build(&mesh, Grouping::Metis);
     check_structure("fins on every second edge (Metis)", &built);
     assert!(built.fallbacks.relocked > 0, "{:?}", built.fallbacks);
@@ -309,13 +303,7 @@ fn weld_tolerance_outside_its_range_is_refused() {
 /// bytes on every run and with any thread count.
 #[test]
 fn repaired_builds_are_byte_identical_whatever_the_thread_count() {
-    let (positions, indices) = finned_sphere(64, 96, 2);
-    let fins = Mesh {
-        source: "fins".into(),
-        positions: positions.into_iter().map(glam::Vec3::from).collect(),
-        indices,
-        ..Mesh::default()
-    };
+    let fins = in_memory("fins", finned_sphere(64, 96, 2));
     let dir = common::scratch("deterministic");
     let sphere = load_mesh(&write(&dir, "s.obj", Sphere::unit(32, 48).obj().as_bytes())).unwrap();
     for mesh in [&fins, &sphere] {

@@ -777,7 +777,7 @@ fn glb_bytes() -> Vec<u8> {
     let (p, idx) = common::tetrahedron();
     let mut buf: Vec<u8> = bytemuck::cast_slice(&p).to_vec();
     buf.extend_from_slice(bytemuck::cast_slice(&idx));
-    let mut json = format!(
+    let json = format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
         "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
         "buffers":[{{"byteLength":{}}}],
@@ -785,22 +785,8 @@ fn glb_bytes() -> Vec<u8> {
         "accessors":[{{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3"}},
                      {{"bufferView":1,"componentType":5123,"count":12,"type":"SCALAR"}}]}}"#,
         buf.len()
-    )
-    .into_bytes();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut glb = Vec::new();
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&((12 + 8 + json.len() + 8 + buf.len()) as u32).to_le_bytes());
-    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&json);
-    glb.extend_from_slice(&(buf.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"BIN\0");
-    glb.extend_from_slice(&buf);
-    glb
+    );
+    common::gltf::glb_container(&json, &buf)
 }
 
 #[test]

@@ -89,25 +89,21 @@ fn gltf_json(buffer_uri: &str, buffer_len: usize) -> String {
     )
 }
 
-fn gltf_buffer() -> Vec<u8> {
-    let (p, idx) = common::tetrahedron();
-    let mut buf: Vec<u8> = bytemuck::cast_slice(&p).to_vec();
-    buf.extend_from_slice(bytemuck::cast_slice(&idx));
-    let uvs: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]];
-    buf.extend_from_slice(bytemuck::cast_slice(&uvs));
-    buf
+/// [`gltf_json`] with the tetrahedron's buffer embedded as a base64 data URI.
+fn embedded_gltf_json() -> String {
+    let buf = common::gltf::tetrahedron_buffer();
+    let uri = format!(
+        r#","uri":"data:application/octet-stream;base64,{}""#,
+        common::base64(&buf)
+    );
+    gltf_json(&uri, buf.len())
 }
 
 #[test]
 fn gltf_applies_node_transforms_and_merges_primitives() {
     let dir = common::scratch("gltf");
-    let buf = gltf_buffer();
-    let uri = format!(
-        r#","uri":"data:application/octet-stream;base64,{}""#,
-        common::base64(&buf)
-    );
     let path = dir.join("tet.gltf");
-    std::fs::write(&path, gltf_json(&uri, buf.len())).unwrap();
+    std::fs::write(&path, embedded_gltf_json()).unwrap();
     let mesh = load_mesh(&path).unwrap();
     // 2 nodes × 2 primitives × 4 triangles.
     assert_eq!(mesh.triangle_count(), 16);
@@ -137,21 +133,8 @@ fn gltf_applies_node_transforms_and_merges_primitives() {
 #[test]
 fn glb_loads_from_its_binary_chunk() {
     let dir = common::scratch("glb");
-    let buf = gltf_buffer();
-    let mut json = gltf_json("", buf.len()).into_bytes();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut glb = Vec::new();
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&((12 + 8 + json.len() + 8 + buf.len()) as u32).to_le_bytes());
-    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&json);
-    glb.extend_from_slice(&(buf.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"BIN\0");
-    glb.extend_from_slice(&buf);
+    let buf = common::gltf::tetrahedron_buffer();
+    let glb = common::gltf::glb_container(&gltf_json("", buf.len()), &buf);
     let path = dir.join("tet.glb");
     std::fs::write(&path, glb).unwrap();
     assert_eq!(load_mesh(&path).unwrap().triangle_count(), 16);
@@ -160,12 +143,7 @@ fn glb_loads_from_its_binary_chunk() {
 #[test]
 fn gltf_without_position_is_refused() {
     let dir = common::scratch("gltf-nopos");
-    let buf = gltf_buffer();
-    let uri = format!(
-        r#","uri":"data:application/octet-stream;base64,{}""#,
-        common::base64(&buf)
-    );
-    let json = gltf_json(&uri, buf.len()).replace(
+    let json = embedded_gltf_json().replace(
         r#""attributes":{"POSITION":0}"#,
         r#""attributes":{"TEXCOORD_0":2}"#,
     );
@@ -277,15 +255,20 @@ fn non_finite_positions_and_uvs_in_memory_are_refused() {
     );
 }
 
+/// Parses `text` as the OBJ file `name`, expects an `Obj` error naming the file, and
+/// returns its message.
+fn obj_refused(name: &str, text: &str) -> String {
+    let err = parse_obj(Path::new(name), text.as_bytes()).unwrap_err();
+    assert!(matches!(err, SceneError::Obj { .. }), "{err:?}");
+    let msg = err.to_string();
+    assert!(msg.contains(name), "{msg}");
+    msg
+}
+
 #[test]
 fn indices_out_of_range_are_refused() {
-    let err = parse_obj(
-        Path::new("oob.obj"),
-        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
-    )
-    .unwrap_err();
-    assert!(matches!(err, SceneError::Obj { .. }), "{err:?}");
-    assert!(err.to_string().contains("oob.obj") && err.to_string().contains("vertex index"));
+    let msg = obj_refused("oob.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    assert!(msg.contains("vertex index"), "{msg}");
 
     let mut mesh = procedural_mesh(8);
     mesh.indices[7] = mesh.positions.len() as u32 + 5;
@@ -366,7 +349,7 @@ fn truncated_stl_is_refused() {
 #[test]
 fn gltf_reads_buffers_from_files_beside_it() {
     let dir = common::scratch("gltf-bin");
-    let buf = gltf_buffer();
+    let buf = common::gltf::tetrahedron_buffer();
     std::fs::write(dir.join("tet data.bin"), &buf).unwrap();
     let path = dir.join("tet.gltf");
     std::fs::write(&path, gltf_json(r#","uri":"tet%20data.bin""#, buf.len())).unwrap();
@@ -398,10 +381,8 @@ fn obj_face_indices_past_either_end_are_refused() {
         ),
         ("v 0 0 0\nv 1 0 0\nf 1 2 -3\n", "vertex index -3"),
     ] {
-        let err = parse_obj(Path::new("bad-face.obj"), text.as_bytes()).unwrap_err();
-        assert!(matches!(err, SceneError::Obj { .. }), "{err:?}");
-        let msg = err.to_string();
-        assert!(msg.contains("bad-face.obj") && msg.contains(what), "{msg}");
+        let msg = obj_refused("bad-face.obj", text);
+        assert!(msg.contains(what), "{msg}");
     }
     // Relative indices within range still load.
     let mesh = parse_obj(

@@ -144,7 +144,7 @@ pub fn glb(positions: &[[f32; 3]], indices: &[u32]) -> Vec<u8> {
             )
         },
     );
-    let mut json = format!(
+    let json = format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
         "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
         "buffers":[{{"byteLength":{}}}],
@@ -156,21 +156,7 @@ pub fn glb(positions: &[[f32; 3]], indices: &[u32]) -> Vec<u8> {
         positions.len(),
         indices.len()
     );
-    while !json.len().is_multiple_of(4) {
-        json.push(' ');
-    }
-    let mut out = Vec::new();
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(json.as_bytes());
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
-    out
+    super::gltf::glb_container(&json, &bin)
 }
 
 /// A closed unit UV sphere, welded: one vertex per pole, no seam column; triangles
@@ -225,4 +211,18 @@ pub fn finned_sphere(rings: u32, segments: u32, fin_every: usize) -> (Vec<[f32; 
         indices.extend_from_slice(&[a, b, tip]);
     }
     (positions, indices)
+}
+
+/// Generated `(positions, indices)` as an in-memory mesh named `source`, for tests that
+/// build without going through a file.
+pub fn in_memory(
+    source: &str,
+    (positions, indices): (Vec<[f32; 3]>, Vec<u32>),
+) -> meshlight_scene::Mesh {
+    meshlight_scene::Mesh {
+        source: source.into(),
+        positions: positions.into_iter().map(glam::Vec3::from).collect(),
+        indices,
+        ..meshlight_scene::Mesh::default()
+    }
 }

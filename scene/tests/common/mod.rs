@@ -4,6 +4,7 @@
 pub mod dag_checks;
 pub mod damage;
 pub mod generators;
+pub mod gltf;
 
 use std::path::PathBuf;
 
