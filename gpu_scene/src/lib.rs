@@ -32,12 +32,14 @@ pub mod error;
 pub mod gpu;
 pub mod instance_table;
 pub mod phase;
+pub mod scene_slots;
 pub mod view;
 
 pub use data::{InstanceId, Material, MeshId, SceneData};
 pub use error::SceneDataError;
 pub use gpu::GpuScene;
 pub use phase::Phase;
+pub use scene_slots::{SceneBuffer, scene_reads};
 pub use view::{Camera, Projection};
 
 /// Names of the imported buffers (and of the pass slots that read them).

@@ -61,3 +61,54 @@ impl ShaderDefs for () {
         Vec::new()
     }
 }
+
+/// Declares a pass's defs struct and its [`ShaderDefs`] impl together, so each def's WGSL
+/// name stands once, beside the field that holds its value.
+///
+/// A field's type is anything [`ShaderDef`] converts from (`bool`, `i32`, `u32`); its
+/// def is `ShaderDef::from(field)`, in field order.
+///
+/// ```
+/// meshlight_shaders::shader_defs! {
+///     /// The variant of walk.wgsl a pass runs.
+///     #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+///     pub struct WalkDefs {
+///         /// `OCCLUSION`: a pyramid is bound.
+///         pub occlusion: bool => "OCCLUSION",
+///         /// `ITEMS`: elements per lane.
+///         pub items: u32 => "ITEMS",
+///     }
+/// }
+/// use meshlight_shaders::{ShaderDef, ShaderDefs};
+/// let defs = WalkDefs { occlusion: true, items: 4 };
+/// assert_eq!(
+///     defs.shader_defs(),
+///     vec![("OCCLUSION", ShaderDef::Bool(true)), ("ITEMS", ShaderDef::UInt(4))]
+/// );
+/// ```
+#[macro_export]
+macro_rules! shader_defs {
+    (
+        $(#[$meta:meta])*
+        $vis:vis struct $name:ident {
+            $(
+                $(#[$field_meta:meta])*
+                $field_vis:vis $field:ident: $ty:ty => $def:literal
+            ),* $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        $vis struct $name {
+            $(
+                $(#[$field_meta])*
+                $field_vis $field: $ty,
+            )*
+        }
+
+        impl $crate::ShaderDefs for $name {
+            fn shader_defs(&self) -> ::std::vec::Vec<(&'static str, $crate::ShaderDef)> {
+                ::std::vec![$(($def, $crate::ShaderDef::from(self.$field))),*]
+            }
+        }
+    };
+}

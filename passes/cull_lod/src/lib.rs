@@ -140,14 +140,15 @@ pub mod cpu;
 pub use cpu::{CullResult, Decision, Thresholds, cpu_cull};
 
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::instance_table::{self, InstanceTable};
+use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
+use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
     Result, SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "cull_lod";
@@ -182,22 +183,17 @@ pub fn contract() -> StageContract {
     let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     StageContract {
         stage: STAGE,
-        slots: vec![
-            read("clusters", elements::CLUSTER, "candidate clusters"),
-            read(
-                "cluster_count",
-                Element::U32,
-                "[0]: valid entries of `clusters`",
-            ),
-            read("instances", elements::INSTANCE, "the scene's instances"),
-            instance_table::high_slot(),
-            read("meshes", elements::MESH, "the scene's meshes"),
-            read("meshlets", elements::MESHLET, "the scene's meshlets"),
-            read(
-                "meshlet_groups",
-                elements::GROUP,
-                "the scene's simplification groups",
-            ),
+        slots: [
+            vec![
+                read("clusters", elements::CLUSTER, "candidate clusters"),
+                read(
+                    "cluster_count",
+                    Element::U32,
+                    "[0]: valid entries of `clusters`",
+                ),
+            ],
+            scene_reads(&[Instances, Meshes, Meshlets, Groups]),
+            vec![
             Slot::buffer(
                 "raster_clusters",
                 Access::StorageWrite,
@@ -269,34 +265,27 @@ pub fn contract() -> StageContract {
                 "second pass: the first pass's per-instance counters; [2i+1] less the candidates drawn",
             )
             .optional(),
-        ],
+            ],
+        ]
+        .concat(),
     }
 }
 
 /// Which culling pass of the frame this is; the hierarchy walk names its passes the same way.
 pub use meshlight_gpu_scene::Phase as Mode;
 
-/// The variant of cull.wgsl a pass runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct CullDefs {
-    /// `OCCLUSION`: a pyramid is bound and tested.
-    pub occlusion: bool,
-    /// `SECOND_PASS`: [`Mode::Second`].
-    pub second: bool,
-    /// `PER_INSTANCE`: the per-instance occlusion counters are bound.
-    pub per_instance: bool,
-    /// `WALKED`: a second pass with the second walk's list bound.
-    pub walked: bool,
-}
-
-impl ShaderDefs for CullDefs {
-    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![
-            ("OCCLUSION", ShaderDef::Bool(self.occlusion)),
-            ("SECOND_PASS", ShaderDef::Bool(self.second)),
-            ("PER_INSTANCE", ShaderDef::Bool(self.per_instance)),
-            ("WALKED", ShaderDef::Bool(self.walked)),
-        ]
+shader_defs! {
+    /// The variant of cull.wgsl a pass runs.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub struct CullDefs {
+        /// A pyramid is bound and tested.
+        pub occlusion: bool => "OCCLUSION",
+        /// [`Mode::Second`].
+        pub second: bool => "SECOND_PASS",
+        /// The per-instance occlusion counters are bound.
+        pub per_instance: bool => "PER_INSTANCE",
+        /// A second pass with the second walk's list bound.
+        pub walked: bool => "WALKED",
     }
 }
 

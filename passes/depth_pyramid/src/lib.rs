@@ -100,7 +100,7 @@ use meshlight_graph::{
     Access, BindingLayout, BufferDesc, ComputeProgram, Element, GraphError, Pass, ProgramDesc,
     RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 use mips::MipViews;
 
 /// The stage name pipelines use.
@@ -313,21 +313,14 @@ struct ShaderParams {
     _pad: [u32; 2],
 }
 
-/// The variant of pyramid.wgsl a program runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct PyramidDefs {
-    /// `SINGLE_PASS`: the arrival counter and all 14 level views (else 7).
-    pub single_pass: bool,
-    /// `VIS_TEXTURE`: the visibility target is an R64Uint texture.
-    pub texture: bool,
-}
-
-impl ShaderDefs for PyramidDefs {
-    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![
-            ("SINGLE_PASS", ShaderDef::Bool(self.single_pass)),
-            ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
-        ]
+shader_defs! {
+    /// The variant of pyramid.wgsl a program runs.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub struct PyramidDefs {
+        /// The arrival counter and all 14 level views (else 7).
+        pub single_pass: bool => "SINGLE_PASS",
+        /// The visibility target is an R64Uint texture.
+        pub texture: bool => "VIS_TEXTURE",
     }
 }
 

@@ -63,14 +63,15 @@
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::instance_table::{self, InstanceTable};
+use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
+use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, Element, Pass, Primitive,
     ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
 };
-use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "hw_raster";
@@ -99,7 +100,8 @@ pub fn contract() -> StageContract {
     let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     StageContract {
         stage: STAGE,
-        slots: vec![
+        slots: [
+            vec![
             read(
                 "raster_clusters",
                 elements::CLUSTER,
@@ -116,17 +118,15 @@ pub fn contract() -> StageContract {
                 Element::DRAW_ARGS,
                 "[384, hardware cluster count, 0, 0]",
             ),
-            read("instances", elements::INSTANCE, "the scene's instances"),
-            instance_table::high_slot(),
-            read("meshes", elements::MESH, "the scene's meshes"),
-            read("meshlets", elements::MESHLET, "the scene's meshlets"),
-            read("payload", Element::U32, "the scene's meshlet payload"),
-            Slot::visibility64(
+            ],
+            scene_reads(&[Instances, Meshes, Meshlets, Payload]),
+            vec![Slot::visibility64(
                 "visbuffer",
                 Access::StorageReadWrite,
                 "width × height visibility values (u64 buffer or r64uint texture); atomicMax onto the software raster's",
-            ),
-        ],
+            )],
+        ]
+        .concat(),
     }
 }
 
@@ -171,21 +171,14 @@ impl HwRaster {
     }
 }
 
-/// The variant of raster.wgsl a pass runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct RasterDefs {
-    /// `MESH_SHADER`: the mesh-stage entry points exist (they need the extension).
-    pub mesh_shader: bool,
-    /// `VIS_TEXTURE`: the visibility buffer is an R64Uint storage texture.
-    pub texture: bool,
-}
-
-impl ShaderDefs for RasterDefs {
-    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![
-            ("MESH_SHADER", ShaderDef::Bool(self.mesh_shader)),
-            ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
-        ]
+shader_defs! {
+    /// The variant of raster.wgsl a pass runs.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub struct RasterDefs {
+        /// The mesh-stage entry points exist (they need the extension).
+        pub mesh_shader: bool => "MESH_SHADER",
+        /// The visibility buffer is an R64Uint storage texture.
+        pub texture: bool => "VIS_TEXTURE",
     }
 }
 

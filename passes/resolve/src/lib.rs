@@ -125,15 +125,16 @@ pub mod settings;
 pub use settings::{DebugView, Resolve};
 
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::instance_table::{self, InstanceTable};
+use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
+use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, DepthAttachment, DepthTarget, Element, GraphError, Pass, ProgramDesc,
     RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
-use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
 /// `meshlight::light::ClusterableObject`, as light clustering's stages declare it.
 const CLUSTERABLE_OBJECT: Element =
@@ -152,8 +153,16 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The format of the `pyramid` the `pyramid` view reads.
 pub const PYRAMID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
-pub const DEPTH_SHADER: PassShader = pass_shader!("resolve::depth", "depth.wgsl");
-pub const SHADE_SHADER: PassShader = pass_shader!("resolve::shade", "shade.wgsl");
+pub const DEPTH_SHADER: PassShader = pass_shader!(
+    "resolve::depth",
+    "depth.wgsl",
+    modules: [("resolve::visibility", "visibility.wgsl")]
+);
+pub const SHADE_SHADER: PassShader = pass_shader!(
+    "resolve::shade",
+    "shade.wgsl",
+    modules: [("resolve::visibility", "visibility.wgsl")]
+);
 
 /// The fullscreen passes that write the depth targets: (program, fragment entry, slot).
 /// Each is declared and recorded only when its slot is bound (see the crate docs).
@@ -176,7 +185,8 @@ pub fn contract() -> StageContract {
     let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     StageContract {
         stage: STAGE,
-        slots: vec![
+        slots: [
+            vec![
             Slot::visibility64(
                 "visbuffer",
                 Access::StorageRead,
@@ -192,12 +202,9 @@ pub fn contract() -> StageContract {
                 Element::U32,
                 "word 0: software clusters (ids below it)",
             ),
-            read("instances", elements::INSTANCE, "the scene's instances"),
-            instance_table::high_slot(),
-            read("meshes", elements::MESH, "the scene's meshes"),
-            read("meshlets", elements::MESHLET, "the scene's meshlets"),
-            read("payload", Element::U32, "the scene's meshlet payload"),
-            read("materials", elements::MATERIAL, "the scene's materials"),
+            ],
+            scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials]),
+            vec![
             Slot::texture(
                 "depth",
                 Access::DepthTarget,
@@ -252,7 +259,9 @@ pub fn contract() -> StageContract {
                 "per instance: [2i] clusters in the LOD cut, [2i+1] left hidden, for the `occlusion` view",
             )
             .optional(),
-        ],
+            ],
+        ]
+        .concat(),
     }
 }
 
@@ -427,45 +436,28 @@ const LIGHT_SLOTS: [&str; 5] = [
     "cluster_objects",
 ];
 
-/// The variant of shade.wgsl a pass runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-struct ShadeDefs {
-    /// `CLUSTERED_LIGHTS`: the froxel lists are bound.
-    clustered_lights: bool,
-    /// `VIS_TEXTURE`: the visibility buffer is an R64Uint texture (depth.wgsl too).
-    texture: bool,
-    /// `PYRAMID`: a depth pyramid is bound, for the `pyramid` view.
-    pyramid: bool,
-    /// `SECOND_COUNTS`: the second culling pass's counts are bound.
-    second_counts: bool,
-    /// `OCCLUDED_PER_INSTANCE`: the per-instance occlusion counters are bound.
-    occluded_per_instance: bool,
-}
-
-impl ShaderDefs for ShadeDefs {
-    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![
-            ("CLUSTERED_LIGHTS", ShaderDef::Bool(self.clustered_lights)),
-            ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
-            ("PYRAMID", ShaderDef::Bool(self.pyramid)),
-            ("SECOND_COUNTS", ShaderDef::Bool(self.second_counts)),
-            (
-                "OCCLUDED_PER_INSTANCE",
-                ShaderDef::Bool(self.occluded_per_instance),
-            ),
-        ]
+shader_defs! {
+    /// The variant of shade.wgsl a pass runs.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    struct ShadeDefs {
+        /// The froxel lists are bound.
+        clustered_lights: bool => "CLUSTERED_LIGHTS",
+        /// The visibility buffer is an R64Uint texture (depth.wgsl too).
+        texture: bool => "VIS_TEXTURE",
+        /// A depth pyramid is bound, for the `pyramid` view.
+        pyramid: bool => "PYRAMID",
+        /// The second culling pass's counts are bound.
+        second_counts: bool => "SECOND_COUNTS",
+        /// The per-instance occlusion counters are bound.
+        occluded_per_instance: bool => "OCCLUDED_PER_INSTANCE",
     }
 }
 
-/// The variant of depth.wgsl a pass runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-struct DepthDefs {
-    texture: bool,
-}
-
-impl ShaderDefs for DepthDefs {
-    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![("VIS_TEXTURE", ShaderDef::Bool(self.texture))]
+shader_defs! {
+    /// The variant of depth.wgsl a pass runs.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    struct DepthDefs {
+        texture: bool => "VIS_TEXTURE",
     }
 }
 
@@ -511,7 +503,7 @@ pub fn register(registry: &mut Registry) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use meshlight_shaders::{Capabilities, ShaderLibrary};
+    use meshlight_shaders::{Capabilities, ShaderDefs, ShaderLibrary};
 
     #[test]
     fn the_shaders_compose_and_validate_without_64_bit_integers() {
@@ -523,14 +515,9 @@ mod tests {
             ),
             (&SHADE_SHADER, &["shade_pixels"][..]),
         ] {
-            let module = library
-                .compose(shader, &[])
+            let entries = library
+                .entry_point_names(shader, &[])
                 .unwrap_or_else(|e| panic!("{e}"));
-            let entries: Vec<_> = module
-                .entry_points
-                .iter()
-                .map(|e| e.name.as_str())
-                .collect();
             assert_eq!(entries, want);
         }
     }

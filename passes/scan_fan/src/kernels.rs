@@ -5,7 +5,7 @@ use crate::{ScanOptions, Subgroups, TileAccess};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, ProgramDesc, RecordContext, Result, SetupContext,
 };
-use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
+use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader, shader_defs};
 
 /// The kernels (`scan.wgsl`) and the tile layouts they run on, one module each.
 ///
@@ -56,28 +56,19 @@ pub(crate) mod flag {
 /// The API's cap on workgroups per dispatch dimension; larger grids are split into rows.
 pub(crate) const MAX_GROUPS_PER_DIM: u32 = 65_535;
 
-/// The variant of `scan.wgsl` with tiles of single elements (staged or direct).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct ScanDefs {
-    /// Elements each lane scans serially (`ITEMS`).
-    pub items_per_thread: u32,
-    /// Subgroup scans (`SUBGROUPS`).
-    pub subgroups: bool,
-    /// The element count comes from the `count` slot (`GPU_COUNT`).
-    pub gpu_count: bool,
-    /// Each lane loads and stores its own run of the tile, not staged through workgroup
-    /// memory (`DIRECT`).
-    pub direct: bool,
-}
-
-impl ShaderDefs for ScanDefs {
-    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![
-            ("ITEMS", ShaderDef::UInt(self.items_per_thread)),
-            ("SUBGROUPS", ShaderDef::Bool(self.subgroups)),
-            ("GPU_COUNT", ShaderDef::Bool(self.gpu_count)),
-            ("DIRECT", ShaderDef::Bool(self.direct)),
-        ]
+shader_defs! {
+    /// The variant of `scan.wgsl` with tiles of single elements (staged or direct).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub struct ScanDefs {
+        /// Elements each lane scans serially.
+        pub items_per_thread: u32 => "ITEMS",
+        /// Subgroup scans.
+        pub subgroups: bool => "SUBGROUPS",
+        /// The element count comes from the `count` slot.
+        pub gpu_count: bool => "GPU_COUNT",
+        /// Each lane loads and stores its own run of the tile, not staged through
+        /// workgroup memory.
+        pub direct: bool => "DIRECT",
     }
 }
 

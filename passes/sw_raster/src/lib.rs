@@ -89,14 +89,15 @@
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::instance_table::{self, InstanceTable};
+use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
+use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
     StageContract, Visibility64,
 };
-use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "sw_raster";
@@ -114,7 +115,8 @@ pub fn contract() -> StageContract {
     let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     StageContract {
         stage: STAGE,
-        slots: vec![
+        slots: [
+            vec![
             read(
                 "raster_clusters",
                 elements::CLUSTER,
@@ -131,15 +133,9 @@ pub fn contract() -> StageContract {
                 "[x, y, 1] over the software clusters",
             )
             .also(Access::Indirect),
-            read("instances", elements::INSTANCE, "the scene's instances"),
-            instance_table::high_slot(),
-            read("meshes", elements::MESH, "the scene's meshes"),
-            read("meshlets", elements::MESHLET, "the scene's meshlets"),
-            read(
-                "payload",
-                meshlight_graph::Element::U32,
-                "the scene's meshlet payload",
-            ),
+            ],
+            scene_reads(&[Instances, Meshes, Meshlets, Payload]),
+            vec![
             Slot::visibility64(
                 "visbuffer",
                 Access::ClearedReadWrite,
@@ -152,7 +148,9 @@ pub fn contract() -> StageContract {
                 "[0] big-triangle tiles listed, [1] asked for (a scratch buffer when unbound)",
             )
             .optional(),
-        ],
+            ],
+        ]
+        .concat(),
     }
 }
 
@@ -210,27 +208,18 @@ pub struct SwRaster {
     pub big_triangle_px: u32,
 }
 
-/// The variant of raster.wgsl a pass runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct RasterDefs {
-    /// `EXACT_DIVISION`: see [`SwRaster::exact_division`].
-    pub exact_division: bool,
-    /// `VIS_TEXTURE`: the visibility buffer is an R64Uint storage texture.
-    pub texture: bool,
-    /// `SLOT_BASE`: clusters start at slot `raster_counts[7]` ([`SwRaster::accumulate`]).
-    pub slot_base: bool,
-    /// `BIG_TRIANGLES`: [`SwRaster::big_triangle_px`] is not 0.
-    pub big_triangles: bool,
-}
-
-impl ShaderDefs for RasterDefs {
-    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![
-            ("EXACT_DIVISION", ShaderDef::Bool(self.exact_division)),
-            ("VIS_TEXTURE", ShaderDef::Bool(self.texture)),
-            ("SLOT_BASE", ShaderDef::Bool(self.slot_base)),
-            ("BIG_TRIANGLES", ShaderDef::Bool(self.big_triangles)),
-        ]
+shader_defs! {
+    /// The variant of raster.wgsl a pass runs.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub struct RasterDefs {
+        /// See [`SwRaster::exact_division`].
+        pub exact_division: bool => "EXACT_DIVISION",
+        /// The visibility buffer is an R64Uint storage texture.
+        pub texture: bool => "VIS_TEXTURE",
+        /// Clusters start at slot `raster_counts[7]` ([`SwRaster::accumulate`]).
+        pub slot_base: bool => "SLOT_BASE",
+        /// [`SwRaster::big_triangle_px`] is not 0.
+        pub big_triangles: bool => "BIG_TRIANGLES",
     }
 }
 
