@@ -140,6 +140,17 @@ impl ShaderLibrary {
             .map_err(|error| self.compose_error(shader, error))
     }
 
+    /// The names of the entry points [`compose`](Self::compose) gives, in source order:
+    /// what a pass's tests check to know each variant composes with the stages it runs.
+    pub fn entry_point_names(
+        &mut self,
+        shader: &PassShader,
+        defs: &[(&'static str, ShaderDef)],
+    ) -> Result<Vec<String>, ShaderError> {
+        let module = self.compose(shader, defs)?;
+        Ok(module.entry_points.into_iter().map(|e| e.name).collect())
+    }
+
     /// Adds the shader's crate-local modules not added yet; a second module under an
     /// import path already taken by another source is an error.
     fn add_local_modules(&mut self, shader: &PassShader) -> Result<(), ShaderError> {

@@ -3,7 +3,7 @@
 
 use meshlight_graph::{
     Bindings, BufferDesc, CompileOptions, Executor, FrameData, GpuContext, GraphBuilder, Imports,
-    Pass, Result,
+    Pass, Result, TextureDesc,
 };
 
 /// The first Vulkan adapter, opened with every feature it has that a pass may use.
@@ -62,6 +62,85 @@ pub fn run_one_pass(
         .fold(Imports::new(), |imports, (i, b)| imports.buffer(i.name, b));
     exec.execute_frame(&compiled, &imports, frame)?;
     outputs.iter().map(|o| exec.read_buffer(o.name)).collect()
+}
+
+/// A texture as `desc` describes it (its size, format, mips and layers), for a test to
+/// import or fill: what the graph itself would create for that description.
+pub fn texture(
+    gpu: &GpuContext,
+    label: &str,
+    desc: &TextureDesc,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: desc.width,
+            height: desc.height,
+            depth_or_array_layers: desc.layers,
+        },
+        mip_level_count: desc.mip_levels,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: desc.format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+/// Copies mip 0 of `texture` (which needs COPY_SRC) to the CPU, rows tightly packed.
+///
+/// Unlike [`GpuContext::read_texture`] it takes the aspect, so a depth texture's depth
+/// can be read on its own.
+pub fn read_texture(
+    gpu: &GpuContext,
+    texture: &wgpu::Texture,
+    aspect: wgpu::TextureAspect,
+) -> Vec<u8> {
+    let format = texture.format();
+    let texel = format
+        .block_copy_size(Some(aspect))
+        .unwrap_or_else(|| panic!("{format:?}'s {aspect:?} cannot be copied to a buffer"));
+    let (width, height) = (texture.width(), texture.height());
+    let row = width * texel;
+    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size: u64::from(padded) * u64::from(height),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &staging,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(height),
+            },
+        },
+        wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = gpu.map_and_read(&staging).unwrap_or_else(|e| panic!("{e}"));
+    bytes
+        .chunks(padded as usize)
+        .flat_map(|r| &r[..row as usize])
+        .copied()
+        .collect()
 }
 
 /// What test buffers are made with: bound as storage, filled, read back, and usable as

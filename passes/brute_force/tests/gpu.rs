@@ -23,7 +23,7 @@ const TEXTURE_USAGE: wgpu::TextureUsages = wgpu::TextureUsages::RENDER_ATTACHMEN
     .union(wgpu::TextureUsages::COPY_SRC)
     .union(wgpu::TextureUsages::COPY_DST);
 
-use meshlight_testing::gpu;
+use meshlight_testing::{gpu, read_texture, texture};
 
 /// The mesh's LOD 0 and a GPU scene of overlapping instances of its asset.
 struct Scene {
@@ -88,49 +88,6 @@ struct Targets {
     ids: Vec<u32>,
 }
 
-/// Reads a 4-byte-per-texel texture of `W` × `H` back, row padding removed.
-fn read_texture(gpu: &GpuContext, texture: &wgpu::Texture, aspect: wgpu::TextureAspect) -> Vec<u8> {
-    let row = W * 4;
-    let padded = row.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("texture readback"),
-        size: (padded * H) as u64,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-    enc.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: Some(H),
-            },
-        },
-        wgpu::Extent3d {
-            width: W,
-            height: H,
-            depth_or_array_layers: 1,
-        },
-    );
-    gpu.queue.submit([enc.finish()]);
-    let bytes = gpu.map_and_read(&staging).unwrap();
-    bytes
-        .chunks(padded as usize)
-        .flat_map(|r| &r[..row as usize])
-        .copied()
-        .collect()
-}
-
 /// A graph of the one pass over imported buffers and targets, run once per view in
 /// `views` with the same executor (so the targets keep what the frame before left);
 /// returns the targets after each frame, or the first error.
@@ -175,20 +132,12 @@ fn run(
         gpu.buffer_with_data("indices", scene.mesh.index_bytes(), BUFFER_USAGE),
     ];
     let texture = |label, format, [width, height]: [u32; 2]| {
-        gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage: TEXTURE_USAGE,
-            view_formats: &[],
-        })
+        texture(
+            &gpu,
+            label,
+            &TextureDesc::d2(format, width, height),
+            TEXTURE_USAGE,
+        )
     };
     let depth_texture = texture("depth", DEPTH_FORMAT, [W, H]);
     let ids_texture = texture("ids", IDS_FORMAT, ids_size);

@@ -19,7 +19,7 @@ use meshlight_pass_cull_lod::{
 };
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
-use meshlight_testing::write_pyramid;
+use meshlight_testing::{texture, write_pyramid};
 use std::collections::BTreeSet;
 
 mod common;
@@ -238,23 +238,10 @@ impl Harness {
             bytemuck::cast_slice(&vec![SENTINEL; n as usize]),
             USAGE,
         );
-        let texture = |label| {
-            gpu.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: desc.width,
-                    height: desc.height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: levels,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: meshlight_pass_cull_lod::PYRAMID_FORMAT,
-                usage,
-                view_formats: &[],
-            })
-        };
-        let (upload, now) = (texture("upload"), texture("pyramid_now"));
+        let (upload, now) = (
+            texture(&gpu, "upload", &desc, usage),
+            texture(&gpu, "pyramid_now", &desc, usage),
+        );
         Self {
             exec: Executor::new(gpu),
             compiled,

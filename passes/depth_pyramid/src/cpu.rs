@@ -163,6 +163,32 @@ mod tests {
         assert_eq!(p.levels, vec![vec![0.375]]);
     }
 
+    /// `w × h` visibility values from an xorshift seeded by `seed`: about one in
+    /// `empty_every` empty, the rest at random depths, with random cluster ids when
+    /// `random_ids` (else id 0).
+    fn random_visibility(
+        w: u32,
+        h: u32,
+        seed: u64,
+        empty_every: u64,
+        random_ids: bool,
+    ) -> Vec<u64> {
+        let mut s = seed | 1;
+        (0..w * h)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                let id = if random_ids { s as u32 } else { 0 };
+                if s.is_multiple_of(empty_every) {
+                    0
+                } else {
+                    value((s >> 40) as f32 / (1u64 << 24) as f32, id)
+                }
+            })
+            .collect()
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(64))]
         /// The level-by-level reduction is the rule: every texel is the min over its
@@ -173,15 +199,7 @@ mod tests {
             h in 1u32..70,
             seed in any::<u64>(),
         ) {
-            let mut s = seed | 1;
-            let vis: Vec<u64> = (0..w * h)
-                .map(|_| {
-                    s ^= s << 13;
-                    s ^= s >> 7;
-                    s ^= s << 17;
-                    if s % 9 == 0 { 0 } else { value((s >> 40) as f32 / (1u64 << 24) as f32, s as u32) }
-                })
-                .collect();
+            let vis = random_visibility(w, h, seed, 9, true);
             let p = build(&vis, w, h);
             for level in 0..p.extent.mip_levels {
                 let [lw, lh] = p.extent.level_size(level);
@@ -205,15 +223,7 @@ mod tests {
             corners in any::<[u32; 4]>(),
             seed in any::<u64>(),
         ) {
-            let mut s = seed | 1;
-            let vis: Vec<u64> = (0..w * h)
-                .map(|_| {
-                    s ^= s << 13;
-                    s ^= s >> 7;
-                    s ^= s << 17;
-                    if s % 50 == 0 { 0 } else { value((s >> 40) as f32 / (1u64 << 24) as f32, 0) }
-                })
-                .collect();
+            let vis = random_visibility(w, h, seed, 50, false);
             let p = build(&vis, w, h);
             let [a, b, c, d] = corners;
             let (xa, xb) = (a % w, b % w);

@@ -13,7 +13,7 @@ const VIS_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
 const PYRAMID_USAGE: wgpu::TextureUsages =
     wgpu::TextureUsages::STORAGE_BINDING.union(wgpu::TextureUsages::COPY_SRC);
 
-use meshlight_testing::gpu;
+use meshlight_testing::{gpu, texture};
 
 /// What a frame's visibility target holds.
 #[derive(Clone, Copy, Debug)]
@@ -108,20 +108,12 @@ fn run(pass: DepthPyramid, form: Form, frames: &[Vec<u64>]) -> Result<Frames> {
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
 
     let source = if form.texture {
-        Source::Texture(gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("visibility"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::R64Uint,
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        }))
+        Source::Texture(texture(
+            &gpu,
+            "visibility",
+            &TextureDesc::d2(wgpu::TextureFormat::R64Uint, w, h),
+            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
+        ))
     } else {
         Source::Buffer(gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("visibility"),
@@ -130,20 +122,7 @@ fn run(pass: DepthPyramid, form: Form, frames: &[Vec<u64>]) -> Result<Frames> {
             mapped_at_creation: false,
         }))
     };
-    let pyramid_texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("pyramid"),
-        size: wgpu::Extent3d {
-            width: desc.width,
-            height: desc.height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: desc.mip_levels,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: desc.format,
-        usage: PYRAMID_USAGE,
-        view_formats: &[],
-    });
+    let pyramid_texture = texture(&gpu, "pyramid", &desc, PYRAMID_USAGE);
     let counter = gpu.buffer_with_data("counter", &[0; 4], VIS_USAGE);
     let mut imports = Imports::new().texture("pyramid", &pyramid_texture);
     imports = match &source {
@@ -394,20 +373,7 @@ fn a_pyramid_not_declared_with_texture_desc_is_an_error_naming_it() {
     .unwrap();
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let vis_buffer = gpu.buffer_with_data("visibility", &vec![0; (w * h * 8) as usize], VIS_USAGE);
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("pyramid"),
-        size: wgpu::Extent3d {
-            width: naive.width,
-            height: naive.height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: naive.mip_levels,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: naive.format,
-        usage: PYRAMID_USAGE,
-        view_formats: &[],
-    });
+    let texture = texture(&gpu, "pyramid", &naive, PYRAMID_USAGE);
     let imports = Imports::new()
         .buffer("visibility", &vis_buffer)
         .texture("pyramid", &texture);

@@ -372,29 +372,22 @@ fn is_empty(value: u64) -> bool {
     value >> 32 == 0
 }
 
-// Out-of-range indices read zeros, as robust buffer access does on the GPU; the
-// rasterisers never write such ids.
+/// `items[index]`, or zeros past the end, as robust buffer access reads on the GPU; the
+/// rasterisers never write such ids.
+fn read_or_zero<T: bytemuck::Zeroable + Copy>(items: &[T], index: u32) -> T {
+    items.get(index as usize).copied().unwrap_or_else(T::zeroed)
+}
+
 fn cluster_of(raster_clusters: &[Cluster], value: u64) -> Cluster {
-    raster_clusters
-        .get(visbuffer::cluster(value) as usize)
-        .copied()
-        .unwrap_or_default()
+    read_or_zero(raster_clusters, visbuffer::cluster(value))
 }
 
 fn instance_of(scene: &SceneData, cluster: &Cluster) -> Instance {
-    scene
-        .instances
-        .get(cluster.instance as usize)
-        .copied()
-        .unwrap_or_default()
+    read_or_zero(&scene.instances, cluster.instance)
 }
 
 fn meshlet_of(scene: &SceneData, cluster: &Cluster) -> MeshletRecord {
-    scene
-        .meshlets
-        .get(cluster.meshlet as usize)
-        .copied()
-        .unwrap_or_else(bytemuck::Zeroable::zeroed)
+    read_or_zero(&scene.meshlets, cluster.meshlet)
 }
 
 /// One corner of a triangle, decoded from the payload as shade.wgsl decodes it.

@@ -2,10 +2,10 @@
 // `frag_depth` from the visibility buffer. `cpu::depth` and `cpu::material_depth` are
 // the references.
 
-#import meshlight::meshlet::Cluster
 #import meshlight::instance::Instance
 #import meshlight::instance_table::instance_at
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster}
+#import resolve::visibility::{raster_clusters, visibility_at}
 
 struct Params {
     // Visibility buffer size in pixels.
@@ -14,15 +14,7 @@ struct Params {
     _pad: vec2<u32>,
 }
 
-// width × height visibility values in the pair form (low word, high word), so reading
-// them needs no 64-bit integers.
-#ifdef VIS_TEXTURE
-// The software rasteriser's `texture` target: an R64Uint storage texture.
-@group(0) @binding(0) var visbuffer: texture_storage_2d<r64uint, read>;
-#else
-@group(0) @binding(0) var<storage, read> visbuffer: array<vec2<u32>>;
-#endif
-@group(0) @binding(1) var<storage, read> raster_clusters: array<Cluster>;
+// Bindings 0 and 1: the visibility buffer and `raster_clusters` (resolve::visibility).
 // The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
 @group(0) @binding(3) var<uniform> params: Params;
 
@@ -45,12 +37,7 @@ fn fullscreen_vs(@builtin(vertex_index) v: u32) -> @builtin(position) vec4<f32> 
 fn value_at(position: vec4<f32>) -> vec2<u32> {
     let x = min(u32(position.x), params.width - 1u);
     let y = min(u32(position.y), params.height - 1u);
-#ifdef VIS_TEXTURE
-    let v = textureLoad(visbuffer, vec2(x, y)).x;
-    return vec2(u32(v & 0xfffffffflu), u32(v >> 32u));
-#else
-    return visbuffer[y * params.width + x];
-#endif
+    return visibility_at(vec2(x, y), params.width);
 }
 
 @fragment

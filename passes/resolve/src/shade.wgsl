@@ -10,6 +10,7 @@
 #import meshlight::instance_table::instance_at
 #import meshlight::view::View
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
+#import resolve::visibility::{raster_clusters, visibility_at}
 #ifdef CLUSTERED_LIGHTS
 #import meshlight::view::{position_from_depth, view_z_from_depth, pixel_to_uv}
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_of_pixel, cluster_index, CLUSTERABLE_POINT_LIGHT, CLUSTERABLE_SPOT_LIGHT, CLUSTERABLE_TYPE_COUNT}
@@ -60,13 +61,7 @@ struct Params {
     _pad2: u32,
 }
 
-#ifdef VIS_TEXTURE
-// The software rasteriser's `texture` target: an R64Uint storage texture.
-@group(0) @binding(0) var visbuffer: texture_storage_2d<r64uint, read>;
-#else
-@group(0) @binding(0) var<storage, read> visbuffer: array<vec2<u32>>;
-#endif
-@group(0) @binding(1) var<storage, read> raster_clusters: array<Cluster>;
+// Bindings 0 and 1: the visibility buffer and `raster_clusters` (resolve::visibility).
 // Word 0: software clusters; ids below it were drawn in software.
 @group(0) @binding(2) var<storage, read> raster_counts: array<u32>;
 // The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
@@ -327,12 +322,7 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height {
         return;
     }
-#ifdef VIS_TEXTURE
-    let v = textureLoad(visbuffer, gid.xy).x;
-    let value = vec2(u32(v & 0xfffffffflu), u32(v >> 32u));
-#else
-    let value = visbuffer[gid.y * params.width + gid.x];
-#endif
+    let value = visibility_at(gid.xy, params.width);
     let pixel = vec2<f32>(gid.xy) + vec2(0.5);
     var rgb = vec3(0.0);
     let empty = visbuffer_is_empty(value);

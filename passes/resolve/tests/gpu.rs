@@ -37,7 +37,7 @@ const DEPTH_USAGE: wgpu::TextureUsages =
 const COLOR_USAGE: wgpu::TextureUsages =
     wgpu::TextureUsages::STORAGE_BINDING.union(wgpu::TextureUsages::COPY_SRC);
 
-use meshlight_testing::gpu;
+use meshlight_testing::{gpu, read_texture, texture};
 
 fn asset(mesh: &meshlight_scene::Mesh) -> MeshletAsset {
     build_asset(mesh, &BuildOptions::default(), &mut |_| {})
@@ -271,65 +271,6 @@ const BOTH: Targets = Targets {
     material_depth: true,
 };
 
-/// Copies a `W × H` texture of 4-byte texels to the CPU.
-fn read_texture(gpu: &GpuContext, texture: &wgpu::Texture, aspect: wgpu::TextureAspect) -> Vec<u8> {
-    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("texture readback"),
-        size: (W * H * 4) as u64,
-        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = gpu
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-    encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                // 64 texels of 4 bytes: the 256-byte row alignment copies need.
-                bytes_per_row: Some(W * 4),
-                rows_per_image: Some(H),
-            },
-        },
-        wgpu::Extent3d {
-            width: W,
-            height: H,
-            depth_or_array_layers: 1,
-        },
-    );
-    gpu.queue.submit([encoder.finish()]);
-    gpu.read_buffer(&buffer, 0, (W * H * 4) as u64).unwrap()
-}
-
-fn texture(
-    gpu: &GpuContext,
-    label: &str,
-    format: wgpu::TextureFormat,
-    usage: wgpu::TextureUsages,
-) -> wgpu::Texture {
-    gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: W,
-            height: H,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format,
-        usage,
-        view_formats: &[],
-    })
-}
-
 /// Runs `pass` over `frame` with `view` as the frame's camera and both depth targets
 /// bound, and reads the targets back.
 fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolved> {
@@ -447,9 +388,24 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
         ),
     ];
     let textures = [
-        texture(&gpu, "depth", DEPTH_FORMAT, DEPTH_USAGE),
-        texture(&gpu, "material_depth", DEPTH_FORMAT, DEPTH_USAGE),
-        texture(&gpu, "color", COLOR_FORMAT, COLOR_USAGE),
+        texture(
+            &gpu,
+            "depth",
+            &TextureDesc::d2(DEPTH_FORMAT, W, H),
+            DEPTH_USAGE,
+        ),
+        texture(
+            &gpu,
+            "material_depth",
+            &TextureDesc::d2(DEPTH_FORMAT, W, H),
+            DEPTH_USAGE,
+        ),
+        texture(
+            &gpu,
+            "color",
+            &TextureDesc::d2(COLOR_FORMAT, W, H),
+            COLOR_USAGE,
+        ),
     ];
     let light_data: Vec<(&str, wgpu::Buffer)> = light_buffers
         .iter()
@@ -501,20 +457,11 @@ const PYRAMID_USAGE: wgpu::TextureUsages =
 
 /// An R32Float texture holding `mips`.
 fn upload_pyramid(gpu: &GpuContext, mips: &[cpu::PyramidMip]) -> wgpu::Texture {
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("pyramid"),
-        size: wgpu::Extent3d {
-            width: mips[0].width,
-            height: mips[0].height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: mips.len() as u32,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: PYRAMID_FORMAT,
-        usage: PYRAMID_USAGE,
-        view_formats: &[],
-    });
+    let desc = TextureDesc {
+        mip_levels: mips.len() as u32,
+        ..TextureDesc::d2(PYRAMID_FORMAT, mips[0].width, mips[0].height)
+    };
+    let texture = texture(gpu, "pyramid", &desc, PYRAMID_USAGE);
     for (level, mip) in mips.iter().enumerate() {
         gpu.queue.write_texture(
             wgpu::TexelCopyTextureInfo {
