@@ -101,8 +101,8 @@
 //! list. [`crate::hierarchy_cpu`] mirrors the shader.
 
 use crate::{
-    CAMERA_CUT_INPUT, CANDIDATE_NODE_COUNT_SLOT, CANDIDATE_NODES_SLOT, InstanceGrid,
-    OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT,
+    CAMERA_CUT_INPUT, CANDIDATE_NODE_COUNT_SLOT, CANDIDATE_NODES_SLOT, Grid, InstanceGrid,
+    OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT, dispatch,
     hierarchy_contract, instance_grid,
 };
 use meshlight_gpu_scene::instance_table::InstanceTable;
@@ -444,14 +444,7 @@ impl Pass for HierarchyFill {
             }
         }
         // Only `walk_dispatch` uses `walk_args` as storage; `fill` is dispatched with it.
-        ctx.program(
-            "walk_dispatch",
-            ProgramDesc::compute(&SHADER, "walk_dispatch")
-                .defs(&defs)
-                .defs(&table)
-                .layout(layout.clone()),
-        );
-        for entry in ["prepare", "roots", "fill"] {
+        for entry in ["walk_dispatch", "prepare", "roots", "fill"] {
             ctx.program(
                 entry,
                 ProgramDesc::compute(&SHADER, entry)
@@ -490,16 +483,19 @@ impl Pass for HierarchyFill {
         let (args, _) = ctx.scratch(WALK_ARGS)?;
         let args = args.clone();
         let mut dispatches = vec![
-            ("prepare", 0, Some([1, 1])),
-            ("roots", 0, Some(roots_grid)),
-            ("walk_dispatch", 0, Some([1, 1])),
-            ("fill", 0, None),
+            ("prepare", 0, Grid::Direct([1, 1])),
+            ("roots", 0, Grid::Direct(roots_grid)),
+            ("walk_dispatch", 0, Grid::Direct([1, 1])),
+            ("fill", 0, Grid::Indirect(&args)),
         ];
         for step in 1..=self.spread_steps {
-            dispatches.push(("fill", step, Some([spread, 1])));
+            dispatches.push(("fill", step, Grid::Direct([spread, 1])));
         }
         for (entry, step, grid) in dispatches {
-            let grid_x = grid.map_or(0, |g| g[0]);
+            let grid_x = match grid {
+                Grid::Direct([x, _]) => x,
+                Grid::Indirect(_) => 0,
+            };
             let params = GpuParams {
                 capacity: self.capacity.unwrap_or(u32::MAX),
                 instance_count,
@@ -520,16 +516,7 @@ impl Pass for HierarchyFill {
                 (3, bytemuck::bytes_of(&view)),
                 (4, bytemuck::bytes_of(&params)),
             ];
-            let program = ctx.compute(entry)?;
-            let group = ctx.bind_group(&program, 0, &uniforms)?;
-            let mut pass = ctx.compute_pass();
-            pass.set_pipeline(&program.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            match grid {
-                Some([x, y]) if x > 0 => pass.dispatch_workgroups(x, y, 1),
-                Some(_) => {}
-                None => pass.dispatch_workgroups_indirect(&args, 0),
-            }
+            dispatch(ctx, entry, &uniforms, grid)?;
         }
         Ok(())
     }

@@ -217,15 +217,7 @@ fn flush() {
         emit_offset[e] = atomicAdd(&emit_total, count);
         return;
     }
-    let cap = capacity();
-    let start = atomicAdd(&cluster_count[1], count);
-    let written = min(count, cap - min(start, cap));
-    if written > 0u {
-        atomicAdd(&cluster_count[0], written);
-    }
-    for (var k = 0u; k < written; k += 1u) {
-        clusters[start + k] = Cluster(walk_instance, hierarchy_clusters[pending_first + k]);
-    }
+    emit_now(walk_instance, pending_first, count);
 }
 
 fn emit_range(first: u32, count: u32) {
@@ -395,8 +387,8 @@ fn root_total() -> u32 {
 }
 
 // Writes meshlets `first .. first + count` of hierarchy_clusters for instance `index` at
-// once: a root that is a leaf, or one the roots list has no room for (then every
-// meshlet below it, as a full queue emits a subtree whole).
+// once: a root that is a leaf, one the roots list has no room for (then every meshlet
+// below it, as a full queue emits a subtree whole), or a range a chunk has no slot for.
 fn emit_now(index: u32, first: u32, count: u32) {
     let cap = capacity();
     let start = atomicAdd(&cluster_count[1], count);
@@ -407,6 +399,24 @@ fn emit_now(index: u32, first: u32, count: u32) {
     for (var k = 0u; k < written; k += 1u) {
         clusters[start + k] = Cluster(index, hierarchy_clusters[first + k]);
     }
+}
+
+// Zeroes the workgroup's node counters (one thread, before a dispatch's walks).
+fn clear_counters() {
+    atomicStore(&tested_nodes, 0u);
+    atomicStore(&leaves, 0u);
+    atomicStore(&spilled, 0u);
+    atomicStore(&hidden_nodes, 0u);
+}
+
+// Adds the workgroup's node counters to `hierarchy_counts` (one thread, after the walks).
+fn add_counters() {
+    atomicAdd(&hierarchy_counts[0], atomicLoad(&tested_nodes));
+    atomicAdd(&hierarchy_counts[1], atomicLoad(&leaves));
+    atomicAdd(&hierarchy_counts[2], atomicLoad(&spilled));
+#ifdef OCCLUSION
+    atomicAdd(&hierarchy_counts[4], atomicLoad(&hidden_nodes));
+#endif
 }
 
 fn walker(index: u32) -> Walker {
@@ -426,10 +436,7 @@ fn roots(
     @builtin(local_invocation_index) t: u32,
 ) {
     if t == 0u {
-        atomicStore(&tested_nodes, 0u);
-        atomicStore(&leaves, 0u);
-        atomicStore(&spilled, 0u);
-        atomicStore(&hidden_nodes, 0u);
+        clear_counters();
         atomicStore(&entries_tested, 0u);
         atomicStore(&entries_passed, 0u);
     }
@@ -483,12 +490,7 @@ fn roots(
     }
     workgroupBarrier();
     if t == 0u {
-        atomicAdd(&hierarchy_counts[0], atomicLoad(&tested_nodes));
-        atomicAdd(&hierarchy_counts[1], atomicLoad(&leaves));
-        atomicAdd(&hierarchy_counts[2], atomicLoad(&spilled));
-#ifdef OCCLUSION
-        atomicAdd(&hierarchy_counts[4], atomicLoad(&hidden_nodes));
-#endif
+        add_counters();
         if arrayLength(&hierarchy_counts) >= ENTRY_WORDS {
             atomicAdd(&hierarchy_counts[5], atomicLoad(&entries_tested));
             atomicAdd(&hierarchy_counts[6], atomicLoad(&entries_passed));
@@ -541,10 +543,7 @@ fn fill(
         atomicStore(&next_len, 0u);
         atomicStore(&emit_ranges, 0u);
         atomicStore(&emit_total, 0u);
-        atomicStore(&leaves, 0u);
-        atomicStore(&tested_nodes, 0u);
-        atomicStore(&spilled, 0u);
-        atomicStore(&hidden_nodes, 0u);
+        clear_counters();
     }
     let entries = workgroupUniformLoad(&entry_total);
     var unfinished = 0u;
@@ -667,12 +666,7 @@ fn fill(
         workgroupBarrier();
     }
     if t == 0u {
-        atomicAdd(&hierarchy_counts[0], atomicLoad(&tested_nodes));
-        atomicAdd(&hierarchy_counts[1], atomicLoad(&leaves));
-        atomicAdd(&hierarchy_counts[2], atomicLoad(&spilled));
+        add_counters();
         atomicAdd(&hierarchy_counts[3], unfinished);
-#ifdef OCCLUSION
-        atomicAdd(&hierarchy_counts[4], atomicLoad(&hidden_nodes));
-#endif
     }
 }

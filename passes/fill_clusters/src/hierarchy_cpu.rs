@@ -370,6 +370,28 @@ pub fn cpu_walk_with(
                         }),
                 );
             };
+            // The node test and `node_seen` (an accepted leaf emits its meshlets): the
+            // node, when the walk goes on below it.
+            let accept = |r: &mut HierarchyWalk, id: u32| -> Option<NodeRecord> {
+                let node = *nodes.get(id as usize)?;
+                let test = node_test(view, &w, &node, params.lod_threshold_px);
+                if test.closeness < near {
+                    r.near_threshold.push((index, id));
+                }
+                if !test.visible || !seen(r, index, instance, id, &node, false) {
+                    return None;
+                }
+                if node.is_leaf() {
+                    r.counts[1] += 1;
+                    emit(
+                        r,
+                        node.first_cluster,
+                        node.first_cluster + node.cluster_count,
+                    );
+                    return None;
+                }
+                Some(node)
+            };
             let mut frontier: Vec<u32> = (entry.first..entry.first + entry.count).collect();
             let mut round = 0;
             while !frontier.is_empty() && round < MAX_ROUNDS {
@@ -378,48 +400,16 @@ pub fn cpu_walk_with(
                 // Children reserved so far, counting those past the queue (the GPU's atomic).
                 let mut reserved = 0usize;
                 for &id in &frontier {
-                    let Some(node) = nodes.get(id as usize) else {
+                    let Some(node) = accept(&mut r, id) else {
                         continue;
                     };
-                    let test = node_test(view, &w, node, params.lod_threshold_px);
-                    if test.closeness < near {
-                        r.near_threshold.push((index, id));
-                    }
-                    if !test.visible || !seen(&mut r, index, instance, id, node, false) {
-                        continue;
-                    }
-                    if node.is_leaf() {
-                        r.counts[1] += 1;
-                        emit(
-                            &mut r,
-                            node.first_cluster,
-                            node.first_cluster + node.cluster_count,
-                        );
-                        continue;
-                    }
                     // Two levels a round: the children of an accepted node are tested
                     // by the same thread, in the same round.
                     for child_id in node.first_child..node.first_child + node.child_count {
                         r.counts[0] += 1;
-                        let Some(child) = nodes.get(child_id as usize) else {
+                        let Some(child) = accept(&mut r, child_id) else {
                             continue;
                         };
-                        let test = node_test(view, &w, child, params.lod_threshold_px);
-                        if test.closeness < near {
-                            r.near_threshold.push((index, child_id));
-                        }
-                        if !test.visible || !seen(&mut r, index, instance, child_id, child, false) {
-                            continue;
-                        }
-                        if child.is_leaf() {
-                            r.counts[1] += 1;
-                            emit(
-                                &mut r,
-                                child.first_cluster,
-                                child.first_cluster + child.cluster_count,
-                            );
-                            continue;
-                        }
                         let slot = reserved;
                         reserved += child.child_count as usize;
                         let fit = (child.child_count as usize).min(width - slot.min(width));

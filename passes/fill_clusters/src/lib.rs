@@ -291,18 +291,14 @@ impl Pass for FillClusters {
         let table = InstanceTable::of(ctx);
         ctx.shader_defs(&table);
         let layout = BindingLayout::from_shader("fill_clusters");
-        ctx.program(
-            "fill",
-            ProgramDesc::compute(&SHADER, "fill")
-                .defs(&table)
-                .layout(layout.clone()),
-        );
-        ctx.program(
-            "finish",
-            ProgramDesc::compute(&SHADER, "finish")
-                .defs(&table)
-                .layout(layout),
-        );
+        for entry in ["fill", "finish"] {
+            ctx.program(
+                entry,
+                ProgramDesc::compute(&SHADER, entry)
+                    .defs(&table)
+                    .layout(layout.clone()),
+            );
+        }
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
@@ -319,29 +315,45 @@ impl Pass for FillClusters {
             _pad: 0,
         };
         ctx.clear("cluster_count")?;
-        let fill = ctx.compute("fill")?;
-        let finish = ctx.compute("finish")?;
         let uniforms: [(u32, &[u8]); 2] = [
             (4, bytemuck::bytes_of(&view)),
             (5, bytemuck::bytes_of(&params)),
         ];
-        let fill_group = ctx.bind_group(&fill, 0, &uniforms)?;
-        let finish_group = ctx.bind_group(&finish, 0, &uniforms)?;
-        {
-            let mut pass = ctx.compute_pass();
-            pass.set_pipeline(&fill.pipeline);
-            pass.set_bind_group(0, &fill_group, &[]);
-            if x > 0 {
-                pass.dispatch_workgroups(x, y, 1);
-            }
-        }
+        dispatch(ctx, "fill", &uniforms, Grid::Direct([x, y]))?;
         // A separate compute pass, so the requested count is final when it is read.
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&finish.pipeline);
-        pass.set_bind_group(0, &finish_group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-        Ok(())
+        dispatch(ctx, "finish", &uniforms, Grid::Direct([1, 1]))
     }
+}
+
+/// The workgroups of one dispatch.
+#[derive(Clone, Copy)]
+pub(crate) enum Grid<'a> {
+    /// `[x, y]` workgroups; none when x is 0.
+    Direct([u32; 2]),
+    /// As many as the arguments at the start of the buffer say (a kernel wrote them).
+    Indirect(&'a wgpu::Buffer),
+}
+
+/// Records one compute pass of the program `entry` over `grid`, its group 0 bound with
+/// `uniforms` (bytes by binding index) and its slots: the one shape of every dispatch
+/// of both implementations.
+pub(crate) fn dispatch(
+    ctx: &mut RecordContext<'_>,
+    entry: &str,
+    uniforms: &[(u32, &[u8])],
+    grid: Grid,
+) -> Result<()> {
+    let program = ctx.compute(entry)?;
+    let group = ctx.bind_group(&program, 0, uniforms)?;
+    let mut pass = ctx.compute_pass();
+    pass.set_pipeline(&program.pipeline);
+    pass.set_bind_group(0, &group, &[]);
+    match grid {
+        Grid::Direct([x, y]) if x > 0 => pass.dispatch_workgroups(x, y, 1),
+        Grid::Direct(_) => {}
+        Grid::Indirect(args) => pass.dispatch_workgroups_indirect(args, 0),
+    }
+    Ok(())
 }
 
 fn build(params: &Params) -> Result<Box<dyn Pass>> {

@@ -7,13 +7,13 @@
 mod support;
 
 use glam::{Mat4, Quat, Vec3};
-use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, data::Limits};
-use meshlight_graph::*;
+use meshlight_gpu_scene::{Camera, Material, SceneData, data::Limits};
 use meshlight_pass_fill_clusters::{FillClusters, FillResult, cpu_fill};
-use meshlight_scene::{BuildOptions, build_asset, procedural_mesh};
+use meshlight_scene::procedural_mesh;
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use std::collections::BTreeMap;
+use support::run::{Frame, run_fill};
+use support::scenes::bake;
 use support::*;
 
 /// Two meshes of different sizes (the larger with more meshlets than a workgroup has
@@ -27,13 +27,8 @@ fn scene() -> SceneData {
     });
     let mut meshes = Vec::new();
     for segments in [4, 20] {
-        let built = build_asset(
-            &procedural_mesh(segments),
-            &BuildOptions::default(),
-            &mut |_| {},
-        )
-        .unwrap();
-        meshes.push(data.add_mesh("knot", &built.asset).unwrap());
+        let asset = bake(&procedural_mesh(segments));
+        meshes.push(data.add_mesh("knot", &asset).unwrap());
     }
     let placements = [
         (0, Mat4::from_translation(Vec3::new(-8.0, 0.0, 0.0))),
@@ -73,62 +68,17 @@ fn view() -> View {
     Camera::perspective(Vec3::new(0.0, 2.0, 20.0), Vec3::ZERO, 1.0, 0.1).view([320, 240], 0, None)
 }
 
-struct GpuFill {
-    /// The whole `clusters` buffer: capacity slots, then the guard.
-    clusters: Vec<Cluster>,
-    count: [u32; 2],
+/// What every test starts from: the scene, the view, and `cpu_fill`'s list of it with no
+/// capacity.
+fn scene_view_and_reference() -> (SceneData, View, FillResult) {
+    let (data, view) = (scene(), view());
+    let reference = cpu_fill(&data, &view, u32::MAX);
+    (data, view, reference)
 }
 
-/// Runs the pass over a sentinel-filled list of `capacity + GUARD` slots.
-fn run(
-    gpu: GpuContext,
-    data: &mut SceneData,
-    view: &View,
-    pass: FillClusters,
-    slots: u32,
-) -> GpuFill {
-    let scene = GpuScene::new(&gpu, data);
-    let mut g = GraphBuilder::new();
-    scene.import(&mut g);
-    let clusters = g.import_buffer(
-        "clusters",
-        BufferDesc::array(elements::CLUSTER, slots as u64),
-        USAGE,
-    );
-    let count = g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
-    let out = g
-        .add_pass(
-            "fill",
-            pass,
-            Bindings::new()
-                .bind("clusters", clusters)
-                .bind("cluster_count", count),
-        )
-        .unwrap();
-    g.export(out.buffer("clusters").unwrap());
-    g.export(out.buffer("cluster_count").unwrap());
-    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
-    let list = gpu.buffer_with_data(
-        "clusters",
-        bytemuck::cast_slice(&vec![SENTINEL; slots as usize]),
-        USAGE,
-    );
-    let mut exec = Executor::new(gpu);
-    let frame = FrameData::new().with("view", bytemuck::bytes_of(view));
-    exec.execute_frame(
-        &compiled,
-        &scene.imports().buffer("clusters", &list),
-        &frame,
-    )
-    .unwrap();
-    let count: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("cluster_count").unwrap());
-    // The list is imported: read the caller's buffer (after the count, so the frame ran).
-    let clusters =
-        bytemuck::pod_collect_to_vec(&exec.gpu.read_buffer(&list, 0, list.size()).unwrap());
-    GpuFill {
-        clusters,
-        count: [count[0], count[1]],
-    }
+/// Runs `pass` over a sentinel-filled list of `slots`.
+fn run(data: &mut SceneData, view: &View, pass: FillClusters, slots: u32) -> Frame {
+    run_fill(data, view, Box::new(pass), slots, None)
 }
 
 /// The written slots as runs per instance: instance → (first slot, clusters in order).
@@ -170,10 +120,7 @@ fn check_runs(reference: &FillResult, written: &[Cluster]) -> usize {
 
 #[test]
 fn clusters_equal_the_reference_when_the_capacity_suffices() {
-    let gpu = gpu();
-    let mut data = scene();
-    let view = view();
-    let reference = cpu_fill(&data, &view, u32::MAX);
+    let (mut data, view, reference) = scene_view_and_reference();
     // The scene exercises both outcomes, with no instance within rounding of a plane.
     assert!(
         reference.visible_instances.len() >= 5,
@@ -197,16 +144,16 @@ fn clusters_equal_the_reference_when_the_capacity_suffices() {
         assert!(margin.abs() > 0.1, "instance {i} lies on a plane: {margin}");
     }
     let capacity = reference.requested + 5;
-    let got = run(gpu, &mut data, &view, FillClusters::default(), capacity);
-    assert_eq!(got.count, [reference.written, reference.requested]);
+    let got = run(&mut data, &view, FillClusters::default(), capacity);
+    assert_eq!(got.cluster_count, [reference.written, reference.requested]);
     let n = reference.requested as usize;
-    let written = &got.clusters[..n];
+    let written = &got.list[..n];
     let mut sorted = written.to_vec();
     sorted.sort_by_key(|c| (c.instance, c.meshlet));
     assert_eq!(sorted, reference.clusters, "the multiset of clusters");
     assert_eq!(check_runs(&reference, written), 0);
     assert!(
-        got.clusters[n..].iter().all(|c| *c == SENTINEL),
+        got.list[n..].iter().all(|c| *c == SENTINEL),
         "a slot past the requested ones was written"
     );
 }
@@ -227,9 +174,7 @@ fn subset_sums(counts: &[u32]) -> Vec<bool> {
 
 #[test]
 fn a_small_capacity_writes_exactly_the_capacity_and_nothing_past_it() {
-    let mut data = scene();
-    let view = view();
-    let full = cpu_fill(&data, &view, u32::MAX);
+    let (mut data, view, full) = scene_view_and_reference();
     let counts: Vec<u32> = full
         .visible_instances
         .iter()
@@ -248,19 +193,9 @@ fn a_small_capacity_writes_exactly_the_capacity_and_nothing_past_it() {
         capacity: Some(capacity),
         instance_count: None,
     };
-    let got = run(gpu(), &mut data, &view, pass, capacity + GUARD);
-    assert_eq!(got.count, [capacity, full.requested]);
-    let written = &got.clusters[..capacity as usize];
-    assert!(
-        written.iter().all(|c| *c != SENTINEL),
-        "a slot below the capacity was left unwritten"
-    );
-    assert!(
-        got.clusters[capacity as usize..]
-            .iter()
-            .all(|c| *c == SENTINEL),
-        "a slot past the capacity was written"
-    );
+    let got = run(&mut data, &view, pass, capacity + GUARD);
+    assert_eq!(got.cluster_count, [capacity, full.requested]);
+    let written = got.filled_to(capacity);
     assert_eq!(
         check_runs(&full, written),
         1,
@@ -270,9 +205,7 @@ fn a_small_capacity_writes_exactly_the_capacity_and_nothing_past_it() {
 
 #[test]
 fn instance_count_limits_the_instances_visited() {
-    let mut data = scene();
-    let view = view();
-    let full = cpu_fill(&data, &view, u32::MAX);
+    let (mut data, view, full) = scene_view_and_reference();
     let mut first_four = data.clone();
     first_four.instances.truncate(4);
     let reference = cpu_fill(&first_four, &view, u32::MAX);
@@ -281,9 +214,12 @@ fn instance_count_limits_the_instances_visited() {
         capacity: None,
         instance_count: Some(4),
     };
-    let got = run(gpu(), &mut data, &view, pass, full.requested);
-    assert_eq!(got.count, [reference.requested, reference.requested]);
-    let mut sorted = got.clusters[..reference.requested as usize].to_vec();
+    let got = run(&mut data, &view, pass, full.requested);
+    assert_eq!(
+        got.cluster_count,
+        [reference.requested, reference.requested]
+    );
+    let mut sorted = got.list[..reference.requested as usize].to_vec();
     sorted.sort_by_key(|c| (c.instance, c.meshlet));
     assert_eq!(sorted, reference.clusters);
 }

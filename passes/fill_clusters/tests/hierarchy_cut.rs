@@ -7,88 +7,53 @@
 
 mod support;
 
-use glam::{Mat4, Quat, Vec3};
-use meshlight_gpu_scene::{Camera, Material, SceneData, data::Limits};
+use glam::Vec3;
+use meshlight_gpu_scene::SceneData;
 use meshlight_pass_cull_lod::{Thresholds, cpu_cull};
 use meshlight_pass_fill_clusters::{WalkParams, cpu_fill, cpu_walk};
-use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
-use meshlight_shaders::cpu::layout::View;
+use meshlight_scene::{MeshletAsset, procedural_mesh};
 use std::collections::BTreeSet;
 use std::sync::OnceLock;
+use support::lattice::lattice;
+use support::scenes::{Views, bake, field};
 use support::*;
 
 fn procedural() -> &'static MeshletAsset {
     static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
-    ASSET.get_or_init(|| {
-        build_asset(&procedural_mesh(40), &BuildOptions::default(), &mut |_| {})
-            .unwrap()
-            .asset
-    })
+    ASSET.get_or_init(|| bake(&procedural_mesh(40)))
 }
 
-/// A 4 × 4 field of `asset`, one unit of mesh radius apart scaled by `radius`, turned,
-/// scaled (one unevenly) and lifted differently, so instances are near and far from any
-/// camera among them.
-fn field(asset: &MeshletAsset) -> SceneData {
-    let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-    });
-    let mesh = data.add_mesh("mesh", asset).unwrap();
-    let radius = data.meshes[0].bounding_sphere[3];
-    for i in 0..16 {
-        let (x, z) = ((i % 4) as f32, (i / 4) as f32);
+/// A 4 × 4 field of `asset`, three mesh radii apart, turned, scaled (one unevenly) and
+/// lifted differently, so instances are near and far from any camera among them.
+fn field_of(asset: &MeshletAsset) -> SceneData {
+    field(&[("mesh", asset)], 16, |i| {
         let scale = if i == 5 {
             Vec3::new(1.6, 0.6, 1.0)
         } else {
             Vec3::splat(0.6 + 0.1 * (i % 7) as f32)
         };
-        let transform = Mat4::from_scale_rotation_translation(
-            scale,
-            Quat::from_rotation_y(i as f32 * 0.9),
-            Vec3::new(x * 3.0, (i % 3) as f32 * 0.4, z * 3.0) * radius,
-        );
-        data.add_instance(mesh, transform, material)
-            .unwrap()
-            .expect("an invertible transform");
-    }
-    data
+        let (x, z) = ((i % 4) as f32, (i / 4) as f32);
+        let position = Vec3::new(x * 3.0, (i % 3) as f32 * 0.4, z * 3.0);
+        (scale, i as f32 * 0.9, position)
+    })
 }
 
-/// A random view of `data`'s field: from inside it to 60 mesh radii away.
-fn random_view(data: &SceneData, rng: &mut Rng, v: u32) -> (View, f32) {
-    let radius = data.meshes[0].bounding_sphere[3];
-    let target = Vec3::new(
-        rng.range(-1.0, 10.0),
-        rng.range(-0.5, 1.5),
-        rng.range(-1.0, 10.0),
-    ) * radius;
-    let direction = Vec3::new(
-        rng.range(-1.0, 1.0),
-        rng.range(-0.4, 1.0),
-        rng.range(-1.0, 1.0),
-    )
-    .normalize_or(Vec3::Z);
-    let distance = radius * 0.3 * (200.0f32).powf(rng.unit());
-    let viewport = [[320, 240], [1280, 720], [2240, 1260]][rng.below(3) as usize];
-    let camera = Camera::perspective(
-        target + direction * distance,
-        target,
-        rng.range(0.4, 1.6),
-        radius * 0.02,
-    );
-    let threshold = [0.5, 1.0, 2.0, 4.0][rng.below(4) as usize];
-    (camera.view(viewport, v, None), threshold)
-}
+/// Random views of the field: from inside it to 60 mesh radii away, at every threshold.
+const VIEWS: Views = Views {
+    target: [Vec3::new(-1.0, -0.5, -1.0), Vec3::new(10.0, 1.5, 10.0)],
+    lowest: -0.4,
+    distance: [0.3, 200.0],
+    viewports: &[[320, 240], [1280, 720], [2240, 1260]],
+    fov: [0.4, 1.6],
+    thresholds: &[0.5, 1.0, 2.0, 4.0],
+};
 
 /// Per view: the flat list and the walk's, each through `cpu_cull`; the cuts must be
 /// equal. Returns (flat clusters, walk clusters + nodes, cut clusters) over all views.
 fn compare_cuts(name: &str, data: &SceneData, seed: u64, views: u32) -> [usize; 3] {
-    let mut rng = Rng(seed);
     let mut totals = [0usize; 3];
     let mut levels_in_cuts = BTreeSet::new();
-    for v in 0..views {
-        let (view, threshold) = random_view(data, &mut rng, v);
+    for (v, view, threshold) in VIEWS.seeded(data, seed, views) {
         let t = Thresholds {
             lod_threshold_px: threshold,
             ..Thresholds::default()
@@ -134,10 +99,11 @@ fn compare_cuts(name: &str, data: &SceneData, seed: u64, views: u32) -> [usize; 
     totals
 }
 
-#[test]
-fn the_walk_and_the_flat_list_give_the_same_cut_on_random_views_of_the_bunny() {
-    let data = field(bunny());
-    let [flat, walk, cut] = compare_cuts("bunny", &data, 0xb0_0b1e5, 60);
+/// On 60 random views of a field of `asset`, the cuts are equal and the walk tests under a
+/// third of what the flat fill lists.
+fn same_cut_for_a_third_of_the_tests(name: &str, asset: &MeshletAsset, seed: u64) {
+    let data = field_of(asset);
+    let [flat, walk, cut] = compare_cuts(name, &data, seed, 60);
     assert!(cut > 0);
     assert!(
         walk * 3 < flat,
@@ -146,25 +112,22 @@ fn the_walk_and_the_flat_list_give_the_same_cut_on_random_views_of_the_bunny() {
 }
 
 #[test]
+fn the_walk_and_the_flat_list_give_the_same_cut_on_random_views_of_the_bunny() {
+    same_cut_for_a_third_of_the_tests("bunny", bunny(), 0xb0_0b1e5);
+}
+
+#[test]
 fn the_walk_and_the_flat_list_give_the_same_cut_on_random_views_of_the_procedural_mesh() {
-    let data = field(procedural());
-    let [flat, walk, cut] = compare_cuts("procedural", &data, 0x9e0_3e7c, 60);
-    assert!(cut > 0);
-    assert!(
-        walk * 3 < flat,
-        "the walk tests {walk} clusters + nodes, the flat list {flat}"
-    );
+    same_cut_for_a_third_of_the_tests("procedural", procedural(), 0x9e0_3e7c);
 }
 
 /// The comparison above notices a walk that loses clusters of the cut: with a threshold
 /// other than cull's, the walk prunes what cull would keep, and the cuts differ.
 #[test]
 fn a_walk_with_another_threshold_than_cull_loses_clusters_of_the_cut() {
-    let data = field(bunny());
-    let mut rng = Rng(0x5eed_0002);
+    let data = field_of(bunny());
     let mut differing = 0;
-    for v in 0..20 {
-        let (view, threshold) = random_view(&data, &mut rng, v);
+    for (_, view, threshold) in VIEWS.seeded(&data, 0x5eed_0002, 20) {
         let t = Thresholds {
             lod_threshold_px: threshold,
             ..Thresholds::default()
@@ -198,28 +161,7 @@ fn a_walk_with_another_threshold_than_cull_loses_clusters_of_the_cut() {
 /// apart, seen from outside one corner at 2240×1260 (`scenes::lattice`), threshold 1 px.
 #[test]
 fn on_the_bunny_lattice_clusters_and_nodes_tested_stay_within_three_times_the_cut() {
-    let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-    });
-    let mesh = data.add_mesh("bunny", bunny()).unwrap();
-    let radius = data.meshes[0].bounding_sphere[3];
-    let spacing = radius * 2.5;
-    let n = 15u32;
-    for i in 0..n * n * n {
-        let cell = Vec3::new((i % n) as f32, (i / n % n) as f32, (i / (n * n)) as f32);
-        data.add_instance(mesh, Mat4::from_translation(cell * spacing), material)
-            .unwrap();
-    }
-    let centre = Vec3::splat((n as f32 - 1.0) * 0.5 * spacing);
-    let extent = n as f32 * spacing;
-    let camera = Camera::perspective(
-        centre + Vec3::new(0.9, 0.6, 1.2).normalize() * extent * 1.3,
-        centre,
-        50f32.to_radians(),
-        radius * 0.05,
-    );
-    let view = camera.view([2240, 1260], 0, None);
+    let (data, view) = lattice(bunny(), 15);
     let t = Thresholds::default();
     let flat = cpu_fill(&data, &view, u32::MAX);
     let want = cpu_cull(&data, &view, &flat.clusters, &t, u32::MAX);
@@ -254,11 +196,9 @@ fn on_the_bunny_lattice_clusters_and_nodes_tested_stay_within_three_times_the_cu
 /// really hands subtrees on.
 #[test]
 fn the_walk_tests_and_lists_the_same_however_it_is_spread() {
-    let data = field(bunny());
-    let mut rng = Rng(0x5b1e_ad00);
+    let data = field_of(bunny());
     let mut handed_on = 0;
-    for v in 0..24 {
-        let (view, threshold) = random_view(&data, &mut rng, v);
+    for (v, view, threshold) in VIEWS.seeded(&data, 0x5b1e_ad00, 24) {
         let walk = |spread_steps: u32, queue_capacity: u32| {
             let params = WalkParams {
                 lod_threshold_px: threshold,

@@ -9,18 +9,18 @@
 
 mod support;
 
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Vec3};
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, data::Limits};
+use meshlight_gpu_scene::{Camera, Material, SceneData, data::Limits};
 use meshlight_graph::*;
-use meshlight_pass_cull_lod::{CullLod, Thresholds};
 use meshlight_pass_fill_clusters::{
     FillClusters, HierarchyFill, HierarchyWalk, WalkParams, cpu_walk, hierarchy::MAX_STEPS,
 };
-use meshlight_scene::{BuildOptions, MeshletAsset, build_asset};
-use meshlight_shaders::cpu::layout::{Cluster, View};
-use std::collections::BTreeSet;
+use meshlight_scene::MeshletAsset;
+use meshlight_shaders::cpu::layout::View;
 use std::sync::OnceLock;
+use support::run::{Cull, Frame, run_fill};
+use support::scenes::{Views, bake, field};
 use support::*;
 
 /// A node the GPU and the reference decide differently must have a deciding value
@@ -30,203 +30,60 @@ const NEAR_THRESHOLD: f32 = 1e-5;
 /// Two meshes (the bunny and spot, so hierarchies are rebased in the shared buffers) on
 /// a 4 × 3 field, turned and scaled differently (one unevenly), in bunny radii.
 fn scene() -> SceneData {
-    let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-    });
-    let meshes = [
-        data.add_mesh("bunny", bunny()).unwrap(),
-        data.add_mesh("spot", spot()).unwrap(),
-    ];
-    let radius = data.meshes[0].bounding_sphere[3];
-    let spot_scale = radius / data.meshes[1].bounding_sphere[3];
-    for i in 0..12 {
+    field(&[("bunny", bunny()), ("spot", spot())], 12, |i| {
         let (x, z) = ((i % 4) as f32, (i / 4) as f32);
-        let mesh = i % 2;
         let mut scale = Vec3::splat(0.7 + 0.1 * (i % 5) as f32);
         if i == 5 {
             scale = Vec3::new(1.5, 0.6, 1.0);
         }
-        if mesh == 1 {
-            scale *= spot_scale;
-        }
-        let transform = Mat4::from_scale_rotation_translation(
-            scale,
-            Quat::from_rotation_y(i as f32 * 1.3),
-            Vec3::new(x * 3.0, 0.0, z * 3.0) * radius,
-        );
-        data.add_instance(meshes[mesh as usize], transform, material)
-            .unwrap()
-            .expect("an invertible transform");
-    }
-    data
+        (scale, i as f32 * 1.3, Vec3::new(x * 3.0, 0.0, z * 3.0))
+    })
 }
 
-fn random_view(data: &SceneData, rng: &mut Rng, v: u32) -> (View, f32) {
-    let radius = data.meshes[0].bounding_sphere[3];
-    let target = Vec3::new(
-        rng.range(-1.0, 10.0),
-        rng.range(-0.5, 1.0),
-        rng.range(-1.0, 7.0),
-    ) * radius;
-    let direction = Vec3::new(
-        rng.range(-1.0, 1.0),
-        rng.range(-0.3, 1.0),
-        rng.range(-1.0, 1.0),
-    )
-    .normalize_or(Vec3::Z);
-    let distance = radius * 0.4 * (120.0f32).powf(rng.unit());
-    let viewport = [[320, 240], [640, 360], [1280, 720]][rng.below(3) as usize];
-    let camera = Camera::perspective(
-        target + direction * distance,
-        target,
-        rng.range(0.5, 1.5),
-        radius * 0.02,
-    );
-    let threshold = [0.5, 1.0, 2.0][rng.below(3) as usize];
-    (camera.view(viewport, v, None), threshold)
-}
-
-/// What one frame left: the fill's list and words, and the cut when cull ran after it.
-struct Frame {
-    /// The whole list buffer: `slots` entries then the guard.
-    list: Vec<Cluster>,
-    cluster_count: [u32; 2],
-    /// `hierarchy_counts` (zeros for the flat fill).
-    counts: [u32; 4],
-    /// Software and hardware sides of cull's raster list.
-    cut: Option<BTreeSet<(u32, u32)>>,
-}
-
-impl Frame {
-    fn listed(&self) -> &[Cluster] {
-        &self.list[..self.cluster_count[0] as usize]
-    }
-}
+/// Random views of the field, from within it to 48 bunny radii away.
+const VIEWS: Views = Views {
+    target: [Vec3::new(-1.0, -0.5, -1.0), Vec3::new(10.0, 1.0, 7.0)],
+    lowest: -0.3,
+    distance: [0.4, 120.0],
+    viewports: &[[320, 240], [640, 360], [1280, 720]],
+    fov: [0.5, 1.5],
+    thresholds: &[0.5, 1.0, 2.0],
+};
 
 enum Fill {
     Flat,
     Hierarchy(HierarchyFill),
 }
 
-/// Runs `fill` (and `cull` after it) for one view over a sentinel-filled list of `slots`.
+/// The walk at `threshold` (cull's), otherwise as by default.
+fn walk_at(threshold: f32) -> Fill {
+    Fill::Hierarchy(HierarchyFill {
+        lod_threshold_px: threshold,
+        ..HierarchyFill::default()
+    })
+}
+
+/// Runs `fill` with a capacity of `slots` (and `cull` after it, with a raster list as
+/// long) over a sentinel-filled list of `slots` and the guard.
 fn run(data: &mut SceneData, view: &View, fill: Fill, cull: Option<f32>, slots: u32) -> Frame {
-    let gpu = gpu();
-    let scene = GpuScene::new(&gpu, data);
-    let mut g = GraphBuilder::new();
-    let h = scene.import(&mut g);
-    let list = g.import_buffer(
-        "clusters",
-        BufferDesc::array(elements::CLUSTER, (slots + GUARD) as u64),
-        USAGE,
-    );
-    let count = g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
-    let mut bindings = Bindings::new()
-        .bind("clusters", list)
-        .bind("cluster_count", count);
-    let hierarchy = matches!(fill, Fill::Hierarchy(_));
     let pass: Box<dyn Pass> = match fill {
         Fill::Flat => Box::new(FillClusters {
             capacity: Some(slots),
             instance_count: None,
         }),
-        Fill::Hierarchy(pass) => {
-            let t = scene.import_hierarchy(&mut g);
-            let counts = g.create_buffer("hierarchy_counts", BufferDesc::array(Element::U32, 4));
-            bindings = bindings
-                .bind("hierarchy_nodes", t.nodes)
-                .bind("hierarchy_clusters", t.clusters)
-                .bind("hierarchy_roots", t.roots)
-                .bind("hierarchy_counts", counts);
-            Box::new(HierarchyFill {
-                capacity: Some(slots),
-                ..pass
-            })
-        }
+        Fill::Hierarchy(pass) => Box::new(HierarchyFill {
+            capacity: Some(slots),
+            ..pass
+        }),
     };
-    let out = g.add_boxed_pass("fill", pass, bindings).unwrap();
-    g.export(out.buffer("clusters").unwrap());
-    g.export(out.buffer("cluster_count").unwrap());
-    if hierarchy {
-        g.export(out.buffer("hierarchy_counts").unwrap());
-    }
-    if let Some(threshold) = cull {
-        let raster = g.create_buffer(
-            "raster_clusters",
-            BufferDesc::array(elements::CLUSTER, slots as u64),
-        );
-        let counts = g.create_buffer("raster_counts", BufferDesc::array(Element::U32, 8));
-        let hw_args = g.create_buffer("hw_args", BufferDesc::array(Element::DRAW_ARGS, 1));
-        let pass = CullLod {
-            thresholds: Thresholds {
-                lod_threshold_px: threshold,
-                ..Thresholds::default()
-            },
-            ..CullLod::default()
-        };
-        let culled = g
-            .add_pass(
-                "cull",
-                pass,
-                Bindings::new()
-                    .bind("clusters", out.buffer("clusters").unwrap())
-                    .bind("cluster_count", out.buffer("cluster_count").unwrap())
-                    .bind("meshlet_groups", h.groups)
-                    .bind("raster_clusters", raster)
-                    .bind("raster_counts", counts)
-                    .bind("hw_args", hw_args),
-            )
-            .unwrap();
-        g.export(culled.buffer("raster_clusters").unwrap());
-        g.export(culled.buffer("raster_counts").unwrap());
-    }
-    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
-    let list_buffer = gpu.buffer_with_data(
-        "clusters",
-        bytemuck::cast_slice(&vec![SENTINEL; (slots + GUARD) as usize]),
-        USAGE,
-    );
-    let mut exec = Executor::new(gpu);
-    let frame = FrameData::new().with("view", bytemuck::bytes_of(view));
-    exec.execute_frame(
-        &compiled,
-        &scene.imports().buffer("clusters", &list_buffer),
-        &frame,
-    )
-    .unwrap();
-    let words = |exec: &mut Executor, name: &str| -> Vec<u32> {
-        bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
-    };
-    let cluster_count = words(&mut exec, "cluster_count");
-    let counts = if hierarchy {
-        words(&mut exec, "hierarchy_counts")
-    } else {
-        vec![0; 4]
-    };
-    let cut = cull.map(|_| {
-        let raster: Vec<Cluster> =
-            bytemuck::pod_collect_to_vec(&exec.read_buffer("raster_clusters").unwrap());
-        let c = words(&mut exec, "raster_counts");
-        let (sw, hw, total) = (c[0] as usize, c[1] as usize, c[2] as usize);
-        assert!(total <= slots as usize, "the raster list overflowed");
-        raster[..sw]
-            .iter()
-            .chain(&raster[slots as usize - hw..])
-            .map(|c| (c.instance, c.meshlet))
-            .collect()
-    });
-    let list = bytemuck::pod_collect_to_vec(
-        &exec
-            .gpu
-            .read_buffer(&list_buffer, 0, list_buffer.size())
-            .unwrap(),
-    );
-    Frame {
-        list,
-        cluster_count: [cluster_count[0], cluster_count[1]],
-        counts: counts[..4].try_into().unwrap(),
-        cut,
-    }
+    let cull = cull.map(|threshold| Cull { threshold, slots });
+    run_fill(data, view, pass, slots + GUARD, cull)
+}
+
+/// The view from `eye` to `target` (in bunny radii), near plane at 0.02 radii.
+fn view_over(data: &SceneData, eye: Vec3, target: Vec3, fov: f32, viewport: [u32; 2]) -> View {
+    let radius = data.meshes[0].bounding_sphere[3];
+    Camera::perspective(eye * radius, target * radius, fov, radius * 0.02).view(viewport, 0, None)
 }
 
 /// Where each meshlet stands in the shared hierarchy cluster list.
@@ -276,11 +133,9 @@ fn compare(data: &SceneData, reference: &HierarchyWalk, got: &Frame, label: &str
 #[test]
 fn lists_equal_the_reference_on_random_views() {
     let mut data = scene();
-    let mut rng = Rng(0x41e7_a7c4_0001);
     let (mut nodes, mut clusters, mut invisible) = (0, 0, 0);
     let mut differing = 0;
-    for v in 0..12 {
-        let (view, threshold) = random_view(&data, &mut rng, v);
+    for (v, view, threshold) in VIEWS.seeded(&data, 0x41e7_a7c4_0001, 12) {
         let params = WalkParams {
             lod_threshold_px: threshold,
             ..WalkParams::default()
@@ -288,11 +143,7 @@ fn lists_equal_the_reference_on_random_views() {
         let reference = cpu_walk(&data, &view, &params, NEAR_THRESHOLD);
         assert!(!reference.queue_full);
         let slots = reference.requested + 16;
-        let pass = HierarchyFill {
-            lod_threshold_px: threshold,
-            ..HierarchyFill::default()
-        };
-        let got = run(&mut data, &view, Fill::Hierarchy(pass), None, slots);
+        let got = run(&mut data, &view, walk_at(threshold), None, slots);
         let label = format!("view {v} (threshold {threshold})");
         differing += compare(&data, &reference, &got, &label);
         nodes += reference.counts[0];
@@ -314,23 +165,11 @@ fn lists_equal_the_reference_on_random_views() {
 #[test]
 fn after_cull_lod_the_cut_equals_the_flat_fills_cut() {
     let mut data = scene();
-    let mut rng = Rng(0x41e7_a7c4_0002);
     let total: u32 = data.instances.iter().map(|i| i.meshlet_count).sum();
     let mut cut_sizes = Vec::new();
-    for v in 0..8 {
-        let (view, threshold) = random_view(&data, &mut rng, v);
+    for (v, view, threshold) in VIEWS.seeded(&data, 0x41e7_a7c4_0002, 8) {
         let flat = run(&mut data, &view, Fill::Flat, Some(threshold), total);
-        let pass = HierarchyFill {
-            lod_threshold_px: threshold,
-            ..HierarchyFill::default()
-        };
-        let walk = run(
-            &mut data,
-            &view,
-            Fill::Hierarchy(pass),
-            Some(threshold),
-            total,
-        );
+        let walk = run(&mut data, &view, walk_at(threshold), Some(threshold), total);
         let (want, got) = (flat.cut.unwrap(), walk.cut.unwrap());
         assert_eq!(
             got.len(),
@@ -352,15 +191,9 @@ fn after_cull_lod_the_cut_equals_the_flat_fills_cut() {
 #[test]
 fn a_full_queue_emits_whole_subtrees_and_keeps_the_cut() {
     let mut data = scene();
-    let radius = data.meshes[0].bounding_sphere[3];
     // Close over the field: many leaves at several levels.
-    let camera = Camera::perspective(
-        Vec3::new(-1.0, 2.0, -1.0) * radius,
-        Vec3::new(5.0, 0.0, 4.0) * radius,
-        1.2,
-        radius * 0.02,
-    );
-    let view = camera.view([1280, 720], 0, None);
+    let eye = Vec3::new(-1.0, 2.0, -1.0);
+    let view = view_over(&data, eye, Vec3::new(5.0, 0.0, 4.0), 1.2, [1280, 720]);
     let threshold = 1.0;
     let total: u32 = data.instances.iter().map(|i| i.meshlet_count).sum();
     // No spreading step: every child that does not fit is emitted whole.
@@ -408,14 +241,8 @@ fn whole_subtrees_keep_the_cut(
 #[test]
 fn a_small_capacity_is_counted_like_the_flat_fill() {
     let mut data = scene();
-    let radius = data.meshes[0].bounding_sphere[3];
-    let camera = Camera::perspective(
-        Vec3::new(-2.0, 3.0, -2.0) * radius,
-        Vec3::new(5.0, 0.0, 4.0) * radius,
-        1.0,
-        radius * 0.02,
-    );
-    let view = camera.view([640, 360], 0, None);
+    let eye = Vec3::new(-2.0, 3.0, -2.0);
+    let view = view_over(&data, eye, Vec3::new(5.0, 0.0, 4.0), 1.0, [640, 360]);
     let reference = cpu_walk(&data, &view, &WalkParams::default(), NEAR_THRESHOLD);
     assert!(reference.near_threshold.is_empty());
     let capacity = reference.requested / 2 + 3;
@@ -427,15 +254,7 @@ fn a_small_capacity_is_counted_like_the_flat_fill() {
         capacity,
     );
     assert_eq!(got.cluster_count, [capacity, reference.requested]);
-    let written = &got.list[..capacity as usize];
-    assert!(
-        written.iter().all(|c| *c != SENTINEL),
-        "a slot below the capacity was left unwritten"
-    );
-    assert!(
-        got.list[capacity as usize..].iter().all(|c| *c == SENTINEL),
-        "a slot past the capacity was written"
-    );
+    let written = got.filled_to(capacity);
     assert_eq!(set(written).len(), written.len(), "a cluster written twice");
     assert!(set(written).is_subset(&set(&reference.clusters)));
     assert_eq!(got.counts, reference.counts);
@@ -444,15 +263,9 @@ fn a_small_capacity_is_counted_like_the_flat_fill() {
 #[test]
 fn instances_behind_the_camera_cost_one_node_each() {
     let mut data = scene();
-    let radius = data.meshes[0].bounding_sphere[3];
     // Looking away from the whole field.
-    let camera = Camera::perspective(
-        Vec3::new(-5.0, 1.0, -5.0) * radius,
-        Vec3::new(-20.0, 1.0, -20.0) * radius,
-        1.0,
-        radius * 0.02,
-    );
-    let view = camera.view([640, 360], 0, None);
+    let eye = Vec3::new(-5.0, 1.0, -5.0);
+    let view = view_over(&data, eye, Vec3::new(-20.0, 1.0, -20.0), 1.0, [640, 360]);
     let got = run(
         &mut data,
         &view,
@@ -514,10 +327,7 @@ fn terrain() -> &'static MeshletAsset {
             calm_centre: glam::Vec2::ZERO,
             calm_radius: 0.0,
         };
-        let mesh = terrain.mesh().unwrap();
-        build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
-            .unwrap()
-            .asset
+        bake(&terrain.mesh().unwrap())
     })
 }
 
@@ -585,17 +395,7 @@ fn one_large_instance_near_and_far_spreads_its_walk_and_keeps_the_cut() {
             single.rounds,
             reference.requested
         );
-        let pass = HierarchyFill {
-            lod_threshold_px: threshold,
-            ..HierarchyFill::default()
-        };
-        let got = run(
-            &mut data,
-            &view,
-            Fill::Hierarchy(pass),
-            Some(threshold),
-            total,
-        );
+        let got = run(&mut data, &view, walk_at(threshold), Some(threshold), total);
         assert_eq!(compare(&data, &reference, &got, label), 0, "{label}");
         let one_group = HierarchyFill {
             lod_threshold_px: threshold,

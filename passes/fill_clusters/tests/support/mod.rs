@@ -1,6 +1,12 @@
-//! What the fill tests share: the sentinel guarding unwritten slots and cluster sets, with
-//! the common test helpers (adapter, usage, baked meshes, seeded generator) re-exported.
+//! What the fill tests share: the sentinel guarding unwritten slots and cluster sets, the
+//! scenes and views they draw, the graphs they run, with the common test helpers
+//! (adapter, usage, baked meshes, seeded generator) re-exported.
 #![allow(dead_code)]
+
+pub mod graph;
+pub mod lattice;
+pub mod run;
+pub mod scenes;
 
 use meshlight_shaders::cpu::layout::Cluster;
 use std::collections::BTreeSet;

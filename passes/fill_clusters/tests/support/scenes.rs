@@ -1,0 +1,108 @@
+//! The scenes the hierarchy tests walk: fields of instances each test places, and seeded
+//! random views over them.
+
+use glam::{Mat4, Quat, Vec3};
+use meshlight_gpu_scene::{Camera, Material, SceneData, data::Limits};
+use meshlight_scene::{BuildOptions, Mesh, MeshletAsset, build_asset};
+use meshlight_shaders::cpu::layout::View;
+use meshlight_testing::Rng;
+
+/// `mesh` baked with the default options.
+pub fn bake(mesh: &Mesh) -> MeshletAsset {
+    build_asset(mesh, &BuildOptions::default(), &mut |_| {})
+        .unwrap()
+        .asset
+}
+
+/// `count` instances of `meshes` (`(name, asset)`; instance `i` takes `meshes[i % len]`)
+/// with one material. `place(i)` gives instance `i`'s scale (each mesh first scaled to
+/// the first one's radius), its turn about y, and its position in radii of the first mesh.
+pub fn field(
+    meshes: &[(&str, &MeshletAsset)],
+    count: u32,
+    place: impl Fn(u32) -> (Vec3, f32, Vec3),
+) -> SceneData {
+    let mut data = SceneData::new(Limits::default());
+    let material = data.add_material(Material {
+        base_color: [1.0; 3],
+    });
+    let ids: Vec<_> = meshes
+        .iter()
+        .map(|(name, asset)| data.add_mesh(name, asset).unwrap())
+        .collect();
+    let radius = data.meshes[0].bounding_sphere[3];
+    for i in 0..count {
+        let mesh = i as usize % ids.len();
+        let (scale, turn, position) = place(i);
+        let transform = Mat4::from_scale_rotation_translation(
+            scale * (radius / data.meshes[mesh].bounding_sphere[3]),
+            Quat::from_rotation_y(turn),
+            position * radius,
+        );
+        data.add_instance(ids[mesh], transform, material)
+            .unwrap()
+            .expect("an invertible transform");
+    }
+    data
+}
+
+/// Where seeded random views of a field look from, in radii of its first mesh.
+#[derive(Clone, Copy)]
+pub struct Views {
+    /// The box the target is drawn in.
+    pub target: [Vec3; 2],
+    /// The eye lies from the target along a direction drawn in x, z ∈ (-1, 1) and
+    /// y ∈ (`lowest`, 1).
+    pub lowest: f32,
+    /// `[nearest, ratio]`: the eye's distance, log-uniform from `nearest` to `nearest × ratio`.
+    pub distance: [f32; 2],
+    pub viewports: &'static [[u32; 2]],
+    /// The vertical field of view's range (radians).
+    pub fov: [f32; 2],
+    /// The LOD thresholds a view is drawn with (px).
+    pub thresholds: &'static [f32],
+}
+
+impl Views {
+    /// `count` views of `data`'s field drawn from `seed`: `(number, view, threshold)`.
+    pub fn seeded(
+        self,
+        data: &SceneData,
+        seed: u64,
+        count: u32,
+    ) -> impl Iterator<Item = (u32, View, f32)> + use<> {
+        let radius = data.meshes[0].bounding_sphere[3];
+        let mut rng = Rng(seed);
+        (0..count).map(move |v| {
+            let (view, threshold) = self.draw(radius, &mut rng, v);
+            (v, view, threshold)
+        })
+    }
+
+    /// View number `v` of a field whose first mesh has this radius, and its threshold.
+    fn draw(&self, radius: f32, rng: &mut Rng, v: u32) -> (View, f32) {
+        let [low, high] = self.target;
+        let target = Vec3::new(
+            rng.range(low.x, high.x),
+            rng.range(low.y, high.y),
+            rng.range(low.z, high.z),
+        ) * radius;
+        let direction = Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(self.lowest, 1.0),
+            rng.range(-1.0, 1.0),
+        )
+        .normalize_or(Vec3::Z);
+        let [nearest, ratio] = self.distance;
+        let distance = radius * nearest * ratio.powf(rng.unit());
+        let viewport = self.viewports[rng.below(self.viewports.len() as u32) as usize];
+        let camera = Camera::perspective(
+            target + direction * distance,
+            target,
+            rng.range(self.fov[0], self.fov[1]),
+            radius * 0.02,
+        );
+        let threshold = self.thresholds[rng.below(self.thresholds.len() as u32) as usize];
+        (camera.view(viewport, v, None), threshold)
+    }
+}
