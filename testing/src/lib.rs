@@ -2,8 +2,8 @@
 //! A dev-dependency only; nothing in a library depends on it.
 
 use meshlight_graph::{
-    Bindings, BufferDesc, CompileOptions, Executor, FrameData, GpuContext, GraphBuilder, Imports,
-    Pass, Result, TextureDesc,
+    Bindings, BufferDesc, CompileOptions, Executor, FrameData, GpuContext, GraphBuilder,
+    GraphError, Imports, Pass, Result, TextureDesc, file::Params,
 };
 
 /// The first Vulkan adapter, opened with every feature it has that a pass may use.
@@ -141,6 +141,21 @@ pub fn read_texture(
         .flat_map(|r| &r[..row as usize])
         .copied()
         .collect()
+}
+
+/// Pipeline-file params from TOML text, as a `[[pass]]`'s `params` table holds them.
+pub fn params(text: &str) -> Params {
+    Params::new(text.parse().unwrap_or_else(|e| panic!("{text}: {e}")))
+}
+
+/// The message of a [`GraphError::Parameter`]: what a test of bad params reads to check
+/// that it names what to change. Any other outcome fails the test.
+pub fn parameter_message<T>(result: Result<T>) -> String {
+    match result {
+        Err(GraphError::Parameter { message, .. }) => message,
+        Err(other) => panic!("not a parameter error: {other}"),
+        Ok(_) => panic!("accepted: a {}", std::any::type_name::<T>()),
+    }
 }
 
 /// What test buffers are made with: bound as storage, filled, read back, and usable as

@@ -335,18 +335,7 @@ pub fn register(registry: &mut Registry) {
 mod tests {
     use super::*;
     use meshlight_shaders::{Capabilities, ShaderLibrary};
-
-    fn params(text: &str) -> Params {
-        Params::new(text.parse().unwrap())
-    }
-
-    fn message(result: Result<BruteForce>) -> String {
-        match result {
-            Err(GraphError::Parameter { message, .. }) => message,
-            Err(other) => panic!("not a parameter error: {other}"),
-            Ok(pass) => panic!("accepted {pass:?}"),
-        }
-    }
+    use meshlight_testing::{parameter_message as message, params};
 
     #[test]
     fn params_are_read_and_checked() {

@@ -2,9 +2,10 @@
 //! buffers too small for them, targets of the wrong format.
 
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_graph::file::{Params, Registry};
+use meshlight_graph::file::Registry;
 use meshlight_graph::*;
 use meshlight_pass_brute_force::{BruteForce, DEPTH_FORMAT, IDS_FORMAT, register};
+use meshlight_testing::{parameter_message, params};
 
 const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::INDEX)
@@ -153,19 +154,7 @@ fn buffers_smaller_than_the_params_need_are_refused_by_slot() {
 fn build(text: &str) -> Result<Box<dyn Pass>> {
     let mut registry = Registry::new();
     register(&mut registry);
-    registry.build(
-        "brute_force",
-        "instanced_draw",
-        &Params::new(text.parse().unwrap()),
-    )
-}
-
-fn parameter_message(result: Result<Box<dyn Pass>>) -> String {
-    match result {
-        Err(GraphError::Parameter { message, .. }) => message,
-        Err(other) => panic!("not a parameter error: {other}"),
-        Ok(_) => panic!("built"),
-    }
+    registry.build("brute_force", "instanced_draw", &params(text))
 }
 
 #[test]

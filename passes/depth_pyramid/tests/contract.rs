@@ -2,11 +2,12 @@
 //! dispatches of each implementation, `auto` through the registry, the texture form's
 //! features, and bad params or bindings.
 
-use meshlight_graph::file::{Params, Registry, parse_pipeline};
+use meshlight_graph::file::{Registry, parse_pipeline};
 use meshlight_graph::*;
 use meshlight_pass_depth_pyramid::{
     DepthPyramid, FORMAT, Method, STAGE, pyramid_extent, register, texture_desc,
 };
+use meshlight_testing::{parameter_message, params};
 
 const BUFFER_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE;
 const TEXTURE_USAGE: wgpu::TextureUsages = wgpu::TextureUsages::STORAGE_BINDING;
@@ -214,17 +215,8 @@ fn the_texture_form_needs_64_bit_texture_support_and_switches_the_shader() {
     }
 }
 
-fn parameter_message(r: Result<impl std::fmt::Debug>) -> String {
-    match r {
-        Err(GraphError::Parameter { message, .. }) => message,
-        Err(other) => panic!("not a parameter error: {other}"),
-        Ok(v) => panic!("accepted: {v:?}"),
-    }
-}
-
 #[test]
 fn bad_params_are_errors_that_say_what_to_change() {
-    let params = |text: &str| Params::new(text.parse().unwrap());
     let m = parameter_message(DepthPyramid::from_params(
         &params("width = 0\nheight = 4"),
         Method::SinglePass,

@@ -32,6 +32,21 @@ struct Frame {
     initial: Vec<u64>,
 }
 
+impl Frame {
+    /// The integer reference's visibility buffer for this frame.
+    fn reference(&self) -> Vec<u64> {
+        cpu::rasterize(
+            &self.scene,
+            &self.view,
+            &self.raster_clusters,
+            self.hw_count,
+            &self.initial,
+            W,
+            H,
+        )
+    }
+}
+
 fn scene() -> SceneData {
     let asset = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {})
         .unwrap()
@@ -325,15 +340,7 @@ fn fixed_point_reference(f: &Frame) -> Vec<u64> {
 fn hardware_raster_matches_both_references_and_keeps_the_software_values() {
     let mut f = frame(scene(), camera(), |_, m| m.level() == 0);
     let got = run(&mut f);
-    let want = cpu::rasterize(
-        &f.scene,
-        &f.view,
-        &f.raster_clusters,
-        f.hw_count,
-        &f.initial,
-        W,
-        H,
-    );
+    let want = f.reference();
     // The float reference interpolates depth from the unsnapped corners, as lavapipe
     // does: within 1e-5 everywhere.
     check("float reference", &got, &want, 2000, depth_tolerance());
@@ -399,15 +406,7 @@ fn meshlets_with_fewer_than_128_triangles_draw_nothing_past_their_count() {
             c.instance == 0 && c.meshlet == index as u32
         });
         f.initial = vec![visbuffer::EMPTY; (W * H) as usize];
-        let want = cpu::rasterize(
-            &f.scene,
-            &f.view,
-            &f.raster_clusters,
-            f.hw_count,
-            &f.initial,
-            W,
-            H,
-        );
+        let want = f.reference();
         let covered = want.iter().filter(|&&v| v != visbuffer::EMPTY).count();
         if best.as_ref().is_none_or(|(n, _, _)| covered > *n) {
             best = Some((covered, f, want));
@@ -453,15 +452,7 @@ fn mesh_shader_draws_what_the_indirect_draw_draws_or_names_the_missing_feature()
         2000,
         1e-6,
     );
-    let want = cpu::rasterize(
-        &f.scene,
-        &f.view,
-        &f.raster_clusters,
-        f.hw_count,
-        &f.initial,
-        W,
-        H,
-    );
+    let want = f.reference();
     check(
         "mesh shader against the float reference",
         &mesh,

@@ -241,19 +241,7 @@ impl Resolve {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn params(text: &str) -> Params {
-        // `Params::new` names the table type, so no direct toml dependency is needed.
-        Params::new(text.parse().unwrap())
-    }
-
-    fn message(r: Result<Resolve>) -> String {
-        match r {
-            Err(GraphError::Parameter { message, .. }) => message,
-            Err(other) => panic!("not a parameter error: {other}"),
-            Ok(r) => panic!("accepted: {r:?}"),
-        }
-    }
+    use meshlight_testing::{parameter_message as message, params};
 
     #[test]
     fn names_round_trip_and_match_the_shader_constants() {

@@ -37,7 +37,7 @@ const DEPTH_USAGE: wgpu::TextureUsages =
 const COLOR_USAGE: wgpu::TextureUsages =
     wgpu::TextureUsages::STORAGE_BINDING.union(wgpu::TextureUsages::COPY_SRC);
 
-use meshlight_testing::{gpu, read_texture, texture};
+use meshlight_testing::{gpu, parameter_message, params, read_texture, texture};
 
 fn asset(mesh: &meshlight_scene::Mesh) -> MeshletAsset {
     build_asset(mesh, &BuildOptions::default(), &mut |_| {})
@@ -840,7 +840,7 @@ fn the_shaded_view_follows_the_settings_from_params() {
         "width = {W}\nheight = {H}\nview = \"shaded\"\nchecker_scale = 3.5\n\
          light_direction = [0.6, 0.2, 0.8]\nlight_color = [1.2, 0.9, 0.6]\nambient_color = [0.05, 0.1, 0.2]"
     );
-    let params = file::Params::new(text.parse().unwrap_or_else(|e| panic!("{e}")));
+    let params = params(&text);
     let mut registry = file::Registry::new();
     meshlight_pass_resolve::register(&mut registry);
     let pass = Resolve::from_params(&params).unwrap();
@@ -879,14 +879,7 @@ fn a_viewport_other_than_the_params_is_a_record_error() {
 fn bad_params_are_refused_with_what_to_change() {
     let mut registry = file::Registry::new();
     meshlight_pass_resolve::register(&mut registry);
-    let build = |text: &str| {
-        let params = file::Params::new(text.parse().unwrap_or_else(|e| panic!("{e}")));
-        match registry.build("resolve", "compute", &params) {
-            Err(GraphError::Parameter { message, .. }) => message,
-            Err(other) => panic!("not a parameter error: {other}"),
-            Ok(_) => panic!("`{text}` was accepted"),
-        }
-    };
+    let build = |text: &str| parameter_message(registry.build("resolve", "compute", &params(text)));
     let m = build("width = 0\nheight = 48");
     assert!(m.contains("`width`") && m.contains("> 0"), "{m}");
     let m = build("height = 48");
