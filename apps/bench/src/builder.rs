@@ -50,15 +50,7 @@ pub fn builder_scenario(
     scratch: &Path,
 ) -> Result<BuilderBench, SceneError> {
     let options = BuildOptions::default();
-    let mut best = f64::INFINITY;
-    let mut built = None;
-    for _ in 0..repeats.max(1) {
-        let start = Instant::now();
-        let b = build_asset(mesh, &options, &mut |_| {})?;
-        best = best.min(start.elapsed().as_secs_f64());
-        built = Some(b);
-    }
-    let built = built.expect("at least one build");
+    let (best, built) = best_time(repeats, || build_asset(mesh, &options, &mut |_| {}))?;
     let h = *built.asset.header();
 
     let (clod_seconds, clod_levels, clod_root_clusters) = clod_baseline(&built.mesh, repeats);
@@ -71,20 +63,8 @@ pub fn builder_scenario(
     let bytes = built.asset.bytes().len();
     // Warm the page cache, then take the best of several loads.
     MeshletAsset::load(&path)?;
-    let mut load_best = f64::INFINITY;
-    for _ in 0..10 {
-        let start = Instant::now();
-        let loaded = MeshletAsset::load(&path)?;
-        load_best = load_best.min(start.elapsed().as_secs_f64());
-        std::hint::black_box(loaded);
-    }
-    let mut verified_best = f64::INFINITY;
-    for _ in 0..3 {
-        let start = Instant::now();
-        let loaded = MeshletAsset::load_verified(&path)?;
-        verified_best = verified_best.min(start.elapsed().as_secs_f64());
-        std::hint::black_box(loaded);
-    }
+    let (load_best, _) = best_time(10, || MeshletAsset::load(&path))?;
+    let (verified_best, _) = best_time(3, || MeshletAsset::load_verified(&path))?;
     let _ = std::fs::remove_file(&path);
 
     Ok(BuilderBench {
@@ -101,6 +81,20 @@ pub fn builder_scenario(
         load_bytes_per_second: bytes as f64 / load_best,
         verified_load_bytes_per_second: bytes as f64 / verified_best,
     })
+}
+
+/// The best wall time of `runs` calls of `f` (one at least), seconds, and what the last
+/// call returned; every result passes through `black_box` so that none is optimised away.
+fn best_time<T, E>(runs: usize, mut f: impl FnMut() -> Result<T, E>) -> Result<(f64, T), E> {
+    let mut best = f64::INFINITY;
+    let mut last = None;
+    for _ in 0..runs.max(1) {
+        let start = Instant::now();
+        let value = f()?;
+        best = best.min(start.elapsed().as_secs_f64());
+        last = Some(std::hint::black_box(value));
+    }
+    Ok((best, last.expect("runs.max(1) runs at least once")))
 }
 
 /// meshoptimizer's reference cluster-LOD builder (its `clusterlod.h`, compiled into the

@@ -118,6 +118,12 @@ fn unique_count(v: &[f64]) -> usize {
     v.len()
 }
 
+/// How long `value`'s bar is on a scale where `max` fills `full`; nothing when every
+/// value is zero, rather than a division by it.
+fn bar_length(value: f64, max: f64, full: f64) -> f64 {
+    if max > 0.0 { value / max * full } else { 0.0 }
+}
+
 /// A bar per row, labelled with its case and value.
 pub fn bars(rows: &[&Row]) -> String {
     let max = rows.iter().map(|r| r.value).fold(0.0, f64::max);
@@ -129,11 +135,7 @@ pub fn bars(rows: &[&Row]) -> String {
     );
     for (i, r) in rows.iter().enumerate() {
         let y = 5.0 + i as f64 * row_h;
-        let w = if max > 0.0 {
-            r.value / max * bar_w
-        } else {
-            0.0
-        };
+        let w = bar_length(r.value, max, bar_w);
         let _ = writeln!(
             s,
             "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text><rect x=\"{label_w}\" y=\"{y}\" width=\"{w:.1}\" height=\"{}\" fill=\"{}\"/><text x=\"{:.1}\" y=\"{}\">{}</text>",
@@ -296,11 +298,7 @@ pub fn stacked(rows: &[&Row]) -> String {
             else {
                 continue;
             };
-            let w = if max > 0.0 {
-                r.value / max * bar_w
-            } else {
-                0.0
-            };
+            let w = bar_length(r.value, max, bar_w);
             let _ = writeln!(
                 s,
                 "<rect x=\"{x:.1}\" y=\"{y}\" width=\"{w:.1}\" height=\"{}\" fill=\"{}\"><title>{}: {} ms</title></rect>",

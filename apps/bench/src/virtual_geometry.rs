@@ -136,6 +136,29 @@ fn pass_ms(m: &Measured, pass: &str) -> f64 {
         .map_or(f64::NAN, |(_, ms)| *ms)
 }
 
+/// The mesh of the lattice and million scenarios: the first of `meshes`, the Stanford
+/// bunny when none is named.
+fn mesh_or_bunny(meshes: &[PathBuf]) -> PathBuf {
+    meshes
+        .first()
+        .cloned()
+        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"))
+}
+
+/// A row's case, alike in every scenario: what the scene holds, its source triangles
+/// and the viewport (the charts read the scene's size from the first word).
+fn case_label(scene: &str, placed: &Placed, width: u32, height: u32) -> String {
+    format!(
+        "{scene}, {} source tris, {width}x{height}",
+        placed.data.source_triangles()
+    )
+}
+
+/// The mesh's file name without its extension, as the cases name it.
+fn stem(mesh: &Path) -> std::borrow::Cow<'_, str> {
+    mesh.file_stem().unwrap_or_default().to_string_lossy()
+}
+
 /// The default scene (a field of procedural meshes on the ground) at 1920×1080 and
 /// 3840×2160 (1080p alone with `quick`).
 pub fn default_scene(quick: bool) -> BenchResult {
@@ -154,17 +177,16 @@ pub fn default_scene(quick: bool) -> BenchResult {
     } else {
         &[(1920, 1080), (3840, 2160)]
     };
+    let frames = if quick { 5 } else { 50 };
     let mut rows = Vec::new();
     for &(width, height) in sizes {
-        let case = format!(
-            "{instances} procedural meshes, {} source tris, {width}x{height}",
-            placed.data.source_triangles()
-        );
-        let m = measure(
+        let case = case_label(
+            &format!("{instances} procedural meshes"),
             &placed,
-            FrameSettings::new(width, height),
-            if quick { 5 } else { 50 },
-        )?;
+            width,
+            height,
+        );
+        let m = measure(&placed, FrameSettings::new(width, height), frames)?;
         rows.extend(rows_of("render", &case, &m));
         // The same frame with the clusters crossing the near plane (and, on a graphics
         // GPU, the large ones) drawn by the hardware rasteriser.
@@ -172,7 +194,7 @@ pub fn default_scene(quick: bool) -> BenchResult {
             hardware: Some(true),
             ..FrameSettings::new(width, height)
         };
-        let m = measure(&placed, hardware, if quick { 5 } else { 50 })?;
+        let m = measure(&placed, hardware, frames)?;
         rows.extend(rows_of("render", &format!("{case}, with hw_raster"), &m));
     }
     Ok(rows)
@@ -191,19 +213,12 @@ struct Lattice {
 
 impl Lattice {
     fn new(quick: bool, meshes: &[PathBuf]) -> Result<Self, Box<dyn std::error::Error>> {
-        let mesh = meshes
-            .first()
-            .cloned()
-            .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+        let mesh = mesh_or_bunny(meshes);
         let n = if quick { 5 } else { 15 };
         let asset = scenes::load_asset(&mesh, 0)?;
         let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
         let (width, height) = if quick { (1280, 720) } else { (2240, 1260) };
-        let case = format!(
-            "{n}³ {}, {} source tris, {width}x{height}",
-            mesh.file_stem().unwrap_or_default().to_string_lossy(),
-            placed.data.source_triangles()
-        );
+        let case = case_label(&format!("{n}³ {}", stem(&mesh)), &placed, width, height);
         Ok(Self {
             mesh,
             placed,
@@ -425,10 +440,7 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
 /// (hierarchy nodes and candidate clusters), the LOD cut and the triangles rasterised;
 /// for one copy, the per-pass profile too (the frame's floor).
 pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
-    let mesh = meshes
-        .first()
-        .cloned()
-        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+    let mesh = mesh_or_bunny(meshes);
     let asset = scenes::load_asset(&mesh, 0)?;
     let sides: &[u32] = if quick {
         &[1, 2, 4]
@@ -436,19 +448,12 @@ pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         &[1, 2, 4, 8, 16, 32]
     };
     let (width, height) = (2240, 1260);
+    let frames = if quick { 3 } else { 30 };
     let mut rows = Vec::new();
     for &n in sides {
         let placed = scenes::lattice(SceneData::new(Default::default()), &asset, n)?;
-        let case = format!(
-            "{} copies, {} source tris, {width}x{height}",
-            n * n * n,
-            placed.data.source_triangles()
-        );
-        let m = measure(
-            &placed,
-            FrameSettings::new(width, height),
-            if quick { 3 } else { 30 },
-        )?;
+        let case = case_label(&format!("{} copies", n * n * n), &placed, width, height);
+        let m = measure(&placed, FrameSettings::new(width, height), frames)?;
         if n == 1 {
             // The floor of the frame, pass by pass: what a nearly empty scene costs.
             rows.extend(
@@ -488,10 +493,7 @@ pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
 /// adapter's limits allow, and split in two bindings, the first holding wgpu's default
 /// binding of 599,186 instances or half the instances, whichever is fewer.
 pub fn million(quick: bool, meshes: &[PathBuf]) -> BenchResult {
-    let mesh = meshes
-        .first()
-        .cloned()
-        .unwrap_or_else(|| PathBuf::from("assets/meshes/stanford-bunny.obj"));
+    let mesh = mesh_or_bunny(meshes);
     let asset = scenes::load_asset(&mesh, 0)?;
     let instances = if quick { 4096 } else { 1 << 20 };
     let adapter = meshlight::graph::GpuAdapter::select()?;
@@ -504,13 +506,15 @@ pub fn million(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         ..whole
     };
     let (width, height) = (2560, 1440);
+    let frames = if quick { 3 } else { 30 };
     let mut rows = Vec::new();
     for limits in [whole, split] {
         let placed = scenes::field(SceneData::new(limits), &asset, instances)?;
-        let mut case = format!(
-            "{instances} {} on the field, {} source tris, {width}x{height}",
-            mesh.file_stem().unwrap_or_default().to_string_lossy(),
-            placed.data.source_triangles()
+        let mut case = case_label(
+            &format!("{instances} {} on the field", stem(&mesh)),
+            &placed,
+            width,
+            height,
         );
         if placed.data.instances_split() {
             case += &format!(
@@ -518,11 +522,7 @@ pub fn million(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                 placed.data.instance_split()
             );
         }
-        let m = measure(
-            &placed,
-            FrameSettings::new(width, height),
-            if quick { 3 } else { 30 },
-        )?;
+        let m = measure(&placed, FrameSettings::new(width, height), frames)?;
         rows.extend(rows_of("vg-million", &case, &m));
     }
     Ok(rows)

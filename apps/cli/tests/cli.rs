@@ -1,39 +1,65 @@
 //! The `meshlight` binary: graph dumps of a shipped pipeline file, and typed errors for a
 //! miswired one.
 
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// One spot at 16×16: the smallest render that still writes a PNG.
-const SMALL_RENDER: [&str; 9] = [
-    "render",
-    "--mesh",
-    "assets/meshes/spot.obj",
-    "--instances",
-    "1",
-    "--width",
-    "16",
-    "--height",
-    "16",
-];
+/// `render` of `instances` spots at `width` × `height`, for more flags to follow.
+fn render_spot<'a>(instances: &'a str, width: &'a str, height: &'a str) -> Vec<&'a str> {
+    vec![
+        "render",
+        "--mesh",
+        "assets/meshes/spot.obj",
+        "--instances",
+        instances,
+        "--width",
+        width,
+        "--height",
+        height,
+    ]
+}
 
-/// [`meshlight`], failing the test with its standard error unless it succeeds.
+/// One spot at 16×16: the smallest render that still writes a PNG.
+fn small_render<'a>() -> Vec<&'a str> {
+    render_spot("1", "16", "16")
+}
+
+/// The repository's root, where the binary runs as a user runs it there.
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+
+/// The environment entry that names an adapter no machine has: a command that asks for
+/// one fails with exit 3, so a run that ends otherwise did not get that far.
+fn no_adapter() -> (&'static str, &'static Path) {
+    ("MESHLIGHT_ADAPTER", Path::new("no adapter is called this"))
+}
+
+/// [`meshlight`], failing the test with its output unless it succeeds.
 fn meshlight_ok(args: &[&str]) -> std::process::Output {
     let out = meshlight(args);
     assert!(
         out.status.success(),
-        "meshlight {}: {}",
+        "meshlight {}: {}{}",
         args.join(" "),
+        String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
     out
 }
 
 fn meshlight(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_meshlight"))
-        .args(args)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
-        .output()
-        .expect("runs")
+    command(args).output().expect("runs")
+}
+
+/// `meshlight args` from the repository's root, to be given more before it runs.
+fn command(args: &[&str]) -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_meshlight"));
+    cmd.args(args).current_dir(ROOT);
+    cmd
+}
+
+/// The text of a file of the repository.
+fn repository_file(path: &str) -> String {
+    std::fs::read_to_string(Path::new(ROOT).join(path)).unwrap()
 }
 
 #[test]
@@ -54,12 +80,7 @@ fn dumps_in_every_format(file: &str, pass: &str) {
         ("mermaid", "flowchart LR"),
         ("html", "<!DOCTYPE html>"),
     ] {
-        let out = meshlight(&["graph", "--pipeline", file, "--format", format]);
-        assert!(
-            out.status.success(),
-            "{format}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = meshlight_ok(&["graph", "--pipeline", file, "--format", format]);
         let text = String::from_utf8(out.stdout).unwrap();
         assert!(
             text.contains(marker) && text.contains(pass),
@@ -70,13 +91,8 @@ fn dumps_in_every_format(file: &str, pass: &str) {
 
 #[test]
 fn a_miswired_pipeline_file_is_a_clear_error() {
-    let dir = std::env::temp_dir().join(format!("meshlight-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let text = std::fs::read_to_string(concat!(
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../.."),
-        "/pipelines/prefix_sum.toml"
-    ))
-    .unwrap();
+    let dir = scratch("miswired");
+    let text = repository_file("pipelines/prefix_sum.toml");
     let bad = dir.join("bad.toml");
     std::fs::write(
         &bad,
@@ -105,19 +121,10 @@ fn every_command_has_help() {
 
 #[test]
 fn render_draws_a_mesh_file_through_the_shipped_pipeline_and_reports_its_counters() {
-    let dir = std::env::temp_dir().join(format!("meshlight-render-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("render");
     let (png, html) = (dir.join("spot.png"), dir.join("spot.html"));
-    let out = meshlight(&[
-        "render",
-        "--mesh",
-        "assets/meshes/spot.obj",
-        "--instances",
-        "4",
-        "--width",
-        "96",
-        "--height",
-        "64",
+    let mut args = render_spot("4", "96", "64");
+    args.extend([
         "--view",
         "lod",
         "--pipeline",
@@ -127,12 +134,8 @@ fn render_draws_a_mesh_file_through_the_shipped_pipeline_and_reports_its_counter
         "--html",
         html.to_str().unwrap(),
     ]);
+    let out = meshlight_ok(&args);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     assert!(stdout.contains("clusters visible (LOD cut)"), "{stdout}");
     let page = std::fs::read_to_string(&html).unwrap();
     assert!(page.contains("sw_raster") && page.contains("triangles rasterised"));
@@ -147,17 +150,15 @@ fn render_draws_a_mesh_file_through_the_shipped_pipeline_and_reports_its_counter
 }
 
 /// `meshlight` with extra environment variables.
-fn meshlight_env(args: &[&str], env: &[(&str, &std::path::Path)]) -> std::process::Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_meshlight"));
-    cmd.args(args)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+fn meshlight_env(args: &[&str], env: &[(&str, &Path)]) -> std::process::Output {
+    let mut cmd = command(args);
     for (k, v) in env {
         cmd.env(k, v);
     }
     cmd.output().expect("runs")
 }
 
-fn scratch(name: &str) -> std::path::PathBuf {
+fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("meshlight-cli-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
@@ -203,16 +204,7 @@ fn render_refuses_numbers_it_cannot_hold_before_baking_or_asking_for_an_adapter(
     for (args, expected) in cases {
         let mut all = vec!["render"];
         all.extend_from_slice(args);
-        let out = meshlight_env(
-            &all,
-            &[
-                ("MESHLIGHT_CACHE_DIR", &cache),
-                (
-                    "MESHLIGHT_ADAPTER",
-                    std::path::Path::new("no adapter is called this"),
-                ),
-            ],
-        );
+        let out = meshlight_env(&all, &[("MESHLIGHT_CACHE_DIR", &cache), no_adapter()]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
         assert!(err.contains(expected), "{args:?}: {err}");
@@ -234,13 +226,7 @@ fn render_refuses_numbers_it_cannot_hold_before_baking_or_asking_for_an_adapter(
             "--height",
             "8",
         ],
-        &[
-            ("MESHLIGHT_CACHE_DIR", &cache),
-            (
-                "MESHLIGHT_ADAPTER",
-                std::path::Path::new("no adapter is called this"),
-            ),
-        ],
+        &[("MESHLIGHT_CACHE_DIR", &cache), no_adapter()],
     );
     assert_eq!(
         out.status.code(),
@@ -279,9 +265,7 @@ fn inputs_and_outputs_that_cannot_be_used_are_named() {
         .write(true)
         .open("/dev/full")
         .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_meshlight"))
-        .args(["graph", "--pipeline", "pipelines/prefix_sum.toml"])
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+    let out = command(&["graph", "--pipeline", "pipelines/prefix_sum.toml"])
         .stdout(full)
         .output()
         .expect("runs");
@@ -294,10 +278,7 @@ fn inputs_and_outputs_that_cannot_be_used_are_named() {
     // The directory of the output cannot be made: refused before any rendering.
     let out = meshlight_env(
         &["render", "-o", "/dev/null/out/image.png"],
-        &[(
-            "MESHLIGHT_ADAPTER",
-            std::path::Path::new("no adapter is called this"),
-        )],
+        &[no_adapter()],
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
@@ -311,7 +292,7 @@ fn inputs_and_outputs_that_cannot_be_used_are_named() {
 /// with exit 0 and "rendered" printed (GPU: lavapipe).
 #[test]
 fn rendering_to_a_full_device_fails_naming_it() {
-    let mut args = SMALL_RENDER.to_vec();
+    let mut args = small_render();
     args.extend(["-o", "/dev/full"]);
     let out = meshlight(&args);
     let err = String::from_utf8_lossy(&out.stderr);
@@ -326,9 +307,7 @@ fn rendering_to_a_full_device_fails_naming_it() {
 fn with_closed_stdout(args: &[&str]) -> (std::process::ExitStatus, String) {
     let (reader, writer) = std::io::pipe().unwrap();
     drop(reader);
-    let out = Command::new(env!("CARGO_BIN_EXE_meshlight"))
-        .args(args)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+    let out = command(args)
         .stdout(writer)
         .stderr(std::process::Stdio::piped())
         .output()
@@ -415,9 +394,7 @@ fn render_refuses_an_asset_that_inspect_rejects_with_the_same_message() {
 #[test]
 fn an_unset_or_invalid_runtime_dir_is_not_complained_about() {
     for value in [None, Some(""), Some("relative/dir"), Some("/no/such/dir")] {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_meshlight"));
-        cmd.arg("info")
-            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."));
+        let mut cmd = command(&["info"]);
         match value {
             None => cmd.env_remove("XDG_RUNTIME_DIR"),
             Some(v) => cmd.env("XDG_RUNTIME_DIR", v),
@@ -464,13 +441,7 @@ fn render_refuses_an_output_that_is_not_png() {
     let dir = scratch("not-png");
     for name in ["x.jpg", "x.PNG.webp"] {
         let path = dir.join(name);
-        let out = meshlight_env(
-            &["render", "-o", path.to_str().unwrap()],
-            &[(
-                "MESHLIGHT_ADAPTER",
-                std::path::Path::new("no adapter is called this"),
-            )],
-        );
+        let out = meshlight_env(&["render", "-o", path.to_str().unwrap()], &[no_adapter()]);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{name}: {err}");
         assert!(
@@ -491,16 +462,11 @@ fn render_keeps_the_report_beside_the_image_in_step() {
     let dir = scratch("report");
     let (png, html) = (dir.join("a.png"), dir.join("a.html"));
     std::fs::write(&html, "an earlier render's report").unwrap();
-    let mut args = SMALL_RENDER.to_vec();
+    let mut args = small_render();
     args.push("-o");
     args.push(png.to_str().unwrap());
-    let out = meshlight(&args);
+    let out = meshlight_ok(&args);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let page = std::fs::read_to_string(&html).unwrap();
     assert!(
         page.contains("<!DOCTYPE html>") && page.contains("sw_raster"),
@@ -511,7 +477,7 @@ fn render_keeps_the_report_beside_the_image_in_step() {
         "{stdout}"
     );
     let other = dir.join("b.png");
-    let mut args = SMALL_RENDER.to_vec();
+    let mut args = small_render();
     args.extend(["-o", other.to_str().unwrap()]);
     let out = meshlight(&args);
     assert!(out.status.success());
@@ -520,7 +486,7 @@ fn render_keeps_the_report_beside_the_image_in_step() {
 }
 
 /// The pixels of a PNG.
-fn pixels(path: &std::path::Path) -> Vec<u8> {
+fn pixels(path: &Path) -> Vec<u8> {
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size().unwrap()];
@@ -536,11 +502,7 @@ fn pixels(path: &std::path::Path) -> Vec<u8> {
 fn render_pipeline_settings_yield_only_to_flags_given() {
     let dir = scratch("precedence");
     let shipped = "pipelines/virtual_geometry.toml";
-    let text = std::fs::read_to_string(concat!(
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../.."),
-        "/pipelines/virtual_geometry.toml"
-    ))
-    .unwrap();
+    let text = repository_file(shipped);
     assert!(text.contains("view = \"shaded\""));
     let lod_file = dir.join("lod.toml");
     std::fs::write(
@@ -553,30 +515,14 @@ fn render_pipeline_settings_yield_only_to_flags_given() {
     // and the run's report.
     let render = |file: &str, extra: &[&str], name: &str| {
         let png = dir.join(name);
-        let mut args = vec![
-            "render",
-            "--mesh",
-            "assets/meshes/spot.obj",
-            "--instances",
-            "4",
-            "--width",
-            "48",
-            "--height",
-            "32",
-            "--pipeline",
-            file,
-            "-o",
-            png.to_str().unwrap(),
-        ];
+        let mut args = render_spot("4", "48", "32");
+        args.extend(["--pipeline", file, "-o", png.to_str().unwrap()]);
         args.extend(extra);
-        let out = meshlight(&args);
-        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-        assert!(
-            out.status.success(),
-            "{name}: {stdout}{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        (pixels(&png), stdout)
+        let out = meshlight_ok(&args);
+        (
+            pixels(&png),
+            String::from_utf8_lossy(&out.stdout).to_string(),
+        )
     };
     let shaded = render(shipped, &[], "shaded.png").0;
     let lod = render(shipped, &["--view", "lod"], "lod.png").0;
@@ -658,13 +604,7 @@ fn the_shipped_pipeline_renders_the_default_image() {
         let mut args = vec!["render", "--width", "96", "--height", "64", "-o"];
         args.push(png.to_str().unwrap());
         args.extend(extra);
-        let out = meshlight(&args);
-        assert!(
-            out.status.success(),
-            "{name}: {}{}",
-            String::from_utf8_lossy(&out.stdout),
-            String::from_utf8_lossy(&out.stderr)
-        );
+        meshlight_ok(&args);
         pixels(&png)
     };
     let file = ["--pipeline", "pipelines/virtual_geometry.toml"];
@@ -685,23 +625,20 @@ fn the_shipped_pipeline_renders_the_default_image() {
 fn bench_charts_saved_rows_and_names_a_file_it_cannot_read() {
     let dir = scratch("bench-html");
     let page = dir.join("charts.html");
-    meshlight_ok(&[
-        "bench",
-        "--from-json",
-        "docs/bench-h200-vg2.json",
-        "--html",
-        page.to_str().unwrap(),
-    ]);
+    let charts_of = |rows: &'static str| {
+        [
+            "bench",
+            "--from-json",
+            rows,
+            "--html",
+            page.to_str().unwrap(),
+        ]
+    };
+    meshlight_ok(&charts_of("docs/bench-h200-vg2.json"));
     let html = std::fs::read_to_string(&page).unwrap();
     assert!(html.contains("<h2>vg-scale</h2>") && html.contains("<polyline"));
     assert!(html.contains("GPU time per pass"));
-    let out = meshlight(&[
-        "bench",
-        "--from-json",
-        "Cargo.toml",
-        "--html",
-        page.to_str().unwrap(),
-    ]);
+    let out = meshlight(&charts_of("Cargo.toml"));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(

@@ -14,7 +14,6 @@ use meshlight_virtual_geometry::{Renderer, SceneOptions, setup};
 #[test]
 fn screenshot_equals_the_renderers_still() {
     let x = common::xvfb();
-    common::use_display(&x);
     let dir = common::tempdir("shot");
     let shot = dir.join("shot.png");
     let (position, target) = (Vec3::new(6.0, 3.0, 9.0), Vec3::new(0.0, 0.5, 0.0));

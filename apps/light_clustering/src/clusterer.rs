@@ -6,6 +6,7 @@ use super::frame_graph::{
     self, ClusteringSettings, ENTRIES_PARAM, LIST_COUNTS_READBACK, OBJECT_USAGE,
     SLICE_COUNTS_READBACK, SLICE_INSTANCES_PARAM,
 };
+use super::growth::{self, Growth, Want};
 use meshlight::graph::{
     CompileOptions, CompiledGraph, Executor, FrameData, FrameStats, GpuAdapter, GraphBuilder,
     GraphError, Imports, Result,
@@ -59,15 +60,6 @@ pub enum ClusteringWarning {
     /// Objects with a NaN or infinite position, a NaN or negative range, an unknown kind
     /// or an unusable direction were skipped.
     InvalidObjects { frame: u64, count: u32 },
-}
-
-/// One grow of a list.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Growth {
-    pub frame: u64,
-    pub param: &'static str,
-    pub from: u64,
-    pub to: u64,
 }
 
 /// The lists of a frame the CPU waited for.
@@ -304,40 +296,16 @@ impl Counters {
             (ENTRIES_PARAM, u64::from(counts.entries_needed)),
         ];
         for (param, wanted) in wants {
-            let now = param_value(compiled, param);
-            if wanted <= now {
-                continue;
-            }
-            let to = wanted.next_power_of_two().min(self.max_entries);
-            if to <= now {
-                log::error!(
-                    "frame {}: {wanted} `{param}` wanted, but {now} is the most this device binds; lights are dropped from froxels (use fewer or smaller lights, or a coarser grid)",
-                    counts.frame
-                );
-                continue;
-            }
-            log::warn!(
-                "frame {}: {wanted} `{param}` wanted but the list holds {now}; raised `{param}` to {to} (start there with `{param} = {to}` in the pipeline's [params] or ClusteringSettings)",
-                counts.frame
-            );
-            compiled.set_param(param, to)?;
-            self.growths.push(Growth {
+            let want = Want {
                 frame: counts.frame,
                 param,
-                from: now,
-                to,
-            });
+                wanted,
+                limit: self.max_entries,
+                when_full: "lights are dropped from froxels (use fewer or smaller lights, or a coarser grid)",
+                also_set_by: "ClusteringSettings",
+            };
+            self.growths.extend(growth::grow(compiled, want)?);
         }
         Ok(())
     }
-}
-
-/// The current value of a size parameter of a compiled graph.
-pub fn param_value(compiled: &CompiledGraph, name: &str) -> u64 {
-    compiled
-        .plan
-        .params
-        .iter()
-        .find(|(n, _)| n == name)
-        .map_or(0, |(_, v)| *v)
 }

@@ -5,9 +5,9 @@
 
 pub mod clusterer;
 pub mod frame_graph;
+pub mod growth;
 pub mod reference;
 
-pub use clusterer::{
-    Clustered, Clusterer, ClusteringCounts, ClusteringSource, ClusteringWarning, Growth,
-};
+pub use clusterer::{Clustered, Clusterer, ClusteringCounts, ClusteringSource, ClusteringWarning};
 pub use frame_graph::ClusteringSettings;
+pub use growth::Growth;

@@ -56,20 +56,7 @@ pub fn cpu_assign(
     settings: &ClusteringSettings,
     objects: &[ClusterableObject],
 ) -> Assignment {
-    let grid = grid_of(settings);
-    let instances: Vec<SliceInstance> = objects
-        .iter()
-        .enumerate()
-        .flat_map(|(i, o)| slices_of(view, &grid, i, o))
-        .collect();
-    let counted = cpu_count(view, &grid, objects, &instances);
-    let lists = lists_from_counts(objects, &instances, &counted);
-    Assignment {
-        grid,
-        instances,
-        counted,
-        lists,
-    }
+    assign(view, settings, objects, slices, cpu_count)
 }
 
 /// The same assignment with the objects and instances spread over rayon's threads; the
@@ -79,17 +66,64 @@ pub fn cpu_assign_parallel(
     settings: &ClusteringSettings,
     objects: &[ClusterableObject],
 ) -> Assignment {
+    assign(view, settings, objects, slices_parallel, count_parallel)
+}
+
+/// The assignment's stages in the GPU's order, the slicing and the counting done by
+/// `slice` and `count` (serial or parallel); the lists follow from the counts alike.
+fn assign(
+    view: &View,
+    settings: &ClusteringSettings,
+    objects: &[ClusterableObject],
+    slice: fn(&View, &ClusterGrid, &[ClusterableObject]) -> Vec<SliceInstance>,
+    count: fn(&View, &ClusterGrid, &[ClusterableObject], &[SliceInstance]) -> CountResult,
+) -> Assignment {
     let grid = grid_of(settings);
-    let instances: Vec<SliceInstance> = objects
+    let instances = slice(view, &grid, objects);
+    let counted = count(view, &grid, objects, &instances);
+    let lists = lists_from_counts(objects, &instances, &counted);
+    Assignment {
+        grid,
+        instances,
+        counted,
+        lists,
+    }
+}
+
+/// z_slice's pairs of every object, in object order, on one thread.
+fn slices(view: &View, grid: &ClusterGrid, objects: &[ClusterableObject]) -> Vec<SliceInstance> {
+    objects
+        .iter()
+        .enumerate()
+        .flat_map(|(i, o)| slices_of(view, grid, i, o))
+        .collect()
+}
+
+/// [`slices`] over rayon's threads (still in object order).
+fn slices_parallel(
+    view: &View,
+    grid: &ClusterGrid,
+    objects: &[ClusterableObject],
+) -> Vec<SliceInstance> {
+    objects
         .par_iter()
         .enumerate()
-        .flat_map_iter(|(i, o)| slices_of(view, &grid, i, o))
-        .collect();
+        .flat_map_iter(|(i, o)| slices_of(view, grid, i, o))
+        .collect()
+}
+
+/// `cpu_count` with the walks spread over rayon's threads; the tally stays serial.
+fn count_parallel(
+    view: &View,
+    grid: &ClusterGrid,
+    objects: &[ClusterableObject],
+    instances: &[SliceInstance],
+) -> CountResult {
     let walked: Vec<_> = instances
         .par_iter()
         .map(|pair| {
             let o = view_object(view, &objects[pair.object as usize]);
-            instance_froxels(view, &grid, &o, pair.slice)
+            instance_froxels(view, grid, &o, pair.slice)
         })
         .collect();
     let mut counts = vec![0u32; (grid.cluster_count * KINDS) as usize];
@@ -99,15 +133,8 @@ pub fn cpu_assign_parallel(
             counts[(froxel * KINDS + kind) as usize] += 1;
         }
     }
-    let counted = CountResult {
+    CountResult {
         counts,
         instances: walked,
-    };
-    let lists = lists_from_counts(objects, &instances, &counted);
-    Assignment {
-        grid,
-        instances,
-        counted,
-        lists,
     }
 }

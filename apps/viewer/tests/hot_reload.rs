@@ -7,13 +7,8 @@ use meshlight::resolve::DebugView;
 
 #[test]
 fn broken_then_fixed_pipeline_file() {
-    let x = common::xvfb();
-    common::use_display(&x);
-    let dir = common::tempdir("reload");
-    let file = dir.join("frame.toml");
-    let good = std::fs::read_to_string(common::root().join("pipelines/virtual_geometry.toml"))
-        .expect("the shipped pipeline");
-    std::fs::write(&file, &good).expect("write");
+    let _x = common::xvfb();
+    let (file, good) = common::pipeline_copy("reload");
     let mut o = common::unlit_options();
     o.scene.pipeline = Some(file.clone());
     let (_event_loop, mut v) = common::windowed(o);

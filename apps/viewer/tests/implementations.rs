@@ -6,15 +6,8 @@ mod common;
 
 #[test]
 fn switching_an_implementation_changes_the_plan_not_the_image() {
-    let x = common::xvfb();
-    common::use_display(&x);
-    let dir = common::tempdir("impl");
-    let file = dir.join("frame.toml");
-    std::fs::copy(
-        common::root().join("pipelines/virtual_geometry.toml"),
-        &file,
-    )
-    .expect("copy the shipped pipeline");
+    let _x = common::xvfb();
+    let (file, _) = common::pipeline_copy("impl");
     let mut o = common::unlit_options();
     o.scene.pipeline = Some(file);
     let (_event_loop, mut v) = common::windowed(o);

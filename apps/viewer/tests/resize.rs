@@ -4,8 +4,7 @@ mod common;
 
 #[test]
 fn resize_changes_the_output_size_and_still_renders() {
-    let x = common::xvfb();
-    common::use_display(&x);
+    let _x = common::xvfb();
     let (_event_loop, mut v) = common::windowed(common::small_options());
     v.run_frames(2).expect("frames");
     let (w, h, rgba) = v.read_image().expect("image");

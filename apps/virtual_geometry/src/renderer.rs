@@ -19,6 +19,8 @@ use meshlight::shaders::cpu::layout::ClusterableObject;
 use meshlight_light_clustering::ClusteringSettings;
 use meshlight_light_clustering::clusterer::Counters;
 use meshlight_light_clustering::frame_graph::OBJECT_USAGE;
+pub use meshlight_light_clustering::growth::Growth;
+use meshlight_light_clustering::growth::{Want, grow, param_value};
 use std::collections::BTreeMap;
 
 /// How many frames [`Renderer::render_still`] runs, at most, to reach a frame that
@@ -37,15 +39,6 @@ pub struct Still {
     pub counts: FrameCounts,
     /// Frames run to get there (more than 1 when a list had to grow).
     pub frames: u32,
-}
-
-/// One grow of a list, for logs and tests.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Growth {
-    pub frame: u64,
-    pub param: &'static str,
-    pub from: u64,
-    pub to: u64,
 }
 
 pub struct Renderer {
@@ -419,41 +412,22 @@ impl Renderer {
             ),
         ];
         for (param, wanted, limit, flag) in wants {
-            let now = self.param(param);
-            if wanted <= now {
-                continue;
-            }
-            let to = wanted.next_power_of_two().min(limit);
-            if to <= now {
-                log::error!(
-                    "frame {}: {wanted} {param} wanted, but {now} is the most this device binds; clusters are dropped (raise the LOD threshold or draw fewer instances)",
-                    counts.frame
-                );
-                continue;
-            }
-            log::warn!(
-                "frame {}: {wanted} {param} wanted but the list holds {now}; raised `{param}` to {to} (start there with {flag} {to} or `{param} = {to}` in the pipeline's [params])",
-                counts.frame
-            );
-            self.compiled.set_param(param, to)?;
-            self.growths.push(Growth {
+            let want = Want {
                 frame: counts.frame,
                 param,
-                from: now,
-                to,
-            });
+                wanted,
+                limit,
+                when_full: "clusters are dropped (raise the LOD threshold or draw fewer instances)",
+                also_set_by: flag,
+            };
+            self.growths.extend(grow(&mut self.compiled, want)?);
         }
         Ok(())
     }
 
     /// The current value of a size parameter.
     pub fn param(&self, name: &str) -> u64 {
-        self.compiled
-            .plan
-            .params
-            .iter()
-            .find(|(n, _)| n == name)
-            .map_or(0, |(_, v)| *v)
+        param_value(&self.compiled, name)
     }
 }
 

@@ -10,25 +10,18 @@
 //! does, so each cluster is rasterised the same way in both frames: the comparison holds
 //! with every cluster sent to the hardware rasteriser and with the shipped split.
 
+mod common;
+
 use glam::{Mat4, Quat, Vec2, Vec3};
-use meshlight::gpu_scene::data::{InstanceId, Limits};
-use meshlight::gpu_scene::{Camera, Material, SceneData};
+use meshlight::gpu_scene::data::InstanceId;
+use meshlight::gpu_scene::{Camera, SceneData};
 use meshlight::scene::terrain::Terrain;
-use meshlight::scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
+use meshlight::scene::{BuildOptions, MeshletAsset, build_asset};
 use meshlight::shaders::cpu::layout::Cluster;
 use meshlight::shaders::cpu::visbuffer;
 use meshlight_virtual_geometry::counts::OcclusionCounts;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer};
 use std::sync::OnceLock;
-
-fn asset() -> &'static MeshletAsset {
-    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
-    ASSET.get_or_init(|| {
-        build_asset(&procedural_mesh(24), &BuildOptions::default(), &mut |_| {})
-            .unwrap()
-            .asset
-    })
-}
 
 /// A flat 4 × 4 square on the x–z plane, facing +y: a solid occluder.
 fn panel_asset() -> &'static MeshletAsset {
@@ -59,11 +52,7 @@ const MOVER: InstanceId = InstanceId(1);
 /// A wall (a flattened, widened mesh) at z = 0, the mover behind its middle, and a
 /// 4 × 3 grid of instances behind it and beside it.
 fn scene() -> SceneData {
-    let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [0.8; 3],
-    });
-    let mesh = data.add_mesh("procedural", asset()).unwrap();
+    let (mut data, mesh, material) = common::grey_scene();
     let mut place = |m: Mat4| data.add_instance(mesh, m, material).unwrap().unwrap();
     place(Mat4::from_scale_rotation_translation(
         Vec3::new(5.0, 3.0, 0.4),

@@ -3,29 +3,20 @@
 //! rasteriser alone against the mixed split, cracks and LOD continuity, golden images,
 //! and the bad inputs of a scene and a viewport.
 
+mod common;
+
+use common::asset;
 use glam::{Mat4, Quat, Vec3};
 use meshlight::gpu_scene::data::{InstanceId, Limits};
-use meshlight::gpu_scene::{Camera, Material, SceneData, SceneDataError};
+use meshlight::gpu_scene::{Camera, SceneData, SceneDataError};
 use meshlight::graph::GraphError;
 use meshlight::resolve::DebugView;
-use meshlight::scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
 use meshlight_virtual_geometry::scenes::{self, Placed};
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer, Still};
 use std::path::PathBuf;
-use std::sync::OnceLock;
 
 const W: u32 = 192;
 const H: u32 = 108;
-
-/// A small procedural mesh (9,216 triangles, several LOD levels), baked once.
-fn asset() -> &'static MeshletAsset {
-    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
-    ASSET.get_or_init(|| {
-        build_asset(&procedural_mesh(24), &BuildOptions::default(), &mut |_| {})
-            .unwrap()
-            .asset
-    })
-}
 
 fn field(instances: u32) -> Placed {
     scenes::field(SceneData::new(Limits::default()), asset(), instances).unwrap()
@@ -162,6 +153,24 @@ fn with_and_without_hardware(placed: &Placed, settings: FrameSettings) -> (Still
     (mixed, software)
 }
 
+/// Asserts that at most one pixel in `one_in` of the `W` × `H` frame differs by more
+/// than 2/255 between `software` and `mixed`; the count is logged as differing `how`.
+fn assert_few_differ(software: &Still, mixed: &Still, one_in: usize, how: &str) {
+    let pixels = (W * H) as usize;
+    let diff = differing(&software.rgba, &mixed.rgba, 2);
+    eprintln!("{diff} of {pixels} pixels differ {how}");
+    assert!(diff * one_in <= pixels, "{diff} of {pixels} pixels differ");
+}
+
+/// The first instance's bounding-sphere centre, placed in the world, and its mesh's
+/// radius as the mesh has it (the cameras below are set by it, not by the instance's scale).
+fn first_instance_sphere(p: &Placed) -> (Vec3, f32) {
+    let s = p.data.meshes[0].bounding_sphere;
+    let centre = Mat4::from_cols_array_2d(&p.data.instances[0].world_from_local)
+        .transform_point3(Vec3::new(s[0], s[1], s[2]));
+    (centre, s[3])
+}
+
 #[test]
 fn drawing_everything_in_software_changes_only_pixels_on_edges() {
     // The shaded view: the cluster and triangle views name slots, which differ when the
@@ -175,10 +184,7 @@ fn drawing_everything_in_software_changes_only_pixels_on_edges() {
     let (mixed, software) = with_and_without_hardware(&placed, mixed_settings);
     // The two rasterisers round edges differently (see hw_raster's docs): the stated
     // tolerance is 2% of the pixels differing by more than 2/255.
-    let pixels = (W * H) as usize;
-    let diff = differing(&software.rgba, &mixed.rgba, 2);
-    eprintln!("{diff} of {pixels} pixels differ between all-software and mixed");
-    assert!(diff * 50 <= pixels, "{diff} of {pixels} pixels differ");
+    assert_few_differ(&software, &mixed, 50, "between all-software and mixed");
 }
 
 #[test]
@@ -187,20 +193,20 @@ fn clusters_crossing_the_near_plane_clip_in_software_as_the_hardware_rasteriser_
     // near plane that cuts clusters: on this adapter class they go to hw_raster.
     let placed = {
         let mut p = field(4);
-        let s = p.data.meshes[0].bounding_sphere;
-        let centre = Mat4::from_cols_array_2d(&p.data.instances[0].world_from_local)
-            .transform_point3(Vec3::new(s[0], s[1], s[2]));
-        let eye = centre + Vec3::new(0.55, 0.3, 0.2) * s[3];
-        p.camera = Camera::perspective(eye, centre, 1.3, s[3] * 0.12);
+        let (centre, radius) = first_instance_sphere(&p);
+        let eye = centre + Vec3::new(0.55, 0.3, 0.2) * radius;
+        p.camera = Camera::perspective(eye, centre, 1.3, radius * 0.12);
         p
     };
     let (mixed, software) = with_and_without_hardware(&placed, settings(DebugView::Shaded));
     // Only pixels on the edges of clipped triangles may differ, and few do: skipping
     // the triangles that cross the near plane (as before clipping) changed 1.7%.
-    let pixels = (W * H) as usize;
-    let diff = differing(&software.rgba, &mixed.rgba, 2);
-    eprintln!("{diff} of {pixels} pixels differ with the near clusters clipped in software");
-    assert!(diff * 200 <= pixels, "{diff} of {pixels} pixels differ");
+    assert_few_differ(
+        &software,
+        &mixed,
+        200,
+        "with the near clusters clipped in software",
+    );
 }
 
 #[test]
@@ -208,14 +214,12 @@ fn no_background_shows_through_a_closed_mesh_drawn_at_a_mixed_lod_cut() {
     // One mesh seen along its length: near clusters at LOD 0, far ones coarser.
     let placed = {
         let mut p = field(1);
-        let s = p.data.meshes[0].bounding_sphere;
-        let centre = Mat4::from_cols_array_2d(&p.data.instances[0].world_from_local)
-            .transform_point3(Vec3::new(s[0], s[1], s[2]));
+        let (centre, radius) = first_instance_sphere(&p);
         p.camera = Camera::perspective(
-            centre + Vec3::new(0.3, 0.25, 1.0) * s[3] * 1.6,
+            centre + Vec3::new(0.3, 0.25, 1.0) * radius * 1.6,
             centre,
             1.0,
-            s[3] * 0.01,
+            radius * 0.01,
         );
         p
     };
@@ -350,11 +354,7 @@ fn golden_images_of_the_shaded_and_cluster_views() {
 /// behind it, wider than the wall, one more knot behind the wall's middle and two
 /// behind its edges.
 fn walled_scene() -> SceneData {
-    let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [0.8; 3],
-    });
-    let mesh = data.add_mesh("procedural", asset()).unwrap();
+    let (mut data, mesh, material) = common::grey_scene();
     let mut place = |m: Mat4| data.add_instance(mesh, m, material).unwrap().unwrap();
     // Three layers, turned differently, so the knots' holes do not line up.
     for i in 0..18 {
@@ -592,17 +592,23 @@ fn more_instances_than_the_buffer_holds_is_an_error_naming_the_limit() {
     }
 }
 
+/// A field of `instances` in a scene whose bindings hold `per_binding` instances each,
+/// `max_instances` in all.
+fn split_field(per_binding: u32, max_instances: u32, instances: u32) -> Placed {
+    let limits = Limits {
+        instances_per_binding: per_binding,
+        max_instances,
+        ..Limits::default()
+    };
+    scenes::field(SceneData::new(limits), asset(), instances).unwrap()
+}
+
 /// Instances past what one binding holds continue in `instances_high`: with a binding
 /// of 7 instances, a field of 13 (and its ground) takes both, and every pass that reads instances (both
 /// fills and culls, both rasterisers, resolve) draws what one binding draws.
 #[test]
 fn instances_past_one_binding_take_a_second_and_draw_the_same_frame() {
-    let limits = Limits {
-        instances_per_binding: 7,
-        max_instances: 14,
-        ..Limits::default()
-    };
-    let split = scenes::field(SceneData::new(limits), asset(), 13).unwrap();
+    let split = split_field(7, 14, 13);
     assert!(split.data.instances_split());
     assert_eq!(split.data.instance_split(), 7);
     let whole = field(13);
@@ -661,12 +667,7 @@ fn instances_past_one_binding_take_a_second_and_draw_the_same_frame() {
 /// take a split table: refused, naming the counts and what to import.
 #[test]
 fn a_split_instance_table_and_a_file_without_the_instances_import_is_an_error() {
-    let limits = Limits {
-        instances_per_binding: 2,
-        max_instances: 4,
-        ..Limits::default()
-    };
-    let split = scenes::field(SceneData::new(limits), asset(), 3).unwrap();
+    let split = split_field(2, 4, 3);
     let GraphSource::File(shipped) = pipeline_file() else {
         unreachable!()
     };

@@ -24,8 +24,9 @@ impl Drop for Xvfb {
     }
 }
 
-/// Starts Xvfb on a free display; fails the test with the script's message if it
-/// cannot (a missing Xvfb is installed where the script may; never skipped).
+/// Starts Xvfb on a free display and points this process at it (call before any window
+/// is opened); fails the test with the script's message if it cannot (a missing Xvfb is
+/// installed where the script may; never skipped).
 pub fn xvfb() -> Xvfb {
     let dir = tempdir("xvfb");
     let pid_file = dir.join("pid");
@@ -47,12 +48,14 @@ pub fn xvfb() -> Xvfb {
         .trim()
         .parse()
         .expect("a pid");
-    Xvfb { display, pid }
+    let x = Xvfb { display, pid };
+    use_display(&x);
+    x
 }
 
-/// Points this process at `x` (call before any window is opened; each test binary has
-/// one test, so no other thread reads the environment meanwhile).
-pub fn use_display(x: &Xvfb) {
+/// Points this process at `x` (each test binary has one test, so no other thread reads
+/// the environment meanwhile).
+fn use_display(x: &Xvfb) {
     // SAFETY: called at the start of the test binary's only test, before any thread of
     // it reads the environment.
     unsafe { std::env::set_var("DISPLAY", &x.display) };
@@ -62,6 +65,16 @@ pub fn use_display(x: &Xvfb) {
         // SAFETY: as above.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
     }
+}
+
+/// A copy of the shipped pipeline file in a fresh directory, for a test to edit while
+/// the viewer watches it: its path and its text.
+pub fn pipeline_copy(what: &str) -> (PathBuf, String) {
+    let file = tempdir(what).join("frame.toml");
+    let text = std::fs::read_to_string(root().join("pipelines/virtual_geometry.toml"))
+        .expect("the shipped pipeline");
+    std::fs::write(&file, &text).expect("write");
+    (file, text)
 }
 
 /// A fresh directory under the temporary directory.
