@@ -4,7 +4,12 @@
 
 use meshlight::graph::{CompileOptions, Plan, Recording, dump};
 use std::fmt::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+// The graph crate's snapshot check, shared so both crates' snapshots behave alike.
+#[path = "../graph/tests/support/snapshot.rs"]
+mod snapshot;
+use snapshot::check;
 
 const PIPELINES: [&str; 4] = [
     "brute_force",
@@ -59,28 +64,6 @@ fn batches(plan: &Plan) -> String {
         }
     }
     out
-}
-
-fn check(name: &str, actual: &str) {
-    let path: PathBuf = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/snapshots")
-        .join(name);
-    if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
-        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
-        std::fs::write(&path, actual).unwrap();
-        return;
-    }
-    let expected = std::fs::read_to_string(&path).unwrap_or_else(|e| {
-        panic!(
-            "{}: {e}; run with UPDATE_SNAPSHOTS=1 to create it",
-            path.display()
-        )
-    });
-    assert!(
-        expected == actual,
-        "{name} changed; diff it against {} (UPDATE_SNAPSHOTS=1 rewrites)\n{actual}",
-        path.display()
-    );
 }
 
 #[test]

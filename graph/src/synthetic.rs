@@ -7,7 +7,7 @@ use crate::contract::{Slot, StageContract};
 use crate::error::Result;
 use crate::pass::{Pass, SetupContext};
 use crate::record::RecordContext;
-use crate::resource::{BufferDesc, Element};
+use crate::resource::{AnyHandle, BufferDesc, Element};
 
 /// A pass with any slots that records nothing: compile and CPU-overhead benchmarks.
 pub struct NoopPass {
@@ -110,41 +110,53 @@ pub fn random_graph(n: usize, seed: u64) -> GraphBuilder {
     for name in &names {
         g.create_buffer(name, BufferDesc::array(Element::U32, 64 + next() % 4096));
     }
-    const INPUTS: [&str; 3] = ["in0", "in1", "in2"];
     for i in 0..n {
-        let mut slots = Vec::new();
-        let mut b = Bindings::new();
-        for name in INPUTS
-            .iter()
-            .take(if i == 0 { 0 } else { (next() % 4) as usize })
-        {
-            let src = (next() % i as u64) as usize;
-            slots.push(Slot::buffer(name, Access::StorageRead, Element::U32, ""));
-            b = b.bind_named(name, &names[src]);
-        }
-        slots.push(Slot::buffer("w", Access::StorageWrite, Element::U32, ""));
-        b = b.bind_named("w", &names[i]);
+        let count = if i == 0 { 0 } else { (next() % 4) as usize };
+        let reads: Vec<usize> = (0..count).map(|_| (next() % i as u64) as usize).collect();
         let accumulate = i % 10 == 9 || i == n - 1;
-        if accumulate {
-            slots.push(Slot::buffer(
-                "out",
-                Access::StorageReadWrite,
-                Element::U32,
-                "",
-            ));
-            b = b.bind("out", out);
-        }
-        let outputs = g
-            .add_pass(&format!("p{i}"), NoopPass { slots }, b)
-            .expect("generated graphs are well-formed");
-        if accumulate {
-            out = outputs
-                .written()
-                .iter()
-                .find(|(s, _)| *s == "out")
-                .map(|(_, h)| *h)
-                .unwrap_or(out);
-        }
+        out = add_layer_pass(&mut g, i, &reads, accumulate, out);
     }
     g
+}
+
+/// Adds pass `p{i}` of a layered graph of transients named `t{n}`: a [`NoopPass`] reading
+/// `t{r}` for each of `reads` (three at most) through slots `in0`..`in2` and writing `t{i}`
+/// through `w`; with `accumulate` it also reads and writes `out` through slot `out`.
+/// Returns the version of `out` that later passes see.
+///
+/// [`random_graph`] builds its graphs of these passes, and a property test can build its
+/// own from generated reads: both then check graphs of one shape.
+pub fn add_layer_pass(
+    g: &mut GraphBuilder,
+    i: usize,
+    reads: &[usize],
+    accumulate: bool,
+    out: AnyHandle,
+) -> AnyHandle {
+    const INPUTS: [&str; 3] = ["in0", "in1", "in2"];
+    let mut slots = Vec::new();
+    let mut b = Bindings::new();
+    for (name, src) in INPUTS.iter().zip(reads) {
+        slots.push(Slot::buffer(name, Access::StorageRead, Element::U32, ""));
+        b = b.bind_named(name, &format!("t{src}"));
+    }
+    slots.push(Slot::buffer("w", Access::StorageWrite, Element::U32, ""));
+    b = b.bind_named("w", &format!("t{i}"));
+    if accumulate {
+        slots.push(Slot::buffer(
+            "out",
+            Access::StorageReadWrite,
+            Element::U32,
+            "",
+        ));
+        b = b.bind("out", out);
+    }
+    let outputs = g
+        .add_pass(&format!("p{i}"), NoopPass { slots }, b)
+        .expect("layered graphs are well-formed");
+    outputs
+        .written()
+        .iter()
+        .find(|(s, _)| *s == "out")
+        .map_or(out, |(_, h)| *h)
 }

@@ -5,7 +5,8 @@
 mod support;
 
 use meshlight_graph::*;
-use support::{dispatch_once, gpu};
+use support::fake::pass;
+use support::{add_writer, dispatch_once, gpu, render_once};
 
 const KERNELS: PassShader = PassShader {
     name: "test::batches",
@@ -121,64 +122,42 @@ fn step_dispatch(ctx: &mut RecordContext<'_>, k: u32, groups: u32) -> Result<()>
     )
 }
 
-/// A stage that copies its slot `from` into its slot `to`.
-fn copy_contract(stage: &'static str) -> StageContract {
-    StageContract {
-        stage,
-        slots: vec![
-            Slot::buffer("from", Access::CopySrc, Element::U32, ""),
-            Slot::buffer("to", Access::CopyDst, Element::U32, ""),
-        ],
-    }
+/// The slots of a stage that copies its slot `from` into its slot `to`.
+fn copy_slots() -> Vec<Slot> {
+    vec![
+        Slot::buffer("from", Access::CopySrc, Element::U32, ""),
+        Slot::buffer("to", Access::CopyDst, Element::U32, ""),
+    ]
 }
 
 /// Copies slot `from` into slot `to` with a copy command (the encoder).
-struct Copy;
+fn copy_buffer(ctx: &mut RecordContext<'_>) -> Result<()> {
+    let (from, bytes) = ctx.buffer("from")?;
+    let (to, _) = ctx.buffer("to")?;
+    ctx.encoder().copy_buffer_to_buffer(from, 0, to, 0, bytes);
+    Ok(())
+}
 
-impl Pass for Copy {
-    fn contract(&self) -> StageContract {
-        copy_contract("copy")
-    }
-    fn implementation(&self) -> &'static str {
-        "copy"
-    }
-    fn setup(&self, _: &mut SetupContext) -> Result<()> {
-        Ok(())
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let (from, bytes) = ctx.buffer("from")?;
-        let (to, _) = ctx.buffer("to")?;
-        ctx.encoder().copy_buffer_to_buffer(from, 0, to, 0, bytes);
-        Ok(())
-    }
+/// The slot `data` a clearing pass writes in place.
+fn data_slot() -> Vec<Slot> {
+    vec![Slot::buffer(
+        "data",
+        Access::StorageReadWrite,
+        Element::U32,
+        "",
+    )]
+}
+
+/// Clears slot `data` with `clear_buffer`, a command of the encoder.
+fn clear_data(ctx: &mut RecordContext<'_>) -> Result<()> {
+    let (data, bytes) = ctx.buffer("data")?;
+    ctx.encoder().clear_buffer(data, 0, Some(bytes));
+    Ok(())
 }
 
 /// A compute-only pass (so the plan batches it) that takes the encoder anyway.
-struct SneakyClear;
-
-impl Pass for SneakyClear {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "sneaky",
-            slots: vec![Slot::buffer(
-                "data",
-                Access::StorageReadWrite,
-                Element::U32,
-                "",
-            )],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "encoder"
-    }
-    fn setup(&self, _: &mut SetupContext) -> Result<()> {
-        Ok(())
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let (data, bytes) = ctx.buffer("data")?;
-        ctx.encoder().clear_buffer(data, 0, Some(bytes));
-        Ok(())
-    }
+fn sneaky_clear() -> impl Pass {
+    pass("sneaky", data_slot(), |_| Ok(()), clear_data)
 }
 
 /// A step that dispatches more workgroups than any device allows: a validation error.
@@ -245,10 +224,7 @@ fn run(
 
 /// Adds `step` on `data` as pass `name` and returns the version it writes.
 fn step_on(g: &mut GraphBuilder, name: &str, step: Step, data: Handle<Buffer>) -> Handle<Buffer> {
-    g.add_pass(name, step, Bindings::new().bind("data", data))
-        .unwrap()
-        .buffer("data")
-        .unwrap()
+    add_writer(g, name, step, Bindings::new().bind("data", data), "data")
 }
 
 /// Each batch's pass count and whether it is a shared compute pass.
@@ -299,15 +275,9 @@ fn a_clear_stays_in_the_batch_and_a_copy_splits_it() {
     let data = step_on(&mut g, "first", Step { k: 5, clear: false }, data);
     let data = step_on(&mut g, "cleared", Step { k: 9, clear: true }, data);
     let data = step_on(&mut g, "after", Step { k: 4, clear: false }, data);
-    let copy = g
-        .add_pass(
-            "copy",
-            Copy,
-            Bindings::new().bind("from", data).bind("to", copy),
-        )
-        .unwrap()
-        .buffer("to")
-        .unwrap();
+    let copier = pass("copy", copy_slots(), |_| Ok(()), copy_buffer);
+    let bindings = Bindings::new().bind("from", data).bind("to", copy);
+    let copy = add_writer(&mut g, "copy", copier, bindings, "to");
     step_on(&mut g, "on_copy", Step { k: 1, clear: false }, copy);
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu())).unwrap();
     let shape = batch_shape(&compiled);
@@ -338,21 +308,13 @@ fn a_render_pass_between_compute_passes_sees_the_first_and_is_seen_by_the_next()
         TextureDesc::d2(wgpu::TextureFormat::Rgba8Unorm, SIDE, SIDE),
     );
     let data = step_on(&mut g, "before", Step { k: 7, clear: true }, data);
-    struct Draw;
-    impl Pass for Draw {
-        fn contract(&self) -> StageContract {
-            StageContract {
-                stage: "draw",
-                slots: vec![
-                    Slot::buffer("shown", Access::StorageRead, Element::U32, ""),
-                    Slot::texture("picture", Access::RenderTarget, None, ""),
-                ],
-            }
-        }
-        fn implementation(&self) -> &'static str {
-            "raster"
-        }
-        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+    let draw = pass(
+        "draw",
+        vec![
+            Slot::buffer("shown", Access::StorageRead, Element::U32, ""),
+            Slot::texture("picture", Access::RenderTarget, None, ""),
+        ],
+        |ctx| {
             ctx.program(
                 "draw",
                 ProgramDesc::render(&KERNELS, "fullscreen")
@@ -361,21 +323,16 @@ fn a_render_pass_between_compute_passes_sees_the_first_and_is_seen_by_the_next()
                     .layout(BindingLayout::render("draw").slot(2, "shown")),
             );
             Ok(())
-        }
-        fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-            let p = ctx.render("draw")?;
-            let bg = ctx.bind_group(&p, 0, &[])?;
-            let mut rp = ctx.render_pass(&[ColorAttachment::new("picture")], None)?;
-            rp.set_pipeline(&p.pipeline);
-            rp.set_bind_group(0, &bg, &[]);
-            rp.draw(0..3, 0..1);
-            Ok(())
-        }
-    }
+        },
+        |ctx| {
+            let picture = [ColorAttachment::new("picture")];
+            render_once(ctx, "draw", &[], &picture, None, |rp| rp.draw(0..3, 0..1))
+        },
+    );
     let picture = g
         .add_pass(
             "draw",
-            Draw,
+            draw,
             Bindings::new().bind("shown", data).bind("picture", picture),
         )
         .unwrap()
@@ -466,28 +423,21 @@ fn history_carries_through_a_batch_from_frame_to_frame() {
     let mut g = GraphBuilder::new();
     let h = g.history_buffer("acc", BufferDesc::array(Element::U32, N as u64));
     // Copies last frame's value where there is one, else starts from zero.
-    let carry = support::fake::pass(
+    let carry = pass(
         "carry",
-        copy_contract("carry").slots,
+        copy_slots(),
         |_| Ok(()),
         |ctx| {
             if ctx.history_valid("from")? {
-                return Copy.record(ctx);
+                return copy_buffer(ctx);
             }
             let (to, bytes) = ctx.buffer("to")?;
             ctx.encoder().clear_buffer(to, 0, Some(bytes));
             Ok(())
         },
     );
-    let acc = g
-        .add_pass(
-            "carry",
-            carry,
-            Bindings::new().bind("from", h.prev).bind("to", h.current),
-        )
-        .unwrap()
-        .buffer("to")
-        .unwrap();
+    let bindings = Bindings::new().bind("from", h.prev).bind("to", h.current);
+    let acc = add_writer(&mut g, "carry", carry, bindings, "to");
     let acc = step_on(&mut g, "a", Step { k: 1, clear: false }, acc);
     step_on(&mut g, "b", Step { k: 2, clear: false }, acc);
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu())).unwrap();
@@ -539,7 +489,8 @@ fn checked_mode_names_the_pass_that_fails_validation_inside_a_batch() {
 #[test]
 fn a_batched_pass_that_takes_the_encoder_is_an_error_when_checked_and_right_when_not() {
     let mut g = chain(&[4]);
-    g.add_pass("sneaky", SneakyClear, Bindings::new()).unwrap();
+    g.add_pass("sneaky", sneaky_clear(), Bindings::new())
+        .unwrap();
     g.add_pass("step_after", Step { k: 6, clear: false }, Bindings::new())
         .unwrap();
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu())).unwrap();
@@ -572,24 +523,17 @@ fn a_batched_pass_that_takes_the_encoder_is_an_error_when_checked_and_right_when
 
 #[test]
 fn needs_encoder_takes_a_pass_out_of_its_batch() {
-    struct Declared;
-    impl Pass for Declared {
-        fn contract(&self) -> StageContract {
-            SneakyClear.contract()
-        }
-        fn implementation(&self) -> &'static str {
-            "declared"
-        }
-        fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+    let declared = pass(
+        "sneaky",
+        data_slot(),
+        |ctx| {
             ctx.needs_encoder("clears with clear_buffer");
             Ok(())
-        }
-        fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-            SneakyClear.record(ctx)
-        }
-    }
+        },
+        clear_data,
+    );
     let mut g = chain(&[4]);
-    g.add_pass("declared", Declared, Bindings::new()).unwrap();
+    g.add_pass("declared", declared, Bindings::new()).unwrap();
     g.add_pass("step_after", Step { k: 6, clear: false }, Bindings::new())
         .unwrap();
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu())).unwrap();
@@ -704,11 +648,7 @@ impl Pass for ScratchClear {
         "fill"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        ctx.scratch_buffer(
-            "words",
-            BufferDesc::array(Element::U32, N as u64),
-            &[Access::StorageReadWrite],
-        );
+        support::scratch_words(ctx, N);
         let on_scratch = BindingLayout::compute("step")
             .scratch(0, "words", Access::StorageReadWrite)
             .uniform(1);

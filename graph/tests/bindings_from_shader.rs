@@ -83,23 +83,17 @@ struct Reflected {
 
 impl Pass for Reflected {
     fn contract(&self) -> StageContract {
+        // The arithmetic passes' `input` and `output`, under a stage name of its own.
         StageContract {
             stage: "scale",
-            slots: vec![
-                Slot::buffer("input", Access::StorageRead, Element::U32, "values"),
-                Slot::buffer("output", Access::StorageWrite, Element::U32, "scaled"),
-            ],
+            slots: support::transform_contract().slots,
         }
     }
     fn implementation(&self) -> &'static str {
         "reflected"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        ctx.scratch_buffer(
-            "words",
-            BufferDesc::array(Element::U32, N as u64),
-            &[Access::StorageReadWrite],
-        );
+        support::scratch_words(ctx, N);
         ctx.program(
             "main",
             ProgramDesc::compute(self.shader, "main").layout(BindingLayout::from_shader("scale")),

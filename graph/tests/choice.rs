@@ -81,9 +81,15 @@ impl Pass for Reader {
     }
 }
 
-fn frame(choice: Choice) -> GraphBuilder {
+/// A graph holding only the 8 × 4 visibility target `vis`, its form not yet chosen.
+fn with_vis() -> GraphBuilder {
     let mut g = GraphBuilder::new();
     g.create_visibility64("vis", 8, 4);
+    g
+}
+
+fn frame(choice: Choice) -> GraphBuilder {
+    let mut g = with_vis();
     let out = g.create_buffer("out", BufferDesc::array(Element::U32, 1));
     g.add_choice("raster", choice, Bindings::new()).unwrap();
     g.add_pass("read", Reader, Bindings::new()).unwrap();
@@ -207,8 +213,7 @@ fn a_texture_rasteriser_on_a_declared_u64_buffer_says_how_to_declare_it() {
 
 #[test]
 fn two_writers_wanting_different_forms_are_an_error() {
-    let mut g = GraphBuilder::new();
-    g.create_visibility64("vis", 8, 4);
+    let mut g = with_vis();
     g.add_boxed_pass("a", texture(), Bindings::new()).unwrap();
     let o = g.add_boxed_pass("b", buffer(), Bindings::new()).unwrap();
     g.export(o.written()[0].1);
@@ -218,8 +223,7 @@ fn two_writers_wanting_different_forms_are_an_error() {
 
 #[test]
 fn candidates_of_different_stages_are_refused() {
-    let mut g = GraphBuilder::new();
-    g.create_visibility64("vis", 8, 4);
+    let mut g = with_vis();
     g.create_buffer("out", BufferDesc::array(Element::U32, 1));
     let err = g
         .add_choice(

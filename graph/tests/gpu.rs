@@ -9,32 +9,18 @@ const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
 
-fn three_pass_graph(transform: Box<dyn Pass>) -> GraphBuilder {
+fn three_pass_graph(transform: impl Pass + 'static) -> GraphBuilder {
     let mut g = GraphBuilder::new();
     let a = g.create_buffer("a", BufferDesc::array(Element::U32, N as u64));
     let b = g.create_buffer("b", BufferDesc::array(Element::U32, N as u64));
     let result = g.import_buffer("result", BufferDesc::array(Element::U32, N as u64), USAGE);
-    let a = g
-        .add_pass(
-            "fill",
-            Fill { count: N, k: 3 },
-            Bindings::new().bind("output", a),
-        )
-        .unwrap()
-        .buffer("output")
-        .unwrap();
-    let b = g
-        .add_boxed_pass(
-            "transform",
-            transform,
-            Bindings::new().bind("input", a).bind("output", b),
-        )
-        .unwrap()
-        .buffer("output")
-        .unwrap();
+    let bindings = Bindings::new().bind("output", a);
+    let a = add_writer(&mut g, "fill", Arith::fill(N, 3), bindings, "output");
+    let bindings = Bindings::new().bind("input", a).bind("output", b);
+    let b = add_writer(&mut g, "transform", transform, bindings, "output");
     g.add_pass(
         "add",
-        Add { count: N, k: 7 },
+        Arith::add(N, 7),
         Bindings::new().bind("input", b).bind("output", result),
     )
     .unwrap();
@@ -55,15 +41,15 @@ fn run_once(g: GraphBuilder) -> Vec<u32> {
 
 #[test]
 fn three_pass_compute_graph_gives_the_known_result() {
-    let out = run_once(three_pass_graph(Box::new(Add { count: N, k: 5 })));
+    let out = run_once(three_pass_graph(Arith::add(N, 5)));
     let expected: Vec<u32> = (0..N).map(|i| i * 3 + 5 + 7).collect();
     assert_eq!(out, expected);
 }
 
 #[test]
 fn swapped_implementation_gives_the_same_result() {
-    let a = run_once(three_pass_graph(Box::new(Add { count: N, k: 10 })));
-    let b = run_once(three_pass_graph(Box::new(AddTwice { count: N, half: 5 })));
+    let a = run_once(three_pass_graph(Arith::add(N, 10)));
+    let b = run_once(three_pass_graph(AddTwice { count: N, half: 5 }));
     assert_eq!(a, b);
     assert_eq!(b[9], 9 * 3 + 10 + 7);
 }
@@ -75,7 +61,7 @@ fn history_resource_carries_from_frame_to_frame() {
     let h = g.history_buffer("counter", BufferDesc::array(Element::U32, 64));
     g.add_pass(
         "accumulate",
-        Add { count: 64, k: 1 },
+        Arith::add(64, 1),
         Bindings::new()
             .bind("input", h.prev)
             .bind("output", h.current),
@@ -92,7 +78,7 @@ fn history_resource_carries_from_frame_to_frame() {
 #[test]
 fn steady_graph_allocates_nothing_after_the_first_frame() {
     let gpu = gpu();
-    let compiled = three_pass_graph(Box::new(Add { count: N, k: 1 }))
+    let compiled = three_pass_graph(Arith::add(N, 1))
         .compile(&CompileOptions::for_gpu(&gpu))
         .unwrap();
     let result = gpu.buffer_with_data("result", &[0u8; N as usize * 4], USAGE);

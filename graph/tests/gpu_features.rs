@@ -6,9 +6,13 @@ mod support;
 use meshlight_graph::*;
 use support::fake::pass;
 use support::rects::*;
-use support::{add_exported, dispatch_once, gpu, read_export};
+use support::{add_exported, compute_once, dispatch_once, gpu, read_export, render_once};
 
-const RASTER: PassShader = support::support_shader!("test::features", "features.wgsl");
+const RASTER: PassShader = support::support_shader!(
+    "test::features",
+    "features.wgsl",
+    modules: [RECT_VERTICES_WGSL]
+);
 const COMPUTE: PassShader = support::support_shader!("test::compute", "compute.wgsl");
 
 fn params(a: u32, b: u32) -> [u32; 4] {
@@ -365,14 +369,10 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
         },
         |ctx| {
             ctx.clear("seen")?;
-            let p = ctx.compute("count")?;
-            let bg = ctx.bind_group(&p, 0, &[])?;
             let (args, _) = ctx.buffer("args")?;
-            let mut cp = ctx.compute_pass();
-            cp.set_pipeline(&p.pipeline);
-            cp.set_bind_group(0, &bg, &[]);
-            cp.dispatch_workgroups_indirect(args, 0);
-            Ok(())
+            compute_once(ctx, "count", &[], |cp| {
+                cp.dispatch_workgroups_indirect(args, 0)
+            })
         },
     );
     add_exported(
@@ -654,14 +654,11 @@ fn run_immediates(features: wgpu::Features) -> (bool, Vec<u32>) {
         },
         |ctx| {
             let p = ctx.compute("main")?;
-            let bg = ctx.bind_group(&p, 0, &[])?;
             let imm = ctx.immediates(&p, bytemuck::cast_slice(&[500u32, 100]))?;
-            let mut cp = ctx.compute_pass();
-            cp.set_pipeline(&p.pipeline);
-            cp.set_bind_group(0, &bg, &[]);
-            imm.set_on_compute(&mut cp);
-            cp.dispatch_workgroups(2, 1, 1);
-            Ok(())
+            compute_once(ctx, "main", &[], |cp| {
+                imm.set_on_compute(cp);
+                cp.dispatch_workgroups(2, 1, 1);
+            })
         },
     );
     let o = g
@@ -912,13 +909,8 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
 const DEPTH_SHADER: PassShader = PassShader {
     name: "test::depth",
     source: r#"
-struct RectVertex {
-    // x, y in clip space; z, w unused.
-    pos: vec4<f32>,
-    // x: depth key (larger is nearer), y: rectangle id.
-    key: vec4<u32>,
-}
-@group(0) @binding(0) var<storage, read> rect_vertices: array<RectVertex>;
+// Binding 0: the rectangles' vertices; a larger depth key (`key.x`) is nearer.
+#import test::rect_vertices::rect_vertices
 
 struct VOut {
     @builtin(position) pos: vec4<f32>,
@@ -937,7 +929,7 @@ fn fs(in: VOut) -> @location(0) vec4<f32> {
 }
 "#,
     file_path: "graph/tests/gpu_features.rs",
-    modules: &[],
+    modules: &[RECT_VERTICES_WGSL],
 };
 
 #[test]
@@ -984,19 +976,14 @@ fn a_depth_tested_render_pass_keeps_the_nearest_rectangle() {
             Ok(())
         },
         move |ctx| {
-            let p = ctx.render("draw")?;
-            let bg = ctx.bind_group(&p, 0, &[])?;
-            let mut rp = ctx.render_pass(
-                &[ColorAttachment::new("color")],
-                Some(DepthAttachment {
-                    target: "depth",
-                    clear: 1.0,
-                }),
-            )?;
-            rp.set_pipeline(&p.pipeline);
-            rp.set_bind_group(0, &bg, &[]);
-            rp.draw(0..count, 0..1);
-            Ok(())
+            let depth = DepthAttachment {
+                target: "depth",
+                clear: 1.0,
+            };
+            let color = [ColorAttachment::new("color")];
+            render_once(ctx, "draw", &[], &color, Some(depth), |rp| {
+                rp.draw(0..count, 0..1)
+            })
         },
     );
     let drawn = g

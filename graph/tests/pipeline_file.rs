@@ -10,16 +10,10 @@ fn registry() -> Registry {
     let mut r = Registry::new();
     r.register("produce", "fill", |p: &Params| {
         p.only(&["count", "k"])?;
-        Ok(Box::new(Fill {
-            count: p.u32("count", 1000)?,
-            k: p.u32("k", 1)?,
-        }) as Box<dyn Pass>)
+        Ok(Box::new(Arith::fill(p.u32("count", 1000)?, p.u32("k", 1)?)) as Box<dyn Pass>)
     });
     r.register("transform", "add", |p: &Params| {
-        Ok(Box::new(Add {
-            count: p.u32("count", 1000)?,
-            k: p.u32("k", 0)?,
-        }) as Box<dyn Pass>)
+        Ok(Box::new(Arith::add(p.u32("count", 1000)?, p.u32("k", 0)?)) as Box<dyn Pass>)
     });
     r.register("transform", "add_twice", |p: &Params| {
         Ok(Box::new(AddTwice {

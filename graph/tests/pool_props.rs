@@ -17,30 +17,7 @@ fn graph(reads: &[Vec<usize>], sizes: &[u64], to_out: &[bool]) -> GraphBuilder {
         g.create_buffer(&format!("t{i}"), u32s(*size));
     }
     for (i, r) in reads.iter().enumerate() {
-        let mut slots: Vec<Slot> = Vec::new();
-        let mut b = Bindings::new();
-        for (k, &src) in r.iter().enumerate() {
-            let name: &'static str = ["in0", "in1", "in2"][k];
-            slots.push(Slot::buffer(name, Access::StorageRead, Element::U32, ""));
-            b = b.bind_named(name, &format!("t{src}"));
-        }
-        slots.push(Slot::buffer("w", Access::StorageWrite, Element::U32, ""));
-        b = b.bind_named("w", &format!("t{i}"));
-        if to_out[i] {
-            slots.push(Slot::buffer(
-                "out",
-                Access::StorageReadWrite,
-                Element::U32,
-                "",
-            ));
-            b = b.bind("out", out);
-        }
-        let outs = g
-            .add_pass(&format!("p{i}"), Fake::new("random", slots), b)
-            .unwrap();
-        if to_out[i] {
-            out = outs.written().iter().find(|(s, _)| *s == "out").unwrap().1;
-        }
+        out = synthetic::add_layer_pass(&mut g, i, r, to_out[i], out);
     }
     g
 }

@@ -3,8 +3,11 @@
 
 #[path = "support/fake.rs"]
 mod fake;
+#[path = "support/snapshot.rs"]
+mod snapshot;
 use fake::*;
 use meshlight_graph::*;
+use snapshot::check;
 
 fn sample() -> Plan {
     let mut g = GraphBuilder::new();
@@ -49,27 +52,6 @@ fn sample() -> Plan {
     g.compile(&CompileOptions::new(wgpu::Features::empty()))
         .unwrap()
         .plan
-}
-
-fn check(name: &str, actual: &str) {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/snapshots")
-        .join(name);
-    if std::env::var_os("UPDATE_SNAPSHOTS").is_some() {
-        std::fs::write(&path, actual).unwrap();
-        return;
-    }
-    let expected = std::fs::read_to_string(&path).unwrap_or_else(|e| {
-        panic!(
-            "{}: {e}; run with UPDATE_SNAPSHOTS=1 to create it",
-            path.display()
-        )
-    });
-    assert!(
-        expected == actual,
-        "{name} changed; diff it against {} (UPDATE_SNAPSHOTS=1 rewrites)\n{actual}",
-        path.display()
-    );
 }
 
 #[test]

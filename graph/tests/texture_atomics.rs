@@ -7,8 +7,11 @@ mod support;
 use meshlight_graph::*;
 use support::rects::*;
 
-const SHADER: PassShader =
-    support::support_shader!("test::texture_atomics", "texture_atomics.wgsl");
+const SHADER: PassShader = support::support_shader!(
+    "test::texture_atomics",
+    "texture_atomics.wgsl",
+    modules: [RECT_VERTICES_WGSL]
+);
 
 /// Stage `raster` with a visibility target that may be a buffer or a texture; this
 /// implementation takes the texture.

@@ -5,8 +5,7 @@
 use meshlight_graph::*;
 
 pub struct Fake {
-    pub stage: &'static str,
-    pub slots: Vec<Slot>,
+    contract: StageContract,
     pub required: wgpu::Features,
     pub side_effect: bool,
     pub scratch: Option<u64>,
@@ -15,8 +14,7 @@ pub struct Fake {
 impl Fake {
     pub fn new(stage: &'static str, slots: Vec<Slot>) -> Self {
         Self {
-            stage,
-            slots,
+            contract: StageContract { stage, slots },
             required: wgpu::Features::empty(),
             side_effect: false,
             scratch: None,
@@ -39,10 +37,7 @@ impl Fake {
 
 impl Pass for Fake {
     fn contract(&self) -> StageContract {
-        StageContract {
-            stage: self.stage,
-            slots: self.slots.clone(),
-        }
+        self.contract.clone()
     }
     fn implementation(&self) -> &'static str {
         "fake"
@@ -87,8 +82,7 @@ pub fn compile_error(g: GraphBuilder) -> GraphError {
 
 /// A pass built from closures, so each test states its contract, setup and record inline.
 pub struct TestPass<S, R> {
-    stage: &'static str,
-    slots: Vec<Slot>,
+    contract: StageContract,
     setup: S,
     record: R,
 }
@@ -99,10 +93,7 @@ where
     R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
 {
     fn contract(&self) -> StageContract {
-        StageContract {
-            stage: self.stage,
-            slots: self.slots.clone(),
-        }
+        self.contract.clone()
     }
     fn implementation(&self) -> &'static str {
         "test"
@@ -121,8 +112,7 @@ where
     R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
 {
     TestPass {
-        stage,
-        slots,
+        contract: StageContract { stage, slots },
         setup,
         record,
     }

@@ -6,24 +6,35 @@ use meshlight_graph::*;
 pub mod fake;
 pub mod rects;
 
-/// A pass shader read from `graph/tests/support/<file>`.
+/// The text of `graph/tests/support/<file>`, embedded.
+#[allow(unused_macros)] // not every test binary reads a shader of its own
+macro_rules! support_text {
+    ($file:literal) => {
+        include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/support/",
+            $file
+        ))
+    };
+}
+
+/// A pass shader read from `graph/tests/support/<file>`, with the `modules` it imports.
 #[allow(unused_macros)] // not every test binary reads a shader of its own
 macro_rules! support_shader {
     ($name:literal, $file:literal) => {
+        $crate::support::support_shader!($name, $file, modules: [])
+    };
+    ($name:literal, $file:literal, modules: [$($module:expr),* $(,)?]) => {
         PassShader {
             name: $name,
-            source: include_str!(concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/tests/support/",
-                $file
-            )),
+            source: $crate::support::support_text!($file),
             file_path: concat!("graph/tests/support/", $file),
-            modules: &[],
+            modules: &[$($module),*],
         }
     };
 }
 #[allow(unused_imports)] // not every test binary reads a shader of its own
-pub(crate) use support_shader;
+pub(crate) use {support_shader, support_text};
 
 pub const SHADER: PassShader = support_shader!("test::arith", "arith.wgsl");
 
@@ -31,18 +42,45 @@ fn u32s(name: &'static str, access: Access, doc: &'static str) -> Slot {
     Slot::buffer(name, access, Element::U32, doc)
 }
 
-/// Stage `produce`: writes `output`.
-pub struct Fill {
-    pub count: u32,
-    pub k: u32,
+/// One dispatch of the arithmetic kernel `entry` over `count` words: `fill` (stage
+/// `produce`) writes `i * k`, `add` (stage `transform`) writes `input[i] + k`. The two
+/// differ only in their contract and layout, so one pass type serves both.
+pub struct Arith {
+    entry: &'static str,
+    contract: fn() -> StageContract,
+    layout: fn() -> BindingLayout,
+    count: u32,
+    k: u32,
 }
 
-/// Stage `transform`: reads `input`, writes `output`. Two implementations share it.
-pub struct Add {
-    pub count: u32,
-    pub k: u32,
+impl Arith {
+    /// Stage `produce`: writes `output`.
+    pub fn fill(count: u32, k: u32) -> Self {
+        Self::new("fill", produce_contract, layout_out_only, count, k)
+    }
+    /// Stage `transform`: reads `input`, writes `output`. `AddTwice` implements it too.
+    pub fn add(count: u32, k: u32) -> Self {
+        Self::new("add", transform_contract, layout_in_out, count, k)
+    }
+    fn new(
+        entry: &'static str,
+        contract: fn() -> StageContract,
+        layout: fn() -> BindingLayout,
+        count: u32,
+        k: u32,
+    ) -> Self {
+        Self {
+            entry,
+            contract,
+            layout,
+            count,
+            k,
+        }
+    }
 }
-/// A second implementation of `transform` giving the same result as `Add { k }` for k = 2·half.
+
+/// A second implementation of `transform` giving the same result as `Arith::add(count, k)`
+/// for k = 2·half.
 pub struct AddTwice {
     pub count: u32,
     pub half: u32,
@@ -80,19 +118,60 @@ fn program(entry: &'static str, layout: BindingLayout) -> ProgramDesc {
     ProgramDesc::compute(&SHADER, entry).layout(layout)
 }
 
-/// Records one dispatch of the compute program `name` with bind group 0.
-pub fn dispatch_once(
+/// Declares the scratch buffer `words` of `count` u32s, read and written by the pass.
+pub fn scratch_words(ctx: &mut SetupContext, count: u32) {
+    ctx.scratch_buffer(
+        "words",
+        BufferDesc::array(Element::U32, count as u64),
+        &[Access::StorageReadWrite],
+    );
+}
+
+/// Records the compute program `name` with bind group 0 (built with `uniforms`) in the
+/// pass's compute pass; `dispatch` issues the dispatches.
+pub fn compute_once(
     ctx: &mut RecordContext<'_>,
     name: &str,
     uniforms: &[(u32, &[u8])],
-    groups: [u32; 3],
+    dispatch: impl FnOnce(&mut wgpu::ComputePass<'static>),
 ) -> Result<()> {
     let p = ctx.compute(name)?;
     let bg = ctx.bind_group(&p, 0, uniforms)?;
     let mut cp = ctx.compute_pass();
     cp.set_pipeline(&p.pipeline);
     cp.set_bind_group(0, &bg, &[]);
-    cp.dispatch_workgroups(groups[0], groups[1], groups[2]);
+    dispatch(&mut cp);
+    Ok(())
+}
+
+/// Records one dispatch of `groups` workgroups of the compute program `name`.
+pub fn dispatch_once(
+    ctx: &mut RecordContext<'_>,
+    name: &str,
+    uniforms: &[(u32, &[u8])],
+    groups: [u32; 3],
+) -> Result<()> {
+    compute_once(ctx, name, uniforms, |cp| {
+        cp.dispatch_workgroups(groups[0], groups[1], groups[2])
+    })
+}
+
+/// Records the render program `name` with bind group 0 (built with `uniforms`) into one
+/// render pass on `colors` and `depth`; `draw` issues the draws.
+pub fn render_once(
+    ctx: &mut RecordContext<'_>,
+    name: &str,
+    uniforms: &[(u32, &[u8])],
+    colors: &[ColorAttachment],
+    depth: Option<DepthAttachment>,
+    draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
+) -> Result<()> {
+    let p = ctx.render(name)?;
+    let bg = ctx.bind_group(&p, 0, uniforms)?;
+    let mut rp = ctx.render_pass(colors, depth)?;
+    rp.set_pipeline(&p.pipeline);
+    rp.set_bind_group(0, &bg, &[]);
+    draw(&mut rp);
     Ok(())
 }
 
@@ -102,37 +181,20 @@ fn dispatch(ctx: &mut RecordContext<'_>, name: &str, count: u32, k: u32) -> Resu
     dispatch_once(ctx, name, &uniforms, [count.div_ceil(64), 1, 1])
 }
 
-impl Pass for Fill {
+impl Pass for Arith {
     fn contract(&self) -> StageContract {
-        produce_contract()
+        (self.contract)()
     }
     fn implementation(&self) -> &'static str {
-        "fill"
+        self.entry
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("output", self.count as u64 * 4);
-        ctx.program("fill", program("fill", layout_out_only()));
+        ctx.program(self.entry, program(self.entry, (self.layout)()));
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        dispatch(ctx, "fill", self.count, self.k)
-    }
-}
-
-impl Pass for Add {
-    fn contract(&self) -> StageContract {
-        transform_contract()
-    }
-    fn implementation(&self) -> &'static str {
-        "add"
-    }
-    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        ctx.min_bytes("output", self.count as u64 * 4);
-        ctx.program("add", program("add", layout_in_out()));
-        Ok(())
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        dispatch(ctx, "add", self.count, self.k)
+        dispatch(ctx, self.entry, self.count, self.k)
     }
 }
 
@@ -197,6 +259,21 @@ pub fn run_frames(
     exec
 }
 
+/// Adds `pass` and returns the version of the buffer it writes through `slot`, for the
+/// next pass to bind.
+pub fn add_writer(
+    g: &mut GraphBuilder,
+    name: &str,
+    pass: impl Pass + 'static,
+    bindings: Bindings,
+    slot: &str,
+) -> Handle<Buffer> {
+    g.add_pass(name, pass, bindings)
+        .unwrap()
+        .buffer(slot)
+        .unwrap()
+}
+
 /// Adds `pass` and exports the buffer it writes through `slot`, for the test to read.
 pub fn add_exported(
     g: &mut GraphBuilder,
@@ -205,8 +282,8 @@ pub fn add_exported(
     bindings: Bindings,
     slot: &str,
 ) {
-    let out = g.add_pass(name, pass, bindings).unwrap();
-    g.export(out.buffer(slot).unwrap());
+    let out = add_writer(g, name, pass, bindings, slot);
+    g.export(out);
 }
 
 /// The exported buffer `name` as the last frame left it, as `T`s.

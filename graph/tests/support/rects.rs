@@ -7,6 +7,7 @@ use meshlight_graph::{
     Handle, ProgramDesc, RecordContext, Result, SetupContext, Slot, Texture, TextureDesc,
     synthetic,
 };
+use meshlight_shaders::LocalModule;
 
 /// Pixel rectangles (x0, y0, x1, y1) with a depth word and an id.
 pub const RECTS: [([u32; 4], u32, u32); 4] = [
@@ -61,6 +62,14 @@ pub fn rect_vertices() -> Vec<RectVertex> {
     v
 }
 
+/// The WGSL of the rectangles' vertices (`#import test::rect_vertices`): the layout of a
+/// [`RectVertex`], its binding and the vertex stage the rasters share.
+pub const RECT_VERTICES_WGSL: LocalModule = LocalModule {
+    name: "test::rect_vertices",
+    source: crate::support::support_text!("rect_vertices.wgsl"),
+    file_path: "graph/tests/support/rect_vertices.wgsl",
+};
+
 /// How the raster passes' slots name a [`RectVertex`].
 pub const RECT_VERTEX: Element = Element::named("RectVertex", 32);
 
@@ -113,11 +122,6 @@ pub fn record_masked_raster(
     draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
 ) -> Result<()> {
     ctx.clear("vis")?;
-    let program = ctx.render("rects")?;
-    let bg = ctx.bind_group(&program, 0, uniforms)?;
-    let mut rp = ctx.render_pass(&[ColorAttachment::new("dummy")], None)?;
-    rp.set_pipeline(&program.pipeline);
-    rp.set_bind_group(0, &bg, &[]);
-    draw(&mut rp);
-    Ok(())
+    let dummy = [ColorAttachment::new("dummy")];
+    super::render_once(ctx, "rects", uniforms, &dummy, None, draw)
 }

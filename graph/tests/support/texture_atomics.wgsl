@@ -1,24 +1,13 @@
 // The rectangle raster of features.wgsl with a 64-bit atomic texture as visibility target.
 
-struct RectVertex {
-    // x, y in clip space; z, w unused.
-    pos: vec4<f32>,
-    // x: high word of the key (depth), y: low word (rectangle id).
-    key: vec4<u32>,
-}
+#import test::rect_vertices::{VOut, rect_vertex}
 
-@group(0) @binding(0) var<storage, read> rect_vertices: array<RectVertex>;
+// Binding 0 is the rectangles' vertices, in the imported module.
 @group(0) @binding(1) var vis: texture_storage_2d<r64uint, atomic>;
-
-struct VOut {
-    @builtin(position) pos: vec4<f32>,
-    @location(0) @interpolate(flat) key: vec2<u32>,
-}
 
 @vertex
 fn rect_vs(@builtin(vertex_index) v: u32) -> VOut {
-    let r = rect_vertices[v];
-    return VOut(vec4<f32>(r.pos.xy, 0.5, 1.0), r.key.xy);
+    return rect_vertex(v);
 }
 
 @fragment
