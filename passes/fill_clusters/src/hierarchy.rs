@@ -112,7 +112,7 @@ use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
     Result, SetupContext, StageContract,
 };
-use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
 /// The implementation name pipelines use.
 pub const IMPLEMENTATION: &str = "hierarchy";
@@ -160,21 +160,14 @@ const LISTS: &str = "subtrees";
 /// (`candidate_nodes`) against this frame's pyramid and drops what is still hidden.
 pub use meshlight_gpu_scene::Phase as Mode;
 
-/// The variant of hierarchy.wgsl a pass runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub struct WalkDefs {
-    /// `OCCLUSION`: a pyramid is bound and tested per node.
-    pub occlusion: bool,
-    /// `SECOND_PASS`: [`Mode::Second`].
-    pub second: bool,
-}
-
-impl ShaderDefs for WalkDefs {
-    fn shader_defs(&self) -> Vec<(&'static str, ShaderDef)> {
-        vec![
-            ("OCCLUSION", ShaderDef::Bool(self.occlusion)),
-            ("SECOND_PASS", ShaderDef::Bool(self.second)),
-        ]
+shader_defs! {
+    /// The variant of hierarchy.wgsl a pass runs.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub struct WalkDefs {
+        /// A pyramid is bound and tested per node.
+        pub occlusion: bool => "OCCLUSION",
+        /// [`Mode::Second`].
+        pub second: bool => "SECOND_PASS",
     }
 }
 

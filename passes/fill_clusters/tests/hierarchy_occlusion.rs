@@ -20,7 +20,7 @@ use meshlight_pass_fill_clusters::{
 };
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
-use meshlight_testing::write_pyramid;
+use meshlight_testing::{texture, write_pyramid};
 use support::run::words;
 use support::scenes::field;
 use support::*;
@@ -143,20 +143,7 @@ fn run_second_walk(
     let nodes_buffer = gpu.buffer_with_data("node_list", bytemuck::cast_slice(&node_words), USAGE);
     let n = nodes.len() as u32;
     let count_buffer = gpu.buffer_with_data("node_count", bytemuck::cast_slice(&[n, n]), USAGE);
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("pyramid_now"),
-        size: wgpu::Extent3d {
-            width: desc.width,
-            height: desc.height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: levels,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::R32Float,
-        usage,
-        view_formats: &[],
-    });
+    let texture = texture(&gpu, "pyramid_now", &desc, usage);
     write_pyramid(&gpu.queue, &texture, pyramid);
     let mut exec = Executor::new(gpu);
     let imports = scene
