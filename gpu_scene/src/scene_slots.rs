@@ -1,10 +1,14 @@
 //! The GPU scene's buffers as a stage reads them: one slot description per buffer, so
 //! every contract that reads the scene declares the same slots, and none declares
 //! `instances` without the optional `instances_high` that `instance_at` may read.
+//!
+//! The WGSL side is the shared modules `meshlight::scene_buffers` and
+//! `meshlight::instance_table`, whose globals carry these slot names, so a shader that
+//! imports them binds these slots with no layout written by hand.
 
 use crate::gpu::elements;
 use crate::{instance_table, names};
-use meshlight_graph::{Access, Element, Slot};
+use meshlight_graph::{Element, Slot};
 
 /// A buffer of the GPU scene that a stage reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,7 +45,7 @@ impl SceneBuffer {
                 "the scene's materials",
             ),
         };
-        Slot::buffer(name, Access::StorageRead, element, doc)
+        Slot::read(name, element, doc)
     }
 }
 

@@ -158,6 +158,10 @@ const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
         "instance_table::instance_at(instance_table::instance_total())",
     ),
     (
+        "meshlight::scene_buffers",
+        "arrayLength(&scene_buffers::payload)",
+    ),
+    (
         "meshlight::occlusion",
         "occlusion::occlusion_level(vec4(0u, 0u, 5u, 9u))",
     ),

@@ -19,6 +19,7 @@
 #import meshlight::meshlet::{Meshlet, MeshletGroup, Cluster, meshlet_bounds, meshlet_triangle_count, lod_cut, MESHLET_NO_GROUP}
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
 #import meshlight::instance_table::instance_at
+#import meshlight::scene_buffers::{meshlets, meshlet_groups}
 #import meshlight::view::{View, sphere_in_frustum}
 #ifdef OCCLUSION
 #import meshlight::occlusion::{occlusion_rect, sphere_occluded}
@@ -46,10 +47,8 @@ struct Params {
 @group(0) @binding(0) var<storage, read> clusters: array<Cluster>;
 // [0]: how many of `clusters` are valid.
 @group(0) @binding(1) var<storage, read> cluster_count: array<u32>;
-// The scene's meshlets and simplification groups; its instances through `instance_at`
-// (meshlight::instance_table, bindings 30 and 31).
-@group(0) @binding(3) var<storage, read> meshlets: array<Meshlet>;
-@group(0) @binding(4) var<storage, read> meshlet_groups: array<MeshletGroup>;
+// The scene's meshlets and simplification groups (meshlight::scene_buffers); its
+// instances through `instance_at` (meshlight::instance_table).
 // Software clusters in slots 0, 1, …; hardware clusters in slots C-1, C-2, ….
 @group(0) @binding(5) var<storage, read_write> raster_clusters: array<Cluster>;
 // The eight count words of the contract (see lib.rs).

@@ -8,6 +8,7 @@
 #import meshlight::meshlet::{Mesh, Cluster}
 #import meshlight::instance::{Instance, instance_transform_sphere}
 #import meshlight::instance_table::{instance_at, instance_total}
+#import meshlight::scene_buffers::meshes
 #import meshlight::view::{View, sphere_in_frustum}
 
 struct Params {
@@ -20,9 +21,8 @@ struct Params {
     _pad: u32,
 }
 
-// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
-// The scene's meshes, for each instance's bounding sphere.
-@group(0) @binding(1) var<storage, read> meshes: array<Mesh>;
+// The instances (`instance_at`, meshlight::instance_table) and the scene's meshes, for
+// each instance's bounding sphere (meshlight::scene_buffers).
 // The cluster list: written below the capacity only.
 @group(0) @binding(2) var<storage, read_write> clusters: array<Cluster>;
 // [0] clusters written = min(requested, capacity), [1] clusters requested.

@@ -37,7 +37,11 @@ struct Params {
 @group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
 // Word 1: hardware cluster count; word 3: C, the slot capacity.
 @group(0) @binding(1) var<storage, read> raster_counts: array<u32>;
-// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
+// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31). The
+// scene's other buffers are declared here rather than imported from
+// meshlight::scene_buffers: naga_oil 0.23 keeps a mesh entry point's output-variable
+// handle from the source when it composes, so `raster_ms` validates only while importing
+// adds no globals ahead of `mesh_out`.
 @group(0) @binding(3) var<storage, read> meshes: array<Mesh>;
 @group(0) @binding(4) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(5) var<storage, read> payload: array<u32>;

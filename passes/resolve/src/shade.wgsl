@@ -8,6 +8,7 @@
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv, meshlet_triangle_location, meshlet_triangle}
 #import meshlight::instance::{Instance, Material, instance_transform_normal}
 #import meshlight::instance_table::instance_at
+#import meshlight::scene_buffers::{meshes, meshlets, payload, materials}
 #import meshlight::view::View
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
 #import resolve::visibility::{raster_clusters, visibility_at}
@@ -64,11 +65,8 @@ struct Params {
 // Bindings 0 and 1: the visibility buffer and `raster_clusters` (resolve::visibility).
 // Word 0: software clusters; ids below it were drawn in software.
 @group(0) @binding(2) var<storage, read> raster_counts: array<u32>;
-// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
-@group(0) @binding(4) var<storage, read> meshes: array<Mesh>;
-@group(0) @binding(5) var<storage, read> meshlets: array<Meshlet>;
-@group(0) @binding(6) var<storage, read> payload: array<u32>;
-@group(0) @binding(7) var<storage, read> materials: array<Material>;
+// The scene's instances, meshes, meshlets, payload and materials:
+// meshlight::instance_table and meshlight::scene_buffers.
 @group(0) @binding(8) var color: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(9) var<uniform> view: View;
 @group(0) @binding(10) var<uniform> params: Params;

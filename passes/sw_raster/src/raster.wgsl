@@ -23,6 +23,7 @@
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle}
 #import meshlight::instance::Instance
 #import meshlight::instance_table::instance_at
+#import meshlight::scene_buffers::{meshes, meshlets, payload}
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
 
@@ -45,10 +46,8 @@ struct Params {
 @group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
 @group(0) @binding(1) var<storage, read> raster_counts: array<u32>;
 @group(0) @binding(2) var<storage, read> sw_args: array<u32>;
-// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
-@group(0) @binding(4) var<storage, read> meshes: array<Mesh>;
-@group(0) @binding(5) var<storage, read> meshlets: array<Meshlet>;
-@group(0) @binding(6) var<storage, read> payload: array<u32>;
+// The scene's instances, meshes, meshlets and payload: meshlight::instance_table and
+// meshlight::scene_buffers.
 #ifdef VIS_TEXTURE
 // `texture`: an R64Uint storage texture with 64-bit texture atomics.
 @group(0) @binding(7) var visbuffer: texture_storage_2d<r64uint, atomic>;

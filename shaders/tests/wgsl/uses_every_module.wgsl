@@ -7,21 +7,17 @@
 #import meshlight::octahedral::{pack_octahedral_normal, unpack_octahedral_normal}
 #import meshlight::meshlet::{Meshlet, MeshletGroup, Mesh, Cluster, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, meshlet_triangle_location, meshlet_triangle, meshlet_bounds, meshlet_level, lod_cut}
 #import meshlight::instance_table::{instance_at, instance_total}
+#import meshlight::scene_buffers::{meshes, meshlets, meshlet_groups, payload, materials}
 #import meshlight::instance::{Instance, Material, instance_transform_point, instance_transform_normal, instance_transform_sphere, instance_max_scale}
 #import meshlight::visbuffer::{visbuffer_pack, visbuffer_depth, visbuffer_cluster, visbuffer_triangle, visbuffer_nearer, visbuffer_is_empty}
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_index, cluster_of_pixel, z_slice_of_depth}
 #import meshlight::froxel::{view_object, froxel_aabb, froxel_rect, rect_is_empty, object_touches_froxel}
 
 @group(0) @binding(0) var<uniform> view: View;
-@group(0) @binding(1) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(2) var<storage, read> clusters: array<Cluster>;
-@group(0) @binding(4) var<storage, read> words: array<u32>;
 @group(0) @binding(5) var<uniform> grid: ClusterGrid;
 @group(0) @binding(6) var<storage, read> objects: array<ClusterableObject>;
 @group(0) @binding(7) var<storage, read_write> out: array<vec4<f32>>;
-@group(0) @binding(8) var<storage, read> meshes: array<Mesh>;
-@group(0) @binding(9) var<storage, read> groups: array<MeshletGroup>;
-@group(0) @binding(10) var<storage, read> materials: array<Material>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -33,19 +29,19 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     var offset = vec3(0u);
     for (var axis = 0u; axis < 3u; axis += 1u) {
         let at = meshlet_vertex_field(meshlet, id.y, axis);
-        offset[axis] = math::read_bits(vec2(words[at.x], words[at.x + 1u]), at.y, at.z);
+        offset[axis] = math::read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
     }
     let local = meshlet_position(meshlet, mesh.position_grid, offset);
     let nx = meshlet_vertex_field(meshlet, id.y, 3u);
     let ny = meshlet_vertex_field(meshlet, id.y, 4u);
     let mesh_normal = meshlet_normal(meshlet, vec2(
-        math::read_bits(vec2(words[nx.x], words[nx.x + 1u]), nx.y, nx.z),
-        math::read_bits(vec2(words[ny.x], words[ny.x + 1u]), ny.y, ny.z)));
-    let uv = meshlet_uv(mesh.uv_grid, words[meshlet_uv_word(meshlet) + id.y]);
+        math::read_bits(vec2(payload[nx.x], payload[nx.x + 1u]), nx.y, nx.z),
+        math::read_bits(vec2(payload[ny.x], payload[ny.x + 1u]), ny.y, ny.z)));
+    let uv = meshlet_uv(mesh.uv_grid, payload[meshlet_uv_word(meshlet) + id.y]);
     let world = instance_transform_point(instance, local);
     let at = meshlet_triangle_location(meshlet, mesh.flags, id.z);
-    let index = meshlet_triangle(meshlet, id.z, vec2(words[at.x], words[at.x + 1u]), at.y).y;
-    let group = groups[meshlet.source_group];
+    let index = meshlet_triangle(meshlet, id.z, vec2(payload[at.x], payload[at.x + 1u]), at.y).y;
+    let group = meshlet_groups[meshlet.source_group];
 
     let normal = unpack_octahedral_normal(pack_octahedral_normal(
         instance_transform_normal(instance, math::safe_normalize(world, vec3(0.0, 0.0, 1.0)))));

@@ -1,0 +1,18 @@
+#define_import_path meshlight::scene_buffers
+
+// The GPU scene's read-only buffers, declared once for every pass that reads them. A
+// shader imports the ones it uses; each binds the slot of its name (the contract's
+// `meshlight_gpu_scene::scene_reads`), so the numbers below only have to stay clear of
+// the importer's own: bindings 25 to 29 are these, as 30 and 31 are
+// meshlight::instance_table's.
+
+#import meshlight::meshlet::{Mesh, Meshlet, MeshletGroup}
+#import meshlight::instance::Material
+
+@group(0) @binding(25) var<storage, read> meshes: array<Mesh>;
+@group(0) @binding(26) var<storage, read> meshlets: array<Meshlet>;
+// The simplification groups, for each meshlet's LOD errors.
+@group(0) @binding(27) var<storage, read> meshlet_groups: array<MeshletGroup>;
+// The meshlets' packed vertices and triangles (`meshlet_vertex_field` and friends).
+@group(0) @binding(28) var<storage, read> payload: array<u32>;
+@group(0) @binding(29) var<storage, read> materials: array<Material>;
