@@ -13,7 +13,7 @@
 
 use crate::gpu::elements;
 use crate::names;
-use meshlight_graph::{Access, RecordContext, Result, SetupContext, ShaderDef, ShaderDefs, Slot};
+use meshlight_graph::{RecordContext, Result, SetupContext, ShaderDef, ShaderDefs, Slot};
 
 /// The optional second binding's slot (and the GPU scene's buffer of that name).
 pub const HIGH_SLOT: &str = names::INSTANCES_HIGH;
@@ -22,9 +22,8 @@ pub const HIGH_DEF: &str = "INSTANCES_HIGH";
 
 /// The optional `instances_high` slot, for a stage contract beside `instances`.
 pub fn high_slot() -> Slot {
-    Slot::buffer(
+    Slot::read(
         HIGH_SLOT,
-        Access::StorageRead,
         elements::INSTANCE,
         "the scene's instances past what one binding holds (bound only when the scene needs it)",
     )

@@ -60,6 +60,11 @@ impl Slot {
             optional: false,
         }
     }
+    /// A buffer slot the pass only reads (`Access::StorageRead`): most of a contract's
+    /// inputs.
+    pub fn read(name: &'static str, element: Element, doc: &'static str) -> Self {
+        Self::buffer(name, Access::StorageRead, element, doc)
+    }
     /// A texture slot, of `format` when one is required.
     pub fn texture(
         name: &'static str,

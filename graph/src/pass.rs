@@ -104,6 +104,18 @@ impl<'a> SetupContext<'a> {
     pub fn limits(&self) -> &wgpu::Limits {
         self.limits
     }
+    /// Checks a pass's `max_per_dimension` param, the workgroup limit per dimension its
+    /// dispatches are sized for: unset (the adapter's limit) or at most the adapter's
+    /// passes; a larger one is a parameter error naming the limit.
+    pub fn check_max_per_dimension(&self, asked: Option<u32>) -> Result<()> {
+        let limit = self.limits.max_compute_workgroups_per_dimension;
+        match asked {
+            Some(m) if m > limit => Err(crate::error::GraphError::parameter(format!(
+                "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
+            ))),
+            _ => Ok(()),
+        }
+    }
     /// The value of a size parameter at compile time.
     pub fn param(&self, name: &str) -> Option<u64> {
         self.params.iter().find(|(n, _)| n == name).map(|(_, v)| *v)

@@ -132,6 +132,14 @@ impl<'a> RecordContext<'a> {
     pub fn device(&self) -> &wgpu::Device {
         self.device
     }
+    /// The workgroup limit per dimension to size dispatches for: a pass's
+    /// `max_per_dimension` when set (checked at setup by
+    /// [`SetupContext::check_max_per_dimension`](crate::SetupContext::check_max_per_dimension)),
+    /// else the adapter's; never above the adapter's.
+    pub fn max_per_dimension(&self, asked: Option<u32>) -> u32 {
+        let limit = self.device.limits().max_compute_workgroups_per_dimension;
+        asked.unwrap_or(limit).min(limit)
+    }
     /// The queue, to upload per-frame data before the frame is submitted.
     pub fn queue(&self) -> &wgpu::Queue {
         self.queue

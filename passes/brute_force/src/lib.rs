@@ -81,9 +81,8 @@ pub fn contract() -> StageContract {
     StageContract {
         stage: STAGE,
         slots: vec![
-            Slot::buffer(
+            Slot::read(
                 "positions",
-                Access::StorageRead,
                 Element::VEC4_F32,
                 "mesh-space LOD-0 positions, w ignored",
             ),
@@ -93,12 +92,7 @@ pub fn contract() -> StageContract {
                 Element::U32,
                 "three per triangle, counter-clockwise front faces",
             ),
-            Slot::buffer(
-                "instances",
-                Access::StorageRead,
-                elements::INSTANCE,
-                "the scene's instances",
-            ),
+            Slot::read("instances", elements::INSTANCE, "the scene's instances"),
             Slot::texture(
                 "depth",
                 Access::DepthTarget,

@@ -87,15 +87,14 @@ pub const WALK_MODULES: &[LocalModule] = SHADER.modules;
 /// The slots through which a walking stage reads z_slice's instances: `count_raster`'s,
 /// and `populate`'s, which walks the same instances.
 pub fn instance_slots() -> Vec<Slot> {
-    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     vec![
-        read("objects", CLUSTERABLE_OBJECT, "lights, probes and decals"),
-        read(
+        Slot::read("objects", CLUSTERABLE_OBJECT, "lights, probes and decals"),
+        Slot::read(
             "slice_instances",
             SLICE_INSTANCE,
             "z_slice's (object, slice) list",
         ),
-        read("slice_counts", Element::U32, "[0] requested, [1] capacity"),
+        Slot::read("slice_counts", Element::U32, "[0] requested, [1] capacity"),
         Slot::buffer(
             "slice_draw_args",
             Access::Indirect,
@@ -108,7 +107,7 @@ pub fn instance_slots() -> Vec<Slot> {
             Element::DISPATCH_ARGS,
             "a workgroup per 64 instances (compute)",
         ),
-        read("cluster_grid", CLUSTER_GRID, "the grid z_slice published"),
+        Slot::read("cluster_grid", CLUSTER_GRID, "the grid z_slice published"),
     ]
 }
 

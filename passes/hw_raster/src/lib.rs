@@ -97,17 +97,16 @@ pub const MESH_SHADER_SOURCE: PassShader = PassShader {
 
 /// The slots every implementation of `hw_raster` shares.
 pub fn contract() -> StageContract {
-    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     StageContract {
         stage: STAGE,
         slots: [
             vec![
-            read(
+            Slot::read(
                 "raster_clusters",
                 elements::CLUSTER,
                 "hardware clusters from the right end",
             ),
-            read(
+            Slot::read(
                 "raster_counts",
                 Element::U32,
                 "word 1: hardware clusters, word 3: the slot capacity C",

@@ -78,17 +78,16 @@ pub const SHADER: PassShader = PassShader {
 
 /// The slots every implementation of `populate` shares.
 pub fn contract() -> StageContract {
-    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     let mut slots = meshlight_pass_count_raster::instance_slots();
     slots.extend([
-        read("cluster_offsets", Element::U32, "where each list starts"),
+        Slot::read("cluster_offsets", Element::U32, "where each list starts"),
         Slot::buffer(
             "cluster_counts",
             Access::StorageReadWrite,
             Element::U32,
             "in: counted; out: entries each list holds",
         ),
-        read("list_total", Element::U32, "[0]: entries needed"),
+        Slot::read("list_total", Element::U32, "[0]: entries needed"),
         Slot::buffer(
             "cluster_objects",
             Access::StorageWrite,

@@ -23,8 +23,8 @@
 
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
-    SetupContext, Slot, StageContract,
+    Access, BindingLayout, Element, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
+    StageContract,
 };
 use meshlight_shaders::{PassShader, pass_shader};
 
@@ -38,9 +38,8 @@ pub fn contract() -> StageContract {
     StageContract {
         stage: STAGE,
         slots: vec![
-            Slot::buffer(
+            Slot::read(
                 "count",
-                Access::StorageRead,
                 Element::U32,
                 "the workgroup count, at word `count_word`, written by an earlier pass",
             ),
@@ -100,14 +99,7 @@ impl Pass for RemapDispatch {
         "single_thread"
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        let limit = ctx.limits().max_compute_workgroups_per_dimension;
-        if let Some(m) = self.max_per_dimension
-            && m > limit
-        {
-            return Err(GraphError::parameter(format!(
-                "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
-            )));
-        }
+        ctx.check_max_per_dimension(self.max_per_dimension)?;
         ctx.min_bytes("count", (self.count_word as u64 + 1) * 4);
         ctx.min_bytes("args", 12);
         let layout = BindingLayout::from_shader("remap_dispatch");
@@ -118,10 +110,9 @@ impl Pass for RemapDispatch {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
         let params = GpuParams {
             count_word: self.count_word,
-            max_per_dimension: self.max_per_dimension.unwrap_or(limit).min(limit),
+            max_per_dimension: ctx.max_per_dimension(self.max_per_dimension),
             _pad: [0; 2],
         };
         let program = ctx.compute("remap")?;

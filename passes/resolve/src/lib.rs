@@ -182,7 +182,6 @@ pub fn material_depth(material: u32) -> f32 {
 
 /// The slots every implementation of `resolve` shares.
 pub fn contract() -> StageContract {
-    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     StageContract {
         stage: STAGE,
         slots: [
@@ -192,12 +191,12 @@ pub fn contract() -> StageContract {
                 Access::StorageRead,
                 "width × height visibility values from the rasterisers (u64 buffer or r64uint texture)",
             ),
-            read(
+            Slot::read(
                 "raster_clusters",
                 elements::CLUSTER,
                 "the slots visibility ids index",
             ),
-            read(
+            Slot::read(
                 "raster_counts",
                 Element::U32,
                 "word 0: software clusters (ids below it)",
@@ -225,21 +224,21 @@ pub fn contract() -> StageContract {
                 Some(COLOR_FORMAT),
                 "shaded colour or a debug view",
             ),
-            read("objects", CLUSTERABLE_OBJECT, "light clustering's objects").optional(),
-            read("cluster_grid", CLUSTER_GRID, "the froxel grid").optional(),
-            read(
+            Slot::read("objects", CLUSTERABLE_OBJECT, "light clustering's objects").optional(),
+            Slot::read("cluster_grid", CLUSTER_GRID, "the froxel grid").optional(),
+            Slot::read(
                 "cluster_offsets",
                 Element::U32,
                 "per froxel and kind: list start",
             )
             .optional(),
-            read(
+            Slot::read(
                 "cluster_counts",
                 Element::U32,
                 "per froxel and kind: list length",
             )
             .optional(),
-            read("cluster_objects", Element::U32, "the lists: object indices").optional(),
+            Slot::read("cluster_objects", Element::U32, "the lists: object indices").optional(),
             Slot::texture(
                 "pyramid",
                 Access::Sampled,
@@ -247,13 +246,13 @@ pub fn contract() -> StageContract {
                 "a reverse-Z min-depth pyramid (mip L: ⌈size / 2^(L+1)⌉), for the `pyramid` view",
             )
             .optional(),
-            read(
+            Slot::read(
                 SECOND_COUNTS,
                 Element::U32,
                 "the second culling pass's raster_counts ([3], [7]), for the `occlusion` view",
             )
             .optional(),
-            read(
+            Slot::read(
                 OCCLUDED_PER_INSTANCE,
                 Element::U32,
                 "per instance: [2i] clusters in the LOD cut, [2i+1] left hidden, for the `occlusion` view",

@@ -102,7 +102,7 @@ pub fn contract() -> StageContract {
     StageContract {
         stage: STAGE,
         slots: vec![
-            Slot::buffer("input", Access::StorageRead, Element::U32, "counts to scan; at least `count` elements"),
+            Slot::read("input", Element::U32, "counts to scan; at least `count` elements"),
             Slot::buffer(
                 "output",
                 Access::StorageWrite,
@@ -110,10 +110,7 @@ pub fn contract() -> StageContract {
                 "prefix sums (exclusive unless `inclusive`); elements past the count are left untouched",
             ),
             Slot::buffer("total", Access::StorageWrite, Element::U32, "total[0] = sum of all counted inputs, modulo 2^32").optional(),
-            Slot::buffer(
-                "count",
-                Access::StorageRead,
-                Element::U32,
+            Slot::read("count", Element::U32,
                 "count[0] = elements to scan, from an earlier pass; clamped to the `count` parameter, dispatches become indirect",
             )
             .optional(),

@@ -112,22 +112,21 @@ const CLEAR_TILE: u32 = 16;
 
 /// The slots every implementation of `sw_raster` shares.
 pub fn contract() -> StageContract {
-    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     StageContract {
         stage: STAGE,
         slots: [
             vec![
-            read(
+            Slot::read(
                 "raster_clusters",
                 elements::CLUSTER,
                 "software clusters first",
             ),
-            read(
+            Slot::read(
                 "raster_counts",
                 meshlight_graph::Element::U32,
                 "word 0: software cluster count",
             ),
-            read(
+            Slot::read(
                 "sw_args",
                 meshlight_graph::Element::DISPATCH_ARGS,
                 "[x, y, 1] over the software clusters",
