@@ -158,6 +158,25 @@ pub fn parameter_message<T>(result: Result<T>) -> String {
     }
 }
 
+/// Checks a pass's params as `parse` reads them (from a pipeline file, or `from_params`):
+/// each of `accepted` parses, and each `(text, key)` of `refused` is a parameter error
+/// whose message names `key`.
+pub fn assert_params<T>(
+    parse: impl Fn(&str) -> Result<T>,
+    accepted: &[&str],
+    refused: &[(&str, &str)],
+) {
+    for text in accepted {
+        if let Err(e) = parse(text) {
+            panic!("`{text}` was refused: {e}");
+        }
+    }
+    for (text, key) in refused {
+        let message = parameter_message(parse(text));
+        assert!(message.contains(key), "`{text}`: {message}");
+    }
+}
+
 /// What test buffers are made with: bound as storage, filled, read back, and usable as
 /// indirect arguments, so one constant serves every pass's buffers.
 pub const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE

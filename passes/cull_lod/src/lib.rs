@@ -180,13 +180,12 @@ pub const SHADER: PassShader = pass_shader!("cull_lod::cull", "cull.wgsl");
 
 /// The slots every implementation of `cull_lod` shares.
 pub fn contract() -> StageContract {
-    let read = |name, element, doc| Slot::buffer(name, Access::StorageRead, element, doc);
     StageContract {
         stage: STAGE,
         slots: [
             vec![
-                read("clusters", elements::CLUSTER, "candidate clusters"),
-                read(
+                Slot::read("clusters", elements::CLUSTER, "candidate clusters"),
+                Slot::read(
                     "cluster_count",
                     Element::U32,
                     "[0]: valid entries of `clusters`",
@@ -233,7 +232,7 @@ pub fn contract() -> StageContract {
                 "first pass: [0] candidates written, [1] found",
             )
             .optional(),
-            read(
+            Slot::read(
                 "first_counts",
                 Element::U32,
                 "second pass: the first pass's raster_counts",
@@ -246,13 +245,13 @@ pub fn contract() -> StageContract {
                 "first pass: per instance [2i] clusters in the LOD cut, [2i+1] found hidden",
             )
             .optional(),
-            read(
+            Slot::read(
                 WALKED_SLOT,
                 elements::CLUSTER,
                 "second pass: the second hierarchy walk's clusters, tested after `clusters`",
             )
             .optional(),
-            read(
+            Slot::read(
                 WALKED_COUNT_SLOT,
                 Element::U32,
                 "second pass: the second walk's cluster_count",
@@ -434,14 +433,7 @@ impl Pass for CullLod {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.check_thresholds()?;
-        let limit = ctx.limits().max_compute_workgroups_per_dimension;
-        if let Some(m) = self.max_per_dimension
-            && m > limit
-        {
-            return Err(GraphError::parameter(format!(
-                "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
-            )));
-        }
+        ctx.check_max_per_dimension(self.max_per_dimension)?;
         let occlusion = self.check_mode(ctx)?;
         let second = self.mode == Mode::Second;
         let per_instance = self.per_instance_slot(ctx, occlusion)?;
@@ -519,10 +511,9 @@ impl Pass for CullLod {
                     ctx.history_valid("pyramid")? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
                 }
             };
-        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
         let params = GpuParams {
             capacity: self.capacity.unwrap_or(u32::MAX),
-            max_per_dimension: self.max_per_dimension.unwrap_or(limit).min(limit),
+            max_per_dimension: ctx.max_per_dimension(self.max_per_dimension),
             lod_threshold_px: self.thresholds.lod_threshold_px,
             sw_threshold_px: self.thresholds.sw_threshold_px,
             hardware: self.thresholds.hardware as u32,
@@ -616,32 +607,24 @@ mod tests {
 
     #[test]
     fn params_parse_integers_floats_and_the_mode() {
-        for ok in [
-            "",
-            "lod_threshold_px = 2",
-            "lod_threshold_px = 0.5, sw_threshold_px = 16.0, mode = \"first\"",
-            "capacity = 100, max_per_dimension = 7",
-        ] {
-            if let Err(e) = pipeline(ok) {
-                panic!("{ok}: {e}");
-            }
-        }
-        for (bad, key) in [
-            ("lod_treshold_px = 1.0", "lod_treshold_px"),
-            ("lod_threshold_px = -1.0", "lod_threshold_px"),
-            ("sw_threshold_px = nan", "sw_threshold_px"),
-            ("sw_threshold_px = true", "sw_threshold_px"),
-            ("mode = \"third\"", "mode"),
-            ("capacity = 1.5", "capacity"),
-            ("hardware = 1", "hardware"),
-        ] {
-            match pipeline(bad) {
-                Err(GraphError::Parameter { message, .. }) => {
-                    assert!(message.contains(key), "{bad}: {message}")
-                }
-                other => panic!("{bad}: {:?}", other.err()),
-            }
-        }
+        meshlight_testing::assert_params(
+            pipeline,
+            &[
+                "",
+                "lod_threshold_px = 2",
+                "lod_threshold_px = 0.5, sw_threshold_px = 16.0, mode = \"first\"",
+                "capacity = 100, max_per_dimension = 7",
+            ],
+            &[
+                ("lod_treshold_px = 1.0", "lod_treshold_px"),
+                ("lod_threshold_px = -1.0", "lod_threshold_px"),
+                ("sw_threshold_px = nan", "sw_threshold_px"),
+                ("sw_threshold_px = true", "sw_threshold_px"),
+                ("mode = \"third\"", "mode"),
+                ("capacity = 1.5", "capacity"),
+                ("hardware = 1", "hardware"),
+            ],
+        );
     }
 
     #[test]

@@ -105,17 +105,11 @@ pub fn contract() -> StageContract {
     StageContract {
         stage: STAGE,
         slots: vec![
-            Slot::buffer(
-                "instances",
-                Access::StorageRead,
-                elements::INSTANCE,
+            Slot::read("instances", elements::INSTANCE,
                 "the scene's instances",
             ),
             instance_table::high_slot(),
-            Slot::buffer(
-                "meshes",
-                Access::StorageRead,
-                elements::MESH,
+            Slot::read("meshes", elements::MESH,
                 "the scene's meshes (bounding spheres)",
             ),
             Slot::buffer(
@@ -130,24 +124,15 @@ pub fn contract() -> StageContract {
                 Element::U32,
                 "[0] clusters written = min(requested, capacity), [1] clusters requested",
             ),
-            Slot::buffer(
-                "hierarchy_nodes",
-                Access::StorageRead,
-                elements::HIERARCHY_NODE,
+            Slot::read("hierarchy_nodes", elements::HIERARCHY_NODE,
                 "the scene's culling-hierarchy nodes (implementation `hierarchy`)",
             )
             .optional(),
-            Slot::buffer(
-                "hierarchy_clusters",
-                Access::StorageRead,
-                Element::U32,
+            Slot::read("hierarchy_clusters", Element::U32,
                 "the hierarchy leaves' meshlets (implementation `hierarchy`)",
             )
             .optional(),
-            Slot::buffer(
-                "hierarchy_roots",
-                Access::StorageRead,
-                Element::U32,
+            Slot::read("hierarchy_roots", Element::U32,
                 "per mesh, its hierarchy's root node (implementation `hierarchy`)",
             )
             .optional(),
@@ -189,17 +174,11 @@ pub fn hierarchy_contract() -> StageContract {
                 "first pass: [0] hidden nodes written, [1] found",
             )
             .optional(),
-            Slot::buffer(
-                CANDIDATE_NODES_SLOT,
-                Access::StorageRead,
-                HIDDEN_NODE,
+            Slot::read(CANDIDATE_NODES_SLOT, HIDDEN_NODE,
                 "second pass: the first pass's hidden nodes, where the walk starts",
             )
             .optional(),
-            Slot::buffer(
-                CANDIDATE_NODE_COUNT_SLOT,
-                Access::StorageRead,
-                Element::U32,
+            Slot::read(CANDIDATE_NODE_COUNT_SLOT, Element::U32,
                 "second pass: the first pass's hidden-node count",
             )
             .optional(),
@@ -417,16 +396,10 @@ params = {{ {params} }}
             );
             meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry).map(|_| ())
         };
-        if let Err(e) = pipeline("capacity = 10, instance_count = 3") {
-            panic!("{e}");
-        }
-        for (params, key) in [("capcity = 10", "capcity"), ("capacity = -1", "capacity")] {
-            match pipeline(params) {
-                Err(GraphError::Parameter { message, .. }) => {
-                    assert!(message.contains(key), "{message}")
-                }
-                other => panic!("{params}: {:?}", other.err()),
-            }
-        }
+        meshlight_testing::assert_params(
+            pipeline,
+            &["capacity = 10, instance_count = 3"],
+            &[("capcity = 10", "capcity"), ("capacity = -1", "capacity")],
+        );
     }
 }

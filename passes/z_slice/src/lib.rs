@@ -110,15 +110,9 @@ pub fn contract() -> StageContract {
     StageContract {
         stage: STAGE,
         slots: vec![
-            Slot::buffer(
-                "objects",
-                Access::StorageRead,
-                CLUSTERABLE_OBJECT,
-                "lights, probes and decals",
-            ),
-            Slot::buffer(
+            Slot::read("objects", CLUSTERABLE_OBJECT, "lights, probes and decals"),
+            Slot::read(
                 "object_count",
-                Access::StorageRead,
                 Element::U32,
                 "[0]: valid entries of `objects`",
             ),
@@ -308,14 +302,7 @@ impl Pass for ZSlice {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.check()?;
-        let limit = ctx.limits().max_compute_workgroups_per_dimension;
-        if let Some(m) = self.max_per_dimension
-            && m > limit
-        {
-            return Err(GraphError::parameter(format!(
-                "`max_per_dimension` = {m} is above the adapter's limit of {limit}; leave it out to use the limit"
-            )));
-        }
+        ctx.check_max_per_dimension(self.max_per_dimension)?;
         ctx.min_bytes("object_count", 4);
         ctx.min_bytes("slice_counts", 4 * cpu::COUNT_WORDS as u64);
         ctx.min_bytes("slice_draw_args", 16);
@@ -343,8 +330,7 @@ impl Pass for ZSlice {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
         let [w, h] = view.viewport_size;
         let grid = self.grid([w as u32, h as u32]);
-        let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
-        let max_per_dimension = self.max_per_dimension.unwrap_or(limit).min(limit);
+        let max_per_dimension = ctx.max_per_dimension(self.max_per_dimension);
         let params = GpuParams {
             capacity: self.capacity.unwrap_or(u32::MAX),
             max_per_dimension,
@@ -459,38 +445,30 @@ mod tests {
 
     #[test]
     fn params_parse_and_bad_ones_name_what_to_change() {
-        for ok in [
-            "",
-            "width = 32, height = 18, depth = 32",
-            "first_slice_end = 2, far = 500.5",
-            "capacity = 100, quad_vertices = 6, max_per_dimension = 7",
-            "depth = 1",
-        ] {
-            if let Err(e) = pipeline(ok) {
-                panic!("{ok}: {e}");
-            }
-        }
-        for (bad, key) in [
-            ("widht = 16", "widht"),
-            ("width = 0", "width"),
-            ("height = 0", "height"),
-            ("depth = 0", "depth"),
-            ("width = 65536, height = 65536, depth = 2", "width"),
-            ("first_slice_end = 0", "first_slice_end"),
-            ("first_slice_end = nan", "first_slice_end"),
-            ("far = 4.0", "far"),
-            ("far = inf", "far"),
-            ("far = \"x\"", "far"),
-            ("quad_vertices = 3", "quad_vertices"),
-            ("capacity = 1.5", "capacity"),
-        ] {
-            match pipeline(bad) {
-                Err(GraphError::Parameter { message, .. }) => {
-                    assert!(message.contains(key), "{bad}: {message}")
-                }
-                other => panic!("{bad}: {:?}", other.err()),
-            }
-        }
+        meshlight_testing::assert_params(
+            pipeline,
+            &[
+                "",
+                "width = 32, height = 18, depth = 32",
+                "first_slice_end = 2, far = 500.5",
+                "capacity = 100, quad_vertices = 6, max_per_dimension = 7",
+                "depth = 1",
+            ],
+            &[
+                ("widht = 16", "widht"),
+                ("width = 0", "width"),
+                ("height = 0", "height"),
+                ("depth = 0", "depth"),
+                ("width = 65536, height = 65536, depth = 2", "width"),
+                ("first_slice_end = 0", "first_slice_end"),
+                ("first_slice_end = nan", "first_slice_end"),
+                ("far = 4.0", "far"),
+                ("far = inf", "far"),
+                ("far = \"x\"", "far"),
+                ("quad_vertices = 3", "quad_vertices"),
+                ("capacity = 1.5", "capacity"),
+            ],
+        );
     }
 
     #[test]
