@@ -35,24 +35,10 @@ install_hint="install Mesa's Vulkan drivers (lavapipe runs on any CPU), e.g.
   sudo pacman -S vulkan-swrast                  (Arch)
 or point VK_DRIVER_FILES at an ICD manifest (*.json) of an installed driver"
 
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then
-  if command -v sudo >/dev/null 2>&1; then
-    sudo="sudo"
-  else
-    echo "error: no Vulkan driver found (no *.json in ${icd_dirs//:/, }), and installing one needs root or sudo." >&2
-    echo "$install_hint" >&2
-    exit 2
-  fi
-fi
-if ! command -v apt-get >/dev/null 2>&1; then
-  echo "error: no Vulkan driver found (no *.json in ${icd_dirs//:/, }), and apt-get is not available here." >&2
-  echo "$install_hint" >&2
-  exit 2
-fi
-echo "no Vulkan driver found: installing Mesa's lavapipe (mesa-vulkan-drivers)" >&2
-$sudo apt-get update -qq
-$sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq mesa-vulkan-drivers >/dev/null
+here="${BASH_SOURCE[0]%/*}"
+[ "$here" = "${BASH_SOURCE[0]}" ] && here=.
+source "$here/apt-install.sh"
+apt_install "no Vulkan driver found (no *.json in ${icd_dirs//:/, })" mesa-vulkan-drivers "$install_hint"
 if ! driver_found; then
   echo "error: mesa-vulkan-drivers was installed but no ICD manifest appeared in ${icd_dirs//:/, }" >&2
   exit 2

@@ -15,24 +15,10 @@ install_hint="install Xvfb, e.g.
   sudo pacman -S xorg-server-xvfb              (Arch)"
 
 if ! command -v Xvfb >/dev/null 2>&1; then
-  sudo=""
-  if [ "$(id -u)" -ne 0 ]; then
-    if command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
-      sudo="sudo"
-    else
-      echo "error: Xvfb is not installed, and installing it needs root or sudo." >&2
-      echo "$install_hint" >&2
-      exit 2
-    fi
-  fi
-  if ! command -v apt-get >/dev/null 2>&1; then
-    echo "error: Xvfb is not installed, and apt-get is not available here." >&2
-    echo "$install_hint" >&2
-    exit 2
-  fi
-  echo "Xvfb not found: installing it (xvfb)" >&2
-  $sudo apt-get update -qq
-  $sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq xvfb >/dev/null
+  here="${BASH_SOURCE[0]%/*}"
+  [ "$here" = "${BASH_SOURCE[0]}" ] && here=.
+  source "$here/apt-install.sh"
+  apt_install "Xvfb is not installed" xvfb "$install_hint"
   if ! command -v Xvfb >/dev/null 2>&1; then
     echo "error: xvfb was installed but no Xvfb is on PATH" >&2
     exit 2

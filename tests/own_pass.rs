@@ -23,7 +23,7 @@ impl Pass for Double {
         StageContract {
             stage: "double",
             slots: vec![
-                Slot::buffer("input", Access::StorageRead, Element::U32, "values"),
+                Slot::read("input", Element::U32, "values"),
                 Slot::buffer("output", Access::StorageWrite, Element::U32, "doubled"),
             ],
         }

@@ -31,6 +31,7 @@ pub mod data;
 pub mod error;
 pub mod gpu;
 pub mod instance_table;
+pub mod lattice;
 pub mod phase;
 pub mod scene_slots;
 pub mod view;

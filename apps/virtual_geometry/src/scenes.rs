@@ -2,6 +2,7 @@
 //! once and cached, or read from an asset file) and instances placed.
 
 use glam::{Mat4, Quat, Vec3};
+use meshlight::gpu_scene::lattice::Lattice;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData};
 use meshlight::scene::asset::format;
 use meshlight::scene::cache::{self, BakeProgress, Source};
@@ -258,22 +259,17 @@ pub fn lattice(
 ) -> Result<Placed, meshlight::gpu_scene::SceneDataError> {
     let materials = palette(&mut data);
     let mesh = data.add_mesh("mesh", asset)?;
-    let radius = mesh_radius(&data, mesh);
-    let spacing = radius * 2.5;
-    for i in 0..n * n * n {
-        let cell = Vec3::new((i % n) as f32, (i / n % n) as f32, (i / (n * n)) as f32);
-        let transform = Mat4::from_translation(cell * spacing);
-        data.add_instance(mesh, transform, materials[i as usize % materials.len()])?;
+    let lattice = Lattice {
+        n,
+        radius: mesh_radius(&data, mesh),
+    };
+    for (i, transform) in lattice.transforms().enumerate() {
+        data.add_instance(mesh, transform, materials[i % materials.len()])?;
     }
-    let centre = Vec3::splat((n as f32 - 1.0) * 0.5 * spacing);
-    let extent = n as f32 * spacing;
-    let camera = Camera::perspective(
-        centre + Vec3::new(0.9, 0.6, 1.2).normalize() * extent * 1.3,
-        centre,
-        50f32.to_radians(),
-        radius * 0.05,
-    );
-    Ok(Placed { data, camera })
+    Ok(Placed {
+        data,
+        camera: lattice.camera(),
+    })
 }
 
 /// One instance at the origin, and a camera that frames it (for `--instances 1`).

@@ -25,11 +25,13 @@
 //!
 //! # Implementations
 //!
-//! - [`Raster`] (`raster`): one instanced indirect draw of a quad per instance on a
+//! [`CountRaster`], whose [`Walk`] is one of:
+//!
+//! - `raster`: one instanced indirect draw of a quad per instance on a
 //!   `width × height` viewport (one pixel per tile, `width` and `height` equal to the
 //!   grid's), colour writes off; the fragment shader tests and counts. Where every unit
 //!   of the GPU rasterises, the rasteriser does the rectangle walk for free.
-//! - [`Compute`] (`compute`): a direct dispatch of at most [`WALK_GROUPS`] workgroups;
+//! - `compute`: a direct dispatch of at most [`WALK_GROUPS`] workgroups;
 //!   each workgroup of 64 lanes takes its share of the instances (at most 64) a round
 //!   and shares its lanes out over
 //!   all their tiles (a prefix sum of the tile counts in
@@ -151,86 +153,27 @@ pub fn tiles_param(params: &Params) -> Result<[u32; 2]> {
     Ok(tiles)
 }
 
-/// The `raster` implementation.
+/// The stage's pass. Its two implementations differ only in how they walk (a [`Walk`]),
+/// so one type serves both and names itself after its walk, as `sw_raster` picks its
+/// target by a field.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Raster {
-    /// The grid's tile columns and rows: the viewport, one pixel per tile.
-    pub width: u32,
-    pub height: u32,
+pub struct CountRaster {
+    pub walk: Walk,
 }
 
-impl Default for Raster {
-    /// z_slice's default grid.
-    fn default() -> Self {
-        Self {
-            width: 16,
-            height: 9,
-        }
-    }
-}
-
-impl Raster {
-    /// Reads `width` and `height` (default 16 × 9; both must equal z_slice's). The
-    /// `compute` implementation accepts the same params and does not need them.
-    pub fn from_params(params: &Params) -> Result<Self> {
-        params.only(&["width", "height"])?;
-        let [width, height] = tiles_param(params)?;
-        Ok(Self { width, height })
-    }
-
-    fn walk(&self) -> Walk {
-        Walk::Raster {
-            width: self.width,
-            height: self.height,
-        }
-    }
-}
-
-impl Pass for Raster {
+impl Pass for CountRaster {
     fn contract(&self) -> StageContract {
         contract()
     }
     fn implementation(&self) -> &'static str {
-        "raster"
+        self.walk.implementation()
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         setup_common(ctx);
-        self.walk().setup(ctx, &COUNT_WALK)
+        self.walk.setup(ctx, &COUNT_WALK)
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        self.walk().record(ctx, &COUNT_WALK, &[])
-    }
-}
-
-/// The `compute` implementation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Compute {
-    /// Workgroups the walk is dispatched with at most ([`WALK_GROUPS`]; tests use a few
-    /// to walk a list in many rounds).
-    pub walk_groups: u32,
-}
-
-impl Default for Compute {
-    fn default() -> Self {
-        Self {
-            walk_groups: WALK_GROUPS,
-        }
-    }
-}
-
-impl Pass for Compute {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        "compute"
-    }
-    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        setup_common(ctx);
-        Walk::Compute(self.walk_groups).setup(ctx, &COUNT_WALK)
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        Walk::Compute(self.walk_groups).record(ctx, &COUNT_WALK, &[])
+        self.walk.record(ctx, &COUNT_WALK, &[])
     }
 }
 
@@ -265,6 +208,26 @@ pub enum Walk {
 const TARGET: &str = "target";
 
 impl Walk {
+    /// The walk a walking stage's params ask for: `raster` on the `width × height` tiles
+    /// ([`tiles_param`]), or `compute` with [`WALK_GROUPS`]. `compute` accepts and checks
+    /// the tiles too, so a file swaps implementations by changing one line.
+    pub fn from_params(params: &Params, compute: bool) -> Result<Self> {
+        let [width, height] = tiles_param(params)?;
+        Ok(if compute {
+            Walk::Compute(WALK_GROUPS)
+        } else {
+            Walk::Raster { width, height }
+        })
+    }
+
+    /// The implementation this walk is: `raster` or `compute`.
+    pub fn implementation(self) -> &'static str {
+        match self {
+            Walk::Raster { .. } => "raster",
+            Walk::Compute(_) => "compute",
+        }
+    }
+
     /// Declares the walk's program (and the raster walk's target and draw arguments).
     pub fn setup(self, ctx: &mut SetupContext, shader: &WalkShader) -> Result<()> {
         let program = match self {
@@ -352,27 +315,18 @@ pub fn walk_grid(ctx: &RecordContext<'_>, max_groups: u32) -> Result<[u32; 2]> {
     Ok(workgroup_grid(groups, limit))
 }
 
-/// The implementation that walks as `walk`: [`Raster`] or [`Compute`].
+/// The implementation that walks as `walk`.
 pub fn pass(walk: Walk) -> Box<dyn Pass> {
-    match walk {
-        Walk::Raster { width, height } => Box::new(Raster { width, height }),
-        Walk::Compute(walk_groups) => Box::new(Compute { walk_groups }),
-    }
+    Box::new(CountRaster { walk })
 }
 
-fn build_raster(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(Raster::from_params(params)?))
-}
-
-fn build_compute(params: &Params) -> Result<Box<dyn Pass>> {
-    // The grid's tiles are accepted (and checked) so a file swaps implementations by
-    // changing one line; the compute walk does not need them.
-    Raster::from_params(params)?;
-    Ok(Box::new(Compute::default()))
+fn build(params: &Params, compute: bool) -> Result<Box<dyn Pass>> {
+    params.only(&["width", "height"])?;
+    Ok(pass(Walk::from_params(params, compute)?))
 }
 
 /// Registers `count_raster` (implementations `raster` and `compute`) for pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "raster", build_raster);
-    registry.register(STAGE, "compute", build_compute);
+    registry.register(STAGE, "raster", |params| build(params, false));
+    registry.register(STAGE, "compute", |params| build(params, true));
 }

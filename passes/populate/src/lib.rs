@@ -42,8 +42,8 @@
 //!
 //! # Implementations
 //!
-//! [`Raster`] (`raster`, an instanced indirect draw of a quad per instance, the fragment
-//! shader writes) and [`Compute`] (`compute`, a direct dispatch whose workgroups share
+//! [`Populate`], whose [`Walk`] is `raster` (an instanced indirect draw of a quad per instance, the fragment
+//! shader writes) or `compute` (a direct dispatch whose workgroups share
 //! their lanes out over the tiles of their share of the instances, at most 64, a round),
 //! as in `count_raster`; pair each with the same implementation of that stage, so both
 //! stages decide every pair with the same code. That code is one source: count_raster's
@@ -125,14 +125,32 @@ const POPULATE_WALK: WalkShader = WalkShader {
     compute_layout: "populate::compute",
 };
 
-/// What both implementations run: the walk, then the compute step after it.
+/// The stage's pass: its walk, then the compute step after it. Its two implementations
+/// differ only in how they walk (count_raster's [`Walk`]), so one type serves both and
+/// names itself after its walk.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Steps {
-    walk: Walk,
-    capacity: Option<u32>,
+pub struct Populate {
+    pub walk: Walk,
+    /// Entries the lists may hold; `None`: all of `cluster_objects`.
+    pub capacity: Option<u32>,
 }
 
-impl Steps {
+impl Populate {
+    fn params(&self) -> GpuParams {
+        GpuParams {
+            capacity: self.capacity.unwrap_or(u32::MAX),
+            _pad: [0; 3],
+        }
+    }
+}
+
+impl Pass for Populate {
+    fn contract(&self) -> StageContract {
+        contract()
+    }
+    fn implementation(&self) -> &'static str {
+        self.walk.implementation()
+    }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("slice_counts", 8);
         ctx.min_bytes("cluster_grid", CLUSTER_GRID.size as u64);
@@ -145,13 +163,6 @@ impl Steps {
             ProgramDesc::compute(&SHADER, "settle").layout(settle),
         );
         self.walk.setup(ctx, &POPULATE_WALK)
-    }
-
-    fn params(&self) -> GpuParams {
-        GpuParams {
-            capacity: self.capacity.unwrap_or(u32::MAX),
-            _pad: [0; 3],
-        }
     }
 
     /// The walk, then `settle`: every count set to the entries written, and the needed
@@ -174,140 +185,19 @@ impl Steps {
     }
 }
 
-/// The `raster` implementation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Raster {
-    /// The grid's tile columns and rows: the viewport, one pixel per tile.
-    pub width: u32,
-    pub height: u32,
-    /// Entries the lists may hold; `None`: all of `cluster_objects`.
-    pub capacity: Option<u32>,
-}
-
-impl Default for Raster {
-    fn default() -> Self {
-        Self {
-            width: 16,
-            height: 9,
-            capacity: None,
-        }
-    }
-}
-
-impl Raster {
-    /// Reads the params of the table in the crate docs.
-    pub fn from_params(params: &Params) -> Result<Self> {
-        params.only(&["width", "height", "capacity"])?;
-        let [width, height] = meshlight_pass_count_raster::tiles_param(params)?;
-        Ok(Self {
-            width,
-            height,
-            capacity: Some(params.u32("capacity", 0)?).filter(|&c| c > 0),
-        })
-    }
-
-    fn steps(&self) -> Steps {
-        Steps {
-            walk: Walk::Raster {
-                width: self.width,
-                height: self.height,
-            },
-            capacity: self.capacity,
-        }
-    }
-}
-
-impl Pass for Raster {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        "raster"
-    }
-    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        self.steps().setup(ctx)
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        self.steps().record(ctx)
-    }
-}
-
-/// The `compute` implementation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Compute {
-    /// Entries the lists may hold; `None`: all of `cluster_objects`.
-    pub capacity: Option<u32>,
-    /// Workgroups the walk is dispatched with at most (count_raster's `WALK_GROUPS`;
-    /// tests use a few to walk a list in many rounds).
-    pub walk_groups: u32,
-}
-
-impl Default for Compute {
-    fn default() -> Self {
-        Self {
-            capacity: None,
-            walk_groups: meshlight_pass_count_raster::WALK_GROUPS,
-        }
-    }
-}
-
-impl Compute {
-    fn steps(&self) -> Steps {
-        Steps {
-            // count_raster's direct grid: a share of at most 64 instances a workgroup a
-            // round.
-            walk: Walk::Compute(self.walk_groups),
-            capacity: self.capacity,
-        }
-    }
-}
-
-impl Pass for Compute {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        "compute"
-    }
-    fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        self.steps().setup(ctx)
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        self.steps().record(ctx)
-    }
-}
-
-/// The implementation that walks as `walk`: [`Raster`] or [`Compute`].
+/// The implementation that walks as `walk`.
 pub fn pass(walk: Walk, capacity: Option<u32>) -> Box<dyn Pass> {
-    match walk {
-        Walk::Raster { width, height } => Box::new(Raster {
-            width,
-            height,
-            capacity,
-        }),
-        Walk::Compute(walk_groups) => Box::new(Compute {
-            capacity,
-            walk_groups,
-        }),
-    }
+    Box::new(Populate { walk, capacity })
 }
 
-fn build_raster(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(Raster::from_params(params)?))
-}
-
-fn build_compute(params: &Params) -> Result<Box<dyn Pass>> {
-    // `width` and `height` are accepted (and checked) so a file swaps implementations by
-    // changing one line.
-    let raster = Raster::from_params(params)?;
-    Ok(Box::new(Compute {
-        capacity: raster.capacity,
-        ..Compute::default()
-    }))
+fn build(params: &Params, compute: bool) -> Result<Box<dyn Pass>> {
+    params.only(&["width", "height", "capacity"])?;
+    let capacity = Some(params.u32("capacity", 0)?).filter(|&c| c > 0);
+    Ok(pass(Walk::from_params(params, compute)?, capacity))
 }
 
 /// Registers `populate` (implementations `raster` and `compute`) for pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "raster", build_raster);
-    registry.register(STAGE, "compute", build_compute);
+    registry.register(STAGE, "raster", |params| build(params, false));
+    registry.register(STAGE, "compute", |params| build(params, true));
 }
