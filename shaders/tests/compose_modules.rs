@@ -2,22 +2,13 @@
 //! it needs.
 
 use meshlight_shaders::{
-    Capabilities, PassShader, ShaderDef, ShaderError, ShaderLibrary, shared_modules, validate,
+    Capabilities, PassShader, ShaderDef, ShaderError, ShaderLibrary, pass_shader, shared_modules,
+    validate,
 };
 
-const EVERY_MODULE: PassShader = PassShader {
-    name: "uses_every_module",
-    source: include_str!("wgsl/uses_every_module.wgsl"),
-    file_path: "shaders/tests/wgsl/uses_every_module.wgsl",
-    modules: &[],
-};
+const EVERY_MODULE: PassShader = pass_shader!("uses_every_module", "wgsl/uses_every_module.wgsl");
 
-const VISBUFFER64: PassShader = PassShader {
-    name: "uses_visbuffer64",
-    source: include_str!("wgsl/uses_visbuffer64.wgsl"),
-    file_path: "shaders/tests/wgsl/uses_visbuffer64.wgsl",
-    modules: &[],
-};
+const VISBUFFER64: PassShader = pass_shader!("uses_visbuffer64", "wgsl/uses_visbuffer64.wgsl");
 
 fn int64() -> Capabilities {
     Capabilities::SHADER_INT64 | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX

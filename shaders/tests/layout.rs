@@ -6,14 +6,9 @@ use std::mem::{offset_of, size_of};
 use meshlight_shaders::cpu::layout::{
     Cluster, ClusterGrid, ClusterableObject, Instance, Material, Mesh, View,
 };
-use meshlight_shaders::{Capabilities, PassShader, ShaderLibrary};
+use meshlight_shaders::{Capabilities, PassShader, ShaderLibrary, pass_shader};
 
-const STRUCTS: PassShader = PassShader {
-    name: "layout",
-    source: include_str!("wgsl/uses_every_module.wgsl"),
-    file_path: "shaders/tests/wgsl/uses_every_module.wgsl",
-    modules: &[],
-};
+const STRUCTS: PassShader = pass_shader!("layout", "wgsl/uses_every_module.wgsl");
 
 /// (member name, offset) of the WGSL struct whose name starts with `name`, and its size.
 fn wgsl_layout(module: &naga::Module, name: &str) -> (Vec<(String, u32)>, u32) {

@@ -68,6 +68,15 @@ enum Source {
     Texture(wgpu::Texture),
 }
 
+/// A `w × h` visibility buffer of u64 values, imported as `visibility`.
+fn import_visibility(g: &mut GraphBuilder, w: u32, h: u32) -> Handle<Buffer> {
+    g.import_buffer(
+        "visibility",
+        BufferDesc::array(Element::U64, u64::from(w) * u64::from(h)),
+        VIS_USAGE,
+    )
+}
+
 /// Every level of the pyramid after each frame, and the `counter` buffer at the end.
 struct Frames {
     levels: Vec<Vec<Vec<f32>>>,
@@ -88,12 +97,7 @@ fn run(pass: DepthPyramid, form: Form, frames: &[Vec<u64>]) -> Result<Frames> {
         )
         .erase()
     } else {
-        g.import_buffer(
-            "visibility",
-            BufferDesc::array(Element::U64, w as u64 * h as u64),
-            VIS_USAGE,
-        )
-        .erase()
+        import_visibility(&mut g, w, h).erase()
     };
     let desc = texture_desc(w, h);
     let pyramid = g.import_texture("pyramid", desc.clone(), PYRAMID_USAGE);
@@ -355,11 +359,7 @@ fn a_pyramid_not_declared_with_texture_desc_is_an_error_naming_it() {
     let (w, h) = (37, 23);
     let gpu = gpu();
     let mut g = GraphBuilder::new();
-    let vis = g.import_buffer(
-        "visibility",
-        BufferDesc::array(Element::U64, (w * h) as u64),
-        VIS_USAGE,
-    );
+    let vis = import_visibility(&mut g, w, h);
     // A full chain of the level-0 size: its rounded-down mips are too small.
     let naive = TextureDesc::d2(wgpu::TextureFormat::R32Float, 19, 12).with_full_mips();
     let pyramid = g.import_texture("pyramid", naive.clone(), PYRAMID_USAGE);
@@ -393,11 +393,7 @@ fn a_history_pyramid_is_right_in_both_textures_it_alternates_between() {
     for method in [Method::SinglePass, Method::TwoPass] {
         let gpu = gpu();
         let mut g = GraphBuilder::new();
-        let vis = g.import_buffer(
-            "visibility",
-            BufferDesc::array(Element::U64, (w * h) as u64),
-            VIS_USAGE,
-        );
+        let vis = import_visibility(&mut g, w, h);
         let pyramid = g.history_texture("pyramid", texture_desc(w, h));
         g.add_pass(
             "pyramid",
