@@ -184,86 +184,86 @@ pub fn contract() -> StageContract {
         stage: STAGE,
         slots: [
             vec![
-                Slot::read("clusters", elements::CLUSTER, "candidate clusters"),
-                Slot::read(
-                    "cluster_count",
-                    Element::U32,
-                    "[0]: valid entries of `clusters`",
-                ),
+                    Slot::read("clusters", elements::CLUSTER, "candidate clusters"),
+                    Slot::read(
+                        "cluster_count",
+                        Element::U32,
+                        "[0]: valid entries of `clusters`",
+                    ),
             ],
             scene_reads(&[Instances, Meshes, Meshlets, Groups]),
             vec![
-            Slot::buffer(
-                "raster_clusters",
-                Access::StorageWrite,
-                elements::CLUSTER,
-                "software clusters from the left, hardware from the right",
-            ),
-            Slot::buffer(
-                "raster_counts",
-                Access::ClearedReadWrite,
-                Element::U32,
-                "sw, hw, requested, capacity, in frustum, sw triangles, hw triangles, 0",
-            ),
-            Slot::buffer(
-                "hw_args",
-                Access::ClearedReadWrite,
-                Element::DRAW_ARGS,
-                "[384, hardware clusters, 0, 0]",
-            ),
-            Slot::texture(
-                "pyramid",
-                Access::Sampled,
-                Some(PYRAMID_FORMAT),
-                "depth pyramid (farthest depth per texel, all mips): last frame's in the first pass, this frame's in the second",
-            )
-            .optional(),
-            Slot::buffer(
-                "occluded",
-                Access::StorageWrite,
-                elements::CLUSTER,
-                "first pass: clusters found hidden, the second pass's candidates",
-            )
-            .optional(),
-            Slot::buffer(
-                "occluded_count",
-                Access::ClearedReadWrite,
-                Element::U32,
-                "first pass: [0] candidates written, [1] found",
-            )
-            .optional(),
-            Slot::read(
-                "first_counts",
-                Element::U32,
-                "second pass: the first pass's raster_counts",
-            )
-            .optional(),
-            Slot::buffer(
-                PER_INSTANCE_FIRST,
-                Access::ClearedReadWrite,
-                Element::U32,
-                "first pass: per instance [2i] clusters in the LOD cut, [2i+1] found hidden",
-            )
-            .optional(),
-            Slot::read(
-                WALKED_SLOT,
-                elements::CLUSTER,
-                "second pass: the second hierarchy walk's clusters, tested after `clusters`",
-            )
-            .optional(),
-            Slot::read(
-                WALKED_COUNT_SLOT,
-                Element::U32,
-                "second pass: the second walk's cluster_count",
-            )
-            .optional(),
-            Slot::buffer(
-                PER_INSTANCE_SECOND,
-                Access::StorageReadWrite,
-                Element::U32,
-                "second pass: the first pass's per-instance counters; [2i+1] less the candidates drawn",
-            )
-            .optional(),
+                Slot::buffer(
+                    "raster_clusters",
+                    Access::StorageWrite,
+                    elements::CLUSTER,
+                    "software clusters from the left, hardware from the right",
+                ),
+                Slot::buffer(
+                    "raster_counts",
+                    Access::ClearedReadWrite,
+                    Element::U32,
+                    "sw, hw, requested, capacity, in frustum, sw triangles, hw triangles, 0",
+                ),
+                Slot::buffer(
+                    "hw_args",
+                    Access::ClearedReadWrite,
+                    Element::DRAW_ARGS,
+                    "[384, hardware clusters, 0, 0]",
+                ),
+                Slot::texture(
+                    "pyramid",
+                    Access::Sampled,
+                    Some(PYRAMID_FORMAT),
+                    "depth pyramid (farthest depth per texel, all mips): last frame's in the first pass, this frame's in the second",
+                )
+                .optional(),
+                Slot::buffer(
+                    "occluded",
+                    Access::StorageWrite,
+                    elements::CLUSTER,
+                    "first pass: clusters found hidden, the second pass's candidates",
+                )
+                .optional(),
+                Slot::buffer(
+                    "occluded_count",
+                    Access::ClearedReadWrite,
+                    Element::U32,
+                    "first pass: [0] candidates written, [1] found",
+                )
+                .optional(),
+                Slot::read(
+                    "first_counts",
+                    Element::U32,
+                    "second pass: the first pass's raster_counts",
+                )
+                .optional(),
+                Slot::buffer(
+                    PER_INSTANCE_FIRST,
+                    Access::ClearedReadWrite,
+                    Element::U32,
+                    "first pass: per instance [2i] clusters in the LOD cut, [2i+1] found hidden",
+                )
+                .optional(),
+                Slot::read(
+                    WALKED_SLOT,
+                    elements::CLUSTER,
+                    "second pass: the second hierarchy walk's clusters, tested after `clusters`",
+                )
+                .optional(),
+                Slot::read(
+                    WALKED_COUNT_SLOT,
+                    Element::U32,
+                    "second pass: the second walk's cluster_count",
+                )
+                .optional(),
+                Slot::buffer(
+                    PER_INSTANCE_SECOND,
+                    Access::StorageReadWrite,
+                    Element::U32,
+                    "second pass: the first pass's per-instance counters; [2i+1] less the candidates drawn",
+                )
+                .optional(),
             ],
         ]
         .concat(),

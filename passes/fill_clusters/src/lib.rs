@@ -105,13 +105,9 @@ pub fn contract() -> StageContract {
     StageContract {
         stage: STAGE,
         slots: vec![
-            Slot::read("instances", elements::INSTANCE,
-                "the scene's instances",
-            ),
+            Slot::read("instances", elements::INSTANCE, "the scene's instances"),
             instance_table::high_slot(),
-            Slot::read("meshes", elements::MESH,
-                "the scene's meshes (bounding spheres)",
-            ),
+            Slot::read("meshes", elements::MESH, "the scene's meshes (bounding spheres)"),
             Slot::buffer(
                 "clusters",
                 Access::StorageWrite,
@@ -124,15 +120,21 @@ pub fn contract() -> StageContract {
                 Element::U32,
                 "[0] clusters written = min(requested, capacity), [1] clusters requested",
             ),
-            Slot::read("hierarchy_nodes", elements::HIERARCHY_NODE,
+            Slot::read(
+                "hierarchy_nodes",
+                elements::HIERARCHY_NODE,
                 "the scene's culling-hierarchy nodes (implementation `hierarchy`)",
             )
             .optional(),
-            Slot::read("hierarchy_clusters", Element::U32,
+            Slot::read(
+                "hierarchy_clusters",
+                Element::U32,
                 "the hierarchy leaves' meshlets (implementation `hierarchy`)",
             )
             .optional(),
-            Slot::read("hierarchy_roots", Element::U32,
+            Slot::read(
+                "hierarchy_roots",
+                Element::U32,
                 "per mesh, its hierarchy's root node (implementation `hierarchy`)",
             )
             .optional(),
@@ -174,11 +176,15 @@ pub fn hierarchy_contract() -> StageContract {
                 "first pass: [0] hidden nodes written, [1] found",
             )
             .optional(),
-            Slot::read(CANDIDATE_NODES_SLOT, HIDDEN_NODE,
+            Slot::read(
+                CANDIDATE_NODES_SLOT,
+                HIDDEN_NODE,
                 "second pass: the first pass's hidden nodes, where the walk starts",
             )
             .optional(),
-            Slot::read(CANDIDATE_NODE_COUNT_SLOT, Element::U32,
+            Slot::read(
+                CANDIDATE_NODE_COUNT_SLOT,
+                Element::U32,
                 "second pass: the first pass's hidden-node count",
             )
             .optional(),

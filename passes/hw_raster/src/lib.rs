@@ -101,22 +101,22 @@ pub fn contract() -> StageContract {
         stage: STAGE,
         slots: [
             vec![
-            Slot::read(
-                "raster_clusters",
-                elements::CLUSTER,
-                "hardware clusters from the right end",
-            ),
-            Slot::read(
-                "raster_counts",
-                Element::U32,
-                "word 1: hardware clusters, word 3: the slot capacity C",
-            ),
-            Slot::buffer(
-                "hw_args",
-                Access::Indirect,
-                Element::DRAW_ARGS,
-                "[384, hardware cluster count, 0, 0]",
-            ),
+                Slot::read(
+                    "raster_clusters",
+                    elements::CLUSTER,
+                    "hardware clusters from the right end",
+                ),
+                Slot::read(
+                    "raster_counts",
+                    Element::U32,
+                    "word 1: hardware clusters, word 3: the slot capacity C",
+                ),
+                Slot::buffer(
+                    "hw_args",
+                    Access::Indirect,
+                    Element::DRAW_ARGS,
+                    "[384, hardware cluster count, 0, 0]",
+                ),
             ],
             scene_reads(&[Instances, Meshes, Meshlets, Payload]),
             vec![Slot::visibility64(

@@ -186,78 +186,78 @@ pub fn contract() -> StageContract {
         stage: STAGE,
         slots: [
             vec![
-            Slot::visibility64(
-                "visbuffer",
-                Access::StorageRead,
-                "width × height visibility values from the rasterisers (u64 buffer or r64uint texture)",
-            ),
-            Slot::read(
-                "raster_clusters",
-                elements::CLUSTER,
-                "the slots visibility ids index",
-            ),
-            Slot::read(
-                "raster_counts",
-                Element::U32,
-                "word 0: software clusters (ids below it)",
-            ),
+                Slot::visibility64(
+                    "visbuffer",
+                    Access::StorageRead,
+                    "width × height visibility values from the rasterisers (u64 buffer or r64uint texture)",
+                ),
+                Slot::read(
+                    "raster_clusters",
+                    elements::CLUSTER,
+                    "the slots visibility ids index",
+                ),
+                Slot::read(
+                    "raster_counts",
+                    Element::U32,
+                    "word 0: software clusters (ids below it)",
+                ),
             ],
             scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials]),
             vec![
-            Slot::texture(
-                "depth",
-                Access::DepthTarget,
-                Some(DEPTH_FORMAT),
-                "reverse-Z depth; 0 where empty",
-            )
-            .optional(),
-            Slot::texture(
-                "material_depth",
-                Access::DepthTarget,
-                Some(DEPTH_FORMAT),
-                "(material + 1) · 2^-24; 0 where empty",
-            )
-            .optional(),
-            Slot::texture(
-                "color",
-                Access::StorageWrite,
-                Some(COLOR_FORMAT),
-                "shaded colour or a debug view",
-            ),
-            Slot::read("objects", CLUSTERABLE_OBJECT, "light clustering's objects").optional(),
-            Slot::read("cluster_grid", CLUSTER_GRID, "the froxel grid").optional(),
-            Slot::read(
-                "cluster_offsets",
-                Element::U32,
-                "per froxel and kind: list start",
-            )
-            .optional(),
-            Slot::read(
-                "cluster_counts",
-                Element::U32,
-                "per froxel and kind: list length",
-            )
-            .optional(),
-            Slot::read("cluster_objects", Element::U32, "the lists: object indices").optional(),
-            Slot::texture(
-                "pyramid",
-                Access::Sampled,
-                Some(PYRAMID_FORMAT),
-                "a reverse-Z min-depth pyramid (mip L: ⌈size / 2^(L+1)⌉), for the `pyramid` view",
-            )
-            .optional(),
-            Slot::read(
-                SECOND_COUNTS,
-                Element::U32,
-                "the second culling pass's raster_counts ([3], [7]), for the `occlusion` view",
-            )
-            .optional(),
-            Slot::read(
-                OCCLUDED_PER_INSTANCE,
-                Element::U32,
-                "per instance: [2i] clusters in the LOD cut, [2i+1] left hidden, for the `occlusion` view",
-            )
-            .optional(),
+                Slot::texture(
+                    "depth",
+                    Access::DepthTarget,
+                    Some(DEPTH_FORMAT),
+                    "reverse-Z depth; 0 where empty",
+                )
+                .optional(),
+                Slot::texture(
+                    "material_depth",
+                    Access::DepthTarget,
+                    Some(DEPTH_FORMAT),
+                    "(material + 1) · 2^-24; 0 where empty",
+                )
+                .optional(),
+                Slot::texture(
+                    "color",
+                    Access::StorageWrite,
+                    Some(COLOR_FORMAT),
+                    "shaded colour or a debug view",
+                ),
+                Slot::read("objects", CLUSTERABLE_OBJECT, "light clustering's objects").optional(),
+                Slot::read("cluster_grid", CLUSTER_GRID, "the froxel grid").optional(),
+                Slot::read(
+                    "cluster_offsets",
+                    Element::U32,
+                    "per froxel and kind: list start",
+                )
+                .optional(),
+                Slot::read(
+                    "cluster_counts",
+                    Element::U32,
+                    "per froxel and kind: list length",
+                )
+                .optional(),
+                Slot::read("cluster_objects", Element::U32, "the lists: object indices").optional(),
+                Slot::texture(
+                    "pyramid",
+                    Access::Sampled,
+                    Some(PYRAMID_FORMAT),
+                    "a reverse-Z min-depth pyramid (mip L: ⌈size / 2^(L+1)⌉), for the `pyramid` view",
+                )
+                .optional(),
+                Slot::read(
+                    SECOND_COUNTS,
+                    Element::U32,
+                    "the second culling pass's raster_counts ([3], [7]), for the `occlusion` view",
+                )
+                .optional(),
+                Slot::read(
+                    OCCLUDED_PER_INSTANCE,
+                    Element::U32,
+                    "per instance: [2i] clusters in the LOD cut, [2i+1] left hidden, for the `occlusion` view",
+                )
+                .optional(),
             ],
         ]
         .concat(),

@@ -110,7 +110,9 @@ pub fn contract() -> StageContract {
                 "prefix sums (exclusive unless `inclusive`); elements past the count are left untouched",
             ),
             Slot::buffer("total", Access::StorageWrite, Element::U32, "total[0] = sum of all counted inputs, modulo 2^32").optional(),
-            Slot::read("count", Element::U32,
+            Slot::read(
+                "count",
+                Element::U32,
                 "count[0] = elements to scan, from an earlier pass; clamped to the `count` parameter, dispatches become indirect",
             )
             .optional(),

@@ -116,37 +116,37 @@ pub fn contract() -> StageContract {
         stage: STAGE,
         slots: [
             vec![
-            Slot::read(
-                "raster_clusters",
-                elements::CLUSTER,
-                "software clusters first",
-            ),
-            Slot::read(
-                "raster_counts",
-                meshlight_graph::Element::U32,
-                "word 0: software cluster count",
-            ),
-            Slot::read(
-                "sw_args",
-                meshlight_graph::Element::DISPATCH_ARGS,
-                "[x, y, 1] over the software clusters",
-            )
-            .also(Access::Indirect),
+                Slot::read(
+                    "raster_clusters",
+                    elements::CLUSTER,
+                    "software clusters first",
+                ),
+                Slot::read(
+                    "raster_counts",
+                    meshlight_graph::Element::U32,
+                    "word 0: software cluster count",
+                ),
+                Slot::read(
+                    "sw_args",
+                    meshlight_graph::Element::DISPATCH_ARGS,
+                    "[x, y, 1] over the software clusters",
+                )
+                .also(Access::Indirect),
             ],
             scene_reads(&[Instances, Meshes, Meshlets, Payload]),
             vec![
-            Slot::visibility64(
-                "visbuffer",
-                Access::ClearedReadWrite,
-                "width × height visibility values (u64 buffer or r64uint texture); cleared, then atomicMax",
-            ),
-            Slot::buffer(
-                BIG_COUNT_SLOT,
-                Access::ClearedReadWrite,
-                meshlight_graph::Element::U32,
-                "[0] big-triangle tiles listed, [1] asked for (a scratch buffer when unbound)",
-            )
-            .optional(),
+                Slot::visibility64(
+                    "visbuffer",
+                    Access::ClearedReadWrite,
+                    "width × height visibility values (u64 buffer or r64uint texture); cleared, then atomicMax",
+                ),
+                Slot::buffer(
+                    BIG_COUNT_SLOT,
+                    Access::ClearedReadWrite,
+                    meshlight_graph::Element::U32,
+                    "[0] big-triangle tiles listed, [1] asked for (a scratch buffer when unbound)",
+                )
+                .optional(),
             ],
         ]
         .concat(),
