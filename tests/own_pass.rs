@@ -41,13 +41,8 @@ impl Pass for Double {
     }
     // Record: one dispatch.
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let program = ctx.compute("double")?;
-        let group = ctx.bind_group(&program, 0, &[])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(self.count.div_ceil(64), 1, 1);
-        Ok(())
+        let groups = [self.count.div_ceil(64), 1, 1];
+        ctx.dispatch_compute("double", &[], Workgroups::Direct(groups))
     }
 }
 

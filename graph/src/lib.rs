@@ -51,7 +51,7 @@ pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};
 pub use readback::STAGE as READBACK_STAGE;
 pub use record::{
     ColorAttachment, ComputePassGuard, ComputeProgram, DepthAttachment, FrameData, Immediates,
-    Program, Readback, RecordContext, RenderProgram,
+    Program, Readback, RecordContext, RenderProgram, Workgroups,
 };
 pub use resource::{
     AnyHandle, Buffer, BufferDesc, Element, Handle, ResourceDesc, ResourceKind, Texture,
@@ -65,6 +65,6 @@ pub mod prelude {
     pub use crate::{
         Access, BindingLayout, BufferDesc, Element, GraphError, Pass, PassShader, ProgramDesc,
         RecordContext, Result, SamplerKind, SetupContext, ShaderDef, ShaderDefs, Slot,
-        StageContract, TextureDesc, Visibility64,
+        StageContract, TextureDesc, Visibility64, Workgroups,
     };
 }

@@ -370,9 +370,7 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
         |ctx| {
             ctx.clear("seen")?;
             let (args, _) = ctx.buffer("args")?;
-            compute_once(ctx, "count", &[], |cp| {
-                cp.dispatch_workgroups_indirect(args, 0)
-            })
+            ctx.dispatch_compute("count", &[], Workgroups::Indirect(args, 0))
         },
     );
     add_exported(

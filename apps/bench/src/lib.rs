@@ -660,13 +660,7 @@ impl Pass for FloorStep {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let program = ctx.compute("step")?;
-        let group = ctx.bind_group(&program, 0, &[])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-        Ok(())
+        ctx.dispatch_compute("step", &[], Workgroups::Direct([1, 1, 1]))
     }
 }
 

@@ -8,7 +8,7 @@ use meshlight::gpu_scene::data::Limits;
 use meshlight::graph::file::{Params, Registry};
 use meshlight::graph::{
     BindingLayout, Pass, PassShader, ProgramDesc, RecordContext, Result, SetupContext,
-    StageContract,
+    StageContract, Workgroups,
 };
 use meshlight::remap_dispatch;
 use meshlight::scene::{BuildOptions, build_asset, procedural_mesh};
@@ -45,13 +45,11 @@ impl Pass for Square {
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let params = [self.count_word, 0, 0, 0];
-        let program = ctx.compute("square")?;
-        let group = ctx.bind_group(&program, 0, &[(2, bytemuck::cast_slice(&params))])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-        Ok(())
+        ctx.dispatch_compute(
+            "square",
+            &[(2, bytemuck::cast_slice(&params))],
+            Workgroups::Direct([1, 1, 1]),
+        )
     }
 }
 

@@ -127,6 +127,17 @@ pub struct RecordContext<'a> {
     pub(crate) graph_id: u64,
 }
 
+/// How many workgroups [`RecordContext::dispatch_compute`] runs: a grid known when
+/// recording, or the `[x, y, z]` arguments a kernel of the frame wrote at `offset` of a
+/// buffer (an `Indirect` slot).
+#[derive(Clone, Copy, Debug)]
+pub enum Workgroups<'b> {
+    /// `[x, y, z]` workgroups.
+    Direct([u32; 3]),
+    /// The arguments at this byte offset of this buffer.
+    Indirect(&'b wgpu::Buffer, u64),
+}
+
 impl<'a> RecordContext<'a> {
     /// The device, to create what the pass makes per frame (buffers for uploads).
     pub fn device(&self) -> &wgpu::Device {
@@ -982,6 +993,34 @@ impl<'a> RecordContext<'a> {
             }
         };
         Ok(Immediates { inner })
+    }
+
+    /// Records the compute program `name` once over `workgroups`, its group 0 built from
+    /// the slots its layout names and `uniforms` (bytes by binding index): the shape of
+    /// most of a pass's dispatches. A direct grid with a zero dimension records nothing.
+    /// A program with a second group, or several dispatches sharing one bind group,
+    /// records through [`compute`](Self::compute) and [`compute_pass`](Self::compute_pass).
+    pub fn dispatch_compute(
+        &mut self,
+        name: &str,
+        uniforms: &[(u32, &[u8])],
+        workgroups: Workgroups<'_>,
+    ) -> Result<()> {
+        let program = self.compute(name)?;
+        let group = self.bind_group(&*program, 0, uniforms)?;
+        let mut pass = self.compute_pass();
+        pass.set_pipeline(&program.pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        match workgroups {
+            Workgroups::Direct([x, y, z]) if x > 0 && y > 0 && z > 0 => {
+                pass.dispatch_workgroups(x, y, z)
+            }
+            Workgroups::Direct(_) => {}
+            Workgroups::Indirect(buffer, offset) => {
+                pass.dispatch_workgroups_indirect(buffer, offset)
+            }
+        }
+        Ok(())
     }
 
     /// The compute pass to dispatch in. For a batched pass it is the batch's shared compute

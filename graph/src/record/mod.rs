@@ -17,7 +17,7 @@ pub mod ring;
 pub mod shared;
 pub mod views;
 
-pub use context::{ColorAttachment, DepthAttachment, Immediates, RecordContext};
+pub use context::{ColorAttachment, DepthAttachment, Immediates, RecordContext, Workgroups};
 pub use frame::FrameData;
 pub use programs::{ComputeProgram, Program, RenderProgram};
 pub use readback::Readback;

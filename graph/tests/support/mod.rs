@@ -144,16 +144,15 @@ pub fn compute_once(
     Ok(())
 }
 
-/// Records one dispatch of `groups` workgroups of the compute program `name`.
+/// Records the compute program `name` once over `groups` (`RecordContext::dispatch_compute`
+/// with a direct grid).
 pub fn dispatch_once(
     ctx: &mut RecordContext<'_>,
     name: &str,
     uniforms: &[(u32, &[u8])],
     groups: [u32; 3],
 ) -> Result<()> {
-    compute_once(ctx, name, uniforms, |cp| {
-        cp.dispatch_workgroups(groups[0], groups[1], groups[2])
-    })
+    ctx.dispatch_compute(name, uniforms, Workgroups::Direct(groups))
 }
 
 /// Records the render program `name` with bind group 0 (built with `uniforms`) into one

@@ -49,7 +49,7 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, ColorAttachment, ColorTarget, Element, Pass, Primitive, ProgramDesc,
-    RecordContext, Result, SetupContext, Slot, StageContract,
+    RecordContext, Result, SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE, check_tiles, declare_tile_target,
@@ -274,13 +274,8 @@ impl Walk {
                 pass.draw_indirect(args, 0);
             }
             Walk::Compute(max_groups) => {
-                let program = ctx.compute(shader.program)?;
-                let group = ctx.bind_group(&*program, 0, &bound)?;
                 let [x, y] = walk_grid(ctx, max_groups)?;
-                let mut pass = ctx.compute_pass();
-                pass.set_pipeline(&program.pipeline);
-                pass.set_bind_group(0, &group, &[]);
-                pass.dispatch_workgroups(x, y, 1);
+                ctx.dispatch_compute(shader.program, &bound, Workgroups::Direct([x, y, 1]))?;
             }
         }
         Ok(())

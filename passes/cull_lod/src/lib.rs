@@ -146,7 +146,7 @@ use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, Slot, StageContract,
+    Result, SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
@@ -520,34 +520,19 @@ impl Pass for CullLod {
             test_occlusion: test_occlusion as u32,
             _pad: [0; 2],
         };
-        let prepare = ctx.compute("prepare")?;
-        let cull = ctx.compute("cull")?;
-        let prepare_group = ctx.bind_group(&prepare, 0, &[(11, bytemuck::bytes_of(&params))])?;
-        let cull_group = ctx.bind_group(
-            &cull,
-            0,
-            &[
-                (10, bytemuck::bytes_of(&view)),
-                (11, bytemuck::bytes_of(&params)),
-            ],
-        )?;
+        let (view, params) = (bytemuck::bytes_of(&view), bytemuck::bytes_of(&params));
         if self.mode == Mode::First && ctx.is_bound(PER_INSTANCE_FIRST) {
             ctx.clear(PER_INSTANCE_FIRST)?;
         }
         let (dispatch, _) = ctx.scratch("dispatch")?;
-        {
-            let mut pass = ctx.compute_pass();
-            pass.set_pipeline(&prepare.pipeline);
-            pass.set_bind_group(0, &prepare_group, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
-        }
-        // A second compute pass: the counters and arguments are written before any
-        // cluster reads them.
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&cull.pipeline);
-        pass.set_bind_group(0, &cull_group, &[]);
-        pass.dispatch_workgroups_indirect(dispatch, 0);
-        Ok(())
+        ctx.dispatch_compute("prepare", &[(11, params)], Workgroups::Direct([1, 1, 1]))?;
+        // A second dispatch: the counters and arguments are written before any cluster
+        // reads them.
+        ctx.dispatch_compute(
+            "cull",
+            &[(10, view), (11, params)],
+            Workgroups::Indirect(dispatch, 0),
+        )
     }
 }
 

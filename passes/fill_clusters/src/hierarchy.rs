@@ -101,8 +101,8 @@
 //! list. [`crate::hierarchy_cpu`] mirrors the shader.
 
 use crate::{
-    CAMERA_CUT_INPUT, CANDIDATE_NODE_COUNT_SLOT, CANDIDATE_NODES_SLOT, Grid, InstanceGrid,
-    OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT, dispatch,
+    CAMERA_CUT_INPUT, CANDIDATE_NODE_COUNT_SLOT, CANDIDATE_NODES_SLOT, InstanceGrid,
+    OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT,
     hierarchy_contract, instance_grid,
 };
 use meshlight_gpu_scene::instance_table::InstanceTable;
@@ -110,7 +110,7 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::Params;
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, StageContract,
+    Result, SetupContext, StageContract, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
@@ -476,18 +476,22 @@ impl Pass for HierarchyFill {
         let (args, _) = ctx.scratch(WALK_ARGS)?;
         let args = args.clone();
         let mut dispatches = vec![
-            ("prepare", 0, Grid::Direct([1, 1])),
-            ("roots", 0, Grid::Direct(roots_grid)),
-            ("walk_dispatch", 0, Grid::Direct([1, 1])),
-            ("fill", 0, Grid::Indirect(&args)),
+            ("prepare", 0, Workgroups::Direct([1, 1, 1])),
+            (
+                "roots",
+                0,
+                Workgroups::Direct([roots_grid[0], roots_grid[1], 1]),
+            ),
+            ("walk_dispatch", 0, Workgroups::Direct([1, 1, 1])),
+            ("fill", 0, Workgroups::Indirect(&args, 0)),
         ];
         for step in 1..=self.spread_steps {
-            dispatches.push(("fill", step, Grid::Direct([spread, 1])));
+            dispatches.push(("fill", step, Workgroups::Direct([spread, 1, 1])));
         }
         for (entry, step, grid) in dispatches {
             let grid_x = match grid {
-                Grid::Direct([x, _]) => x,
-                Grid::Indirect(_) => 0,
+                Workgroups::Direct([x, ..]) => x,
+                Workgroups::Indirect(..) => 0,
             };
             let params = GpuParams {
                 capacity: self.capacity.unwrap_or(u32::MAX),
@@ -509,7 +513,7 @@ impl Pass for HierarchyFill {
                 (3, bytemuck::bytes_of(&view)),
                 (4, bytemuck::bytes_of(&params)),
             ];
-            dispatch(ctx, entry, &uniforms, grid)?;
+            ctx.dispatch_compute(entry, &uniforms, grid)?;
         }
         Ok(())
     }

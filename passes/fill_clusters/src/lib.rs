@@ -72,7 +72,7 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
-    SetupContext, Slot, StageContract,
+    SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader};
 
@@ -304,41 +304,10 @@ impl Pass for FillClusters {
             (4, bytemuck::bytes_of(&view)),
             (5, bytemuck::bytes_of(&params)),
         ];
-        dispatch(ctx, "fill", &uniforms, Grid::Direct([x, y]))?;
+        ctx.dispatch_compute("fill", &uniforms, Workgroups::Direct([x, y, 1]))?;
         // A separate compute pass, so the requested count is final when it is read.
-        dispatch(ctx, "finish", &uniforms, Grid::Direct([1, 1]))
+        ctx.dispatch_compute("finish", &uniforms, Workgroups::Direct([1, 1, 1]))
     }
-}
-
-/// The workgroups of one dispatch.
-#[derive(Clone, Copy)]
-pub(crate) enum Grid<'a> {
-    /// `[x, y]` workgroups; none when x is 0.
-    Direct([u32; 2]),
-    /// As many as the arguments at the start of the buffer say (a kernel wrote them).
-    Indirect(&'a wgpu::Buffer),
-}
-
-/// Records one compute pass of the program `entry` over `grid`, its group 0 bound with
-/// `uniforms` (bytes by binding index) and its slots: the one shape of every dispatch
-/// of both implementations.
-pub(crate) fn dispatch(
-    ctx: &mut RecordContext<'_>,
-    entry: &str,
-    uniforms: &[(u32, &[u8])],
-    grid: Grid,
-) -> Result<()> {
-    let program = ctx.compute(entry)?;
-    let group = ctx.bind_group(&program, 0, uniforms)?;
-    let mut pass = ctx.compute_pass();
-    pass.set_pipeline(&program.pipeline);
-    pass.set_bind_group(0, &group, &[]);
-    match grid {
-        Grid::Direct([x, y]) if x > 0 => pass.dispatch_workgroups(x, y, 1),
-        Grid::Direct(_) => {}
-        Grid::Indirect(args) => pass.dispatch_workgroups_indirect(args, 0),
-    }
-    Ok(())
 }
 
 fn build(params: &Params) -> Result<Box<dyn Pass>> {

@@ -69,7 +69,7 @@ use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, Element, Pass, Primitive,
-    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
+    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
@@ -294,14 +294,11 @@ impl Pass for HwRaster {
         let bind_group =
             ctx.bind_group(&program, 0, &[(7, bytemuck::bytes_of(&view)), (8, params)])?;
         if self.feed == Feed::MeshShader {
-            let dispatch = ctx.compute("mesh_dispatch")?;
-            let dispatch_group = ctx.bind_group(&dispatch, 0, &[(8, params)])?;
-            {
-                let mut pass = ctx.compute_pass();
-                pass.set_pipeline(&dispatch.pipeline);
-                pass.set_bind_group(0, &dispatch_group, &[]);
-                pass.dispatch_workgroups(1, 1, 1);
-            }
+            ctx.dispatch_compute(
+                "mesh_dispatch",
+                &[(8, params)],
+                Workgroups::Direct([1, 1, 1]),
+            )?;
             let (args, _) = ctx.scratch(MESH_ARGS)?;
             let mut pass = ctx.render_pass(&[ColorAttachment::new(TARGET)], None)?;
             pass.set_pipeline(&program.pipeline);

@@ -56,7 +56,7 @@ pub mod cpu;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, Element, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
-    StageContract,
+    StageContract, Workgroups,
 };
 use meshlight_pass_count_raster::{Walk, WalkShader};
 use meshlight_pass_z_slice::CLUSTER_GRID;
@@ -175,13 +175,11 @@ impl Pass for Populate {
         let (_, bytes) = ctx.buffer("cluster_counts")?;
         let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
         let groups = ((bytes / 4) as u32).div_ceil(WORKGROUP).clamp(1, limit);
-        let program = ctx.compute("settle")?;
-        let group = ctx.bind_group(&program, 0, &[(10, params)])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(groups, 1, 1);
-        Ok(())
+        ctx.dispatch_compute(
+            "settle",
+            &[(10, params)],
+            Workgroups::Direct([groups, 1, 1]),
+        )
     }
 }
 

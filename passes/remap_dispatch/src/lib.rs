@@ -24,7 +24,7 @@
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, Element, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
-    StageContract,
+    StageContract, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader};
 
@@ -115,13 +115,11 @@ impl Pass for RemapDispatch {
             max_per_dimension: ctx.max_per_dimension(self.max_per_dimension),
             _pad: [0; 2],
         };
-        let program = ctx.compute("remap")?;
-        let bind_group = ctx.bind_group(&program, 0, &[(2, bytemuck::bytes_of(&params))])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-        Ok(())
+        ctx.dispatch_compute(
+            "remap",
+            &[(2, bytemuck::bytes_of(&params))],
+            Workgroups::Direct([1, 1, 1]),
+        )
     }
 }
 

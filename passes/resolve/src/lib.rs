@@ -131,7 +131,7 @@ use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, DepthAttachment, DepthTarget, Element, GraphError, Pass, ProgramDesc,
-    RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
+    RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
@@ -404,20 +404,14 @@ impl Pass for Resolve {
                 t.mip_levels - 1
             )));
         }
-        let program = ctx.compute("shade")?;
-        let bind_group = ctx.bind_group(
-            &program,
-            0,
+        ctx.dispatch_compute(
+            "shade",
             &[
                 (9, bytemuck::bytes_of(&view)),
                 (10, bytemuck::bytes_of(&shade_params)),
             ],
-        )?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(self.width.div_ceil(TILE), self.height.div_ceil(TILE), 1);
-        Ok(())
+            Workgroups::Direct([self.width.div_ceil(TILE), self.height.div_ceil(TILE), 1]),
+        )
     }
 }
 

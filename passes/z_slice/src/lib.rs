@@ -79,7 +79,7 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, Slot, StageContract, TextureDesc,
+    Result, SetupContext, Slot, StageContract, TextureDesc, Workgroups,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
 use meshlight_shaders::{PassShader, pass_shader};
@@ -357,24 +357,19 @@ impl Pass for ZSlice {
             bytemuck::bytes_of(&grid),
             bytemuck::bytes_of(&params),
         );
-        let prepare = ctx.compute("prepare")?;
-        let slice = ctx.compute("slice")?;
-        let prepare_group = ctx.bind_group(&prepare, 0, &[(10, grid), (11, params)])?;
-        let slice_group = ctx.bind_group(&slice, 0, &[(9, view), (10, grid), (11, params)])?;
         // Two dispatches: the counters are reset (and the froxel counts zeroed) before any
         // object counts; the arguments are written by the last workgroup of the second,
         // once every object has counted.
-        {
-            let mut pass = ctx.compute_pass();
-            pass.set_pipeline(&prepare.pipeline);
-            pass.set_bind_group(0, &prepare_group, &[]);
-            pass.dispatch_workgroups(prepare_groups, 1, 1);
-        }
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&slice.pipeline);
-        pass.set_bind_group(0, &slice_group, &[]);
-        pass.dispatch_workgroups(groups[0], groups[1], 1);
-        Ok(())
+        ctx.dispatch_compute(
+            "prepare",
+            &[(10, grid), (11, params)],
+            Workgroups::Direct([prepare_groups, 1, 1]),
+        )?;
+        ctx.dispatch_compute(
+            "slice",
+            &[(9, view), (10, grid), (11, params)],
+            Workgroups::Direct([groups[0], groups[1], 1]),
+        )
     }
 }
 
