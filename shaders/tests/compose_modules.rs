@@ -214,22 +214,14 @@ fn composing_is_deterministic() {
     assert_eq!(format!("{second:?}"), format!("{third:?}"));
 }
 
-const LOCAL_HELPERS: &str =
-    "#define_import_path test_crate::helpers\nfn twice(x: u32) -> u32 { return 2u * x; }\n";
-
 /// A crate's own module, imported by its shader and added to the library on first use.
 #[test]
 fn a_crate_local_module_is_imported_by_its_path() {
-    const SHADER: PassShader = PassShader {
-        name: "test::uses_local",
-        source: "#import test_crate::helpers::twice\n@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n@compute @workgroup_size(1)\nfn main() { out[0] = twice(21u); }\n",
-        file_path: "shaders/tests/compose_modules.rs (local)",
-        modules: &[meshlight_shaders::LocalModule {
-            name: "test_crate::helpers",
-            source: LOCAL_HELPERS,
-            file_path: "shaders/tests/compose_modules.rs (helpers)",
-        }],
-    };
+    const SHADER: PassShader = pass_shader!(
+        "test::uses_local",
+        "wgsl/uses_local.wgsl",
+        modules: [("test_crate::helpers", "wgsl/local_helpers.wgsl")]
+    );
     let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
     // Twice: the module is added once and reused.
     for _ in 0..2 {
@@ -245,21 +237,16 @@ fn a_crate_local_module_is_imported_by_its_path() {
         );
     }
     // Another source under the same import path is refused, naming both files.
-    const OTHER: PassShader = PassShader {
-        name: "test::other_local",
-        source: "#import test_crate::helpers::twice\n@compute @workgroup_size(1)\nfn main() { _ = twice(1u); }\n",
-        file_path: "shaders/tests/compose_modules.rs (other)",
-        modules: &[meshlight_shaders::LocalModule {
-            name: "test_crate::helpers",
-            source: "#define_import_path test_crate::helpers\nfn twice(x: u32) -> u32 { return x + x; }\n",
-            file_path: "shaders/tests/compose_modules.rs (other helpers)",
-        }],
-    };
+    const OTHER: PassShader = pass_shader!(
+        "test::other_local",
+        "wgsl/other_local.wgsl",
+        modules: [("test_crate::helpers", "wgsl/other_helpers.wgsl")]
+    );
     let err = library.compose(&OTHER, &[]).unwrap_err().to_string();
     assert!(
         err.contains("test_crate::helpers")
-            && err.contains("(helpers)")
-            && err.contains("(other helpers)"),
+            && err.contains("wgsl/local_helpers.wgsl")
+            && err.contains("wgsl/other_helpers.wgsl"),
         "{err}"
     );
 }

@@ -1,0 +1,3 @@
+#import test_crate::helpers::twice
+@compute @workgroup_size(1)
+fn main() { _ = twice(1u); }
