@@ -18,18 +18,19 @@ const SHADER: PassShader = PassShader {
 };
 
 impl Pass for Double {
-    // The contract: what the stage reads and writes, by slot name.
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "double",
-            slots: vec![
-                Slot::read("input", Element::U32, "values"),
-                Slot::buffer("output", Access::StorageWrite, Element::U32, "doubled"),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "compute"
+    // What it is: implementation `compute` of stage `double`, whose contract says what
+    // the stage reads and writes, by slot name.
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "compute",
+            StageContract {
+                stage: "double",
+                slots: vec![
+                    Slot::read("input", Element::U32, "values"),
+                    Slot::buffer("output", Access::StorageWrite, Element::U32, "doubled"),
+                ],
+            },
+        )
     }
     // Setup: the program; its bindings come from the WGSL variables' names.
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {

@@ -7,34 +7,30 @@ use meshlight_gpu_scene::{GpuScene, SceneData, data::Limits, names};
 use meshlight_graph::*;
 use meshlight_scene::asset::format::{GroupRecord, MeshletRecord};
 use meshlight_scene::{BuildOptions, MeshletAsset, build_asset};
+use meshlight_shaders::pass_shader;
 use std::mem::size_of;
 
-const DECODE: PassShader = PassShader {
-    name: "test::decode",
-    source: include_str!("decode.wgsl"),
-    file_path: "gpu_scene/tests/decode.wgsl",
-    modules: &[],
-};
+const DECODE: PassShader = pass_shader!("test::decode", "decode.wgsl");
 
 struct Decode {
     meshlets: u32,
 }
 
 impl Pass for Decode {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "decode",
-            slots: vec![
-                Slot::buffer("meshlets", Access::StorageRead, elements::MESHLET, ""),
-                Slot::buffer("payload", Access::StorageRead, Element::U32, ""),
-                Slot::buffer("meshes", Access::StorageRead, elements::MESH, ""),
-                Slot::buffer("vertices", Access::StorageWrite, Element::VEC4_F32, ""),
-                Slot::buffer("triangles", Access::StorageWrite, Element::VEC4_F32, ""),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "test"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "test",
+            StageContract {
+                stage: "decode",
+                slots: vec![
+                    Slot::buffer("meshlets", Access::StorageRead, elements::MESHLET, ""),
+                    Slot::buffer("payload", Access::StorageRead, Element::U32, ""),
+                    Slot::buffer("meshes", Access::StorageRead, elements::MESH, ""),
+                    Slot::buffer("vertices", Access::StorageWrite, Element::VEC4_F32, ""),
+                    Slot::buffer("triangles", Access::StorageWrite, Element::VEC4_F32, ""),
+                ],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let layout = BindingLayout::compute("decode")
@@ -50,13 +46,8 @@ impl Pass for Decode {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let p = ctx.compute("decode")?;
-        let bg = ctx.bind_group(&p, 0, &[])?;
-        let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&p.pipeline);
-        pass.set_bind_group(0, &bg, &[]);
-        pass.dispatch_workgroups(self.meshlets.min(65_535), self.meshlets.div_ceil(65_535), 1);
-        Ok(())
+        let grid = [self.meshlets.min(65_535), self.meshlets.div_ceil(65_535), 1];
+        ctx.dispatch_compute("decode", &[], Workgroups::Direct(grid))
     }
 }
 

@@ -346,18 +346,18 @@ impl GraphBuilder {
             });
         }
         let first = candidates.remove(0);
-        let contract = first.contract();
+        let contract = first.implementation().contract;
         for c in &candidates {
-            let other = c.contract();
+            let other = c.implementation().contract;
             if other.stage != contract.stage || other.slot_names() != contract.slot_names() {
                 return Err(GraphError::Parameter {
                     pass: name.to_string(),
                     message: format!(
                         "candidate `{}` implements stage `{}` with slots [{}], but `{}` implements `{}` with [{}]; a choice's candidates must share one contract",
-                        c.implementation(),
+                        c.implementation().name,
                         other.stage,
                         other.slot_names().join(", "),
-                        first.implementation(),
+                        first.implementation().name,
                         contract.stage,
                         contract.slot_names().join(", ")
                     ),
@@ -384,7 +384,7 @@ impl GraphBuilder {
                 name: name.to_string(),
             });
         }
-        let mut contract = pass.contract();
+        let mut contract = pass.implementation().contract;
         for (slot, _, _) in &bindings.entries {
             if contract.slot(slot).is_none() {
                 return Err(GraphError::UnknownSlot {

@@ -49,7 +49,10 @@ impl Choice {
         if wanted == AUTO {
             return Ok(Self::auto(candidates));
         }
-        match candidates.iter().position(|c| c.implementation() == wanted) {
+        match candidates
+            .iter()
+            .position(|c| c.implementation().name == wanted)
+        {
             Some(i) => {
                 let named = candidates.remove(i);
                 Ok(Self::named(named, candidates))
@@ -57,12 +60,12 @@ impl Choice {
             None => Err(GraphError::UnknownImplementation {
                 stage: candidates
                     .first()
-                    .map(|c| c.contract().stage.to_string())
+                    .map(|c| c.implementation().contract.stage.to_string())
                     .unwrap_or_default(),
                 implementation: wanted.to_string(),
                 known: candidates
                     .iter()
-                    .map(|c| c.implementation())
+                    .map(|c| c.implementation().name)
                     .chain([AUTO])
                     .collect::<Vec<_>>()
                     .join(", "),
@@ -75,7 +78,10 @@ impl Choice {
     }
     /// The candidates' implementation names, in order.
     pub fn implementations(&self) -> Vec<&'static str> {
-        self.candidates.iter().map(|c| c.implementation()).collect()
+        self.candidates
+            .iter()
+            .map(|c| c.implementation().name)
+            .collect()
     }
 }
 
@@ -114,12 +120,12 @@ pub(crate) fn resolve(
         .iter()
         .zip(&judged)
         .map(|(c, m)| CandidatePlan {
-            implementation: c.implementation(),
+            implementation: c.implementation().name,
             missing: m.iter_names().map(|(n, _)| n.to_string()).collect(),
         })
         .collect();
     let runnable = judged.iter().position(|m| m.is_empty());
-    let stage = candidates[0].contract().stage.to_string();
+    let stage = candidates[0].implementation().contract.stage.to_string();
     let order = plans
         .iter()
         .map(|p| format!("`{}`", p.implementation))

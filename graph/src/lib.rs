@@ -45,7 +45,7 @@ pub use exec::{
 };
 pub use layout::{BindingLayout, BindingSource, LayoutEntry, SamplerKind};
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
-pub use pass::{Pass, SetupContext, Visibility64};
+pub use pass::{Implementation, Pass, SetupContext, Visibility64};
 pub use plan::{Batch, CandidatePlan, ChoicePlan, LoadOp, Plan, Recording, Selection, StoreOp};
 pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};
 pub use readback::STAGE as READBACK_STAGE;
@@ -63,8 +63,8 @@ pub use resource::{
 /// of a stage implementation need nothing else from this crate.
 pub mod prelude {
     pub use crate::{
-        Access, BindingLayout, BufferDesc, Element, GraphError, Pass, PassShader, ProgramDesc,
-        RecordContext, Result, SamplerKind, SetupContext, ShaderDef, ShaderDefs, Slot,
+        Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, PassShader,
+        ProgramDesc, RecordContext, Result, SamplerKind, SetupContext, ShaderDef, ShaderDefs, Slot,
         StageContract, TextureDesc, Visibility64, Workgroups,
     };
 }

@@ -14,10 +14,9 @@ use meshlight_shaders::{ShaderDef, ShaderDefs};
 /// A pass owns no GPU resources the graph should schedule: everything it reads or writes
 /// comes through its slots or through scratch buffers declared in `setup`.
 pub trait Pass: Send + Sync {
-    /// The contract of the stage this pass implements.
-    fn contract(&self) -> StageContract;
-    /// The implementation's name within its stage, e.g. `scan_fan` or `two_step`.
-    fn implementation(&self) -> &'static str;
+    /// Which implementation of which stage this pass is: pipeline files, the registry,
+    /// `auto` and every report name a pass by this pair.
+    fn implementation(&self) -> Implementation;
     /// Declares features, shader defs, scratch buffers and size requirements. Runs at
     /// compile time, with the adapter's features known, so the pass can pick a variant.
     fn setup(&self, ctx: &mut SetupContext) -> Result<()>;
@@ -29,6 +28,23 @@ pub trait Pass: Send + Sync {
     /// pass adapts to whatever is bound.
     fn visibility64(&self) -> Option<Visibility64> {
         None
+    }
+}
+
+/// A pass's identity: its name within its stage and the stage's contract. One value, so
+/// a pass says what it is in one place.
+#[derive(Clone, Debug)]
+pub struct Implementation {
+    /// The implementation's name within its stage, e.g. `scan_fan` or `two_step`.
+    pub name: &'static str,
+    /// The contract of the stage this pass implements.
+    pub contract: StageContract,
+}
+
+impl Implementation {
+    /// The implementation `name` of the stage `contract` describes.
+    pub fn new(name: &'static str, contract: StageContract) -> Self {
+        Self { name, contract }
     }
 }
 

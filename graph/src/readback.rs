@@ -4,7 +4,7 @@
 use crate::access::Access;
 use crate::contract::{Slot, SlotKind, StageContract};
 use crate::error::{GraphError, Result};
-use crate::pass::{Pass, SetupContext};
+use crate::pass::{Implementation, Pass, SetupContext};
 use crate::record::RecordContext;
 
 /// Stage name of readback passes in plans and dumps.
@@ -27,21 +27,21 @@ impl ReadbackPass {
 }
 
 impl Pass for ReadbackPass {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: STAGE,
-            slots: vec![Slot {
-                name: "source",
-                access: Access::CopySrc,
-                also: Vec::new(),
-                kind: SlotKind::Buffer { element: None },
-                doc: "the buffer copied to the CPU",
-                optional: false,
-            }],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "ring"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "ring",
+            StageContract {
+                stage: STAGE,
+                slots: vec![Slot {
+                    name: "source",
+                    access: Access::CopySrc,
+                    also: Vec::new(),
+                    kind: SlotKind::Buffer { element: None },
+                    doc: "the buffer copied to the CPU",
+                    optional: false,
+                }],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         if self.latency == 0 {

@@ -5,7 +5,7 @@ use crate::access::Access;
 use crate::builder::{Bindings, GraphBuilder};
 use crate::contract::{Slot, StageContract};
 use crate::error::Result;
-use crate::pass::{Pass, SetupContext};
+use crate::pass::{Implementation, Pass, SetupContext};
 use crate::record::RecordContext;
 use crate::resource::{AnyHandle, BufferDesc, Element};
 
@@ -16,14 +16,14 @@ pub struct NoopPass {
 }
 
 impl Pass for NoopPass {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "noop",
-            slots: self.slots.clone(),
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "noop"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "noop",
+            StageContract {
+                stage: "noop",
+                slots: self.slots.clone(),
+            },
+        )
     }
     fn setup(&self, _: &mut SetupContext) -> Result<()> {
         Ok(())
@@ -46,20 +46,20 @@ pub struct CopyTextureToBuffer {
 }
 
 impl Pass for CopyTextureToBuffer {
-    fn contract(&self) -> StageContract {
+    fn implementation(&self) -> Implementation {
         // Any buffer: the test reads it as whatever the texels are.
         let mut buffer = Slot::buffer("buffer", Access::CopyDst, Element::BYTES, "");
         buffer.kind = crate::contract::SlotKind::Buffer { element: None };
-        StageContract {
-            stage: "copy_texture_to_buffer",
-            slots: vec![
-                Slot::texture("texture", Access::CopySrc, Some(self.format), ""),
-                buffer,
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "copy"
+        Implementation::new(
+            "copy",
+            StageContract {
+                stage: "copy_texture_to_buffer",
+                slots: vec![
+                    Slot::texture("texture", Access::CopySrc, Some(self.format), ""),
+                    buffer,
+                ],
+            },
+        )
     }
     fn setup(&self, _: &mut SetupContext) -> Result<()> {
         Ok(())

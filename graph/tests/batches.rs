@@ -76,24 +76,24 @@ struct Step {
 }
 
 impl Pass for Step {
-    fn contract(&self) -> StageContract {
+    fn implementation(&self) -> Implementation {
         let access = if self.clear {
             Access::ClearedReadWrite
         } else {
             Access::StorageReadWrite
         };
-        StageContract {
-            stage: "step",
-            slots: vec![Slot::buffer(
-                "data",
-                access,
-                Element::U32,
-                "updated in place",
-            )],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "compute"
+        Implementation::new(
+            "compute",
+            StageContract {
+                stage: "step",
+                slots: vec![Slot::buffer(
+                    "data",
+                    access,
+                    Element::U32,
+                    "updated in place",
+                )],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let layout = BindingLayout::compute("step").slot(0, "data").uniform(1);
@@ -164,11 +164,11 @@ fn sneaky_clear() -> impl Pass {
 struct Oversized;
 
 impl Pass for Oversized {
-    fn contract(&self) -> StageContract {
-        Step { k: 0, clear: false }.contract()
-    }
-    fn implementation(&self) -> &'static str {
-        "oversized"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "oversized",
+            Step { k: 0, clear: false }.implementation().contract,
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         Step { k: 0, clear: false }.setup(ctx)
@@ -340,17 +340,17 @@ fn a_render_pass_between_compute_passes_sees_the_first_and_is_seen_by_the_next()
         .unwrap();
     struct ReadBack;
     impl Pass for ReadBack {
-        fn contract(&self) -> StageContract {
-            StageContract {
-                stage: "read_back",
-                slots: vec![
-                    Slot::texture("picture", Access::Sampled, None, ""),
-                    Slot::buffer("texels", Access::StorageWrite, Element::U32, ""),
-                ],
-            }
-        }
-        fn implementation(&self) -> &'static str {
-            "compute"
+        fn implementation(&self) -> Implementation {
+            Implementation::new(
+                "compute",
+                StageContract {
+                    stage: "read_back",
+                    slots: vec![
+                        Slot::texture("picture", Access::Sampled, None, ""),
+                        Slot::buffer("texels", Access::StorageWrite, Element::U32, ""),
+                    ],
+                },
+            )
         }
         fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
             let layout = BindingLayout::compute("read_back")
@@ -638,14 +638,14 @@ struct ScratchClear {
 }
 
 impl Pass for ScratchClear {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "scratch_clear",
-            slots: vec![Slot::buffer("data", Access::StorageWrite, Element::U32, "")],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "fill"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "fill",
+            StageContract {
+                stage: "scratch_clear",
+                slots: vec![Slot::buffer("data", Access::StorageWrite, Element::U32, "")],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         support::scratch_words(ctx, N);

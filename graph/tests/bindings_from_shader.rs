@@ -82,15 +82,14 @@ struct Reflected {
 }
 
 impl Pass for Reflected {
-    fn contract(&self) -> StageContract {
-        // The arithmetic passes' `input` and `output`, under a stage name of its own.
-        StageContract {
-            stage: "scale",
-            slots: support::transform_contract().slots,
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "reflected"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "reflected", // The arithmetic passes' `input` and `output`, under a stage name of its own.
+            StageContract {
+                stage: "scale",
+                slots: support::transform_contract().slots,
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         support::scratch_words(ctx, N);

@@ -14,14 +14,14 @@ struct Raster {
 }
 
 impl Pass for Raster {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "raster",
-            slots: vec![Slot::visibility64("vis", Access::ClearedReadWrite, "")],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        self.name
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            self.name,
+            StageContract {
+                stage: "raster",
+                slots: vec![Slot::visibility64("vis", Access::ClearedReadWrite, "")],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         if self.form == Visibility64::Texture {
@@ -54,17 +54,17 @@ fn buffer() -> Box<dyn Pass> {
 struct Reader;
 
 impl Pass for Reader {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "reader",
-            slots: vec![
-                Slot::visibility64("vis", Access::StorageRead, ""),
-                Slot::buffer("out", Access::StorageWrite, Element::U32, ""),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "reader"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "reader",
+            StageContract {
+                stage: "reader",
+                slots: vec![
+                    Slot::visibility64("vis", Access::StorageRead, ""),
+                    Slot::buffer("out", Access::StorageWrite, Element::U32, ""),
+                ],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         struct Defs(bool);

@@ -60,17 +60,17 @@ struct MeshRaster {
 }
 
 impl Pass for MeshRaster {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "hw_raster",
-            slots: vec![
-                Slot::buffer("rects", Access::StorageRead, Element::named("Rect", 32), ""),
-                Slot::buffer("vis", Access::ClearedReadWrite, Element::U64, ""),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "mesh_shader"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "mesh_shader",
+            StageContract {
+                stage: "hw_raster",
+                slots: vec![
+                    Slot::buffer("rects", Access::StorageRead, Element::named("Rect", 32), ""),
+                    Slot::buffer("vis", Access::ClearedReadWrite, Element::U64, ""),
+                ],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.require_features(

@@ -20,17 +20,17 @@ struct TextureRaster {
 }
 
 impl Pass for TextureRaster {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "raster",
-            slots: vec![
-                rects_slot(),
-                Slot::visibility64("vis", Access::ClearedReadWrite, ""),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "texture_atomics"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "texture_atomics",
+            StageContract {
+                stage: "raster",
+                slots: vec![
+                    rects_slot(),
+                    Slot::visibility64("vis", Access::ClearedReadWrite, ""),
+                ],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.require_features(wgpu::Features::SHADER_INT64);

@@ -637,19 +637,19 @@ static FLOOR_SHADER: PassShader = PassShader {
 struct FloorStep;
 
 impl Pass for FloorStep {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "floor_step",
-            slots: vec![Slot::buffer(
-                "counter",
-                Access::StorageReadWrite,
-                Element::U32,
-                "incremented by each step",
-            )],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "one_thread"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "one_thread",
+            StageContract {
+                stage: "floor_step",
+                slots: vec![Slot::buffer(
+                    "counter",
+                    Access::StorageReadWrite,
+                    Element::U32,
+                    "incremented by each step",
+                )],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.program(

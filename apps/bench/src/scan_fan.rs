@@ -11,8 +11,8 @@
 
 use meshlight::graph::{
     Access, BindingLayout, Bindings, BufferDesc, CompileOptions, Element, Executor, GraphBuilder,
-    GraphError, Imports, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
-    StageContract,
+    GraphError, Implementation, Imports, Pass, ProgramDesc, RecordContext, Result, SetupContext,
+    Slot, StageContract,
 };
 use meshlight::scan_fan::{
     DecoupledLookback, MAX_COUNT, ScanFan, ScanOptions, Subgroups, TileAccess, TwoStep,
@@ -156,11 +156,11 @@ impl ComputeCopy {
 }
 
 impl Pass for ComputeCopy {
-    fn contract(&self) -> StageContract {
-        copy_contract(Access::StorageRead, Access::StorageWrite)
-    }
-    fn implementation(&self) -> &'static str {
-        "compute"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "compute",
+            copy_contract(Access::StorageRead, Access::StorageWrite),
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         // Named: the shader reads the same two slots as 16-byte and 4-byte words.
@@ -206,11 +206,11 @@ impl Pass for ComputeCopy {
 struct CopyCommand;
 
 impl Pass for CopyCommand {
-    fn contract(&self) -> StageContract {
-        copy_contract(Access::CopySrc, Access::CopyDst)
-    }
-    fn implementation(&self) -> &'static str {
-        "copy_buffer_to_buffer"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "copy_buffer_to_buffer",
+            copy_contract(Access::CopySrc, Access::CopyDst),
+        )
     }
     fn setup(&self, _: &mut SetupContext) -> Result<()> {
         Ok(())

@@ -3,8 +3,8 @@
 //! that texture into the window's surface, under the overlay.
 
 use meshlight::graph::{
-    Access, Bindings, GraphBuilder, Pass, RecordContext, Result, SetupContext, Slot, StageContract,
-    TextureDesc,
+    Access, Bindings, GraphBuilder, Implementation, Pass, RecordContext, Result, SetupContext,
+    Slot, StageContract, TextureDesc,
 };
 use meshlight::resolve::COLOR_FORMAT;
 use meshlight_virtual_geometry::FrameSettings;
@@ -22,27 +22,27 @@ pub const PRESENT_USAGE: wgpu::TextureUsages =
 struct CopyToPresent;
 
 impl Pass for CopyToPresent {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: STAGE,
-            slots: vec![
-                Slot::texture(
-                    "color",
-                    Access::CopySrc,
-                    Some(COLOR_FORMAT),
-                    "the frame's resolved image",
-                ),
-                Slot::texture(
-                    PRESENT,
-                    Access::CopyDst,
-                    Some(COLOR_FORMAT),
-                    "the viewer's texture, drawn into the window",
-                ),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "copy"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "copy",
+            StageContract {
+                stage: STAGE,
+                slots: vec![
+                    Slot::texture(
+                        "color",
+                        Access::CopySrc,
+                        Some(COLOR_FORMAT),
+                        "the frame's resolved image",
+                    ),
+                    Slot::texture(
+                        PRESENT,
+                        Access::CopyDst,
+                        Some(COLOR_FORMAT),
+                        "the viewer's texture, drawn into the window",
+                    ),
+                ],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext<'_>) -> Result<()> {
         ctx.needs_encoder("a texture copy is an encoder command");

@@ -7,8 +7,8 @@ use meshlight::gpu_scene::SceneData;
 use meshlight::gpu_scene::data::Limits;
 use meshlight::graph::file::{Params, Registry};
 use meshlight::graph::{
-    BindingLayout, Pass, PassShader, ProgramDesc, RecordContext, Result, SetupContext,
-    StageContract, Workgroups,
+    BindingLayout, Implementation, Pass, PassShader, ProgramDesc, RecordContext, Result,
+    SetupContext, Workgroups,
 };
 use meshlight::remap_dispatch;
 use meshlight::scene::{BuildOptions, build_asset, procedural_mesh};
@@ -29,11 +29,8 @@ struct Square {
 }
 
 impl Pass for Square {
-    fn contract(&self) -> StageContract {
-        remap_dispatch::contract()
-    }
-    fn implementation(&self) -> &'static str {
-        "square"
+    fn implementation(&self) -> Implementation {
+        Implementation::new("square", remap_dispatch::contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("count", (self.count_word as u64 + 1) * 4);

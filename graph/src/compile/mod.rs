@@ -343,7 +343,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         .map(|(p, (node, setup))| PassPlan {
             name: node.name.clone(),
             stage: node.contract.stage,
-            implementation: node.pass.implementation(),
+            implementation: node.pass.implementation().name,
             choice: choices[p].clone(),
             slots: slot_uses(&resources, &table, &live, node),
             scratch: scratch_of[p].clone(),
@@ -639,7 +639,7 @@ fn visibility_forms(
                     expected: format!(
                         "a {} (implementation `{}` writes one); declare `{}` with `visibility = {{ width_param = ..., height_param = ... }}` (`create_visibility64` in code) so it follows the implementation",
                         form_name(wants),
-                        node.pass.implementation(),
+                        node.pass.implementation().name,
                         res.name
                     ),
                     found: format!("a {}", res.desc.kind_name()),

@@ -85,7 +85,7 @@ impl Registry {
             }
         }
         if let Some(named) = named {
-            candidates.retain(|c| c.implementation() != implementation);
+            candidates.retain(|c| c.implementation().name != implementation);
             candidates.insert(0, named);
         }
         Choice::select(implementation, candidates).map(Some)

@@ -36,11 +36,8 @@ impl Fake {
 }
 
 impl Pass for Fake {
-    fn contract(&self) -> StageContract {
-        self.contract.clone()
-    }
-    fn implementation(&self) -> &'static str {
-        "fake"
+    fn implementation(&self) -> Implementation {
+        Implementation::new("fake", self.contract.clone())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.require_features(self.required);
@@ -92,11 +89,8 @@ where
     S: Fn(&mut SetupContext) -> Result<()> + Send + Sync,
     R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync,
 {
-    fn contract(&self) -> StageContract {
-        self.contract.clone()
-    }
-    fn implementation(&self) -> &'static str {
-        "test"
+    fn implementation(&self) -> Implementation {
+        Implementation::new("test", self.contract.clone())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         (self.setup)(ctx)

@@ -181,11 +181,8 @@ fn dispatch(ctx: &mut RecordContext<'_>, name: &str, count: u32, k: u32) -> Resu
 }
 
 impl Pass for Arith {
-    fn contract(&self) -> StageContract {
-        (self.contract)()
-    }
-    fn implementation(&self) -> &'static str {
-        self.entry
+    fn implementation(&self) -> Implementation {
+        Implementation::new(self.entry, (self.contract)())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("output", self.count as u64 * 4);
@@ -198,11 +195,8 @@ impl Pass for Arith {
 }
 
 impl Pass for AddTwice {
-    fn contract(&self) -> StageContract {
-        transform_contract()
-    }
-    fn implementation(&self) -> &'static str {
-        "add_twice"
+    fn implementation(&self) -> Implementation {
+        Implementation::new("add_twice", transform_contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.scratch_buffer(

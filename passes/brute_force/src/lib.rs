@@ -49,8 +49,8 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::StoreOp;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, ColorTarget, DepthTarget, Element, GraphError, Pass, Primitive,
-    ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
+    Access, BindingLayout, ColorTarget, DepthTarget, Element, GraphError, Implementation, Pass,
+    Primitive, ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
 };
 use meshlight_scene::Mesh;
 use meshlight_shaders::cpu::layout::Instance;
@@ -225,11 +225,8 @@ fn store_op(ctx: &RecordContext<'_>, slot: &str) -> wgpu::StoreOp {
 }
 
 impl Pass for BruteForce {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        IMPLEMENTATION
+    fn implementation(&self) -> Implementation {
+        Implementation::new(IMPLEMENTATION, contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.validate()?;

@@ -160,8 +160,8 @@ fn build(text: &str) -> Result<Box<dyn Pass>> {
 #[test]
 fn pipeline_files_get_the_pass_and_errors_naming_what_to_change() {
     let pass = build("width = 96\nheight = 64\nindex_count = 300\ninstance_count = 4").unwrap();
-    assert_eq!(pass.implementation(), "instanced_draw");
-    assert_eq!(pass.contract().stage, "brute_force");
+    assert_eq!(pass.implementation().name, "instanced_draw");
+    assert_eq!(pass.implementation().contract.stage, "brute_force");
     let m = parameter_message(build(
         "width = 0\nheight = 64\nindex_count = 300\ninstance_count = 4",
     ));

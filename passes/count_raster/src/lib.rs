@@ -48,8 +48,8 @@ pub mod testbed;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, ColorAttachment, ColorTarget, Element, Pass, Primitive, ProgramDesc,
-    RecordContext, Result, SetupContext, Slot, StageContract, Workgroups,
+    Access, BindingLayout, ColorAttachment, ColorTarget, Element, Implementation, Pass, Primitive,
+    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE, check_tiles, declare_tile_target,
@@ -162,11 +162,8 @@ pub struct CountRaster {
 }
 
 impl Pass for CountRaster {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        self.walk.implementation()
+    fn implementation(&self) -> Implementation {
+        Implementation::new(self.walk.implementation(), contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         setup_common(ctx);

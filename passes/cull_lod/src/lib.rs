@@ -145,8 +145,8 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, Slot, StageContract, Workgroups,
+    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, ProgramDesc,
+    RecordContext, Result, SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
@@ -425,11 +425,8 @@ impl CullLod {
 }
 
 impl Pass for CullLod {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        IMPLEMENTATION
+    fn implementation(&self) -> Implementation {
+        Implementation::new(IMPLEMENTATION, contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.check_thresholds()?;

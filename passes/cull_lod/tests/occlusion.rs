@@ -48,18 +48,18 @@ struct CopyPyramid {
 }
 
 impl Pass for CopyPyramid {
-    fn contract(&self) -> StageContract {
+    fn implementation(&self) -> Implementation {
         let f = Some(meshlight_pass_cull_lod::PYRAMID_FORMAT);
-        StageContract {
-            stage: "copy_pyramid",
-            slots: vec![
-                Slot::texture("source", Access::CopySrc, f, ""),
-                Slot::texture("target", Access::CopyDst, f, ""),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "copy"
+        Implementation::new(
+            "copy",
+            StageContract {
+                stage: "copy_pyramid",
+                slots: vec![
+                    Slot::texture("source", Access::CopySrc, f, ""),
+                    Slot::texture("target", Access::CopyDst, f, ""),
+                ],
+            },
+        )
     }
     fn setup(&self, _: &mut SetupContext) -> Result<()> {
         Ok(())

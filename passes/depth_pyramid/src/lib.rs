@@ -97,8 +97,8 @@ pub use extent::{
 
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, ComputeProgram, Element, GraphError, Pass, ProgramDesc,
-    RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
+    Access, BindingLayout, BufferDesc, ComputeProgram, Element, GraphError, Implementation, Pass,
+    ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
 };
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 use mips::MipViews;
@@ -333,11 +333,8 @@ fn levels_layout(views: u32) -> BindingLayout {
 }
 
 impl Pass for DepthPyramid {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        self.method.name()
+    fn implementation(&self) -> Implementation {
+        Implementation::new(self.method.name(), contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.validate()?;

@@ -109,8 +109,8 @@ use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::Params;
 use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, StageContract, Workgroups,
+    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, ProgramDesc,
+    RecordContext, Result, SetupContext, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
@@ -364,11 +364,8 @@ impl HierarchyFill {
 }
 
 impl Pass for HierarchyFill {
-    fn contract(&self) -> StageContract {
-        hierarchy_contract()
-    }
-    fn implementation(&self) -> &'static str {
-        IMPLEMENTATION
+    fn implementation(&self) -> Implementation {
+        Implementation::new(IMPLEMENTATION, hierarchy_contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.check()?;

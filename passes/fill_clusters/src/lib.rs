@@ -71,8 +71,8 @@ use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, Element, GraphError, Pass, ProgramDesc, RecordContext, Result,
-    SetupContext, Slot, StageContract, Workgroups,
+    Access, BindingLayout, Element, GraphError, Implementation, Pass, ProgramDesc, RecordContext,
+    Result, SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader};
 
@@ -264,11 +264,8 @@ pub fn workgroup_grid(n: u32, limit: u32) -> [u32; 2] {
 }
 
 impl Pass for FillClusters {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        IMPLEMENTATION
+    fn implementation(&self) -> Implementation {
+        Implementation::new(IMPLEMENTATION, contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("cluster_count", 8);

@@ -68,8 +68,9 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, Element, Pass, Primitive,
-    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc, Workgroups,
+    Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, Element, Implementation, Pass,
+    Primitive, ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
+    Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
@@ -209,11 +210,8 @@ impl HwRaster {
 }
 
 impl Pass for HwRaster {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        self.feed.implementation()
+    fn implementation(&self) -> Implementation {
+        Implementation::new(self.feed.implementation(), contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let texture = ctx.is_texture("visbuffer");

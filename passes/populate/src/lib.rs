@@ -55,8 +55,8 @@ pub mod cpu;
 
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, Element, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
-    StageContract, Workgroups,
+    Access, BindingLayout, Element, Implementation, Pass, ProgramDesc, RecordContext, Result,
+    SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_pass_count_raster::{Walk, WalkShader};
 use meshlight_pass_z_slice::CLUSTER_GRID;
@@ -145,11 +145,8 @@ impl Populate {
 }
 
 impl Pass for Populate {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        self.walk.implementation()
+    fn implementation(&self) -> Implementation {
+        Implementation::new(self.walk.implementation(), contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("slice_counts", 8);

@@ -23,8 +23,8 @@
 
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, Element, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
-    StageContract, Workgroups,
+    Access, BindingLayout, Element, Implementation, Pass, ProgramDesc, RecordContext, Result,
+    SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader};
 
@@ -92,11 +92,8 @@ impl RemapDispatch {
 }
 
 impl Pass for RemapDispatch {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        "single_thread"
+    fn implementation(&self) -> Implementation {
+        Implementation::new("single_thread", contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.check_max_per_dimension(self.max_per_dimension)?;

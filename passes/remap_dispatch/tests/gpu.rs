@@ -31,19 +31,19 @@ fn consume(@builtin(workgroup_id) wg: vec3<u32>) {
 struct Consume;
 
 impl Pass for Consume {
-    fn contract(&self) -> StageContract {
-        StageContract {
-            stage: "consume",
-            slots: vec![
-                Slot::buffer("count", Access::StorageRead, Element::U32, ""),
-                Slot::buffer("args", Access::StorageRead, Element::DISPATCH_ARGS, "")
-                    .also(Access::Indirect),
-                Slot::buffer("hits", Access::ClearedReadWrite, Element::U32, ""),
-            ],
-        }
-    }
-    fn implementation(&self) -> &'static str {
-        "test"
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            "test",
+            StageContract {
+                stage: "consume",
+                slots: vec![
+                    Slot::buffer("count", Access::StorageRead, Element::U32, ""),
+                    Slot::buffer("args", Access::StorageRead, Element::DISPATCH_ARGS, "")
+                        .also(Access::Indirect),
+                    Slot::buffer("hits", Access::ClearedReadWrite, Element::U32, ""),
+                ],
+            },
+        )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let layout = BindingLayout::from_shader("consume");

@@ -130,8 +130,9 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, DepthAttachment, DepthTarget, Element, GraphError, Pass, ProgramDesc,
-    RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract, Workgroups,
+    Access, BindingLayout, DepthAttachment, DepthTarget, Element, GraphError, Implementation, Pass,
+    ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
+    Workgroups,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
@@ -288,11 +289,8 @@ struct ShadeParams {
 }
 
 impl Pass for Resolve {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        "compute"
+    fn implementation(&self) -> Implementation {
+        Implementation::new("compute", contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);

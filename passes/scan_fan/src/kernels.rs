@@ -338,11 +338,8 @@ macro_rules! scan_implementation {
         }
 
         impl meshlight_graph::Pass for $ty {
-            fn contract(&self) -> meshlight_graph::StageContract {
-                $crate::contract()
-            }
-            fn implementation(&self) -> &'static str {
-                $name
+            fn implementation(&self) -> meshlight_graph::Implementation {
+                meshlight_graph::Implementation::new($name, $crate::contract())
             }
             fn setup(&self, ctx: &mut meshlight_graph::SetupContext) -> meshlight_graph::Result<()> {
                 $crate::kernels::setup_scheme(ctx, self)

@@ -87,11 +87,11 @@ fn registry_knows_every_implementation() {
     let pass = registry
         .build("scan_fan", "decoupled_lookback", &params("count = 3"))
         .unwrap();
-    assert_eq!(pass.implementation(), "decoupled_lookback");
+    assert_eq!(pass.implementation().name, "decoupled_lookback");
     let pass = registry
         .build("scan_fan", "two_step", &params("count = 3"))
         .unwrap();
-    assert_eq!(pass.implementation(), "two_step");
+    assert_eq!(pass.implementation().name, "two_step");
 }
 
 #[test]

@@ -94,8 +94,8 @@ use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, Pass, ProgramDesc, RecordContext, Result, SetupContext, Slot,
-    StageContract, Visibility64,
+    Access, BindingLayout, Implementation, Pass, ProgramDesc, RecordContext, Result, SetupContext,
+    Slot, StageContract, Visibility64,
 };
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
@@ -269,14 +269,14 @@ impl SwRaster {
 }
 
 impl Pass for SwRaster {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        match self.target {
-            Visibility64::Buffer => "buffer",
-            Visibility64::Texture => "texture",
-        }
+    fn implementation(&self) -> Implementation {
+        Implementation::new(
+            match self.target {
+                Visibility64::Buffer => "buffer",
+                Visibility64::Texture => "texture",
+            },
+            contract(),
+        )
     }
     fn visibility64(&self) -> Option<Visibility64> {
         Some(self.target)

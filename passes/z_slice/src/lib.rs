@@ -78,8 +78,8 @@ pub use cpu::{Extent, Outcome, SliceInstance, ZSliceResult, cpu_z_slice};
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, GraphError, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, Slot, StageContract, TextureDesc, Workgroups,
+    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, ProgramDesc,
+    RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc, Workgroups,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
 use meshlight_shaders::{PassShader, pass_shader};
@@ -294,11 +294,8 @@ impl ZSlice {
 }
 
 impl Pass for ZSlice {
-    fn contract(&self) -> StageContract {
-        contract()
-    }
-    fn implementation(&self) -> &'static str {
-        IMPLEMENTATION
+    fn implementation(&self) -> Implementation {
+        Implementation::new(IMPLEMENTATION, contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.check()?;

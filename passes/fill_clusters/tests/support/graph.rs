@@ -13,7 +13,7 @@ use meshlight_pass_fill_clusters::hierarchy;
 /// hierarchy's buffers and a 4-word `hierarchy_counts`. Exports the count words and
 /// returns whether the fill walks the hierarchy.
 pub fn add_fill(g: &mut GraphBuilder, scene: &GpuScene, fill: Box<dyn Pass>) -> Result<bool> {
-    let walks = fill.implementation() == hierarchy::IMPLEMENTATION;
+    let walks = fill.implementation().name == hierarchy::IMPLEMENTATION;
     scene.import(g);
     g.create_buffer("cluster_count", BufferDesc::array(Element::U32, 2));
     if walks {
