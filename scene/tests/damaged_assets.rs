@@ -20,12 +20,17 @@ fn header(words: &mut [u32]) -> &mut AssetHeader {
     bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut words[..AssetHeader::WORDS]))
 }
 
-fn meshlet(words: &mut [u32], i: usize) -> &mut MeshletRecord {
-    let first = header(words).sections[SECTION_MESHLETS].offset as usize;
-    let n = size_of::<MeshletRecord>() / 4;
+/// Record `i` of the section `section`, whose records are `T`s, to damage in place.
+fn record<T: bytemuck::Pod>(words: &mut [u32], section: usize, i: usize) -> &mut T {
+    let first = header(words).sections[section].offset as usize;
+    let n = size_of::<T>() / 4;
     bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
         &mut words[first + i * n..first + (i + 1) * n],
     ))
+}
+
+fn meshlet(words: &mut [u32], i: usize) -> &mut MeshletRecord {
+    record(words, SECTION_MESHLETS, i)
 }
 
 #[test]
@@ -191,11 +196,7 @@ fn coordinates_beyond_the_quantiser_are_refused_at_bake_time() {
 }
 
 fn group(words: &mut [u32], i: usize) -> &mut GroupRecord {
-    let first = header(words).sections[SECTION_GROUPS].offset as usize;
-    let n = size_of::<GroupRecord>() / 4;
-    bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
-        &mut words[first + i * n..first + (i + 1) * n],
-    ))
+    record(words, SECTION_GROUPS, i)
 }
 
 fn records(words: &[u32]) -> (Vec<MeshletRecord>, Vec<GroupRecord>) {
@@ -210,6 +211,12 @@ fn records(words: &[u32]) -> (Vec<MeshletRecord>, Vec<GroupRecord>) {
     )
 }
 
+/// The first meshlet of level 1: one made by simplifying a group.
+fn first_level_one_meshlet(words: &[u32]) -> usize {
+    let (meshlets, _) = records(words);
+    meshlets.iter().position(|m| m.level() == 1).unwrap()
+}
+
 #[test]
 fn meshlets_are_stored_level_by_level() {
     refused_saying(
@@ -217,8 +224,7 @@ fn meshlets_are_stored_level_by_level() {
         "counts",
         "level by level",
         |w| {
-            let (meshlets, _) = records(w);
-            let i = meshlets.iter().position(|m| m.level() == 1).unwrap();
+            let i = first_level_one_meshlet(w);
             let m = meshlet(w, i);
             m.counts = (m.counts & 0xffff) | (2 << 16);
         },
@@ -242,8 +248,8 @@ fn group_links_must_be_consistent() {
         "source_group",
         "one level above",
         |w| {
-            let (meshlets, groups) = records(w);
-            let i = meshlets.iter().position(|m| m.level() == 1).unwrap();
+            let (_, groups) = records(w);
+            let i = first_level_one_meshlet(w);
             let other = groups.iter().position(|g| g.level == 1).unwrap();
             meshlet(w, i).source_group = other as u32;
         },
