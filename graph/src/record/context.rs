@@ -72,25 +72,44 @@ enum ImmediatesInner {
 impl Immediates {
     /// Sets the data on a compute pass before its dispatches.
     pub fn set_on_compute(&self, pass: &mut wgpu::ComputePass<'_>) {
-        match &self.inner {
-            ImmediatesInner::None => {}
-            ImmediatesInner::Native(bytes) => pass.set_immediates(0, bytes),
-            ImmediatesInner::Uniform { group, bind_group } => {
-                pass.set_bind_group(*group, bind_group, &[])
-            }
-        }
+        self.set_on(pass)
     }
     /// Sets the data on a render pass before its draws.
     pub fn set_on_render(&self, pass: &mut wgpu::RenderPass<'_>) {
+        self.set_on(pass)
+    }
+    /// The one way immediates reach either kind of pass.
+    fn set_on(&self, pass: &mut impl TakesImmediates) {
         match &self.inner {
             ImmediatesInner::None => {}
-            ImmediatesInner::Native(bytes) => pass.set_immediates(0, bytes),
-            ImmediatesInner::Uniform { group, bind_group } => {
-                pass.set_bind_group(*group, bind_group, &[])
-            }
+            ImmediatesInner::Native(bytes) => pass.native(bytes),
+            ImmediatesInner::Uniform { group, bind_group } => pass.uniform(*group, bind_group),
         }
     }
 }
+
+/// A pass immediates are set on: compute and render passes spell the two calls alike
+/// but share no wgpu trait, so this one lets [`Immediates`] match its form once.
+trait TakesImmediates {
+    /// The bytes as native immediate data, from offset 0.
+    fn native(&mut self, bytes: &[u8]);
+    /// The fallback uniform block's bind group, at `group`.
+    fn uniform(&mut self, group: u32, bind_group: &wgpu::BindGroup);
+}
+
+macro_rules! takes_immediates {
+    ($($pass:ty),*) => {$(
+        impl TakesImmediates for $pass {
+            fn native(&mut self, bytes: &[u8]) {
+                self.set_immediates(0, bytes)
+            }
+            fn uniform(&mut self, group: u32, bind_group: &wgpu::BindGroup) {
+                self.set_bind_group(group, bind_group, &[])
+            }
+        }
+    )*};
+}
+takes_immediates!(wgpu::ComputePass<'_>, wgpu::RenderPass<'_>);
 
 /// What `Pass::record` gets: the pass's bound resources, its programs, bind groups, the
 /// frame's inputs and the command encoder.
