@@ -154,20 +154,25 @@ impl GraphBuilder {
         ResourceId(self.resources.len() as u32 - 1)
     }
 
+    /// The handle to the first version of a newly declared resource: every declaration
+    /// returns one, typed by the caller as a buffer or a texture.
+    fn add_first_version<K>(
+        &mut self,
+        name: &str,
+        desc: ResourceDesc,
+        kind: ResourceKind,
+    ) -> Handle<K> {
+        Handle::new(self.add_resource(name, desc, kind), 0)
+    }
+
     /// A transient buffer: the graph allocates it from its pool and may share the memory with
     /// resources whose lifetimes do not overlap.
     pub fn create_buffer(&mut self, name: &str, desc: BufferDesc) -> Handle<Buffer> {
-        Handle::new(
-            self.add_resource(name, ResourceDesc::Buffer(desc), ResourceKind::Transient),
-            0,
-        )
+        self.add_first_version(name, ResourceDesc::Buffer(desc), ResourceKind::Transient)
     }
     /// A transient texture; see [`GraphBuilder::create_buffer`].
     pub fn create_texture(&mut self, name: &str, desc: TextureDesc) -> Handle<Texture> {
-        Handle::new(
-            self.add_resource(name, ResourceDesc::Texture(desc), ResourceKind::Transient),
-            0,
-        )
+        self.add_first_version(name, ResourceDesc::Texture(desc), ResourceKind::Transient)
     }
     /// A transient `width × height` 64-bit visibility target whose form follows the pass
     /// that clears it ([`crate::Pass::visibility64`]): a buffer of `u64` for a rasteriser
@@ -187,10 +192,12 @@ impl GraphBuilder {
         desc: BufferDesc,
         usage: wgpu::BufferUsages,
     ) -> Handle<Buffer> {
-        let kind = ResourceKind::Imported {
-            usage: ImportedUsage::Buffer(usage),
-        };
-        Handle::new(self.add_resource(name, ResourceDesc::Buffer(desc), kind), 0)
+        let usage = ImportedUsage::Buffer(usage);
+        self.add_first_version(
+            name,
+            ResourceDesc::Buffer(desc),
+            ResourceKind::Imported { usage },
+        )
     }
     /// A caller-owned texture; `usage` is what the caller created it with.
     pub fn import_texture(
@@ -199,46 +206,40 @@ impl GraphBuilder {
         desc: TextureDesc,
         usage: wgpu::TextureUsages,
     ) -> Handle<Texture> {
-        let kind = ResourceKind::Imported {
-            usage: ImportedUsage::Texture(usage),
-        };
-        Handle::new(
-            self.add_resource(name, ResourceDesc::Texture(desc), kind),
-            0,
+        let usage = ImportedUsage::Texture(usage);
+        self.add_first_version(
+            name,
+            ResourceDesc::Texture(desc),
+            ResourceKind::Imported { usage },
         )
     }
     /// A buffer carried to the next frame: write `current`; read last frame's as `prev`
     /// (named `<name>.prev`).
     pub fn history_buffer(&mut self, name: &str, desc: BufferDesc) -> History<Buffer> {
-        let (prev, current) = self.history(name, ResourceDesc::Buffer(desc));
-        History {
-            prev: Handle::new(prev, 0),
-            current: Handle::new(current, 0),
-        }
+        self.history(name, ResourceDesc::Buffer(desc))
     }
     /// A texture carried to the next frame; see [`GraphBuilder::history_buffer`].
     pub fn history_texture(&mut self, name: &str, desc: TextureDesc) -> History<Texture> {
-        let (prev, current) = self.history(name, ResourceDesc::Texture(desc));
-        History {
-            prev: Handle::new(prev, 0),
-            current: Handle::new(current, 0),
-        }
+        self.history(name, ResourceDesc::Texture(desc))
     }
-    fn history(&mut self, name: &str, desc: ResourceDesc) -> (ResourceId, ResourceId) {
+    /// Declares `name` and `<name>.prev`, each pointing at the other.
+    fn history<K>(&mut self, name: &str, desc: ResourceDesc) -> History<K> {
         let n = self.resources.len() as u32;
-        let current = self.add_resource(
+        let current: Handle<K> = self.add_first_version(
             name,
             desc.clone(),
             ResourceKind::History {
                 prev: ResourceId(n + 1),
             },
         );
-        let prev = self.add_resource(
+        let prev = self.add_first_version(
             &format!("{name}.prev"),
             desc,
-            ResourceKind::HistoryPrev { current },
+            ResourceKind::HistoryPrev {
+                current: current.id,
+            },
         );
-        (prev, current)
+        History { prev, current }
     }
     /// Keeps a transient after the frame so the caller can read it back.
     pub fn export(&mut self, handle: impl Into<AnyHandle>) {
