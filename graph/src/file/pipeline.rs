@@ -1,11 +1,11 @@
 //! Pipeline files: a TOML list of resources and pass instances, turned into a
 //! `GraphBuilder` through the code-first API, so both paths share every check.
 
-use crate::builder::{Bindings, GraphBuilder};
+use crate::builder::{Bindings, GraphBuilder, History};
 use crate::error::{GraphError, Result};
 use crate::file::{Params, Registry};
 use crate::problem::{MAX_PIPELINE_FILE_BYTES, ResourceProblem, SourceProblem};
-use crate::resource::{BufferDesc, Element, TextureDesc, TextureRange};
+use crate::resource::{BufferDesc, Element, Handle, TextureDesc, TextureRange};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::io::Read;
@@ -516,7 +516,7 @@ fn declare(
                     .into());
                 }
             };
-            let usage = buffer_usage(&r.usage)?;
+            let usage = usage_flags::<wgpu::BufferUsages>(&r.usage, "buffer")?;
             // A count from a parameter may be 0 for a while (no instances yet) and is
             // checked where it is resolved; one written in the file never changes.
             if element.size == 0 || b.count == Some(0) {
@@ -531,20 +531,15 @@ fn declare(
                 (None, Some(p)) => BufferDesc::array_param(element, p),
                 _ => return Err("give exactly one of `count` or `count_param`".into()),
             };
-            match r.kind {
-                EntryKind::Transient => drop(g.create_buffer(&r.name, desc)),
-                EntryKind::Exported => {
-                    let h = g.create_buffer(&r.name, desc);
-                    g.export(h);
-                }
-                EntryKind::Imported => {
-                    let _ = g.import_buffer(&r.name, desc, usage);
-                }
-                EntryKind::History => drop(g.history_buffer(&r.name, desc)),
-            }
+            let buffer = Declarers {
+                create: GraphBuilder::create_buffer,
+                import: GraphBuilder::import_buffer,
+                history: GraphBuilder::history_buffer,
+            };
+            buffer.declare(g, r, desc, usage);
         }
         (None, Some(t)) => {
-            let usage = texture_usage(&r.usage)?;
+            let usage = usage_flags::<wgpu::TextureUsages>(&r.usage, "texture")?;
             let format = parse_format(&t.format)?;
             let desc = TextureDesc {
                 format,
@@ -560,17 +555,12 @@ fn declare(
                 desc.mip_levels,
                 desc.layers,
             )?;
-            match r.kind {
-                EntryKind::Transient => drop(g.create_texture(&r.name, desc)),
-                EntryKind::Exported => {
-                    let h = g.create_texture(&r.name, desc);
-                    g.export(h);
-                }
-                EntryKind::Imported => {
-                    let _ = g.import_texture(&r.name, desc, usage);
-                }
-                EntryKind::History => drop(g.history_texture(&r.name, desc)),
-            }
+            let texture = Declarers {
+                create: GraphBuilder::create_texture,
+                import: GraphBuilder::import_texture,
+                history: GraphBuilder::history_texture,
+            };
+            texture.declare(g, r, desc, usage);
         }
         _ => {
             return Err(
@@ -582,31 +572,44 @@ fn declare(
     Ok(())
 }
 
-fn buffer_usage(names: &[String]) -> std::result::Result<wgpu::BufferUsages, ResourceProblem> {
-    names
-        .iter()
-        .try_fold(wgpu::BufferUsages::empty(), |acc, n| {
-            wgpu::BufferUsages::from_name(n)
-                .map(|u| acc | u)
-                .ok_or_else(|| ResourceProblem::UnknownUsage {
-                    kind: "buffer",
-                    usage: n.clone(),
-                    known: known_names(wgpu::BufferUsages::all().iter_names()),
-                })
-        })
+/// The builder's three ways to declare a buffer, or a texture: the entry's kind picks
+/// one, the same way for both forms.
+struct Declarers<D, U, K> {
+    create: fn(&mut GraphBuilder, &str, D) -> Handle<K>,
+    import: fn(&mut GraphBuilder, &str, D, U) -> Handle<K>,
+    history: fn(&mut GraphBuilder, &str, D) -> History<K>,
 }
-fn texture_usage(names: &[String]) -> std::result::Result<wgpu::TextureUsages, ResourceProblem> {
-    names
-        .iter()
-        .try_fold(wgpu::TextureUsages::empty(), |acc, n| {
-            wgpu::TextureUsages::from_name(n)
-                .map(|u| acc | u)
-                .ok_or_else(|| ResourceProblem::UnknownUsage {
-                    kind: "texture",
-                    usage: n.clone(),
-                    known: known_names(wgpu::TextureUsages::all().iter_names()),
-                })
-        })
+
+impl<D, U, K> Declarers<D, U, K> {
+    /// Declares `r` as `desc`; `usage` is read only by an imported entry.
+    fn declare(&self, g: &mut GraphBuilder, r: &ResourceEntry, desc: D, usage: U) {
+        match r.kind {
+            EntryKind::Transient => drop((self.create)(g, &r.name, desc)),
+            EntryKind::Exported => {
+                let h = (self.create)(g, &r.name, desc);
+                g.export(h);
+            }
+            EntryKind::Imported => drop((self.import)(g, &r.name, desc, usage)),
+            EntryKind::History => drop((self.history)(g, &r.name, desc)),
+        }
+    }
+}
+
+/// An entry's `usage` names as the wgpu flags of its `kind` (`buffer` or `texture`); a
+/// name the flags lack is refused with the ones they have.
+fn usage_flags<F: bitflags::Flags + Copy>(
+    names: &[String],
+    kind: &'static str,
+) -> std::result::Result<F, ResourceProblem> {
+    names.iter().try_fold(F::empty(), |acc, n| {
+        F::from_name(n)
+            .map(|u| acc.union(u))
+            .ok_or_else(|| ResourceProblem::UnknownUsage {
+                kind,
+                usage: n.clone(),
+                known: known_names(F::all().iter_names()),
+            })
+    })
 }
 
 /// The flag names a `usage` list may hold, as wgpu spells them.
