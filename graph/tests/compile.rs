@@ -120,10 +120,7 @@ fn read_of_a_transient_nothing_writes_is_an_error() {
         Bindings::new(),
     )
     .unwrap();
-    let e = compile_error(g);
-    let GraphError::ReadWithoutWriter { pass, resource, .. } = e else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(GraphError::ReadWithoutWriter { pass, resource, .. } = g);
     assert_eq!(
         (pass.as_str(), resource.as_str()),
         ("reader", "never_written")
@@ -156,18 +153,16 @@ fn stale_handle_is_an_error_naming_the_writer() {
         Bindings::new().bind("t", t1),
     )
     .unwrap();
-    let e = compile_error(g);
-    let GraphError::StaleVersion {
-        pass,
-        resource,
-        given,
-        current,
-        writer,
-        ..
-    } = e
-    else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(
+        GraphError::StaleVersion {
+            pass,
+            resource,
+            given,
+            current,
+            writer,
+            ..
+        } = g
+    );
     assert_eq!(
         (
             pass.as_str(),
@@ -186,17 +181,15 @@ fn element_and_kind_mismatches_are_errors() {
     g.import_buffer("out", BufferDesc::array(Element::F32, 4), IMPORT_USAGE);
     g.add_pass("writer", Fake::rw(&[], &["out"]), Bindings::new())
         .unwrap();
-    let e = compile_error(g);
-    let GraphError::DescriptorMismatch {
-        pass,
-        slot,
-        expected,
-        found,
-        ..
-    } = e
-    else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(
+        GraphError::DescriptorMismatch {
+            pass,
+            slot,
+            expected,
+            found,
+            ..
+        } = g
+    );
     assert_eq!((pass.as_str(), slot.as_str()), ("writer", "out"));
     assert!(
         expected.contains("u32") && found.contains("f32"),
@@ -211,10 +204,7 @@ fn element_and_kind_mismatches_are_errors() {
     );
     g.add_pass("writer", Fake::rw(&[], &["out"]), Bindings::new())
         .unwrap();
-    assert!(matches!(
-        compile_error(g),
-        GraphError::DescriptorMismatch { .. }
-    ));
+    let_compile_error!(GraphError::DescriptorMismatch { .. } = g);
 
     let mut g = GraphBuilder::new();
     g.import_texture(
@@ -230,13 +220,13 @@ fn element_and_kind_mismatches_are_errors() {
     );
     g.add_pass("writer", Fake::new("t", vec![slot]), Bindings::new())
         .unwrap();
-    let e = compile_error(g);
-    let GraphError::DescriptorMismatch {
-        expected, found, ..
-    } = e
-    else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(
+        GraphError::DescriptorMismatch {
+            expected,
+            found,
+            ..
+        } = g
+    );
     assert_eq!(
         (expected.as_str(), found.as_str()),
         ("a r32float texture", "a rgba8unorm texture")
@@ -249,13 +239,13 @@ fn usage_the_import_does_not_allow_is_an_error() {
     g.import_buffer("out", u32s(4), wgpu::BufferUsages::COPY_SRC);
     g.add_pass("writer", Fake::rw(&[], &["out"]), Bindings::new())
         .unwrap();
-    let e = compile_error(g);
-    let GraphError::UsageNotAllowed {
-        resource, reason, ..
-    } = e
-    else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(
+        GraphError::UsageNotAllowed {
+            resource,
+            reason,
+            ..
+        } = g
+    );
     assert_eq!(resource, "out");
     assert!(reason.contains("STORAGE"), "{reason}");
     // A buffer in an indirect slot is fine; a texture there is not.
@@ -279,10 +269,7 @@ fn usage_the_import_does_not_allow_is_an_error() {
     ];
     g.add_pass("draw", Fake::new("t", slots), Bindings::new())
         .unwrap();
-    assert!(matches!(
-        compile_error(g),
-        GraphError::UsageNotAllowed { .. }
-    ));
+    let_compile_error!(GraphError::UsageNotAllowed { .. } = g);
 }
 
 #[test]
@@ -295,10 +282,7 @@ fn writing_last_frames_history_is_an_error() {
         Bindings::new().bind("out", h.prev),
     )
     .unwrap();
-    assert!(matches!(
-        compile_error(g),
-        GraphError::ReadOnlyResource { .. }
-    ));
+    let_compile_error!(GraphError::ReadOnlyResource { .. } = g);
 }
 
 #[test]
@@ -306,10 +290,7 @@ fn duplicate_names_are_errors() {
     let mut g = GraphBuilder::new();
     g.create_buffer("x", u32s(4));
     g.create_buffer("x", u32s(4));
-    let e = compile_error(g);
-    let GraphError::DuplicateName { what, name } = e else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(GraphError::DuplicateName { what, name } = g);
     assert_eq!((what, name.as_str()), ("resource", "x"));
     let mut g = GraphBuilder::new();
     g.create_buffer("x", u32s(4));
@@ -328,10 +309,7 @@ fn required_feature_missing_on_the_adapter_is_an_error() {
     let mut p = Fake::rw(&[], &["out"]);
     p.required = wgpu::Features::TEXTURE_INT64_ATOMIC;
     g.add_pass("raster", p, Bindings::new()).unwrap();
-    let e = compile_error(g);
-    let GraphError::MissingFeature { pass, features, .. } = e else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(GraphError::MissingFeature { pass, features, .. } = g);
     assert_eq!(
         (pass.as_str(), features.as_str()),
         ("raster", "TEXTURE_INT64_ATOMIC")
@@ -489,16 +467,14 @@ fn one_resource_in_a_read_and_a_write_slot_of_one_pass_is_an_error() {
             .bind_named("w", "out"),
     )
     .unwrap();
-    let e = compile_error(g);
-    let GraphError::UsageNotAllowed {
-        pass,
-        resource,
-        reason,
-        ..
-    } = e
-    else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(
+        GraphError::UsageNotAllowed {
+            pass,
+            resource,
+            reason,
+            ..
+        } = g
+    );
     assert_eq!((pass.as_str(), resource.as_str()), ("p", "out"));
     assert!(reason.contains("another slot"), "{reason}");
 }

@@ -34,10 +34,7 @@ fn a_size_that_overflows_u64_is_an_error_not_a_wrapped_size() {
     let h = g.create_buffer("huge", desc);
     g.export(h);
     one_writer(&mut g, "huge");
-    let e = compile_error(g);
-    let GraphError::SizeOverflow { resource } = e else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(GraphError::SizeOverflow { resource } = g);
     assert_eq!(resource, "huge");
 }
 
@@ -51,13 +48,14 @@ fn a_buffer_over_max_buffer_size_is_a_compile_error() {
         "four_tib",
         Slot::buffer("out", Access::CopyDst, Element::BYTES, ""),
     );
-    let e = compile_error(g);
-    let GraphError::LimitExceeded {
-        what, limit, max, ..
-    } = e
-    else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(
+        GraphError::LimitExceeded {
+            what,
+            limit,
+            max,
+            ..
+        } = g
+    );
     assert!(what.contains("four_tib"), "{what}");
     assert_eq!(limit, "max_buffer_size");
     assert_eq!(max, limits().max_buffer_size);
@@ -83,10 +81,7 @@ fn a_storage_binding_over_its_limit_names_the_pass_slot_and_limit() {
         Bindings::new().bind_named("out", "big"),
     )
     .unwrap();
-    let e = compile_error(g);
-    let GraphError::LimitExceeded { what, limit, .. } = e else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(GraphError::LimitExceeded { what, limit, .. } = g);
     assert!(
         what.contains("`big`") && what.contains("`out`") && what.contains("`w`"),
         "{what}"
@@ -131,10 +126,7 @@ fn a_texture_over_the_dimension_limit_is_a_compile_error() {
     );
     g.export(t);
     one_texture_writer(&mut g, "wide");
-    let e = compile_error(g);
-    let GraphError::LimitExceeded { what, limit, .. } = e else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(GraphError::LimitExceeded { what, limit, .. } = g);
     assert!(what.contains("wide"));
     assert_eq!(limit, "max_texture_dimension_2d");
 }
@@ -156,10 +148,7 @@ fn a_declared_dispatch_over_the_per_dimension_limit_is_a_compile_error() {
     let mut g = GraphBuilder::new();
     g.import_buffer("out", u32s(4), IMPORT_USAGE);
     g.add_pass("wide", wide, Bindings::new()).unwrap();
-    let e = compile_error(g);
-    let GraphError::LimitExceeded { what, limit, .. } = e else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(GraphError::LimitExceeded { what, limit, .. } = g);
     assert!(what.contains("`main`") && what.contains("`wide`"), "{what}");
     assert_eq!(limit, "max_compute_workgroups_per_dimension");
 }
@@ -216,13 +205,13 @@ fn size_parameters_resize_buffers_and_a_bad_value_leaves_the_plan_as_it_was() {
     let h = g.create_buffer("list", BufferDesc::array_param(Element::U32, "slotz"));
     g.export(h);
     one_writer(&mut g, "list");
-    let e = compile_error(g);
-    let GraphError::UnknownParam {
-        resource, param, ..
-    } = e
-    else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(
+        GraphError::UnknownParam {
+            resource,
+            param,
+            ..
+        } = g
+    );
     assert_eq!((resource.as_str(), param.as_str()), ("list", "slotz"))
 }
 
@@ -288,10 +277,7 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
         let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_full_mips();
         let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
         add_mip_pass(&mut g, "bad", t, src, dst).unwrap();
-        let e = compile_error(g);
-        let GraphError::UsageNotAllowed { pass, reason, .. } = e else {
-            panic!("{e:?}");
-        };
+        let_compile_error!(GraphError::UsageNotAllowed { pass, reason, .. } = g);
         assert_eq!(pass, "bad");
         assert!(reason.contains("overlapping"), "{reason}");
     }
@@ -300,10 +286,7 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
     let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_mips(2);
     let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
     add_mip_pass(&mut g, "bad", t, TextureRange::mip(0), TextureRange::mip(2)).unwrap();
-    assert!(matches!(
-        compile_error(g),
-        GraphError::DescriptorMismatch { .. }
-    ));
+    let_compile_error!(GraphError::DescriptorMismatch { .. } = g);
 }
 
 #[test]
@@ -321,10 +304,7 @@ fn texture_arrays_and_layer_ranges_plan_like_mips() {
     );
     // Layer 1 has no writer yet.
     assert!(out.is_ok());
-    assert!(matches!(
-        compile_error(g),
-        GraphError::ReadWithoutWriter { .. }
-    ));
+    let_compile_error!(GraphError::ReadWithoutWriter { .. } = g);
 }
 
 #[test]
@@ -399,10 +379,7 @@ fn a_64_bit_visibility_slot_takes_a_u64_buffer_or_an_r64uint_texture() {
             .contains(wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::STORAGE_ATOMIC)
     );
     assert!(c.plan.passes[0].required_features.contains(atomics));
-    let e = compile_error(build());
-    let GraphError::MissingFeature { pass, features, .. } = e else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(GraphError::MissingFeature { pass, features, .. } = build());
     assert_eq!(pass, "raster");
     assert!(features.contains("TEXTURE_INT64_ATOMIC"), "{features}");
 
@@ -415,13 +392,13 @@ fn a_64_bit_visibility_slot_takes_a_u64_buffer_or_an_r64uint_texture() {
         Bindings::new().bind("vis", v),
     )
     .unwrap();
-    let e = compile_error(g);
-    let GraphError::DescriptorMismatch {
-        expected, found, ..
-    } = e
-    else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(
+        GraphError::DescriptorMismatch {
+            expected,
+            found,
+            ..
+        } = g
+    );
     assert!(expected.contains("64-bit visibility"), "{expected}");
     assert!(found.contains("u32"), "{found}");
 }
@@ -455,10 +432,7 @@ fn a_mesh_program_requires_the_mesh_shader_feature() {
         g.add_pass("hw", meshy(), Bindings::new()).unwrap();
         g
     };
-    let e = compile_error(build());
-    let GraphError::MissingFeature { pass, features, .. } = e else {
-        panic!("{e:?}");
-    };
+    let_compile_error!(GraphError::MissingFeature { pass, features, .. } = build());
     assert_eq!(pass, "hw");
     assert!(features.contains("EXPERIMENTAL_MESH_SHADER"), "{features}");
     let c = build()

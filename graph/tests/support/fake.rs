@@ -77,6 +77,20 @@ pub fn compile_error(g: GraphBuilder) -> GraphError {
         .expect("the graph compiled; the test expects a compile error")
 }
 
+/// Compiles `$graph` expecting the error `$variant` and binds the pattern's fields for the
+/// checks that follow; any other outcome panics naming what came instead.
+#[allow(unused_macros)] // not every test binary expects compile errors
+macro_rules! let_compile_error {
+    ($variant:pat = $graph:expr) => {
+        let e = compile_error($graph);
+        let $variant = e else {
+            panic!("{e:?}");
+        };
+    };
+}
+#[allow(unused_imports)] // not every test binary expects compile errors
+pub(crate) use let_compile_error;
+
 /// A pass built from closures, so each test states its contract, setup and record inline.
 pub struct TestPass<S, R> {
     contract: StageContract,
