@@ -10,9 +10,23 @@ use support::gpu;
 
 const N: u32 = 64;
 
-const GOOD: PassShader = PassShader {
-    name: "test::reflect_good",
-    source: "
+/// A shader of these tests, written inline: `label` ends its file path in parentheses,
+/// which every error about the shader quotes, so each test can tell its shader's errors.
+macro_rules! reflect_shader {
+    ($name:literal, $label:literal, $source:literal) => {
+        PassShader {
+            name: concat!("test::reflect_", $name),
+            source: $source,
+            file_path: concat!("graph/tests/bindings_from_shader.rs (", $label, ")"),
+            modules: &[],
+        }
+    };
+}
+
+const GOOD: PassShader = reflect_shader!(
+    "good",
+    "good",
+    "
 struct Params { scale: u32, add: u32, _a: u32, _b: u32 }
 @group(0) @binding(0) var<storage, read> input: array<u32>;
 @group(0) @binding(1) var<storage, read_write> output: array<u32>;
@@ -25,15 +39,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     words[i] = input[i] * params.scale;
     output[i] = words[i] + params.add;
 }
-",
-    file_path: "graph/tests/bindings_from_shader.rs (good)",
-    modules: &[],
-};
+"
+);
 
 /// A variable named after nothing the pass has.
-const STRAY: PassShader = PassShader {
-    name: "test::reflect_stray",
-    source: "
+const STRAY: PassShader = reflect_shader!(
+    "stray",
+    "stray",
+    "
 @group(0) @binding(0) var<storage, read> input: array<u32>;
 @group(0) @binding(1) var<storage, read_write> output: array<u32>;
 @group(0) @binding(2) var<storage, read> stray: array<u32>;
@@ -41,15 +54,14 @@ const STRAY: PassShader = PassShader {
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     output[id.x] = input[id.x] + stray[id.x];
 }
-",
-    file_path: "graph/tests/bindings_from_shader.rs (stray)",
-    modules: &[],
-};
+"
+);
 
 /// Writes the slot the contract only reads.
-const WRITES_INPUT: PassShader = PassShader {
-    name: "test::reflect_writes_input",
-    source: "
+const WRITES_INPUT: PassShader = reflect_shader!(
+    "writes_input",
+    "writes input",
+    "
 @group(0) @binding(0) var<storage, read_write> input: array<u32>;
 @group(0) @binding(1) var<storage, read_write> output: array<u32>;
 @compute @workgroup_size(64)
@@ -57,25 +69,22 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     input[id.x] = 1u;
     output[id.x] = input[id.x];
 }
-",
-    file_path: "graph/tests/bindings_from_shader.rs (writes input)",
-    modules: &[],
-};
+"
+);
 
 /// Reads the slot's u32 elements as vec2<u32>.
-const WIDE: PassShader = PassShader {
-    name: "test::reflect_wide",
-    source: "
+const WIDE: PassShader = reflect_shader!(
+    "wide",
+    "wide",
+    "
 @group(0) @binding(0) var<storage, read> input: array<vec2<u32>>;
 @group(0) @binding(1) var<storage, read_write> output: array<u32>;
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     output[id.x] = input[id.x].x;
 }
-",
-    file_path: "graph/tests/bindings_from_shader.rs (wide)",
-    modules: &[],
-};
+"
+);
 
 struct Reflected {
     shader: &'static PassShader,
