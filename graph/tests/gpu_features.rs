@@ -30,6 +30,23 @@ fn declare(
     Ok(())
 }
 
+/// A test pass whose one program `program.0` runs the kernel `program.1` of the test
+/// kernels laid out by `layout`: most passes here differ only in those and their record.
+fn kernel_pass<R>(
+    stage: &'static str,
+    slots: Vec<Slot>,
+    program: (&'static str, &'static str),
+    layout: BindingLayout,
+    record: R,
+) -> impl Pass + 'static
+where
+    R: Fn(&mut RecordContext<'_>) -> Result<()> + Send + Sync + 'static,
+{
+    let (name, entry) = program;
+    let setup = move |ctx: &mut SetupContext| declare(ctx, name, entry, layout.clone());
+    pass(stage, slots, setup, record)
+}
+
 // ---------------------------------------------------------------------------------------
 // A render pass with a masked dummy colour target whose fragment shader does a 64-bit
 // atomicMax into a storage buffer.
@@ -169,18 +186,16 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
         wgpu::BufferUsages::STORAGE,
     );
     let mut pyramid = g.create_texture("pyramid", desc.clone());
-    let base_pass = pass(
+    let base_pass = kernel_pass(
         "base",
         vec![
             Slot::buffer("source", Access::StorageRead, Element::F32, ""),
             r32f("mip", Access::StorageWrite),
         ],
-        |ctx| {
-            let layout = BindingLayout::compute("base")
-                .slot(0, "source")
-                .slot(1, "mip");
-            declare(ctx, "base", "write_base", layout)
-        },
+        ("base", "write_base"),
+        BindingLayout::compute("base")
+            .slot(0, "source")
+            .slot(1, "mip"),
         |ctx| dispatch_once(ctx, "base", &[], [MIP_W.div_ceil(8), MIP_H.div_ceil(8), 1]),
     );
     pyramid = g
@@ -196,18 +211,16 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
         .unwrap();
     for level in 1..levels {
         let (dw, dh) = desc.mip_size(level);
-        let down = pass(
+        let down = kernel_pass(
             "downsample",
             vec![
                 r32f("src", Access::Sampled),
                 r32f("dst", Access::StorageWrite),
             ],
-            |ctx| {
-                let layout = BindingLayout::compute("downsample")
-                    .slot(3, "src")
-                    .slot(4, "dst");
-                declare(ctx, "downsample", "downsample", layout)
-            },
+            ("downsample", "downsample"),
+            BindingLayout::compute("downsample")
+                .slot(3, "src")
+                .slot(4, "dst"),
             move |ctx| dispatch_once(ctx, "downsample", &[], [dw.div_ceil(8), dh.div_ceil(8), 1]),
         );
         pyramid = g
@@ -223,20 +236,18 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
             .unwrap();
     }
     let gathered = g.create_buffer("gathered", BufferDesc::array(Element::F32, total));
-    let gather = pass(
+    let gather = kernel_pass(
         "gather",
         vec![
             Slot::texture("pyramid", Access::Sampled, None, ""),
             Slot::buffer("gathered", Access::StorageWrite, Element::F32, ""),
         ],
-        |ctx| {
-            let layout = BindingLayout::compute("gather")
-                .uniform(2)
-                .slot(5, "pyramid")
-                .sampler(6, SamplerKind::Nearest)
-                .slot(7, "gathered");
-            declare(ctx, "gather", "gather", layout)
-        },
+        ("gather", "gather"),
+        BindingLayout::compute("gather")
+            .uniform(2)
+            .slot(5, "pyramid")
+            .sampler(6, SamplerKind::Nearest)
+            .slot(7, "gathered"),
         move |ctx| {
             let desc = match ctx.desc("pyramid")? {
                 ResourceDesc::Texture(t) => t.clone(),
@@ -355,18 +366,16 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
         .unwrap();
     let args = out.buffer("args").unwrap();
     g.export(out.buffer("marks").unwrap());
-    let count = pass(
+    let count = kernel_pass(
         "count",
         vec![
             Slot::buffer("args", Access::StorageRead, Element::U32, "").also(Access::Indirect),
             Slot::buffer("seen", Access::ClearedReadWrite, Element::U32, ""),
         ],
-        |ctx| {
-            let layout = BindingLayout::compute("count")
-                .slot(12, "args")
-                .slot(13, "seen");
-            declare(ctx, "count", "count_groups", layout)
-        },
+        ("count", "count_groups"),
+        BindingLayout::compute("count")
+            .slot(12, "args")
+            .slot(13, "seen"),
         |ctx| {
             ctx.clear("seen")?;
             let (args, _) = ctx.buffer("args")?;
@@ -448,6 +457,19 @@ fn stamp_graph(latency: u32) -> CompiledGraph {
         .unwrap()
 }
 
+/// A warmed-up frame of a steady graph: no resource, pipeline or bind group was made.
+fn assert_created_nothing(stats: &FrameStats, frame: u32) {
+    assert_eq!(
+        (
+            stats.allocations,
+            stats.pipelines_created,
+            stats.bind_groups_created
+        ),
+        (0, 0, 0),
+        "frame {frame}"
+    );
+}
+
 #[test]
 fn frame_data_changes_every_frame_without_recompiling_or_allocating() {
     let compiled = stamp_graph(1);
@@ -459,15 +481,7 @@ fn frame_data_changes_every_frame_without_recompiling_or_allocating() {
             .execute_frame(&compiled, &Imports::new(), &data)
             .unwrap();
         if f > 0 {
-            assert_eq!(
-                (
-                    stats.allocations,
-                    stats.pipelines_created,
-                    stats.bind_groups_created
-                ),
-                (0, 0, 0),
-                "frame {f}"
-            );
+            assert_created_nothing(&stats, f);
         }
         if f % 10 == 9 {
             let got: Vec<u32> = read_export(&mut exec, "stamp");
@@ -533,21 +547,19 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
     g.size_param("slots", 1024);
     let list = g.create_buffer("list", BufferDesc::array_param(Element::U32, "slots"));
     let hist = g.history_buffer("hist", BufferDesc::array_param(Element::U32, "slots"));
-    let grow = pass(
+    let grow = kernel_pass(
         "grow",
         vec![
             Slot::buffer("list", Access::StorageWrite, Element::U32, ""),
             Slot::buffer("prev", Access::StorageRead, Element::U32, ""),
             Slot::buffer("hist", Access::StorageWrite, Element::U32, ""),
         ],
-        |ctx| {
-            let layout = BindingLayout::compute("grow")
-                .uniform(2)
-                .slot(15, "list")
-                .slot(16, "prev")
-                .slot(17, "hist");
-            declare(ctx, "grow", "grow", layout)
-        },
+        ("grow", "grow"),
+        BindingLayout::compute("grow")
+            .uniform(2)
+            .slot(15, "list")
+            .slot(16, "prev")
+            .slot(17, "hist"),
         |ctx| {
             let (_, bytes) = ctx.buffer("list")?;
             let n = (bytes / 4) as u32;
@@ -735,18 +747,16 @@ fn sampled_import_graph(mips: u32) -> GraphBuilder {
         wgpu::TextureUsages::TEXTURE_BINDING,
     );
     let dst = g.create_texture("dst", TextureDesc::d2(wgpu::TextureFormat::R32Float, 8, 8));
-    let down = pass(
+    let down = kernel_pass(
         "downsample",
         vec![
             Slot::texture("src", Access::Sampled, None, ""),
             Slot::texture("dst", Access::StorageWrite, None, ""),
         ],
-        |ctx| {
-            let layout = BindingLayout::compute("downsample")
-                .slot(3, "src")
-                .slot(4, "dst");
-            declare(ctx, "down", "downsample", layout)
-        },
+        ("down", "downsample"),
+        BindingLayout::compute("downsample")
+            .slot(3, "src")
+            .slot(4, "dst"),
         |ctx| dispatch_once(ctx, "down", &[], [1, 1, 1]),
     );
     let out = g
@@ -779,41 +789,34 @@ fn r32_texture(gpu: &GpuContext, mips: u32) -> wgpu::Texture {
     })
 }
 
-#[test]
-fn imported_textures_keep_their_views_and_bind_groups_across_frames() {
+/// The one-mip sampled-import graph, compiled, with an executor and a caller texture of
+/// `mips` levels to import as `src`.
+fn sampled_import_run(mips: u32) -> (CompiledGraph, Executor, wgpu::Texture) {
     let gpu = gpu();
-    let texture = r32_texture(&gpu, 1);
+    let texture = r32_texture(&gpu, mips);
     let compiled = sampled_import_graph(1)
         .compile(&CompileOptions::for_gpu(&gpu))
         .unwrap();
-    let mut exec = Executor::new(gpu);
+    (compiled, Executor::new(gpu), texture)
+}
+
+#[test]
+fn imported_textures_keep_their_views_and_bind_groups_across_frames() {
+    let (compiled, mut exec, texture) = sampled_import_run(1);
     for frame in 0..4 {
         // A fresh `Imports` every frame, as a render loop builds it.
         let stats = exec
             .execute(&compiled, &Imports::new().texture("src", &texture))
             .unwrap();
         if frame > 0 {
-            assert_eq!(
-                (
-                    stats.allocations,
-                    stats.pipelines_created,
-                    stats.bind_groups_created
-                ),
-                (0, 0, 0),
-                "frame {frame}"
-            );
+            assert_created_nothing(&stats, frame);
         }
     }
 }
 
 #[test]
 fn an_imported_texture_with_other_mip_counts_is_refused() {
-    let gpu = gpu();
-    let texture = r32_texture(&gpu, 3);
-    let compiled = sampled_import_graph(1)
-        .compile(&CompileOptions::for_gpu(&gpu))
-        .unwrap();
-    let mut exec = Executor::new(gpu);
+    let (compiled, mut exec, texture) = sampled_import_run(3);
     match exec.execute(&compiled, &Imports::new().texture("src", &texture)) {
         Err(GraphError::ImportMismatch { resource, message }) => {
             assert_eq!(resource, "src");
@@ -838,15 +841,13 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
     let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, SIDE, SIDE).with_layers(LAYERS);
     let mut array = g.create_texture("array", desc);
     for layer in 0..LAYERS {
-        let fill = pass(
+        let fill = kernel_pass(
             "fill_layer",
             vec![Slot::texture("layer", Access::StorageWrite, None, "")],
-            |ctx| {
-                let layout = BindingLayout::compute("fill_layer")
-                    .uniform(2)
-                    .slot(18, "layer");
-                declare(ctx, "fill", "fill_layer", layout)
-            },
+            ("fill", "fill_layer"),
+            BindingLayout::compute("fill_layer")
+                .uniform(2)
+                .slot(18, "layer"),
             move |ctx| {
                 dispatch_once(
                     ctx,
@@ -870,18 +871,16 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
         "flat",
         BufferDesc::array(Element::F32, (LAYERS * SIDE * SIDE) as u64),
     );
-    let flatten = pass(
+    let flatten = kernel_pass(
         "flatten",
         vec![
             Slot::texture("array", Access::Sampled, None, ""),
             Slot::buffer("flat", Access::StorageWrite, Element::F32, ""),
         ],
-        |ctx| {
-            let layout = BindingLayout::compute("flatten")
-                .slot(19, "array")
-                .slot(20, "flat");
-            declare(ctx, "flatten", "flatten_layers", layout)
-        },
+        ("flatten", "flatten_layers"),
+        BindingLayout::compute("flatten")
+            .slot(19, "array")
+            .slot(20, "flat"),
         |ctx| dispatch_once(ctx, "flatten", &[], [1, 1, LAYERS]),
     );
     add_exported(
