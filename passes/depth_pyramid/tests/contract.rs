@@ -7,10 +7,11 @@ use meshlight_graph::*;
 use meshlight_pass_depth_pyramid::{
     DepthPyramid, FORMAT, Method, STAGE, pyramid_extent, register, texture_desc,
 };
+use meshlight_testing::pass_errors::pass_parameter_message;
 use meshlight_testing::{parameter_message, params};
 
-const BUFFER_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE;
-const TEXTURE_USAGE: wgpu::TextureUsages = wgpu::TextureUsages::STORAGE_BINDING;
+mod common;
+use common::{Visibility, add_pyramid_pass};
 
 /// How the one-pass graph is bound.
 struct Binding {
@@ -35,36 +36,14 @@ const PLAIN: Binding = Binding {
 
 fn compile(pass: DepthPyramid, b: Binding) -> Result<CompiledGraph> {
     let (w, h) = (pass.width.max(1), pass.height.max(1));
-    let mut g = GraphBuilder::new();
     let visibility = if b.texture {
-        g.import_texture(
-            "visibility",
-            TextureDesc::d2(wgpu::TextureFormat::R64Uint, w, h),
-            TEXTURE_USAGE,
-        )
-        .erase()
+        Visibility::Texture
     } else {
-        let values = b.values.unwrap_or(w as u64 * h as u64);
-        g.import_buffer(
-            "visibility",
-            BufferDesc::array(Element::U64, values),
-            BUFFER_USAGE,
-        )
-        .erase()
+        Visibility::Buffer(b.values.unwrap_or(w as u64 * h as u64))
     };
-    let pyramid = g.import_texture(
-        "pyramid",
-        b.pyramid.unwrap_or_else(|| texture_desc(w, h)),
-        TEXTURE_USAGE,
-    );
-    let mut bindings = Bindings::new()
-        .bind("visibility", visibility)
-        .bind("pyramid", pyramid);
-    if b.counter {
-        let counter = g.import_buffer("counter", BufferDesc::array(Element::U32, 1), BUFFER_USAGE);
-        bindings = bindings.bind("counter", counter);
-    }
-    g.add_pass("pyramid", pass, bindings)?;
+    let pyramid = b.pyramid.unwrap_or_else(|| texture_desc(w, h));
+    let mut g = GraphBuilder::new();
+    add_pyramid_pass(&mut g, pass, visibility, pyramid, b.counter)?;
     g.compile(&CompileOptions::new(b.features))
 }
 
@@ -217,36 +196,35 @@ fn the_texture_form_needs_64_bit_texture_support_and_switches_the_shader() {
 
 #[test]
 fn bad_params_are_errors_that_say_what_to_change() {
-    let m = parameter_message(DepthPyramid::from_params(
-        &params("width = 0\nheight = 4"),
-        Method::SinglePass,
-    ));
-    assert!(m.contains("`width`") && m.contains("0 × 4"), "{m}");
-    let m = parameter_message(DepthPyramid::from_params(
-        &params("height = 4"),
-        Method::TwoPass,
-    ));
-    assert!(m.contains("> 0"), "{m}");
-    let m = parameter_message(DepthPyramid::from_params(
-        &params("width = 20000\nheight = 4"),
-        Method::SinglePass,
-    ));
-    assert!(m.contains("16384") && m.contains("smaller"), "{m}");
-    let m = parameter_message(DepthPyramid::from_params(
-        &params("width = 4\nheight = 4\nlevels = 3"),
-        Method::SinglePass,
-    ));
-    assert!(m.contains("`levels`"), "{m}");
+    // (params, implementation, what the message must say)
+    let refused: [(&str, Method, &[&str]); 4] = [
+        (
+            "width = 0\nheight = 4",
+            Method::SinglePass,
+            &["`width`", "0 × 4"],
+        ),
+        ("height = 4", Method::TwoPass, &["> 0"]),
+        (
+            "width = 20000\nheight = 4",
+            Method::SinglePass,
+            &["16384", "smaller"],
+        ),
+        (
+            "width = 4\nheight = 4\nlevels = 3",
+            Method::SinglePass,
+            &["`levels`"],
+        ),
+    ];
+    for (text, method, says) in refused {
+        let m = parameter_message(DepthPyramid::from_params(&params(text), method));
+        assert!(says.iter().all(|s| m.contains(s)), "{m}");
+    }
     let p = DepthPyramid::from_params(&params("width = 37\nheight = 23"), Method::TwoPass).unwrap();
     assert_eq!((p.width, p.height, p.method), (37, 23, Method::TwoPass));
     // Built in code, the same check runs at compile and names the pass.
-    match compile(DepthPyramid::single_pass(0, 23), PLAIN) {
-        Err(GraphError::Parameter { pass, message }) => {
-            assert_eq!(pass, "pyramid");
-            assert!(message.contains("`width`"), "{message}");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let message =
+        pass_parameter_message(compile(DepthPyramid::single_pass(0, 23), PLAIN), "pyramid");
+    assert!(message.contains("`width`"), "{message}");
 }
 
 #[test]

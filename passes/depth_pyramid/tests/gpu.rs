@@ -7,11 +7,11 @@
 use meshlight_graph::*;
 use meshlight_pass_depth_pyramid::{DepthPyramid, Method, cpu, pyramid_extent, texture_desc};
 
-const VIS_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::COPY_DST)
-    .union(wgpu::BufferUsages::COPY_SRC);
-const PYRAMID_USAGE: wgpu::TextureUsages =
-    wgpu::TextureUsages::STORAGE_BINDING.union(wgpu::TextureUsages::COPY_SRC);
+mod common;
+use common::{
+    BUFFER_USAGE, PYRAMID_USAGE, VISIBILITY_TEXTURE_USAGE, Visibility, add_pyramid_pass,
+    import_visibility,
+};
 
 use meshlight_testing::{gpu, texture};
 
@@ -68,15 +68,6 @@ enum Source {
     Texture(wgpu::Texture),
 }
 
-/// A `w × h` visibility buffer of u64 values, imported as `visibility`.
-fn import_visibility(g: &mut GraphBuilder, w: u32, h: u32) -> Handle<Buffer> {
-    g.import_buffer(
-        "visibility",
-        BufferDesc::array(Element::U64, u64::from(w) * u64::from(h)),
-        VIS_USAGE,
-    )
-}
-
 /// Every level of the pyramid after each frame, and the `counter` buffer at the end.
 struct Frames {
     levels: Vec<Vec<Vec<f32>>>,
@@ -89,26 +80,13 @@ fn run(pass: DepthPyramid, form: Form, frames: &[Vec<u64>]) -> Result<Frames> {
     let (w, h) = (pass.width, pass.height);
     let gpu = gpu();
     let mut g = GraphBuilder::new();
-    let vis = if form.texture {
-        g.import_texture(
-            "visibility",
-            TextureDesc::d2(wgpu::TextureFormat::R64Uint, w, h),
-            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
-        )
-        .erase()
+    let visibility = if form.texture {
+        Visibility::Texture
     } else {
-        import_visibility(&mut g, w, h).erase()
+        Visibility::Buffer(u64::from(w) * u64::from(h))
     };
     let desc = texture_desc(w, h);
-    let pyramid = g.import_texture("pyramid", desc.clone(), PYRAMID_USAGE);
-    let mut bindings = Bindings::new()
-        .bind("visibility", vis)
-        .bind("pyramid", pyramid);
-    if form.counter {
-        let c = g.import_buffer("counter", BufferDesc::array(Element::U32, 1), VIS_USAGE);
-        bindings = bindings.bind("counter", c);
-    }
-    g.add_pass("pyramid", pass, bindings)?;
+    add_pyramid_pass(&mut g, pass, visibility, desc.clone(), form.counter)?;
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
 
     let source = if form.texture {
@@ -116,18 +94,18 @@ fn run(pass: DepthPyramid, form: Form, frames: &[Vec<u64>]) -> Result<Frames> {
             &gpu,
             "visibility",
             &TextureDesc::d2(wgpu::TextureFormat::R64Uint, w, h),
-            wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
+            VISIBILITY_TEXTURE_USAGE,
         ))
     } else {
         Source::Buffer(gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("visibility"),
             size: w as u64 * h as u64 * 8,
-            usage: VIS_USAGE,
+            usage: BUFFER_USAGE,
             mapped_at_creation: false,
         }))
     };
     let pyramid_texture = texture(&gpu, "pyramid", &desc, PYRAMID_USAGE);
-    let counter = gpu.buffer_with_data("counter", &[0; 4], VIS_USAGE);
+    let counter = gpu.buffer_with_data("counter", &[0; 4], BUFFER_USAGE);
     let mut imports = Imports::new().texture("pyramid", &pyramid_texture);
     imports = match &source {
         Source::Texture(t) => imports.texture("visibility", t),
@@ -372,7 +350,8 @@ fn a_pyramid_not_declared_with_texture_desc_is_an_error_naming_it() {
     )
     .unwrap();
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
-    let vis_buffer = gpu.buffer_with_data("visibility", &vec![0; (w * h * 8) as usize], VIS_USAGE);
+    let vis_buffer =
+        gpu.buffer_with_data("visibility", &vec![0; (w * h * 8) as usize], BUFFER_USAGE);
     let texture = texture(&gpu, "pyramid", &naive, PYRAMID_USAGE);
     let imports = Imports::new()
         .buffer("visibility", &vis_buffer)
@@ -407,7 +386,7 @@ fn a_history_pyramid_is_right_in_both_textures_it_alternates_between() {
         let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("visibility"),
             size: (w * h * 8) as u64,
-            usage: VIS_USAGE,
+            usage: BUFFER_USAGE,
             mapped_at_creation: false,
         });
         let imports = Imports::new().buffer("visibility", &buffer);
