@@ -3,6 +3,7 @@
 
 use meshlight_graph::*;
 use meshlight_pass_remap_dispatch::{RemapDispatch, cpu_remap};
+use meshlight_testing::pass_errors::pass_parameter_message;
 use meshlight_testing::{Input, Output, USAGE, executor, run_one_pass};
 
 /// A consumer of the arguments: every workgroup below the count marks its linear index.
@@ -152,13 +153,8 @@ fn a_limit_above_the_adapters_is_a_parameter_error() {
         .add_pass("remap", remap, Bindings::new().bind("args", args))
         .unwrap();
     g.export(out.buffer("args").unwrap());
-    match g.compile(&CompileOptions::for_gpu(&exec.gpu)) {
-        Err(GraphError::Parameter { pass, message }) => {
-            assert_eq!(pass, "remap");
-            assert!(message.contains("max_per_dimension"), "{message}");
-        }
-        other => panic!("{:?}", other.err()),
-    }
+    let message = pass_parameter_message(g.compile(&CompileOptions::for_gpu(&exec.gpu)), "remap");
+    assert!(message.contains("max_per_dimension"), "{message}");
 }
 
 /// The pass alone, its count at a word other than the first.
