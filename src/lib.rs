@@ -40,20 +40,27 @@ pub use meshlight_pass_z_slice as z_slice;
 pub use meshlight_scene as scene;
 pub use meshlight_shaders as shaders;
 
+/// Each stage crate's `register`, in the order their implementations enter the registry.
+const REGISTERS: [fn(&mut graph::file::Registry); 12] = [
+    scan_fan::register,
+    remap_dispatch::register,
+    fill_clusters::register,
+    cull_lod::register,
+    sw_raster::register,
+    hw_raster::register,
+    resolve::register,
+    depth_pyramid::register,
+    brute_force::register,
+    z_slice::register,
+    count_raster::register,
+    populate::register,
+];
+
 /// Every stage implementation shipped with meshlight, for pipeline files.
 pub fn registry() -> graph::file::Registry {
     let mut r = graph::file::Registry::new();
-    scan_fan::register(&mut r);
-    remap_dispatch::register(&mut r);
-    fill_clusters::register(&mut r);
-    cull_lod::register(&mut r);
-    sw_raster::register(&mut r);
-    hw_raster::register(&mut r);
-    resolve::register(&mut r);
-    depth_pyramid::register(&mut r);
-    brute_force::register(&mut r);
-    z_slice::register(&mut r);
-    count_raster::register(&mut r);
-    populate::register(&mut r);
+    for register in REGISTERS {
+        register(&mut r);
+    }
     r
 }
