@@ -53,6 +53,14 @@ const FEATURES: [(wgpu::Features, &str); 11] = [
     ),
 ];
 
+/// `(name, value)` for each named field of a `wgpu::Limits`: the report names a limit by
+/// its field, so the name is the field's own and cannot drift from it.
+macro_rules! limit_rows {
+    ($limits:expr; $($field:ident),* $(,)?) => {
+        [$((stringify!($field), u64::from($limits.$field))),*]
+    };
+}
+
 /// The report `meshlight info` prints.
 pub fn report() -> Result<String, Box<dyn std::error::Error>> {
     let adapter = GpuAdapter::select()?;
@@ -92,41 +100,18 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
         writeln!(out, "  {mark}  {name:<34} {what}")?;
     }
     writeln!(out, "\nlimits:")?;
-    for (name, value) in [
-        (
-            "max_compute_workgroups_per_dimension",
-            limits.max_compute_workgroups_per_dimension as u64,
-        ),
-        (
-            "max_storage_buffer_binding_size",
-            limits.max_storage_buffer_binding_size,
-        ),
-        ("max_buffer_size", limits.max_buffer_size),
-        (
-            "max_texture_dimension_2d",
-            limits.max_texture_dimension_2d as u64,
-        ),
-        (
-            "max_compute_workgroup_storage_size",
-            limits.max_compute_workgroup_storage_size as u64,
-        ),
-        (
-            "max_mesh_output_vertices",
-            limits.max_mesh_output_vertices as u64,
-        ),
-        (
-            "max_mesh_output_primitives",
-            limits.max_mesh_output_primitives as u64,
-        ),
-        (
-            "max_mesh_workgroups_per_dimension",
-            limits.max_mesh_workgroups_per_dimension as u64,
-        ),
-        (
-            "max_mesh_workgroup_total_count",
-            limits.max_mesh_workgroup_total_count as u64,
-        ),
-    ] {
+    for (name, value) in limit_rows!(
+        limits;
+        max_compute_workgroups_per_dimension,
+        max_storage_buffer_binding_size,
+        max_buffer_size,
+        max_texture_dimension_2d,
+        max_compute_workgroup_storage_size,
+        max_mesh_output_vertices,
+        max_mesh_output_primitives,
+        max_mesh_workgroups_per_dimension,
+        max_mesh_workgroup_total_count,
+    ) {
         writeln!(out, "  {name:<38} {value}")?;
     }
     writeln!(
