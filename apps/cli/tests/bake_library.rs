@@ -2,27 +2,12 @@
 //! the same bytes whatever the number of jobs, up-to-date outputs skipped, refusals
 //! reported per file.
 
+mod common;
+
+use common::{meshlight, scratch};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn meshlight(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshlight"))
-        .args(args)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
-        .output()
-        .expect("runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "meshlight-bake-library-{name}-{}",
-        std::process::id()
-    ));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use std::process::Output;
 
 /// Three of the project's meshes in a small tree, and a text file that is not a mesh.
 fn library(dir: &Path) -> PathBuf {

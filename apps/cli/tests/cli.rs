@@ -1,8 +1,10 @@
 //! The `meshlight` binary: graph dumps of a shipped pipeline file, and typed errors for a
 //! miswired one.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+
+use common::{ROOT, command, meshlight, scratch};
+use std::path::Path;
 
 /// `render` of `instances` spots at `width` × `height`, for more flags to follow.
 fn render_spot<'a>(instances: &'a str, width: &'a str, height: &'a str) -> Vec<&'a str> {
@@ -24,9 +26,6 @@ fn small_render<'a>() -> Vec<&'a str> {
     render_spot("1", "16", "16")
 }
 
-/// The repository's root, where the binary runs as a user runs it there.
-const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
-
 /// The environment entry that names an adapter no machine has: a command that asks for
 /// one fails with exit 3, so a run that ends otherwise did not get that far.
 fn no_adapter() -> (&'static str, &'static Path) {
@@ -44,17 +43,6 @@ fn meshlight_ok(args: &[&str]) -> std::process::Output {
         String::from_utf8_lossy(&out.stderr)
     );
     out
-}
-
-fn meshlight(args: &[&str]) -> std::process::Output {
-    command(args).output().expect("runs")
-}
-
-/// `meshlight args` from the repository's root, to be given more before it runs.
-fn command(args: &[&str]) -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_meshlight"));
-    cmd.args(args).current_dir(ROOT);
-    cmd
 }
 
 /// The text of a file of the repository.
@@ -156,13 +144,6 @@ fn meshlight_env(args: &[&str], env: &[(&str, &Path)]) -> std::process::Output {
         cmd.env(k, v);
     }
     cmd.output().expect("runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("meshlight-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// Each bounded number is refused with the number and the limit, before a mesh is baked

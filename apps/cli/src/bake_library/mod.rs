@@ -9,6 +9,11 @@
 
 pub mod stamp;
 
+/// The fresh directory the unit tests write in, the one the binary's tests use.
+#[cfg(test)]
+#[path = "../../tests/common/scratch.rs"]
+mod scratch;
+
 use meshlight::scene::load::load_mesh;
 use meshlight::scene::{BuildOptions, Built, MeshletAsset, build_asset};
 use meshlight_output::{OutputError, create_parent};
@@ -364,15 +369,8 @@ pub fn summary(rows: &[Row], jobs: usize, seconds: f64) -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::scratch::scratch;
     use super::*;
-
-    fn scratch(name: &str) -> PathBuf {
-        let dir =
-            std::env::temp_dir().join(format!("meshlight-library-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
 
     #[test]
     fn meshes_are_found_in_sorted_order_by_extension_and_collisions_are_refused() {

@@ -136,11 +136,11 @@ fn gltf_json(bytes: &[u8]) -> Option<serde_json::Value> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bake_library::scratch::scratch;
 
     #[test]
     fn the_buffers_a_gltf_names_beside_it_are_found_and_no_others() {
-        let dir = std::env::temp_dir().join(format!("meshlight-stamp-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = scratch("stamp");
         let json = r#"{"asset":{"version":"2.0"},"buffers":[
             {"uri":"data:application/octet-stream;base64,AAAA","byteLength":3},
             {"uri":"my%20mesh.bin","byteLength":4},
