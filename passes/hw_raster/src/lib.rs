@@ -72,6 +72,7 @@ use meshlight_graph::{
     Primitive, ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
     Workgroups,
 };
+use meshlight_pass_sw_raster::require_visbuffer;
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
 /// The stage name pipelines use.
@@ -215,14 +216,7 @@ impl Pass for HwRaster {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let texture = ctx.is_texture("visbuffer");
-        ctx.require_features(if texture {
-            wgpu::Features::SHADER_INT64
-                | wgpu::Features::TEXTURE_ATOMIC
-                | wgpu::Features::TEXTURE_INT64_ATOMIC
-        } else {
-            wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
-        });
-        ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
+        require_visbuffer(ctx, texture, self.width, self.height);
         ctx.min_bytes("raster_counts", 16);
         ctx.min_bytes("hw_args", 16);
         ctx.frame_input(VIEW_INPUT);

@@ -226,6 +226,18 @@ shader_defs! {
 pub const TEXTURE_FEATURES: wgpu::Features =
     wgpu::Features::TEXTURE_ATOMIC.union(wgpu::Features::TEXTURE_INT64_ATOMIC);
 
+/// What atomicMax onto a `width` × `height` 64-bit visibility target (slot `visbuffer`,
+/// an R64Uint texture or a `u64` buffer) asks of the adapter and of the slot. `hw_raster`
+/// draws onto the same target the same way, so it asks the same.
+pub fn require_visbuffer(ctx: &mut SetupContext, texture: bool, width: u32, height: u32) {
+    ctx.require_features(if texture {
+        wgpu::Features::SHADER_INT64 | TEXTURE_FEATURES
+    } else {
+        wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
+    });
+    ctx.min_bytes("visbuffer", width as u64 * height as u64 * 8);
+}
+
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuParams {
@@ -283,12 +295,7 @@ impl Pass for SwRaster {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let texture = self.target == Visibility64::Texture;
-        ctx.require_features(if texture {
-            wgpu::Features::SHADER_INT64 | TEXTURE_FEATURES
-        } else {
-            wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
-        });
-        ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
+        require_visbuffer(ctx, texture, self.width, self.height);
         // With a slot base the first slot is word 7.
         ctx.min_bytes("raster_counts", if self.accumulate { 32 } else { 4 });
         ctx.min_bytes("sw_args", 12);
@@ -343,27 +350,13 @@ impl Pass for SwRaster {
             big_triangles: big,
         };
         ctx.shader_defs(&defs);
-        ctx.program(
-            "raster",
-            ProgramDesc::compute(&SHADER, "raster")
-                .defs(&defs)
-                .defs(&table)
-                .layout(layout.clone()),
-        );
-        ctx.program(
-            "raster_clipped",
-            ProgramDesc::compute(&SHADER, "raster_clipped")
-                .defs(&defs)
-                .defs(&table)
-                .layout(layout.clone()),
-        );
-        if big {
+        for &entry in entry_points(big) {
             ctx.program(
-                "raster_big",
-                ProgramDesc::compute(&SHADER, "raster_big")
+                entry,
+                ProgramDesc::compute(&SHADER, entry)
                     .defs(&defs)
                     .defs(&table)
-                    .layout(layout),
+                    .layout(layout.clone()),
             );
         }
         if texture && !self.accumulate {
@@ -411,8 +404,6 @@ impl Pass for SwRaster {
             (8, bytemuck::bytes_of(&view)),
             (9, bytemuck::bytes_of(&params)),
         ];
-        let program = ctx.compute("raster")?;
-        let bind_group = ctx.bind_group(&program, 0, &uniforms)?;
         // `buffer` gives the buffer and its size; the arguments start at its beginning.
         let (args, _) = ctx.buffer("sw_args")?;
         if let Some((clear, group)) = clear {
@@ -426,31 +417,33 @@ impl Pass for SwRaster {
             );
         }
         // Each program binds what its entry point uses: a bind group each.
-        let clipped = ctx.compute("raster_clipped")?;
-        let clipped_group = ctx.bind_group(&clipped, 0, &uniforms)?;
-        let big_program = if big {
-            let program = ctx.compute("raster_big")?;
+        let mut programs = Vec::new();
+        for &entry in entry_points(big) {
+            let program = ctx.compute(entry)?;
             let group = ctx.bind_group(&program, 0, &uniforms)?;
-            Some((program, group))
-        } else {
-            None
-        };
+            programs.push((entry, program, group));
+        }
         // A second compute pass: the clear is visible before any cluster writes.
         let mut pass = ctx.compute_pass();
-        pass.set_pipeline(&program.pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups_indirect(args, 0);
-        // Then the clusters with triangles to clip, then the tiles both listed.
-        pass.set_pipeline(&clipped.pipeline);
-        pass.set_bind_group(0, &clipped_group, &[]);
-        pass.dispatch_workgroups(CLIP_GROUPS, 1, 1);
-        if let Some((big, group)) = big_program {
-            pass.set_pipeline(&big.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(BIG_GROUPS, 1, 1);
+        for (entry, program, group) in &programs {
+            pass.set_pipeline(&program.pipeline);
+            pass.set_bind_group(0, group, &[]);
+            match *entry {
+                "raster" => pass.dispatch_workgroups_indirect(args, 0),
+                "raster_clipped" => pass.dispatch_workgroups(CLIP_GROUPS, 1, 1),
+                _ => pass.dispatch_workgroups(BIG_GROUPS, 1, 1),
+            }
         }
         Ok(())
     }
+}
+
+/// The kernel's entry points a pass runs, in dispatch order: every cluster (indirect,
+/// over `sw_args`), then the clusters with triangles to clip, then, with big triangles,
+/// the tiles both listed.
+fn entry_points(big: bool) -> &'static [&'static str] {
+    const ALL: [&str; 3] = ["raster", "raster_clipped", "raster_big"];
+    if big { &ALL } else { &ALL[..2] }
 }
 
 fn build_buffer(params: &Params) -> Result<Box<dyn Pass>> {
