@@ -3,13 +3,12 @@
 //! another camera (the targets are cleared every frame), and the record errors.
 
 use glam::{Mat4, Quat, Vec3};
-use meshlight_gpu_scene::data::Limits;
-use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
+use meshlight_gpu_scene::{Camera, GpuScene, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_brute_force::{
     BruteForce, DEPTH_FORMAT, EMPTY_ID, IDS_FORMAT, Lod0Buffers, cpu, lod0_buffers,
 };
-use meshlight_scene::{BuildOptions, build_asset, procedural_mesh};
+use meshlight_scene::procedural_mesh;
 use meshlight_shaders::cpu::layout::View;
 
 const W: u32 = 96;
@@ -25,29 +24,19 @@ const TEXTURE_USAGE: wgpu::TextureUsages = wgpu::TextureUsages::RENDER_ATTACHMEN
 
 use meshlight_testing::{gpu, read_texture, texture};
 
+#[path = "../../sw_raster/tests/support/scenes.rs"]
+mod scenes;
+
 /// The mesh's LOD 0 and a GPU scene of overlapping instances of its asset.
 struct Scene {
     mesh: Lod0Buffers,
     data: SceneData,
 }
 
+/// Four knots: the two the rasterisers' tests draw, then two more, turned and stretched.
 fn scene() -> Scene {
     let mesh = procedural_mesh(8);
-    let asset = build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
-        .unwrap()
-        .asset;
-    let mut data = SceneData::new(Limits::default());
-    let id = data.add_mesh("knot", &asset).unwrap();
-    let material = data.add_material(Material {
-        base_color: [0.8, 0.5, 0.3],
-    });
     let placements = [
-        Mat4::IDENTITY,
-        Mat4::from_scale_rotation_translation(
-            Vec3::splat(0.6),
-            Quat::from_rotation_y(0.7),
-            Vec3::new(2.5, 1.0, 2.0),
-        ),
         Mat4::from_scale_rotation_translation(
             Vec3::splat(0.8),
             Quat::from_rotation_x(1.1),
@@ -59,12 +48,9 @@ fn scene() -> Scene {
             Vec3::new(0.5, -1.5, -3.0),
         ),
     ];
-    for m in placements {
-        data.add_instance(id, m, material).unwrap().unwrap();
-    }
     Scene {
+        data: scenes::knot_scene(&mesh, &placements),
         mesh: lod0_buffers(&mesh),
-        data,
     }
 }
 

@@ -3,13 +3,12 @@
 //! triangles, the software slots, the earlier contents of the visibility buffer and the
 //! errors.
 
-use glam::{Mat4, Quat, Vec3};
-use meshlight_gpu_scene::data::Limits;
-use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
+use glam::{Mat4, Vec3};
+use meshlight_gpu_scene::{Camera, GpuScene, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_hw_raster::{Feed, HwRaster, VERTICES_PER_CLUSTER, cpu};
 use meshlight_scene::asset::format::MeshletRecord;
-use meshlight_scene::{BuildOptions, build_asset, procedural_mesh};
+use meshlight_scene::procedural_mesh;
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::visbuffer;
 
@@ -20,7 +19,11 @@ const SOFTWARE: u32 = 3;
 /// Unused slots between the software and hardware ones.
 const GAP: u32 = 2;
 
+use meshlight_testing::features::where_supported;
 use meshlight_testing::{USAGE, gpu};
+
+#[path = "../../sw_raster/tests/support/scenes.rs"]
+mod scenes;
 
 /// A scene, a camera, and the slot buffer culling would have left.
 struct Frame {
@@ -47,26 +50,9 @@ impl Frame {
     }
 }
 
+/// The knot at its place and a smaller copy moved up and turned.
 fn scene() -> SceneData {
-    let asset = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {})
-        .unwrap()
-        .asset;
-    let mut scene = SceneData::new(Limits::default());
-    let mesh = scene.add_mesh("knot", &asset).unwrap();
-    let material = scene.add_material(Material {
-        base_color: [0.8, 0.5, 0.3],
-    });
-    scene
-        .add_instance(mesh, Mat4::IDENTITY, material)
-        .unwrap()
-        .unwrap();
-    let moved = Mat4::from_scale_rotation_translation(
-        Vec3::splat(0.6),
-        Quat::from_rotation_y(0.7),
-        Vec3::new(2.5, 1.0, 2.0),
-    );
-    scene.add_instance(mesh, moved, material).unwrap().unwrap();
-    scene
+    scenes::knot_scene(&procedural_mesh(12), &[])
 }
 
 /// The meshlets `pick` chooses, of every instance, in hardware slots; `SOFTWARE` real clusters in
@@ -427,23 +413,15 @@ fn meshlets_with_fewer_than_128_triangles_draw_nothing_past_their_count() {
 #[test]
 fn mesh_shader_draws_what_the_indirect_draw_draws_or_names_the_missing_feature() {
     let mut f = frame(scene(), camera(), |_, m| m.level() <= 1);
-    let has = gpu()
-        .adapter
-        .features()
-        .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER);
-    let mesh = run_fed(&mut f, Feed::MeshShader);
-    if !has {
-        match mesh {
-            Err(GraphError::MissingFeature { pass, features, .. }) => {
-                assert_eq!(pass, "hw_raster");
-                assert!(features.contains("EXPERIMENTAL_MESH_SHADER"), "{features}");
-                eprintln!("no mesh shaders here: the typed error, as expected");
-            }
-            other => panic!("expected the missing-feature error, got {:?}", other.err()),
-        }
+    let Some(mesh) = where_supported(
+        run_fed(&mut f, Feed::MeshShader),
+        wgpu::Features::EXPERIMENTAL_MESH_SHADER,
+        "hw_raster",
+        "EXPERIMENTAL_MESH_SHADER",
+        "mesh shaders",
+    ) else {
         return;
-    }
-    let mesh = mesh.unwrap_or_else(|e| panic!("{e}"));
+    };
     let indirect = run(&mut f);
     check(
         "mesh shader against indirect draw",

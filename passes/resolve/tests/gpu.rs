@@ -18,7 +18,7 @@ use meshlight_pass_resolve::{
 };
 use meshlight_pass_z_slice::{ZSlice, cpu_z_slice};
 use meshlight_scene::load::load_obj;
-use meshlight_scene::{BuildOptions, MeshletAsset, build_asset, procedural_mesh};
+use meshlight_scene::procedural_mesh;
 use meshlight_shaders::cpu::layout::{
     Cluster, ClusterGrid, ClusterableKind, ClusterableObject, View,
 };
@@ -39,11 +39,9 @@ const COLOR_USAGE: wgpu::TextureUsages =
 
 use meshlight_testing::{gpu, parameter_message, params, read_texture, texture};
 
-fn asset(mesh: &meshlight_scene::Mesh) -> MeshletAsset {
-    build_asset(mesh, &BuildOptions::default(), &mut |_| {})
-        .unwrap()
-        .asset
-}
+#[path = "../../sw_raster/tests/support/scenes.rs"]
+mod scenes;
+use scenes::add_mesh;
 
 /// `mesh`'s bounding sphere moved to `at` with radius `radius`, turned and stretched.
 fn place(scene: &SceneData, mesh: u32, at: Vec3, radius: f32, turn: Quat, stretch: Vec3) -> Mat4 {
@@ -164,10 +162,8 @@ fn frame() -> Frame {
     let spot = load_obj(&spot_path).unwrap();
     assert!(!spot.uvs.is_empty(), "spot.obj should have UVs");
     let mut scene = SceneData::new(Limits::default());
-    let spot = scene.add_mesh("spot", &asset(&spot)).unwrap();
-    let knot = scene
-        .add_mesh("knot", &asset(&procedural_mesh(12)))
-        .unwrap();
+    let spot = add_mesh(&mut scene, "spot", &spot);
+    let knot = add_mesh(&mut scene, "knot", &procedural_mesh(12));
     let materials = [[0.9, 0.6, 0.4], [0.4, 0.8, 0.5], [0.7, 0.7, 0.9]]
         .map(|base_color| scene.add_material(Material { base_color }));
     let instances = [

@@ -9,7 +9,7 @@ use meshlight_gpu_scene::data::Limits;
 use meshlight_gpu_scene::{Camera, GpuScene, Material, Projection, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_sw_raster::{BIG_COUNT_SLOT, SwRaster, cpu};
-use meshlight_scene::{BuildOptions, Mesh, build_asset, procedural_mesh};
+use meshlight_scene::{Mesh, procedural_mesh};
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::visbuffer;
 
@@ -20,40 +20,41 @@ const SCANLINES: u32 = 1;
 /// Above every triangle box: every workgroup loops over its whole box.
 const BOXES: u32 = 1 << 20;
 
+use meshlight_testing::features::where_supported;
 use meshlight_testing::{USAGE, gpu};
+
+#[path = "support/scenes.rs"]
+mod scenes;
+use scenes::add_mesh;
 
 // ---------------------------------------------------------------------------------------
 // Scenes and views
 
-fn add_mesh(scene: &mut SceneData, name: &str, mesh: &Mesh) -> meshlight_gpu_scene::MeshId {
-    let asset = build_asset(mesh, &BuildOptions::default(), &mut |_| {})
-        .unwrap_or_else(|e| panic!("{e}"))
-        .asset;
-    scene.add_mesh(name, &asset).unwrap()
-}
-
 /// Three instances of the torus knot (one at its place, two moved, scaled and turned).
 fn knot_scene() -> SceneData {
+    let third = Mat4::from_scale_rotation_translation(
+        Vec3::new(0.5, 0.7, 0.6),
+        Quat::from_rotation_x(-1.1),
+        Vec3::new(-2.0, -1.5, 1.0),
+    );
+    scenes::knot_scene(&procedural_mesh(12), &[third])
+}
+
+/// The white `meshes`, then one instance of each at its place, numbered in order.
+fn flat_scene(meshes: &[(&str, Mesh)]) -> SceneData {
     let mut scene = SceneData::new(Limits::default());
-    let mesh = add_mesh(&mut scene, "knot", &procedural_mesh(12));
     let material = scene.add_material(Material {
-        base_color: [0.8, 0.5, 0.3],
+        base_color: [1.0; 3],
     });
-    let transforms = [
-        Mat4::IDENTITY,
-        Mat4::from_scale_rotation_translation(
-            Vec3::splat(0.6),
-            Quat::from_rotation_y(0.7),
-            Vec3::new(2.5, 1.0, 2.0),
-        ),
-        Mat4::from_scale_rotation_translation(
-            Vec3::new(0.5, 0.7, 0.6),
-            Quat::from_rotation_x(-1.1),
-            Vec3::new(-2.0, -1.5, 1.0),
-        ),
-    ];
-    for t in transforms {
-        scene.add_instance(mesh, t, material).unwrap().unwrap();
+    let ids: Vec<_> = meshes
+        .iter()
+        .map(|(name, mesh)| add_mesh(&mut scene, name, mesh))
+        .collect();
+    for id in ids {
+        scene
+            .add_instance(id, Mat4::IDENTITY, material)
+            .unwrap()
+            .unwrap();
     }
     scene
 }
@@ -452,23 +453,15 @@ fn the_texture_target_holds_the_reference_values_or_names_the_missing_feature() 
         target: Visibility64::Texture,
         ..exact
     };
-    let has = gpu()
-        .adapter
-        .features()
-        .contains(meshlight_pass_sw_raster::TEXTURE_FEATURES);
-    let got = run(&mut scene, &input, &views, textured);
-    if !has {
-        match got {
-            Err(GraphError::MissingFeature { pass, features, .. }) => {
-                assert_eq!(pass, "sw_raster");
-                assert!(features.contains("TEXTURE_INT64_ATOMIC"), "{features}");
-                eprintln!("no 64-bit texture atomics here: the typed error, as expected");
-            }
-            other => panic!("expected the missing-feature error, got {:?}", other.err()),
-        }
+    let Some(got) = where_supported(
+        run(&mut scene, &input, &views, textured),
+        meshlight_pass_sw_raster::TEXTURE_FEATURES,
+        "sw_raster",
+        "TEXTURE_INT64_ATOMIC",
+        "64-bit texture atomics",
+    ) else {
         return;
-    }
-    let got = got.unwrap_or_else(|e| panic!("{e}"));
+    };
     let buffer = run(&mut scene, &input, &views, exact).unwrap_or_else(|e| panic!("{e}"));
     for (k, view) in views.iter().enumerate() {
         let want = input.reference(&scene, view);
@@ -602,20 +595,10 @@ fn inside_square(view: &View) -> Vec<bool> {
 
 #[test]
 fn shared_edges_of_a_flat_quad_cover_every_pixel_exactly_once() {
-    let mut scene = SceneData::new(Limits::default());
-    let material = scene.add_material(Material {
-        base_color: [1.0; 3],
-    });
-    let regular = add_mesh(&mut scene, "regular", &flat_quad(16, 0.0));
-    let jittered = add_mesh(&mut scene, "jittered", &flat_quad(20, 0.35));
-    scene
-        .add_instance(regular, Mat4::IDENTITY, material)
-        .unwrap()
-        .unwrap();
-    scene
-        .add_instance(jittered, Mat4::IDENTITY, material)
-        .unwrap()
-        .unwrap();
+    let mut scene = flat_scene(&[
+        ("regular", flat_quad(16, 0.0)),
+        ("jittered", flat_quad(20, 0.35)),
+    ]);
 
     // Orthographic, 24 pixels per unit, the origin on a pixel centre: the regular grid
     // (3 pixels a cell) puts vertices on pixel centres and edges through them, where
@@ -993,15 +976,7 @@ fn triangles_crossing_the_near_plane_are_clipped_as_the_reference_clips_them() {
 /// covered exactly once, clipped pieces and unclipped triangles alike.
 #[test]
 fn a_square_cut_by_the_near_plane_has_no_holes_and_no_overlaps() {
-    let mut scene = SceneData::new(Limits::default());
-    let material = scene.add_material(Material {
-        base_color: [1.0; 3],
-    });
-    let quad = add_mesh(&mut scene, "jittered", &flat_quad(20, 0.35));
-    scene
-        .add_instance(quad, Mat4::IDENTITY, material)
-        .unwrap()
-        .unwrap();
+    let mut scene = flat_scene(&[("jittered", flat_quad(20, 0.35))]);
     // Low over the square (z = 0, front face +z), looking along it and down a little,
     // the near plane cutting it; one camera rolled, one reaching past the sides.
     let mut rolled = Camera::perspective(
