@@ -326,7 +326,7 @@ pub fn register(registry: &mut Registry) {
 mod tests {
     use super::*;
     use meshlight_shaders::{Capabilities, ShaderLibrary};
-    use meshlight_testing::{parameter_message as message, params};
+    use meshlight_testing::params;
 
     #[test]
     fn params_are_read_and_checked() {
@@ -340,24 +340,26 @@ mod tests {
                 instance_count: 4
             }
         );
-        let m = message(BruteForce::from_params(&params(
-            "width = 0\nheight = 64\nindex_count = 30\ninstance_count = 4",
-        )));
-        assert!(m.contains("`width`") && m.contains("0 × 64"), "{m}");
-        let m = message(BruteForce::from_params(&params(
-            "width = 96\nheight = 64\nindex_count = 31\ninstance_count = 4",
-        )));
-        assert!(m.contains("`index_count`") && m.contains("31"), "{m}");
-        let m = message(BruteForce::from_params(&params(
-            "width = 96\nheight = 64\nindex_count = 30",
-        )));
-        assert!(m.contains("`instance_count`"), "{m}");
-        assert!(
-            BruteForce::from_params(&params(
-                "width = 96\nheight = 64\nindex_count = 30\ninstance_count = 4\ninstances = 4"
-            ))
-            .is_err(),
-            "a misspelt key is refused"
+        let zero_width = "width = 0\nheight = 64\nindex_count = 30\ninstance_count = 4";
+        let odd_indices = "width = 96\nheight = 64\nindex_count = 31\ninstance_count = 4";
+        meshlight_testing::assert_params(
+            |text| BruteForce::from_params(&params(text)),
+            &[ok],
+            &[
+                (zero_width, "`width`"),
+                (zero_width, "0 × 64"),
+                (odd_indices, "`index_count`"),
+                (odd_indices, "31"),
+                (
+                    "width = 96\nheight = 64\nindex_count = 30",
+                    "`instance_count`",
+                ),
+                // A misspelt key is refused by name.
+                (
+                    "width = 96\nheight = 64\nindex_count = 30\ninstance_count = 4\ninstances = 4",
+                    "`instances`",
+                ),
+            ],
         );
     }
 

@@ -241,7 +241,7 @@ impl Resolve {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use meshlight_testing::{parameter_message as message, params};
+    use meshlight_testing::params;
 
     #[test]
     fn names_round_trip_and_match_the_shader_constants() {
@@ -282,40 +282,34 @@ mod tests {
 
     #[test]
     fn bad_params_are_errors_that_name_what_to_change() {
-        let m = message(Resolve::from_params(&params("width = 0\nheight = 48")));
-        assert!(m.contains("`width`") && m.contains("0 × 48"), "{m}");
-        let m = message(Resolve::from_params(&params("height = 48")));
-        assert!(m.contains("`width`"), "{m}");
-        let m = message(Resolve::from_params(&params(
-            "width = 4\nheight = 4\nview = \"normal\"",
-        )));
-        assert!(
-            m.contains("`normal`") && m.contains("shaded, clusters"),
-            "{m}"
+        let wrong_size = "width = 0\nheight = 48";
+        let wrong_view = "width = 4\nheight = 4\nview = \"normal\"";
+        let wrong_scale = "width = 4\nheight = 4\nchecker_scale = \"big\"";
+        let wrong_color = "width = 4\nheight = 4\nlight_color = [1, -1, 1]";
+        meshlight_testing::assert_params(
+            |text| Resolve::from_params(&params(text)),
+            &[],
+            &[
+                (wrong_size, "`width`"),
+                (wrong_size, "0 × 48"),
+                ("height = 48", "`width`"),
+                (wrong_view, "`normal`"),
+                (wrong_view, "shaded, clusters"),
+                ("width = 4\nheight = 4\nwidht = 4", "`widht`"),
+                (wrong_scale, "`checker_scale`"),
+                (wrong_scale, "big"),
+                ("width = 4\nheight = 4\nchecker_scale = 0", "> 0"),
+                (
+                    "width = 4\nheight = 4\nlight_direction = [1, 2]",
+                    "three finite numbers",
+                ),
+                (
+                    "width = 4\nheight = 4\nlight_direction = [0, 0, 0]",
+                    "must not be zero",
+                ),
+                (wrong_color, "`light_color`"),
+                (wrong_color, "negative"),
+            ],
         );
-        let m = message(Resolve::from_params(&params(
-            "width = 4\nheight = 4\nwidht = 4",
-        )));
-        assert!(m.contains("`widht`"), "{m}");
-        let m = message(Resolve::from_params(&params(
-            "width = 4\nheight = 4\nchecker_scale = \"big\"",
-        )));
-        assert!(m.contains("`checker_scale`") && m.contains("big"), "{m}");
-        let m = message(Resolve::from_params(&params(
-            "width = 4\nheight = 4\nchecker_scale = 0",
-        )));
-        assert!(m.contains("> 0"), "{m}");
-        let m = message(Resolve::from_params(&params(
-            "width = 4\nheight = 4\nlight_direction = [1, 2]",
-        )));
-        assert!(m.contains("three finite numbers"), "{m}");
-        let m = message(Resolve::from_params(&params(
-            "width = 4\nheight = 4\nlight_direction = [0, 0, 0]",
-        )));
-        assert!(m.contains("must not be zero"), "{m}");
-        let m = message(Resolve::from_params(&params(
-            "width = 4\nheight = 4\nlight_color = [1, -1, 1]",
-        )));
-        assert!(m.contains("`light_color`") && m.contains("negative"), "{m}");
     }
 }
