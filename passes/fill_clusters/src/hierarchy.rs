@@ -103,14 +103,13 @@
 use crate::{
     CAMERA_CUT_INPUT, CANDIDATE_NODE_COUNT_SLOT, CANDIDATE_NODES_SLOT, InstanceGrid,
     OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT,
-    hierarchy_contract, instance_grid,
+    hierarchy_contract, instance_grid, instance_programs,
 };
-use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::Params;
 use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, ProgramDesc,
-    RecordContext, Result, SetupContext, Workgroups,
+    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, RecordContext,
+    Result, SetupContext, Workgroups,
 };
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
@@ -377,9 +376,6 @@ impl Pass for HierarchyFill {
         let occlusion = self.check_mode(ctx)?;
         let second = self.mode == Mode::Second;
         let defs = WalkDefs { occlusion, second };
-        ctx.shader_defs(&defs);
-        let table = InstanceTable::of(ctx);
-        ctx.shader_defs(&table);
         ctx.min_bytes("cluster_count", 8);
         ctx.frame_input(VIEW_INPUT);
         let count_words = if occlusion { OCCLUSION_COUNT_WORDS } else { 4 };
@@ -434,15 +430,8 @@ impl Pass for HierarchyFill {
             }
         }
         // Only `walk_dispatch` uses `walk_args` as storage; `fill` is dispatched with it.
-        for entry in ["walk_dispatch", "prepare", "roots", "fill"] {
-            ctx.program(
-                entry,
-                ProgramDesc::compute(&SHADER, entry)
-                    .defs(&defs)
-                    .defs(&table)
-                    .layout(layout.clone()),
-            );
-        }
+        let entries = ["walk_dispatch", "prepare", "roots", "fill"];
+        instance_programs(ctx, &SHADER, &entries, layout, &defs);
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {

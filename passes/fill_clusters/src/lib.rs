@@ -74,7 +74,7 @@ use meshlight_graph::{
     Access, BindingLayout, Element, GraphError, Implementation, Pass, ProgramDesc, RecordContext,
     Result, SetupContext, Slot, StageContract, Workgroups,
 };
-use meshlight_shaders::{PassShader, pass_shader};
+use meshlight_shaders::{PassShader, ShaderDefs, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "fill_clusters";
@@ -256,6 +256,30 @@ pub(crate) fn instance_grid(
     })
 }
 
+/// Declares a compute program for each of `entries` in `shader`, all composed with
+/// `defs` and the instance table's under one `layout`, and records those defs as the
+/// pass's: an implementation's kernels run one variant and share its bindings.
+pub(crate) fn instance_programs(
+    ctx: &mut SetupContext,
+    shader: &'static PassShader,
+    entries: &[&'static str],
+    layout: BindingLayout,
+    defs: &impl ShaderDefs,
+) {
+    let table = InstanceTable::of(ctx);
+    ctx.shader_defs(defs);
+    ctx.shader_defs(&table);
+    for &entry in entries {
+        ctx.program(
+            entry,
+            ProgramDesc::compute(shader, entry)
+                .defs(defs)
+                .defs(&table)
+                .layout(layout.clone()),
+        );
+    }
+}
+
 /// `n` workgroups as `[x, y]` with both under `limit` (x as wide as allowed).
 pub fn workgroup_grid(n: u32, limit: u32) -> [u32; 2] {
     let x = n.min(limit.max(1));
@@ -270,17 +294,8 @@ impl Pass for FillClusters {
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         ctx.min_bytes("cluster_count", 8);
         ctx.frame_input(VIEW_INPUT);
-        let table = InstanceTable::of(ctx);
-        ctx.shader_defs(&table);
         let layout = BindingLayout::from_shader("fill_clusters");
-        for entry in ["fill", "finish"] {
-            ctx.program(
-                entry,
-                ProgramDesc::compute(&SHADER, entry)
-                    .defs(&table)
-                    .layout(layout.clone()),
-            );
-        }
+        instance_programs(ctx, &SHADER, &["fill", "finish"], layout, &());
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
