@@ -192,11 +192,10 @@ impl GraphBuilder {
         desc: BufferDesc,
         usage: wgpu::BufferUsages,
     ) -> Handle<Buffer> {
-        let usage = ImportedUsage::Buffer(usage);
-        self.add_first_version(
+        self.import(
             name,
             ResourceDesc::Buffer(desc),
-            ResourceKind::Imported { usage },
+            ImportedUsage::Buffer(usage),
         )
     }
     /// A caller-owned texture; `usage` is what the caller created it with.
@@ -206,12 +205,14 @@ impl GraphBuilder {
         desc: TextureDesc,
         usage: wgpu::TextureUsages,
     ) -> Handle<Texture> {
-        let usage = ImportedUsage::Texture(usage);
-        self.add_first_version(
+        self.import(
             name,
             ResourceDesc::Texture(desc),
-            ResourceKind::Imported { usage },
+            ImportedUsage::Texture(usage),
         )
+    }
+    fn import<K>(&mut self, name: &str, desc: ResourceDesc, usage: ImportedUsage) -> Handle<K> {
+        self.add_first_version(name, desc, ResourceKind::Imported { usage })
     }
     /// A buffer carried to the next frame: write `current`; read last frame's as `prev`
     /// (named `<name>.prev`).
