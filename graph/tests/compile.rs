@@ -120,7 +120,7 @@ fn read_of_a_transient_nothing_writes_is_an_error() {
         Bindings::new(),
     )
     .unwrap();
-    let_compile_error!(GraphError::ReadWithoutWriter { pass, resource, .. } = g);
+    let_compile_error!(g => GraphError::ReadWithoutWriter { pass, resource, .. });
     assert_eq!(
         (pass.as_str(), resource.as_str()),
         ("reader", "never_written")
@@ -153,16 +153,7 @@ fn stale_handle_is_an_error_naming_the_writer() {
         Bindings::new().bind("t", t1),
     )
     .unwrap();
-    let_compile_error!(
-        GraphError::StaleVersion {
-            pass,
-            resource,
-            given,
-            current,
-            writer,
-            ..
-        } = g
-    );
+    let_compile_error!(g => GraphError::StaleVersion { pass, resource, given, current, writer, .. });
     assert_eq!(
         (
             pass.as_str(),
@@ -181,15 +172,7 @@ fn element_and_kind_mismatches_are_errors() {
     g.import_buffer("out", BufferDesc::array(Element::F32, 4), IMPORT_USAGE);
     g.add_pass("writer", Fake::rw(&[], &["out"]), Bindings::new())
         .unwrap();
-    let_compile_error!(
-        GraphError::DescriptorMismatch {
-            pass,
-            slot,
-            expected,
-            found,
-            ..
-        } = g
-    );
+    let_compile_error!(g => GraphError::DescriptorMismatch { pass, slot, expected, found, .. });
     assert_eq!((pass.as_str(), slot.as_str()), ("writer", "out"));
     assert!(
         expected.contains("u32") && found.contains("f32"),
@@ -204,7 +187,7 @@ fn element_and_kind_mismatches_are_errors() {
     );
     g.add_pass("writer", Fake::rw(&[], &["out"]), Bindings::new())
         .unwrap();
-    let_compile_error!(GraphError::DescriptorMismatch { .. } = g);
+    let_compile_error!(g => GraphError::DescriptorMismatch { .. });
 
     let mut g = GraphBuilder::new();
     g.import_texture(
@@ -220,13 +203,7 @@ fn element_and_kind_mismatches_are_errors() {
     );
     g.add_pass("writer", Fake::new("t", vec![slot]), Bindings::new())
         .unwrap();
-    let_compile_error!(
-        GraphError::DescriptorMismatch {
-            expected,
-            found,
-            ..
-        } = g
-    );
+    let_compile_error!(g => GraphError::DescriptorMismatch { expected, found, .. });
     assert_eq!(
         (expected.as_str(), found.as_str()),
         ("a r32float texture", "a rgba8unorm texture")
@@ -239,13 +216,7 @@ fn usage_the_import_does_not_allow_is_an_error() {
     g.import_buffer("out", u32s(4), wgpu::BufferUsages::COPY_SRC);
     g.add_pass("writer", Fake::rw(&[], &["out"]), Bindings::new())
         .unwrap();
-    let_compile_error!(
-        GraphError::UsageNotAllowed {
-            resource,
-            reason,
-            ..
-        } = g
-    );
+    let_compile_error!(g => GraphError::UsageNotAllowed { resource, reason, .. });
     assert_eq!(resource, "out");
     assert!(reason.contains("STORAGE"), "{reason}");
     // A buffer in an indirect slot is fine; a texture there is not.
@@ -269,7 +240,7 @@ fn usage_the_import_does_not_allow_is_an_error() {
     ];
     g.add_pass("draw", Fake::new("t", slots), Bindings::new())
         .unwrap();
-    let_compile_error!(GraphError::UsageNotAllowed { .. } = g);
+    let_compile_error!(g => GraphError::UsageNotAllowed { .. });
 }
 
 #[test]
@@ -282,7 +253,7 @@ fn writing_last_frames_history_is_an_error() {
         Bindings::new().bind("out", h.prev),
     )
     .unwrap();
-    let_compile_error!(GraphError::ReadOnlyResource { .. } = g);
+    let_compile_error!(g => GraphError::ReadOnlyResource { .. });
 }
 
 #[test]
@@ -290,7 +261,7 @@ fn duplicate_names_are_errors() {
     let mut g = GraphBuilder::new();
     g.create_buffer("x", u32s(4));
     g.create_buffer("x", u32s(4));
-    let_compile_error!(GraphError::DuplicateName { what, name } = g);
+    let_compile_error!(g => GraphError::DuplicateName { what, name });
     assert_eq!((what, name.as_str()), ("resource", "x"));
     let mut g = GraphBuilder::new();
     g.create_buffer("x", u32s(4));
@@ -309,7 +280,7 @@ fn required_feature_missing_on_the_adapter_is_an_error() {
     let mut p = Fake::rw(&[], &["out"]);
     p.required = wgpu::Features::TEXTURE_INT64_ATOMIC;
     g.add_pass("raster", p, Bindings::new()).unwrap();
-    let_compile_error!(GraphError::MissingFeature { pass, features, .. } = g);
+    let_compile_error!(g => GraphError::MissingFeature { pass, features, .. });
     assert_eq!(
         (pass.as_str(), features.as_str()),
         ("raster", "TEXTURE_INT64_ATOMIC")
@@ -467,14 +438,7 @@ fn one_resource_in_a_read_and_a_write_slot_of_one_pass_is_an_error() {
             .bind_named("w", "out"),
     )
     .unwrap();
-    let_compile_error!(
-        GraphError::UsageNotAllowed {
-            pass,
-            resource,
-            reason,
-            ..
-        } = g
-    );
+    let_compile_error!(g => GraphError::UsageNotAllowed { pass, resource, reason, .. });
     assert_eq!((pass.as_str(), resource.as_str()), ("p", "out"));
     assert!(reason.contains("another slot"), "{reason}");
 }

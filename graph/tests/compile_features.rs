@@ -34,7 +34,7 @@ fn a_size_that_overflows_u64_is_an_error_not_a_wrapped_size() {
     let h = g.create_buffer("huge", desc);
     g.export(h);
     one_writer(&mut g, "huge");
-    let_compile_error!(GraphError::SizeOverflow { resource } = g);
+    let_compile_error!(g => GraphError::SizeOverflow { resource });
     assert_eq!(resource, "huge");
 }
 
@@ -48,14 +48,7 @@ fn a_buffer_over_max_buffer_size_is_a_compile_error() {
         "four_tib",
         Slot::buffer("out", Access::CopyDst, Element::BYTES, ""),
     );
-    let_compile_error!(
-        GraphError::LimitExceeded {
-            what,
-            limit,
-            max,
-            ..
-        } = g
-    );
+    let_compile_error!(g => GraphError::LimitExceeded { what, limit, max, .. });
     assert!(what.contains("four_tib"), "{what}");
     assert_eq!(limit, "max_buffer_size");
     assert_eq!(max, limits().max_buffer_size);
@@ -81,7 +74,7 @@ fn a_storage_binding_over_its_limit_names_the_pass_slot_and_limit() {
         Bindings::new().bind_named("out", "big"),
     )
     .unwrap();
-    let_compile_error!(GraphError::LimitExceeded { what, limit, .. } = g);
+    let_compile_error!(g => GraphError::LimitExceeded { what, limit, .. });
     assert!(
         what.contains("`big`") && what.contains("`out`") && what.contains("`w`"),
         "{what}"
@@ -126,7 +119,7 @@ fn a_texture_over_the_dimension_limit_is_a_compile_error() {
     );
     g.export(t);
     one_texture_writer(&mut g, "wide");
-    let_compile_error!(GraphError::LimitExceeded { what, limit, .. } = g);
+    let_compile_error!(g => GraphError::LimitExceeded { what, limit, .. });
     assert!(what.contains("wide"));
     assert_eq!(limit, "max_texture_dimension_2d");
 }
@@ -148,7 +141,7 @@ fn a_declared_dispatch_over_the_per_dimension_limit_is_a_compile_error() {
     let mut g = GraphBuilder::new();
     g.import_buffer("out", u32s(4), IMPORT_USAGE);
     g.add_pass("wide", wide, Bindings::new()).unwrap();
-    let_compile_error!(GraphError::LimitExceeded { what, limit, .. } = g);
+    let_compile_error!(g => GraphError::LimitExceeded { what, limit, .. });
     assert!(what.contains("`main`") && what.contains("`wide`"), "{what}");
     assert_eq!(limit, "max_compute_workgroups_per_dimension");
 }
@@ -205,13 +198,7 @@ fn size_parameters_resize_buffers_and_a_bad_value_leaves_the_plan_as_it_was() {
     let h = g.create_buffer("list", BufferDesc::array_param(Element::U32, "slotz"));
     g.export(h);
     one_writer(&mut g, "list");
-    let_compile_error!(
-        GraphError::UnknownParam {
-            resource,
-            param,
-            ..
-        } = g
-    );
+    let_compile_error!(g => GraphError::UnknownParam { resource, param, .. });
     assert_eq!((resource.as_str(), param.as_str()), ("list", "slotz"))
 }
 
@@ -277,7 +264,7 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
         let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_full_mips();
         let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
         add_mip_pass(&mut g, "bad", t, src, dst).unwrap();
-        let_compile_error!(GraphError::UsageNotAllowed { pass, reason, .. } = g);
+        let_compile_error!(g => GraphError::UsageNotAllowed { pass, reason, .. });
         assert_eq!(pass, "bad");
         assert!(reason.contains("overlapping"), "{reason}");
     }
@@ -286,7 +273,7 @@ fn overlapping_ranges_in_one_pass_stay_an_error() {
     let desc = TextureDesc::d2(wgpu::TextureFormat::R32Float, 16, 16).with_mips(2);
     let t = g.import_texture("pyr", desc, wgpu::TextureUsages::all());
     add_mip_pass(&mut g, "bad", t, TextureRange::mip(0), TextureRange::mip(2)).unwrap();
-    let_compile_error!(GraphError::DescriptorMismatch { .. } = g);
+    let_compile_error!(g => GraphError::DescriptorMismatch { .. });
 }
 
 #[test]
@@ -304,7 +291,7 @@ fn texture_arrays_and_layer_ranges_plan_like_mips() {
     );
     // Layer 1 has no writer yet.
     assert!(out.is_ok());
-    let_compile_error!(GraphError::ReadWithoutWriter { .. } = g);
+    let_compile_error!(g => GraphError::ReadWithoutWriter { .. });
 }
 
 #[test]
@@ -379,7 +366,7 @@ fn a_64_bit_visibility_slot_takes_a_u64_buffer_or_an_r64uint_texture() {
             .contains(wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::STORAGE_ATOMIC)
     );
     assert!(c.plan.passes[0].required_features.contains(atomics));
-    let_compile_error!(GraphError::MissingFeature { pass, features, .. } = build());
+    let_compile_error!(build() => GraphError::MissingFeature { pass, features, .. });
     assert_eq!(pass, "raster");
     assert!(features.contains("TEXTURE_INT64_ATOMIC"), "{features}");
 
@@ -392,13 +379,7 @@ fn a_64_bit_visibility_slot_takes_a_u64_buffer_or_an_r64uint_texture() {
         Bindings::new().bind("vis", v),
     )
     .unwrap();
-    let_compile_error!(
-        GraphError::DescriptorMismatch {
-            expected,
-            found,
-            ..
-        } = g
-    );
+    let_compile_error!(g => GraphError::DescriptorMismatch { expected, found, .. });
     assert!(expected.contains("64-bit visibility"), "{expected}");
     assert!(found.contains("u32"), "{found}");
 }
@@ -432,7 +413,7 @@ fn a_mesh_program_requires_the_mesh_shader_feature() {
         g.add_pass("hw", meshy(), Bindings::new()).unwrap();
         g
     };
-    let_compile_error!(GraphError::MissingFeature { pass, features, .. } = build());
+    let_compile_error!(build() => GraphError::MissingFeature { pass, features, .. });
     assert_eq!(pass, "hw");
     assert!(features.contains("EXPERIMENTAL_MESH_SHADER"), "{features}");
     let c = build()

@@ -81,7 +81,7 @@ pub fn compile_error(g: GraphBuilder) -> GraphError {
 /// checks that follow; any other outcome panics naming what came instead.
 #[allow(unused_macros)] // not every test binary expects compile errors
 macro_rules! let_compile_error {
-    ($variant:pat = $graph:expr) => {
+    ($graph:expr => $variant:pat) => {
         let e = compile_error($graph);
         let $variant = e else {
             panic!("{e:?}");
