@@ -217,9 +217,7 @@ fn compare(
 
 #[test]
 fn random_views_match_the_reference() {
-    let mut rng = Rng(0x5eed_cafe_f00d_0001);
-    let mut data = scene();
-    let clusters = all_clusters(&data, &mut rng);
+    let (mut rng, mut data, clusters) = seeded(0x5eed_cafe_f00d_0001, scene());
     let levels = data.meshes[0].level_count;
     assert!(levels >= 4, "spot has {levels} LOD levels");
     let mut totals = [0usize; 6];
@@ -355,8 +353,7 @@ fn with_every_cluster_in_view_the_cut_covers_each_lod0_meshlet_exactly_once() {
             )
         })
         .collect();
-    let mut data = scene_with(&placements);
-    let clusters = all_clusters(&data, &mut Rng(7));
+    let (_, mut data, clusters) = seeded(7, scene_with(&placements));
     let camera = Camera::perspective(
         Vec3::new(0.0, 1.5, 2.0),
         Vec3::new(0.0, 0.0, -20.0),
@@ -422,9 +419,7 @@ fn with_every_cluster_in_view_the_cut_covers_each_lod0_meshlet_exactly_once() {
 
 #[test]
 fn a_tiny_slot_buffer_overflows_into_exactly_its_capacity() {
-    let mut rng = Rng(0x0f10_2030);
-    let mut data = scene();
-    let clusters = all_clusters(&data, &mut rng);
+    let (_, mut data, clusters) = seeded(0x0f10_2030, scene());
     // A view with both software and hardware clusters.
     let camera = Camera::perspective(Vec3::new(2.0, 6.0, 14.0), Vec3::ZERO, 1.0, 0.05);
     let view = camera.view([1280, 720], 0, None);
@@ -475,9 +470,7 @@ fn a_tiny_slot_buffer_overflows_into_exactly_its_capacity() {
 
 #[test]
 fn a_cull_dispatch_folded_into_two_dimensions_visits_every_cluster() {
-    let mut rng = Rng(0xd15_a7c4);
-    let mut data = scene();
-    let clusters = all_clusters(&data, &mut rng);
+    let (_, mut data, clusters) = seeded(0xd15_a7c4, scene());
     let groups = (clusters.len() as u32).div_ceil(meshlight_pass_cull_lod::WORKGROUP_SIZE);
     // The smallest limit whose square still covers the workgroups: several rows.
     let limit = (1..).find(|m| m * m >= groups).unwrap();

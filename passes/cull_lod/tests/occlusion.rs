@@ -397,6 +397,52 @@ fn check_words(label: &str, got: &[u32; 12], want: &CullResult, near: usize) {
     assert_eq!(got[10], want.counts[10], "{label}: slots of the pass");
 }
 
+/// One pass of frame `f` (the first or the second, as `occlusion` says) against the
+/// reference's `want` for it: its lists, up to clusters decided differently near a
+/// threshold (the first pass's candidates too), its count words and its hardware
+/// arguments. Returns how many clusters lay near a threshold.
+fn check_pass(
+    data: &SceneData,
+    view: &View,
+    label: &str,
+    f: &Frame,
+    occlusion: Occlusion,
+    want: &CullResult,
+) -> usize {
+    let second = matches!(occlusion, Occlusion::Second { .. });
+    let (pass, words, hw_args) = if second {
+        ("second", &f.second, f.second_hw_args)
+    } else {
+        ("first", &f.first, f.first_hw_args)
+    };
+    let (software, hardware) = if second {
+        second_lists(f)
+    } else {
+        first_lists(f)
+    };
+    let lists: [(&[Cluster], &[Cluster]); 3] = if second {
+        [
+            (&hardware, &want.hardware),
+            (&software, &want.software),
+            (&[], &[]),
+        ]
+    } else {
+        [
+            (&software, &want.software),
+            (&hardware, &want.hardware),
+            (&f.candidates, &want.occluded),
+        ]
+    };
+    let near = differing(data, view, occlusion, &format!("{label} {pass}"), lists);
+    assert!(
+        near <= MAX_NEAR_PER_VIEW,
+        "{label}: {near} near a threshold"
+    );
+    check_words(&format!("{label} {pass}"), words, want, near);
+    assert_eq!(hw_args, [HW_VERTICES, words[1], 0, 0]);
+    near
+}
+
 /// Six spot instances; instance 2 was elsewhere last frame.
 fn moved_scene() -> SceneData {
     let mut data = scene();
@@ -466,9 +512,7 @@ fn walls(rng: &mut Rng, data: &SceneData, view: &View, count: u32) -> DepthPyram
 
 #[test]
 fn both_passes_match_the_reference_on_random_views_and_walls() {
-    let mut rng = Rng(0x0cc1_0de5_0000_0001);
-    let mut data = moved_scene();
-    let clusters = all_clusters(&data, &mut rng);
+    let (mut rng, mut data, clusters) = seeded(0x0cc1_0de5_0000_0001, moved_scene());
     let mut harness = Harness::new(&mut data, &clusters);
     let empty = DepthPyramid::from_depth(VIEWPORT[0], VIEWPORT[1], &vec![0.0; pixels()]);
     let mut totals = [0u32; 4];
@@ -491,24 +535,7 @@ fn both_passes_match_the_reference_on_random_views_and_walls() {
 
         let first = Occlusion::First(&last);
         let want = cpu::cpu_cull_with(&data, &view, &clusters, &T, harness.capacity, first);
-        let (software, hardware) = first_lists(&f);
-        let near = differing(
-            &data,
-            &view,
-            first,
-            &format!("{label} first"),
-            [
-                (&software, &want.software),
-                (&hardware, &want.hardware),
-                (&f.candidates, &want.occluded),
-            ],
-        );
-        assert!(
-            near <= MAX_NEAR_PER_VIEW,
-            "{label}: {near} near a threshold"
-        );
-        check_words(&format!("{label} first"), &f.first, &want, near);
-        assert_eq!(f.first_hw_args, [HW_VERTICES, f.first[1], 0, 0]);
+        let near = check_pass(&data, &view, &label, &f, first, &want);
         assert_eq!(f.candidate_count, [f.first[9]; 2], "{label}: candidates");
 
         // The second pass, on the candidates the GPU's first pass found.
@@ -517,28 +544,11 @@ fn both_passes_match_the_reference_on_random_views_and_walls() {
             first_counts: f.first,
         };
         let want2 = cpu::cpu_cull_with(&data, &view, &f.candidates, &T, harness.capacity, second);
-        let (software2, hardware2) = second_lists(&f);
-        let near2 = differing(
-            &data,
-            &view,
-            second,
-            &format!("{label} second"),
-            [
-                (&hardware2, &want2.hardware),
-                (&software2, &want2.software),
-                (&[], &[]),
-            ],
-        );
-        assert!(
-            near2 <= MAX_NEAR_PER_VIEW,
-            "{label}: {near2} near a threshold"
-        );
-        check_words(&format!("{label} second"), &f.second, &want2, near2);
+        let near2 = check_pass(&data, &view, &label, &f, second, &want2);
         assert_eq!(
             f.second[7], f.first[0],
             "{label}: second software slots start"
         );
-        assert_eq!(f.second_hw_args, [HW_VERTICES, f.second[1], 0, 0]);
         check_per_instance(&label, &f, data.instances.len());
         if near == 0 && near2 == 0 {
             let want_words = cpu::occluded_per_instance(&want, Some(&want2), data.instances.len());
@@ -562,9 +572,7 @@ fn both_passes_match_the_reference_on_random_views_and_walls() {
 
 #[test]
 fn the_second_pass_tests_only_the_first_passs_candidates_in_the_free_slots() {
-    let mut rng = Rng(0x5ec0_4d00_0000_0002);
-    let mut data = moved_scene();
-    let clusters = all_clusters(&data, &mut rng);
+    let (_, mut data, clusters) = seeded(0x5ec0_4d00_0000_0002, moved_scene());
     let mut harness = Harness::new(&mut data, &clusters);
     let view = Camera::perspective(Vec3::new(1.0, 2.5, 9.0), Vec3::ZERO, 1.0, 0.05)
         .view(VIEWPORT, 1, None);
@@ -630,9 +638,7 @@ fn the_second_pass_tests_only_the_first_passs_candidates_in_the_free_slots() {
 
 #[test]
 fn with_no_valid_history_or_on_a_camera_cut_the_first_pass_culls_nothing_by_occlusion() {
-    let mut rng = Rng(0x1157_0e41_0000_0003);
-    let mut data = moved_scene();
-    let clusters = all_clusters(&data, &mut rng);
+    let (_, mut data, clusters) = seeded(0x1157_0e41_0000_0003, moved_scene());
     let mut harness = Harness::new(&mut data, &clusters);
     let view = Camera::perspective(Vec3::new(-2.0, 3.0, 10.0), Vec3::ZERO, 1.1, 0.05)
         .view(VIEWPORT, 1, None);

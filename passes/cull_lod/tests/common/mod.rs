@@ -43,6 +43,14 @@ pub fn scene() -> SceneData {
     scene_with(&placements)
 }
 
+/// A test's starting point: the generator seeded with `seed`, the scene, and every
+/// cluster of it shuffled by that generator, which the test draws from after.
+pub fn seeded(seed: u64, data: SceneData) -> (Rng, SceneData, Vec<Cluster>) {
+    let mut rng = Rng(seed);
+    let clusters = all_clusters(&data, &mut rng);
+    (rng, data, clusters)
+}
+
 /// Every meshlet of every instance, in a seeded shuffled order.
 pub fn all_clusters(data: &SceneData, rng: &mut Rng) -> Vec<Cluster> {
     let mut clusters: Vec<Cluster> = data
