@@ -223,17 +223,7 @@ fn random_views_match_the_reference() {
     let mut totals = [0usize; 6];
     let mut near_total = 0;
     for v in 0..10 {
-        let target = Vec3::new(
-            rng.range(-4.0, 4.0),
-            rng.range(-0.5, 0.5),
-            rng.range(-3.0, 3.0),
-        );
-        let direction = Vec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-0.3, 1.0),
-            rng.range(-1.0, 1.0),
-        )
-        .normalize_or(Vec3::Z);
+        let (target, direction) = random_aim(&mut rng, Vec3::new(4.0, 0.5, 3.0), [-0.3, 1.0]);
         let distance = 1.5 * (30.0f32 / 1.5).powf(rng.unit());
         let viewport = [[320, 240], [640, 360], [1280, 720]][rng.below(3) as usize];
         let camera = Camera::perspective(

@@ -458,17 +458,7 @@ fn moved_scene() -> SceneData {
 
 /// A random camera, and the one it was last frame (a little orbit and dolly).
 fn random_views(rng: &mut Rng, v: u32) -> View {
-    let target = Vec3::new(
-        rng.range(-2.0, 2.0),
-        rng.range(-0.3, 0.3),
-        rng.range(-1.5, 1.5),
-    );
-    let direction = Vec3::new(
-        rng.range(-1.0, 1.0),
-        rng.range(0.0, 0.8),
-        rng.range(-1.0, 1.0),
-    )
-    .normalize_or(Vec3::Z);
+    let (target, direction) = random_aim(rng, Vec3::new(2.0, 0.3, 1.5), [0.0, 0.8]);
     let distance = rng.range(4.0, 14.0);
     let fov = rng.range(0.7, 1.2);
     let camera = Camera::perspective(target + direction * distance, target, fov, 0.05);

@@ -43,6 +43,24 @@ pub fn scene() -> SceneData {
     scene_with(&placements)
 }
 
+/// A random camera aim: a target in the box `±extent` about the origin, and the unit
+/// direction from it toward the eye, its y drawn from `rise` before normalising (so the
+/// camera looks down at the scene as much as the test wants).
+pub fn random_aim(rng: &mut Rng, extent: Vec3, rise: [f32; 2]) -> (Vec3, Vec3) {
+    let target = Vec3::new(
+        rng.range(-extent.x, extent.x),
+        rng.range(-extent.y, extent.y),
+        rng.range(-extent.z, extent.z),
+    );
+    let direction = Vec3::new(
+        rng.range(-1.0, 1.0),
+        rng.range(rise[0], rise[1]),
+        rng.range(-1.0, 1.0),
+    )
+    .normalize_or(Vec3::Z);
+    (target, direction)
+}
+
 /// A test's starting point: the generator seeded with `seed`, the scene, and every
 /// cluster of it shuffled by that generator, which the test draws from after.
 pub fn seeded(seed: u64, data: SceneData) -> (Rng, SceneData, Vec<Cluster>) {
