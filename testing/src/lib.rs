@@ -2,6 +2,7 @@
 //! A dev-dependency only; nothing in a library depends on it.
 
 pub mod features;
+pub mod frames;
 pub mod pass_errors;
 use meshlight_graph::{
     Bindings, BufferDesc, CompileOptions, Executor, FrameData, GpuContext, GraphBuilder,

@@ -22,6 +22,7 @@ const TEXTURE_USAGE: wgpu::TextureUsages = wgpu::TextureUsages::RENDER_ATTACHMEN
     .union(wgpu::TextureUsages::COPY_SRC)
     .union(wgpu::TextureUsages::COPY_DST);
 
+use meshlight_testing::frames::run_per_view;
 use meshlight_testing::{gpu, read_texture, texture};
 
 #[path = "../../sw_raster/tests/support/scenes.rs"]
@@ -134,12 +135,8 @@ fn run(
         .texture("depth", &depth_texture)
         .texture("ids", &ids_texture);
     let mut exec = Executor::new(gpu);
-    let mut out = Vec::new();
-    for view in views {
-        let data = FrameData::new().with("view", bytemuck::bytes_of(view));
-        exec.execute_frame(&compiled, &imports, &data)?;
-        exec.finish()?;
-        out.push(Targets {
+    run_per_view(&mut exec, &compiled, &imports, views, |exec| {
+        Ok(Targets {
             depth: bytemuck::pod_collect_to_vec(&read_texture(
                 &exec.gpu,
                 &depth_texture,
@@ -150,9 +147,8 @@ fn run(
                 &ids_texture,
                 wgpu::TextureAspect::All,
             )),
-        });
-    }
-    Ok(out)
+        })
+    })
 }
 
 fn pass_for(scene: &Scene) -> BruteForce {

@@ -19,8 +19,10 @@ const SOFTWARE: u32 = 3;
 /// Unused slots between the software and hardware ones.
 const GAP: u32 = 2;
 
+use meshlight_gpu_scene::gpu::elements;
 use meshlight_testing::features::where_supported;
-use meshlight_testing::{USAGE, gpu};
+use meshlight_testing::frames::{Imported, filled, import_filled, run_per_view};
+use meshlight_testing::gpu;
 
 #[path = "../../sw_raster/tests/support/scenes.rs"]
 mod scenes;
@@ -127,17 +129,20 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
     let args = [VERTICES_PER_CLUSTER, frame.hw_count, 0, 0];
     let mut g = GraphBuilder::new();
     scene.import(&mut g);
-    let clusters = g.import_buffer(
-        "raster_clusters",
-        BufferDesc::array(meshlight_gpu_scene::gpu::elements::CLUSTER, capacity as u64),
-        USAGE,
-    );
-    let counts_h = g.import_buffer("raster_counts", BufferDesc::array(Element::U32, 8), USAGE);
-    let args_h = g.import_buffer("hw_args", BufferDesc::array(Element::DRAW_ARGS, 1), USAGE);
-    let vis = g.import_buffer(
-        "visbuffer",
-        BufferDesc::array(Element::U64, (W * H) as u64),
-        USAGE,
+    let Imported {
+        handles: [clusters, counts_h, args_h, vis],
+        buffers: [.., visbuffer],
+        imports,
+    } = import_filled(
+        &mut g,
+        &gpu,
+        [
+            filled("raster_clusters", elements::CLUSTER, &frame.raster_clusters),
+            filled("raster_counts", Element::U32, &counts),
+            filled("hw_args", Element::DRAW_ARGS, &args),
+            filled("visbuffer", Element::U64, &frame.initial),
+        ],
+        scene.imports(),
     );
     g.add_pass(
         "hw_raster",
@@ -153,28 +158,12 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
             .bind("visbuffer", vis),
     )?;
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
-    let buffers = [
-        gpu.buffer_with_data(
-            "raster_clusters",
-            bytemuck::cast_slice(&frame.raster_clusters),
-            USAGE,
-        ),
-        gpu.buffer_with_data("raster_counts", bytemuck::cast_slice(&counts), USAGE),
-        gpu.buffer_with_data("hw_args", bytemuck::cast_slice(&args), USAGE),
-        gpu.buffer_with_data("visbuffer", bytemuck::cast_slice(&frame.initial), USAGE),
-    ];
-    let imports = scene
-        .imports()
-        .buffer("raster_clusters", &buffers[0])
-        .buffer("raster_counts", &buffers[1])
-        .buffer("hw_args", &buffers[2])
-        .buffer("visbuffer", &buffers[3]);
     let mut exec = Executor::new(gpu);
-    let data = FrameData::new().with("view", bytemuck::bytes_of(&frame.view));
-    exec.execute_frame(&compiled, &imports, &data)?;
-    exec.finish()?;
-    let bytes = exec.gpu.read_buffer(&buffers[3], 0, (W * H) as u64 * 8)?;
-    Ok(bytemuck::pod_collect_to_vec(&bytes))
+    let mut frames = run_per_view(&mut exec, &compiled, &imports, &[frame.view], |exec| {
+        let bytes = exec.gpu.read_buffer(&visbuffer, 0, (W * H) as u64 * 8)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    })?;
+    Ok(frames.remove(0))
 }
 
 /// Depth agreement with the float reference: 1e-5 on lavapipe, which interpolates from

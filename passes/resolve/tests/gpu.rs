@@ -37,6 +37,7 @@ const DEPTH_USAGE: wgpu::TextureUsages =
 const COLOR_USAGE: wgpu::TextureUsages =
     wgpu::TextureUsages::STORAGE_BINDING.union(wgpu::TextureUsages::COPY_SRC);
 
+use meshlight_testing::frames::{Imported, filled, import_filled, run_per_view};
 use meshlight_testing::{gpu, parameter_message, params, read_texture, texture};
 
 #[path = "../../sw_raster/tests/support/scenes.rs"]
@@ -281,20 +282,21 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
     let slots = frame.raster_clusters.len() as u64;
     let mut g = GraphBuilder::new();
     scene.import(&mut g);
-    let clusters = g.import_buffer(
-        "raster_clusters",
-        BufferDesc::array(elements::CLUSTER, slots),
-        BUFFER_USAGE,
-    );
-    let counts = g.import_buffer(
-        "raster_counts",
-        BufferDesc::array(Element::U32, 4),
-        BUFFER_USAGE,
-    );
-    let vis = g.import_buffer(
-        "visbuffer",
-        BufferDesc::array(Element::U64, (W * H) as u64),
-        BUFFER_USAGE,
+    // Words past the first are other counters of the slot buffer; the pass reads word 0.
+    let count_words = [frame.software, 7, 0, slots as u32];
+    let Imported {
+        handles: [clusters, counts, vis],
+        imports,
+        ..
+    } = import_filled(
+        &mut g,
+        &gpu,
+        [
+            filled("raster_clusters", elements::CLUSTER, &frame.raster_clusters),
+            filled("raster_counts", Element::U32, &count_words),
+            filled("visbuffer", Element::U64, &frame.visbuffer),
+        ],
+        scene.imports(),
     );
     let mut bindings = Bindings::new();
     for (name, wanted) in [
@@ -364,25 +366,6 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
             .bind("color", color),
     )?;
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
-    // Words past the first are other counters of the slot buffer; the pass reads word 0.
-    let count_words = [frame.software, 7, 0, slots as u32];
-    let buffers = [
-        gpu.buffer_with_data(
-            "raster_clusters",
-            bytemuck::cast_slice(&frame.raster_clusters),
-            BUFFER_USAGE,
-        ),
-        gpu.buffer_with_data(
-            "raster_counts",
-            bytemuck::cast_slice(&count_words),
-            BUFFER_USAGE,
-        ),
-        gpu.buffer_with_data(
-            "visbuffer",
-            bytemuck::cast_slice(&frame.visbuffer),
-            BUFFER_USAGE,
-        ),
-    ];
     let textures = [
         texture(
             &gpu,
@@ -408,12 +391,7 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
         .map(|(name, bytes)| (*name, gpu.buffer_with_data(name, bytes, BUFFER_USAGE)))
         .collect();
     let pyramid_texture = pyramid.map(|mips| upload_pyramid(&gpu, mips));
-    let mut imports = scene
-        .imports()
-        .buffer("raster_clusters", &buffers[0])
-        .buffer("raster_counts", &buffers[1])
-        .buffer("visbuffer", &buffers[2])
-        .texture("color", &textures[2]);
+    let mut imports = imports.texture("color", &textures[2]);
     if targets.depth {
         imports = imports.texture("depth", &textures[0]);
     }
@@ -427,25 +405,25 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
         imports = imports.buffer(name, buffer);
     }
     let mut exec = Executor::new(gpu);
-    let data = FrameData::new().with("view", bytemuck::bytes_of(view));
-    exec.execute_frame(&compiled, &imports, &data)?;
-    exec.finish()?;
-    let depth_of = |wanted: bool, texture: &wgpu::Texture| {
-        wanted.then(|| {
-            let bytes = read_texture(&exec.gpu, texture, wgpu::TextureAspect::DepthOnly);
-            bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)
+    let mut frames = run_per_view(&mut exec, &compiled, &imports, &[*view], |exec| {
+        let depth_of = |wanted: bool, texture: &wgpu::Texture| {
+            wanted.then(|| {
+                let bytes = read_texture(&exec.gpu, texture, wgpu::TextureAspect::DepthOnly);
+                bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)
+            })
+        };
+        Ok(Resolved {
+            depth: depth_of(targets.depth, &textures[0]),
+            material_depth: depth_of(targets.material_depth, &textures[1]),
+            color: bytemuck::pod_collect_to_vec(&read_texture(
+                &exec.gpu,
+                &textures[2],
+                wgpu::TextureAspect::All,
+            )),
+            plan: compiled.plan.clone(),
         })
-    };
-    Ok(Resolved {
-        depth: depth_of(targets.depth, &textures[0]),
-        material_depth: depth_of(targets.material_depth, &textures[1]),
-        color: bytemuck::pod_collect_to_vec(&read_texture(
-            &exec.gpu,
-            &textures[2],
-            wgpu::TextureAspect::All,
-        )),
-        plan: compiled.plan.clone(),
-    })
+    })?;
+    Ok(frames.remove(0))
 }
 
 const PYRAMID_USAGE: wgpu::TextureUsages =

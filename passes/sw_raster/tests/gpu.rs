@@ -20,8 +20,10 @@ const SCANLINES: u32 = 1;
 /// Above every triangle box: every workgroup loops over its whole box.
 const BOXES: u32 = 1 << 20;
 
+use meshlight_gpu_scene::gpu::elements;
 use meshlight_testing::features::where_supported;
-use meshlight_testing::{USAGE, gpu};
+use meshlight_testing::frames::{Imported, filled, import_filled, run_per_view};
+use meshlight_testing::gpu;
 
 #[path = "support/scenes.rs"]
 mod scenes;
@@ -149,26 +151,23 @@ fn run(
     let gpu = gpu();
     let gpu_scene = GpuScene::new(&gpu, scene);
     let counts = [input.count, 0, 0, 0];
+    let stale = stale_contents();
     let mut g = GraphBuilder::new();
     gpu_scene.import(&mut g);
-    let slots = g.import_buffer(
-        "raster_clusters",
-        BufferDesc::array(
-            meshlight_gpu_scene::gpu::elements::CLUSTER,
-            input.slots.len() as u64,
-        ),
-        USAGE,
-    );
-    let counts_h = g.import_buffer("raster_counts", BufferDesc::array(Element::U32, 4), USAGE);
-    let args_h = g.import_buffer(
-        "sw_args",
-        BufferDesc::array(Element::DISPATCH_ARGS, 1),
-        USAGE,
-    );
-    let out = g.import_buffer(
-        "visbuffer",
-        BufferDesc::array(Element::U64, (W * H) as u64),
-        USAGE,
+    let Imported {
+        handles: [slots, counts_h, args_h, out],
+        buffers: [.., visbuffer],
+        imports,
+    } = import_filled(
+        &mut g,
+        &gpu,
+        [
+            filled("raster_clusters", elements::CLUSTER, &input.slots),
+            filled("raster_counts", Element::U32, &counts),
+            filled("sw_args", Element::DISPATCH_ARGS, &input.args),
+            filled("visbuffer", Element::U64, &stale),
+        ],
+        gpu_scene.imports(),
     );
     // The `texture` target is a transient R64Uint texture, copied out after the raster.
     let texture = pass.target == Visibility64::Texture;
@@ -203,25 +202,9 @@ fn run(
         g.add_pass("copy_out", copy_out, copy)?;
     }
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
-    let buffers = [
-        gpu.buffer_with_data("raster_clusters", bytemuck::cast_slice(&input.slots), USAGE),
-        gpu.buffer_with_data("raster_counts", bytemuck::cast_slice(&counts), USAGE),
-        gpu.buffer_with_data("sw_args", bytemuck::cast_slice(&input.args), USAGE),
-        gpu.buffer_with_data("visbuffer", bytemuck::cast_slice(&stale_contents()), USAGE),
-    ];
-    let imports = gpu_scene
-        .imports()
-        .buffer("raster_clusters", &buffers[0])
-        .buffer("raster_counts", &buffers[1])
-        .buffer("sw_args", &buffers[2])
-        .buffer("visbuffer", &buffers[3]);
     let mut exec = Executor::new(gpu);
-    let mut out = Vec::new();
-    for view in views {
-        let data = FrameData::new().with("view", bytemuck::bytes_of(view));
-        exec.execute_frame(&compiled, &imports, &data)?;
-        exec.finish()?;
-        let bytes = exec.gpu.read_buffer(&buffers[3], 0, (W * H) as u64 * 8)?;
+    run_per_view(&mut exec, &compiled, &imports, views, |exec| {
+        let bytes = exec.gpu.read_buffer(&visbuffer, 0, (W * H) as u64 * 8)?;
         if tiled {
             // Big triangles were tiled, and every tile found room in the list.
             let c: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer(BIG_COUNT_SLOT)?);
@@ -230,9 +213,8 @@ fn run(
                 "big-triangle tiles listed, asked for: {c:?}"
             );
         }
-        out.push(bytemuck::pod_collect_to_vec(&bytes));
-    }
-    Ok(out)
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    })
 }
 
 /// The pass with exact division, so that every driver matches the reference bit for bit
@@ -801,29 +783,39 @@ fn an_accumulating_pass_draws_its_slots_over_the_first_passs_image() {
     let gpu_scene = GpuScene::new(&gpu, &mut scene);
     let mut g = GraphBuilder::new();
     gpu_scene.import(&mut g);
-    let slots_h = g.import_buffer(
-        "raster_clusters",
-        BufferDesc::array(
-            meshlight_gpu_scene::gpu::elements::CLUSTER,
-            slots.len() as u64,
-        ),
-        USAGE,
+    // Each pass's counts (its cluster count, and in word 7 its first slot) and dispatch.
+    let x = 5;
+    let words = [(k, 0), (n - k, k)].map(|(count, base)| [count, 0, 0, 0, 0, 0, 0, base]);
+    let args = [k, n - k].map(|count| [x, count.div_ceil(x), 1]);
+    let Imported {
+        handles:
+            [
+                slots_h,
+                counts_first,
+                args_first,
+                counts_second,
+                args_second,
+            ],
+        imports,
+        ..
+    } = import_filled(
+        &mut g,
+        &gpu,
+        [
+            filled("raster_clusters", elements::CLUSTER, &slots),
+            filled("counts_first", Element::U32, &words[0]),
+            filled("args_first", Element::DISPATCH_ARGS, &args[0]),
+            filled("counts_second", Element::U32, &words[1]),
+            filled("args_second", Element::DISPATCH_ARGS, &args[1]),
+        ],
+        gpu_scene.imports(),
     );
     let vis = g.create_buffer("visbuffer", BufferDesc::array(Element::U64, (W * H) as u64));
     let mut vis: AnyHandle = vis.into();
-    let mut inputs = Vec::new();
-    for (pass_name, count, base, accumulate) in [("first", k, 0, false), ("second", n - k, k, true)]
-    {
-        let counts = g.import_buffer(
-            &format!("counts_{pass_name}"),
-            BufferDesc::array(Element::U32, 8),
-            USAGE,
-        );
-        let args = g.import_buffer(
-            &format!("args_{pass_name}"),
-            BufferDesc::array(Element::DISPATCH_ARGS, 1),
-            USAGE,
-        );
+    for (pass_name, counts, args, accumulate) in [
+        ("first", counts_first, args_first, false),
+        ("second", counts_second, args_second, true),
+    ] {
         let drawn = g
             .add_pass(
                 pass_name,
@@ -839,36 +831,19 @@ fn an_accumulating_pass_draws_its_slots_over_the_first_passs_image() {
             )
             .unwrap_or_else(|e| panic!("{e}"));
         vis = drawn.buffer("visbuffer").unwrap().into();
-        let words = [count, 0, 0, 0, 0, 0, 0, base];
-        let x = 5;
-        inputs.push((pass_name, words, [x, count.div_ceil(x), 1]));
     }
     g.export(vis);
     let compiled = g
         .compile(&CompileOptions::for_gpu(&gpu))
         .unwrap_or_else(|e| panic!("{e}"));
-    let mut imports = gpu_scene.imports().buffer(
-        "raster_clusters",
-        &gpu.buffer_with_data("raster_clusters", bytemuck::cast_slice(&slots), USAGE),
-    );
-    for (pass_name, words, args) in &inputs {
-        imports = imports
-            .buffer(
-                &format!("counts_{pass_name}"),
-                &gpu.buffer_with_data("counts", bytemuck::cast_slice(words), USAGE),
-            )
-            .buffer(
-                &format!("args_{pass_name}"),
-                &gpu.buffer_with_data("args", bytemuck::cast_slice(args), USAGE),
-            );
-    }
     let mut exec = Executor::new(gpu);
-    for (i, view) in views.iter().enumerate() {
-        let data = FrameData::new().with("view", bytemuck::bytes_of(view));
-        exec.execute_frame(&compiled, &imports, &data)
-            .unwrap_or_else(|e| panic!("{e}"));
-        exec.finish().unwrap();
-        let got: Vec<u64> = bytemuck::pod_collect_to_vec(&exec.read_buffer("visbuffer").unwrap());
+    let frames = run_per_view(&mut exec, &compiled, &imports, &views, |exec| {
+        Ok(bytemuck::pod_collect_to_vec::<u8, u64>(
+            &exec.read_buffer("visbuffer")?,
+        ))
+    })
+    .unwrap_or_else(|e| panic!("{e}"));
+    for (i, (view, got)) in views.iter().zip(&frames).enumerate() {
         let want = whole.reference(&scene, view);
         let second_ids = want
             .iter()
@@ -878,7 +853,7 @@ fn an_accumulating_pass_draws_its_slots_over_the_first_passs_image() {
             second_ids > 100,
             "view {i}: the second pass owns {second_ids} pixels"
         );
-        assert_identical(&format!("view {i}"), &got, &want);
+        assert_identical(&format!("view {i}"), got, &want);
     }
 }
 
