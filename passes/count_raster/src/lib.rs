@@ -52,8 +52,8 @@ use meshlight_graph::{
     ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, Workgroups,
 };
 use meshlight_pass_z_slice::{
-    CLUSTER_GRID, CLUSTERABLE_OBJECT, SLICE_INSTANCE, check_tiles, declare_tile_target,
-    workgroup_grid,
+    CLUSTER_GRID, CLUSTERABLE_OBJECT, INSTANCE_MODULE, SLICE_INSTANCE, check_tiles,
+    declare_tile_target, workgroup_grid,
 };
 use meshlight_shaders::{LocalModule, PassShader, pass_shader};
 
@@ -65,15 +65,22 @@ pub const VIEW_INPUT: &str = "view";
 pub const KINDS: u32 = 4;
 /// The entry points of both implementations; the walk itself is the `count_raster::walk`
 /// module ([`WALK_MODULES`]).
-pub const SHADER: PassShader = pass_shader!(
-    "count_raster::count",
-    "count.wgsl",
-    modules: [("count_raster::walk", "walk.wgsl")]
-);
+pub const SHADER: PassShader = PassShader {
+    modules: &[
+        INSTANCE_MODULE,
+        LocalModule {
+            name: "count_raster::walk",
+            source: include_str!("walk.wgsl"),
+            file_path: concat!(env!("CARGO_PKG_NAME"), "/walk.wgsl"),
+        },
+    ],
+    ..pass_shader!("count_raster::count", "count.wgsl")
+};
 
-/// The walk over z_slice's instances and their froxels (`walk.wgsl`), for this stage and
-/// for `populate`, whose shader imports it too and defines `POPULATE` to claim list places
-/// where this stage counts.
+/// The walk over z_slice's instances and their froxels (`walk.wgsl`, after z_slice's
+/// [`INSTANCE_MODULE`], which it imports), for this stage and for `populate`, whose
+/// shader imports it too and defines `POPULATE` to claim list places where this stage
+/// counts.
 ///
 /// Both stages must decide every (object, froxel) pair alike, or populate's lists would
 /// not match the counts its offsets were built from; one source for the walk makes that

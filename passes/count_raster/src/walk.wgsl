@@ -25,12 +25,7 @@
 #import meshlight::view::View
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_index, CLUSTERABLE_TYPE_COUNT}
 #import meshlight::froxel::{ViewObject, TileRect, view_object, froxel_aabb, froxel_rect, object_touches_froxel, froxel_quad_corner, walk_rounds, walk_instance, walk_layout, walk_tile, WALK_GROUP}
-
-// One (object, slice) pair of `z_slice`'s list.
-struct SliceInstance {
-    object: u32,
-    slice: u32,
-}
+#import z_slice::instance::{SliceInstance}
 
 // The objects `slice_instances` refers to.
 @group(0) @binding(0) var<storage, read> objects: array<ClusterableObject>;

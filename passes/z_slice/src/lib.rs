@@ -82,7 +82,7 @@ use meshlight_graph::{
     RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc, Workgroups,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
-use meshlight_shaders::{PassShader, pass_shader};
+use meshlight_shaders::{LocalModule, PassShader, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "z_slice";
@@ -102,7 +102,19 @@ pub const CLUSTER_GRID: Element = Element::named("ClusterGrid", size_of::<Cluste
 pub const SLICE_INSTANCE: Element =
     Element::named("SliceInstance", size_of::<SliceInstance>() as u32);
 
-pub const SHADER: PassShader = pass_shader!("z_slice::z_slice", "z_slice.wgsl");
+/// The WGSL of the list's entries, `SliceInstance` ([`cpu::SliceInstance`] is its
+/// mirror), imported by this stage's shader and by the walk count_raster and populate
+/// share: one definition of the layout every reader of the list agrees on.
+pub const INSTANCE_MODULE: LocalModule = LocalModule {
+    name: "z_slice::instance",
+    source: include_str!("instance.wgsl"),
+    file_path: concat!(env!("CARGO_PKG_NAME"), "/instance.wgsl"),
+};
+
+pub const SHADER: PassShader = PassShader {
+    modules: &[INSTANCE_MODULE],
+    ..pass_shader!("z_slice::z_slice", "z_slice.wgsl")
+};
 
 /// The slots every implementation of `z_slice` shares.
 pub fn contract() -> StageContract {

@@ -9,6 +9,7 @@
 #import meshlight::light::{ClusterableObject, ClusterGrid, z_slice_of_depth, CLUSTERABLE_SPOT_LIGHT, CLUSTERABLE_PROBE, CLUSTERABLE_DECAL, CLUSTERABLE_TYPE_COUNT}
 #import meshlight::view::{View, sphere_in_frustum}
 #import meshlight::dispatch::{fold_dispatch, linear_workgroup}
+#import z_slice::instance::{SliceInstance}
 
 struct Params {
     // Instances the list may hold; clamped to the bound list's length.
@@ -18,14 +19,6 @@ struct Params {
     // Vertices of one quad in the draw arguments: 4 (strip) or 6 (list).
     quad_vertices: u32,
     _pad: u32,
-}
-
-// One (object, slice) pair of the list.
-struct SliceInstance {
-    // Index into `objects`.
-    object: u32,
-    // Depth slice, 0 ..< dims.z.
-    slice: u32,
 }
 
 // The objects to assign; `object_count[0]` of them are valid.
