@@ -323,16 +323,11 @@ impl Pass for ZSlice {
             BufferDesc::array(Element::U32, 1),
             &[Access::StorageReadWrite],
         );
-        let prepare = BindingLayout::from_shader("z_slice::prepare");
-        let slice = BindingLayout::from_shader("z_slice::slice");
-        ctx.program(
-            "prepare",
-            ProgramDesc::compute(&SHADER, "prepare").layout(prepare),
-        );
-        ctx.program(
-            "slice",
-            ProgramDesc::compute(&SHADER, "slice").layout(slice),
-        );
+        // Both programs are an entry point of the shader, laid out as it binds.
+        for (entry, layout) in [("prepare", "z_slice::prepare"), ("slice", "z_slice::slice")] {
+            let layout = BindingLayout::from_shader(layout);
+            ctx.program(entry, ProgramDesc::compute(&SHADER, entry).layout(layout));
+        }
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
