@@ -186,6 +186,23 @@ fn compare(
     differing.len()
 }
 
+/// Runs `pass` over all of `objects` with a list of its capacity and the guard after it,
+/// and compares the outputs with the reference: what every test of a whole scene does.
+/// Returns the outputs and how many pairs were decided near a threshold.
+fn run_compared(
+    objects: &[ClusterableObject],
+    view: &View,
+    pass: ZSlice,
+    label: &str,
+) -> (GpuSlices, usize) {
+    let capacity = pass
+        .capacity
+        .expect("a capacity param, for the guard to lie past it");
+    let got = run(objects, objects.len() as u32, view, pass, capacity + GUARD);
+    let near = compare(view, &pass, objects, capacity, &got, label);
+    (got, near)
+}
+
 fn pass_with(capacity: u32) -> ZSlice {
     ZSlice {
         capacity: Some(capacity),
@@ -223,19 +240,12 @@ fn random_scenes_of_every_kind_match_the_reference() {
             quad_vertices: [4, 6][rng.below(2) as usize],
             ..pass_with(capacity)
         };
-        let got = run(
-            &objects,
-            objects.len() as u32,
-            &view,
-            pass,
-            capacity + GUARD,
-        );
         let label = format!(
             "scene {scene} ({}, {viewport:?}, {:?})",
             if ortho { "ortho" } else { "perspective" },
             pass.grid
         );
-        let near = compare(&view, &pass, &objects, capacity, &got, &label);
+        let (got, near) = run_compared(&objects, &view, pass, &label);
         assert!(
             near <= MAX_NEAR_PER_SCENE,
             "{label}: {near} pairs near a threshold"
@@ -371,22 +381,7 @@ fn special_objects_get_the_slices_they_must() {
             _ => panic!("{name}: {outcome:?}, expected {want:?}"),
         }
     }
-    let capacity = 1000;
-    let got = run(
-        &objects,
-        objects.len() as u32,
-        &view,
-        pass_with(capacity),
-        capacity + GUARD,
-    );
-    let near = compare(
-        &view,
-        &pass_with(capacity),
-        &objects,
-        capacity,
-        &got,
-        "special",
-    );
+    let (got, near) = run_compared(&objects, &view, pass_with(1000), "special");
     assert_eq!(near, 0);
     assert_eq!(got.counts[WORD_INVALID], invalid as u32);
     assert_eq!(got.counts[WORD_CULLED], 6);
@@ -439,8 +434,7 @@ fn an_overflowing_list_counts_everything_and_writes_only_its_capacity() {
         reference.pairs.len()
     );
     // The list buffer is longer than the capacity param: the guard lies inside it.
-    let got = run(&objects, objects.len() as u32, &view, pass, C + GUARD);
-    let near = compare(&view, &pass, &objects, C, &got, "overflow");
+    let (got, near) = run_compared(&objects, &view, pass, "overflow");
     assert!(near <= MAX_NEAR_PER_SCENE);
     assert!(got.counts[WORD_REQUESTED] > C);
     assert_eq!(got.draw_args[1], C);
@@ -466,8 +460,7 @@ fn more_objects_than_one_dispatch_row_are_all_sliced() {
     let view = camera.view([256, 256], 0, None);
     let objects = random_objects(&mut rng, 300, Vec3::ZERO, 25.0);
     let pass = limited_pass(20_000, 3);
-    let got = run(&objects, objects.len() as u32, &view, pass, 20_000 + GUARD);
-    let near = compare(&view, &pass, &objects, 20_000, &got, "2-D dispatch");
+    let (got, near) = run_compared(&objects, &view, pass, "2-D dispatch");
     assert!(near <= MAX_NEAR_PER_SCENE);
     let seen: u32 = got.counts[WORD_INVALID..].iter().sum();
     assert_eq!(seen, 300, "every object decided once: {:?}", got.counts);
