@@ -1,11 +1,12 @@
 //! count_raster in a test graph, after z_slice's ([`meshlight_pass_z_slice::testbed`]):
-//! the walks the GPU tests of this stage and of `populate` run, and the count they
-//! start from.
+//! the walks the GPU tests of this stage and of `populate` run, and the graph and frame
+//! they start from.
 
 use crate::Walk;
-use meshlight_graph::{Bindings, GraphBuilder, PassOutputs, Result};
-use meshlight_pass_z_slice::testbed::Sliced;
-use meshlight_shaders::cpu::layout::ClusterGrid;
+use meshlight_graph::{Bindings, Executor, GraphBuilder, Imports, PassOutputs, Result};
+use meshlight_pass_z_slice::testbed::{Sliced, read_written, run_frame};
+use meshlight_pass_z_slice::{SliceInstance, ZSlice};
+use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject, View};
 
 /// Which walk a test runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,10 +33,57 @@ impl Implementation {
     }
 }
 
-/// Adds count_raster, walking as `walk`, over what `sliced` wrote; it counts into
-/// z_slice's `cluster_counts`.
-pub fn add_count(g: &mut GraphBuilder, sliced: &Sliced, walk: Walk) -> Result<PassOutputs> {
-    let counts = sliced.outputs.buffer("cluster_counts")?;
-    let bindings = sliced.bind_walk(Bindings::new().bind("cluster_counts", counts))?;
-    g.add_boxed_pass("count", crate::pass(walk), bindings)
+/// z_slice and count_raster, walking as a test's [`Implementation`], in a test graph:
+/// what the GPU tests of this stage and of `populate` build before adding what they
+/// read back (populate its scan and its own pass too), and run alike.
+pub struct Counted {
+    pub graph: GraphBuilder,
+    pub sliced: Sliced,
+    /// The grid z_slice cuts the view into.
+    pub grid: ClusterGrid,
+    /// The walk count_raster runs, for a later stage to walk alike.
+    pub walk: Walk,
+    /// What count_raster wrote: it counts into z_slice's `cluster_counts`.
+    pub outputs: PassOutputs,
+}
+
+impl Counted {
+    /// The graph over `objects` objects seen through `view` ([`Sliced::add_for_walk`]),
+    /// count_raster walking what z_slice wrote.
+    pub fn add(
+        z_slice: ZSlice,
+        objects: usize,
+        view: &View,
+        implementation: Implementation,
+    ) -> Result<Self> {
+        let mut graph = GraphBuilder::new();
+        let (sliced, grid) = Sliced::add_for_walk(&mut graph, z_slice, objects, view)?;
+        let walk = implementation.walk(&grid);
+        let counts = sliced.outputs.buffer("cluster_counts")?;
+        let bindings = sliced.bind_walk(Bindings::new().bind("cluster_counts", counts))?;
+        let outputs = graph.add_boxed_pass("count", crate::pass(walk), bindings)?;
+        Ok(Self {
+            graph,
+            sliced,
+            grid,
+            walk,
+            outputs,
+        })
+    }
+
+    /// Runs one frame of the graph on `exec` over all of `objects` with the caller's
+    /// `imports` beside them ([`run_frame`]), and returns what z_slice wrote
+    /// ([`read_written`]); the caller reads what it exported.
+    pub fn run(
+        mut self,
+        exec: &mut Executor,
+        objects: &[ClusterableObject],
+        view: &View,
+        imports: Imports,
+    ) -> Result<(Vec<SliceInstance>, ClusterGrid)> {
+        self.sliced.export_written(&mut self.graph)?;
+        let count = objects.len() as u32;
+        run_frame(exec, self.graph, objects, count, view, imports)?;
+        Ok(read_written(exec))
+    }
 }

@@ -5,12 +5,12 @@
 //! threshold; such pairs are counted and bounded.
 
 use glam::Vec3;
-use meshlight_graph::{GraphBuilder, Imports};
+use meshlight_graph::Imports;
 use meshlight_pass_count_raster::KINDS;
 use meshlight_pass_count_raster::cpu::{CountResult, cpu_count};
-use meshlight_pass_count_raster::testbed::{Implementation, add_count};
+use meshlight_pass_count_raster::testbed::{Counted, Implementation};
 use meshlight_pass_z_slice::scenes::{Rng, object, perspective, random_camera, random_objects};
-use meshlight_pass_z_slice::testbed::{Sliced, read, read_written, run_frame};
+use meshlight_pass_z_slice::testbed::read;
 use meshlight_pass_z_slice::{GridSettings, SliceInstance, ZSlice};
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableKind, ClusterableObject, View};
 use meshlight_testing::executor;
@@ -30,15 +30,13 @@ fn run(
     z_slice: ZSlice,
     implementation: Implementation,
 ) -> GpuCounts {
-    let mut g = GraphBuilder::new();
-    let (sliced, grid) = Sliced::add_for_walk(&mut g, z_slice, objects.len(), view).unwrap();
-    let counted = add_count(&mut g, &sliced, implementation.walk(&grid)).unwrap();
-    sliced.export_written(&mut g).unwrap();
-    g.export(counted.buffer("cluster_counts").unwrap());
+    let mut counted = Counted::add(z_slice, objects.len(), view, implementation).unwrap();
+    let counts = counted.outputs.buffer("cluster_counts").unwrap();
+    counted.graph.export(counts);
     let mut exec = executor();
-    let n = objects.len() as u32;
-    run_frame(&mut exec, g, objects, n, view, Imports::new()).unwrap();
-    let (instances, grid) = read_written(&mut exec);
+    let (instances, grid) = counted
+        .run(&mut exec, objects, view, Imports::new())
+        .unwrap();
     GpuCounts {
         instances,
         counts: read(&mut exec, "cluster_counts"),

@@ -4,13 +4,13 @@
 //! whose deciding value lies within `NEAR` of its threshold. A too-small capacity cuts
 //! lists the way the reference does and writes nothing past it.
 
-use meshlight_graph::{Bindings, BufferDesc, Element, GraphBuilder, Imports};
+use meshlight_graph::{Bindings, BufferDesc, Element, Imports};
 use meshlight_pass_count_raster::KINDS;
-use meshlight_pass_count_raster::testbed::{Implementation, add_count};
+use meshlight_pass_count_raster::testbed::{Counted, Implementation};
 use meshlight_pass_populate::cpu::{ClusterLists, cpu_populate};
 use meshlight_pass_scan_fan::ScanFan;
 use meshlight_pass_z_slice::scenes::{Rng, random_camera, random_objects};
-use meshlight_pass_z_slice::testbed::{Sliced, USAGE, read, read_written, run_frame};
+use meshlight_pass_z_slice::testbed::{USAGE, read};
 use meshlight_pass_z_slice::{GridSettings, SliceInstance, ZSlice};
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject, View};
 use meshlight_testing::executor;
@@ -39,9 +39,9 @@ fn run(
     implementation: Implementation,
     capacity: u32,
 ) -> GpuLists {
-    let mut g = GraphBuilder::new();
-    let (sliced, grid) = Sliced::add_for_walk(&mut g, z_slice, objects.len(), view).unwrap();
-    let lists = grid.cluster_count * KINDS;
+    let mut counted = Counted::add(z_slice, objects.len(), view, implementation).unwrap();
+    let g = &mut counted.graph;
+    let lists = counted.grid.cluster_count * KINDS;
     let list_buffer = g.import_buffer(
         "cluster_objects",
         BufferDesc::array(Element::U32, u64::from(capacity + GUARD)),
@@ -51,24 +51,24 @@ fn run(
     let offsets = buffer("cluster_offsets", u64::from(lists));
     let total = buffer("list_total", 1);
     let list_counts = buffer("list_counts", 2);
-    let walk = implementation.walk(&grid);
-    let counted = add_count(&mut g, &sliced, walk).unwrap();
+    let counts = counted.outputs.buffer("cluster_counts").unwrap();
     let scanned = g
         .add_pass(
             "scan",
             ScanFan::new(lists),
             Bindings::new()
-                .bind("input", counted.buffer("cluster_counts").unwrap())
+                .bind("input", counts)
                 .bind("output", offsets)
                 .bind("total", total),
         )
         .unwrap();
-    let populate_bindings = sliced
+    let populate_bindings = counted
+        .sliced
         .bind_walk(
             Bindings::new()
                 .bind("cluster_offsets", scanned.buffer("output").unwrap())
                 .bind("list_total", scanned.buffer("total").unwrap())
-                .bind("cluster_counts", counted.buffer("cluster_counts").unwrap())
+                .bind("cluster_counts", counts)
                 .bind("cluster_objects", list_buffer)
                 .bind("list_counts", list_counts),
         )
@@ -76,11 +76,10 @@ fn run(
     let populated = g
         .add_boxed_pass(
             "populate",
-            meshlight_pass_populate::pass(walk, Some(capacity)),
+            meshlight_pass_populate::pass(counted.walk, Some(capacity)),
             populate_bindings,
         )
         .unwrap();
-    sliced.export_written(&mut g).unwrap();
     g.export(scanned.buffer("output").unwrap());
     for name in ["cluster_counts", "cluster_objects", "list_counts"] {
         g.export(populated.buffer(name).unwrap());
@@ -91,9 +90,7 @@ fn run(
         exec.gpu
             .buffer_with_data("cluster_objects", bytemuck::cast_slice(&sentinels), USAGE);
     let imports = Imports::new().buffer("cluster_objects", &lists_buffer);
-    let n = objects.len() as u32;
-    run_frame(&mut exec, g, objects, n, view, imports).unwrap();
-    let (instances, grid) = read_written(&mut exec);
+    let (instances, grid) = counted.run(&mut exec, objects, view, imports).unwrap();
     let raw: Vec<u32> = bytemuck::pod_collect_to_vec(
         &exec
             .gpu
