@@ -5,7 +5,7 @@ mod common;
 use std::collections::HashMap;
 use std::path::Path;
 
-use meshlight_scene::asset::format::{AssetHeader, MeshletRecord, SECTION_MESHLETS, VERSION};
+use meshlight_scene::asset::format::{MeshletRecord, SECTION_MESHLETS, VERSION};
 use meshlight_scene::compress::{AUTO_ERROR_SHARE, MAX_POSITION_BITS, PositionBits, Quantization};
 use meshlight_scene::{
     BuildOptions, Built, MeshletAsset, SceneError, build_asset, load::load_mesh, procedural_mesh,
@@ -247,10 +247,6 @@ fn damaged_files_are_refused_with_typed_errors() {
 fn structurally_broken_files_with_valid_checksums_are_refused() {
     let built = build(&procedural_mesh(12));
     let words: Vec<u32> = bytemuck::cast_slice(built.asset.bytes()).to_vec();
-    let header: AssetHeader =
-        *bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
-    let first = header.sections[SECTION_MESHLETS].offset as usize;
-    let record_words = size_of::<MeshletRecord>() / 4;
     type Edit = (&'static str, fn(&mut MeshletRecord));
     let edits: [Edit; 2] = [
         ("data outside the payload", |m| m.data_offset = u32::MAX / 2),
@@ -260,10 +256,7 @@ fn structurally_broken_files_with_valid_checksums_are_refused() {
     ];
     for (what, edit) in edits {
         let mut w = words.clone();
-        let rec: &mut MeshletRecord = bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
-            &mut w[first..first + record_words],
-        ));
-        edit(rec);
+        edit(common::damage::record_mut(&mut w, SECTION_MESHLETS, 0));
         common::damage::reseal(&mut w);
         let len = w.len() as u64 * 4;
         let err = MeshletAsset::from_words(w, len, Path::new("x.mlasset")).unwrap_err();

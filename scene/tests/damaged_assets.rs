@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::damage::{good_words, refused, refused_saying, reseal};
+use common::damage::{good_words, record_mut, refused, refused_saying, reseal};
 
 use std::path::Path;
 
@@ -20,17 +20,8 @@ fn header(words: &mut [u32]) -> &mut AssetHeader {
     bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut words[..AssetHeader::WORDS]))
 }
 
-/// Record `i` of the section `section`, whose records are `T`s, to damage in place.
-fn record<T: bytemuck::Pod>(words: &mut [u32], section: usize, i: usize) -> &mut T {
-    let first = header(words).sections[section].offset as usize;
-    let n = size_of::<T>() / 4;
-    bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
-        &mut words[first + i * n..first + (i + 1) * n],
-    ))
-}
-
 fn meshlet(words: &mut [u32], i: usize) -> &mut MeshletRecord {
-    record(words, SECTION_MESHLETS, i)
+    record_mut(words, SECTION_MESHLETS, i)
 }
 
 #[test]
@@ -196,7 +187,7 @@ fn coordinates_beyond_the_quantiser_are_refused_at_bake_time() {
 }
 
 fn group(words: &mut [u32], i: usize) -> &mut GroupRecord {
-    record(words, SECTION_GROUPS, i)
+    record_mut(words, SECTION_GROUPS, i)
 }
 
 fn records(words: &[u32]) -> (Vec<MeshletRecord>, Vec<GroupRecord>) {

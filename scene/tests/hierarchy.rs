@@ -6,14 +6,15 @@
 
 mod common;
 
-use common::damage::refused;
+use common::damage::{record_mut, refused};
 
 use std::collections::HashSet;
 use std::path::Path;
 
 use meshlight_scene::asset::format::{
-    AssetHeader, MAGIC, NO_GROUP, NodeRecord, ROOT_PARENT_ERROR, SECTION_CHILDREN, SECTION_GROUPS,
-    SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES, SECTION_PAYLOAD, VERSION,
+    AssetHeader, GroupRecord, MAGIC, MeshletRecord, NO_GROUP, NodeRecord, ROOT_PARENT_ERROR,
+    SECTION_CHILDREN, SECTION_GROUPS, SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES,
+    SECTION_PAYLOAD, VERSION,
 };
 use meshlight_scene::hierarchy::{MAX_CHILDREN, depth, encloses, meshlet_lod};
 use meshlight_scene::load::load_mesh;
@@ -134,11 +135,7 @@ fn header(words: &[u32]) -> AssetHeader {
 }
 
 fn node(words: &mut [u32], i: usize) -> &mut NodeRecord {
-    let first = header(words).sections[SECTION_NODES].offset as usize;
-    let n = size_of::<NodeRecord>() / 4;
-    bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
-        &mut words[first + i * n..first + (i + 1) * n],
-    ))
+    record_mut(words, SECTION_NODES, i)
 }
 
 fn list(words: &mut [u32]) -> &mut [u32] {
@@ -285,15 +282,8 @@ fn bounds_and_errors_that_do_not_hold_what_is_below_are_refused() {
             })
             .unwrap();
         let m = list(w)[ns[leaf].first_cluster as usize] as usize;
-        let s = header(w).sections[SECTION_MESHLETS];
-        let n = size_of::<meshlight_scene::asset::format::MeshletRecord>() / 4;
-        let parent =
-            std::mem::offset_of!(meshlight_scene::asset::format::MeshletRecord, parent_group) / 4;
-        let g = w[s.offset as usize + m * n + parent] as usize;
-        let groups = header(w).sections[SECTION_GROUPS].offset as usize;
-        let count =
-            std::mem::offset_of!(meshlight_scene::asset::format::GroupRecord, child_count) / 4;
-        w[groups + g * 8 + count] -= 1;
+        let g = record_mut::<MeshletRecord>(w, SECTION_MESHLETS, m).parent_group as usize;
+        record_mut::<GroupRecord>(w, SECTION_GROUPS, g).child_count -= 1;
     });
 }
 

@@ -12,6 +12,17 @@ pub fn good_words() -> Vec<u32> {
     bytemuck::cast_slice(built.asset.bytes()).to_vec()
 }
 
+/// Record `i` of the section `section`, whose records are `T`s (meshlets, groups or
+/// nodes), to damage in place.
+pub fn record_mut<T: bytemuck::Pod>(words: &mut [u32], section: usize, i: usize) -> &mut T {
+    let h: &AssetHeader = bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
+    let first = h.sections[section].offset as usize;
+    let n = size_of::<T>() / 4;
+    bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(
+        &mut words[first + i * n..first + (i + 1) * n],
+    ))
+}
+
 /// Rewrites the header's size and checksum to match the (damaged) words.
 pub fn reseal(words: &mut [u32]) {
     let size = words.len() as u64 * 4;
