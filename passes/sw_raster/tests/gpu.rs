@@ -23,7 +23,7 @@ const BOXES: u32 = 1 << 20;
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_testing::features::where_supported;
 use meshlight_testing::frames::{Imported, filled, import_filled, run_per_view};
-use meshlight_testing::gpu;
+use meshlight_testing::{Rng, gpu};
 
 #[path = "support/scenes.rs"]
 mod scenes;
@@ -70,25 +70,9 @@ fn clusters_of(scene: &SceneData, instance: u32, pick: impl Fn(u32) -> bool) -> 
         .collect()
 }
 
-/// A small deterministic generator, so the views are the same on every run.
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
-}
-
 /// `n` perspective views from seeded points around the knot scene.
 fn seeded_views(seed: u64, n: usize) -> Vec<View> {
-    let mut rng = Lcg(seed);
+    let mut rng = Rng(seed);
     (0..n)
         .map(|_| {
             let yaw = rng.range(0.0, std::f32::consts::TAU);
@@ -125,6 +109,18 @@ impl Input {
             slots,
             count,
         }
+    }
+
+    /// Every slot drawn, `x` workgroups per row.
+    fn every(slots: Vec<Cluster>, x: u32) -> Self {
+        let count = slots.len() as u32;
+        Self::new(slots, count, x)
+    }
+
+    /// Every slot drawn, a workgroup each in one row.
+    fn every_in_one_row(slots: Vec<Cluster>) -> Self {
+        let count = slots.len() as u32;
+        Self::new(slots, count, count)
     }
 
     fn reference(&self, scene: &SceneData, view: &View) -> Vec<u64> {
@@ -425,8 +421,7 @@ fn the_texture_target_holds_the_reference_values_or_names_the_missing_feature() 
         clusters_of(&scene, 1, |l| l >= 1),
     ]
     .concat();
-    let count = slots.len() as u32;
-    let input = Input::new(slots, count, 7);
+    let input = Input::every(slots, 7);
     let views = seeded_views(5, 3);
     // `pass` divides exactly: bit for bit on every driver, so the reference is the
     // yardstick on NVIDIA too.
@@ -468,8 +463,7 @@ fn the_texture_target_holds_the_reference_values_or_names_the_missing_feature() 
 fn front_faces_are_the_mesh_outside() {
     let mut scene = knot_scene();
     let slots: Vec<Cluster> = clusters_of(&scene, 0, |l| l == 0);
-    let count = slots.len() as u32;
-    let input = Input::new(slots, count, count);
+    let input = Input::every_in_one_row(slots);
     let views = seeded_views(11, 2);
     let got = run(&mut scene, &input, &views, pass(16)).unwrap_or_else(|e| panic!("{e}"));
     for (k, view) in views.iter().enumerate() {
@@ -514,7 +508,7 @@ fn front_faces_are_the_mesh_outside() {
 /// inner vertices moved in the plane by `jitter` cells so edges cross pixels at odd
 /// angles.
 fn flat_quad(n: u32, jitter: f32) -> Mesh {
-    let mut rng = Lcg(3);
+    let mut rng = Rng(3);
     let mut positions = Vec::new();
     for j in 0..=n {
         for i in 0..=n {
@@ -612,8 +606,7 @@ fn shared_edges_of_a_flat_quad_cover_every_pixel_exactly_once() {
     for instance in 0..2 {
         let slots: Vec<Cluster> = clusters_of(&scene, instance, |l| l == 0);
         assert!(slots.len() >= 2, "the square fits one meshlet");
-        let count = slots.len() as u32;
-        let input = Input::new(slots, count, 3);
+        let input = Input::every(slots, 3);
         for (loop_name, width) in [("scanline", SCANLINES), ("box", BOXES)] {
             let got =
                 run(&mut scene, &input, &views, pass(width)).unwrap_or_else(|e| panic!("{e}"));
@@ -672,8 +665,7 @@ fn each_frame_starts_from_a_cleared_visibility_buffer() {
         clusters_of(&scene, 1, |l| l == 0),
     ]
     .concat();
-    let count = slots.len() as u32;
-    let input = Input::new(slots, count, 5);
+    let input = Input::every(slots, 5);
     let near = Camera::perspective(Vec3::new(1.0, 2.0, 6.0), Vec3::ZERO, 0.8, 0.5);
     let far = Camera::perspective(
         Vec3::new(-9.0, 4.0, -10.0),
@@ -702,8 +694,7 @@ fn each_frame_starts_from_a_cleared_visibility_buffer() {
 fn a_viewport_other_than_the_params_is_a_record_error_naming_both() {
     let mut scene = knot_scene();
     let slots: Vec<Cluster> = clusters_of(&scene, 0, |l| l == 0);
-    let count = slots.len() as u32;
-    let input = Input::new(slots, count, count);
+    let input = Input::every_in_one_row(slots);
     let camera = Camera::perspective(Vec3::new(1.0, 2.0, 8.0), Vec3::ZERO, 0.8, 0.5);
     let view = camera.view([W + 1, H], 0, None);
     match run(&mut scene, &input, &[view], pass(16)) {
@@ -869,7 +860,7 @@ fn near_views() -> Vec<View> {
         let r = 2.0 + (5.0 * t).cos();
         Vec3::new(r * (3.0 * t).cos(), r * (3.0 * t).sin(), -(5.0 * t).sin())
     };
-    let mut rng = Lcg(11);
+    let mut rng = Rng(11);
     (0..6)
         .map(|k| {
             let t = rng.range(0.0, std::f32::consts::TAU);
@@ -911,8 +902,7 @@ fn triangles_crossing_the_near_plane_are_clipped_as_the_reference_clips_them() {
         clusters_of(&scene, 1, |l| l <= 1),
     ]
     .concat();
-    let count = slots.len() as u32;
-    let input = Input::new(slots, count, 7);
+    let input = Input::every(slots, 7);
     let views = near_views();
     let mut clipped = 0;
     for view in &views {
@@ -978,8 +968,7 @@ fn a_square_cut_by_the_near_plane_has_no_holes_and_no_overlaps() {
     ];
     let views: Vec<View> = cameras.iter().map(|c| c.view([W, H], 0, None)).collect();
     let slots = clusters_of(&scene, 0, |l| l == 0);
-    let count = slots.len() as u32;
-    let input = Input::new(slots, count, 2);
+    let input = Input::every(slots, 2);
     let got = run(&mut scene, &input, &views, pass(SCANLINES)).unwrap_or_else(|e| panic!("{e}"));
     for (k, view) in views.iter().enumerate() {
         let name = format!("view {k}");
