@@ -504,6 +504,17 @@ fn first_difference(got: &[f32], want: &[f32]) -> Option<(usize, f32, f32)> {
         .map(|(i, (g, w))| (i, *g, *w))
 }
 
+/// How `got` differs from `f` shaded by the reference with `settings`: see
+/// [`color_differences`].
+fn reference_differences(
+    got: &[[u8; 4]],
+    f: &Frame,
+    settings: &Settings,
+    tolerance: u8,
+) -> (usize, u8) {
+    color_differences(got, &cpu::shade(&f.cpu(), settings), tolerance)
+}
+
 /// Pixels whose largest channel difference exceeds `tolerance`, and the largest one.
 fn color_differences(got: &[[u8; 4]], want: &[[u8; 4]], tolerance: u8) -> (usize, u8) {
     assert_eq!(got.len(), want.len());
@@ -622,14 +633,11 @@ fn without_depth_targets_only_the_shading_dispatch_runs_and_the_colour_is_the_sa
         assert!(bare.depth.is_none() && bare.material_depth.is_none());
         // The same image as with the targets, and the reference's.
         assert_eq!(bare.color, both.color, "{view_mode}");
-        let want = cpu::shade(
-            &f.cpu(),
-            &Settings {
-                view: view_mode,
-                ..Settings::default()
-            },
-        );
-        let (over, largest) = color_differences(&bare.color, &want, 2);
+        let settings = Settings {
+            view: view_mode,
+            ..Settings::default()
+        };
+        let (over, largest) = reference_differences(&bare.color, &f, &settings, 2);
         assert!(
             over * 100 <= pixels,
             "{view_mode}: {over} pixels differ by more than 2 (largest {largest})"
@@ -685,8 +693,7 @@ fn the_pyramid_view_shows_each_mip_of_a_bound_pyramid_like_the_reference() {
         let mut pass = Resolve::new(W, H).with_view(DebugView::Pyramid);
         pass.settings.pyramid_mip = mip;
         let got = run_with(&mut f, pass, &view, BOTH).unwrap_or_else(|e| panic!("{e}"));
-        let want = cpu::shade(&f.cpu(), &pass.settings);
-        let (over, largest) = color_differences(&got.color, &want, 1);
+        let (over, largest) = reference_differences(&got.color, &f, &pass.settings, 1);
         assert_eq!(over, 0, "mip {mip}: largest difference {largest}");
         // A pixel shows the texel covering it: blocks of 2^(mip+1) pixels are one grey.
         let block = 2u32 << mip;
@@ -753,8 +760,7 @@ fn the_occlusion_view_colours_by_pass_and_culled_share_like_the_reference() {
         .count();
     // Without the records every covered pixel is first-pass green, untinted.
     let plain = run_with(&mut f, pass, &view, BOTH).unwrap_or_else(|e| panic!("{e}"));
-    let want = cpu::shade(&f.cpu(), &pass.settings);
-    let (over, largest) = color_differences(&plain.color, &want, 2);
+    let (over, largest) = reference_differences(&plain.color, &f, &pass.settings, 2);
     assert!(
         over * 100 <= covered,
         "no records: {over} pixels differ (largest {largest})"
@@ -769,8 +775,7 @@ fn the_occlusion_view_colours_by_pass_and_culled_share_like_the_reference() {
     f.second_counts = Some(counts);
     f.occluded_per_instance = Some(vec![10, 0, 10, 5, 4, 4]);
     let got = run_with(&mut f, pass, &view, BOTH).unwrap_or_else(|e| panic!("{e}"));
-    let want = cpu::shade(&f.cpu(), &pass.settings);
-    let (over, largest) = color_differences(&got.color, &want, 2);
+    let (over, largest) = reference_differences(&got.color, &f, &pass.settings, 2);
     assert!(
         over * 100 <= covered,
         "{over} of {covered} pixels differ (largest {largest})"
@@ -875,15 +880,12 @@ fn clustered_lights_shade_and_count_like_the_reference() {
     let pixels = (W * H) as usize;
     for view in [DebugView::Shaded, DebugView::LightCount] {
         let got = run(&mut f, Resolve::new(W, H).with_view(view));
-        let want = cpu::shade(
-            &f.cpu(),
-            &Settings {
-                view,
-                ..Settings::default()
-            },
-        );
+        let settings = Settings {
+            view,
+            ..Settings::default()
+        };
         // A pixel whose depth lies on a slice boundary may read the neighbouring froxel.
-        let (over, largest) = color_differences(&got.color, &want, 2);
+        let (over, largest) = reference_differences(&got.color, &f, &settings, 2);
         eprintln!("{view}: {over} pixels differ by more than 2, largest {largest}");
         assert!(
             over * 100 <= pixels,
