@@ -10,6 +10,7 @@
 #import meshlight::instance_table::{instance_at, instance_total}
 #import meshlight::scene_buffers::meshes
 #import meshlight::view::{View, sphere_in_frustum}
+#import fill_clusters::list::{clusters, cluster_count, cluster_capacity}
 
 struct Params {
     // Clusters the list may hold; the shader also clamps it to the bound list's length.
@@ -22,13 +23,10 @@ struct Params {
 }
 
 // The instances (`instance_at`, meshlight::instance_table) and the scene's meshes, for
-// each instance's bounding sphere (meshlight::scene_buffers).
-// The cluster list: written below the capacity only.
-@group(0) @binding(2) var<storage, read_write> clusters: array<Cluster>;
-// [0] clusters written = min(requested, capacity), [1] clusters requested.
-@group(0) @binding(3) var<storage, read_write> cluster_count: array<atomic<u32>>;
-@group(0) @binding(4) var<uniform> view: View;
-@group(0) @binding(5) var<uniform> params: Params;
+// each instance's bounding sphere (meshlight::scene_buffers); the cluster list and its
+// count (fill_clusters::list).
+@group(0) @binding(3) var<uniform> view: View;
+@group(0) @binding(4) var<uniform> params: Params;
 
 const WORKGROUP_SIZE: u32 = 64u;
 
@@ -36,7 +34,7 @@ const WORKGROUP_SIZE: u32 = 64u;
 var<workgroup> range_start: u32;
 
 fn capacity() -> u32 {
-    return min(params.capacity, arrayLength(&clusters));
+    return cluster_capacity(params.capacity);
 }
 
 @compute @workgroup_size(64)

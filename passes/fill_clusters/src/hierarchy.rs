@@ -116,7 +116,11 @@ use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 /// The implementation name pipelines use.
 pub const IMPLEMENTATION: &str = "hierarchy";
 
-pub const SHADER: PassShader = pass_shader!("fill_clusters::hierarchy", "hierarchy.wgsl");
+pub const SHADER: PassShader = pass_shader!(
+    "fill_clusters::hierarchy",
+    "hierarchy.wgsl",
+    modules: [("fill_clusters::list", "list.wgsl")]
+);
 
 /// Nodes a frontier holds in workgroup memory (`QUEUE` in the shader).
 pub const QUEUE: u32 = 1024;

@@ -38,6 +38,8 @@
 #import meshlight::instance_table::{instance_at, instance_total}
 #import meshlight::view::View
 #import meshlight::math::F32_MAX
+// Qualified (`cluster_list::clusters`): `cluster_count` also names a HierarchyNode field.
+#import fill_clusters::list as cluster_list
 #ifdef OCCLUSION
 #import meshlight::occlusion::{occlusion_rect, sphere_occluded}
 #endif
@@ -104,11 +106,8 @@ struct Subtree {
     count: u32,
 }
 
-// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
-// The cluster list: written below the capacity only.
-@group(0) @binding(1) var<storage, read_write> clusters: array<Cluster>;
-// [0] clusters written = min(requested, capacity), [1] clusters requested.
-@group(0) @binding(2) var<storage, read_write> cluster_count: array<atomic<u32>>;
+// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31); the
+// cluster list and its count (fill_clusters::list, bindings 1 and 2).
 @group(0) @binding(3) var<uniform> view: View;
 @group(0) @binding(4) var<uniform> params: Params;
 // Every mesh's hierarchy nodes.
@@ -193,7 +192,7 @@ var<workgroup> hidden_nodes: atomic<u32>;
 var<workgroup> entry_total: u32;
 
 fn capacity() -> u32 {
-    return min(params.capacity, arrayLength(&clusters));
+    return cluster_list::cluster_capacity(params.capacity);
 }
 
 // This thread's range not yet handed to the chunk (adjacent leaves extend it), and the
@@ -329,8 +328,8 @@ fn node_seen(node: HierarchyNode, id: u32, w: Walker, entry: bool) -> bool {
 
 @compute @workgroup_size(1)
 fn prepare() {
-    atomicStore(&cluster_count[0], 0u);
-    atomicStore(&cluster_count[1], 0u);
+    atomicStore(&cluster_list::cluster_count[0], 0u);
+    atomicStore(&cluster_list::cluster_count[1], 0u);
     for (var i = 0u; i < min(ENTRY_WORDS, arrayLength(&hierarchy_counts)); i += 1u) {
         atomicStore(&hierarchy_counts[i], 0u);
     }
@@ -391,13 +390,13 @@ fn root_total() -> u32 {
 // below it, as a full queue emits a subtree whole), or a range a chunk has no slot for.
 fn emit_now(index: u32, first: u32, count: u32) {
     let cap = capacity();
-    let start = atomicAdd(&cluster_count[1], count);
+    let start = atomicAdd(&cluster_list::cluster_count[1], count);
     let written = min(count, cap - min(start, cap));
     if written > 0u {
-        atomicAdd(&cluster_count[0], written);
+        atomicAdd(&cluster_list::cluster_count[0], written);
     }
     for (var k = 0u; k < written; k += 1u) {
-        clusters[start + k] = Cluster(index, hierarchy_clusters[first + k]);
+        cluster_list::clusters[start + k] = Cluster(index, hierarchy_clusters[first + k]);
     }
 }
 
@@ -628,13 +627,13 @@ fn fill(
                     emit_len = min(atomicExchange(&emit_ranges, 0u), EMIT_SLOTS);
                     let total = atomicExchange(&emit_total, 0u);
                     if total > 0u {
-                        emit_base = atomicAdd(&cluster_count[1], total);
+                        emit_base = atomicAdd(&cluster_list::cluster_count[1], total);
                         // The written word grows by the part below the capacity: the
                         // reservations tile [0, requested), so the sum is min(requested,
                         // capacity) once every step is done, with no dispatch after.
                         let written = min(total, cap - min(emit_base, cap));
                         if written > 0u {
-                            atomicAdd(&cluster_count[0], written);
+                            atomicAdd(&cluster_list::cluster_count[0], written);
                         }
                     }
                 }
@@ -647,7 +646,7 @@ fn fill(
                     let range_first = emit_first[e];
                     for (var k = t; k < c; k += WORKGROUP_SIZE) {
                         if start + k < cap {
-                            clusters[start + k] = Cluster(index, hierarchy_clusters[range_first + k]);
+                            cluster_list::clusters[start + k] = Cluster(index, hierarchy_clusters[range_first + k]);
                         }
                     }
                 }

@@ -83,7 +83,11 @@ pub const IMPLEMENTATION: &str = "workgroup_per_instance";
 /// The frame input holding the `View`.
 pub const VIEW_INPUT: &str = "view";
 
-pub const SHADER: PassShader = pass_shader!("fill_clusters::fill", "fill.wgsl");
+pub const SHADER: PassShader = pass_shader!(
+    "fill_clusters::fill",
+    "fill.wgsl",
+    modules: [("fill_clusters::list", "list.wgsl")]
+);
 
 /// The depth pyramid's slot (`hierarchy` with occlusion).
 pub const PYRAMID_SLOT: &str = "pyramid";
@@ -313,8 +317,8 @@ impl Pass for FillClusters {
         };
         ctx.clear("cluster_count")?;
         let uniforms: [(u32, &[u8]); 2] = [
-            (4, bytemuck::bytes_of(&view)),
-            (5, bytemuck::bytes_of(&params)),
+            (3, bytemuck::bytes_of(&view)),
+            (4, bytemuck::bytes_of(&params)),
         ];
         ctx.dispatch_compute("fill", &uniforms, Workgroups::Direct([x, y, 1]))?;
         // A separate compute pass, so the requested count is final when it is read.
