@@ -4,6 +4,7 @@
 pub mod features;
 pub mod frames;
 pub mod pass_errors;
+pub mod shader_variants;
 use meshlight_graph::{
     Bindings, BufferDesc, CompileOptions, Executor, FrameData, GpuContext, GraphBuilder,
     GraphError, Imports, Pass, Result, TextureDesc, file::Params,

@@ -329,21 +329,18 @@ pub fn register(registry: &mut Registry) {
 #[cfg(test)]
 mod tests {
     use super::RasterDefs;
-    use meshlight_shaders::{Capabilities, ShaderDefs, ShaderLibrary, validate};
+    use meshlight_shaders::{Capabilities, ShaderDefs, ShaderError};
+    use meshlight_testing::shader_variants::compose_and_validate;
 
-    fn compose(defs: RasterDefs, caps: Capabilities) -> Result<(), String> {
-        let mut library = ShaderLibrary::new(caps).map_err(|e| e.to_string())?;
+    /// The variant `defs` picks, from the source with the mesh-shader extension when it
+    /// has the mesh-stage entry points.
+    fn compose(defs: RasterDefs, caps: Capabilities) -> Result<(), ShaderError> {
         let shader = if defs.mesh_shader {
             &super::MESH_SHADER_SOURCE
         } else {
             &super::SHADER
         };
-        let module = library
-            .compose(shader, &defs.shader_defs())
-            .map_err(|e| e.to_string())?;
-        validate(shader.name, &module, caps)
-            .map(|_| ())
-            .map_err(|e| e.to_string())
+        compose_and_validate(shader, &defs.shader_defs(), caps)
     }
 
     #[test]

@@ -495,6 +495,7 @@ pub fn register(registry: &mut Registry) {
 mod tests {
     use super::*;
     use meshlight_shaders::{Capabilities, ShaderDefs, ShaderLibrary};
+    use meshlight_testing::shader_variants::compose_and_validate;
 
     #[test]
     fn the_shaders_compose_and_validate_without_64_bit_integers() {
@@ -516,7 +517,6 @@ mod tests {
     #[test]
     fn the_texture_variants_compose_and_validate_with_64_bit_texture_reads() {
         let caps = Capabilities::SHADER_INT64 | Capabilities::TEXTURE_INT64_ATOMIC;
-        let mut library = ShaderLibrary::new(caps).unwrap();
         let depth = DepthDefs { texture: true }.shader_defs();
         let shade = ShadeDefs {
             clustered_lights: true,
@@ -527,11 +527,7 @@ mod tests {
         }
         .shader_defs();
         for (shader, defs) in [(&DEPTH_SHADER, &depth), (&SHADE_SHADER, &shade)] {
-            let module = library
-                .compose(shader, defs)
-                .unwrap_or_else(|e| panic!("{e}"));
-            meshlight_shaders::validate(shader.name, &module, caps)
-                .unwrap_or_else(|e| panic!("{e}"));
+            compose_and_validate(shader, defs, caps).unwrap_or_else(|e| panic!("{e}"));
         }
     }
 

@@ -484,16 +484,13 @@ mod tests {
             assert!(source.contains(&line), "raster.wgsl lacks `{line}`");
         }
     }
-    use meshlight_shaders::{Capabilities, ShaderLibrary, validate};
+    use meshlight_shaders::Capabilities;
+    use meshlight_testing::shader_variants::compose_and_validate;
 
     #[test]
     fn the_kernel_composes_and_validates_with_int64_atomics() {
         let caps = Capabilities::SHADER_INT64 | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX;
-        let mut library = ShaderLibrary::new(caps).unwrap_or_else(|e| panic!("{e}"));
-        let module = library
-            .compose(&super::SHADER, &[])
-            .unwrap_or_else(|e| panic!("{e}"));
-        validate(super::SHADER.name, &module, caps).unwrap_or_else(|e| panic!("{e}"));
+        compose_and_validate(&super::SHADER, &[], caps).unwrap_or_else(|e| panic!("{e}"));
     }
 
     #[test]
@@ -508,18 +505,11 @@ mod tests {
             slot_base: true,
             big_triangles: true,
         };
-        let mut library = ShaderLibrary::new(caps).unwrap_or_else(|e| panic!("{e}"));
-        let module = library
-            .compose(&super::SHADER, &defs.shader_defs())
+        compose_and_validate(&super::SHADER, &defs.shader_defs(), caps)
             .unwrap_or_else(|e| panic!("{e}"));
-        validate(super::SHADER.name, &module, caps).unwrap_or_else(|e| panic!("{e}"));
         // Without texture atomics the variant is refused.
         let plain = Capabilities::SHADER_INT64 | Capabilities::SHADER_INT64_ATOMIC_MIN_MAX;
-        let mut library = ShaderLibrary::new(plain).unwrap_or_else(|e| panic!("{e}"));
-        let refused = library
-            .compose(&super::SHADER, &defs.shader_defs())
-            .and_then(|m| validate(super::SHADER.name, &m, plain));
-        assert!(refused.is_err());
+        assert!(compose_and_validate(&super::SHADER, &defs.shader_defs(), plain).is_err());
     }
 
     fn px(x: i32, y: i32) -> [i32; 2] {
