@@ -33,10 +33,19 @@ impl Implementation {
     }
 }
 
-/// z_slice and count_raster, walking as a test's [`Implementation`], in a test graph:
-/// what the GPU tests of this stage and of `populate` build before adding what they
-/// read back (populate its scan and its own pass too), and run alike.
-pub struct Counted {
+/// What a walking stage's GPU test runs over: the objects, the view they are seen
+/// through and the z_slice that cuts the view into the grid the walk covers.
+pub struct Scene {
+    pub view: View,
+    pub objects: Vec<ClusterableObject>,
+    pub z_slice: ZSlice,
+}
+
+/// z_slice and count_raster over a [`Scene`], walking as a test's [`Implementation`],
+/// in a test graph: what the GPU tests of this stage and of `populate` build before
+/// adding what they read back (populate its scan and its own pass too), and run alike.
+pub struct Counted<'a> {
+    pub scene: &'a Scene,
     pub graph: GraphBuilder,
     pub sliced: Sliced,
     /// The grid z_slice cuts the view into.
@@ -47,22 +56,19 @@ pub struct Counted {
     pub outputs: PassOutputs,
 }
 
-impl Counted {
-    /// The graph over `objects` objects seen through `view` ([`Sliced::add_for_walk`]),
-    /// count_raster walking what z_slice wrote.
-    pub fn add(
-        z_slice: ZSlice,
-        objects: usize,
-        view: &View,
-        implementation: Implementation,
-    ) -> Result<Self> {
+impl<'a> Counted<'a> {
+    /// The graph over `scene` ([`Sliced::add_for_walk`]), count_raster walking what
+    /// z_slice wrote.
+    pub fn add(scene: &'a Scene, implementation: Implementation) -> Result<Self> {
         let mut graph = GraphBuilder::new();
-        let (sliced, grid) = Sliced::add_for_walk(&mut graph, z_slice, objects, view)?;
+        let objects = scene.objects.len();
+        let (sliced, grid) = Sliced::add_for_walk(&mut graph, scene.z_slice, objects, &scene.view)?;
         let walk = implementation.walk(&grid);
         let counts = sliced.outputs.buffer("cluster_counts")?;
         let bindings = sliced.bind_walk(Bindings::new().bind("cluster_counts", counts))?;
         let outputs = graph.add_boxed_pass("count", crate::pass(walk), bindings)?;
         Ok(Self {
+            scene,
             graph,
             sliced,
             grid,
@@ -71,17 +77,16 @@ impl Counted {
         })
     }
 
-    /// Runs one frame of the graph on `exec` over all of `objects` with the caller's
-    /// `imports` beside them ([`run_frame`]), and returns what z_slice wrote
+    /// Runs one frame of the graph on `exec` over all of the scene's objects with the
+    /// caller's `imports` beside them ([`run_frame`]), and returns what z_slice wrote
     /// ([`read_written`]); the caller reads what it exported.
     pub fn run(
         mut self,
         exec: &mut Executor,
-        objects: &[ClusterableObject],
-        view: &View,
         imports: Imports,
     ) -> Result<(Vec<SliceInstance>, ClusterGrid)> {
         self.sliced.export_written(&mut self.graph)?;
+        let Scene { view, objects, .. } = self.scene;
         let count = objects.len() as u32;
         run_frame(exec, self.graph, objects, count, view, imports)?;
         Ok(read_written(exec))

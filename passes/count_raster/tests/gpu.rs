@@ -8,7 +8,7 @@ use glam::Vec3;
 use meshlight_graph::Imports;
 use meshlight_pass_count_raster::KINDS;
 use meshlight_pass_count_raster::cpu::{CountResult, cpu_count};
-use meshlight_pass_count_raster::testbed::{Counted, Implementation};
+use meshlight_pass_count_raster::testbed::{Counted, Implementation, Scene};
 use meshlight_pass_z_slice::scenes::{Rng, object, perspective, random_camera, random_objects};
 use meshlight_pass_z_slice::testbed::read;
 use meshlight_pass_z_slice::{GridSettings, SliceInstance, ZSlice};
@@ -24,19 +24,12 @@ struct GpuCounts {
     grid: ClusterGrid,
 }
 
-fn run(
-    objects: &[ClusterableObject],
-    view: &View,
-    z_slice: ZSlice,
-    implementation: Implementation,
-) -> GpuCounts {
-    let mut counted = Counted::add(z_slice, objects.len(), view, implementation).unwrap();
+fn run(scene: &Scene, implementation: Implementation) -> GpuCounts {
+    let mut counted = Counted::add(scene, implementation).unwrap();
     let counts = counted.outputs.buffer("cluster_counts").unwrap();
     counted.graph.export(counts);
     let mut exec = executor();
-    let (instances, grid) = counted
-        .run(&mut exec, objects, view, Imports::new())
-        .unwrap();
+    let (instances, grid) = counted.run(&mut exec, Imports::new()).unwrap();
     GpuCounts {
         instances,
         counts: read(&mut exec, "cluster_counts"),
@@ -104,7 +97,7 @@ fn compare(
     (differing, reference.counts.iter().sum())
 }
 
-fn scene(rng: &mut Rng, index: u32) -> (View, Vec<ClusterableObject>, ZSlice) {
+fn scene(rng: &mut Rng, index: u32) -> Scene {
     let (camera, target) = random_camera(rng, index % 2 == 1);
     let viewport = [[320, 180], [256, 256], [640, 360]][rng.below(3) as usize];
     let view = camera.view(viewport, index, None);
@@ -118,7 +111,11 @@ fn scene(rng: &mut Rng, index: u32) -> (View, Vec<ClusterableObject>, ZSlice) {
         quad_vertices: [4, 6][rng.below(2) as usize],
         ..ZSlice::default()
     };
-    (view, objects, z_slice)
+    Scene {
+        view,
+        objects,
+        z_slice,
+    }
 }
 
 #[test]
@@ -127,12 +124,12 @@ fn random_scenes_count_like_the_reference_in_both_implementations() {
     let mut per_kind = [0u32; 4];
     let (mut differing, mut orthographic_scenes, mut scenes_in_rounds) = (0, 0, 0);
     for index in 0..6 {
-        let (view, objects, z_slice) = scene(&mut rng, index);
-        let [w, h] = view.viewport_size.map(|v| v as u32);
-        let grid = z_slice.grid([w, h]);
-        let raster = run(&objects, &view, z_slice, Implementation::Raster);
-        let compute = run(&objects, &view, z_slice, Implementation::Compute);
-        let rounds = run(&objects, &view, z_slice, Implementation::ComputeRounds);
+        let scene = scene(&mut rng, index);
+        let [w, h] = scene.view.viewport_size.map(|v| v as u32);
+        let grid = scene.z_slice.grid([w, h]);
+        let raster = run(&scene, Implementation::Raster);
+        let compute = run(&scene, Implementation::Compute);
+        let rounds = run(&scene, Implementation::ComputeRounds);
         if rounds.instances.len() > 2 * 64 {
             scenes_in_rounds += 1;
         }
@@ -154,8 +151,8 @@ fn random_scenes_count_like_the_reference_in_both_implementations() {
             (&compute, Implementation::Compute),
         ]
         .map(|(got, i)| {
-            let label = format!("scene {index} {i:?} ({:?})", z_slice.grid);
-            compare(&view, &objects, got, &grid, &label)
+            let label = format!("scene {index} {i:?} ({:?})", scene.z_slice.grid);
+            compare(&scene.view, &scene.objects, got, &grid, &label)
         });
         assert!(
             total > 100,
@@ -207,10 +204,15 @@ fn lights_around_the_camera_count_where_they_must() {
         // A small light on the view axis at 10 m: the centre tiles of its slices only.
         object(p, Vec3::new(0.0, 0.0, -10.0), 0.5),
     ];
+    let scene = Scene {
+        view,
+        objects,
+        z_slice,
+    };
     for implementation in Implementation::ALL {
-        let got = run(&objects, &view, z_slice, implementation);
+        let got = run(&scene, implementation);
         let label = format!("{implementation:?}");
-        let (differing, _) = compare(&view, &objects, &got, &grid, &label);
+        let (differing, _) = compare(&scene.view, &scene.objects, &got, &grid, &label);
         assert_eq!(differing, 0, "{label}");
         let at = |x: u32, y: u32, z: u32| got.counts[((z * 9 + y) * 16 + x) as usize * 4];
         // The light reaches 2 m around the camera: every tile of slice 0 (from the near
@@ -237,9 +239,13 @@ fn lights_around_the_camera_count_where_they_must() {
 
 #[test]
 fn no_objects_count_nothing() {
-    let view = perspective(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 1.2).view([320, 180], 0, None);
+    let scene = Scene {
+        view: perspective(Vec3::ZERO, Vec3::new(0.0, 0.0, -1.0), 1.2).view([320, 180], 0, None),
+        objects: Vec::new(),
+        z_slice: ZSlice::default(),
+    };
     for implementation in Implementation::ALL {
-        let got = run(&[], &view, ZSlice::default(), implementation);
+        let got = run(&scene, implementation);
         assert!(got.instances.is_empty());
         assert!(got.counts.iter().all(|&c| c == 0), "{implementation:?}");
     }

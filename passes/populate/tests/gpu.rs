@@ -6,7 +6,7 @@
 
 use meshlight_graph::{Bindings, BufferDesc, Element, Imports};
 use meshlight_pass_count_raster::KINDS;
-use meshlight_pass_count_raster::testbed::{Counted, Implementation};
+use meshlight_pass_count_raster::testbed::{Counted, Implementation, Scene};
 use meshlight_pass_populate::cpu::{ClusterLists, cpu_populate};
 use meshlight_pass_scan_fan::ScanFan;
 use meshlight_pass_z_slice::scenes::{Rng, random_camera, random_objects};
@@ -32,14 +32,8 @@ struct GpuLists {
     grid: ClusterGrid,
 }
 
-fn run(
-    objects: &[ClusterableObject],
-    view: &View,
-    z_slice: ZSlice,
-    implementation: Implementation,
-    capacity: u32,
-) -> GpuLists {
-    let mut counted = Counted::add(z_slice, objects.len(), view, implementation).unwrap();
+fn run(scene: &Scene, implementation: Implementation, capacity: u32) -> GpuLists {
+    let mut counted = Counted::add(scene, implementation).unwrap();
     let g = &mut counted.graph;
     let lists = counted.grid.cluster_count * KINDS;
     let list_buffer = g.import_buffer(
@@ -90,7 +84,7 @@ fn run(
         exec.gpu
             .buffer_with_data("cluster_objects", bytemuck::cast_slice(&sentinels), USAGE);
     let imports = Imports::new().buffer("cluster_objects", &lists_buffer);
-    let (instances, grid) = counted.run(&mut exec, objects, view, imports).unwrap();
+    let (instances, grid) = counted.run(&mut exec, imports).unwrap();
     let raw: Vec<u32> = bytemuck::pod_collect_to_vec(
         &exec
             .gpu
@@ -182,7 +176,7 @@ fn compare(
     differing
 }
 
-fn scene(rng: &mut Rng, index: u32) -> (View, Vec<ClusterableObject>, ZSlice) {
+fn scene(rng: &mut Rng, index: u32) -> Scene {
     let (camera, target) = random_camera(rng, index % 2 == 1);
     let viewport = [[320, 180], [256, 256]][rng.below(2) as usize];
     let z_slice = ZSlice {
@@ -193,11 +187,11 @@ fn scene(rng: &mut Rng, index: u32) -> (View, Vec<ClusterableObject>, ZSlice) {
         },
         ..ZSlice::default()
     };
-    (
-        camera.view(viewport, index, None),
-        random_objects(rng, 150, target, 60.0),
+    Scene {
+        view: camera.view(viewport, index, None),
+        objects: random_objects(rng, 150, target, 60.0),
         z_slice,
-    )
+    }
 }
 
 #[test]
@@ -205,9 +199,9 @@ fn lists_equal_the_reference_as_sets_in_both_implementations() {
     let mut rng = Rng(0x0bad_cafe_f00d_0001);
     let mut differing = 0;
     for index in 0..4 {
-        let (view, objects, z_slice) = scene(&mut rng, index);
+        let scene = scene(&mut rng, index);
         for implementation in Implementation::ALL {
-            let got = run(&objects, &view, z_slice, implementation, 1 << 18);
+            let got = run(&scene, implementation, 1 << 18);
             let label = format!("scene {index} {implementation:?}");
             assert!(
                 got.list_counts[0] > 200,
@@ -218,7 +212,7 @@ fn lists_equal_the_reference_as_sets_in_both_implementations() {
                 got.list_counts[0] <= 1 << 18,
                 "{label}: the lists overflowed"
             );
-            differing += compare(&view, &objects, &got, 1 << 18, &label);
+            differing += compare(&scene.view, &scene.objects, &got, 1 << 18, &label);
         }
     }
     assert!(differing <= 8, "{differing} pairs decided otherwise");
@@ -227,12 +221,12 @@ fn lists_equal_the_reference_as_sets_in_both_implementations() {
 #[test]
 fn a_small_capacity_cuts_lists_and_writes_nothing_past_it() {
     let mut rng = Rng(0x0bad_cafe_f00d_0002);
-    let (view, objects, z_slice) = scene(&mut rng, 0);
+    let scene = scene(&mut rng, 0);
     for implementation in Implementation::ALL {
-        let got = run(&objects, &view, z_slice, implementation, 100);
+        let got = run(&scene, implementation, 100);
         let label = format!("{implementation:?} at capacity 100");
         assert!(got.list_counts[0] > 100, "{label}: no overflow to test");
         assert!(got.lists.counts.iter().sum::<u32>() <= 100, "{label}");
-        compare(&view, &objects, &got, 100, &label);
+        compare(&scene.view, &scene.objects, &got, 100, &label);
     }
 }
