@@ -19,11 +19,6 @@ mod common;
 use common::*;
 
 /// What the GPU leaves in slots nothing may write.
-const SENTINEL: Cluster = Cluster {
-    instance: 0xdead_beef,
-    meshlet: 0xfeed_f00d,
-};
-
 /// Slots after the capacity that must keep the sentinel.
 const GUARD: u32 = 32;
 
@@ -91,14 +86,7 @@ fn run(
     g.export(out.buffer("raster_counts").unwrap());
     g.export(out.buffer("hw_args").unwrap());
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
-    let list_buffer = gpu.buffer_with_data("clusters", bytemuck::cast_slice(clusters), USAGE);
-    let count_buffer =
-        gpu.buffer_with_data("cluster_count", bytemuck::cast_slice(&[n as u32; 2]), USAGE);
-    let raster_buffer = gpu.buffer_with_data(
-        "raster_clusters",
-        bytemuck::cast_slice(&vec![SENTINEL; slots as usize]),
-        USAGE,
-    );
+    let [list_buffer, count_buffer, raster_buffer] = cull_buffers(&gpu, clusters, slots);
     let imports = scene
         .imports()
         .buffer("clusters", &list_buffer)

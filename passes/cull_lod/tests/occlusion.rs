@@ -25,10 +25,6 @@ use std::collections::BTreeSet;
 mod common;
 use common::*;
 
-const SENTINEL: Cluster = Cluster {
-    instance: 0xdead_beef,
-    meshlet: 0xfeed_f00d,
-};
 /// Decisions the GPU may take differently from the reference: within this relative
 /// distance of a threshold, at most `MAX_NEAR_PER_VIEW` per view and pass.
 const NEAR_THRESHOLD: f32 = 1e-5;
@@ -229,15 +225,7 @@ impl Harness {
         g.export(out2.buffer("raster_clusters").unwrap());
         g.export(out2.buffer(PER_INSTANCE_SECOND).unwrap());
         let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
-        let clusters_buffer =
-            gpu.buffer_with_data("clusters", bytemuck::cast_slice(clusters), USAGE);
-        let count_buffer =
-            gpu.buffer_with_data("cluster_count", bytemuck::cast_slice(&[n as u32; 2]), USAGE);
-        let raster_buffer = gpu.buffer_with_data(
-            "raster_clusters",
-            bytemuck::cast_slice(&vec![SENTINEL; n as usize]),
-            USAGE,
-        );
+        let [clusters_buffer, count_buffer, raster_buffer] = cull_buffers(&gpu, clusters, n as u32);
         let (upload, now) = (
             texture(&gpu, "upload", &desc, usage),
             texture(&gpu, "pyramid_now", &desc, usage),

@@ -4,6 +4,7 @@
 
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::{Material, SceneData, data::Limits};
+use meshlight_graph::GpuContext;
 use meshlight_shaders::cpu::layout::Cluster;
 
 #[allow(unused_imports)] // not every test binary that includes this module uses each
@@ -41,6 +42,29 @@ pub fn scene() -> SceneData {
         })
         .collect();
     scene_with(&placements)
+}
+
+/// What a raster slot holds before the cull: no cluster of any scene, so a slot the pass
+/// left unwritten shows.
+pub const SENTINEL: Cluster = Cluster {
+    instance: 0xdead_beef,
+    meshlet: 0xfeed_f00d,
+};
+
+/// The buffers a cull is imported with, filled: the candidate `clusters`, their two
+/// count words (every candidate written, none dropped) and `slots` raster slots holding
+/// [`SENTINEL`].
+pub fn cull_buffers(gpu: &GpuContext, clusters: &[Cluster], slots: u32) -> [wgpu::Buffer; 3] {
+    let n = clusters.len() as u32;
+    [
+        gpu.buffer_with_data("clusters", bytemuck::cast_slice(clusters), USAGE),
+        gpu.buffer_with_data("cluster_count", bytemuck::cast_slice(&[n; 2]), USAGE),
+        gpu.buffer_with_data(
+            "raster_clusters",
+            bytemuck::cast_slice(&vec![SENTINEL; slots as usize]),
+            USAGE,
+        ),
+    ]
 }
 
 /// A random camera aim: a target in the box `±extent` about the origin, and the unit
