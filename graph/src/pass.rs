@@ -57,6 +57,21 @@ pub enum Visibility64 {
     Texture,
 }
 
+impl Visibility64 {
+    /// What `atomicMax` onto a target of this form asks of the adapter: 64-bit integers
+    /// and the 64-bit atomics of a buffer or of a storage texture. Every rasteriser that
+    /// writes the target asks the same, whichever stage it implements.
+    pub fn atomic_max_features(self) -> wgpu::Features {
+        wgpu::Features::SHADER_INT64
+            | match self {
+                Visibility64::Buffer => wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
+                Visibility64::Texture => {
+                    wgpu::Features::TEXTURE_ATOMIC | wgpu::Features::TEXTURE_INT64_ATOMIC
+                }
+            }
+    }
+}
+
 /// A scratch buffer or texture private to one pass.
 #[derive(Clone, Debug)]
 pub struct ScratchDecl {

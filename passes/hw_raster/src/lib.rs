@@ -70,9 +70,8 @@ use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, Element, Implementation, Pass,
     Primitive, ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
-    Workgroups,
+    Visibility64, Workgroups,
 };
-use meshlight_pass_sw_raster::require_visbuffer;
 use meshlight_shaders::{PassShader, pass_shader, shader_defs};
 
 /// The stage name pipelines use.
@@ -216,7 +215,14 @@ impl Pass for HwRaster {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let texture = ctx.is_texture("visbuffer");
-        require_visbuffer(ctx, texture, self.width, self.height);
+        // atomicMax onto the 64-bit target, as sw_raster draws onto it.
+        let target = if texture {
+            Visibility64::Texture
+        } else {
+            Visibility64::Buffer
+        };
+        ctx.require_features(target.atomic_max_features());
+        ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
         ctx.min_bytes("raster_counts", 16);
         ctx.min_bytes("hw_args", 16);
         ctx.frame_input(VIEW_INPUT);

@@ -226,18 +226,6 @@ shader_defs! {
 pub const TEXTURE_FEATURES: wgpu::Features =
     wgpu::Features::TEXTURE_ATOMIC.union(wgpu::Features::TEXTURE_INT64_ATOMIC);
 
-/// What atomicMax onto a `width` × `height` 64-bit visibility target (slot `visbuffer`,
-/// an R64Uint texture or a `u64` buffer) asks of the adapter and of the slot. `hw_raster`
-/// draws onto the same target the same way, so it asks the same.
-pub fn require_visbuffer(ctx: &mut SetupContext, texture: bool, width: u32, height: u32) {
-    ctx.require_features(if texture {
-        wgpu::Features::SHADER_INT64 | TEXTURE_FEATURES
-    } else {
-        wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
-    });
-    ctx.min_bytes("visbuffer", width as u64 * height as u64 * 8);
-}
-
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct GpuParams {
@@ -295,7 +283,8 @@ impl Pass for SwRaster {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         let texture = self.target == Visibility64::Texture;
-        require_visbuffer(ctx, texture, self.width, self.height);
+        ctx.require_features(self.target.atomic_max_features());
+        ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
         // With a slot base the first slot is word 7.
         ctx.min_bytes("raster_counts", if self.accumulate { 32 } else { 4 });
         ctx.min_bytes("sw_args", 12);
