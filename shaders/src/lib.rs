@@ -17,6 +17,7 @@ mod defs;
 mod error;
 mod library;
 mod modules;
+mod uniform;
 
 pub use defs::{ShaderDef, ShaderDefs};
 pub use error::ShaderError;

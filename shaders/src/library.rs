@@ -42,22 +42,20 @@ pub struct LocalModule {
 /// `pass_shader!("sw_raster", "raster.wgsl")` embeds the file with `include_str!` and
 /// labels it with the calling crate's name and the file name. With
 /// `modules: [("scan_fan::common", "common.wgsl")]` the shader may import those files of
-/// the crate by their import paths.
+/// the crate by their import paths; with `params: GpuParams` it may import the struct of
+/// that [`crate::uniform_block!`] from the block's module.
 #[macro_export]
 macro_rules! pass_shader {
-    ($name:expr, $file:literal) => {
-        $crate::pass_shader!($name, $file, modules: [])
-    };
-    ($name:expr, $file:literal, modules: [$(($import:literal, $module:literal)),* $(,)?]) => {
+    ($name:expr, $file:literal $(, params: $params:ty)? $(, modules: [$(($import:literal, $module:literal)),* $(,)?])? $(,)?) => {
         $crate::PassShader {
             name: $name,
             source: include_str!($file),
             file_path: concat!(env!("CARGO_PKG_NAME"), "/", $file),
-            modules: &[$($crate::LocalModule {
+            modules: &[$(<$params>::MODULE,)? $($($crate::LocalModule {
                 name: $import,
                 source: include_str!($module),
                 file_path: concat!(env!("CARGO_PKG_NAME"), "/", $module),
-            }),*],
+            }),*)?],
         }
     };
 }

@@ -26,12 +26,12 @@ use meshlight_graph::{
     Access, BindingLayout, Element, Implementation, Pass, ProgramDesc, RecordContext, Result,
     SetupContext, Slot, StageContract, Workgroups,
 };
-use meshlight_shaders::{PassShader, pass_shader};
+use meshlight_shaders::{PassShader, pass_shader, uniform_block};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "remap_dispatch";
 
-pub const SHADER: PassShader = pass_shader!("remap_dispatch::remap", "remap.wgsl");
+pub const SHADER: PassShader = pass_shader!("remap_dispatch::remap", "remap.wgsl", params: GpuParams);
 
 /// The slots every implementation of `remap_dispatch` shares.
 pub fn contract() -> StageContract {
@@ -69,12 +69,16 @@ pub struct RemapDispatch {
     pub max_per_dimension: Option<u32>,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
-    count_word: u32,
-    max_per_dimension: u32,
-    _pad: [u32; 2],
+uniform_block! {
+    /// The uniform of remap.wgsl, which imports the struct from this declaration.
+    struct GpuParams as "Params" in "remap_dispatch::params" {
+        /// Word of `count` that holds the workgroup count.
+        count_word: u32,
+        /// The adapter's limit on workgroups per dimension (or a smaller test value).
+        max_per_dimension: u32,
+        pad_a: u32,
+        pad_b: u32,
+    }
 }
 
 const PARAM_KEYS: [&str; 2] = ["count_word", "max_per_dimension"];
@@ -110,7 +114,7 @@ impl Pass for RemapDispatch {
         let params = GpuParams {
             count_word: self.count_word,
             max_per_dimension: ctx.max_per_dimension(self.max_per_dimension),
-            _pad: [0; 2],
+            ..GpuParams::default()
         };
         ctx.dispatch_compute(
             "remap",

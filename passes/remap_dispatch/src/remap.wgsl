@@ -4,14 +4,8 @@
 // (y * x_size + x) and those at or past the count return at once.
 
 #import meshlight::dispatch::fold_dispatch
-
-struct Params {
-    // Word of `count` that holds the workgroup count.
-    count_word: u32,
-    // The adapter's limit on workgroups per dimension (or a smaller test value).
-    max_per_dimension: u32,
-    _pad: vec2<u32>,
-}
+// The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
+#import remap_dispatch::params::Params
 
 // The workgroup count, at word `params.count_word`.
 @group(0) @binding(0) var<storage, read> count: array<u32>;
