@@ -97,14 +97,14 @@ use meshlight_graph::{
     Access, BindingLayout, Implementation, Pass, ProgramDesc, RecordContext, Result, SetupContext,
     Slot, StageContract, Visibility64,
 };
-use meshlight_shaders::{PassShader, pass_shader, shader_defs};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "sw_raster";
 /// The frame input holding the `View`.
 pub const VIEW_INPUT: &str = "view";
 
-pub const SHADER: PassShader = pass_shader!("sw_raster::raster", "raster.wgsl");
+pub const SHADER: PassShader = pass_shader!("sw_raster::raster", "raster.wgsl", params: GpuParams);
 /// The `texture` implementation's clear: a dispatch of plain stores.
 pub const CLEAR_SHADER: PassShader = pass_shader!("sw_raster::clear", "clear.wgsl");
 /// The clear's workgroup edge (16 × 16 pixels).
@@ -226,18 +226,24 @@ shader_defs! {
 pub const TEXTURE_FEATURES: wgpu::Features =
     wgpu::Features::TEXTURE_ATOMIC.union(wgpu::Features::TEXTURE_INT64_ATOMIC);
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
-    width: u32,
-    height: u32,
-    scanline_width: u32,
-    /// Always 0: the kernel xors products with it so that no compiler fuses them into
-    /// an fma the reference does not do.
-    zero: u32,
-    big_triangle_px: u32,
-    big_capacity: u32,
-    _pad: [u32; 2],
+uniform_block! {
+    /// The uniform of raster.wgsl, which imports the struct from this declaration.
+    struct GpuParams as "Params" in "sw_raster::params" {
+        /// Visibility buffer size in pixels.
+        width: u32,
+        height: u32,
+        /// Workgroups whose widest triangle box reaches this many pixels loop per scanline.
+        scanline_width: u32,
+        /// Always 0 (see `unfused`): the kernel xors products with it so that no compiler
+        /// fuses them into an fma the reference does not do.
+        zero: u32,
+        /// BIG_TRIANGLES: boxes this wide or tall are tiled for `raster_big`.
+        big_triangle_px: u32,
+        /// Entries `big_triangle_tiles` may hold (clamped to its length too).
+        big_capacity: u32,
+        pad_a: u32,
+        pad_b: u32,
+    }
 }
 
 const PARAM_KEYS: [&str; 6] = [
@@ -366,7 +372,7 @@ impl Pass for SwRaster {
             zero: 0,
             big_triangle_px: self.big_triangle_px,
             big_capacity: BIG_TILE_CAPACITY,
-            _pad: [0; 2],
+            ..GpuParams::default()
         };
         let big = self.big_triangle_px > 0;
         ctx.clear_scratch(CLIP_COUNT)?;

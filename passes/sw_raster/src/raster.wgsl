@@ -27,21 +27,8 @@
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
 
-struct Params {
-    // Visibility buffer size in pixels.
-    width: u32,
-    height: u32,
-    // Workgroups whose widest triangle box reaches this many pixels loop per scanline.
-    scanline_width: u32,
-    // Always 0; see `unfused`.
-    zero: u32,
-    // BIG_TRIANGLES: boxes this wide or tall are tiled for `raster_big`.
-    big_triangle_px: u32,
-    // Entries `big_triangle_tiles` may hold (clamped to its length too).
-    big_capacity: u32,
-    _pad0: u32,
-    _pad1: u32,
-}
+// The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
+#import sw_raster::params::Params
 
 @group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
 @group(0) @binding(1) var<storage, read> raster_counts: array<u32>;
