@@ -24,24 +24,8 @@
 #ifdef OCCLUSION
 #import meshlight::occlusion::{occlusion_rect, sphere_occluded}
 #endif
-
-struct Params {
-    // Slots the raster list may use; clamped to the bound list's length.
-    capacity: u32,
-    // The per-dimension workgroup limit the indirect dispatch must stay under.
-    max_per_dimension: u32,
-    // A cluster is in the LOD cut when its own error projects to at most this many
-    // pixels and its parent's to more.
-    lod_threshold_px: f32,
-    // Clusters whose screen box is narrower and shorter than this go to software.
-    sw_threshold_px: f32,
-    // 0: every cluster of the cut goes to software (no hardware rasteriser).
-    hardware: u32,
-    // 1: test occlusion against `pyramid`; 0: skip it (no valid history, camera cut).
-    test_occlusion: u32,
-    _pad0: u32,
-    _pad1: u32,
-}
+// The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
+#import cull_lod::params::Params
 
 // The candidate clusters, `fill_clusters`' list.
 @group(0) @binding(0) var<storage, read> clusters: array<Cluster>;

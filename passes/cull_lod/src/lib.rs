@@ -148,7 +148,7 @@ use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, ProgramDesc,
     RecordContext, Result, SetupContext, Slot, StageContract, Workgroups,
 };
-use meshlight_shaders::{PassShader, pass_shader, shader_defs};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "cull_lod";
@@ -176,7 +176,7 @@ const PER_INSTANCE_BINDING: u32 = 16;
 /// Threads per cull workgroup.
 pub const WORKGROUP_SIZE: u32 = 64;
 
-pub const SHADER: PassShader = pass_shader!("cull_lod::cull", "cull.wgsl");
+pub const SHADER: PassShader = pass_shader!("cull_lod::cull", "cull.wgsl", params: GpuParams);
 
 /// The slots every implementation of `cull_lod` shares.
 pub fn contract() -> StageContract {
@@ -300,16 +300,25 @@ pub struct CullLod {
     pub max_per_dimension: Option<u32>,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
-    capacity: u32,
-    max_per_dimension: u32,
-    lod_threshold_px: f32,
-    sw_threshold_px: f32,
-    hardware: u32,
-    test_occlusion: u32,
-    _pad: [u32; 2],
+uniform_block! {
+    /// The uniform of cull.wgsl, which imports the struct from this declaration.
+    struct GpuParams as "Params" in "cull_lod::params" {
+        /// Slots the raster list may use; clamped to the bound list's length.
+        capacity: u32,
+        /// The per-dimension workgroup limit the indirect dispatch must stay under.
+        max_per_dimension: u32,
+        /// A cluster is in the LOD cut when its own error projects to at most this many
+        /// pixels and its parent's to more.
+        lod_threshold_px: f32,
+        /// Clusters whose screen box is narrower and shorter than this go to software.
+        sw_threshold_px: f32,
+        /// 0: every cluster of the cut goes to software (no hardware rasteriser).
+        hardware: u32,
+        /// 1: test occlusion against `pyramid`; 0: skip it (no valid history, camera cut).
+        test_occlusion: u32,
+        pad_a: u32,
+        pad_b: u32,
+    }
 }
 
 const PARAM_KEYS: [&str; 6] = [
@@ -515,7 +524,7 @@ impl Pass for CullLod {
             sw_threshold_px: self.thresholds.sw_threshold_px,
             hardware: self.thresholds.hardware as u32,
             test_occlusion: test_occlusion as u32,
-            _pad: [0; 2],
+            ..GpuParams::default()
         };
         let (view, params) = (bytemuck::bytes_of(&view), bytemuck::bytes_of(&params));
         if self.mode == Mode::First && ctx.is_bound(PER_INSTANCE_FIRST) {
