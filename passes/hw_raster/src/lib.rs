@@ -72,7 +72,7 @@ use meshlight_graph::{
     Primitive, ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
     Visibility64, Workgroups,
 };
-use meshlight_shaders::{PassShader, pass_shader, shader_defs};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "hw_raster";
@@ -85,7 +85,7 @@ pub const NAN_BITS: u32 = 0x7fc0_0000;
 /// The scratch colour target.
 const TARGET: &str = "target";
 
-pub const SHADER: PassShader = pass_shader!("hw_raster::raster", "raster.wgsl");
+pub const SHADER: PassShader = pass_shader!("hw_raster::raster", "raster.wgsl", params: GpuParams);
 
 /// raster.wgsl with the mesh-shader extension enabled (compose it with `MESH_SHADER`):
 /// an `enable` directive must be the first line and cannot depend on a def.
@@ -93,7 +93,7 @@ pub const MESH_SHADER_SOURCE: PassShader = PassShader {
     name: "hw_raster::raster_mesh",
     source: concat!("enable wgpu_mesh_shader;\n", include_str!("raster.wgsl")),
     file_path: concat!(env!("CARGO_PKG_NAME"), "/raster.wgsl (mesh variant)"),
-    modules: &[],
+    modules: &[GpuParams::MODULE],
 };
 
 /// The slots every implementation of `hw_raster` shares.
@@ -182,16 +182,25 @@ shader_defs! {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
-    width: u32,
-    height: u32,
-    nan_bits: u32,
-    /// Mesh workgroups per row of the mesh dispatch, and at most in all.
-    row: u32,
-    total: u32,
-    _pad: [u32; 3],
+uniform_block! {
+    /// The uniform of raster.wgsl (both variants), which imports the struct from this
+    /// declaration. Importing a module of types adds no globals, so the mesh variant's
+    /// `mesh_out` keeps its place for naga_oil.
+    struct GpuParams as "Params" in "hw_raster::params" {
+        /// Visibility buffer size in pixels (the viewport's).
+        width: u32,
+        height: u32,
+        /// 0x7fc00000, a quiet NaN: discarded vertices take it as every coordinate. It
+        /// comes from the uniform because shader validation refuses a NaN constant.
+        nan_bits: u32,
+        /// Mesh workgroups per row of the mesh dispatch, and at most in all (the
+        /// adapter's mesh-dispatch limits).
+        row: u32,
+        total: u32,
+        pad_a: u32,
+        pad_b: u32,
+        pad_c: u32,
+    }
 }
 
 const PARAM_KEYS: [&str; 2] = ["width", "height"];
@@ -285,7 +294,7 @@ impl Pass for HwRaster {
             nan_bits: NAN_BITS,
             row: limits.max_mesh_workgroups_per_dimension.max(1),
             total: limits.max_mesh_workgroup_total_count,
-            _pad: [0; 3],
+            ..GpuParams::default()
         };
         let params = bytemuck::bytes_of(&params);
         let program = ctx.render("raster")?;

@@ -17,21 +17,8 @@
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
 
-struct Params {
-    // Visibility buffer size in pixels (the viewport's).
-    width: u32,
-    height: u32,
-    // 0x7fc00000, a quiet NaN: discarded vertices take it as every coordinate. It comes
-    // from the uniform because shader validation refuses a NaN constant.
-    nan_bits: u32,
-    // Mesh workgroups per row of the mesh dispatch, and at most in all (the adapter's
-    // mesh-dispatch limits).
-    row: u32,
-    total: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
+// The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
+#import hw_raster::params::Params
 
 // Cluster slots; hardware clusters fill them from the right end, C - 1 downwards.
 @group(0) @binding(0) var<storage, read> raster_clusters: array<Cluster>;
