@@ -12,15 +12,8 @@
 #import meshlight::view::{View, sphere_in_frustum}
 #import fill_clusters::list::{clusters, cluster_count, cluster_capacity}
 
-struct Params {
-    // Clusters the list may hold; the shader also clamps it to the bound list's length.
-    capacity: u32,
-    // Instances to visit (at most the bound instance count).
-    instance_count: u32,
-    // x size of the dispatch, to linearise the workgroup id.
-    groups_x: u32,
-    _pad: u32,
-}
+// The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
+#import fill_clusters::fill_params::Params
 
 // The instances (`instance_at`, meshlight::instance_table) and the scene's meshes, for
 // each instance's bounding sphere (meshlight::scene_buffers); the cluster list and its

@@ -111,7 +111,7 @@ use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, RecordContext,
     Result, SetupContext, Workgroups,
 };
-use meshlight_shaders::{PassShader, pass_shader, shader_defs};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
 
 /// The implementation name pipelines use.
 pub const IMPLEMENTATION: &str = "hierarchy";
@@ -119,6 +119,7 @@ pub const IMPLEMENTATION: &str = "hierarchy";
 pub const SHADER: PassShader = pass_shader!(
     "fill_clusters::hierarchy",
     "hierarchy.wgsl",
+    params: GpuParams,
     modules: [("fill_clusters::list", "list.wgsl")]
 );
 
@@ -229,23 +230,41 @@ impl Default for HierarchyFill {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
-    capacity: u32,
-    instance_count: u32,
-    groups_x: u32,
-    queue_capacity: u32,
-    lod_threshold_px: f32,
-    step: u32,
-    steps: u32,
-    list_capacity: u32,
-    test_occlusion: u32,
-    node_capacity: u32,
-    root_capacity: u32,
-    max_per_dimension: u32,
-    occlusion_min_clusters: u32,
-    _pad: [u32; 3],
+uniform_block! {
+    /// The uniform of hierarchy.wgsl, which imports the struct from this declaration.
+    struct GpuParams as "Params" in "fill_clusters::hierarchy_params" {
+        /// Clusters the list may hold; the shader also clamps it to the bound list's length.
+        capacity: u32,
+        /// Instances to visit (at most the bound instance count).
+        instance_count: u32,
+        /// x size of the dispatch, to linearise the workgroup id.
+        groups_x: u32,
+        /// Nodes a frontier may hold, at most QUEUE (smaller in tests, to reach the spill).
+        queue_capacity: u32,
+        /// cull_lod's `lod_threshold_px`: the two must agree, or the cut loses clusters.
+        lod_threshold_px: f32,
+        /// This dispatch's step: 0 starts at the instances' roots, `steps` is the last.
+        step: u32,
+        /// Spreading steps: lists of subtrees handed from one step to the next.
+        steps: u32,
+        /// Entries each list holds.
+        list_capacity: u32,
+        /// 1: test occlusion against `pyramid`; 0: skip it (no valid history, camera cut).
+        test_occlusion: u32,
+        /// Entries `node_list` may hold (clamped to its length too).
+        node_capacity: u32,
+        /// Entries the roots list holds (clamped to its length too).
+        root_capacity: u32,
+        /// The per-dimension workgroup limit step 0's indirect dispatch stays under.
+        max_per_dimension: u32,
+        /// Inner nodes with fewer meshlets below are not tested for occlusion (cull_lod
+        /// tests their clusters): each test costs the walk a dependent texture read. A
+        /// walk's entries (instance roots, the second walk's nodes) always are.
+        occlusion_min_clusters: u32,
+        pad_a: u32,
+        pad_b: u32,
+        pad_c: u32,
+    }
 }
 
 const PARAM_KEYS: [&str; 9] = [
@@ -497,7 +516,7 @@ impl Pass for HierarchyFill {
                 root_capacity: ROOT_CAPACITY,
                 max_per_dimension: limit,
                 occlusion_min_clusters: self.occlusion_min_clusters,
-                _pad: [0; 3],
+                ..GpuParams::default()
             };
             let uniforms: [(u32, &[u8]); 2] = [
                 (3, bytemuck::bytes_of(&view)),

@@ -40,6 +40,8 @@
 #import meshlight::math::F32_MAX
 // Qualified (`cluster_list::clusters`): `cluster_count` also names a HierarchyNode field.
 #import fill_clusters::list as cluster_list
+// The uniform block, declared once for Rust and WGSL by `GpuParams` in hierarchy.rs.
+#import fill_clusters::hierarchy_params::Params
 #ifdef OCCLUSION
 #import meshlight::occlusion::{occlusion_rect, sphere_occluded}
 #endif
@@ -62,40 +64,6 @@ struct HierarchyNode {
     first_cluster: u32,
     cluster_count: u32,
     reserved: vec2<u32>,
-}
-
-struct Params {
-    // Clusters the list may hold; the shader also clamps it to the bound list's length.
-    capacity: u32,
-    // Instances to visit (at most the bound instance count).
-    instance_count: u32,
-    // x size of the dispatch, to linearise the workgroup id.
-    groups_x: u32,
-    // Nodes a frontier may hold, at most QUEUE (smaller in tests, to reach the spill).
-    queue_capacity: u32,
-    // cull_lod's `lod_threshold_px`: the two must agree, or the cut loses clusters.
-    lod_threshold_px: f32,
-    // This dispatch's step: 0 starts at the instances' roots, `steps` is the last.
-    step: u32,
-    // Spreading steps: lists of subtrees handed from one step to the next.
-    steps: u32,
-    // Entries each list holds.
-    list_capacity: u32,
-    // 1: test occlusion against `pyramid`; 0: skip it (no valid history, camera cut).
-    test_occlusion: u32,
-    // Entries `node_list` may hold (clamped to its length too).
-    node_capacity: u32,
-    // Entries the roots list holds (clamped to its length too).
-    root_capacity: u32,
-    // The per-dimension workgroup limit step 0's indirect dispatch stays under.
-    max_per_dimension: u32,
-    // Inner nodes with fewer meshlets below are not tested for occlusion (cull_lod
-    // tests their clusters): each test costs the walk a dependent texture read. A
-    // walk's entries (instance roots, the second walk's nodes) always are.
-    occlusion_min_clusters: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 // Children `first .. first + count` of one node of `instance`'s hierarchy, handed to the

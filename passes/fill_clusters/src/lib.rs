@@ -74,7 +74,7 @@ use meshlight_graph::{
     Access, BindingLayout, Element, GraphError, Implementation, Pass, ProgramDesc, RecordContext,
     Result, SetupContext, Slot, StageContract, Workgroups,
 };
-use meshlight_shaders::{PassShader, ShaderDefs, pass_shader};
+use meshlight_shaders::{PassShader, ShaderDefs, pass_shader, uniform_block};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "fill_clusters";
@@ -86,6 +86,7 @@ pub const VIEW_INPUT: &str = "view";
 pub const SHADER: PassShader = pass_shader!(
     "fill_clusters::fill",
     "fill.wgsl",
+    params: GpuParams,
     modules: [("fill_clusters::list", "list.wgsl")]
 );
 
@@ -205,13 +206,17 @@ pub struct FillClusters {
     pub instance_count: Option<u32>,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
-    capacity: u32,
-    instance_count: u32,
-    groups_x: u32,
-    _pad: u32,
+uniform_block! {
+    /// The uniform of fill.wgsl, which imports the struct from this declaration.
+    struct GpuParams as "Params" in "fill_clusters::fill_params" {
+        /// Clusters the list may hold; the shader also clamps it to the bound list's length.
+        capacity: u32,
+        /// Instances to visit (at most the bound instance count).
+        instance_count: u32,
+        /// x size of the dispatch, to linearise the workgroup id.
+        groups_x: u32,
+        pad_a: u32,
+    }
 }
 
 const PARAM_KEYS: [&str; 2] = ["capacity", "instance_count"];
@@ -313,7 +318,7 @@ impl Pass for FillClusters {
             capacity: self.capacity.unwrap_or(u32::MAX),
             instance_count,
             groups_x: x,
-            _pad: 0,
+            ..GpuParams::default()
         };
         ctx.clear("cluster_count")?;
         let uniforms: [(u32, &[u8]); 2] = [
