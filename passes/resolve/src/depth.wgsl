@@ -7,12 +7,8 @@
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster}
 #import resolve::visibility::{raster_clusters, visibility_at}
 
-struct Params {
-    // Visibility buffer size in pixels.
-    width: u32,
-    height: u32,
-    _pad: vec2<u32>,
-}
+// The uniform block, declared once for Rust and WGSL by `DepthParams` in lib.rs.
+#import resolve::depth_params::Params
 
 // Bindings 0 and 1: the visibility buffer and `raster_clusters` (resolve::visibility).
 // The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).

@@ -135,7 +135,7 @@ use meshlight_graph::{
     Workgroups,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
 
 /// `meshlight::light::ClusterableObject`, as light clustering's stages declare it.
 const CLUSTERABLE_OBJECT: Element =
@@ -157,11 +157,13 @@ pub const PYRAMID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 pub const DEPTH_SHADER: PassShader = pass_shader!(
     "resolve::depth",
     "depth.wgsl",
+    params: DepthParams,
     modules: [("resolve::visibility", "visibility.wgsl")]
 );
 pub const SHADE_SHADER: PassShader = pass_shader!(
     "resolve::shade",
     "shade.wgsl",
+    params: ShadeParams,
     modules: [("resolve::visibility", "visibility.wgsl")]
 );
 
@@ -265,27 +267,39 @@ pub fn contract() -> StageContract {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct DepthParams {
-    width: u32,
-    height: u32,
-    _pad: [u32; 2],
+uniform_block! {
+    /// The uniform of the depth resolves (`Params` in depth.wgsl), which import the struct
+    /// from this declaration.
+    struct DepthParams as "Params" in "resolve::depth_params" {
+        /// Visibility buffer size in pixels.
+        width: u32,
+        height: u32,
+        pad_a: u32,
+        pad_b: u32,
+    }
 }
 
-/// The uniform of the shading program (`Params` in shade.wgsl).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ShadeParams {
-    light_direction: [f32; 4],
-    light_color: [f32; 4],
-    ambient_color: [f32; 4],
-    width: u32,
-    height: u32,
-    view_mode: u32,
-    checker_scale: f32,
-    pyramid_mip: u32,
-    _pad: [u32; 3],
+uniform_block! {
+    /// The uniform of the shading program (`Params` in shade.wgsl), which imports the
+    /// struct from this declaration.
+    struct ShadeParams as "Params" in "resolve::shade_params" {
+        /// Unit vector towards the light, world space.
+        light_direction: [f32; 4],
+        /// Linear RGB radiance of the light and of the ambient term.
+        light_color: [f32; 4],
+        ambient_color: [f32; 4],
+        width: u32,
+        height: u32,
+        view_mode: u32,
+        /// Checker squares per UV unit.
+        checker_scale: f32,
+        /// The mip the pyramid view shows.
+        pyramid_mip: u32,
+        /// Scalars, not a vec3 (whose 16-byte alignment would grow the struct).
+        pad_a: u32,
+        pad_b: u32,
+        pad_c: u32,
+    }
 }
 
 impl Pass for Resolve {
@@ -365,7 +379,7 @@ impl Pass for Resolve {
         let depth_params = DepthParams {
             width: self.width,
             height: self.height,
-            _pad: [0; 2],
+            ..DepthParams::default()
         };
         for (program, _, target) in DEPTH_RESOLVES {
             if !ctx.is_bound(target) {
@@ -389,7 +403,7 @@ impl Pass for Resolve {
             view_mode: s.view as u32,
             checker_scale: s.checker_scale,
             pyramid_mip: s.pyramid_mip,
-            _pad: [0; 3],
+            ..ShadeParams::default()
         };
         if s.view.needs_pyramid()
             && let ResourceDesc::Texture(t) = ctx.desc("pyramid")?

@@ -43,24 +43,8 @@ const CULLED_TINT: f32 = 0.7;
 // Checker squares: dark ones multiply the base colour by this.
 const CHECKER_DARK: f32 = 0.55;
 
-struct Params {
-    // Unit vector towards the light, world space.
-    light_direction: vec4<f32>,
-    // Linear RGB radiance of the light and of the ambient term.
-    light_color: vec4<f32>,
-    ambient_color: vec4<f32>,
-    width: u32,
-    height: u32,
-    view_mode: u32,
-    // Checker squares per UV unit.
-    checker_scale: f32,
-    // The mip the pyramid view shows.
-    pyramid_mip: u32,
-    // Scalars, not a vec3 (whose 16-byte alignment would grow the struct).
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
+// The uniform block, declared once for Rust and WGSL by `ShadeParams` in lib.rs.
+#import resolve::shade_params::Params
 
 // Bindings 0 and 1: the visibility buffer and `raster_clusters` (resolve::visibility).
 // Word 0: software clusters; ids below it were drawn in software.
