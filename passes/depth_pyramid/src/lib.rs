@@ -100,7 +100,7 @@ use meshlight_graph::{
     Access, BindingLayout, BufferDesc, ComputeProgram, Element, GraphError, Implementation, Pass,
     ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
 };
-use meshlight_shaders::{PassShader, pass_shader, shader_defs};
+use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
 use mips::MipViews;
 
 /// The stage name pipelines use.
@@ -114,7 +114,7 @@ pub const COUNTER: &str = "counter";
 /// The implementation names, best first (the order `auto` tries them in).
 pub const IMPLEMENTATIONS: [&str; 2] = ["single_pass", "two_pass"];
 
-pub const SHADER: PassShader = pass_shader!("depth_pyramid", "pyramid.wgsl");
+pub const SHADER: PassShader = pass_shader!("depth_pyramid", "pyramid.wgsl", params: ShaderParams);
 
 /// Scratch: one u32 per tile, its level-6 texel's depth bits.
 const TILE_RESULTS: &str = "tile_results";
@@ -240,7 +240,7 @@ impl DepthPyramid {
             tiles: self.tiles(),
             levels: self.extent().mip_levels,
             level_base,
-            _pad: [0; 2],
+            ..ShaderParams::default()
         }
     }
 
@@ -302,15 +302,21 @@ impl DepthPyramid {
     }
 }
 
-/// The uniform of pyramid.wgsl (`Params`).
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct ShaderParams {
-    size: [u32; 2],
-    tiles: [u32; 2],
-    levels: u32,
-    level_base: u32,
-    _pad: [u32; 2],
+uniform_block! {
+    /// The uniform of pyramid.wgsl, which imports the struct (`Params`) from this
+    /// declaration.
+    struct ShaderParams as "Params" in "depth_pyramid::params" {
+        /// Visibility target size in pixels.
+        size: [u32; 2],
+        /// Tiles of 128 × 128 pixels covering it: the workgroup grid of the first step.
+        tiles: [u32; 2],
+        /// Levels of the pyramid (its mip count).
+        levels: u32,
+        /// The level bound at group 1, binding 0: 0, or 7 for two_pass's top dispatch.
+        level_base: u32,
+        pad_a: u32,
+        pad_b: u32,
+    }
 }
 
 shader_defs! {

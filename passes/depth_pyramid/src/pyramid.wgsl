@@ -10,17 +10,8 @@
 // target and the levels are 0 to 6; in the top step it is the grid of tile results
 // (one texel of level 6 per tile) and the levels are 7 to 13.
 
-struct Params {
-    // Visibility target size in pixels.
-    size: vec2<u32>,
-    // Tiles of 128 × 128 pixels covering it: the workgroup grid of the first step.
-    tiles: vec2<u32>,
-    // Levels of the pyramid (its mip count).
-    levels: u32,
-    // The level bound at group 1, binding 0: 0, or 7 for two_pass's top dispatch.
-    level_base: u32,
-    _pad: vec2<u32>,
-}
+// The uniform block, declared once for Rust and WGSL by `ShaderParams` in lib.rs.
+#import depth_pyramid::params::Params
 
 #ifdef VIS_TEXTURE
 // The software rasteriser's `texture` target: an R64Uint storage texture.
