@@ -82,7 +82,7 @@ use meshlight_graph::{
     RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc, Workgroups,
 };
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
-use meshlight_shaders::{LocalModule, PassShader, pass_shader};
+use meshlight_shaders::{LocalModule, PassShader, pass_shader, uniform_block};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "z_slice";
@@ -112,7 +112,7 @@ pub const INSTANCE_MODULE: LocalModule = LocalModule {
 };
 
 pub const SHADER: PassShader = PassShader {
-    modules: &[INSTANCE_MODULE],
+    modules: &[INSTANCE_MODULE, GpuParams::MODULE],
     ..pass_shader!("z_slice::z_slice", "z_slice.wgsl")
 };
 
@@ -233,13 +233,17 @@ impl Default for ZSlice {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
-    capacity: u32,
-    max_per_dimension: u32,
-    quad_vertices: u32,
-    _pad: u32,
+uniform_block! {
+    /// The uniform of z_slice.wgsl, which imports the struct from this declaration.
+    struct GpuParams as "Params" in "z_slice::params" {
+        /// Instances the list may hold; clamped to the bound list's length.
+        capacity: u32,
+        /// The per-dimension workgroup limit every dispatch this pass sizes must stay under.
+        max_per_dimension: u32,
+        /// Vertices of one quad in the draw arguments: 4 (strip) or 6 (list).
+        quad_vertices: u32,
+        pad_a: u32,
+    }
 }
 
 const PARAM_KEYS: [&str; 8] = [
@@ -339,7 +343,7 @@ impl Pass for ZSlice {
             capacity: self.capacity.unwrap_or(u32::MAX),
             max_per_dimension,
             quad_vertices: self.quad_vertices,
-            _pad: 0,
+            ..GpuParams::default()
         };
         // A workgroup per 64 objects the bound list holds: `object_count[0]` may be fewer,
         // and those workgroups' lanes find no object, which costs less than the extra

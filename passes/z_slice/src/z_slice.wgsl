@@ -11,15 +11,8 @@
 #import meshlight::dispatch::{fold_dispatch, linear_workgroup}
 #import z_slice::instance::{SliceInstance}
 
-struct Params {
-    // Instances the list may hold; clamped to the bound list's length.
-    capacity: u32,
-    // The per-dimension workgroup limit every dispatch this pass sizes must stay under.
-    max_per_dimension: u32,
-    // Vertices of one quad in the draw arguments: 4 (strip) or 6 (list).
-    quad_vertices: u32,
-    _pad: u32,
-}
+// The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
+#import z_slice::params::Params
 
 // The objects to assign; `object_count[0]` of them are valid.
 @group(0) @binding(0) var<storage, read> objects: array<ClusterableObject>;
