@@ -250,3 +250,89 @@ fn a_crate_local_module_is_imported_by_its_path() {
         "{err}"
     );
 }
+
+/// `meshlight::occlusion::instance_sphere_rect` projects as the importing pass's test
+/// needs: naga_oil composes the module with the shader's defs, so without `SECOND_PASS`
+/// it reads last frame's view-projection and the instance's previous transform, and with
+/// it this frame's.
+#[test]
+fn instance_sphere_rect_follows_the_importing_shaders_second_pass() {
+    const SHADER: PassShader = PassShader {
+        name: "uses_instance_sphere_rect",
+        source: "#import meshlight::occlusion::instance_sphere_rect
+#import meshlight::instance::Instance
+#import meshlight::view::View
+
+@group(0) @binding(0) var<uniform> view: View;
+@group(0) @binding(1) var<storage, read> instances: array<Instance>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+
+@compute @workgroup_size(1)
+fn main() {
+    let rect = instance_sphere_rect(instances[0], view, vec4(0.0, 0.0, -2.0, 0.5));
+    out[0] = select(0u, 1u, rect.testable);
+}
+",
+        file_path: "generated",
+        modules: &[],
+    };
+    // One library for both variants: naga_oil's cache of the module's IR must tell them
+    // apart.
+    let mut library = ShaderLibrary::new(Capabilities::empty()).unwrap();
+    // The members of the function's `instance` (argument 0) and `view` (argument 1) it
+    // reads.
+    let mut read = |defs: &[(&'static str, ShaderDef)]| {
+        let module = library
+            .compose(&SHADER, defs)
+            .unwrap_or_else(|e| panic!("{e}"));
+        validate(SHADER.name, &module, Capabilities::empty()).unwrap_or_else(|e| panic!("{e}"));
+        let (_, function) = module
+            .functions
+            .iter()
+            .find(|(_, f)| {
+                f.name
+                    .as_deref()
+                    .is_some_and(|n| n.starts_with("instance_sphere_rect"))
+            })
+            .expect("instance_sphere_rect in the composed module");
+        let members = |argument: u32| -> Vec<String> {
+            let ty = function.arguments[argument as usize].ty;
+            let naga::TypeInner::Struct { members, .. } = &module.types[ty].inner else {
+                panic!("argument {argument} is not a struct");
+            };
+            let mut names: Vec<String> = function
+                .expressions
+                .iter()
+                .filter_map(|(_, e)| match e {
+                    naga::Expression::AccessIndex { base, index }
+                        if matches!(
+                            function.expressions[*base],
+                            naga::Expression::FunctionArgument(a) if a == argument
+                        ) =>
+                    {
+                        members[*index as usize].name.clone()
+                    }
+                    _ => None,
+                })
+                .collect();
+            names.sort();
+            names.dedup();
+            names
+        };
+        (members(0), members(1))
+    };
+    let (instance, view) = read(&[]);
+    assert_eq!(instance, ["previous_world_from_local"]);
+    assert!(
+        view.contains(&"previous_view_projection".to_owned())
+            && !view.contains(&"view_projection".to_owned()),
+        "first pass reads {view:?}"
+    );
+    let (instance, view) = read(&[("SECOND_PASS", ShaderDef::Bool(true))]);
+    assert!(instance.is_empty(), "second pass reads {instance:?}");
+    assert!(
+        view.contains(&"view_projection".to_owned())
+            && !view.contains(&"previous_view_projection".to_owned()),
+        "second pass reads {view:?}"
+    );
+}

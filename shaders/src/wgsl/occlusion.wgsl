@@ -2,7 +2,11 @@
 
 // Occlusion of a bounding sphere by a depth pyramid, conservative: a sphere is reported
 // hidden only when every pixel it could cover already holds a nearer surface. The Rust
-// mirror is `meshlight_shaders::cpu::occlusion`, operation for operation.
+// mirror is `meshlight_shaders::cpu::occlusion`, operation for operation; the one
+// function it lacks, `instance_sphere_rect`, only chains `meshlight::instance`'s transform
+// and scale into `occlusion_rect`, and the passes' CPU references (cull_lod's
+// `cpu::occlusion_test`, fill_clusters' `hierarchy_cpu::node_occlusion`) chain their
+// mirrors of those the same way.
 //
 // The pyramid is an R32Float texture over a W × H reverse-Z depth image (near = 1, far
 // or empty = 0). Each texel holds the minimum, i.e. the farthest, depth of its
@@ -12,6 +16,8 @@
 // these 2^(L+1) × 2^(L+1) pixels".
 
 #import meshlight::math::{F32_MAX, max_component}
+#import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
+#import meshlight::view::View
 
 // Pixels added on every side of a sphere's screen rectangle: covers the rasterisers'
 // sub-pixel snapping and the rounding of the projection.
@@ -76,6 +82,26 @@ fn occlusion_rect(view_projection: mat4x4<f32>, viewport: vec2<f32>, center: vec
     rect.pixels = vec4(u32(lo.x), u32(lo.y), u32(hi.x), u32(hi.y));
     rect.depth = depth;
     return rect;
+}
+
+// The screen rectangle of a mesh-space `sphere` of `instance`, seen as the importing
+// pass's occlusion test sees it. A first pass tests against last frame's pyramid, so it
+// projects through last frame's view-projection and the instance's previous transform;
+// a pass composed with SECOND_PASS defined tests against this frame's, through the
+// current ones. naga_oil composes this module with the importing shader's defs, so the
+// choice follows that shader's SECOND_PASS. One place for it keeps the per-cluster test
+// (cull_lod) and the per-node test (fill_clusters' hierarchy) projecting alike.
+fn instance_sphere_rect(instance: Instance, view: View, sphere: vec4<f32>) -> OcclusionRect {
+    var seen = instance;
+#ifdef SECOND_PASS
+    let view_projection = view.view_projection;
+#else
+    seen.world_from_local = instance.previous_world_from_local;
+    let view_projection = view.previous_view_projection;
+#endif
+    let center = instance_transform_point(seen, sphere.xyz);
+    let radius = sphere.w * instance_max_scale(seen);
+    return occlusion_rect(view_projection, view.viewport_size, center, radius);
 }
 
 // The finest pyramid level at which the rectangle covers at most 2 × 2 texels: a texel
