@@ -22,7 +22,7 @@
 #import meshlight::scene_buffers::{meshlets, meshlet_groups}
 #import meshlight::view::{View, sphere_in_frustum}
 #ifdef OCCLUSION
-#import meshlight::occlusion::{occlusion_rect, sphere_occluded}
+#import meshlight::occlusion::{instance_sphere_rect, sphere_occluded}
 #endif
 // The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
 #import cull_lod::params::Params
@@ -113,16 +113,7 @@ fn slot_range() -> vec2<u32> {
 // and transform in the first pass, this frame's in the second. Counts the clusters it
 // could test.
 fn is_occluded(instance: Instance, bounds: vec4<f32>) -> bool {
-    var seen = instance;
-#ifdef SECOND_PASS
-    let view_projection = view.view_projection;
-#else
-    seen.world_from_local = instance.previous_world_from_local;
-    let view_projection = view.previous_view_projection;
-#endif
-    let center = instance_transform_point(seen, bounds.xyz);
-    let radius = bounds.w * instance_max_scale(seen);
-    let rect = occlusion_rect(view_projection, view.viewport_size, center, radius);
+    let rect = instance_sphere_rect(instance, view, bounds);
     if rect.testable {
         atomicAdd(&raster_counts[11], 1u);
     }
