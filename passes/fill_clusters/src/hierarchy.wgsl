@@ -43,7 +43,7 @@
 // The uniform block, declared once for Rust and WGSL by `GpuParams` in hierarchy.rs.
 #import fill_clusters::hierarchy_params::Params
 #ifdef OCCLUSION
-#import meshlight::occlusion::{occlusion_rect, sphere_occluded}
+#import meshlight::occlusion::{instance_sphere_rect, sphere_occluded}
 #endif
 
 // 64 bytes: the asset's `NodeRecord`, with `first_child` and `first_cluster` rebased
@@ -247,16 +247,7 @@ fn node_visible(node: HierarchyNode, w: Walker) -> bool {
 // Whether the pyramid proves a node's bounding sphere (which encloses the culling
 // sphere of every meshlet below) hidden: cull_lod's cluster test on the node's sphere.
 fn node_occluded(node: HierarchyNode, w: Walker) -> bool {
-    var seen = w.instance;
-#ifdef SECOND_PASS
-    let view_projection = view.view_projection;
-#else
-    seen.world_from_local = w.instance.previous_world_from_local;
-    let view_projection = view.previous_view_projection;
-#endif
-    let centre = instance_transform_point(seen, node.bounds.xyz);
-    let radius = node.bounds.w * instance_max_scale(seen);
-    return sphere_occluded(pyramid, occlusion_rect(view_projection, view.viewport_size, centre, radius));
+    return sphere_occluded(pyramid, instance_sphere_rect(w.instance, view, node.bounds));
 }
 
 #ifndef SECOND_PASS
