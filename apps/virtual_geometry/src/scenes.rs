@@ -73,6 +73,43 @@ fn palette(data: &mut SceneData) -> Vec<u32> {
     .collect()
 }
 
+/// The mesh a scene's copies share, its bounding radius and the palette they take turns
+/// with: what every scene of many copies starts from.
+struct Copies {
+    mesh: MeshId,
+    radius: f32,
+    materials: Vec<u32>,
+}
+
+impl Copies {
+    /// The palette, then `asset` as mesh `mesh`, added to `data`.
+    fn add(
+        data: &mut SceneData,
+        asset: &MeshletAsset,
+    ) -> Result<Self, meshlight::gpu_scene::SceneDataError> {
+        let materials = palette(data);
+        let mesh = data.add_mesh("mesh", asset)?;
+        let radius = mesh_radius(data, mesh);
+        Ok(Self {
+            mesh,
+            radius,
+            materials,
+        })
+    }
+
+    /// Copy `i` at `transform`, in the palette's colour for it.
+    fn place(
+        &self,
+        data: &mut SceneData,
+        i: usize,
+        transform: Mat4,
+    ) -> Result<(), meshlight::gpu_scene::SceneDataError> {
+        let material = self.materials[i % self.materials.len()];
+        data.add_instance(self.mesh, transform, material)?;
+        Ok(())
+    }
+}
+
 /// `instances` copies of `asset` standing on a field of hilly ground, each turned and
 /// scaled a little, seen from a low camera at one corner looking across the field to
 /// the horizon: near copies fill the screen, far ones shrink to a few pixels, so every
@@ -86,9 +123,8 @@ pub fn field(
     asset: &MeshletAsset,
     instances: u32,
 ) -> Result<Placed, meshlight::gpu_scene::SceneDataError> {
-    let materials = palette(&mut data);
-    let mesh = data.add_mesh("mesh", asset)?;
-    let radius = mesh_radius(&data, mesh);
+    let copies = Copies::add(&mut data, asset)?;
+    let radius = copies.radius;
     let side = (instances as f32).sqrt().ceil().max(1.0) as u32;
     let spacing = radius * FIELD_SPACING;
     let ground = (instances > 0).then(|| field_ground(radius, instances));
@@ -122,8 +158,7 @@ pub fn field(
             turn,
             Vec3::new(at.x, under - lowest * scale, at.z),
         );
-        let material = materials[i as usize % materials.len()];
-        data.add_instance(mesh, transform, material)?;
+        copies.place(&mut data, i as usize, transform)?;
     }
     if let Some(ground) = ground {
         let ground_asset = ground_asset(&ground).map_err(|e| {
@@ -257,14 +292,13 @@ pub fn lattice(
     asset: &MeshletAsset,
     n: u32,
 ) -> Result<Placed, meshlight::gpu_scene::SceneDataError> {
-    let materials = palette(&mut data);
-    let mesh = data.add_mesh("mesh", asset)?;
+    let copies = Copies::add(&mut data, asset)?;
     let lattice = Lattice {
         n,
-        radius: mesh_radius(&data, mesh),
+        radius: copies.radius,
     };
     for (i, transform) in lattice.transforms().enumerate() {
-        data.add_instance(mesh, transform, materials[i % materials.len()])?;
+        copies.place(&mut data, i, transform)?;
     }
     Ok(Placed {
         data,
