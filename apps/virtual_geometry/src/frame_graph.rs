@@ -435,31 +435,23 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         )
     };
     g.add_choice("sw_raster", sw_choice(false)?, Bindings::new())?;
-    let hw_choice = || {
+    // The stages whose one parameter is the viewport.
+    let at_viewport = |stage: &str, implementation: &str| {
         registered(
             &registry,
-            meshlight::hw_raster::STAGE,
-            &s.hw_raster,
+            stage,
+            implementation,
             toml::toml! {
                 width = (width)
                 height = (height)
             },
         )
     };
+    let hw_choice = || at_viewport(meshlight::hw_raster::STAGE, &s.hw_raster);
     if s.has_hardware() {
         g.add_choice("hw_raster", hw_choice()?, Bindings::new())?;
     }
-    let pyramid = || {
-        registered(
-            &registry,
-            meshlight::depth_pyramid::STAGE,
-            AUTO,
-            toml::toml! {
-                width = (width)
-                height = (height)
-            },
-        )
-    };
+    let pyramid = || at_viewport(meshlight::depth_pyramid::STAGE, AUTO);
     if history.is_some() {
         let visibility = Bindings::new().bind_named("visibility", "visbuffer");
         g.add_choice("depth_pyramid", pyramid()?, visibility)?;
