@@ -8,24 +8,8 @@
 // Work is cut into tiles of WG lanes × ITEMS elements. All sums are u32 and wrap modulo
 // 2^32, like the CPU reference.
 
-struct Params {
-    // Elements of level 0 when the count comes from the CPU (unused with GPU_COUNT).
-    count: u32,
-    // The level this dispatch works on (0 = input/output, l > 0 = fan level l).
-    level: u32,
-    // Offset in `fan` of this level's values (levels > 0); a multiple of 4.
-    src_offset: u32,
-    // Offset in `fan` of the next level: `reduce` writes tile totals there, `scan_add` reads
-    // each tile's carry from there.
-    dst_offset: u32,
-    // FLAG_* bits.
-    flags: u32,
-    // The most elements level 0 may hold; a GPU count above it is clamped.
-    capacity: u32,
-    // Levels whose dispatch arguments `dispatch_args` writes (GPU_COUNT only).
-    indirect_levels: u32,
-    _pad: u32,
-}
+// The uniform block, declared once for Rust and WGSL by `GpuParams` in kernels.rs.
+#import scan_fan::params::Params
 
 // Write inclusive sums (element i includes itself) instead of exclusive ones.
 const FLAG_INCLUSIVE: u32 = 1u;

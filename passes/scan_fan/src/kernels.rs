@@ -5,7 +5,9 @@ use crate::{ScanOptions, Subgroups, TileAccess};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, ProgramDesc, RecordContext, Result, SetupContext,
 };
-use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader, shader_defs};
+use meshlight_shaders::{
+    PassShader, ShaderDef, ShaderDefs, pass_shader, shader_defs, uniform_block,
+};
 
 /// The kernels (`scan.wgsl`) and the tile layouts they run on, one module each.
 ///
@@ -14,11 +16,14 @@ use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs, pass_shader, shader_d
 /// `scan.wgsl` holds the kernels once and imports the layout, `scan_fan::vector_tile` when
 /// the vector width `WIDTH` is given ([`VectorDefs`]) and `scan_fan::staged_tile` without
 /// it ([`ScanDefs`]); both build on `scan_fan::common` (parameters, bindings, the
-/// Hillis–Steele scan). A `WIDTH` def rather than two entry files keeps every kernel in one
-/// place, and the layout modules keep the hot loops of each layout whole and unchanged.
+/// Hillis–Steele scan), which takes the parameters' struct from `scan_fan::params`, the
+/// module of the `GpuParams` block every dispatch uploads. A `WIDTH` def rather than two
+/// entry files keeps every kernel in one place, and the layout modules keep the hot loops
+/// of each layout whole and unchanged.
 pub const SHADER: PassShader = pass_shader!(
     "scan_fan::scan",
     "scan.wgsl",
+    params: GpuParams,
     modules: [
         ("scan_fan::common", "common.wgsl"),
         ("scan_fan::staged_tile", "staged_tile.wgsl"),
@@ -122,18 +127,27 @@ impl ShaderDefs for Defs {
 /// bound as an array of `vec4<u32>`, so smaller scans run the staged kernels.
 pub const VECTOR_MIN_COUNT: u32 = 4;
 
-/// The uniform block of every dispatch; mirrors `Params` in `common.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub(crate) struct GpuParams {
-    pub count: u32,
-    pub level: u32,
-    pub src_offset: u32,
-    pub dst_offset: u32,
-    pub flags: u32,
-    pub capacity: u32,
-    pub indirect_levels: u32,
-    pub _pad: u32,
+uniform_block! {
+    /// The uniform block of every dispatch, which `common.wgsl` imports from this
+    /// declaration for all the kernels.
+    pub(crate) struct GpuParams as "Params" in "scan_fan::params" {
+        /// Elements of level 0 when the count comes from the CPU (unused with GPU_COUNT).
+        pub count: u32,
+        /// The level this dispatch works on (0 = input/output, l > 0 = fan level l).
+        pub level: u32,
+        /// Offset in `fan` of this level's values (levels > 0); a multiple of 4.
+        pub src_offset: u32,
+        /// Offset in `fan` of the next level: `reduce` writes tile totals there, `scan_add`
+        /// reads each tile's carry from there.
+        pub dst_offset: u32,
+        /// FLAG_* bits.
+        pub flags: u32,
+        /// The most elements level 0 may hold; a GPU count above it is clamped.
+        pub capacity: u32,
+        /// Levels whose dispatch arguments `dispatch_args` writes (GPU_COUNT only).
+        pub indirect_levels: u32,
+        pub pad_a: u32,
+    }
 }
 
 /// Element counts of each level and where the levels above 0 sit in the fan buffer.
@@ -201,7 +215,7 @@ impl Levels {
             flags,
             capacity: options.count,
             indirect_levels: self.top() as u32,
-            _pad: 0,
+            ..GpuParams::default()
         }
     }
 }
