@@ -55,7 +55,7 @@ use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, INSTANCE_MODULE, SLICE_INSTANCE, check_tiles,
     declare_tile_target, workgroup_grid,
 };
-use meshlight_shaders::{LocalModule, PassShader, pass_shader};
+use meshlight_shaders::{LocalModule, PassShader, pass_shader, uniform_block};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "count_raster";
@@ -68,6 +68,7 @@ pub const KINDS: u32 = 4;
 pub const SHADER: PassShader = PassShader {
     modules: &[
         INSTANCE_MODULE,
+        ListParams::MODULE,
         LocalModule {
             name: "count_raster::walk",
             source: include_str!("walk.wgsl"),
@@ -78,9 +79,9 @@ pub const SHADER: PassShader = PassShader {
 };
 
 /// The walk over z_slice's instances and their froxels (`walk.wgsl`, after z_slice's
-/// [`INSTANCE_MODULE`], which it imports), for this stage and for `populate`, whose
-/// shader imports it too and defines `POPULATE` to claim list places where this stage
-/// counts.
+/// [`INSTANCE_MODULE`] and [`ListParams`]'s module, which it imports), for this stage and
+/// for `populate`, whose shader imports it too and defines `POPULATE` to claim list places
+/// where this stage counts.
 ///
 /// Both stages must decide every (object, froxel) pair alike, or populate's lists would
 /// not match the counts its offsets were built from; one source for the walk makes that
@@ -92,6 +93,22 @@ pub const SHADER: PassShader = PassShader {
 /// Rust: a stage never runs the other's variant, so the choice belongs to the shader, not
 /// to the pipeline.
 pub const WALK_MODULES: &[LocalModule] = SHADER.modules;
+
+uniform_block! {
+    /// The uniform of the walk's `POPULATE` section, which `populate` fills and binds at 10.
+    ///
+    /// populate owns the upload, yet the block is declared here, beside the walk that
+    /// imports it: naga_oil resolves every import a module uses, in whichever `#ifdef`
+    /// branch, when the module is added, so `walk.wgsl` may only import modules this
+    /// stage's own shader lists, and this crate cannot name populate's.
+    pub struct ListParams as "ListParams" in "count_raster::list_params" {
+        /// Entries the list may hold; clamped to the bound list's length.
+        pub capacity: u32,
+        pub pad_a: u32,
+        pub pad_b: u32,
+        pub pad_c: u32,
+    }
+}
 
 /// The slots through which a walking stage reads z_slice's instances: `count_raster`'s,
 /// and `populate`'s, which walks the same instances.

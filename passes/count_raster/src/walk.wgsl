@@ -43,13 +43,8 @@
 @group(0) @binding(5) var<uniform> view: View;
 
 #ifdef POPULATE
-struct ListParams {
-    // Entries the list may hold; clamped to the bound list's length.
-    capacity: u32,
-    pad_a: u32,
-    pad_b: u32,
-    pad_c: u32,
-}
+// The uniform block, declared once for Rust and WGSL by `ListParams` in lib.rs.
+#import count_raster::list_params::ListParams
 
 // Exclusive prefix sum of count_raster's counts: where each (froxel, kind) list starts.
 @group(0) @binding(6) var<storage, read> cluster_offsets: array<u32>;
