@@ -58,7 +58,7 @@ use meshlight_graph::{
     Access, BindingLayout, Element, Implementation, Pass, ProgramDesc, RecordContext, Result,
     SetupContext, Slot, StageContract, Workgroups,
 };
-use meshlight_pass_count_raster::{Walk, WalkShader};
+use meshlight_pass_count_raster::{ListParams, Walk, WalkShader};
 use meshlight_pass_z_slice::CLUSTER_GRID;
 use meshlight_shaders::{PassShader, pass_shader};
 
@@ -70,7 +70,8 @@ pub const VIEW_INPUT: &str = "view";
 const WORKGROUP: u32 = 64;
 
 /// The walk's entry points and `settle`; the walk is count_raster's
-/// ([`meshlight_pass_count_raster::WALK_MODULES`]), run here with `POPULATE` defined.
+/// ([`meshlight_pass_count_raster::WALK_MODULES`], which include the module of the
+/// [`ListParams`] block this stage uploads), run here with `POPULATE` defined.
 pub const SHADER: PassShader = PassShader {
     modules: meshlight_pass_count_raster::WALK_MODULES,
     ..pass_shader!("populate::populate", "populate.wgsl")
@@ -107,13 +108,6 @@ pub fn contract() -> StageContract {
     }
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuParams {
-    capacity: u32,
-    _pad: [u32; 3],
-}
-
 /// The walk of this stage's implementations: count_raster's, claiming list places.
 const POPULATE_WALK: WalkShader = WalkShader {
     shader: &SHADER,
@@ -136,10 +130,12 @@ pub struct Populate {
 }
 
 impl Populate {
-    fn params(&self) -> GpuParams {
-        GpuParams {
+    /// The walk's and `settle`'s uniform, whose block count_raster declares beside the
+    /// walk that imports it.
+    fn params(&self) -> ListParams {
+        ListParams {
             capacity: self.capacity.unwrap_or(u32::MAX),
-            _pad: [0; 3],
+            ..ListParams::default()
         }
     }
 }
