@@ -230,17 +230,18 @@ impl Agreement {
 }
 
 /// The depth change per pixel of the reference at pixel `i`, across x plus across y,
-/// from the neighbours that show the same triangle (0 where none does).
+/// measured to the neighbours it covers (0 where it covers none). Those may show other
+/// triangles: a pixel on a silhouette often holds a sliver of a steep triangle whose
+/// own neighbours are empty, and the surface around it slopes as that triangle does.
 fn depth_slope(want: &[u64], i: usize) -> f32 {
     let (x, y) = (i as u32 % W, i as u32 / W);
     let at = |x: u32, y: u32| want[(y * W + x) as usize];
-    let same = |v: u64| v != visbuffer::EMPTY && v as u32 == want[i] as u32;
     let here = visbuffer::depth(want[i]);
     let across = |neighbours: [Option<u64>; 2]| {
         neighbours
             .into_iter()
             .flatten()
-            .filter(|&v| same(v))
+            .filter(|&v| v != visbuffer::EMPTY)
             .map(|v| (visbuffer::depth(v) - here).abs())
             .fold(0.0, f32::max)
     };
