@@ -31,7 +31,8 @@ use meshlight_shaders::{PassShader, pass_shader, uniform_block};
 /// The stage name pipelines use.
 pub const STAGE: &str = "remap_dispatch";
 
-pub const SHADER: PassShader = pass_shader!("remap_dispatch::remap", "remap.wgsl", params: GpuParams);
+pub const SHADER: PassShader =
+    pass_shader!("remap_dispatch::remap", "remap.wgsl", params: GpuParams);
 
 /// The slots every implementation of `remap_dispatch` shares.
 pub fn contract() -> StageContract {
