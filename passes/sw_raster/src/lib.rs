@@ -345,10 +345,10 @@ impl Pass for SwRaster {
             big_triangles: big,
         };
         ctx.shader_defs(&defs);
-        for &entry in entry_points(big) {
+        for kernel in kernels(big) {
             ctx.program(
-                entry,
-                ProgramDesc::compute(&SHADER, entry)
+                kernel.entry,
+                ProgramDesc::compute(&SHADER, kernel.entry)
                     .defs(&defs)
                     .defs(&table)
                     .layout(layout.clone()),
@@ -413,31 +413,56 @@ impl Pass for SwRaster {
         }
         // Each program binds what its entry point uses: a bind group each.
         let mut programs = Vec::new();
-        for &entry in entry_points(big) {
-            let program = ctx.compute(entry)?;
+        for kernel in kernels(big) {
+            let program = ctx.compute(kernel.entry)?;
             let group = ctx.bind_group(&program, 0, &uniforms)?;
-            programs.push((entry, program, group));
+            programs.push((kernel.groups, program, group));
         }
         // A second compute pass: the clear is visible before any cluster writes.
         let mut pass = ctx.compute_pass();
-        for (entry, program, group) in &programs {
+        for (groups, program, group) in &programs {
             pass.set_pipeline(&program.pipeline);
             pass.set_bind_group(0, group, &[]);
-            match *entry {
-                "raster" => pass.dispatch_workgroups_indirect(args, 0),
-                "raster_clipped" => pass.dispatch_workgroups(CLIP_GROUPS, 1, 1),
-                _ => pass.dispatch_workgroups(BIG_GROUPS, 1, 1),
+            match groups {
+                KernelGroups::FromArgs => pass.dispatch_workgroups_indirect(args, 0),
+                KernelGroups::Fixed(n) => pass.dispatch_workgroups(*n, 1, 1),
             }
         }
         Ok(())
     }
 }
 
-/// The kernel's entry points a pass runs, in dispatch order: every cluster (indirect,
-/// over `sw_args`), then the clusters with triangles to clip, then, with big triangles,
-/// the tiles both listed.
-fn entry_points(big: bool) -> &'static [&'static str] {
-    const ALL: [&str; 3] = ["raster", "raster_clipped", "raster_big"];
+/// One entry point of the kernel and how many workgroups run it.
+struct Kernel {
+    entry: &'static str,
+    groups: KernelGroups,
+}
+
+#[derive(Clone, Copy)]
+enum KernelGroups {
+    /// The 2-D grid `remap_dispatch` wrote into `sw_args`: one per cluster.
+    FromArgs,
+    /// A fixed grid that strides over a list the first entry point filled.
+    Fixed(u32),
+}
+
+/// The kernel's entry points a pass runs, in dispatch order: every cluster, then the
+/// clusters with triangles to clip, then, with big triangles, the tiles both listed.
+fn kernels(big: bool) -> &'static [Kernel] {
+    const ALL: [Kernel; 3] = [
+        Kernel {
+            entry: "raster",
+            groups: KernelGroups::FromArgs,
+        },
+        Kernel {
+            entry: "raster_clipped",
+            groups: KernelGroups::Fixed(CLIP_GROUPS),
+        },
+        Kernel {
+            entry: "raster_big",
+            groups: KernelGroups::Fixed(BIG_GROUPS),
+        },
+    ];
     if big { &ALL } else { &ALL[..2] }
 }
 
