@@ -1,7 +1,7 @@
 //! Implementation choice (`auto`, named with alternatives) and 64-bit visibility targets
 //! whose form follows the pass that clears them; all headless.
 
-use meshlight_graph::file::{Params, Registry, parse_pipeline};
+use meshlight_graph::file::{Registry, parse_pipeline};
 use meshlight_graph::*;
 
 const ATOMICS: wgpu::Features =
@@ -237,15 +237,9 @@ fn candidates_of_different_stages_are_refused() {
 }
 
 fn registry() -> Registry {
-    fn t(_: &Params) -> Result<Box<dyn Pass>> {
-        Ok(texture())
-    }
-    fn b(_: &Params) -> Result<Box<dyn Pass>> {
-        Ok(buffer())
-    }
     let mut r = Registry::new();
-    r.register("raster", "texture", t);
-    r.register("raster", "buffer", b);
+    r.register("raster", "texture", |_| Ok(texture()));
+    r.register("raster", "buffer", |_| Ok(buffer()));
     r
 }
 

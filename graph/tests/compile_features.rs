@@ -432,7 +432,7 @@ fn a_mesh_program_requires_the_mesh_shader_feature() {
 fn pipeline_file_errors_name_the_stage_and_the_version() {
     let registry = {
         let mut r = file::Registry::new();
-        r.register("transform", "add", |_| {
+        r.register("transform", "add", |_| -> Result<Fake> {
             unreachable!("never built in these tests")
         });
         r
@@ -473,7 +473,7 @@ bind = { input = "x@4294967296" }
     let registry = {
         let mut r = file::Registry::new();
         r.register("transform", "add", |_| {
-            Ok(Box::new(Fake::rw(&["input"], &["output"])))
+            Ok(Fake::rw(&["input"], &["output"]))
         });
         r
     };
@@ -488,10 +488,8 @@ bind = { input = "x@4294967296" }
 #[test]
 fn pipeline_files_declare_size_parameters_and_texture_ranges() {
     let mut registry = file::Registry::new();
-    registry.register("down", "fake", |_| Ok(Box::new(mip_pass())));
-    registry.register("fill", "fake", |_| {
-        Ok(Box::new(Fake::new("fill", vec![out_u32()])))
-    });
+    registry.register("down", "fake", |_| Ok(mip_pass()));
+    registry.register("fill", "fake", |_| Ok(Fake::new("fill", vec![out_u32()])));
     let text = r#"
 [params]
 slots = 300

@@ -10,16 +10,16 @@ fn registry() -> Registry {
     let mut r = Registry::new();
     r.register("produce", "fill", |p: &Params| {
         p.only(&["count", "k"])?;
-        Ok(Box::new(Arith::fill(p.u32("count", 1000)?, p.u32("k", 1)?)) as Box<dyn Pass>)
+        Ok(Arith::fill(p.u32("count", 1000)?, p.u32("k", 1)?))
     });
     r.register("transform", "add", |p: &Params| {
-        Ok(Box::new(Arith::add(p.u32("count", 1000)?, p.u32("k", 0)?)) as Box<dyn Pass>)
+        Ok(Arith::add(p.u32("count", 1000)?, p.u32("k", 0)?))
     });
     r.register("transform", "add_twice", |p: &Params| {
-        Ok(Box::new(AddTwice {
+        Ok(AddTwice {
             count: p.u32("count", 1000)?,
             half: p.u32("half", 0)?,
-        }) as Box<dyn Pass>)
+        })
     });
     r
 }

@@ -246,7 +246,7 @@ pub enum GraphSource {
     File(PathBuf),
     /// A pipeline file whose stages come from the registry the function returns: the
     /// built-in one with the caller's own implementations registered, e.g.
-    /// `|| { let mut r = meshlight::registry(); r.register(STAGE, "mine", build_mine); r }`.
+    /// `|| { let mut r = meshlight::registry(); r.register(STAGE, "mine", Mine::from_params); r }`.
     FileWith(PathBuf, fn() -> Registry),
 }
 

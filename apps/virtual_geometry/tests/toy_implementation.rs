@@ -50,16 +50,18 @@ impl Pass for Square {
     }
 }
 
-fn build_square(params: &Params) -> Result<Box<dyn Pass>> {
-    params.only(&["count_word"])?;
-    Ok(Box::new(Square {
-        count_word: params.u32("count_word", 0)?,
-    }))
+impl Square {
+    fn from_params(params: &Params) -> Result<Self> {
+        params.only(&["count_word"])?;
+        Ok(Self {
+            count_word: params.u32("count_word", 0)?,
+        })
+    }
 }
 
 fn registry() -> Registry {
     let mut r = meshlight::registry();
-    r.register(remap_dispatch::STAGE, "square", build_square);
+    r.register(remap_dispatch::STAGE, "square", Square::from_params);
     r
 }
 

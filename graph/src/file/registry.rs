@@ -5,9 +5,29 @@ use crate::error::{GraphError, Result};
 use crate::file::Params;
 use crate::pass::Pass;
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
-/// Builds a pass from its `params` table.
-pub type Factory = fn(&Params) -> Result<Box<dyn Pass>>;
+/// Builds a pass from its `params` table (stored boxed, so the registry holds every
+/// implementation of every stage alike).
+pub type Factory = Arc<dyn Fn(&Params) -> Result<Box<dyn Pass>> + Send + Sync>;
+
+/// What a registered builder returns: a pass, or one already boxed.
+pub trait IntoPass {
+    /// The pass, boxed as the graph holds it.
+    fn into_pass(self) -> Box<dyn Pass>;
+}
+
+impl<P: Pass + 'static> IntoPass for P {
+    fn into_pass(self) -> Box<dyn Pass> {
+        Box::new(self)
+    }
+}
+
+impl IntoPass for Box<dyn Pass> {
+    fn into_pass(self) -> Box<dyn Pass> {
+        self
+    }
+}
 
 /// The stages and implementations pipeline files can name, each with its factory, and per
 /// stage the order `auto` tries them in.
@@ -23,16 +43,37 @@ impl Registry {
     pub fn new() -> Self {
         Self::default()
     }
-    /// Adds the factory that builds `implementation` of `stage`; a second registration of the
+    /// Adds what builds `implementation` of `stage` from a pipeline entry's params: a
+    /// pass's own `from_params`, or a closure naming the variant, e.g.
+    /// `|p| SwRaster::from_params(p, Visibility64::Buffer)`. A second registration of the
     /// same pair replaces the first.
-    pub fn register(
-        &mut self,
-        stage: &'static str,
-        implementation: &'static str,
-        factory: Factory,
-    ) {
+    pub fn register<P, F>(&mut self, stage: &'static str, implementation: &'static str, build: F)
+    where
+        P: IntoPass,
+        F: Fn(&Params) -> Result<P> + Send + Sync + 'static,
+    {
+        let factory: Factory = Arc::new(move |params| Ok(build(params)?.into_pass()));
         self.factories
             .insert((stage.to_string(), implementation.to_string()), factory);
+    }
+    /// Registers the implementations of a stage that one type builds, each from its own
+    /// variant (`build(params, variant)`), and makes `auto` try them in the order given.
+    pub fn register_best_first<V, P, F>(
+        &mut self,
+        stage: &'static str,
+        best_first: &[(&'static str, V)],
+        build: F,
+    ) where
+        V: Copy + Send + Sync + 'static,
+        P: IntoPass,
+        F: Fn(&Params, V) -> Result<P> + Clone + Send + Sync + 'static,
+    {
+        for &(implementation, variant) in best_first {
+            let build = build.clone();
+            self.register(stage, implementation, move |params| build(params, variant));
+        }
+        let names: Vec<&'static str> = best_first.iter().map(|(name, _)| *name).collect();
+        self.prefer(stage, &names);
     }
     /// Makes `auto` available for `stage`: compile keeps the first of `best_first` the
     /// adapter runs. Every name must be registered (checked when a file uses it).

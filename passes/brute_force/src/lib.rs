@@ -313,13 +313,9 @@ impl Pass for BruteForce {
     }
 }
 
-fn build(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(BruteForce::from_params(params)?))
-}
-
 /// Registers `brute_force` (implementation `instanced_draw`) for pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, IMPLEMENTATION, build);
+    registry.register(STAGE, IMPLEMENTATION, BruteForce::from_params);
 }
 
 #[cfg(test)]

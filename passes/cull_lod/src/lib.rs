@@ -542,13 +542,9 @@ impl Pass for CullLod {
     }
 }
 
-fn build(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(CullLod::from_params(params)?))
-}
-
 /// Registers `cull_lod` (implementation `compute`) for pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, IMPLEMENTATION, build);
+    registry.register(STAGE, IMPLEMENTATION, CullLod::from_params);
 }
 
 #[cfg(test)]

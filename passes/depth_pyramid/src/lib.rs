@@ -111,8 +111,12 @@ pub const VISIBILITY: &str = "visibility";
 pub const PYRAMID: &str = "pyramid";
 /// The optional slot of `single_pass`'s persistent arrival counter.
 pub const COUNTER: &str = "counter";
-/// The implementation names, best first (the order `auto` tries them in).
-pub const IMPLEMENTATIONS: [&str; 2] = ["single_pass", "two_pass"];
+/// The implementations and the method each runs, best first (the order `auto` tries them
+/// in).
+pub const IMPLEMENTATIONS: [(&str, Method); 2] = [
+    ("single_pass", Method::SinglePass),
+    ("two_pass", Method::TwoPass),
+];
 
 pub const SHADER: PassShader = pass_shader!("depth_pyramid", "pyramid.wgsl", params: ShaderParams);
 
@@ -476,24 +480,8 @@ impl DepthPyramid {
     }
 }
 
-fn build_single_pass(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(DepthPyramid::from_params(
-        params,
-        Method::SinglePass,
-    )?))
-}
-
-fn build_two_pass(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(DepthPyramid::from_params(
-        params,
-        Method::TwoPass,
-    )?))
-}
-
 /// Registers `depth_pyramid` (implementations `single_pass`, `two_pass` and `auto`) for
 /// pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "single_pass", build_single_pass);
-    registry.register(STAGE, "two_pass", build_two_pass);
-    registry.prefer(STAGE, &IMPLEMENTATIONS);
+    registry.register_best_first(STAGE, &IMPLEMENTATIONS, DepthPyramid::from_params);
 }

@@ -528,10 +528,6 @@ impl Pass for HierarchyFill {
     }
 }
 
-pub(crate) fn build(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(HierarchyFill::from_params(params)?))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

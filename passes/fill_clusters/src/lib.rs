@@ -331,15 +331,11 @@ impl Pass for FillClusters {
     }
 }
 
-fn build(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(FillClusters::from_params(params)?))
-}
-
 /// Registers `fill_clusters` (implementations `workgroup_per_instance` and `hierarchy`)
 /// for pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, IMPLEMENTATION, build);
-    registry.register(STAGE, hierarchy::IMPLEMENTATION, hierarchy::build);
+    registry.register(STAGE, IMPLEMENTATION, FillClusters::from_params);
+    registry.register(STAGE, hierarchy::IMPLEMENTATION, HierarchyFill::from_params);
 }
 
 #[cfg(test)]

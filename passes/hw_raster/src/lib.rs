@@ -130,8 +130,12 @@ pub fn contract() -> StageContract {
     }
 }
 
-/// The implementation names, best first (the order `auto` tries them in).
-pub const IMPLEMENTATIONS: [&str; 2] = ["mesh_shader", "indirect_draw"];
+/// The implementations and how each feeds clusters, best first (the order `auto` tries
+/// them in).
+pub const IMPLEMENTATIONS: [(&str, Feed); 2] = [
+    ("mesh_shader", Feed::MeshShader),
+    ("indirect_draw", Feed::IndirectDraw),
+];
 
 /// How clusters reach the rasteriser.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -325,20 +329,10 @@ impl Pass for HwRaster {
 /// The mesh dispatch's arguments (`mesh_shader` only).
 const MESH_ARGS: &str = "mesh_args";
 
-fn build_indirect(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(HwRaster::from_params(params, Feed::IndirectDraw)?))
-}
-
-fn build_mesh(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(HwRaster::from_params(params, Feed::MeshShader)?))
-}
-
 /// Registers `hw_raster` (implementations `indirect_draw`, `mesh_shader` and `auto`) for
 /// pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "indirect_draw", build_indirect);
-    registry.register(STAGE, "mesh_shader", build_mesh);
-    registry.prefer(STAGE, &IMPLEMENTATIONS);
+    registry.register_best_first(STAGE, &IMPLEMENTATIONS, HwRaster::from_params);
 }
 
 #[cfg(test)]

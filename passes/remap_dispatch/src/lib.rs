@@ -125,13 +125,9 @@ impl Pass for RemapDispatch {
     }
 }
 
-fn build(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(RemapDispatch::from_params(params)?))
-}
-
 /// Registers `remap_dispatch` for pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "single_thread", build);
+    registry.register(STAGE, "single_thread", RemapDispatch::from_params);
 }
 
 #[cfg(test)]

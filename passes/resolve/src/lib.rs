@@ -128,7 +128,7 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
-use meshlight_graph::file::{Params, Registry};
+use meshlight_graph::file::Registry;
 use meshlight_graph::{
     Access, BindingLayout, DepthAttachment, DepthTarget, Element, GraphError, Implementation, Pass,
     ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
@@ -496,13 +496,9 @@ impl Resolve {
     }
 }
 
-fn build(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(Resolve::from_params(params)?))
-}
-
 /// Registers `resolve` (implementation `compute`) for pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "compute", build);
+    registry.register(STAGE, "compute", Resolve::from_params);
 }
 
 #[cfg(test)]

@@ -73,7 +73,7 @@
 //! the CPU take one dispatch instead: one workgroup walks the tiles in order.
 
 use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{Access, Element, GraphError, Pass, Result, Slot, StageContract};
+use meshlight_graph::{Access, Element, GraphError, Result, Slot, StageContract};
 
 mod cpu;
 mod decoupled_lookback;
@@ -296,27 +296,15 @@ impl ScanOptions {
     }
 }
 
-fn build_scan_fan(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(ScanFan::with_options(ScanOptions::from_params(
-        params,
-    )?)))
-}
-
-fn build_two_step(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(TwoStep::with_options(ScanOptions::from_params(
-        params,
-    )?)))
-}
-
-fn build_decoupled_lookback(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(DecoupledLookback::with_options(
-        ScanOptions::from_params_for_lookback(params)?,
-    )))
-}
-
 /// Registers the implementations of stage `scan_fan` for pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "scan_fan", build_scan_fan);
-    registry.register(STAGE, "two_step", build_two_step);
-    registry.register(STAGE, "decoupled_lookback", build_decoupled_lookback);
+    registry.register(STAGE, "scan_fan", |p| {
+        ScanOptions::from_params(p).map(ScanFan::with_options)
+    });
+    registry.register(STAGE, "two_step", |p| {
+        ScanOptions::from_params(p).map(TwoStep::with_options)
+    });
+    registry.register(STAGE, "decoupled_lookback", |p| {
+        ScanOptions::from_params_for_lookback(p).map(DecoupledLookback::with_options)
+    });
 }

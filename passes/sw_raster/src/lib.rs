@@ -180,8 +180,12 @@ const PIECE_WORDS: u32 = 10;
 /// Workgroups of the clipping dispatch, striding over the clusters listed.
 const CLIP_GROUPS: u32 = 256;
 
-/// The implementation names, best first (the order `auto` tries them in).
-pub const IMPLEMENTATIONS: [&str; 2] = ["texture", "buffer"];
+/// The implementations and the visibility target each writes, best first (the order
+/// `auto` tries them in).
+pub const IMPLEMENTATIONS: [(&str, Visibility64); 2] = [
+    ("texture", Visibility64::Texture),
+    ("buffer", Visibility64::Buffer),
+];
 
 /// The `buffer` and `texture` implementations ([`SwRaster::target`] tells them apart).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -466,26 +470,10 @@ fn kernels(big: bool) -> &'static [Kernel] {
     if big { &ALL } else { &ALL[..2] }
 }
 
-fn build_buffer(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(SwRaster::from_params(
-        params,
-        Visibility64::Buffer,
-    )?))
-}
-
-fn build_texture(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(SwRaster::from_params(
-        params,
-        Visibility64::Texture,
-    )?))
-}
-
 /// Registers `sw_raster` (implementations `buffer`, `texture` and `auto`) for pipeline
 /// files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, "buffer", build_buffer);
-    registry.register(STAGE, "texture", build_texture);
-    registry.prefer(STAGE, &IMPLEMENTATIONS);
+    registry.register_best_first(STAGE, &IMPLEMENTATIONS, SwRaster::from_params);
 }
 
 #[cfg(test)]

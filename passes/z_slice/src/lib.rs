@@ -392,10 +392,6 @@ pub fn workgroup_grid(groups: u64, max_per_dimension: u32) -> [u32; 2] {
     [x as u32, groups.div_ceil(x).clamp(1, max) as u32]
 }
 
-fn build(params: &Params) -> Result<Box<dyn Pass>> {
-    Ok(Box::new(ZSlice::from_params(params)?))
-}
-
 /// Checks a tile grid read from a pipeline file by a stage that walks froxels: at least
 /// one tile each way.
 pub fn check_tiles(width: u32, height: u32) -> Result<()> {
@@ -432,7 +428,7 @@ pub fn declare_tile_target(
 
 /// Registers `z_slice` (implementation `compute`) for pipeline files.
 pub fn register(registry: &mut Registry) {
-    registry.register(STAGE, IMPLEMENTATION, build);
+    registry.register(STAGE, IMPLEMENTATION, ZSlice::from_params);
 }
 
 #[cfg(test)]
