@@ -153,6 +153,10 @@ const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
         "arrayLength(&scene_buffers::payload)",
     ),
     (
+        "meshlight::cluster_triangle",
+        "cluster_triangle::cluster_triangle(meshlight::meshlet::Cluster(), 0u).corners.x",
+    ),
+    (
         "meshlight::occlusion",
         "occlusion::occlusion_level(vec4(0u, 0u, 5u, 9u))",
     ),

@@ -5,10 +5,10 @@
 // there.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv, meshlet_triangle_location, meshlet_triangle}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
 #import meshlight::instance::{Instance, Material, instance_transform_normal}
-#import meshlight::instance_table::instance_at
-#import meshlight::scene_buffers::{meshes, meshlets, payload, materials}
+#import meshlight::cluster_triangle::cluster_triangle
+#import meshlight::scene_buffers::{meshlets, payload, materials}
 #import meshlight::view::View
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
 #import resolve::visibility::{raster_clusters, visibility_at}
@@ -261,12 +261,11 @@ fn filtered_checker(p: vec2<f32>, ddx: vec2<f32>, ddy: vec2<f32>) -> f32 {
 fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
     let id = visbuffer_cluster(value);
     let t = visbuffer_triangle(value);
-    let cluster = raster_clusters[id];
-    let instance = instance_at(cluster.instance);
-    let m = meshlets[cluster.meshlet];
-    let mesh = meshes[instance.mesh];
-    let at = meshlet_triangle_location(m, mesh.flags, t);
-    let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+    let tri = cluster_triangle(raster_clusters[id], t);
+    let instance = tri.instance;
+    let m = tri.m;
+    let mesh = tri.mesh;
+    let corners = tri.corners;
     var clip: array<vec4<f32>, 3>;
     var normal: array<vec3<f32>, 3>;
     var uv: array<vec2<f32>, 3>;

@@ -24,6 +24,7 @@
 #import meshlight::instance::Instance
 #import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshes, meshlets, payload}
+#import meshlight::cluster_triangle::{ClusterTriangle, cluster_triangle}
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
 
@@ -414,22 +415,8 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
 }
 
 // Triangle `t` of the cluster in raster slot `slot`: what transforms and decodes it.
-struct SlotTriangle {
-    instance: Instance,
-    m: Meshlet,
-    mesh: Mesh,
-    // Its corners' vertex indices in the meshlet.
-    corners: vec3<u32>,
-}
-
-fn slot_triangle(slot: u32, t: u32) -> SlotTriangle {
-    let cluster = raster_clusters[slot];
-    let instance = instance_at(cluster.instance);
-    let m = meshlets[cluster.meshlet];
-    let mesh = meshes[instance.mesh];
-    let at = meshlet_triangle_location(m, mesh.flags, t);
-    let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
-    return SlotTriangle(instance, m, mesh, corners);
+fn slot_triangle(slot: u32, t: u32) -> ClusterTriangle {
+    return cluster_triangle(raster_clusters[slot], t);
 }
 
 // The clusters `raster` listed, a workgroup each (strided) and a thread per triangle:
