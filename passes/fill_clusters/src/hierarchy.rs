@@ -533,6 +533,7 @@ mod tests {
     use super::*;
     use meshlight_scene::asset::format::NodeRecord;
     use meshlight_shaders::{Capabilities, ShaderLibrary};
+    use meshlight_testing::shader_variants::wgsl_constant;
 
     /// The GPU scene uploads the asset's node records as they are: the WGSL struct must
     /// have their size and field offsets, and the shader's constants the Rust ones.
@@ -579,18 +580,7 @@ mod tests {
             .map(|(n, o)| (n.to_string(), *o as u32))
             .collect();
         assert_eq!(offsets, want);
-        let constant = |name: &str| -> f64 {
-            let line = SHADER
-                .source
-                .lines()
-                .find(|l| l.starts_with(&format!("const {name}:")))
-                .unwrap_or_else(|| panic!("no const {name}"));
-            let text = line.split('=').nth(1).unwrap().trim();
-            text.trim_end_matches(';')
-                .trim_end_matches('u')
-                .parse()
-                .unwrap()
-        };
+        let constant = |name| wgsl_constant::<f64>(&SHADER, name);
         assert_eq!(constant("QUEUE"), QUEUE as f64);
         assert_eq!(constant("MAX_ROUNDS"), MAX_ROUNDS as f64);
         assert_eq!(constant("SLACK"), SLACK as f64);

@@ -435,6 +435,7 @@ pub fn register(registry: &mut Registry) {
 mod tests {
     use super::*;
     use meshlight_shaders::cpu::light::{z_slice_of_depth, z_slice_start};
+    use meshlight_testing::shader_variants::wgsl_constant;
 
     /// Reads the pass from `params`, a pipeline file's `params = { … }` contents.
     fn pipeline(params: &str) -> Result<()> {
@@ -505,19 +506,7 @@ mod tests {
 
     #[test]
     fn the_wgsl_constants_are_the_reference_s() {
-        let value = |name: &str| -> f32 {
-            let line = SHADER
-                .source
-                .lines()
-                .find(|l| l.starts_with(&format!("const {name}: f32 = ")))
-                .unwrap_or_else(|| panic!("no `const {name}` in the WGSL"));
-            line.rsplit(' ')
-                .next()
-                .unwrap()
-                .trim_end_matches(';')
-                .parse()
-                .unwrap()
-        };
+        let value = |name| wgsl_constant::<f32>(&SHADER, name);
         assert_eq!(value("SQRT_2").to_bits(), cpu::SQRT_2.to_bits());
         assert_eq!(value("SQRT_3").to_bits(), cpu::SQRT_3.to_bits());
         assert_eq!(value("RANGE_LIMIT").to_bits(), cpu::RANGE_LIMIT.to_bits());
