@@ -39,9 +39,14 @@ impl Params {
     pub fn size(&self, what: &str) -> Result<[u32; 2]> {
         let width = self.u32("width", 0)?;
         let height = self.u32("height", 0)?;
+        Self::positive_size(width, height, &format!("{what}'s size"))
+    }
+    /// `[width, height]` when both are > 0, else the parameter error a pass's `width` and
+    /// `height` give, `size` saying what they measure; for passes built in code too.
+    pub fn positive_size(width: u32, height: u32, size: &str) -> Result<[u32; 2]> {
         if width == 0 || height == 0 {
             return Err(GraphError::parameter(format!(
-                "`width` and `height` ({what}'s size) must both be > 0, got {width} × {height}"
+                "`width` and `height` ({size}) must both be > 0, got {width} × {height}"
             )));
         }
         Ok([width, height])

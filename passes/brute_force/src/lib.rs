@@ -179,12 +179,11 @@ impl BruteForce {
 
     /// Checks the params, for passes built from a file and in code alike.
     pub fn validate(&self) -> Result<()> {
-        let (width, height) = (self.width, self.height);
-        if width == 0 || height == 0 {
-            return Err(GraphError::parameter(format!(
-                "`width` and `height` (the size of the depth and id targets) must both be > 0, got {width} × {height}"
-            )));
-        }
+        Params::positive_size(
+            self.width,
+            self.height,
+            "the size of the depth and id targets",
+        )?;
         let n = self.index_count;
         if n == 0 || !n.is_multiple_of(3) {
             return Err(GraphError::parameter(format!(

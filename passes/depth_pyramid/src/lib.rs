@@ -215,12 +215,8 @@ impl DepthPyramid {
     }
 
     pub fn validate(&self) -> Result<()> {
-        let (w, h) = (self.width, self.height);
-        if w == 0 || h == 0 {
-            return Err(GraphError::parameter(format!(
-                "`width` and `height` (the visibility target's size) must both be > 0, got {w} × {h}"
-            )));
-        }
+        let [w, h] =
+            Params::positive_size(self.width, self.height, "the visibility target's size")?;
         if w > MAX_SIDE || h > MAX_SIDE {
             return Err(GraphError::parameter(format!(
                 "`width` × `height` = {w} × {h}: the pyramid takes sides up to {MAX_SIDE}; render at a smaller size"
