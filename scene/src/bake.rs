@@ -52,6 +52,15 @@ impl BakeOptions {
     }
 }
 
+/// A progress bar of `len` steps in the style of every bake: a spinner, `what` (an
+/// indicatif template naming the work and where the bar goes), then the time taken.
+pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let template = format!("{{spinner}} {what} ({{elapsed}})");
+    let style = indicatif::ProgressStyle::with_template(&template)
+        .unwrap_or_else(|e| panic!("progress template `{template}`: {e}"));
+    indicatif::ProgressBar::new(len).with_style(style.progress_chars("=> "))
+}
+
 /// Loads the input (or generates the procedural mesh), builds, saves and prints the
 /// bake summary.
 pub fn run_bake(args: &BakeOptions) -> Result<(), SceneError> {
@@ -62,13 +71,9 @@ pub fn run_bake(args: &BakeOptions) -> Result<(), SceneError> {
     let mesh = load_input(&args.input, args.segments, &load)?;
     let load_time = load_start.elapsed();
 
-    let bar = indicatif::ProgressBar::new(mesh.triangle_count() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} building LOD DAG [{bar:30}] {msg} ({elapsed})",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
+    let bar = progress_bar(
+        mesh.triangle_count() as u64,
+        "building LOD DAG [{bar:30}] {msg}",
     );
     // Short builds finish before a bar would help; indicatif hides it off a terminal.
     if mesh.triangle_count() < 200_000 {

@@ -140,13 +140,9 @@ pub fn run(
             dir: input_dir.to_path_buf(),
         });
     }
-    let bar = indicatif::ProgressBar::new(inputs.len() as u64);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{spinner} baking [{bar:30}] {pos}/{len} meshes, last {msg} ({elapsed})",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
+    let bar = meshlight::scene::bake::progress_bar(
+        inputs.len() as u64,
+        "baking [{bar:30}] {pos}/{len} meshes, last {msg}",
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(120));
     let rows = bake_all(input_dir, output_dir, &inputs, options, &|row| {
