@@ -490,39 +490,7 @@ fn pipeline_files_declare_size_parameters_and_texture_ranges() {
     let mut registry = file::Registry::new();
     registry.register("down", "fake", |_| Ok(mip_pass()));
     registry.register("fill", "fake", |_| Ok(Fake::new("fill", vec![out_u32()])));
-    let text = r#"
-[params]
-slots = 300
-
-[[resource]]
-name = "list"
-kind = "exported"
-buffer = { element = "u32", count_param = "slots" }
-
-[[resource]]
-name = "pyr"
-kind = "imported"
-texture = { format = "r32float", width = 16, height = 16, mip_levels = 5 }
-usage = ["TEXTURE_BINDING", "STORAGE_BINDING"]
-
-[[pass]]
-name = "fill"
-stage = "fill"
-implementation = "fake"
-bind = { out = "list" }
-
-[[pass]]
-name = "mip1"
-stage = "down"
-implementation = "fake"
-bind = { src = "pyr#mip=0", dst = "pyr#mip=1" }
-
-[[pass]]
-name = "mip2"
-stage = "down"
-implementation = "fake"
-bind = { src = "pyr#mips=1..2", dst = "pyr#mip=2" }
-"#;
+    let text = include_str!("pipelines/size_params_and_texture_ranges.toml");
     let c = file::parse_pipeline(text, "p.toml", &registry)
         .unwrap()
         .compile(&opts())

@@ -161,29 +161,7 @@ fn bad_parameters_and_syntax_are_typed_errors() {
 fn caller_parameters_size_textures_and_reach_pass_parameters() {
     use meshlight_graph::file::parse_pipeline_with;
     use std::collections::BTreeMap;
-    let text = r#"
-[params]
-n = 1000
-width = 8
-height = 4
-
-[[resource]]
-name = "a"
-kind = "exported"
-buffer = { element = "u32", count_param = "n" }
-
-[[resource]]
-name = "image"
-kind = "exported"
-texture = { format = "rgba8unorm", width_param = "width", height_param = "height" }
-
-[[pass]]
-name = "fill"
-stage = "produce"
-implementation = "fill"
-params = { count = "$n", k = 3 }
-bind = { output = "a" }
-"#;
+    let text = include_str!("pipelines/caller_parameters.toml");
     let overrides = BTreeMap::from([("n".to_string(), 500u64), ("width".to_string(), 16)]);
     let g = parse_pipeline_with(text, "t.toml", &registry(), &overrides).unwrap();
     let plan = g
