@@ -55,6 +55,20 @@ pub fn run_one_pass(
     for o in outputs {
         g.export(written.buffer(o.name)?);
     }
+    let names: Vec<&str> = outputs.iter().map(|o| o.name).collect();
+    run_graph(exec, g, inputs, &names, frame)
+}
+
+/// Compiles `g` for `exec`'s GPU and runs it for one frame with each of `inputs` made
+/// on the GPU and imported under its name (`g` declares those imports), then returns
+/// the bytes of each exported buffer `outputs` names, in order.
+pub fn run_graph(
+    exec: &mut Executor,
+    g: GraphBuilder,
+    inputs: &[Input],
+    outputs: &[&str],
+    frame: &FrameData,
+) -> Result<Vec<Vec<u8>>> {
     let compiled = g.compile(&CompileOptions::for_gpu(&exec.gpu))?;
     let buffers: Vec<wgpu::Buffer> = inputs
         .iter()
@@ -65,7 +79,7 @@ pub fn run_one_pass(
         .zip(&buffers)
         .fold(Imports::new(), |imports, (i, b)| imports.buffer(i.name, b));
     exec.execute_frame(&compiled, &imports, frame)?;
-    outputs.iter().map(|o| exec.read_buffer(o.name)).collect()
+    outputs.iter().map(|name| exec.read_buffer(name)).collect()
 }
 
 /// A texture as `desc` describes it (its size, format, mips and layers), for a test to

@@ -88,31 +88,24 @@ fn run(
     let gpu_scene = GpuScene::new(&gpu, &mut scene.data);
     let mut g = GraphBuilder::new();
     gpu_scene.import(&mut g);
-    let positions = g.import_buffer(
+    // Each resource is named as the slot it binds.
+    g.import_buffer(
         "positions",
         BufferDesc::array(Element::VEC4_F32, scene.mesh.positions.len() as u64),
         BUFFER_USAGE,
     );
-    let indices = g.import_buffer(
+    g.import_buffer(
         "indices",
         BufferDesc::array(Element::U32, scene.mesh.indices.len() as u64),
         BUFFER_USAGE,
     );
-    let depth = g.import_texture("depth", TextureDesc::d2(DEPTH_FORMAT, W, H), TEXTURE_USAGE);
-    let ids = g.import_texture(
+    g.import_texture("depth", TextureDesc::d2(DEPTH_FORMAT, W, H), TEXTURE_USAGE);
+    g.import_texture(
         "ids",
         TextureDesc::d2(IDS_FORMAT, ids_size[0], ids_size[1]),
         TEXTURE_USAGE,
     );
-    g.add_pass(
-        "brute_force",
-        pass,
-        Bindings::new()
-            .bind("positions", positions)
-            .bind("indices", indices)
-            .bind("depth", depth)
-            .bind("ids", ids),
-    )?;
+    g.add_pass("brute_force", pass, Bindings::new())?;
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
     let buffers = [
         gpu.buffer_with_data("positions", scene.mesh.position_bytes(), BUFFER_USAGE),

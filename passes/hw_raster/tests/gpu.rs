@@ -129,10 +129,11 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
     let args = [VERTICES_PER_CLUSTER, frame.hw_count, 0, 0];
     let mut g = GraphBuilder::new();
     scene.import(&mut g);
+    // Each buffer is imported under its slot's name, which binds it.
     let Imported {
-        handles: [clusters, counts_h, args_h, vis],
         buffers: [.., visbuffer],
         imports,
+        ..
     } = import_filled(
         &mut g,
         &gpu,
@@ -151,11 +152,7 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
             height: H,
             feed,
         },
-        Bindings::new()
-            .bind("raster_clusters", clusters)
-            .bind("raster_counts", counts_h)
-            .bind("hw_args", args_h)
-            .bind("visbuffer", vis),
+        Bindings::new(),
     )?;
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
     let mut exec = Executor::new(gpu);

@@ -3,8 +3,9 @@
 
 use meshlight_graph::*;
 use meshlight_pass_remap_dispatch::{RemapDispatch, cpu_remap};
+use meshlight_testing::frames::filled;
 use meshlight_testing::pass_errors::pass_parameter_message;
-use meshlight_testing::{Input, Output, USAGE, executor, run_one_pass};
+use meshlight_testing::{Input, Output, USAGE, executor, run_graph, run_one_pass};
 
 /// A consumer of the arguments: every workgroup below the count marks its linear index.
 const CONSUMER: PassShader = PassShader {
@@ -97,15 +98,17 @@ fn run(exec: &mut Executor, count: u32, max: u32, capacity: u32) -> ([u32; 3], V
         )
         .unwrap();
     g.export(out.buffer("hits").unwrap());
-    let compiled = g.compile(&CompileOptions::for_gpu(&exec.gpu)).unwrap();
-    let buffer = exec
-        .gpu
-        .buffer_with_data("count", bytemuck::bytes_of(&count), USAGE);
-    exec.execute(&compiled, &Imports::new().buffer("count", &buffer))
+    let count = [count];
+    let input = filled("count", Element::U32, &count);
+    let [args, hits] = run_graph(exec, g, &[input], &["args", "hits"], &FrameData::new())
+        .unwrap()
+        .try_into()
         .unwrap();
-    let args: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("args").unwrap());
-    let hits: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("hits").unwrap());
-    ([args[0], args[1], args[2]], hits)
+    let args: Vec<u32> = bytemuck::pod_collect_to_vec(&args);
+    (
+        [args[0], args[1], args[2]],
+        bytemuck::pod_collect_to_vec(&hits),
+    )
 }
 
 #[test]

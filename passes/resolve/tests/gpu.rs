@@ -284,11 +284,8 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
     scene.import(&mut g);
     // Words past the first are other counters of the slot buffer; the pass reads word 0.
     let count_words = [frame.software, 7, 0, slots as u32];
-    let Imported {
-        handles: [clusters, counts, vis],
-        imports,
-        ..
-    } = import_filled(
+    // Every resource below is imported under its slot's name, which binds it.
+    let Imported { imports, .. } = import_filled(
         &mut g,
         &gpu,
         [
@@ -298,24 +295,21 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
         ],
         scene.imports(),
     );
-    let mut bindings = Bindings::new();
     for (name, wanted) in [
         ("depth", targets.depth),
         ("material_depth", targets.material_depth),
     ] {
         if wanted {
-            let t = g.import_texture(name, TextureDesc::d2(DEPTH_FORMAT, W, H), DEPTH_USAGE);
-            bindings = bindings.bind(name, t);
+            g.import_texture(name, TextureDesc::d2(DEPTH_FORMAT, W, H), DEPTH_USAGE);
         }
     }
     let pyramid = frame.pyramid.as_ref();
     if let Some(mips) = pyramid {
         let desc = TextureDesc::d2(PYRAMID_FORMAT, mips[0].width, mips[0].height)
             .with_mips(mips.len() as u32);
-        let handle = g.import_texture("pyramid", desc, PYRAMID_USAGE);
-        bindings = bindings.bind("pyramid", handle);
+        g.import_texture("pyramid", desc, PYRAMID_USAGE);
     }
-    let color = g.import_texture("color", TextureDesc::d2(COLOR_FORMAT, W, H), COLOR_USAGE);
+    g.import_texture("color", TextureDesc::d2(COLOR_FORMAT, W, H), COLOR_USAGE);
     let mut light_buffers: Vec<(&str, Vec<u8>)> = match &frame.lights {
         Some(l) => vec![
             ("objects", bytemuck::cast_slice(&l.objects).to_vec()),
@@ -345,7 +339,6 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
             light_buffers.push((name, bytemuck::cast_slice(words).to_vec()));
         }
     }
-    let mut light_bindings = bindings;
     for (name, bytes) in &light_buffers {
         let element = match *name {
             "objects" => Element::named("ClusterableObject", 64),
@@ -353,18 +346,9 @@ fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> 
             _ => Element::U32,
         };
         let count = bytes.len() as u64 / u64::from(element.size);
-        let handle = g.import_buffer(name, BufferDesc::array(element, count), BUFFER_USAGE);
-        light_bindings = light_bindings.bind(name, handle);
+        g.import_buffer(name, BufferDesc::array(element, count), BUFFER_USAGE);
     }
-    g.add_pass(
-        "resolve",
-        pass,
-        light_bindings
-            .bind("visbuffer", vis)
-            .bind("raster_clusters", clusters)
-            .bind("raster_counts", counts)
-            .bind("color", color),
-    )?;
+    g.add_pass("resolve", pass, Bindings::new())?;
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
     let textures = [
         texture(

@@ -231,6 +231,7 @@ fn random_sizes_values_and_options() {
 fn pipeline_file_builds_every_implementation() {
     use meshlight_graph::file::{Registry, parse_pipeline};
     use meshlight_graph::*;
+    use meshlight_testing::{frames::filled, run_graph};
     let mut registry = Registry::new();
     meshlight_pass_scan_fan::register(&mut registry);
     let n = 5_000u32;
@@ -262,14 +263,15 @@ bind = {{ input = "counts", output = "offsets" }}
 "#
         );
         let g = parse_pipeline(&text, "inline.toml", &registry).unwrap();
-        let compiled = g.compile(&CompileOptions::for_gpu(&exec.gpu)).unwrap();
-        let counts = exec
-            .gpu
-            .buffer_with_data("counts", bytemuck::cast_slice(&input), USAGE);
-        exec.execute(&compiled, &Imports::new().buffer("counts", &counts))
-            .unwrap();
-        let offsets: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("offsets").unwrap());
-        let got_total: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("total").unwrap());
+        let counts = filled("counts", Element::U32, &input);
+        let frame = FrameData::new();
+        let [offsets, got_total] =
+            run_graph(&mut exec, g, &[counts], &["offsets", "total"], &frame)
+                .unwrap()
+                .try_into()
+                .unwrap();
+        let offsets: Vec<u32> = bytemuck::pod_collect_to_vec(&offsets);
+        let got_total: Vec<u32> = bytemuck::pod_collect_to_vec(&got_total);
         assert_eq!(offsets, expected, "{implementation}");
         assert_eq!(got_total[0], total, "{implementation}");
     }

@@ -150,8 +150,9 @@ fn run(
     let stale = stale_contents();
     let mut g = GraphBuilder::new();
     gpu_scene.import(&mut g);
+    // Each buffer is imported under its slot's name, which binds it.
     let Imported {
-        handles: [slots, counts_h, args_h, out],
+        handles: [.., out],
         buffers: [.., visbuffer],
         imports,
     } = import_filled(
@@ -167,20 +168,14 @@ fn run(
     );
     // The `texture` target is a transient R64Uint texture, copied out after the raster.
     let texture = pass.target == Visibility64::Texture;
-    let vis: AnyHandle = if texture {
-        g.create_visibility64("visbuffer_texture", W, H)
-    } else {
-        out.into()
-    };
-    let mut bindings = Bindings::new()
-        .bind("raster_clusters", slots)
-        .bind("raster_counts", counts_h)
-        .bind("sw_args", args_h)
-        .bind("visbuffer", vis);
+    let mut bindings = Bindings::new();
+    if texture {
+        let vis = g.create_visibility64("visbuffer_texture", W, H);
+        bindings = bindings.bind("visbuffer", vis);
+    }
     let tiled = pass.big_triangle_px > 0;
     if tiled {
-        let count = g.create_buffer(BIG_COUNT_SLOT, BufferDesc::array(Element::U32, 2));
-        bindings = bindings.bind(BIG_COUNT_SLOT, count);
+        g.create_buffer(BIG_COUNT_SLOT, BufferDesc::array(Element::U32, 2));
     }
     let drawn = g.add_pass("sw_raster", pass, bindings)?;
     if tiled {
