@@ -11,4 +11,4 @@ pub use pipeline::{
     PipelineFile, load_pipeline, load_pipeline_with, parse_format, parse_pipeline,
     parse_pipeline_with, read_pipeline_text,
 };
-pub use registry::{Factory, IntoPass, Registry};
+pub use registry::{IntoPass, Registry};

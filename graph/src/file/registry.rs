@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 /// Builds a pass from its `params` table (stored boxed, so the registry holds every
 /// implementation of every stage alike).
-pub type Factory = Arc<dyn Fn(&Params) -> Result<Box<dyn Pass>> + Send + Sync>;
+type Factory = Arc<dyn Fn(&Params) -> Result<Box<dyn Pass>> + Send + Sync>;
 
 /// What a registered builder returns: a pass, or one already boxed.
 pub trait IntoPass {
