@@ -340,6 +340,7 @@ impl GraphBuilder {
         let Choice {
             selection,
             mut candidates,
+            class_orders,
         } = choice;
         if candidates.is_empty() {
             return Err(GraphError::Parameter {
@@ -368,7 +369,11 @@ impl GraphBuilder {
         }
         let outputs = self.add_boxed_pass(name, first, bindings)?;
         if let Some(node) = self.passes.last_mut() {
-            node.alternatives = Some((selection, candidates));
+            node.alternatives = Some(Choice {
+                selection,
+                candidates,
+                class_orders,
+            });
         }
         Ok(outputs)
     }

@@ -10,6 +10,7 @@
 //! pass really requires. The plan keeps a [`ChoicePlan`] so dumps show what was chosen
 //! and why.
 
+use crate::adapter::AdapterClass;
 use crate::error::{GraphError, Result};
 use crate::names::feature_names;
 use crate::pass::{Pass, SetupContext};
@@ -22,6 +23,20 @@ pub const AUTO: &str = "auto";
 pub struct Choice {
     pub(crate) selection: Selection,
     pub(crate) candidates: Vec<Box<dyn Pass>>,
+    /// Orders `auto` follows instead on some adapter classes.
+    pub(crate) class_orders: Vec<ClassOrder>,
+}
+
+/// The order `auto` tries a stage's implementations in on one adapter class, and what
+/// measurement says so.
+#[derive(Clone, Debug)]
+pub struct ClassOrder {
+    /// The class the order is for.
+    pub class: AdapterClass,
+    /// Implementation names, best first; those left out follow in the stage's own order.
+    pub best_first: Vec<&'static str>,
+    /// Why, for the plan and its dumps.
+    pub why: &'static str,
 }
 
 impl Choice {
@@ -30,6 +45,7 @@ impl Choice {
         Self {
             selection: Selection::Auto,
             candidates,
+            class_orders: Vec::new(),
         }
     }
     /// `named` runs; `alternatives` (the stage's other implementations, best first) are
@@ -40,7 +56,13 @@ impl Choice {
         Self {
             selection: Selection::Named,
             candidates,
+            class_orders: Vec::new(),
         }
+    }
+    /// `auto` follows `orders` on the classes they name (see [`ClassOrder`]).
+    pub fn with_class_orders(mut self, orders: Vec<ClassOrder>) -> Self {
+        self.class_orders = orders;
+        self
     }
     /// `auto` over `candidates` (best first) when `wanted` is `auto`, else the candidate
     /// named `wanted` with the others as alternatives; an unknown name is an error
@@ -92,10 +114,11 @@ pub(crate) fn missing_features(
     pass: &dyn Pass,
     adapter: wgpu::Features,
     limits: &wgpu::Limits,
+    class: AdapterClass,
     params: &[(String, u64)],
     bound: Vec<&'static str>,
 ) -> Result<wgpu::Features> {
-    let mut ctx = SetupContext::new(adapter, limits, params, bound);
+    let mut ctx = SetupContext::new(adapter, limits, class, params, bound);
     pass.setup(&mut ctx)?;
     Ok(ctx.required - adapter)
 }
@@ -106,12 +129,28 @@ pub(crate) fn missing_features(
 pub(crate) fn resolve(
     pass_name: &str,
     choice: Choice,
+    class: AdapterClass,
     mut missing: impl FnMut(&dyn Pass) -> Result<wgpu::Features>,
 ) -> Result<(Box<dyn Pass>, ChoicePlan)> {
     let Choice {
         selection,
-        candidates,
+        mut candidates,
+        class_orders,
     } = choice;
+    // On a class with an order of its own, `auto` tries that order first.
+    let class_order = class_orders
+        .into_iter()
+        .find(|o| o.class == class && selection == Selection::Auto);
+    if let Some(o) = &class_order {
+        let rank = |c: &Box<dyn Pass>| {
+            let name = c.implementation().name;
+            o.best_first
+                .iter()
+                .position(|n| *n == name)
+                .unwrap_or(o.best_first.len())
+        };
+        candidates.sort_by_key(rank);
+    }
     let mut judged = Vec::with_capacity(candidates.len());
     for c in &candidates {
         judged.push(missing(c.as_ref())?);
@@ -162,6 +201,10 @@ pub(crate) fn resolve(
         _ => 0,
     };
     let name = plans[chosen].implementation;
+    let on_class = class_order
+        .as_ref()
+        .map(|o| format!("on a {} `auto` tries {order} ({}); ", class.name(), o.why))
+        .unwrap_or_default();
     let reason = match selection {
         Selection::Auto => {
             let skipped: Vec<String> = plans[..chosen]
@@ -169,10 +212,12 @@ pub(crate) fn resolve(
                 .map(|p| format!("`{}` needs {}", p.implementation, p.missing.join(", ")))
                 .collect();
             if skipped.is_empty() {
-                format!("`{name}` is the first of {order} and the adapter has all it needs")
+                format!(
+                    "{on_class}`{name}` is the first of {order} and the adapter has all it needs"
+                )
             } else {
                 format!(
-                    "{}, which the adapter lacks; `{name}` is the next of {order}",
+                    "{on_class}{}, which the adapter lacks; `{name}` is the next of {order}",
                     skipped.join("; ")
                 )
             }

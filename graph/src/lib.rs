@@ -8,11 +8,13 @@
 
 // The modules in layers, lowest first. A module imports only from layers before its
 // own, which keeps the crate free of import cycles:
-//   1 access, names, problem   2 error, layout, resource   3 contract, program   4 plan
-//   5 record (what a pass records against)   6 pass (the trait and its setup)
-//   7 choice, node, readback   8 builder   9 compile, file, synthetic   10 exec   11 dump
+//   1 access, adapter, names, problem   2 error, layout, resource   3 contract, program
+//   4 plan   5 record (what a pass records against)   6 pass (the trait and its setup)
+//   7 choice   8 node, readback   9 builder   10 compile, file, synthetic   11 exec
+//   12 dump
 
 mod access;
+mod adapter;
 mod builder;
 mod choice;
 mod compile;
@@ -34,8 +36,9 @@ mod resource;
 pub mod synthetic;
 
 pub use access::Access;
+pub use adapter::AdapterClass;
 pub use builder::{Bindings, GraphBuilder, History, PassOutputs};
-pub use choice::Choice;
+pub use choice::{Choice, ClassOrder};
 pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};

@@ -2,9 +2,9 @@
 //! choice, the implementations compile may keep instead. The builder makes nodes;
 //! compile and the executor read them, so the type sits below all three.
 
+use crate::choice::Choice;
 use crate::contract::{Slot, StageContract};
 use crate::pass::Pass;
-use crate::plan::Selection;
 use crate::resource::{AnyHandle, TextureRange};
 
 /// A pass as the graph keeps it: its instance name, implementation and bound slots.
@@ -19,9 +19,9 @@ pub(crate) struct PassNode {
     pub bindings: Vec<AnyHandle>,
     /// Per slot, the texture range it binds (`None`: the whole resource).
     pub ranges: Vec<Option<TextureRange>>,
-    /// The stage's other implementations, when the pass was added as a [`crate::Choice`]:
+    /// The stage's other implementations, when the pass was added as a [`Choice`]:
     /// compile keeps `pass` or one of these.
-    pub(crate) alternatives: Option<(Selection, Vec<Box<dyn Pass>>)>,
+    pub(crate) alternatives: Option<Choice>,
 }
 
 impl PassNode {

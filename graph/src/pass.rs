@@ -2,6 +2,7 @@
 //! its commands in `record`.
 
 use crate::access::Access;
+use crate::adapter::AdapterClass;
 use crate::contract::StageContract;
 use crate::error::Result;
 use crate::program::ProgramDesc;
@@ -85,6 +86,7 @@ pub struct ScratchDecl {
 pub struct SetupContext<'a> {
     adapter_features: wgpu::Features,
     limits: &'a wgpu::Limits,
+    class: AdapterClass,
     params: &'a [(String, u64)],
     bound: Vec<&'static str>,
     textures: Vec<&'static str>,
@@ -99,18 +101,21 @@ pub struct SetupContext<'a> {
     pub(crate) dispatches: Vec<(String, [u32; 3])>,
     pub(crate) needs_encoder: Option<String>,
     pub(crate) clears_itself: Vec<String>,
+    pub(crate) skipped: Option<String>,
 }
 
 impl<'a> SetupContext<'a> {
     pub(crate) fn new(
         adapter_features: wgpu::Features,
         limits: &'a wgpu::Limits,
+        class: AdapterClass,
         params: &'a [(String, u64)],
         bound: Vec<&'static str>,
     ) -> Self {
         Self {
             adapter_features,
             limits,
+            class,
             params,
             bound,
             textures: Vec::new(),
@@ -125,6 +130,7 @@ impl<'a> SetupContext<'a> {
             dispatches: Vec::new(),
             needs_encoder: None,
             clears_itself: Vec::new(),
+            skipped: None,
         }
     }
     /// The adapter's features, to choose between variants.
@@ -134,6 +140,11 @@ impl<'a> SetupContext<'a> {
     /// The adapter's limits (workgroups per dimension, binding sizes, …).
     pub fn limits(&self) -> &wgpu::Limits {
         self.limits
+    }
+    /// The adapter's class, for a parameter whose best value depends on how the
+    /// adapter's units divide between graphics and compute (`auto`).
+    pub fn adapter_class(&self) -> AdapterClass {
+        self.class
     }
     /// Checks a pass's `max_per_dimension` param, the workgroup limit per dimension its
     /// dispatches are sized for: unset (the adapter's limit) or at most the adapter's
@@ -243,6 +254,14 @@ impl<'a> SetupContext<'a> {
     /// slot does not take the pass out of its batch.
     pub fn clears_itself(&mut self, slot: &str) {
         self.clears_itself.push(slot.to_string());
+    }
+    /// Declares that the pass has nothing to do on this adapter, and why: it stays in the
+    /// plan (what it writes keeps its versions, and the dumps show it with `why`) but
+    /// records nothing. For a pass that measurements say not to run on an adapter class
+    /// (a hardware rasteriser where few units run graphics) while the frame stays one
+    /// pipeline. A skipped pass should declare nothing else.
+    pub fn skip(&mut self, why: &str) {
+        self.skipped = Some(why.to_string());
     }
     /// Marks the pass as having an effect outside the graph (readback, logging), so it is
     /// never culled.

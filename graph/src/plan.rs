@@ -98,6 +98,10 @@ pub struct PassPlan {
     /// How the executor records the pass: inside a batch's shared compute pass, or on the
     /// frame's command encoder.
     pub recording: Recording,
+    /// Why the pass records nothing on this adapter (`SetupContext::skip`), when it does
+    /// not.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skipped: Option<String>,
 }
 
 /// How a pass is recorded.
@@ -164,18 +168,33 @@ pub fn batches_of(passes: &[PassPlan], order: &[usize]) -> Vec<Batch> {
 }
 
 impl PassPlan {
-    /// `implementation`, marked `(auto)` when compile picked it by the adapter.
+    /// `implementation`, marked `(auto)` when compile picked it by the adapter and
+    /// `(skipped)` when it records nothing there.
     pub fn implementation_label(&self) -> String {
-        match &self.choice {
+        let label = match &self.choice {
             Some(c) if c.selection == Selection::Auto => {
                 format!("{} (auto)", self.implementation)
             }
             _ => self.implementation.to_string(),
+        };
+        if self.skipped.is_some() {
+            format!("{label} (skipped)")
+        } else {
+            label
         }
     }
     /// Why compile picked this implementation, for passes with several.
     pub fn choice_reason(&self) -> Option<&str> {
         self.choice.as_ref().map(|c| c.reason.as_str())
+    }
+    /// What the plan says about how this pass was decided: why it is skipped, why its
+    /// implementation was picked, or both.
+    pub fn decision(&self) -> Option<String> {
+        match (self.skipped.as_deref(), self.choice_reason()) {
+            (Some(skip), Some(choice)) => Some(format!("skipped: {skip}; {choice}")),
+            (Some(skip), None) => Some(format!("skipped: {skip}")),
+            (None, choice) => choice.map(str::to_string),
+        }
     }
 }
 

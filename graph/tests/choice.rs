@@ -313,3 +313,46 @@ fn a_visibility_entry_takes_no_other_shape_and_no_history() {
     let err = parse_pipeline(&history, "f.toml", &r).err().unwrap();
     assert!(err.to_string().contains("transient"), "{err}");
 }
+
+/// An adapter class with an order of its own changes what `auto` tries first there, and
+/// the plan says so; other classes, and a named implementation, are unaffected.
+#[test]
+fn auto_follows_the_adapter_class_order_and_says_why() {
+    let mut r = registry();
+    r.prefer("raster", &["texture", "buffer"]);
+    r.prefer_on(
+        "raster",
+        AdapterClass::FewGraphicsUnits,
+        &["buffer"],
+        "measured: buffers win there",
+    );
+    assert_eq!(
+        r.preference("raster", AdapterClass::FewGraphicsUnits),
+        Some(vec!["buffer".to_string(), "texture".to_string()])
+    );
+    let plan = |imp: &str, class| {
+        parse_pipeline(&FILE.replace("IMPL", imp), "f.toml", &r)
+            .unwrap()
+            .compile(&CompileOptions::new(ATOMICS).with_class(class))
+            .unwrap()
+            .plan
+    };
+    let few = plan("auto", AdapterClass::FewGraphicsUnits);
+    assert_eq!(few.passes[0].implementation, "buffer");
+    let reason = few.passes[0].choice_reason().unwrap();
+    assert!(
+        reason.contains("few graphics units") && reason.contains("buffers win"),
+        "{reason}"
+    );
+    let graphics = plan("auto", AdapterClass::Graphics);
+    assert_eq!(graphics.passes[0].implementation, "texture");
+    assert!(
+        !graphics.passes[0]
+            .choice_reason()
+            .unwrap()
+            .contains("buffers win")
+    );
+    // A named implementation is what runs, whatever the class prefers.
+    let named = plan("texture", AdapterClass::FewGraphicsUnits);
+    assert_eq!(named.passes[0].implementation, "texture");
+}

@@ -159,11 +159,12 @@ fn bad_parameters_and_syntax_are_typed_errors() {
 /// pass parameters; a misspelt override or reference is an error naming it.
 #[test]
 fn caller_parameters_size_textures_and_reach_pass_parameters() {
-    use meshlight_graph::file::parse_pipeline_with;
-    use std::collections::BTreeMap;
+    use meshlight_graph::file::Pipeline;
     let text = include_str!("pipelines/caller_parameters.toml");
-    let overrides = BTreeMap::from([("n".to_string(), 500u64), ("width".to_string(), 16)]);
-    let g = parse_pipeline_with(text, "t.toml", &registry(), &overrides).unwrap();
+    let mut pipeline = Pipeline::parse(text, "t.toml").unwrap();
+    pipeline.set_param("n", 500).unwrap();
+    pipeline.set_param("width", 16).unwrap();
+    let g = pipeline.build(&registry()).unwrap();
     let plan = g
         .compile(&CompileOptions::new(wgpu::Features::all()))
         .unwrap()
@@ -178,8 +179,10 @@ fn caller_parameters_size_textures_and_reach_pass_parameters() {
         format!("{a:?}").contains("2000"),
         "500 u32 = 2000 bytes: {a:?}"
     );
-    let bad = BTreeMap::from([("widht".to_string(), 16u64)]);
-    let Err(e) = parse_pipeline_with(text, "t.toml", &registry(), &bad) else {
+    let Err(e) = Pipeline::parse(text, "t.toml")
+        .unwrap()
+        .set_param("widht", 16)
+    else {
         panic!("a misspelt override was accepted")
     };
     assert!(e.to_string().contains("`widht`"), "{e}");

@@ -3,10 +3,9 @@
 
 use meshlight_graph::GraphError;
 use meshlight_graph::file::{
-    MAX_PIPELINE_FILE_BYTES, Registry, ResourceProblem, SourceProblem, load_pipeline,
-    parse_pipeline, parse_pipeline_with, read_pipeline_text,
+    MAX_PIPELINE_FILE_BYTES, Pipeline, Registry, ResourceProblem, SourceProblem, load_pipeline,
+    parse_pipeline, read_pipeline_text,
 };
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 const TEXTURE: &str = r#"
@@ -78,8 +77,9 @@ fn a_texture_with_a_zero_dimension_is_refused_naming_it() {
         "",
     );
     assert!(parse_pipeline(&by_param, "t.toml", &registry).is_ok());
-    let zero = BTreeMap::from([("height".to_string(), 0u64)]);
-    let e = parse_pipeline_with(&by_param, "t.toml", &registry, &zero).err();
+    let mut zero = Pipeline::parse(&by_param, "t.toml").unwrap();
+    zero.set_param("height", 0).unwrap();
+    let e = zero.build(&registry).err();
     assert!(
         matches!(
             e,

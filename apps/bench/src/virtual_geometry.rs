@@ -735,22 +735,18 @@ pub fn brute_force(
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
     let index_usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
     // The shipped pipeline file, sized for this mesh, scene and viewport.
-    let sizes: std::collections::BTreeMap<String, u64> = [
+    let mut pipeline = meshlight::graph::file::Pipeline::parse(
+        include_str!("../../../pipelines/brute_force.toml"),
+        "pipelines/brute_force.toml",
+    )?;
+    pipeline.set_params([
         ("width", width as u64),
         ("height", height as u64),
         ("vertices", lod0.positions.len() as u64),
         ("indices", lod0.indices.len() as u64),
         ("instances", data.instances.len() as u64),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
-    let g = meshlight::graph::file::parse_pipeline_with(
-        include_str!("../../../pipelines/brute_force.toml"),
-        "pipelines/brute_force.toml",
-        &meshlight::registry(),
-        &sizes,
-    )?;
+    ])?;
+    let g = pipeline.build(&meshlight::registry())?;
     let adapter = GpuAdapter::select()?;
     let compiled = g.compile(&CompileOptions::for_adapter(&adapter))?;
     let gpu = adapter.open(compiled.plan.enabled_features)?;

@@ -266,17 +266,9 @@ pub fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
 /// A pipeline file with the clusterer's sizes set in its `[params]`, the counters' read
 /// backs added. The grid's shape and the implementations are the file's.
 pub fn load(path: &Path, s: &ClusteringSettings) -> Result<GraphBuilder> {
-    let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| GraphError::PipelineFile {
-        file: file.clone(),
-        message: format!("cannot read it: {e}"),
-    })?;
-    let mut g = meshlight::graph::file::parse_pipeline_with(
-        &text,
-        &file,
-        &meshlight::registry(),
-        &overrides(s),
-    )?;
+    let mut pipeline = meshlight::graph::file::Pipeline::load(path)?;
+    pipeline.set_params(overrides(s))?;
+    let mut g = pipeline.build(&meshlight::registry())?;
     add_readbacks(&mut g)?;
     Ok(g)
 }

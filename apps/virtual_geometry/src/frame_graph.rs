@@ -658,7 +658,9 @@ pub fn load_with(
     // `auto` tries the hardware rasterisers in the adapter class's order, as in code.
     let mut registry = registry.clone();
     prefer_class_order(&mut registry, s);
-    let mut g = meshlight::graph::file::parse_pipeline_with(&text, &file, &registry, &params)?;
+    let mut pipeline = meshlight::graph::file::Pipeline::parse(&text, &file)?;
+    pipeline.set_params(params)?;
+    let mut g = pipeline.build(&registry)?;
     add_readbacks(&mut g)?;
     if clusters_lights {
         clustering::add_readbacks(&mut g)?;

@@ -9,8 +9,8 @@ pub mod slots;
 pub mod versions;
 
 use crate::access::{Access, texture_usage_for};
+use crate::adapter::AdapterClass;
 use crate::builder::{GraphBuilder, VisibilityDecl};
-use crate::choice::Choice;
 use crate::error::{GraphError, Result};
 use crate::names::feature_names;
 use crate::node::PassNode;
@@ -22,7 +22,7 @@ use crate::resource::*;
 use pool::Lifetime;
 use std::sync::Arc;
 
-/// What compile plans for: the adapter's features and limits (no device needed).
+/// What compile plans for: the adapter's features, limits and class (no device needed).
 #[derive(Clone, Debug)]
 pub struct CompileOptions {
     /// Features of the adapter the graph will run on (`Features::all()` to plan without
@@ -30,6 +30,9 @@ pub struct CompileOptions {
     pub adapter_features: wgpu::Features,
     /// Limits of the adapter: buffer, binding and texture sizes, workgroups per dimension.
     pub limits: wgpu::Limits,
+    /// How the adapter's units divide between graphics and compute, which orders `auto`
+    /// where measurements say a stage's best implementation differs by class.
+    pub class: AdapterClass,
 }
 
 impl CompileOptions {
@@ -39,7 +42,13 @@ impl CompileOptions {
         Self {
             adapter_features,
             limits: wgpu::Limits::default(),
+            class: AdapterClass::default(),
         }
+    }
+    /// Plans for adapters of `class` (a graphics GPU unless told).
+    pub fn with_class(mut self, class: AdapterClass) -> Self {
+        self.class = class;
+        self
     }
     /// Plans for these limits instead of wgpu's defaults, e.g. to test a limit check.
     pub fn with_limits(mut self, limits: wgpu::Limits) -> Self {
@@ -190,22 +199,20 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     for mut node in passes {
         match node.alternatives.take() {
             None => choices.push(None),
-            Some((selection, rest)) => {
-                let mut candidates = vec![node.pass];
-                candidates.extend(rest);
-                let choice = Choice {
-                    selection,
-                    candidates,
-                };
-                let (pass, plan) = crate::choice::resolve(&node.name, choice, |c| {
-                    crate::choice::missing_features(
-                        c,
-                        options.adapter_features,
-                        &options.limits,
-                        &params,
-                        node.contract.slot_names(),
-                    )
-                })?;
+            Some(mut choice) => {
+                // The node holds the first candidate; the choice, the others.
+                choice.candidates.insert(0, node.pass);
+                let (pass, plan) =
+                    crate::choice::resolve(&node.name, choice, options.class, |c| {
+                        crate::choice::missing_features(
+                            c,
+                            options.adapter_features,
+                            &options.limits,
+                            options.class,
+                            &params,
+                            node.contract.slot_names(),
+                        )
+                    })?;
                 node.pass = pass;
                 choices.push(Some(plan));
             }
@@ -228,6 +235,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
         let mut ctx = SetupContext::new(
             options.adapter_features,
             &options.limits,
+            options.class,
             &params,
             node.contract.slot_names(),
         )
@@ -362,6 +370,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             optional_features: setup.optional,
             side_effect: setup.side_effect,
             recording: recording(&resources, node, setup, &scratch_of[p]),
+            skipped: setup.skipped.clone(),
         })
         .collect::<Vec<_>>();
     let batches = batches_of(&pass_plans, &order);
@@ -425,6 +434,10 @@ fn recording(
     setup: &SetupContext<'_>,
     scratch: &[usize],
 ) -> Recording {
+    // A skipped pass records nothing, so it never holds a batch up.
+    if setup.skipped.is_some() {
+        return Recording::Compute;
+    }
     if let Some(why) = &setup.needs_encoder {
         return Recording::Encoder(why.clone());
     }

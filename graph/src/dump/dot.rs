@@ -51,8 +51,8 @@ pub fn to_dot(plan: &Plan) -> String {
             format!("\nprograms: {}", names.join(", "))
         };
         let tooltip = p
-            .choice_reason()
-            .map(|r| format!(", tooltip=\"chosen: {}\"", esc(r)))
+            .decision()
+            .map(|r| format!(", tooltip=\"{}\"", esc(&r)))
             .unwrap_or_default();
         let mut inputs: Vec<&str> = p
             .slots

@@ -117,8 +117,8 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
             esc(&pass.name),
             esc(pass.stage),
             esc(&pass.implementation_label()),
-            pass.choice_reason()
-                .map(|r| format!("<br><small>{}</small>", esc(r)))
+            pass.decision()
+                .map(|r| format!("<br><small>{}</small>", esc(&r)))
                 .unwrap_or_default(),
             gpu.map(|g| format!("{g:.1}")).unwrap_or_else(|| "–".into()),
             timing

@@ -289,6 +289,7 @@ impl CompileOptions {
         Self {
             adapter_features: gpu.features,
             limits: gpu.device.limits(),
+            class: crate::AdapterClass::of(&gpu.info),
         }
     }
     /// The features and limits of `adapter`.
@@ -296,6 +297,7 @@ impl CompileOptions {
         Self {
             adapter_features: adapter.features(),
             limits: adapter.adapter.limits(),
+            class: crate::AdapterClass::of(&adapter.info()),
         }
     }
 }

@@ -940,6 +940,10 @@ impl FrameRecord<'_> {
         shared: &mut SharedPass,
         batched: bool,
     ) -> Result<()> {
+        // A pass skipped on this adapter has nothing to record.
+        if self.graph.plan.passes[p].skipped.is_some() {
+            return Ok(());
+        }
         let node = &self.graph.passes[p];
         let mut ctx = RecordContext {
             device: &self.gpu.device,

@@ -1,72 +1,156 @@
-//! Pipeline files: a TOML list of resources and pass instances, turned into a
-//! `GraphBuilder` through the code-first API, so both paths share every check.
+//! A pipeline as data: the `[params]`, `[[resource]]` and `[[pass]]` entries of a pipeline
+//! file, which a caller changes through methods (a parameter set, a pass's implementation
+//! swapped, a resource added and bound) before [`Pipeline::build`] turns it into a
+//! [`GraphBuilder`]. A renderer that ships its frame as a file applies its settings here,
+//! so the frame exists once, as the file, and nothing ever edits the file's text.
 
-use crate::builder::{Bindings, GraphBuilder, History};
+use crate::builder::GraphBuilder;
 use crate::error::{GraphError, Result};
-use crate::file::{Params, Registry};
-use crate::problem::{MAX_PIPELINE_FILE_BYTES, ResourceProblem, SourceProblem};
-use crate::resource::{BufferDesc, Element, Handle, TextureDesc, TextureRange};
-use serde::Deserialize;
-use std::collections::BTreeMap;
-use std::io::Read;
+use crate::file::Registry;
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// A pipeline file as parsed, before its passes are built.
-#[derive(Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub struct PipelineFile {
+pub struct Pipeline {
     /// Shown in dumps.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Size parameters: `[params] cluster_slots = 65536`; buffers name one with
-    /// `count_param` instead of `count`.
+    /// `count_param` instead of `count`, pass parameters with `"$name"`.
     #[serde(default)]
     pub params: BTreeMap<String, u64>,
-    #[serde(default, rename = "resource")]
     /// The `[[resource]]` entries, in file order.
+    #[serde(default, rename = "resource")]
     pub resources: Vec<ResourceEntry>,
-    #[serde(default, rename = "pass")]
     /// The `[[pass]]` entries, in file order: the order passes are added to the graph.
+    #[serde(default, rename = "pass")]
     pub passes: Vec<PassEntry>,
+    /// Where the pipeline came from, as errors name it.
+    #[serde(skip)]
+    file: String,
 }
 
-#[derive(Debug, Deserialize, Clone, Copy, PartialEq, Eq)]
+/// What a `[[resource]]` entry declares: a transient, imported, exported or history
+/// resource.
+#[derive(Debug, Deserialize, Serialize, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum EntryKind {
+    /// Lives within a frame, pooled.
     Transient,
+    /// Owned by the caller, handed to every frame.
     Imported,
+    /// Transient, kept after the frame for the caller to read back.
     Exported,
+    /// Written this frame, read next frame as `<name>.prev`.
     History,
 }
 
-#[derive(Debug, Deserialize)]
+/// A buffer of `count` (or `count_param`) elements.
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct BufferEntry {
     /// A known element name (`u32`, `u64`, `f32`, `vec4<f32>`, `DispatchIndirectArgs`,
     /// `DrawIndirectArgs`, `u8`) or any name with `element_size`.
     pub element: String,
+    /// Bytes per element, for element names the graph does not know.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub element_size: Option<u32>,
+    /// A fixed element count.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub count: Option<u64>,
     /// A size parameter from `[params]` giving the element count.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub count_param: Option<String>,
 }
 
-#[derive(Debug, Deserialize)]
+/// How many mip levels a texture entry has: a count, or `"full"`, the whole chain down
+/// to 1 × 1 for whatever size its parameters give, so a file sized by parameters never
+/// carries a mip count that only fits one size.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(try_from = "MipLevelsText", into = "MipLevelsText")]
+pub enum MipLevels {
+    /// This many levels.
+    Count(u32),
+    /// `floor(log2(max(width, height))) + 1` levels.
+    Full,
+}
+
+impl Default for MipLevels {
+    fn default() -> Self {
+        MipLevels::Count(1)
+    }
+}
+
+impl MipLevels {
+    /// The level count for a `width × height` texture.
+    pub fn resolve(self, width: u32, height: u32) -> u32 {
+        match self {
+            MipLevels::Count(n) => n,
+            MipLevels::Full => 32 - width.max(height).max(1).leading_zeros(),
+        }
+    }
+}
+
+/// `mip_levels` as written: a number or a word.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(untagged)]
+enum MipLevelsText {
+    Count(u32),
+    Word(String),
+}
+
+impl TryFrom<MipLevelsText> for MipLevels {
+    type Error = String;
+    fn try_from(t: MipLevelsText) -> std::result::Result<Self, String> {
+        match t {
+            MipLevelsText::Count(n) => Ok(MipLevels::Count(n)),
+            MipLevelsText::Word(w) if w == "full" => Ok(MipLevels::Full),
+            MipLevelsText::Word(w) => Err(format!(
+                "`mip_levels = \"{w}\"`: give a number of levels, or \"full\" for the whole chain"
+            )),
+        }
+    }
+}
+
+impl From<MipLevels> for MipLevelsText {
+    fn from(m: MipLevels) -> Self {
+        match m {
+            MipLevels::Count(n) => MipLevelsText::Count(n),
+            MipLevels::Full => MipLevelsText::Word("full".into()),
+        }
+    }
+}
+
+/// A 2-D texture (or array), its size fixed or read from `[params]`.
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct TextureEntry {
+    /// The format's WGSL spelling (`rgba8unorm`, `r32float`, `depth32float`, …).
     pub format: String,
     /// A fixed width, or `width_param`: a size parameter from `[params]` (read when the
-    /// file is loaded, so a renderer sets the viewport through the parameters).
+    /// pipeline is built, so a renderer sets the viewport through the parameters).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub width: Option<u32>,
+    /// The size parameter giving the width.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub width_param: Option<String>,
+    /// A fixed height.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub height: Option<u32>,
+    /// The size parameter giving the height.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub height_param: Option<String>,
-    #[serde(default = "one")]
-    pub mip_levels: u32,
+    /// Mip levels: a count (1 when left out) or `"full"`.
+    #[serde(default)]
+    pub mip_levels: MipLevels,
     /// Array layers (1: a plain 2-D texture).
     #[serde(default = "one")]
     pub layers: u32,
 }
+
 fn one() -> u32 {
     1
 }
@@ -74,583 +158,424 @@ fn one() -> u32 {
 /// A 64-bit visibility target of `width × height` values, held as a `u64` buffer or an
 /// `R64Uint` texture as the rasteriser that clears it writes (see
 /// `GraphBuilder::create_visibility64`), so swapping that rasteriser is one line.
-#[derive(Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct VisibilityEntry {
+    /// A fixed width.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub width: Option<u32>,
+    /// The size parameter giving the width.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub width_param: Option<String>,
+    /// A fixed height.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub height: Option<u32>,
+    /// The size parameter giving the height.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub height_param: Option<String>,
 }
 
-#[derive(Debug, Deserialize)]
+/// One `[[resource]]`: a name, a kind and exactly one of a buffer, a texture or a
+/// visibility target.
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ResourceEntry {
+    /// The resource's name; slots of the same name bind it unless told otherwise.
     pub name: String,
+    /// Transient, imported, exported or history.
     pub kind: EntryKind,
+    /// A buffer.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub buffer: Option<BufferEntry>,
+    /// A texture.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub texture: Option<TextureEntry>,
+    /// A 64-bit visibility target.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub visibility: Option<VisibilityEntry>,
     /// Imported only: the usages the caller creates it with (`STORAGE`, `COPY_SRC`, …).
     /// The names are checked on every kind, so a misspelt one is never ignored.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub usage: Vec<String>,
 }
 
-#[derive(Debug, Deserialize)]
+impl ResourceEntry {
+    /// A buffer of `kind` holding `count` elements of `element` (a known element name,
+    /// or any name with `element_size`).
+    pub fn buffer(
+        name: &str,
+        kind: EntryKind,
+        element: &str,
+        element_size: Option<u32>,
+        count: u64,
+    ) -> Self {
+        Self::of(
+            name,
+            kind,
+            BufferEntry {
+                element: element.to_string(),
+                element_size,
+                count: Some(count),
+                count_param: None,
+            },
+        )
+    }
+
+    /// A texture of `kind` in `format` (WGSL spelling) sized by the parameters
+    /// `width_param` and `height_param`.
+    pub fn texture_sized_by(
+        name: &str,
+        kind: EntryKind,
+        format: &str,
+        width_param: &str,
+        height_param: &str,
+    ) -> Self {
+        Self {
+            name: name.to_string(),
+            kind,
+            buffer: None,
+            texture: Some(TextureEntry {
+                format: format.to_string(),
+                width: None,
+                width_param: Some(width_param.to_string()),
+                height: None,
+                height_param: Some(height_param.to_string()),
+                mip_levels: MipLevels::default(),
+                layers: 1,
+            }),
+            visibility: None,
+            usage: Vec::new(),
+        }
+    }
+
+    fn of(name: &str, kind: EntryKind, buffer: BufferEntry) -> Self {
+        Self {
+            name: name.to_string(),
+            kind,
+            buffer: Some(buffer),
+            texture: None,
+            visibility: None,
+            usage: Vec::new(),
+        }
+    }
+
+    /// The usages an imported resource is created with, as wgpu names the flags
+    /// (`STORAGE`, `RENDER_ATTACHMENT`, …).
+    pub fn with_usage(mut self, usage: &[&str]) -> Self {
+        self.usage = usage.iter().map(|u| u.to_string()).collect();
+        self
+    }
+}
+
+/// One `[[pass]]`: an instance of a stage implementation with its parameters and slot
+/// bindings.
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct PassEntry {
+    /// The pass instance's name in the graph, unique in the pipeline.
     pub name: String,
+    /// The stage it implements.
     pub stage: String,
+    /// The implementation's name, or `auto`.
     pub implementation: String,
-    #[serde(default)]
+    /// The implementation's parameters (`"$name"` reads a size parameter).
+    #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
     pub params: toml::Table,
-    /// slot → `resource` (its current version) or `resource@N` (an explicit version).
-    #[serde(default)]
+    /// slot → `resource` (its current version), `resource@N` (an explicit version), with
+    /// `#mip=2`-style texture ranges.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub bind: BTreeMap<String, String>,
+}
+
+impl PassEntry {
+    /// The parameter `key` as written.
+    pub fn param(&self, key: &str) -> Option<&toml::Value> {
+        self.params.get(key)
+    }
+    /// The string parameter `key`, where it is one.
+    pub fn param_str(&self, key: &str) -> Option<&str> {
+        self.param(key).and_then(toml::Value::as_str)
+    }
+    /// Sets parameter `key`, replacing what the file wrote.
+    pub fn set_param(&mut self, key: &str, value: impl Into<toml::Value>) {
+        self.params.insert(key.to_string(), value.into());
+    }
+    /// The resource (and version or range, as written) bound to `slot` explicitly.
+    pub fn binding(&self, slot: &str) -> Option<&str> {
+        self.bind.get(slot).map(String::as_str)
+    }
+    /// Binds `slot` to `resource` (written as in a file: `name`, `name@N`, `name#mip=1`).
+    pub fn bind(&mut self, slot: &str, resource: &str) {
+        self.bind.insert(slot.to_string(), resource.to_string());
+    }
+    /// Removes the explicit binding of `slot`; the slot then binds the resource of its
+    /// own name, if any (optional slots stay unbound without one).
+    pub fn unbind(&mut self, slot: &str) -> Option<String> {
+        self.bind.remove(slot)
+    }
+}
+
+/// The resource name a binding target refers to: `name@2#mip=1` and `name.prev` name
+/// `name`'s entry.
+pub(crate) fn target_resource(target: &str) -> &str {
+    let name = target.split(['#', '@']).next().unwrap_or(target);
+    name.strip_suffix(".prev").unwrap_or(name)
+}
+
+impl Pipeline {
+    /// Parses a pipeline file's text; `file` names it in errors.
+    pub fn parse(text: &str, file: &str) -> Result<Self> {
+        let mut p: Pipeline = toml::from_str(text).map_err(|e| GraphError::PipelineFile {
+            file: file.to_string(),
+            message: e.to_string(),
+        })?;
+        p.file = file.to_string();
+        Ok(p)
+    }
+
+    /// Reads and parses the pipeline file at `path` (a regular file of bounded size; see
+    /// [`crate::file::read_pipeline_text`]).
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = crate::file::read_pipeline_text(path)?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// The file the pipeline came from, as errors name it.
+    pub fn file(&self) -> &str {
+        &self.file
+    }
+
+    fn error(&self, message: String) -> GraphError {
+        GraphError::PipelineFile {
+            file: self.file.clone(),
+            message,
+        }
+    }
+
+    /// The value of size parameter `name`.
+    pub fn param(&self, name: &str) -> Option<u64> {
+        self.params.get(name).copied()
+    }
+
+    /// Sets a size parameter the pipeline declares; an undeclared one is an error (a
+    /// misspelt name would otherwise be ignored).
+    pub fn set_param(&mut self, name: &str, value: u64) -> Result<()> {
+        match self.params.get_mut(name) {
+            Some(v) => {
+                *v = value;
+                Ok(())
+            }
+            None => Err(self.error(format!(
+                "the caller sets parameter `{name}`, which the pipeline does not declare; add `{name} = <default>` to its [params]"
+            ))),
+        }
+    }
+
+    /// [`Self::set_param`] for each of `params`.
+    pub fn set_params<N: AsRef<str>>(
+        &mut self,
+        params: impl IntoIterator<Item = (N, u64)>,
+    ) -> Result<()> {
+        params
+            .into_iter()
+            .try_for_each(|(name, value)| self.set_param(name.as_ref(), value))
+    }
+
+    /// Sets a size parameter, declaring it when the pipeline does not.
+    pub fn declare_param(&mut self, name: &str, value: u64) {
+        self.params.insert(name.to_string(), value);
+    }
+
+    /// The resource entry named `name`.
+    pub fn resource(&self, name: &str) -> Option<&ResourceEntry> {
+        self.resources.iter().find(|r| r.name == name)
+    }
+
+    /// Adds a resource before every pass, so slots of its name bind it by default; a
+    /// name the pipeline already declares is an error.
+    pub fn add_resource(&mut self, entry: ResourceEntry) -> Result<()> {
+        if self.resource(&entry.name).is_some() {
+            return Err(self.error(format!(
+                "the caller adds resource `{}`, which the pipeline already declares; bind the existing one or pick another name",
+                entry.name
+            )));
+        }
+        self.resources.push(entry);
+        Ok(())
+    }
+
+    /// The pass named `name`.
+    pub fn pass(&self, name: &str) -> Option<&PassEntry> {
+        self.passes.iter().find(|p| p.name == name)
+    }
+
+    /// The pass named `name`, to change; an unknown name is an error listing the passes.
+    pub fn pass_mut(&mut self, name: &str) -> Result<&mut PassEntry> {
+        match self.passes.iter().position(|p| p.name == name) {
+            Some(i) => Ok(&mut self.passes[i]),
+            None => {
+                let known = self
+                    .passes
+                    .iter()
+                    .map(|p| p.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                Err(self.error(format!("it has no pass `{name}` (passes: {known})")))
+            }
+        }
+    }
+
+    /// The passes of `stage`, in order.
+    pub fn passes_of<'p>(&'p self, stage: &'p str) -> impl Iterator<Item = &'p PassEntry> + 'p {
+        self.passes.iter().filter(move |p| p.stage == stage)
+    }
+
+    /// The passes of `stage`, in order, to change.
+    pub fn passes_of_mut<'p>(
+        &'p mut self,
+        stage: &'p str,
+    ) -> impl Iterator<Item = &'p mut PassEntry> + 'p {
+        self.passes.iter_mut().filter(move |p| p.stage == stage)
+    }
+
+    /// Whether any pass implements `stage`.
+    pub fn has_stage(&self, stage: &str) -> bool {
+        self.passes_of(stage).next().is_some()
+    }
+
+    /// Sets parameter `key` of every pass of `stage`; returns how many passes there are.
+    pub fn set_stage_param(
+        &mut self,
+        stage: &str,
+        key: &str,
+        value: impl Into<toml::Value>,
+    ) -> usize {
+        let value = value.into();
+        self.passes_of_mut(stage)
+            .map(|p| p.set_param(key, value.clone()))
+            .count()
+    }
+
+    /// Runs every pass of `stage` with `implementation` (or `auto`); returns how many
+    /// passes there are. An implementation the registry lacks is refused when the
+    /// pipeline is built, with the stage's known ones.
+    pub fn set_implementation(&mut self, stage: &str, implementation: &str) -> usize {
+        self.passes_of_mut(stage)
+            .map(|p| p.implementation = implementation.to_string())
+            .count()
+    }
+
+    /// Binds `resource` to `slot` of every pass of `stage` (an extra resource a stage
+    /// reads in every pass, such as a second binding of a table); returns how many
+    /// passes there are.
+    pub fn bind_stage(&mut self, stage: &str, slot: &str, resource: &str) -> usize {
+        self.passes_of_mut(stage)
+            .map(|p| p.bind(slot, resource))
+            .count()
+    }
+
+    /// Removes the passes `remove` picks, then every resource no remaining pass binds
+    /// (by name or explicitly), and the explicit bindings of remaining passes to a
+    /// resource that only removed passes wrote: what only the removed passes made goes
+    /// with them, and an optional slot that read it is left unbound. A required slot left
+    /// without its resource is refused when the pipeline is built, naming it. `registry`
+    /// gives each pass's contract, to know which slots bind by name. Returns the names of
+    /// the removed passes and resources.
+    pub fn remove_passes(
+        &mut self,
+        registry: &Registry,
+        remove: impl Fn(&PassEntry) -> bool,
+    ) -> Result<Removed> {
+        let (gone, kept): (Vec<PassEntry>, Vec<PassEntry>) = std::mem::take(&mut self.passes)
+            .into_iter()
+            .partition(remove);
+        self.passes = kept;
+        let mut written_by_kept = BTreeSet::new();
+        let mut bound_by_kept = BTreeSet::new();
+        for p in &self.passes {
+            for (slot, writes) in self.slots_of(p, registry)? {
+                let resource = p.binding(slot).map_or(slot, target_resource).to_string();
+                if writes {
+                    written_by_kept.insert(resource.clone());
+                }
+                bound_by_kept.insert(resource);
+            }
+        }
+        let mut written_by_gone = BTreeSet::new();
+        for p in &gone {
+            for (slot, writes) in self.slots_of(p, registry)? {
+                if writes {
+                    written_by_gone
+                        .insert(p.binding(slot).map_or(slot, target_resource).to_string());
+                }
+            }
+        }
+        // A resource only removed passes wrote holds nothing now: it goes, and so do the
+        // explicit bindings to it.
+        let orphans: BTreeSet<String> = written_by_gone
+            .difference(&written_by_kept)
+            .filter(|r| {
+                self.resource(r)
+                    .is_some_and(|e| matches!(e.kind, EntryKind::Transient | EntryKind::Exported))
+            })
+            .cloned()
+            .collect();
+        for p in &mut self.passes {
+            p.bind
+                .retain(|_, target| !orphans.contains(target_resource(target)));
+        }
+        let mut resources = Vec::new();
+        self.resources.retain(|r| {
+            let keep = bound_by_kept.contains(&r.name) && !orphans.contains(&r.name);
+            if !keep {
+                resources.push(r.name.clone());
+            }
+            keep
+        });
+        Ok(Removed {
+            passes: gone.into_iter().map(|p| p.name).collect(),
+            resources,
+        })
+    }
+
+    /// Each slot of `pass`'s stage contract (from the registry, with the pass's own
+    /// parameters) with whether the pass writes through it.
+    fn slots_of(&self, pass: &PassEntry, registry: &Registry) -> Result<Vec<(&'static str, bool)>> {
+        let contract = crate::file::build::build_pass(self, pass, registry)?.contract();
+        Ok(contract
+            .slots
+            .iter()
+            .map(|s| (s.name, s.writes()))
+            .collect())
+    }
+
+    /// The graph this pipeline declares, its passes built by `registry`.
+    pub fn build(&self, registry: &Registry) -> Result<GraphBuilder> {
+        crate::file::build::build(self, registry)
+    }
+
+    /// The pipeline as TOML text, for a caller that keeps or shows the pipeline it
+    /// built (comments of the original file are not kept).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).unwrap_or_default()
+    }
+}
+
+/// What [`Pipeline::remove_passes`] removed.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Removed {
+    /// The passes, by name.
+    pub passes: Vec<String>,
+    /// The resources no remaining pass uses, by name.
+    pub resources: Vec<String>,
 }
 
 /// Reads and parses the pipeline file at `path` with `registry`'s stages.
 pub fn load_pipeline(path: &Path, registry: &Registry) -> Result<GraphBuilder> {
-    load_pipeline_with(path, registry, &BTreeMap::new())
-}
-
-/// Loads a pipeline file with some of its `[params]` replaced: a renderer sets the
-/// viewport and the scene's buffer sizes this way. An override of a parameter the file
-/// does not declare is an error (a misspelt name would otherwise be ignored).
-pub fn load_pipeline_with(
-    path: &Path,
-    registry: &Registry,
-    overrides: &BTreeMap<String, u64>,
-) -> Result<GraphBuilder> {
-    let text = read_pipeline_text(path)?;
-    parse_pipeline_with(&text, &path.display().to_string(), registry, overrides)
-}
-
-/// The text of a pipeline file: a regular file of at most [`MAX_PIPELINE_FILE_BYTES`].
-/// A device, FIFO or directory is refused before it is opened (`/dev/zero` would
-/// otherwise be read until memory runs out), and the read stops past the limit even if
-/// the file grows while it is read.
-pub fn read_pipeline_text(path: &Path) -> Result<String> {
-    let refuse = |problem| GraphError::PipelineSource {
-        file: path.display().to_string(),
-        problem,
-    };
-    let unreadable = |e: std::io::Error| {
-        refuse(SourceProblem::Unreadable {
-            reason: e.to_string(),
-        })
-    };
-    let meta = std::fs::metadata(path).map_err(unreadable)?;
-    if !meta.is_file() {
-        return Err(refuse(SourceProblem::NotARegularFile {
-            what: file_kind(&meta.file_type()),
-        }));
-    }
-    let too_large = |bytes| {
-        refuse(SourceProblem::TooLarge {
-            bytes,
-            limit: MAX_PIPELINE_FILE_BYTES,
-        })
-    };
-    if meta.len() > MAX_PIPELINE_FILE_BYTES {
-        return Err(too_large(meta.len()));
-    }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    std::fs::File::open(path)
-        .and_then(|f| f.take(MAX_PIPELINE_FILE_BYTES + 1).read_to_end(&mut bytes))
-        .map_err(unreadable)?;
-    if bytes.len() as u64 > MAX_PIPELINE_FILE_BYTES {
-        return Err(too_large(bytes.len() as u64));
-    }
-    String::from_utf8(bytes).map_err(|e| {
-        refuse(SourceProblem::Unreadable {
-            reason: format!(
-                "it is not UTF-8 text (byte {})",
-                e.utf8_error().valid_up_to()
-            ),
-        })
-    })
-}
-
-/// What a path that is not a regular file is, for the error.
-fn file_kind(t: &std::fs::FileType) -> &'static str {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if t.is_char_device() {
-            return "a character device";
-        }
-        if t.is_block_device() {
-            return "a block device";
-        }
-        if t.is_fifo() {
-            return "a FIFO";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-    }
-    if t.is_dir() {
-        "a directory"
-    } else {
-        "not a regular file"
-    }
+    Pipeline::load(path)?.build(registry)
 }
 
 /// Parses a pipeline file's text (`file` names it in errors) with `registry`'s stages.
 pub fn parse_pipeline(text: &str, file: &str, registry: &Registry) -> Result<GraphBuilder> {
-    parse_pipeline_with(text, file, registry, &BTreeMap::new())
-}
-
-/// [`parse_pipeline`] with `overrides` replacing values of the file's `[params]`.
-pub fn parse_pipeline_with(
-    text: &str,
-    file: &str,
-    registry: &Registry,
-    overrides: &BTreeMap<String, u64>,
-) -> Result<GraphBuilder> {
-    let ferr = |message: String| GraphError::PipelineFile {
-        file: file.to_string(),
-        message,
-    };
-    let mut parsed: PipelineFile = toml::from_str(text).map_err(|e| ferr(e.to_string()))?;
-    for (name, value) in overrides {
-        match parsed.params.get_mut(name) {
-            Some(v) => *v = *value,
-            None => {
-                return Err(ferr(format!(
-                    "the caller sets parameter `{name}`, which the file does not declare; add `{name} = <default>` to its [params]"
-                )));
-            }
-        }
-    }
-    let mut g = GraphBuilder::new();
-    for (name, value) in &parsed.params {
-        g.size_param(name, *value);
-    }
-    for r in &parsed.resources {
-        declare(&mut g, r, &parsed.params).map_err(|refusal| match refusal {
-            Refusal::Text(m) => ferr(format!("resource `{}`: {m}", r.name)),
-            Refusal::Problem(problem) => GraphError::PipelineResource {
-                file: file.to_string(),
-                resource: r.name.clone(),
-                problem,
-            },
-        })?;
-    }
-    for p in &mut parsed.passes {
-        substitute_params(&mut p.params, &parsed.params)
-            .map_err(|m| ferr(format!("pass `{}`: {m}", p.name)))?;
-    }
-    for p in &parsed.passes {
-        if registry.implementations(&p.stage).is_empty() {
-            let stages = registry.stage_names();
-            return Err(GraphError::UnknownStage {
-                file: file.to_string(),
-                pass: p.name.clone(),
-                stage: p.stage.clone(),
-                known: if stages.is_empty() {
-                    "none are registered".into()
-                } else {
-                    stages.join(", ")
-                },
-            });
-        }
-        let params = Params::new(p.params.clone());
-        let with_pass = |e| match e {
-            GraphError::Parameter { message, .. } => GraphError::Parameter {
-                pass: p.name.clone(),
-                message,
-            },
-            other => other,
-        };
-        let pass = match registry
-            .build_choice(&p.stage, &p.implementation, &params)
-            .map_err(with_pass)?
-        {
-            Some(choice) => Built::Choice(choice),
-            None => Built::One(
-                registry
-                    .build(&p.stage, &p.implementation, &params)
-                    .map_err(with_pass)?,
-            ),
-        };
-        let mut bindings = Bindings::new();
-        for (slot, target) in &p.bind {
-            let bad = |m: String| ferr(format!("pass `{}` slot `{slot}`: {m}", p.name));
-            let (target_res, range) = match target.split_once('#') {
-                Some((res, view)) => (res, Some(parse_range(view).map_err(bad)?)),
-                None => (target.as_str(), None),
-            };
-            bindings = match target_res.split_once('@') {
-                Some((res, v)) => {
-                    let v: u32 = v.parse().map_err(|e: std::num::ParseIntError| {
-                        let why = match e.kind() {
-                            std::num::IntErrorKind::PosOverflow => format!(
-                                "the version after @ in `{target}` is too large (at most {})",
-                                u32::MAX
-                            ),
-                            _ => format!("`{target}` needs a version number after @"),
-                        };
-                        bad(why)
-                    })?;
-                    let h = g
-                        .resource_at(res, v)
-                        .ok_or_else(|| GraphError::UnknownResource {
-                            pass: p.name.clone(),
-                            slot: slot.clone(),
-                            resource: res.to_string(),
-                        })?;
-                    match range {
-                        Some(r) => bindings.bind_range(slot, h, r),
-                        None => bindings.bind(slot, h),
-                    }
-                }
-                None => match range {
-                    Some(r) => bindings.bind_named_range(slot, target_res, r),
-                    None => bindings.bind_named(slot, target_res),
-                },
-            };
-        }
-        match pass {
-            Built::One(pass) => g.add_boxed_pass(&p.name, pass, bindings)?,
-            Built::Choice(choice) => g.add_choice(&p.name, choice, bindings)?,
-        };
-    }
-    Ok(g)
-}
-
-/// A pipeline entry's pass: one implementation, or several for compile to pick from.
-enum Built {
-    One(Box<dyn crate::pass::Pass>),
-    Choice(crate::choice::Choice),
-}
-
-/// `mip=N`, `mips=A..B`, `layer=N`, `layers=A..B`, joined with `,`: the part of a texture
-/// a slot binds, written after `#` (`pyramid#mip=2`, `shadow#layer=1,mip=0`).
-fn parse_range(text: &str) -> std::result::Result<TextureRange, String> {
-    let mut range = TextureRange::mips(0, u32::MAX);
-    let span = |v: &str| -> Option<(u32, u32)> {
-        match v.split_once("..") {
-            Some((a, b)) => {
-                let (a, b): (u32, u32) = (a.trim().parse().ok()?, b.trim().parse().ok()?);
-                (b > a).then_some((a, b - a))
-            }
-            None => v.trim().parse().ok().map(|n| (n, 1)),
-        }
-    };
-    for part in text.split(',') {
-        let (key, value) = part.split_once('=').ok_or_else(|| {
-            format!("`#{text}`: expected `mip=N`, `mips=A..B`, `layer=N` or `layers=A..B`")
-        })?;
-        let (first, count) = span(value).ok_or_else(|| {
-            format!("`#{text}`: `{value}` is not a number or a non-empty range A..B")
-        })?;
-        match key.trim() {
-            "mip" | "mips" => {
-                range.base_mip = first;
-                range.mip_count = count;
-            }
-            "layer" | "layers" => {
-                range.base_layer = first;
-                range.layer_count = count;
-            }
-            other => {
-                return Err(format!(
-                    "`#{text}`: unknown view key `{other}`; use mip, mips, layer or layers"
-                ));
-            }
-        }
-    }
-    Ok(range)
-}
-
-/// Pass parameters written `"$name"` take the value of size parameter `name`, so one
-/// `[params]` entry (the viewport, say) reaches resources and passes alike.
-fn substitute_params(
-    table: &mut toml::Table,
-    params: &BTreeMap<String, u64>,
-) -> std::result::Result<(), String> {
-    for (key, value) in table.iter_mut() {
-        if let toml::Value::String(s) = value
-            && let Some(name) = s.strip_prefix('$')
-        {
-            let v = params.get(name).ok_or_else(|| {
-                format!("parameter `{key}` refers to `${name}`, which [params] does not declare")
-            })?;
-            let v = i64::try_from(*v)
-                .map_err(|_| format!("`${name}` = {v} is too large for parameter `{key}`"))?;
-            *value = toml::Value::Integer(v);
-        }
-    }
-    Ok(())
-}
-
-/// A texture dimension: fixed, or from a size parameter.
-fn dimension(
-    what: &str,
-    fixed: Option<u32>,
-    param: &Option<String>,
-    params: &BTreeMap<String, u64>,
-) -> std::result::Result<u32, String> {
-    match (fixed, param) {
-        (Some(v), None) => Ok(v),
-        (None, Some(p)) => {
-            let v = params
-                .get(p)
-                .ok_or_else(|| format!("`{what}_param = \"{p}\"` names no entry of [params]"))?;
-            u32::try_from(*v).map_err(|_| format!("{what} `{p}` = {v} does not fit 32 bits"))
-        }
-        _ => Err(format!("give exactly one of `{what}` or `{what}_param`")),
-    }
-}
-
-/// Why [`declare`] refused an entry: a typed problem, or a message about the entry's
-/// shape.
-enum Refusal {
-    Text(String),
-    Problem(ResourceProblem),
-}
-
-impl From<String> for Refusal {
-    fn from(m: String) -> Self {
-        Refusal::Text(m)
-    }
-}
-impl From<&str> for Refusal {
-    fn from(m: &str) -> Self {
-        Refusal::Text(m.to_string())
-    }
-}
-impl From<ResourceProblem> for Refusal {
-    fn from(p: ResourceProblem) -> Self {
-        Refusal::Problem(p)
-    }
-}
-
-/// Refuses an extent with a zero dimension, whether written or read from `[params]`.
-fn nonzero_extent(
-    what: &'static str,
-    width: u32,
-    height: u32,
-    mip_levels: u32,
-    layers: u32,
-) -> std::result::Result<(), ResourceProblem> {
-    if [width, height, mip_levels, layers].contains(&0) {
-        return Err(ResourceProblem::ZeroExtent {
-            what,
-            width,
-            height,
-            mip_levels,
-            layers,
-        });
-    }
-    Ok(())
-}
-
-fn declare(
-    g: &mut GraphBuilder,
-    r: &ResourceEntry,
-    params: &BTreeMap<String, u64>,
-) -> std::result::Result<(), Refusal> {
-    if let Some(v) = &r.visibility {
-        if r.buffer.is_some() || r.texture.is_some() {
-            return Err(
-                "give exactly one of `buffer = {..}`, `texture = {..}` or `visibility = {..}`"
-                    .into(),
-            );
-        }
-        // Held as a buffer or a texture, as the rasteriser decides: a name either knows.
-        if let Some(n) = r.usage.iter().find(|n| {
-            wgpu::BufferUsages::from_name(n).is_none()
-                && wgpu::TextureUsages::from_name(n).is_none()
-        }) {
-            return Err(ResourceProblem::UnknownUsage {
-                kind: "buffer or texture",
-                usage: n.clone(),
-                known: format!(
-                    "{}; {}",
-                    known_names(wgpu::BufferUsages::all().iter_names()),
-                    known_names(wgpu::TextureUsages::all().iter_names())
-                ),
-            }
-            .into());
-        }
-        let width = dimension("width", v.width, &v.width_param, params)?;
-        let height = dimension("height", v.height, &v.height_param, params)?;
-        nonzero_extent("visibility target", width, height, 1, 1)?;
-        match r.kind {
-            EntryKind::Transient => drop(g.create_visibility64(&r.name, width, height)),
-            EntryKind::Exported => {
-                let h = g.create_visibility64(&r.name, width, height);
-                g.export(h);
-            }
-            other => {
-                return Err(format!(
-                    "a visibility target is `transient` or `exported`, not {other:?}; declare a {} as `buffer` or `texture` instead",
-                    if other == EntryKind::Imported {
-                        "caller-owned one"
-                    } else {
-                        "history"
-                    }
-                )
-                .into());
-            }
-        }
-        return Ok(());
-    }
-    match (&r.buffer, &r.texture) {
-        (Some(b), None) => {
-            let element = match (Element::from_known_name(&b.element), b.element_size) {
-                (_, Some(size)) => Element {
-                    name: b.element.clone().into(),
-                    size,
-                },
-                (Some(e), None) => e,
-                (None, None) => {
-                    return Err(format!(
-                        "element `{}` is not a known type; give `element_size` in bytes",
-                        b.element
-                    )
-                    .into());
-                }
-            };
-            let usage = usage_flags::<wgpu::BufferUsages>(&r.usage, "buffer")?;
-            // A count from a parameter may be 0 for a while (no instances yet) and is
-            // checked where it is resolved; one written in the file never changes.
-            if element.size == 0 || b.count == Some(0) {
-                return Err(ResourceProblem::EmptyBuffer {
-                    count: b.count,
-                    element_size: element.size,
-                }
-                .into());
-            }
-            let desc = match (b.count, &b.count_param) {
-                (Some(n), None) => BufferDesc::array(element, n),
-                (None, Some(p)) => BufferDesc::array_param(element, p),
-                _ => return Err("give exactly one of `count` or `count_param`".into()),
-            };
-            let buffer = Declarers {
-                create: GraphBuilder::create_buffer,
-                import: GraphBuilder::import_buffer,
-                history: GraphBuilder::history_buffer,
-            };
-            buffer.declare(g, r, desc, usage);
-        }
-        (None, Some(t)) => {
-            let usage = usage_flags::<wgpu::TextureUsages>(&r.usage, "texture")?;
-            let format = parse_format(&t.format)?;
-            let desc = TextureDesc {
-                format,
-                width: dimension("width", t.width, &t.width_param, params)?,
-                height: dimension("height", t.height, &t.height_param, params)?,
-                mip_levels: t.mip_levels,
-                layers: t.layers,
-            };
-            nonzero_extent(
-                "texture",
-                desc.width,
-                desc.height,
-                desc.mip_levels,
-                desc.layers,
-            )?;
-            let texture = Declarers {
-                create: GraphBuilder::create_texture,
-                import: GraphBuilder::import_texture,
-                history: GraphBuilder::history_texture,
-            };
-            texture.declare(g, r, desc, usage);
-        }
-        _ => {
-            return Err(
-                "give exactly one of `buffer = {..}`, `texture = {..}` or `visibility = {..}`"
-                    .into(),
-            );
-        }
-    }
-    Ok(())
-}
-
-/// The builder's three ways to declare a buffer, or a texture: the entry's kind picks
-/// one, the same way for both forms.
-struct Declarers<D, U, K> {
-    create: fn(&mut GraphBuilder, &str, D) -> Handle<K>,
-    import: fn(&mut GraphBuilder, &str, D, U) -> Handle<K>,
-    history: fn(&mut GraphBuilder, &str, D) -> History<K>,
-}
-
-impl<D, U, K> Declarers<D, U, K> {
-    /// Declares `r` as `desc`; `usage` is read only by an imported entry.
-    fn declare(&self, g: &mut GraphBuilder, r: &ResourceEntry, desc: D, usage: U) {
-        match r.kind {
-            EntryKind::Transient => drop((self.create)(g, &r.name, desc)),
-            EntryKind::Exported => {
-                let h = (self.create)(g, &r.name, desc);
-                g.export(h);
-            }
-            EntryKind::Imported => drop((self.import)(g, &r.name, desc, usage)),
-            EntryKind::History => drop((self.history)(g, &r.name, desc)),
-        }
-    }
-}
-
-/// An entry's `usage` names as the wgpu flags of its `kind` (`buffer` or `texture`); a
-/// name the flags lack is refused with the ones they have.
-fn usage_flags<F: bitflags::Flags + Copy>(
-    names: &[String],
-    kind: &'static str,
-) -> std::result::Result<F, ResourceProblem> {
-    names.iter().try_fold(F::empty(), |acc, n| {
-        F::from_name(n)
-            .map(|u| acc.union(u))
-            .ok_or_else(|| ResourceProblem::UnknownUsage {
-                kind,
-                usage: n.clone(),
-                known: known_names(F::all().iter_names()),
-            })
-    })
-}
-
-/// The flag names a `usage` list may hold, as wgpu spells them.
-fn known_names<T>(names: impl Iterator<Item = (&'static str, T)>) -> String {
-    names.map(|(n, _)| n).collect::<Vec<_>>().join(", ")
-}
-
-/// Texture formats by their WGSL spelling (`rgba8unorm`, `r32uint`, `depth32float`, …).
-pub fn parse_format(name: &str) -> std::result::Result<wgpu::TextureFormat, String> {
-    use wgpu::TextureFormat as F;
-    const KNOWN: &[F] = &[
-        F::R8Unorm,
-        F::R16Float,
-        F::R32Uint,
-        F::R32Sint,
-        F::R32Float,
-        F::R64Uint,
-        F::Rg32Uint,
-        F::Rg32Float,
-        F::Rgba8Unorm,
-        F::Rgba8UnormSrgb,
-        F::Bgra8Unorm,
-        F::Rgba16Float,
-        F::Rgba32Uint,
-        F::Rgba32Float,
-        F::Depth32Float,
-        F::Depth24Plus,
-        F::Depth16Unorm,
-    ];
-    KNOWN
-        .iter()
-        .copied()
-        .find(|f| crate::names::format_name(*f) == name.to_lowercase())
-        .ok_or_else(|| {
-            format!(
-                "unknown texture format `{name}`; known: {}",
-                KNOWN
-                    .iter()
-                    .map(|f| crate::names::format_name(*f))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        })
+    Pipeline::parse(text, file)?.build(registry)
 }

@@ -1,6 +1,7 @@
 //! The registry: (stage, implementation) → a factory building the pass from parameters.
 
-use crate::choice::{AUTO, Choice};
+use crate::adapter::AdapterClass;
+use crate::choice::{AUTO, Choice, ClassOrder};
 use crate::error::{GraphError, Result};
 use crate::file::Params;
 use crate::pass::Pass;
@@ -36,6 +37,8 @@ pub struct Registry {
     factories: BTreeMap<(String, String), Factory>,
     /// Per stage, its implementations best first, for `auto`.
     preferences: BTreeMap<String, Vec<String>>,
+    /// Per stage, orders that replace `preferences` on one adapter class, and why.
+    class_preferences: BTreeMap<String, Vec<ClassOrder>>,
 }
 
 impl Registry {
@@ -84,9 +87,43 @@ impl Registry {
         );
     }
 
-    /// The stage's implementations best first, when it has an `auto`.
-    pub fn preference(&self, stage: &str) -> Option<&[String]> {
-        self.preferences.get(stage).map(Vec::as_slice)
+    /// Makes `auto` try `stage`'s implementations in the order `best_first` on adapters
+    /// of `class` (those it leaves out after, in the stage's own order): the same
+    /// features can want another implementation where the hardware differs. `why`
+    /// says what was measured, and the plan's choice names it.
+    pub fn prefer_on(
+        &mut self,
+        stage: &'static str,
+        class: AdapterClass,
+        best_first: &[&'static str],
+        why: &'static str,
+    ) {
+        let orders = self.class_preferences.entry(stage.to_string()).or_default();
+        orders.retain(|o| o.class != class);
+        orders.push(ClassOrder {
+            class,
+            best_first: best_first.to_vec(),
+            why,
+        });
+    }
+
+    /// The stage's implementations best first on adapters of `class`, when it has an
+    /// `auto`.
+    pub fn preference(&self, stage: &str, class: AdapterClass) -> Option<Vec<String>> {
+        let order = self.preferences.get(stage)?;
+        let first: &[&str] = self
+            .class_preferences
+            .get(stage)
+            .and_then(|orders| orders.iter().find(|o| o.class == class))
+            .map_or(&[], |o| o.best_first.as_slice());
+        let mut names: Vec<String> = first.iter().map(|s| s.to_string()).collect();
+        names.extend(
+            order
+                .iter()
+                .filter(|n| !first.contains(&n.as_str()))
+                .cloned(),
+        );
+        Some(names)
     }
 
     /// The pass for a pipeline entry as a [`Choice`]: for `auto`, every preferred
@@ -129,7 +166,12 @@ impl Registry {
             candidates.retain(|c| c.implementation().name != implementation);
             candidates.insert(0, named);
         }
-        Choice::select(implementation, candidates).map(Some)
+        let orders = self
+            .class_preferences
+            .get(stage)
+            .cloned()
+            .unwrap_or_default();
+        Choice::select(implementation, candidates).map(|c| Some(c.with_class_orders(orders)))
     }
 
     /// Builds `implementation` of `stage` from `params`; an unknown pair is an error listing
