@@ -360,11 +360,14 @@ pub enum GraphError {
         message: String,
     },
 
-    /// No Vulkan adapter was found; the message says how to install one.
+    /// No adapter was found on the backends searched; the message says how to install
+    /// one.
     #[error(
-        "no Vulkan adapter found{detail}. Install Mesa's software driver: `sudo apt-get install mesa-vulkan-drivers` (lavapipe), or set MESHLIGHT_ADAPTER to a name from `vulkaninfo --summary`"
+        "no GPU adapter found on {backends}{detail}. On Linux without a GPU, install Mesa's software Vulkan driver: `sudo apt-get install mesa-vulkan-drivers` (lavapipe); set MESHLIGHT_ADAPTER to part of a name from `vulkaninfo --summary`, or WGPU_BACKEND to the backends to search"
     )]
     NoAdapter {
+        /// The backends searched, as wgpu names them.
+        backends: String,
         /// The adapter asked for and those found; empty when none was asked for.
         detail: String,
     },

@@ -43,8 +43,9 @@ pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
-    ADAPTER_ENV, BATCHING_ENV, BatchStats, CHECKED_ENV, Executor, FrameStats, GpuAdapter,
-    GpuContext, GpuTimings, INDIRECT_VALIDATION_ENV, Imports, PassTiming, TIMING_ENV, TimingMode,
+    ADAPTER_ENV, AdapterOptions, BATCHING_ENV, BatchStats, CHECKED_ENV, Executor, FrameStats,
+    GpuAdapter, GpuContext, GpuTimings, INDIRECT_VALIDATION_ENV, Imports, PassTiming, TIMING_ENV,
+    TimingMode,
 };
 pub use layout::{BindingLayout, BindingSource, LayoutEntry, SamplerKind};
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};

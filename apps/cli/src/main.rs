@@ -84,7 +84,6 @@ const EXIT_NO_ADAPTER: u8 = 3;
 
 fn main() -> ExitCode {
     quiet_on_closed_stdout();
-    usable_runtime_dir();
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     let result: Result<(), Box<dyn std::error::Error>> = match cli.command {
@@ -134,45 +133,6 @@ fn quiet_on_closed_stdout() {
     // SAFETY: called first in `main`, before any thread exists; SIG_DFL is a valid action.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
-}
-
-/// The Vulkan loader's window-system probing (libwayland) prints `error:
-/// XDG_RUNTIME_DIR is invalid or not set in the environment.` to standard error once per
-/// probe when the variable is unset or not an absolute path, as on a fresh container or a
-/// remote shell. meshlight opens no window, so the message only alarms: where the
-/// variable is unset or does not name a directory, it is pointed at a private directory
-/// (mode 0700, as the XDG spec asks) under the temporary directory before any wgpu call.
-/// A valid value is left as it is.
-fn usable_runtime_dir() {
-    const VAR: &str = "XDG_RUNTIME_DIR";
-    let valid = std::env::var_os(VAR)
-        .map(PathBuf::from)
-        .is_some_and(|dir| dir.is_absolute() && dir.is_dir());
-    if valid {
-        return;
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::{DirBuilderExt, MetadataExt};
-        // SAFETY: getuid has no preconditions and cannot fail.
-        let uid = unsafe { libc::getuid() };
-        let dir = std::env::temp_dir().join(format!("meshlight-runtime-{uid}"));
-        let made = std::fs::DirBuilder::new()
-            .mode(0o700)
-            .create(&dir)
-            .or_else(|e| match e.kind() {
-                std::io::ErrorKind::AlreadyExists => Ok(()),
-                _ => Err(e),
-            });
-        // Only a directory this user owns is used; otherwise the loader's message stays,
-        // which costs nothing but noise.
-        let ours = made.is_ok()
-            && std::fs::symlink_metadata(&dir).is_ok_and(|m| m.is_dir() && m.uid() == uid);
-        if ours {
-            // SAFETY: called at the start of `main`, before any thread exists.
-            unsafe { std::env::set_var(VAR, &dir) };
-        }
     }
 }
 

@@ -369,9 +369,9 @@ fn render_refuses_an_asset_that_inspect_rejects_with_the_same_message() {
     assert!(!dir.join("bad.png").exists());
 }
 
-/// The Vulkan loader's window-system probing complains on standard error when
-/// XDG_RUNTIME_DIR is unset or not an absolute path; the binary points it at a private
-/// directory first, so a run says nothing of it (GPU: lavapipe).
+/// The drivers' window-system code complains on standard error when XDG_RUNTIME_DIR is
+/// unset or not an absolute path; the library keeps that line off standard error while
+/// it enumerates adapters, so a run says nothing of it (GPU: lavapipe).
 #[test]
 fn an_unset_or_invalid_runtime_dir_is_not_complained_about() {
     for value in [None, Some(""), Some("relative/dir"), Some("/no/such/dir")] {

@@ -27,54 +27,130 @@ pub fn experimental_features() -> wgpu::Features {
         .fold(wgpu::Features::empty(), |acc, (_, f)| acc | f)
 }
 
-/// A chosen adapter, before a device is created for it.
-pub struct GpuAdapter {
-    /// The instance the adapter came from; surfaces are made from it.
-    pub instance: wgpu::Instance,
-    /// The adapter picked by [`crate::ADAPTER_ENV`], or the first Vulkan one.
-    pub adapter: wgpu::Adapter,
+/// Which adapter [`GpuAdapter::select_with`] opens, and how.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct AdapterOptions {
+    /// The backends searched. Default: the native ones this build has (Vulkan, Metal,
+    /// DX12, as the crate's `vulkan`, `metal` and `dx12` features enable them).
+    pub backends: wgpu::Backends,
+    /// Part of the adapter's name, case-insensitive; `None`: the best adapter found (a
+    /// discrete GPU before an integrated one, a GPU before a CPU implementation).
+    pub name: Option<String>,
+    /// wgpu's indirect-call validation (see [`INDIRECT_VALIDATION_ENV`]).
+    pub indirect_validation: bool,
 }
 
-impl GpuAdapter {
-    /// The adapter named by `MESHLIGHT_ADAPTER`, else the first Vulkan adapter, with
-    /// indirect-call validation as `MESHLIGHT_INDIRECT_VALIDATION` says (on by default).
-    pub fn select() -> Result<Self> {
+impl Default for AdapterOptions {
+    fn default() -> Self {
+        Self {
+            backends: Self::native_backends(),
+            name: None,
+            indirect_validation: true,
+        }
+    }
+}
+
+impl AdapterOptions {
+    /// The primary native backends this build of wgpu has: those of Vulkan, Metal and
+    /// DX12 its features enabled and the target supports.
+    pub fn native_backends() -> wgpu::Backends {
+        wgpu::Backends::PRIMARY & wgpu::Instance::enabled_backend_features()
+    }
+
+    /// The defaults with the environment's choices: `WGPU_BACKEND` (wgpu's own list,
+    /// e.g. `vulkan` or `metal,dx12`), [`ADAPTER_ENV`] and [`INDIRECT_VALIDATION_ENV`].
+    pub fn from_env() -> Self {
         let off = std::env::var(INDIRECT_VALIDATION_ENV).is_ok_and(|v| {
             matches!(
                 v.trim().to_ascii_lowercase().as_str(),
                 "0" | "off" | "false" | "no"
             )
         });
-        Self::select_with_indirect_validation(!off)
+        Self {
+            backends: wgpu::Backends::from_env().unwrap_or_else(Self::native_backends),
+            name: std::env::var(ADAPTER_ENV).ok().filter(|s| !s.is_empty()),
+            indirect_validation: !off,
+        }
+    }
+}
+
+/// How much an adapter of this type is preferred when none is named: lower first.
+fn rank(device_type: wgpu::DeviceType) -> u8 {
+    match device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    }
+}
+
+/// A chosen adapter, before a device is created for it.
+pub struct GpuAdapter {
+    /// The instance the adapter came from; surfaces are made from it.
+    pub instance: wgpu::Instance,
+    /// The adapter picked by [`AdapterOptions`].
+    pub adapter: wgpu::Adapter,
+}
+
+impl GpuAdapter {
+    /// The adapter the environment asks for ([`AdapterOptions::from_env`]).
+    pub fn select() -> Result<Self> {
+        Self::select_with(&AdapterOptions::from_env())
     }
 
-    /// [`Self::select`] with wgpu's indirect-call validation on or off (see
-    /// [`INDIRECT_VALIDATION_ENV`]).
-    pub fn select_with_indirect_validation(indirect_validation: bool) -> Result<Self> {
+    /// The adapter `options` ask for: named, or the best of the backends searched.
+    pub fn select_with(options: &AdapterOptions) -> Result<Self> {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = wgpu::Backends::VULKAN;
+        desc.backends = options.backends;
         desc.flags.set(
             wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL,
-            indirect_validation,
+            options.indirect_validation,
         );
         let instance = wgpu::Instance::new(desc);
-        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
-        let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
-        let wanted = std::env::var(ADAPTER_ENV).ok().filter(|s| !s.is_empty());
-        let adapter = match &wanted {
+        let adapters = crate::exec::quiet::without_runtime_dir_alarm(|| {
+            pollster::block_on(instance.enumerate_adapters(options.backends))
+        });
+        let names: Vec<String> = adapters
+            .iter()
+            .map(|a| {
+                let info = a.get_info();
+                format!("{} ({:?})", info.name, info.backend)
+            })
+            .collect();
+        let searched = match options
+            .backends
+            .iter_names()
+            .map(|(n, _)| n.to_lowercase())
+            .collect::<Vec<_>>()
+        {
+            names if names.is_empty() => {
+                "no backend (enable meshlight's `vulkan`, `metal` or `dx12` feature)".to_string()
+            }
+            names => names.join(", "),
+        };
+        let adapter = match &options.name {
             Some(w) => adapters
                 .into_iter()
                 .find(|a| a.get_info().name.to_lowercase().contains(&w.to_lowercase()))
                 .ok_or_else(|| GraphError::NoAdapter {
+                    backends: searched,
                     detail: format!(
                         " matching {ADAPTER_ENV}={w:?} (found: {})",
-                        names.join(", ")
+                        if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names.join(", ")
+                        }
                     ),
                 })?,
             None => adapters
                 .into_iter()
-                .next()
+                .enumerate()
+                .min_by_key(|(i, a)| (rank(a.get_info().device_type), *i))
+                .map(|(_, a)| a)
                 .ok_or_else(|| GraphError::NoAdapter {
+                    backends: searched,
                     detail: String::new(),
                 })?,
         };
@@ -154,6 +230,29 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// A host application's own device: meshlight records and submits on it, creates its
+    /// resources and pipelines there, and opens no device or surface of its own. The
+    /// features it can use are those the device was created with; ask
+    /// `meshlight_virtual_geometry::Renderer::required_features` (or compile your graph
+    /// with [`crate::CompileOptions::for_adapter`] and read `plan.enabled_features`)
+    /// before creating it.
+    pub fn from_host(
+        instance: wgpu::Instance,
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Self {
+        let info = adapter.get_info();
+        Self {
+            features: device.features(),
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+        }
+    }
+
     /// Selects an adapter and opens it with every feature the adapter has out of `wanted`,
     /// leaving out mappable primary buffers, which slow discrete GPUs down, and wgpu's
     /// experimental features other than mesh shading, which no meshlight pass uses.
