@@ -6,7 +6,8 @@
 //! - [`gpu_scene`]: assets packed into shared GPU buffers, instances, materials, the view.
 //! - The virtual-geometry stages: [`fill_clusters`], [`cull_lod`], [`remap_dispatch`],
 //!   [`sw_raster`], [`hw_raster`], [`depth_pyramid`], [`resolve`]; [`brute_force`] is the
-//!   baseline they are measured against.
+//!   baseline they are measured against; [`present`] draws the image into a host's
+//!   target.
 //! - [`scan_fan`]: GPU prefix sum (stage `scan_fan`: `scan_fan`, `two_step`,
 //!   `decoupled_lookback`).
 //! - Light clustering: [`z_slice`], [`count_raster`], [`populate`] (with [`scan_fan`]
@@ -32,6 +33,7 @@ pub use meshlight_pass_depth_pyramid as depth_pyramid;
 pub use meshlight_pass_fill_clusters as fill_clusters;
 pub use meshlight_pass_hw_raster as hw_raster;
 pub use meshlight_pass_populate as populate;
+pub use meshlight_pass_present as present;
 pub use meshlight_pass_remap_dispatch as remap_dispatch;
 pub use meshlight_pass_resolve as resolve;
 pub use meshlight_pass_scan_fan as scan_fan;
@@ -41,7 +43,7 @@ pub use meshlight_scene as scene;
 pub use meshlight_shaders as shaders;
 
 /// Each stage crate's `register`, in the order their implementations enter the registry.
-const REGISTERS: [fn(&mut graph::file::Registry); 12] = [
+const REGISTERS: [fn(&mut graph::file::Registry); 13] = [
     scan_fan::register,
     remap_dispatch::register,
     fill_clusters::register,
@@ -54,6 +56,7 @@ const REGISTERS: [fn(&mut graph::file::Registry); 12] = [
     z_slice::register,
     count_raster::register,
     populate::register,
+    present::register,
 ];
 
 /// Every stage implementation shipped with meshlight, for pipeline files.

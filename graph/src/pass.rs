@@ -89,7 +89,7 @@ pub struct SetupContext<'a> {
     class: AdapterClass,
     params: &'a [(String, u64)],
     bound: Vec<&'static str>,
-    textures: Vec<&'static str>,
+    textures: Vec<(&'static str, wgpu::TextureFormat)>,
     pub(crate) required: wgpu::Features,
     pub(crate) optional: wgpu::Features,
     pub(crate) shader_defs: Vec<(String, ShaderDef)>,
@@ -170,9 +170,17 @@ impl<'a> SetupContext<'a> {
     /// True when `slot` is bound to a texture, so a pass whose slot takes a buffer or a
     /// texture (a 64-bit visibility target) picks the matching shader variant.
     pub fn is_texture(&self, slot: &str) -> bool {
-        self.textures.contains(&slot)
+        self.format(slot).is_some()
     }
-    pub(crate) fn with_textures(mut self, textures: Vec<&'static str>) -> Self {
+    /// The format of the texture bound to `slot`, so a pass whose slot takes any format
+    /// (a host's target) compiles the variant for it (sRGB encoding, channel order).
+    pub fn format(&self, slot: &str) -> Option<wgpu::TextureFormat> {
+        self.textures
+            .iter()
+            .find(|(s, _)| *s == slot)
+            .map(|(_, f)| *f)
+    }
+    pub(crate) fn with_textures(mut self, textures: Vec<(&'static str, wgpu::TextureFormat)>) -> Self {
         self.textures = textures;
         self
     }

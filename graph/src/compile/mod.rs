@@ -229,8 +229,10 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     for (p, node) in passes.iter().enumerate() {
         let textures = node
             .bound_slots()
-            .filter(|(_, h)| matches!(resources[h.id.index()].desc, ResourceDesc::Texture(_)))
-            .map(|(s, _)| s.name)
+            .filter_map(|(s, h)| match &resources[h.id.index()].desc {
+                ResourceDesc::Texture(t) => Some((s.name, t.format)),
+                ResourceDesc::Buffer(_) => None,
+            })
             .collect();
         let mut ctx = SetupContext::new(
             options.adapter_features,
