@@ -263,7 +263,7 @@ impl Pass for BruteForce {
         check_target(ctx, "depth", self.width, self.height)?;
         check_target(ctx, "ids", self.width, self.height)?;
         let program = ctx.render("draw")?;
-        let bind_group = ctx.bind_group(&program, 0, &[(2, bytemuck::bytes_of(&view))])?;
+        let bind_group = ctx.bind_group(&program, 0, &[("view", bytemuck::bytes_of(&view))])?;
         let (indices, _) = ctx.buffer("indices")?;
         let (_, depth) = ctx.texture("depth")?;
         let (_, ids) = ctx.texture("ids")?;

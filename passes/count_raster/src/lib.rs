@@ -274,15 +274,15 @@ impl Walk {
         Ok(())
     }
 
-    /// Records the walk with the view (binding 5) and `uniforms` bound.
+    /// Records the walk with the view and `uniforms` bound.
     pub fn record(
         self,
         ctx: &mut RecordContext<'_>,
         shader: &WalkShader,
-        uniforms: &[(u32, &[u8])],
+        uniforms: &[(&str, &[u8])],
     ) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
-        let mut bound = vec![(5, bytemuck::bytes_of(&view))];
+        let mut bound = vec![("view", bytemuck::bytes_of(&view))];
         bound.extend_from_slice(uniforms);
         match self {
             Walk::Raster { .. } => {

@@ -531,12 +531,16 @@ impl Pass for CullLod {
             ctx.clear(PER_INSTANCE_FIRST)?;
         }
         let (dispatch, _) = ctx.scratch("dispatch")?;
-        ctx.dispatch_compute("prepare", &[(11, params)], Workgroups::Direct([1, 1, 1]))?;
+        ctx.dispatch_compute(
+            "prepare",
+            &[("params", params)],
+            Workgroups::Direct([1, 1, 1]),
+        )?;
         // A second dispatch: the counters and arguments are written before any cluster
         // reads them.
         ctx.dispatch_compute(
             "cull",
-            &[(10, view), (11, params)],
+            &[("view", view), ("params", params)],
             Workgroups::Indirect(dispatch, 0),
         )
     }

@@ -463,7 +463,7 @@ impl DepthPyramid {
         grid: [u32; 2],
     ) -> Result<Dispatch> {
         let params = self.params(level_base);
-        let common = ctx.bind_group(&program, 0, &[(2, bytemuck::bytes_of(&params))])?;
+        let common = ctx.bind_group(&program, 0, &[("params", bytemuck::bytes_of(&params))])?;
         let levels =
             self.mips
                 .bind_group(ctx, &program, level_base, self.method.level_bindings())?;

@@ -518,9 +518,9 @@ impl Pass for HierarchyFill {
                 occlusion_min_clusters: self.occlusion_min_clusters,
                 ..GpuParams::default()
             };
-            let uniforms: [(u32, &[u8]); 2] = [
-                (3, bytemuck::bytes_of(&view)),
-                (4, bytemuck::bytes_of(&params)),
+            let uniforms: [(&str, &[u8]); 2] = [
+                ("view", bytemuck::bytes_of(&view)),
+                ("params", bytemuck::bytes_of(&params)),
             ];
             ctx.dispatch_compute(entry, &uniforms, grid)?;
         }

@@ -321,9 +321,9 @@ impl Pass for FillClusters {
             ..GpuParams::default()
         };
         ctx.clear("cluster_count")?;
-        let uniforms: [(u32, &[u8]); 2] = [
-            (3, bytemuck::bytes_of(&view)),
-            (4, bytemuck::bytes_of(&params)),
+        let uniforms: [(&str, &[u8]); 2] = [
+            ("view", bytemuck::bytes_of(&view)),
+            ("params", bytemuck::bytes_of(&params)),
         ];
         ctx.dispatch_compute("fill", &uniforms, Workgroups::Direct([x, y, 1]))?;
         // A separate compute pass, so the requested count is final when it is read.

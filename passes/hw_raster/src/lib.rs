@@ -302,12 +302,15 @@ impl Pass for HwRaster {
         };
         let params = bytemuck::bytes_of(&params);
         let program = ctx.render("raster")?;
-        let bind_group =
-            ctx.bind_group(&program, 0, &[(7, bytemuck::bytes_of(&view)), (8, params)])?;
+        let bind_group = ctx.bind_group(
+            &program,
+            0,
+            &[("view", bytemuck::bytes_of(&view)), ("params", params)],
+        )?;
         if self.feed == Feed::MeshShader {
             ctx.dispatch_compute(
                 "mesh_dispatch",
-                &[(8, params)],
+                &[("params", params)],
                 Workgroups::Direct([1, 1, 1]),
             )?;
             let (args, _) = ctx.scratch(MESH_ARGS)?;

@@ -163,14 +163,15 @@ impl Pass for Populate {
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let params = self.params();
         let params = bytemuck::bytes_of(&params);
-        self.walk.record(ctx, &POPULATE_WALK, &[(10, params)])?;
+        self.walk
+            .record(ctx, &POPULATE_WALK, &[("list_params", params)])?;
         // A thread per list (grid-stride past the limit).
         let (_, bytes) = ctx.buffer("cluster_counts")?;
         let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
         let groups = ((bytes / 4) as u32).div_ceil(WORKGROUP).clamp(1, limit);
         ctx.dispatch_compute(
             "settle",
-            &[(10, params)],
+            &[("list_params", params)],
             Workgroups::Direct([groups, 1, 1]),
         )
     }

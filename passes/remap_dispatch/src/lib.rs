@@ -119,7 +119,7 @@ impl Pass for RemapDispatch {
         };
         ctx.dispatch_compute(
             "remap",
-            &[(2, bytemuck::bytes_of(&params))],
+            &[("params", bytemuck::bytes_of(&params))],
             Workgroups::Direct([1, 1, 1]),
         )
     }

@@ -386,8 +386,11 @@ impl Pass for Resolve {
                 continue;
             }
             let program = ctx.render(program)?;
-            let bind_group =
-                ctx.bind_group(&program, 0, &[(3, bytemuck::bytes_of(&depth_params))])?;
+            let bind_group = ctx.bind_group(
+                &program,
+                0,
+                &[("params", bytemuck::bytes_of(&depth_params))],
+            )?;
             let mut pass = ctx.render_pass(&[], Some(DepthAttachment { target, clear: 0.0 }))?;
             pass.set_pipeline(&program.pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
@@ -419,8 +422,8 @@ impl Pass for Resolve {
         ctx.dispatch_compute(
             "shade",
             &[
-                (9, bytemuck::bytes_of(&view)),
-                (10, bytemuck::bytes_of(&shade_params)),
+                ("view", bytemuck::bytes_of(&view)),
+                ("params", bytemuck::bytes_of(&shade_params)),
             ],
             Workgroups::Direct([self.width.div_ceil(TILE), self.height.div_ceil(TILE), 1]),
         )

@@ -494,7 +494,8 @@ pub(crate) fn record(ctx: &mut RecordContext<'_>, steps: &[Step], clear_state: b
     let mut encoded = Vec::with_capacity(steps.len());
     for step in steps {
         let program = ctx.compute(step.entry)?;
-        let bind_group = ctx.bind_group(&program, 0, &[(4, bytemuck::bytes_of(&step.params))])?;
+        let bind_group =
+            ctx.bind_group(&program, 0, &[("params", bytemuck::bytes_of(&step.params))])?;
         encoded.push(Encoded {
             program,
             bind_group,

@@ -399,9 +399,9 @@ impl Pass for SwRaster {
                 Some((program, group))
             }
         };
-        let uniforms: [(u32, &[u8]); 2] = [
-            (8, bytemuck::bytes_of(&view)),
-            (9, bytemuck::bytes_of(&params)),
+        let uniforms: [(&str, &[u8]); 2] = [
+            ("view", bytemuck::bytes_of(&view)),
+            ("params", bytemuck::bytes_of(&params)),
         ];
         // `buffer` gives the buffer and its size; the arguments start at its beginning.
         let (args, _) = ctx.buffer("sw_args")?;

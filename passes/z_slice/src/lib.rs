@@ -370,12 +370,12 @@ impl Pass for ZSlice {
         // once every object has counted.
         ctx.dispatch_compute(
             "prepare",
-            &[(10, grid), (11, params)],
+            &[("grid", grid), ("params", params)],
             Workgroups::Direct([prepare_groups, 1, 1]),
         )?;
         ctx.dispatch_compute(
             "slice",
-            &[(9, view), (10, grid), (11, params)],
+            &[("view", view), ("grid", grid), ("params", params)],
             Workgroups::Direct([groups[0], groups[1], 1]),
         )
     }
