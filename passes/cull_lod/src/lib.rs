@@ -142,7 +142,7 @@ pub use cpu::{CullResult, Decision, Thresholds, cpu_cull};
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
+use meshlight_gpu_scene::{Phase, SceneBuffer::*, scene_reads};
 use meshlight_graph::file::{Params, Registry};
 use meshlight_graph::{
     Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, ProgramDesc,
@@ -270,16 +270,13 @@ pub fn contract() -> StageContract {
     }
 }
 
-/// Which culling pass of the frame this is; the hierarchy walk names its passes the same way.
-pub use meshlight_gpu_scene::Phase as Mode;
-
 shader_defs! {
     /// The variant of cull.wgsl a pass runs.
     #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
     pub struct CullDefs {
         /// A pyramid is bound and tested.
         pub occlusion: bool => "OCCLUSION",
-        /// [`Mode::Second`].
+        /// [`Phase::Second`].
         pub second: bool => "SECOND_PASS",
         /// The per-instance occlusion counters are bound.
         pub per_instance: bool => "PER_INSTANCE",
@@ -292,7 +289,9 @@ shader_defs! {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CullLod {
     pub thresholds: Thresholds,
-    pub mode: Mode,
+    /// Which culling pass of the frame this is (`mode` in a pipeline file): the first
+    /// tests against last frame's pyramid, the second re-tests what the first hid.
+    pub phase: Phase,
     /// Raster slots `C`; `None`: as many as `raster_clusters` holds.
     pub capacity: Option<u32>,
     /// A per-dimension limit below the adapter's (tests use small ones); `None`: the
@@ -335,7 +334,7 @@ impl CullLod {
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let defaults = Thresholds::default();
-        let mode = Mode::from_params(params)?;
+        let phase = Phase::from_params(params)?;
         let nonzero = |v: u32| (v > 0).then_some(v);
         let pass = Self {
             thresholds: Thresholds {
@@ -343,7 +342,7 @@ impl CullLod {
                 sw_threshold_px: params.f32("sw_threshold_px", defaults.sw_threshold_px)?,
                 hardware: params.bool("hardware", true)?,
             },
-            mode,
+            phase,
             capacity: nonzero(params.u32("capacity", 0)?),
             max_per_dimension: nonzero(params.u32("max_per_dimension", 0)?),
         };
@@ -351,32 +350,32 @@ impl CullLod {
         Ok(pass)
     }
 
-    fn check_mode(&self, ctx: &SetupContext) -> Result<bool> {
+    fn check_phase(&self, ctx: &SetupContext) -> Result<bool> {
         let bound = |slot| ctx.is_bound(slot);
         let occlusion = bound("pyramid");
-        match self.mode {
-            Mode::First if occlusion && !(bound("occluded") && bound("occluded_count")) => {
+        match self.phase {
+            Phase::First if occlusion && !(bound("occluded") && bound("occluded_count")) => {
                 Err(GraphError::parameter(
                     "a first pass with a `pyramid` needs `occluded` and `occluded_count` bound: the clusters it finds hidden go there for the second pass",
                 ))
             }
-            Mode::First if !occlusion && (bound("occluded") || bound("first_counts")) => {
+            Phase::First if !occlusion && (bound("occluded") || bound("first_counts")) => {
                 Err(GraphError::parameter(
                     "`occluded` or `first_counts` is bound but `pyramid` is not: bind last frame's pyramid to test occlusion, or unbind them",
                 ))
             }
-            Mode::First if bound("first_counts") => Err(GraphError::parameter(
+            Phase::First if bound("first_counts") => Err(GraphError::parameter(
                 "`first_counts` is for `mode = \"second\"`; unbind it from the first pass",
             )),
-            Mode::Second if !(occlusion && bound("first_counts")) => Err(GraphError::parameter(
+            Phase::Second if !(occlusion && bound("first_counts")) => Err(GraphError::parameter(
                 "`mode = \"second\"` needs `pyramid` (this frame's) and `first_counts` (the first pass's raster_counts) bound",
             )),
-            Mode::Second if bound("occluded") || bound("occluded_count") => {
+            Phase::Second if bound("occluded") || bound("occluded_count") => {
                 Err(GraphError::parameter(
                     "`occluded` and `occluded_count` are the first pass's outputs, to bind to the second pass as `clusters` and `cluster_count`; give them resource names other than the slots' (e.g. `candidates`, `candidate_count`), or the second pass binds them by name",
                 ))
             }
-            _ if self.mode == Mode::First && (bound(WALKED_SLOT) || bound(WALKED_COUNT_SLOT)) => {
+            _ if self.phase == Phase::First && (bound(WALKED_SLOT) || bound(WALKED_COUNT_SLOT)) => {
                 Err(GraphError::parameter(format!(
                     "`{WALKED_SLOT}` is the second walk's list, for `mode = \"second\"`; unbind it from the first pass"
                 )))
@@ -397,14 +396,14 @@ impl CullLod {
         ctx: &SetupContext,
         occlusion: bool,
     ) -> Result<Option<&'static str>> {
-        let (mine, other) = match self.mode {
-            Mode::First => (PER_INSTANCE_FIRST, PER_INSTANCE_SECOND),
-            Mode::Second => (PER_INSTANCE_SECOND, PER_INSTANCE_FIRST),
+        let (mine, other) = match self.phase {
+            Phase::First => (PER_INSTANCE_FIRST, PER_INSTANCE_SECOND),
+            Phase::Second => (PER_INSTANCE_SECOND, PER_INSTANCE_FIRST),
         };
         if ctx.is_bound(other) {
             return Err(GraphError::parameter(format!(
                 "`{other}` is bound to a `mode = \"{}\"` pass, which counts per instance in `{mine}`; a first pass clears and fills `{PER_INSTANCE_FIRST}`, the second updates the same buffer as `{PER_INSTANCE_SECOND}` (name the resource unlike both slots, or the second pass binds it by name)",
-                self.mode.name()
+                self.phase.name()
             )));
         }
         if !ctx.is_bound(mine) {
@@ -440,8 +439,8 @@ impl Pass for CullLod {
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.check_thresholds()?;
         ctx.check_max_per_dimension(self.max_per_dimension)?;
-        let occlusion = self.check_mode(ctx)?;
-        let second = self.mode == Mode::Second;
+        let occlusion = self.check_phase(ctx)?;
+        let second = self.phase == Phase::Second;
         let per_instance = self.per_instance_slot(ctx, occlusion)?;
         let walked = second && ctx.is_bound(WALKED_SLOT);
         let defs = CullDefs {
@@ -511,9 +510,9 @@ impl Pass for CullLod {
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
         let test_occlusion = ctx.is_bound("pyramid")
-            && match self.mode {
-                Mode::Second => true,
-                Mode::First => {
+            && match self.phase {
+                Phase::Second => true,
+                Phase::First => {
                     ctx.history_valid("pyramid")? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
                 }
             };
@@ -527,7 +526,7 @@ impl Pass for CullLod {
             ..GpuParams::default()
         };
         let (view, params) = (bytemuck::bytes_of(&view), bytemuck::bytes_of(&params));
-        if self.mode == Mode::First && ctx.is_bound(PER_INSTANCE_FIRST) {
+        if self.phase == Phase::First && ctx.is_bound(PER_INSTANCE_FIRST) {
             ctx.clear(PER_INSTANCE_FIRST)?;
         }
         let (dispatch, _) = ctx.scratch("dispatch")?;

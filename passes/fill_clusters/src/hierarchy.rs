@@ -105,6 +105,7 @@ use crate::{
     OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT,
     hierarchy_contract, instance_grid, instance_programs,
 };
+use meshlight_gpu_scene::Phase;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::file::Params;
 use meshlight_graph::{
@@ -158,19 +159,13 @@ const ROOT_GROUPS: u32 = 1024;
 /// Scratch: the lists of handed-on subtrees, 12 bytes an entry.
 const LISTS: &str = "subtrees";
 
-/// Which walk of the frame this is (two-pass occlusion culling, DESIGN §5): the first
-/// walks from every instance's root and, with a pyramid bound (last frame's), sends the
-/// nodes it proves hidden to `occluded_nodes`; the second walks from those
-/// (`candidate_nodes`) against this frame's pyramid and drops what is still hidden.
-pub use meshlight_gpu_scene::Phase as Mode;
-
 shader_defs! {
     /// The variant of hierarchy.wgsl a pass runs.
     #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
     pub struct WalkDefs {
         /// A pyramid is bound and tested per node.
         pub occlusion: bool => "OCCLUSION",
-        /// [`Mode::Second`].
+        /// [`Phase::Second`].
         pub second: bool => "SECOND_PASS",
     }
 }
@@ -200,8 +195,12 @@ pub struct HierarchyFill {
     pub subtree_capacity: Option<u32>,
     /// Workgroups of each step after the first; `None`: [`SPREAD_GROUPS`].
     pub spread_groups: Option<u32>,
-    /// The first walk of the frame or the second (occlusion culling).
-    pub mode: Mode,
+    /// Which walk of the frame this is (`mode` in a pipeline file; two-pass occlusion
+    /// culling, DESIGN §5): the first walks from every instance's root and, with a
+    /// pyramid bound (last frame's), sends the nodes it proves hidden to
+    /// `occluded_nodes`; the second walks from those (`candidate_nodes`) against this
+    /// frame's pyramid and drops what is still hidden.
+    pub phase: Phase,
     /// With occlusion, the walk's entries (instance roots; the second walk's nodes) and
     /// the inner nodes with at least this many meshlets below are tested against the
     /// pyramid ([`OCCLUSION_MIN_CLUSTERS`] by default; `u32::MAX`: entries only).
@@ -224,7 +223,7 @@ impl Default for HierarchyFill {
             spread_steps: SPREAD_STEPS,
             subtree_capacity: None,
             spread_groups: None,
-            mode: Mode::First,
+            phase: Phase::First,
             occlusion_min_clusters: OCCLUSION_MIN_CLUSTERS,
         }
     }
@@ -293,7 +292,7 @@ impl HierarchyFill {
             subtree_capacity: nonzero(params.u32("subtree_capacity", 0)?),
             spread_groups: nonzero(params.u32("spread_groups", 0)?),
             occlusion_min_clusters: params.u32("occlusion_min_clusters", OCCLUSION_MIN_CLUSTERS)?,
-            mode: Mode::from_params(params)?,
+            phase: Phase::from_params(params)?,
         };
         pass.check()?;
         Ok(pass)
@@ -342,21 +341,21 @@ impl HierarchyFill {
     }
 
     /// Whether the walk tests occlusion (a pyramid is bound), after checking that the
-    /// slots of the mode are bound and the other mode's are not.
-    fn check_mode(&self, ctx: &SetupContext) -> Result<bool> {
+    /// slots of its phase are bound and the other phase's are not.
+    fn check_phase(&self, ctx: &SetupContext) -> Result<bool> {
         let bound = |slot| ctx.is_bound(slot);
         let occlusion = bound(PYRAMID_SLOT);
-        let (mine, other) = match self.mode {
-            Mode::First => (
+        let (mine, other) = match self.phase {
+            Phase::First => (
                 [OCCLUDED_NODES_SLOT, OCCLUDED_NODE_COUNT_SLOT],
                 [CANDIDATE_NODES_SLOT, CANDIDATE_NODE_COUNT_SLOT],
             ),
-            Mode::Second => (
+            Phase::Second => (
                 [CANDIDATE_NODES_SLOT, CANDIDATE_NODE_COUNT_SLOT],
                 [OCCLUDED_NODES_SLOT, OCCLUDED_NODE_COUNT_SLOT],
             ),
         };
-        let mode = self.mode.name();
+        let mode = self.phase.name();
         if let Some(slot) = other.iter().find(|s| bound(s)) {
             return Err(GraphError::parameter(format!(
                 "`{slot}` is bound to a `mode = \"{mode}\"` walk, which uses `{}` and `{}`; the first walk writes `{OCCLUDED_NODES_SLOT}`, the second reads the same list as `{CANDIDATE_NODES_SLOT}` (name the resources unlike both slots, or the second walk binds them by name)",
@@ -364,14 +363,14 @@ impl HierarchyFill {
             )));
         }
         let listed = mine.iter().filter(|s| bound(s)).count();
-        if occlusion && listed < 2 || self.mode == Mode::Second && !occlusion {
+        if occlusion && listed < 2 || self.phase == Phase::Second && !occlusion {
             return Err(GraphError::parameter(format!(
                 "a `mode = \"{mode}\"` walk with occlusion needs `{PYRAMID_SLOT}`, `{}` and `{}` bound ({})",
                 mine[0],
                 mine[1],
-                match self.mode {
-                    Mode::First => "last frame's pyramid; the nodes it hides go to the list",
-                    Mode::Second => "this frame's pyramid; the first walk's hidden nodes",
+                match self.phase {
+                    Phase::First => "last frame's pyramid; the nodes it hides go to the list",
+                    Phase::Second => "this frame's pyramid; the first walk's hidden nodes",
                 }
             )));
         }
@@ -396,8 +395,8 @@ impl Pass for HierarchyFill {
                 "`{STAGE}` implementation `{IMPLEMENTATION}` walks the culling hierarchy: bind slot `{slot}` to the GPU scene's buffer of that name (GpuScene::import_hierarchy, or gpu::import_hierarchy_for)"
             )));
         }
-        let occlusion = self.check_mode(ctx)?;
-        let second = self.mode == Mode::Second;
+        let occlusion = self.check_phase(ctx)?;
+        let second = self.phase == Phase::Second;
         let defs = WalkDefs { occlusion, second };
         ctx.min_bytes("cluster_count", 8);
         ctx.frame_input(VIEW_INPUT);
@@ -467,17 +466,17 @@ impl Pass for HierarchyFill {
         let spread = self.spread_groups.unwrap_or(SPREAD_GROUPS).min(limit);
         let occlusion = ctx.is_bound(PYRAMID_SLOT);
         let test_occlusion = occlusion
-            && match self.mode {
-                Mode::Second => true,
-                Mode::First => {
+            && match self.phase {
+                Phase::Second => true,
+                Phase::First => {
                     ctx.history_valid(PYRAMID_SLOT)? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
                 }
             };
         // The roots a thread each: every instance's (a grid over them), or the second
         // walk's nodes, whose count only the GPU knows (a fixed grid striding over them).
-        let roots_grid = match self.mode {
-            Mode::First => crate::workgroup_grid(instance_count.div_ceil(64), limit),
-            Mode::Second => [ROOT_GROUPS.min(limit), 1],
+        let roots_grid = match self.phase {
+            Phase::First => crate::workgroup_grid(instance_count.div_ceil(64), limit),
+            Phase::Second => [ROOT_GROUPS.min(limit), 1],
         };
         // The counters and list lengths zeroed, the roots, step 0's arguments, step 0
         // (a workgroup per entry of the roots list), then each later step over the list

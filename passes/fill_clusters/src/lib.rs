@@ -63,7 +63,7 @@ pub mod hierarchy;
 pub mod hierarchy_cpu;
 
 pub use cpu::{FillResult, cpu_fill};
-pub use hierarchy::{HierarchyFill, Mode};
+pub use hierarchy::HierarchyFill;
 pub use hierarchy_cpu::{HierarchyWalk, WalkOcclusion, WalkParams, cpu_walk, cpu_walk_with};
 
 use meshlight_gpu_scene::gpu::elements;
