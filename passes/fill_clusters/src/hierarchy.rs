@@ -92,7 +92,9 @@
 //! # Why skipping is exact
 //!
 //! `node_visible` compares the node's bounds as `cull_lod` compares each cluster's
-//! (frustum, own error imperceptible, parent error perceptible), with the node's sphere
+//! (frustum, own error imperceptible, parent error perceptible; the projected error and
+//! the comparison are `meshlight::view`'s `error_to_pixels` and `meshlight::meshlet`'s
+//! `error_perceptible`, which `lod_cut` uses too), with the node's sphere
 //! and errors bounding every cluster below (`meshlight_scene::hierarchy` says why), and
 //! each comparison moved toward keeping by a slack of 2^-13 of the magnitudes involved
 //! (the translation, the camera position, the sphere), far above the f32 rounding of the

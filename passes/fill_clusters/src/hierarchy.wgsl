@@ -33,10 +33,10 @@
 // hidden instance costs one node test per pass and emits nothing.
 
 #import meshlight::dispatch::linear_workgroup
-#import meshlight::meshlet::Cluster
+#import meshlight::meshlet::{Cluster, error_perceptible}
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
 #import meshlight::instance_table::{instance_at, instance_total}
-#import meshlight::view::View
+#import meshlight::view::{View, error_to_pixels}
 #import meshlight::math::F32_MAX
 // Qualified (`cluster_list::clusters`): `cluster_count` also names a HierarchyNode field.
 #import fill_clusters::list as cluster_list
@@ -231,16 +231,15 @@ fn node_visible(node: HierarchyNode, w: Walker) -> bool {
     // Too fine: the largest parent error, seen from the sphere's nearest point, is
     // imperceptible, so every parent below is.
     if node.max_parent_error < F32_MAX {
-        let parent_px = (node.max_parent_error * w.scale) / max(d - lod_radius - s, view.near)
-            * view.lod_scale;
-        if parent_px <= params.lod_threshold_px {
+        let parent_px = error_to_pixels(view, d - lod_radius - s, node.max_parent_error * w.scale);
+        if !error_perceptible(parent_px, params.lod_threshold_px) {
             return false;
         }
     }
     // Too coarse: the smallest own error, seen from the sphere's farthest point, is
     // perceptible, so every own error below is.
-    let own_px = (node.min_error * w.scale) / max(d + lod_radius + s, view.near) * view.lod_scale;
-    return !(own_px > params.lod_threshold_px);
+    let own_px = error_to_pixels(view, d + lod_radius + s, node.min_error * w.scale);
+    return !error_perceptible(own_px, params.lod_threshold_px);
 }
 
 #ifdef OCCLUSION

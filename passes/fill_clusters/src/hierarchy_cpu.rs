@@ -12,11 +12,13 @@
 //! that order, but not which nodes are tested: every node is tested by one walk, so the
 //! counts and the list agree with the GPU's whenever nothing was emitted whole.
 
-use crate::cpu::{instance_max_scale, mat_vec};
+use crate::cpu::instance_max_scale;
 use crate::hierarchy::{MAX_ROUNDS, QUEUE, SLACK, SPREAD_STEPS, SUBTREE_CAPACITY};
 use meshlight_gpu_scene::SceneData;
 use meshlight_scene::asset::format::NodeRecord;
 use meshlight_shaders::cpu::layout::{Cluster, Instance, View};
+use meshlight_shaders::cpu::lod::{error_perceptible, error_to_pixels};
+use meshlight_shaders::cpu::matrix::transform_point;
 use meshlight_shaders::cpu::occlusion::{DEPTH_SLACK, DepthPyramid, MARGIN_PX, occlusion_rect};
 
 /// The pass's parameters that change what it emits.
@@ -177,15 +179,11 @@ impl<'a> Walker<'a> {
     }
 
     fn transform(&self, p: [f32; 4]) -> [f32; 3] {
-        xyz(mat_vec(
-            &self.instance.world_from_local,
-            [p[0], p[1], p[2], 1.0],
-        ))
+        transform_point(&self.instance.world_from_local, xyz(p))
     }
 }
 
 /// `node_visible`, with how close it came to deciding otherwise.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn node_test(view: &View, w: &Walker, node: &NodeRecord, threshold: f32) -> NodeTest {
     let rel = |v: f32, to: f32| (v - to).abs() / to.abs().max(f32::MIN_POSITIVE);
     let centre = w.transform(node.bounds);
@@ -212,20 +210,19 @@ pub fn node_test(view: &View, w: &Walker, node: &NodeRecord, threshold: f32) -> 
         lod_centre[2] - c[2],
     ]);
     if node.max_parent_error < f32::MAX {
-        let parent_px = (node.max_parent_error * w.scale) / (d - lod_radius - s).max(view.near)
-            * view.lod_scale;
+        let parent_px = error_to_pixels(view, d - lod_radius - s, node.max_parent_error * w.scale);
         closeness = closeness.min(rel(parent_px, threshold));
-        if parent_px <= threshold {
+        if !error_perceptible(parent_px, threshold) {
             return NodeTest {
                 visible: false,
                 closeness,
             };
         }
     }
-    let own_px = (node.min_error * w.scale) / (d + lod_radius + s).max(view.near) * view.lod_scale;
+    let own_px = error_to_pixels(view, d + lod_radius + s, node.min_error * w.scale);
     closeness = closeness.min(rel(own_px, threshold));
     NodeTest {
-        visible: !(own_px > threshold),
+        visible: !error_perceptible(own_px, threshold),
         closeness,
     }
 }

@@ -8,6 +8,8 @@ pub mod dispatch;
 pub mod froxel;
 pub mod layout;
 pub mod light;
+pub mod lod;
+pub mod matrix;
 pub mod occlusion;
 pub mod octahedral;
 pub mod rng;

@@ -2,6 +2,8 @@
 //! the conservative test, mirrored operation for operation in f32, plus a reference
 //! depth pyramid built by the rule the WGSL module reads it with.
 
+use super::matrix::mat_vec;
+
 /// `OCCLUSION_MARGIN_PX`.
 pub const MARGIN_PX: f32 = 1.0;
 /// `OCCLUSION_RADIUS_SLACK`.
@@ -20,11 +22,6 @@ pub struct OcclusionRect {
     /// hi.y` in pixels; 0 when a corner was not in front of the near plane), so a test
     /// can tell how near a decision came to flipping.
     pub screen: [f32; 4],
-}
-
-/// `m * v` for a column-major matrix, summed column by column.
-fn mat_vec(m: &[[f32; 4]; 4], v: [f32; 4]) -> [f32; 4] {
-    std::array::from_fn(|r| m[0][r] * v[0] + m[1][r] * v[1] + m[2][r] * v[2] + m[3][r] * v[3])
 }
 
 /// `occlusion_rect`.
