@@ -37,6 +37,8 @@
 //! nothing: the last texel of a row of an odd level covers the one leftover texel below
 //! it. An occlusion test reads level `L` where one texel spans `2^(L+1)` pixels, and the
 //! texels under a pixel rectangle clamped to the image are always inside the level.
+//! `meshlight_shaders::cpu::occlusion::DepthPyramid` builds the same levels on the CPU:
+//! the tests compare with it bit for bit, and the culling references test against it.
 //!
 //! The texture is padded so wgpu's rounded-down mips hold the rounded-up levels
 //! ([`PyramidExtent::texture_size`]): read level `L` only inside
@@ -86,7 +88,6 @@
 //! The pass builds one bind group itself (per-level views of the pyramid, [`mips`]): the
 //! graph binds one view per slot, and a storage texture binding holds one mip.
 
-pub mod cpu;
 pub mod extent;
 pub mod mips;
 
