@@ -46,15 +46,9 @@ pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::StoreOp;
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, ColorTarget, DepthTarget, Element, GraphError, Implementation, Pass,
-    Primitive, ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
-};
+use meshlight_graph::prelude::*;
 use meshlight_scene::Mesh;
 use meshlight_shaders::cpu::layout::Instance;
-use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "brute_force";

@@ -46,16 +46,12 @@ pub mod cpu;
 pub mod testbed;
 
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, ColorAttachment, ColorTarget, Element, Implementation, Pass, Primitive,
-    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, Workgroups,
-};
+use meshlight_graph::prelude::*;
 use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, INSTANCE_MODULE, SLICE_INSTANCE, check_tiles,
     declare_tile_target, workgroup_grid,
 };
-use meshlight_shaders::{LocalModule, PassShader, pass_shader, uniform_block};
+use meshlight_shaders::LocalModule;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "count_raster";

@@ -96,12 +96,7 @@ pub use extent::{
     tile_grid,
 };
 
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, ComputeProgram, Element, GraphError, Implementation, Pass,
-    ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
-};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
+use meshlight_graph::prelude::*;
 use mips::MipViews;
 
 /// The stage name pipelines use.

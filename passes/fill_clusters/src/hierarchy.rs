@@ -109,12 +109,7 @@ use crate::{
 };
 use meshlight_gpu_scene::Phase;
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::file::Params;
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, RecordContext,
-    Result, SetupContext, Workgroups,
-};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
+use meshlight_graph::prelude::*;
 
 /// The implementation name pipelines use.
 pub const IMPLEMENTATION: &str = "hierarchy";

@@ -69,12 +69,7 @@ pub use hierarchy_cpu::{HierarchyWalk, WalkOcclusion, WalkParams, cpu_walk, cpu_
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, Element, GraphError, Implementation, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, Slot, StageContract, Workgroups,
-};
-use meshlight_shaders::{PassShader, ShaderDefs, pass_shader, uniform_block};
+use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "fill_clusters";

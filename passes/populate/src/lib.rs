@@ -53,14 +53,9 @@
 
 pub mod cpu;
 
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, Element, Implementation, Pass, ProgramDesc, RecordContext, Result,
-    SetupContext, Slot, StageContract, Workgroups,
-};
+use meshlight_graph::prelude::*;
 use meshlight_pass_count_raster::{ListParams, Walk, WalkShader};
 use meshlight_pass_z_slice::CLUSTER_GRID;
-use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "populate";

@@ -21,12 +21,7 @@
 //! 4.29 × 10⁹ at the API limit, far past the 2²⁵ clusters a visibility id can name) lose
 //! their last rows. [`cpu_remap`] is the reference.
 
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, Element, Implementation, Pass, ProgramDesc, RecordContext, Result,
-    SetupContext, Slot, StageContract, Workgroups,
-};
-use meshlight_shaders::{PassShader, pass_shader, uniform_block};
+use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "remap_dispatch";

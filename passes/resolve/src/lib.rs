@@ -128,14 +128,8 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
-use meshlight_graph::file::Registry;
-use meshlight_graph::{
-    Access, BindingLayout, DepthAttachment, DepthTarget, Element, GraphError, Implementation, Pass,
-    ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
-    Workgroups,
-};
+use meshlight_graph::prelude::*;
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
 
 /// `meshlight::light::ClusterableObject`, as light clustering's stages declare it.
 const CLUSTERABLE_OBJECT: Element =

@@ -2,8 +2,7 @@
 //! the light of the shaded view; read from code or from a pipeline file's params.
 
 use glam::Vec3;
-use meshlight_graph::file::Params;
-use meshlight_graph::{GraphError, Result};
+use meshlight_graph::prelude::*;
 use std::fmt;
 use std::str::FromStr;
 

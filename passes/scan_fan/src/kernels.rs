@@ -2,12 +2,7 @@
 //! fan buffer, scratch declarations, and the recording of a list of dispatches.
 
 use crate::{ScanOptions, Subgroups, TileAccess};
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, ProgramDesc, RecordContext, Result, SetupContext,
-};
-use meshlight_shaders::{
-    PassShader, ShaderDef, ShaderDefs, pass_shader, shader_defs, uniform_block,
-};
+use meshlight_graph::prelude::*;
 
 /// The kernels (`scan.wgsl`) and the tile layouts they run on, one module each.
 ///

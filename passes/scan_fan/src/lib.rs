@@ -72,8 +72,7 @@
 //! and one write (8 bytes), 12 bytes in all. Counts of at most [`WALK_TILES`] tiles known on
 //! the CPU take one dispatch instead: one workgroup walks the tiles in order.
 
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{Access, Element, GraphError, Result, Slot, StageContract};
+use meshlight_graph::prelude::*;
 
 mod cpu;
 mod decoupled_lookback;

@@ -76,13 +76,9 @@ pub mod testbed;
 pub use cpu::{Extent, Outcome, SliceInstance, ZSliceResult, cpu_z_slice};
 
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, ProgramDesc,
-    RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc, Workgroups,
-};
+use meshlight_graph::prelude::*;
+use meshlight_shaders::LocalModule;
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
-use meshlight_shaders::{LocalModule, PassShader, pass_shader, uniform_block};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "z_slice";
