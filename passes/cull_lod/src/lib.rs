@@ -17,11 +17,11 @@
 //! | `cluster_count`   | storage read       | u32     | `[0]`: clusters in the list |
 //! | `instances`       | storage read       | Instance | the GPU scene |
 //! | `instances_high`  | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
-//! | `meshes`          | storage read       | Mesh    | the GPU scene (reserved for the occlusion pass; `compute` binds it to nothing) |
+//! | `meshes`          | storage read       | Mesh    | the GPU scene's read set; `compute` reads nothing of it and binds it to nothing |
 //! | `meshlets`        | storage read       | Meshlet | bounds, groups, triangle counts |
 //! | `meshlet_groups`  | storage read       | MeshletGroup | LOD spheres and errors |
 //! | `raster_clusters` | storage write      | Cluster | `C` slots: software in `0..[0]`, hardware in `C-[1]..C` |
-//! | `raster_counts`   | cleared read-write | u32 × 8 | the words below |
+//! | `raster_counts`   | cleared read-write | u32 × 8 (12 with `pyramid`) | the words below |
 //! | `hw_args`         | cleared read-write | DrawIndirectArgs | `[384, hardware clusters, 0, 0]` for `draw_indirect` |
 //! | `pyramid`         | sampled (optional) | R32Float, all mips | the depth pyramid; bound: occlusion is tested |
 //! | `occluded`        | storage write (optional) | Cluster | `first` with a pyramid: the clusters found hidden, the second pass's candidates |
@@ -126,10 +126,13 @@
 //!   shorter than `sw_threshold_px`; hardware otherwise.
 //! - Slots: `total = atomicAdd([2], 1)`; `total >= C`: dropped; else software writes slot
 //!   `atomicAdd([0], 1)`, hardware slot `C − 1 − atomicAdd(hw_args[1], 1)` (and counts
-//!   `[1]`). So `[0] + [1] = min([2], C)` and no slot is written twice.
+//!   `[1]`). So `[0] + [1] = min([2], C)` and no slot is written twice. A second pass
+//!   does the same inside its free range: `C` is its `[10]` slots, software starts at
+//!   `[7]` and hardware below `[3]`.
 //! - The cull runs as an indirect dispatch of 64-thread workgroups over
-//!   `cluster_count[0]`, `x × y` with both under the per-dimension limit (a one-thread
-//!   dispatch writes the arguments into a scratch buffer and resets the counters).
+//!   `cluster_count[0]` (plus `walked_cluster_count[0]` when that list is bound), `x × y`
+//!   with both under the per-dimension limit (a one-thread dispatch writes the arguments
+//!   into a scratch buffer and resets the counters).
 //! - [`cpu::cpu_cull`] is the reference, mirroring the WGSL's f32 operations in order.
 //!   The GPU tests compare sets exactly, allowing only clusters whose deciding value lies
 //!   within a relative 1e-5 of its threshold ([`cpu::Decision::closeness`]); they count
@@ -198,7 +201,7 @@ pub fn contract() -> StageContract {
                     "raster_counts",
                     Access::ClearedReadWrite,
                     Element::U32,
-                    "sw, hw, requested, capacity, in frustum, sw triangles, hw triangles, 0",
+                    "sw, hw, requested, capacity, in frustum, sw triangles, hw triangles, first sw slot; with a pyramid: in cut, hidden, slots, testable",
                 ),
                 Slot::buffer(
                     "hw_args",

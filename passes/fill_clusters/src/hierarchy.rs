@@ -6,7 +6,10 @@
 //! The contract is the stage's, with the optional slots bound: `hierarchy_nodes`,
 //! `hierarchy_clusters` and `hierarchy_roots` (the GPU scene's, from
 //! `GpuScene::import_hierarchy`), and `hierarchy_counts` if the caller wants the
-//! counters (otherwise a scratch buffer holds them). The list holds a superset of the LOD
+//! counters (otherwise a scratch buffer holds them); plus the occlusion slots of
+//! [`crate::hierarchy_contract`]: `pyramid`, and `occluded_nodes` and
+//! `occluded_node_count` for a first walk, `candidate_nodes` and `candidate_node_count`
+//! for a second (see [`HierarchyFill::phase`]). The list holds a superset of the LOD
 //! cut: every meshlet of every accepted leaf, each written once, as
 //! `(instance, meshlet)` like `workgroup_per_instance`'s, with the same overflow words
 //! (`cluster_count[1]` requested, `[0] = min([1], capacity)`). `cull_lod` after it then
@@ -21,13 +24,18 @@
 //! | `spread_steps`     | [`SPREAD_STEPS`] | steps that hand wide walks on to more workgroups, at most [`MAX_STEPS`]; 0: one workgroup per instance walks it all |
 //! | `subtree_capacity` | 0 ([`SUBTREE_CAPACITY`]) | entries each step's list of handed-on subtrees holds |
 //! | `spread_groups`    | 0 ([`SPREAD_GROUPS`]) | workgroups of each step after the first |
+//! | `mode`             | `"first"` | `first`: the walk from every instance's root (with a pyramid, hidden nodes go to `occluded_nodes`); `second`: the walk from the first's hidden nodes against this frame's pyramid |
+//! | `occlusion_min_clusters` | [`OCCLUSION_MIN_CLUSTERS`] | with a pyramid, inner nodes with fewer meshlets below are not tested for occlusion (a walk's entries always are) |
 //!
 //! `hierarchy_counts`: `[0]` nodes tested, `[1]` leaves accepted, `[2]` subtrees emitted
 //! whole because a frontier and the next step's list were full, `[3]` walks (of an
 //! instance or of a handed-on subtree) that hit the round limit (0 unless the data is
 //! damaged). Every node is tested by exactly one workgroup, so `[0]` and `[1]` do not
-//! depend on how the walk was split. With room for [`ENTRY_COUNT_WORDS`], `[5]` and
-//! `[6]` count the walk's entries tested and passed: instances tested and visible. Clusters + nodes tested = `cluster_count[1] + [0]`.
+//! depend on how the walk was split. With a pyramid, `[4]` counts the nodes it hid
+//! ([`OCCLUSION_COUNT_WORDS`]). With room for [`ENTRY_COUNT_WORDS`], `[5]` and `[6]` count
+//! the walk's entries tested and passed: the first walk's are the instances' roots (so
+//! instances tested and visible), the second's the hidden nodes it starts from.
+//! Clusters + nodes tested = `cluster_count[1] + [0]`.
 //!
 //! # The walk
 //!
@@ -39,10 +47,12 @@
 //! barriers, a global reservation), and a walk is latency-bound: the frontiers of the
 //! scenes measured stay within one or two chunks, so halving the rounds is what shortens
 //! it. The root's test (frustum and LOD) is the instance test, so a culled instance costs
-//! one node.
+//! one node: the roots are tested first, a thread each (`roots`), and only the children
+//! of those that pass reach a workgroup.
 //!
 //! The walk is split over `spread_steps + 1` dispatches so that its cost follows the
-//! work, not the instance: step 0 is one workgroup per instance starting at its root;
+//! work, not the instance: step 0 is one workgroup per root that passed, starting at its
+//! children;
 //! step k ≥ 1 is `spread_groups` workgroups striding over the list of subtrees step
 //! k − 1 handed on. In a spreading step (all but the last) a frontier holds one chunk
 //! (64 nodes, so a round is one pass of tests and two barriers); an accepted node's
@@ -74,7 +84,8 @@
 //! the level trees: more than the whole walk; a few spreading steps cost one dispatch
 //! each. The written word `cluster_count[0]` is summed by the reservations themselves
 //! (each adds its part below the capacity), so no dispatch follows the walk: the chain
-//! is one clearing dispatch and `spread_steps + 1` walks.
+//! is `prepare` (the counters zeroed), `roots`, `walk_dispatch` (step 0's indirect
+//! arguments) and `spread_steps + 1` walks.
 //!
 //! # Measured
 //!
@@ -233,13 +244,15 @@ uniform_block! {
         capacity: u32,
         /// Instances to visit (at most the bound instance count).
         instance_count: u32,
-        /// x size of the dispatch, to linearise the workgroup id.
+        /// The dispatch's x size. The kernels take their grid from `num_workgroups` and
+        /// do not read it.
         groups_x: u32,
         /// Nodes a frontier may hold, at most QUEUE (smaller in tests, to reach the spill).
         queue_capacity: u32,
         /// cull_lod's `lod_threshold_px`: the two must agree, or the cut loses clusters.
         lod_threshold_px: f32,
-        /// This dispatch's step: 0 starts at the instances' roots, `steps` is the last.
+        /// This dispatch's step: 0 starts at the roots list (the children of every root
+        /// that passed), `steps` is the last.
         step: u32,
         /// Spreading steps: lists of subtrees handed from one step to the next.
         steps: u32,

@@ -22,7 +22,7 @@
 //! | `hierarchy_nodes` | storage read, optional | HierarchyNode | the GPU scene's hierarchy nodes (`hierarchy` only) |
 //! | `hierarchy_clusters` | storage read, optional | u32 | the leaves' meshlets (`hierarchy` only) |
 //! | `hierarchy_roots` | storage read, optional | u32 | per mesh, its root node (`hierarchy` only) |
-//! | `hierarchy_counts` | cleared read-write, optional | u32 × 4 | nodes tested, leaves accepted, subtrees emitted whole, walks unfinished (`hierarchy` only) |
+//! | `hierarchy_counts` | cleared read-write, optional | u32 × 4 (or more) | nodes tested, leaves accepted, subtrees emitted whole, walks unfinished; then nodes hidden, entries tested and passed (`hierarchy` only; [`hierarchy`] says when) |
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`).
 //!
@@ -321,7 +321,8 @@ impl Pass for FillClusters {
             ("params", bytemuck::bytes_of(&params)),
         ];
         ctx.dispatch_compute("fill", &uniforms, Workgroups::Direct([x, y, 1]))?;
-        // A separate compute pass, so the requested count is final when it is read.
+        // A second dispatch (dependent, so wgpu puts a barrier before it): the requested
+        // count is final when it is read.
         ctx.dispatch_compute("finish", &uniforms, Workgroups::Direct([1, 1, 1]))
     }
 }

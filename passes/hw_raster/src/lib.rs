@@ -54,8 +54,8 @@
 //! - Coverage is the hardware's: pixel centres, top-left rule, its sub-pixel precision
 //!   (8 bits on lavapipe, like the software rasteriser's fixed point). The two differ on
 //!   pixels whose centre lies within rounding of an edge and in the last bits of depth;
-//!   the GPU test states the tolerance. Unlike the software rasteriser, the hardware
-//!   clips triangles at the near plane instead of skipping them.
+//!   the GPU test states the tolerance. Both clip triangles at the near plane: the
+//!   hardware in fixed function, the software rasteriser in clip space.
 //! - The two implementations feed the rasteriser the same triangles in the same
 //!   positions; they may differ only where the hardware orders equal-depth writes.
 //! - [`cpu::rasterize`] is the reference (float edge functions at pixel centres).

@@ -55,7 +55,7 @@ pub fn cpu_remap(count: u32, max_per_dimension: u32) -> [u32; 3] {
     meshlight_shaders::cpu::dispatch::fold_dispatch(count, max_per_dimension)
 }
 
-/// The one implementation: a single-thread compute pass.
+/// The one implementation: a single-thread dispatch.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RemapDispatch {
     /// Word of the `count` slot holding the count.

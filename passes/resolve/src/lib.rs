@@ -4,11 +4,11 @@
 //!
 //! The rasterisers store only `depth | cluster | triangle` per pixel; everything else is
 //! recomputed here once per pixel instead of once per overdrawn fragment. Shading is a
-//! compute pass that fetches the
-//! pixel's triangle from the payload again, transforms its three corners again, and
-//! reconstructs perspective-correct barycentrics and their screen-space derivatives at
-//! the pixel centre analytically from the clip-space corners (no quad neighbours
-//! exist in a compute shader). The derivatives box-filter a UV checkerboard.
+//! compute dispatch that fetches the pixel's triangle from the payload again, transforms
+//! its three corners again, and reconstructs perspective-correct barycentrics and their
+//! screen-space derivatives at the pixel centre analytically from the clip-space corners
+//! (no quad neighbours exist in a compute shader). The derivatives box-filter a UV
+//! checkerboard.
 //!
 //! # Depth targets: off unless a pipeline composites with raster geometry
 //!

@@ -24,7 +24,7 @@
 //!
 //! | slot | access | holds | |
 //! |------|--------|-------|---|
-//! | `raster_clusters` | storage read | Cluster | software clusters in slots `0..raster_counts[0]` |
+//! | `raster_clusters` | storage read | Cluster | software clusters in slots `0..raster_counts[0]` (from `raster_counts[7]` with `accumulate`) |
 //! | `raster_counts` | storage read | u32 | word 0: software cluster count; with `accumulate`, word 7: their first slot |
 //! | `sw_args` | storage read + indirect | DispatchIndirectArgs | `[x, y, 1]` from `remap_dispatch` |
 //! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
@@ -68,7 +68,8 @@
 //! - Big triangles (param `big_triangle_px`, default [`BIG_TRIANGLE_PX`]; 0: off): a
 //!   triangle whose clipped box is at least that many pixels wide or tall is cut into
 //!   64 × 64-pixel tiles of its box, listed, and covered by a second dispatch, a
-//!   workgroup per tile and a pixel per thread, instead of by its one thread. It writes
+//!   workgroup per tile whose 128 threads stride over its pixels (32 each), instead of
+//!   by its one thread. It writes
 //!   the pixels and values the thread would have (the same setup, the same edge and
 //!   depth arithmetic), so the reference is unchanged; a clipped triangle's pieces are
 //!   tiled one by one. This is what lets culling send
@@ -255,9 +256,9 @@ const PARAM_KEYS: [&str; 6] = [
 ];
 
 impl SwRaster {
-    /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16) and
-    /// `exact_division` and `accumulate` (default false); `target` picks the
-    /// implementation.
+    /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16),
+    /// `big_triangle_px` (default [`BIG_TRIANGLE_PX`]) and `exact_division` and
+    /// `accumulate` (default false); `target` picks the implementation.
     pub fn from_params(params: &Params, target: Visibility64) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let [width, height] = params.size("the visibility buffer")?;
@@ -417,7 +418,8 @@ impl Pass for SwRaster {
             let group = ctx.bind_group(&program, 0, &uniforms)?;
             programs.push((kernel.groups, program, group));
         }
-        // A second compute pass: the clear is visible before any cluster writes.
+        // After the clear: wgpu's barrier before each dependent dispatch (in the batch's
+        // pass or in a pass of its own) makes it visible before any cluster writes.
         let mut pass = ctx.compute_pass();
         for (groups, program, group) in &programs {
             pass.set_pipeline(&program.pipeline);
