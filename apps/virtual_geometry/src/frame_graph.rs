@@ -2,7 +2,8 @@
 //! pipeline file ([`load`]); both declare the same resources under the same names, so a
 //! file a user edits renders with the same renderer.
 //!
-//! With occlusion (the default), two culling passes (DESIGN §5):
+//! With occlusion (the default), two culling passes (docs/ARCHITECTURE.md, "Two-pass
+//! occlusion culling"):
 //!
 //! ```text
 //! fill → cull (first, last frame's pyramid) → remap → sw_raster → hw_raster

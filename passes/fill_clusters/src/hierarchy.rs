@@ -80,9 +80,9 @@
 //! that workgroups make progress together — lavapipe and other drivers give no such
 //! promise, and a wrong guess hangs the device. Here a step reads only the list the
 //! previous dispatch finished. One dispatch per tree level costs two dependent dispatches
-//! per level (about 4 µs on an H200, DESIGN §9) over the 15 to 25 levels of the chain and
-//! the level trees: more than the whole walk; a few spreading steps cost one dispatch
-//! each. The written word `cluster_count[0]` is summed by the reservations themselves
+//! per level (about 4 µs on an H200: docs/BENCHMARKS.md, graph-floor) over the 15 to 25
+//! levels of the chain and the level trees: more than the whole walk; a few spreading
+//! steps cost one dispatch each. The written word `cluster_count[0]` is summed by the reservations themselves
 //! (each adds its part below the capacity), so no dispatch follows the walk: the chain
 //! is `prepare` (the counters zeroed), `roots`, `walk_dispatch` (step 0's indirect
 //! arguments) and `spread_steps + 1` walks.
@@ -204,8 +204,8 @@ pub struct HierarchyFill {
     /// Workgroups of each step after the first; `None`: [`SPREAD_GROUPS`].
     pub spread_groups: Option<u32>,
     /// Which walk of the frame this is (`mode` in a pipeline file; two-pass occlusion
-    /// culling, DESIGN §5): the first walks from every instance's root and, with a
-    /// pyramid bound (last frame's), sends the nodes it proves hidden to
+    /// culling, docs/ARCHITECTURE.md): the first walks from every instance's root and,
+    /// with a pyramid bound (last frame's), sends the nodes it proves hidden to
     /// `occluded_nodes`; the second walks from those (`candidate_nodes`) against this
     /// frame's pyramid and drops what is still hidden.
     pub phase: Phase,

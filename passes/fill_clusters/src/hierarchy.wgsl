@@ -24,14 +24,14 @@
 // with one global atomic and written cooperatively, one leaf after another, consecutive
 // threads writing consecutive slots.
 //
-// With OCCLUSION (two-pass occlusion culling, DESIGN §5), an accepted node (a walk's
-// entry, or an inner node with at least `occlusion_min_clusters` meshlets below) is
-// also tested against a depth pyramid. The first pass (last frame's pyramid, through last frame's
-// view and the instance's previous transform) hands a node it proves hidden to the
-// second pass as one entry of `node_list` and goes no deeper; the second pass
-// (SECOND_PASS: this frame's pyramid and view) starts its walk from that list instead
-// of the instances' roots and drops what is still hidden. A root is the instance, so a
-// hidden instance costs one node test per pass and emits nothing.
+// With OCCLUSION (two-pass occlusion culling, docs/ARCHITECTURE.md), an accepted node
+// (a walk's entry, or an inner node with at least `occlusion_min_clusters` meshlets
+// below) is also tested against a depth pyramid. The first pass (last frame's pyramid,
+// through last frame's view and the instance's previous transform) hands a node it
+// proves hidden to the second pass as one entry of `node_list` and goes no deeper; the
+// second pass (SECOND_PASS: this frame's pyramid and view) starts its walk from that
+// list instead of the instances' roots and drops what is still hidden. A root is the
+// instance, so a hidden instance costs one node test per pass and emits nothing.
 
 #import meshlight::dispatch::linear_workgroup
 #import meshlight::meshlet::{Cluster, error_perceptible}
