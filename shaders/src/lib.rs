@@ -13,6 +13,8 @@
 //! normals, the LOD and occlusion tests, the depth pyramid), so every pass's CPU
 //! reference builds on one copy of each.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 mod defs;
 mod error;

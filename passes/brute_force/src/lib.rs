@@ -42,6 +42,8 @@
 //!   Coverage is the hardware's (pixel centres, top-left rule, its sub-pixel precision).
 //! - [`cpu::draw`] is the reference (float edge functions at pixel centres).
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
@@ -63,6 +65,8 @@ pub const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The id of a pixel no triangle covers.
 pub const EMPTY_ID: u32 = 0;
 
+/// The baseline's WGSL (`draw.wgsl`), public so the shader tests compose and validate
+/// every entry point.
 pub const SHADER: PassShader = pass_shader!("brute_force::draw", "draw.wgsl");
 
 /// The id the `ids` target holds where `instance` is the nearest surface.
@@ -114,9 +118,11 @@ pub struct Lod0Buffers {
 }
 
 impl Lod0Buffers {
+    /// The positions as the bytes a `positions` buffer is created with.
     pub fn position_bytes(&self) -> &[u8] {
         bytemuck::cast_slice(&self.positions)
     }
+    /// The indices as the bytes an `indices` buffer is created with.
     pub fn index_bytes(&self) -> &[u8] {
         bytemuck::cast_slice(&self.indices)
     }
@@ -124,6 +130,7 @@ impl Lod0Buffers {
     pub fn index_count(&self) -> u32 {
         self.indices.len() as u32
     }
+    /// Triangles drawn per instance, for throughput figures.
     pub fn triangle_count(&self) -> u32 {
         self.index_count() / 3
     }
@@ -148,6 +155,7 @@ pub fn lod0_buffers(mesh: &Mesh) -> Lod0Buffers {
 pub struct BruteForce {
     /// The targets' size in pixels, which the view's viewport must equal.
     pub width: u32,
+    /// The targets' height in pixels (see `width`).
     pub height: u32,
     /// Indices drawn per instance, from the start of `indices`.
     pub index_count: u32,

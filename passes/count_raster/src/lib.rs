@@ -42,6 +42,8 @@
 //! value lies within a hair of its threshold (`meshlight_shaders::cpu::froxel::Decision`),
 //! where the GPU's rounding may go the other way.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 pub mod testbed;
 
@@ -100,8 +102,11 @@ uniform_block! {
     pub struct ListParams as "ListParams" in "count_raster::list_params" {
         /// Entries the list may hold; clamped to the bound list's length.
         pub capacity: u32,
+        /// Pads the block to one 16-byte row, as a uniform's size must be.
         pub pad_a: u32,
+        /// See `pad_a`.
         pub pad_b: u32,
+        /// See `pad_a`.
         pub pad_c: u32,
     }
 }
@@ -178,6 +183,7 @@ pub fn tiles_param(params: &Params) -> Result<[u32; 2]> {
 /// target by a field.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CountRaster {
+    /// How this pass walks: its implementation (`raster` or `compute`).
     pub walk: Walk,
 }
 
@@ -197,16 +203,19 @@ impl Pass for CountRaster {
 /// A walking stage's program: its shader, entry points and layout labels.
 #[derive(Clone, Copy, Debug)]
 pub struct WalkShader {
+    /// The stage's WGSL, holding every entry point below.
     pub shader: &'static PassShader,
     /// The program's name in the pass.
     pub program: &'static str,
-    /// `raster`'s entry points: the instance's quad, the froxel of a pixel.
+    /// `raster`'s vertex entry point: the corner of the instance's tile rectangle.
     pub vertex: &'static str,
+    /// `raster`'s fragment entry point: tests and counts (or places) the pixel's froxel.
     pub fragment: &'static str,
     /// `compute`'s entry point.
     pub compute: &'static str,
-    /// Labels of the bind-group layouts of each implementation.
+    /// Label of the `raster` bind-group layout, as dumps and GPU captures show it.
     pub raster_layout: &'static str,
+    /// Label of the `compute` bind-group layout.
     pub compute_layout: &'static str,
 }
 
@@ -216,7 +225,12 @@ pub struct WalkShader {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Walk {
     /// One instanced indirect draw of a quad per instance on a `width × height` viewport.
-    Raster { width: u32, height: u32 },
+    Raster {
+        /// Viewport columns: the grid's tiles across, one pixel each.
+        width: u32,
+        /// Viewport rows: the grid's tiles down.
+        height: u32,
+    },
     /// A direct dispatch of at most this many workgroups ([`walk_grid`]).
     Compute(u32),
 }

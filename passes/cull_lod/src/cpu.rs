@@ -21,7 +21,9 @@ pub const HW_VERTICES: u32 = 384;
 /// The thresholds the pass compares with (its params).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Thresholds {
+    /// Pixels of error the cut may show: `lod_threshold_px`.
     pub lod_threshold_px: f32,
+    /// Screen-box size under which a cluster goes to software: `sw_threshold_px`.
     pub sw_threshold_px: f32,
     /// `false`: every cluster of the cut goes to software, for pipelines with no
     /// hardware rasteriser (sw_raster clips the clusters crossing the near plane).
@@ -43,21 +45,26 @@ impl Default for Thresholds {
 pub struct Decision {
     /// Smallest `dot(plane.xyz, centre) + plane.w + radius`: in the frustum when >= 0.
     pub frustum_margin: f32,
+    /// Whether the sphere touches the frustum (the first test; nothing else runs without it).
     pub in_frustum: bool,
     /// Own and parent error in pixels (`f32::MAX` parent for a root: never projected).
     pub own_px: f32,
+    /// The parent group's error in pixels, compared after `own_px`.
     pub parent_px: f32,
+    /// Whether the cluster is in the LOD cut: own error hidden, parent's shown.
     pub in_cut: bool,
     /// Distance of the sphere's centre beyond the near plane, minus its radius.
     pub near_margin: f32,
     /// Screen box of the sphere (0 when it reaches the near plane: not computed).
     pub box_size: [f32; 2],
+    /// Whether the cluster goes to the software rasteriser.
     pub software: bool,
     /// The world-space radius, for scaling the frustum and near margins.
     pub radius: f32,
     /// Once in the cut with the occlusion test on: the sphere's rectangle, and the
     /// farthest depth the pyramid holds under it (when testable).
     pub occlusion: Option<(OcclusionRect, f32)>,
+    /// Whether the pyramid proved the cluster hidden (it then takes no raster slot).
     pub occluded: bool,
 }
 
@@ -117,6 +124,7 @@ pub struct CullResult {
     pub cut: Vec<Cluster>,
     /// The cut split by rasteriser (every cut cluster, whether or not a slot was free).
     pub software: Vec<Cluster>,
+    /// The cut clusters the hardware rasteriser takes.
     pub hardware: Vec<Cluster>,
     /// Cut clusters the pyramid proved hidden, in list order: the first pass's
     /// candidates (`occluded`), or what the second pass culled.
@@ -129,7 +137,7 @@ pub struct CullResult {
     pub hw_args: [u32; 4],
 }
 
-pub fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
+fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
@@ -211,7 +219,9 @@ pub enum Occlusion<'a> {
     First(&'a DepthPyramid),
     /// The second pass against this frame's, given the first pass's `raster_counts`.
     Second {
+        /// This frame's pyramid, built from what the first pass drew.
         pyramid: &'a DepthPyramid,
+        /// The first pass's `raster_counts`, whose software and hardware ends bound the free slots.
         first_counts: [u32; 12],
     },
 }

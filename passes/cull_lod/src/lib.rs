@@ -138,6 +138,8 @@
 //!   within a relative 1e-5 of its threshold ([`cpu::Decision::closeness`]); they count
 //!   such clusters and assert there are at most 2 per view.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 
 pub use cpu::{CullResult, Decision, Thresholds, cpu_cull};
@@ -167,6 +169,7 @@ pub const PER_INSTANCE_FIRST: &str = "occluded_per_instance";
 pub const PER_INSTANCE_SECOND: &str = "still_occluded_per_instance";
 /// The second pass's optional second list: the second hierarchy walk's clusters.
 pub const WALKED_SLOT: &str = "walked_clusters";
+/// The count words of `walked_clusters`: the second walk's `cluster_count`.
 pub const WALKED_COUNT_SLOT: &str = "walked_cluster_count";
 /// The binding of the per-instance counters in cull.wgsl.
 const PER_INSTANCE_BINDING: u32 = 16;
@@ -174,6 +177,8 @@ const PER_INSTANCE_BINDING: u32 = 16;
 /// Threads per cull workgroup.
 pub const WORKGROUP_SIZE: u32 = 64;
 
+/// The stage's WGSL (`cull.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!("cull_lod::cull", "cull.wgsl", params: GpuParams);
 
 /// The slots every implementation of `cull_lod` shares.
@@ -286,6 +291,7 @@ shader_defs! {
 /// The `compute` implementation.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CullLod {
+    /// The LOD and software thresholds, and whether a hardware rasteriser follows.
     pub thresholds: Thresholds,
     /// Which culling pass of the frame this is (`mode` in a pipeline file): the first
     /// tests against last frame's pyramid, the second re-tests what the first hid.

@@ -88,6 +88,8 @@
 //! The pass builds one bind group itself (per-level views of the pyramid, [`mips`]): the
 //! graph binds one view per slot, and a storage texture binding holds one mip.
 
+#![warn(missing_docs)]
+
 pub mod extent;
 pub mod mips;
 
@@ -114,6 +116,8 @@ pub const IMPLEMENTATIONS: [(&str, Method); 2] = [
     ("two_pass", Method::TwoPass),
 ];
 
+/// The stage's WGSL (`pyramid.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!("depth_pyramid", "pyramid.wgsl", params: ShaderParams);
 
 /// Scratch: one u32 per tile, its level-6 texel's depth bits.
@@ -158,6 +162,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// The implementation name pipelines use for this method.
     pub fn name(self) -> &'static str {
         match self {
             Method::SinglePass => "single_pass",
@@ -177,8 +182,11 @@ impl Method {
 /// and `two_pass`, told apart by [`DepthPyramid::method`]).
 #[derive(Clone, Debug)]
 pub struct DepthPyramid {
+    /// The visibility target's width in pixels; the pyramid's size follows from it.
     pub width: u32,
+    /// The visibility target's height in pixels.
     pub height: u32,
+    /// How the levels above the first tiles are reached: one dispatch or two.
     pub method: Method,
     mips: MipViews,
 }
@@ -187,6 +195,8 @@ pub struct DepthPyramid {
 pub const KEYS: [&str; 2] = ["width", "height"];
 
 impl DepthPyramid {
+    /// A pass for a `width × height` target built by `method`; nothing is checked until
+    /// setup ([`Self::validate`]).
     pub fn new(width: u32, height: u32, method: Method) -> Self {
         Self {
             width,
@@ -195,9 +205,11 @@ impl DepthPyramid {
             mips: MipViews::default(),
         }
     }
+    /// [`Self::new`] with `single_pass`, what `auto` takes.
     pub fn single_pass(width: u32, height: u32) -> Self {
         Self::new(width, height, Method::SinglePass)
     }
+    /// [`Self::new`] with `two_pass`, for adapters that bind fewer than 14 storage textures.
     pub fn two_pass(width: u32, height: u32) -> Self {
         Self::new(width, height, Method::TwoPass)
     }
@@ -210,6 +222,7 @@ impl DepthPyramid {
         Ok(pass)
     }
 
+    /// Refuses a size of 0 or past [`MAX_SIDE`], naming the params to change.
     pub fn validate(&self) -> Result<()> {
         let [w, h] =
             Params::positive_size(self.width, self.height, "the visibility target's size")?;
@@ -221,6 +234,7 @@ impl DepthPyramid {
         Ok(())
     }
 
+    /// Level 0's size and the level count of this pass's pyramid, for sizing the texture.
     pub fn extent(&self) -> PyramidExtent {
         pyramid_extent(self.width, self.height)
     }

@@ -125,6 +125,8 @@ use meshlight_graph::prelude::*;
 /// The implementation name pipelines use.
 pub const IMPLEMENTATION: &str = "hierarchy";
 
+/// The `hierarchy` implementation's WGSL with its uniform block and the list module,
+/// public so the shader tests compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!(
     "fill_clusters::hierarchy",
     "hierarchy.wgsl",

@@ -24,10 +24,15 @@ use meshlight_shaders::cpu::occlusion::{DEPTH_SLACK, DepthPyramid, MARGIN_PX, oc
 /// The pass's parameters that change what it emits.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WalkParams {
+    /// `capacity`: clusters the list may hold.
     pub capacity: u32,
+    /// `lod_threshold_px`: the error the cut may show, as `cull_lod`'s.
     pub lod_threshold_px: f32,
+    /// `queue_capacity`: nodes a frontier of the last step holds.
     pub queue_capacity: u32,
+    /// `spread_steps`: steps that hand wide walks on.
     pub spread_steps: u32,
+    /// `subtree_capacity`: entries each step's list holds.
     pub subtree_capacity: u32,
     /// `occlusion_min_clusters`.
     pub occlusion_min_clusters: u32,
@@ -57,8 +62,9 @@ pub struct HierarchyWalk {
     /// `hierarchy_counts`: nodes tested, leaves accepted, subtrees emitted whole, walks
     /// unfinished.
     pub counts: [u32; 4],
-    /// `cluster_count[1]` and `[0]`.
+    /// `cluster_count[1]`: clusters requested.
     pub requested: u32,
+    /// `cluster_count[0]`: the requested clusters below the capacity.
     pub written: u32,
     /// Some subtree was emitted whole (a frontier and the next list full): which then
     /// depends on the order the GPU appended children in.
@@ -87,12 +93,16 @@ pub enum WalkOcclusion<'a> {
     /// The first walk against last frame's pyramid (previous view-projection and
     /// instance transforms); `capacity` entries of `occluded_nodes`.
     First {
+        /// Last frame's pyramid.
         pyramid: &'a DepthPyramid,
+        /// Entries of `occluded_nodes`; hidden nodes past it are walked as if visible.
         capacity: u32,
     },
     /// The second walk from the first's hidden nodes against this frame's pyramid.
     Second {
+        /// This frame's pyramid.
         pyramid: &'a DepthPyramid,
+        /// The first walk's hidden nodes, `(instance, node)`, where this walk starts.
         nodes: &'a [(u32, u32)],
     },
 }
@@ -141,7 +151,9 @@ pub fn node_occlusion(
 /// comparison was made).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NodeTest {
+    /// Whether the walk goes on below the node.
     pub visible: bool,
+    /// How close the deciding comparison came to flipping, relative to its scale.
     pub closeness: f32,
 }
 
@@ -160,12 +172,17 @@ fn xyz(v: [f32; 4]) -> [f32; 3] {
 /// What stays the same for every node of one instance (`Walker` in the shader).
 #[derive(Clone, Copy, Debug)]
 pub struct Walker<'a> {
+    /// The instance walked.
     pub instance: &'a Instance,
+    /// Its largest axis scale, which grows every sphere and error.
     pub scale: f32,
+    /// `|translation| + |camera|`: with a sphere's own size, the magnitudes a test's
+    /// slack is relative to.
     pub reach: f32,
 }
 
 impl<'a> Walker<'a> {
+    /// The walker of `instance` seen from `view`, as the shader's `walker` builds it.
     pub fn new(instance: &'a Instance, view: &View) -> Self {
         Self {
             instance,

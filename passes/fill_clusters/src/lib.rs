@@ -58,6 +58,8 @@
 //! `gpu::hierarchy_lengths`, and `implementation = "hierarchy"` with
 //! `params = { lod_threshold_px = <cull's> }`.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 pub mod hierarchy;
 pub mod hierarchy_cpu;
@@ -78,6 +80,8 @@ pub const IMPLEMENTATION: &str = "workgroup_per_instance";
 /// The frame input holding the `View`.
 pub const VIEW_INPUT: &str = "view";
 
+/// `workgroup_per_instance`'s WGSL with its uniform block and the list module, public so
+/// the shader tests compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!(
     "fill_clusters::fill",
     "fill.wgsl",
@@ -89,9 +93,11 @@ pub const SHADER: PassShader = pass_shader!(
 pub const PYRAMID_SLOT: &str = "pyramid";
 /// The first pass's output: the nodes the pyramid hid.
 pub const OCCLUDED_NODES_SLOT: &str = "occluded_nodes";
+/// The first pass's count words for it: `[0]` written, `[1]` found.
 pub const OCCLUDED_NODE_COUNT_SLOT: &str = "occluded_node_count";
 /// The second pass's input: the same list, bound under another name.
 pub const CANDIDATE_NODES_SLOT: &str = "candidate_nodes";
+/// The second pass's count words of that list: the first pass's `occluded_node_count`.
 pub const CANDIDATE_NODE_COUNT_SLOT: &str = "candidate_node_count";
 /// An entry of the hidden-node list: `(instance, node, 1)`, three u32 (the walk's
 /// `Subtree`).

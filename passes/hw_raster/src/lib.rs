@@ -60,6 +60,8 @@
 //!   positions; they may differ only where the hardware orders equal-depth writes.
 //! - [`cpu::rasterize`] is the reference (float edge functions at pixel centres).
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
@@ -79,6 +81,8 @@ pub const NAN_BITS: u32 = 0x7fc0_0000;
 /// The scratch colour target.
 const TARGET: &str = "target";
 
+/// The stage's WGSL (`raster.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!("hw_raster::raster", "raster.wgsl", params: GpuParams);
 
 /// raster.wgsl with the mesh-shader extension enabled (compose it with `MESH_SHADER`):
@@ -153,8 +157,11 @@ impl Feed {
 /// The `indirect_draw` and `mesh_shader` implementations ([`HwRaster::feed`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HwRaster {
+    /// The visibility buffer's width in pixels, which the view's viewport must equal.
     pub width: u32,
+    /// The visibility buffer's height in pixels.
     pub height: u32,
+    /// How clusters reach the rasteriser: the implementation.
     pub feed: Feed,
 }
 

@@ -51,6 +51,8 @@
 //! imports with `POPULATE` defined, and both record it through
 //! [`meshlight_pass_count_raster::Walk`].
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 
 use meshlight_graph::prelude::*;
@@ -119,6 +121,7 @@ const POPULATE_WALK: WalkShader = WalkShader {
 /// names itself after its walk.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Populate {
+    /// How this pass walks: its implementation, the same as count_raster's.
     pub walk: Walk,
     /// Entries the lists may hold; `None`: all of `cluster_objects`.
     pub capacity: Option<u32>,

@@ -21,11 +21,15 @@
 //! 4.29 × 10⁹ at the API limit, far past the 2²⁵ clusters a visibility id can name) lose
 //! their last rows. [`cpu_remap`] is the reference.
 
+#![warn(missing_docs)]
+
 use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "remap_dispatch";
 
+/// The stage's WGSL (`remap.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader =
     pass_shader!("remap_dispatch::remap", "remap.wgsl", params: GpuParams);
 

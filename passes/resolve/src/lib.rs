@@ -119,6 +119,8 @@
 //!   and pyramid views within 1/255), shading within 2/255 per channel on ≥ 99% of
 //!   pixels.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 pub mod settings;
 
@@ -148,12 +150,16 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The format of the `pyramid` the `pyramid` view reads.
 pub const PYRAMID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
+/// The depth resolves' WGSL (`depth.wgsl`), public so the shader tests compose and
+/// validate every entry point.
 pub const DEPTH_SHADER: PassShader = pass_shader!(
     "resolve::depth",
     "depth.wgsl",
     params: DepthParams,
     modules: [("resolve::visibility", "visibility.wgsl")]
 );
+/// The shading program's WGSL (`shade.wgsl`), public so the shader tests compose and
+/// validate every entry point.
 pub const SHADE_SHADER: PassShader = pass_shader!(
     "resolve::shade",
     "shade.wgsl",

@@ -130,6 +130,7 @@ pub struct Settings {
     pub light_color: Vec3,
     /// Linear RGB ambient term, so faces turned away from the light keep their shape.
     pub ambient_color: Vec3,
+    /// What the `color` target shows: the shaded image or a debug view.
     pub view: DebugView,
     /// Checker squares per UV unit.
     pub checker_scale: f32,
@@ -156,8 +157,11 @@ impl Default for Settings {
 /// buffer's size and the size of the three targets.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolve {
+    /// The visibility buffer's width, and the targets'.
     pub width: u32,
+    /// The visibility buffer's height, and the targets'.
     pub height: u32,
+    /// Lighting and the debug view: what may change between frames without a new graph.
     pub settings: Settings,
 }
 

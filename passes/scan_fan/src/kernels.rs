@@ -317,6 +317,7 @@ macro_rules! scan_implementation {
         $(#[$doc])*
         #[derive(Clone, Debug)]
         pub struct $ty {
+            /// What the scan is configured with; swapping implementations keeps it.
             pub options: $crate::ScanOptions,
         }
 
@@ -330,6 +331,7 @@ macro_rules! scan_implementation {
             pub fn new(count: u32) -> Self {
                 Self::with_options($defaults(count))
             }
+            /// The implementation with `options` as given, for a caller that sets each field.
             pub fn with_options(options: $crate::ScanOptions) -> Self {
                 Self { options }
             }

@@ -87,6 +87,8 @@
 //!   by an ulp; lavapipe matches either way. Off by default because it costs: the
 //!   H100 figures are in docs/BENCHMARKS.md.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
@@ -100,6 +102,8 @@ pub const STAGE: &str = "sw_raster";
 /// The frame input holding the `View`.
 pub const VIEW_INPUT: &str = "view";
 
+/// The stage's WGSL (`raster.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!("sw_raster::raster", "raster.wgsl", params: GpuParams);
 /// The `texture` implementation's clear: a dispatch of plain stores.
 pub const CLEAR_SHADER: PassShader = pass_shader!("sw_raster::clear", "clear.wgsl");
@@ -186,7 +190,9 @@ pub const IMPLEMENTATIONS: [(&str, Visibility64); 2] = [
 /// The `buffer` and `texture` implementations ([`SwRaster::target`] tells them apart).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SwRaster {
+    /// The visibility buffer's width in pixels, which the view's viewport must equal.
     pub width: u32,
+    /// The visibility buffer's height in pixels.
     pub height: u32,
     /// What the visibility buffer is: `Buffer` (implementation `buffer`) or `Texture`
     /// (`texture`).

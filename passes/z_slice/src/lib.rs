@@ -69,6 +69,8 @@
 //!   deciding value lies within a relative 1e-5 of a threshold
 //!   ([`cpu::Extent::closeness`]); they count such pairs and assert a small bound.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 pub mod scenes;
 pub mod testbed;
@@ -107,6 +109,8 @@ pub const INSTANCE_MODULE: LocalModule = LocalModule {
     file_path: concat!(env!("CARGO_PKG_NAME"), "/instance.wgsl"),
 };
 
+/// The stage's WGSL (`z_slice.wgsl`) with the instance module and its uniform block,
+/// public so the shader tests compose and validate every entry point.
 pub const SHADER: PassShader = PassShader {
     modules: &[INSTANCE_MODULE, GpuParams::MODULE],
     ..pass_shader!("z_slice::z_slice", "z_slice.wgsl")
@@ -160,7 +164,9 @@ pub fn contract() -> StageContract {
 pub struct GridSettings {
     /// Tile columns, tile rows, depth slices.
     pub dims: [u32; 3],
+    /// View-space distance where slice 0 ends; every nearer depth is in slice 0.
     pub first_slice_end: f32,
+    /// Where the last slice ends; farther depths are in it.
     pub far: f32,
 }
 
@@ -208,6 +214,7 @@ impl GridSettings {
 /// The `compute` implementation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ZSlice {
+    /// The froxel grid's shape, which the later stages read from `cluster_grid`.
     pub grid: GridSettings,
     /// List entries; `None`: as many as `slice_instances` holds.
     pub capacity: Option<u32>,

@@ -14,9 +14,12 @@ pub const DEPTH_SLACK: f32 = 1.0 + 1.0 / 256.0;
 /// `OcclusionRect`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct OcclusionRect {
+    /// Whether the sphere can be tested: every corner in front of the near plane and the
+    /// rectangle wholly on the screen. Untestable spheres are kept.
     pub testable: bool,
     /// Inclusive pixel range: x0, y0, x1, y1.
     pub pixels: [u32; 4],
+    /// The sphere's nearest NDC depth (reverse-Z: the largest), compared with the pyramid.
     pub depth: f32,
     /// The rectangle before the margin and the on-screen check (`lo.x, lo.y, hi.x,
     /// hi.y` in pixels; 0 when a corner was not in front of the near plane), so a test
