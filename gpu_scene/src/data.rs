@@ -32,8 +32,11 @@ pub struct Limits {
     pub instances_per_binding: u32,
     /// Instances both bindings hold.
     pub max_instances: u32,
+    /// Meshlet records the shared `meshlets` binding holds.
     pub max_meshlets: u32,
+    /// Words the shared `payload` binding holds (less the two words of padding after it).
     pub max_payload_words: u32,
+    /// Culling-hierarchy nodes the shared `hierarchy_nodes` binding holds.
     pub max_hierarchy_nodes: u32,
 }
 
@@ -51,6 +54,8 @@ impl Limits {
             max_hierarchy_nodes: count(size_of::<NodeRecord>()),
         }
     }
+    /// The counts an adapter with these limits can bind, for sizing a scene before it
+    /// is uploaded.
     pub fn for_device(limits: &wgpu::Limits) -> Self {
         Self::for_binding_size(limits.max_storage_buffer_binding_size)
     }
@@ -66,11 +71,16 @@ impl Default for Limits {
 /// Everything the GPU scene uploads, with change tracking.
 #[derive(Clone, Debug, Default)]
 pub struct SceneData {
+    /// One record per added asset: its grids, bounds and meshlet range, which instances
+    /// refer to by [`MeshId`].
     pub meshes: Vec<layout::Mesh>,
     /// Every asset's meshlet records; `data_offset`, `source_group` and `parent_group`
     /// are rebased onto the shared payload and group arrays.
     pub meshlets: Vec<MeshletRecord>,
+    /// Every asset's simplification groups (LOD spheres and errors), which meshlets refer to
+    /// as their own and their parent's group.
     pub groups: Vec<GroupRecord>,
+    /// Every asset's packed vertex, UV and triangle words, which meshlet records point into.
     pub payload: Vec<u32>,
     /// Every asset's culling-hierarchy nodes; `first_child` and `first_cluster` rebased
     /// onto these shared arrays.
@@ -79,7 +89,9 @@ pub struct SceneData {
     pub hierarchy_clusters: Vec<u32>,
     /// Per mesh: the index of its hierarchy's root in `hierarchy_nodes`.
     pub hierarchy_roots: Vec<u32>,
+    /// The placed instances, in the order they were added: what the culling passes walk.
     pub instances: Vec<layout::Instance>,
+    /// The material table instances index, in GPU layout.
     pub materials: Vec<layout::Material>,
     mesh_names: Vec<String>,
     limits: Limits,
@@ -93,6 +105,8 @@ pub struct SceneData {
 }
 
 impl SceneData {
+    /// An empty scene that refuses to grow past `limits` (the device's, so that every
+    /// buffer can be bound whole).
     pub fn new(limits: Limits) -> Self {
         Self {
             limits,
@@ -100,6 +114,7 @@ impl SceneData {
         }
     }
 
+    /// The limits the scene was made with, for callers that size their own lists to it.
     pub fn limits(&self) -> Limits {
         self.limits
     }
@@ -216,10 +231,12 @@ impl SceneData {
         Ok(MeshId(self.meshes.len() as u32 - 1))
     }
 
+    /// The name an asset was added under, for counters and messages that name meshes.
     pub fn mesh_name(&self, mesh: MeshId) -> Option<&str> {
         self.mesh_names.get(mesh.0 as usize).map(String::as_str)
     }
 
+    /// Adds a material and returns the index instances refer to it by.
     pub fn add_material(&mut self, material: Material) -> u32 {
         let [r, g, b] = material.base_color;
         self.materials.push(layout::Material {

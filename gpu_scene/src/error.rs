@@ -3,19 +3,33 @@ use thiserror::Error;
 /// What can go wrong when assets and instances are added to a scene.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum SceneDataError {
+    /// Adding this would take a buffer past what one binding of the device holds.
     #[error("the scene would hold {requested} {what}, above the limit of {limit}; {advice}")]
     Limit {
+        /// What would grow (meshlets, payload words, instances, …).
         what: &'static str,
+        /// How many the scene would then hold.
         requested: u64,
+        /// The most the device can bind.
         limit: u64,
+        /// What to change to stay under it.
         advice: &'static str,
     },
+    /// An instance named a mesh this scene was never given.
     #[error("mesh id {0} does not exist in this scene; add the mesh first with `add_mesh`")]
     UnknownMesh(u32),
+    /// An instance named a material this scene was never given.
     #[error("material id {0} does not exist in this scene; add it first with `add_material`")]
     UnknownMaterial(u32),
+    /// An instance id past the scene's instances.
     #[error("instance id {0} does not exist in this scene")]
     UnknownInstance(u32),
+    /// An asset failed the checks that keep damaged data off the GPU.
     #[error("asset `{name}` is invalid: {reason}; re-bake it with `meshlight bake`")]
-    InvalidAsset { name: String, reason: String },
+    InvalidAsset {
+        /// The name the asset was added under.
+        name: String,
+        /// The check it failed.
+        reason: String,
+    },
 }

@@ -15,13 +15,21 @@ const USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
 /// Element types of the scene buffers, as graph dumps name them.
 pub mod elements {
     use super::*;
+    /// The asset's `MeshletRecord`, WGSL `meshlet::Meshlet`.
     pub const MESHLET: Element = Element::named("Meshlet", size_of::<MeshletRecord>() as u32);
+    /// The asset's `GroupRecord`, WGSL `meshlet::MeshletGroup`.
     pub const GROUP: Element = Element::named("MeshletGroup", size_of::<GroupRecord>() as u32);
+    /// WGSL `meshlet::Mesh`: one per added asset.
     pub const MESH: Element = Element::named("Mesh", size_of::<layout::Mesh>() as u32);
+    /// WGSL `instance::Instance`.
     pub const INSTANCE: Element = Element::named("Instance", size_of::<layout::Instance>() as u32);
+    /// WGSL `instance::Material`.
     pub const MATERIAL: Element = Element::named("Material", size_of::<layout::Material>() as u32);
+    /// WGSL `meshlet::Cluster`: the (instance, meshlet) pairs the culling lists hold.
     pub const CLUSTER: Element = Element::named("Cluster", size_of::<layout::Cluster>() as u32);
+    /// WGSL `view::View`, when a pass reads the view from a buffer.
     pub const VIEW: Element = Element::named("View", size_of::<layout::View>() as u32);
+    /// The asset's `NodeRecord`, WGSL `HierarchyNode` (fill_clusters' walk).
     pub const HIERARCHY_NODE: Element =
         Element::named("HierarchyNode", size_of::<NodeRecord>() as u32);
 }
@@ -29,13 +37,19 @@ pub mod elements {
 /// The graph handles of the scene buffers, returned by [`GpuScene::import`].
 #[derive(Clone, Copy, Debug)]
 pub struct SceneHandles {
+    /// Bound to the `meshlets` slots.
     pub meshlets: Handle<Buffer>,
+    /// Bound to the `meshlet_groups` slots.
     pub groups: Handle<Buffer>,
+    /// Bound to the `payload` slots.
     pub payload: Handle<Buffer>,
+    /// Bound to the `meshes` slots.
     pub meshes: Handle<Buffer>,
+    /// Bound to the `instances` slots (the first binding's worth when split).
     pub instances: Handle<Buffer>,
     /// The instances past one binding's limit, when the scene has that many.
     pub instances_high: Option<Handle<Buffer>>,
+    /// Bound to the `materials` slots.
     pub materials: Handle<Buffer>,
 }
 
@@ -60,8 +74,11 @@ impl SceneHandles {
 /// [`GpuScene::import_hierarchy`] and [`import_hierarchy_for`].
 #[derive(Clone, Copy, Debug)]
 pub struct HierarchyHandles {
+    /// Bound to the `hierarchy_nodes` slot.
     pub nodes: Handle<Buffer>,
+    /// Bound to the `hierarchy_clusters` slot.
     pub clusters: Handle<Buffer>,
+    /// Bound to the `hierarchy_roots` slot.
     pub roots: Handle<Buffer>,
 }
 
@@ -76,6 +93,7 @@ struct SceneBuffer {
 /// Bytes written by one [`GpuScene::upload`], to show that unchanged data stays put.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct UploadStats {
+    /// Bytes copied to the GPU.
     pub bytes: u64,
     /// Buffers created (first upload, or a buffer outgrown).
     pub created: u32,
@@ -286,6 +304,8 @@ impl GpuScene {
         stats
     }
 
+    /// The uploaded buffer named `name` (one of [`crate::names`]), to import it into a graph
+    /// built elsewhere or read it back in a test.
     pub fn buffer(&self, name: &str) -> Option<&wgpu::Buffer> {
         self.buffers
             .iter()

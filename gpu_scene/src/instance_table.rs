@@ -33,6 +33,7 @@ pub fn high_slot() -> Slot {
 /// Which variant of the instance table a pass compiles: one binding or two.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InstanceTable {
+    /// The instances take two bindings: `instances_high` is bound and `INSTANCES_HIGH` defined.
     pub split: bool,
 }
 

@@ -27,7 +27,10 @@
 //! [`SceneData`] is the CPU side (what CPU references read); [`GpuScene`] owns the
 //! buffers and re-uploads only what changed. [`view`] builds the per-frame `View`.
 
+#![warn(missing_docs)]
+
 pub mod data;
+/// What adding assets and instances to a scene can refuse, and why.
 pub mod error;
 pub mod gpu;
 pub mod instance_table;
@@ -45,16 +48,25 @@ pub use view::{Camera, Projection};
 
 /// Names of the imported buffers (and of the pass slots that read them).
 pub mod names {
+    /// Every asset's meshlet records.
     pub const MESHLETS: &str = "meshlets";
+    /// Every asset's simplification groups.
     pub const GROUPS: &str = "meshlet_groups";
+    /// Every asset's packed vertex, UV and triangle words.
     pub const PAYLOAD: &str = "payload";
+    /// One record per asset: grids, bounds, meshlet range.
     pub const MESHES: &str = "meshes";
+    /// The instances (or the first binding's worth of them).
     pub const INSTANCES: &str = "instances";
     /// The instances past what one binding holds (`instance_table`).
     pub const INSTANCES_HIGH: &str = "instances_high";
+    /// The material table.
     pub const MATERIALS: &str = "materials";
+    /// Every asset's culling-hierarchy nodes.
     pub const HIERARCHY_NODES: &str = "hierarchy_nodes";
+    /// The hierarchy leaves' meshlets, as indices into `meshlets`.
     pub const HIERARCHY_CLUSTERS: &str = "hierarchy_clusters";
+    /// Per mesh, its hierarchy's root node.
     pub const HIERARCHY_ROOTS: &str = "hierarchy_roots";
     /// The frame input holding the `View` bytes.
     pub const VIEW: &str = "view";

@@ -1,5 +1,6 @@
-//! Which culling pass of the frame a pass is: two-pass occlusion culling (DESIGN §5)
-//! runs the walk and the cluster test twice, and both stages name the pass the same way.
+//! Which culling pass of the frame a pass is: two-pass occlusion culling
+//! (docs/ARCHITECTURE.md, "Two-pass occlusion culling") runs the walk and the cluster
+//! test twice, and both stages name the pass the same way.
 
 use meshlight_graph::file::Params;
 use meshlight_graph::{GraphError, Result};

@@ -15,11 +15,15 @@ use meshlight_graph::{Element, Slot};
 pub enum SceneBuffer {
     /// `instances`, with the optional `instances_high` after it.
     Instances,
+    /// `meshes`: per asset its grids and bounds.
     Meshes,
+    /// `meshlets`: the meshlet records.
     Meshlets,
     /// `meshlet_groups`: the simplification groups.
     Groups,
+    /// `payload`: the packed vertices, UVs and triangles.
     Payload,
+    /// `materials`: the material table.
     Materials,
 }
 

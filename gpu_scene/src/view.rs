@@ -43,21 +43,38 @@ pub fn frame_view(
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
     /// Infinite far plane; `fov_y` in radians.
-    Perspective { fov_y: f32, near: f32 },
+    Perspective {
+        /// Vertical field of view, radians.
+        fov_y: f32,
+        /// Distance of the near plane, where depth is 1.
+        near: f32,
+    },
     /// `height` world units fill the viewport vertically; depth spans near..far.
-    Orthographic { height: f32, near: f32, far: f32 },
+    Orthographic {
+        /// World units the viewport spans vertically.
+        height: f32,
+        /// Distance of the near plane, where depth is 1.
+        near: f32,
+        /// Distance of the far plane, where depth is 0.
+        far: f32,
+    },
 }
 
 /// A camera looking from `position` towards `target`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
+    /// Where the camera is, world space.
     pub position: Vec3,
+    /// The point it looks at.
     pub target: Vec3,
+    /// Which way is up on the screen (`Vec3::Y` unless set).
     pub up: Vec3,
+    /// How it projects.
     pub projection: Projection,
 }
 
 impl Camera {
+    /// A perspective camera with the default up, the form every scene and tool starts from.
     pub fn perspective(position: Vec3, target: Vec3, fov_y: f32, near: f32) -> Self {
         Self {
             position,
@@ -67,10 +84,13 @@ impl Camera {
         }
     }
 
+    /// World to view space, right-handed.
     pub fn view_matrix(&self) -> Mat4 {
         glam::camera::rh::view::look_at_mat4(self.position, self.target, self.up)
     }
 
+    /// View to clip space for a viewport of `viewport` pixels: reverse-Z, infinite far
+    /// plane for a perspective camera.
     pub fn projection_matrix(&self, viewport: [u32; 2]) -> Mat4 {
         let aspect = viewport[0].max(1) as f32 / viewport[1].max(1) as f32;
         match self.projection {

@@ -11,8 +11,9 @@ pub enum BindingSource {
     Slot(&'static str),
     /// A scratch buffer the pass declared in setup, used with this access.
     Scratch(std::borrow::Cow<'static, str>, Access),
-    /// A small uniform block whose bytes the pass passes when it builds the bind group.
-    Uniform,
+    /// A small uniform block, named as its WGSL variable: the pass gives its bytes under
+    /// that name when it builds the bind group, as it names slots and scratch resources.
+    Uniform(std::borrow::Cow<'static, str>),
     /// A sampler the graph creates and caches.
     Sampler(SamplerKind),
 }
@@ -82,8 +83,8 @@ pub struct LayoutEntry {
 /// A layout made [`Self::from_shader`] lists only what the shader cannot say (samplers);
 /// every other binding the program's entry points use is read from the composed module
 /// when the program is built: a WGSL global named like a slot binds that slot, one named
-/// like a scratch resource binds it, a `var<uniform>` takes the bytes the pass gives for
-/// its binding number. A global that matches nothing, or writes a read-only slot, or
+/// like a scratch resource binds it, a `var<uniform>` takes the bytes the pass gives under
+/// the variable's name. A global that matches nothing, or writes a read-only slot, or
 /// whose array element differs from the slot's, is an error naming the variable.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct BindingLayout {
@@ -95,6 +96,11 @@ pub struct BindingLayout {
     pub entries: Vec<LayoutEntry>,
     /// Fill in the shader's other bindings when the program is built.
     pub reflect: bool,
+    /// Uniforms the shader declares in this group that none of the program's entry points
+    /// uses, filled in by reflection: bytes given for them are accepted and dropped, so
+    /// one list of a shader's uniforms serves each of its entry points, while a name the
+    /// shader does not declare at all is still an error.
+    pub(crate) unused_uniforms: Vec<std::borrow::Cow<'static, str>>,
 }
 
 impl BindingLayout {
@@ -109,6 +115,7 @@ impl BindingLayout {
             visibility,
             entries: Vec::new(),
             reflect: false,
+            unused_uniforms: Vec::new(),
         }
     }
     /// The layout of group 0 read from the shader, for a compute program (see the type's
@@ -149,10 +156,11 @@ impl BindingLayout {
     pub fn scratch(self, binding: u32, name: &'static str, access: Access) -> Self {
         self.push(binding, BindingSource::Scratch(name.into(), access))
     }
-    /// Binds a uniform buffer at `binding`, filled with the bytes the pass gives when it
-    /// records.
-    pub fn uniform(self, binding: u32) -> Self {
-        self.push(binding, BindingSource::Uniform)
+    /// Binds a uniform buffer at `binding`, filled with the bytes the pass gives under
+    /// `name` when it records; `name` is the WGSL variable's (a layout read from the
+    /// shader checks that).
+    pub fn uniform(self, binding: u32, name: &'static str) -> Self {
+        self.push(binding, BindingSource::Uniform(name.into()))
     }
     /// Binds a sampler of `kind` at `binding`.
     pub fn sampler(self, binding: u32, kind: SamplerKind) -> Self {

@@ -63,12 +63,17 @@ pub use resource::{
 };
 
 /// What a pass author uses, in one import: `use meshlight_graph::prelude::*;`. The
-/// contract (slots), setup (programs, scratch, defs) and record (bind groups, dispatches)
-/// of a stage implementation need nothing else from this crate.
+/// contract (slots), setup (programs, scratch, defs), record (bind groups, dispatches,
+/// render passes) and registration (params, registry) of a stage implementation need
+/// nothing else from this crate, and its shader declarations nothing else from
+/// `meshlight_shaders`.
 pub mod prelude {
+    pub use crate::file::{Params, Registry};
     pub use crate::{
-        Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, PassShader,
-        ProgramDesc, RecordContext, Result, SamplerKind, SetupContext, ShaderDef, ShaderDefs, Slot,
-        StageContract, TextureDesc, Visibility64, Workgroups,
+        Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, ComputeProgram,
+        DepthAttachment, DepthTarget, Element, GraphError, Implementation, Pass, PassShader,
+        Primitive, ProgramDesc, RecordContext, ResourceDesc, Result, SamplerKind, SetupContext,
+        ShaderDef, ShaderDefs, Slot, StageContract, StoreOp, TextureDesc, Visibility64, Workgroups,
     };
+    pub use meshlight_shaders::{pass_shader, shader_defs, uniform_block};
 }

@@ -96,7 +96,9 @@ impl Pass for Step {
         )
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        let layout = BindingLayout::compute("step").slot(0, "data").uniform(1);
+        let layout = BindingLayout::compute("step")
+            .slot(0, "data")
+            .uniform(1, "params");
         ctx.program(
             "step",
             ProgramDesc::compute(&KERNELS, "step").layout(layout),
@@ -117,7 +119,7 @@ fn step_dispatch(ctx: &mut RecordContext<'_>, k: u32, groups: u32) -> Result<()>
     dispatch_once(
         ctx,
         "step",
-        &[(1, bytemuck::cast_slice(&params))],
+        &[("params", bytemuck::cast_slice(&params))],
         [groups, 1, 1],
     )
 }
@@ -651,7 +653,7 @@ impl Pass for ScratchClear {
         support::scratch_words(ctx, N);
         let on_scratch = BindingLayout::compute("step")
             .scratch(0, "words", Access::StorageReadWrite)
-            .uniform(1);
+            .uniform(1, "params");
         ctx.program(
             "step",
             ProgramDesc::compute(&KERNELS, "step").layout(on_scratch),

@@ -1,5 +1,5 @@
 //! Layouts read from the shader (`BindingLayout::from_shader`): WGSL globals named like
-//! slots and scratch resources bind them, uniforms take the bytes given for their binding,
+//! slots and scratch resources bind them, uniforms take the bytes given under their name,
 //! and every mismatch is an error naming the file, the variable and the slot (lavapipe
 //! in CI).
 
@@ -38,6 +38,26 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if i >= arrayLength(&output) { return; }
     words[i] = input[i] * params.scale;
     output[i] = words[i] + params.add;
+}
+"
+);
+
+/// `main` copies; only `scaled`, another entry point, reads the uniform.
+const COPY_BESIDE_SCALED: PassShader = reflect_shader!(
+    "copy_beside_scaled",
+    "copy beside scaled",
+    "
+struct Params { scale: u32, add: u32, _a: u32, _b: u32 }
+@group(0) @binding(0) var<storage, read> input: array<u32>;
+@group(0) @binding(1) var<storage, read_write> output: array<u32>;
+@group(0) @binding(5) var<uniform> params: Params;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x < arrayLength(&output) { output[id.x] = input[id.x]; }
+}
+@compute @workgroup_size(64)
+fn scaled(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x < arrayLength(&output) { output[id.x] = input[id.x] * params.scale; }
 }
 "
 );
@@ -88,6 +108,21 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 
 struct Reflected {
     shader: &'static PassShader,
+    /// The layout of group 0: read from the shader, maybe with explicit entries.
+    layout: BindingLayout,
+    /// The name the pass gives the uniform bytes under; `None` gives none.
+    uniform: Option<&'static str>,
+}
+
+impl Reflected {
+    /// `shader` with its layout read from it and the bytes given as `params`.
+    fn new(shader: &'static PassShader) -> Self {
+        Self {
+            shader,
+            layout: BindingLayout::from_shader("scale"),
+            uniform: Some("params"),
+        }
+    }
 }
 
 impl Pass for Reflected {
@@ -104,19 +139,28 @@ impl Pass for Reflected {
         support::scratch_words(ctx, N);
         ctx.program(
             "main",
-            ProgramDesc::compute(self.shader, "main").layout(BindingLayout::from_shader("scale")),
+            ProgramDesc::compute(self.shader, "main").layout(self.layout.clone()),
         );
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let params = [3u32, 7, 0, 0];
-        let uniforms = [(5, bytemuck::cast_slice(&params))];
+        let uniforms: Vec<(&str, &[u8])> = self
+            .uniform
+            .map(|name| (name, bytemuck::cast_slice(&params)))
+            .into_iter()
+            .collect();
         support::dispatch_once(ctx, "main", &uniforms, [N.div_ceil(64), 1, 1])
     }
 }
 
 /// Runs the pass with `shader` once; the output, or the error.
 fn run(shader: &'static PassShader) -> std::result::Result<Vec<u32>, GraphError> {
+    run_pass(Reflected::new(shader))
+}
+
+/// Runs `pass` once; the output, or the error.
+fn run_pass(pass: Reflected) -> std::result::Result<Vec<u32>, GraphError> {
     let gpu = gpu();
     let input: Vec<u32> = (0..N).collect();
     let mut g = GraphBuilder::new();
@@ -128,7 +172,7 @@ fn run(shader: &'static PassShader) -> std::result::Result<Vec<u32>, GraphError>
     let output = g.create_buffer("output", BufferDesc::array(Element::U32, N as u64));
     let out = g.add_pass(
         "scale",
-        Reflected { shader },
+        pass,
         Bindings::new()
             .bind("input", input_handle)
             .bind("output", output),
@@ -147,16 +191,25 @@ fn run(shader: &'static PassShader) -> std::result::Result<Vec<u32>, GraphError>
 
 /// Runs `shader` expecting an error whose message contains every one of `parts`.
 fn assert_error_names(shader: &'static PassShader, parts: &[&str]) {
-    let e = error_of(shader);
-    for part in parts {
-        assert!(e.contains(part), "`{part}` missing from: {e}");
-    }
+    assert_contains(&error_of(shader), parts);
 }
 
 fn error_of(shader: &'static PassShader) -> String {
-    match run(shader) {
+    pass_error(Reflected::new(shader))
+}
+
+fn pass_error(pass: Reflected) -> String {
+    let name = pass.shader.name;
+    match run_pass(pass) {
         Err(e) => e.to_string(),
-        Ok(out) => panic!("{} ran: {out:?}", shader.name),
+        Ok(out) => panic!("{name} ran: {out:?}"),
+    }
+}
+
+/// Asserts that `message` contains every one of `parts`.
+fn assert_contains(message: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(message.contains(part), "`{part}` missing from: {message}");
     }
 }
 
@@ -202,4 +255,53 @@ fn an_element_size_unlike_the_slots_is_an_error_naming_both_sizes() {
             "8-byte elements",
         ],
     );
+}
+
+#[test]
+fn a_uniform_given_under_a_name_the_shader_lacks_is_an_error_listing_its_uniforms() {
+    let e = pass_error(Reflected {
+        uniform: Some("param"),
+        ..Reflected::new(&GOOD)
+    });
+    assert_contains(&e, &["no uniform `param`", "uniforms of group 0: params"]);
+}
+
+#[test]
+fn a_uniform_given_no_bytes_is_an_error_naming_it() {
+    let e = pass_error(Reflected {
+        uniform: None,
+        ..Reflected::new(&GOOD)
+    });
+    assert_contains(
+        &e,
+        &[
+            "uniform `params` (binding 5)",
+            "given no bytes",
+            "uniforms of group 0: params",
+        ],
+    );
+}
+
+#[test]
+fn a_layout_naming_a_uniform_unlike_its_variable_is_an_error_naming_both() {
+    let e = pass_error(Reflected {
+        layout: BindingLayout::from_shader("scale").uniform(5, "settings"),
+        uniform: Some("settings"),
+        ..Reflected::new(&GOOD)
+    });
+    assert_contains(
+        &e,
+        &["(good)", "`settings`", "the shader calls it `params`"],
+    );
+}
+
+#[test]
+fn a_uniform_only_another_entry_point_uses_may_be_given_but_a_misspelt_one_may_not() {
+    let out = run(&COPY_BESIDE_SCALED).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(out, (0..N).collect::<Vec<u32>>());
+    let e = pass_error(Reflected {
+        uniform: Some("param"),
+        ..Reflected::new(&COPY_BESIDE_SCALED)
+    });
+    assert_contains(&e, &["no uniform `param`", "uniforms of group 0: params"]);
 }

@@ -105,13 +105,15 @@ fn wgpu_validation_error_surfaces_as_an_error() {
         "produce",
         produce_contract().slots,
         |ctx| {
-            let layout = BindingLayout::compute("fill").slot(1, "output").uniform(2);
+            let layout = BindingLayout::compute("fill")
+                .slot(1, "output")
+                .uniform(2, "params");
             ctx.program("fill", ProgramDesc::compute(&SHADER, "fill").layout(layout));
             Ok(())
         },
         |ctx| {
             let params = [1u32, 1, 0, 0];
-            let uniforms = [(2, bytemuck::cast_slice(&params))];
+            let uniforms = [("params", bytemuck::cast_slice(&params))];
             dispatch_once(ctx, "fill", &uniforms, [u32::MAX, 1, 1])
         },
     );

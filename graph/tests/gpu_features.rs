@@ -74,7 +74,7 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
                 .visible_in(wgpu::ShaderStages::VERTEX)
                 .slot(1, "vis")
                 .visible_in(wgpu::ShaderStages::FRAGMENT)
-                .uniform(2)
+                .uniform(2, "raster")
                 .visible_in(wgpu::ShaderStages::FRAGMENT);
             let program = ProgramDesc::render(&RASTER, "rect_vs").fragment("rect_fs");
             declare_masked_raster(ctx, program.layout(layout));
@@ -82,7 +82,7 @@ fn render_pass_with_a_masked_target_does_64_bit_atomic_max_like_the_cpu() {
         },
         move |ctx| {
             let raster_params = [W, 0, 0, 0, 0, 0, 0, 0];
-            let uniforms = [(2, bytemuck::cast_slice(&raster_params))];
+            let uniforms = [("raster", bytemuck::cast_slice(&raster_params))];
             record_masked_raster(ctx, &uniforms, |rp| rp.draw(0..vertex_count, 0..1))
         },
     );
@@ -244,7 +244,7 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
         ],
         ("gather", "gather"),
         BindingLayout::compute("gather")
-            .uniform(2)
+            .uniform(2, "params")
             .slot(5, "pyramid")
             .sampler(6, SamplerKind::Nearest)
             .slot(7, "gathered"),
@@ -258,8 +258,11 @@ fn a_mip_chain_built_in_one_frame_equals_the_cpu_min_reduction() {
             let mut groups = Vec::new();
             for level in 0..desc.mip_levels {
                 let (w, h) = desc.mip_size(level);
-                let bg =
-                    ctx.bind_group(&p, 0, &[(2, bytemuck::cast_slice(&params(level, offset)))])?;
+                let bg = ctx.bind_group(
+                    &p,
+                    0,
+                    &[("params", bytemuck::cast_slice(&params(level, offset)))],
+                )?;
                 groups.push((bg, (w * h).div_ceil(64)));
                 offset += w * h;
             }
@@ -321,11 +324,11 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
         ],
         |ctx| {
             let append = BindingLayout::compute("append")
-                .uniform(2)
+                .uniform(2, "params")
                 .slot(8, "args")
                 .slot(9, "items");
             let mark = BindingLayout::compute("mark")
-                .uniform(2)
+                .uniform(2, "params")
                 .slot(10, "items")
                 .read_only()
                 .slot(11, "marks");
@@ -341,8 +344,8 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
             let append = ctx.compute("append")?;
             let mark = ctx.compute("mark")?;
             let p = params(N, 6);
-            let a = ctx.bind_group(&append, 0, &[(2, bytemuck::cast_slice(&p))])?;
-            let m = ctx.bind_group(&mark, 0, &[(2, bytemuck::cast_slice(&p))])?;
+            let a = ctx.bind_group(&append, 0, &[("params", bytemuck::cast_slice(&p))])?;
+            let m = ctx.bind_group(&mark, 0, &[("params", bytemuck::cast_slice(&p))])?;
             let (args, _) = ctx.buffer("args")?;
             let mut cp = ctx.compute_pass();
             cp.set_pipeline(&append.pipeline);
@@ -433,7 +436,9 @@ fn stamp_graph(latency: u32) -> CompiledGraph {
         )],
         |ctx| {
             ctx.frame_input("value");
-            let layout = BindingLayout::compute("stamp").uniform(2).slot(14, "stamp");
+            let layout = BindingLayout::compute("stamp")
+                .uniform(2, "params")
+                .slot(14, "stamp");
             declare(ctx, "stamp", "write_stamp", layout)
         },
         |ctx| {
@@ -442,7 +447,7 @@ fn stamp_graph(latency: u32) -> CompiledGraph {
             dispatch_once(
                 ctx,
                 "stamp",
-                &[(2, bytemuck::cast_slice(&params(value, frame)))],
+                &[("params", bytemuck::cast_slice(&params(value, frame)))],
                 [1, 1, 1],
             )
         },
@@ -556,7 +561,7 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
         ],
         ("grow", "grow"),
         BindingLayout::compute("grow")
-            .uniform(2)
+            .uniform(2, "params")
             .slot(15, "list")
             .slot(16, "prev")
             .slot(17, "hist"),
@@ -567,7 +572,7 @@ fn raising_a_size_parameter_resizes_transients_and_history_and_frees_the_old_obj
             dispatch_once(
                 ctx,
                 "grow",
-                &[(2, bytemuck::cast_slice(&params(n, valid)))],
+                &[("params", bytemuck::cast_slice(&params(n, valid)))],
                 [n.div_ceil(64), 1, 1],
             )
         },
@@ -846,13 +851,16 @@ fn layers_of_a_texture_array_are_written_through_their_own_views() {
             vec![Slot::texture("layer", Access::StorageWrite, None, "")],
             ("fill", "fill_layer"),
             BindingLayout::compute("fill_layer")
-                .uniform(2)
+                .uniform(2, "params")
                 .slot(18, "layer"),
             move |ctx| {
                 dispatch_once(
                     ctx,
                     "fill",
-                    &[(2, bytemuck::cast_slice(&params(100 * (layer + 1), 0)))],
+                    &[(
+                        "params",
+                        bytemuck::cast_slice(&params(100 * (layer + 1), 0)),
+                    )],
                     [1, 1, 1],
                 )
             },

@@ -84,7 +84,7 @@ impl Pass for MeshRaster {
         .visible_in(wgpu::ShaderStages::TASK | wgpu::ShaderStages::MESH)
         .slot(1, "vis")
         .visible_in(wgpu::ShaderStages::FRAGMENT)
-        .uniform(2);
+        .uniform(2, "mesh_params");
         let program = if self.task {
             ProgramDesc::mesh(&MESH, Some("rect_ts"), "rect_ms_task")
         } else {
@@ -95,7 +95,7 @@ impl Pass for MeshRaster {
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let params = [W, H, 0, 0];
-        let uniforms = [(2, bytemuck::cast_slice(&params))];
+        let uniforms = [("mesh_params", bytemuck::cast_slice(&params))];
         // One task workgroup launches every rectangle's mesh workgroup.
         let groups = if self.task { 1 } else { RECTS.len() as u32 };
         record_masked_raster(ctx, &uniforms, |rp| rp.draw_mesh_tasks(groups, 1, 1))

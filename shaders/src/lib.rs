@@ -9,8 +9,11 @@
 //! [`ShaderLibrary::compose`] turns a [`PassShader`] plus typed [`ShaderDef`]s into a
 //! validated `naga::Module` ready for `wgpu::ShaderSource::Naga`.
 //!
-//! [`cpu`] mirrors the bit-exact encodings (visibility packing, octahedral normals,
-//! layouts) in Rust, so pass tests and the asset builder share one reference.
+//! [`cpu`] mirrors the shared WGSL in Rust (layouts, visibility packing, octahedral
+//! normals, the LOD and occlusion tests, the depth pyramid), so every pass's CPU
+//! reference builds on one copy of each.
+
+#![warn(missing_docs)]
 
 pub mod cpu;
 mod defs;

@@ -33,7 +33,9 @@ pub struct PassShader {
 pub struct LocalModule {
     /// The import path; equals the file's `#define_import_path`.
     pub name: &'static str,
+    /// The WGSL text.
     pub source: &'static str,
+    /// Where the text comes from, which every error about it names.
     pub file_path: &'static str,
 }
 

@@ -42,6 +42,8 @@ fn every_module_composes_and_validates_without_int64() {
         "sphere_in_frustum",
         "octahedral_decode",
         "lod_cut",
+        "error_perceptible",
+        "error_to_pixels",
         "meshlet_triangle",
         "read_bits",
         "instance_transform_normal",

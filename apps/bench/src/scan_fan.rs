@@ -167,9 +167,9 @@ impl Pass for ComputeCopy {
         let wide = BindingLayout::compute("copy4")
             .slot(0, "src")
             .slot(1, "dst")
-            .uniform(2);
+            .uniform(2, "params");
         let tail = BindingLayout::compute("copy_tail")
-            .uniform(2)
+            .uniform(2, "params")
             .slot(3, "src")
             .slot(4, "dst");
         ctx.program(
@@ -187,8 +187,8 @@ impl Pass for ComputeCopy {
         let params = self.params();
         let wide = ctx.compute("copy4")?;
         let tail = ctx.compute("tail")?;
-        let wide_bg = ctx.bind_group(&wide, 0, &[(2, bytemuck::bytes_of(&params))])?;
-        let tail_bg = ctx.bind_group(&tail, 0, &[(2, bytemuck::bytes_of(&params))])?;
+        let wide_bg = ctx.bind_group(&wide, 0, &[("params", bytemuck::bytes_of(&params))])?;
+        let tail_bg = ctx.bind_group(&tail, 0, &[("params", bytemuck::bytes_of(&params))])?;
         let mut pass = ctx.compute_pass();
         pass.set_pipeline(&wide.pipeline);
         pass.set_bind_group(0, &wide_bg, &[]);

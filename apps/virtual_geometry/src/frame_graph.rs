@@ -2,7 +2,8 @@
 //! pipeline file ([`load`]); both declare the same resources under the same names, so a
 //! file a user edits renders with the same renderer.
 //!
-//! With occlusion (the default), two culling passes (DESIGN §5):
+//! With occlusion (the default), two culling passes (docs/ARCHITECTURE.md, "Two-pass
+//! occlusion culling"):
 //!
 //! ```text
 //! fill → cull (first, last frame's pyramid) → remap → sw_raster → hw_raster
@@ -22,11 +23,12 @@ use super::counts::{
     SECOND_COUNTS_READBACK, SECOND_HIERARCHY_COUNTS_READBACK, SECOND_WALK_COUNT_READBACK,
 };
 use meshlight::cull_lod::{
-    CullLod, Mode, OCCLUSION_COUNT_WORDS, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND, Thresholds,
+    CullLod, OCCLUSION_COUNT_WORDS, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND, Thresholds,
     WALKED_COUNT_SLOT, WALKED_SLOT,
 };
 use meshlight::fill_clusters::hierarchy::{ENTRY_COUNT_WORDS, OCCLUSION_MIN_CLUSTERS};
-use meshlight::fill_clusters::{FillClusters, HIDDEN_NODE, HierarchyFill, Mode as WalkMode};
+use meshlight::fill_clusters::{FillClusters, HIDDEN_NODE, HierarchyFill};
+use meshlight::gpu_scene::Phase;
 use meshlight::gpu_scene::gpu::{
     buffer_lengths, elements, hierarchy_lengths, import_for, import_hierarchy_for,
 };
@@ -459,7 +461,7 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
             // The nodes the first walk found hidden, walked again against this frame's
             // pyramid; cull_second takes the clusters below those still visible.
             let second_walk = HierarchyFill {
-                mode: WalkMode::Second,
+                phase: Phase::Second,
                 ..walk
             };
             let bindings = Bindings::new()
@@ -472,7 +474,7 @@ pub fn build(data: &SceneData, s: &FrameSettings) -> Result<GraphBuilder> {
         }
         let second = CullLod {
             thresholds,
-            mode: Mode::Second,
+            phase: Phase::Second,
             ..CullLod::default()
         };
         let bindings = Bindings::new()

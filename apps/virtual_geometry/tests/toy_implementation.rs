@@ -44,7 +44,7 @@ impl Pass for Square {
         let params = [self.count_word, 0, 0, 0];
         ctx.dispatch_compute(
             "square",
-            &[(2, bytemuck::cast_slice(&params))],
+            &[("params", bytemuck::cast_slice(&params))],
             Workgroups::Direct([1, 1, 1]),
         )
     }

@@ -492,8 +492,10 @@ impl<'a> RecordContext<'a> {
                         self.binding_type(name, slot.access, e)?
                     }
                     BindingSource::Scratch(name, access) => self.binding_type(name, *access, e)?,
-                    BindingSource::Uniform => buffer_binding_type(crate::access::Access::Uniform)
-                        .expect("uniform is a buffer binding"),
+                    BindingSource::Uniform(_) => {
+                        buffer_binding_type(crate::access::Access::Uniform)
+                            .expect("uniform is a buffer binding")
+                    }
                     BindingSource::Sampler(kind) => kind.binding_type(),
                 };
                 Ok(wgpu::BindGroupLayoutEntry {
@@ -692,8 +694,8 @@ impl<'a> RecordContext<'a> {
                 .first()
                 .map(|l| l.visibility)
                 .unwrap_or(wgpu::ShaderStages::all());
-            let l =
-                crate::layout::BindingLayout::with_visibility("immediates", visibility).uniform(0);
+            let l = crate::layout::BindingLayout::with_visibility("immediates", visibility)
+                .uniform(0, IMMEDIATES_BLOCK);
             let entries = self.layout_entries(&l)?;
             let bgl = self.programs.layout(self.device, l.label, entries);
             groups.push((l, bgl));
@@ -888,32 +890,39 @@ impl<'a> RecordContext<'a> {
     }
 
     /// The bind group for `group` of `program`, filled from the slots its layout names;
-    /// `uniforms` gives the bytes of each `Uniform` binding, by binding index.
+    /// `uniforms` gives the bytes of each uniform block under its WGSL variable's name, as
+    /// slots and scratch resources are named. A name the program's shader declares no
+    /// uniform of in this group, one given twice, or a uniform the program uses given no
+    /// bytes is an error listing the group's uniforms; bytes for a uniform that only other
+    /// entry points of the shader use are dropped, so one list serves them all.
     pub fn bind_group(
         &mut self,
         program: &impl Program,
         group: usize,
-        uniforms: &[(u32, &[u8])],
+        uniforms: &[(&str, &[u8])],
     ) -> Result<wgpu::BindGroup> {
         let (layout, bgl) = program
             .layouts()
             .groups
             .get(group)
             .ok_or_else(|| self.err(format!("program has no bind group {group}")))?;
+        self.check_uniform_names(layout, group, uniforms)?;
         let mut entries = Vec::with_capacity(layout.entries.len());
         for e in &layout.entries {
             let bound = match &e.source {
                 BindingSource::Slot(name) => self.bound(name)?,
                 BindingSource::Scratch(name, _) => self.bound(name)?,
-                BindingSource::Uniform => {
+                BindingSource::Uniform(name) => {
                     let bytes = uniforms
                         .iter()
-                        .find(|(b, _)| *b == e.binding)
+                        .find(|(n, _)| n == name)
                         .map(|(_, d)| *d)
                         .ok_or_else(|| {
                             self.err(format!(
-                                "no bytes given for uniform binding {} of `{}`",
-                                e.binding, layout.label
+                                "uniform `{name}` (binding {}) of `{}` was given no bytes; pass (\"{name}\", bytes) (uniforms of group {group}: {})",
+                                e.binding,
+                                layout.label,
+                                uniform_names(layout)
                             ))
                         })?;
                     self.uniform(bytes)?
@@ -925,6 +934,38 @@ impl<'a> RecordContext<'a> {
             entries.push((e.binding, bound));
         }
         Ok(self.cached_bind_group(layout.label, bgl.clone(), entries))
+    }
+
+    /// Every name in `uniforms` must be a uniform of `layout` (or one its shader declares
+    /// for other entry points), given once: a misspelt or stale name would otherwise be
+    /// ignored while the block it meant goes unfilled.
+    fn check_uniform_names(
+        &self,
+        layout: &crate::layout::BindingLayout,
+        group: usize,
+        uniforms: &[(&str, &[u8])],
+    ) -> Result<()> {
+        for (i, (name, _)) in uniforms.iter().enumerate() {
+            let known = layout
+                .entries
+                .iter()
+                .any(|e| matches!(&e.source, BindingSource::Uniform(n) if n == name))
+                || layout.unused_uniforms.iter().any(|n| n == name);
+            if !known {
+                return Err(self.err(format!(
+                    "`{}` has no uniform `{name}` in group {group}; name the WGSL variable (uniforms of group {group}: {})",
+                    layout.label,
+                    uniform_names(layout)
+                )));
+            }
+            if uniforms[..i].iter().any(|(n, _)| n == name) {
+                return Err(self.err(format!(
+                    "uniform `{name}` of `{}` is given twice; give its bytes once",
+                    layout.label
+                )));
+            }
+        }
+        Ok(())
     }
 
     fn uniform(&mut self, bytes: &[u8]) -> Result<BoundResource> {
@@ -1015,14 +1056,15 @@ impl<'a> RecordContext<'a> {
     }
 
     /// Records the compute program `name` once over `workgroups`, its group 0 built from
-    /// the slots its layout names and `uniforms` (bytes by binding index): the shape of
-    /// most of a pass's dispatches. A direct grid with a zero dimension records nothing.
+    /// the slots its layout names and `uniforms` (bytes by WGSL variable name, as for
+    /// [`bind_group`](Self::bind_group)): the shape of most of a pass's dispatches. A
+    /// direct grid with a zero dimension records nothing.
     /// A program with a second group, or several dispatches sharing one bind group,
     /// records through [`compute`](Self::compute) and [`compute_pass`](Self::compute_pass).
     pub fn dispatch_compute(
         &mut self,
         name: &str,
-        uniforms: &[(u32, &[u8])],
+        uniforms: &[(&str, &[u8])],
         workgroups: Workgroups<'_>,
     ) -> Result<()> {
         let program = self.compute(name)?;
@@ -1155,6 +1197,31 @@ impl<'a> RecordContext<'a> {
         self.readbacks
             .record(self.device, self.encoder, copy)
             .map_err(|m| self.err(m))
+    }
+}
+
+/// The name of the uniform the immediates fallback binds at binding 0 of its own group.
+/// The graph fills it itself in [`RecordContext::immediates`], so the shader's variable may
+/// be called anything.
+const IMMEDIATES_BLOCK: &str = "immediates";
+
+/// The uniforms of `layout`, those its program uses and those only other entry points of
+/// its shader use, for errors about them.
+fn uniform_names(layout: &crate::layout::BindingLayout) -> String {
+    let mut names: Vec<&str> = layout
+        .entries
+        .iter()
+        .filter_map(|e| match &e.source {
+            BindingSource::Uniform(n) => Some(n.as_ref()),
+            _ => None,
+        })
+        .chain(layout.unused_uniforms.iter().map(|n| n.as_ref()))
+        .collect();
+    names.sort_unstable();
+    if names.is_empty() {
+        "none".to_string()
+    } else {
+        names.join(", ")
     }
 }
 

@@ -1,7 +1,7 @@
 //! The bindings a composed shader declares, read from its naga module, so a pass writes
 //! each binding once: in WGSL. A global whose name is a slot binds that slot, one named
 //! like a scratch resource binds the scratch, a `var<uniform>` takes the bytes the pass
-//! gives for its binding; the access (read-only or read-write storage, write-only
+//! gives under the variable's name; the access (read-only or read-write storage, write-only
 //! texture) and the stages that use it come from the module.
 
 use crate::access::Access;
@@ -153,11 +153,27 @@ pub(crate) fn expand(
             .filter(|(e, _)| entries.contains(&e.as_str()))
             .fold(wgpu::ShaderStages::NONE, |s, (_, st)| s | *st);
         if stages.is_empty() {
+            if g.kind == GlobalKind::Uniform {
+                out.unused_uniforms.push(g.name.clone().into());
+            }
             continue;
         }
         // An explicit entry stands, whatever the variable is called there: the form for
-        // a binding whose name cannot match (one variable, two slots by mode).
-        if layout.entries.iter().any(|e| e.binding == g.binding) {
+        // a binding whose name cannot match (one variable, two slots by mode). A uniform
+        // is the exception: its name is how the pass gives its bytes, so it must be the
+        // variable's.
+        if let Some(e) = layout.entries.iter().find(|e| e.binding == g.binding) {
+            if let BindingSource::Uniform(name) = &e.source
+                && *name != g.name
+            {
+                return Err(mismatch(
+                    g,
+                    format!(
+                        "the layout names the uniform at binding {} `{name}`, but the shader calls it `{}`; give the layout the variable's name",
+                        g.binding, g.name
+                    ),
+                ));
+            }
             continue;
         }
         let entry = |source| LayoutEntry {
@@ -168,7 +184,7 @@ pub(crate) fn expand(
             write_only: false,
         };
         let mut e = match g.kind {
-            GlobalKind::Uniform => entry(BindingSource::Uniform),
+            GlobalKind::Uniform => entry(BindingSource::Uniform(g.name.clone().into())),
             GlobalKind::Sampler => {
                 return Err(mismatch(
                     g,

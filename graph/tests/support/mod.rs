@@ -105,13 +105,15 @@ pub fn transform_contract() -> StageContract {
 fn layout_out_only() -> BindingLayout {
     // `fill` reads no input, but the shader declares it; bind the output twice would alias,
     // so `fill` uses a layout without binding 0.
-    BindingLayout::compute("fill").slot(1, "output").uniform(2)
+    BindingLayout::compute("fill")
+        .slot(1, "output")
+        .uniform(2, "params")
 }
 fn layout_in_out() -> BindingLayout {
     BindingLayout::compute("add")
         .slot(0, "input")
         .slot(1, "output")
-        .uniform(2)
+        .uniform(2, "params")
 }
 
 fn program(entry: &'static str, layout: BindingLayout) -> ProgramDesc {
@@ -132,7 +134,7 @@ pub fn scratch_words(ctx: &mut SetupContext, count: u32) {
 pub fn compute_once(
     ctx: &mut RecordContext<'_>,
     name: &str,
-    uniforms: &[(u32, &[u8])],
+    uniforms: &[(&str, &[u8])],
     dispatch: impl FnOnce(&mut wgpu::ComputePass<'static>),
 ) -> Result<()> {
     let p = ctx.compute(name)?;
@@ -149,7 +151,7 @@ pub fn compute_once(
 pub fn dispatch_once(
     ctx: &mut RecordContext<'_>,
     name: &str,
-    uniforms: &[(u32, &[u8])],
+    uniforms: &[(&str, &[u8])],
     groups: [u32; 3],
 ) -> Result<()> {
     ctx.dispatch_compute(name, uniforms, Workgroups::Direct(groups))
@@ -160,7 +162,7 @@ pub fn dispatch_once(
 pub fn render_once(
     ctx: &mut RecordContext<'_>,
     name: &str,
-    uniforms: &[(u32, &[u8])],
+    uniforms: &[(&str, &[u8])],
     colors: &[ColorAttachment],
     depth: Option<DepthAttachment>,
     draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
@@ -176,7 +178,7 @@ pub fn render_once(
 
 fn dispatch(ctx: &mut RecordContext<'_>, name: &str, count: u32, k: u32) -> Result<()> {
     let params = [count, k, 0, 0];
-    let uniforms = [(2, bytemuck::cast_slice(&params))];
+    let uniforms = [("params", bytemuck::cast_slice(&params))];
     dispatch_once(ctx, name, &uniforms, [count.div_ceil(64), 1, 1])
 }
 
@@ -208,11 +210,11 @@ impl Pass for AddTwice {
         let first = BindingLayout::compute("add_twice.first")
             .slot(0, "input")
             .scratch(1, "half", Access::StorageReadWrite)
-            .uniform(2);
+            .uniform(2, "params");
         let second = BindingLayout::compute("add_twice.second")
             .scratch(0, "half", Access::StorageRead)
             .slot(1, "output")
-            .uniform(2);
+            .uniform(2, "params");
         ctx.program("first", program("add", first));
         ctx.program("second", program("add", second));
         Ok(())

@@ -118,7 +118,7 @@ pub fn declare_masked_raster(ctx: &mut SetupContext, program: ProgramDesc) {
 /// with `uniforms`; `draw` issues the draw.
 pub fn record_masked_raster(
     ctx: &mut RecordContext<'_>,
-    uniforms: &[(u32, &[u8])],
+    uniforms: &[(&str, &[u8])],
     draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
 ) -> Result<()> {
     ctx.clear("vis")?;

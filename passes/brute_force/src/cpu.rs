@@ -14,7 +14,9 @@ use meshlight_shaders::cpu::layout::{Instance, View};
 /// The two targets after the pass, row-major `width` × `height`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Columns of both targets.
     pub width: u32,
+    /// Rows of both targets.
     pub height: u32,
     /// Reverse-Z NDC depth of the nearest surface; 0 where empty.
     pub depth: Vec<f32>,

@@ -42,19 +42,15 @@
 //!   Coverage is the hardware's (pixel centres, top-left rule, its sub-pixel precision).
 //! - [`cpu::draw`] is the reference (float edge functions at pixel centres).
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::StoreOp;
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, ColorTarget, DepthTarget, Element, GraphError, Implementation, Pass,
-    Primitive, ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
-};
+use meshlight_graph::prelude::*;
 use meshlight_scene::Mesh;
 use meshlight_shaders::cpu::layout::Instance;
-use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "brute_force";
@@ -69,6 +65,8 @@ pub const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// The id of a pixel no triangle covers.
 pub const EMPTY_ID: u32 = 0;
 
+/// The baseline's WGSL (`draw.wgsl`), public so the shader tests compose and validate
+/// every entry point.
 pub const SHADER: PassShader = pass_shader!("brute_force::draw", "draw.wgsl");
 
 /// The id the `ids` target holds where `instance` is the nearest surface.
@@ -120,9 +118,11 @@ pub struct Lod0Buffers {
 }
 
 impl Lod0Buffers {
+    /// The positions as the bytes a `positions` buffer is created with.
     pub fn position_bytes(&self) -> &[u8] {
         bytemuck::cast_slice(&self.positions)
     }
+    /// The indices as the bytes an `indices` buffer is created with.
     pub fn index_bytes(&self) -> &[u8] {
         bytemuck::cast_slice(&self.indices)
     }
@@ -130,6 +130,7 @@ impl Lod0Buffers {
     pub fn index_count(&self) -> u32 {
         self.indices.len() as u32
     }
+    /// Triangles drawn per instance, for throughput figures.
     pub fn triangle_count(&self) -> u32 {
         self.index_count() / 3
     }
@@ -154,6 +155,7 @@ pub fn lod0_buffers(mesh: &Mesh) -> Lod0Buffers {
 pub struct BruteForce {
     /// The targets' size in pixels, which the view's viewport must equal.
     pub width: u32,
+    /// The targets' height in pixels (see `width`).
     pub height: u32,
     /// Indices drawn per instance, from the start of `indices`.
     pub index_count: u32,
@@ -263,7 +265,7 @@ impl Pass for BruteForce {
         check_target(ctx, "depth", self.width, self.height)?;
         check_target(ctx, "ids", self.width, self.height)?;
         let program = ctx.render("draw")?;
-        let bind_group = ctx.bind_group(&program, 0, &[(2, bytemuck::bytes_of(&view))])?;
+        let bind_group = ctx.bind_group(&program, 0, &[("view", bytemuck::bytes_of(&view))])?;
         let (indices, _) = ctx.buffer("indices")?;
         let (_, depth) = ctx.texture("depth")?;
         let (_, ids) = ctx.texture("ids")?;

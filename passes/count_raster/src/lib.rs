@@ -42,20 +42,18 @@
 //! value lies within a hair of its threshold (`meshlight_shaders::cpu::froxel::Decision`),
 //! where the GPU's rounding may go the other way.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 pub mod testbed;
 
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, ColorAttachment, ColorTarget, Element, Implementation, Pass, Primitive,
-    ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, Workgroups,
-};
+use meshlight_graph::prelude::*;
 use meshlight_pass_z_slice::{
     CLUSTER_GRID, CLUSTERABLE_OBJECT, INSTANCE_MODULE, SLICE_INSTANCE, check_tiles,
     declare_tile_target, workgroup_grid,
 };
-use meshlight_shaders::{LocalModule, PassShader, pass_shader, uniform_block};
+use meshlight_shaders::LocalModule;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "count_raster";
@@ -104,8 +102,11 @@ uniform_block! {
     pub struct ListParams as "ListParams" in "count_raster::list_params" {
         /// Entries the list may hold; clamped to the bound list's length.
         pub capacity: u32,
+        /// Pads the block to one 16-byte row, as a uniform's size must be.
         pub pad_a: u32,
+        /// See `pad_a`.
         pub pad_b: u32,
+        /// See `pad_a`.
         pub pad_c: u32,
     }
 }
@@ -182,6 +183,7 @@ pub fn tiles_param(params: &Params) -> Result<[u32; 2]> {
 /// target by a field.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CountRaster {
+    /// How this pass walks: its implementation (`raster` or `compute`).
     pub walk: Walk,
 }
 
@@ -201,16 +203,19 @@ impl Pass for CountRaster {
 /// A walking stage's program: its shader, entry points and layout labels.
 #[derive(Clone, Copy, Debug)]
 pub struct WalkShader {
+    /// The stage's WGSL, holding every entry point below.
     pub shader: &'static PassShader,
     /// The program's name in the pass.
     pub program: &'static str,
-    /// `raster`'s entry points: the instance's quad, the froxel of a pixel.
+    /// `raster`'s vertex entry point: the corner of the instance's tile rectangle.
     pub vertex: &'static str,
+    /// `raster`'s fragment entry point: tests and counts (or places) the pixel's froxel.
     pub fragment: &'static str,
     /// `compute`'s entry point.
     pub compute: &'static str,
-    /// Labels of the bind-group layouts of each implementation.
+    /// Label of the `raster` bind-group layout, as dumps and GPU captures show it.
     pub raster_layout: &'static str,
+    /// Label of the `compute` bind-group layout.
     pub compute_layout: &'static str,
 }
 
@@ -220,7 +225,12 @@ pub struct WalkShader {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Walk {
     /// One instanced indirect draw of a quad per instance on a `width × height` viewport.
-    Raster { width: u32, height: u32 },
+    Raster {
+        /// Viewport columns: the grid's tiles across, one pixel each.
+        width: u32,
+        /// Viewport rows: the grid's tiles down.
+        height: u32,
+    },
     /// A direct dispatch of at most this many workgroups ([`walk_grid`]).
     Compute(u32),
 }
@@ -274,15 +284,15 @@ impl Walk {
         Ok(())
     }
 
-    /// Records the walk with the view (binding 5) and `uniforms` bound.
+    /// Records the walk with the view and `uniforms` bound.
     pub fn record(
         self,
         ctx: &mut RecordContext<'_>,
         shader: &WalkShader,
-        uniforms: &[(u32, &[u8])],
+        uniforms: &[(&str, &[u8])],
     ) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
-        let mut bound = vec![(5, bytemuck::bytes_of(&view))];
+        let mut bound = vec![("view", bytemuck::bytes_of(&view))];
         bound.extend_from_slice(uniforms);
         match self {
             Walk::Raster { .. } => {

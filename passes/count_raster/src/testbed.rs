@@ -11,13 +11,16 @@ use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject, View};
 /// Which walk a test runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Implementation {
+    /// The `raster` implementation: a quad per instance.
     Raster,
+    /// The `compute` implementation with its default grid.
     Compute,
     /// `compute` dispatched with one workgroup: the walk takes a round per 64 instances.
     ComputeRounds,
 }
 
 impl Implementation {
+    /// Every walk, for tests that run each.
     pub const ALL: [Self; 3] = [Self::Raster, Self::Compute, Self::ComputeRounds];
 
     /// The walk over `grid`'s tiles.
@@ -36,8 +39,11 @@ impl Implementation {
 /// What a walking stage's GPU test runs over: the objects, the view they are seen
 /// through and the z_slice that cuts the view into the grid the walk covers.
 pub struct Scene {
+    /// The camera the objects are clustered for.
     pub view: View,
+    /// The lights, probes and decals to cluster.
     pub objects: Vec<ClusterableObject>,
+    /// The z_slice pass, whose grid the walk covers.
     pub z_slice: ZSlice,
 }
 
@@ -45,8 +51,11 @@ pub struct Scene {
 /// in a test graph: what the GPU tests of this stage and of `populate` build before
 /// adding what they read back (populate its scan and its own pass too), and run alike.
 pub struct Counted<'a> {
+    /// The scene the graph was built for.
     pub scene: &'a Scene,
+    /// The graph so far: z_slice and count_raster, for the test to add to.
     pub graph: GraphBuilder,
+    /// z_slice's outputs the walk read.
     pub sliced: Sliced,
     /// The grid z_slice cuts the view into.
     pub grid: ClusterGrid,

@@ -1,7 +1,8 @@
 //! The CPU reference of `cull_lod`: the shared WGSL it calls (`instance_max_scale`,
-//! `instance_transform_point`, `sphere_in_frustum`, `project_error_to_pixels`,
-//! `lod_cut`) and its own `is_software`, mirrored operation for operation in f32
-//! (matrix times vector summed column by column, dot products left to right).
+//! `instance_transform_point`, `sphere_in_frustum`; the LOD cut is
+//! `meshlight_shaders::cpu::lod`'s, the one mirror of it) and its own `is_software`,
+//! mirrored operation for operation in f32 (matrix times vector summed column by column,
+//! dot products left to right).
 //!
 //! A decision can still differ from the GPU's when a value lies within rounding of its
 //! threshold (a GPU may fuse a multiply and an add); [`Decision`] keeps the values each
@@ -10,6 +11,8 @@
 use meshlight_gpu_scene::SceneData;
 use meshlight_scene::asset::format::NO_GROUP;
 use meshlight_shaders::cpu::layout::{Cluster, Instance, View};
+use meshlight_shaders::cpu::lod::lod_cut;
+use meshlight_shaders::cpu::matrix::{mat_vec, transform_point};
 use meshlight_shaders::cpu::occlusion::{DepthPyramid, OcclusionRect, occlusion_rect};
 
 /// `draw_indirect` vertex count of one hardware cluster (128 triangles × 3).
@@ -18,7 +21,9 @@ pub const HW_VERTICES: u32 = 384;
 /// The thresholds the pass compares with (its params).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Thresholds {
+    /// Pixels of error the cut may show: `lod_threshold_px`.
     pub lod_threshold_px: f32,
+    /// Screen-box size under which a cluster goes to software: `sw_threshold_px`.
     pub sw_threshold_px: f32,
     /// `false`: every cluster of the cut goes to software, for pipelines with no
     /// hardware rasteriser (sw_raster clips the clusters crossing the near plane).
@@ -40,21 +45,26 @@ impl Default for Thresholds {
 pub struct Decision {
     /// Smallest `dot(plane.xyz, centre) + plane.w + radius`: in the frustum when >= 0.
     pub frustum_margin: f32,
+    /// Whether the sphere touches the frustum (the first test; nothing else runs without it).
     pub in_frustum: bool,
     /// Own and parent error in pixels (`f32::MAX` parent for a root: never projected).
     pub own_px: f32,
+    /// The parent group's error in pixels, compared after `own_px`.
     pub parent_px: f32,
+    /// Whether the cluster is in the LOD cut: own error hidden, parent's shown.
     pub in_cut: bool,
     /// Distance of the sphere's centre beyond the near plane, minus its radius.
     pub near_margin: f32,
     /// Screen box of the sphere (0 when it reaches the near plane: not computed).
     pub box_size: [f32; 2],
+    /// Whether the cluster goes to the software rasteriser.
     pub software: bool,
     /// The world-space radius, for scaling the frustum and near margins.
     pub radius: f32,
     /// Once in the cut with the occlusion test on: the sphere's rectangle, and the
     /// farthest depth the pyramid holds under it (when testable).
     pub occlusion: Option<(OcclusionRect, f32)>,
+    /// Whether the pyramid proved the cluster hidden (it then takes no raster slot).
     pub occluded: bool,
 }
 
@@ -114,6 +124,7 @@ pub struct CullResult {
     pub cut: Vec<Cluster>,
     /// The cut split by rasteriser (every cut cluster, whether or not a slot was free).
     pub software: Vec<Cluster>,
+    /// The cut clusters the hardware rasteriser takes.
     pub hardware: Vec<Cluster>,
     /// Cut clusters the pyramid proved hidden, in list order: the first pass's
     /// candidates (`occluded`), or what the second pass culled.
@@ -126,17 +137,8 @@ pub struct CullResult {
     pub hw_args: [u32; 4],
 }
 
-/// `m * v` for a column-major matrix, summed column by column as the WGSL does.
-pub fn mat_vec(m: &[[f32; 4]; 4], v: [f32; 4]) -> [f32; 4] {
-    std::array::from_fn(|r| m[0][r] * v[0] + m[1][r] * v[1] + m[2][r] * v[2] + m[3][r] * v[3])
-}
-
-pub fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
+fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn sub3(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 fn xyz(v: [f32; 4]) -> [f32; 3] {
@@ -151,11 +153,6 @@ pub fn instance_max_scale(instance: &Instance) -> f32 {
     x.max(y.max(z)).sqrt()
 }
 
-/// `instance_transform_point`.
-pub fn transform_point(m: &[[f32; 4]; 4], p: [f32; 3]) -> [f32; 3] {
-    xyz(mat_vec(m, [p[0], p[1], p[2], 1.0]))
-}
-
 /// `sphere_in_frustum` (a NaN distance keeps the sphere, as the WGSL's `<` does) and the
 /// smallest margin over the planes.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -168,43 +165,6 @@ pub fn sphere_in_frustum(view: &View, center: [f32; 3], radius: f32) -> (bool, f
         margin = margin.min(d + radius);
     }
     (inside, margin)
-}
-
-/// `project_error_to_pixels`.
-pub fn project_error_to_pixels(view: &View, center: [f32; 3], radius: f32, error: f32) -> f32 {
-    let d = sub3(center, view.camera_position);
-    let distance = dot3(d, d).sqrt() - radius;
-    error / distance.max(view.near) * view.lod_scale
-}
-
-/// `lod_cut` with the projected errors it compared: (in the cut, own px, parent px).
-#[allow(clippy::too_many_arguments)]
-pub fn lod_cut(
-    view: &View,
-    world_from_mesh: &[[f32; 4]; 4],
-    scale: f32,
-    own_sphere: [f32; 4],
-    own_error: f32,
-    parent_sphere: [f32; 4],
-    parent_error: f32,
-    threshold: f32,
-) -> (bool, f32, f32) {
-    let own_center = transform_point(world_from_mesh, xyz(own_sphere));
-    let own = project_error_to_pixels(view, own_center, own_sphere[3] * scale, own_error * scale);
-    if own > threshold {
-        return (false, own, f32::MAX);
-    }
-    if parent_error >= f32::MAX {
-        return (true, own, f32::MAX);
-    }
-    let parent_center = transform_point(world_from_mesh, xyz(parent_sphere));
-    let parent = project_error_to_pixels(
-        view,
-        parent_center,
-        parent_sphere[3] * scale,
-        parent_error * scale,
-    );
-    (parent > threshold, own, parent)
 }
 
 /// `is_software`: (software, near margin, screen box size).
@@ -259,7 +219,9 @@ pub enum Occlusion<'a> {
     First(&'a DepthPyramid),
     /// The second pass against this frame's, given the first pass's `raster_counts`.
     Second {
+        /// This frame's pyramid, built from what the first pass drew.
         pyramid: &'a DepthPyramid,
+        /// The first pass's `raster_counts`, whose software and hardware ends bound the free slots.
         first_counts: [u32; 12],
     },
 }

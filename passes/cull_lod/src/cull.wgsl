@@ -9,8 +9,9 @@
 // frame's pyramid, through last frame's view-projection and each instance's previous
 // transform, and appends what it finds hidden to `occluded`; the second takes that list
 // as its clusters and tests it against this frame's pyramid with the current view, and
-// puts what survives into the slots the first pass left free, every one on the hardware
-// side (see lib.rs for why). With WALKED, the second pass also takes the clusters the
+// puts what survives into the slots the first pass left free, split as the first pass
+// splits: software from the left of that range, hardware from its right (lib.rs, "Two-pass
+// occlusion"). With WALKED, the second pass also takes the clusters the
 // second hierarchy walk listed (below the nodes the first walk found hidden), after its
 // own list: those were never tested, and are tested like the rest.
 
@@ -35,7 +36,8 @@
 // instances through `instance_at` (meshlight::instance_table).
 // Software clusters in slots 0, 1, …; hardware clusters in slots C-1, C-2, ….
 @group(0) @binding(5) var<storage, read_write> raster_clusters: array<Cluster>;
-// The eight count words of the contract (see lib.rs).
+// The count words of the contract (see lib.rs): eight, twelve with OCCLUSION
+// (`OCCLUSION_COUNT_WORDS`).
 @group(0) @binding(6) var<storage, read_write> raster_counts: array<atomic<u32>>;
 // draw_indirect arguments of the hardware rasteriser: [384, hardware clusters, 0, 0].
 @group(0) @binding(7) var<storage, read_write> hw_args: array<atomic<u32>>;
@@ -97,7 +99,8 @@ const COUNT_WORDS: u32 = 12u;
 
 // The slots this pass may fill, [x, y): the whole list in the first pass; in the
 // second, what lies between the first pass's software clusters and its hardware ones.
-// The second pass fills it from the right, so hardware rasteriser instance j draws slot
+// Software clusters fill it from x (`raster_counts[7]`, where sw_raster's `accumulate`
+// starts), hardware ones from y down, so hardware rasteriser instance j draws slot
 // y - 1 - j (`raster_counts[3]` = y is the `C` it reads).
 fn slot_range() -> vec2<u32> {
 #ifdef SECOND_PASS

@@ -17,11 +17,11 @@
 //! | `cluster_count`   | storage read       | u32     | `[0]`: clusters in the list |
 //! | `instances`       | storage read       | Instance | the GPU scene |
 //! | `instances_high`  | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
-//! | `meshes`          | storage read       | Mesh    | the GPU scene (reserved for the occlusion pass; `compute` binds it to nothing) |
+//! | `meshes`          | storage read       | Mesh    | the GPU scene's read set; `compute` reads nothing of it and binds it to nothing |
 //! | `meshlets`        | storage read       | Meshlet | bounds, groups, triangle counts |
 //! | `meshlet_groups`  | storage read       | MeshletGroup | LOD spheres and errors |
 //! | `raster_clusters` | storage write      | Cluster | `C` slots: software in `0..[0]`, hardware in `C-[1]..C` |
-//! | `raster_counts`   | cleared read-write | u32 × 8 | the words below |
+//! | `raster_counts`   | cleared read-write | u32 × 8 (12 with `pyramid`) | the words below |
 //! | `hw_args`         | cleared read-write | DrawIndirectArgs | `[384, hardware clusters, 0, 0]` for `draw_indirect` |
 //! | `pyramid`         | sampled (optional) | R32Float, all mips | the depth pyramid; bound: occlusion is tested |
 //! | `occluded`        | storage write (optional) | Cluster | `first` with a pyramid: the clusters found hidden, the second pass's candidates |
@@ -126,14 +126,19 @@
 //!   shorter than `sw_threshold_px`; hardware otherwise.
 //! - Slots: `total = atomicAdd([2], 1)`; `total >= C`: dropped; else software writes slot
 //!   `atomicAdd([0], 1)`, hardware slot `C − 1 − atomicAdd(hw_args[1], 1)` (and counts
-//!   `[1]`). So `[0] + [1] = min([2], C)` and no slot is written twice.
+//!   `[1]`). So `[0] + [1] = min([2], C)` and no slot is written twice. A second pass
+//!   does the same inside its free range: `C` is its `[10]` slots, software starts at
+//!   `[7]` and hardware below `[3]`.
 //! - The cull runs as an indirect dispatch of 64-thread workgroups over
-//!   `cluster_count[0]`, `x × y` with both under the per-dimension limit (a one-thread
-//!   dispatch writes the arguments into a scratch buffer and resets the counters).
+//!   `cluster_count[0]` (plus `walked_cluster_count[0]` when that list is bound), `x × y`
+//!   with both under the per-dimension limit (a one-thread dispatch writes the arguments
+//!   into a scratch buffer and resets the counters).
 //! - [`cpu::cpu_cull`] is the reference, mirroring the WGSL's f32 operations in order.
 //!   The GPU tests compare sets exactly, allowing only clusters whose deciding value lies
 //!   within a relative 1e-5 of its threshold ([`cpu::Decision::closeness`]); they count
 //!   such clusters and assert there are at most 2 per view.
+
+#![warn(missing_docs)]
 
 pub mod cpu;
 
@@ -142,13 +147,8 @@ pub use cpu::{CullResult, Decision, Thresholds, cpu_cull};
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, ProgramDesc,
-    RecordContext, Result, SetupContext, Slot, StageContract, Workgroups,
-};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
+use meshlight_gpu_scene::{Phase, SceneBuffer::*, scene_reads};
+use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "cull_lod";
@@ -169,6 +169,7 @@ pub const PER_INSTANCE_FIRST: &str = "occluded_per_instance";
 pub const PER_INSTANCE_SECOND: &str = "still_occluded_per_instance";
 /// The second pass's optional second list: the second hierarchy walk's clusters.
 pub const WALKED_SLOT: &str = "walked_clusters";
+/// The count words of `walked_clusters`: the second walk's `cluster_count`.
 pub const WALKED_COUNT_SLOT: &str = "walked_cluster_count";
 /// The binding of the per-instance counters in cull.wgsl.
 const PER_INSTANCE_BINDING: u32 = 16;
@@ -176,6 +177,8 @@ const PER_INSTANCE_BINDING: u32 = 16;
 /// Threads per cull workgroup.
 pub const WORKGROUP_SIZE: u32 = 64;
 
+/// The stage's WGSL (`cull.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!("cull_lod::cull", "cull.wgsl", params: GpuParams);
 
 /// The slots every implementation of `cull_lod` shares.
@@ -203,7 +206,7 @@ pub fn contract() -> StageContract {
                     "raster_counts",
                     Access::ClearedReadWrite,
                     Element::U32,
-                    "sw, hw, requested, capacity, in frustum, sw triangles, hw triangles, 0",
+                    "sw, hw, requested, capacity, in frustum, sw triangles, hw triangles, first sw slot; with a pyramid: in cut, hidden, slots, testable",
                 ),
                 Slot::buffer(
                     "hw_args",
@@ -270,16 +273,13 @@ pub fn contract() -> StageContract {
     }
 }
 
-/// Which culling pass of the frame this is; the hierarchy walk names its passes the same way.
-pub use meshlight_gpu_scene::Phase as Mode;
-
 shader_defs! {
     /// The variant of cull.wgsl a pass runs.
     #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
     pub struct CullDefs {
         /// A pyramid is bound and tested.
         pub occlusion: bool => "OCCLUSION",
-        /// [`Mode::Second`].
+        /// [`Phase::Second`].
         pub second: bool => "SECOND_PASS",
         /// The per-instance occlusion counters are bound.
         pub per_instance: bool => "PER_INSTANCE",
@@ -291,8 +291,11 @@ shader_defs! {
 /// The `compute` implementation.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CullLod {
+    /// The LOD and software thresholds, and whether a hardware rasteriser follows.
     pub thresholds: Thresholds,
-    pub mode: Mode,
+    /// Which culling pass of the frame this is (`mode` in a pipeline file): the first
+    /// tests against last frame's pyramid, the second re-tests what the first hid.
+    pub phase: Phase,
     /// Raster slots `C`; `None`: as many as `raster_clusters` holds.
     pub capacity: Option<u32>,
     /// A per-dimension limit below the adapter's (tests use small ones); `None`: the
@@ -335,7 +338,7 @@ impl CullLod {
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let defaults = Thresholds::default();
-        let mode = Mode::from_params(params)?;
+        let phase = Phase::from_params(params)?;
         let nonzero = |v: u32| (v > 0).then_some(v);
         let pass = Self {
             thresholds: Thresholds {
@@ -343,7 +346,7 @@ impl CullLod {
                 sw_threshold_px: params.f32("sw_threshold_px", defaults.sw_threshold_px)?,
                 hardware: params.bool("hardware", true)?,
             },
-            mode,
+            phase,
             capacity: nonzero(params.u32("capacity", 0)?),
             max_per_dimension: nonzero(params.u32("max_per_dimension", 0)?),
         };
@@ -351,32 +354,32 @@ impl CullLod {
         Ok(pass)
     }
 
-    fn check_mode(&self, ctx: &SetupContext) -> Result<bool> {
+    fn check_phase(&self, ctx: &SetupContext) -> Result<bool> {
         let bound = |slot| ctx.is_bound(slot);
         let occlusion = bound("pyramid");
-        match self.mode {
-            Mode::First if occlusion && !(bound("occluded") && bound("occluded_count")) => {
+        match self.phase {
+            Phase::First if occlusion && !(bound("occluded") && bound("occluded_count")) => {
                 Err(GraphError::parameter(
                     "a first pass with a `pyramid` needs `occluded` and `occluded_count` bound: the clusters it finds hidden go there for the second pass",
                 ))
             }
-            Mode::First if !occlusion && (bound("occluded") || bound("first_counts")) => {
+            Phase::First if !occlusion && (bound("occluded") || bound("first_counts")) => {
                 Err(GraphError::parameter(
                     "`occluded` or `first_counts` is bound but `pyramid` is not: bind last frame's pyramid to test occlusion, or unbind them",
                 ))
             }
-            Mode::First if bound("first_counts") => Err(GraphError::parameter(
+            Phase::First if bound("first_counts") => Err(GraphError::parameter(
                 "`first_counts` is for `mode = \"second\"`; unbind it from the first pass",
             )),
-            Mode::Second if !(occlusion && bound("first_counts")) => Err(GraphError::parameter(
+            Phase::Second if !(occlusion && bound("first_counts")) => Err(GraphError::parameter(
                 "`mode = \"second\"` needs `pyramid` (this frame's) and `first_counts` (the first pass's raster_counts) bound",
             )),
-            Mode::Second if bound("occluded") || bound("occluded_count") => {
+            Phase::Second if bound("occluded") || bound("occluded_count") => {
                 Err(GraphError::parameter(
                     "`occluded` and `occluded_count` are the first pass's outputs, to bind to the second pass as `clusters` and `cluster_count`; give them resource names other than the slots' (e.g. `candidates`, `candidate_count`), or the second pass binds them by name",
                 ))
             }
-            _ if self.mode == Mode::First && (bound(WALKED_SLOT) || bound(WALKED_COUNT_SLOT)) => {
+            _ if self.phase == Phase::First && (bound(WALKED_SLOT) || bound(WALKED_COUNT_SLOT)) => {
                 Err(GraphError::parameter(format!(
                     "`{WALKED_SLOT}` is the second walk's list, for `mode = \"second\"`; unbind it from the first pass"
                 )))
@@ -397,14 +400,14 @@ impl CullLod {
         ctx: &SetupContext,
         occlusion: bool,
     ) -> Result<Option<&'static str>> {
-        let (mine, other) = match self.mode {
-            Mode::First => (PER_INSTANCE_FIRST, PER_INSTANCE_SECOND),
-            Mode::Second => (PER_INSTANCE_SECOND, PER_INSTANCE_FIRST),
+        let (mine, other) = match self.phase {
+            Phase::First => (PER_INSTANCE_FIRST, PER_INSTANCE_SECOND),
+            Phase::Second => (PER_INSTANCE_SECOND, PER_INSTANCE_FIRST),
         };
         if ctx.is_bound(other) {
             return Err(GraphError::parameter(format!(
                 "`{other}` is bound to a `mode = \"{}\"` pass, which counts per instance in `{mine}`; a first pass clears and fills `{PER_INSTANCE_FIRST}`, the second updates the same buffer as `{PER_INSTANCE_SECOND}` (name the resource unlike both slots, or the second pass binds it by name)",
-                self.mode.name()
+                self.phase.name()
             )));
         }
         if !ctx.is_bound(mine) {
@@ -440,8 +443,8 @@ impl Pass for CullLod {
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.check_thresholds()?;
         ctx.check_max_per_dimension(self.max_per_dimension)?;
-        let occlusion = self.check_mode(ctx)?;
-        let second = self.mode == Mode::Second;
+        let occlusion = self.check_phase(ctx)?;
+        let second = self.phase == Phase::Second;
         let per_instance = self.per_instance_slot(ctx, occlusion)?;
         let walked = second && ctx.is_bound(WALKED_SLOT);
         let defs = CullDefs {
@@ -511,9 +514,9 @@ impl Pass for CullLod {
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let view = frame_view(ctx, VIEW_INPUT, None)?;
         let test_occlusion = ctx.is_bound("pyramid")
-            && match self.mode {
-                Mode::Second => true,
-                Mode::First => {
+            && match self.phase {
+                Phase::Second => true,
+                Phase::First => {
                     ctx.history_valid("pyramid")? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
                 }
             };
@@ -527,16 +530,20 @@ impl Pass for CullLod {
             ..GpuParams::default()
         };
         let (view, params) = (bytemuck::bytes_of(&view), bytemuck::bytes_of(&params));
-        if self.mode == Mode::First && ctx.is_bound(PER_INSTANCE_FIRST) {
+        if self.phase == Phase::First && ctx.is_bound(PER_INSTANCE_FIRST) {
             ctx.clear(PER_INSTANCE_FIRST)?;
         }
         let (dispatch, _) = ctx.scratch("dispatch")?;
-        ctx.dispatch_compute("prepare", &[(11, params)], Workgroups::Direct([1, 1, 1]))?;
+        ctx.dispatch_compute(
+            "prepare",
+            &[("params", params)],
+            Workgroups::Direct([1, 1, 1]),
+        )?;
         // A second dispatch: the counters and arguments are written before any cluster
         // reads them.
         ctx.dispatch_compute(
             "cull",
-            &[(10, view), (11, params)],
+            &[("view", view), ("params", params)],
             Workgroups::Indirect(dispatch, 0),
         )
     }

@@ -10,12 +10,11 @@
 
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::{Camera, GpuScene, SceneData};
+use meshlight_gpu_scene::{Camera, GpuScene, Phase, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_cull_lod::cpu::{self, HW_VERTICES, Occlusion};
 use meshlight_pass_cull_lod::{
-    CAMERA_CUT_INPUT, CullLod, CullResult, Mode, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND,
-    Thresholds,
+    CAMERA_CUT_INPUT, CullLod, CullResult, PER_INSTANCE_FIRST, PER_INSTANCE_SECOND, Thresholds,
 };
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
@@ -187,7 +186,7 @@ impl Harness {
             .unwrap();
         let second = CullLod {
             thresholds: T,
-            mode: Mode::Second,
+            phase: Phase::Second,
             ..CullLod::default()
         };
         let out2 = g

@@ -9,7 +9,7 @@
 //! size whose rounded-down mips hold every level; the texels past a level's size are
 //! never written and never part of any footprint.
 
-use meshlight_graph::TextureDesc;
+use meshlight_graph::prelude::*;
 
 /// The pyramid's format: one depth per texel.
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;

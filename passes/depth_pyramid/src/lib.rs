@@ -37,6 +37,8 @@
 //! nothing: the last texel of a row of an odd level covers the one leftover texel below
 //! it. An occlusion test reads level `L` where one texel spans `2^(L+1)` pixels, and the
 //! texels under a pixel rectangle clamped to the image are always inside the level.
+//! `meshlight_shaders::cpu::occlusion::DepthPyramid` builds the same levels on the CPU:
+//! the tests compare with it bit for bit, and the culling references test against it.
 //!
 //! The texture is padded so wgpu's rounded-down mips hold the rounded-up levels
 //! ([`PyramidExtent::texture_size`]): read level `L` only inside
@@ -86,7 +88,8 @@
 //! The pass builds one bind group itself (per-level views of the pyramid, [`mips`]): the
 //! graph binds one view per slot, and a storage texture binding holds one mip.
 
-pub mod cpu;
+#![warn(missing_docs)]
+
 pub mod extent;
 pub mod mips;
 
@@ -95,12 +98,7 @@ pub use extent::{
     tile_grid,
 };
 
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, ComputeProgram, Element, GraphError, Implementation, Pass,
-    ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
-};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
+use meshlight_graph::prelude::*;
 use mips::MipViews;
 
 /// The stage name pipelines use.
@@ -118,6 +116,8 @@ pub const IMPLEMENTATIONS: [(&str, Method); 2] = [
     ("two_pass", Method::TwoPass),
 ];
 
+/// The stage's WGSL (`pyramid.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!("depth_pyramid", "pyramid.wgsl", params: ShaderParams);
 
 /// Scratch: one u32 per tile, its level-6 texel's depth bits.
@@ -162,6 +162,7 @@ pub enum Method {
 }
 
 impl Method {
+    /// The implementation name pipelines use for this method.
     pub fn name(self) -> &'static str {
         match self {
             Method::SinglePass => "single_pass",
@@ -181,8 +182,11 @@ impl Method {
 /// and `two_pass`, told apart by [`DepthPyramid::method`]).
 #[derive(Clone, Debug)]
 pub struct DepthPyramid {
+    /// The visibility target's width in pixels; the pyramid's size follows from it.
     pub width: u32,
+    /// The visibility target's height in pixels.
     pub height: u32,
+    /// How the levels above the first tiles are reached: one dispatch or two.
     pub method: Method,
     mips: MipViews,
 }
@@ -191,6 +195,8 @@ pub struct DepthPyramid {
 pub const KEYS: [&str; 2] = ["width", "height"];
 
 impl DepthPyramid {
+    /// A pass for a `width × height` target built by `method`; nothing is checked until
+    /// setup ([`Self::validate`]).
     pub fn new(width: u32, height: u32, method: Method) -> Self {
         Self {
             width,
@@ -199,9 +205,11 @@ impl DepthPyramid {
             mips: MipViews::default(),
         }
     }
+    /// [`Self::new`] with `single_pass`, what `auto` takes.
     pub fn single_pass(width: u32, height: u32) -> Self {
         Self::new(width, height, Method::SinglePass)
     }
+    /// [`Self::new`] with `two_pass`, for adapters that bind fewer than 14 storage textures.
     pub fn two_pass(width: u32, height: u32) -> Self {
         Self::new(width, height, Method::TwoPass)
     }
@@ -214,6 +222,7 @@ impl DepthPyramid {
         Ok(pass)
     }
 
+    /// Refuses a size of 0 or past [`MAX_SIDE`], naming the params to change.
     pub fn validate(&self) -> Result<()> {
         let [w, h] =
             Params::positive_size(self.width, self.height, "the visibility target's size")?;
@@ -225,6 +234,7 @@ impl DepthPyramid {
         Ok(())
     }
 
+    /// Level 0's size and the level count of this pass's pyramid, for sizing the texture.
     pub fn extent(&self) -> PyramidExtent {
         pyramid_extent(self.width, self.height)
     }
@@ -463,7 +473,7 @@ impl DepthPyramid {
         grid: [u32; 2],
     ) -> Result<Dispatch> {
         let params = self.params(level_base);
-        let common = ctx.bind_group(&program, 0, &[(2, bytemuck::bytes_of(&params))])?;
+        let common = ctx.bind_group(&program, 0, &[("params", bytemuck::bytes_of(&params))])?;
         let levels =
             self.mips
                 .bind_group(ctx, &program, level_base, self.method.level_bindings())?;

@@ -12,7 +12,7 @@
 //! creates none; a history pyramid alternates between two textures, which both stay
 //! cached. The cache is bounded, since a resize brings new textures.
 
-use meshlight_graph::{ComputeProgram, RecordContext, Result};
+use meshlight_graph::prelude::*;
 use std::sync::Mutex;
 
 /// Cached bind groups, at most this many (the oldest goes first).

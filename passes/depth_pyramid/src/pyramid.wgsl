@@ -1,5 +1,6 @@
 // The depth pyramid: a min-depth mip chain of the 64-bit visibility target.
-// `cpu::build` is the reference; lib.rs states the footprint rule this implements.
+// `meshlight_shaders::cpu::occlusion::DepthPyramid` is the reference; lib.rs states the
+// footprint rule this implements.
 //
 // Depths are handled as their u32 bits throughout. The rasterisers store clamped,
 // non-negative depths (0 = empty = far, with reverse-Z), whose bits order like the floats,

@@ -1,11 +1,13 @@
-//! `depth_pyramid` on the GPU (lavapipe in CI) against `cpu::build`, exactly: odd, even
+//! `depth_pyramid` on the GPU (lavapipe in CI) against the CPU pyramid
+//! (`meshlight_shaders::cpu::occlusion::DepthPyramid::from_visibility`), exactly: odd, even
 //! and one-pixel sizes, one tile and many, both implementations, frames in a row with
 //! different depths (so a counter left unreset or a level left stale shows), random
 //! depths with empty pixels; the texture form where the adapter has 64-bit texture
 //! atomics; and a pyramid texture not declared with `texture_desc`.
 
 use meshlight_graph::*;
-use meshlight_pass_depth_pyramid::{DepthPyramid, Method, cpu, pyramid_extent, texture_desc};
+use meshlight_pass_depth_pyramid::{DepthPyramid, Method, pyramid_extent, texture_desc};
+use meshlight_shaders::cpu::occlusion;
 
 mod common;
 use common::{
@@ -204,10 +206,10 @@ fn read_levels(gpu: &GpuContext, texture: &wgpu::Texture, w: u32, h: u32) -> Res
 }
 
 /// Panics at the first texel whose bits differ from the reference's.
-fn assert_levels_equal(got: &[Vec<f32>], want: &cpu::Pyramid, what: &str) {
+fn assert_levels_equal(got: &[Vec<f32>], want: &occlusion::DepthPyramid, what: &str) {
     assert_eq!(got.len(), want.levels.len(), "{what}: level count");
-    for (l, (g, w)) in got.iter().zip(&want.levels).enumerate() {
-        let [lw, _] = want.extent.level_size(l as u32);
+    for (l, (g, (lw, _, w))) in got.iter().zip(&want.levels).enumerate() {
+        let lw = *lw;
         if let Some(i) = g
             .iter()
             .zip(w)
@@ -233,7 +235,7 @@ fn check(method: Method, w: u32, h: u32, form: Form) -> Frames {
     ];
     let got = run(DepthPyramid::new(w, h, method), form, &frames).unwrap_or_else(|e| panic!("{e}"));
     for (i, (values, levels)) in frames.iter().zip(&got.levels).enumerate() {
-        let want = cpu::build(values, w, h);
+        let want = occlusion::DepthPyramid::from_visibility(values, w, h);
         assert_levels_equal(
             levels,
             &want,
@@ -297,7 +299,7 @@ fn a_persistent_counter_is_left_at_zero_and_needs_no_clear() {
         for (i, (values, levels)) in frames.iter().zip(&got.levels).enumerate() {
             assert_levels_equal(
                 levels,
-                &cpu::build(values, w, h),
+                &occlusion::DepthPyramid::from_visibility(values, w, h),
                 &format!("{w}×{h} frame {i}"),
             );
         }
@@ -405,13 +407,12 @@ fn a_history_pyramid_is_right_in_both_textures_it_alternates_between() {
             exec.finish().unwrap();
             let bytes = exec.read_texture("pyramid").unwrap();
             let texels: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
-            let want = cpu::build(&values, w, h);
-            let [lw, lh] = want.extent.level_size(0);
+            let want = occlusion::DepthPyramid::from_visibility(&values, w, h);
+            let [lw, lh] = want.level_size(0);
             let level0: Vec<f32> = (0..lh as usize)
                 .flat_map(|y| texels[y * padded_width..y * padded_width + lw as usize].to_vec())
                 .collect();
-            let want0 = cpu::Pyramid {
-                extent: want.extent,
+            let want0 = occlusion::DepthPyramid {
                 levels: vec![want.levels[0].clone()],
             };
             assert_levels_equal(&[level0], &want0, &format!("{method:?} frame {frame}"));
@@ -440,8 +441,8 @@ fn random_sizes_match_the_reference() {
             let frames = [visibility(w, h, Depths::WithEmpty(seed))];
             let got = run(DepthPyramid::new(w, h, method), BUFFER, &frames)
                 .map_err(|e| TestCaseError::fail(e.to_string()))?;
-            let want = cpu::build(&frames[0], w, h);
-            for (l, (g, r)) in got.levels[0].iter().zip(&want.levels).enumerate() {
+            let want = occlusion::DepthPyramid::from_visibility(&frames[0], w, h);
+            for (l, (g, (_, _, r))) in got.levels[0].iter().zip(&want.levels).enumerate() {
                 let same = g.iter().zip(r).all(|(a, b)| a.to_bits() == b.to_bits());
                 prop_assert!(same, "{method:?} {w}×{h} seed {seed}: level {l} differs");
             }

@@ -6,6 +6,7 @@
 
 use meshlight_gpu_scene::SceneData;
 use meshlight_shaders::cpu::layout::{Cluster, Instance, View};
+use meshlight_shaders::cpu::matrix::mat_vec;
 
 /// What `fill_clusters` produces for a scene and a view.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -21,11 +22,6 @@ pub struct FillResult {
     pub requested: u32,
     /// `cluster_count[0]`: `min(requested, capacity)`.
     pub written: u32,
-}
-
-/// `m * v` for a column-major matrix, summed column by column as the WGSL does.
-pub fn mat_vec(m: &[[f32; 4]; 4], v: [f32; 4]) -> [f32; 4] {
-    std::array::from_fn(|r| m[0][r] * v[0] + m[1][r] * v[1] + m[2][r] * v[2] + m[3][r] * v[3])
 }
 
 fn dot3(a: [f32; 3], b: [f32; 3]) -> f32 {

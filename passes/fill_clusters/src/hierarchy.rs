@@ -6,7 +6,10 @@
 //! The contract is the stage's, with the optional slots bound: `hierarchy_nodes`,
 //! `hierarchy_clusters` and `hierarchy_roots` (the GPU scene's, from
 //! `GpuScene::import_hierarchy`), and `hierarchy_counts` if the caller wants the
-//! counters (otherwise a scratch buffer holds them). The list holds a superset of the LOD
+//! counters (otherwise a scratch buffer holds them); plus the occlusion slots of
+//! [`crate::hierarchy_contract`]: `pyramid`, and `occluded_nodes` and
+//! `occluded_node_count` for a first walk, `candidate_nodes` and `candidate_node_count`
+//! for a second (see [`HierarchyFill::phase`]). The list holds a superset of the LOD
 //! cut: every meshlet of every accepted leaf, each written once, as
 //! `(instance, meshlet)` like `workgroup_per_instance`'s, with the same overflow words
 //! (`cluster_count[1]` requested, `[0] = min([1], capacity)`). `cull_lod` after it then
@@ -21,13 +24,18 @@
 //! | `spread_steps`     | [`SPREAD_STEPS`] | steps that hand wide walks on to more workgroups, at most [`MAX_STEPS`]; 0: one workgroup per instance walks it all |
 //! | `subtree_capacity` | 0 ([`SUBTREE_CAPACITY`]) | entries each step's list of handed-on subtrees holds |
 //! | `spread_groups`    | 0 ([`SPREAD_GROUPS`]) | workgroups of each step after the first |
+//! | `mode`             | `"first"` | `first`: the walk from every instance's root (with a pyramid, hidden nodes go to `occluded_nodes`); `second`: the walk from the first's hidden nodes against this frame's pyramid |
+//! | `occlusion_min_clusters` | [`OCCLUSION_MIN_CLUSTERS`] | with a pyramid, inner nodes with fewer meshlets below are not tested for occlusion (a walk's entries always are) |
 //!
 //! `hierarchy_counts`: `[0]` nodes tested, `[1]` leaves accepted, `[2]` subtrees emitted
 //! whole because a frontier and the next step's list were full, `[3]` walks (of an
 //! instance or of a handed-on subtree) that hit the round limit (0 unless the data is
 //! damaged). Every node is tested by exactly one workgroup, so `[0]` and `[1]` do not
-//! depend on how the walk was split. With room for [`ENTRY_COUNT_WORDS`], `[5]` and
-//! `[6]` count the walk's entries tested and passed: instances tested and visible. Clusters + nodes tested = `cluster_count[1] + [0]`.
+//! depend on how the walk was split. With a pyramid, `[4]` counts the nodes it hid
+//! ([`OCCLUSION_COUNT_WORDS`]). With room for [`ENTRY_COUNT_WORDS`], `[5]` and `[6]` count
+//! the walk's entries tested and passed: the first walk's are the instances' roots (so
+//! instances tested and visible), the second's the hidden nodes it starts from.
+//! Clusters + nodes tested = `cluster_count[1] + [0]`.
 //!
 //! # The walk
 //!
@@ -39,10 +47,12 @@
 //! barriers, a global reservation), and a walk is latency-bound: the frontiers of the
 //! scenes measured stay within one or two chunks, so halving the rounds is what shortens
 //! it. The root's test (frustum and LOD) is the instance test, so a culled instance costs
-//! one node.
+//! one node: the roots are tested first, a thread each (`roots`), and only the children
+//! of those that pass reach a workgroup.
 //!
 //! The walk is split over `spread_steps + 1` dispatches so that its cost follows the
-//! work, not the instance: step 0 is one workgroup per instance starting at its root;
+//! work, not the instance: step 0 is one workgroup per root that passed, starting at its
+//! children;
 //! step k ≥ 1 is `spread_groups` workgroups striding over the list of subtrees step
 //! k − 1 handed on. In a spreading step (all but the last) a frontier holds one chunk
 //! (64 nodes, so a round is one pass of tests and two barriers); an accepted node's
@@ -70,11 +80,12 @@
 //! that workgroups make progress together — lavapipe and other drivers give no such
 //! promise, and a wrong guess hangs the device. Here a step reads only the list the
 //! previous dispatch finished. One dispatch per tree level costs two dependent dispatches
-//! per level (about 4 µs on an H200, DESIGN §9) over the 15 to 25 levels of the chain and
-//! the level trees: more than the whole walk; a few spreading steps cost one dispatch
-//! each. The written word `cluster_count[0]` is summed by the reservations themselves
+//! per level (about 4 µs on an H200: docs/BENCHMARKS.md, graph-floor) over the 15 to 25
+//! levels of the chain and the level trees: more than the whole walk; a few spreading
+//! steps cost one dispatch each. The written word `cluster_count[0]` is summed by the reservations themselves
 //! (each adds its part below the capacity), so no dispatch follows the walk: the chain
-//! is one clearing dispatch and `spread_steps + 1` walks.
+//! is `prepare` (the counters zeroed), `roots`, `walk_dispatch` (step 0's indirect
+//! arguments) and `spread_steps + 1` walks.
 //!
 //! # Measured
 //!
@@ -92,7 +103,9 @@
 //! # Why skipping is exact
 //!
 //! `node_visible` compares the node's bounds as `cull_lod` compares each cluster's
-//! (frustum, own error imperceptible, parent error perceptible), with the node's sphere
+//! (frustum, own error imperceptible, parent error perceptible; the projected error and
+//! the comparison are `meshlight::view`'s `error_to_pixels` and `meshlight::meshlet`'s
+//! `error_perceptible`, which `lod_cut` uses too), with the node's sphere
 //! and errors bounding every cluster below (`meshlight_scene::hierarchy` says why), and
 //! each comparison moved toward keeping by a slack of 2^-13 of the magnitudes involved
 //! (the translation, the camera position, the sphere), far above the f32 rounding of the
@@ -105,17 +118,15 @@ use crate::{
     OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT,
     hierarchy_contract, instance_grid, instance_programs,
 };
+use meshlight_gpu_scene::Phase;
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::file::Params;
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, RecordContext,
-    Result, SetupContext, Workgroups,
-};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
+use meshlight_graph::prelude::*;
 
 /// The implementation name pipelines use.
 pub const IMPLEMENTATION: &str = "hierarchy";
 
+/// The `hierarchy` implementation's WGSL with its uniform block and the list module,
+/// public so the shader tests compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!(
     "fill_clusters::hierarchy",
     "hierarchy.wgsl",
@@ -158,19 +169,13 @@ const ROOT_GROUPS: u32 = 1024;
 /// Scratch: the lists of handed-on subtrees, 12 bytes an entry.
 const LISTS: &str = "subtrees";
 
-/// Which walk of the frame this is (two-pass occlusion culling, DESIGN §5): the first
-/// walks from every instance's root and, with a pyramid bound (last frame's), sends the
-/// nodes it proves hidden to `occluded_nodes`; the second walks from those
-/// (`candidate_nodes`) against this frame's pyramid and drops what is still hidden.
-pub use meshlight_gpu_scene::Phase as Mode;
-
 shader_defs! {
     /// The variant of hierarchy.wgsl a pass runs.
     #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
     pub struct WalkDefs {
         /// A pyramid is bound and tested per node.
         pub occlusion: bool => "OCCLUSION",
-        /// [`Mode::Second`].
+        /// [`Phase::Second`].
         pub second: bool => "SECOND_PASS",
     }
 }
@@ -200,8 +205,12 @@ pub struct HierarchyFill {
     pub subtree_capacity: Option<u32>,
     /// Workgroups of each step after the first; `None`: [`SPREAD_GROUPS`].
     pub spread_groups: Option<u32>,
-    /// The first walk of the frame or the second (occlusion culling).
-    pub mode: Mode,
+    /// Which walk of the frame this is (`mode` in a pipeline file; two-pass occlusion
+    /// culling, docs/ARCHITECTURE.md): the first walks from every instance's root and,
+    /// with a pyramid bound (last frame's), sends the nodes it proves hidden to
+    /// `occluded_nodes`; the second walks from those (`candidate_nodes`) against this
+    /// frame's pyramid and drops what is still hidden.
+    pub phase: Phase,
     /// With occlusion, the walk's entries (instance roots; the second walk's nodes) and
     /// the inner nodes with at least this many meshlets below are tested against the
     /// pyramid ([`OCCLUSION_MIN_CLUSTERS`] by default; `u32::MAX`: entries only).
@@ -224,7 +233,7 @@ impl Default for HierarchyFill {
             spread_steps: SPREAD_STEPS,
             subtree_capacity: None,
             spread_groups: None,
-            mode: Mode::First,
+            phase: Phase::First,
             occlusion_min_clusters: OCCLUSION_MIN_CLUSTERS,
         }
     }
@@ -237,13 +246,15 @@ uniform_block! {
         capacity: u32,
         /// Instances to visit (at most the bound instance count).
         instance_count: u32,
-        /// x size of the dispatch, to linearise the workgroup id.
+        /// The dispatch's x size. The kernels take their grid from `num_workgroups` and
+        /// do not read it.
         groups_x: u32,
         /// Nodes a frontier may hold, at most QUEUE (smaller in tests, to reach the spill).
         queue_capacity: u32,
         /// cull_lod's `lod_threshold_px`: the two must agree, or the cut loses clusters.
         lod_threshold_px: f32,
-        /// This dispatch's step: 0 starts at the instances' roots, `steps` is the last.
+        /// This dispatch's step: 0 starts at the roots list (the children of every root
+        /// that passed), `steps` is the last.
         step: u32,
         /// Spreading steps: lists of subtrees handed from one step to the next.
         steps: u32,
@@ -293,7 +304,7 @@ impl HierarchyFill {
             subtree_capacity: nonzero(params.u32("subtree_capacity", 0)?),
             spread_groups: nonzero(params.u32("spread_groups", 0)?),
             occlusion_min_clusters: params.u32("occlusion_min_clusters", OCCLUSION_MIN_CLUSTERS)?,
-            mode: Mode::from_params(params)?,
+            phase: Phase::from_params(params)?,
         };
         pass.check()?;
         Ok(pass)
@@ -342,21 +353,21 @@ impl HierarchyFill {
     }
 
     /// Whether the walk tests occlusion (a pyramid is bound), after checking that the
-    /// slots of the mode are bound and the other mode's are not.
-    fn check_mode(&self, ctx: &SetupContext) -> Result<bool> {
+    /// slots of its phase are bound and the other phase's are not.
+    fn check_phase(&self, ctx: &SetupContext) -> Result<bool> {
         let bound = |slot| ctx.is_bound(slot);
         let occlusion = bound(PYRAMID_SLOT);
-        let (mine, other) = match self.mode {
-            Mode::First => (
+        let (mine, other) = match self.phase {
+            Phase::First => (
                 [OCCLUDED_NODES_SLOT, OCCLUDED_NODE_COUNT_SLOT],
                 [CANDIDATE_NODES_SLOT, CANDIDATE_NODE_COUNT_SLOT],
             ),
-            Mode::Second => (
+            Phase::Second => (
                 [CANDIDATE_NODES_SLOT, CANDIDATE_NODE_COUNT_SLOT],
                 [OCCLUDED_NODES_SLOT, OCCLUDED_NODE_COUNT_SLOT],
             ),
         };
-        let mode = self.mode.name();
+        let mode = self.phase.name();
         if let Some(slot) = other.iter().find(|s| bound(s)) {
             return Err(GraphError::parameter(format!(
                 "`{slot}` is bound to a `mode = \"{mode}\"` walk, which uses `{}` and `{}`; the first walk writes `{OCCLUDED_NODES_SLOT}`, the second reads the same list as `{CANDIDATE_NODES_SLOT}` (name the resources unlike both slots, or the second walk binds them by name)",
@@ -364,14 +375,14 @@ impl HierarchyFill {
             )));
         }
         let listed = mine.iter().filter(|s| bound(s)).count();
-        if occlusion && listed < 2 || self.mode == Mode::Second && !occlusion {
+        if occlusion && listed < 2 || self.phase == Phase::Second && !occlusion {
             return Err(GraphError::parameter(format!(
                 "a `mode = \"{mode}\"` walk with occlusion needs `{PYRAMID_SLOT}`, `{}` and `{}` bound ({})",
                 mine[0],
                 mine[1],
-                match self.mode {
-                    Mode::First => "last frame's pyramid; the nodes it hides go to the list",
-                    Mode::Second => "this frame's pyramid; the first walk's hidden nodes",
+                match self.phase {
+                    Phase::First => "last frame's pyramid; the nodes it hides go to the list",
+                    Phase::Second => "this frame's pyramid; the first walk's hidden nodes",
                 }
             )));
         }
@@ -396,8 +407,8 @@ impl Pass for HierarchyFill {
                 "`{STAGE}` implementation `{IMPLEMENTATION}` walks the culling hierarchy: bind slot `{slot}` to the GPU scene's buffer of that name (GpuScene::import_hierarchy, or gpu::import_hierarchy_for)"
             )));
         }
-        let occlusion = self.check_mode(ctx)?;
-        let second = self.mode == Mode::Second;
+        let occlusion = self.check_phase(ctx)?;
+        let second = self.phase == Phase::Second;
         let defs = WalkDefs { occlusion, second };
         ctx.min_bytes("cluster_count", 8);
         ctx.frame_input(VIEW_INPUT);
@@ -467,17 +478,17 @@ impl Pass for HierarchyFill {
         let spread = self.spread_groups.unwrap_or(SPREAD_GROUPS).min(limit);
         let occlusion = ctx.is_bound(PYRAMID_SLOT);
         let test_occlusion = occlusion
-            && match self.mode {
-                Mode::Second => true,
-                Mode::First => {
+            && match self.phase {
+                Phase::Second => true,
+                Phase::First => {
                     ctx.history_valid(PYRAMID_SLOT)? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
                 }
             };
         // The roots a thread each: every instance's (a grid over them), or the second
         // walk's nodes, whose count only the GPU knows (a fixed grid striding over them).
-        let roots_grid = match self.mode {
-            Mode::First => crate::workgroup_grid(instance_count.div_ceil(64), limit),
-            Mode::Second => [ROOT_GROUPS.min(limit), 1],
+        let roots_grid = match self.phase {
+            Phase::First => crate::workgroup_grid(instance_count.div_ceil(64), limit),
+            Phase::Second => [ROOT_GROUPS.min(limit), 1],
         };
         // The counters and list lengths zeroed, the roots, step 0's arguments, step 0
         // (a workgroup per entry of the roots list), then each later step over the list
@@ -518,9 +529,9 @@ impl Pass for HierarchyFill {
                 occlusion_min_clusters: self.occlusion_min_clusters,
                 ..GpuParams::default()
             };
-            let uniforms: [(u32, &[u8]); 2] = [
-                (3, bytemuck::bytes_of(&view)),
-                (4, bytemuck::bytes_of(&params)),
+            let uniforms: [(&str, &[u8]); 2] = [
+                ("view", bytemuck::bytes_of(&view)),
+                ("params", bytemuck::bytes_of(&params)),
             ];
             ctx.dispatch_compute(entry, &uniforms, grid)?;
         }

@@ -24,19 +24,20 @@
 // with one global atomic and written cooperatively, one leaf after another, consecutive
 // threads writing consecutive slots.
 //
-// With OCCLUSION (two-pass occlusion culling, DESIGN §5), an accepted node is also tested
-// against a depth pyramid. The first pass (last frame's pyramid, through last frame's
-// view and the instance's previous transform) hands a node it proves hidden to the
-// second pass as one entry of `node_list` and goes no deeper; the second pass
-// (SECOND_PASS: this frame's pyramid and view) starts its walk from that list instead
-// of the instances' roots and drops what is still hidden. A root is the instance, so a
-// hidden instance costs one node test per pass and emits nothing.
+// With OCCLUSION (two-pass occlusion culling, docs/ARCHITECTURE.md), an accepted node
+// (a walk's entry, or an inner node with at least `occlusion_min_clusters` meshlets
+// below) is also tested against a depth pyramid. The first pass (last frame's pyramid,
+// through last frame's view and the instance's previous transform) hands a node it
+// proves hidden to the second pass as one entry of `node_list` and goes no deeper; the
+// second pass (SECOND_PASS: this frame's pyramid and view) starts its walk from that
+// list instead of the instances' roots and drops what is still hidden. A root is the
+// instance, so a hidden instance costs one node test per pass and emits nothing.
 
 #import meshlight::dispatch::linear_workgroup
-#import meshlight::meshlet::Cluster
+#import meshlight::meshlet::{Cluster, error_perceptible}
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
 #import meshlight::instance_table::{instance_at, instance_total}
-#import meshlight::view::View
+#import meshlight::view::{View, error_to_pixels}
 #import meshlight::math::F32_MAX
 // Qualified (`cluster_list::clusters`): `cluster_count` also names a HierarchyNode field.
 #import fill_clusters::list as cluster_list
@@ -85,7 +86,8 @@ struct Subtree {
 // Per mesh, its root node.
 @group(0) @binding(7) var<storage, read> hierarchy_roots: array<u32>;
 // [0] nodes tested, [1] leaves accepted, [2] subtrees emitted whole (queue full),
-// [3] instances whose walk hit the round limit (0 unless the data is damaged).
+// [3] walks (of a roots-list entry or a handed-on subtree) that hit the round limit (0
+// unless the data is damaged).
 @group(0) @binding(8) var<storage, read_write> hierarchy_counts: array<atomic<u32>>;
 // [k] entries requested in the list step k + 1 reads (at most list_capacity written);
 // [MAX_STEPS] the roots list's.
@@ -156,7 +158,8 @@ var<workgroup> entries_tested: atomic<u32>;
 var<workgroup> entries_passed: atomic<u32>;
 var<workgroup> spilled: atomic<u32>;
 var<workgroup> hidden_nodes: atomic<u32>;
-// Entries this step walks (instances in step 0, the list's length after).
+// Entries this step walks (the roots list's length in step 0, the handed-on list's
+// after).
 var<workgroup> entry_total: u32;
 
 fn capacity() -> u32 {
@@ -231,16 +234,15 @@ fn node_visible(node: HierarchyNode, w: Walker) -> bool {
     // Too fine: the largest parent error, seen from the sphere's nearest point, is
     // imperceptible, so every parent below is.
     if node.max_parent_error < F32_MAX {
-        let parent_px = (node.max_parent_error * w.scale) / max(d - lod_radius - s, view.near)
-            * view.lod_scale;
-        if parent_px <= params.lod_threshold_px {
+        let parent_px = error_to_pixels(view, d - lod_radius - s, node.max_parent_error * w.scale);
+        if !error_perceptible(parent_px, params.lod_threshold_px) {
             return false;
         }
     }
     // Too coarse: the smallest own error, seen from the sphere's farthest point, is
     // perceptible, so every own error below is.
-    let own_px = (node.min_error * w.scale) / max(d + lod_radius + s, view.near) * view.lod_scale;
-    return !(own_px > params.lod_threshold_px);
+    let own_px = error_to_pixels(view, d + lod_radius + s, node.min_error * w.scale);
+    return !error_perceptible(own_px, params.lod_threshold_px);
 }
 
 #ifdef OCCLUSION
@@ -506,7 +508,8 @@ fn fill(
     let entries = workgroupUniformLoad(&entry_total);
     var unfinished = 0u;
     for (var entry = first_entry; entry < entries; entry += stride) {
-        // The entry: an instance's root (step 0) or a handed-on range of children.
+        // The entry: the children of a root that passed (step 0) or a handed-on range of
+        // children.
         var index = entry;
         var first = 0u;
         var count = 0u;

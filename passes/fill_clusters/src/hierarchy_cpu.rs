@@ -12,20 +12,27 @@
 //! that order, but not which nodes are tested: every node is tested by one walk, so the
 //! counts and the list agree with the GPU's whenever nothing was emitted whole.
 
-use crate::cpu::{instance_max_scale, mat_vec};
+use crate::cpu::instance_max_scale;
 use crate::hierarchy::{MAX_ROUNDS, QUEUE, SLACK, SPREAD_STEPS, SUBTREE_CAPACITY};
 use meshlight_gpu_scene::SceneData;
 use meshlight_scene::asset::format::NodeRecord;
 use meshlight_shaders::cpu::layout::{Cluster, Instance, View};
+use meshlight_shaders::cpu::lod::{error_perceptible, error_to_pixels};
+use meshlight_shaders::cpu::matrix::transform_point;
 use meshlight_shaders::cpu::occlusion::{DEPTH_SLACK, DepthPyramid, MARGIN_PX, occlusion_rect};
 
 /// The pass's parameters that change what it emits.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WalkParams {
+    /// `capacity`: clusters the list may hold.
     pub capacity: u32,
+    /// `lod_threshold_px`: the error the cut may show, as `cull_lod`'s.
     pub lod_threshold_px: f32,
+    /// `queue_capacity`: nodes a frontier of the last step holds.
     pub queue_capacity: u32,
+    /// `spread_steps`: steps that hand wide walks on.
     pub spread_steps: u32,
+    /// `subtree_capacity`: entries each step's list holds.
     pub subtree_capacity: u32,
     /// `occlusion_min_clusters`.
     pub occlusion_min_clusters: u32,
@@ -55,8 +62,9 @@ pub struct HierarchyWalk {
     /// `hierarchy_counts`: nodes tested, leaves accepted, subtrees emitted whole, walks
     /// unfinished.
     pub counts: [u32; 4],
-    /// `cluster_count[1]` and `[0]`.
+    /// `cluster_count[1]`: clusters requested.
     pub requested: u32,
+    /// `cluster_count[0]`: the requested clusters below the capacity.
     pub written: u32,
     /// Some subtree was emitted whole (a frontier and the next list full): which then
     /// depends on the order the GPU appended children in.
@@ -85,12 +93,16 @@ pub enum WalkOcclusion<'a> {
     /// The first walk against last frame's pyramid (previous view-projection and
     /// instance transforms); `capacity` entries of `occluded_nodes`.
     First {
+        /// Last frame's pyramid.
         pyramid: &'a DepthPyramid,
+        /// Entries of `occluded_nodes`; hidden nodes past it are walked as if visible.
         capacity: u32,
     },
     /// The second walk from the first's hidden nodes against this frame's pyramid.
     Second {
+        /// This frame's pyramid.
         pyramid: &'a DepthPyramid,
+        /// The first walk's hidden nodes, `(instance, node)`, where this walk starts.
         nodes: &'a [(u32, u32)],
     },
 }
@@ -139,7 +151,9 @@ pub fn node_occlusion(
 /// comparison was made).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NodeTest {
+    /// Whether the walk goes on below the node.
     pub visible: bool,
+    /// How close the deciding comparison came to flipping, relative to its scale.
     pub closeness: f32,
 }
 
@@ -158,12 +172,17 @@ fn xyz(v: [f32; 4]) -> [f32; 3] {
 /// What stays the same for every node of one instance (`Walker` in the shader).
 #[derive(Clone, Copy, Debug)]
 pub struct Walker<'a> {
+    /// The instance walked.
     pub instance: &'a Instance,
+    /// Its largest axis scale, which grows every sphere and error.
     pub scale: f32,
+    /// `|translation| + |camera|`: with a sphere's own size, the magnitudes a test's
+    /// slack is relative to.
     pub reach: f32,
 }
 
 impl<'a> Walker<'a> {
+    /// The walker of `instance` seen from `view`, as the shader's `walker` builds it.
     pub fn new(instance: &'a Instance, view: &View) -> Self {
         Self {
             instance,
@@ -177,15 +196,11 @@ impl<'a> Walker<'a> {
     }
 
     fn transform(&self, p: [f32; 4]) -> [f32; 3] {
-        xyz(mat_vec(
-            &self.instance.world_from_local,
-            [p[0], p[1], p[2], 1.0],
-        ))
+        transform_point(&self.instance.world_from_local, xyz(p))
     }
 }
 
 /// `node_visible`, with how close it came to deciding otherwise.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn node_test(view: &View, w: &Walker, node: &NodeRecord, threshold: f32) -> NodeTest {
     let rel = |v: f32, to: f32| (v - to).abs() / to.abs().max(f32::MIN_POSITIVE);
     let centre = w.transform(node.bounds);
@@ -212,20 +227,19 @@ pub fn node_test(view: &View, w: &Walker, node: &NodeRecord, threshold: f32) -> 
         lod_centre[2] - c[2],
     ]);
     if node.max_parent_error < f32::MAX {
-        let parent_px = (node.max_parent_error * w.scale) / (d - lod_radius - s).max(view.near)
-            * view.lod_scale;
+        let parent_px = error_to_pixels(view, d - lod_radius - s, node.max_parent_error * w.scale);
         closeness = closeness.min(rel(parent_px, threshold));
-        if parent_px <= threshold {
+        if !error_perceptible(parent_px, threshold) {
             return NodeTest {
                 visible: false,
                 closeness,
             };
         }
     }
-    let own_px = (node.min_error * w.scale) / (d + lod_radius + s).max(view.near) * view.lod_scale;
+    let own_px = error_to_pixels(view, d + lod_radius + s, node.min_error * w.scale);
     closeness = closeness.min(rel(own_px, threshold));
     NodeTest {
-        visible: !(own_px > threshold),
+        visible: !error_perceptible(own_px, threshold),
         closeness,
     }
 }

@@ -22,7 +22,7 @@
 //! | `hierarchy_nodes` | storage read, optional | HierarchyNode | the GPU scene's hierarchy nodes (`hierarchy` only) |
 //! | `hierarchy_clusters` | storage read, optional | u32 | the leaves' meshlets (`hierarchy` only) |
 //! | `hierarchy_roots` | storage read, optional | u32 | per mesh, its root node (`hierarchy` only) |
-//! | `hierarchy_counts` | cleared read-write, optional | u32 × 4 | nodes tested, leaves accepted, subtrees emitted whole, walks unfinished (`hierarchy` only) |
+//! | `hierarchy_counts` | cleared read-write, optional | u32 × 4 (or more) | nodes tested, leaves accepted, subtrees emitted whole, walks unfinished; then nodes hidden, entries tested and passed (`hierarchy` only; [`hierarchy`] says when) |
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`).
 //!
@@ -58,23 +58,20 @@
 //! `gpu::hierarchy_lengths`, and `implementation = "hierarchy"` with
 //! `params = { lod_threshold_px = <cull's> }`.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 pub mod hierarchy;
 pub mod hierarchy_cpu;
 
 pub use cpu::{FillResult, cpu_fill};
-pub use hierarchy::{HierarchyFill, Mode};
+pub use hierarchy::HierarchyFill;
 pub use hierarchy_cpu::{HierarchyWalk, WalkOcclusion, WalkParams, cpu_walk, cpu_walk_with};
 
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, Element, GraphError, Implementation, Pass, ProgramDesc, RecordContext,
-    Result, SetupContext, Slot, StageContract, Workgroups,
-};
-use meshlight_shaders::{PassShader, ShaderDefs, pass_shader, uniform_block};
+use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "fill_clusters";
@@ -83,6 +80,8 @@ pub const IMPLEMENTATION: &str = "workgroup_per_instance";
 /// The frame input holding the `View`.
 pub const VIEW_INPUT: &str = "view";
 
+/// `workgroup_per_instance`'s WGSL with its uniform block and the list module, public so
+/// the shader tests compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!(
     "fill_clusters::fill",
     "fill.wgsl",
@@ -94,9 +93,11 @@ pub const SHADER: PassShader = pass_shader!(
 pub const PYRAMID_SLOT: &str = "pyramid";
 /// The first pass's output: the nodes the pyramid hid.
 pub const OCCLUDED_NODES_SLOT: &str = "occluded_nodes";
+/// The first pass's count words for it: `[0]` written, `[1]` found.
 pub const OCCLUDED_NODE_COUNT_SLOT: &str = "occluded_node_count";
 /// The second pass's input: the same list, bound under another name.
 pub const CANDIDATE_NODES_SLOT: &str = "candidate_nodes";
+/// The second pass's count words of that list: the first pass's `occluded_node_count`.
 pub const CANDIDATE_NODE_COUNT_SLOT: &str = "candidate_node_count";
 /// An entry of the hidden-node list: `(instance, node, 1)`, three u32 (the walk's
 /// `Subtree`).
@@ -321,12 +322,13 @@ impl Pass for FillClusters {
             ..GpuParams::default()
         };
         ctx.clear("cluster_count")?;
-        let uniforms: [(u32, &[u8]); 2] = [
-            (3, bytemuck::bytes_of(&view)),
-            (4, bytemuck::bytes_of(&params)),
+        let uniforms: [(&str, &[u8]); 2] = [
+            ("view", bytemuck::bytes_of(&view)),
+            ("params", bytemuck::bytes_of(&params)),
         ];
         ctx.dispatch_compute("fill", &uniforms, Workgroups::Direct([x, y, 1]))?;
-        // A separate compute pass, so the requested count is final when it is read.
+        // A second dispatch (dependent, so wgpu puts a barrier before it): the requested
+        // count is final when it is read.
         ctx.dispatch_compute("finish", &uniforms, Workgroups::Direct([1, 1, 1]))
     }
 }

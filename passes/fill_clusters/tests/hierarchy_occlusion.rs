@@ -10,11 +10,9 @@ mod support;
 
 use glam::Vec3;
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::{Camera, GpuScene, SceneData};
+use meshlight_gpu_scene::{Camera, GpuScene, Phase, SceneData};
 use meshlight_graph::*;
-use meshlight_pass_fill_clusters::hierarchy::{
-    Mode, OCCLUSION_COUNT_WORDS, OCCLUSION_MIN_CLUSTERS,
-};
+use meshlight_pass_fill_clusters::hierarchy::{OCCLUSION_COUNT_WORDS, OCCLUSION_MIN_CLUSTERS};
 use meshlight_pass_fill_clusters::{
     HIDDEN_NODE, HierarchyFill, WalkOcclusion, WalkParams, cpu_walk_with,
 };
@@ -122,7 +120,7 @@ fn run_second_walk(
     let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST;
     let pyramid_handle = g.import_texture("pyramid_now", desc.clone(), usage);
     let walk = HierarchyFill {
-        mode: Mode::Second,
+        phase: Phase::Second,
         occlusion_min_clusters,
         ..HierarchyFill::default()
     };

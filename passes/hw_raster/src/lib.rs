@@ -54,11 +54,13 @@
 //! - Coverage is the hardware's: pixel centres, top-left rule, its sub-pixel precision
 //!   (8 bits on lavapipe, like the software rasteriser's fixed point). The two differ on
 //!   pixels whose centre lies within rounding of an edge and in the last bits of depth;
-//!   the GPU test states the tolerance. Unlike the software rasteriser, the hardware
-//!   clips triangles at the near plane instead of skipping them.
+//!   the GPU test states the tolerance. Both clip triangles at the near plane: the
+//!   hardware in fixed function, the software rasteriser in clip space.
 //! - The two implementations feed the rasteriser the same triangles in the same
 //!   positions; they may differ only where the hardware orders equal-depth writes.
 //! - [`cpu::rasterize`] is the reference (float edge functions at pixel centres).
+
+#![warn(missing_docs)]
 
 pub mod cpu;
 
@@ -66,13 +68,7 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, ColorAttachment, ColorTarget, Element, Implementation, Pass,
-    Primitive, ProgramDesc, RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc,
-    Visibility64, Workgroups,
-};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
+use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "hw_raster";
@@ -85,6 +81,8 @@ pub const NAN_BITS: u32 = 0x7fc0_0000;
 /// The scratch colour target.
 const TARGET: &str = "target";
 
+/// The stage's WGSL (`raster.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!("hw_raster::raster", "raster.wgsl", params: GpuParams);
 
 /// raster.wgsl with the mesh-shader extension enabled (compose it with `MESH_SHADER`):
@@ -159,8 +157,11 @@ impl Feed {
 /// The `indirect_draw` and `mesh_shader` implementations ([`HwRaster::feed`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct HwRaster {
+    /// The visibility buffer's width in pixels, which the view's viewport must equal.
     pub width: u32,
+    /// The visibility buffer's height in pixels.
     pub height: u32,
+    /// How clusters reach the rasteriser: the implementation.
     pub feed: Feed,
 }
 
@@ -302,12 +303,15 @@ impl Pass for HwRaster {
         };
         let params = bytemuck::bytes_of(&params);
         let program = ctx.render("raster")?;
-        let bind_group =
-            ctx.bind_group(&program, 0, &[(7, bytemuck::bytes_of(&view)), (8, params)])?;
+        let bind_group = ctx.bind_group(
+            &program,
+            0,
+            &[("view", bytemuck::bytes_of(&view)), ("params", params)],
+        )?;
         if self.feed == Feed::MeshShader {
             ctx.dispatch_compute(
                 "mesh_dispatch",
-                &[(8, params)],
+                &[("params", params)],
                 Workgroups::Direct([1, 1, 1]),
             )?;
             let (args, _) = ctx.scratch(MESH_ARGS)?;

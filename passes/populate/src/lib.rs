@@ -51,16 +51,13 @@
 //! imports with `POPULATE` defined, and both record it through
 //! [`meshlight_pass_count_raster::Walk`].
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, Element, Implementation, Pass, ProgramDesc, RecordContext, Result,
-    SetupContext, Slot, StageContract, Workgroups,
-};
+use meshlight_graph::prelude::*;
 use meshlight_pass_count_raster::{ListParams, Walk, WalkShader};
 use meshlight_pass_z_slice::CLUSTER_GRID;
-use meshlight_shaders::{PassShader, pass_shader};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "populate";
@@ -124,6 +121,7 @@ const POPULATE_WALK: WalkShader = WalkShader {
 /// names itself after its walk.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Populate {
+    /// How this pass walks: its implementation, the same as count_raster's.
     pub walk: Walk,
     /// Entries the lists may hold; `None`: all of `cluster_objects`.
     pub capacity: Option<u32>,
@@ -163,14 +161,15 @@ impl Pass for Populate {
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
         let params = self.params();
         let params = bytemuck::bytes_of(&params);
-        self.walk.record(ctx, &POPULATE_WALK, &[(10, params)])?;
+        self.walk
+            .record(ctx, &POPULATE_WALK, &[("list_params", params)])?;
         // A thread per list (grid-stride past the limit).
         let (_, bytes) = ctx.buffer("cluster_counts")?;
         let limit = ctx.device().limits().max_compute_workgroups_per_dimension;
         let groups = ((bytes / 4) as u32).div_ceil(WORKGROUP).clamp(1, limit);
         ctx.dispatch_compute(
             "settle",
-            &[(10, params)],
+            &[("list_params", params)],
             Workgroups::Direct([groups, 1, 1]),
         )
     }

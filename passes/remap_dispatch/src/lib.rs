@@ -21,16 +21,15 @@
 //! 4.29 × 10⁹ at the API limit, far past the 2²⁵ clusters a visibility id can name) lose
 //! their last rows. [`cpu_remap`] is the reference.
 
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, Element, Implementation, Pass, ProgramDesc, RecordContext, Result,
-    SetupContext, Slot, StageContract, Workgroups,
-};
-use meshlight_shaders::{PassShader, pass_shader, uniform_block};
+#![warn(missing_docs)]
+
+use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "remap_dispatch";
 
+/// The stage's WGSL (`remap.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader =
     pass_shader!("remap_dispatch::remap", "remap.wgsl", params: GpuParams);
 
@@ -60,7 +59,7 @@ pub fn cpu_remap(count: u32, max_per_dimension: u32) -> [u32; 3] {
     meshlight_shaders::cpu::dispatch::fold_dispatch(count, max_per_dimension)
 }
 
-/// The one implementation: a single-thread compute pass.
+/// The one implementation: a single-thread dispatch.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RemapDispatch {
     /// Word of the `count` slot holding the count.
@@ -119,7 +118,7 @@ impl Pass for RemapDispatch {
         };
         ctx.dispatch_compute(
             "remap",
-            &[(2, bytemuck::bytes_of(&params))],
+            &[("params", bytemuck::bytes_of(&params))],
             Workgroups::Direct([1, 1, 1]),
         )
     }

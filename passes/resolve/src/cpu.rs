@@ -15,11 +15,14 @@ use meshlight_shaders::cpu::layout::{
 use meshlight_shaders::cpu::light::{cluster_index, z_slice_of_depth};
 use meshlight_shaders::cpu::visbuffer;
 
-/// shade.wgsl's `SKY_ZENITH` and `SKY_HORIZON`.
+/// shade.wgsl's `SKY_ZENITH`: the colour of an empty pixel at the top of the screen.
 pub const SKY_ZENITH: Vec3 = Vec3::new(0.25, 0.45, 0.8);
+/// shade.wgsl's `SKY_HORIZON`: the colour of an empty pixel at the bottom, where the
+/// gradient starts.
 pub const SKY_HORIZON: Vec3 = Vec3::new(0.75, 0.85, 0.95);
-/// The `raster` view's colours (`SOFTWARE_COLOR`, `HARDWARE_COLOR`).
+/// The `raster` view's colour of a software-rasterised cluster (`SOFTWARE_COLOR`).
 pub const SOFTWARE_COLOR: [u8; 3] = [230, 90, 50];
+/// The `raster` view's colour of a hardware-rasterised cluster.
 pub const HARDWARE_COLOR: [u8; 3] = [50, 120, 230];
 /// Dark checker squares multiply the base colour by this (`CHECKER_DARK`).
 pub const CHECKER_DARK: f32 = 0.55;
@@ -27,7 +30,9 @@ pub const CHECKER_DARK: f32 = 0.55;
 /// Everything the pass reads, as the CPU holds it.
 #[derive(Clone, Copy, Debug)]
 pub struct Frame<'a> {
+    /// The scene the visibility ids refer into.
     pub scene: &'a SceneData,
+    /// The camera the frame was drawn with.
     pub view: &'a View,
     /// The slots visibility cluster ids index.
     pub raster_clusters: &'a [Cluster],
@@ -35,7 +40,9 @@ pub struct Frame<'a> {
     pub software_clusters: u32,
     /// `width × height` values, row-major.
     pub visbuffer: &'a [u64],
+    /// Columns of the visibility buffer and the image.
     pub width: u32,
+    /// Rows of the visibility buffer and the image.
     pub height: u32,
     /// Light clustering's output, when the frame has it.
     pub lights: Option<ClusteredLights<'a>>,
@@ -47,11 +54,14 @@ pub struct Frame<'a> {
     pub occluded_per_instance: Option<&'a [u32]>,
 }
 
-/// The `occlusion` view's colours (`FIRST_PASS_COLOR`, `SECOND_PASS_COLOR`,
-/// `CULLED_COLOR`) and how far a wholly culled instance goes towards red (`CULLED_TINT`).
+/// The `occlusion` view's colour of a cluster the first pass drew. This and the three
+/// below mirror shade.wgsl's constants of the same names.
 pub const FIRST_PASS_COLOR: Vec3 = Vec3::new(0.35, 0.85, 0.4);
+/// The `occlusion` view's colour of a cluster the second pass drew.
 pub const SECOND_PASS_COLOR: Vec3 = Vec3::new(0.3, 0.55, 1.0);
+/// The colour an instance wholly culled by occlusion tends to.
 pub const CULLED_COLOR: Vec3 = Vec3::new(1.0, 0.2, 0.15);
+/// How far towards `CULLED_COLOR` a wholly culled instance goes.
 pub const CULLED_TINT: f32 = 0.7;
 
 /// shade.wgsl's `drawn_by_second_pass`: slot `id` lies between the first pass's
@@ -88,7 +98,9 @@ pub fn occlusion_color(second_pass: bool, culled_share: f32, shaded: Vec3) -> Ve
 /// One mip of a depth pyramid as the texture holds it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PyramidMip {
+    /// Texels per row.
     pub width: u32,
+    /// Rows.
     pub height: u32,
     /// `width × height` reverse-Z depths, row-major.
     pub texels: Vec<f32>,
@@ -110,11 +122,15 @@ pub fn pyramid_depth(mips: &[PyramidMip], pixel: [u32; 2], level: u32) -> f32 {
 /// Light clustering's five outputs, as the pass binds them.
 #[derive(Clone, Copy, Debug)]
 pub struct ClusteredLights<'a> {
+    /// The objects the lists index.
     pub objects: &'a [ClusterableObject],
+    /// The froxel grid the lists were built over.
     pub grid: &'a ClusterGrid,
-    /// Per froxel and kind: where its list starts, and its length.
+    /// Per froxel and kind: where its list starts.
     pub offsets: &'a [u32],
+    /// Per froxel and kind: the length of its list.
     pub counts: &'a [u32],
+    /// The lists back to back: indices into `objects`.
     pub list: &'a [u32],
 }
 
@@ -219,6 +235,7 @@ pub fn cluster_key(c: &Cluster) -> u32 {
     hash(c.instance) ^ c.meshlet
 }
 
+/// The colour a debug view gives an id: a hash of it, kept away from black (empty).
 pub fn id_color(id: u32) -> [u8; 3] {
     let h = hash(id);
     [0, 8, 16].map(|shift| (64 + ((h >> shift) & 0xff) * 3 / 4) as u8)
@@ -447,8 +464,11 @@ pub fn triangle_corners(scene: &SceneData, mesh: &Mesh, m: &MeshletRecord, t: u3
 /// and y (`Barycentrics` in shade.wgsl).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Barycentrics {
+    /// The perspective-correct barycentrics at the pixel centre.
     pub b: Vec3,
+    /// Their change one pixel to the right.
     pub ddx: Vec3,
+    /// Their change one pixel down.
     pub ddy: Vec3,
 }
 

@@ -4,11 +4,11 @@
 //!
 //! The rasterisers store only `depth | cluster | triangle` per pixel; everything else is
 //! recomputed here once per pixel instead of once per overdrawn fragment. Shading is a
-//! compute pass that fetches the
-//! pixel's triangle from the payload again, transforms its three corners again, and
-//! reconstructs perspective-correct barycentrics and their screen-space derivatives at
-//! the pixel centre analytically from the clip-space corners (no quad neighbours
-//! exist in a compute shader). The derivatives box-filter a UV checkerboard.
+//! compute dispatch that fetches the pixel's triangle from the payload again, transforms
+//! its three corners again, and reconstructs perspective-correct barycentrics and their
+//! screen-space derivatives at the pixel centre analytically from the clip-space corners
+//! (no quad neighbours exist in a compute shader). The derivatives box-filter a UV
+//! checkerboard.
 //!
 //! # Depth targets: off unless a pipeline composites with raster geometry
 //!
@@ -119,6 +119,8 @@
 //!   and pyramid views within 1/255), shading within 2/255 per channel on ≥ 99% of
 //!   pixels.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 pub mod settings;
 
@@ -128,14 +130,8 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
-use meshlight_graph::file::Registry;
-use meshlight_graph::{
-    Access, BindingLayout, DepthAttachment, DepthTarget, Element, GraphError, Implementation, Pass,
-    ProgramDesc, RecordContext, ResourceDesc, Result, SetupContext, Slot, StageContract,
-    Workgroups,
-};
+use meshlight_graph::prelude::*;
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
 
 /// `meshlight::light::ClusterableObject`, as light clustering's stages declare it.
 const CLUSTERABLE_OBJECT: Element =
@@ -154,12 +150,16 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The format of the `pyramid` the `pyramid` view reads.
 pub const PYRAMID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
+/// The depth resolves' WGSL (`depth.wgsl`), public so the shader tests compose and
+/// validate every entry point.
 pub const DEPTH_SHADER: PassShader = pass_shader!(
     "resolve::depth",
     "depth.wgsl",
     params: DepthParams,
     modules: [("resolve::visibility", "visibility.wgsl")]
 );
+/// The shading program's WGSL (`shade.wgsl`), public so the shader tests compose and
+/// validate every entry point.
 pub const SHADE_SHADER: PassShader = pass_shader!(
     "resolve::shade",
     "shade.wgsl",
@@ -386,8 +386,11 @@ impl Pass for Resolve {
                 continue;
             }
             let program = ctx.render(program)?;
-            let bind_group =
-                ctx.bind_group(&program, 0, &[(3, bytemuck::bytes_of(&depth_params))])?;
+            let bind_group = ctx.bind_group(
+                &program,
+                0,
+                &[("params", bytemuck::bytes_of(&depth_params))],
+            )?;
             let mut pass = ctx.render_pass(&[], Some(DepthAttachment { target, clear: 0.0 }))?;
             pass.set_pipeline(&program.pipeline);
             pass.set_bind_group(0, &bind_group, &[]);
@@ -419,8 +422,8 @@ impl Pass for Resolve {
         ctx.dispatch_compute(
             "shade",
             &[
-                (9, bytemuck::bytes_of(&view)),
-                (10, bytemuck::bytes_of(&shade_params)),
+                ("view", bytemuck::bytes_of(&view)),
+                ("params", bytemuck::bytes_of(&shade_params)),
             ],
             Workgroups::Direct([self.width.div_ceil(TILE), self.height.div_ceil(TILE), 1]),
         )

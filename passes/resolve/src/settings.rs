@@ -2,8 +2,7 @@
 //! the light of the shaded view; read from code or from a pipeline file's params.
 
 use glam::Vec3;
-use meshlight_graph::file::Params;
-use meshlight_graph::{GraphError, Result};
+use meshlight_graph::prelude::*;
 use std::fmt;
 use std::str::FromStr;
 
@@ -131,6 +130,7 @@ pub struct Settings {
     pub light_color: Vec3,
     /// Linear RGB ambient term, so faces turned away from the light keep their shape.
     pub ambient_color: Vec3,
+    /// What the `color` target shows: the shaded image or a debug view.
     pub view: DebugView,
     /// Checker squares per UV unit.
     pub checker_scale: f32,
@@ -157,8 +157,11 @@ impl Default for Settings {
 /// buffer's size and the size of the three targets.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolve {
+    /// The visibility buffer's width, and the targets'.
     pub width: u32,
+    /// The visibility buffer's height, and the targets'.
     pub height: u32,
+    /// Lighting and the debug view: what may change between frames without a new graph.
     pub settings: Settings,
 }
 

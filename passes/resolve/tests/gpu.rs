@@ -22,6 +22,7 @@ use meshlight_scene::procedural_mesh;
 use meshlight_shaders::cpu::layout::{
     Cluster, ClusterGrid, ClusterableKind, ClusterableObject, View,
 };
+use meshlight_shaders::cpu::occlusion::DepthPyramid;
 use meshlight_shaders::cpu::visbuffer;
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -444,32 +445,18 @@ fn upload_pyramid(gpu: &GpuContext, mips: &[cpu::PyramidMip]) -> wgpu::Texture {
     texture
 }
 
-/// The pyramid's rule on the CPU, at the sizes a texture's mip chain has (`floor`
-/// halving from a base of `⌈W/2⌉ × ⌈H/2⌉`): texel `(x, y)` of mip `L` is the minimum
-/// reverse-Z depth over pixels `[x, x + 1) · 2^(L+1)` (those inside the image).
-fn min_pyramid(depth: &[f32], levels: u32) -> Vec<cpu::PyramidMip> {
-    let (bw, bh) = (W.div_ceil(2), H.div_ceil(2));
-    (0..levels)
-        .map(|level| {
-            let (w, h) = ((bw >> level).max(1), (bh >> level).max(1));
-            let span = 2u32 << level;
-            let mut texels = Vec::with_capacity((w * h) as usize);
-            for y in 0..h {
-                for x in 0..w {
-                    let mut least = f32::INFINITY;
-                    for py in y * span..((y + 1) * span).min(H) {
-                        for px in x * span..((x + 1) * span).min(W) {
-                            least = least.min(depth[(py * W + px) as usize]);
-                        }
-                    }
-                    texels.push(least);
-                }
-            }
-            cpu::PyramidMip {
-                width: w,
-                height: h,
-                texels,
-            }
+/// The first `levels` levels of the CPU pyramid of the `W × H` image `depth`, as the mips
+/// of a texture hold them (at `W × H` the rule's rounded-up level sizes are the mip
+/// chain's rounded-down ones).
+fn min_pyramid(depth: &[f32], levels: usize) -> Vec<cpu::PyramidMip> {
+    DepthPyramid::from_depth(W, H, depth)
+        .levels
+        .into_iter()
+        .take(levels)
+        .map(|(width, height, texels)| cpu::PyramidMip {
+            width,
+            height,
+            texels,
         })
         .collect()
 }

@@ -2,12 +2,7 @@
 //! fan buffer, scratch declarations, and the recording of a list of dispatches.
 
 use crate::{ScanOptions, Subgroups, TileAccess};
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, ProgramDesc, RecordContext, Result, SetupContext,
-};
-use meshlight_shaders::{
-    PassShader, ShaderDef, ShaderDefs, pass_shader, shader_defs, uniform_block,
-};
+use meshlight_graph::prelude::*;
 
 /// The kernels (`scan.wgsl`) and the tile layouts they run on, one module each.
 ///
@@ -322,6 +317,7 @@ macro_rules! scan_implementation {
         $(#[$doc])*
         #[derive(Clone, Debug)]
         pub struct $ty {
+            /// What the scan is configured with; swapping implementations keeps it.
             pub options: $crate::ScanOptions,
         }
 
@@ -335,6 +331,7 @@ macro_rules! scan_implementation {
             pub fn new(count: u32) -> Self {
                 Self::with_options($defaults(count))
             }
+            /// The implementation with `options` as given, for a caller that sets each field.
             pub fn with_options(options: $crate::ScanOptions) -> Self {
                 Self { options }
             }
@@ -494,7 +491,8 @@ pub(crate) fn record(ctx: &mut RecordContext<'_>, steps: &[Step], clear_state: b
     let mut encoded = Vec::with_capacity(steps.len());
     for step in steps {
         let program = ctx.compute(step.entry)?;
-        let bind_group = ctx.bind_group(&program, 0, &[(4, bytemuck::bytes_of(&step.params))])?;
+        let bind_group =
+            ctx.bind_group(&program, 0, &[("params", bytemuck::bytes_of(&step.params))])?;
         encoded.push(Encoded {
             program,
             bind_group,

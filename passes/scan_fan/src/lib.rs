@@ -72,8 +72,9 @@
 //! and one write (8 bytes), 12 bytes in all. Counts of at most [`WALK_TILES`] tiles known on
 //! the CPU take one dispatch instead: one workgroup walks the tiles in order.
 
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{Access, Element, GraphError, Result, Slot, StageContract};
+#![warn(missing_docs)]
+
+use meshlight_graph::prelude::*;
 
 mod cpu;
 mod decoupled_lookback;
@@ -187,11 +188,13 @@ pub struct ScanOptions {
     pub count: u32,
     /// Inclusive sums (`output[i]` includes `input[i]`) instead of exclusive ones.
     pub inclusive: bool,
+    /// Whether to use subgroup scans where the device has them (`auto`) or never (`off`).
     pub subgroups: Subgroups,
     /// Elements each lane scans; a tile is 256 × this. 1 gives the plain 256-element
     /// chunk; larger values cut the barriers and the fan per element, which is what makes
     /// the scan bandwidth-bound. 32 only with vector tiles.
     pub items_per_thread: u32,
+    /// How a lane reaches its part of a tile.
     pub tile_access: TileAccess,
 }
 
@@ -271,6 +274,8 @@ impl ScanOptions {
         WORKGROUP * self.items_per_thread
     }
 
+    /// Refuses options no kernel runs (an `items_per_thread` other than the listed ones,
+    /// 32 without vector tiles, a count past 2^31), naming the parameter to change.
     pub fn validate(&self) -> Result<()> {
         let bad = |message: String| Err(GraphError::parameter(message));
         if !matches!(self.items_per_thread, 1 | 2 | 4 | 8 | 16 | 32) {

@@ -24,7 +24,7 @@
 //!
 //! | slot | access | holds | |
 //! |------|--------|-------|---|
-//! | `raster_clusters` | storage read | Cluster | software clusters in slots `0..raster_counts[0]` |
+//! | `raster_clusters` | storage read | Cluster | software clusters in slots `0..raster_counts[0]` (from `raster_counts[7]` with `accumulate`) |
 //! | `raster_counts` | storage read | u32 | word 0: software cluster count; with `accumulate`, word 7: their first slot |
 //! | `sw_args` | storage read + indirect | DispatchIndirectArgs | `[x, y, 1]` from `remap_dispatch` |
 //! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
@@ -68,7 +68,8 @@
 //! - Big triangles (param `big_triangle_px`, default [`BIG_TRIANGLE_PX`]; 0: off): a
 //!   triangle whose clipped box is at least that many pixels wide or tall is cut into
 //!   64 × 64-pixel tiles of its box, listed, and covered by a second dispatch, a
-//!   workgroup per tile and a pixel per thread, instead of by its one thread. It writes
+//!   workgroup per tile whose 128 threads stride over its pixels (32 each), instead of
+//!   by its one thread. It writes
 //!   the pixels and values the thread would have (the same setup, the same edge and
 //!   depth arithmetic), so the reference is unchanged; a clipped triangle's pieces are
 //!   tiled one by one. This is what lets culling send
@@ -86,24 +87,23 @@
 //!   by an ulp; lavapipe matches either way. Off by default because it costs: the
 //!   H100 figures are in docs/BENCHMARKS.md.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, Implementation, Pass, ProgramDesc, RecordContext, Result, SetupContext,
-    Slot, StageContract, Visibility64,
-};
-use meshlight_shaders::{PassShader, pass_shader, shader_defs, uniform_block};
+use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "sw_raster";
 /// The frame input holding the `View`.
 pub const VIEW_INPUT: &str = "view";
 
+/// The stage's WGSL (`raster.wgsl`) with its uniform block, public so the shader tests
+/// compose and validate every entry point.
 pub const SHADER: PassShader = pass_shader!("sw_raster::raster", "raster.wgsl", params: GpuParams);
 /// The `texture` implementation's clear: a dispatch of plain stores.
 pub const CLEAR_SHADER: PassShader = pass_shader!("sw_raster::clear", "clear.wgsl");
@@ -190,7 +190,9 @@ pub const IMPLEMENTATIONS: [(&str, Visibility64); 2] = [
 /// The `buffer` and `texture` implementations ([`SwRaster::target`] tells them apart).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SwRaster {
+    /// The visibility buffer's width in pixels, which the view's viewport must equal.
     pub width: u32,
+    /// The visibility buffer's height in pixels.
     pub height: u32,
     /// What the visibility buffer is: `Buffer` (implementation `buffer`) or `Texture`
     /// (`texture`).
@@ -260,9 +262,9 @@ const PARAM_KEYS: [&str; 6] = [
 ];
 
 impl SwRaster {
-    /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16) and
-    /// `exact_division` and `accumulate` (default false); `target` picks the
-    /// implementation.
+    /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16),
+    /// `big_triangle_px` (default [`BIG_TRIANGLE_PX`]) and `exact_division` and
+    /// `accumulate` (default false); `target` picks the implementation.
     pub fn from_params(params: &Params, target: Visibility64) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let [width, height] = params.size("the visibility buffer")?;
@@ -399,9 +401,9 @@ impl Pass for SwRaster {
                 Some((program, group))
             }
         };
-        let uniforms: [(u32, &[u8]); 2] = [
-            (8, bytemuck::bytes_of(&view)),
-            (9, bytemuck::bytes_of(&params)),
+        let uniforms: [(&str, &[u8]); 2] = [
+            ("view", bytemuck::bytes_of(&view)),
+            ("params", bytemuck::bytes_of(&params)),
         ];
         // `buffer` gives the buffer and its size; the arguments start at its beginning.
         let (args, _) = ctx.buffer("sw_args")?;
@@ -422,7 +424,8 @@ impl Pass for SwRaster {
             let group = ctx.bind_group(&program, 0, &uniforms)?;
             programs.push((kernel.groups, program, group));
         }
-        // A second compute pass: the clear is visible before any cluster writes.
+        // After the clear: wgpu's barrier before each dependent dispatch (in the batch's
+        // pass or in a pass of its own) makes it visible before any cluster writes.
         let mut pass = ctx.compute_pass();
         for (groups, program, group) in &programs {
             pass.set_pipeline(&program.pipeline);

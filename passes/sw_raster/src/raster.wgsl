@@ -6,7 +6,7 @@
 // With BIG_TRIANGLES, a triangle whose clipped box reaches `big_triangle_px` pixels in
 // width or height is not covered by its thread: it is cut into tiles of TILE × TILE
 // pixels of its box, listed in `big_triangle_tiles`, and `raster_big` covers each tile with a
-// workgroup, a pixel per thread. The pixels, depths and values are the ones the thread
+// workgroup, its threads striding over the tile's pixels one at a time. The pixels, depths and values are the ones the thread
 // would have written (the same setup and the same `shade`), so the reference does not
 // change; only who covers them does. When the list is full the thread covers its
 // triangle itself (atomicMax makes a pixel written twice harmless).

@@ -8,9 +8,13 @@ use meshlight_shaders::cpu::light::z_slice_of_depth;
 
 /// Count words of `slice_counts` (see the crate docs).
 pub const COUNT_WORDS: usize = 8;
+/// `[0]`: instances requested, which may exceed the capacity.
 pub const WORD_REQUESTED: usize = 0;
+/// `[1]`: the list's capacity; overflow = requested − capacity.
 pub const WORD_CAPACITY: usize = 1;
+/// `[2]`: objects skipped as invalid.
 pub const WORD_INVALID: usize = 2;
+/// `[3]`: objects culled (range 0, outside the frustum, nearer than the near plane).
 pub const WORD_CULLED: usize = 3;
 /// `WORD_VISIBLE + kind`: objects of that kind given at least one slice.
 pub const WORD_VISIBLE: usize = 4;
@@ -18,9 +22,11 @@ pub const WORD_VISIBLE: usize = 4;
 /// Ranges above this, infinity included, are this (`RANGE_LIMIT` in the WGSL).
 pub const RANGE_LIMIT: f32 = 1e30;
 const MIN_DIRECTION_SQUARED: f32 = 1e-12;
-/// `SQRT_2` and `SQRT_3` of the WGSL, which writes them as `1.4142135` and `1.7320508`
-/// (the same f32 values; a test reads the WGSL to keep it so).
+/// `SQRT_2` of the WGSL, which writes it as `1.4142135` (the same f32 value; a test
+/// reads the WGSL to keep it so): a decal's box reaches `r√2` from its axis.
 pub const SQRT_2: f32 = std::f32::consts::SQRT_2;
+/// `SQRT_3` of the WGSL, written there as `1.7320508`: a box of half-extent `r` reaches
+/// `r√3` from its centre, the radius its frustum test uses.
 pub const SQRT_3: f32 = 1.732_050_8;
 
 /// `SliceInstance`: one (object, slice) pair of the list.
@@ -39,7 +45,9 @@ pub const SQRT_3: f32 = 1.732_050_8;
     bytemuck::Zeroable,
 )]
 pub struct SliceInstance {
+    /// Index into `objects`.
     pub object: u32,
+    /// Depth slice, below the grid's depth.
     pub slice: u32,
 }
 
@@ -52,18 +60,27 @@ pub enum Outcome {
     /// Range 0, outside the frustum, or wholly nearer than the near plane.
     Culled,
     /// Slices `first..=last`.
-    Visible { first: u32, last: u32 },
+    Visible {
+        /// The slice of the bounds' nearest depth.
+        first: u32,
+        /// The slice of the farthest depth (never before `first`).
+        last: u32,
+    },
 }
 
 /// The view-space depth interval of one object and the values that decided it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Extent {
+    /// Invalid, culled, or the slices given.
     pub outcome: Outcome,
+    /// View-space depth of the bounds' nearest point.
     pub near_depth: f32,
+    /// View-space depth of the bounds' farthest point.
     pub far_depth: f32,
-    /// Radius of the sphere given to the frustum test, and the sphere's smallest
-    /// `dot(plane, centre) + w + radius` over the planes (negative: outside).
+    /// Radius of the sphere given to the frustum test.
     pub bound: f32,
+    /// The sphere's smallest `dot(plane, centre) + w + radius` over the planes (negative:
+    /// outside).
     pub frustum_margin: f32,
     /// `|dot(plane, centre)| + |w|` of that plane: the scale the margin is relative to.
     pub frustum_scale: f32,
@@ -220,8 +237,11 @@ pub fn object_extent(view: &View, grid: &ClusterGrid, object: &ClusterableObject
 pub struct ZSliceResult {
     /// Every (object, slice) pair, in object order, capacity ignored.
     pub pairs: Vec<SliceInstance>,
+    /// `slice_counts` (see the crate docs).
     pub counts: [u32; COUNT_WORDS],
+    /// `slice_draw_args`: `[quad_vertices, instances written, 0, 0]`.
     pub draw_args: [u32; 4],
+    /// `slice_dispatch_args`: `[x, y, 1]`.
     pub dispatch_args: [u32; 3],
 }
 

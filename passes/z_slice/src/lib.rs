@@ -69,6 +69,8 @@
 //!   deciding value lies within a relative 1e-5 of a threshold
 //!   ([`cpu::Extent::closeness`]); they count such pairs and assert a small bound.
 
+#![warn(missing_docs)]
+
 pub mod cpu;
 pub mod scenes;
 pub mod testbed;
@@ -76,13 +78,9 @@ pub mod testbed;
 pub use cpu::{Extent, Outcome, SliceInstance, ZSliceResult, cpu_z_slice};
 
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_graph::file::{Params, Registry};
-use meshlight_graph::{
-    Access, BindingLayout, BufferDesc, Element, GraphError, Implementation, Pass, ProgramDesc,
-    RecordContext, Result, SetupContext, Slot, StageContract, TextureDesc, Workgroups,
-};
+use meshlight_graph::prelude::*;
+use meshlight_shaders::LocalModule;
 use meshlight_shaders::cpu::layout::{ClusterGrid, ClusterableObject};
-use meshlight_shaders::{LocalModule, PassShader, pass_shader, uniform_block};
 
 /// The stage name pipelines use.
 pub const STAGE: &str = "z_slice";
@@ -111,6 +109,8 @@ pub const INSTANCE_MODULE: LocalModule = LocalModule {
     file_path: concat!(env!("CARGO_PKG_NAME"), "/instance.wgsl"),
 };
 
+/// The stage's WGSL (`z_slice.wgsl`) with the instance module and its uniform block,
+/// public so the shader tests compose and validate every entry point.
 pub const SHADER: PassShader = PassShader {
     modules: &[INSTANCE_MODULE, GpuParams::MODULE],
     ..pass_shader!("z_slice::z_slice", "z_slice.wgsl")
@@ -164,7 +164,9 @@ pub fn contract() -> StageContract {
 pub struct GridSettings {
     /// Tile columns, tile rows, depth slices.
     pub dims: [u32; 3],
+    /// View-space distance where slice 0 ends; every nearer depth is in slice 0.
     pub first_slice_end: f32,
+    /// Where the last slice ends; farther depths are in it.
     pub far: f32,
 }
 
@@ -212,6 +214,7 @@ impl GridSettings {
 /// The `compute` implementation.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ZSlice {
+    /// The froxel grid's shape, which the later stages read from `cluster_grid`.
     pub grid: GridSettings,
     /// List entries; `None`: as many as `slice_instances` holds.
     pub capacity: Option<u32>,
@@ -370,12 +373,12 @@ impl Pass for ZSlice {
         // once every object has counted.
         ctx.dispatch_compute(
             "prepare",
-            &[(10, grid), (11, params)],
+            &[("grid", grid), ("params", params)],
             Workgroups::Direct([prepare_groups, 1, 1]),
         )?;
         ctx.dispatch_compute(
             "slice",
-            &[(9, view), (10, grid), (11, params)],
+            &[("view", view), ("grid", grid), ("params", params)],
             Workgroups::Direct([groups[0], groups[1], 1]),
         )
     }

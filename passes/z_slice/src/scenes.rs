@@ -19,6 +19,8 @@ pub fn direction(rng: &mut Rng) -> Vec3 {
     .normalize_or(Vec3::Y)
 }
 
+/// An object of `kind` at `position` reaching `range`, pointing down: the base the test
+/// scenes vary.
 pub fn object(kind: ClusterableKind, position: Vec3, range: f32) -> ClusterableObject {
     ClusterableObject {
         position_range: [position.x, position.y, position.z, range],
@@ -31,6 +33,7 @@ pub fn object(kind: ClusterableKind, position: Vec3, range: f32) -> ClusterableO
     }
 }
 
+/// A spot light with the given direction and half-angle.
 pub fn spot(position: Vec3, direction: Vec3, range: f32, half_angle: f32) -> ClusterableObject {
     let mut o = object(ClusterableKind::SpotLight, position, range);
     o.direction_cos_angle = [direction.x, direction.y, direction.z, half_angle.cos()];
@@ -38,6 +41,7 @@ pub fn spot(position: Vec3, direction: Vec3, range: f32, half_angle: f32) -> Clu
     o
 }
 
+/// Every object kind, in `ClusterableKind` order, so scenes cycle through all of them.
 pub const KINDS: [ClusterableKind; 4] = [
     ClusterableKind::PointLight,
     ClusterableKind::SpotLight,
@@ -91,10 +95,12 @@ pub fn random_camera(rng: &mut Rng, ortho: bool) -> (Camera, Vec3) {
     (camera, target)
 }
 
+/// A perspective camera with the tests' near plane (0.1).
 pub fn perspective(position: Vec3, target: Vec3, fov_y: f32) -> Camera {
     Camera::perspective(position, target, fov_y, 0.1)
 }
 
+/// An orthographic camera `height` units tall, with the tests' depth range.
 pub fn orthographic(position: Vec3, target: Vec3, height: f32) -> Camera {
     Camera {
         position,

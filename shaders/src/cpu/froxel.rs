@@ -65,12 +65,17 @@ fn unit(v: Vec3) -> Vec3 {
 /// `ViewObject`: an object in view space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ViewObject {
+    /// The object's position, view space.
     pub center: Vec3,
+    /// How far it reaches (a light's range, a box's half-extent).
     pub range: f32,
     /// Probes and decals: the box's half-axes; spot lights: the unit axis in `[2]`.
     pub axes: [Vec3; 3],
+    /// `ClusterableKind` as its number, which picks the test.
     pub kind: u32,
+    /// Spot lights: cosine of the half-angle.
     pub cos_angle: f32,
+    /// Spot lights: sine of the half-angle.
     pub sin_angle: f32,
 }
 
@@ -169,7 +174,9 @@ pub fn line_at_depth(line: [Vec3; 2], depth: f32) -> Vec3 {
 /// `Aabb`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
+    /// The smallest corner, view space.
     pub min: Vec3,
+    /// The largest corner, view space.
     pub max: Vec3,
 }
 
@@ -212,15 +219,19 @@ pub fn froxel_aabb(view: &View, grid: &ClusterGrid, froxel: [u32; 3]) -> Aabb {
 /// `TileRect`, both corners inclusive.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TileRect {
+    /// The first tile, `[x, y]`.
     pub min: [u32; 2],
+    /// The last tile, `[x, y]` (inclusive).
     pub max: [u32; 2],
 }
 
 impl TileRect {
+    /// The rectangle of no tiles (`min.x > max.x`), what an object that misses the slice gets.
     pub const EMPTY: TileRect = TileRect {
         min: [1, 0],
         max: [0, 0],
     };
+    /// Whether the rectangle holds no tile.
     pub fn is_empty(&self) -> bool {
         self.min[0] > self.max[0] || self.min[1] > self.max[1]
     }
@@ -238,6 +249,7 @@ impl TileRect {
 /// A decision and how close its deciding value came to the threshold.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Decision {
+    /// The decision.
     pub value: bool,
     /// `|value − threshold| / scale`: under about 1e-5 the GPU may decide otherwise.
     pub closeness: f32,
@@ -421,6 +433,7 @@ pub fn object_touches_froxel(o: &ViewObject, aabb: &Aabb) -> Decision {
 /// What one instance `(o, slice)` tests.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InstanceFroxels {
+    /// The tiles the instance covers.
     pub rect: TileRect,
     /// How close the rectangle's edges (or its depth cut) came to going otherwise.
     pub rect_closeness: f32,

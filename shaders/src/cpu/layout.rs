@@ -10,22 +10,36 @@ use bytemuck::{Pod, Zeroable};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct View {
+    /// World space to view space.
     pub view: [[f32; 4]; 4],
+    /// View space to clip space, reverse-Z.
     pub projection: [[f32; 4]; 4],
+    /// World space to clip space: `projection * view`.
     pub view_projection: [[f32; 4]; 4],
+    /// View space to world space.
     pub inverse_view: [[f32; 4]; 4],
+    /// Clip space to view space.
     pub inverse_projection: [[f32; 4]; 4],
+    /// Clip space to world space, to rebuild positions from depth.
     pub inverse_view_projection: [[f32; 4]; 4],
+    /// Last frame's world-to-clip, for testing against last frame's depth pyramid.
     pub previous_view_projection: [[f32; 4]; 4],
     /// Left, right, bottom, top, near, far; inside when `dot(xyz, p) + w >= 0`.
     pub frustum: [[f32; 4]; 6],
+    /// Camera position, world space: where LOD errors are measured from.
     pub camera_position: [f32; 3],
+    /// Distance to the near plane, view-space units: the nearest a projected error is
+    /// measured at.
     pub near: f32,
+    /// Render target size in pixels.
     pub viewport_size: [f32; 2],
+    /// `1 / viewport_size`, so a shader turns pixels into uv without dividing.
     pub inverse_viewport_size: [f32; 2],
     /// `0.5 * projection[1][1] * viewport height`.
     pub lod_scale: f32,
+    /// Frame counter, for temporal effects and debugging.
     pub frame_index: u32,
+    /// Pads the struct to a 16-byte multiple, so the mirror has no implicit padding.
     pub padding: [u32; 2],
 }
 
@@ -39,10 +53,13 @@ pub struct Mesh {
     pub uv_grid: [f32; 4],
     /// Mesh-space sphere around the whole mesh: centre, radius.
     pub bounding_sphere: [f32; 4],
+    /// The mesh's first meshlet in the shared meshlet array.
     pub first_meshlet: u32,
+    /// Its meshlets, all LOD levels: `first_meshlet .. first_meshlet + meshlet_count`.
     pub meshlet_count: u32,
     /// `MESH_FLAG_UVS` (1) when the payload holds UVs.
     pub flags: u32,
+    /// LOD levels of the mesh's DAG, for the `lod` debug view and statistics.
     pub level_count: u32,
 }
 
@@ -53,7 +70,9 @@ pub const MESH_FLAG_UVS: u32 = 1;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Pod, Zeroable)]
 pub struct Cluster {
+    /// Index of the instance that draws the meshlet.
     pub instance: u32,
+    /// Index into the shared meshlet array.
     pub meshlet: u32,
 }
 
@@ -61,13 +80,20 @@ pub struct Cluster {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Instance {
+    /// Mesh space to world space.
     pub world_from_local: [[f32; 4]; 4],
+    /// Last frame's `world_from_local`, for last frame's occlusion test.
     pub previous_world_from_local: [[f32; 4]; 4],
+    /// World space to mesh space; its transposed upper 3 × 3 transforms normals.
     pub local_from_world: [[f32; 4]; 4],
     /// xyz origin, w step: the mesh's [`Mesh::position_grid`].
     pub position_grid: [f32; 4],
+    /// Index into the material table.
     pub material: u32,
+    /// The mesh's first meshlet in the shared meshlet array, copied so culling needs no
+    /// mesh lookup.
     pub first_meshlet: u32,
+    /// How many meshlets the mesh has (all LOD levels).
     pub meshlet_count: u32,
     /// Index into the mesh table.
     pub mesh: u32,
@@ -85,9 +111,13 @@ pub struct Material {
 #[repr(u32)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum ClusterableKind {
+    /// A point light: a sphere of influence.
     PointLight = 0,
+    /// A spot light: a sphere cut to a cone.
     SpotLight = 1,
+    /// A reflection probe: an oriented box.
     Probe = 2,
+    /// A decal: a box projected along its direction.
     Decal = 3,
 }
 
@@ -100,13 +130,20 @@ impl ClusterableKind {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ClusterableObject {
+    /// xyz world-space position; w the range beyond which it affects nothing.
     pub position_range: [f32; 4],
+    /// xyz world-space unit direction (spot axis, decal projection); w cosine of a spot's
+    /// outer half-angle.
     pub direction_cos_angle: [f32; 4],
+    /// rgb linear colour, w intensity (lights).
     pub color_intensity: [f32; 4],
     /// A [`ClusterableKind`] as u32.
     pub kind: u32,
+    /// Sine of a spot's outer half-angle, precomputed for the cone test.
     pub sin_angle: f32,
+    /// Index into the probe or decal table of the pass that shades with it.
     pub payload: u32,
+    /// Pads the struct to a 16-byte multiple.
     pub padding: u32,
 }
 
@@ -114,13 +151,21 @@ pub struct ClusterableObject {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ClusterGrid {
+    /// Clusters along x (tile columns), y (tile rows) and z (depth slices).
     pub dims: [u32; 3],
+    /// `dims.x * dims.y * dims.z`.
     pub cluster_count: u32,
+    /// One tile's size in pixels (viewport size / `dims.xy`, rounded up).
     pub tile_size: [f32; 2],
+    /// View-space distance where slice 0 begins; nearer depths fall into it.
     pub near: f32,
+    /// View-space distance where the last slice ends; farther depths fall into it.
     pub far: f32,
+    /// `dims.z / log2(far / near)`: slices per doubling of distance.
     pub z_slice_scale: f32,
+    /// `-log2(near) * z_slice_scale`, so `slice = floor(log2(z) * scale + bias)`.
     pub z_slice_bias: f32,
+    /// Pads the struct to a 16-byte multiple.
     pub padding: [u32; 2],
 }
 

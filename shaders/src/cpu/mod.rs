@@ -1,13 +1,16 @@
-//! Rust references for the bit-exact encodings of the shared WGSL modules.
+//! Rust mirrors of the shared WGSL modules: their struct layouts, encodings and tests.
 //!
-//! The asset builder encodes with these functions and pass tests compare GPU output
-//! against them, so each mirrors its WGSL counterpart operation for operation. [`rng`]
-//! is the seeded generator the references and tests draw their inputs from.
+//! The GPU scene uploads through the layouts, and every pass's CPU reference is built on
+//! the functions, which pass tests compare GPU output with; so each mirrors its WGSL
+//! counterpart operation for operation, and each exists once. [`rng`] is the seeded
+//! generator the references and tests draw their inputs from.
 
 pub mod dispatch;
 pub mod froxel;
 pub mod layout;
 pub mod light;
+pub mod lod;
+pub mod matrix;
 pub mod occlusion;
 pub mod octahedral;
 pub mod rng;

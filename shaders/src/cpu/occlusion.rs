@@ -2,6 +2,8 @@
 //! the conservative test, mirrored operation for operation in f32, plus a reference
 //! depth pyramid built by the rule the WGSL module reads it with.
 
+use super::matrix::mat_vec;
+
 /// `OCCLUSION_MARGIN_PX`.
 pub const MARGIN_PX: f32 = 1.0;
 /// `OCCLUSION_RADIUS_SLACK`.
@@ -12,19 +14,17 @@ pub const DEPTH_SLACK: f32 = 1.0 + 1.0 / 256.0;
 /// `OcclusionRect`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct OcclusionRect {
+    /// Whether the sphere can be tested: every corner in front of the near plane and the
+    /// rectangle wholly on the screen. Untestable spheres are kept.
     pub testable: bool,
     /// Inclusive pixel range: x0, y0, x1, y1.
     pub pixels: [u32; 4],
+    /// The sphere's nearest NDC depth (reverse-Z: the largest), compared with the pyramid.
     pub depth: f32,
     /// The rectangle before the margin and the on-screen check (`lo.x, lo.y, hi.x,
     /// hi.y` in pixels; 0 when a corner was not in front of the near plane), so a test
     /// can tell how near a decision came to flipping.
     pub screen: [f32; 4],
-}
-
-/// `m * v` for a column-major matrix, summed column by column.
-fn mat_vec(m: &[[f32; 4]; 4], v: [f32; 4]) -> [f32; 4] {
-    std::array::from_fn(|r| m[0][r] * v[0] + m[1][r] * v[1] + m[2][r] * v[2] + m[3][r] * v[3])
 }
 
 /// `occlusion_rect`.
@@ -83,40 +83,73 @@ pub fn occlusion_level(pixels: [u32; 4]) -> u32 {
 
 /// A depth pyramid by the rule of `meshlight::occlusion`: level `L` is
 /// `ceil(W / 2^(L+1)) × ceil(H / 2^(L+1))`, each texel the minimum (farthest) depth of
-/// the source pixels it covers, down to 1 × 1.
+/// the source pixels it covers, down to 1 × 1. The one CPU pyramid: the `depth_pyramid`
+/// stage is compared with it exactly, and the culling references test against it.
+///
+/// Depths are reverse-Z and never negative (the rasterisers clamp them), so the float
+/// minimum taken here is the shader's minimum of their bits, and every texel is exactly
+/// one of the source depths.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DepthPyramid {
     /// Per level: width, height, texels row by row.
     pub levels: Vec<(u32, u32, Vec<f32>)>,
 }
 
+/// The depth of a visibility value: its high 32 bits as an f32 (0, the far plane, for an
+/// empty pixel).
+pub fn visibility_depth(value: u64) -> f32 {
+    f32::from_bits((value >> 32) as u32)
+}
+
 impl DepthPyramid {
-    /// The pyramid of a `width × height` reverse-Z depth image (row-major).
+    /// The pyramid of a `width × height` reverse-Z depth image (row-major): level 0 from
+    /// 2 × 2 source pixels, each level above from the 2 × 2 texels below it that exist.
     pub fn from_depth(width: u32, height: u32, depth: &[f32]) -> Self {
         assert_eq!(depth.len(), (width * height) as usize, "depth image size");
-        let mut levels = Vec::new();
-        let mut level = 0u32;
+        let mut levels: Vec<(u32, u32, Vec<f32>)> = Vec::new();
+        let mut below_size = [width, height];
         loop {
-            let span = 2u32 << level;
-            let (w, h) = (width.div_ceil(span), height.div_ceil(span));
-            let mut texels = vec![f32::MAX; (w * h) as usize];
-            for y in 0..height {
-                for x in 0..width {
-                    let t = &mut texels[((y / span) * w + x / span) as usize];
-                    *t = t.min(depth[(y * width + x) as usize]);
-                }
-            }
-            levels.push((w, h, texels));
-            if w == 1 && h == 1 {
+            let size = below_size.map(|side| side.div_ceil(2));
+            let below = levels.last().map_or(depth, |(_, _, texels)| texels);
+            let texels = reduce(below, below_size, size);
+            levels.push((size[0], size[1], texels));
+            if size == [1, 1] {
                 return Self { levels };
             }
-            level += 1;
+            below_size = size;
         }
     }
 
-    /// Texel `(x, y)` of `level`.
+    /// The pyramid of the first `width × height` values of a visibility target (row-major,
+    /// the depth in each value's high 32 bits), as the `depth_pyramid` stage builds it.
+    pub fn from_visibility(visibility: &[u64], width: u32, height: u32) -> Self {
+        let pixels = (width * height) as usize;
+        assert!(
+            visibility.len() >= pixels,
+            "{} visibility values for {width} × {height}",
+            visibility.len()
+        );
+        let depth: Vec<f32> = visibility[..pixels]
+            .iter()
+            .map(|&v| visibility_depth(v))
+            .collect();
+        Self::from_depth(width, height, &depth)
+    }
+
+    /// The size of `level`: `[width, height]`.
+    pub fn level_size(&self, level: u32) -> [u32; 2] {
+        let (w, h, _) = &self.levels[level as usize];
+        [*w, *h]
+    }
+
+    /// Texel `(x, y)` of `level`; a coordinate past the level's size panics, so a reader
+    /// that strays outside a level is caught rather than handed the next row's texel.
     pub fn texel(&self, level: u32, x: u32, y: u32) -> f32 {
-        let (w, _, texels) = &self.levels[level as usize];
+        let (w, h, texels) = &self.levels[level as usize];
+        assert!(
+            x < *w && y < *h,
+            "texel ({x}, {y}) outside level {level}'s {w} × {h}"
+        );
         texels[(y * w + x) as usize]
     }
 
@@ -142,6 +175,24 @@ impl DepthPyramid {
     pub fn occludes(&self, rect: &OcclusionRect) -> bool {
         rect.testable && rect.depth * DEPTH_SLACK < self.farthest(rect.pixels)
     }
+}
+
+/// Each texel of a `size` level: the min of the 2 × 2 texels of `below` under it, those
+/// that exist.
+fn reduce(below: &[f32], [bw, bh]: [u32; 2], [w, h]: [u32; 2]) -> Vec<f32> {
+    let mut out = Vec::with_capacity((w * h) as usize);
+    for y in 0..h {
+        for x in 0..w {
+            let mut m = f32::MAX;
+            for sy in 2 * y..(2 * y + 2).min(bh) {
+                for sx in 2 * x..(2 * x + 2).min(bw) {
+                    m = m.min(below[(sy * bw + sx) as usize]);
+                }
+            }
+            out.push(m);
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -206,6 +257,137 @@ mod tests {
         let mut holed = vec![0.5; 64 * 64];
         holed[32 * 64 + 32] = 0.0;
         assert!(!DepthPyramid::from_depth(64, 64, &holed).occludes(&behind));
+    }
+
+    fn value(depth: f32, payload: u32) -> u64 {
+        (depth.to_bits() as u64) << 32 | payload as u64
+    }
+
+    #[test]
+    fn a_small_visibility_target_by_hand() {
+        // 3 × 5, reverse-Z depths; 0 marks an empty pixel.
+        #[rustfmt::skip]
+        let depths = [
+            0.5, 0.25, 0.75,
+            0.5, 0.5,  0.0,
+            0.9, 0.8,  0.7,
+            0.6, 0.1,  0.3,
+            0.4, 0.2,  1.0,
+        ];
+        let vis: Vec<u64> = depths.iter().map(|&d| value(d, 7)).collect();
+        let p = DepthPyramid::from_visibility(&vis, 3, 5);
+        assert_eq!(p.levels.len(), 3);
+        assert_eq!(p.levels[0].2, vec![0.25, 0.0, 0.1, 0.3, 0.2, 1.0]);
+        assert_eq!(p.levels[1].2, vec![0.0, 0.2]);
+        assert_eq!(p.levels[2].2, vec![0.0]);
+        assert_eq!(p.level_size(0), [2, 3]);
+        assert_eq!(p.texel(0, 1, 2), 1.0);
+    }
+
+    #[test]
+    #[should_panic(expected = "outside level 0")]
+    fn a_texel_past_its_level_is_refused() {
+        // Level 0 of 5 × 3 is 3 × 2: (3, 0) would be (0, 1) read as a flat index.
+        DepthPyramid::from_depth(5, 3, &[0.5; 15]).texel(0, 3, 0);
+    }
+
+    /// `w × h` visibility values drawn from `seed`: about one in `empty_every` empty, the
+    /// rest at random depths in [0, 1), with random cluster ids when `random_ids`.
+    fn random_visibility(
+        w: u32,
+        h: u32,
+        seed: u64,
+        empty_every: u32,
+        random_ids: bool,
+    ) -> Vec<u64> {
+        let mut rng = super::super::rng::Rng(seed | 1);
+        (0..w * h)
+            .map(|_| {
+                let id = if random_ids { rng.next_u64() as u32 } else { 0 };
+                if rng.below(empty_every) == 0 {
+                    0
+                } else {
+                    value(rng.unit(), id)
+                }
+            })
+            .collect()
+    }
+
+    /// Texel `(x, y)` of `level` straight from the rule: the min depth over source pixels
+    /// `[x·2^(L+1), (x+1)·2^(L+1)) × [y·2^(L+1), (y+1)·2^(L+1))` clipped to the image.
+    fn footprint_min(vis: &[u64], width: u32, height: u32, level: u32, x: u32, y: u32) -> f32 {
+        let side = 2u64 << level;
+        let xs = (x as u64 * side)..((x as u64 + 1) * side).min(width as u64);
+        let ys = (y as u64 * side)..((y as u64 + 1) * side).min(height as u64);
+        let mut m = f32::MAX;
+        for sy in ys {
+            for sx in xs.clone() {
+                m = m.min(visibility_depth(vis[(sy * width as u64 + sx) as usize]));
+            }
+        }
+        m
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// The level-by-level reduction is the rule: every texel is the min over its
+        /// clipped footprint, down to one texel.
+        #[test]
+        fn levels_equal_the_footprint_rule(
+            w in 1u32..70,
+            h in 1u32..70,
+            seed in proptest::prelude::any::<u64>(),
+        ) {
+            let vis = random_visibility(w, h, seed, 9, true);
+            let p = DepthPyramid::from_visibility(&vis, w, h);
+            for level in 0..p.levels.len() as u32 {
+                let [lw, lh] = p.level_size(level);
+                proptest::prop_assert_eq!([lw, lh], [w.div_ceil(2 << level), h.div_ceil(2 << level)]);
+                for y in 0..lh {
+                    for x in 0..lw {
+                        let want = footprint_min(&vis, w, h, level, x, y);
+                        proptest::prop_assert_eq!(p.texel(level, x, y).to_bits(), want.to_bits());
+                    }
+                }
+            }
+            proptest::prop_assert_eq!(p.levels.last().map(|l| l.2.len()), Some(1));
+        }
+
+        /// A rectangle read through the pyramid (`pyramid_farthest`) is never nearer than
+        /// its farthest pixel, reads only texels inside their level (`texel` panics
+        /// otherwise), and is exactly the min over the aligned blocks of its level that
+        /// hold the rectangle.
+        #[test]
+        fn a_rectangle_read_is_conservative(
+            w in 1u32..300,
+            h in 1u32..300,
+            corners in proptest::prelude::any::<[u32; 4]>(),
+            seed in proptest::prelude::any::<u64>(),
+        ) {
+            let vis = random_visibility(w, h, seed, 50, false);
+            let p = DepthPyramid::from_visibility(&vis, w, h);
+            let [a, b, c, d] = corners;
+            let (xa, xb) = (a % w, b % w);
+            let (ya, yb) = (c % h, d % h);
+            let (x0, x1, y0, y1) = (xa.min(xb), xa.max(xb), ya.min(yb), ya.max(yb));
+            let got = p.farthest([x0, y0, x1, y1]);
+            let depth = |x: u32, y: u32| visibility_depth(vis[(y * w + x) as usize]);
+            let mut farthest = f32::MAX;
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    farthest = farthest.min(depth(x, y));
+                }
+            }
+            proptest::prop_assert!(got <= farthest, "{w}×{h} [{x0}, {x1}] × [{y0}, {y1}]: {got} > {farthest}");
+            let shift = occlusion_level([x0, y0, x1, y1]) + 1;
+            let mut covered = f32::MAX;
+            for y in (y0 >> shift << shift)..(((y1 >> shift) + 1) << shift).min(h) {
+                for x in (x0 >> shift << shift)..(((x1 >> shift) + 1) << shift).min(w) {
+                    covered = covered.min(depth(x, y));
+                }
+            }
+            proptest::prop_assert_eq!(got.to_bits(), covered.to_bits());
+        }
     }
 
     /// A reverse-Z infinite perspective (column-major), square aspect.

@@ -213,6 +213,12 @@ fn meshlet_triangle(m: Meshlet, triangle: u32, words: vec2<u32>, bit: u32) -> ve
     return vec3<u32>(clamp(vec3(first, first - d1, first - d2), vec3(0), vec3(last)));
 }
 
+// Whether an error of `pixels` is seen at `threshold_pixels`: the comparison of the LOD
+// cut, which the hierarchy walk's bounds on it make too.
+fn error_perceptible(pixels: f32, threshold_pixels: f32) -> bool {
+    return pixels > threshold_pixels;
+}
+
 // The LOD cut: draw a meshlet when its own error is imperceptible and its parent's is
 // not. Spheres (centre xyz, radius w) and errors are mesh space; `world_from_mesh` and
 // its largest axis scale `scale` bring them to world space. Because errors and spheres
@@ -229,7 +235,7 @@ fn lod_cut(
 ) -> bool {
     let own_center = (world_from_mesh * vec4(own_sphere.xyz, 1.0)).xyz;
     let own = project_error_to_pixels(view, own_center, own_sphere.w * scale, own_error * scale);
-    if own > threshold_pixels {
+    if error_perceptible(own, threshold_pixels) {
         return false;
     }
     // A root has no parent: it is drawn whenever its own error passes.
@@ -239,5 +245,5 @@ fn lod_cut(
     let parent_center = (world_from_mesh * vec4(parent_sphere.xyz, 1.0)).xyz;
     let parent = project_error_to_pixels(
         view, parent_center, parent_sphere.w * scale, parent_error * scale);
-    return parent > threshold_pixels;
+    return error_perceptible(parent, threshold_pixels);
 }

@@ -53,14 +53,20 @@ fn sphere_in_frustum(view: View, center: vec3<f32>, radius: f32) -> bool {
     return true;
 }
 
-// Screen-space size in pixels of a simplification error, the way meshoptimizer's
-// cluster-LOD demo measures it: the error sits on the LOD sphere's nearest point to the
-// camera (never closer than the near plane), so it is conservative for the whole group
-// and, because parent spheres enclose their children, monotonic along the DAG.
-// `center` is world-space; radius and error are already scaled by the instance.
-fn project_error_to_pixels(view: View, center: vec3<f32>, radius: f32, error: f32) -> f32 {
-    let distance = length(center - view.camera_position) - radius;
+// Screen-space size in pixels of a simplification error seen from `distance` (never
+// closer than the near plane), the way meshoptimizer's cluster-LOD demo measures it.
+// The one formula of the LOD cut: `project_error_to_pixels` puts the error on a
+// sphere, the hierarchy walk bounds it over a node's spheres.
+fn error_to_pixels(view: View, distance: f32, error: f32) -> f32 {
     return error / max(distance, view.near) * view.lod_scale;
+}
+
+// `error_to_pixels` with the error on the LOD sphere's nearest point to the camera, so
+// it is conservative for the whole group and, because parent spheres enclose their
+// children, monotonic along the DAG. `center` is world-space; radius and error are
+// already scaled by the instance.
+fn project_error_to_pixels(view: View, center: vec3<f32>, radius: f32, error: f32) -> f32 {
+    return error_to_pixels(view, length(center - view.camera_position) - radius, error);
 }
 
 // Clip space to normalised device coordinates.
