@@ -37,13 +37,14 @@ pub mod synthetic;
 
 pub use access::Access;
 pub use adapter::AdapterClass;
+pub use names::feature_names;
 pub use builder::{Bindings, GraphBuilder, History, PassOutputs};
 pub use choice::{Choice, ClassOrder};
 pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
-    ADAPTER_ENV, AdapterOptions, BATCHING_ENV, BatchStats, CHECKED_ENV, Executor, FrameStats,
+    ADAPTER_ENV, AdapterOptions, BATCHING_ENV, experimental_features, BatchStats, CHECKED_ENV, Executor, FrameStats,
     GpuAdapter, GpuContext, GpuTimings, INDIRECT_VALIDATION_ENV, Imports, PassTiming, TIMING_ENV,
     TimingMode,
 };

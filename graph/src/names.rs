@@ -4,7 +4,7 @@
 use serde::{Serialize, Serializer};
 
 /// Feature names, comma-separated, for error messages.
-pub(crate) fn feature_names(f: wgpu::Features) -> String {
+pub fn feature_names(f: wgpu::Features) -> String {
     f.iter_names()
         .map(|(n, _)| n)
         .collect::<Vec<_>>()

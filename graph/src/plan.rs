@@ -239,6 +239,9 @@ pub struct Plan {
     /// ones the adapter has; open the device with these.
     #[serde(serialize_with = "ser_features")]
     pub enabled_features: wgpu::Features,
+    /// The adapter class the plan was made for: what `auto` choices and parameters
+    /// followed where they depend on it.
+    pub class: crate::adapter::AdapterClass,
     /// Size parameters and their current values.
     pub params: Vec<(String, u64)>,
     /// Bumped by every re-plan (a size parameter changed), so the executor knows to

@@ -257,7 +257,7 @@ fn frames_in_flight(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::e
     let mut renderer = Renderer::new(
         placed.data,
         FrameSettings::new(width, height),
-        &GraphSource::Code,
+        &GraphSource::Shipped,
     )?;
     let device = renderer.adapter.clone();
     let base = placed.camera;

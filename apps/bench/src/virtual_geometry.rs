@@ -33,7 +33,7 @@ pub fn measure(
     settings: FrameSettings,
     frames: u32,
 ) -> Result<Measured, Box<dyn std::error::Error>> {
-    let mut renderer = Renderer::new(placed.data.clone(), settings, &GraphSource::Code)?;
+    let mut renderer = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)?;
     let mut run = |mode: TimingMode| -> Result<Vec<GpuTimings>, Box<dyn std::error::Error>> {
         renderer.executor.timing = mode;
         renderer.render_still(&placed.camera)?;
@@ -343,7 +343,7 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         &placed,
         FrameSettings {
             hardware: Some(false),
-            exact_division: true,
+            exact_division: Some(true),
             ..FrameSettings::new(width, height)
         },
         frames,
@@ -580,9 +580,9 @@ pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     for sw in implementations(meshlight::sw_raster::STAGE) {
         let settings = FrameSettings {
             hardware: Some(false),
-            sw_raster: sw.clone(),
             ..base.clone()
-        };
+        }
+        .with_implementation(meshlight::sw_raster::STAGE, &sw);
         if let Some(m) = try_measure(settings, &format!("sw_raster {sw}"))? {
             software.push((sw, m));
         }
@@ -620,9 +620,9 @@ pub fn rasterisers(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         let hw = hw.as_str();
         let settings = FrameSettings {
             sw_threshold_px: Some(0.0),
-            hw_raster: hw.into(),
             ..base.clone()
-        };
+        }
+        .with_implementation(meshlight::hw_raster::STAGE, hw);
         let Some(m) = try_measure(settings, &format!("hw_raster {hw}"))? else {
             continue;
         };

@@ -4,8 +4,7 @@
 //! for the adapter, and its plan says what compile picked and why, exactly as a render
 //! on that adapter would.
 
-use meshlight::graph::{CompileOptions, GpuAdapter};
-use meshlight_virtual_geometry::split::AdapterClass;
+use meshlight::graph::{AdapterClass, CompileOptions, GpuAdapter};
 use std::fmt::Write;
 
 /// Features that decide which implementations run, or how fast.
@@ -74,7 +73,7 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
         info.name, info.backend, info.device_type, info.driver, info.driver_info
     )?;
     let class = AdapterClass::of(&info);
-    let (threshold, why) = class.sw_threshold_px();
+    let (threshold, why) = meshlight::cull_lod::sw_threshold_on(class);
     writeln!(out, "class: {}", class.name())?;
     writeln!(
         out,
@@ -122,10 +121,7 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
     for (flag, range) in &bounds {
         writeln!(out, "  --{flag:<12} {}..={}", range.start(), range.end())?;
     }
-    let mut registry = meshlight::registry();
-    // `auto` tries the hardware rasterisers in this class's order, as the renderer does.
-    let feeds = class.hardware_feeds().map(|f| f.implementation());
-    registry.prefer(meshlight::hw_raster::STAGE, &feeds);
+    let registry = meshlight::registry();
     writeln!(
         out,
         "\nstages and their implementations (the registry pipeline files and --sw-raster/--hw-raster name them from):"
@@ -141,18 +137,16 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
         out,
         "\nauto picks (pipelines/virtual_geometry.toml compiled for this adapter):"
     )?;
-    let graph = meshlight::graph::file::parse_pipeline(
-        include_str!("../../../pipelines/virtual_geometry.toml"),
-        "pipelines/virtual_geometry.toml",
-        &registry,
-    )?;
+    use meshlight_virtual_geometry::frame_graph::{SHIPPED, SHIPPED_FILE};
+    let graph = meshlight::graph::file::parse_pipeline(SHIPPED, SHIPPED_FILE, &registry)?;
     let plan = graph.compile(&CompileOptions::for_adapter(&adapter))?.plan;
     for p in &plan.passes {
-        if let Some(choice) = &p.choice {
+        if let Some(decision) = p.decision() {
             writeln!(
                 out,
-                "  {:<12} {:<14} {}",
-                p.stage, choice.chosen, choice.reason
+                "  {:<18} {:<22} {decision}",
+                p.name,
+                p.implementation_label()
             )?;
         }
     }

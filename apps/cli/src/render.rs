@@ -23,16 +23,17 @@ pub struct RenderArgs {
     #[arg(long)]
     pub slots: Option<u64>,
     /// The software rasteriser: auto (64-bit texture atomics where the adapter has
-    /// them), texture or buffer. Ignored with --pipeline (the file names its own).
-    #[arg(long, default_value = "auto")]
-    pub sw_raster: String,
+    /// them), texture or buffer. Given, it wins over the pipeline's.
+    #[arg(long)]
+    pub sw_raster: Option<String>,
     /// The hardware rasteriser: auto (in the adapter class's order: the indirect draw
     /// first where few units run graphics, else mesh shaders where the adapter has
-    /// them), mesh_shader or indirect_draw. Ignored with --pipeline.
-    #[arg(long, default_value = "auto")]
-    pub hw_raster: String,
+    /// them), mesh_shader or indirect_draw. Given, it wins over the pipeline's.
+    #[arg(long)]
+    pub hw_raster: Option<String>,
     /// Clusters whose screen box is smaller than this many pixels are rasterised in
-    /// software (default: the adapter class's, see `meshlight info`).
+    /// software (default: the pipeline's; the shipped frame's is the adapter class's,
+    /// see `meshlight info`).
     #[arg(long)]
     pub sw_threshold: Option<f32>,
     /// Output PNG (a path ending in .png, or one without an extension).
@@ -78,16 +79,18 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         lights,
         source,
     } = setup(&scene)?;
-    settings.sw_raster = a.sw_raster.clone();
-    settings.hw_raster = a.hw_raster.clone();
-    settings.sw_threshold_px = a.sw_threshold;
-    settings.clusters = a.clusters.unwrap_or(settings.clusters);
-    settings.slots = a.slots.unwrap_or(settings.slots);
-    // Sizes given win over a pipeline file's; none given leaves the file's.
-    settings.keep_file_lists = meshlight_virtual_geometry::frame_graph::KeepFileLists {
-        clusters: a.clusters.is_none(),
-        slots: a.slots.is_none(),
-    };
+    // What is given wins over the pipeline's; what is not leaves the pipeline's.
+    for (stage, implementation) in [
+        (meshlight::sw_raster::STAGE, &a.sw_raster),
+        (meshlight::hw_raster::STAGE, &a.hw_raster),
+    ] {
+        if let Some(i) = implementation {
+            settings = settings.with_implementation(stage, i);
+        }
+    }
+    settings.sw_threshold_px = a.sw_threshold.or(settings.sw_threshold_px);
+    settings.clusters = a.clusters;
+    settings.slots = a.slots;
     let skipped = data.skipped_instances();
     let instances = data.instances.len();
     let source_triangles = data.source_triangles();
@@ -160,12 +163,11 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         meshlight_virtual_geometry::counts::PER_PIXEL,
         still.counts.triangles_per_pixel(scene.width, scene.height)
     );
+    // Per pass only where measured per pass (`--timing passes`); per batch otherwise.
     for p in &still.stats.passes {
-        let gpu = p
-            .gpu_us
-            .map(|g| format!("{g:.0} µs GPU"))
-            .unwrap_or_else(|| "no timestamps".into());
-        let _ = writeln!(report, "  {:<22} {gpu}", p.name);
+        if let Some(us) = p.gpu_us {
+            let _ = writeln!(report, "  {:<22} {us:.0} µs GPU", p.name);
+        }
     }
     for b in &still.stats.batches {
         if let Some(us) = b.gpu_us {
@@ -177,13 +179,27 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             );
         }
     }
-    if let Some(total) = still.stats.gpu_frame_us {
-        let _ = writeln!(
-            report,
-            "  {:<22} {total:.0} µs GPU (timing mode {})",
-            "frame",
-            still.stats.timing.name()
-        );
+    match still.stats.gpu_frame_us {
+        Some(total) => {
+            let _ = writeln!(
+                report,
+                "  {:<22} {total:.0} µs GPU (timing mode {})",
+                "frame",
+                still.stats.timing.name()
+            );
+        }
+        None => {
+            let _ = writeln!(
+                report,
+                "  no GPU timings: timing mode {} on {}",
+                still.stats.timing.name(),
+                if renderer.executor.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
+                    "this adapter"
+                } else {
+                    "an adapter without timestamps"
+                }
+            );
+        }
     }
     if let Some(html) = html {
         let image = image_link(&html, &a.output);

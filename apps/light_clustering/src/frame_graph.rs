@@ -1,17 +1,33 @@
-//! Light clustering as a graph: z_slice → count_raster → scan_fan → populate, built in
-//! code ([`build`], or [`add_stages`] into a larger frame) or loaded from a pipeline file
-//! ([`load`]); both declare the same resources under the same names, so either runs with
-//! the same [`Clusterer`](super::Clusterer).
+//! Light clustering as a graph: z_slice → count_raster → scan_fan → populate. The frame
+//! is `pipelines/light_clustering.toml`, embedded ([`SHIPPED`]); [`build`] applies a
+//! [`ClusteringSettings`] to it through the pipeline's methods ([`apply`]), and [`load`]
+//! does the same to a file of the caller's, so both run with the same
+//! [`Clusterer`](super::Clusterer). A virtual-geometry frame that clusters lights holds
+//! the same four passes, and takes the same settings through [`apply`].
 
 use meshlight::count_raster::KINDS;
-use meshlight::graph::file::{Params, Registry};
-use meshlight::graph::{Bindings, BufferDesc, Element, GraphBuilder, GraphError, Result};
-use meshlight::scan_fan::{ScanFan, ScanOptions, WALK_TILES, WORKGROUP};
-use meshlight::z_slice::{
-    CLUSTER_GRID, CLUSTERABLE_OBJECT, GridSettings, SLICE_INSTANCE, ZSlice, cpu::COUNT_WORDS,
-};
+use meshlight::graph::file::Pipeline;
+use meshlight::graph::{GraphBuilder, GraphError, Result};
+use meshlight::scan_fan::{WALK_TILES, WORKGROUP};
+use meshlight::z_slice::{GridSettings, cpu::COUNT_WORDS};
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// The light clustering's frame, `pipelines/light_clustering.toml`.
+pub const SHIPPED: &str = include_str!("../pipelines/light_clustering.toml");
+/// How errors name [`SHIPPED`].
+pub const SHIPPED_FILE: &str = "pipelines/light_clustering.toml";
+
+/// The stages of the light clustering, in the order they run.
+pub const STAGES: [&str; 4] = [
+    meshlight::z_slice::STAGE,
+    meshlight::count_raster::STAGE,
+    meshlight::scan_fan::STAGE,
+    meshlight::populate::STAGE,
+];
+
+/// The imported resources the clustering reads: the objects and how many are valid.
+pub const INPUTS: [&str; 2] = ["objects", "object_count"];
 
 /// Size parameter: clusterable objects the object buffer holds.
 pub const OBJECTS_PARAM: &str = "objects";
@@ -71,7 +87,9 @@ impl ClusteringSettings {
         w * h * d * u64::from(KINDS)
     }
 
-    fn check(&self) -> Result<()> {
+    /// Refuses a grid with an empty dimension, more lists than the prefix sum takes, or
+    /// an empty capacity, naming what to change.
+    pub fn check(&self) -> Result<()> {
         let err = |message: String| {
             Err(GraphError::Setting {
                 setting: "the light clustering's settings".into(),
@@ -99,88 +117,33 @@ impl ClusteringSettings {
         }
         Ok(())
     }
+}
 
-    fn grid_pass(&self) -> ZSlice {
-        ZSlice {
-            grid: self.grid,
-            ..ZSlice::default()
+/// Applies `s` to a pipeline holding the clustering's passes: its sizes and grid
+/// (`[params]`), z_slice's depth slicing, the `count_raster`/`populate` and `scan_fan`
+/// implementations, and the scan's tiles (the single-dispatch walk where the lists fit
+/// one, the implementation's default otherwise).
+pub fn apply(p: &mut Pipeline, s: &ClusteringSettings) -> Result<()> {
+    s.check()?;
+    p.set_params(overrides(s))?;
+    p.set_stage_param(
+        meshlight::z_slice::STAGE,
+        "first_slice_end",
+        f64::from(s.grid.first_slice_end),
+    );
+    p.set_stage_param(meshlight::z_slice::STAGE, "far", f64::from(s.grid.far));
+    for stage in [meshlight::count_raster::STAGE, meshlight::populate::STAGE] {
+        p.set_implementation(stage, &s.implementation);
+    }
+    let walk = s.scan == "scan_fan" && fits_one_walk(s.lists() as u32);
+    for scan in p.passes_of_mut(meshlight::scan_fan::STAGE) {
+        scan.implementation = s.scan.clone();
+        if walk {
+            scan.set_param("items_per_thread", i64::from(WALK_ITEMS_PER_THREAD));
+        } else {
+            scan.params.remove("items_per_thread");
         }
     }
-}
-
-/// The four stages and their working buffers, into `g`, which must already hold
-/// `objects` and `object_count` (imported, or written by an earlier pass). The outputs
-/// are `cluster_grid`, `cluster_offsets`, `cluster_counts` and `cluster_objects`; the
-/// counters `slice_counts` and `list_counts`.
-pub fn add_stages(g: &mut GraphBuilder, s: &ClusteringSettings) -> Result<()> {
-    add_stages_with(g, s, &meshlight::registry())
-}
-
-/// [`add_stages`] with the implementations of `registry`.
-pub fn add_stages_with(
-    g: &mut GraphBuilder,
-    s: &ClusteringSettings,
-    registry: &Registry,
-) -> Result<()> {
-    s.check()?;
-    g.size_param(SLICE_INSTANCES_PARAM, s.slice_instances);
-    g.size_param(ENTRIES_PARAM, s.entries);
-    let lists = s.lists();
-    for (name, desc) in [
-        (
-            "slice_instances",
-            BufferDesc::array_param(SLICE_INSTANCE, SLICE_INSTANCES_PARAM),
-        ),
-        (
-            "slice_counts",
-            BufferDesc::array(Element::U32, COUNT_WORDS as u64),
-        ),
-        ("slice_draw_args", BufferDesc::array(Element::DRAW_ARGS, 1)),
-        (
-            "slice_dispatch_args",
-            BufferDesc::array(Element::DISPATCH_ARGS, 1),
-        ),
-        ("cluster_grid", BufferDesc::array(CLUSTER_GRID, 1)),
-        ("cluster_counts", BufferDesc::array(Element::U32, lists)),
-        ("cluster_offsets", BufferDesc::array(Element::U32, lists)),
-        ("list_total", BufferDesc::array(Element::U32, 1)),
-        (
-            "cluster_objects",
-            BufferDesc::array_param(Element::U32, ENTRIES_PARAM),
-        ),
-        ("list_counts", BufferDesc::array(Element::U32, 2)),
-    ] {
-        g.create_buffer(name, desc);
-    }
-    // Slots not bound here bind to the resource of the same name.
-    g.add_pass("z_slice", s.grid_pass(), Bindings::new())?;
-    // The stages with several implementations come from the registry, as in a file.
-    let [width, height, _] = s.grid.dims;
-    let tiles = Params::new(toml::toml! {
-        width = (width)
-        height = (height)
-    });
-    let count = registry.build(meshlight::count_raster::STAGE, &s.implementation, &tiles)?;
-    g.add_boxed_pass("count", count, Bindings::new())?;
-    let mut scan_params = toml::toml! { count = (lists as i64) };
-    if s.scan == "scan_fan" && fits_one_walk(lists as u32) {
-        scan_params.insert(
-            "items_per_thread".into(),
-            toml::Value::Integer(WALK_ITEMS_PER_THREAD.into()),
-        );
-    }
-    let scan = registry.build(
-        meshlight::scan_fan::STAGE,
-        &s.scan,
-        &Params::new(scan_params),
-    )?;
-    let bindings = Bindings::new()
-        .bind_named("input", "cluster_counts")
-        .bind_named("output", "cluster_offsets")
-        .bind_named("total", "list_total");
-    g.add_boxed_pass("scan", scan, bindings)?;
-    let populate = registry.build(meshlight::populate::STAGE, &s.implementation, &tiles)?;
-    g.add_boxed_pass("populate", populate, Bindings::new())?;
     Ok(())
 }
 
@@ -195,41 +158,20 @@ fn fits_one_walk(lists: u32) -> bool {
 /// dependent ones (the default grid's 13,824 lists are two tiles of 8,192).
 pub const WALK_ITEMS_PER_THREAD: u32 = 32;
 
-/// `scan_fan` over `lists` counts: with tiles large enough for the single-dispatch walk
-/// where the lists fit, else the default tiles.
-pub fn scan_fan(lists: u32) -> ScanFan {
-    let mut options = ScanOptions::new(lists);
-    if fits_one_walk(lists) {
-        options.items_per_thread = WALK_ITEMS_PER_THREAD;
-    }
-    ScanFan::with_options(options)
-}
-
-/// The clustering on its own: objects imported, the lists exported, counters read back.
+/// The clustering on its own, from [`SHIPPED`]: objects imported, the lists exported,
+/// counters read back.
 pub fn build(s: &ClusteringSettings) -> Result<GraphBuilder> {
-    let mut g = GraphBuilder::new();
-    import_objects(&mut g, s);
-    add_stages(&mut g, s)?;
-    export_and_read_back(&mut g)?;
-    Ok(g)
+    from_pipeline(Pipeline::parse(SHIPPED, SHIPPED_FILE)?, s)
 }
 
-/// Imports `objects` (sized by [`OBJECTS_PARAM`]) and `object_count`.
-pub fn import_objects(g: &mut GraphBuilder, s: &ClusteringSettings) {
-    g.size_param(OBJECTS_PARAM, s.objects);
-    g.import_buffer(
-        "objects",
-        BufferDesc::array_param(CLUSTERABLE_OBJECT, OBJECTS_PARAM),
-        OBJECT_USAGE,
-    );
-    g.import_buffer(
-        "object_count",
-        BufferDesc::array(Element::U32, 1),
-        OBJECT_USAGE,
-    );
+/// A pipeline file of the caller's with `s` applied ([`apply`]), its counters read back.
+pub fn load(path: &Path, s: &ClusteringSettings) -> Result<GraphBuilder> {
+    from_pipeline(Pipeline::load(path)?, s)
 }
 
-fn export_and_read_back(g: &mut GraphBuilder) -> Result<()> {
+fn from_pipeline(mut p: Pipeline, s: &ClusteringSettings) -> Result<GraphBuilder> {
+    apply(&mut p, s)?;
+    let mut g = p.build(&meshlight::registry())?;
     for name in [
         "cluster_grid",
         "cluster_offsets",
@@ -244,7 +186,8 @@ fn export_and_read_back(g: &mut GraphBuilder) -> Result<()> {
         })?;
         g.export(handle);
     }
-    add_readbacks(g)
+    add_readbacks(&mut g)?;
+    Ok(g)
 }
 
 /// The counters come back [`COUNTS_LATENCY`] frames later.
@@ -261,16 +204,6 @@ pub fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
         Some(0..8),
         COUNTS_LATENCY,
     )
-}
-
-/// A pipeline file with the clusterer's sizes set in its `[params]`, the counters' read
-/// backs added. The grid's shape and the implementations are the file's.
-pub fn load(path: &Path, s: &ClusteringSettings) -> Result<GraphBuilder> {
-    let mut pipeline = meshlight::graph::file::Pipeline::load(path)?;
-    pipeline.set_params(overrides(s))?;
-    let mut g = pipeline.build(&meshlight::registry())?;
-    add_readbacks(&mut g)?;
-    Ok(g)
 }
 
 /// The `[params]` the clusterer sets in a pipeline file.

@@ -166,7 +166,8 @@ impl Overlay {
 
     fn controls(&mut self, ui: &mut egui::Ui, f: &Facts<'_>, actions: &mut OverlayActions) {
         let s = f.settings;
-        let mut view = s.view;
+        let shown = f.renderer.view;
+        let mut view = shown;
         egui::ComboBox::from_label("view")
             .selected_text(view.name())
             .show_ui(ui, |ui| {
@@ -175,16 +176,23 @@ impl Overlay {
                 }
             });
         ui.small(legend(view));
-        if view != s.view {
+        if view != shown {
             actions.view = Some(view);
         }
-        let mut lod = self.lod_px.unwrap_or(s.lod_threshold_px);
-        let mut sw = self.sw_px.unwrap_or(s.sw_threshold_px.unwrap_or(0.0));
-        let lod_slider = ui.add(egui::Slider::new(&mut lod, 0.1..=16.0).text("LOD px"));
-        let sw_slider = ui.add(egui::Slider::new(&mut sw, 0.0..=256.0).text("sw/hw split px"));
-        if f.pipeline.is_some() {
-            ui.small("a pipeline file keeps its own thresholds");
-        }
+        let (lod_now, sw_now) = f.renderer.thresholds();
+        let mut lod = self.lod_px.unwrap_or(s.lod_threshold_px.unwrap_or(lod_now));
+        let mut sw = self.sw_px.unwrap_or(s.sw_threshold_px.unwrap_or(sw_now));
+        let lod_slider = ui.add(
+            egui::Slider::new(&mut lod, 0.1..=16.0)
+                .logarithmic(true)
+                .text("LOD px"),
+        );
+        // Up to the largest split any adapter class uses: every cluster to software.
+        let sw_slider = ui.add(
+            egui::Slider::new(&mut sw, 0.0..=meshlight::cull_lod::EVERY_CLUSTER_PX)
+                .logarithmic(true)
+                .text("sw/hw split px"),
+        );
         self.lod_px = Some(lod);
         self.sw_px = Some(sw);
         let released = lod_slider.drag_stopped()

@@ -1,8 +1,8 @@
-//! The pipeline file, watched and edited: its modification time polled (no watcher
-//! thread or crate), the stages the overlay chose written into a copy of it, and an
-//! error placed at a line of the file so the overlay can say where.
+//! The pipeline file, watched: its modification time polled (no watcher thread or
+//! crate), and an error placed at a line of the file so the overlay can say where. The
+//! overlay's choices reach the frame as settings, through the pipeline API; the file is
+//! never rewritten.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime};
 
@@ -101,82 +101,11 @@ fn line_named(message: &str) -> Option<usize> {
     })
 }
 
-/// `text` with the `implementation` of every `[[pass]]` of a stage in `chosen` set to
-/// the chosen name; every other line stays where it was, so line numbers still match
-/// the file.
-pub fn with_implementations(text: &str, chosen: &BTreeMap<String, String>) -> String {
-    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
-    let mut blocks: Vec<(usize, Option<String>, Option<usize>)> = Vec::new();
-    let value = |l: &str, key: &str| -> Option<String> {
-        let (k, v) = l.split_once('=')?;
-        (k.trim() == key).then(|| {
-            v.split('#')
-                .next()
-                .unwrap_or_default()
-                .trim()
-                .trim_matches('"')
-                .to_string()
-        })
-    };
-    for (i, line) in lines.iter().enumerate() {
-        let t = line.trim();
-        if t.starts_with('[') {
-            if t == "[[pass]]" {
-                blocks.push((i, None, None));
-            } else if t.starts_with("[[") || !t.starts_with("[pass") {
-                blocks.push((i, Some(String::new()), None));
-            }
-            continue;
-        }
-        if let Some((_, stage, implementation)) = blocks.last_mut() {
-            if stage.is_none()
-                && let Some(s) = value(t, "stage")
-            {
-                *stage = Some(s);
-            } else if value(t, "implementation").is_some() {
-                *implementation = Some(i);
-            }
-        }
-    }
-    for (start, stage, implementation) in blocks.into_iter().rev() {
-        let Some(name) = stage.as_deref().and_then(|s| chosen.get(s)) else {
-            continue;
-        };
-        let line = format!("implementation = \"{name}\"");
-        match implementation {
-            Some(i) => lines[i] = line,
-            None => lines[start] = format!("[[pass]]\n{line}"),
-        }
-    }
-    let mut out = lines.join("\n");
-    out.push('\n');
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     const FILE: &str = "name = \"f\"\n\n[[pass]]\nname = \"a\"\nstage = \"sw_raster\"\nimplementation = \"auto\" # best\n\n[[resource]]\nname = \"r\"\nimplementation = \"x\"\n\n[[pass]]\nimplementation = \"single_pass\"\nstage = \"depth_pyramid\"\nparams = { mip = 1 }\n";
-
-    #[test]
-    fn chosen_implementations_replace_their_stages_lines_only() {
-        let chosen = BTreeMap::from([
-            ("sw_raster".to_string(), "buffer".to_string()),
-            ("depth_pyramid".to_string(), "two_pass".to_string()),
-        ]);
-        let out = with_implementations(FILE, &chosen);
-        let lines: Vec<&str> = out.lines().collect();
-        assert_eq!(lines.len(), FILE.lines().count());
-        assert_eq!(lines[5], "implementation = \"buffer\"");
-        assert_eq!(
-            lines[9], "implementation = \"x\"",
-            "a resource's line changed"
-        );
-        assert_eq!(lines[12], "implementation = \"two_pass\"");
-        let parsed: toml::Table = toml::from_str(&out).expect("still TOML");
-        assert_eq!(parsed["pass"].as_array().map(Vec::len), Some(2));
-    }
 
     #[test]
     fn errors_are_placed_at_the_parsers_line_or_the_quoted_name() {

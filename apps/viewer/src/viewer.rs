@@ -6,13 +6,13 @@ use crate::camera::CameraRig;
 use crate::options::ViewerOptions;
 use crate::overlay::{Overlay, OverlayActions};
 use crate::present::{Blit, add_present, present_texture};
-use crate::reload::{FileError, PipelineWatch, locate, with_implementations};
+use crate::reload::{FileError, PipelineWatch, locate};
 use meshlight::gpu_scene::Camera;
 use meshlight::graph::{FrameStats, GraphError};
 use meshlight::resolve::DebugView;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer, setup};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
 use winit::window::Window;
@@ -98,10 +98,9 @@ pub struct Viewer {
     pub renderer: Renderer,
     pub rig: CameraRig,
     options: ViewerOptions,
-    /// The settings the graph is built with (width, view, thresholds, implementations).
+    /// The settings the graph is built with (width, view, thresholds, implementations
+    /// chosen in the overlay or through the API).
     settings: FrameSettings,
-    /// Stage → implementation chosen in the overlay (or through the API).
-    chosen: BTreeMap<String, String>,
     present: wgpu::Texture,
     watch: Option<PipelineWatch>,
     /// The last error a rebuild reported; the last good graph keeps rendering meanwhile.
@@ -115,8 +114,6 @@ pub struct Viewer {
     overlay: Overlay,
     target: Option<Target>,
     registry: meshlight::graph::file::Registry,
-    /// Where the file with the overlay's choices written into it is kept.
-    edited: PathBuf,
 }
 
 impl Viewer {
@@ -140,7 +137,6 @@ impl Viewer {
         let mut viewer = Self {
             rig: CameraRig::new(camera),
             settings,
-            chosen: BTreeMap::new(),
             present,
             watch: o.scene.pipeline.clone().map(PipelineWatch::new),
             error: None,
@@ -152,11 +148,6 @@ impl Viewer {
             overlay: Overlay::default(),
             target: None,
             registry: meshlight::registry(),
-            edited: std::env::temp_dir().join(format!(
-                "meshlight-view-{}-{:p}.toml",
-                std::process::id(),
-                &device
-            )),
             options,
             renderer,
         };
@@ -166,7 +157,7 @@ impl Viewer {
             .import_texture(crate::present::PRESENT, &texture);
         // The first graph gets the copy into the viewer's texture.
         viewer
-            .apply(viewer.settings.clone(), viewer.chosen.clone())
+            .apply(viewer.settings.clone())
             .map_err(ViewerError::Other)?;
         if let Some(w) = window {
             viewer.attach(w)?;
@@ -307,32 +298,32 @@ impl Viewer {
     }
 
     /// Runs `stage` with `implementation` from now on. On an error (the adapter cannot
-    /// run it, the frame built in code does not choose it) the error is kept in
-    /// [`Self::error`] and returned, and the last good graph keeps rendering.
+    /// run it, the pipeline has no such stage) the error is kept in [`Self::error`] and
+    /// returned, and the last good graph keeps rendering.
     pub fn select_implementation(
         &mut self,
         stage: &str,
         implementation: &str,
     ) -> Result<(), String> {
-        let mut chosen = self.chosen.clone();
-        chosen.insert(stage.to_string(), implementation.to_string());
-        self.apply(self.settings.clone(), chosen)
+        let s = self
+            .settings
+            .clone()
+            .with_implementation(stage, implementation);
+        self.apply(s)
     }
 
     /// Shows `view` (rebuilds the graph).
     pub fn set_view(&mut self, view: DebugView) -> Result<(), String> {
-        let mut s = self.settings.clone();
-        s.view = view;
-        s.keep_file_view = false;
-        self.apply(s, self.chosen.clone())
+        let s = self.settings.clone().with_view(view);
+        self.apply(s)
     }
 
     /// Sets the LOD threshold and the software/hardware split (pixels) and rebuilds.
     pub fn set_thresholds(&mut self, lod_px: f32, sw_px: f32) -> Result<(), String> {
         let mut s = self.settings.clone();
-        s.lod_threshold_px = lod_px;
+        s.lod_threshold_px = Some(lod_px);
         s.sw_threshold_px = Some(sw_px);
-        self.apply(s, self.chosen.clone())
+        self.apply(s)
     }
 
     /// Renders at `width` × `height` from the next frame (the graph rebuilt at that size;
@@ -362,7 +353,7 @@ impl Viewer {
         if let Some(c) = &mut s.clustering {
             c.viewport = [width, height];
         }
-        self.apply(s, self.chosen.clone())
+        self.apply(s)
     }
 
     /// Places the camera (a camera cut for the renderer).
@@ -374,21 +365,16 @@ impl Viewer {
     /// Re-reads the pipeline file now (as a change of it does), rebuilding the graph;
     /// an error is shown and returned, the last good graph kept.
     pub fn reload_pipeline(&mut self) -> Result<(), String> {
-        self.apply(self.settings.clone(), self.chosen.clone())
+        self.apply(self.settings.clone())
     }
 
-    /// Builds the graph for `settings` and `chosen`; only a success replaces the
-    /// current graph, settings and choices.
-    fn apply(
-        &mut self,
-        mut settings: FrameSettings,
-        chosen: BTreeMap<String, String>,
-    ) -> Result<(), String> {
-        let result = self.try_apply(&mut settings, &chosen);
+    /// Builds the graph for `settings`; only a success replaces the current graph and
+    /// settings.
+    fn apply(&mut self, settings: FrameSettings) -> Result<(), String> {
+        let result = self.try_apply(&settings);
         match result {
             Ok(()) => {
                 self.settings = settings;
-                self.chosen = chosen;
                 self.error = None;
                 self.file_error = None;
                 Ok(())
@@ -400,44 +386,10 @@ impl Viewer {
         }
     }
 
-    fn try_apply(
-        &mut self,
-        settings: &mut FrameSettings,
-        chosen: &BTreeMap<String, String>,
-    ) -> Result<(), String> {
+    fn try_apply(&mut self, settings: &FrameSettings) -> Result<(), String> {
         let source = match &self.options.scene.pipeline {
-            None => {
-                for (stage, name) in chosen {
-                    match stage.as_str() {
-                        "sw_raster" => settings.sw_raster = name.clone(),
-                        "hw_raster" => settings.hw_raster = name.clone(),
-                        "fill_clusters" => settings.hierarchy = name == "hierarchy",
-                        _ => {
-                            return Err(format!(
-                                "the frame built in code picks `{stage}` itself; to choose it, run with --pipeline (e.g. pipelines/virtual_geometry.toml) and pick it there"
-                            ));
-                        }
-                    }
-                }
-                GraphSource::Code
-            }
-            Some(path) => {
-                let text = std::fs::read_to_string(path).map_err(|e| {
-                    self.file_error = Some(FileError {
-                        file: path.clone(),
-                        line: None,
-                        message: format!("cannot read it: {e}"),
-                    });
-                    format!("{}: cannot read it: {e}", path.display())
-                })?;
-                if chosen.is_empty() {
-                    GraphSource::File(path.clone())
-                } else {
-                    std::fs::write(&self.edited, with_implementations(&text, chosen))
-                        .map_err(|e| format!("cannot write {}: {e}", self.edited.display()))?;
-                    GraphSource::File(self.edited.clone())
-                }
-            }
+            None => GraphSource::Shipped,
+            Some(path) => GraphSource::File(path.clone()),
         };
         let size_changed =
             (settings.width, settings.height) != (self.present.width(), self.present.height());
@@ -456,10 +408,6 @@ impl Viewer {
         if let Err(e) = rebuilt {
             let message = e.to_string();
             if let Some(path) = &self.options.scene.pipeline {
-                let message = message.replace(
-                    &self.edited.display().to_string(),
-                    &path.display().to_string(),
-                );
                 let prefix = format!("pipeline file {}: ", path.display());
                 let message = message.strip_prefix(&prefix).unwrap_or(&message);
                 let text = std::fs::read_to_string(path).unwrap_or_default();
@@ -470,11 +418,6 @@ impl Viewer {
             }
             return Err(message);
         }
-        // The renderer took the view from the file where the file names one.
-        *settings = FrameSettings {
-            view: self.renderer.settings.view,
-            ..settings.clone()
-        };
         if size_changed {
             self.present = present;
             let texture = self.present.clone();
@@ -716,7 +659,8 @@ impl Viewer {
             .into_iter()
             .map(|(stage, names)| {
                 let now = self
-                    .chosen
+                    .settings
+                    .implementations
                     .get(&stage)
                     .cloned()
                     .or_else(|| current.get(&stage).cloned())
@@ -791,12 +735,6 @@ impl Target {
                 egui_wgpu::RendererOptions::default(),
             ),
         }
-    }
-}
-
-impl Drop for Viewer {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.edited);
     }
 }
 

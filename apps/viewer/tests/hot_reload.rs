@@ -67,7 +67,7 @@ fn broken_then_fixed_pipeline_file() {
     std::fs::write(&file, &fixed).expect("write");
     assert!(v.poll_pipeline(true));
     assert_eq!(v.error, None, "the fixed file still reports an error");
-    assert_eq!(v.renderer.settings.view, DebugView::Lod);
+    assert_eq!(v.renderer.view, DebugView::Lod);
     v.run_frames(3).expect("frames");
     let after = v.read_image().expect("image").2;
     assert_ne!(after, before, "the new graph renders the old image");

@@ -7,7 +7,7 @@ pub fn main() -> Result<(), Box<dyn std::error::Error>> {
     let asset = scenes::load_asset("assets/meshes/spot.obj".as_ref(), 0)?;
     let placed = scenes::field(SceneData::new(Default::default()), &asset, 64)?;
     let settings = FrameSettings::new(640, 360);
-    let mut renderer = Renderer::new(placed.data, settings, &GraphSource::Code)?;
+    let mut renderer = Renderer::new(placed.data, settings, &GraphSource::Shipped)?;
     let still = renderer.render_still(&placed.camera)?;
     println!("{} × {} RGBA pixels", still.width, still.height);
     for (counter, value) in still.counts.rows() {

@@ -20,10 +20,11 @@ pub mod counts;
 pub mod frame_graph;
 pub mod renderer;
 pub mod scenes;
+pub mod settings;
 pub mod setup;
-pub mod split;
 
 pub use counts::FrameCounts;
-pub use frame_graph::{FrameSettings, GraphSource};
+pub use frame_graph::GraphSource;
+pub use settings::{FrameSettings, HostTargets};
 pub use renderer::{Renderer, Still};
 pub use setup::{SceneOptions, SceneSetup, SetupError, setup};

@@ -9,14 +9,20 @@ use super::counts::{
     RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK, SECOND_HIERARCHY_COUNTS_READBACK,
     SECOND_WALK_COUNT_READBACK,
 };
-use super::frame_graph::{CLUSTERS_PARAM, FrameSettings, GraphSource, MAX_SLOTS, SLOTS_PARAM};
+use super::frame_graph::{
+    CLUSTERS_PARAM, DEPTH, Frame, GraphSource, HOST_TARGET, MAX_SLOTS, SLOTS_PARAM, frame,
+};
+use meshlight::graph::file::Pipeline;
+use super::settings::FrameSettings;
 use glam::Mat4;
+use meshlight::gpu_scene::data::Limits;
 use meshlight::gpu_scene::{Camera, GpuScene, SceneData};
 use meshlight::graph::{
-    CompileOptions, CompiledGraph, Executor, FrameData, FrameStats, GpuAdapter, GraphError, Result,
+    AdapterClass, CompileOptions, CompiledGraph, Executor, FrameData, FrameStats, GpuAdapter,
+    GpuContext, GraphError, Imports, Result, experimental_features, feature_names,
 };
+use meshlight::resolve::DebugView;
 use meshlight::shaders::cpu::layout::ClusterableObject;
-use meshlight_light_clustering::ClusteringSettings;
 use meshlight_light_clustering::clusterer::Counters;
 use meshlight_light_clustering::frame_graph::OBJECT_USAGE;
 pub use meshlight_light_clustering::growth::Growth;
@@ -46,7 +52,12 @@ pub struct Renderer {
     /// frame; a scene that outgrows its buffers (more meshes or instances) needs a new
     /// renderer, whose graph is sized for it.
     pub data: SceneData,
+    /// What the frame was built with.
     pub settings: FrameSettings,
+    /// What the frame's `resolve` shows (the settings' view, or the pipeline's own).
+    pub view: DebugView,
+    /// The pipeline the frame was built from, as the settings left it.
+    pub pipeline: Pipeline,
     pub compiled: CompiledGraph,
     pub executor: Executor,
     scene: GpuScene,
@@ -96,42 +107,85 @@ struct PendingCounts {
 }
 
 impl Renderer {
-    /// Selects the adapter, builds and compiles the graph for it (which decides the
-    /// device's features), opens the device and uploads the scene.
-    pub fn new(
-        mut data: SceneData,
-        mut settings: FrameSettings,
+    /// Selects the adapter ([`meshlight::graph::AdapterOptions::from_env`]), builds the
+    /// frame and compiles it for that adapter (which decides the device's features),
+    /// opens the device and uploads the scene.
+    pub fn new(data: SceneData, settings: FrameSettings, source: &GraphSource) -> Result<Self> {
+        let adapter = GpuAdapter::select()?;
+        settings.check_viewport(adapter.adapter.limits().max_texture_dimension_2d)?;
+        let Frame {
+            graph,
+            pipeline,
+            view,
+        } = frame(source, &data, &settings)?;
+        let compiled = graph.compile(&CompileOptions::for_adapter(&adapter))?;
+        let gpu = adapter.open(compiled.plan.enabled_features)?;
+        Ok(Self::on(gpu, data, settings, (pipeline, view), compiled))
+    }
+
+    /// A renderer on a host application's device ([`GpuContext::from_host`]): it creates
+    /// its buffers, textures and pipelines there, records and submits on the host's
+    /// queue, and opens no device or surface of its own. The device must have the
+    /// features [`Self::required_features`] gives for its adapter; without them the
+    /// error lists what to request.
+    pub fn with_gpu(
+        gpu: GpuContext,
+        data: SceneData,
+        settings: FrameSettings,
         source: &GraphSource,
     ) -> Result<Self> {
-        if settings.keep_file_view
-            && let GraphSource::File(path) | GraphSource::FileWith(path, _) = source
-            && let Some(view) = super::frame_graph::view_in_file(path)?
-        {
-            // The frame loop's choices (an occlusion view's extra frame) follow the
-            // view the file shows.
-            settings.view = view;
-        }
-        if let GraphSource::File(path) | GraphSource::FileWith(path, _) = source
-            && settings.clustering.is_none()
-            && super::frame_graph::file_clusters_lights(path)
-        {
-            // A file that clusters lights runs its clustering with none: empty lists.
-            settings.clustering = Some(ClusteringSettings::new(
-                [settings.width, settings.height],
-                1,
-            ));
-        }
-        let adapter = GpuAdapter::select()?;
-        let class = super::split::AdapterClass::of(&adapter.info());
-        settings.hardware = Some(settings.hardware_on(class));
-        settings.adapter_class = Some(class);
-        settings.sw_threshold_px = Some(settings.sw_threshold_on(class));
-        let limits = adapter.adapter.limits();
-        settings.check_viewport(limits.max_texture_dimension_2d)?;
-        let compiled = source
-            .graph(&data, &settings)?
-            .compile(&CompileOptions::for_adapter(&adapter))?;
-        let gpu = adapter.open(compiled.plan.enabled_features)?;
+        settings.check_viewport(gpu.device.limits().max_texture_dimension_2d)?;
+        let Frame {
+            graph,
+            pipeline,
+            view,
+        } = frame(source, &data, &settings)?;
+        let compiled = match graph.compile(&CompileOptions::for_gpu(&gpu)) {
+            Ok(compiled) => compiled,
+            Err(GraphError::MissingFeature { .. }) => {
+                let wanted = Self::required_features(&gpu.adapter, &settings)?;
+                return Err(GraphError::DeviceLacksFeatures {
+                    features: feature_names(wanted - gpu.features),
+                    instead: "create the device with these among its `required_features`: `Renderer::required_features(&adapter, &settings)` gives them all".into(),
+                });
+            }
+            Err(e) => return Err(e),
+        };
+        Ok(Self::on(gpu, data, settings, (pipeline, view), compiled))
+    }
+
+    /// The features the frame uses on `adapter` with `settings`: what a host requests
+    /// when it creates the device it hands to [`Self::with_gpu`]. Planned without wgpu's
+    /// experimental features (mesh shaders), which need the host's own opt-in; a device
+    /// that has them lets `auto` pick them.
+    pub fn required_features(adapter: &wgpu::Adapter, settings: &FrameSettings) -> Result<wgpu::Features> {
+        let limits = adapter.limits();
+        let data = SceneData::new(Limits::for_device(&limits));
+        let frame = frame(&GraphSource::Shipped, &data, settings)?;
+        let options = CompileOptions {
+            adapter_features: adapter.features() - experimental_features(),
+            limits,
+            class: AdapterClass::of(&adapter.get_info()),
+        };
+        Ok(frame.graph.compile(&options)?.plan.enabled_features)
+    }
+
+    /// The limits to create a host's device with: the adapter's own. The scene's buffers
+    /// are sized to the device's limits, so larger ones hold larger scenes; a device
+    /// whose limits a frame exceeds is refused when the frame compiles, naming the limit.
+    pub fn required_limits(adapter: &wgpu::Adapter) -> wgpu::Limits {
+        adapter.limits()
+    }
+
+    /// The renderer on an open device, for a compiled frame.
+    fn on(
+        gpu: GpuContext,
+        mut data: SceneData,
+        settings: FrameSettings,
+        (pipeline, view): (Pipeline, DebugView),
+        compiled: CompiledGraph,
+    ) -> Self {
+        let limits = gpu.device.limits();
         let name = gpu.info.name.clone();
         let scene = GpuScene::new(&gpu, &mut data);
         let max_elements = limits
@@ -147,24 +201,14 @@ impl Renderer {
             }),
             object_count: gpu.buffer_with_data("object_count", &[0; 4], OBJECT_USAGE),
         });
-        let two_pass = compiled
-            .plan
-            .pass_index(&format!("readback:{SECOND_COUNTS_READBACK}"))
-            .is_some();
-        let walks_hierarchy = compiled
-            .plan
-            .pass_index(&format!("readback:{HIERARCHY_COUNTS_READBACK}"))
-            .is_some();
-        let walks_twice = compiled
-            .plan
-            .pass_index(&format!("readback:{SECOND_WALK_COUNT_READBACK}"))
-            .is_some();
-        Ok(Self {
+        let mut renderer = Self {
             data,
             settings,
-            two_pass,
-            walks_hierarchy,
-            walks_twice,
+            view,
+            pipeline,
+            two_pass: false,
+            walks_hierarchy: false,
+            walks_twice: false,
             cut: false,
             moved: Vec::new(),
             compiled,
@@ -181,13 +225,68 @@ impl Renderer {
             light_buffers,
             clustering: Counters::new(max_elements * 2),
             imported_textures: Vec::new(),
-        })
+        };
+        renderer.note_readbacks();
+        renderer
+    }
+
+    /// Which counters the compiled frame reads back.
+    fn note_readbacks(&mut self) {
+        let has = |name: &str| {
+            self.compiled
+                .plan
+                .pass_index(&format!("readback:{name}"))
+                .is_some()
+        };
+        self.two_pass = has(SECOND_COUNTS_READBACK);
+        self.walks_hierarchy = has(HIERARCHY_COUNTS_READBACK);
+        self.walks_twice = has(SECOND_WALK_COUNT_READBACK);
     }
 
     /// Records and submits one frame seen by `camera`; never waits for the GPU. Counters
     /// of earlier frames that have come back are taken, and a list that overflowed is
     /// grown for the next frame.
     pub fn frame(&mut self, camera: &Camera) -> Result<FrameStats> {
+        self.run_frame(camera, Imports::new())
+    }
+
+    /// [`Self::frame`] into a host's targets (the renderer made with
+    /// [`FrameSettings::host`]): the image drawn into `color` (the texture of the format
+    /// the settings named, at the frame's size, with `RENDER_ATTACHMENT`), and with a
+    /// depth target, the scene's reverse-Z depth into `depth` (`Depth32Float`), ready
+    /// for the host's own geometry to be drawn over with `LoadOp::Load` and a
+    /// `Greater` depth test. Submitted on the host's queue before this returns, so
+    /// whatever the host submits next sees it.
+    pub fn draw(
+        &mut self,
+        camera: &Camera,
+        color: &wgpu::Texture,
+        depth: Option<&wgpu::Texture>,
+    ) -> Result<FrameStats> {
+        let Some(host) = self.settings.host else {
+            return Err(GraphError::Setting {
+                setting: "FrameSettings::host".into(),
+                message: "the renderer was made without host targets; set `FrameSettings::host` to the formats of the textures `draw` is given".into(),
+            });
+        };
+        if host.depth != depth.is_some() {
+            return Err(GraphError::Setting {
+                setting: "FrameSettings::host.depth".into(),
+                message: format!(
+                    "the renderer was made {} a host depth target but `draw` was given {}; give a depth texture exactly when `host.depth` is set",
+                    if host.depth { "with" } else { "without" },
+                    if depth.is_some() { "one" } else { "none" }
+                ),
+            });
+        }
+        let mut imports = Imports::new().texture(HOST_TARGET, color);
+        if let Some(depth) = depth {
+            imports = imports.texture(DEPTH, depth);
+        }
+        self.run_frame(camera, imports)
+    }
+
+    fn run_frame(&mut self, camera: &Camera, extra: Imports) -> Result<FrameStats> {
         let viewport = [self.settings.width, self.settings.height];
         let view = camera.view(viewport, self.frame_index, self.previous_view_projection);
         self.previous_view_projection = Some(Mat4::from_cols_array_2d(&view.view_projection));
@@ -197,7 +296,7 @@ impl Renderer {
         let frame = FrameData::new()
             .with(meshlight::gpu_scene::names::VIEW, bytemuck::bytes_of(&view))
             .with(meshlight::cull_lod::CAMERA_CUT_INPUT, &cut.to_le_bytes());
-        let mut imports = self.scene.imports();
+        let mut imports = self.scene.imports().merge(extra);
         if let Some(b) = &self.light_buffers {
             let limit = self.settings.clustering.as_ref().map_or(0, |c| c.objects);
             if self.lights.len() as u64 > limit {
@@ -279,7 +378,7 @@ impl Renderer {
     /// yet, so the image shows what the frame culls against its own history rather than
     /// a first frame, which has none.
     pub fn render_still(&mut self, camera: &Camera) -> Result<Still> {
-        if self.two_pass && self.settings.view.needs_occlusion_records() && self.frame_index == 0 {
+        if self.two_pass && self.view.needs_occlusion_records() && self.frame_index == 0 {
             let submitted = self.frame(camera)?.frame;
             meshlight::still::finish(&mut self.executor, submitted)?;
             self.take_counts()?;
@@ -429,6 +528,30 @@ impl Renderer {
     pub fn param(&self, name: &str) -> u64 {
         param_value(&self.compiled, name)
     }
+
+    /// The LOD threshold and the software/hardware split the first culling pass uses,
+    /// in pixels (an `auto` split resolved for the adapter's class).
+    pub fn thresholds(&self) -> (f32, f32) {
+        let defaults = meshlight::cull_lod::Thresholds::default();
+        let cull = self.pipeline.passes_of(meshlight::cull_lod::STAGE).next();
+        let number = |key: &str| {
+            cull.and_then(|c| c.param(key)).and_then(|v| match v {
+                toml::Value::Float(f) => Some(*f as f32),
+                toml::Value::Integer(i) => Some(*i as f32),
+                _ => None,
+            })
+        };
+        let auto = cull.and_then(|c| c.param_str("sw_threshold_px")) == Some("auto");
+        let sw = if auto {
+            meshlight::cull_lod::sw_threshold_on(self.compiled.plan.class).0
+        } else {
+            number("sw_threshold_px").unwrap_or(defaults.sw_threshold_px)
+        };
+        (
+            number("lod_threshold_px").unwrap_or(defaults.lod_threshold_px),
+            sw,
+        )
+    }
 }
 
 /// Changing the frame while it runs: a window resized, an implementation or a threshold
@@ -446,43 +569,35 @@ impl Renderer {
         mut settings: FrameSettings,
         extend: &dyn Fn(&mut meshlight::graph::GraphBuilder, &FrameSettings) -> Result<()>,
     ) -> Result<()> {
-        if settings.keep_file_view
-            && let GraphSource::File(path) | GraphSource::FileWith(path, _) = source
-            && let Some(view) = super::frame_graph::view_in_file(path)?
-        {
-            settings.view = view;
-        }
         let gpu = &self.executor.gpu;
         settings.check_viewport(gpu.device.limits().max_texture_dimension_2d)?;
-        settings.clusters = settings.clusters.max(self.param(CLUSTERS_PARAM));
-        settings.slots = settings.slots.max(self.param(SLOTS_PARAM));
-        let mut builder = source.graph(&self.data, &settings)?;
-        extend(&mut builder, &settings)?;
-        let compiled = builder.compile(&CompileOptions::for_gpu(gpu))?;
+        // The lists keep what they grew to.
+        for (size, param) in [
+            (&mut settings.clusters, CLUSTERS_PARAM),
+            (&mut settings.slots, SLOTS_PARAM),
+        ] {
+            if let Some(now) = self.compiled.param(param) {
+                *size = Some(size.map_or(now, |asked| asked.max(now)));
+            }
+        }
+        let frame = frame(source, &self.data, &settings)?;
+        let mut graph = frame.graph;
+        extend(&mut graph, &settings)?;
+        let compiled = graph.compile(&CompileOptions::for_gpu(gpu))?;
         let missing = compiled.plan.enabled_features - gpu.features;
         if !missing.is_empty() {
             return Err(GraphError::DeviceLacksFeatures {
-                features: missing
-                    .iter_names()
-                    .map(|(name, _)| name)
-                    .collect::<Vec<_>>()
-                    .join(", "),
+                features: feature_names(missing),
                 instead:
                     "the device was opened for the first graph; start with this choice instead"
                         .into(),
             });
         }
-        let has = |name: &str| {
-            compiled
-                .plan
-                .pass_index(&format!("readback:{name}"))
-                .is_some()
-        };
-        self.two_pass = has(SECOND_COUNTS_READBACK);
-        self.walks_hierarchy = has(HIERARCHY_COUNTS_READBACK);
-        self.walks_twice = has(SECOND_WALK_COUNT_READBACK);
         self.compiled = compiled;
+        self.note_readbacks();
         self.settings = settings;
+        self.view = frame.view;
+        self.pipeline = frame.pipeline;
         self.pending.clear();
         self.latest = None;
         self.previous_view_projection = None;

@@ -28,9 +28,10 @@ pub mod env {
 pub struct HostTargets {
     /// The format of the host's colour texture (a swapchain's `Bgra8UnormSrgb`, say).
     pub color: wgpu::TextureFormat,
-    /// The format of the host's depth texture, when the scene's depth is wanted there
-    /// (`Depth32Float`: meshlight draws reverse-Z, 1 at the near plane, 0 far away).
-    pub depth: Option<wgpu::TextureFormat>,
+    /// Whether the scene's depth goes into the host's depth texture: a `Depth32Float`
+    /// texture, which resolve writes reverse-Z (1 at the near plane, 0 far away and
+    /// where nothing was drawn).
+    pub depth: bool,
 }
 
 /// What a frame is asked for. `None` everywhere but the viewport: the pipeline's own
@@ -56,9 +57,10 @@ pub struct FrameSettings {
     pub implementations: BTreeMap<String, String>,
     /// `Some(false)`: no hardware rasteriser; culling sends every cluster to software,
     /// which clips those crossing the near plane. `Some(true)`: one on every adapter.
-    /// `None`: the pipeline's (the shipped frame: the adapter class decides, see
-    /// `meshlight::graph::AdapterClass::hardware_raster`). `MESHLIGHT_HARDWARE_RASTER`
-    /// sets it.
+    /// `None`: on where a split is given ([`Self::sw_threshold_px`] asks for both
+    /// rasterisers), else the pipeline's (the shipped frame: the adapter class decides,
+    /// see `meshlight::graph::AdapterClass::hardware_raster`).
+    /// `MESHLIGHT_HARDWARE_RASTER` sets it.
     pub hardware: Option<bool>,
     /// Initial candidate-list and raster-slot sizes (the renderer grows them on
     /// overflow); `None`: the pipeline's `[params]`.

@@ -3,7 +3,8 @@
 //! from a pipeline file) and the frame's settings. Both applications start from
 //! [`setup`], so a window and a still of the same options draw the same frame.
 
-use crate::frame_graph::{FrameSettings, GraphSource, file_clusters_lights};
+use crate::frame_graph::GraphSource;
+use crate::settings::FrameSettings;
 use crate::scenes;
 use meshlight::gpu_scene::{Camera, SceneData, SceneDataError, data::Limits};
 use meshlight::graph::{GpuAdapter, GraphError};
@@ -56,10 +57,14 @@ impl SceneOptions {
         }
     }
 
-    /// Whether the graph clusters lights: the frame built in code does, a pipeline file
-    /// does when it has the clustering's passes.
+    /// Whether the graph clusters lights: the shipped frame does, a pipeline file does
+    /// when it has the clustering's passes (one that cannot be read does not; loading
+    /// it says why).
     pub fn graph_clusters_lights(&self) -> bool {
-        self.pipeline.as_deref().is_none_or(file_clusters_lights)
+        self.pipeline.as_deref().is_none_or(|path| {
+            meshlight::graph::file::Pipeline::load(path)
+                .is_ok_and(|p| p.has_stage(meshlight::z_slice::STAGE))
+        })
     }
 
     /// The lights asked for, explicitly or by default.
@@ -77,7 +82,7 @@ impl SceneOptions {
         let Some(path) = &self.pipeline else {
             return Ok(());
         };
-        meshlight::graph::file::read_pipeline_text(path)?;
+        meshlight::graph::file::Pipeline::load(path)?;
         let lights = self.lights_asked();
         if lights > 0 && self.instances > 1 && !self.graph_clusters_lights() {
             return Err(GraphError::PipelineFile {
@@ -136,8 +141,7 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     };
     let mut settings = FrameSettings::new(o.width, o.height);
     // A view given wins over a pipeline file's; none given leaves the file's.
-    settings.view = o.view.unwrap_or_default();
-    settings.keep_file_view = o.view.is_none();
+    settings.view = o.view;
     let lights = if o.instances > 1 {
         scenes::field_lights(&placed, o.lights_asked())
     } else {
@@ -155,7 +159,7 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     }
     let source = match &o.pipeline {
         Some(path) => GraphSource::File(path.clone()),
-        None => GraphSource::Code,
+        None => GraphSource::Shipped,
     };
     Ok(SceneSetup {
         data: placed.data,

@@ -29,17 +29,17 @@ fn placed() -> Placed {
 
 fn settings(view: DebugView, sw: &str, hw: &str) -> FrameSettings {
     FrameSettings {
-        view,
-        sw_raster: sw.into(),
-        hw_raster: hw.into(),
         // Low, so that at this size both rasterisers draw.
         sw_threshold_px: Some(16.0),
         ..FrameSettings::new(W, H)
     }
+    .with_view(view)
+    .with_implementation(meshlight::sw_raster::STAGE, sw)
+    .with_implementation(meshlight::hw_raster::STAGE, hw)
 }
 
 fn render(placed: &Placed, settings: FrameSettings) -> Result<(Still, Renderer), GraphError> {
-    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Code)?;
+    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)?;
     let still = r.render_still(&placed.camera)?;
     Ok((still, r))
 }

@@ -172,7 +172,7 @@ fn renderer(occlusion: bool, split: Option<f32>, width: u32, height: u32) -> Ren
         material_depth: false,
         ..FrameSettings::new(width, height)
     };
-    Renderer::new(scene(), settings, &GraphSource::Code).unwrap_or_else(|e| panic!("{e}"))
+    Renderer::new(scene(), settings, &GraphSource::Shipped).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The frame's visibility target as (depth bits, instance, meshlet, triangle) per pixel.
@@ -386,7 +386,7 @@ fn the_pipeline_files_run_the_frames_built_in_code() {
             occlusion,
             ..FrameSettings::new(w, h)
         };
-        let mut code = Renderer::new(scene(), settings.clone(), &GraphSource::Code).unwrap();
+        let mut code = Renderer::new(scene(), settings.clone(), &GraphSource::Shipped).unwrap();
         let mut loaded = Renderer::new(scene(), settings, &pipeline(file)).unwrap();
         // Moving frames, so the two-pass frame has history to test against.
         for step in &steps[..5] {

@@ -39,10 +39,7 @@ fn render(placed: &Placed, settings: FrameSettings, source: &GraphSource) -> (St
 }
 
 fn settings(view: DebugView) -> FrameSettings {
-    FrameSettings {
-        view,
-        ..FrameSettings::new(W, H)
-    }
+    FrameSettings::new(W, H).with_view(view)
 }
 
 /// Whether the compiled frame runs the pass named `name`.
@@ -78,7 +75,7 @@ fn the_pipeline_file_and_the_graph_built_in_code_give_identical_images() {
         DebugView::Lod,
         DebugView::Raster,
     ] {
-        let (code, _) = render(&placed, settings(view), &GraphSource::Code);
+        let (code, _) = render(&placed, settings(view), &GraphSource::Shipped);
         let (file, r) = render(&placed, settings(view), &pipeline_file());
         assert_eq!(code.counts, file.counts, "{view:?}");
         assert!(
@@ -95,14 +92,14 @@ fn the_pipeline_file_and_the_graph_built_in_code_give_identical_images() {
 fn a_slot_buffer_far_too_small_overflows_grows_and_then_renders_the_right_image() {
     // Shaded: hardware clusters' ids depend on the slot count, their colours do not.
     let placed = field(16);
-    let (want, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let (want, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Shipped);
     assert_eq!(want.frames, 1, "the default lists hold this scene");
     let small = FrameSettings {
-        clusters: 64,
-        slots: 8,
+        clusters: Some(64),
+        slots: Some(8),
         ..settings(DebugView::Shaded)
     };
-    let (got, r) = render(&placed, small, &GraphSource::Code);
+    let (got, r) = render(&placed, small, &GraphSource::Shipped);
     // The first frame dropped candidates and slots, and each grow is logged. The slots
     // can only count the clusters the candidate list let through, so they may grow
     // again on the second frame: within three frames the image is right.
@@ -139,14 +136,14 @@ fn a_slot_buffer_far_too_small_overflows_grows_and_then_renders_the_right_image(
 /// The frame with `settings`, where both rasterisers draw, and the same frame with no
 /// hardware rasteriser, which draws the same clusters in software.
 fn with_and_without_hardware(placed: &Placed, settings: FrameSettings) -> (Still, Still) {
-    let (mixed, r) = render(placed, settings.clone(), &GraphSource::Code);
+    let (mixed, r) = render(placed, settings.clone(), &GraphSource::Shipped);
     assert!(runs(&r, "hw_raster"));
     assert!(mixed.counts.hardware > 0, "{:?}", mixed.counts);
     let all_sw = FrameSettings {
         hardware: Some(false),
         ..settings
     };
-    let (software, r) = render(placed, all_sw, &GraphSource::Code);
+    let (software, r) = render(placed, all_sw, &GraphSource::Shipped);
     assert!(!runs(&r, "hw_raster"));
     assert_eq!(software.counts.hardware, 0);
     assert_eq!(software.counts.visible, mixed.counts.visible);
@@ -225,11 +222,11 @@ fn no_background_shows_through_a_closed_mesh_drawn_at_a_mixed_lod_cut() {
     };
     let (w, h) = (384usize, 216usize);
     let cut_settings = FrameSettings {
-        view: DebugView::Lod,
-        lod_threshold_px: 1.0,
+        view: Some(DebugView::Lod),
+        lod_threshold_px: Some(1.0),
         ..FrameSettings::new(w as u32, h as u32)
     };
-    let (cut, _) = render(&placed, cut_settings.clone(), &GraphSource::Code);
+    let (cut, _) = render(&placed, cut_settings.clone(), &GraphSource::Shipped);
     let levels: std::collections::HashSet<[u8; 3]> = cut
         .rgba
         .chunks(4)
@@ -244,10 +241,10 @@ fn no_background_shows_through_a_closed_mesh_drawn_at_a_mixed_lod_cut() {
     let (lod0, _) = render(
         &placed,
         FrameSettings {
-            lod_threshold_px: 0.0,
+            lod_threshold_px: Some(0.0),
             ..cut_settings
         },
-        &GraphSource::Code,
+        &GraphSource::Shipped,
     );
     let inside = |x: usize, y: usize| {
         (y - 2..=y + 2).all(|yy| (x - 2..=x + 2).all(|xx| !empty(&lod0.rgba, yy * w + xx)))
@@ -276,11 +273,11 @@ fn under_one_pixel_of_error_the_depth_agrees_with_lod_zero() {
     let placed = field(9);
     let depth_of = |threshold: f32| {
         let s = FrameSettings {
-            lod_threshold_px: threshold,
+            lod_threshold_px: Some(threshold),
             depth: true,
             ..settings(DebugView::Shaded)
         };
-        let (_, mut r) = render(&placed, s, &GraphSource::Code);
+        let (_, mut r) = render(&placed, s, &GraphSource::Shipped);
         let bytes = r.executor.read_texture("depth").unwrap();
         bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)
     };
@@ -345,7 +342,7 @@ fn golden_images_of_the_shaded_and_cluster_views() {
         (DebugView::Shaded, "field_shaded"),
         (DebugView::Clusters, "field_clusters"),
     ] {
-        let (still, _) = render(&placed, settings(view), &GraphSource::Code);
+        let (still, _) = render(&placed, settings(view), &GraphSource::Shipped);
         check_golden(name, &still);
     }
 }
@@ -399,7 +396,7 @@ fn mover_at(t: f32) -> Mat4 {
 #[test]
 fn a_still_of_the_occlusion_view_culls_against_a_history() {
     let settings = FrameSettings {
-        view: DebugView::Occlusion,
+        view: Some(DebugView::Occlusion),
         ..FrameSettings::new(320, 180)
     };
     let camera = Camera::perspective(
@@ -408,18 +405,18 @@ fn a_still_of_the_occlusion_view_culls_against_a_history() {
         0.9,
         0.05,
     );
-    let mut r = Renderer::new(walled_scene(), settings.clone(), &GraphSource::Code)
+    let mut r = Renderer::new(walled_scene(), settings.clone(), &GraphSource::Shipped)
         .unwrap_or_else(|e| panic!("{e}"));
     let still = r.render_still(&camera).unwrap_or_else(|e| panic!("{e}"));
     let counts = still.counts.occlusion.expect("both passes' counters");
     assert!(counts.first_occluded > 0, "{counts:?}");
     // Other views keep the first frame.
     let shaded = FrameSettings {
-        view: DebugView::Shaded,
+        view: Some(DebugView::Shaded),
         ..settings
     };
     let mut r =
-        Renderer::new(walled_scene(), shaded, &GraphSource::Code).unwrap_or_else(|e| panic!("{e}"));
+        Renderer::new(walled_scene(), shaded, &GraphSource::Shipped).unwrap_or_else(|e| panic!("{e}"));
     let still = r.render_still(&camera).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(still.counts.occlusion.map(|c| c.first_tested), Some(0));
 }
@@ -427,12 +424,12 @@ fn a_still_of_the_occlusion_view_culls_against_a_history() {
 #[test]
 fn golden_image_of_the_occlusion_view() {
     let settings = FrameSettings {
-        view: DebugView::Occlusion,
+        view: Some(DebugView::Occlusion),
         ..FrameSettings::new(320, 180)
     };
     // The frame built in code, and the shipped pipeline file with the view's records
     // added when it loads: the same two frames give the same image.
-    let mut stills = [GraphSource::Code, pipeline_file()].map(|source| {
+    let mut stills = [GraphSource::Shipped, pipeline_file()].map(|source| {
         let mut r = Renderer::new(walled_scene(), settings.clone(), &source)
             .unwrap_or_else(|e| panic!("{e}"));
         // Last frame the camera stood close to the wall (not told it was a cut) and the
@@ -517,11 +514,11 @@ fn golden_images_of_the_default_scene() {
         (DebugView::Clusters, "default_clusters"),
     ] {
         let s = FrameSettings {
-            view,
-            clusters: 1 << 24,
+            view: Some(view),
+            clusters: Some(1 << 24),
             ..FrameSettings::new(256, 144)
         };
-        let (still, _) = render(&placed, s, &GraphSource::Code);
+        let (still, _) = render(&placed, s, &GraphSource::Shipped);
         assert_eq!(still.frames, 1, "{:?}", still.counts);
         check_golden(name, &still);
     }
@@ -530,7 +527,7 @@ fn golden_images_of_the_default_scene() {
 #[test]
 fn zero_instances_draw_the_sky_alone() {
     let placed = field(0);
-    let (still, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let (still, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Shipped);
     assert_eq!(still.counts.clusters_requested, 0);
     let row = |y: u32| &still.rgba[(y * W * 4) as usize..((y + 1) * W * 4) as usize];
     for y in 0..H {
@@ -568,11 +565,11 @@ fn singular_and_nan_instances_are_skipped_and_counted_not_drawn() {
         data: broken,
         camera: placed.camera,
     };
-    let (a, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let (a, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Shipped);
     let (b, _) = render(
         &with_broken,
         settings(DebugView::Shaded),
-        &GraphSource::Code,
+        &GraphSource::Shipped,
     );
     assert_eq!(differing(&a.rgba, &b.rgba, 0), 0);
 }
@@ -623,7 +620,7 @@ fn instances_past_one_binding_take_a_second_and_draw_the_same_frame() {
             ..settings(DebugView::Clusters)
         },
     ];
-    for source in [GraphSource::Code, pipeline_file()] {
+    for source in [GraphSource::Shipped, pipeline_file()] {
         for s in &cases {
             let (want, _) = render(&whole, s.clone(), &source);
             let (got, r) = render(&split, s.clone(), &source);
@@ -724,7 +721,7 @@ fn a_viewport_of_zero_or_past_the_texture_limit_is_an_error_saying_what_to_chang
         match Renderer::new(
             placed.data.clone(),
             FrameSettings::new(w, h),
-            &GraphSource::Code,
+            &GraphSource::Shipped,
         ) {
             Err(GraphError::Setting { setting, message }) => {
                 assert_eq!(setting, "the viewport");
@@ -742,7 +739,7 @@ fn the_default_frame_has_no_depth_targets_and_turning_them_on_keeps_the_image() 
     // frame declares neither and runs no fragment pass in resolve; a frame that asks for
     // them gets them readable, and the colour does not depend on them.
     let placed = field(16);
-    let (bare, mut r) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let (bare, mut r) = render(&placed, settings(DebugView::Shaded), &GraphSource::Shipped);
     let plan = &r.compiled.plan;
     assert!(
         plan.resources
@@ -766,7 +763,7 @@ fn the_default_frame_has_no_depth_targets_and_turning_them_on_keeps_the_image() 
         material_depth: true,
         ..settings(DebugView::Shaded)
     };
-    let (full, mut r) = render(&placed, with_targets, &GraphSource::Code);
+    let (full, mut r) = render(&placed, with_targets, &GraphSource::Shipped);
     assert_eq!(differing(&full.rgba, &bare.rgba, 0), 0);
     assert!(r.executor.read_texture("depth").is_ok());
     assert!(r.executor.read_texture("material_depth").is_ok());
@@ -786,9 +783,9 @@ fn clustered_lights_shade_the_field_and_the_light_count_view_shows_them() {
         }),
         ..settings(view)
     };
-    let (unlit, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let (unlit, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Shipped);
     let still = |view| {
-        let mut r = Renderer::new(placed.data.clone(), lit_settings(view), &GraphSource::Code)
+        let mut r = Renderer::new(placed.data.clone(), lit_settings(view), &GraphSource::Shipped)
             .unwrap_or_else(|e| panic!("{e}"));
         r.lights = lights.clone();
         let s = r
@@ -833,7 +830,7 @@ fn clustered_lights_shade_the_field_and_the_light_count_view_shows_them() {
     match Renderer::new(
         placed.data.clone(),
         settings(DebugView::LightCount),
-        &GraphSource::Code,
+        &GraphSource::Shipped,
     ) {
         Err(GraphError::Parameter { message, .. }) => {
             assert!(message.contains("light_clustering.toml"), "{message}")
@@ -849,11 +846,11 @@ fn the_hierarchy_walk_draws_the_flat_fills_image_from_fewer_candidates() {
         hierarchy: false,
         ..settings(DebugView::Shaded)
     };
-    let (flat, _) = render(&placed, flat_fill, &GraphSource::Code);
+    let (flat, _) = render(&placed, flat_fill, &GraphSource::Shipped);
     // The shipped file walks the hierarchy, as the frame built in code does by default.
     let (walk, r) = render(&placed, settings(DebugView::Shaded), &pipeline_file());
     assert!(runs(&r, "fill"));
-    let (code, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Code);
+    let (code, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Shipped);
     assert_eq!(code.counts, walk.counts);
     let h = walk
         .counts

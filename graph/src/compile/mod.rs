@@ -420,6 +420,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             enabled_features: enabled,
             params,
             generation: 0,
+            class: options.class,
         },
         passes,
         setups: pass_setups,

@@ -44,11 +44,17 @@ impl Imports {
             .insert(name.to_string(), Import::Buffer(buffer.clone()));
         self
     }
-    /// Its views are made once per texture and kept by the executor, so bind groups over
-    /// an imported texture are found in the cache frame after frame.
+    /// Supplies a caller-owned texture for the imported resource `name`. Its views are
+    /// made once per texture and kept by the executor, so bind groups over an imported
+    /// texture are found in the cache frame after frame.
     pub fn texture(mut self, name: &str, texture: &wgpu::Texture) -> Self {
         self.entries
             .insert(name.to_string(), Import::Texture(texture.clone()));
+        self
+    }
+    /// These imports and `other`'s; a name in both takes `other`'s.
+    pub fn merge(mut self, other: Imports) -> Self {
+        self.entries.extend(other.entries);
         self
     }
 }

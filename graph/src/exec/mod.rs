@@ -7,7 +7,10 @@ pub mod executor;
 mod quiet;
 pub mod timing;
 
-pub use context::{ADAPTER_ENV, AdapterOptions, GpuAdapter, GpuContext, INDIRECT_VALIDATION_ENV};
+pub use context::{
+    ADAPTER_ENV, AdapterOptions, GpuAdapter, GpuContext, INDIRECT_VALIDATION_ENV,
+    experimental_features,
+};
 pub use executor::{
     BATCHING_ENV, BatchStats, CHECKED_ENV, Executor, FrameStats, Imports, PassTiming,
 };

@@ -433,6 +433,12 @@ fn known_names<T>(names: impl Iterator<Item = (&'static str, T)>) -> String {
     names.map(|(n, _)| n).collect::<Vec<_>>().join(", ")
 }
 
+/// How a pipeline entry writes `format` (what [`parse_format`] reads back), for a caller
+/// that adds a texture of a format it holds.
+pub fn format_text(format: wgpu::TextureFormat) -> String {
+    crate::names::format_name(format)
+}
+
 /// Texture formats by their WGSL spelling (`rgba8unorm`, `r32uint`, `depth32float`, …).
 pub fn parse_format(name: &str) -> std::result::Result<wgpu::TextureFormat, String> {
     use wgpu::TextureFormat as F;
@@ -448,6 +454,8 @@ pub fn parse_format(name: &str) -> std::result::Result<wgpu::TextureFormat, Stri
         F::Rgba8Unorm,
         F::Rgba8UnormSrgb,
         F::Bgra8Unorm,
+        F::Bgra8UnormSrgb,
+        F::Rgb10a2Unorm,
         F::Rgba16Float,
         F::Rgba32Uint,
         F::Rgba32Float,

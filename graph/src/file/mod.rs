@@ -10,7 +10,7 @@ mod registry;
 
 pub use crate::choice::AUTO;
 pub use crate::problem::{MAX_PIPELINE_FILE_BYTES, ResourceProblem, SourceProblem};
-pub use build::parse_format;
+pub use build::{format_text, parse_format};
 pub use params::Params;
 pub use pipeline::{
     BufferEntry, EntryKind, MipLevels, PassEntry, Pipeline, Removed, ResourceEntry, TextureEntry,

@@ -1,5 +1,6 @@
 //! Typed access to a pass's `params` table in a pipeline file.
 
+use crate::choice::AUTO;
 use crate::error::{GraphError, Result};
 
 /// A pass's parameters. Getters take a default so every parameter is optional in files;
@@ -94,6 +95,26 @@ impl Params {
         };
         x.is_finite().then_some(x)
     }
+    /// A finite number, or `"auto"` (`None`): a value the pass resolves itself, from the
+    /// adapter's class. `default` when the table lacks the key.
+    pub fn f32_or_auto(&self, key: &str, default: Option<f32>) -> Result<Option<f32>> {
+        match self.table.get(key) {
+            None => Ok(default),
+            Some(toml::Value::String(s)) if s == AUTO => Ok(None),
+            Some(v) => Self::finite(v)
+                .map(Some)
+                .ok_or_else(|| Self::err(key, "a finite number or \"auto\"", v)),
+        }
+    }
+    /// `true`, `false` or `"auto"` (`None`), as [`Self::f32_or_auto`].
+    pub fn bool_or_auto(&self, key: &str, default: Option<bool>) -> Result<Option<bool>> {
+        match self.table.get(key) {
+            None => Ok(default),
+            Some(toml::Value::String(s)) if s == AUTO => Ok(None),
+            Some(toml::Value::Boolean(b)) => Ok(Some(*b)),
+            Some(v) => Err(Self::err(key, "true, false or \"auto\"", v)),
+        }
+    }
     /// The string at `key`, or `default` when the table lacks it.
     pub fn string(&self, key: &str, default: &str) -> Result<String> {
         match self.table.get(key) {
@@ -149,6 +170,24 @@ mod tests {
                 }
                 other => panic!("{key}: {other:?}"),
             }
+        }
+    }
+
+    #[test]
+    fn auto_stands_for_a_value_the_pass_resolves_and_other_words_are_refused() {
+        let p = params("a = \"auto\"\nb = 3\nc = \"often\"\nd = true");
+        assert_eq!(p.f32_or_auto("a", Some(1.0)).unwrap(), None);
+        assert_eq!(p.f32_or_auto("b", None).unwrap(), Some(3.0));
+        assert_eq!(p.f32_or_auto("missing", Some(2.0)).unwrap(), Some(2.0));
+        assert_eq!(p.bool_or_auto("a", Some(true)).unwrap(), None);
+        assert_eq!(p.bool_or_auto("d", None).unwrap(), Some(true));
+        for err in [
+            p.f32_or_auto("c", None).err(),
+            p.bool_or_auto("c", None).err(),
+            p.bool_or_auto("b", None).err(),
+        ] {
+            let message = err.expect("refused").to_string();
+            assert!(message.contains("\"auto\""), "{message}");
         }
     }
 

@@ -404,6 +404,18 @@ impl Pipeline {
         Ok(())
     }
 
+    /// Removes the resource named `name` and every explicit binding to it, so the slots
+    /// that bound it are left unbound (an optional slot) or refused when the pipeline is
+    /// built (a required one, naming it). Returns whether the pipeline declared it.
+    pub fn remove_resource(&mut self, name: &str) -> bool {
+        let before = self.resources.len();
+        self.resources.retain(|r| r.name != name);
+        for p in &mut self.passes {
+            p.bind.retain(|_, target| target_resource(target) != name);
+        }
+        self.resources.len() < before
+    }
+
     /// The pass named `name`.
     pub fn pass(&self, name: &str) -> Option<&PassEntry> {
         self.passes.iter().find(|p| p.name == name)

@@ -205,6 +205,11 @@ impl<'a> RecordContext<'a> {
     pub fn pass_name(&self) -> &str {
         self.name
     }
+    /// The adapter class the graph was compiled for, so a parameter left `auto` in
+    /// setup resolves the same way when the pass records.
+    pub fn adapter_class(&self) -> crate::adapter::AdapterClass {
+        self.plan.class
+    }
     /// The executor's frame counter, from 0.
     pub fn frame_index(&self) -> u64 {
         self.frame_index

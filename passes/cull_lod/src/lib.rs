@@ -105,8 +105,8 @@
 //! | param               | default | |
 //! |---------------------|---------|---|
 //! | `lod_threshold_px`  | 1.0     | screen-space error (pixels) a cluster may show |
-//! | `sw_threshold_px`   | 128.0   | screen-box size under which a cluster goes to software (tuned on an H100, where few units run graphics: docs/BENCHMARKS.md) |
-//! | `hardware`          | true    | false: every cluster to software, those crossing the near plane too (sw_raster clips them; a pipeline with no `hw_raster`) |
+//! | `sw_threshold_px`   | 128.0   | screen-box size under which a cluster goes to software; `"auto"`: the adapter class's split ([`sw_threshold_on`], measured: docs/BENCHMARKS.md) |
+//! | `hardware`          | true    | false: every cluster to software, those crossing the near plane too (sw_raster clips them; a pipeline with no `hw_raster`); `"auto"`: where the adapter class rasterises in hardware (`AdapterClass::hardware_raster`, the rule `hw_raster`'s `run = "auto"` follows) |
 //! | `mode`              | `"first"` | `first`: every candidate, occlusion against last frame's pyramid when one is bound; `second`: the re-test of the first pass's occluded clusters against this frame's |
 //! | `capacity`          | 0 (all of `raster_clusters`) | `C`, at most the buffer's size / 8 |
 //! | `max_per_dimension` | 0 (the adapter's) | workgroup limit per dimension of the indirect cull dispatch |
@@ -141,6 +141,40 @@
 #![warn(missing_docs)]
 
 pub mod cpu;
+
+use meshlight_graph::AdapterClass;
+
+/// A split larger than any viewport: every cluster to software but those crossing the
+/// near plane.
+pub const EVERY_CLUSTER_PX: f32 = 16384.0;
+
+/// The `sw_threshold_px` that `"auto"` takes on an adapter of `class`, and why. Where
+/// clusters switch from the software to the hardware rasteriser depends on how many of
+/// the GPU's units run graphics work: the H100 and H200 run vertex and fragment work on
+/// 2 of their TPCs only, so the compute rasteriser wins up to large clusters there.
+pub fn sw_threshold_on(class: AdapterClass) -> (f32, &'static str) {
+    match class {
+        // Measured on an H200 (docs/BENCHMARKS.md): with big triangles tiled in
+        // software, sending every cluster there (all but those crossing the near plane)
+        // took the default scene at 3840×2160 from 3.49 to 1.62 ms and at 1920×1080
+        // from 1.28 to 0.87 ms.
+        AdapterClass::FewGraphicsUnits => (
+            EVERY_CLUSTER_PX,
+            "measured on an H200: hardware raster runs on 2 TPCs, and software with big triangles tiled wins at every cluster size, so only clusters crossing the near plane go to hardware",
+        ),
+        AdapterClass::Cpu => (
+            EVERY_CLUSTER_PX,
+            "a CPU adapter runs both rasterisers on the CPU; the data-centre split keeps its images comparable",
+        ),
+        // Not measured here: Nanite's rule of thumb sends clusters whose triangles are
+        // about a pixel or smaller to software; a 128-triangle cluster under 32 px has
+        // triangles of a few pixels.
+        AdapterClass::Graphics => (
+            32.0,
+            "not measured on such a GPU: hardware raster is fast where every unit runs graphics, so only small clusters go to software",
+        ),
+    }
+}
 
 pub use cpu::{CullResult, Decision, Thresholds, cpu_cull};
 
@@ -293,6 +327,13 @@ shader_defs! {
 pub struct CullLod {
     /// The LOD and software thresholds, and whether a hardware rasteriser follows.
     pub thresholds: Thresholds,
+    /// `sw_threshold_px = "auto"`: the split of the adapter's class
+    /// ([`sw_threshold_on`]) instead of `thresholds.sw_threshold_px`.
+    pub auto_split: bool,
+    /// `hardware = "auto"`: a hardware rasteriser follows where the adapter's class
+    /// rasterises in hardware at all (`AdapterClass::hardware_raster`, the rule
+    /// `hw_raster`'s `run = "auto"` follows too), instead of `thresholds.hardware`.
+    pub auto_hardware: bool,
     /// Which culling pass of the frame this is (`mode` in a pipeline file): the first
     /// tests against last frame's pyramid, the second re-tests what the first hid.
     pub phase: Phase,
@@ -339,13 +380,17 @@ impl CullLod {
         params.only(&PARAM_KEYS)?;
         let defaults = Thresholds::default();
         let phase = Phase::from_params(params)?;
+        let split = params.f32_or_auto("sw_threshold_px", Some(defaults.sw_threshold_px))?;
+        let hardware = params.bool_or_auto("hardware", Some(defaults.hardware))?;
         let nonzero = |v: u32| (v > 0).then_some(v);
         let pass = Self {
             thresholds: Thresholds {
                 lod_threshold_px: params.f32("lod_threshold_px", defaults.lod_threshold_px)?,
-                sw_threshold_px: params.f32("sw_threshold_px", defaults.sw_threshold_px)?,
-                hardware: params.bool("hardware", true)?,
+                sw_threshold_px: split.unwrap_or(defaults.sw_threshold_px),
+                hardware: hardware.unwrap_or(defaults.hardware),
             },
+            auto_split: split.is_none(),
+            auto_hardware: hardware.is_none(),
             phase,
             capacity: nonzero(params.u32("capacity", 0)?),
             max_per_dimension: nonzero(params.u32("max_per_dimension", 0)?),
@@ -419,6 +464,24 @@ impl CullLod {
             )));
         }
         Ok(Some(mine))
+    }
+
+    /// The thresholds the pass uses on an adapter of `class`: its own, with those it
+    /// left `auto` taken from the class.
+    pub fn thresholds_on(&self, class: AdapterClass) -> Thresholds {
+        Thresholds {
+            sw_threshold_px: if self.auto_split {
+                sw_threshold_on(class).0
+            } else {
+                self.thresholds.sw_threshold_px
+            },
+            hardware: if self.auto_hardware {
+                class.hardware_raster().0
+            } else {
+                self.thresholds.hardware
+            },
+            ..self.thresholds
+        }
     }
 
     fn check_thresholds(&self) -> Result<()> {
@@ -520,12 +583,13 @@ impl Pass for CullLod {
                     ctx.history_valid("pyramid")? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
                 }
             };
+        let thresholds = self.thresholds_on(ctx.adapter_class());
         let params = GpuParams {
             capacity: self.capacity.unwrap_or(u32::MAX),
             max_per_dimension: ctx.max_per_dimension(self.max_per_dimension),
-            lod_threshold_px: self.thresholds.lod_threshold_px,
-            sw_threshold_px: self.thresholds.sw_threshold_px,
-            hardware: self.thresholds.hardware as u32,
+            lod_threshold_px: thresholds.lod_threshold_px,
+            sw_threshold_px: thresholds.sw_threshold_px,
+            hardware: thresholds.hardware as u32,
             test_occlusion: test_occlusion as u32,
             ..GpuParams::default()
         };

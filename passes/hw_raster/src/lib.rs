@@ -35,6 +35,11 @@
 //! | `instances_high` | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
 //! | `visbuffer` | storage read-write | u64 / r64uint | `width × height`, row-major buffer or texture; atomicMax onto what `sw_raster` left |
 //!
+//! | param    | default    | |
+//! |----------|------------|---|
+//! | `width`, `height` | required | the visibility buffer's size |
+//! | `run`    | `"always"` | `"auto"`: skipped (kept in the plan, recording nothing) where the adapter class rasterises nothing in hardware (`AdapterClass::hardware_raster`), the rule `cull_lod`'s `hardware = "auto"` follows, so culling then sends it nothing |
+//!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`): its `viewport_size` must
 //! equal the params `width` × `height` (a record error names both otherwise).
 //! Scratch: `target`, an `R8Unorm` colour target of the viewport size, masked, cleared
@@ -68,6 +73,7 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_gpu_scene::{SceneBuffer::*, scene_reads};
+use meshlight_graph::AdapterClass;
 use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
@@ -146,7 +152,7 @@ pub enum Feed {
 
 impl Feed {
     /// The implementation name pipelines use for this feed.
-    pub fn implementation(self) -> &'static str {
+    pub const fn implementation(self) -> &'static str {
         match self {
             Feed::IndirectDraw => "indirect_draw",
             Feed::MeshShader => "mesh_shader",
@@ -163,6 +169,8 @@ pub struct HwRaster {
     pub height: u32,
     /// How clusters reach the rasteriser: the implementation.
     pub feed: Feed,
+    /// `run = "auto"`: skipped where the adapter class rasterises nothing in hardware.
+    pub auto_skip: bool,
 }
 
 impl HwRaster {
@@ -172,6 +180,7 @@ impl HwRaster {
             width,
             height,
             feed: Feed::IndirectDraw,
+            auto_skip: false,
         }
     }
 }
@@ -208,17 +217,27 @@ uniform_block! {
     }
 }
 
-const PARAM_KEYS: [&str; 2] = ["width", "height"];
+const PARAM_KEYS: [&str; 3] = ["width", "height", "run"];
 
 impl HwRaster {
     /// Reads `width` and `height` (required, > 0: the visibility buffer's size).
     pub fn from_params(params: &Params, feed: Feed) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let [width, height] = params.size("the visibility buffer")?;
+        let auto_skip = match params.string("run", "always")?.as_str() {
+            "always" => false,
+            "auto" => true,
+            other => {
+                return Err(GraphError::parameter(format!(
+                    "`run` = \"{other}\": use \"always\", or \"auto\" to skip the pass where the adapter class rasterises nothing in hardware"
+                )));
+            }
+        };
         Ok(Self {
             width,
             height,
             feed,
+            auto_skip,
         })
     }
 }
@@ -228,6 +247,13 @@ impl Pass for HwRaster {
         Implementation::new(self.feed.implementation(), contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
+        if self.auto_skip {
+            let (runs, why) = ctx.adapter_class().hardware_raster();
+            if !runs {
+                ctx.skip(why);
+                return Ok(());
+            }
+        }
         let texture = ctx.is_texture("visbuffer");
         // atomicMax onto the 64-bit target, as sw_raster draws onto it.
         let target = if texture {
@@ -337,6 +363,14 @@ const MESH_ARGS: &str = "mesh_args";
 /// pipeline files.
 pub fn register(registry: &mut Registry) {
     registry.register_best_first(STAGE, &IMPLEMENTATIONS, HwRaster::from_params);
+    // Measured on an H100 (docs/BENCHMARKS.md, rasterisers): the indirect draw ran the
+    // same clusters 1.19× faster than mesh shaders on the 2 TPCs that run graphics there.
+    registry.prefer_on(
+        STAGE,
+        AdapterClass::FewGraphicsUnits,
+        &[Feed::IndirectDraw.implementation()],
+        "measured on an H100: the indirect draw ran the same clusters 1.19x faster than mesh shaders on the 2 TPCs that run graphics",
+    );
 }
 
 #[cfg(test)]

@@ -148,6 +148,7 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
     g.add_pass(
         "hw_raster",
         HwRaster {
+            auto_skip: false,
             width: W,
             height: H,
             feed,
