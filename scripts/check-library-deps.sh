@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Fails when a library crate depends, directly or through another crate, on what only the
-# applications may use: an argument parser (clap), an image encoder (png) or a logger
-# (env_logger). The library crates are every workspace member except the applications
-# (apps/cli, apps/viewer, apps/bench, apps/output) and the dev-only test helpers, so a
-# new pass crate is checked without being named here.
+# applications may use: an argument parser (clap), an image encoder (png), a logger
+# (env_logger) or a progress bar (indicatif: a library reports progress through a
+# callback, and the application that owns the terminal draws it). The library crates
+# are every workspace member except the applications (apps/cli, apps/viewer,
+# apps/bench, apps/output) and the dev-only test helpers, so a new pass crate is
+# checked without being named here.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 APPS='^(meshlight-cli|meshlight-viewer|meshlight-bench|meshlight-output|meshlight-testing)$'
-FORBIDDEN='^(clap|png|env_logger) '
+FORBIDDEN='^(clap|png|env_logger|indicatif) '
 members=$(cargo metadata --no-deps --format-version 1 |
     python3 -c 'import json,sys; print("\n".join(p["name"] for p in json.load(sys.stdin)["packages"]))' |
     grep -Ev "$APPS")
@@ -23,5 +25,5 @@ for crate in $members; do
     fi
 done
 [ "$checked" -gt 0 ] || { echo "no library crates found" >&2; exit 1; }
-[ "$failed" -eq 0 ] && echo "$checked library crates: no clap, png or env_logger"
+[ "$failed" -eq 0 ] && echo "$checked library crates: no clap, png, env_logger or indicatif"
 exit "$failed"

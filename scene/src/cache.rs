@@ -138,37 +138,16 @@ fn store(asset: &MeshletAsset, dir: &Path, path: &Path) -> Result<(), SceneError
     std::fs::rename(&tmp, path).map_err(|e| SceneError::io(path, e))
 }
 
-/// A progress bar for bakes started from the command line: a spinner with the level
-/// and the triangles left (the total is unknown until the mesh is loaded). Hidden when
-/// standard error is not a terminal.
-pub struct BakeProgress {
-    bar: indicatif::ProgressBar,
-}
-
-impl BakeProgress {
-    pub fn new(name: &str) -> Self {
-        let bar = indicatif::ProgressBar::new_spinner();
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} baking {prefix}: {msg} ({elapsed})")
-                .expect("valid template"),
-        );
-        bar.set_prefix(name.to_string());
-        bar.enable_steady_tick(std::time::Duration::from_millis(120));
-        Self { bar }
-    }
-
-    pub fn report(&self, p: LevelProgress) {
-        self.bar.set_message(format!(
-            "level {}, {} clusters, {} triangles left",
-            p.level, p.active_clusters, p.active_triangles
-        ));
-    }
-}
-
-impl Drop for BakeProgress {
-    fn drop(&mut self) {
-        self.bar.finish_and_clear();
-    }
+/// Reports a bake's progress at `info` level of the `log` crate, for hosts that draw no
+/// progress of their own: a first bake of a large mesh takes seconds, and whoever
+/// enables the logs can see that it is moving and on which level.
+pub fn log_progress(name: &str, p: LevelProgress) {
+    log::info!(
+        "baking {name}: level {}, {} clusters, {} triangles left",
+        p.level,
+        p.active_clusters,
+        p.active_triangles
+    );
 }
 
 #[cfg(test)]

@@ -353,7 +353,6 @@ mod tests {
             worst
         };
         let measured: Vec<(u32, f32)> = [10, 11, 12, 13, 16].map(|b| (b, worst(b))).to_vec();
-        println!("worst normal error per bits: {measured:?}");
         assert!(worst(NORMAL_BITS) <= 1e-3, "{measured:?}");
         assert!(
             worst(NORMAL_BITS - 1) > 1e-3,

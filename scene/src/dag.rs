@@ -104,7 +104,7 @@ pub struct DagOptions {
 }
 
 /// Reported once per finished level, for progress bars.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LevelProgress {
     pub level: u32,
     /// Clusters not yet simplified (the candidates for the next level).

@@ -18,6 +18,7 @@ pub mod error;
 pub mod greedy_meshlets;
 pub mod grouping;
 pub mod hierarchy;
+pub mod inspect;
 pub mod load;
 pub mod mesh;
 pub mod meshlets;

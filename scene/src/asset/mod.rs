@@ -4,6 +4,7 @@
 pub mod checksum;
 pub mod format;
 pub mod scan;
+pub mod summary;
 pub mod triangles;
 pub mod validate;
 
