@@ -12,6 +12,7 @@ pub mod cache;
 pub mod chain_fingerprint;
 pub mod compress;
 pub mod dag;
+#[cfg(any(test, feature = "test-utils"))]
 pub mod damaged;
 pub mod deviation;
 pub mod error;
