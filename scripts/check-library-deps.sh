@@ -25,5 +25,15 @@ for crate in $members; do
     fi
 done
 [ "$checked" -gt 0 ] || { echo "no library crates found" >&2; exit 1; }
-[ "$failed" -eq 0 ] && echo "$checked library crates: no clap, png, env_logger or indicatif"
+# A renderer that only draws baked assets takes meshlight-scene without its `build`
+# feature, and with it none of the builder's libraries.
+BUILDER='^(meshopt|metis|tobj|gltf) '
+found=$(cargo tree -p meshlight-scene --no-default-features -e normal,build --prefix none --format '{p}' |
+    grep -E "$BUILDER" | sort -u || true)
+if [ -n "$found" ]; then
+    echo "meshlight-scene without default features depends on: $(echo $found | tr '\n' ' ')" >&2
+    echo "  put the code that needs it behind the \`build\` feature" >&2
+    failed=1
+fi
+[ "$failed" -eq 0 ] && echo "$checked library crates: no clap, png, env_logger or indicatif; meshlight-scene without \`build\`: no builder libraries"
 exit "$failed"

@@ -58,3 +58,41 @@ pub fn inspect(path: &Path) -> Result<InspectReport, SceneError> {
     let asset = MeshletAsset::load(path)?;
     Ok(InspectReport::of(path, &asset))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::asset::format::{AssetHeader, MAGIC, VERSION};
+
+    /// A file that is not an asset of this version is refused with the error that says
+    /// what to do, before anything is reported (and without the builder: these run
+    /// under `--no-default-features` too).
+    #[test]
+    fn what_is_not_a_current_asset_is_refused_before_a_report() {
+        let dir = std::env::temp_dir().join(format!("meshlight-inspect-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let header_bytes = AssetHeader::WORDS * 4;
+
+        let mesh = dir.join("mesh.obj");
+        std::fs::write(&mesh, "v 0 0 0\n".repeat(header_bytes)).unwrap();
+        let err = inspect(&mesh).unwrap_err();
+        assert!(matches!(err, SceneError::AssetMagic { .. }), "{err:?}");
+        assert!(err.to_string().contains("meshlight bake"), "{err}");
+
+        let mut old = vec![0u8; header_bytes];
+        old[..8].copy_from_slice(&MAGIC);
+        old[8..12].copy_from_slice(&(VERSION - 1).to_le_bytes());
+        let old_path = dir.join("old.mlasset");
+        std::fs::write(&old_path, &old).unwrap();
+        let err = inspect(&old_path).unwrap_err();
+        assert!(
+            matches!(err, SceneError::AssetVersion { found, expected, .. }
+                if found == VERSION - 1 && expected == VERSION),
+            "{err:?}"
+        );
+
+        let err = inspect(&dir.join("missing.mlasset")).unwrap_err();
+        assert!(err.to_string().contains("missing.mlasset"), "{err}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -88,6 +88,12 @@ impl AssetHeader {
     }
 }
 
+/// Most vertices per meshlet: local indices are `u8`, and 255 leaves 255 free as a
+/// sentinel for the GPU.
+pub const MAX_MESHLET_VERTICES: usize = 255;
+/// Most triangles per meshlet: one workgroup of 128 threads rasterises one meshlet.
+pub const MAX_MESHLET_TRIANGLES: usize = 128;
+
 /// Marks "no group" in [`MeshletRecord::source_group`] and
 /// [`MeshletRecord::parent_group`].
 pub const NO_GROUP: u32 = u32::MAX;
