@@ -32,11 +32,17 @@ pub const CACHE_DIR_ENV: &str = "MESHLIGHT_CACHE_DIR";
 /// What to bake: a mesh file or the procedural mesh.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Source {
+    /// A mesh file; its bytes are part of the key, so an edited file is baked again.
     File(PathBuf),
-    Procedural { segments: u32 },
+    /// The procedural mesh, generated rather than read.
+    Procedural {
+        /// Tube segments (see [`crate::procedural_mesh`]): part of the key.
+        segments: u32,
+    },
 }
 
 impl Source {
+    /// What to call the source in progress and error messages.
     pub fn name(&self) -> String {
         match self {
             Source::File(p) => p.display().to_string(),
@@ -48,6 +54,7 @@ impl Source {
 /// Whether [`load_or_bake`] found the asset in the cache.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
+    /// Loaded from the cache; nothing was baked.
     Hit,
     /// Baked and written to the cache.
     Baked,

@@ -16,6 +16,8 @@
 //! - `test-utils`: `damaged`, assets broken on purpose for other crates' tests (with
 //!   `build`).
 
+#![warn(missing_docs)]
+
 // Reading, validating, verifying and inspecting assets: always built.
 pub mod asset;
 pub mod bounds;

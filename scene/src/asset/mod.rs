@@ -50,12 +50,17 @@ impl std::fmt::Debug for MeshletAsset {
 /// Where an asset's bytes go, for summaries and for choosing what to compress next.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct SizeBreakdown {
+    /// The header.
     pub header: usize,
+    /// The meshlet records.
     pub meshlet_records: usize,
     /// Group records plus their child lists.
     pub groups: usize,
+    /// The position offsets of the vertex records.
     pub positions: usize,
+    /// The normal offsets of the vertex records (their share of each record's bits).
     pub normals: usize,
+    /// The UV words.
     pub uvs: usize,
     /// Local indices, including the padding of each meshlet's list to whole words.
     pub indices: usize,
@@ -64,6 +69,7 @@ pub struct SizeBreakdown {
 }
 
 impl SizeBreakdown {
+    /// All the parts: the file size, which a test can hold the breakdown to.
     pub fn total(&self) -> usize {
         self.header
             + self.meshlet_records
@@ -94,11 +100,15 @@ pub fn dag_error(path: &Path, problems: &[String]) -> Result<(), SceneError> {
 /// One meshlet decoded back to floats, for tests, tools and CPU references.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DecodedMeshlet {
+    /// Positions, dequantised from the grid.
     pub positions: Vec<Vec3>,
     /// Grid coordinates: exact, so equal positions compare equal across meshlets.
     pub grid: Vec<[u32; 3]>,
+    /// Unit normals, decoded from their octahedral components.
     pub normals: Vec<Vec3>,
+    /// UVs, dequantised; empty when the asset has none.
     pub uvs: Vec<[f32; 2]>,
+    /// Corners of each triangle as local vertex indices.
     pub triangles: Vec<[u8; 3]>,
 }
 
@@ -296,6 +306,8 @@ impl MeshletAsset {
         validate::validate(&self.words)
     }
 
+    /// Writes the file image to `path` as it is: the words are already the file, with
+    /// header and checksum, so saving is one write.
     pub fn save(&self, path: &Path) -> Result<(), SceneError> {
         std::fs::write(path, self.bytes()).map_err(|source| SceneError::Write {
             path: PathBuf::from(path),
@@ -308,6 +320,7 @@ impl MeshletAsset {
         bytemuck::cast_slice(&self.words)
     }
 
+    /// The header, in place (no copy): counts, bounds, grids and where the sections lie.
     pub fn header(&self) -> &AssetHeader {
         bytemuck::from_bytes(bytemuck::cast_slice(&self.words[..AssetHeader::WORDS]))
     }
@@ -317,18 +330,23 @@ impl MeshletAsset {
         &self.words[s.offset as usize..(s.offset + s.words) as usize]
     }
 
+    /// The meshlet records, in place, as the GPU receives them.
     pub fn meshlets(&self) -> &[MeshletRecord] {
         bytemuck::cast_slice(self.section(SECTION_MESHLETS))
     }
 
+    /// The group records, in place: where meshlets take their own and parent LOD spheres
+    /// and errors.
     pub fn groups(&self) -> &[GroupRecord] {
         bytemuck::cast_slice(self.section(SECTION_GROUPS))
     }
 
+    /// Every group's children (meshlet ids), one list after another.
     pub fn children(&self) -> &[u32] {
         self.section(SECTION_CHILDREN)
     }
 
+    /// The meshlets simplified in `group`.
     pub fn group_children(&self, group: &GroupRecord) -> &[u32] {
         &self.children()
             [group.first_child as usize..(group.first_child + group.child_count) as usize]
@@ -373,6 +391,7 @@ impl MeshletAsset {
         }
     }
 
+    /// The position grid of the header, to decode positions or bound their error.
     pub fn quantization(&self) -> Quantization {
         let h = self.header();
         Quantization {

@@ -13,7 +13,10 @@ pub const MAX_LEVELS: u32 = 256;
 /// One inconsistency: the field and what is wrong with it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Invalid {
+    /// The header field, record field or section that is wrong, e.g. `header.flags` or
+    /// `header.sections[2].offset`, so that an error message can point at it.
     pub field: String,
+    /// What is wrong with it, worded to follow the field.
     pub problem: String,
 }
 

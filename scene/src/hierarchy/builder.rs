@@ -13,7 +13,9 @@ pub const BRANCHING: usize = 8;
 /// take their meshlets from (asset-local meshlet ids, each meshlet once).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Hierarchy {
+    /// The node records, in breadth-first order, as the asset stores them.
     pub nodes: Vec<NodeRecord>,
+    /// The cluster list, in depth-first order, as the asset stores it.
     pub clusters: Vec<u32>,
 }
 
