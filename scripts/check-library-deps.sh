@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Fails when a library crate depends, directly or through another crate, on what only the
-# applications may use: an argument parser (clap), an image encoder (png) or a logger
-# (env_logger). The library crates are every workspace member except the applications
-# (apps/cli, apps/viewer, apps/bench, apps/output) and the dev-only test helpers, so a
-# new pass crate is checked without being named here.
+# applications may use: an argument parser (clap), an image encoder (png), a logger
+# (env_logger) or a progress bar (indicatif: a library reports progress through a
+# callback, and the application that owns the terminal draws it). The library crates
+# are every workspace member except the applications (apps/cli, apps/viewer,
+# apps/bench, apps/output) and the dev-only test helpers, so a new pass crate is
+# checked without being named here.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 APPS='^(meshlight-cli|meshlight-viewer|meshlight-bench|meshlight-output|meshlight-testing)$'
-FORBIDDEN='^(clap|png|env_logger) '
+FORBIDDEN='^(clap|png|env_logger|indicatif) '
 members=$(cargo metadata --no-deps --format-version 1 |
     python3 -c 'import json,sys; print("\n".join(p["name"] for p in json.load(sys.stdin)["packages"]))' |
     grep -Ev "$APPS")
@@ -23,5 +25,15 @@ for crate in $members; do
     fi
 done
 [ "$checked" -gt 0 ] || { echo "no library crates found" >&2; exit 1; }
-[ "$failed" -eq 0 ] && echo "$checked library crates: no clap, png or env_logger"
+# A renderer that only draws baked assets takes meshlight-scene without its `build`
+# feature, and with it none of the builder's libraries.
+BUILDER='^(meshopt|metis|tobj|gltf) '
+found=$(cargo tree -p meshlight-scene --no-default-features -e normal,build --prefix none --format '{p}' |
+    grep -E "$BUILDER" | sort -u || true)
+if [ -n "$found" ]; then
+    echo "meshlight-scene without default features depends on: $(echo $found | tr '\n' ' ')" >&2
+    echo "  put the code that needs it behind the \`build\` feature" >&2
+    failed=1
+fi
+[ "$failed" -eq 0 ] && echo "$checked library crates: no clap, png, env_logger or indicatif; meshlight-scene without \`build\`: no builder libraries"
 exit "$failed"

@@ -1,20 +1,23 @@
-//! What `meshlight bake` and `meshlight inspect` run: a mesh baked into an asset with a
-//! progress bar and a summary, an asset inspected and its invariants verified. The
-//! command line parses its arguments into [`BakeOptions`]; tests call these directly.
+//! What `meshlight bake` runs for one mesh: loaded (or generated), built, checked as
+//! `inspect` would check it, and written, with what happened returned as a
+//! [`BakeReport`] and progress reported through a callback. The command line parses its
+//! arguments into [`BakeOptions`], draws the progress and prints the report; a host
+//! application can bake the same way and show both its own way.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use crate::asset::MeshletAsset;
+use crate::asset::summary::AssetSummary;
 use crate::compress::PositionBits;
+use crate::dag::{Fallbacks, LevelProgress};
 use crate::error::SceneError;
 use crate::grouping::Grouping;
 use crate::load::{DEFAULT_TRIANGLE_BUDGET, LoadOptions, load_mesh_with};
-use crate::mesh::Mesh;
+use crate::mesh::{CleanReport, Mesh};
 use crate::pipeline::{BuildOptions, Built, build_asset};
 use crate::procedural::{DEFAULT_SEGMENTS, procedural_mesh};
-use crate::verify::{expected_levels, level_stats, quality, verify};
+use crate::verify::{quality, verify};
 
 /// Input name that selects the built-in procedural mesh instead of a file.
 pub const PROCEDURAL_INPUT: &str = "procedural";
@@ -52,61 +55,105 @@ impl BakeOptions {
     }
 }
 
-/// A progress bar of `len` steps in the style of every bake: a spinner, `what` (an
-/// indicatif template naming the work and where the bar goes), then the time taken.
-pub fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
-    let template = format!("{{spinner}} {what} ({{elapsed}})");
-    let style = indicatif::ProgressStyle::with_template(&template)
-        .unwrap_or_else(|e| panic!("progress template `{template}`: {e}"));
-    indicatif::ProgressBar::new(len).with_style(style.progress_chars("=> "))
+/// How far a bake has come, for a progress display: the triangle count is known once
+/// the mesh is loaded, and each level of the DAG leaves fewer triangles to simplify.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BakeProgress {
+    /// The mesh is loaded; building starts. Its triangles are what the levels work down
+    /// from.
+    Loaded {
+        /// Triangles of the mesh as loaded, before cleaning.
+        triangles: u64,
+    },
+    /// A level of the DAG is built.
+    Level(LevelProgress),
 }
 
-/// Loads the input (or generates the procedural mesh), builds, saves and prints the
-/// bake summary.
-pub fn run_bake(args: &BakeOptions) -> Result<(), SceneError> {
+/// What a bake did: the figures `meshlight bake` prints.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BakeReport {
+    /// The mesh file baked (or [`PROCEDURAL_INPUT`]).
+    pub input: PathBuf,
+    /// The asset file written.
+    pub output: PathBuf,
+    /// Triangles of the cleaned mesh the DAG was built from.
+    pub mesh_triangles: usize,
+    /// Vertices of the cleaned mesh.
+    pub mesh_vertices: usize,
+    /// What cleaning dropped and welded.
+    pub clean: CleanReport,
+    /// Whether distinct positions met on the position grid, so that the mesh was
+    /// snapped to the grid and built again.
+    pub snapped_to_grid: bool,
+    /// Groups repaired because simplifying them would have cracked a LOD cut.
+    pub fallbacks: Fallbacks,
+    /// Header and DAG statistics of the asset written.
+    pub summary: AssetSummary,
+    /// Loading (or generating) the mesh.
+    pub load_time: Duration,
+    /// Building the DAG alone.
+    pub dag_time: Duration,
+    /// Cleaning, building and packing (loading not included).
+    pub total_time: Duration,
+    /// What is poor about the DAG (see [`crate::verify::quality`]); the asset is
+    /// written all the same.
+    pub warnings: Vec<String>,
+}
+
+impl BakeReport {
+    /// The report of `built`, baked from `input` into `output` after `load_time` spent
+    /// loading.
+    pub fn new(input: &Path, output: &Path, built: &Built, load_time: Duration) -> Self {
+        Self {
+            input: input.to_path_buf(),
+            output: output.to_path_buf(),
+            mesh_triangles: built.mesh.triangle_count(),
+            mesh_vertices: built.mesh.positions.len(),
+            clean: built.clean,
+            snapped_to_grid: built.snapped_to_grid,
+            fallbacks: built.fallbacks,
+            summary: AssetSummary::of(&built.asset),
+            load_time,
+            dag_time: built.dag_time,
+            total_time: built.total_time,
+            warnings: quality(&built.asset).warnings,
+        }
+    }
+}
+
+/// Loads the input (or generates the procedural mesh), builds it, checks the asset and
+/// saves it, calling `progress` as it goes. Nothing is written when the asset fails the
+/// checks `inspect` runs.
+pub fn bake(
+    options: &BakeOptions,
+    progress: &mut dyn FnMut(BakeProgress),
+) -> Result<BakeReport, SceneError> {
     let load_start = Instant::now();
     let load = LoadOptions {
-        max_triangles: args.max_triangles,
+        max_triangles: options.max_triangles,
     };
-    let mesh = load_input(&args.input, args.segments, &load)?;
+    let mesh = load_input(&options.input, options.segments, &load)?;
     let load_time = load_start.elapsed();
-
-    let bar = progress_bar(
-        mesh.triangle_count() as u64,
-        "building LOD DAG [{bar:30}] {msg}",
-    );
-    // Short builds finish before a bar would help; indicatif hides it off a terminal.
-    if mesh.triangle_count() < 200_000 {
-        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
-    let input_triangles = mesh.triangle_count() as u64;
+    progress(BakeProgress::Loaded {
+        triangles: mesh.triangle_count() as u64,
+    });
     let built = build_asset(
         &mesh,
         &BuildOptions {
-            grouping: args.grouping,
-            position_bits: args.position_bits,
+            grouping: options.grouping,
+            position_bits: options.position_bits,
             ..BuildOptions::default()
         },
-        &mut |p| {
-            // Triangles left shrink by about half per level; show progress toward zero.
-            bar.set_position(input_triangles.saturating_sub(p.active_triangles as u64));
-            bar.set_message(format!(
-                "level {}: {} clusters, {} triangles left",
-                p.level, p.active_clusters, p.active_triangles
-            ));
-        },
+        &mut |level| progress(BakeProgress::Level(level)),
     )?;
-    bar.finish_and_clear();
-    check_before_writing(&args.input, &built.asset)?;
-    built.asset.save(&args.output)?;
-    print!(
-        "{}",
-        bake_summary(&args.input, &args.output, &built, load_time.as_secs_f64())
-    );
-    for w in quality(&built.asset).warnings {
-        println!("  warning: {w}");
-    }
-    Ok(())
+    check_before_writing(&options.input, &built.asset)?;
+    built.asset.save(&options.output)?;
+    Ok(BakeReport::new(
+        &options.input,
+        &options.output,
+        &built,
+        load_time,
+    ))
 }
 
 /// Refuses to write an asset that `inspect` would reject: the same structural checks
@@ -137,178 +184,6 @@ fn load_input(input: &Path, segments: u32, options: &LoadOptions) -> Result<Mesh
         return Ok(procedural_mesh(segments));
     }
     load_mesh_with(input, options)
-}
-
-/// The text `meshlight bake` prints.
-pub fn bake_summary(input: &Path, output: &Path, built: &Built, load_seconds: f64) -> String {
-    let h = built.asset.header();
-    let mut s = String::new();
-    let _ = writeln!(s, "baked {} -> {}", input.display(), output.display());
-    let c = &built.clean;
-    let _ = writeln!(
-        s,
-        "  input: {} triangles, {} vertices; {} degenerate and {} duplicate triangles dropped, \
-         {} vertices welded to a neighbour{}",
-        built.mesh.triangle_count(),
-        built.mesh.positions.len(),
-        c.dropped_degenerate,
-        c.dropped_duplicate,
-        c.welded_vertices,
-        if built.snapped_to_grid {
-            "; snapped to the position grid"
-        } else {
-            ""
-        }
-    );
-    let _ = writeln!(
-        s,
-        "  crack repairs: {} groups kept unsimplified (fallback), {} simplified again with \
-         their border triangles locked",
-        built.fallbacks.unsimplified, built.fallbacks.relocked
-    );
-    s += &dag_table(&built.asset);
-    let seconds = built.total_time.as_secs_f64();
-    let _ = writeln!(
-        s,
-        "  build time: {:.3} s ({:.3} s DAG, {:.3} s loading before), {:.0} input triangles/s",
-        seconds,
-        built.dag_time.as_secs_f64(),
-        load_seconds,
-        h.lod0_triangles as f64 / seconds
-    );
-    s
-}
-
-/// Loads an asset (which validates magic, version, size, checksum and structure),
-/// prints its header and statistics, and verifies the DAG invariants. Structural
-/// violations fail; quality findings are printed as warnings and do not.
-pub fn run_inspect(file: &Path) -> Result<(), SceneError> {
-    let asset = MeshletAsset::load(file)?;
-    print!("{}", inspect_summary(file, &asset));
-    let problems = verify(&asset);
-    if problems.is_empty() {
-        println!("  invariants: all hold");
-        let q = quality(&asset);
-        for w in &q.warnings {
-            println!("  warning: {w}");
-        }
-        if q.warnings.is_empty() {
-            println!(
-                "  quality: levels halve, {} root(s)",
-                asset.header().root_count
-            );
-        }
-        Ok(())
-    } else {
-        for p in &problems {
-            println!("  violated: {p}");
-        }
-        crate::asset::dag_error(file, &problems)
-    }
-}
-
-/// The header and DAG statistics `meshlight inspect` prints.
-pub fn inspect_summary(path: &Path, asset: &MeshletAsset) -> String {
-    let h = asset.header();
-    let mut s = String::new();
-    let _ = writeln!(s, "{}: meshlet asset version {}", path.display(), h.version);
-    let _ = writeln!(
-        s,
-        "  {} bytes, checksum {:#018x}, {} meshlets, {} groups, UVs: {}",
-        asset.bytes().len(),
-        h.checksum[0] as u64 | ((h.checksum[1] as u64) << 32),
-        h.meshlet_count,
-        h.group_count,
-        if h.has_uvs() { "yes" } else { "no" }
-    );
-    let _ = writeln!(
-        s,
-        "  bounds {:?} .. {:?}; position grid {} bits, step {:.3e} (max error {:.3e})",
-        h.bounds_min,
-        h.bounds_max,
-        h.quant_bits,
-        h.quant_step,
-        asset.quantization().max_error()
-    );
-    let _ = writeln!(
-        s,
-        "  source: {} vertices; {} degenerate triangles were dropped",
-        h.input_vertices, h.dropped_degenerate
-    );
-    s += &dag_table(asset);
-    s
-}
-
-fn dag_table(asset: &MeshletAsset) -> String {
-    let h = asset.header();
-    let stats = level_stats(asset);
-    let mut s = String::new();
-    let _ = writeln!(s, "  level  meshlets  triangles  fill   max error");
-    for (level, st) in stats.iter().enumerate() {
-        let max_error = asset
-            .meshlets()
-            .iter()
-            .filter(|m| m.level() as usize == level)
-            .map(|m| asset.lod(m).1)
-            .fold(0.0f32, f32::max);
-        let _ = writeln!(
-            s,
-            "  {level:>5}  {:>8}  {:>9}  {:>5.1}  {:.3e}",
-            st.meshlets,
-            st.triangles,
-            st.triangles as f64 / st.meshlets.max(1) as f64,
-            max_error
-        );
-    }
-    let roots: Vec<_> = asset
-        .meshlets()
-        .iter()
-        .filter(|m| m.parent_group == crate::asset::format::NO_GROUP)
-        .collect();
-    let _ = writeln!(
-        s,
-        "  levels: {} (log2 of LOD-0 meshlets + 1 = {:.1}); root: {} meshlets, {} triangles",
-        h.level_count,
-        expected_levels(h.lod0_meshlets),
-        roots.len(),
-        roots.iter().map(|m| m.triangle_count()).sum::<u32>()
-    );
-    let _ = writeln!(
-        s,
-        "  meshlet fill: {:.1} triangles per meshlet overall, {:.1} at LOD 0",
-        h.total_triangles as f64 / h.meshlet_count.max(1) as f64,
-        h.lod0_triangles as f64 / h.lod0_meshlets.max(1) as f64
-    );
-    let _ = writeln!(
-        s,
-        "  size: {} bytes, {:.2} bytes per LOD-0 triangle ({} triangles in all levels)",
-        asset.bytes().len(),
-        asset.bytes().len() as f64 / h.lod0_triangles.max(1) as f64,
-        h.total_triangles
-    );
-    let nodes = asset.nodes();
-    let _ = writeln!(
-        s,
-        "  culling hierarchy: {} nodes, {} leaves (one per group, one of roots), depth {}",
-        nodes.len(),
-        crate::hierarchy::leaf_count(nodes),
-        crate::hierarchy::depth(nodes)
-    );
-    let b = asset.size_breakdown();
-    let per = |bytes: usize| bytes as f64 / h.lod0_triangles.max(1) as f64;
-    let _ = writeln!(
-        s,
-        "  bytes per LOD-0 triangle: records {:.2}, groups {:.2}, hierarchy {:.2}, positions {:.2}, normals {:.2}, UVs {:.2}, indices {:.2}; {:.2} vertex copies per triangle",
-        per(b.meshlet_records),
-        per(b.groups),
-        per(b.hierarchy),
-        per(b.positions),
-        per(b.normals),
-        per(b.uvs),
-        per(b.indices),
-        h.total_vertices as f64 / h.total_triangles.max(1) as f64
-    );
-    s
 }
 
 #[cfg(test)]

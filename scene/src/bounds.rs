@@ -7,13 +7,17 @@ use glam::Vec3;
 /// projects to pixels to choose a cut.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LodBounds {
+    /// Centre of the sphere, in mesh space.
     pub center: Vec3,
+    /// Radius of the sphere: the error is projected from its nearest point.
     pub radius: f32,
     /// Object-space error; `f32::INFINITY` for "no parent" (a root).
     pub error: f32,
 }
 
 impl LodBounds {
+    /// The parent of a root: an infinite error, so that a root is drawn whenever
+    /// nothing finer is.
     pub const ROOT_PARENT: LodBounds = LodBounds {
         center: Vec3::ZERO,
         radius: 0.0,

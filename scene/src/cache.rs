@@ -32,11 +32,17 @@ pub const CACHE_DIR_ENV: &str = "MESHLIGHT_CACHE_DIR";
 /// What to bake: a mesh file or the procedural mesh.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Source {
+    /// A mesh file; its bytes are part of the key, so an edited file is baked again.
     File(PathBuf),
-    Procedural { segments: u32 },
+    /// The procedural mesh, generated rather than read.
+    Procedural {
+        /// Tube segments (see [`crate::procedural_mesh`]): part of the key.
+        segments: u32,
+    },
 }
 
 impl Source {
+    /// What to call the source in progress and error messages.
     pub fn name(&self) -> String {
         match self {
             Source::File(p) => p.display().to_string(),
@@ -48,6 +54,7 @@ impl Source {
 /// Whether [`load_or_bake`] found the asset in the cache.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Outcome {
+    /// Loaded from the cache; nothing was baked.
     Hit,
     /// Baked and written to the cache.
     Baked,
@@ -138,37 +145,16 @@ fn store(asset: &MeshletAsset, dir: &Path, path: &Path) -> Result<(), SceneError
     std::fs::rename(&tmp, path).map_err(|e| SceneError::io(path, e))
 }
 
-/// A progress bar for bakes started from the command line: a spinner with the level
-/// and the triangles left (the total is unknown until the mesh is loaded). Hidden when
-/// standard error is not a terminal.
-pub struct BakeProgress {
-    bar: indicatif::ProgressBar,
-}
-
-impl BakeProgress {
-    pub fn new(name: &str) -> Self {
-        let bar = indicatif::ProgressBar::new_spinner();
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} baking {prefix}: {msg} ({elapsed})")
-                .expect("valid template"),
-        );
-        bar.set_prefix(name.to_string());
-        bar.enable_steady_tick(std::time::Duration::from_millis(120));
-        Self { bar }
-    }
-
-    pub fn report(&self, p: LevelProgress) {
-        self.bar.set_message(format!(
-            "level {}, {} clusters, {} triangles left",
-            p.level, p.active_clusters, p.active_triangles
-        ));
-    }
-}
-
-impl Drop for BakeProgress {
-    fn drop(&mut self) {
-        self.bar.finish_and_clear();
-    }
+/// Reports a bake's progress at `info` level of the `log` crate, for hosts that draw no
+/// progress of their own: a first bake of a large mesh takes seconds, and whoever
+/// enables the logs can see that it is moving and on which level.
+pub fn log_progress(name: &str, p: LevelProgress) {
+    log::info!(
+        "baking {name}: level {}, {} clusters, {} triangles left",
+        p.level,
+        p.active_clusters,
+        p.active_triangles
+    );
 }
 
 #[cfg(test)]

@@ -18,13 +18,19 @@ pub const AUTO_ERROR_SHARE: f32 = 1.0 / 8.0;
 /// The grid and the packed deltas are decoded with 32-bit integer maths and `f32`, which
 /// is exact up to 2^24 steps.
 pub const MAX_POSITION_BITS: u32 = 24;
+/// Fewer bits than this put a 16-cell grid over the whole mesh: nothing drawable, so a
+/// smaller request is a mistake worth refusing.
 pub const MIN_POSITION_BITS: u32 = 4;
 
 /// The mesh-wide position grid: `position = origin + step * q`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Quantization {
+    /// Grid point 0: the smallest corner of the mesh's bounds.
     pub origin: Vec3,
+    /// Distance between neighbouring grid points, the same on every axis so that the
+    /// error bound is one number.
     pub step: f32,
+    /// Bits per axis: grid coordinates run from 0 to `2^bits - 1`.
     pub bits: u32,
 }
 
@@ -47,6 +53,7 @@ impl Quantization {
         }
     }
 
+    /// The nearest grid point to `p`, clamped into the grid.
     pub fn quantize(&self, p: Vec3) -> [u32; 3] {
         let max = ((1u64 << self.bits) - 1) as f32;
         ((p - self.origin) / self.step)
@@ -56,6 +63,7 @@ impl Quantization {
             .map(|c| c as u32)
     }
 
+    /// The position of grid point `q`, computed as the shaders compute it.
     pub fn dequantize(&self, q: [u32; 3]) -> Vec3 {
         self.origin + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * self.step
     }
@@ -73,6 +81,8 @@ pub enum PositionBits {
     /// LOD-0 error (see [`auto_position_bits`]).
     #[default]
     Auto,
+    /// This many bits, from [`MIN_POSITION_BITS`] to [`MAX_POSITION_BITS`]: for
+    /// comparing encodings, or a grid shared by several assets.
     Fixed(u32),
 }
 
@@ -138,10 +148,12 @@ pub struct BitWriter<'a> {
 }
 
 impl<'a> BitWriter<'a> {
+    /// A writer appending to `words` from a fresh word on.
     pub fn new(words: &'a mut Vec<u32>) -> Self {
         Self { words, bit: 0 }
     }
 
+    /// Appends the low `bits` of `value`, straddling into a new word where needed.
     pub fn put(&mut self, value: u32, bits: u32) {
         if bits == 0 {
             return;
@@ -261,11 +273,15 @@ fn sign(v: f32) -> f32 {
 /// Texture coordinates as 2×16-bit unorm over the mesh's UV rectangle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UvQuantization {
+    /// The smallest UV of the mesh per component: code 0.
     pub min: [f32; 2],
+    /// UV distance per code step per component (0 for a mesh without UVs).
     pub step: [f32; 2],
 }
 
 impl UvQuantization {
+    /// The grid over the rectangle `uvs` span, so that the 16 bits per component cover
+    /// what the mesh uses rather than a fixed range.
     pub fn new(uvs: &[[f32; 2]]) -> Self {
         let (lo, hi) = uvs.iter().fold(
             (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
@@ -284,6 +300,7 @@ impl UvQuantization {
         }
     }
 
+    /// `uv` as one word: u in the low half, v in the high half.
     pub fn encode(&self, uv: [f32; 2]) -> u32 {
         let q = |k: usize| {
             if self.step[k] == 0.0 {
@@ -297,6 +314,7 @@ impl UvQuantization {
         q(0) | (q(1) << 16)
     }
 
+    /// The UV of a word [`Self::encode`] wrote.
     pub fn decode(&self, packed: u32) -> [f32; 2] {
         [
             self.min[0] + (packed & 0xffff) as f32 * self.step[0],
@@ -353,7 +371,6 @@ mod tests {
             worst
         };
         let measured: Vec<(u32, f32)> = [10, 11, 12, 13, 16].map(|b| (b, worst(b))).to_vec();
-        println!("worst normal error per bits: {measured:?}");
         assert!(worst(NORMAL_BITS) <= 1e-3, "{measured:?}");
         assert!(
             worst(NORMAL_BITS - 1) > 1e-3,

@@ -47,6 +47,7 @@ pub struct DagCluster {
 }
 
 impl DagCluster {
+    /// Triangles of the cluster.
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
@@ -68,13 +69,16 @@ pub struct DagGroup {
     pub deviation: f32,
     /// How hard it had to be pushed to simplify.
     pub mode: Mode,
+    /// The clusters simplified together (indices into [`Dag::clusters`]).
     pub children: Vec<u32>,
 }
 
 /// The whole hierarchy for one mesh.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dag {
+    /// Every cluster of every level, LOD 0 first.
     pub clusters: Vec<DagCluster>,
+    /// Every group, in the order they were formed.
     pub groups: Vec<DagGroup>,
     /// Number of cluster levels (max level + 1).
     pub level_count: u32,
@@ -93,22 +97,28 @@ pub struct Dag {
 /// once more at the next level with other neighbours, like a stuck group's.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Fallbacks {
+    /// Groups simplified again with their border triangles locked.
     pub relocked: usize,
+    /// Groups not formed: their children stayed the cut there.
     pub unsimplified: usize,
 }
 
 /// How to build the DAG.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct DagOptions {
+    /// How the clusters of a level are grouped for simplification.
     pub grouping: Grouping,
 }
 
 /// Reported once per finished level, for progress bars.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LevelProgress {
+    /// Levels built so far (1 after the first simplification).
     pub level: u32,
     /// Clusters not yet simplified (the candidates for the next level).
     pub active_clusters: usize,
+    /// Triangles of those clusters: what is left to simplify, which about halves per
+    /// level and so measures how far the build has come.
     pub active_triangles: usize,
 }
 

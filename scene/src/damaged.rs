@@ -1,6 +1,8 @@
 //! Assets damaged on purpose, sound in structure but not as a DAG: what the checks of
 //! `inspect`, `bake`, the cache and the renderer must refuse. For the tests of every
-//! tool that loads assets, so each damages them the same way.
+//! tool that loads assets, so each damages them the same way. Compiled for this
+//! crate's own tests and behind the `test-utils` feature, which other crates enable in
+//! their dev-dependencies: an application has no use for broken assets.
 
 use crate::{Built, MeshletAsset};
 

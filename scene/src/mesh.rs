@@ -25,6 +25,7 @@ pub const MAX_COORDINATE: f32 = 1e16;
 pub struct Mesh {
     /// Where the mesh came from (a file path or a generator name), quoted in errors.
     pub source: String,
+    /// Vertex positions, in the source's units.
     pub positions: Vec<Vec3>,
     /// Unit normals, one per position.
     pub normals: Vec<Vec3>,
@@ -49,10 +50,12 @@ pub struct CleanReport {
 }
 
 impl Mesh {
+    /// Triangles of the mesh.
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
 
+    /// Whether the mesh has texture coordinates, which the asset then stores.
     pub fn has_uvs(&self) -> bool {
         !self.uvs.is_empty()
     }

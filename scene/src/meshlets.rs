@@ -6,11 +6,11 @@ use rayon::prelude::*;
 
 use crate::greedy_meshlets::{SeedOrder, grow_meshlets};
 
-/// Most vertices per meshlet: local indices are `u8`, and 255 leaves 255 free as a
-/// sentinel for the GPU.
-pub const MAX_VERTICES: usize = 255;
-/// Most triangles per meshlet: one workgroup of 128 threads rasterises one meshlet.
-pub const MAX_TRIANGLES: usize = 128;
+/// The asset format's limits, which the splitter fills meshlets up to (they live with the
+/// format, so that reading assets needs no builder).
+pub use crate::asset::format::{
+    MAX_MESHLET_TRIANGLES as MAX_TRIANGLES, MAX_MESHLET_VERTICES as MAX_VERTICES,
+};
 
 /// Triangles per independently split chunk of a large mesh. Fixed, not derived from the
 /// thread count, so the meshlets are the same on every machine; large enough that the

@@ -18,6 +18,7 @@ use crate::weld::{DEFAULT_WELD_TOLERANCE, MAX_WELD_TOLERANCE};
 /// Options of [`build_asset`].
 #[derive(Debug, Clone, Copy)]
 pub struct BuildOptions {
+    /// How meshlets are grouped for simplification.
     pub grouping: Grouping,
     /// Bits per axis of the mesh-wide position grid.
     pub position_bits: PositionBits,
@@ -41,11 +42,13 @@ impl Default for BuildOptions {
 /// An asset plus what was learnt while building it.
 #[derive(Debug, Clone)]
 pub struct Built {
+    /// The packed asset, ready to save or upload.
     pub asset: MeshletAsset,
     /// The DAG in the cleaned mesh's vertex ids (for tests and tools).
     pub dag: Dag,
     /// The cleaned mesh the DAG refers to.
     pub mesh: Mesh,
+    /// What cleaning dropped and welded before building.
     pub clean: CleanReport,
     /// Groups whose simplification would have cracked a LOD cut and were repaired
     /// (also in `dag.fallbacks`).
@@ -56,7 +59,9 @@ pub struct Built {
     /// Whether distinct positions met on the position grid, so that the mesh was
     /// snapped to the grid and built again (see [`build_asset`]).
     pub snapped_to_grid: bool,
+    /// Building the DAG alone, to tell the builder's cost from cleaning and packing.
     pub dag_time: Duration,
+    /// Cleaning, building and packing.
     pub total_time: Duration,
 }
 

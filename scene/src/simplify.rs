@@ -40,11 +40,16 @@ pub const FOLDS_PER_64_TRIANGLES: usize = 1;
 /// How a group was simplified, for statistics.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
+    /// Attribute-aware, seams kept: what almost every group needs.
     Regular,
+    /// Collapses across attribute seams allowed, seam vertices protected: for a group
+    /// whose seams leave regular mode too few collapses.
     Permissive,
     /// Simplified as if every attribute seam were welded: needed where nearly every
     /// vertex is on a seam (a faceted mesh), where the modes that keep seams are stuck.
     Welded,
+    /// Topology and attributes ignored, error scaled by [`SLOPPY_ERROR_FACTOR`]: the
+    /// last resort before a group is left for the next level.
     Sloppy,
 }
 
@@ -55,6 +60,7 @@ impl Mode {
 
 /// One simplified group in the group's own (global) vertex ids.
 pub struct Simplified {
+    /// Three global vertex ids per output triangle.
     pub indices: Vec<u32>,
     /// Object-space error of this simplification alone, as meshoptimizer estimates it
     /// (scaled by [`SLOPPY_ERROR_FACTOR`] for sloppy results).
@@ -62,13 +68,18 @@ pub struct Simplified {
     /// Measured distance from the output's triangles to the input's (see
     /// [`simplified_deviation`]).
     pub deviation: f32,
+    /// The mode that gave this result, counted in the build's statistics.
     pub mode: Mode,
 }
 
 /// Per global vertex: is it on the group border (locked), and is it on an attribute
 /// seam (protected in permissive mode)?
 pub struct VertexFlags<'a> {
+    /// Whether a global vertex is on the group's border: moving it would open a crack
+    /// against the neighbouring group.
     pub locked: &'a (dyn Fn(u32) -> bool + Sync),
+    /// Per global vertex, whether it lies on an attribute seam (several copies of one
+    /// position).
     pub seam: &'a [bool],
 }
 

@@ -29,6 +29,8 @@ pub struct Terrain {
     /// Octaves of noise, each half the wavelength and half the amplitude of the one
     /// before.
     pub octaves: u32,
+    /// Seed of the noise: terrains differing only in it have different hills, the same
+    /// on every machine.
     pub seed: u32,
     /// Texture coordinates per world unit (`uv = (x, z) · uv_scale`).
     pub uv_scale: f32,
@@ -36,6 +38,7 @@ pub struct Terrain {
     /// the ground is flat at height 0, and the hills rise to their full height by three
     /// times that distance (a smoothstep). 0: no calm spot.
     pub calm_centre: Vec2,
+    /// Radius of the flat calm spot, world units.
     pub calm_radius: f32,
 }
 

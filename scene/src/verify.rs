@@ -15,8 +15,11 @@ use crate::chain_fingerprint::ChainKeys;
 /// Per-level counts of an asset.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct LevelStats {
+    /// Meshlets of the level.
     pub meshlets: usize,
+    /// Triangles of the level: each level should hold about half the one before.
     pub triangles: usize,
+    /// Vertex records of the level (a vertex counts once per meshlet using it).
     pub vertices: usize,
 }
 
@@ -60,6 +63,7 @@ pub struct Quality {
     pub warnings: Vec<String>,
     /// Largest triangles(level) / triangles(level - 1), the last level aside.
     pub worst_ratio: f64,
+    /// Most levels a good DAG of this size has ([`level_limit`]).
     pub level_limit: u32,
     /// All levels' triangles over LOD 0's.
     pub total_ratio: f64,

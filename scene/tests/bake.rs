@@ -1,9 +1,11 @@
-//! `meshlight bake` / `meshlight inspect` through their library entry points (the
-//! command line's parsing of their options is tested with the command).
+//! `meshlight bake` / `meshlight inspect` through their library entry points, which
+//! return what the command prints as values (the command's parsing of their options and
+//! its wording are tested with the command).
 
 mod common;
 
-use meshlight_scene::bake::{BakeOptions, run_bake, run_inspect};
+use meshlight_scene::bake::{BakeOptions, BakeProgress, bake};
+use meshlight_scene::inspect::inspect;
 use meshlight_scene::{Grouping, MeshletAsset, SceneError};
 
 #[test]
@@ -16,40 +18,100 @@ fn bake_then_inspect_the_procedural_mesh() {
         position_bits: "14".parse().unwrap(),
         ..BakeOptions::new("procedural", &out)
     };
-    run_bake(&options).unwrap();
+    let mut steps = Vec::new();
+    let report = bake(&options, &mut |step| steps.push(step)).unwrap();
     let asset = MeshletAsset::load(&out).unwrap();
     assert_eq!(asset.header().quant_bits, 14);
     assert_eq!(asset.header().lod0_triangles, 16 * 12 * 12);
-    run_inspect(&out).unwrap();
+    assert_eq!(
+        report.summary.header,
+        *asset.header(),
+        "the report is the file's"
+    );
+    assert_eq!(report.output, out);
+
+    // Progress: the mesh's size first, then each level in turn, leaving no more
+    // triangles to simplify than the one before.
+    assert_eq!(
+        steps.first(),
+        Some(&BakeProgress::Loaded {
+            triangles: 16 * 12 * 12
+        })
+    );
+    let levels: Vec<_> = steps[1..]
+        .iter()
+        .map(|s| match s {
+            BakeProgress::Level(p) => *p,
+            other => panic!("a second {other:?}"),
+        })
+        .collect();
+    assert!(levels.len() >= 2, "{steps:?}");
+    assert!(
+        levels
+            .iter()
+            .enumerate()
+            .all(|(i, p)| p.level == i as u32 + 1),
+        "{levels:?}"
+    );
+    assert!(levels[0].active_triangles < 16 * 12 * 12, "{levels:?}");
+    assert!(
+        levels
+            .windows(2)
+            .all(|w| w[1].active_triangles <= w[0].active_triangles),
+        "{levels:?}"
+    );
+
+    let inspected = inspect(&out).unwrap();
+    assert_eq!(inspected.summary, report.summary, "bake and inspect agree");
+    assert!(inspected.problems.is_empty(), "{:?}", inspected.problems);
+    inspected.verdict().unwrap();
 
     let mut bytes = std::fs::read(&out).unwrap();
     bytes.truncate(bytes.len() / 2);
     std::fs::write(&out, bytes).unwrap();
-    let err = run_inspect(&out).unwrap_err();
+    let err = inspect(&out).unwrap_err();
     assert!(matches!(err, SceneError::AssetTruncated { .. }), "{err:?}");
 }
 
+/// The figures of the summary add up to what the header and the file say.
 #[test]
-fn bake_summary_reports_levels_fill_and_size() {
+fn the_asset_summary_adds_up() {
     let path = common::shared_mesh("spot.obj");
     let mesh = meshlight_scene::load::load_mesh(&path).unwrap();
     let built = meshlight_scene::build_asset(&mesh, &Default::default(), &mut |_| {}).unwrap();
-    let text = meshlight_scene::bake::bake_summary(&path, "spot.mlasset".as_ref(), &built, 0.0);
-    for needle in [
-        "level  meshlets  triangles",
-        "levels:",
-        "root:",
-        "meshlet fill",
-        "bytes per LOD-0 triangle",
-        "build time",
-        "input triangles/s",
-    ] {
-        assert!(text.contains(needle), "missing {needle:?} in\n{text}");
-    }
+    let s = meshlight_scene::asset::summary::AssetSummary::of(&built.asset);
+    let h = built.asset.header();
+    assert_eq!(s.levels.len(), h.level_count as usize);
+    assert!(h.level_count > 2, "{h:?}");
+    assert_eq!(s.levels[0].triangles, h.lod0_triangles as usize);
+    assert_eq!(s.levels[0].meshlets, h.lod0_meshlets as usize);
+    assert_eq!(
+        s.levels.iter().map(|l| l.triangles).sum::<usize>(),
+        h.total_triangles as usize
+    );
+    assert_eq!(s.levels[0].max_error, 0.0, "LOD 0 is the mesh itself");
+    assert!(
+        s.levels.windows(2).all(|w| w[0].max_error < w[1].max_error),
+        "errors grow with the level: {:?}",
+        s.levels
+    );
+    assert_eq!(s.root_meshlets, h.root_count as usize);
+    assert_eq!(
+        s.root_triangles as usize,
+        s.levels.last().unwrap().triangles,
+        "the roots are the last level here"
+    );
+    assert_eq!(s.hierarchy.leaves, h.group_count as usize + 1);
+    assert_eq!(s.hierarchy.nodes, h.node_count as usize);
+    assert!(s.hierarchy.depth >= 2, "{:?}", s.hierarchy);
+    assert_eq!(s.bytes, built.asset.bytes().len());
+    assert_eq!(s.size.total(), s.bytes);
+    assert_eq!(s.checksum() & 0xffff_ffff, u64::from(h.checksum[0]));
+    assert!(s.max_position_error > 0.0);
 }
 
-/// A valid but poor DAG (every meshlet a root) passes `inspect` with warnings, exit 0;
-/// `bake` refuses to write what its own checks reject.
+/// A valid but poor DAG (every meshlet a root) passes `inspect` with warnings;
+/// a broken one is reported with its violations and fails.
 #[test]
 fn inspect_warns_on_poor_dags_and_fails_only_on_broken_ones() {
     let built = meshlight_scene::build_asset(
@@ -67,20 +129,29 @@ fn inspect_warns_on_poor_dags_and_fails_only_on_broken_ones() {
     }
     dag.level_count = 1;
     let poor = MeshletAsset::from_dag(&built.mesh, &dag, 16, 0);
-    let q = meshlight_scene::verify::quality(&poor);
-    assert!(
-        q.warnings.iter().any(|w| w.contains("root meshlets")),
-        "{q:?}"
-    );
     let dir = common::scratch("cli-poor");
     let path = dir.join("poor.mlasset");
     poor.save(&path).unwrap();
-    run_inspect(&path).unwrap();
+    let report = inspect(&path).unwrap();
+    report.verdict().unwrap();
+    assert!(report.problems.is_empty(), "{:?}", report.problems);
+    assert!(
+        report.warnings.iter().any(|w| w.contains("root meshlets")),
+        "{report:?}"
+    );
 
     // Broken: a group error below its children's. Not loadable by inspect's rules.
     let broken = meshlight_scene::damaged::error_below_child(&built).unwrap();
     let path = dir.join("broken.mlasset");
     broken.save(&path).unwrap();
-    let err = run_inspect(&path).unwrap_err();
+    let report = inspect(&path).unwrap();
+    assert!(
+        report.problems.iter().any(|p| p.contains("below child")),
+        "{:?}",
+        report.problems
+    );
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    let err = report.verdict().unwrap_err();
     assert!(matches!(err, SceneError::AssetCorrupt { .. }), "{err:?}");
+    assert_eq!(report.summary.header, *broken.header());
 }

@@ -349,7 +349,7 @@ fn every_payload_word_belongs_to_one_meshlet() {
 /// with the same message.
 #[test]
 fn loading_for_the_renderer_refuses_what_inspect_rejects() {
-    use meshlight_scene::bake::run_inspect;
+    use meshlight_scene::inspect::inspect;
     let dir = common::scratch("load-verified");
     let good = dir.join("good.mlasset");
     let built = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {}).unwrap();
@@ -361,7 +361,7 @@ fn loading_for_the_renderer_refuses_what_inspect_rejects() {
     let bad = dir.join("bad.mlasset");
     broken.save(&bad).unwrap();
     MeshletAsset::load(&bad).expect("structurally sound");
-    let inspect = run_inspect(&bad).unwrap_err();
+    let inspect = inspect(&bad).unwrap().verdict().unwrap_err();
     let load = MeshletAsset::load_verified(&bad).unwrap_err();
     assert!(matches!(load, SceneError::AssetCorrupt { .. }), "{load:?}");
     assert_eq!(load.to_string(), inspect.to_string());

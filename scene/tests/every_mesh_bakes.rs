@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 use common::dag_checks::{check, check_structure};
 use common::generators::{Sphere, finned_sphere, glb, in_memory, soup_stl, spheres_obj};
-use meshlight_scene::bake::{BakeOptions, run_bake, run_inspect};
+use meshlight_scene::bake::{BakeOptions, bake};
+use meshlight_scene::inspect::inspect;
 use meshlight_scene::load::load_mesh;
 use meshlight_scene::{BuildOptions, Built, Grouping, Mesh, build_asset, procedural_mesh};
 
@@ -41,8 +42,10 @@ fn bakes(dir: &Path, path: &Path) {
             segments: 8,
             ..BakeOptions::new(path, &output)
         };
-        run_bake(&args).unwrap_or_else(|e| panic!("{name} ({grouping:?}): {e}"));
-        run_inspect(&output).unwrap_or_else(|e| panic!("{name}: {e}"));
+        bake(&args, &mut |_| {}).unwrap_or_else(|e| panic!("{name} ({grouping:?}): {e}"));
+        inspect(&output)
+            .and_then(|report| report.verdict())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         check(&format!("{name} ({grouping:?})"), &build(&mesh, grouping));
     }
 }
@@ -249,19 +252,14 @@ fn cracking_groups_are_repaired_locally() {
     assert!(built.fallbacks.unsimplified > 0, "{:?}", built.fallbacks);
     assert_eq!(built.fallback_groups as usize, built.fallbacks.unsimplified);
     assert_eq!(built.dag.fallbacks, built.fallbacks);
-    let summary = meshlight_scene::bake::bake_summary(
+    // The count reaches the report `meshlight bake` prints.
+    let report = meshlight_scene::bake::BakeReport::new(
         Path::new("fins.obj"),
         Path::new("fins.mlasset"),
         &built,
-        0.0,
+        Default::default(),
     );
-    assert!(
-        summary.contains(&format!(
-            "{} groups kept unsimplified",
-            built.fallbacks.unsimplified
-        )),
-        "{summary}"
-    );
+    assert_eq!(report.fallbacks, built.fallbacks);
 }
 
 /// Positions the weld leaves apart but the position grid merges: without welding the

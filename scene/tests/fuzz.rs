@@ -129,7 +129,7 @@ fn fuzz_asset_loader() {
 fn use_everything(asset: &MeshletAsset) {
     let _ = meshlight_scene::verify::verify(asset);
     let _ = meshlight_scene::verify::quality(asset);
-    let _ = meshlight_scene::bake::inspect_summary(Path::new("fuzz.mlasset"), asset);
+    let _ = meshlight_scene::asset::summary::AssetSummary::of(asset);
     let _ = asset.size_breakdown();
     for i in 0..asset.meshlets().len() {
         let _ = asset.decode_meshlet(i);

@@ -91,7 +91,7 @@ fn main() -> ExitCode {
         Command::Graph(a) => graph(a),
         Command::Bench(a) => meshlight_bench::run(&a.options()),
         Command::Bake(a) => bake(a),
-        Command::Inspect { file } => meshlight::scene::bake::run_inspect(&file).map_err(Into::into),
+        Command::Inspect { file } => meshlight_cli::inspect::run(&file).map_err(Into::into),
         Command::Info => meshlight_cli::info::report()
             .and_then(|text| meshlight_output::write_stdout(&text).map_err(Into::into)),
         Command::View(a) => view::view(a),
@@ -155,7 +155,7 @@ fn bake(a: args::BakeArgs) -> Result<(), Box<dyn std::error::Error>> {
         pool.install(|| meshlight_cli::bake_library::run(&a.input, &a.output, &options, threads))
             .map_err(Into::into)
     } else {
-        pool.install(|| meshlight::scene::bake::run_bake(&a.options()))
+        pool.install(|| meshlight_cli::bake_file::run(&a.options()))
             .map_err(Into::into)
     }
 }

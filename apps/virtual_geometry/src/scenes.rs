@@ -5,7 +5,7 @@ use glam::{Mat4, Quat, Vec3};
 use meshlight::gpu_scene::lattice::Lattice;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData};
 use meshlight::scene::asset::format;
-use meshlight::scene::cache::{self, BakeProgress, Source};
+use meshlight::scene::cache::{self, Source};
 use meshlight::scene::{BuildOptions, MeshletAsset, SceneError, Terrain, build_asset};
 use meshlight::shaders::cpu::layout::{ClusterableKind, ClusterableObject};
 use std::path::Path;
@@ -19,7 +19,7 @@ pub const DEFAULT_LIGHTS: u32 = 256;
 
 /// The asset of a mesh argument: `procedural` (the default mesh with `segments`), a
 /// baked `.mlasset` file, or a mesh file baked on first use and cached (keyed by the
-/// file's bytes and the bake options), with a progress spinner while it bakes.
+/// file's bytes and the bake options), its progress logged while it bakes.
 pub fn load_asset(mesh: &Path, segments: u32) -> Result<MeshletAsset, SceneError> {
     if mesh.extension().is_some_and(|e| e == "mlasset") {
         // Every check `meshlight inspect` runs, so nothing it rejects reaches the GPU.
@@ -30,12 +30,12 @@ pub fn load_asset(mesh: &Path, segments: u32) -> Result<MeshletAsset, SceneError
     } else {
         Source::File(mesh.to_path_buf())
     };
-    let progress = BakeProgress::new(&source.name());
+    let name = source.name();
     let (asset, _) = cache::load_or_bake(
         &source,
         &BuildOptions::default(),
         &cache::cache_dir(),
-        &mut |p| progress.report(p),
+        &mut |p| cache::log_progress(&name, p),
     )?;
     Ok(asset)
 }
@@ -225,7 +225,7 @@ pub fn field_ground(radius: f32, instances: u32) -> Terrain {
 }
 
 /// The baked asset of `terrain`: from this process's memory, else from the asset cache,
-/// else baked (with a progress spinner) and stored in the cache. The cache file is named
+/// else baked (its progress logged) and stored in the cache. The cache file is named
 /// by a hash of the terrain's fields, the asset format and the builder revision.
 pub fn ground_asset(terrain: &Terrain) -> Result<MeshletAsset, SceneError> {
     static BAKED: Mutex<Vec<(u64, MeshletAsset)>> = Mutex::new(Vec::new());
@@ -242,8 +242,9 @@ pub fn ground_asset(terrain: &Terrain) -> Result<MeshletAsset, SceneError> {
         Some(Ok(asset)) => asset,
         _ => {
             let mesh = terrain.mesh()?;
-            let progress = BakeProgress::new(&mesh.source);
-            let built = build_asset(&mesh, &BuildOptions::default(), &mut |p| progress.report(p))?;
+            let built = build_asset(&mesh, &BuildOptions::default(), &mut |p| {
+                cache::log_progress(&mesh.source, p)
+            })?;
             store(&built.asset, &dir, &path);
             built.asset
         }

@@ -22,6 +22,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
+/// The first eight bytes of every asset, so that a mesh file or anything else given
+/// by mistake is named as such instead of failing a later check.
 pub const MAGIC: [u8; 8] = *b"MLASSET\0";
 /// Bumped on any layout change; older files are refused, not misread. 4: the culling
 /// hierarchy (`node_count`, two more sections).
@@ -30,63 +32,106 @@ pub const VERSION: u32 = 4;
 /// Header flag: each meshlet's payload holds UVs after its vertex records.
 pub const FLAG_UVS: u32 = 1;
 
-/// Section order in [`AssetHeader::sections`].
+/// Section order in [`AssetHeader::sections`]: the meshlet records.
 pub const SECTION_MESHLETS: usize = 0;
+/// The group records.
 pub const SECTION_GROUPS: usize = 1;
+/// The meshlet ids of each group's children, which [`GroupRecord::first_child`] indexes.
 pub const SECTION_CHILDREN: usize = 2;
+/// The packed vertex, UV and triangle words of every meshlet.
 pub const SECTION_PAYLOAD: usize = 3;
+/// The culling hierarchy's node records.
 pub const SECTION_NODES: usize = 4;
+/// The meshlet ids the hierarchy's leaves take, which [`NodeRecord::first_cluster`]
+/// indexes.
 pub const SECTION_NODE_CLUSTERS: usize = 5;
+/// Sections in a file; the header holds one [`Section`] for each.
 pub const SECTION_COUNT: usize = 6;
 
 /// Where a section lies, in 32-bit words from the start of the file.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
 pub struct Section {
+    /// First word of the section, from the start of the file (header included).
     pub offset: u32,
+    /// Length of the section in words.
     pub words: u32,
 }
 
+/// The start of every asset: what a loader checks before it trusts the rest (magic,
+/// version, size, checksum, where each section lies), the counts summaries report
+/// without walking the records, and the grids positions and UVs are decoded on.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct AssetHeader {
+    /// [`MAGIC`].
     pub magic: [u8; 8],
+    /// [`VERSION`] of the writer; a reader refuses any other.
     pub version: u32,
+    /// [`FLAG_UVS`] or nothing.
     pub flags: u32,
     /// Whole file size in bytes, low and high halves (the header stays 4-byte aligned).
     pub file_size: [u32; 2],
     /// Checksum of every byte after the header, low and high halves.
     pub checksum: [u32; 2],
+    /// Meshlet records, all levels.
     pub meshlet_count: u32,
+    /// Group records: one per simplification step of the DAG.
     pub group_count: u32,
     /// Nodes of the culling hierarchy (at least one: the root).
     pub node_count: u32,
+    /// Levels of the DAG, LOD 0 included.
     pub level_count: u32,
+    /// Meshlets without a parent group, which a distant view draws.
     pub root_count: u32,
+    /// Meshlets of LOD 0, the full-detail mesh.
     pub lod0_meshlets: u32,
+    /// Triangles of LOD 0: the mesh's triangles after cleaning, what sizes and rates are
+    /// quoted per.
     pub lod0_triangles: u32,
+    /// Triangles of all levels.
     pub total_triangles: u32,
+    /// Vertex records of all levels (a vertex is stored once per meshlet using it).
     pub total_vertices: u32,
+    /// Vertices of the mesh the asset was built from, after cleaning.
     pub input_vertices: u32,
+    /// Triangles the bake dropped as degenerate, so that a summary can say the asset
+    /// has fewer triangles than the source for that reason.
     pub dropped_degenerate: u32,
+    /// Smallest corner of the mesh's bounding box.
     pub bounds_min: [f32; 3],
+    /// Largest corner of the mesh's bounding box.
     pub bounds_max: [f32; 3],
     /// Position grid: `position = quant_origin + quant_step * q`.
     pub quant_origin: [f32; 3],
+    /// Distance between neighbouring grid points (the same on every axis).
     pub quant_step: f32,
+    /// Bits per axis of the grid: the largest grid coordinate is `2^quant_bits - 1`.
     pub quant_bits: u32,
+    /// UV grid: `uv = uv_min + uv_step * q` per component (see
+    /// [`crate::compress::UvQuantization`]).
     pub uv_min: [f32; 2],
+    /// Distance between neighbouring UV grid points per component.
     pub uv_step: [f32; 2],
+    /// Where each section lies, in the order of the `SECTION_*` constants.
     pub sections: [Section; SECTION_COUNT],
 }
 
 impl AssetHeader {
+    /// Size of the header in 32-bit words: the sections start after it.
     pub const WORDS: usize = size_of::<AssetHeader>() / 4;
 
+    /// Whether each meshlet's payload holds UVs ([`FLAG_UVS`]).
     pub fn has_uvs(&self) -> bool {
         self.flags & FLAG_UVS != 0
     }
 }
+
+/// Most vertices per meshlet: local indices are `u8`, and 255 leaves 255 free as a
+/// sentinel for the GPU.
+pub const MAX_MESHLET_VERTICES: usize = 255;
+/// Most triangles per meshlet: one workgroup of 128 threads rasterises one meshlet.
+pub const MAX_MESHLET_TRIANGLES: usize = 128;
 
 /// Marks "no group" in [`MeshletRecord::source_group`] and
 /// [`MeshletRecord::parent_group`].
@@ -131,15 +176,19 @@ pub struct MeshletRecord {
 pub const NORMAL_BIAS: i32 = 1 << (crate::compress::NORMAL_BITS - 1);
 
 impl MeshletRecord {
+    /// Vertices of the meshlet, from [`Self::counts`].
     pub fn vertex_count(&self) -> u32 {
         self.counts & 0xff
     }
+    /// Triangles of the meshlet, from [`Self::counts`].
     pub fn triangle_count(&self) -> u32 {
         (self.counts >> 8) & 0xff
     }
+    /// DAG level of the meshlet (0: full detail), from [`Self::counts`].
     pub fn level(&self) -> u32 {
         (self.counts >> 16) & 0xff
     }
+    /// Bits of each packed position offset (x, y, z), from [`Self::bits`].
     pub fn axis_bits(&self) -> [u32; 3] {
         [
             self.bits & 0xff,
@@ -182,11 +231,19 @@ impl MeshletRecord {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 pub struct GroupRecord {
+    /// Sphere (centre, radius) enclosing the group's children's LOD spheres: the error
+    /// is projected from it, so that a parent is never finer than a child from any
+    /// viewpoint.
     pub lod_sphere: [f32; 4],
+    /// Simplification error of the group's result, at least its children's, so that
+    /// errors grow monotonically up the DAG and a cut is consistent.
     pub error: f32,
+    /// The build iteration that formed the group: the meshlets it produced are one
+    /// level above it (its children may be lower, when they were stuck before).
     pub level: u32,
     /// Range in the children section.
     pub first_child: u32,
+    /// Meshlets simplified in the group.
     pub child_count: u32,
 }
 
@@ -194,13 +251,19 @@ pub struct GroupRecord {
 /// UVs (when the asset has them), triangle records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PayloadLayout {
+    /// First word of the vertex records (always 0).
     pub vertices: u32,
+    /// First word of the UVs (equal to `triangles` without UVs).
     pub uvs: u32,
+    /// First word of the triangle records.
     pub triangles: u32,
+    /// One past the meshlet's last word.
     pub end: u32,
 }
 
 impl PayloadLayout {
+    /// The layout of `record`'s payload, from its counts and bit widths alone: the
+    /// decoders and the validation find every block without reading the payload.
     pub fn of(record: &MeshletRecord, has_uvs: bool) -> Self {
         let vc = record.vertex_count();
         let vertices = 0;
@@ -241,22 +304,27 @@ pub struct NodeRecord {
     /// Internal nodes: the children are nodes `first_child .. first_child + child_count`
     /// of the same mesh, all after this one. Leaves: `child_count` = 0, `first_child` = 0.
     pub first_child: u32,
+    /// Child nodes; 0 for a leaf.
     pub child_count: u32,
     /// The meshlets below, as a range of the cluster list: a leaf's own, an internal
     /// node's the concatenation of its children's (the list is in depth-first order).
     pub first_cluster: u32,
+    /// Meshlets below.
     pub cluster_count: u32,
     /// Zero.
     pub reserved: [u32; 2],
 }
 
 impl NodeRecord {
+    /// Whether the node holds meshlets rather than child nodes.
     pub fn is_leaf(&self) -> bool {
         self.child_count == 0
     }
+    /// The child nodes' indices (empty for a leaf).
     pub fn children(&self) -> std::ops::Range<usize> {
         self.first_child as usize..self.first_child as usize + self.child_count as usize
     }
+    /// The range of the cluster list holding the meshlets below.
     pub fn clusters(&self) -> std::ops::Range<usize> {
         self.first_cluster as usize..self.first_cluster as usize + self.cluster_count as usize
     }

@@ -16,14 +16,14 @@ use rayon::prelude::*;
 use super::MeshletAsset;
 use super::format::{MeshletRecord, PayloadLayout};
 use super::triangles::{TriangleBits, for_each_stored, prediction_reciprocal};
+use crate::asset::format::MAX_MESHLET_VERTICES;
 use crate::chain_fingerprint::{ChainKeys, triangle};
 use crate::compress::{bit_window, low_bits};
-use crate::meshlets::MAX_VERTICES;
 
 /// Vertex words a meshlet can have: one more than its 8-bit vertex count allows, so
 /// that an index taken modulo it needs no bounds check.
 const WORDS: usize = 256;
-const _: () = assert!(MAX_VERTICES < WORDS);
+const _: () = assert!(MAX_MESHLET_VERTICES < WORDS);
 
 /// One meshlet's decoded vertices: their fingerprint words, and their grid points an
 /// axis at a time.
@@ -348,7 +348,8 @@ fn clamped_triangles(
     (first_out_of_range, boundary)
 }
 
-#[cfg(test)]
+// The scans are compared on built assets.
+#[cfg(all(test, feature = "build"))]
 mod tests {
     use super::*;
     use crate::asset::triangles::first_out_of_range;

@@ -21,6 +21,8 @@ pub struct TriangleBits {
 }
 
 impl TriangleBits {
+    /// Bits of one record, so that a thread per triangle finds its record by
+    /// multiplying.
     pub fn stride(self) -> u32 {
         self.offset + 2 * self.delta
     }
@@ -105,7 +107,7 @@ pub fn prediction_reciprocal(triangles: u32) -> u64 {
 }
 
 /// Calls `each` with every triangle's index and stored corners in order, as
-/// [`stored_corners`] gives them one at a time, but with the prediction's division done
+/// `stored_corners` gives them one at a time, but with the prediction's division done
 /// as a multiplication: the load-time checks visit every triangle of an asset, and a
 /// division per triangle cost as much as the rest of decoding it.
 pub fn for_each_stored(

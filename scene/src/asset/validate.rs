@@ -6,7 +6,6 @@
 
 use super::format::*;
 use crate::compress::{MAX_POSITION_BITS, MIN_POSITION_BITS};
-use crate::meshlets::{MAX_TRIANGLES, MAX_VERTICES};
 
 /// Most levels an asset may have: a meshlet stores its level in 8 bits.
 pub const MAX_LEVELS: u32 = 256;
@@ -14,7 +13,10 @@ pub const MAX_LEVELS: u32 = 256;
 /// One inconsistency: the field and what is wrong with it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Invalid {
+    /// The header field, record field or section that is wrong, e.g. `header.flags` or
+    /// `header.sections[2].offset`, so that an error message can point at it.
     pub field: String,
+    /// What is wrong with it, worded to follow the field.
     pub problem: String,
 }
 
@@ -134,11 +136,15 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         if m.counts >> 24 != 0 {
             return Err(bad(f("counts"), "has bits set above bit 24"));
         }
-        if vc == 0 || tc == 0 || vc > MAX_VERTICES as u32 || tc > MAX_TRIANGLES as u32 {
+        if vc == 0
+            || tc == 0
+            || vc > MAX_MESHLET_VERTICES as u32
+            || tc > MAX_MESHLET_TRIANGLES as u32
+        {
             return Err(bad(
                 f("counts"),
                 format!(
-                    "says {vc} vertices and {tc} triangles; meshlets hold 1..={MAX_VERTICES} and 1..={MAX_TRIANGLES}"
+                    "says {vc} vertices and {tc} triangles; meshlets hold 1..={MAX_MESHLET_VERTICES} and 1..={MAX_MESHLET_TRIANGLES}"
                 ),
             ));
         }

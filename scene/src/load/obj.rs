@@ -9,6 +9,7 @@ use crate::error::SceneError;
 use crate::load::read_file;
 use crate::mesh::Mesh;
 
+/// Reads the OBJ file at `path` (its .mtl is not needed: only geometry is read).
 pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
     let bytes = read_file(path)?;
     parse_obj(path, &bytes)

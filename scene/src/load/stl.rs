@@ -11,6 +11,7 @@ use crate::error::SceneError;
 use crate::load::read_file;
 use crate::mesh::Mesh;
 
+/// Reads the STL file at `path`, binary or ASCII (told apart by its size and start).
 pub fn load_stl(path: &Path) -> Result<Mesh, SceneError> {
     let bytes = read_file(path)?;
     parse_stl(path, &bytes)

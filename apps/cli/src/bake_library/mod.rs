@@ -140,7 +140,7 @@ pub fn run(
             dir: input_dir.to_path_buf(),
         });
     }
-    let bar = meshlight::scene::bake::progress_bar(
+    let bar = crate::progress::progress_bar(
         inputs.len() as u64,
         "baking [{bar:30}] {pos}/{len} meshes, last {msg}",
     );

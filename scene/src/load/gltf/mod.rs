@@ -29,6 +29,8 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
     load_gltf_with(path, &LoadOptions::default())
 }
 
+/// Reads the glTF or GLB file at `path`, refusing a node tree that would expand beyond
+/// `options.max_triangles` before expanding it.
 pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneError> {
     let budget = options.max_triangles;
     let bytes = read_file(path)?;
