@@ -2,7 +2,7 @@
 //! dumps that show them (no GPU: plans for two fixed feature sets). Set
 //! UPDATE_SNAPSHOTS=1 to rewrite them after an intended change, then review the diff.
 
-use meshlight::graph::{CompileOptions, Plan, Recording, dump};
+use meshlight::graph::{AdapterClass, CompileOptions, Plan, Recording, dump};
 use std::fmt::Write;
 use std::path::Path;
 
@@ -34,6 +34,16 @@ fn nvidia() -> wgpu::Features {
     lavapipe() | wgpu::Features::TEXTURE_INT64_ATOMIC | wgpu::Features::TEXTURE_ATOMIC
 }
 
+/// The adapter class each feature set stands for: lavapipe is a CPU adapter, the H200
+/// runs graphics on few units.
+fn class_of(features: wgpu::Features) -> AdapterClass {
+    if features.contains(wgpu::Features::TEXTURE_INT64_ATOMIC) {
+        AdapterClass::FewGraphicsUnits
+    } else {
+        AdapterClass::Cpu
+    }
+}
+
 fn plan(name: &str, features: wgpu::Features) -> Plan {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("pipelines")
@@ -41,7 +51,7 @@ fn plan(name: &str, features: wgpu::Features) -> Plan {
     let builder = meshlight::graph::file::load_pipeline(&path, &meshlight::registry())
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     builder
-        .compile(&CompileOptions::new(features))
+        .compile(&CompileOptions::new(features).with_class(class_of(features)))
         .unwrap_or_else(|e| panic!("{name}: {e}"))
         .plan
 }
@@ -53,6 +63,10 @@ fn batches(plan: &Plan) -> String {
         let _ = writeln!(out, "{}", batch.label(b));
         for &p in &batch.passes {
             let pass = &plan.passes[p];
+            if pass.skipped.is_some() {
+                let _ = writeln!(out, "  {} (skipped)", pass.name);
+                continue;
+            }
             match &pass.recording {
                 Recording::Compute => {
                     let _ = writeln!(out, "  {}", pass.name);

@@ -44,7 +44,7 @@ pub use error::SceneDataError;
 pub use gpu::GpuScene;
 pub use phase::Phase;
 pub use scene_slots::{SceneBuffer, scene_reads};
-pub use view::{Camera, Projection};
+pub use view::{Camera, CameraError, Projection};
 
 /// Names of the imported buffers (and of the pass slots that read them).
 pub mod names {

@@ -58,6 +58,40 @@ pub enum Projection {
         /// Distance of the far plane, where depth is 0.
         far: f32,
     },
+    /// A host application's own view-to-clip matrix ([`Camera::from_matrices`]), used as
+    /// it is: its aspect is the host's and does not follow the viewport.
+    Matrix {
+        /// The matrix, reverse-Z (depth 1 at the near plane).
+        projection: Mat4,
+        /// Distance of the near plane, where depth is 1, read from the matrix.
+        near: f32,
+    },
+}
+
+/// Why a host's matrices cannot be drawn with.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CameraError {
+    /// A matrix holds a NaN or an infinity.
+    #[error("the {which} matrix is not finite; pass the matrices the host draws with")]
+    NotFinite {
+        /// `view` or `projection`.
+        which: &'static str,
+    },
+    /// The view matrix scales, shears or mirrors, so it is not a camera's pose.
+    #[error(
+        "the view matrix is not a rotation and a translation (its axes are not orthonormal, or it mirrors); pass the camera's world-to-view matrix, e.g. glam's `camera::rh::view::look_at_mat4`, with any scale moved into the instances"
+    )]
+    NotRigid,
+    /// The projection does not map the near plane to depth 1 in front of the camera.
+    #[error(
+        "the projection maps depth 1 to view-space z = {near_z} and depth 0.5 to z = {mid_z}: meshlight draws reverse-Z, depth 1 at the near plane in front of the camera (negative z, right-handed) and 0 far away, as Bevy does; build it with glam's `camera::rh::proj::directx::perspective_infinite_reverse` (or swap near and far of a standard projection)"
+    )]
+    NotReverseZ {
+        /// View-space z the matrix maps depth 1 to.
+        near_z: f32,
+        /// View-space z it maps depth 0.5 to.
+        mid_z: f32,
+    },
 }
 
 /// A camera looking from `position` towards `target`.
@@ -74,6 +108,57 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// A host application's camera: its world-to-view matrix (right-handed, looking
+    /// down -Z, a rotation and a translation) and its view-to-clip projection (reverse-Z:
+    /// depth 1 at the near plane, 0 far away, as Bevy's and glam's
+    /// `camera::rh::proj::directx::perspective_infinite_reverse`). A frame seen through it lines up with what the
+    /// host draws with the same matrices, so the two composite by depth. Matrices
+    /// meshlight cannot draw with are refused, saying what to pass instead.
+    pub fn from_matrices(view: Mat4, projection: Mat4) -> Result<Self, CameraError> {
+        for (which, m) in [("view", view), ("projection", projection)] {
+            if !m.is_finite() {
+                return Err(CameraError::NotFinite { which });
+            }
+        }
+        let axes = [
+            view.x_axis.truncate(),
+            view.y_axis.truncate(),
+            view.z_axis.truncate(),
+        ];
+        let orthonormal = (0..3).all(|i| {
+            (0..3).all(|j| {
+                let want = if i == j { 1.0 } else { 0.0 };
+                (axes[i].dot(axes[j]) - want).abs() < 1e-3
+            })
+        });
+        let rows_last = view.row(3);
+        if !orthonormal || glam::Mat3::from_mat4(view).determinant() <= 0.0 || rows_last != Vec4::W
+        {
+            return Err(CameraError::NotRigid);
+        }
+        let inverse = projection.inverse();
+        let view_z = |depth: f32| {
+            let p = inverse * Vec4::new(0.0, 0.0, depth, 1.0);
+            p.z / p.w
+        };
+        let (near_z, mid_z) = (view_z(1.0), view_z(0.5));
+        if !(near_z.is_finite() && mid_z.is_finite() && near_z < 0.0 && near_z > mid_z) {
+            return Err(CameraError::NotReverseZ { near_z, mid_z });
+        }
+        let pose = view.inverse();
+        let position = pose.w_axis.truncate();
+        let forward = -pose.z_axis.truncate();
+        Ok(Self {
+            position,
+            target: position + forward,
+            up: pose.y_axis.truncate(),
+            projection: Projection::Matrix {
+                projection,
+                near: -near_z,
+            },
+        })
+    }
+
     /// A perspective camera with the default up, the form every scene and tool starts from.
     pub fn perspective(position: Vec3, target: Vec3, fov_y: f32, near: f32) -> Self {
         Self {
@@ -102,12 +187,15 @@ impl Camera {
                 // Swapping near and far maps the near plane to depth 1.
                 glam::camera::rh::proj::directx::orthographic(-w, w, -h, h, far, near)
             }
+            Projection::Matrix { projection, .. } => projection,
         }
     }
 
     fn near(&self) -> f32 {
         match self.projection {
-            Projection::Perspective { near, .. } | Projection::Orthographic { near, .. } => near,
+            Projection::Perspective { near, .. }
+            | Projection::Orthographic { near, .. }
+            | Projection::Matrix { near, .. } => near,
         }
     }
 
@@ -158,6 +246,50 @@ pub fn frustum_planes(view_projection: Mat4) -> [[f32; 4]; 6] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_hosts_matrices_give_the_same_view_and_bad_ones_say_what_to_pass() {
+        let eye = Vec3::new(3.0, 2.0, 7.0);
+        use glam::camera::rh::{proj::directx, view::look_at_mat4};
+        let view = look_at_mat4(eye, Vec3::new(0.0, 0.5, 0.0), Vec3::Y);
+        let projection = directx::perspective_infinite_reverse(0.8, 16.0 / 9.0, 0.25);
+        let camera = Camera::from_matrices(view, projection).unwrap();
+        assert!(camera.view_matrix().abs_diff_eq(view, 1e-5), "{camera:?}");
+        assert_eq!(camera.projection_matrix([1920, 1080]), projection);
+        assert!((camera.near() - 0.25).abs() < 1e-5);
+        assert!((camera.position - eye).length() < 1e-5);
+        // A standard-Z projection maps depth 1 to the far side.
+        let standard = directx::perspective(0.8, 16.0 / 9.0, 0.25, 100.0);
+        assert!(matches!(
+            Camera::from_matrices(view, standard),
+            Err(CameraError::NotReverseZ { .. })
+        ));
+        let scaled = view * Mat4::from_scale(Vec3::splat(2.0));
+        assert_eq!(
+            Camera::from_matrices(scaled, projection),
+            Err(CameraError::NotRigid)
+        );
+        let mirrored = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)) * view;
+        assert_eq!(
+            Camera::from_matrices(mirrored, projection),
+            Err(CameraError::NotRigid)
+        );
+        let mut broken = projection;
+        broken.x_axis.x = f32::NAN;
+        assert_eq!(
+            Camera::from_matrices(view, broken),
+            Err(CameraError::NotFinite {
+                which: "projection"
+            })
+        );
+        let message = Camera::from_matrices(view, standard)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("perspective_infinite_reverse"),
+            "{message}"
+        );
+    }
 
     #[test]
     fn planes_keep_what_the_projection_shows_and_reject_the_rest() {

@@ -395,8 +395,18 @@ pub enum GraphError {
         message: String,
     },
 
-    /// A pass failed while recording, e.g. a shader's bindings do not match its slots
-    /// (execute).
+    /// A pass's programs could not be built for the device: a shader's bindings do not
+    /// match its slots, or the device refuses a pipeline or layout (prepare, before any
+    /// frame).
+    #[error("pass `{pass}` cannot be prepared for this device: {message}")]
+    Prepare {
+        /// The pass, by its name in the graph.
+        pass: String,
+        /// What is wrong and what to change.
+        message: String,
+    },
+
+    /// A pass failed while recording (execute).
     #[error("pass `{pass}` failed while recording: {message}")]
     Record {
         /// The pass, by its name in the graph.

@@ -37,19 +37,19 @@ pub mod synthetic;
 
 pub use access::Access;
 pub use adapter::AdapterClass;
-pub use names::feature_names;
 pub use builder::{Bindings, GraphBuilder, History, PassOutputs};
 pub use choice::{Choice, ClassOrder};
 pub use compile::{CompileOptions, CompiledGraph};
 pub use contract::{Slot, SlotKind, StageContract};
 pub use error::{GraphError, Result};
 pub use exec::{
-    ADAPTER_ENV, AdapterOptions, BATCHING_ENV, experimental_features, BatchStats, CHECKED_ENV, Executor, FrameStats,
+    ADAPTER_ENV, AdapterOptions, BATCHING_ENV, BatchStats, CHECKED_ENV, Executor, FrameStats,
     GpuAdapter, GpuContext, GpuTimings, INDIRECT_VALIDATION_ENV, Imports, PassTiming, TIMING_ENV,
-    TimingMode,
+    TimingMode, experimental_features,
 };
 pub use layout::{BindingLayout, BindingSource, LayoutEntry, SamplerKind};
 pub use meshlight_shaders::{PassShader, ShaderDef, ShaderDefs};
+pub use names::feature_names;
 pub use pass::{Implementation, Pass, SetupContext, Visibility64};
 pub use plan::{Batch, CandidatePlan, ChoicePlan, LoadOp, Plan, Recording, Selection, StoreOp};
 pub use program::{ColorTarget, DepthTarget, Geometry, Primitive, ProgramDesc};

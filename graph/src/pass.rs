@@ -180,7 +180,10 @@ impl<'a> SetupContext<'a> {
             .find(|(s, _)| *s == slot)
             .map(|(_, f)| *f)
     }
-    pub(crate) fn with_textures(mut self, textures: Vec<(&'static str, wgpu::TextureFormat)>) -> Self {
+    pub(crate) fn with_textures(
+        mut self,
+        textures: Vec<(&'static str, wgpu::TextureFormat)>,
+    ) -> Self {
         self.textures = textures;
         self
     }

@@ -70,8 +70,8 @@ fn measure_gpu(
     frames: u32,
 ) -> Result<GpuRun, Box<dyn std::error::Error>> {
     let settings = ClusteringSettings {
-        implementation: implementation.into(),
-        scan: scan.into(),
+        implementation: Some(implementation.into()),
+        scan: Some(scan.into()),
         ..ClusteringSettings::new(VIEWPORT, lights.len() as u64)
     };
     let mut clusterer = Clusterer::new(settings, &ClusteringSource::Code)?;

@@ -193,7 +193,12 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
                 report,
                 "  no GPU timings: timing mode {} on {}",
                 still.stats.timing.name(),
-                if renderer.executor.gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
+                if renderer
+                    .executor
+                    .gpu
+                    .features
+                    .contains(wgpu::Features::TIMESTAMP_QUERY)
+                {
                     "this adapter"
                 } else {
                     "an adapter without timestamps"

@@ -527,13 +527,26 @@ fn render_pipeline_settings_yield_only_to_flags_given() {
     )
     .1;
     assert!(!flagged.contains("the lists grew"), "{flagged}");
-    // Lights asked for with a file that clusters none are refused, naming the file and
-    // the fix.
-    let one_pass = "pipelines/virtual_geometry_one_pass.toml";
+    // Lights asked for with a file that clusters none (the one-pass frame with its
+    // light clustering taken out) are refused, naming the file and the fix.
+    let mut unlit = meshlight::graph::file::Pipeline::parse(
+        include_str!("../../../pipelines/virtual_geometry_one_pass.toml"),
+        "one_pass.toml",
+    )
+    .unwrap();
+    let stages = meshlight_light_clustering::frame_graph::STAGES;
+    unlit
+        .remove_passes(&meshlight::registry(), |p| {
+            stages.contains(&p.stage.as_str())
+        })
+        .unwrap();
+    let unlit_file = dir.join("unlit.toml");
+    std::fs::write(&unlit_file, unlit.to_toml()).unwrap();
+    let unlit_file = unlit_file.to_str().unwrap();
     let out = meshlight(&[
         "render",
         "--pipeline",
-        one_pass,
+        unlit_file,
         "--lights",
         "8",
         "--instances",
@@ -542,7 +555,7 @@ fn render_pipeline_settings_yield_only_to_flags_given() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert!(
-        err.contains(one_pass) && err.contains("--lights 0"),
+        err.contains(unlit_file) && err.contains("--lights 0"),
         "{err}"
     );
     let _ = std::fs::remove_dir_all(&dir);

@@ -56,11 +56,12 @@ pub struct ClusteringSettings {
     /// for both, so the two stages decide every (object, froxel) pair with the same
     /// code. Shipped: `compute` (workgroups walk the instances' tiles: the fast path
     /// where few units run graphics) and `raster` (a quad per instance through the
-    /// rasteriser).
-    pub implementation: String,
+    /// rasteriser). `None`: the pipeline's (`compute` in the shipped files).
+    pub implementation: Option<String>,
     /// The `scan_fan` implementation that turns the counts into offsets, as registered
-    /// (`scan_fan`, `two_step`, `decoupled_lookback`).
-    pub scan: String,
+    /// (`scan_fan`, `two_step`, `decoupled_lookback`); `None`: the pipeline's
+    /// (`scan_fan` in the shipped files).
+    pub scan: Option<String>,
     /// Objects the object buffer holds; more in a frame is an error naming this.
     pub objects: u64,
     /// Initial sizes of z_slice's list and of the froxel lists; grown on overflow.
@@ -73,8 +74,8 @@ impl ClusteringSettings {
         Self {
             viewport,
             grid: GridSettings::default(),
-            implementation: "compute".into(),
-            scan: "scan_fan".into(),
+            implementation: None,
+            scan: None,
             objects,
             slice_instances: (objects * 4).max(1024),
             entries: (objects * 16).max(4096),
@@ -132,13 +133,17 @@ pub fn apply(p: &mut Pipeline, s: &ClusteringSettings) -> Result<()> {
         f64::from(s.grid.first_slice_end),
     );
     p.set_stage_param(meshlight::z_slice::STAGE, "far", f64::from(s.grid.far));
-    for stage in [meshlight::count_raster::STAGE, meshlight::populate::STAGE] {
-        p.set_implementation(stage, &s.implementation);
+    if let Some(implementation) = &s.implementation {
+        for stage in [meshlight::count_raster::STAGE, meshlight::populate::STAGE] {
+            p.set_implementation(stage, implementation);
+        }
     }
-    let walk = s.scan == "scan_fan" && fits_one_walk(s.lists() as u32);
+    let lists = s.lists() as u32;
     for scan in p.passes_of_mut(meshlight::scan_fan::STAGE) {
-        scan.implementation = s.scan.clone();
-        if walk {
+        if let Some(implementation) = &s.scan {
+            scan.implementation = implementation.clone();
+        }
+        if scan.implementation == "scan_fan" && fits_one_walk(lists) {
             scan.set_param("items_per_thread", i64::from(WALK_ITEMS_PER_THREAD));
         } else {
             scan.params.remove("items_per_thread");

@@ -25,7 +25,7 @@ fn pipeline_file() -> PathBuf {
 
 fn settings(viewport: [u32; 2], implementation: &str) -> ClusteringSettings {
     ClusteringSettings {
-        implementation: implementation.into(),
+        implementation: Some(implementation.into()),
         ..ClusteringSettings::new(viewport, 1024)
     }
 }
@@ -146,8 +146,9 @@ fn the_implementation_swap_is_one_line_of_the_pipeline_file() {
         let path = std::env::temp_dir().join(format!("light_clustering_{stage}_raster.toml"));
         std::fs::write(&path, swapped).unwrap();
         let label = format!("{stage} swapped to raster");
+        // Settings that name no implementation: the file's stands.
         let mut clusterer = Clusterer::new(
-            settings([320, 180], "compute"),
+            ClusteringSettings::new([320, 180], 1024),
             &ClusteringSource::File(path.clone()),
         )
         .unwrap_or_else(|e| panic!("{label}: {e}"));
@@ -311,7 +312,7 @@ fn the_single_pass_scan_gives_the_same_lists() {
     let mut rng = Rng(0x5ca7_0000_0000_0001);
     let (view, objects) = random_scene(&mut rng, 1);
     let s = ClusteringSettings {
-        scan: "decoupled_lookback".into(),
+        scan: Some("decoupled_lookback".into()),
         ..settings([320, 180], "compute")
     };
     let want = cpu_assign(&view, &s, &objects);
@@ -341,8 +342,8 @@ fn an_implementation_the_registry_lacks_is_refused_naming_the_registered_ones() 
         ("compute", "blelloch", "scan_fan"),
     ] {
         let s = ClusteringSettings {
-            implementation: implementation.into(),
-            scan: scan.into(),
+            implementation: Some(implementation.into()),
+            scan: Some(scan.into()),
             ..ClusteringSettings::new([320, 180], 16)
         };
         let Err(err) = meshlight_light_clustering::frame_graph::build(&s) else {

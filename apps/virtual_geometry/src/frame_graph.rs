@@ -142,7 +142,12 @@ pub fn frame(source: &GraphSource, data: &SceneData, s: &FrameSettings) -> Resul
     let view = view_of(&pipeline)?;
     let mut graph = pipeline.build(&registry)?;
     if s.keep_visibility {
-        for name in ["visbuffer", "raster_clusters", "raster_counts", SECOND_COUNTS] {
+        for name in [
+            "visbuffer",
+            "raster_clusters",
+            "raster_counts",
+            SECOND_COUNTS,
+        ] {
             if let Some(h) = graph.resource(name) {
                 graph.export(h);
             }
@@ -161,7 +166,12 @@ pub fn frame(source: &GraphSource, data: &SceneData, s: &FrameSettings) -> Resul
 
 /// Applies `s` to the frame's pipeline, in the order each step needs: what the frame
 /// holds (lights, flat fill, hardware raster, targets), then its sizes and parameters.
-pub fn apply(p: &mut Pipeline, registry: &Registry, data: &SceneData, s: &FrameSettings) -> Result<()> {
+pub fn apply(
+    p: &mut Pipeline,
+    registry: &Registry,
+    data: &SceneData,
+    s: &FrameSettings,
+) -> Result<()> {
     lights(p, registry, s)?;
     for (stage, implementation) in &s.implementations {
         if stage == meshlight::fill_clusters::STAGE && implementation == FLAT_FILL {
@@ -196,7 +206,9 @@ pub const FLAT_FILL: &str = "workgroup_per_instance";
 fn no_stage(p: &Pipeline, stage: &str, what: &str) -> GraphError {
     GraphError::PipelineFile {
         file: p.file().to_string(),
-        message: format!("it has no pass of stage `{stage}` to {what}; add one, or drop the setting"),
+        message: format!(
+            "it has no pass of stage `{stage}` to {what}; add one, or drop the setting"
+        ),
     }
 }
 
@@ -283,7 +295,10 @@ fn sizes(p: &mut Pipeline, data: &SceneData, s: &FrameSettings) -> Result<()> {
             ("pixels", u64::from(s.width) * u64::from(s.height)),
             (PYRAMID_WIDTH_PARAM, u64::from(pyramid.width)),
             (PYRAMID_HEIGHT_PARAM, u64::from(pyramid.height)),
-            (HIDDEN_NODES_PARAM, hidden_node_capacity(data.instances.len())),
+            (
+                HIDDEN_NODES_PARAM,
+                hidden_node_capacity(data.instances.len()),
+            ),
         ])
         .chain(s.clusters.map(|c| (CLUSTERS_PARAM, c)))
         .chain(s.slots.map(|n| (SLOTS_PARAM, n.min(MAX_SLOTS))));
@@ -338,9 +353,8 @@ fn instance_table(p: &mut Pipeline, data: &SceneData) -> Result<()> {
 /// concern; the walk and the cull take the same LOD threshold, or the walk would prune
 /// clusters of the cull's cut.
 fn thresholds(p: &mut Pipeline, s: &FrameSettings) {
-    let walks = |e: &PassEntry| {
-        e.stage == meshlight::fill_clusters::STAGE && e.implementation != FLAT_FILL
-    };
+    let walks =
+        |e: &PassEntry| e.stage == meshlight::fill_clusters::STAGE && e.implementation != FLAT_FILL;
     for pass in p.passes.iter_mut() {
         let cull = pass.stage == meshlight::cull_lod::STAGE;
         let walk = walks(pass);
@@ -396,7 +410,11 @@ fn occlusion_records(p: &mut Pipeline, instances: usize) -> Result<()> {
     let Some(second_counts) = p
         .passes_of(cull)
         .find(|e| e.param_str("mode") == Some("second"))
-        .map(|e| e.binding("raster_counts").unwrap_or("raster_counts").to_string())
+        .map(|e| {
+            e.binding("raster_counts")
+                .unwrap_or("raster_counts")
+                .to_string()
+        })
     else {
         return Ok(());
     };
@@ -440,8 +458,14 @@ fn targets(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
         // The host's texture, where resolve's depth pass writes.
         p.resources.retain(|r| r.name != DEPTH);
         p.add_resource(
-            ResourceEntry::texture_sized_by(DEPTH, EntryKind::Imported, &depth_format, "width", "height")
-                .with_usage(&["RENDER_ATTACHMENT"]),
+            ResourceEntry::texture_sized_by(
+                DEPTH,
+                EntryKind::Imported,
+                &depth_format,
+                "width",
+                "height",
+            )
+            .with_usage(&["RENDER_ATTACHMENT"]),
         )?;
     } else if s.depth && p.resource(DEPTH).is_none() {
         p.add_resource(exported(DEPTH))?;

@@ -25,6 +25,6 @@ pub mod setup;
 
 pub use counts::FrameCounts;
 pub use frame_graph::GraphSource;
-pub use settings::{FrameSettings, HostTargets};
 pub use renderer::{Renderer, Still};
+pub use settings::{FrameSettings, HostTargets};
 pub use setup::{SceneOptions, SceneSetup, SetupError, setup};

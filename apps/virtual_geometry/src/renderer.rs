@@ -12,11 +12,11 @@ use super::counts::{
 use super::frame_graph::{
     CLUSTERS_PARAM, DEPTH, Frame, GraphSource, HOST_TARGET, MAX_SLOTS, SLOTS_PARAM, frame,
 };
-use meshlight::graph::file::Pipeline;
 use super::settings::FrameSettings;
 use glam::Mat4;
 use meshlight::gpu_scene::data::Limits;
 use meshlight::gpu_scene::{Camera, GpuScene, SceneData};
+use meshlight::graph::file::Pipeline;
 use meshlight::graph::{
     AdapterClass, CompileOptions, CompiledGraph, Executor, FrameData, FrameStats, GpuAdapter,
     GpuContext, GraphError, Imports, Result, experimental_features, feature_names,
@@ -158,7 +158,10 @@ impl Renderer {
     /// when it creates the device it hands to [`Self::with_gpu`]. Planned without wgpu's
     /// experimental features (mesh shaders), which need the host's own opt-in; a device
     /// that has them lets `auto` pick them.
-    pub fn required_features(adapter: &wgpu::Adapter, settings: &FrameSettings) -> Result<wgpu::Features> {
+    pub fn required_features(
+        adapter: &wgpu::Adapter,
+        settings: &FrameSettings,
+    ) -> Result<wgpu::Features> {
         let limits = adapter.limits();
         let data = SceneData::new(Limits::for_device(&limits));
         let frame = frame(&GraphSource::Shipped, &data, settings)?;

@@ -4,8 +4,8 @@
 //! [`setup`], so a window and a still of the same options draw the same frame.
 
 use crate::frame_graph::GraphSource;
-use crate::settings::FrameSettings;
 use crate::scenes;
+use crate::settings::FrameSettings;
 use meshlight::gpu_scene::{Camera, SceneData, SceneDataError, data::Limits};
 use meshlight::graph::{GpuAdapter, GraphError};
 use meshlight::resolve::DebugView;

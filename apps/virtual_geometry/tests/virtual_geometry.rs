@@ -415,8 +415,8 @@ fn a_still_of_the_occlusion_view_culls_against_a_history() {
         view: Some(DebugView::Shaded),
         ..settings
     };
-    let mut r =
-        Renderer::new(walled_scene(), shaded, &GraphSource::Shipped).unwrap_or_else(|e| panic!("{e}"));
+    let mut r = Renderer::new(walled_scene(), shaded, &GraphSource::Shipped)
+        .unwrap_or_else(|e| panic!("{e}"));
     let still = r.render_still(&camera).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(still.counts.occlusion.map(|c| c.first_tested), Some(0));
 }
@@ -785,8 +785,12 @@ fn clustered_lights_shade_the_field_and_the_light_count_view_shows_them() {
     };
     let (unlit, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Shipped);
     let still = |view| {
-        let mut r = Renderer::new(placed.data.clone(), lit_settings(view), &GraphSource::Shipped)
-            .unwrap_or_else(|e| panic!("{e}"));
+        let mut r = Renderer::new(
+            placed.data.clone(),
+            lit_settings(view),
+            &GraphSource::Shipped,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
         r.lights = lights.clone();
         let s = r
             .render_still(&placed.camera)

@@ -181,6 +181,7 @@ fn resolve_sizes(
 }
 
 pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<CompiledGraph> {
+    profiling::scope!("meshlight::compile");
     let GraphBuilder {
         mut resources,
         passes,

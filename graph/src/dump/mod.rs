@@ -1,15 +1,18 @@
 //! Deterministic dumps of a compiled plan: DOT, JSON, Mermaid, an SVG drawing and a
-//! self-contained HTML page. Everything iterates in plan order, so equal plans give equal bytes.
+//! self-contained HTML page, and a frame's GPU timings as a Chrome trace. Everything
+//! iterates in plan order, so equal plans give equal bytes.
 
 mod dot;
 mod html;
 mod mermaid;
 mod svg;
+mod trace;
 
 pub use dot::to_dot;
 pub use html::{Report, to_html, to_html_report};
 pub use mermaid::to_mermaid;
 pub use svg::to_svg;
+pub use trace::to_chrome_trace;
 
 use crate::exec::FrameStats;
 use crate::plan::Plan;

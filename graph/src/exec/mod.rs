@@ -4,6 +4,7 @@
 
 pub mod context;
 pub mod executor;
+mod prepare;
 mod quiet;
 pub mod timing;
 

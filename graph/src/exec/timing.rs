@@ -3,6 +3,7 @@
 //! timing never makes the CPU wait for the GPU.
 
 use crate::record::ring::MapRing;
+use crate::record::shared::{BatchStamps, SharedPass};
 use serde::Serialize;
 use std::collections::HashMap;
 
@@ -203,5 +204,72 @@ impl Timestamps {
                 })
             })
             .collect()
+    }
+}
+
+/// How one frame is timed: the mode in effect, whether batches share compute passes under
+/// it, and the timestamps it writes. Made by the executor per frame; the batch loop asks
+/// it where to stamp.
+pub(crate) struct FrameTimer<'t> {
+    /// The mode in effect (`off` where timing is switched off or the adapter has no
+    /// timestamps).
+    pub mode: TimingMode,
+    /// Consecutive compute passes share a compute pass: per-pass stamps split every
+    /// batch unless they can go inside the shared pass.
+    pub batching: bool,
+    /// The query set, when the frame is timed.
+    stamps: Option<&'t Timestamps>,
+}
+
+impl<'t> FrameTimer<'t> {
+    /// A timer for `mode` over `stamps`; `batching` as the executor decided it.
+    pub fn new(mode: TimingMode, batching: bool, stamps: Option<&'t Timestamps>) -> Self {
+        Self {
+            mode,
+            batching,
+            stamps: stamps.filter(|_| mode != TimingMode::Off),
+        }
+    }
+
+    /// The stamps a batch's shared compute pass writes at its two ends (`frame` mode).
+    pub fn shared_batch(&self, b: usize) -> Option<BatchStamps> {
+        self.batch_stamps().map(|t| BatchStamps {
+            query_set: t.query_set.clone(),
+            begin: Some(2 * b as u32),
+            end: 2 * b as u32 + 1,
+        })
+    }
+
+    /// Writes the stamp opening (or, with `end`, closing) batch `b` when it is recorded
+    /// on the encoder (`frame` mode).
+    pub fn batch_edge(&self, encoder: &mut wgpu::CommandEncoder, b: usize, end: bool) {
+        if let Some(t) = self.batch_stamps() {
+            t.write(encoder, 2 * b as u32 + u32::from(end));
+        }
+    }
+
+    /// Writes the stamp opening (or closing) the pass at position `at` of the order
+    /// (`passes` mode): inside the batch's shared compute pass when it is batched.
+    pub fn pass_edge(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        shared: &mut SharedPass,
+        batched: bool,
+        at: u32,
+        end: bool,
+    ) {
+        let Some(t) = self.stamps.filter(|_| self.mode == TimingMode::Passes) else {
+            return;
+        };
+        let index = 2 * at + u32::from(end);
+        if batched {
+            shared.get(encoder).write_timestamp(&t.query_set, index);
+        } else {
+            t.write(encoder, index);
+        }
+    }
+
+    fn batch_stamps(&self) -> Option<&'t Timestamps> {
+        self.stamps.filter(|_| self.mode == TimingMode::Frame)
     }
 }

@@ -3,21 +3,20 @@
 
 use crate::contract::StageContract;
 use crate::error::{GraphError, Result};
-use crate::layout::{BindingSource, buffer_binding_type, texture_binding_type};
+use crate::layout::BindingSource;
 use crate::plan::{AttachmentOps, LoadOp, Plan, StoreOp};
-use crate::program::{Geometry, ProgramDesc, ProgramKind};
+use crate::program::{ProgramDesc, ProgramKind};
 use crate::record::fill::Fill;
 use crate::record::frame::FrameData;
 use crate::record::physical::Physical;
 use crate::record::programs::{
-    AnyProgram, BindGroupKey, BoundResource, CHUNK, ComputeProgram, ImmediateMode, ModuleKey,
-    Program, ProgramKey, ProgramLayouts, Programs, RenderProgram,
+    AnyProgram, BindGroupKey, BoundResource, CHUNK, ComputeProgram, ImmediateMode, Program,
+    Programs, RenderProgram,
 };
 use crate::record::readback::Readbacks;
 use crate::record::shared::{ComputePassGuard, SharedPass, Unplanned};
 use crate::record::views::ViewCache;
-use crate::resource::{ResourceDesc, ResourceKind, TextureDesc, TextureRange};
-use meshlight_shaders::ShaderDef;
+use crate::resource::{ResourceDesc, ResourceKind, TextureRange};
 use std::sync::Arc;
 
 /// A colour attachment of [`RecordContext::render_pass`]: a target slot or scratch
@@ -122,9 +121,6 @@ pub struct RecordContext<'a> {
     pub(crate) name: &'a str,
     /// The pass's stage contract with its unbound optional slots removed.
     pub(crate) contract: &'a StageContract,
-    /// Every slot of the stage, bound or not, so a shader that uses an unbound one is
-    /// told to bind it instead of being told the slot does not exist.
-    pub(crate) stage_slots: &'a [&'static str],
     /// The programs the pass declared in setup, in declaration order.
     pub(crate) declared: &'a [(String, Arc<ProgramDesc>)],
     pub(crate) pass_index: usize,
@@ -476,71 +472,6 @@ impl<'a> RecordContext<'a> {
         }
     }
 
-    /// The wgpu layout entries of a declared layout, from the bound resources.
-    fn layout_entries(
-        &self,
-        layout: &crate::layout::BindingLayout,
-    ) -> Result<Vec<wgpu::BindGroupLayoutEntry>> {
-        let contract = &self.contract;
-        layout
-            .entries
-            .iter()
-            .map(|e| {
-                let ty = match &e.source {
-                    BindingSource::Slot(name) => {
-                        let slot = contract.slot(name).ok_or_else(|| GraphError::UnknownSlot {
-                            pass: self.name.to_string(),
-                            stage: contract.stage.to_string(),
-                            slot: name.to_string(),
-                            available: contract.slot_names().join(", "),
-                        })?;
-                        self.binding_type(name, slot.access, e)?
-                    }
-                    BindingSource::Scratch(name, access) => self.binding_type(name, *access, e)?,
-                    BindingSource::Uniform(_) => {
-                        buffer_binding_type(crate::access::Access::Uniform)
-                            .expect("uniform is a buffer binding")
-                    }
-                    BindingSource::Sampler(kind) => kind.binding_type(),
-                };
-                Ok(wgpu::BindGroupLayoutEntry {
-                    binding: e.binding,
-                    visibility: e.visibility.unwrap_or(layout.visibility),
-                    ty,
-                    count: None,
-                })
-            })
-            .collect()
-    }
-
-    /// The binding type of the named slot or scratch resource used with `access` (as
-    /// read-only or write-only storage when the layout entry says so).
-    fn binding_type(
-        &self,
-        name: &str,
-        access: crate::access::Access,
-        entry: &crate::layout::LayoutEntry,
-    ) -> Result<wgpu::BindingType> {
-        let access = if entry.read_only {
-            crate::access::Access::StorageRead
-        } else if entry.write_only {
-            crate::access::Access::StorageWrite
-        } else {
-            access
-        };
-        let (r, _) = self.named(name)?;
-        match &self.plan.resources[r].info.desc {
-            ResourceDesc::Buffer(_) => buffer_binding_type(access),
-            ResourceDesc::Texture(t) => texture_binding_type(access, t.format, t.layers > 1),
-        }
-        .ok_or_else(|| {
-            self.err(format!(
-                "`{name}` ({}) cannot be bound in a bind group",
-                access.name()
-            ))
-        })
-    }
-
     fn declared(&self, name: &str) -> Result<(usize, &'a Arc<ProgramDesc>)> {
         self.declared
             .iter()
@@ -559,339 +490,44 @@ impl<'a> RecordContext<'a> {
             })
     }
 
-    fn target_format(&self, name: &str) -> Result<wgpu::TextureFormat> {
-        let (r, _) = self.named(name)?;
-        match &self.plan.resources[r].info.desc {
-            ResourceDesc::Texture(TextureDesc { format, .. }) => Ok(*format),
-            ResourceDesc::Buffer(_) => Err(self.err(format!(
-                "render target `{name}` is a buffer; bind a texture"
-            ))),
-        }
-    }
-
-    fn program_key(&mut self, desc: &ProgramDesc) -> Result<ProgramKey> {
-        let native_immediates = self.features.contains(wgpu::Features::IMMEDIATES);
-        let expanded = if desc.layouts.iter().any(|l| l.reflect) {
-            let (_, globals) = self.programs.module(
-                self.device,
-                self.features,
-                self.name,
-                desc.shader,
-                module_key(desc, native_immediates),
-            )?;
-            let names = self.reflection_names();
-            let entries = desc.entries();
-            desc.layouts
-                .iter()
-                .enumerate()
-                .map(|(group, l)| {
-                    if !l.reflect {
-                        return Ok(l.clone());
-                    }
-                    crate::record::reflect::expand(l, group as u32, &globals, &entries, &names)
-                        .map_err(|m| {
-                            self.err(format!(
-                                "shader {} variable `{}`: {}",
-                                desc.shader.file_path, m.variable, m.message
-                            ))
-                        })
-                })
-                .collect::<Result<Vec<_>>>()?
-        } else {
-            desc.layouts.clone()
-        };
-        let layouts = expanded
-            .iter()
-            .map(|l| self.layout_entries(l))
-            .collect::<Result<Vec<_>>>()?;
-        let (target_formats, depth_format) = match &desc.kind {
-            ProgramKind::Render { targets, depth, .. } => (
-                targets
-                    .iter()
-                    .map(|t| self.target_format(t.target))
-                    .collect::<Result<Vec<_>>>()?,
-                depth
-                    .as_ref()
-                    .map(|d| self.target_format(d.target))
-                    .transpose()?,
-            ),
-            ProgramKind::Compute { .. } => (Vec::new(), None),
-        };
-        Ok(ProgramKey {
-            desc: desc.clone(),
-            expanded,
-            layouts,
-            target_formats,
-            depth_format,
-            native_immediates,
-        })
-    }
-
-    /// The pass's slots and scratch resources, for layouts read from the shader.
-    fn reflection_names(&self) -> crate::record::reflect::Names {
-        let contract = &self.contract;
-        let slots = contract
-            .slots
-            .iter()
-            .map(|s| {
-                let element = match &s.kind {
-                    crate::contract::SlotKind::Buffer { element: Some(e) } => e.size,
-                    _ => 0,
-                };
-                (s.name, s.access, element)
-            })
-            .collect();
-        let prefix = format!("{}/", self.name);
-        let scratch = self.plan.passes[self.pass_index]
-            .scratch
-            .iter()
-            .filter_map(|&r| {
-                let name = self.plan.resources[r].info.name.strip_prefix(&prefix)?;
-                Some(name.to_string())
-            })
-            .collect();
-        crate::record::reflect::Names {
-            stage: contract.stage,
-            slots,
-            all_slots: self.stage_slots.to_vec(),
-            scratch,
-        }
-    }
-
-    /// The module, bind-group layouts and pipeline layout of a program.
-    fn build_layouts(
-        &mut self,
-        key: &ProgramKey,
-    ) -> Result<(wgpu::ShaderModule, ProgramLayouts, wgpu::PipelineLayout)> {
-        let desc = &key.desc;
-        let immediates = if desc.immediate_size == 0 {
-            ImmediateMode::None
-        } else if key.native_immediates {
-            ImmediateMode::Native {
-                size: desc.immediate_size,
-            }
-        } else {
-            ImmediateMode::Uniform {
-                group: desc.layouts.len() as u32,
-            }
-        };
-        let (module, _) = self.programs.module(
-            self.device,
-            self.features,
-            self.name,
-            desc.shader,
-            module_key(desc, key.native_immediates),
-        )?;
-        let mut groups: Vec<(crate::layout::BindingLayout, wgpu::BindGroupLayout)> = key
-            .expanded
-            .iter()
-            .zip(&key.layouts)
-            .map(|(l, entries)| {
-                (
-                    l.clone(),
-                    self.programs.layout(self.device, l.label, entries.clone()),
-                )
-            })
-            .collect();
-        if let ImmediateMode::Uniform { .. } = immediates {
-            let visibility = desc
-                .layouts
-                .first()
-                .map(|l| l.visibility)
-                .unwrap_or(wgpu::ShaderStages::all());
-            let l = crate::layout::BindingLayout::with_visibility("immediates", visibility)
-                .uniform(0, IMMEDIATES_BLOCK);
-            let entries = self.layout_entries(&l)?;
-            let bgl = self.programs.layout(self.device, l.label, entries);
-            groups.push((l, bgl));
-        }
-        let refs: Vec<Option<&wgpu::BindGroupLayout>> =
-            groups.iter().map(|(_, l)| Some(l)).collect();
-        let label = format!("{}::{}", desc.shader.name, desc.entries().join("+"));
-        let layout = self
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(&label),
-                bind_group_layouts: &refs,
-                immediate_size: match immediates {
-                    ImmediateMode::Native { size } => size,
-                    _ => 0,
-                },
-            });
-        Ok((module, ProgramLayouts { groups, immediates }, layout))
-    }
-
-    /// What this pass's declared program `index` resolved to on an earlier frame, so a
-    /// steady frame builds no key.
-    fn resolved(&self, index: usize) -> Option<&AnyProgram> {
-        self.programs
-            .resolved(self.graph_id, self.pass_index, index)
-    }
-
-    /// Notes what declared program `index` resolved to, for [`Self::resolved`].
-    fn remember(&mut self, index: usize, program: AnyProgram) {
-        self.programs
-            .resolve(self.graph_id, self.pass_index, index, program);
-    }
-
-    /// Caches a program just built under `key`, for any pass that asks for the same one,
-    /// and remembers it as what declared program `index` resolved to.
-    fn keep(&mut self, index: usize, key: ProgramKey, program: AnyProgram) {
-        self.programs.insert(key, program.clone());
-        self.remember(index, program);
-    }
-
-    /// The compute program declared in setup as `name`, built once and cached.
+    /// The compute program declared in setup as `name`, built when the graph was
+    /// prepared for the device ([`crate::Executor::prepare`]).
     pub fn compute(&mut self, name: &str) -> Result<Arc<ComputeProgram>> {
         let (index, desc) = self.declared(name)?;
-        let ProgramKind::Compute { entry } = desc.kind else {
+        if !matches!(desc.kind, ProgramKind::Compute { .. }) {
             return Err(self.err(format!("program `{name}` is not a compute program")));
-        };
-        if let Some(AnyProgram::Compute(p)) = self.resolved(index) {
-            return Ok(p.clone());
         }
-        let key = self.program_key(desc)?;
-        if let Some(p) = self.programs.compute(&key) {
-            self.remember(index, AnyProgram::Compute(p.clone()));
-            return Ok(p);
+        match self
+            .programs
+            .resolved(self.graph_id, self.pass_index, index)
+        {
+            Some(AnyProgram::Compute(p)) => Ok(p.clone()),
+            _ => Err(self.unprepared(name)),
         }
-        let (module, layouts, layout) = self.build_layouts(&key)?;
-        let label = format!("{}::{entry}", desc.shader.name);
-        let pipeline = self
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(&label),
-                layout: Some(&layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-        let program = Arc::new(ComputeProgram { pipeline, layouts });
-        self.keep(index, key, AnyProgram::Compute(program.clone()));
-        Ok(program)
     }
 
-    /// The render (vertex or mesh) program declared in setup as `name`, built once and
-    /// cached.
+    /// The render (vertex or mesh) program declared in setup as `name`, built when the
+    /// graph was prepared for the device.
     pub fn render(&mut self, name: &str) -> Result<Arc<RenderProgram>> {
         let (index, desc) = self.declared(name)?;
-        if let Some(AnyProgram::Render(p)) = self.resolved(index) {
-            return Ok(p.clone());
-        }
-        let ProgramKind::Render {
-            geometry,
-            fragment,
-            targets,
-            depth,
-            primitive,
-        } = &desc.kind
-        else {
+        if !matches!(desc.kind, ProgramKind::Render { .. }) {
             return Err(self.err(format!("program `{name}` is not a render program")));
-        };
-        let key = self.program_key(desc)?;
-        if let Some(p) = self.programs.render(&key) {
-            self.remember(index, AnyProgram::Render(p.clone()));
-            return Ok(p);
         }
-        let (module, layouts, layout) = self.build_layouts(&key)?;
-        let label = format!("{}::{}", desc.shader.name, desc.entries().join("+"));
-        let color_states: Vec<Option<wgpu::ColorTargetState>> = targets
-            .iter()
-            .zip(&key.target_formats)
-            .map(|(t, format)| {
-                Some(wgpu::ColorTargetState {
-                    format: *format,
-                    blend: t.blend,
-                    write_mask: t.write_mask,
-                })
-            })
-            .collect();
-        let fragment_state = fragment.map(|entry| wgpu::FragmentState {
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            targets: &color_states,
-        });
-        let depth_stencil =
-            depth
-                .as_ref()
-                .zip(key.depth_format)
-                .map(|(d, format)| wgpu::DepthStencilState {
-                    format,
-                    depth_write_enabled: Some(d.write),
-                    depth_compare: Some(d.compare),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                });
-        let primitive_state = wgpu::PrimitiveState {
-            topology: primitive.topology,
-            strip_index_format: None,
-            front_face: primitive.front_face,
-            cull_mode: primitive.cull_mode,
-            unclipped_depth: primitive.unclipped_depth
-                && self.features.contains(wgpu::Features::DEPTH_CLIP_CONTROL),
-            polygon_mode: wgpu::PolygonMode::Fill,
-            conservative: false,
-        };
-        let pipeline = match geometry {
-            Geometry::Vertex { entry } => {
-                self.device
-                    .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                        label: Some(&label),
-                        layout: Some(&layout),
-                        vertex: wgpu::VertexState {
-                            module: &module,
-                            entry_point: Some(entry),
-                            compilation_options: Default::default(),
-                            buffers: &[],
-                        },
-                        primitive: primitive_state,
-                        depth_stencil,
-                        multisample: Default::default(),
-                        fragment: fragment_state,
-                        multiview_mask: None,
-                        cache: None,
-                    })
-            }
-            Geometry::Mesh { task, mesh } => {
-                if !self
-                    .features
-                    .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER)
-                {
-                    return Err(GraphError::MissingFeature {
-                        pass: self.name.to_string(),
-                        stage: self.contract.stage.to_string(),
-                        features: "EXPERIMENTAL_MESH_SHADER".into(),
-                        instead: "open the device with the plan's `enabled_features`".into(),
-                    });
-                }
-                self.device
-                    .create_mesh_pipeline(&wgpu::MeshPipelineDescriptor {
-                        label: Some(&label),
-                        layout: Some(&layout),
-                        task: task.map(|entry| wgpu::TaskState {
-                            module: &module,
-                            entry_point: Some(entry),
-                            compilation_options: Default::default(),
-                        }),
-                        mesh: wgpu::MeshState {
-                            module: &module,
-                            entry_point: Some(mesh),
-                            compilation_options: Default::default(),
-                        },
-                        primitive: primitive_state,
-                        depth_stencil,
-                        multisample: Default::default(),
-                        fragment: fragment_state,
-                        multiview: None,
-                        cache: None,
-                    })
-            }
-        };
-        let program = Arc::new(RenderProgram { pipeline, layouts });
-        self.keep(index, key, AnyProgram::Render(program.clone()));
-        Ok(program)
+        match self
+            .programs
+            .resolved(self.graph_id, self.pass_index, index)
+        {
+            Some(AnyProgram::Render(p)) => Ok(p.clone()),
+            _ => Err(self.unprepared(name)),
+        }
+    }
+
+    /// A program asked for that preparing the graph did not build: the pass declared it
+    /// under another kind, or recorded against a graph the executor never prepared.
+    fn unprepared(&self, name: &str) -> GraphError {
+        self.err(format!(
+            "program `{name}` was not built for this device; the executor prepares every declared program before the first frame (Executor::prepare)"
+        ))
     }
 
     /// The bind group for `group` of `program`, filled from the slots its layout names;
@@ -1205,11 +841,6 @@ impl<'a> RecordContext<'a> {
     }
 }
 
-/// The name of the uniform the immediates fallback binds at binding 0 of its own group.
-/// The graph fills it itself in [`RecordContext::immediates`], so the shader's variable may
-/// be called anything.
-const IMMEDIATES_BLOCK: &str = "immediates";
-
 /// The uniforms of `layout`, those its program uses and those only other entry points of
 /// its shader use, for errors about them.
 fn uniform_names(layout: &crate::layout::BindingLayout) -> String {
@@ -1227,19 +858,5 @@ fn uniform_names(layout: &crate::layout::BindingLayout) -> String {
         "none".to_string()
     } else {
         names.join(", ")
-    }
-}
-
-/// The module a program composes: its shader with its defs, and `IMMEDIATES` set for how
-/// immediate data reaches it.
-fn module_key(desc: &ProgramDesc, native_immediates: bool) -> ModuleKey {
-    let mut defs: Vec<(&'static str, ShaderDef)> = desc.defs.clone();
-    if desc.immediate_size != 0 {
-        defs.retain(|(n, _)| *n != "IMMEDIATES");
-        defs.push(("IMMEDIATES", ShaderDef::Bool(native_immediates)));
-    }
-    ModuleKey {
-        shader: desc.shader.name,
-        defs,
     }
 }

@@ -10,6 +10,11 @@ use meshlight_shaders::{PassShader, ShaderDef, ShaderLibrary};
 use std::collections::HashMap;
 use std::sync::Arc;
 
+/// The name of the uniform the immediates fallback binds at binding 0 of its own group.
+/// The graph fills it itself in [`RecordContext::immediates`], so the shader's variable may
+/// be called anything.
+pub(crate) const IMMEDIATES_BLOCK: &str = "immediates";
+
 /// The bind-group layouts a program was built with, and where its immediate data goes.
 pub struct ProgramLayouts {
     pub(crate) groups: Vec<(BindingLayout, wgpu::BindGroupLayout)>,
@@ -118,6 +123,8 @@ pub(crate) struct Programs {
     /// built or found. Layout entries and formats are fixed by the compiled graph, so a
     /// steady frame skips building and hashing a `ProgramKey`.
     resolved: HashMap<(u64, usize), Vec<Option<AnyProgram>>>,
+    /// Compiled graphs whose every program is built (`exec::prepare`).
+    prepared: std::collections::HashSet<u64>,
     layouts: HashMap<Vec<wgpu::BindGroupLayoutEntry>, wgpu::BindGroupLayout>,
     samplers: HashMap<SamplerKind, wgpu::Sampler>,
     /// Bind groups by the exact objects they bind, with the frame that last used each;
@@ -136,6 +143,7 @@ impl Programs {
             modules: HashMap::new(),
             programs: HashMap::new(),
             resolved: HashMap::new(),
+            prepared: Default::default(),
             layouts: HashMap::new(),
             samplers: HashMap::new(),
             bind_groups: HashMap::new(),
@@ -243,6 +251,15 @@ impl Programs {
             slots.resize(index + 1, None);
         }
         slots[index] = Some(program);
+    }
+
+    /// Whether every program of compiled graph `graph` is built.
+    pub fn is_prepared(&self, graph: u64) -> bool {
+        self.prepared.contains(&graph)
+    }
+    /// Notes that every program of compiled graph `graph` is built.
+    pub fn prepared(&mut self, graph: u64) {
+        self.prepared.insert(graph);
     }
 
     pub fn insert(&mut self, key: ProgramKey, program: AnyProgram) {

@@ -83,8 +83,7 @@ impl Pass for Present {
         let format = ctx.format("target").ok_or_else(|| {
             GraphError::parameter("`target` must be bound to a colour texture".to_string())
         })?;
-        if format.is_depth_stencil_format() || !format.is_srgb() && !renderable_colour(format)
-        {
+        if format.is_depth_stencil_format() || !format.is_srgb() && !renderable_colour(format) {
             return Err(GraphError::parameter(format!(
                 "`target` is {format:?}, which a render pass cannot draw colour into; give a colour format such as Bgra8UnormSrgb or Rgba8Unorm"
             )));

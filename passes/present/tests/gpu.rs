@@ -92,16 +92,15 @@ fn the_image_keeps_its_bytes_in_every_target_format() {
         exec.execute(&compiled, &imports)
             .unwrap_or_else(|e| panic!("{format:?}: {e}"));
         exec.finish().unwrap();
-        let shown = as_rgba(format, &read_texture(&exec.gpu, &target, wgpu::TextureAspect::All));
+        let shown = as_rgba(
+            format,
+            &read_texture(&exec.gpu, &target, wgpu::TextureAspect::All),
+        );
         let tolerance = cpu::within_rounding(format.is_srgb());
         let mut off = 0;
         for (i, (got, texel)) in shown.iter().zip(pixels.chunks(4)).enumerate() {
             let want = cpu::presented([texel[0], texel[1], texel[2], texel[3]]);
-            if got
-                .iter()
-                .zip(want)
-                .any(|(g, w)| g.abs_diff(w) > tolerance)
-            {
+            if got.iter().zip(want).any(|(g, w)| g.abs_diff(w) > tolerance) {
                 off += 1;
                 assert!(off < 5, "{format:?} pixel {i}: {got:?}, want {want:?}");
             }
