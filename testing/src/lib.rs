@@ -5,6 +5,7 @@ pub mod features;
 pub mod frames;
 pub mod pass_errors;
 pub mod shader_variants;
+pub mod xvfb;
 use meshlight_graph::{
     Bindings, BufferDesc, CompileOptions, Executor, FrameData, GpuContext, GraphBuilder,
     GraphError, Imports, Pass, Result, TextureDesc, file::Params,

@@ -5,50 +5,18 @@
 
 use meshlight_viewer::{Viewer, ViewerOptions};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// The repository's root.
 pub fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// A running Xvfb, stopped when dropped.
-pub struct Xvfb {
-    pub display: String,
-    pid: u32,
-}
-
-impl Drop for Xvfb {
-    fn drop(&mut self) {
-        let _ = Command::new("kill").arg(self.pid.to_string()).status();
-    }
-}
+pub use meshlight_testing::xvfb::Xvfb;
 
 /// Starts Xvfb on a free display and points this process at it (call before any window
-/// is opened); fails the test with the script's message if it cannot (a missing Xvfb is
-/// installed where the script may; never skipped).
+/// is opened); fails the test if it cannot, never skipped.
 pub fn xvfb() -> Xvfb {
-    let dir = tempdir("xvfb");
-    let pid_file = dir.join("pid");
-    let out = Command::new("bash")
-        .arg(root().join("scripts/ensure-xvfb.sh"))
-        .arg("--start")
-        .env("XVFB_PID_FILE", &pid_file)
-        .output()
-        .expect("cannot run scripts/ensure-xvfb.sh");
-    assert!(
-        out.status.success(),
-        "the viewer's tests need an X server and could not start Xvfb: {}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let display = String::from_utf8_lossy(&out.stdout).trim().to_string();
-    let pid = std::fs::read_to_string(&pid_file)
-        .expect("ensure-xvfb.sh wrote no pid")
-        .trim()
-        .parse()
-        .expect("a pid");
-    let x = Xvfb { display, pid };
+    let x = meshlight_testing::xvfb::start(&tempdir("xvfb"));
     use_display(&x);
     x
 }
