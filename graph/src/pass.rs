@@ -102,6 +102,7 @@ pub struct SetupContext<'a> {
     pub(crate) needs_encoder: Option<String>,
     pub(crate) clears_itself: Vec<String>,
     pub(crate) skipped: Option<String>,
+    pub(crate) notes: Vec<String>,
 }
 
 impl<'a> SetupContext<'a> {
@@ -131,6 +132,7 @@ impl<'a> SetupContext<'a> {
             needs_encoder: None,
             clears_itself: Vec::new(),
             skipped: None,
+            notes: Vec::new(),
         }
     }
     /// The adapter's features, to choose between variants.
@@ -273,6 +275,11 @@ impl<'a> SetupContext<'a> {
     /// pipeline. A skipped pass should declare nothing else.
     pub fn skip(&mut self, why: &str) {
         self.skipped = Some(why.to_string());
+    }
+    /// Records how the pass settled something it was left to decide (a parameter given
+    /// as `auto`, say), so the plan and its dumps say what it chose and why.
+    pub fn note(&mut self, decision: String) {
+        self.notes.push(decision);
     }
     /// Marks the pass as having an effect outside the graph (readback, logging), so it is
     /// never culled.

@@ -102,6 +102,10 @@ pub struct PassPlan {
     /// not.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub skipped: Option<String>,
+    /// What the pass settled in setup that it was left to decide, and why
+    /// (`SetupContext::note`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 /// How a pass is recorded.
@@ -190,11 +194,14 @@ impl PassPlan {
     /// What the plan says about how this pass was decided: why it is skipped, why its
     /// implementation was picked, or both.
     pub fn decision(&self) -> Option<String> {
-        match (self.skipped.as_deref(), self.choice_reason()) {
-            (Some(skip), Some(choice)) => Some(format!("skipped: {skip}; {choice}")),
-            (Some(skip), None) => Some(format!("skipped: {skip}")),
-            (None, choice) => choice.map(str::to_string),
-        }
+        let parts: Vec<String> = self
+            .skipped
+            .iter()
+            .map(|skip| format!("skipped: {skip}"))
+            .chain(self.choice_reason().map(str::to_string))
+            .chain(self.notes.iter().cloned())
+            .collect();
+        (!parts.is_empty()).then(|| parts.join("; "))
     }
 }
 

@@ -12,7 +12,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 #[global_allocator]
 static ALLOCATOR: meshlight_viewer::offscreen::CountingAllocator =
     meshlight_viewer::offscreen::CountingAllocator;
-use meshlight::graph::{CompileOptions, GraphError, dump};
+use meshlight::graph::{GraphError, dump};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -73,10 +73,15 @@ struct GraphArgs {
     /// Write to this file instead of standard output.
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Plan for this machine's adapter (its features decide `auto`) instead of one with
-    /// every feature.
+    /// Plan for this machine's adapter (its features and class decide `auto`) instead of
+    /// one with every feature.
     #[arg(long)]
     for_adapter: bool,
+    /// Plan for an adapter of this class: graphics (the default without an adapter),
+    /// few-graphics-units (an NVIDIA H100 or H200) or cpu (lavapipe). `meshlight info`
+    /// names this machine's.
+    #[arg(long, value_parser = meshlight_cli::graph::parse_class)]
+    class: Option<meshlight::graph::AdapterClass>,
 }
 
 /// Exit code when no Vulkan adapter exists, so scripts can install lavapipe and retry.
@@ -161,14 +166,8 @@ fn bake(a: args::BakeArgs) -> Result<(), Box<dyn std::error::Error>> {
 }
 
 fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
-    let builder = meshlight::graph::file::load_pipeline(&a.pipeline, &meshlight::registry())?;
-    // Planning without a device assumes every feature; running checks the real adapter.
-    let options = if a.for_adapter {
-        CompileOptions::for_adapter(&meshlight::graph::GpuAdapter::select()?)
-    } else {
-        CompileOptions::new(wgpu::Features::all())
-    };
-    let plan = builder.compile(&options)?.plan;
+    let options = meshlight_cli::graph::options(a.for_adapter, a.class)?;
+    let plan = meshlight_cli::graph::plan(&a.pipeline, &options)?;
     let title = a.pipeline.display().to_string();
     let text = match a.format {
         Format::Dot => dump::to_dot(&plan),

@@ -45,6 +45,11 @@ pub struct RenderArgs {
     /// so it never describes an image that is gone.
     #[arg(long)]
     pub html: Option<PathBuf>,
+    /// Also write the frame's GPU timings as a Chrome trace (JSON), which Perfetto
+    /// (ui.perfetto.dev) and chrome://tracing open: one event per batch, or per pass with
+    /// `--timing passes`.
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
     /// GPU timing: `frame` (one timestamp pair per batch, the default), `passes` (per
     /// pass, for profiling: each pair costs GPU time) or `off`. Default: MESHLIGHT_TIMING.
     #[arg(long, value_parser = parse_timing)]
@@ -69,8 +74,8 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         (beside != a.output && beside.is_file()).then_some(beside)
     });
     create_parent(&a.output)?;
-    if let Some(html) = &html {
-        create_parent(html)?;
+    for page in html.iter().chain(&a.trace) {
+        create_parent(page)?;
     }
     let SceneSetup {
         data,
@@ -205,6 +210,24 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
                 }
             );
         }
+    }
+    if let Some(path) = &a.trace {
+        let timings = renderer.executor.take_gpu_timings()?;
+        let frame: Vec<_> = timings
+            .into_iter()
+            .filter(|t| t.frame == still.stats.frame)
+            .collect();
+        if frame.is_empty() {
+            return Err(format!(
+                "--trace: frame {} has no GPU timings (timing mode {}); use --timing frame or passes on an adapter with timestamps",
+                still.stats.frame,
+                still.stats.timing.name()
+            )
+            .into());
+        }
+        let trace = dump::to_chrome_trace(&frame, Some(&renderer.compiled.plan));
+        write_file(path, trace.as_bytes())?;
+        let _ = writeln!(report, "trace: {}", path.display());
     }
     if let Some(html) = html {
         let image = image_link(&html, &a.output);

@@ -53,7 +53,19 @@ pub fn view(a: ViewArgs) -> Result<(), Box<dyn std::error::Error>> {
         no_vsync: a.no_vsync,
     };
     if !a.offscreen {
+        let (screenshot, size) = (
+            options.screenshot.clone(),
+            (options.scene.width, options.scene.height),
+        );
         meshlight_viewer::app::run(options)?;
+        if let Some(path) = screenshot {
+            meshlight_output::write_stdout(&format!(
+                "wrote {} ({} × {}, the last frame without the overlay)\n",
+                path.display(),
+                size.0,
+                size.1
+            ))?;
+        }
         return Ok(());
     }
     let frames = options.frames.unwrap_or(0);

@@ -137,6 +137,46 @@ fn render_draws_a_mesh_file_through_the_shipped_pipeline_and_reports_its_counter
     assert!(err.contains("clusters") && err.contains("shaded"), "{err}");
 }
 
+/// `render --trace` writes the frame's GPU timings as Chrome trace JSON: one complete
+/// event per batch the report lists, each naming its passes; and the report lists no
+/// pass without a GPU time of its own (GPU: lavapipe, which has timestamps).
+#[test]
+fn render_writes_a_chrome_trace_with_an_event_per_batch() {
+    let dir = scratch("trace");
+    let (png, trace) = (dir.join("spot.png"), dir.join("frame.trace.json"));
+    let mut args = render_spot("4", "96", "64");
+    args.extend([
+        "-o",
+        png.to_str().unwrap(),
+        "--trace",
+        trace.to_str().unwrap(),
+    ]);
+    let out = meshlight_ok(&args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let batches = stdout
+        .lines()
+        .filter(|l| l.trim_start().starts_with("batch ") && l.contains("µs GPU"))
+        .count();
+    assert!(batches >= 2, "{stdout}");
+    assert!(!stdout.contains("no timestamps"), "{stdout}");
+    let text = std::fs::read_to_string(&trace).expect("the trace was written");
+    let json: serde_json::Value = serde_json::from_str(&text).expect("the trace is JSON");
+    let events = json["traceEvents"].as_array().expect("traceEvents");
+    let complete: Vec<_> = events.iter().filter(|e| e["ph"] == "X").collect();
+    assert_eq!(complete.len(), batches, "{text}");
+    assert!(
+        complete
+            .iter()
+            .all(|e| e["dur"].is_number() && e["ts"].is_number())
+    );
+    assert!(
+        complete.iter().any(|e| e["args"]["passes"]
+            .as_str()
+            .is_some_and(|p| p.contains("sw_raster"))),
+        "{text}"
+    );
+}
+
 /// `meshlight` with extra environment variables.
 fn meshlight_env(args: &[&str], env: &[(&str, &Path)]) -> std::process::Output {
     let mut cmd = command(args);

@@ -44,6 +44,12 @@ fn screenshot_equals_the_renderers_still() {
         "meshlight view failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // It says what it wrote.
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains("wrote") && said.contains(&shot.display().to_string()),
+        "{said}"
+    );
     let decoder = png::Decoder::new(std::io::BufReader::new(
         std::fs::File::open(&shot).expect("no screenshot written"),
     ));

@@ -140,6 +140,12 @@ impl App {
                     .write_html(&path)
                     .map(|()| log::warn!("wrote {}", path.display()))
             }
+            KeyCode::KeyT => {
+                let path = std::path::PathBuf::from(format!("{stamp}.trace.json"));
+                viewer
+                    .write_trace(&path)
+                    .map(|()| log::warn!("wrote {}", path.display()))
+            }
             KeyCode::Tab => {
                 viewer.overlay_on = !viewer.overlay_on;
                 Ok(())

@@ -220,6 +220,6 @@ impl Overlay {
                 actions.implementation = Some((stage.clone(), picked));
             }
         }
-        ui.small("WASD/QE fly, right drag look, scroll speed, O orbit, R reset, P/F12 screenshot, H report");
+        ui.small("WASD/QE fly, right drag look, scroll speed, O orbit, R reset, P/F12 screenshot, H report, T trace");
     }
 }

@@ -706,6 +706,22 @@ impl Viewer {
         Ok(())
     }
 
+    /// Writes the GPU timings of the frames since the last trace (up to the executor's
+    /// last 256) as a Chrome trace, which Perfetto opens; waits for the frames in flight.
+    pub fn write_trace(&mut self, path: &Path) -> Result<(), ViewerError> {
+        self.renderer.executor.finish()?;
+        let timings = self.renderer.executor.take_gpu_timings()?;
+        if timings.is_empty() {
+            return Err(ViewerError::Other(
+                "no GPU timings to trace: the adapter has no timestamps, or timing is off (MESHLIGHT_TIMING)".into(),
+            ));
+        }
+        let trace =
+            meshlight::graph::dump::to_chrome_trace(&timings, Some(&self.renderer.compiled.plan));
+        meshlight_output::write_file(path, trace.as_bytes())?;
+        Ok(())
+    }
+
     /// The camera the next frame uses.
     pub fn camera(&self) -> Camera {
         self.rig.camera()

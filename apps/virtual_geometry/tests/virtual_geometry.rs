@@ -23,10 +23,15 @@ fn field(instances: u32) -> Placed {
 }
 
 fn pipeline_file() -> GraphSource {
-    GraphSource::File(PathBuf::from(concat!(
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../.."),
-        "/pipelines/virtual_geometry.toml"
-    )))
+    shipped_file("virtual_geometry")
+}
+
+/// A shipped pipeline file, read from the repository as a user would pass it.
+fn shipped_file(name: &str) -> GraphSource {
+    GraphSource::File(
+        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+            .join(format!("pipelines/{name}.toml")),
+    )
 }
 
 fn render(placed: &Placed, settings: FrameSettings, source: &GraphSource) -> (Still, Renderer) {
@@ -66,25 +71,51 @@ fn empty(rgba: &[u8], i: usize) -> bool {
     rgba[i * 4..i * 4 + 3] == [0, 0, 0]
 }
 
+/// The renderer's shipped frame is the shipped file: with occlusion it is
+/// `pipelines/virtual_geometry.toml`, without it `virtual_geometry_one_pass.toml`, and
+/// either, read from disk as a user passes it, draws the same image with the same plan.
 #[test]
-fn the_pipeline_file_and_the_graph_built_in_code_give_identical_images() {
+fn the_shipped_frame_and_the_shipped_files_give_identical_plans_and_images() {
     let placed = field(16);
-    for view in [
-        DebugView::Shaded,
-        DebugView::Clusters,
-        DebugView::Lod,
-        DebugView::Raster,
+    for (occlusion, file) in [
+        (true, "virtual_geometry"),
+        (false, "virtual_geometry_one_pass"),
     ] {
-        let (code, _) = render(&placed, settings(view), &GraphSource::Shipped);
-        let (file, r) = render(&placed, settings(view), &pipeline_file());
-        assert_eq!(code.counts, file.counts, "{view:?}");
-        assert!(
-            code.counts.visible > 0 && code.counts.software > 0,
-            "{:?}",
-            code.counts
-        );
-        assert_eq!(differing(&code.rgba, &file.rgba, 0), 0, "{view:?}");
-        assert!(runs(&r, "hw_raster"));
+        for view in [
+            DebugView::Shaded,
+            DebugView::Clusters,
+            DebugView::Lod,
+            DebugView::Raster,
+        ] {
+            let s = FrameSettings {
+                occlusion,
+                ..settings(view)
+            };
+            let (shipped, a) = render(&placed, s.clone(), &GraphSource::Shipped);
+            let (read, b) = render(&placed, s, &shipped_file(file));
+            assert_eq!(shipped.counts, read.counts, "{file} {view:?}");
+            assert!(
+                shipped.counts.visible > 0 && shipped.counts.software > 0,
+                "{:?}",
+                shipped.counts
+            );
+            assert_eq!(
+                differing(&shipped.rgba, &read.rgba, 0),
+                0,
+                "{file} {view:?}"
+            );
+            let (pa, pb) = (&a.compiled.plan, &b.compiled.plan);
+            let passes = |p: &meshlight::graph::Plan| {
+                p.passes
+                    .iter()
+                    .map(|x| (x.name.clone(), x.implementation, x.decision()))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(passes(pa), passes(pb), "{file}");
+            assert_eq!(pa.batches, pb.batches, "{file}");
+            assert!(runs(&a, "hw_raster"));
+            assert_eq!(runs(&a, "cull_second"), occlusion, "{file}");
+        }
     }
 }
 

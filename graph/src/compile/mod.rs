@@ -374,6 +374,7 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             side_effect: setup.side_effect,
             recording: recording(&resources, node, setup, &scratch_of[p]),
             skipped: setup.skipped.clone(),
+            notes: setup.notes.clone(),
         })
         .collect::<Vec<_>>();
     let batches = batches_of(&pass_plans, &order);

@@ -505,6 +505,28 @@ impl Pass for CullLod {
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.check_thresholds()?;
+        let class = ctx.adapter_class();
+        let on = self.thresholds_on(class);
+        if self.auto_split {
+            let why = sw_threshold_on(class).1;
+            ctx.note(format!(
+                "`sw_threshold_px = \"auto\"`: {} px on a {} ({why})",
+                on.sw_threshold_px,
+                class.name()
+            ));
+        }
+        if self.auto_hardware {
+            let why = class.hardware_raster().1;
+            ctx.note(format!(
+                "`hardware = \"auto\"`: {} on a {} ({why})",
+                if on.hardware {
+                    "clusters go to hardware"
+                } else {
+                    "every cluster to software"
+                },
+                class.name()
+            ));
+        }
         ctx.check_max_per_dimension(self.max_per_dimension)?;
         let occlusion = self.check_phase(ctx)?;
         let second = self.phase == Phase::Second;
