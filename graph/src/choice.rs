@@ -142,14 +142,14 @@ pub(crate) fn resolve(
         .into_iter()
         .find(|o| o.class == class && selection == Selection::Auto);
     if let Some(o) = &class_order {
-        let rank = |c: &Box<dyn Pass>| {
+        let rank = |c: &dyn Pass| {
             let name = c.implementation().name;
             o.best_first
                 .iter()
                 .position(|n| *n == name)
                 .unwrap_or(o.best_first.len())
         };
-        candidates.sort_by_key(rank);
+        candidates.sort_by_key(|c| rank(c.as_ref()));
     }
     let mut judged = Vec::with_capacity(candidates.len());
     for c in &candidates {

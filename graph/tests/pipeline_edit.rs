@@ -295,8 +295,8 @@ fn a_pass_skipped_on_an_adapter_class_stays_in_the_plan_and_says_why() {
         cpu.batches,
         graphics.batches
     );
-    // On a device (lavapipe is a CPU adapter), a frame runs without recording it: its
-    // `record` would panic.
+    // On a device (lavapipe is a CPU adapter), a frame runs without recording it (its
+    // `record` would panic) or timing it: the per-pass profile lists the passes that ran.
     let gpu = meshlight_testing::gpu();
     assert_eq!(
         AdapterClass::of(&gpu.info),
@@ -306,5 +306,20 @@ fn a_pass_skipped_on_an_adapter_class_stays_in_the_plan_and_says_why() {
     );
     let compiled = build().compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let mut exec = Executor::new(gpu);
-    exec.execute(&compiled, &Imports::new()).unwrap();
+    exec.timing = TimingMode::Passes;
+    let stats = exec.execute(&compiled, &Imports::new()).unwrap();
+    let ran: Vec<&str> = stats.passes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(ran, ["make", "use"]);
+    assert!(
+        stats
+            .batches
+            .iter()
+            .all(|b| !b.passes.contains(&"draw".to_string())),
+        "{:?}",
+        stats.batches
+    );
+    exec.finish().unwrap();
+    for t in exec.take_gpu_timings().unwrap() {
+        assert!(t.passes.iter().all(|(name, _)| name != "draw"), "{t:?}");
+    }
 }

@@ -39,7 +39,10 @@ fn graph() -> GraphBuilder {
 /// Spans as the `tracing` backend of `profiling` opens them: name, and the `tag` a scope
 /// with data carries.
 #[derive(Default, Clone)]
-struct Spans(Arc<Mutex<Vec<(String, Option<String>)>>>);
+struct Spans(Arc<Mutex<Vec<Span>>>);
+
+/// A span's name and tag.
+type Span = (String, Option<String>);
 
 struct Tag(Option<String>);
 

@@ -55,10 +55,6 @@ impl FrameRecord<'_> {
         shared: &mut SharedPass,
         batched: bool,
     ) -> Result<()> {
-        // A pass skipped on this adapter has nothing to record.
-        if self.graph.plan.passes[p].skipped.is_some() {
-            return Ok(());
-        }
         let node = &self.graph.passes[p];
         let mut ctx = RecordContext {
             device: &self.gpu.device,
@@ -120,6 +116,10 @@ impl FrameRecord<'_> {
                 timer.batch_edge(&mut encoder, b, false);
             }
             for &p in &batch.passes {
+                // A pass skipped on this adapter records nothing and is not timed.
+                if plan.passes[p].skipped.is_some() {
+                    continue;
+                }
                 let node = &graph.passes[p];
                 profiling::scope!("meshlight::record", node.name.as_str());
                 let t0 = Instant::now();
@@ -167,6 +167,7 @@ impl FrameRecord<'_> {
                 passes: batch
                     .passes
                     .iter()
+                    .filter(|&&p| plan.passes[p].skipped.is_none())
                     .map(|&p| plan.passes[p].name.clone())
                     .collect(),
                 gpu_us: None,

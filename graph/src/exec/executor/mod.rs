@@ -354,11 +354,8 @@ impl Executor {
         {
             let names = match mode {
                 TimingMode::Frame => batches.iter().map(|b| b.label.clone()).collect(),
-                _ => plan
-                    .order
-                    .iter()
-                    .map(|&p| plan.passes[p].name.clone())
-                    .collect(),
+                // The passes recorded, in order: skipped ones have no stamps.
+                _ => passes.iter().map(|p| p.name.clone()).collect(),
             };
             ts.resolve(&self.gpu.device, &mut encoder, frame, mode, names);
         }
