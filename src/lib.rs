@@ -22,6 +22,8 @@
 //! reference); `meshlight-cli` is the `meshlight` command, `meshlight-viewer` the live
 //! window and `meshlight-bench` the benchmark scenarios.
 
+#![warn(missing_docs)]
+
 pub mod still;
 
 pub use meshlight_gpu_scene as gpu_scene;
@@ -41,6 +43,9 @@ pub use meshlight_pass_sw_raster as sw_raster;
 pub use meshlight_pass_z_slice as z_slice;
 pub use meshlight_scene as scene;
 pub use meshlight_shaders as shaders;
+/// The crates meshlight's API speaks in, at the versions it was built with: a user needs
+/// no dependency of their own on them (and cannot get a second, mismatched copy).
+pub use {bytemuck, glam, wgpu};
 
 /// Each stage crate's `register`, in the order their implementations enter the registry.
 const REGISTERS: [fn(&mut graph::file::Registry); 13] = [

@@ -27,28 +27,36 @@ pub const MAX_STILL_FRAMES: u32 = 4;
 /// Where the graph comes from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ClusteringSource {
+    /// The shipped frame, `pipelines/light_clustering.toml`.
     Code,
+    /// A pipeline file of the caller's.
     File(PathBuf),
 }
 
 /// One frame's counters.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ClusteringCounts {
+    /// The frame they were counted in.
     pub frame: u64,
     /// z_slice: instances asked for and the list's capacity.
     pub slice_requested: u32,
+    /// See `slice_requested`.
     pub slice_capacity: u32,
     /// Objects skipped as invalid (NaN position, negative range, …) and culled.
     pub invalid: u32,
+    /// See `invalid`.
     pub culled: u32,
     /// Objects given slices, per kind.
     pub visible: [u32; 4],
     /// populate: entries all lists needed, and the capacity.
     pub entries_needed: u32,
+    /// See `entries_needed`.
     pub entries_capacity: u32,
 }
 
 impl ClusteringCounts {
+    /// Whether the frame lost pairs or entries to a list too small: its lists are
+    /// incomplete, and the clusterer grows them for the next frame.
     pub fn overflowed(&self) -> bool {
         self.slice_requested > self.slice_capacity || self.entries_needed > self.entries_capacity
     }
@@ -59,24 +67,40 @@ impl ClusteringCounts {
 pub enum ClusteringWarning {
     /// Objects with a NaN or infinite position, a NaN or negative range, an unknown kind
     /// or an unusable direction were skipped.
-    InvalidObjects { frame: u64, count: u32 },
+    InvalidObjects {
+        /// The frame that skipped them.
+        frame: u64,
+        /// How many.
+        count: u32,
+    },
 }
 
 /// The lists of a frame the CPU waited for.
 pub struct Clustered {
+    /// The froxel grid the lists index.
     pub grid: ClusterGrid,
+    /// Per froxel and kind, an offset and a count into one index list.
     pub lists: ClusterLists,
+    /// The frame's counters.
     pub counts: ClusteringCounts,
+    /// What the frame cost.
     pub stats: FrameStats,
+    /// Frames run to get there (more than one when a list grew).
     pub frames: u32,
 }
 
+/// Light clustering on its own device: the frame compiled for the adapter, the objects
+/// uploaded every frame, the lists grown when a frame ran out of room.
 pub struct Clusterer {
+    /// What the clustering was asked for.
     pub settings: ClusteringSettings,
+    /// The frame, compiled for the device.
     pub compiled: CompiledGraph,
+    /// The device and what runs on it.
     pub executor: Executor,
     objects: wgpu::Buffer,
     object_count: wgpu::Buffer,
+    /// The counters that came back, the grows and the warnings.
     pub counters: Counters,
 }
 
@@ -91,6 +115,8 @@ impl Clusterer {
         Self::with_graph(settings, graph)
     }
 
+    /// The clusterer of `graph` (a frame holding the clustering's passes under their
+    /// resources' names), compiled for the selected adapter.
     pub fn with_graph(settings: ClusteringSettings, graph: GraphBuilder) -> Result<Self> {
         let adapter = GpuAdapter::select()?;
         let limits = adapter.adapter.limits();
@@ -216,12 +242,17 @@ pub struct Counters {
     /// The largest list a binding holds, in 4-byte entries.
     max_entries: u64,
     pending: BTreeMap<u64, [Option<Vec<u8>>; 2]>,
+    /// The newest frame's counters that came back.
     pub latest: Option<ClusteringCounts>,
+    /// Every grow of a list so far.
     pub growths: Vec<Growth>,
+    /// What frames reported that the caller should know.
     pub warnings: Vec<ClusteringWarning>,
 }
 
 impl Counters {
+    /// Counters for lists that may grow up to `max_entries` entries (the device's
+    /// binding limit).
     pub fn new(max_entries: u64) -> Self {
         Self {
             max_entries,

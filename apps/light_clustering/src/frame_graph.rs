@@ -46,11 +46,12 @@ pub const OBJECT_USAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_DST)
     .union(wgpu::BufferUsages::COPY_SRC);
 
-/// What the clustering is asked for; the same for both ways of building the graph.
+/// What the clustering is asked for, applied to the shipped frame and to a file alike.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ClusteringSettings {
     /// The view's size in pixels.
     pub viewport: [u32; 2],
+    /// The froxel grid: tiles across, down and depth slices, and how depth is sliced.
     pub grid: GridSettings,
     /// The implementation of `count_raster` and of `populate`, as registered: the same
     /// for both, so the two stages decide every (object, froxel) pair with the same
@@ -66,10 +67,13 @@ pub struct ClusteringSettings {
     pub objects: u64,
     /// Initial sizes of z_slice's list and of the froxel lists; grown on overflow.
     pub slice_instances: u64,
+    /// See `slice_instances`.
     pub entries: u64,
 }
 
 impl ClusteringSettings {
+    /// The default grid over a `viewport`, for up to `objects` lights, with lists
+    /// sized for them (grown when a frame needs more).
     pub fn new(viewport: [u32; 2], objects: u64) -> Self {
         Self {
             viewport,

@@ -8,14 +8,19 @@ use meshlight::graph::{CompiledGraph, Result};
 /// One grow of a list, for logs and tests.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Growth {
+    /// The frame that asked for more.
     pub frame: u64,
+    /// The list's size parameter.
     pub param: &'static str,
+    /// Its size before, in entries.
     pub from: u64,
+    /// Its size after.
     pub to: u64,
 }
 
 /// What a frame asked of a list, and what to tell the user when it cannot have it.
 pub struct Want {
+    /// The frame that asked.
     pub frame: u64,
     /// The list's size parameter.
     pub param: &'static str,

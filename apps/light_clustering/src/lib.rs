@@ -3,6 +3,8 @@
 //! into a graph ([`frame_graph`]), run frame after frame with overflow growth
 //! ([`Clusterer`]), and the CPU reference of the whole assignment ([`reference`]).
 
+#![warn(missing_docs)]
+
 pub mod clusterer;
 pub mod frame_graph;
 pub mod growth;

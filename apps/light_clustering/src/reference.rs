@@ -16,11 +16,13 @@ use rayon::prelude::*;
 /// What the reference assigned.
 #[derive(Clone, Debug)]
 pub struct Assignment {
+    /// The froxel grid of the view.
     pub grid: ClusterGrid,
     /// z_slice's pairs, in object order.
     pub instances: Vec<SliceInstance>,
     /// Every instance's walk (with each decision's closeness, for comparisons).
     pub counted: CountResult,
+    /// Per froxel and kind, the objects whose test passed.
     pub lists: ClusterLists,
 }
 

@@ -36,9 +36,11 @@ pub struct FrameCounts {
     pub slots: u32,
     /// Clusters drawn by each rasteriser.
     pub software: u32,
+    /// See `software`.
     pub hardware: u32,
     /// Triangles of those clusters.
     pub software_triangles: u32,
+    /// See `software_triangles`.
     pub hardware_triangles: u32,
     /// Clusters the raster slots had no room for (both culling passes).
     pub slots_dropped: u32,
@@ -75,7 +77,9 @@ pub struct HierarchyCounts {
 /// Instances the hierarchy walk tested at their root, and those it went on into.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct InstanceCounts {
+    /// Instances whose root the walk tested.
     pub tested: u32,
+    /// Instances it went on into (in the frustum, not hidden).
     pub visible: u32,
 }
 
@@ -83,12 +87,15 @@ pub struct InstanceCounts {
 /// re-tested against this frame's pyramid.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct SecondWalkCounts {
+    /// Nodes the second walk tested.
     pub nodes_tested: u32,
+    /// Leaves whose clusters it listed.
     pub leaves_accepted: u32,
     /// Nodes still hidden: culled for good, with everything below them.
     pub still_hidden: u32,
     /// Clusters the walk listed for the second culling pass, and asked for.
     pub clusters_listed: u32,
+    /// See `clusters_listed`.
     pub clusters_requested: u32,
 }
 
@@ -140,14 +147,20 @@ pub struct OcclusionCounts {
     /// last frame's pyramid (0 without valid history or on a camera cut), and those it
     /// hid (the second pass's candidates).
     pub first_cut: u32,
+    /// See `first_cut`.
     pub first_tested: u32,
+    /// See `first_cut`.
     pub first_occluded: u32,
     /// Second pass: candidates considered, tested against this frame's pyramid, still
     /// hidden (culled for good), and drawn.
     pub second_considered: u32,
+    /// See `second_considered`.
     pub second_tested: u32,
+    /// See `second_considered`.
     pub second_occluded: u32,
+    /// See `second_considered`.
     pub second_drawn: u32,
+    /// Triangles of the clusters the second pass drew.
     pub second_triangles: u32,
 }
 
@@ -220,6 +233,7 @@ impl FrameCounts {
         self.clusters_dropped() > 0 || self.slots_dropped() > 0
     }
 
+    /// Triangles both rasterisers drew.
     pub fn triangles(&self) -> u64 {
         self.software_triangles as u64 + self.hardware_triangles as u64
     }

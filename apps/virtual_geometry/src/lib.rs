@@ -16,6 +16,8 @@
 //! This crate only wires them, sizes what they share, and turns the counters into
 //! numbers a person reads.
 
+#![warn(missing_docs)]
+
 pub mod counts;
 pub mod frame_graph;
 pub mod renderer;

@@ -36,17 +36,23 @@ pub const MAX_STILL_FRAMES: u32 = 4;
 
 /// A finished image.
 pub struct Still {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
     /// RGBA8, rows top to bottom.
     pub rgba: Vec<u8>,
     /// The frame's statistics, with GPU timings where the adapter has timestamps.
     pub stats: FrameStats,
+    /// The frame's counters: clusters considered, drawn by each rasteriser, dropped.
     pub counts: FrameCounts,
     /// Frames run to get there (more than 1 when a list had to grow).
     pub frames: u32,
 }
 
+/// The virtual-geometry renderer: the frame compiled for a device (its own, or a host's),
+/// the scene on the GPU, and the frame loop that reads the counters back and grows the
+/// lists without waiting.
 pub struct Renderer {
     /// The scene. Moving instances and changing materials is uploaded by the next
     /// frame; a scene that outgrows its buffers (more meshes or instances) needs a new
@@ -58,7 +64,9 @@ pub struct Renderer {
     pub view: DebugView,
     /// The pipeline the frame was built from, as the settings left it.
     pub pipeline: Pipeline,
+    /// The frame, compiled for the device.
     pub compiled: CompiledGraph,
+    /// The device and what runs on it (resources, pipelines, timings, readbacks).
     pub executor: Executor,
     scene: GpuScene,
     /// The largest list a binding can hold, in elements of 8 bytes.
@@ -78,7 +86,9 @@ pub struct Renderer {
     /// Counters by frame, until both readbacks of a frame are in.
     pending: BTreeMap<u64, PendingCounts>,
     latest: Option<FrameCounts>,
+    /// Every grow of the candidate list and the raster slots so far.
     pub growths: Vec<Growth>,
+    /// The adapter's name, for reports.
     pub adapter: String,
     /// The lights the frame clusters and shades with (with `settings.clustering`; at
     /// most its `objects`). Uploaded by every frame.

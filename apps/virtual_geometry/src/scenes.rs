@@ -55,7 +55,9 @@ impl Rng {
 
 /// A scene and the camera that frames it.
 pub struct Placed {
+    /// The meshes, materials and instances.
     pub data: SceneData,
+    /// A camera that frames them.
     pub camera: Camera,
 }
 
