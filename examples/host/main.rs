@@ -3,7 +3,7 @@
 //! buffer, and has meshlight draw its virtual-geometry scene into the same frame,
 //! composited by depth (one triangle in front of the mesh, one behind it).
 //!
-//!     cargo run --release --example host [-- --frames N --screenshot out/host.png]
+//!     cargo run --release -p meshlight-example-host [-- --frames N --screenshot out/host.png]
 //!
 //! `--draw host|meshlight|both` leaves one side out (the test compares the three),
 //! `--width`/`--height` size the window. What meshlight needs from the host is marked

@@ -19,6 +19,7 @@ mod builder;
 mod choice;
 mod compile;
 mod contract;
+#[cfg(feature = "dumps")]
 pub mod dump;
 mod error;
 mod exec;

@@ -49,7 +49,6 @@ pub mod cpu;
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::prelude::*;
-use meshlight_scene::Mesh;
 use meshlight_shaders::cpu::layout::Instance;
 
 /// The stage name pipelines use.
@@ -138,8 +137,10 @@ impl Lod0Buffers {
 
 /// The buffers that draw `mesh` at full resolution. Pass the mesh the scene's asset was
 /// built from, so the baseline draws the triangles the meshlet DAG's LOD 0 holds (the
-/// builder only drops degenerate triangles, which cover nothing).
-pub fn lod0_buffers(mesh: &Mesh) -> Lod0Buffers {
+/// builder only drops degenerate triangles, which cover nothing). Source meshes are the
+/// baker's (the `build` feature).
+#[cfg(feature = "build")]
+pub fn lod0_buffers(mesh: &meshlight_scene::Mesh) -> Lod0Buffers {
     Lod0Buffers {
         positions: mesh
             .positions
@@ -360,6 +361,7 @@ mod tests {
         );
     }
 
+    #[cfg(feature = "build")]
     #[test]
     fn lod0_buffers_keep_the_mesh() {
         let mesh = meshlight_scene::procedural_mesh(3);

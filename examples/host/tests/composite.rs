@@ -6,7 +6,7 @@
 //! everywhere else it is drawn. The scene's own image and depth come from the library
 //! rendering the same scene with the same matrices on a device of its own.
 
-#[path = "../examples/host/scene.rs"]
+#[path = "../scene.rs"]
 #[allow(dead_code)] // the test draws no host triangles itself
 mod scene;
 
@@ -17,21 +17,9 @@ use std::path::{Path, PathBuf};
 const W: u32 = 320;
 const H: u32 = 200;
 
-/// The example's binary, built beside this test's (`cargo test --all-targets` builds
-/// both).
+/// The example's binary, which cargo builds for this test.
 fn example() -> PathBuf {
-    let exe = std::env::current_exe().expect("the test's own path");
-    let debug = exe
-        .parent()
-        .and_then(Path::parent)
-        .expect("target/<profile>");
-    let host = debug.join("examples/host");
-    assert!(
-        host.is_file(),
-        "no {}: build the example with `cargo build --example host` (cargo test --all-targets does)",
-        host.display()
-    );
-    host
+    PathBuf::from(env!("CARGO_BIN_EXE_host"))
 }
 
 fn read_png(path: &Path) -> Vec<u8> {
