@@ -1,10 +1,11 @@
-//! meshlight as a library: spot on the field, one frame rendered, its size and counters.
-//! The README shows this file; `tests/readme.rs` checks the two agree and runs it.
+//! The README's "Use it as a library": a field of procedural meshes rendered to an image,
+//! with no file to find.
 use meshlight::gpu_scene::SceneData;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer, scenes};
 
-pub fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let asset = scenes::load_asset("assets/meshes/spot.obj".as_ref(), 0)?;
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // The procedural mesh (16 × 64² triangles), baked on first use and cached.
+    let asset = scenes::load_asset("procedural".as_ref(), 64)?;
     let placed = scenes::field(SceneData::new(Default::default()), &asset, 64)?;
     let settings = FrameSettings::new(640, 360);
     let mut renderer = Renderer::new(placed.data, settings, &GraphSource::Shipped)?;
