@@ -150,3 +150,184 @@ fn dumps_of_the_shipped_pipelines_show_their_batches_and_match_their_snapshots()
         check(&format!("{name}.html.snap"), &html);
     }
 }
+
+/// A box of the SVG drawing: its pass, where it is, and the two lines of text it holds.
+struct DrawnBox {
+    pass: String,
+    class: String,
+    rect: [f64; 4],
+    name: String,
+    label: String,
+    batch: String,
+}
+
+fn attribute(s: &str, name: &str) -> String {
+    let key = format!(" {name}=\"");
+    let at = s.find(&key).unwrap_or_else(|| panic!("no {name} in {s}")) + key.len();
+    s[at..].split('"').next().unwrap().to_string()
+}
+
+/// The texts of one box, in order: the name, the stage and implementation, the batch.
+fn texts(g: &str) -> Vec<String> {
+    g.split("<text ")
+        .skip(1)
+        .map(|t| {
+            t.split('>')
+                .nth(1)
+                .unwrap()
+                .split("</text")
+                .next()
+                .unwrap()
+                .to_string()
+        })
+        .collect()
+}
+
+fn drawn_boxes(svg: &str) -> Vec<DrawnBox> {
+    svg.lines()
+        .filter(|l| l.starts_with("<g class=\"pass"))
+        .map(|g| {
+            let rect = ["x", "y", "width", "height"].map(|a| {
+                attribute(&g[g.find("<rect").unwrap()..], a)
+                    .parse()
+                    .unwrap()
+            });
+            let t = texts(g);
+            DrawnBox {
+                pass: attribute(g, "data-pass"),
+                class: attribute(g, "class"),
+                rect,
+                name: t[0].clone(),
+                label: t[1].clone(),
+                batch: t[2].clone(),
+            }
+        })
+        .collect()
+}
+
+/// Points along an edge's path (`M`, `H`, `V` and `C` commands, as the drawing writes
+/// them): every corner, and a point a pixel apart along straight runs and curves.
+fn path_points(d: &str) -> Vec<(f64, f64)> {
+    let mut points = vec![];
+    let mut at = (0.0, 0.0);
+    let pair = |t: &str| -> (f64, f64) {
+        let (x, y) = t.split_once(',').unwrap();
+        (x.parse().unwrap(), y.parse().unwrap())
+    };
+    let mut tokens = d.split_whitespace();
+    while let Some(t) = tokens.next() {
+        let (cmd, rest) = t.split_at(1);
+        let line = |from: (f64, f64), to: (f64, f64), points: &mut Vec<(f64, f64)>| {
+            let n = ((to.0 - from.0).abs() + (to.1 - from.1).abs())
+                .ceil()
+                .max(1.0) as usize;
+            for i in 0..=n {
+                let f = i as f64 / n as f64;
+                points.push((from.0 + (to.0 - from.0) * f, from.1 + (to.1 - from.1) * f));
+            }
+        };
+        match cmd {
+            "M" => {
+                at = pair(rest);
+                points.push(at);
+            }
+            "H" => {
+                let to = (rest.parse().unwrap(), at.1);
+                line(at, to, &mut points);
+                at = to;
+            }
+            "V" => {
+                let to = (at.0, rest.parse().unwrap());
+                line(at, to, &mut points);
+                at = to;
+            }
+            "C" => {
+                let c1 = pair(rest);
+                let c2 = pair(tokens.next().unwrap());
+                let to = pair(tokens.next().unwrap());
+                for i in 0..=256 {
+                    let f = i as f64 / 256.0;
+                    let g = 1.0 - f;
+                    let bez = |a: f64, b: f64, c: f64, e: f64| {
+                        g * g * g * a + 3.0 * g * g * f * b + 3.0 * g * f * f * c + f * f * f * e
+                    };
+                    points.push((bez(at.0, c1.0, c2.0, to.0), bez(at.1, c1.1, c2.1, to.1)));
+                }
+                at = to;
+            }
+            other => panic!("unexpected path command {other} in {d}"),
+        }
+    }
+    points
+}
+
+/// The drawing of every shipped pipeline, on both feature sets: each box holds its text
+/// (at a generous 0.6 em a character), no edge passes through any box (its own included:
+/// it leaves one box's bottom edge and enters the other's top), and a pass the adapter's
+/// class skips is drawn grey and says so.
+#[test]
+fn svg_boxes_hold_their_text_and_no_edge_crosses_a_box() {
+    let mut skipped_seen = 0;
+    for name in PIPELINES {
+        for features in [lavapipe(), nvidia()] {
+            let plan = plan(name, features);
+            let svg = dump::to_svg(&plan);
+            let boxes = drawn_boxes(&svg);
+            assert_eq!(boxes.len(), plan.order.len() + plan.culled.len(), "{name}");
+            for b in &boxes {
+                let [_, _, w, _] = b.rect;
+                let chars = |s: &str| s.chars().count() as f64;
+                let top = chars(&b.name) * 7.2 + chars(&b.batch) * 6.0 + 7.0 + 6.0 + 6.0;
+                let bottom = chars(&b.label) * 6.0 + 7.0 + 4.0;
+                assert!(
+                    top <= w && bottom <= w,
+                    "{name}: {} ({} / {}) in a box {w} wide",
+                    b.pass,
+                    b.name,
+                    b.label
+                );
+            }
+            let mut edges = 0;
+            for line in svg.lines().filter(|l| l.starts_with("<path d=\"")) {
+                edges += 1;
+                let d = attribute(line, "d");
+                for (x, y) in path_points(&d) {
+                    for b in &boxes {
+                        let [bx, by, bw, bh] = b.rect;
+                        assert!(
+                            !(x > bx + 0.5
+                                && x < bx + bw - 0.5
+                                && y > by + 0.5
+                                && y < by + bh - 0.5),
+                            "{name}: the edge {} passes through {} at ({x}, {y})",
+                            line.split("<title>").nth(1).unwrap_or(line),
+                            b.pass
+                        );
+                    }
+                }
+            }
+            let pairs: std::collections::BTreeSet<(usize, usize)> =
+                plan.edges.iter().map(|e| (e.from, e.to)).collect();
+            assert_eq!(
+                edges,
+                pairs.len(),
+                "{name}: an arrow per pair of dependent passes"
+            );
+            for &p in &plan.order {
+                let pass = &plan.passes[p];
+                let drawn = boxes.iter().find(|b| b.pass == pass.name).unwrap();
+                if pass.skipped.is_some() {
+                    skipped_seen += 1;
+                    assert_eq!(drawn.class, "pass skipped", "{name}: {}", pass.name);
+                    assert!(drawn.label.ends_with("(skipped)"), "{}", drawn.label);
+                } else {
+                    assert_eq!(drawn.class, "pass", "{name}: {}", pass.name);
+                }
+            }
+        }
+    }
+    assert!(
+        skipped_seen > 0,
+        "some shipped pipeline skips a pass on some class"
+    );
+}
