@@ -6,3 +6,5 @@ cd "$(dirname "$0")/.."
 bash scripts/ensure-vulkan.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cargo test --workspace --all-targets --no-fail-fast "$@"
+# The doctests (not among --all-targets): the graph's entry points, run on the adapter.
+cargo test --workspace --doc --no-fail-fast "$@"

@@ -109,6 +109,43 @@ impl PassOutputs {
 }
 
 /// Declares a frame: resources, then passes in the order their effects should apply.
+///
+/// Compiling needs no device: the plan orders the passes, culls those whose writes
+/// nothing reads, and pools the transients.
+///
+/// ```
+/// use meshlight_graph::synthetic::NoopPass;
+/// use meshlight_graph::*;
+///
+/// # fn main() -> Result<()> {
+/// let mut g = GraphBuilder::new();
+/// g.create_buffer("visible", BufferDesc::array(Element::U32, 1024));
+/// g.create_buffer("debug", BufferDesc::array(Element::U32, 16));
+/// let image = g.create_buffer("image", BufferDesc::array(Element::U32, 64 * 64));
+/// g.export(image);
+/// // Passes that record nothing, with the slots of a cull, a raster and a debug view;
+/// // a slot binds the resource of its own name unless `Bindings` says otherwise.
+/// let pass = |reads: &[&'static str], writes: &[&'static str]| NoopPass {
+///     slots: reads
+///         .iter()
+///         .map(|r| Slot::read(r, Element::U32, ""))
+///         .chain(writes.iter().map(|w| Slot::buffer(w, Access::StorageWrite, Element::U32, "")))
+///         .collect(),
+/// };
+/// g.add_pass("cull", pass(&[], &["visible"]), Bindings::new())?;
+/// g.add_pass("debug_view", pass(&["visible"], &["debug"]), Bindings::new())?;
+/// g.add_pass("raster", pass(&["visible"], &["image"]), Bindings::new())?;
+///
+/// let plan = g.compile(&CompileOptions::new(wgpu::Features::empty()))?.plan;
+/// let names = |passes: &[usize]| -> Vec<String> {
+///     passes.iter().map(|&p| plan.passes[p].name.clone()).collect()
+/// };
+/// assert_eq!(names(&plan.order), ["cull", "raster"]);
+/// // Nothing reads what the debug view writes, and `debug` is not exported.
+/// assert_eq!(names(&plan.culled), ["debug_view"]);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Default)]
 pub struct GraphBuilder {
     pub(crate) resources: Vec<ResourceInfo>,

@@ -12,6 +12,65 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// A pipeline file as parsed, before its passes are built.
+///
+/// A renderer ships its frame as a file and applies its settings through these methods;
+/// `auto` picks the first implementation the registry prefers that the adapter runs:
+///
+/// ```
+/// use meshlight_graph::file::{Params, Pipeline, Registry};
+/// use meshlight_graph::*;
+///
+/// /// A stage `fill` with two implementations that write `list` (recording nothing here).
+/// struct Fill(&'static str);
+/// impl Pass for Fill {
+///     fn implementation(&self) -> Implementation {
+///         let list = Slot::buffer("list", Access::StorageWrite, Element::U32, "");
+///         Implementation::new(self.0, StageContract { stage: "fill", slots: vec![list] })
+///     }
+///     fn setup(&self, _: &mut SetupContext) -> Result<()> {
+///         Ok(())
+///     }
+///     fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
+///         Ok(())
+///     }
+/// }
+///
+/// const FRAME: &str = r#"
+/// [params]
+/// n = 1024
+///
+/// [[resource]]
+/// name = "list"
+/// kind = "exported"
+/// buffer = { element = "u32", count_param = "n" }
+///
+/// [[pass]]
+/// name = "fill"
+/// stage = "fill"
+/// implementation = "auto"
+/// "#;
+///
+/// # fn main() -> Result<()> {
+/// let mut registry = Registry::new();
+/// registry.register("fill", "fast", |_: &Params| Ok(Fill("fast")));
+/// registry.register("fill", "simple", |_: &Params| Ok(Fill("simple")));
+/// registry.prefer("fill", &["fast", "simple"]);
+///
+/// let options = CompileOptions::new(wgpu::Features::empty());
+/// let mut frame = Pipeline::parse(FRAME, "frame.toml")?;
+/// let plan = frame.build(&registry)?.compile(&options)?.plan;
+/// assert_eq!(plan.passes[0].implementation, "fast");
+///
+/// // Settings: a size and a stage's implementation, changed without editing text.
+/// frame.set_param("n", 4096)?;
+/// assert_eq!(frame.set_implementation("fill", "simple"), 1);
+/// let plan = frame.build(&registry)?.compile(&options)?.plan;
+/// assert_eq!(plan.passes[0].implementation, "simple");
+/// let list = plan.resources.iter().find(|r| r.info.name == "list").unwrap();
+/// assert!(matches!(&list.info.desc, ResourceDesc::Buffer(b) if b.size == 4 * 4096));
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Pipeline {

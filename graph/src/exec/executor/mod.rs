@@ -53,6 +53,54 @@ fn env_switch(name: &str) -> Option<bool> {
 
 /// Runs compiled graphs frame after frame on one device: allocates and pools the physical
 /// resources, caches programs and bind groups, times and reads back.
+///
+/// A frame that copies a caller's texture into a buffer the graph owns, on the first
+/// adapter found (lavapipe where there is no GPU: `scripts/ensure-vulkan.sh` installs it):
+///
+/// ```
+/// use meshlight_graph::synthetic::CopyTextureToBuffer;
+/// use meshlight_graph::*;
+/// use wgpu::util::DeviceExt;
+///
+/// # fn main() -> Result<()> {
+/// // A row of 64 RGBA8 texels is 256 bytes, the alignment texture copies want.
+/// let (width, height) = (64, 2);
+/// let format = wgpu::TextureFormat::Rgba8Unorm;
+/// let usage = wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST;
+///
+/// let mut g = GraphBuilder::new();
+/// g.import_texture("picture", TextureDesc::d2(format, width, height), usage);
+/// let copy = g.create_buffer("copy", BufferDesc::array(Element::U32, (width * height) as u64));
+/// g.export(copy);
+/// let pass = CopyTextureToBuffer { format, width, height };
+/// let bind = Bindings::new().bind_named("texture", "picture").bind("buffer", copy);
+/// g.add_pass("copy", pass, bind)?;
+///
+/// let gpu = GpuContext::with_available(wgpu::Features::empty())?;
+/// let compiled = g.compile(&CompileOptions::for_gpu(&gpu))?;
+/// let mut executor = Executor::new(gpu);
+/// let texels: Vec<u8> = (0..width * height * 4).map(|i| i as u8).collect();
+/// let picture = executor.device().create_texture_with_data(
+///     executor.queue(),
+///     &wgpu::TextureDescriptor {
+///         label: Some("picture"),
+///         size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+///         mip_level_count: 1,
+///         sample_count: 1,
+///         dimension: wgpu::TextureDimension::D2,
+///         format,
+///         usage,
+///         view_formats: &[],
+///     },
+///     wgpu::util::TextureDataOrder::LayerMajor,
+///     &texels,
+/// );
+/// executor.execute(&compiled, &Imports::new().texture("picture", &picture))?;
+/// // Waits for the GPU: for tests and tools; frames read back through the graph.
+/// assert_eq!(executor.read_buffer("copy")?, texels);
+/// # Ok(())
+/// # }
+/// ```
 pub struct Executor {
     /// The device the executor runs on; callers make imported resources and surfaces on it.
     pub gpu: GpuContext,
