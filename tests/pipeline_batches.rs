@@ -3,6 +3,7 @@
 //! UPDATE_SNAPSHOTS=1 to rewrite them after an intended change, then review the diff.
 
 use meshlight::graph::{AdapterClass, CompileOptions, Plan, Recording, dump};
+use meshlight_testing::features::{h200, lavapipe};
 use std::fmt::Write;
 use std::path::Path;
 
@@ -17,22 +18,6 @@ const PIPELINES: [&str; 4] = [
     "prefix_sum",
     "virtual_geometry",
 ];
-
-/// What lavapipe (Mesa 22.3) offers through wgpu 30.
-fn lavapipe() -> wgpu::Features {
-    wgpu::Features::SHADER_INT64
-        | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
-        | wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS
-        | wgpu::Features::SUBGROUP
-        | wgpu::Features::TIMESTAMP_QUERY
-        | wgpu::Features::INDIRECT_FIRST_INSTANCE
-        | wgpu::Features::MULTI_DRAW_INDIRECT_COUNT
-}
-
-/// What the NVIDIA H100/H200 add that changes implementation choices.
-fn nvidia() -> wgpu::Features {
-    lavapipe() | wgpu::Features::TEXTURE_INT64_ATOMIC | wgpu::Features::TEXTURE_ATOMIC
-}
 
 /// The adapter class each feature set stands for: lavapipe is a CPU adapter, the H200
 /// runs graphics on few units.
@@ -83,7 +68,7 @@ fn batches(plan: &Plan) -> String {
 #[test]
 fn every_batch_is_a_run_of_compute_passes_or_one_encoder_pass_in_plan_order() {
     for name in PIPELINES {
-        for features in [lavapipe(), nvidia()] {
+        for features in [lavapipe(), h200()] {
             let plan = plan(name, features);
             let flat: Vec<usize> = plan.batches.iter().flat_map(|b| b.passes.clone()).collect();
             assert_eq!(
@@ -121,7 +106,7 @@ fn batches_of_the_shipped_pipelines_match_their_snapshots() {
         );
         check(
             &format!("{name}.nvidia.batches.txt"),
-            &batches(&plan(name, nvidia())),
+            &batches(&plan(name, h200())),
         );
     }
 }
@@ -269,7 +254,7 @@ fn path_points(d: &str) -> Vec<(f64, f64)> {
 fn svg_boxes_hold_their_text_and_no_edge_crosses_a_box() {
     let mut skipped_seen = 0;
     for name in PIPELINES {
-        for features in [lavapipe(), nvidia()] {
+        for features in [lavapipe(), h200()] {
             let plan = plan(name, features);
             let svg = dump::to_svg(&plan);
             let boxes = drawn_boxes(&svg);

@@ -4,6 +4,27 @@
 
 use meshlight_graph::{GraphError, Result};
 
+/// What lavapipe (Mesa 22.3) offers through wgpu 30 of what the passes use: the features
+/// headless tests plan for when they stand for CI's adapter.
+pub fn lavapipe() -> wgpu::Features {
+    wgpu::Features::SHADER_INT64
+        | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
+        | wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS
+        | wgpu::Features::SUBGROUP
+        | wgpu::Features::TIMESTAMP_QUERY
+        | wgpu::Features::INDIRECT_FIRST_INSTANCE
+        | wgpu::Features::MULTI_DRAW_INDIRECT_COUNT
+}
+
+/// What an NVIDIA H200 (Vulkan) adds that changes implementation choices: 64-bit texture
+/// atomics and mesh shaders.
+pub fn h200() -> wgpu::Features {
+    lavapipe()
+        | wgpu::Features::TEXTURE_INT64_ATOMIC
+        | wgpu::Features::TEXTURE_ATOMIC
+        | wgpu::Features::EXPERIMENTAL_MESH_SHADER
+}
+
 /// `result` of compiling and running a pass that needs `features`: its value where the
 /// test GPU has them. Where it has not, asserts that `result` is the
 /// [`GraphError::MissingFeature`] of the pass named `pass`, naming the feature `named`,

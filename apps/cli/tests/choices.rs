@@ -11,29 +11,11 @@ mod snapshot;
 use meshlight::gpu_scene::SceneData;
 use meshlight::graph::{AdapterClass, CompileOptions, Plan};
 use meshlight_light_clustering::ClusteringSettings;
+use meshlight_testing::features::{h200, lavapipe};
 use meshlight_virtual_geometry::frame_graph::frame;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, scenes};
 use std::fmt::Write;
 use std::path::Path;
-
-/// What lavapipe (Mesa 22.3) offers through wgpu 30.
-fn lavapipe() -> wgpu::Features {
-    wgpu::Features::SHADER_INT64
-        | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX
-        | wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS
-        | wgpu::Features::SUBGROUP
-        | wgpu::Features::TIMESTAMP_QUERY
-        | wgpu::Features::INDIRECT_FIRST_INSTANCE
-        | wgpu::Features::MULTI_DRAW_INDIRECT_COUNT
-}
-
-/// What the H200 adds: 64-bit texture atomics and mesh shaders.
-fn h200() -> wgpu::Features {
-    lavapipe()
-        | wgpu::Features::TEXTURE_INT64_ATOMIC
-        | wgpu::Features::TEXTURE_ATOMIC
-        | wgpu::Features::EXPERIMENTAL_MESH_SHADER
-}
 
 /// Each pass's implementation and why, one line a pass.
 fn choices(plan: &Plan) -> Vec<String> {
