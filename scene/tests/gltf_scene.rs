@@ -8,7 +8,8 @@ mod common;
 use glam::{Mat4, Quat, Vec3};
 use meshlight_scene::SceneError;
 use meshlight_scene::load::{
-    CameraProjection, LoadOptions, load_gltf_scene, load_gltf_scene_with, load_mesh, load_mesh_with,
+    AlphaMode, CameraProjection, DEFAULT_MATERIAL, LoadOptions, load_gltf_scene,
+    load_gltf_scene_with, load_mesh, load_mesh_with,
 };
 use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive};
 use serde_json::json;
@@ -272,6 +273,132 @@ fn a_node_naming_a_missing_camera_is_refused() {
     let e = load_gltf_scene(&path).unwrap_err().to_string();
     assert!(
         e.contains("camera 3") && e.contains("only 0 cameras"),
+        "{e}"
+    );
+}
+
+/// One mesh of five primitives, each its own material (the fifth none: glTF's default).
+fn five_materials(materials: &[serde_json::Value]) -> (GltfWriter, usize) {
+    let mut w = GltfWriter::new();
+    let ids: Vec<usize> = materials.iter().map(|m| w.material(m.clone())).collect();
+    let primitives: Vec<Primitive> = (0..5)
+        .map(|k| {
+            let mut p = quad();
+            for v in &mut p.positions {
+                v[0] += k as f32 * 2.0;
+            }
+            p.material = ids.get(k).copied();
+            p
+        })
+        .collect();
+    let mesh = w.mesh("five", &primitives);
+    let node = w.node(Node {
+        mesh: Some(mesh),
+        ..Node::default()
+    });
+    w.scene(&[node]);
+    (w, mesh)
+}
+
+#[test]
+fn materials_are_read_with_their_factors_and_each_triangle_keeps_its_primitives() {
+    let materials = [
+        json!({"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.4}}),
+        json!({"name": "gold", "pbrMetallicRoughness": {"baseColorFactor": [1.0, 0.8, 0.3, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.2}}),
+        json!({"name": "leaves", "alphaMode": "MASK", "alphaCutoff": 0.3, "doubleSided": true}),
+        json!({"name": "lamp", "emissiveFactor": [2.0, 1.5, 0.5], "alphaMode": "BLEND"}),
+    ];
+    let (w, _) = five_materials(&materials);
+    let dir = common::scratch("gltf-materials");
+    let path = dir.join("five.glb");
+    std::fs::write(&path, w.glb()).unwrap();
+    let scene = load_gltf_scene(&path).unwrap();
+    assert_eq!(scene.materials.len(), 4);
+    let red = &scene.materials[0];
+    assert_eq!(
+        (red.name.as_str(), red.base_color),
+        ("red", [1.0, 0.0, 0.0, 1.0])
+    );
+    assert_eq!((red.metallic, red.roughness), (0.0, 0.4));
+    assert_eq!(scene.materials[1].metallic, 1.0);
+    let leaves = &scene.materials[2];
+    assert_eq!(leaves.alpha, AlphaMode::Mask { cutoff: 0.3 });
+    assert!(leaves.double_sided);
+    // Unset factors take glTF's defaults.
+    assert_eq!(
+        (leaves.base_color, leaves.metallic, leaves.roughness),
+        ([1.0; 4], 1.0, 1.0)
+    );
+    assert_eq!(scene.materials[3].emissive, [2.0, 1.5, 0.5]);
+    assert_eq!(scene.materials[3].alpha, AlphaMode::Blend);
+    // Two triangles per primitive, each with its primitive's material.
+    let m = &scene.meshes[0];
+    assert_eq!(m.mesh.triangle_count(), 10);
+    assert_eq!(
+        m.triangle_materials,
+        [0, 0, 1, 1, 2, 2, 3, 3, DEFAULT_MATERIAL, DEFAULT_MATERIAL]
+    );
+}
+
+fn refused_material(material: serde_json::Value) -> String {
+    let (w, _) = five_materials(&[material]);
+    let dir = common::scratch("gltf-bad-material");
+    let path = dir.join("bad.glb");
+    std::fs::write(&path, w.glb()).unwrap();
+    match load_gltf_scene(&path) {
+        Err(e @ SceneError::Gltf { .. }) => e.to_string(),
+        other => panic!("expected a glTF error, got {other:?}"),
+    }
+}
+
+#[test]
+fn materials_out_of_range_are_refused_naming_the_material_and_the_value() {
+    let e = refused_material(
+        json!({"name": "hot", "pbrMetallicRoughness": {"baseColorFactor": [1.5, 0.0, 0.0, 1.0]}}),
+    );
+    assert!(
+        e.contains("material \"hot\"") && e.contains("baseColorFactor[0] is 1.5"),
+        "{e}"
+    );
+    let e = refused_material(json!({"pbrMetallicRoughness": {"roughnessFactor": -0.25}}));
+    assert!(
+        e.contains("material \"#0\"") && e.contains("roughnessFactor is -0.25"),
+        "{e}"
+    );
+    let e = refused_material(json!({"emissiveFactor": [-1.0, 0.0, 0.0]}));
+    assert!(e.contains("emissiveFactor holds -1"), "{e}");
+    let e = refused_material(json!({"alphaMode": "MASK", "alphaCutoff": -0.5}));
+    assert!(e.contains("alphaCutoff is -0.5"), "{e}");
+    let e = refused_material(json!({"alphaMode": "GLASS"}));
+    assert!(e.contains("not OPAQUE, MASK or BLEND"), "{e}");
+    let e = refused_material(json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 2}}}));
+    assert!(
+        e.contains("base colour texture is texture 2") && e.contains("only 0 textures"),
+        "{e}"
+    );
+    let e = refused_material(json!({"normalTexture": {"index": 0}}));
+    assert!(e.contains("normal texture is texture 0"), "{e}");
+}
+
+#[test]
+fn a_primitive_naming_a_missing_material_is_refused() {
+    let mut w = GltfWriter::new();
+    let mut p = quad();
+    p.material = Some(7);
+    let mesh = w.mesh("quad", &[p]);
+    let node = w.node(Node {
+        mesh: Some(mesh),
+        ..Node::default()
+    });
+    w.scene(&[node]);
+    let dir = common::scratch("gltf-missing-material");
+    let path = dir.join("missing.glb");
+    std::fs::write(&path, w.glb()).unwrap();
+    let e = load_gltf_scene(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("mesh \"quad\" primitive 0")
+            && e.contains("material is 7")
+            && e.contains("only 0 materials"),
         "{e}"
     );
 }

@@ -3,7 +3,9 @@
 //! draw. Only what tests need: float positions, normals and UVs, u32 indices, TRS or
 //! matrix nodes, perspective and orthographic cameras.
 
-use serde_json::{Value, json};
+use serde_json::Value;
+/// For materials and damaged objects given as JSON, without a dependency of the caller's.
+pub use serde_json::json;
 
 /// One triangle primitive.
 #[derive(Clone, Debug, Default)]
@@ -16,6 +18,8 @@ pub struct Primitive {
     pub uvs: Option<Vec<[f32; 2]>>,
     /// Three per triangle.
     pub indices: Vec<u32>,
+    /// Its material, an index the writer returned.
+    pub material: Option<usize>,
 }
 
 /// A node: what it places and where, relative to its parent.
@@ -48,6 +52,7 @@ pub struct GltfWriter {
     meshes: Vec<Value>,
     nodes: Vec<Value>,
     cameras: Vec<Value>,
+    materials: Vec<Value>,
     scene: Vec<usize>,
 }
 
@@ -112,7 +117,11 @@ impl GltfWriter {
                 "SCALAR",
                 p.indices.len(),
             );
-            out.push(json!({ "attributes": attributes, "indices": indices }));
+            let mut primitive = json!({ "attributes": attributes, "indices": indices });
+            if let Some(m) = p.material {
+                primitive["material"] = json!(m);
+            }
+            out.push(primitive);
         }
         self.meshes.push(json!({ "name": name, "primitives": out }));
         self.meshes.len() - 1
@@ -131,6 +140,13 @@ impl GltfWriter {
     pub fn raw_camera(&mut self, camera: Value) -> usize {
         self.cameras.push(camera);
         self.cameras.len() - 1
+    }
+
+    /// Adds a material given as its JSON object (`pbrMetallicRoughness`, `alphaMode`,
+    /// …, or damaged ones); returns its index.
+    pub fn material(&mut self, material: Value) -> usize {
+        self.materials.push(material);
+        self.materials.len() - 1
     }
 
     /// Adds a node; returns its index.
@@ -183,6 +199,9 @@ impl GltfWriter {
         });
         if !self.cameras.is_empty() {
             root["cameras"] = json!(self.cameras);
+        }
+        if !self.materials.is_empty() {
+            root["materials"] = json!(self.materials);
         }
         root
     }

@@ -2,12 +2,14 @@
 //! each node that places it an instance at its world transform, framed by a camera of
 //! the file's or one that sees the whole scene.
 
-use crate::scenes::{Placed, palette};
+use crate::scenes::Placed;
 use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::view::Projection;
-use meshlight::gpu_scene::{Camera, MeshId, SceneData, SceneDataError};
+use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData, SceneDataError};
 use meshlight::scene::cache;
-use meshlight::scene::load::{CameraProjection, GltfScene, SceneCamera, load_gltf_scene};
+use meshlight::scene::load::{
+    CameraProjection, DEFAULT_MATERIAL, GltfScene, SceneCamera, load_gltf_scene,
+};
 use meshlight::scene::{BuildOptions, SceneError};
 use meshlight::shaders::cpu::layout::{ClusterableKind, ClusterableObject};
 use std::collections::BTreeMap;
@@ -57,8 +59,10 @@ pub fn is_gltf(path: &Path) -> bool {
 /// the file's cameras (in the scene's node order); `None` frames the whole scene from
 /// the front, above and to the right.
 ///
-/// Materials are not read yet: each mesh takes a colour of its own from the palette.
-/// A node whose transform mirrors places a copy of its mesh with the winding reversed
+/// Each mesh is drawn in its material's base colour factor (glTF's default material is
+/// white). Until assets record a material per meshlet, a mesh of several materials takes
+/// the one covering most of its triangles, and a warning names it; textures are not read
+/// yet. A node whose transform mirrors places a copy of its mesh with the winding reversed
 /// (baked once too), since the rasterisers keep counter-clockwise faces.
 pub fn gltf_scene(
     data: SceneData,
@@ -87,7 +91,7 @@ pub fn place(
                 })
         })
         .transpose()?;
-    let colours = palette(&mut data);
+    let colours = mesh_colours(&mut data, scene);
     // (mesh, mirrored) → the GPU scene's mesh and its bounds, baked on first use.
     let mut baked: BTreeMap<(usize, bool), (MeshId, [Vec3; 2])> = BTreeMap::new();
     let (mut low, mut high) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
@@ -119,7 +123,7 @@ pub fn place(
                 known
             }
         };
-        let colour = colours[instance.mesh % colours.len()];
+        let colour = colours[instance.mesh];
         if data
             .add_instance(mesh, instance.transform, colour)?
             .is_some()
@@ -141,6 +145,46 @@ pub fn place(
         None => framing_camera(low, high),
     };
     Ok(Placed { data, camera })
+}
+
+/// Per mesh of `scene`, the material of `data` it is drawn in: its glTF material's base
+/// colour (one GPU material per glTF material used, glTF's white default where a
+/// primitive names none).
+fn mesh_colours(data: &mut SceneData, scene: &GltfScene) -> Vec<u32> {
+    let mut added: BTreeMap<u32, u32> = BTreeMap::new();
+    scene
+        .meshes
+        .iter()
+        .map(|m| {
+            let mut counts: BTreeMap<u32, usize> = BTreeMap::new();
+            for &t in &m.triangle_materials {
+                *counts.entry(t).or_default() += 1;
+            }
+            // The most triangles; the lowest index among equals, so the choice is stable.
+            let (&chosen, _) = counts
+                .iter()
+                .max_by_key(|&(&k, &n)| (n, std::cmp::Reverse(k)))
+                .unwrap_or((&DEFAULT_MATERIAL, &0));
+            let material = scene.materials.get(chosen as usize);
+            if counts.len() > 1 {
+                log::warn!(
+                    "{}: mesh {:?} has {} materials; until assets record a material per \
+                     meshlet it is drawn in the base colour of {:?}, which covers the most \
+                     triangles",
+                    scene.source,
+                    m.name,
+                    counts.len(),
+                    material.map_or("the default material", |m| m.name.as_str())
+                );
+            }
+            *added.entry(chosen).or_insert_with(|| {
+                let [r, g, b, _] = material.map_or([1.0; 4], |m| m.base_color);
+                data.add_material(Material {
+                    base_color: [r, g, b],
+                })
+            })
+        })
+        .collect()
 }
 
 /// The camera a glTF node carries: at the node's origin, looking down its -Z axis with

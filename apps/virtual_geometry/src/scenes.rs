@@ -61,8 +61,7 @@ pub struct Placed {
     pub camera: Camera,
 }
 
-/// Six distinct flat colours added to `data` as materials; copies and meshes take turns.
-pub(crate) fn palette(data: &mut SceneData) -> Vec<u32> {
+fn palette(data: &mut SceneData) -> Vec<u32> {
     [
         [0.80, 0.34, 0.24],
         [0.86, 0.70, 0.30],

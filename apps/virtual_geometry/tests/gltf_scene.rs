@@ -8,7 +8,7 @@ use meshlight::gpu_scene::{Material, SceneData};
 use meshlight::scene::BuildOptions;
 use meshlight::scene::cache;
 use meshlight::scene::load::load_gltf_scene;
-use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive};
+use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive, json};
 use meshlight_virtual_geometry::gltf_scene::{GltfSceneError, file_camera, gltf_scene, place};
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer};
 use std::path::{Path, PathBuf};
@@ -296,4 +296,41 @@ fn the_files_cameras_are_offered_and_a_missing_one_is_an_error() {
             );
         }
     }
+}
+
+/// Each mesh is drawn in its glTF material's base colour; one of several materials takes
+/// the one covering most triangles; a mesh without a material is white.
+#[test]
+fn meshes_take_their_materials_base_colour() {
+    let mut w = GltfWriter::new();
+    let red = w.material(json!({"name": "red",
+        "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.1, 0.1, 1.0]}}));
+    let blue = w.material(json!({"name": "blue",
+        "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.2, 0.9, 1.0]}}));
+    let with = |material: Option<usize>, p: Primitive| Primitive { material, ..p };
+    let ball = w.mesh("ball", &[with(Some(red), sphere(8, 16))]);
+    // The cube's 12 triangles are blue, the small sphere's 256 red: red covers most.
+    let mixed = w.mesh(
+        "mixed",
+        &[with(Some(blue), cube()), with(Some(red), sphere(8, 16))],
+    );
+    let plain = w.mesh("plain", &[cube()]);
+    let nodes = [ball, mixed, plain].map(|mesh| {
+        w.node(Node {
+            mesh: Some(mesh),
+            translation: Some([mesh as f32 * 3.0, 0.0, 0.0]),
+            ..Node::default()
+        })
+    });
+    w.scene(&nodes);
+    let path = scratch("materials").join("materials.glb");
+    std::fs::write(&path, w.glb()).unwrap();
+    let placed = gltf_scene(SceneData::new(Limits::default()), &path, None).unwrap();
+    let colour =
+        |i: usize| placed.data.materials[placed.data.instances[i].material as usize].base_color;
+    assert_eq!(colour(0), [0.9, 0.1, 0.1, 1.0]);
+    assert_eq!(colour(1), [0.9, 0.1, 0.1, 1.0]);
+    assert_eq!(colour(2), [1.0, 1.0, 1.0, 1.0]);
+    // One GPU material per glTF material used, and the default.
+    assert_eq!(placed.data.materials.len(), 2);
 }

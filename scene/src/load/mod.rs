@@ -11,8 +11,9 @@ use crate::error::SceneError;
 use crate::mesh::{MAX_TRIANGLES, Mesh};
 
 pub use self::gltf::{
-    CameraProjection, GltfScene, SceneCamera, SceneInstance, SceneMesh, load_gltf, load_gltf_scene,
-    load_gltf_scene_with, load_gltf_with, percent_decode,
+    AlphaMode, CameraProjection, DEFAULT_MATERIAL, GltfScene, SceneCamera, SceneInstance,
+    SceneMaterial, SceneMesh, TextureRef, load_gltf, load_gltf_scene, load_gltf_scene_with,
+    load_gltf_with, percent_decode,
 };
 pub use self::obj::{load_obj, parse_obj};
 pub use self::stl::{load_stl, parse_stl};

@@ -12,6 +12,8 @@
 mod accessor;
 mod buffers;
 pub use buffers::percent_decode;
+mod materials;
+pub use materials::{AlphaMode, DEFAULT_MATERIAL, SceneMaterial, TextureRef};
 mod nodes;
 mod scene;
 pub use scene::{
@@ -57,7 +59,7 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
     {
         let Some(m) = mesh else { continue };
         if meshes[*m].is_none() {
-            meshes[*m] = Some(file.read_mesh(&buffers, *m)?);
+            meshes[*m] = Some(file.read_mesh(&buffers, *m)?.map(|(mesh, _)| mesh));
         }
         let Some(Some(part)) = &meshes[*m] else {
             continue;
@@ -219,10 +221,15 @@ impl<'p> GltfFile<'p> {
         load_buffers(self.root(), self.gltf.blob.clone(), self.path)
     }
 
-    /// Mesh `mi`'s triangle primitives merged, in the mesh's own space; `None` when it
-    /// has none (points or lines only, each skipped with a warning). Normals are kept
+    /// Mesh `mi`'s triangle primitives merged, in the mesh's own space, with each
+    /// triangle's material (its primitive's, or [`DEFAULT_MATERIAL`]); `None` when it has
+    /// no triangles (points or lines only, each skipped with a warning). Normals are kept
     /// only where every primitive has them, UVs likewise.
-    fn read_mesh(&self, buffers: &[Vec<u8>], mi: usize) -> Result<Option<Mesh>, SceneError> {
+    fn read_mesh(
+        &self,
+        buffers: &[Vec<u8>],
+        mi: usize,
+    ) -> Result<Option<(Mesh, Vec<u32>)>, SceneError> {
         let root = self.root();
         let path = self.path;
         let position = Checked::Valid(gltf::Semantic::Positions);
@@ -234,6 +241,7 @@ impl<'p> GltfFile<'p> {
             ..Mesh::default()
         };
         let (mut normals_complete, mut uvs_complete, mut any) = (true, true, false);
+        let mut materials = Vec::new();
         for (pi, p) in root.meshes[mi].primitives.iter().enumerate() {
             let at = |e: String| self.err(format!("mesh {name:?} primitive {pi}: {e}"));
             match p.mode {
@@ -252,6 +260,17 @@ impl<'p> GltfFile<'p> {
                 }
             }
             any = true;
+            let material = match p.material {
+                Some(m) if m.value() >= root.materials.len() => {
+                    return Err(at(format!(
+                        "its material is {}, but the file has only {} materials",
+                        m.value(),
+                        root.materials.len()
+                    )));
+                }
+                Some(m) => m.value() as u32,
+                None => DEFAULT_MATERIAL,
+            };
             let pos = check(
                 root,
                 buffers,
@@ -340,6 +359,7 @@ impl<'p> GltfFile<'p> {
                 });
             }
             mesh.indices.extend(indices.iter().map(|&i| i + base));
+            materials.extend(std::iter::repeat_n(material, indices.len() / 3));
             Mesh::check_limits(&mesh.source, 0, (mesh.indices.len() / 3) as u64)?;
         }
         if !any {
@@ -351,7 +371,7 @@ impl<'p> GltfFile<'p> {
         if !uvs_complete {
             mesh.uvs.clear();
         }
-        Ok(Some(mesh))
+        Ok(Some((mesh, materials)))
     }
 }
 

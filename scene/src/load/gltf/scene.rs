@@ -9,6 +9,7 @@ use glam::Mat4;
 use gltf::json::validation::Checked;
 
 use super::GltfFile;
+use super::materials::{SceneMaterial, read_materials};
 use super::nodes::Placement;
 use crate::error::SceneError;
 use crate::load::LoadOptions;
@@ -26,6 +27,8 @@ pub struct GltfScene {
     pub instances: Vec<SceneInstance>,
     /// The cameras the scene's nodes carry, in the same order.
     pub cameras: Vec<SceneCamera>,
+    /// The file's materials, which [`SceneMesh::triangle_materials`] index.
+    pub materials: Vec<SceneMaterial>,
 }
 
 /// One mesh of a scene.
@@ -35,6 +38,9 @@ pub struct SceneMesh {
     pub name: String,
     /// Its triangle primitives merged (see [`super::load_gltf`] for what is kept).
     pub mesh: Mesh,
+    /// Each triangle's material: its primitive's, an index into
+    /// [`GltfScene::materials`], or [`super::DEFAULT_MATERIAL`].
+    pub triangle_materials: Vec<u32>,
 }
 
 /// One node placing a mesh.
@@ -97,6 +103,7 @@ pub fn load_gltf_scene(path: &Path) -> Result<GltfScene, SceneError> {
 pub fn load_gltf_scene_with(path: &Path, options: &LoadOptions) -> Result<GltfScene, SceneError> {
     let file = GltfFile::open(path)?;
     let placed = file.placements(None)?;
+    let materials = read_materials(&file)?;
     let root = file.root();
 
     // The distinct meshes placed, in the order of their first placement, and what they
@@ -125,11 +132,12 @@ pub fn load_gltf_scene_with(path: &Path, options: &LoadOptions) -> Result<GltfSc
     let mut read: Vec<Option<usize>> = vec![None; used.len()];
     let mut meshes = Vec::new();
     for (k, &m) in used.iter().enumerate() {
-        if let Some(mesh) = file.read_mesh(&buffers, m)? {
+        if let Some((mesh, triangle_materials)) = file.read_mesh(&buffers, m)? {
             read[k] = Some(meshes.len());
             meshes.push(SceneMesh {
                 name: file.mesh_name(m),
                 mesh,
+                triangle_materials,
             });
         }
     }
@@ -158,6 +166,7 @@ pub fn load_gltf_scene_with(path: &Path, options: &LoadOptions) -> Result<GltfSc
         meshes,
         instances,
         cameras,
+        materials,
     })
 }
 
