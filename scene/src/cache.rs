@@ -79,10 +79,31 @@ pub fn cache_dir() -> PathBuf {
 
 /// The cache key of a source baked with `options`; reads the source file.
 pub fn key(source: &Source, options: &BuildOptions) -> Result<u64, SceneError> {
-    let mut bytes = match source {
+    let bytes = match source {
         Source::File(path) => std::fs::read(path).map_err(|e| SceneError::io(path, e))?,
         Source::Procedural { segments } => format!("procedural:{segments}").into_bytes(),
     };
+    Ok(key_of(bytes, options))
+}
+
+/// The cache key of a mesh already in memory (one mesh of a glTF scene): its content,
+/// so the same mesh in two files, or a file edited elsewhere, bakes once.
+pub fn mesh_key(mesh: &Mesh, options: &BuildOptions) -> u64 {
+    let mut bytes = b"mesh:".to_vec();
+    for part in [
+        bytemuck::cast_slice::<_, u8>(&mesh.positions),
+        bytemuck::cast_slice(&mesh.normals),
+        bytemuck::cast_slice(&mesh.uvs),
+        bytemuck::cast_slice(&mesh.indices),
+    ] {
+        bytes.extend_from_slice(&(part.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(part);
+    }
+    key_of(bytes, options)
+}
+
+/// What every key hashes after the input: the options, the format, the builder.
+fn key_of(mut bytes: Vec<u8>, options: &BuildOptions) -> u64 {
     bytes.extend(
         format!(
             "|{:?}|{}|weld {:e}|format {VERSION}|builder {} r{BUILDER_REVISION}",
@@ -93,7 +114,7 @@ pub fn key(source: &Source, options: &BuildOptions) -> Result<u64, SceneError> {
         )
         .into_bytes(),
     );
-    Ok(xxh3_64(&bytes))
+    xxh3_64(&bytes)
 }
 
 /// The asset of `source` from the cache in `dir`, or baked (with `progress` after each
@@ -104,7 +125,31 @@ pub fn load_or_bake(
     dir: &Path,
     progress: &mut dyn FnMut(LevelProgress),
 ) -> Result<(MeshletAsset, Outcome), SceneError> {
-    let path = dir.join(format!("{:016x}.mlasset", key(source, options)?));
+    let key = key(source, options)?;
+    cached_or_built(key, dir, || {
+        build_asset(&load_source(source)?, options, progress).map(|b| b.asset)
+    })
+}
+
+/// The asset of a mesh in memory (one mesh of a glTF scene) from the cache in `dir`,
+/// keyed by its content ([`mesh_key`]), or baked and stored there.
+pub fn load_or_bake_mesh(
+    mesh: &Mesh,
+    options: &BuildOptions,
+    dir: &Path,
+    progress: &mut dyn FnMut(LevelProgress),
+) -> Result<(MeshletAsset, Outcome), SceneError> {
+    cached_or_built(mesh_key(mesh, options), dir, || {
+        build_asset(mesh, options, progress).map(|b| b.asset)
+    })
+}
+
+fn cached_or_built(
+    key: u64,
+    dir: &Path,
+    build: impl FnOnce() -> Result<MeshletAsset, SceneError>,
+) -> Result<(MeshletAsset, Outcome), SceneError> {
+    let path = dir.join(format!("{key:016x}.mlasset"));
     if path.exists() {
         // Every check `inspect` runs (a few times the plain load): a cache entry that a
         // bug or a disk damaged in a way the checksum cannot see is baked again, never
@@ -117,16 +162,15 @@ pub fn load_or_bake(
             ),
         }
     }
-    let mesh = load_source(source)?;
-    let built = build_asset(&mesh, options, progress)?;
-    let outcome = match store(&built.asset, dir, &path) {
+    let asset = build()?;
+    let outcome = match store(&asset, dir, &path) {
         Ok(()) => Outcome::Baked,
         Err(e) => {
             log::warn!("could not cache the baked asset in {}: {e}", dir.display());
             Outcome::BakedUncached
         }
     };
-    Ok((built.asset, outcome))
+    Ok((asset, outcome))
 }
 
 fn load_source(source: &Source) -> Result<Mesh, SceneError> {

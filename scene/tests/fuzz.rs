@@ -16,7 +16,7 @@ use meshlight_scene::asset::format::{
     AssetHeader, GroupRecord, MeshletRecord, NodeRecord, SECTION_CHILDREN, SECTION_GROUPS,
     SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES, SECTION_PAYLOAD,
 };
-use meshlight_scene::load::{load_mesh, parse_obj, parse_stl};
+use meshlight_scene::load::{load_gltf_scene, load_mesh, parse_obj, parse_stl};
 use meshlight_scene::{
     BuildOptions, Mesh, MeshletAsset, SceneError, Terrain, build_asset, procedural_mesh,
 };
@@ -56,6 +56,16 @@ where
 fn build_if_loaded(mesh: Result<Mesh, meshlight_scene::SceneError>) {
     if let Ok(mesh) = mesh {
         let _ = build_asset(&mesh, &BuildOptions::default(), &mut |_| {});
+    }
+}
+
+/// A glTF file both ways: merged into one mesh, and as a scene (each of its meshes built).
+fn build_gltf_if_loaded(path: &Path) {
+    build_if_loaded(load_mesh(path));
+    if let Ok(scene) = load_gltf_scene(path) {
+        for m in scene.meshes {
+            build_if_loaded(Ok(m.mesh));
+        }
     }
 }
 
@@ -683,7 +693,7 @@ fn fuzz_stl_loader() {
     });
 }
 
-/// A small valid glTF: two nodes instancing a tetrahedron with UVs.
+/// A small valid glTF: two nodes instancing a tetrahedron with UVs, and a camera node.
 fn gltf_text() -> String {
     let (p, idx) = common::tetrahedron();
     let mut buf: Vec<u8> = bytemuck::cast_slice(&p).to_vec();
@@ -692,7 +702,8 @@ fn gltf_text() -> String {
     buf.extend_from_slice(bytemuck::cast_slice(&uvs));
     format!(
         r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
-        "nodes":[{{"children":[1,2]}},{{"mesh":0,"translation":[10,0,0]}},{{"mesh":0,"scale":[-1,1,1]}}],
+        "nodes":[{{"children":[1,2,3]}},{{"mesh":0,"translation":[10,0,0]}},{{"mesh":0,"scale":[-1,1,1]}},{{"camera":0,"translation":[0,1,5]}}],
+        "cameras":[{{"type":"perspective","perspective":{{"yfov":0.8,"znear":0.1}}}}],
         "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":2}},"indices":1,"mode":4}}]}}],
         "buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],
         "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":48}},{{"buffer":0,"byteOffset":48,"byteLength":24}},{{"buffer":0,"byteOffset":72,"byteLength":32,"byteStride":8}}],
@@ -775,7 +786,7 @@ fn fuzz_gltf_loader() {
         }
         let path = dir.join("fuzz.gltf");
         std::fs::write(&path, t).unwrap();
-        build_if_loaded(load_mesh(&path));
+        build_gltf_if_loaded(&path);
     });
 }
 
@@ -815,6 +826,6 @@ fn fuzz_glb_loader() {
         b.truncate(b.len() - cut * 7);
         let path = dir.join("fuzz.glb");
         std::fs::write(&path, b).unwrap();
-        build_if_loaded(load_mesh(&path));
+        build_gltf_if_loaded(&path);
     });
 }

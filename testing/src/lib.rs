@@ -3,6 +3,7 @@
 
 pub mod features;
 pub mod frames;
+pub mod gltf_writer;
 pub mod pass_errors;
 pub mod shader_variants;
 pub mod xvfb;

@@ -13,9 +13,21 @@ use std::path::PathBuf;
 /// The scene `render` and `view` draw.
 #[derive(clap::Args)]
 pub struct SceneArgs {
-    /// Mesh file (.obj, .gltf, .glb, .stl, or a baked .mlasset), or `procedural`.
+    /// Mesh file (.obj, .gltf, .glb, .stl, or a baked .mlasset), or `procedural`. A glTF
+    /// file is drawn as its scene: each mesh baked once, each node that places it an
+    /// instance, framed by a camera that sees it all (--camera-index picks one of the
+    /// file's); --instances and the field apply to the other formats, or to a glTF file
+    /// with --merge-gltf.
     #[arg(long, default_value = "procedural")]
     pub mesh: PathBuf,
+    /// Bake a glTF file's scene into one mesh and place copies of it on the field, as for
+    /// the other formats.
+    #[arg(long)]
+    pub merge_gltf: bool,
+    /// Look through the glTF scene's camera N (0 is the first camera node in the
+    /// scene's order) instead of one that frames the scene.
+    #[arg(long, value_name = "N")]
+    pub camera_index: Option<usize>,
     /// Tube segments of the procedural mesh (16 × segments² triangles; 256 ≈ 1M).
     #[arg(long, default_value_t = DEFAULT_SEGMENTS)]
     pub segments: u32,
@@ -64,6 +76,8 @@ impl SceneArgs {
             view: self.view,
             width: self.width,
             height: self.height,
+            merge_gltf: self.merge_gltf,
+            camera: self.camera_index,
         }
     }
 }

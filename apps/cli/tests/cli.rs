@@ -728,3 +728,84 @@ fn bake_refuses_options_out_of_bounds_when_parsing() {
         "{help}"
     );
 }
+
+/// A glTF file of two tetrahedra on two nodes and a camera, written for the test.
+fn two_node_scene(dir: &Path) -> std::path::PathBuf {
+    use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive};
+    let mut w = GltfWriter::new();
+    let tet = w.mesh(
+        "tetrahedron",
+        &[Primitive {
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            indices: vec![0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3],
+            ..Primitive::default()
+        }],
+    );
+    let camera = w.perspective_camera("eye", 0.8, 0.1);
+    let nodes = [0.0f32, 2.0].map(|x| {
+        w.node(Node {
+            mesh: Some(tet),
+            translation: Some([x, 0.0, 0.0]),
+            ..Node::default()
+        })
+    });
+    let eye = w.node(Node {
+        camera: Some(camera),
+        translation: Some([1.0, 0.5, 6.0]),
+        ..Node::default()
+    });
+    w.scene(&[nodes[0], nodes[1], eye]);
+    let path = dir.join("two.glb");
+    std::fs::write(&path, w.glb()).unwrap();
+    path
+}
+
+#[test]
+fn render_draws_a_gltf_file_as_its_scene_and_offers_its_cameras() {
+    let dir = scratch("gltf-scene");
+    let glb = two_node_scene(&dir);
+    let png = dir.join("two.png");
+    let base = [
+        "render",
+        "--mesh",
+        glb.to_str().unwrap(),
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "-o",
+        png.to_str().unwrap(),
+    ];
+    let out = meshlight_ok(&base);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("2 instances"), "{stdout}");
+    let mut through = base.to_vec();
+    through.extend(["--camera-index", "0"]);
+    meshlight_ok(&through);
+    let mut merged = base.to_vec();
+    merged.extend(["--merge-gltf", "--instances", "3"]);
+    let out = meshlight_ok(&merged);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    // Three copies of the merged file on the field, and the ground.
+    assert!(stdout.contains("4 instances"), "{stdout}");
+
+    let mut missing = base.to_vec();
+    missing.extend(["--camera-index", "1"]);
+    let out = meshlight(&missing);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("camera 1 asked for"),
+        "{err}"
+    );
+    let out = meshlight(&["render", "--camera-index", "0", "-o", png.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("only for a glTF scene"),
+        "{err}"
+    );
+}

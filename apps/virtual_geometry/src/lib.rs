@@ -20,6 +20,7 @@
 
 pub mod counts;
 pub mod frame_graph;
+pub mod gltf_scene;
 pub mod renderer;
 pub mod scenes;
 pub mod settings;

@@ -4,12 +4,15 @@
 //! [`setup`], so a window and a still of the same options draw the same frame.
 
 use crate::frame_graph::GraphSource;
+use crate::gltf_scene::{self, GltfSceneError};
 use crate::scenes;
 use crate::settings::FrameSettings;
 use meshlight::gpu_scene::{Camera, SceneData, SceneDataError, data::Limits};
 use meshlight::graph::{GpuAdapter, GraphError};
 use meshlight::resolve::DebugView;
+use meshlight::scene::MeshletAsset;
 use meshlight::scene::SceneError;
+use meshlight::scene::load::{GltfScene, load_gltf_scene};
 use meshlight::shaders::cpu::layout::ClusterableObject;
 use meshlight_light_clustering::ClusteringSettings;
 use std::path::PathBuf;
@@ -40,6 +43,11 @@ pub struct SceneOptions {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// A glTF file is drawn as its scene (its meshes at its nodes); true bakes it as one
+    /// mesh and places copies of it on the field, as for other mesh files.
+    pub merge_gltf: bool,
+    /// One of a glTF scene's cameras (in its node order); `None` frames the scene.
+    pub camera: Option<usize>,
 }
 
 impl SceneOptions {
@@ -54,7 +62,14 @@ impl SceneOptions {
             view: None,
             width,
             height,
+            merge_gltf: false,
+            camera: None,
         }
+    }
+
+    /// Whether the mesh argument is drawn as a glTF scene rather than copies of one mesh.
+    pub fn is_gltf_scene(&self) -> bool {
+        gltf_scene::is_gltf(&self.mesh) && !self.merge_gltf
     }
 
     /// Whether the graph clusters lights: the shipped frame does, a pipeline file does
@@ -122,30 +137,54 @@ pub enum SetupError {
     /// The scene does not fit the GPU buffers.
     #[error(transparent)]
     SceneData(#[from] SceneDataError),
+    /// A glTF scene.
+    #[error(transparent)]
+    GltfScene(#[from] GltfSceneError),
+}
+
+/// What the mesh argument gave: a glTF scene, or one mesh to place copies of.
+enum Loaded {
+    Scene(GltfScene),
+    Copies(MeshletAsset),
 }
 
 /// Checks the pipeline file, loads (or bakes) the mesh, places its copies and lights on
-/// the field, sized for the adapter the frame will run on, and fills the frame settings.
+/// the field (or a glTF file's meshes at its nodes), sized for the adapter the frame will
+/// run on, and fills the frame settings.
 pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     o.check_pipeline()?;
-    let asset = scenes::load_asset(&o.mesh, o.segments)?;
+    if o.camera.is_some() && !o.is_gltf_scene() {
+        return Err(GltfSceneError::NotAScene {
+            mesh: o.mesh.display().to_string(),
+        }
+        .into());
+    }
+    // Read (and baked) before the adapter is asked for, so a bad file costs nothing.
+    let loaded = match o.is_gltf_scene() {
+        true => Loaded::Scene(load_gltf_scene(&o.mesh)?),
+        false => Loaded::Copies(scenes::load_asset(&o.mesh, o.segments)?),
+    };
     // The scene's buffers are bound whole: sized for the adapter the frame will run on.
     let adapter = GpuAdapter::select()?;
     let limits = Limits::for_device(&adapter.adapter.limits());
     drop(adapter);
     let data = SceneData::new(limits);
-    let placed = if o.instances == 1 {
-        scenes::single(data, &asset)?
-    } else {
-        scenes::field(data, &asset, o.instances)?
+    let placed = match &loaded {
+        Loaded::Scene(scene) => gltf_scene::place(data, scene, o.camera)?,
+        Loaded::Copies(asset) if o.instances == 1 => scenes::single(data, asset)?,
+        Loaded::Copies(asset) => scenes::field(data, asset, o.instances)?,
     };
     let mut settings = FrameSettings::new(o.width, o.height);
     // A view given wins over a pipeline file's; none given leaves the file's.
     settings.view = o.view;
-    let lights = if o.instances > 1 {
-        scenes::field_lights(&placed, o.lights_asked())
-    } else {
-        Vec::new()
+    let lights = match (&loaded, o.lights) {
+        // A scene is lit by the sun and the sky unless lights are asked for.
+        (Loaded::Scene(_), Some(n)) => gltf_scene::scene_lights(&placed, n),
+        (Loaded::Scene(_), None) => Vec::new(),
+        (Loaded::Copies(_), _) if o.instances > 1 => {
+            scenes::field_lights(&placed, o.lights_asked())
+        }
+        (Loaded::Copies(_), _) => Vec::new(),
     };
     if !lights.is_empty() || o.view.is_some_and(|v| v.needs_lights()) {
         let mut clustering =

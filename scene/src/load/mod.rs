@@ -10,7 +10,11 @@ use std::path::Path;
 use crate::error::SceneError;
 use crate::mesh::{MAX_TRIANGLES, Mesh};
 
-pub use self::gltf::{load_gltf, load_gltf_with, percent_decode};
+pub use self::gltf::{
+    AlphaMode, CameraProjection, DEFAULT_MATERIAL, GltfScene, SceneCamera, SceneInstance,
+    SceneMaterial, SceneMesh, TextureRef, load_gltf, load_gltf_scene, load_gltf_scene_with,
+    load_gltf_with, percent_decode,
+};
 pub use self::obj::{load_obj, parse_obj};
 pub use self::stl::{load_stl, parse_stl};
 

@@ -11,24 +11,4 @@ pub fn tetrahedron_buffer() -> Vec<u8> {
     buf
 }
 
-/// A GLB file: the header, `json` as the JSON chunk (padded with spaces, as the format
-/// wants every chunk a multiple of 4 bytes) and `bin`, already so padded, as the binary
-/// chunk.
-pub fn glb_container(json: &str, bin: &[u8]) -> Vec<u8> {
-    assert!(bin.len().is_multiple_of(4), "pad the binary chunk first");
-    let mut json = json.as_bytes().to_vec();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let mut glb = Vec::new();
-    glb.extend_from_slice(b"glTF");
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&((12 + 8 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
-    glb.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"JSON");
-    glb.extend_from_slice(&json);
-    glb.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    glb.extend_from_slice(b"BIN\0");
-    glb.extend_from_slice(bin);
-    glb
-}
+pub use meshlight_testing::gltf_writer::glb_container;

@@ -1,5 +1,8 @@
-//! glTF 2.0 (.gltf with external or embedded buffers, and .glb): every triangle
-//! primitive of the default scene, with node transforms applied, merged into one mesh.
+//! glTF 2.0 (.gltf with external or embedded buffers, and .glb). A file's default scene
+//! is read two ways: kept as a scene ([`load_gltf_scene`]: each mesh read once, in its
+//! own space, and each node that places it an instance with its world transform, plus
+//! the cameras the nodes carry), or merged into one mesh with the node transforms
+//! applied ([`load_gltf`]), for baking one asset from a file.
 //!
 //! The file is parsed without the crate's validation and read from its JSON directly:
 //! the node tree is expanded by [`nodes`] (cycles and runaway instancing refused before
@@ -9,17 +12,24 @@
 mod accessor;
 mod buffers;
 pub use buffers::percent_decode;
+mod materials;
+pub use materials::{AlphaMode, DEFAULT_MATERIAL, SceneMaterial, TextureRef};
 mod nodes;
+mod scene;
+pub use scene::{
+    CameraProjection, GltfScene, SceneCamera, SceneInstance, SceneMesh, load_gltf_scene,
+    load_gltf_scene_with,
+};
 
 use std::path::Path;
 
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Mat4, Vec3};
 use gltf::json::validation::Checked;
 use gltf::json::{Root, mesh::Mode};
 
 use self::accessor::{Role, check, declared_count};
 use self::buffers::load_buffers;
-use self::nodes::{Instance, NodeError, expand};
+use self::nodes::{NodeError, Placement, expand};
 use crate::error::SceneError;
 use crate::load::{LoadOptions, read_file};
 use crate::mesh::Mesh;
@@ -29,100 +39,211 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
     load_gltf_with(path, &LoadOptions::default())
 }
 
-/// Reads the glTF or GLB file at `path`, refusing a node tree that would expand beyond
-/// `options.max_triangles` before expanding it.
+/// Reads the glTF or GLB file at `path` as one mesh: every triangle primitive of every
+/// node's mesh, transformed into world space, refusing a node tree that would expand
+/// beyond `options.max_triangles` before expanding it.
 pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneError> {
-    let budget = options.max_triangles;
-    let bytes = read_file(path)?;
-    let err = |reason: String| SceneError::Gltf {
-        path: path.to_owned(),
-        reason,
-    };
-    check_glb_header(&bytes).map_err(err)?;
-    let gltf = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(e.to_string()))?;
-    let root: &Root = gltf.document.as_json();
-    let position = Checked::Valid(gltf::Semantic::Positions);
-    let normal = Checked::Valid(gltf::Semantic::Normals);
-    let texcoord = Checked::Valid(gltf::Semantic::TexCoords(0));
-    let mesh_name = |mi: usize| {
-        root.meshes[mi]
-            .name
-            .clone()
-            .unwrap_or_else(|| format!("#{mi}"))
-    };
-
-    // Per mesh: the triangles its accessors declare, which bounds the node expansion.
-    let mut mesh_triangles = Vec::with_capacity(root.meshes.len());
-    for (mi, m) in root.meshes.iter().enumerate() {
-        let mut triangles = 0u64;
-        for (pi, p) in m.primitives.iter().enumerate() {
-            let Some(&pos) = p.attributes.get(&position) else {
-                return Err(SceneError::GltfMissingPosition {
-                    path: path.to_owned(),
-                    mesh: mesh_name(mi),
-                    primitive: pi,
-                });
-            };
-            let at = |e: String| err(format!("mesh {:?} primitive {pi}: {e}", mesh_name(mi)));
-            let corners = match p.indices {
-                Some(i) => declared_count(root, i.value(), Role::Indices).map_err(at)?,
-                None => declared_count(root, pos.value(), Role::Position).map_err(at)?,
-            };
-            triangles = triangles.saturating_add(corners / 3);
-        }
-        mesh_triangles.push(triangles);
-    }
-
-    let scene = root.scene.map(|s| s.value()).or(if root.scenes.is_empty() {
-        None
-    } else {
-        Some(0)
-    });
-    let instances = match scene {
-        Some(s) => {
-            let scene = root.scenes.get(s).ok_or_else(|| {
-                err(format!(
-                    "the default scene is {s}, but the file has only {} scenes",
-                    root.scenes.len()
-                ))
-            })?;
-            let roots: Vec<usize> = scene.nodes.iter().map(|n| n.value()).collect();
-            expand(root, &roots, &mesh_triangles, budget)
-                .map_err(|e| node_error(path, root, e, budget))?
-        }
-        // No scene: every mesh untransformed rather than nothing.
-        None => {
-            let total: u64 = mesh_triangles.iter().fold(0, |a, &t| a.saturating_add(t));
-            Mesh::check_limits(&path.display().to_string(), 0, total)?;
-            if total > budget {
-                return Err(over_budget(path, total, budget));
-            }
-            (0..root.meshes.len())
-                .map(|mesh| Instance {
-                    mesh,
-                    transform: glam::Mat4::IDENTITY,
-                })
-                .collect()
-        }
-    };
-
-    let buffers = load_buffers(root, gltf.blob.clone(), path)?;
-
-    let mut mesh = Mesh {
+    let file = GltfFile::open(path)?;
+    let placed = file.placements(Some(options.max_triangles))?;
+    let buffers = file.buffers()?;
+    // Each mesh read once, however many nodes place it.
+    let mut meshes: Vec<Option<Option<Mesh>>> = vec![None; file.root().meshes.len()];
+    let mut merged = Mesh {
         source: path.display().to_string(),
         ..Mesh::default()
     };
-    let mut any_missing_uv = false;
-    let mut uv_parts: Vec<Option<Vec<[f32; 2]>>> = Vec::new();
-    let mut normals_complete = true;
-    for Instance {
-        mesh: mi,
-        transform,
-    } in &instances
+    let (mut normals, mut uvs) = (true, true);
+    for Placement {
+        mesh, transform, ..
+    } in &placed
     {
-        let name = mesh_name(*mi);
-        for (pi, p) in root.meshes[*mi].primitives.iter().enumerate() {
-            let at = |e: String| err(format!("mesh {name:?} primitive {pi}: {e}"));
+        let Some(m) = mesh else { continue };
+        if meshes[*m].is_none() {
+            meshes[*m] = Some(file.read_mesh(&buffers, *m)?.map(|(mesh, _)| mesh));
+        }
+        let Some(Some(part)) = &meshes[*m] else {
+            continue;
+        };
+        Mesh::check_limits(
+            &merged.source,
+            (merged.positions.len() + part.positions.len()) as u64,
+            ((merged.indices.len() + part.indices.len()) / 3) as u64,
+        )?;
+        normals &= !part.normals.is_empty();
+        uvs &= part.has_uvs();
+        append_transformed(&mut merged, part, *transform);
+    }
+    if !normals {
+        // Normals from some meshes only: regenerate all, so shading is consistent.
+        merged.normals.clear();
+    }
+    if !uvs {
+        merged.uvs.clear();
+    }
+    Ok(merged)
+}
+
+/// Appends `part` placed by `transform` to `into`: positions transformed, normals by
+/// the inverse transpose, and the winding flipped where the transform mirrors (a
+/// mirroring transform turns counter-clockwise into clockwise).
+fn append_transformed(into: &mut Mesh, part: &Mesh, transform: Mat4) {
+    let base = into.positions.len() as u32;
+    into.positions.extend(
+        part.positions
+            .iter()
+            .map(|&p| transform.transform_point3(p)),
+    );
+    let normal_matrix = Mat3::from_mat4(transform).inverse().transpose();
+    into.normals.extend(
+        part.normals
+            .iter()
+            .map(|&n| (normal_matrix * n).normalize_or_zero()),
+    );
+    into.uvs.extend_from_slice(&part.uvs);
+    let mirrored = transform.determinant() < 0.0;
+    for t in part.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0] + base, t[1] + base, t[2] + base];
+        into.indices
+            .extend_from_slice(&if mirrored { [a, c, b] } else { [a, b, c] });
+    }
+}
+
+/// A parsed glTF file: its JSON checked only as far as each step needs.
+struct GltfFile<'p> {
+    path: &'p Path,
+    gltf: gltf::Gltf,
+}
+
+impl<'p> GltfFile<'p> {
+    fn open(path: &'p Path) -> Result<Self, SceneError> {
+        let bytes = read_file(path)?;
+        let err = |reason: String| SceneError::Gltf {
+            path: path.to_owned(),
+            reason,
+        };
+        check_glb_header(&bytes).map_err(err)?;
+        let gltf =
+            gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(e.to_string()))?;
+        Ok(Self { path, gltf })
+    }
+
+    fn root(&self) -> &Root {
+        self.gltf.document.as_json()
+    }
+
+    fn err(&self, reason: String) -> SceneError {
+        SceneError::Gltf {
+            path: self.path.to_owned(),
+            reason,
+        }
+    }
+
+    fn mesh_name(&self, mi: usize) -> String {
+        self.root().meshes[mi]
+            .name
+            .clone()
+            .unwrap_or_else(|| format!("#{mi}"))
+    }
+
+    /// Per mesh, the triangles its accessors declare (before anything is read), which
+    /// bounds what the node tree may expand to.
+    fn mesh_triangles(&self) -> Result<Vec<u64>, SceneError> {
+        let root = self.root();
+        let position = Checked::Valid(gltf::Semantic::Positions);
+        let mut out = Vec::with_capacity(root.meshes.len());
+        for (mi, m) in root.meshes.iter().enumerate() {
+            let mut triangles = 0u64;
+            for (pi, p) in m.primitives.iter().enumerate() {
+                let Some(&pos) = p.attributes.get(&position) else {
+                    return Err(SceneError::GltfMissingPosition {
+                        path: self.path.to_owned(),
+                        mesh: self.mesh_name(mi),
+                        primitive: pi,
+                    });
+                };
+                let at = |e: String| {
+                    self.err(format!("mesh {:?} primitive {pi}: {e}", self.mesh_name(mi)))
+                };
+                let corners = match p.indices {
+                    Some(i) => declared_count(root, i.value(), Role::Indices).map_err(at)?,
+                    None => declared_count(root, pos.value(), Role::Position).map_err(at)?,
+                };
+                triangles = triangles.saturating_add(corners / 3);
+            }
+            out.push(triangles);
+        }
+        Ok(out)
+    }
+
+    /// Every node of the default scene with its world transform (every mesh
+    /// untransformed where the file has no scene). With `expanded_budget`, a tree whose
+    /// placed meshes add up to more triangles is refused before it is expanded.
+    fn placements(&self, expanded_budget: Option<u64>) -> Result<Vec<Placement>, SceneError> {
+        let root = self.root();
+        let mesh_triangles = self.mesh_triangles()?;
+        let scene = root.scene.map(|s| s.value()).or(if root.scenes.is_empty() {
+            None
+        } else {
+            Some(0)
+        });
+        match scene {
+            Some(s) => {
+                let scene = root.scenes.get(s).ok_or_else(|| {
+                    self.err(format!(
+                        "the default scene is {s}, but the file has only {} scenes",
+                        root.scenes.len()
+                    ))
+                })?;
+                let roots: Vec<usize> = scene.nodes.iter().map(|n| n.value()).collect();
+                expand(root, &roots, &mesh_triangles, expanded_budget)
+                    .map_err(|e| node_error(self.path, root, e, expanded_budget))
+            }
+            // No scene: every mesh untransformed rather than nothing.
+            None => {
+                let total: u64 = mesh_triangles.iter().fold(0, |a, &t| a.saturating_add(t));
+                Mesh::check_limits(&self.path.display().to_string(), 0, total)?;
+                if let Some(budget) = expanded_budget.filter(|&b| total > b) {
+                    return Err(over_budget(self.path, total, budget));
+                }
+                Ok((0..root.meshes.len())
+                    .map(|mesh| Placement {
+                        node: None,
+                        mesh: Some(mesh),
+                        camera: None,
+                        transform: Mat4::IDENTITY,
+                    })
+                    .collect())
+            }
+        }
+    }
+
+    fn buffers(&self) -> Result<Vec<Vec<u8>>, SceneError> {
+        load_buffers(self.root(), self.gltf.blob.clone(), self.path)
+    }
+
+    /// Mesh `mi`'s triangle primitives merged, in the mesh's own space, with each
+    /// triangle's material (its primitive's, or [`DEFAULT_MATERIAL`]); `None` when it has
+    /// no triangles (points or lines only, each skipped with a warning). Normals are kept
+    /// only where every primitive has them, UVs likewise.
+    fn read_mesh(
+        &self,
+        buffers: &[Vec<u8>],
+        mi: usize,
+    ) -> Result<Option<(Mesh, Vec<u32>)>, SceneError> {
+        let root = self.root();
+        let path = self.path;
+        let position = Checked::Valid(gltf::Semantic::Positions);
+        let normal = Checked::Valid(gltf::Semantic::Normals);
+        let texcoord = Checked::Valid(gltf::Semantic::TexCoords(0));
+        let name = self.mesh_name(mi);
+        let mut mesh = Mesh {
+            source: format!("{} (mesh {name:?})", path.display()),
+            ..Mesh::default()
+        };
+        let (mut normals_complete, mut uvs_complete, mut any) = (true, true, false);
+        let mut materials = Vec::new();
+        for (pi, p) in root.meshes[mi].primitives.iter().enumerate() {
+            let at = |e: String| self.err(format!("mesh {name:?} primitive {pi}: {e}"));
             match p.mode {
                 Checked::Valid(Mode::Triangles) => {}
                 Checked::Valid(other) => {
@@ -138,9 +259,21 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
                     ));
                 }
             }
+            any = true;
+            let material = match p.material {
+                Some(m) if m.value() >= root.materials.len() => {
+                    return Err(at(format!(
+                        "its material is {}, but the file has only {} materials",
+                        m.value(),
+                        root.materials.len()
+                    )));
+                }
+                Some(m) => m.value() as u32,
+                None => DEFAULT_MATERIAL,
+            };
             let pos = check(
                 root,
-                &buffers,
+                buffers,
                 p.attributes[&position].value(),
                 Role::Position,
             )
@@ -163,7 +296,7 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
                     value: values[k],
                 }),
             };
-            let positions = pos.read_vec3(&buffers);
+            let positions = pos.read_vec3(buffers);
             finite(
                 positions.as_flattened(),
                 3,
@@ -171,51 +304,44 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
                 "POSITION",
             )?;
             let base = mesh.positions.len() as u32;
-            let normal_matrix = Mat3::from_mat4(*transform).inverse().transpose();
             match p.attributes.get(&normal) {
                 Some(n) => {
-                    let n = check(root, &buffers, n.value(), Role::Normal).map_err(at)?;
+                    let n = check(root, buffers, n.value(), Role::Normal).map_err(at)?;
                     if n.count != count {
                         return Err(at(format!(
                             "NORMAL has {} elements, POSITION {count}",
                             n.count
                         )));
                     }
-                    let read = n.read_vec3(&buffers);
+                    let read = n.read_vec3(buffers);
                     finite(read.as_flattened(), 3, accessor_of(&normal), "NORMAL")?;
-                    mesh.normals.extend(
-                        read.into_iter()
-                            .map(|n| (normal_matrix * Vec3::from(n)).normalize_or_zero()),
-                    );
+                    mesh.normals
+                        .extend(read.into_iter().map(|n| Vec3::from(n).normalize_or_zero()));
                 }
                 None => {
                     normals_complete = false;
                     mesh.normals.extend(std::iter::repeat_n(Vec3::ZERO, count));
                 }
             }
-            let uvs = match p.attributes.get(&texcoord) {
+            match p.attributes.get(&texcoord) {
                 Some(t) => {
-                    let t = check(root, &buffers, t.value(), Role::TexCoord).map_err(at)?;
-                    let read = t.read_vec2(&buffers);
+                    let t = check(root, buffers, t.value(), Role::TexCoord).map_err(at)?;
+                    let read = t.read_vec2(buffers);
                     finite(read.as_flattened(), 2, accessor_of(&texcoord), "TEXCOORD_0")?;
-                    Some(read)
+                    if read.len() == count {
+                        mesh.uvs.extend(read);
+                    } else {
+                        uvs_complete = false;
+                    }
                 }
-                None => None,
-            };
-            match &uvs {
-                Some(t) if t.len() == count => {}
-                _ => any_missing_uv = true,
+                None => uvs_complete = false,
             }
-            uv_parts.push(uvs);
-            mesh.positions.extend(
-                positions
-                    .iter()
-                    .map(|&p| transform.transform_point3(Vec3::from(p))),
-            );
-            let mut indices: Vec<u32> = match p.indices {
-                Some(i) => check(root, &buffers, i.value(), Role::Indices)
+            mesh.positions
+                .extend(positions.iter().map(|&p| Vec3::from(p)));
+            let indices: Vec<u32> = match p.indices {
+                Some(i) => check(root, buffers, i.value(), Role::Indices)
                     .map_err(at)?
-                    .read_indices(&buffers),
+                    .read_indices(buffers),
                 None => (0..count as u32).collect(),
             };
             if !indices.len().is_multiple_of(3) {
@@ -223,12 +349,6 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
                     "{} indices is not a whole number of triangles",
                     indices.len()
                 )));
-            }
-            if transform.determinant() < 0.0 {
-                // A mirroring transform turns counter-clockwise into clockwise.
-                for t in indices.chunks_exact_mut(3) {
-                    t.swap(1, 2);
-                }
             }
             if let Some(k) = indices.iter().position(|&i| i as usize >= count) {
                 return Err(SceneError::IndexOutOfRange {
@@ -239,17 +359,20 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
                 });
             }
             mesh.indices.extend(indices.iter().map(|&i| i + base));
+            materials.extend(std::iter::repeat_n(material, indices.len() / 3));
             Mesh::check_limits(&mesh.source, 0, (mesh.indices.len() / 3) as u64)?;
         }
+        if !any {
+            return Ok(None);
+        }
+        if !normals_complete {
+            mesh.normals.clear();
+        }
+        if !uvs_complete {
+            mesh.uvs.clear();
+        }
+        Ok(Some((mesh, materials)))
     }
-    if !normals_complete {
-        // Normals from some primitives only: regenerate all, so shading is consistent.
-        mesh.normals.clear();
-    }
-    if !any_missing_uv && !uv_parts.is_empty() {
-        mesh.uvs = uv_parts.into_iter().flatten().flatten().collect();
-    }
-    Ok(mesh)
 }
 
 /// The GLB header's length, checked before the glTF crate subtracts the header size from
@@ -284,7 +407,7 @@ fn over_budget(path: &Path, count: u64, budget: u64) -> SceneError {
     }
 }
 
-fn node_error(path: &Path, root: &Root, e: NodeError, budget: u64) -> SceneError {
+fn node_error(path: &Path, root: &Root, e: NodeError, budget: Option<u64>) -> SceneError {
     let source = path.display().to_string();
     let reason = match e {
         NodeError::MissingNode { parent, node } => format!(
@@ -309,7 +432,7 @@ fn node_error(path: &Path, root: &Root, e: NodeError, budget: u64) -> SceneError
             nodes::MAX_NODE_INSTANCES
         ),
         NodeError::TooManyTriangles { count } if count <= crate::mesh::MAX_TRIANGLES => {
-            return over_budget(path, count, budget);
+            return over_budget(path, count, budget.unwrap_or(crate::mesh::MAX_TRIANGLES));
         }
         NodeError::TooManyTriangles { count } => {
             return SceneError::TooLarge {

@@ -13,9 +13,15 @@ use crate::mesh::MAX_TRIANGLES;
 /// means subtrees shared many times over.
 pub const MAX_NODE_INSTANCES: u64 = 1 << 20;
 
-/// One mesh placed by one path through the node tree.
-pub struct Instance {
-    pub mesh: usize,
+/// A node reached by one path through the node tree, with what it carries.
+pub struct Placement {
+    /// The node (`None` for a mesh a file without scenes places untransformed).
+    pub node: Option<usize>,
+    /// The mesh it places, if any.
+    pub mesh: Option<usize>,
+    /// The camera it carries, if any.
+    pub camera: Option<usize>,
+    /// Its world transform: its ancestors' transforms and its own.
     pub transform: Mat4,
 }
 
@@ -30,15 +36,17 @@ pub enum NodeError {
     TooManyTriangles { count: u64 },
 }
 
-/// The mesh instances of the scene rooted at `roots`. `mesh_triangles[m]` is mesh `m`'s
-/// triangle count as its accessors declare it, which bounds the expansion: more than
-/// `budget` triangles in all is refused before anything is expanded.
+/// The nodes of the scene rooted at `roots` that carry a mesh or a camera, in depth-first
+/// order. `mesh_triangles[m]` is mesh `m`'s triangle count as its accessors declare it,
+/// which bounds the expansion: with `budget`, more than that many triangles placed in all
+/// is refused before anything is expanded (a scene kept as instances places them
+/// without copying, and gives none).
 pub fn expand(
     root: &Root,
     roots: &[usize],
     mesh_triangles: &[u64],
-    budget: u64,
-) -> Result<Vec<Instance>, NodeError> {
+    budget: Option<u64>,
+) -> Result<Vec<Placement>, NodeError> {
     let nodes = &root.nodes;
     let children = |n: usize| -> &[gltf::json::Index<gltf::json::Node>] {
         nodes[n].children.as_deref().unwrap_or(&[])
@@ -119,7 +127,9 @@ pub fn expand(
     if instances > MAX_NODE_INSTANCES {
         return Err(NodeError::TooManyInstances { count: instances });
     }
-    if triangles > MAX_TRIANGLES.min(budget) {
+    if let Some(budget) = budget
+        && triangles > MAX_TRIANGLES.min(budget)
+    {
         return Err(NodeError::TooManyTriangles { count: triangles });
     }
 
@@ -129,9 +139,12 @@ pub fn expand(
     while let Some((n, parent)) = stack.pop() {
         let world =
             parent * local_transform(&nodes[n]).ok_or(NodeError::BadTransform { node: n })?;
-        if let Some(m) = nodes[n].mesh {
-            out.push(Instance {
-                mesh: m.value(),
+        let (mesh, camera) = (nodes[n].mesh, nodes[n].camera);
+        if mesh.is_some() || camera.is_some() {
+            out.push(Placement {
+                node: Some(n),
+                mesh: mesh.map(|m| m.value()),
+                camera: camera.map(|c| c.value()),
                 transform: world,
             });
         }

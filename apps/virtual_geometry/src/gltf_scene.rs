@@ -1,0 +1,272 @@
+//! A glTF file drawn as its author made it: each mesh baked once (cached by its content),
+//! each node that places it an instance at its world transform, framed by a camera of
+//! the file's or one that sees the whole scene.
+
+use crate::scenes::Placed;
+use glam::{Mat4, Vec3};
+use meshlight::gpu_scene::view::Projection;
+use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData, SceneDataError};
+use meshlight::scene::cache;
+use meshlight::scene::load::{
+    CameraProjection, DEFAULT_MATERIAL, GltfScene, SceneCamera, load_gltf_scene,
+};
+use meshlight::scene::{BuildOptions, SceneError};
+use meshlight::shaders::cpu::layout::{ClusterableKind, ClusterableObject};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Why a glTF scene cannot be drawn.
+#[derive(Debug, thiserror::Error)]
+pub enum GltfSceneError {
+    /// The file, or one of its meshes.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The scene does not fit the GPU buffers.
+    #[error(transparent)]
+    SceneData(#[from] SceneDataError),
+    /// A camera asked for of a mesh that is not a glTF scene.
+    #[error(
+        "{mesh}: a camera index is only for a glTF scene (.gltf or .glb, not merged into one mesh); leave it out"
+    )]
+    NotAScene {
+        /// The mesh argument.
+        mesh: String,
+    },
+    /// A camera asked for that the file does not have.
+    #[error(
+        "{file}: camera {index} asked for, but its scene has {count} camera(s){}; leave the camera out to frame the whole scene",
+        if *count > 0 { format!(" (0 to {})", count - 1) } else { String::new() }
+    )]
+    NoSuchCamera {
+        /// The file.
+        file: String,
+        /// The camera asked for.
+        index: usize,
+        /// The cameras its scene's nodes carry.
+        count: usize,
+    },
+}
+
+/// Is `extension` (lower case) a glTF file's?
+pub fn is_gltf(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+/// The glTF file at `path` as a scene in `data`: each mesh baked once (or found in the
+/// asset cache by its content), each node placing it an instance. `camera` picks one of
+/// the file's cameras (in the scene's node order); `None` frames the whole scene from
+/// the front, above and to the right.
+///
+/// Each mesh is drawn in its material's base colour factor (glTF's default material is
+/// white). Until assets record a material per meshlet, a mesh of several materials takes
+/// the one covering most of its triangles, and a warning names it; textures are not read
+/// yet. A node whose transform mirrors places a copy of its mesh with the winding reversed
+/// (baked once too), since the rasterisers keep counter-clockwise faces.
+pub fn gltf_scene(
+    data: SceneData,
+    path: &Path,
+    camera: Option<usize>,
+) -> Result<Placed, GltfSceneError> {
+    let scene = load_gltf_scene(path)?;
+    place(data, &scene, camera)
+}
+
+/// [`gltf_scene`] for a scene already loaded.
+pub fn place(
+    mut data: SceneData,
+    scene: &GltfScene,
+    camera: Option<usize>,
+) -> Result<Placed, GltfSceneError> {
+    let chosen = camera
+        .map(|index| {
+            scene
+                .cameras
+                .get(index)
+                .ok_or_else(|| GltfSceneError::NoSuchCamera {
+                    file: scene.source.clone(),
+                    index,
+                    count: scene.cameras.len(),
+                })
+        })
+        .transpose()?;
+    let colours = mesh_colours(&mut data, scene);
+    // (mesh, mirrored) → the GPU scene's mesh and its bounds, baked on first use.
+    let mut baked: BTreeMap<(usize, bool), (MeshId, [Vec3; 2])> = BTreeMap::new();
+    let (mut low, mut high) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for instance in &scene.instances {
+        let mirrored = instance.transform.determinant() < 0.0;
+        let key = (instance.mesh, mirrored);
+        let (mesh, [lo, hi]) = match baked.get(&key) {
+            Some(&known) => known,
+            None => {
+                let source = &scene.meshes[instance.mesh];
+                let mut mesh = source.mesh.clone();
+                let mut name = source.name.clone();
+                if mirrored {
+                    for t in mesh.indices.chunks_exact_mut(3) {
+                        t.swap(1, 2);
+                    }
+                    name.push_str(" (mirrored)");
+                }
+                let (asset, _) = cache::load_or_bake_mesh(
+                    &mesh,
+                    &BuildOptions::default(),
+                    &cache::cache_dir(),
+                    &mut |p| cache::log_progress(&mesh.source, p),
+                )?;
+                let id = data.add_mesh(&name, &asset)?;
+                let h = asset.header();
+                let known = (id, [Vec3::from(h.bounds_min), Vec3::from(h.bounds_max)]);
+                baked.insert(key, known);
+                known
+            }
+        };
+        let colour = colours[instance.mesh];
+        if data
+            .add_instance(mesh, instance.transform, colour)?
+            .is_some()
+        {
+            for corner in 0..8 {
+                let c = Vec3::new(
+                    if corner & 1 == 0 { lo.x } else { hi.x },
+                    if corner & 2 == 0 { lo.y } else { hi.y },
+                    if corner & 4 == 0 { lo.z } else { hi.z },
+                );
+                let w = instance.transform.transform_point3(c);
+                low = low.min(w);
+                high = high.max(w);
+            }
+        }
+    }
+    let camera = match chosen {
+        Some(c) => file_camera(c),
+        None => framing_camera(low, high),
+    };
+    Ok(Placed { data, camera })
+}
+
+/// Per mesh of `scene`, the material of `data` it is drawn in: its glTF material's base
+/// colour (one GPU material per glTF material used, glTF's white default where a
+/// primitive names none).
+fn mesh_colours(data: &mut SceneData, scene: &GltfScene) -> Vec<u32> {
+    let mut added: BTreeMap<u32, u32> = BTreeMap::new();
+    scene
+        .meshes
+        .iter()
+        .map(|m| {
+            let mut counts: BTreeMap<u32, usize> = BTreeMap::new();
+            for &t in &m.triangle_materials {
+                *counts.entry(t).or_default() += 1;
+            }
+            // The most triangles; the lowest index among equals, so the choice is stable.
+            let (&chosen, _) = counts
+                .iter()
+                .max_by_key(|&(&k, &n)| (n, std::cmp::Reverse(k)))
+                .unwrap_or((&DEFAULT_MATERIAL, &0));
+            let material = scene.materials.get(chosen as usize);
+            if counts.len() > 1 {
+                log::warn!(
+                    "{}: mesh {:?} has {} materials; until assets record a material per \
+                     meshlet it is drawn in the base colour of {:?}, which covers the most \
+                     triangles",
+                    scene.source,
+                    m.name,
+                    counts.len(),
+                    material.map_or("the default material", |m| m.name.as_str())
+                );
+            }
+            *added.entry(chosen).or_insert_with(|| {
+                let [r, g, b, _] = material.map_or([1.0; 4], |m| m.base_color);
+                data.add_material(Material {
+                    base_color: [r, g, b],
+                })
+            })
+        })
+        .collect()
+}
+
+/// The camera a glTF node carries: at the node's origin, looking down its -Z axis with
+/// its +Y up (any scale in the node ignored, as glTF asks). A perspective camera's
+/// aspect ratio is the viewport's, not the file's.
+pub fn file_camera(c: &SceneCamera) -> Camera {
+    let position = c.transform.w_axis.truncate();
+    let forward = -c.transform.z_axis.truncate().normalize_or(Vec3::NEG_Z);
+    let up = c.transform.y_axis.truncate().normalize_or(Vec3::Y);
+    let projection = match c.projection {
+        CameraProjection::Perspective { yfov, znear, .. } => Projection::Perspective {
+            fov_y: yfov,
+            near: znear,
+        },
+        CameraProjection::Orthographic {
+            ymag, znear, zfar, ..
+        } => Projection::Orthographic {
+            height: 2.0 * ymag,
+            near: znear,
+            far: zfar,
+        },
+    };
+    Camera {
+        position,
+        target: position + forward,
+        up,
+        projection,
+    }
+}
+
+/// A camera that sees the box `low..high` whole: from the front (+Z), above and to the
+/// right, 40° high, standing back so the box's bounding sphere fits.
+pub fn framing_camera(low: Vec3, high: Vec3) -> Camera {
+    if low.x > high.x {
+        // Nothing placed: the sky, from the origin.
+        return Camera::perspective(
+            Vec3::new(0.0, 0.0, 5.0),
+            Vec3::ZERO,
+            40f32.to_radians(),
+            0.01,
+        );
+    }
+    let centre = (low + high) * 0.5;
+    let radius = ((high - low).length() * 0.5).max(1e-4);
+    let fov = 40f32.to_radians();
+    let distance = radius / (fov * 0.5).sin() * 1.05;
+    Camera::perspective(
+        centre + Vec3::new(0.45, 0.45, 1.0).normalize() * distance,
+        centre,
+        fov,
+        distance * 0.002,
+    )
+}
+
+/// `count` point lights over a scene's instances, spread evenly over them in order, each
+/// hovering a little above its instance and reaching about three of its radii.
+pub fn scene_lights(placed: &Placed, count: u32) -> Vec<ClusterableObject> {
+    let instances = &placed.data.instances;
+    if instances.is_empty() || count == 0 {
+        return Vec::new();
+    }
+    (0..count)
+        .map(|i| {
+            let instance = &instances[(i as usize * instances.len()) / count as usize];
+            let m = Mat4::from_cols_array_2d(&instance.world_from_local);
+            let s = placed.data.meshes[instance.mesh as usize].bounding_sphere;
+            let scale = [m.x_axis, m.y_axis, m.z_axis]
+                .map(|a| a.truncate().length())
+                .into_iter()
+                .fold(0.0f32, f32::max);
+            let radius = (s[3] * scale).max(1e-4);
+            let p = m.transform_point3(Vec3::new(s[0], s[1], s[2])) + Vec3::Y * radius * 1.2;
+            // Hues around the colour wheel, in order.
+            let hue = i as f32 * 2.399_963;
+            let color = [0.0f32, 2.1, 4.2].map(|phase| 0.55 + 0.45 * (hue + phase).cos());
+            ClusterableObject {
+                position_range: [p.x, p.y, p.z, radius * 3.0],
+                direction_cos_angle: [0.0, -1.0, 0.0, 1.0],
+                color_intensity: [color[0], color[1], color[2], radius * radius * 4.0],
+                kind: ClusterableKind::PointLight as u32,
+                ..ClusterableObject::default()
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,204 @@
+//! A glTF file's materials (metallic-roughness PBR) as the scene carries them: factors
+//! checked (finite, in their ranges), texture references checked against the file's
+//! textures, so nothing a renderer reads later can index out of range or shade NaN.
+
+use gltf::json::material::AlphaMode as JsonAlphaMode;
+use gltf::json::validation::Checked;
+
+use super::GltfFile;
+use crate::error::SceneError;
+
+/// Where [`SceneMesh::triangle_materials`](super::SceneMesh::triangle_materials) says a
+/// triangle has no material of the file's: glTF's default material (white, fully rough,
+/// not metallic) applies.
+pub const DEFAULT_MATERIAL: u32 = u32::MAX;
+
+/// A texture a material samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TextureRef {
+    /// Index into the file's textures.
+    pub texture: usize,
+    /// Which `TEXCOORD_n` it is sampled with (only `TEXCOORD_0` is read).
+    pub tex_coord: u32,
+}
+
+/// How a material's alpha is used.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha is ignored.
+    Opaque,
+    /// Texels whose alpha is below `cutoff` are not drawn.
+    Mask {
+        /// The alpha below which a texel is cut out.
+        cutoff: f32,
+    },
+    /// Alpha blends: meshlight draws such materials opaque (and says so when it draws them).
+    Blend,
+}
+
+/// One glTF material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneMaterial {
+    /// Its name, or `#index`.
+    pub name: String,
+    /// Linear RGBA multiplied into the base colour texture (and vertex colours).
+    pub base_color: [f32; 4],
+    /// The base colour texture (sRGB).
+    pub base_color_texture: Option<TextureRef>,
+    /// Metalness, 0 to 1.
+    pub metallic: f32,
+    /// Perceptual roughness, 0 to 1.
+    pub roughness: f32,
+    /// Roughness in G and metalness in B.
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// A tangent-space normal map.
+    pub normal_texture: Option<TextureRef>,
+    /// How strongly the normal map bends the normal.
+    pub normal_scale: f32,
+    /// Ambient occlusion in R.
+    pub occlusion_texture: Option<TextureRef>,
+    /// How much of the occlusion applies, 0 to 1.
+    pub occlusion_strength: f32,
+    /// Linear emitted colour, multiplied into the emissive texture.
+    pub emissive: [f32; 3],
+    /// The emissive texture (sRGB).
+    pub emissive_texture: Option<TextureRef>,
+    /// How alpha is used.
+    pub alpha: AlphaMode,
+    /// Whether back faces are drawn too.
+    pub double_sided: bool,
+}
+
+impl Default for SceneMaterial {
+    /// glTF's default material.
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color: [1.0; 4],
+            base_color_texture: None,
+            metallic: 1.0,
+            roughness: 1.0,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
+            emissive: [0.0; 3],
+            emissive_texture: None,
+            alpha: AlphaMode::Opaque,
+            double_sided: false,
+        }
+    }
+}
+
+/// Every material of the file, checked.
+pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, SceneError> {
+    let root = file.root();
+    root.materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let name = m.name.clone().unwrap_or_else(|| format!("#{i}"));
+            let bad = |what: String| {
+                file.err(format!(
+                    "material {name:?}: {what}; fix the material in the file (a glTF editor or \
+                     exporter writes it)"
+                ))
+            };
+            let texture = |index: usize, tex_coord: u32, role: &str| {
+                if index >= root.textures.len() {
+                    return Err(bad(format!(
+                        "its {role} is texture {index}, but the file has only {} textures",
+                        root.textures.len()
+                    )));
+                }
+                if tex_coord != 0 {
+                    log::warn!(
+                        "{}: material {name:?} samples its {role} with TEXCOORD_{tex_coord}; \
+                         only TEXCOORD_0 is read, so it is sampled with that",
+                        file.path.display()
+                    );
+                }
+                Ok(TextureRef {
+                    texture: index,
+                    tex_coord,
+                })
+            };
+            let unit = |v: f32, what: &str| {
+                if (0.0..=1.0).contains(&v) {
+                    Ok(v)
+                } else {
+                    Err(bad(format!("its {what} is {v}, not between 0 and 1")))
+                }
+            };
+            let pbr = &m.pbr_metallic_roughness;
+            let mut base_color = pbr.base_color_factor.0;
+            for (k, c) in base_color.iter_mut().enumerate() {
+                *c = unit(*c, &format!("baseColorFactor[{k}]"))?;
+            }
+            let emissive = m.emissive_factor.0;
+            if let Some(e) = emissive.iter().find(|e| !(e.is_finite() && **e >= 0.0)) {
+                return Err(bad(format!(
+                    "its emissiveFactor holds {e}, not a finite value ≥ 0"
+                )));
+            }
+            let normal_scale = m.normal_texture.as_ref().map_or(1.0, |n| n.scale);
+            if !normal_scale.is_finite() {
+                return Err(bad(format!("its normal texture's scale is {normal_scale}")));
+            }
+            let alpha = match m.alpha_mode {
+                Checked::Valid(JsonAlphaMode::Opaque) => AlphaMode::Opaque,
+                Checked::Valid(JsonAlphaMode::Mask) => {
+                    let cutoff = m.alpha_cutoff.map_or(0.5, |c| c.0);
+                    if !(cutoff.is_finite() && cutoff >= 0.0) {
+                        return Err(bad(format!("its alphaCutoff is {cutoff}, not ≥ 0")));
+                    }
+                    AlphaMode::Mask { cutoff }
+                }
+                Checked::Valid(JsonAlphaMode::Blend) => AlphaMode::Blend,
+                Checked::Invalid => {
+                    return Err(bad("its alphaMode is not OPAQUE, MASK or BLEND".to_string()));
+                }
+            };
+            Ok(SceneMaterial {
+                name: name.clone(),
+                base_color,
+                base_color_texture: pbr
+                    .base_color_texture
+                    .as_ref()
+                    .map(|t| texture(t.index.value(), t.tex_coord, "base colour texture"))
+                    .transpose()?,
+                metallic: unit(pbr.metallic_factor.0, "metallicFactor")?,
+                roughness: unit(pbr.roughness_factor.0, "roughnessFactor")?,
+                metallic_roughness_texture: pbr
+                    .metallic_roughness_texture
+                    .as_ref()
+                    .map(|t| texture(t.index.value(), t.tex_coord, "metallic-roughness texture"))
+                    .transpose()?,
+                normal_texture: m
+                    .normal_texture
+                    .as_ref()
+                    .map(|t| texture(t.index.value(), t.tex_coord, "normal texture"))
+                    .transpose()?,
+                normal_scale,
+                occlusion_texture: m
+                    .occlusion_texture
+                    .as_ref()
+                    .map(|t| texture(t.index.value(), t.tex_coord, "occlusion texture"))
+                    .transpose()?,
+                occlusion_strength: m
+                    .occlusion_texture
+                    .as_ref()
+                    .map_or(Ok(1.0), |t| unit(t.strength.0, "occlusion strength"))?,
+                emissive,
+                emissive_texture: m
+                    .emissive_texture
+                    .as_ref()
+                    .map(|t| texture(t.index.value(), t.tex_coord, "emissive texture"))
+                    .transpose()?,
+                alpha,
+                double_sided: m.double_sided,
+            })
+        })
+        .collect()
+}
