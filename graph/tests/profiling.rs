@@ -12,6 +12,11 @@ use support::*;
 
 const N: u32 = 256;
 
+/// Held by each test of this file: `tracing` caches per call site whether anyone listens,
+/// and a scope first reached by the other test's thread while no subscriber of this
+/// test's existed could be cached as unheard.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
 /// fill → (readback: an encoder batch) → add: three batches.
 fn graph() -> GraphBuilder {
     let mut g = GraphBuilder::new();
@@ -79,8 +84,11 @@ impl tracing::Subscriber for Spans {
 
 #[test]
 fn compile_prepare_record_and_submit_are_scopes_a_profiler_sees() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let spans = Spans::default();
     tracing::subscriber::with_default(spans.clone(), || {
+        // Call sites met before this subscriber existed are asked again.
+        tracing::callsite::rebuild_interest_cache();
         let gpu = gpu();
         let compiled = graph().compile(&CompileOptions::for_gpu(&gpu)).unwrap();
         let mut exec = Executor::new(gpu);
@@ -113,6 +121,7 @@ fn compile_prepare_record_and_submit_are_scopes_a_profiler_sees() {
 
 #[test]
 fn a_frames_timings_are_a_chrome_trace_with_an_event_per_batch() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let gpu = gpu();
     assert!(
         gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY),
