@@ -2,7 +2,7 @@
 //! each node that places it an instance at its world transform, framed by a camera of
 //! the file's or one that sees the whole scene.
 
-use crate::scenes::Placed;
+use crate::scenes::{Placed, point_light};
 use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::view::Projection;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData, SceneDataError};
@@ -11,7 +11,7 @@ use meshlight::scene::load::{
     CameraProjection, DEFAULT_MATERIAL, GltfScene, SceneCamera, load_gltf_scene,
 };
 use meshlight::scene::{BuildOptions, SceneError};
-use meshlight::shaders::cpu::layout::{ClusterableKind, ClusterableObject};
+use meshlight::shaders::cpu::layout::ClusterableObject;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -258,15 +258,7 @@ pub fn scene_lights(placed: &Placed, count: u32) -> Vec<ClusterableObject> {
             let radius = (s[3] * scale).max(1e-4);
             let p = m.transform_point3(Vec3::new(s[0], s[1], s[2])) + Vec3::Y * radius * 1.2;
             // Hues around the colour wheel, in order.
-            let hue = i as f32 * 2.399_963;
-            let color = [0.0f32, 2.1, 4.2].map(|phase| 0.55 + 0.45 * (hue + phase).cos());
-            ClusterableObject {
-                position_range: [p.x, p.y, p.z, radius * 3.0],
-                direction_cos_angle: [0.0, -1.0, 0.0, 1.0],
-                color_intensity: [color[0], color[1], color[2], radius * radius * 4.0],
-                kind: ClusterableKind::PointLight as u32,
-                ..ClusterableObject::default()
-            }
+            point_light(p, radius * 3.0, radius, i as f32 * 2.399_963)
         })
         .collect()
 }

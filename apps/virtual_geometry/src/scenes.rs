@@ -361,16 +361,23 @@ pub fn field_lights(placed: &Placed, count: u32) -> Vec<ClusterableObject> {
             let offset = Vec3::new(rng.unit() - 0.5, 0.0, rng.unit() - 0.5) * radius * 2.0;
             let p = at + offset + Vec3::Y * radius * (1.2 + rng.unit());
             let hue = rng.unit() * std::f32::consts::TAU;
-            let color = [0.0f32, 2.1, 4.2].map(|phase| 0.55 + 0.45 * (hue + phase).cos());
-            ClusterableObject {
-                position_range: [p.x, p.y, p.z, radius * 3.5],
-                direction_cos_angle: [0.0, -1.0, 0.0, 1.0],
-                color_intensity: [color[0], color[1], color[2], radius * radius * 4.0],
-                kind: ClusterableKind::PointLight as u32,
-                ..ClusterableObject::default()
-            }
+            point_light(p, radius * 3.5, radius, hue)
         })
         .collect()
+}
+
+/// A point light at `p` reaching `reach`, as bright as an object of `radius` beneath it
+/// wants, its colour at `hue` (radians) around the colour wheel: the lights the scenes
+/// hang over their instances.
+pub(crate) fn point_light(p: Vec3, reach: f32, radius: f32, hue: f32) -> ClusterableObject {
+    let color = [0.0f32, 2.1, 4.2].map(|phase| 0.55 + 0.45 * (hue + phase).cos());
+    ClusterableObject {
+        position_range: [p.x, p.y, p.z, reach],
+        direction_cos_angle: [0.0, -1.0, 0.0, 1.0],
+        color_intensity: [color[0], color[1], color[2], radius * radius * 4.0],
+        kind: ClusterableKind::PointLight as u32,
+        ..ClusterableObject::default()
+    }
 }
 
 #[cfg(test)]
