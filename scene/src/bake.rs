@@ -128,6 +128,7 @@ pub fn bake(
     options: &BakeOptions,
     progress: &mut dyn FnMut(BakeProgress),
 ) -> Result<BakeReport, SceneError> {
+    refuse_overwriting_the_input(&options.input, &options.output)?;
     let load_start = Instant::now();
     let load = LoadOptions {
         max_triangles: options.max_triangles,
@@ -154,6 +155,31 @@ pub fn bake(
         &built,
         load_time,
     ))
+}
+
+/// Refuses an output that is the input itself (the same file by another name, or
+/// through a link): the asset would replace the mesh it was baked from.
+fn refuse_overwriting_the_input(input: &Path, output: &Path) -> Result<(), SceneError> {
+    let resolved = |p: &Path| -> Option<std::path::PathBuf> {
+        p.canonicalize().ok().or_else(|| {
+            // An output that does not exist yet: its folder resolved, then its name.
+            let parent = match p.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d,
+                _ => Path::new("."),
+            };
+            Some(parent.canonicalize().ok()?.join(p.file_name()?))
+        })
+    };
+    if let (Some(i), Some(o)) = (resolved(input), resolved(output))
+        && i == o
+    {
+        return Err(SceneError::InvalidOption(format!(
+            "the output {} is the input mesh itself; give `-o` another path (the asset would \
+             overwrite the mesh it is baked from)",
+            output.display()
+        )));
+    }
+    Ok(())
 }
 
 /// Refuses to write an asset that `inspect` would reject: the same structural checks

@@ -80,7 +80,7 @@ pub fn cache_dir() -> PathBuf {
 /// The cache key of a source baked with `options`; reads the source file.
 pub fn key(source: &Source, options: &BuildOptions) -> Result<u64, SceneError> {
     let bytes = match source {
-        Source::File(path) => std::fs::read(path).map_err(|e| SceneError::io(path, e))?,
+        Source::File(path) => crate::input::read_file(path, crate::input::MAX_INPUT_BYTES)?,
         Source::Procedural { segments } => format!("procedural:{segments}").into_bytes(),
     };
     Ok(key_of(bytes, options))

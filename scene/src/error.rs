@@ -33,8 +33,8 @@ pub enum SceneError {
 
     /// The input is a device, pipe or folder, which would block or mean nothing.
     #[error(
-        "{path}: is {kind}, not a regular file; give the path of a mesh file (devices, pipes \
-         and folders are not read)"
+        "{path}: is {kind}, not a regular file; give the path of a file (devices, pipes and \
+         folders are not read)"
     )]
     NotARegularFile {
         /// The path given.
@@ -43,11 +43,11 @@ pub enum SceneError {
         kind: &'static str,
     },
 
-    /// A mesh file larger than any mesh the asset format can hold, refused before it is
-    /// read into memory.
+    /// A file larger than any input of its kind (a mesh larger than the asset format can
+    /// hold), refused before it is read into memory.
     #[error(
-        "{path}: the file is {size} bytes, more than the {limit} bytes a mesh input may have; \
-         split the mesh into several files"
+        "{path}: the file is {size} bytes, more than the {limit} bytes such an input may \
+         have; split it into several files"
     )]
     FileTooLarge {
         /// The file.

@@ -25,6 +25,7 @@ pub mod chain_fingerprint;
 pub mod compress;
 pub mod error;
 pub mod hierarchy;
+pub mod input;
 pub mod inspect;
 pub mod verify;
 pub mod watertight;

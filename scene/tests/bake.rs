@@ -155,3 +155,35 @@ fn inspect_warns_on_poor_dags_and_fails_only_on_broken_ones() {
     assert!(matches!(err, SceneError::AssetCorrupt { .. }), "{err:?}");
     assert_eq!(report.summary.header, *broken.header());
 }
+
+/// `bake X -o X`, by the same name, another spelling or a link: refused before anything
+/// is read, and the mesh is left as it was.
+#[test]
+fn an_output_that_is_the_input_is_refused_and_the_mesh_kept() {
+    let dir = common::scratch("bake-onto-input");
+    let mesh = dir.join("tet.obj");
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    std::fs::write(&mesh, text).unwrap();
+    let mut outputs = vec![mesh.clone(), dir.join(".").join("tet.obj")];
+    #[cfg(unix)]
+    {
+        let link = dir.join("link.obj");
+        std::os::unix::fs::symlink(&mesh, &link).unwrap();
+        outputs.push(link);
+    }
+    for out in outputs {
+        match bake(&BakeOptions::new(&mesh, &out), &mut |_| {}) {
+            Err(SceneError::InvalidOption(m)) => {
+                assert!(m.contains("is the input mesh itself"), "{m}")
+            }
+            other => panic!("{}: expected a refusal, got {other:?}", out.display()),
+        }
+        assert_eq!(std::fs::read_to_string(&mesh).unwrap(), text);
+    }
+    // Another name beside it is fine.
+    bake(
+        &BakeOptions::new(&mesh, dir.join("tet.mlasset")),
+        &mut |_| {},
+    )
+    .unwrap();
+}

@@ -61,6 +61,9 @@ pub const ALL: &[&str] = &[
     "light-clustering",
 ];
 
+/// Largest `--from-json` file read: a full run's rows are a few hundred kilobytes.
+const MAX_ROWS_FILE_BYTES: u64 = 256 << 20;
+
 pub fn run(args: &BenchOptions) -> std::result::Result<(), Box<dyn std::error::Error>> {
     let scenarios: Vec<String> = if args.scenarios.is_empty() {
         ALL.iter().map(|s| s.to_string()).collect()
@@ -69,8 +72,13 @@ pub fn run(args: &BenchOptions) -> std::result::Result<(), Box<dyn std::error::E
     };
     let mut rows = Vec::new();
     for path in &args.from_json {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("{}: cannot read it: {e}", path.display()))?;
+        let bytes = meshlight::scene::input::read_file(path, MAX_ROWS_FILE_BYTES)?;
+        let text = String::from_utf8(bytes).map_err(|_| {
+            format!(
+                "{}: not UTF-8 text; give a file `--json` wrote",
+                path.display()
+            )
+        })?;
         let read: Vec<Row> = serde_json::from_str(&text).map_err(|e| {
             format!(
                 "{}: not a list of bench rows ({e}); give a file `--json` wrote",

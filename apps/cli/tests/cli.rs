@@ -809,3 +809,65 @@ fn render_draws_a_gltf_file_as_its_scene_and_offers_its_cameras() {
         "{err}"
     );
 }
+
+/// A named pipe in a fresh directory.
+#[cfg(unix)]
+fn fifo(name: &str) -> std::path::PathBuf {
+    let path = scratch(name).join(format!("{name}.fifo"));
+    let made = std::process::Command::new("mkfifo")
+        .arg(&path)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success());
+    path
+}
+
+/// Every command that reads a user's file refuses a device or a pipe at once, naming
+/// it, rather than reading `/dev/zero` until memory runs out or waiting on a pipe for a
+/// writer (each run is given 20 s; a refusal takes milliseconds).
+#[cfg(unix)]
+#[test]
+fn devices_and_pipes_given_as_inputs_are_refused_at_once() {
+    let pipe = fifo("input-pipe");
+    let pipe = pipe.to_str().unwrap();
+    let asset_pipe = fifo("asset-pipe");
+    let asset_pipe = asset_pipe.with_extension("mlasset");
+    std::fs::rename(asset_pipe.with_extension("fifo"), &asset_pipe).unwrap();
+    let asset_pipe = asset_pipe.to_str().unwrap();
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["render", "--mesh", "/dev/zero"],
+        vec!["render", "--mesh", pipe],
+        vec!["render", "--mesh", asset_pipe],
+        vec!["inspect", asset_pipe],
+        vec!["inspect", "/dev/zero"],
+        vec!["bench", "--from-json", "/dev/zero", "--html", "/dev/null"],
+        vec!["bench", "--from-json", pipe, "--html", "/dev/null"],
+    ];
+    for args in cases {
+        let started = std::time::Instant::now();
+        let mut child = command(&args)
+            .env("MESHLIGHT_ADAPTER", "no adapter is called this")
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("runs");
+        let status = loop {
+            if let Some(status) = child.try_wait().unwrap() {
+                break status;
+            }
+            if started.elapsed() > std::time::Duration::from_secs(20) {
+                let _ = child.kill();
+                panic!("meshlight {}: still running after 20 s", args.join(" "));
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        };
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!status.success(), "{}: {err}", args.join(" "));
+        assert!(
+            err.contains("not a regular file"),
+            "meshlight {}: {err}",
+            args.join(" ")
+        );
+    }
+}

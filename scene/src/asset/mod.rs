@@ -123,6 +123,8 @@ impl MeshletAsset {
     /// A file's bytes as 32-bit words, and its length in bytes; a file too short for a
     /// header is refused here, with the magic or version message where its start says so.
     fn read_words(path: &Path) -> Result<(Vec<u32>, u64), SceneError> {
+        // Before it is opened: opening a pipe would wait for a writer.
+        crate::input::regular_file(path)?;
         let mut file = std::fs::File::open(path).map_err(|e| SceneError::io(path, e))?;
         let len = file.metadata().map_err(|e| SceneError::io(path, e))?.len();
         let header_bytes = (AssetHeader::WORDS * 4) as u64;

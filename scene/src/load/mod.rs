@@ -4,7 +4,6 @@ mod gltf;
 mod obj;
 mod stl;
 
-use std::io::Read;
 use std::path::Path;
 
 use crate::error::SceneError;
@@ -13,17 +12,12 @@ use crate::mesh::{MAX_TRIANGLES, Mesh};
 pub use self::gltf::{
     AlphaMode, CameraProjection, DEFAULT_MATERIAL, GltfScene, SceneCamera, SceneInstance,
     SceneMaterial, SceneMesh, TextureRef, load_gltf, load_gltf_scene, load_gltf_scene_with,
-    load_gltf_with, percent_decode,
+    load_gltf_with, percent_decode, referenced_path,
 };
 pub use self::obj::{load_obj, parse_obj};
 pub use self::stl::{load_stl, parse_stl};
 
-/// Largest mesh input file (a mesh, or a buffer a glTF names) read, in bytes: 2 GiB.
-/// The largest binary STL the triangle limit allows ([`MAX_TRIANGLES`] × 50 bytes) is
-/// 1.7 GB, and an OBJ of that many triangles without normals or UVs about as much.
-/// Checked from the file's metadata before reading, so a huge or endless file costs
-/// nothing.
-pub const MAX_INPUT_BYTES: u64 = 1 << 31;
+pub use crate::input::MAX_INPUT_BYTES;
 
 /// Default for [`LoadOptions::max_triangles`]: 2^23 (8.4 million) triangles. Building
 /// takes seconds per million, so a glTF scene whose instancing expands past this is
@@ -79,61 +73,7 @@ pub fn load_mesh_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
     }
 }
 
-/// Reads a mesh input: a regular file (not a device, pipe or folder: `/dev/zero` would
-/// never end) of at most [`MAX_INPUT_BYTES`], both known from its metadata before a
-/// byte is read.
+/// A mesh input's bytes: a regular file of at most [`MAX_INPUT_BYTES`].
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, SceneError> {
-    let meta = std::fs::metadata(path).map_err(|e| SceneError::io(path, e))?;
-    if !meta.is_file() {
-        return Err(SceneError::NotARegularFile {
-            path: path.to_owned(),
-            kind: file_kind(&meta),
-        });
-    }
-    if meta.len() > MAX_INPUT_BYTES {
-        return Err(SceneError::FileTooLarge {
-            path: path.to_owned(),
-            size: meta.len(),
-            limit: MAX_INPUT_BYTES,
-        });
-    }
-    let file = std::fs::File::open(path).map_err(|e| SceneError::io(path, e))?;
-    // A file that grows while it is read still stops at the limit.
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(MAX_INPUT_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| SceneError::io(path, e))?;
-    if bytes.len() as u64 > MAX_INPUT_BYTES {
-        return Err(SceneError::FileTooLarge {
-            path: path.to_owned(),
-            size: bytes.len() as u64,
-            limit: MAX_INPUT_BYTES,
-        });
-    }
-    Ok(bytes)
-}
-
-fn file_kind(meta: &std::fs::Metadata) -> &'static str {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        let t = meta.file_type();
-        if t.is_char_device() {
-            return "a character device";
-        }
-        if t.is_block_device() {
-            return "a block device";
-        }
-        if t.is_fifo() {
-            return "a pipe";
-        }
-        if t.is_socket() {
-            return "a socket";
-        }
-    }
-    if meta.is_dir() {
-        "a folder"
-    } else {
-        "not a file"
-    }
+    crate::input::read_file(path, MAX_INPUT_BYTES)
 }

@@ -9,10 +9,12 @@
 
 use super::AssetStats;
 use meshlight::scene::cache::{self, Source};
+use meshlight::scene::input::{MAX_INPUT_BYTES, read_file};
+use meshlight::scene::load::referenced_path;
 use meshlight::scene::{BuildOptions, MeshletAsset, SceneError};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Component, Path, PathBuf};
+use std::path::{Path, PathBuf};
 
 /// Appended to the output's name.
 pub const STAMP_SUFFIX: &str = ".key";
@@ -79,9 +81,10 @@ pub fn up_to_date(output: &Path, key: &str) -> Option<AssetStats> {
 }
 
 /// The buffer files a `.gltf` or `.glb` names by relative URI, in its order: those the
-/// loader reads beside the model. `data:` URIs are in the file's own bytes; absolute
-/// paths, other schemes and paths leaving the model's directory are not followed (the
-/// loader refuses them).
+/// loader reads beside the model, found by the loader's own containment rule
+/// ([`referenced_path`]: no scheme, no absolute path, nothing leaving the model's folder,
+/// links included), so a stamp never opens what the loader would refuse. `data:` URIs are
+/// in the file's own bytes.
 fn external_buffers(input: &Path) -> Vec<PathBuf> {
     let is = |ext: &str| {
         input
@@ -92,26 +95,19 @@ fn external_buffers(input: &Path) -> Vec<PathBuf> {
     if !(is("gltf") || is("glb")) {
         return Vec::new();
     }
-    let Some(json) = std::fs::read(input).ok().and_then(|b| gltf_json(&b)) else {
+    let Some(json) = read_file(input, MAX_INPUT_BYTES)
+        .ok()
+        .and_then(|b| gltf_json(&b))
+    else {
         return Vec::new();
     };
-    let base = input.parent().unwrap_or(Path::new(""));
     json.get("buffers")
         .and_then(|b| b.as_array())
         .into_iter()
         .flatten()
         .filter_map(|b| b.get("uri")?.as_str())
-        .filter_map(|uri| {
-            let scheme = uri.split_once(':').is_some_and(|(s, _)| !s.contains('/'));
-            if scheme {
-                return None;
-            }
-            let relative = PathBuf::from(meshlight::scene::load::percent_decode(uri)?);
-            let inside = relative
-                .components()
-                .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
-            inside.then(|| base.join(relative))
-        })
+        .filter(|uri| !uri.starts_with("data:"))
+        .filter_map(|uri| referenced_path(input, uri).ok())
         .collect()
 }
 
@@ -137,6 +133,26 @@ fn gltf_json(bytes: &[u8]) -> Option<serde_json::Value> {
 mod tests {
     use super::*;
     use crate::bake_library::scratch::scratch;
+
+    /// A buffer reached through a link that leads out of the model's folder is not
+    /// followed: the loader refuses it, so the stamp never opens it.
+    #[cfg(unix)]
+    #[test]
+    fn a_buffer_linked_outside_the_models_folder_is_not_opened() {
+        let dir = scratch("stamp-link");
+        let model = dir.join("model");
+        std::fs::create_dir_all(&model).unwrap();
+        std::fs::write(dir.join("outside.bin"), [0u8; 4]).unwrap();
+        std::os::unix::fs::symlink(dir.join("outside.bin"), model.join("link.bin")).unwrap();
+        std::fs::write(model.join("inside.bin"), [0u8; 4]).unwrap();
+        let gltf = model.join("m.gltf");
+        std::fs::write(
+            &gltf,
+            r#"{"asset":{"version":"2.0"},"buffers":[{"uri":"link.bin","byteLength":4},{"uri":"inside.bin","byteLength":4}]}"#,
+        )
+        .unwrap();
+        assert_eq!(external_buffers(&gltf), [model.join("inside.bin")]);
+    }
 
     #[test]
     fn the_buffers_a_gltf_names_beside_it_are_found_and_no_others() {

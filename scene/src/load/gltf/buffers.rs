@@ -42,7 +42,7 @@ pub fn load_buffers(
                     .ok_or_else(|| err(format!("buffer {i} has a data URI with invalid base64")))?
             }
             Some(uri) => {
-                let path = buffer_path(model, uri).map_err(|reason| {
+                let path = referenced_path(model, uri).map_err(|reason| {
                     err(format!(
                         "buffer {i} has the uri {uri:?}, which {reason}; a buffer is a `data:` \
                          URI or a file in the model's folder named relative to it (`mesh.bin`, \
@@ -68,10 +68,11 @@ pub fn load_buffers(
     Ok(out)
 }
 
-/// The file a non-`data:` buffer URI names, or why it may not be read: it must be a
-/// relative path without `..` that, with links resolved, stays inside the model's
-/// folder.
-fn buffer_path(model: &Path, uri: &str) -> Result<PathBuf, String> {
+/// The file a non-`data:` URI of the glTF file `model` names (a buffer's, later an
+/// image's), or why it may not be read: it must be a relative path without `..` that,
+/// with links resolved, stays inside the model's folder. The one containment rule of
+/// every path that follows a reference from a file (the loader, and `bake DIR`'s stamps).
+pub fn referenced_path(model: &Path, uri: &str) -> Result<PathBuf, String> {
     let relative = percent_decode(uri).ok_or("is malformed (a bad %-escape)")?;
     // `file:`, `http:`, `C:` and the like: a scheme or a drive, not a relative path.
     let first = relative.split(['/', '\\']).next().unwrap_or("");

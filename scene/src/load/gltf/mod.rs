@@ -11,7 +11,7 @@
 
 mod accessor;
 mod buffers;
-pub use buffers::percent_decode;
+pub use buffers::{percent_decode, referenced_path};
 mod materials;
 pub use materials::{AlphaMode, DEFAULT_MATERIAL, SceneMaterial, TextureRef};
 mod nodes;
