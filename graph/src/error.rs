@@ -211,6 +211,21 @@ pub enum GraphError {
         resource: String,
     },
 
+    /// A buffer of no elements (compile): nothing could be bound to it.
+    #[error(
+        "resource `{resource}` holds no elements, and a buffer holds at least one: {}",
+        match param {
+            Some(p) => format!("give its size parameter `{p}` (now 0) at least 1"),
+            None => "declare a count of at least 1".to_string(),
+        }
+    )]
+    EmptyBuffer {
+        /// The resource, by its declared name.
+        resource: String,
+        /// The size parameter that gave it no elements, if one did.
+        param: Option<String>,
+    },
+
     /// A buffer is sized by an undeclared parameter (compile).
     #[error(
         "resource `{resource}` is sized by parameter `{param}`, which is not declared; declare it with size_param (known: {known})"

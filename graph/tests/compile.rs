@@ -442,3 +442,35 @@ fn one_resource_in_a_read_and_a_write_slot_of_one_pass_is_an_error() {
     assert_eq!((pass.as_str(), resource.as_str()), ("p", "out"));
     assert!(reason.contains("another slot"), "{reason}");
 }
+
+/// A buffer of no elements is refused at compile, naming the resource and the size
+/// parameter to raise, rather than surfacing later as wgpu's refusal of the binding.
+#[test]
+fn a_buffer_of_no_elements_is_refused_naming_its_parameter() {
+    let build = |count: BufferDesc| {
+        let mut g = GraphBuilder::new();
+        g.size_param("clusters", 0);
+        g.create_buffer("list", count);
+        g.add_pass("fill", Fake::rw(&[], &["list"]), Bindings::new())
+            .unwrap();
+        g.export(g.resource("list").unwrap());
+        g.compile(&CompileOptions::new(wgpu::Features::empty()))
+    };
+    match build(BufferDesc::array_param(Element::U32, "clusters")) {
+        Err(e @ GraphError::EmptyBuffer { .. }) => {
+            let m = e.to_string();
+            assert!(
+                m.contains("`list`") && m.contains("`clusters` (now 0) at least 1"),
+                "{m}"
+            );
+        }
+        other => panic!("expected EmptyBuffer, got {:?}", other.err()),
+    }
+    match build(u32s(0)) {
+        Err(e @ GraphError::EmptyBuffer { param: None, .. }) => {
+            assert!(e.to_string().contains("a count of at least 1"), "{e}");
+        }
+        other => panic!("expected EmptyBuffer, got {:?}", other.err()),
+    }
+    assert!(build(u32s(1)).is_ok());
+}

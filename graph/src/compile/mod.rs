@@ -169,12 +169,19 @@ fn resolve_sizes(
             desc.count_param = Some(param.clone());
             res.desc = ResourceDesc::Buffer(desc);
         }
-        if let ResourceDesc::Buffer(b) = &res.desc
-            && b.overflowed()
-        {
-            return Err(GraphError::SizeOverflow {
-                resource: res.name.clone(),
-            });
+        if let ResourceDesc::Buffer(b) = &res.desc {
+            if b.overflowed() {
+                return Err(GraphError::SizeOverflow {
+                    resource: res.name.clone(),
+                });
+            }
+            // wgpu would take it and refuse the binding later, naming no parameter.
+            if b.size == 0 {
+                return Err(GraphError::EmptyBuffer {
+                    resource: res.name.clone(),
+                    param: b.count_param.clone(),
+                });
+            }
         }
     }
     Ok(())
