@@ -473,4 +473,14 @@ fn a_buffer_of_no_elements_is_refused_naming_its_parameter() {
         other => panic!("expected EmptyBuffer, got {:?}", other.err()),
     }
     assert!(build(u32s(1)).is_ok());
+    // An import declared with no elements binds the caller's buffer, whatever its size
+    // (an empty input of a scan, say): not refused.
+    let mut g = GraphBuilder::new();
+    let input = g.import_buffer("input", u32s(0), wgpu::BufferUsages::STORAGE);
+    g.add_pass("read", Fake::rw(&["in"], &[]), Bindings::new().bind("in", input))
+        .unwrap();
+    assert!(
+        g.compile(&CompileOptions::new(wgpu::Features::empty()))
+            .is_ok()
+    );
 }

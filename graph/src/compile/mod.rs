@@ -175,8 +175,9 @@ fn resolve_sizes(
                     resource: res.name.clone(),
                 });
             }
-            // wgpu would take it and refuse the binding later, naming no parameter.
-            if b.size == 0 {
+            // wgpu would take it and refuse the binding later, naming no parameter. An
+            // import's declaration may say 0: the caller's buffer is what gets bound.
+            if b.size == 0 && !matches!(res.kind, ResourceKind::Imported { .. }) {
                 return Err(GraphError::EmptyBuffer {
                     resource: res.name.clone(),
                     param: b.count_param.clone(),
