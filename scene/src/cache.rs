@@ -23,8 +23,9 @@ use crate::procedural::procedural_mesh;
 /// Raised whenever the builder makes different assets from the same input and options
 /// within one crate version: 2 = meshlets grown by `greedy_meshlets` across seams,
 /// groups by meshoptimizer's partitioner, the welded escalation step; 3 = positions
-/// welded within a tolerance, duplicate faces dropped, cracking groups repaired.
-pub const BUILDER_REVISION: u32 = 3;
+/// welded within a tolerance, duplicate faces dropped, cracking groups repaired; 4 =
+/// meshlets split by material slot.
+pub const BUILDER_REVISION: u32 = 4;
 
 /// Environment variable naming the cache directory (default: the user cache directory).
 pub const CACHE_DIR_ENV: &str = "MESHLIGHT_CACHE_DIR";
@@ -95,6 +96,7 @@ pub fn mesh_key(mesh: &Mesh, options: &BuildOptions) -> u64 {
         bytemuck::cast_slice(&mesh.normals),
         bytemuck::cast_slice(&mesh.uvs),
         bytemuck::cast_slice(&mesh.indices),
+        bytemuck::cast_slice(&mesh.materials),
     ] {
         bytes.extend_from_slice(&(part.len() as u64).to_le_bytes());
         bytes.extend_from_slice(part);

@@ -44,6 +44,8 @@ pub struct DagCluster {
     pub parent_group: u32,
     /// The group that produced this cluster, or [`NO_GROUP`] at level 0.
     pub source_group: u32,
+    /// The material slot of all its triangles (see [`Mesh::materials`]).
+    pub material: u32,
 }
 
 impl DagCluster {
@@ -141,9 +143,20 @@ pub fn build_dag(
         .any(|(v, &r)| r != v as u32)
         .then_some(remap.as_slice());
 
-    let mut clusters: Vec<DagCluster> = split_mesh_into_meshlets(positions, &mesh.indices, weld)
+    // Each vertex's material slot, and the slots' triangles split on their own, so that
+    // no meshlet straddles two materials.
+    let slots = mesh.vertex_materials();
+    let lod0: Vec<(u32, Vec<u32>)> = by_material(&mesh.indices, &slots)
+        .into_iter()
+        .flat_map(|(material, indices)| {
+            split_mesh_into_meshlets(positions, &indices, weld)
+                .into_iter()
+                .map(move |m| (material, m))
+        })
+        .collect();
+    let mut clusters: Vec<DagCluster> = lod0
         .into_par_iter()
-        .map(|indices| {
+        .map(|(material, indices)| {
             let bounds = sphere_of(positions, &indices);
             DagCluster {
                 indices,
@@ -157,6 +170,7 @@ pub fn build_dag(
                 parent: LodBounds::ROOT_PARENT,
                 parent_group: NO_GROUP,
                 source_group: NO_GROUP,
+                material,
             }
         })
         .collect();
@@ -165,7 +179,7 @@ pub fn build_dag(
     // Clusters whose group was stuck once; stuck again, they become terminal roots.
     let mut retried = vec![false; clusters.len()];
     let mut level = 0u32;
-    let seam = seam_vertices(mesh, &remap);
+    let (seam, material_border) = seam_vertices(mesh, &remap, &slots);
     // Which group uses each welded vertex this level; shared ones are the borders.
     let mut owner = vec![u32::MAX; positions.len()];
     let mut border = vec![false; positions.len()];
@@ -204,6 +218,8 @@ pub fn build_dag(
         let flags = VertexFlags {
             locked: &locked,
             seam: &seam,
+            materials: &slots,
+            material_border: &material_border,
         };
         let results: Vec<_> = level_groups
             .par_iter()
@@ -231,6 +247,8 @@ pub fn build_dag(
                         let flags = VertexFlags {
                             locked: &locked,
                             seam: &seam,
+                            materials: &slots,
+                            material_border: &material_border,
                         };
                         match simplify_group(positions, normals, &indices, &flags) {
                             Some(s) if seals(&s.indices) => {
@@ -241,8 +259,18 @@ pub fn build_dag(
                         }
                     }
                 };
-                let meshlets = split_into_meshlets(positions, &simplified.indices, weld);
-                let bounds: Vec<_> = meshlets.iter().map(|m| sphere_of(positions, m)).collect();
+                let meshlets: Vec<(u32, Vec<u32>)> = by_material(&simplified.indices, &slots)
+                    .into_iter()
+                    .flat_map(|(material, indices)| {
+                        split_into_meshlets(positions, &indices, weld)
+                            .into_iter()
+                            .map(move |m| (material, m))
+                    })
+                    .collect();
+                let bounds: Vec<_> = meshlets
+                    .iter()
+                    .map(|(_, m)| sphere_of(positions, m))
+                    .collect();
                 (Some((simplified, meshlets, bounds)), fallback)
             })
             .collect();
@@ -274,7 +302,7 @@ pub fn build_dag(
                 child.parent = lod;
                 child.parent_group = id;
             }
-            for (indices, bounds) in meshlets.into_iter().zip(bounds) {
+            for ((material, indices), bounds) in meshlets.into_iter().zip(bounds) {
                 next.push(clusters.len() as u32);
                 retried.push(false);
                 clusters.push(DagCluster {
@@ -285,6 +313,7 @@ pub fn build_dag(
                     parent: LodBounds::ROOT_PARENT,
                     parent_group: NO_GROUP,
                     source_group: id,
+                    material,
                 });
             }
             groups.push(DagGroup {
@@ -418,20 +447,48 @@ fn border_triangle_corners(
 }
 
 /// Vertices on an attribute seam: another vertex at the same position has a different
-/// normal or UV. Permissive simplification may collapse across seams elsewhere but must
-/// keep these, or textures and shading tear.
-fn seam_vertices(mesh: &Mesh, remap: &[u32]) -> Vec<bool> {
+/// normal, UV or material. Permissive simplification may collapse across seams elsewhere
+/// but must keep these, or textures and shading tear. Second: the vertices on a border
+/// between two materials, which the modes that ignore seams must not move.
+fn seam_vertices(mesh: &Mesh, remap: &[u32], slots: &[u32]) -> (Vec<bool>, Vec<bool>) {
     let mut differs = vec![false; remap.len()];
+    let mut material_differs = vec![false; remap.len()];
     for (v, &r) in remap.iter().enumerate() {
         let r = r as usize;
-        if r != v
-            && (mesh.normals[v] != mesh.normals[r]
-                || (mesh.has_uvs() && mesh.uvs[v] != mesh.uvs[r]))
+        if r == v {
+            continue;
+        }
+        if slots[v] != slots[r] {
+            material_differs[r] = true;
+        }
+        if mesh.normals[v] != mesh.normals[r]
+            || (mesh.has_uvs() && mesh.uvs[v] != mesh.uvs[r])
+            || slots[v] != slots[r]
         {
             differs[r] = true;
         }
     }
-    remap.iter().map(|&r| differs[r as usize]).collect()
+    (
+        remap.iter().map(|&r| differs[r as usize]).collect(),
+        remap.iter().map(|&r| material_differs[r as usize]).collect(),
+    )
+}
+
+/// The triangles of `indices` split by the material slot of their corners (which
+/// agree: see [`Mesh::clean`]), in slot order; one list when there is one slot.
+fn by_material(indices: &[u32], slots: &[u32]) -> Vec<(u32, Vec<u32>)> {
+    let mut lists: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+    let first = indices.first().map_or(0, |&v| slots[v as usize]);
+    if indices.iter().all(|&v| slots[v as usize] == first) {
+        return vec![(first, indices.to_vec())];
+    }
+    for t in indices.chunks_exact(3) {
+        lists
+            .entry(slots[t[0] as usize])
+            .or_default()
+            .extend_from_slice(t);
+    }
+    lists.into_iter().collect()
 }
 
 fn sphere_of(positions: &[Vec3], indices: &[u32]) -> (Vec3, f32) {

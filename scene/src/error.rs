@@ -223,6 +223,24 @@ pub enum SceneError {
         limit: u64,
     },
 
+    /// A triangle whose material slot is past what a meshlet record can hold.
+    #[error(
+        "{source_name}: triangle {triangle} has material slot {slot}, but a mesh may use \
+         at most {limit} (slots 0 to {}); split the mesh so that each part has fewer \
+         materials",
+        limit - 1
+    )]
+    TooManyMaterials {
+        /// The file or in-memory source.
+        source_name: String,
+        /// The first triangle with too high a slot.
+        triangle: usize,
+        /// Its slot.
+        slot: u32,
+        /// [`crate::mesh::MAX_MATERIALS`].
+        limit: u32,
+    },
+
     /// Normals or texture coordinates whose count differs from the positions'.
     #[error(
         "{source_name}: the attribute arrays do not match the {vertex_count} positions ({detail})"

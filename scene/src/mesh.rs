@@ -17,6 +17,10 @@ pub const MAX_VERTICES: u64 = 1 << 26;
 /// at 1e16 every square, sum and sphere merge stays far inside the `f32` range.
 pub const MAX_COORDINATE: f32 = 1e16;
 
+/// Most material slots one mesh may use: a meshlet record keeps its slot in 8 bits
+/// (see [`crate::asset::format::MeshletRecord::counts`]).
+pub const MAX_MATERIALS: u32 = 256;
+
 /// An indexed triangle mesh with per-vertex normals and optional texture coordinates.
 ///
 /// Vertices on UV seams or hard edges appear several times with the same position; the
@@ -33,6 +37,12 @@ pub struct Mesh {
     pub uvs: Vec<[f32; 2]>,
     /// Three indices per triangle, counter-clockwise front faces.
     pub indices: Vec<u32>,
+    /// Each triangle's material slot (below [`MAX_MATERIALS`]), or empty when every
+    /// triangle has slot 0. A slot is the mesh's own: whoever places the mesh maps its
+    /// slots to materials (a glTF mesh's primitives each take one). Meshlets never
+    /// straddle two slots, and simplification keeps the borders between them, so a
+    /// coarse level draws each material where the full mesh does.
+    pub materials: Vec<u32>,
 }
 
 /// What [`Mesh::clean`] changed, for the bake summary.
@@ -58,6 +68,31 @@ impl Mesh {
     /// Whether the mesh has texture coordinates, which the asset then stores.
     pub fn has_uvs(&self) -> bool {
         !self.uvs.is_empty()
+    }
+
+    /// Material slots the mesh uses: one past the largest slot of a triangle (1 when
+    /// [`Self::materials`] is empty).
+    pub fn material_count(&self) -> u32 {
+        self.materials.iter().max().map_or(1, |&m| m + 1)
+    }
+
+    /// The slot of triangle `t`.
+    pub fn material_of(&self, t: usize) -> u32 {
+        self.materials.get(t).copied().unwrap_or(0)
+    }
+
+    /// Each vertex's material slot. After [`Self::clean`] no vertex is shared by two
+    /// slots, so this is well defined; vertices no triangle uses get slot 0.
+    pub fn vertex_materials(&self) -> Vec<u32> {
+        let mut slot = vec![0u32; self.positions.len()];
+        if !self.materials.is_empty() {
+            for (t, corners) in self.indices.chunks_exact(3).enumerate() {
+                for &v in corners {
+                    slot[v as usize] = self.materials[t];
+                }
+            }
+        }
+        slot
     }
 
     /// Refuses counts beyond the asset format's limits before any large allocation.
@@ -116,6 +151,25 @@ impl Mesh {
                 source_name: self.source.clone(),
                 vertex_count: n,
                 detail: format!("{} texture coordinates", self.uvs.len()),
+            });
+        }
+        if !self.materials.is_empty() && self.materials.len() != self.triangle_count() {
+            return Err(SceneError::AttributeMismatch {
+                source_name: self.source.clone(),
+                vertex_count: n,
+                detail: format!(
+                    "{} material slots for {} triangles",
+                    self.materials.len(),
+                    self.triangle_count()
+                ),
+            });
+        }
+        if let Some(triangle) = self.materials.iter().position(|&m| m >= MAX_MATERIALS) {
+            return Err(SceneError::TooManyMaterials {
+                source_name: self.source.clone(),
+                triangle,
+                slot: self.materials[triangle],
+                limit: MAX_MATERIALS,
             });
         }
         if let Some(vertex) = self.positions.iter().position(|p| !p.is_finite()) {
@@ -178,7 +232,8 @@ impl Mesh {
         );
         let mut dropped_duplicate = 0;
         let mut kept = Vec::with_capacity(self.indices.len());
-        for t in self.indices.chunks_exact(3) {
+        let mut kept_materials = Vec::with_capacity(self.materials.len());
+        for (i, t) in self.indices.chunks_exact(3).enumerate() {
             let (a, b, c) = (t[0], t[1], t[2]);
             if a == b || b == c || a == c {
                 continue;
@@ -204,8 +259,12 @@ impl Mesh {
                 continue;
             }
             kept.extend_from_slice(t);
+            if let Some(&m) = self.materials.get(i) {
+                kept_materials.push(m);
+            }
         }
         self.indices = kept;
+        self.materials = kept_materials;
         let report = CleanReport {
             dropped_degenerate: before - self.triangle_count() - dropped_duplicate,
             dropped_duplicate,
@@ -223,13 +282,49 @@ impl Mesh {
             });
         }
         if self.normals.len() != n || self.normals.iter().any(|v| !v.is_finite()) {
+            self.normals.clear();
+            self.split_shared_vertices();
             self.generate_normals();
         } else {
             for v in &mut self.normals {
                 *v = v.normalize_or(Vec3::Z);
             }
+            self.split_shared_vertices();
         }
         Ok(report)
+    }
+
+    /// Gives every material slot its own copies of the vertices its triangles share
+    /// with another slot's, so that each vertex has one slot: the border between two
+    /// materials becomes a seam, which simplification keeps like a UV seam, and a
+    /// meshlet's vertices all belong to its slot.
+    fn split_shared_vertices(&mut self) {
+        if self.materials.is_empty() {
+            return;
+        }
+        let mut owner = vec![u32::MAX; self.positions.len()];
+        let mut copies = rustc_hash::FxHashMap::<(u32, u32), u32>::default();
+        for (t, corners) in self.indices.chunks_exact_mut(3).enumerate() {
+            let slot = self.materials[t];
+            for v in corners {
+                let o = &mut owner[*v as usize];
+                if *o == u32::MAX {
+                    *o = slot;
+                } else if *o != slot {
+                    let source = *v as usize;
+                    *v = *copies.entry((*v, slot)).or_insert_with(|| {
+                        self.positions.push(self.positions[source]);
+                        if !self.normals.is_empty() {
+                            self.normals.push(self.normals[source]);
+                        }
+                        if !self.uvs.is_empty() {
+                            self.uvs.push(self.uvs[source]);
+                        }
+                        (self.positions.len() - 1) as u32
+                    });
+                }
+            }
+        }
     }
 
     /// Area-weighted smooth normals. Copies of one position (seams) are accumulated

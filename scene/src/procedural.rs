@@ -70,6 +70,7 @@ pub fn procedural_mesh(segments: u32) -> Mesh {
         normals: Vec::new(),
         uvs: Vec::new(),
         indices,
+        materials: Vec::new(),
     };
     mesh.generate_normals();
     mesh

@@ -81,6 +81,13 @@ pub struct VertexFlags<'a> {
     /// Per global vertex, whether it lies on an attribute seam (several copies of one
     /// position).
     pub seam: &'a [bool],
+    /// Per global vertex, its material slot (each vertex has one; see
+    /// [`crate::mesh::Mesh::clean`]).
+    pub materials: &'a [u32],
+    /// Per global vertex, whether a copy of its position belongs to another material.
+    /// Regular and permissive modes keep such a border as a seam; the welded and
+    /// sloppy modes, which ignore seams, lock it.
+    pub material_border: &'a [bool],
 }
 
 /// Simplifies `indices` (global vertex ids) to about half. Returns `None` when even the
@@ -101,6 +108,20 @@ pub fn simplify_group(
     let weld = crate::mesh::position_remap(&pos);
     let mut locked: Vec<bool> = globals.iter().map(|&g| (flags.locked)(g)).collect();
     lock_lone_corners(&local, &weld, &mut locked);
+    let slot: Vec<u32> = globals.iter().map(|&g| flags.materials[g as usize]).collect();
+    let several_materials = slot.iter().any(|&m| m != slot[0]);
+    // What the modes that ignore seams lock: the group border, and the material
+    // borders, which they would otherwise merge across.
+    let hard_locked: Vec<bool> = globals
+        .iter()
+        .zip(&locked)
+        .map(|(&g, &lock)| lock || flags.material_border[g as usize])
+        .collect();
+    // Positions welded only within a material, for the welded mode.
+    let material_weld = match several_materials {
+        true => weld_within_materials(&pos, &slot),
+        false => weld.clone(),
+    };
     let locks: Vec<SimplifyVertex> = globals
         .iter()
         .zip(&locked)
@@ -130,6 +151,7 @@ pub fn simplify_group(
         let mut error = 0.0f32;
         let out = match mode {
             Mode::Welded => {
+                let weld = &material_weld;
                 let welded: Vec<u32> = local.iter().map(|&v| weld[v as usize]).collect();
                 if welded == local {
                     // No seam in the group: the same input regular mode had.
@@ -145,7 +167,7 @@ pub fn simplify_group(
                 // Seams are gone once welded, so nothing is protected; the border stays.
                 let border: Vec<SimplifyVertex> = reps
                     .iter()
-                    .map(|&r| match locked[r as usize] {
+                    .map(|&r| match hard_locked[r as usize] {
                         true => SimplifyVertex::Lock,
                         false => SimplifyVertex::None,
                     })
@@ -163,7 +185,7 @@ pub fn simplify_group(
                     Some(&mut error),
                 );
                 let out: Vec<u32> = out.iter().map(|&c| reps[c as usize]).collect();
-                unweld(&out, &pos, &attrs, &weld)
+                unweld(&out, &pos, &attrs, weld)
             }
             Mode::Regular | Mode::Permissive => {
                 let mut options = SimplifyOptions::ErrorAbsolute | SimplifyOptions::ErrorClamped;
@@ -184,10 +206,17 @@ pub fn simplify_group(
                 )
             }
             Mode::Sloppy => {
+                let hard_locks: Vec<SimplifyVertex> = hard_locked
+                    .iter()
+                    .map(|&lock| match lock {
+                        true => SimplifyVertex::Lock,
+                        false => SimplifyVertex::None,
+                    })
+                    .collect();
                 let out = meshopt::simplify_sloppy_with_locks(
                     &local,
                     &adapter,
-                    &locks,
+                    &hard_locks,
                     target,
                     f32::MAX,
                     Some(&mut error),
@@ -199,6 +228,16 @@ pub fn simplify_group(
         };
         let count = out.len() / 3;
         if out.is_empty() || count > stuck {
+            continue;
+        }
+        // A triangle whose corners belong to two materials has no material to draw it
+        // in: the result is not taken (the locks above make this rare).
+        if several_materials
+            && out.chunks_exact(3).any(|t| {
+                slot[t[0] as usize] != slot[t[1] as usize]
+                    || slot[t[0] as usize] != slot[t[2] as usize]
+            })
+        {
             continue;
         }
         let folds = overused_edges(&out, &weld);
@@ -222,6 +261,20 @@ pub fn simplify_group(
         error,
         mode,
     })
+}
+
+/// For every vertex, the first vertex with a bit-identical position and the same
+/// material slot: [`crate::mesh::position_remap`] that never joins two materials.
+fn weld_within_materials(pos: &[Vec3], slot: &[u32]) -> Vec<u32> {
+    let mut map = rustc_hash::FxHashMap::default();
+    pos.iter()
+        .zip(slot)
+        .enumerate()
+        .map(|(i, (p, &m))| {
+            let key = ((*p + Vec3::ZERO).to_array().map(f32::to_bits), m);
+            *map.entry(key).or_insert(i as u32)
+        })
+        .collect()
 }
 
 /// Gives each corner of the welded triangles `out` the copy of its position whose normal

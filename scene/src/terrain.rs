@@ -182,6 +182,7 @@ impl Terrain {
             normals: Vec::new(),
             uvs,
             indices,
+            materials: Vec::new(),
         };
         mesh.generate_normals();
         Ok(mesh)

@@ -331,13 +331,12 @@ fn materials_are_read_with_their_factors_and_each_triangle_keeps_its_primitives(
     );
     assert_eq!(scene.materials[3].emissive, [2.0, 1.5, 0.5]);
     assert_eq!(scene.materials[3].alpha, AlphaMode::Blend);
-    // Two triangles per primitive, each with its primitive's material.
+    // Two triangles per primitive, each with its primitive's slot, each slot with
+    // its primitive's material.
     let m = &scene.meshes[0];
     assert_eq!(m.mesh.triangle_count(), 10);
-    assert_eq!(
-        m.triangle_materials,
-        [0, 0, 1, 1, 2, 2, 3, 3, DEFAULT_MATERIAL, DEFAULT_MATERIAL]
-    );
+    assert_eq!(m.mesh.materials, [0, 0, 1, 1, 2, 2, 3, 3, 4, 4]);
+    assert_eq!(m.materials, [0, 1, 2, 3, DEFAULT_MATERIAL]);
 }
 
 fn refused_material(material: serde_json::Value) -> String {

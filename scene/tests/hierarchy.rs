@@ -369,5 +369,5 @@ fn an_asset_of_the_format_before_the_hierarchy_asks_to_be_rebaked() {
             "{msg}"
         );
     }
-    assert_eq!(VERSION, 4);
+    assert!(VERSION > 3, "this test writes the format before the current one");
 }

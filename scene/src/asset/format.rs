@@ -26,8 +26,9 @@ use bytemuck::{Pod, Zeroable};
 /// by mistake is named as such instead of failing a later check.
 pub const MAGIC: [u8; 8] = *b"MLASSET\0";
 /// Bumped on any layout change; older files are refused, not misread. 4: the culling
-/// hierarchy (`node_count`, two more sections).
-pub const VERSION: u32 = 4;
+/// hierarchy (`node_count`, two more sections). 5: material slots
+/// ([`AssetHeader::material_count`], [`MeshletRecord::material`]).
+pub const VERSION: u32 = 5;
 
 /// Header flag: each meshlet's payload holds UVs after its vertex records.
 pub const FLAG_UVS: u32 = 1;
@@ -98,6 +99,9 @@ pub struct AssetHeader {
     /// Triangles the bake dropped as degenerate, so that a summary can say the asset
     /// has fewer triangles than the source for that reason.
     pub dropped_degenerate: u32,
+    /// Material slots of the mesh (at least 1): every meshlet's slot is below it, and
+    /// whoever places the mesh gives a material for each.
+    pub material_count: u32,
     /// Smallest corner of the mesh's bounding box.
     pub bounds_min: [f32; 3],
     /// Largest corner of the mesh's bounding box.
@@ -159,7 +163,8 @@ pub struct MeshletRecord {
     pub parent_group: u32,
     /// First payload word, relative to the payload section.
     pub data_offset: u32,
-    /// vertex count (bits 0..8), triangle count (8..16), level (16..24).
+    /// vertex count (bits 0..8), triangle count (8..16), level (16..24), material slot
+    /// (24..32): a meshlet's triangles all have one material.
     pub counts: u32,
     /// Per-meshlet minimum of the grid coordinates; packed values are offsets from it.
     pub grid_min: [u32; 3],
@@ -187,6 +192,10 @@ impl MeshletRecord {
     /// DAG level of the meshlet (0: full detail), from [`Self::counts`].
     pub fn level(&self) -> u32 {
         (self.counts >> 16) & 0xff
+    }
+    /// The material slot of the meshlet's triangles, from [`Self::counts`].
+    pub fn material(&self) -> u32 {
+        self.counts >> 24
     }
     /// Bits of each packed position offset (x, y, z), from [`Self::bits`].
     pub fn axis_bits(&self) -> [u32; 3] {

@@ -112,7 +112,8 @@ impl MeshletAsset {
                     data_offset: 0,
                     counts: locals.len() as u32
                         | ((c.triangle_count() as u32) << 8)
-                        | (c.level.min(255) << 16),
+                        | (c.level.min(255) << 16)
+                        | (c.material << 24),
                     grid_min: lo,
                     bits: bits[0]
                         | (bits[1] << 8)
@@ -177,6 +178,7 @@ impl MeshletAsset {
         header.total_vertices = meshlets.iter().map(|m| m.vertex_count()).sum();
         header.input_vertices = mesh.positions.len() as u32;
         header.dropped_degenerate = dropped_degenerate as u32;
+        header.material_count = mesh.material_count();
         header.bounds_min = min.to_array();
         header.bounds_max = max.to_array();
         header.quant_origin = quant.origin.to_array();

@@ -118,6 +118,16 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ),
         ));
     }
+    if h.material_count == 0 || h.material_count > crate::mesh::MAX_MATERIALS {
+        return Err(bad(
+            "header.material_count",
+            format!(
+                "is {}, outside 1..={} (a meshlet keeps its slot in 8 bits)",
+                h.material_count,
+                crate::mesh::MAX_MATERIALS
+            ),
+        ));
+    }
     header_floats(h)?;
     let sphere_limit = SphereLimit::of(h);
 
@@ -133,8 +143,15 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
     for (i, m) in meshlets.iter().enumerate() {
         let f = |name: &str| format!("meshlet[{i}].{name}");
         let (vc, tc, level) = (m.vertex_count(), m.triangle_count(), m.level());
-        if m.counts >> 24 != 0 {
-            return Err(bad(f("counts"), "has bits set above bit 24"));
+        if m.material() >= h.material_count {
+            return Err(bad(
+                f("counts"),
+                format!(
+                    "material slot {} is not below header.material_count {}",
+                    m.material(),
+                    h.material_count
+                ),
+            ));
         }
         if vc == 0
             || tc == 0

@@ -8,8 +8,8 @@ use gltf::json::validation::Checked;
 use super::GltfFile;
 use crate::error::SceneError;
 
-/// Where [`SceneMesh::triangle_materials`](super::SceneMesh::triangle_materials) says a
-/// triangle has no material of the file's: glTF's default material (white, fully rough,
+/// Where [`SceneMesh::materials`](super::SceneMesh::materials) says a slot's
+/// primitives have no material of the file's: glTF's default material (white, fully rough,
 /// not metallic) applies.
 pub const DEFAULT_MATERIAL: u32 = u32::MAX;
 

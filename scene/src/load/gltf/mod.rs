@@ -59,7 +59,11 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
     {
         let Some(m) = mesh else { continue };
         if meshes[*m].is_none() {
-            meshes[*m] = Some(file.read_mesh(&buffers, *m)?.map(|(mesh, _)| mesh));
+            // One mesh for a single material: the slots of the parts are not kept.
+            meshes[*m] = Some(file.read_mesh(&buffers, *m)?.map(|(mut mesh, _)| {
+                mesh.materials.clear();
+                mesh
+            }));
         }
         let Some(Some(part)) = &meshes[*m] else {
             continue;
@@ -221,9 +225,10 @@ impl<'p> GltfFile<'p> {
         load_buffers(self.root(), self.gltf.blob.clone(), self.path)
     }
 
-    /// Mesh `mi`'s triangle primitives merged, in the mesh's own space, with each
-    /// triangle's material (its primitive's, or [`DEFAULT_MATERIAL`]); `None` when it has
-    /// no triangles (points or lines only, each skipped with a warning). Normals are kept
+    /// Mesh `mi`'s triangle primitives merged, in the mesh's own space, each triangle
+    /// with its material slot ([`Mesh::materials`]), and the file's material behind
+    /// each slot (a primitive's, or [`DEFAULT_MATERIAL`]); `None` when it has no
+    /// triangles (points or lines only, each skipped with a warning). Normals are kept
     /// only where every primitive has them, UVs likewise.
     fn read_mesh(
         &self,
@@ -241,7 +246,8 @@ impl<'p> GltfFile<'p> {
             ..Mesh::default()
         };
         let (mut normals_complete, mut uvs_complete, mut any) = (true, true, false);
-        let mut materials = Vec::new();
+        // The file's material behind each of the mesh's slots, in order of first use.
+        let mut slots: Vec<u32> = Vec::new();
         for (pi, p) in root.meshes[mi].primitives.iter().enumerate() {
             let at = |e: String| self.err(format!("mesh {name:?} primitive {pi}: {e}"));
             match p.mode {
@@ -359,7 +365,23 @@ impl<'p> GltfFile<'p> {
                 });
             }
             mesh.indices.extend(indices.iter().map(|&i| i + base));
-            materials.extend(std::iter::repeat_n(material, indices.len() / 3));
+            let slot = match slots.iter().position(|&m| m == material) {
+                Some(slot) => slot as u32,
+                None => {
+                    slots.push(material);
+                    (slots.len() - 1) as u32
+                }
+            };
+            if slot >= crate::mesh::MAX_MATERIALS {
+                return Err(SceneError::TooManyMaterials {
+                    source_name: mesh.source.clone(),
+                    triangle: mesh.indices.len() / 3,
+                    slot,
+                    limit: crate::mesh::MAX_MATERIALS,
+                });
+            }
+            mesh.materials
+                .extend(std::iter::repeat_n(slot, indices.len() / 3));
             Mesh::check_limits(&mesh.source, 0, (mesh.indices.len() / 3) as u64)?;
         }
         if !any {
@@ -371,7 +393,11 @@ impl<'p> GltfFile<'p> {
         if !uvs_complete {
             mesh.uvs.clear();
         }
-        Ok(Some((mesh, materials)))
+        if slots.len() <= 1 {
+            // One material: every triangle's slot is 0, which an empty list says.
+            mesh.materials.clear();
+        }
+        Ok(Some((mesh, slots)))
     }
 }
 

@@ -27,7 +27,7 @@ pub struct GltfScene {
     pub instances: Vec<SceneInstance>,
     /// The cameras the scene's nodes carry, in the same order.
     pub cameras: Vec<SceneCamera>,
-    /// The file's materials, which [`SceneMesh::triangle_materials`] index.
+    /// The file's materials, which [`SceneMesh::materials`] index.
     pub materials: Vec<SceneMaterial>,
 }
 
@@ -36,11 +36,12 @@ pub struct GltfScene {
 pub struct SceneMesh {
     /// The glTF mesh's name, or `#index` for an unnamed one.
     pub name: String,
-    /// Its triangle primitives merged (see [`super::load_gltf`] for what is kept).
+    /// Its triangle primitives merged (see [`super::load_gltf`] for what is kept), each
+    /// triangle with its material slot ([`Mesh::materials`]).
     pub mesh: Mesh,
-    /// Each triangle's material: its primitive's, an index into
-    /// [`GltfScene::materials`], or [`super::DEFAULT_MATERIAL`].
-    pub triangle_materials: Vec<u32>,
+    /// The material behind each slot, in order of first use by the primitives: an
+    /// index into [`GltfScene::materials`], or [`super::DEFAULT_MATERIAL`].
+    pub materials: Vec<u32>,
 }
 
 /// One node placing a mesh.
@@ -132,12 +133,12 @@ pub fn load_gltf_scene_with(path: &Path, options: &LoadOptions) -> Result<GltfSc
     let mut read: Vec<Option<usize>> = vec![None; used.len()];
     let mut meshes = Vec::new();
     for (k, &m) in used.iter().enumerate() {
-        if let Some((mesh, triangle_materials)) = file.read_mesh(&buffers, m)? {
+        if let Some((mesh, materials)) = file.read_mesh(&buffers, m)? {
             read[k] = Some(meshes.len());
             meshes.push(SceneMesh {
                 name: file.mesh_name(m),
                 mesh,
-                triangle_materials,
+                materials,
             });
         }
     }
