@@ -94,6 +94,8 @@ pub struct SceneData {
     /// The material table instances index, in GPU layout.
     pub materials: Vec<layout::Material>,
     mesh_names: Vec<String>,
+    /// Per mesh, its material slots: an instance's material is the first of as many.
+    mesh_materials: Vec<u32>,
     limits: Limits,
     /// Instances refused because their transform was singular or not finite.
     skipped_instances: u32,
@@ -227,6 +229,7 @@ impl SceneData {
             level_count: header.level_count,
         });
         self.mesh_names.push(name.to_string());
+        self.mesh_materials.push(header.material_count);
         self.geometry_version += 1;
         Ok(MeshId(self.meshes.len() as u32 - 1))
     }
@@ -234,6 +237,12 @@ impl SceneData {
     /// The name an asset was added under, for counters and messages that name meshes.
     pub fn mesh_name(&self, mesh: MeshId) -> Option<&str> {
         self.mesh_names.get(mesh.0 as usize).map(String::as_str)
+    }
+
+    /// Material slots of `mesh` (1 for a mesh of one material): an instance of it
+    /// takes that many consecutive materials, from the one it is placed with.
+    pub fn mesh_material_count(&self, mesh: MeshId) -> Option<u32> {
+        self.mesh_materials.get(mesh.0 as usize).copied()
     }
 
     /// Adds a material and returns the index instances refer to it by.
@@ -246,7 +255,9 @@ impl SceneData {
         self.materials.len() as u32 - 1
     }
 
-    /// Places `mesh` with `world_from_local`. A transform that is singular or not finite
+    /// Places `mesh` with `world_from_local`, its material slot `k` drawn in material
+    /// `material + k` (so a mesh of several materials takes as many consecutive ones,
+    /// see [`Self::mesh_material_count`]). A transform that is singular or not finite
     /// cannot be drawn (its normals and LOD scale are undefined): the instance is
     /// skipped, counted in [`Self::skipped_instances`], and `Ok(None)` returned.
     pub fn add_instance(
@@ -259,8 +270,13 @@ impl SceneData {
             .meshes
             .get(mesh.0 as usize)
             .ok_or(SceneDataError::UnknownMesh(mesh.0))?;
-        if material as usize >= self.materials.len() {
-            return Err(SceneDataError::UnknownMaterial(material));
+        let slots = self.mesh_materials[mesh.0 as usize];
+        if material as u64 + slots as u64 > self.materials.len() as u64 {
+            return Err(SceneDataError::UnknownMaterial {
+                material,
+                slots,
+                added: self.materials.len() as u32,
+            });
         }
         check_limit(
             "instances",

@@ -18,9 +18,21 @@ pub enum SceneDataError {
     /// An instance named a mesh this scene was never given.
     #[error("mesh id {0} does not exist in this scene; add the mesh first with `add_mesh`")]
     UnknownMesh(u32),
-    /// An instance named a material this scene was never given.
-    #[error("material id {0} does not exist in this scene; add it first with `add_material`")]
-    UnknownMaterial(u32),
+    /// An instance named a material this scene was never given, or a mesh of several
+    /// material slots runs past the materials added.
+    #[error(
+        "material id {material} with the mesh's {slots} slot(s) needs materials up to \
+         {material} + {slots} - 1, but the scene has {added}; add them first with \
+         `add_material`"
+    )]
+    UnknownMaterial {
+        /// The instance's first material.
+        material: u32,
+        /// The mesh's material slots.
+        slots: u32,
+        /// Materials the scene holds.
+        added: u32,
+    },
     /// An instance id past the scene's instances.
     #[error("instance id {0} does not exist in this scene")]
     UnknownInstance(u32),

@@ -477,8 +477,12 @@ fn a_buffer_of_no_elements_is_refused_naming_its_parameter() {
     // (an empty input of a scan, say): not refused.
     let mut g = GraphBuilder::new();
     let input = g.import_buffer("input", u32s(0), wgpu::BufferUsages::STORAGE);
-    g.add_pass("read", Fake::rw(&["in"], &[]), Bindings::new().bind("in", input))
-        .unwrap();
+    g.add_pass(
+        "read",
+        Fake::rw(&["in"], &[]),
+        Bindings::new().bind("in", input),
+    )
+    .unwrap();
     assert!(
         g.compile(&CompileOptions::new(wgpu::Features::empty()))
             .is_ok()

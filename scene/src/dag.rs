@@ -470,7 +470,10 @@ fn seam_vertices(mesh: &Mesh, remap: &[u32], slots: &[u32]) -> (Vec<bool>, Vec<b
     }
     (
         remap.iter().map(|&r| differs[r as usize]).collect(),
-        remap.iter().map(|&r| material_differs[r as usize]).collect(),
+        remap
+            .iter()
+            .map(|&r| material_differs[r as usize])
+            .collect(),
     )
 }
 

@@ -108,7 +108,10 @@ pub fn simplify_group(
     let weld = crate::mesh::position_remap(&pos);
     let mut locked: Vec<bool> = globals.iter().map(|&g| (flags.locked)(g)).collect();
     lock_lone_corners(&local, &weld, &mut locked);
-    let slot: Vec<u32> = globals.iter().map(|&g| flags.materials[g as usize]).collect();
+    let slot: Vec<u32> = globals
+        .iter()
+        .map(|&g| flags.materials[g as usize])
+        .collect();
     let several_materials = slot.iter().any(|&m| m != slot[0]);
     // What the modes that ignore seams lock: the group border, and the material
     // borders, which they would otherwise merge across.

@@ -29,11 +29,7 @@ fn patched_sphere() -> Mesh {
         .indices
         .chunks_exact(3)
         .map(|t| {
-            let c = t
-                .iter()
-                .map(|&v| mesh.positions[v as usize])
-                .sum::<Vec3>()
-                / 3.0;
+            let c = t.iter().map(|&v| mesh.positions[v as usize]).sum::<Vec3>() / 3.0;
             let band = (((c.z + 1.0) * 0.5 * 5.0) as u32).min(4);
             let sector = (((c.y.atan2(c.x) / std::f32::consts::TAU + 0.5) * 4.0) as u32).min(3);
             (band + 2 * sector) % SLOTS
@@ -88,7 +84,9 @@ fn every_meshlet_at_every_level_holds_one_material() {
     let top = built.dag.level_count - 1;
     for slot in 0..SLOTS {
         assert!(
-            in_dag.keys().any(|&(level, s)| s == slot && level + 1 >= top),
+            in_dag
+                .keys()
+                .any(|&(level, s)| s == slot && level + 1 >= top),
             "slot {slot} is missing near the top level {top}: {in_dag:?}"
         );
     }

@@ -29,12 +29,13 @@ pub fn text(report: &InspectReport) -> String {
     );
     let _ = writeln!(
         s,
-        "  {} bytes, checksum {:#018x}, {} meshlets, {} groups, UVs: {}",
+        "  {} bytes, checksum {:#018x}, {} meshlets, {} groups, UVs: {}, material slots: {}",
         summary.bytes,
         summary.checksum(),
         h.meshlet_count,
         h.group_count,
-        if h.has_uvs() { "yes" } else { "no" }
+        if h.has_uvs() { "yes" } else { "no" },
+        h.material_count
     );
     let _ = writeln!(
         s,

@@ -51,6 +51,7 @@ pub fn legend(view: DebugView) -> &'static str {
         DebugView::Depth => "reverse-Z depth as grey, depth^(1/4)",
         DebugView::LightCount => "lights per froxel: black none, red 32 or more",
         DebugView::Pyramid => "a mip of the depth pyramid as grey",
+        DebugView::Material => "a colour per material",
         DebugView::Occlusion => {
             "green: first culling pass drew it, blue: second; red: share occluded"
         }

@@ -7,9 +7,7 @@ use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::view::Projection;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData, SceneDataError};
 use meshlight::scene::cache;
-use meshlight::scene::load::{
-    CameraProjection, DEFAULT_MATERIAL, GltfScene, SceneCamera, load_gltf_scene,
-};
+use meshlight::scene::load::{CameraProjection, GltfScene, SceneCamera, load_gltf_scene};
 use meshlight::scene::{BuildOptions, SceneError};
 use meshlight::shaders::cpu::layout::ClusterableObject;
 use std::collections::BTreeMap;
@@ -59,10 +57,9 @@ pub fn is_gltf(path: &Path) -> bool {
 /// the file's cameras (in the scene's node order); `None` frames the whole scene from
 /// the front, above and to the right.
 ///
-/// Each mesh is drawn in its material's base colour factor (glTF's default material is
-/// white). Until assets record a material per meshlet, a mesh of several materials takes
-/// the one covering most of its triangles, and a warning names it; textures are not read
-/// yet. A node whose transform mirrors places a copy of its mesh with the winding reversed
+/// Each primitive is drawn in its material's base colour factor (glTF's default
+/// material is white): the asset keeps each meshlet's material slot, and the instance
+/// the first of its mesh's run of materials. Textures are not read yet. A node whose transform mirrors places a copy of its mesh with the winding reversed
 /// (baked once too), since the rasterisers keep counter-clockwise faces.
 pub fn gltf_scene(
     data: SceneData,
@@ -91,7 +88,7 @@ pub fn place(
                 })
         })
         .transpose()?;
-    let colours = mesh_colours(&mut data, scene);
+    let materials = mesh_materials(&mut data, scene);
     // (mesh, mirrored) → the GPU scene's mesh and its bounds, baked on first use.
     let mut baked: BTreeMap<(usize, bool), (MeshId, [Vec3; 2])> = BTreeMap::new();
     let (mut low, mut high) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
@@ -123,9 +120,8 @@ pub fn place(
                 known
             }
         };
-        let colour = colours[instance.mesh];
         if data
-            .add_instance(mesh, instance.transform, colour)?
+            .add_instance(mesh, instance.transform, materials[instance.mesh])?
             .is_some()
         {
             for corner in 0..8 {
@@ -147,41 +143,28 @@ pub fn place(
     Ok(Placed { data, camera })
 }
 
-/// Per mesh of `scene`, the material of `data` it is drawn in: its glTF material's base
-/// colour (one GPU material per glTF material used, glTF's white default where a
-/// primitive names none).
-fn mesh_colours(data: &mut SceneData, scene: &GltfScene) -> Vec<u32> {
-    let mut added: BTreeMap<u32, u32> = BTreeMap::new();
+/// Per mesh of `scene`, the first of the materials of `data` its slots are drawn in:
+/// one GPU material per slot, consecutive, with its glTF material's base colour
+/// factor (glTF's white default where a primitive names none). Meshes with the same
+/// materials share one run.
+fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Vec<u32> {
+    let mut runs: BTreeMap<&[u32], u32> = BTreeMap::new();
     scene
         .meshes
         .iter()
         .map(|m| {
-            let mut counts: BTreeMap<u32, usize> = BTreeMap::new();
-            for &t in &m.triangle_materials {
-                *counts.entry(t).or_default() += 1;
-            }
-            // The most triangles; the lowest index among equals, so the choice is stable.
-            let (&chosen, _) = counts
-                .iter()
-                .max_by_key(|&(&k, &n)| (n, std::cmp::Reverse(k)))
-                .unwrap_or((&DEFAULT_MATERIAL, &0));
-            let material = scene.materials.get(chosen as usize);
-            if counts.len() > 1 {
-                log::warn!(
-                    "{}: mesh {:?} has {} materials; until assets record a material per \
-                     meshlet it is drawn in the base colour of {:?}, which covers the most \
-                     triangles",
-                    scene.source,
-                    m.name,
-                    counts.len(),
-                    material.map_or("the default material", |m| m.name.as_str())
-                );
-            }
-            *added.entry(chosen).or_insert_with(|| {
-                let [r, g, b, _] = material.map_or([1.0; 4], |m| m.base_color);
-                data.add_material(Material {
-                    base_color: [r, g, b],
-                })
+            *runs.entry(&m.materials).or_insert_with(|| {
+                let first = data.materials.len() as u32;
+                for &slot in &m.materials {
+                    let [r, g, b, _] = scene
+                        .materials
+                        .get(slot as usize)
+                        .map_or([1.0; 4], |m| m.base_color);
+                    data.add_material(Material {
+                        base_color: [r, g, b],
+                    });
+                }
+                first
             })
         })
         .collect()

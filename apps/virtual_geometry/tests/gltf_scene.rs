@@ -4,7 +4,7 @@
 
 use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::data::Limits;
-use meshlight::gpu_scene::{Material, SceneData};
+use meshlight::gpu_scene::{Material, MeshId, SceneData};
 use meshlight::scene::BuildOptions;
 use meshlight::scene::cache;
 use meshlight::scene::load::load_gltf_scene;
@@ -298,10 +298,11 @@ fn the_files_cameras_are_offered_and_a_missing_one_is_an_error() {
     }
 }
 
-/// Each mesh is drawn in its glTF material's base colour; one of several materials takes
-/// the one covering most triangles; a mesh without a material is white.
+/// Each primitive is drawn in its glTF material's base colour: a mesh of two materials
+/// takes a run of two GPU materials in its primitives' order, meshes of the same
+/// materials share a run, and a mesh without a material is white.
 #[test]
-fn meshes_take_their_materials_base_colour() {
+fn meshes_take_a_run_of_their_primitives_materials() {
     let mut w = GltfWriter::new();
     let red = w.material(json!({"name": "red",
         "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.1, 0.1, 1.0]}}));
@@ -309,13 +310,13 @@ fn meshes_take_their_materials_base_colour() {
         "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.2, 0.9, 1.0]}}));
     let with = |material: Option<usize>, p: Primitive| Primitive { material, ..p };
     let ball = w.mesh("ball", &[with(Some(red), sphere(8, 16))]);
-    // The cube's 12 triangles are blue, the small sphere's 256 red: red covers most.
     let mixed = w.mesh(
         "mixed",
         &[with(Some(blue), cube()), with(Some(red), sphere(8, 16))],
     );
     let plain = w.mesh("plain", &[cube()]);
-    let nodes = [ball, mixed, plain].map(|mesh| {
+    let another_ball = w.mesh("another ball", &[with(Some(red), sphere(6, 12))]);
+    let nodes = [ball, mixed, plain, another_ball].map(|mesh| {
         w.node(Node {
             mesh: Some(mesh),
             translation: Some([mesh as f32 * 3.0, 0.0, 0.0]),
@@ -326,11 +327,98 @@ fn meshes_take_their_materials_base_colour() {
     let path = scratch("materials").join("materials.glb");
     std::fs::write(&path, w.glb()).unwrap();
     let placed = gltf_scene(SceneData::new(Limits::default()), &path, None).unwrap();
-    let colour =
-        |i: usize| placed.data.materials[placed.data.instances[i].material as usize].base_color;
-    assert_eq!(colour(0), [0.9, 0.1, 0.1, 1.0]);
-    assert_eq!(colour(1), [0.9, 0.1, 0.1, 1.0]);
-    assert_eq!(colour(2), [1.0, 1.0, 1.0, 1.0]);
-    // One GPU material per glTF material used, and the default.
-    assert_eq!(placed.data.materials.len(), 2);
+    let data = &placed.data;
+    let colour = |i: usize, slot: u32| {
+        data.materials[(data.instances[i].material + slot) as usize].base_color
+    };
+    let slots = |i: usize| data.mesh_material_count(MeshId(data.instances[i].mesh));
+    assert_eq!(colour(0, 0), [0.9, 0.1, 0.1, 1.0]);
+    assert_eq!(slots(1), Some(2));
+    assert_eq!(colour(1, 0), [0.1, 0.2, 0.9, 1.0]);
+    assert_eq!(colour(1, 1), [0.9, 0.1, 0.1, 1.0]);
+    assert_eq!(colour(2, 0), [1.0, 1.0, 1.0, 1.0]);
+    assert_eq!(data.instances[3].material, data.instances[0].material);
+    // Runs: [red], [blue, red], [white].
+    assert_eq!(data.materials.len(), 4);
+    // Each of the mixed mesh's meshlets is the cube's (slot 0, 12 triangles in all)
+    // or the sphere's (slot 1).
+    let mesh = data.meshes[data.instances[1].mesh as usize];
+    let range = mesh.first_meshlet as usize..(mesh.first_meshlet + mesh.meshlet_count) as usize;
+    let cube_triangles: u32 = data.meshlets[range]
+        .iter()
+        .filter(|m| m.level() == 0 && m.material() == 0)
+        .map(|m| m.triangle_count())
+        .sum();
+    assert_eq!(cube_triangles, 12);
+}
+
+/// A strip of five unit quads, each a primitive of its own material, in one mesh: one
+/// asset, and the `material` view shows each quad in the colour of its own material
+/// (the instance's first material plus the quad's slot).
+#[test]
+fn the_material_view_shows_each_primitive_in_its_own_material() {
+    let mut w = GltfWriter::new();
+    let primitives: Vec<Primitive> = (0..5)
+        .map(|k| {
+            let x = k as f32;
+            let material = w.material(json!({"name": format!("m{k}"),
+                "pbrMetallicRoughness": {"baseColorFactor": [0.2 * x, 0.5, 1.0 - 0.2 * x, 1.0]}}));
+            Primitive {
+                positions: vec![
+                    [x, 0.0, 0.0],
+                    [x + 1.0, 0.0, 0.0],
+                    [x + 1.0, 1.0, 0.0],
+                    [x, 1.0, 0.0],
+                ],
+                normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
+                uvs: None,
+                indices: vec![0, 1, 2, 0, 2, 3],
+                material: Some(material),
+            }
+        })
+        .collect();
+    let strip = w.mesh("strip", &primitives);
+    let node = w.node(Node {
+        mesh: Some(strip),
+        ..Node::default()
+    });
+    w.scene(&[node]);
+    let path = scratch("material-view").join("strip.glb");
+    std::fs::write(&path, w.glb()).unwrap();
+    let placed = gltf_scene(SceneData::new(Limits::default()), &path, None).unwrap();
+    assert_eq!(
+        placed.data.meshes.len(),
+        1,
+        "one asset for the five materials"
+    );
+    let first = placed.data.instances[0].material;
+    let camera = meshlight::gpu_scene::Camera::perspective(
+        Vec3::new(2.5, 0.5, 4.0),
+        Vec3::new(2.5, 0.5, 0.0),
+        1.0,
+        0.1,
+    );
+    let mut settings = FrameSettings::new(W, H);
+    settings.view = Some(meshlight::resolve::DebugView::Material);
+    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let image = r
+        .render_still(&camera)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .rgba;
+    let view_projection = camera.projection_matrix([W, H]) * camera.view_matrix();
+    let mut seen = Vec::new();
+    for k in 0..5u32 {
+        let clip = view_projection * glam::Vec4::new(k as f32 + 0.5, 0.5, 0.0, 1.0);
+        let ndc = clip.truncate() / clip.w;
+        let x = ((ndc.x + 1.0) * 0.5 * W as f32) as usize;
+        let y = ((1.0 - ndc.y) * 0.5 * H as f32) as usize;
+        let at = (y * W as usize + x) * 4;
+        let got = [image[at], image[at + 1], image[at + 2]];
+        let want = meshlight::resolve::cpu::id_color(first + k);
+        assert_eq!(got, want, "quad {k} at pixel ({x}, {y})");
+        seen.push(got);
+    }
+    seen.dedup();
+    assert_eq!(seen.len(), 5, "five distinct colours: {seen:?}");
 }

@@ -260,8 +260,15 @@ pub fn depth(visbuffer: &[u64], width: u32, height: u32) -> Vec<f32> {
         .collect()
 }
 
+/// The material a cluster's triangles take: its instance's plus its meshlet's slot.
+pub fn material_of(scene: &SceneData, cluster: &Cluster) -> u32 {
+    instance_of(scene, cluster)
+        .material
+        .wrapping_add(meshlet_of(scene, cluster).material())
+}
+
 /// The `material_depth` target: [`crate::material_depth`] of the material of the
-/// instance each pixel's cluster draws, 0 where empty.
+/// cluster each pixel shows ([`material_of`]), 0 where empty.
 pub fn material_depth(
     scene: &SceneData,
     raster_clusters: &[Cluster],
@@ -274,7 +281,7 @@ pub fn material_depth(
                 return 0.0;
             }
             let cluster = cluster_of(raster_clusters, v);
-            crate::material_depth(instance_of(scene, &cluster).material)
+            crate::material_depth(material_of(scene, &cluster))
         })
         .collect()
 }
@@ -347,6 +354,10 @@ fn pixel_color(
             let cluster = cluster_of(frame.raster_clusters, value);
             unorm(id_color(meshlet_of(frame.scene, &cluster).level()))
         }
+        DebugView::Material => unorm(id_color(material_of(
+            frame.scene,
+            &cluster_of(frame.raster_clusters, value),
+        ))),
         DebugView::Raster => unorm(if id < frame.software_clusters {
             SOFTWARE_COLOR
         } else {
@@ -562,7 +573,7 @@ fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> 
     let checker = filtered_checker(weigh(b), weigh(bary.ddx), weigh(bary.ddy));
     let base = scene
         .materials
-        .get(instance.material as usize)
+        .get(instance.material as usize + m.material() as usize)
         .map_or(Vec3::ZERO, |m| Vec4::from_array(m.base_color).truncate());
     let albedo = base * (CHECKER_DARK * (1.0 - checker) + checker);
     let diffuse = n.dot(light.direction).max(0.0);

@@ -4,6 +4,8 @@
 
 #import meshlight::instance::Instance
 #import meshlight::instance_table::instance_at
+#import meshlight::meshlet::meshlet_material
+#import meshlight::scene_buffers::meshlets
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster}
 #import resolve::visibility::{raster_clusters, visibility_at}
 
@@ -11,7 +13,8 @@
 #import resolve::depth_params::Params
 
 // Bindings 0 and 1: the visibility buffer and `raster_clusters` (resolve::visibility).
-// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31).
+// The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31); the
+// meshlets, for their material slots (meshlight::scene_buffers).
 @group(0) @binding(3) var<uniform> params: Params;
 
 // 2^-24: material ids map to multiples of it, exact in f32 below 2^24.
@@ -49,5 +52,5 @@ fn material_depth_fs(@builtin(position) position: vec4<f32>) -> @builtin(frag_de
         return 0.0;
     }
     let cluster = raster_clusters[visbuffer_cluster(value)];
-    return material_depth(instance_at(cluster.instance).material);
+    return material_depth(instance_at(cluster.instance).material + meshlet_material(meshlets[cluster.meshlet]));
 }

@@ -34,11 +34,13 @@ pub enum DebugView {
     /// the `second_counts` slot), tinted red by the share of the pixel's instance that
     /// occlusion culled (the `occluded_per_instance` slot), over the shaded brightness.
     Occlusion = 8,
+    /// A colour per material: the pixel's instance's material plus its meshlet's slot.
+    Material = 9,
 }
 
 impl DebugView {
     /// Every view, in discriminant order.
-    pub const ALL: [DebugView; 9] = [
+    pub const ALL: [DebugView; 10] = [
         DebugView::Shaded,
         DebugView::Clusters,
         DebugView::Triangles,
@@ -48,6 +50,7 @@ impl DebugView {
         DebugView::LightCount,
         DebugView::Pyramid,
         DebugView::Occlusion,
+        DebugView::Material,
     ];
 
     /// The name pipeline files and the command line use.
@@ -62,6 +65,7 @@ impl DebugView {
             DebugView::LightCount => "light-count",
             DebugView::Pyramid => "pyramid",
             DebugView::Occlusion => "occlusion",
+            DebugView::Material => "material",
         }
     }
 

@@ -5,9 +5,10 @@
 // there.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
 #import meshlight::instance::{Instance, Material, instance_transform_normal}
 #import meshlight::cluster_triangle::cluster_triangle
+#import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshlets, payload, materials}
 #import meshlight::view::View
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
@@ -27,6 +28,7 @@ const VIEW_DEPTH: u32 = 5u;
 const VIEW_LIGHT_COUNT: u32 = 6u;
 const VIEW_PYRAMID: u32 = 7u;
 const VIEW_OCCLUSION: u32 = 8u;
+const VIEW_MATERIAL: u32 = 9u;
 // The light-count view's scale: this many lights in a froxel is the hottest colour.
 const LIGHT_COUNT_FULL: f32 = 32.0;
 
@@ -288,7 +290,7 @@ fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
     let st_dx = (uv[0] * bary.ddx.x + uv[1] * bary.ddx.y + uv[2] * bary.ddx.z) * params.checker_scale;
     let st_dy = (uv[0] * bary.ddy.x + uv[1] * bary.ddy.y + uv[2] * bary.ddy.z) * params.checker_scale;
     let checker = filtered_checker(st, st_dx, st_dy);
-    let base = materials[instance.material].base_color.rgb;
+    let base = materials[instance.material + meshlet_material(m)].base_color.rgb;
     let albedo = base * mix(CHECKER_DARK, 1.0, checker);
     let diffuse = max(dot(n, params.light_direction.xyz), 0.0);
     var radiance = params.ambient_color.rgb + params.light_color.rgb * diffuse;
@@ -323,6 +325,13 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
             if !empty {
                 let m = meshlets[raster_clusters[visbuffer_cluster(value)].meshlet];
                 rgb = byte_color(id_color(meshlet_level(m)));
+            }
+        }
+        case VIEW_MATERIAL: {
+            if !empty {
+                let cluster = raster_clusters[visbuffer_cluster(value)];
+                let slot = meshlet_material(meshlets[cluster.meshlet]);
+                rgb = byte_color(id_color(instance_at(cluster.instance).material + slot));
             }
         }
         case VIEW_RASTER: {

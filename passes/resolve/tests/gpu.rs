@@ -157,17 +157,28 @@ impl Frame {
 }
 
 /// Spot (with UVs) twice, once stretched so normals need the inverse transpose, and the
-/// knot (no UVs) behind, three materials; each instance draws one LOD level, so the
-/// `lod` view has several. The first half of the slots count as software clusters.
+/// knot (no UVs) behind, in three material slots along its tube (its instance takes the
+/// last three of five materials); each instance draws one LOD level, so the `lod` view
+/// has several. The first half of the slots count as software clusters.
 fn frame() -> Frame {
     let spot_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/meshes/spot.obj");
     let spot = load_obj(&spot_path).unwrap();
     assert!(!spot.uvs.is_empty(), "spot.obj should have UVs");
     let mut scene = SceneData::new(Limits::default());
     let spot = add_mesh(&mut scene, "spot", &spot);
-    let knot = add_mesh(&mut scene, "knot", &procedural_mesh(12));
-    let materials = [[0.9, 0.6, 0.4], [0.4, 0.8, 0.5], [0.7, 0.7, 0.9]]
-        .map(|base_color| scene.add_material(Material { base_color }));
+    let mut knot = procedural_mesh(12);
+    let n = knot.triangle_count();
+    knot.materials = (0..n).map(|t| (t * 3 / n) as u32).collect();
+    let knot = add_mesh(&mut scene, "knot", &knot);
+    assert_eq!(scene.mesh_material_count(knot), Some(3));
+    let materials = [
+        [0.9, 0.6, 0.4],
+        [0.4, 0.8, 0.5],
+        [0.7, 0.7, 0.9],
+        [0.3, 0.3, 0.8],
+        [0.9, 0.9, 0.2],
+    ]
+    .map(|base_color| scene.add_material(Material { base_color }));
     let instances = [
         (
             spot,
@@ -519,8 +530,8 @@ fn depth_material_depth_and_every_view_match_the_reference() {
     let material_depth = cpu::material_depth(&f.scene, &f.raster_clusters, &f.visbuffer);
     let materials: BTreeSet<u32> = material_depth.iter().map(|d| d.to_bits()).collect();
     assert!(
-        materials.len() >= 4,
-        "empty and three materials: {materials:?}"
+        materials.len() >= 6,
+        "empty, spot's two materials and the knot's three: {materials:?}"
     );
 
     let needs_more =
@@ -571,6 +582,8 @@ fn depth_material_depth_and_every_view_match_the_reference() {
         // Every view shows something that tells pixels apart, so a constant image fails.
         let least = match view {
             DebugView::Raster | DebugView::Lod => 3,
+            // Empty, spot's two materials and the knot's three slots.
+            DebugView::Material => 6,
             DebugView::Depth => 10,
             _ => 20,
         };

@@ -539,6 +539,7 @@ fn flat_quad(n: u32, jitter: f32) -> Mesh {
         positions,
         uvs: Vec::new(),
         indices,
+        materials: Vec::new(),
     }
 }
 

@@ -46,7 +46,8 @@ struct Meshlet {
     parent_group: u32,
     // First payload word of this meshlet, in the shared payload buffer.
     data_offset: u32,
-    // Vertex count (bits 0..8), triangle count (8..16), LOD level (16..24).
+    // Vertex count (bits 0..8), triangle count (8..16), LOD level (16..24), material
+    // slot (24..32), which the instance's `material` is the base of.
     counts: u32,
     // Smallest grid coordinate of the meshlet's vertices; vertices store offsets from it.
     grid_min: array<u32, 3>,
@@ -105,6 +106,11 @@ fn meshlet_triangle_count(m: Meshlet) -> u32 {
 
 fn meshlet_level(m: Meshlet) -> u32 {
     return extractBits(m.counts, 16u, 8u);
+}
+
+// The meshlet's material slot: its triangles take material `instance.material + slot`.
+fn meshlet_material(m: Meshlet) -> u32 {
+    return m.counts >> 24u;
 }
 
 fn meshlet_bounds(m: Meshlet) -> vec4<f32> {
