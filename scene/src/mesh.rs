@@ -17,9 +17,8 @@ pub const MAX_VERTICES: u64 = 1 << 26;
 /// at 1e16 every square, sum and sphere merge stays far inside the `f32` range.
 pub const MAX_COORDINATE: f32 = 1e16;
 
-/// Most material slots one mesh may use: a meshlet record keeps its slot in 8 bits
-/// (see [`crate::asset::format::MeshletRecord::counts`]).
-pub const MAX_MATERIALS: u32 = 256;
+/// Most material slots one mesh may use (the asset format's limit).
+pub use crate::asset::format::MAX_MATERIALS;
 
 /// An indexed triangle mesh with per-vertex normals and optional texture coordinates.
 ///

@@ -137,6 +137,10 @@ pub const MAX_MESHLET_VERTICES: usize = 255;
 /// Most triangles per meshlet: one workgroup of 128 threads rasterises one meshlet.
 pub const MAX_MESHLET_TRIANGLES: usize = 128;
 
+/// Most material slots one mesh may use: a meshlet record keeps its slot in 8 bits
+/// (see [`MeshletRecord::counts`]).
+pub const MAX_MATERIALS: u32 = 256;
+
 /// Marks "no group" in [`MeshletRecord::source_group`] and
 /// [`MeshletRecord::parent_group`].
 pub const NO_GROUP: u32 = u32::MAX;

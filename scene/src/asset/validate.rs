@@ -118,13 +118,13 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ),
         ));
     }
-    if h.material_count == 0 || h.material_count > crate::mesh::MAX_MATERIALS {
+    if h.material_count == 0 || h.material_count > MAX_MATERIALS {
         return Err(bad(
             "header.material_count",
             format!(
                 "is {}, outside 1..={} (a meshlet keeps its slot in 8 bits)",
                 h.material_count,
-                crate::mesh::MAX_MATERIALS
+                MAX_MATERIALS
             ),
         ));
     }
