@@ -123,8 +123,7 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             "header.material_count",
             format!(
                 "is {}, outside 1..={} (a meshlet keeps its slot in 8 bits)",
-                h.material_count,
-                MAX_MATERIALS
+                h.material_count, MAX_MATERIALS
             ),
         ));
     }
