@@ -132,6 +132,7 @@ pub fn bake(
     let load_start = Instant::now();
     let load = LoadOptions {
         max_triangles: options.max_triangles,
+        ..LoadOptions::default()
     };
     let mesh = load_input(&options.input, options.segments, &load)?;
     let load_time = load_start.elapsed();

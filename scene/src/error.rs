@@ -105,6 +105,20 @@ pub enum SceneError {
         reason: String,
     },
 
+    /// An image a glTF material samples could not be used, with
+    /// [`crate::load::LoadOptions::strict_textures`] (otherwise a warning).
+    #[cfg(feature = "build")]
+    #[error("{path}: {reason}")]
+    GltfTexture {
+        /// The file.
+        path: PathBuf,
+        /// The glTF image.
+        image: usize,
+        /// Why, naming the image and what to change.
+        #[source]
+        reason: crate::texture::TextureError,
+    },
+
     /// A glTF primitive without positions, which cannot be drawn.
     #[error(
         "{path}: glTF mesh {mesh:?}, primitive {primitive} has no POSITION attribute; \

@@ -7,7 +7,8 @@
 //!
 //! # Features
 //!
-//! - `build` (default): everything that makes assets: the loaders, the procedural and
+//! - `build` (default): everything that makes assets: the loaders, the texture decoders,
+//!   the procedural and
 //!   terrain meshes, the DAG builder, packing, `bake` and the asset cache, with the
 //!   C and C++ libraries they need (METIS, meshoptimizer). A renderer that only draws
 //!   assets baked elsewhere turns it off (`default-features = false`) and keeps
@@ -62,6 +63,8 @@ pub mod procedural;
 pub mod simplify;
 #[cfg(feature = "build")]
 pub mod terrain;
+#[cfg(feature = "build")]
+pub mod texture;
 #[cfg(feature = "build")]
 pub mod weld;
 

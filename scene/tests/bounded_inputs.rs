@@ -210,13 +210,17 @@ fn node_tree_expansion_is_checked_against_the_triangle_budget_first() {
     // buffer is what stops it).
     let raised = LoadOptions {
         max_triangles: 1 << 25,
+        ..LoadOptions::default()
     };
     let err = load_mesh_with(&path, &raised).unwrap_err();
     assert!(matches!(err, SceneError::Gltf { .. }), "{err:?}");
     // Within the budget, a valid instanced scene loads.
     std::fs::write(&path, gltf_text("mesh.bin", &doubling_tree(4), 12)).unwrap();
     assert_eq!(load_mesh(&path).unwrap().triangle_count(), 8 * 4);
-    let small = LoadOptions { max_triangles: 31 };
+    let small = LoadOptions {
+        max_triangles: 31,
+        ..LoadOptions::default()
+    };
     let err = load_mesh_with(&path, &small).unwrap_err();
     assert!(
         matches!(
@@ -233,6 +237,7 @@ fn node_tree_expansion_is_checked_against_the_triangle_budget_first() {
         &path,
         &LoadOptions {
             max_triangles: MAX_TRIANGLES + 1,
+            ..LoadOptions::default()
         },
     )
     .unwrap_err();

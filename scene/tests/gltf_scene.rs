@@ -199,7 +199,10 @@ fn the_triangle_budget_counts_distinct_meshes_of_a_scene_and_every_copy_when_mer
     w.scene(&nodes);
     let path = dir.join("copies.glb");
     std::fs::write(&path, w.glb()).unwrap();
-    let options = LoadOptions { max_triangles: 100 };
+    let options = LoadOptions {
+        max_triangles: 100,
+        ..LoadOptions::default()
+    };
     let scene = load_gltf_scene_with(&path, &options).unwrap();
     assert_eq!((scene.meshes.len(), scene.instances.len()), (1, 1000));
     match load_mesh_with(&path, &options) {
@@ -208,7 +211,10 @@ fn the_triangle_budget_counts_distinct_meshes_of_a_scene_and_every_copy_when_mer
         }
         other => panic!("expected the triangle budget, got {other:?}"),
     }
-    let tight = LoadOptions { max_triangles: 3 };
+    let tight = LoadOptions {
+        max_triangles: 3,
+        ..LoadOptions::default()
+    };
     assert!(matches!(
         load_gltf_scene_with(&path, &tight),
         Err(SceneError::TriangleBudget { count: 4, .. })

@@ -53,6 +53,9 @@ pub struct GltfWriter {
     nodes: Vec<Value>,
     cameras: Vec<Value>,
     materials: Vec<Value>,
+    images: Vec<Value>,
+    textures: Vec<Value>,
+    samplers: Vec<Value>,
     scene: Vec<usize>,
 }
 
@@ -149,6 +152,40 @@ impl GltfWriter {
         self.materials.len() - 1
     }
 
+    /// Adds an image stored in the binary buffer (a buffer view) with its MIME type;
+    /// returns the image's index.
+    pub fn image_bytes(&mut self, bytes: &[u8], mime: &str) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.views.push(json!({
+            "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()
+        }));
+        self.bin.extend_from_slice(bytes);
+        self.images
+            .push(json!({ "bufferView": self.views.len() - 1, "mimeType": mime }));
+        self.images.len() - 1
+    }
+
+    /// Adds an image given by `uri` (a file beside the model, or a `data:` URI);
+    /// returns its index.
+    pub fn image_uri(&mut self, uri: &str) -> usize {
+        self.images.push(json!({ "uri": uri }));
+        self.images.len() - 1
+    }
+
+    /// Adds a texture of `image`, with a sampler of its own when `sampler` is given (its
+    /// JSON object: `wrapS`, `wrapT`, …); returns the texture's index.
+    pub fn texture(&mut self, image: usize, sampler: Option<Value>) -> usize {
+        let mut t = json!({ "source": image });
+        if let Some(s) = sampler {
+            self.samplers.push(s);
+            t["sampler"] = json!(self.samplers.len() - 1);
+        }
+        self.textures.push(t);
+        self.textures.len() - 1
+    }
+
     /// Adds a node; returns its index.
     pub fn node(&mut self, node: Node) -> usize {
         let mut n = json!({});
@@ -203,6 +240,15 @@ impl GltfWriter {
         if !self.materials.is_empty() {
             root["materials"] = json!(self.materials);
         }
+        for (key, list) in [
+            ("images", &self.images),
+            ("textures", &self.textures),
+            ("samplers", &self.samplers),
+        ] {
+            if !list.is_empty() {
+                root[key] = json!(list);
+            }
+        }
         root
     }
 
@@ -243,4 +289,25 @@ pub fn glb_container(json: &str, bin: &[u8]) -> Vec<u8> {
     glb.extend_from_slice(b"BIN\0");
     glb.extend_from_slice(&bin);
     glb
+}
+
+/// `rgba` (`width × height` pixels, rows top to bottom) as a PNG file's bytes.
+pub fn png_bytes(width: u32, height: u32, rgba: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, width, height);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().expect("PNG header");
+    writer.write_image_data(rgba).expect("PNG data");
+    writer.finish().expect("PNG end");
+    out
+}
+
+/// `rgb` (`width × height` pixels) as a JPEG file's bytes at `quality` (1 to 100).
+pub fn jpeg_bytes(width: u16, height: u16, rgb: &[u8], quality: u8) -> Vec<u8> {
+    let mut out = Vec::new();
+    jpeg_encoder::Encoder::new(&mut out, quality)
+        .encode(rgb, width, height, jpeg_encoder::ColorType::Rgb)
+        .expect("JPEG encoding");
+    out
 }

@@ -11,8 +11,8 @@ use crate::mesh::{MAX_TRIANGLES, Mesh};
 
 pub use self::gltf::{
     AlphaMode, CameraProjection, DEFAULT_MATERIAL, GltfScene, SceneCamera, SceneInstance,
-    SceneMaterial, SceneMesh, TextureRef, load_gltf, load_gltf_scene, load_gltf_scene_with,
-    load_gltf_with, percent_decode, referenced_path,
+    SceneMaterial, SceneMesh, SceneTexture, TextureRef, Wrap, load_gltf, load_gltf_scene,
+    load_gltf_scene_with, load_gltf_with, percent_decode, referenced_path,
 };
 pub use self::obj::{load_obj, parse_obj};
 pub use self::stl::{load_stl, parse_stl};
@@ -32,12 +32,18 @@ pub struct LoadOptions {
     /// triangles), checked from the declared counts before anything is expanded or
     /// read. At most [`MAX_TRIANGLES`], the asset format's limit.
     pub max_triangles: u64,
+    /// Whether an image a glTF material samples that cannot be used (missing, not PNG
+    /// or JPEG, corrupt, too large) is an error. By default it is a warning and the
+    /// materials sampling it use their factors, so that a scene missing one texture
+    /// still opens.
+    pub strict_textures: bool,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
         Self {
             max_triangles: DEFAULT_TRIANGLE_BUDGET,
+            strict_textures: false,
         }
     }
 }

@@ -112,7 +112,7 @@ pub fn referenced_path(model: &Path, uri: &str) -> Result<PathBuf, String> {
 }
 
 /// Standard base64 (RFC 4648), padding optional; `None` on any other character.
-fn decode_base64(text: &str) -> Option<Vec<u8>> {
+pub(super) fn decode_base64(text: &str) -> Option<Vec<u8>> {
     let value = |c: u8| -> Option<u32> {
         Some(match c {
             b'A'..=b'Z' => c - b'A',

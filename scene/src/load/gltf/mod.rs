@@ -12,6 +12,8 @@
 mod accessor;
 mod buffers;
 pub use buffers::{percent_decode, referenced_path};
+mod images;
+pub use images::{SceneTexture, Wrap};
 mod materials;
 pub use materials::{AlphaMode, DEFAULT_MATERIAL, SceneMaterial, TextureRef};
 mod nodes;

@@ -9,6 +9,7 @@ use glam::Mat4;
 use gltf::json::validation::Checked;
 
 use super::GltfFile;
+use super::images::{SceneTexture, read_textures};
 use super::materials::{SceneMaterial, read_materials};
 use super::nodes::Placement;
 use crate::error::SceneError;
@@ -29,6 +30,12 @@ pub struct GltfScene {
     pub cameras: Vec<SceneCamera>,
     /// The file's materials, which [`SceneMesh::materials`] index.
     pub materials: Vec<SceneMaterial>,
+    /// The file's textures, which the materials' [`super::TextureRef`]s index, with
+    /// the images the materials sample decoded.
+    pub textures: Vec<SceneTexture>,
+    /// What was read but cannot be drawn as the file asks (an image that does not
+    /// decode, say), one line each; also logged as warnings.
+    pub warnings: Vec<String>,
 }
 
 /// One mesh of a scene.
@@ -129,6 +136,7 @@ pub fn load_gltf_scene_with(path: &Path, options: &LoadOptions) -> Result<GltfSc
     }
 
     let buffers = file.buffers()?;
+    let (textures, warnings) = read_textures(&file, &buffers, &materials, options)?;
     // Each used mesh read once; one without triangles places nothing.
     let mut read: Vec<Option<usize>> = vec![None; used.len()];
     let mut meshes = Vec::new();
@@ -168,6 +176,8 @@ pub fn load_gltf_scene_with(path: &Path, options: &LoadOptions) -> Result<GltfSc
         instances,
         cameras,
         materials,
+        textures,
+        warnings,
     })
 }
 
