@@ -38,6 +38,7 @@ pub fn host_scene(
     let mesh = data.add_mesh("knot", &asset)?;
     let material = data.add_material(Material {
         base_color: [0.86, 0.70, 0.30],
+        ..Material::default()
     });
     data.add_instance(mesh, Mat4::IDENTITY, material)?;
     let s = data.meshes[0].bounding_sphere;

@@ -16,12 +16,38 @@ pub struct MeshId(pub u32);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct InstanceId(pub u32);
 
-/// A material: what shading needs to colour a surface.
+/// A material: what shading needs to colour a surface, glTF's metallic-roughness
+/// model by its factors.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
-    /// Linear RGB albedo.
+    /// Linear RGB albedo (of a metal: its specular colour).
     pub base_color: [f32; 3],
+    /// 0 for a dielectric, 1 for a metal.
+    pub metallic: f32,
+    /// Perceptual roughness, 0 (mirror) to 1; squared into GGX's alpha.
+    pub roughness: f32,
+    /// Linear RGB light the surface gives off, added to what it reflects.
+    pub emissive: [f32; 3],
+    /// Whether the base colour is modulated by a checkerboard over the mesh's UVs, so
+    /// that an untextured test mesh shows its parameterisation and its LOD changes.
+    pub checker: bool,
 }
+
+impl Default for Material {
+    /// A rough white dielectric with the checkerboard, as the generated scenes use.
+    fn default() -> Self {
+        Self {
+            base_color: [1.0; 3],
+            metallic: 0.0,
+            roughness: DEFAULT_ROUGHNESS,
+            emissive: [0.0; 3],
+            checker: true,
+        }
+    }
+}
+
+/// The roughness of [`Material::default`]: a broad, faint highlight.
+pub const DEFAULT_ROUGHNESS: f32 = 0.6;
 
 /// Element counts the buffers may not exceed. Each buffer is bound whole, so the binding
 /// limit of the device bounds it; [`Limits::for_device`] derives them. The instance
@@ -248,8 +274,18 @@ impl SceneData {
     /// Adds a material and returns the index instances refer to it by.
     pub fn add_material(&mut self, material: Material) -> u32 {
         let [r, g, b] = material.base_color;
+        let [er, eg, eb] = material.emissive;
         self.materials.push(layout::Material {
             base_color: [r, g, b, 1.0],
+            emissive: [er, eg, eb, 0.0],
+            metallic: material.metallic.clamp(0.0, 1.0),
+            roughness: material.roughness.clamp(0.0, 1.0),
+            flags: if material.checker {
+                layout::MATERIAL_FLAG_CHECKER
+            } else {
+                0
+            },
+            reserved: 0,
         });
         self.materials_version += 1;
         self.materials.len() as u32 - 1

@@ -100,6 +100,7 @@ fn singular_and_nan_transforms_are_skipped_and_counted() {
     let mesh = data.add_mesh("a", &asset(6)).unwrap();
     let material = data.add_material(Material {
         base_color: [1.0; 3],
+        ..Material::default()
     });
     let ok = data
         .add_instance(mesh, Mat4::from_translation(Vec3::X), material)
@@ -132,6 +133,7 @@ fn more_instances_than_the_buffer_holds_is_an_error_naming_the_limit() {
     let mesh = data.add_mesh("a", &asset(6)).unwrap();
     let material = data.add_material(Material {
         base_color: [1.0; 3],
+        ..Material::default()
     });
     for _ in 0..2 {
         data.add_instance(mesh, Mat4::IDENTITY, material).unwrap();
@@ -151,6 +153,7 @@ fn ten_in_a_row(data: &mut SceneData) -> (MeshId, u32, Vec<meshlight_gpu_scene::
     let mesh = data.add_mesh("a", &asset(6)).unwrap();
     let material = data.add_material(Material {
         base_color: [1.0; 3],
+        ..Material::default()
     });
     let ids = (0..10)
         .map(|i| {

@@ -19,7 +19,7 @@ fn checker(n: u32, cell: u32, a: [u8; 4], b: [u8; 4]) -> Image {
     let mut rgba = Vec::new();
     for y in 0..n {
         for x in 0..n {
-            rgba.extend_from_slice(if (x / cell + y / cell) % 2 == 0 {
+            rgba.extend_from_slice(if (x / cell + y / cell).is_multiple_of(2) {
                 &a
             } else {
                 &b
@@ -227,7 +227,8 @@ fn scene_with_image(
 fn an_image_that_cannot_be_used_is_a_warning_or_with_strict_textures_an_error() {
     let outside = common::scratch("gltf-bad-image-outside-target").join("secret.png");
     std::fs::write(&outside, png_bytes(1, 1, &[1, 2, 3, 4])).unwrap();
-    let cases: [(&str, Box<dyn FnOnce(&mut GltfWriter) -> usize>, &str); 5] = [
+    type SetUp = Box<dyn FnOnce(&mut GltfWriter) -> usize>;
+    let cases: [(&str, SetUp, &str); 5] = [
         (
             "missing",
             Box::new(|w| w.image_uri("missing.png")),

@@ -87,7 +87,12 @@ fn rust_mirrors_match_the_wgsl_layouts() {
             level_count,
         ]
     );
-    assert_layout!(&module, "Material", Material, [base_color]);
+    assert_layout!(
+        &module,
+        "Material",
+        Material,
+        [base_color, emissive, metallic, roughness, flags, reserved]
+    );
     assert_layout!(&module, "Cluster", Cluster, [instance, meshlet]);
     assert_layout!(
         &module,

@@ -7,7 +7,9 @@ use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::view::Projection;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData, SceneDataError};
 use meshlight::scene::cache;
-use meshlight::scene::load::{CameraProjection, GltfScene, SceneCamera, load_gltf_scene};
+use meshlight::scene::load::{
+    CameraProjection, GltfScene, SceneCamera, SceneMaterial, load_gltf_scene,
+};
 use meshlight::scene::{BuildOptions, SceneError};
 use meshlight::shaders::cpu::layout::ClusterableObject;
 use std::collections::BTreeMap;
@@ -57,10 +59,12 @@ pub fn is_gltf(path: &Path) -> bool {
 /// the file's cameras (in the scene's node order); `None` frames the whole scene from
 /// the front, above and to the right.
 ///
-/// Each primitive is drawn in its material's base colour factor (glTF's default
-/// material is white): the asset keeps each meshlet's material slot, and the instance
-/// the first of its mesh's run of materials. Textures are not read yet. A node whose transform mirrors places a copy of its mesh with the winding reversed
-/// (baked once too), since the rasterisers keep counter-clockwise faces.
+/// Each primitive is shaded with its material's metallic-roughness factors (glTF's
+/// default material where it names none): the asset keeps each meshlet's material
+/// slot, and the instance the first of its mesh's run of materials. Textures are read
+/// but not drawn yet. A node whose transform mirrors places a copy of its mesh with the
+/// winding reversed (baked once too), since the rasterisers keep counter-clockwise
+/// faces.
 pub fn gltf_scene(
     data: SceneData,
     path: &Path,
@@ -144,9 +148,9 @@ pub fn place(
 }
 
 /// Per mesh of `scene`, the first of the materials of `data` its slots are drawn in:
-/// one GPU material per slot, consecutive, with its glTF material's base colour
-/// factor (glTF's white default where a primitive names none). Meshes with the same
-/// materials share one run.
+/// one GPU material per slot, consecutive, with its glTF material's factors (base
+/// colour, metallic, roughness, emissive; glTF's default material where a primitive
+/// names none), and no checkerboard. Meshes with the same materials share one run.
 fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Vec<u32> {
     let mut runs: BTreeMap<&[u32], u32> = BTreeMap::new();
     scene
@@ -156,12 +160,15 @@ fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Vec<u32> {
             *runs.entry(&m.materials).or_insert_with(|| {
                 let first = data.materials.len() as u32;
                 for &slot in &m.materials {
-                    let [r, g, b, _] = scene
-                        .materials
-                        .get(slot as usize)
-                        .map_or([1.0; 4], |m| m.base_color);
+                    let default = SceneMaterial::default();
+                    let source = scene.materials.get(slot as usize).unwrap_or(&default);
+                    let [r, g, b, _] = source.base_color;
                     data.add_material(Material {
                         base_color: [r, g, b],
+                        metallic: source.metallic,
+                        roughness: source.roughness,
+                        emissive: source.emissive,
+                        checker: false,
                     });
                 }
                 first

@@ -71,7 +71,12 @@ fn palette(data: &mut SceneData) -> Vec<u32> {
         [0.58, 0.36, 0.66],
     ]
     .into_iter()
-    .map(|base_color| data.add_material(Material { base_color }))
+    .map(|base_color| {
+        data.add_material(Material {
+            base_color,
+            ..Material::default()
+        })
+    })
     .collect()
 }
 
@@ -172,6 +177,7 @@ pub fn field(
         let ground_mesh = data.add_mesh("ground", &ground_asset)?;
         let material = data.add_material(Material {
             base_color: GROUND_COLOR,
+            ..Material::default()
         });
         data.add_instance(ground_mesh, Mat4::IDENTITY, material)?;
     }

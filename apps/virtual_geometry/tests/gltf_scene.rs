@@ -197,6 +197,7 @@ fn a_mesh_placed_by_many_nodes_is_baked_once_and_drawn_at_each_nodes_transform()
         let [r, g, b, _] = m.base_color;
         expected.add_material(Material {
             base_color: [r, g, b],
+            ..Material::default()
         });
     }
     let ball = expected.add_mesh("ball", &bake(0)).unwrap();

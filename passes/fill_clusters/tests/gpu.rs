@@ -24,6 +24,7 @@ fn scene() -> SceneData {
     let mut data = SceneData::new(Limits::default());
     let material = data.add_material(Material {
         base_color: [1.0; 3],
+        ..Material::default()
     });
     let mut meshes = Vec::new();
     for segments in [4, 20] {

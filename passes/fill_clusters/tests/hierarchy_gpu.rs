@@ -346,6 +346,7 @@ fn terrain_scene() -> SceneData {
     let mut data = SceneData::new(Limits::default());
     let material = data.add_material(Material {
         base_color: [1.0; 3],
+        ..Material::default()
     });
     let mesh = data.add_mesh("terrain", terrain()).unwrap();
     data.add_instance(mesh, Mat4::IDENTITY, material)

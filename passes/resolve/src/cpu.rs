@@ -3,6 +3,7 @@
 //! arithmetic is exact (ids, depths) and to a stated tolerance where drivers may round
 //! differently (the shaded view).
 
+use crate::brdf::Surface;
 use crate::settings::{DebugView, Settings};
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use meshlight_gpu_scene::SceneData;
@@ -10,7 +11,8 @@ use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout};
 use meshlight_scene::asset::triangles;
 use meshlight_scene::compress::{NORMAL_BITS, decode_octahedral, get_bits};
 use meshlight_shaders::cpu::layout::{
-    Cluster, ClusterGrid, ClusterableKind, ClusterableObject, Instance, MESH_FLAG_UVS, Mesh, View,
+    Cluster, ClusterGrid, ClusterableKind, ClusterableObject, Instance, MATERIAL_FLAG_CHECKER,
+    MESH_FLAG_UVS, Mesh, View,
 };
 use meshlight_shaders::cpu::light::{cluster_index, z_slice_of_depth};
 use meshlight_shaders::cpu::visbuffer;
@@ -165,8 +167,17 @@ impl ClusteredLights<'_> {
             .sum()
     }
 
-    /// `clustered_lighting`: radiance from the point and spot lights of the froxel.
-    fn lighting(&self, view: &View, pixel: Vec2, depth: f32, n: Vec3) -> Vec3 {
+    /// `clustered_lighting`: radiance from the point and spot lights of the froxel
+    /// towards `v`, reflected by `s`.
+    fn lighting(
+        &self,
+        view: &View,
+        pixel: Vec2,
+        depth: f32,
+        s: &Surface,
+        n: Vec3,
+        v: Vec3,
+    ) -> Vec3 {
         let uv = pixel * Vec2::from_array(view.inverse_viewport_size);
         let ndc = uv * Vec2::new(2.0, -2.0) + Vec2::new(-1.0, 1.0);
         let w = Mat4::from_cols_array_2d(&view.inverse_view_projection)
@@ -191,7 +202,7 @@ impl ClusteredLights<'_> {
                     falloff *= smoothstep(cos_outer, cos_outer + (1.0 - cos_outer) * 0.2, cd);
                 }
                 let [r, g, b, intensity] = light.color_intensity;
-                sum += Vec3::new(r, g, b) * intensity * falloff * n.dot(l).max(0.0);
+                sum += Vec3::new(r, g, b) * intensity * falloff * s.light_response(n, v, l);
             }
         }
         sum
@@ -542,7 +553,8 @@ pub fn transform_normal(instance: &Instance, n: Vec3) -> Vec3 {
     (Mat3::from_mat4(m).transpose() * n).normalize()
 }
 
-/// shade.wgsl's `shade`: the lit, checkered surface of the pixel's triangle.
+/// shade.wgsl's `shade`: the pixel's triangle lit through its material (resolve::brdf),
+/// checkered where the material asks.
 fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> Vec3 {
     let scene = frame.scene;
     let cluster = cluster_of(frame.raster_clusters, value);
@@ -556,10 +568,8 @@ fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> 
     let corners = triangle_corners(scene, &mesh, &m, visbuffer::triangle(value));
     let world_from_local = Mat4::from_cols_array_2d(&instance.world_from_local);
     let view_projection = Mat4::from_cols_array_2d(&frame.view.view_projection);
-    let clip = corners.map(|c| {
-        let world = world_from_local * c.position.extend(1.0);
-        view_projection * world.truncate().extend(1.0)
-    });
+    let world = corners.map(|c| (world_from_local * c.position.extend(1.0)).truncate());
+    let clip = world.map(|w| view_projection * w.extend(1.0));
     let size = Vec2::new(frame.width as f32, frame.height as f32);
     let bary = barycentrics(clip, pixel, size);
     let b = bary.b;
@@ -567,21 +577,29 @@ fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> 
     let n = transform_normal(
         &instance,
         k0.normal * b.x + k1.normal * b.y + k2.normal * b.z,
-    );
-    let scale = light.checker_scale;
-    let weigh = |w: Vec3| (k0.uv * w.x + k1.uv * w.y + k2.uv * w.z) * scale;
-    let checker = filtered_checker(weigh(b), weigh(bary.ddx), weigh(bary.ddy));
-    let base = scene
+    )
+    .normalize();
+    let camera = Vec3::from_array(frame.view.camera_position);
+    let v = (camera - (world[0] * b.x + world[1] * b.y + world[2] * b.z)).normalize();
+    let material = scene
         .materials
         .get(instance.material as usize + m.material() as usize)
-        .map_or(Vec3::ZERO, |m| Vec4::from_array(m.base_color).truncate());
-    let albedo = base * (CHECKER_DARK * (1.0 - checker) + checker);
-    let diffuse = n.dot(light.direction).max(0.0);
-    let mut radiance = light.ambient + light.color * diffuse;
-    if let Some(lights) = frame.lights {
-        radiance += lights.lighting(frame.view, pixel, visbuffer::depth(value), n.normalize());
+        .copied()
+        .unwrap_or_default();
+    let mut base = Vec4::from_array(material.base_color).truncate();
+    if material.flags & MATERIAL_FLAG_CHECKER != 0 {
+        let scale = light.checker_scale;
+        let weigh = |w: Vec3| (k0.uv * w.x + k1.uv * w.y + k2.uv * w.z) * scale;
+        let checker = filtered_checker(weigh(b), weigh(bary.ddx), weigh(bary.ddy));
+        base *= CHECKER_DARK * (1.0 - checker) + checker;
     }
-    albedo * radiance
+    let s = Surface::new(base, material.metallic, material.roughness);
+    let mut radiance = light.ambient * s.ambient_response()
+        + light.color * s.light_response(n, v, light.direction);
+    if let Some(lights) = frame.lights {
+        radiance += lights.lighting(frame.view, pixel, visbuffer::depth(value), &s, n, v);
+    }
+    radiance + Vec4::from_array(material.emissive).truncate()
 }
 
 #[cfg(test)]

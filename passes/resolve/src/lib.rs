@@ -121,6 +121,7 @@
 
 #![warn(missing_docs)]
 
+pub mod brdf;
 pub mod cpu;
 pub mod settings;
 
@@ -164,7 +165,10 @@ pub const SHADE_SHADER: PassShader = pass_shader!(
     "resolve::shade",
     "shade.wgsl",
     params: ShadeParams,
-    modules: [("resolve::visibility", "visibility.wgsl")]
+    modules: [
+        ("resolve::visibility", "visibility.wgsl"),
+        ("resolve::brdf", "brdf.wgsl")
+    ]
 );
 
 /// The fullscreen passes that write the depth targets: (program, fragment entry, slot).

@@ -6,7 +6,8 @@
 
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
-#import meshlight::instance::{Instance, Material, instance_transform_normal}
+#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, instance_transform_normal}
+#import resolve::brdf::{Surface, surface, light_response, ambient_response}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshlets, payload, materials}
@@ -128,9 +129,10 @@ fn froxel_list(pixel: vec2<f32>, view_z: f32, kind: u32) -> vec2<u32> {
     return vec2(start, min(cluster_counts[at], arrayLength(&cluster_objects) - start));
 }
 
-// Radiance from the point and spot lights of the pixel's froxel: inverse-square falloff
-// windowed to reach zero at the range, spots faded over the outer fifth of the cone.
-fn clustered_lighting(pixel: vec2<f32>, depth: f32, n: vec3<f32>) -> vec3<f32> {
+// Radiance from the point and spot lights of the pixel's froxel towards `v`: inverse-square
+// falloff windowed to reach zero at the range, spots faded over the outer fifth of the
+// cone, each reflected by the surface `s` (resolve::brdf).
+fn clustered_lighting(pixel: vec2<f32>, depth: f32, s: Surface, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     let world = position_from_depth(view, pixel_to_uv(view, pixel), depth);
     let view_z = view_z_from_depth(view, depth);
     var sum = vec3(0.0);
@@ -150,7 +152,7 @@ fn clustered_lighting(pixel: vec2<f32>, depth: f32, n: vec3<f32>) -> vec3<f32> {
                 let cd = dot(-l, normalize(light.direction_cos_angle.xyz));
                 falloff *= smoothstep(cos_outer, mix(cos_outer, 1.0, 0.2), cd);
             }
-            sum += light.color_intensity.rgb * light.color_intensity.w * falloff * max(dot(n, l), 0.0);
+            sum += light.color_intensity.rgb * light.color_intensity.w * falloff * light_response(s, n, v, l);
         }
     }
     return sum;
@@ -269,14 +271,15 @@ fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
     let mesh = tri.mesh;
     let corners = tri.corners;
     var clip: array<vec4<f32>, 3>;
+    var world: array<vec3<f32>, 3>;
     var normal: array<vec3<f32>, 3>;
     var uv: array<vec2<f32>, 3>;
     let has_uvs = (mesh.flags & MESH_FLAG_UVS) != 0u;
     for (var k = 0u; k < 3u; k += 1u) {
         let v = corners[k];
         let p = meshlet_position(m, mesh.position_grid, vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u)));
-        let world = instance.world_from_local * vec4(p, 1.0);
-        clip[k] = view.view_projection * vec4(world.xyz, 1.0);
+        world[k] = (instance.world_from_local * vec4(p, 1.0)).xyz;
+        clip[k] = view.view_projection * vec4(world[k], 1.0);
         normal[k] = meshlet_normal(m, vec2(field(m, v, 3u), field(m, v, 4u)));
         uv[k] = vec2(0.0);
         if has_uvs {
@@ -285,19 +288,23 @@ fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
     }
     let bary = barycentrics(clip[0], clip[1], clip[2], pixel);
     let b = bary.b;
-    let n = instance_transform_normal(instance, normal[0] * b.x + normal[1] * b.y + normal[2] * b.z);
+    let n = normalize(instance_transform_normal(instance, normal[0] * b.x + normal[1] * b.y + normal[2] * b.z));
+    let v = normalize(view.camera_position - (world[0] * b.x + world[1] * b.y + world[2] * b.z));
     let st = (uv[0] * b.x + uv[1] * b.y + uv[2] * b.z) * params.checker_scale;
     let st_dx = (uv[0] * bary.ddx.x + uv[1] * bary.ddx.y + uv[2] * bary.ddx.z) * params.checker_scale;
     let st_dy = (uv[0] * bary.ddy.x + uv[1] * bary.ddy.y + uv[2] * bary.ddy.z) * params.checker_scale;
-    let checker = filtered_checker(st, st_dx, st_dy);
-    let base = materials[instance.material + meshlet_material(m)].base_color.rgb;
-    let albedo = base * mix(CHECKER_DARK, 1.0, checker);
-    let diffuse = max(dot(n, params.light_direction.xyz), 0.0);
-    var radiance = params.ambient_color.rgb + params.light_color.rgb * diffuse;
+    let material = materials[instance.material + meshlet_material(m)];
+    var base = material.base_color.rgb;
+    if (material.flags & MATERIAL_FLAG_CHECKER) != 0u {
+        base *= mix(CHECKER_DARK, 1.0, filtered_checker(st, st_dx, st_dy));
+    }
+    let s = surface(base, material.metallic, material.roughness);
+    var radiance = params.ambient_color.rgb * ambient_response(s)
+        + params.light_color.rgb * light_response(s, n, v, params.light_direction.xyz);
 #ifdef CLUSTERED_LIGHTS
-    radiance += clustered_lighting(pixel, visbuffer_depth(value), normalize(n));
+    radiance += clustered_lighting(pixel, visbuffer_depth(value), s, n, v);
 #endif
-    return albedo * radiance;
+    return radiance + material.emissive.rgb;
 }
 
 @compute @workgroup_size(8, 8)

@@ -171,14 +171,37 @@ fn frame() -> Frame {
     knot.materials = (0..n).map(|t| (t * 3 / n) as u32).collect();
     let knot = add_mesh(&mut scene, "knot", &knot);
     assert_eq!(scene.mesh_material_count(knot), Some(3));
+    // A checkered dielectric, a smooth metal, and the knot's slots: checkered, a
+    // plain rough plastic, and a glowing one.
+    let plain = |base_color| Material {
+        base_color,
+        checker: false,
+        ..Material::default()
+    };
     let materials = [
-        [0.9, 0.6, 0.4],
-        [0.4, 0.8, 0.5],
-        [0.7, 0.7, 0.9],
-        [0.3, 0.3, 0.8],
-        [0.9, 0.9, 0.2],
+        Material {
+            base_color: [0.9, 0.6, 0.4],
+            ..Material::default()
+        },
+        Material {
+            metallic: 1.0,
+            roughness: 0.45,
+            ..plain([0.95, 0.8, 0.4])
+        },
+        Material {
+            base_color: [0.7, 0.7, 0.9],
+            ..Material::default()
+        },
+        Material {
+            roughness: 0.9,
+            ..plain([0.3, 0.3, 0.8])
+        },
+        Material {
+            emissive: [0.6, 0.3, 0.0],
+            ..plain([0.9, 0.9, 0.2])
+        },
     ]
-    .map(|base_color| scene.add_material(Material { base_color }));
+    .map(|m| scene.add_material(m));
     let instances = [
         (
             spot,

@@ -47,6 +47,7 @@ fn flat_scene(meshes: &[(&str, Mesh)]) -> SceneData {
     let mut scene = SceneData::new(Limits::default());
     let material = scene.add_material(Material {
         base_color: [1.0; 3],
+        ..Material::default()
     });
     let ids: Vec<_> = meshes
         .iter()

@@ -105,7 +105,20 @@ pub struct Instance {
 pub struct Material {
     /// Linear RGB albedo; alpha unused.
     pub base_color: [f32; 4],
+    /// Linear RGB emitted light; w unused.
+    pub emissive: [f32; 4],
+    /// 0 dielectric, 1 metal.
+    pub metallic: f32,
+    /// Perceptual roughness, 0 to 1.
+    pub roughness: f32,
+    /// [`MATERIAL_FLAG_CHECKER`] or 0.
+    pub flags: u32,
+    /// Zero.
+    pub reserved: u32,
 }
+
+/// `Material::flags`: the base colour is modulated by a checkerboard over the UVs.
+pub const MATERIAL_FLAG_CHECKER: u32 = 1;
 
 /// The `kind` values of [`ClusterableObject`], as the `CLUSTERABLE_*` WGSL constants.
 #[repr(u32)]

@@ -25,7 +25,19 @@ struct Instance {
 struct Material {
     // Linear RGB albedo; alpha unused (opaque geometry only).
     base_color: vec4<f32>,
+    // Linear RGB emitted light; w unused.
+    emissive: vec4<f32>,
+    // 0 dielectric, 1 metal.
+    metallic: f32,
+    // Perceptual roughness, 0 to 1 (GGX alpha = roughness²).
+    roughness: f32,
+    // MATERIAL_FLAG_CHECKER or 0.
+    flags: u32,
+    reserved: u32,
 }
+
+// `Material::flags`: the base colour is modulated by a checkerboard over the UVs.
+const MATERIAL_FLAG_CHECKER: u32 = 1u;
 
 fn instance_transform_point(instance: Instance, p: vec3<f32>) -> vec3<f32> {
     return (instance.world_from_local * vec4(p, 1.0)).xyz;

@@ -14,6 +14,7 @@ pub fn scene_with(placements: &[Mat4]) -> SceneData {
     let mut data = SceneData::new(Limits::default());
     let material = data.add_material(Material {
         base_color: [1.0; 3],
+        ..Material::default()
     });
     let mesh = data.add_mesh("spot", spot()).unwrap();
     for &transform in placements {

@@ -14,6 +14,7 @@ pub fn lattice(asset: &MeshletAsset, n: u32) -> (SceneData, View) {
     let mut data = SceneData::new(Limits::default());
     let material = data.add_material(Material {
         base_color: [1.0; 3],
+        ..Material::default()
     });
     let mesh = data.add_mesh("bunny", asset).unwrap();
     let lattice = Lattice {

@@ -25,6 +25,7 @@ pub fn field(
     let mut data = SceneData::new(Limits::default());
     let material = data.add_material(Material {
         base_color: [1.0; 3],
+        ..Material::default()
     });
     let ids: Vec<_> = meshes
         .iter()

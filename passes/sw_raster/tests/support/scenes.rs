@@ -24,6 +24,7 @@ pub fn knot_scene(mesh: &Mesh, more: &[Mat4]) -> SceneData {
     let knot = add_mesh(&mut scene, "knot", mesh);
     let material = scene.add_material(Material {
         base_color: [0.8, 0.5, 0.3],
+        ..Material::default()
     });
     let moved = Mat4::from_scale_rotation_translation(
         Vec3::splat(0.6),
