@@ -184,7 +184,8 @@ impl ClusteredLights<'_> {
             * Vec4::new(ndc.x, ndc.y, depth, 1.0);
         let world = w.truncate() / w.w;
         let view_z = view_z_from_depth(view, depth);
-        let mut sum = Vec3::ZERO;
+        // In fixed point, as the shader sums (see `LIGHT_SUM_SCALE`).
+        let mut sum = [0u32; 3];
         for kind in [ClusterableKind::PointLight, ClusterableKind::SpotLight] {
             let (start, len) = self.froxel_list(pixel, view_z, kind as u32);
             for &index in &self.list[start as usize..(start + len) as usize] {
@@ -202,12 +203,22 @@ impl ClusteredLights<'_> {
                     falloff *= smoothstep(cos_outer, cos_outer + (1.0 - cos_outer) * 0.2, cd);
                 }
                 let [r, g, b, intensity] = light.color_intensity;
-                sum += Vec3::new(r, g, b) * intensity * falloff * s.light_response(n, v, l);
+                let c = Vec3::new(r, g, b) * intensity * falloff * s.light_response(n, v, l);
+                let steps = c.clamp(Vec3::ZERO, Vec3::splat(LIGHT_SUM_MAX)) * LIGHT_SUM_SCALE
+                    + Vec3::splat(0.5);
+                for (acc, x) in sum.iter_mut().zip(steps.to_array()) {
+                    *acc = acc.wrapping_add(x as u32);
+                }
             }
         }
-        sum
+        Vec3::from_array(sum.map(|x| x as f32)) / LIGHT_SUM_SCALE
     }
 }
+
+/// shade.wgsl's fixed-point steps per unit of the clustered lights' sum, and the most
+/// one light adds.
+const LIGHT_SUM_SCALE: f32 = 65536.0;
+const LIGHT_SUM_MAX: f32 = 64.0;
 
 /// `view_z_from_depth`: the positive view-space distance of a reverse-Z depth.
 fn view_z_from_depth(view: &View, depth: f32) -> f32 {

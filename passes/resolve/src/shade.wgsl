@@ -129,13 +129,20 @@ fn froxel_list(pixel: vec2<f32>, view_z: f32, kind: u32) -> vec2<u32> {
     return vec2(start, min(cluster_counts[at], arrayLength(&cluster_objects) - start));
 }
 
+// Steps per unit of the clustered lights' fixed-point sum, and the most one light adds.
+const LIGHT_SUM_SCALE: f32 = 65536.0;
+const LIGHT_SUM_MAX: f32 = 64.0;
+
 // Radiance from the point and spot lights of the pixel's froxel towards `v`: inverse-square
 // falloff windowed to reach zero at the range, spots faded over the outer fifth of the
-// cone, each reflected by the surface `s` (resolve::brdf).
+// cone, each reflected by the surface `s` (resolve::brdf). Summed in fixed point
+// (2^-16 steps, each light clamped to LIGHT_SUM_MAX), which is associative: populate
+// fills a froxel's list in whatever order its atomics fall, and a float sum in another
+// order could round a pixel differently from one frame to the next.
 fn clustered_lighting(pixel: vec2<f32>, depth: f32, s: Surface, n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     let world = position_from_depth(view, pixel_to_uv(view, pixel), depth);
     let view_z = view_z_from_depth(view, depth);
-    var sum = vec3(0.0);
+    var sum = vec3(0u);
     for (var kind = CLUSTERABLE_POINT_LIGHT; kind <= CLUSTERABLE_SPOT_LIGHT; kind += 1u) {
         let list = froxel_list(pixel, view_z, kind);
         for (var i = 0u; i < list.y; i += 1u) {
@@ -152,10 +159,11 @@ fn clustered_lighting(pixel: vec2<f32>, depth: f32, s: Surface, n: vec3<f32>, v:
                 let cd = dot(-l, normalize(light.direction_cos_angle.xyz));
                 falloff *= smoothstep(cos_outer, mix(cos_outer, 1.0, 0.2), cd);
             }
-            sum += light.color_intensity.rgb * light.color_intensity.w * falloff * light_response(s, n, v, l);
+            let c = light.color_intensity.rgb * light.color_intensity.w * falloff * light_response(s, n, v, l);
+            sum += vec3<u32>(clamp(c, vec3(0.0), vec3(LIGHT_SUM_MAX)) * LIGHT_SUM_SCALE + 0.5);
         }
     }
-    return sum;
+    return vec3<f32>(sum) / LIGHT_SUM_SCALE;
 }
 
 // Point and spot lights in the pixel's froxel (the last slice for the sky).
