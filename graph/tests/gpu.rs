@@ -125,6 +125,8 @@ fn wgpu_validation_error_surfaces_as_an_error() {
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let buffer = gpu.buffer_with_data("out", &[0u8; 64], USAGE);
     let mut exec = Executor::new(gpu);
+    // Naming the pass is checked mode's work, which release builds leave off.
+    exec.set_checked(true);
     match exec.execute(&compiled, &Imports::new().buffer("out", &buffer)) {
         Err(GraphError::Validation { pass, message }) => {
             assert_eq!(pass, "too_big");
@@ -132,6 +134,15 @@ fn wgpu_validation_error_surfaces_as_an_error() {
         }
         other => panic!(
             "expected a validation error, got {:?}",
+            other.map(|s| s.frame)
+        ),
+    }
+    // Unchecked, the frame still fails with wgpu's message, naming no pass.
+    exec.set_checked(false);
+    match exec.execute(&compiled, &Imports::new().buffer("out", &buffer)) {
+        Err(GraphError::FrameValidation { message, .. }) => assert!(!message.is_empty()),
+        other => panic!(
+            "expected a frame validation error, got {:?}",
             other.map(|s| s.frame)
         ),
     }

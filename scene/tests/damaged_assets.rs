@@ -371,3 +371,35 @@ fn loading_for_the_renderer_refuses_what_inspect_rejects() {
         load.to_string()
     );
 }
+
+/// A UV grid whose largest encoded UV (`uv_min + 65535 · uv_step`) is past the f32
+/// range decodes to infinity on the GPU: refused at load, naming the fields.
+#[test]
+fn a_uv_grid_that_overflows_f32_is_refused() {
+    let mut mesh =
+        common::generators::in_memory("uv sphere", common::generators::welded_sphere(12, 24));
+    mesh.uvs = mesh.positions.iter().map(|p| [p.x, p.y]).collect();
+    let built = build_asset(&mesh, &BuildOptions::default(), &mut |_| {}).unwrap();
+    assert!(built.asset.header().has_uvs());
+    let words: Vec<u32> = bytemuck::cast_slice(built.asset.bytes()).to_vec();
+    let load = |edit: &dyn Fn(&mut AssetHeader)| {
+        let mut w = words.clone();
+        edit(header(&mut w));
+        reseal(&mut w);
+        let len = w.len() as u64 * 4;
+        MeshletAsset::from_words(w, len, Path::new("uv.mlasset"))
+    };
+    assert!(load(&|_| {}).is_ok());
+    let err = load(&|h| {
+        h.uv_min[1] = 3e38;
+        h.uv_step[1] = 1e35;
+    })
+    .unwrap_err();
+    match &err {
+        SceneError::AssetField { field, .. } => {
+            assert!(field.contains("uv_min/uv_step"), "{err}");
+            assert!(err.to_string().contains("f32 range"), "{err}");
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -70,6 +70,10 @@ pub fn run(args: &BenchOptions) -> std::result::Result<(), Box<dyn std::error::E
     } else {
         args.scenarios.clone()
     };
+    // Output paths are checked before any scenario runs, not after minutes of work.
+    for path in args.json.iter().chain(&args.html) {
+        meshlight_output::check_output_path(path)?;
+    }
     let mut rows = Vec::new();
     for path in &args.from_json {
         let bytes = meshlight::scene::input::read_file(path, MAX_ROWS_FILE_BYTES)?;
@@ -128,16 +132,10 @@ pub fn run(args: &BenchOptions) -> std::result::Result<(), Box<dyn std::error::E
         rows.extend(new);
     }
     if let Some(path) = &args.json {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)?;
-        }
-        std::fs::write(path, serde_json::to_string_pretty(&rows)?)?;
+        meshlight_output::write_file(path, serde_json::to_string_pretty(&rows)?.as_bytes())?;
     }
     if let Some(path) = &args.html {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)?;
-        }
-        std::fs::write(path, crate::html::page("meshlight bench", &rows))?;
+        meshlight_output::write_file(path, crate::html::page("meshlight bench", &rows).as_bytes())?;
         println!("charts: {}", path.display());
     }
     Ok(())

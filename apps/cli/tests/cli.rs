@@ -309,6 +309,44 @@ fn inputs_and_outputs_that_cannot_be_used_are_named() {
     );
 }
 
+/// `bench`'s outputs: a directory is refused before any scenario runs, and a full
+/// device fails naming it, never a bare OS error.
+#[test]
+fn bench_outputs_that_cannot_be_written_are_named() {
+    let dir = scratch("bench-outputs");
+    let start = std::time::Instant::now();
+    let out = meshlight(&[
+        "bench",
+        "--scenario",
+        "virtual-geometry",
+        "--json",
+        dir.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(dir.to_str().unwrap()) && err.contains("directory"),
+        "{err}"
+    );
+    assert!(
+        start.elapsed() < std::time::Duration::from_secs(20),
+        "refused only after {:?}",
+        start.elapsed()
+    );
+    let rows = dir.join("rows.json");
+    std::fs::write(&rows, "[]").unwrap();
+    let out = meshlight(&[
+        "bench",
+        "--from-json",
+        rows.to_str().unwrap(),
+        "--html",
+        "/dev/full",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot write /dev/full"), "{err}");
+}
+
 /// A PNG small enough to sit in the write buffer until the end used to be lost there
 /// with exit 0 and "rendered" printed (GPU: lavapipe).
 #[test]

@@ -56,6 +56,31 @@ pub fn create_parent(path: &Path) -> Result<(), OutputError> {
     }
 }
 
+/// Checks, before any work, that `path` can be written: not a directory, its folder made
+/// (or makeable), the file openable for writing. A file this creates to find out is
+/// removed again, so a later failure leaves nothing behind.
+pub fn check_output_path(path: &Path) -> Result<(), OutputError> {
+    if path.is_dir() {
+        return Err(OutputError::new(
+            path,
+            "write",
+            "it is a directory; give a file path (inside it, say)",
+        ));
+    }
+    create_parent(path)?;
+    let existed = path.exists();
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(path)
+        .map_err(|e| OutputError::new(path, "write", e))?;
+    if !existed {
+        let _ = std::fs::remove_file(path);
+    }
+    Ok(())
+}
+
 /// Writes `bytes` to `path` (its directory created first).
 pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     create_parent(path)?;

@@ -778,5 +778,16 @@ fn header_floats(h: &AssetHeader) -> Result<(), Invalid> {
             format!("{:?} / {:?} is not a finite rectangle", h.uv_min, h.uv_step),
         ));
     }
+    // The largest UV a record encodes is `uv_min + 65535 · uv_step`, computed in f32 on
+    // the GPU: past the f32 range it decodes to infinity and the surface shades black.
+    if h.has_uvs() && (0..2).any(|k| !(h.uv_min[k] + 65535.0 * h.uv_step[k]).is_finite()) {
+        return Err(bad(
+            "header.uv_min/uv_step",
+            format!(
+                "{:?} / {:?} reaches past the f32 range at the largest encoded UV",
+                h.uv_min, h.uv_step
+            ),
+        ));
+    }
     Ok(())
 }

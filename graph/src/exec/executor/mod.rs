@@ -189,6 +189,18 @@ impl Executor {
         }
     }
 
+    /// Turns checked mode on or off, whatever the build profile and [`CHECKED_ENV`] say:
+    /// checked, a frame that fails validation is recorded again pass by pass to name
+    /// the failing pass (on by default in debug builds, where the cost does not matter).
+    pub fn set_checked(&mut self, on: bool) {
+        self.checked = on;
+    }
+
+    /// Whether checked mode is on (see [`Self::set_checked`]).
+    pub fn checked(&self) -> bool {
+        self.checked
+    }
+
     /// Frames executed so far (the index the next frame gets).
     pub fn frame_index(&self) -> u64 {
         self.frame
