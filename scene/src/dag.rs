@@ -146,14 +146,9 @@ pub fn build_dag(
     // Each vertex's material slot, and the slots' triangles split on their own, so that
     // no meshlet straddles two materials.
     let slots = mesh.vertex_materials();
-    let lod0: Vec<(u32, Vec<u32>)> = by_material(&mesh.indices, &slots)
-        .into_iter()
-        .flat_map(|(material, indices)| {
-            split_mesh_into_meshlets(positions, &indices, weld)
-                .into_iter()
-                .map(move |m| (material, m))
-        })
-        .collect();
+    let lod0 = meshlets_by_material(&mesh.indices, &slots, |indices| {
+        split_mesh_into_meshlets(positions, indices, weld)
+    });
     let mut clusters: Vec<DagCluster> = lod0
         .into_par_iter()
         .map(|(material, indices)| {
@@ -259,14 +254,9 @@ pub fn build_dag(
                         }
                     }
                 };
-                let meshlets: Vec<(u32, Vec<u32>)> = by_material(&simplified.indices, &slots)
-                    .into_iter()
-                    .flat_map(|(material, indices)| {
-                        split_into_meshlets(positions, &indices, weld)
-                            .into_iter()
-                            .map(move |m| (material, m))
-                    })
-                    .collect();
+                let meshlets = meshlets_by_material(&simplified.indices, &slots, |indices| {
+                    split_into_meshlets(positions, indices, weld)
+                });
                 let bounds: Vec<_> = meshlets
                     .iter()
                     .map(|(_, m)| sphere_of(positions, m))
@@ -475,6 +465,19 @@ fn seam_vertices(mesh: &Mesh, remap: &[u32], slots: &[u32]) -> (Vec<bool>, Vec<b
             .map(|&r| material_differs[r as usize])
             .collect(),
     )
+}
+
+/// The meshlets `split` makes of each material slot's triangles on their own, each with
+/// its slot, in slot order.
+fn meshlets_by_material(
+    indices: &[u32],
+    slots: &[u32],
+    split: impl Fn(&[u32]) -> Vec<Vec<u32>>,
+) -> Vec<(u32, Vec<u32>)> {
+    by_material(indices, slots)
+        .into_iter()
+        .flat_map(|(material, triangles)| split(&triangles).into_iter().map(move |m| (material, m)))
+        .collect()
 }
 
 /// The triangles of `indices` split by the material slot of their corners (which

@@ -64,15 +64,17 @@ fn file_kind(meta: &std::fs::Metadata) -> &'static str {
             return "a block device";
         }
         if t.is_fifo() {
-            return "a pipe";
+            return "a FIFO";
         }
         if t.is_socket() {
             return "a socket";
         }
     }
+    // The words the pipeline-file reader uses (graph::file), so every refusal reads
+    // alike.
     if meta.is_dir() {
-        "a folder"
+        "a directory"
     } else {
-        "not a file"
+        "not a regular file"
     }
 }

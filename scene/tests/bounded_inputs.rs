@@ -136,7 +136,7 @@ fn buffers_and_meshes_must_be_regular_files() {
         matches!(
             err,
             SceneError::NotARegularFile {
-                kind: "a folder",
+                kind: "a directory",
                 ..
             }
         ),
