@@ -75,11 +75,6 @@ impl Mesh {
         self.materials.iter().max().map_or(1, |&m| m + 1)
     }
 
-    /// The slot of triangle `t`.
-    pub fn material_of(&self, t: usize) -> u32 {
-        self.materials.get(t).copied().unwrap_or(0)
-    }
-
     /// Each vertex's material slot. After [`Self::clean`] no vertex is shared by two
     /// slots, so this is well defined; vertices no triangle uses get slot 0.
     pub fn vertex_materials(&self) -> Vec<u32> {

@@ -121,9 +121,9 @@ pub fn simplify_group(
         .map(|(&g, &lock)| lock || flags.material_border[g as usize])
         .collect();
     // Positions welded only within a material, for the welded mode.
-    let material_weld = match several_materials {
-        true => weld_within_materials(&pos, &slot),
-        false => weld.clone(),
+    let material_weld: std::borrow::Cow<[u32]> = match several_materials {
+        true => weld_within_materials(&pos, &slot).into(),
+        false => weld.as_slice().into(),
     };
     let locks: Vec<SimplifyVertex> = globals
         .iter()
