@@ -24,20 +24,7 @@ fn tetrahedron() -> Primitive {
     }
 }
 
-/// A unit quad in the XY plane, two triangles facing +Z.
-fn quad() -> Primitive {
-    Primitive {
-        positions: vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ],
-        normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
-        indices: vec![0, 1, 2, 0, 2, 3],
-        ..Primitive::default()
-    }
-}
+use common::gltf::unit_quad as quad;
 
 struct Written {
     path: std::path::PathBuf,

@@ -138,18 +138,12 @@ fn a_non_square_texture_is_resampled_and_mipped_to_one_texel() {
     assert!((180..=196).contains(&grey), "{grey}");
 }
 
+/// The unit quad with UVs (the image upright on it) in `material`.
 fn quad(material: usize) -> Primitive {
     Primitive {
-        positions: vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ],
-        normals: None,
         uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
-        indices: vec![0, 1, 2, 0, 2, 3],
         material: Some(material),
+        ..common::gltf::unit_quad()
     }
 }
 
