@@ -39,7 +39,7 @@ pub fn host_scene(
     let material = data.add_material(Material {
         base_color: [0.86, 0.70, 0.30],
         ..Material::default()
-    });
+    })?;
     data.add_instance(mesh, Mat4::IDENTITY, material)?;
     let s = data.meshes[0].bounding_sphere;
     let (centre, radius) = (Vec3::new(s[0], s[1], s[2]), s[3]);

@@ -5,7 +5,8 @@ use crate::error::SceneDataError;
 use glam::{Mat4, Vec3};
 use meshlight_scene::MeshletAsset;
 use meshlight_scene::asset::format::{GroupRecord, MeshletRecord, NO_GROUP, NodeRecord};
-use meshlight_shaders::cpu::layout::{self, MESH_FLAG_UVS};
+use meshlight_scene::texture::{ColorSpace, Image, MipChain, mip_chain, resample_square};
+use meshlight_shaders::cpu::layout::{self, MAP_COUNT, MESH_FLAG_UVS, TextureRef, TextureWrap};
 use std::ops::Range;
 
 /// A mesh added with [`SceneData::add_mesh`].
@@ -16,8 +17,12 @@ pub struct MeshId(pub u32);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct InstanceId(pub u32);
 
+/// A texture added with [`SceneData::add_texture`], for a [`Material`]'s maps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct TextureId(pub u32);
+
 /// A material: what shading needs to colour a surface, glTF's metallic-roughness
-/// model by its factors.
+/// model, its factors multiplied by its textures where it has them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     /// Linear RGB albedo (of a metal: its specular colour).
@@ -31,6 +36,15 @@ pub struct Material {
     /// Whether the base colour is modulated by a checkerboard over the mesh's UVs, so
     /// that an untextured test mesh shows its parameterisation and its LOD changes.
     pub checker: bool,
+    /// The textures, by `layout::MAP_*` index: base colour (sRGB, multiplies
+    /// `base_color`), metallic-roughness (G roughness, B metalness, multiplying the
+    /// factors), normal (tangent space), occlusion (R, on the ambient light) and
+    /// emissive (sRGB, multiplies `emissive`).
+    pub maps: [Option<TextureId>; MAP_COUNT],
+    /// How far the normal map tilts the normal (glTF's `normalTexture.scale`).
+    pub normal_scale: f32,
+    /// How much of the occlusion map applies, 0 to 1.
+    pub occlusion_strength: f32,
 }
 
 impl Default for Material {
@@ -42,6 +56,9 @@ impl Default for Material {
             roughness: DEFAULT_ROUGHNESS,
             emissive: [0.0; 3],
             checker: true,
+            maps: [None; MAP_COUNT],
+            normal_scale: 1.0,
+            occlusion_strength: 1.0,
         }
     }
 }
@@ -64,6 +81,9 @@ pub struct Limits {
     pub max_payload_words: u32,
     /// Culling-hierarchy nodes the shared `hierarchy_nodes` binding holds.
     pub max_hierarchy_nodes: u32,
+    /// Texel words (one RGBA8 texel each, mips included) the `textures` binding holds:
+    /// the scene's texture budget.
+    pub max_texture_words: u32,
 }
 
 impl Limits {
@@ -78,6 +98,7 @@ impl Limits {
             // Two words of padding follow the payload (see `GpuScene`).
             max_payload_words: count(4).saturating_sub(2),
             max_hierarchy_nodes: count(size_of::<NodeRecord>()),
+            max_texture_words: count(4),
         }
     }
     /// The counts an adapter with these limits can bind, for sizing a scene before it
@@ -119,6 +140,10 @@ pub struct SceneData {
     pub instances: Vec<layout::Instance>,
     /// The material table instances index, in GPU layout.
     pub materials: Vec<layout::Material>,
+    /// Every texture's mip chain, one RGBA8 texel a word (see `layout::TextureRef`).
+    pub textures: Vec<u32>,
+    /// Where each added texture lies in `textures`, by [`TextureId`].
+    pub texture_refs: Vec<TextureRef>,
     mesh_names: Vec<String>,
     /// Per mesh, its material slots: an instance's material is the first of as many.
     mesh_materials: Vec<u32>,
@@ -128,6 +153,7 @@ pub struct SceneData {
     /// Bumped whenever meshes are added (geometry buffers must be uploaded again).
     pub(crate) geometry_version: u64,
     pub(crate) materials_version: u64,
+    pub(crate) textures_version: u64,
     /// Instances changed since the last upload.
     pub(crate) dirty_instances: Option<Range<usize>>,
 }
@@ -271,24 +297,115 @@ impl SceneData {
         self.mesh_materials.get(mesh.0 as usize).copied()
     }
 
-    /// Adds a material and returns the index instances refer to it by.
-    pub fn add_material(&mut self, material: Material) -> u32 {
+    /// Adds a material and returns the index instances refer to it by. A map naming a
+    /// texture this scene was not given is refused.
+    pub fn add_material(&mut self, material: Material) -> Result<u32, SceneDataError> {
         let [r, g, b] = material.base_color;
         let [er, eg, eb] = material.emissive;
+        let mut maps = [[0u32; 2]; MAP_COUNT];
+        for (slot, map) in maps.iter_mut().zip(material.maps) {
+            if let Some(TextureId(id)) = map {
+                let reference =
+                    self.texture_refs
+                        .get(id as usize)
+                        .ok_or(SceneDataError::UnknownTexture {
+                            texture: id,
+                            added: self.texture_refs.len() as u32,
+                        })?;
+                *slot = reference.words();
+            }
+        }
+        let finite = |v: f32, fallback: f32| if v.is_finite() { v } else { fallback };
         self.materials.push(layout::Material {
             base_color: [r, g, b, 1.0],
-            emissive: [er, eg, eb, 0.0],
+            emissive: [er, eg, eb, finite(material.normal_scale, 1.0)],
             metallic: material.metallic.clamp(0.0, 1.0),
             roughness: material.roughness.clamp(0.0, 1.0),
+            occlusion_strength: material.occlusion_strength.clamp(0.0, 1.0),
+            alpha_cutoff: 0.0,
             flags: if material.checker {
                 layout::MATERIAL_FLAG_CHECKER
             } else {
                 0
             },
             reserved: 0,
+            maps,
         });
         self.materials_version += 1;
-        self.materials.len() as u32 - 1
+        Ok(self.materials.len() as u32 - 1)
+    }
+
+    /// Adds a decoded image as a texture: resampled to a square power-of-two side (the
+    /// next one up from its longer side, at most 2^[`layout::MAX_TEXTURE_SIZE_LOG2`],
+    /// larger images scaled down) and mip-mapped, both in linear light when `srgb`.
+    pub fn add_image(
+        &mut self,
+        image: &Image,
+        srgb: bool,
+        wrap: [TextureWrap; 2],
+    ) -> Result<TextureId, SceneDataError> {
+        let side = image
+            .width
+            .max(image.height)
+            .max(1)
+            .next_power_of_two()
+            .min(1 << layout::MAX_TEXTURE_SIZE_LOG2);
+        let space = if srgb {
+            ColorSpace::Srgb
+        } else {
+            ColorSpace::Linear
+        };
+        let chain = mip_chain(&resample_square(image, side, space), space);
+        self.add_texture(&chain, srgb, wrap)
+    }
+
+    /// Adds a texture: `chain` (square, a power-of-two side up to
+    /// 2^[`layout::MAX_TEXTURE_SIZE_LOG2`], every level down to 1 × 1, as
+    /// `meshlight_scene::texture::mip_chain` makes it), its colour channels sRGB-encoded
+    /// or data, wrapping in U and V as `wrap` says. Refused past the texture budget
+    /// ([`Limits::max_texture_words`]) with the words needed and held.
+    pub fn add_texture(
+        &mut self,
+        chain: &MipChain,
+        srgb: bool,
+        wrap: [TextureWrap; 2],
+    ) -> Result<TextureId, SceneDataError> {
+        let size = chain.size();
+        let shape_ok = size.is_power_of_two()
+            && size <= 1 << layout::MAX_TEXTURE_SIZE_LOG2
+            && chain.levels.len() as u32 == size.trailing_zeros() + 1
+            && chain.levels.iter().enumerate().all(|(l, level)| {
+                let side = size >> l;
+                level.width == side
+                    && level.height == side
+                    && level.rgba.len() == side as usize * side as usize * 4
+            });
+        if !shape_ok {
+            return Err(SceneDataError::TextureShape { size });
+        }
+        let reference = TextureRef {
+            texels: self.textures.len() as u32,
+            size_log2: size.trailing_zeros(),
+            srgb,
+            wrap,
+        };
+        check_limit(
+            "texture words (RGBA8 texels, mips included)",
+            self.textures.len() as u64 + reference.words_len(),
+            self.limits.max_texture_words as u64,
+            "scale the textures down, or use a device with a larger storage binding",
+        )?;
+        for level in &chain.levels {
+            self.textures.extend(
+                level
+                    .rgba
+                    .chunks_exact(4)
+                    .map(|t| u32::from_le_bytes([t[0], t[1], t[2], t[3]])),
+            );
+        }
+        self.texture_refs.push(reference);
+        self.textures_version += 1;
+        Ok(TextureId(self.texture_refs.len() as u32 - 1))
     }
 
     /// Places `mesh` with `world_from_local`, its material slot `k` drawn in material

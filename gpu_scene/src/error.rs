@@ -33,6 +33,27 @@ pub enum SceneDataError {
         /// Materials the scene holds.
         added: u32,
     },
+    /// A material named a texture this scene was never given.
+    #[error(
+        "texture id {texture} does not exist in this scene, which has {added} texture(s); \
+         add it first with `add_texture`"
+    )]
+    UnknownTexture {
+        /// The texture named.
+        texture: u32,
+        /// Textures the scene holds.
+        added: u32,
+    },
+    /// A texture that is not a square power-of-two mip chain.
+    #[error(
+        "a texture of side {size} is not a square power-of-two mip chain of at most 4096 \
+         texels a side with every level down to 1 × 1; make it with \
+         `meshlight_scene::texture::mip_chain` after `resample_square`"
+    )]
+    TextureShape {
+        /// Side of level 0.
+        size: u32,
+    },
     /// An instance id past the scene's instances.
     #[error("instance id {0} does not exist in this scene")]
     UnknownInstance(u32),

@@ -51,6 +51,8 @@ pub struct SceneHandles {
     pub instances_high: Option<Handle<Buffer>>,
     /// Bound to the `materials` slots.
     pub materials: Handle<Buffer>,
+    /// Bound to the `textures` slots.
+    pub textures: Handle<Buffer>,
 }
 
 impl SceneHandles {
@@ -66,6 +68,7 @@ impl SceneHandles {
             instances: import(names::INSTANCES),
             instances_high: split.then(|| import(names::INSTANCES_HIGH)),
             materials: import(names::MATERIALS),
+            textures: import(names::TEXTURES),
         }
     }
 }
@@ -107,12 +110,13 @@ pub struct GpuScene {
     instances_split: bool,
     geometry_version: u64,
     materials_version: u64,
+    textures_version: u64,
 }
 
 /// The element count of each scene buffer as [`GpuScene::new`] would create it for
 /// `data`, by buffer name. A graph can then be declared and compiled (which picks the
 /// device's features) before the device, and so the buffers, exist.
-pub fn buffer_lengths(data: &SceneData) -> [(&'static str, Element, u64); 7] {
+pub fn buffer_lengths(data: &SceneData) -> [(&'static str, Element, u64); 8] {
     let count = |n: usize| (n as u64).max(1);
     let split = data.instance_split();
     [
@@ -136,6 +140,7 @@ pub fn buffer_lengths(data: &SceneData) -> [(&'static str, Element, u64); 7] {
             elements::MATERIAL,
             count(data.materials.len()),
         ),
+        (names::TEXTURES, Element::U32, count(data.textures.len())),
     ]
 }
 
@@ -192,7 +197,7 @@ pub fn import_for(data: &SceneData, g: &mut GraphBuilder) -> SceneHandles {
 }
 
 /// The buffers in their order in [`GpuScene`].
-const ORDER: [&str; 10] = [
+const ORDER: [&str; 11] = [
     names::MESHLETS,
     names::GROUPS,
     names::PAYLOAD,
@@ -200,6 +205,7 @@ const ORDER: [&str; 10] = [
     names::INSTANCES,
     names::INSTANCES_HIGH,
     names::MATERIALS,
+    names::TEXTURES,
     names::HIERARCHY_NODES,
     names::HIERARCHY_CLUSTERS,
     names::HIERARCHY_ROOTS,
@@ -228,6 +234,7 @@ fn content<'a>(data: &'a SceneData, name: &str) -> (Element, Cow<'a, [u8]>) {
         names::HIERARCHY_NODES => (elements::HIERARCHY_NODE, borrowed(&data.hierarchy_nodes)),
         names::HIERARCHY_CLUSTERS => (Element::U32, borrowed(&data.hierarchy_clusters)),
         names::HIERARCHY_ROOTS => (Element::U32, borrowed(&data.hierarchy_roots)),
+        names::TEXTURES => (Element::U32, borrowed(&data.textures)),
         _ => (elements::MATERIAL, borrowed(&data.materials)),
     }
 }
@@ -248,6 +255,7 @@ impl GpuScene {
             instances_split: data.instances_split(),
             geometry_version: data.geometry_version,
             materials_version: data.materials_version,
+            textures_version: data.textures_version,
         }
     }
 
@@ -258,11 +266,13 @@ impl GpuScene {
         let mut stats = UploadStats::default();
         let geometry = data.geometry_version != self.geometry_version;
         let materials = data.materials_version != self.materials_version;
+        let textures = data.textures_version != self.textures_version;
         let dirty = data.dirty_instances.take();
         for (i, &name) in ORDER.iter().enumerate() {
             let changed = match name {
                 names::INSTANCES | names::INSTANCES_HIGH => dirty.is_some(),
                 names::MATERIALS => materials,
+                names::TEXTURES => textures,
                 _ => geometry,
             };
             if !changed {
@@ -300,6 +310,7 @@ impl GpuScene {
         }
         self.geometry_version = data.geometry_version;
         self.materials_version = data.materials_version;
+        self.textures_version = data.textures_version;
         self.instances_split = data.instances_split();
         stats
     }

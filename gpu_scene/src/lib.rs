@@ -12,7 +12,8 @@
 //! | `meshes`        | `array<meshlet::Mesh>`        | per asset: grids, bounds, meshlet range |
 //! | `instances`     | `array<instance::Instance>`   | transforms, material, mesh, meshlet range |
 //! | `instances_high`| `array<instance::Instance>`   | the instances past one binding's limit (see [`instance_table`]) |
-//! | `materials`     | `array<instance::Material>`   | base colour |
+//! | `materials`     | `array<instance::Material>`   | factors and texture references |
+//! | `textures`      | `array<u32>`                  | every texture's mip chain, RGBA8 (`layout::TextureRef`) |
 //!
 //! Three more hold the meshes' culling hierarchies (`meshlight_scene::hierarchy`), for
 //! the `hierarchy` implementation of `fill_clusters`; a graph imports them with
@@ -39,7 +40,7 @@ pub mod phase;
 pub mod scene_slots;
 pub mod view;
 
-pub use data::{InstanceId, Material, MeshId, SceneData};
+pub use data::{InstanceId, Material, MeshId, SceneData, TextureId};
 pub use error::SceneDataError;
 pub use gpu::GpuScene;
 pub use phase::Phase;
@@ -62,6 +63,8 @@ pub mod names {
     pub const INSTANCES_HIGH: &str = "instances_high";
     /// The material table.
     pub const MATERIALS: &str = "materials";
+    /// Every texture's mip chain.
+    pub const TEXTURES: &str = "textures";
     /// Every asset's culling-hierarchy nodes.
     pub const HIERARCHY_NODES: &str = "hierarchy_nodes";
     /// The hierarchy leaves' meshlets, as indices into `meshlets`.

@@ -25,6 +25,8 @@ pub enum SceneBuffer {
     Payload,
     /// `materials`: the material table.
     Materials,
+    /// `textures`: every texture's mip chain.
+    Textures,
 }
 
 impl SceneBuffer {
@@ -47,6 +49,11 @@ impl SceneBuffer {
                 names::MATERIALS,
                 elements::MATERIAL,
                 "the scene's materials",
+            ),
+            Self::Textures => (
+                names::TEXTURES,
+                Element::U32,
+                "the scene's textures: RGBA8 mip chains",
             ),
         };
         Slot::read(name, element, doc)

@@ -98,10 +98,12 @@ fn hierarchies_are_rebased_onto_the_shared_arrays() {
 fn singular_and_nan_transforms_are_skipped_and_counted() {
     let mut data = SceneData::new(Limits::default());
     let mesh = data.add_mesh("a", &asset(6)).unwrap();
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-        ..Material::default()
-    });
+    let material = data
+        .add_material(Material {
+            base_color: [1.0; 3],
+            ..Material::default()
+        })
+        .unwrap();
     let ok = data
         .add_instance(mesh, Mat4::from_translation(Vec3::X), material)
         .unwrap();
@@ -131,10 +133,12 @@ fn more_instances_than_the_buffer_holds_is_an_error_naming_the_limit() {
     };
     let mut data = SceneData::new(limits);
     let mesh = data.add_mesh("a", &asset(6)).unwrap();
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-        ..Material::default()
-    });
+    let material = data
+        .add_material(Material {
+            base_color: [1.0; 3],
+            ..Material::default()
+        })
+        .unwrap();
     for _ in 0..2 {
         data.add_instance(mesh, Mat4::IDENTITY, material).unwrap();
     }
@@ -151,10 +155,12 @@ fn more_instances_than_the_buffer_holds_is_an_error_naming_the_limit() {
 /// One mesh placed ten times along x (instance i at x = i), with one material.
 fn ten_in_a_row(data: &mut SceneData) -> (MeshId, u32, Vec<meshlight_gpu_scene::InstanceId>) {
     let mesh = data.add_mesh("a", &asset(6)).unwrap();
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-        ..Material::default()
-    });
+    let material = data
+        .add_material(Material {
+            base_color: [1.0; 3],
+            ..Material::default()
+        })
+        .unwrap();
     let ids = (0..10)
         .map(|i| {
             data.add_instance(mesh, Mat4::from_translation(Vec3::X * i as f32), material)

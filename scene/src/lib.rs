@@ -63,7 +63,6 @@ pub mod procedural;
 pub mod simplify;
 #[cfg(feature = "build")]
 pub mod terrain;
-#[cfg(feature = "build")]
 pub mod texture;
 #[cfg(feature = "build")]
 pub mod weld;

@@ -91,7 +91,17 @@ fn rust_mirrors_match_the_wgsl_layouts() {
         &module,
         "Material",
         Material,
-        [base_color, emissive, metallic, roughness, flags, reserved]
+        [
+            base_color,
+            emissive,
+            metallic,
+            roughness,
+            occlusion_strength,
+            alpha_cutoff,
+            flags,
+            reserved,
+            maps,
+        ]
     );
     assert_layout!(&module, "Cluster", Cluster, [instance, meshlet]);
     assert_layout!(

@@ -43,7 +43,7 @@ pub struct Overlay {
 /// One line about each view, shown under the drop-down.
 pub fn legend(view: DebugView) -> &'static str {
     match view {
-        DebugView::Shaded => "lit, checkered surface over a sky gradient",
+        DebugView::Shaded => "lit surface (textured or checkered) over a sky gradient",
         DebugView::Clusters => "a colour per rasterised cluster",
         DebugView::Triangles => "a colour per triangle",
         DebugView::Lod => "a colour per LOD level of the pixel's meshlet",
@@ -52,6 +52,10 @@ pub fn legend(view: DebugView) -> &'static str {
         DebugView::LightCount => "lights per froxel: black none, red 32 or more",
         DebugView::Pyramid => "a mip of the depth pyramid as grey",
         DebugView::Material => "a colour per material",
+        DebugView::Uv => "texture coordinates: red fract(u), green fract(v)",
+        DebugView::Normal => "the shading normal (normal map applied), n/2 + 1/2",
+        DebugView::Mip => "a colour per mip level of the base colour texture",
+        DebugView::BaseColor => "base colour (factor x texture), unlit",
         DebugView::Occlusion => {
             "green: first culling pass drew it, blue: second; red: share occluded"
         }

@@ -32,7 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let material = data.add_material(Material {
         base_color: [0.8, 0.5, 0.3],
         ..Material::default()
-    });
+    })?;
     let id = data.add_mesh("mesh", &asset)?;
     let r = data.meshes[0].bounding_sphere[3];
     for i in 0..400 {

@@ -5,14 +5,18 @@
 use crate::scenes::{Placed, point_light};
 use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::view::Projection;
-use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData, SceneDataError};
+use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData, SceneDataError, TextureId};
 use meshlight::scene::cache;
 use meshlight::scene::load::{
-    CameraProjection, GltfScene, SceneCamera, SceneMaterial, load_gltf_scene,
+    AlphaMode, CameraProjection, GltfScene, SceneCamera, SceneMaterial, Wrap, load_gltf_scene,
 };
+use meshlight::scene::texture::Image;
 use meshlight::scene::{BuildOptions, SceneError};
-use meshlight::shaders::cpu::layout::ClusterableObject;
-use std::collections::BTreeMap;
+use meshlight::shaders::cpu::layout::{
+    ClusterableObject, MAP_BASE_COLOR, MAP_COUNT, MAP_EMISSIVE, MAP_METALLIC_ROUGHNESS, MAP_NORMAL,
+    MAP_OCCLUSION, TextureWrap,
+};
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// Why a glTF scene cannot be drawn.
@@ -61,8 +65,8 @@ pub fn is_gltf(path: &Path) -> bool {
 ///
 /// Each primitive is shaded with its material's metallic-roughness factors (glTF's
 /// default material where it names none): the asset keeps each meshlet's material
-/// slot, and the instance the first of its mesh's run of materials. Textures are read
-/// but not drawn yet. A node whose transform mirrors places a copy of its mesh with the
+/// slot, and the instance the first of its mesh's run of materials, with the material's
+/// textures (base colour, metallic-roughness, normal, occlusion, emissive). A node whose transform mirrors places a copy of its mesh with the
 /// winding reversed (baked once too), since the rasterisers keep counter-clockwise
 /// faces.
 pub fn gltf_scene(
@@ -92,7 +96,7 @@ pub fn place(
                 })
         })
         .transpose()?;
-    let materials = mesh_materials(&mut data, scene);
+    let materials = mesh_materials(&mut data, scene)?;
     // (mesh, mirrored) → the GPU scene's mesh and its bounds, baked on first use.
     let mut baked: BTreeMap<(usize, bool), (MeshId, [Vec3; 2])> = BTreeMap::new();
     let (mut low, mut high) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
@@ -148,33 +152,115 @@ pub fn place(
 }
 
 /// Per mesh of `scene`, the first of the materials of `data` its slots are drawn in:
-/// one GPU material per slot, consecutive, with its glTF material's factors (base
-/// colour, metallic, roughness, emissive; glTF's default material where a primitive
-/// names none), and no checkerboard. Meshes with the same materials share one run.
-fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Vec<u32> {
+/// one GPU material per slot, consecutive, with its glTF material's factors and
+/// textures (glTF's default material where a primitive names none), and no
+/// checkerboard. Meshes with the same materials share one run.
+fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Result<Vec<u32>, SceneDataError> {
+    let mut textures = SceneTextures::default();
     let mut runs: BTreeMap<&[u32], u32> = BTreeMap::new();
-    scene
-        .meshes
-        .iter()
-        .map(|m| {
-            *runs.entry(&m.materials).or_insert_with(|| {
-                let first = data.materials.len() as u32;
-                for &slot in &m.materials {
-                    let default = SceneMaterial::default();
-                    let source = scene.materials.get(slot as usize).unwrap_or(&default);
-                    let [r, g, b, _] = source.base_color;
-                    data.add_material(Material {
-                        base_color: [r, g, b],
-                        metallic: source.metallic,
-                        roughness: source.roughness,
-                        emissive: source.emissive,
-                        checker: false,
-                    });
+    let mut firsts = Vec::with_capacity(scene.meshes.len());
+    let mut masked = BTreeSet::new();
+    for m in &scene.meshes {
+        if let Some(&first) = runs.get(m.materials.as_slice()) {
+            firsts.push(first);
+            continue;
+        }
+        let first = data.materials.len() as u32;
+        for &slot in &m.materials {
+            let default = SceneMaterial::default();
+            let source = scene.materials.get(slot as usize).unwrap_or(&default);
+            if !matches!(source.alpha, AlphaMode::Opaque) {
+                masked.insert(source.name.clone());
+            }
+            let [r, g, b, _] = source.base_color;
+            let mut maps = [None; MAP_COUNT];
+            for (map, texture, srgb) in [
+                (MAP_BASE_COLOR, source.base_color_texture, true),
+                (
+                    MAP_METALLIC_ROUGHNESS,
+                    source.metallic_roughness_texture,
+                    false,
+                ),
+                (MAP_NORMAL, source.normal_texture, false),
+                (MAP_OCCLUSION, source.occlusion_texture, false),
+                (MAP_EMISSIVE, source.emissive_texture, true),
+            ] {
+                if let Some(t) = texture {
+                    maps[map] = textures.get(data, scene, t.texture, srgb)?;
                 }
-                first
-            })
-        })
-        .collect()
+            }
+            data.add_material(Material {
+                base_color: [r, g, b],
+                metallic: source.metallic,
+                roughness: source.roughness,
+                emissive: source.emissive,
+                checker: false,
+                maps,
+                normal_scale: source.normal_scale,
+                occlusion_strength: source.occlusion_strength,
+            })?;
+        }
+        runs.insert(&m.materials, first);
+        firsts.push(first);
+    }
+    if !masked.is_empty() {
+        log::warn!(
+            "{}: material(s) {} use alpha (MASK or BLEND); meshlight draws them opaque, \
+             cut-out texels included",
+            scene.source,
+            masked.into_iter().collect::<Vec<_>>().join(", ")
+        );
+    }
+    Ok(firsts)
+}
+
+/// The scene's textures uploaded into `data` as they are first used
+/// ([`SceneData::add_image`]), once per colour space each is sampled in.
+#[derive(Default)]
+struct SceneTextures {
+    uploaded: BTreeMap<(usize, bool), Option<TextureId>>,
+}
+
+impl SceneTextures {
+    fn get(
+        &mut self,
+        data: &mut SceneData,
+        scene: &GltfScene,
+        texture: usize,
+        srgb: bool,
+    ) -> Result<Option<TextureId>, SceneDataError> {
+        if let Some(&id) = self.uploaded.get(&(texture, srgb)) {
+            return Ok(id);
+        }
+        // An image that did not decode was reported when the file was read; the
+        // material keeps its factor.
+        let id = match scene
+            .textures
+            .get(texture)
+            .and_then(|t| Some((t, t.image.as_ref()?)))
+        {
+            Some((t, image)) => Some(upload(data, image, srgb, t.wrap)?),
+            None => None,
+        };
+        self.uploaded.insert((texture, srgb), id);
+        Ok(id)
+    }
+}
+
+/// `image` added to `data` as a texture ([`SceneData::add_image`]) with glTF's wrap
+/// modes.
+pub fn upload(
+    data: &mut SceneData,
+    image: &Image,
+    srgb: bool,
+    wrap: [Wrap; 2],
+) -> Result<TextureId, SceneDataError> {
+    let wrap = wrap.map(|w| match w {
+        Wrap::Repeat => TextureWrap::Repeat,
+        Wrap::ClampToEdge => TextureWrap::Clamp,
+        Wrap::MirroredRepeat => TextureWrap::Mirror,
+    });
+    data.add_image(image, srgb, wrap)
 }
 
 /// The camera a glTF node carries: at the node's origin, looking down its -Z axis with

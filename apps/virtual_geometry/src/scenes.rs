@@ -61,7 +61,7 @@ pub struct Placed {
     pub camera: Camera,
 }
 
-fn palette(data: &mut SceneData) -> Vec<u32> {
+fn palette(data: &mut SceneData) -> Result<Vec<u32>, meshlight::gpu_scene::SceneDataError> {
     [
         [0.80, 0.34, 0.24],
         [0.86, 0.70, 0.30],
@@ -94,7 +94,7 @@ impl Copies {
         data: &mut SceneData,
         asset: &MeshletAsset,
     ) -> Result<Self, meshlight::gpu_scene::SceneDataError> {
-        let materials = palette(data);
+        let materials = palette(data)?;
         let mesh = data.add_mesh("mesh", asset)?;
         let radius = mesh_radius(data, mesh);
         Ok(Self {
@@ -178,7 +178,7 @@ pub fn field(
         let material = data.add_material(Material {
             base_color: GROUND_COLOR,
             ..Material::default()
-        });
+        })?;
         data.add_instance(ground_mesh, Mat4::IDENTITY, material)?;
     }
     let extent = side as f32 * spacing;

@@ -197,13 +197,16 @@ fn a_mesh_placed_by_many_nodes_is_baked_once_and_drawn_at_each_nodes_transform()
     for m in &placed.data.materials {
         let [r, g, b, _] = m.base_color;
         let [er, eg, eb, _] = m.emissive;
-        expected.add_material(Material {
-            base_color: [r, g, b],
-            metallic: m.metallic,
-            roughness: m.roughness,
-            emissive: [er, eg, eb],
-            checker: m.flags & meshlight::shaders::cpu::layout::MATERIAL_FLAG_CHECKER != 0,
-        });
+        expected
+            .add_material(Material {
+                base_color: [r, g, b],
+                metallic: m.metallic,
+                roughness: m.roughness,
+                emissive: [er, eg, eb],
+                checker: m.flags & meshlight::shaders::cpu::layout::MATERIAL_FLAG_CHECKER != 0,
+                ..Material::default()
+            })
+            .unwrap();
     }
     let ball = expected.add_mesh("ball", &bake(0)).unwrap();
     let block = expected.add_mesh("block", &bake(1)).unwrap();

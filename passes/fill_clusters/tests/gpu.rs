@@ -22,10 +22,12 @@ use support::*;
 /// because of its scale.
 fn scene() -> SceneData {
     let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-        ..Material::default()
-    });
+    let material = data
+        .add_material(Material {
+            base_color: [1.0; 3],
+            ..Material::default()
+        })
+        .unwrap();
     let mut meshes = Vec::new();
     for segments in [4, 20] {
         let asset = bake(&procedural_mesh(segments));

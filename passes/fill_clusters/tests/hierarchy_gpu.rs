@@ -344,10 +344,12 @@ fn terrain_near_view() -> View {
 
 fn terrain_scene() -> SceneData {
     let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-        ..Material::default()
-    });
+    let material = data
+        .add_material(Material {
+            base_color: [1.0; 3],
+            ..Material::default()
+        })
+        .unwrap();
     let mesh = data.add_mesh("terrain", terrain()).unwrap();
     data.add_instance(mesh, Mat4::IDENTITY, material)
         .unwrap()

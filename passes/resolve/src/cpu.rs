@@ -5,14 +5,16 @@
 
 use crate::brdf::Surface;
 use crate::settings::{DebugView, Settings};
+use crate::texture::{sample_texture, texture_lod};
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use meshlight_gpu_scene::SceneData;
 use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout};
 use meshlight_scene::asset::triangles;
 use meshlight_scene::compress::{NORMAL_BITS, decode_octahedral, get_bits};
 use meshlight_shaders::cpu::layout::{
-    Cluster, ClusterGrid, ClusterableKind, ClusterableObject, Instance, MATERIAL_FLAG_CHECKER,
-    MESH_FLAG_UVS, Mesh, View,
+    Cluster, ClusterGrid, ClusterableKind, ClusterableObject, Instance, MAP_BASE_COLOR,
+    MAP_EMISSIVE, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MATERIAL_FLAG_CHECKER,
+    MESH_FLAG_UVS, Material, Mesh, TextureRef, View,
 };
 use meshlight_shaders::cpu::light::{cluster_index, z_slice_of_depth};
 use meshlight_shaders::cpu::visbuffer;
@@ -380,6 +382,17 @@ fn pixel_color(
             frame.scene,
             &cluster_of(frame.raster_clusters, value),
         ))),
+        DebugView::Uv => {
+            let uv = pixel_surface(frame, light.checker_scale, value, pixel).uv;
+            (uv - uv.floor()).extend(0.0)
+        }
+        DebugView::Normal => {
+            pixel_surface(frame, light.checker_scale, value, pixel).n * 0.5 + Vec3::splat(0.5)
+        }
+        DebugView::Mip => mip_color(&pixel_surface(frame, light.checker_scale, value, pixel)),
+        DebugView::BaseColor => pixel_surface(frame, light.checker_scale, value, pixel)
+            .base
+            .truncate(),
         DebugView::Raster => unorm(if id < frame.software_clusters {
             SOFTWARE_COLOR
         } else {
@@ -564,9 +577,72 @@ pub fn transform_normal(instance: &Instance, n: Vec3) -> Vec3 {
     (Mat3::from_mat4(m).transpose() * n).normalize()
 }
 
-/// shade.wgsl's `shade`: the pixel's triangle lit through its material (resolve::brdf),
-/// checkered where the material asks.
-fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> Vec3 {
+/// shade.wgsl's `PixelSurface`: what shading knows of a pixel before it is lit.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelSurface {
+    /// The pixel's material.
+    pub material: Material,
+    /// Base colour (factor × texture × checker) and alpha, linear.
+    pub base: Vec4,
+    /// Metalness after the metallic-roughness texture.
+    pub metallic: f32,
+    /// Roughness after the metallic-roughness texture.
+    pub roughness: f32,
+    /// Shading normal (normal map applied), world space.
+    pub n: Vec3,
+    /// Direction to the eye.
+    pub v: Vec3,
+    /// The ambient light's share the occlusion map leaves.
+    pub occlusion: f32,
+    /// Emitted light after the emissive texture.
+    pub emissive: Vec3,
+    /// Texture coordinates at the pixel centre.
+    pub uv: Vec2,
+    /// Their change per pixel step in x.
+    pub uv_dx: Vec2,
+    /// ... and in y.
+    pub uv_dy: Vec2,
+}
+
+impl PixelSurface {
+    /// shade.wgsl's `sample_map`: `map` at the pixel, or `fallback` without a texture.
+    fn sample_map(&self, textures: &[u32], map: usize, fallback: Vec4) -> Vec4 {
+        match TextureRef::from_words(self.material.maps[map]) {
+            Some(t) => sample_texture(textures, &t, self.uv, self.uv_dx, self.uv_dy),
+            None => fallback,
+        }
+    }
+}
+
+/// shade.wgsl's `mapped_normal`: the normal map's texel in the triangle's tangent frame.
+pub fn mapped_normal(n: Vec3, world: [Vec3; 3], uv: [Vec2; 3], texel: Vec3, scale: f32) -> Vec3 {
+    let (e1, e2) = (world[1] - world[0], world[2] - world[0]);
+    let (d1, d2) = (uv[1] - uv[0], uv[2] - uv[0]);
+    let r = d1.x * d2.y - d2.x * d1.y;
+    let t_raw = (e1 * d2.y - e2 * d1.y) * wgsl_sign(r);
+    let t_perp = t_raw - n * n.dot(t_raw);
+    if r == 0.0 || t_perp.dot(t_perp) < 1e-20 {
+        return n;
+    }
+    let t = t_perp.normalize();
+    let b = n.cross(t) * -wgsl_sign(r);
+    let m = (texel * 2.0 - Vec3::ONE) * Vec3::new(scale, scale, 1.0);
+    (t * m.x + b * m.y + n * m.z).normalize()
+}
+
+/// WGSL's `sign`: 0 for 0 (Rust's `signum` gives 1).
+fn wgsl_sign(x: f32) -> f32 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// shade.wgsl's `pixel_surface`: the pixel's triangle, its material and its textures.
+pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2) -> PixelSurface {
     let scene = frame.scene;
     let cluster = cluster_of(frame.raster_clusters, value);
     let instance = instance_of(scene, &cluster);
@@ -585,32 +661,71 @@ fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> 
     let bary = barycentrics(clip, pixel, size);
     let b = bary.b;
     let [k0, k1, k2] = corners;
-    let n = transform_normal(
-        &instance,
-        k0.normal * b.x + k1.normal * b.y + k2.normal * b.z,
-    )
-    .normalize();
-    let camera = Vec3::from_array(frame.view.camera_position);
-    let v = (camera - (world[0] * b.x + world[1] * b.y + world[2] * b.z)).normalize();
     let material = scene
         .materials
         .get(instance.material as usize + m.material() as usize)
         .copied()
         .unwrap_or_default();
-    let mut base = Vec4::from_array(material.base_color).truncate();
+    let weigh = |w: Vec3| k0.uv * w.x + k1.uv * w.y + k2.uv * w.z;
+    let camera = Vec3::from_array(frame.view.camera_position);
+    let mut s = PixelSurface {
+        material,
+        base: Vec4::ONE,
+        metallic: 0.0,
+        roughness: 0.0,
+        n: transform_normal(
+            &instance,
+            k0.normal * b.x + k1.normal * b.y + k2.normal * b.z,
+        )
+        .normalize(),
+        v: (camera - (world[0] * b.x + world[1] * b.y + world[2] * b.z)).normalize(),
+        occlusion: 1.0,
+        emissive: Vec3::ZERO,
+        uv: weigh(b),
+        uv_dx: weigh(bary.ddx),
+        uv_dy: weigh(bary.ddy),
+    };
+    let textures = &scene.textures;
+    s.base =
+        Vec4::from_array(material.base_color) * s.sample_map(textures, MAP_BASE_COLOR, Vec4::ONE);
     if material.flags & MATERIAL_FLAG_CHECKER != 0 {
-        let scale = light.checker_scale;
-        let weigh = |w: Vec3| (k0.uv * w.x + k1.uv * w.y + k2.uv * w.z) * scale;
-        let checker = filtered_checker(weigh(b), weigh(bary.ddx), weigh(bary.ddy));
-        base *= CHECKER_DARK * (1.0 - checker) + checker;
+        let scale = checker_scale;
+        let checker = filtered_checker(s.uv * scale, s.uv_dx * scale, s.uv_dy * scale);
+        s.base = (s.base.truncate() * (CHECKER_DARK * (1.0 - checker) + checker)).extend(s.base.w);
     }
-    let s = Surface::new(base, material.metallic, material.roughness);
-    let mut radiance = light.ambient * s.ambient_response()
-        + light.color * s.light_response(n, v, light.direction);
+    let metallic_roughness = s.sample_map(textures, MAP_METALLIC_ROUGHNESS, Vec4::ONE);
+    s.metallic = material.metallic * metallic_roughness.z;
+    s.roughness = material.roughness * metallic_roughness.y;
+    if TextureRef::from_words(material.maps[MAP_NORMAL]).is_some() {
+        let texel = s.sample_map(textures, MAP_NORMAL, Vec4::new(0.5, 0.5, 1.0, 1.0));
+        let uv = corners.map(|c| c.uv);
+        s.n = mapped_normal(s.n, world, uv, texel.truncate(), material.emissive[3]);
+    }
+    s.occlusion = 1.0
+        + material.occlusion_strength * (s.sample_map(textures, MAP_OCCLUSION, Vec4::ONE).x - 1.0);
+    s.emissive = Vec4::from_array(material.emissive).truncate()
+        * s.sample_map(textures, MAP_EMISSIVE, Vec4::ONE).truncate();
+    s
+}
+
+/// shade.wgsl's `shade`: the pixel's surface lit through its material (resolve::brdf).
+fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> Vec3 {
+    let p = pixel_surface(frame, light.checker_scale, value, pixel);
+    let s = Surface::new(p.base.truncate(), p.metallic, p.roughness);
+    let mut radiance = light.ambient * s.ambient_response() * p.occlusion
+        + light.color * s.light_response(p.n, p.v, light.direction);
     if let Some(lights) = frame.lights {
-        radiance += lights.lighting(frame.view, pixel, visbuffer::depth(value), &s, n, v);
+        radiance += lights.lighting(frame.view, pixel, visbuffer::depth(value), &s, p.n, p.v);
     }
-    radiance + Vec4::from_array(material.emissive).truncate()
+    radiance + p.emissive
+}
+
+/// shade.wgsl's `mip_color`: a colour per level the base colour texture is read at.
+fn mip_color(p: &PixelSurface) -> Vec3 {
+    match TextureRef::from_words(p.material.maps[MAP_BASE_COLOR]) {
+        Some(t) => unorm(id_color(texture_lod(&t, p.uv_dx, p.uv_dy).floor() as u32)),
+        None => Vec3::ZERO,
+    }
 }
 
 #[cfg(test)]

@@ -124,6 +124,7 @@
 pub mod brdf;
 pub mod cpu;
 pub mod settings;
+pub mod texture;
 
 pub use settings::{DebugView, Resolve};
 
@@ -167,7 +168,8 @@ pub const SHADE_SHADER: PassShader = pass_shader!(
     params: ShadeParams,
     modules: [
         ("resolve::visibility", "visibility.wgsl"),
-        ("resolve::brdf", "brdf.wgsl")
+        ("resolve::brdf", "brdf.wgsl"),
+        ("resolve::texture", "texture.wgsl")
     ]
 );
 
@@ -209,7 +211,7 @@ pub fn contract() -> StageContract {
                     "word 0: software clusters (ids below it)",
                 ),
             ],
-            scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials]),
+            scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials, Textures]),
             vec![
                 Slot::texture(
                     "depth",

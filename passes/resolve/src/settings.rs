@@ -36,11 +36,21 @@ pub enum DebugView {
     Occlusion = 8,
     /// A colour per material: the pixel's instance's material plus its meshlet's slot.
     Material = 9,
+    /// The texture coordinates: red `fract(u)`, green `fract(v)`.
+    Uv = 10,
+    /// The shading normal (normal map applied), world space, as `n · 0.5 + 0.5`.
+    Normal = 11,
+    /// The mip level the base colour texture is read at (the level the filter starts
+    /// from), a colour per level as the `lod` view colours LOD levels; black where the
+    /// material has no base colour texture.
+    Mip = 12,
+    /// The base colour (factor times texture), unlit, linear.
+    BaseColor = 13,
 }
 
 impl DebugView {
     /// Every view, in discriminant order.
-    pub const ALL: [DebugView; 10] = [
+    pub const ALL: [DebugView; 14] = [
         DebugView::Shaded,
         DebugView::Clusters,
         DebugView::Triangles,
@@ -51,6 +61,10 @@ impl DebugView {
         DebugView::Pyramid,
         DebugView::Occlusion,
         DebugView::Material,
+        DebugView::Uv,
+        DebugView::Normal,
+        DebugView::Mip,
+        DebugView::BaseColor,
     ];
 
     /// The name pipeline files and the command line use.
@@ -66,6 +80,10 @@ impl DebugView {
             DebugView::Pyramid => "pyramid",
             DebugView::Occlusion => "occlusion",
             DebugView::Material => "material",
+            DebugView::Uv => "uv",
+            DebugView::Normal => "normal",
+            DebugView::Mip => "mip",
+            DebugView::BaseColor => "base-color",
         }
     }
 
@@ -290,7 +308,7 @@ mod tests {
     #[test]
     fn bad_params_are_errors_that_name_what_to_change() {
         let wrong_size = "width = 0\nheight = 48";
-        let wrong_view = "width = 4\nheight = 4\nview = \"normal\"";
+        let wrong_view = "width = 4\nheight = 4\nview = \"normals\"";
         let wrong_scale = "width = 4\nheight = 4\nchecker_scale = \"big\"";
         let wrong_color = "width = 4\nheight = 4\nlight_color = [1, -1, 1]";
         meshlight_testing::assert_params(
@@ -300,7 +318,7 @@ mod tests {
                 (wrong_size, "`width`"),
                 (wrong_size, "0 × 48"),
                 ("height = 48", "`width`"),
-                (wrong_view, "`normal`"),
+                (wrong_view, "`normals`"),
                 (wrong_view, "shaded, clusters"),
                 ("width = 4\nheight = 4\nwidht = 4", "`widht`"),
                 (wrong_scale, "`checker_scale`"),

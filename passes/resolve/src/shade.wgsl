@@ -6,8 +6,9 @@
 
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
-#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, instance_transform_normal}
+#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
+#import resolve::texture::{texture_present, sample_texture, texture_lod}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshlets, payload, materials}
@@ -30,6 +31,10 @@ const VIEW_LIGHT_COUNT: u32 = 6u;
 const VIEW_PYRAMID: u32 = 7u;
 const VIEW_OCCLUSION: u32 = 8u;
 const VIEW_MATERIAL: u32 = 9u;
+const VIEW_UV: u32 = 10u;
+const VIEW_NORMAL: u32 = 11u;
+const VIEW_MIP: u32 = 12u;
+const VIEW_BASE_COLOR: u32 = 13u;
 // The light-count view's scale: this many lights in a froxel is the hottest colour.
 const LIGHT_COUNT_FULL: f32 = 32.0;
 
@@ -270,7 +275,57 @@ fn filtered_checker(p: vec2<f32>, ddx: vec2<f32>, ddy: vec2<f32>) -> f32 {
     return 0.5 - 0.5 * i.x * i.y;
 }
 
-fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
+// What shading knows of a pixel's surface before it is lit.
+struct PixelSurface {
+    material: Material,
+    // Base colour (factor × texture × checker) and its alpha, linear.
+    base: vec4<f32>,
+    metallic: f32,
+    roughness: f32,
+    // Shading normal (normal map applied) and direction to the eye, world space.
+    n: vec3<f32>,
+    v: vec3<f32>,
+    // The ambient light's share left by the occlusion map.
+    occlusion: f32,
+    emissive: vec3<f32>,
+    // Texture coordinates and their change per pixel step.
+    uv: vec2<f32>,
+    uv_dx: vec2<f32>,
+    uv_dy: vec2<f32>,
+}
+
+// `map` of `material` at the pixel, or `fallback` where the material has no such texture.
+fn sample_map(material: Material, map: u32, s: PixelSurface, fallback: vec4<f32>) -> vec4<f32> {
+    let words = material.maps[map];
+    if !texture_present(words) {
+        return fallback;
+    }
+    return sample_texture(words, s.uv, s.uv_dx, s.uv_dy);
+}
+
+// The normal map's normal: the texel's tangent-space vector (x, y scaled by the
+// material's scale) in the triangle's tangent frame, derived from its world-space edges
+// and UV edges (no tangents are stored). glTF's V runs down the image while a normal
+// map's green points up it, so the bitangent is cross(n, t) for an unmirrored mapping
+// and its opposite where the UVs are mirrored.
+fn mapped_normal(n: vec3<f32>, world: array<vec3<f32>, 3>, uv: array<vec2<f32>, 3>, texel: vec3<f32>, scale: f32) -> vec3<f32> {
+    let e1 = world[1] - world[0];
+    let e2 = world[2] - world[0];
+    let d1 = uv[1] - uv[0];
+    let d2 = uv[2] - uv[0];
+    let r = d1.x * d2.y - d2.x * d1.y;
+    let t_raw = (e1 * d2.y - e2 * d1.y) * sign(r);
+    let t_perp = t_raw - n * dot(n, t_raw);
+    if r == 0.0 || dot(t_perp, t_perp) < 1e-20 {
+        return n;
+    }
+    let t = normalize(t_perp);
+    let b = cross(n, t) * -sign(r);
+    let m = (texel * 2.0 - 1.0) * vec3(scale, scale, 1.0);
+    return normalize(t * m.x + b * m.y + n * m.z);
+}
+
+fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
     let id = visbuffer_cluster(value);
     let t = visbuffer_triangle(value);
     let tri = cluster_triangle(raster_clusters[id], t);
@@ -296,23 +351,49 @@ fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
     }
     let bary = barycentrics(clip[0], clip[1], clip[2], pixel);
     let b = bary.b;
-    let n = normalize(instance_transform_normal(instance, normal[0] * b.x + normal[1] * b.y + normal[2] * b.z));
-    let v = normalize(view.camera_position - (world[0] * b.x + world[1] * b.y + world[2] * b.z));
-    let st = (uv[0] * b.x + uv[1] * b.y + uv[2] * b.z) * params.checker_scale;
-    let st_dx = (uv[0] * bary.ddx.x + uv[1] * bary.ddx.y + uv[2] * bary.ddx.z) * params.checker_scale;
-    let st_dy = (uv[0] * bary.ddy.x + uv[1] * bary.ddy.y + uv[2] * bary.ddy.z) * params.checker_scale;
+    var s: PixelSurface;
     let material = materials[instance.material + meshlet_material(m)];
-    var base = material.base_color.rgb;
+    s.material = material;
+    s.n = normalize(instance_transform_normal(instance, normal[0] * b.x + normal[1] * b.y + normal[2] * b.z));
+    s.v = normalize(view.camera_position - (world[0] * b.x + world[1] * b.y + world[2] * b.z));
+    s.uv = uv[0] * b.x + uv[1] * b.y + uv[2] * b.z;
+    s.uv_dx = uv[0] * bary.ddx.x + uv[1] * bary.ddx.y + uv[2] * bary.ddx.z;
+    s.uv_dy = uv[0] * bary.ddy.x + uv[1] * bary.ddy.y + uv[2] * bary.ddy.z;
+    s.base = material.base_color * sample_map(material, MAP_BASE_COLOR, s, vec4(1.0));
     if (material.flags & MATERIAL_FLAG_CHECKER) != 0u {
-        base *= mix(CHECKER_DARK, 1.0, filtered_checker(st, st_dx, st_dy));
+        let scale = params.checker_scale;
+        s.base = vec4(s.base.rgb * mix(CHECKER_DARK, 1.0, filtered_checker(s.uv * scale, s.uv_dx * scale, s.uv_dy * scale)), s.base.a);
     }
-    let s = surface(base, material.metallic, material.roughness);
-    var radiance = params.ambient_color.rgb * ambient_response(s)
-        + params.light_color.rgb * light_response(s, n, v, params.light_direction.xyz);
+    let metallic_roughness = sample_map(material, MAP_METALLIC_ROUGHNESS, s, vec4(1.0));
+    s.metallic = material.metallic * metallic_roughness.b;
+    s.roughness = material.roughness * metallic_roughness.g;
+    if texture_present(material.maps[MAP_NORMAL]) {
+        let texel = sample_map(material, MAP_NORMAL, s, vec4(0.5, 0.5, 1.0, 1.0)).xyz;
+        s.n = mapped_normal(s.n, world, uv, texel, material.emissive.w);
+    }
+    s.occlusion = 1.0 + material.occlusion_strength * (sample_map(material, MAP_OCCLUSION, s, vec4(1.0)).r - 1.0);
+    s.emissive = material.emissive.rgb * sample_map(material, MAP_EMISSIVE, s, vec4(1.0)).rgb;
+    return s;
+}
+
+fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
+    let p = pixel_surface(value, pixel);
+    let s = surface(p.base.rgb, p.metallic, p.roughness);
+    var radiance = params.ambient_color.rgb * ambient_response(s) * p.occlusion
+        + params.light_color.rgb * light_response(s, p.n, p.v, params.light_direction.xyz);
 #ifdef CLUSTERED_LIGHTS
-    radiance += clustered_lighting(pixel, visbuffer_depth(value), s, n, v);
+    radiance += clustered_lighting(pixel, visbuffer_depth(value), s, p.n, p.v);
 #endif
-    return radiance + material.emissive.rgb;
+    return radiance + p.emissive;
+}
+
+// The `mip` view: a colour per level the base colour texture is read at, black without one.
+fn mip_color(p: PixelSurface) -> vec3<f32> {
+    let words = p.material.maps[MAP_BASE_COLOR];
+    if !texture_present(words) {
+        return vec3(0.0);
+    }
+    return byte_color(id_color(u32(floor(texture_lod(words, p.uv_dx, p.uv_dy)))));
 }
 
 @compute @workgroup_size(8, 8)
@@ -347,6 +428,27 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
                 let cluster = raster_clusters[visbuffer_cluster(value)];
                 let slot = meshlet_material(meshlets[cluster.meshlet]);
                 rgb = byte_color(id_color(instance_at(cluster.instance).material + slot));
+            }
+        }
+        case VIEW_UV: {
+            if !empty {
+                let uv = pixel_surface(value, pixel).uv;
+                rgb = vec3(fract(uv), 0.0);
+            }
+        }
+        case VIEW_NORMAL: {
+            if !empty {
+                rgb = pixel_surface(value, pixel).n * 0.5 + 0.5;
+            }
+        }
+        case VIEW_MIP: {
+            if !empty {
+                rgb = mip_color(pixel_surface(value, pixel));
+            }
+        }
+        case VIEW_BASE_COLOR: {
+            if !empty {
+                rgb = pixel_surface(value, pixel).base.rgb;
             }
         }
         case VIEW_RASTER: {

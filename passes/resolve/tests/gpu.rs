@@ -8,7 +8,7 @@
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::data::Limits;
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
+use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData, TextureId};
 use meshlight_graph::*;
 use meshlight_pass_populate::cpu::{ClusterLists, cpu_populate};
 use meshlight_pass_resolve::settings::Settings;
@@ -19,8 +19,9 @@ use meshlight_pass_resolve::{
 use meshlight_pass_z_slice::{ZSlice, cpu_z_slice};
 use meshlight_scene::load::load_obj;
 use meshlight_scene::procedural_mesh;
+use meshlight_scene::texture::{Image, decode_image};
 use meshlight_shaders::cpu::layout::{
-    Cluster, ClusterGrid, ClusterableKind, ClusterableObject, View,
+    Cluster, ClusterGrid, ClusterableKind, ClusterableObject, TextureWrap, View,
 };
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
 use meshlight_shaders::cpu::visbuffer;
@@ -156,6 +157,63 @@ impl Frame {
     }
 }
 
+/// The test scene's textures: Spot's own (1024², sRGB, repeating), a normal map of
+/// bumps, and small data and colour textures that clamp or mirror, so the filter, the
+/// mip choice, the wrap modes and each map's use are compared with the reference.
+struct Textures {
+    spot: TextureId,
+    bumps: TextureId,
+    metal_rough: TextureId,
+    occlusion: TextureId,
+    glow: TextureId,
+}
+
+impl Textures {
+    fn add(scene: &mut SceneData) -> Self {
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/meshes/spot_texture.png");
+        let bytes = std::fs::read(&path).unwrap();
+        let spot = decode_image(&bytes, "spot_texture.png").unwrap();
+        let generated = |side: u32, f: &dyn Fn(u32, u32) -> [u8; 4]| {
+            let mut image = Image::filled(side, side, [0; 4]);
+            for y in 0..side {
+                for x in 0..side {
+                    let at = ((y * side + x) * 4) as usize;
+                    image.rgba[at..at + 4].copy_from_slice(&f(x, y));
+                }
+            }
+            image
+        };
+        let bumps = generated(64, &|x, y| {
+            let a = x as f32 / 64.0 * std::f32::consts::TAU * 4.0;
+            let b = y as f32 / 64.0 * std::f32::consts::TAU * 3.0;
+            let n = Vec3::new(0.5 * a.sin(), 0.5 * b.cos(), 1.0).normalize();
+            let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
+            [e(n.x), e(n.y), e(n.z), 255]
+        });
+        let metal_rough = generated(32, &|x, y| [0, (x * 8) as u8, 255 - (y * 8) as u8, 255]);
+        let occlusion = generated(16, &|x, y| [((x ^ y) * 16) as u8, 0, 0, 255]);
+        let glow = generated(8, &|x, y| [(x * 32) as u8, (y * 32) as u8, 200, 255]);
+        let repeat = [TextureWrap::Repeat; 2];
+        let mut add = |image: &Image, srgb, wrap| scene.add_image(image, srgb, wrap).unwrap();
+        Self {
+            spot: add(&spot, true, repeat),
+            bumps: add(&bumps, false, repeat),
+            metal_rough: add(
+                &metal_rough,
+                false,
+                [TextureWrap::Clamp, TextureWrap::Mirror],
+            ),
+            occlusion: add(
+                &occlusion,
+                false,
+                [TextureWrap::Mirror, TextureWrap::Repeat],
+            ),
+            glow: add(&glow, true, [TextureWrap::Clamp; 2]),
+        }
+    }
+}
+
 /// Spot (with UVs) twice, once stretched so normals need the inverse transpose, and the
 /// knot (no UVs) behind, in three material slots along its tube (its instance takes the
 /// last three of five materials); each instance draws one LOD level, so the `lod` view
@@ -178,14 +236,26 @@ fn frame() -> Frame {
         checker: false,
         ..Material::default()
     };
+    let textures = Textures::add(&mut scene);
     let materials = [
         Material {
             base_color: [0.9, 0.6, 0.4],
+            maps: [Some(textures.spot), None, Some(textures.bumps), None, None],
+            normal_scale: 0.8,
             ..Material::default()
         },
         Material {
             metallic: 1.0,
             roughness: 0.45,
+            maps: [
+                None,
+                Some(textures.metal_rough),
+                None,
+                Some(textures.occlusion),
+                Some(textures.glow),
+            ],
+            emissive: [0.5, 0.4, 0.3],
+            occlusion_strength: 0.7,
             ..plain([0.95, 0.8, 0.4])
         },
         Material {
@@ -201,7 +271,7 @@ fn frame() -> Frame {
             ..plain([0.9, 0.9, 0.2])
         },
     ]
-    .map(|m| scene.add_material(m));
+    .map(|m| scene.add_material(m).unwrap());
     let instances = [
         (
             spot,
@@ -586,7 +656,8 @@ fn depth_material_depth_and_every_view_match_the_reference() {
         let distinct: BTreeSet<[u8; 4]> = want.iter().copied().collect();
         let (tolerance, share) = match view {
             DebugView::Shaded => (2, 0.99),
-            DebugView::Depth => (1, 1.0),
+            // Filtered texels and normalised normals: float rounding may differ by a step.
+            DebugView::Depth | DebugView::Normal | DebugView::BaseColor | DebugView::Uv => (1, 1.0),
             _ => (0, 1.0),
         };
         let (over, largest) = color_differences(&got.color, &want, tolerance);
@@ -607,6 +678,8 @@ fn depth_material_depth_and_every_view_match_the_reference() {
             DebugView::Raster | DebugView::Lod => 3,
             // Empty, spot's two materials and the knot's three slots.
             DebugView::Material => 6,
+            // Empty, the knot's level 0 (no UVs), and Spot's texture at a few levels.
+            DebugView::Mip => 4,
             DebugView::Depth => 10,
             _ => 20,
         };

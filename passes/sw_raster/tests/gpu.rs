@@ -45,10 +45,12 @@ fn knot_scene() -> SceneData {
 /// The white `meshes`, then one instance of each at its place, numbered in order.
 fn flat_scene(meshes: &[(&str, Mesh)]) -> SceneData {
     let mut scene = SceneData::new(Limits::default());
-    let material = scene.add_material(Material {
-        base_color: [1.0; 3],
-        ..Material::default()
-    });
+    let material = scene
+        .add_material(Material {
+            base_color: [1.0; 3],
+            ..Material::default()
+        })
+        .unwrap();
     let ids: Vec<_> = meshes
         .iter()
         .map(|(name, mesh)| add_mesh(&mut scene, name, mesh))

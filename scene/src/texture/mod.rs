@@ -2,15 +2,18 @@
 //! brought to a square power-of-two size, and given a full mip chain, filtered in linear
 //! light where the texels are sRGB.
 //!
-//! Why square powers of two: the GPU keeps textures in 2-D array textures, one per size
-//! and colour space, so that a shader without descriptor arrays can still sample any of
-//! them by (array, layer). A texture resampled to its array's size keeps its UV mapping
-//! (UVs are relative to the image), wraps with the sampler's repeat exactly, and its mips
-//! halve evenly down to 1 × 1.
+//! Why square powers of two: the GPU keeps every texture in one storage buffer, which a
+//! shader without descriptor arrays can still index per pixel, and filters them itself;
+//! a square power-of-two chain is addressed from its side alone (level `L` starts at a
+//! closed-form offset), keeps its UV mapping (UVs are relative to the image), wraps
+//! exactly, and its mips halve evenly down to 1 × 1. The decoders need the `build`
+//! feature; the resampling and mips do not.
 
+#[cfg(feature = "build")]
 mod decode;
 mod mips;
 
+#[cfg(feature = "build")]
 pub use decode::{ImageFormat, decode_image, sniff_format};
 pub use mips::{MipChain, from_linear, mip_chain, resample_square, to_linear};
 

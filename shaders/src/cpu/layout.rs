@@ -103,22 +103,140 @@ pub struct Instance {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Material {
-    /// Linear RGB albedo; alpha unused.
+    /// Linear RGB albedo, and in `[3]` the alpha factor.
     pub base_color: [f32; 4],
-    /// Linear RGB emitted light; w unused.
+    /// Linear RGB emitted light, and in `[3]` the normal map's scale.
     pub emissive: [f32; 4],
     /// 0 dielectric, 1 metal.
     pub metallic: f32,
     /// Perceptual roughness, 0 to 1.
     pub roughness: f32,
+    /// How much of the occlusion map applies, 0 to 1.
+    pub occlusion_strength: f32,
+    /// MASK materials: texels whose alpha is below this are cut out (0 for opaque).
+    pub alpha_cutoff: f32,
     /// [`MATERIAL_FLAG_CHECKER`] or 0.
     pub flags: u32,
     /// Zero.
     pub reserved: u32,
+    /// The textures, by `MAP_*` index: each a [`TextureRef`]'s two words, `[0, 0]` for
+    /// none.
+    pub maps: [[u32; 2]; MAP_COUNT],
 }
 
 /// `Material::flags`: the base colour is modulated by a checkerboard over the UVs.
 pub const MATERIAL_FLAG_CHECKER: u32 = 1;
+
+/// `Material::maps` index of the base colour texture (sRGB; alpha in A).
+pub const MAP_BASE_COLOR: usize = 0;
+/// ... of the metallic-roughness texture (roughness in G, metalness in B).
+pub const MAP_METALLIC_ROUGHNESS: usize = 1;
+/// ... of the tangent-space normal map.
+pub const MAP_NORMAL: usize = 2;
+/// ... of the occlusion texture (R).
+pub const MAP_OCCLUSION: usize = 3;
+/// ... of the emissive texture (sRGB).
+pub const MAP_EMISSIVE: usize = 4;
+/// Textures a material may sample.
+pub const MAP_COUNT: usize = 5;
+
+/// Where a texture lies in the scene's `textures` buffer and how it is sampled: two
+/// words, as `Material::maps` holds them.
+///
+/// A texture is square with a power-of-two side `2^size_log2` and a full mip chain;
+/// level `L` (side `s = 2^size_log2 >> L`) starts `(4·S² − 4·s²) / 3` words after
+/// `texels`, rows top to bottom, one RGBA8 texel per word (R in the low byte).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct TextureRef {
+    /// The word of level 0's first texel.
+    pub texels: u32,
+    /// log2 of the side of level 0 (0 to [`MAX_TEXTURE_SIZE_LOG2`]).
+    pub size_log2: u32,
+    /// Colour channels are sRGB-encoded (decoded to linear light before filtering).
+    pub srgb: bool,
+    /// How U and V coordinates outside 0..1 wrap.
+    pub wrap: [TextureWrap; 2],
+}
+
+/// The largest texture side, as a power of two (4096).
+pub const MAX_TEXTURE_SIZE_LOG2: u32 = 12;
+
+/// How a texture coordinate outside 0..1 is brought back in (glTF's sampler wrap modes).
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TextureWrap {
+    /// Repeats (the default).
+    #[default]
+    Repeat = 0,
+    /// Clamps to the edge texel.
+    Clamp = 1,
+    /// Repeats, every other copy mirrored.
+    Mirror = 2,
+}
+
+/// `TextureRef` word 1: a texture is present.
+const TEXTURE_PRESENT: u32 = 1 << 31;
+/// `TextureRef` word 1: sRGB colour.
+const TEXTURE_SRGB: u32 = 1 << 4;
+
+impl TextureRef {
+    /// The two words `Material::maps` holds: `texels`, then `size_log2` in bits 0..4,
+    /// sRGB in bit 4, the U wrap in bits 5..7, the V wrap in bits 7..9, and bit 31 set.
+    pub fn words(&self) -> [u32; 2] {
+        [
+            self.texels,
+            TEXTURE_PRESENT
+                | self.size_log2
+                | if self.srgb { TEXTURE_SRGB } else { 0 }
+                | (self.wrap[0] as u32) << 5
+                | (self.wrap[1] as u32) << 7,
+        ]
+    }
+
+    /// The reference two words hold, or `None` for no texture (or a mode that is no
+    /// [`TextureWrap`]).
+    pub fn from_words(words: [u32; 2]) -> Option<Self> {
+        if words[1] & TEXTURE_PRESENT == 0 {
+            return None;
+        }
+        let wrap = |bits: u32| match bits & 3 {
+            0 => Some(TextureWrap::Repeat),
+            1 => Some(TextureWrap::Clamp),
+            2 => Some(TextureWrap::Mirror),
+            _ => None,
+        };
+        Some(Self {
+            texels: words[0],
+            size_log2: words[1] & 15,
+            srgb: words[1] & TEXTURE_SRGB != 0,
+            wrap: [wrap(words[1] >> 5)?, wrap(words[1] >> 7)?],
+        })
+    }
+
+    /// Side of level 0.
+    pub fn size(&self) -> u32 {
+        1 << self.size_log2
+    }
+
+    /// Mip levels, down to 1 × 1.
+    pub fn levels(&self) -> u32 {
+        self.size_log2 + 1
+    }
+
+    /// Words of the whole chain.
+    pub fn words_len(&self) -> u64 {
+        mip_offset(self.size_log2, self.levels())
+    }
+}
+
+/// Words before level `level` (at most `size_log2 + 1`, the chain's end) of a chain whose
+/// level 0 has side `S = 2^size_log2`: `(4·S² − 4·s²) / 3` with `s = S / 2^level`,
+/// computed as `(4^(n+1) − 4^(n+1−level)) / 3` with `n = size_log2`, which stays exact.
+pub fn mip_offset(size_log2: u32, level: u32) -> u64 {
+    let n1 = size_log2 + 1;
+    let level = level.min(n1);
+    ((1u64 << (2 * n1)) - (1u64 << (2 * (n1 - level)))) / 3
+}
 
 /// The `kind` values of [`ClusterableObject`], as the `CLUSTERABLE_*` WGSL constants.
 #[repr(u32)]

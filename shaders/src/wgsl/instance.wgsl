@@ -23,21 +23,35 @@ struct Instance {
 
 // One entry of the material table. Layout matches `cpu::layout::Material`.
 struct Material {
-    // Linear RGB albedo; alpha unused (opaque geometry only).
+    // Linear RGB albedo; alpha factor in w.
     base_color: vec4<f32>,
-    // Linear RGB emitted light; w unused.
+    // Linear RGB emitted light; the normal map's scale in w.
     emissive: vec4<f32>,
     // 0 dielectric, 1 metal.
     metallic: f32,
     // Perceptual roughness, 0 to 1 (GGX alpha = roughness²).
     roughness: f32,
+    // How much of the occlusion map applies, 0 to 1.
+    occlusion_strength: f32,
+    // MASK materials: texels whose alpha is below this are cut out (0 for opaque).
+    alpha_cutoff: f32,
     // MATERIAL_FLAG_CHECKER or 0.
     flags: u32,
     reserved: u32,
+    // The textures, by MAP_* index: (first texel word, shape), shape 0 for none
+    // (`cpu::layout::TextureRef`).
+    maps: array<vec2<u32>, 5>,
 }
 
 // `Material::flags`: the base colour is modulated by a checkerboard over the UVs.
 const MATERIAL_FLAG_CHECKER: u32 = 1u;
+
+// `Material::maps` indices.
+const MAP_BASE_COLOR: u32 = 0u;
+const MAP_METALLIC_ROUGHNESS: u32 = 1u;
+const MAP_NORMAL: u32 = 2u;
+const MAP_OCCLUSION: u32 = 3u;
+const MAP_EMISSIVE: u32 = 4u;
 
 fn instance_transform_point(instance: Instance, p: vec3<f32>) -> vec3<f32> {
     return (instance.world_from_local * vec4(p, 1.0)).xyz;

@@ -3,7 +3,7 @@
 // The GPU scene's read-only buffers, declared once for every pass that reads them. A
 // shader imports the ones it uses; each binds the slot of its name (the contract's
 // `meshlight_gpu_scene::scene_reads`), so the numbers below only have to stay clear of
-// the importer's own: bindings 25 to 29 are these, as 30 and 31 are
+// the importer's own: bindings 24 to 29 are these, as 30 and 31 are
 // meshlight::instance_table's.
 
 #import meshlight::meshlet::{Mesh, Meshlet, MeshletGroup}
@@ -16,3 +16,6 @@
 // The meshlets' packed vertices and triangles (`meshlet_vertex_field` and friends).
 @group(0) @binding(28) var<storage, read> payload: array<u32>;
 @group(0) @binding(29) var<storage, read> materials: array<Material>;
+// Every texture's mip chain, one RGBA8 texel a word (`cpu::layout::TextureRef` says
+// where a texture lies; resolve::texture samples them).
+@group(0) @binding(24) var<storage, read> textures: array<u32>;

@@ -22,10 +22,12 @@ pub fn asset() -> &'static MeshletAsset {
 /// scene, the mesh and the material.
 pub fn grey_scene() -> (SceneData, MeshId, u32) {
     let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [0.8; 3],
-        ..Material::default()
-    });
+    let material = data
+        .add_material(Material {
+            base_color: [0.8; 3],
+            ..Material::default()
+        })
+        .unwrap();
     let mesh = data.add_mesh("procedural", asset()).unwrap();
     (data, mesh, material)
 }

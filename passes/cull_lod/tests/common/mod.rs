@@ -12,10 +12,12 @@ pub use meshlight_testing::{Rng, USAGE, gpu, meshes::spot};
 
 pub fn scene_with(placements: &[Mat4]) -> SceneData {
     let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-        ..Material::default()
-    });
+    let material = data
+        .add_material(Material {
+            base_color: [1.0; 3],
+            ..Material::default()
+        })
+        .unwrap();
     let mesh = data.add_mesh("spot", spot()).unwrap();
     for &transform in placements {
         data.add_instance(mesh, transform, material)

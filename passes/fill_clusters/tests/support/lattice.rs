@@ -12,10 +12,12 @@ pub const VIEWPORT: [u32; 2] = [2240, 1260];
 /// The lattice of `asset` and the view of it.
 pub fn lattice(asset: &MeshletAsset, n: u32) -> (SceneData, View) {
     let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-        ..Material::default()
-    });
+    let material = data
+        .add_material(Material {
+            base_color: [1.0; 3],
+            ..Material::default()
+        })
+        .unwrap();
     let mesh = data.add_mesh("bunny", asset).unwrap();
     let lattice = Lattice {
         n,

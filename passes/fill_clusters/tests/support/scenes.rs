@@ -23,10 +23,12 @@ pub fn field(
     place: impl Fn(u32) -> (Vec3, f32, Vec3),
 ) -> SceneData {
     let mut data = SceneData::new(Limits::default());
-    let material = data.add_material(Material {
-        base_color: [1.0; 3],
-        ..Material::default()
-    });
+    let material = data
+        .add_material(Material {
+            base_color: [1.0; 3],
+            ..Material::default()
+        })
+        .unwrap();
     let ids: Vec<_> = meshes
         .iter()
         .map(|(name, asset)| data.add_mesh(name, asset).unwrap())

@@ -22,10 +22,12 @@ pub fn add_mesh(scene: &mut SceneData, name: &str, mesh: &Mesh) -> MeshId {
 pub fn knot_scene(mesh: &Mesh, more: &[Mat4]) -> SceneData {
     let mut scene = SceneData::new(Limits::default());
     let knot = add_mesh(&mut scene, "knot", mesh);
-    let material = scene.add_material(Material {
-        base_color: [0.8, 0.5, 0.3],
-        ..Material::default()
-    });
+    let material = scene
+        .add_material(Material {
+            base_color: [0.8, 0.5, 0.3],
+            ..Material::default()
+        })
+        .unwrap();
     let moved = Mat4::from_scale_rotation_translation(
         Vec3::splat(0.6),
         Quat::from_rotation_y(0.7),

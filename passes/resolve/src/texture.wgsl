@@ -1,0 +1,117 @@
+#define_import_path resolve::texture
+
+// Trilinear sampling of the scene's textures from a storage buffer, one RGBA8 texel a
+// word. A compute shader without descriptor arrays (lavapipe has none) cannot pick one
+// of many textures per pixel; a buffer holds them all, and each material names where
+// its maps lie (`cpu::layout::TextureRef`). Filtering is done here, so it is the same on
+// every adapter and `texture.rs` mirrors it step by step: sRGB texels are decoded to
+// linear light before they are weighed, wrap modes apply per axis, and the level comes
+// from the UV derivatives the pixel's triangle gives analytically.
+
+#import meshlight::scene_buffers::textures
+
+const TEXTURE_PRESENT: u32 = 0x80000000u;
+const TEXTURE_SRGB: u32 = 16u;
+const WRAP_CLAMP: u32 = 1u;
+const WRAP_MIRROR: u32 = 2u;
+// The largest side a texture may have, as a power of two (`MAX_TEXTURE_SIZE_LOG2`).
+const MAX_SIZE_LOG2: u32 = 12u;
+
+fn texture_present(map: vec2<u32>) -> bool {
+    return (map.y & TEXTURE_PRESENT) != 0u;
+}
+
+fn texture_size_log2(map: vec2<u32>) -> u32 {
+    return min(map.y & 15u, MAX_SIZE_LOG2);
+}
+
+fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    return select(pow((c + 0.055) / 1.055, vec3(2.4)), c / 12.92, c <= vec3(0.04045));
+}
+
+// Words before `level` in a chain of side 2^size_log2 (`cpu::layout::mip_offset`).
+fn mip_offset(size_log2: u32, level: u32) -> u32 {
+    let n1 = size_log2 + 1u;
+    return ((1u << (2u * n1)) - (1u << (2u * (n1 - level)))) / 3u;
+}
+
+// A coordinate brought into 0..1 before texels are addressed, so that integer texel
+// indices stay small however far a tiling UV runs.
+fn wrap_coordinate(u: f32, mode: u32) -> f32 {
+    switch mode {
+        case WRAP_CLAMP: {
+            return clamp(u, 0.0, 1.0);
+        }
+        case WRAP_MIRROR: {
+            return u - 2.0 * floor(u * 0.5);
+        }
+        default: {
+            return u - floor(u);
+        }
+    }
+}
+
+// Texel index `i` of a row or column of `side` texels, wrapped by `mode`.
+fn wrap_index(i: i32, side: i32, mode: u32) -> i32 {
+    switch mode {
+        case WRAP_CLAMP: {
+            return clamp(i, 0, side - 1);
+        }
+        case WRAP_MIRROR: {
+            let period = 2 * side;
+            let m = ((i % period) + period) % period;
+            return select(m, period - 1 - m, m >= side);
+        }
+        default: {
+            return ((i % side) + side) % side;
+        }
+    }
+}
+
+fn texel(map: vec2<u32>, start: u32, side: i32, x: i32, y: i32) -> vec4<f32> {
+    let mode = vec2((map.y >> 5u) & 3u, (map.y >> 7u) & 3u);
+    let at = start + u32(wrap_index(y, side, mode.y) * side + wrap_index(x, side, mode.x));
+    let c = unpack4x8unorm(textures[at]);
+    if (map.y & TEXTURE_SRGB) != 0u {
+        return vec4(srgb_to_linear(c.rgb), c.a);
+    }
+    return c;
+}
+
+// Bilinear filtering of one level at `uv` (already wrapped into 0..1).
+fn sample_level(map: vec2<u32>, uv: vec2<f32>, level: u32) -> vec4<f32> {
+    let size_log2 = texture_size_log2(map);
+    let side = i32(1u << (size_log2 - level));
+    let start = map.x + mip_offset(size_log2, level);
+    let p = uv * f32(side) - 0.5;
+    let corner = floor(p);
+    let f = p - corner;
+    let x = i32(corner.x);
+    let y = i32(corner.y);
+    let top = mix(texel(map, start, side, x, y), texel(map, start, side, x + 1, y), f.x);
+    let bottom = mix(texel(map, start, side, x, y + 1), texel(map, start, side, x + 1, y + 1), f.x);
+    return mix(top, bottom, f.y);
+}
+
+// The level of detail a pixel footprint of `uv_dx`, `uv_dy` (UV per pixel step) asks of
+// a texture of side 2^size_log2: log2 of the longer footprint axis in texels, clamped to
+// the chain (the isotropic rule GPUs use).
+fn texture_lod(map: vec2<u32>, uv_dx: vec2<f32>, uv_dy: vec2<f32>) -> f32 {
+    let size_log2 = texture_size_log2(map);
+    let side = f32(1u << size_log2);
+    let rho = max(length(uv_dx), length(uv_dy)) * side;
+    return clamp(log2(max(rho, 1e-20)), 0.0, f32(size_log2));
+}
+
+// Trilinear filtering: the two levels around the footprint's, each bilinear, mixed.
+fn sample_texture(map: vec2<u32>, uv: vec2<f32>, uv_dx: vec2<f32>, uv_dy: vec2<f32>) -> vec4<f32> {
+    let wrapped = vec2(wrap_coordinate(uv.x, (map.y >> 5u) & 3u), wrap_coordinate(uv.y, (map.y >> 7u) & 3u));
+    let lod = texture_lod(map, uv_dx, uv_dy);
+    let fine = u32(floor(lod));
+    let blend = lod - f32(fine);
+    let c = sample_level(map, wrapped, fine);
+    if blend <= 0.0 {
+        return c;
+    }
+    return mix(c, sample_level(map, wrapped, fine + 1u), blend);
+}
