@@ -113,6 +113,23 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
     ) {
         writeln!(out, "  {name:<38} {value}")?;
     }
+    let scene = meshlight::gpu_scene::data::Limits::for_device(&limits);
+    writeln!(
+        out,
+        "\nscene budget (each scene buffer is bound whole, so one storage binding bounds it):"
+    )?;
+    writeln!(
+        out,
+        "  textures: {} MiB ({} RGBA8 texels, mips included; each texture square, at most {} a side)",
+        (scene.max_texture_words as u64 * 4) >> 20,
+        scene.max_texture_words,
+        1u32 << meshlight::shaders::cpu::layout::MAX_TEXTURE_SIZE_LOG2
+    )?;
+    writeln!(
+        out,
+        "  meshlets: {}, payload words: {}, instances: {}",
+        scene.max_meshlets, scene.max_payload_words, scene.max_instances
+    )?;
     writeln!(
         out,
         "\nrender bounds (what the renderer holds with wgpu's default limits; checked before a render asks for the adapter):"

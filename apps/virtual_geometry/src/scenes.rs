@@ -6,8 +6,9 @@ use meshlight::gpu_scene::lattice::Lattice;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData};
 use meshlight::scene::asset::format;
 use meshlight::scene::cache::{self, Source};
+use meshlight::scene::load::{ObjMaterial, load_obj_scene};
 use meshlight::scene::{BuildOptions, MeshletAsset, SceneError, Terrain, build_asset};
-use meshlight::shaders::cpu::layout::{ClusterableKind, ClusterableObject};
+use meshlight::shaders::cpu::layout::{ClusterableKind, ClusterableObject, TextureWrap};
 use std::path::Path;
 use std::sync::Mutex;
 
@@ -38,6 +39,59 @@ pub fn load_asset(mesh: &Path, segments: u32) -> Result<MeshletAsset, SceneError
         &mut |p| cache::log_progress(&name, p),
     )?;
     Ok(asset)
+}
+
+/// An OBJ mesh argument whose `.mtl` gives it materials: the asset baked with a slot per
+/// material (cached by content, as a glTF scene's meshes are) and the materials. `None`
+/// for any other mesh argument, and for an OBJ without usable materials (which
+/// [`load_asset`] bakes as before).
+pub fn load_obj_with_materials(
+    mesh: &Path,
+) -> Result<Option<(MeshletAsset, Vec<ObjMaterial>)>, SceneError> {
+    if !mesh
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+    {
+        return Ok(None);
+    }
+    let scene = load_obj_scene(mesh)?;
+    for w in &scene.warnings {
+        log::warn!("{w}");
+    }
+    let plain = |m: &ObjMaterial| m.diffuse == [1.0; 3] && m.diffuse_texture.is_none();
+    if scene.materials.iter().all(plain) {
+        return Ok(None);
+    }
+    let (asset, _) = cache::load_or_bake_mesh(
+        &scene.mesh,
+        &BuildOptions::default(),
+        &cache::cache_dir(),
+        &mut |p| cache::log_progress(&scene.mesh.source, p),
+    )?;
+    Ok(Some((asset, scene.materials)))
+}
+
+/// `materials` added to `data` (textures included, repeating) as one run, one per
+/// slot; returns the first.
+pub fn add_obj_materials(
+    data: &mut SceneData,
+    materials: &[ObjMaterial],
+) -> Result<u32, meshlight::gpu_scene::SceneDataError> {
+    let first = data.materials.len() as u32;
+    for m in materials {
+        let mut maps = [None; meshlight::shaders::cpu::layout::MAP_COUNT];
+        if let Some(image) = &m.diffuse_texture {
+            maps[meshlight::shaders::cpu::layout::MAP_BASE_COLOR] =
+                Some(data.add_image(image, true, [TextureWrap::Repeat; 2])?);
+        }
+        data.add_material(Material {
+            base_color: m.diffuse,
+            checker: false,
+            maps,
+            ..Material::default()
+        })?;
+    }
+    Ok(first)
 }
 
 /// A small deterministic generator, so scenes are the same on every run.
@@ -88,13 +142,35 @@ struct Copies {
     materials: Vec<u32>,
 }
 
+/// What a scene's copies are painted with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Paint {
+    /// Six checkered colours, copy `i` in colour `i mod 6`: copies are told apart.
+    Palette,
+    /// The mesh's own materials, already in the scene: every copy takes the run from
+    /// this material on (one per slot of the mesh).
+    Own(u32),
+}
+
 impl Copies {
     /// The palette, then `asset` as mesh `mesh`, added to `data`.
     fn add(
         data: &mut SceneData,
         asset: &MeshletAsset,
     ) -> Result<Self, meshlight::gpu_scene::SceneDataError> {
-        let materials = palette(data)?;
+        Self::add_painted(data, asset, Paint::Palette)
+    }
+
+    /// `asset` as mesh `mesh`, painted as `paint` says.
+    fn add_painted(
+        data: &mut SceneData,
+        asset: &MeshletAsset,
+        paint: Paint,
+    ) -> Result<Self, meshlight::gpu_scene::SceneDataError> {
+        let materials = match paint {
+            Paint::Palette => palette(data)?,
+            Paint::Own(first) => vec![first],
+        };
         let mesh = data.add_mesh("mesh", asset)?;
         let radius = mesh_radius(data, mesh);
         Ok(Self {
@@ -126,11 +202,21 @@ impl Copies {
 /// LOD DAG (cached like any bake) and added after the copies, so the copies keep mesh 0
 /// and instances `0..instances`. An empty field has no ground either: the sky alone.
 pub fn field(
-    mut data: SceneData,
+    data: SceneData,
     asset: &MeshletAsset,
     instances: u32,
 ) -> Result<Placed, meshlight::gpu_scene::SceneDataError> {
-    let copies = Copies::add(&mut data, asset)?;
+    field_painted(data, asset, instances, Paint::Palette)
+}
+
+/// [`field`] with the copies painted as `paint` says.
+pub fn field_painted(
+    mut data: SceneData,
+    asset: &MeshletAsset,
+    instances: u32,
+    paint: Paint,
+) -> Result<Placed, meshlight::gpu_scene::SceneDataError> {
+    let copies = Copies::add_painted(&mut data, asset, paint)?;
     let radius = copies.radius;
     let side = (instances as f32).sqrt().ceil().max(1.0) as u32;
     let spacing = radius * FIELD_SPACING;
@@ -320,7 +406,16 @@ pub fn single(
     data: SceneData,
     asset: &MeshletAsset,
 ) -> Result<Placed, meshlight::gpu_scene::SceneDataError> {
-    let mut placed = field(data, asset, 1)?;
+    single_painted(data, asset, Paint::Palette)
+}
+
+/// [`single`] painted as `paint` says.
+pub fn single_painted(
+    data: SceneData,
+    asset: &MeshletAsset,
+    paint: Paint,
+) -> Result<Placed, meshlight::gpu_scene::SceneDataError> {
+    let mut placed = field_painted(data, asset, 1, paint)?;
     let mesh = &placed.data.meshes[0];
     let s = mesh.bounding_sphere;
     let centre = placed.data.instances.first().map_or(Vec3::ZERO, |i| {

@@ -5,14 +5,14 @@
 
 use crate::frame_graph::GraphSource;
 use crate::gltf_scene::{self, GltfSceneError};
-use crate::scenes;
+use crate::scenes::{self, Paint};
 use crate::settings::FrameSettings;
 use meshlight::gpu_scene::{Camera, SceneData, SceneDataError, data::Limits};
 use meshlight::graph::{GpuAdapter, GraphError};
 use meshlight::resolve::DebugView;
 use meshlight::scene::MeshletAsset;
 use meshlight::scene::SceneError;
-use meshlight::scene::load::{GltfScene, load_gltf_scene};
+use meshlight::scene::load::{GltfScene, ObjMaterial, load_gltf_scene};
 use meshlight::shaders::cpu::layout::ClusterableObject;
 use meshlight_light_clustering::ClusteringSettings;
 use std::path::PathBuf;
@@ -145,7 +145,8 @@ pub enum SetupError {
 /// What the mesh argument gave: a glTF scene, or one mesh to place copies of.
 enum Loaded {
     Scene(GltfScene),
-    Copies(MeshletAsset),
+    /// The asset, and an OBJ's own materials where its `.mtl` gives some.
+    Copies(MeshletAsset, Option<Vec<ObjMaterial>>),
 }
 
 /// Checks the pipeline file, loads (or bakes) the mesh, places its copies and lights on
@@ -162,17 +163,28 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     // Read (and baked) before the adapter is asked for, so a bad file costs nothing.
     let loaded = match o.is_gltf_scene() {
         true => Loaded::Scene(load_gltf_scene(&o.mesh)?),
-        false => Loaded::Copies(scenes::load_asset(&o.mesh, o.segments)?),
+        false => match scenes::load_obj_with_materials(&o.mesh)? {
+            Some((asset, materials)) => Loaded::Copies(asset, Some(materials)),
+            None => Loaded::Copies(scenes::load_asset(&o.mesh, o.segments)?, None),
+        },
     };
     // The scene's buffers are bound whole: sized for the adapter the frame will run on.
     let adapter = GpuAdapter::select()?;
     let limits = Limits::for_device(&adapter.adapter.limits());
     drop(adapter);
-    let data = SceneData::new(limits);
+    let mut data = SceneData::new(limits);
     let placed = match &loaded {
         Loaded::Scene(scene) => gltf_scene::place(data, scene, o.camera)?,
-        Loaded::Copies(asset) if o.instances == 1 => scenes::single(data, asset)?,
-        Loaded::Copies(asset) => scenes::field(data, asset, o.instances)?,
+        Loaded::Copies(asset, materials) => {
+            let paint = match materials {
+                Some(m) => Paint::Own(scenes::add_obj_materials(&mut data, m)?),
+                None => Paint::Palette,
+            };
+            match o.instances {
+                1 => scenes::single_painted(data, asset, paint)?,
+                n => scenes::field_painted(data, asset, n, paint)?,
+            }
+        }
     };
     let mut settings = FrameSettings::new(o.width, o.height);
     // A view given wins over a pipeline file's; none given leaves the file's.
@@ -181,10 +193,10 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
         // A scene is lit by the sun and the sky unless lights are asked for.
         (Loaded::Scene(_), Some(n)) => gltf_scene::scene_lights(&placed, n),
         (Loaded::Scene(_), None) => Vec::new(),
-        (Loaded::Copies(_), _) if o.instances > 1 => {
+        (Loaded::Copies(..), _) if o.instances > 1 => {
             scenes::field_lights(&placed, o.lights_asked())
         }
-        (Loaded::Copies(_), _) => Vec::new(),
+        (Loaded::Copies(..), _) => Vec::new(),
     };
     if !lights.is_empty() || o.view.is_some_and(|v| v.needs_lights()) {
         let mut clustering =

@@ -12,7 +12,7 @@ use meshlight::scene::texture::to_linear;
 use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive, json, png_bytes};
 use meshlight_virtual_geometry::gltf_scene::gltf_scene;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 const W: u32 = 128;
 const H: u32 = 96;
@@ -37,7 +37,7 @@ fn checker_png() -> Vec<u8> {
     let mut rgba = Vec::new();
     for y in 0..SIDE {
         for x in 0..SIDE {
-            let light = (x / SQUARE + y / SQUARE) % 2 == 0;
+            let light = (x / SQUARE + y / SQUARE).is_multiple_of(2);
             rgba.extend(if light { LIGHT } else { DARK });
             rgba.push(255);
         }
@@ -101,7 +101,7 @@ fn world_at(distance: f32, x: u32, y: u32) -> Vec2 {
     Vec2::new(ndc.x * t * W as f32 / H as f32, ndc.y * t) * distance
 }
 
-fn render(path: &PathBuf, view: DebugView, distance: f32) -> Vec<u8> {
+fn render(path: &Path, view: DebugView, distance: f32) -> Vec<u8> {
     let placed =
         gltf_scene(SceneData::new(Limits::default()), path, None).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(placed.data.texture_refs.len(), 1, "one texture uploaded");

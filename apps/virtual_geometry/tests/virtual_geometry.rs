@@ -916,3 +916,163 @@ fn the_hierarchy_walk_draws_the_flat_fills_image_from_fewer_candidates() {
     );
     assert!(changed <= (W * H / 500) as usize, "{changed} pixels differ");
 }
+
+/// A copy of Spot in a scratch folder with its own material: `spot.obj` names no
+/// `.mtl`, so the copy starts with `mtllib spot.mtl` and `usemtl spot`, beside the
+/// repository's `spot.mtl` and `spot_texture.png`.
+fn textured_spot() -> PathBuf {
+    let meshes = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../assets/meshes"));
+    let dir = std::env::temp_dir().join(format!("meshlight-vg-spot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut obj = b"mtllib spot.mtl\nusemtl spot\n".to_vec();
+    obj.extend(std::fs::read(meshes.join("spot.obj")).unwrap());
+    std::fs::write(dir.join("spot.obj"), obj).unwrap();
+    for file in ["spot.mtl", "spot_texture.png"] {
+        std::fs::copy(meshes.join(file), dir.join(file)).unwrap();
+    }
+    dir.join("spot.obj")
+}
+
+#[test]
+fn golden_images_of_textured_spot() {
+    let path = textured_spot();
+    let (asset, materials) = scenes::load_obj_with_materials(&path)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .expect("spot.mtl gives Spot its texture");
+    assert_eq!(materials.len(), 1);
+    assert!(materials[0].diffuse_texture.is_some());
+    let mut data = SceneData::new(Limits::default());
+    let first = scenes::add_obj_materials(&mut data, &materials).unwrap();
+    let placed = scenes::single_painted(data, &asset, scenes::Paint::Own(first)).unwrap();
+    assert_eq!(placed.data.texture_refs.len(), 1);
+    assert_eq!(placed.data.texture_refs[0].size(), 1024);
+    for (view, name) in [
+        (DebugView::Shaded, "spot_shaded"),
+        (DebugView::BaseColor, "spot_base_color"),
+        (DebugView::Mip, "spot_mip"),
+    ] {
+        let (still, _) = render(&placed, settings(view), &GraphSource::Shipped);
+        check_golden(name, &still);
+    }
+}
+
+/// A generated glTF scene of several materials: a strip of five quads, one mesh of five
+/// primitives each in its own colour, a checker-textured quad above it whose texture
+/// repeats, and a metal and an emissive sphere; the shaded and material views.
+#[test]
+fn golden_images_of_a_multi_material_scene() {
+    use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive, json, png_bytes};
+    let mut w = GltfWriter::new();
+    let quad = |x: f32, y: f32, size: f32, tiles: f32, material| Primitive {
+        positions: vec![
+            [x, y, 0.0],
+            [x + size, y, 0.0],
+            [x + size, y + size, 0.0],
+            [x, y + size, 0.0],
+        ],
+        normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
+        uvs: Some(vec![[0.0, tiles], [tiles, tiles], [tiles, 0.0], [0.0, 0.0]]),
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: Some(material),
+    };
+    let strip: Vec<Primitive> = (0..5)
+        .map(|k| {
+            let x = k as f32;
+            let m = w.material(json!({"name": format!("m{k}"), "pbrMetallicRoughness": {
+                "baseColorFactor": [0.2 * x + 0.1, 0.5, 0.9 - 0.2 * x, 1.0],
+                "metallicFactor": 0.0, "roughnessFactor": 0.3 + 0.15 * x}}));
+            quad(x, 0.0, 1.0, 1.0, m)
+        })
+        .collect();
+    let mut rgba = Vec::new();
+    for y in 0..16u32 {
+        for x in 0..16u32 {
+            let light = (x / 4 + y / 4).is_multiple_of(2);
+            rgba.extend(if light {
+                [230, 220, 200, 255]
+            } else {
+                [60, 90, 40, 255]
+            });
+        }
+    }
+    let image = w.image_bytes(&png_bytes(16, 16, &rgba), "image/png");
+    let texture = w.texture(image, None);
+    let textured = w.material(json!({"name": "checker", "pbrMetallicRoughness": {
+        "baseColorTexture": {"index": texture}, "metallicFactor": 0.0}}));
+    let metal = w.material(json!({"name": "metal", "pbrMetallicRoughness": {
+        "baseColorFactor": [0.95, 0.75, 0.4, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.35}}));
+    let glow = w.material(json!({"name": "glow", "emissiveFactor": [0.9, 0.3, 0.1],
+        "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.2, 0.2, 1.0], "metallicFactor": 0.0}}));
+    let strip = w.mesh("strip", &strip);
+    let board = w.mesh("board", &[quad(0.0, 1.2, 2.0, 3.0, textured)]);
+    let ball = |w: &mut GltfWriter, material| {
+        let (rings, segments) = (16u32, 24u32);
+        let mut positions = Vec::new();
+        for r in 0..=rings {
+            for s in 0..=segments {
+                let (t, p) = (
+                    std::f32::consts::PI * r as f32 / rings as f32,
+                    std::f32::consts::TAU * s as f32 / segments as f32,
+                );
+                positions.push([t.sin() * p.cos(), t.cos(), t.sin() * p.sin()]);
+            }
+        }
+        let mut indices = Vec::new();
+        for r in 0..rings {
+            for s in 0..segments {
+                let a = r * (segments + 1) + s;
+                let b = a + segments + 1;
+                indices.extend([a, a + 1, b, a + 1, b + 1, b]);
+            }
+        }
+        let normals = Some(positions.clone());
+        w.mesh(
+            "ball",
+            &[Primitive {
+                positions,
+                normals,
+                uvs: None,
+                indices,
+                material: Some(material),
+            }],
+        )
+    };
+    let metal_ball = ball(&mut w, metal);
+    let glow_ball = ball(&mut w, glow);
+    let nodes = [
+        (strip, [0.0, 0.0, 0.0], 1.0),
+        (board, [0.0, 0.0, 0.0], 1.0),
+        (metal_ball, [3.2, 1.9, 0.3], 0.5),
+        (glow_ball, [4.4, 1.9, 0.3], 0.5),
+    ]
+    .map(|(mesh, translation, s)| {
+        w.node(Node {
+            mesh: Some(mesh),
+            translation: Some(translation),
+            scale: Some([s; 3]),
+            ..Node::default()
+        })
+    });
+    w.scene(&nodes);
+    let dir = std::env::temp_dir().join(format!("meshlight-vg-materials-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("materials.glb");
+    std::fs::write(&path, w.glb()).unwrap();
+    let mut placed = meshlight_virtual_geometry::gltf_scene::gltf_scene(
+        SceneData::new(Limits::default()),
+        &path,
+        None,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(placed.data.materials.len(), 8);
+    assert_eq!(placed.data.texture_refs.len(), 1);
+    placed.camera =
+        Camera::perspective(Vec3::new(2.5, 1.4, 4.6), Vec3::new(2.5, 1.2, 0.0), 0.9, 0.1);
+    for (view, name) in [
+        (DebugView::Shaded, "materials_shaded"),
+        (DebugView::Material, "materials_material"),
+    ] {
+        let (still, _) = render(&placed, settings(view), &GraphSource::Shipped);
+        check_golden(name, &still);
+    }
+}

@@ -6,8 +6,10 @@ use std::path::Path;
 use glam::Vec3;
 
 use crate::error::SceneError;
+use crate::load::gltf::referenced_path;
 use crate::load::read_file;
 use crate::mesh::Mesh;
+use crate::texture::{Image, decode_image};
 
 /// Reads the OBJ file at `path` (its .mtl is not needed: only geometry is read).
 pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
@@ -18,6 +20,16 @@ pub fn load_obj(path: &Path) -> Result<Mesh, SceneError> {
 /// Parses OBJ text. Polygons are fan-triangulated; vertices are split where normals or
 /// texture coordinates differ (seams), which the builder sees through by position.
 pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
+    // Materials do not matter to geometry; a missing .mtl must not fail the load.
+    let (models, _) = parse_models(path, bytes, |_| Err(tobj::LoadError::OpenFileFailed))?;
+    Ok(merge(path, &models, |_| 0).0)
+}
+
+fn parse_models(
+    path: &Path,
+    bytes: &[u8],
+    material_loader: impl Fn(&Path) -> tobj::MTLLoadResult,
+) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>), SceneError> {
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
@@ -30,15 +42,24 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
         reason,
     })?;
     let mut reader = BufReader::new(bytes);
-    // Materials do not matter to geometry; a missing .mtl must not fail the load.
-    let (models, _materials) = tobj::load_obj_buf(&mut reader, &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| SceneError::Obj {
-        path: path.to_owned(),
-        reason: describe(e),
-    })?;
+    let (models, materials) =
+        tobj::load_obj_buf(&mut reader, &options, material_loader).map_err(|e| {
+            SceneError::Obj {
+                path: path.to_owned(),
+                reason: describe(e),
+            }
+        })?;
+    // A material file that failed was reported by the loader.
+    Ok((models, materials.unwrap_or_default()))
+}
 
+/// Every model merged into one mesh; `slot_of(model)` gives each model's triangles
+/// their material slot, kept only when some slot is not 0. Also returns how many slots.
+fn merge(
+    path: &Path,
+    models: &[tobj::Model],
+    mut slot_of: impl FnMut(&tobj::Model) -> u32,
+) -> (Mesh, u32) {
     let mut mesh = Mesh {
         source: path.display().to_string(),
         ..Mesh::default()
@@ -50,7 +71,8 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
         .iter()
         .all(|m| m.mesh.texcoords.len() / 2 == m.mesh.positions.len() / 3)
         && models.iter().any(|m| !m.mesh.texcoords.is_empty());
-    for model in &models {
+    let mut slots = 1;
+    for model in models {
         let m = &model.mesh;
         let base = mesh.positions.len() as u32;
         mesh.positions.extend(
@@ -70,8 +92,130 @@ pub fn parse_obj(path: &Path, bytes: &[u8]) -> Result<Mesh, SceneError> {
                 .extend(m.texcoords.chunks_exact(2).map(|t| [t[0], t[1]]));
         }
         mesh.indices.extend(m.indices.iter().map(|&i| i + base));
+        let slot = slot_of(model);
+        slots = slots.max(slot + 1);
+        mesh.materials
+            .extend(std::iter::repeat_n(slot, m.indices.len() / 3));
     }
-    Ok(mesh)
+    if slots == 1 {
+        mesh.materials.clear();
+    }
+    (mesh, slots)
+}
+
+/// One material of an OBJ file's `.mtl`, as meshlight draws it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjMaterial {
+    /// Its `newmtl` name (`default` for faces that name none).
+    pub name: String,
+    /// `Kd`, the diffuse colour, taken as linear RGB (white where absent).
+    pub diffuse: [f32; 3],
+    /// `map_Kd`, decoded, its rows flipped so that OBJ's V (up the image) addresses
+    /// it as glTF's V (down the image) does; `None` where absent or unusable (the
+    /// warning says why).
+    pub diffuse_texture: Option<std::sync::Arc<Image>>,
+}
+
+/// An OBJ file with its materials: the mesh with a slot per material its faces use (in
+/// order of first use), and each slot's material.
+#[derive(Debug, Clone)]
+pub struct ObjScene {
+    /// The geometry, `materials` holding the slots (empty when there is one).
+    pub mesh: Mesh,
+    /// Per slot, its material.
+    pub materials: Vec<ObjMaterial>,
+    /// What could not be used (a missing `.mtl`, a texture that does not decode): the
+    /// mesh is drawn with what remains.
+    pub warnings: Vec<String>,
+}
+
+/// Reads the OBJ file at `path` with the `.mtl` files it names (beside it, under the
+/// rule glTF's URIs follow: relative, inside the model's folder) and their `map_Kd`
+/// textures. A missing or unreadable `.mtl` or texture is a warning, not an error: the
+/// geometry is still drawn, in white or the `Kd` colour.
+pub fn load_obj_scene(path: &Path) -> Result<ObjScene, SceneError> {
+    let bytes = read_file(path)?;
+    let warnings = std::cell::RefCell::new(Vec::new());
+    let warn = |w: String| warnings.borrow_mut().push(w);
+    let (models, materials) = parse_models(path, &bytes, |mtl| {
+        let name = mtl.to_string_lossy();
+        let read = referenced_path(path, &name)
+            .map_err(|why| format!("{name} {why}"))
+            .and_then(|p| read_file(&p).map_err(|e| e.to_string()));
+        match read {
+            Ok(text) => tobj::load_mtl_buf(&mut BufReader::new(&text[..])).inspect_err(|e| {
+                warn(format!(
+                    "{}: its material file {name} does not parse ({e}); drawn in white",
+                    path.display()
+                ))
+            }),
+            Err(why) => {
+                warn(format!(
+                    "{}: its material file cannot be used ({why}); drawn in white",
+                    path.display()
+                ));
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    })?;
+    // Slots in order of first use; faces with no material share one.
+    let mut order: Vec<Option<usize>> = Vec::new();
+    let (mesh, _) = merge(path, &models, |model| {
+        let id = model.mesh.material_id.filter(|&i| i < materials.len());
+        match order.iter().position(|&o| o == id) {
+            Some(slot) => slot as u32,
+            None => {
+                order.push(id);
+                order.len() as u32 - 1
+            }
+        }
+    });
+    let slots = order
+        .into_iter()
+        .map(|id| match id.map(|i| &materials[i]) {
+            None => ObjMaterial {
+                name: "default".into(),
+                diffuse: [1.0; 3],
+                diffuse_texture: None,
+            },
+            Some(m) => ObjMaterial {
+                name: m.name.clone(),
+                diffuse: m
+                    .diffuse
+                    .filter(|d| d.iter().all(|c| c.is_finite()))
+                    .map_or([1.0; 3], |d| d.map(|c| c.clamp(0.0, 1.0))),
+                diffuse_texture: m.diffuse_texture.as_ref().and_then(|t| {
+                    match load_texture(path, t) {
+                        Ok(image) => Some(std::sync::Arc::new(image)),
+                        Err(why) => {
+                            warn(format!(
+                                "{}: material {:?}: its map_Kd {why}; drawn in its Kd colour",
+                                path.display(),
+                                m.name
+                            ));
+                            None
+                        }
+                    }
+                }),
+            },
+        })
+        .collect();
+    Ok(ObjScene {
+        mesh,
+        materials: slots,
+        warnings: warnings.into_inner(),
+    })
+}
+
+/// A `map_Kd` file beside the model, decoded and flipped to glTF's V.
+fn load_texture(model: &Path, name: &str) -> Result<Image, String> {
+    let file = referenced_path(model, name).map_err(|why| format!("{name} {why}"))?;
+    let bytes = read_file(&file).map_err(|e| e.to_string())?;
+    let mut image = decode_image(&bytes, name).map_err(|e| e.to_string())?;
+    let row = image.width as usize * 4;
+    let rows: Vec<&[u8]> = image.rgba.chunks_exact(row).rev().collect();
+    image.rgba = rows.concat();
+    Ok(image)
 }
 
 /// Refuses a `v`, `vt` or `vn` line holding a number that is not finite: `inf`, `nan`,
