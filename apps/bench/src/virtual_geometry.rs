@@ -200,6 +200,92 @@ pub fn default_scene(quick: bool) -> BenchResult {
     Ok(rows)
 }
 
+/// Textures of the `textured` scenario: Spot's own, tinted to as many hues, each
+/// uploaded at this side.
+const TEXTURED_COUNT: u32 = 64;
+const TEXTURED_SIDE: u32 = 512;
+
+/// Spot with its own texture on the default field (1,024 copies; 64 with `quick`),
+/// [`TEXTURED_COUNT`] copies of the texture tinted to as many hues (so neighbouring
+/// copies read different texels), at 1920×1080 and 3840×2160 (1080p alone with
+/// `quick`): the frame and the resolve with textures, and the texture memory.
+pub fn textured(quick: bool) -> BenchResult {
+    let dir = std::env::temp_dir().join(format!("meshlight-bench-spot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let meshes = Path::new("assets/meshes");
+    let mut obj = b"mtllib spot.mtl\nusemtl spot\n".to_vec();
+    obj.extend(std::fs::read(meshes.join("spot.obj"))?);
+    std::fs::write(dir.join("spot.obj"), obj)?;
+    for file in ["spot.mtl", "spot_texture.png"] {
+        std::fs::copy(meshes.join(file), dir.join(file))?;
+    }
+    let (asset, materials) = scenes::load_obj_with_materials(&dir.join("spot.obj"))?
+        .ok_or("spot.mtl should give Spot its texture")?;
+    let spot = materials[0]
+        .diffuse_texture
+        .clone()
+        .ok_or("spot.mtl should name spot_texture.png")?;
+    let small = meshlight::scene::texture::resample_square(
+        &spot,
+        TEXTURED_SIDE,
+        meshlight::scene::texture::ColorSpace::Srgb,
+    );
+    let mut data = SceneData::new(Default::default());
+    let mut runs = Vec::new();
+    for k in 0..TEXTURED_COUNT {
+        let hue = k as f32 / TEXTURED_COUNT as f32 * std::f32::consts::TAU;
+        let tint = [0.0f32, 2.1, 4.2].map(|phase| 0.6 + 0.4 * (hue + phase).cos());
+        let mut image = small.clone();
+        for texel in image.rgba.chunks_exact_mut(4) {
+            for c in 0..3 {
+                texel[c] = (texel[c] as f32 * tint[c]).round() as u8;
+            }
+        }
+        let texture = data.add_image(
+            &image,
+            true,
+            [meshlight::shaders::cpu::layout::TextureWrap::Repeat; 2],
+        )?;
+        let mut maps = [None; meshlight::shaders::cpu::layout::MAP_COUNT];
+        maps[meshlight::shaders::cpu::layout::MAP_BASE_COLOR] = Some(texture);
+        runs.push(data.add_material(meshlight::gpu_scene::Material {
+            checker: false,
+            maps,
+            ..Default::default()
+        })?);
+    }
+    let texture_bytes = data.textures.len() as f64 * 4.0;
+    let instances = if quick { 64 } else { scenes::DEFAULT_INSTANCES };
+    let placed = scenes::field_painted(data, &asset, instances, scenes::Paint::Own(runs))?;
+    let sizes: &[(u32, u32)] = if quick {
+        &[(1920, 1080)]
+    } else {
+        &[(1920, 1080), (3840, 2160)]
+    };
+    let frames = if quick { 5 } else { 50 };
+    let mut rows = Vec::new();
+    for &(width, height) in sizes {
+        let case = case_label(
+            &format!("{instances} textured Spots ({TEXTURED_COUNT} textures of {TEXTURED_SIDE}²)"),
+            &placed,
+            width,
+            height,
+        );
+        let m = measure(&placed, FrameSettings::new(width, height), frames)?;
+        rows.extend(rows_of("textured", &case, &m));
+        rows.push(row(
+            "textured",
+            case,
+            "texture memory (RGBA8, mips included)",
+            texture_bytes / (1 << 20) as f64,
+            "MiB",
+            &m.device,
+        ));
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    Ok(rows)
+}
+
 /// The scene of [`lattice`] and [`rasterisers`]: 15³ copies of a mesh (5³ at 1280×720
 /// with `quick`), its viewport, frame count and the case label of its rows.
 struct Lattice {

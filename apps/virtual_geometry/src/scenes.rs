@@ -143,13 +143,13 @@ struct Copies {
 }
 
 /// What a scene's copies are painted with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Paint {
     /// Six checkered colours, copy `i` in colour `i mod 6`: copies are told apart.
     Palette,
-    /// The mesh's own materials, already in the scene: every copy takes the run from
-    /// this material on (one per slot of the mesh).
-    Own(u32),
+    /// The mesh's own materials, already in the scene: copy `i` takes the run (one
+    /// material per slot of the mesh) starting at `runs[i mod runs.len()]`.
+    Own(Vec<u32>),
 }
 
 impl Copies {
@@ -169,7 +169,8 @@ impl Copies {
     ) -> Result<Self, meshlight::gpu_scene::SceneDataError> {
         let materials = match paint {
             Paint::Palette => palette(data)?,
-            Paint::Own(first) => vec![first],
+            Paint::Own(runs) if !runs.is_empty() => runs,
+            Paint::Own(_) => palette(data)?,
         };
         let mesh = data.add_mesh("mesh", asset)?;
         let radius = mesh_radius(data, mesh);

@@ -177,7 +177,7 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
         Loaded::Scene(scene) => gltf_scene::place(data, scene, o.camera)?,
         Loaded::Copies(asset, materials) => {
             let paint = match materials {
-                Some(m) => Paint::Own(scenes::add_obj_materials(&mut data, m)?),
+                Some(m) => Paint::Own(vec![scenes::add_obj_materials(&mut data, m)?]),
                 None => Paint::Palette,
             };
             match o.instances {

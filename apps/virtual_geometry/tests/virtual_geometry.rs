@@ -943,7 +943,7 @@ fn golden_images_of_textured_spot() {
     assert!(materials[0].diffuse_texture.is_some());
     let mut data = SceneData::new(Limits::default());
     let first = scenes::add_obj_materials(&mut data, &materials).unwrap();
-    let placed = scenes::single_painted(data, &asset, scenes::Paint::Own(first)).unwrap();
+    let placed = scenes::single_painted(data, &asset, scenes::Paint::Own(vec![first])).unwrap();
     assert_eq!(placed.data.texture_refs.len(), 1);
     assert_eq!(placed.data.texture_refs[0].size(), 1024);
     for (view, name) in [
