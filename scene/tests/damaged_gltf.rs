@@ -306,3 +306,40 @@ fn non_finite_accessor_values_are_refused_naming_the_accessor() {
         }
     }
 }
+
+/// A file that requires an extension the loader does not read (a Draco-compressed
+/// primitive has no plain accessors) is refused naming the extension and a way out,
+/// before any accessor is read; an extension only used, not required, loads.
+#[test]
+fn a_required_extension_that_is_not_read_is_named_with_a_way_out() {
+    let with = |used: &str, required: &str| {
+        gltf(ONE_NODE, "[0]", PRIMITIVE, ACCESSORS).replacen(
+            r#""asset":{"version":"2.0"},"#,
+            &format!(
+                r#""asset":{{"version":"2.0"}},"extensionsUsed":{used},"extensionsRequired":{required},"#
+            ),
+            1,
+        )
+    };
+    for (extension, way_out) in [
+        ("KHR_draco_mesh_compression", "gltf-transform"),
+        ("EXT_meshopt_compression", "decompress"),
+        ("KHR_mesh_quantization", "-noq"),
+        ("KHR_texture_basisu", "PNG or JPEG"),
+        ("EXT_made_up", "export the scene again"),
+    ] {
+        let list = format!(r#"["{extension}"]"#);
+        refused(
+            &format!("{extension}.gltf"),
+            &with(&list, &list),
+            &[extension, "does not read", way_out],
+        );
+    }
+    let used = with(r#"["KHR_texture_transform"]"#, "[]");
+    assert_eq!(
+        load_mesh(&write("used.gltf", &used))
+            .unwrap()
+            .triangle_count(),
+        4
+    );
+}

@@ -7,8 +7,8 @@
 //! compute dispatch that fetches the pixel's triangle from the payload again, transforms
 //! its three corners again, and reconstructs perspective-correct barycentrics and their
 //! screen-space derivatives at the pixel centre analytically from the clip-space corners
-//! (no quad neighbours exist in a compute shader). The derivatives box-filter a UV
-//! checkerboard.
+//! (no quad neighbours exist in a compute shader). The derivatives choose each
+//! texture's mip level and box-filter the generated scenes' UV checkerboard.
 //!
 //! # Depth targets: off unless a pipeline composites with raster geometry
 //!
@@ -43,6 +43,7 @@
 //! | `raster_clusters` | storage read | Cluster | the slots the visibility ids index |
 //! | `raster_counts` | storage read | u32 | word 0: software clusters (ids below it) |
 //! | `instances`, `meshes`, `meshlets`, `payload`, `materials` | storage read | scene | the GPU scene |
+//! | `textures` | storage read | u32 | every texture's mip chain, one RGBA8 texel a word (`layout::TextureRef`) |
 //! | `instances_high` | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
 //! | `depth` | depth target (optional) | Depth32Float | reverse-Z NDC depth; 0 where empty |
 //! | `material_depth` | depth target (optional) | Depth32Float | [`material_depth`] of the instance's material; 0 where empty |
@@ -100,10 +101,16 @@
 //!   `∂b/∂x`, `∂b/∂y` per pixel by the quotient rule from `∂λ/∂ndc` and the NDC size of
 //!   a pixel (`2 / width`, `-2 / height`).
 //! - Shading: normal `Σ b_i n_i` to world space with the inverse transpose, UV `Σ b_i
-//!   uv_i` (0 without UVs), checker `filtered_checker(uv · checker_scale, ∂uv/∂x ·
-//!   scale, ∂uv/∂y · scale)` (a box filter of the square wave over the pixel's
-//!   footprint), `albedo = base · mix(0.55, 1, checker)`, `colour = albedo · (ambient +
-//!   light · max(n · l, 0) + lights)`, clamped, stored linear. `lights` (with clustering
+//!   uv_i` (0 without UVs) and its derivatives `Σ ∂b_i/∂x uv_i`, `Σ ∂b_i/∂y uv_i`; each of
+//!   the material's maps sampled there ([`texture`]): base colour `factor · texel`,
+//!   checkered where the material asks (`· mix(0.55, 1, filtered_checker(uv · scale,
+//!   ∂uv · scale))`, a box filter of the square wave over the pixel's footprint);
+//!   metalness and roughness times the texel's B and G; the normal map's `(2·texel − 1)
+//!   · (scale, scale, 1)` in the triangle's tangent frame (tangent `t` from its world and
+//!   UV edges, bitangent `n × t`, negated where the UVs are mirrored); the ambient times
+//!   `1 + strength · (occlusion − 1)`; emission times the emissive texel. Then GGX and
+//!   Lambert ([`brdf`]) for the sun, the ambient and the clustered lights, plus emission,
+//!   clamped, stored linear. `lights` (with clustering
 //!   bound): over the point and spot lists of the froxel `cluster_of_pixel(pixel,
 //!   view_z)`, `colour · intensity · window² / d² · max(n̂ · l, 0)` with `window =
 //!   saturate(1 − (d² / range²)²)`, spots also times `smoothstep(cos_outer, mix(cos_outer,
@@ -114,7 +121,14 @@
 //!   and change from frame to frame; the scene cluster does not), `triangles` = of
 //!   `cluster_key · 131 + triangle`, `lod` = of the meshlet's LOD level, `raster` = two fixed
 //!   colours (software: id < `raster_counts[0]`), `depth` = `depth^(1/4)` grey; id
-//!   colours are [`cpu::id_color`], empty pixels black; `pyramid` as above.
+//!   colours are [`cpu::id_color`], empty pixels black; `pyramid` as above; `uv` =
+//!   `(fract(u), fract(v), 0)`; `normal` = the shading normal `· 0.5 + 0.5`; `mip` = the
+//!   id colour of `floor(level)` of the base colour texture (black without one);
+//!   `base-color` = the base colour before lighting.
+//! - Texture sampling ([`texture`]): level `λ = clamp(log2(max(|∂uv/∂x|, |∂uv/∂y|) ·
+//!   S), 0, log2 S)` for a texture of side `S`; bilinear in levels `⌊λ⌋` and `⌊λ⌋ + 1`
+//!   mixed by `fract(λ)`; texel centres at `(i + 0.5) / s`; sRGB texels decoded to linear
+//!   light before they are weighed; U and V wrap (repeat, clamp, mirror) on their own.
 //! - [`cpu`] is the reference: depth, material depth and debug views exact (the depth
 //!   and pyramid views within 1/255), shading within 2/255 per channel on ≥ 99% of
 //!   pixels.

@@ -11,7 +11,8 @@ use std::str::FromStr;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[repr(u32)]
 pub enum DebugView {
-    /// The lit, checkered surface over a sky gradient.
+    /// The lit surface (textured, or checkered where the material asks) over a sky
+    /// gradient.
     #[default]
     Shaded = 0,
     /// A colour per visibility cluster id (per slot of `raster_clusters`).

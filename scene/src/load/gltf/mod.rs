@@ -114,6 +114,10 @@ fn append_transformed(into: &mut Mesh, part: &Mesh, transform: Mat4) {
     }
 }
 
+/// Extensions a file may require: none yet (the material extensions meshlight ignores
+/// are never required by a valid file, as they only add to the core material).
+const READ_EXTENSIONS: &[&str] = &[];
+
 /// A parsed glTF file: its JSON checked only as far as each step needs.
 struct GltfFile<'p> {
     path: &'p Path,
@@ -130,7 +134,51 @@ impl<'p> GltfFile<'p> {
         check_glb_header(&bytes).map_err(err)?;
         let gltf =
             gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(e.to_string()))?;
-        Ok(Self { path, gltf })
+        let file = Self { path, gltf };
+        file.check_extensions()?;
+        Ok(file)
+    }
+
+    /// Refuses a file that requires an extension this loader does not read (its data
+    /// would be misread: a Draco-compressed primitive has no plain accessors at all),
+    /// naming the extension and a way out; warns of optional ones that change the look.
+    fn check_extensions(&self) -> Result<(), SceneError> {
+        let root = self.root();
+        if let Some(unread) = root
+            .extensions_required
+            .iter()
+            .find(|e| !READ_EXTENSIONS.contains(&e.as_str()))
+        {
+            let way_out = match unread.as_str() {
+                "KHR_draco_mesh_compression" | "EXT_meshopt_compression" => {
+                    "decompress the file first, e.g. `gltf-transform copy in.glb out.glb` \
+                     (glTF-Transform writes plain accessors unless asked to compress) or \
+                     `gltfpack -i in.glb -o out.glb -noq`"
+                }
+                "KHR_mesh_quantization" => {
+                    "write it again without quantised attributes, e.g. `gltfpack -i in.glb \
+                     -o out.glb -noq`"
+                }
+                "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif" => {
+                    "convert its textures to PNG or JPEG, e.g. with glTF-Transform's \
+                     `png` or `jpeg` commands"
+                }
+                _ => "export the scene again without it",
+            };
+            return Err(self.err(format!(
+                "it requires the extension {unread}, which meshlight does not read; {way_out}"
+            )));
+        }
+        for used in &root.extensions_used {
+            if used == "KHR_texture_transform" {
+                log::warn!(
+                    "{}: it uses KHR_texture_transform, which meshlight does not read yet; its \
+                     textures are drawn without their offset, rotation and scale",
+                    self.path.display()
+                );
+            }
+        }
+        Ok(())
     }
 
     fn root(&self) -> &Root {
