@@ -150,7 +150,13 @@ fn bake(a: args::BakeArgs) -> Result<(), Box<dyn std::error::Error>> {
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
-        .build()?;
+        .build()
+        .map_err(|e| {
+            format!(
+                "bake: {threads} threads could not be started ({e}); this system allows fewer \
+                 (see `ulimit -u` and the memory for their stacks): give a smaller --jobs"
+            )
+        })?;
     if a.input.is_dir() {
         let options = meshlight::scene::BuildOptions {
             grouping: a.grouping,

@@ -29,6 +29,18 @@ fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     return select(pow((c + 0.055) / 1.055, vec3(2.4)), c / 12.92, c <= vec3(0.04045));
 }
 
+// Linear light of each 8-bit sRGB value, filled once per workgroup: a trilinear sample
+// decodes up to 24 channels, and a table read costs far less than a `pow`.
+var<workgroup> srgb_table: array<f32, 256>;
+
+// Fills `srgb_table`; every invocation of the workgroup calls it (with its index among
+// `invocations`) before a workgroupBarrier and any sampling.
+fn fill_srgb_table(index: u32, invocations: u32) {
+    for (var i = index; i < 256u; i += invocations) {
+        srgb_table[i] = srgb_to_linear(vec3(f32(i) / 255.0)).x;
+    }
+}
+
 // Words before `level` in a chain of side 2^size_log2 (`cpu::layout::mip_offset`).
 fn mip_offset(size_log2: u32, level: u32) -> u32 {
     let n1 = size_log2 + 1u;
@@ -51,19 +63,20 @@ fn wrap_coordinate(u: f32, mode: u32) -> f32 {
     }
 }
 
-// Texel index `i` of a row or column of `side` texels, wrapped by `mode`.
+// Texel index `i` of a row or column of `side` texels (a power of two), wrapped by
+// `mode`: masks rather than remainders, which a GPU divides slowly (two's complement
+// makes `i & (side - 1)` the Euclidean remainder for negative `i` too).
 fn wrap_index(i: i32, side: i32, mode: u32) -> i32 {
     switch mode {
         case WRAP_CLAMP: {
             return clamp(i, 0, side - 1);
         }
         case WRAP_MIRROR: {
-            let period = 2 * side;
-            let m = ((i % period) + period) % period;
-            return select(m, period - 1 - m, m >= side);
+            let m = i & (2 * side - 1);
+            return select(m, 2 * side - 1 - m, m >= side);
         }
         default: {
-            return ((i % side) + side) % side;
+            return i & (side - 1);
         }
     }
 }
@@ -71,11 +84,16 @@ fn wrap_index(i: i32, side: i32, mode: u32) -> i32 {
 fn texel(map: vec2<u32>, start: u32, side: i32, x: i32, y: i32) -> vec4<f32> {
     let mode = vec2((map.y >> 5u) & 3u, (map.y >> 7u) & 3u);
     let at = start + u32(wrap_index(y, side, mode.y) * side + wrap_index(x, side, mode.x));
-    let c = unpack4x8unorm(textures[at]);
+    let word = textures[at];
     if (map.y & TEXTURE_SRGB) != 0u {
-        return vec4(srgb_to_linear(c.rgb), c.a);
+        return vec4(
+            srgb_table[word & 255u],
+            srgb_table[(word >> 8u) & 255u],
+            srgb_table[(word >> 16u) & 255u],
+            f32(word >> 24u) / 255.0,
+        );
     }
-    return c;
+    return unpack4x8unorm(word);
 }
 
 // Bilinear filtering of one level at `uv` (already wrapped into 0..1).
