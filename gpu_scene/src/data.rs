@@ -140,7 +140,8 @@ pub struct SceneData {
     pub instances: Vec<layout::Instance>,
     /// The material table instances index, in GPU layout.
     pub materials: Vec<layout::Material>,
-    /// Every texture's mip chain, one RGBA8 texel a word (see `layout::TextureRef`).
+    /// The sRGB decoding table ([`layout::SRGB_TABLE_WORDS`] words), then every
+    /// texture's mip chain, one RGBA8 texel a word (see `layout::TextureRef`).
     pub textures: Vec<u32>,
     /// Where each added texture lies in `textures`, by [`TextureId`].
     pub texture_refs: Vec<TextureRef>,
@@ -382,6 +383,9 @@ impl SceneData {
             });
         if !shape_ok {
             return Err(SceneDataError::TextureShape { size });
+        }
+        if self.textures.is_empty() {
+            self.textures.extend(layout::srgb_table());
         }
         let reference = TextureRef {
             texels: self.textures.len() as u32,

@@ -8,7 +8,7 @@
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
 #import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
-#import resolve::texture::{texture_present, sample_texture, texture_lod, fill_srgb_table}
+#import resolve::texture::{texture_present, sample_texture, texture_lod}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshlets, payload, materials}
@@ -397,9 +397,7 @@ fn mip_color(p: PixelSurface) -> vec3<f32> {
 }
 
 @compute @workgroup_size(8, 8)
-fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    fill_srgb_table(local, 64u);
-    workgroupBarrier();
+fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height {
         return;
     }

@@ -1,21 +1,8 @@
 //! texture.wgsl on the CPU, in f32 and in the same order: trilinear sampling of the
 //! scene's `textures` buffer through a material's map, for the reference and its tests.
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec4};
 use meshlight_shaders::cpu::layout::{TextureRef, TextureWrap, mip_offset};
-
-/// sRGB-encoded channels in 0..1 to linear light (`srgb_to_linear`).
-pub fn srgb_to_linear(c: Vec3) -> Vec3 {
-    c.to_array()
-        .map(|c| {
-            if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }
-        })
-        .into()
-}
 
 /// `wrap_coordinate`: a coordinate brought into 0..1 (0..2 mirrored) before texels are
 /// addressed.
@@ -43,9 +30,12 @@ fn texel(textures: &[u32], map: &TextureRef, start: u32, side: i32, x: i32, y: i
     let at = start as usize
         + (wrap_index(y, side, map.wrap[1]) * side + wrap_index(x, side, map.wrap[0])) as usize;
     let word = textures.get(at).copied().unwrap_or(0);
-    let c = Vec4::from_array(word.to_le_bytes().map(|b| b as f32 / 255.0));
+    let bytes = word.to_le_bytes();
+    let c = Vec4::from_array(bytes.map(|b| b as f32 / 255.0));
     if map.srgb {
-        srgb_to_linear(c.truncate()).extend(c.w)
+        // `srgb_decoded`: the table the buffer starts with.
+        let decoded = |b: u8| f32::from_bits(textures.get(b as usize).copied().unwrap_or(0));
+        Vec4::new(decoded(bytes[0]), decoded(bytes[1]), decoded(bytes[2]), c.w)
     } else {
         c
     }
@@ -166,9 +156,10 @@ mod tests {
 
     #[test]
     fn srgb_texels_are_decoded_before_they_are_weighed() {
-        let words = vec![u32::from_le_bytes([188, 188, 188, 255])];
+        let mut words = meshlight_shaders::cpu::layout::srgb_table().to_vec();
+        words.push(u32::from_le_bytes([188, 188, 188, 255]));
         let map = TextureRef {
-            texels: 0,
+            texels: 256,
             size_log2: 0,
             srgb: true,
             wrap: [TextureWrap::Repeat; 2],

@@ -25,20 +25,12 @@ fn texture_size_log2(map: vec2<u32>) -> u32 {
     return min(map.y & 15u, MAX_SIZE_LOG2);
 }
 
-fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
-    return select(pow((c + 0.055) / 1.055, vec3(2.4)), c / 12.92, c <= vec3(0.04045));
-}
-
-// Linear light of each 8-bit sRGB value, filled once per workgroup: a trilinear sample
-// decodes up to 24 channels, and a table read costs far less than a `pow`.
-var<workgroup> srgb_table: array<f32, 256>;
-
-// Fills `srgb_table`; every invocation of the workgroup calls it (with its index among
-// `invocations`) before a workgroupBarrier and any sampling.
-fn fill_srgb_table(index: u32, invocations: u32) {
-    for (var i = index; i < 256u; i += invocations) {
-        srgb_table[i] = srgb_to_linear(vec3(f32(i) / 255.0)).x;
-    }
+// Linear light of the 8-bit sRGB value `v`: the f32 bits in word `v` of `textures`, whose
+// first 256 words are that table (`cpu::layout::SRGB_TABLE_WORDS`). A trilinear sample
+// decodes up to 24 channels; a cached load costs far less than a `pow`, and a table kept
+// with the textures costs a frame without textures nothing.
+fn srgb_decoded(v: u32) -> f32 {
+    return bitcast<f32>(textures[v]);
 }
 
 // Words before `level` in a chain of side 2^size_log2 (`cpu::layout::mip_offset`).
@@ -87,9 +79,9 @@ fn texel(map: vec2<u32>, start: u32, side: i32, x: i32, y: i32) -> vec4<f32> {
     let word = textures[at];
     if (map.y & TEXTURE_SRGB) != 0u {
         return vec4(
-            srgb_table[word & 255u],
-            srgb_table[(word >> 8u) & 255u],
-            srgb_table[(word >> 16u) & 255u],
+            srgb_decoded(word & 255u),
+            srgb_decoded((word >> 8u) & 255u),
+            srgb_decoded((word >> 16u) & 255u),
             f32(word >> 24u) / 255.0,
         );
     }
