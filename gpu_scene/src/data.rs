@@ -5,7 +5,9 @@ use crate::error::SceneDataError;
 use glam::{Mat4, Vec3};
 use meshlight_scene::MeshletAsset;
 use meshlight_scene::asset::format::{GroupRecord, MeshletRecord, NO_GROUP, NodeRecord};
-use meshlight_scene::texture::{ColorSpace, Image, MipChain, mip_chain, resample_square};
+use meshlight_scene::texture::{
+    ColorSpace, Image, MipChain, mip_chain, resample_square, to_linear,
+};
 use meshlight_shaders::cpu::layout::{self, MAP_COUNT, MESH_FLAG_UVS, TextureRef, TextureWrap};
 use std::ops::Range;
 
@@ -65,6 +67,13 @@ impl Default for Material {
 
 /// The roughness of [`Material::default`]: a broad, faint highlight.
 pub const DEFAULT_ROUGHNESS: f32 = 0.6;
+
+/// The table the `textures` buffer starts with ([`layout::SRGB_TABLE_WORDS`] words):
+/// word `v` holds the f32 bits of the linear light of 8-bit sRGB value `v`, which the
+/// resolve reads instead of decoding each texel with a `pow`.
+pub fn srgb_table() -> [u32; layout::SRGB_TABLE_WORDS] {
+    std::array::from_fn(|v| to_linear(v as u8).to_bits())
+}
 
 /// Element counts the buffers may not exceed. Each buffer is bound whole, so the binding
 /// limit of the device bounds it; [`Limits::for_device`] derives them. The instance
@@ -385,7 +394,7 @@ impl SceneData {
             return Err(SceneDataError::TextureShape { size });
         }
         if self.textures.is_empty() {
-            self.textures.extend(layout::srgb_table());
+            self.textures.extend(srgb_table());
         }
         let reference = TextureRef {
             texels: self.textures.len() as u32,

@@ -159,6 +159,16 @@ fn stem(mesh: &Path) -> std::borrow::Cow<'_, str> {
     mesh.file_stem().unwrap_or_default().to_string_lossy()
 }
 
+/// The viewports of the field scenes, 1920×1080 and 3840×2160 (1080p alone with
+/// `quick`), and the frames each is measured over.
+fn screen_sizes(quick: bool) -> (&'static [(u32, u32)], u32) {
+    if quick {
+        (&[(1920, 1080)], 5)
+    } else {
+        (&[(1920, 1080), (3840, 2160)], 50)
+    }
+}
+
 /// The default scene (a field of procedural meshes on the ground) at 1920×1080 and
 /// 3840×2160 (1080p alone with `quick`).
 pub fn default_scene(quick: bool) -> BenchResult {
@@ -172,12 +182,7 @@ pub fn default_scene(quick: bool) -> BenchResult {
     };
     let asset = scenes::load_asset(Path::new("procedural"), segments)?;
     let placed = scenes::field(SceneData::new(Default::default()), &asset, instances)?;
-    let sizes: &[(u32, u32)] = if quick {
-        &[(1920, 1080)]
-    } else {
-        &[(1920, 1080), (3840, 2160)]
-    };
-    let frames = if quick { 5 } else { 50 };
+    let (sizes, frames) = screen_sizes(quick);
     let mut rows = Vec::new();
     for &(width, height) in sizes {
         let case = case_label(
@@ -257,12 +262,7 @@ pub fn textured(quick: bool) -> BenchResult {
     let texture_bytes = data.textures.len() as f64 * 4.0;
     let instances = if quick { 64 } else { scenes::DEFAULT_INSTANCES };
     let placed = scenes::field_painted(data, &asset, instances, scenes::Paint::Own(runs))?;
-    let sizes: &[(u32, u32)] = if quick {
-        &[(1920, 1080)]
-    } else {
-        &[(1920, 1080), (3840, 2160)]
-    };
-    let frames = if quick { 5 } else { 50 };
+    let (sizes, frames) = screen_sizes(quick);
     let mut rows = Vec::new();
     for &(width, height) in sizes {
         let case = case_label(

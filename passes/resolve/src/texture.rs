@@ -156,7 +156,7 @@ mod tests {
 
     #[test]
     fn srgb_texels_are_decoded_before_they_are_weighed() {
-        let mut words = meshlight_shaders::cpu::layout::srgb_table().to_vec();
+        let mut words = meshlight_gpu_scene::data::srgb_table().to_vec();
         words.push(u32::from_le_bytes([188, 188, 188, 255]));
         let map = TextureRef {
             texels: 256,

@@ -159,22 +159,9 @@ pub struct TextureRef {
 }
 
 /// Words at the start of the scene's `textures` buffer that hold the sRGB decoding
-/// table: word `v` is the f32 bits of the linear light of 8-bit sRGB value `v`. Texel
-/// words follow it.
+/// table: word `v` is the f32 bits of the linear light of 8-bit sRGB value `v`
+/// (`meshlight_gpu_scene::data::srgb_table`). Texel words follow it.
 pub const SRGB_TABLE_WORDS: usize = 256;
-
-/// The table [`SRGB_TABLE_WORDS`] describes.
-pub fn srgb_table() -> [u32; SRGB_TABLE_WORDS] {
-    std::array::from_fn(|v| {
-        let c = v as f32 / 255.0;
-        let linear = if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        };
-        linear.to_bits()
-    })
-}
 
 /// The largest texture side, as a power of two (4096).
 pub const MAX_TEXTURE_SIZE_LOG2: u32 = 12;
