@@ -2,7 +2,7 @@
 //! and every way the material file or its texture can be unusable reported as a warning
 //! naming the file, with the geometry still drawn.
 
-use meshlight_scene::load::{load_obj, load_obj_scene};
+use meshlight_scene::load::{load_obj, load_obj_scene, names_material_library};
 use meshlight_testing::gltf_writer::png_bytes;
 use std::path::{Path, PathBuf};
 
@@ -77,6 +77,10 @@ fn usemtl_gives_slots_in_order_of_first_use_with_their_colours_and_textures() {
     assert_eq!(plain.positions, scene.mesh.positions);
     assert_eq!(plain.indices, scene.mesh.indices);
     assert!(plain.materials.is_empty());
+    assert!(names_material_library(TWO_QUADS.as_bytes()));
+    assert!(!names_material_library(
+        b"v 0 0 0\n# mtllib in a comment\nusemtl x\n"
+    ));
 }
 
 #[test]

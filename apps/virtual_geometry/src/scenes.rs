@@ -6,7 +6,7 @@ use meshlight::gpu_scene::lattice::Lattice;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData};
 use meshlight::scene::asset::format;
 use meshlight::scene::cache::{self, Source};
-use meshlight::scene::load::{ObjMaterial, load_obj_scene};
+use meshlight::scene::load::{ObjMaterial, load_obj_scene, names_material_library};
 use meshlight::scene::{BuildOptions, MeshletAsset, SceneError, Terrain, build_asset};
 use meshlight::shaders::cpu::layout::{ClusterableKind, ClusterableObject, TextureWrap};
 use std::path::Path;
@@ -52,6 +52,12 @@ pub fn load_obj_with_materials(
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
     {
+        return Ok(None);
+    }
+    // An OBJ naming no material library bakes as before, so a cached asset is found
+    // without parsing the file.
+    let bytes = meshlight::scene::input::read_file(mesh, meshlight::scene::load::MAX_INPUT_BYTES)?;
+    if !names_material_library(&bytes) {
         return Ok(None);
     }
     let scene = load_obj_scene(mesh)?;

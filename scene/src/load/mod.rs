@@ -14,7 +14,9 @@ pub use self::gltf::{
     SceneMaterial, SceneMesh, SceneTexture, TextureRef, Wrap, load_gltf, load_gltf_scene,
     load_gltf_scene_with, load_gltf_with, percent_decode, referenced_path,
 };
-pub use self::obj::{ObjMaterial, ObjScene, load_obj, load_obj_scene, parse_obj};
+pub use self::obj::{
+    ObjMaterial, ObjScene, load_obj, load_obj_scene, names_material_library, parse_obj,
+};
 pub use self::stl::{load_stl, parse_stl};
 
 pub use crate::input::MAX_INPUT_BYTES;

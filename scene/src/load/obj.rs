@@ -207,6 +207,16 @@ pub fn load_obj_scene(path: &Path) -> Result<ObjScene, SceneError> {
     })
 }
 
+/// Whether OBJ text names a material library (a `mtllib` line): without one, every face
+/// is in the default material, and [`load_obj_scene`] has nothing to add to [`parse_obj`].
+pub fn names_material_library(bytes: &[u8]) -> bool {
+    bytes.split(|&b| b == b'\n').any(|line| {
+        line.split(|b| b.is_ascii_whitespace())
+            .find(|w| !w.is_empty())
+            == Some(b"mtllib")
+    })
+}
+
 /// A `map_Kd` file beside the model, decoded and flipped to glTF's V.
 fn load_texture(model: &Path, name: &str) -> Result<Image, String> {
     let file = referenced_path(model, name).map_err(|why| format!("{name} {why}"))?;
