@@ -28,19 +28,31 @@ impl Role {
 
     fn allowed(self) -> &'static str {
         match self {
-            Role::Position | Role::Normal => "VEC3 of FLOAT (5126)",
-            Role::TexCoord => "VEC2 of FLOAT, or of normalized UNSIGNED_BYTE/UNSIGNED_SHORT",
+            Role::Position => {
+                "VEC3 of FLOAT, or (KHR_mesh_quantization) of BYTE, UNSIGNED_BYTE, SHORT or \
+                 UNSIGNED_SHORT, normalized or not"
+            }
+            Role::Normal => "VEC3 of FLOAT, or (KHR_mesh_quantization) of normalized BYTE or SHORT",
+            Role::TexCoord => {
+                "VEC2 of FLOAT, of normalized UNSIGNED_BYTE or UNSIGNED_SHORT, or \
+                 (KHR_mesh_quantization) of BYTE, UNSIGNED_BYTE, SHORT or UNSIGNED_SHORT, \
+                 normalized or not"
+            }
             Role::Indices => "SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT",
         }
     }
 
     fn accepts(self, ty: Type, ct: ComponentType, normalized: bool) -> bool {
         use ComponentType as C;
+        // KHR_mesh_quantization's widening of the core types: a file may use it without
+        // listing the extension, and reading it costs nothing.
+        let small_int = matches!(ct, C::I8 | C::U8 | C::I16 | C::U16);
         match self {
-            Role::Position | Role::Normal => ty == Type::Vec3 && ct == C::F32,
-            Role::TexCoord => {
-                ty == Type::Vec2 && (ct == C::F32 || (normalized && matches!(ct, C::U8 | C::U16)))
+            Role::Position => ty == Type::Vec3 && (ct == C::F32 || small_int),
+            Role::Normal => {
+                ty == Type::Vec3 && (ct == C::F32 || (normalized && matches!(ct, C::I8 | C::I16)))
             }
+            Role::TexCoord => ty == Type::Vec2 && (ct == C::F32 || small_int),
             Role::Indices => ty == Type::Scalar && matches!(ct, C::U8 | C::U16 | C::U32),
         }
     }
@@ -184,13 +196,19 @@ pub fn check(
 }
 
 impl CheckedAccessor {
-    /// Component `k` of element `i`, as `f32` (normalized integers scaled to 0..1).
+    /// Component `k` of element `i`, as `f32`: normalized integers scaled to 0..1
+    /// (unsigned) or -1..1 (signed, as glTF decodes them), others converted as they are.
     fn float(&self, buffers: &[Vec<u8>], i: usize, k: usize) -> f32 {
         let raw = self.raw(buffers, i, k);
+        let n = self.normalized;
         match self.component {
             ComponentType::F32 => f32::from_bits(raw),
-            ComponentType::U8 if self.normalized => raw as f32 / 255.0,
-            ComponentType::U16 if self.normalized => raw as f32 / 65535.0,
+            ComponentType::U8 if n => raw as f32 / 255.0,
+            ComponentType::U16 if n => raw as f32 / 65535.0,
+            ComponentType::I8 if n => (raw as u8 as i8 as f32 / 127.0).max(-1.0),
+            ComponentType::I16 if n => (raw as u16 as i16 as f32 / 32767.0).max(-1.0),
+            ComponentType::I8 => raw as u8 as i8 as f32,
+            ComponentType::I16 => raw as u16 as i16 as f32,
             _ => raw as f32,
         }
     }

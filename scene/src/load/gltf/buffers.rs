@@ -28,6 +28,14 @@ pub fn load_buffers(
     };
     let mut out = Vec::with_capacity(root.buffers.len());
     for (i, b) in root.buffers.iter().enumerate() {
+        let fallback = b.extensions.as_ref().is_some_and(|e| {
+            super::compressed::is_fallback(e.others.get(super::compressed::EXTENSION))
+        });
+        if fallback {
+            // Only compressed views point into it, and they are decoded from elsewhere.
+            out.push(Vec::new());
+            continue;
+        }
         let data = match b.uri.as_deref() {
             None => blob.take().ok_or_else(|| {
                 err(format!(

@@ -11,6 +11,7 @@
 
 mod accessor;
 mod buffers;
+mod compressed;
 pub use buffers::{percent_decode, referenced_path};
 mod images;
 pub use images::{SceneTexture, Wrap};
@@ -45,7 +46,7 @@ pub fn load_gltf(path: &Path) -> Result<Mesh, SceneError> {
 /// node's mesh, transformed into world space, refusing a node tree that would expand
 /// beyond `options.max_triangles` before expanding it.
 pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneError> {
-    let file = GltfFile::open(path)?;
+    let mut file = GltfFile::open(path)?;
     let placed = file.placements(Some(options.max_triangles))?;
     let buffers = file.buffers()?;
     // Each mesh read once, however many nodes place it.
@@ -114,14 +115,16 @@ fn append_transformed(into: &mut Mesh, part: &Mesh, transform: Mat4) {
     }
 }
 
-/// Extensions a file may require: none yet (the material extensions meshlight ignores
-/// are never required by a valid file, as they only add to the core material).
-const READ_EXTENSIONS: &[&str] = &[];
+/// Extensions a file may require that the loader reads (the material extensions meshlight
+/// ignores are never required by a valid file, as they only add to the core material).
+const READ_EXTENSIONS: &[&str] = &[compressed::EXTENSION, "KHR_mesh_quantization"];
 
 /// A parsed glTF file: its JSON checked only as far as each step needs.
 struct GltfFile<'p> {
     path: &'p Path,
-    gltf: gltf::Gltf,
+    root: Root,
+    /// A `.glb`'s binary chunk.
+    blob: Option<Vec<u8>>,
 }
 
 impl<'p> GltfFile<'p> {
@@ -134,7 +137,11 @@ impl<'p> GltfFile<'p> {
         check_glb_header(&bytes).map_err(err)?;
         let gltf =
             gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(e.to_string()))?;
-        let file = Self { path, gltf };
+        let file = Self {
+            path,
+            root: gltf.document.into_json(),
+            blob: gltf.blob,
+        };
         file.check_extensions()?;
         Ok(file)
     }
@@ -150,14 +157,11 @@ impl<'p> GltfFile<'p> {
             .find(|e| !READ_EXTENSIONS.contains(&e.as_str()))
         {
             let way_out = match unread.as_str() {
-                "KHR_draco_mesh_compression" | "EXT_meshopt_compression" => {
+                "KHR_draco_mesh_compression" => {
                     "decompress the file first, e.g. `gltf-transform copy in.glb out.glb` \
-                     (glTF-Transform writes plain accessors unless asked to compress) or \
-                     `gltfpack -i in.glb -o out.glb -noq`"
-                }
-                "KHR_mesh_quantization" => {
-                    "write it again without quantised attributes, e.g. `gltfpack -i in.glb \
-                     -o out.glb -noq`"
+                     (glTF-Transform writes plain accessors unless asked to compress), or \
+                     recompress it with meshoptimizer, which meshlight reads: `gltfpack -i \
+                     in.glb -o out.glb -c`"
                 }
                 "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif" => {
                     "convert its textures to PNG or JPEG, e.g. with glTF-Transform's \
@@ -182,7 +186,7 @@ impl<'p> GltfFile<'p> {
     }
 
     fn root(&self) -> &Root {
-        self.gltf.document.as_json()
+        &self.root
     }
 
     fn err(&self, reason: String) -> SceneError {
@@ -271,8 +275,12 @@ impl<'p> GltfFile<'p> {
         }
     }
 
-    fn buffers(&self) -> Result<Vec<Vec<u8>>, SceneError> {
-        load_buffers(self.root(), self.gltf.blob.clone(), self.path)
+    /// The file's buffers, with its compressed views decoded (each such view then points
+    /// at a buffer of its own, appended after the file's).
+    fn buffers(&mut self) -> Result<Vec<Vec<u8>>, SceneError> {
+        let mut buffers = load_buffers(&self.root, self.blob.take(), self.path)?;
+        compressed::decode_views(&mut self.root, &mut buffers).map_err(|e| self.err(e))?;
+        Ok(buffers)
     }
 
     /// Mesh `mi`'s triangle primitives merged, in the mesh's own space, each triangle

@@ -109,7 +109,7 @@ pub fn load_gltf_scene(path: &Path) -> Result<GltfScene, SceneError> {
 /// accessors' declared counts before anything is read; instances cost no triangles, and
 /// the node tree may place at most [`super::nodes::MAX_NODE_INSTANCES`] of them.
 pub fn load_gltf_scene_with(path: &Path, options: &LoadOptions) -> Result<GltfScene, SceneError> {
-    let file = GltfFile::open(path)?;
+    let mut file = GltfFile::open(path)?;
     let placed = file.placements(None)?;
     let materials = read_materials(&file)?;
     let root = file.root();
