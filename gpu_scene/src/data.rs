@@ -47,7 +47,14 @@ pub struct Material {
     pub normal_scale: f32,
     /// How much of the occlusion map applies, 0 to 1.
     pub occlusion_strength: f32,
+    /// The texture coordinates the maps are sampled at, as an affine map of the mesh's:
+    /// row `r` gives coordinate `r` as `row · (u, v, 1)` (glTF's `KHR_texture_transform`;
+    /// [`IDENTITY_UV`] by default). It applies to the checkerboard too.
+    pub uv_transform: [[f32; 3]; 2],
 }
+
+/// [`Material::uv_transform`] that samples at the mesh's own texture coordinates.
+pub const IDENTITY_UV: [[f32; 3]; 2] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
 
 impl Default for Material {
     /// A rough white dielectric with the checkerboard, as the generated scenes use.
@@ -61,6 +68,7 @@ impl Default for Material {
             maps: [None; MAP_COUNT],
             normal_scale: 1.0,
             occlusion_strength: 1.0,
+            uv_transform: IDENTITY_UV,
         }
     }
 }
@@ -325,6 +333,14 @@ impl SceneData {
                 *slot = reference.words();
             }
         }
+        if let Some(&value) = material
+            .uv_transform
+            .as_flattened()
+            .iter()
+            .find(|v| !v.is_finite())
+        {
+            return Err(SceneDataError::NonFiniteUvTransform { value });
+        }
         let finite = |v: f32, fallback: f32| if v.is_finite() { v } else { fallback };
         self.materials.push(layout::Material {
             base_color: [r, g, b, 1.0],
@@ -340,6 +356,7 @@ impl SceneData {
             },
             reserved: 0,
             maps,
+            uv_transform: material.uv_transform.map(|[a, b, c]| [a, b, c, 0.0]),
         });
         self.materials_version += 1;
         Ok(self.materials.len() as u32 - 1)

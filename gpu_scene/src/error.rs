@@ -44,6 +44,16 @@ pub enum SceneDataError {
         /// Textures the scene holds.
         added: u32,
     },
+    /// A material whose texture transform holds a NaN or an infinity, which would sample
+    /// every texel at NaN.
+    #[error(
+        "a material's uv_transform holds {value}; give it finite values (IDENTITY_UV samples \
+         at the mesh's own coordinates)"
+    )]
+    NonFiniteUvTransform {
+        /// The first value that is not finite.
+        value: f32,
+    },
     /// A texture that is not a square power-of-two mip chain.
     #[error(
         "a texture of side {size} is not a square power-of-two mip chain of at most 4096 \

@@ -40,7 +40,7 @@ pub mod phase;
 pub mod scene_slots;
 pub mod view;
 
-pub use data::{InstanceId, Material, MeshId, SceneData, TextureId};
+pub use data::{IDENTITY_UV, InstanceId, Material, MeshId, SceneData, TextureId};
 pub use error::SceneDataError;
 pub use gpu::GpuScene;
 pub use phase::Phase;

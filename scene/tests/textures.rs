@@ -8,7 +8,10 @@ mod common;
 use std::sync::Arc;
 
 use meshlight_scene::SceneError;
-use meshlight_scene::load::{LoadOptions, Wrap, load_gltf_scene, load_gltf_scene_with};
+use meshlight_scene::load::{
+    GltfScene, IDENTITY_UV_TRANSFORM, LoadOptions, UvTransform, Wrap, load_gltf_scene,
+    load_gltf_scene_with,
+};
 use meshlight_scene::texture::{
     ColorSpace, Image, MAX_IMAGE_SIDE, TextureError, decode_image, mip_chain, resample_square,
 };
@@ -288,5 +291,118 @@ fn a_texture_without_an_existing_image_is_refused() {
             assert!(e.to_string().contains("texture 0 has image 3"), "{e}")
         }
         other => panic!("expected a glTF error, got {other:?}"),
+    }
+}
+
+/// A scene of one quad whose material is `material` (textures 0 and 1 exist).
+fn scene_with_material(name: &str, material: serde_json::Value) -> Result<GltfScene, SceneError> {
+    let image = checker(4, 1, [255, 0, 0, 255], [0, 0, 255, 255]);
+    let mut w = GltfWriter::new();
+    let png = w.image_bytes(&png_bytes(4, 4, &image.rgba), "image/png");
+    w.texture(png, None);
+    w.texture(png, None);
+    let m = w.material(material);
+    let mesh = w.mesh("quad", &[quad(m)]);
+    let node = w.node(Node {
+        mesh: Some(mesh),
+        ..Node::default()
+    });
+    w.scene(&[node]);
+    let path = common::scratch(&format!("gltf-transform-{name}")).join("t.glb");
+    std::fs::write(&path, w.glb()).unwrap();
+    load_gltf_scene(&path)
+}
+
+/// `KHR_texture_transform` as the extension's own example reads it: offset (0, 1), a
+/// quarter turn and half scale take the unit square to the image's lower-left quarter
+/// (V runs down). A material whose maps disagree says so; `texCoord` overrides the set.
+#[test]
+fn texture_transforms_are_read_as_the_extension_defines_them() {
+    let quarter = std::f32::consts::FRAC_PI_2;
+    let example = json!({"offset": [0.0, 1.0], "rotation": quarter, "scale": [0.5, 0.5]});
+    let scene = scene_with_material(
+        "example",
+        json!({
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+                "extensions": {"KHR_texture_transform": example}}},
+            "normalTexture": {"index": 1, "extensions": {"KHR_texture_transform":
+                {"scale": [4.0, 4.0], "texCoord": 0}}},
+            "emissiveTexture": {"index": 1, "extensions": {"KHR_texture_transform":
+                {"texCoord": 1}}}
+        }),
+    )
+    .unwrap();
+    let m = &scene.materials[0];
+    let base = m.base_color_texture.unwrap().transform;
+    let apply = |t: UvTransform, [u, v]: [f32; 2]| t.map(|r| r[0] * u + r[1] * v + r[2]);
+    for (corner, expected) in [
+        ([0.0, 0.0], [0.0, 1.0]),
+        ([1.0, 0.0], [0.0, 0.5]),
+        ([1.0, 1.0], [0.5, 0.5]),
+        ([0.0, 1.0], [0.5, 1.0]),
+    ] {
+        let got = apply(base, corner);
+        assert!(
+            (got[0] - expected[0]).abs() < 1e-6 && (got[1] - expected[1]).abs() < 1e-6,
+            "{corner:?} went to {got:?}, not {expected:?}"
+        );
+    }
+    let normal = m.normal_texture.unwrap();
+    assert_eq!(normal.transform, [[4.0, 0.0, 0.0], [0.0, 4.0, 0.0]]);
+    assert_eq!(normal.tex_coord, 0);
+    let emissive = m.emissive_texture.unwrap();
+    assert_eq!(emissive.transform, IDENTITY_UV_TRANSFORM);
+    assert_eq!(
+        emissive.tex_coord, 1,
+        "texCoord overrides the texture's set"
+    );
+    assert_eq!(
+        m.uv_transform(),
+        (base, true),
+        "the base colour's wins; maps disagree"
+    );
+    // Without a transform anywhere, the identity, and no disagreement.
+    let plain = scene_with_material(
+        "plain",
+        json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}),
+    )
+    .unwrap();
+    assert_eq!(
+        plain.materials[0].uv_transform(),
+        (IDENTITY_UV_TRANSFORM, false)
+    );
+}
+
+#[test]
+fn damaged_texture_transforms_are_refused_naming_the_field() {
+    for (name, transform, needle) in [
+        (
+            "rotation",
+            json!({"rotation": "quarter"}),
+            "rotation \"quarter\"",
+        ),
+        (
+            "offset",
+            json!({"offset": [1.0]}),
+            "offset [1.0], not two numbers",
+        ),
+        (
+            "scale",
+            json!({"scale": [1e300, 1.0]}),
+            "scale 1e+300, not a number a 32-bit float holds",
+        ),
+        ("set", json!({"texCoord": -1}), "texCoord -1"),
+    ] {
+        let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+            "extensions": {"KHR_texture_transform": transform}}}});
+        let err = scene_with_material(name, material).expect_err(name);
+        let msg = err.to_string();
+        assert!(matches!(err, SceneError::Gltf { .. }), "{name}: {err:?}");
+        for needle in ["base colour texture's KHR_texture_transform", needle] {
+            assert!(
+                msg.contains(needle),
+                "{name}: {needle:?} missing from: {msg}"
+            );
+        }
     }
 }

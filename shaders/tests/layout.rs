@@ -101,6 +101,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
             flags,
             reserved,
             maps,
+            uv_transform,
         ]
     );
     assert_layout!(&module, "Cluster", Cluster, [instance, meshlet]);

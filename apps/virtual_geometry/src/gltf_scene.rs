@@ -160,6 +160,7 @@ fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Result<Vec<u32>, S
     let mut runs: BTreeMap<&[u32], u32> = BTreeMap::new();
     let mut firsts = Vec::with_capacity(scene.meshes.len());
     let mut masked = BTreeSet::new();
+    let mut mixed_transforms = BTreeSet::new();
     for m in &scene.meshes {
         if let Some(&first) = runs.get(m.materials.as_slice()) {
             firsts.push(first);
@@ -189,6 +190,10 @@ fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Result<Vec<u32>, S
                     maps[map] = textures.get(data, scene, t.texture, srgb)?;
                 }
             }
+            let (uv_transform, mixed) = source.uv_transform();
+            if mixed {
+                mixed_transforms.insert(source.name.clone());
+            }
             data.add_material(Material {
                 base_color: [r, g, b],
                 metallic: source.metallic,
@@ -198,10 +203,20 @@ fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Result<Vec<u32>, S
                 maps,
                 normal_scale: source.normal_scale,
                 occlusion_strength: source.occlusion_strength,
+                uv_transform,
             })?;
         }
         runs.insert(&m.materials, first);
         firsts.push(first);
+    }
+    if !mixed_transforms.is_empty() {
+        log::warn!(
+            "{}: material(s) {} give their textures different KHR_texture_transforms; \
+             meshlight samples all of a material's textures through one, so they are drawn \
+             with the base colour texture's (or the first textured map's)",
+            scene.source,
+            mixed_transforms.into_iter().collect::<Vec<_>>().join(", ")
+        );
     }
     if !masked.is_empty() {
         log::warn!(

@@ -666,7 +666,9 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
         .get(instance.material as usize + m.material() as usize)
         .copied()
         .unwrap_or_default();
-    let weigh = |w: Vec3| k0.uv * w.x + k1.uv * w.y + k2.uv * w.z;
+    // The coordinates the maps are sampled at.
+    let uv = corners.map(|c| Vec2::from(material.uv(c.uv.to_array())));
+    let weigh = |w: Vec3| uv[0] * w.x + uv[1] * w.y + uv[2] * w.z;
     let camera = Vec3::from_array(frame.view.camera_position);
     let mut s = PixelSurface {
         material,
@@ -698,7 +700,6 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
     s.roughness = material.roughness * metallic_roughness.y;
     if TextureRef::from_words(material.maps[MAP_NORMAL]).is_some() {
         let texel = s.sample_map(textures, MAP_NORMAL, Vec4::new(0.5, 0.5, 1.0, 1.0));
-        let uv = corners.map(|c| c.uv);
         s.n = mapped_normal(s.n, world, uv, texel.truncate(), material.emissive[3]);
     }
     s.occlusion = 1.0

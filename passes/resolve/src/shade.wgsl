@@ -6,7 +6,7 @@
 
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
-#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal}
+#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
 #import resolve::texture::{texture_present, sample_texture, texture_lod}
 #import meshlight::cluster_triangle::cluster_triangle
@@ -338,6 +338,7 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
     var normal: array<vec3<f32>, 3>;
     var uv: array<vec2<f32>, 3>;
     let has_uvs = (mesh.flags & MESH_FLAG_UVS) != 0u;
+    let material = materials[instance.material + meshlet_material(m)];
     for (var k = 0u; k < 3u; k += 1u) {
         let v = corners[k];
         let p = meshlet_position(m, mesh.position_grid, vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u)));
@@ -348,11 +349,12 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
         if has_uvs {
             uv[k] = meshlet_uv(mesh.uv_grid, payload[meshlet_uv_word(m) + v]);
         }
+        // The coordinates the maps are sampled at.
+        uv[k] = material_uv(material, uv[k]);
     }
     let bary = barycentrics(clip[0], clip[1], clip[2], pixel);
     let b = bary.b;
     var s: PixelSurface;
-    let material = materials[instance.material + meshlet_material(m)];
     s.material = material;
     s.n = normalize(instance_transform_normal(instance, normal[0] * b.x + normal[1] * b.y + normal[2] * b.z));
     s.v = normalize(view.camera_position - (world[0] * b.x + world[1] * b.y + world[2] * b.z));

@@ -256,6 +256,8 @@ fn frame() -> Frame {
             ],
             emissive: [0.5, 0.4, 0.3],
             occlusion_strength: 0.7,
+            // Its maps tiled, turned and moved (KHR_texture_transform).
+            uv_transform: meshlight_scene::load::texture_transform([0.25, -0.1], 0.7, [2.0, 1.5]),
             ..plain([0.95, 0.8, 0.4])
         },
         Material {

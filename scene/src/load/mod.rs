@@ -10,9 +10,10 @@ use crate::error::SceneError;
 use crate::mesh::{MAX_TRIANGLES, Mesh};
 
 pub use self::gltf::{
-    AlphaMode, CameraProjection, DEFAULT_MATERIAL, GltfScene, SceneCamera, SceneInstance,
-    SceneMaterial, SceneMesh, SceneTexture, TextureRef, Wrap, load_gltf, load_gltf_scene,
-    load_gltf_scene_with, load_gltf_with, percent_decode, referenced_path,
+    AlphaMode, CameraProjection, DEFAULT_MATERIAL, GltfScene, IDENTITY_UV_TRANSFORM, SceneCamera,
+    SceneInstance, SceneMaterial, SceneMesh, SceneTexture, TextureRef, UvTransform, Wrap,
+    load_gltf, load_gltf_scene, load_gltf_scene_with, load_gltf_with, percent_decode,
+    referenced_path, texture_transform,
 };
 pub use self::obj::{
     ObjMaterial, ObjScene, load_obj, load_obj_scene, names_material_library, parse_obj,

@@ -122,7 +122,22 @@ pub struct Material {
     /// The textures, by `MAP_*` index: each a [`TextureRef`]'s two words, `[0, 0]` for
     /// none.
     pub maps: [[u32; 2]; MAP_COUNT],
+    /// The texture coordinates every map is sampled at, from the mesh's: row `r` gives
+    /// coordinate `r` as `dot(row.xyz, (u, v, 1))` (w is zero). [`IDENTITY_UV_TRANSFORM`]
+    /// leaves them as they are.
+    pub uv_transform: [[f32; 4]; 2],
 }
+
+impl Material {
+    /// instance.wgsl's `material_uv`: `uv` through the material's texture transform.
+    pub fn uv(&self, uv: [f32; 2]) -> [f32; 2] {
+        self.uv_transform
+            .map(|r| r[0] * uv[0] + r[1] * uv[1] + r[2])
+    }
+}
+
+/// `Material::uv_transform` that samples at the mesh's own texture coordinates.
+pub const IDENTITY_UV_TRANSFORM: [[f32; 4]; 2] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
 
 /// `Material::flags`: the base colour is modulated by a checkerboard over the UVs.
 pub const MATERIAL_FLAG_CHECKER: u32 = 1;

@@ -41,6 +41,15 @@ struct Material {
     // The textures, by MAP_* index: (first texel word, shape), shape 0 for none
     // (`cpu::layout::TextureRef`).
     maps: array<vec2<u32>, 5>,
+    // The coordinates the maps are sampled at: row r gives coordinate r as
+    // dot(row.xyz, vec3(uv, 1.0)) (glTF's KHR_texture_transform; identity by default).
+    uv_transform: array<vec4<f32>, 2>,
+}
+
+// `uv` through `material`'s texture transform.
+fn material_uv(material: Material, uv: vec2<f32>) -> vec2<f32> {
+    let h = vec3(uv, 1.0);
+    return vec2(dot(material.uv_transform[0].xyz, h), dot(material.uv_transform[1].xyz, h));
 }
 
 // `Material::flags`: the base colour is modulated by a checkerboard over the UVs.

@@ -73,10 +73,7 @@ pub fn decode_views(root: &mut Root, buffers: &mut Vec<Vec<u8>>) -> Result<(), S
         };
         let what = format!("buffer view {i} ({EXTENSION})");
         let stream = parse(ext, buffers).map_err(|e| format!("{what}: {e}"))?;
-        let size = stream
-            .count
-            .checked_mul(stream.stride)
-            .unwrap_or(usize::MAX);
+        let size = stream.count.saturating_mul(stream.stride);
         decoded_total = decoded_total.saturating_add(size);
         if decoded_total as u64 > MAX_INPUT_BYTES {
             return Err(format!(

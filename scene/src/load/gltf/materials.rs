@@ -2,6 +2,9 @@
 //! checked (finite, in their ranges), texture references checked against the file's
 //! textures, so nothing a renderer reads later can index out of range or shade NaN.
 
+use gltf::json::Value;
+use gltf::json::extensions::material::{NormalTexture, OcclusionTexture};
+use gltf::json::extensions::texture::Info;
 use gltf::json::material::AlphaMode as JsonAlphaMode;
 use gltf::json::validation::Checked;
 
@@ -13,13 +16,35 @@ use crate::error::SceneError;
 /// not metallic) applies.
 pub const DEFAULT_MATERIAL: u32 = u32::MAX;
 
+/// An affine map of texture coordinates: row `r` gives coordinate `r` as
+/// `row · (u, v, 1)`.
+pub type UvTransform = [[f32; 3]; 2];
+
+/// The [`UvTransform`] that leaves coordinates as they are.
+pub const IDENTITY_UV_TRANSFORM: UvTransform = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
 /// A texture a material samples.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TextureRef {
     /// Index into the file's textures.
     pub texture: usize,
     /// Which `TEXCOORD_n` it is sampled with (only `TEXCOORD_0` is read).
     pub tex_coord: u32,
+    /// Its `KHR_texture_transform` (offset, rotation and scale) as one affine map, or
+    /// [`IDENTITY_UV_TRANSFORM`].
+    pub transform: UvTransform,
+}
+
+/// `KHR_texture_transform`'s `T · R · S`: coordinates scaled, then rotated by `rotation`
+/// radians (counter-clockwise in the image, whose V runs down), then offset; the
+/// extension's example (offset (0, 1), a quarter turn, half scale: the image's
+/// lower-left quarter turned) fixes the rotation's sense.
+pub fn texture_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> UvTransform {
+    let (sin, cos) = rotation.sin_cos();
+    [
+        [cos * scale[0], sin * scale[1], offset[0]],
+        [-sin * scale[0], cos * scale[1], offset[1]],
+    ]
 }
 
 /// How a material's alpha is used.
@@ -69,6 +94,24 @@ pub struct SceneMaterial {
     pub double_sided: bool,
 }
 
+impl SceneMaterial {
+    /// The one texture transform meshlight samples all of the material's maps with (the
+    /// base colour texture's, or else the first map's that has one), and whether another
+    /// map asks for a different one (which is then drawn with this one).
+    pub fn uv_transform(&self) -> (UvTransform, bool) {
+        let maps = [
+            self.base_color_texture,
+            self.metallic_roughness_texture,
+            self.normal_texture,
+            self.occlusion_texture,
+            self.emissive_texture,
+        ];
+        let mut present = maps.iter().flatten().map(|t| t.transform);
+        let chosen = present.next().unwrap_or(IDENTITY_UV_TRANSFORM);
+        (chosen, present.any(|t| t != chosen))
+    }
+}
+
 impl Default for SceneMaterial {
     /// glTF's default material.
     fn default() -> Self {
@@ -105,7 +148,12 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
                      exporter writes it)"
                 ))
             };
-            let texture = |index: usize, tex_coord: u32, role: &str| {
+            let texture = |index: usize, tex_coord: u32, extension: Option<&Value>, role: &str| {
+                let (transform, tex_coord) = match extension {
+                    None => (IDENTITY_UV_TRANSFORM, tex_coord),
+                    Some(e) => read_transform(e, tex_coord)
+                        .map_err(|e| bad(format!("its {role}'s KHR_texture_transform {e}")))?,
+                };
                 if index >= root.textures.len() {
                     return Err(bad(format!(
                         "its {role} is texture {index}, but the file has only {} textures",
@@ -122,6 +170,7 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
                 Ok(TextureRef {
                     texture: index,
                     tex_coord,
+                    transform,
                 })
             };
             let unit = |v: f32, what: &str| {
@@ -166,25 +215,53 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
                 base_color_texture: pbr
                     .base_color_texture
                     .as_ref()
-                    .map(|t| texture(t.index.value(), t.tex_coord, "base colour texture"))
+                    .map(|t| {
+                        texture(
+                            t.index.value(),
+                            t.tex_coord,
+                            transform_of(&t.extensions),
+                            "base colour texture",
+                        )
+                    })
                     .transpose()?,
                 metallic: unit(pbr.metallic_factor.0, "metallicFactor")?,
                 roughness: unit(pbr.roughness_factor.0, "roughnessFactor")?,
                 metallic_roughness_texture: pbr
                     .metallic_roughness_texture
                     .as_ref()
-                    .map(|t| texture(t.index.value(), t.tex_coord, "metallic-roughness texture"))
+                    .map(|t| {
+                        texture(
+                            t.index.value(),
+                            t.tex_coord,
+                            transform_of(&t.extensions),
+                            "metallic-roughness texture",
+                        )
+                    })
                     .transpose()?,
                 normal_texture: m
                     .normal_texture
                     .as_ref()
-                    .map(|t| texture(t.index.value(), t.tex_coord, "normal texture"))
+                    .map(|t| {
+                        texture(
+                            t.index.value(),
+                            t.tex_coord,
+                            normal_transform_of(&t.extensions),
+                            "normal texture",
+                        )
+                    })
                     .transpose()?,
                 normal_scale,
                 occlusion_texture: m
                     .occlusion_texture
                     .as_ref()
-                    .map(|t| texture(t.index.value(), t.tex_coord, "occlusion texture"))
+                    .map(|t| {
+                        texture(
+                            t.index.value(),
+                            t.tex_coord,
+                            occlusion_transform_of(&t.extensions),
+                            "occlusion texture",
+                        )
+                    })
                     .transpose()?,
                 occlusion_strength: m
                     .occlusion_texture
@@ -194,11 +271,65 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
                 emissive_texture: m
                     .emissive_texture
                     .as_ref()
-                    .map(|t| texture(t.index.value(), t.tex_coord, "emissive texture"))
+                    .map(|t| {
+                        texture(
+                            t.index.value(),
+                            t.tex_coord,
+                            transform_of(&t.extensions),
+                            "emissive texture",
+                        )
+                    })
                     .transpose()?,
                 alpha,
                 double_sided: m.double_sided,
             })
         })
         .collect()
+}
+
+const TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
+
+fn transform_of(extensions: &Option<Info>) -> Option<&Value> {
+    extensions.as_ref()?.others.get(TEXTURE_TRANSFORM)
+}
+
+fn normal_transform_of(extensions: &Option<NormalTexture>) -> Option<&Value> {
+    extensions.as_ref()?.others.get(TEXTURE_TRANSFORM)
+}
+
+fn occlusion_transform_of(extensions: &Option<OcclusionTexture>) -> Option<&Value> {
+    extensions.as_ref()?.others.get(TEXTURE_TRANSFORM)
+}
+
+/// A `KHR_texture_transform` object as one affine map, with the `texCoord` it overrides
+/// `tex_coord` with; an error says which field is wrong.
+fn read_transform(e: &Value, tex_coord: u32) -> Result<(UvTransform, u32), String> {
+    let number = |v: &Value, what: &str| -> Result<f32, String> {
+        match v.as_f64() {
+            Some(x) if x.is_finite() && (x as f32).is_finite() => Ok(x as f32),
+            _ => Err(format!("has {what} {v}, not a number a 32-bit float holds")),
+        }
+    };
+    let pair = |name: &str, default: [f32; 2]| -> Result<[f32; 2], String> {
+        match e.get(name) {
+            None => Ok(default),
+            Some(Value::Array(a)) if a.len() == 2 => {
+                Ok([number(&a[0], name)?, number(&a[1], name)?])
+            }
+            Some(v) => Err(format!("has {name} {v}, not two numbers")),
+        }
+    };
+    let offset = pair("offset", [0.0, 0.0])?;
+    let scale = pair("scale", [1.0, 1.0])?;
+    let rotation = e
+        .get("rotation")
+        .map_or(Ok(0.0), |r| number(r, "rotation"))?;
+    let tex_coord = match e.get("texCoord") {
+        None => tex_coord,
+        Some(v) => v
+            .as_u64()
+            .and_then(|n| u32::try_from(n).ok())
+            .ok_or_else(|| format!("has texCoord {v}, not a set index"))?,
+    };
+    Ok((texture_transform(offset, rotation, scale), tex_coord))
 }

@@ -16,7 +16,10 @@ pub use buffers::{percent_decode, referenced_path};
 mod images;
 pub use images::{SceneTexture, Wrap};
 mod materials;
-pub use materials::{AlphaMode, DEFAULT_MATERIAL, SceneMaterial, TextureRef};
+pub use materials::{
+    AlphaMode, DEFAULT_MATERIAL, IDENTITY_UV_TRANSFORM, SceneMaterial, TextureRef, UvTransform,
+    texture_transform,
+};
 mod nodes;
 mod scene;
 pub use scene::{
@@ -148,7 +151,7 @@ impl<'p> GltfFile<'p> {
 
     /// Refuses a file that requires an extension this loader does not read (its data
     /// would be misread: a Draco-compressed primitive has no plain accessors at all),
-    /// naming the extension and a way out; warns of optional ones that change the look.
+    /// naming the extension and a way out.
     fn check_extensions(&self) -> Result<(), SceneError> {
         let root = self.root();
         if let Some(unread) = root
@@ -172,15 +175,6 @@ impl<'p> GltfFile<'p> {
             return Err(self.err(format!(
                 "it requires the extension {unread}, which meshlight does not read; {way_out}"
             )));
-        }
-        for used in &root.extensions_used {
-            if used == "KHR_texture_transform" {
-                log::warn!(
-                    "{}: it uses KHR_texture_transform, which meshlight does not read yet; its \
-                     textures are drawn without their offset, rotation and scale",
-                    self.path.display()
-                );
-            }
         }
         Ok(())
     }
