@@ -51,6 +51,9 @@ pub struct Material {
     /// row `r` gives coordinate `r` as `row · (u, v, 1)` (glTF's `KHR_texture_transform`;
     /// [`IDENTITY_UV`] by default). It applies to the checkerboard too.
     pub uv_transform: [[f32; 3]; 2],
+    /// Whether back faces are drawn too, lit with the normal reversed (glTF's
+    /// `doubleSided`). Otherwise both rasterisers drop them, as they do by default.
+    pub double_sided: bool,
 }
 
 /// [`Material::uv_transform`] that samples at the mesh's own texture coordinates.
@@ -69,6 +72,7 @@ impl Default for Material {
             normal_scale: 1.0,
             occlusion_strength: 1.0,
             uv_transform: IDENTITY_UV,
+            double_sided: false,
         }
     }
 }
@@ -309,6 +313,16 @@ impl SceneData {
         self.mesh_names.get(mesh.0 as usize).map(String::as_str)
     }
 
+    /// The material a cluster of `meshlet` placed by `instance` is drawn with (the
+    /// instance's first material plus the meshlet's slot), as the passes find it; `None`
+    /// where an index is out of range.
+    pub fn cluster_material(&self, instance: u32, meshlet: u32) -> Option<&layout::Material> {
+        let first = self.instances.get(instance as usize)?.material;
+        let slot = self.meshlets.get(meshlet as usize)?.material();
+        self.materials
+            .get((first as usize).checked_add(slot as usize)?)
+    }
+
     /// Material slots of `mesh` (1 for a mesh of one material): an instance of it
     /// takes that many consecutive materials, from the one it is placed with.
     pub fn mesh_material_count(&self, mesh: MeshId) -> Option<u32> {
@@ -351,6 +365,10 @@ impl SceneData {
             alpha_cutoff: 0.0,
             flags: if material.checker {
                 layout::MATERIAL_FLAG_CHECKER
+            } else {
+                0
+            } | if material.double_sided {
+                layout::MATERIAL_FLAG_DOUBLE_SIDED
             } else {
                 0
             },

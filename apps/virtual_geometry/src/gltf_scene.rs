@@ -204,6 +204,7 @@ fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Result<Vec<u32>, S
                 normal_scale: source.normal_scale,
                 occlusion_strength: source.occlusion_strength,
                 uv_transform,
+                double_sided: source.double_sided,
             })?;
         }
         runs.insert(&m.materials, first);

@@ -431,3 +431,75 @@ fn the_material_view_shows_each_primitive_in_its_own_material() {
     seen.dedup();
     assert_eq!(seen.len(), 5, "five distinct colours: {seen:?}");
 }
+
+/// glTF's `doubleSided`: two quads facing +z, seen from behind. The double-sided one is
+/// drawn, its shading normal reversed to face the eye (the `normal` view's blue is
+/// z · 0.5 + 0.5: 0 for −z); the one-sided one is culled, so its pixel shows the sky the
+/// gap between them shows. From the front both are drawn with the normal +z.
+#[test]
+fn a_double_sided_material_is_drawn_from_behind_with_its_normal_reversed() {
+    let mut w = GltfWriter::new();
+    let quad = |w: &mut GltfWriter, x0: f32, double_sided: bool| {
+        let material = w.material(json!({"doubleSided": double_sided}));
+        Primitive {
+            positions: vec![
+                [x0, -0.75, 0.0],
+                [x0 + 1.5, -0.75, 0.0],
+                [x0 + 1.5, 0.75, 0.0],
+                [x0, 0.75, 0.0],
+            ],
+            normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
+            uvs: None,
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material: Some(material),
+        }
+    };
+    let two_sided = quad(&mut w, -2.0, true);
+    let one_sided = quad(&mut w, 0.5, false);
+    let mesh = w.mesh("quads", &[two_sided, one_sided]);
+    let node = w.node(Node {
+        mesh: Some(mesh),
+        ..Node::default()
+    });
+    w.scene(&[node]);
+    let path = scratch("double-sided").join("quads.glb");
+    std::fs::write(&path, w.glb()).unwrap();
+    let placed = gltf_scene(SceneData::new(Limits::default()), &path, None).unwrap();
+    let mut settings = FrameSettings::new(W, H);
+    settings.view = Some(meshlight::resolve::DebugView::Normal);
+    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)
+        .unwrap_or_else(|e| panic!("{e}"));
+    for (eye, behind) in [
+        (Vec3::new(0.0, 0.0, -4.0), true),
+        (Vec3::new(0.0, 0.0, 4.0), false),
+    ] {
+        let camera = meshlight::gpu_scene::Camera::perspective(eye, Vec3::ZERO, 1.0, 0.1);
+        let image = r
+            .render_still(&camera)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .rgba;
+        let view_projection = camera.projection_matrix([W, H]) * camera.view_matrix();
+        let pixel = |x: f32| {
+            let clip = view_projection * glam::Vec4::new(x, 0.0, 0.0, 1.0);
+            let ndc = clip.truncate() / clip.w;
+            let px = ((ndc.x + 1.0) * 0.5 * W as f32) as usize;
+            let py = ((1.0 - ndc.y) * 0.5 * H as f32) as usize;
+            let at = (py * W as usize + px) * 4;
+            [image[at], image[at + 1], image[at + 2]]
+        };
+        let (two, one, gap) = (pixel(-1.25), pixel(1.25), pixel(0.0));
+        if behind {
+            assert!(
+                two[2] < 8,
+                "from behind, the double-sided quad's normal is {two:?}"
+            );
+            assert_eq!(one, gap, "from behind, the one-sided quad is not drawn");
+        } else {
+            assert!(
+                two[2] > 247 && one[2] > 247,
+                "from the front: {two:?}, {one:?}"
+            );
+            assert_ne!(one, gap);
+        }
+    }
+}

@@ -9,7 +9,7 @@ use meshlight_gpu_scene::SceneData;
 use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout};
 use meshlight_scene::asset::triangles;
 use meshlight_scene::compress::get_bits;
-use meshlight_shaders::cpu::layout::{Cluster, Mesh, View};
+use meshlight_shaders::cpu::layout::{Cluster, MATERIAL_FLAG_DOUBLE_SIDED, Mesh, View};
 use meshlight_shaders::cpu::visbuffer;
 use std::ops::Range;
 
@@ -120,7 +120,8 @@ pub fn cover_triangle(
 /// The visibility buffer after the hardware pass: `initial` (what the software pass
 /// left, row-major `width` × `height`) with the clusters of [`hardware_slots`]`(capacity,
 /// hw_count)` of `raster_clusters` (capacity = its length) drawn over it by atomicMax,
-/// each with its slot as visibility id. Triangles with a corner at or behind the camera
+/// each with its slot as visibility id; back faces are dropped unless the cluster's
+/// material is double-sided. Triangles with a corner at or behind the camera
 /// plane (w <= 0), which the hardware clips, are left out: scenes given to this
 /// reference lie in front of the near plane. Clusters naming a missing instance,
 /// meshlet or mesh draw nothing.
@@ -149,6 +150,9 @@ pub fn rasterize(
             continue;
         };
         let world_from_local = Mat4::from_cols_array_2d(&instance.world_from_local);
+        let two_sided = scene
+            .cluster_material(cluster.instance, cluster.meshlet)
+            .is_some_and(|m| m.flags & MATERIAL_FLAG_DOUBLE_SIDED != 0);
         let (positions, corners) = decode_geometry(scene, mesh, m);
         let screen: Vec<Option<([f64; 2], f64)>> = positions
             .iter()
@@ -172,7 +176,11 @@ pub fn rasterize(
             let [Some(a), Some(b), Some(c)] = v else {
                 continue;
             };
-            cover_triangle([a, b, c], width, height, |x, y, depth| {
+            // A two-sided back face (clockwise in NDC, positive area on the y-down
+            // screen) is turned to face the eye, as raster.wgsl turns it.
+            let turned = two_sided && edge(a.0, b.0, c.0) > 0.0;
+            let corners = if turned { [a, c, b] } else { [a, b, c] };
+            cover_triangle(corners, width, height, |x, y, depth| {
                 let px = &mut out[(y * width + x) as usize];
                 *px = (*px).max(visbuffer::pack(depth, slot, t as u32));
             });

@@ -123,7 +123,7 @@ pub fn contract() -> StageContract {
                     "[384, hardware cluster count, 0, 0]",
                 ),
             ],
-            scene_reads(&[Instances, Meshes, Meshlets, Payload]),
+            scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials]),
             vec![Slot::visibility64(
                 "visbuffer",
                 Access::StorageReadWrite,

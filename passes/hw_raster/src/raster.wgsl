@@ -11,8 +11,8 @@
 
 #import meshlight::dispatch::linear_workgroup
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESHLET_MAX_TRIANGLES, MESHLET_MAX_VERTICES, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle}
-#import meshlight::instance::Instance
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESHLET_MAX_TRIANGLES, MESHLET_MAX_VERTICES, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle, meshlet_material}
+#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_DOUBLE_SIDED}
 #import meshlight::instance_table::instance_at
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
@@ -32,6 +32,7 @@
 @group(0) @binding(3) var<storage, read> meshes: array<Mesh>;
 @group(0) @binding(4) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(5) var<storage, read> payload: array<u32>;
+@group(0) @binding(10) var<storage, read> materials: array<Material>;
 // width × height visibility values, row-major; the software rasteriser wrote first.
 #ifdef VIS_TEXTURE
 @group(0) @binding(6) var visbuffer: texture_storage_2d<r64uint, atomic>;
@@ -52,6 +53,20 @@ fn clip_position(instance: Instance, mesh: Mesh, m: Meshlet, k: u32) -> vec4<f32
     let p = meshlet_position(m, mesh.position_grid, vec3(field(m, k, 0u), field(m, k, 1u), field(m, k, 2u)));
     let world = instance.world_from_local * vec4(p, 1.0);
     return view.view_projection * vec4(world.xyz, 1.0);
+}
+
+// Whether meshlet `m` placed by `instance` is drawn with a double-sided material: its
+// back faces are turned to face the eye (two corners swapped), so the pipeline's
+// back-face culling keeps them.
+fn double_sided(instance: Instance, m: Meshlet) -> bool {
+    return (materials[instance.material + meshlet_material(m)].flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
+}
+
+// Whether clip-space corners (a, b, c) are a back face: counter-clockwise in NDC is front,
+// and the sign of the homogeneous determinant tells the facing of the visible part even
+// when a corner lies behind the eye (Olano and Greer's 2DH rasterisation).
+fn back_facing(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>) -> bool {
+    return determinant(mat3x3(a.xyw, b.xyw, c.xyw)) < 0.0;
 }
 
 // The visibility write of one fragment; position.z is the NDC depth, since the
@@ -97,7 +112,16 @@ fn raster_vs(@builtin(vertex_index) v: u32, @builtin(instance_index) j: u32) -> 
     let instance = instance_at(cluster.instance);
     let mesh = meshes[instance.mesh];
     let at = meshlet_triangle_location(m, mesh.flags, t);
-    let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+    var corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+    if double_sided(instance, m) {
+        // Every corner's invocation decides alike, from the same three positions.
+        let a = clip_position(instance, mesh, m, corners.x);
+        let b = clip_position(instance, mesh, m, corners.y);
+        let c = clip_position(instance, mesh, m, corners.z);
+        if back_facing(a, b, c) {
+            corners = corners.xzy;
+        }
+    }
     out.position = clip_position(instance, mesh, m, corners[v % 3u]);
     return out;
 }
@@ -154,9 +178,20 @@ fn raster_ms(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
         for (var v = lane; v < vertices; v += MESH_GROUP) {
             mesh_out.vertices[v].position = clip_position(instance, mesh, m, v);
         }
+        let two_sided = double_sided(instance, m);
         for (var t = lane; t < triangles; t += MESH_GROUP) {
             let at = meshlet_triangle_location(m, mesh.flags, t);
-            let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+            var corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+            if two_sided {
+                // From the positions again: reading another lane's outputs would need
+                // a barrier in uniform control flow.
+                let a = clip_position(instance, mesh, m, corners.x);
+                let b = clip_position(instance, mesh, m, corners.y);
+                let c = clip_position(instance, mesh, m, corners.z);
+                if back_facing(a, b, c) {
+                    corners = corners.xzy;
+                }
+            }
             mesh_out.primitives[t].indices = corners;
             mesh_out.primitives[t].id = vec2(slot, t);
         }

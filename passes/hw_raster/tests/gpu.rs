@@ -527,3 +527,58 @@ fn a_viewport_other_than_the_params_is_a_record_error_and_zero_size_a_parameter_
         Ok(_) => panic!("a zero-sized visibility buffer was accepted"),
     }
 }
+
+/// A double-sided material's back faces are drawn, turned to face the eye; a one-sided
+/// material's are culled. The flat square seen from behind: empty one-sided, drawn whole
+/// two-sided, as the float reference draws it, by the indirect draw and (where the
+/// adapter has mesh shaders) the mesh shader.
+#[test]
+fn double_sided_materials_draw_their_back_faces_like_the_reference() {
+    let behind = Camera::perspective(Vec3::new(0.4, -0.3, -2.6), Vec3::ZERO, 0.9, 0.5);
+    for two_sided in [false, true] {
+        let mut scene = SceneData::new(meshlight_gpu_scene::data::Limits::default());
+        let square = scenes::add_mesh(&mut scene, "square", &scenes::flat_quad(6, 0.2));
+        let material = scene
+            .add_material(meshlight_gpu_scene::Material {
+                double_sided: two_sided,
+                ..meshlight_gpu_scene::Material::default()
+            })
+            .unwrap();
+        scene
+            .add_instance(square, Mat4::IDENTITY, material)
+            .unwrap()
+            .unwrap();
+        let mut f = frame(scene, behind, |_, m| m.level() == 0);
+        f.initial = vec![visbuffer::EMPTY; (W * H) as usize];
+        let want = f.reference();
+        let covered = want.iter().filter(|&&v| v != visbuffer::EMPTY).count();
+        let name = format!("square from behind, two-sided {two_sided}");
+        let got = run(&mut f);
+        if !two_sided {
+            assert_eq!(covered, 0, "{name}: the reference drew back faces");
+            assert!(
+                got.iter().all(|&v| v == visbuffer::EMPTY),
+                "{name}: back faces were drawn"
+            );
+            continue;
+        }
+        assert!(covered > (W * H / 4) as usize, "{name}: {covered}");
+        check(&name, &got, &want, covered * 99 / 100, depth_tolerance());
+        check_ids(&f, &got);
+        if let Some(mesh) = where_supported(
+            run_fed(&mut f, Feed::MeshShader),
+            wgpu::Features::EXPERIMENTAL_MESH_SHADER,
+            "hw_raster",
+            "EXPERIMENTAL_MESH_SHADER",
+            "mesh shaders",
+        ) {
+            check(
+                &format!("{name}, mesh shader"),
+                &mesh,
+                &want,
+                covered * 99 / 100,
+                depth_tolerance(),
+            );
+        }
+    }
+}

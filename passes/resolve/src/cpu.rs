@@ -14,7 +14,7 @@ use meshlight_scene::compress::{NORMAL_BITS, decode_octahedral, get_bits};
 use meshlight_shaders::cpu::layout::{
     Cluster, ClusterGrid, ClusterableKind, ClusterableObject, Instance, MAP_BASE_COLOR,
     MAP_EMISSIVE, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MATERIAL_FLAG_CHECKER,
-    MESH_FLAG_UVS, Material, Mesh, TextureRef, View,
+    MATERIAL_FLAG_DOUBLE_SIDED, MESH_FLAG_UVS, Material, Mesh, TextureRef, View,
 };
 use meshlight_shaders::cpu::light::{cluster_index, z_slice_of_depth};
 use meshlight_shaders::cpu::visbuffer;
@@ -701,6 +701,11 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
     if TextureRef::from_words(material.maps[MAP_NORMAL]).is_some() {
         let texel = s.sample_map(textures, MAP_NORMAL, Vec4::new(0.5, 0.5, 1.0, 1.0));
         s.n = mapped_normal(s.n, world, uv, texel.truncate(), material.emissive[3]);
+    }
+    let xyw = |c: Vec4| Vec3::new(c.x, c.y, c.w);
+    let back = Mat3::from_cols(xyw(clip[0]), xyw(clip[1]), xyw(clip[2])).determinant() < 0.0;
+    if material.flags & MATERIAL_FLAG_DOUBLE_SIDED != 0 && back {
+        s.n = -s.n;
     }
     s.occlusion = 1.0
         + material.occlusion_strength * (s.sample_map(textures, MAP_OCCLUSION, Vec4::ONE).x - 1.0);

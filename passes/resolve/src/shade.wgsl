@@ -6,7 +6,7 @@
 
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
-#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
+#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MATERIAL_FLAG_DOUBLE_SIDED, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
 #import resolve::texture::{texture_present, sample_texture, texture_lod}
 #import meshlight::cluster_triangle::cluster_triangle
@@ -372,6 +372,12 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
     if texture_present(material.maps[MAP_NORMAL]) {
         let texel = sample_map(material, MAP_NORMAL, s, vec4(0.5, 0.5, 1.0, 1.0)).xyz;
         s.n = mapped_normal(s.n, world, uv, texel, material.emissive.w);
+    }
+    // A double-sided material's back face (drawn turned by the rasterisers; clockwise in
+    // NDC, which the homogeneous determinant tells even with a corner behind the eye) is
+    // lit with its shading normal reversed, as glTF asks.
+    if (material.flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u && determinant(mat3x3(clip[0].xyw, clip[1].xyw, clip[2].xyw)) < 0.0 {
+        s.n = -s.n;
     }
     s.occlusion = 1.0 + material.occlusion_strength * (sample_map(material, MAP_OCCLUSION, s, vec4(1.0)).r - 1.0);
     s.emissive = material.emissive.rgb * sample_map(material, MAP_EMISSIVE, s, vec4(1.0)).rgb;

@@ -5,7 +5,7 @@
 
 use glam::Vec4;
 use meshlight_gpu_scene::SceneData;
-use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::layout::{Cluster, MATERIAL_FLAG_DOUBLE_SIDED, View};
 use meshlight_shaders::cpu::visbuffer;
 
 /// Screen coordinates (pixels) at or beyond this make a vertex unusable; see the crate
@@ -305,6 +305,26 @@ pub fn clipped_pieces(poly: &[Vec4], size: [f32; 2]) -> Vec<[([i32; 2], f32); 3]
         .collect()
 }
 
+/// Whether `cluster` is drawn with a double-sided material (raster.wgsl's
+/// `double_sided`): its back faces are turned to face the eye rather than dropped.
+pub fn double_sided(scene: &SceneData, cluster: &Cluster) -> bool {
+    scene
+        .cluster_material(cluster.instance, cluster.meshlet)
+        .is_some_and(|m| m.flags & MATERIAL_FLAG_DOUBLE_SIDED != 0)
+}
+
+/// `corners` as [`cover_triangle`] takes them, swapped where they are a back face (a
+/// counter-clockwise, negative-area triangle on the y-down screen), as raster.wgsl's
+/// `triangle_setup` turns a two-sided back face.
+pub fn facing_the_eye(corners: [([i32; 2], f32); 3]) -> [([i32; 2], f32); 3] {
+    let [a, b, c] = corners;
+    if edge(a.0, b.0, c.0) < 0 {
+        [a, c, b]
+    } else {
+        corners
+    }
+}
+
 /// The visibility buffer (row-major, `width` × `height`, 0 = empty) of `clusters` drawn
 /// from `scene` through `view`; the visibility cluster id is the index into `clusters`.
 /// Clusters naming a missing instance or meshlet draw nothing.
@@ -317,8 +337,14 @@ pub fn rasterize(
 ) -> Vec<u64> {
     let mut out = vec![visbuffer::EMPTY; width as usize * height as usize];
     for (id, cluster) in clusters.iter().enumerate() {
+        let two_sided = double_sided(scene, cluster);
         for tri in screen_triangles(scene, view, cluster, width, height) {
-            cover_triangle(tri.corners, width, height, |x, y, depth| {
+            let corners = if two_sided {
+                facing_the_eye(tri.corners)
+            } else {
+                tri.corners
+            };
+            cover_triangle(corners, width, height, |x, y, depth| {
                 let px = &mut out[(y * width + x) as usize];
                 *px = (*px).max(visbuffer::pack(depth, id as u32, tri.index));
             });

@@ -133,7 +133,7 @@ pub fn contract() -> StageContract {
                 )
                 .also(Access::Indirect),
             ],
-            scene_reads(&[Instances, Meshes, Meshlets, Payload]),
+            scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials]),
             vec![
                 Slot::visibility64(
                     "visbuffer",

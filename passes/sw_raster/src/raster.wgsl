@@ -20,10 +20,10 @@
 
 #import meshlight::dispatch::linear_workgroup
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle}
-#import meshlight::instance::Instance
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle, meshlet_material}
+#import meshlight::instance::{Instance, MATERIAL_FLAG_DOUBLE_SIDED}
 #import meshlight::instance_table::instance_at
-#import meshlight::scene_buffers::{meshes, meshlets, payload}
+#import meshlight::scene_buffers::{meshes, meshlets, payload, materials}
 #import meshlight::cluster_triangle::{ClusterTriangle, cluster_triangle}
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
@@ -272,24 +272,43 @@ fn piece_corners(poly: Polygon, k: u32) -> array<ScreenVertex, 3> {
     return v;
 }
 
+// Whether meshlet `m` placed by `instance` is drawn with a double-sided material, whose
+// back faces are turned to face the eye rather than dropped.
+fn double_sided(instance: Instance, m: Meshlet) -> bool {
+    return (materials[instance.material + meshlet_material(m)].flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
+}
+
+// `double_sided` of the cluster in raster slot `slot`.
+fn slot_double_sided(slot: u32) -> bool {
+    let cluster = raster_clusters[slot];
+    return double_sided(instance_at(cluster.instance), meshlets[cluster.meshlet]);
+}
+
 // A triangle ready to cover, with its clipped pixel box [lo, hi] (empty when it is a
-// back face, degenerate, or off the screen).
+// back face that is not `two_sided`, degenerate, or off the screen).
 struct Setup {
     tri: Tri,
     lo: vec2<i32>,
     hi: vec2<i32>,
 }
 
-fn triangle_setup(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex, slot: u32, t: u32) -> Setup {
+fn triangle_setup(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex, slot: u32, t: u32, two_sided: bool) -> Setup {
     var tri: Tri;
     var lo = vec2(0);
     var hi = vec2(-1);
     // Front faces are counter-clockwise in NDC (y up), so counter-clockwise on the
-    // y-down screen too; corners (0, 2, 1) make them clockwise there.
+    // y-down screen too; corners (0, 2, 1) make them clockwise there. A two-sided back
+    // face keeps (0, 1, 2), which is clockwise for it.
+    var p1 = c;
+    var p2 = b;
+    if two_sided && edge(a.xy, c.xy, b.xy) < 0li {
+        p1 = b;
+        p2 = c;
+    }
     tri.v0 = a.xy;
-    tri.v1 = c.xy;
-    tri.v2 = b.xy;
-    tri.z = vec3(a.z, c.z, b.z);
+    tri.v1 = p1.xy;
+    tri.v2 = p2.xy;
+    tri.z = vec3(a.z, p1.z, p2.z);
     tri.area = edge(tri.v0, tri.v1, tri.v2);
     let fa = f32(tri.area);
     tri.gradient = vec2(divide(tri.z.y - tri.z.x, fa), divide(tri.z.z - tri.z.x, fa));
@@ -300,7 +319,7 @@ fn triangle_setup(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex, slot: u32, 
     );
     tri.value_cluster = slot;
     tri.triangle = t;
-    // Back faces and degenerate triangles have area <= 0.
+    // Back faces (not two-sided) and degenerate triangles have area <= 0.
     if tri.area > 0li {
         let mn = min(tri.v0, min(tri.v1, tri.v2));
         let mx = max(tri.v0, max(tri.v1, tri.v2));
@@ -371,6 +390,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     workgroupBarrier();
 
     var setup = Setup(Tri(), vec2(0), vec2(-1));
+    let two_sided = double_sided(instance, m);
     if t < meshlet_triangle_count(m) {
         let at = meshlet_triangle_location(m, mesh.flags, t);
         let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
@@ -381,6 +401,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
                 ScreenVertex(screen_xy[c.z], screen_z[c.z], true),
                 i,
                 t,
+                two_sided,
             );
         } else {
             // Clipped by `raster_clipped`.
@@ -442,12 +463,13 @@ fn raster_clipped(
             continue;
         }
         let poly = clip_triangle(a, b, d);
+        let two_sided = double_sided(s.instance, s.m);
         for (var k = 0u; k + 2u < poly.count; k += 1u) {
             let v = piece_corners(poly, k);
             if !v[0].ok {
                 continue;
             }
-            let piece = triangle_setup(v[0], v[1], v[2], slot, t);
+            let piece = triangle_setup(v[0], v[1], v[2], slot, t, two_sided);
             if any(piece.lo > piece.hi) {
                 continue;
             }
@@ -580,7 +602,7 @@ fn raster_big(
                 v[k] = ScreenVertex(xy, bitcast<f32>(clip_list[base + 3u * k + 2u]), true);
             }
             let id = clip_list[base + 9u];
-            setup = triangle_setup(v[0], v[1], v[2], id >> 7u, id & 127u);
+            setup = triangle_setup(v[0], v[1], v[2], id >> 7u, id & 127u, slot_double_sided(id >> 7u));
         } else {
             let slot = entry.x >> 7u;
             let triangle = entry.x & 127u;
@@ -591,6 +613,7 @@ fn raster_big(
                 screen_vertex(s.m, s.mesh, s.instance, s.corners.z),
                 slot,
                 triangle,
+                double_sided(s.instance, s.m),
             );
         }
         // The part of the box this tile covers, a pixel per thread, row by row.

@@ -10,7 +10,7 @@ use meshlight_gpu_scene::{Camera, GpuScene, Material, Projection, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_sw_raster::{BIG_COUNT_SLOT, SwRaster, cpu};
 use meshlight_scene::{Mesh, procedural_mesh};
-use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::layout::{Cluster, MATERIAL_FLAG_DOUBLE_SIDED, View};
 use meshlight_shaders::cpu::visbuffer;
 
 const W: u32 = 96;
@@ -27,7 +27,7 @@ use meshlight_testing::{Rng, gpu};
 
 #[path = "support/scenes.rs"]
 mod scenes;
-use scenes::add_mesh;
+use scenes::{add_mesh, flat_quad};
 
 // ---------------------------------------------------------------------------------------
 // Scenes and views
@@ -499,50 +499,6 @@ fn front_faces_are_the_mesh_outside() {
             "view {k}: only {same} of {} pixels show the nearest surface",
             drawn.len()
         );
-    }
-}
-
-/// A flat square in the plane z = 0 (facing +z), `n` × `n` cells, diagonals alternating,
-/// inner vertices moved in the plane by `jitter` cells so edges cross pixels at odd
-/// angles.
-fn flat_quad(n: u32, jitter: f32) -> Mesh {
-    let mut rng = Rng(3);
-    let mut positions = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let inner = i > 0 && i < n && j > 0 && j < n;
-            let (dx, dy) = if inner {
-                (rng.range(-jitter, jitter), rng.range(-jitter, jitter))
-            } else {
-                (0.0, 0.0)
-            };
-            positions.push(Vec3::new(
-                -1.0 + 2.0 * (i as f32 + dx) / n as f32,
-                -1.0 + 2.0 * (j as f32 + dy) / n as f32,
-                0.0,
-            ));
-        }
-    }
-    let at = |i: u32, j: u32| j * (n + 1) + i;
-    let mut indices = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
-            // Counter-clockwise seen from +z.
-            if (i + j) % 2 == 0 {
-                indices.extend([a, b, c, a, c, d]);
-            } else {
-                indices.extend([a, b, d, b, c, d]);
-            }
-        }
-    }
-    Mesh {
-        source: "flat quad".into(),
-        normals: vec![Vec3::Z; positions.len()],
-        positions,
-        uvs: Vec::new(),
-        indices,
-        materials: Vec::new(),
     }
 }
 
@@ -1041,5 +997,71 @@ fn clipping_keeps_a_crossing_edge_shared_by_two_triangles_identical() {
         first
             .iter()
             .all(|v| cpu::inside(*v) || cpu::plane_distance(*v, 0).abs() < 1e-5)
+    );
+}
+
+/// A double-sided material's back faces are drawn, turned to face the eye, by every
+/// path of the kernel (whole triangles, clipped pieces, big-triangle tiles): the flat
+/// square seen from behind, and the inside of the knot's tube from views that cut into
+/// it, match the reference; with a one-sided material the square from behind is empty
+/// and the tube's inside is not drawn.
+#[test]
+fn double_sided_materials_draw_their_back_faces_like_the_reference() {
+    let behind =
+        Camera::perspective(Vec3::new(0.4, -0.3, -2.6), Vec3::ZERO, 0.9, 0.5).view([W, H], 0, None);
+    for two_sided in [false, true] {
+        let mut scene = flat_scene(&[("square", flat_quad(3, 0.2))]);
+        if two_sided {
+            scene.materials[0].flags |= MATERIAL_FLAG_DOUBLE_SIDED;
+        }
+        let input = Input::every_in_one_row(clusters_of(&scene, 0, |l| l == 0));
+        let want = input.reference(&scene, &behind);
+        if two_sided {
+            assert!(covered(&want) > (W * H / 4) as usize, "{}", covered(&want));
+        } else {
+            assert_eq!(covered(&want), 0, "a one-sided square from behind");
+        }
+        // Tiles only where there is something to tile (the run checks tiles were listed).
+        let tiled = SwRaster {
+            big_triangle_px: 8,
+            ..pass(SCANLINES)
+        };
+        let passes = if two_sided {
+            vec![pass(SCANLINES), tiled]
+        } else {
+            vec![pass(SCANLINES)]
+        };
+        for p in passes {
+            let got = run(&mut scene, &input, &[behind], p).unwrap_or_else(|e| panic!("{e}"));
+            assert_identical(&format!("square, two-sided {two_sided}"), &got[0], &want);
+        }
+    }
+
+    let views = near_views();
+    let mut covered_by = Vec::new();
+    for two_sided in [false, true] {
+        let mut scene = knot_scene();
+        if two_sided {
+            for m in &mut scene.materials {
+                m.flags |= MATERIAL_FLAG_DOUBLE_SIDED;
+            }
+        }
+        let input = Input::every(clusters_of(&scene, 0, |l| l == 0), 7);
+        let want: Vec<Vec<u64>> = views.iter().map(|v| input.reference(&scene, v)).collect();
+        let got =
+            run(&mut scene, &input, &views, pass(SCANLINES)).unwrap_or_else(|e| panic!("{e}"));
+        for k in 0..views.len() {
+            assert_identical(
+                &format!("knot, two-sided {two_sided}, view {k}"),
+                &got[k],
+                &want[k],
+            );
+        }
+        covered_by.push(want.iter().map(|w| covered(w)).sum::<usize>());
+    }
+    // From inside the tube, its back faces fill what the one-sided knot leaves open.
+    assert!(
+        covered_by[1] > covered_by[0] + (W * H / 4) as usize,
+        "pixels covered one-sided, two-sided: {covered_by:?}"
     );
 }

@@ -115,7 +115,7 @@ pub struct Material {
     pub occlusion_strength: f32,
     /// MASK materials: texels whose alpha is below this are cut out (0 for opaque).
     pub alpha_cutoff: f32,
-    /// [`MATERIAL_FLAG_CHECKER`] or 0.
+    /// [`MATERIAL_FLAG_CHECKER`] and [`MATERIAL_FLAG_DOUBLE_SIDED`], or 0.
     pub flags: u32,
     /// Zero.
     pub reserved: u32,
@@ -141,6 +141,9 @@ pub const IDENTITY_UV_TRANSFORM: [[f32; 4]; 2] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.
 
 /// `Material::flags`: the base colour is modulated by a checkerboard over the UVs.
 pub const MATERIAL_FLAG_CHECKER: u32 = 1;
+/// `Material::flags`: back faces are drawn too (both rasterisers turn them to face the
+/// eye) and shaded with the normal reversed, as glTF's `doubleSided` asks.
+pub const MATERIAL_FLAG_DOUBLE_SIDED: u32 = 2;
 
 /// `Material::maps` index of the base colour texture (sRGB; alpha in A).
 pub const MAP_BASE_COLOR: usize = 0;

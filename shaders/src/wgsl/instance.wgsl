@@ -35,7 +35,7 @@ struct Material {
     occlusion_strength: f32,
     // MASK materials: texels whose alpha is below this are cut out (0 for opaque).
     alpha_cutoff: f32,
-    // MATERIAL_FLAG_CHECKER or 0.
+    // MATERIAL_FLAG_CHECKER | MATERIAL_FLAG_DOUBLE_SIDED, or 0.
     flags: u32,
     reserved: u32,
     // The textures, by MAP_* index: (first texel word, shape), shape 0 for none
@@ -54,6 +54,8 @@ fn material_uv(material: Material, uv: vec2<f32>) -> vec2<f32> {
 
 // `Material::flags`: the base colour is modulated by a checkerboard over the UVs.
 const MATERIAL_FLAG_CHECKER: u32 = 1u;
+// `Material::flags`: back faces are drawn too, and shaded with the normal reversed.
+const MATERIAL_FLAG_DOUBLE_SIDED: u32 = 2u;
 
 // `Material::maps` indices.
 const MAP_BASE_COLOR: u32 = 0u;

@@ -41,3 +41,47 @@ pub fn knot_scene(mesh: &Mesh, more: &[Mat4]) -> SceneData {
     }
     scene
 }
+
+/// A flat square in the plane z = 0 (facing +z), `n` × `n` cells, diagonals alternating,
+/// inner vertices moved in the plane by `jitter` cells so edges cross pixels at odd
+/// angles.
+pub fn flat_quad(n: u32, jitter: f32) -> Mesh {
+    let mut rng = meshlight_testing::Rng(3);
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let inner = i > 0 && i < n && j > 0 && j < n;
+            let (dx, dy) = if inner {
+                (rng.range(-jitter, jitter), rng.range(-jitter, jitter))
+            } else {
+                (0.0, 0.0)
+            };
+            positions.push(Vec3::new(
+                -1.0 + 2.0 * (i as f32 + dx) / n as f32,
+                -1.0 + 2.0 * (j as f32 + dy) / n as f32,
+                0.0,
+            ));
+        }
+    }
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    let mut indices = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let [a, b, c, d] = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+            // Counter-clockwise seen from +z.
+            if (i + j) % 2 == 0 {
+                indices.extend([a, b, c, a, c, d]);
+            } else {
+                indices.extend([a, b, d, b, c, d]);
+            }
+        }
+    }
+    Mesh {
+        source: "flat quad".into(),
+        normals: vec![Vec3::Z; positions.len()],
+        positions,
+        uvs: Vec::new(),
+        indices,
+        materials: Vec::new(),
+    }
+}
