@@ -205,6 +205,21 @@ pub enum SceneError {
         limit: f32,
     },
 
+    /// A mesh so small that no position grid resolves it: its step would fall below the
+    /// smallest normal `f32`.
+    #[error(
+        "{source_name}: the mesh spans {extent:e} units, below {limit:e}, the smallest extent \
+         the position grid resolves; scale the mesh up (export it in smaller units)"
+    )]
+    ExtentTooSmall {
+        /// The file or in-memory source.
+        source_name: String,
+        /// The largest side of its bounds.
+        extent: f32,
+        /// The smallest extent allowed.
+        limit: f32,
+    },
+
     /// A triangle naming a vertex the mesh does not have.
     #[error(
         "{source_name}: triangle {triangle} refers to vertex {index}, but the mesh has only \

@@ -17,6 +17,11 @@ pub const MAX_VERTICES: u64 = 1 << 26;
 /// at 1e16 every square, sum and sphere merge stays far inside the `f32` range.
 pub const MAX_COORDINATE: f32 = 1e16;
 
+/// The smallest mesh extent: the finest position grid (2^24 cells a side) over it still
+/// has a step that is a normal `f32` (a denormal step decodes every vertex to the
+/// grid's origin), with a margin for the builder's error arithmetic.
+pub const MIN_EXTENT: f32 = 1e-30;
+
 /// Most material slots one mesh may use (the asset format's limit).
 pub use crate::asset::format::MAX_MATERIALS;
 
@@ -196,6 +201,18 @@ impl Mesh {
                 vertex,
                 position: self.positions[vertex].to_array(),
                 limit: MAX_COORDINATE,
+            });
+        }
+        let (lo, hi) = self.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        let extent = (hi - lo).max_element();
+        if n > 0 && extent > 0.0 && extent < MIN_EXTENT {
+            return Err(SceneError::ExtentTooSmall {
+                source_name: self.source.clone(),
+                extent,
+                limit: MIN_EXTENT,
             });
         }
         for (i, &index) in self.indices.iter().enumerate() {

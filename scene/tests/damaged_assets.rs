@@ -13,7 +13,7 @@ use meshlight_scene::asset::format::{
     AssetHeader, GroupRecord, MeshletRecord, SECTION_GROUPS, SECTION_MESHLETS, SECTION_PAYLOAD,
 };
 use meshlight_scene::load::parse_obj;
-use meshlight_scene::mesh::MAX_COORDINATE;
+use meshlight_scene::mesh::{MAX_COORDINATE, MIN_EXTENT};
 use meshlight_scene::{BuildOptions, MeshletAsset, SceneError, build_asset, procedural_mesh};
 
 fn header(words: &mut [u32]) -> &mut AssetHeader {
@@ -184,6 +184,49 @@ fn coordinates_beyond_the_quantiser_are_refused_at_bake_time() {
     built.asset.save(&path).unwrap();
     let loaded = MeshletAsset::load(&path).unwrap();
     assert!(meshlight_scene::verify::verify(&loaded).is_empty());
+}
+
+/// A closed tetrahedron `scale` units across, as OBJ text.
+fn tetrahedron_obj(scale: f32) -> String {
+    format!(
+        "v 0 0 0\nv {scale:e} 0 0\nv 0 {scale:e} 0\nv 0 0 {scale:e}\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+    )
+}
+
+/// A mesh too small for any position grid is refused naming its extent and the limit
+/// (it used to end in an internal error from the asset's own checks); one just above
+/// the limit bakes into an asset that loads and verifies.
+#[test]
+fn meshes_smaller_than_the_position_grid_resolves_are_refused_naming_the_limit() {
+    for scale in [1e-36f32, 1e-33, MIN_EXTENT * 0.5] {
+        let mesh = parse_obj(Path::new("tiny.obj"), tetrahedron_obj(scale).as_bytes()).unwrap();
+        let err = build_asset(&mesh, &BuildOptions::default(), &mut |_| {}).unwrap_err();
+        match &err {
+            SceneError::ExtentTooSmall { extent, limit, .. } => {
+                assert_eq!((*extent, *limit), (scale, MIN_EXTENT))
+            }
+            other => panic!("{scale:e}: {other:?}"),
+        }
+        let msg = err.to_string();
+        assert!(
+            msg.contains("tiny.obj") && msg.contains("scale the mesh up"),
+            "{msg}"
+        );
+        assert!(!msg.contains("report"), "{msg}");
+    }
+    for scale in [MIN_EXTENT * 2.0, 1e-20] {
+        let mesh = parse_obj(Path::new("small.obj"), tetrahedron_obj(scale).as_bytes()).unwrap();
+        let built = build_asset(&mesh, &BuildOptions::default(), &mut |_| {})
+            .unwrap_or_else(|e| panic!("{scale:e}: {e}"));
+        let dir = common::scratch(&format!("small-{scale:e}"));
+        let path = dir.join("small.mlasset");
+        built.asset.save(&path).unwrap();
+        let loaded = MeshletAsset::load(&path).unwrap();
+        assert!(
+            meshlight_scene::verify::verify(&loaded).is_empty(),
+            "{scale:e}"
+        );
+    }
 }
 
 fn group(words: &mut [u32], i: usize) -> &mut GroupRecord {
