@@ -34,10 +34,11 @@ fn virtual_geometry_shaders_compose_and_validate() {
     ] {
         check(shader, &());
     }
-    for (exact_division, slot_base, big_triangles) in [
-        (false, false, false),
-        (true, false, true),
-        (false, true, true),
+    for (exact_division, slot_base, big_triangles, two_sided) in [
+        (false, false, false, false),
+        (true, false, true, true),
+        (false, true, true, false),
+        (false, false, false, true),
     ] {
         check(
             &meshlight::sw_raster::SHADER,
@@ -46,6 +47,7 @@ fn virtual_geometry_shaders_compose_and_validate() {
                 texture: false,
                 slot_base,
                 big_triangles,
+                two_sided,
             },
         );
     }

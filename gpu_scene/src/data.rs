@@ -356,6 +356,31 @@ impl SceneData {
             return Err(SceneDataError::NonFiniteUvTransform { value });
         }
         let finite = |v: f32, fallback: f32| if v.is_finite() { v } else { fallback };
+        // A transform other than the identity goes into the `textures` buffer, where the
+        // resolve reads it only for this material's pixels.
+        let uv_transform = if material.uv_transform == IDENTITY_UV {
+            0
+        } else {
+            if self.textures.is_empty() {
+                self.textures.extend(srgb_table());
+            }
+            check_limit(
+                "texture words (RGBA8 texels, mips included, and texture transforms)",
+                (self.textures.len() + layout::UV_TRANSFORM_WORDS) as u64,
+                self.limits.max_texture_words as u64,
+                "scale the textures down, or use a device with a larger storage binding",
+            )?;
+            let word = self.textures.len() as u32;
+            self.textures.extend(
+                material
+                    .uv_transform
+                    .as_flattened()
+                    .iter()
+                    .map(|v| v.to_bits()),
+            );
+            self.textures_version += 1;
+            word
+        };
         self.materials.push(layout::Material {
             base_color: [r, g, b, 1.0],
             emissive: [er, eg, eb, finite(material.normal_scale, 1.0)],
@@ -372,9 +397,8 @@ impl SceneData {
             } else {
                 0
             },
-            reserved: 0,
+            uv_transform,
             maps,
-            uv_transform: material.uv_transform.map(|[a, b, c]| [a, b, c, 0.0]),
         });
         self.materials_version += 1;
         Ok(self.materials.len() as u32 - 1)

@@ -99,9 +99,8 @@ fn rust_mirrors_match_the_wgsl_layouts() {
             occlusion_strength,
             alpha_cutoff,
             flags,
-            reserved,
-            maps,
             uv_transform,
+            maps,
         ]
     );
     assert_layout!(&module, "Cluster", Cluster, [instance, meshlet]);

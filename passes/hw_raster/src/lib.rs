@@ -171,6 +171,10 @@ pub struct HwRaster {
     pub feed: Feed,
     /// `run = "auto"`: skipped where the adapter class rasterises nothing in hardware.
     pub auto_skip: bool,
+    /// Draw the back faces of clusters whose material is double-sided (turned to face
+    /// the eye); off, the shaders read no material and every back face is culled
+    /// (`sw_raster`'s parameter of the same name, which a renderer sets alike).
+    pub two_sided: bool,
 }
 
 impl HwRaster {
@@ -181,6 +185,7 @@ impl HwRaster {
             height,
             feed: Feed::IndirectDraw,
             auto_skip: false,
+            two_sided: false,
         }
     }
 }
@@ -193,6 +198,8 @@ shader_defs! {
         pub mesh_shader: bool => "MESH_SHADER",
         /// The visibility buffer is an R64Uint storage texture.
         pub texture: bool => "VIS_TEXTURE",
+        /// See [`HwRaster::two_sided`].
+        pub two_sided: bool => "TWO_SIDED",
     }
 }
 
@@ -217,10 +224,11 @@ uniform_block! {
     }
 }
 
-const PARAM_KEYS: [&str; 3] = ["width", "height", "run"];
+const PARAM_KEYS: [&str; 4] = ["width", "height", "run", "two_sided"];
 
 impl HwRaster {
-    /// Reads `width` and `height` (required, > 0: the visibility buffer's size).
+    /// Reads `width` and `height` (required, > 0: the visibility buffer's size), `run`
+    /// and `two_sided` (default false).
     pub fn from_params(params: &Params, feed: Feed) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let [width, height] = params.size("the visibility buffer")?;
@@ -238,6 +246,7 @@ impl HwRaster {
             height,
             feed,
             auto_skip,
+            two_sided: params.bool("two_sided", false)?,
         })
     }
 }
@@ -275,6 +284,7 @@ impl Pass for HwRaster {
         let defs = RasterDefs {
             mesh_shader: mesh,
             texture,
+            two_sided: self.two_sided,
         };
         ctx.shader_defs(&defs);
         let table = InstanceTable::of(ctx);
@@ -397,10 +407,13 @@ mod tests {
             | Capabilities::TEXTURE_ATOMIC
             | Capabilities::TEXTURE_INT64_ATOMIC;
         for mesh_shader in [false, true] {
-            for on_texture in [false, true] {
+            for (on_texture, two_sided) in
+                [(false, false), (false, true), (true, false), (true, true)]
+            {
                 let defs = RasterDefs {
                     mesh_shader,
                     texture: on_texture,
+                    two_sided,
                 };
                 let mut caps = if on_texture { texture } else { int64 };
                 if mesh_shader {
@@ -413,6 +426,7 @@ mod tests {
         let defs = RasterDefs {
             mesh_shader: true,
             texture: false,
+            two_sided: false,
         };
         assert!(compose(defs, int64).is_err());
     }

@@ -58,8 +58,13 @@ fn clip_position(instance: Instance, mesh: Mesh, m: Meshlet, k: u32) -> vec4<f32
 // Whether meshlet `m` placed by `instance` is drawn with a double-sided material: its
 // back faces are turned to face the eye (two corners swapped), so the pipeline's
 // back-face culling keeps them.
+// Without TWO_SIDED (a scene with no such material) no material is read.
 fn double_sided(instance: Instance, m: Meshlet) -> bool {
+#ifdef TWO_SIDED
     return (materials[instance.material + meshlet_material(m)].flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
+#else
+    return false;
+#endif
 }
 
 // Whether clip-space corners (a, b, c) are a back face: counter-clockwise in NDC is front,

@@ -35,6 +35,8 @@ struct Frame {
     hw_count: u32,
     /// What the software pass left in the visibility buffer.
     initial: Vec<u64>,
+    /// The pass's `two_sided` (on unless a test turns it off).
+    two_sided: bool,
 }
 
 impl Frame {
@@ -103,6 +105,7 @@ fn frame(
         raster_clusters,
         hw_count,
         initial,
+        two_sided: true,
     }
 }
 
@@ -152,6 +155,7 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
             width: W,
             height: H,
             feed,
+            two_sided: frame.two_sided,
         },
         Bindings::new(),
     )?;
@@ -564,6 +568,13 @@ fn double_sided_materials_draw_their_back_faces_like_the_reference() {
         }
         assert!(covered > (W * H / 4) as usize, "{name}: {covered}");
         check(&name, &got, &want, covered * 99 / 100, depth_tolerance());
+        // Without the pass's `two_sided`, no material is read: culled like any.
+        f.two_sided = false;
+        assert!(
+            run(&mut f).iter().all(|&v| v == visbuffer::EMPTY),
+            "{name}: two_sided off drew back faces"
+        );
+        f.two_sided = true;
         check_ids(&f, &got);
         if let Some(mesh) = where_supported(
             run_fed(&mut f, Feed::MeshShader),

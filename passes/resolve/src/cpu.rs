@@ -14,7 +14,8 @@ use meshlight_scene::compress::{NORMAL_BITS, decode_octahedral, get_bits};
 use meshlight_shaders::cpu::layout::{
     Cluster, ClusterGrid, ClusterableKind, ClusterableObject, Instance, MAP_BASE_COLOR,
     MAP_EMISSIVE, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MATERIAL_FLAG_CHECKER,
-    MATERIAL_FLAG_DOUBLE_SIDED, MESH_FLAG_UVS, Material, Mesh, TextureRef, View,
+    MATERIAL_FLAG_DOUBLE_SIDED, MESH_FLAG_UVS, Material, Mesh, TextureRef, View, material_uv,
+    material_uv_step, uv_transform_at,
 };
 use meshlight_shaders::cpu::light::{cluster_index, z_slice_of_depth};
 use meshlight_shaders::cpu::visbuffer;
@@ -666,8 +667,7 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
         .get(instance.material as usize + m.material() as usize)
         .copied()
         .unwrap_or_default();
-    // The coordinates the maps are sampled at.
-    let uv = corners.map(|c| Vec2::from(material.uv(c.uv.to_array())));
+    let mut uv = corners.map(|c| c.uv);
     let weigh = |w: Vec3| uv[0] * w.x + uv[1] * w.y + uv[2] * w.z;
     let camera = Vec3::from_array(frame.view.camera_position);
     let mut s = PixelSurface {
@@ -687,6 +687,15 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
         uv_dx: weigh(bary.ddx),
         uv_dy: weigh(bary.ddy),
     };
+    if material.uv_transform != 0 {
+        // The coordinates the maps are sampled at, transformed after interpolation as
+        // shade.wgsl transforms them (a word past the buffer reads as zeros there).
+        let t = uv_transform_at(&scene.textures, material.uv_transform).unwrap_or_default();
+        s.uv = Vec2::from(material_uv(&t, s.uv.to_array()));
+        s.uv_dx = Vec2::from(material_uv_step(&t, s.uv_dx.to_array()));
+        s.uv_dy = Vec2::from(material_uv_step(&t, s.uv_dy.to_array()));
+        uv = uv.map(|c| Vec2::from(material_uv(&t, c.to_array())));
+    }
     let textures = &scene.textures;
     s.base =
         Vec4::from_array(material.base_color) * s.sample_map(textures, MAP_BASE_COLOR, Vec4::ONE);

@@ -273,9 +273,14 @@ fn piece_corners(poly: Polygon, k: u32) -> array<ScreenVertex, 3> {
 }
 
 // Whether meshlet `m` placed by `instance` is drawn with a double-sided material, whose
-// back faces are turned to face the eye rather than dropped.
+// back faces are turned to face the eye rather than dropped. Without TWO_SIDED (a scene
+// with no such material) no material is read and every back face is dropped.
 fn double_sided(instance: Instance, m: Meshlet) -> bool {
+#ifdef TWO_SIDED
     return (materials[instance.material + meshlet_material(m)].flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
+#else
+    return false;
+#endif
 }
 
 // `double_sided` of the cluster in raster slot `slot`.
@@ -298,18 +303,18 @@ fn triangle_setup(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex, slot: u32, 
     var hi = vec2(-1);
     // Front faces are counter-clockwise in NDC (y up), so counter-clockwise on the
     // y-down screen too; corners (0, 2, 1) make them clockwise there. A two-sided back
-    // face keeps (0, 1, 2), which is clockwise for it.
-    var p1 = c;
-    var p2 = b;
-    if two_sided && edge(a.xy, c.xy, b.xy) < 0li {
-        p1 = b;
-        p2 = c;
-    }
+    // face is turned back to (0, 1, 2), which is clockwise for it.
     tri.v0 = a.xy;
-    tri.v1 = p1.xy;
-    tri.v2 = p2.xy;
-    tri.z = vec3(a.z, p1.z, p2.z);
+    tri.v1 = c.xy;
+    tri.v2 = b.xy;
+    tri.z = vec3(a.z, c.z, b.z);
     tri.area = edge(tri.v0, tri.v1, tri.v2);
+    if two_sided && tri.area < 0li {
+        tri.v1 = b.xy;
+        tri.v2 = c.xy;
+        tri.z = vec3(a.z, b.z, c.z);
+        tri.area = -tri.area;
+    }
     let fa = f32(tri.area);
     tri.gradient = vec2(divide(tri.z.y - tri.z.x, fa), divide(tri.z.z - tri.z.x, fa));
     tri.bias = vec3(
@@ -376,6 +381,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     let instance = instance_at(cluster.instance);
     let m = meshlets[cluster.meshlet];
     let mesh = meshes[instance.mesh];
+    let two_sided = double_sided(instance, m);
     if t == 0u {
         atomicStore(&widest, 0u);
         atomicStore(&needs_clip, 0u);
@@ -390,7 +396,6 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     workgroupBarrier();
 
     var setup = Setup(Tri(), vec2(0), vec2(-1));
-    let two_sided = double_sided(instance, m);
     if t < meshlet_triangle_count(m) {
         let at = meshlet_triangle_location(m, mesh.flags, t);
         let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);

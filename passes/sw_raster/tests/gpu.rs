@@ -222,6 +222,7 @@ fn pass(scanline_width: u32) -> SwRaster {
         exact_division: true,
         accumulate: false,
         big_triangle_px: 0,
+        two_sided: false,
     }
 }
 
@@ -1021,15 +1022,22 @@ fn double_sided_materials_draw_their_back_faces_like_the_reference() {
         } else {
             assert_eq!(covered(&want), 0, "a one-sided square from behind");
         }
+        let drawing = SwRaster {
+            two_sided: true,
+            ..pass(SCANLINES)
+        };
         // Tiles only where there is something to tile (the run checks tiles were listed).
         let tiled = SwRaster {
             big_triangle_px: 8,
-            ..pass(SCANLINES)
+            ..drawing
         };
         let passes = if two_sided {
-            vec![pass(SCANLINES), tiled]
+            // Without the pass's `two_sided`, no material is read: culled like any.
+            let off = run(&mut scene, &input, &[behind], pass(SCANLINES)).unwrap();
+            assert_eq!(covered(&off[0]), 0, "two_sided off draws no back face");
+            vec![drawing, tiled]
         } else {
-            vec![pass(SCANLINES)]
+            vec![drawing]
         };
         for p in passes {
             let got = run(&mut scene, &input, &[behind], p).unwrap_or_else(|e| panic!("{e}"));
@@ -1048,8 +1056,11 @@ fn double_sided_materials_draw_their_back_faces_like_the_reference() {
         }
         let input = Input::every(clusters_of(&scene, 0, |l| l == 0), 7);
         let want: Vec<Vec<u64>> = views.iter().map(|v| input.reference(&scene, v)).collect();
-        let got =
-            run(&mut scene, &input, &views, pass(SCANLINES)).unwrap_or_else(|e| panic!("{e}"));
+        let drawing = SwRaster {
+            two_sided: true,
+            ..pass(SCANLINES)
+        };
+        let got = run(&mut scene, &input, &views, drawing).unwrap_or_else(|e| panic!("{e}"));
         for k in 0..views.len() {
             assert_identical(
                 &format!("knot, two-sided {two_sided}, view {k}"),

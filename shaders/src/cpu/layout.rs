@@ -117,27 +117,40 @@ pub struct Material {
     pub alpha_cutoff: f32,
     /// [`MATERIAL_FLAG_CHECKER`] and [`MATERIAL_FLAG_DOUBLE_SIDED`], or 0.
     pub flags: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// Where the texture transform the maps are sampled through lies in the scene's
+    /// `textures` buffer ([`uv_transform_at`]), or 0 for none (word 0 is the sRGB
+    /// table's, never a transform). Kept out of the record, which stays 96 bytes: the
+    /// resolve loads each pixel's material, and 32 bytes more there cost it 1%.
+    pub uv_transform: u32,
     /// The textures, by `MAP_*` index: each a [`TextureRef`]'s two words, `[0, 0]` for
     /// none.
     pub maps: [[u32; 2]; MAP_COUNT],
-    /// The texture coordinates every map is sampled at, from the mesh's: row `r` gives
-    /// coordinate `r` as `dot(row.xyz, (u, v, 1))` (w is zero). [`IDENTITY_UV_TRANSFORM`]
-    /// leaves them as they are.
-    pub uv_transform: [[f32; 4]; 2],
 }
 
-impl Material {
-    /// instance.wgsl's `material_uv`: `uv` through the material's texture transform.
-    pub fn uv(&self, uv: [f32; 2]) -> [f32; 2] {
-        self.uv_transform
-            .map(|r| r[0] * uv[0] + r[1] * uv[1] + r[2])
-    }
+/// A texture transform: row `r` gives coordinate `r` as `row · (u, v, 1)`.
+pub type UvTransform = [[f32; 3]; 2];
+
+/// Words a [`UvTransform`] takes in the `textures` buffer: its rows, as f32 bits.
+pub const UV_TRANSFORM_WORDS: usize = 6;
+
+/// The transform at word `word` of a `textures` buffer (`Material::uv_transform`), or
+/// `None` for 0 or a word past the buffer.
+pub fn uv_transform_at(textures: &[u32], word: u32) -> Option<UvTransform> {
+    let w = textures.get(word as usize..word as usize + UV_TRANSFORM_WORDS)?;
+    (word != 0)
+        .then(|| std::array::from_fn(|r| std::array::from_fn(|k| f32::from_bits(w[3 * r + k]))))
 }
 
-/// `Material::uv_transform` that samples at the mesh's own texture coordinates.
-pub const IDENTITY_UV_TRANSFORM: [[f32; 4]; 2] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]];
+/// instance.wgsl's `material_uv`: `uv` through the transform.
+pub fn material_uv(t: &UvTransform, uv: [f32; 2]) -> [f32; 2] {
+    t.map(|r| r[0] * uv[0] + r[1] * uv[1] + r[2])
+}
+
+/// instance.wgsl's `material_uv_step`: a change of uv through the transform's linear
+/// part (how the pixel's UV derivatives transform).
+pub fn material_uv_step(t: &UvTransform, d: [f32; 2]) -> [f32; 2] {
+    t.map(|r| r[0] * d[0] + r[1] * d[1])
+}
 
 /// `Material::flags`: the base colour is modulated by a checkerboard over the UVs.
 pub const MATERIAL_FLAG_CHECKER: u32 = 1;

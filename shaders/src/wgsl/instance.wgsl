@@ -37,19 +37,24 @@ struct Material {
     alpha_cutoff: f32,
     // MATERIAL_FLAG_CHECKER | MATERIAL_FLAG_DOUBLE_SIDED, or 0.
     flags: u32,
-    reserved: u32,
+    // The word of the `textures` buffer where the texture transform the maps are
+    // sampled through lies (six f32: rows (a, b, c), (d, e, f)), 0 for none.
+    uv_transform: u32,
     // The textures, by MAP_* index: (first texel word, shape), shape 0 for none
     // (`cpu::layout::TextureRef`).
     maps: array<vec2<u32>, 5>,
-    // The coordinates the maps are sampled at: row r gives coordinate r as
-    // dot(row.xyz, vec3(uv, 1.0)) (glTF's KHR_texture_transform; identity by default).
-    uv_transform: array<vec4<f32>, 2>,
 }
 
-// `uv` through `material`'s texture transform.
-fn material_uv(material: Material, uv: vec2<f32>) -> vec2<f32> {
+// `uv` through a texture transform of rows `r0` and `r1` (glTF's KHR_texture_transform):
+// coordinate k is dot(row k, vec3(uv, 1)).
+fn material_uv(r0: vec3<f32>, r1: vec3<f32>, uv: vec2<f32>) -> vec2<f32> {
     let h = vec3(uv, 1.0);
-    return vec2(dot(material.uv_transform[0].xyz, h), dot(material.uv_transform[1].xyz, h));
+    return vec2(dot(r0, h), dot(r1, h));
+}
+
+// A change `d` of uv through the transform's linear part (how UV derivatives transform).
+fn material_uv_step(r0: vec3<f32>, r1: vec3<f32>, d: vec2<f32>) -> vec2<f32> {
+    return vec2(dot(r0.xy, d), dot(r1.xy, d));
 }
 
 // `Material::flags`: the base colour is modulated by a checkerboard over the UVs.
