@@ -158,6 +158,11 @@ fn textured_scene(w: &mut GltfWriter, base: usize, normal: Option<usize>) {
         material["normalTexture"] = json!({"index": n, "scale": 0.5});
     }
     let m = w.material(material);
+    quad_scene(w, m);
+}
+
+/// `w`'s scene: one node placing the quad in material `m`.
+fn quad_scene(w: &mut GltfWriter, m: usize) {
     let mesh = w.mesh("quad", &[quad(m)]);
     let node = w.node(Node {
         mesh: Some(mesh),
@@ -302,12 +307,7 @@ fn scene_with_material(name: &str, material: serde_json::Value) -> Result<GltfSc
     w.texture(png, None);
     w.texture(png, None);
     let m = w.material(material);
-    let mesh = w.mesh("quad", &[quad(m)]);
-    let node = w.node(Node {
-        mesh: Some(mesh),
-        ..Node::default()
-    });
-    w.scene(&[node]);
+    quad_scene(&mut w, m);
     let path = common::scratch(&format!("gltf-transform-{name}")).join("t.glb");
     std::fs::write(&path, w.glb()).unwrap();
     load_gltf_scene(&path)

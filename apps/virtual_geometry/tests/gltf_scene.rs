@@ -10,6 +10,7 @@ use meshlight::scene::cache;
 use meshlight::scene::load::load_gltf_scene;
 use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive, json};
 use meshlight_virtual_geometry::gltf_scene::{GltfSceneError, file_camera, gltf_scene, place};
+use meshlight_virtual_geometry::scenes::Placed;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer};
 use std::path::{Path, PathBuf};
 
@@ -364,6 +365,20 @@ fn meshes_take_a_run_of_their_primitives_materials() {
 /// A strip of five unit quads, each a primitive of its own material, in one mesh: one
 /// asset, and the `material` view shows each quad in the colour of its own material
 /// (the instance's first material plus the quad's slot).
+/// `w`'s scene of one mesh `name` of `primitives` on one node, written as a GLB and
+/// placed in a new scene.
+fn one_mesh_scene(mut w: GltfWriter, name: &str, primitives: &[Primitive]) -> Placed {
+    let mesh = w.mesh(name, primitives);
+    let node = w.node(Node {
+        mesh: Some(mesh),
+        ..Node::default()
+    });
+    w.scene(&[node]);
+    let path = scratch(name).join(format!("{name}.glb"));
+    std::fs::write(&path, w.glb()).unwrap();
+    gltf_scene(SceneData::new(Limits::default()), &path, None).unwrap()
+}
+
 #[test]
 fn the_material_view_shows_each_primitive_in_its_own_material() {
     let mut w = GltfWriter::new();
@@ -386,15 +401,7 @@ fn the_material_view_shows_each_primitive_in_its_own_material() {
             }
         })
         .collect();
-    let strip = w.mesh("strip", &primitives);
-    let node = w.node(Node {
-        mesh: Some(strip),
-        ..Node::default()
-    });
-    w.scene(&[node]);
-    let path = scratch("material-view").join("strip.glb");
-    std::fs::write(&path, w.glb()).unwrap();
-    let placed = gltf_scene(SceneData::new(Limits::default()), &path, None).unwrap();
+    let placed = one_mesh_scene(w, "strip", &primitives);
     assert_eq!(
         placed.data.meshes.len(),
         1,
@@ -456,15 +463,7 @@ fn a_double_sided_material_is_drawn_from_behind_with_its_normal_reversed() {
     };
     let two_sided = quad(&mut w, -2.0, true);
     let one_sided = quad(&mut w, 0.5, false);
-    let mesh = w.mesh("quads", &[two_sided, one_sided]);
-    let node = w.node(Node {
-        mesh: Some(mesh),
-        ..Node::default()
-    });
-    w.scene(&[node]);
-    let path = scratch("double-sided").join("quads.glb");
-    std::fs::write(&path, w.glb()).unwrap();
-    let placed = gltf_scene(SceneData::new(Limits::default()), &path, None).unwrap();
+    let placed = one_mesh_scene(w, "quads", &[two_sided, one_sided]);
     let mut settings = FrameSettings::new(W, H);
     settings.view = Some(meshlight::resolve::DebugView::Normal);
     let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)

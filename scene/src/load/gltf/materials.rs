@@ -3,8 +3,6 @@
 //! textures, so nothing a renderer reads later can index out of range or shade NaN.
 
 use gltf::json::Value;
-use gltf::json::extensions::material::{NormalTexture, OcclusionTexture};
-use gltf::json::extensions::texture::Info;
 use gltf::json::material::AlphaMode as JsonAlphaMode;
 use gltf::json::validation::Checked;
 
@@ -134,6 +132,16 @@ impl Default for SceneMaterial {
     }
 }
 
+/// A texture reference's `KHR_texture_transform` object, whichever kind of reference (the
+/// core, normal and occlusion ones are three types with the same `extensions`).
+macro_rules! transform_of {
+    ($t:expr) => {
+        $t.extensions
+            .as_ref()
+            .and_then(|e| e.others.get("KHR_texture_transform"))
+    };
+}
+
 /// Every material of the file, checked.
 pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, SceneError> {
     let root = file.root();
@@ -219,7 +227,7 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
                         texture(
                             t.index.value(),
                             t.tex_coord,
-                            transform_of(&t.extensions),
+                            transform_of!(t),
                             "base colour texture",
                         )
                     })
@@ -233,7 +241,7 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
                         texture(
                             t.index.value(),
                             t.tex_coord,
-                            transform_of(&t.extensions),
+                            transform_of!(t),
                             "metallic-roughness texture",
                         )
                     })
@@ -245,7 +253,7 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
                         texture(
                             t.index.value(),
                             t.tex_coord,
-                            normal_transform_of(&t.extensions),
+                            transform_of!(t),
                             "normal texture",
                         )
                     })
@@ -258,7 +266,7 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
                         texture(
                             t.index.value(),
                             t.tex_coord,
-                            occlusion_transform_of(&t.extensions),
+                            transform_of!(t),
                             "occlusion texture",
                         )
                     })
@@ -275,7 +283,7 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
                         texture(
                             t.index.value(),
                             t.tex_coord,
-                            transform_of(&t.extensions),
+                            transform_of!(t),
                             "emissive texture",
                         )
                     })
@@ -285,20 +293,6 @@ pub(super) fn read_materials(file: &GltfFile) -> Result<Vec<SceneMaterial>, Scen
             })
         })
         .collect()
-}
-
-const TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
-
-fn transform_of(extensions: &Option<Info>) -> Option<&Value> {
-    extensions.as_ref()?.others.get(TEXTURE_TRANSFORM)
-}
-
-fn normal_transform_of(extensions: &Option<NormalTexture>) -> Option<&Value> {
-    extensions.as_ref()?.others.get(TEXTURE_TRANSFORM)
-}
-
-fn occlusion_transform_of(extensions: &Option<OcclusionTexture>) -> Option<&Value> {
-    extensions.as_ref()?.others.get(TEXTURE_TRANSFORM)
 }
 
 /// A `KHR_texture_transform` object as one affine map, with the `texCoord` it overrides
