@@ -117,15 +117,21 @@ fn raster_vs(@builtin(vertex_index) v: u32, @builtin(instance_index) j: u32) -> 
     let instance = instance_at(cluster.instance);
     let mesh = meshes[instance.mesh];
     let at = meshlet_triangle_location(m, mesh.flags, t);
-    var corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
+    let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
     if double_sided(instance, m) {
-        // Every corner's invocation decides alike, from the same three positions.
-        let a = clip_position(instance, mesh, m, corners.x);
-        let b = clip_position(instance, mesh, m, corners.y);
-        let c = clip_position(instance, mesh, m, corners.z);
-        if back_facing(a, b, c) {
-            corners = corners.xzy;
+        // Every corner's invocation decides alike, from the same three positions, and
+        // takes its own from them (corners 1 and 2 swapped for a back face).
+        let p = array(
+            clip_position(instance, mesh, m, corners.x),
+            clip_position(instance, mesh, m, corners.y),
+            clip_position(instance, mesh, m, corners.z),
+        );
+        var k = v % 3u;
+        if back_facing(p[0], p[1], p[2]) && k != 0u {
+            k = 3u - k;
         }
+        out.position = p[k];
+        return out;
     }
     out.position = clip_position(instance, mesh, m, corners[v % 3u]);
     return out;
