@@ -34,11 +34,11 @@ fn virtual_geometry_shaders_compose_and_validate() {
     ] {
         check(shader, &());
     }
-    for (exact_division, slot_base, big_triangles, two_sided) in [
-        (false, false, false, false),
-        (true, false, true, true),
-        (false, true, true, false),
-        (false, false, false, true),
+    for (exact_division, slot_base, big_triangles, two_sided, alpha_mask) in [
+        (false, false, false, false, false),
+        (true, false, true, true, true),
+        (false, true, true, false, true),
+        (false, false, false, true, false),
     ] {
         check(
             &meshlight::sw_raster::SHADER,
@@ -48,6 +48,7 @@ fn virtual_geometry_shaders_compose_and_validate() {
                 slot_base,
                 big_triangles,
                 two_sided,
+                alpha_mask,
             },
         );
     }

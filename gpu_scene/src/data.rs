@@ -54,6 +54,13 @@ pub struct Material {
     /// Whether back faces are drawn too, lit with the normal reversed (glTF's
     /// `doubleSided`). Otherwise both rasterisers drop them, as they do by default.
     pub double_sided: bool,
+    /// The base colour's alpha factor (glTF's `baseColorFactor[3]`), 0 to 1: with the
+    /// base colour texture's alpha, what a MASK material is cut by.
+    pub alpha: f32,
+    /// glTF's `alphaMode` MASK: where the base colour's alpha (factor × texture) is
+    /// below this cutoff, both rasterisers leave the pixel undrawn and what lies behind
+    /// shows through. `None`: opaque.
+    pub alpha_cutoff: Option<f32>,
 }
 
 /// [`Material::uv_transform`] that samples at the mesh's own texture coordinates.
@@ -73,6 +80,8 @@ impl Default for Material {
             occlusion_strength: 1.0,
             uv_transform: IDENTITY_UV,
             double_sided: false,
+            alpha: 1.0,
+            alpha_cutoff: None,
         }
     }
 }
@@ -355,6 +364,9 @@ impl SceneData {
         {
             return Err(SceneDataError::NonFiniteUvTransform { value });
         }
+        if let Some(value) = material.alpha_cutoff.filter(|v| !v.is_finite()) {
+            return Err(SceneDataError::NonFiniteAlphaCutoff { value });
+        }
         let finite = |v: f32, fallback: f32| if v.is_finite() { v } else { fallback };
         // A transform other than the identity goes into the `textures` buffer, where the
         // resolve reads it only for this material's pixels.
@@ -382,18 +394,22 @@ impl SceneData {
             word
         };
         self.materials.push(layout::Material {
-            base_color: [r, g, b, 1.0],
+            base_color: [r, g, b, finite(material.alpha, 1.0).clamp(0.0, 1.0)],
             emissive: [er, eg, eb, finite(material.normal_scale, 1.0)],
             metallic: material.metallic.clamp(0.0, 1.0),
             roughness: material.roughness.clamp(0.0, 1.0),
             occlusion_strength: material.occlusion_strength.clamp(0.0, 1.0),
-            alpha_cutoff: 0.0,
+            alpha_cutoff: material.alpha_cutoff.unwrap_or(0.0),
             flags: if material.checker {
                 layout::MATERIAL_FLAG_CHECKER
             } else {
                 0
             } | if material.double_sided {
                 layout::MATERIAL_FLAG_DOUBLE_SIDED
+            } else {
+                0
+            } | if material.alpha_cutoff.is_some() {
+                layout::MATERIAL_FLAG_MASK
             } else {
                 0
             },

@@ -54,6 +54,15 @@ pub enum SceneDataError {
         /// The first value that is not finite.
         value: f32,
     },
+    /// A MASK material whose cutoff is not a finite number.
+    #[error(
+        "a material's alpha_cutoff is {value}; give a finite cutoff (glTF's default is 0.5), \
+         or None for an opaque material"
+    )]
+    NonFiniteAlphaCutoff {
+        /// The cutoff given.
+        value: f32,
+    },
     /// A texture that is not a square power-of-two mip chain.
     #[error(
         "a texture of side {size} is not a square power-of-two mip chain of at most 4096 \

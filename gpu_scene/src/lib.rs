@@ -38,6 +38,8 @@ pub mod instance_table;
 pub mod lattice;
 pub mod phase;
 pub mod scene_slots;
+pub mod surface;
+pub mod texture;
 pub mod view;
 
 pub use data::{IDENTITY_UV, InstanceId, Material, MeshId, SceneData, TextureId};

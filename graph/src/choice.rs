@@ -151,19 +151,33 @@ pub(crate) fn resolve(
         };
         candidates.sort_by_key(|c| rank(c.as_ref()));
     }
+    // A candidate whose setup refuses the parameters does not run; `auto` passes over it
+    // (a parameter one implementation does not support yet), a named one reports it.
     let mut judged = Vec::with_capacity(candidates.len());
-    for c in &candidates {
-        judged.push(missing(c.as_ref())?);
+    let mut refusals = Vec::with_capacity(candidates.len());
+    for (k, c) in candidates.iter().enumerate() {
+        match missing(c.as_ref()) {
+            Ok(m) => {
+                judged.push(m);
+                refusals.push(None);
+            }
+            Err(e) if k == 0 && selection != Selection::Auto => return Err(e),
+            Err(e) => {
+                judged.push(wgpu::Features::empty());
+                refusals.push(Some(e.to_string()));
+            }
+        }
     }
     let plans: Vec<CandidatePlan> = candidates
         .iter()
-        .zip(&judged)
-        .map(|(c, m)| CandidatePlan {
+        .zip(judged.iter().zip(&refusals))
+        .map(|(c, (m, refused))| CandidatePlan {
             implementation: c.implementation().name,
             missing: m.iter_names().map(|(n, _)| n.to_string()).collect(),
+            refused: refused.clone(),
         })
         .collect();
-    let runnable = judged.iter().position(|m| m.is_empty());
+    let runnable = (0..judged.len()).position(|k| judged[k].is_empty() && refusals[k].is_none());
     let stage = candidates[0].implementation().contract.stage.to_string();
     let order = plans
         .iter()
@@ -187,6 +201,17 @@ pub(crate) fn resolve(
                 },
             });
         }
+        (Selection::Auto, None) if judged.iter().all(|m| m.is_empty()) => {
+            // Every candidate refused the parameters: the first one's reason.
+            return Err(GraphError::parameter(format!(
+                "pass `{pass_name}`: no implementation of stage `{stage}` accepts its parameters: {}",
+                plans
+                    .iter()
+                    .filter_map(|p| p.refused.as_deref())
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            )));
+        }
         (Selection::Auto, None) => {
             return Err(GraphError::MissingFeature {
                 pass: pass_name.to_string(),
@@ -209,7 +234,14 @@ pub(crate) fn resolve(
         Selection::Auto => {
             let skipped: Vec<String> = plans[..chosen]
                 .iter()
-                .map(|p| format!("`{}` needs {}", p.implementation, p.missing.join(", ")))
+                .map(|p| match &p.refused {
+                    Some(why) => format!("`{}` refuses its parameters ({why})", p.implementation),
+                    None => format!(
+                        "`{}` needs {}, which the adapter lacks",
+                        p.implementation,
+                        p.missing.join(", ")
+                    ),
+                })
                 .collect();
             if skipped.is_empty() {
                 format!(
@@ -217,7 +249,7 @@ pub(crate) fn resolve(
                 )
             } else {
                 format!(
-                    "{on_class}{}, which the adapter lacks; `{name}` is the next of {order}",
+                    "{on_class}{}; `{name}` is the next of {order}",
                     skipped.join("; ")
                 )
             }

@@ -343,6 +343,9 @@ pub struct CandidatePlan {
     pub implementation: &'static str,
     /// Features its setup asked for that the adapter lacks (empty: it runs here).
     pub missing: Vec<String>,
+    /// Why its setup refused the pass's parameters, where it did (it does not run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refused: Option<String>,
 }
 
 /// What compile decided for a pass with several candidates, for dumps and `info`.

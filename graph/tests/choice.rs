@@ -153,6 +153,61 @@ fn auto_falls_back_to_the_buffer_and_the_dumps_say_why() {
     }
 }
 
+/// A rasteriser whose setup refuses its parameters (as an implementation refuses one it
+/// does not support yet).
+struct Refusing;
+
+impl Pass for Refusing {
+    fn implementation(&self) -> Implementation {
+        Raster {
+            name: "refusing",
+            form: Visibility64::Buffer,
+        }
+        .implementation()
+    }
+    fn setup(&self, _: &mut SetupContext) -> Result<()> {
+        Err(GraphError::parameter(
+            "`cut` is not available here yet".to_string(),
+        ))
+    }
+    fn record(&self, _: &mut RecordContext<'_>) -> Result<()> {
+        Ok(())
+    }
+    fn visibility64(&self) -> Option<Visibility64> {
+        Some(Visibility64::Buffer)
+    }
+}
+
+#[test]
+fn auto_passes_over_a_candidate_that_refuses_its_parameters_and_says_why() {
+    let c = frame(Choice::auto(vec![Box::new(Refusing), buffer()]))
+        .compile(&CompileOptions::new(ATOMICS))
+        .unwrap();
+    let raster = &c.plan.passes[0];
+    assert_eq!(raster.implementation, "buffer");
+    let reason = raster.choice_reason().unwrap();
+    assert!(
+        reason.contains("`refusing` refuses its parameters") && reason.contains("`cut`"),
+        "{reason}"
+    );
+    // Named, its refusal is the error; with nothing accepting them, so is auto's.
+    let named = frame(Choice::named(Box::new(Refusing), vec![buffer()]))
+        .compile(&CompileOptions::new(ATOMICS))
+        .err()
+        .expect("a named candidate's refusal is an error")
+        .to_string();
+    assert!(named.contains("`cut` is not available"), "{named}");
+    let none = frame(Choice::auto(vec![Box::new(Refusing)]))
+        .compile(&CompileOptions::new(ATOMICS))
+        .err()
+        .expect("auto with every candidate refusing is an error")
+        .to_string();
+    assert!(
+        none.contains("no implementation of stage `raster` accepts") && none.contains("`cut`"),
+        "{none}"
+    );
+}
+
 #[test]
 fn a_named_implementation_the_adapter_lacks_names_the_one_that_would_run() {
     let err = frame(Choice::named(texture(), vec![buffer()]))

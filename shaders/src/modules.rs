@@ -29,7 +29,7 @@ macro_rules! shared {
     };
 }
 
-static SHARED_MODULES: [SharedModule; 14] = [
+static SHARED_MODULES: [SharedModule; 16] = [
     shared!("meshlight::math", "math.wgsl"),
     shared!("meshlight::dispatch", "dispatch.wgsl"),
     shared!("meshlight::view", "view.wgsl"),
@@ -39,6 +39,8 @@ static SHARED_MODULES: [SharedModule; 14] = [
     shared!("meshlight::instance_table", "instance_table.wgsl"),
     shared!("meshlight::scene_buffers", "scene_buffers.wgsl"),
     shared!("meshlight::cluster_triangle", "cluster_triangle.wgsl"),
+    shared!("meshlight::texture", "texture.wgsl"),
+    shared!("meshlight::surface", "surface.wgsl"),
     shared!("meshlight::occlusion", "occlusion.wgsl"),
     shared!("meshlight::visbuffer", "visbuffer.wgsl"),
     shared!(

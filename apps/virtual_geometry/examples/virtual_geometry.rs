@@ -84,6 +84,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         accumulate: false,
         big_triangle_px: meshlight::sw_raster::BIG_TRIANGLE_PX,
         two_sided: false,
+        alpha_mask: false,
     };
     g.add_pass("sw_raster", sw, Bindings::new())?;
     g.add_pass(

@@ -189,7 +189,7 @@ pub fn apply(
     hardware(p, registry, s.hardware.or(s.sw_threshold_px.map(|_| true)))?;
     sizes(p, data, s)?;
     instance_table(p, data)?;
-    two_sided(p, data);
+    material_variants(p, data);
     thresholds(p, s);
     if let Some(view) = s.view {
         p.set_stage_param(meshlight::resolve::STAGE, "view", view.name());
@@ -350,19 +350,40 @@ fn instance_table(p: &mut Pipeline, data: &SceneData) -> Result<()> {
     p.add_resource(entry)
 }
 
-/// Both rasterisers draw double-sided materials' back faces (`two_sided`) only when the
+/// Both rasterisers act on double-sided materials (`two_sided`: back faces drawn) and
+/// MASK materials (`alpha_mask`: texels below the cutoff left undrawn) only when the
 /// scene has such a material: the material lookup and the turn cost the software
 /// rasteriser about 2% on an H200, which a scene without one should not pay. A
 /// renderer's scene keeps its materials, so the choice holds for the frame's life.
-fn two_sided(p: &mut Pipeline, data: &SceneData) {
-    use meshlight::shaders::cpu::layout::MATERIAL_FLAG_DOUBLE_SIDED;
-    if data
-        .materials
-        .iter()
-        .any(|m| m.flags & MATERIAL_FLAG_DOUBLE_SIDED != 0)
-    {
-        for stage in [meshlight::sw_raster::STAGE, meshlight::hw_raster::STAGE] {
-            p.set_stage_param(stage, "two_sided", true);
+/// The hardware rasteriser's `mesh_shader` implementation cannot cut out texels yet: it
+/// refuses `alpha_mask`, so `auto` passes over it, and a pipeline that names it draws
+/// such a scene with `indirect_draw` instead, with a warning.
+fn material_variants(p: &mut Pipeline, data: &SceneData) {
+    use meshlight::hw_raster::Feed;
+    use meshlight::shaders::cpu::layout::{MATERIAL_FLAG_DOUBLE_SIDED, MATERIAL_FLAG_MASK};
+    let has = |flag: u32| data.materials.iter().any(|m| m.flags & flag != 0);
+    for (flag, param) in [
+        (MATERIAL_FLAG_DOUBLE_SIDED, "two_sided"),
+        (MATERIAL_FLAG_MASK, "alpha_mask"),
+    ] {
+        if has(flag) {
+            for stage in [meshlight::sw_raster::STAGE, meshlight::hw_raster::STAGE] {
+                p.set_stage_param(stage, param, true);
+            }
+        }
+    }
+    if !has(MATERIAL_FLAG_MASK) {
+        return;
+    }
+    let mesh_shader = Feed::MeshShader.implementation();
+    for pass in p.passes.iter_mut() {
+        if pass.stage == meshlight::hw_raster::STAGE && pass.implementation == mesh_shader {
+            log::warn!(
+                "pass `{}`: the scene has MASK materials, which the `{mesh_shader}` hardware \
+                 rasteriser cannot cut out yet; drawing it with `indirect_draw` instead",
+                pass.name
+            );
+            pass.implementation = Feed::IndirectDraw.implementation().to_string();
         }
     }
 }

@@ -159,7 +159,7 @@ fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Result<Vec<u32>, S
     let mut textures = SceneTextures::default();
     let mut runs: BTreeMap<&[u32], u32> = BTreeMap::new();
     let mut firsts = Vec::with_capacity(scene.meshes.len());
-    let mut masked = BTreeSet::new();
+    let mut blended = BTreeSet::new();
     let mut mixed_transforms = BTreeSet::new();
     for m in &scene.meshes {
         if let Some(&first) = runs.get(m.materials.as_slice()) {
@@ -170,10 +170,15 @@ fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Result<Vec<u32>, S
         for &slot in &m.materials {
             let default = SceneMaterial::default();
             let source = scene.materials.get(slot as usize).unwrap_or(&default);
-            if !matches!(source.alpha, AlphaMode::Opaque) {
-                masked.insert(source.name.clone());
-            }
-            let [r, g, b, _] = source.base_color;
+            let alpha_cutoff = match source.alpha {
+                AlphaMode::Opaque => None,
+                AlphaMode::Mask { cutoff } => Some(cutoff),
+                AlphaMode::Blend => {
+                    blended.insert(source.name.clone());
+                    None
+                }
+            };
+            let [r, g, b, alpha] = source.base_color;
             let mut maps = [None; MAP_COUNT];
             for (map, texture, srgb) in [
                 (MAP_BASE_COLOR, source.base_color_texture, true),
@@ -205,6 +210,8 @@ fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Result<Vec<u32>, S
                 occlusion_strength: source.occlusion_strength,
                 uv_transform,
                 double_sided: source.double_sided,
+                alpha,
+                alpha_cutoff,
             })?;
         }
         runs.insert(&m.materials, first);
@@ -219,12 +226,12 @@ fn mesh_materials(data: &mut SceneData, scene: &GltfScene) -> Result<Vec<u32>, S
             mixed_transforms.into_iter().collect::<Vec<_>>().join(", ")
         );
     }
-    if !masked.is_empty() {
+    if !blended.is_empty() {
         log::warn!(
-            "{}: material(s) {} use alpha (MASK or BLEND); meshlight draws them opaque, \
-             cut-out texels included",
+            "{}: material(s) {} blend (alphaMode BLEND); meshlight draws them opaque (a \
+             visibility buffer keeps one surface a pixel); MASK materials are cut out",
             scene.source,
-            masked.into_iter().collect::<Vec<_>>().join(", ")
+            blended.into_iter().collect::<Vec<_>>().join(", ")
         );
     }
     Ok(firsts)

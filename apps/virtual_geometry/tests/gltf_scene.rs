@@ -8,7 +8,7 @@ use meshlight::gpu_scene::{Material, MeshId, SceneData};
 use meshlight::scene::BuildOptions;
 use meshlight::scene::cache;
 use meshlight::scene::load::load_gltf_scene;
-use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive, json};
+use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive, json, png_bytes};
 use meshlight_virtual_geometry::gltf_scene::{GltfSceneError, file_camera, gltf_scene, place};
 use meshlight_virtual_geometry::scenes::Placed;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer};
@@ -362,9 +362,6 @@ fn meshes_take_a_run_of_their_primitives_materials() {
     assert_eq!(cube_triangles, 12);
 }
 
-/// A strip of five unit quads, each a primitive of its own material, in one mesh: one
-/// asset, and the `material` view shows each quad in the colour of its own material
-/// (the instance's first material plus the quad's slot).
 /// `w`'s scene of one mesh `name` of `primitives` on one node, written as a GLB and
 /// placed in a new scene.
 fn one_mesh_scene(mut w: GltfWriter, name: &str, primitives: &[Primitive]) -> Placed {
@@ -379,6 +376,9 @@ fn one_mesh_scene(mut w: GltfWriter, name: &str, primitives: &[Primitive]) -> Pl
     gltf_scene(SceneData::new(Limits::default()), &path, None).unwrap()
 }
 
+/// A strip of five unit quads, each a primitive of its own material, in one mesh: one
+/// asset, and the `material` view shows each quad in the colour of its own material
+/// (the instance's first material plus the quad's slot).
 #[test]
 fn the_material_view_shows_each_primitive_in_its_own_material() {
     let mut w = GltfWriter::new();
@@ -501,4 +501,96 @@ fn a_double_sided_material_is_drawn_from_behind_with_its_normal_reversed() {
             assert_ne!(one, gap);
         }
     }
+}
+
+/// glTF's `alphaMode` MASK, drawn through the shipped frame: before an opaque quad, a
+/// MASK quad whose base colour texture is opaque on its left and clear on its right
+/// (clamped, so alpha falls from 1 to 0 across the middle) is cut where the alpha is
+/// below the cutoff, and a MASK quad whose factor's alpha is under the cutoff is cut
+/// whole: the `material` view shows the quad behind there. A BLEND quad is drawn opaque.
+#[test]
+fn a_mask_material_is_cut_out_where_its_alpha_is_below_the_cutoff() {
+    let mut w = GltfWriter::new();
+    let png = png_bytes(2, 1, &[255, 255, 255, 255, 255, 255, 255, 0]);
+    let image = w.image_bytes(&png, "image/png");
+    let clamp = json!({"wrapS": 33071, "wrapT": 33071});
+    let half_clear = w.texture(image, Some(clamp));
+    let quad = |w: &mut GltfWriter, x0: f32, z: f32, width: f32, material| {
+        let material = w.material(material);
+        Primitive {
+            positions: vec![
+                [x0, -0.75, z],
+                [x0 + width, -0.75, z],
+                [x0 + width, 0.75, z],
+                [x0, 0.75, z],
+            ],
+            normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
+            uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material: Some(material),
+        }
+    };
+    let textured = quad(
+        &mut w,
+        -2.0,
+        0.0,
+        1.5,
+        json!({"alphaMode": "MASK", "alphaCutoff": 0.5,
+               "pbrMetallicRoughness": {"baseColorTexture": {"index": half_clear}}}),
+    );
+    let faint = quad(
+        &mut w,
+        0.25,
+        0.0,
+        0.75,
+        json!({"alphaMode": "MASK", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.3]}}),
+    );
+    let blend = quad(
+        &mut w,
+        1.25,
+        0.0,
+        0.75,
+        json!({"alphaMode": "BLEND", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 0.3]}}),
+    );
+    let behind = quad(&mut w, -2.5, -0.5, 5.0, json!({}));
+    let placed = one_mesh_scene(w, "cut-outs", &[textured, faint, blend, behind]);
+    let mut settings = FrameSettings::new(W, H);
+    settings.view = Some(meshlight::resolve::DebugView::Material);
+    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let camera =
+        meshlight::gpu_scene::Camera::perspective(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 1.0, 0.1);
+    let image = r
+        .render_still(&camera)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .rgba;
+    let view_projection = camera.projection_matrix([W, H]) * camera.view_matrix();
+    let pixel = |x: f32| {
+        let clip = view_projection * glam::Vec4::new(x, 0.0, 0.0, 1.0);
+        let ndc = clip.truncate() / clip.w;
+        let px = ((ndc.x + 1.0) * 0.5 * W as f32) as usize;
+        let py = ((1.0 - ndc.y) * 0.5 * H as f32) as usize;
+        let at = (py * W as usize + px) * 4;
+        [image[at], image[at + 1], image[at + 2]]
+    };
+    // Between the quads only the one behind is drawn.
+    let back = pixel(0.0);
+    let colors = |slot: u32| {
+        let first = placed.data.instances[0].material;
+        meshlight::resolve::cpu::id_color(first + slot)
+    };
+    assert_eq!(back, colors(3), "the quad behind");
+    // The textured quad: u = 0.2 opaque, u = 0.8 clear.
+    assert_eq!(
+        pixel(-2.0 + 1.5 * 0.2),
+        colors(0),
+        "opaque texels are drawn"
+    );
+    assert_eq!(pixel(-2.0 + 1.5 * 0.8), back, "clear texels are cut out");
+    assert_eq!(
+        pixel(0.25 + 0.375),
+        back,
+        "a factor below the cutoff cuts the quad whole"
+    );
+    assert_eq!(pixel(1.25 + 0.375), colors(2), "BLEND is drawn opaque");
 }

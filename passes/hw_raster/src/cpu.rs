@@ -4,8 +4,8 @@
 //! edge functions in f64 at the exact pixel centres. It tells coverage and ids apart
 //! from the hardware's sub-pixel rounding, which the GPU test bounds.
 
-use glam::{Mat4, Vec3, Vec4};
-use meshlight_gpu_scene::SceneData;
+use glam::{Mat4, Vec2, Vec3, Vec4};
+use meshlight_gpu_scene::{SceneData, surface};
 use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout};
 use meshlight_scene::asset::triangles;
 use meshlight_scene::compress::get_bits;
@@ -121,7 +121,8 @@ pub fn cover_triangle(
 /// left, row-major `width` × `height`) with the clusters of [`hardware_slots`]`(capacity,
 /// hw_count)` of `raster_clusters` (capacity = its length) drawn over it by atomicMax,
 /// each with its slot as visibility id; back faces are dropped unless the cluster's
-/// material is double-sided. Triangles with a corner at or behind the camera
+/// material is double-sided, and pixels a MASK material cuts out
+/// ([`surface::cut_out`], the pass's `alpha_mask`) are left as they were. Triangles with a corner at or behind the camera
 /// plane (w <= 0), which the hardware clips, are left out: scenes given to this
 /// reference lie in front of the near plane. Clusters naming a missing instance,
 /// meshlet or mesh draw nothing.
@@ -181,6 +182,18 @@ pub fn rasterize(
             let turned = two_sided && edge(a.0, b.0, c.0) > 0.0;
             let corners = if turned { [a, c, b] } else { [a, b, c] };
             cover_triangle(corners, width, height, |x, y, depth| {
+                let pixel = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let viewport = Vec2::new(width as f32, height as f32);
+                if surface::cut_out(
+                    scene,
+                    &view.view_projection,
+                    viewport,
+                    &cluster,
+                    t as u32,
+                    pixel,
+                ) {
+                    return;
+                }
                 let px = &mut out[(y * width + x) as usize];
                 *px = (*px).max(visbuffer::pack(depth, slot, t as u32));
             });

@@ -31,7 +31,7 @@
 //! | `raster_clusters` | storage read | Cluster | hardware clusters in slots `C - hw_count .. C` |
 //! | `raster_counts` | storage read | u32 | word 1: hardware clusters, word 3: `C`, the slot capacity |
 //! | `hw_args` | indirect | DrawIndirectArgs | `[384, hw_count, 0, 0]` from `cull_lod` |
-//! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
+//! | `instances`, `meshes`, `meshlets`, `payload`, `materials`, `textures` | storage read | scene | the GPU scene (materials with `two_sided` or `alpha_mask`, textures with `alpha_mask`) |
 //! | `instances_high` | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
 //! | `visbuffer` | storage read-write | u64 / r64uint | `width × height`, row-major buffer or texture; atomicMax onto what `sw_raster` left |
 //!
@@ -39,6 +39,7 @@
 //! |----------|------------|---|
 //! | `width`, `height` | required | the visibility buffer's size |
 //! | `run`    | `"always"` | `"auto"`: skipped (kept in the plan, recording nothing) where the adapter class rasterises nothing in hardware (`AdapterClass::hardware_raster`), the rule `cull_lod`'s `hardware = "auto"` follows, so culling then sends it nothing |
+//! | `two_sided`, `alpha_mask` | false | act on double-sided and MASK materials (below); off, no material is read |
 //!
 //! Frame input `view` (`meshlight_shaders::cpu::layout::View`): its `viewport_size` must
 //! equal the params `width` × `height` (a record error names both otherwise).
@@ -61,6 +62,12 @@
 //!   pixels whose centre lies within rounding of an edge and in the last bits of depth;
 //!   the GPU test states the tolerance. Both clip triangles at the near plane: the
 //!   hardware in fixed function, the software rasteriser in clip space.
+//! - Materials (params `two_sided`, `alpha_mask`; `sw_raster`'s, set alike): a
+//!   double-sided material's back faces are turned to face the eye; a MASK material's
+//!   fragments whose base colour alpha at the pixel centre is below the cutoff
+//!   (`meshlight::surface`'s `cut_out`, the software rasteriser's test) write nothing.
+//!   `mesh_shader` refuses `alpha_mask` (naga_oil 0.23 cannot compose its mesh entry
+//!   point with the sampler); a renderer draws such scenes with `indirect_draw`.
 //! - The two implementations feed the rasteriser the same triangles in the same
 //!   positions; they may differ only where the hardware orders equal-depth writes.
 //! - [`cpu::rasterize`] is the reference (float edge functions at pixel centres).
@@ -123,7 +130,7 @@ pub fn contract() -> StageContract {
                     "[384, hardware cluster count, 0, 0]",
                 ),
             ],
-            scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials]),
+            scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials, Textures]),
             vec![Slot::visibility64(
                 "visbuffer",
                 Access::StorageReadWrite,
@@ -175,6 +182,10 @@ pub struct HwRaster {
     /// the eye); off, the shaders read no material and every back face is culled
     /// (`sw_raster`'s parameter of the same name, which a renderer sets alike).
     pub two_sided: bool,
+    /// Leave undrawn the fragments of MASK materials whose base colour alpha is below
+    /// the cutoff (`sw_raster`'s parameter of the same name, the same test); off, no
+    /// material is read for it.
+    pub alpha_mask: bool,
 }
 
 impl HwRaster {
@@ -186,6 +197,7 @@ impl HwRaster {
             feed: Feed::IndirectDraw,
             auto_skip: false,
             two_sided: false,
+            alpha_mask: false,
         }
     }
 }
@@ -200,6 +212,8 @@ shader_defs! {
         pub texture: bool => "VIS_TEXTURE",
         /// See [`HwRaster::two_sided`].
         pub two_sided: bool => "TWO_SIDED",
+        /// See [`HwRaster::alpha_mask`].
+        pub alpha_mask: bool => "ALPHA_MASK",
     }
 }
 
@@ -224,11 +238,11 @@ uniform_block! {
     }
 }
 
-const PARAM_KEYS: [&str; 4] = ["width", "height", "run", "two_sided"];
+const PARAM_KEYS: [&str; 5] = ["width", "height", "run", "two_sided", "alpha_mask"];
 
 impl HwRaster {
-    /// Reads `width` and `height` (required, > 0: the visibility buffer's size), `run`
-    /// and `two_sided` (default false).
+    /// Reads `width` and `height` (required, > 0: the visibility buffer's size), `run`,
+    /// `two_sided` and `alpha_mask` (default false).
     pub fn from_params(params: &Params, feed: Feed) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let [width, height] = params.size("the visibility buffer")?;
@@ -247,6 +261,7 @@ impl HwRaster {
             feed,
             auto_skip,
             two_sided: params.bool("two_sided", false)?,
+            alpha_mask: params.bool("alpha_mask", false)?,
         })
     }
 }
@@ -281,10 +296,20 @@ impl Pass for HwRaster {
             &[Access::RenderTarget],
         );
         let mesh = self.feed == Feed::MeshShader;
+        if mesh && self.alpha_mask {
+            return Err(GraphError::parameter(
+                "`alpha_mask` is not available with the `mesh_shader` implementation yet: \
+                 naga_oil 0.23 cannot compose a mesh entry point with the texture sampling \
+                 the cut-out needs; use implementation = \"indirect_draw\" for scenes with \
+                 MASK materials"
+                    .to_string(),
+            ));
+        }
         let defs = RasterDefs {
             mesh_shader: mesh,
             texture,
             two_sided: self.two_sided,
+            alpha_mask: self.alpha_mask,
         };
         ctx.shader_defs(&defs);
         let table = InstanceTable::of(ctx);
@@ -407,13 +432,19 @@ mod tests {
             | Capabilities::TEXTURE_ATOMIC
             | Capabilities::TEXTURE_INT64_ATOMIC;
         for mesh_shader in [false, true] {
-            for (on_texture, two_sided) in
-                [(false, false), (false, true), (true, false), (true, true)]
-            {
+            for (on_texture, two_sided, alpha_mask) in [
+                (false, false, false),
+                (false, true, true),
+                (true, false, true),
+                (true, true, false),
+            ] {
+                // `setup` refuses the mesh variant with `alpha_mask` (see there).
+                let alpha_mask = alpha_mask && !mesh_shader;
                 let defs = RasterDefs {
                     mesh_shader,
                     texture: on_texture,
                     two_sided,
+                    alpha_mask,
                 };
                 let mut caps = if on_texture { texture } else { int64 };
                 if mesh_shader {
@@ -427,6 +458,7 @@ mod tests {
             mesh_shader: true,
             texture: false,
             two_sided: false,
+            alpha_mask: false,
         };
         assert!(compose(defs, int64).is_err());
     }

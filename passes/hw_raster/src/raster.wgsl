@@ -13,6 +13,9 @@
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESHLET_MAX_TRIANGLES, MESHLET_MAX_VERTICES, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle, meshlet_material}
 #import meshlight::instance::{Instance, Material, MATERIAL_FLAG_DOUBLE_SIDED}
+#ifdef ALPHA_MASK
+#import meshlight::surface::cut_out
+#endif
 #import meshlight::instance_table::instance_at
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
@@ -25,14 +28,18 @@
 // Word 1: hardware cluster count; word 3: C, the slot capacity.
 @group(0) @binding(1) var<storage, read> raster_counts: array<u32>;
 // The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31). The
-// scene's other buffers are declared here rather than imported from
+// mesh variant declares the scene's other buffers here rather than importing them from
 // meshlight::scene_buffers: naga_oil 0.23 keeps a mesh entry point's output-variable
 // handle from the source when it composes, so `raster_ms` validates only while importing
 // adds no globals ahead of `mesh_out`.
+#ifdef MESH_SHADER
 @group(0) @binding(3) var<storage, read> meshes: array<Mesh>;
 @group(0) @binding(4) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(5) var<storage, read> payload: array<u32>;
 @group(0) @binding(10) var<storage, read> materials: array<Material>;
+#else
+#import meshlight::scene_buffers::{meshes, meshlets, payload, materials}
+#endif
 // width × height visibility values, row-major; the software rasteriser wrote first.
 #ifdef VIS_TEXTURE
 @group(0) @binding(6) var visbuffer: texture_storage_2d<r64uint, atomic>;
@@ -75,13 +82,19 @@ fn back_facing(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>) -> bool {
 }
 
 // The visibility write of one fragment; position.z is the NDC depth, since the
-// viewport's depth range is 0..1.
+// viewport's depth range is 0..1. With ALPHA_MASK a fragment of a MASK material that
+// `cut_out` leaves undrawn (position.xy is the pixel centre) writes nothing.
 fn write_visibility(position: vec4<f32>, id: vec2<u32>) {
     let x = u32(position.x);
     let y = u32(position.y);
     if x >= params.width || y >= params.height {
         return;
     }
+#ifdef ALPHA_MASK
+    if cut_out(raster_clusters[id.x], id.y, position.xy, vec2(f32(params.width), f32(params.height)), view.view_projection) {
+        return;
+    }
+#endif
     let value = visbuffer64_pack(position.z, id.x, id.y);
 #ifdef VIS_TEXTURE
     textureAtomicMax(visbuffer, vec2(x, y), value);

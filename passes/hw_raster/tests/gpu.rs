@@ -37,6 +37,8 @@ struct Frame {
     initial: Vec<u64>,
     /// The pass's `two_sided` (on unless a test turns it off).
     two_sided: bool,
+    /// The pass's `alpha_mask` (off unless a test turns it on).
+    alpha_mask: bool,
 }
 
 impl Frame {
@@ -106,6 +108,7 @@ fn frame(
         hw_count,
         initial,
         two_sided: true,
+        alpha_mask: false,
     }
 }
 
@@ -156,6 +159,7 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
             height: H,
             feed,
             two_sided: frame.two_sided,
+            alpha_mask: frame.alpha_mask,
         },
         Bindings::new(),
     )?;
@@ -591,5 +595,66 @@ fn double_sided_materials_draw_their_back_faces_like_the_reference() {
                 depth_tolerance(),
             );
         }
+    }
+}
+
+/// A MASK material's fragments whose texture alpha falls below the cutoff write
+/// nothing, so the opaque square behind shows through where the reference shows it; off,
+/// the quad is drawn whole. The `mesh_shader` implementation refuses `alpha_mask` with
+/// an error that names the way out.
+#[test]
+fn mask_materials_cut_out_the_fragments_the_reference_cuts() {
+    let camera = Camera::perspective(Vec3::new(0.3, -0.4, 2.4), Vec3::ZERO, 0.9, 0.5);
+    let mut f = frame(scenes::masked_scene(4, 1.0), camera, |_, m| m.level() == 0);
+    f.initial = vec![visbuffer::EMPTY; (W * H) as usize];
+    f.alpha_mask = true;
+    let want = f.reference();
+    let masked_quad = |v: &[u64]| {
+        v.iter()
+            .filter(|&&p| {
+                p != visbuffer::EMPTY
+                    && f.raster_clusters[visbuffer::cluster(p) as usize].instance == 0
+            })
+            .count()
+    };
+    let whole = cpu::rasterize(
+        &scenes::with_cutoff(&f.scene, None),
+        &f.view,
+        &f.raster_clusters,
+        f.hw_count,
+        &f.initial,
+        W,
+        H,
+    );
+    let (kept, all) = (masked_quad(&want), masked_quad(&whole));
+    assert!(
+        kept > all / 4 && kept < all * 3 / 4,
+        "the reference keeps {kept} of the quad's {all} pixels"
+    );
+    let covered = want.iter().filter(|&&v| v != visbuffer::EMPTY).count();
+    let got = run(&mut f);
+    check(
+        "masked quad",
+        &got,
+        &want,
+        covered * 99 / 100,
+        depth_tolerance(),
+    );
+    check_ids(&f, &got);
+    // Without the pass's `alpha_mask`, no material is read: the quad is whole.
+    f.alpha_mask = false;
+    let off = run(&mut f);
+    check(
+        "masked quad, alpha_mask off",
+        &off,
+        &whole,
+        covered * 99 / 100,
+        depth_tolerance(),
+    );
+    f.alpha_mask = true;
+    match run_fed(&mut f, Feed::MeshShader) {
+        Err(e) if e.to_string().contains("indirect_draw") => {}
+        Err(e) if e.to_string().contains("EXPERIMENTAL_MESH_SHADER") => {}
+        other => panic!("mesh_shader with alpha_mask: {:?}", other.map(|_| ())),
     }
 }

@@ -5,17 +5,17 @@
 
 use crate::brdf::Surface;
 use crate::settings::{DebugView, Settings};
-use crate::texture::{sample_texture, texture_lod};
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use meshlight_gpu_scene::SceneData;
-use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout};
-use meshlight_scene::asset::triangles;
-use meshlight_scene::compress::{NORMAL_BITS, decode_octahedral, get_bits};
+use meshlight_gpu_scene::surface::{
+    barycentrics, interpolated_uv, transformed_uv, triangle_corners, uv_transform_rows,
+};
+use meshlight_gpu_scene::texture::{sample_texture, texture_lod};
+use meshlight_scene::asset::format::MeshletRecord;
 use meshlight_shaders::cpu::layout::{
     Cluster, ClusterGrid, ClusterableKind, ClusterableObject, Instance, MAP_BASE_COLOR,
     MAP_EMISSIVE, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MATERIAL_FLAG_CHECKER,
-    MATERIAL_FLAG_DOUBLE_SIDED, MESH_FLAG_UVS, Material, Mesh, TextureRef, View, material_uv,
-    material_uv_step, uv_transform_at,
+    MATERIAL_FLAG_DOUBLE_SIDED, Material, TextureRef, View, material_uv,
 };
 use meshlight_shaders::cpu::light::{cluster_index, z_slice_of_depth};
 use meshlight_shaders::cpu::visbuffer;
@@ -454,107 +454,6 @@ fn meshlet_of(scene: &SceneData, cluster: &Cluster) -> MeshletRecord {
     read_or_zero(&scene.meshlets, cluster.meshlet)
 }
 
-/// One corner of a triangle, decoded from the payload as shade.wgsl decodes it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Corner {
-    /// Mesh space: `grid.xyz + (grid_min + offset) · grid.w`, the integer add first.
-    pub position: Vec3,
-    /// Mesh-space unit normal.
-    pub normal: Vec3,
-    /// `uv_grid.xy + (u16, u16) · uv_grid.zw`, or 0 when the mesh has no UVs.
-    pub uv: Vec2,
-}
-
-/// The three corners of triangle `t` of meshlet `m`, in winding order.
-pub fn triangle_corners(scene: &SceneData, mesh: &Mesh, m: &MeshletRecord, t: u32) -> [Corner; 3] {
-    let has_uvs = mesh.flags & MESH_FLAG_UVS != 0;
-    let layout = PayloadLayout::of(m, has_uvs);
-    let start = (m.data_offset as usize).min(scene.payload.len());
-    let data = &scene.payload[start..];
-    let block = data.get(layout.triangles as usize..).unwrap_or(&[]);
-    let (vc, tc) = (m.vertex_count(), m.triangle_count());
-    let corners = triangles::decode(block, t, m.triangle_bits(), vc, tc);
-    let axis = m.axis_bits();
-    let (normal_min, normal_bits) = (m.normal_min(), m.normal_bits());
-    let stride = m.vertex_stride() as usize;
-    let grid = mesh.position_grid;
-    let uv_grid = mesh.uv_grid;
-    corners.map(|v| {
-        let mut at = v as usize * stride;
-        let mut field = |bits: u32| {
-            let d = get_bits(data, at, bits).unwrap_or(0);
-            at += bits as usize;
-            d
-        };
-        let q = [0, 1, 2].map(|k| m.grid_min[k].wrapping_add(field(axis[k])));
-        let position = Vec3::new(grid[0], grid[1], grid[2])
-            + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * grid[3];
-        let oct = [0, 1].map(|k| normal_min[k] + field(normal_bits[k]) as i32);
-        let normal = decode_octahedral(oct, NORMAL_BITS);
-        let uv = if has_uvs {
-            let word = data.get((layout.uvs + v) as usize).copied().unwrap_or(0);
-            Vec2::new(uv_grid[0], uv_grid[1])
-                + Vec2::new((word & 0xffff) as f32, (word >> 16) as f32)
-                    * Vec2::new(uv_grid[2], uv_grid[3])
-        } else {
-            Vec2::ZERO
-        };
-        Corner {
-            position,
-            normal,
-            uv,
-        }
-    })
-}
-
-/// Perspective-correct barycentrics at a pixel and their change per pixel step in x
-/// and y (`Barycentrics` in shade.wgsl).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Barycentrics {
-    /// The perspective-correct barycentrics at the pixel centre.
-    pub b: Vec3,
-    /// Their change one pixel to the right.
-    pub ddx: Vec3,
-    /// Their change one pixel down.
-    pub ddy: Vec3,
-}
-
-/// shade.wgsl's `barycentrics`: the clip-space corners, the pixel position (centres at
-/// +0.5) and the viewport size in pixels.
-pub fn barycentrics(clip: [Vec4; 3], pixel: Vec2, size: Vec2) -> Barycentrics {
-    let [c0, c1, c2] = clip;
-    let p = Vec2::new(pixel.x * 2.0 / size.x - 1.0, 1.0 - pixel.y * 2.0 / size.y);
-    let step = Vec2::new(2.0 / size.x, -2.0 / size.y);
-    let iw = Vec3::new(1.0 / c0.w, 1.0 / c1.w, 1.0 / c2.w);
-    let n0 = c0.truncate().truncate() * iw.x;
-    let d1 = c1.truncate().truncate() * iw.y - n0;
-    let d2 = c2.truncate().truncate() * iw.z - n0;
-    let dp = p - n0;
-    let det = d1.x * d2.y - d1.y * d2.x;
-    if det.abs() < 1e-30 {
-        return Barycentrics {
-            b: Vec3::X,
-            ..Default::default()
-        };
-    }
-    let inv_det = 1.0 / det;
-    let l1 = (dp.x * d2.y - dp.y * d2.x) * inv_det;
-    let l2 = (d1.x * dp.y - d1.y * dp.x) * inv_det;
-    let l = Vec3::new(1.0 - l1 - l2, l1, l2);
-    let gx = Vec3::new(d1.y - d2.y, d2.y, -d1.y) * inv_det * step.x;
-    let gy = Vec3::new(d2.x - d1.x, -d2.x, d1.x) * inv_det * step.y;
-    let q = l * iw;
-    let s = 1.0 / (q.x + q.y + q.z);
-    let b = q * s;
-    let sx = gx.dot(iw);
-    let sy = gy.dot(iw);
-    Barycentrics {
-        b,
-        ddx: (gx * iw - b * sx) * s,
-        ddy: (gy * iw - b * sy) * s,
-    }
-}
-
 /// WGSL's `fract`: `x − floor(x)`, in [0, 1) for negative x too (unlike `f32::fract`).
 fn fract(v: Vec2) -> Vec2 {
     v - v.floor()
@@ -668,8 +567,15 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
         .copied()
         .unwrap_or_default();
     let mut uv = corners.map(|c| c.uv);
-    let weigh = |w: Vec3| uv[0] * w.x + uv[1] * w.y + uv[2] * w.z;
     let camera = Vec3::from_array(frame.view.camera_position);
+    let mut at = interpolated_uv(uv, &bary);
+    if material.uv_transform != 0 {
+        // The coordinates the maps are sampled at (`material_sample_uv`), and the
+        // corners' for the normal map's tangent frame, as shade.wgsl transforms them.
+        let r = uv_transform_rows(&scene.textures, &material);
+        at = transformed_uv(&r, at);
+        uv = uv.map(|c| Vec2::from(material_uv(&r, c.to_array())));
+    }
     let mut s = PixelSurface {
         material,
         base: Vec4::ONE,
@@ -683,19 +589,10 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
         v: (camera - (world[0] * b.x + world[1] * b.y + world[2] * b.z)).normalize(),
         occlusion: 1.0,
         emissive: Vec3::ZERO,
-        uv: weigh(b),
-        uv_dx: weigh(bary.ddx),
-        uv_dy: weigh(bary.ddy),
+        uv: at.uv,
+        uv_dx: at.dx,
+        uv_dy: at.dy,
     };
-    if material.uv_transform != 0 {
-        // The coordinates the maps are sampled at, transformed after interpolation as
-        // shade.wgsl transforms them (a word past the buffer reads as zeros there).
-        let t = uv_transform_at(&scene.textures, material.uv_transform).unwrap_or_default();
-        s.uv = Vec2::from(material_uv(&t, s.uv.to_array()));
-        s.uv_dx = Vec2::from(material_uv_step(&t, s.uv_dx.to_array()));
-        s.uv_dy = Vec2::from(material_uv_step(&t, s.uv_dy.to_array()));
-        uv = uv.map(|c| Vec2::from(material_uv(&t, c.to_array())));
-    }
     let textures = &scene.textures;
     s.base =
         Vec4::from_array(material.base_color) * s.sample_map(textures, MAP_BASE_COLOR, Vec4::ONE);

@@ -96,13 +96,14 @@
 //! - Material depth: material `m` ↦ `(min(m, 2^24 - 2) + 1) · 2^-24`, exact in f32, never
 //!   0; a material pass draws at that depth with `CompareFunction::Equal` to touch only
 //!   its pixels.
-//! - Barycentrics: with `ndc_i = clip_i.xy / clip_i.w` and the pixel centre `p` in NDC,
+//! - Barycentrics (`meshlight::surface`, which the rasterisers share for MASK
+//!   materials): with `ndc_i = clip_i.xy / clip_i.w` and the pixel centre `p` in NDC,
 //!   screen-linear `λ` of `p` in the NDC triangle, then `b_i = λ_i / w_i / Σ λ_j / w_j`;
 //!   `∂b/∂x`, `∂b/∂y` per pixel by the quotient rule from `∂λ/∂ndc` and the NDC size of
 //!   a pixel (`2 / width`, `-2 / height`).
 //! - Shading: normal `Σ b_i n_i` to world space with the inverse transpose, UV `Σ b_i
 //!   uv_i` (0 without UVs) and its derivatives `Σ ∂b_i/∂x uv_i`, `Σ ∂b_i/∂y uv_i`; each of
-//!   the material's maps sampled there ([`texture`]): base colour `factor · texel`,
+//!   the material's maps sampled there (`meshlight::texture`): base colour `factor · texel`,
 //!   checkered where the material asks (`· mix(0.55, 1, filtered_checker(uv · scale,
 //!   ∂uv · scale))`, a box filter of the square wave over the pixel's footprint);
 //!   metalness and roughness times the texel's B and G; the normal map's `(2·texel − 1)
@@ -125,7 +126,8 @@
 //!   `(fract(u), fract(v), 0)`; `normal` = the shading normal `· 0.5 + 0.5`; `mip` = the
 //!   id colour of `floor(level)` of the base colour texture (black without one);
 //!   `base-color` = the base colour before lighting.
-//! - Texture sampling ([`texture`]): level `λ = clamp(log2(max(|∂uv/∂x|, |∂uv/∂y|) ·
+//! - Texture sampling (`meshlight::texture`, [`meshlight_gpu_scene::texture`] on the
+//!   CPU): level `λ = clamp(log2(max(|∂uv/∂x|, |∂uv/∂y|) ·
 //!   S), 0, log2 S)` for a texture of side `S`; bilinear in levels `⌊λ⌋` and `⌊λ⌋ + 1`
 //!   mixed by `fract(λ)`; texel centres at `(i + 0.5) / s`; sRGB texels decoded to linear
 //!   light before they are weighed; U and V wrap (repeat, clamp, mirror) on their own.
@@ -138,7 +140,6 @@
 pub mod brdf;
 pub mod cpu;
 pub mod settings;
-pub mod texture;
 
 pub use settings::{DebugView, Resolve};
 
@@ -182,8 +183,7 @@ pub const SHADE_SHADER: PassShader = pass_shader!(
     params: ShadeParams,
     modules: [
         ("resolve::visibility", "visibility.wgsl"),
-        ("resolve::brdf", "brdf.wgsl"),
-        ("resolve::texture", "texture.wgsl")
+        ("resolve::brdf", "brdf.wgsl")
     ]
 );
 

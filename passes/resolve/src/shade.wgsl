@@ -6,12 +6,13 @@
 
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
-#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MATERIAL_FLAG_DOUBLE_SIDED, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv, material_uv_step}
+#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MATERIAL_FLAG_DOUBLE_SIDED, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
-#import resolve::texture::{texture_present, sample_texture, texture_lod}
+#import meshlight::texture::{texture_present, sample_texture, texture_lod}
+#import meshlight::surface::{barycentrics, interpolated_uv, uv_transform_rows, transformed_uv}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::instance_table::instance_at
-#import meshlight::scene_buffers::{meshlets, payload, materials, textures}
+#import meshlight::scene_buffers::{meshlets, payload, materials}
 #import meshlight::view::View
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
 #import resolve::visibility::{raster_clusters, visibility_at}
@@ -225,48 +226,6 @@ fn byte_color(c: vec3<u32>) -> vec3<f32> {
     return vec3<f32>(c) / 255.0;
 }
 
-// Perspective-correct barycentrics at a pixel and their derivatives per pixel step in
-// x and y, from the clip-space corners.
-struct Barycentrics {
-    b: vec3<f32>,
-    ddx: vec3<f32>,
-    ddy: vec3<f32>,
-}
-
-fn barycentrics(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, pixel: vec2<f32>) -> Barycentrics {
-    var out: Barycentrics;
-    let size = vec2(f32(params.width), f32(params.height));
-    // NDC of the pixel centre, and NDC per pixel step (y goes down the screen).
-    let p = vec2(pixel.x * 2.0 / size.x - 1.0, 1.0 - pixel.y * 2.0 / size.y);
-    let step = vec2(2.0 / size.x, -2.0 / size.y);
-    let iw = vec3(1.0 / c0.w, 1.0 / c1.w, 1.0 / c2.w);
-    let n0 = c0.xy * iw.x;
-    let d1 = c1.xy * iw.y - n0;
-    let d2 = c2.xy * iw.z - n0;
-    let dp = p - n0;
-    let det = d1.x * d2.y - d1.y * d2.x;
-    if abs(det) < 1e-30 {
-        out.b = vec3(1.0, 0.0, 0.0);
-        return out;
-    }
-    let inv_det = 1.0 / det;
-    // Screen-linear barycentrics and their NDC gradients.
-    let l1 = (dp.x * d2.y - dp.y * d2.x) * inv_det;
-    let l2 = (d1.x * dp.y - d1.y * dp.x) * inv_det;
-    let l = vec3(1.0 - l1 - l2, l1, l2);
-    let gx = vec3(d1.y - d2.y, d2.y, -d1.y) * inv_det * step.x;
-    let gy = vec3(d2.x - d1.x, -d2.x, d1.x) * inv_det * step.y;
-    // Perspective correction: b = l·iw / Σ l·iw, differentiated by the quotient rule.
-    let q = l * iw;
-    let s = 1.0 / (q.x + q.y + q.z);
-    out.b = q * s;
-    let sx = dot(gx, iw);
-    let sy = dot(gy, iw);
-    out.ddx = (gx * iw - out.b * sx) * s;
-    out.ddy = (gy * iw - out.b * sy) * s;
-    return out;
-}
-
 // A checkerboard box-filtered over the pixel's footprint in checker space (the
 // analytic integral of the square wave), so it fades to grey instead of aliasing.
 fn filtered_checker(p: vec2<f32>, ddx: vec2<f32>, ddy: vec2<f32>) -> f32 {
@@ -349,29 +308,26 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
             uv[k] = meshlet_uv(mesh.uv_grid, payload[meshlet_uv_word(m) + v]);
         }
     }
-    let bary = barycentrics(clip[0], clip[1], clip[2], pixel);
+    let bary = barycentrics(clip[0], clip[1], clip[2], pixel, vec2(f32(params.width), f32(params.height)));
     let b = bary.b;
     var s: PixelSurface;
     let material = materials[instance.material + meshlet_material(m)];
     s.material = material;
     s.n = normalize(instance_transform_normal(instance, normal[0] * b.x + normal[1] * b.y + normal[2] * b.z));
     s.v = normalize(view.camera_position - (world[0] * b.x + world[1] * b.y + world[2] * b.z));
-    s.uv = uv[0] * b.x + uv[1] * b.y + uv[2] * b.z;
-    s.uv_dx = uv[0] * bary.ddx.x + uv[1] * bary.ddx.y + uv[2] * bary.ddx.z;
-    s.uv_dy = uv[0] * bary.ddy.x + uv[1] * bary.ddy.y + uv[2] * bary.ddy.z;
+    var at = interpolated_uv(uv, bary);
     if material.uv_transform != 0u {
-        // The coordinates the maps are sampled at; the transform is read only here, so
-        // materials without one pay nothing for it.
-        let w = material.uv_transform;
-        let r0 = vec3(bitcast<f32>(textures[w]), bitcast<f32>(textures[w + 1u]), bitcast<f32>(textures[w + 2u]));
-        let r1 = vec3(bitcast<f32>(textures[w + 3u]), bitcast<f32>(textures[w + 4u]), bitcast<f32>(textures[w + 5u]));
-        s.uv = material_uv(r0, r1, s.uv);
-        s.uv_dx = material_uv_step(r0, r1, s.uv_dx);
-        s.uv_dy = material_uv_step(r0, r1, s.uv_dy);
+        // The coordinates the maps are sampled at (meshlight::surface's
+        // `material_sample_uv`), and the corners' for the normal map's tangent frame.
+        let r = uv_transform_rows(material);
+        at = transformed_uv(r, at);
         for (var k = 0u; k < 3u; k += 1u) {
-            uv[k] = material_uv(r0, r1, uv[k]);
+            uv[k] = material_uv(r[0], r[1], uv[k]);
         }
     }
+    s.uv = at.uv;
+    s.uv_dx = at.dx;
+    s.uv_dy = at.dy;
     s.base = material.base_color * sample_map(material, MAP_BASE_COLOR, s, vec4(1.0));
     if (material.flags & MATERIAL_FLAG_CHECKER) != 0u {
         let scale = params.checker_scale;

@@ -3,8 +3,8 @@
 //! f32 operation here rounds once, as IEEE 754 says; the kernel makes its own do the
 //! same on any driver (see the crate docs), which is what lets the test compare bits.
 
-use glam::Vec4;
-use meshlight_gpu_scene::SceneData;
+use glam::{Vec2, Vec4};
+use meshlight_gpu_scene::{SceneData, surface};
 use meshlight_shaders::cpu::layout::{Cluster, MATERIAL_FLAG_DOUBLE_SIDED, View};
 use meshlight_shaders::cpu::visbuffer;
 
@@ -327,7 +327,9 @@ pub fn facing_the_eye(corners: [([i32; 2], f32); 3]) -> [([i32; 2], f32); 3] {
 
 /// The visibility buffer (row-major, `width` × `height`, 0 = empty) of `clusters` drawn
 /// from `scene` through `view`; the visibility cluster id is the index into `clusters`.
-/// Clusters naming a missing instance or meshlet draw nothing.
+/// Clusters naming a missing instance or meshlet draw nothing. The pass's `two_sided`
+/// and `alpha_mask` are both on: back faces of double-sided materials are turned, and
+/// pixels a MASK material cuts out ([`surface::cut_out`]) are not written.
 pub fn rasterize(
     scene: &SceneData,
     view: &View,
@@ -336,6 +338,7 @@ pub fn rasterize(
     height: u32,
 ) -> Vec<u64> {
     let mut out = vec![visbuffer::EMPTY; width as usize * height as usize];
+    let size = Vec2::new(width as f32, height as f32);
     for (id, cluster) in clusters.iter().enumerate() {
         let two_sided = double_sided(scene, cluster);
         for tri in screen_triangles(scene, view, cluster, width, height) {
@@ -345,6 +348,17 @@ pub fn rasterize(
                 tri.corners
             };
             cover_triangle(corners, width, height, |x, y, depth| {
+                let pixel = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                if surface::cut_out(
+                    scene,
+                    &view.view_projection,
+                    size,
+                    cluster,
+                    tri.index,
+                    pixel,
+                ) {
+                    return;
+                }
                 let px = &mut out[(y * width + x) as usize];
                 *px = (*px).max(visbuffer::pack(depth, id as u32, tri.index));
             });

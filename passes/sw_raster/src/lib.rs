@@ -27,7 +27,7 @@
 //! | `raster_clusters` | storage read | Cluster | software clusters in slots `0..raster_counts[0]` (from `raster_counts[7]` with `accumulate`) |
 //! | `raster_counts` | storage read | u32 | word 0: software cluster count; with `accumulate`, word 7: their first slot |
 //! | `sw_args` | storage read + indirect | DispatchIndirectArgs | `[x, y, 1]` from `remap_dispatch` |
-//! | `instances`, `meshes`, `meshlets`, `payload` | storage read | scene | the GPU scene |
+//! | `instances`, `meshes`, `meshlets`, `payload`, `materials`, `textures` | storage read | scene | the GPU scene (materials with `two_sided` or `alpha_mask`, textures with `alpha_mask`) |
 //! | `instances_high` | storage read, optional | Instance | the instances past one binding's limit (`meshlight_gpu_scene::instance_table`) |
 //! | `visbuffer` | cleared read-write | u64 / r64uint | `width × height`, row-major buffer or texture; cleared (a buffer fill, or a dispatch for the texture) then atomicMax |
 //!
@@ -77,6 +77,13 @@
 //!   (a scratch buffer of [`BIG_TILE_CAPACITY`] tiles) is full, the thread covers its
 //!   triangle itself. The optional slot `big_triangle_count` (u32 × 2) receives `[0]`
 //!   tiles listed and `[1]` tiles asked for.
+//! - Materials (params `two_sided` and `alpha_mask`, default false; a renderer sets them
+//!   for a scene that has such a material, and without them no material is read): a
+//!   double-sided material's back faces are turned to face the eye; a MASK material's
+//!   covered pixels whose base colour alpha (`meshlight::surface`'s `cut_out`: the
+//!   triangle's perspective-correct UV at the pixel centre, the resolve's texture
+//!   filter) is below its cutoff are not written. The test runs per covered pixel
+//!   of a MASK triangle, after coverage and depth, so it costs only such pixels.
 //! - [`cpu::rasterize`] is the reference, equal bit for bit (the GPU test checks every
 //!   pixel). Every f32 operation is rounded as IEEE 754 rounds it, on any driver:
 //!   Vulkan requires that of adds and multiplies, but lets a compiler fuse a multiply
@@ -133,7 +140,7 @@ pub fn contract() -> StageContract {
                 )
                 .also(Access::Indirect),
             ],
-            scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials]),
+            scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials, Textures]),
             vec![
                 Slot::visibility64(
                     "visbuffer",
@@ -216,6 +223,11 @@ pub struct SwRaster {
     /// lookup and the turn cost about 2% of the pass on an H200, so a renderer turns it
     /// on only for a scene that has such a material.
     pub two_sided: bool,
+    /// Leave undrawn the pixels of clusters whose material is MASK where the base
+    /// colour's alpha is below its cutoff (`meshlight::surface`'s `cut_out`, the alpha
+    /// the resolve would read). Off, no material is read for it: a renderer turns it on
+    /// only for a scene that has such a material.
+    pub alpha_mask: bool,
 }
 
 shader_defs! {
@@ -232,6 +244,8 @@ shader_defs! {
         pub big_triangles: bool => "BIG_TRIANGLES",
         /// See [`SwRaster::two_sided`].
         pub two_sided: bool => "TWO_SIDED",
+        /// See [`SwRaster::alpha_mask`].
+        pub alpha_mask: bool => "ALPHA_MASK",
     }
 }
 
@@ -259,7 +273,7 @@ uniform_block! {
     }
 }
 
-const PARAM_KEYS: [&str; 7] = [
+const PARAM_KEYS: [&str; 8] = [
     "big_triangle_px",
     "width",
     "height",
@@ -267,12 +281,14 @@ const PARAM_KEYS: [&str; 7] = [
     "exact_division",
     "accumulate",
     "two_sided",
+    "alpha_mask",
 ];
 
 impl SwRaster {
     /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16),
     /// `big_triangle_px` (default [`BIG_TRIANGLE_PX`]) and `exact_division`,
-    /// `accumulate` and `two_sided` (default false); `target` picks the implementation.
+    /// `accumulate`, `two_sided` and `alpha_mask` (default false); `target` picks the
+    /// implementation.
     pub fn from_params(params: &Params, target: Visibility64) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let [width, height] = params.size("the visibility buffer")?;
@@ -285,6 +301,7 @@ impl SwRaster {
             accumulate: params.bool("accumulate", false)?,
             big_triangle_px: params.u32("big_triangle_px", BIG_TRIANGLE_PX)?,
             two_sided: params.bool("two_sided", false)?,
+            alpha_mask: params.bool("alpha_mask", false)?,
         })
     }
 }
@@ -359,6 +376,7 @@ impl Pass for SwRaster {
             slot_base: self.accumulate,
             big_triangles: big,
             two_sided: self.two_sided,
+            alpha_mask: self.alpha_mask,
         };
         ctx.shader_defs(&defs);
         for kernel in kernels(big) {
@@ -526,6 +544,7 @@ mod tests {
             slot_base: true,
             big_triangles: true,
             two_sided: true,
+            alpha_mask: true,
         };
         compose_and_validate(&super::SHADER, &defs.shader_defs(), caps)
             .unwrap_or_else(|e| panic!("{e}"));

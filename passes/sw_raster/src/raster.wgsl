@@ -21,12 +21,15 @@
 #import meshlight::dispatch::linear_workgroup
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_triangle_location, meshlet_triangle, meshlet_material}
-#import meshlight::instance::{Instance, MATERIAL_FLAG_DOUBLE_SIDED}
+#import meshlight::instance::{Instance, MATERIAL_FLAG_DOUBLE_SIDED, MATERIAL_FLAG_MASK}
 #import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshes, meshlets, payload, materials}
 #import meshlight::cluster_triangle::{ClusterTriangle, cluster_triangle}
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
+#ifdef ALPHA_MASK
+#import meshlight::surface::cut_out
+#endif
 
 // The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
 #import sw_raster::params::Params
@@ -272,33 +275,48 @@ fn piece_corners(poly: Polygon, k: u32) -> array<ScreenVertex, 3> {
     return v;
 }
 
-// Whether meshlet `m` placed by `instance` is drawn with a double-sided material, whose
-// back faces are turned to face the eye rather than dropped. Without TWO_SIDED (a scene
-// with no such material) no material is read and every back face is dropped.
-fn double_sided(instance: Instance, m: Meshlet) -> bool {
+// The material flags this variant acts on: MATERIAL_FLAG_DOUBLE_SIDED with TWO_SIDED (back
+// faces are turned to face the eye rather than dropped), MATERIAL_FLAG_MASK with
+// ALPHA_MASK (pixels `cut_out` are left undrawn). A renderer sets them only for a scene
+// with such a material; with neither, no material is read.
 #ifdef TWO_SIDED
-    return (materials[instance.material + meshlet_material(m)].flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
+const SIDED_FLAG: u32 = MATERIAL_FLAG_DOUBLE_SIDED;
 #else
-    return false;
+const SIDED_FLAG: u32 = 0u;
 #endif
+#ifdef ALPHA_MASK
+const MASK_FLAG: u32 = MATERIAL_FLAG_MASK;
+#else
+const MASK_FLAG: u32 = 0u;
+#endif
+
+// The flags of the material meshlet `m` placed by `instance` is drawn with, of those
+// this variant acts on.
+fn material_flags(instance: Instance, m: Meshlet) -> u32 {
+    if (SIDED_FLAG | MASK_FLAG) == 0u {
+        return 0u;
+    }
+    return materials[instance.material + meshlet_material(m)].flags & (SIDED_FLAG | MASK_FLAG);
 }
 
-// `double_sided` of the cluster in raster slot `slot`.
-fn slot_double_sided(slot: u32) -> bool {
+// `material_flags` of the cluster in raster slot `slot`.
+fn slot_material_flags(slot: u32) -> u32 {
     let cluster = raster_clusters[slot];
-    return double_sided(instance_at(cluster.instance), meshlets[cluster.meshlet]);
+    return material_flags(instance_at(cluster.instance), meshlets[cluster.meshlet]);
 }
 
 // A triangle ready to cover, with its clipped pixel box [lo, hi] (empty when it is a
-// back face that is not `two_sided`, degenerate, or off the screen).
+// back face of a material that is not double-sided, degenerate, or off the screen).
 struct Setup {
     tri: Tri,
     lo: vec2<i32>,
     hi: vec2<i32>,
 }
 
-fn triangle_setup(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex, slot: u32, t: u32, two_sided: bool) -> Setup {
+fn triangle_setup(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex, slot: u32, t: u32, flags: u32) -> Setup {
     var tri: Tri;
+    let two_sided = (flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
+    tri.masked = (flags & MATERIAL_FLAG_MASK) != 0u;
     var lo = vec2(0);
     var hi = vec2(-1);
     // Front faces are counter-clockwise in NDC (y up), so counter-clockwise on the
@@ -346,6 +364,8 @@ struct Tri {
     bias: vec3<i32>,
     value_cluster: u32,
     triangle: u32,
+    // Its material is MASK: each covered pixel asks `cut_out` before it is written.
+    masked: bool,
 }
 
 fn shade(tri: Tri, x: i32, y: i32) {
@@ -358,6 +378,11 @@ fn shade(tri: Tri, x: i32, y: i32) {
     }
     let depth = tri.z.x + unfused(f32(e1) * tri.gradient.x) + unfused(f32(e2) * tri.gradient.y);
     let value = visbuffer64_pack(depth, tri.value_cluster, tri.triangle);
+#ifdef ALPHA_MASK
+    if tri.masked && cut_out(raster_clusters[tri.value_cluster], tri.triangle, vec2(f32(x), f32(y)) + 0.5, vec2(f32(params.width), f32(params.height)), view.view_projection) {
+        return;
+    }
+#endif
 #ifdef VIS_TEXTURE
     textureAtomicMax(visbuffer, vec2(u32(x), u32(y)), value);
 #else
@@ -381,7 +406,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
     let instance = instance_at(cluster.instance);
     let m = meshlets[cluster.meshlet];
     let mesh = meshes[instance.mesh];
-    let two_sided = double_sided(instance, m);
+    let flags = material_flags(instance, m);
     if t == 0u {
         atomicStore(&widest, 0u);
         atomicStore(&needs_clip, 0u);
@@ -406,7 +431,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
                 ScreenVertex(screen_xy[c.z], screen_z[c.z], true),
                 i,
                 t,
-                two_sided,
+                flags,
             );
         } else {
             // Clipped by `raster_clipped`.
@@ -468,13 +493,13 @@ fn raster_clipped(
             continue;
         }
         let poly = clip_triangle(a, b, d);
-        let two_sided = double_sided(s.instance, s.m);
+        let flags = material_flags(s.instance, s.m);
         for (var k = 0u; k + 2u < poly.count; k += 1u) {
             let v = piece_corners(poly, k);
             if !v[0].ok {
                 continue;
             }
-            let piece = triangle_setup(v[0], v[1], v[2], slot, t, two_sided);
+            let piece = triangle_setup(v[0], v[1], v[2], slot, t, flags);
             if any(piece.lo > piece.hi) {
                 continue;
             }
@@ -607,7 +632,7 @@ fn raster_big(
                 v[k] = ScreenVertex(xy, bitcast<f32>(clip_list[base + 3u * k + 2u]), true);
             }
             let id = clip_list[base + 9u];
-            setup = triangle_setup(v[0], v[1], v[2], id >> 7u, id & 127u, slot_double_sided(id >> 7u));
+            setup = triangle_setup(v[0], v[1], v[2], id >> 7u, id & 127u, slot_material_flags(id >> 7u));
         } else {
             let slot = entry.x >> 7u;
             let triangle = entry.x & 127u;
@@ -618,7 +643,7 @@ fn raster_big(
                 screen_vertex(s.m, s.mesh, s.instance, s.corners.z),
                 slot,
                 triangle,
-                double_sided(s.instance, s.m),
+                material_flags(s.instance, s.m),
             );
         }
         // The part of the box this tile covers, a pixel per thread, row by row.

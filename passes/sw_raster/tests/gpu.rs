@@ -27,7 +27,7 @@ use meshlight_testing::{Rng, gpu};
 
 #[path = "support/scenes.rs"]
 mod scenes;
-use scenes::{add_mesh, flat_quad};
+use scenes::{MASK_CUTOFF, add_mesh, flat_quad, masked_scene, with_cutoff};
 
 // ---------------------------------------------------------------------------------------
 // Scenes and views
@@ -223,6 +223,7 @@ fn pass(scanline_width: u32) -> SwRaster {
         accumulate: false,
         big_triangle_px: 0,
         two_sided: false,
+        alpha_mask: false,
     }
 }
 
@@ -1075,4 +1076,94 @@ fn double_sided_materials_draw_their_back_faces_like_the_reference() {
         covered_by[1] > covered_by[0] + (W * H / 4) as usize,
         "pixels covered one-sided, two-sided: {covered_by:?}"
     );
+}
+
+/// Pixels where `got` equals neither bracket, of references drawn with the cutoff an
+/// eighth of an 8-bit step below and above: a pixel whose alpha lies within rounding of
+/// the cutoff may be cut by one and kept by the other, and both rasterisers compute
+/// the alpha with the driver's float operations.
+fn outside_brackets(got: &[u64], low: &[u64], high: &[u64]) -> Vec<usize> {
+    (0..got.len())
+        .filter(|&i| got[i] != low[i] && got[i] != high[i])
+        .collect()
+}
+
+/// The cutoff's brackets (see [`outside_brackets`]).
+const CUTOFF_ROUNDING: f32 = 1.0 / 2048.0;
+
+/// A MASK material's pixels whose texture alpha falls below the cutoff are left undrawn
+/// by every path of the kernel (whole triangles, big-triangle tiles, pieces of
+/// triangles clipped at the near plane), so the opaque square behind shows through, as
+/// the reference draws it; without the pass's `alpha_mask` the quad is drawn whole.
+#[test]
+fn mask_materials_cut_out_the_pixels_the_reference_cuts() {
+    let scene = masked_scene(4, 1.0);
+    let views = [
+        Camera::perspective(Vec3::new(0.3, -0.4, 2.4), Vec3::ZERO, 0.9, 0.5).view([W, H], 0, None),
+        // Grazing, from above the quad: its near end is clipped at the near plane.
+        Camera::perspective(
+            Vec3::new(0.1, -0.9, 0.6),
+            Vec3::new(0.0, 0.8, 0.0),
+            1.2,
+            0.5,
+        )
+        .view([W, H], 0, None),
+    ];
+    let clusters = [0, 1]
+        .iter()
+        .flat_map(|&i| clusters_of(&scene, i, |l| l == 0))
+        .collect();
+    let input = Input::every_in_one_row(clusters);
+    let opaque = with_cutoff(&scene, None);
+    let low = with_cutoff(&scene, Some(MASK_CUTOFF - CUTOFF_ROUNDING));
+    let high = with_cutoff(&scene, Some(MASK_CUTOFF + CUTOFF_ROUNDING));
+    let front = |v: &[u64]| {
+        v.iter()
+            .filter(|&&p| {
+                p != visbuffer::EMPTY && input.slots[visbuffer::cluster(p) as usize].instance == 0
+            })
+            .count()
+    };
+    let drawing = SwRaster {
+        alpha_mask: true,
+        ..pass(SCANLINES)
+    };
+    let tiled = SwRaster {
+        big_triangle_px: 8,
+        ..drawing
+    };
+    for (k, view) in views.iter().enumerate() {
+        let whole = input.reference(&opaque, view);
+        let want = input.reference(&scene, view);
+        // The checker cuts about half the quad, and the square behind fills the holes.
+        let (kept, all) = (front(&want), front(&whole));
+        assert!(
+            kept > all / 4 && kept < all * 3 / 4,
+            "view {k}: the reference keeps {kept} of the quad's {all} pixels"
+        );
+        assert!(
+            covered(&want) > kept + (all - kept) / 2,
+            "view {k}: nothing shows behind"
+        );
+        let (low, high) = (input.reference(&low, view), input.reference(&high, view));
+        for p in [drawing, tiled] {
+            let got =
+                run(&mut scene.clone(), &input, &[*view], p).unwrap_or_else(|e| panic!("{e}"));
+            let wrong = outside_brackets(&got[0], &low, &high);
+            assert!(
+                wrong.is_empty(),
+                "view {k}, big_triangle_px {}: {} pixels differ from the reference, first at {:?}: GPU {} / CPU {}",
+                p.big_triangle_px,
+                wrong.len(),
+                wrong.first().map(|&i| (i as u32 % W, i as u32 / W)),
+                wrong
+                    .first()
+                    .map_or(String::new(), |&i| describe(got[0][i])),
+                wrong.first().map_or(String::new(), |&i| describe(want[i])),
+            );
+        }
+        // Without the pass's `alpha_mask`, no material is read: the quad is whole.
+        let off = run(&mut scene.clone(), &input, &[*view], pass(SCANLINES)).unwrap();
+        assert_identical(&format!("view {k}, alpha_mask off"), &off[0], &whole);
+    }
 }

@@ -115,7 +115,8 @@ pub struct Material {
     pub occlusion_strength: f32,
     /// MASK materials: texels whose alpha is below this are cut out (0 for opaque).
     pub alpha_cutoff: f32,
-    /// [`MATERIAL_FLAG_CHECKER`] and [`MATERIAL_FLAG_DOUBLE_SIDED`], or 0.
+    /// [`MATERIAL_FLAG_CHECKER`], [`MATERIAL_FLAG_DOUBLE_SIDED`] and [`MATERIAL_FLAG_MASK`],
+    /// or 0.
     pub flags: u32,
     /// Where the texture transform the maps are sampled through lies in the scene's
     /// `textures` buffer ([`uv_transform_at`]), or 0 for none (word 0 is the sRGB
@@ -157,6 +158,10 @@ pub const MATERIAL_FLAG_CHECKER: u32 = 1;
 /// `Material::flags`: back faces are drawn too (both rasterisers turn them to face the
 /// eye) and shaded with the normal reversed, as glTF's `doubleSided` asks.
 pub const MATERIAL_FLAG_DOUBLE_SIDED: u32 = 2;
+/// `Material::flags`: glTF's `alphaMode` MASK. Where the base colour's alpha (factor ×
+/// texture) is below `alpha_cutoff`, both rasterisers leave the pixel undrawn, so what
+/// lies behind shows through.
+pub const MATERIAL_FLAG_MASK: u32 = 4;
 
 /// `Material::maps` index of the base colour texture (sRGB; alpha in A).
 pub const MAP_BASE_COLOR: usize = 0;

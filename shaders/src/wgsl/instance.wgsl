@@ -35,7 +35,7 @@ struct Material {
     occlusion_strength: f32,
     // MASK materials: texels whose alpha is below this are cut out (0 for opaque).
     alpha_cutoff: f32,
-    // MATERIAL_FLAG_CHECKER | MATERIAL_FLAG_DOUBLE_SIDED, or 0.
+    // MATERIAL_FLAG_CHECKER | MATERIAL_FLAG_DOUBLE_SIDED | MATERIAL_FLAG_MASK, or 0.
     flags: u32,
     // The word of the `textures` buffer where the texture transform the maps are
     // sampled through lies (six f32: rows (a, b, c), (d, e, f)), 0 for none.
@@ -61,6 +61,9 @@ fn material_uv_step(r0: vec3<f32>, r1: vec3<f32>, d: vec2<f32>) -> vec2<f32> {
 const MATERIAL_FLAG_CHECKER: u32 = 1u;
 // `Material::flags`: back faces are drawn too, and shaded with the normal reversed.
 const MATERIAL_FLAG_DOUBLE_SIDED: u32 = 2u;
+// `Material::flags`: alphaMode MASK; texels whose alpha is below `alpha_cutoff` are not
+// drawn (meshlight::surface's `cut_out`, which both rasterisers ask).
+const MATERIAL_FLAG_MASK: u32 = 4u;
 
 // `Material::maps` indices.
 const MAP_BASE_COLOR: u32 = 0u;

@@ -85,3 +85,80 @@ pub fn flat_quad(n: u32, jitter: f32) -> Mesh {
         materials: Vec::new(),
     }
 }
+
+/// The cutoff of [`masked_scene`]'s MASK material.
+pub const MASK_CUTOFF: f32 = 0.5;
+
+/// A MASK material over an opaque one: instance 0 is `flat_quad(n, 0.2)` with UVs that
+/// run over the texture `tiles` times, drawn with a MASK material (cutoff
+/// [`MASK_CUTOFF`]) whose base colour texture is a 4 × 4 checker of alpha 0 and 255
+/// (repeating), so magnified it cuts the quad into squares; instance 1 is a larger
+/// opaque square half a unit behind it (z = -0.5), which the cut-out squares show.
+pub fn masked_scene(n: u32, tiles: f32) -> SceneData {
+    use meshlight_scene::texture::Image;
+    use meshlight_shaders::cpu::layout::{MAP_BASE_COLOR, TextureWrap};
+    let mut scene = SceneData::new(Limits::default());
+    let mut front = flat_quad(n, 0.2);
+    front.uvs = front
+        .positions
+        .iter()
+        .map(|p| [(p.x + 1.0) * 0.5 * tiles, (1.0 - p.y) * 0.5 * tiles])
+        .collect();
+    let front = add_mesh(&mut scene, "masked", &front);
+    let back = add_mesh(&mut scene, "behind", &flat_quad(2, 0.0));
+    let checker = Image {
+        width: 4,
+        height: 4,
+        rgba: (0..16u32)
+            .flat_map(|i| {
+                [
+                    230,
+                    200,
+                    120,
+                    if (i % 4 + i / 4) % 2 == 0 { 255 } else { 0 },
+                ]
+            })
+            .collect(),
+    };
+    let texture = scene
+        .add_image(&checker, true, [TextureWrap::Repeat; 2])
+        .unwrap();
+    let mut maps = [None; meshlight_shaders::cpu::layout::MAP_COUNT];
+    maps[MAP_BASE_COLOR] = Some(texture);
+    let masked = scene
+        .add_material(Material {
+            maps,
+            checker: false,
+            alpha_cutoff: Some(MASK_CUTOFF),
+            ..Material::default()
+        })
+        .unwrap();
+    let opaque = scene.add_material(Material::default()).unwrap();
+    scene
+        .add_instance(front, Mat4::IDENTITY, masked)
+        .unwrap()
+        .unwrap();
+    let behind = Mat4::from_scale_rotation_translation(
+        Vec3::new(1.6, 1.6, 1.0),
+        Quat::IDENTITY,
+        Vec3::new(0.0, 0.0, -0.5),
+    );
+    scene.add_instance(back, behind, opaque).unwrap().unwrap();
+    scene
+}
+
+/// `scene` with the cutoff of every MASK material set to `cutoff` (`None`: made opaque),
+/// for references that bracket pixels whose alpha lies within rounding of the cutoff.
+pub fn with_cutoff(scene: &SceneData, cutoff: Option<f32>) -> SceneData {
+    use meshlight_shaders::cpu::layout::MATERIAL_FLAG_MASK;
+    let mut s = scene.clone();
+    for m in &mut s.materials {
+        if m.flags & MATERIAL_FLAG_MASK != 0 {
+            match cutoff {
+                Some(c) => m.alpha_cutoff = c,
+                None => m.flags &= !MATERIAL_FLAG_MASK,
+            }
+        }
+    }
+    s
+}

@@ -1,12 +1,13 @@
-#define_import_path resolve::texture
+#define_import_path meshlight::texture
 
 // Trilinear sampling of the scene's textures from a storage buffer, one RGBA8 texel a
 // word. A compute shader without descriptor arrays (lavapipe has none) cannot pick one
 // of many textures per pixel; a buffer holds them all, and each material names where
 // its maps lie (`cpu::layout::TextureRef`). Filtering is done here, so it is the same on
-// every adapter and `texture.rs` mirrors it step by step: sRGB texels are decoded to
-// linear light before they are weighed, wrap modes apply per axis, and the level comes
-// from the UV derivatives the pixel's triangle gives analytically.
+// every adapter and `meshlight_gpu_scene::texture` mirrors it step by step: sRGB texels
+// are decoded to linear light before they are weighed, wrap modes apply per axis, and
+// the level comes from the UV derivatives the pixel's triangle gives analytically
+// (meshlight::surface).
 
 #import meshlight::scene_buffers::textures
 

@@ -1,5 +1,6 @@
-//! texture.wgsl on the CPU, in f32 and in the same order: trilinear sampling of the
-//! scene's `textures` buffer through a material's map, for the reference and its tests.
+//! `meshlight::texture` (shaders/src/wgsl/texture.wgsl) on the CPU, in f32 and in the
+//! same order: trilinear sampling of the scene's `textures` buffer through a material's
+//! map, for the references of the passes that sample it.
 
 use glam::{Vec2, Vec4};
 use meshlight_shaders::cpu::layout::{TextureRef, TextureWrap, mip_offset};
@@ -156,7 +157,7 @@ mod tests {
 
     #[test]
     fn srgb_texels_are_decoded_before_they_are_weighed() {
-        let mut words = meshlight_gpu_scene::data::srgb_table().to_vec();
+        let mut words = crate::data::srgb_table().to_vec();
         words.push(u32::from_le_bytes([188, 188, 188, 255]));
         let map = TextureRef {
             texels: 256,
