@@ -266,3 +266,51 @@ fn an_asset_inspect_rejects_never_reaches_the_gpu_scene() {
     assert!(verified.is_verified());
     assert_eq!(data.add_mesh("good", &verified).unwrap(), MeshId(0));
 }
+
+/// A MASK material is recorded with its flag, cutoff and alpha factor (clamped to 0..1);
+/// a cutoff or texture transform that is not finite is refused, naming the value.
+#[test]
+fn mask_materials_are_recorded_and_non_finite_values_refused() {
+    use meshlight_shaders::cpu::layout::MATERIAL_FLAG_MASK;
+    let mut data = SceneData::new(Limits::default());
+    let masked = data
+        .add_material(Material {
+            alpha: 1.5,
+            alpha_cutoff: Some(0.3),
+            ..Material::default()
+        })
+        .unwrap();
+    let opaque = data.add_material(Material::default()).unwrap();
+    let m = data.materials[masked as usize];
+    assert!(m.flags & MATERIAL_FLAG_MASK != 0);
+    assert_eq!((m.alpha_cutoff, m.base_color[3]), (0.3, 1.0));
+    assert_eq!(
+        data.materials[opaque as usize].flags & MATERIAL_FLAG_MASK,
+        0
+    );
+    let err = data
+        .add_material(Material {
+            alpha_cutoff: Some(f32::NAN),
+            ..Material::default()
+        })
+        .unwrap_err();
+    assert!(
+        matches!(err, SceneDataError::NonFiniteAlphaCutoff { .. }),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("alpha_cutoff is NaN"), "{err}");
+    let mut uv_transform = meshlight_gpu_scene::IDENTITY_UV;
+    uv_transform[1][2] = f32::INFINITY;
+    let err = data
+        .add_material(Material {
+            uv_transform,
+            ..Material::default()
+        })
+        .unwrap_err();
+    assert!(
+        matches!(err, SceneDataError::NonFiniteUvTransform { .. }),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("inf"), "{err}");
+    assert_eq!(data.materials.len(), 2, "a refused material adds nothing");
+}

@@ -159,6 +159,14 @@ const ONE_USE_PER_MODULE: &[(&str, &str)] = &[
         "cluster_triangle::cluster_triangle(meshlight::meshlet::Cluster(), 0u).corners.x",
     ),
     (
+        "meshlight::texture",
+        "texture::sample_texture(vec2(0u, 0x80000002u), vec2(0.5), vec2(0.0), vec2(0.0)).a",
+    ),
+    (
+        "meshlight::surface",
+        "surface::cut_out(meshlight::meshlet::Cluster(), 0u, vec2(0.5), vec2(8.0), mat4x4<f32>())",
+    ),
+    (
         "meshlight::occlusion",
         "occlusion::occlusion_level(vec4(0u, 0u, 5u, 9u))",
     ),

@@ -213,7 +213,8 @@ const TEXTURED_SIDE: u32 = 512;
 /// Spot with its own texture on the default field (1,024 copies; 64 with `quick`),
 /// [`TEXTURED_COUNT`] copies of the texture tinted to as many hues (so neighbouring
 /// copies read different texels), at 1920×1080 and 3840×2160 (1080p alone with
-/// `quick`): the frame and the resolve with textures, and the texture memory.
+/// `quick`): the frame and the resolve with textures, and the texture memory; then the
+/// same field with MASK materials that cut a quarter of each texture, at the first size.
 pub fn textured(quick: bool) -> BenchResult {
     let dir = std::env::temp_dir().join(format!("meshlight-bench-spot-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
@@ -235,15 +236,69 @@ pub fn textured(quick: bool) -> BenchResult {
         TEXTURED_SIDE,
         meshlight::scene::texture::ColorSpace::Srgb,
     );
+    let instances = if quick { 64 } else { scenes::DEFAULT_INSTANCES };
+    let (sizes, frames) = screen_sizes(quick);
+    let mut rows = Vec::new();
+    for masked in [false, true] {
+        let (placed, texture_bytes) = textured_field(&asset, &small, instances, masked)?;
+        // The masked field once, at the first size: what the cut-out test costs.
+        let sizes = if masked { &sizes[..1] } else { sizes };
+        for &(width, height) in sizes {
+            let what = if masked {
+                ", MASK (a quarter of the texels cut)"
+            } else {
+                ""
+            };
+            let case = case_label(
+                &format!(
+                    "{instances} textured Spots ({TEXTURED_COUNT} textures of {TEXTURED_SIDE}²){what}"
+                ),
+                &placed,
+                width,
+                height,
+            );
+            let m = measure(&placed, FrameSettings::new(width, height), frames)?;
+            rows.extend(rows_of("textured", &case, &m));
+            rows.push(row(
+                "textured",
+                case,
+                "texture memory (RGBA8, mips included)",
+                texture_bytes / (1 << 20) as f64,
+                "MiB",
+                &m.device,
+            ));
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    Ok(rows)
+}
+
+/// The `textured` field: `asset` placed `instances` times, each copy in one of
+/// [`TEXTURED_COUNT`] materials whose base colour is `image` tinted to a hue of its own.
+/// `masked`: the materials are MASK (cutoff 0.5) and a quarter of the texels (a grid of
+/// square holes, 32 texels a period) have alpha 0, so both rasterisers run the cut-out
+/// test on every pixel of the field and leave a quarter of it undrawn. Returns the
+/// scene and its texture bytes.
+fn textured_field(
+    asset: &meshlight::scene::MeshletAsset,
+    image: &meshlight::scene::texture::Image,
+    instances: u32,
+    masked: bool,
+) -> Result<(Placed, f64), Box<dyn std::error::Error>> {
     let mut data = SceneData::new(Default::default());
     let mut runs = Vec::new();
     for k in 0..TEXTURED_COUNT {
         let hue = k as f32 / TEXTURED_COUNT as f32 * std::f32::consts::TAU;
         let tint = [0.0f32, 2.1, 4.2].map(|phase| 0.6 + 0.4 * (hue + phase).cos());
-        let mut image = small.clone();
-        for texel in image.rgba.chunks_exact_mut(4) {
+        let mut image = image.clone();
+        let width = image.width as usize;
+        for (i, texel) in image.rgba.chunks_exact_mut(4).enumerate() {
             for c in 0..3 {
                 texel[c] = (texel[c] as f32 * tint[c]).round() as u8;
+            }
+            let (x, y) = (i % width, i / width);
+            if masked && x % 32 < 16 && y % 32 < 16 {
+                texel[3] = 0;
             }
         }
         let texture = data.add_image(
@@ -256,34 +311,13 @@ pub fn textured(quick: bool) -> BenchResult {
         runs.push(data.add_material(meshlight::gpu_scene::Material {
             checker: false,
             maps,
+            alpha_cutoff: masked.then_some(0.5),
             ..Default::default()
         })?);
     }
     let texture_bytes = data.textures.len() as f64 * 4.0;
-    let instances = if quick { 64 } else { scenes::DEFAULT_INSTANCES };
-    let placed = scenes::field_painted(data, &asset, instances, scenes::Paint::Own(runs))?;
-    let (sizes, frames) = screen_sizes(quick);
-    let mut rows = Vec::new();
-    for &(width, height) in sizes {
-        let case = case_label(
-            &format!("{instances} textured Spots ({TEXTURED_COUNT} textures of {TEXTURED_SIDE}²)"),
-            &placed,
-            width,
-            height,
-        );
-        let m = measure(&placed, FrameSettings::new(width, height), frames)?;
-        rows.extend(rows_of("textured", &case, &m));
-        rows.push(row(
-            "textured",
-            case,
-            "texture memory (RGBA8, mips included)",
-            texture_bytes / (1 << 20) as f64,
-            "MiB",
-            &m.device,
-        ));
-    }
-    std::fs::remove_dir_all(&dir).ok();
-    Ok(rows)
+    let placed = scenes::field_painted(data, asset, instances, scenes::Paint::Own(runs))?;
+    Ok((placed, texture_bytes))
 }
 
 /// The scene of [`lattice`] and [`rasterisers`]: 15³ copies of a mesh (5³ at 1280×720

@@ -594,6 +594,13 @@ mod tests {
         let constant = |name| wgsl_constant::<f64>(&SHADER, name);
         assert_eq!(constant("QUEUE"), QUEUE as f64);
         assert_eq!(constant("MAX_ROUNDS"), MAX_ROUNDS as f64);
+        // Two levels a round: the deepest tree the loader lets through is one the walk
+        // finishes.
+        assert_eq!(
+            2 * MAX_ROUNDS,
+            meshlight_scene::hierarchy::MAX_DEPTH,
+            "the loader's depth limit follows the walk's rounds"
+        );
         assert_eq!(constant("SLACK"), SLACK as f64);
         assert_eq!(constant("MAX_STEPS"), MAX_STEPS as f64);
     }

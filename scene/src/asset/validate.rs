@@ -502,7 +502,7 @@ fn hierarchy(
     nodes: &[NodeRecord],
     list: &[u32],
 ) -> Result<(), Invalid> {
-    use crate::hierarchy::{MAX_CHILDREN, encloses};
+    use crate::hierarchy::{MAX_CHILDREN, MAX_DEPTH, encloses};
     if nodes.is_empty() {
         return Err(bad("header.node_count", "is 0; the hierarchy has a root"));
     }
@@ -538,6 +538,8 @@ fn hierarchy(
         }
     }
     let mut parents = vec![0u32; nodes.len()];
+    // Each node's level below the root, set by its parent (children come after it).
+    let mut depth = vec![0u32; nodes.len()];
     let mut group_leaf = vec![false; groups.len()];
     for (i, n) in nodes.iter().enumerate() {
         let f = |name: &str| format!("node[{i}].{name}");
@@ -630,6 +632,19 @@ fn hierarchy(
         let mut at = n.first_cluster;
         for c in n.children() {
             parents[c] += 1;
+            depth[c] = depth[i] + 1;
+            if depth[c] >= MAX_DEPTH {
+                return Err(bad(
+                    format!("node[{c}]"),
+                    format!(
+                        "lies {} levels below the root, where the GPU walk never reaches \
+                         (it tests levels 0 to {}); rebake the mesh: a baked hierarchy \
+                         branches several ways and stays far shallower",
+                        depth[c],
+                        MAX_DEPTH - 1
+                    ),
+                ));
+            }
             let child = &nodes[c];
             if child.first_cluster != at {
                 return Err(bad(
@@ -790,4 +805,47 @@ fn header_floats(h: &AssetHeader) -> Result<(), Invalid> {
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::asset::format::{NO_GROUP, ROOT_PARENT_ERROR};
+    use crate::hierarchy::MAX_DEPTH;
+
+    /// A chain of `levels` nodes over one root meshlet: each inner node's one child is
+    /// the next, the last a leaf, every node covering the meshlet with the same spheres.
+    fn chain(levels: usize) -> (Vec<MeshletRecord>, Vec<NodeRecord>) {
+        let sphere = [0.0, 0.0, 0.0, 1.0];
+        let meshlet = MeshletRecord {
+            bounds: sphere,
+            parent_group: NO_GROUP,
+            source_group: NO_GROUP,
+            ..bytemuck::Zeroable::zeroed()
+        };
+        let nodes = (0..levels)
+            .map(|i| NodeRecord {
+                bounds: sphere,
+                lod_sphere: sphere,
+                min_error: 0.0,
+                max_parent_error: ROOT_PARENT_ERROR,
+                first_child: if i + 1 < levels { i as u32 + 1 } else { 0 },
+                child_count: u32::from(i + 1 < levels),
+                first_cluster: 0,
+                cluster_count: 1,
+                reserved: [0; 2],
+            })
+            .collect();
+        (vec![meshlet], nodes)
+    }
+
+    #[test]
+    fn a_hierarchy_deeper_than_the_gpu_walk_reaches_is_refused() {
+        let (meshlets, nodes) = chain(MAX_DEPTH as usize);
+        hierarchy(&meshlets, &[], &nodes, &[0]).unwrap_or_else(|e| panic!("{e:?}"));
+        let (meshlets, nodes) = chain(MAX_DEPTH as usize + 1);
+        let e = hierarchy(&meshlets, &[], &nodes, &[0]).unwrap_err();
+        assert_eq!(e.field, format!("node[{MAX_DEPTH}]"));
+        assert!(e.problem.contains("never reaches"), "{e:?}");
+    }
 }

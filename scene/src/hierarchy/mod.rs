@@ -60,6 +60,13 @@ pub use builder::{BRANCHING, Hierarchy, build};
 /// Most children a stored node may have (the loader refuses more).
 pub const MAX_CHILDREN: u32 = 16;
 
+/// Levels of a tree the GPU walk reaches: the root is level 0, and `fill_clusters`'
+/// walk tests two levels a round for at most 256 rounds, so a node at this level or
+/// deeper is never tested and what lies below it is never drawn. The loader refuses
+/// such a tree rather than draw a mesh with parts silently missing; a baked tree
+/// branches eight ways and stays far shallower.
+pub const MAX_DEPTH: u32 = 512;
+
 /// A LOD sphere (mesh space: centre, radius) and the error measured inside it, as
 /// [`crate::MeshletAsset::lod`] returns them.
 pub type Lod = ([f32; 4], f32);
