@@ -9,8 +9,8 @@ use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout};
 use meshlight_scene::asset::triangles;
 use meshlight_scene::compress::{NORMAL_BITS, decode_octahedral, get_bits};
 use meshlight_shaders::cpu::layout::{
-    Cluster, MAP_BASE_COLOR, MATERIAL_FLAG_MASK, MESH_FLAG_UVS, Material, Mesh, TextureRef,
-    material_uv, material_uv_step, uv_transform_at,
+    Cluster, MAP_BASE_COLOR, MATERIAL_FLAG_MASK, MESH_FLAG_UVS, Mesh, TextureRef, material_uv,
+    material_uv_step, uv_transform_at,
 };
 
 use crate::SceneData;
@@ -139,10 +139,10 @@ pub fn interpolated_uv(uv: [Vec2; 3], b: &Barycentrics) -> SampleUv {
     }
 }
 
-/// `uv_transform_rows`: `material`'s texture transform, zeros where its word lies past
-/// the buffer (as the shader's reads would give).
-pub fn uv_transform_rows(textures: &[u32], material: &Material) -> [[f32; 3]; 2] {
-    uv_transform_at(textures, material.uv_transform).unwrap_or_default()
+/// `uv_transform_rows`: the texture transform at word `word` of `textures`, zeros where
+/// it lies past the buffer (as the shader's reads would give).
+pub fn uv_transform_rows(textures: &[u32], word: u32) -> [[f32; 3]; 2] {
+    uv_transform_at(textures, word).unwrap_or_default()
 }
 
 /// `transformed_uv`: `s` through the transform of rows `r`.
@@ -154,30 +154,15 @@ pub fn transformed_uv(r: &[[f32; 3]; 2], s: SampleUv) -> SampleUv {
     }
 }
 
-/// `material_sample_uv`: where `material`'s maps are sampled for corner coordinates `uv`
-/// at `b`.
-pub fn material_sample_uv(
-    textures: &[u32],
-    material: &Material,
-    uv: [Vec2; 3],
-    b: &Barycentrics,
-) -> SampleUv {
-    let s = interpolated_uv(uv, b);
-    if material.uv_transform == 0 {
-        return s;
-    }
-    transformed_uv(&uv_transform_rows(textures, material), s)
-}
-
-/// `base_alpha`: the base colour factor's alpha, times the texture's where there is one.
-pub fn base_alpha(textures: &[u32], material: &Material, s: &SampleUv) -> f32 {
-    match TextureRef::from_words(material.maps[MAP_BASE_COLOR]) {
-        Some(map) => material.base_color[3] * sample_texture(textures, &map, s.uv, s.dx, s.dy).w,
-        None => material.base_color[3],
+/// `base_alpha`: the factor, times the alpha of `map` at `s` where there is one.
+pub fn base_alpha(textures: &[u32], map: [u32; 2], factor: f32, s: &SampleUv) -> f32 {
+    match TextureRef::from_words(map) {
+        Some(map) => factor * sample_texture(textures, &map, s.uv, s.dx, s.dy).w,
+        None => factor,
     }
 }
 
-/// `cut_out`: whether the pixel centred at `pixel` of triangle `t` of `cluster`, drawn
+/// `cut_out` (`cut_at` of `cut_out_setup`): whether the pixel centred at `pixel` of triangle `t` of `cluster`, drawn
 /// through `view_projection` into a `size` pixel viewport, is left undrawn because its
 /// material is MASK and the base colour's alpha there is below the cutoff. A cluster
 /// naming a missing instance, meshlet or material is never cut out.
@@ -208,6 +193,13 @@ pub fn cut_out(
         view_projection * world.extend(1.0)
     });
     let b = barycentrics(clip, pixel, size);
-    let s = material_sample_uv(&scene.textures, material, corners.map(|c| c.uv), &b);
-    base_alpha(&scene.textures, material, &s) < material.alpha_cutoff
+    let mut s = interpolated_uv(corners.map(|c| c.uv), &b);
+    if material.uv_transform != 0 {
+        s = transformed_uv(
+            &uv_transform_rows(&scene.textures, material.uv_transform),
+            s,
+        );
+    }
+    let map = material.maps[MAP_BASE_COLOR];
+    base_alpha(&scene.textures, map, material.base_color[3], &s) < material.alpha_cutoff
 }

@@ -570,9 +570,9 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
     let camera = Vec3::from_array(frame.view.camera_position);
     let mut at = interpolated_uv(uv, &bary);
     if material.uv_transform != 0 {
-        // The coordinates the maps are sampled at (`material_sample_uv`), and the
-        // corners' for the normal map's tangent frame, as shade.wgsl transforms them.
-        let r = uv_transform_rows(&scene.textures, &material);
+        // The coordinates the maps are sampled at, and the corners' for the normal
+        // map's tangent frame, as shade.wgsl transforms them.
+        let r = uv_transform_rows(&scene.textures, material.uv_transform);
         at = transformed_uv(&r, at);
         uv = uv.map(|c| Vec2::from(material_uv(&r, c.to_array())));
     }

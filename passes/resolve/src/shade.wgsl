@@ -317,9 +317,9 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
     s.v = normalize(view.camera_position - (world[0] * b.x + world[1] * b.y + world[2] * b.z));
     var at = interpolated_uv(uv, bary);
     if material.uv_transform != 0u {
-        // The coordinates the maps are sampled at (meshlight::surface's
-        // `material_sample_uv`), and the corners' for the normal map's tangent frame.
-        let r = uv_transform_rows(material);
+        // The coordinates the maps are sampled at (as meshlight::surface's `cut_at`
+        // finds them), and the corners' for the normal map's tangent frame.
+        let r = uv_transform_rows(material.uv_transform);
         at = transformed_uv(r, at);
         for (var k = 0u; k < 3u; k += 1u) {
             uv[k] = material_uv(r[0], r[1], uv[k]);

@@ -80,10 +80,11 @@
 //! - Materials (params `two_sided` and `alpha_mask`, default false; a renderer sets them
 //!   for a scene that has such a material, and without them no material is read): a
 //!   double-sided material's back faces are turned to face the eye; a MASK material's
-//!   covered pixels whose base colour alpha (`meshlight::surface`'s `cut_out`: the
-//!   triangle's perspective-correct UV at the pixel centre, the resolve's texture
-//!   filter) is below its cutoff are not written. The test runs per covered pixel
-//!   of a MASK triangle, after coverage and depth, so it costs only such pixels.
+//!   covered pixels whose base colour alpha (`meshlight::surface`: the triangle's
+//!   perspective-correct UV at the pixel centre, the resolve's texture filter) is below
+//!   its cutoff are not written. A MASK triangle is set up once (`cut_out_setup`: its
+//!   corners decoded and transformed, its barycentrics' constants) and each covered
+//!   pixel evaluated (`cut_at`), after coverage and depth.
 //! - [`cpu::rasterize`] is the reference, equal bit for bit (the GPU test checks every
 //!   pixel). Every f32 operation is rounded as IEEE 754 rounds it, on any driver:
 //!   Vulkan requires that of adds and multiplies, but lets a compiler fuse a multiply
@@ -224,7 +225,7 @@ pub struct SwRaster {
     /// on only for a scene that has such a material.
     pub two_sided: bool,
     /// Leave undrawn the pixels of clusters whose material is MASK where the base
-    /// colour's alpha is below its cutoff (`meshlight::surface`'s `cut_out`, the alpha
+    /// colour's alpha is below its cutoff (`meshlight::surface`'s `cut_at`, the alpha
     /// the resolve would read). Off, no material is read for it: a renderer turns it on
     /// only for a scene that has such a material.
     pub alpha_mask: bool,

@@ -28,7 +28,7 @@
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
 #ifdef ALPHA_MASK
-#import meshlight::surface::cut_out
+#import meshlight::surface::{CutOut, cut_out_setup, cut_at}
 #endif
 
 // The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
@@ -277,7 +277,7 @@ fn piece_corners(poly: Polygon, k: u32) -> array<ScreenVertex, 3> {
 
 // The material flags this variant acts on: MATERIAL_FLAG_DOUBLE_SIDED with TWO_SIDED (back
 // faces are turned to face the eye rather than dropped), MATERIAL_FLAG_MASK with
-// ALPHA_MASK (pixels `cut_out` are left undrawn). A renderer sets them only for a scene
+// ALPHA_MASK (pixels `cut_at` cuts out are left undrawn). A renderer sets them only for a scene
 // with such a material; with neither, no material is read.
 #ifdef TWO_SIDED
 const SIDED_FLAG: u32 = MATERIAL_FLAG_DOUBLE_SIDED;
@@ -316,7 +316,12 @@ struct Setup {
 fn triangle_setup(a: ScreenVertex, b: ScreenVertex, c: ScreenVertex, slot: u32, t: u32, flags: u32) -> Setup {
     var tri: Tri;
     let two_sided = (flags & MATERIAL_FLAG_DOUBLE_SIDED) != 0u;
-    tri.masked = (flags & MATERIAL_FLAG_MASK) != 0u;
+#ifdef ALPHA_MASK
+    if (flags & MATERIAL_FLAG_MASK) != 0u {
+        // Once per triangle (or piece, or tile): what every covered pixel's test needs.
+        tri.cut = cut_out_setup(raster_clusters[slot], t, view.view_projection);
+    }
+#endif
     var lo = vec2(0);
     var hi = vec2(-1);
     // Front faces are counter-clockwise in NDC (y up), so counter-clockwise on the
@@ -364,8 +369,11 @@ struct Tri {
     bias: vec3<i32>,
     value_cluster: u32,
     triangle: u32,
-    // Its material is MASK: each covered pixel asks `cut_out` before it is written.
-    masked: bool,
+#ifdef ALPHA_MASK
+    // Set up for a MASK material (`cut.masked`): each covered pixel asks `cut_at`
+    // before it is written.
+    cut: CutOut,
+#endif
 }
 
 fn shade(tri: Tri, x: i32, y: i32) {
@@ -379,7 +387,7 @@ fn shade(tri: Tri, x: i32, y: i32) {
     let depth = tri.z.x + unfused(f32(e1) * tri.gradient.x) + unfused(f32(e2) * tri.gradient.y);
     let value = visbuffer64_pack(depth, tri.value_cluster, tri.triangle);
 #ifdef ALPHA_MASK
-    if tri.masked && cut_out(raster_clusters[tri.value_cluster], tri.triangle, vec2(f32(x), f32(y)) + 0.5, vec2(f32(params.width), f32(params.height)), view.view_projection) {
+    if cut_at(tri.cut, vec2(f32(x), f32(y)) + 0.5, vec2(f32(params.width), f32(params.height))) {
         return;
     }
 #endif

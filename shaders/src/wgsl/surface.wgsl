@@ -10,10 +10,10 @@
 
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv}
-#import meshlight::instance::{Material, MATERIAL_FLAG_MASK, MAP_BASE_COLOR, material_uv, material_uv_step}
+#import meshlight::instance::{MATERIAL_FLAG_MASK, MAP_BASE_COLOR, material_uv, material_uv_step}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::scene_buffers::{payload, materials, textures}
-#import meshlight::texture::{texture_present, sample_texture}
+#import meshlight::texture::{texture_present, sample_alpha}
 
 // Perspective-correct barycentrics at a pixel and their derivatives per pixel step in
 // x and y.
@@ -23,24 +23,44 @@ struct Barycentrics {
     ddy: vec3<f32>,
 }
 
-// The barycentrics at `pixel` (centres at +0.5) of a `size` pixel viewport, from the
-// clip-space corners.
-fn barycentrics(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, pixel: vec2<f32>, size: vec2<f32>) -> Barycentrics {
+// What the barycentrics of a triangle take from its clip-space corners, whatever the
+// pixel: a rasteriser sets it up once per triangle and evaluates it per pixel.
+struct BarycentricSetup {
+    // 1 / w of each corner.
+    iw: vec3<f32>,
+    // The first corner in NDC, and the other two relative to it.
+    origin: vec2<f32>,
+    side_a: vec2<f32>,
+    side_b: vec2<f32>,
+    // 1 / the NDC triangle's doubled area, 0 for a degenerate triangle.
+    inv_det: f32,
+}
+
+fn barycentric_setup(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>) -> BarycentricSetup {
+    var out: BarycentricSetup;
+    out.iw = vec3(1.0 / c0.w, 1.0 / c1.w, 1.0 / c2.w);
+    out.origin = c0.xy * out.iw.x;
+    out.side_a = c1.xy * out.iw.y - out.origin;
+    out.side_b = c2.xy * out.iw.z - out.origin;
+    let det = out.side_a.x * out.side_b.y - out.side_a.y * out.side_b.x;
+    out.inv_det = select(1.0 / det, 0.0, abs(det) < 1e-30);
+    return out;
+}
+
+// The barycentrics at `pixel` (centres at +0.5) of a `size` pixel viewport.
+fn barycentrics_at(t: BarycentricSetup, pixel: vec2<f32>, size: vec2<f32>) -> Barycentrics {
     var out: Barycentrics;
-    // NDC of the pixel centre, and NDC per pixel step (y goes down the screen).
-    let p = vec2(pixel.x * 2.0 / size.x - 1.0, 1.0 - pixel.y * 2.0 / size.y);
-    let step = vec2(2.0 / size.x, -2.0 / size.y);
-    let iw = vec3(1.0 / c0.w, 1.0 / c1.w, 1.0 / c2.w);
-    let n0 = c0.xy * iw.x;
-    let d1 = c1.xy * iw.y - n0;
-    let d2 = c2.xy * iw.z - n0;
-    let dp = p - n0;
-    let det = d1.x * d2.y - d1.y * d2.x;
-    if abs(det) < 1e-30 {
+    if t.inv_det == 0.0 {
         out.b = vec3(1.0, 0.0, 0.0);
         return out;
     }
-    let inv_det = 1.0 / det;
+    // NDC of the pixel centre, and NDC per pixel step (y goes down the screen).
+    let p = vec2(pixel.x * 2.0 / size.x - 1.0, 1.0 - pixel.y * 2.0 / size.y);
+    let step = vec2(2.0 / size.x, -2.0 / size.y);
+    let dp = p - t.origin;
+    let d1 = t.side_a;
+    let d2 = t.side_b;
+    let inv_det = t.inv_det;
     // Screen-linear barycentrics and their NDC gradients.
     let l1 = (dp.x * d2.y - dp.y * d2.x) * inv_det;
     let l2 = (d1.x * dp.y - d1.y * dp.x) * inv_det;
@@ -48,6 +68,7 @@ fn barycentrics(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, pixel: vec2<f32>, s
     let gx = vec3(d1.y - d2.y, d2.y, -d1.y) * inv_det * step.x;
     let gy = vec3(d2.x - d1.x, -d2.x, d1.x) * inv_det * step.y;
     // Perspective correction: b = l·iw / Σ l·iw, differentiated by the quotient rule.
+    let iw = t.iw;
     let q = l * iw;
     let s = 1.0 / (q.x + q.y + q.z);
     out.b = q * s;
@@ -56,6 +77,12 @@ fn barycentrics(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, pixel: vec2<f32>, s
     out.ddx = (gx * iw - out.b * sx) * s;
     out.ddy = (gy * iw - out.b * sy) * s;
     return out;
+}
+
+// The barycentrics at `pixel` (centres at +0.5) of a `size` pixel viewport, from the
+// clip-space corners.
+fn barycentrics(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, pixel: vec2<f32>, size: vec2<f32>) -> Barycentrics {
+    return barycentrics_at(barycentric_setup(c0, c1, c2), pixel, size);
 }
 
 // Texture coordinates at a pixel and their change per pixel step.
@@ -74,10 +101,9 @@ fn interpolated_uv(uv: array<vec2<f32>, 3>, b: Barycentrics) -> SampleUv {
     );
 }
 
-// The rows of `material`'s texture transform (`Material::uv_transform`, six words of
-// `textures`); only for a material whose word is not 0.
-fn uv_transform_rows(material: Material) -> array<vec3<f32>, 2> {
-    let w = material.uv_transform;
+// The rows of the texture transform at word `w` of `textures` (`Material::uv_transform`,
+// six words); only for a word that is not 0.
+fn uv_transform_rows(w: u32) -> array<vec3<f32>, 2> {
     return array(
         vec3(bitcast<f32>(textures[w]), bitcast<f32>(textures[w + 1u]), bitcast<f32>(textures[w + 2u])),
         vec3(bitcast<f32>(textures[w + 3u]), bitcast<f32>(textures[w + 4u]), bitcast<f32>(textures[w + 5u])),
@@ -89,24 +115,12 @@ fn transformed_uv(r: array<vec3<f32>, 2>, s: SampleUv) -> SampleUv {
     return SampleUv(material_uv(r[0], r[1], s.uv), material_uv_step(r[0], r[1], s.dx), material_uv_step(r[0], r[1], s.dy));
 }
 
-// Where `material`'s maps are sampled for corner coordinates `uv` at `b`: interpolated,
-// then through the texture transform where the material has one (read only then, so
-// materials without one pay nothing for it).
-fn material_sample_uv(material: Material, uv: array<vec2<f32>, 3>, b: Barycentrics) -> SampleUv {
-    let s = interpolated_uv(uv, b);
-    if material.uv_transform == 0u {
-        return s;
-    }
-    return transformed_uv(uv_transform_rows(material), s);
-}
-
-// The base colour's alpha at `s`: the factor's, times the texture's where there is one.
-fn base_alpha(material: Material, s: SampleUv) -> f32 {
-    let map = material.maps[MAP_BASE_COLOR];
+// The base colour's alpha at `s`: the factor's, times the texture's where `map` is one.
+fn base_alpha(map: vec2<u32>, factor: f32, s: SampleUv) -> f32 {
     if !texture_present(map) {
-        return material.base_color.a;
+        return factor;
     }
-    return material.base_color.a * sample_texture(map, s.uv, s.dx, s.dy).a;
+    return factor * sample_alpha(map, s.uv, s.dx, s.dy);
 }
 
 fn corner_field(m: Meshlet, vertex: u32, f: u32) -> u32 {
@@ -114,30 +128,70 @@ fn corner_field(m: Meshlet, vertex: u32, f: u32) -> u32 {
     return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
 }
 
-// Whether the pixel centred at `pixel` of triangle `t` of `cluster` is cut out: its
-// material is MASK and the base colour's alpha there is below the cutoff. The corners
-// are transformed as the resolve transforms them (`world_from_local`, then
-// `view_projection`), so the rasterisers test the alpha the resolve would read.
-fn cut_out(cluster: Cluster, t: u32, pixel: vec2<f32>, size: vec2<f32>, view_projection: mat4x4<f32>) -> bool {
+// What deciding a MASK triangle's pixels takes, whatever the pixel (`cut_out_setup`).
+struct CutOut {
+    // The triangle's material is MASK: without it no pixel is cut.
+    masked: bool,
+    bary: BarycentricSetup,
+    uv: array<vec2<f32>, 3>,
+    // The material's base colour map, alpha factor, cutoff and texture transform word.
+    map: vec2<u32>,
+    alpha: f32,
+    cutoff: f32,
+    uv_transform: u32,
+}
+
+// Triangle `t` of `cluster` set up for `cut_at`. The corners are transformed as the
+// resolve transforms them (`world_from_local`, then `view_projection`), so the
+// rasterisers test the alpha the resolve would read. The material is read first: a
+// triangle of another material costs one lookup.
+fn cut_out_setup(cluster: Cluster, t: u32, view_projection: mat4x4<f32>) -> CutOut {
+    var out: CutOut;
     let tri = cluster_triangle(cluster, t);
     let material = materials[tri.instance.material + meshlet_material(tri.m)];
-    if (material.flags & MATERIAL_FLAG_MASK) == 0u {
-        return false;
+    out.masked = (material.flags & MATERIAL_FLAG_MASK) != 0u;
+    if !out.masked {
+        return out;
     }
+    out.map = material.maps[MAP_BASE_COLOR];
+    out.alpha = material.base_color.a;
+    out.cutoff = material.alpha_cutoff;
+    out.uv_transform = material.uv_transform;
     let has_uvs = (tri.mesh.flags & MESH_FLAG_UVS) != 0u;
     var clip: array<vec4<f32>, 3>;
-    var uv: array<vec2<f32>, 3>;
     for (var k = 0u; k < 3u; k += 1u) {
         let v = tri.corners[k];
         let m = tri.m;
         let p = meshlet_position(m, tri.mesh.position_grid, vec3(corner_field(m, v, 0u), corner_field(m, v, 1u), corner_field(m, v, 2u)));
         let world = (tri.instance.world_from_local * vec4(p, 1.0)).xyz;
         clip[k] = view_projection * vec4(world, 1.0);
-        uv[k] = vec2(0.0);
+        out.uv[k] = vec2(0.0);
         if has_uvs {
-            uv[k] = meshlet_uv(tri.mesh.uv_grid, payload[meshlet_uv_word(m) + v]);
+            out.uv[k] = meshlet_uv(tri.mesh.uv_grid, payload[meshlet_uv_word(m) + v]);
         }
     }
-    let b = barycentrics(clip[0], clip[1], clip[2], pixel, size);
-    return base_alpha(material, material_sample_uv(material, uv, b)) < material.alpha_cutoff;
+    out.bary = barycentric_setup(clip[0], clip[1], clip[2]);
+    return out;
+}
+
+// Whether the pixel centred at `pixel` of a `size` pixel viewport is cut out of the
+// triangle `c` describes: its material is MASK and the base colour's alpha there is
+// below the cutoff.
+fn cut_at(c: CutOut, pixel: vec2<f32>, size: vec2<f32>) -> bool {
+    if !c.masked {
+        return false;
+    }
+    // The coordinates the resolve samples the maps at: interpolated, then through the
+    // material's texture transform where it has one.
+    var s = interpolated_uv(c.uv, barycentrics_at(c.bary, pixel, size));
+    if c.uv_transform != 0u {
+        s = transformed_uv(uv_transform_rows(c.uv_transform), s);
+    }
+    return base_alpha(c.map, c.alpha, s) < c.cutoff;
+}
+
+// Whether the pixel centred at `pixel` of triangle `t` of `cluster` is cut out
+// (`cut_at` of `cut_out_setup`): for a caller that tests one pixel of a triangle.
+fn cut_out(cluster: Cluster, t: u32, pixel: vec2<f32>, size: vec2<f32>, view_projection: mat4x4<f32>) -> bool {
+    return cut_at(cut_out_setup(cluster, t, view_projection), pixel, size);
 }

@@ -126,3 +126,41 @@ fn sample_texture(map: vec2<u32>, uv: vec2<f32>, uv_dx: vec2<f32>, uv_dy: vec2<f
     }
     return mix(c, sample_level(map, wrapped, fine + 1u), blend);
 }
+
+// The alpha of texel (x, y) of a level starting at `start` (`texel(...).a`, without
+// decoding the colour).
+fn texel_alpha(map: vec2<u32>, start: u32, side: i32, x: i32, y: i32) -> f32 {
+    let mode = vec2((map.y >> 5u) & 3u, (map.y >> 7u) & 3u);
+    let at = start + u32(wrap_index(y, side, mode.y) * side + wrap_index(x, side, mode.x));
+    return f32(textures[at] >> 24u) / 255.0;
+}
+
+// `sample_level(...).a`: the same weights over the alpha channel alone.
+fn sample_level_alpha(map: vec2<u32>, uv: vec2<f32>, level: u32) -> f32 {
+    let size_log2 = texture_size_log2(map);
+    let side = i32(1u << (size_log2 - level));
+    let start = map.x + mip_offset(size_log2, level);
+    let p = uv * f32(side) - 0.5;
+    let corner = floor(p);
+    let f = p - corner;
+    let x = i32(corner.x);
+    let y = i32(corner.y);
+    let top = mix(texel_alpha(map, start, side, x, y), texel_alpha(map, start, side, x + 1, y), f.x);
+    let bottom = mix(texel_alpha(map, start, side, x, y + 1), texel_alpha(map, start, side, x + 1, y + 1), f.x);
+    return mix(top, bottom, f.y);
+}
+
+// `sample_texture(...).a`, reading only the alpha byte of each texel: a MASK material's
+// cut-out test samples it for every covered pixel, and the colour's decoding (three
+// sRGB table reads a texel) would be wasted there.
+fn sample_alpha(map: vec2<u32>, uv: vec2<f32>, uv_dx: vec2<f32>, uv_dy: vec2<f32>) -> f32 {
+    let wrapped = vec2(wrap_coordinate(uv.x, (map.y >> 5u) & 3u), wrap_coordinate(uv.y, (map.y >> 7u) & 3u));
+    let lod = texture_lod(map, uv_dx, uv_dy);
+    let fine = u32(floor(lod));
+    let blend = lod - f32(fine);
+    let a = sample_level_alpha(map, wrapped, fine);
+    if blend <= 0.0 {
+        return a;
+    }
+    return mix(a, sample_level_alpha(map, wrapped, fine + 1u), blend);
+}
