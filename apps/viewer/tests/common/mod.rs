@@ -68,10 +68,10 @@ pub fn small_options() -> ViewerOptions {
     o
 }
 
-/// [`small_options`] without lights, for tests that compare frames exactly: populate
-/// claims froxel-list slots with atomics, so a froxel's lights come in an order that
-/// varies from frame to frame and their shading sums round differently (by one step of 8
-/// bits at most).
+/// [`small_options`] without lights, for tests whose subject is not the lights: their
+/// frames skip light clustering. (A lit frame renders the same bytes every time too:
+/// the resolve sums a froxel's lights in fixed point, whatever order populate's atomics
+/// list them in; `the_lit_frame_renders_the_same_bytes_every_time` checks it.)
 pub fn unlit_options() -> ViewerOptions {
     let mut o = small_options();
     o.scene.lights = Some(0);
