@@ -439,6 +439,18 @@ fn the_material_view_shows_each_primitive_in_its_own_material() {
     assert_eq!(seen.len(), 5, "five distinct colours: {seen:?}");
 }
 
+/// The colour of the pixel of `image` (W × H, RGBA) that shows the point (x, 0, 0)
+/// through `camera`.
+fn pixel_on_x_axis(image: &[u8], camera: &meshlight::gpu_scene::Camera, x: f32) -> [u8; 3] {
+    let view_projection = camera.projection_matrix([W, H]) * camera.view_matrix();
+    let clip = view_projection * glam::Vec4::new(x, 0.0, 0.0, 1.0);
+    let ndc = clip.truncate() / clip.w;
+    let px = ((ndc.x + 1.0) * 0.5 * W as f32) as usize;
+    let py = ((1.0 - ndc.y) * 0.5 * H as f32) as usize;
+    let at = (py * W as usize + px) * 4;
+    [image[at], image[at + 1], image[at + 2]]
+}
+
 /// glTF's `doubleSided`: two quads facing +z, seen from behind. The double-sided one is
 /// drawn, its shading normal reversed to face the eye (the `normal` view's blue is
 /// z · 0.5 + 0.5: 0 for −z); the one-sided one is culled, so its pixel shows the sky the
@@ -477,15 +489,7 @@ fn a_double_sided_material_is_drawn_from_behind_with_its_normal_reversed() {
             .render_still(&camera)
             .unwrap_or_else(|e| panic!("{e}"))
             .rgba;
-        let view_projection = camera.projection_matrix([W, H]) * camera.view_matrix();
-        let pixel = |x: f32| {
-            let clip = view_projection * glam::Vec4::new(x, 0.0, 0.0, 1.0);
-            let ndc = clip.truncate() / clip.w;
-            let px = ((ndc.x + 1.0) * 0.5 * W as f32) as usize;
-            let py = ((1.0 - ndc.y) * 0.5 * H as f32) as usize;
-            let at = (py * W as usize + px) * 4;
-            [image[at], image[at + 1], image[at + 2]]
-        };
+        let pixel = |x: f32| pixel_on_x_axis(&image, &camera, x);
         let (two, one, gap) = (pixel(-1.25), pixel(1.25), pixel(0.0));
         if behind {
             assert!(
@@ -564,15 +568,7 @@ fn a_mask_material_is_cut_out_where_its_alpha_is_below_the_cutoff() {
         .render_still(&camera)
         .unwrap_or_else(|e| panic!("{e}"))
         .rgba;
-    let view_projection = camera.projection_matrix([W, H]) * camera.view_matrix();
-    let pixel = |x: f32| {
-        let clip = view_projection * glam::Vec4::new(x, 0.0, 0.0, 1.0);
-        let ndc = clip.truncate() / clip.w;
-        let px = ((ndc.x + 1.0) * 0.5 * W as f32) as usize;
-        let py = ((1.0 - ndc.y) * 0.5 * H as f32) as usize;
-        let at = (py * W as usize + px) * 4;
-        [image[at], image[at + 1], image[at + 2]]
-    };
+    let pixel = |x: f32| pixel_on_x_axis(&image, &camera, x);
     // Between the quads only the one behind is drawn.
     let back = pixel(0.0);
     let colors = |slot: u32| {

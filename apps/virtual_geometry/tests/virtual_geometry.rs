@@ -893,7 +893,7 @@ fn the_lit_frame_renders_the_same_bytes_every_time() {
     let mut r = Renderer::new(placed.data.clone(), lit(W, H), &GraphSource::Shipped)
         .unwrap_or_else(|e| panic!("{e}"));
     r.lights = scenes::field_lights(&placed, 48);
-    let mut still = |r: &mut Renderer| {
+    let still = |r: &mut Renderer| {
         r.render_still(&placed.camera)
             .unwrap_or_else(|e| panic!("{e}"))
             .rgba

@@ -89,19 +89,30 @@ fn texel(map: vec2<u32>, start: u32, side: i32, x: i32, y: i32) -> vec4<f32> {
     return unpack4x8unorm(word);
 }
 
-// Bilinear filtering of one level at `uv` (already wrapped into 0..1).
-fn sample_level(map: vec2<u32>, uv: vec2<f32>, level: u32) -> vec4<f32> {
+// The four texels bilinear filtering of one level at `uv` (already wrapped into 0..1)
+// weighs: the level's first word and side, the top-left texel, and the weights.
+struct Taps {
+    start: u32,
+    side: i32,
+    x: i32,
+    y: i32,
+    f: vec2<f32>,
+}
+
+fn level_taps(map: vec2<u32>, uv: vec2<f32>, level: u32) -> Taps {
     let size_log2 = texture_size_log2(map);
     let side = i32(1u << (size_log2 - level));
-    let start = map.x + mip_offset(size_log2, level);
     let p = uv * f32(side) - 0.5;
     let corner = floor(p);
-    let f = p - corner;
-    let x = i32(corner.x);
-    let y = i32(corner.y);
-    let top = mix(texel(map, start, side, x, y), texel(map, start, side, x + 1, y), f.x);
-    let bottom = mix(texel(map, start, side, x, y + 1), texel(map, start, side, x + 1, y + 1), f.x);
-    return mix(top, bottom, f.y);
+    return Taps(map.x + mip_offset(size_log2, level), side, i32(corner.x), i32(corner.y), p - corner);
+}
+
+// Bilinear filtering of one level at `uv` (already wrapped into 0..1).
+fn sample_level(map: vec2<u32>, uv: vec2<f32>, level: u32) -> vec4<f32> {
+    let t = level_taps(map, uv, level);
+    let top = mix(texel(map, t.start, t.side, t.x, t.y), texel(map, t.start, t.side, t.x + 1, t.y), t.f.x);
+    let bottom = mix(texel(map, t.start, t.side, t.x, t.y + 1), texel(map, t.start, t.side, t.x + 1, t.y + 1), t.f.x);
+    return mix(top, bottom, t.f.y);
 }
 
 // The level of detail a pixel footprint of `uv_dx`, `uv_dy` (UV per pixel step) asks of
@@ -114,17 +125,29 @@ fn texture_lod(map: vec2<u32>, uv_dx: vec2<f32>, uv_dy: vec2<f32>) -> f32 {
     return clamp(log2(max(rho, 1e-20)), 0.0, f32(size_log2));
 }
 
-// Trilinear filtering: the two levels around the footprint's, each bilinear, mixed.
-fn sample_texture(map: vec2<u32>, uv: vec2<f32>, uv_dx: vec2<f32>, uv_dy: vec2<f32>) -> vec4<f32> {
+// Where trilinear filtering reads: `uv` wrapped, the finer of the two levels around the
+// footprint's, and how much of the coarser one is mixed in.
+struct Trilinear {
+    uv: vec2<f32>,
+    fine: u32,
+    blend: f32,
+}
+
+fn trilinear(map: vec2<u32>, uv: vec2<f32>, uv_dx: vec2<f32>, uv_dy: vec2<f32>) -> Trilinear {
     let wrapped = vec2(wrap_coordinate(uv.x, (map.y >> 5u) & 3u), wrap_coordinate(uv.y, (map.y >> 7u) & 3u));
     let lod = texture_lod(map, uv_dx, uv_dy);
     let fine = u32(floor(lod));
-    let blend = lod - f32(fine);
-    let c = sample_level(map, wrapped, fine);
-    if blend <= 0.0 {
+    return Trilinear(wrapped, fine, lod - f32(fine));
+}
+
+// Trilinear filtering: the two levels around the footprint's, each bilinear, mixed.
+fn sample_texture(map: vec2<u32>, uv: vec2<f32>, uv_dx: vec2<f32>, uv_dy: vec2<f32>) -> vec4<f32> {
+    let t = trilinear(map, uv, uv_dx, uv_dy);
+    let c = sample_level(map, t.uv, t.fine);
+    if t.blend <= 0.0 {
         return c;
     }
-    return mix(c, sample_level(map, wrapped, fine + 1u), blend);
+    return mix(c, sample_level(map, t.uv, t.fine + 1u), t.blend);
 }
 
 // The alpha of texel (x, y) of a level starting at `start` (`texel(...).a`, without
@@ -135,32 +158,22 @@ fn texel_alpha(map: vec2<u32>, start: u32, side: i32, x: i32, y: i32) -> f32 {
     return f32(textures[at] >> 24u) / 255.0;
 }
 
-// `sample_level(...).a`: the same weights over the alpha channel alone.
+// `sample_level(...).a`: the same taps and weights over the alpha channel alone.
 fn sample_level_alpha(map: vec2<u32>, uv: vec2<f32>, level: u32) -> f32 {
-    let size_log2 = texture_size_log2(map);
-    let side = i32(1u << (size_log2 - level));
-    let start = map.x + mip_offset(size_log2, level);
-    let p = uv * f32(side) - 0.5;
-    let corner = floor(p);
-    let f = p - corner;
-    let x = i32(corner.x);
-    let y = i32(corner.y);
-    let top = mix(texel_alpha(map, start, side, x, y), texel_alpha(map, start, side, x + 1, y), f.x);
-    let bottom = mix(texel_alpha(map, start, side, x, y + 1), texel_alpha(map, start, side, x + 1, y + 1), f.x);
-    return mix(top, bottom, f.y);
+    let t = level_taps(map, uv, level);
+    let top = mix(texel_alpha(map, t.start, t.side, t.x, t.y), texel_alpha(map, t.start, t.side, t.x + 1, t.y), t.f.x);
+    let bottom = mix(texel_alpha(map, t.start, t.side, t.x, t.y + 1), texel_alpha(map, t.start, t.side, t.x + 1, t.y + 1), t.f.x);
+    return mix(top, bottom, t.f.y);
 }
 
 // `sample_texture(...).a`, reading only the alpha byte of each texel: a MASK material's
 // cut-out test samples it for every covered pixel, and the colour's decoding (three
 // sRGB table reads a texel) would be wasted there.
 fn sample_alpha(map: vec2<u32>, uv: vec2<f32>, uv_dx: vec2<f32>, uv_dy: vec2<f32>) -> f32 {
-    let wrapped = vec2(wrap_coordinate(uv.x, (map.y >> 5u) & 3u), wrap_coordinate(uv.y, (map.y >> 7u) & 3u));
-    let lod = texture_lod(map, uv_dx, uv_dy);
-    let fine = u32(floor(lod));
-    let blend = lod - f32(fine);
-    let a = sample_level_alpha(map, wrapped, fine);
-    if blend <= 0.0 {
+    let t = trilinear(map, uv, uv_dx, uv_dy);
+    let a = sample_level_alpha(map, t.uv, t.fine);
+    if t.blend <= 0.0 {
         return a;
     }
-    return mix(a, sample_level_alpha(map, wrapped, fine + 1u), blend);
+    return mix(a, sample_level_alpha(map, t.uv, t.fine + 1u), t.blend);
 }
