@@ -2,14 +2,14 @@
 
 // Where a pixel lies on its triangle and what its material reads there: perspective-
 // correct barycentrics and their change per pixel step (from the three clip-space
-// corners, as the anchors reconstruct them from a visibility buffer), the coordinates
+// corners, as visibility-buffer renderers reconstruct them), the coordinates
 // the material's maps are sampled at, and the alpha a MASK material is cut by. The
 // resolve shades through these functions and both rasterisers ask `cut_out` which
 // pixels of a MASK material to leave undrawn, so the three agree on every pixel.
 // `meshlight_gpu_scene::surface` mirrors each step on the CPU.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv}
+#import meshlight::meshlet::{Meshlet, Cluster, MESH_FLAG_UVS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv}
 #import meshlight::instance::{MATERIAL_FLAG_MASK, MAP_BASE_COLOR, material_uv, material_uv_step}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::scene_buffers::{payload, materials, textures}
