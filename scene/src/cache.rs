@@ -24,8 +24,9 @@ use crate::procedural::procedural_mesh;
 /// within one crate version: 2 = meshlets grown by `greedy_meshlets` across seams,
 /// groups by meshoptimizer's partitioner, the welded escalation step; 3 = positions
 /// welded within a tolerance, duplicate faces dropped, cracking groups repaired; 4 =
-/// meshlets split by material slot.
-pub const BUILDER_REVISION: u32 = 4;
+/// meshlets split by material slot; 5 = UVs simplified with the positions and their
+/// slide counted in the LOD error.
+pub const BUILDER_REVISION: u32 = 5;
 
 /// Environment variable naming the cache directory (default: the user cache directory).
 pub const CACHE_DIR_ENV: &str = "MESHLIGHT_CACHE_DIR";

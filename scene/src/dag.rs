@@ -20,7 +20,8 @@ use crate::error::SceneError;
 use crate::grouping::{Grouping, group_clusters};
 use crate::mesh::{Mesh, edge_key, position_remap, triangle_edges};
 use crate::meshlets::{split_into_meshlets, split_mesh_into_meshlets};
-use crate::simplify::{Mode, VertexFlags, simplify_group};
+use crate::simplify::{Attributes, Mode, VertexFlags, simplify_group};
+use crate::uv_slide::{UvSurface, simplified_uv_slide};
 
 /// Marks "none" in cluster → group links.
 pub const NO_GROUP: u32 = u32::MAX;
@@ -62,13 +63,16 @@ pub struct DagGroup {
     /// The build iteration that formed the group (children may be from lower levels when
     /// they were stuck before).
     pub level: u32,
-    /// Encloses every child's LOD sphere; error = max(children) + max(simplify error,
-    /// deviation).
+    /// Encloses every child's LOD sphere; error = the larger of max(children) +
+    /// max(simplify error, deviation) and the UV slide.
     pub lod: LodBounds,
     /// Error of this group's simplification alone, as meshoptimizer estimates it.
     pub simplify_error: f32,
     /// Measured distance from this group's output to its children's triangles.
     pub deviation: f32,
+    /// Bound on how far from LOD 0's a texel of this group's output is drawn (see
+    /// [`crate::uv_slide`]); 0 for a mesh without UVs. `lod.error` is at least this.
+    pub uv_slide: f32,
     /// How hard it had to be pushed to simplify.
     pub mode: Mode,
     /// The clusters simplified together (indices into [`Dag::clusters`]).
@@ -134,7 +138,11 @@ pub fn build_dag(
     let unit = crate::mesh::unit_scale(&mesh.positions);
     let scaled: Vec<Vec3> = mesh.positions.iter().map(|&p| p * unit).collect();
     let positions = &scaled;
-    let normals = &mesh.normals;
+    let attributes = Attributes {
+        normals: &mesh.normals,
+        uvs: &mesh.uvs,
+        texel: crate::uv_slide::texel_size(positions, &mesh.uvs, &mesh.indices),
+    };
     let remap = position_remap(positions);
     // Meshlets grow across attribute seams, where there are any.
     let weld = remap
@@ -209,6 +217,32 @@ pub fn build_dag(
         }
 
         let shared = shared_edges(&level_groups, &keyed, &border);
+        // The level as a textured surface, each triangle with its cluster's error: what
+        // a group's texture slide is measured against (see `crate::uv_slide`).
+        // (Nothing to measure on a mesh without UVs: the surface is left empty.)
+        let textured: &[u32] = match mesh.has_uvs() {
+            true => &active,
+            false => &[],
+        };
+        let level_indices: Vec<u32> = textured
+            .iter()
+            .flat_map(|&c| clusters[c as usize].indices.iter().copied())
+            .collect();
+        let level_errors: Vec<f32> = textured
+            .iter()
+            .flat_map(|&c| {
+                let c = &clusters[c as usize];
+                std::iter::repeat_n(c.lod.error, c.triangle_count())
+            })
+            .collect();
+        let level_surface = UvSurface::new(
+            positions,
+            &mesh.uvs,
+            &slots,
+            &level_indices,
+            attributes.texel,
+        )
+        .with_errors(level_errors);
         let locked = |v: u32| border[remap[v as usize] as usize];
         let flags = VertexFlags {
             locked: &locked,
@@ -230,7 +264,7 @@ pub fn build_dag(
                     .collect();
                 let seals = |out: &[u32]| seals_borders(&indices, out, &remap, &border, &shared);
                 let mut fallback = None;
-                let simplified = match simplify_group(positions, normals, &indices, &flags) {
+                let simplified = match simplify_group(positions, &attributes, &indices, &flags) {
                     Some(s) if seals(&s.indices) => s,
                     None => return (None, None),
                     Some(_) => {
@@ -245,7 +279,7 @@ pub fn build_dag(
                             materials: &slots,
                             material_border: &material_border,
                         };
-                        match simplify_group(positions, normals, &indices, &flags) {
+                        match simplify_group(positions, &attributes, &indices, &flags) {
                             Some(s) if seals(&s.indices) => {
                                 fallback = Some(Fallback::Relocked);
                                 s
@@ -254,6 +288,7 @@ pub fn build_dag(
                         }
                     }
                 };
+                let uv_slide = simplified_uv_slide(&level_surface, &indices, &simplified.indices);
                 let meshlets = meshlets_by_material(&simplified.indices, &slots, |indices| {
                     split_into_meshlets(positions, indices, weld)
                 });
@@ -261,7 +296,7 @@ pub fn build_dag(
                     .iter()
                     .map(|(_, m)| sphere_of(positions, m))
                     .collect();
-                (Some((simplified, meshlets, bounds)), fallback)
+                (Some((simplified, uv_slide, meshlets, bounds)), fallback)
             })
             .collect();
 
@@ -273,7 +308,7 @@ pub fn build_dag(
                 None => {}
             }
             let children: Vec<u32> = members.iter().map(|&m| active[m as usize]).collect();
-            let Some((simplified, meshlets, bounds)) = result else {
+            let Some((simplified, uv_slide, meshlets, bounds)) = result else {
                 // Stuck even with the sloppy fallback: once more with other neighbours,
                 // then a terminal root (drawn whenever nothing finer is).
                 for &c in &children {
@@ -285,7 +320,8 @@ pub fn build_dag(
                 continue;
             };
             let own_error = simplified.error.max(simplified.deviation);
-            let lod = group_lod(&clusters, &children, own_error);
+            let mut lod = group_lod(&clusters, &children, own_error);
+            lod.error = lod.error.max(uv_slide);
             let id = groups.len() as u32;
             for &c in &children {
                 let child = &mut clusters[c as usize];
@@ -311,6 +347,7 @@ pub fn build_dag(
                 lod,
                 simplify_error: simplified.error,
                 deviation: simplified.deviation,
+                uv_slide,
                 mode: simplified.mode,
                 children,
             });
@@ -351,6 +388,7 @@ pub fn build_dag(
         g.lod = back(g.lod);
         g.simplify_error /= unit;
         g.deviation /= unit;
+        g.uv_slide /= unit;
     }
     Ok(Dag {
         clusters,

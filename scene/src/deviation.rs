@@ -99,14 +99,14 @@ pub fn simplified_deviation(positions: &[Vec3], source: &[u32], simplified: &[u3
 /// Lookups on the source triangles around each vertex.
 impl Fans {
     /// Whether some source triangle has the edge `i`–`j`.
-    fn has_edge(&self, source: &[u32], i: u32, j: u32) -> bool {
+    pub(crate) fn has_edge(&self, source: &[u32], i: u32, j: u32) -> bool {
         self.of(i)
             .iter()
             .any(|&t| source[3 * t as usize..3 * t as usize + 3].contains(&j))
     }
 
     /// Whether some source triangle has the corners `a`, `b` and `c`.
-    fn has_triangle(&self, source: &[u32], a: u32, b: u32, c: u32) -> bool {
+    pub(crate) fn has_triangle(&self, source: &[u32], a: u32, b: u32, c: u32) -> bool {
         self.of(a).iter().any(|&t| {
             let s = &source[3 * t as usize..3 * t as usize + 3];
             s.contains(&b) && s.contains(&c)

@@ -65,6 +65,8 @@ pub mod simplify;
 pub mod terrain;
 pub mod texture;
 #[cfg(feature = "build")]
+pub mod uv_slide;
+#[cfg(feature = "build")]
 pub mod weld;
 
 #[cfg(feature = "build")]

@@ -25,6 +25,10 @@ const GOOD_RATIO: f32 = 0.55;
 /// attribute error cannot exceed the position error scale, so the weight only steers
 /// which collapses happen first.
 const NORMAL_WEIGHT: f32 = 0.5;
+/// Weight of each UV component, in object units per UV unit ([`crate::uv_slide::texel_size`]):
+/// a UV difference then counts as far as the texel moves on the surface, as the measured
+/// slide does.
+const UV_WEIGHT: f32 = 1.0;
 /// Sloppy simplification ignores topology and attributes; its error estimate is scaled
 /// up, as clusterlod does, so that such groups switch to their parent later.
 pub const SLOPPY_ERROR_FACTOR: f32 = 2.0;
@@ -90,6 +94,16 @@ pub struct VertexFlags<'a> {
     pub material_border: &'a [bool],
 }
 
+/// A mesh's vertex attributes, in its global vertex ids.
+pub struct Attributes<'a> {
+    /// One unit normal per vertex.
+    pub normals: &'a [Vec3],
+    /// One UV per vertex, or none for a mesh without UVs.
+    pub uvs: &'a [[f32; 2]],
+    /// Object units per UV unit ([`crate::uv_slide::texel_size`]).
+    pub texel: f32,
+}
+
 /// Simplifies `indices` (global vertex ids) to about half. Returns `None` when even the
 /// sloppy fallback cannot remove 15% of the triangles (`STUCK_RATIO`).
 ///
@@ -97,13 +111,42 @@ pub struct VertexFlags<'a> {
 /// of the buffer it is given, and a group is a tiny part of the mesh.
 pub fn simplify_group(
     positions: &[Vec3],
-    normals: &[Vec3],
+    attributes: &Attributes<'_>,
     indices: &[u32],
     flags: &VertexFlags<'_>,
 ) -> Option<Simplified> {
     let crate::meshlets::Localised { globals, local } = crate::meshlets::localise(indices);
     let pos: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
-    let attrs: Vec<Vec3> = globals.iter().map(|&g| normals[g as usize]).collect();
+    let normals: Vec<Vec3> = globals
+        .iter()
+        .map(|&g| attributes.normals[g as usize])
+        .collect();
+    let uvs: Vec<[f32; 2]> = match attributes.uvs.is_empty() {
+        true => Vec::new(),
+        false => globals
+            .iter()
+            .map(|&g| attributes.uvs[g as usize])
+            .collect(),
+    };
+    // What the attribute-aware modes weigh: the normal, then the UV where there is one.
+    let (attrs, weights): (Vec<f32>, Vec<f32>) = match uvs.is_empty() {
+        true => (
+            bytemuck::cast_slice(&normals).to_vec(),
+            vec![NORMAL_WEIGHT; 3],
+        ),
+        false => (
+            normals
+                .iter()
+                .zip(&uvs)
+                .flat_map(|(n, uv)| [n.x, n.y, n.z, uv[0], uv[1]])
+                .collect(),
+            [
+                [NORMAL_WEIGHT; 3].as_slice(),
+                &[UV_WEIGHT * attributes.texel; 2],
+            ]
+            .concat(),
+        ),
+    };
     // Welded ids for the fold check: seams must not count as separate edges.
     let weld = crate::mesh::position_remap(&pos);
     let mut locked: Vec<bool> = globals.iter().map(|&g| (flags.locked)(g)).collect();
@@ -188,7 +231,7 @@ pub fn simplify_group(
                     Some(&mut error),
                 );
                 let out: Vec<u32> = out.iter().map(|&c| reps[c as usize]).collect();
-                unweld(&out, &pos, &attrs, weld)
+                unweld(&out, &pos, &normals, weld)
             }
             Mode::Regular | Mode::Permissive => {
                 let mut options = SimplifyOptions::ErrorAbsolute | SimplifyOptions::ErrorClamped;
@@ -198,9 +241,9 @@ pub fn simplify_group(
                 meshopt::simplify_with_attributes_and_locks(
                     &local,
                     &adapter,
-                    bytemuck::cast_slice(&attrs),
-                    &[NORMAL_WEIGHT; 3],
-                    12,
+                    &attrs,
+                    &weights,
+                    4 * weights.len(),
                     &locks,
                     target,
                     f32::MAX,
