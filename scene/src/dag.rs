@@ -21,7 +21,7 @@ use crate::grouping::{Grouping, group_clusters};
 use crate::mesh::{Mesh, edge_key, position_remap, triangle_edges};
 use crate::meshlets::{split_into_meshlets, split_mesh_into_meshlets};
 use crate::simplify::{Attributes, Mode, VertexFlags, simplify_group};
-use crate::uv_slide::{UvSurface, simplified_uv_slide};
+use crate::uv_slide::{UvSurface, simplified_uv_slide, uv_charts};
 
 /// Marks "none" in cluster → group links.
 pub const NO_GROUP: u32 = u32::MAX;
@@ -183,6 +183,10 @@ pub fn build_dag(
     let mut retried = vec![false; clusters.len()];
     let mut level = 0u32;
     let (seam, material_border) = seam_vertices(mesh, &remap, &slots);
+    let charts = match mesh.has_uvs() {
+        true => uv_charts(positions.len(), &mesh.indices),
+        false => Vec::new(),
+    };
     // Which group uses each welded vertex this level; shared ones are the borders.
     let mut owner = vec![u32::MAX; positions.len()];
     let mut border = vec![false; positions.len()];
@@ -238,7 +242,7 @@ pub fn build_dag(
         let level_surface = UvSurface::new(
             positions,
             &mesh.uvs,
-            &slots,
+            &charts,
             &level_indices,
             attributes.texel,
         )

@@ -98,11 +98,16 @@ pub fn build_asset(
         PositionBits::Fixed(bits) => bits,
         PositionBits::Auto => {
             let (min, max) = mesh.bounds();
+            // The positions' own error: a texture's slide (also in `parent.error`) says
+            // nothing of how finely positions must be stored.
             let lod0_errors: Vec<f32> = dag
                 .clusters
                 .iter()
                 .filter(|c| c.level == 0)
-                .map(|c| c.parent.error)
+                .map(|c| match dag.groups.get(c.parent_group as usize) {
+                    Some(g) => g.simplify_error.max(g.deviation),
+                    None => c.parent.error,
+                })
                 .collect();
             auto_position_bits((max - min).max_element(), &lod0_errors)
         }

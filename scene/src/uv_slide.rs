@@ -14,11 +14,15 @@
 //! LOD 0, so the texel is within `d + e` of where LOD 0 draws it (triangle inequality):
 //! that sum, over the output's samples, bounds the group's slide from LOD 0.
 //!
-//! A sample whose UV no triangle of its material carries (a coarse border edge cutting
-//! across a curved chart border, or a collapse across a seam) shows a texel the
-//! full-detail mesh never showed there. Its slide is the distance to the point with the
-//! nearest UV plus that UV gap in object units (see [`texel_size`]), so it is never below
-//! what the texture visibly moved; this case is an estimate, not a bound.
+//! The point carrying `u` is looked for on the sample's own chart only: the triangles
+//! joined to it through shared vertices, which is a piece of the map with no seam inside
+//! ([`uv_charts`]). An atlas packs charts of far-apart parts side by side, so a UV just
+//! outside a chart usually lies in another one; the texel shown there is a bleed across
+//! the seam, not the other part's surface brought over. Such a sample (a coarse border
+//! edge cutting across a curved chart border, or a collapse across a seam) is measured
+//! to the point of its chart with the nearest UV, plus that UV gap in object units (see
+//! [`texel_size`]): never below what the texture visibly moved, but an estimate, not a
+//! bound.
 
 use glam::{Vec2, Vec3};
 
@@ -49,8 +53,33 @@ pub fn texel_size(positions: &[Vec3], uvs: &[[f32; 2]], indices: &[u32]) -> f32 
     }
 }
 
+/// Each vertex's chart: the connected piece of `indices` (joined through shared vertex
+/// ids, so split wherever a seam gave a position several vertices) it belongs to, named
+/// by its lowest vertex id. Unused vertices are their own chart.
+pub fn uv_charts(vertex_count: usize, indices: &[u32]) -> Vec<u32> {
+    let mut parent: Vec<u32> = (0..vertex_count as u32).collect();
+    fn root(parent: &mut [u32], mut v: u32) -> u32 {
+        while parent[v as usize] != v {
+            let up = parent[parent[v as usize] as usize];
+            parent[v as usize] = up;
+            v = up;
+        }
+        v
+    }
+    for t in indices.chunks_exact(3) {
+        for &v in &t[1..] {
+            let (a, b) = (root(&mut parent, t[0]), root(&mut parent, v));
+            // The lower root names the joined set.
+            parent[a.max(b) as usize] = a.min(b);
+        }
+    }
+    (0..vertex_count as u32)
+        .map(|v| root(&mut parent, v))
+        .collect()
+}
+
 /// Largest slide from LOD 0 of the `simplified` triangles' texture (indexing the
-/// `positions`, `uvs` and per-vertex material `slots` of `level`), in object units: each
+/// `positions`, `uvs` and per-vertex `charts` of `level`), in object units: each
 /// sample's distance to the nearest point of `level` carrying its UV plus that point's
 /// cluster error (see the module's doc).
 ///
@@ -73,7 +102,7 @@ pub fn simplified_uv_slide(level: &UvSurface<'_>, source: &[u32], simplified: &[
             .map(|&v| Vec2::from(uvs[v as usize]))
             .sum::<Vec2>()
             / n;
-        worst = worst.max(level.slide(p, uv, level.slot(corners[0])));
+        worst = worst.max(level.slide(p, uv, level.chart(corners[0])));
     };
     for t in simplified.chunks_exact(3) {
         if !fans.has_triangle(source, t[0], t[1], t[2]) {
@@ -100,8 +129,8 @@ pub fn simplified_uv_slide(level: &UvSurface<'_>, source: &[u32], simplified: &[
 pub struct UvSurface<'a> {
     positions: &'a [Vec3],
     uvs: &'a [[f32; 2]],
-    /// Each vertex's material slot.
-    slots: &'a [u32],
+    /// Each vertex's chart ([`uv_charts`]).
+    charts: &'a [u32],
     /// Object units per UV unit ([`texel_size`]).
     texel: f32,
     triangles: Vec<[u32; 3]>,
@@ -121,7 +150,7 @@ impl<'a> UvSurface<'a> {
     pub fn new(
         positions: &'a [Vec3],
         uvs: &'a [[f32; 2]],
-        slots: &'a [u32],
+        charts: &'a [u32],
         indices: &[u32],
         texel: f32,
     ) -> Self {
@@ -191,7 +220,7 @@ impl<'a> UvSurface<'a> {
         Self {
             positions,
             uvs,
-            slots,
+            charts,
             texel,
             errors: vec![0.0; triangles.len()],
             triangles,
@@ -211,16 +240,16 @@ impl<'a> UvSurface<'a> {
         self
     }
 
-    /// A vertex's material slot.
-    pub fn slot(&self, v: u32) -> u32 {
-        self.slots[v as usize]
+    /// A vertex's chart.
+    pub fn chart(&self, v: u32) -> u32 {
+        self.charts[v as usize]
     }
 
     /// How far from LOD 0's the texel at `uv` drawn at `p` is (see the module's doc): the
-    /// nearest point of a triangle of `material` carrying `uv`, plus that triangle's
-    /// error, or, where none carries it, the point with the nearest UV plus the gap in
-    /// object units and its triangle's error.
-    pub fn slide(&self, p: Vec3, uv: Vec2, material: u32) -> f32 {
+    /// nearest point of a triangle of `chart` carrying `uv`, plus that triangle's error,
+    /// or, where none carries it, the point of the chart with the nearest UV plus the gap
+    /// in object units and its triangle's error.
+    pub fn slide(&self, p: Vec3, uv: Vec2, chart: u32) -> f32 {
         if self.triangles.is_empty() {
             return 0.0;
         }
@@ -229,7 +258,7 @@ impl<'a> UvSurface<'a> {
         if c.x >= 0.0 && c.y >= 0.0 && c.x < self.dims[0] as f32 && c.y < self.dims[1] as f32 {
             for &t in self.cell([c.x as i32, c.y as i32]) {
                 let tri = self.triangles[t as usize];
-                if self.slots[tri[0] as usize] != material {
+                if self.charts[tri[0] as usize] != chart {
                     continue;
                 }
                 let [a, b, c] = tri.map(|v| Vec2::from(self.uvs[v as usize]));
@@ -270,7 +299,7 @@ impl<'a> UvSurface<'a> {
                     }
                     for &t in self.cell([x, y]) {
                         let tri = self.triangles[t as usize];
-                        if self.slots[tri[0] as usize] != material {
+                        if self.charts[tri[0] as usize] != chart {
                             continue;
                         }
                         let [a, b, c] = tri.map(|v| Vec2::from(self.uvs[v as usize]));
@@ -371,6 +400,14 @@ mod tests {
     use super::*;
 
     #[test]
+    fn charts_are_the_pieces_joined_by_shared_vertices() {
+        // Two triangles sharing an edge, a third sharing only positions (other ids), a
+        // vertex no triangle uses.
+        let charts = uv_charts(10, &[5, 1, 2, 2, 1, 3, 4, 6, 7]);
+        assert_eq!(charts, vec![0, 1, 1, 1, 4, 1, 4, 4, 8, 9]);
+    }
+
+    #[test]
     fn the_nearest_point_of_a_triangle_is_found_in_every_region() {
         let [a, b, c] = [Vec2::ZERO, Vec2::X, Vec2::Y];
         let at = |p: Vec2| {
@@ -408,17 +445,18 @@ mod tests {
         ]
         .concat();
         let simplified = [0, 2, 8, 0, 8, 6];
-        let slots = [0u32; 9];
+        let charts = uv_charts(9, &source);
+        assert_eq!(charts, vec![0; 9]);
         let linear: Vec<[f32; 2]> = positions.iter().map(|p| [p.x / 2.0, p.y / 2.0]).collect();
         let texel = texel_size(&positions, &linear, &source);
         assert!((texel - 2.0).abs() < 1e-5, "{texel}");
-        let level = UvSurface::new(&positions, &linear, &slots, &source, texel);
+        let level = UvSurface::new(&positions, &linear, &charts, &source, texel);
         let slide = simplified_uv_slide(&level, &source, &simplified);
         assert!(slide < 1e-5, "a linear map slides {slide}");
         // The centre's texel moved off the centre by a quarter of the map.
         let mut warped = linear.clone();
         warped[4] = [0.75, 0.75];
-        let level = UvSurface::new(&positions, &warped, &slots, &source, texel);
+        let level = UvSurface::new(&positions, &warped, &charts, &source, texel);
         let slide = simplified_uv_slide(&level, &source, &simplified);
         assert!(slide > 0.2, "a warped map slides only {slide}");
     }

@@ -6,7 +6,7 @@ mod common;
 
 use glam::{Vec2, Vec3};
 use meshlight_scene::load::load_mesh;
-use meshlight_scene::uv_slide::{UvSurface, texel_size};
+use meshlight_scene::uv_slide::{UvSurface, texel_size, uv_charts};
 use meshlight_scene::watertight::crack_problems;
 use meshlight_scene::{BuildOptions, Built, Mesh, build_asset};
 
@@ -95,7 +95,7 @@ const ROUNDING: f32 = 1e-5;
 fn check_texture_slide(name: &str, built: &Built) -> Vec<f32> {
     let mesh = &built.mesh;
     assert!(mesh.has_uvs(), "{name} has no UVs");
-    let slots = mesh.vertex_materials();
+    let charts = uv_charts(mesh.positions.len(), &mesh.indices);
     let texel = texel_size(&mesh.positions, &mesh.uvs, &mesh.indices);
     let lod0: Vec<u32> = built
         .dag
@@ -104,7 +104,7 @@ fn check_texture_slide(name: &str, built: &Built) -> Vec<f32> {
         .filter(|c| c.level == 0)
         .flat_map(|c| c.indices.iter().copied())
         .collect();
-    let surface = UvSurface::new(&mesh.positions, &mesh.uvs, &slots, &lod0, texel);
+    let surface = UvSurface::new(&mesh.positions, &mesh.uvs, &charts, &lod0, texel);
     let (min, max) = mesh.bounds();
     let rounding = ROUNDING * (max - min).max_element();
     let levels = built.dag.level_count as usize;
@@ -114,7 +114,7 @@ fn check_texture_slide(name: &str, built: &Built) -> Vec<f32> {
         for t in cluster.indices.chunks_exact(3) {
             let p = [t[0], t[1], t[2]].map(|v| mesh.positions[v as usize]);
             let uv = [t[0], t[1], t[2]].map(|v| Vec2::from(mesh.uvs[v as usize]));
-            let material = slots[t[0] as usize];
+            let chart = charts[t[0] as usize];
             let samples = [
                 [1.0, 0.0, 0.0],
                 [0.0, 1.0, 0.0],
@@ -127,7 +127,7 @@ fn check_texture_slide(name: &str, built: &Built) -> Vec<f32> {
             for w in samples {
                 let at = p[0] * w[0] + p[1] * w[1] + p[2] * w[2];
                 let at_uv = uv[0] * w[0] + uv[1] * w[1] + uv[2] * w[2];
-                let slide = surface.slide(at, at_uv, material);
+                let slide = surface.slide(at, at_uv, chart);
                 let level = cluster.level as usize;
                 worst[level] = worst[level].max(slide);
                 if bound > 0.0 {
