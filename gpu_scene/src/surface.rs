@@ -23,7 +23,8 @@ pub struct Corner {
     pub position: Vec3,
     /// Mesh-space unit normal.
     pub normal: Vec3,
-    /// `uv_grid.xy + (u16, u16) · uv_grid.zw`, or 0 when the mesh has no UVs.
+    /// `uv_grid.xy + (origin + offset << shift) · uv_grid.zw`, or 0 when the mesh has no
+    /// UVs.
     pub uv: Vec2,
 }
 
@@ -55,9 +56,16 @@ pub fn triangle_corners(scene: &SceneData, mesh: &Mesh, m: &MeshletRecord, t: u3
         let oct = [0, 1].map(|k| normal_min[k] + field(normal_bits[k]) as i32);
         let normal = decode_octahedral(oct, NORMAL_BITS);
         let uv = if has_uvs {
-            let word = data.get((layout.uvs + v) as usize).copied().unwrap_or(0);
+            let read = |at: u32| data.get(at as usize).copied().unwrap_or(0);
+            let word = read(layout.uv_words + v);
+            let origin = [read(layout.uvs), read(layout.uvs + 1)];
+            // The low 24 bits of an origin word are its code, the high 8 the shift.
+            let code = |k: usize, offset: u32| {
+                let shift = (origin[k] >> 24) & 31;
+                (origin[k] & 0xff_ffff).wrapping_add(offset << shift) as f32
+            };
             Vec2::new(uv_grid[0], uv_grid[1])
-                + Vec2::new((word & 0xffff) as f32, (word >> 16) as f32)
+                + Vec2::new(code(0, word & 0xffff), code(1, word >> 16))
                     * Vec2::new(uv_grid[2], uv_grid[3])
         } else {
             Vec2::ZERO

@@ -3,7 +3,7 @@
 // asset's CPU decoder.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, meshlet_triangle_location, meshlet_triangle, MESH_FLAG_UVS}
+#import meshlight::meshlet::{Meshlet, Mesh, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, MESHLET_UV_ORIGIN_WORDS, meshlet_triangle_location, meshlet_triangle, MESH_FLAG_UVS}
 
 @group(0) @binding(0) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(1) var<storage, read> payload: array<u32>;
@@ -31,7 +31,9 @@ fn decode(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
         let n = meshlet_normal(m, vec2(field(m, v, 3u), field(m, v, 4u)));
         var uv = vec2(0.0);
         if (mesh.flags & MESH_FLAG_UVS) != 0u {
-            uv = meshlet_uv(mesh.uv_grid, payload[meshlet_uv_word(m) + v]);
+            let block = meshlet_uv_word(m);
+            let origin = vec2(payload[block], payload[block + 1u]);
+            uv = meshlet_uv(mesh.uv_grid, origin, payload[block + MESHLET_UV_ORIGIN_WORDS + v]);
         }
         vertices[(index * 255u + v) * 2u] = vec4(p, uv.x);
         vertices[(index * 255u + v) * 2u + 1u] = vec4(n, uv.y);

@@ -270,56 +270,109 @@ fn sign(v: f32) -> f32 {
     if v >= 0.0 { 1.0 } else { -1.0 }
 }
 
-/// Texture coordinates as 2×16-bit unorm over the mesh's UV rectangle.
+/// Codes per axis of a mesh's UV grid: a code is below this, where an f32 still holds
+/// every integer exactly, so the GPU's `f32(code)` is the code itself.
+pub const UV_GRID_CODES: u32 = 1 << 24;
+
+/// Largest shift of a meshlet's 16-bit UV offsets: 16 bits shifted by 8 span the grid.
+pub const UV_MAX_SHIFT: u32 = 8;
+
+/// The code of a mesh's largest UV: what a meshlet spanning the whole rectangle reaches
+/// with the largest shift, below [`UV_GRID_CODES`].
+pub const UV_LARGEST_CODE: u32 = 0xffff << UV_MAX_SHIFT;
+
+/// Texture coordinates on a mesh-wide grid of [`UV_GRID_CODES`] codes per axis over the
+/// mesh's UV rectangle. A meshlet's UV block starts with one word per component, its
+/// smallest code (low 24 bits) and a shift (high 8 bits); each vertex then stores 16-bit
+/// offsets from those codes, in units of `2^shift` codes.
+///
+/// Why not 16 bits over the whole mesh: a tiling map spans many UV units, and 65,536
+/// steps over 64 repeats are a step of a whole texel of a 1,024² texture. A LOD-0
+/// meshlet spans a small part of the map, so its offsets need no shift and it keeps the
+/// grid's full precision; a coarse meshlet spanning the whole map shifts by up to
+/// [`UV_MAX_SHIFT`], its steps no coarser than before, where its LOD error is larger.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UvQuantization {
     /// The smallest UV of the mesh per component: code 0.
     pub min: [f32; 2],
-    /// UV distance per code step per component (0 for a mesh without UVs).
+    /// UV distance per code per component (0 for a mesh without UVs).
     pub step: [f32; 2],
 }
 
 impl UvQuantization {
-    /// The grid over the rectangle `uvs` span, so that the 16 bits per component cover
-    /// what the mesh uses rather than a fixed range.
+    /// The grid over the rectangle `uvs` span.
     pub fn new(uvs: &[[f32; 2]]) -> Self {
-        let (lo, hi) = uvs.iter().fold(
-            (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &u| (lo.min(Vec2::from(u)), hi.max(Vec2::from(u))),
-        );
         if uvs.is_empty() {
             return Self {
                 min: [0.0; 2],
                 step: [0.0; 2],
             };
         }
-        let step = ((hi - lo) / 65535.0).max(Vec2::splat(f32::MIN_POSITIVE));
+        let (lo, hi) = uvs.iter().fold(
+            (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &u| (lo.min(Vec2::from(u)), hi.max(Vec2::from(u))),
+        );
+        // The whole rectangle fits one meshlet's offsets at the largest shift.
+        let step = ((hi - lo) / UV_LARGEST_CODE as f32).max(Vec2::splat(f32::MIN_POSITIVE));
         Self {
             min: lo.to_array(),
             step: step.to_array(),
         }
     }
 
-    /// `uv` as one word: u in the low half, v in the high half.
-    pub fn encode(&self, uv: [f32; 2]) -> u32 {
-        let q = |k: usize| {
+    /// The grid code of `uv` per component.
+    pub fn code(&self, uv: [f32; 2]) -> [u32; 2] {
+        [0, 1].map(|k| {
             if self.step[k] == 0.0 {
                 0
             } else {
-                ((uv[k] - self.min[k]) / self.step[k])
+                // In f64: at 2^24 codes an f32 quotient would be off by a code.
+                ((f64::from(uv[k]) - f64::from(self.min[k])) / f64::from(self.step[k]))
                     .round()
-                    .clamp(0.0, 65535.0) as u32
+                    .clamp(0.0, f64::from(UV_LARGEST_CODE)) as u32
             }
-        };
-        q(0) | (q(1) << 16)
+        })
     }
 
-    /// The UV of a word [`Self::encode`] wrote.
-    pub fn decode(&self, packed: u32) -> [f32; 2] {
-        [
-            self.min[0] + (packed & 0xffff) as f32 * self.step[0],
-            self.min[1] + (packed >> 16) as f32 * self.step[1],
-        ]
+    /// A meshlet's UV block: its origin words (the smallest code and the shift, one word
+    /// per component), then one word per vertex, the u offset in the low half and v in
+    /// the high half.
+    pub fn encode_meshlet(&self, uvs: impl Iterator<Item = [f32; 2]> + Clone) -> Vec<u32> {
+        let (lo, hi) =
+            uvs.clone()
+                .map(|uv| self.code(uv))
+                .fold(([u32::MAX; 2], [0u32; 2]), |(lo, hi), c| {
+                    (
+                        [lo[0].min(c[0]), lo[1].min(c[1])],
+                        [hi[0].max(c[0]), hi[1].max(c[1])],
+                    )
+                });
+        let origin = [0, 1].map(|k| lo[k].min(hi[k]));
+        // The smallest shift whose rounded offsets reach the largest code.
+        let rounded = |span: u32, s: u32| (span + ((1 << s) >> 1)) >> s;
+        let shift = [0, 1].map(|k| {
+            (0..=UV_MAX_SHIFT)
+                .find(|&s| rounded(hi[k] - origin[k], s) <= 0xffff)
+                .unwrap_or(UV_MAX_SHIFT)
+        });
+        let mut block: Vec<u32> = (0..2).map(|k| origin[k] | (shift[k] << 24)).collect();
+        block.extend(uvs.map(|uv| {
+            let c = self.code(uv);
+            let d = [0, 1].map(|k| rounded(c[k] - origin[k], shift[k]).min(0xffff));
+            d[0] | (d[1] << 16)
+        }));
+        block
+    }
+
+    /// The UV of a vertex's word [`Self::encode_meshlet`] wrote, with its meshlet's
+    /// `origin` words, computed as the GPU does.
+    pub fn decode(&self, origin: [u32; 2], packed: u32) -> [f32; 2] {
+        let offset = [packed & 0xffff, packed >> 16];
+        [0, 1].map(|k| {
+            let shift = (origin[k] >> 24) & 31;
+            let code = (origin[k] & 0xff_ffff).wrapping_add(offset[k] << shift);
+            self.min[k] + code as f32 * self.step[k]
+        })
     }
 }
 

@@ -5,7 +5,7 @@ mod common;
 use std::collections::HashMap;
 use std::path::Path;
 
-use meshlight_scene::asset::format::{MeshletRecord, SECTION_MESHLETS, VERSION};
+use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout, SECTION_MESHLETS, VERSION};
 use meshlight_scene::compress::{AUTO_ERROR_SHARE, MAX_POSITION_BITS, PositionBits, Quantization};
 use meshlight_scene::{
     BuildOptions, Built, MeshletAsset, SceneError, build_asset, load::load_mesh, procedural_mesh,
@@ -14,6 +14,96 @@ use proptest::prelude::*;
 
 fn build(mesh: &meshlight_scene::Mesh) -> Built {
     build_asset(mesh, &BuildOptions::default(), &mut |_| {}).unwrap()
+}
+
+/// The two origin words of meshlet `i`'s UV block.
+fn uv_origin(asset: &MeshletAsset, i: usize) -> [u32; 2] {
+    let m = &asset.meshlets()[i];
+    let at = (m.data_offset + PayloadLayout::of(m, true).uvs) as usize;
+    [asset.payload()[at], asset.payload()[at + 1]]
+}
+
+/// A flat square of `n × n` cells whose map repeats `repeats` times across it, as a
+/// tiling ground texture does.
+fn tiled_square(n: u32, repeats: f32) -> meshlight_scene::Mesh {
+    let mut mesh = meshlight_scene::Mesh {
+        source: "tiled square".into(),
+        ..Default::default()
+    };
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+            mesh.positions.push(glam::Vec3::new(x, y, 0.0));
+            mesh.normals.push(glam::Vec3::Z);
+            mesh.uvs.push([x * repeats, y * repeats]);
+        }
+    }
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            mesh.indices.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    mesh
+}
+
+/// A map repeated 64 times over a square: each meshlet's UVs keep a precision set by
+/// its own extent in the map (within its extent over 65,535), not the map's, so a
+/// compact LOD-0 meshlet keeps a small part of a texel of a 1,024² texture where 16 bits
+/// over the whole map were a quarter texel.
+#[test]
+fn a_tiling_map_keeps_its_uvs_to_a_small_part_of_a_texel() {
+    let built = build(&tiled_square(128, 64.0));
+    check_round_trip(&built);
+    let asset = &built.asset;
+    let h = asset.header();
+    let texel = 1.0 / 1024.0;
+    let whole_map_half_step = 64.0 / 65535.0 * 0.5;
+    let mut lod0_errors = Vec::new();
+    for (i, cluster) in built.dag.clusters.iter().enumerate() {
+        let d = asset.decode_meshlet(i);
+        let mut locals: Vec<u32> = Vec::new();
+        for &g in &cluster.indices {
+            if !locals.contains(&g) {
+                locals.push(g);
+            }
+        }
+        let uvs: Vec<[f32; 2]> = locals.iter().map(|&g| built.mesh.uvs[g as usize]).collect();
+        let mut worst = 0.0f32;
+        for a in 0..2 {
+            let lo = uvs.iter().map(|u| u[a]).fold(f32::INFINITY, f32::min);
+            let hi = uvs.iter().map(|u| u[a]).fold(f32::NEG_INFINITY, f32::max);
+            let rounding = 2.0 * f32::EPSILON * (h.uv_min[a].abs() + 64.0);
+            // The smallest shift that fits the extent leaves a step of at most twice the
+            // extent over 65,535 (a grid code of rounding besides).
+            let bound = (hi - lo) / 65535.0 + h.uv_step[a] + rounding;
+            for (k, uv) in uvs.iter().enumerate() {
+                let e = (d.uvs[k][a] - uv[a]).abs();
+                assert!(
+                    e <= bound,
+                    "meshlet {i}: UV error {e} past {bound} for an extent of {}",
+                    hi - lo
+                );
+                worst = worst.max(e);
+            }
+        }
+        if cluster.level == 0 {
+            lod0_errors.push(worst / texel);
+        }
+    }
+    lod0_errors.sort_by(f32::total_cmp);
+    let median = lod0_errors[lod0_errors.len() / 2];
+    println!(
+        "tiled square: LOD-0 meshlets' worst UV error, in texels of a 1,024² texture: median \
+         {median:.4}, largest {:.4}; 16 bits over the map: {:.4}",
+        lod0_errors.last().unwrap(),
+        whole_map_half_step / texel
+    );
+    assert!(
+        median * texel <= whole_map_half_step / 4.0,
+        "the median LOD-0 meshlet is {median} texels off"
+    );
 }
 
 /// Checks every decoded meshlet against the DAG cluster it came from.
@@ -67,9 +157,17 @@ fn check_round_trip(built: &Built) {
                 let uv = built.mesh.uvs[g as usize];
                 #[allow(clippy::needless_range_loop)]
                 for a in 0..2 {
+                    // Half the meshlet's step: the grid's, times 2^shift.
+                    let shift = uv_origin(asset, i)[a] >> 24;
+                    let half = h.uv_step[a] * (1u32 << shift) as f32 * 0.5;
+                    // Plus f32 rounding of `uv_min + code * uv_step` at the map's magnitude.
+                    let rounding = 2.0
+                        * f32::EPSILON
+                        * (h.uv_min[a].abs() + h.uv_step[a] * (1u32 << 24) as f32);
+                    let e = (d.uvs[k][a] - uv[a]).abs();
                     assert!(
-                        (d.uvs[k][a] - uv[a]).abs() <= h.uv_step[a] * 0.5 + 1e-6,
-                        "meshlet {i}: uv"
+                        e <= half + rounding,
+                        "meshlet {i}: uv error {e}, half its step {half}, rounding {rounding}"
                     );
                 }
             }

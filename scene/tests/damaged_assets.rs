@@ -415,8 +415,9 @@ fn loading_for_the_renderer_refuses_what_inspect_rejects() {
     );
 }
 
-/// A UV grid whose largest encoded UV (`uv_min + 65535 · uv_step`) is past the f32
-/// range decodes to infinity on the GPU: refused at load, naming the fields.
+/// A UV grid whose largest encoded UV (`uv_min + (2^24 + 65535 · 2^8) · uv_step`) is
+/// past the f32 range decodes to infinity on the GPU: refused at load, naming the
+/// fields. So is a meshlet whose UV offsets are shifted past the grid.
 #[test]
 fn a_uv_grid_that_overflows_f32_is_refused() {
     let mut mesh =
@@ -442,6 +443,24 @@ fn a_uv_grid_that_overflows_f32_is_refused() {
         SceneError::AssetField { field, .. } => {
             assert!(field.contains("uv_min/uv_step"), "{err}");
             assert!(err.to_string().contains("f32 range"), "{err}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Meshlet 3's v offsets shifted by 9: codes past the grid.
+    let m = built.asset.meshlets()[3];
+    let at = built.asset.header().sections[meshlight_scene::asset::format::SECTION_PAYLOAD].offset
+        + m.data_offset
+        + meshlight_scene::asset::format::PayloadLayout::of(&m, true).uvs
+        + 1;
+    let mut w = words.clone();
+    w[at as usize] = (w[at as usize] & 0xff_ffff) | (9 << 24);
+    reseal(&mut w);
+    let len = w.len() as u64 * 4;
+    let err = MeshletAsset::from_words(w, len, Path::new("uv.mlasset")).unwrap_err();
+    match &err {
+        SceneError::AssetField { field, .. } => {
+            assert!(field.contains("meshlet[3].data_offset"), "{err}");
+            assert!(err.to_string().contains("shifted by 9"), "{err}");
         }
         other => panic!("{other:?}"),
     }

@@ -5,7 +5,7 @@
 // there.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv, MESHLET_UV_ORIGIN_WORDS}
 #import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MATERIAL_FLAG_DOUBLE_SIDED, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
 #import meshlight::texture::{texture_present, sample_texture, texture_lod}
@@ -305,7 +305,9 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
         normal[k] = meshlet_normal(m, vec2(field(m, v, 3u), field(m, v, 4u)));
         uv[k] = vec2(0.0);
         if has_uvs {
-            uv[k] = meshlet_uv(mesh.uv_grid, payload[meshlet_uv_word(m) + v]);
+            let block = meshlet_uv_word(m);
+            let origin = vec2(payload[block], payload[block + 1u]);
+            uv[k] = meshlet_uv(mesh.uv_grid, origin, payload[block + MESHLET_UV_ORIGIN_WORDS + v]);
         }
     }
     let bary = barycentrics(clip[0], clip[1], clip[2], pixel, vec2(f32(params.width), f32(params.height)));

@@ -27,8 +27,13 @@ use bytemuck::{Pod, Zeroable};
 pub const MAGIC: [u8; 8] = *b"MLASSET\0";
 /// Bumped on any layout change; older files are refused, not misread. 4: the culling
 /// hierarchy (`node_count`, two more sections). 5: material slots
-/// ([`AssetHeader::material_count`], [`MeshletRecord::material`]).
-pub const VERSION: u32 = 5;
+/// ([`AssetHeader::material_count`], [`MeshletRecord::material`]). 6: UVs as per-meshlet
+/// origins on a finer mesh-wide grid ([`UV_ORIGIN_WORDS`]).
+pub const VERSION: u32 = 6;
+
+/// Words at the start of a meshlet's UV block: its UV grid origin, one code per
+/// component (see [`crate::compress::UvQuantization`]).
+pub const UV_ORIGIN_WORDS: u32 = 2;
 
 /// Header flag: each meshlet's payload holds UVs after its vertex records.
 pub const FLAG_UVS: u32 = 1;
@@ -112,8 +117,8 @@ pub struct AssetHeader {
     pub quant_step: f32,
     /// Bits per axis of the grid: the largest grid coordinate is `2^quant_bits - 1`.
     pub quant_bits: u32,
-    /// UV grid: `uv = uv_min + uv_step * q` per component (see
-    /// [`crate::compress::UvQuantization`]).
+    /// UV grid: `uv = uv_min + uv_step * (origin + offset)` per component, with a
+    /// meshlet's origin and a vertex's offset (see [`crate::compress::UvQuantization`]).
     pub uv_min: [f32; 2],
     /// Distance between neighbouring UV grid points per component.
     pub uv_step: [f32; 2],
@@ -261,13 +266,17 @@ pub struct GroupRecord {
 }
 
 /// Payload layout of one meshlet, in words from its `data_offset`: vertex records,
-/// UVs (when the asset has them), triangle records.
+/// the UV block (when the asset has them: the meshlet's origin, then a word per vertex),
+/// triangle records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PayloadLayout {
     /// First word of the vertex records (always 0).
     pub vertices: u32,
-    /// First word of the UVs (equal to `triangles` without UVs).
+    /// First word of the UV block, its origin (equal to `triangles` without UVs).
     pub uvs: u32,
+    /// First word of the vertices' UVs, after the origin (equal to `triangles` without
+    /// UVs).
+    pub uv_words: u32,
     /// First word of the triangle records.
     pub triangles: u32,
     /// One past the meshlet's last word.
@@ -281,11 +290,13 @@ impl PayloadLayout {
         let vc = record.vertex_count();
         let vertices = 0;
         let uvs = (vc * record.vertex_stride()).div_ceil(32);
-        let triangles = uvs + if has_uvs { vc } else { 0 };
+        let uv_words = uvs + if has_uvs { UV_ORIGIN_WORDS } else { 0 };
+        let triangles = uv_words + if has_uvs { vc } else { 0 };
         let end = triangles + (record.triangle_count() * record.triangle_stride()).div_ceil(32);
         Self {
             vertices,
             uvs,
+            uv_words,
             triangles,
             end,
         }

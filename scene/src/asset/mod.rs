@@ -536,9 +536,10 @@ impl MeshletAsset {
             step: h.uv_step,
         };
         let uvs = if h.has_uvs() {
-            data[layout.uvs as usize..layout.triangles as usize]
+            let origin = [data[layout.uvs as usize], data[layout.uvs as usize + 1]];
+            data[layout.uv_words as usize..layout.triangles as usize]
                 .iter()
-                .map(|&u| uvq.decode(u))
+                .map(|&u| uvq.decode(origin, u))
                 .collect()
         } else {
             Vec::new()

@@ -97,7 +97,7 @@ impl MeshletAsset {
                     }
                 }
                 if has_uvs {
-                    data.extend(locals.iter().map(|&v| uvq.encode(mesh.uvs[v as usize])));
+                    data.extend(uvq.encode_meshlet(locals.iter().map(|&v| mesh.uvs[v as usize])));
                 }
                 let local: Vec<[u32; 3]> = local_index
                     .chunks_exact(3)

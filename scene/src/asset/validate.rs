@@ -5,7 +5,7 @@
 //! names the field that is wrong.
 
 use super::format::*;
-use crate::compress::{MAX_POSITION_BITS, MIN_POSITION_BITS};
+use crate::compress::{MAX_POSITION_BITS, MIN_POSITION_BITS, UV_GRID_CODES, UV_MAX_SHIFT};
 
 /// Most levels an asset may have: a meshlet stores its level in 8 bits.
 pub const MAX_LEVELS: u32 = 256;
@@ -269,6 +269,20 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ));
         }
         payload_end += layout.end as u64;
+        if has_uvs {
+            let at = (m.data_offset + layout.uvs) as usize;
+            if let Some(k) = (0..2).find(|&k| payload[at + k] >> 24 > UV_MAX_SHIFT) {
+                return Err(bad(
+                    f("data_offset"),
+                    format!(
+                        "points at a UV block whose {} offsets are shifted by {}; at most \
+                         {UV_MAX_SHIFT} reaches every code of the UV grid",
+                        ["u", "v"][k],
+                        payload[at + k] >> 24
+                    ),
+                ));
+            }
+        }
         if level == 0 {
             lod0_meshlets += 1;
             lod0_triangles += tc as u64;
@@ -793,9 +807,11 @@ fn header_floats(h: &AssetHeader) -> Result<(), Invalid> {
             format!("{:?} / {:?} is not a finite rectangle", h.uv_min, h.uv_step),
         ));
     }
-    // The largest UV a record encodes is `uv_min + 65535 · uv_step`, computed in f32 on
-    // the GPU: past the f32 range it decodes to infinity and the surface shades black.
-    if h.has_uvs() && (0..2).any(|k| !(h.uv_min[k] + 65535.0 * h.uv_step[k]).is_finite()) {
+    // The largest UV a record can encode is `uv_min + code · uv_step`, a code below
+    // `UV_GRID_CODES` plus a 16-bit offset shifted by at most `UV_MAX_SHIFT`, computed
+    // in f32 on the GPU: past the f32 range it decodes to infinity and shades black.
+    let largest_code = (UV_GRID_CODES + (0xffff << UV_MAX_SHIFT)) as f32;
+    if h.has_uvs() && (0..2).any(|k| !(h.uv_min[k] + largest_code * h.uv_step[k]).is_finite()) {
         return Err(bad(
             "header.uv_min/uv_step",
             format!(

@@ -1,6 +1,6 @@
 #define_import_path meshlight::meshlet
 
-// Meshlets as the asset format (version 3) stores them, and their decoding on the GPU.
+// Meshlets as the asset format (version 6) stores them, and their decoding on the GPU.
 // `Meshlet` and `MeshletGroup` are the asset's `MeshletRecord` and `GroupRecord` byte
 // for byte, so the GPU scene uploads the asset's sections as they are (offsets rebased
 // when several assets share the buffers); a test checks the layouts.
@@ -9,7 +9,9 @@
 // - vertex records of `meshlet_vertex_stride` bits each: the grid offsets x, y, z at the
 //   meshlet's bits per axis, then the two octahedral normal components as offsets from
 //   the meshlet's smallest ones at its normal bits;
-// - when the mesh has UVs (`MESH_FLAG_UVS`), one word per vertex: two 16-bit unorms;
+// - when the mesh has UVs (`MESH_FLAG_UVS`), the UV block: the meshlet's origin on the
+//   mesh's UV grid (`MESHLET_UV_ORIGIN_WORDS` words, a code and a shift per component),
+//   then one word per vertex, its two 16-bit offsets from the origin;
 // - triangle records of `meshlet_triangle_stride` bits each (at most 25): the largest
 //   corner as a biased offset from its prediction `(t + 1) * vertices / triangles`, then
 //   the two other corners, in winding order, as distances below it.
@@ -33,6 +35,8 @@ const MESHLET_NORMAL_BITS: u32 = 12u;
 const MESHLET_NORMAL_BIAS: i32 = 2048;
 // `Mesh::flags`: each meshlet's payload holds UVs after its vertex records.
 const MESH_FLAG_UVS: u32 = 1u;
+// Words of a meshlet's UV origin, before its vertices' UV words.
+const MESHLET_UV_ORIGIN_WORDS: u32 = 2u;
 
 // 52 bytes; the asset's `MeshletRecord`.
 struct Meshlet {
@@ -143,14 +147,15 @@ fn meshlet_triangle_stride(m: Meshlet) -> u32 {
     return t.x + 2u * t.y;
 }
 
-// First payload word of the UV block (meaningful only when the mesh has UVs).
+// First payload word of the UV block, the meshlet's UV origin (meaningful only when the
+// mesh has UVs); vertex `v`'s word is at `+ MESHLET_UV_ORIGIN_WORDS + v`.
 fn meshlet_uv_word(m: Meshlet) -> u32 {
     return m.data_offset + (meshlet_vertex_count(m) * meshlet_vertex_stride(m) + 31u) / 32u;
 }
 
 // First payload word of the triangle records.
 fn meshlet_triangle_word(m: Meshlet, mesh_flags: u32) -> u32 {
-    let uvs = select(0u, meshlet_vertex_count(m), (mesh_flags & MESH_FLAG_UVS) != 0u);
+    let uvs = select(0u, MESHLET_UV_ORIGIN_WORDS + meshlet_vertex_count(m), (mesh_flags & MESH_FLAG_UVS) != 0u);
     return meshlet_uv_word(m) + uvs;
 }
 
@@ -190,9 +195,14 @@ fn meshlet_normal(m: Meshlet, offset: vec2<u32>) -> vec3<f32> {
     return normalize(n);
 }
 
-// Texture coordinates from a vertex's UV word (at `meshlet_uv_word(m) + vertex`).
-fn meshlet_uv(uv_grid: vec4<f32>, word: u32) -> vec2<f32> {
-    return uv_grid.xy + vec2(f32(word & 0xffffu), f32(word >> 16u)) * uv_grid.zw;
+// Texture coordinates from the meshlet's UV `origin` (the two words at
+// `meshlet_uv_word(m)`: a code in the low 24 bits, a shift in the high 8) and a vertex's
+// UV word (two 16-bit offsets, in units of 2^shift codes). Codes stay below 2^24, so
+// their f32 is exact (`meshlight_scene::compress::UvQuantization`).
+fn meshlet_uv(uv_grid: vec4<f32>, origin: vec2<u32>, word: u32) -> vec2<f32> {
+    let offset = vec2(word & 0xffffu, word >> 16u) << (origin >> vec2(24u));
+    let code = (origin & vec2(0xffffffu)) + offset;
+    return uv_grid.xy + vec2<f32>(code) * uv_grid.zw;
 }
 
 // Where triangle `triangle`'s record begins: x = payload word, y = bit in it. A record

@@ -9,7 +9,7 @@
 // `meshlight_gpu_scene::surface` mirrors each step on the CPU.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Cluster, MESH_FLAG_UVS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv}
+#import meshlight::meshlet::{Meshlet, Cluster, MESH_FLAG_UVS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv, MESHLET_UV_ORIGIN_WORDS}
 #import meshlight::instance::{MATERIAL_FLAG_MASK, MAP_BASE_COLOR, material_uv, material_uv_step}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::scene_buffers::{payload, materials, textures}
@@ -167,7 +167,9 @@ fn cut_out_setup(cluster: Cluster, t: u32, view_projection: mat4x4<f32>) -> CutO
         clip[k] = view_projection * vec4(world, 1.0);
         out.uv[k] = vec2(0.0);
         if has_uvs {
-            out.uv[k] = meshlet_uv(tri.mesh.uv_grid, payload[meshlet_uv_word(m) + v]);
+            let block = meshlet_uv_word(m);
+            let origin = vec2(payload[block], payload[block + 1u]);
+            out.uv[k] = meshlet_uv(tri.mesh.uv_grid, origin, payload[block + MESHLET_UV_ORIGIN_WORDS + v]);
         }
     }
     out.bary = barycentric_setup(clip[0], clip[1], clip[2]);
