@@ -5,7 +5,8 @@
 
 use glam::{Vec2, Vec4};
 use meshlight_gpu_scene::{SceneData, surface};
-use meshlight_shaders::cpu::layout::{Cluster, MATERIAL_FLAG_DOUBLE_SIDED, View};
+use meshlight_scene::asset::format::PayloadLayout;
+use meshlight_shaders::cpu::layout::{Cluster, MATERIAL_FLAG_DOUBLE_SIDED, MESH_FLAG_UVS, View};
 use meshlight_shaders::cpu::visbuffer;
 
 /// Screen coordinates (pixels) at or beyond this make a vertex unusable; see the crate
@@ -245,8 +246,9 @@ pub fn screen_triangles(
         .iter()
         .map(|&c| snap(c, size).filter(|_| inside(c)))
         .collect();
-    let uv_word = m.data_offset + (vertex_count * stride).div_ceil(32);
-    let triangle_word = uv_word + if mesh.flags & 1 != 0 { vertex_count } else { 0 };
+    // Where the triangle records start: the asset format's one definition of the layout.
+    let has_uvs = mesh.flags & MESH_FLAG_UVS != 0;
+    let triangle_word = m.data_offset + PayloadLayout::of(m, has_uvs).triangles;
     let field_bits = [bits(m.bits, 24, 4), bits(m.bits, 28, 4)];
     let triangle_stride = field_bits[0] + 2 * field_bits[1];
     (0..triangle_count)
