@@ -26,26 +26,7 @@ fn uv_origin(asset: &MeshletAsset, i: usize) -> [u32; 2] {
 /// A flat square of `n × n` cells whose map repeats `repeats` times across it, as a
 /// tiling ground texture does.
 fn tiled_square(n: u32, repeats: f32) -> meshlight_scene::Mesh {
-    let mut mesh = meshlight_scene::Mesh {
-        source: "tiled square".into(),
-        ..Default::default()
-    };
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
-            mesh.positions.push(glam::Vec3::new(x, y, 0.0));
-            mesh.normals.push(glam::Vec3::Z);
-            mesh.uvs.push([x * repeats, y * repeats]);
-        }
-    }
-    let at = |i: u32, j: u32| j * (n + 1) + i;
-    for j in 0..n {
-        for i in 0..n {
-            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-            mesh.indices.extend_from_slice(&[a, b, c, a, c, d]);
-        }
-    }
-    mesh
+    common::generators::textured_square("tiled square", n, |x, y| (0.0, [x * repeats, y * repeats]))
 }
 
 /// A map repeated 64 times over a square: each meshlet's UVs keep a precision set by

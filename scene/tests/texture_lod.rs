@@ -18,31 +18,15 @@ fn build(mesh: &Mesh) -> Built {
 /// position), so that dropping a vertex moves the texture even where the surface barely
 /// moves.
 fn warped_grid(n: u32) -> Mesh {
-    let mut mesh = Mesh {
-        source: "warped grid".into(),
-        ..Mesh::default()
-    };
     let tau = std::f32::consts::TAU;
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
-            let z = 0.02 * (tau * 2.0 * x).sin() * (tau * 1.5 * y).cos();
-            mesh.positions.push(Vec3::new(x, y, z));
-            mesh.normals.push(Vec3::Z);
-            mesh.uvs.push([
-                x + 0.03 * (tau * 2.0 * y).sin(),
-                y + 0.03 * (tau * 3.0 * x).sin(),
-            ]);
-        }
-    }
-    let at = |i: u32, j: u32| j * (n + 1) + i;
-    for j in 0..n {
-        for i in 0..n {
-            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-            mesh.indices.extend_from_slice(&[a, b, c, a, c, d]);
-        }
-    }
-    mesh
+    common::generators::textured_square("warped grid", n, |x, y| {
+        let z = 0.02 * (tau * 2.0 * x).sin() * (tau * 1.5 * y).cos();
+        let uv = [
+            x + 0.03 * (tau * 2.0 * y).sin(),
+            y + 0.03 * (tau * 3.0 * x).sin(),
+        ];
+        (z, uv)
+    })
 }
 
 /// A latitude-longitude sphere whose map wraps: the column at longitude 0 is there

@@ -226,3 +226,34 @@ pub fn in_memory(
         ..meshlight_scene::Mesh::default()
     }
 }
+
+/// A square of `n × n` cells over [0, 1]², two triangles each, with each grid point's
+/// height and UV given by `at(x, y) -> (z, uv)` (normals all +Z: the tests using it look
+/// at positions and UVs).
+pub fn textured_square(
+    source: &str,
+    n: u32,
+    at: impl Fn(f32, f32) -> (f32, [f32; 2]),
+) -> meshlight_scene::Mesh {
+    let mut mesh = meshlight_scene::Mesh {
+        source: source.into(),
+        ..meshlight_scene::Mesh::default()
+    };
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+            let (z, uv) = at(x, y);
+            mesh.positions.push(glam::Vec3::new(x, y, z));
+            mesh.normals.push(glam::Vec3::Z);
+            mesh.uvs.push(uv);
+        }
+    }
+    let id = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            mesh.indices.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    mesh
+}
