@@ -32,6 +32,9 @@ use crate::mesh::{Fans, edge_key, triangle_edges};
 /// samples on a chart's border edges are exactly on it and round either way.
 const INSIDE: f32 = 1e-4;
 
+/// Rings of grid cells searched around a sample for the nearest UV of its chart.
+const MAX_RINGS: i32 = 32;
+
 /// Object units per UV unit over the whole mesh: the square root of its surface area
 /// over its UV area. It turns a UV difference into how far a texel moved on the surface,
 /// and weighs UVs against positions in the simplifier. 0 when the UVs cover no area.
@@ -88,7 +91,9 @@ pub fn uv_charts(vertex_count: usize, indices: &[u32]) -> Vec<u32> {
 /// Triangles and edges the simplification kept (those of `source`) are not measured:
 /// they are part of the level, within its errors already.
 pub fn simplified_uv_slide(level: &UvSurface<'_>, source: &[u32], simplified: &[u32]) -> f32 {
-    if level.uvs.is_empty() || simplified.is_empty() {
+    // A map of no area (every UV on one line, or all zero, as some exporters write)
+    // shows no texture that could slide.
+    if level.uvs.is_empty() || level.texel == 0.0 || simplified.is_empty() {
         return 0.0;
     }
     let (positions, uvs) = (level.positions, level.uvs);
@@ -285,9 +290,12 @@ impl<'a> UvSurface<'a> {
             )
             .max(Vec2::ZERO)
             .length();
-        let rings = self.dims[0].max(self.dims[1]);
+        // A sample whose chart has no triangle within this many rings is charged the
+        // gap to the last ring: a lower estimate, which bounds the search's cost.
+        let rings = self.dims[0].max(self.dims[1]).min(MAX_RINGS);
+        let mut nearest_gap = outside;
         for r in 0..=rings {
-            let nearest_gap = outside.max((r - 1).max(0) as f32 * cell_side);
+            nearest_gap = outside.max((r - 1).max(0) as f32 * cell_side);
             if nearest_gap * self.texel >= best {
                 break;
             }
@@ -313,7 +321,11 @@ impl<'a> UvSurface<'a> {
                 }
             }
         }
-        if best.is_finite() { best } else { 0.0 }
+        if best.is_finite() {
+            best
+        } else {
+            nearest_gap * self.texel
+        }
     }
 
     /// The triangles listed in a grid cell.
@@ -459,5 +471,11 @@ mod tests {
         let level = UvSurface::new(&positions, &warped, &charts, &source, texel);
         let slide = simplified_uv_slide(&level, &source, &simplified);
         assert!(slide > 0.2, "a warped map slides only {slide}");
+        // All UVs zero, as some exporters write: no area, no texture to slide, and no
+        // search through the grid for each sample.
+        let zero = vec![[0.0f32; 2]; 9];
+        assert_eq!(texel_size(&positions, &zero, &source), 0.0);
+        let level = UvSurface::new(&positions, &zero, &charts, &source, 0.0);
+        assert_eq!(simplified_uv_slide(&level, &source, &simplified), 0.0);
     }
 }
