@@ -27,7 +27,7 @@ done
 [ "$checked" -gt 0 ] || { echo "no library crates found" >&2; exit 1; }
 # A renderer that only draws baked assets takes meshlight-scene without its `build`
 # feature, and with it none of the builder's libraries.
-BUILDER='^(meshopt|metis|tobj|gltf|png|zune-jpeg|zune-core) '
+BUILDER='^(meshopt|metis|tobj|gltf|draco-core|png|zune-jpeg|zune-core) '
 found=$(cargo tree -p meshlight-scene --no-default-features -e normal,build --prefix none --format '{p}' |
     grep -E "$BUILDER" | sort -u || true)
 if [ -n "$found" ]; then

@@ -307,8 +307,8 @@ fn non_finite_accessor_values_are_refused_naming_the_accessor() {
     }
 }
 
-/// A file that requires an extension the loader does not read (a Draco-compressed
-/// primitive has no plain accessors) is refused naming the extension and a way out,
+/// A file that requires an extension the loader does not read (a Basis Universal texture
+/// has no PNG or JPEG) is refused naming the extension and a way out,
 /// before any accessor is read; an extension only used, not required, loads.
 #[test]
 fn a_required_extension_that_is_not_read_is_named_with_a_way_out() {
@@ -322,7 +322,7 @@ fn a_required_extension_that_is_not_read_is_named_with_a_way_out() {
         )
     };
     for (extension, way_out) in [
-        ("KHR_draco_mesh_compression", "gltf-transform"),
+        ("EXT_texture_webp", "PNG or JPEG"),
         ("KHR_texture_basisu", "PNG or JPEG"),
         ("EXT_made_up", "export the scene again"),
     ] {

@@ -12,6 +12,7 @@
 mod accessor;
 mod buffers;
 mod compressed;
+mod draco;
 pub use buffers::{percent_decode, referenced_path};
 mod images;
 pub use images::{SceneTexture, Wrap};
@@ -120,7 +121,11 @@ fn append_transformed(into: &mut Mesh, part: &Mesh, transform: Mat4) {
 
 /// Extensions a file may require that the loader reads (the material extensions meshlight
 /// ignores are never required by a valid file, as they only add to the core material).
-const READ_EXTENSIONS: &[&str] = &[compressed::EXTENSION, "KHR_mesh_quantization"];
+const READ_EXTENSIONS: &[&str] = &[
+    compressed::EXTENSION,
+    draco::EXTENSION,
+    "KHR_mesh_quantization",
+];
 
 /// A parsed glTF file: its JSON checked only as far as each step needs.
 struct GltfFile<'p> {
@@ -150,7 +155,7 @@ impl<'p> GltfFile<'p> {
     }
 
     /// Refuses a file that requires an extension this loader does not read (its data
-    /// would be misread: a Draco-compressed primitive has no plain accessors at all),
+    /// would be misread: a Basis Universal texture has no PNG or JPEG to decode),
     /// naming the extension and a way out.
     fn check_extensions(&self) -> Result<(), SceneError> {
         let root = self.root();
@@ -160,12 +165,6 @@ impl<'p> GltfFile<'p> {
             .find(|e| !READ_EXTENSIONS.contains(&e.as_str()))
         {
             let way_out = match unread.as_str() {
-                "KHR_draco_mesh_compression" => {
-                    "decompress the file first, e.g. `gltf-transform copy in.glb out.glb` \
-                     (glTF-Transform writes plain accessors unless asked to compress), or \
-                     recompress it with meshoptimizer, which meshlight reads: `gltfpack -i \
-                     in.glb -o out.glb -c`"
-                }
                 "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif" => {
                     "convert its textures to PNG or JPEG, e.g. with glTF-Transform's \
                      `png` or `jpeg` commands"
@@ -269,11 +268,13 @@ impl<'p> GltfFile<'p> {
         }
     }
 
-    /// The file's buffers, with its compressed views decoded (each such view then points
-    /// at a buffer of its own, appended after the file's).
+    /// The file's buffers, with its compressed views and Draco-compressed primitives
+    /// decoded (each such view or accessor then points at a buffer of its own, appended
+    /// after the file's).
     fn buffers(&mut self) -> Result<Vec<Vec<u8>>, SceneError> {
         let mut buffers = load_buffers(&self.root, self.blob.take(), self.path)?;
         compressed::decode_views(&mut self.root, &mut buffers).map_err(|e| self.err(e))?;
+        draco::decode_primitives(&mut self.root, &mut buffers).map_err(|e| self.err(e))?;
         Ok(buffers)
     }
 
