@@ -8,7 +8,9 @@ use meshlight_scene::asset::format::{GroupRecord, MeshletRecord, NO_GROUP, NodeR
 use meshlight_scene::texture::{
     ColorSpace, Image, MipChain, mip_chain, resample_square, to_linear,
 };
-use meshlight_shaders::cpu::layout::{self, MAP_COUNT, MESH_FLAG_UVS, TextureRef, TextureWrap};
+use meshlight_shaders::cpu::layout::{
+    self, MAP_COUNT, MESH_FLAG_COLORS, MESH_FLAG_UVS, TextureRef, TextureWrap,
+};
 use std::ops::Range;
 
 /// A mesh added with [`SceneData::add_mesh`].
@@ -95,6 +97,12 @@ pub const DEFAULT_ROUGHNESS: f32 = 0.6;
 pub fn srgb_table() -> [u32; layout::SRGB_TABLE_WORDS] {
     std::array::from_fn(|v| to_linear(v as u8).to_bits())
 }
+
+// The mesh flags are the asset's header flags, bit for bit.
+const _: () = assert!(
+    MESH_FLAG_UVS == meshlight_scene::asset::format::FLAG_UVS
+        && MESH_FLAG_COLORS == meshlight_scene::asset::format::FLAG_COLORS
+);
 
 /// Element counts the buffers may not exceed. Each buffer is bound whole, so the binding
 /// limit of the device bounds it; [`Limits::for_device`] derives them. The instance
@@ -272,6 +280,11 @@ impl SceneData {
         // which no pass reads; they are kept for inspection.
         self.groups.extend_from_slice(asset.groups());
         self.payload.extend_from_slice(asset.payload());
+        if header.has_colors() && self.textures.is_empty() {
+            // Vertex colours are sRGB-encoded: the resolve decodes them with the table
+            // the textures buffer starts with (256 words, within any limit).
+            self.textures.extend(srgb_table());
+        }
         let node_base = self.hierarchy_nodes.len() as u32;
         let list_base = self.hierarchy_clusters.len() as u32;
         self.hierarchy_roots.push(node_base);
@@ -308,7 +321,9 @@ impl SceneData {
             bounding_sphere: [center.x, center.y, center.z, radius],
             first_meshlet,
             meshlet_count: asset.meshlets().len() as u32,
-            flags: if header.has_uvs() { MESH_FLAG_UVS } else { 0 },
+            // The asset's flags as they are: the payload layout follows from them
+            // (`PayloadLayout::of`), on the GPU as on the CPU.
+            flags: header.flags & (MESH_FLAG_UVS | MESH_FLAG_COLORS),
             level_count: header.level_count,
         });
         self.mesh_names.push(name.to_string());

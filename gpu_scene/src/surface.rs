@@ -7,10 +7,10 @@
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout};
 use meshlight_scene::asset::triangles;
-use meshlight_scene::compress::{NORMAL_BITS, decode_octahedral, get_bits};
+use meshlight_scene::compress::{NORMAL_BITS, decode_color, decode_octahedral, get_bits};
 use meshlight_shaders::cpu::layout::{
-    Cluster, MAP_BASE_COLOR, MATERIAL_FLAG_MASK, MESH_FLAG_UVS, Mesh, TextureRef, material_uv,
-    material_uv_step, uv_transform_at,
+    Cluster, MAP_BASE_COLOR, MATERIAL_FLAG_MASK, MESH_FLAG_COLORS, MESH_FLAG_UVS, Mesh, TextureRef,
+    material_uv, material_uv_step, uv_transform_at,
 };
 
 use crate::SceneData;
@@ -26,13 +26,15 @@ pub struct Corner {
     /// `uv_grid.xy + (origin + offset << shift) · uv_grid.zw`, or 0 when the mesh has no
     /// UVs.
     pub uv: Vec2,
+    /// Linear RGBA vertex colour, or white when the mesh has none.
+    pub color: Vec4,
 }
 
 /// The three corners of triangle `t` of meshlet `m`, in winding order. Offsets past the
 /// payload read as zeros, as a storage-buffer read past the end may.
 pub fn triangle_corners(scene: &SceneData, mesh: &Mesh, m: &MeshletRecord, t: u32) -> [Corner; 3] {
     let has_uvs = mesh.flags & MESH_FLAG_UVS != 0;
-    let layout = PayloadLayout::of(m, has_uvs);
+    let layout = PayloadLayout::of(m, mesh.flags);
     let start = (m.data_offset as usize).min(scene.payload.len());
     let data = &scene.payload[start..];
     let block = data.get(layout.triangles as usize..).unwrap_or(&[]);
@@ -57,23 +59,35 @@ pub fn triangle_corners(scene: &SceneData, mesh: &Mesh, m: &MeshletRecord, t: u3
         let normal = decode_octahedral(oct, NORMAL_BITS);
         let uv = if has_uvs {
             let read = |at: u32| data.get(at as usize).copied().unwrap_or(0);
-            let word = read(layout.uv_words + v);
             let origin = [read(layout.uvs), read(layout.uvs + 1)];
+            let offsets = data.get(layout.uv_words as usize..).unwrap_or(&[]);
+            let [bu, bv] = m.uv_bits();
+            let at = (v * (bu + bv)) as usize;
+            let offset = [
+                get_bits(offsets, at, bu).unwrap_or(0),
+                get_bits(offsets, at + bu as usize, bv).unwrap_or(0),
+            ];
             // The low 24 bits of an origin word are its code, the high 8 the shift.
-            let code = |k: usize, offset: u32| {
+            let code = |k: usize| {
                 let shift = (origin[k] >> 24) & 31;
-                (origin[k] & 0xff_ffff).wrapping_add(offset << shift) as f32
+                (origin[k] & 0xff_ffff).wrapping_add(offset[k] << shift) as f32
             };
             Vec2::new(uv_grid[0], uv_grid[1])
-                + Vec2::new(code(0, word & 0xffff), code(1, word >> 16))
-                    * Vec2::new(uv_grid[2], uv_grid[3])
+                + Vec2::new(code(0), code(1)) * Vec2::new(uv_grid[2], uv_grid[3])
         } else {
             Vec2::ZERO
+        };
+        let color = if mesh.flags & MESH_FLAG_COLORS != 0 {
+            let word = data.get((layout.colors + v) as usize).copied().unwrap_or(0);
+            Vec4::from_array(decode_color(word))
+        } else {
+            Vec4::ONE
         };
         Corner {
             position,
             normal,
             uv,
+            color,
         }
     })
 }
@@ -209,5 +223,10 @@ pub fn cut_out(
         );
     }
     let map = material.maps[MAP_BASE_COLOR];
-    base_alpha(&scene.textures, map, material.base_color[3], &s) < material.alpha_cutoff
+    let mut alpha = base_alpha(&scene.textures, map, material.base_color[3], &s);
+    if mesh.flags & MESH_FLAG_COLORS != 0 {
+        let [c0, c1, c2] = corners.map(|c| c.color.w);
+        alpha *= c0 * b.b.x + c1 * b.b.y + c2 * b.b.z;
+    }
+    alpha < material.alpha_cutoff
 }

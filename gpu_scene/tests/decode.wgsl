@@ -3,7 +3,7 @@
 // asset's CPU decoder.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, MESHLET_UV_ORIGIN_WORDS, meshlet_triangle_location, meshlet_triangle, MESH_FLAG_UVS}
+#import meshlight::meshlet::{Meshlet, Mesh, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, meshlet_uv_location, meshlet_triangle_location, meshlet_triangle, MESH_FLAG_UVS}
 
 @group(0) @binding(0) var<storage, read> meshlets: array<Meshlet>;
 @group(0) @binding(1) var<storage, read> payload: array<u32>;
@@ -32,14 +32,14 @@ fn decode(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
         var uv = vec2(0.0);
         if (mesh.flags & MESH_FLAG_UVS) != 0u {
             let block = meshlet_uv_word(m);
-            let origin = vec2(payload[block], payload[block + 1u]);
-            uv = meshlet_uv(mesh.uv_grid, origin, payload[block + MESHLET_UV_ORIGIN_WORDS + v]);
+            let at = meshlet_uv_location(m, v);
+            uv = meshlet_uv(m, mesh.uv_grid, vec2(payload[block], payload[block + 1u]), vec2(payload[at.x], payload[at.x + 1u]), at.y);
         }
         vertices[(index * 255u + v) * 2u] = vec4(p, uv.x);
         vertices[(index * 255u + v) * 2u + 1u] = vec4(n, uv.y);
     }
     if t < meshlet_triangle_count(m) {
-        let at = meshlet_triangle_location(m, mesh.flags, t);
+        let at = meshlet_triangle_location(m, t);
         let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
         triangles[index * 128u + t] = vec4(c, 1u);
     }

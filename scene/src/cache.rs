@@ -96,6 +96,7 @@ pub fn mesh_key(mesh: &Mesh, options: &BuildOptions) -> u64 {
         bytemuck::cast_slice::<_, u8>(&mesh.positions),
         bytemuck::cast_slice(&mesh.normals),
         bytemuck::cast_slice(&mesh.uvs),
+        bytemuck::cast_slice(&mesh.colors),
         bytemuck::cast_slice(&mesh.indices),
         bytemuck::cast_slice(&mesh.materials),
     ] {

@@ -1,6 +1,6 @@
 //! Vertex compression: positions on one mesh-wide grid, bit-packed per meshlet at the
 //! fewest bits per axis; octahedral normals in 2 × [`NORMAL_BITS`] snorm; UVs as
-//! 2×16-bit unorm over the mesh's UV rectangle.
+//! per-meshlet offsets on a mesh-wide grid over the mesh's UV rectangle.
 //!
 //! One grid for the whole mesh is what keeps LOD cuts watertight after quantisation:
 //! a vertex shared by two meshlets decodes to bit-identical positions in both.
@@ -215,12 +215,18 @@ pub fn get_bits(words: &[u32], bit_offset: usize, bits: u32) -> Option<u32> {
 
 /// Bits per component of an octahedral normal. Measured worst distance of a decoded
 /// unit normal from the original over a dense sphere of directions
-/// (`normal_bits_meet_the_precision_bound`, precise encoding): 16 bits 4.3e-5, 13 bits
-/// 3.4e-4, 12 bits 6.8e-4, 11 bits 1.35e-3. The bound the tests hold decoded normals to
-/// is 1e-3 (0.06°, far below what shading shows); 12 bits is the fewest that meet it.
+/// (`normal_bits_meet_the_precision_bound`, precise encoding): 12 bits 6.8e-4, 11 bits
+/// 1.35e-3, 10 bits 2.7e-3 (0.16°), 9 bits 5.4e-3. The bound the tests hold decoded
+/// normals to is [`NORMAL_ERROR_BOUND`]: a change of n·l of at most 0.003, under one
+/// 8-bit step of linear light, where gltfpack's default (8 bits) moves normals by 0.6°.
+/// 10 bits is the fewest that meet it; 12 bits cost 0.7 bytes more per LOD-0 triangle
+/// on Spot and Beast.
 /// In an asset each meshlet stores its normals as offsets from their smallest
 /// components, at the bits their range needs (see [`crate::asset::format`]).
-pub const NORMAL_BITS: u32 = 12;
+pub const NORMAL_BITS: u32 = 10;
+
+/// Largest distance of a decoded unit normal from the original (see [`NORMAL_BITS`]).
+pub const NORMAL_ERROR_BOUND: f32 = 3e-3;
 
 /// Octahedral mapping of a unit vector to two signed components in `-max..=max`, with
 /// `max = 2^(bits-1) - 1`.
@@ -274,29 +280,55 @@ fn sign(v: f32) -> f32 {
 /// every integer exactly, so the GPU's `f32(code)` is the code itself.
 pub const UV_GRID_CODES: u32 = 1 << 24;
 
-/// Largest shift of a meshlet's 16-bit UV offsets: 16 bits shifted by 8 span the grid.
+/// Most bits of a meshlet's UV offset per component.
+pub const UV_MAX_BITS: u32 = 16;
+
+/// Largest shift of a meshlet's UV offsets: 16 bits shifted by 8 span the grid.
 pub const UV_MAX_SHIFT: u32 = 8;
 
 /// The code of a mesh's largest UV: what a meshlet spanning the whole rectangle reaches
 /// with the largest shift, below [`UV_GRID_CODES`].
-pub const UV_LARGEST_CODE: u32 = 0xffff << UV_MAX_SHIFT;
+pub const UV_LARGEST_CODE: u32 = ((1 << UV_MAX_BITS) - 1) << UV_MAX_SHIFT;
+
+/// The coarsest UV step a meshlet is stored at when its offsets fit [`UV_MAX_BITS`]
+/// (in UV units, 2^-15): an eighth of a texel of a 4,096² texture, the largest the
+/// renderer uploads, and a thirty-second of a texel of a 1,024² one. gltfpack's default
+/// (12 bits over the mesh's UV range) is a whole texel of a 4,096² texture over a unit
+/// map. Finer steps only cost bits.
+pub const UV_STEP_TARGET: f32 = 1.0 / 32768.0;
 
 /// Texture coordinates on a mesh-wide grid of [`UV_GRID_CODES`] codes per axis over the
 /// mesh's UV rectangle. A meshlet's UV block starts with one word per component, its
-/// smallest code (low 24 bits) and a shift (high 8 bits); each vertex then stores 16-bit
-/// offsets from those codes, in units of `2^shift` codes.
+/// smallest code (low 24 bits) and a shift (high 8 bits); each vertex then stores
+/// offsets from those codes, in units of `2^shift` codes, at the meshlet's bits per
+/// component ([`UvBlock::bits`], 1 to [`UV_MAX_BITS`]).
 ///
 /// Why not 16 bits over the whole mesh: a tiling map spans many UV units, and 65,536
-/// steps over 64 repeats are a step of a whole texel of a 1,024² texture. A LOD-0
-/// meshlet spans a small part of the map, so its offsets need no shift and it keeps the
-/// grid's full precision; a coarse meshlet spanning the whole map shifts by up to
-/// [`UV_MAX_SHIFT`], its steps no coarser than before, where its LOD error is larger.
+/// steps over 64 repeats are a step of a whole texel of a 1,024² texture. Why not the
+/// grid's full precision everywhere: [`UV_STEP_TARGET`] over a meshlet's part of the map
+/// takes fewer bits than the grid's step over it, though less than one would hope on
+/// atlas-mapped meshes (Spot, Beast), whose meshlets often straddle a seam and so span
+/// far-apart charts. A meshlet spanning the whole map shifts until 16 bits reach, up to
+/// [`UV_MAX_SHIFT`], where its LOD error is larger.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct UvQuantization {
     /// The smallest UV of the mesh per component: code 0.
     pub min: [f32; 2],
     /// UV distance per code per component (0 for a mesh without UVs).
     pub step: [f32; 2],
+}
+
+/// One meshlet's encoded UVs.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UvBlock {
+    /// Per component, the smallest code (low 24 bits) and the shift (high 8 bits): the
+    /// block's first two payload words.
+    pub origin: [u32; 2],
+    /// Bits of each vertex's offset per component, 1 to [`UV_MAX_BITS`] (kept in the
+    /// meshlet record, so the payload's layout follows from the record alone).
+    pub bits: [u32; 2],
+    /// Each vertex's offsets from `origin`, in units of `2^shift` codes.
+    pub offsets: Vec<[u32; 2]>,
 }
 
 impl UvQuantization {
@@ -334,10 +366,20 @@ impl UvQuantization {
         })
     }
 
-    /// A meshlet's UV block: its origin words (the smallest code and the shift, one word
-    /// per component), then one word per vertex, the u offset in the low half and v in
-    /// the high half.
-    pub fn encode_meshlet(&self, uvs: impl Iterator<Item = [f32; 2]> + Clone) -> Vec<u32> {
+    /// The largest shift whose step is at most [`UV_STEP_TARGET`] on component `k` (a
+    /// thousandth over it allowed: a unit rectangle's grid step is 2^-24 and a hair).
+    fn target_shift(&self, k: usize) -> u32 {
+        let target = f64::from(UV_STEP_TARGET) * 1.001;
+        (0..=UV_MAX_SHIFT)
+            .rev()
+            .find(|&s| f64::from(self.step[k]) * f64::from(1u32 << s) <= target)
+            .unwrap_or(0)
+    }
+
+    /// A meshlet's UV block: per component, the coarsest step down to the grid's that
+    /// keeps [`UV_STEP_TARGET`], or the finest whose offsets fit [`UV_MAX_BITS`] where
+    /// that target needs more; then the fewest bits that hold the offsets.
+    pub fn encode_meshlet(&self, uvs: impl Iterator<Item = [f32; 2]> + Clone) -> UvBlock {
         let (lo, hi) =
             uvs.clone()
                 .map(|uv| self.code(uv))
@@ -348,32 +390,57 @@ impl UvQuantization {
                     )
                 });
         let origin = [0, 1].map(|k| lo[k].min(hi[k]));
-        // The smallest shift whose rounded offsets reach the largest code.
+        let largest = (1u32 << UV_MAX_BITS) - 1;
         let rounded = |span: u32, s: u32| (span + ((1 << s) >> 1)) >> s;
         let shift = [0, 1].map(|k| {
-            (0..=UV_MAX_SHIFT)
-                .find(|&s| rounded(hi[k] - origin[k], s) <= 0xffff)
-                .unwrap_or(UV_MAX_SHIFT)
+            let fits = (0..=UV_MAX_SHIFT)
+                .find(|&s| rounded(hi[k] - origin[k], s) <= largest)
+                .unwrap_or(UV_MAX_SHIFT);
+            fits.max(self.target_shift(k))
         });
-        let mut block: Vec<u32> = (0..2).map(|k| origin[k] | (shift[k] << 24)).collect();
-        block.extend(uvs.map(|uv| {
-            let c = self.code(uv);
-            let d = [0, 1].map(|k| rounded(c[k] - origin[k], shift[k]).min(0xffff));
-            d[0] | (d[1] << 16)
-        }));
-        block
+        let bits = [0, 1].map(|k| bits_for(rounded(hi[k] - origin[k], shift[k])).max(1));
+        let offsets = uvs
+            .map(|uv| {
+                let c = self.code(uv);
+                [0, 1].map(|k| rounded(c[k] - origin[k], shift[k]).min((1 << bits[k]) - 1))
+            })
+            .collect();
+        UvBlock {
+            origin: [0, 1].map(|k| origin[k] | (shift[k] << 24)),
+            bits,
+            offsets,
+        }
     }
 
-    /// The UV of a vertex's word [`Self::encode_meshlet`] wrote, with its meshlet's
+    /// The UV of a vertex's `offset` [`Self::encode_meshlet`] wrote, with its meshlet's
     /// `origin` words, computed as the GPU does.
-    pub fn decode(&self, origin: [u32; 2], packed: u32) -> [f32; 2] {
-        let offset = [packed & 0xffff, packed >> 16];
+    pub fn decode(&self, origin: [u32; 2], offset: [u32; 2]) -> [f32; 2] {
         [0, 1].map(|k| {
             let shift = (origin[k] >> 24) & 31;
             let code = (origin[k] & 0xff_ffff).wrapping_add(offset[k] << shift);
             self.min[k] + code as f32 * self.step[k]
         })
     }
+}
+
+/// A vertex colour as the asset stores it, one word: red, green and blue as 8-bit sRGB
+/// (the encoding colour textures use, so dark gradients keep their steps), alpha as
+/// 8-bit linear, red in the low byte. `c` is linear RGBA, clamped to 0..1.
+pub fn encode_color(c: [f32; 4]) -> u32 {
+    let [r, g, b] = [c[0], c[1], c[2]].map(|v| crate::texture::from_linear(v) as u32);
+    let a = (c[3].clamp(0.0, 1.0) * 255.0).round() as u32;
+    r | (g << 8) | (b << 16) | (a << 24)
+}
+
+/// Linear RGBA of a word [`encode_color`] wrote, as the resolve decodes it.
+pub fn decode_color(word: u32) -> [f32; 4] {
+    let byte = |k: u32| (word >> (8 * k)) as u8;
+    [
+        crate::texture::to_linear(byte(0)),
+        crate::texture::to_linear(byte(1)),
+        crate::texture::to_linear(byte(2)),
+        byte(3) as f32 / 255.0,
+    ]
 }
 
 #[cfg(test)]
@@ -423,10 +490,10 @@ mod tests {
             }
             worst
         };
-        let measured: Vec<(u32, f32)> = [10, 11, 12, 13, 16].map(|b| (b, worst(b))).to_vec();
-        assert!(worst(NORMAL_BITS) <= 1e-3, "{measured:?}");
+        let measured: Vec<(u32, f32)> = [9, 10, 11, 12, 16].map(|b| (b, worst(b))).to_vec();
+        assert!(worst(NORMAL_BITS) <= NORMAL_ERROR_BOUND, "{measured:?}");
         assert!(
-            worst(NORMAL_BITS - 1) > 1e-3,
+            worst(NORMAL_BITS - 1) > NORMAL_ERROR_BOUND,
             "fewer bits would also do: {measured:?}"
         );
     }

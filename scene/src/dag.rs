@@ -141,6 +141,7 @@ pub fn build_dag(
     let attributes = Attributes {
         normals: &mesh.normals,
         uvs: &mesh.uvs,
+        colors: &mesh.colors,
         texel: crate::uv_slide::texel_size(positions, &mesh.uvs, &mesh.indices),
     };
     let remap = position_remap(positions);
@@ -495,6 +496,7 @@ fn seam_vertices(mesh: &Mesh, remap: &[u32], slots: &[u32]) -> (Vec<bool>, Vec<b
         }
         if mesh.normals[v] != mesh.normals[r]
             || (mesh.has_uvs() && mesh.uvs[v] != mesh.uvs[r])
+            || (mesh.has_colors() && mesh.colors[v] != mesh.colors[r])
             || slots[v] != slots[r]
         {
             differs[r] = true;

@@ -39,6 +39,9 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Texture coordinates, one per position, or empty when the source has none.
     pub uvs: Vec<[f32; 2]>,
+    /// Vertex colours (glTF's `COLOR_0`), linear RGBA in 0..1, one per position, or empty
+    /// when the source has none. They multiply the material's base colour and alpha.
+    pub colors: Vec<[f32; 4]>,
     /// Three indices per triangle, counter-clockwise front faces.
     pub indices: Vec<u32>,
     /// Each triangle's material slot (below [`MAX_MATERIALS`]), or empty when every
@@ -72,6 +75,11 @@ impl Mesh {
     /// Whether the mesh has texture coordinates, which the asset then stores.
     pub fn has_uvs(&self) -> bool {
         !self.uvs.is_empty()
+    }
+
+    /// Whether the mesh has vertex colours, which the asset then stores.
+    pub fn has_colors(&self) -> bool {
+        !self.colors.is_empty()
     }
 
     /// Material slots the mesh uses: one past the largest slot of a triangle (1 when
@@ -152,6 +160,13 @@ impl Mesh {
                 detail: format!("{} texture coordinates", self.uvs.len()),
             });
         }
+        if self.colors.len() != n && !self.colors.is_empty() {
+            return Err(SceneError::AttributeMismatch {
+                source_name: self.source.clone(),
+                vertex_count: n,
+                detail: format!("{} vertex colours", self.colors.len()),
+            });
+        }
         if !self.materials.is_empty() && self.materials.len() != self.triangle_count() {
             return Err(SceneError::AttributeMismatch {
                 source_name: self.source.clone(),
@@ -189,6 +204,19 @@ impl Mesh {
                 location: format!("vertex {vertex}"),
                 attribute: "texture coordinate".into(),
                 value: if t[0].is_finite() { t[1] } else { t[0] },
+            });
+        }
+        if let Some(vertex) = self
+            .colors
+            .iter()
+            .position(|c| !c.iter().all(|v| v.is_finite()))
+        {
+            let c = self.colors[vertex];
+            return Err(SceneError::NonFiniteAttribute {
+                source_name: self.source.clone(),
+                location: format!("vertex {vertex}"),
+                attribute: "vertex colour".into(),
+                value: c.into_iter().find(|v| !v.is_finite()).unwrap_or(f32::NAN),
             });
         }
         if let Some(vertex) = self
@@ -330,6 +358,9 @@ impl Mesh {
                         }
                         if !self.uvs.is_empty() {
                             self.uvs.push(self.uvs[source]);
+                        }
+                        if !self.colors.is_empty() {
+                            self.colors.push(self.colors[source]);
                         }
                         (self.positions.len() - 1) as u32
                     });

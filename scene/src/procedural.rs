@@ -69,6 +69,7 @@ pub fn procedural_mesh(segments: u32) -> Mesh {
         positions,
         normals: Vec::new(),
         uvs: Vec::new(),
+        colors: Vec::new(),
         indices,
         materials: Vec::new(),
     };

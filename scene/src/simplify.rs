@@ -25,6 +25,10 @@ const GOOD_RATIO: f32 = 0.55;
 /// attribute error cannot exceed the position error scale, so the weight only steers
 /// which collapses happen first.
 const NORMAL_WEIGHT: f32 = 0.5;
+/// Weight of each vertex colour component (0..1), like a normal's: with `ErrorClamped`
+/// it steers which collapses happen first, so a colour gradient keeps its vertices
+/// longer than a flat patch.
+const COLOR_WEIGHT: f32 = 0.5;
 /// Weight of each UV component, in object units per UV unit ([`crate::uv_slide::texel_size`]):
 /// a UV difference then counts as far as the texel moves on the surface, as the measured
 /// slide does.
@@ -100,6 +104,8 @@ pub struct Attributes<'a> {
     pub normals: &'a [Vec3],
     /// One UV per vertex, or none for a mesh without UVs.
     pub uvs: &'a [[f32; 2]],
+    /// One linear RGBA colour per vertex, or none for a mesh without vertex colours.
+    pub colors: &'a [[f32; 4]],
     /// Object units per UV unit ([`crate::uv_slide::texel_size`]).
     pub texel: f32,
 }
@@ -121,32 +127,28 @@ pub fn simplify_group(
         .iter()
         .map(|&g| attributes.normals[g as usize])
         .collect();
-    let uvs: Vec<[f32; 2]> = match attributes.uvs.is_empty() {
-        true => Vec::new(),
-        false => globals
-            .iter()
-            .map(|&g| attributes.uvs[g as usize])
-            .collect(),
-    };
-    // What the attribute-aware modes weigh: the normal, then the UV where there is one.
-    let (attrs, weights): (Vec<f32>, Vec<f32>) = match uvs.is_empty() {
-        true => (
-            bytemuck::cast_slice(&normals).to_vec(),
-            vec![NORMAL_WEIGHT; 3],
-        ),
-        false => (
-            normals
-                .iter()
-                .zip(&uvs)
-                .flat_map(|(n, uv)| [n.x, n.y, n.z, uv[0], uv[1]])
-                .collect(),
-            [
-                [NORMAL_WEIGHT; 3].as_slice(),
-                &[UV_WEIGHT * attributes.texel; 2],
-            ]
-            .concat(),
-        ),
-    };
+    // What the attribute-aware modes weigh: the normal, then the UV and the colour
+    // where there are any.
+    let has_uvs = !attributes.uvs.is_empty();
+    let has_colors = !attributes.colors.is_empty();
+    let mut attrs: Vec<f32> = Vec::with_capacity(globals.len() * 9);
+    for &g in &globals {
+        let g = g as usize;
+        attrs.extend_from_slice(&attributes.normals[g].to_array());
+        if has_uvs {
+            attrs.extend_from_slice(&attributes.uvs[g]);
+        }
+        if has_colors {
+            attrs.extend_from_slice(&attributes.colors[g]);
+        }
+    }
+    let mut weights = vec![NORMAL_WEIGHT; 3];
+    if has_uvs {
+        weights.extend([UV_WEIGHT * attributes.texel; 2]);
+    }
+    if has_colors {
+        weights.extend([COLOR_WEIGHT; 4]);
+    }
     // Welded ids for the fold check: seams must not count as separate edges.
     let weld = crate::mesh::position_remap(&pos);
     let mut locked: Vec<bool> = globals.iter().map(|&g| (flags.locked)(g)).collect();

@@ -181,6 +181,7 @@ impl Terrain {
             positions,
             normals: Vec::new(),
             uvs,
+            colors: Vec::new(),
             indices,
             materials: Vec::new(),
         };

@@ -19,7 +19,8 @@ fn build(mesh: &meshlight_scene::Mesh) -> Built {
 /// The two origin words of meshlet `i`'s UV block.
 fn uv_origin(asset: &MeshletAsset, i: usize) -> [u32; 2] {
     let m = &asset.meshlets()[i];
-    let at = (m.data_offset + PayloadLayout::of(m, true).uvs) as usize;
+    let at = (m.data_offset + PayloadLayout::of(m, meshlight_scene::asset::format::FLAG_UVS).uvs)
+        as usize;
     [asset.payload()[at], asset.payload()[at + 1]]
 }
 
@@ -57,8 +58,10 @@ fn a_tiling_map_keeps_its_uvs_to_a_small_part_of_a_texel() {
             let hi = uvs.iter().map(|u| u[a]).fold(f32::NEG_INFINITY, f32::max);
             let rounding = 2.0 * f32::EPSILON * (h.uv_min[a].abs() + 64.0);
             // The smallest shift that fits the extent leaves a step of at most twice the
-            // extent over 65,535 (a grid code of rounding besides).
-            let bound = (hi - lo) / 65535.0 + h.uv_step[a] + rounding;
+            // extent over 65,535, and the precision target a step of at most
+            // `UV_STEP_TARGET` (a grid code of rounding besides).
+            let target = meshlight_scene::compress::UV_STEP_TARGET * 1.001;
+            let bound = ((hi - lo) / 65535.0).max(target * 0.5) + h.uv_step[a] + rounding;
             for (k, uv) in uvs.iter().enumerate() {
                 let e = (d.uvs[k][a] - uv[a]).abs();
                 assert!(
@@ -130,7 +133,7 @@ fn check_round_trip(built: &Built) {
             );
             let n = built.mesh.normals[g as usize];
             assert!(
-                (d.normals[k] - n).length() <= 1e-3,
+                (d.normals[k] - n).length() <= meshlight_scene::compress::NORMAL_ERROR_BOUND,
                 "meshlet {i}: normal {} vs {n}",
                 d.normals[k]
             );
@@ -152,6 +155,24 @@ fn check_round_trip(built: &Built) {
                     );
                 }
             }
+            assert_eq!(h.has_colors(), built.mesh.has_colors());
+            if h.has_colors() {
+                // Colour words: RGB as the nearest 8-bit sRGB value, alpha linear.
+                let want = built.mesh.colors[g as usize];
+                let got = d.colors[k];
+                let srgb = |l: f32| meshlight_scene::texture::from_linear(l);
+                for c in 0..3 {
+                    assert_eq!(
+                        meshlight_scene::texture::to_linear(srgb(want[c])),
+                        got[c],
+                        "meshlet {i}: colour {got:?}, wanted {want:?}"
+                    );
+                }
+                assert!(
+                    (got[3] - want[3]).abs() <= 0.5 / 255.0 + 1e-6,
+                    "meshlet {i}: alpha {got:?}, wanted {want:?}"
+                );
+            }
         }
         // The culling sphere holds the decoded vertices.
         let m = &asset.meshlets()[i];
@@ -172,6 +193,29 @@ fn compressed_vertices_decode_within_the_quantisation_step() {
         let path = common::shared_mesh("spot.obj");
         let built = build(&load_mesh(&path).unwrap());
         assert!(built.asset.header().has_uvs());
+        check_round_trip(&built);
+    }
+    // With vertex colours: after the UV block, and without UVs.
+    for uvs in [true, false] {
+        let mut mesh = load_mesh(&common::shared_mesh("spot.obj")).unwrap();
+        if !uvs {
+            mesh.uvs.clear();
+        }
+        mesh.colors = mesh
+            .positions
+            .iter()
+            .map(|p| {
+                [
+                    p.x.abs().min(1.0),
+                    0.5 + 0.4 * p.y.sin(),
+                    0.02,
+                    0.25 + 0.5 * p.z.abs().min(1.0),
+                ]
+            })
+            .collect();
+        let built = build(&mesh);
+        assert!(built.asset.header().has_colors());
+        assert_eq!(built.asset.header().has_uvs(), uvs);
         check_round_trip(&built);
     }
 }
@@ -355,7 +399,7 @@ fn damaged_triangle_records_decode_in_range_and_are_reported() {
     let mut w: Vec<u32> = bytemuck::cast_slice(built.asset.bytes()).to_vec();
     let m = built.asset.meshlets()[0];
     let payload = built.asset.header().sections[meshlight_scene::asset::format::SECTION_PAYLOAD];
-    let layout = meshlight_scene::asset::format::PayloadLayout::of(&m, false);
+    let layout = meshlight_scene::asset::format::PayloadLayout::of(&m, 0);
     // The first record's corner offset field zero: its largest corner lies half the
     // field's range below the prediction (about 0 for the first triangle), below 0.
     let at = (payload.offset + m.data_offset + layout.triangles) as usize;

@@ -450,7 +450,11 @@ fn a_uv_grid_that_overflows_f32_is_refused() {
     let m = built.asset.meshlets()[3];
     let at = built.asset.header().sections[meshlight_scene::asset::format::SECTION_PAYLOAD].offset
         + m.data_offset
-        + meshlight_scene::asset::format::PayloadLayout::of(&m, true).uvs
+        + meshlight_scene::asset::format::PayloadLayout::of(
+            &m,
+            meshlight_scene::asset::format::FLAG_UVS,
+        )
+        .uvs
         + 1;
     let mut w = words.clone();
     w[at as usize] = (w[at as usize] & 0xff_ffff) | (9 << 24);

@@ -440,13 +440,13 @@ fn repair_sums(words: &mut [u32]) {
         vertices = vertices.wrapping_add(m.vertex_count());
         roots += (m.parent_group == u32::MAX) as u32;
         top = top.max(m.level());
-        at += meshlight_scene::asset::format::PayloadLayout::of(m, h.has_uvs()).end as u64;
+        at += meshlight_scene::asset::format::PayloadLayout::of(m, h.flags).end as u64;
     }
     if at == payload.words as u64 {
         let mut at = 0;
         for m in &mut meshlets {
             m.data_offset = at;
-            at += meshlight_scene::asset::format::PayloadLayout::of(m, h.has_uvs()).end;
+            at += meshlight_scene::asset::format::PayloadLayout::of(m, h.flags).end;
         }
         words[records.offset as usize..end as usize]
             .copy_from_slice(bytemuck::cast_slice(&meshlets));

@@ -1,7 +1,7 @@
 //! A glTF writer for tests: scenes built in code (meshes, a node tree, cameras), written
 //! as a `.glb`, so a test knows exactly what the loader must find and the renderer must
-//! draw. Only what tests need: float positions, normals and UVs, u32 indices, TRS or
-//! matrix nodes, perspective and orthographic cameras.
+//! draw. Only what tests need: float positions, normals and UVs, vertex colours, u32
+//! indices, TRS or matrix nodes, perspective and orthographic cameras.
 
 use serde_json::Value;
 /// For materials and damaged objects given as JSON, without a dependency of the caller's.
@@ -16,10 +16,21 @@ pub struct Primitive {
     pub normals: Option<Vec<[f32; 3]>>,
     /// `TEXCOORD_0`, one per position, or none.
     pub uvs: Option<Vec<[f32; 2]>>,
+    /// `COLOR_0`, one per position, or none.
+    pub colors: Option<Colors>,
     /// Three per triangle.
     pub indices: Vec<u32>,
     /// Its material, an index the writer returned.
     pub material: Option<usize>,
+}
+
+/// A primitive's `COLOR_0`, in two of the forms glTF allows.
+#[derive(Clone, Debug)]
+pub enum Colors {
+    /// VEC4 of normalized UNSIGNED_BYTE (what most exporters write).
+    Rgba8(Vec<[u8; 4]>),
+    /// VEC3 of FLOAT.
+    RgbFloat(Vec<[f32; 3]>),
 }
 
 /// A node: what it places and where, relative to its parent.
@@ -113,6 +124,19 @@ impl GltfWriter {
             if let Some(t) = &p.uvs {
                 attributes["TEXCOORD_0"] =
                     json!(self.accessor(bytemuck::cast_slice(t), FLOAT, "VEC2", t.len()));
+            }
+            match &p.colors {
+                Some(Colors::Rgba8(c)) => {
+                    const UNSIGNED_BYTE: u32 = 5121;
+                    let a = self.accessor(c.as_flattened(), UNSIGNED_BYTE, "VEC4", c.len());
+                    self.accessors[a]["normalized"] = json!(true);
+                    attributes["COLOR_0"] = json!(a);
+                }
+                Some(Colors::RgbFloat(c)) => {
+                    attributes["COLOR_0"] =
+                        json!(self.accessor(bytemuck::cast_slice(c), FLOAT, "VEC3", c.len()));
+                }
+                None => {}
             }
             let indices = self.accessor(
                 bytemuck::cast_slice(&p.indices),

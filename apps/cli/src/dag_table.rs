@@ -51,13 +51,14 @@ pub fn dag_table(summary: &AssetSummary) -> String {
     let per = |bytes: usize| bytes as f64 / h.lod0_triangles.max(1) as f64;
     let _ = writeln!(
         s,
-        "  bytes per LOD-0 triangle: records {:.2}, groups {:.2}, hierarchy {:.2}, positions {:.2}, normals {:.2}, UVs {:.2}, indices {:.2}; {:.2} vertex copies per triangle",
+        "  bytes per LOD-0 triangle: records {:.2}, groups {:.2}, hierarchy {:.2}, positions {:.2}, normals {:.2}, UVs {:.2}, colours {:.2}, indices {:.2}; {:.2} vertex copies per triangle",
         per(b.meshlet_records),
         per(b.groups),
         per(b.hierarchy),
         per(b.positions),
         per(b.normals),
         per(b.uvs),
+        per(b.colors),
         per(b.indices),
         h.total_vertices as f64 / h.total_triangles.max(1) as f64
     );

@@ -71,6 +71,7 @@ fn quad_file(name: &str, image: &[u8], role: &str, mirror_u: bool) -> PathBuf {
         &[Primitive {
             positions: corners.iter().map(|p| [p[0], p[1], 0.0]).collect(),
             normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
+            colors: None,
             uvs: Some(corners.iter().map(|&p| uv(p)).collect()),
             indices: vec![0, 1, 2, 0, 2, 3],
             material: Some(material),

@@ -1015,6 +1015,7 @@ fn golden_images_of_a_multi_material_scene() {
             [x, y + size, 0.0],
         ],
         normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
+        colors: None,
         uvs: Some(vec![[0.0, tiles], [tiles, tiles], [tiles, 0.0], [0.0, 0.0]]),
         indices: vec![0, 1, 2, 0, 2, 3],
         material: Some(material),
@@ -1075,6 +1076,7 @@ fn golden_images_of_a_multi_material_scene() {
             &[Primitive {
                 positions,
                 normals,
+                colors: None,
                 uvs: None,
                 indices,
                 material: Some(material),

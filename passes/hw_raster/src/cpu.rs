@@ -13,9 +13,6 @@ use meshlight_shaders::cpu::layout::{Cluster, MATERIAL_FLAG_DOUBLE_SIDED, Mesh, 
 use meshlight_shaders::cpu::visbuffer;
 use std::ops::Range;
 
-/// `Mesh::flags` bit: the meshlets' payload holds UVs.
-const MESH_FLAG_UVS: u32 = 1;
-
 /// The slots instances `0..hw_count` draw: `C - hw_count .. C` (instance `j` draws
 /// `C - 1 - j`), clamped to the capacity.
 pub fn hardware_slots(capacity: u32, hw_count: u32) -> Range<u32> {
@@ -29,7 +26,7 @@ pub fn decode_geometry(
     mesh: &Mesh,
     m: &MeshletRecord,
 ) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let layout = PayloadLayout::of(m, mesh.flags & MESH_FLAG_UVS != 0);
+    let layout = PayloadLayout::of(m, mesh.flags);
     let start = (m.data_offset as usize).min(scene.payload.len());
     let data = &scene.payload[start..];
     let axis = m.axis_bits();

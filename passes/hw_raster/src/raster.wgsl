@@ -129,7 +129,7 @@ fn raster_vs(@builtin(vertex_index) v: u32, @builtin(instance_index) j: u32) -> 
     }
     let instance = instance_at(cluster.instance);
     let mesh = meshes[instance.mesh];
-    let at = meshlet_triangle_location(m, mesh.flags, t);
+    let at = meshlet_triangle_location(m, t);
     let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
     if double_sided(instance, m) {
         // Every corner's invocation decides alike, from the same three positions, and
@@ -204,7 +204,7 @@ fn raster_ms(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
         }
         let two_sided = double_sided(instance, m);
         for (var t = lane; t < triangles; t += MESH_GROUP) {
-            let at = meshlet_triangle_location(m, mesh.flags, t);
+            let at = meshlet_triangle_location(m, t);
             var corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
             if two_sided {
                 // From the positions again: reading another lane's outputs would need

@@ -15,7 +15,7 @@ use meshlight_scene::asset::format::MeshletRecord;
 use meshlight_shaders::cpu::layout::{
     Cluster, ClusterGrid, ClusterableKind, ClusterableObject, Instance, MAP_BASE_COLOR,
     MAP_EMISSIVE, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MATERIAL_FLAG_CHECKER,
-    MATERIAL_FLAG_DOUBLE_SIDED, Material, TextureRef, View, material_uv,
+    MATERIAL_FLAG_DOUBLE_SIDED, MESH_FLAG_COLORS, Material, TextureRef, View, material_uv,
 };
 use meshlight_shaders::cpu::light::{cluster_index, z_slice_of_depth};
 use meshlight_shaders::cpu::visbuffer;
@@ -596,6 +596,9 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
     let textures = &scene.textures;
     s.base =
         Vec4::from_array(material.base_color) * s.sample_map(textures, MAP_BASE_COLOR, Vec4::ONE);
+    if mesh.flags & MESH_FLAG_COLORS != 0 {
+        s.base *= k0.color * b.x + k1.color * b.y + k2.color * b.z;
+    }
     if material.flags & MATERIAL_FLAG_CHECKER != 0 {
         let scale = checker_scale;
         let checker = filtered_checker(s.uv * scale, s.uv_dx * scale, s.uv_dy * scale);

@@ -5,10 +5,10 @@
 // there.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv, MESHLET_UV_ORIGIN_WORDS}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, MESH_FLAG_COLORS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv, meshlet_uv_location, meshlet_color_word}
 #import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MATERIAL_FLAG_DOUBLE_SIDED, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
-#import meshlight::texture::{texture_present, sample_texture, texture_lod}
+#import meshlight::texture::{texture_present, sample_texture, texture_lod, vertex_color}
 #import meshlight::surface::{barycentrics, interpolated_uv, uv_transform_rows, transformed_uv}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::instance_table::instance_at
@@ -237,7 +237,7 @@ fn filtered_checker(p: vec2<f32>, ddx: vec2<f32>, ddy: vec2<f32>) -> f32 {
 // What shading knows of a pixel's surface before it is lit.
 struct PixelSurface {
     material: Material,
-    // Base colour (factor × texture × checker) and its alpha, linear.
+    // Base colour (factor × texture × vertex colour × checker) and its alpha, linear.
     base: vec4<f32>,
     metallic: f32,
     roughness: f32,
@@ -306,8 +306,8 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
         uv[k] = vec2(0.0);
         if has_uvs {
             let block = meshlet_uv_word(m);
-            let origin = vec2(payload[block], payload[block + 1u]);
-            uv[k] = meshlet_uv(mesh.uv_grid, origin, payload[block + MESHLET_UV_ORIGIN_WORDS + v]);
+            let at = meshlet_uv_location(m, v);
+            uv[k] = meshlet_uv(m, mesh.uv_grid, vec2(payload[block], payload[block + 1u]), vec2(payload[at.x], payload[at.x + 1u]), at.y);
         }
     }
     let bary = barycentrics(clip[0], clip[1], clip[2], pixel, vec2(f32(params.width), f32(params.height)));
@@ -331,6 +331,10 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
     s.uv_dx = at.dx;
     s.uv_dy = at.dy;
     s.base = material.base_color * sample_map(material, MAP_BASE_COLOR, s, vec4(1.0));
+    if (mesh.flags & MESH_FLAG_COLORS) != 0u {
+        let colors = meshlet_color_word(m, mesh.flags);
+        s.base *= vertex_color(payload[colors + corners[0]]) * b.x + vertex_color(payload[colors + corners[1]]) * b.y + vertex_color(payload[colors + corners[2]]) * b.z;
+    }
     if (material.flags & MATERIAL_FLAG_CHECKER) != 0u {
         let scale = params.checker_scale;
         s.base = vec4(s.base.rgb * mix(CHECKER_DARK, 1.0, filtered_checker(s.uv * scale, s.uv_dx * scale, s.uv_dy * scale)), s.base.a);

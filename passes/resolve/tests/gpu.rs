@@ -220,11 +220,26 @@ impl Textures {
 /// has several. The first half of the slots count as software clusters.
 fn frame() -> Frame {
     let spot_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/meshes/spot.obj");
-    let spot = load_obj(&spot_path).unwrap();
+    let mut spot = load_obj(&spot_path).unwrap();
     assert!(!spot.uvs.is_empty(), "spot.obj should have UVs");
+    // Vertex colours over UVs (a pale tint) and without (the knot's bands), so the
+    // payload's colour words are read after a UV block and right after the triangles.
+    spot.colors = spot
+        .positions
+        .iter()
+        .map(|p| [0.8 + 0.2 * (4.0 * p.y).sin(), 1.0, 0.85, 1.0])
+        .collect();
     let mut scene = SceneData::new(Limits::default());
     let spot = add_mesh(&mut scene, "spot", &spot);
     let mut knot = procedural_mesh(12);
+    knot.colors = knot
+        .positions
+        .iter()
+        .map(|p| {
+            let a = 3.0 * p.x + 2.0 * p.z;
+            [0.5 + 0.5 * a.cos(), 0.5 + 0.5 * (a + 2.0).cos(), 0.6, 1.0]
+        })
+        .collect();
     let n = knot.triangle_count();
     knot.materials = (0..n).map(|t| (t * 3 / n) as u32).collect();
     let knot = add_mesh(&mut scene, "knot", &knot);

@@ -6,7 +6,7 @@
 use glam::{Vec2, Vec4};
 use meshlight_gpu_scene::{SceneData, surface};
 use meshlight_scene::asset::format::PayloadLayout;
-use meshlight_shaders::cpu::layout::{Cluster, MATERIAL_FLAG_DOUBLE_SIDED, MESH_FLAG_UVS, View};
+use meshlight_shaders::cpu::layout::{Cluster, MATERIAL_FLAG_DOUBLE_SIDED, View};
 use meshlight_shaders::cpu::visbuffer;
 
 /// Screen coordinates (pixels) at or beyond this make a vertex unusable; see the crate
@@ -212,7 +212,7 @@ pub fn screen_triangles(
     let grid = mesh.position_grid;
     let vertex_count = bits(m.counts, 0, 8);
     let triangle_count = bits(m.counts, 8, 8);
-    let axis = [bits(m.bits, 0, 8), bits(m.bits, 8, 8), bits(m.bits, 16, 8)];
+    let axis = [bits(m.bits, 0, 5), bits(m.bits, 5, 5), bits(m.bits, 10, 5)];
     let normal = [bits(m.normals, 24, 4), bits(m.normals, 28, 4)];
     let stride = axis.iter().sum::<u32>() + normal[0] + normal[1];
     let clip: Vec<Vec4> = (0..vertex_count)
@@ -247,8 +247,7 @@ pub fn screen_triangles(
         .map(|&c| snap(c, size).filter(|_| inside(c)))
         .collect();
     // Where the triangle records start: the asset format's one definition of the layout.
-    let has_uvs = mesh.flags & MESH_FLAG_UVS != 0;
-    let triangle_word = m.data_offset + PayloadLayout::of(m, has_uvs).triangles;
+    let triangle_word = m.data_offset + PayloadLayout::of(m, mesh.flags).triangles;
     let field_bits = [bits(m.bits, 24, 4), bits(m.bits, 28, 4)];
     let triangle_stride = field_bits[0] + 2 * field_bits[1];
     (0..triangle_count)

@@ -430,7 +430,7 @@ fn raster(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index)
 
     var setup = Setup(Tri(), vec2(0), vec2(-1));
     if t < meshlet_triangle_count(m) {
-        let at = meshlet_triangle_location(m, mesh.flags, t);
+        let at = meshlet_triangle_location(m, t);
         let c = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
         if (usable[c.x] & usable[c.y] & usable[c.z]) != 0u {
             setup = triangle_setup(

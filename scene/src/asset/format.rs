@@ -17,8 +17,12 @@
 //!   [`MeshletRecord::normals`]). A meshlet is a small patch whose
 //!   normals span a fraction of the sphere, so this takes 19 to 23 bits on the test
 //!   meshes (the smoother the surface, the fewer) where the full components took 24;
-//! - UVs (when the asset has them): 2 × 16-bit unorm per vertex, one word;
-//! - triangles: fixed-width records of about 16 bits, see [`super::triangles`].
+//! - triangles: fixed-width records of about 16 bits, see [`super::triangles`];
+//! - UVs (when the asset has them): the meshlet's origin on the mesh's UV grid, then
+//!   each vertex's offsets from it at the meshlet's bits per component (in
+//!   [`MeshletRecord::bits`]; see [`crate::compress::UvQuantization`]);
+//! - vertex colours (when the asset has them): one word per vertex, sRGB RGB and
+//!   linear alpha at 8 bits each ([`crate::compress::encode_color`]).
 
 use bytemuck::{Pod, Zeroable};
 
@@ -28,15 +32,21 @@ pub const MAGIC: [u8; 8] = *b"MLASSET\0";
 /// Bumped on any layout change; older files are refused, not misread. 4: the culling
 /// hierarchy (`node_count`, two more sections). 5: material slots
 /// ([`AssetHeader::material_count`], [`MeshletRecord::material`]). 6: UVs as per-meshlet
-/// origins on a finer mesh-wide grid ([`UV_ORIGIN_WORDS`]).
-pub const VERSION: u32 = 6;
+/// origins on a finer mesh-wide grid ([`UV_ORIGIN_WORDS`]). 7: UV offsets bit-packed at
+/// the meshlet's bits per component, the UV block after the triangles; vertex colours
+/// ([`FLAG_COLORS`]).
+pub const VERSION: u32 = 7;
 
 /// Words at the start of a meshlet's UV block: its UV grid origin, one code per
 /// component (see [`crate::compress::UvQuantization`]).
 pub const UV_ORIGIN_WORDS: u32 = 2;
 
-/// Header flag: each meshlet's payload holds UVs after its vertex records.
+/// Header flag: each meshlet's payload holds UVs after its triangle records.
 pub const FLAG_UVS: u32 = 1;
+/// Header flag: each meshlet's payload ends with a colour word per vertex.
+pub const FLAG_COLORS: u32 = 2;
+/// Every header flag a reader knows.
+pub const KNOWN_FLAGS: u32 = FLAG_UVS | FLAG_COLORS;
 
 /// Section order in [`AssetHeader::sections`]: the meshlet records.
 pub const SECTION_MESHLETS: usize = 0;
@@ -74,7 +84,7 @@ pub struct AssetHeader {
     pub magic: [u8; 8],
     /// [`VERSION`] of the writer; a reader refuses any other.
     pub version: u32,
-    /// [`FLAG_UVS`] or nothing.
+    /// [`FLAG_UVS`] and [`FLAG_COLORS`], or nothing.
     pub flags: u32,
     /// Whole file size in bytes, low and high halves (the header stays 4-byte aligned).
     pub file_size: [u32; 2],
@@ -134,6 +144,11 @@ impl AssetHeader {
     pub fn has_uvs(&self) -> bool {
         self.flags & FLAG_UVS != 0
     }
+
+    /// Whether each meshlet's payload holds vertex colours ([`FLAG_COLORS`]).
+    pub fn has_colors(&self) -> bool {
+        self.flags & FLAG_COLORS != 0
+    }
 }
 
 /// Most vertices per meshlet: local indices are `u8`, and 255 leaves 255 free as a
@@ -177,8 +192,10 @@ pub struct MeshletRecord {
     pub counts: u32,
     /// Per-meshlet minimum of the grid coordinates; packed values are offsets from it.
     pub grid_min: [u32; 3],
-    /// Bits per packed axis: x (0..8), y (8..16), z (16..24); then the widths of the
-    /// triangle records' fields: corner offset (24..28), corner deltas (28..32).
+    /// Bits per packed axis: x (0..5), y (5..10), z (10..15); bits of the UV offsets
+    /// less one (when the asset has UVs, else 0): u (15..19), v (19..23); bit 23 is 0;
+    /// then the widths of the triangle records' fields: corner offset (24..28), corner
+    /// deltas (28..32).
     pub bits: u32,
     /// Smallest octahedral normal components of the meshlet, biased by
     /// [`NORMAL_BIAS`] to be unsigned: x (0..12), y (12..24); then the bits of each
@@ -209,10 +226,29 @@ impl MeshletRecord {
     /// Bits of each packed position offset (x, y, z), from [`Self::bits`].
     pub fn axis_bits(&self) -> [u32; 3] {
         [
-            self.bits & 0xff,
-            (self.bits >> 8) & 0xff,
-            (self.bits >> 16) & 0xff,
+            self.bits & 0x1f,
+            (self.bits >> 5) & 0x1f,
+            (self.bits >> 10) & 0x1f,
         ]
+    }
+    /// Bits of each vertex's UV offset (u, v), from [`Self::bits`]; meaningful only in
+    /// an asset with UVs.
+    pub fn uv_bits(&self) -> [u32; 2] {
+        [((self.bits >> 15) & 0xf) + 1, ((self.bits >> 19) & 0xf) + 1]
+    }
+    /// [`Self::bits`] from its fields (`uv_bits` is `None` without UVs).
+    pub fn pack_bits(
+        axis: [u32; 3],
+        uv_bits: Option<[u32; 2]>,
+        triangles: super::triangles::TriangleBits,
+    ) -> u32 {
+        let uv = uv_bits.map_or(0, |b| ((b[0] - 1) << 15) | ((b[1] - 1) << 19));
+        axis[0]
+            | (axis[1] << 5)
+            | (axis[2] << 10)
+            | uv
+            | (triangles.offset << 24)
+            | (triangles.delta << 28)
     }
     /// Field widths of the triangle records (see [`super::triangles`]).
     pub fn triangle_bits(&self) -> super::triangles::TriangleBits {
@@ -266,38 +302,50 @@ pub struct GroupRecord {
 }
 
 /// Payload layout of one meshlet, in words from its `data_offset`: vertex records,
-/// the UV block (when the asset has them: the meshlet's origin, then a word per vertex),
-/// triangle records.
+/// triangle records, then the UV block (when the asset has them: the meshlet's origin,
+/// then the vertices' offsets), then the colour words (when it has them). UVs and
+/// colours come last so that the rasterisers, which rarely read them, find the
+/// triangles at the same place with or without.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PayloadLayout {
     /// First word of the vertex records (always 0).
     pub vertices: u32,
-    /// First word of the UV block, its origin (equal to `triangles` without UVs).
-    pub uvs: u32,
-    /// First word of the vertices' UVs, after the origin (equal to `triangles` without
-    /// UVs).
-    pub uv_words: u32,
     /// First word of the triangle records.
     pub triangles: u32,
+    /// First word of the UV block, its origin (equal to `end` without UVs).
+    pub uvs: u32,
+    /// First word of the vertices' UV offsets, after the origin (equal to `colors`
+    /// without UVs).
+    pub uv_words: u32,
+    /// First word of the colour words, one per vertex (equal to `end` without colours).
+    pub colors: u32,
     /// One past the meshlet's last word.
     pub end: u32,
 }
 
 impl PayloadLayout {
-    /// The layout of `record`'s payload, from its counts and bit widths alone: the
+    /// The layout of `record`'s payload in an asset (or GPU mesh) with header `flags`
+    /// ([`FLAG_UVS`], [`FLAG_COLORS`]), from its counts and bit widths alone: the
     /// decoders and the validation find every block without reading the payload.
-    pub fn of(record: &MeshletRecord, has_uvs: bool) -> Self {
+    pub fn of(record: &MeshletRecord, flags: u32) -> Self {
         let vc = record.vertex_count();
         let vertices = 0;
-        let uvs = (vc * record.vertex_stride()).div_ceil(32);
-        let uv_words = uvs + if has_uvs { UV_ORIGIN_WORDS } else { 0 };
-        let triangles = uv_words + if has_uvs { vc } else { 0 };
-        let end = triangles + (record.triangle_count() * record.triangle_stride()).div_ceil(32);
+        let triangles = (vc * record.vertex_stride()).div_ceil(32);
+        let uvs = triangles + (record.triangle_count() * record.triangle_stride()).div_ceil(32);
+        let (uv_words, colors) = if flags & FLAG_UVS != 0 {
+            let [u, v] = record.uv_bits();
+            let uv_words = uvs + UV_ORIGIN_WORDS;
+            (uv_words, uv_words + (vc * (u + v)).div_ceil(32))
+        } else {
+            (uvs, uvs)
+        };
+        let end = colors + if flags & FLAG_COLORS != 0 { vc } else { 0 };
         Self {
             vertices,
+            triangles,
             uvs,
             uv_words,
-            triangles,
+            colors,
             end,
         }
     }

@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use crate::compress::{
-    NORMAL_BITS, Quantization, UvQuantization, bit_window, decode_octahedral, get_bits, low_bits,
+    NORMAL_BITS, Quantization, UvQuantization, bit_window, decode_color, decode_octahedral,
+    get_bits, low_bits,
 };
 use crate::error::SceneError;
 use format::*;
@@ -60,8 +61,10 @@ pub struct SizeBreakdown {
     pub positions: usize,
     /// The normal offsets of the vertex records (their share of each record's bits).
     pub normals: usize,
-    /// The UV words.
+    /// The UV blocks.
     pub uvs: usize,
+    /// The vertex colour words.
+    pub colors: usize,
     /// Local indices, including the padding of each meshlet's list to whole words.
     pub indices: usize,
     /// The culling hierarchy: nodes and cluster list.
@@ -77,6 +80,7 @@ impl SizeBreakdown {
             + self.positions
             + self.normals
             + self.uvs
+            + self.colors
             + self.indices
             + self.hierarchy
     }
@@ -108,6 +112,8 @@ pub struct DecodedMeshlet {
     pub normals: Vec<Vec3>,
     /// UVs, dequantised; empty when the asset has none.
     pub uvs: Vec<[f32; 2]>,
+    /// Linear RGBA vertex colours; empty when the asset has none.
+    pub colors: Vec<[f32; 4]>,
     /// Corners of each triangle as local vertex indices.
     pub triangles: Vec<[u8; 3]>,
 }
@@ -405,7 +411,7 @@ impl MeshletAsset {
 
     /// Bytes per part of the file; the parts add up to the file size.
     pub fn size_breakdown(&self) -> SizeBreakdown {
-        let has_uvs = self.header().has_uvs();
+        let flags = self.header().flags;
         let mut b = SizeBreakdown {
             header: AssetHeader::WORDS * 4,
             meshlet_records: self.section(SECTION_MESHLETS).len() * 4,
@@ -414,25 +420,26 @@ impl MeshletAsset {
             ..Default::default()
         };
         for m in self.meshlets() {
-            let l = PayloadLayout::of(m, has_uvs);
+            let l = PayloadLayout::of(m, flags);
             // Vertex records interleave positions and normals: split their words by bits.
-            let vertex_bytes = (l.uvs - l.vertices) as usize * 4;
+            let vertex_bytes = (l.triangles - l.vertices) as usize * 4;
             let [nx, ny] = m.normal_bits();
             let normal_share = (nx + ny) as usize;
             let normals = vertex_bytes * normal_share / m.vertex_stride().max(1) as usize;
             b.positions += vertex_bytes - normals;
             b.normals += normals;
-            b.uvs += (l.triangles - l.uvs) as usize * 4;
-            b.indices += (l.end - l.triangles) as usize * 4;
+            b.indices += (l.uvs - l.triangles) as usize * 4;
+            b.uvs += (l.colors - l.uvs) as usize * 4;
+            b.colors += (l.end - l.colors) as usize * 4;
         }
         b
     }
 
     /// A meshlet's triangle records (see [`triangles`]).
     pub fn triangle_block(&self, m: &MeshletRecord) -> &[u32] {
-        let layout = PayloadLayout::of(m, self.header().has_uvs());
+        let layout = PayloadLayout::of(m, self.header().flags);
         &self.payload()
-            [(m.data_offset + layout.triangles) as usize..(m.data_offset + layout.end) as usize]
+            [(m.data_offset + layout.triangles) as usize..(m.data_offset + layout.uvs) as usize]
     }
 
     /// One meshlet's grid points and triangles only: what the DAG checks compare, without
@@ -504,12 +511,12 @@ impl MeshletAsset {
     pub fn decode_meshlet(&self, index: usize) -> DecodedMeshlet {
         let h = self.header();
         let m = &self.meshlets()[index];
-        let layout = PayloadLayout::of(m, h.has_uvs());
+        let layout = PayloadLayout::of(m, h.flags);
         let data = &self.payload()[m.data_offset as usize..(m.data_offset + layout.end) as usize];
         let vc = m.vertex_count() as usize;
         let bits = m.axis_bits();
         let quant = self.quantization();
-        let vertex_block = &data[..layout.uvs as usize];
+        let vertex_block = &data[..layout.triangles as usize];
         let stride = m.vertex_stride() as usize;
         // Every field is in range (validated at load); `unwrap_or(0)` only keeps a
         // decoder of untrusted words from panicking.
@@ -537,9 +544,17 @@ impl MeshletAsset {
         };
         let uvs = if h.has_uvs() {
             let origin = [data[layout.uvs as usize], data[layout.uvs as usize + 1]];
-            data[layout.uv_words as usize..layout.triangles as usize]
-                .iter()
-                .map(|&u| uvq.decode(origin, u))
+            let uv_block = &data[layout.uv_words as usize..];
+            let [bu, bv] = m.uv_bits();
+            (0..m.vertex_count() as usize)
+                .map(|v| {
+                    let at = v * (bu + bv) as usize;
+                    let offset = [
+                        field(uv_block, at, bu),
+                        field(uv_block, at + bu as usize, bv),
+                    ];
+                    uvq.decode(origin, offset)
+                })
                 .collect()
         } else {
             Vec::new()
@@ -551,11 +566,20 @@ impl MeshletAsset {
                 triangles::decode(triangle_block, t, m.triangle_bits(), vc, tc).map(|i| i as u8)
             })
             .collect();
+        let colors = if h.has_colors() {
+            data[layout.colors as usize..layout.end as usize]
+                .iter()
+                .map(|&w| decode_color(w))
+                .collect()
+        } else {
+            Vec::new()
+        };
         DecodedMeshlet {
             positions: grid.iter().map(|&q| quant.dequantize(q)).collect(),
             grid,
             normals,
             uvs,
+            colors,
             triangles,
         }
     }

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::format::*;
 use super::{MeshletAsset, checksum, triangles};
 use crate::compress::{
-    BitWriter, NORMAL_BITS, Quantization, UvQuantization, bits_for, encode_octahedral,
+    BitWriter, NORMAL_BITS, Quantization, UvQuantization, bits_for, encode_color, encode_octahedral,
 };
 use crate::dag::Dag;
 use crate::mesh::Mesh;
@@ -34,6 +34,7 @@ impl MeshletAsset {
         let (min, max) = mesh.bounds();
         let uvq = UvQuantization::new(&mesh.uvs);
         let has_uvs = mesh.has_uvs();
+        let has_colors = mesh.has_colors();
         let grid: Vec<[u32; 3]> = mesh
             .positions
             .par_iter()
@@ -96,14 +97,28 @@ impl MeshletAsset {
                         w.put((o[k] - oct_lo[k]) as u32, oct_bits[k]);
                     }
                 }
-                if has_uvs {
-                    data.extend(uvq.encode_meshlet(locals.iter().map(|&v| mesh.uvs[v as usize])));
-                }
                 let local: Vec<[u32; 3]> = local_index
                     .chunks_exact(3)
                     .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
                     .collect();
                 let tri_bits = triangles::encode(&local, locals.len() as u32, &mut data);
+                let uv_bits = has_uvs.then(|| {
+                    let block = uvq.encode_meshlet(locals.iter().map(|&v| mesh.uvs[v as usize]));
+                    data.extend(block.origin);
+                    let mut w = BitWriter::new(&mut data);
+                    for o in &block.offsets {
+                        w.put(o[0], block.bits[0]);
+                        w.put(o[1], block.bits[1]);
+                    }
+                    block.bits
+                });
+                if has_colors {
+                    data.extend(
+                        locals
+                            .iter()
+                            .map(|&v| encode_color(mesh.colors[v as usize])),
+                    );
+                }
                 let sphere4 = |c: Vec3, r: f32| [c.x, c.y, c.z, r];
                 let record = MeshletRecord {
                     bounds: sphere4(c.bounds.0, c.bounds.1 + pad),
@@ -115,11 +130,7 @@ impl MeshletAsset {
                         | (c.level.min(255) << 16)
                         | (c.material << 24),
                     grid_min: lo,
-                    bits: bits[0]
-                        | (bits[1] << 8)
-                        | (bits[2] << 16)
-                        | (tri_bits.offset << 24)
-                        | (tri_bits.delta << 28),
+                    bits: MeshletRecord::pack_bits(bits, uv_bits, tri_bits),
                     normals: (oct_lo[0] + NORMAL_BIAS) as u32
                         | (((oct_lo[1] + NORMAL_BIAS) as u32) << 12)
                         | (oct_bits[0] << 24)
@@ -165,7 +176,8 @@ impl MeshletAsset {
         let mut header = <AssetHeader as bytemuck::Zeroable>::zeroed();
         header.magic = MAGIC;
         header.version = VERSION;
-        header.flags = if has_uvs { FLAG_UVS } else { 0 };
+        header.flags =
+            if has_uvs { FLAG_UVS } else { 0 } | if has_colors { FLAG_COLORS } else { 0 };
         header.meshlet_count = meshlets.len() as u32;
         header.group_count = groups.len() as u32;
         header.node_count = hierarchy.nodes.len() as u32;

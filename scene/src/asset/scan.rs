@@ -147,7 +147,7 @@ fn scan_meshlet<const WIDE: bool>(
     keys: &ChainKeys,
     decoded: &mut Decoded,
 ) -> MeshletScan {
-    let layout = PayloadLayout::of(m, asset.header().has_uvs());
+    let layout = PayloadLayout::of(m, asset.header().flags);
     // From the meshlet's data to the payload's end: windows read past a block's last
     // field, and the masks drop what they read there.
     let data = &payload[m.data_offset as usize * 4..];
@@ -404,7 +404,7 @@ mod tests {
         // past the vertices) and move a vertex far from its meshlet's sphere.
         for i in [0, 5, 9] {
             let m = asset.meshlets()[i];
-            let layout = PayloadLayout::of(&m, asset.header().has_uvs());
+            let layout = PayloadLayout::of(&m, asset.header().flags);
             let at = asset.header().sections[super::super::format::SECTION_PAYLOAD].offset
                 + m.data_offset;
             asset.words[(at + layout.triangles) as usize] = u32::MAX;

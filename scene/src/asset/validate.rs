@@ -5,7 +5,9 @@
 //! names the field that is wrong.
 
 use super::format::*;
-use crate::compress::{MAX_POSITION_BITS, MIN_POSITION_BITS, UV_GRID_CODES, UV_MAX_SHIFT};
+use crate::compress::{
+    MAX_POSITION_BITS, MIN_POSITION_BITS, UV_GRID_CODES, UV_LARGEST_CODE, UV_MAX_SHIFT,
+};
 
 /// Most levels an asset may have: a meshlet stores its level in 8 bits.
 pub const MAX_LEVELS: u32 = 256;
@@ -36,10 +38,10 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
     let h: &AssetHeader = bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
     let total = words.len() as u64;
 
-    if h.flags & !FLAG_UVS != 0 {
+    if h.flags & !KNOWN_FLAGS != 0 {
         return Err(bad(
             "header.flags",
-            format!("has unknown bits {:#x}", h.flags & !FLAG_UVS),
+            format!("has unknown bits {:#x}", h.flags & !KNOWN_FLAGS),
         ));
     }
     // Sections tile the file in order: nothing overlaps, nothing is left over.
@@ -207,6 +209,22 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
                 ),
             ));
         }
+        // Bit 23 is unused; the UV widths are 0 in an asset without UVs.
+        let unused = if has_uvs { 1 << 23 } else { 0x1ff << 15 };
+        if m.bits & unused != 0 {
+            return Err(bad(
+                f("bits"),
+                format!(
+                    "sets bits {:#x}, which {}",
+                    m.bits & unused,
+                    if has_uvs {
+                        "no field uses"
+                    } else {
+                        "give UV widths in an asset without UVs"
+                    }
+                ),
+            ));
+        }
         let bits = m.axis_bits();
         for (k, (&b, &min)) in bits.iter().zip(&m.grid_min).enumerate() {
             if b > h.quant_bits {
@@ -254,7 +272,7 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
                 ),
             ));
         }
-        let layout = PayloadLayout::of(m, has_uvs);
+        let layout = PayloadLayout::of(m, h.flags);
         if m.data_offset as u64 + layout.end as u64 > payload.len() as u64 {
             return Err(bad(f("data_offset"), "puts its data outside the payload"));
         }
@@ -808,9 +826,10 @@ fn header_floats(h: &AssetHeader) -> Result<(), Invalid> {
         ));
     }
     // The largest UV a record can encode is `uv_min + code · uv_step`, a code below
-    // `UV_GRID_CODES` plus a 16-bit offset shifted by at most `UV_MAX_SHIFT`, computed
-    // in f32 on the GPU: past the f32 range it decodes to infinity and shades black.
-    let largest_code = (UV_GRID_CODES + (0xffff << UV_MAX_SHIFT)) as f32;
+    // `UV_GRID_CODES` plus an offset of at most `UV_MAX_BITS` shifted by at most
+    // `UV_MAX_SHIFT`, computed in f32 on the GPU: past the f32 range it decodes to
+    // infinity and shades black.
+    let largest_code = (UV_GRID_CODES + UV_LARGEST_CODE) as f32;
     if h.has_uvs() && (0..2).any(|k| !(h.uv_min[k] + largest_code * h.uv_step[k]).is_finite()) {
         return Err(bad(
             "header.uv_min/uv_step",

@@ -71,6 +71,12 @@ fn merge(
         .iter()
         .all(|m| m.mesh.texcoords.len() / 2 == m.mesh.positions.len() / 3)
         && models.iter().any(|m| !m.mesh.texcoords.is_empty());
+    // `v x y z r g b` lines: the colours tools write, read as sRGB like a colour
+    // texture's (OBJ names no colour space), alpha 1.
+    let all_colors = models
+        .iter()
+        .all(|m| m.mesh.vertex_color.len() == m.mesh.positions.len())
+        && models.iter().any(|m| !m.mesh.vertex_color.is_empty());
     let mut slots = 1;
     for model in models {
         let m = &model.mesh;
@@ -90,6 +96,12 @@ fn merge(
         if all_uvs {
             mesh.uvs
                 .extend(m.texcoords.chunks_exact(2).map(|t| [t[0], t[1]]));
+        }
+        if all_colors {
+            mesh.colors.extend(m.vertex_color.chunks_exact(3).map(|c| {
+                let linear = crate::texture::srgb_to_linear;
+                [linear(c[0]), linear(c[1]), linear(c[2]), 1.0]
+            }));
         }
         mesh.indices.extend(m.indices.iter().map(|&i| i + base));
         let slot = slot_of(model);

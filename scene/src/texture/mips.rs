@@ -6,7 +6,13 @@ use super::{ColorSpace, Image};
 
 /// The sRGB transfer function's inverse, for one 8-bit value: linear light in 0..=1.
 pub fn to_linear(v: u8) -> f32 {
-    let c = v as f32 / 255.0;
+    srgb_to_linear(v as f32 / 255.0)
+}
+
+/// The sRGB transfer function's inverse: an encoded value in 0..=1 (clamped) to linear
+/// light.
+pub fn srgb_to_linear(c: f32) -> f32 {
+    let c = c.clamp(0.0, 1.0);
     if c <= 0.04045 {
         c / 12.92
     } else {

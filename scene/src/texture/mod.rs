@@ -15,7 +15,7 @@ mod mips;
 
 #[cfg(feature = "build")]
 pub use decode::{ImageFormat, decode_image, sniff_format};
-pub use mips::{MipChain, from_linear, mip_chain, resample_square, to_linear};
+pub use mips::{MipChain, from_linear, mip_chain, resample_square, srgb_to_linear, to_linear};
 
 /// Largest width or height an image file may declare: past it, decoding is refused
 /// before anything is allocated (16384 is the largest 2-D texture most GPUs take).

@@ -57,7 +57,8 @@ pub struct Mesh {
     pub first_meshlet: u32,
     /// Its meshlets, all LOD levels: `first_meshlet .. first_meshlet + meshlet_count`.
     pub meshlet_count: u32,
-    /// `MESH_FLAG_UVS` (1) when the payload holds UVs.
+    /// `MESH_FLAG_UVS` (1) when the payload holds UVs, `MESH_FLAG_COLORS` (2) when it
+    /// holds vertex colours: the asset header's flags.
     pub flags: u32,
     /// LOD levels of the mesh's DAG, for the `lod` debug view and statistics.
     pub level_count: u32,
@@ -65,6 +66,8 @@ pub struct Mesh {
 
 /// `MESH_FLAG_UVS` of [`Mesh::flags`].
 pub const MESH_FLAG_UVS: u32 = 1;
+/// `MESH_FLAG_COLORS` of [`Mesh::flags`].
+pub const MESH_FLAG_COLORS: u32 = 2;
 
 /// `meshlight::meshlet::Cluster`.
 #[repr(C)]

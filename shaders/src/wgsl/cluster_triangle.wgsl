@@ -22,7 +22,7 @@ fn cluster_triangle(cluster: Cluster, t: u32) -> ClusterTriangle {
     let instance = instance_at(cluster.instance);
     let m = meshlets[cluster.meshlet];
     let mesh = meshes[instance.mesh];
-    let at = meshlet_triangle_location(m, mesh.flags, t);
+    let at = meshlet_triangle_location(m, t);
     let corners = meshlet_triangle(m, t, vec2(payload[at.x], payload[at.x + 1u]), at.y);
     return ClusterTriangle(instance, m, mesh, corners);
 }

@@ -1,6 +1,6 @@
 #define_import_path meshlight::meshlet
 
-// Meshlets as the asset format (version 6) stores them, and their decoding on the GPU.
+// Meshlets as the asset format (version 7) stores them, and their decoding on the GPU.
 // `Meshlet` and `MeshletGroup` are the asset's `MeshletRecord` and `GroupRecord` byte
 // for byte, so the GPU scene uploads the asset's sections as they are (offsets rebased
 // when several assets share the buffers); a test checks the layouts.
@@ -9,12 +9,17 @@
 // - vertex records of `meshlet_vertex_stride` bits each: the grid offsets x, y, z at the
 //   meshlet's bits per axis, then the two octahedral normal components as offsets from
 //   the meshlet's smallest ones at its normal bits;
-// - when the mesh has UVs (`MESH_FLAG_UVS`), the UV block: the meshlet's origin on the
-//   mesh's UV grid (`MESHLET_UV_ORIGIN_WORDS` words, a code and a shift per component),
-//   then one word per vertex, its two 16-bit offsets from the origin;
 // - triangle records of `meshlet_triangle_stride` bits each (at most 25): the largest
 //   corner as a biased offset from its prediction `(t + 1) * vertices / triangles`, then
-//   the two other corners, in winding order, as distances below it.
+//   the two other corners, in winding order, as distances below it;
+// - when the mesh has UVs (`MESH_FLAG_UVS`), the UV block: the meshlet's origin on the
+//   mesh's UV grid (`MESHLET_UV_ORIGIN_WORDS` words, a code and a shift per component),
+//   then each vertex's offsets from it, u then v, at `meshlet_uv_bits` (at most 16
+//   each);
+// - when the mesh has vertex colours (`MESH_FLAG_COLORS`), a word per vertex: sRGB red,
+//   green, blue and linear alpha at 8 bits each (`meshlight::texture`'s
+//   `vertex_color`). The rasterisers read UVs and colours only for MASK materials, so
+//   they come last.
 // Every field is found by multiplying, so a thread per vertex or per triangle decodes
 // its own record with no serial state. Read a field with `read_bits` from the two words
 // at its location; the GPU scene pads the payload so the second word always exists.
@@ -30,12 +35,14 @@ const MESHLET_MAX_VERTICES: u32 = 255u;
 // `source_group` of a LOD-0 meshlet and `parent_group` of a root.
 const MESHLET_NO_GROUP: u32 = 0xffffffffu;
 // Bits per octahedral normal component before the per-meshlet offsets.
-const MESHLET_NORMAL_BITS: u32 = 12u;
+const MESHLET_NORMAL_BITS: u32 = 10u;
 // Added to a signed octahedral component to store its minimum unsigned.
-const MESHLET_NORMAL_BIAS: i32 = 2048;
-// `Mesh::flags`: each meshlet's payload holds UVs after its vertex records.
+const MESHLET_NORMAL_BIAS: i32 = 512;
+// `Mesh::flags`: each meshlet's payload holds UVs after its triangle records.
 const MESH_FLAG_UVS: u32 = 1u;
-// Words of a meshlet's UV origin, before its vertices' UV words.
+// `Mesh::flags`: each meshlet's payload ends with a colour word per vertex.
+const MESH_FLAG_COLORS: u32 = 2u;
+// Words of a meshlet's UV origin, before its vertices' UV offsets.
 const MESHLET_UV_ORIGIN_WORDS: u32 = 2u;
 
 // 52 bytes; the asset's `MeshletRecord`.
@@ -55,8 +62,9 @@ struct Meshlet {
     counts: u32,
     // Smallest grid coordinate of the meshlet's vertices; vertices store offsets from it.
     grid_min: array<u32, 3>,
-    // Bits per axis x (0..8), y (8..16), z (16..24); triangle record fields: corner
-    // offset (24..28), corner distances (28..32).
+    // Bits per axis x (0..5), y (5..10), z (10..15); UV offset bits less one, u
+    // (15..19), v (19..23); triangle record fields: corner offset (24..28), corner
+    // distances (28..32).
     bits: u32,
     // Smallest octahedral components plus MESHLET_NORMAL_BIAS: x (0..12), y (12..24);
     // bits of each component's offset: x (24..28), y (28..32).
@@ -123,7 +131,12 @@ fn meshlet_bounds(m: Meshlet) -> vec4<f32> {
 
 // Bits per axis of the grid offsets (x, y, z).
 fn meshlet_axis_bits(m: Meshlet) -> vec3<u32> {
-    return vec3(extractBits(m.bits, 0u, 8u), extractBits(m.bits, 8u, 8u), extractBits(m.bits, 16u, 8u));
+    return vec3(extractBits(m.bits, 0u, 5u), extractBits(m.bits, 5u, 5u), extractBits(m.bits, 10u, 5u));
+}
+
+// Bits of each vertex's UV offsets (u, v); meaningful only when the mesh has UVs.
+fn meshlet_uv_bits(m: Meshlet) -> vec2<u32> {
+    return vec2(extractBits(m.bits, 15u, 4u), extractBits(m.bits, 19u, 4u)) + 1u;
 }
 
 // Bits of the two octahedral offsets.
@@ -147,16 +160,34 @@ fn meshlet_triangle_stride(m: Meshlet) -> u32 {
     return t.x + 2u * t.y;
 }
 
-// First payload word of the UV block, the meshlet's UV origin (meaningful only when the
-// mesh has UVs); vertex `v`'s word is at `+ MESHLET_UV_ORIGIN_WORDS + v`.
-fn meshlet_uv_word(m: Meshlet) -> u32 {
+// First payload word of the triangle records.
+fn meshlet_triangle_word(m: Meshlet) -> u32 {
     return m.data_offset + (meshlet_vertex_count(m) * meshlet_vertex_stride(m) + 31u) / 32u;
 }
 
-// First payload word of the triangle records.
-fn meshlet_triangle_word(m: Meshlet, mesh_flags: u32) -> u32 {
-    let uvs = select(0u, MESHLET_UV_ORIGIN_WORDS + meshlet_vertex_count(m), (mesh_flags & MESH_FLAG_UVS) != 0u);
-    return meshlet_uv_word(m) + uvs;
+// First payload word of the UV block, the meshlet's UV origin (meaningful only when the
+// mesh has UVs).
+fn meshlet_uv_word(m: Meshlet) -> u32 {
+    return meshlet_triangle_word(m) + (meshlet_triangle_count(m) * meshlet_triangle_stride(m) + 31u) / 32u;
+}
+
+// First payload word of the colour words, one per vertex (meaningful only when the mesh
+// has vertex colours): after the UV block where the mesh has UVs.
+fn meshlet_color_word(m: Meshlet, mesh_flags: u32) -> u32 {
+    var word = meshlet_uv_word(m);
+    if (mesh_flags & MESH_FLAG_UVS) != 0u {
+        let b = meshlet_uv_bits(m);
+        word += MESHLET_UV_ORIGIN_WORDS + (meshlet_vertex_count(m) * (b.x + b.y) + 31u) / 32u;
+    }
+    return word;
+}
+
+// Where vertex `vertex`'s UV offsets lie: x = payload word, y = bit in it. Both offsets
+// (at most 32 bits together) lie in the words x and x + 1.
+fn meshlet_uv_location(m: Meshlet, vertex: u32) -> vec2<u32> {
+    let b = meshlet_uv_bits(m);
+    let bit = vertex * (b.x + b.y);
+    return vec2(meshlet_uv_word(m) + MESHLET_UV_ORIGIN_WORDS + bit / 32u, bit % 32u);
 }
 
 // Where field `field` of vertex `vertex` lies: x = payload word, y = bit in it, z = bit
@@ -196,20 +227,25 @@ fn meshlet_normal(m: Meshlet, offset: vec2<u32>) -> vec3<f32> {
 }
 
 // Texture coordinates from the meshlet's UV `origin` (the two words at
-// `meshlet_uv_word(m)`: a code in the low 24 bits, a shift in the high 8) and a vertex's
-// UV word (two 16-bit offsets, in units of 2^shift codes). Codes stay below 2^24, so
-// their f32 is exact (`meshlight_scene::compress::UvQuantization`).
-fn meshlet_uv(uv_grid: vec4<f32>, origin: vec2<u32>, word: u32) -> vec2<f32> {
-    let offset = vec2(word & 0xffffu, word >> 16u) << (origin >> vec2(24u));
+// `meshlet_uv_word(m)`: a code in the low 24 bits, a shift in the high 8) and the two
+// words at a vertex's `meshlet_uv_location` (`words`, its offsets from bit `bit` on, in
+// units of 2^shift codes). Codes stay below 2^24, so their f32 is exact
+// (`meshlight_scene::compress::UvQuantization`).
+fn meshlet_uv(m: Meshlet, uv_grid: vec4<f32>, origin: vec2<u32>, words: vec2<u32>, bit: u32) -> vec2<f32> {
+    let b = meshlet_uv_bits(m);
+    let u = read_bits(words, bit, b.x);
+    let v_bit = bit + b.x;
+    let v = read_bits(select(words, vec2(words.y, 0u), v_bit >= 32u), v_bit % 32u, b.y);
+    let offset = vec2(u, v) << (origin >> vec2(24u));
     let code = (origin & vec2(0xffffffu)) + offset;
     return uv_grid.xy + vec2<f32>(code) * uv_grid.zw;
 }
 
 // Where triangle `triangle`'s record begins: x = payload word, y = bit in it. A record
 // fits in the two words x and x + 1.
-fn meshlet_triangle_location(m: Meshlet, mesh_flags: u32, triangle: u32) -> vec2<u32> {
+fn meshlet_triangle_location(m: Meshlet, triangle: u32) -> vec2<u32> {
     let bit = triangle * meshlet_triangle_stride(m);
-    return vec2(meshlet_triangle_word(m, mesh_flags) + bit / 32u, bit % 32u);
+    return vec2(meshlet_triangle_word(m) + bit / 32u, bit % 32u);
 }
 
 // The three local vertex indices of triangle `triangle`, in winding order, from the two

@@ -9,11 +9,11 @@
 // `meshlight_gpu_scene::surface` mirrors each step on the CPU.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Cluster, MESH_FLAG_UVS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv, MESHLET_UV_ORIGIN_WORDS}
+#import meshlight::meshlet::{Meshlet, Cluster, MESH_FLAG_UVS, MESH_FLAG_COLORS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv, meshlet_uv_location, meshlet_color_word}
 #import meshlight::instance::{MATERIAL_FLAG_MASK, MAP_BASE_COLOR, material_uv, material_uv_step}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::scene_buffers::{payload, materials, textures}
-#import meshlight::texture::{texture_present, sample_alpha}
+#import meshlight::texture::{texture_present, sample_alpha, vertex_color}
 
 // Perspective-correct barycentrics at a pixel and their derivatives per pixel step in
 // x and y.
@@ -139,6 +139,9 @@ struct CutOut {
     alpha: f32,
     cutoff: f32,
     uv_transform: u32,
+    // The mesh has vertex colours, whose alphas multiply the material's.
+    has_colors: bool,
+    vertex_alpha: vec3<f32>,
 }
 
 // Triangle `t` of `cluster` set up for `cut_at`. The corners are transformed as the
@@ -158,6 +161,7 @@ fn cut_out_setup(cluster: Cluster, t: u32, view_projection: mat4x4<f32>) -> CutO
     out.cutoff = material.alpha_cutoff;
     out.uv_transform = material.uv_transform;
     let has_uvs = (tri.mesh.flags & MESH_FLAG_UVS) != 0u;
+    out.has_colors = (tri.mesh.flags & MESH_FLAG_COLORS) != 0u;
     var clip: array<vec4<f32>, 3>;
     for (var k = 0u; k < 3u; k += 1u) {
         let v = tri.corners[k];
@@ -168,8 +172,11 @@ fn cut_out_setup(cluster: Cluster, t: u32, view_projection: mat4x4<f32>) -> CutO
         out.uv[k] = vec2(0.0);
         if has_uvs {
             let block = meshlet_uv_word(m);
-            let origin = vec2(payload[block], payload[block + 1u]);
-            out.uv[k] = meshlet_uv(tri.mesh.uv_grid, origin, payload[block + MESHLET_UV_ORIGIN_WORDS + v]);
+            let at = meshlet_uv_location(m, v);
+            out.uv[k] = meshlet_uv(m, tri.mesh.uv_grid, vec2(payload[block], payload[block + 1u]), vec2(payload[at.x], payload[at.x + 1u]), at.y);
+        }
+        if out.has_colors {
+            out.vertex_alpha[k] = vertex_color(payload[meshlet_color_word(m, tri.mesh.flags) + v]).a;
         }
     }
     out.bary = barycentric_setup(clip[0], clip[1], clip[2]);
@@ -185,11 +192,16 @@ fn cut_at(c: CutOut, pixel: vec2<f32>, size: vec2<f32>) -> bool {
     }
     // The coordinates the resolve samples the maps at: interpolated, then through the
     // material's texture transform where it has one.
-    var s = interpolated_uv(c.uv, barycentrics_at(c.bary, pixel, size));
+    let b = barycentrics_at(c.bary, pixel, size);
+    var s = interpolated_uv(c.uv, b);
     if c.uv_transform != 0u {
         s = transformed_uv(uv_transform_rows(c.uv_transform), s);
     }
-    return base_alpha(c.map, c.alpha, s) < c.cutoff;
+    var alpha = base_alpha(c.map, c.alpha, s);
+    if c.has_colors {
+        alpha *= c.vertex_alpha.x * b.b.x + c.vertex_alpha.y * b.b.y + c.vertex_alpha.z * b.b.z;
+    }
+    return alpha < c.cutoff;
 }
 
 // Whether the pixel centred at `pixel` of triangle `t` of `cluster` is cut out

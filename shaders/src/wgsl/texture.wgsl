@@ -34,6 +34,13 @@ fn srgb_decoded(v: u32) -> f32 {
     return bitcast<f32>(textures[v]);
 }
 
+// A vertex colour word (`meshlight::meshlet`'s `meshlet_color_word`): sRGB red,
+// green and blue decoded to linear light through the same table, alpha linear.
+fn vertex_color(word: u32) -> vec4<f32> {
+    let c = unpack4x8unorm(word);
+    return vec4(srgb_decoded(word & 0xffu), srgb_decoded((word >> 8u) & 0xffu), srgb_decoded((word >> 16u) & 0xffu), c.w);
+}
+
 // Words before `level` in a chain of side 2^size_log2 (`cpu::layout::mip_offset`).
 fn mip_offset(size_log2: u32, level: u32) -> u32 {
     let n1 = size_log2 + 1u;

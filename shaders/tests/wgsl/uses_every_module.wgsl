@@ -5,7 +5,7 @@
 #import meshlight::dispatch::{fold_dispatch, linear_workgroup}
 #import meshlight::view::{View, sphere_in_frustum, project_error_to_pixels, world_to_screen, position_from_depth, view_z_from_depth, pixel_to_uv}
 #import meshlight::octahedral::{pack_octahedral_normal, unpack_octahedral_normal}
-#import meshlight::meshlet::{Meshlet, MeshletGroup, Mesh, Cluster, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, MESHLET_UV_ORIGIN_WORDS, meshlet_triangle_location, meshlet_triangle, meshlet_bounds, meshlet_level, lod_cut}
+#import meshlight::meshlet::{Meshlet, MeshletGroup, Mesh, Cluster, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv, meshlet_uv_word, meshlet_uv_location, meshlet_triangle_location, meshlet_triangle, meshlet_bounds, meshlet_level, lod_cut}
 #import meshlight::instance_table::{instance_at, instance_total}
 #import meshlight::scene_buffers::{meshes, meshlets, meshlet_groups, payload, materials}
 #import meshlight::instance::{Instance, Material, instance_transform_point, instance_transform_normal, instance_transform_sphere, instance_max_scale}
@@ -38,9 +38,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         math::read_bits(vec2(payload[nx.x], payload[nx.x + 1u]), nx.y, nx.z),
         math::read_bits(vec2(payload[ny.x], payload[ny.x + 1u]), ny.y, ny.z)));
     let block = meshlet_uv_word(meshlet);
-    let uv = meshlet_uv(mesh.uv_grid, vec2(payload[block], payload[block + 1u]), payload[block + MESHLET_UV_ORIGIN_WORDS + id.y]);
+    let uv_at = meshlet_uv_location(meshlet, id.y);
+    let uv = meshlet_uv(meshlet, mesh.uv_grid, vec2(payload[block], payload[block + 1u]), vec2(payload[uv_at.x], payload[uv_at.x + 1u]), uv_at.y);
     let world = instance_transform_point(instance, local);
-    let at = meshlet_triangle_location(meshlet, mesh.flags, id.z);
+    let at = meshlet_triangle_location(meshlet, id.z);
     let index = meshlet_triangle(meshlet, id.z, vec2(payload[at.x], payload[at.x + 1u]), at.y).y;
     let group = meshlet_groups[meshlet.source_group];
 

@@ -81,6 +81,7 @@ pub fn flat_quad(n: u32, jitter: f32) -> Mesh {
         normals: vec![Vec3::Z; positions.len()],
         positions,
         uvs: Vec::new(),
+        colors: Vec::new(),
         indices,
         materials: Vec::new(),
     }

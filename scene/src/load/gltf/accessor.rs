@@ -13,6 +13,7 @@ pub enum Role {
     Position,
     Normal,
     TexCoord,
+    Color,
     Indices,
 }
 
@@ -22,6 +23,7 @@ impl Role {
             Role::Position => "POSITION",
             Role::Normal => "NORMAL",
             Role::TexCoord => "TEXCOORD_0",
+            Role::Color => "COLOR_0",
             Role::Indices => "indices",
         }
     }
@@ -38,6 +40,9 @@ impl Role {
                  (KHR_mesh_quantization) of BYTE, UNSIGNED_BYTE, SHORT or UNSIGNED_SHORT, \
                  normalized or not"
             }
+            Role::Color => {
+                "VEC3 or VEC4 of FLOAT, or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT"
+            }
             Role::Indices => "SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT",
         }
     }
@@ -53,6 +58,10 @@ impl Role {
                 ty == Type::Vec3 && (ct == C::F32 || (normalized && matches!(ct, C::I8 | C::I16)))
             }
             Role::TexCoord => ty == Type::Vec2 && (ct == C::F32 || small_int),
+            Role::Color => {
+                matches!(ty, Type::Vec3 | Type::Vec4)
+                    && (ct == C::F32 || (normalized && matches!(ct, C::U8 | C::U16)))
+            }
             Role::Indices => ty == Type::Scalar && matches!(ct, C::U8 | C::U16 | C::U32),
         }
     }
@@ -236,6 +245,22 @@ impl CheckedAccessor {
         debug_assert_eq!(self.components, 2);
         (0..self.count)
             .map(|i| [0, 1].map(|k| self.float(buffers, i, k)))
+            .collect()
+    }
+
+    /// RGBA, alpha 1 where the accessor holds RGB.
+    pub fn read_rgba(&self, buffers: &[Vec<u8>]) -> Vec<[f32; 4]> {
+        debug_assert!(self.components == 3 || self.components == 4);
+        (0..self.count)
+            .map(|i| {
+                [0, 1, 2, 3].map(|k| {
+                    if k < self.components {
+                        self.float(buffers, i, k)
+                    } else {
+                        1.0
+                    }
+                })
+            })
             .collect()
     }
 

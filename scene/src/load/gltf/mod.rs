@@ -59,7 +59,7 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
         source: path.display().to_string(),
         ..Mesh::default()
     };
-    let (mut normals, mut uvs) = (true, true);
+    let (mut normals, mut uvs, mut colors) = (true, true, false);
     for Placement {
         mesh, transform, ..
     } in &placed
@@ -82,6 +82,7 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
         )?;
         normals &= !part.normals.is_empty();
         uvs &= part.has_uvs();
+        colors |= part.has_colors();
         append_transformed(&mut merged, part, *transform);
     }
     if !normals {
@@ -90,6 +91,9 @@ pub fn load_gltf_with(path: &Path, options: &LoadOptions) -> Result<Mesh, SceneE
     }
     if !uvs {
         merged.uvs.clear();
+    }
+    if !colors {
+        merged.colors.clear();
     }
     Ok(merged)
 }
@@ -111,6 +115,14 @@ fn append_transformed(into: &mut Mesh, part: &Mesh, transform: Mat4) {
             .map(|&n| (normal_matrix * n).normalize_or_zero()),
     );
     into.uvs.extend_from_slice(&part.uvs);
+    // White where a part has no colours (glTF's default); cleared after merging when no
+    // part has any.
+    match part.has_colors() {
+        true => into.colors.extend_from_slice(&part.colors),
+        false => into
+            .colors
+            .extend(std::iter::repeat_n([1.0; 4], part.positions.len())),
+    }
     let mirrored = transform.determinant() < 0.0;
     for t in part.indices.chunks_exact(3) {
         let [a, b, c] = [t[0] + base, t[1] + base, t[2] + base];
@@ -282,7 +294,8 @@ impl<'p> GltfFile<'p> {
     /// with its material slot ([`Mesh::materials`]), and the file's material behind
     /// each slot (a primitive's, or [`DEFAULT_MATERIAL`]); `None` when it has no
     /// triangles (points or lines only, each skipped with a warning). Normals are kept
-    /// only where every primitive has them, UVs likewise.
+    /// only where every primitive has them, UVs likewise; vertex colours where any
+    /// primitive has them (white for the others).
     fn read_mesh(
         &self,
         buffers: &[Vec<u8>],
@@ -293,12 +306,14 @@ impl<'p> GltfFile<'p> {
         let position = Checked::Valid(gltf::Semantic::Positions);
         let normal = Checked::Valid(gltf::Semantic::Normals);
         let texcoord = Checked::Valid(gltf::Semantic::TexCoords(0));
+        let color = Checked::Valid(gltf::Semantic::Colors(0));
         let name = self.mesh_name(mi);
         let mut mesh = Mesh {
             source: format!("{} (mesh {name:?})", path.display()),
             ..Mesh::default()
         };
         let (mut normals_complete, mut uvs_complete, mut any) = (true, true, false);
+        let mut any_colors = false;
         // The file's material behind each of the mesh's slots, in order of first use.
         let mut slots: Vec<u32> = Vec::new();
         for (pi, p) in root.meshes[mi].primitives.iter().enumerate() {
@@ -395,6 +410,24 @@ impl<'p> GltfFile<'p> {
                 }
                 None => uvs_complete = false,
             }
+            // White where a primitive has no colours, glTF's default.
+            match p.attributes.get(&color) {
+                Some(c) => {
+                    let c = check(root, buffers, c.value(), Role::Color).map_err(at)?;
+                    if c.count != count {
+                        return Err(at(format!(
+                            "COLOR_0 has {} elements, POSITION {count}",
+                            c.count
+                        )));
+                    }
+                    let read = c.read_rgba(buffers);
+                    finite(read.as_flattened(), 4, accessor_of(&color), "COLOR_0")?;
+                    mesh.colors
+                        .extend(read.into_iter().map(|c| c.map(|v| v.clamp(0.0, 1.0))));
+                    any_colors = true;
+                }
+                None => mesh.colors.extend(std::iter::repeat_n([1.0; 4], count)),
+            }
             mesh.positions
                 .extend(positions.iter().map(|&p| Vec3::from(p)));
             let indices: Vec<u32> = match p.indices {
@@ -445,6 +478,9 @@ impl<'p> GltfFile<'p> {
         }
         if !uvs_complete {
             mesh.uvs.clear();
+        }
+        if !any_colors {
+            mesh.colors.clear();
         }
         if slots.len() <= 1 {
             // One material: every triangle's slot is 0, which an empty list says.
