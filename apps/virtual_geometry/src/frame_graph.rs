@@ -357,10 +357,16 @@ fn instance_table(p: &mut Pipeline, data: &SceneData) -> Result<()> {
 /// renderer's scene keeps its materials, so the choice holds for the frame's life.
 /// The hardware rasteriser's `mesh_shader` implementation cannot cut out texels yet: it
 /// refuses `alpha_mask`, so `auto` passes over it, and a pipeline that names it draws
-/// such a scene with `indirect_draw` instead, with a warning.
+/// such a scene with `indirect_draw` instead, with a warning. Likewise the resolve
+/// multiplies by vertex colours (`vertex_colors`) only when some mesh has them.
 fn material_variants(p: &mut Pipeline, data: &SceneData) {
     use meshlight::hw_raster::Feed;
-    use meshlight::shaders::cpu::layout::{MATERIAL_FLAG_DOUBLE_SIDED, MATERIAL_FLAG_MASK};
+    use meshlight::shaders::cpu::layout::{
+        MATERIAL_FLAG_DOUBLE_SIDED, MATERIAL_FLAG_MASK, MESH_FLAG_COLORS,
+    };
+    if data.meshes.iter().any(|m| m.flags & MESH_FLAG_COLORS != 0) {
+        p.set_stage_param(meshlight::resolve::STAGE, "vertex_colors", true);
+    }
     let has = |flag: u32| data.materials.iter().any(|m| m.flags & flag != 0);
     for (flag, param) in [
         (MATERIAL_FLAG_DOUBLE_SIDED, "two_sided"),

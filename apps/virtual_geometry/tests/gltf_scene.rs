@@ -593,3 +593,85 @@ fn a_mask_material_is_cut_out_where_its_alpha_is_below_the_cutoff() {
     );
     assert_eq!(pixel(1.25 + 0.375), colors(2), "BLEND is drawn opaque");
 }
+
+/// glTF's `COLOR_0` multiplies the base colour and alpha: in the `base-color` view a red-
+/// and a blue-coloured quad of one white material show their vertex colours; a MASK
+/// quad whose vertex alpha is 0 is cut out by the rasterisers (what lies behind shows),
+/// as is the half of one whose alpha runs from 1 to 0 across it.
+#[test]
+fn vertex_colours_tint_the_base_colour_and_their_alpha_cuts_mask_materials() {
+    use meshlight_testing::gltf_writer::Colors;
+    let mut w = GltfWriter::new();
+    let white = w.material(json!({"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1]}}));
+    let mask = w.material(json!({"alphaMode": "MASK", "alphaCutoff": 0.5}));
+    let grey = w.material(json!({"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.2, 0.2, 1]}}));
+    let quad = |x0: f32, z: f32, width: f32, material, colors: [[u8; 4]; 4]| Primitive {
+        positions: vec![
+            [x0, -0.75, z],
+            [x0 + width, -0.75, z],
+            [x0 + width, 0.75, z],
+            [x0, 0.75, z],
+        ],
+        normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
+        colors: Some(Colors::Rgba8(colors.to_vec())),
+        uvs: None,
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: Some(material),
+    };
+    let red = quad(-2.0, 0.0, 0.75, white, [[255, 0, 0, 255]; 4]);
+    let blue = quad(-1.0, 0.0, 0.75, white, [[0, 0, 255, 255]; 4]);
+    let clear = quad(0.0, 0.0, 0.75, mask, [[255, 255, 255, 0]; 4]);
+    let fading = quad(
+        1.0,
+        0.0,
+        1.0,
+        mask,
+        [
+            [255, 255, 255, 255],
+            [255, 255, 255, 0],
+            [255, 255, 255, 0],
+            [255, 255, 255, 255],
+        ],
+    );
+    let behind = quad(-2.5, -0.5, 5.0, grey, [[255; 4]; 4]);
+    let placed = one_mesh_scene(w, "coloured", &[red, blue, clear, fading, behind]);
+    let mut settings = FrameSettings::new(W, H);
+    settings.view = Some(meshlight::resolve::DebugView::BaseColor);
+    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let camera =
+        meshlight::gpu_scene::Camera::perspective(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 1.0, 0.1);
+    let image = r
+        .render_still(&camera)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .rgba;
+    let pixel = |x: f32| pixel_on_x_axis(&image, &camera, x);
+    let back = pixel(-0.125);
+    assert!(
+        back[0] == back[1] && back[1] == back[2] && back[0] > 20 && back[0] < 160,
+        "the grey quad behind: {back:?}"
+    );
+    let [r0, g0, b0] = pixel(-2.0 + 0.375);
+    assert!(
+        r0 > 200 && g0 < 10 && b0 < 10,
+        "the red quad: {:?}",
+        [r0, g0, b0]
+    );
+    let [r1, g1, b1] = pixel(-1.0 + 0.375);
+    assert!(
+        r1 < 10 && g1 < 10 && b1 > 200,
+        "the blue quad: {:?}",
+        [r1, g1, b1]
+    );
+    assert_eq!(
+        pixel(0.375),
+        back,
+        "a vertex alpha of 0 cuts a MASK quad out"
+    );
+    let opaque = pixel(1.0 + 0.2);
+    assert!(
+        opaque.iter().all(|&c| c > 200),
+        "the fading quad's opaque side: {opaque:?}"
+    );
+    assert_eq!(pixel(1.0 + 0.8), back, "and its clear side is cut out");
+}

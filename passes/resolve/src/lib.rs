@@ -371,6 +371,7 @@ impl Pass for Resolve {
         }
         let occluded_per_instance = ctx.is_bound(OCCLUDED_PER_INSTANCE);
         let defs = ShadeDefs {
+            vertex_colors: self.vertex_colors,
             clustered_lights: lit,
             texture,
             pyramid,
@@ -468,6 +469,8 @@ shader_defs! {
     /// The variant of shade.wgsl a pass runs.
     #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
     struct ShadeDefs {
+        /// The base colour is multiplied by vertex colours (`Resolve::vertex_colors`).
+        vertex_colors: bool => "VERTEX_COLORS",
         /// The froxel lists are bound.
         clustered_lights: bool => "CLUSTERED_LIGHTS",
         /// The visibility buffer is an R64Uint texture (depth.wgsl too).
@@ -552,6 +555,7 @@ mod tests {
         let caps = Capabilities::SHADER_INT64 | Capabilities::TEXTURE_INT64_ATOMIC;
         let depth = DepthDefs { texture: true }.shader_defs();
         let shade = ShadeDefs {
+            vertex_colors: true,
             clustered_lights: true,
             texture: true,
             pyramid: true,

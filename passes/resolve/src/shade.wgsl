@@ -331,10 +331,12 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
     s.uv_dx = at.dx;
     s.uv_dy = at.dy;
     s.base = material.base_color * sample_map(material, MAP_BASE_COLOR, s, vec4(1.0));
+#ifdef VERTEX_COLORS
     if (mesh.flags & MESH_FLAG_COLORS) != 0u {
         let colors = meshlet_color_word(m, mesh.flags);
         s.base *= vertex_color(payload[colors + corners[0]]) * b.x + vertex_color(payload[colors + corners[1]]) * b.y + vertex_color(payload[colors + corners[2]]) * b.z;
     }
+#endif
     if (material.flags & MATERIAL_FLAG_CHECKER) != 0u {
         let scale = params.checker_scale;
         s.base = vec4(s.base.rgb * mix(CHECKER_DARK, 1.0, filtered_checker(s.uv * scale, s.uv_dx * scale, s.uv_dy * scale)), s.base.a);

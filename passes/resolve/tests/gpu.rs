@@ -398,7 +398,19 @@ fn run_with_view(frame: &mut Frame, pass: Resolve, view: &View) -> Result<Resolv
 
 /// Runs `pass` with the depth targets `targets` names bound (and the frame's pyramid,
 /// if it has one), and reads back what was bound.
-fn run_with(frame: &mut Frame, pass: Resolve, view: &View, targets: Targets) -> Result<Resolved> {
+fn run_with(
+    frame: &mut Frame,
+    mut pass: Resolve,
+    view: &View,
+    targets: Targets,
+) -> Result<Resolved> {
+    // As the renderer sets it: on when a mesh has vertex colours, which the reference
+    // then multiplies by.
+    pass.vertex_colors = frame
+        .scene
+        .meshes
+        .iter()
+        .any(|m| m.flags & meshlight_shaders::cpu::layout::MESH_FLAG_COLORS != 0);
     let gpu = gpu();
     let scene = GpuScene::new(&gpu, &mut frame.scene);
     let slots = frame.raster_clusters.len() as u64;
