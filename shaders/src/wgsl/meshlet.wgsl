@@ -233,10 +233,9 @@ fn meshlet_normal(m: Meshlet, offset: vec2<u32>) -> vec3<f32> {
 // (`meshlight_scene::compress::UvQuantization`).
 fn meshlet_uv(m: Meshlet, uv_grid: vec4<f32>, origin: vec2<u32>, words: vec2<u32>, bit: u32) -> vec2<f32> {
     let b = meshlet_uv_bits(m);
-    let u = read_bits(words, bit, b.x);
-    let v_bit = bit + b.x;
-    let v = read_bits(select(words, vec2(words.y, 0u), v_bit >= 32u), v_bit % 32u, b.y);
-    let offset = vec2(u, v) << (origin >> vec2(24u));
+    // Both offsets (at most 32 bits) in one word, then split: the 32 bits from `bit` on.
+    let field = (words.x >> bit) | select(words.y << (32u - bit), 0u, bit == 0u);
+    let offset = vec2(extractBits(field, 0u, b.x), extractBits(field, b.x, b.y)) << (origin >> vec2(24u));
     let code = (origin & vec2(0xffffffu)) + offset;
     return uv_grid.xy + vec2<f32>(code) * uv_grid.zw;
 }
