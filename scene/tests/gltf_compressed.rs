@@ -11,33 +11,10 @@ use meshlight_scene::load::{GltfScene, load_gltf_scene};
 use meshopt::EncodeExpMode;
 use serde_json::{Value, json};
 
-/// A tiling-UV sphere: positions (radius 3 around (10, -2, 5)), unit normals, UVs in 0..4.
-struct Sphere {
-    positions: Vec<[f32; 3]>,
-    normals: Vec<[f32; 3]>,
-    uvs: Vec<[f32; 2]>,
-    indices: Vec<u32>,
-}
+use common::generators::AttributedSphere as Sphere;
 
 fn sphere() -> Sphere {
-    let (unit, indices) = common::generators::welded_sphere(12, 20);
-    Sphere {
-        positions: unit
-            .iter()
-            .map(|p| [10.0 + 3.0 * p[0], -2.0 + 3.0 * p[1], 5.0 + 3.0 * p[2]])
-            .collect(),
-        normals: unit.clone(),
-        uvs: unit
-            .iter()
-            .map(|p| {
-                [
-                    4.0 * (p[1].atan2(p[0]) / std::f32::consts::TAU + 0.5),
-                    2.0 * (1.0 - p[2]),
-                ]
-            })
-            .collect(),
-        indices,
-    }
+    Sphere::new(12, 20)
 }
 
 /// Which index encoding and normal width a compressed file uses.

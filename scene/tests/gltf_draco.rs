@@ -96,33 +96,10 @@ fn a_file_from_the_reference_encoder_loads_as_its_decoder_reads_it() {
     close("max", &hi.to_array().map(f64::from), &want("max"), 1e-6);
 }
 
-/// A tiling-UV sphere: positions (radius 3 around (10, -2, 5)), unit normals, UVs in 0..4.
-struct Sphere {
-    positions: Vec<[f32; 3]>,
-    normals: Vec<[f32; 3]>,
-    uvs: Vec<[f32; 2]>,
-    indices: Vec<u32>,
-}
+use common::generators::AttributedSphere as Sphere;
 
 fn sphere() -> Sphere {
-    let (unit, indices) = common::generators::welded_sphere(10, 16);
-    Sphere {
-        positions: unit
-            .iter()
-            .map(|p| [10.0 + 3.0 * p[0], -2.0 + 3.0 * p[1], 5.0 + 3.0 * p[2]])
-            .collect(),
-        normals: unit.clone(),
-        uvs: unit
-            .iter()
-            .map(|p| {
-                [
-                    4.0 * (p[1].atan2(p[0]) / std::f32::consts::TAU + 0.5),
-                    2.0 * (1.0 - p[2]),
-                ]
-            })
-            .collect(),
-        indices,
-    }
+    Sphere::new(10, 16)
 }
 
 /// The sphere as a Draco stream: positions (unique id 0, 16 bits), normals (1, 12 bits),

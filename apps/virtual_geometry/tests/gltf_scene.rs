@@ -452,6 +452,38 @@ fn pixel_on_x_axis(image: &[u8], camera: &meshlight::gpu_scene::Camera, x: f32) 
     [image[at], image[at + 1], image[at + 2]]
 }
 
+/// A quad facing +z at depth `z`, from x0 to x0 + width and y −0.75 to 0.75, with
+/// its normals and no attributes else.
+fn facing_z_quad(x0: f32, z: f32, width: f32) -> Primitive {
+    Primitive {
+        positions: vec![
+            [x0, -0.75, z],
+            [x0 + width, -0.75, z],
+            [x0 + width, 0.75, z],
+            [x0, 0.75, z],
+        ],
+        normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
+        indices: vec![0, 1, 2, 0, 2, 3],
+        ..Primitive::default()
+    }
+}
+
+/// `placed` drawn in `view` from (0, 0, 4) looking at the origin, as a function from x
+/// to the colour of the pixel that shows (x, 0, 0).
+fn x_axis_pixels(placed: &Placed, view: meshlight::resolve::DebugView) -> impl Fn(f32) -> [u8; 3] {
+    let mut settings = FrameSettings::new(W, H);
+    settings.view = Some(view);
+    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let camera =
+        meshlight::gpu_scene::Camera::perspective(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 1.0, 0.1);
+    let image = r
+        .render_still(&camera)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .rgba;
+    move |x| pixel_on_x_axis(&image, &camera, x)
+}
+
 /// glTF's `doubleSided`: two quads facing +z, seen from behind. The double-sided one is
 /// drawn, its shading normal reversed to face the eye (the `normal` view's blue is
 /// z · 0.5 + 0.5: 0 for −z); the one-sided one is culled, so its pixel shows the sky the
@@ -524,17 +556,9 @@ fn a_mask_material_is_cut_out_where_its_alpha_is_below_the_cutoff() {
     let quad = |w: &mut GltfWriter, x0: f32, z: f32, width: f32, material| {
         let material = w.material(material);
         Primitive {
-            positions: vec![
-                [x0, -0.75, z],
-                [x0 + width, -0.75, z],
-                [x0 + width, 0.75, z],
-                [x0, 0.75, z],
-            ],
-            normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
-            colors: None,
             uvs: Some(vec![[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]]),
-            indices: vec![0, 1, 2, 0, 2, 3],
             material: Some(material),
+            ..facing_z_quad(x0, z, width)
         }
     };
     let textured = quad(
@@ -561,17 +585,7 @@ fn a_mask_material_is_cut_out_where_its_alpha_is_below_the_cutoff() {
     );
     let behind = quad(&mut w, -2.5, -0.5, 5.0, json!({}));
     let placed = one_mesh_scene(w, "cut-outs", &[textured, faint, blend, behind]);
-    let mut settings = FrameSettings::new(W, H);
-    settings.view = Some(meshlight::resolve::DebugView::Material);
-    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let camera =
-        meshlight::gpu_scene::Camera::perspective(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 1.0, 0.1);
-    let image = r
-        .render_still(&camera)
-        .unwrap_or_else(|e| panic!("{e}"))
-        .rgba;
-    let pixel = |x: f32| pixel_on_x_axis(&image, &camera, x);
+    let pixel = x_axis_pixels(&placed, meshlight::resolve::DebugView::Material);
     // Between the quads only the one behind is drawn.
     let back = pixel(0.0);
     let colors = |slot: u32| {
@@ -606,17 +620,9 @@ fn vertex_colours_tint_the_base_colour_and_their_alpha_cuts_mask_materials() {
     let mask = w.material(json!({"alphaMode": "MASK", "alphaCutoff": 0.5}));
     let grey = w.material(json!({"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.2, 0.2, 1]}}));
     let quad = |x0: f32, z: f32, width: f32, material, colors: [[u8; 4]; 4]| Primitive {
-        positions: vec![
-            [x0, -0.75, z],
-            [x0 + width, -0.75, z],
-            [x0 + width, 0.75, z],
-            [x0, 0.75, z],
-        ],
-        normals: Some(vec![[0.0, 0.0, 1.0]; 4]),
         colors: Some(Colors::Rgba8(colors.to_vec())),
-        uvs: None,
-        indices: vec![0, 1, 2, 0, 2, 3],
         material: Some(material),
+        ..facing_z_quad(x0, z, width)
     };
     let red = quad(-2.0, 0.0, 0.75, white, [[255, 0, 0, 255]; 4]);
     let blue = quad(-1.0, 0.0, 0.75, white, [[0, 0, 255, 255]; 4]);
@@ -635,17 +641,7 @@ fn vertex_colours_tint_the_base_colour_and_their_alpha_cuts_mask_materials() {
     );
     let behind = quad(-2.5, -0.5, 5.0, grey, [[255; 4]; 4]);
     let placed = one_mesh_scene(w, "coloured", &[red, blue, clear, fading, behind]);
-    let mut settings = FrameSettings::new(W, H);
-    settings.view = Some(meshlight::resolve::DebugView::BaseColor);
-    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let camera =
-        meshlight::gpu_scene::Camera::perspective(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, 1.0, 0.1);
-    let image = r
-        .render_still(&camera)
-        .unwrap_or_else(|e| panic!("{e}"))
-        .rgba;
-    let pixel = |x: f32| pixel_on_x_axis(&image, &camera, x);
+    let pixel = x_axis_pixels(&placed, meshlight::resolve::DebugView::BaseColor);
     let back = pixel(-0.125);
     assert!(
         back[0] == back[1] && back[1] == back[2] && back[0] > 20 && back[0] < 160,

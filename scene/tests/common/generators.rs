@@ -257,3 +257,36 @@ pub fn textured_square(
     }
     mesh
 }
+
+/// A welded sphere of radius 3 around (10, -2, 5) with unit normals and a tiling map
+/// (UVs in 0..4 × 0..4), as arrays a glTF writer takes: what the compressed-file tests
+/// compress and compare the loaded mesh with.
+pub struct AttributedSphere {
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Vec<[f32; 3]>,
+    pub uvs: Vec<[f32; 2]>,
+    pub indices: Vec<u32>,
+}
+
+impl AttributedSphere {
+    pub fn new(rings: u32, segments: u32) -> Self {
+        let (unit, indices) = welded_sphere(rings, segments);
+        Self {
+            positions: unit
+                .iter()
+                .map(|p| [10.0 + 3.0 * p[0], -2.0 + 3.0 * p[1], 5.0 + 3.0 * p[2]])
+                .collect(),
+            normals: unit.clone(),
+            uvs: unit
+                .iter()
+                .map(|p| {
+                    [
+                        4.0 * (p[1].atan2(p[0]) / std::f32::consts::TAU + 0.5),
+                        2.0 * (1.0 - p[2]),
+                    ]
+                })
+                .collect(),
+            indices,
+        }
+    }
+}
