@@ -469,3 +469,27 @@ fn a_uv_grid_that_overflows_f32_is_refused() {
         other => panic!("{other:?}"),
     }
 }
+
+/// A meshlet whose vertex records decode outside the header's bounds (its grid origin
+/// moved along the mesh's shortest axis, where the cubic grid reaches past the mesh, so
+/// every other check still holds) is refused at load: the culling spheres come from the
+/// bounds, so such vertices could be culled while on screen.
+#[test]
+fn vertices_decoded_outside_the_bounds_are_refused() {
+    refused_saying(
+        "grid origin moved past the bounds",
+        "meshlet[0].data_offset",
+        "outside the header's bounds",
+        |w| {
+            let h = *header(w);
+            let extent = [0, 1, 2].map(|k| h.bounds_max[k] - h.bounds_min[k]);
+            let k = (0..3)
+                .min_by(|&a, &b| extent[a].total_cmp(&extent[b]))
+                .unwrap();
+            let top = (1u32 << h.quant_bits) - 1;
+            let m = meshlet(w, 0);
+            let reach = (1u32 << m.axis_bits()[k]) - 1;
+            m.grid_min[k] = top - reach;
+        },
+    );
+}

@@ -6,7 +6,7 @@
 
 use super::format::*;
 use crate::compress::{
-    MAX_POSITION_BITS, MIN_POSITION_BITS, UV_GRID_CODES, UV_LARGEST_CODE, UV_MAX_SHIFT,
+    MAX_POSITION_BITS, MIN_POSITION_BITS, UV_GRID_CODES, UV_LARGEST_CODE, UV_MAX_SHIFT, get_bits,
 };
 
 /// Most levels an asset may have: a meshlet stores its level in 8 bits.
@@ -287,6 +287,17 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ));
         }
         payload_end += layout.end as u64;
+        let data = &payload[m.data_offset as usize..(m.data_offset + layout.end) as usize];
+        if let Some((k, p)) = vertex_outside_bounds(h, m, data, &sphere_limit) {
+            return Err(bad(
+                f("data_offset"),
+                format!(
+                    "points at vertex records that decode to {p:?} on axis {k}, outside the \
+                     header's bounds {:?}..{:?} (the grid's rounding allowed)",
+                    h.bounds_min, h.bounds_max
+                ),
+            ));
+        }
         if has_uvs {
             let at = (m.data_offset + layout.uvs) as usize;
             if let Some(k) = (0..2).find(|&k| payload[at + k] >> 24 > UV_MAX_SHIFT) {
@@ -402,6 +413,41 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
 /// 0.68 of the diagonal. 4 leaves room for any mesh and still refuses a radius that
 /// would overflow projecting it.
 const LOD_SPHERE_SLACK: f64 = 4.0;
+
+/// The first of meshlet `m`'s decoded vertices (its payload `data`) that lies outside
+/// the header's bounds padded by the grid's rounding, as its axis and coordinate: the
+/// culling and the LOD spheres are derived from the bounds, so a vertex outside them
+/// could be culled while on screen.
+fn vertex_outside_bounds(
+    h: &AssetHeader,
+    m: &MeshletRecord,
+    data: &[u32],
+    limit: &SphereLimit,
+) -> Option<(usize, f64)> {
+    if m.vertex_count() == 0 {
+        return None;
+    }
+    let bits = m.axis_bits();
+    let stride = m.vertex_stride() as usize;
+    let mut lo = [u32::MAX; 3];
+    let mut hi = [0u32; 3];
+    for v in 0..m.vertex_count() as usize {
+        let mut at = v * stride;
+        for k in 0..3 {
+            let q = m.grid_min[k].wrapping_add(get_bits(data, at, bits[k]).unwrap_or(0));
+            at += bits[k] as usize;
+            lo[k] = lo[k].min(q);
+            hi[k] = hi[k].max(q);
+        }
+    }
+    (0..3).find_map(|k| {
+        let at = |q: u32| h.quant_origin[k] as f64 + q as f64 * h.quant_step as f64;
+        [at(lo[k]), at(hi[k])]
+            .into_iter()
+            .find(|&p| p < limit.lo[k] - limit.pad || p > limit.hi[k] + limit.pad)
+            .map(|p| (k, p))
+    })
+}
 
 /// Spheres must lie around the mesh: a culling sphere (around decoded vertices) within
 /// its bounds, padded by the grid's rounding, and a LOD sphere within a few diagonals.
