@@ -103,7 +103,10 @@
 //!   a pixel (`2 / width`, `-2 / height`).
 //! - Shading: normal `Σ b_i n_i` to world space with the inverse transpose, UV `Σ b_i
 //!   uv_i` (0 without UVs) and its derivatives `Σ ∂b_i/∂x uv_i`, `Σ ∂b_i/∂y uv_i`; each of
-//!   the material's maps sampled there (`meshlight::texture`): base colour `factor · texel`,
+//!   the material's maps sampled there (`meshlight::texture`): base colour `factor · texel`
+//!   (times the interpolated vertex colour `Σ b_i c_i` with the param `vertex_colors`,
+//!   which the renderer sets for a scene with a coloured mesh; off, the shader holds no
+//!   code for them),
 //!   checkered where the material asks (`· mix(0.55, 1, filtered_checker(uv · scale,
 //!   ∂uv · scale))`, a box filter of the square wave over the pixel's footprint);
 //!   metalness and roughness times the texel's B and G; the normal map's `(2·texel − 1)
