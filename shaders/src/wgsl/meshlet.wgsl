@@ -193,15 +193,19 @@ fn meshlet_uv_location(m: Meshlet, vertex: u32) -> vec2<u32> {
 // Where field `field` of vertex `vertex` lies: x = payload word, y = bit in it, z = bit
 // count. Fields: 0, 1, 2 = grid offsets x, y, z; 3, 4 = octahedral offsets x, y. Read
 // words x and x + 1 and pass them, with y and z, to `read_bits`.
+//
+// The fields' widths and the bits before each are chosen with selects, not read from a
+// local array in a loop: a driver may keep such an array in memory, and this runs for
+// every corner the rasterisers and the resolve decode (as an indexed array it cost an
+// H200 a quarter of the 3840×2160 resolve).
 fn meshlet_vertex_field(m: Meshlet, vertex: u32, field: u32) -> vec3<u32> {
     let a = meshlet_axis_bits(m);
     let n = meshlet_normal_bits(m);
-    let widths = array(a.x, a.y, a.z, n.x, n.y);
-    var bit = vertex * meshlet_vertex_stride(m);
-    for (var f = 0u; f < field; f += 1u) {
-        bit += widths[f];
-    }
-    return vec3(m.data_offset + bit / 32u, bit % 32u, widths[field]);
+    let before = select(0u, a.x, field > 0u) + select(0u, a.y, field > 1u)
+        + select(0u, a.z, field > 2u) + select(0u, n.x, field > 3u);
+    let width = select(select(select(select(n.y, n.x, field == 3u), a.z, field == 2u), a.y, field == 1u), a.x, field == 0u);
+    let bit = vertex * (a.x + a.y + a.z + n.x + n.y) + before;
+    return vec3(m.data_offset + bit / 32u, bit % 32u, width);
 }
 
 // Mesh-space position from the three grid offsets. The integer add comes first, so a
