@@ -197,8 +197,11 @@ const DEPTH_RESOLVES: [(&str, &str, &str); 2] = [
     ("material_depth", "material_depth_fs", "material_depth"),
 ];
 
-/// Pixels per shading workgroup side.
-const TILE: u32 = 8;
+/// Pixels a shading workgroup covers across and down (shade.wgsl's `@workgroup_size`).
+/// 16 × 8 (a warp of 32 on two rows) beat 8 × 8, 32 × 4, 64 × 2 and 16 × 16 on an
+/// H200: the colour target's stores cost half as much on wide rows, while taller tiles
+/// keep more of a triangle's pixels in one warp (docs/BENCHMARKS.md).
+const TILE: [u32; 2] = [16, 8];
 
 /// The depth a material pass tests with `Equal` for material `m`: `(m + 1) · 2^-24`
 /// (ids past `2^24 - 2` share the last value); 0 is left for empty pixels.
@@ -394,7 +397,7 @@ impl Pass for Resolve {
         );
         ctx.dispatch(
             "shade",
-            [self.width.div_ceil(TILE), self.height.div_ceil(TILE), 1],
+            [self.width.div_ceil(TILE[0]), self.height.div_ceil(TILE[1]), 1],
         );
         Ok(())
     }
@@ -449,7 +452,7 @@ impl Pass for Resolve {
                 ("view", bytemuck::bytes_of(&view)),
                 ("params", bytemuck::bytes_of(&shade_params)),
             ],
-            Workgroups::Direct([self.width.div_ceil(TILE), self.height.div_ceil(TILE), 1]),
+            Workgroups::Direct([self.width.div_ceil(TILE[0]), self.height.div_ceil(TILE[1]), 1]),
         )
     }
 }

@@ -11,7 +11,7 @@
 #import meshlight::math::read_bits
 #import meshlight::meshlet::{Meshlet, Cluster, MESH_FLAG_UVS, MESH_FLAG_COLORS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv, meshlet_uv_location, meshlet_color_word}
 #import meshlight::instance::{MATERIAL_FLAG_MASK, MAP_BASE_COLOR, material_uv, material_uv_step}
-#import meshlight::cluster_triangle::cluster_triangle
+#import meshlight::cluster_triangle::{cluster_triangle, ClusterTriangle}
 #import meshlight::scene_buffers::{payload, materials, textures}
 #import meshlight::texture::{texture_present, sample_alpha, vertex_color}
 
@@ -144,6 +144,34 @@ struct CutOut {
     vertex_alpha: vec3<f32>,
 }
 
+// What the cut-out test takes from one corner: its clip-space position, texture
+// coordinates (0 without UVs) and vertex alpha (1 without colours).
+struct CutCorner {
+    clip: vec4<f32>,
+    uv: vec2<f32>,
+    alpha: f32,
+}
+
+// Corner `v` of `tri`, as the resolve decodes it. Called once per corner rather than
+// from a loop filling arrays, which a driver may keep in memory (as the resolve's
+// `corner_attributes`).
+fn cut_corner(tri: ClusterTriangle, v: u32, view_projection: mat4x4<f32>, has_uvs: bool, has_colors: bool) -> CutCorner {
+    let m = tri.m;
+    var c = CutCorner(vec4(0.0), vec2(0.0), 1.0);
+    let p = meshlet_position(m, tri.mesh.position_grid, vec3(corner_field(m, v, 0u), corner_field(m, v, 1u), corner_field(m, v, 2u)));
+    let world = (tri.instance.world_from_local * vec4(p, 1.0)).xyz;
+    c.clip = view_projection * vec4(world, 1.0);
+    if has_uvs {
+        let block = meshlet_uv_word(m);
+        let at = meshlet_uv_location(m, v);
+        c.uv = meshlet_uv(m, tri.mesh.uv_grid, vec2(payload[block], payload[block + 1u]), vec2(payload[at.x], payload[at.x + 1u]), at.y);
+    }
+    if has_colors {
+        c.alpha = vertex_color(payload[meshlet_color_word(m, tri.mesh.flags) + v]).a;
+    }
+    return c;
+}
+
 // Triangle `t` of `cluster` set up for `cut_at`. The corners are transformed as the
 // resolve transforms them (`world_from_local`, then `view_projection`), so the
 // rasterisers test the alpha the resolve would read. The material is read first: a
@@ -162,24 +190,12 @@ fn cut_out_setup(cluster: Cluster, t: u32, view_projection: mat4x4<f32>) -> CutO
     out.uv_transform = material.uv_transform;
     let has_uvs = (tri.mesh.flags & MESH_FLAG_UVS) != 0u;
     out.has_colors = (tri.mesh.flags & MESH_FLAG_COLORS) != 0u;
-    var clip: array<vec4<f32>, 3>;
-    for (var k = 0u; k < 3u; k += 1u) {
-        let v = tri.corners[k];
-        let m = tri.m;
-        let p = meshlet_position(m, tri.mesh.position_grid, vec3(corner_field(m, v, 0u), corner_field(m, v, 1u), corner_field(m, v, 2u)));
-        let world = (tri.instance.world_from_local * vec4(p, 1.0)).xyz;
-        clip[k] = view_projection * vec4(world, 1.0);
-        out.uv[k] = vec2(0.0);
-        if has_uvs {
-            let block = meshlet_uv_word(m);
-            let at = meshlet_uv_location(m, v);
-            out.uv[k] = meshlet_uv(m, tri.mesh.uv_grid, vec2(payload[block], payload[block + 1u]), vec2(payload[at.x], payload[at.x + 1u]), at.y);
-        }
-        if out.has_colors {
-            out.vertex_alpha[k] = vertex_color(payload[meshlet_color_word(m, tri.mesh.flags) + v]).a;
-        }
-    }
-    out.bary = barycentric_setup(clip[0], clip[1], clip[2]);
+    let c0 = cut_corner(tri, tri.corners.x, view_projection, has_uvs, out.has_colors);
+    let c1 = cut_corner(tri, tri.corners.y, view_projection, has_uvs, out.has_colors);
+    let c2 = cut_corner(tri, tri.corners.z, view_projection, has_uvs, out.has_colors);
+    out.uv = array(c0.uv, c1.uv, c2.uv);
+    out.vertex_alpha = vec3(c0.alpha, c1.alpha, c2.alpha);
+    out.bary = barycentric_setup(c0.clip, c1.clip, c2.clip);
     return out;
 }
 
