@@ -267,38 +267,85 @@ impl TriangleGrid {
     }
 }
 
-/// Closest point on triangle abc to p, by the Voronoi regions of its corners and edges
-/// (Ericson, Real-Time Collision Detection, 5.1.5).
-pub fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+/// Which part of a triangle abc holds the point nearest to some p: a corner, a point
+/// `t` of the way along an edge, or the inside (with the barycentric areas `va`, `vb`,
+/// `vc`, to be divided by their sum). Found by the Voronoi regions of the corners and
+/// edges (Ericson, Real-Time Collision Detection, 5.1.5), for points of any dimension:
+/// the surface deviation asks it in object space, the texture slide in UV space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TriangleRegion {
+    A,
+    B,
+    C,
+    Ab(f32),
+    Ac(f32),
+    Bc(f32),
+    Inside { va: f32, vb: f32, vc: f32 },
+}
+
+/// A point [`triangle_region`] measures: differences and dot products.
+pub trait TrianglePoint: Copy + std::ops::Sub<Output = Self> {
+    fn dot(self, other: Self) -> f32;
+}
+
+impl TrianglePoint for Vec3 {
+    fn dot(self, other: Self) -> f32 {
+        Vec3::dot(self, other)
+    }
+}
+
+impl TrianglePoint for glam::Vec2 {
+    fn dot(self, other: Self) -> f32 {
+        glam::Vec2::dot(self, other)
+    }
+}
+
+/// The region of triangle abc nearest to `p` (see [`TriangleRegion`]).
+pub fn triangle_region<P: TrianglePoint>(p: P, a: P, b: P, c: P) -> TriangleRegion {
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
+        return TriangleRegion::A;
     }
     let bp = p - b;
     let (d3, d4) = (ab.dot(bp), ac.dot(bp));
     if d3 >= 0.0 && d4 <= d3 {
-        return b;
+        return TriangleRegion::B;
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
+        return TriangleRegion::Ab(d1 / (d1 - d3));
     }
     let cp = p - c;
     let (d5, d6) = (ab.dot(cp), ac.dot(cp));
     if d6 >= 0.0 && d5 <= d6 {
-        return c;
+        return TriangleRegion::C;
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
+        return TriangleRegion::Ac(d2 / (d2 - d6));
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        return TriangleRegion::Bc((d4 - d3) / ((d4 - d3) + (d5 - d6)));
     }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
+    TriangleRegion::Inside { va, vb, vc }
+}
+
+/// Closest point on triangle abc to p.
+pub fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    match triangle_region(p, a, b, c) {
+        TriangleRegion::A => a,
+        TriangleRegion::B => b,
+        TriangleRegion::C => c,
+        TriangleRegion::Ab(t) => a + (b - a) * t,
+        TriangleRegion::Ac(t) => a + (c - a) * t,
+        TriangleRegion::Bc(t) => b + (c - b) * t,
+        TriangleRegion::Inside { va, vb, vc } => {
+            let denom = 1.0 / (va + vb + vc);
+            a + (b - a) * (vb * denom) + (c - a) * (vc * denom)
+        }
+    }
 }
 
 #[cfg(test)]

@@ -26,6 +26,7 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::deviation::{TriangleRegion, triangle_region};
 use crate::mesh::{Fans, edge_key, triangle_edges};
 
 /// How far outside a UV triangle (in barycentric units) a sample still counts as inside:
@@ -361,50 +362,30 @@ pub fn inside(p: Vec2, a: Vec2, b: Vec2, c: Vec2) -> Option<[f32; 3]> {
 }
 
 /// The barycentric weights of the point of the UV triangle `a b c` nearest to `p`
-/// (Voronoi regions of the corners, then the edges, then the inside). A triangle of no
-/// UV area gives its nearest corner or edge point.
+/// ([`triangle_region`], which the surface deviation shares). A triangle of no UV area
+/// gives its nearest corner or edge point.
 pub fn closest_barycentric(p: Vec2, a: Vec2, b: Vec2, c: Vec2) -> [f32; 3] {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return [1.0, 0.0, 0.0];
+    match triangle_region(p, a, b, c) {
+        TriangleRegion::A => [1.0, 0.0, 0.0],
+        TriangleRegion::B => [0.0, 1.0, 0.0],
+        TriangleRegion::C => [0.0, 0.0, 1.0],
+        TriangleRegion::Ab(t) => [1.0 - t, t, 0.0],
+        TriangleRegion::Ac(t) => [1.0 - t, 0.0, t],
+        TriangleRegion::Bc(t) => [0.0, 1.0 - t, t],
+        TriangleRegion::Inside { va, vb, vc } => {
+            let sum = va + vb + vc;
+            if sum.abs() <= f32::MIN_POSITIVE {
+                // No area: the nearest corner.
+                let d = [a, b, c].map(|q| q.distance_squared(p));
+                let i = (0..3).min_by(|&i, &j| d[i].total_cmp(&d[j])).unwrap_or(0);
+                let mut w = [0.0; 3];
+                w[i] = 1.0;
+                return w;
+            }
+            let (v, w) = (vb / sum, vc / sum);
+            [1.0 - v - w, v, w]
+        }
     }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return [0.0, 1.0, 0.0];
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let t = d1 / (d1 - d3);
-        return [1.0 - t, t, 0.0];
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return [0.0, 0.0, 1.0];
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let t = d2 / (d2 - d6);
-        return [1.0 - t, 0.0, t];
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return [0.0, 1.0 - t, t];
-    }
-    let sum = va + vb + vc;
-    if sum.abs() <= f32::MIN_POSITIVE {
-        // No area: the nearest corner.
-        let d = [a, b, c].map(|q| q.distance_squared(p));
-        let i = (0..3).min_by(|&i, &j| d[i].total_cmp(&d[j])).unwrap_or(0);
-        let mut w = [0.0; 3];
-        w[i] = 1.0;
-        return w;
-    }
-    let (v, w) = (vb / sum, vc / sum);
-    [1.0 - v - w, v, w]
 }
 
 #[cfg(test)]

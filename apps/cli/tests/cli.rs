@@ -848,6 +848,34 @@ fn render_draws_a_gltf_file_as_its_scene_and_offers_its_cameras() {
     );
 }
 
+/// `meshlight args` (with no adapter to open) run to its end, which must come within
+/// `seconds`: its exit status and standard error.
+#[cfg(unix)]
+fn run_within(args: &[&str], seconds: u64) -> (std::process::ExitStatus, String) {
+    let started = std::time::Instant::now();
+    let mut child = command(args)
+        .env("MESHLIGHT_ADAPTER", "no adapter is called this")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("runs");
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if started.elapsed() > std::time::Duration::from_secs(seconds) {
+            let _ = child.kill();
+            panic!(
+                "meshlight {}: still running after {seconds} s",
+                args.join(" ")
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let out = child.wait_with_output().unwrap();
+    (status, String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
 /// A named pipe in a fresh directory.
 #[cfg(unix)]
 fn fifo(name: &str) -> std::path::PathBuf {
@@ -882,30 +910,107 @@ fn devices_and_pipes_given_as_inputs_are_refused_at_once() {
         vec!["bench", "--from-json", pipe, "--html", "/dev/null"],
     ];
     for args in cases {
-        let started = std::time::Instant::now();
-        let mut child = command(&args)
-            .env("MESHLIGHT_ADAPTER", "no adapter is called this")
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .expect("runs");
-        let status = loop {
-            if let Some(status) = child.try_wait().unwrap() {
-                break status;
-            }
-            if started.elapsed() > std::time::Duration::from_secs(20) {
-                let _ = child.kill();
-                panic!("meshlight {}: still running after 20 s", args.join(" "));
-            }
-            std::thread::sleep(std::time::Duration::from_millis(20));
-        };
-        let out = child.wait_with_output().unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
+        let (status, err) = run_within(&args, 20);
         assert!(!status.success(), "{}: {err}", args.join(" "));
         assert!(
             err.contains("not a regular file"),
             "meshlight {}: {err}",
             args.join(" ")
         );
+    }
+}
+
+/// Every argument that names a file to read, given each kind of path that is not a
+/// regular file (a named pipe, a directory, a link to `/dev/zero`, a link to a pipe),
+/// named with the extension the argument expects: the command fails within 20 s (a
+/// refusal takes milliseconds; reading `/dev/zero` runs out of memory and a pipe waits
+/// forever), without a panic, and its message names the path.
+#[cfg(unix)]
+#[test]
+fn every_input_argument_refuses_pipes_directories_and_devices() {
+    let dir = scratch("hostile-inputs");
+    let pipe_target = dir.join("target.fifo");
+    assert!(
+        std::process::Command::new("mkfifo")
+            .arg(&pipe_target)
+            .status()
+            .expect("mkfifo runs")
+            .success()
+    );
+    // Each hostile kind, as a path ending in `ext`.
+    let hostile = |kind: &str, ext: &str| -> String {
+        let path = dir.join(format!("{kind}.{ext}"));
+        if !path.exists() && std::fs::symlink_metadata(&path).is_err() {
+            match kind {
+                "pipe" => assert!(
+                    std::process::Command::new("mkfifo")
+                        .arg(&path)
+                        .status()
+                        .unwrap()
+                        .success()
+                ),
+                "directory" => std::fs::create_dir(&path).unwrap(),
+                "zero-link" => std::os::unix::fs::symlink("/dev/zero", &path).unwrap(),
+                "pipe-link" => std::os::unix::fs::symlink(&pipe_target, &path).unwrap(),
+                _ => unreachable!(),
+            }
+        }
+        path.to_str().unwrap().to_string()
+    };
+    let out = dir.join("out.mlasset");
+    let out = out.to_str().unwrap();
+    for kind in ["pipe", "directory", "zero-link", "pipe-link"] {
+        let mut cases: Vec<Vec<String>> = Vec::new();
+        for mesh_ext in ["obj", "glb", "gltf", "stl", "mlasset"] {
+            let mesh = hostile(kind, mesh_ext);
+            cases.push(vec!["render".into(), "--mesh".into(), mesh.clone()]);
+            cases.push(vec![
+                "view".into(),
+                "--offscreen".into(),
+                "--frames".into(),
+                "1".into(),
+                "--mesh".into(),
+                mesh.clone(),
+            ]);
+            // A directory is what `bake DIR` bakes: only the file kinds are refused.
+            if kind != "directory" {
+                cases.push(vec!["bake".into(), mesh.clone(), "-o".into(), out.into()]);
+            }
+        }
+        let pipeline = hostile(kind, "toml");
+        cases.push(vec!["render".into(), "--pipeline".into(), pipeline.clone()]);
+        cases.push(vec![
+            "view".into(),
+            "--offscreen".into(),
+            "--frames".into(),
+            "1".into(),
+            "--pipeline".into(),
+            pipeline.clone(),
+        ]);
+        cases.push(vec!["graph".into(), "--pipeline".into(), pipeline]);
+        cases.push(vec!["inspect".into(), hostile(kind, "mlasset")]);
+        let json = hostile(kind, "json");
+        cases.push(vec![
+            "bench".into(),
+            "--from-json".into(),
+            json,
+            "--html".into(),
+            "/dev/null".into(),
+        ]);
+        for args in &cases {
+            let args: Vec<&str> = args.iter().map(String::as_str).collect();
+            let (status, err) = run_within(&args, 20);
+            let shown = args.join(" ");
+            assert!(!status.success(), "meshlight {shown} succeeded: {err}");
+            assert!(!err.contains("panicked"), "meshlight {shown}: {err}");
+            let named = args
+                .iter()
+                .skip(1)
+                .any(|a| a.contains(kind) && err.contains(a));
+            assert!(
+                named,
+                "meshlight {shown}: the message does not name the path: {err}"
+            );
+        }
     }
 }

@@ -397,7 +397,11 @@ impl Pass for Resolve {
         );
         ctx.dispatch(
             "shade",
-            [self.width.div_ceil(TILE[0]), self.height.div_ceil(TILE[1]), 1],
+            [
+                self.width.div_ceil(TILE[0]),
+                self.height.div_ceil(TILE[1]),
+                1,
+            ],
         );
         Ok(())
     }
@@ -452,7 +456,11 @@ impl Pass for Resolve {
                 ("view", bytemuck::bytes_of(&view)),
                 ("params", bytemuck::bytes_of(&shade_params)),
             ],
-            Workgroups::Direct([self.width.div_ceil(TILE[0]), self.height.div_ceil(TILE[1]), 1]),
+            Workgroups::Direct([
+                self.width.div_ceil(TILE[0]),
+                self.height.div_ceil(TILE[1]),
+                1,
+            ]),
         )
     }
 }

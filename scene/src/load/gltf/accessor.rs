@@ -204,6 +204,24 @@ pub fn check(
     })
 }
 
+/// An integer component `v`, `bytes` wide, as glTF decodes it: with `normalized`, an 8- or
+/// 16-bit value divided by the largest its type holds (signed values clamped at -1, so
+/// both -128 and -127 read -1); otherwise, and for wider types, as it is. Plain accessors
+/// and Draco's decoded attributes both read through this.
+pub(super) fn integer_component(v: f32, bytes: usize, signed: bool, normalized: bool) -> f32 {
+    if !normalized {
+        return v;
+    }
+    let max = match (bytes, signed) {
+        (1, false) => 255.0,
+        (1, true) => 127.0,
+        (2, false) => 65535.0,
+        (2, true) => 32767.0,
+        _ => return v,
+    };
+    if signed { (v / max).max(-1.0) } else { v / max }
+}
+
 impl CheckedAccessor {
     /// Component `k` of element `i`, as `f32`: normalized integers scaled to 0..1
     /// (unsigned) or -1..1 (signed, as glTF decodes them), others converted as they are.
@@ -212,12 +230,10 @@ impl CheckedAccessor {
         let n = self.normalized;
         match self.component {
             ComponentType::F32 => f32::from_bits(raw),
-            ComponentType::U8 if n => raw as f32 / 255.0,
-            ComponentType::U16 if n => raw as f32 / 65535.0,
-            ComponentType::I8 if n => (raw as u8 as i8 as f32 / 127.0).max(-1.0),
-            ComponentType::I16 if n => (raw as u16 as i16 as f32 / 32767.0).max(-1.0),
-            ComponentType::I8 => raw as u8 as i8 as f32,
-            ComponentType::I16 => raw as u16 as i16 as f32,
+            ComponentType::U8 => integer_component(raw as f32, 1, false, n),
+            ComponentType::U16 => integer_component(raw as f32, 2, false, n),
+            ComponentType::I8 => integer_component(raw as u8 as i8 as f32, 1, true, n),
+            ComponentType::I16 => integer_component(raw as u16 as i16 as f32, 2, true, n),
             _ => raw as f32,
         }
     }

@@ -19,6 +19,7 @@ use gltf::json::Value;
 use gltf::json::accessor::{ComponentType, GenericComponentType};
 use gltf::json::validation::{Checked, USize64};
 
+use super::accessor::integer_component;
 use crate::load::MAX_INPUT_BYTES;
 
 /// The extension's name, as files list it.
@@ -53,11 +54,6 @@ pub fn decode_primitives(root: &mut Root, buffers: &mut Vec<Vec<u8>>) -> Result<
     let views = root.buffer_views.len();
     for mi in 0..root.meshes.len() {
         for pi in 0..root.meshes[mi].primitives.len() {
-            let name = root.meshes[mi]
-                .name
-                .clone()
-                .unwrap_or_else(|| format!("#{mi}"));
-            let what = format!("mesh {name:?} primitive {pi} ({EXTENSION})");
             let Some(ext) = root.meshes[mi].primitives[pi]
                 .extensions
                 .as_ref()
@@ -65,6 +61,11 @@ pub fn decode_primitives(root: &mut Root, buffers: &mut Vec<Vec<u8>>) -> Result<
             else {
                 continue;
             };
+            let name = root.meshes[mi]
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("#{mi}"));
+            let what = format!("mesh {name:?} primitive {pi} ({EXTENSION})");
             let compressed = parse(ext, views).map_err(|e| format!("{what}: {e}"))?;
             if let std::collections::hash_map::Entry::Vacant(slot) = streams.entry(compressed.view)
             {
@@ -287,18 +288,15 @@ fn floats(a: &PointAttribute, points: usize) -> Result<Vec<f32>, String> {
     Ok(out)
 }
 
-/// One scalar of type `ty` from its little-endian bytes, as glTF reads it.
+/// One scalar of type `ty` from its little-endian bytes, as glTF reads it
+/// ([`integer_component`] for the integers).
 fn scalar(ty: DataType, b: &[u8], normalized: bool) -> f32 {
-    let norm = |v: f32, max: f32, signed: bool| match (normalized, signed) {
-        (false, _) => v,
-        (true, false) => v / max,
-        (true, true) => (v / max).max(-1.0),
-    };
+    let n = normalized;
     match ty {
-        DataType::Int8 => norm(b[0] as i8 as f32, 127.0, true),
-        DataType::Uint8 | DataType::Bool => norm(b[0] as f32, 255.0, false),
-        DataType::Int16 => norm(i16::from_le_bytes([b[0], b[1]]) as f32, 32767.0, true),
-        DataType::Uint16 => norm(u16::from_le_bytes([b[0], b[1]]) as f32, 65535.0, false),
+        DataType::Int8 => integer_component(b[0] as i8 as f32, 1, true, n),
+        DataType::Uint8 | DataType::Bool => integer_component(b[0] as f32, 1, false, n),
+        DataType::Int16 => integer_component(i16::from_le_bytes([b[0], b[1]]) as f32, 2, true, n),
+        DataType::Uint16 => integer_component(u16::from_le_bytes([b[0], b[1]]) as f32, 2, false, n),
         DataType::Int32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
         DataType::Uint32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
         DataType::Int64 => i64::from_le_bytes(b[..8].try_into().unwrap_or_default()) as f32,
