@@ -274,17 +274,32 @@ impl TriangleGrid {
 /// the surface deviation asks it in object space, the texture slide in UV space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TriangleRegion {
+    /// Corner a.
     A,
+    /// Corner b.
     B,
+    /// Corner c.
     C,
+    /// `a + (b - a) · t`.
     Ab(f32),
+    /// `a + (c - a) · t`.
     Ac(f32),
+    /// `b + (c - b) · t`.
     Bc(f32),
-    Inside { va: f32, vb: f32, vc: f32 },
+    /// The inside, at barycentric weights proportional to `va`, `vb`, `vc`.
+    Inside {
+        /// Weight of a (before division by the sum).
+        va: f32,
+        /// Weight of b.
+        vb: f32,
+        /// Weight of c.
+        vc: f32,
+    },
 }
 
 /// A point [`triangle_region`] measures: differences and dot products.
 pub trait TrianglePoint: Copy + std::ops::Sub<Output = Self> {
+    /// The dot product.
     fn dot(self, other: Self) -> f32;
 }
 
