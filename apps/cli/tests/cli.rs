@@ -1014,3 +1014,87 @@ fn every_input_argument_refuses_pipes_directories_and_devices() {
         }
     }
 }
+
+/// Every argument that names a file to write, given a directory or a full device: the
+/// command fails without a panic, and its message names the path (render runs on the
+/// adapter the GPU tests use, since it writes only after drawing).
+#[cfg(unix)]
+#[test]
+fn every_output_argument_names_the_path_it_cannot_write() {
+    let dir = scratch("hostile-outputs");
+    let folder = |ext: &str| -> String {
+        let path = dir.join(format!("folder.{ext}"));
+        std::fs::create_dir_all(&path).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let png = dir.join("frame.png");
+    let png = png.to_str().unwrap().to_string();
+    let rows = "docs/bench-h200-resolve-decode.json";
+    let pipeline = "pipelines/virtual_geometry.toml";
+    let small = [
+        "render",
+        "--instances",
+        "1",
+        "--segments",
+        "8",
+        "--width",
+        "32",
+        "--height",
+        "32",
+    ];
+    let mut cases: Vec<(Vec<String>, String)> = Vec::new();
+    let strings = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    for bad in [folder("svg"), "/dev/full".to_string()] {
+        cases.push((
+            strings(&[
+                "graph",
+                "--pipeline",
+                pipeline,
+                "--format",
+                "svg",
+                "-o",
+                &bad,
+            ]),
+            bad.clone(),
+        ));
+    }
+    for bad in [folder("html"), "/dev/full".to_string()] {
+        cases.push((
+            strings(&["bench", "--from-json", rows, "--html", &bad]),
+            bad.clone(),
+        ));
+        let mut trace = strings(&small);
+        trace.extend(strings(&["-o", &png, "--html", &bad]));
+        cases.push((trace, bad.clone()));
+    }
+    for bad in [folder("json"), "/dev/full".to_string()] {
+        cases.push((
+            strings(&["bench", "--from-json", rows, "--json", &bad]),
+            bad.clone(),
+        ));
+        let mut trace = strings(&small);
+        trace.extend(strings(&["-o", &png, "--trace", &bad]));
+        cases.push((trace, bad.clone()));
+    }
+    for bad in [folder("png"), "/dev/full".to_string()] {
+        let mut render = strings(&small);
+        render.extend(strings(&["-o", &bad]));
+        cases.push((render, bad.clone()));
+    }
+    cases.push((
+        strings(&["bake", "procedural", "--segments", "8", "-o", "/dev/full"]),
+        "/dev/full".to_string(),
+    ));
+    for (args, bad) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = command(&args).output().expect("runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        let shown = args.join(" ");
+        assert!(!out.status.success(), "meshlight {shown} succeeded: {err}");
+        assert!(!err.contains("panicked"), "meshlight {shown}: {err}");
+        assert!(
+            err.contains(bad.as_str()),
+            "meshlight {shown}: the message does not name {bad}: {err}"
+        );
+    }
+}

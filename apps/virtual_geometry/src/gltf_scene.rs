@@ -66,9 +66,9 @@ pub fn is_gltf(path: &Path) -> bool {
 /// Each primitive is shaded with its material's metallic-roughness factors (glTF's
 /// default material where it names none): the asset keeps each meshlet's material
 /// slot, and the instance the first of its mesh's run of materials, with the material's
-/// textures (base colour, metallic-roughness, normal, occlusion, emissive). A node whose transform mirrors places a copy of its mesh with the
-/// winding reversed (baked once too), since the rasterisers keep counter-clockwise
-/// faces.
+/// textures (base colour, metallic-roughness, normal, occlusion, emissive). A node whose
+/// transform mirrors places a copy of its mesh with the winding reversed (baked once
+/// too), since the rasterisers keep counter-clockwise faces.
 pub fn gltf_scene(
     data: SceneData,
     path: &Path,
