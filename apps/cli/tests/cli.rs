@@ -1027,8 +1027,8 @@ fn every_output_argument_names_the_path_it_cannot_write() {
         std::fs::create_dir_all(&path).unwrap();
         path.to_str().unwrap().to_string()
     };
-    let png = dir.join("frame.png");
-    let png = png.to_str().unwrap().to_string();
+    const PNG: &str = "PNG";
+    let png = dir.join("frame.png").to_str().unwrap().to_string();
     let rows = "docs/bench-h200-resolve-decode.json";
     let pipeline = "pipelines/virtual_geometry.toml";
     let small = [
@@ -1042,49 +1042,52 @@ fn every_output_argument_names_the_path_it_cannot_write() {
         "--height",
         "32",
     ];
-    let mut cases: Vec<(Vec<String>, String)> = Vec::new();
-    let strings = |a: &[&str]| a.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-    for bad in [folder("svg"), "/dev/full".to_string()] {
-        cases.push((
-            strings(&[
+    // Each form with BAD where the path goes, and the extension its path takes.
+    const BAD: &str = "BAD";
+    let render = |extra: &[&'static str]| [&small[..], extra].concat();
+    let forms: Vec<(&str, Vec<&str>)> = vec![
+        (
+            "svg",
+            vec![
                 "graph",
                 "--pipeline",
                 pipeline,
                 "--format",
                 "svg",
                 "-o",
-                &bad,
-            ]),
-            bad.clone(),
-        ));
+                BAD,
+            ],
+        ),
+        ("html", vec!["bench", "--from-json", rows, "--html", BAD]),
+        ("json", vec!["bench", "--from-json", rows, "--json", BAD]),
+        ("html", render(&["-o", PNG, "--html", BAD])),
+        ("json", render(&["-o", PNG, "--trace", BAD])),
+        ("png", render(&["-o", BAD])),
+        (
+            "mlasset",
+            vec!["bake", "procedural", "--segments", "8", "-o", BAD],
+        ),
+    ];
+    let mut cases: Vec<(Vec<String>, String)> = Vec::new();
+    for (ext, form) in &forms {
+        // `bake -o DIR` is the directory form: only the device is a bad output there.
+        let folders = if *ext == "mlasset" {
+            vec![]
+        } else {
+            vec![folder(ext)]
+        };
+        for bad in folders.into_iter().chain(["/dev/full".to_string()]) {
+            let args = form
+                .iter()
+                .map(|a| match *a {
+                    BAD => bad.clone(),
+                    PNG => png.clone(),
+                    _ => a.to_string(),
+                })
+                .collect();
+            cases.push((args, bad));
+        }
     }
-    for bad in [folder("html"), "/dev/full".to_string()] {
-        cases.push((
-            strings(&["bench", "--from-json", rows, "--html", &bad]),
-            bad.clone(),
-        ));
-        let mut trace = strings(&small);
-        trace.extend(strings(&["-o", &png, "--html", &bad]));
-        cases.push((trace, bad.clone()));
-    }
-    for bad in [folder("json"), "/dev/full".to_string()] {
-        cases.push((
-            strings(&["bench", "--from-json", rows, "--json", &bad]),
-            bad.clone(),
-        ));
-        let mut trace = strings(&small);
-        trace.extend(strings(&["-o", &png, "--trace", &bad]));
-        cases.push((trace, bad.clone()));
-    }
-    for bad in [folder("png"), "/dev/full".to_string()] {
-        let mut render = strings(&small);
-        render.extend(strings(&["-o", &bad]));
-        cases.push((render, bad.clone()));
-    }
-    cases.push((
-        strings(&["bake", "procedural", "--segments", "8", "-o", "/dev/full"]),
-        "/dev/full".to_string(),
-    ));
     for (args, bad) in &cases {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let out = command(&args).output().expect("runs");
