@@ -166,12 +166,16 @@ fn bake(a: args::BakeArgs) -> Result<(), Box<dyn std::error::Error>> {
         pool.install(|| meshlight_cli::bake_library::run(&a.input, &a.output, &options, threads))
             .map_err(Into::into)
     } else {
+        meshlight_output::check_output_path(&a.output)?;
         pool.install(|| meshlight_cli::bake_file::run(&a.options()))
             .map_err(Into::into)
     }
 }
 
 fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {
+    if let Some(path) = &a.output {
+        meshlight_output::check_output_path(path)?;
+    }
     let options = meshlight_cli::graph::options(a.for_adapter, a.class)?;
     let plan = meshlight_cli::graph::plan(&a.pipeline, &options)?;
     let title = a.pipeline.display().to_string();

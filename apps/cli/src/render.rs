@@ -4,7 +4,7 @@
 use crate::args::SceneArgs;
 use meshlight::graph::dump;
 use meshlight_cli::render_bounds::RenderNumbers;
-use meshlight_output::{create_parent, write_file, write_png, write_stdout};
+use meshlight_output::{check_output_path, write_file, write_png, write_stdout};
 use meshlight_virtual_geometry::{Renderer, SceneOptions, SceneSetup, setup};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -73,9 +73,8 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         let beside = a.output.with_extension("html");
         (beside != a.output && beside.is_file()).then_some(beside)
     });
-    create_parent(&a.output)?;
-    for page in html.iter().chain(&a.trace) {
-        create_parent(page)?;
+    for path in std::iter::once(&a.output).chain(&html).chain(&a.trace) {
+        check_output_path(path)?;
     }
     let SceneSetup {
         data,

@@ -42,6 +42,7 @@ pub struct ViewArgs {
 pub fn view(a: ViewArgs) -> Result<(), Box<dyn std::error::Error>> {
     if let Some(path) = &a.screenshot {
         meshlight_output::check_png_path(path)?;
+        meshlight_output::check_output_path(path)?;
     }
     let options = ViewerOptions {
         scene: a.scene.options(),

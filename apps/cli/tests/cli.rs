@@ -1100,4 +1100,38 @@ fn every_output_argument_names_the_path_it_cannot_write() {
             "meshlight {shown}: the message does not name {bad}: {err}"
         );
     }
+    // Checked before any work: with no adapter to open, a directory given as an image,
+    // page, trace, screenshot or asset is still what the message names.
+    let before_work = [
+        render(&["-o", "DIR.png"]),
+        render(&["-o", PNG, "--html", "DIR.html"]),
+        render(&["-o", PNG, "--trace", "DIR.json"]),
+        vec![
+            "view",
+            "--offscreen",
+            "--frames",
+            "1",
+            "--screenshot",
+            "DIR.png",
+        ],
+        vec!["bake", "procedural", "--segments", "8", "-o", "DIR.mlasset"],
+    ];
+    for form in before_work {
+        let args: Vec<String> = form
+            .iter()
+            .map(|a| match a.strip_prefix("DIR.") {
+                Some(ext) => folder(ext),
+                None if *a == PNG => png.clone(),
+                None => a.to_string(),
+            })
+            .collect();
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (status, err) = run_within(&args, 20);
+        let shown = args.join(" ");
+        assert!(!status.success(), "meshlight {shown} succeeded: {err}");
+        assert!(
+            err.contains("folder.") && err.contains("is a directory"),
+            "meshlight {shown}: refused for another reason than its output: {err}"
+        );
+    }
 }

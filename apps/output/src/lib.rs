@@ -58,7 +58,9 @@ pub fn create_parent(path: &Path) -> Result<(), OutputError> {
 
 /// Checks, before any work, that `path` can be written: not a directory, its folder made
 /// (or makeable), the file openable for writing. A file this creates to find out is
-/// removed again, so a later failure leaves nothing behind.
+/// removed again, so a later failure leaves nothing behind. A device or a pipe that
+/// exists (`/dev/null`, `/dev/stdout`, a named pipe) is left to the write: opening a
+/// pipe to test it would wait for a reader, or end a waiting reader's input early.
 pub fn check_output_path(path: &Path) -> Result<(), OutputError> {
     if path.is_dir() {
         return Err(OutputError::new(
@@ -66,6 +68,9 @@ pub fn check_output_path(path: &Path) -> Result<(), OutputError> {
             "write",
             "it is a directory; give a file path (inside it, say)",
         ));
+    }
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file()) {
+        return Ok(());
     }
     create_parent(path)?;
     let existed = path.exists();
