@@ -4,12 +4,11 @@
 // the three clip-space corners. `cpu::shade` is the reference; every step has its mirror
 // there.
 
-#import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, MESH_FLAG_COLORS, meshlet_level, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_normal, meshlet_uv_word, meshlet_uv, meshlet_uv_location, meshlet_color_word}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_COLORS, meshlet_level, meshlet_material, meshlet_normal, meshlet_color_word}
 #import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MATERIAL_FLAG_DOUBLE_SIDED, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
 #import meshlight::texture::{texture_present, sample_texture, texture_lod, vertex_color}
-#import meshlight::surface::{barycentrics, interpolated_uv, uv_transform_rows, transformed_uv}
+#import meshlight::surface::{barycentrics, interpolated_uv, uv_transform_rows, transformed_uv, corner_field, corner_position, corner_uv}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshlets, payload, materials}
@@ -193,10 +192,6 @@ fn heat(t: f32) -> vec3<f32> {
     )) * min(x * 8.0, 1.0);
 }
 
-fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
-    let at = meshlet_vertex_field(m, vertex, f);
-    return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
-}
 
 // A well-mixed 32-bit hash (lowbias32), for colours that tell neighbouring ids apart.
 fn hash(x: u32) -> u32 {
@@ -248,15 +243,10 @@ struct CornerAttributes {
 // 8% of the 3840×2160 resolve.
 fn corner_attributes(instance: Instance, m: Meshlet, mesh: Mesh, v: u32) -> CornerAttributes {
     var c: CornerAttributes;
-    let p = meshlet_position(m, mesh.position_grid, vec3(field(m, v, 0u), field(m, v, 1u), field(m, v, 2u)));
-    c.world = (instance.world_from_local * vec4(p, 1.0)).xyz;
+    c.world = (instance.world_from_local * vec4(corner_position(m, mesh, v), 1.0)).xyz;
     c.clip = view.view_projection * vec4(c.world, 1.0);
-    c.normal = meshlet_normal(m, vec2(field(m, v, 3u), field(m, v, 4u)));
-    if (mesh.flags & MESH_FLAG_UVS) != 0u {
-        let block = meshlet_uv_word(m);
-        let at = meshlet_uv_location(m, v);
-        c.uv = meshlet_uv(m, mesh.uv_grid, vec2(payload[block], payload[block + 1u]), vec2(payload[at.x], payload[at.x + 1u]), at.y);
-    }
+    c.normal = meshlet_normal(m, vec2(corner_field(m, v, 3u), corner_field(m, v, 4u)));
+    c.uv = corner_uv(m, mesh, v);
     return c;
 }
 

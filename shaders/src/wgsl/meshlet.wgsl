@@ -204,7 +204,7 @@ fn meshlet_vertex_field(m: Meshlet, vertex: u32, field: u32) -> vec3<u32> {
     let before = select(0u, a.x, field > 0u) + select(0u, a.y, field > 1u)
         + select(0u, a.z, field > 2u) + select(0u, n.x, field > 3u);
     let width = select(select(select(select(n.y, n.x, field == 3u), a.z, field == 2u), a.y, field == 1u), a.x, field == 0u);
-    let bit = vertex * (a.x + a.y + a.z + n.x + n.y) + before;
+    let bit = vertex * meshlet_vertex_stride(m) + before;
     return vec3(m.data_offset + bit / 32u, bit % 32u, width);
 }
 

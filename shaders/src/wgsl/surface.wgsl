@@ -9,7 +9,7 @@
 // `meshlight_gpu_scene::surface` mirrors each step on the CPU.
 
 #import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Cluster, MESH_FLAG_UVS, MESH_FLAG_COLORS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv, meshlet_uv_location, meshlet_color_word}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, MESH_FLAG_COLORS, meshlet_material, meshlet_vertex_field, meshlet_position, meshlet_uv_word, meshlet_uv, meshlet_uv_location, meshlet_color_word}
 #import meshlight::instance::{MATERIAL_FLAG_MASK, MAP_BASE_COLOR, material_uv, material_uv_step}
 #import meshlight::cluster_triangle::{cluster_triangle, ClusterTriangle}
 #import meshlight::scene_buffers::{payload, materials, textures}
@@ -123,9 +123,26 @@ fn base_alpha(map: vec2<u32>, factor: f32, s: SampleUv) -> f32 {
     return factor * sample_alpha(map, s.uv, s.dx, s.dy);
 }
 
+// Field `f` of vertex `vertex` of meshlet `m` (`meshlet_vertex_field`), read from the payload.
 fn corner_field(m: Meshlet, vertex: u32, f: u32) -> u32 {
     let at = meshlet_vertex_field(m, vertex, f);
     return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
+}
+
+// Mesh-space position of vertex `v` of meshlet `m` of `mesh`.
+fn corner_position(m: Meshlet, mesh: Mesh, v: u32) -> vec3<f32> {
+    return meshlet_position(m, mesh.position_grid, vec3(corner_field(m, v, 0u), corner_field(m, v, 1u), corner_field(m, v, 2u)));
+}
+
+// Texture coordinates of vertex `v` of meshlet `m` of `mesh`, 0 where the mesh has none.
+// The rasterisers' cut-out test and the resolve both read UVs through this.
+fn corner_uv(m: Meshlet, mesh: Mesh, v: u32) -> vec2<f32> {
+    if (mesh.flags & MESH_FLAG_UVS) == 0u {
+        return vec2(0.0);
+    }
+    let block = meshlet_uv_word(m);
+    let at = meshlet_uv_location(m, v);
+    return meshlet_uv(m, mesh.uv_grid, vec2(payload[block], payload[block + 1u]), vec2(payload[at.x], payload[at.x + 1u]), at.y);
 }
 
 // What deciding a MASK triangle's pixels takes, whatever the pixel (`cut_out_setup`).
@@ -155,19 +172,13 @@ struct CutCorner {
 // Corner `v` of `tri`, as the resolve decodes it. Called once per corner rather than
 // from a loop filling arrays, which a driver may keep in memory (as the resolve's
 // `corner_attributes`).
-fn cut_corner(tri: ClusterTriangle, v: u32, view_projection: mat4x4<f32>, has_uvs: bool, has_colors: bool) -> CutCorner {
-    let m = tri.m;
+fn cut_corner(tri: ClusterTriangle, v: u32, view_projection: mat4x4<f32>, has_colors: bool) -> CutCorner {
     var c = CutCorner(vec4(0.0), vec2(0.0), 1.0);
-    let p = meshlet_position(m, tri.mesh.position_grid, vec3(corner_field(m, v, 0u), corner_field(m, v, 1u), corner_field(m, v, 2u)));
-    let world = (tri.instance.world_from_local * vec4(p, 1.0)).xyz;
+    let world = (tri.instance.world_from_local * vec4(corner_position(tri.m, tri.mesh, v), 1.0)).xyz;
     c.clip = view_projection * vec4(world, 1.0);
-    if has_uvs {
-        let block = meshlet_uv_word(m);
-        let at = meshlet_uv_location(m, v);
-        c.uv = meshlet_uv(m, tri.mesh.uv_grid, vec2(payload[block], payload[block + 1u]), vec2(payload[at.x], payload[at.x + 1u]), at.y);
-    }
+    c.uv = corner_uv(tri.m, tri.mesh, v);
     if has_colors {
-        c.alpha = vertex_color(payload[meshlet_color_word(m, tri.mesh.flags) + v]).a;
+        c.alpha = vertex_color(payload[meshlet_color_word(tri.m, tri.mesh.flags) + v]).a;
     }
     return c;
 }
@@ -188,11 +199,10 @@ fn cut_out_setup(cluster: Cluster, t: u32, view_projection: mat4x4<f32>) -> CutO
     out.alpha = material.base_color.a;
     out.cutoff = material.alpha_cutoff;
     out.uv_transform = material.uv_transform;
-    let has_uvs = (tri.mesh.flags & MESH_FLAG_UVS) != 0u;
     out.has_colors = (tri.mesh.flags & MESH_FLAG_COLORS) != 0u;
-    let c0 = cut_corner(tri, tri.corners.x, view_projection, has_uvs, out.has_colors);
-    let c1 = cut_corner(tri, tri.corners.y, view_projection, has_uvs, out.has_colors);
-    let c2 = cut_corner(tri, tri.corners.z, view_projection, has_uvs, out.has_colors);
+    let c0 = cut_corner(tri, tri.corners.x, view_projection, out.has_colors);
+    let c1 = cut_corner(tri, tri.corners.y, view_projection, out.has_colors);
+    let c2 = cut_corner(tri, tri.corners.z, view_projection, out.has_colors);
     out.uv = array(c0.uv, c1.uv, c2.uv);
     out.vertex_alpha = vec3(c0.alpha, c1.alpha, c2.alpha);
     out.bary = barycentric_setup(c0.clip, c1.clip, c2.clip);
