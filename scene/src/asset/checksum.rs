@@ -15,3 +15,9 @@ pub fn file_checksum(header: &[u32], body: &[u32]) -> u64 {
     let seed = xxh3_64(bytemuck::cast_slice(&h));
     xxh3_64_with_seed(bytemuck::cast_slice(body), seed)
 }
+
+/// The checksum of one streamed page's bytes, checked when the page is read back on its
+/// own, long after the file's checksum was: the file may have changed since.
+pub fn page_checksum(bytes: &[u8]) -> u64 {
+    xxh3_64(bytes)
+}

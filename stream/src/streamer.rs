@@ -1,0 +1,580 @@
+//! The streamer: which pages to read, publish and evict each frame.
+//!
+//! Each frame the renderer hands over the pages the GPU wanted (read back a few frames
+//! late: pages the cut would refine, resident or not, with a priority such as the
+//! screen-space error) and gets back a [`FramePlan`]: pages to evict, pages to install
+//! (bytes and where in the pool), and pages to start reading. Reads complete whenever
+//! the reader is done ([`Streamer::complete`]), in any order.
+//!
+//! The rules, each kept as an invariant the tests check on every frame:
+//! - **Parents first.** A page is read only once every page it needs is at least being
+//!   read, and published only once they are all resident, in the order reads were
+//!   issued. So the resident set is always closed under parents, which is what makes
+//!   every cut complete ([`crate::cut`]). A wanted page's missing ancestors are wanted
+//!   with its priority; among equals the shallower goes first.
+//! - **Evict only what nothing needs.** A page is evicted only when no page that needs it
+//!   is resident or being read, and it has not been wanted for
+//!   [`Budget::keep_frames`] frames (the GPU's word lags by the readback's latency);
+//!   least recently wanted first, and only when a read needs the room.
+//! - **Budgets.** Installs and uploaded bytes per frame (a page larger than the byte
+//!   budget goes alone), reads in flight, evictions per frame.
+//! - **Pressure, not thrashing.** When the pages the view wants outgrow the pool, the LOD
+//!   threshold's scale rises ([`crate::pressure`]) instead of evicting pages in use.
+//! - **A bad page is refused.** A read that fails or returns the wrong size marks the
+//!   page failed for the rest of the run: it is never published, its group keeps its
+//!   coarser level, and [`Streamer::take_failures`] names it.
+
+use std::cmp::Ordering;
+use std::collections::{BTreeSet, BinaryHeap, HashMap};
+
+use crate::pages::{PageGraph, PageId};
+use crate::pool::{Allocation, PoolAllocator};
+use crate::pressure::LodPressure;
+
+/// Per-frame limits of the streamer's work.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Budget {
+    /// Pages published per frame at most.
+    pub installs_per_frame: u32,
+    /// Bytes uploaded per frame at most; a single page larger than this is still
+    /// installed, alone.
+    pub upload_bytes_per_frame: u64,
+    /// Reads in flight at most.
+    pub loads_in_flight: u32,
+    /// Pages evicted per frame at most.
+    pub evictions_per_frame: u32,
+    /// Frames a page must go unwanted before it may be evicted: at least the readback's
+    /// latency, so a page the GPU is still asking for is never taken away.
+    pub keep_frames: u64,
+}
+
+impl Default for Budget {
+    /// 128 installs and 32 MiB a frame, 256 reads in flight, 1,024 evictions a frame,
+    /// pages kept 8 frames after their last want.
+    fn default() -> Self {
+        Self {
+            installs_per_frame: 128,
+            upload_bytes_per_frame: 32 << 20,
+            loads_in_flight: 256,
+            evictions_per_frame: 1024,
+            keep_frames: 8,
+        }
+    }
+}
+
+/// A page the GPU wanted this frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Request {
+    /// The page.
+    pub page: PageId,
+    /// Larger goes first (e.g. the group's projected error in pixels).
+    pub priority: f32,
+}
+
+/// A read to start: the reader fetches the page's bytes and hands them to
+/// [`Streamer::complete`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Load {
+    /// The page.
+    pub page: PageId,
+    /// Its size in bytes.
+    pub bytes: u64,
+}
+
+/// A page to publish: upload `data` at `allocation.offset` of the pool, then mark the
+/// page resident in the page table.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Install {
+    /// The page.
+    pub page: PageId,
+    /// Where in the pool.
+    pub allocation: Allocation,
+    /// The page's bytes, as read.
+    pub data: Vec<u8>,
+}
+
+/// What one frame changes. Apply the evictions before the installs: an install may
+/// reuse an evicted page's bytes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FramePlan {
+    /// Pages to mark not resident.
+    pub evict: Vec<PageId>,
+    /// Pages to upload and mark resident, parents before children.
+    pub install: Vec<Install>,
+    /// Reads to start.
+    pub load: Vec<Load>,
+    /// The frame's figures.
+    pub stats: FrameStats,
+}
+
+/// One frame of the streamer, in figures.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameStats {
+    /// Wanted pages (and their ancestors) not resident.
+    pub requested: u32,
+    /// Reads started.
+    pub loads_started: u32,
+    /// Pages published.
+    pub installed: u32,
+    /// Pages evicted.
+    pub evicted: u32,
+    /// Bytes of the pages published.
+    pub bytes_uploaded: u64,
+    /// Pool bytes reserved (resident pages and reads in flight).
+    pub pool_used: u64,
+    /// Pool bytes.
+    pub pool_bytes: u64,
+    /// Pages resident.
+    pub resident_pages: u32,
+    /// Reads in flight or read and waiting for their parents.
+    pub in_flight: u32,
+    /// Bytes of every page the view wants (and their ancestors), resident or not.
+    pub wanted_bytes: u64,
+    /// The LOD threshold's scale from pool pressure.
+    pub lod_scale: f32,
+    /// Pages refused so far.
+    pub failed_pages: u32,
+}
+
+/// Where a page is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PageState {
+    /// Not on the GPU, not being read.
+    Absent,
+    /// Being read; room in the pool is reserved.
+    Loading,
+    /// Read, waiting for its parents or the frame's budget to be published.
+    Loaded,
+    /// On the GPU: its group may be refined.
+    Resident,
+    /// Refused (a read failed or returned the wrong bytes); never published.
+    Failed,
+}
+
+/// A page refused, and why.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PageFailure {
+    /// The page.
+    pub page: PageId,
+    /// What was wrong with it.
+    pub reason: String,
+}
+
+/// What is wrong with a streamer's setup.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum StreamError {
+    /// A page cannot fit in the pool even when it is empty.
+    #[error(
+        "the page pool of {pool} bytes cannot hold page {page} of {page_bytes} bytes: \
+         give the pool at least {page_bytes} bytes"
+    )]
+    PoolTooSmall {
+        /// The pool's bytes.
+        pool: u64,
+        /// The largest page.
+        page: PageId,
+        /// Its bytes.
+        page_bytes: u64,
+    },
+}
+
+/// A queued read, ordered by priority, then shallower first, then page id.
+#[derive(Debug, Clone, Copy)]
+struct Queued {
+    priority: f32,
+    depth: u32,
+    page: PageId,
+}
+
+impl PartialEq for Queued {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for Queued {}
+impl PartialOrd for Queued {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Queued {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.priority
+            .total_cmp(&other.priority)
+            .then(other.depth.cmp(&self.depth))
+            .then(other.page.cmp(&self.page))
+    }
+}
+
+/// Not queued, in [`Streamer::queued`].
+const NOT_QUEUED: f32 = f32::NEG_INFINITY;
+
+/// The streaming policy over one [`PageGraph`] and one pool.
+#[derive(Debug)]
+pub struct Streamer {
+    graph: PageGraph,
+    budget: Budget,
+    pressure: LodPressure,
+    pool: PoolAllocator,
+    state: Vec<PageState>,
+    allocation: Vec<Option<Allocation>>,
+    /// Bytes read, waiting to be published.
+    data: HashMap<PageId, Vec<u8>>,
+    /// Last frame each page was wanted.
+    last_wanted: Vec<u64>,
+    /// Dependents being read, read or resident: while any, the page stays.
+    holders: Vec<u32>,
+    /// Resident pages without holders, by (last wanted, page): eviction candidates.
+    evictable: BTreeSet<(u64, PageId)>,
+    queue: BinaryHeap<Queued>,
+    /// The priority a page is queued at ([`NOT_QUEUED`] when it is not).
+    queued: Vec<f32>,
+    /// Reads in the order they were issued, for publishing in that order.
+    issued: Vec<PageId>,
+    /// The frame a page was last visited in while taking the frame's wants.
+    visited: Vec<u64>,
+    failures: Vec<PageFailure>,
+    failed_pages: u32,
+    resident_pages: u32,
+    frame: u64,
+}
+
+impl Streamer {
+    /// A streamer for `graph`'s pages over a pool of `pool_bytes`, nothing resident.
+    pub fn new(graph: PageGraph, pool_bytes: u64, budget: Budget) -> Result<Self, StreamError> {
+        let pool = PoolAllocator::new(pool_bytes);
+        if let Some(page) = (0..graph.len() as PageId).max_by_key(|&p| graph.bytes(p))
+            && PoolAllocator::reserved(graph.bytes(page)) > pool.capacity()
+        {
+            return Err(StreamError::PoolTooSmall {
+                pool: pool_bytes,
+                page,
+                page_bytes: graph.bytes(page),
+            });
+        }
+        let n = graph.len();
+        Ok(Self {
+            graph,
+            budget,
+            pressure: LodPressure::default(),
+            pool,
+            state: vec![PageState::Absent; n],
+            allocation: vec![None; n],
+            data: HashMap::new(),
+            last_wanted: vec![0; n],
+            holders: vec![0; n],
+            evictable: BTreeSet::new(),
+            queue: BinaryHeap::new(),
+            queued: vec![NOT_QUEUED; n],
+            issued: Vec::new(),
+            visited: vec![u64::MAX; n],
+            failures: Vec::new(),
+            failed_pages: 0,
+            resident_pages: 0,
+            frame: 0,
+        })
+    }
+
+    /// Replaces the pressure's band and step.
+    pub fn with_pressure(mut self, pressure: LodPressure) -> Self {
+        self.pressure = pressure;
+        self
+    }
+
+    /// The pages streamed.
+    pub fn graph(&self) -> &PageGraph {
+        &self.graph
+    }
+
+    /// The budgets.
+    pub fn budget(&self) -> &Budget {
+        &self.budget
+    }
+
+    /// Where page `page` is.
+    pub fn state(&self, page: PageId) -> PageState {
+        self.state[page as usize]
+    }
+
+    /// Whether page `page` is resident: its group may be refined.
+    pub fn is_resident(&self, page: PageId) -> bool {
+        self.state(page) == PageState::Resident
+    }
+
+    /// Where a page in the pool lies (reserved once its read starts).
+    pub fn allocation(&self, page: PageId) -> Option<Allocation> {
+        self.allocation[page as usize]
+    }
+
+    /// The LOD threshold's scale from pool pressure (1 without).
+    pub fn lod_scale(&self) -> f32 {
+        self.pressure.scale()
+    }
+
+    /// Pool bytes reserved (resident pages and reads).
+    pub fn pool_used(&self) -> u64 {
+        self.pool.used()
+    }
+
+    /// Pool bytes.
+    pub fn pool_bytes(&self) -> u64 {
+        self.pool.capacity()
+    }
+
+    /// The pages refused since the last call, for the renderer's warnings.
+    pub fn take_failures(&mut self) -> Vec<PageFailure> {
+        std::mem::take(&mut self.failures)
+    }
+
+    /// A read finished: `Ok` with the page's bytes, or `Err` with what went wrong. A
+    /// result for a page that is not being read is ignored.
+    pub fn complete(&mut self, page: PageId, result: Result<Vec<u8>, String>) {
+        if self.state(page) != PageState::Loading {
+            return;
+        }
+        let expected = self.graph.bytes(page);
+        match result {
+            Ok(data) if data.len() as u64 == expected => {
+                self.state[page as usize] = PageState::Loaded;
+                self.data.insert(page, data);
+            }
+            Ok(data) => self.fail(
+                page,
+                format!(
+                    "{} bytes were read where the page has {expected}",
+                    data.len()
+                ),
+            ),
+            Err(reason) => self.fail(page, reason),
+        }
+    }
+
+    /// One frame: takes the GPU's wants, and plans evictions, installs and reads.
+    /// `frame` must grow from call to call.
+    pub fn frame(&mut self, frame: u64, wanted: &[Request]) -> FramePlan {
+        self.frame = frame;
+        let mut plan = FramePlan::default();
+        let (requested, wanted_bytes) = self.take_wants(frame, wanted);
+        self.publish(&mut plan);
+        self.start_loads(frame, &mut plan);
+        let lod_scale = self
+            .pressure
+            .update(wanted_bytes as f32 / self.pool.capacity().max(1) as f32);
+        plan.stats = FrameStats {
+            requested,
+            loads_started: plan.load.len() as u32,
+            installed: plan.install.len() as u32,
+            evicted: plan.evict.len() as u32,
+            bytes_uploaded: plan.install.iter().map(|i| i.data.len() as u64).sum(),
+            pool_used: self.pool.used(),
+            pool_bytes: self.pool.capacity(),
+            resident_pages: self.resident_pages,
+            in_flight: self.issued.len() as u32,
+            wanted_bytes,
+            lod_scale,
+            failed_pages: self.failed_pages,
+        };
+        plan
+    }
+
+    /// Marks the wanted pages and their ancestors, queues the absent ones; returns how
+    /// many are absent and the bytes of all of them.
+    fn take_wants(&mut self, frame: u64, wanted: &[Request]) -> (u32, u64) {
+        let mut wanted = wanted.to_vec();
+        // Highest first, so a page reached from two wants is queued at the higher.
+        wanted.sort_by(|a, b| b.priority.total_cmp(&a.priority));
+        let (mut requested, mut bytes) = (0, 0);
+        let mut stack = Vec::new();
+        for r in wanted {
+            if r.page as usize >= self.graph.len() {
+                continue;
+            }
+            stack.push(r.page);
+            while let Some(p) = stack.pop() {
+                if self.visited[p as usize] == frame {
+                    continue;
+                }
+                self.visited[p as usize] = frame;
+                match self.state(p) {
+                    PageState::Failed => continue,
+                    PageState::Absent => {
+                        requested += 1;
+                        self.enqueue(p, r.priority);
+                    }
+                    _ => {}
+                }
+                bytes += self.graph.bytes(p);
+                self.touch(p, frame);
+                stack.extend_from_slice(self.graph.parents(p));
+            }
+        }
+        (requested, bytes)
+    }
+
+    fn enqueue(&mut self, page: PageId, priority: f32) {
+        if priority > self.queued[page as usize] {
+            self.queued[page as usize] = priority;
+            self.queue.push(Queued {
+                priority,
+                depth: self.graph.depth(page),
+                page,
+            });
+        }
+    }
+
+    /// Records that `page` was wanted in `frame`.
+    fn touch(&mut self, page: PageId, frame: u64) {
+        let p = page as usize;
+        if self.evictable.remove(&(self.last_wanted[p], page)) {
+            self.evictable.insert((frame, page));
+        }
+        self.last_wanted[p] = frame;
+    }
+
+    /// Publishes read pages in issue order while their parents are resident and the
+    /// budgets allow; drops those whose parent was refused.
+    fn publish(&mut self, plan: &mut FramePlan) {
+        let mut bytes = 0u64;
+        let issued = std::mem::take(&mut self.issued);
+        for page in issued {
+            match self.state(page) {
+                PageState::Loading => self.issued.push(page),
+                PageState::Loaded => {
+                    let parents = self.graph.parents(page);
+                    if parents.iter().any(|&q| self.state(q) == PageState::Failed) {
+                        self.data.remove(&page);
+                        self.drop_page(page, PageState::Absent);
+                        continue;
+                    }
+                    let size = self.graph.bytes(page);
+                    let fits = plan.install.len() < self.budget.installs_per_frame as usize
+                        && (plan.install.is_empty()
+                            || bytes + size <= self.budget.upload_bytes_per_frame);
+                    if !fits || parents.iter().any(|&q| !self.is_resident(q)) {
+                        self.issued.push(page);
+                        continue;
+                    }
+                    bytes += size;
+                    // Installed counts as wanted now: never evicted in the frame it
+                    // arrives.
+                    self.last_wanted[page as usize] = self.frame;
+                    self.state[page as usize] = PageState::Resident;
+                    self.resident_pages += 1;
+                    if self.holders[page as usize] == 0 {
+                        self.evictable
+                            .insert((self.last_wanted[page as usize], page));
+                    }
+                    plan.install.push(Install {
+                        page,
+                        allocation: self.allocation[page as usize].expect("a read page has room"),
+                        data: self.data.remove(&page).expect("a read page has bytes"),
+                    });
+                }
+                // Refused while being read.
+                _ => {}
+            }
+        }
+    }
+
+    /// Starts reads in priority order while reads may be in flight and room can be
+    /// made.
+    fn start_loads(&mut self, frame: u64, plan: &mut FramePlan) {
+        while self.issued.len() < self.budget.loads_in_flight as usize {
+            let Some(next) = self.queue.pop() else { break };
+            let page = next.page;
+            let p = page as usize;
+            if self.queued[p] != next.priority {
+                continue; // queued again at a higher priority
+            }
+            self.queued[p] = NOT_QUEUED;
+            if self.state[p] != PageState::Absent
+                || self.last_wanted[p] + self.budget.keep_frames < frame
+            {
+                continue; // read already, or no longer wanted
+            }
+            let parents = self.graph.parents(page);
+            if parents
+                .iter()
+                .any(|&q| matches!(self.state(q), PageState::Absent | PageState::Failed))
+            {
+                continue; // a parent could not be read first: wanted again next frame
+            }
+            let size = self.graph.bytes(page);
+            let allocation = loop {
+                if let Some(a) = self.pool.allocate(size) {
+                    break Some(a);
+                }
+                if !self.evict_one(frame, plan) {
+                    break None;
+                }
+            };
+            let Some(allocation) = allocation else {
+                // Full of pages in use: wait (pressure coarsens the cut meanwhile).
+                self.enqueue(page, next.priority);
+                break;
+            };
+            self.allocation[p] = Some(allocation);
+            self.state[p] = PageState::Loading;
+            for i in 0..self.graph.parents(page).len() {
+                let q = self.graph.parents(page)[i];
+                self.hold(q);
+            }
+            self.issued.push(page);
+            plan.load.push(Load { page, bytes: size });
+        }
+    }
+
+    /// Evicts the least recently wanted page nothing needs, if one has gone unwanted
+    /// long enough and the frame may evict more.
+    fn evict_one(&mut self, frame: u64, plan: &mut FramePlan) -> bool {
+        if plan.evict.len() >= self.budget.evictions_per_frame as usize {
+            return false;
+        }
+        let Some(&(last, page)) = self.evictable.first() else {
+            return false;
+        };
+        if last + self.budget.keep_frames >= frame {
+            return false;
+        }
+        self.evictable.remove(&(last, page));
+        self.resident_pages -= 1;
+        self.drop_page(page, PageState::Absent);
+        plan.evict.push(page);
+        true
+    }
+
+    /// Takes a page out of the pool (evicted, refused, or dropped after its parent was
+    /// refused): its room is freed and its parents lose a holder.
+    fn drop_page(&mut self, page: PageId, to: PageState) {
+        self.state[page as usize] = to;
+        if let Some(a) = self.allocation[page as usize].take() {
+            self.pool.release(a);
+        }
+        for i in 0..self.graph.parents(page).len() {
+            let q = self.graph.parents(page)[i];
+            self.release_hold(q);
+        }
+    }
+
+    fn hold(&mut self, page: PageId) {
+        let p = page as usize;
+        if self.holders[p] == 0 {
+            self.evictable.remove(&(self.last_wanted[p], page));
+        }
+        self.holders[p] += 1;
+    }
+
+    fn release_hold(&mut self, page: PageId) {
+        let p = page as usize;
+        self.holders[p] -= 1;
+        if self.holders[p] == 0 && self.state[p] == PageState::Resident {
+            self.evictable.insert((self.last_wanted[p], page));
+        }
+    }
+
+    fn fail(&mut self, page: PageId, reason: String) {
+        self.failed_pages += 1;
+        self.failures.push(PageFailure { page, reason });
+        self.drop_page(page, PageState::Failed);
+    }
+}
