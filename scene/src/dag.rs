@@ -82,7 +82,9 @@ pub struct DagGroup {
 /// The whole hierarchy for one mesh.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dag {
-    /// Every cluster of every level, LOD 0 first.
+    /// Every cluster of every level, in page order: the roots first, then each group's
+    /// children in group order (so a group's children are one range, the asset's page;
+    /// see [`crate::asset::format`]).
     pub clusters: Vec<DagCluster>,
     /// Every group, in the order they were formed.
     pub groups: Vec<DagGroup>,
@@ -400,7 +402,8 @@ pub fn build_dag(
         groups,
         level_count,
         fallbacks,
-    })
+    }
+    .in_page_order())
 }
 
 enum Fallback {
@@ -584,6 +587,36 @@ impl Dag {
     /// The clusters with no parent.
     pub fn roots(&self) -> impl Iterator<Item = &DagCluster> {
         self.clusters.iter().filter(|c| c.parent_group == NO_GROUP)
+    }
+
+    /// The same DAG with its clusters in page order: the roots (in their order), then
+    /// each group's children in group order; the groups' children renumbered.
+    fn in_page_order(mut self) -> Self {
+        let order: Vec<usize> = (self.clusters.iter().enumerate())
+            .filter(|(_, c)| c.parent_group == NO_GROUP)
+            .map(|(i, _)| i)
+            .chain((self.groups.iter()).flat_map(|g| g.children.iter().map(|&c| c as usize)))
+            .collect();
+        assert_eq!(
+            order.len(),
+            self.clusters.len(),
+            "every cluster is a root or the child of exactly one group"
+        );
+        let mut new_index = vec![0u32; order.len()];
+        for (new, &old) in order.iter().enumerate() {
+            new_index[old] = new as u32;
+        }
+        let mut old: Vec<Option<DagCluster>> = self.clusters.into_iter().map(Some).collect();
+        self.clusters = order
+            .iter()
+            .map(|&i| old[i].take().expect("each cluster once"))
+            .collect();
+        for g in &mut self.groups {
+            for c in &mut g.children {
+                *c = new_index[*c as usize];
+            }
+        }
+        self
     }
 }
 

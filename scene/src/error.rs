@@ -348,6 +348,23 @@ pub enum SceneError {
         found: u64,
     },
 
+    /// One page of an asset whose bytes do not match the page's checksum: damaged on
+    /// disk, or changed since the resident part was read.
+    #[error(
+        "{path}: page {page} of the asset is corrupt (checksum {found:#018x}, its record says \
+         {expected:#018x}); re-bake or re-copy it"
+    )]
+    AssetPageChecksum {
+        /// The file.
+        path: PathBuf,
+        /// The page (its group's index).
+        page: u32,
+        /// The checksum its record says.
+        expected: u64,
+        /// The checksum of its bytes.
+        found: u64,
+    },
+
     /// An asset whose checksum holds but whose structure does not: a field out of range
     /// or inconsistent with another, which would make the GPU read out of bounds.
     #[error("{path}: the asset is corrupt: {field} {problem}; re-bake it from its source mesh")]

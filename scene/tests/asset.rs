@@ -5,7 +5,9 @@ mod common;
 use std::collections::HashMap;
 use std::path::Path;
 
-use meshlight_scene::asset::format::{MeshletRecord, PayloadLayout, SECTION_MESHLETS, VERSION};
+use meshlight_scene::asset::format::{
+    MeshletRecord, PayloadLayout, SECTION_MESHLETS, SECTION_PAYLOAD, VERSION,
+};
 use meshlight_scene::compress::{AUTO_ERROR_SHARE, MAX_POSITION_BITS, PositionBits, Quantization};
 use meshlight_scene::{
     BuildOptions, Built, MeshletAsset, SceneError, build_asset, load::load_mesh, procedural_mesh,
@@ -354,11 +356,27 @@ fn damaged_files_are_refused_with_typed_errors() {
     );
     assert!(err.to_string().contains("re-bake"));
 
+    // A flip in the resident part fails the header's checksum; one in a page fails
+    // that page's, named.
     let mut bad = good.clone();
-    let at = bad.len() - 100;
+    let at = built.asset.resident_bytes() as usize - 100;
     bad[at] ^= 0x10;
     let err = MeshletAsset::load(&write(&dir, "c.mlasset", &bad)).unwrap_err();
     assert!(matches!(err, SceneError::AssetChecksum { .. }), "{err:?}");
+    let mut bad = good.clone();
+    let payload = built.asset.header().sections[SECTION_PAYLOAD].offset as usize * 4;
+    let page = built.asset.pages().len() / 2;
+    bad[payload + built.asset.pages()[page].first_word as usize * 4 + 5] ^= 0x10;
+    let err = MeshletAsset::load(&write(&dir, "p.mlasset", &bad)).unwrap_err();
+    assert!(
+        matches!(err, SceneError::AssetPageChecksum { page: p, .. } if p as usize == page),
+        "{err:?}"
+    );
+    assert!(
+        err.to_string()
+            .contains(&format!("p.mlasset: page {page} of the asset is corrupt")),
+        "{err}"
+    );
 
     let err = MeshletAsset::load(&dir.join("missing.mlasset")).unwrap_err();
     assert!(matches!(err, SceneError::Io { .. }), "{err:?}");

@@ -10,7 +10,8 @@ use common::damage::{good_words, record_mut, refused, refused_saying, reseal};
 use std::path::Path;
 
 use meshlight_scene::asset::format::{
-    AssetHeader, GroupRecord, MeshletRecord, SECTION_GROUPS, SECTION_MESHLETS, SECTION_PAYLOAD,
+    AssetHeader, GroupRecord, MeshletRecord, PageRecord, SECTION_CHILDREN, SECTION_GROUPS,
+    SECTION_MESHLETS, SECTION_PAGES, SECTION_PAYLOAD,
 };
 use meshlight_scene::load::parse_obj;
 use meshlight_scene::mesh::{MAX_COORDINATE, MIN_EXTENT};
@@ -252,16 +253,53 @@ fn first_level_one_meshlet(words: &[u32]) -> usize {
 }
 
 #[test]
-fn meshlets_are_stored_level_by_level() {
+fn meshlets_are_stored_page_by_page() {
     refused_saying(
-        "a level-1 meshlet raised to 2",
-        "counts",
-        "level by level",
+        "a root after a group's children",
+        "parent_group",
+        "the roots first",
         |w| {
-            let i = first_level_one_meshlet(w);
-            let m = meshlet(w, i);
-            m.counts = (m.counts & 0xffff) | (2 << 16);
+            let last = header(w).meshlet_count as usize - 1;
+            meshlet(w, last).parent_group = u32::MAX;
         },
+    );
+    refused_saying(
+        "a child of group 2 among group 1's",
+        "parent_group",
+        "page by page",
+        |w| {
+            let (meshlets, _) = records(w);
+            let i = meshlets.iter().position(|m| m.parent_group == 1).unwrap();
+            meshlet(w, i).parent_group = 2;
+        },
+    );
+    refused_saying(
+        "a group's children listed out of order",
+        "group[1].first_child",
+        "after the previous group's",
+        |w| {
+            let first = group(w, 1).first_child as usize;
+            let at = header(w).sections[SECTION_CHILDREN].offset as usize + first;
+            w.swap(at, at + 1);
+        },
+    );
+    refused_saying(
+        "a page record one word off",
+        "page[3]",
+        "children's payload",
+        |w| record_mut::<PageRecord>(w, SECTION_PAGES, 3).first_word += 1,
+    );
+    refused_saying(
+        "a page record one word short",
+        "page[0]",
+        "children's payload",
+        |w| record_mut::<PageRecord>(w, SECTION_PAGES, 0).words -= 1,
+    );
+    refused_saying(
+        "a resident part one word long",
+        "header.resident_words",
+        "roots' payload",
+        |w| header(w).resident_words += 1,
     );
 }
 
@@ -307,8 +345,9 @@ fn group_links_must_be_consistent() {
         "parent_group",
         "lists the meshlet",
         |w| {
+            // The last of group 0's children, so that the order still holds.
             let (meshlets, _) = records(w);
-            let i = meshlets.iter().position(|m| m.parent_group == 0).unwrap();
+            let i = meshlets.iter().rposition(|m| m.parent_group == 0).unwrap();
             meshlet(w, i).parent_group = 1;
         },
     );
@@ -366,7 +405,7 @@ fn spheres_must_lie_around_the_mesh() {
 fn every_payload_word_belongs_to_one_meshlet() {
     refused_saying(
         "a word no meshlet refers to",
-        "sections[3]",
+        "sections[6]",
         "belongs to one meshlet",
         |w| {
             let s = header(w).sections;

@@ -11,7 +11,7 @@ mod common;
 
 use std::path::Path;
 
-use meshlight_scene::asset::checksum::file_checksum;
+use meshlight_scene::asset::checksum::seal;
 use meshlight_scene::asset::format::{
     AssetHeader, GroupRecord, MeshletRecord, NodeRecord, SECTION_CHILDREN, SECTION_GROUPS,
     SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES, SECTION_PAYLOAD,
@@ -121,11 +121,8 @@ fn fuzz_asset_loader() {
         if cut > 0 {
             w.truncate(n - cut);
         }
-        if reseal && w.len() >= AssetHeader::WORDS {
-            let sum = file_checksum(&w[..AssetHeader::WORDS], &w[AssetHeader::WORDS..]);
-            let at = std::mem::offset_of!(AssetHeader, checksum) / 4;
-            w[at] = sum as u32;
-            w[at + 1] = (sum >> 32) as u32;
+        if reseal {
+            seal(&mut w);
         }
         let len = w.len() as u64 * 4;
         if let Ok(asset) = MeshletAsset::from_words(w, len, Path::new("fuzz.mlasset")) {
@@ -471,9 +468,7 @@ fn reseal(words: &mut [u32], fields: &[Field], mutated: &[usize]) {
     {
         return;
     }
-    let sum = file_checksum(&words[..AssetHeader::WORDS], &words[AssetHeader::WORDS..]);
-    words[at] = sum as u32;
-    words[at + 1] = (sum >> 32) as u32;
+    seal(words);
 }
 
 /// How a mutated file fared.

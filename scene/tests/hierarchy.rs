@@ -272,7 +272,8 @@ fn bounds_and_errors_that_do_not_hold_what_is_below_are_refused() {
     refused("an infinite error", "max_parent_error", |w| {
         node(w, 3).max_parent_error = f32::INFINITY
     });
-    refused("a leaf that is not all of its group", "node[", |w| {
+    // Since pages, a group's children are also its page's range, which is checked first.
+    refused("a leaf that is not all of its group", "page[", |w| {
         // The group of the first group leaf now claims one child less than its leaf holds.
         let ns = nodes(w);
         let leaf = ns

@@ -507,3 +507,23 @@ fn fly_around_the_bunny(pressure: LodPressure) -> Flight {
         detailed_frames,
     }
 }
+
+/// A page is what the asset stores as one: the graph's sizes are the page records'.
+#[test]
+fn the_page_graph_matches_the_assets_page_records() {
+    let asset = meshlight_testing::meshes::spot();
+    let graph = MeshDag::of_asset(asset).pages();
+    assert_eq!(graph.len(), asset.pages().len());
+    for (g, page) in asset.pages().iter().enumerate() {
+        assert_eq!(
+            graph.bytes(g as PageId),
+            u64::from(page.words) * 4,
+            "page {g}"
+        );
+    }
+    assert_eq!(
+        graph.total_bytes() + asset.resident_bytes(),
+        asset.bytes().len() as u64,
+        "the pages and the resident part are the whole file"
+    );
+}

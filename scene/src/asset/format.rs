@@ -2,12 +2,21 @@
 //! plain old data of 4-byte fields, so a loaded file is used in place through bytemuck
 //! casts and uploaded to the GPU as is.
 //!
-//! File = [`AssetHeader`] then six sections, each a whole number of 32-bit words:
+//! File = [`AssetHeader`] then seven sections, each a whole number of 32-bit words:
 //! meshlets ([`MeshletRecord`]), groups ([`GroupRecord`]), group children (`u32`
-//! meshlet ids), the payload (`u32` words of packed vertex and index data), the culling
-//! hierarchy's nodes ([`NodeRecord`]) and its cluster list (`u32` meshlet ids, every
-//! meshlet once, in the order the hierarchy's leaves take them; see
-//! [`crate::hierarchy`]).
+//! meshlet ids), the culling hierarchy's nodes ([`NodeRecord`]) and its cluster list
+//! (`u32` meshlet ids, every meshlet once, in the order the hierarchy's leaves take
+//! them; see [`crate::hierarchy`]), the pages ([`PageRecord`]), and last the payload
+//! (`u32` words of packed vertex and index data).
+//!
+//! **Pages.** The file is laid out so that a renderer can stream it: meshlets are stored
+//! page by page, the roots first, then each group's children in group order, and their
+//! payload in the same order. So everything but the pages' payload (the *resident
+//! part*: records, hierarchy, the roots' payload) is one prefix of the file, and each
+//! group's children's payload (its page, see `meshlight-stream`) is one range after it,
+//! with its own checksum ([`PageRecord::checksum`]). The header's checksum covers the
+//! resident part only, so a streamed file is checked without reading its pages, and
+//! each page as it is read.
 //!
 //! A meshlet's payload is three blocks of fixed-width records (see [`PayloadLayout`]),
 //! so that a GPU thread per vertex or per triangle finds its record by multiplying:
@@ -34,8 +43,10 @@ pub const MAGIC: [u8; 8] = *b"MLASSET\0";
 /// ([`AssetHeader::material_count`], [`MeshletRecord::material`]). 6: UVs as per-meshlet
 /// origins on a finer mesh-wide grid ([`UV_ORIGIN_WORDS`]). 7: UV offsets bit-packed at
 /// the meshlet's bits per component, the UV block after the triangles; vertex colours
-/// ([`FLAG_COLORS`]).
-pub const VERSION: u32 = 7;
+/// ([`FLAG_COLORS`]). 8: pages: meshlets and payload stored page by page, the payload
+/// last, a page section with a checksum per page, the header's checksum over the
+/// resident part ([`AssetHeader::resident_words`]).
+pub const VERSION: u32 = 8;
 
 /// Words at the start of a meshlet's UV block: its UV grid origin, one code per
 /// component (see [`crate::compress::UvQuantization`]).
@@ -54,15 +65,18 @@ pub const SECTION_MESHLETS: usize = 0;
 pub const SECTION_GROUPS: usize = 1;
 /// The meshlet ids of each group's children, which [`GroupRecord::first_child`] indexes.
 pub const SECTION_CHILDREN: usize = 2;
-/// The packed vertex, UV and triangle words of every meshlet.
-pub const SECTION_PAYLOAD: usize = 3;
 /// The culling hierarchy's node records.
-pub const SECTION_NODES: usize = 4;
+pub const SECTION_NODES: usize = 3;
 /// The meshlet ids the hierarchy's leaves take, which [`NodeRecord::first_cluster`]
 /// indexes.
-pub const SECTION_NODE_CLUSTERS: usize = 5;
+pub const SECTION_NODE_CLUSTERS: usize = 4;
+/// One [`PageRecord`] per group.
+pub const SECTION_PAGES: usize = 5;
+/// The packed vertex, UV and triangle words of every meshlet, the roots' first, then
+/// page by page. Last, so that everything before the first page is one prefix.
+pub const SECTION_PAYLOAD: usize = 6;
 /// Sections in a file; the header holds one [`Section`] for each.
-pub const SECTION_COUNT: usize = 6;
+pub const SECTION_COUNT: usize = 7;
 
 /// Where a section lies, in 32-bit words from the start of the file.
 #[repr(C)]
@@ -88,7 +102,8 @@ pub struct AssetHeader {
     pub flags: u32,
     /// Whole file size in bytes, low and high halves (the header stays 4-byte aligned).
     pub file_size: [u32; 2],
-    /// Checksum of every byte after the header, low and high halves.
+    /// Checksum of the resident part after the header (every section before the
+    /// payload, then the roots' payload), low and high halves; each page has its own.
     pub checksum: [u32; 2],
     /// Meshlet records, all levels.
     pub meshlet_count: u32,
@@ -117,6 +132,10 @@ pub struct AssetHeader {
     /// Material slots of the mesh (at least 1): every meshlet's slot is below it, and
     /// whoever places the mesh gives a material for each.
     pub material_count: u32,
+    /// Payload words of the roots, at the start of the payload: with every section
+    /// before the payload, the resident part a streamed file is opened with, and what
+    /// [`AssetHeader::checksum`] covers.
+    pub resident_words: u32,
     /// Smallest corner of the mesh's bounding box.
     pub bounds_min: [f32; 3],
     /// Largest corner of the mesh's bounding box.
@@ -299,6 +318,31 @@ pub struct GroupRecord {
     pub first_child: u32,
     /// Meshlets simplified in the group.
     pub child_count: u32,
+}
+
+/// One page: a group's children's payload, one range of the payload section. Pages
+/// follow each other in group order after the roots' payload and fill the rest of it.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct PageRecord {
+    /// First word, relative to the payload section (the first child's `data_offset`).
+    pub first_word: u32,
+    /// Words of the page.
+    pub words: u32,
+    /// XXH3-64 of the page's bytes (`checksum::page_checksum`), low and high halves.
+    pub checksum: [u32; 2],
+}
+
+impl PageRecord {
+    /// The page's words as a range of the payload section.
+    pub fn range(&self) -> std::ops::Range<usize> {
+        self.first_word as usize..self.first_word as usize + self.words as usize
+    }
+
+    /// The checksum as one number.
+    pub fn checksum(&self) -> u64 {
+        u64::from(self.checksum[0]) | (u64::from(self.checksum[1]) << 32)
+    }
 }
 
 /// Payload layout of one meshlet, in words from its `data_offset`: vertex records,

@@ -69,6 +69,8 @@ pub struct SizeBreakdown {
     pub indices: usize,
     /// The culling hierarchy: nodes and cluster list.
     pub hierarchy: usize,
+    /// The page records (ranges and checksums).
+    pub pages: usize,
 }
 
 impl SizeBreakdown {
@@ -83,6 +85,7 @@ impl SizeBreakdown {
             + self.colors
             + self.indices
             + self.hierarchy
+            + self.pages
     }
 }
 
@@ -237,8 +240,18 @@ impl MeshletAsset {
             words,
             dag_verified: false,
         };
+        // The resident part's end comes from the header, not yet trusted: clamped, a
+        // wrong one gives a checksum that does not match rather than a panic.
+        let resident_end = (header.sections[SECTION_PAYLOAD].offset as usize)
+            .saturating_add(header.resident_words as usize)
+            .clamp(header_words, asset.words.len());
         let (found, checked) = rayon::join(
-            || checksum::file_checksum(&asset.words[..header_words], &asset.words[header_words..]),
+            || {
+                checksum::file_checksum(
+                    &asset.words[..header_words],
+                    &asset.words[header_words..resident_end],
+                )
+            },
             || {
                 asset.validate().map_err(|e| SceneError::AssetField {
                     path: p(),
@@ -259,10 +272,29 @@ impl MeshletAsset {
             });
         }
         checked?;
+        // The pages after the structure: their ranges are trusted only once validated.
+        asset.check_pages(path)?;
         Ok(Self {
             dag_verified: dag,
             ..asset
         })
+    }
+
+    /// Checks every page's bytes against its checksum.
+    fn check_pages(&self, path: &Path) -> Result<(), SceneError> {
+        let payload = self.payload();
+        for (page, record) in self.pages().iter().enumerate() {
+            let found = checksum::page_checksum(bytemuck::cast_slice(&payload[record.range()]));
+            if found != record.checksum() {
+                return Err(SceneError::AssetPageChecksum {
+                    path: path.to_owned(),
+                    page: page as u32,
+                    expected: record.checksum(),
+                    found,
+                });
+            }
+        }
+        Ok(())
     }
 
     /// Loads an asset and runs every check `meshlight inspect` runs: what
@@ -365,6 +397,19 @@ impl MeshletAsset {
         self.section(SECTION_PAYLOAD)
     }
 
+    /// One page per group: where its children's payload lies, and its checksum.
+    pub fn pages(&self) -> &[PageRecord] {
+        bytemuck::cast_slice(self.section(SECTION_PAGES))
+    }
+
+    /// Bytes of the resident part: every section before the payload and the roots'
+    /// payload, the prefix of the file a streamed scene reads whole.
+    pub fn resident_bytes(&self) -> u64 {
+        (self.header().sections[SECTION_PAYLOAD].offset as u64
+            + self.header().resident_words as u64)
+            * 4
+    }
+
     /// The culling hierarchy's nodes, root first (see [`crate::hierarchy`]).
     pub fn nodes(&self) -> &[NodeRecord] {
         bytemuck::cast_slice(self.section(SECTION_NODES))
@@ -417,6 +462,7 @@ impl MeshletAsset {
             meshlet_records: self.section(SECTION_MESHLETS).len() * 4,
             groups: (self.section(SECTION_GROUPS).len() + self.children().len()) * 4,
             hierarchy: (self.section(SECTION_NODES).len() + self.node_clusters().len()) * 4,
+            pages: self.section(SECTION_PAGES).len() * 4,
             ..Default::default()
         };
         for m in self.meshlets() {

@@ -47,6 +47,7 @@ impl MeshletAsset {
             .map(|&n| encode_octahedral(n, NORMAL_BITS))
             .collect();
         let pad = quant.max_error();
+        let flags = if has_uvs { FLAG_UVS } else { 0 } | if has_colors { FLAG_COLORS } else { 0 };
 
         let encoded: Vec<(MeshletRecord, Vec<u32>)> = dag
             .clusters
@@ -140,20 +141,42 @@ impl MeshletAsset {
             })
             .collect();
 
+        // The DAG is in page order (see `format`): the roots, then each group's
+        // children in group order, so a page's meshlets and payload are each one range.
+        let root_count = dag.roots().count();
         let mut meshlets = Vec::with_capacity(encoded.len());
         let mut payload = Vec::new();
-        for (mut record, data) in encoded {
+        let mut resident_words = 0;
+        for (i, (mut record, data)) in encoded.into_iter().enumerate() {
             record.data_offset = payload.len() as u32;
             payload.extend_from_slice(&data);
             meshlets.push(record);
+            if i + 1 == root_count {
+                resident_words = payload.len() as u32;
+            }
         }
         let mut children = Vec::new();
+        let mut pages = Vec::with_capacity(dag.groups.len());
         let groups: Vec<GroupRecord> = dag
             .groups
             .iter()
             .map(|g| {
                 let first_child = children.len() as u32;
                 children.extend_from_slice(&g.children);
+                let (first, last) = (
+                    &meshlets[g.children[0] as usize],
+                    &meshlets[*children.last().expect("a group has children") as usize],
+                );
+                let (start, end) = (
+                    first.data_offset,
+                    last.data_offset + PayloadLayout::of(last, flags).end,
+                );
+                pages.push(PageRecord {
+                    first_word: start,
+                    words: end - start,
+                    // Filled in by `checksum::seal`.
+                    checksum: [0; 2],
+                });
                 GroupRecord {
                     // Padded like the meshlet bounds that LOD-0 meshlets use as their LOD
                     // spheres, so that every group sphere still holds its children's.
@@ -176,8 +199,7 @@ impl MeshletAsset {
         let mut header = <AssetHeader as bytemuck::Zeroable>::zeroed();
         header.magic = MAGIC;
         header.version = VERSION;
-        header.flags =
-            if has_uvs { FLAG_UVS } else { 0 } | if has_colors { FLAG_COLORS } else { 0 };
+        header.flags = flags;
         header.meshlet_count = meshlets.len() as u32;
         header.group_count = groups.len() as u32;
         header.node_count = hierarchy.nodes.len() as u32;
@@ -191,6 +213,7 @@ impl MeshletAsset {
         header.input_vertices = mesh.positions.len() as u32;
         header.dropped_degenerate = dropped_degenerate as u32;
         header.material_count = mesh.material_count();
+        header.resident_words = resident_words;
         header.bounds_min = min.to_array();
         header.bounds_max = max.to_array();
         header.quant_origin = quant.origin.to_array();
@@ -211,18 +234,15 @@ impl MeshletAsset {
         header.sections[SECTION_MESHLETS] = push(&mut words, bytemuck::cast_slice(&meshlets));
         header.sections[SECTION_GROUPS] = push(&mut words, bytemuck::cast_slice(&groups));
         header.sections[SECTION_CHILDREN] = push(&mut words, &children);
-        header.sections[SECTION_PAYLOAD] = push(&mut words, &payload);
         header.sections[SECTION_NODES] = push(&mut words, bytemuck::cast_slice(&hierarchy.nodes));
         header.sections[SECTION_NODE_CLUSTERS] = push(&mut words, &hierarchy.clusters);
+        header.sections[SECTION_PAGES] = push(&mut words, bytemuck::cast_slice(&pages));
+        header.sections[SECTION_PAYLOAD] = push(&mut words, &payload);
         let size = words.len() as u64 * 4;
         header.file_size = [size as u32, (size >> 32) as u32];
-        let sum = checksum::file_checksum(
-            bytemuck::cast_slice(std::slice::from_ref(&header)),
-            &words[AssetHeader::WORDS..],
-        );
-        header.checksum = [sum as u32, (sum >> 32) as u32];
         words[..AssetHeader::WORDS]
             .copy_from_slice(bytemuck::cast_slice(std::slice::from_ref(&header)));
+        checksum::seal(&mut words);
         Self {
             words,
             dag_verified: false,

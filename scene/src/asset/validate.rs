@@ -136,7 +136,8 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
     // Where the next meshlet's payload must start: meshlets' data follow each other
     // and together fill the payload, so no word is unreferenced or shared.
     let mut payload_end = 0u64;
-    let mut previous_level = 0;
+    // Page order: the roots, then each group's children in group order.
+    let mut previous_parent: Option<u32> = None;
     let grid_max = (1u64 << h.quant_bits) - 1;
     let (mut lod0_meshlets, mut lod0_triangles, mut triangles, mut vertices, mut roots) =
         (0u64, 0u64, 0u64, 0u64, 0u64);
@@ -175,16 +176,6 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
                 ),
             ));
         }
-        if level < previous_level {
-            return Err(bad(
-                f("counts"),
-                format!(
-                    "level {level} follows a meshlet of level {previous_level}; meshlets are \
-                     stored level by level, from LOD 0 up"
-                ),
-            ));
-        }
-        previous_level = level;
         max_level = max_level.max(level);
         if m.normal_bits()
             .iter()
@@ -263,6 +254,29 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
                 ));
             }
         }
+        match (m.parent_group, previous_parent) {
+            (NO_GROUP, Some(p)) => {
+                return Err(bad(
+                    f("parent_group"),
+                    format!(
+                        "is none (a root) after a child of group {p}; meshlets are stored \
+                         page by page: the roots first, then each group's children in \
+                         group order"
+                    ),
+                ));
+            }
+            (NO_GROUP, None) => {}
+            (g, Some(p)) if g < p => {
+                return Err(bad(
+                    f("parent_group"),
+                    format!(
+                        "is {g} after a child of group {p}; meshlets are stored page by \
+                         page: the roots first, then each group's children in group order"
+                    ),
+                ));
+            }
+            (g, _) => previous_parent = Some(g),
+        }
         if (level == 0) != (m.source_group == NO_GROUP) {
             return Err(bad(
                 f("source_group"),
@@ -322,7 +336,7 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
     }
     if payload_end != payload.len() as u64 {
         return Err(bad(
-            "header.sections[3].words",
+            format!("header.sections[{SECTION_PAYLOAD}].words"),
             format!(
                 "the payload holds {} words, but the meshlets' data ends at word {payload_end}; \
                  every payload word belongs to one meshlet",
@@ -397,6 +411,19 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         ));
     }
     group_links(meshlets, groups, children)?;
+    record(
+        SECTION_PAGES,
+        size_of::<PageRecord>() / 4,
+        h.group_count,
+        "group",
+    )?;
+    pages(
+        h,
+        meshlets,
+        groups,
+        children,
+        bytemuck::cast_slice(section(SECTION_PAGES)),
+    )?;
     record(
         SECTION_NODES,
         size_of::<NodeRecord>() / 4,
@@ -563,6 +590,78 @@ fn group_links(
         return Err(bad(
             format!("group[{g}]"),
             "has no simplified meshlets (none names it as its source group)",
+        ));
+    }
+    Ok(())
+}
+
+/// The pages: each group's children are the meshlets after the previous group's (after
+/// the roots for group 0), in order, so that a page is one range of meshlets; its record
+/// gives its payload's range exactly, and the roots' payload is the resident part.
+/// Meshlets' payloads follow each other (checked above), so the pages then tile the
+/// payload after the roots'.
+fn pages(
+    h: &AssetHeader,
+    meshlets: &[MeshletRecord],
+    groups: &[GroupRecord],
+    children: &[u32],
+    pages: &[PageRecord],
+) -> Result<(), Invalid> {
+    let roots = meshlets
+        .iter()
+        .take_while(|m| m.parent_group == NO_GROUP)
+        .count();
+    let payload_end = |m: &MeshletRecord| m.data_offset + PayloadLayout::of(m, h.flags).end;
+    let resident = meshlets[..roots].last().map_or(0, payload_end);
+    if h.resident_words != resident {
+        return Err(bad(
+            "header.resident_words",
+            format!(
+                "is {}, but the roots' payload ends at word {resident}",
+                h.resident_words
+            ),
+        ));
+    }
+    let mut next = roots as u32;
+    for (g, (group, page)) in groups.iter().zip(pages).enumerate() {
+        let list = &children[group.first_child as usize..][..group.child_count as usize];
+        if let Some(k) = (0..list.len()).find(|&k| list[k] != next + k as u32) {
+            return Err(bad(
+                format!("group[{g}].first_child"),
+                format!(
+                    "lists meshlet {} as child {k}, where meshlet {} stands; a group's \
+                     children are the meshlets after the previous group's, in order",
+                    list[k],
+                    next + k as u32
+                ),
+            ));
+        }
+        let (first, last) = (
+            &meshlets[next as usize],
+            &meshlets[(next + group.child_count - 1) as usize],
+        );
+        let words = payload_end(last) - first.data_offset;
+        if (page.first_word, page.words) != (first.data_offset, words) {
+            return Err(bad(
+                format!("page[{g}]"),
+                format!(
+                    "gives words {}..+{}, but group {g}'s children's payload is words \
+                     {}..+{words}",
+                    page.first_word, page.words, first.data_offset
+                ),
+            ));
+        }
+        next += group.child_count;
+    }
+    if next as usize != meshlets.len() {
+        return Err(bad(
+            "header.group_count",
+            format!(
+                "is {}, but its groups' children end at meshlet {next} of {}; every meshlet \
+                 but the roots is one group's child",
+                groups.len(),
+                meshlets.len()
+            ),
         ));
     }
     Ok(())

@@ -1,7 +1,7 @@
 //! Damaging a baked asset the way a bit flip or a hostile writer would, while keeping its
 //! size and checksum valid, so that only the structural checks can notice.
 
-use meshlight_scene::asset::checksum::file_checksum;
+use meshlight_scene::asset::checksum::seal;
 use meshlight_scene::asset::format::AssetHeader;
 use meshlight_scene::{BuildOptions, MeshletAsset, SceneError, build_asset, procedural_mesh};
 use std::path::Path;
@@ -29,10 +29,7 @@ pub fn reseal(words: &mut [u32]) {
     let h: &mut AssetHeader =
         bytemuck::from_bytes_mut(bytemuck::cast_slice_mut(&mut words[..AssetHeader::WORDS]));
     h.file_size = [size as u32, (size >> 32) as u32];
-    let sum = file_checksum(&words[..AssetHeader::WORDS], &words[AssetHeader::WORDS..]);
-    let at = std::mem::offset_of!(AssetHeader, checksum) / 4;
-    words[at] = sum as u32;
-    words[at + 1] = (sum >> 32) as u32;
+    seal(words);
 }
 
 /// Applies `edit` to [`good_words`], reseals and loads as `bad.mlasset`; expects an
