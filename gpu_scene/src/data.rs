@@ -195,6 +195,8 @@ pub struct SceneData {
     pub(crate) textures_version: u64,
     /// Instances changed since the last upload.
     pub(crate) dirty_instances: Option<Range<usize>>,
+    /// Set for a scene that streams its meshes' pages ([`Self::streamed`]).
+    pub(crate) streaming: Option<crate::streaming::Streaming>,
 }
 
 impl SceneData {
@@ -203,6 +205,18 @@ impl SceneData {
     pub fn new(limits: Limits) -> Self {
         Self {
             limits,
+            ..Default::default()
+        }
+    }
+
+    /// An empty scene that streams: each mesh added is held in streamed form, its
+    /// records, hierarchy and roots' payload resident and every page absent until
+    /// installed (see [`crate::streaming`]); reserve the pool with
+    /// [`Self::reserve_pool`] once the meshes are in.
+    pub fn streamed(limits: Limits) -> Self {
+        Self {
+            limits,
+            streaming: Some(Default::default()),
             ..Default::default()
         }
     }
@@ -326,6 +340,9 @@ impl SceneData {
             flags: header.flags & (MESH_FLAG_UVS | MESH_FLAG_COLORS),
             level_count: header.level_count,
         });
+        if self.streaming.is_some() {
+            self.add_streamed_parts(asset, self.meshes.len() as u32 - 1);
+        }
         self.mesh_names.push(name.to_string());
         self.mesh_materials.push(header.material_count);
         self.geometry_version += 1;
@@ -657,7 +674,7 @@ pub fn drawable(m: Mat4) -> bool {
     m.is_finite() && m.determinant().abs() > 1e-20 && m.inverse().is_finite()
 }
 
-fn check_limit(
+pub(crate) fn check_limit(
     what: &'static str,
     requested: u64,
     limit: u64,

@@ -15,6 +15,12 @@ pub enum SceneDataError {
         /// What to change to stay under it.
         advice: &'static str,
     },
+    /// A streaming operation the scene cannot do (see [`crate::streaming`]).
+    #[error("streaming: {reason}")]
+    Streaming {
+        /// What was wrong.
+        reason: String,
+    },
     /// An instance named a mesh this scene was never given.
     #[error("mesh id {0} does not exist in this scene; add the mesh first with `add_mesh`")]
     UnknownMesh(u32),

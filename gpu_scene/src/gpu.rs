@@ -197,7 +197,7 @@ pub fn import_for(data: &SceneData, g: &mut GraphBuilder) -> SceneHandles {
 }
 
 /// The buffers in their order in [`GpuScene`].
-const ORDER: [&str; 11] = [
+const ORDER: [&str; 12] = [
     names::MESHLETS,
     names::GROUPS,
     names::PAYLOAD,
@@ -209,6 +209,7 @@ const ORDER: [&str; 11] = [
     names::HIERARCHY_NODES,
     names::HIERARCHY_CLUSTERS,
     names::HIERARCHY_ROOTS,
+    names::STREAM_ERRORS,
 ];
 
 /// What buffer `name` holds, borrowed from `data` (only the payload is copied, to append
@@ -235,7 +236,30 @@ fn content<'a>(data: &'a SceneData, name: &str) -> (Element, Cow<'a, [u8]>) {
         names::HIERARCHY_CLUSTERS => (Element::U32, borrowed(&data.hierarchy_clusters)),
         names::HIERARCHY_ROOTS => (Element::U32, borrowed(&data.hierarchy_roots)),
         names::TEXTURES => (Element::U32, borrowed(&data.textures)),
+        names::STREAM_ERRORS => (
+            Element::F32,
+            data.streaming()
+                .map_or(Cow::Borrowed(&[][..]), |s| borrowed(&s.stream_errors)),
+        ),
         _ => (elements::MATERIAL, borrowed(&data.materials)),
+    }
+}
+
+/// The bytes of elements `first .. first + count` of buffer `name`, for a streaming
+/// write (see [`crate::streaming`]).
+fn stream_bytes<'a>(data: &'a SceneData, name: &str, first: usize, count: usize) -> &'a [u8] {
+    fn part<T: bytemuck::Pod>(items: &[T], first: usize, count: usize) -> &[u8] {
+        bytemuck::cast_slice(&items[first..first + count])
+    }
+    match name {
+        names::PAYLOAD => part(&data.payload, first, count),
+        names::MESHLETS => part(&data.meshlets, first, count),
+        names::GROUPS => part(&data.groups, first, count),
+        names::HIERARCHY_NODES => part(&data.hierarchy_nodes, first, count),
+        names::STREAM_ERRORS => data
+            .streaming()
+            .map_or(&[][..], |s| part(&s.stream_errors, first, count)),
+        _ => &[],
     }
 }
 
@@ -306,6 +330,23 @@ impl GpuScene {
                 gpu.queue
                     .write_buffer(&slot.buffer, range.start as u64, &bytes[range.clone()]);
                 stats.bytes += range.len() as u64;
+            }
+        }
+        // Pages installed and evicted since: a few small ranges each, unless the
+        // geometry went up whole above.
+        for w in data.take_stream_writes() {
+            let Some(i) = ORDER.iter().position(|&n| n == w.buffer) else {
+                continue;
+            };
+            if geometry {
+                continue;
+            }
+            let slot = &self.buffers[i];
+            let bytes = stream_bytes(data, w.buffer, w.first, w.count);
+            let offset = (w.first * slot.element.size as usize) as u64;
+            if !bytes.is_empty() && offset + bytes.len() as u64 <= slot.buffer.size() {
+                gpu.queue.write_buffer(&slot.buffer, offset, bytes);
+                stats.bytes += bytes.len() as u64;
             }
         }
         self.geometry_version = data.geometry_version;

@@ -25,6 +25,11 @@
 //! | `hierarchy_clusters` | `u32`          | the leaves' meshlets, as indices into `meshlets` |
 //! | `hierarchy_roots`    | `u32`          | per mesh, its root node |
 //!
+//! A streamed scene ([`SceneData::streamed`], see [`streaming`]) holds each mesh's
+//! records, hierarchy and roots' payload, and a pool at the end of the payload where
+//! pages are installed; one more buffer, `stream_errors` (`f32` per group), holds each
+//! group's error while its page is not resident, for the cull to ask for it.
+//!
 //! [`SceneData`] is the CPU side (what CPU references read); [`GpuScene`] owns the
 //! buffers and re-uploads only what changed. [`view`] builds the per-frame `View`.
 
@@ -38,6 +43,7 @@ pub mod instance_table;
 pub mod lattice;
 pub mod phase;
 pub mod scene_slots;
+pub mod streaming;
 pub mod surface;
 pub mod texture;
 pub mod view;
@@ -73,6 +79,9 @@ pub mod names {
     pub const HIERARCHY_CLUSTERS: &str = "hierarchy_clusters";
     /// Per mesh, its hierarchy's root node.
     pub const HIERARCHY_ROOTS: &str = "hierarchy_roots";
+    /// Per group of a streamed scene, its error while its page is not resident (0 while
+    /// it is): where the cull finds the pages it wants.
+    pub const STREAM_ERRORS: &str = "stream_errors";
     /// The frame input holding the `View` bytes.
     pub const VIEW: &str = "view";
 }

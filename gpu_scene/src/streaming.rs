@@ -1,0 +1,300 @@
+//! Streaming in the GPU scene: meshes whose pages (`meshlight_stream::pages`) come and go
+//! in a fixed pool at the end of the payload.
+//!
+//! Nothing a pass reads changes shape. Residency is written into the data the passes
+//! already read, so the LOD test, the hierarchy walk and every decoder run unchanged:
+//! - **The page table is the meshlet records' `data_offset`.** A page's meshlets point
+//!   into the pool while it is resident; installing a page writes its bytes to its pool
+//!   range and rewrites those offsets (one write: a page's meshlets are one range).
+//!   While it is not, they point at word 0 and are never drawn.
+//! - **Residency is the group's error.** A group whose page is not resident has error 0
+//!   on the GPU: as a parent it is never perceptible (its children, which are not there,
+//!   are not drawn), as a source it always hides (the meshlets it produced stand in for
+//!   its children). That is exactly the cut "refined when its error shows and its page
+//!   is resident", complete whenever the resident pages are closed under parents, which
+//!   the streamer guarantees (`meshlight_stream::cut`). The real error goes to
+//!   [`Streaming::stream_errors`], where the cull finds the groups it wants refined.
+//! - **The hierarchy keeps pruning safely.** A node's smallest own error is 0 (any
+//!   meshlet may have to stand in for a missing page, so no subtree is ever "too
+//!   coarse"), and the leaf of a group whose page is not resident has largest parent error
+//!   0, so the walk skips it: none of its meshlets can be drawn.
+
+use meshlight_scene::MeshletAsset;
+use meshlight_scene::asset::format::{NO_GROUP, SECTION_PAYLOAD};
+
+use crate::error::SceneDataError;
+
+/// One streamed group's page: what installing and evicting it rewrites.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StreamedPage {
+    /// The mesh the group belongs to (its index in `SceneData::meshes`).
+    pub mesh: u32,
+    /// The group's error as the asset has it.
+    pub error: f32,
+    /// Its children: scene meshlets `first_meshlet .. first_meshlet + meshlet_count`.
+    pub first_meshlet: u32,
+    /// Meshlets of the page.
+    pub meshlet_count: u32,
+    /// Payload words of the page.
+    pub words: u32,
+    /// Where the page lies in its asset file, in bytes from the start.
+    pub file_offset: u64,
+    /// Its checksum (`PageRecord::checksum`).
+    pub checksum: u64,
+    /// The hierarchy leaf holding the page's meshlets, and its largest parent error.
+    pub leaf: u32,
+    /// The leaf's `max_parent_error` while the page is resident.
+    pub leaf_parent_error: f32,
+    /// Where the page lies in the pool (words from the pool's start) while resident.
+    pub resident_at: Option<u32>,
+}
+
+/// A range of a scene buffer that changed, to be written to the GPU.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StreamWrite {
+    /// The buffer (one of [`crate::names`]).
+    pub buffer: &'static str,
+    /// First element changed.
+    pub first: usize,
+    /// Elements changed.
+    pub count: usize,
+}
+
+/// The streaming state of a [`crate::SceneData`].
+#[derive(Clone, Debug, Default)]
+pub struct Streaming {
+    /// Per scene group, its page.
+    pub pages: Vec<StreamedPage>,
+    /// Per scene group: its real error while its page is not resident, 0 while it is.
+    /// The cull asks for a group's page when this error shows.
+    pub stream_errors: Vec<f32>,
+    /// Per scene meshlet of a page: its first payload word within the page.
+    pub page_offsets: Vec<u32>,
+    /// The pool: payload words `pool_base .. pool_base + pool_words`.
+    pub pool_base: u32,
+    /// Words of the pool.
+    pub pool_words: u32,
+    /// Changes not yet written to the GPU.
+    pub(crate) writes: Vec<StreamWrite>,
+}
+
+impl Streaming {
+    /// A page's group, checked.
+    fn page(&self, group: u32) -> Result<&StreamedPage, SceneDataError> {
+        self.pages
+            .get(group as usize)
+            .ok_or_else(|| SceneDataError::Streaming {
+                reason: format!(
+                    "page {group} does not exist: the scene streams {} pages",
+                    self.pages.len()
+                ),
+            })
+    }
+}
+
+impl crate::SceneData {
+    /// Whether the scene streams its meshes' pages (see [`crate::SceneData::streamed`]).
+    pub fn streaming(&self) -> Option<&Streaming> {
+        self.streaming.as_ref()
+    }
+
+    /// Adds `asset` in streamed form: its records, hierarchy and roots' payload, every
+    /// page absent. Called by `add_mesh` on a streamed scene.
+    pub(crate) fn add_streamed_parts(&mut self, asset: &MeshletAsset, mesh: u32) {
+        // `add_mesh` has appended the whole asset: find where its parts begin.
+        let header = *asset.header();
+        let payload_base = (self.payload.len() - asset.payload().len()) as u32;
+        let first_meshlet = self.meshes[mesh as usize].first_meshlet;
+        let group_base = (self.groups.len() - asset.groups().len()) as u32;
+        let node_base = self.hierarchy_roots[mesh as usize];
+        let streaming = self.streaming.get_or_insert_with(Streaming::default);
+        let pages = asset.pages();
+        let payload_offset = u64::from(header.sections[SECTION_PAYLOAD].offset) * 4;
+        // The leaf of each group: the leaf whose meshlets it simplified.
+        let mut leaves = vec![(0u32, 0.0f32); pages.len()];
+        for (i, node) in asset.nodes().iter().enumerate() {
+            if let Some(&m) = asset.node_meshlets(node).first()
+                && node.is_leaf()
+            {
+                let g = asset.meshlets()[m as usize].parent_group;
+                if g != NO_GROUP {
+                    leaves[g as usize] = (node_base + i as u32, node.max_parent_error);
+                }
+            }
+        }
+        for (g, (page, group)) in pages.iter().zip(asset.groups()).enumerate() {
+            let children = asset.group_children(group);
+            streaming.pages.push(StreamedPage {
+                mesh,
+                error: group.error,
+                first_meshlet: first_meshlet + children[0],
+                meshlet_count: group.child_count,
+                words: page.words,
+                file_offset: payload_offset + u64::from(page.first_word) * 4,
+                checksum: page.checksum(),
+                leaf: leaves[g].0,
+                leaf_parent_error: leaves[g].1,
+                resident_at: None,
+            });
+            streaming.stream_errors.push(group.error);
+        }
+        for m in asset.meshlets() {
+            let offset = match pages.get(m.parent_group as usize) {
+                Some(page) => m.data_offset - page.first_word,
+                None => 0,
+            };
+            streaming.page_offsets.push(offset);
+        }
+        // Absent: the pages' meshlets point at word 0, their groups have error 0, the
+        // leaves that hold them prune, and no subtree is too coarse.
+        let meshlets = &mut self.meshlets[first_meshlet as usize..];
+        for m in meshlets.iter_mut() {
+            if m.parent_group != NO_GROUP {
+                m.data_offset = 0;
+            }
+        }
+        for g in &mut self.groups[group_base as usize..] {
+            g.error = 0.0;
+        }
+        for node in &mut self.hierarchy_nodes[node_base as usize..] {
+            node.min_error = 0.0;
+        }
+        for &(leaf, _) in &leaves {
+            self.hierarchy_nodes[leaf as usize].max_parent_error = 0.0;
+        }
+        self.payload
+            .truncate(payload_base as usize + header.resident_words as usize);
+    }
+
+    /// Makes room for a pool of `bytes` (rounded down to words) at the end of the
+    /// payload, where installed pages go. Once per scene, after its meshes.
+    pub fn reserve_pool(&mut self, bytes: u64) -> Result<(), SceneDataError> {
+        let words = bytes / 4;
+        let base = self.payload.len() as u64;
+        crate::data::check_limit(
+            "payload words",
+            base + words,
+            self.limits().max_payload_words as u64,
+            "give a smaller pool (--pool-mb), or use a device with a larger storage binding",
+        )?;
+        let Some(streaming) = self.streaming.as_mut() else {
+            return Err(SceneDataError::Streaming {
+                reason: "the scene does not stream: make it with SceneData::streamed".into(),
+            });
+        };
+        if streaming.pool_words != 0 {
+            return Err(SceneDataError::Streaming {
+                reason: "the pool is already reserved".into(),
+            });
+        }
+        streaming.pool_base = base as u32;
+        streaming.pool_words = words as u32;
+        self.payload.resize((base + words) as usize, 0);
+        self.geometry_version += 1;
+        Ok(())
+    }
+
+    /// Installs page `group` at word `at` of the pool with its `words`: its bytes into the
+    /// pool, its meshlets pointed at them, its group and leaf made live.
+    pub fn install_page(
+        &mut self,
+        group: u32,
+        at: u32,
+        words: &[u32],
+    ) -> Result<(), SceneDataError> {
+        let Some(streaming) = self.streaming.as_mut() else {
+            return Err(SceneDataError::Streaming {
+                reason: "the scene does not stream".into(),
+            });
+        };
+        let page = streaming.page(group)?.clone();
+        if words.len() != page.words as usize {
+            return Err(SceneDataError::Streaming {
+                reason: format!(
+                    "page {group} has {} words, {} were given",
+                    page.words,
+                    words.len()
+                ),
+            });
+        }
+        if u64::from(at) + u64::from(page.words) > u64::from(streaming.pool_words) {
+            return Err(SceneDataError::Streaming {
+                reason: format!(
+                    "page {group} ({} words) at pool word {at} runs past the pool's {} words",
+                    page.words, streaming.pool_words
+                ),
+            });
+        }
+        let start = (streaming.pool_base + at) as usize;
+        self.payload[start..start + words.len()].copy_from_slice(words);
+        let first = page.first_meshlet as usize;
+        let count = page.meshlet_count as usize;
+        for (m, record) in self.meshlets[first..first + count].iter_mut().enumerate() {
+            record.data_offset = start as u32 + streaming.page_offsets[first + m];
+        }
+        self.groups[group as usize].error = page.error;
+        self.hierarchy_nodes[page.leaf as usize].max_parent_error = page.leaf_parent_error;
+        streaming.stream_errors[group as usize] = 0.0;
+        streaming.pages[group as usize].resident_at = Some(at);
+        streaming
+            .writes
+            .extend(page_writes(&page, group, Some((start, words.len()))));
+        Ok(())
+    }
+
+    /// Evicts page `group`: its group and leaf dead again, its meshlets pointed at word 0.
+    /// Its pool words are left as they are, for the next page installed there.
+    pub fn evict_page(&mut self, group: u32) -> Result<(), SceneDataError> {
+        let Some(streaming) = self.streaming.as_mut() else {
+            return Err(SceneDataError::Streaming {
+                reason: "the scene does not stream".into(),
+            });
+        };
+        let page = streaming.page(group)?.clone();
+        let first = page.first_meshlet as usize;
+        for record in &mut self.meshlets[first..first + page.meshlet_count as usize] {
+            record.data_offset = 0;
+        }
+        self.groups[group as usize].error = 0.0;
+        self.hierarchy_nodes[page.leaf as usize].max_parent_error = 0.0;
+        streaming.stream_errors[group as usize] = page.error;
+        streaming.pages[group as usize].resident_at = None;
+        streaming.writes.extend(page_writes(&page, group, None));
+        Ok(())
+    }
+
+    /// The changes since the last call, for [`crate::GpuScene::upload`].
+    pub(crate) fn take_stream_writes(&mut self) -> Vec<StreamWrite> {
+        self.streaming
+            .as_mut()
+            .map(|s| std::mem::take(&mut s.writes))
+            .unwrap_or_default()
+    }
+}
+
+/// What installing (with the pool words written) or evicting a page changes.
+fn page_writes(
+    page: &StreamedPage,
+    group: u32,
+    pool: Option<(usize, usize)>,
+) -> impl Iterator<Item = StreamWrite> {
+    use crate::names;
+    let write = |buffer, first, count| StreamWrite {
+        buffer,
+        first,
+        count,
+    };
+    [
+        pool.map(|(first, count)| write(names::PAYLOAD, first, count)),
+        Some(write(
+            names::MESHLETS,
+            page.first_meshlet as usize,
+            page.meshlet_count as usize,
+        )),
+        Some(write(names::GROUPS, group as usize, 1)),
+        Some(write(names::HIERARCHY_NODES, page.leaf as usize, 1)),
+        Some(write(names::STREAM_ERRORS, group as usize, 1)),
+    ]
+    .into_iter()
+    .flatten()
+}

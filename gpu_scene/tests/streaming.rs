@@ -1,0 +1,366 @@
+//! A streamed scene: pages installed and evicted rewrite the records the passes read so
+//! that the renderer's own LOD test draws the cut over resident pages, and with every
+//! page in, the scene reads as the fully resident one.
+
+use glam::Mat4;
+use meshlight_gpu_scene::data::Limits;
+use meshlight_gpu_scene::{GpuScene, Material, SceneData};
+use meshlight_scene::MeshletAsset;
+use meshlight_scene::asset::format::{NO_GROUP, PayloadLayout};
+use meshlight_shaders::cpu::layout::View;
+use meshlight_shaders::cpu::lod::lod_cut;
+use meshlight_stream::{MeshDag, PageGraph, PageId};
+
+/// Two meshes in one scene, so the second's pages and meshlets are rebased.
+fn scenes() -> (Vec<&'static MeshletAsset>, SceneData, SceneData) {
+    let assets = vec![
+        meshlight_testing::meshes::spot(),
+        meshlight_testing::meshes::bunny(),
+    ];
+    let mut resident = SceneData::new(Limits::default());
+    let mut streamed = SceneData::streamed(Limits::default());
+    for data in [&mut resident, &mut streamed] {
+        for (i, asset) in assets.iter().enumerate() {
+            data.add_mesh(&format!("mesh{i}"), asset).unwrap();
+        }
+    }
+    let total: u64 = assets
+        .iter()
+        .map(|a| {
+            a.pages()
+                .iter()
+                .map(|p| u64::from(p.words) * 4)
+                .sum::<u64>()
+        })
+        .sum();
+    streamed.reserve_pool(total).unwrap();
+    (assets, resident, streamed)
+}
+
+/// The scene's page graph: each mesh's appended.
+fn graph(assets: &[&MeshletAsset]) -> PageGraph {
+    let mut graph = PageGraph::default();
+    for asset in assets {
+        graph.append(&MeshDag::of_asset(asset).pages());
+    }
+    graph
+}
+
+/// A page's words as the asset file holds them.
+fn page_words(assets: &[&MeshletAsset], page: PageId) -> (usize, Vec<u32>) {
+    let mut page = page as usize;
+    for (mesh, asset) in assets.iter().enumerate() {
+        if let Some(record) = asset.pages().get(page) {
+            return (mesh, asset.payload()[record.range()].to_vec());
+        }
+        page -= asset.pages().len();
+    }
+    panic!("no page {page}");
+}
+
+/// Pages in an order that installs parents first.
+fn parents_first(graph: &PageGraph) -> Vec<PageId> {
+    let mut order: Vec<PageId> = (0..graph.len() as PageId).collect();
+    order.sort_by_key(|&p| graph.depth(p));
+    order
+}
+
+/// Whether each of the scene's meshlets is in its LOD cut, with the renderer's LOD test
+/// on the scene's (possibly rewritten) groups, for an instance at the identity.
+fn cut(data: &SceneData, view: &View, threshold: f32) -> Vec<bool> {
+    data.meshlets
+        .iter()
+        .map(|m| {
+            let (own_sphere, own_error) = data.own_lod(m);
+            let (parent_sphere, parent_error) = data.parent_lod(m);
+            let identity = Mat4::IDENTITY.to_cols_array_2d();
+            lod_cut(
+                view,
+                &identity,
+                1.0,
+                own_sphere,
+                own_error,
+                parent_sphere,
+                parent_error,
+                threshold,
+            )
+            .0
+        })
+        .collect()
+}
+
+fn view_from(distance: f32) -> View {
+    View {
+        camera_position: [0.3, 0.2, distance],
+        near: 0.01,
+        lod_scale: 540.0,
+        ..View::default()
+    }
+}
+
+#[test]
+fn with_every_page_installed_the_scene_reads_as_the_resident_one() {
+    let (assets, resident, mut streamed) = scenes();
+    let graph = graph(&assets);
+    assert_eq!(graph.len(), streamed.groups.len());
+    // Nothing installed: only the roots' payload is held, and the cut is the roots.
+    let held = streamed.streaming().unwrap().pool_base as usize;
+    let roots: usize = assets
+        .iter()
+        .map(|a| a.header().resident_words as usize)
+        .sum();
+    assert_eq!(held, roots);
+    let view = view_from(0.5);
+    let drawn = cut(&streamed, &view, 1.0);
+    for (m, record) in streamed.meshlets.iter().enumerate() {
+        assert_eq!(drawn[m], record.parent_group == NO_GROUP, "meshlet {m}");
+    }
+    // Every page, parents first, packed at the pool's start in that order.
+    let mut at = 0;
+    for page in parents_first(&graph) {
+        let (_, words) = page_words(&assets, page);
+        streamed.install_page(page, at, &words).unwrap();
+        at += words.len() as u32;
+    }
+    // Each meshlet's payload is where its record points; groups and nodes are the
+    // asset's again (bar the smallest own errors, which stay 0).
+    for (m, (s, r)) in streamed.meshlets.iter().zip(&resident.meshlets).enumerate() {
+        let flags = if m < assets[0].meshlets().len() {
+            assets[0].header().flags
+        } else {
+            assets[1].header().flags
+        };
+        let end = PayloadLayout::of(r, flags).end as usize;
+        let (a, b) = (s.data_offset as usize, r.data_offset as usize);
+        assert_eq!(
+            streamed.payload[a..a + end],
+            resident.payload[b..b + end],
+            "meshlet {m}"
+        );
+        assert_eq!(
+            MeshletRecordKey::of(s),
+            MeshletRecordKey::of(r),
+            "meshlet {m}"
+        );
+    }
+    assert_eq!(streamed.groups, resident.groups);
+    for (s, r) in streamed
+        .hierarchy_nodes
+        .iter()
+        .zip(&resident.hierarchy_nodes)
+    {
+        assert_eq!(s.max_parent_error, r.max_parent_error);
+        assert_eq!(s.min_error, 0.0);
+    }
+    for distance in [0.2, 0.5, 1.0, 3.0, 10.0] {
+        let view = view_from(distance);
+        assert_eq!(
+            cut(&streamed, &view, 1.0),
+            cut(&resident, &view, 1.0),
+            "at {distance}"
+        );
+    }
+    assert!(
+        streamed
+            .streaming()
+            .unwrap()
+            .stream_errors
+            .iter()
+            .all(|&e| e == 0.0)
+    );
+}
+
+/// Everything of a meshlet record but its payload offset.
+#[derive(Debug, PartialEq)]
+struct MeshletRecordKey([f32; 4], u32, u32, u32, [u32; 3], u32, u32);
+
+impl MeshletRecordKey {
+    fn of(m: &meshlight_scene::asset::format::MeshletRecord) -> Self {
+        Self(
+            m.bounds,
+            m.source_group,
+            m.parent_group,
+            m.counts,
+            m.grid_min,
+            m.bits,
+            m.normals,
+        )
+    }
+}
+
+/// Under random residency closed under parents, the renderer's LOD test on the rewritten
+/// records draws exactly the cut over resident pages, and that cut is complete.
+#[test]
+fn the_rewritten_records_draw_the_cut_over_resident_pages() {
+    let (assets, _, mut streamed) = scenes();
+    let graph = graph(&assets);
+    let dags: Vec<MeshDag> = assets.iter().map(|a| MeshDag::of_asset(a)).collect();
+    let mut rng = meshlight_testing::Rng(5);
+    let mut resident = vec![false; graph.len()];
+    // Each page at its own range of the pool (it holds them all).
+    let slots: Vec<u32> = (0..graph.len() as PageId)
+        .scan(0u32, |at, p| {
+            let slot = *at;
+            *at += (graph.bytes(p) / 4) as u32;
+            Some(slot)
+        })
+        .collect();
+    let (mut paged, mut fallbacks) = (0, 0);
+    for round in 0..40 {
+        // Install a few pages whose parents are in, evict a few that nothing needs.
+        for page in parents_first(&graph) {
+            let p = page as usize;
+            let parents_in = graph.parents(page).iter().all(|&q| resident[q as usize]);
+            if !resident[p] && parents_in && rng.below(3) == 0 {
+                let (_, words) = page_words(&assets, page);
+                streamed.install_page(page, slots[p], &words).unwrap();
+                resident[p] = true;
+            } else if resident[p]
+                && graph
+                    .dependents(page)
+                    .iter()
+                    .all(|&d| !resident[d as usize])
+                && rng.below(4) == 0
+            {
+                streamed.evict_page(page).unwrap();
+                resident[p] = false;
+            }
+        }
+        let view = view_from(0.2 + round as f32 * 0.1);
+        let drawn = cut(&streamed, &view, 1.0);
+        let mut first_meshlet = 0;
+        let mut first_group = 0;
+        for (asset, dag) in assets.iter().zip(&dags) {
+            let n = asset.meshlets().len();
+            let groups = asset.groups().len();
+            let shows: Vec<bool> = asset
+                .groups()
+                .iter()
+                .map(|g| {
+                    let s = g.lod_sphere;
+                    let px = meshlight_shaders::cpu::lod::project_error_to_pixels(
+                        &view,
+                        [s[0], s[1], s[2]],
+                        s[3],
+                        g.error,
+                    );
+                    meshlight_shaders::cpu::lod::error_perceptible(px, 1.0)
+                })
+                .collect();
+            let is_resident = |g: u32| resident[first_group + g as usize];
+            let want = meshlight_stream::cut::select(dag, &shows, is_resident);
+            assert_eq!(
+                &drawn[first_meshlet..first_meshlet + n],
+                &want[..],
+                "round {round}"
+            );
+            // How often the cut drew a page's meshlets, and how often it fell back to a
+            // coarser one because the finer page was missing.
+            for (m, &d) in want.iter().enumerate() {
+                let (source, parent) = (dag.source[m], dag.parent[m]);
+                paged += usize::from(d && parent != NO_GROUP);
+                fallbacks += usize::from(
+                    d && source != NO_GROUP && shows[source as usize] && !is_resident(source),
+                );
+            }
+            meshlight_stream::cut::check(dag, &want, is_resident).unwrap();
+            first_meshlet += n;
+            first_group += groups;
+        }
+    }
+    assert!(
+        paged > 1000 && fallbacks > 100,
+        "{paged} paged, {fallbacks} fallbacks"
+    );
+}
+
+/// Installs and evictions reach the GPU as small writes, and the GPU's copies then
+/// equal the scene's.
+#[test]
+fn installs_and_evictions_upload_only_what_they_change() {
+    let gpu = meshlight_testing::gpu();
+    let (assets, _, mut streamed) = scenes();
+    let material = streamed.add_material(Material::default()).unwrap();
+    streamed
+        .add_instance(meshlight_gpu_scene::MeshId(0), Mat4::IDENTITY, material)
+        .unwrap();
+    let mut scene = GpuScene::new(&gpu, &mut streamed);
+    assert_eq!(scene.upload(&gpu, &mut streamed).bytes, 0);
+    let graph = graph(&assets);
+    let page = parents_first(&graph)[0];
+    let (_, words) = page_words(&assets, page);
+    streamed.install_page(page, 64, &words).unwrap();
+    let stats = scene.upload(&gpu, &mut streamed);
+    let info = streamed.streaming().unwrap().pages[page as usize].clone();
+    let expected = words.len() as u64 * 4
+        + u64::from(info.meshlet_count)
+            * size_of::<meshlight_scene::asset::format::MeshletRecord>() as u64
+        + size_of::<meshlight_scene::asset::format::GroupRecord>() as u64
+        + size_of::<meshlight_scene::asset::format::NodeRecord>() as u64
+        + 4;
+    assert_eq!((stats.bytes, stats.created), (expected, 0));
+    for name in [
+        "payload",
+        "meshlets",
+        "meshlet_groups",
+        "hierarchy_nodes",
+        "stream_errors",
+    ] {
+        let buffer = scene.buffer(name).unwrap();
+        let got = gpu.read_buffer(buffer, 0, buffer.size()).unwrap();
+        let want: Vec<u8> = match name {
+            "payload" => bytemuck::cast_slice(&streamed.payload).to_vec(),
+            "meshlets" => bytemuck::cast_slice(&streamed.meshlets).to_vec(),
+            "meshlet_groups" => bytemuck::cast_slice(&streamed.groups).to_vec(),
+            "hierarchy_nodes" => bytemuck::cast_slice(&streamed.hierarchy_nodes).to_vec(),
+            _ => bytemuck::cast_slice(&streamed.streaming().unwrap().stream_errors).to_vec(),
+        };
+        assert_eq!(&got[..want.len()], &want[..], "{name}");
+    }
+    streamed.evict_page(page).unwrap();
+    let stats = scene.upload(&gpu, &mut streamed);
+    assert_eq!(stats.bytes, expected - words.len() as u64 * 4);
+    let groups = gpu
+        .read_buffer(
+            scene.buffer("meshlet_groups").unwrap(),
+            0,
+            32 * streamed.groups.len() as u64,
+        )
+        .unwrap();
+    assert_eq!(&groups[..], bytemuck::cast_slice::<_, u8>(&streamed.groups));
+}
+
+#[test]
+fn bad_streaming_calls_are_refused_by_name() {
+    let (assets, mut resident, mut streamed) = scenes();
+    let err = resident.install_page(0, 0, &[]).unwrap_err().to_string();
+    assert!(err.contains("does not stream"), "{err}");
+    let err = streamed
+        .install_page(1 << 30, 0, &[])
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("page 1073741824 does not exist"), "{err}");
+    let (_, words) = page_words(&assets, 0);
+    let err = streamed
+        .install_page(0, 0, &words[1..])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains(&format!(
+            "has {} words, {} were given",
+            words.len(),
+            words.len() - 1
+        )),
+        "{err}"
+    );
+    let pool = streamed.streaming().unwrap().pool_words;
+    let err = streamed
+        .install_page(0, pool - 1, &words)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("runs past the pool"), "{err}");
+    let err = streamed.reserve_pool(1024).unwrap_err().to_string();
+    assert!(err.contains("already reserved"), "{err}");
+    let err = resident.reserve_pool(1024).unwrap_err().to_string();
+    assert!(err.contains("does not stream"), "{err}");
+}
