@@ -386,6 +386,12 @@ impl GpuScene {
         }
     }
 
+    /// Declares a streamed scene's `stream_errors` buffer as an imported resource (for
+    /// `cull_lod`'s streaming slots).
+    pub fn import_stream_errors(&self, g: &mut GraphBuilder) -> Handle<Buffer> {
+        self.import_one(g, names::STREAM_ERRORS)
+    }
+
     /// Declares the buffer `name` (one of [`names`]) as an imported resource, sized as
     /// the scene holds it.
     fn import_one(&self, g: &mut GraphBuilder, name: &str) -> Handle<Buffer> {

@@ -432,3 +432,52 @@ pub fn occluded_per_instance(
     }
     words
 }
+
+/// The pages a streaming first pass lists (`want_page`), by group: for each cluster in
+/// the frustum and the LOD cut, its source group when that group's page is missing and
+/// its error shows (priority: the error in pixels), and its parent group (in use,
+/// priority 0). A page wanted by several clusters is listed once, with the priority of
+/// whichever cluster the GPU's atomics let first, so the reference gives each group the
+/// range of priorities its clusters computed.
+pub fn wanted_pages(
+    scene: &SceneData,
+    view: &View,
+    clusters: &[Cluster],
+    thresholds: &Thresholds,
+) -> std::collections::BTreeMap<u32, (f32, f32)> {
+    let stream_errors = scene.streaming().map_or(&[][..], |s| &s.stream_errors[..]);
+    let mut wanted = std::collections::BTreeMap::new();
+    let mut want = |group: u32, priority: f32| {
+        let e = wanted.entry(group).or_insert((priority, priority));
+        e.0 = f32::min(e.0, priority);
+        e.1 = f32::max(e.1, priority);
+    };
+    for &cluster in clusters {
+        let d = classify(scene, view, cluster, thresholds);
+        if !(d.in_frustum && d.in_cut) {
+            continue;
+        }
+        let instance = &scene.instances[cluster.instance as usize];
+        let meshlet = &scene.meshlets[cluster.meshlet as usize];
+        if let Some(&missing) = stream_errors.get(meshlet.source_group as usize)
+            && missing > 0.0
+        {
+            let scale = instance_max_scale(instance);
+            let sphere = scene.groups[meshlet.source_group as usize].lod_sphere;
+            let centre = transform_point(&instance.world_from_local, xyz(sphere));
+            let px = meshlight_shaders::cpu::lod::project_error_to_pixels(
+                view,
+                centre,
+                sphere[3] * scale,
+                missing * scale,
+            );
+            if meshlight_shaders::cpu::lod::error_perceptible(px, thresholds.lod_threshold_px) {
+                want(meshlet.source_group, px);
+            }
+        }
+        if meshlet.parent_group != NO_GROUP {
+            want(meshlet.parent_group, 0.0);
+        }
+    }
+    wanted
+}

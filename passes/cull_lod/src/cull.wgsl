@@ -14,14 +14,20 @@
 // occlusion"). With WALKED, the second pass also takes the clusters the
 // second hierarchy walk listed (below the nodes the first walk found hidden), after its
 // own list: those were never tested, and are tested like the rest.
+//
+// With STREAMING (a streamed scene, `meshlight_gpu_scene::streaming`), each cluster of
+// the LOD cut asks for the pages it needs: the page of its source group when that
+// group's error shows but its page is missing (the cluster stands in for finer ones
+// the pool lacks), and the page it lies on (in use, so it is kept). Each page is listed
+// once a frame, through a per-group mark of the last frame it was wanted.
 
 #import meshlight::dispatch::linear_workgroup
 #import meshlight::math::F32_MAX
-#import meshlight::meshlet::{Meshlet, MeshletGroup, Cluster, meshlet_bounds, meshlet_triangle_count, lod_cut, MESHLET_NO_GROUP}
+#import meshlight::meshlet::{Meshlet, MeshletGroup, Cluster, meshlet_bounds, meshlet_triangle_count, lod_cut, error_perceptible, MESHLET_NO_GROUP}
 #import meshlight::instance::{Instance, instance_max_scale, instance_transform_point}
 #import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshlets, meshlet_groups}
-#import meshlight::view::{View, sphere_in_frustum}
+#import meshlight::view::{View, sphere_in_frustum, project_error_to_pixels}
 #ifdef OCCLUSION
 #import meshlight::occlusion::{instance_sphere_rect, sphere_occluded}
 #endif
@@ -47,6 +53,35 @@
 @group(0) @binding(9) var<storage, read> dispatch_in: array<u32>;
 @group(0) @binding(10) var<uniform> view: View;
 @group(0) @binding(11) var<uniform> params: Params;
+#ifdef STREAMING
+// Per group of the scene: its error while its page is not resident, 0 while it is.
+@group(0) @binding(17) var<storage, read> stream_errors: array<f32>;
+// Per group: 1 + the last frame (`view.frame_index`) its page was wanted; kept across
+// frames, never cleared.
+@group(0) @binding(18) var<storage, read_write> page_marks: array<atomic<u32>>;
+// The pages wanted this frame, each once: (group, priority as f32 bits: the error in
+// pixels of a missing page, 0 for a page in use).
+@group(0) @binding(19) var<storage, read_write> page_requests: array<vec2<u32>>;
+// [0] requests written, [1] found (more than the list holds: the rest wait a frame).
+@group(0) @binding(20) var<storage, read_write> page_request_count: array<atomic<u32>>;
+
+// Lists `group`'s page unless this frame already has.
+fn want_page(group: u32, priority: f32) {
+    let stamp = view.frame_index + 1u;
+    // Most clusters find their page marked already: a load, no atomic write.
+    if atomicLoad(&page_marks[group]) == stamp {
+        return;
+    }
+    if atomicMax(&page_marks[group], stamp) == stamp {
+        return;
+    }
+    let k = atomicAdd(&page_request_count[1], 1u);
+    if k < arrayLength(&page_requests) {
+        page_requests[k] = vec2(group, bitcast<u32>(priority));
+        atomicAdd(&page_request_count[0], 1u);
+    }
+}
+#endif
 #ifdef OCCLUSION
 // The depth pyramid (R32Float, farthest depth per texel, full mip chain): last frame's
 // in the first pass, this frame's in the second.
@@ -181,6 +216,10 @@ fn prepare() {
     atomicStore(&occluded_count[1], 0u);
 #endif
 #endif
+#ifdef STREAMING
+    atomicStore(&page_request_count[0], 0u);
+    atomicStore(&page_request_count[1], 0u);
+#endif
     atomicStore(&hw_args[0], HW_VERTICES);
     atomicStore(&hw_args[1], 0u);
     atomicStore(&hw_args[2], 0u);
@@ -255,6 +294,21 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
         parent_error, params.lod_threshold_px) {
         return;
     }
+#ifdef STREAMING
+    if meshlet.source_group != MESHLET_NO_GROUP {
+        let missing = stream_errors[meshlet.source_group];
+        if missing > 0.0 {
+            let centre = (instance.world_from_local * vec4(own_sphere.xyz, 1.0)).xyz;
+            let px = project_error_to_pixels(view, centre, own_sphere.w * scale, missing * scale);
+            if error_perceptible(px, params.lod_threshold_px) {
+                want_page(meshlet.source_group, px);
+            }
+        }
+    }
+    if meshlet.parent_group != MESHLET_NO_GROUP {
+        want_page(meshlet.parent_group, 0.0);
+    }
+#endif
 
 #ifdef OCCLUSION
     atomicAdd(&raster_counts[8], 1u);

@@ -31,6 +31,10 @@
 //! | `still_occluded_per_instance` | storage read-write (optional) | u32 × 2 per instance | `second`: the same buffer; `[2i + 1]` less each candidate found visible |
 //! | `walked_clusters` | storage read (optional) | Cluster | `second`: the second hierarchy walk's list (`fill_clusters` `hierarchy`, `mode = "second"`), tested after `clusters` |
 //! | `walked_cluster_count` | storage read (optional) | u32 × 2 | `second`: its `cluster_count` |
+//! | `stream_errors`   | storage read (optional) | f32 per group | streaming: a group's error while its page is missing, else 0 (the streamed scene's buffer) |
+//! | `page_marks`      | storage read-write (optional) | u32 per group | streaming: 1 + the last frame the group's page was wanted; kept across frames |
+//! | `page_requests`   | storage write (optional) | PageRequest (group, priority bits) | streaming: the pages wanted this frame, each once |
+//! | `page_request_count` | cleared read-write (optional) | u32 × 2 | streaming: `[0]` requests written, `[1]` found |
 //!
 //! `raster_counts`: `[0]` software clusters, `[1]` hardware clusters, `[2]` clusters
 //! that passed frustum, LOD and occlusion (slots requested, may exceed the slots the
@@ -72,6 +76,23 @@
 //! visible. The second pass takes that list as `walked_clusters` and
 //! `walked_cluster_count`, after its candidates: its clusters were never tested, and get
 //! every test (frustum, LOD, occlusion against this frame's pyramid).
+//!
+//! # Streaming
+//!
+//! On a streamed scene (`meshlight_gpu_scene::streaming`) the LOD test needs nothing
+//! new: a group whose page is missing has error 0 there, so the cut already keeps its
+//! result. What the pass adds, with the four streaming slots bound to a first pass, is
+//! the list of pages the frame wants: for each cluster in the frustum and the cut
+//! (before the occlusion test, so a page is kept while its clusters are hidden for a
+//! moment), the page of its source group when that group's real error
+//! (`stream_errors`) shows, with the error in pixels as its priority, and the page it
+//! lies on (its parent group's, in use: priority 0). A per-group mark (`page_marks`,
+//! `view.frame_index + 1`) lists each page once a frame; a plain load skips the atomic
+//! when the page is marked already, so the many clusters of one page cost one write.
+//! The renderer reads the list back and hands it to the streamer
+//! (`meshlight_stream::Streamer::frame`). [`cpu::wanted_pages`] is the reference. The
+//! second pass lists nothing: a cluster drawn only through the second walk asks for its
+//! pages the next frame.
 //!
 //! # Per-instance occlusion counters (for the `occlusion` debug view)
 //!
@@ -205,6 +226,18 @@ pub const PER_INSTANCE_SECOND: &str = "still_occluded_per_instance";
 pub const WALKED_SLOT: &str = "walked_clusters";
 /// The count words of `walked_clusters`: the second walk's `cluster_count`.
 pub const WALKED_COUNT_SLOT: &str = "walked_cluster_count";
+/// Streaming: per group, its error while its page is missing (the streamed scene's
+/// `stream_errors` buffer, bound by name).
+pub const STREAM_ERRORS_SLOT: &str = "stream_errors";
+/// Streaming: per group, 1 + the last frame its page was wanted; kept across frames.
+pub const PAGE_MARKS_SLOT: &str = "page_marks";
+/// Streaming: the pages wanted this frame, (group, priority bits) each.
+pub const PAGE_REQUESTS_SLOT: &str = "page_requests";
+/// Streaming: `[0]` requests written, `[1]` found.
+pub const PAGE_REQUEST_COUNT_SLOT: &str = "page_request_count";
+/// The element of `page_requests`: a group and its priority (f32 bits).
+pub const PAGE_REQUEST: Element = Element::named("PageRequest", 8);
+
 /// The binding of the per-instance counters in cull.wgsl.
 const PER_INSTANCE_BINDING: u32 = 16;
 
@@ -301,6 +334,33 @@ pub fn contract() -> StageContract {
                     "second pass: the first pass's per-instance counters; [2i+1] less the candidates drawn",
                 )
                 .optional(),
+                Slot::read(
+                    STREAM_ERRORS_SLOT,
+                    Element::F32,
+                    "streaming: per group, its error while its page is missing, else 0",
+                )
+                .optional(),
+                Slot::buffer(
+                    PAGE_MARKS_SLOT,
+                    Access::StorageReadWrite,
+                    Element::U32,
+                    "streaming: per group, 1 + the last frame its page was wanted (kept across frames)",
+                )
+                .optional(),
+                Slot::buffer(
+                    PAGE_REQUESTS_SLOT,
+                    Access::StorageWrite,
+                    PAGE_REQUEST,
+                    "streaming: the pages wanted this frame, once each: (group, priority)",
+                )
+                .optional(),
+                Slot::buffer(
+                    PAGE_REQUEST_COUNT_SLOT,
+                    Access::ClearedReadWrite,
+                    Element::U32,
+                    "streaming: [0] requests written, [1] found",
+                )
+                .optional(),
             ],
         ]
         .concat(),
@@ -319,6 +379,8 @@ shader_defs! {
         pub per_instance: bool => "PER_INSTANCE",
         /// A second pass with the second walk's list bound.
         pub walked: bool => "WALKED",
+        /// The streaming slots are bound: clusters of the cut ask for their pages.
+        pub streaming: bool => "STREAMING",
     }
 }
 
@@ -466,6 +528,29 @@ impl CullLod {
         Ok(Some(mine))
     }
 
+    /// Whether the streaming slots are bound (all four, to a first pass), or an error
+    /// saying what to bind.
+    fn check_streaming(&self, ctx: &SetupContext) -> Result<bool> {
+        let slots = [
+            STREAM_ERRORS_SLOT,
+            PAGE_MARKS_SLOT,
+            PAGE_REQUESTS_SLOT,
+            PAGE_REQUEST_COUNT_SLOT,
+        ];
+        let bound = slots.iter().filter(|s| ctx.is_bound(s)).count();
+        match bound {
+            0 => Ok(false),
+            4 if self.phase == Phase::First => Ok(true),
+            4 => Err(GraphError::parameter(
+                "the streaming slots are bound to a `mode = \"second\"` pass; the first pass asks for the pages of the whole cut, so bind them there only",
+            )),
+            _ => Err(GraphError::parameter(format!(
+                "bind all four streaming slots ({}) or none: {bound} of them are bound",
+                slots.join(", ")
+            ))),
+        }
+    }
+
     /// The thresholds the pass uses on an adapter of `class`: its own, with those it
     /// left `auto` taken from the class.
     pub fn thresholds_on(&self, class: AdapterClass) -> Thresholds {
@@ -532,12 +617,17 @@ impl Pass for CullLod {
         let second = self.phase == Phase::Second;
         let per_instance = self.per_instance_slot(ctx, occlusion)?;
         let walked = second && ctx.is_bound(WALKED_SLOT);
+        let streaming = self.check_streaming(ctx)?;
         let defs = CullDefs {
             occlusion,
             second,
             per_instance: per_instance.is_some(),
             walked,
+            streaming,
         };
+        if streaming {
+            ctx.min_bytes(PAGE_REQUEST_COUNT_SLOT, 8);
+        }
         ctx.shader_defs(&defs);
         let table = InstanceTable::of(ctx);
         ctx.shader_defs(&table);
