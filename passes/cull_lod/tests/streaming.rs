@@ -51,12 +51,13 @@ fn install_some(data: &mut SceneData, rng: &mut Rng, share: f32) -> usize {
     let graph = MeshDag::of_asset(spot()).pages();
     let mut order: Vec<PageId> = (0..graph.len() as PageId).collect();
     order.sort_by_key(|&p| graph.depth(p));
-    let mut at = vec![0u32; graph.len()];
-    let mut next = 0;
-    for p in 0..graph.len() {
-        at[p] = next;
-        next += spot().pages()[p].words;
-    }
+    let at: Vec<u32> = (spot().pages().iter())
+        .scan(0u32, |next, page| {
+            let at = *next;
+            *next += page.words;
+            Some(at)
+        })
+        .collect();
     let mut installed = 0;
     for page in order {
         let parents_in = graph.parents(page).iter().all(|&q| {
