@@ -4,6 +4,8 @@
 //! - [`shaders`]: the shared WGSL library and the composer.
 //! - [`scene`]: mesh loading, the meshlet LOD DAG builder and the asset format.
 //! - [`gpu_scene`]: assets packed into shared GPU buffers, instances, materials, the view.
+//! - [`stream`]: geometry streaming's policy: pages, the cut over resident pages, the
+//!   streamer and its reader threads.
 //! - The virtual-geometry stages: [`fill_clusters`], [`cull_lod`], [`remap_dispatch`],
 //!   [`sw_raster`], [`hw_raster`], [`depth_pyramid`], [`resolve`]; [`brute_force`] is the
 //!   baseline they are measured against; [`present`] draws the image into a host's
@@ -43,6 +45,7 @@ pub use meshlight_pass_sw_raster as sw_raster;
 pub use meshlight_pass_z_slice as z_slice;
 pub use meshlight_scene as scene;
 pub use meshlight_shaders as shaders;
+pub use meshlight_stream as stream;
 /// The crates meshlight's API speaks in, at the versions it was built with: a user needs
 /// no dependency of their own on them (and cannot get a second, mismatched copy).
 pub use {bytemuck, glam, wgpu};

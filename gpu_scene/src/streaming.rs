@@ -47,6 +47,9 @@ pub struct StreamedPage {
     pub leaf_parent_error: f32,
     /// Where the page lies in the pool (words from the pool's start) while resident.
     pub resident_at: Option<u32>,
+    /// The scene groups whose pages must be resident before this one (the groups its
+    /// group's result was simplified in; see `meshlight_stream::pages`).
+    pub parents: Vec<u32>,
 }
 
 /// A range of a scene buffer that changed, to be written to the GPU.
@@ -122,6 +125,17 @@ impl crate::SceneData {
                 }
             }
         }
+        // Each group's parents: the groups its result went into.
+        let mut parents = vec![Vec::new(); pages.len()];
+        for m in asset.meshlets() {
+            if m.source_group != NO_GROUP && m.parent_group != NO_GROUP {
+                parents[m.source_group as usize].push(group_base + m.parent_group);
+            }
+        }
+        for list in &mut parents {
+            list.sort_unstable();
+            list.dedup();
+        }
         for (g, (page, group)) in pages.iter().zip(asset.groups()).enumerate() {
             let children = asset.group_children(group);
             streaming.pages.push(StreamedPage {
@@ -135,6 +149,7 @@ impl crate::SceneData {
                 leaf: leaves[g].0,
                 leaf_parent_error: leaves[g].1,
                 resident_at: None,
+                parents: std::mem::take(&mut parents[g]),
             });
             streaming.stream_errors.push(group.error);
         }

@@ -330,6 +330,21 @@ fn installs_and_evictions_upload_only_what_they_change() {
     assert_eq!(&groups[..], bytemuck::cast_slice::<_, u8>(&streamed.groups));
 }
 
+/// The scene's pages name the same parents as the stream crate's page graph.
+#[test]
+fn the_scenes_pages_need_what_the_page_graph_says() {
+    let (assets, _, streamed) = scenes();
+    let graph = graph(&assets);
+    for (g, page) in streamed.streaming().unwrap().pages.iter().enumerate() {
+        assert_eq!(page.parents, graph.parents(g as PageId), "page {g}");
+        assert_eq!(
+            u64::from(page.words) * 4,
+            graph.bytes(g as PageId),
+            "page {g}"
+        );
+    }
+}
+
 #[test]
 fn bad_streaming_calls_are_refused_by_name() {
     let (assets, mut resident, mut streamed) = scenes();

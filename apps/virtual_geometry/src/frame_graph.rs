@@ -154,6 +154,7 @@ pub fn frame(source: &GraphSource, data: &SceneData, s: &FrameSettings) -> Resul
         }
     }
     add_readbacks(&mut graph)?;
+    super::streaming::add_readbacks(&mut graph)?;
     if s.clustering.is_some() {
         clustering::add_readbacks(&mut graph)?;
     }
@@ -197,6 +198,7 @@ pub fn apply(
     if view_of(p)?.needs_occlusion_records() {
         occlusion_records(p, data.instances.len())?;
     }
+    super::streaming::apply(p, data)?;
     targets(p, s)
 }
 

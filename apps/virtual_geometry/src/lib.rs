@@ -25,6 +25,7 @@ pub mod renderer;
 pub mod scenes;
 pub mod settings;
 pub mod setup;
+pub mod streaming;
 
 pub use counts::FrameCounts;
 pub use frame_graph::GraphSource;

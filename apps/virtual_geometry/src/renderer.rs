@@ -13,6 +13,7 @@ use super::frame_graph::{
     CLUSTERS_PARAM, DEPTH, Frame, GraphSource, HOST_TARGET, MAX_SLOTS, SLOTS_PARAM, frame,
 };
 use super::settings::FrameSettings;
+use super::streaming::{PageSource, Streaming};
 use glam::Mat4;
 use meshlight::gpu_scene::data::Limits;
 use meshlight::gpu_scene::{Camera, GpuScene, SceneData};
@@ -23,6 +24,7 @@ use meshlight::graph::{
 };
 use meshlight::resolve::DebugView;
 use meshlight::shaders::cpu::layout::ClusterableObject;
+use meshlight::stream::Budget;
 use meshlight_light_clustering::clusterer::Counters;
 use meshlight_light_clustering::frame_graph::OBJECT_USAGE;
 pub use meshlight_light_clustering::growth::Growth;
@@ -98,6 +100,8 @@ pub struct Renderer {
     pub clustering: Counters,
     /// Textures of the caller's given to every frame (see [`Renderer::import_texture`]).
     imported_textures: Vec<(String, wgpu::Texture)>,
+    /// A streamed scene's streaming (see [`Renderer::start_streaming`]).
+    pub streaming: Option<Streaming>,
 }
 
 /// The imported object list of the light clustering and its count.
@@ -238,9 +242,24 @@ impl Renderer {
             light_buffers,
             clustering: Counters::new(max_elements * 2),
             imported_textures: Vec::new(),
+            streaming: None,
         };
         renderer.note_readbacks();
         renderer
+    }
+
+    /// Starts streaming a streamed scene's pages (`SceneData::streamed`): mesh `i`'s from
+    /// `sources[i]`, within `budget`, read by `threads` threads. Until then, and for a
+    /// scene that does not stream, frames are refused / unaffected.
+    pub fn start_streaming(
+        &mut self,
+        sources: Vec<PageSource>,
+        budget: Budget,
+        threads: usize,
+    ) -> Result<()> {
+        let streaming = Streaming::new(&self.executor.gpu, &self.data, sources, budget, threads)?;
+        self.streaming = Some(streaming);
+        Ok(())
     }
 
     /// Which counters the compiled frame reads back.
@@ -301,8 +320,26 @@ impl Renderer {
 
     fn run_frame(&mut self, camera: &Camera, extra: Imports) -> Result<FrameStats> {
         let viewport = [self.settings.width, self.settings.height];
-        let view = camera.view(viewport, self.frame_index, self.previous_view_projection);
+        let mut view = camera.view(viewport, self.frame_index, self.previous_view_projection);
         self.previous_view_projection = Some(Mat4::from_cols_array_2d(&view.view_projection));
+        match &mut self.streaming {
+            Some(streaming) => {
+                streaming.before_frame(
+                    &mut self.executor,
+                    &mut self.data,
+                    u64::from(self.frame_index) + 1,
+                )?;
+                // Pool pressure coarsens the cut: errors look smaller by its scale.
+                view.lod_scale /= streaming.lod_scale();
+            }
+            None if self.data.streaming().is_some() => {
+                return Err(GraphError::Setting {
+                    setting: "streaming".into(),
+                    message: "the scene streams, but no page source was given: call `Renderer::start_streaming` before the first frame".into(),
+                });
+            }
+            None => {}
+        }
         self.frame_index = self.frame_index.wrapping_add(1);
         self.scene.upload(&self.executor.gpu, &mut self.data);
         let cut = u32::from(std::mem::take(&mut self.cut));
@@ -310,6 +347,9 @@ impl Renderer {
             .with(meshlight::gpu_scene::names::VIEW, bytemuck::bytes_of(&view))
             .with(meshlight::cull_lod::CAMERA_CUT_INPUT, &cut.to_le_bytes());
         let mut imports = self.scene.imports().merge(extra);
+        if let Some(streaming) = &self.streaming {
+            imports = streaming.imports(imports);
+        }
         if let Some(b) = &self.light_buffers {
             let limit = self.settings.clustering.as_ref().map_or(0, |c| c.objects);
             if self.lights.len() as u64 > limit {

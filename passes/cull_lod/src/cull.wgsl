@@ -55,7 +55,7 @@
 @group(0) @binding(11) var<uniform> params: Params;
 #ifdef STREAMING
 // Per group of the scene: its error while its page is not resident, 0 while it is.
-@group(0) @binding(17) var<storage, read> stream_errors: array<f32>;
+@group(0) @binding(17) var<storage, read> page_errors: array<f32>;
 // Per group: 1 + the last frame (`view.frame_index`) its page was wanted; kept across
 // frames, never cleared.
 @group(0) @binding(18) var<storage, read_write> page_marks: array<atomic<u32>>;
@@ -296,7 +296,7 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
     }
 #ifdef STREAMING
     if meshlet.source_group != MESHLET_NO_GROUP {
-        let missing = stream_errors[meshlet.source_group];
+        let missing = page_errors[meshlet.source_group];
         if missing > 0.0 {
             let centre = (instance.world_from_local * vec4(own_sphere.xyz, 1.0)).xyz;
             let px = project_error_to_pixels(view, centre, own_sphere.w * scale, missing * scale);

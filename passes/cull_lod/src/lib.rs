@@ -31,7 +31,7 @@
 //! | `still_occluded_per_instance` | storage read-write (optional) | u32 × 2 per instance | `second`: the same buffer; `[2i + 1]` less each candidate found visible |
 //! | `walked_clusters` | storage read (optional) | Cluster | `second`: the second hierarchy walk's list (`fill_clusters` `hierarchy`, `mode = "second"`), tested after `clusters` |
 //! | `walked_cluster_count` | storage read (optional) | u32 × 2 | `second`: its `cluster_count` |
-//! | `stream_errors`   | storage read (optional) | f32 per group | streaming: a group's error while its page is missing, else 0 (the streamed scene's buffer) |
+//! | `page_errors`     | storage read (optional) | f32 per group | streaming: a group's error while its page is missing, else 0 (the streamed scene's `stream_errors`) |
 //! | `page_marks`      | storage read-write (optional) | u32 per group | streaming: 1 + the last frame the group's page was wanted; kept across frames |
 //! | `page_requests`   | storage write (optional) | PageRequest (group, priority bits) | streaming: the pages wanted this frame, each once |
 //! | `page_request_count` | cleared read-write (optional) | u32 × 2 | streaming: `[0]` requests written, `[1]` found |
@@ -85,7 +85,7 @@
 //! the list of pages the frame wants: for each cluster in the frustum and the cut
 //! (before the occlusion test, so a page is kept while its clusters are hidden for a
 //! moment), the page of its source group when that group's real error
-//! (`stream_errors`) shows, with the error in pixels as its priority, and the page it
+//! (`page_errors`) shows, with the error in pixels as its priority, and the page it
 //! lies on (its parent group's, in use: priority 0). A per-group mark (`page_marks`,
 //! `view.frame_index + 1`) lists each page once a frame; a plain load skips the atomic
 //! when the page is marked already, so the many clusters of one page cost one write.
@@ -226,9 +226,10 @@ pub const PER_INSTANCE_SECOND: &str = "still_occluded_per_instance";
 pub const WALKED_SLOT: &str = "walked_clusters";
 /// The count words of `walked_clusters`: the second walk's `cluster_count`.
 pub const WALKED_COUNT_SLOT: &str = "walked_cluster_count";
-/// Streaming: per group, its error while its page is missing (the streamed scene's
-/// `stream_errors` buffer, bound by name).
-pub const STREAM_ERRORS_SLOT: &str = "stream_errors";
+/// Streaming: per group, its error while its page is missing (bind the streamed scene's
+/// `stream_errors` buffer). The streaming slots are named unlike the resources a frame
+/// gives them, so that only the pass they are bound to takes them.
+pub const STREAM_ERRORS_SLOT: &str = "page_errors";
 /// Streaming: per group, 1 + the last frame its page was wanted; kept across frames.
 pub const PAGE_MARKS_SLOT: &str = "page_marks";
 /// Streaming: the pages wanted this frame, (group, priority bits) each.

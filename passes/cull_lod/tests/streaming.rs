@@ -117,7 +117,7 @@ fn run(data: &mut SceneData, clusters: &[Cluster], views: &[View], t: Thresholds
                 .bind("raster_clusters", raster)
                 .bind("raster_counts", counts)
                 .bind("hw_args", hw_args)
-                .bind("stream_errors", stream_errors)
+                .bind("page_errors", stream_errors)
                 .bind("page_marks", marks)
                 .bind("page_requests", requests)
                 .bind("page_request_count", request_count),

@@ -1,0 +1,340 @@
+//! Streaming in the frame loop, for a streamed scene (`SceneData::streamed`): the first
+//! cull lists the pages its cut wants (`cull_lod`'s streaming slots), the list comes back
+//! through the readback ring a few frames later without a wait, the streamer
+//! (`meshlight::stream::Streamer`) plans the frame's evictions, installs and reads, the
+//! reads run on the loader's threads (or copy from an asset held in memory), and the
+//! scene's records are rewritten so the next frame draws what is resident.
+//!
+//! Everything here runs before a frame is recorded, on the render thread, and never
+//! waits: a page read this frame is installed by a later one.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use meshlight::cull_lod::{
+    PAGE_MARKS_SLOT, PAGE_REQUEST_COUNT_SLOT, PAGE_REQUESTS_SLOT, STREAM_ERRORS_SLOT,
+};
+use meshlight::gpu_scene::SceneData;
+use meshlight::gpu_scene::names::STREAM_ERRORS;
+use meshlight::graph::file::{EntryKind, Pipeline, ResourceEntry};
+use meshlight::graph::{Executor, GraphBuilder, GraphError, Imports, Result};
+use meshlight::scene::MeshletAsset;
+use meshlight::scene::asset::format::SECTION_PAYLOAD;
+use meshlight::stream::loader::{Loader, PageFile, ReadJob};
+use meshlight::stream::streamer::PageFailure;
+use meshlight::stream::{Budget, PageGraph, Request, Streamer};
+
+/// The resource the per-group marks live in (imported: kept across frames). Named
+/// unlike `cull_lod`'s slots, which bind by name: only the first cull takes them.
+pub const PAGE_MARKS: &str = "stream_marks";
+/// The frame's list of wanted pages.
+pub const PAGE_REQUESTS: &str = "stream_requests";
+/// Its two count words.
+pub const PAGE_REQUEST_COUNT: &str = "stream_request_count";
+/// The readback of the list.
+pub const REQUESTS_READBACK: &str = "page_requests";
+/// The readback of its count.
+pub const REQUEST_COUNT_READBACK: &str = "page_request_count";
+/// Frames the requests take to come back: as the counters.
+pub const REQUESTS_LATENCY: u32 = super::frame_graph::COUNTS_LATENCY;
+/// Most pages one frame lists; the rest are listed by the next frames (their marks are
+/// set only when listed).
+pub const MAX_REQUESTS: u64 = 16384;
+
+/// Where a mesh's pages are read from.
+#[derive(Clone, Debug)]
+pub enum PageSource {
+    /// The asset's file, read a page at a time on the loader's threads.
+    File(Arc<PageFile>),
+    /// An asset held whole in memory (built in the process, or loaded whole): a page is
+    /// a copy of its words.
+    Memory(Arc<MeshletAsset>),
+}
+
+/// The resources a streamed frame adds to its pipeline, bound to the first culling pass
+/// (`cull_lod` without `mode = "second"`): the scene's `stream_errors`, the page marks,
+/// the request list and its count.
+pub fn apply(p: &mut Pipeline, data: &SceneData) -> Result<()> {
+    if data.streaming().is_none() {
+        return Ok(());
+    }
+    let cull = meshlight::cull_lod::STAGE;
+    if !p
+        .passes_of(cull)
+        .any(|e| e.param_str("mode") != Some("second"))
+    {
+        return Err(GraphError::PipelineFile {
+            file: p.file().to_string(),
+            message: format!(
+                "the scene streams, but the pipeline has no first `{cull}` pass to ask for pages; add one"
+            ),
+        });
+    }
+    let groups = data.groups.len().max(1) as u64;
+    let usage = ["STORAGE", "COPY_DST", "COPY_SRC"];
+    for entry in [
+        ResourceEntry::buffer(STREAM_ERRORS, EntryKind::Imported, "f32", Some(4), groups)
+            .with_usage(&usage),
+        ResourceEntry::buffer(PAGE_MARKS, EntryKind::Imported, "u32", Some(4), groups)
+            .with_usage(&usage),
+        ResourceEntry::buffer(
+            PAGE_REQUESTS,
+            EntryKind::Transient,
+            "PageRequest",
+            Some(8),
+            groups.min(MAX_REQUESTS),
+        ),
+        ResourceEntry::buffer(PAGE_REQUEST_COUNT, EntryKind::Transient, "u32", None, 2),
+    ] {
+        if p.resource(&entry.name).is_none() {
+            p.add_resource(entry)?;
+        }
+    }
+    for pass in p.passes_of_mut(cull) {
+        if pass.param_str("mode") != Some("second") {
+            for (slot, resource) in [
+                (STREAM_ERRORS_SLOT, STREAM_ERRORS),
+                (PAGE_MARKS_SLOT, PAGE_MARKS),
+                (PAGE_REQUESTS_SLOT, PAGE_REQUESTS),
+                (PAGE_REQUEST_COUNT_SLOT, PAGE_REQUEST_COUNT),
+            ] {
+                pass.bind(slot, resource);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The readbacks of the request list and its count, in a streamed frame.
+pub fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
+    if g.resource(PAGE_REQUESTS).is_none() {
+        return Ok(());
+    }
+    g.readback_named(
+        REQUEST_COUNT_READBACK,
+        PAGE_REQUEST_COUNT,
+        Some(0..8),
+        REQUESTS_LATENCY,
+    )?;
+    g.readback_named(REQUESTS_READBACK, PAGE_REQUESTS, None, REQUESTS_LATENCY)
+}
+
+/// One frame of streaming, in figures (the newest frame's, and totals since the start).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StreamStats {
+    /// The streamer's figures for the frame (pool, pages, uploads, LOD scale).
+    pub frame: meshlight::stream::streamer::FrameStats,
+    /// Pages the GPU listed in the requests that came back this frame.
+    pub listed: u32,
+    /// Pages the GPU could not list (its list was full): listed by a later frame.
+    pub unlisted: u32,
+    /// Time the render thread spent on streaming before this frame.
+    pub cpu: Duration,
+    /// Pages read so far.
+    pub loaded_total: u64,
+    /// Pages evicted so far.
+    pub evicted_total: u64,
+    /// Pages refused so far (a read failed or did not match its checksum).
+    pub failed_total: u64,
+}
+
+/// One frame's request readbacks: (count words, list).
+type RequestReadbacks = (Option<Vec<u8>>, Option<Vec<u8>>);
+
+/// The streaming side of a renderer.
+pub struct Streaming {
+    streamer: Streamer,
+    loader: Loader,
+    sources: Vec<PageSource>,
+    marks: wgpu::Buffer,
+    /// Request readbacks by frame, until both halves are in.
+    back: BTreeMap<u64, RequestReadbacks>,
+    stats: StreamStats,
+    failures: Vec<PageFailure>,
+    /// A frame has run since streaming started, so its readbacks exist.
+    ran: bool,
+}
+
+impl Streaming {
+    /// Streaming for `data` (a streamed scene with its pool reserved), reading mesh `i`'s
+    /// pages from `sources[i]` with `threads` reader threads, within `budget`.
+    pub fn new(
+        gpu: &meshlight::graph::GpuContext,
+        data: &SceneData,
+        sources: Vec<PageSource>,
+        budget: Budget,
+        threads: usize,
+    ) -> Result<Self> {
+        let setting = |message: String| GraphError::Setting {
+            setting: "streaming".into(),
+            message,
+        };
+        let s = data
+            .streaming()
+            .ok_or_else(|| setting("the scene does not stream".into()))?;
+        if sources.len() != data.meshes.len() {
+            return Err(setting(format!(
+                "{} page sources for {} meshes: give one per mesh, in the order they were added",
+                sources.len(),
+                data.meshes.len()
+            )));
+        }
+        let graph = PageGraph::new(
+            s.pages.iter().map(|p| u64::from(p.words) * 4).collect(),
+            s.pages.iter().map(|p| p.parents.clone()).collect(),
+        )
+        .map_err(|e| setting(e.to_string()))?;
+        let streamer = Streamer::new(graph, u64::from(s.pool_words) * 4, budget)
+            .map_err(|e| setting(format!("{e} (`--pool-mb`)")))?;
+        let loader = Loader::new(threads)
+            .map_err(|e| setting(format!("the page reader threads could not start: {e}")))?;
+        let marks = gpu.buffer_with_data(
+            PAGE_MARKS,
+            &vec![0u8; data.groups.len().max(1) * 4],
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+        );
+        Ok(Self {
+            streamer,
+            loader,
+            sources,
+            marks,
+            back: BTreeMap::new(),
+            stats: StreamStats::default(),
+            failures: Vec::new(),
+            ran: false,
+        })
+    }
+
+    /// The frame's imports with the page marks added.
+    pub fn imports(&self, imports: Imports) -> Imports {
+        imports.buffer(PAGE_MARKS, &self.marks)
+    }
+
+    /// The LOD threshold's scale from pool pressure (the view's `lod_scale` is divided
+    /// by it).
+    pub fn lod_scale(&self) -> f32 {
+        self.streamer.lod_scale()
+    }
+
+    /// The newest figures.
+    pub fn stats(&self) -> StreamStats {
+        self.stats
+    }
+
+    /// The streamer, for tools and tests that inspect residency.
+    pub fn streamer(&self) -> &Streamer {
+        &self.streamer
+    }
+
+    /// The pages refused since the last call (each was also logged as a warning).
+    pub fn take_failures(&mut self) -> Vec<PageFailure> {
+        std::mem::take(&mut self.failures)
+    }
+
+    /// Before frame `frame` is recorded: takes the requests that came back and the reads
+    /// that finished, and applies the streamer's plan to the scene.
+    pub fn before_frame(
+        &mut self,
+        executor: &mut Executor,
+        data: &mut SceneData,
+        frame: u64,
+    ) -> Result<()> {
+        let start = Instant::now();
+        let (wanted, listed, unlisted) = match self.ran {
+            true => self.take_requests(executor)?,
+            false => (Vec::new(), 0, 0),
+        };
+        self.ran = true;
+        for (page, result) in self.loader.finished() {
+            self.streamer.complete(page, result);
+        }
+        let plan = self.streamer.frame(frame, &wanted);
+        let scene_error = |e: meshlight::gpu_scene::SceneDataError| GraphError::Setting {
+            setting: "streaming".into(),
+            message: e.to_string(),
+        };
+        for &page in &plan.evict {
+            data.evict_page(page).map_err(scene_error)?;
+        }
+        for install in &plan.install {
+            let words: Vec<u32> = bytemuck::pod_collect_to_vec(&install.data);
+            data.install_page(install.page, (install.allocation.offset / 4) as u32, &words)
+                .map_err(scene_error)?;
+        }
+        for load in &plan.load {
+            let page = &data.streaming().expect("a streamed scene").pages[load.page as usize];
+            match &self.sources[page.mesh as usize] {
+                PageSource::File(file) => self.loader.submit(ReadJob {
+                    page: load.page,
+                    file: Arc::clone(file),
+                    offset: page.file_offset,
+                    bytes: load.bytes,
+                    checksum: Some(page.checksum),
+                }),
+                PageSource::Memory(asset) => {
+                    let payload = asset.header().sections[SECTION_PAYLOAD].offset;
+                    let first = (page.file_offset / 4 - u64::from(payload)) as usize;
+                    let words = &asset.payload()[first..first + page.words as usize];
+                    self.streamer
+                        .complete(load.page, Ok(bytemuck::cast_slice(words).to_vec()));
+                }
+            }
+        }
+        for failure in self.streamer.take_failures() {
+            log::warn!("page {} refused: {}", failure.page, failure.reason);
+            self.stats.failed_total += 1;
+            self.failures.push(failure);
+        }
+        self.stats.loaded_total += plan.stats.loads_started as u64;
+        self.stats.evicted_total += plan.stats.evicted as u64;
+        self.stats.frame = plan.stats;
+        self.stats.listed = listed;
+        self.stats.unlisted = unlisted;
+        self.stats.cpu = start.elapsed();
+        Ok(())
+    }
+
+    /// The pages the GPU listed in every frame whose requests are back, merged (a page
+    /// at its highest priority), with how many it listed and could not.
+    fn take_requests(&mut self, executor: &mut Executor) -> Result<(Vec<Request>, u32, u32)> {
+        while let Some(r) = executor.take_readback(REQUEST_COUNT_READBACK)? {
+            self.back.entry(r.frame).or_default().0 = Some(r.bytes);
+        }
+        while let Some(r) = executor.take_readback(REQUESTS_READBACK)? {
+            self.back.entry(r.frame).or_default().1 = Some(r.bytes);
+        }
+        let mut merged: BTreeMap<u32, f32> = BTreeMap::new();
+        let (mut listed, mut unlisted) = (0, 0);
+        let complete: Vec<u64> = (self.back.iter())
+            .filter(|(_, (count, list))| count.is_some() && list.is_some())
+            .map(|(&frame, _)| frame)
+            .collect();
+        for frame in complete {
+            let (Some(count), Some(list)) = self.back.remove(&frame).expect("listed above") else {
+                continue;
+            };
+            let words: Vec<u32> = bytemuck::pod_collect_to_vec(&count);
+            let entries: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(&list);
+            let written = (words[0] as usize).min(entries.len());
+            listed += written as u32;
+            unlisted += words[1].saturating_sub(words[0]);
+            for &[page, bits] in &entries[..written] {
+                let priority = f32::from_bits(bits);
+                let e = merged.entry(page).or_insert(priority);
+                *e = e.max(priority);
+            }
+        }
+        // A frame's readbacks that never pair up (a resize between them) are dropped.
+        while self.back.len() > 8 {
+            self.back.pop_first();
+        }
+        let wanted = merged
+            .into_iter()
+            .map(|(page, priority)| Request { page, priority })
+            .collect();
+        Ok((wanted, listed, unlisted))
+    }
+}
