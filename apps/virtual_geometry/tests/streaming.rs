@@ -9,9 +9,17 @@ mod common;
 use std::sync::Arc;
 
 use common::asset;
-use meshlight::gpu_scene::SceneData;
+use meshlight::glam::Vec3;
 use meshlight::gpu_scene::data::Limits;
-use meshlight::stream::Budget;
+use meshlight::gpu_scene::{Camera, SceneData};
+use meshlight::scene::MeshletAsset;
+use meshlight::scene::asset::format::{NO_GROUP, SECTION_PAYLOAD};
+use meshlight::shaders::cpu::layout::View;
+use meshlight::shaders::cpu::lod::lod_cut;
+use meshlight::shaders::cpu::rng::Rng;
+use meshlight::stream::cut::check;
+use meshlight::stream::loader::PageFile;
+use meshlight::stream::{Budget, MeshDag};
 use meshlight_virtual_geometry::scenes::{self, Placed};
 use meshlight_virtual_geometry::streaming::PageSource;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer, Still};
@@ -108,4 +116,154 @@ fn a_streamed_scene_settles_on_the_resident_image() {
         got.counts.software + got.counts.hardware,
         want.counts.software + want.counts.hardware
     );
+}
+
+/// The meshes of the field, in the order it adds them: the copies' and the ground's.
+fn field_assets(placed: &Placed) -> Vec<Arc<MeshletAsset>> {
+    let radius = placed.data.meshes[0].bounding_sphere[3].max(1e-6);
+    let ground = scenes::ground_asset(&scenes::field_ground(radius, 9)).unwrap();
+    vec![Arc::new(asset().clone()), Arc::new(ground)]
+}
+
+/// Checks that the scene as the last frame drew it encodes, for every instance, a
+/// complete cut over the resident pages: the renderer's LOD test on the rewritten records
+/// (`shaders::cpu::lod::lod_cut`, which the GPU's is tested against) draws, on every path
+/// from a LOD-0 meshlet up to a root, exactly one meshlet, and only meshlets of resident
+/// pages. Returns how many meshlets of pages (not roots) the cuts drew.
+fn check_complete_cuts(r: &Renderer, dags: &[MeshDag], view: &View) -> usize {
+    let data = &r.data;
+    let pages = &data.streaming().unwrap().pages;
+    let mut paged = 0;
+    for (i, instance) in data.instances.iter().enumerate() {
+        let mesh = instance.mesh as usize;
+        let first = data.meshes[mesh].first_meshlet as usize;
+        let dag = &dags[mesh];
+        let group_base = data.meshlets[first..]
+            .iter()
+            .zip(&dag.parent)
+            .find(|&(_, &p)| p != NO_GROUP)
+            .map_or(0, |(m, &p)| m.parent_group - p);
+        let scale = meshlight::cull_lod::cpu::instance_max_scale(instance);
+        let drawn: Vec<bool> = (0..dag.meshlet_count())
+            .map(|k| {
+                let m = &data.meshlets[first + k];
+                let (own_sphere, own_error) = data.own_lod(m);
+                let (parent_sphere, parent_error) = data.parent_lod(m);
+                lod_cut(
+                    view,
+                    &instance.world_from_local,
+                    scale,
+                    own_sphere,
+                    own_error,
+                    parent_sphere,
+                    parent_error,
+                    1.0,
+                )
+                .0
+            })
+            .collect();
+        let resident = |g: u32| pages[(group_base + g) as usize].resident_at.is_some();
+        if let Err(hole) = check(dag, &drawn, resident) {
+            panic!("instance {i}: {hole}");
+        }
+        paged += drawn
+            .iter()
+            .zip(&dag.parent)
+            .filter(|&(&d, &p)| d && p != NO_GROUP)
+            .count();
+    }
+    paged
+}
+
+/// A camera somewhere over the field, looking at a point on it.
+fn wander(placed: &Placed, rng: &mut Rng) -> Camera {
+    let radius = placed.data.meshes[0].bounding_sphere[3];
+    let extent = 3.0 * 2.6 * radius;
+    let target = Vec3::new(rng.range(0.0, extent), 0.0, rng.range(0.0, extent));
+    let eye = target + Vec3::new(rng.range(-1.0, 1.0), rng.range(0.2, 1.0), rng.range(-1.0, 1.0)).normalize()
+        * radius
+        * rng.range(0.5, 12.0);
+    Camera::perspective(eye, target, 55f32.to_radians(), radius * 0.05)
+}
+
+/// Frames from random cameras over the field through a pool of a sixth of its pages:
+/// after every frame, every instance's cut over what is resident is complete, pages
+/// are evicted and read again, and the pressure coarsens the cut when the view wants
+/// more than the pool.
+#[test]
+fn a_flight_through_a_small_pool_never_shows_a_hole() {
+    let full = field(Some(all_pages()));
+    let total: u64 = full.data.streaming().unwrap().pages.iter().map(|p| u64::from(p.words) * 4).sum();
+    let placed = field(Some(total / 6));
+    let assets = field_assets(&placed);
+    let dags: Vec<MeshDag> = assets.iter().map(|a| MeshDag::of_asset(a)).collect();
+    let mut r = Renderer::new(placed.data.clone(), FrameSettings::new(W, H), &GraphSource::Shipped).unwrap();
+    let sources = assets.iter().map(|a| PageSource::Memory(Arc::clone(a))).collect();
+    r.start_streaming(sources, Budget::default(), 2).unwrap();
+    let mut rng = Rng(77);
+    let mut camera = wander(&placed, &mut rng);
+    let (mut paged, mut max_scale) = (0, 1.0f32);
+    for frame in 0..120u32 {
+        if frame % 6 == 0 {
+            camera = wander(&placed, &mut rng);
+        }
+        r.frame(&camera).unwrap();
+        let s = r.streaming.as_ref().unwrap();
+        let mut view = camera.view([W, H], frame, None);
+        view.lod_scale /= s.lod_scale();
+        max_scale = max_scale.max(s.lod_scale());
+        paged += check_complete_cuts(&r, &dags, &view);
+    }
+    let stats = r.streaming.as_ref().unwrap().stats();
+    eprintln!("{stats:?}, largest LOD scale {max_scale}, {paged} paged meshlets drawn");
+    assert!(stats.evicted_total > 0, "nothing evicted: {stats:?}");
+    assert!(paged > 1000, "the cuts drew {paged} meshlets of pages");
+}
+
+/// A page whose bytes on disk fail its checksum is refused, named, never installed, and
+/// neither is anything that needs it; the frames go on drawing complete cuts.
+#[test]
+fn a_damaged_page_is_refused_and_its_group_drawn_coarser() {
+    let placed = field(Some(all_pages()));
+    let assets = field_assets(&placed);
+    let dags: Vec<MeshDag> = assets.iter().map(|a| MeshDag::of_asset(a)).collect();
+    let dir = std::env::temp_dir().join(format!("meshlight-stream-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("copies.mlasset");
+    // The coarsest page of the copies' mesh, one byte flipped on disk.
+    let graph = dags[0].pages();
+    let damaged = (0..graph.len() as u32).find(|&p| graph.parents(p).is_empty()).unwrap();
+    let mut bytes = asset().bytes().to_vec();
+    let payload = asset().header().sections[SECTION_PAYLOAD].offset as usize * 4;
+    bytes[payload + asset().pages()[damaged as usize].first_word as usize * 4 + 3] ^= 0x40;
+    std::fs::write(&path, &bytes).unwrap();
+    let mut r = Renderer::new(placed.data.clone(), FrameSettings::new(W, H), &GraphSource::Shipped).unwrap();
+    let sources = vec![
+        PageSource::File(PageFile::open(&path).unwrap()),
+        PageSource::Memory(Arc::clone(&assets[1])),
+    ];
+    r.start_streaming(sources, Budget::default(), 2).unwrap();
+    let mut failures = Vec::new();
+    for frame in 0..40u32 {
+        r.frame(&placed.camera).unwrap();
+        let s = r.streaming.as_mut().unwrap();
+        failures.extend(s.take_failures());
+        let mut view = placed.camera.view([W, H], frame, None);
+        view.lod_scale /= s.lod_scale();
+        check_complete_cuts(&r, &dags, &view);
+    }
+    let still = r.render_still(&placed.camera).unwrap();
+    assert!(still.counts.software + still.counts.hardware > 0);
+    assert_eq!(failures.len(), 1, "{failures:?}");
+    assert_eq!(failures[0].page, damaged);
+    assert!(failures[0].reason.contains("fails its checksum"), "{}", failures[0].reason);
+    assert!(failures[0].reason.contains("copies.mlasset"), "{}", failures[0].reason);
+    // Neither it nor anything below it was installed.
+    let pages = &r.data.streaming().unwrap().pages;
+    let mut below = vec![damaged];
+    while let Some(p) = below.pop() {
+        assert!(pages[p as usize].resident_at.is_none(), "page {p} installed");
+        below.extend_from_slice(graph.dependents(p));
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }
