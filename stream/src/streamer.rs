@@ -350,16 +350,21 @@ impl Streamer {
     }
 
     /// One frame: takes the GPU's wants, and plans evictions, installs and reads.
-    /// `frame` must grow from call to call.
-    pub fn frame(&mut self, frame: u64, wanted: &[Request]) -> FramePlan {
+    /// `frame` must grow from call to call. `wanted` is `None` when no word came back
+    /// from the GPU for this frame (its readback is late): nothing is touched and the
+    /// pressure holds, where an empty list would say the view wants nothing.
+    pub fn frame(&mut self, frame: u64, wanted: Option<&[Request]>) -> FramePlan {
         self.frame = frame;
         let mut plan = FramePlan::default();
-        let (requested, wanted_bytes) = self.take_wants(frame, wanted);
+        let (requested, wanted_bytes) = self.take_wants(frame, wanted.unwrap_or_default());
         self.publish(&mut plan);
         self.start_loads(frame, &mut plan);
-        let lod_scale = self
-            .pressure
-            .update(wanted_bytes as f32 / self.pool.capacity().max(1) as f32);
+        let lod_scale = match wanted {
+            Some(_) => self
+                .pressure
+                .update(wanted_bytes as f32 / self.pool.capacity().max(1) as f32),
+            None => self.pressure.scale(),
+        };
         plan.stats = FrameStats {
             requested,
             loads_started: plan.load.len() as u32,

@@ -210,7 +210,7 @@ fn fly(seed: u64, frames: u64, pool_fraction: f32, failure_rate: f32) -> (u32, u
                 priority: errors[g as usize] - wanted_at,
             })
             .collect();
-        let plan = streamer.frame(frame, &wanted);
+        let plan = streamer.frame(frame, Some(&wanted));
         evicted += plan.evict.len();
         renderer.apply(&streamer, &plan, &budget);
         for load in &plan.load {
@@ -308,7 +308,7 @@ fn a_still_view_settles_on_the_fully_resident_cut() {
             .collect();
         let mut settled_at = None;
         for frame in 1..=400 {
-            let plan = streamer.frame(frame, &wanted);
+            let plan = streamer.frame(frame, Some(&wanted));
             for load in plan.load {
                 streamer.complete(load.page, Ok(page_bytes(&graph, load.page)));
             }
@@ -350,7 +350,7 @@ fn pressure_raises_the_lod_scale_and_relaxes_it() {
                 priority: 1.0,
             })
             .collect();
-        let plan = streamer.frame(frame, &wanted);
+        let plan = streamer.frame(frame, Some(&wanted));
         for load in plan.load {
             streamer.complete(load.page, Ok(page_bytes(&graph, load.page)));
         }
@@ -487,7 +487,7 @@ fn fly_around_the_bunny(pressure: LodPressure) -> Flight {
         for page in pending.drain(..) {
             streamer.complete(page, Ok(page_bytes(&graph, page)));
         }
-        let plan = streamer.frame(frame, &wanted);
+        let plan = streamer.frame(frame, Some(&wanted));
         evicted += plan.evict.len();
         pending.extend(plan.load.iter().map(|l| l.page));
         let drawn = select(&dag, &shows, |g| streamer.is_resident(g));

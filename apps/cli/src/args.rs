@@ -62,6 +62,13 @@ pub struct SceneArgs {
     /// Image height in pixels (with `view`, the window's first height).
     #[arg(long, default_value_t = 720)]
     pub height: u32,
+    /// Stream the meshes' geometry through a GPU pool of this many MiB: only the roots
+    /// and the culling data stay resident, and the pages the view needs are read into
+    /// the pool (least recently used ones evicted; a pool too small for the view draws
+    /// it coarser, never with holes). Default: every page resident. A still renders once
+    /// streaming has settled for the view.
+    #[arg(long, value_name = "MIB", value_parser = clap::value_parser!(u64).range(1..=1 << 20))]
+    pub pool_mb: Option<u64>,
 }
 
 impl SceneArgs {
@@ -78,6 +85,7 @@ impl SceneArgs {
             height: self.height,
             merge_gltf: self.merge_gltf,
             camera: self.camera_index,
+            pool_mb: self.pool_mb,
         }
     }
 }

@@ -3,6 +3,7 @@
 
 use crate::args::SceneArgs;
 use meshlight::graph::dump;
+use meshlight::stream::Budget;
 use meshlight_cli::render_bounds::RenderNumbers;
 use meshlight_output::{check_output_path, write_file, write_png, write_stdout};
 use meshlight_virtual_geometry::{Renderer, SceneOptions, SceneSetup, setup};
@@ -60,6 +61,11 @@ pub struct RenderArgs {
     pub checked: bool,
 }
 
+/// Threads reading streamed pages.
+const STREAM_THREADS: usize = 4;
+/// Most frames a still waits for streaming to settle.
+const MAX_STREAM_FRAMES: u32 = 600;
+
 pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     let scene = a.scene.options();
     // Everything the command line bounds is checked before a mesh is baked or an adapter
@@ -82,6 +88,7 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         mut settings,
         lights,
         source,
+        sources,
     } = setup(&scene)?;
     // What is given wins over the pipeline's; what is not leaves the pipeline's.
     for (stage, implementation) in [
@@ -105,6 +112,13 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         renderer.executor.timing = mode;
     }
     renderer.executor.checked |= a.checked;
+    let streamed_frames = match sources.is_empty() {
+        true => 0,
+        false => {
+            renderer.start_streaming(sources, Budget::default(), STREAM_THREADS)?;
+            renderer.settle_streaming(&camera, MAX_STREAM_FRAMES)?
+        }
+    };
     let still = renderer.render_still(&camera)?;
     write_png(&a.output, still.width, still.height, &still.rgba)?;
     // Written at once, so that a failing standard output is one error naming it.
@@ -130,6 +144,20 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     }
     if light_count > 0 {
         let _ = writeln!(report, "  {light_count} point lights clustered on the GPU");
+    }
+    if let Some(s) = renderer.streaming.as_ref().map(|s| s.stats()) {
+        let f = s.frame;
+        let _ = writeln!(
+            report,
+            "  streamed: settled after {streamed_frames} frames; pool {:.1} of {:.1} MiB, {} pages resident, {} read, {} evicted, {} refused; LOD scale {:.2} from pool pressure",
+            f.pool_used as f64 / (1u64 << 20) as f64,
+            f.pool_bytes as f64 / (1u64 << 20) as f64,
+            f.resident_pages,
+            s.loaded_total,
+            s.evicted_total,
+            s.failed_total,
+            f.lod_scale
+        );
     }
     if skipped > 0 {
         let _ = writeln!(

@@ -3,6 +3,7 @@
 //! the file's or one that sees the whole scene.
 
 use crate::scenes::{Placed, point_light};
+use crate::streaming::PageSource;
 use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::view::Projection;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData, SceneDataError, TextureId};
@@ -99,6 +100,7 @@ pub fn place(
     let materials = mesh_materials(&mut data, scene)?;
     // (mesh, mirrored) → the GPU scene's mesh and its bounds, baked on first use.
     let mut baked: BTreeMap<(usize, bool), (MeshId, [Vec3; 2])> = BTreeMap::new();
+    let mut sources = Vec::new();
     let (mut low, mut high) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
     for instance in &scene.instances {
         let mirrored = instance.transform.determinant() < 0.0;
@@ -122,6 +124,9 @@ pub fn place(
                     &mut |p| cache::log_progress(&mesh.source, p),
                 )?;
                 let id = data.add_mesh(&name, &asset)?;
+                if data.streaming().is_some() {
+                    sources.push(PageSource::Memory(std::sync::Arc::new(asset.clone())));
+                }
                 let h = asset.header();
                 let known = (id, [Vec3::from(h.bounds_min), Vec3::from(h.bounds_max)]);
                 baked.insert(key, known);
@@ -148,7 +153,11 @@ pub fn place(
         Some(c) => file_camera(c),
         None => framing_camera(low, high),
     };
-    Ok(Placed { data, camera })
+    Ok(Placed {
+        data,
+        camera,
+        sources,
+    })
 }
 
 /// Per mesh of `scene`, the first of the materials of `data` its slots are drawn in:

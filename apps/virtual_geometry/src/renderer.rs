@@ -36,6 +36,10 @@ use std::collections::BTreeMap;
 /// grow per list suffices unless the view changes.
 pub const MAX_STILL_FRAMES: u32 = 4;
 
+/// Frames in a row with nothing to stream that [`Renderer::settle_streaming`] waits for:
+/// more than the requests' readback latency, so a page asked for has had time to show.
+pub const SETTLED_FRAMES: u32 = 2 * super::streaming::REQUESTS_LATENCY + 2;
+
 /// A finished image.
 pub struct Still {
     /// Image width in pixels.
@@ -260,6 +264,38 @@ impl Renderer {
         let streaming = Streaming::new(&self.executor.gpu, &self.data, sources, budget, threads)?;
         self.streaming = Some(streaming);
         Ok(())
+    }
+
+    /// Frames of `camera` until streaming has settled: for [`SETTLED_FRAMES`] frames in a
+    /// row no page the view wants is missing, being read or waiting to be installed.
+    /// At most `max_frames`; returns the frames run (0 for a scene that does not stream).
+    /// A still of a streamed scene renders after this, so that it shows what the pool
+    /// holds for the view rather than the first frames' coarse cut.
+    pub fn settle_streaming(&mut self, camera: &Camera, max_frames: u32) -> Result<u32> {
+        if self.streaming.is_none() {
+            return Ok(0);
+        }
+        let mut quiet = 0;
+        for frame in 1..=max_frames {
+            let submitted = self.frame(camera)?.frame;
+            // Never more than the readback ring ahead of the GPU.
+            if frame % 4 == 0 {
+                meshlight::still::finish(&mut self.executor, submitted)?;
+            }
+            let s = self.streaming.as_ref().expect("checked above").stats();
+            let busy = s.frame.requested > 0 || s.frame.in_flight > 0 || s.frame.installed > 0;
+            // The first frames' requests are still on their way back.
+            let heard = frame > super::streaming::REQUESTS_LATENCY + 1;
+            quiet = if busy || !heard { 0 } else { quiet + 1 };
+            if quiet == SETTLED_FRAMES {
+                return Ok(frame);
+            }
+        }
+        log::warn!(
+            "streaming had not settled after {max_frames} frames: {:?}",
+            self.streaming.as_ref().map(|s| s.stats())
+        );
+        Ok(max_frames)
     }
 
     /// Which counters the compiled frame reads back.

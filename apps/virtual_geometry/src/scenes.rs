@@ -1,6 +1,7 @@
 //! Scenes the command line, the examples and the benchmarks draw: meshes loaded (baked
 //! once and cached, or read from an asset file) and instances placed.
 
+use crate::streaming::PageSource;
 use glam::{Mat4, Quat, Vec3};
 use meshlight::gpu_scene::lattice::Lattice;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData};
@@ -119,6 +120,24 @@ pub struct Placed {
     pub data: SceneData,
     /// A camera that frames them.
     pub camera: Camera,
+    /// Where each mesh's pages are read from, in mesh order, when `data` streams (see
+    /// [`crate::Renderer::start_streaming`]); empty when it does not.
+    pub sources: Vec<PageSource>,
+}
+
+/// Adds `asset` to `data` as mesh `name` and, when the scene streams, notes where its
+/// pages come from: the asset, held in memory.
+fn add_mesh(
+    data: &mut SceneData,
+    sources: &mut Vec<PageSource>,
+    name: &str,
+    asset: &MeshletAsset,
+) -> Result<MeshId, meshlight::gpu_scene::SceneDataError> {
+    let mesh = data.add_mesh(name, asset)?;
+    if data.streaming().is_some() {
+        sources.push(PageSource::Memory(std::sync::Arc::new(asset.clone())));
+    }
+    Ok(mesh)
 }
 
 fn palette(data: &mut SceneData) -> Result<Vec<u32>, meshlight::gpu_scene::SceneDataError> {
@@ -146,6 +165,8 @@ struct Copies {
     mesh: MeshId,
     radius: f32,
     materials: Vec<u32>,
+    /// The mesh's page source, in a streamed scene.
+    sources: Vec<PageSource>,
 }
 
 /// What a scene's copies are painted with.
@@ -178,12 +199,14 @@ impl Copies {
             Paint::Own(runs) if !runs.is_empty() => runs,
             Paint::Own(_) => palette(data)?,
         };
-        let mesh = data.add_mesh("mesh", asset)?;
+        let mut sources = Vec::new();
+        let mesh = add_mesh(data, &mut sources, "mesh", asset)?;
         let radius = mesh_radius(data, mesh);
         Ok(Self {
             mesh,
             radius,
             materials,
+            sources,
         })
     }
 
@@ -223,7 +246,7 @@ pub fn field_painted(
     instances: u32,
     paint: Paint,
 ) -> Result<Placed, meshlight::gpu_scene::SceneDataError> {
-    let copies = Copies::add_painted(&mut data, asset, paint)?;
+    let mut copies = Copies::add_painted(&mut data, asset, paint)?;
     let radius = copies.radius;
     let side = (instances as f32).sqrt().ceil().max(1.0) as u32;
     let spacing = radius * FIELD_SPACING;
@@ -267,7 +290,7 @@ pub fn field_painted(
                 reason: e.to_string(),
             }
         })?;
-        let ground_mesh = data.add_mesh("ground", &ground_asset)?;
+        let ground_mesh = add_mesh(&mut data, &mut copies.sources, "ground", &ground_asset)?;
         let material = data.add_material(Material {
             base_color: GROUND_COLOR,
             ..Material::default()
@@ -283,7 +306,11 @@ pub fn field_painted(
         55f32.to_radians(),
         radius * 0.05,
     );
-    Ok(Placed { data, camera })
+    Ok(Placed {
+        data,
+        camera,
+        sources: copies.sources,
+    })
 }
 
 /// Distance between neighbouring copies of a [`field`], in mesh radii.
@@ -405,6 +432,7 @@ pub fn lattice(
     Ok(Placed {
         data,
         camera: lattice.camera(),
+        sources: copies.sources,
     })
 }
 

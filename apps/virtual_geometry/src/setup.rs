@@ -48,6 +48,9 @@ pub struct SceneOptions {
     pub merge_gltf: bool,
     /// One of a glTF scene's cameras (in its node order); `None` frames the scene.
     pub camera: Option<usize>,
+    /// Stream the meshes' pages through a GPU pool of this many MiB (see
+    /// [`crate::streaming`]); `None`: every page resident.
+    pub pool_mb: Option<u64>,
 }
 
 impl SceneOptions {
@@ -64,6 +67,7 @@ impl SceneOptions {
             height,
             merge_gltf: false,
             camera: None,
+            pool_mb: None,
         }
     }
 
@@ -123,6 +127,9 @@ pub struct SceneSetup {
     pub lights: Vec<ClusterableObject>,
     /// The graph: built in code or read from the pipeline file.
     pub source: GraphSource,
+    /// Where each mesh's pages are read from, when the scene streams (give them to
+    /// [`crate::Renderer::start_streaming`]); empty when it does not.
+    pub sources: Vec<crate::streaming::PageSource>,
 }
 
 /// What stops a scene from being set up.
@@ -172,8 +179,11 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     let adapter = GpuAdapter::select()?;
     let limits = Limits::for_device(&adapter.adapter.limits());
     drop(adapter);
-    let mut data = SceneData::new(limits);
-    let placed = match &loaded {
+    let mut data = match o.pool_mb {
+        Some(_) => SceneData::streamed(limits),
+        None => SceneData::new(limits),
+    };
+    let mut placed = match &loaded {
         Loaded::Scene(scene) => gltf_scene::place(data, scene, o.camera)?,
         Loaded::Copies(asset, materials) => {
             let paint = match materials {
@@ -186,6 +196,9 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
             }
         }
     };
+    if let Some(mb) = o.pool_mb {
+        placed.data.reserve_pool(mb << 20)?;
+    }
     let mut settings = FrameSettings::new(o.width, o.height);
     // A view given wins over a pipeline file's; none given leaves the file's.
     settings.view = o.view;
@@ -218,5 +231,6 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
         settings,
         lights,
         source,
+        sources: placed.sources,
     })
 }

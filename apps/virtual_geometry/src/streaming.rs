@@ -245,13 +245,13 @@ impl Streaming {
         let start = Instant::now();
         let (wanted, listed, unlisted) = match self.ran {
             true => self.take_requests(executor)?,
-            false => (Vec::new(), 0, 0),
+            false => (None, 0, 0),
         };
         self.ran = true;
         for (page, result) in self.loader.finished() {
             self.streamer.complete(page, result);
         }
-        let plan = self.streamer.frame(frame, &wanted);
+        let plan = self.streamer.frame(frame, wanted.as_deref());
         let scene_error = |e: meshlight::gpu_scene::SceneDataError| GraphError::Setting {
             setting: "streaming".into(),
             message: e.to_string(),
@@ -298,8 +298,12 @@ impl Streaming {
     }
 
     /// The pages the GPU listed in every frame whose requests are back, merged (a page
-    /// at its highest priority), with how many it listed and could not.
-    fn take_requests(&mut self, executor: &mut Executor) -> Result<(Vec<Request>, u32, u32)> {
+    /// at its highest priority; `None` when no frame's came back), with how many it
+    /// listed and could not.
+    fn take_requests(
+        &mut self,
+        executor: &mut Executor,
+    ) -> Result<(Option<Vec<Request>>, u32, u32)> {
         while let Some(r) = executor.take_readback(REQUEST_COUNT_READBACK)? {
             self.back.entry(r.frame).or_default().0 = Some(r.bytes);
         }
@@ -307,7 +311,7 @@ impl Streaming {
             self.back.entry(r.frame).or_default().1 = Some(r.bytes);
         }
         let mut merged: BTreeMap<u32, f32> = BTreeMap::new();
-        let (mut listed, mut unlisted) = (0, 0);
+        let (mut listed, mut unlisted, mut heard) = (0, 0, false);
         let complete: Vec<u64> = (self.back.iter())
             .filter(|(_, (count, list))| count.is_some() && list.is_some())
             .map(|(&frame, _)| frame)
@@ -316,6 +320,7 @@ impl Streaming {
             let (Some(count), Some(list)) = self.back.remove(&frame).expect("listed above") else {
                 continue;
             };
+            heard = true;
             let words: Vec<u32> = bytemuck::pod_collect_to_vec(&count);
             let entries: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(&list);
             let written = (words[0] as usize).min(entries.len());
@@ -331,10 +336,12 @@ impl Streaming {
         while self.back.len() > 8 {
             self.back.pop_first();
         }
-        let wanted = merged
-            .into_iter()
-            .map(|(page, priority)| Request { page, priority })
-            .collect();
+        let wanted = heard.then(|| {
+            merged
+                .into_iter()
+                .map(|(page, priority)| Request { page, priority })
+                .collect()
+        });
         Ok((wanted, listed, unlisted))
     }
 }

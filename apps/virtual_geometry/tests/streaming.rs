@@ -180,9 +180,15 @@ fn wander(placed: &Placed, rng: &mut Rng) -> Camera {
     let radius = placed.data.meshes[0].bounding_sphere[3];
     let extent = 3.0 * 2.6 * radius;
     let target = Vec3::new(rng.range(0.0, extent), 0.0, rng.range(0.0, extent));
-    let eye = target + Vec3::new(rng.range(-1.0, 1.0), rng.range(0.2, 1.0), rng.range(-1.0, 1.0)).normalize()
-        * radius
-        * rng.range(0.5, 12.0);
+    let eye = target
+        + Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(0.2, 1.0),
+            rng.range(-1.0, 1.0),
+        )
+        .normalize()
+            * radius
+            * rng.range(0.5, 12.0);
     Camera::perspective(eye, target, 55f32.to_radians(), radius * 0.05)
 }
 
@@ -193,12 +199,27 @@ fn wander(placed: &Placed, rng: &mut Rng) -> Camera {
 #[test]
 fn a_flight_through_a_small_pool_never_shows_a_hole() {
     let full = field(Some(all_pages()));
-    let total: u64 = full.data.streaming().unwrap().pages.iter().map(|p| u64::from(p.words) * 4).sum();
+    let total: u64 = full
+        .data
+        .streaming()
+        .unwrap()
+        .pages
+        .iter()
+        .map(|p| u64::from(p.words) * 4)
+        .sum();
     let placed = field(Some(total / 6));
     let assets = field_assets(&placed);
     let dags: Vec<MeshDag> = assets.iter().map(|a| MeshDag::of_asset(a)).collect();
-    let mut r = Renderer::new(placed.data.clone(), FrameSettings::new(W, H), &GraphSource::Shipped).unwrap();
-    let sources = assets.iter().map(|a| PageSource::Memory(Arc::clone(a))).collect();
+    let mut r = Renderer::new(
+        placed.data.clone(),
+        FrameSettings::new(W, H),
+        &GraphSource::Shipped,
+    )
+    .unwrap();
+    let sources = assets
+        .iter()
+        .map(|a| PageSource::Memory(Arc::clone(a)))
+        .collect();
     r.start_streaming(sources, Budget::default(), 2).unwrap();
     let mut rng = Rng(77);
     let mut camera = wander(&placed, &mut rng);
@@ -232,12 +253,19 @@ fn a_damaged_page_is_refused_and_its_group_drawn_coarser() {
     let path = dir.join("copies.mlasset");
     // The coarsest page of the copies' mesh, one byte flipped on disk.
     let graph = dags[0].pages();
-    let damaged = (0..graph.len() as u32).find(|&p| graph.parents(p).is_empty()).unwrap();
+    let damaged = (0..graph.len() as u32)
+        .find(|&p| graph.parents(p).is_empty())
+        .unwrap();
     let mut bytes = asset().bytes().to_vec();
     let payload = asset().header().sections[SECTION_PAYLOAD].offset as usize * 4;
     bytes[payload + asset().pages()[damaged as usize].first_word as usize * 4 + 3] ^= 0x40;
     std::fs::write(&path, &bytes).unwrap();
-    let mut r = Renderer::new(placed.data.clone(), FrameSettings::new(W, H), &GraphSource::Shipped).unwrap();
+    let mut r = Renderer::new(
+        placed.data.clone(),
+        FrameSettings::new(W, H),
+        &GraphSource::Shipped,
+    )
+    .unwrap();
     let sources = vec![
         PageSource::File(PageFile::open(&path).unwrap()),
         PageSource::Memory(Arc::clone(&assets[1])),
@@ -256,13 +284,24 @@ fn a_damaged_page_is_refused_and_its_group_drawn_coarser() {
     assert!(still.counts.software + still.counts.hardware > 0);
     assert_eq!(failures.len(), 1, "{failures:?}");
     assert_eq!(failures[0].page, damaged);
-    assert!(failures[0].reason.contains("fails its checksum"), "{}", failures[0].reason);
-    assert!(failures[0].reason.contains("copies.mlasset"), "{}", failures[0].reason);
+    assert!(
+        failures[0].reason.contains("fails its checksum"),
+        "{}",
+        failures[0].reason
+    );
+    assert!(
+        failures[0].reason.contains("copies.mlasset"),
+        "{}",
+        failures[0].reason
+    );
     // Neither it nor anything below it was installed.
     let pages = &r.data.streaming().unwrap().pages;
     let mut below = vec![damaged];
     while let Some(p) = below.pop() {
-        assert!(pages[p as usize].resident_at.is_none(), "page {p} installed");
+        assert!(
+            pages[p as usize].resident_at.is_none(),
+            "page {p} installed"
+        );
         below.extend_from_slice(graph.dependents(p));
     }
     std::fs::remove_dir_all(&dir).unwrap();

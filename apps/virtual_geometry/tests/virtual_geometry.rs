@@ -595,6 +595,7 @@ fn singular_and_nan_instances_are_skipped_and_counted_not_drawn() {
     let with_broken = Placed {
         data: broken,
         camera: placed.camera,
+        sources: Vec::new(),
     };
     let (a, _) = render(&placed, settings(DebugView::Shaded), &GraphSource::Shipped);
     let (b, _) = render(

@@ -29,11 +29,21 @@ mod imp {
     use std::io::{Read, Write};
     use std::os::fd::{FromRawFd, OwnedFd};
 
+    /// One filter at a time: two threads selecting adapters at once would each save and
+    /// restore fd 2, and the later restore would put the first's pipe back on fd 2 for
+    /// good, so its reader never saw the pipe end and selection hung.
+    static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
     /// Standard error through a pipe while `f` runs; a reader thread keeps the pipe from
     /// filling, and what it read is written on afterwards, the alarm left out. Where a
     /// step fails (no stderr, no pipe), `f` runs unfiltered.
     pub(super) fn filtered<T>(f: impl FnOnce() -> T) -> T {
         const STDERR: i32 = 2;
+        // A panic inside another filter leaves nothing to protect but fd 2, which it
+        // restored (or never moved): go on.
+        let _one = ONE_AT_A_TIME
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let mut fds = [0i32; 2];
         // SAFETY: `fds` is a valid array of two ints for pipe(2) to fill.
         if unsafe { libc::pipe(fds.as_mut_ptr()) } != 0 {
@@ -96,8 +106,14 @@ mod tests {
         unsafe { libc::write(2, text.as_ptr().cast(), text.len()) };
     }
 
+    /// The tests move fd 2 themselves: one at a time.
+    static TESTS: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
     #[test]
     fn only_the_alarm_is_dropped_and_the_rest_reaches_stderr() {
+        let _one = TESTS
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let file = std::env::temp_dir().join(format!("meshlight-quiet-{}", std::process::id()));
         let sink = std::fs::File::create(&file).unwrap();
         // SAFETY: fd 2 is saved and put back; `sink` is open for both calls.
@@ -117,5 +133,34 @@ mod tests {
         let _ = std::fs::remove_file(&file);
         assert_eq!(value, 7);
         assert_eq!(shown, "MESA: a real warning\n");
+    }
+
+    /// Filters on several threads at once all finish (they once hung: each saved and
+    /// restored fd 2, and a late restore left another's pipe open for good).
+    #[test]
+    fn filters_on_many_threads_at_once_all_finish() {
+        let _one = TESTS
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let (done, finished) = std::sync::mpsc::channel();
+        for i in 0..8 {
+            let done = done.clone();
+            std::thread::spawn(move || {
+                let v = imp::filtered(|| {
+                    std::thread::sleep(std::time::Duration::from_millis(5));
+                    i
+                });
+                let _ = done.send(v);
+            });
+        }
+        let mut got: Vec<i32> = (0..8)
+            .map(|_| {
+                finished
+                    .recv_timeout(std::time::Duration::from_secs(20))
+                    .expect("a filter never finished")
+            })
+            .collect();
+        got.sort();
+        assert_eq!(got, (0..8).collect::<Vec<_>>());
     }
 }
