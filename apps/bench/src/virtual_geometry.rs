@@ -26,6 +26,8 @@ pub struct Measured {
     pub profiled_total_ms: f64,
     pub counts: meshlight_virtual_geometry::FrameCounts,
     pub device: String,
+    /// A streamed scene's figures after the timed frames.
+    pub stream: Option<meshlight_virtual_geometry::streaming::StreamStats>,
 }
 
 pub fn measure(
@@ -33,7 +35,18 @@ pub fn measure(
     settings: FrameSettings,
     frames: u32,
 ) -> Result<Measured, Box<dyn std::error::Error>> {
+    measure_prepared(placed, settings, frames, |_| Ok(()))
+}
+
+/// [`measure`], with `prepare` run on the renderer before anything is timed.
+pub fn measure_prepared(
+    placed: &Placed,
+    settings: FrameSettings,
+    frames: u32,
+    prepare: impl FnOnce(&mut Renderer) -> Result<(), Box<dyn std::error::Error>>,
+) -> Result<Measured, Box<dyn std::error::Error>> {
     let mut renderer = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)?;
+    prepare(&mut renderer)?;
     let mut run = |mode: TimingMode| -> Result<Vec<GpuTimings>, Box<dyn std::error::Error>> {
         renderer.executor.timing = mode;
         renderer.render_still(&placed.camera)?;
@@ -81,6 +94,7 @@ pub fn measure(
         profiled_total_ms: total(&profiled),
         counts,
         device: renderer.adapter.clone(),
+        stream: renderer.streaming.as_ref().map(|s| s.stats()),
     })
 }
 
@@ -896,4 +910,80 @@ pub fn brute_force(
         return Err("the adapter has no GPU timestamps; nothing to measure".into());
     }
     Ok(median(times))
+}
+
+/// Streaming against the same scene fully resident, in the same run: the default scene
+/// at 1920×1080 and the 15³ bunnies at 2240×1260, each drawn resident and streamed
+/// through a pool that holds every page (after streaming settled: the steady cost of
+/// streaming itself, the walk visiting coarser levels and the cull listing pages).
+pub fn stream(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    use meshlight::stream::Budget;
+    let (segments, instances) = if quick {
+        (64, 64)
+    } else {
+        (
+            meshlight::scene::DEFAULT_SEGMENTS,
+            scenes::DEFAULT_INSTANCES,
+        )
+    };
+    let procedural = scenes::load_asset(Path::new("procedural"), segments)?;
+    let bunny_mesh = mesh_or_bunny(meshes);
+    let bunny = scenes::load_asset(&bunny_mesh, 0)?;
+    let n = if quick { 5 } else { 15 };
+    let frames = if quick { 5 } else { 50 };
+    type Make<'a> = Box<dyn Fn(SceneData) -> Result<Placed, meshlight::gpu_scene::SceneDataError> + 'a>;
+    let scenes: [(String, Make, (u32, u32)); 2] = [
+        (
+            format!("{instances} procedural meshes"),
+            Box::new(|data| scenes::field(data, &procedural, instances)),
+            (1920, 1080),
+        ),
+        (
+            format!("{n}³ {}", stem(&bunny_mesh)),
+            Box::new(|data| scenes::lattice(data, &bunny, n)),
+            if quick { (1280, 720) } else { (2240, 1260) },
+        ),
+    ];
+    let mut rows = Vec::new();
+    for (scene, make, (width, height)) in scenes {
+        let resident = make(SceneData::new(Default::default()))?;
+        let mut streamed = make(SceneData::streamed(Default::default()))?;
+        let pages: u64 = (streamed.data.streaming().expect("a streamed scene").pages.iter())
+            .map(|p| u64::from(p.words) * 4)
+            .sum();
+        // Every page fits, with the allocator's rounding.
+        let pool = pages + pages / 8 + (1 << 20);
+        streamed.data.reserve_pool(pool)?;
+        let case = case_label(&scene, &resident, width, height);
+        let settings = FrameSettings::new(width, height);
+        let m = measure(&resident, settings.clone(), frames)?;
+        let baseline = m.total_ms;
+        rows.extend(rows_of("vg-stream", &format!("{case}, resident"), &m));
+        let sources = streamed.sources.clone();
+        let camera = streamed.camera;
+        let mut settled = 0;
+        let m = measure_prepared(&streamed, settings, frames, |r| {
+            r.start_streaming(sources, Budget::default(), 4)?;
+            settled = r.settle_streaming(&camera, 600)?;
+            Ok(())
+        })?;
+        let streamed_case = format!("{case}, streamed (every page in a {} MiB pool)", pool >> 20);
+        let mut streamed_rows = rows_of("vg-stream", &streamed_case, &m);
+        for r in &mut streamed_rows {
+            if r.metric == "GPU frame (timing mode frame)" {
+                r.vs_baseline = Some(r.value / baseline);
+            }
+        }
+        rows.extend(streamed_rows);
+        let s = m.stream.unwrap_or_default();
+        for (metric, value, unit) in [
+            ("frames to settle from an empty pool", f64::from(settled), ""),
+            ("pool used", s.frame.pool_used as f64 / (1u64 << 20) as f64, "MiB"),
+            ("pages resident", f64::from(s.frame.resident_pages), ""),
+            ("streamer CPU, last frame", s.cpu.as_secs_f64() * 1e3, "ms"),
+        ] {
+            rows.push(row("vg-stream", streamed_case.clone(), metric, value, unit, &m.device));
+        }
+    }
+    Ok(rows)
 }

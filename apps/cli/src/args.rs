@@ -158,7 +158,9 @@ pub struct BenchArgs {
     /// dispatches in one raw wgpu compute pass), pool-reuse,
     /// render (the default scene at 1920x1080), virtual-geometry (15³ meshes at
     /// 2240x1260, the first --mesh or the bunny), vg-scale (1 to 32,768 copies of that
-    /// mesh at 2240x1260: frame time and work tested), vg-million, rasterisers (the same
+    /// mesh at 2240x1260: frame time and work tested), vg-million, vg-stream (the
+    /// default scene and 15³ bunnies resident, then streamed with every page in the
+    /// pool: what streaming costs a settled frame), rasterisers (the same
     /// scene: each implementation of sw_raster and hw_raster, and the software/hardware
     /// split sweep), builder, scan-fan, light-clustering (1,000 to 1,000,000 point
     /// lights at 1920x1080, both implementations, against the CPU reference).
