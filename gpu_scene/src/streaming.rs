@@ -14,10 +14,14 @@
 //!   is resident", complete whenever the resident pages are closed under parents, which
 //!   the streamer guarantees (`meshlight_stream::cut`). The real error goes to
 //!   [`Streaming::stream_errors`], where the cull finds the groups it wants refined.
-//! - **The hierarchy keeps pruning safely.** A node's smallest own error is 0 (any
-//!   meshlet may have to stand in for a missing page, so no subtree is ever "too
-//!   coarse"), and the leaf of a group whose page is not resident has largest parent error
-//!   0, so the walk skips it: none of its meshlets can be drawn.
+//! - **The hierarchy keeps pruning safely.** A node's smallest own error is the smallest
+//!   over the meshlets below of their source group's error as the GPU has it (0 while
+//!   that group's page is missing: the meshlet may have to stand in for it, so the
+//!   subtree is not "too coarse"), kept up to date on every install and eviction for
+//!   the leaves holding the group's result and their ancestors; with every page in, the
+//!   walk prunes exactly as a resident scene's. The leaf of a group whose page is not
+//!   resident has largest parent error 0, so the walk skips it: none of its meshlets
+//!   can be drawn.
 
 use meshlight_scene::MeshletAsset;
 use meshlight_scene::asset::format::{NO_GROUP, SECTION_PAYLOAD};
@@ -79,7 +83,15 @@ pub struct Streaming {
     pub pool_words: u32,
     /// Changes not yet written to the GPU.
     pub(crate) writes: Vec<StreamWrite>,
+    /// Per scene hierarchy node, its parent ([`NO_NODE`] for a root).
+    node_parents: Vec<u32>,
+    /// Per scene group, the hierarchy leaves holding the meshlets it produced: their
+    /// smallest own error follows the group's residency.
+    result_leaves: Vec<Vec<u32>>,
 }
+
+/// No parent node: a hierarchy's root.
+const NO_NODE: u32 = u32::MAX;
 
 impl Streaming {
     /// A page's group, checked.
@@ -152,6 +164,7 @@ impl crate::SceneData {
                 parents: std::mem::take(&mut parents[g]),
             });
             streaming.stream_errors.push(group.error);
+            streaming.result_leaves.push(Vec::new());
         }
         for m in asset.meshlets() {
             let offset = match pages.get(m.parent_group as usize) {
@@ -171,8 +184,30 @@ impl crate::SceneData {
         for g in &mut self.groups[group_base as usize..] {
             g.error = 0.0;
         }
-        for node in &mut self.hierarchy_nodes[node_base as usize..] {
+        let nodes = &mut self.hierarchy_nodes[node_base as usize..];
+        streaming
+            .node_parents
+            .resize(node_base as usize + nodes.len(), NO_NODE);
+        for (i, node) in nodes.iter_mut().enumerate() {
+            // Every source group's page is missing: every own error is 0 on the GPU.
             node.min_error = 0.0;
+            for child in node.children() {
+                // `first_child` is rebased onto the shared nodes already.
+                streaming.node_parents[child] = node_base + i as u32;
+            }
+            if node.is_leaf() {
+                let leaf = node_base + i as u32;
+                for &m in &self.hierarchy_clusters[node.clusters()] {
+                    let source = self.meshlets[m as usize].source_group;
+                    if source != NO_GROUP {
+                        streaming.result_leaves[source as usize].push(leaf);
+                    }
+                }
+            }
+        }
+        for leaves in &mut streaming.result_leaves[group_base as usize..] {
+            leaves.sort_unstable();
+            leaves.dedup();
         }
         for &(leaf, _) in &leaves {
             self.hierarchy_nodes[leaf as usize].max_parent_error = 0.0;
@@ -254,7 +289,48 @@ impl crate::SceneData {
         streaming
             .writes
             .extend(page_writes(&page, group, Some((start, words.len()))));
+        self.refresh_min_errors(group);
         Ok(())
+    }
+
+    /// After group `group`'s error changed on the GPU: the smallest own error of the
+    /// leaves holding its result, and of their ancestors, recomputed.
+    fn refresh_min_errors(&mut self, group: u32) {
+        let streaming = self.streaming.as_mut().expect("a streamed scene");
+        let mut changed = Vec::new();
+        for &leaf in &streaming.result_leaves[group as usize] {
+            let n = self.hierarchy_nodes[leaf as usize];
+            let min = self.hierarchy_clusters[n.clusters()]
+                .iter()
+                .map(|&m| match self.meshlets[m as usize].source_group {
+                    NO_GROUP => 0.0,
+                    g => self.groups[g as usize].error,
+                })
+                .fold(f32::INFINITY, f32::min);
+            changed.push((leaf, min));
+        }
+        // Up from each leaf while the value changes.
+        while let Some((i, min)) = changed.pop() {
+            let record = &mut self.hierarchy_nodes[i as usize];
+            if record.min_error == min {
+                continue;
+            }
+            record.min_error = min;
+            streaming.writes.push(StreamWrite {
+                buffer: crate::names::HIERARCHY_NODES,
+                first: i as usize,
+                count: 1,
+            });
+            let parent = streaming.node_parents[i as usize];
+            if parent != NO_NODE {
+                let p = self.hierarchy_nodes[parent as usize];
+                let min = self.hierarchy_nodes[p.children()]
+                    .iter()
+                    .map(|c| c.min_error)
+                    .fold(f32::INFINITY, f32::min);
+                changed.push((parent, min));
+            }
+        }
     }
 
     /// Evicts page `group`: its group and leaf dead again, its meshlets pointed at word 0.
@@ -275,15 +351,30 @@ impl crate::SceneData {
         streaming.stream_errors[group as usize] = page.error;
         streaming.pages[group as usize].resident_at = None;
         streaming.writes.extend(page_writes(&page, group, None));
+        self.refresh_min_errors(group);
         Ok(())
     }
 
-    /// The changes since the last call, for [`crate::GpuScene::upload`].
+    /// The changes since the last call, for [`crate::GpuScene::upload`]: per buffer,
+    /// in order, overlapping and touching ranges merged (a node changed by several
+    /// installs is written once).
     pub(crate) fn take_stream_writes(&mut self) -> Vec<StreamWrite> {
-        self.streaming
-            .as_mut()
-            .map(|s| std::mem::take(&mut s.writes))
-            .unwrap_or_default()
+        let Some(streaming) = self.streaming.as_mut() else {
+            return Vec::new();
+        };
+        let mut writes = std::mem::take(&mut streaming.writes);
+        writes.sort_by_key(|w| (w.buffer, w.first));
+        let mut merged: Vec<StreamWrite> = Vec::with_capacity(writes.len());
+        for w in writes {
+            match merged.last_mut() {
+                Some(last) if last.buffer == w.buffer && w.first <= last.first + last.count => {
+                    let end = (last.first + last.count).max(w.first + w.count);
+                    last.count = end - last.first;
+                }
+                _ => merged.push(w),
+            }
+        }
+        merged
     }
 }
 

@@ -123,7 +123,7 @@ fn with_every_page_installed_the_scene_reads_as_the_resident_one() {
         at += words.len() as u32;
     }
     // Each meshlet's payload is where its record points; groups and nodes are the
-    // asset's again (bar the smallest own errors, which stay 0).
+    // asset's again.
     for (m, (s, r)) in streamed.meshlets.iter().zip(&resident.meshlets).enumerate() {
         let flags = if m < assets[0].meshlets().len() {
             assets[0].header().flags
@@ -144,14 +144,7 @@ fn with_every_page_installed_the_scene_reads_as_the_resident_one() {
         );
     }
     assert_eq!(streamed.groups, resident.groups);
-    for (s, r) in streamed
-        .hierarchy_nodes
-        .iter()
-        .zip(&resident.hierarchy_nodes)
-    {
-        assert_eq!(s.max_parent_error, r.max_parent_error);
-        assert_eq!(s.min_error, 0.0);
-    }
+    assert_eq!(streamed.hierarchy_nodes, resident.hierarchy_nodes);
     for distance in [0.2, 0.5, 1.0, 3.0, 10.0] {
         let view = view_from(distance);
         assert_eq!(
@@ -168,6 +161,17 @@ fn with_every_page_installed_the_scene_reads_as_the_resident_one() {
             .iter()
             .all(|&e| e == 0.0)
     );
+}
+
+/// The scene meshlets below hierarchy node `i` (a leaf's, or its descendants').
+fn node_meshlets(data: &SceneData, i: usize) -> Vec<u32> {
+    let node = data.hierarchy_nodes[i];
+    if node.is_leaf() {
+        return data.hierarchy_clusters[node.clusters()].to_vec();
+    }
+    node.children()
+        .flat_map(|c| node_meshlets(data, c))
+        .collect()
 }
 
 /// Everything of a meshlet record but its payload offset.
@@ -225,6 +229,14 @@ fn the_rewritten_records_draw_the_cut_over_resident_pages() {
                 streamed.evict_page(page).unwrap();
                 resident[p] = false;
             }
+        }
+        // Every node's smallest own error bounds the meshlets below as the GPU sees them.
+        for (i, node) in streamed.hierarchy_nodes.iter().enumerate() {
+            let min = node_meshlets(&streamed, i)
+                .iter()
+                .map(|&m| streamed.own_lod(&streamed.meshlets[m as usize]).1)
+                .fold(f32::INFINITY, f32::min);
+            assert_eq!(node.min_error, min, "round {round}, node {i}");
         }
         let view = view_from(0.2 + round as f32 * 0.1);
         let drawn = cut(&streamed, &view, 1.0);
@@ -289,15 +301,25 @@ fn installs_and_evictions_upload_only_what_they_change() {
     let graph = graph(&assets);
     let page = parents_first(&graph)[0];
     let (_, words) = page_words(&assets, page);
+    let nodes_before = streamed.hierarchy_nodes.clone();
     streamed.install_page(page, 64, &words).unwrap();
     let stats = scene.upload(&gpu, &mut streamed);
     let info = streamed.streaming().unwrap().pages[page as usize].clone();
-    let expected = words.len() as u64 * 4
-        + u64::from(info.meshlet_count)
-            * size_of::<meshlight_scene::asset::format::MeshletRecord>() as u64
+    // The nodes written: the page's leaf and those whose smallest own error changed.
+    let changed = |before: &[meshlight_scene::asset::format::NodeRecord], data: &SceneData| {
+        (data.hierarchy_nodes.iter().zip(before))
+            .enumerate()
+            .filter(|&(i, (a, b))| a != b || i == info.leaf as usize)
+            .count() as u64
+    };
+    let node_bytes = size_of::<meshlight_scene::asset::format::NodeRecord>() as u64;
+    let records = u64::from(info.meshlet_count)
+        * size_of::<meshlight_scene::asset::format::MeshletRecord>() as u64
         + size_of::<meshlight_scene::asset::format::GroupRecord>() as u64
-        + size_of::<meshlight_scene::asset::format::NodeRecord>() as u64
         + 4;
+    let nodes = changed(&nodes_before, &streamed);
+    assert!(nodes >= 2, "the install changed {nodes} nodes");
+    let expected = words.len() as u64 * 4 + records + nodes * node_bytes;
     assert_eq!((stats.bytes, stats.created), (expected, 0));
     for name in [
         "payload",
@@ -317,9 +339,11 @@ fn installs_and_evictions_upload_only_what_they_change() {
         };
         assert_eq!(&got[..want.len()], &want[..], "{name}");
     }
+    let nodes_before = streamed.hierarchy_nodes.clone();
     streamed.evict_page(page).unwrap();
     let stats = scene.upload(&gpu, &mut streamed);
-    assert_eq!(stats.bytes, expected - words.len() as u64 * 4);
+    let nodes = changed(&nodes_before, &streamed);
+    assert_eq!(stats.bytes, records + nodes * node_bytes);
     let groups = gpu
         .read_buffer(
             scene.buffer("meshlet_groups").unwrap(),

@@ -931,7 +931,8 @@ pub fn stream(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     let bunny = scenes::load_asset(&bunny_mesh, 0)?;
     let n = if quick { 5 } else { 15 };
     let frames = if quick { 5 } else { 50 };
-    type Make<'a> = Box<dyn Fn(SceneData) -> Result<Placed, meshlight::gpu_scene::SceneDataError> + 'a>;
+    type Make<'a> =
+        Box<dyn Fn(SceneData) -> Result<Placed, meshlight::gpu_scene::SceneDataError> + 'a>;
     let scenes: [(String, Make, (u32, u32)); 2] = [
         (
             format!("{instances} procedural meshes"),
@@ -948,9 +949,14 @@ pub fn stream(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     for (scene, make, (width, height)) in scenes {
         let resident = make(SceneData::new(Default::default()))?;
         let mut streamed = make(SceneData::streamed(Default::default()))?;
-        let pages: u64 = (streamed.data.streaming().expect("a streamed scene").pages.iter())
-            .map(|p| u64::from(p.words) * 4)
-            .sum();
+        let pages: u64 = (streamed
+            .data
+            .streaming()
+            .expect("a streamed scene")
+            .pages
+            .iter())
+        .map(|p| u64::from(p.words) * 4)
+        .sum();
         // Every page fits, with the allocator's rounding.
         let pool = pages + pages / 8 + (1 << 20);
         streamed.data.reserve_pool(pool)?;
@@ -977,12 +983,27 @@ pub fn stream(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         rows.extend(streamed_rows);
         let s = m.stream.unwrap_or_default();
         for (metric, value, unit) in [
-            ("frames to settle from an empty pool", f64::from(settled), ""),
-            ("pool used", s.frame.pool_used as f64 / (1u64 << 20) as f64, "MiB"),
+            (
+                "frames to settle from an empty pool",
+                f64::from(settled),
+                "",
+            ),
+            (
+                "pool used",
+                s.frame.pool_used as f64 / (1u64 << 20) as f64,
+                "MiB",
+            ),
             ("pages resident", f64::from(s.frame.resident_pages), ""),
             ("streamer CPU, last frame", s.cpu.as_secs_f64() * 1e3, "ms"),
         ] {
-            rows.push(row("vg-stream", streamed_case.clone(), metric, value, unit, &m.device));
+            rows.push(row(
+                "vg-stream",
+                streamed_case.clone(),
+                metric,
+                value,
+                unit,
+                &m.device,
+            ));
         }
     }
     Ok(rows)
