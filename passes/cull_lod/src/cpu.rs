@@ -435,10 +435,11 @@ pub fn occluded_per_instance(
 
 /// The pages a streaming first pass lists (`want_page`), by group: for each cluster in
 /// the frustum and the LOD cut, its source group when that group's page is missing and
-/// its error shows (priority: the error in pixels), and its parent group (in use,
-/// priority 0). A page wanted by several clusters is listed once, with the priority of
-/// whichever cluster the GPU's atomics let first, so the reference gives each group the
-/// range of priorities its clusters computed.
+/// its error shows (priority: the error in pixels); and for the first cluster of each
+/// run of the list from one page of one instance (`mark_page_in_use`), its parent group
+/// when that group's error shows (in use, priority 0). A page wanted by several clusters
+/// is listed once, with the priority of whichever cluster the GPU's atomics let first,
+/// so the reference gives each group the range of priorities its clusters computed.
 pub fn wanted_pages(
     scene: &SceneData,
     view: &View,
@@ -452,31 +453,43 @@ pub fn wanted_pages(
         e.0 = f32::min(e.0, priority);
         e.1 = f32::max(e.1, priority);
     };
-    for &cluster in clusters {
+    for (i, &cluster) in clusters.iter().enumerate() {
+        let instance = &scene.instances[cluster.instance as usize];
+        let meshlet = &scene.meshlets[cluster.meshlet as usize];
+        let scale = instance_max_scale(instance);
+        let project = |group: u32, error: f32| {
+            let sphere = scene.groups[group as usize].lod_sphere;
+            let centre = transform_point(&instance.world_from_local, xyz(sphere));
+            meshlight_shaders::cpu::lod::project_error_to_pixels(
+                view,
+                centre,
+                sphere[3] * scale,
+                error * scale,
+            )
+        };
+        let parent = meshlet.parent_group;
+        let starts_run = i == 0 || {
+            let previous = clusters[i - 1];
+            previous.instance != cluster.instance
+                || scene.meshlets[previous.meshlet as usize].parent_group != parent
+        };
+        if parent != NO_GROUP && starts_run {
+            let px = project(parent, scene.groups[parent as usize].error);
+            if meshlight_shaders::cpu::lod::error_perceptible(px, thresholds.lod_threshold_px) {
+                want(parent, 0.0);
+            }
+        }
         let d = classify(scene, view, cluster, thresholds);
         if !(d.in_frustum && d.in_cut) {
             continue;
         }
-        let instance = &scene.instances[cluster.instance as usize];
-        let meshlet = &scene.meshlets[cluster.meshlet as usize];
         if let Some(&missing) = stream_errors.get(meshlet.source_group as usize)
             && missing > 0.0
         {
-            let scale = instance_max_scale(instance);
-            let sphere = scene.groups[meshlet.source_group as usize].lod_sphere;
-            let centre = transform_point(&instance.world_from_local, xyz(sphere));
-            let px = meshlight_shaders::cpu::lod::project_error_to_pixels(
-                view,
-                centre,
-                sphere[3] * scale,
-                missing * scale,
-            );
+            let px = project(meshlet.source_group, missing);
             if meshlight_shaders::cpu::lod::error_perceptible(px, thresholds.lod_threshold_px) {
                 want(meshlet.source_group, px);
             }
-        }
-        if meshlet.parent_group != NO_GROUP {
-            want(meshlet.parent_group, 0.0);
         }
     }
     wanted

@@ -16,10 +16,11 @@
 // own list: those were never tested, and are tested like the rest.
 //
 // With STREAMING (a streamed scene, `meshlight_gpu_scene::streaming`), each cluster of
-// the LOD cut asks for the pages it needs: the page of its source group when that
-// group's error shows but its page is missing (the cluster stands in for finer ones
-// the pool lacks), and the page it lies on (in use, so it is kept). Each page is listed
-// once a frame, through a per-group mark of the last frame it was wanted.
+// the LOD cut asks for the page of its source group when that group's error shows but
+// its page is missing (the cluster stands in for finer ones the pool lacks), and the
+// first cluster of each run of one page marks that page in use when its group is
+// refined (so it is kept). Each page is listed once a frame, through a per-group mark
+// of the last frame it was wanted.
 
 #import meshlight::dispatch::linear_workgroup
 #import meshlight::math::F32_MAX
@@ -64,6 +65,31 @@
 @group(0) @binding(19) var<storage, read_write> page_requests: array<vec2<u32>>;
 // [0] requests written, [1] found (more than the list holds: the rest wait a frame).
 @group(0) @binding(20) var<storage, read_write> page_request_count: array<atomic<u32>>;
+
+// The page cluster `i` lies on is in use when its group is refined for the instance
+// (its error shows: the group's children, this page, are drawn). Asked once per run of
+// the list's clusters from one page of one instance (the walk lists a leaf's meshlets
+// together, the flat fill an instance's meshlets in page order), by the run's first,
+// whatever the frustum says of it: one test and one mark where every cluster of the
+// page would otherwise hit the same word.
+fn mark_page_in_use(i: u32, cluster: Cluster, meshlet: Meshlet, instance: Instance, scale: f32) {
+    let group = meshlet.parent_group;
+    if group == MESHLET_NO_GROUP {
+        return;
+    }
+    if i > 0u {
+        let previous = clusters[i - 1u];
+        if previous.instance == cluster.instance && meshlets[previous.meshlet].parent_group == group {
+            return;
+        }
+    }
+    let sphere = meshlet_groups[group].lod_sphere;
+    let centre = (instance.world_from_local * vec4(sphere.xyz, 1.0)).xyz;
+    let px = project_error_to_pixels(view, centre, sphere.w * scale, meshlet_groups[group].error * scale);
+    if error_perceptible(px, params.lod_threshold_px) {
+        want_page(group, 0.0);
+    }
+}
 
 // Lists `group`'s page unless this frame already has.
 fn want_page(group: u32, priority: f32) {
@@ -271,6 +297,9 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
     let bounds = meshlet_bounds(meshlet);
     let center = instance_transform_point(instance, bounds.xyz);
     let radius = bounds.w * scale;
+#ifdef STREAMING
+    mark_page_in_use(i, cluster, meshlet, instance, scale);
+#endif
     if !sphere_in_frustum(view, center, radius) {
         return;
     }
@@ -304,9 +333,6 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
                 want_page(meshlet.source_group, px);
             }
         }
-    }
-    if meshlet.parent_group != MESHLET_NO_GROUP {
-        want_page(meshlet.parent_group, 0.0);
     }
 #endif
 

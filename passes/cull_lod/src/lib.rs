@@ -85,10 +85,14 @@
 //! the list of pages the frame wants: for each cluster in the frustum and the cut
 //! (before the occlusion test, so a page is kept while its clusters are hidden for a
 //! moment), the page of its source group when that group's real error
-//! (`page_errors`) shows, with the error in pixels as its priority, and the page it
-//! lies on (its parent group's, in use: priority 0). A per-group mark (`page_marks`,
-//! `view.frame_index + 1`) lists each page once a frame; a plain load skips the atomic
-//! when the page is marked already, so the many clusters of one page cost one write.
+//! (`page_errors`) shows, with the error in pixels as its priority; and the page a run
+//! of candidates lies on (the walk lists a leaf's meshlets together), in use when its
+//! group's error shows (priority 0), asked by the run's first cluster only. A per-group
+//! mark (`page_marks`, `view.frame_index + 1`) lists each page once a frame; a load
+//! skips the atomic write when the page is marked already. Marking in use from every
+//! cluster of the cut cost the default scene's cull 0.028 ms on an H200 (0.035 →
+//! 0.063 ms: some 117,000 atomics on a few hundred words); from the runs' first, less
+//! (docs/BENCHMARKS.md).
 //! The renderer reads the list back and hands it to the streamer
 //! (`meshlight_stream::Streamer::frame`). [`cpu::wanted_pages`] is the reference. The
 //! second pass lists nothing: a cluster drawn only through the second walk asks for its
