@@ -46,11 +46,17 @@ pub struct Budget {
     /// Frames a page must go unwanted before it may be evicted: at least the readback's
     /// latency, so a page the GPU is still asking for is never taken away.
     pub keep_frames: u64,
+    /// Read the pages that need a requested page (its children, the next level finer)
+    /// along with it, after every page the view wants, only into free room (never
+    /// evicting for them), and evictable from the frame after they arrive until the
+    /// view asks for them: the view that wants a page usually wants the level below next, and asking
+    /// for it only once the page is in costs a readback's round trip per level.
+    pub prefetch: bool,
 }
 
 impl Default for Budget {
     /// 128 installs and 32 MiB a frame, 256 reads in flight, 1,024 evictions a frame,
-    /// pages kept 8 frames after their last want.
+    /// pages kept 8 frames after their last want, children prefetched.
     fn default() -> Self {
         Self {
             installs_per_frame: 128,
@@ -58,6 +64,7 @@ impl Default for Budget {
             loads_in_flight: 256,
             evictions_per_frame: 1024,
             keep_frames: 8,
+            prefetch: true,
         }
     }
 }
@@ -237,6 +244,12 @@ pub struct Streamer {
     failed_pages: u32,
     resident_pages: u32,
     frame: u64,
+    /// Pages queued only as prefetches (not wanted themselves): read only into free
+    /// room, never at the cost of an eviction.
+    prefetched: Vec<bool>,
+    /// Installs and bytes published in the current frame, against its budgets.
+    installed_this_frame: u32,
+    uploaded_this_frame: u64,
 }
 
 impl Streamer {
@@ -272,6 +285,9 @@ impl Streamer {
             failed_pages: 0,
             resident_pages: 0,
             frame: 0,
+            installed_this_frame: 0,
+            uploaded_this_frame: 0,
+            prefetched: vec![false; n],
         })
     }
 
@@ -326,6 +342,16 @@ impl Streamer {
         std::mem::take(&mut self.failures)
     }
 
+    /// Publishes, within what is left of this frame's budgets, the pages whose reads
+    /// finished since [`Self::frame`] planned it (a reader that completes at once, such
+    /// as one copying from memory, installs in the same frame). Apply these after the
+    /// frame plan's.
+    pub fn publish_ready(&mut self) -> Vec<Install> {
+        let mut plan = FramePlan::default();
+        self.publish(&mut plan);
+        plan.install
+    }
+
     /// A read finished: `Ok` with the page's bytes, or `Err` with what went wrong. A
     /// result for a page that is not being read is ignored.
     pub fn complete(&mut self, page: PageId, result: Result<Vec<u8>, String>) {
@@ -355,6 +381,8 @@ impl Streamer {
     /// pressure holds, where an empty list would say the view wants nothing.
     pub fn frame(&mut self, frame: u64, wanted: Option<&[Request]>) -> FramePlan {
         self.frame = frame;
+        self.installed_this_frame = 0;
+        self.uploaded_this_frame = 0;
         let mut plan = FramePlan::default();
         let (requested, wanted_bytes) = self.take_wants(frame, wanted.unwrap_or_default());
         self.publish(&mut plan);
@@ -405,15 +433,36 @@ impl Streamer {
                     PageState::Absent => {
                         requested += 1;
                         self.enqueue(p, r.priority);
+                        if self.budget.prefetch && p == r.page {
+                            self.prefetch_children(p, r.priority, frame);
+                        }
                     }
                     _ => {}
                 }
+                // Wanted: no longer a mere prefetch.
+                self.prefetched[p as usize] = false;
                 bytes += self.graph.bytes(p);
                 self.touch(p, frame);
                 stack.extend_from_slice(self.graph.parents(p));
             }
         }
         (requested, bytes)
+    }
+
+    /// Queues the absent pages that need `page`, after every wanted page. They are not
+    /// wanted (neither counted nor touched), only kept from going stale in the queue.
+    fn prefetch_children(&mut self, page: PageId, priority: f32, frame: u64) {
+        for i in 0..self.graph.dependents(page).len() {
+            let child = self.graph.dependents(page)[i];
+            let c = child as usize;
+            if self.state(child) == PageState::Absent && self.visited[c] != frame {
+                self.last_wanted[c] = self.last_wanted[c].max(frame);
+                self.prefetched[c] = true;
+                // Below every wanted page (priorities are >= 0), the higher the parent's
+                // the sooner.
+                self.enqueue(child, -1.0 / (1.0 + priority.max(0.0)));
+            }
+        }
     }
 
     fn enqueue(&mut self, page: PageId, priority: f32) {
@@ -439,7 +488,6 @@ impl Streamer {
     /// Publishes read pages in issue order while their parents are resident and the
     /// budgets allow; drops those whose parent was refused.
     fn publish(&mut self, plan: &mut FramePlan) {
-        let mut bytes = 0u64;
         let issued = std::mem::take(&mut self.issued);
         for page in issued {
             match self.state(page) {
@@ -452,17 +500,24 @@ impl Streamer {
                         continue;
                     }
                     let size = self.graph.bytes(page);
-                    let fits = plan.install.len() < self.budget.installs_per_frame as usize
-                        && (plan.install.is_empty()
-                            || bytes + size <= self.budget.upload_bytes_per_frame);
+                    let fits = self.installed_this_frame < self.budget.installs_per_frame
+                        && (self.installed_this_frame == 0
+                            || self.uploaded_this_frame + size
+                                <= self.budget.upload_bytes_per_frame);
                     if !fits || parents.iter().any(|&q| !self.is_resident(q)) {
                         self.issued.push(page);
                         continue;
                     }
-                    bytes += size;
+                    self.installed_this_frame += 1;
+                    self.uploaded_this_frame += size;
                     // Installed counts as wanted now: never evicted in the frame it
-                    // arrives.
-                    self.last_wanted[page as usize] = self.frame;
+                    // arrives. A prefetch nobody has asked for yet may go from the next
+                    // frame on, so it never holds room a wanted page waits for.
+                    self.last_wanted[page as usize] = match self.prefetched[page as usize] {
+                        true => self.frame.saturating_sub(self.budget.keep_frames),
+                        false => self.frame,
+                    };
+                    self.prefetched[page as usize] = false;
                     self.state[page as usize] = PageState::Resident;
                     self.resident_pages += 1;
                     if self.holders[page as usize] == 0 {
@@ -505,25 +560,33 @@ impl Streamer {
                 continue; // a parent could not be read first: wanted again next frame
             }
             let size = self.graph.bytes(page);
+            // Held before room is made, so that making room never evicts a parent.
+            for i in 0..self.graph.parents(page).len() {
+                let q = self.graph.parents(page)[i];
+                self.hold(q);
+            }
             let allocation = loop {
                 if let Some(a) = self.pool.allocate(size) {
                     break Some(a);
                 }
-                if !self.evict_one(frame, plan) {
+                if self.prefetched[p] || !self.evict_one(frame, plan) {
                     break None;
                 }
             };
             let Some(allocation) = allocation else {
+                for i in 0..self.graph.parents(page).len() {
+                    let q = self.graph.parents(page)[i];
+                    self.release_hold(q);
+                }
+                if self.prefetched[p] {
+                    continue; // no free room for a prefetch: dropped
+                }
                 // Full of pages in use: wait (pressure coarsens the cut meanwhile).
                 self.enqueue(page, next.priority);
                 break;
             };
             self.allocation[p] = Some(allocation);
             self.state[p] = PageState::Loading;
-            for i in 0..self.graph.parents(page).len() {
-                let q = self.graph.parents(page)[i];
-                self.hold(q);
-            }
             self.issued.push(page);
             plan.load.push(Load { page, bytes: size });
         }

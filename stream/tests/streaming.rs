@@ -183,6 +183,7 @@ fn fly(seed: u64, frames: u64, pool_fraction: f32, failure_rate: f32) -> (u32, u
         loads_in_flight: 1 + rng.below(16),
         evictions_per_frame: 1 + rng.below(8),
         keep_frames: u64::from(rng.below(4)),
+        prefetch: seed.is_multiple_of(2),
     };
     let mut streamer = Streamer::new(graph.clone(), pool, budget).unwrap();
     let mut renderer = Renderer {
@@ -296,6 +297,7 @@ fn a_still_view_settles_on_the_fully_resident_cut() {
             loads_in_flight: 8,
             evictions_per_frame: 4,
             keep_frames: 2,
+            prefetch: true,
         };
         let mut streamer = Streamer::new(graph.clone(), graph.total_bytes() * 2, budget).unwrap();
         let shows = perceptible(&errors, rng.range(0.0, 4.0));
@@ -379,26 +381,29 @@ fn a_pool_smaller_than_a_page_is_refused_with_both_sizes() {
 }
 
 /// The LOD test on a real mesh's DAG: a camera flying around the bunny at random, near
-/// and far, a pool of a third of the mesh (one LOD-0 page needs up to a fifth of it: its ancestors), reads finishing a frame late. Every frame's
-/// cut, with the real projected errors, is complete: with the pressure coupling, and
-/// without it (so that the pool thrashes).
+/// and far, a pool of a third of the mesh (one LOD-0 page needs up to a fifth of it:
+/// its ancestors), reads finishing a frame late. Every frame's cut, with the real
+/// projected errors, is complete: with the pressure coupling, and without it (so that
+/// the pool thrashes), prefetching children or not.
 #[test]
 fn the_bunny_under_a_small_pool_never_shows_a_hole() {
-    let flight = fly_around_the_bunny(LodPressure::default());
+    let flight = fly_around_the_bunny(LodPressure::default(), true);
     assert!(
         flight.max_scale > 2.0,
         "the pressure never coarsened the cut: {flight:?}"
     );
-    let flight = fly_around_the_bunny(LodPressure::new(0.70, 0.85, 1.05, 1.0));
-    assert_eq!(flight.max_scale, 1.0);
-    assert!(
-        flight.evicted > 20,
-        "the pool was not exercised: {flight:?}"
-    );
-    assert!(
-        flight.detailed_frames > 0,
-        "LOD 0 was never drawn: {flight:?}"
-    );
+    for prefetch in [false, true] {
+        let flight = fly_around_the_bunny(LodPressure::new(0.70, 0.85, 1.05, 1.0), prefetch);
+        assert_eq!(flight.max_scale, 1.0);
+        assert!(
+            flight.evicted > 20,
+            "prefetch {prefetch}: the pool was not exercised: {flight:?}"
+        );
+        assert!(
+            flight.detailed_frames > 0,
+            "prefetch {prefetch}: LOD 0 was never drawn: {flight:?}"
+        );
+    }
 }
 
 /// What a flight did.
@@ -409,12 +414,16 @@ struct Flight {
     detailed_frames: usize,
 }
 
-fn fly_around_the_bunny(pressure: LodPressure) -> Flight {
+fn fly_around_the_bunny(pressure: LodPressure, prefetch: bool) -> Flight {
     let asset = meshlight_testing::meshes::bunny();
     let dag = MeshDag::of_asset(asset);
     let graph = dag.pages();
     let pool = graph.total_bytes() / 3;
-    let mut streamer = Streamer::new(graph.clone(), pool, Budget::default())
+    let budget = Budget {
+        prefetch,
+        ..Budget::default()
+    };
+    let mut streamer = Streamer::new(graph.clone(), pool, budget)
         .unwrap()
         .with_pressure(pressure);
     let mut max_scale = 1.0f32;

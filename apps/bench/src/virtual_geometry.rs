@@ -965,8 +965,22 @@ pub fn stream(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         let m = measure(&resident, settings.clone(), frames)?;
         let baseline = m.total_ms;
         rows.extend(rows_of("vg-stream", &format!("{case}, resident"), &m));
-        let sources = streamed.sources.clone();
         let camera = streamed.camera;
+        // Cold start without reading each requested page's children along with it.
+        let settled_alone = {
+            let mut r = Renderer::new(
+                streamed.data.clone(),
+                settings.clone(),
+                &GraphSource::Shipped,
+            )?;
+            let budget = Budget {
+                prefetch: false,
+                ..Budget::default()
+            };
+            r.start_streaming(streamed.sources.clone(), budget, 4)?;
+            r.settle_streaming(&camera, 600)?
+        };
+        let sources = streamed.sources.clone();
         let mut settled = 0;
         let m = measure_prepared(&streamed, settings, frames, |r| {
             r.start_streaming(sources, Budget::default(), 4)?;
@@ -986,6 +1000,11 @@ pub fn stream(quick: bool, meshes: &[PathBuf]) -> BenchResult {
             (
                 "frames to settle from an empty pool",
                 f64::from(settled),
+                "",
+            ),
+            (
+                "frames to settle from an empty pool, children not prefetched",
+                f64::from(settled_alone),
                 "",
             ),
             (

@@ -268,7 +268,8 @@ impl Renderer {
 
     /// Frames of `camera` until streaming has settled: for [`SETTLED_FRAMES`] frames in a
     /// row no page the view wants is missing, being read or waiting to be installed.
-    /// At most `max_frames`; returns the frames run (0 for a scene that does not stream).
+    /// At most `max_frames`; returns the frames it took to get there, the quiet ones not
+    /// counted (0 for a scene that does not stream).
     /// A still of a streamed scene renders after this, so that it shows what the pool
     /// holds for the view rather than the first frames' coarse cut.
     pub fn settle_streaming(&mut self, camera: &Camera, max_frames: u32) -> Result<u32> {
@@ -288,7 +289,8 @@ impl Renderer {
             let heard = frame > super::streaming::REQUESTS_LATENCY + 1;
             quiet = if busy || !heard { 0 } else { quiet + 1 };
             if quiet == SETTLED_FRAMES {
-                return Ok(frame);
+                // The first of the quiet frames: when streaming had nothing left to do.
+                return Ok(frame + 1 - SETTLED_FRAMES);
             }
         }
         log::warn!(

@@ -283,6 +283,13 @@ impl Streaming {
                 }
             }
         }
+        // Pages copied from memory just now go in this frame, not the next.
+        let ready = self.streamer.publish_ready();
+        for install in &ready {
+            let words: Vec<u32> = bytemuck::pod_collect_to_vec(&install.data);
+            data.install_page(install.page, (install.allocation.offset / 4) as u32, &words)
+                .map_err(scene_error)?;
+        }
         for failure in self.streamer.take_failures() {
             log::warn!("page {} refused: {}", failure.page, failure.reason);
             self.stats.failed_total += 1;
@@ -291,6 +298,9 @@ impl Streaming {
         self.stats.loaded_total += plan.stats.loads_started as u64;
         self.stats.evicted_total += plan.stats.evicted as u64;
         self.stats.frame = plan.stats;
+        self.stats.frame.installed += ready.len() as u32;
+        self.stats.frame.resident_pages += ready.len() as u32;
+        self.stats.frame.bytes_uploaded += ready.iter().map(|i| i.data.len() as u64).sum::<u64>();
         self.stats.listed = listed;
         self.stats.unlisted = unlisted;
         self.stats.cpu = start.elapsed();
