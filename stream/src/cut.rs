@@ -133,17 +133,7 @@ pub fn check(dag: &MeshDag, drawn: &[bool], resident: impl Fn(u32) -> bool) -> R
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Groups 0 and 1 simplify LOD 0 into meshlets 4 and 5, which group 2 simplifies into
-    /// the root 6.
-    fn diamond() -> MeshDag {
-        MeshDag {
-            source: vec![NO_GROUP, NO_GROUP, NO_GROUP, NO_GROUP, 0, 1, 2],
-            parent: vec![0, 0, 1, 1, 2, 2, NO_GROUP],
-            payload_bytes: vec![4; 7],
-            group_count: 3,
-        }
-    }
+    use crate::pages::diamond;
 
     #[test]
     fn a_missing_page_keeps_its_groups_result_and_the_cut_stays_complete() {

@@ -288,22 +288,23 @@ impl PageGraph {
     }
 }
 
+/// Two LOD-0 groups (0, 1) whose results were simplified together in group 2, whose
+/// result is the root: the smallest DAG with a page that needs another, for the tests.
+#[cfg(test)]
+pub(crate) fn diamond() -> MeshDag {
+    MeshDag {
+        // Meshlets 0..4 are LOD 0 (children of 0 and 1), 4 and 5 came out of groups 0
+        // and 1 and went into group 2, 6 is the root group 2 produced.
+        source: vec![NO_GROUP, NO_GROUP, NO_GROUP, NO_GROUP, 0, 1, 2],
+        parent: vec![0, 0, 1, 1, 2, 2, NO_GROUP],
+        payload_bytes: vec![10, 20, 30, 40, 50, 60, 70],
+        group_count: 3,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Two LOD-0 groups (0, 1) whose results were simplified together in group 2, whose
-    /// result is the root.
-    fn diamond() -> MeshDag {
-        MeshDag {
-            // Meshlets 0..4 are LOD 0 (children of 0 and 1), 4 and 5 came out of groups 0
-            // and 1 and went into group 2, 6 is the root group 2 produced.
-            source: vec![NO_GROUP, NO_GROUP, NO_GROUP, NO_GROUP, 0, 1, 2],
-            parent: vec![0, 0, 1, 1, 2, 2, NO_GROUP],
-            payload_bytes: vec![10, 20, 30, 40, 50, 60, 70],
-            group_count: 3,
-        }
-    }
 
     #[test]
     fn a_page_holds_its_groups_children_and_needs_the_groups_its_result_went_into() {
