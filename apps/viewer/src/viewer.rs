@@ -10,6 +10,7 @@ use crate::reload::{FileError, PipelineWatch, locate};
 use meshlight::gpu_scene::Camera;
 use meshlight::graph::{FrameStats, GraphError};
 use meshlight::resolve::DebugView;
+use meshlight::stream::Budget;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer, setup};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -116,6 +117,9 @@ pub struct Viewer {
     registry: meshlight::graph::file::Registry,
 }
 
+/// Threads reading streamed pages.
+const STREAM_THREADS: usize = 4;
+
 impl Viewer {
     /// Builds the scene and the renderer; with a window, presents to it.
     pub fn new(options: ViewerOptions, window: Option<Arc<Window>>) -> Result<Self, ViewerError> {
@@ -123,6 +127,10 @@ impl Viewer {
         let scene = setup(&o.scene)?;
         let mut renderer = Renderer::new(scene.data, scene.settings, &scene.source)?;
         renderer.lights = scene.lights;
+        if !scene.sources.is_empty() {
+            // `--pool-mb`: the scene streams; its pages come from the assets in memory.
+            renderer.start_streaming(scene.sources, Budget::default(), STREAM_THREADS)?;
+        }
         let camera = match o.camera {
             Some(c) => Camera {
                 position: c.position,

@@ -1,0 +1,24 @@
+//! `view --pool-mb`: the viewer streams its scene (no window needed): frames run, pages
+//! arrive, and nothing is refused.
+
+mod common;
+
+use meshlight_viewer::viewer::Viewer;
+
+#[test]
+fn the_viewer_streams_a_scene_given_a_pool() {
+    let mut options = common::unlit_options();
+    options.scene.pool_mb = Some(8);
+    let mut viewer = Viewer::new(options, None).unwrap_or_else(|e| panic!("{e}"));
+    for _ in 0..12 {
+        viewer.frame().unwrap_or_else(|e| panic!("{e}"));
+    }
+    let stats = viewer
+        .renderer
+        .streaming
+        .as_ref()
+        .expect("the viewer streams")
+        .stats();
+    assert!(stats.loaded_total > 0, "{stats:?}");
+    assert_eq!(stats.failed_total, 0, "{stats:?}");
+}
