@@ -443,7 +443,12 @@ impl Streamer {
                 self.prefetched[p as usize] = false;
                 bytes += self.graph.bytes(p);
                 self.touch(p, frame);
-                stack.extend_from_slice(self.graph.parents(p));
+                // A resident page's ancestors are resident and held by it (none can be
+                // evicted under it), and the GPU lists them itself where they are in
+                // use: only a page not yet in needs its ancestors wanted with it.
+                if self.state(p) != PageState::Resident {
+                    stack.extend_from_slice(self.graph.parents(p));
+                }
             }
         }
         (requested, bytes)
