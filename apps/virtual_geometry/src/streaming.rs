@@ -23,7 +23,7 @@ use meshlight::scene::MeshletAsset;
 use meshlight::scene::asset::format::SECTION_PAYLOAD;
 use meshlight::stream::loader::{Loader, PageFile, ReadJob};
 use meshlight::stream::streamer::PageFailure;
-use meshlight::stream::{Budget, PageGraph, Request, Streamer};
+use meshlight::stream::{Budget, Install, PageGraph, Request, Streamer};
 
 /// The resource the per-group marks live in (imported: kept across frames). Named
 /// unlike `cull_lod`'s slots, which bind by name: only the first cull takes them.
@@ -259,11 +259,15 @@ impl Streaming {
         for &page in &plan.evict {
             data.evict_page(page).map_err(scene_error)?;
         }
-        for install in &plan.install {
-            let words: Vec<u32> = bytemuck::pod_collect_to_vec(&install.data);
-            data.install_page(install.page, (install.allocation.offset / 4) as u32, &words)
-                .map_err(scene_error)?;
-        }
+        let install = |data: &mut SceneData, installs: &[Install]| -> Result<()> {
+            for i in installs {
+                let words: Vec<u32> = bytemuck::pod_collect_to_vec(&i.data);
+                data.install_page(i.page, (i.allocation.offset / 4) as u32, &words)
+                    .map_err(scene_error)?;
+            }
+            Ok(())
+        };
+        install(data, &plan.install)?;
         for load in &plan.load {
             let page = &data.streaming().expect("a streamed scene").pages[load.page as usize];
             match &self.sources[page.mesh as usize] {
@@ -285,11 +289,7 @@ impl Streaming {
         }
         // Pages copied from memory just now go in this frame, not the next.
         let ready = self.streamer.publish_ready();
-        for install in &ready {
-            let words: Vec<u32> = bytemuck::pod_collect_to_vec(&install.data);
-            data.install_page(install.page, (install.allocation.offset / 4) as u32, &words)
-                .map_err(scene_error)?;
-        }
+        install(data, &ready)?;
         for failure in self.streamer.take_failures() {
             log::warn!("page {} refused: {}", failure.page, failure.reason);
             self.stats.failed_total += 1;
