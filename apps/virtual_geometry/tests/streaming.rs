@@ -9,13 +9,13 @@ mod common;
 use std::sync::Arc;
 
 use common::asset;
+use meshlight::cull_lod::cpu::lod_test;
 use meshlight::glam::Vec3;
 use meshlight::gpu_scene::data::Limits;
 use meshlight::gpu_scene::{Camera, SceneData};
 use meshlight::scene::MeshletAsset;
 use meshlight::scene::asset::format::{NO_GROUP, SECTION_PAYLOAD};
-use meshlight::shaders::cpu::layout::View;
-use meshlight::shaders::cpu::lod::lod_cut;
+use meshlight::shaders::cpu::layout::{Cluster, View};
 use meshlight::shaders::cpu::rng::Rng;
 use meshlight::stream::cut::check;
 use meshlight::stream::loader::PageFile;
@@ -127,7 +127,7 @@ fn field_assets(placed: &Placed) -> Vec<Arc<MeshletAsset>> {
 
 /// Checks that the scene as the last frame drew it encodes, for every instance, a
 /// complete cut over the resident pages: the renderer's LOD test on the rewritten records
-/// (`shaders::cpu::lod::lod_cut`, which the GPU's is tested against) draws, on every path
+/// (`cull_lod::cpu::lod_test`, which the GPU's is tested against) draws, on every path
 /// from a LOD-0 meshlet up to a root, exactly one meshlet, and only meshlets of resident
 /// pages. Returns how many meshlets of pages (not roots) the cuts drew.
 fn check_complete_cuts(r: &Renderer, dags: &[MeshDag], view: &View) -> usize {
@@ -143,23 +143,13 @@ fn check_complete_cuts(r: &Renderer, dags: &[MeshDag], view: &View) -> usize {
             .zip(&dag.parent)
             .find(|&(_, &p)| p != NO_GROUP)
             .map_or(0, |(m, &p)| m.parent_group - p);
-        let scale = meshlight::cull_lod::cpu::instance_max_scale(instance);
         let drawn: Vec<bool> = (0..dag.meshlet_count())
             .map(|k| {
-                let m = &data.meshlets[first + k];
-                let (own_sphere, own_error) = data.own_lod(m);
-                let (parent_sphere, parent_error) = data.parent_lod(m);
-                lod_cut(
-                    view,
-                    &instance.world_from_local,
-                    scale,
-                    own_sphere,
-                    own_error,
-                    parent_sphere,
-                    parent_error,
-                    1.0,
-                )
-                .0
+                let cluster = Cluster {
+                    instance: i as u32,
+                    meshlet: (first + k) as u32,
+                };
+                lod_test(data, view, cluster, 1.0).0
             })
             .collect();
         let resident = |g: u32| pages[(group_base + g) as usize].resident_at.is_some();

@@ -252,6 +252,31 @@ pub fn occlusion_test(
     (rect, farthest, pyramid.occludes(&rect))
 }
 
+/// The LOD test of one cluster, whatever the frustum says: `lod_cut` with the own and
+/// parent spheres and errors the scene's groups give it (as the GPU reads them, so on a
+/// streamed scene the cut over resident pages). (in the cut, own px, parent px).
+pub fn lod_test(
+    scene: &SceneData,
+    view: &View,
+    cluster: Cluster,
+    threshold: f32,
+) -> (bool, f32, f32) {
+    let instance = &scene.instances[cluster.instance as usize];
+    let meshlet = &scene.meshlets[cluster.meshlet as usize];
+    let (own_sphere, own_error) = scene.own_lod(meshlet);
+    let (parent_sphere, parent_error) = scene.parent_lod(meshlet);
+    lod_cut(
+        view,
+        &instance.world_from_local,
+        instance_max_scale(instance),
+        own_sphere,
+        own_error,
+        parent_sphere,
+        parent_error,
+        threshold,
+    )
+}
+
 /// Everything the pass decides for one cluster (no occlusion test).
 pub fn classify(scene: &SceneData, view: &View, cluster: Cluster, t: &Thresholds) -> Decision {
     classify_with(scene, view, cluster, t, Occlusion::Off)
@@ -281,21 +306,7 @@ pub fn classify_with(
     if !in_frustum {
         return d;
     }
-    let group = |g: u32| scene.groups.get(g as usize).filter(|_| g != NO_GROUP);
-    let (own_sphere, own_error) =
-        group(meshlet.source_group).map_or((bounds, 0.0), |g| (g.lod_sphere, g.error));
-    let (parent_sphere, parent_error) =
-        group(meshlet.parent_group).map_or(([0.0; 4], f32::MAX), |g| (g.lod_sphere, g.error));
-    let (in_cut, own_px, parent_px) = lod_cut(
-        view,
-        &instance.world_from_local,
-        scale,
-        own_sphere,
-        own_error,
-        parent_sphere,
-        parent_error,
-        t.lod_threshold_px,
-    );
+    let (in_cut, own_px, parent_px) = lod_test(scene, view, cluster, t.lod_threshold_px);
     d.in_cut = in_cut;
     d.own_px = own_px;
     d.parent_px = parent_px;

@@ -9,7 +9,7 @@ use meshlight_gpu_scene::data::Limits;
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::{Camera, GpuScene, Material, SceneData};
 use meshlight_graph::*;
-use meshlight_pass_cull_lod::cpu::{self, wanted_pages};
+use meshlight_pass_cull_lod::cpu::wanted_pages;
 use meshlight_pass_cull_lod::{CullLod, PAGE_REQUEST, Thresholds, cpu_cull};
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_stream::{MeshDag, PageId};
@@ -110,13 +110,7 @@ fn run(data: &mut SceneData, clusters: &[Cluster], views: &[View], t: Thresholds
         .add_pass(
             "cull",
             pass,
-            Bindings::new()
-                .bind("clusters", list)
-                .bind("cluster_count", count)
-                .bind("meshlet_groups", h.groups)
-                .bind("raster_clusters", raster)
-                .bind("raster_counts", counts)
-                .bind("hw_args", hw_args)
+            base_bindings([list, count, h.groups, raster, counts, hw_args])
                 .bind("page_errors", stream_errors)
                 .bind("page_marks", marks)
                 .bind("page_requests", requests)
@@ -161,6 +155,23 @@ fn run(data: &mut SceneData, clusters: &[Cluster], views: &[View], t: Thresholds
         software: last_counts[0] as usize,
         hardware: last_counts[1] as usize,
     }
+}
+
+/// The slots every cull binds: the candidates and their count, the groups, the raster
+/// slots, their counts and the draw arguments, in that order.
+fn base_bindings(buffers: [Handle<Buffer>; 6]) -> Bindings {
+    let slots = [
+        "clusters",
+        "cluster_count",
+        "meshlet_groups",
+        "raster_clusters",
+        "raster_counts",
+        "hw_args",
+    ];
+    slots
+        .into_iter()
+        .zip(buffers)
+        .fold(Bindings::new(), |b, (slot, h)| b.bind(slot, h))
 }
 
 fn camera_view(rng: &mut Rng, frame: u32) -> View {
@@ -253,7 +264,6 @@ fn with_every_page_in_the_cut_is_the_resident_scenes() {
             got.frames[0].values().all(|&px| px == 0.0),
             "a page asked for with all in"
         );
-        let _ = cpu::HW_VERTICES;
     }
 }
 
@@ -276,13 +286,7 @@ fn streaming_slots_bound_by_halves_are_refused() {
         .add_pass(
             "cull",
             CullLod::default(),
-            Bindings::new()
-                .bind("clusters", list)
-                .bind("cluster_count", count)
-                .bind("meshlet_groups", h.groups)
-                .bind("raster_clusters", raster)
-                .bind("raster_counts", counts)
-                .bind("hw_args", hw_args)
+            base_bindings([list, count, h.groups, raster, counts, hw_args])
                 .bind("page_marks", marks),
         )
         .unwrap();
