@@ -314,7 +314,7 @@ fn damaged_compressed_views_are_refused_naming_the_view() {
     for (name, edit, needles) in cases {
         let mut damaged = doc.clone();
         edit(&mut damaged);
-        let err = load(&damaged, &bin, name).expect_err(name);
+        let err = load(&damaged, &bin, &format!("damaged-{name}")).expect_err(name);
         let msg = err.to_string();
         assert!(matches!(err, SceneError::Gltf { .. }), "{name}: {err:?}");
         for needle in needles {
