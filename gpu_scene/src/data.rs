@@ -231,6 +231,15 @@ impl SceneData {
     /// put through every check `meshlight inspect` runs, so nothing it rejects reaches
     /// the GPU; one loaded with `MeshletAsset::load_verified` is not checked twice.
     pub fn add_mesh(&mut self, name: &str, asset: &MeshletAsset) -> Result<MeshId, SceneDataError> {
+        if asset.page_file().is_some() && self.streaming.is_none() {
+            return Err(SceneDataError::InvalidAsset {
+                name: name.to_string(),
+                reason: "it was opened for streaming (its resident part only): add it to a \
+                         streamed scene (`SceneData::streamed`), or load it whole \
+                         (`MeshletAsset::load_verified`)"
+                    .into(),
+            });
+        }
         if !asset.is_verified() {
             asset.check_all(std::path::Path::new(name)).map_err(|e| {
                 SceneDataError::InvalidAsset {

@@ -79,6 +79,29 @@ pub struct ReadJob {
     pub bytes: u64,
     /// Its checksum ([`page_checksum`]), when the asset stores one.
     pub checksum: Option<u64>,
+    /// Checks of its contents, run on the reading thread after the checksum (so a
+    /// page's decoding checks cost the render thread nothing).
+    pub check: Option<PageCheck>,
+}
+
+/// A check of a page's bytes: `Err` says why the page is refused.
+pub type CheckFn = dyn Fn(&[u8]) -> Result<(), String> + Send + Sync;
+
+/// Checks of a page's bytes, shared by the reading threads.
+#[derive(Clone)]
+pub struct PageCheck(pub Arc<CheckFn>);
+
+impl PageCheck {
+    /// A check from a closure.
+    pub fn new(check: impl Fn(&[u8]) -> Result<(), String> + Send + Sync + 'static) -> Self {
+        Self(Arc::new(check))
+    }
+}
+
+impl std::fmt::Debug for PageCheck {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("PageCheck")
+    }
 }
 
 /// A finished read: the page's bytes, or what went wrong.
@@ -180,6 +203,9 @@ fn read(job: &ReadJob) -> Result<Vec<u8>, String> {
             job.page
         ));
     }
+    if let Some(check) = &job.check {
+        (check.0)(&data)?;
+    }
     Ok(data)
 }
 
@@ -202,13 +228,25 @@ mod tests {
             offset,
             bytes: len,
             checksum,
+            check: None,
         };
         let good = page_checksum(&bytes[100..612]);
         loader.submit(job(0, 100, 512, Some(good)));
         loader.submit(job(1, 4000, 6000, None));
         loader.submit(job(2, 9000, 2000, None));
         loader.submit(job(3, 100, 512, Some(good ^ 1)));
-        let mut results: Vec<ReadResult> = (0..4)
+        // A check of the contents runs after the checksum, and its word is the error.
+        let odd_first = PageCheck::new(|b: &[u8]| match b[0] % 2 {
+            0 => Ok(()),
+            _ => Err(format!("first byte {} is odd", b[0])),
+        });
+        for (page, offset) in [(4, 100), (5, 101)] {
+            loader.submit(ReadJob {
+                check: Some(odd_first.clone()),
+                ..job(page, offset, 16, None)
+            });
+        }
+        let mut results: Vec<ReadResult> = (0..6)
             .map(|_| {
                 loader
                     .wait(Duration::from_secs(10))
@@ -226,6 +264,11 @@ mod tests {
         assert!(past.contains("pages.bin"), "{past}");
         let damaged = results[3].1.as_ref().unwrap_err();
         assert!(damaged.contains("page 3 fails its checksum"), "{damaged}");
+        assert_eq!(results[4].1.as_deref(), Ok(&bytes[100..116]));
+        assert_eq!(
+            results[5].1.as_ref().unwrap_err(),
+            &format!("first byte {} is odd", bytes[101])
+        );
         assert!(loader.finished().is_empty());
         drop(loader);
         std::fs::remove_dir_all(&dir).unwrap();

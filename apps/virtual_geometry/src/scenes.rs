@@ -23,9 +23,21 @@ pub const DEFAULT_LIGHTS: u32 = 256;
 /// baked `.mlasset` file, or a mesh file baked on first use and cached (keyed by the
 /// file's bytes and the bake options), its progress logged while it bakes.
 pub fn load_asset(mesh: &Path, segments: u32) -> Result<MeshletAsset, SceneError> {
+    open_asset(mesh, segments, false)
+}
+
+/// [`load_asset`], and with `streamed` a baked `.mlasset` file opened for streaming
+/// ([`MeshletAsset::open_resident`]): only its resident part is read, its pages when the
+/// view needs them. A mesh baked on first use is held whole either way (it was built in
+/// memory, or is read whole from the cache), and streamed from memory.
+pub fn open_asset(mesh: &Path, segments: u32, streamed: bool) -> Result<MeshletAsset, SceneError> {
     if mesh.extension().is_some_and(|e| e == "mlasset") {
-        // Every check `meshlight inspect` runs, so nothing it rejects reaches the GPU.
-        return MeshletAsset::load_verified(mesh);
+        // Every check `meshlight inspect` runs, so nothing it rejects reaches the GPU
+        // (a streamed asset's pages are checked as they are read).
+        return match streamed {
+            true => MeshletAsset::open_resident(mesh),
+            false => MeshletAsset::load_verified(mesh),
+        };
     }
     let source = if mesh.as_os_str() == "procedural" {
         Source::Procedural { segments }
@@ -126,7 +138,8 @@ pub struct Placed {
 }
 
 /// Adds `asset` to `data` as mesh `name` and, when the scene streams, notes where its
-/// pages come from: the asset, held in memory.
+/// pages come from ([`PageSource::of`]: its file when it was opened for streaming, else
+/// the asset in memory).
 fn add_mesh(
     data: &mut SceneData,
     sources: &mut Vec<PageSource>,
@@ -135,7 +148,13 @@ fn add_mesh(
 ) -> Result<MeshId, meshlight::gpu_scene::SceneDataError> {
     let mesh = data.add_mesh(name, asset)?;
     if data.streaming().is_some() {
-        sources.push(PageSource::Memory(std::sync::Arc::new(asset.clone())));
+        let source = PageSource::of(&std::sync::Arc::new(asset.clone())).map_err(|e| {
+            meshlight::gpu_scene::SceneDataError::InvalidAsset {
+                name: name.to_string(),
+                reason: e.to_string(),
+            }
+        })?;
+        sources.push(source);
     }
     Ok(mesh)
 }

@@ -172,7 +172,10 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
         true => Loaded::Scene(load_gltf_scene(&o.mesh)?),
         false => match scenes::load_obj_with_materials(&o.mesh)? {
             Some((asset, materials)) => Loaded::Copies(asset, Some(materials)),
-            None => Loaded::Copies(scenes::load_asset(&o.mesh, o.segments)?, None),
+            None => Loaded::Copies(
+                scenes::open_asset(&o.mesh, o.segments, o.pool_mb.is_some())?,
+                None,
+            ),
         },
     };
     // The scene's buffers are bound whole: sized for the adapter the frame will run on.

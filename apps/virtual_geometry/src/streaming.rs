@@ -21,7 +21,7 @@ use meshlight::graph::file::{EntryKind, Pipeline, ResourceEntry};
 use meshlight::graph::{Executor, GraphBuilder, GraphError, Imports, Result};
 use meshlight::scene::MeshletAsset;
 use meshlight::scene::asset::format::SECTION_PAYLOAD;
-use meshlight::stream::loader::{Loader, PageFile, ReadJob};
+use meshlight::stream::loader::{Loader, PageCheck, PageFile, ReadJob};
 use meshlight::stream::streamer::PageFailure;
 use meshlight::stream::{Budget, Install, PageGraph, Request, Streamer};
 
@@ -45,11 +45,61 @@ pub const MAX_REQUESTS: u64 = 16384;
 /// Where a mesh's pages are read from.
 #[derive(Clone, Debug)]
 pub enum PageSource {
-    /// The asset's file, read a page at a time on the loader's threads.
-    File(Arc<PageFile>),
+    /// The asset's file, read a page at a time on the loader's threads; each page read
+    /// is checked against its checksum and then against `asset`, the file's resident
+    /// part ([`MeshletAsset::open_resident`]), before it may be installed.
+    File {
+        /// The file the pages are read from.
+        file: Arc<PageFile>,
+        /// Its resident part, which the scene holds.
+        asset: Arc<MeshletAsset>,
+    },
     /// An asset held whole in memory (built in the process, or loaded whole): a page is
     /// a copy of its words.
     Memory(Arc<MeshletAsset>),
+}
+
+impl PageSource {
+    /// Where `asset`'s pages come from: the file it was opened from for streaming
+    /// ([`MeshletAsset::open_resident`]), or the asset itself when it is held whole.
+    pub fn of(
+        asset: &Arc<MeshletAsset>,
+    ) -> std::result::Result<Self, meshlight::scene::SceneError> {
+        Ok(match asset.page_file() {
+            Some(path) => PageSource::File {
+                file: PageFile::open(path).map_err(|source| meshlight::scene::SceneError::Io {
+                    path: path.to_owned(),
+                    source,
+                })?,
+                asset: Arc::clone(asset),
+            },
+            None => PageSource::Memory(Arc::clone(asset)),
+        })
+    }
+
+    /// The asset (whole, or its resident part).
+    pub fn asset(&self) -> &Arc<MeshletAsset> {
+        match self {
+            PageSource::File { asset, .. } | PageSource::Memory(asset) => asset,
+        }
+    }
+}
+
+/// The check of page `group` of `asset` read from `file`, after its checksum: the checks
+/// [`MeshletAsset::open_resident`] leaves to each page.
+fn page_check(file: &Arc<PageFile>, asset: &Arc<MeshletAsset>, group: u32) -> PageCheck {
+    let (file, asset) = (Arc::clone(file), Arc::clone(asset));
+    PageCheck::new(move |bytes| {
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
+        asset.check_page(group as usize, &words).map_err(|e| {
+            format!(
+                "{}: page {group} is corrupt: {} {}; bake it again",
+                file.path().display(),
+                e.field,
+                e.problem
+            )
+        })
+    })
 }
 
 /// The resources a streamed frame adds to its pipeline, bound to the first culling pass
@@ -147,6 +197,8 @@ pub struct Streaming {
     streamer: Streamer,
     loader: Loader,
     sources: Vec<PageSource>,
+    /// Per mesh, its first page (its groups are its pages, in order).
+    first_page: Vec<u32>,
     marks: wgpu::Buffer,
     /// Request readbacks by frame, until both halves are in.
     back: BTreeMap<u64, RequestReadbacks>,
@@ -196,10 +248,14 @@ impl Streaming {
                 | wgpu::BufferUsages::COPY_DST
                 | wgpu::BufferUsages::COPY_SRC,
         );
+        let first_page = (0..data.meshes.len() as u32)
+            .map(|mesh| s.pages.partition_point(|p| p.mesh < mesh) as u32)
+            .collect();
         Ok(Self {
             streamer,
             loader,
             sources,
+            first_page,
             marks,
             back: BTreeMap::new(),
             stats: StreamStats::default(),
@@ -271,12 +327,17 @@ impl Streaming {
         for load in &plan.load {
             let page = &data.streaming().expect("a streamed scene").pages[load.page as usize];
             match &self.sources[page.mesh as usize] {
-                PageSource::File(file) => self.loader.submit(ReadJob {
+                PageSource::File { file, asset } => self.loader.submit(ReadJob {
                     page: load.page,
                     file: Arc::clone(file),
                     offset: page.file_offset,
                     bytes: load.bytes,
                     checksum: Some(page.checksum),
+                    check: Some(page_check(
+                        file,
+                        asset,
+                        load.page - self.first_page[page.mesh as usize],
+                    )),
                 }),
                 PageSource::Memory(asset) => {
                     let payload = asset.header().sections[SECTION_PAYLOAD].offset;

@@ -18,7 +18,6 @@ use meshlight::scene::asset::format::{NO_GROUP, SECTION_PAYLOAD};
 use meshlight::shaders::cpu::layout::{Cluster, View};
 use meshlight::shaders::cpu::rng::Rng;
 use meshlight::stream::cut::check;
-use meshlight::stream::loader::PageFile;
 use meshlight::stream::{Budget, MeshDag};
 use meshlight_virtual_geometry::scenes::{self, Placed};
 use meshlight_virtual_geometry::streaming::PageSource;
@@ -231,68 +230,82 @@ fn a_flight_through_a_small_pool_never_shows_a_hole() {
     assert!(paged > 1000, "the cuts drew {paged} meshlets of pages");
 }
 
-/// A page whose bytes on disk fail its checksum is refused, named, never installed, and
-/// neither is anything that needs it; the frames go on drawing complete cuts.
+/// A page whose bytes on disk fail its checksum, or pass it (resealed, as a hostile
+/// writer would) but fail the checks of its contents, is refused, named, never
+/// installed, and neither is anything that needs it; the frames go on drawing complete
+/// cuts. The asset is opened for streaming: only its resident part is read up front.
 #[test]
 fn a_damaged_page_is_refused_and_its_group_drawn_coarser() {
-    let placed = field(Some(all_pages()));
-    let assets = field_assets(&placed);
+    let assets = field_assets(&field(None));
     let dags: Vec<MeshDag> = assets.iter().map(|a| MeshDag::of_asset(a)).collect();
     let dir = std::env::temp_dir().join(format!("meshlight-stream-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("copies.mlasset");
-    // The coarsest page of the copies' mesh, one byte flipped on disk.
+    // The coarsest page of the copies' mesh is damaged on disk.
     let graph = dags[0].pages();
     let damaged = (0..graph.len() as u32)
         .find(|&p| graph.parents(p).is_empty())
         .unwrap();
-    let mut bytes = asset().bytes().to_vec();
-    let payload = asset().header().sections[SECTION_PAYLOAD].offset as usize * 4;
-    bytes[payload + asset().pages()[damaged as usize].first_word as usize * 4 + 3] ^= 0x40;
-    std::fs::write(&path, &bytes).unwrap();
-    let mut r = Renderer::new(
-        placed.data.clone(),
-        FrameSettings::new(W, H),
-        &GraphSource::Shipped,
-    )
-    .unwrap();
-    let sources = vec![
-        PageSource::File(PageFile::open(&path).unwrap()),
-        PageSource::Memory(Arc::clone(&assets[1])),
-    ];
-    r.start_streaming(sources, Budget::default(), 2).unwrap();
-    let mut failures = Vec::new();
-    for frame in 0..40u32 {
-        r.frame(&placed.camera).unwrap();
-        let s = r.streaming.as_mut().unwrap();
-        failures.extend(s.take_failures());
-        let mut view = placed.camera.view([W, H], frame, None);
-        view.lod_scale /= s.lod_scale();
-        check_complete_cuts(&r, &dags, &view);
-    }
-    let still = r.render_still(&placed.camera).unwrap();
-    assert!(still.counts.software + still.counts.hardware > 0);
-    assert_eq!(failures.len(), 1, "{failures:?}");
-    assert_eq!(failures[0].page, damaged);
-    assert!(
-        failures[0].reason.contains("fails its checksum"),
-        "{}",
-        failures[0].reason
-    );
-    assert!(
-        failures[0].reason.contains("copies.mlasset"),
-        "{}",
-        failures[0].reason
-    );
-    // Neither it nor anything below it was installed.
-    let pages = &r.data.streaming().unwrap().pages;
-    let mut below = vec![damaged];
-    while let Some(p) = below.pop() {
-        assert!(
-            pages[p as usize].resident_at.is_none(),
-            "page {p} installed"
-        );
-        below.extend_from_slice(graph.dependents(p));
+    let payload = asset().header().sections[SECTION_PAYLOAD].offset as usize;
+    let range = asset().pages()[damaged as usize].range();
+    let first = payload + range.start;
+    // One byte flipped: the page's checksum refuses it.
+    let mut flipped: Vec<u32> = bytemuck::cast_slice(asset().bytes()).to_vec();
+    flipped[first] ^= 0x4000_0000;
+    // The first bit flip whose page the content checks refuse, the checksums resealed.
+    let mut resealed: Vec<u32> = bytemuck::cast_slice(asset().bytes()).to_vec();
+    let bit = (0..range.len() * 32)
+        .find(|&b| {
+            let mut page = asset().payload()[range.clone()].to_vec();
+            page[b / 32] ^= 1 << (b % 32);
+            asset().check_page(damaged as usize, &page).is_err()
+        })
+        .expect("a flip the page checks refuse");
+    resealed[first + bit / 32] ^= 1 << (bit % 32);
+    meshlight::scene::asset::checksum::seal(&mut resealed);
+    for (name, words, says) in [
+        ("copies.mlasset", flipped, "fails its checksum"),
+        ("resealed.mlasset", resealed, "is corrupt"),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, bytemuck::cast_slice::<u32, u8>(&words)).unwrap();
+        // The scene holds the file's resident part, as `render --pool-mb` does.
+        let opened = Arc::new(MeshletAsset::open_resident(&path).unwrap());
+        let mut placed = scenes::field(SceneData::streamed(Limits::default()), &opened, 9).unwrap();
+        placed.data.reserve_pool(all_pages()).unwrap();
+        let mut r =
+            Renderer::new(placed.data, FrameSettings::new(W, H), &GraphSource::Shipped).unwrap();
+        let sources = vec![
+            PageSource::of(&opened).unwrap(),
+            PageSource::Memory(Arc::clone(&assets[1])),
+        ];
+        assert!(matches!(sources[0], PageSource::File { .. }));
+        r.start_streaming(sources, Budget::default(), 2).unwrap();
+        let mut failures = Vec::new();
+        for frame in 0..40u32 {
+            r.frame(&placed.camera).unwrap();
+            let s = r.streaming.as_mut().unwrap();
+            failures.extend(s.take_failures());
+            let mut view = placed.camera.view([W, H], frame, None);
+            view.lod_scale /= s.lod_scale();
+            check_complete_cuts(&r, &dags, &view);
+        }
+        let still = r.render_still(&placed.camera).unwrap();
+        assert!(still.counts.software + still.counts.hardware > 0);
+        assert_eq!(failures.len(), 1, "{name}: {failures:?}");
+        assert_eq!(failures[0].page, damaged);
+        let reason = &failures[0].reason;
+        assert!(reason.contains(says), "{name}: {reason}");
+        assert!(reason.contains(name), "{name}: {reason}");
+        // Neither it nor anything below it was installed.
+        let pages = &r.data.streaming().unwrap().pages;
+        let mut below = vec![damaged];
+        while let Some(p) = below.pop() {
+            assert!(
+                pages[p as usize].resident_at.is_none(),
+                "{name}: page {p} installed"
+            );
+            below.extend_from_slice(graph.dependents(p));
+        }
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -30,6 +30,9 @@ pub struct MeshletAsset {
     /// Passed every check `inspect` runs ([`MeshletAsset::load_verified`],
     /// [`MeshletAsset::verified`]), so whoever uploads it need not check it again.
     dag_verified: bool,
+    /// Opened for streaming ([`MeshletAsset::open_resident`]): `words` ends with the
+    /// resident part, and the pages are read from this file as needed.
+    page_file: Option<PathBuf>,
 }
 
 /// Assets are equal when their bytes are: whether one was verified is not part of it.
@@ -187,6 +190,19 @@ impl MeshletAsset {
         path: &Path,
         dag: bool,
     ) -> Result<Self, SceneError> {
+        Self::from_prefix_checked(words, len, path, dag, None)
+    }
+
+    /// [`MeshletAsset::from_words_checked`] of the first `words` of a file of `len` bytes:
+    /// the whole file, or with `page_file` (an asset opened for streaming) its resident
+    /// part, whose pages are then checked as they are read ([`MeshletAsset::check_page`]).
+    fn from_prefix_checked(
+        words: Vec<u32>,
+        len: u64,
+        path: &Path,
+        dag: bool,
+        page_file: Option<PathBuf>,
+    ) -> Result<Self, SceneError> {
         let p = || path.to_owned();
         let corrupt = |reason: String| SceneError::AssetCorrupt { path: p(), reason };
         let header_words = AssetHeader::WORDS;
@@ -236,9 +252,11 @@ impl MeshletAsset {
             return Err(corrupt(format!("{len} bytes where the header says {size}")));
         }
         let stored = header.checksum[0] as u64 | ((header.checksum[1] as u64) << 32);
+        let total_words = size / 4;
         let asset = Self {
             words,
             dag_verified: false,
+            page_file,
         };
         // The resident part's end comes from the header, not yet trusted: clamped, a
         // wrong one gives a checksum that does not match rather than a panic.
@@ -253,10 +271,12 @@ impl MeshletAsset {
                 )
             },
             || {
-                asset.validate().map_err(|e| SceneError::AssetField {
-                    path: p(),
-                    field: e.field,
-                    problem: e.problem,
+                validate::validate_prefix(&asset.words, total_words).map_err(|e| {
+                    SceneError::AssetField {
+                        path: p(),
+                        field: e.field,
+                        problem: e.problem,
+                    }
                 })?;
                 if dag {
                     asset.verify_dag(path)?;
@@ -273,7 +293,10 @@ impl MeshletAsset {
         }
         checked?;
         // The pages after the structure: their ranges are trusted only once validated.
-        asset.check_pages(path)?;
+        // An asset opened for streaming has read none of them yet.
+        if asset.page_file.is_none() {
+            asset.check_pages(path)?;
+        }
         Ok(Self {
             dag_verified: dag,
             ..asset
@@ -306,6 +329,77 @@ impl MeshletAsset {
     pub fn load_verified(path: &Path) -> Result<Self, SceneError> {
         let (words, len) = Self::read_words(path)?;
         Self::from_words_checked(words, len, path, true)
+    }
+
+    /// Opens an asset for streaming: reads only its resident part (the header, every
+    /// record, the culling hierarchy and the roots' payload: [`Self::resident_bytes`])
+    /// and checks it as [`MeshletAsset::load_verified`] checks a whole file, except for
+    /// what needs the pages' bytes: each page is checked when it is read
+    /// ([`MeshletAsset::check_page`], after its checksum), and the crack check, which
+    /// compares neighbouring pages, is left to `bake` and `inspect`. The asset's
+    /// [`Self::payload`] is the roots' alone; its pages are read from
+    /// [`Self::page_file`].
+    pub fn open_resident(path: &Path) -> Result<Self, SceneError> {
+        crate::input::regular_file(path)?;
+        let mut file = std::fs::File::open(path).map_err(|e| SceneError::io(path, e))?;
+        let len = file.metadata().map_err(|e| SceneError::io(path, e))?.len();
+        let header_words = AssetHeader::WORDS;
+        if len < (header_words * 4) as u64 {
+            // Too short for a header: the whole-file load names what is wrong.
+            return Self::load(path);
+        }
+        let mut header = vec![0u32; header_words];
+        file.read_exact(bytemuck::cast_slice_mut(&mut header))
+            .map_err(|e| SceneError::io(path, e))?;
+        let h: &AssetHeader = bytemuck::from_bytes(bytemuck::cast_slice(&header));
+        // Untrusted until checked: clamped to the file, a wrong end gives a checksum or
+        // structure error rather than a huge read.
+        let end = (h.sections[SECTION_PAYLOAD].offset as u64 + h.resident_words as u64)
+            .clamp(header_words as u64, len.div_ceil(4));
+        let mut words = header;
+        words.resize(end as usize, 0);
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut words);
+        let read = (end * 4).min(len) as usize;
+        file.read_exact(&mut bytes[header_words * 4..read])
+            .map_err(|e| SceneError::io(path, e))?;
+        Self::from_prefix_checked(words, len, path, true, Some(path.to_owned()))
+    }
+
+    /// Where an asset opened with [`MeshletAsset::open_resident`] reads its pages from;
+    /// `None` for one held whole.
+    pub fn page_file(&self) -> Option<&Path> {
+        self.page_file.as_deref()
+    }
+
+    /// How many meshlets, from the first, have their data in [`Self::payload`]: all of
+    /// them, or the roots of an asset opened for streaming (stored first).
+    pub fn held_meshlets(&self) -> usize {
+        match self.page_file {
+            None => self.meshlets().len(),
+            Some(_) => (self.header().root_count as usize).min(self.meshlets().len()),
+        }
+    }
+
+    /// Checks page `group`'s `words` as read from [`Self::page_file`] (after its
+    /// checksum): what loading a whole file checks of the page's meshlets' data, and
+    /// what `inspect` checks of each meshlet alone. An error names the page's first
+    /// problem.
+    pub fn check_page(&self, group: usize, words: &[u32]) -> Result<(), validate::Invalid> {
+        let (Some(page), Some(g)) = (self.pages().get(group), self.groups().get(group)) else {
+            return Err(validate::Invalid {
+                field: "page".into(),
+                problem: format!("{group} is past the asset's {} pages", self.pages().len()),
+            });
+        };
+        // Validated at open: a page's meshlets are one range.
+        let first = self.group_children(g)[0] as usize;
+        validate::check_page_data(
+            self.header(),
+            self.meshlets(),
+            page,
+            first..first + g.child_count as usize,
+            words,
+        )
     }
 
     /// This asset after every check of [`MeshletAsset::check_all`], marked so that
@@ -349,6 +443,16 @@ impl MeshletAsset {
     /// Writes the file image to `path` as it is: the words are already the file, with
     /// header and checksum, so saving is one write.
     pub fn save(&self, path: &Path) -> Result<(), SceneError> {
+        if let Some(file) = &self.page_file {
+            return Err(SceneError::Write {
+                path: PathBuf::from(path),
+                source: std::io::Error::other(format!(
+                    "the asset was opened for streaming and holds its resident part only; \
+                     copy {} instead",
+                    file.display()
+                )),
+            });
+        }
         std::fs::write(path, self.bytes()).map_err(|source| SceneError::Write {
             path: PathBuf::from(path),
             source,
@@ -365,9 +469,10 @@ impl MeshletAsset {
         bytemuck::from_bytes(bytemuck::cast_slice(&self.words[..AssetHeader::WORDS]))
     }
 
+    /// A section; the payload of an asset opened for streaming ends with the roots'.
     fn section(&self, i: usize) -> &[u32] {
         let s = self.header().sections[i];
-        &self.words[s.offset as usize..(s.offset + s.words) as usize]
+        &self.words[s.offset as usize..((s.offset + s.words) as usize).min(self.words.len())]
     }
 
     /// The meshlet records, in place, as the GPU receives them.
@@ -392,7 +497,9 @@ impl MeshletAsset {
             [group.first_child as usize..(group.first_child + group.child_count) as usize]
     }
 
-    /// Packed vertex and index words, addressed by [`MeshletRecord::data_offset`].
+    /// Packed vertex and index words, addressed by [`MeshletRecord::data_offset`]; of an
+    /// asset opened for streaming ([`Self::open_resident`]), the roots' alone, and its
+    /// other meshlets are not decoded from it.
     pub fn payload(&self) -> &[u32] {
         self.section(SECTION_PAYLOAD)
     }

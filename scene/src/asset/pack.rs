@@ -246,6 +246,7 @@ impl MeshletAsset {
         Self {
             words,
             dag_verified: false,
+            page_file: None,
         }
     }
 }

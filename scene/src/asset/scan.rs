@@ -44,9 +44,10 @@ pub struct MeshletScan {
     pub boundary: u64,
 }
 
-/// Scans every meshlet, in parallel; the result is in meshlet order.
+/// Scans every meshlet whose data the asset holds (all of them, or the roots of one
+/// opened for streaming), in parallel; the result is in meshlet order.
 pub fn scan_meshlets(asset: &MeshletAsset, keys: &ChainKeys) -> Vec<MeshletScan> {
-    let meshlets = asset.meshlets();
+    let meshlets = &asset.meshlets()[..asset.held_meshlets()];
     // Chunks of meshlets keep rayon's per-item overhead off meshlets this small, and
     // share one array of vertex words.
     const CHUNK: usize = 64;

@@ -35,8 +35,15 @@ fn finite_sphere(s: [f32; 4]) -> bool {
 
 /// Checks `words`, a whole file image whose size and checksum already match its header.
 pub fn validate(words: &[u32]) -> Result<(), Invalid> {
+    validate_prefix(words, words.len() as u64)
+}
+
+/// Checks the first `words` of a file of `total` words whose size and checksum already
+/// match its header: the whole file, or (an asset opened for streaming) at least every
+/// section before the payload. The records are checked whole; a meshlet whose data lies
+/// past `words` has its data checked when its page is read ([`check_page_data`]).
+pub fn validate_prefix(words: &[u32], total: u64) -> Result<(), Invalid> {
     let h: &AssetHeader = bytemuck::from_bytes(bytemuck::cast_slice(&words[..AssetHeader::WORDS]));
-    let total = words.len() as u64;
 
     if h.flags & !KNOWN_FLAGS != 0 {
         return Err(bad(
@@ -95,9 +102,17 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         h.group_count,
         "group",
     )?;
+    // The payload is last and may be cut short; every section before it is in `words`.
+    let payload_words = h.sections[SECTION_PAYLOAD].words as u64;
+    if (words.len() as u64) < h.sections[SECTION_PAYLOAD].offset as u64 {
+        return Err(bad(
+            format!("header.sections[{SECTION_PAYLOAD}].offset"),
+            "lies past the part of the file that was read",
+        ));
+    }
     let section = |i: usize| {
         let s = h.sections[i];
-        &words[s.offset as usize..(s.offset + s.words) as usize]
+        &words[s.offset as usize..((s.offset + s.words) as usize).min(words.len())]
     };
     let meshlets: &[MeshletRecord] = bytemuck::cast_slice(section(SECTION_MESHLETS));
     let groups: &[GroupRecord] = bytemuck::cast_slice(section(SECTION_GROUPS));
@@ -287,7 +302,7 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ));
         }
         let layout = PayloadLayout::of(m, h.flags);
-        if m.data_offset as u64 + layout.end as u64 > payload.len() as u64 {
+        if m.data_offset as u64 + layout.end as u64 > payload_words {
             return Err(bad(f("data_offset"), "puts its data outside the payload"));
         }
         if m.data_offset as u64 != payload_end {
@@ -301,30 +316,12 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
             ));
         }
         payload_end += layout.end as u64;
-        let data = &payload[m.data_offset as usize..(m.data_offset + layout.end) as usize];
-        if let Some((k, p)) = vertex_outside_bounds(h, m, data, &sphere_limit) {
-            return Err(bad(
-                f("data_offset"),
-                format!(
-                    "points at vertex records that decode to {p:?} on axis {k}, outside the \
-                     header's bounds {:?}..{:?} (the grid's rounding allowed)",
-                    h.bounds_min, h.bounds_max
-                ),
-            ));
-        }
-        if has_uvs {
-            let at = (m.data_offset + layout.uvs) as usize;
-            if let Some(k) = (0..2).find(|&k| payload[at + k] >> 24 > UV_MAX_SHIFT) {
-                return Err(bad(
-                    f("data_offset"),
-                    format!(
-                        "points at a UV block whose {} offsets are shifted by {}; at most \
-                         {UV_MAX_SHIFT} reaches every code of the UV grid",
-                        ["u", "v"][k],
-                        payload[at + k] >> 24
-                    ),
-                ));
-            }
+        // Data past what was read is checked when its page is.
+        if let Some(data) =
+            payload.get(m.data_offset as usize..(m.data_offset + layout.end) as usize)
+        {
+            meshlet_data(h, m, &layout, data, &sphere_limit)
+                .map_err(|p| bad(f("data_offset"), p))?;
         }
         if level == 0 {
             lod0_meshlets += 1;
@@ -334,13 +331,12 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
         vertices += vc as u64;
         roots += (m.parent_group == NO_GROUP) as u64;
     }
-    if payload_end != payload.len() as u64 {
+    if payload_end != payload_words {
         return Err(bad(
             format!("header.sections[{SECTION_PAYLOAD}].words"),
             format!(
-                "the payload holds {} words, but the meshlets' data ends at word {payload_end}; \
-                 every payload word belongs to one meshlet",
-                payload.len()
+                "the payload holds {payload_words} words, but the meshlets' data ends at word \
+                 {payload_end}; every payload word belongs to one meshlet"
             ),
         ));
     }
@@ -432,6 +428,107 @@ pub fn validate(words: &[u32]) -> Result<(), Invalid> {
     )?;
     let nodes: &[NodeRecord] = bytemuck::cast_slice(section(SECTION_NODES));
     hierarchy(meshlets, groups, nodes, section(SECTION_NODE_CLUSTERS))
+}
+
+/// The checks of one meshlet's `data` (its payload words, `layout.end` of them) that
+/// the structure relies on: its vertices within the header's bounds and its UV blocks'
+/// shifts in range. The problem, worded to follow `meshlet[i].data_offset`.
+fn meshlet_data(
+    h: &AssetHeader,
+    m: &MeshletRecord,
+    layout: &PayloadLayout,
+    data: &[u32],
+    sphere_limit: &SphereLimit,
+) -> Result<(), String> {
+    if let Some((k, p)) = vertex_outside_bounds(h, m, data, sphere_limit) {
+        return Err(format!(
+            "points at vertex records that decode to {p:?} on axis {k}, outside the \
+             header's bounds {:?}..{:?} (the grid's rounding allowed)",
+            h.bounds_min, h.bounds_max
+        ));
+    }
+    if h.has_uvs() {
+        let at = layout.uvs as usize;
+        if let Some(k) = (0..2).find(|&k| data[at + k] >> 24 > UV_MAX_SHIFT) {
+            return Err(format!(
+                "points at a UV block whose {} offsets are shifted by {}; at most \
+                 {UV_MAX_SHIFT} reaches every code of the UV grid",
+                ["u", "v"][k],
+                data[at + k] >> 24
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Checks a page's words as read from the file, for an asset opened for streaming
+/// (whose structure [`validate_prefix`] checked): the page is `group`'s, `words` long as
+/// its record says, and each of its meshlets' data passes what a whole file's load
+/// checks (vertices within the bounds, UV shifts) and what `inspect` checks of one
+/// meshlet (triangle corners within its vertices, vertices within its culling sphere).
+/// The page's checksum is the reader's to check, before this.
+pub fn check_page_data(
+    h: &AssetHeader,
+    meshlets: &[MeshletRecord],
+    page: &PageRecord,
+    children: std::ops::Range<usize>,
+    words: &[u32],
+) -> Result<(), Invalid> {
+    if words.len() as u64 != page.words as u64 {
+        return Err(bad(
+            "page",
+            format!(
+                "is {} words where its record says {}",
+                words.len(),
+                page.words
+            ),
+        ));
+    }
+    let sphere_limit = SphereLimit::of(h);
+    for i in children {
+        let m = &meshlets[i];
+        let f = |name: &str| format!("meshlet[{i}].{name}");
+        let layout = PayloadLayout::of(m, h.flags);
+        // `validate_prefix` checked that the page's meshlets tile its range.
+        let start = (m.data_offset - page.first_word) as usize;
+        let data = &words[start..start + layout.end as usize];
+        meshlet_data(h, m, &layout, data, &sphere_limit).map_err(|p| bad(f("data_offset"), p))?;
+        let (vc, tc) = (m.vertex_count(), m.triangle_count());
+        let block = &data[layout.triangles as usize..layout.uvs as usize];
+        if let Some(t) = super::triangles::first_out_of_range(block, m.triangle_bits(), vc, tc) {
+            return Err(bad(
+                f("triangles"),
+                format!("triangle {t} refers past the meshlet's {vc} vertices"),
+            ));
+        }
+        let centre = [m.bounds[0], m.bounds[1], m.bounds[2]].map(f64::from);
+        let reach = m.bounds[3] as f64 * (1.0 + 1e-5)
+            + 1e-6 * centre.iter().fold(0.0f64, |a, c| a.max(c.abs()));
+        let (origin, step) = (h.quant_origin.map(f64::from), h.quant_step as f64);
+        let bits = m.axis_bits();
+        let stride = m.vertex_stride() as usize;
+        for v in 0..vc as usize {
+            let mut at = v * stride;
+            let mut d2 = 0.0f64;
+            for k in 0..3 {
+                let q = m.grid_min[k].wrapping_add(get_bits(data, at, bits[k]).unwrap_or(0));
+                at += bits[k] as usize;
+                let d = origin[k] + q as f64 * step - centre[k];
+                d2 += d * d;
+            }
+            if d2.sqrt() > reach {
+                return Err(bad(
+                    f("bounds"),
+                    format!(
+                        "vertex {v} lies {} from the centre of the culling sphere of radius {}",
+                        d2.sqrt(),
+                        m.bounds[3]
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// How far a group's LOD sphere may reach beyond the mesh's bounds, in multiples of
