@@ -46,6 +46,8 @@ pub mod damaged;
 #[cfg(feature = "build")]
 pub mod deviation;
 #[cfg(feature = "build")]
+pub mod glb;
+#[cfg(feature = "build")]
 pub mod greedy_meshlets;
 #[cfg(feature = "build")]
 pub mod grouping;
@@ -68,6 +70,8 @@ pub mod texture;
 pub mod uv_slide;
 #[cfg(feature = "build")]
 pub mod weld;
+#[cfg(feature = "build")]
+pub mod world;
 
 #[cfg(feature = "build")]
 pub use dag::{Dag, DagOptions, build_dag};
@@ -78,6 +82,8 @@ pub use mesh::{CleanReport, Mesh};
 #[cfg(feature = "build")]
 pub use pipeline::{BuildOptions, Built, build_asset};
 #[cfg(feature = "build")]
-pub use procedural::{DEFAULT_SEGMENTS, procedural_mesh};
+pub use procedural::{DEFAULT_SEGMENTS, Knot, knot_mesh, procedural_mesh};
 #[cfg(feature = "build")]
 pub use terrain::Terrain;
+#[cfg(feature = "build")]
+pub use world::World;

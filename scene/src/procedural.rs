@@ -27,8 +27,37 @@ fn grid(segments: u32) -> (u32, u32) {
 /// (segments ≥ 3). Same segments, same bytes, on every machine: only `sin`/`cos` of
 /// `f32`, evaluated in a fixed order.
 pub fn procedural_mesh(segments: u32) -> Mesh {
+    knot_mesh(segments, Knot::DEFAULT)
+}
+
+/// The shape of a bumpy torus knot: the default mesh's, or one of a family of others
+/// (a generated world places a different one on each tile).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Knot {
+    /// Turns around the axis of symmetry (coprime with `q` for one closed tube).
+    pub p: u32,
+    /// Turns through the torus's hole.
+    pub q: u32,
+    /// Shifts the bumps along the tube and around it: knots differing only in it have
+    /// their bumps in other places.
+    pub phase: f32,
+}
+
+impl Knot {
+    /// The default mesh's: a (3,5) knot.
+    pub const DEFAULT: Knot = Knot {
+        p: 3,
+        q: 5,
+        phase: 0.0,
+    };
+}
+
+/// A bumpy `knot` with `16 × segments²` triangles, closed and manifold as
+/// [`procedural_mesh`] is (which is `knot_mesh(segments, Knot::DEFAULT)`).
+pub fn knot_mesh(segments: u32, knot: Knot) -> Mesh {
     let (along, around) = grid(segments);
-    let (p, q) = (3.0f32, 5.0f32);
+    let (p, q) = (knot.p as f32, knot.q as f32);
+    let phase = knot.phase;
     let curve = |t: f32| {
         let r = 2.0 + (q * t).cos();
         Vec3::new(r * (p * t).cos(), r * (p * t).sin(), -(q * t).sin())
@@ -47,9 +76,9 @@ pub fn procedural_mesh(segments: u32) -> Mesh {
         let up = side.cross(tangent);
         for j in 0..around {
             let s = TAU * j as f32 / around as f32;
-            let bumps = 0.06 * (7.0 * t).sin() * (3.0 * s).sin()
-                + 0.03 * (41.0 * t + 2.0 * s).sin()
-                + 0.015 * (97.0 * t).cos() * (9.0 * s).cos();
+            let bumps = 0.06 * (7.0 * t + phase).sin() * (3.0 * s).sin()
+                + 0.03 * (41.0 * t + 2.0 * s + phase).sin()
+                + 0.015 * (97.0 * t).cos() * (9.0 * s + phase).cos();
             let radius = 0.45 * (1.0 + bumps);
             positions.push(c + radius * (side * s.cos() + up * s.sin()));
         }
@@ -65,7 +94,13 @@ pub fn procedural_mesh(segments: u32) -> Mesh {
         }
     }
     let mut mesh = Mesh {
-        source: format!("procedural torus knot ({segments} segments)"),
+        source: match knot == Knot::DEFAULT {
+            true => format!("procedural torus knot ({segments} segments)"),
+            false => format!(
+                "procedural ({}, {}) torus knot, phase {} ({segments} segments)",
+                knot.p, knot.q, knot.phase
+            ),
+        },
         positions,
         normals: Vec::new(),
         uvs: Vec::new(),

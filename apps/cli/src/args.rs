@@ -6,7 +6,7 @@ use meshlight::resolve::DebugView;
 use meshlight::scene::compress::PositionBits;
 use meshlight::scene::load::DEFAULT_TRIANGLE_BUDGET;
 use meshlight::scene::mesh::MAX_TRIANGLES;
-use meshlight::scene::{DEFAULT_SEGMENTS, Grouping};
+use meshlight::scene::{DEFAULT_SEGMENTS, Grouping, World};
 use meshlight_virtual_geometry::{SceneOptions, scenes};
 use std::path::PathBuf;
 
@@ -96,6 +96,41 @@ fn view_parser() -> impl clap::builder::TypedValueParser<Value = DebugView> {
     use clap::builder::TypedValueParser as _;
     clap::builder::PossibleValuesParser::new(DebugView::ALL.map(DebugView::name))
         .try_map(|name| DebugView::parse(&name))
+}
+
+/// The generated world `generate` writes (see `meshlight::scene::World`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct GenerateArgs {
+    /// Directory to write the meshes under (`ground/…glb`, `knots/…glb`).
+    pub output: PathBuf,
+    /// Tiles per side: tiles² grounds and as many knots.
+    #[arg(long, default_value_t = World::default().tiles, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub tiles: u32,
+    /// Side of a tile, in world units.
+    #[arg(long, default_value_t = World::default().tile_size)]
+    pub tile_size: f32,
+    /// Grid cells per tile side (2 · cells² triangles a ground).
+    #[arg(long, default_value_t = World::default().cells, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub cells: u32,
+    /// Tube segments of each knot (16 · segments² triangles); 0: no knots.
+    #[arg(long, default_value_t = World::default().knot_segments, value_parser = clap::value_parser!(u32).range(0..=1024))]
+    pub knot_segments: u32,
+    /// Seed of the hills and the knots' shapes.
+    #[arg(long, default_value_t = World::default().seed)]
+    pub seed: u32,
+}
+
+impl GenerateArgs {
+    /// The world these arguments describe.
+    pub fn world(&self) -> World {
+        World {
+            tiles: self.tiles,
+            tile_size: self.tile_size,
+            cells: self.cells,
+            knot_segments: self.knot_segments,
+            seed: self.seed,
+        }
+    }
 }
 
 /// Build a meshlet LOD asset from a mesh file.

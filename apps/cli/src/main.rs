@@ -38,6 +38,10 @@ enum Command {
     /// Build a meshlet LOD asset from a mesh file, or every mesh file under a directory
     /// (mirrored under the output directory, up-to-date outputs skipped).
     Bake(args::BakeArgs),
+    /// Write a generated world of unique geometry (a grid of terrain tiles, a knot of its
+    /// own shape on each) as mesh files under a directory, to bake with `bake DIR -o OUT`
+    /// and draw with `render --mesh OUT`: a scene larger than GPU memory for streaming.
+    Generate(args::GenerateArgs),
     /// Print an asset's header and DAG statistics and verify its invariants.
     Inspect {
         /// Asset file written by `meshlight bake`.
@@ -96,6 +100,7 @@ fn main() -> ExitCode {
         Command::Graph(a) => graph(a),
         Command::Bench(a) => meshlight_bench::run(&a.options()),
         Command::Bake(a) => bake(a),
+        Command::Generate(a) => generate(a),
         Command::Inspect { file } => meshlight_cli::inspect::run(&file).map_err(Into::into),
         Command::Info => meshlight_cli::info::report()
             .and_then(|text| meshlight_output::write_stdout(&text).map_err(Into::into)),
@@ -170,6 +175,24 @@ fn bake(a: args::BakeArgs) -> Result<(), Box<dyn std::error::Error>> {
         pool.install(|| meshlight_cli::bake_file::run(&a.options()))
             .map_err(Into::into)
     }
+}
+
+/// Writes the world's meshes and a line saying what was written.
+fn generate(a: args::GenerateArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let world = a.world();
+    world.check()?;
+    let start = std::time::Instant::now();
+    let bytes = world.write(&a.output, &|_, _| {})?;
+    meshlight_output::write_stdout(&format!(
+        "{}: {} meshes, {} triangles, {:.1} MiB of glTF in {:.1} s; bake with `meshlight bake {} -o ASSETS`\n",
+        a.output.display(),
+        world.mesh_count(),
+        world.triangle_count(),
+        bytes as f64 / (1u64 << 20) as f64,
+        start.elapsed().as_secs_f64(),
+        a.output.display(),
+    ))?;
+    Ok(())
 }
 
 fn graph(a: GraphArgs) -> Result<(), Box<dyn std::error::Error>> {

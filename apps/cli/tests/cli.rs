@@ -1135,3 +1135,73 @@ fn every_output_argument_names_the_path_it_cannot_write() {
         );
     }
 }
+
+/// `generate` writes a world, `bake DIR` bakes it, and `render --mesh OUT` draws the
+/// directory of assets: resident, and streamed through a pool far smaller than the
+/// assets (only their resident parts read up front), the same image once streaming
+/// has settled.
+#[test]
+fn a_generated_world_bakes_and_renders_resident_and_streamed() {
+    let dir = scratch("world");
+    let (meshes, assets) = (dir.join("meshes"), dir.join("assets"));
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    let out = meshlight_ok(&[
+        "generate",
+        &s(&meshes),
+        "--tiles",
+        "2",
+        "--cells",
+        "96",
+        "--knot-segments",
+        "24",
+    ]);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(said.contains("8 meshes"), "{said}");
+    meshlight_ok(&["bake", &s(&meshes), "-o", &s(&assets)]);
+    let asset_bytes: u64 = ["ground", "knots"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(assets.join(d)).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "mlasset"))
+        .map(|p| std::fs::metadata(p).unwrap().len())
+        .sum();
+    assert!(asset_bytes > 1 << 20, "{asset_bytes} bytes of assets");
+    let render = |png: &Path, pool: Option<&str>| {
+        let mut args = vec![
+            "render".to_string(),
+            "--mesh".into(),
+            s(&assets),
+            "--width".into(),
+            "160".into(),
+            "--height".into(),
+            "90".into(),
+            "-o".into(),
+            s(png),
+        ];
+        if let Some(mb) = pool {
+            args.extend(["--pool-mb".into(), mb.into()]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = meshlight_ok(&args);
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    render(&dir.join("resident.png"), None);
+    let report = render(&dir.join("streamed.png"), Some("1"));
+    assert!(report.contains("streamed: settled after"), "{report}");
+    assert!(report.contains("0 refused"), "{report}");
+    assert_eq!(
+        std::fs::read(dir.join("resident.png")).unwrap(),
+        std::fs::read(dir.join("streamed.png")).unwrap(),
+        "the settled streamed image differs from the resident one"
+    );
+    // An empty directory names what to do.
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let out = meshlight(&["render", "--mesh", &s(&empty), "-o", &s(&dir.join("x.png"))]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("holds no .mlasset files"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

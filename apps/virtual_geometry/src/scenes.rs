@@ -455,6 +455,85 @@ pub fn lattice(
     })
 }
 
+/// Every `.mlasset` file under `dir` and its folders (what `meshlight bake DIR -o OUT`
+/// writes), in path order, opened in parallel: whole with every check `inspect` runs,
+/// or with `streamed` only their resident parts ([`open_asset`]). Each comes with its
+/// path relative to `dir`, its name in messages.
+pub fn load_library(dir: &Path, streamed: bool) -> Result<Vec<(String, MeshletAsset)>, SceneError> {
+    use rayon::prelude::*;
+    let mut files = Vec::new();
+    let mut folders = vec![dir.to_path_buf()];
+    while let Some(folder) = folders.pop() {
+        let entries = std::fs::read_dir(&folder).map_err(|source| SceneError::Io {
+            path: folder.clone(),
+            source,
+        })?;
+        for entry in entries {
+            let entry = entry.map_err(|source| SceneError::Io {
+                path: folder.clone(),
+                source,
+            })?;
+            let path = entry.path();
+            // Links are not followed: a link to a parent would never end.
+            let kind = entry.file_type().map_err(|source| SceneError::Io {
+                path: path.clone(),
+                source,
+            })?;
+            if kind.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|e| e == "mlasset") {
+                files.push(path);
+            }
+        }
+    }
+    if files.is_empty() {
+        return Err(SceneError::InvalidOption(format!(
+            "{} holds no .mlasset files; bake a directory of meshes into it first \
+             (`meshlight bake MESHES -o {}`)",
+            dir.display(),
+            dir.display()
+        )));
+    }
+    files.sort();
+    files
+        .par_iter()
+        .map(|path| {
+            let name = path.strip_prefix(dir).unwrap_or(path).display().to_string();
+            Ok((name, open_asset(path, 0, streamed)?))
+        })
+        .collect()
+}
+
+/// A directory of baked assets as one scene ([`load_library`]): each asset once, where
+/// it was baked (a generated world's tiles are baked in world space), in the palette's
+/// colours in turn, lit by the sun, seen from above one corner of their bounds.
+pub fn library(
+    mut data: SceneData,
+    assets: &[(String, MeshletAsset)],
+) -> Result<Placed, meshlight::gpu_scene::SceneDataError> {
+    let materials = palette(&mut data)?;
+    let mut sources = Vec::new();
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for (i, (name, asset)) in assets.iter().enumerate() {
+        let mesh = add_mesh(&mut data, &mut sources, name, asset)?;
+        data.add_instance(mesh, Mat4::IDENTITY, materials[i % materials.len()])?;
+        lo = lo.min(Vec3::from(asset.header().bounds_min));
+        hi = hi.max(Vec3::from(asset.header().bounds_max));
+    }
+    let (centre, radius) = (0.5 * (lo + hi), (0.5 * (hi - lo)).length().max(1e-6));
+    let camera = Camera::perspective(
+        centre + Vec3::new(-0.7, 0.45, -0.7).normalize() * radius * 1.2,
+        centre,
+        50f32.to_radians(),
+        radius * 1e-4,
+    );
+    Ok(Placed {
+        data,
+        camera,
+        sources,
+    })
+}
+
 /// One instance at the origin, and a camera that frames it (for `--instances 1`).
 pub fn single(
     data: SceneData,

@@ -152,6 +152,8 @@ pub enum SetupError {
 /// What the mesh argument gave: a glTF scene, or one mesh to place copies of.
 enum Loaded {
     Scene(GltfScene),
+    /// A directory of baked assets, each drawn once where it was baked.
+    Library(Vec<(String, MeshletAsset)>),
     /// The asset, and an OBJ's own materials where its `.mtl` gives some.
     Copies(MeshletAsset, Option<Vec<ObjMaterial>>),
 }
@@ -170,6 +172,9 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     // Read (and baked) before the adapter is asked for, so a bad file costs nothing.
     let loaded = match o.is_gltf_scene() {
         true => Loaded::Scene(load_gltf_scene(&o.mesh)?),
+        false if o.mesh.is_dir() => {
+            Loaded::Library(scenes::load_library(&o.mesh, o.pool_mb.is_some())?)
+        }
         false => match scenes::load_obj_with_materials(&o.mesh)? {
             Some((asset, materials)) => Loaded::Copies(asset, Some(materials)),
             None => Loaded::Copies(
@@ -188,6 +193,7 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     };
     let mut placed = match &loaded {
         Loaded::Scene(scene) => gltf_scene::place(data, scene, o.camera)?,
+        Loaded::Library(assets) => scenes::library(data, assets)?,
         Loaded::Copies(asset, materials) => {
             let paint = match materials {
                 Some(m) => Paint::Own(vec![scenes::add_obj_materials(&mut data, m)?]),
@@ -209,6 +215,7 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
         // A scene is lit by the sun and the sky unless lights are asked for.
         (Loaded::Scene(_), Some(n)) => gltf_scene::scene_lights(&placed, n),
         (Loaded::Scene(_), None) => Vec::new(),
+        (Loaded::Library(_), _) => Vec::new(),
         (Loaded::Copies(..), _) if o.instances > 1 => {
             scenes::field_lights(&placed, o.lights_asked())
         }
