@@ -8,6 +8,7 @@
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
@@ -113,6 +114,8 @@ pub struct Loader {
     jobs: Option<Sender<ReadJob>>,
     done: Receiver<ReadResult>,
     threads: Vec<JoinHandle<()>>,
+    /// Nanoseconds the threads spent reading and checking, all of them together.
+    busy: Arc<AtomicU64>,
 }
 
 impl Loader {
@@ -121,10 +124,12 @@ impl Loader {
         let (jobs, queue) = channel::<ReadJob>();
         let (finished, done) = channel();
         let queue = Arc::new(Mutex::new(queue));
+        let busy = Arc::new(AtomicU64::new(0));
         let threads = (0..threads.max(1))
             .map(|i| {
                 let queue = Arc::clone(&queue);
                 let finished = finished.clone();
+                let busy = Arc::clone(&busy);
                 std::thread::Builder::new()
                     .name(format!("meshlight-page-reader-{i}"))
                     .spawn(move || {
@@ -135,7 +140,11 @@ impl Loader {
                                 Err(_) => return,
                             };
                             let Ok(job) = job else { return };
-                            if finished.send((job.page, read(&job))).is_err() {
+                            let start = std::time::Instant::now();
+                            let result = read(&job);
+                            let spent = start.elapsed().as_nanos() as u64;
+                            busy.fetch_add(spent, Ordering::Relaxed);
+                            if finished.send((job.page, result)).is_err() {
                                 return;
                             }
                         }
@@ -146,7 +155,14 @@ impl Loader {
             jobs: Some(jobs),
             done,
             threads,
+            busy,
         })
+    }
+
+    /// Time the threads have spent reading and checking pages so far, all of them
+    /// together: the streamer's work off the render thread.
+    pub fn busy(&self) -> std::time::Duration {
+        std::time::Duration::from_nanos(self.busy.load(Ordering::Relaxed))
     }
 
     /// Queues a read.

@@ -23,7 +23,11 @@ pub struct LodPressure {
     /// The largest scale: past it the view wants more than the pool even at its
     /// coarsest, and the cut falls back to what is resident.
     pub max_scale: f32,
+    /// Frames without running out of room before the scale may fall again.
+    pub calm_frames: u32,
     scale: f32,
+    /// Frames since a wanted page last found no room.
+    calm: u32,
 }
 
 impl Default for LodPressure {
@@ -41,7 +45,9 @@ impl LodPressure {
             low,
             step,
             max_scale,
+            calm_frames: 32,
             scale: 1.0,
+            calm: u32::MAX,
         }
     }
 
@@ -53,9 +59,23 @@ impl LodPressure {
     /// One frame's step, from the fraction of the pool the view wants; returns the new
     /// scale.
     pub fn update(&mut self, wanted_fraction: f32) -> f32 {
-        if wanted_fraction > self.high {
+        self.update_with_room(wanted_fraction, false)
+    }
+
+    /// [`Self::update`], also told whether a wanted page found no room this frame. The
+    /// wanted bytes do not count every page the view needs (a resident page's ancestors
+    /// are held by it, not wanted), so a pool may be full of needed pages below the high
+    /// mark: running out of room raises the scale as passing the mark does, and the
+    /// scale then falls only after `calm_frames` frames with room, so it does not swing
+    /// between the two.
+    pub fn update_with_room(&mut self, wanted_fraction: f32, out_of_room: bool) -> f32 {
+        self.calm = match out_of_room {
+            true => 0,
+            false => self.calm.saturating_add(1),
+        };
+        if out_of_room || wanted_fraction > self.high {
             self.scale = (self.scale * self.step).min(self.max_scale);
-        } else if wanted_fraction < self.low {
+        } else if wanted_fraction < self.low && self.calm >= self.calm_frames {
             self.scale = (self.scale / self.step).max(1.0);
         }
         self.scale
@@ -83,6 +103,22 @@ mod tests {
             p.update(2.0);
         }
         assert_eq!(p.scale(), 64.0);
+    }
+
+    /// Running out of room raises the scale below the high mark, and it falls back only
+    /// after the calm frames.
+    #[test]
+    fn running_out_of_room_raises_the_scale_and_it_relaxes_only_after_calm_frames() {
+        let mut p = LodPressure::default();
+        assert_eq!(p.update_with_room(0.75, false), 1.0);
+        assert_eq!(p.update_with_room(0.75, true), 1.05);
+        assert_eq!(p.update_with_room(0.75, true), 1.05 * 1.05);
+        // Below the low mark, but not yet calm: held.
+        let held = p.scale();
+        for _ in 0..p.calm_frames - 1 {
+            assert_eq!(p.update_with_room(0.5, false), held);
+        }
+        assert!(p.update_with_room(0.5, false) < held);
     }
 
     /// With wanted bytes going as 1/scale², the scale settles inside the band instead of

@@ -231,6 +231,8 @@ pub struct Streamer {
     last_wanted: Vec<u64>,
     /// Dependents being read, read or resident: while any, the page stays.
     holders: Vec<u32>,
+    /// This frame, a wanted page found no room: every resident page is needed.
+    out_of_room: bool,
     /// Resident pages without holders, by (last wanted, page): eviction candidates.
     evictable: BTreeSet<(u64, PageId)>,
     queue: BinaryHeap<Queued>,
@@ -276,6 +278,7 @@ impl Streamer {
             data: HashMap::new(),
             last_wanted: vec![0; n],
             holders: vec![0; n],
+            out_of_room: false,
             evictable: BTreeSet::new(),
             queue: BinaryHeap::new(),
             queued: vec![NOT_QUEUED; n],
@@ -388,9 +391,10 @@ impl Streamer {
         self.publish(&mut plan);
         self.start_loads(frame, &mut plan);
         let lod_scale = match wanted {
-            Some(_) => self
-                .pressure
-                .update(wanted_bytes as f32 / self.pool.capacity().max(1) as f32),
+            Some(_) => self.pressure.update_with_room(
+                wanted_bytes as f32 / self.pool.capacity().max(1) as f32,
+                self.out_of_room,
+            ),
             None => self.pressure.scale(),
         };
         plan.stats = FrameStats {
@@ -544,6 +548,7 @@ impl Streamer {
     /// Starts reads in priority order while reads may be in flight and room can be
     /// made.
     fn start_loads(&mut self, frame: u64, plan: &mut FramePlan) {
+        self.out_of_room = false;
         while self.issued.len() < self.budget.loads_in_flight as usize {
             let Some(next) = self.queue.pop() else { break };
             let page = next.page;
@@ -586,7 +591,9 @@ impl Streamer {
                 if self.prefetched[p] {
                     continue; // no free room for a prefetch: dropped
                 }
-                // Full of pages in use: wait (pressure coarsens the cut meanwhile).
+                // Full of pages in use: wait (pressure coarsens the cut meanwhile),
+                // unless only this frame's eviction budget ran out.
+                self.out_of_room |= plan.evict.len() < self.budget.evictions_per_frame as usize;
                 self.enqueue(page, next.priority);
                 break;
             };

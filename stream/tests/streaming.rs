@@ -536,3 +536,76 @@ fn the_page_graph_matches_the_assets_page_records() {
         "the pages and the resident part are the whole file"
     );
 }
+
+/// The GPU lists the pages in use (the pages of the drawn meshlets) and the missing
+/// pages whose error shows, not the ancestors of resident pages: those are held by their
+/// children. A still view wanting every detail, through a pool that holds the pages it
+/// lists but not their ancestors too, must coarsen the cut until what it needs fits and
+/// nothing stays pending, rather than wait for room that never comes.
+#[test]
+fn a_pool_full_of_held_ancestors_coarsens_the_cut_rather_than_waiting() {
+    let mut rng = Rng(11);
+    let (dag, errors) = random_dag(&mut rng, 600);
+    let graph = dag.pages();
+    // The finest pages alone: the pages of the LOD-0 meshlets.
+    let finest: std::collections::BTreeSet<u32> = (0..dag.parent.len())
+        .filter(|&m| dag.source[m] == NO_GROUP && dag.parent[m] != NO_GROUP)
+        .map(|m| dag.parent[m])
+        .collect();
+    let finest_bytes: u64 = finest.iter().map(|&p| graph.bytes(p)).sum();
+    // The finest pages are 80 % of the pool: inside the dead band, with no room for
+    // their ancestors.
+    let pool = finest_bytes * 5 / 4;
+    assert!(
+        pool < graph.total_bytes(),
+        "{pool} of {}",
+        graph.total_bytes()
+    );
+    let mut streamer = Streamer::new(graph.clone(), pool, Budget::default()).unwrap();
+    let mut resident = vec![false; graph.len()];
+    // Just below the smallest error: at scale 1 every group's error shows.
+    let threshold = 0.9 * errors.iter().cloned().fold(f32::MAX, f32::min);
+    let mut quiet = 0;
+    for frame in 1..=600u64 {
+        let shows = perceptible(&errors, threshold * streamer.lod_scale());
+        let drawn = select(&dag, &shows, |g| resident[g as usize]);
+        let mut wanted: BTreeMap<u32, f32> = BTreeMap::new();
+        for (m, _) in drawn.iter().enumerate().filter(|(_, d)| **d) {
+            if dag.parent[m] != NO_GROUP {
+                wanted.insert(dag.parent[m], 0.0);
+            }
+            let s = dag.source[m];
+            if s != NO_GROUP && shows[s as usize] && !resident[s as usize] {
+                wanted.insert(s, errors[s as usize]);
+            }
+        }
+        let requests: Vec<Request> = (wanted.iter())
+            .map(|(&page, &priority)| Request { page, priority })
+            .collect();
+        let plan = streamer.frame(frame, Some(&requests));
+        for &p in &plan.evict {
+            resident[p as usize] = false;
+        }
+        for i in &plan.install {
+            resident[i.page as usize] = true;
+        }
+        for load in &plan.load {
+            streamer.complete(load.page, Ok(page_bytes(&graph, load.page)));
+        }
+        for i in streamer.publish_ready() {
+            resident[i.page as usize] = true;
+        }
+        let pending = (wanted.keys()).any(|&p| !resident[p as usize]);
+        quiet = if pending { 0 } else { quiet + 1 };
+        if quiet == 10 {
+            break;
+        }
+    }
+    assert_eq!(
+        quiet,
+        10,
+        "still waiting for room at scale {}",
+        streamer.lod_scale()
+    );
+    assert!(streamer.lod_scale() > 1.0);
+}

@@ -917,6 +917,273 @@ pub fn brute_force(
 /// through a pool that holds every page (after streaming settled: the steady cost of
 /// streaming itself, the walk visiting coarser levels and the cull listing pages).
 pub fn stream(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    // A directory of baked assets is flown through (`flight`); a mesh file is the
+    // bunnies' mesh.
+    let (worlds, meshes): (Vec<PathBuf>, Vec<PathBuf>) =
+        meshes.iter().cloned().partition(|m| m.is_dir());
+    let mut rows = Vec::new();
+    for world in &worlds {
+        rows.extend(flight(world, quick)?);
+    }
+    rows.extend(stream_resident_pool(quick, &meshes)?);
+    Ok(rows)
+}
+
+/// The camera of a scripted flight over a scene's bounds at `t` in 0..1: just above the
+/// highest point, along the scene in a gentle S, looking ahead and down, so the ground
+/// below is drawn fine and the far scene coarse, and new ground comes into view all the
+/// way.
+pub fn flight_camera(lo: glam::Vec3, hi: glam::Vec3, t: f32) -> meshlight::gpu_scene::Camera {
+    use glam::Vec3;
+    let size = hi - lo;
+    let at = |t: f32| {
+        Vec3::new(
+            lo.x + size.x * (0.1 + 0.8 * t),
+            hi.y + 0.01 * size.x.max(size.z),
+            lo.z + size.z * (0.5 + 0.3 * (std::f32::consts::TAU * t).sin()),
+        )
+    };
+    let eye = at(t);
+    let ahead = (at(t + 0.01) - eye).normalize_or(Vec3::X);
+    let reach = 0.1 * size.x.max(size.z);
+    meshlight::gpu_scene::Camera::perspective(
+        eye,
+        eye + ahead * reach - Vec3::Y * (0.35 * reach),
+        60f32.to_radians(),
+        1e-4 * size.x.max(size.z),
+    )
+}
+
+/// Pages resident while a page they need is not: a hole in the cut. The streamer never
+/// allows one (the tests check the drawn cuts); the flight counts them every frame.
+fn holes(data: &SceneData) -> u64 {
+    let Some(s) = data.streaming() else { return 0 };
+    s.pages
+        .iter()
+        .filter(|p| p.resident_at.is_some())
+        .filter(|p| {
+            p.parents
+                .iter()
+                .any(|&q| s.pages[q as usize].resident_at.is_none())
+        })
+        .count() as u64
+}
+
+/// A scripted flight over a directory of baked assets (`meshlight generate` and `bake
+/// DIR`), at 1920×1080, the same path drawn fully resident and streamed from the files
+/// through a pool of an eighth of the assets' bytes, in the same run: the frames' GPU
+/// time along the path, the cold start, the streamer's CPU on the render thread and on
+/// the readers, the bytes uploaded against the budget, pages read and evicted, the LOD
+/// scale from pressure, and holes. A scene too large to be resident (its payload past
+/// what one binding holds) is flown streamed only, and says so.
+fn flight(dir: &Path, quick: bool) -> BenchResult {
+    use meshlight::gpu_scene::data::Limits;
+    use meshlight::stream::Budget;
+    let (width, height) = if quick { (1280, 720) } else { (1920, 1080) };
+    let frames = if quick { 60 } else { 600 };
+    let adapter = meshlight::graph::GpuAdapter::select()?;
+    let limits = Limits::for_device(&adapter.adapter.limits());
+    drop(adapter);
+    let opened = scenes::load_library(dir, true)?;
+    let asset_bytes: u64 = (opened.iter())
+        .map(|(_, a)| {
+            let h = a.header();
+            u64::from(h.file_size[0]) | (u64::from(h.file_size[1]) << 32)
+        })
+        .sum();
+    let (mut lo, mut hi) = (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN));
+    for (_, a) in &opened {
+        lo = lo.min(glam::Vec3::from(a.header().bounds_min));
+        hi = hi.max(glam::Vec3::from(a.header().bounds_max));
+    }
+    // An eighth of the assets, in whole 64 KiB (a small scene's: 1 MiB at least).
+    let pool = ((asset_bytes / 8) & !0xffff).max(1 << 20);
+    let mut streamed = scenes::library(SceneData::streamed(limits), &opened)?;
+    drop(opened);
+    streamed.data.reserve_pool(pool)?;
+    let camera = |frame: u32| flight_camera(lo, hi, frame as f32 / frames as f32);
+    let settings = FrameSettings::new(width, height);
+    let scene = format!(
+        "{} assets, {:.2} GB ({})",
+        streamed.data.meshes.len(),
+        asset_bytes as f64 / 1e9,
+        dir.file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into())
+    );
+    let case = format!("{scene}, {width}×{height}, {frames}-frame flight");
+    let mut rows = Vec::new();
+    // The path's frames in `frame` timing mode, after one still at its start.
+    let fly = |r: &mut Renderer,
+               each: &mut dyn FnMut(&Renderer)|
+     -> Result<Vec<f64>, Box<dyn std::error::Error>> {
+        r.executor.timing = TimingMode::Frame;
+        r.executor.finish()?;
+        r.executor.take_gpu_timings()?;
+        for frame in 0..frames {
+            r.frame(&camera(frame))?;
+            each(r);
+        }
+        r.executor.finish()?;
+        Ok((r.executor.take_gpu_timings()?.iter())
+            .map(|t| t.total_us / 1e3)
+            .collect())
+    };
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    // Resident, where it fits.
+    let resident = scenes::load_library(dir, false)
+        .map_err(|e| e.to_string())
+        .and_then(|assets| {
+            scenes::library(SceneData::new(limits), &assets).map_err(|e| e.to_string())
+        });
+    let mut baseline = None;
+    let device;
+    match resident {
+        Ok(placed) => {
+            let mut r = Renderer::new(placed.data, settings.clone(), &GraphSource::Shipped)?;
+            r.render_still(&camera(0))?;
+            let times = fly(&mut r, &mut |_| {})?;
+            device = r.adapter.clone();
+            baseline = Some(median(times.clone()));
+            for (metric, value) in [
+                ("GPU frame, median over the flight", median(times.clone())),
+                ("GPU frame, mean over the flight", mean(&times)),
+                ("GPU frame, worst of the flight", worst(&times)),
+            ] {
+                rows.push(row(
+                    "vg-stream",
+                    format!("{case}, resident"),
+                    metric,
+                    value,
+                    "ms",
+                    &device,
+                ));
+            }
+        }
+        Err(why) => {
+            eprintln!("{scene} cannot be drawn resident, so it is flown streamed only: {why}");
+            device = String::new();
+        }
+    }
+    // Streamed.
+    let mut r = Renderer::new(streamed.data, settings, &GraphSource::Shipped)?;
+    let threads = std::thread::available_parallelism().map_or(4, |n| n.get().clamp(2, 8));
+    r.start_streaming(streamed.sources, Budget::default(), threads)?;
+    let cold = r.settle_streaming(&camera(0), 600)?;
+    let device = if device.is_empty() {
+        r.adapter.clone()
+    } else {
+        device
+    };
+    let mut per_frame: Vec<meshlight_virtual_geometry::streaming::StreamStats> = Vec::new();
+    let mut hole_count = 0;
+    let start = r.streaming.as_ref().map(|s| s.stats()).unwrap_or_default();
+    let times = fly(&mut r, &mut |r| {
+        per_frame.push(r.streaming.as_ref().map(|s| s.stats()).unwrap_or_default());
+        hole_count += holes(&r.data);
+    })?;
+    let last = per_frame.last().copied().unwrap_or_default();
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    let render_thread: Vec<f64> = per_frame.iter().map(|s| ms(s.cpu)).collect();
+    let readers: Vec<f64> = per_frame.iter().map(|s| ms(s.readers)).collect();
+    let uploaded: Vec<f64> = (per_frame.iter())
+        .map(|s| s.frame.bytes_uploaded as f64 / (1u64 << 20) as f64)
+        .collect();
+    let scales: Vec<f64> = per_frame
+        .iter()
+        .map(|s| f64::from(s.frame.lod_scale))
+        .collect();
+    let streamed_case = format!(
+        "{case}, streamed ({:.1} MiB pool, {threads} readers)",
+        pool as f64 / (1u64 << 20) as f64
+    );
+    let mut stream_rows = Vec::new();
+    let mut push = |metric: &str, value: f64, unit: &str| {
+        stream_rows.push(row(
+            "vg-stream",
+            streamed_case.clone(),
+            metric,
+            value,
+            unit,
+            &device,
+        ));
+    };
+    push(
+        "GPU frame, median over the flight",
+        median(times.clone()),
+        "ms",
+    );
+    push("GPU frame, mean over the flight", mean(&times), "ms");
+    push("GPU frame, worst of the flight", worst(&times), "ms");
+    push(
+        "assets per pool byte",
+        asset_bytes as f64 / pool as f64,
+        "×",
+    );
+    push(
+        "frames to settle from an empty pool (cold start)",
+        f64::from(cold),
+        "",
+    );
+    push(
+        "streamer CPU on the render thread, worst frame",
+        worst(&render_thread),
+        "ms",
+    );
+    push(
+        "streamer CPU on the render thread, mean",
+        mean(&render_thread),
+        "ms",
+    );
+    push(
+        "streamer CPU on the readers, worst frame",
+        worst(&readers),
+        "ms",
+    );
+    push("streamer CPU on the readers, mean", mean(&readers), "ms");
+    push(
+        "uploaded, worst frame (budget 32 MiB)",
+        worst(&uploaded),
+        "MiB",
+    );
+    push("uploaded, mean a frame", mean(&uploaded), "MiB");
+    push(
+        "pages read in the flight",
+        (last.loaded_total - start.loaded_total) as f64,
+        "",
+    );
+    push(
+        "pages evicted in the flight",
+        (last.evicted_total - start.evicted_total) as f64,
+        "",
+    );
+    push("pages refused", last.failed_total as f64, "");
+    push(
+        "pool used at the end",
+        last.frame.pool_used as f64 / (1u64 << 20) as f64,
+        "MiB",
+    );
+    push("LOD scale from pressure, largest", worst(&scales), "×");
+    push("LOD scale from pressure, mean", mean(&scales), "×");
+    push(
+        "holes (resident pages missing a parent, all frames)",
+        hole_count as f64,
+        "",
+    );
+    if let Some(b) = baseline {
+        for r in &mut stream_rows {
+            if r.metric.starts_with("GPU frame, median") {
+                r.vs_baseline = Some(r.value / b);
+            }
+        }
+    }
+    rows.extend(stream_rows);
+    Ok(rows)
+}
+
+/// Streaming against the same scene fully resident, every page in the pool (see
+/// [`stream`]).
+fn stream_resident_pool(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     use meshlight::stream::Budget;
     let (segments, instances) = if quick {
         (64, 64)

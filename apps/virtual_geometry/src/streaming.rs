@@ -181,6 +181,9 @@ pub struct StreamStats {
     pub unlisted: u32,
     /// Time the render thread spent on streaming before this frame.
     pub cpu: Duration,
+    /// Time the reader threads spent reading and checking pages since the frame before
+    /// (all threads together).
+    pub readers: Duration,
     /// Pages read so far.
     pub loaded_total: u64,
     /// Pages evicted so far.
@@ -206,6 +209,8 @@ pub struct Streaming {
     failures: Vec<PageFailure>,
     /// A frame has run since streaming started, so its readbacks exist.
     ran: bool,
+    /// The readers' busy time at the frame before.
+    readers_before: Duration,
 }
 
 impl Streaming {
@@ -261,6 +266,7 @@ impl Streaming {
             stats: StreamStats::default(),
             failures: Vec::new(),
             ran: false,
+            readers_before: Duration::ZERO,
         })
     }
 
@@ -365,6 +371,9 @@ impl Streaming {
         self.stats.listed = listed;
         self.stats.unlisted = unlisted;
         self.stats.cpu = start.elapsed();
+        let busy = self.loader.busy();
+        self.stats.readers = busy - self.readers_before;
+        self.readers_before = busy;
         Ok(())
     }
 
