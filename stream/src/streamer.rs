@@ -46,25 +46,30 @@ pub struct Budget {
     /// Frames a page must go unwanted before it may be evicted: at least the readback's
     /// latency, so a page the GPU is still asking for is never taken away.
     pub keep_frames: u64,
-    /// Read the pages that need a requested page (its children, the next level finer)
-    /// along with it, after every page the view wants, only into free room (never
-    /// evicting for them), and evictable from the frame after they arrive until the
-    /// view asks for them: the view that wants a page usually wants the level below next, and asking
-    /// for it only once the page is in costs a readback's round trip per level.
-    pub prefetch: bool,
+    /// Levels below a requested page read along with it (1: its children, the next
+    /// level finer; 2: their children too; 0: none), after every page the view wants,
+    /// only into free room (never evicting for them), and evictable from the frame after
+    /// they arrive until the view asks for them: the view that wants a page usually
+    /// wants the levels below next, and asking for each only once the one above is in
+    /// costs a readback's round trip per level.
+    pub prefetch_levels: u32,
 }
 
 impl Default for Budget {
-    /// 128 installs and 32 MiB a frame, 256 reads in flight, 1,024 evictions a frame,
-    /// pages kept 8 frames after their last want, children prefetched.
+    /// 1,024 installs and 32 MiB a frame, 256 reads in flight, 1,024 evictions a frame,
+    /// pages kept 8 frames after their last want, children prefetched. A page here is
+    /// one group's children (about 9 KB on a generated world, where Nanite's are 128
+    /// KiB), so the bytes bind before the count: with 128 installs a frame, a cold start
+    /// over that world took 40 frames, with 1,024 it takes 30 (NVIDIA H200, `bench
+    /// --scenario vg-stream`), at the same render-thread cost.
     fn default() -> Self {
         Self {
-            installs_per_frame: 128,
+            installs_per_frame: 1024,
             upload_bytes_per_frame: 32 << 20,
             loads_in_flight: 256,
             evictions_per_frame: 1024,
             keep_frames: 8,
-            prefetch: true,
+            prefetch_levels: 1,
         }
     }
 }
@@ -216,6 +221,9 @@ impl Ord for Queued {
 /// Not queued, in [`Streamer::queued`].
 const NOT_QUEUED: f32 = f32::NEG_INFINITY;
 
+/// Not an eviction candidate, in [`Streamer::evictable_key`].
+const NOT_EVICTABLE: u64 = u64::MAX;
+
 /// The streaming policy over one [`PageGraph`] and one pool.
 #[derive(Debug)]
 pub struct Streamer {
@@ -235,6 +243,9 @@ pub struct Streamer {
     out_of_room: bool,
     /// Resident pages without holders, by (last wanted, page): eviction candidates.
     evictable: BTreeSet<(u64, PageId)>,
+    /// Each page's key in `evictable` ([`NOT_EVICTABLE`] when it is not there), which
+    /// may be older than its last want (see [`Streamer::touch`]).
+    evictable_key: Vec<u64>,
     queue: BinaryHeap<Queued>,
     /// The priority a page is queued at ([`NOT_QUEUED`] when it is not).
     queued: Vec<f32>,
@@ -280,6 +291,7 @@ impl Streamer {
             holders: vec![0; n],
             out_of_room: false,
             evictable: BTreeSet::new(),
+            evictable_key: vec![NOT_EVICTABLE; n],
             queue: BinaryHeap::new(),
             queued: vec![NOT_QUEUED; n],
             issued: Vec::new(),
@@ -437,8 +449,8 @@ impl Streamer {
                     PageState::Absent => {
                         requested += 1;
                         self.enqueue(p, r.priority);
-                        if self.budget.prefetch && p == r.page {
-                            self.prefetch_children(p, r.priority, frame);
+                        if p == r.page {
+                            self.prefetch_below(p, r.priority, frame, 1);
                         }
                     }
                     _ => {}
@@ -458,19 +470,43 @@ impl Streamer {
         (requested, bytes)
     }
 
-    /// Queues the absent pages that need `page`, after every wanted page. They are not
-    /// wanted (neither counted nor touched), only kept from going stale in the queue.
-    fn prefetch_children(&mut self, page: PageId, priority: f32, frame: u64) {
+    /// Queues the absent pages that need `page`, `level` levels below the requested
+    /// page, and (up to [`Budget::prefetch_levels`]) the levels below them, after every
+    /// wanted page and each level after the one above. They are not wanted (neither
+    /// counted nor touched), only kept from going stale in the queue.
+    fn prefetch_below(&mut self, page: PageId, priority: f32, frame: u64, level: u32) {
+        if level > self.budget.prefetch_levels {
+            return;
+        }
         for i in 0..self.graph.dependents(page).len() {
             let child = self.graph.dependents(page)[i];
             let c = child as usize;
             if self.state(child) == PageState::Absent && self.visited[c] != frame {
-                self.last_wanted[c] = self.last_wanted[c].max(frame);
-                self.prefetched[c] = true;
-                // Below every wanted page (priorities are >= 0), the higher the parent's
-                // the sooner.
-                self.enqueue(child, -1.0 / (1.0 + priority.max(0.0)));
+                // Below every wanted page (priorities are >= 0) and every level above,
+                // the higher the requested page's the sooner.
+                let below = -((level - 1) as f32) - 1.0 / (1.0 + priority.max(0.0));
+                // The child's other parents first (at the same priority the coarser
+                // pages go first): it cannot be read before them, and a view that wants
+                // this page's children usually wants theirs too.
+                for k in 0..self.graph.parents(child).len() {
+                    let q = self.graph.parents(child)[k];
+                    if q != page {
+                        self.prefetch_page(q, below, frame);
+                    }
+                }
+                self.prefetch_page(child, below, frame);
+                self.prefetch_below(child, priority, frame, level + 1);
             }
+        }
+    }
+
+    /// Queues `page` as a prefetch at `priority`, if it is absent and not wanted.
+    fn prefetch_page(&mut self, page: PageId, priority: f32, frame: u64) {
+        let p = page as usize;
+        if self.state(page) == PageState::Absent && self.visited[p] != frame {
+            self.last_wanted[p] = self.last_wanted[p].max(frame);
+            self.prefetched[p] = true;
+            self.enqueue(page, priority);
         }
     }
 
@@ -486,12 +522,27 @@ impl Streamer {
     }
 
     /// Records that `page` was wanted in `frame`.
+    /// Notes that `page` was wanted in `frame`. Its place among the eviction candidates
+    /// is not moved now (thousands of pages in use are touched every frame): an entry
+    /// found stale when evicting is put back at its page's newest frame then.
     fn touch(&mut self, page: PageId, frame: u64) {
+        self.last_wanted[page as usize] = frame;
+    }
+
+    /// Makes `page` an eviction candidate, keyed by when it was last wanted.
+    fn add_evictable(&mut self, page: PageId) {
         let p = page as usize;
-        if self.evictable.remove(&(self.last_wanted[p], page)) {
-            self.evictable.insert((frame, page));
+        self.evictable_key[p] = self.last_wanted[p];
+        self.evictable.insert((self.last_wanted[p], page));
+    }
+
+    /// Takes `page` out of the eviction candidates, if it is one.
+    fn remove_evictable(&mut self, page: PageId) {
+        let p = page as usize;
+        if self.evictable_key[p] != NOT_EVICTABLE {
+            self.evictable.remove(&(self.evictable_key[p], page));
+            self.evictable_key[p] = NOT_EVICTABLE;
         }
-        self.last_wanted[p] = frame;
     }
 
     /// Publishes read pages in issue order while their parents are resident and the
@@ -530,8 +581,7 @@ impl Streamer {
                     self.state[page as usize] = PageState::Resident;
                     self.resident_pages += 1;
                     if self.holders[page as usize] == 0 {
-                        self.evictable
-                            .insert((self.last_wanted[page as usize], page));
+                        self.add_evictable(page);
                     }
                     plan.install.push(Install {
                         page,
@@ -610,13 +660,22 @@ impl Streamer {
         if plan.evict.len() >= self.budget.evictions_per_frame as usize {
             return false;
         }
-        let Some(&(last, page)) = self.evictable.first() else {
-            return false;
+        let page = loop {
+            let Some(&(last, page)) = self.evictable.first() else {
+                return false;
+            };
+            if last != self.last_wanted[page as usize] {
+                // Wanted since it became a candidate: back in at its newest frame.
+                self.remove_evictable(page);
+                self.add_evictable(page);
+                continue;
+            }
+            if last + self.budget.keep_frames >= frame {
+                return false;
+            }
+            break page;
         };
-        if last + self.budget.keep_frames >= frame {
-            return false;
-        }
-        self.evictable.remove(&(last, page));
+        self.remove_evictable(page);
         self.resident_pages -= 1;
         self.drop_page(page, PageState::Absent);
         plan.evict.push(page);
@@ -639,7 +698,7 @@ impl Streamer {
     fn hold(&mut self, page: PageId) {
         let p = page as usize;
         if self.holders[p] == 0 {
-            self.evictable.remove(&(self.last_wanted[p], page));
+            self.remove_evictable(page);
         }
         self.holders[p] += 1;
     }
@@ -648,7 +707,7 @@ impl Streamer {
         let p = page as usize;
         self.holders[p] -= 1;
         if self.holders[p] == 0 && self.state[p] == PageState::Resident {
-            self.evictable.insert((self.last_wanted[p], page));
+            self.add_evictable(page);
         }
     }
 

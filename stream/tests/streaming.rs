@@ -183,7 +183,7 @@ fn fly(seed: u64, frames: u64, pool_fraction: f32, failure_rate: f32) -> (u32, u
         loads_in_flight: 1 + rng.below(16),
         evictions_per_frame: 1 + rng.below(8),
         keep_frames: u64::from(rng.below(4)),
-        prefetch: seed.is_multiple_of(2),
+        prefetch_levels: (seed % 4) as u32,
     };
     let mut streamer = Streamer::new(graph.clone(), pool, budget).unwrap();
     let mut renderer = Renderer {
@@ -297,7 +297,7 @@ fn a_still_view_settles_on_the_fully_resident_cut() {
             loads_in_flight: 8,
             evictions_per_frame: 4,
             keep_frames: 2,
-            prefetch: true,
+            prefetch_levels: 1,
         };
         let mut streamer = Streamer::new(graph.clone(), graph.total_bytes() * 2, budget).unwrap();
         let shows = perceptible(&errors, rng.range(0.0, 4.0));
@@ -384,15 +384,15 @@ fn a_pool_smaller_than_a_page_is_refused_with_both_sizes() {
 /// and far, a pool of a third of the mesh (one LOD-0 page needs up to a fifth of it:
 /// its ancestors), reads finishing a frame late. Every frame's cut, with the real
 /// projected errors, is complete: with the pressure coupling, and without it (so that
-/// the pool thrashes), prefetching children or not.
+/// the pool thrashes), prefetching no level below a request, one, or three.
 #[test]
 fn the_bunny_under_a_small_pool_never_shows_a_hole() {
-    let flight = fly_around_the_bunny(LodPressure::default(), true);
+    let flight = fly_around_the_bunny(LodPressure::default(), 1);
     assert!(
         flight.max_scale > 2.0,
         "the pressure never coarsened the cut: {flight:?}"
     );
-    for prefetch in [false, true] {
+    for prefetch in [0, 1, 3] {
         let flight = fly_around_the_bunny(LodPressure::new(0.70, 0.85, 1.05, 1.0), prefetch);
         assert_eq!(flight.max_scale, 1.0);
         assert!(
@@ -414,13 +414,13 @@ struct Flight {
     detailed_frames: usize,
 }
 
-fn fly_around_the_bunny(pressure: LodPressure, prefetch: bool) -> Flight {
+fn fly_around_the_bunny(pressure: LodPressure, prefetch: u32) -> Flight {
     let asset = meshlight_testing::meshes::bunny();
     let dag = MeshDag::of_asset(asset);
     let graph = dag.pages();
     let pool = graph.total_bytes() / 3;
     let budget = Budget {
-        prefetch,
+        prefetch_levels: prefetch,
         ..Budget::default()
     };
     let mut streamer = Streamer::new(graph.clone(), pool, budget)

@@ -972,15 +972,21 @@ fn holes(data: &SceneData) -> u64 {
 /// A scripted flight over a directory of baked assets (`meshlight generate` and `bake
 /// DIR`), at 1920×1080, the same path drawn fully resident and streamed from the files
 /// through a pool of an eighth of the assets' bytes, in the same run: the frames' GPU
-/// time along the path, the cold start, the streamer's CPU on the render thread and on
-/// the readers, the bytes uploaded against the budget, pages read and evicted, the LOD
-/// scale from pressure, and holes. A scene too large to be resident (its payload past
-/// what one binding holds) is flown streamed only, and says so.
+/// time and triangles along the path (a streamed cut refines a level per round trip, so
+/// while flying it lags the resident one), the cold start, the streamer's CPU on the
+/// render thread and on the readers, the bytes uploaded against the budget, pages read
+/// and evicted, the LOD scale from pressure and holes; then, at stops along the path,
+/// the steady frame once streaming has settled against the resident frame there. The
+/// streamed flight runs with one and with three levels prefetched below each request.
+/// A scene too large to be resident (its payload past what one binding holds) is flown
+/// streamed only, and says so.
 fn flight(dir: &Path, quick: bool) -> BenchResult {
     use meshlight::gpu_scene::data::Limits;
     use meshlight::stream::Budget;
     let (width, height) = if quick { (1280, 720) } else { (1920, 1080) };
     let frames = if quick { 60 } else { 600 };
+    let stops = [0.25f32, 0.5, 0.75];
+    let stop_frames = if quick { 5 } else { 30 };
     let adapter = meshlight::graph::GpuAdapter::select()?;
     let limits = Limits::for_device(&adapter.adapter.limits());
     drop(adapter);
@@ -1002,6 +1008,7 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
     drop(opened);
     streamed.data.reserve_pool(pool)?;
     let camera = |frame: u32| flight_camera(lo, hi, frame as f32 / frames as f32);
+    let stop_camera = |t: f32| flight_camera(lo, hi, t);
     let settings = FrameSettings::new(width, height);
     let scene = format!(
         "{} assets, {:.2} GB ({})",
@@ -1012,10 +1019,9 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
     );
     let case = format!("{scene}, {width}×{height}, {frames}-frame flight");
     let mut rows = Vec::new();
-    // The path's frames in `frame` timing mode, after one still at its start.
-    let fly = |r: &mut Renderer,
-               each: &mut dyn FnMut(&Renderer)|
-     -> Result<Vec<f64>, Box<dyn std::error::Error>> {
+    type Each<'a> = &'a mut dyn FnMut(&Renderer);
+    // The path's frames in `frame` timing mode; `each` sees the renderer after each.
+    let fly = |r: &mut Renderer, each: Each| -> Result<Vec<f64>, Box<dyn std::error::Error>> {
         r.executor.timing = TimingMode::Frame;
         r.executor.finish()?;
         r.executor.take_gpu_timings()?;
@@ -1028,8 +1034,37 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             .map(|t| t.total_us / 1e3)
             .collect())
     };
+    // The median GPU frame of `stop_frames` frames at one camera.
+    let hold = |r: &mut Renderer,
+                camera: &meshlight::gpu_scene::Camera|
+     -> Result<f64, Box<dyn std::error::Error>> {
+        r.executor.finish()?;
+        r.executor.take_gpu_timings()?;
+        for _ in 0..stop_frames {
+            r.frame(camera)?;
+        }
+        r.executor.finish()?;
+        Ok(median(
+            (r.executor.take_gpu_timings()?.iter())
+                .map(|t| t.total_us / 1e3)
+                .collect(),
+        ))
+    };
+    // Frames at one camera for a second before anything is timed: a GPU left idle
+    // (while the scene loads) runs its first hundreds of frames at a lower clock.
+    let warm = |r: &mut Renderer,
+                camera: &meshlight::gpu_scene::Camera|
+     -> Result<(), Box<dyn std::error::Error>> {
+        let start = std::time::Instant::now();
+        while start.elapsed() < std::time::Duration::from_secs(1) {
+            r.frame(camera)?;
+            r.executor.finish()?;
+        }
+        Ok(())
+    };
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    let triangles = |r: &Renderer| r.latest_counts().map_or(0.0, |c| c.triangles() as f64);
     // Resident, where it fits.
     let resident = scenes::load_library(dir, false)
         .map_err(|e| e.to_string())
@@ -1037,147 +1072,206 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             scenes::library(SceneData::new(limits), &assets).map_err(|e| e.to_string())
         });
     let mut baseline = None;
-    let device;
+    let mut stop_baselines = Vec::new();
+    let mut device = String::new();
     match resident {
         Ok(placed) => {
             let mut r = Renderer::new(placed.data, settings.clone(), &GraphSource::Shipped)?;
             r.render_still(&camera(0))?;
-            let times = fly(&mut r, &mut |_| {})?;
+            warm(&mut r, &camera(0))?;
+            let mut drawn = Vec::new();
+            let times = fly(&mut r, &mut |r| drawn.push(triangles(r)))?;
             device = r.adapter.clone();
             baseline = Some(median(times.clone()));
-            for (metric, value) in [
-                ("GPU frame, median over the flight", median(times.clone())),
-                ("GPU frame, mean over the flight", mean(&times)),
-                ("GPU frame, worst of the flight", worst(&times)),
-            ] {
-                rows.push(row(
-                    "vg-stream",
-                    format!("{case}, resident"),
-                    metric,
-                    value,
+            let case = format!("{case}, resident");
+            for (metric, value, unit) in [
+                (
+                    "GPU frame, median over the flight",
+                    median(times.clone()),
                     "ms",
-                    &device,
-                ));
+                ),
+                ("GPU frame, mean over the flight", mean(&times), "ms"),
+                ("GPU frame, worst of the flight", worst(&times), "ms"),
+                (
+                    "triangles rasterised, mean over the flight",
+                    mean(&drawn),
+                    "",
+                ),
+            ] {
+                rows.push(row("vg-stream", case.clone(), metric, value, unit, &device));
+            }
+            for &t in &stops {
+                let ms = hold(&mut r, &stop_camera(t))?;
+                stop_baselines.push(ms);
+                let metric = format!("GPU frame at the stop {:.0} % along", t * 100.0);
+                rows.push(row("vg-stream", case.clone(), &metric, ms, "ms", &device));
             }
         }
         Err(why) => {
             eprintln!("{scene} cannot be drawn resident, so it is flown streamed only: {why}");
-            device = String::new();
         }
     }
-    // Streamed.
-    let mut r = Renderer::new(streamed.data, settings, &GraphSource::Shipped)?;
+    // Streamed: the default budget, and more installs a frame with one level and
+    // three prefetched.
     let threads = std::thread::available_parallelism().map_or(4, |n| n.get().clamp(2, 8));
-    r.start_streaming(streamed.sources, Budget::default(), threads)?;
-    let cold = r.settle_streaming(&camera(0), 600)?;
-    let device = if device.is_empty() {
-        r.adapter.clone()
-    } else {
-        device
-    };
-    let mut per_frame: Vec<meshlight_virtual_geometry::streaming::StreamStats> = Vec::new();
-    let mut hole_count = 0;
-    let start = r.streaming.as_ref().map(|s| s.stats()).unwrap_or_default();
-    let times = fly(&mut r, &mut |r| {
-        per_frame.push(r.streaming.as_ref().map(|s| s.stats()).unwrap_or_default());
-        hole_count += holes(&r.data);
-    })?;
-    let last = per_frame.last().copied().unwrap_or_default();
-    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
-    let render_thread: Vec<f64> = per_frame.iter().map(|s| ms(s.cpu)).collect();
-    let readers: Vec<f64> = per_frame.iter().map(|s| ms(s.readers)).collect();
-    let uploaded: Vec<f64> = (per_frame.iter())
-        .map(|s| s.frame.bytes_uploaded as f64 / (1u64 << 20) as f64)
-        .collect();
-    let scales: Vec<f64> = per_frame
-        .iter()
-        .map(|s| f64::from(s.frame.lod_scale))
-        .collect();
-    let streamed_case = format!(
-        "{case}, streamed ({:.1} MiB pool, {threads} readers)",
-        pool as f64 / (1u64 << 20) as f64
-    );
-    let mut stream_rows = Vec::new();
-    let mut push = |metric: &str, value: f64, unit: &str| {
-        stream_rows.push(row(
-            "vg-stream",
-            streamed_case.clone(),
-            metric,
-            value,
-            unit,
-            &device,
-        ));
-    };
-    push(
-        "GPU frame, median over the flight",
-        median(times.clone()),
-        "ms",
-    );
-    push("GPU frame, mean over the flight", mean(&times), "ms");
-    push("GPU frame, worst of the flight", worst(&times), "ms");
-    push(
-        "assets per pool byte",
-        asset_bytes as f64 / pool as f64,
-        "×",
-    );
-    push(
-        "frames to settle from an empty pool (cold start)",
-        f64::from(cold),
-        "",
-    );
-    push(
-        "streamer CPU on the render thread, worst frame",
-        worst(&render_thread),
-        "ms",
-    );
-    push(
-        "streamer CPU on the render thread, mean",
-        mean(&render_thread),
-        "ms",
-    );
-    push(
-        "streamer CPU on the readers, worst frame",
-        worst(&readers),
-        "ms",
-    );
-    push("streamer CPU on the readers, mean", mean(&readers), "ms");
-    push(
-        "uploaded, worst frame (budget 32 MiB)",
-        worst(&uploaded),
-        "MiB",
-    );
-    push("uploaded, mean a frame", mean(&uploaded), "MiB");
-    push(
-        "pages read in the flight",
-        (last.loaded_total - start.loaded_total) as f64,
-        "",
-    );
-    push(
-        "pages evicted in the flight",
-        (last.evicted_total - start.evicted_total) as f64,
-        "",
-    );
-    push("pages refused", last.failed_total as f64, "");
-    push(
-        "pool used at the end",
-        last.frame.pool_used as f64 / (1u64 << 20) as f64,
-        "MiB",
-    );
-    push("LOD scale from pressure, largest", worst(&scales), "×");
-    push("LOD scale from pressure, mean", mean(&scales), "×");
-    push(
-        "holes (resident pages missing a parent, all frames)",
-        hole_count as f64,
-        "",
-    );
-    if let Some(b) = baseline {
-        for r in &mut stream_rows {
-            if r.metric.starts_with("GPU frame, median") {
-                r.vs_baseline = Some(r.value / b);
+    let budgets = [
+        Budget::default(),
+        Budget {
+            installs_per_frame: 1024,
+            ..Budget::default()
+        },
+        Budget {
+            installs_per_frame: 1024,
+            prefetch_levels: 3,
+            ..Budget::default()
+        },
+    ];
+    for budget in budgets {
+        let (installs, prefetch_levels) = (budget.installs_per_frame, budget.prefetch_levels);
+        let mut r = Renderer::new(
+            streamed.data.clone(),
+            settings.clone(),
+            &GraphSource::Shipped,
+        )?;
+        r.start_streaming(streamed.sources.clone(), budget, threads)?;
+        let cold = r.settle_streaming(&camera(0), 600)?;
+        warm(&mut r, &camera(0))?;
+        if device.is_empty() {
+            device = r.adapter.clone();
+        }
+        let mut per_frame = Vec::new();
+        let mut drawn = Vec::new();
+        let mut hole_count = 0;
+        let start = r.streaming.as_ref().map(|s| s.stats()).unwrap_or_default();
+        let times = fly(&mut r, &mut |r| {
+            per_frame.push(r.streaming.as_ref().map(|s| s.stats()).unwrap_or_default());
+            drawn.push(triangles(r));
+            hole_count += holes(&r.data);
+        })?;
+        let last = per_frame.last().copied().unwrap_or_default();
+        let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+        let render_thread: Vec<f64> = per_frame.iter().map(|s| ms(s.cpu)).collect();
+        let readers: Vec<f64> = per_frame.iter().map(|s| ms(s.readers)).collect();
+        let uploaded: Vec<f64> = (per_frame.iter())
+            .map(|s| s.frame.bytes_uploaded as f64 / (1u64 << 20) as f64)
+            .collect();
+        let scales: Vec<f64> = (per_frame.iter())
+            .map(|s| f64::from(s.frame.lod_scale))
+            .collect();
+        let streamed_case = format!(
+            "{case}, streamed ({:.1} MiB pool, {threads} readers, {installs} installs a frame, {prefetch_levels} level(s) prefetched)",
+            pool as f64 / (1u64 << 20) as f64
+        );
+        let mut stream_rows = Vec::new();
+        let mut push = |metric: &str, value: f64, unit: &str| {
+            stream_rows.push(row(
+                "vg-stream",
+                streamed_case.clone(),
+                metric,
+                value,
+                unit,
+                &device,
+            ));
+        };
+        push(
+            "GPU frame, median over the flight",
+            median(times.clone()),
+            "ms",
+        );
+        push("GPU frame, mean over the flight", mean(&times), "ms");
+        push("GPU frame, worst of the flight", worst(&times), "ms");
+        push(
+            "triangles rasterised, mean over the flight",
+            mean(&drawn),
+            "",
+        );
+        push(
+            "assets per pool byte",
+            asset_bytes as f64 / pool as f64,
+            "×",
+        );
+        push(
+            "frames to settle from an empty pool (cold start)",
+            f64::from(cold),
+            "",
+        );
+        push(
+            "streamer CPU on the render thread, worst frame",
+            worst(&render_thread),
+            "ms",
+        );
+        push(
+            "streamer CPU on the render thread, mean",
+            mean(&render_thread),
+            "ms",
+        );
+        push(
+            "streamer CPU on the readers, worst frame",
+            worst(&readers),
+            "ms",
+        );
+        push("streamer CPU on the readers, mean", mean(&readers), "ms");
+        push(
+            "uploaded, worst frame (budget 32 MiB)",
+            worst(&uploaded),
+            "MiB",
+        );
+        push("uploaded, mean a frame", mean(&uploaded), "MiB");
+        push(
+            "pages read in the flight",
+            (last.loaded_total - start.loaded_total) as f64,
+            "",
+        );
+        push(
+            "pages evicted in the flight",
+            (last.evicted_total - start.evicted_total) as f64,
+            "",
+        );
+        push("pages refused", last.failed_total as f64, "");
+        push(
+            "pool used at the end",
+            last.frame.pool_used as f64 / (1u64 << 20) as f64,
+            "MiB",
+        );
+        push("LOD scale from pressure, largest", worst(&scales), "×");
+        push("LOD scale from pressure, mean", mean(&scales), "×");
+        push(
+            "holes (resident pages missing a parent, all frames)",
+            hole_count as f64,
+            "",
+        );
+        let mut at_stops = Vec::new();
+        for &t in &stops {
+            let settled = r.settle_streaming(&stop_camera(t), 600)?;
+            at_stops.push((t, settled, hold(&mut r, &stop_camera(t))?));
+        }
+        for &(t, settled, frame_ms) in &at_stops {
+            let at = format!("{:.0} % along", t * 100.0);
+            push(
+                &format!("frames to settle at the stop {at}"),
+                f64::from(settled),
+                "",
+            );
+            push(&format!("GPU frame at the stop {at}"), frame_ms, "ms");
+        }
+        for (i, &(_, _, frame_ms)) in at_stops.iter().enumerate() {
+            let Some(&b) = stop_baselines.get(i) else {
+                continue;
+            };
+            let metric = format!("GPU frame at the stop {:.0} % along", stops[i] * 100.0);
+            if let Some(r) = stream_rows.iter_mut().find(|r| r.metric == metric) {
+                r.vs_baseline = Some(frame_ms / b);
             }
         }
+        if let Some(b) = baseline {
+            for r in &mut stream_rows {
+                if r.metric.starts_with("GPU frame, median") {
+                    r.vs_baseline = Some(r.value / b);
+                }
+            }
+        }
+        rows.extend(stream_rows);
     }
-    rows.extend(stream_rows);
     Ok(rows)
 }
 
@@ -1241,7 +1335,7 @@ fn stream_resident_pool(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                 &GraphSource::Shipped,
             )?;
             let budget = Budget {
-                prefetch: false,
+                prefetch_levels: 0,
                 ..Budget::default()
             };
             r.start_streaming(streamed.sources.clone(), budget, 4)?;

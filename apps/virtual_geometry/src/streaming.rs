@@ -390,7 +390,7 @@ impl Streaming {
         while let Some(r) = executor.take_readback(REQUESTS_READBACK)? {
             self.back.entry(r.frame).or_default().1 = Some(r.bytes);
         }
-        let mut merged: BTreeMap<u32, f32> = BTreeMap::new();
+        let mut merged: Vec<(u32, f32)> = Vec::new();
         let (mut listed, mut unlisted, mut heard) = (0, 0, false);
         let complete: Vec<u64> = (self.back.iter())
             .filter(|(_, (count, list))| count.is_some() && list.is_some())
@@ -406,16 +406,17 @@ impl Streaming {
             let written = (words[0] as usize).min(entries.len());
             listed += written as u32;
             unlisted += words[1].saturating_sub(words[0]);
-            for &[page, bits] in &entries[..written] {
-                let priority = f32::from_bits(bits);
-                let e = merged.entry(page).or_insert(priority);
-                *e = e.max(priority);
-            }
+            merged.extend(
+                (entries[..written].iter()).map(|&[page, bits]| (page, f32::from_bits(bits))),
+            );
         }
         // A frame's readbacks that never pair up (a resize between them) are dropped.
         while self.back.len() > 8 {
             self.back.pop_first();
         }
+        // A page listed by several frames once, at its highest priority.
+        merged.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
+        merged.dedup_by_key(|e| e.0);
         let wanted = heard.then(|| {
             merged
                 .into_iter()
