@@ -65,7 +65,9 @@ pub struct SceneArgs {
     /// Stream the meshes' geometry through a GPU pool of this many MiB: only the roots
     /// and the culling data stay resident, and the pages the view needs are read into
     /// the pool (least recently used ones evicted; a pool too small for the view draws
-    /// it coarser, never with holes). Default: every page resident. A still renders once
+    /// it coarser, never with holes). Default: every page resident, unless baked assets
+    /// (a .mlasset or a directory of them) hold more geometry than the adapter binds:
+    /// those stream through the pool `meshlight info` names. A still renders once
     /// streaming has settled for the view.
     #[arg(long, value_name = "MIB", value_parser = clap::value_parser!(u64).range(1..=1 << 20))]
     pub pool_mb: Option<u64>,

@@ -132,6 +132,12 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
     )?;
     writeln!(
         out,
+        "  streaming pool: {} MiB by default (a quarter of the payload binding; baked assets \
+         whose payload is larger stream through it, --pool-mb chooses another size)",
+        meshlight_virtual_geometry::streaming::default_pool_bytes(&scene) >> 20
+    )?;
+    writeln!(
+        out,
         "\nrender bounds (what the renderer holds with wgpu's default limits; checked before a render asks for the adapter):"
     )?;
     let bounds = crate::render_bounds::bounds();

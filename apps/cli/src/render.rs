@@ -264,6 +264,11 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             &dump::Report {
                 last_frame: Some(&still.stats),
                 image: Some(&image),
+                facts: &renderer
+                    .streaming
+                    .as_ref()
+                    .map(|s| s.stats().rows())
+                    .unwrap_or_default(),
             },
         );
         let page = match page.rfind("</body>") {

@@ -1186,9 +1186,19 @@ fn a_generated_world_bakes_and_renders_resident_and_streamed() {
         String::from_utf8_lossy(&out.stdout).to_string()
     };
     render(&dir.join("resident.png"), None);
+    // A page beside the image is rewritten with it: the streamed one shows the pool.
+    std::fs::write(dir.join("streamed.html"), "").unwrap();
     let report = render(&dir.join("streamed.png"), Some("1"));
     assert!(report.contains("streamed: settled after"), "{report}");
     assert!(report.contains("0 refused"), "{report}");
+    let page = std::fs::read_to_string(dir.join("streamed.html")).unwrap();
+    for fact in [
+        "pages resident",
+        "LOD scale from pool pressure",
+        "of 1.0 MiB",
+    ] {
+        assert!(page.contains(fact), "{fact} missing from the page");
+    }
     assert_eq!(
         std::fs::read(dir.join("resident.png")).unwrap(),
         std::fs::read(dir.join("streamed.png")).unwrap(),

@@ -158,6 +158,25 @@ impl Overlay {
                 s.frames_in_flight
             ));
         }
+        if let Some(s) = &f.renderer.streaming {
+            let stats = s.stats();
+            let frame = &stats.frame;
+            ui.label(format!(
+                "streaming: pool {:.0} of {:.0} MiB, LOD scale {:.2}",
+                frame.pool_used as f64 / (1u64 << 20) as f64,
+                frame.pool_bytes as f64 / (1u64 << 20) as f64,
+                frame.lod_scale
+            ));
+            egui::CollapsingHeader::new("streaming").show(ui, |ui| {
+                egui::Grid::new("streaming").show(ui, |ui| {
+                    for (label, value) in stats.rows() {
+                        ui.label(label);
+                        ui.label(value);
+                        ui.end_row();
+                    }
+                });
+            });
+        }
         let p = f.rig.position;
         ui.label(format!(
             "camera {:.2}, {:.2}, {:.2}  speed {:.2}{}",

@@ -705,10 +705,17 @@ impl Viewer {
 
     /// Writes the current plan, with the last frame's timings, as a self-contained page.
     pub fn write_html(&self, path: &Path) -> Result<(), ViewerError> {
-        let page = meshlight::graph::dump::to_html(
+        let facts = (self.renderer.streaming.as_ref())
+            .map(|s| s.stats().rows())
+            .unwrap_or_default();
+        let page = meshlight::graph::dump::to_html_report(
             &self.renderer.compiled.plan,
             &format!("meshlight view: {}", self.options.scene.mesh.display()),
-            self.last_stats.as_ref(),
+            &meshlight::graph::dump::Report {
+                last_frame: self.last_stats.as_ref(),
+                image: None,
+                facts: &facts,
+            },
         );
         meshlight_output::write_file(path, page.as_bytes())?;
         Ok(())

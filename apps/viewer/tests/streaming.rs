@@ -1,5 +1,5 @@
 //! `view --pool-mb`: the viewer streams its scene (no window needed): frames run, pages
-//! arrive, and nothing is refused.
+//! arrive, nothing is refused, and its HTML page shows the streamer's figures.
 
 mod common;
 
@@ -21,4 +21,12 @@ fn the_viewer_streams_a_scene_given_a_pool() {
         .stats();
     assert!(stats.loaded_total > 0, "{stats:?}");
     assert_eq!(stats.failed_total, 0, "{stats:?}");
+    let page =
+        std::env::temp_dir().join(format!("meshlight-view-stream-{}.html", std::process::id()));
+    viewer.write_html(&page).unwrap();
+    let html = std::fs::read_to_string(&page).unwrap();
+    std::fs::remove_file(&page).unwrap();
+    for fact in ["pages resident", "of 8.0 MiB", "streamer CPU"] {
+        assert!(html.contains(fact), "{fact} missing from the viewer's page");
+    }
 }

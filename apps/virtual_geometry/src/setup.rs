@@ -12,6 +12,7 @@ use meshlight::graph::{GpuAdapter, GraphError};
 use meshlight::resolve::DebugView;
 use meshlight::scene::MeshletAsset;
 use meshlight::scene::SceneError;
+use meshlight::scene::asset::format::SECTION_PAYLOAD;
 use meshlight::scene::load::{GltfScene, ObjMaterial, load_gltf_scene};
 use meshlight::shaders::cpu::layout::ClusterableObject;
 use meshlight_light_clustering::ClusteringSettings;
@@ -158,6 +159,31 @@ enum Loaded {
     Copies(MeshletAsset, Option<Vec<ObjMaterial>>),
 }
 
+/// The pool to stream through: `--pool-mb`'s, or for baked assets whose payload is more
+/// than one binding holds on this adapter, [`crate::streaming::default_pool_bytes`]
+/// (said in a warning); `None`: every page resident.
+fn pool_bytes(o: &SceneOptions, loaded: &Loaded, limits: &Limits) -> Option<u64> {
+    if let Some(mb) = o.pool_mb {
+        return Some(mb << 20);
+    }
+    let payload = |a: &MeshletAsset| u64::from(a.header().sections[SECTION_PAYLOAD].words);
+    let words: u64 = match loaded {
+        Loaded::Library(assets) => assets.iter().map(|(_, a)| payload(a)).sum(),
+        Loaded::Copies(asset, _) if asset.page_file().is_some() => payload(asset),
+        _ => return None,
+    };
+    let pool = crate::streaming::pool_for_payload(words, limits)?;
+    log::warn!(
+        "{}: {:.2} GB of geometry is more than one binding holds on this adapter ({:.2} GB): \
+         streaming it through a {} MiB pool (`--pool-mb` chooses the size)",
+        o.mesh.display(),
+        words as f64 * 4e-9,
+        f64::from(limits.max_payload_words) * 4e-9,
+        pool >> 20
+    );
+    Some(pool)
+}
+
 /// Checks the pipeline file, loads (or bakes) the mesh, places its copies and lights on
 /// the field (or a glTF file's meshes at its nodes), sized for the adapter the frame will
 /// run on, and fills the frame settings.
@@ -170,24 +196,32 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
         .into());
     }
     // Read (and baked) before the adapter is asked for, so a bad file costs nothing.
-    let loaded = match o.is_gltf_scene() {
+    // Baked assets are opened for streaming (their resident parts only) until the
+    // adapter says whether they fit whole.
+    let mut loaded = match o.is_gltf_scene() {
         true => Loaded::Scene(load_gltf_scene(&o.mesh)?),
-        false if o.mesh.is_dir() => {
-            Loaded::Library(scenes::load_library(&o.mesh, o.pool_mb.is_some())?)
-        }
+        false if o.mesh.is_dir() => Loaded::Library(scenes::load_library(&o.mesh, true)?),
         false => match scenes::load_obj_with_materials(&o.mesh)? {
             Some((asset, materials)) => Loaded::Copies(asset, Some(materials)),
-            None => Loaded::Copies(
-                scenes::open_asset(&o.mesh, o.segments, o.pool_mb.is_some())?,
-                None,
-            ),
+            None => Loaded::Copies(scenes::open_asset(&o.mesh, o.segments, true)?, None),
         },
     };
     // The scene's buffers are bound whole: sized for the adapter the frame will run on.
     let adapter = GpuAdapter::select()?;
     let limits = Limits::for_device(&adapter.adapter.limits());
     drop(adapter);
-    let mut data = match o.pool_mb {
+    let pool = pool_bytes(o, &loaded, &limits);
+    if pool.is_none() {
+        // Resident: every asset opened for streaming is read whole after all.
+        match &mut loaded {
+            Loaded::Library(assets) => *assets = scenes::load_library(&o.mesh, false)?,
+            Loaded::Copies(asset, _) if asset.page_file().is_some() => {
+                *asset = MeshletAsset::load_verified(&o.mesh)?;
+            }
+            _ => {}
+        }
+    }
+    let mut data = match pool {
         Some(_) => SceneData::streamed(limits),
         None => SceneData::new(limits),
     };
@@ -205,8 +239,8 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
             }
         }
     };
-    if let Some(mb) = o.pool_mb {
-        placed.data.reserve_pool(mb << 20)?;
+    if let Some(bytes) = pool {
+        placed.data.reserve_pool(bytes)?;
     }
     let mut settings = FrameSettings::new(o.width, o.height);
     // A view given wins over a pipeline file's; none given leaves the file's.

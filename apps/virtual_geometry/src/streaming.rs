@@ -42,6 +42,26 @@ pub const REQUESTS_LATENCY: u32 = super::frame_graph::COUNTS_LATENCY;
 /// set only when listed).
 pub const MAX_REQUESTS: u64 = 16384;
 
+/// The pool a scene streams through when none is asked for (a scene whose baked assets
+/// do not fit the adapter's payload binding): a quarter of what that binding holds, so
+/// the resident parts keep the rest: 511 MiB where bindings hold 2 GiB (an NVIDIA
+/// H200 through wgpu), about Nanite's pool.
+pub fn default_pool_bytes(limits: &meshlight::gpu_scene::data::Limits) -> u64 {
+    let binding = u64::from(limits.max_payload_words) * 4;
+    // In whole MiB.
+    (binding / 4) & !0xf_ffff
+}
+
+/// The pool baked assets of `payload_words` stream through when no pool is asked for:
+/// [`default_pool_bytes`] when they are more than the adapter's payload binding holds,
+/// `None` (resident) when they fit.
+pub fn pool_for_payload(
+    payload_words: u64,
+    limits: &meshlight::gpu_scene::data::Limits,
+) -> Option<u64> {
+    (payload_words > u64::from(limits.max_payload_words)).then(|| default_pool_bytes(limits))
+}
+
 /// Where a mesh's pages are read from.
 #[derive(Clone, Debug)]
 pub enum PageSource {
@@ -190,6 +210,51 @@ pub struct StreamStats {
     pub evicted_total: u64,
     /// Pages refused so far (a read failed or did not match its checksum).
     pub failed_total: u64,
+}
+
+impl StreamStats {
+    /// The figures as (label, value) rows, for the viewer's overlay and the HTML pages.
+    pub fn rows(&self) -> Vec<(String, String)> {
+        let f = &self.frame;
+        let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        [
+            (
+                "pool",
+                format!("{:.1} of {:.1} MiB", mib(f.pool_used), mib(f.pool_bytes)),
+            ),
+            ("pages resident", f.resident_pages.to_string()),
+            (
+                "this frame: wanted, missing, read, installed, evicted",
+                format!(
+                    "{}, {}, {}, {}, {}",
+                    self.listed, f.requested, f.loads_started, f.installed, f.evicted
+                ),
+            ),
+            (
+                "uploaded this frame",
+                format!("{:.1} KiB", f.bytes_uploaded as f64 / 1024.0),
+            ),
+            (
+                "streamer CPU: render thread, readers",
+                format!("{:.3} ms, {:.3} ms", ms(self.cpu), ms(self.readers)),
+            ),
+            (
+                "LOD scale from pool pressure",
+                format!("{:.2}", f.lod_scale),
+            ),
+            (
+                "pages read, evicted, refused so far",
+                format!(
+                    "{}, {}, {}",
+                    self.loaded_total, self.evicted_total, self.failed_total
+                ),
+            ),
+        ]
+        .into_iter()
+        .map(|(label, value)| (label.to_string(), value))
+        .collect()
+    }
 }
 
 /// One frame's request readbacks: (count words, list).
@@ -424,5 +489,22 @@ impl Streaming {
                 .collect()
         });
         Ok((wanted, listed, unlisted))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use meshlight::gpu_scene::data::Limits;
+
+    #[test]
+    fn assets_stream_by_default_only_when_the_binding_cannot_hold_them() {
+        let h200 = Limits::for_binding_size((1 << 31) - 1);
+        assert_eq!(default_pool_bytes(&h200), 511 << 20);
+        let held = u64::from(h200.max_payload_words);
+        assert_eq!(pool_for_payload(held, &h200), None);
+        assert_eq!(pool_for_payload(held + 1, &h200), Some(511 << 20));
+        let small = Limits::for_binding_size(64 << 20);
+        assert_eq!(pool_for_payload(held, &small), Some(15 << 20));
     }
 }

@@ -31,6 +31,9 @@ pub struct Report<'a> {
     pub last_frame: Option<&'a FrameStats>,
     /// The image the frame made, as the page links it (a path relative to the page).
     pub image: Option<&'a str>,
+    /// Figures of the frame the graph does not know (e.g. a renderer's streaming), as
+    /// (label, value) rows of a table under the image.
+    pub facts: &'a [(String, String)],
 }
 
 /// The plan as one self-contained HTML page (graph, batches, passes, resources, pool
@@ -42,6 +45,7 @@ pub fn to_html(plan: &Plan, title: &str, last_frame: Option<&FrameStats>) -> Str
         &Report {
             last_frame,
             image: None,
+            facts: &[],
         },
     )
 }
@@ -93,6 +97,13 @@ table{{border-collapse:collapse;margin:1em 0}}td,th{{padding:3px 8px;border:1px 
             "<p><img src=\"{}\" alt=\"the frame's image\" style=\"max-width:100%\"></p>",
             esc(image)
         );
+    }
+    if !report.facts.is_empty() {
+        h.push_str("<table>\n");
+        for (label, value) in report.facts {
+            let _ = writeln!(h, "<tr><th>{}</th><td>{}</td></tr>", esc(label), esc(value));
+        }
+        h.push_str("</table>\n");
     }
     h.push_str("<h2>Graph</h2>\n");
     // Inline SVG in HTML needs no namespace, and the page names no address.
