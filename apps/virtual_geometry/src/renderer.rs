@@ -10,7 +10,8 @@ use super::counts::{
     SECOND_WALK_COUNT_READBACK,
 };
 use super::frame_graph::{
-    CLUSTERS_PARAM, DEPTH, Frame, GraphSource, HOST_TARGET, MAX_SLOTS, SLOTS_PARAM, frame,
+    CLUSTERS_PARAM, DEPTH, Frame, GraphSource, HOST_TARGET, MAX_SLOTS, SECOND_COUNTS, SLOTS_PARAM,
+    frame,
 };
 use super::settings::FrameSettings;
 use super::streaming::{PageSource, Streaming};
@@ -456,6 +457,38 @@ impl Renderer {
             // The transform was drawable when it was set, so this cannot be refused.
             let _ = self.data.set_transform(id, now);
         }
+    }
+
+    /// The clusters the last frame rasterised, read back from the GPU's slot list: both
+    /// rasterisers' slots of the first culling pass, and of the second where the frame
+    /// has one. Waits for the GPU (a debug readback, for tests and tools that check the
+    /// drawn cut, e.g. with `meshlight::stream::cut::check`); needs a renderer made
+    /// with [`FrameSettings::keep_visibility`]. With occlusion on, the clusters the
+    /// second pass culled are not among them.
+    pub fn drawn_clusters(&mut self) -> Result<Vec<meshlight::shaders::cpu::layout::Cluster>> {
+        let words = |r: &mut Self, name: &str| -> Result<Vec<u32>> {
+            Ok(bytemuck::pod_collect_to_vec(&r.executor.read_buffer(name)?))
+        };
+        let slots: Vec<meshlight::shaders::cpu::layout::Cluster> =
+            bytemuck::pod_collect_to_vec(&self.executor.read_buffer("raster_clusters")?);
+        let mut drawn = Vec::new();
+        // Per pass: software slots from [7] up, [0] of them; hardware ones from [3]
+        // down, [1] of them (`cull_lod`'s counters; [7] is 0 without occlusion).
+        let mut take = |counts: &[u32]| {
+            let software = counts[7] as usize..(counts[7] + counts[0]) as usize;
+            let hardware = counts[3].saturating_sub(counts[1]) as usize..counts[3] as usize;
+            for range in [software, hardware] {
+                drawn.extend_from_slice(slots.get(range).unwrap_or_default());
+            }
+        };
+        let mut first = words(self, "raster_counts")?;
+        // `prepare` zeroes words 0..8 in every mode.
+        first.resize(first.len().max(8), 0);
+        take(&first);
+        if self.two_pass {
+            take(&words(self, SECOND_COUNTS)?);
+        }
+        Ok(drawn)
     }
 
     /// The newest frame whose counters are back.

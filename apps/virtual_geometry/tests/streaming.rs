@@ -309,3 +309,74 @@ fn a_damaged_page_is_refused_and_its_group_drawn_coarser() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The drawn cut read back from the GPU (`Renderer::drawn_clusters`) is complete on every
+/// frame of a camera moving in and out under a pool far smaller than the pages: the CPU
+/// checker (`stream::cut::check`) finds every path from a LOD-0 meshlet to a root
+/// meeting exactly one drawn meshlet, and only meshlets of resident pages drawn.
+/// Occlusion is off and the mesh stays inside the view, so what was drawn is the whole
+/// cut.
+#[test]
+fn the_drawn_cut_read_back_from_the_gpu_is_complete_every_frame() {
+    let mut placed = scenes::single(SceneData::streamed(Limits::default()), asset()).unwrap();
+    placed.data.reserve_pool(all_pages() / 64).unwrap();
+    let settings = FrameSettings {
+        occlusion: false,
+        keep_visibility: true,
+        ..FrameSettings::new(480, 270)
+    };
+    // The copy's bounding sphere in the world (the field turns and scales it a little).
+    let sphere = placed.data.meshes[0].bounding_sphere;
+    let world =
+        meshlight::glam::Mat4::from_cols_array_2d(&placed.data.instances[0].world_from_local);
+    let centre = world.transform_point3(Vec3::new(sphere[0], sphere[1], sphere[2]));
+    let radius = sphere[3]
+        * world
+            .x_axis
+            .length()
+            .max(world.y_axis.length())
+            .max(world.z_axis.length());
+    let mut r = Renderer::new(placed.data, settings, &GraphSource::Shipped).unwrap();
+    r.start_streaming(placed.sources, Budget::default(), 2)
+        .unwrap();
+    let dag = MeshDag::of_asset(asset());
+    let meshlets = asset().meshlets().len();
+    let (mut paged, mut last) = (0, Vec::new());
+    for frame in 0..48u32 {
+        // From 3.5 radii (the whole mesh in view) out to 12 and back.
+        let t = 0.5 - 0.5 * (frame as f32 * 0.26).cos();
+        let eye = centre + Vec3::new(0.45, 0.55, 1.0).normalize() * radius * (3.5 + 8.5 * t);
+        let camera = Camera::perspective(eye, centre, 40f32.to_radians(), radius * 0.05);
+        r.frame(&camera).unwrap();
+        let drawn = r.drawn_clusters().unwrap();
+        let mut flags = vec![false; meshlets];
+        for c in drawn.iter().filter(|c| c.instance == 0) {
+            assert!(
+                !flags[c.meshlet as usize],
+                "frame {frame}: meshlet {} twice",
+                c.meshlet
+            );
+            flags[c.meshlet as usize] = true;
+        }
+        let pages = &r.data.streaming().unwrap().pages;
+        let resident = |g: u32| pages[g as usize].resident_at.is_some();
+        if let Err(hole) = check(&dag, &flags, resident) {
+            panic!("frame {frame}: {hole}");
+        }
+        paged += (0..meshlets)
+            .filter(|&m| flags[m] && asset().meshlets()[m].parent_group != NO_GROUP)
+            .count();
+        last = flags;
+    }
+    let stats = r.streaming.as_ref().unwrap().stats();
+    assert!(
+        stats.evicted_total > 0,
+        "the pool was never full: {stats:?}"
+    );
+    assert!(paged > 100, "{paged} meshlets of pages drawn");
+    // The checker can fail: one drawn meshlet taken away leaves a path without one.
+    let m = last.iter().position(|&d| d).unwrap();
+    last[m] = false;
+    let pages = &r.data.streaming().unwrap().pages;
+    assert!(check(&dag, &last, |g| pages[g as usize].resident_at.is_some()).is_err());
+}

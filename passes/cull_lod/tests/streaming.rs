@@ -206,24 +206,25 @@ fn the_listed_pages_are_the_references_once_a_frame() {
             got.frames[1].is_empty(),
             "{label}: listed again in the same frame"
         );
-        assert_eq!(
-            got.frames[0], got.frames[2],
-            "{label}: the next frame lists the same"
+        // The same pages; each at the priority of whichever of its clusters listed it
+        // first, which may differ from frame to frame (checked against the range below).
+        assert!(
+            got.frames[0].keys().eq(got.frames[2].keys()),
+            "{label}: the next frame lists the same pages"
         );
         let gpu_groups: Vec<u32> = got.frames[0].keys().copied().collect();
         let cpu_groups: Vec<u32> = want.keys().copied().collect();
         assert_eq!(gpu_groups, cpu_groups, "{label}");
-        for (group, &px) in &got.frames[0] {
+        for (group, &px) in got.frames[0].iter().chain(&got.frames[2]) {
             let (lo, hi) = want[group];
             let slack = 1e-5 * hi.max(1.0);
             assert!(
                 px >= lo - slack && px <= hi + slack,
                 "{label}: group {group} at {px}, want {lo}..={hi}"
             );
-            if px > 0.0 {
-                listed_missing += 1;
-            } else {
-                listed_used += 1;
+            match px > 0.0 {
+                true => listed_missing += 1,
+                false => listed_used += 1,
             }
         }
         assert!(got.software + got.hardware > 0, "{label}: nothing drawn");
