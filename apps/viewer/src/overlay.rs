@@ -59,6 +59,9 @@ pub fn legend(view: DebugView) -> &'static str {
         DebugView::Occlusion => {
             "green: first culling pass drew it, blue: second; red: share occluded"
         }
+        DebugView::Residency => {
+            "green: at the wanted level; yellow, orange, red: 1, 2, 3+ levels coarser (page not in the pool)"
+        }
     }
 }
 

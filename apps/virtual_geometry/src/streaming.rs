@@ -161,6 +161,7 @@ pub fn apply(p: &mut Pipeline, data: &SceneData) -> Result<()> {
             p.add_resource(entry)?;
         }
     }
+    let mut threshold = None;
     for pass in p.passes_of_mut(cull) {
         if pass.param_str("mode") != Some("second") {
             for (slot, resource) in [
@@ -171,6 +172,14 @@ pub fn apply(p: &mut Pipeline, data: &SceneData) -> Result<()> {
             ] {
                 pass.bind(slot, resource);
             }
+            threshold = threshold.or(pass.param("lod_threshold_px").cloned());
+        }
+    }
+    // The `residency` view measures missing detail against the cull's threshold.
+    for pass in p.passes_of_mut(meshlight::resolve::STAGE) {
+        pass.bind(meshlight::resolve::STREAM_ERRORS, STREAM_ERRORS);
+        if let Some(t) = &threshold {
+            pass.set_param("lod_threshold_px", t.clone());
         }
     }
     Ok(())

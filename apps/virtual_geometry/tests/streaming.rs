@@ -380,3 +380,37 @@ fn the_drawn_cut_read_back_from_the_gpu_is_complete_every_frame() {
     let pages = &r.data.streaming().unwrap().pages;
     assert!(check(&dag, &last, |g| pages[g as usize].resident_at.is_some()).is_err());
 }
+
+/// The `residency` view in a streamed frame: before streaming has settled, clusters
+/// drawn coarser than the view wants show (yellow to red, red above green); once it has
+/// settled, every covered pixel is at the wanted level (green).
+#[test]
+fn the_residency_view_shows_missing_detail_until_streaming_settles() {
+    let placed = field(Some(all_pages()));
+    let settings = FrameSettings {
+        view: Some(meshlight::resolve::DebugView::Residency),
+        ..FrameSettings::new(W, H)
+    };
+    let mut r = Renderer::new(placed.data, settings, &GraphSource::Shipped).unwrap();
+    r.start_streaming(placed.sources, Budget::default(), 2)
+        .unwrap();
+    // Pixels drawn coarser than wanted: redder than green.
+    let coarser = |still: &Still| {
+        still
+            .rgba
+            .chunks(4)
+            .filter(|p| p[0] as i32 > p[1] as i32 + 8)
+            .count()
+    };
+    let first = r.render_still(&placed.camera).unwrap();
+    let early = coarser(&first);
+    assert!(
+        early > 50,
+        "only {early} pixels drawn coarser before streaming"
+    );
+    r.settle_streaming(&placed.camera, 400).unwrap();
+    let settled = r.render_still(&placed.camera).unwrap();
+    let covered = settled.rgba.chunks(4).filter(|p| p[1] > 0).count();
+    assert!(covered > 1000, "{covered} covered pixels");
+    assert_eq!(coarser(&settled), 0, "drawn coarser once settled");
+}

@@ -147,10 +147,7 @@ fn xyz(v: [f32; 4]) -> [f32; 3] {
 
 /// `instance_max_scale`.
 pub fn instance_max_scale(instance: &Instance) -> f32 {
-    let m = &instance.world_from_local;
-    let axis = |c: usize| dot3(xyz(m[c]), xyz(m[c]));
-    let (x, y, z) = (axis(0), axis(1), axis(2));
-    x.max(y.max(z)).sqrt()
+    meshlight_shaders::cpu::lod::instance_max_scale(&instance.world_from_local)
 }
 
 /// `sphere_in_frustum` (a NaN distance keeps the sphere, as the WGSL's `<` does) and the

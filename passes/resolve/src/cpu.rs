@@ -57,6 +57,57 @@ pub struct Frame<'a> {
     pub second_counts: Option<&'a [u32]>,
     /// The `occluded_per_instance` slot, if bound: `[2i]` cut, `[2i + 1]` left hidden.
     pub occluded_per_instance: Option<&'a [u32]>,
+    /// The `stream_errors` slot, if bound: per group, its error while its page is not
+    /// in the streaming pool, else 0.
+    pub stream_errors: Option<&'a [f32]>,
+}
+
+/// The `residency` view's colours: at the wanted level, then one, two, three or more
+/// levels coarser (shade.wgsl's `RESIDENCY_COLORS`).
+pub const RESIDENCY_COLORS: [Vec3; 4] = [
+    Vec3::new(0.3, 0.8, 0.35),
+    Vec3::new(0.95, 0.85, 0.2),
+    Vec3::new(1.0, 0.5, 0.1),
+    Vec3::new(0.95, 0.15, 0.1),
+];
+
+/// shade.wgsl's `levels_missing`: how many levels (at most 3) coarser than the view
+/// wants `cluster` is drawn because its source group's page is missing: its missing
+/// error projected on the meshlet's bounds, against the threshold, a level per doubling.
+pub fn levels_missing(
+    scene: &SceneData,
+    view: &View,
+    stream_errors: Option<&[f32]>,
+    cluster: &Cluster,
+    lod_threshold_px: f32,
+) -> u32 {
+    use meshlight_shaders::cpu::lod::{
+        error_perceptible, instance_max_scale, project_error_to_pixels,
+    };
+    let Some(errors) = stream_errors else {
+        return 0;
+    };
+    let m = meshlet_of(scene, cluster);
+    let Some(&missing) = errors.get(m.source_group as usize) else {
+        return 0;
+    };
+    if missing <= 0.0 {
+        return 0;
+    }
+    let instance = instance_of(scene, cluster);
+    let scale = instance_max_scale(&instance.world_from_local);
+    let world = Mat4::from_cols_array_2d(&instance.world_from_local);
+    let centre = world * Vec4::new(m.bounds[0], m.bounds[1], m.bounds[2], 1.0);
+    let px = project_error_to_pixels(
+        view,
+        centre.truncate().to_array(),
+        m.bounds[3] * scale,
+        missing * scale,
+    );
+    if !error_perceptible(px, lod_threshold_px) {
+        return 0;
+    }
+    1 + (px / lod_threshold_px).log2().floor().min(2.0) as u32
 }
 
 /// The `occlusion` view's colour of a cluster the first pass drew. This and the three
@@ -319,6 +370,7 @@ pub fn shade(frame: &Frame, settings: &Settings) -> Vec<[u8; 4]> {
         ambient: settings.ambient_color,
         checker_scale: settings.checker_scale,
         pyramid_mip: settings.pyramid_mip,
+        lod_threshold_px: settings.lod_threshold_px,
     };
     let mut out = Vec::with_capacity(frame.visbuffer.len());
     for y in 0..frame.height {
@@ -340,6 +392,7 @@ struct ShadeLight {
     ambient: Vec3,
     checker_scale: f32,
     pyramid_mip: u32,
+    lod_threshold_px: f32,
 }
 
 /// shade.wgsl's `shade_pixels` before the clamp and the store.
@@ -401,6 +454,19 @@ fn pixel_color(
         }),
         // Reverse-Z depth falls off as 1 / distance; the fourth root spreads it.
         DebugView::Depth => Vec3::splat(visbuffer::depth(value).sqrt().sqrt()),
+        DebugView::Residency => {
+            let cluster = cluster_of(frame.raster_clusters, value);
+            let levels = levels_missing(
+                frame.scene,
+                frame.view,
+                frame.stream_errors,
+                &cluster,
+                light.lod_threshold_px,
+            );
+            let shaded = shade_surface(frame, light, value, pixel);
+            let lit = shaded.dot(Vec3::new(0.2126, 0.7152, 0.0722)).min(1.0);
+            RESIDENCY_COLORS[levels as usize] * (0.45 + 0.55 * lit)
+        }
         DebugView::Occlusion => {
             let cluster = cluster_of(frame.raster_clusters, value);
             occlusion_color(

@@ -287,6 +287,12 @@ pub fn contract() -> StageContract {
                     "per instance: [2i] clusters in the LOD cut, [2i+1] left hidden, for the `occlusion` view",
                 )
                 .optional(),
+                Slot::read(
+                    STREAM_ERRORS,
+                    Element::F32,
+                    "per group: its error while its page is not in the streaming pool, else 0 (the scene's `stream_errors`), for the `residency` view",
+                )
+                .optional(),
             ],
         ]
         .concat(),
@@ -321,8 +327,9 @@ uniform_block! {
         checker_scale: f32,
         /// The mip the pyramid view shows.
         pyramid_mip: u32,
-        /// Scalars, not a vec3 (whose 16-byte alignment would grow the struct).
-        pad_a: u32,
+        /// The LOD threshold the residency view measures missing detail against.
+        lod_threshold_px: f32,
+        /// Scalars, not a vec2 (whose alignment would grow the struct).
         pad_b: u32,
         pad_c: u32,
     }
@@ -376,7 +383,9 @@ impl Pass for Resolve {
             ctx.min_bytes(SECOND_COUNTS, 32);
         }
         let occluded_per_instance = ctx.is_bound(OCCLUDED_PER_INSTANCE);
+        let residency = ctx.is_bound(STREAM_ERRORS);
         let defs = ShadeDefs {
+            residency,
             vertex_colors: self.vertex_colors,
             clustered_lights: lit,
             texture,
@@ -437,6 +446,7 @@ impl Pass for Resolve {
             view_mode: s.view as u32,
             checker_scale: s.checker_scale,
             pyramid_mip: s.pyramid_mip,
+            lod_threshold_px: s.lod_threshold_px,
             ..ShadeParams::default()
         };
         if s.view.needs_pyramid()
@@ -469,6 +479,8 @@ impl Pass for Resolve {
 pub const SECOND_COUNTS: &str = "second_counts";
 /// The slot of the per-instance occlusion counters, read by the `occlusion` view.
 pub const OCCLUDED_PER_INSTANCE: &str = "occluded_per_instance";
+/// The slot of the streamed groups' missing errors, read by the `residency` view.
+pub const STREAM_ERRORS: &str = "stream_errors";
 
 /// Light clustering's outputs the shading reads, at bindings 11 to 15.
 const LIGHT_SLOTS: [&str; 5] = [
@@ -493,6 +505,8 @@ shader_defs! {
         pyramid: bool => "PYRAMID",
         /// The second culling pass's counts are bound.
         second_counts: bool => "SECOND_COUNTS",
+        /// The streamed groups' missing errors are bound, for the `residency` view.
+        residency: bool => "RESIDENCY",
         /// The per-instance occlusion counters are bound.
         occluded_per_instance: bool => "OCCLUDED_PER_INSTANCE",
     }
@@ -575,6 +589,7 @@ mod tests {
             pyramid: true,
             second_counts: true,
             occluded_per_instance: true,
+            residency: true,
         }
         .shader_defs();
         for (shader, defs) in [(&DEPTH_SHADER, &depth), (&SHADE_SHADER, &shade)] {

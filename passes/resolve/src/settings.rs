@@ -47,11 +47,18 @@ pub enum DebugView {
     Mip = 12,
     /// The base colour (factor times texture), unlit, linear.
     BaseColor = 13,
+    /// How many levels coarser than the view wants each cluster is drawn because a page
+    /// it needs is not in the streaming pool (the `stream_errors` slot): green at the
+    /// wanted level, yellow one level coarser, orange two, red three or more, over the
+    /// shaded brightness. Estimated from the missing group's error in pixels against
+    /// `lod_threshold_px` (errors about double a level); all green when the scene does
+    /// not stream.
+    Residency = 14,
 }
 
 impl DebugView {
     /// Every view, in discriminant order.
-    pub const ALL: [DebugView; 14] = [
+    pub const ALL: [DebugView; 15] = [
         DebugView::Shaded,
         DebugView::Clusters,
         DebugView::Triangles,
@@ -66,6 +73,7 @@ impl DebugView {
         DebugView::Normal,
         DebugView::Mip,
         DebugView::BaseColor,
+        DebugView::Residency,
     ];
 
     /// The name pipeline files and the command line use.
@@ -85,6 +93,7 @@ impl DebugView {
             DebugView::Normal => "normal",
             DebugView::Mip => "mip",
             DebugView::BaseColor => "base-color",
+            DebugView::Residency => "residency",
         }
     }
 
@@ -159,6 +168,9 @@ pub struct Settings {
     pub checker_scale: f32,
     /// The mip the `pyramid` view shows (0: the finest, half the viewport's size).
     pub pyramid_mip: u32,
+    /// The LOD cut's threshold in pixels, as the culling pass has it: the `residency`
+    /// view measures missing detail against it.
+    pub lod_threshold_px: f32,
 }
 
 impl Default for Settings {
@@ -172,6 +184,7 @@ impl Default for Settings {
             view: DebugView::Shaded,
             checker_scale: 8.0,
             pyramid_mip: 0,
+            lod_threshold_px: 1.0,
         }
     }
 }
@@ -194,7 +207,7 @@ pub struct Resolve {
 }
 
 /// The params a pipeline file may give; any other key is an error.
-pub const KEYS: [&str; 9] = [
+pub const KEYS: [&str; 10] = [
     "width",
     "height",
     "view",
@@ -204,6 +217,7 @@ pub const KEYS: [&str; 9] = [
     "ambient_color",
     "pyramid_mip",
     "vertex_colors",
+    "lod_threshold_px",
 ];
 
 impl Resolve {
@@ -227,7 +241,8 @@ impl Resolve {
     /// `shaded`), `checker_scale` (> 0, default 8), and `light_direction` (non-zero),
     /// `light_color`, `ambient_color` (non-negative) as `[x, y, z]` arrays, and
     /// `pyramid_mip` (default 0; checked against the bound pyramid when the pass records),
-    /// `vertex_colors` (default false).
+    /// `vertex_colors` (default false), `lod_threshold_px` (> 0, default 1: the culling
+    /// pass's, for the `residency` view).
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&KEYS)?;
         let [width, height] = params.size("the visibility buffer")?;
@@ -246,6 +261,12 @@ impl Resolve {
         if light_direction.normalize_or_zero() == Vec3::ZERO {
             return Err(GraphError::parameter(format!(
                 "`light_direction` (towards the light) must not be zero, got {light_direction}"
+            )));
+        }
+        let lod_threshold_px = params.f32("lod_threshold_px", defaults.lod_threshold_px)?;
+        if !(lod_threshold_px > 0.0 && lod_threshold_px.is_finite()) {
+            return Err(GraphError::parameter(format!(
+                "`lod_threshold_px` (the culling pass's LOD threshold, for the `residency` view) must be > 0, got {lod_threshold_px}"
             )));
         }
         let colour = |key: &str, default: Vec3| -> Result<Vec3> {
@@ -267,6 +288,7 @@ impl Resolve {
                 view,
                 checker_scale,
                 pyramid_mip: params.u32("pyramid_mip", defaults.pyramid_mip)?,
+                lod_threshold_px,
             },
             vertex_colors: params.bool("vertex_colors", false)?,
         })

@@ -4,15 +4,15 @@
 // the three clip-space corners. `cpu::shade` is the reference; every step has its mirror
 // there.
 
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_COLORS, meshlet_level, meshlet_material, meshlet_normal, meshlet_color_word}
-#import meshlight::instance::{Instance, Material, MATERIAL_FLAG_CHECKER, MATERIAL_FLAG_DOUBLE_SIDED, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_COLORS, MESHLET_NO_GROUP, meshlet_level, meshlet_material, meshlet_normal, meshlet_color_word, meshlet_bounds, error_perceptible}
+#import meshlight::instance::{Instance, Material, instance_max_scale, MATERIAL_FLAG_CHECKER, MATERIAL_FLAG_DOUBLE_SIDED, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
 #import meshlight::texture::{texture_present, sample_texture, texture_lod, vertex_color}
 #import meshlight::surface::{barycentrics, interpolated_uv, uv_transform_rows, transformed_uv, corner_field, corner_position, corner_uv}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshlets, payload, materials}
-#import meshlight::view::View
+#import meshlight::view::{View, project_error_to_pixels}
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
 #import resolve::visibility::{raster_clusters, visibility_at}
 #ifdef CLUSTERED_LIGHTS
@@ -35,6 +35,7 @@ const VIEW_UV: u32 = 10u;
 const VIEW_NORMAL: u32 = 11u;
 const VIEW_MIP: u32 = 12u;
 const VIEW_BASE_COLOR: u32 = 13u;
+const VIEW_RESIDENCY: u32 = 14u;
 // The light-count view's scale: this many lights in a froxel is the hottest colour.
 const LIGHT_COUNT_FULL: f32 = 32.0;
 
@@ -87,6 +88,48 @@ fn pyramid_depth(pixel: vec2<u32>, level: u32) -> f32 {
 // left hidden after both passes.
 @group(0) @binding(18) var<storage, read> occluded_per_instance: array<u32>;
 #endif
+
+#ifdef RESIDENCY
+// Per group: its error while its page is not in the streaming pool, else 0.
+@group(0) @binding(19) var<storage, read> stream_errors: array<f32>;
+#endif
+
+// The `residency` view: how many levels coarser than the view wants the cluster is
+// drawn, because the page of the group that made its meshlet is not in the pool. The
+// missing error is projected on the meshlet's own bounds (the cull projects it on the
+// group's LOD sphere, which holds them: this never overstates), and each level coarser
+// about doubles it. 0 when the scene does not stream.
+fn levels_missing(cluster: Cluster) -> u32 {
+#ifdef RESIDENCY
+    let m = meshlets[cluster.meshlet];
+    let group = m.source_group;
+    if group == MESHLET_NO_GROUP {
+        return 0u;
+    }
+    let missing = stream_errors[group];
+    if missing <= 0.0 {
+        return 0u;
+    }
+    let instance = instance_at(cluster.instance);
+    let scale = instance_max_scale(instance);
+    let bounds = meshlet_bounds(m);
+    let centre = (instance.world_from_local * vec4(bounds.xyz, 1.0)).xyz;
+    let px = project_error_to_pixels(view, centre, bounds.w * scale, missing * scale);
+    if !error_perceptible(px, params.lod_threshold_px) {
+        return 0u;
+    }
+    return 1u + u32(min(floor(log2(px / params.lod_threshold_px)), 2.0));
+#else
+    return 0u;
+#endif
+}
+
+const RESIDENCY_COLORS = array<vec3<f32>, 4>(
+    vec3(0.3, 0.8, 0.35),
+    vec3(0.95, 0.85, 0.2),
+    vec3(1.0, 0.5, 0.1),
+    vec3(0.95, 0.15, 0.1),
+);
 
 // True when the second culling pass drew the cluster in slot `id`.
 fn drawn_by_second_pass(id: u32) -> bool {
@@ -457,6 +500,13 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
 #ifdef PYRAMID
             rgb = vec3(sqrt(sqrt(max(pyramid_depth(gid.xy, params.pyramid_mip), 0.0))));
 #endif
+        }
+        case VIEW_RESIDENCY: {
+            if !empty {
+                let tint = RESIDENCY_COLORS[levels_missing(raster_clusters[visbuffer_cluster(value)])];
+                let lit = min(dot(shade(value, pixel), vec3(0.2126, 0.7152, 0.0722)), 1.0);
+                rgb = tint * (0.45 + 0.55 * lit);
+            }
         }
         case VIEW_OCCLUSION: {
             if !empty {

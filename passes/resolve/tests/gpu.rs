@@ -14,7 +14,7 @@ use meshlight_pass_populate::cpu::{ClusterLists, cpu_populate};
 use meshlight_pass_resolve::settings::Settings;
 use meshlight_pass_resolve::{
     COLOR_FORMAT, DEPTH_FORMAT, DebugView, OCCLUDED_PER_INSTANCE, PYRAMID_FORMAT, Resolve,
-    SECOND_COUNTS, cpu,
+    SECOND_COUNTS, STREAM_ERRORS, cpu,
 };
 use meshlight_pass_z_slice::{ZSlice, cpu_z_slice};
 use meshlight_scene::load::load_obj;
@@ -68,6 +68,8 @@ struct Frame {
     /// The `second_counts` and `occluded_per_instance` slots, for the `occlusion` view.
     second_counts: Option<Vec<u32>>,
     occluded_per_instance: Option<Vec<u32>>,
+    /// The `stream_errors` slot, for the `residency` view.
+    stream_errors: Option<Vec<f32>>,
 }
 
 /// Light clustering's output for the frame, from the CPU references of its stages.
@@ -97,6 +99,7 @@ impl Frame {
             pyramid: self.pyramid.as_deref(),
             second_counts: self.second_counts.as_deref(),
             occluded_per_instance: self.occluded_per_instance.as_deref(),
+            stream_errors: self.stream_errors.as_deref(),
         }
     }
 
@@ -366,6 +369,7 @@ fn frame() -> Frame {
         pyramid: None,
         second_counts: None,
         occluded_per_instance: None,
+        stream_errors: None,
     }
 }
 
@@ -473,10 +477,14 @@ fn run_with(
             light_buffers.push((name, bytemuck::cast_slice(words).to_vec()));
         }
     }
+    if let Some(errors) = &frame.stream_errors {
+        light_buffers.push((STREAM_ERRORS, bytemuck::cast_slice(errors).to_vec()));
+    }
     for (name, bytes) in &light_buffers {
         let element = match *name {
             "objects" => Element::named("ClusterableObject", 64),
             "cluster_grid" => Element::named("ClusterGrid", 48),
+            STREAM_ERRORS => Element::F32,
             _ => Element::U32,
         };
         let count = bytes.len() as u64 / u64::from(element.size);
@@ -687,6 +695,8 @@ fn depth_material_depth_and_every_view_match_the_reference() {
             DebugView::Shaded => (2, 0.99),
             // Filtered texels and normalised normals: float rounding may differ by a step.
             DebugView::Depth | DebugView::Normal | DebugView::BaseColor | DebugView::Uv => (1, 1.0),
+            // A tint times the shaded brightness, which may round a step apart.
+            DebugView::Residency => (1, 1.0),
             _ => (0, 1.0),
         };
         let (over, largest) = color_differences(&got.color, &want, tolerance);
@@ -919,6 +929,63 @@ fn the_occlusion_view_colours_by_pass_and_culled_share_like_the_reference() {
             );
         }
     }
+}
+
+/// The `residency` view: with no `stream_errors` bound every covered pixel is at the
+/// wanted level (green); with missing errors of several sizes on the meshlets' source
+/// groups, the pixels take the reference's colours, each meaning on screen.
+#[test]
+fn the_residency_view_colours_missing_levels_like_the_reference() {
+    let mut f = frame();
+    let view = f.view;
+    let pass = Resolve::new(W, H).with_view(DebugView::Residency);
+    let covered = f
+        .visbuffer
+        .iter()
+        .filter(|&&v| v != visbuffer::EMPTY)
+        .count();
+    let plain = run_with(&mut f, pass, &view, BOTH).unwrap_or_else(|e| panic!("{e}"));
+    let (over, largest) = reference_differences(&plain.color, &f, &pass.settings, 2);
+    assert!(
+        over * 100 <= covered,
+        "unbound: {over} pixels differ (largest {largest})"
+    );
+    assert_eq!(
+        dominant(&plain.color, &f.visbuffer, 1),
+        covered,
+        "all green"
+    );
+    // Every group's page missing, its error spread over four orders of magnitude, so
+    // each of the four colours is drawn somewhere.
+    let groups = f.scene.groups.len();
+    f.stream_errors = Some(
+        (0..groups)
+            .map(|g| match g % 5 {
+                0 => 0.0,
+                k => 1e-4 * 10f32.powi(k as i32),
+            })
+            .collect(),
+    );
+    let got = run_with(&mut f, pass, &view, BOTH).unwrap_or_else(|e| panic!("{e}"));
+    let (over, largest) = reference_differences(&got.color, &f, &pass.settings, 2);
+    assert!(
+        over * 100 <= covered,
+        "{over} of {covered} pixels differ (largest {largest})"
+    );
+    let mut seen = [0usize; 4];
+    for v in f.visbuffer.iter().filter(|&&v| v != visbuffer::EMPTY) {
+        let cluster = f.raster_clusters[visbuffer::cluster(*v) as usize];
+        let levels = cpu::levels_missing(
+            &f.scene,
+            &view,
+            f.stream_errors.as_deref(),
+            &cluster,
+            pass.settings.lod_threshold_px,
+        );
+        seen[levels as usize] += 1;
+    }
+    eprintln!("pixels at 0, 1, 2, 3+ levels missing: {seen:?}");
+    assert!(seen.iter().all(|&n| n > 0), "{seen:?}");
 }
 
 #[test]

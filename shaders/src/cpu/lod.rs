@@ -6,6 +6,14 @@
 use super::layout::View;
 use super::matrix::transform_point;
 
+/// `instance_max_scale`: the largest axis scale of `world_from_local` (columns), which
+/// brings a mesh-space radius or error to world space.
+pub fn instance_max_scale(world_from_local: &[[f32; 4]; 4]) -> f32 {
+    let axis = |c: [f32; 4]| c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    let [x, y, z] = [0, 1, 2].map(|c| axis(world_from_local[c]));
+    x.max(y.max(z)).sqrt()
+}
+
 /// `error_to_pixels`: pixels an error of `error` world units spans at `distance` from
 /// the camera (never nearer than the near plane).
 pub fn error_to_pixels(view: &View, distance: f32, error: f32) -> f32 {
