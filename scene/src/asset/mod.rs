@@ -107,6 +107,35 @@ pub fn dag_error(path: &Path, problems: &[String]) -> Result<(), SceneError> {
     }
 }
 
+/// Calls `each` with every vertex's local index and grid point of meshlet `m`, whose
+/// vertex records start `data` (which may end early: a window past it reads zeros).
+#[inline(always)]
+pub(crate) fn grid_points(m: &MeshletRecord, data: &[u8], mut each: impl FnMut(usize, [u32; 3])) {
+    let [bx, by, bz] = m.axis_bits();
+    let masks = [bx, by, bz].map(low_bits);
+    let stride = m.vertex_stride() as usize;
+    let point =
+        |o: [u64; 3]| [0, 1, 2].map(|k| m.grid_min[k].wrapping_add((o[k] & masks[k]) as u32));
+    if bx + by + bz <= 57 {
+        for v in 0..m.vertex_count() as usize {
+            let w = bit_window(data, v * stride);
+            each(v, point([w, w >> bx, w >> (bx + by)]));
+        }
+    } else {
+        for v in 0..m.vertex_count() as usize {
+            let at = v * stride;
+            each(
+                v,
+                point([
+                    bit_window(data, at),
+                    bit_window(data, at + bx as usize),
+                    bit_window(data, at + (bx + by) as usize),
+                ]),
+            );
+        }
+    }
+}
+
 /// One meshlet decoded back to floats, for tests, tools and CPU references.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DecodedMeshlet {
@@ -613,33 +642,14 @@ impl MeshletAsset {
     /// and a whole vertex record at a time: what the load-time checks decode every
     /// vertex of an asset with.
     #[inline(always)]
-    pub fn for_each_grid_point(&self, m: &MeshletRecord, mut each: impl FnMut(usize, [u32; 3])) {
+    pub fn for_each_grid_point(&self, m: &MeshletRecord, each: impl FnMut(usize, [u32; 3])) {
         // From the meshlet's data on: a record's window may reach past its block, and the
         // masks drop what it reads there.
-        let data: &[u8] = bytemuck::cast_slice(&self.payload()[m.data_offset as usize..]);
-        let [bx, by, bz] = m.axis_bits();
-        let masks = [bx, by, bz].map(low_bits);
-        let stride = m.vertex_stride() as usize;
-        let point =
-            |o: [u64; 3]| [0, 1, 2].map(|k| m.grid_min[k].wrapping_add((o[k] & masks[k]) as u32));
-        if bx + by + bz <= 57 {
-            for v in 0..m.vertex_count() as usize {
-                let w = bit_window(data, v * stride);
-                each(v, point([w, w >> bx, w >> (bx + by)]));
-            }
-        } else {
-            for v in 0..m.vertex_count() as usize {
-                let at = v * stride;
-                each(
-                    v,
-                    point([
-                        bit_window(data, at),
-                        bit_window(data, at + bx as usize),
-                        bit_window(data, at + (bx + by) as usize),
-                    ]),
-                );
-            }
-        }
+        grid_points(
+            m,
+            bytemuck::cast_slice(&self.payload()[m.data_offset as usize..]),
+            each,
+        );
     }
 
     /// One meshlet's triangles as local vertex indices, clamped as the GPU clamps them.

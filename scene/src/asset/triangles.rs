@@ -164,10 +164,16 @@ pub fn first_out_of_range(
     vertices: u32,
     triangles: u32,
 ) -> Option<u32> {
-    (0..triangles).find(|&t| {
-        stored_corners(block, t, bits, vertices, triangles)
-            .is_none_or(|c| c.iter().any(|&c| !(0..vertices as i64).contains(&c)))
-    })
+    // Every record, the division done as `for_each_stored` does it (a page's checks
+    // visit every triangle of the page).
+    let mut first = None;
+    for_each_stored(block, bits, vertices, triangles, |t, corners| {
+        let bad = corners.is_none_or(|c| c.iter().any(|&c| !(0..vertices as i64).contains(&c)));
+        if bad && first.is_none() {
+            first = Some(t);
+        }
+    });
+    first
 }
 
 #[cfg(test)]

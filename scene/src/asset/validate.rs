@@ -441,24 +441,35 @@ fn meshlet_data(
     sphere_limit: &SphereLimit,
 ) -> Result<(), String> {
     if let Some((k, p)) = vertex_outside_bounds(h, m, data, sphere_limit) {
-        return Err(format!(
-            "points at vertex records that decode to {p:?} on axis {k}, outside the \
-             header's bounds {:?}..{:?} (the grid's rounding allowed)",
-            h.bounds_min, h.bounds_max
-        ));
+        return Err(outside_bounds_problem(h, k, p));
     }
-    if h.has_uvs() {
-        let at = layout.uvs as usize;
-        if let Some(k) = (0..2).find(|&k| data[at + k] >> 24 > UV_MAX_SHIFT) {
-            return Err(format!(
-                "points at a UV block whose {} offsets are shifted by {}; at most \
-                 {UV_MAX_SHIFT} reaches every code of the UV grid",
-                ["u", "v"][k],
-                data[at + k] >> 24
-            ));
-        }
+    if let Some(k) = uv_shift_past_grid(h, layout, data) {
+        return Err(uv_shift_problem(k, data[layout.uvs as usize + k]));
     }
     Ok(())
+}
+
+fn outside_bounds_problem(h: &AssetHeader, k: usize, p: f64) -> String {
+    format!(
+        "points at vertex records that decode to {p:?} on axis {k}, outside the \
+         header's bounds {:?}..{:?} (the grid's rounding allowed)",
+        h.bounds_min, h.bounds_max
+    )
+}
+
+/// The UV offset (0: u, 1: v) of a meshlet's UV block whose shift is past the grid.
+fn uv_shift_past_grid(h: &AssetHeader, layout: &PayloadLayout, data: &[u32]) -> Option<usize> {
+    let at = layout.uvs as usize;
+    (0..2).find(|&k| h.has_uvs() && data[at + k] >> 24 > UV_MAX_SHIFT)
+}
+
+fn uv_shift_problem(k: usize, word: u32) -> String {
+    format!(
+        "points at a UV block whose {} offsets are shifted by {}; at most \
+         {UV_MAX_SHIFT} reaches every code of the UV grid",
+        ["u", "v"][k],
+        word >> 24
+    )
 }
 
 /// Checks a page's words as read from the file, for an asset opened for streaming
@@ -485,6 +496,7 @@ pub fn check_page_data(
         ));
     }
     let sphere_limit = SphereLimit::of(h);
+    let (origin, step) = (h.quant_origin, h.quant_step);
     for i in children {
         let m = &meshlets[i];
         let f = |name: &str| format!("meshlet[{i}].{name}");
@@ -492,7 +504,41 @@ pub fn check_page_data(
         // `validate_prefix` checked that the page's meshlets tile its range.
         let start = (m.data_offset - page.first_word) as usize;
         let data = &words[start..start + layout.end as usize];
-        meshlet_data(h, m, &layout, data, &sphere_limit).map_err(|p| bad(f("data_offset"), p))?;
+        // One decoding of the vertices gives the bounds check of a whole file's load
+        // (`vertex_outside_bounds`, from the grid's extremes) and the culling sphere
+        // check of `inspect` (`verify`'s, in the same f32 operations).
+        let centre = [m.bounds[0], m.bounds[1], m.bounds[2]];
+        let (mut lo, mut hi, mut farthest_bits) = ([u32::MAX; 3], [0u32; 3], 0u32);
+        super::grid_points(m, bytemuck::cast_slice(data), |_, q| {
+            let mut squared = 0.0f32;
+            for k in 0..3 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+                let d = (origin[k] + q[k] as f32 * step) - centre[k];
+                squared += d * d;
+            }
+            farthest_bits = farthest_bits.max(squared.to_bits());
+        });
+        if let Some((k, p)) = outside_bounds(h, lo, hi, &sphere_limit) {
+            return Err(bad(f("data_offset"), outside_bounds_problem(h, k, p)));
+        }
+        if let Some(k) = uv_shift_past_grid(h, &layout, data) {
+            return Err(bad(
+                f("data_offset"),
+                uv_shift_problem(k, data[layout.uvs as usize + k]),
+            ));
+        }
+        let farthest = f32::from_bits(farthest_bits).sqrt();
+        let largest = centre.iter().fold(0.0f32, |a, c| a.max(c.abs()));
+        if farthest > m.bounds[3] * (1.0 + 1e-5) + 1e-6 * largest {
+            return Err(bad(
+                f("bounds"),
+                format!(
+                    "a vertex lies {farthest} from the centre of its culling sphere of radius {}",
+                    m.bounds[3]
+                ),
+            ));
+        }
         let (vc, tc) = (m.vertex_count(), m.triangle_count());
         let block = &data[layout.triangles as usize..layout.uvs as usize];
         if let Some(t) = super::triangles::first_out_of_range(block, m.triangle_bits(), vc, tc) {
@@ -500,32 +546,6 @@ pub fn check_page_data(
                 f("triangles"),
                 format!("triangle {t} refers past the meshlet's {vc} vertices"),
             ));
-        }
-        let centre = [m.bounds[0], m.bounds[1], m.bounds[2]].map(f64::from);
-        let reach = m.bounds[3] as f64 * (1.0 + 1e-5)
-            + 1e-6 * centre.iter().fold(0.0f64, |a, c| a.max(c.abs()));
-        let (origin, step) = (h.quant_origin.map(f64::from), h.quant_step as f64);
-        let bits = m.axis_bits();
-        let stride = m.vertex_stride() as usize;
-        for v in 0..vc as usize {
-            let mut at = v * stride;
-            let mut d2 = 0.0f64;
-            for k in 0..3 {
-                let q = m.grid_min[k].wrapping_add(get_bits(data, at, bits[k]).unwrap_or(0));
-                at += bits[k] as usize;
-                let d = origin[k] + q as f64 * step - centre[k];
-                d2 += d * d;
-            }
-            if d2.sqrt() > reach {
-                return Err(bad(
-                    f("bounds"),
-                    format!(
-                        "vertex {v} lies {} from the centre of the culling sphere of radius {}",
-                        d2.sqrt(),
-                        m.bounds[3]
-                    ),
-                ));
-            }
         }
     }
     Ok(())
@@ -564,6 +584,17 @@ fn vertex_outside_bounds(
             hi[k] = hi[k].max(q);
         }
     }
+    outside_bounds(h, lo, hi, limit)
+}
+
+/// The first axis, and coordinate, where grid extremes `lo`..`hi` decode outside the
+/// header's bounds padded by the grid's rounding.
+fn outside_bounds(
+    h: &AssetHeader,
+    lo: [u32; 3],
+    hi: [u32; 3],
+    limit: &SphereLimit,
+) -> Option<(usize, f64)> {
     (0..3).find_map(|k| {
         let at = |q: u32| h.quant_origin[k] as f64 + q as f64 * h.quant_step as f64;
         [at(lo[k]), at(hi[k])]
