@@ -429,9 +429,13 @@ impl Streamer {
     /// Marks the wanted pages and their ancestors, queues the absent ones; returns how
     /// many are absent and the bytes of all of them.
     fn take_wants(&mut self, frame: u64, wanted: &[Request]) -> (u32, u64) {
-        let mut wanted = wanted.to_vec();
-        // Highest first, so a page reached from two wants is queued at the higher.
+        // Highest first, so a page reached from two wants is queued at the higher. Most
+        // wants are pages in use (priority 0, thousands a frame): only the rest, the
+        // missing pages, need sorting.
+        let (mut wanted, in_use): (Vec<Request>, Vec<Request>) =
+            wanted.iter().partition(|r| r.priority > 0.0);
         wanted.sort_by(|a, b| b.priority.total_cmp(&a.priority));
+        wanted.extend(in_use);
         let (mut requested, mut bytes) = (0, 0);
         let mut stack = Vec::new();
         for r in wanted {

@@ -488,9 +488,8 @@ impl Streaming {
         while self.back.len() > 8 {
             self.back.pop_first();
         }
-        // A page listed by several frames once, at its highest priority.
-        merged.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.total_cmp(&a.1)));
-        merged.dedup_by_key(|e| e.0);
+        // A page listed by several frames (when more than one came back) stays listed
+        // twice: the streamer takes each page once, at its highest priority.
         let wanted = heard.then(|| {
             merged
                 .into_iter()
