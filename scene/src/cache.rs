@@ -135,6 +135,42 @@ pub fn load_or_bake(
     })
 }
 
+/// [`load_or_bake`] for a scene that streams: the cached file opened for streaming
+/// ([`MeshletAsset::open_resident`]: its resident part read, its pages read as the view
+/// needs them), baking it into the cache first when it is not there. Only when the
+/// cache cannot be written is the asset returned whole, as baked.
+pub fn open_or_bake_resident(
+    source: &Source,
+    options: &BuildOptions,
+    dir: &Path,
+    progress: &mut dyn FnMut(LevelProgress),
+) -> Result<(MeshletAsset, Outcome), SceneError> {
+    let key = key(source, options)?;
+    let path = entry(dir, key);
+    if path.exists() {
+        match MeshletAsset::open_resident(&path) {
+            Ok(asset) => return Ok((asset, Outcome::Hit)),
+            Err(e) => log::warn!(
+                "cached asset {} is unusable ({e}); baking again",
+                path.display()
+            ),
+        }
+    }
+    let (asset, outcome) = cached_or_built(key, dir, || {
+        build_asset(&load_source(source)?, options, progress).map(|b| b.asset)
+    })?;
+    match outcome {
+        // Baked just now and stored: the file is what streams, not the copy in memory.
+        Outcome::Baked => Ok((MeshletAsset::open_resident(&path)?, outcome)),
+        _ => Ok((asset, outcome)),
+    }
+}
+
+/// The file of cache entry `key` in `dir`.
+fn entry(dir: &Path, key: u64) -> PathBuf {
+    dir.join(format!("{key:016x}.mlasset"))
+}
+
 /// The asset of a mesh in memory (one mesh of a glTF scene) from the cache in `dir`,
 /// keyed by its content ([`mesh_key`]), or baked and stored there.
 pub fn load_or_bake_mesh(
@@ -153,7 +189,7 @@ fn cached_or_built(
     dir: &Path,
     build: impl FnOnce() -> Result<MeshletAsset, SceneError>,
 ) -> Result<(MeshletAsset, Outcome), SceneError> {
-    let path = dir.join(format!("{key:016x}.mlasset"));
+    let path = entry(dir, key);
     if path.exists() {
         // Every check `inspect` runs (a few times the plain load): a cache entry that a
         // bug or a disk damaged in a way the checksum cannot see is baked again, never
@@ -208,6 +244,28 @@ pub fn log_progress(name: &str, p: LevelProgress) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_streamed_scene_opens_the_cached_file_for_its_resident_part() {
+        let dir =
+            std::env::temp_dir().join(format!("meshlight-cache-stream-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let source = Source::Procedural { segments: 8 };
+        let options = BuildOptions::default();
+        let (a, first) = open_or_bake_resident(&source, &options, &dir, &mut |_| {}).unwrap();
+        assert_eq!(first, Outcome::Baked);
+        let (b, second) = open_or_bake_resident(&source, &options, &dir, &mut |_| {}).unwrap();
+        assert_eq!(second, Outcome::Hit);
+        let path = entry(&dir, key(&source, &options).unwrap());
+        for asset in [&a, &b] {
+            assert_eq!(asset.page_file(), Some(path.as_path()));
+            assert_eq!(asset.bytes().len() as u64, asset.resident_bytes());
+        }
+        let (whole, _) = load_or_bake(&source, &options, &dir, &mut |_| {}).unwrap();
+        assert_eq!(whole.meshlets(), a.meshlets());
+        assert!(whole.bytes().len() > a.bytes().len());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn a_second_load_hits_and_a_corrupt_entry_is_rebaked() {

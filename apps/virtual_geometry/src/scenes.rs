@@ -26,10 +26,10 @@ pub fn load_asset(mesh: &Path, segments: u32) -> Result<MeshletAsset, SceneError
     open_asset(mesh, segments, false)
 }
 
-/// [`load_asset`], and with `streamed` a baked `.mlasset` file opened for streaming
-/// ([`MeshletAsset::open_resident`]): only its resident part is read, its pages when the
-/// view needs them. A mesh baked on first use is held whole either way (it was built in
-/// memory, or is read whole from the cache), and streamed from memory.
+/// [`load_asset`], and with `streamed` the asset opened for streaming
+/// ([`MeshletAsset::open_resident`]): a baked `.mlasset` file, or the cache's file of a
+/// mesh baked on first use (baked into the cache first when it is not there): only its
+/// resident part is read, its pages when the view needs them.
 pub fn open_asset(mesh: &Path, segments: u32, streamed: bool) -> Result<MeshletAsset, SceneError> {
     if mesh.extension().is_some_and(|e| e == "mlasset") {
         // Every check `meshlight inspect` runs, so nothing it rejects reaches the GPU
@@ -45,7 +45,11 @@ pub fn open_asset(mesh: &Path, segments: u32, streamed: bool) -> Result<MeshletA
         Source::File(mesh.to_path_buf())
     };
     let name = source.name();
-    let (asset, _) = cache::load_or_bake(
+    let open = match streamed {
+        true => cache::open_or_bake_resident,
+        false => cache::load_or_bake,
+    };
+    let (asset, _) = open(
         &source,
         &BuildOptions::default(),
         &cache::cache_dir(),

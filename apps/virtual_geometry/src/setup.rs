@@ -203,7 +203,13 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
         false if o.mesh.is_dir() => Loaded::Library(scenes::load_library(&o.mesh, true)?),
         false => match scenes::load_obj_with_materials(&o.mesh)? {
             Some((asset, materials)) => Loaded::Copies(asset, Some(materials)),
-            None => Loaded::Copies(scenes::open_asset(&o.mesh, o.segments, true)?, None),
+            // A mesh baked on first use streams only when asked to: its size is known
+            // only once baked.
+            None => {
+                let baked = o.mesh.extension().is_some_and(|e| e == "mlasset");
+                let streamed = baked || o.pool_mb.is_some();
+                Loaded::Copies(scenes::open_asset(&o.mesh, o.segments, streamed)?, None)
+            }
         },
     };
     // The scene's buffers are bound whole: sized for the adapter the frame will run on.
@@ -216,7 +222,7 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
         match &mut loaded {
             Loaded::Library(assets) => *assets = scenes::load_library(&o.mesh, false)?,
             Loaded::Copies(asset, _) if asset.page_file().is_some() => {
-                *asset = MeshletAsset::load_verified(&o.mesh)?;
+                *asset = scenes::open_asset(&o.mesh, o.segments, false)?;
             }
             _ => {}
         }
