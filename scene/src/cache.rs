@@ -130,7 +130,7 @@ pub fn load_or_bake(
     progress: &mut dyn FnMut(LevelProgress),
 ) -> Result<(MeshletAsset, Outcome), SceneError> {
     let key = key(source, options)?;
-    cached_or_built(key, dir, || {
+    cached_or_built(key, dir, MeshletAsset::load_verified, || {
         build_asset(&load_source(source)?, options, progress).map(|b| b.asset)
     })
 }
@@ -146,22 +146,12 @@ pub fn open_or_bake_resident(
     progress: &mut dyn FnMut(LevelProgress),
 ) -> Result<(MeshletAsset, Outcome), SceneError> {
     let key = key(source, options)?;
-    let path = entry(dir, key);
-    if path.exists() {
-        match MeshletAsset::open_resident(&path) {
-            Ok(asset) => return Ok((asset, Outcome::Hit)),
-            Err(e) => log::warn!(
-                "cached asset {} is unusable ({e}); baking again",
-                path.display()
-            ),
-        }
-    }
-    let (asset, outcome) = cached_or_built(key, dir, || {
+    let (asset, outcome) = cached_or_built(key, dir, MeshletAsset::open_resident, || {
         build_asset(&load_source(source)?, options, progress).map(|b| b.asset)
     })?;
     match outcome {
         // Baked just now and stored: the file is what streams, not the copy in memory.
-        Outcome::Baked => Ok((MeshletAsset::open_resident(&path)?, outcome)),
+        Outcome::Baked => Ok((MeshletAsset::open_resident(&entry(dir, key))?, outcome)),
         _ => Ok((asset, outcome)),
     }
 }
@@ -179,22 +169,27 @@ pub fn load_or_bake_mesh(
     dir: &Path,
     progress: &mut dyn FnMut(LevelProgress),
 ) -> Result<(MeshletAsset, Outcome), SceneError> {
-    cached_or_built(mesh_key(mesh, options), dir, || {
-        build_asset(mesh, options, progress).map(|b| b.asset)
-    })
+    cached_or_built(
+        mesh_key(mesh, options),
+        dir,
+        MeshletAsset::load_verified,
+        || build_asset(mesh, options, progress).map(|b| b.asset),
+    )
 }
 
+/// The cache entry `key` in `dir` read with `open`, or built and stored there. `open`
+/// checks what `inspect` checks ([`MeshletAsset::load_verified`], or
+/// [`MeshletAsset::open_resident`] for the resident part): an entry that a bug or a
+/// disk damaged in a way the checksum cannot see is baked again, never drawn.
 fn cached_or_built(
     key: u64,
     dir: &Path,
+    open: fn(&Path) -> Result<MeshletAsset, SceneError>,
     build: impl FnOnce() -> Result<MeshletAsset, SceneError>,
 ) -> Result<(MeshletAsset, Outcome), SceneError> {
     let path = entry(dir, key);
     if path.exists() {
-        // Every check `inspect` runs (a few times the plain load): a cache entry that a
-        // bug or a disk damaged in a way the checksum cannot see is baked again, never
-        // drawn.
-        match MeshletAsset::load_verified(&path) {
+        match open(&path) {
             Ok(asset) => return Ok((asset, Outcome::Hit)),
             Err(e) => log::warn!(
                 "cached asset {} is unusable ({e}); baking again",

@@ -191,7 +191,7 @@ impl Terrain {
 }
 
 /// lowbias32: a well-mixed 32-bit hash.
-fn hash(mut h: u32) -> u32 {
+pub(crate) fn hash(mut h: u32) -> u32 {
     h ^= h >> 16;
     h = h.wrapping_mul(0x7feb_352d);
     h ^= h >> 15;

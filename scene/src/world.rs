@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use crate::error::SceneError;
 use crate::mesh::Mesh;
 use crate::procedural::{Knot, knot_mesh};
-use crate::terrain::Terrain;
+use crate::terrain::{Terrain, hash};
 
 /// A generated world's size and seed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -224,14 +224,4 @@ impl World {
             })
             .sum()
     }
-}
-
-/// lowbias32.
-fn hash(mut h: u32) -> u32 {
-    h ^= h >> 16;
-    h = h.wrapping_mul(0x7feb_352d);
-    h ^= h >> 15;
-    h = h.wrapping_mul(0x846c_a68b);
-    h ^= h >> 16;
-    h
 }
