@@ -1050,6 +1050,31 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
                 .collect(),
         ))
     };
+    // Per pass, the median GPU time of `stop_frames` frames at one camera in `passes`
+    // timing mode: where a settled frame's time goes (the mode adds its own cost).
+    let profile = |r: &mut Renderer,
+                   camera: &meshlight::gpu_scene::Camera|
+     -> Result<Vec<(String, f64)>, Box<dyn std::error::Error>> {
+        r.executor.finish()?;
+        r.executor.take_gpu_timings()?;
+        r.executor.timing = TimingMode::Passes;
+        for _ in 0..stop_frames {
+            r.frame(camera)?;
+        }
+        r.executor.finish()?;
+        let timings = r.executor.take_gpu_timings()?;
+        r.executor.timing = TimingMode::Frame;
+        let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
+        for t in &timings {
+            for (name, us) in &t.passes {
+                match per_pass.iter_mut().find(|(n, _)| n == name) {
+                    Some((_, v)) => v.push(us / 1e3),
+                    None => per_pass.push((name.clone(), vec![us / 1e3])),
+                }
+            }
+        }
+        Ok(per_pass.into_iter().map(|(n, v)| (n, median(v))).collect())
+    };
     // Frames at one camera for a second before anything is timed: a GPU left idle
     // (while the scene loads) runs its first hundreds of frames at a lower clock.
     let warm = |r: &mut Renderer,
@@ -1104,6 +1129,10 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
                 let ms = hold(&mut r, &stop_camera(t))?;
                 stop_baselines.push(ms);
                 let metric = format!("GPU frame at the stop {:.0} % along", t * 100.0);
+                rows.push(row("vg-stream", case.clone(), &metric, ms, "ms", &device));
+            }
+            for (pass, ms) in profile(&mut r, &stop_camera(stops[1]))? {
+                let metric = format!("GPU {pass} at the middle stop (timing mode passes)");
                 rows.push(row("vg-stream", case.clone(), &metric, ms, "ms", &device));
             }
         }
@@ -1245,6 +1274,7 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             let settled = r.settle_streaming(&stop_camera(t), 600)?;
             at_stops.push((t, settled, hold(&mut r, &stop_camera(t))?));
         }
+        let passes = profile(&mut r, &stop_camera(stops[1]))?;
         for &(t, settled, frame_ms) in &at_stops {
             let at = format!("{:.0} % along", t * 100.0);
             push(
@@ -1253,6 +1283,13 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
                 "",
             );
             push(&format!("GPU frame at the stop {at}"), frame_ms, "ms");
+        }
+        for (pass, ms) in passes {
+            push(
+                &format!("GPU {pass} at the middle stop (timing mode passes)"),
+                ms,
+                "ms",
+            );
         }
         for (i, &(_, _, frame_ms)) in at_stops.iter().enumerate() {
             let Some(&b) = stop_baselines.get(i) else {
