@@ -402,4 +402,19 @@ fn bad_streaming_calls_are_refused_by_name() {
     assert!(err.contains("already reserved"), "{err}");
     let err = resident.reserve_pool(1024).unwrap_err().to_string();
     assert!(err.contains("does not stream"), "{err}");
+    // An asset opened for streaming holds its resident part only: a resident scene
+    // refuses it, a streamed one takes it.
+    let dir = std::env::temp_dir().join(format!("meshlight-gpu-scene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("spot.mlasset");
+    assets[0].save(&path).unwrap();
+    let opened = MeshletAsset::open_resident(&path).unwrap();
+    let err = resident
+        .add_mesh("opened", &opened)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("opened for streaming"), "{err}");
+    let mut fresh = SceneData::streamed(Limits::default());
+    fresh.add_mesh("opened", &opened).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
 }
