@@ -146,9 +146,30 @@ pub fn open_or_bake_resident(
     progress: &mut dyn FnMut(LevelProgress),
 ) -> Result<(MeshletAsset, Outcome), SceneError> {
     let key = key(source, options)?;
-    let (asset, outcome) = cached_or_built(key, dir, MeshletAsset::open_resident, || {
+    cached_resident(key, dir, || {
         build_asset(&load_source(source)?, options, progress).map(|b| b.asset)
-    })?;
+    })
+}
+
+/// [`load_or_bake_mesh`] for a scene that streams, as [`open_or_bake_resident`].
+pub fn open_or_bake_mesh_resident(
+    mesh: &Mesh,
+    options: &BuildOptions,
+    dir: &Path,
+    progress: &mut dyn FnMut(LevelProgress),
+) -> Result<(MeshletAsset, Outcome), SceneError> {
+    cached_resident(mesh_key(mesh, options), dir, || {
+        build_asset(mesh, options, progress).map(|b| b.asset)
+    })
+}
+
+/// The cache entry `key` opened for streaming, built and stored first when missing.
+fn cached_resident(
+    key: u64,
+    dir: &Path,
+    build: impl FnOnce() -> Result<MeshletAsset, SceneError>,
+) -> Result<(MeshletAsset, Outcome), SceneError> {
+    let (asset, outcome) = cached_or_built(key, dir, MeshletAsset::open_resident, build)?;
     match outcome {
         // Baked just now and stored: the file is what streams, not the copy in memory.
         Outcome::Baked => Ok((MeshletAsset::open_resident(&entry(dir, key))?, outcome)),

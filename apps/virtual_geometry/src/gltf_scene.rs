@@ -117,15 +117,22 @@ pub fn place(
                     }
                     name.push_str(" (mirrored)");
                 }
-                let (asset, _) = cache::load_or_bake_mesh(
+                // A streamed scene opens the cached file's resident part and reads its
+                // pages from there.
+                let streamed = data.streaming().is_some();
+                let open = match streamed {
+                    true => cache::open_or_bake_mesh_resident,
+                    false => cache::load_or_bake_mesh,
+                };
+                let (asset, _) = open(
                     &mesh,
                     &BuildOptions::default(),
                     &cache::cache_dir(),
                     &mut |p| cache::log_progress(&mesh.source, p),
                 )?;
                 let id = data.add_mesh(&name, &asset)?;
-                if data.streaming().is_some() {
-                    sources.push(PageSource::Memory(std::sync::Arc::new(asset.clone())));
+                if streamed {
+                    sources.push(PageSource::of(&std::sync::Arc::new(asset.clone()))?);
                 }
                 let h = asset.header();
                 let known = (id, [Vec3::from(h.bounds_min), Vec3::from(h.bounds_max)]);

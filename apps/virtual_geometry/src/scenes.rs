@@ -65,6 +65,15 @@ pub fn open_asset(mesh: &Path, segments: u32, streamed: bool) -> Result<MeshletA
 pub fn load_obj_with_materials(
     mesh: &Path,
 ) -> Result<Option<(MeshletAsset, Vec<ObjMaterial>)>, SceneError> {
+    open_obj_with_materials(mesh, false)
+}
+
+/// [`load_obj_with_materials`], and with `streamed` the cached asset opened for
+/// streaming (its resident part; its pages read from the cache's file).
+pub fn open_obj_with_materials(
+    mesh: &Path,
+    streamed: bool,
+) -> Result<Option<(MeshletAsset, Vec<ObjMaterial>)>, SceneError> {
     if !mesh
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
@@ -85,7 +94,11 @@ pub fn load_obj_with_materials(
     if scene.materials.iter().all(plain) {
         return Ok(None);
     }
-    let (asset, _) = cache::load_or_bake_mesh(
+    let open = match streamed {
+        true => cache::open_or_bake_mesh_resident,
+        false => cache::load_or_bake_mesh,
+    };
+    let (asset, _) = open(
         &scene.mesh,
         &BuildOptions::default(),
         &cache::cache_dir(),

@@ -201,7 +201,7 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     let mut loaded = match o.is_gltf_scene() {
         true => Loaded::Scene(load_gltf_scene(&o.mesh)?),
         false if o.mesh.is_dir() => Loaded::Library(scenes::load_library(&o.mesh, true)?),
-        false => match scenes::load_obj_with_materials(&o.mesh)? {
+        false => match scenes::open_obj_with_materials(&o.mesh, o.pool_mb.is_some())? {
             Some((asset, materials)) => Loaded::Copies(asset, Some(materials)),
             // A mesh baked on first use streams only when asked to: its size is known
             // only once baked.

@@ -671,3 +671,42 @@ fn vertex_colours_tint_the_base_colour_and_their_alpha_cuts_mask_materials() {
     );
     assert_eq!(pixel(1.0 + 0.8), back, "and its clear side is cut out");
 }
+
+/// A glTF scene drawn streamed: each mesh's cached file is opened for its resident part
+/// and its pages are read from that file; once streaming has settled, the image is the
+/// resident one.
+#[test]
+fn a_streamed_gltf_scene_reads_its_meshes_pages_from_their_cached_files() {
+    use meshlight_virtual_geometry::streaming::PageSource;
+    let path = write_file(&scratch("balls-streamed"));
+    let resident = gltf_scene(SceneData::new(Limits::default()), &path, None).unwrap();
+    let mut streamed = gltf_scene(SceneData::streamed(Limits::default()), &path, None).unwrap();
+    assert_eq!(streamed.sources.len(), streamed.data.meshes.len());
+    for source in &streamed.sources {
+        assert!(
+            matches!(source, PageSource::File { .. }),
+            "a mesh streams from memory"
+        );
+    }
+    streamed.data.reserve_pool(8 << 20).unwrap();
+    let want = render(resident.data, &resident.camera);
+    let mut r = Renderer::new(
+        streamed.data,
+        FrameSettings::new(W, H),
+        &GraphSource::Shipped,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    r.start_streaming(streamed.sources, meshlight::stream::Budget::default(), 2)
+        .unwrap();
+    r.settle_streaming(&streamed.camera, 400).unwrap();
+    let got = r.render_still(&streamed.camera).unwrap().rgba;
+    assert!(
+        got == want,
+        "the settled streamed image differs from the resident one"
+    );
+    let stats = r.streaming.as_ref().unwrap().stats();
+    assert!(
+        stats.loaded_total > 0 && stats.failed_total == 0,
+        "{stats:?}"
+    );
+}
