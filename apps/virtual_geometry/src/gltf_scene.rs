@@ -7,12 +7,11 @@ use crate::streaming::PageSource;
 use glam::{Mat4, Vec3};
 use meshlight::gpu_scene::view::Projection;
 use meshlight::gpu_scene::{Camera, Material, MeshId, SceneData, SceneDataError, TextureId};
-use meshlight::scene::cache;
+use meshlight::scene::SceneError;
 use meshlight::scene::load::{
     AlphaMode, CameraProjection, GltfScene, SceneCamera, SceneMaterial, Wrap, load_gltf_scene,
 };
 use meshlight::scene::texture::Image;
-use meshlight::scene::{BuildOptions, SceneError};
 use meshlight::shaders::cpu::layout::{
     ClusterableObject, MAP_BASE_COLOR, MAP_COUNT, MAP_EMISSIVE, MAP_METALLIC_ROUGHNESS, MAP_NORMAL,
     MAP_OCCLUSION, TextureWrap,
@@ -120,16 +119,7 @@ pub fn place(
                 // A streamed scene opens the cached file's resident part and reads its
                 // pages from there.
                 let streamed = data.streaming().is_some();
-                let open = match streamed {
-                    true => cache::open_or_bake_mesh_resident,
-                    false => cache::load_or_bake_mesh,
-                };
-                let (asset, _) = open(
-                    &mesh,
-                    &BuildOptions::default(),
-                    &cache::cache_dir(),
-                    &mut |p| cache::log_progress(&mesh.source, p),
-                )?;
+                let asset = crate::scenes::cached_mesh(&mesh, streamed)?;
                 let id = data.add_mesh(&name, &asset)?;
                 if streamed {
                     sources.push(PageSource::of(&std::sync::Arc::new(asset.clone()))?);

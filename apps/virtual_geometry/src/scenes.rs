@@ -94,17 +94,27 @@ pub fn open_obj_with_materials(
     if scene.materials.iter().all(plain) {
         return Ok(None);
     }
+    Ok(Some((cached_mesh(&scene.mesh, streamed)?, scene.materials)))
+}
+
+/// A mesh in memory (an OBJ's with its materials, a glTF scene's) baked once and cached
+/// by content, its progress logged: whole, or with `streamed` the cache's file opened for
+/// its resident part.
+pub fn cached_mesh(
+    mesh: &meshlight::scene::Mesh,
+    streamed: bool,
+) -> Result<MeshletAsset, SceneError> {
     let open = match streamed {
         true => cache::open_or_bake_mesh_resident,
         false => cache::load_or_bake_mesh,
     };
     let (asset, _) = open(
-        &scene.mesh,
+        mesh,
         &BuildOptions::default(),
         &cache::cache_dir(),
-        &mut |p| cache::log_progress(&scene.mesh.source, p),
+        &mut |p| cache::log_progress(&mesh.source, p),
     )?;
-    Ok(Some((asset, scene.materials)))
+    Ok(asset)
 }
 
 /// `materials` added to `data` (textures included, repeating) as one run, one per
