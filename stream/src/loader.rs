@@ -9,8 +9,8 @@
 use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::mpsc::{Receiver, Sender, channel};
-use std::sync::{Arc, Mutex};
+use std::sync::mpsc::{Receiver, channel};
+use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
@@ -37,6 +37,46 @@ impl PageFile {
     /// The file's path, for messages.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// Asks the OS to start reading `bytes` at `offset` into its cache now, so a read
+    /// of them later waits less (`posix_fadvise` with `WILLNEED`; nothing where there
+    /// is none). Advice only: a failure is ignored.
+    pub fn advise(&self, offset: u64, bytes: u64) {
+        #[cfg(unix)]
+        {
+            use std::os::fd::AsRawFd;
+            // SAFETY: the descriptor is this file's, open for as long as `self`.
+            unsafe {
+                libc::posix_fadvise(
+                    self.file.as_raw_fd(),
+                    offset as libc::off_t,
+                    bytes as libc::off_t,
+                    libc::POSIX_FADV_WILLNEED,
+                );
+            }
+        }
+        #[cfg(not(unix))]
+        let _ = (offset, bytes);
+    }
+
+    /// Drops the file's bytes from the OS cache where the OS allows it (`posix_fadvise`
+    /// with `DONTNEED` after a sync), so the next reads come from the disk: for
+    /// measuring cold reads. Does nothing where there is no such call.
+    pub fn forget_cached(&self) -> std::io::Result<()> {
+        #[cfg(unix)]
+        {
+            use std::os::fd::AsRawFd;
+            self.file.sync_all()?;
+            // SAFETY: as in `advise`.
+            let code = unsafe {
+                libc::posix_fadvise(self.file.as_raw_fd(), 0, 0, libc::POSIX_FADV_DONTNEED)
+            };
+            if code != 0 {
+                return Err(std::io::Error::from_raw_os_error(code));
+            }
+        }
+        Ok(())
     }
 
     /// Reads `bytes` bytes at `offset`.
@@ -108,24 +148,81 @@ impl std::fmt::Debug for PageCheck {
 /// A finished read: the page's bytes, or what went wrong.
 pub type ReadResult = (PageId, Result<Vec<u8>, String>);
 
+/// Reads waiting for a thread, and whether the loader is closing.
+#[derive(Debug, Default)]
+struct Queue {
+    jobs: std::collections::VecDeque<ReadJob>,
+    closed: bool,
+    /// Threads reading (each takes its share of what is queued).
+    threads: usize,
+    /// Whether a thread advises the OS of its share's reads before making them.
+    read_ahead: bool,
+}
+
 /// Threads reading pages.
 #[derive(Debug)]
 pub struct Loader {
-    jobs: Option<Sender<ReadJob>>,
+    /// The waiting reads, and the signal that wakes the threads for them.
+    queue: Arc<(Mutex<Queue>, Condvar)>,
     done: Receiver<ReadResult>,
     threads: Vec<JoinHandle<()>>,
-    /// Nanoseconds the threads spent reading and checking, all of them together.
-    busy: Arc<AtomicU64>,
+    /// Nanoseconds the threads spent on each step ([`ReaderTimes`]), all of them
+    /// together.
+    busy: Arc<[AtomicU64; 3]>,
+}
+
+/// Time the reading threads have spent, all of them together, by step.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ReaderTimes {
+    /// Reading the pages' bytes (with the read-ahead advice).
+    pub read: Duration,
+    /// Their checksums.
+    pub checksum: Duration,
+    /// The checks of their contents ([`ReadJob::check`]).
+    pub check: Duration,
+}
+
+impl ReaderTimes {
+    /// The steps together.
+    pub fn total(&self) -> Duration {
+        self.read + self.checksum + self.check
+    }
+}
+
+impl std::ops::Sub for ReaderTimes {
+    type Output = ReaderTimes;
+    fn sub(self, before: ReaderTimes) -> ReaderTimes {
+        ReaderTimes {
+            read: self.read.saturating_sub(before.read),
+            checksum: self.checksum.saturating_sub(before.checksum),
+            check: self.check.saturating_sub(before.check),
+        }
+    }
 }
 
 impl Loader {
-    /// `threads` reading threads (at least one).
+    /// `threads` reading threads (at least one), without read-ahead.
     pub fn new(threads: usize) -> std::io::Result<Self> {
-        let (jobs, queue) = channel::<ReadJob>();
+        Self::with_read_ahead(threads, false)
+    }
+
+    /// `threads` reading threads (at least one). Each takes an even share of the reads
+    /// queued when it wakes; with `read_ahead`, it first advises the OS of all of them
+    /// ([`PageFile::advise`]), so the disk sees a share's reads at once rather than one
+    /// at a time per thread.
+    pub fn with_read_ahead(threads: usize, read_ahead: bool) -> std::io::Result<Self> {
         let (finished, done) = channel();
-        let queue = Arc::new(Mutex::new(queue));
-        let busy = Arc::new(AtomicU64::new(0));
-        let threads = (0..threads.max(1))
+        let threads = threads.max(1);
+        let queue = Arc::new((
+            Mutex::new(Queue {
+                threads,
+                read_ahead,
+                ..Queue::default()
+            }),
+            Condvar::new(),
+        ));
+        let busy = Arc::new([AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)]);
+        let threads = (0..threads)
             .map(|i| {
                 let queue = Arc::clone(&queue);
                 let finished = finished.clone();
@@ -133,26 +230,28 @@ impl Loader {
                 std::thread::Builder::new()
                     .name(format!("meshlight-page-reader-{i}"))
                     .spawn(move || {
-                        loop {
-                            // The lock is held only to take a job, not while reading it.
-                            let job = match queue.lock() {
-                                Ok(queue) => queue.recv(),
-                                Err(_) => return,
-                            };
-                            let Ok(job) = job else { return };
-                            let start = std::time::Instant::now();
-                            let result = read(&job);
-                            let spent = start.elapsed().as_nanos() as u64;
-                            busy.fetch_add(spent, Ordering::Relaxed);
-                            if finished.send((job.page, result)).is_err() {
-                                return;
+                        // The lock is held only to take a share, not while reading it.
+                        while let Some((share, read_ahead)) = next_share(&queue) {
+                            if read_ahead {
+                                let start = std::time::Instant::now();
+                                for job in &share {
+                                    job.file.advise(job.offset, job.bytes);
+                                }
+                                let spent = start.elapsed().as_nanos() as u64;
+                                busy[0].fetch_add(spent, Ordering::Relaxed);
+                            }
+                            for job in share {
+                                let result = read(&job, &busy);
+                                if finished.send((job.page, result)).is_err() {
+                                    return;
+                                }
                             }
                         }
                     })
             })
             .collect::<std::io::Result<Vec<_>>>()?;
         Ok(Self {
-            jobs: Some(jobs),
+            queue,
             done,
             threads,
             busy,
@@ -161,15 +260,35 @@ impl Loader {
 
     /// Time the threads have spent reading and checking pages so far, all of them
     /// together: the streamer's work off the render thread.
-    pub fn busy(&self) -> std::time::Duration {
-        std::time::Duration::from_nanos(self.busy.load(Ordering::Relaxed))
+    pub fn busy(&self) -> ReaderTimes {
+        let step = |i: usize| Duration::from_nanos(self.busy[i].load(Ordering::Relaxed));
+        ReaderTimes {
+            read: step(0),
+            checksum: step(1),
+            check: step(2),
+        }
     }
 
     /// Queues a read.
     pub fn submit(&self, job: ReadJob) {
-        if let Some(jobs) = &self.jobs {
-            // Fails only when every thread has stopped, which only dropping does.
-            let _ = jobs.send(job);
+        self.submit_all([job]);
+    }
+
+    /// Queues reads, waking the threads once for all of them (a frame hands over tens
+    /// of reads, and a wake per read is a system call each on the render thread).
+    pub fn submit_all(&self, jobs: impl IntoIterator<Item = ReadJob>) {
+        let (queue, wake) = &*self.queue;
+        let mut queue = queue
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let before = queue.jobs.len();
+        queue.jobs.extend(jobs);
+        let added = queue.jobs.len() - before;
+        drop(queue);
+        match added {
+            0 => {}
+            1 => wake.notify_one(),
+            _ => wake.notify_all(),
         }
     }
 
@@ -187,15 +306,46 @@ impl Loader {
 
 impl Drop for Loader {
     fn drop(&mut self) {
-        self.jobs = None;
+        let (queue, wake) = &*self.queue;
+        queue
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .closed = true;
+        wake.notify_all();
         for thread in self.threads.drain(..) {
             let _ = thread.join();
         }
     }
 }
 
-/// One read, with its checks.
-fn read(job: &ReadJob) -> Result<Vec<u8>, String> {
+/// The next reads for a reading thread, in the order they were queued, waiting for
+/// some: an even share of those queued (so a frame's reads spread over the threads),
+/// and whether to advise the OS of them first. `None` once the loader closes (reads
+/// still queued then are dropped).
+fn next_share(queue: &(Mutex<Queue>, Condvar)) -> Option<(Vec<ReadJob>, bool)> {
+    let (queue, wake) = queue;
+    let mut queue = queue.lock().ok()?;
+    loop {
+        if queue.closed {
+            return None;
+        }
+        if !queue.jobs.is_empty() {
+            let share = queue.jobs.len().div_ceil(queue.threads);
+            let jobs = queue.jobs.drain(..share).collect();
+            return Some((jobs, queue.read_ahead));
+        }
+        queue = wake.wait(queue).ok()?;
+    }
+}
+
+/// One read, with its checks; each step's time added to `busy`.
+fn read(job: &ReadJob, busy: &[AtomicU64; 3]) -> Result<Vec<u8>, String> {
+    let mut clock = std::time::Instant::now();
+    let mut lap = |step: usize| {
+        let now = std::time::Instant::now();
+        busy[step].fetch_add((now - clock).as_nanos() as u64, Ordering::Relaxed);
+        clock = now;
+    };
     let path = job.file.path().display();
     let data = job.file.read(job.offset, job.bytes).map_err(|e| {
         if e.kind() == std::io::ErrorKind::UnexpectedEof {
@@ -209,9 +359,13 @@ fn read(job: &ReadJob) -> Result<Vec<u8>, String> {
         } else {
             format!("{path}: page {} could not be read: {e}", job.page)
         }
-    })?;
+    });
+    lap(0);
+    let data = data?;
+    let sum = job.checksum.map(|_| page_checksum(&data));
+    lap(1);
     if let Some(expected) = job.checksum
-        && page_checksum(&data) != expected
+        && sum != Some(expected)
     {
         return Err(format!(
             "{path}: page {} fails its checksum: the file is damaged or changed while \
@@ -220,7 +374,9 @@ fn read(job: &ReadJob) -> Result<Vec<u8>, String> {
         ));
     }
     if let Some(check) = &job.check {
-        (check.0)(&data)?;
+        let checked = (check.0)(&data);
+        lap(2);
+        checked?;
     }
     Ok(data)
 }
@@ -231,13 +387,24 @@ mod tests {
 
     #[test]
     fn pages_are_read_at_their_offsets_and_damage_is_named() {
-        let dir = std::env::temp_dir().join(format!("meshlight-loader-{}", std::process::id()));
+        for read_ahead in [false, true] {
+            pages_are_read(read_ahead);
+        }
+    }
+
+    fn pages_are_read(read_ahead: bool) {
+        let dir = std::env::temp_dir().join(format!(
+            "meshlight-loader-{}-{read_ahead}",
+            std::process::id()
+        ));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("pages.bin");
         let bytes: Vec<u8> = (0..10_000u32).map(|i| (i * 7) as u8).collect();
         std::fs::write(&path, &bytes).unwrap();
         let file = PageFile::open(&path).unwrap();
-        let loader = Loader::new(3).unwrap();
+        // Cold or not, the bytes read are the file's.
+        file.forget_cached().unwrap();
+        let loader = Loader::with_read_ahead(3, read_ahead).unwrap();
         let job = |page, offset, len, checksum| ReadJob {
             page,
             file: Arc::clone(&file),
@@ -286,6 +453,18 @@ mod tests {
             &format!("first byte {} is odd", bytes[101])
         );
         assert!(loader.finished().is_empty());
+        // A frame's reads handed over at once are shared out and all come back.
+        loader.submit_all((0..100u32).map(|i| job(100 + i, u64::from(i) * 97, 97, None)));
+        let mut pages: Vec<u32> = (0..100)
+            .map(|_| {
+                let (page, data) = loader.wait(Duration::from_secs(10)).expect("a read");
+                let at = (page as usize - 100) * 97;
+                assert_eq!(data.as_deref(), Ok(&bytes[at..at + 97]));
+                page
+            })
+            .collect();
+        pages.sort();
+        assert_eq!(pages, (100..200).collect::<Vec<u32>>());
         drop(loader);
         std::fs::remove_dir_all(&dir).unwrap();
     }

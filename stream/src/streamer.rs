@@ -59,10 +59,11 @@ impl Default for Budget {
     /// 1,024 installs and 32 MiB a frame, 256 reads in flight, 1,024 evictions a frame,
     /// pages kept 8 frames after their last want, children prefetched. A page here is
     /// one group's children (about 9 KB on a generated world, where Nanite's are 128
-    /// KiB), so the bytes bind before the count: with 128 installs a frame, a cold start
-    /// over that world took 40 frames, with 1,024 it takes 29–30 (NVIDIA H200, `bench
-    /// --scenario vg-stream`), at the same mean render-thread cost and a worst frame of
-    /// 1.0 ms rather than 0.8.
+    /// KiB), so the count binds before the bytes: over that world a cold start takes 30
+    /// frames with 1,024 installs a frame, 40 with 128 and 66 with 64, whose worst
+    /// render-thread frame is 0.83 ms rather than 1.25 (NVIDIA H200's machine, `bench
+    /// --scenario vg-stream`). Lower it where the render thread's worst frame matters
+    /// more than how soon detail arrives.
     fn default() -> Self {
         Self {
             installs_per_frame: 1024,
