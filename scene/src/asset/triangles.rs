@@ -165,7 +165,27 @@ pub fn first_out_of_range(
     triangles: u32,
 ) -> Option<u32> {
     // Every record, the division done as `for_each_stored` does it (a page's checks
-    // visit every triangle of the page).
+    // visit every triangle of the page). First without a branch per triangle: the
+    // lowest corner (a record's first corner is its highest: the deltas are
+    // subtracted) and the highest first corner. Only a block that fails is walked
+    // again, for its first bad triangle.
+    let (mut lowest, mut highest, mut missing) = (i64::MAX, i64::MIN, false);
+    for_each_stored(
+        block,
+        bits,
+        vertices,
+        triangles,
+        |_, corners| match corners {
+            Some([a, b, c]) => {
+                lowest = lowest.min(b.min(c));
+                highest = highest.max(a);
+            }
+            None => missing = true,
+        },
+    );
+    if !missing && lowest >= 0 && highest < i64::from(vertices) {
+        return None;
+    }
     let mut first = None;
     for_each_stored(block, bits, vertices, triangles, |t, corners| {
         let bad = corners.is_none_or(|c| c.iter().any(|&c| !(0..vertices as i64).contains(&c)));
