@@ -3,6 +3,8 @@
 
 use crate::data::SceneData;
 use crate::names;
+use crate::stream_upload::{Part, StreamUpload};
+use crate::streaming::{StreamBuffer, StreamWrite};
 use meshlight_graph::{Buffer, BufferDesc, Element, GpuContext, GraphBuilder, Handle, Imports};
 use meshlight_scene::asset::format::{GroupRecord, MeshletRecord, NodeRecord};
 use meshlight_shaders::cpu::layout;
@@ -111,6 +113,8 @@ pub struct GpuScene {
     geometry_version: u64,
     materials_version: u64,
     textures_version: u64,
+    /// The dispatch that writes streaming's changes, made on the first.
+    stream_upload: Option<StreamUpload>,
 }
 
 /// The element count of each scene buffer as [`GpuScene::new`] would create it for
@@ -245,21 +249,29 @@ fn content<'a>(data: &'a SceneData, name: &str) -> (Element, Cow<'a, [u8]>) {
     }
 }
 
-/// The bytes of elements `first .. first + count` of buffer `name`, for a streaming
-/// write (see [`crate::streaming`]).
-fn stream_bytes<'a>(data: &'a SceneData, name: &str, first: usize, count: usize) -> &'a [u8] {
-    fn part<T: bytemuck::Pod>(items: &[T], first: usize, count: usize) -> &[u8] {
-        bytemuck::cast_slice(&items[first..first + count])
+/// The words of elements `first .. first + count` of `buffer`, and the word they
+/// start at, for a streaming write (see [`crate::streaming`]).
+fn stream_words(
+    data: &SceneData,
+    buffer: StreamBuffer,
+    first: usize,
+    count: usize,
+) -> (u32, &[u32]) {
+    fn part<T: bytemuck::Pod>(items: &[T], first: usize, count: usize) -> (u32, &[u32]) {
+        let per = size_of::<T>() / 4;
+        (
+            (first * per) as u32,
+            bytemuck::cast_slice(&items[first..first + count]),
+        )
     }
-    match name {
-        names::PAYLOAD => part(&data.payload, first, count),
-        names::MESHLETS => part(&data.meshlets, first, count),
-        names::GROUPS => part(&data.groups, first, count),
-        names::HIERARCHY_NODES => part(&data.hierarchy_nodes, first, count),
-        names::STREAM_ERRORS => data
+    match buffer {
+        StreamBuffer::Payload => part(&data.payload, first, count),
+        StreamBuffer::Meshlets => part(&data.meshlets, first, count),
+        StreamBuffer::Groups => part(&data.groups, first, count),
+        StreamBuffer::HierarchyNodes => part(&data.hierarchy_nodes, first, count),
+        StreamBuffer::StreamErrors => data
             .streaming()
-            .map_or(&[][..], |s| part(&s.stream_errors, first, count)),
-        _ => &[],
+            .map_or((0, &[][..]), |s| part(&s.stream_errors, first, count)),
     }
 }
 
@@ -280,6 +292,7 @@ impl GpuScene {
             geometry_version: data.geometry_version,
             materials_version: data.materials_version,
             textures_version: data.textures_version,
+            stream_upload: None,
         }
     }
 
@@ -334,26 +347,45 @@ impl GpuScene {
         }
         // Pages installed and evicted since: a few small ranges each, unless the
         // geometry went up whole above.
-        for w in data.take_stream_writes() {
-            let Some(i) = ORDER.iter().position(|&n| n == w.buffer) else {
-                continue;
-            };
-            if geometry {
-                continue;
-            }
-            let slot = &self.buffers[i];
-            let bytes = stream_bytes(data, w.buffer, w.first, w.count);
-            let offset = (w.first * slot.element.size as usize) as u64;
-            if !bytes.is_empty() && offset + bytes.len() as u64 <= slot.buffer.size() {
-                gpu.queue.write_buffer(&slot.buffer, offset, bytes);
-                stats.bytes += bytes.len() as u64;
-            }
+        let writes = data.take_stream_writes();
+        if !geometry && !writes.is_empty() {
+            stats.bytes += self.write_stream(gpu, data, &writes);
         }
         self.geometry_version = data.geometry_version;
         self.materials_version = data.materials_version;
         self.textures_version = data.textures_version;
         self.instances_split = data.instances_split();
         stats
+    }
+
+    /// Writes the streaming changes `writes` (ranges of `data`'s buffers) to the GPU's
+    /// copies by one dispatch ([`crate::stream_upload`]); returns the bytes written.
+    fn write_stream(&mut self, gpu: &GpuContext, data: &SceneData, writes: &[StreamWrite]) -> u64 {
+        let Some(targets) = StreamBuffer::ALL
+            .map(|b| ORDER.iter().position(|&n| n == b.name()))
+            .into_iter()
+            .collect::<Option<Vec<usize>>>()
+        else {
+            return 0;
+        };
+        let buffers = &self.buffers;
+        let parts: Vec<Part<'_>> = (writes.iter())
+            .filter_map(|w| {
+                let (first_word, words) = stream_words(data, w.buffer, w.first, w.count);
+                let slot = &buffers[targets[w.buffer as usize]];
+                let end = (u64::from(first_word) + words.len() as u64) * 4;
+                (!words.is_empty() && end <= slot.buffer.size()).then_some(Part {
+                    buffer: w.buffer,
+                    first_word,
+                    words,
+                })
+            })
+            .collect();
+        let upload = self
+            .stream_upload
+            .get_or_insert_with(|| StreamUpload::new(gpu));
+        let targets = [0, 1, 2, 3, 4].map(|k| &buffers[targets[k]].buffer);
+        upload.write(gpu, targets, &parts)
     }
 
     /// The uploaded buffer named `name` (one of [`crate::names`]), to import it into a graph

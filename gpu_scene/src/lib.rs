@@ -43,6 +43,7 @@ pub mod instance_table;
 pub mod lattice;
 pub mod phase;
 pub mod scene_slots;
+mod stream_upload;
 pub mod streaming;
 pub mod surface;
 pub mod texture;

@@ -56,11 +56,50 @@ pub struct StreamedPage {
     pub parents: Vec<u32>,
 }
 
+/// A scene buffer streaming changes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum StreamBuffer {
+    /// [`crate::names::PAYLOAD`]: a page's words, in the pool.
+    Payload,
+    /// [`crate::names::MESHLETS`]: a page's meshlets' `data_offset`.
+    Meshlets,
+    /// [`crate::names::GROUPS`]: a group's error.
+    Groups,
+    /// [`crate::names::HIERARCHY_NODES`]: a leaf's largest parent error, and the
+    /// smallest own errors above it.
+    HierarchyNodes,
+    /// [`crate::names::STREAM_ERRORS`]: a group's error while its page is missing.
+    StreamErrors,
+}
+
+impl StreamBuffer {
+    /// Every one, in order.
+    pub const ALL: [StreamBuffer; 5] = [
+        StreamBuffer::Payload,
+        StreamBuffer::Meshlets,
+        StreamBuffer::Groups,
+        StreamBuffer::HierarchyNodes,
+        StreamBuffer::StreamErrors,
+    ];
+
+    /// Its name (one of [`crate::names`]).
+    pub fn name(self) -> &'static str {
+        use crate::names;
+        match self {
+            StreamBuffer::Payload => names::PAYLOAD,
+            StreamBuffer::Meshlets => names::MESHLETS,
+            StreamBuffer::Groups => names::GROUPS,
+            StreamBuffer::HierarchyNodes => names::HIERARCHY_NODES,
+            StreamBuffer::StreamErrors => names::STREAM_ERRORS,
+        }
+    }
+}
+
 /// A range of a scene buffer that changed, to be written to the GPU.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StreamWrite {
-    /// The buffer (one of [`crate::names`]).
-    pub buffer: &'static str,
+    /// The buffer.
+    pub buffer: StreamBuffer,
     /// First element changed.
     pub first: usize,
     /// Elements changed.
@@ -257,7 +296,8 @@ impl crate::SceneData {
                 reason: "the scene does not stream".into(),
             });
         };
-        let page = streaming.page(group)?.clone();
+        let page = streaming.page(group)?;
+        let span = PageSpan::of(page);
         if words.len() != page.words as usize {
             return Err(SceneDataError::Streaming {
                 reason: format!(
@@ -277,18 +317,18 @@ impl crate::SceneData {
         }
         let start = (streaming.pool_base + at) as usize;
         self.payload[start..start + words.len()].copy_from_slice(words);
-        let first = page.first_meshlet as usize;
-        let count = page.meshlet_count as usize;
+        let first = span.first_meshlet as usize;
+        let count = span.meshlet_count as usize;
         for (m, record) in self.meshlets[first..first + count].iter_mut().enumerate() {
             record.data_offset = start as u32 + streaming.page_offsets[first + m];
         }
-        self.groups[group as usize].error = page.error;
-        self.hierarchy_nodes[page.leaf as usize].max_parent_error = page.leaf_parent_error;
+        self.groups[group as usize].error = span.error;
+        self.hierarchy_nodes[span.leaf as usize].max_parent_error = span.leaf_parent_error;
         streaming.stream_errors[group as usize] = 0.0;
         streaming.pages[group as usize].resident_at = Some(at);
         streaming
             .writes
-            .extend(page_writes(&page, group, Some((start, words.len()))));
+            .extend(page_writes(&span, group, Some((start, words.len()))));
         self.refresh_min_errors(group);
         Ok(())
     }
@@ -317,7 +357,7 @@ impl crate::SceneData {
             }
             record.min_error = min;
             streaming.writes.push(StreamWrite {
-                buffer: crate::names::HIERARCHY_NODES,
+                buffer: StreamBuffer::HierarchyNodes,
                 first: i as usize,
                 count: 1,
             });
@@ -341,16 +381,16 @@ impl crate::SceneData {
                 reason: "the scene does not stream".into(),
             });
         };
-        let page = streaming.page(group)?.clone();
-        let first = page.first_meshlet as usize;
-        for record in &mut self.meshlets[first..first + page.meshlet_count as usize] {
+        let span = PageSpan::of(streaming.page(group)?);
+        let first = span.first_meshlet as usize;
+        for record in &mut self.meshlets[first..first + span.meshlet_count as usize] {
             record.data_offset = 0;
         }
         self.groups[group as usize].error = 0.0;
-        self.hierarchy_nodes[page.leaf as usize].max_parent_error = 0.0;
-        streaming.stream_errors[group as usize] = page.error;
+        self.hierarchy_nodes[span.leaf as usize].max_parent_error = 0.0;
+        streaming.stream_errors[group as usize] = span.error;
         streaming.pages[group as usize].resident_at = None;
-        streaming.writes.extend(page_writes(&page, group, None));
+        streaming.writes.extend(page_writes(&span, group, None));
         self.refresh_min_errors(group);
         Ok(())
     }
@@ -378,28 +418,48 @@ impl crate::SceneData {
     }
 }
 
+/// What installing or evicting a page rewrites, copied out of its [`StreamedPage`].
+struct PageSpan {
+    error: f32,
+    first_meshlet: u32,
+    meshlet_count: u32,
+    leaf: u32,
+    leaf_parent_error: f32,
+}
+
+impl PageSpan {
+    fn of(page: &StreamedPage) -> Self {
+        Self {
+            error: page.error,
+            first_meshlet: page.first_meshlet,
+            meshlet_count: page.meshlet_count,
+            leaf: page.leaf,
+            leaf_parent_error: page.leaf_parent_error,
+        }
+    }
+}
+
 /// What installing (with the pool words written) or evicting a page changes.
 fn page_writes(
-    page: &StreamedPage,
+    page: &PageSpan,
     group: u32,
     pool: Option<(usize, usize)>,
-) -> impl Iterator<Item = StreamWrite> {
-    use crate::names;
+) -> impl Iterator<Item = StreamWrite> + use<> {
     let write = |buffer, first, count| StreamWrite {
         buffer,
         first,
         count,
     };
     [
-        pool.map(|(first, count)| write(names::PAYLOAD, first, count)),
+        pool.map(|(first, count)| write(StreamBuffer::Payload, first, count)),
         Some(write(
-            names::MESHLETS,
+            StreamBuffer::Meshlets,
             page.first_meshlet as usize,
             page.meshlet_count as usize,
         )),
-        Some(write(names::GROUPS, group as usize, 1)),
-        Some(write(names::HIERARCHY_NODES, page.leaf as usize, 1)),
-        Some(write(names::STREAM_ERRORS, group as usize, 1)),
+        Some(write(StreamBuffer::Groups, group as usize, 1)),
+        Some(write(StreamBuffer::HierarchyNodes, page.leaf as usize, 1)),
+        Some(write(StreamBuffer::StreamErrors, group as usize, 1)),
     ]
     .into_iter()
     .flatten()

@@ -321,24 +321,7 @@ fn installs_and_evictions_upload_only_what_they_change() {
     assert!(nodes >= 2, "the install changed {nodes} nodes");
     let expected = words.len() as u64 * 4 + records + nodes * node_bytes;
     assert_eq!((stats.bytes, stats.created), (expected, 0));
-    for name in [
-        "payload",
-        "meshlets",
-        "meshlet_groups",
-        "hierarchy_nodes",
-        "stream_errors",
-    ] {
-        let buffer = scene.buffer(name).unwrap();
-        let got = gpu.read_buffer(buffer, 0, buffer.size()).unwrap();
-        let want: Vec<u8> = match name {
-            "payload" => bytemuck::cast_slice(&streamed.payload).to_vec(),
-            "meshlets" => bytemuck::cast_slice(&streamed.meshlets).to_vec(),
-            "meshlet_groups" => bytemuck::cast_slice(&streamed.groups).to_vec(),
-            "hierarchy_nodes" => bytemuck::cast_slice(&streamed.hierarchy_nodes).to_vec(),
-            _ => bytemuck::cast_slice(&streamed.streaming().unwrap().stream_errors).to_vec(),
-        };
-        assert_eq!(&got[..want.len()], &want[..], "{name}");
-    }
+    assert_streamed_buffers_match(&gpu, &scene, &streamed, "after the install");
     let nodes_before = streamed.hierarchy_nodes.clone();
     streamed.evict_page(page).unwrap();
     let stats = scene.upload(&gpu, &mut streamed);
@@ -352,6 +335,81 @@ fn installs_and_evictions_upload_only_what_they_change() {
         )
         .unwrap();
     assert_eq!(&groups[..], bytemuck::cast_slice::<_, u8>(&streamed.groups));
+}
+
+/// Each streamed buffer of the GPU's copy equals the scene's (the CPU reference of
+/// the dispatch that writes streaming's changes).
+fn assert_streamed_buffers_match(
+    gpu: &meshlight_graph::GpuContext,
+    scene: &GpuScene,
+    data: &SceneData,
+    when: &str,
+) {
+    for name in [
+        "payload",
+        "meshlets",
+        "meshlet_groups",
+        "hierarchy_nodes",
+        "stream_errors",
+    ] {
+        let buffer = scene.buffer(name).unwrap();
+        let got = gpu.read_buffer(buffer, 0, buffer.size()).unwrap();
+        let want: Vec<u8> = match name {
+            "payload" => bytemuck::cast_slice(&data.payload).to_vec(),
+            "meshlets" => bytemuck::cast_slice(&data.meshlets).to_vec(),
+            "meshlet_groups" => bytemuck::cast_slice(&data.groups).to_vec(),
+            "hierarchy_nodes" => bytemuck::cast_slice(&data.hierarchy_nodes).to_vec(),
+            _ => bytemuck::cast_slice(&data.streaming().unwrap().stream_errors).to_vec(),
+        };
+        assert!(got[..want.len()] == want[..], "{name} differs {when}");
+    }
+}
+
+/// Many pages installed, evicted and installed again elsewhere, frame after frame
+/// (hundreds of ranges in one upload): the GPU's buffers follow the scene's exactly.
+#[test]
+fn many_installs_and_evictions_a_frame_reach_the_gpu_exactly() {
+    let gpu = meshlight_testing::gpu();
+    let (assets, _, mut streamed) = scenes();
+    let material = streamed.add_material(Material::default()).unwrap();
+    streamed
+        .add_instance(meshlight_gpu_scene::MeshId(0), Mat4::IDENTITY, material)
+        .unwrap();
+    let mut scene = GpuScene::new(&gpu, &mut streamed);
+    let graph = graph(&assets);
+    let order = parents_first(&graph);
+    let pool = streamed.streaming().unwrap().pool_words;
+    let mut rng = meshlight_testing::Rng(11);
+    let mut resident: Vec<PageId> = Vec::new();
+    let (mut installs, mut at) = (0, 0u32);
+    for frame in 0..8 {
+        // Evict pages nothing resident needs (the deepest first), then install pages
+        // not resident in parents-first order, at offsets spread over the pool.
+        resident.sort_by_key(|&p| std::cmp::Reverse(graph.depth(p)));
+        let evict = resident.len().min(30 + rng.below(60) as usize);
+        for page in resident.drain(..evict) {
+            streamed.evict_page(page).unwrap();
+        }
+        let count = 40 + rng.below(120) as usize;
+        let absent: Vec<PageId> = (order.iter())
+            .filter(|p| !resident.contains(p))
+            .take(count)
+            .copied()
+            .collect();
+        for page in absent {
+            let (_, words) = page_words(&assets, page);
+            if at + words.len() as u32 > pool {
+                at = 0;
+            }
+            streamed.install_page(page, at, &words).unwrap();
+            at += words.len() as u32 + rng.below(8) * 4;
+            resident.push(page);
+            installs += 1;
+        }
+        scene.upload(&gpu, &mut streamed);
+        assert_streamed_buffers_match(&gpu, &scene, &streamed, &format!("after frame {frame}"));
+    }
+    assert!(installs > 400, "only {installs} installs");
 }
 
 /// The scene's pages name the same parents as the stream crate's page graph.
