@@ -26,7 +26,12 @@ fn the_viewer_streams_a_scene_given_a_pool() {
     viewer.write_html(&page).unwrap();
     let html = std::fs::read_to_string(&page).unwrap();
     std::fs::remove_file(&page).unwrap();
-    for fact in ["pages resident", "of 8.0 MiB", "streamer CPU"] {
+    for fact in [
+        "pages resident",
+        "of 8.0 MiB",
+        "streamer CPU",
+        "lists, plan, scene, upload",
+    ] {
         assert!(html.contains(fact), "{fact} missing from the viewer's page");
     }
 }

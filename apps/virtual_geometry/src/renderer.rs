@@ -380,7 +380,11 @@ impl Renderer {
             None => {}
         }
         self.frame_index = self.frame_index.wrapping_add(1);
+        let upload = std::time::Instant::now();
         self.scene.upload(&self.executor.gpu, &mut self.data);
+        if let Some(streaming) = &mut self.streaming {
+            streaming.add_upload_time(upload.elapsed());
+        }
         let cut = u32::from(std::mem::take(&mut self.cut));
         let frame = FrameData::new()
             .with(meshlight::gpu_scene::names::VIEW, bytemuck::bytes_of(&view))

@@ -21,7 +21,7 @@ use meshlight::graph::file::{EntryKind, Pipeline, ResourceEntry};
 use meshlight::graph::{Executor, GraphBuilder, GraphError, Imports, Result};
 use meshlight::scene::MeshletAsset;
 use meshlight::scene::asset::format::SECTION_PAYLOAD;
-use meshlight::stream::loader::{Loader, PageCheck, PageFile, ReadJob};
+use meshlight::stream::loader::{Loader, PageCheck, PageFile, ReadJob, ReaderTimes};
 use meshlight::stream::streamer::PageFailure;
 use meshlight::stream::{Budget, Install, PageGraph, Request, Streamer};
 
@@ -110,16 +110,26 @@ impl PageSource {
 fn page_check(file: &Arc<PageFile>, asset: &Arc<MeshletAsset>, group: u32) -> PageCheck {
     let (file, asset) = (Arc::clone(file), Arc::clone(asset));
     PageCheck::new(move |bytes| {
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
-        asset.check_page(group as usize, &words).map_err(|e| {
-            format!(
-                "{}: page {group} is corrupt: {} {}; bake it again",
-                file.path().display(),
-                e.field,
-                e.problem
-            )
-        })
+        asset
+            .check_page(group as usize, &words_of(bytes))
+            .map_err(|e| {
+                format!(
+                    "{}: page {group} is corrupt: {} {}; bake it again",
+                    file.path().display(),
+                    e.field,
+                    e.problem
+                )
+            })
     })
+}
+
+/// A page's bytes as words: in place when they lie aligned (as a read's buffer does),
+/// copied when not.
+fn words_of(bytes: &[u8]) -> std::borrow::Cow<'_, [u32]> {
+    match bytemuck::try_cast_slice(bytes) {
+        Ok(words) => std::borrow::Cow::Borrowed(words),
+        Err(_) => std::borrow::Cow::Owned(bytemuck::pod_collect_to_vec(bytes)),
+    }
 }
 
 /// The resources a streamed frame adds to its pipeline, bound to the first culling pass
@@ -208,11 +218,16 @@ pub struct StreamStats {
     pub listed: u32,
     /// Pages the GPU could not list (its list was full): listed by a later frame.
     pub unlisted: u32,
-    /// Time the render thread spent on streaming before this frame.
+    /// Time the render thread spent on streaming for this frame: [`StreamPhases`]
+    /// together.
     pub cpu: Duration,
+    /// Where that time went.
+    pub phases: StreamPhases,
     /// Time the reader threads spent reading and checking pages since the frame before
     /// (all threads together).
     pub readers: Duration,
+    /// That time by step.
+    pub reader_steps: ReaderTimes,
     /// Pages read so far.
     pub loaded_total: u64,
     /// Pages evicted so far.
@@ -249,6 +264,16 @@ impl StreamStats {
                 format!("{:.3} ms, {:.3} ms", ms(self.cpu), ms(self.readers)),
             ),
             (
+                "render thread: lists, plan, scene, upload",
+                format!(
+                    "{:.3}, {:.3}, {:.3}, {:.3} ms",
+                    ms(self.phases.requests),
+                    ms(self.phases.plan),
+                    ms(self.phases.scene),
+                    ms(self.phases.upload)
+                ),
+            ),
+            (
                 "LOD scale from pool pressure",
                 format!("{:.2}", f.lod_scale),
             ),
@@ -263,6 +288,36 @@ impl StreamStats {
         .into_iter()
         .map(|(label, value)| (label.to_string(), value))
         .collect()
+    }
+}
+
+/// Where the render thread's streaming time of one frame went.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StreamPhases {
+    /// Taking the request lists that came back and the reads that finished.
+    pub requests: Duration,
+    /// The streamer's plan (wants, queue, evictions, publishing).
+    pub plan: Duration,
+    /// Evictions and installs applied to the scene's records, and reads handed out.
+    pub scene: Duration,
+    /// The changed records and pages written to the GPU's buffers.
+    pub upload: Duration,
+}
+
+impl StreamPhases {
+    /// The phases with their names, for reports.
+    pub fn named(&self) -> [(&'static str, Duration); 4] {
+        [
+            ("requests", self.requests),
+            ("plan", self.plan),
+            ("scene", self.scene),
+            ("upload", self.upload),
+        ]
+    }
+
+    /// All of them.
+    pub fn total(&self) -> Duration {
+        self.requests + self.plan + self.scene + self.upload
     }
 }
 
@@ -284,7 +339,7 @@ pub struct Streaming {
     /// A frame has run since streaming started, so its readbacks exist.
     ran: bool,
     /// The readers' busy time at the frame before.
-    readers_before: Duration,
+    readers_before: ReaderTimes,
 }
 
 impl Streaming {
@@ -318,7 +373,10 @@ impl Streaming {
         .map_err(|e| setting(e.to_string()))?;
         let streamer = Streamer::new(graph, u64::from(s.pool_words) * 4, budget)
             .map_err(|e| setting(format!("{e} (`--pool-mb`)")))?;
-        let loader = Loader::new(threads)
+        // Read-ahead: from a cold page cache, 8 threads read a world's pages 1.2–1.4×
+        // as fast with it (three runs on the NVIDIA H200 machine, `bench --scenario
+        // vg-stream`).
+        let loader = Loader::with_read_ahead(threads, true)
             .map_err(|e| setting(format!("the page reader threads could not start: {e}")))?;
         let marks = gpu.buffer_with_data(
             PAGE_MARKS,
@@ -340,7 +398,7 @@ impl Streaming {
             stats: StreamStats::default(),
             failures: Vec::new(),
             ran: false,
-            readers_before: Duration::ZERO,
+            readers_before: ReaderTimes::default(),
         })
     }
 
@@ -387,7 +445,9 @@ impl Streaming {
         for (page, result) in self.loader.finished() {
             self.streamer.complete(page, result);
         }
+        let planned = Instant::now();
         let plan = self.streamer.frame(frame, wanted.as_deref());
+        let applied = Instant::now();
         let scene_error = |e: meshlight::gpu_scene::SceneDataError| GraphError::Setting {
             setting: "streaming".into(),
             message: e.to_string(),
@@ -397,17 +457,17 @@ impl Streaming {
         }
         let install = |data: &mut SceneData, installs: &[Install]| -> Result<()> {
             for i in installs {
-                let words: Vec<u32> = bytemuck::pod_collect_to_vec(&i.data);
-                data.install_page(i.page, (i.allocation.offset / 4) as u32, &words)
+                data.install_page(i.page, (i.allocation.offset / 4) as u32, &words_of(&i.data))
                     .map_err(scene_error)?;
             }
             Ok(())
         };
         install(data, &plan.install)?;
+        let mut reads = Vec::with_capacity(plan.load.len());
         for load in &plan.load {
             let page = &data.streaming().expect("a streamed scene").pages[load.page as usize];
             match &self.sources[page.mesh as usize] {
-                PageSource::File { file, asset } => self.loader.submit(ReadJob {
+                PageSource::File { file, asset } => reads.push(ReadJob {
                     page: load.page,
                     file: Arc::clone(file),
                     offset: page.file_offset,
@@ -428,6 +488,7 @@ impl Streaming {
                 }
             }
         }
+        self.loader.submit_all(reads);
         // Pages copied from memory just now go in this frame, not the next.
         let ready = self.streamer.publish_ready();
         install(data, &ready)?;
@@ -444,11 +505,26 @@ impl Streaming {
         self.stats.frame.bytes_uploaded += ready.iter().map(|i| i.data.len() as u64).sum::<u64>();
         self.stats.listed = listed;
         self.stats.unlisted = unlisted;
-        self.stats.cpu = start.elapsed();
+        let done = Instant::now();
+        self.stats.phases = StreamPhases {
+            requests: planned - start,
+            plan: applied - planned,
+            scene: done - applied,
+            upload: Duration::ZERO,
+        };
+        self.stats.cpu = self.stats.phases.total();
         let busy = self.loader.busy();
-        self.stats.readers = busy - self.readers_before;
+        self.stats.reader_steps = busy - self.readers_before;
+        self.stats.readers = self.stats.reader_steps.total();
         self.readers_before = busy;
         Ok(())
+    }
+
+    /// Counts `spent`, the time the frame's scene upload took (the pages and records
+    /// changed by [`Self::before_frame`]), as the render thread's streaming time.
+    pub fn add_upload_time(&mut self, spent: Duration) {
+        self.stats.phases.upload += spent;
+        self.stats.cpu = self.stats.phases.total();
     }
 
     /// The pages the GPU listed in every frame whose requests are back, merged (a page
