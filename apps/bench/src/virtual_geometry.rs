@@ -1089,6 +1089,13 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
     };
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let worst = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    // Progress, stamped with the wall clock (to line up with a log of the GPU's clocks).
+    let note = |what: &str| {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        eprintln!("vg-stream at {:.3} s: {what}", now.as_secs_f64());
+    };
     let triangles = |r: &Renderer| r.latest_counts().map_or(0.0, |c| c.triangles() as f64);
     // Resident, where it fits.
     let resident = scenes::load_library(dir, false)
@@ -1104,6 +1111,7 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             let mut r = Renderer::new(placed.data, settings.clone(), &GraphSource::Shipped)?;
             r.render_still(&camera(0))?;
             warm(&mut r, &camera(0))?;
+            note("resident: the flight");
             let mut drawn = Vec::new();
             let times = fly(&mut r, &mut |r| drawn.push(triangles(r)))?;
             device = r.adapter.clone();
@@ -1125,7 +1133,9 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             ] {
                 rows.push(row("vg-stream", case.clone(), metric, value, unit, &device));
             }
+            note("resident: the stops");
             for &t in &stops {
+                warm(&mut r, &stop_camera(t))?;
                 let ms = hold(&mut r, &stop_camera(t))?;
                 stop_baselines.push(ms);
                 let metric = format!("GPU frame at the stop {:.0} % along", t * 100.0);
@@ -1140,22 +1150,29 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             eprintln!("{scene} cannot be drawn resident, so it is flown streamed only: {why}");
         }
     }
-    // Streamed: the default budget, and more installs a frame with one level and
-    // three prefetched.
+    // Streamed: the default budget and reader threads; two readers; 64 installs a
+    // frame (the render thread's worst frame against the cold start); three levels
+    // prefetched.
     let threads = std::thread::available_parallelism().map_or(4, |n| n.get().clamp(2, 8));
-    let budgets = [
-        Budget::default(),
-        Budget {
-            installs_per_frame: 1024,
-            ..Budget::default()
-        },
-        Budget {
-            installs_per_frame: 1024,
-            prefetch_levels: 3,
-            ..Budget::default()
-        },
+    let configs = [
+        (Budget::default(), threads),
+        (Budget::default(), 2),
+        (
+            Budget {
+                installs_per_frame: 64,
+                ..Budget::default()
+            },
+            threads,
+        ),
+        (
+            Budget {
+                prefetch_levels: 3,
+                ..Budget::default()
+            },
+            threads,
+        ),
     ];
-    for budget in budgets {
+    for (budget, threads) in configs {
         let (installs, prefetch_levels) = (budget.installs_per_frame, budget.prefetch_levels);
         let mut r = Renderer::new(
             streamed.data.clone(),
@@ -1163,6 +1180,9 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             &GraphSource::Shipped,
         )?;
         r.start_streaming(streamed.sources.clone(), budget, threads)?;
+        note(&format!(
+            "streamed, {installs} installs, {prefetch_levels} level(s): cold start"
+        ));
         let cold = r.settle_streaming(&camera(0), 600)?;
         warm(&mut r, &camera(0))?;
         if device.is_empty() {
@@ -1172,6 +1192,7 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
         let mut drawn = Vec::new();
         let mut hole_count = 0;
         let start = r.streaming.as_ref().map(|s| s.stats()).unwrap_or_default();
+        note("streamed: the flight");
         let times = fly(&mut r, &mut |r| {
             per_frame.push(r.streaming.as_ref().map(|s| s.stats()).unwrap_or_default());
             drawn.push(triangles(r));
@@ -1240,6 +1261,50 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             "ms",
         );
         push("streamer CPU on the readers, mean", mean(&readers), "ms");
+        // Where the time goes: each step's mean and worst frame.
+        let steps = |s: &meshlight_virtual_geometry::streaming::StreamStats| {
+            let r = s.reader_steps;
+            let readers = [
+                ("readers: read", r.read),
+                ("readers: checksum", r.checksum),
+                ("readers: check", r.check),
+            ];
+            (s.phases.named().into_iter())
+                .map(|(name, d)| (format!("render thread: {name}"), d))
+                .chain(readers.into_iter().map(|(n, d)| (n.to_string(), d)))
+                .collect::<Vec<_>>()
+        };
+        for (i, (name, _)) in steps(&last).iter().enumerate() {
+            let each: Vec<f64> = per_frame.iter().map(|s| ms(steps(s)[i].1)).collect();
+            push(&format!("streamer CPU, {name}, mean"), mean(&each), "ms");
+            push(
+                &format!("streamer CPU, {name}, worst frame"),
+                worst(&each),
+                "ms",
+            );
+        }
+        let busiest = (0..per_frame.len())
+            .max_by(|&a, &b| per_frame[a].cpu.cmp(&per_frame[b].cpu))
+            .map(|i| per_frame[i]);
+        if let Some(b) = busiest {
+            push(
+                "the render thread's worst frame: pages installed",
+                f64::from(b.frame.installed),
+                "",
+            );
+            push(
+                "the render thread's worst frame: pages evicted",
+                f64::from(b.frame.evicted),
+                "",
+            );
+            push(
+                "the render thread's worst frame: pages listed by the GPU",
+                f64::from(b.listed),
+                "",
+            );
+        }
+        let listed: Vec<f64> = per_frame.iter().map(|s| f64::from(s.listed)).collect();
+        push("pages listed by the GPU a frame, mean", mean(&listed), "");
         push(
             "uploaded, worst frame (budget 32 MiB)",
             worst(&uploaded),
@@ -1270,11 +1335,14 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             "",
         );
         let mut at_stops = Vec::new();
+        note("streamed: the stops");
         for &t in &stops {
             let settled = r.settle_streaming(&stop_camera(t), 600)?;
+            warm(&mut r, &stop_camera(t))?;
             at_stops.push((t, settled, hold(&mut r, &stop_camera(t))?));
         }
         let passes = profile(&mut r, &stop_camera(stops[1]))?;
+        note("streamed: done");
         for &(t, settled, frame_ms) in &at_stops {
             let at = format!("{:.0} % along", t * 100.0);
             push(
@@ -1308,6 +1376,107 @@ fn flight(dir: &Path, quick: bool) -> BenchResult {
             }
         }
         rows.extend(stream_rows);
+    }
+    note("cold reads");
+    rows.extend(cold_reads(&streamed, &case, &device)?);
+    Ok(rows)
+}
+
+/// Pages read by the loader's threads from the files with the OS's cache of them dropped
+/// first, plainly and with read-ahead advice (the streamer's reads when the world is not
+/// in memory), against the same reads from the cache: the same spread sample of pages
+/// each time, each mode twice, alternating.
+fn cold_reads(streamed: &Placed, case: &str, device: &str) -> BenchResult {
+    use meshlight::stream::loader::{Loader, ReadJob};
+    use meshlight_virtual_geometry::streaming::PageSource;
+    use std::time::{Duration, Instant};
+    let Some(s) = streamed.data.streaming() else {
+        return Ok(Vec::new());
+    };
+    let files: Vec<_> = (streamed.sources.iter())
+        .filter_map(|source| match source {
+            PageSource::File { file, .. } => Some(std::sync::Arc::clone(file)),
+            PageSource::Memory(_) => None,
+        })
+        .collect();
+    if files.len() != streamed.sources.len() || s.pages.is_empty() {
+        return Ok(Vec::new());
+    }
+    const SAMPLE: usize = 4096;
+    let step = s.pages.len().div_ceil(SAMPLE).max(1);
+    let jobs: Vec<ReadJob> = (s.pages.iter().enumerate().step_by(step))
+        .map(|(i, p)| ReadJob {
+            page: i as u32,
+            file: std::sync::Arc::clone(&files[p.mesh as usize]),
+            offset: p.file_offset,
+            bytes: u64::from(p.words) * 4,
+            checksum: Some(p.checksum),
+            check: None,
+        })
+        .collect();
+    let bytes: u64 = jobs.iter().map(|j| j.bytes).sum();
+    let threads = std::thread::available_parallelism().map_or(4, |n| n.get().clamp(2, 8));
+    let mut rows = Vec::new();
+    let mut times: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
+    for (mode, cold, ahead) in [
+        ("from the OS's cache", false, false),
+        ("cold", true, false),
+        ("cold, with read-ahead", true, true),
+        ("cold", true, false),
+        ("cold, with read-ahead", true, true),
+    ] {
+        if cold {
+            for file in &files {
+                if let Err(e) = file.forget_cached() {
+                    eprintln!(
+                        "the OS's cache of {} cannot be dropped ({e}): no cold reads",
+                        file.path().display()
+                    );
+                    return Ok(rows);
+                }
+            }
+        }
+        let loader = Loader::with_read_ahead(threads, ahead)?;
+        let start = Instant::now();
+        loader.submit_all(jobs.iter().cloned());
+        for _ in 0..jobs.len() {
+            if let Some((page, Err(e))) = loader.wait(Duration::from_secs(60)) {
+                return Err(format!("page {page}: {e}").into());
+            }
+        }
+        times
+            .entry(mode)
+            .or_default()
+            .push(start.elapsed().as_secs_f64());
+    }
+    let case = format!(
+        "{case}, {} pages ({:.1} MiB) read by {threads} threads",
+        jobs.len(),
+        bytes as f64 / (1u64 << 20) as f64
+    );
+    let baseline = times.get("cold").map(|t| median(t.clone()));
+    for (mode, t) in times {
+        let seconds = median(t);
+        let mut r = row(
+            "vg-stream",
+            case.clone(),
+            &format!("page reads, {mode}"),
+            jobs.len() as f64 / seconds,
+            "pages/s",
+            device,
+        );
+        if mode == "cold, with read-ahead" {
+            r.vs_baseline = baseline.map(|b| b / seconds);
+        }
+        rows.push(r);
+        rows.push(row(
+            "vg-stream",
+            case.clone(),
+            &format!("page bytes read, {mode}"),
+            bytes as f64 / seconds / (1u64 << 20) as f64,
+            "MiB/s",
+            device,
+        ));
     }
     Ok(rows)
 }
