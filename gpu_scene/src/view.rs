@@ -221,7 +221,9 @@ impl Camera {
             inverse_viewport_size: [1.0 / size[0], 1.0 / size[1]],
             lod_scale: 0.5 * projection.y_axis.y * size[1],
             frame_index,
-            padding: [0; 2],
+            // An affine projection (w = 1 everywhere) is orthographic.
+            orthographic: u32::from(projection.w_axis.w != 0.0),
+            padding: 0,
         }
     }
 }
@@ -246,6 +248,21 @@ pub fn frustum_planes(view_projection: Mat4) -> [[f32; 4]; 6] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_orthographic_cameras_view_measures_errors_in_pixels_per_world_unit() {
+        let mut camera = Camera::perspective(Vec3::new(0.0, 0.0, 10.0), Vec3::ZERO, 1.0, 0.1);
+        assert_eq!(camera.view([640, 480], 0, None).orthographic, 0);
+        camera.projection = Projection::Orthographic {
+            height: 8.0,
+            near: 0.1,
+            far: 50.0,
+        };
+        let view = camera.view([640, 480], 0, None);
+        assert_eq!(view.orthographic, 1);
+        // 480 pixels span 8 world units.
+        assert!((view.lod_scale - 60.0).abs() < 1e-4, "{}", view.lod_scale);
+    }
 
     #[test]
     fn a_hosts_matrices_give_the_same_view_and_bad_ones_say_what_to_pass() {

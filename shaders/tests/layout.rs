@@ -70,6 +70,7 @@ fn rust_mirrors_match_the_wgsl_layouts() {
             inverse_viewport_size,
             lod_scale,
             frame_index,
+            orthographic,
             padding,
         ]
     );

@@ -7,7 +7,7 @@
 
 use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::gpu::elements;
-use meshlight_gpu_scene::{Camera, GpuScene, SceneData};
+use meshlight_gpu_scene::{Camera, GpuScene, Projection, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_cull_lod::cpu::{self, HW_VERTICES};
 use meshlight_pass_cull_lod::{CullLod, CullResult, Thresholds, cpu_cull};
@@ -214,13 +214,19 @@ fn random_views_match_the_reference() {
         let (target, direction) = random_aim(&mut rng, Vec3::new(4.0, 0.5, 3.0), [-0.3, 1.0]);
         let distance = 1.5 * (30.0f32 / 1.5).powf(rng.unit());
         let viewport = [[320, 240], [640, 360], [1280, 720]][rng.below(3) as usize];
-        let camera = Camera::perspective(
-            target + direction * distance,
-            target,
-            rng.range(0.5, 1.5),
-            0.05,
-        );
+        let fov = rng.range(0.5, 1.5);
+        let mut camera = Camera::perspective(target + direction * distance, target, fov, 0.05);
+        // Every third view orthographic (a shadow cascade's kind): its errors project
+        // the same at every distance.
+        if v % 3 == 2 {
+            camera.projection = Projection::Orthographic {
+                height: 2.0 * distance * (0.5 * fov).tan(),
+                near: 0.05,
+                far: distance * 4.0,
+            };
+        }
         let view = camera.view(viewport, v, None);
+        assert_eq!(view.orthographic, u32::from(v % 3 == 2));
         // Every fourth view sends the whole cut to software (`hardware = false`).
         let t = Thresholds {
             lod_threshold_px: [0.5, 1.0, 2.0, 4.0][rng.below(4) as usize],

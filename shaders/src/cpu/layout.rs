@@ -35,12 +35,16 @@ pub struct View {
     pub viewport_size: [f32; 2],
     /// `1 / viewport_size`, so a shader turns pixels into uv without dividing.
     pub inverse_viewport_size: [f32; 2],
-    /// `0.5 * projection[1][1] * viewport height`.
+    /// `0.5 * projection[1][1] * viewport height`: pixels per world unit at distance 1
+    /// (perspective), or at any distance (orthographic).
     pub lod_scale: f32,
     /// Frame counter, for temporal effects and debugging.
     pub frame_index: u32,
+    /// 1 when the projection is orthographic (a shadow cascade, an orthographic camera):
+    /// a projected error does not shrink with distance.
+    pub orthographic: u32,
     /// Pads the struct to a 16-byte multiple, so the mirror has no implicit padding.
-    pub padding: [u32; 2],
+    pub padding: u32,
 }
 
 /// `meshlight::meshlet::Mesh`: one loaded mesh asset in the GPU scene.

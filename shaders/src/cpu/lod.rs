@@ -15,8 +15,12 @@ pub fn instance_max_scale(world_from_local: &[[f32; 4]; 4]) -> f32 {
 }
 
 /// `error_to_pixels`: pixels an error of `error` world units spans at `distance` from
-/// the camera (never nearer than the near plane).
+/// the camera (never nearer than the near plane); through an orthographic projection,
+/// at any distance.
 pub fn error_to_pixels(view: &View, distance: f32, error: f32) -> f32 {
+    if view.orthographic != 0 {
+        return error * view.lod_scale;
+    }
     error / distance.max(view.near) * view.lod_scale
 }
 
@@ -92,6 +96,19 @@ mod tests {
 
     fn assert_near(got: f32, want: f32) {
         assert!((got - want).abs() <= want * 1e-6, "{got} != {want}");
+    }
+
+    #[test]
+    fn an_orthographic_views_errors_project_the_same_at_every_distance() {
+        let v = View {
+            lod_scale: 100.0,
+            near: 0.1,
+            orthographic: 1,
+            ..View::default()
+        };
+        for distance in [0.0, 0.5, 10.0, 1e4] {
+            assert_near(error_to_pixels(&v, distance, 0.5), 50.0);
+        }
     }
 
     #[test]

@@ -37,8 +37,11 @@ struct View {
     lod_scale: f32,
     // Frame counter, for temporal effects and debugging.
     frame_index: u32,
+    // 1 when the projection is orthographic: a projected error does not shrink with
+    // distance.
+    orthographic: u32,
     // Padding to a 16-byte multiple, so the Rust mirror has no implicit padding.
-    padding: vec2<u32>,
+    padding: u32,
 }
 
 // True when the sphere (world-space centre, radius) touches the frustum.
@@ -54,10 +57,14 @@ fn sphere_in_frustum(view: View, center: vec3<f32>, radius: f32) -> bool {
 }
 
 // Screen-space size in pixels of a simplification error seen from `distance` (never
-// closer than the near plane), the way meshoptimizer's cluster-LOD demo measures it.
-// The one formula of the LOD cut: `project_error_to_pixels` puts the error on a
-// sphere, the hierarchy walk bounds it over a node's spheres.
+// closer than the near plane), the way meshoptimizer's cluster-LOD demo measures it;
+// through an orthographic projection the same at every distance. The one formula of
+// the LOD cut: `project_error_to_pixels` puts the error on a sphere, the hierarchy walk
+// bounds it over a node's spheres.
 fn error_to_pixels(view: View, distance: f32, error: f32) -> f32 {
+    if view.orthographic != 0u {
+        return error * view.lod_scale;
+    }
     return error / max(distance, view.near) * view.lod_scale;
 }
 

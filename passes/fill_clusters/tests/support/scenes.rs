@@ -2,7 +2,7 @@
 //! random views over them.
 
 use glam::{Mat4, Quat, Vec3};
-use meshlight_gpu_scene::{Camera, Material, SceneData, data::Limits};
+use meshlight_gpu_scene::{Camera, Material, Projection, SceneData, data::Limits};
 use meshlight_scene::{BuildOptions, Mesh, MeshletAsset, build_asset};
 use meshlight_shaders::cpu::layout::View;
 use meshlight_testing::Rng;
@@ -99,12 +99,18 @@ impl Views {
         let [nearest, ratio] = self.distance;
         let distance = radius * nearest * ratio.powf(rng.unit());
         let viewport = self.viewports[rng.below(self.viewports.len() as u32) as usize];
-        let camera = Camera::perspective(
-            target + direction * distance,
-            target,
-            rng.range(self.fov[0], self.fov[1]),
-            radius * 0.02,
-        );
+        let fov = rng.range(self.fov[0], self.fov[1]);
+        let mut camera =
+            Camera::perspective(target + direction * distance, target, fov, radius * 0.02);
+        // Every fourth view orthographic (a shadow cascade's kind), spanning what the
+        // perspective view spans at the target.
+        if v % 4 == 3 {
+            camera.projection = Projection::Orthographic {
+                height: 2.0 * distance * (0.5 * fov).tan(),
+                near: radius * 0.02,
+                far: distance * 4.0,
+            };
+        }
         let threshold = self.thresholds[rng.below(self.thresholds.len() as u32) as usize];
         (camera.view(viewport, v, None), threshold)
     }
