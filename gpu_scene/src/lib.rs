@@ -35,6 +35,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cascades;
 pub mod data;
 /// What adding assets and instances to a scene can refuse, and why.
 pub mod error;

@@ -1,0 +1,491 @@
+//! A directional light's shadow cascades for a camera: where the camera's view is split
+//! between them, and each one's orthographic view, fitted so that shadows hold still
+//! while the camera moves.
+//!
+//! - **Splits.** The practical scheme: each split distance blends the uniform and the
+//!   logarithmic split of `near .. distance` by [`CascadeSettings::split_lambda`] (0:
+//!   uniform, 1: logarithmic, where each cascade covers the same ratio of distances).
+//! - **A fixed size per cascade.** A cascade covers the bounding sphere of its slice of
+//!   the camera's frustum, computed in the camera's own space, so its radius (and a
+//!   texel's world size) depends only on the projection and the split, never on where
+//!   the camera stands or looks: turning the camera does not rescale the shadow map.
+//! - **Whole texels.** The sphere's centre is snapped, in the light's frame, to whole
+//!   texels, so when the camera moves the map slides by whole texels and a still edge
+//!   falls on the same texels (no shimmer).
+//! - **Casters outside the slice.** The depth range covers the sphere and reaches
+//!   [`CascadeSettings::caster_reach`] further towards the light: a mountain behind the
+//!   camera still shades the ground in front of it.
+//!
+//! The LOD rule that follows (documented in docs/ARCHITECTURE.md, "Views"): a shadow
+//! view's cut is chosen by its own projection, orthographic, with a texel's world size
+//! as the pixel; it depends only on the cascade an object falls in, never on the
+//! camera's cut, so an object's shadow changes level only when it changes cascade.
+
+use glam::{Mat4, Vec3, Vec3Swizzles};
+use meshlight_shaders::cpu::layout::View;
+
+use crate::view::{Camera, CameraError};
+
+/// The most cascades a light has.
+pub const MAX_CASCADES: u32 = 4;
+
+/// How a directional light's shadow is split into cascades.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CascadeSettings {
+    /// Cascades, 1 to [`MAX_CASCADES`].
+    pub count: u32,
+    /// Texels along each side of a cascade's map.
+    pub resolution: u32,
+    /// Distance from the camera (view-space depth) where shadows end.
+    pub distance: f32,
+    /// 0: uniform splits; 1: logarithmic; between: a blend of the two.
+    pub split_lambda: f32,
+    /// How far beyond a cascade's sphere, towards the light, casters are kept.
+    pub caster_reach: f32,
+}
+
+impl Default for CascadeSettings {
+    /// Four 2048² cascades to 100 units, split 0.8 of the way to logarithmic, casters
+    /// kept 100 units towards the light.
+    fn default() -> Self {
+        Self {
+            count: 4,
+            resolution: 2048,
+            distance: 100.0,
+            split_lambda: 0.8,
+            caster_reach: 100.0,
+        }
+    }
+}
+
+/// What is wrong with a cascade setting: the setting, and what to change.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CascadeError {
+    /// A number out of its range.
+    #[error("shadow cascades: {setting} = {value} is outside {range}; {hint}")]
+    OutOfRange {
+        /// The setting.
+        setting: &'static str,
+        /// What it was.
+        value: String,
+        /// What it must lie in.
+        range: &'static str,
+        /// What to change.
+        hint: &'static str,
+    },
+    /// The light has no direction.
+    #[error(
+        "shadow cascades: the light's direction {0:?} has no length or is not finite; give a unit vector towards the light"
+    )]
+    LightDirection([f32; 3]),
+    /// The camera cannot be split.
+    #[error("shadow cascades: {0}")]
+    Camera(#[from] CameraError),
+    /// Shadows end before the camera's near plane.
+    #[error(
+        "shadow cascades: shadows end at {distance}, nearer than the camera's near plane at {near}; raise the shadow distance"
+    )]
+    Distance {
+        /// The shadow distance.
+        distance: f32,
+        /// The camera's near plane.
+        near: f32,
+    },
+}
+
+impl CascadeSettings {
+    /// Checks every number, naming the first one out of range.
+    pub fn validate(&self) -> Result<(), CascadeError> {
+        let out = |setting, value: String, range, hint| {
+            Err(CascadeError::OutOfRange {
+                setting,
+                value,
+                range,
+                hint,
+            })
+        };
+        if !(1..=MAX_CASCADES).contains(&self.count) {
+            return out(
+                "count",
+                self.count.to_string(),
+                "1..=4",
+                "give 1 to 4 cascades",
+            );
+        }
+        if !(16..=16384).contains(&self.resolution) {
+            return out(
+                "resolution",
+                self.resolution.to_string(),
+                "16..=16384",
+                "give a map side of 16 to 16384 texels",
+            );
+        }
+        if !(self.distance.is_finite() && self.distance > 0.0) {
+            return out(
+                "distance",
+                self.distance.to_string(),
+                "(0, ∞)",
+                "give a positive, finite shadow distance",
+            );
+        }
+        if !(0.0..=1.0).contains(&self.split_lambda) {
+            return out(
+                "split_lambda",
+                self.split_lambda.to_string(),
+                "0..=1",
+                "0 splits uniformly, 1 logarithmically",
+            );
+        }
+        if !(self.caster_reach.is_finite() && self.caster_reach >= 0.0) {
+            return out(
+                "caster_reach",
+                self.caster_reach.to_string(),
+                "[0, ∞)",
+                "give a finite distance, 0 or more",
+            );
+        }
+        Ok(())
+    }
+
+    /// The view-space depths where the cascades begin and end: `count + 1` of them, from
+    /// `near` to [`Self::distance`], increasing.
+    pub fn splits(&self, near: f32) -> Vec<f32> {
+        let (n, f, count) = (near, self.distance, self.count as f32);
+        (0..=self.count)
+            .map(|i| {
+                let t = i as f32 / count;
+                let logarithmic = n * (f / n).powf(t);
+                let uniform = n + (f - n) * t;
+                let d = self.split_lambda * logarithmic + (1.0 - self.split_lambda) * uniform;
+                match i {
+                    0 => n,
+                    i if i == self.count => f,
+                    _ => d,
+                }
+            })
+            .collect()
+    }
+}
+
+/// One cascade: its slice of the camera's view and the light's view over it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cascade {
+    /// View-space depths of the slice it serves.
+    pub near: f32,
+    /// Where the slice ends.
+    pub far: f32,
+    /// World size of one texel of its map.
+    pub texel_size: f32,
+    /// The light's camera for it: orthographic, looking along the light.
+    pub camera: Camera,
+    /// Its view for a map of the cascade's resolution.
+    pub view: View,
+}
+
+/// The cascades of a light shining towards `-toward_light` for `camera` drawn to a
+/// `viewport`: `settings.count` of them, nearest first.
+pub fn cascades(
+    camera: &Camera,
+    viewport: [u32; 2],
+    toward_light: Vec3,
+    settings: &CascadeSettings,
+    frame_index: u32,
+) -> Result<Vec<Cascade>, CascadeError> {
+    settings.validate()?;
+    let light = toward_light.normalize_or_zero();
+    if light == Vec3::ZERO || !light.is_finite() {
+        return Err(CascadeError::LightDirection(toward_light.to_array()));
+    }
+    let near = camera_near(camera, viewport);
+    if settings.distance <= near {
+        return Err(CascadeError::Distance {
+            distance: settings.distance,
+            near,
+        });
+    }
+    let world_from_view = camera.view_matrix().inverse();
+    let view_from_clip = camera.projection_matrix(viewport).inverse();
+    // The light's frame: rows are its axes; it looks along -light.
+    let up = if light.y.abs() < 0.99 {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    };
+    let light_from_world = glam::camera::rh::view::look_to_mat4(Vec3::ZERO, -light, up);
+    let world_from_light = light_from_world.inverse();
+    let res = settings.resolution;
+    let splits = settings.splits(near);
+    splits
+        .windows(2)
+        .map(|pair| {
+            let (slice_near, slice_far) = (pair[0], pair[1]);
+            let (centre, radius) = slice_sphere(&view_from_clip, slice_near, slice_far);
+            let texel_size = 2.0 * radius / res as f32;
+            let in_light =
+                light_from_world.transform_point3(world_from_view.transform_point3(centre));
+            let snapped = Vec3::new(
+                (in_light.x / texel_size).floor() * texel_size,
+                (in_light.y / texel_size).floor() * texel_size,
+                in_light.z,
+            );
+            // The eye: on the light's side of the sphere, just past the casters' reach
+            // (the near plane, a hundredth of the way in, keeps the projection
+            // invertible).
+            let margin = 0.01 * (radius + settings.caster_reach);
+            let back = radius + settings.caster_reach + margin;
+            let eye = world_from_light.transform_point3(snapped + Vec3::Z * back);
+            let view = glam::camera::rh::view::look_to_mat4(eye, -light, up);
+            // Reverse-Z: the near plane at depth 1, the sphere's far side at 0.
+            let projection = glam::camera::rh::proj::directx::orthographic(
+                -radius,
+                radius,
+                -radius,
+                radius,
+                back + radius,
+                margin,
+            );
+            let light_camera = Camera::from_matrices(view, projection)?;
+            Ok(Cascade {
+                near: slice_near,
+                far: slice_far,
+                texel_size,
+                view: light_camera.view([res, res], frame_index, None),
+                camera: light_camera,
+            })
+        })
+        .collect()
+}
+
+/// The near plane's distance of `camera` (view-space depth where clip depth is 1).
+fn camera_near(camera: &Camera, viewport: [u32; 2]) -> f32 {
+    let view_from_clip = camera.projection_matrix(viewport).inverse();
+    -view_from_clip.project_point3(Vec3::new(0.0, 0.0, 1.0)).z
+}
+
+/// The bounding sphere, in view space, of the camera frustum's slice between view-space
+/// depths `near` and `far`: centred on the view axis where the corners allow, so it
+/// depends only on the projection.
+fn slice_sphere(view_from_clip: &Mat4, near: f32, far: f32) -> (Vec3, f32) {
+    // A corner at view-space depth `d` along the ray through NDC (x, y).
+    let corner = |x: f32, y: f32, d: f32| {
+        let a = view_from_clip.project_point3(Vec3::new(x, y, 1.0));
+        let b = view_from_clip.project_point3(Vec3::new(x, y, 0.5));
+        let t = (-d - a.z) / (b.z - a.z);
+        a + (b - a) * t
+    };
+    let corners: Vec<Vec3> = [near, far]
+        .into_iter()
+        .flat_map(|d| {
+            [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)].map(|(x, y)| corner(x, y, d))
+        })
+        .collect();
+    // The smallest sphere centred on the axis through the slice's middle line: its
+    // centre's depth balances the near and far corners' distances.
+    let axis = |d: f32| corner(0.0, 0.0, d).xy();
+    let (near_half, far_half) = (
+        corners[..4]
+            .iter()
+            .map(|c| (c.xy() - axis(near)).length_squared())
+            .fold(0.0f32, f32::max),
+        corners[4..]
+            .iter()
+            .map(|c| (c.xy() - axis(far)).length_squared())
+            .fold(0.0f32, f32::max),
+    );
+    // |z - near|² + near_half = |z - far|² + far_half, along depth.
+    let depth = ((far * far - near * near) + (far_half - near_half)) / (2.0 * (far - near));
+    let depth = depth.clamp(near, far);
+    let centre = corner(0.0, 0.0, depth);
+    let radius = corners
+        .iter()
+        .map(|c| (*c - centre).length())
+        .fold(0.0f32, f32::max);
+    (centre, radius)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::view::Projection;
+
+    fn camera(position: Vec3, target: Vec3) -> Camera {
+        Camera::perspective(position, target, 1.0, 0.1)
+    }
+
+    fn texel_of(c: &Cascade, world: Vec3, res: u32) -> glam::Vec2 {
+        let vp = Mat4::from_cols_array_2d(&c.view.view_projection);
+        let ndc = vp.project_point3(world);
+        (ndc.xy() * 0.5 + 0.5) * res as f32
+    }
+
+    #[test]
+    fn splits_run_from_the_near_plane_to_the_distance_and_blend_the_two_schemes() {
+        let s = CascadeSettings {
+            count: 4,
+            distance: 100.0,
+            split_lambda: 0.0,
+            ..CascadeSettings::default()
+        };
+        let uniform = s.splits(1.0);
+        assert_eq!(uniform.len(), 5);
+        assert_eq!((uniform[0], uniform[4]), (1.0, 100.0));
+        assert!((uniform[2] - 50.5).abs() < 1e-4, "{uniform:?}");
+        let log = CascadeSettings {
+            split_lambda: 1.0,
+            ..s
+        }
+        .splits(1.0);
+        // Each cascade covers the same ratio: 100^(1/4).
+        assert!((log[1] - 100f32.powf(0.25)).abs() < 1e-4, "{log:?}");
+        let blend = CascadeSettings {
+            split_lambda: 0.5,
+            ..s
+        }
+        .splits(1.0);
+        assert!((blend[1] - 0.5 * (uniform[1] + log[1])).abs() < 1e-4);
+        assert!(blend.windows(2).all(|w| w[0] < w[1]), "{blend:?}");
+    }
+
+    #[test]
+    fn each_cascade_covers_its_slice_of_the_camera_frustum() {
+        let settings = CascadeSettings::default();
+        let cam = camera(Vec3::new(3.0, 5.0, 9.0), Vec3::new(-4.0, 0.0, -30.0));
+        let viewport = [1920, 1080];
+        let cascades = cascades(&cam, viewport, Vec3::new(-0.5, 0.8, 0.35), &settings, 0).unwrap();
+        assert_eq!(cascades.len(), 4);
+        let world_from_view = cam.view_matrix().inverse();
+        let view_from_clip = cam.projection_matrix(viewport).inverse();
+        for c in &cascades {
+            // No larger than the sphere around the slice's corners from their centroid.
+            let corners: Vec<Vec3> = [c.near, c.far]
+                .into_iter()
+                .flat_map(|d| {
+                    [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)].map(|(x, y)| {
+                        let a = view_from_clip.project_point3(Vec3::new(x, y, 1.0));
+                        let b = view_from_clip.project_point3(Vec3::new(x, y, 0.5));
+                        a + (b - a) * ((-d - a.z) / (b.z - a.z))
+                    })
+                })
+                .collect();
+            let centroid = corners.iter().sum::<Vec3>() / 8.0;
+            let loose = corners
+                .iter()
+                .map(|p| (*p - centroid).length())
+                .fold(0.0, f32::max);
+            assert!(
+                c.texel_size <= 2.0 * loose / settings.resolution as f32 * (1.0 + 1e-5),
+                "cascade {}..{}: a texel of {} for a slice of radius {loose}",
+                c.near,
+                c.far,
+                c.texel_size
+            );
+            let vp = Mat4::from_cols_array_2d(&c.view.view_projection);
+            for d in [c.near, 0.5 * (c.near + c.far), c.far] {
+                for (x, y) in [
+                    (-1.0, -1.0),
+                    (1.0, -1.0),
+                    (-1.0, 1.0),
+                    (1.0, 1.0),
+                    (0.0, 0.0),
+                ] {
+                    let a = view_from_clip.project_point3(Vec3::new(x, y, 1.0));
+                    let b = view_from_clip.project_point3(Vec3::new(x, y, 0.5));
+                    let p = a + (b - a) * ((-d - a.z) / (b.z - a.z));
+                    let ndc = vp.project_point3(world_from_view.transform_point3(p));
+                    assert!(
+                        ndc.x.abs() <= 1.0 + 1e-4 && ndc.y.abs() <= 1.0 + 1e-4,
+                        "depth {d}: {ndc}"
+                    );
+                    assert!((0.0..=1.0).contains(&ndc.z), "depth {d}: {ndc}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn moving_the_camera_slides_the_maps_by_whole_texels_and_turning_it_keeps_their_size() {
+        let settings = CascadeSettings {
+            resolution: 1024,
+            ..CascadeSettings::default()
+        };
+        let light = Vec3::new(-0.5, 0.8, 0.35);
+        let point = Vec3::new(2.5, 0.3, -7.25);
+        let first = cascades(
+            &camera(Vec3::new(0.0, 2.0, 5.0), Vec3::ZERO),
+            [1280, 720],
+            light,
+            &settings,
+            0,
+        )
+        .unwrap();
+        let mut rng = meshlight_shaders::cpu::rng::Rng(7);
+        for _ in 0..20 {
+            let shift = Vec3::new(
+                rng.range(-3.0, 3.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-3.0, 3.0),
+            );
+            let target = Vec3::new(rng.range(-5.0, 5.0), 0.0, rng.range(-5.0, 5.0));
+            let moved = cascades(
+                &camera(Vec3::new(0.0, 2.0, 5.0) + shift, target),
+                [1280, 720],
+                light,
+                &settings,
+                0,
+            )
+            .unwrap();
+            for (a, b) in first.iter().zip(&moved) {
+                assert_eq!(a.texel_size, b.texel_size, "a cascade's texel changed size");
+                let slide = texel_of(b, point, 1024) - texel_of(a, point, 1024);
+                let off = (slide - slide.round()).abs().max_element();
+                assert!(off < 2e-2, "the map slid by {slide}, not whole texels");
+            }
+        }
+    }
+
+    #[test]
+    fn bad_settings_name_what_to_change() {
+        let cam = camera(Vec3::new(0.0, 2.0, 5.0), Vec3::ZERO);
+        let bad = |settings: CascadeSettings| {
+            cascades(&cam, [64, 64], Vec3::Y, &settings, 0)
+                .unwrap_err()
+                .to_string()
+        };
+        let d = CascadeSettings::default();
+        assert!(bad(CascadeSettings { count: 5, ..d }).contains("count = 5"));
+        assert!(bad(CascadeSettings { resolution: 8, ..d }).contains("resolution = 8"));
+        assert!(
+            bad(CascadeSettings {
+                distance: f32::NAN,
+                ..d
+            })
+            .contains("distance")
+        );
+        assert!(
+            bad(CascadeSettings {
+                distance: 0.05,
+                ..d
+            })
+            .contains("raise the shadow distance")
+        );
+        assert!(
+            bad(CascadeSettings {
+                split_lambda: 2.0,
+                ..d
+            })
+            .contains("split_lambda")
+        );
+        let e = cascades(&cam, [64, 64], Vec3::ZERO, &d, 0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("towards the light"), "{e}");
+        // An orthographic camera splits too.
+        let mut ortho = cam;
+        ortho.projection = Projection::Orthographic {
+            height: 10.0,
+            near: 0.1,
+            far: 200.0,
+        };
+        assert_eq!(cascades(&ortho, [64, 64], Vec3::Y, &d, 0).unwrap().len(), 4);
+    }
+}
