@@ -18,6 +18,8 @@ enum Target {
 #[derive(Clone, Debug, Default)]
 pub struct Bindings {
     entries: Vec<(String, Target, Option<TextureRange>)>,
+    /// (frame input the pass reads, the frame input supplied for it).
+    inputs: Vec<(String, String)>,
 }
 
 impl Bindings {
@@ -47,6 +49,14 @@ impl Bindings {
     pub fn bind_named(mut self, slot: &str, resource: &str) -> Self {
         self.entries
             .push((slot.to_string(), Target::Name(resource.to_string()), None));
+        self
+    }
+    /// Supplies the pass's frame input `read` (e.g. `view`) from the frame input named
+    /// `supplied`, so one stage can run once per view of a frame, each pass reading its
+    /// own view. An input never mapped is read under its own name.
+    pub fn input(mut self, read: &str, supplied: &str) -> Self {
+        self.inputs.retain(|(r, _)| r != read);
+        self.inputs.push((read.to_string(), supplied.to_string()));
         self
     }
     /// [`Bindings::bind_named`] with a texture range.
@@ -503,6 +513,7 @@ impl GraphBuilder {
             stage_slots,
             bindings: resolved,
             ranges,
+            inputs: bindings.inputs,
             alternatives: None,
         });
         Ok(PassOutputs {

@@ -19,12 +19,23 @@ pub(crate) struct PassNode {
     pub bindings: Vec<AnyHandle>,
     /// Per slot, the texture range it binds (`None`: the whole resource).
     pub ranges: Vec<Option<TextureRange>>,
+    /// (frame input the pass reads, the frame input supplied for it): see
+    /// `Bindings::input`.
+    pub inputs: Vec<(String, String)>,
     /// The stage's other implementations, when the pass was added as a [`Choice`]:
     /// compile keeps `pass` or one of these.
     pub(crate) alternatives: Option<Choice>,
 }
 
 impl PassNode {
+    /// The frame input supplied for the pass's input `read`.
+    pub fn supplied_input<'a>(&'a self, read: &'a str) -> &'a str {
+        self.inputs
+            .iter()
+            .find(|(r, _)| r == read)
+            .map_or(read, |(_, s)| s.as_str())
+    }
+
     /// Each bound slot with the resource version it binds, in contract order: what most
     /// compile steps walk.
     pub fn bound_slots(&self) -> impl Iterator<Item = (&Slot, &AnyHandle)> {

@@ -502,6 +502,105 @@ fn frame_data_changes_every_frame_without_recompiling_or_allocating() {
     }
 }
 
+/// Three passes of one stage, each supplied its own frame input for the `value` it
+/// reads (`Bindings::input`): the way a stage runs once per view of a frame.
+#[test]
+fn each_pass_reads_the_frame_input_supplied_for_it() {
+    let mut g = GraphBuilder::new();
+    for k in 0..3 {
+        let stamp = g.create_buffer(&format!("stamp_{k}"), BufferDesc::array(Element::U32, 2));
+        let writer = pass(
+            "stamp",
+            vec![Slot::buffer(
+                "stamp",
+                Access::StorageWrite,
+                Element::U32,
+                "",
+            )],
+            |ctx| {
+                ctx.frame_input("value");
+                let layout = BindingLayout::compute("stamp")
+                    .uniform(2, "params")
+                    .slot(14, "stamp");
+                declare(ctx, "stamp", "write_stamp", layout)
+            },
+            |ctx| {
+                let value = ctx.frame_u32("value")?;
+                dispatch_once(
+                    ctx,
+                    "stamp",
+                    &[("params", bytemuck::cast_slice(&params(value, 0)))],
+                    [1, 1, 1],
+                )
+            },
+        );
+        let bindings = Bindings::new()
+            .bind("stamp", stamp)
+            .input("value", &format!("value_{k}"));
+        let out = g.add_pass(&format!("stamp_{k}"), writer, bindings).unwrap();
+        g.export(out.buffer("stamp").unwrap());
+    }
+    let compiled = g
+        .compile(&CompileOptions::new(wgpu::Features::empty()))
+        .unwrap();
+    let inputs: Vec<&[String]> = (compiled.plan.passes.iter())
+        .map(|p| p.frame_inputs.as_slice())
+        .collect();
+    assert_eq!(inputs, [["value_0"], ["value_1"], ["value_2"]]);
+    let mut exec = Executor::new(gpu());
+    let mut data = FrameData::new();
+    for k in 0..3 {
+        data.set_u32(&format!("value_{k}"), 100 + k);
+    }
+    exec.execute_frame(&compiled, &Imports::new(), &data)
+        .unwrap();
+    for k in 0..3u32 {
+        let got: Vec<u32> = read_export(&mut exec, &format!("stamp_{k}"));
+        assert_eq!(got, [100 + k, 0], "pass {k}");
+    }
+    // A frame without one of them names the input supplied, not the one read.
+    let mut partial = FrameData::new();
+    partial.set_u32("value_0", 1).set_u32("value_1", 2);
+    match exec.execute_frame(&compiled, &Imports::new(), &partial) {
+        Err(GraphError::MissingFrameInput { pass, input }) => {
+            assert_eq!((pass.as_str(), input.as_str()), ("stamp_2", "value_2"))
+        }
+        other => panic!("{:?}", other.map(|s| s.frame)),
+    }
+}
+
+/// Supplying an input the pass never reads is a compile error naming what it reads.
+#[test]
+fn supplying_an_input_the_pass_does_not_read_is_refused() {
+    let mut g = GraphBuilder::new();
+    let stamp = g.create_buffer("stamp", BufferDesc::array(Element::U32, 2));
+    let writer = pass(
+        "stamp",
+        vec![Slot::buffer(
+            "stamp",
+            Access::StorageWrite,
+            Element::U32,
+            "",
+        )],
+        |ctx| {
+            ctx.frame_input("value");
+            Ok(())
+        },
+        |_| Ok(()),
+    );
+    let bindings = Bindings::new().bind("stamp", stamp).input("viwe", "view_0");
+    let out = g.add_pass("stamp", writer, bindings).unwrap();
+    g.export(out.buffer("stamp").unwrap());
+    let Err(e) = g.compile(&CompileOptions::new(wgpu::Features::empty())) else {
+        panic!("a graph supplying an input its pass does not read compiled");
+    };
+    let e = e.to_string();
+    assert!(
+        e.contains("reads no frame input `viwe` (it reads: value)"),
+        "{e}"
+    );
+}
+
 #[test]
 fn readback_of_frame_k_is_taken_at_frame_k_plus_latency_without_waiting() {
     const LATENCY: u32 = 2;

@@ -199,3 +199,105 @@ fn caller_parameters_size_textures_and_reach_pass_parameters() {
     };
     assert!(e.to_string().contains("names no entry"), "{e}");
 }
+
+/// A view set: entries with `views` stand for one per view, `{view}` their number.
+const VIEWS: &str = r#"
+[views]
+cascades = COUNT
+
+[[resource]]
+name = "a_{view}"
+kind = "transient"
+views = "cascades"
+buffer = { element = "u32", count = 1000 }
+
+[[resource]]
+name = "result"
+kind = "imported"
+buffer = { element = "u32", count = 1000 }
+usage = ["STORAGE", "COPY_SRC", "COPY_DST"]
+
+[[pass]]
+name = "fill_{view}"
+stage = "produce"
+implementation = "fill"
+views = "cascades"
+params = { count = 1000, k = 3 }
+bind = { output = "a_{view}" }
+
+[[pass]]
+name = "transform"
+stage = "transform"
+implementation = "add"
+params = { count = 1000, k = 1 }
+bind = { input = "LAST", output = "result" }
+"#;
+
+#[test]
+fn a_view_set_writes_its_entries_out_once_per_view() {
+    let text = VIEWS.replace("COUNT", "3").replace("LAST", "a_2");
+    let g = parse_pipeline(&text, "views.toml", &registry()).unwrap();
+    let plan = g
+        .compile(&CompileOptions::new(wgpu::Features::empty()))
+        .unwrap()
+        .plan;
+    let passes: Vec<&str> = plan.passes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(passes, ["fill_0", "fill_1", "fill_2", "transform"]);
+    for k in 0..3 {
+        assert!(
+            plan.resources
+                .iter()
+                .any(|r| r.info.name == format!("a_{k}")),
+            "a_{k} was not declared"
+        );
+    }
+    // The file runs: the last view's buffer feeds the transform.
+    assert_eq!(
+        run(&text),
+        (0..1000).map(|i| i * 3 + 1).collect::<Vec<u32>>()
+    );
+    // No views: the set's entries are left out, and a binding to one is refused by name.
+    let none = VIEWS.replace("COUNT", "0").replace("LAST", "a_0");
+    match parse_pipeline(&none, "views.toml", &registry()) {
+        Err(GraphError::UnknownResource { resource, .. }) => assert_eq!(resource, "a_0"),
+        other => panic!("{:?}", other.err()),
+    }
+}
+
+#[test]
+fn view_set_mistakes_name_the_entry_and_what_to_change() {
+    let base = VIEWS.replace("COUNT", "2").replace("LAST", "a_1");
+    let refused = |text: &str| match parse_pipeline(text, "views.toml", &registry())
+        .and_then(|g| g.compile(&CompileOptions::new(wgpu::Features::empty())))
+    {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("accepted:\n{text}"),
+    };
+    let e = refused(&base.replace(
+        "views = \"cascades\"\nparams",
+        "views = \"cascdes\"\nparams",
+    ));
+    assert!(
+        e.contains("view set `cascdes`, which [views] does not declare"),
+        "{e}"
+    );
+    let e = refused(&base.replace("name = \"fill_{view}\"", "name = \"fill\""));
+    assert!(
+        e.contains("pass `fill` runs over view set `cascades`, but its name holds no `{view}`"),
+        "{e}"
+    );
+    let e = refused(&base.replace("bind = { input = \"a_1\"", "bind = { input = \"a_{view}\""));
+    assert!(
+        e.contains("pass `transform` writes `{view}` but runs over no view set"),
+        "{e}"
+    );
+    // A pass supplied a frame input it does not read.
+    let e = refused(&base.replace(
+        "params = { count = 1000, k = 1 }",
+        "params = { count = 1000, k = 1 }\ninputs = { view = \"view_0\" }",
+    ));
+    assert!(
+        e.contains("reads no frame input `view` (it reads: none)"),
+        "{e}"
+    );
+}

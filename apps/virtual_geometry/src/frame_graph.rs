@@ -540,13 +540,11 @@ fn targets(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
         for r in p.resources.iter_mut().filter(|r| r.name == COLOR) {
             r.kind = EntryKind::Transient;
         }
-        p.passes.push(PassEntry {
-            name: "present".into(),
-            stage: meshlight::present::STAGE.into(),
-            implementation: "fullscreen".into(),
-            params: toml::Table::new(),
-            bind: Default::default(),
-        });
+        p.passes.push(PassEntry::new(
+            "present",
+            meshlight::present::STAGE,
+            "fullscreen",
+        ));
     }
     Ok(())
 }

@@ -258,6 +258,21 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             },
             other => other,
         })?;
+        if let Some((read, supplied)) =
+            (node.inputs.iter()).find(|(read, _)| !ctx.frame_inputs.iter().any(|i| i == read))
+        {
+            return Err(GraphError::Parameter {
+                pass: node.name.clone(),
+                message: format!(
+                    "it reads no frame input `{read}` (it reads: {}), so `{supplied}` cannot be supplied for it; remove that input mapping",
+                    if ctx.frame_inputs.is_empty() {
+                        "none".to_string()
+                    } else {
+                        ctx.frame_inputs.join(", ")
+                    }
+                ),
+            });
+        }
         // 64-bit texture atomics on a bound R64Uint texture are a requirement of the
         // binding itself, whatever the pass declared.
         for (slot, h) in node.bound_slots() {
@@ -376,7 +391,9 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
                 .iter()
                 .map(|(n, d)| ProgramPlan::new(n, d))
                 .collect(),
-            frame_inputs: setup.frame_inputs.clone(),
+            frame_inputs: (setup.frame_inputs.iter())
+                .map(|read| node.supplied_input(read).to_string())
+                .collect(),
             required_features: setup.required,
             optional_features: setup.optional,
             side_effect: setup.side_effect,

@@ -84,7 +84,8 @@ pub(crate) fn build(pipeline: &Pipeline, registry: &Registry) -> Result<GraphBui
     for (name, value) in &pipeline.params {
         g.size_param(name, *value);
     }
-    for r in &pipeline.resources {
+    let (resources, passes) = expanded(pipeline)?;
+    for r in &resources {
         declare(&mut g, r, &pipeline.params).map_err(|refusal| match refusal {
             Refusal::Text(m) => ferr(format!("resource `{}`: {m}", r.name)),
             Refusal::Problem(problem) => GraphError::PipelineResource {
@@ -94,9 +95,12 @@ pub(crate) fn build(pipeline: &Pipeline, registry: &Registry) -> Result<GraphBui
             },
         })?;
     }
-    for p in &pipeline.passes {
+    for p in &passes {
         let pass = build_pass(pipeline, p, registry)?;
         let mut bindings = Bindings::new();
+        for (read, supplied) in &p.inputs {
+            bindings = bindings.input(read, supplied);
+        }
         for (slot, target) in &p.bind {
             let bad = |m: String| ferr(format!("pass `{}` slot `{slot}`: {m}", p.name));
             let (target_res, range) = match target.split_once('#') {
@@ -139,6 +143,71 @@ pub(crate) fn build(pipeline: &Pipeline, registry: &Registry) -> Result<GraphBui
         };
     }
     Ok(g)
+}
+
+/// What stands for a view's number in the entries of a view set.
+const VIEW: &str = "{view}";
+
+/// The pipeline's resources and passes with each view set's entries written out once
+/// per view (`{view}` replaced by its number in names, bindings, inputs and string
+/// parameters), in file order.
+fn expanded(pipeline: &Pipeline) -> Result<(Vec<ResourceEntry>, Vec<PassEntry>)> {
+    let ferr = |message: String| GraphError::PipelineFile {
+        file: pipeline.file().to_string(),
+        message,
+    };
+    let views = |what: &str, name: &str, set: &Option<String>, uses_view: bool| match set {
+        None if uses_view => Err(ferr(format!(
+            "{what} `{name}` writes `{VIEW}` but runs over no view set; add `views = \"<set>\"` naming one of [views]"
+        ))),
+        None => Ok(None),
+        Some(set) if !name.contains(VIEW) => Err(ferr(format!(
+            "{what} `{name}` runs over view set `{set}`, but its name holds no `{VIEW}`, so its views would share one name; name it like `{name}_{VIEW}`"
+        ))),
+        Some(set) => match pipeline.views.get(set) {
+            Some(&count) => Ok(Some(count)),
+            None => Err(ferr(format!(
+                "{what} `{name}` runs over view set `{set}`, which [views] does not declare; add `{set} = <views>` to [views]"
+            ))),
+        },
+    };
+    let mut resources = Vec::new();
+    for r in &pipeline.resources {
+        match views("resource", &r.name, &r.views, r.name.contains(VIEW))? {
+            None => resources.push(r.clone()),
+            Some(count) => resources.extend((0..count).map(|k| ResourceEntry {
+                name: r.name.replace(VIEW, &k.to_string()),
+                views: None,
+                ..r.clone()
+            })),
+        }
+    }
+    let mut passes = Vec::new();
+    for p in &pipeline.passes {
+        let uses_view = |text: &str| text.contains(VIEW);
+        let written = uses_view(&p.name)
+            || p.bind.values().any(|t| uses_view(t))
+            || p.inputs.values().any(|t| uses_view(t))
+            || p.params.values().any(|v| v.as_str().is_some_and(uses_view));
+        match views("pass", &p.name, &p.views, written)? {
+            None => passes.push(p.clone()),
+            Some(count) => passes.extend((0..count).map(|k| {
+                let view = |text: &String| text.replace(VIEW, &k.to_string());
+                let mut pass = p.clone();
+                pass.name = view(&p.name);
+                pass.views = None;
+                pass.bind.values_mut().for_each(|t| *t = view(t));
+                pass.inputs.values_mut().for_each(|t| *t = view(t));
+                for (_, v) in pass.params.iter_mut() {
+                    if let toml::Value::String(text) = v {
+                        *text = text.replace(VIEW, &k.to_string());
+                    }
+                }
+                pass
+            })),
+        }
+    }
+    Ok((resources, passes))
 }
 
 /// `mip=N`, `mips=A..B`, `layer=N`, `layers=A..B`, joined with `,`: the part of a texture

@@ -81,6 +81,12 @@ pub struct Pipeline {
     /// `count_param` instead of `count`, pass parameters with `"$name"`.
     #[serde(default)]
     pub params: BTreeMap<String, u64>,
+    /// View sets: `[views] cascades = 4`. A `[[resource]]` or `[[pass]]` with
+    /// `views = "cascades"` stands for one entry per view of the set, `{view}` in its name,
+    /// bindings and inputs replaced by the view's number (0, 1, …); a set of 0 views
+    /// leaves its entries out.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub views: BTreeMap<String, u32>,
     /// The `[[resource]]` entries, in file order.
     #[serde(default, rename = "resource")]
     pub resources: Vec<ResourceEntry>,
@@ -256,6 +262,9 @@ pub struct ResourceEntry {
     /// The names are checked on every kind, so a misspelt one is never ignored.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub usage: Vec<String>,
+    /// The view set (`[views]`) it exists once per view of; its name holds `{view}`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub views: Option<String>,
 }
 
 impl ResourceEntry {
@@ -304,6 +313,7 @@ impl ResourceEntry {
             }),
             visibility: None,
             usage: Vec::new(),
+            views: None,
         }
     }
 
@@ -315,6 +325,7 @@ impl ResourceEntry {
             texture: None,
             visibility: None,
             usage: Vec::new(),
+            views: None,
         }
     }
 
@@ -344,9 +355,29 @@ pub struct PassEntry {
     /// `#mip=2`-style texture ranges.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub bind: BTreeMap<String, String>,
+    /// Frame input the pass reads → the frame input supplied for it
+    /// (`inputs = { view = "cascade_view_{view}" }`): see `Bindings::input`.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub inputs: BTreeMap<String, String>,
+    /// The view set (`[views]`) it runs once per view of; its name holds `{view}`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub views: Option<String>,
 }
 
 impl PassEntry {
+    /// A pass of `stage` named `name`, of implementation `implementation`, with no
+    /// parameters, bindings or inputs.
+    pub fn new(name: &str, stage: &str, implementation: &str) -> Self {
+        Self {
+            name: name.to_string(),
+            stage: stage.to_string(),
+            implementation: implementation.to_string(),
+            params: toml::Table::new(),
+            bind: BTreeMap::new(),
+            inputs: BTreeMap::new(),
+            views: None,
+        }
+    }
     /// The parameter `key` as written.
     pub fn param(&self, key: &str) -> Option<&toml::Value> {
         self.params.get(key)

@@ -119,6 +119,8 @@ pub struct RecordContext<'a> {
     pub(crate) encoder: &'a mut wgpu::CommandEncoder,
     /// The pass instance's name, for labels and errors.
     pub(crate) name: &'a str,
+    /// (frame input the pass reads, the frame input supplied for it).
+    pub(crate) inputs: &'a [(String, String)],
     /// The pass's stage contract with its unbound optional slots removed.
     pub(crate) contract: &'a StageContract,
     /// The programs the pass declared in setup, in declaration order.
@@ -212,11 +214,14 @@ impl<'a> RecordContext<'a> {
     }
     /// A per-frame input the pass declared with `SetupContext::frame_input`.
     pub fn frame_bytes(&self, name: &str) -> Result<&'a [u8]> {
+        let supplied = (self.inputs.iter())
+            .find(|(read, _)| read == name)
+            .map_or(name, |(_, s)| s.as_str());
         self.frame_data
-            .get(name)
+            .get(supplied)
             .ok_or_else(|| GraphError::MissingFrameInput {
                 pass: self.name.to_string(),
-                input: name.to_string(),
+                input: supplied.to_string(),
             })
     }
     /// A per-frame u32 input (`FrameData::u32`).

@@ -62,6 +62,7 @@ impl FrameRecord<'_> {
             features: self.gpu.features,
             encoder,
             name: &node.name,
+            inputs: &node.inputs,
             contract: &node.contract,
             declared: &self.graph.setups[p].programs,
             pass_index: p,
