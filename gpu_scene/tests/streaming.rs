@@ -286,17 +286,25 @@ fn the_rewritten_records_draw_the_cut_over_resident_pages() {
     );
 }
 
-/// Installs and evictions reach the GPU as small writes, and the GPU's copies then
-/// equal the scene's.
-#[test]
-fn installs_and_evictions_upload_only_what_they_change() {
-    let gpu = meshlight_testing::gpu();
+/// The streamed scene with one instance of its first mesh, uploaded.
+fn uploaded(
+    gpu: &meshlight_graph::GpuContext,
+) -> (Vec<&'static MeshletAsset>, SceneData, GpuScene) {
     let (assets, _, mut streamed) = scenes();
     let material = streamed.add_material(Material::default()).unwrap();
     streamed
         .add_instance(meshlight_gpu_scene::MeshId(0), Mat4::IDENTITY, material)
         .unwrap();
-    let mut scene = GpuScene::new(&gpu, &mut streamed);
+    let scene = GpuScene::new(gpu, &mut streamed);
+    (assets, streamed, scene)
+}
+
+/// Installs and evictions reach the GPU as small writes, and the GPU's copies then
+/// equal the scene's.
+#[test]
+fn installs_and_evictions_upload_only_what_they_change() {
+    let gpu = meshlight_testing::gpu();
+    let (assets, mut streamed, mut scene) = uploaded(&gpu);
     assert_eq!(scene.upload(&gpu, &mut streamed).bytes, 0);
     let graph = graph(&assets);
     let page = parents_first(&graph)[0];
@@ -370,12 +378,7 @@ fn assert_streamed_buffers_match(
 #[test]
 fn many_installs_and_evictions_a_frame_reach_the_gpu_exactly() {
     let gpu = meshlight_testing::gpu();
-    let (assets, _, mut streamed) = scenes();
-    let material = streamed.add_material(Material::default()).unwrap();
-    streamed
-        .add_instance(meshlight_gpu_scene::MeshId(0), Mat4::IDENTITY, material)
-        .unwrap();
-    let mut scene = GpuScene::new(&gpu, &mut streamed);
+    let (assets, mut streamed, mut scene) = uploaded(&gpu);
     let graph = graph(&assets);
     let order = parents_first(&graph);
     let pool = streamed.streaming().unwrap().pool_words;

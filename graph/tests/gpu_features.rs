@@ -423,10 +423,9 @@ fn appended_buffer_drives_indirect_dispatches_in_its_own_pass_and_the_next() {
 // ---------------------------------------------------------------------------------------
 // Frame data: 100 frames with new values and no recompile; async readback with latency.
 
-fn stamp_graph(latency: u32) -> CompiledGraph {
-    let mut g = GraphBuilder::new();
-    let stamp = g.create_buffer("stamp", BufferDesc::array(Element::U32, 2));
-    let writer = pass(
+/// A pass writing `[frame input value, frame index]` to its `stamp` buffer.
+fn stamp_pass() -> impl Pass {
+    pass(
         "stamp",
         vec![Slot::buffer(
             "stamp",
@@ -451,7 +450,13 @@ fn stamp_graph(latency: u32) -> CompiledGraph {
                 [1, 1, 1],
             )
         },
-    );
+    )
+}
+
+fn stamp_graph(latency: u32) -> CompiledGraph {
+    let mut g = GraphBuilder::new();
+    let stamp = g.create_buffer("stamp", BufferDesc::array(Element::U32, 2));
+    let writer = stamp_pass();
     let out = g
         .add_pass("stamp", writer, Bindings::new().bind("stamp", stamp))
         .unwrap();
@@ -509,31 +514,7 @@ fn each_pass_reads_the_frame_input_supplied_for_it() {
     let mut g = GraphBuilder::new();
     for k in 0..3 {
         let stamp = g.create_buffer(&format!("stamp_{k}"), BufferDesc::array(Element::U32, 2));
-        let writer = pass(
-            "stamp",
-            vec![Slot::buffer(
-                "stamp",
-                Access::StorageWrite,
-                Element::U32,
-                "",
-            )],
-            |ctx| {
-                ctx.frame_input("value");
-                let layout = BindingLayout::compute("stamp")
-                    .uniform(2, "params")
-                    .slot(14, "stamp");
-                declare(ctx, "stamp", "write_stamp", layout)
-            },
-            |ctx| {
-                let value = ctx.frame_u32("value")?;
-                dispatch_once(
-                    ctx,
-                    "stamp",
-                    &[("params", bytemuck::cast_slice(&params(value, 0)))],
-                    [1, 1, 1],
-                )
-            },
-        );
+        let writer = stamp_pass();
         let bindings = Bindings::new()
             .bind("stamp", stamp)
             .input("value", &format!("value_{k}"));
