@@ -154,7 +154,7 @@ pub struct BakeArgs {
     pub position_bits: PositionBits,
     /// Tube segments of the procedural mesh (16 × segments² triangles).
     #[arg(long, default_value_t = DEFAULT_SEGMENTS,
-          value_parser = clap::value_parser!(u32).range(3..=1024))]
+          value_parser = clap::value_parser!(u32).range(baked_segments()))]
     pub segments: u32,
     /// Most triangles a glTF scene's node tree may expand to (instances × their
     /// meshes' triangles), checked before anything is expanded.
@@ -179,6 +179,12 @@ impl BakeArgs {
             max_triangles: self.max_triangles,
         }
     }
+}
+
+/// The segments `bake` takes, the bound `render` gives a streamed mesh too.
+fn baked_segments() -> std::ops::RangeInclusive<i64> {
+    let range = meshlight_cli::render_bounds::BAKED_SEGMENTS;
+    *range.start() as i64..=*range.end() as i64
 }
 
 fn grouping_parser() -> impl clap::builder::TypedValueParser<Value = Grouping> {

@@ -138,11 +138,10 @@ pub fn report() -> Result<String, Box<dyn std::error::Error>> {
     )?;
     writeln!(
         out,
-        "\nrender bounds (what the renderer holds with wgpu's default limits; checked before a render asks for the adapter):"
+        "\nrender bounds (what the renderer holds with wgpu's default limits, which every device meets; checked before a render bakes a mesh or asks for the adapter):"
     )?;
-    let bounds = crate::render_bounds::bounds();
-    for (flag, range) in &bounds {
-        writeln!(out, "  --{flag:<12} {}..={}", range.start(), range.end())?;
+    for line in crate::render_bounds::lines() {
+        writeln!(out, "  {line}")?;
     }
     let registry = meshlight::registry();
     writeln!(

@@ -4,7 +4,7 @@
 use crate::args::SceneArgs;
 use meshlight::graph::dump;
 use meshlight::stream::Budget;
-use meshlight_cli::render_bounds::RenderNumbers;
+use meshlight_cli::render_bounds::{self, RenderNumbers};
 use meshlight_output::{check_output_path, write_file, write_png, write_stdout};
 use meshlight_virtual_geometry::{Renderer, SceneOptions, SceneSetup, setup};
 use std::fmt::Write as _;
@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 /// Render the default scene (or a mesh) into a PNG.
 #[derive(clap::Args)]
+#[command(after_help = render_bounds::help())]
 pub struct RenderArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
@@ -298,6 +299,7 @@ fn check_bounds(a: &RenderArgs, scene: &SceneOptions) -> Result<(), Box<dyn std:
         height: scene.height,
         clusters: a.clusters,
         slots: a.slots,
+        streamed: scene.pool_mb.is_some(),
     }
     .check()?;
     Ok(())

@@ -196,6 +196,7 @@ fn render_refuses_numbers_it_cannot_hold_before_baking_or_asking_for_an_adapter(
     let max_lights = meshlight_cli::render_bounds::max_lights().to_string();
     let max_instances = meshlight_cli::render_bounds::max_instances().to_string();
     let max_clusters = meshlight_cli::render_bounds::max_clusters().to_string();
+    let max_segments = meshlight_cli::render_bounds::MAX_RESIDENT_SEGMENTS;
     let cases: &[(&[&str], &str)] = &[
         (
             &["--lights", "4294967295"],
@@ -203,10 +204,16 @@ fn render_refuses_numbers_it_cannot_hold_before_baking_or_asking_for_an_adapter(
         ),
         (
             &["--segments", "100000"],
-            "--segments 100000 is outside 3..=1024",
+            &format!("--segments 100000 is outside 3..={max_segments}"),
         ),
-        (&["--segments", "0"], "--segments 0 is outside 3..=1024"),
-        (&["--segments", "1"], "--segments 1 is outside 3..=1024"),
+        (
+            &["--segments", "0"],
+            &format!("--segments 0 is outside 3..={max_segments}"),
+        ),
+        (
+            &["--segments", "1"],
+            &format!("--segments 1 is outside 3..={max_segments}"),
+        ),
         (
             &["--instances", "4294967295"],
             &format!("--instances 4294967295 is outside 0..={max_instances}"),

@@ -24,6 +24,19 @@ use std::path::PathBuf;
 /// grows the list.
 pub const FIELD_ENTRIES_PER_LIGHT: u64 = 32;
 
+/// The clustering [`setup`] asks for `lights` lights over a `viewport`: the lists of
+/// [`ClusteringSettings::new`], the froxel lists started at [`FIELD_ENTRIES_PER_LIGHT`]
+/// entries a light, so the default scene runs one frame rather than warning that its
+/// lists grew. Public so that a bound on the light count (`meshlight render --lights`)
+/// sizes the lists exactly as the frame will.
+pub fn clustering_for(viewport: [u32; 2], lights: u64) -> ClusteringSettings {
+    let mut clustering = ClusteringSettings::new(viewport, lights.max(1));
+    clustering.entries = clustering
+        .entries
+        .max(lights.saturating_mul(FIELD_ENTRIES_PER_LIGHT));
+    clustering
+}
+
 /// What to draw and at what size.
 #[derive(Clone, Debug)]
 pub struct SceneOptions {
@@ -262,14 +275,7 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
         (Loaded::Copies(..), _) => Vec::new(),
     };
     if !lights.is_empty() || o.view.is_some_and(|v| v.needs_lights()) {
-        let mut clustering =
-            ClusteringSettings::new([o.width, o.height], lights.len().max(1) as u64);
-        // The froxel lists start large enough for the field's lights, so the default
-        // scene runs one frame rather than warning that its lists grew.
-        clustering.entries = clustering
-            .entries
-            .max(lights.len() as u64 * FIELD_ENTRIES_PER_LIGHT);
-        settings.clustering = Some(clustering);
+        settings.clustering = Some(clustering_for([o.width, o.height], lights.len() as u64));
     }
     let source = match &o.pipeline {
         Some(path) => GraphSource::File(path.clone()),
