@@ -310,6 +310,22 @@ pub struct RenderNumbers {
     pub streamed: bool,
 }
 
+impl Default for RenderNumbers {
+    /// What `meshlight render` draws with no flags: the default scene at 1280×720.
+    fn default() -> Self {
+        Self {
+            segments: meshlight::scene::DEFAULT_SEGMENTS,
+            instances: meshlight_virtual_geometry::scenes::DEFAULT_INSTANCES,
+            lights: meshlight_virtual_geometry::scenes::DEFAULT_LIGHTS,
+            width: 1280,
+            height: 720,
+            clusters: None,
+            slots: None,
+            streamed: false,
+        }
+    }
+}
+
 impl RenderNumbers {
     /// The numbers [`bounds`] bounds, in its order: `None` where a flag is not given.
     fn given(&self) -> [Option<u64>; 8] {
@@ -361,23 +377,10 @@ impl RenderNumbers {
 mod tests {
     use super::*;
 
-    fn defaults() -> RenderNumbers {
-        RenderNumbers {
-            segments: meshlight::scene::DEFAULT_SEGMENTS,
-            instances: meshlight_virtual_geometry::scenes::DEFAULT_INSTANCES,
-            lights: meshlight_virtual_geometry::scenes::DEFAULT_LIGHTS,
-            width: 1280,
-            height: 720,
-            clusters: None,
-            slots: None,
-            streamed: false,
-        }
-    }
-
     /// The defaults pass; every bound's printed line comes from the list the check uses.
     #[test]
     fn the_defaults_pass_and_the_printed_bounds_are_the_checked_ones() {
-        assert_eq!(defaults().check(), Ok(()));
+        assert_eq!(RenderNumbers::default().check(), Ok(()));
         let printed = help();
         for bound in bounds(false) {
             let range = format!("{}..={}", bound.range.start(), bound.range.end());
@@ -391,13 +394,13 @@ mod tests {
     fn the_largest_numbers_are_refused_without_overflow() {
         let n = RenderNumbers {
             lights: u32::MAX,
-            ..defaults()
+            ..RenderNumbers::default()
         };
         assert_eq!(n.check().unwrap_err().flags, &["lights"]);
         let n = RenderNumbers {
             width: u32::MAX,
             height: u32::MAX,
-            ..defaults()
+            ..RenderNumbers::default()
         };
         assert_eq!(n.check().unwrap_err().flags, &["width"]);
     }

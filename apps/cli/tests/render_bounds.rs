@@ -21,20 +21,6 @@ use meshlight_virtual_geometry::setup::clustering_for;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer, SceneOptions, scenes};
 use std::path::Path;
 
-/// The default render's numbers.
-fn defaults() -> RenderNumbers {
-    RenderNumbers {
-        segments: meshlight::scene::DEFAULT_SEGMENTS,
-        instances: scenes::DEFAULT_INSTANCES,
-        lights: scenes::DEFAULT_LIGHTS,
-        width: 1280,
-        height: 720,
-        clusters: None,
-        slots: None,
-        streamed: false,
-    }
-}
-
 /// The bound numbers, with the limits they are derived from written out: each changes
 /// only with the formats or wgpu's defaults, and then the printed ranges change too.
 #[test]
@@ -123,7 +109,7 @@ fn each_flag_passes_at_its_maximum_and_is_refused_one_past_it() {
     for (flag, streamed, max, set, limit) in cases {
         let mut n = RenderNumbers {
             streamed,
-            ..defaults()
+            ..RenderNumbers::default()
         };
         set(&mut n, max);
         assert_eq!(n.check(), Ok(()), "{flag} at {max}: {n:?}");
@@ -152,7 +138,7 @@ fn each_flag_passes_at_its_maximum_and_is_refused_one_past_it() {
     let square = RenderNumbers {
         width: side,
         height: side,
-        ..defaults()
+        ..RenderNumbers::default()
     };
     assert_eq!(square.check(), Ok(()));
     let wider = RenderNumbers {
