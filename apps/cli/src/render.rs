@@ -291,17 +291,7 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
 /// The numbers the command line bounds, checked against the limits of the formats and
 /// buffers they size.
 fn check_bounds(a: &RenderArgs, scene: &SceneOptions) -> Result<(), Box<dyn std::error::Error>> {
-    RenderNumbers {
-        segments: scene.segments,
-        instances: scene.instances,
-        lights: scene.lights_asked(),
-        width: scene.width,
-        height: scene.height,
-        clusters: a.clusters,
-        slots: a.slots,
-        streamed: scene.pool_mb.is_some(),
-    }
-    .check()?;
+    RenderNumbers::of_scene(scene, a.clusters, a.slots).check()?;
     Ok(())
 }
 

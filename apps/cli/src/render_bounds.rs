@@ -327,6 +327,25 @@ impl Default for RenderNumbers {
 }
 
 impl RenderNumbers {
+    /// The numbers of the scene options `render` and `view` share, with `render`'s
+    /// `--clusters` and `--slots` where given.
+    pub fn of_scene(
+        scene: &meshlight_virtual_geometry::SceneOptions,
+        clusters: Option<u64>,
+        slots: Option<u64>,
+    ) -> Self {
+        Self {
+            segments: scene.segments,
+            instances: scene.instances,
+            lights: scene.lights_asked(),
+            width: scene.width,
+            height: scene.height,
+            clusters,
+            slots,
+            streamed: scene.pool_mb.is_some(),
+        }
+    }
+
     /// The numbers [`bounds`] bounds, in its order: `None` where a flag is not given.
     fn given(&self) -> [Option<u64>; 8] {
         [

@@ -40,12 +40,15 @@ pub struct ViewArgs {
 
 /// Opens the window and runs it until it is closed (or `--frames` have run).
 pub fn view(a: ViewArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let scene = a.scene.options();
+    // The bounds `render` checks, before the window or the adapter.
+    meshlight_cli::render_bounds::RenderNumbers::of_scene(&scene, None, None).check()?;
     if let Some(path) = &a.screenshot {
         meshlight_output::check_png_path(path)?;
         meshlight_output::check_output_path(path)?;
     }
     let options = ViewerOptions {
-        scene: a.scene.options(),
+        scene,
         frames: a.frames,
         screenshot: a.screenshot,
         camera: a.camera,

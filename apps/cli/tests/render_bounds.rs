@@ -296,8 +296,8 @@ fn help_and_info_print_the_checked_bounds() {
 fn the_binary_refuses_past_the_bounds_before_any_work() {
     let dir = scratch("bounds-binary");
     let cache = dir.join("cache");
-    let run = |args: &[&str]| {
-        let mut cmd = common::command(&[&["render"][..], args].concat());
+    let run_as = |command: &str, args: &[&str]| {
+        let mut cmd = common::command(&[&[command][..], args].concat());
         cmd.env("MESHLIGHT_CACHE_DIR", &cache)
             .env("MESHLIGHT_ADAPTER", "no adapter is called this");
         let out = cmd.output().expect("runs");
@@ -306,6 +306,7 @@ fn the_binary_refuses_past_the_bounds_before_any_work() {
             String::from_utf8_lossy(&out.stderr).into_owned(),
         )
     };
+    let run = |args: &[&str]| run_as("render", args);
     let side = max_side().to_string();
     let one_past = |max: u64| (max + 1).to_string();
     let lights = one_past(max_lights());
@@ -338,11 +339,14 @@ fn the_binary_refuses_past_the_bounds_before_any_work() {
             ),
         ),
     ];
-    for (args, expected) in &cases {
-        let (code, err) = run(args);
-        assert_eq!(code, Some(1), "{args:?}: {err}");
-        assert!(err.contains(expected.as_str()), "{args:?}: {err}");
-        assert!(!cache.exists(), "{args:?} baked before refusing");
+    // `view` shares the flags and refuses the same, before a window or an adapter.
+    for command in ["render", "view"] {
+        for (args, expected) in &cases {
+            let (code, err) = run_as(command, args);
+            assert_eq!(code, Some(1), "{command} {args:?}: {err}");
+            assert!(err.contains(expected.as_str()), "{command} {args:?}: {err}");
+            assert!(!cache.exists(), "{command} {args:?} baked before refusing");
+        }
     }
     // At the bounds (a tiny mesh, so the bake before the adapter is quick).
     let lights = max_lights().to_string();
