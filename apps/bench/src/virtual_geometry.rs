@@ -40,8 +40,8 @@ pub fn measure(
 
 /// Frames at one camera for a second before anything is timed: a GPU left idle (while a
 /// scene loads, or streaming settles a frame at a time) runs its next hundreds of frames
-/// at a lower clock. Without it, the first case a process measured came out at 3.8 ms
-/// where it takes 0.77 (the default scene at 1920×1080 on an NVIDIA H200).
+/// at a lower clock. It does not cure a slow first case seen on an NVIDIA H200 in a
+/// process that first baked its meshes (docs/BENCHMARKS.md, "Measuring").
 pub fn warm_up(
     r: &mut Renderer,
     camera: &meshlight::gpu_scene::Camera,
