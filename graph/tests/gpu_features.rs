@@ -499,9 +499,14 @@ fn frame_data_changes_every_frame_without_recompiling_or_allocating() {
         }
     }
     // A frame without the input is an error naming the pass and the input.
-    match exec.execute(&compiled, &Imports::new()) {
-        Err(GraphError::MissingFrameInput { pass, input }) => {
-            assert_eq!((pass.as_str(), input.as_str()), ("stamp", "value"))
+    assert_missing_input(exec.execute(&compiled, &Imports::new()), "stamp", "value");
+}
+
+/// `frame` failed for want of frame input `input` of pass `pass`.
+fn assert_missing_input(frame: Result<FrameStats>, pass: &str, input: &str) {
+    match frame {
+        Err(GraphError::MissingFrameInput { pass: p, input: i }) => {
+            assert_eq!((p.as_str(), i.as_str()), (pass, input))
         }
         other => panic!("{:?}", other.map(|s| s.frame)),
     }
@@ -542,12 +547,11 @@ fn each_pass_reads_the_frame_input_supplied_for_it() {
     // A frame without one of them names the input supplied, not the one read.
     let mut partial = FrameData::new();
     partial.set_u32("value_0", 1).set_u32("value_1", 2);
-    match exec.execute_frame(&compiled, &Imports::new(), &partial) {
-        Err(GraphError::MissingFrameInput { pass, input }) => {
-            assert_eq!((pass.as_str(), input.as_str()), ("stamp_2", "value_2"))
-        }
-        other => panic!("{:?}", other.map(|s| s.frame)),
-    }
+    assert_missing_input(
+        exec.execute_frame(&compiled, &Imports::new(), &partial),
+        "stamp_2",
+        "value_2",
+    );
 }
 
 /// Supplying an input the pass never reads is a compile error naming what it reads.
