@@ -34,11 +34,12 @@ fn virtual_geometry_shaders_compose_and_validate() {
     ] {
         check(shader, &());
     }
-    for (exact_division, slot_base, big_triangles, two_sided, alpha_mask) in [
-        (false, false, false, false, false),
-        (true, false, true, true, true),
-        (false, true, true, false, true),
-        (false, false, false, true, false),
+    for (exact_division, slot_base, big_triangles, two_sided, alpha_mask, depth_only) in [
+        (false, false, false, false, false, false),
+        (true, false, true, true, true, false),
+        (false, true, true, false, true, false),
+        (false, false, false, true, false, false),
+        (false, false, true, true, true, true),
     ] {
         check(
             &meshlight::sw_raster::SHADER,
@@ -49,6 +50,7 @@ fn virtual_geometry_shaders_compose_and_validate() {
                 big_triangles,
                 two_sided,
                 alpha_mask,
+                depth_only,
             },
         );
     }

@@ -200,7 +200,8 @@ fn caller_parameters_size_textures_and_reach_pass_parameters() {
     assert!(e.to_string().contains("names no entry"), "{e}");
 }
 
-/// A view set: entries with `views` stand for one per view, `{view}` their number.
+/// A view set: entries with `views` stand for one per view, `{view}` their number (a
+/// param that is `{view}` alone becomes the number itself: view `k` fills with `i * k`).
 const VIEWS: &str = r#"
 [views]
 cascades = COUNT
@@ -222,7 +223,7 @@ name = "fill_{view}"
 stage = "produce"
 implementation = "fill"
 views = "cascades"
-params = { count = 1000, k = 3 }
+params = { count = 1000, k = "{view}" }
 bind = { output = "a_{view}" }
 
 [[pass]]
@@ -251,10 +252,10 @@ fn a_view_set_writes_its_entries_out_once_per_view() {
             "a_{k} was not declared"
         );
     }
-    // The file runs: the last view's buffer feeds the transform.
+    // The file runs: the last view's buffer (filled with `k = 2`) feeds the transform.
     assert_eq!(
         run(&text),
-        (0..1000).map(|i| i * 3 + 1).collect::<Vec<u32>>()
+        (0..1000).map(|i| i * 2 + 1).collect::<Vec<u32>>()
     );
     // No views: the set's entries are left out, and a binding to one is refused by name.
     let none = VIEWS.replace("COUNT", "0").replace("LAST", "a_0");

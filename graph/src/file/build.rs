@@ -200,7 +200,13 @@ fn expanded(pipeline: &Pipeline) -> Result<(Vec<ResourceEntry>, Vec<PassEntry>)>
                 pass.inputs.values_mut().for_each(|t| *t = view(t));
                 for (_, v) in pass.params.iter_mut() {
                     if let toml::Value::String(text) = v {
-                        *text = text.replace(VIEW, &k.to_string());
+                        // A param that is the view alone is its index, a number
+                        // (`layer = "{view}"`); in a longer text it is spelled out.
+                        *v = if text == VIEW {
+                            toml::Value::Integer(i64::from(k))
+                        } else {
+                            toml::Value::String(text.replace(VIEW, &k.to_string()))
+                        };
                     }
                 }
                 pass

@@ -400,6 +400,30 @@ impl<'a> RecordContext<'a> {
         self.clear_resource(r, slot)
     }
 
+    /// Zeroes `bytes` bytes of the buffer bound to `slot` from byte `offset`: one part of
+    /// a buffer several passes share (one layer each of a stack of maps). Both must be
+    /// multiples of 4, and `offset` of the device's storage offset alignment (256 bytes
+    /// at most) so the fill dispatch can bind the part; otherwise, or past the buffer's
+    /// end, it is a record error naming the numbers.
+    pub fn clear_part(&mut self, slot: &str, offset: u64, bytes: u64) -> Result<()> {
+        let r = self.slot_resource(slot)?;
+        let Physical::Buffer { buffer, .. } = self.physical(r)? else {
+            return Err(self.err(format!(
+                "`clear_part` clears part of a buffer, but slot `{slot}` binds a texture"
+            )));
+        };
+        let align = u64::from(self.device.limits().min_storage_buffer_offset_alignment);
+        let end = offset.checked_add(bytes).unwrap_or(u64::MAX);
+        if offset % align != 0 || bytes % 4 != 0 || end > buffer.size() {
+            return Err(self.err(format!(
+                "cannot clear bytes {offset}..{end} of slot `{slot}` ({} bytes): the start must be a multiple of {align} and the length of 4, within the buffer",
+                buffer.size()
+            )));
+        }
+        self.fill_dispatch_at(buffer, offset, bytes);
+        Ok(())
+    }
+
     /// Zeroes a scratch buffer declared in setup, as [`Self::clear`] does a slot.
     pub fn clear_scratch(&mut self, name: &str) -> Result<()> {
         let r = self.scratch_resource(name)?;
@@ -444,6 +468,11 @@ impl<'a> RecordContext<'a> {
     /// a
     /// batch, else in a compute pass of its own.
     fn fill_dispatch(&mut self, buffer: &wgpu::Buffer, bytes: u64) {
+        self.fill_dispatch_at(buffer, 0, bytes);
+    }
+
+    /// [`Self::fill_dispatch`] of `bytes` from `start` (aligned for a binding).
+    fn fill_dispatch_at(&mut self, buffer: &wgpu::Buffer, start: u64, bytes: u64) {
         if bytes == 0 {
             return;
         }
@@ -457,7 +486,7 @@ impl<'a> RecordContext<'a> {
         for (offset, size) in chunks {
             let bound = BoundResource::Buffer {
                 buffer: buffer.clone(),
-                offset,
+                offset: start + offset,
                 size,
             };
             let group = self.cached_bind_group(

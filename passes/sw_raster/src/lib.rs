@@ -120,6 +120,26 @@ const CLEAR_TILE: u32 = 16;
 
 /// The slots every implementation of `sw_raster` shares.
 pub fn contract() -> StageContract {
+    contract_with(false)
+}
+
+/// The stage's slots; with `depth_only`, `visbuffer` is a buffer of `u32` depths
+/// ([`SwRaster::depth_only`]) instead of a 64-bit visibility target.
+fn contract_with(depth_only: bool) -> StageContract {
+    let target = if depth_only {
+        Slot::buffer(
+            "visbuffer",
+            Access::StorageReadWrite,
+            meshlight_graph::Element::U32,
+            "layers of width × height reverse-Z depth bits; layer `layer` cleared, then atomicMax",
+        )
+    } else {
+        Slot::visibility64(
+            "visbuffer",
+            Access::ClearedReadWrite,
+            "width × height visibility values (u64 buffer or r64uint texture); cleared, then atomicMax",
+        )
+    };
     StageContract {
         stage: STAGE,
         slots: [
@@ -143,11 +163,7 @@ pub fn contract() -> StageContract {
             ],
             scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials, Textures]),
             vec![
-                Slot::visibility64(
-                    "visbuffer",
-                    Access::ClearedReadWrite,
-                    "width × height visibility values (u64 buffer or r64uint texture); cleared, then atomicMax",
-                ),
+                target,
                 Slot::buffer(
                     BIG_COUNT_SLOT,
                     Access::ClearedReadWrite,
@@ -229,6 +245,14 @@ pub struct SwRaster {
     /// the resolve would read). Off, no material is read for it: a renderer turns it on
     /// only for a scene that has such a material.
     pub alpha_mask: bool,
+    /// Write only the depth: `visbuffer` is a buffer of `u32`, the reverse-Z depth's
+    /// bits (the visibility value's high word), in layers of `width × height`; the pass
+    /// clears and draws layer [`Self::layer`] only. A shadow map: no cluster id is
+    /// needed, and half the bytes are cleared and written. Both implementations write
+    /// it alike, with 32-bit buffer atomics.
+    pub depth_only: bool,
+    /// With [`Self::depth_only`], the layer drawn (`layer = "{view}"` in a view set).
+    pub layer: u32,
 }
 
 shader_defs! {
@@ -247,6 +271,8 @@ shader_defs! {
         pub two_sided: bool => "TWO_SIDED",
         /// See [`SwRaster::alpha_mask`].
         pub alpha_mask: bool => "ALPHA_MASK",
+        /// See [`SwRaster::depth_only`].
+        pub depth_only: bool => "DEPTH_ONLY",
     }
 }
 
@@ -269,12 +295,15 @@ uniform_block! {
         big_triangle_px: u32,
         /// Entries `big_triangle_tiles` may hold (clamped to its length too).
         big_capacity: u32,
-        pad_a: u32,
-        pad_b: u32,
+        /// DEPTH_ONLY: the layer of `visbuffer` drawn.
+        layer: u32,
+        pad: u32,
     }
 }
 
-const PARAM_KEYS: [&str; 8] = [
+const PARAM_KEYS: [&str; 10] = [
+    "depth_only",
+    "layer",
     "big_triangle_px",
     "width",
     "height",
@@ -288,21 +317,42 @@ const PARAM_KEYS: [&str; 8] = [
 impl SwRaster {
     /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16),
     /// `big_triangle_px` (default [`BIG_TRIANGLE_PX`]) and `exact_division`,
-    /// `accumulate`, `two_sided` and `alpha_mask` (default false); `target` picks the
-    /// implementation.
+    /// `accumulate`, `two_sided`, `alpha_mask` and `depth_only` (default false), and
+    /// `layer` (default 0, only with `depth_only`); `target` picks the implementation.
     pub fn from_params(params: &Params, target: Visibility64) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let [width, height] = params.size("the visibility buffer")?;
+        let depth_only = params.bool("depth_only", false)?;
+        let layer = params.u32("layer", 0)?;
+        if layer > 0 && !depth_only {
+            return Err(GraphError::parameter(format!(
+                "`layer = {layer}` draws one layer of a stack of depth maps, which only `depth_only = true` writes; set it, or drop `layer`"
+            )));
+        }
+        let layer_bytes = u64::from(width) * u64::from(height) * 4;
+        if depth_only && layer_bytes % 256 != 0 {
+            return Err(GraphError::parameter(format!(
+                "a depth-only layer of {width} × {height} is {layer_bytes} bytes, not a multiple of 256, so it cannot be cleared alone; give sizes whose product is a multiple of 64 (sides that are multiples of 8)"
+            )));
+        }
+        let accumulate = params.bool("accumulate", false)?;
+        if depth_only && accumulate {
+            return Err(GraphError::parameter(
+                "`depth_only` and `accumulate` together are not supported: a depth-only layer is drawn by one pass; drop `accumulate`".to_string(),
+            ));
+        }
         Ok(Self {
             width,
             height,
             target,
             scanline_width: params.u32("scanline_width", 16)?,
             exact_division: params.bool("exact_division", false)?,
-            accumulate: params.bool("accumulate", false)?,
+            accumulate,
             big_triangle_px: params.u32("big_triangle_px", BIG_TRIANGLE_PX)?,
             two_sided: params.bool("two_sided", false)?,
             alpha_mask: params.bool("alpha_mask", false)?,
+            depth_only,
+            layer,
         })
     }
 }
@@ -314,16 +364,23 @@ impl Pass for SwRaster {
                 Visibility64::Buffer => "buffer",
                 Visibility64::Texture => "texture",
             },
-            contract(),
+            contract_with(self.depth_only),
         )
     }
     fn visibility64(&self) -> Option<Visibility64> {
-        Some(self.target)
+        (!self.depth_only).then_some(self.target)
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        let texture = self.target == Visibility64::Texture;
-        ctx.require_features(self.target.atomic_max_features());
-        ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
+        let texture = self.target == Visibility64::Texture && !self.depth_only;
+        if self.depth_only {
+            // 64-bit integers for the edge functions; the depth atomics are 32-bit.
+            ctx.require_features(wgpu::Features::SHADER_INT64);
+            let layer_bytes = self.layer_bytes();
+            ctx.min_bytes("visbuffer", layer_bytes * (u64::from(self.layer) + 1));
+        } else {
+            ctx.require_features(self.target.atomic_max_features());
+            ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
+        }
         // With a slot base the first slot is word 7.
         ctx.min_bytes("raster_counts", if self.accumulate { 32 } else { 4 });
         ctx.min_bytes("sw_args", 12);
@@ -378,6 +435,7 @@ impl Pass for SwRaster {
             big_triangles: big,
             two_sided: self.two_sided,
             alpha_mask: self.alpha_mask,
+            depth_only: self.depth_only,
         };
         ctx.shader_defs(&defs);
         for kernel in kernels(big) {
@@ -407,6 +465,7 @@ impl Pass for SwRaster {
             zero: 0,
             big_triangle_px: self.big_triangle_px,
             big_capacity: BIG_TILE_CAPACITY,
+            layer: self.layer,
             ..GpuParams::default()
         };
         let big = self.big_triangle_px > 0;
@@ -420,6 +479,11 @@ impl Pass for SwRaster {
         }
         let clear = match self.target {
             _ if self.accumulate => None,
+            _ if self.depth_only => {
+                let bytes = self.layer_bytes();
+                ctx.clear_part("visbuffer", bytes * u64::from(self.layer), bytes)?;
+                None
+            }
             Visibility64::Buffer => {
                 ctx.clear("visbuffer")?;
                 None
@@ -465,6 +529,13 @@ impl Pass for SwRaster {
             }
         }
         Ok(())
+    }
+}
+
+impl SwRaster {
+    /// Bytes of one depth-only layer.
+    fn layer_bytes(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height) * 4
     }
 }
 
@@ -546,6 +617,7 @@ mod tests {
             big_triangles: true,
             two_sided: true,
             alpha_mask: true,
+            depth_only: false,
         };
         compose_and_validate(&super::SHADER, &defs.shader_defs(), caps)
             .unwrap_or_else(|e| panic!("{e}"));

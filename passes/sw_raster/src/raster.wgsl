@@ -27,6 +27,7 @@
 #import meshlight::cluster_triangle::{ClusterTriangle, cluster_triangle}
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
+#import meshlight::visbuffer::visbuffer_depth_bits
 #ifdef ALPHA_MASK
 #import meshlight::surface::{CutOut, cut_out_setup, cut_at}
 #endif
@@ -39,12 +40,18 @@
 @group(0) @binding(2) var<storage, read> sw_args: array<u32>;
 // The scene's instances, meshes, meshlets and payload: meshlight::instance_table and
 // meshlight::scene_buffers.
+#ifdef DEPTH_ONLY
+// `depth_only`: layers of width × height depths, reverse-Z f32 bits (which order as the
+// depths do, all being at least 0), written with 32-bit atomicMax at layer `params.layer`.
+@group(0) @binding(7) var<storage, read_write> visbuffer: array<atomic<u32>>;
+#else
 #ifdef VIS_TEXTURE
 // `texture`: an R64Uint storage texture with 64-bit texture atomics.
 @group(0) @binding(7) var visbuffer: texture_storage_2d<r64uint, atomic>;
 #else
 // `buffer`: width × height values, row-major, with 64-bit buffer atomics.
 @group(0) @binding(7) var<storage, read_write> visbuffer: array<atomic<u64>>;
+#endif
 #endif
 @group(0) @binding(8) var<uniform> view: View;
 @group(0) @binding(9) var<uniform> params: Params;
@@ -385,16 +392,22 @@ fn shade(tri: Tri, x: i32, y: i32) {
         return;
     }
     let depth = tri.z.x + unfused(f32(e1) * tri.gradient.x) + unfused(f32(e2) * tri.gradient.y);
-    let value = visbuffer64_pack(depth, tri.value_cluster, tri.triangle);
 #ifdef ALPHA_MASK
     if cut_at(tri.cut, vec2(f32(x), f32(y)) + 0.5, vec2(f32(params.width), f32(params.height))) {
         return;
     }
 #endif
+#ifdef DEPTH_ONLY
+    // The visibility value's high word.
+    let layer_start = params.layer * params.width * params.height;
+    atomicMax(&visbuffer[layer_start + u32(y) * params.width + u32(x)], visbuffer_depth_bits(depth));
+#else
+    let value = visbuffer64_pack(depth, tri.value_cluster, tri.triangle);
 #ifdef VIS_TEXTURE
     textureAtomicMax(visbuffer, vec2(u32(x), u32(y)), value);
 #else
     atomicMax(&visbuffer[u32(y) * params.width + u32(x)], value);
+#endif
 #endif
 }
 

@@ -224,6 +224,8 @@ fn pass(scanline_width: u32) -> SwRaster {
         big_triangle_px: 0,
         two_sided: false,
         alpha_mask: false,
+        depth_only: false,
+        layer: 0,
     }
 }
 
@@ -1166,4 +1168,107 @@ fn mask_materials_cut_out_the_pixels_the_reference_cuts() {
         let off = run(&mut scene.clone(), &input, &[*view], pass(SCANLINES)).unwrap();
         assert_identical(&format!("view {k}, alpha_mask off"), &off[0], &whole);
     }
+}
+
+/// A depth-only pass (a shadow map's) draws one layer of a stack of `u32` depths: the
+/// layer holds the high word of the reference's visibility values, bit for bit, and the
+/// other layers keep what they held.
+#[test]
+fn a_depth_only_layer_holds_the_references_depths_and_leaves_the_other_layers() {
+    let mut scene = knot_scene();
+    let slots: Vec<Cluster> = [
+        clusters_of(&scene, 0, |l| l == 0),
+        clusters_of(&scene, 1, |l| l == 2),
+    ]
+    .concat();
+    let count = slots.len() as u32;
+    let input = Input::new(slots, count, count);
+    let views = seeded_views(11, 2);
+    let layer_len = (W * H) as usize;
+    let stale: Vec<u32> = (0..2 * layer_len as u32).map(|i| i * 7 + 1).collect();
+    for raster in [
+        pass(SCANLINES),
+        SwRaster {
+            big_triangle_px: 3,
+            ..pass(BOXES)
+        },
+    ] {
+        let raster = SwRaster {
+            depth_only: true,
+            layer: 1,
+            ..raster
+        };
+        let gpu = gpu();
+        let gpu_scene = GpuScene::new(&gpu, &mut scene);
+        let mut g = GraphBuilder::new();
+        gpu_scene.import(&mut g);
+        let Imported {
+            buffers: [.., maps],
+            imports,
+            ..
+        } = import_filled(
+            &mut g,
+            &gpu,
+            [
+                filled("raster_clusters", elements::CLUSTER, &input.slots),
+                filled("raster_counts", Element::U32, &[count, 0, 0, 0]),
+                filled("sw_args", Element::DISPATCH_ARGS, &input.args),
+                filled("visbuffer", Element::U32, &stale),
+            ],
+            gpu_scene.imports(),
+        );
+        g.add_pass("shadow_raster", raster, Bindings::new())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let compiled = g
+            .compile(&CompileOptions::for_gpu(&gpu))
+            .unwrap_or_else(|e| panic!("{e}"));
+        // A depth-only pass asks nothing of the 64-bit atomics.
+        assert!(
+            !compiled
+                .plan
+                .enabled_features
+                .contains(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX)
+        );
+        let mut exec = Executor::new(gpu);
+        let got = run_per_view(&mut exec, &compiled, &imports, &views, |exec| {
+            let bytes = exec.gpu.read_buffer(&maps, 0, (2 * layer_len * 4) as u64)?;
+            Ok(bytemuck::pod_collect_to_vec::<u8, u32>(&bytes))
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+        for (k, (maps, view)) in got.iter().zip(&views).enumerate() {
+            assert_eq!(
+                &maps[..layer_len],
+                &stale[..layer_len],
+                "view {k}: layer 0 was touched"
+            );
+            let want: Vec<u32> = input
+                .reference(&scene, view)
+                .iter()
+                .map(|&v| (v >> 32) as u32)
+                .collect();
+            assert!(
+                want.iter().filter(|&&d| d != 0).count() > 300,
+                "view {k} covers little"
+            );
+            let wrong = (0..layer_len)
+                .filter(|&i| maps[layer_len + i] != want[i])
+                .count();
+            assert_eq!(
+                wrong, 0,
+                "view {k}: {wrong} depths differ from the reference"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_layer_without_depth_only_is_a_parameter_error() {
+    let params = meshlight_testing::params("width = 96\nheight = 64\nlayer = 2");
+    let e = SwRaster::from_params(&params, Visibility64::Buffer).unwrap_err();
+    assert!(e.to_string().contains("`depth_only = true`"), "{e}");
+    let params = meshlight_testing::params("width = 90\nheight = 66\ndepth_only = true");
+    let e = SwRaster::from_params(&params, Visibility64::Buffer)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("multiple of 256"), "{e}");
 }
