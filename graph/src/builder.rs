@@ -11,6 +11,8 @@ use crate::resource::*;
 enum Target {
     Handle(AnyHandle),
     Name(String),
+    /// Left unbound though a resource of the slot's name exists.
+    Nothing,
 }
 
 /// Slot → resource bindings of one pass. Slots left out bind to the resource of the same
@@ -57,6 +59,13 @@ impl Bindings {
     pub fn input(mut self, read: &str, supplied: &str) -> Self {
         self.inputs.retain(|(r, _)| r != read);
         self.inputs.push((read.to_string(), supplied.to_string()));
+        self
+    }
+    /// Leaves the optional slot `slot` unbound even where a resource of its name exists
+    /// (a pipeline file writes `slot = ""`): a shadow view's cull that must not test
+    /// the camera's depth pyramid. A required slot left so is an error at `add_pass`.
+    pub fn unbind(mut self, slot: &str) -> Self {
+        self.entries.push((slot.to_string(), Target::Nothing, None));
         self
     }
     /// [`Bindings::bind_named`] with a texture range.
@@ -461,6 +470,16 @@ impl GraphBuilder {
             let target = entry.map(|(_, t, _)| t.clone());
             let range = entry.and_then(|(_, _, r)| *r);
             let handle = match target {
+                Some(Target::Nothing) if slot.optional => {
+                    unbound_optional.push(slot.name);
+                    continue;
+                }
+                Some(Target::Nothing) => {
+                    return Err(GraphError::UnboundSlot {
+                        pass: name.to_string(),
+                        slot: slot.name.to_string(),
+                    });
+                }
                 Some(Target::Handle(h)) => h,
                 Some(Target::Name(res)) => {
                     self.resource(&res)

@@ -67,12 +67,27 @@ pub fn run_per_view<T>(
     compiled: &CompiledGraph,
     imports: &Imports,
     views: &[View],
+    read: impl FnMut(&mut Executor) -> Result<T>,
+) -> Result<Vec<T>> {
+    run_per_view_with(exec, compiled, imports, views, &[], read)
+}
+
+/// [`run_per_view`] with more frame inputs, `(name, bytes)`, the same in every frame.
+pub fn run_per_view_with<T>(
+    exec: &mut Executor,
+    compiled: &CompiledGraph,
+    imports: &Imports,
+    views: &[View],
+    inputs: &[(&str, &[u8])],
     mut read: impl FnMut(&mut Executor) -> Result<T>,
 ) -> Result<Vec<T>> {
     views
         .iter()
         .map(|view| {
-            let data = FrameData::new().with("view", bytemuck::bytes_of(view));
+            let mut data = FrameData::new().with("view", bytemuck::bytes_of(view));
+            for (name, bytes) in inputs {
+                data = data.with(name, bytes);
+            }
             exec.execute_frame(compiled, imports, &data)?;
             exec.finish()?;
             read(exec)

@@ -62,6 +62,9 @@ pub fn legend(view: DebugView) -> &'static str {
         DebugView::Residency => {
             "green: at the wanted level; yellow, orange, red: 1, 2, 3+ levels coarser (page not in the pool)"
         }
+        DebugView::Shadow => {
+            "sun shadow cascades: red, green, blue, yellow from the nearest; dark where shadowed"
+        }
     }
 }
 

@@ -85,6 +85,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         big_triangle_px: meshlight::sw_raster::BIG_TRIANGLE_PX,
         two_sided: false,
         alpha_mask: false,
+        depth_only: false,
+        layer: 0,
     };
     g.add_pass("sw_raster", sw, Bindings::new())?;
     g.add_pass(

@@ -102,6 +102,10 @@ pub(crate) fn build(pipeline: &Pipeline, registry: &Registry) -> Result<GraphBui
             bindings = bindings.input(read, supplied);
         }
         for (slot, target) in &p.bind {
+            if target.is_empty() {
+                bindings = bindings.unbind(slot);
+                continue;
+            }
             let bad = |m: String| ferr(format!("pass `{}` slot `{slot}`: {m}", p.name));
             let (target_res, range) = match target.split_once('#') {
                 Some((res, view)) => (res, Some(parse_range(view).map_err(bad)?)),

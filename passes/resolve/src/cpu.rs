@@ -60,6 +60,8 @@ pub struct Frame<'a> {
     /// The `stream_errors` slot, if bound: per group, its error while its page is not
     /// in the streaming pool, else 0.
     pub stream_errors: Option<&'a [f32]>,
+    /// The sun's shadow cascades, when the frame binds them.
+    pub shadows: Option<crate::shadows::ShadowFrame<'a>>,
 }
 
 /// The `residency` view's colours: at the wanted level, then one, two, three or more
@@ -454,6 +456,10 @@ fn pixel_color(
         }),
         // Reverse-Z depth falls off as 1 / distance; the fourth root spreads it.
         DebugView::Depth => Vec3::splat(visbuffer::depth(value).sqrt().sqrt()),
+        DebugView::Shadow => frame.shadows.map_or(Vec3::ZERO, |shadows| {
+            let p = pixel_surface(frame, light.checker_scale, value, pixel);
+            crate::shadows::shadow_color(&shadows, frame.view, &p)
+        }),
         DebugView::Residency => {
             let cluster = cluster_of(frame.raster_clusters, value);
             let levels = levels_missing(
@@ -558,6 +564,8 @@ pub struct PixelSurface {
     pub n: Vec3,
     /// Direction to the eye.
     pub v: Vec3,
+    /// The surface point, world space.
+    pub world: Vec3,
     /// The ambient light's share the occlusion map leaves.
     pub occlusion: f32,
     /// Emitted light after the emissive texture.
@@ -634,6 +642,7 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
         .unwrap_or_default();
     let mut uv = corners.map(|c| c.uv);
     let camera = Vec3::from_array(frame.view.camera_position);
+    let point = world[0] * b.x + world[1] * b.y + world[2] * b.z;
     let mut at = interpolated_uv(uv, &bary);
     if material.uv_transform != 0 {
         // The coordinates the maps are sampled at, and the corners' for the normal
@@ -652,7 +661,8 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
             k0.normal * b.x + k1.normal * b.y + k2.normal * b.z,
         )
         .normalize(),
-        v: (camera - (world[0] * b.x + world[1] * b.y + world[2] * b.z)).normalize(),
+        v: (camera - point).normalize(),
+        world: point,
         occlusion: 1.0,
         emissive: Vec3::ZERO,
         uv: at.uv,
@@ -693,8 +703,11 @@ pub fn pixel_surface(frame: &Frame, checker_scale: f32, value: u64, pixel: Vec2)
 fn shade_surface(frame: &Frame, light: &ShadeLight, value: u64, pixel: Vec2) -> Vec3 {
     let p = pixel_surface(frame, light.checker_scale, value, pixel);
     let s = Surface::new(p.base.truncate(), p.metallic, p.roughness);
-    let mut radiance = light.ambient * s.ambient_response() * p.occlusion
-        + light.color * s.light_response(p.n, p.v, light.direction);
+    let mut sun = light.color * s.light_response(p.n, p.v, light.direction);
+    if let Some(shadows) = &frame.shadows {
+        sun *= crate::shadows::shadow_factor(shadows, frame.view, p.world, p.n);
+    }
+    let mut radiance = light.ambient * s.ambient_response() * p.occlusion + sun;
     if let Some(lights) = frame.lights {
         radiance += lights.lighting(frame.view, pixel, visbuffer::depth(value), &s, p.n, p.v);
     }

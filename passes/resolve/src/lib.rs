@@ -143,6 +143,7 @@
 pub mod brdf;
 pub mod cpu;
 pub mod settings;
+pub mod shadows;
 
 pub use settings::{DebugView, Resolve};
 
@@ -170,6 +171,17 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The format of the `pyramid` the `pyramid` view reads.
 pub const PYRAMID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
 
+/// A WGSL module beside this file, named for its import path.
+macro_rules! local_module {
+    ($name:literal, $file:literal) => {
+        meshlight_shaders::LocalModule {
+            name: $name,
+            source: include_str!($file),
+            file_path: concat!(env!("CARGO_PKG_NAME"), "/", $file),
+        }
+    };
+}
+
 /// The depth resolves' WGSL (`depth.wgsl`), public so the shader tests compose and
 /// validate every entry point.
 pub const DEPTH_SHADER: PassShader = pass_shader!(
@@ -180,15 +192,20 @@ pub const DEPTH_SHADER: PassShader = pass_shader!(
 );
 /// The shading program's WGSL (`shade.wgsl`), public so the shader tests compose and
 /// validate every entry point.
-pub const SHADE_SHADER: PassShader = pass_shader!(
-    "resolve::shade",
-    "shade.wgsl",
-    params: ShadeParams,
-    modules: [
-        ("resolve::visibility", "visibility.wgsl"),
-        ("resolve::brdf", "brdf.wgsl")
-    ]
-);
+pub const SHADE_SHADER: PassShader = PassShader {
+    name: "resolve::shade",
+    source: include_str!("shade.wgsl"),
+    file_path: concat!(env!("CARGO_PKG_NAME"), "/shade.wgsl"),
+    // What `pass_shader!` writes, by hand: the shader has two uniform blocks, which the
+    // macro does not take.
+    modules: &[
+        ShadeParams::MODULE,
+        shadows::ShadowParams::MODULE,
+        local_module!("resolve::visibility", "visibility.wgsl"),
+        local_module!("resolve::brdf", "brdf.wgsl"),
+        local_module!("resolve::shadows", "shadows.wgsl"),
+    ],
+};
 
 /// The fullscreen passes that write the depth targets: (program, fragment entry, slot).
 /// Each is declared and recorded only when its slot is bound (see the crate docs).
@@ -288,6 +305,12 @@ pub fn contract() -> StageContract {
                 )
                 .optional(),
                 Slot::read(
+                    shadows::SHADOW_MAPS,
+                    Element::U32,
+                    "the sun's cascades: resolution² reverse-Z depth bits each, with the frame input `shadows`",
+                )
+                .optional(),
+                Slot::read(
                     STREAM_ERRORS,
                     Element::F32,
                     "per group: its error while its page is not in the streaming pool, else 0 (the scene's `stream_errors`), for the `residency` view",
@@ -384,6 +407,14 @@ impl Pass for Resolve {
         }
         let occluded_per_instance = ctx.is_bound(OCCLUDED_PER_INSTANCE);
         let residency = ctx.is_bound(STREAM_ERRORS);
+        let shadowed = ctx.is_bound(shadows::SHADOW_MAPS);
+        if shadowed {
+            ctx.frame_input(shadows::SHADOWS_INPUT);
+        } else if self.settings.view == DebugView::Shadow {
+            return Err(GraphError::parameter(
+                "the `shadow` view shows the sun's shadow cascades, and none are bound; bind the cascades' depth maps to the `shadow_maps` slot (the shipped frame does, with shadows on) or pick another view",
+            ));
+        }
         let defs = ShadeDefs {
             residency,
             vertex_colors: self.vertex_colors,
@@ -392,6 +423,7 @@ impl Pass for Resolve {
             pyramid,
             second_counts,
             occluded_per_instance,
+            shadows: shadowed,
         };
         ctx.shader_defs(&defs);
         // Bindings from the shader: the defs above decide which of the optional slots
@@ -460,18 +492,58 @@ impl Pass for Resolve {
                 t.mip_levels - 1
             )));
         }
+        let shadow_params = if ctx.is_bound(shadows::SHADOW_MAPS) {
+            Some(self.shadow_params(ctx)?)
+        } else {
+            None
+        };
+        let mut uniforms = vec![
+            ("view", bytemuck::bytes_of(&view)),
+            ("params", bytemuck::bytes_of(&shade_params)),
+        ];
+        if let Some(p) = &shadow_params {
+            uniforms.push(("shadows", bytemuck::bytes_of(p)));
+        }
         ctx.dispatch_compute(
             "shade",
-            &[
-                ("view", bytemuck::bytes_of(&view)),
-                ("params", bytemuck::bytes_of(&shade_params)),
-            ],
+            &uniforms,
             Workgroups::Direct([
                 self.width.div_ceil(TILE[0]),
                 self.height.div_ceil(TILE[1]),
                 1,
             ]),
         )
+    }
+}
+
+impl Resolve {
+    /// The frame input `shadows`, checked against the bound maps: at most four
+    /// cascades, and maps that hold them all.
+    fn shadow_params(&self, ctx: &RecordContext<'_>) -> Result<shadows::ShadowParams> {
+        let bytes = ctx.frame_bytes(shadows::SHADOWS_INPUT)?;
+        let size = size_of::<shadows::ShadowParams>();
+        let p: shadows::ShadowParams = bytes
+            .get(..size)
+            .map(bytemuck::pod_read_unaligned)
+            .ok_or_else(|| {
+                GraphError::parameter(format!(
+                    "frame input `{}` must hold a ShadowParams ({size} bytes), got {}",
+                    shadows::SHADOWS_INPUT,
+                    bytes.len()
+                ))
+            })?;
+        let (_, bound) = ctx.buffer(shadows::SHADOW_MAPS)?;
+        if p.count > meshlight_gpu_scene::cascades::MAX_CASCADES || p.map_words() * 4 > bound {
+            return Err(GraphError::parameter(format!(
+                "the frame's shadows ask for {} cascades of {}² texels ({} bytes), but `{}` holds {bound} bytes and at most {} cascades are read; size the maps for the cascades",
+                p.count,
+                p.resolution,
+                p.map_words() * 4,
+                shadows::SHADOW_MAPS,
+                meshlight_gpu_scene::cascades::MAX_CASCADES
+            )));
+        }
+        Ok(p)
     }
 }
 
@@ -509,6 +581,8 @@ shader_defs! {
         residency: bool => "RESIDENCY",
         /// The per-instance occlusion counters are bound.
         occluded_per_instance: bool => "OCCLUDED_PER_INSTANCE",
+        /// The sun's shadow cascades are bound.
+        shadows: bool => "SHADOWS",
     }
 }
 
@@ -590,6 +664,7 @@ mod tests {
             second_counts: true,
             occluded_per_instance: true,
             residency: true,
+            shadows: true,
         }
         .shader_defs();
         for (shader, defs) in [(&DEPTH_SHADER, &depth), (&SHADE_SHADER, &shade)] {

@@ -54,11 +54,15 @@ pub enum DebugView {
     /// `lod_threshold_px` (errors about double a level); all green when the scene does
     /// not stream.
     Residency = 14,
+    /// The sun's shadow: each pixel coloured by the cascade it reads (red, green, blue,
+    /// yellow from the nearest; grey past the last) and dimmed where the sun does not
+    /// reach it (`0.3 + 0.7 · shadow factor`). Needs the `shadow_maps` slot bound.
+    Shadow = 15,
 }
 
 impl DebugView {
     /// Every view, in discriminant order.
-    pub const ALL: [DebugView; 15] = [
+    pub const ALL: [DebugView; 16] = [
         DebugView::Shaded,
         DebugView::Clusters,
         DebugView::Triangles,
@@ -74,6 +78,7 @@ impl DebugView {
         DebugView::Mip,
         DebugView::BaseColor,
         DebugView::Residency,
+        DebugView::Shadow,
     ];
 
     /// The name pipeline files and the command line use.
@@ -94,6 +99,7 @@ impl DebugView {
             DebugView::Mip => "mip",
             DebugView::BaseColor => "base-color",
             DebugView::Residency => "residency",
+            DebugView::Shadow => "shadow",
         }
     }
 

@@ -15,6 +15,9 @@
 #import meshlight::view::{View, project_error_to_pixels}
 #import meshlight::visbuffer::{visbuffer_is_empty, visbuffer_depth, visbuffer_cluster, visbuffer_triangle}
 #import resolve::visibility::{raster_clusters, visibility_at}
+#ifdef SHADOWS
+#import resolve::shadows::{shadow_factor, cascade_index, shadows}
+#endif
 #ifdef CLUSTERED_LIGHTS
 #import meshlight::view::{position_from_depth, view_z_from_depth, pixel_to_uv}
 #import meshlight::light::{ClusterableObject, ClusterGrid, cluster_of_pixel, cluster_index, CLUSTERABLE_POINT_LIGHT, CLUSTERABLE_SPOT_LIGHT, CLUSTERABLE_TYPE_COUNT}
@@ -36,6 +39,16 @@ const VIEW_NORMAL: u32 = 11u;
 const VIEW_MIP: u32 = 12u;
 const VIEW_BASE_COLOR: u32 = 13u;
 const VIEW_RESIDENCY: u32 = 14u;
+const VIEW_SHADOW: u32 = 15u;
+// The `shadow` view's colour per cascade, nearest first, and past the last
+// (`shadows::CASCADE_COLORS`).
+const CASCADE_COLORS: array<vec3<f32>, 4> = array(
+    vec3(0.95, 0.35, 0.3),
+    vec3(0.35, 0.85, 0.4),
+    vec3(0.35, 0.55, 1.0),
+    vec3(0.95, 0.8, 0.3),
+);
+const NO_CASCADE_COLOR: vec3<f32> = vec3(0.6, 0.6, 0.6);
 // The light-count view's scale: this many lights in a froxel is the hottest colour.
 const LIGHT_COUNT_FULL: f32 = 32.0;
 
@@ -303,6 +316,8 @@ struct PixelSurface {
     // Shading normal (normal map applied) and direction to the eye, world space.
     n: vec3<f32>,
     v: vec3<f32>,
+    // The surface point, world space.
+    world: vec3<f32>,
     // The ambient light's share left by the occlusion map.
     occlusion: f32,
     emissive: vec3<f32>,
@@ -364,7 +379,8 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
     let material = materials[instance.material + meshlet_material(m)];
     s.material = material;
     s.n = normalize(instance_transform_normal(instance, normal[0] * b.x + normal[1] * b.y + normal[2] * b.z));
-    s.v = normalize(view.camera_position - (world[0] * b.x + world[1] * b.y + world[2] * b.z));
+    s.world = world[0] * b.x + world[1] * b.y + world[2] * b.z;
+    s.v = normalize(view.camera_position - s.world);
     var at = interpolated_uv(uv, bary);
     if material.uv_transform != 0u {
         // The coordinates the maps are sampled at (as meshlight::surface's `cut_at`
@@ -409,8 +425,11 @@ fn pixel_surface(value: vec2<u32>, pixel: vec2<f32>) -> PixelSurface {
 fn shade(value: vec2<u32>, pixel: vec2<f32>) -> vec3<f32> {
     let p = pixel_surface(value, pixel);
     let s = surface(p.base.rgb, p.metallic, p.roughness);
-    var radiance = params.ambient_color.rgb * ambient_response(s) * p.occlusion
-        + params.light_color.rgb * light_response(s, p.n, p.v, params.light_direction.xyz);
+    var sun = params.light_color.rgb * light_response(s, p.n, p.v, params.light_direction.xyz);
+#ifdef SHADOWS
+    sun *= shadow_factor(view, p.world, p.n);
+#endif
+    var radiance = params.ambient_color.rgb * ambient_response(s) * p.occlusion + sun;
 #ifdef CLUSTERED_LIGHTS
     radiance += clustered_lighting(pixel, visbuffer_depth(value), s, p.n, p.v);
 #endif
@@ -499,6 +518,16 @@ fn shade_pixels(@builtin(global_invocation_id) gid: vec3<u32>) {
         case VIEW_PYRAMID: {
 #ifdef PYRAMID
             rgb = vec3(sqrt(sqrt(max(pyramid_depth(gid.xy, params.pyramid_mip), 0.0))));
+#endif
+        }
+        case VIEW_SHADOW: {
+#ifdef SHADOWS
+            if !empty {
+                let p = pixel_surface(value, pixel);
+                let k = cascade_index(view, p.world);
+                let tint = select(NO_CASCADE_COLOR, CASCADE_COLORS[min(k, 3u)], k < shadows.count);
+                rgb = tint * (0.3 + 0.7 * shadow_factor(view, p.world, p.n));
+            }
 #endif
         }
         case VIEW_RESIDENCY: {

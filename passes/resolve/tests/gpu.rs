@@ -39,7 +39,8 @@ const DEPTH_USAGE: wgpu::TextureUsages =
 const COLOR_USAGE: wgpu::TextureUsages =
     wgpu::TextureUsages::STORAGE_BINDING.union(wgpu::TextureUsages::COPY_SRC);
 
-use meshlight_testing::frames::{Imported, filled, import_filled, run_per_view};
+use meshlight_pass_resolve::shadows::{SHADOW_MAPS, SHADOWS_INPUT, ShadowFrame, ShadowParams};
+use meshlight_testing::frames::{Imported, filled, import_filled, run_per_view_with};
 use meshlight_testing::{gpu, parameter_message, params, read_texture, texture};
 
 #[path = "../../sw_raster/tests/support/scenes.rs"]
@@ -70,6 +71,8 @@ struct Frame {
     occluded_per_instance: Option<Vec<u32>>,
     /// The `stream_errors` slot, for the `residency` view.
     stream_errors: Option<Vec<f32>>,
+    /// The sun's cascades: the frame input and the `shadow_maps` slot's words.
+    shadows: Option<(ShadowParams, Vec<u32>)>,
 }
 
 /// Light clustering's output for the frame, from the CPU references of its stages.
@@ -100,6 +103,10 @@ impl Frame {
             second_counts: self.second_counts.as_deref(),
             occluded_per_instance: self.occluded_per_instance.as_deref(),
             stream_errors: self.stream_errors.as_deref(),
+            shadows: self
+                .shadows
+                .as_ref()
+                .map(|(params, maps)| ShadowFrame { params, maps }),
         }
     }
 
@@ -370,6 +377,7 @@ fn frame() -> Frame {
         second_counts: None,
         occluded_per_instance: None,
         stream_errors: None,
+        shadows: None,
     }
 }
 
@@ -392,6 +400,10 @@ struct Targets {
 const BOTH: Targets = Targets {
     depth: true,
     material_depth: true,
+};
+const NONE: Targets = Targets {
+    depth: false,
+    material_depth: false,
 };
 
 /// Runs `pass` over `frame` with `view` as the frame's camera and both depth targets
@@ -480,6 +492,9 @@ fn run_with(
     if let Some(errors) = &frame.stream_errors {
         light_buffers.push((STREAM_ERRORS, bytemuck::cast_slice(errors).to_vec()));
     }
+    if let Some((_, maps)) = &frame.shadows {
+        light_buffers.push((SHADOW_MAPS, bytemuck::cast_slice(maps).to_vec()));
+    }
     for (name, bytes) in &light_buffers {
         let element = match *name {
             "objects" => Element::named("ClusterableObject", 64),
@@ -531,24 +546,35 @@ fn run_with(
         imports = imports.buffer(name, buffer);
     }
     let mut exec = Executor::new(gpu);
-    let mut frames = run_per_view(&mut exec, &compiled, &imports, &[*view], |exec| {
-        let depth_of = |wanted: bool, texture: &wgpu::Texture| {
-            wanted.then(|| {
-                let bytes = read_texture(&exec.gpu, texture, wgpu::TextureAspect::DepthOnly);
-                bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)
+    let shadow_input: Vec<(&str, &[u8])> = match &frame.shadows {
+        Some((params, _)) => vec![(SHADOWS_INPUT, bytemuck::bytes_of(params))],
+        None => Vec::new(),
+    };
+    let mut frames = run_per_view_with(
+        &mut exec,
+        &compiled,
+        &imports,
+        &[*view],
+        &shadow_input,
+        |exec| {
+            let depth_of = |wanted: bool, texture: &wgpu::Texture| {
+                wanted.then(|| {
+                    let bytes = read_texture(&exec.gpu, texture, wgpu::TextureAspect::DepthOnly);
+                    bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)
+                })
+            };
+            Ok(Resolved {
+                depth: depth_of(targets.depth, &textures[0]),
+                material_depth: depth_of(targets.material_depth, &textures[1]),
+                color: bytemuck::pod_collect_to_vec(&read_texture(
+                    &exec.gpu,
+                    &textures[2],
+                    wgpu::TextureAspect::All,
+                )),
+                plan: compiled.plan.clone(),
             })
-        };
-        Ok(Resolved {
-            depth: depth_of(targets.depth, &textures[0]),
-            material_depth: depth_of(targets.material_depth, &textures[1]),
-            color: bytemuck::pod_collect_to_vec(&read_texture(
-                &exec.gpu,
-                &textures[2],
-                wgpu::TextureAspect::All,
-            )),
-            plan: compiled.plan.clone(),
-        })
-    })?;
+        },
+    )?;
     Ok(frames.remove(0))
 }
 
@@ -1096,4 +1122,132 @@ fn the_light_count_view_without_clustering_is_an_error() {
         }
         other => panic!("{:?}", other.err()),
     }
+}
+
+/// The sun's shadow: two 64² cascades of the frame's own clusters, drawn by the depth-only
+/// rasteriser's reference from each cascade's view, shade the frame and colour the
+/// `shadow` view as the reference does; some pixels are in shadow and both cascades are
+/// read.
+#[test]
+fn the_sun_is_shadowed_through_two_cascades_like_the_reference() {
+    use meshlight_gpu_scene::cascades::{CascadeSettings, cascades};
+    let mut f = frame();
+    let view = f.view;
+    let camera = Camera::perspective(
+        Vec3::new(0.1, 0.6, 2.7),
+        Vec3::new(0.0, 0.1, -0.5),
+        0.9,
+        0.1,
+    );
+    assert_eq!(
+        camera.view([W, H], 0, None).view_projection,
+        view.view_projection
+    );
+    let settings = Settings {
+        light_direction: Vec3::new(-0.6, 0.7, 0.5),
+        ..Settings::default()
+    };
+    let cascade_settings = CascadeSettings {
+        count: 2,
+        resolution: 64,
+        // Uniform splits: the spots (about 2.7 away) in the first, the knot in the second.
+        distance: 6.0,
+        split_lambda: 0.0,
+        caster_reach: 4.0,
+    };
+    let list = cascades(
+        &camera,
+        [W, H],
+        settings.light_direction,
+        &cascade_settings,
+        0,
+    )
+    .unwrap();
+    let mut maps = Vec::new();
+    for c in &list {
+        let drawn =
+            meshlight_pass_sw_raster::cpu::rasterize(&f.scene, &c.view, &f.raster_clusters, 64, 64);
+        maps.extend(drawn.iter().map(|&v| (v >> 32) as u32));
+    }
+    let params = ShadowParams::new(&list, 64, 1.0, 1.0);
+    f.shadows = Some((params, maps));
+    let covered = f
+        .visbuffer
+        .iter()
+        .filter(|&&v| v != visbuffer::EMPTY)
+        .count();
+    let mut pass = Resolve::new(W, H);
+    pass.settings = settings;
+    let got = run_with(&mut f, pass, &view, NONE).unwrap_or_else(|e| panic!("{e}"));
+    let (over, largest) = reference_differences(&got.color, &f, &pass.settings, 2);
+    assert!(
+        over * 100 <= covered,
+        "{over} of {covered} pixels differ (largest {largest})"
+    );
+    // The shadow darkens some of what the sun lit.
+    let shadowed = cpu::shade(&f.cpu(), &settings);
+    let sunlit = {
+        let mut plain = f.cpu();
+        plain.shadows = None;
+        cpu::shade(&plain, &settings)
+    };
+    let darker = shadowed
+        .iter()
+        .zip(&sunlit)
+        .filter(|(a, b)| u32::from(a[0]) + 8 < u32::from(b[0]))
+        .count();
+    assert!(darker > 40, "only {darker} pixels are darker in shadow");
+    // The `shadow` view: both cascades' colours, the reference's values.
+    let pass = Resolve {
+        settings: Settings {
+            view: DebugView::Shadow,
+            ..settings
+        },
+        ..pass
+    };
+    let got = run_with(&mut f, pass, &view, NONE).unwrap_or_else(|e| panic!("{e}"));
+    let (over, largest) = reference_differences(&got.color, &f, &pass.settings, 2);
+    assert!(
+        over * 100 <= covered,
+        "shadow view: {over} of {covered} pixels differ (largest {largest})"
+    );
+    let (params, _) = f.shadows.as_ref().unwrap();
+    let mut per_cascade = [0usize; 3];
+    for y in 0..H {
+        for x in 0..W {
+            let v = f.visbuffer[(y * W + x) as usize];
+            if v == visbuffer::EMPTY {
+                continue;
+            }
+            let p = cpu::pixel_surface(
+                &f.cpu(),
+                8.0,
+                v,
+                glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
+            );
+            let k = meshlight_pass_resolve::shadows::cascade_index(params, &view, p.world);
+            per_cascade[k as usize] += 1;
+        }
+    }
+    eprintln!("pixels per cascade (0, 1, past): {per_cascade:?}");
+    assert!(
+        per_cascade[0] > 50 && per_cascade[1] > 50,
+        "{per_cascade:?}"
+    );
+}
+
+#[test]
+fn the_shadow_view_without_shadow_maps_is_an_error() {
+    let mut f = frame();
+    let view = f.view;
+    let e = run_with(
+        &mut f,
+        Resolve::new(W, H).with_view(DebugView::Shadow),
+        &view,
+        NONE,
+    )
+    .err()
+    .map(|e| e.to_string())
+    .unwrap_or_default();
+    assert!(e.contains("`shadow_maps`"), "{e}");
 }
