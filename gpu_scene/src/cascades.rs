@@ -112,12 +112,12 @@ impl CascadeSettings {
                 "give 1 to 4 cascades",
             );
         }
-        if !(16..=16384).contains(&self.resolution) {
+        if !(16..=16384).contains(&self.resolution) || !self.resolution.is_multiple_of(8) {
             return out(
                 "resolution",
                 self.resolution.to_string(),
-                "16..=16384",
-                "give a map side of 16 to 16384 texels",
+                "16..=16384, a multiple of 8",
+                "give a map side of 16 to 16384 texels, a multiple of 8 (each cascade's map is cleared alone, in whole 256-byte blocks)",
             );
         }
         if !(self.distance.is_finite() && self.distance > 0.0) {

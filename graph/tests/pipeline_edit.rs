@@ -323,3 +323,27 @@ fn a_pass_skipped_on_an_adapter_class_stays_in_the_plan_and_says_why() {
         assert!(t.passes.iter().all(|(name, _)| name != "draw"), "{t:?}");
     }
 }
+
+#[test]
+fn an_empty_binding_leaves_an_optional_slot_unbound_and_a_required_one_is_refused() {
+    // `side` exists, so `use` would bind it by name.
+    let text = FILE.replace(
+        "[[pass]]\nname = \"use\"\nstage = \"use\"\nimplementation = \"one\"\nbind = { side = \"side_list\" }",
+        "[[resource]]\nname = \"side\"\nkind = \"imported\"\nbuffer = { element = \"u32\", count = 4 }\nusage = [\"STORAGE\"]\n\n[[pass]]\nname = \"use\"\nstage = \"use\"\nimplementation = \"one\"\nbind = { side = \"\" }",
+    );
+    let p = Pipeline::parse(&text, "edit.toml").unwrap();
+    assert_eq!(bound(&plan(&p), "use", "side"), None);
+    let by_name =
+        Pipeline::parse(&text.replace("bind = { side = \"\" }", ""), "edit.toml").unwrap();
+    assert_eq!(
+        bound(&plan(&by_name), "use", "side").as_deref(),
+        Some("side")
+    );
+    let required = Pipeline::parse(&text.replace("side = \"\"", "a = \"\""), "edit.toml").unwrap();
+    match required.build(&registry()).err() {
+        Some(GraphError::UnboundSlot { pass, slot }) => {
+            assert_eq!((pass.as_str(), slot.as_str()), ("use", "a"))
+        }
+        other => panic!("{other:?}"),
+    }
+}

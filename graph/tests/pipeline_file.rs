@@ -302,3 +302,74 @@ fn view_set_mistakes_name_the_entry_and_what_to_change() {
         "{e}"
     );
 }
+
+/// Consecutive entries over one view set run view by view: view 0's passes, then view
+/// 1's. So the views may share a list each refills: here every view fills `shared` with
+/// `i * k` and copies it out before the next view refills it.
+#[test]
+fn consecutive_entries_over_a_view_set_run_view_by_view() {
+    let text = r#"
+[views]
+cascades = 3
+
+[[resource]]
+name = "shared"
+kind = "transient"
+buffer = { element = "u32", count = 1000 }
+
+[[resource]]
+name = "a_{view}"
+kind = "transient"
+views = "cascades"
+buffer = { element = "u32", count = 1000 }
+
+[[resource]]
+name = "result"
+kind = "imported"
+buffer = { element = "u32", count = 1000 }
+usage = ["STORAGE", "COPY_SRC", "COPY_DST"]
+
+[[pass]]
+name = "fill_{view}"
+stage = "produce"
+implementation = "fill"
+views = "cascades"
+params = { count = 1000, k = "{view}" }
+bind = { output = "shared" }
+
+[[pass]]
+name = "copy_{view}"
+stage = "transform"
+implementation = "add"
+views = "cascades"
+params = { count = 1000, k = 0 }
+bind = { input = "shared", output = "a_{view}" }
+
+[[pass]]
+name = "transform"
+stage = "transform"
+implementation = "add"
+params = { count = 1000, k = 1 }
+bind = { input = "a_1", output = "result" }
+"#;
+    let g = parse_pipeline(text, "views.toml", &registry()).unwrap();
+    let plan = g
+        .compile(&CompileOptions::new(wgpu::Features::empty()))
+        .unwrap()
+        .plan;
+    let passes: Vec<&str> = plan.passes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        passes,
+        [
+            "fill_0",
+            "copy_0",
+            "fill_1",
+            "copy_1",
+            "fill_2",
+            "copy_2",
+            "transform"
+        ]
+    );
+    // View 1's copy holds view 1's fill, not the last view's.
+    assert_eq!(run(text), (0..1000).map(|i| i + 1).collect::<Vec<u32>>());
+}

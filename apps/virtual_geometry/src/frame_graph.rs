@@ -147,6 +147,7 @@ pub fn frame(source: &GraphSource, data: &SceneData, s: &FrameSettings) -> Resul
             "raster_clusters",
             "raster_counts",
             SECOND_COUNTS,
+            meshlight::resolve::shadows::SHADOW_MAPS,
         ] {
             if let Some(h) = graph.resource(name) {
                 graph.export(h);
@@ -155,6 +156,8 @@ pub fn frame(source: &GraphSource, data: &SceneData, s: &FrameSettings) -> Resul
     }
     add_readbacks(&mut graph)?;
     super::streaming::add_readbacks(&mut graph)?;
+    let cascades = pipeline.views.get(super::shadows::CASCADES).copied();
+    super::shadows::add_readbacks(&mut graph, cascades.unwrap_or(0))?;
     if s.clustering.is_some() {
         clustering::add_readbacks(&mut graph)?;
     }
@@ -174,6 +177,7 @@ pub fn apply(
     s: &FrameSettings,
 ) -> Result<()> {
     lights(p, registry, s)?;
+    super::shadows::apply(p, registry, s)?;
     for (stage, implementation) in &s.implementations {
         if stage == meshlight::fill_clusters::STAGE && implementation == FLAT_FILL {
             flat_fill(p, registry)?;
@@ -192,8 +196,13 @@ pub fn apply(
     instance_table(p, data)?;
     material_variants(p, data);
     thresholds(p, s);
+    super::shadows::bias_thresholds(p, s);
     if let Some(view) = s.view {
         p.set_stage_param(meshlight::resolve::STAGE, "view", view.name());
+    }
+    if let Some(sun) = s.sun_direction {
+        let sun = toml::Value::Array(sun.to_array().map(|c| f64::from(c).into()).into());
+        p.set_stage_param(meshlight::resolve::STAGE, "light_direction", sun);
     }
     if view_of(p)?.needs_occlusion_records() {
         occlusion_records(p, data.instances.len())?;
@@ -249,8 +258,13 @@ fn flat_fill(p: &mut Pipeline, registry: &Registry) -> Result<()> {
             continue;
         }
         fill.implementation = FLAT_FILL.to_string();
-        fill.bind.clear();
         fill.params.clear();
+        if super::shadows::is_shadow(fill) {
+            // A shadow view's lists stay its own; the walk's occlusion slot goes.
+            fill.unbind("pyramid");
+        } else {
+            fill.bind.clear();
+        }
     }
     p.remove_passes(registry, |e| second.contains(&e.name))?;
     // What only the walk reads or writes: the hierarchy and its counters.
@@ -271,7 +285,12 @@ fn hardware(p: &mut Pipeline, registry: &Registry, hardware: Option<bool>) -> Re
     let Some(on) = hardware else {
         return Ok(());
     };
-    p.set_stage_param(meshlight::cull_lod::STAGE, "hardware", on);
+    // The shadow views draw depth in software only.
+    for cull in p.passes_of_mut(meshlight::cull_lod::STAGE) {
+        if !super::shadows::is_shadow(cull) {
+            cull.set_param("hardware", on);
+        }
+    }
     if on {
         p.set_stage_param(meshlight::hw_raster::STAGE, "run", "always");
     } else {
@@ -475,9 +494,12 @@ fn occlusion_records(p: &mut Pipeline, instances: usize) -> Result<()> {
         ))?;
     }
     for pass in p.passes_of_mut(cull) {
+        if super::shadows::is_shadow(pass) {
+            continue;
+        }
         if pass.param_str("mode") == Some("second") {
             pass.bind(PER_INSTANCE_SECOND, INSTANCE_OCCLUSION);
-        } else if pass.binding("pyramid").is_some() {
+        } else if pass.binding("pyramid").is_some_and(|b| !b.is_empty()) {
             pass.bind(PER_INSTANCE_FIRST, INSTANCE_OCCLUSION);
         }
     }

@@ -25,10 +25,11 @@ pub mod renderer;
 pub mod scenes;
 pub mod settings;
 pub mod setup;
+pub mod shadows;
 pub mod streaming;
 
 pub use counts::FrameCounts;
 pub use frame_graph::GraphSource;
 pub use renderer::{Renderer, Still};
-pub use settings::{FrameSettings, HostTargets};
+pub use settings::{FrameSettings, HostTargets, ShadowSettings};
 pub use setup::{SceneOptions, SceneSetup, SetupError, setup};

@@ -107,6 +107,10 @@ pub struct Renderer {
     imported_textures: Vec<(String, wgpu::Texture)>,
     /// A streamed scene's streaming (see [`Renderer::start_streaming`]).
     pub streaming: Option<Streaming>,
+    /// The shadow cascades the frame draws (0 without shadows).
+    cascades: u32,
+    /// The newest counters of each shadow cascade that have come back.
+    pub shadow_counts: Vec<super::shadows::CascadeCounts>,
 }
 
 /// The imported object list of the light clustering and its count.
@@ -248,6 +252,8 @@ impl Renderer {
             clustering: Counters::new(max_elements * 2),
             imported_textures: Vec::new(),
             streaming: None,
+            cascades: 0,
+            shadow_counts: Vec::new(),
         };
         renderer.note_readbacks();
         renderer
@@ -312,6 +318,29 @@ impl Renderer {
         self.two_pass = has(SECOND_COUNTS_READBACK);
         self.walks_hierarchy = has(HIERARCHY_COUNTS_READBACK);
         self.walks_twice = has(SECOND_WALK_COUNT_READBACK);
+        self.cascades = match self.settings.shadows {
+            Some(_) => (self.pipeline.views.get(super::shadows::CASCADES)).map_or(0, |&n| n),
+            None => 0,
+        };
+        self.shadow_counts.clear();
+    }
+
+    /// The direction towards the sun: the first `resolve` pass's `light_direction`, or
+    /// the resolve's default.
+    pub fn sun_direction(&self) -> glam::Vec3 {
+        let default = meshlight::resolve::settings::Settings::default().light_direction;
+        (self.pipeline.passes_of(meshlight::resolve::STAGE).next())
+            .and_then(|r| r.param("light_direction"))
+            .and_then(|v| v.as_array())
+            .and_then(|a| {
+                let f: Vec<f32> = a
+                    .iter()
+                    .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
+                    .map(|x| x as f32)
+                    .collect();
+                (f.len() == 3).then(|| glam::Vec3::new(f[0], f[1], f[2]))
+            })
+            .unwrap_or(default)
     }
 
     /// Records and submits one frame seen by `camera`; never waits for the GPU. Counters
@@ -379,6 +408,17 @@ impl Renderer {
             }
             None => {}
         }
+        let shadows = match self.settings.shadows.filter(|_| self.cascades > 0) {
+            Some(settings) => Some(super::shadows::ShadowFrame::new(
+                camera,
+                viewport,
+                self.sun_direction(),
+                &settings,
+                self.frame_index,
+                self.streaming.as_ref().map_or(1.0, |s| s.lod_scale()),
+            )?),
+            None => None,
+        };
         self.frame_index = self.frame_index.wrapping_add(1);
         let upload = std::time::Instant::now();
         self.scene.upload(&self.executor.gpu, &mut self.data);
@@ -386,9 +426,12 @@ impl Renderer {
             streaming.add_upload_time(upload.elapsed());
         }
         let cut = u32::from(std::mem::take(&mut self.cut));
-        let frame = FrameData::new()
+        let mut frame = FrameData::new()
             .with(meshlight::gpu_scene::names::VIEW, bytemuck::bytes_of(&view))
             .with(meshlight::cull_lod::CAMERA_CUT_INPUT, &cut.to_le_bytes());
+        if let Some(shadows) = &shadows {
+            frame = shadows.add_to(frame);
+        }
         let mut imports = self.scene.imports().merge(extra);
         if let Some(streaming) = &self.streaming {
             imports = streaming.imports(imports);
@@ -612,6 +655,56 @@ impl Renderer {
         while self.pending.len() > 16 {
             self.pending.pop_first();
         }
+        self.take_shadow_counts()
+    }
+
+    /// Takes each cascade's counters that have come back, and grows the shared lists
+    /// for a cascade that overflowed them.
+    fn take_shadow_counts(&mut self) -> Result<()> {
+        use super::shadows::{CLUSTER_COUNT, CascadeCounts, RASTER_COUNTS, view_name};
+        for k in 0..self.cascades {
+            let mut cull = None;
+            while let Some(r) = self.executor.take_readback(&view_name(RASTER_COUNTS, k))? {
+                cull = Some(r);
+            }
+            let mut fill = None;
+            while let Some(r) = self.executor.take_readback(&view_name(CLUSTER_COUNT, k))? {
+                fill = Some(r);
+            }
+            let (Some(cull), Some(fill)) = (cull, fill) else {
+                continue;
+            };
+            let counts = CascadeCounts::from_words(k, cull.frame, &cull.bytes, &fill.bytes)
+                .ok_or_else(|| GraphError::Readback(format!("cascade {k}'s counters are short")))?;
+            for (param, wanted, limit, flag) in [
+                (
+                    CLUSTERS_PARAM,
+                    u64::from(counts.candidates_requested),
+                    self.max_elements,
+                    "--clusters",
+                ),
+                (
+                    SLOTS_PARAM,
+                    u64::from(counts.visible),
+                    self.max_elements.min(MAX_SLOTS),
+                    "--slots",
+                ),
+            ] {
+                let want = Want {
+                    frame: counts.frame,
+                    param,
+                    wanted,
+                    limit,
+                    when_full: "shadow casters are dropped (raise the shadow LOD bias or shorten the shadow distance)",
+                    also_set_by: flag,
+                };
+                self.growths.extend(grow(&mut self.compiled, want)?);
+            }
+            match self.shadow_counts.iter_mut().find(|c| c.cascade == k) {
+                Some(c) => *c = counts,
+                None => self.shadow_counts.push(counts),
+            }
+        }
         Ok(())
     }
 
@@ -722,10 +815,10 @@ impl Renderer {
             });
         }
         self.compiled = compiled;
-        self.note_readbacks();
         self.settings = settings;
         self.view = frame.view;
         self.pipeline = frame.pipeline;
+        self.note_readbacks();
         self.pending.clear();
         self.latest = None;
         self.previous_view_projection = None;

@@ -3,6 +3,7 @@
 //! lights, a host's target). A setting left `None` keeps what the pipeline says, so the
 //! shipped frame and a user's file take the same settings the same way.
 
+use meshlight::gpu_scene::cascades::CascadeSettings;
 use meshlight::graph::{GraphError, Result};
 use meshlight::resolve::DebugView;
 use meshlight_light_clustering::ClusteringSettings;
@@ -32,6 +33,64 @@ pub struct HostTargets {
     /// texture, which resolve writes reverse-Z (1 at the near plane, 0 far away and
     /// where nothing was drawn).
     pub depth: bool,
+}
+
+/// The sun's shadow: its cascades and how a receiver is compared with them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowSettings {
+    /// How many cascades, their resolution, how far shadows reach and how the view is
+    /// split between them.
+    pub cascades: CascadeSettings,
+    /// How far a receiver moves towards the light before it is compared, in texels of
+    /// its cascade: against acne on surfaces facing the sun.
+    pub depth_bias: f32,
+    /// How far a receiver moves along its normal, in texels of its cascade: against
+    /// acne on surfaces the sun grazes.
+    pub normal_bias: f32,
+    /// The shadow views' LOD threshold is the camera's times `2^lod_bias` (in the
+    /// shadow view's texels): 0 keeps a texel of error, 1 allows two (fewer triangles
+    /// drawn into the maps, coarser silhouettes in the shadow).
+    pub lod_bias: f32,
+}
+
+impl Default for ShadowSettings {
+    /// The default cascades ([`CascadeSettings::default`]: four 2048² to 100 units), one
+    /// texel of depth and normal bias, no LOD bias.
+    fn default() -> Self {
+        Self {
+            cascades: CascadeSettings::default(),
+            depth_bias: 1.0,
+            normal_bias: 1.0,
+            lod_bias: 0.0,
+        }
+    }
+}
+
+impl ShadowSettings {
+    /// Checks every number, naming the first one out of range and what to give.
+    pub fn validate(&self) -> Result<()> {
+        self.cascades.validate().map_err(|e| GraphError::Setting {
+            setting: "shadows".into(),
+            message: e.to_string(),
+        })?;
+        for (name, value, range) in [
+            ("depth_bias", self.depth_bias, 0.0..=64.0),
+            ("normal_bias", self.normal_bias, 0.0..=64.0),
+            ("lod_bias", self.lod_bias, -4.0..=8.0),
+        ] {
+            if !range.contains(&value) {
+                return Err(GraphError::Setting {
+                    setting: format!("shadows.{name}"),
+                    message: format!(
+                        "{value} is outside {}..={}; give a number in that range",
+                        range.start(),
+                        range.end()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
 }
 
 /// What a frame is asked for. `None` everywhere but the viewport: the pipeline's own
@@ -78,8 +137,8 @@ pub struct FrameSettings {
     /// Cluster the renderer's lights and shade with them; `None` takes the light
     /// clustering's passes out of the frame.
     pub clustering: Option<ClusteringSettings>,
-    /// Keep the visibility target (`visbuffer`), the slot list (`raster_clusters`) and
-    /// the culling passes' counters after the frame, for `Executor::read_buffer` (tests,
+    /// Keep the visibility target (`visbuffer`), the slot list (`raster_clusters`), the
+    /// culling passes' counters and the shadow maps (`shadow_maps`) after the frame, for `Executor::read_buffer` (tests,
     /// debugging).
     pub keep_visibility: bool,
     /// Two-pass occlusion culling: the shipped frame is `pipelines/virtual_geometry.toml`
@@ -97,6 +156,13 @@ pub struct FrameSettings {
     pub big_triangle_px: Option<u32>,
     /// A host's targets the frame draws into, instead of leaving its image in `color`.
     pub host: Option<HostTargets>,
+    /// Direction towards the sun, world space (any length but zero): every `resolve`
+    /// pass's `light_direction`, which the shadow cascades follow too; `None`: the
+    /// pipeline's.
+    pub sun_direction: Option<glam::Vec3>,
+    /// The sun's shadow, drawn by the pipeline's shadow stage (the passes over the view
+    /// set `cascades`); `None` takes that stage out, and the image is unshadowed.
+    pub shadows: Option<ShadowSettings>,
 }
 
 /// The value of an environment variable, parsed; unset or unparsable: `None`.
@@ -134,6 +200,8 @@ impl FrameSettings {
             occlusion_min_clusters: from_env(env::OCCLUSION_MIN_CLUSTERS),
             big_triangle_px: from_env(env::BIG_TRIANGLE_PX),
             host: None,
+            sun_direction: None,
+            shadows: None,
         }
     }
 

@@ -172,8 +172,9 @@ pub fn apply(p: &mut Pipeline, data: &SceneData) -> Result<()> {
         }
     }
     let mut threshold = None;
+    // The shadow views draw what the camera's pages hold; they ask for none of their own.
     for pass in p.passes_of_mut(cull) {
-        if pass.param_str("mode") != Some("second") {
+        if pass.param_str("mode") != Some("second") && !super::shadows::is_shadow(pass) {
             for (slot, resource) in [
                 (STREAM_ERRORS_SLOT, STREAM_ERRORS),
                 (PAGE_MARKS_SLOT, PAGE_MARKS),

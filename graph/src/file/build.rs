@@ -186,38 +186,61 @@ fn expanded(pipeline: &Pipeline) -> Result<(Vec<ResourceEntry>, Vec<PassEntry>)>
             })),
         }
     }
+    // Consecutive entries over one view set form a block, written out view by view
+    // (view 0's passes, then view 1's, ...): each view's passes run together, so they
+    // may share lists that each view refills.
     let mut passes = Vec::new();
+    let mut block: Vec<&PassEntry> = Vec::new();
+    let mut block_count = 0;
+    let flush = |block: &mut Vec<&PassEntry>, count: u32, passes: &mut Vec<PassEntry>| {
+        for k in 0..count {
+            passes.extend(block.iter().map(|p| view_pass(p, k)));
+        }
+        block.clear();
+    };
     for p in &pipeline.passes {
         let uses_view = |text: &str| text.contains(VIEW);
         let written = uses_view(&p.name)
             || p.bind.values().any(|t| uses_view(t))
             || p.inputs.values().any(|t| uses_view(t))
             || p.params.values().any(|v| v.as_str().is_some_and(uses_view));
-        match views("pass", &p.name, &p.views, written)? {
+        let count = views("pass", &p.name, &p.views, written)?;
+        if block.first().is_some_and(|b| b.views != p.views) || count.is_none() {
+            flush(&mut block, block_count, &mut passes);
+        }
+        match count {
             None => passes.push(p.clone()),
-            Some(count) => passes.extend((0..count).map(|k| {
-                let view = |text: &String| text.replace(VIEW, &k.to_string());
-                let mut pass = p.clone();
-                pass.name = view(&p.name);
-                pass.views = None;
-                pass.bind.values_mut().for_each(|t| *t = view(t));
-                pass.inputs.values_mut().for_each(|t| *t = view(t));
-                for (_, v) in pass.params.iter_mut() {
-                    if let toml::Value::String(text) = v {
-                        // A param that is the view alone is its index, a number
-                        // (`layer = "{view}"`); in a longer text it is spelled out.
-                        *v = if text == VIEW {
-                            toml::Value::Integer(i64::from(k))
-                        } else {
-                            toml::Value::String(text.replace(VIEW, &k.to_string()))
-                        };
-                    }
-                }
-                pass
-            })),
+            Some(count) => {
+                block.push(p);
+                block_count = count;
+            }
         }
     }
+    flush(&mut block, block_count, &mut passes);
     Ok((resources, passes))
+}
+
+/// View `k`'s pass of an entry that runs over a view set: `{view}` replaced by `k` in
+/// its name, bindings, inputs and string params.
+pub(crate) fn view_pass(p: &PassEntry, k: u32) -> PassEntry {
+    let view = |text: &String| text.replace(VIEW, &k.to_string());
+    let mut pass = p.clone();
+    pass.name = view(&p.name);
+    pass.views = None;
+    pass.bind.values_mut().for_each(|t| *t = view(t));
+    pass.inputs.values_mut().for_each(|t| *t = view(t));
+    for (_, v) in pass.params.iter_mut() {
+        if let toml::Value::String(text) = v {
+            // A param that is the view alone is its index, a number (`layer =
+            // "{view}"`); in a longer text it is spelled out.
+            *v = if text == VIEW {
+                toml::Value::Integer(i64::from(k))
+            } else {
+                toml::Value::String(text.replace(VIEW, &k.to_string()))
+            };
+        }
+    }
+    pass
 }
 
 /// `mip=N`, `mips=A..B`, `layer=N`, `layers=A..B`, joined with `,`: the part of a texture

@@ -643,6 +643,16 @@ impl Pipeline {
     /// Each slot of `pass`'s stage contract (from the registry, with the pass's own
     /// parameters) with whether the pass writes through it.
     fn slots_of(&self, pass: &PassEntry, registry: &Registry) -> Result<Vec<(&'static str, bool)>> {
+        // An entry over a view set is built as its first view: params like
+        // `layer = "{view}"` only mean something once the view is known.
+        let first_view;
+        let pass = match pass.views {
+            Some(_) => {
+                first_view = crate::file::build::view_pass(pass, 0);
+                &first_view
+            }
+            None => pass,
+        };
         let contract = crate::file::build::build_pass(self, pass, registry)?.contract();
         Ok(contract
             .slots

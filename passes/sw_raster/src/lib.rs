@@ -120,16 +120,22 @@ const CLEAR_TILE: u32 = 16;
 
 /// The slots every implementation of `sw_raster` shares.
 pub fn contract() -> StageContract {
-    contract_with(false)
+    contract_with(None)
 }
 
-/// The stage's slots; with `depth_only`, `visbuffer` is a buffer of `u32` depths
-/// ([`SwRaster::depth_only`]) instead of a 64-bit visibility target.
-fn contract_with(depth_only: bool) -> StageContract {
-    let target = if depth_only {
+/// The stage's slots; with a depth-only layer ([`SwRaster::depth_only`]), `visbuffer` is
+/// a buffer of `u32` depths instead of a 64-bit visibility target. Layer 0's pass starts
+/// the stack (it depends on nothing drawn before it); a later layer's keeps what the
+/// passes before it drew, so the layers are drawn in order.
+fn contract_with(depth_layer: Option<u32>) -> StageContract {
+    let target = if let Some(layer) = depth_layer {
         Slot::buffer(
             "visbuffer",
-            Access::StorageReadWrite,
+            if layer == 0 {
+                Access::ClearedReadWrite
+            } else {
+                Access::StorageReadWrite
+            },
             meshlight_graph::Element::U32,
             "layers of width × height reverse-Z depth bits; layer `layer` cleared, then atomicMax",
         )
@@ -364,7 +370,7 @@ impl Pass for SwRaster {
                 Visibility64::Buffer => "buffer",
                 Visibility64::Texture => "texture",
             },
-            contract_with(self.depth_only),
+            contract_with(self.depth_only.then_some(self.layer)),
         )
     }
     fn visibility64(&self) -> Option<Visibility64> {

@@ -1,0 +1,212 @@
+//! The sun's shadow in the frame: the pipeline's shadow stage (every pass and resource
+//! over the view set [`CASCADES`]) sized for [`ShadowSettings`] or taken out, each
+//! frame's cascades ([`meshlight::gpu_scene::cascades`]) handed to the passes as frame
+//! inputs, and the cascades' counters read back so their lists grow like the camera's.
+//!
+//! A shadow pass is told from the camera's by its `views`: the renderer's settings that
+//! concern the camera's passes (occlusion records, the streaming slots, the hardware
+//! rasteriser) leave the shadow passes as the file wrote them, and the LOD threshold of
+//! a shadow pass is the camera's times `2^lod_bias`.
+
+use super::settings::{FrameSettings, ShadowSettings};
+use meshlight::gpu_scene::Camera;
+use meshlight::gpu_scene::cascades::{Cascade, cascades};
+use meshlight::graph::file::{PassEntry, Pipeline, Registry};
+use meshlight::graph::{FrameData, GraphBuilder, GraphError, Result};
+use meshlight::resolve::shadows::{SHADOW_MAPS, SHADOWS_INPUT, ShadowParams};
+
+/// The view set the shadow stage's entries run over, one view per cascade.
+pub const CASCADES: &str = "cascades";
+/// The frame input each cascade's passes read their View from (`{view}` its number).
+pub const CASCADE_VIEW_INPUT: &str = "cascade_view_{view}";
+/// The size parameter of each cascade's map side.
+pub const RESOLUTION_PARAM: &str = "shadow_resolution";
+/// The size parameter of the maps' texels (cascades × side²).
+pub const TEXELS_PARAM: &str = "shadow_texels";
+/// Each cascade's culling counters (`cull_lod`'s `raster_counts`), read back.
+pub const RASTER_COUNTS: &str = "shadow_raster_counts_{view}";
+/// Each cascade's candidate count (`fill_clusters`' `cluster_count`), read back.
+pub const CLUSTER_COUNT: &str = "shadow_cluster_count_{view}";
+
+/// True for an entry of the shadow stage.
+pub fn is_shadow(e: &PassEntry) -> bool {
+    e.views.as_deref() == Some(CASCADES)
+}
+
+/// Sizes the shadow stage for `s.shadows`, or takes it out (its passes, and the
+/// resources only it uses, `shadow_maps` among them, so resolve binds none). Shadows
+/// asked of a pipeline without the stage are an error saying what to add.
+pub fn apply(p: &mut Pipeline, registry: &Registry, s: &FrameSettings) -> Result<()> {
+    let has_stage = p.passes.iter().any(is_shadow);
+    let Some(shadows) = s.shadows else {
+        if has_stage {
+            p.remove_passes(registry, is_shadow)?;
+            let unused: Vec<String> = p
+                .resources
+                .iter()
+                .filter(|r| r.views.as_deref() == Some(CASCADES) || r.name == SHADOW_MAPS)
+                .map(|r| r.name.clone())
+                .collect();
+            for name in unused {
+                p.remove_resource(&name);
+            }
+            p.views.remove(CASCADES);
+        }
+        return Ok(());
+    };
+    shadows.validate()?;
+    if !has_stage || !p.views.contains_key(CASCADES) {
+        return Err(GraphError::PipelineFile {
+            file: p.file().to_string(),
+            message: format!(
+                "shadows are asked for, but the pipeline has no shadow stage (passes over the view set `{CASCADES}`); render without shadows (`--shadow-cascades 0`), or add the stage as pipelines/virtual_geometry.toml does"
+            ),
+        });
+    }
+    let c = shadows.cascades;
+    p.views.insert(CASCADES.to_string(), c.count);
+    let side = u64::from(c.resolution);
+    for (name, value) in [
+        (RESOLUTION_PARAM, side),
+        (TEXELS_PARAM, u64::from(c.count) * side * side),
+    ] {
+        if p.param(name).is_some() {
+            p.set_param(name, value)?;
+        }
+    }
+    Ok(())
+}
+
+/// After the camera's thresholds are set: the shadow passes' LOD threshold times
+/// `2^lod_bias`.
+pub fn bias_thresholds(p: &mut Pipeline, s: &FrameSettings) {
+    let Some(shadows) = s.shadows else {
+        return;
+    };
+    let scale = f64::from(shadows.lod_bias).exp2();
+    for pass in p.passes.iter_mut().filter(|e| is_shadow(e)) {
+        let threshold = match pass.param("lod_threshold_px") {
+            Some(toml::Value::Float(f)) => *f,
+            Some(toml::Value::Integer(i)) => *i as f64,
+            _ => continue,
+        };
+        pass.set_param("lod_threshold_px", threshold * scale);
+    }
+}
+
+/// The readbacks of each cascade's counters (the cull's first eight words and the
+/// candidate count), [`super::frame_graph::COUNTS_LATENCY`] frames late.
+pub fn add_readbacks(g: &mut GraphBuilder, count: u32) -> Result<()> {
+    for k in 0..count {
+        for (name, bytes) in [(RASTER_COUNTS, 32), (CLUSTER_COUNT, 8)] {
+            let name = view_name(name, k);
+            if g.resource(&name).is_some() {
+                g.readback_named(
+                    &name,
+                    &name,
+                    Some(0..bytes),
+                    super::frame_graph::COUNTS_LATENCY,
+                )?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// One cascade's counters, as its culling pass and its walk left them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CascadeCounts {
+    /// The cascade, 0 the nearest.
+    pub cascade: u32,
+    /// The frame they were counted in.
+    pub frame: u64,
+    /// Candidates the walk listed (may exceed the list).
+    pub candidates_requested: u32,
+    /// Clusters that passed the frustum and LOD tests (slots requested).
+    pub visible: u32,
+    /// Clusters drawn, all in software.
+    pub drawn: u32,
+    /// Triangles drawn.
+    pub triangles: u32,
+}
+
+impl CascadeCounts {
+    /// From the cull's `raster_counts` (eight words) and the walk's `cluster_count`.
+    pub fn from_words(cascade: u32, frame: u64, cull: &[u8], fill: &[u8]) -> Option<Self> {
+        let word = |b: &[u8], i: usize| {
+            b.get(i * 4..i * 4 + 4)
+                .map(|w| u32::from_le_bytes(w.try_into().expect("four bytes")))
+        };
+        Some(Self {
+            cascade,
+            frame,
+            candidates_requested: word(fill, 1)?,
+            visible: word(cull, 2)?,
+            drawn: word(cull, 0)? + word(cull, 1)?,
+            triangles: word(cull, 5)? + word(cull, 6)?,
+        })
+    }
+}
+
+/// `name` of view `k`.
+pub fn view_name(name: &str, k: u32) -> String {
+    name.replace("{view}", &k.to_string())
+}
+
+/// A frame's shadow inputs: each cascade's View, and the resolve's [`ShadowParams`].
+pub struct ShadowFrame {
+    /// The cascades, nearest first.
+    pub cascades: Vec<Cascade>,
+    /// What the resolve reads.
+    pub params: ShadowParams,
+}
+
+impl ShadowFrame {
+    /// The cascades of `camera` for a `viewport`, the sun shining from `toward_light`;
+    /// `lod_scale` divides each cascade view's LOD scale as it does the camera's (a
+    /// streamed pool under pressure coarsens both).
+    pub fn new(
+        camera: &Camera,
+        viewport: [u32; 2],
+        toward_light: glam::Vec3,
+        shadows: &ShadowSettings,
+        frame_index: u32,
+        lod_scale: f32,
+    ) -> Result<Self> {
+        let mut list = cascades(
+            camera,
+            viewport,
+            toward_light,
+            &shadows.cascades,
+            frame_index,
+        )
+        .map_err(|e| GraphError::Setting {
+            setting: "shadows".into(),
+            message: e.to_string(),
+        })?;
+        for c in &mut list {
+            c.view.lod_scale /= lod_scale;
+        }
+        let params = ShadowParams::new(
+            &list,
+            shadows.cascades.resolution,
+            shadows.normal_bias,
+            shadows.depth_bias,
+        );
+        Ok(Self {
+            cascades: list,
+            params,
+        })
+    }
+
+    /// `frame` with every cascade's View and the resolve's parameters.
+    pub fn add_to(&self, mut frame: FrameData) -> FrameData {
+        for (k, c) in self.cascades.iter().enumerate() {
+            frame = frame.with(
+                &view_name(CASCADE_VIEW_INPUT, k as u32),
+                bytemuck::bytes_of(&c.view),
+            );
+        }
+        frame.with(SHADOWS_INPUT, bytemuck::bytes_of(&self.params))
+    }
+}
