@@ -245,15 +245,74 @@ pub fn cascades(
                 margin,
             );
             let light_camera = Camera::from_matrices(view, projection)?;
+            let mut view = light_camera.view([res, res], frame_index, None);
+            view.frustum = caster_planes(
+                camera,
+                viewport,
+                light,
+                (slice_near, slice_far),
+                3.0 * texel_size,
+                &view.frustum,
+            );
             Ok(Cascade {
                 near: slice_near,
                 far: slice_far,
                 texel_size,
-                view: light_camera.view([res, res], frame_index, None),
+                view,
                 camera: light_camera,
             })
         })
         .collect()
+}
+
+/// The planes a caster of a cascade is culled against. The cascade box's four sides
+/// (casters outside them draw off the map), and two planes of the camera's slice
+/// `near..far`: a caster matters only where its shadow can fall on the slice, so only
+/// inside the slice swept towards the light, and each of the slice's planes (the
+/// camera's four sides and the slice's two ends, moved out by `margin` for the filter's
+/// reach) whose inward normal does not face away from the light bounds that sweep
+/// (moving towards the light never brings a point back inside it). The slice's ends
+/// are taken first, then the sides most across the light; where fewer than two bound
+/// the sweep, the box's near and far planes fill in. So slots 4 and 5 do not hold the
+/// box's near and far planes: a shadow view's cull sends every cluster to software
+/// (`hardware = false`), which clips at the near plane itself, and never reads slot 4
+/// as one. The projection, and so the LOD and the texel snapping, stays the box's.
+fn caster_planes(
+    camera: &Camera,
+    viewport: [u32; 2],
+    toward_light: Vec3,
+    (near, far): (f32, f32),
+    margin: f32,
+    box_planes: &[[f32; 4]; 6],
+) -> [[f32; 4]; 6] {
+    let world_from_view = camera.view_matrix().inverse();
+    let eye = world_from_view.w_axis.truncate();
+    let forward = -world_from_view.z_axis.truncate().normalize();
+    let sides =
+        crate::view::frustum_planes(camera.projection_matrix(viewport) * camera.view_matrix());
+    let ends = [
+        forward.extend(-forward.dot(eye + forward * near)),
+        (-forward).extend(forward.dot(eye + forward * far)),
+    ];
+    let bounding = |p: &glam::Vec4| p.truncate().dot(toward_light) >= 0.0;
+    let mut lateral: Vec<glam::Vec4> = sides[..4]
+        .iter()
+        .map(|p| glam::Vec4::from_array(*p))
+        .filter(bounding)
+        .collect();
+    lateral.sort_by(|a, b| {
+        (a.truncate().dot(toward_light)).total_cmp(&b.truncate().dot(toward_light))
+    });
+    let mut chosen = ends
+        .into_iter()
+        .filter(bounding)
+        .chain(lateral)
+        .map(|p| (p + glam::Vec4::W * margin).to_array())
+        .chain([box_planes[4], box_planes[5]]);
+    let mut out = *box_planes;
+    out[4] = chosen.next().unwrap_or(box_planes[4]);
+    out[5] = chosen.next().unwrap_or(box_planes[5]);
+    out
 }
 
 /// The near plane's distance of `camera` (view-space depth where clip depth is 1).
@@ -487,5 +546,75 @@ mod tests {
             far: 200.0,
         };
         assert_eq!(cascades(&ortho, [64, 64], Vec3::Y, &d, 0).unwrap().len(), 4);
+    }
+
+    /// Every caster whose shadow can fall on a cascade's slice (a point of the slice
+    /// moved towards the light, inside the map) is inside the cull planes, and the
+    /// planes cut away much of the box the camera never sees.
+    #[test]
+    fn the_cull_planes_keep_every_caster_of_the_slice_and_cut_the_rest() {
+        let mut rng = 7u64;
+        let mut unit = move || {
+            rng = rng
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (rng >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let inside = |planes: &[[f32; 4]; 6], p: Vec3, slack: f32| {
+            planes
+                .iter()
+                .all(|q| Vec3::new(q[0], q[1], q[2]).dot(p) + q[3] >= -slack)
+        };
+        let settings = CascadeSettings {
+            count: 3,
+            resolution: 512,
+            distance: 60.0,
+            ..CascadeSettings::default()
+        };
+        let mut cut = 0;
+        let mut boxed = 0;
+        for case in 0..6 {
+            let eye = Vec3::new(unit() * 20.0 - 10.0, 1.0 + unit() * 8.0, unit() * 20.0);
+            let look = Vec3::new(unit() * 10.0 - 5.0, 0.0, -10.0 - unit() * 10.0);
+            let cam = camera(eye, look);
+            let light = Vec3::new(unit() - 0.5, 0.3 + unit(), unit() - 0.5).normalize();
+            let viewport = [640, 360];
+            let list = cascades(&cam, viewport, light, &settings, 0).unwrap();
+            let inverse = (cam.projection_matrix(viewport) * cam.view_matrix()).inverse();
+            let forward = (cam.target - cam.position).normalize();
+            for c in &list {
+                let b = Mat4::from_cols_array_2d(&c.view.view_projection);
+                let box_planes = crate::view::frustum_planes(b);
+                for _ in 0..400 {
+                    // A receiver in the slice: a ray through the screen, at a depth in it.
+                    let ndc = glam::Vec2::new(unit() * 2.0 - 1.0, unit() * 2.0 - 1.0);
+                    let far = inverse.project_point3(ndc.extend(0.5));
+                    let dir = (far - cam.position).normalize();
+                    let depth = c.near + unit() * (c.far - c.near);
+                    let receiver = cam.position + dir * (depth / dir.dot(forward));
+                    let caster = receiver + light * unit() * settings.caster_reach;
+                    if inside(&box_planes, caster, 0.0) {
+                        assert!(
+                            inside(&c.view.frustum, caster, 1e-3),
+                            "case {case}: a caster of the slice is culled"
+                        );
+                    }
+                    // Any point of the box: how many the planes cut.
+                    let p = b.inverse().project_point3(Vec3::new(
+                        unit() * 2.0 - 1.0,
+                        unit() * 2.0 - 1.0,
+                        unit(),
+                    ));
+                    if inside(&box_planes, p, 0.0) {
+                        boxed += 1;
+                        cut += usize::from(!inside(&c.view.frustum, p, 0.0));
+                    }
+                }
+            }
+        }
+        assert!(
+            cut * 8 > boxed,
+            "the planes cut only {cut} of {boxed} points of the boxes"
+        );
     }
 }

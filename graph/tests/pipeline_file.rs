@@ -373,3 +373,41 @@ bind = { input = "a_1", output = "result" }
     // View 1's copy holds view 1's fill, not the last view's.
     assert_eq!(run(text), (0..1000).map(|i| i + 1).collect::<Vec<u32>>());
 }
+
+/// A pass left out of one frame (`FrameData::skip`) records nothing: the imported
+/// buffer it writes keeps what it held; the next frame runs it again. A name that is no
+/// pass is refused by name.
+#[test]
+fn a_pass_left_out_of_a_frame_records_nothing_and_an_unknown_name_is_refused() {
+    let g = parse_pipeline(&file("add", "k = 8"), "test.toml", &registry()).unwrap();
+    let gpu = gpu();
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let usage =
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+    let stale: Vec<u8> = (0..1000u32).flat_map(|i| (i + 5).to_le_bytes()).collect();
+    let result = gpu.buffer_with_data("result", &stale, usage);
+    let imports = Imports::new().buffer("result", &result);
+    let mut exec = Executor::new(gpu);
+    let mut skip = FrameData::new();
+    skip.skip("transform");
+    let stats = exec.execute_frame(&compiled, &imports, &skip).unwrap();
+    exec.finish().unwrap();
+    assert!(!stats.passes.iter().any(|p| p.name == "transform"));
+    assert_eq!(
+        read_u32s(&exec.gpu, &result, 1000),
+        (0..1000).map(|i| i + 5).collect::<Vec<u32>>()
+    );
+    exec.execute_frame(&compiled, &imports, &FrameData::new())
+        .unwrap();
+    exec.finish().unwrap();
+    assert_eq!(
+        read_u32s(&exec.gpu, &result, 1000),
+        (0..1000).map(|i| i * 3 + 8).collect::<Vec<u32>>()
+    );
+    let mut unknown = FrameData::new();
+    unknown.skip("transfrom");
+    let e = exec
+        .execute_frame(&compiled, &imports, &unknown)
+        .unwrap_err();
+    assert!(e.to_string().contains("`transfrom`"), "{e}");
+}

@@ -28,6 +28,8 @@ pub struct Measured {
     pub device: String,
     /// A streamed scene's figures after the timed frames.
     pub stream: Option<meshlight_virtual_geometry::streaming::StreamStats>,
+    /// Each shadow cascade's counters, of the last still.
+    pub shadow_counts: Vec<meshlight_virtual_geometry::shadows::CascadeCounts>,
 }
 
 pub fn measure(
@@ -112,6 +114,7 @@ pub fn measure_prepared(
         counts,
         device: renderer.adapter.clone(),
         stream: renderer.streaming.as_ref().map(|s| s.stats()),
+        shadow_counts: renderer.shadow_counts.clone(),
     })
 }
 
@@ -232,6 +235,128 @@ pub fn default_scene(quick: bool) -> BenchResult {
         };
         let m = measure(&placed, hardware, frames)?;
         rows.extend(rows_of("render", &format!("{case}, with hw_raster"), &m));
+    }
+    Ok(rows)
+}
+
+/// The sun's shadow (`vg-shadows`): the default scene at 1920×1080 and 1,048,576 bunnies
+/// at 2560×1440, each without shadows and with four 2048² cascades to the default
+/// shadow distance: every cascade drawn every frame (as when the camera moves), and kept
+/// while nothing changes (a still camera: the frame then draws no cascade); the default
+/// scene also with a shadow LOD bias of 1. All in one run. Per case: the frame, the
+/// shadow passes' sum and share of the per-pass profile, and each cascade's clusters and
+/// triangles. With `quick`, 64 small meshes and 4,096 bunnies.
+pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
+    use meshlight_virtual_geometry::setup::ShadowRequest;
+    let (segments, instances) = if quick {
+        (64, 64)
+    } else {
+        (
+            meshlight::scene::DEFAULT_SEGMENTS,
+            scenes::DEFAULT_INSTANCES,
+        )
+    };
+    let frames = if quick { 5 } else { 50 };
+    let asset = scenes::load_asset(Path::new("procedural"), segments)?;
+    let default = scenes::field(SceneData::new(Default::default()), &asset, instances)?;
+    let mesh = mesh_or_bunny(meshes);
+    let bunny = scenes::load_asset(&mesh, 0)?;
+    let adapter = meshlight::graph::GpuAdapter::select()?;
+    let limits = meshlight::gpu_scene::data::Limits::for_device(&adapter.adapter.limits());
+    drop(adapter);
+    let copies = if quick { 4096 } else { 1 << 20 };
+    let million = scenes::field(SceneData::new(limits), &bunny, copies)?;
+    let request = ShadowRequest {
+        cascades: Some(4),
+        resolution: Some(2048),
+        ..ShadowRequest::default()
+    };
+    let mut rows = Vec::new();
+    // (LOD bias, maps kept while nothing changes)
+    let cases = [
+        (
+            &default,
+            format!("{instances} procedural meshes"),
+            (1920, 1080),
+            &[(0.0, false), (0.0, true), (1.0, false)][..],
+        ),
+        (
+            &million,
+            format!("{copies} {} on the field", stem(&mesh)),
+            (2560, 1440),
+            &[(0.0, false), (0.0, true)][..],
+        ),
+    ];
+    for (placed, scene, (width, height), variants) in cases {
+        let case = case_label(&scene, placed, width, height);
+        let m = measure(placed, FrameSettings::new(width, height), frames)?;
+        rows.extend(rows_of("vg-shadows", &format!("{case}, no shadows"), &m));
+        for &(lod_bias, cache) in variants {
+            let mut shadows = ShadowRequest {
+                lod_bias,
+                ..request
+            }
+            .settings(&placed.data, &placed.camera, [width, height], true)
+            .ok_or("no shadows")?;
+            shadows.cache = cache;
+            let settings = FrameSettings {
+                shadows: Some(shadows),
+                ..FrameSettings::new(width, height)
+            };
+            let m = measure(placed, settings, frames)?;
+            let case = format!(
+                "{case}, 4 cascades of 2048² to {:.0} units, LOD bias {lod_bias}, {}",
+                shadows.cascades.distance,
+                if cache {
+                    "kept while still"
+                } else {
+                    "drawn every frame"
+                }
+            );
+            rows.extend(rows_of("vg-shadows", &case, &m));
+            let shadow_ms: f64 = m
+                .passes
+                .iter()
+                .filter(|(n, _)| n.starts_with("shadow_"))
+                .map(|(_, ms)| ms)
+                .sum();
+            let device = m.device.as_str();
+            rows.push(row(
+                "vg-shadows",
+                case.clone(),
+                "GPU shadow passes, sum (timing mode passes)",
+                shadow_ms,
+                "ms",
+                device,
+            ));
+            rows.push(row(
+                "vg-shadows",
+                case.clone(),
+                "shadow passes' share of the profiled frame",
+                100.0 * shadow_ms / m.profiled_total_ms,
+                "%",
+                device,
+            ));
+            for c in &m.shadow_counts {
+                let k = c.cascade;
+                rows.push(row(
+                    "vg-shadows",
+                    case.clone(),
+                    &format!("shadow cascade {k}: clusters drawn"),
+                    f64::from(c.drawn),
+                    "",
+                    device,
+                ));
+                rows.push(row(
+                    "vg-shadows",
+                    case.clone(),
+                    &format!("shadow cascade {k}: triangles drawn"),
+                    f64::from(c.triangles),
+                    "",
+                    device,
+                ));
+            }
+        }
     }
     Ok(rows)
 }

@@ -7,6 +7,7 @@ use meshlight::scene::compress::PositionBits;
 use meshlight::scene::load::DEFAULT_TRIANGLE_BUDGET;
 use meshlight::scene::mesh::MAX_TRIANGLES;
 use meshlight::scene::{DEFAULT_SEGMENTS, Grouping, World};
+use meshlight_virtual_geometry::setup::ShadowRequest;
 use meshlight_virtual_geometry::{SceneOptions, scenes};
 use std::path::PathBuf;
 
@@ -71,6 +72,64 @@ pub struct SceneArgs {
     /// streaming has settled for the view.
     #[arg(long, value_name = "MIB", value_parser = clap::value_parser!(u64).range(1..=1 << 20))]
     pub pool_mb: Option<u64>,
+    /// Direction towards the sun, `x,y,z` in world space (any length); default: the
+    /// pipeline's (the shipped frame's sun is up and to the left, `-0.5,0.8,0.35`).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_direction, allow_hyphen_values = true)]
+    pub sun: Option<[f32; 3]>,
+    #[command(flatten)]
+    pub shadows: ShadowArgs,
+}
+
+/// The sun's shadow.
+#[derive(clap::Args)]
+pub struct ShadowArgs {
+    /// Shadow cascades, 0 to 4 (0: no shadow). Default: 4 where the pipeline has the
+    /// shadow stage (the shipped frame does), else 0. `--view shadow` colours them.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=4))]
+    pub shadow_cascades: Option<u32>,
+    /// Texels along each side of a cascade's map: 16 to 16384, a multiple of 8 (default:
+    /// the viewport's longer side, from 256 to 2048).
+    #[arg(long, value_name = "TEXELS")]
+    pub shadow_resolution: Option<u32>,
+    /// How far from the camera shadows reach, in world units (default: where the median
+    /// instance looks 8 pixels across, or the scene's far side if nearer).
+    #[arg(long, value_name = "DISTANCE")]
+    pub shadow_distance: Option<f32>,
+    /// How the view is split between cascades: 0 uniformly, 1 logarithmically (each
+    /// cascade covers the same ratio of distances), between: a blend.
+    #[arg(long, value_name = "LAMBDA", default_value_t = 0.8)]
+    pub shadow_split: f32,
+    /// How far a receiver moves towards the sun before it is compared, in texels of its
+    /// cascade (against acne on surfaces facing the sun).
+    #[arg(long, value_name = "TEXELS", default_value_t = 1.0)]
+    pub shadow_depth_bias: f32,
+    /// How far a receiver moves along its normal, in texels of its cascade (against acne
+    /// where the sun grazes).
+    #[arg(long, value_name = "TEXELS", default_value_t = 1.0)]
+    pub shadow_normal_bias: f32,
+    /// The shadow views' LOD threshold is the camera's times 2^bias (1: twice the error,
+    /// fewer triangles drawn into the maps).
+    #[arg(
+        long,
+        value_name = "BIAS",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub shadow_lod_bias: f32,
+}
+
+/// `x,y,z`: three finite numbers, not all zero.
+fn parse_direction(text: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let numbers: Option<Vec<f32>> = parts.iter().map(|p| p.parse::<f32>().ok()).collect();
+    match numbers.as_deref() {
+        Some(&[x, y, z]) if [x, y, z].iter().all(|c| c.is_finite()) && [x, y, z] != [0.0; 3] => {
+            Ok([x, y, z])
+        }
+        _ => Err(format!(
+            "`{text}` is not a direction: give three finite numbers, not all zero, as x,y,z (e.g. -0.5,0.8,0.35)"
+        )),
+    }
 }
 
 impl SceneArgs {
@@ -88,6 +147,23 @@ impl SceneArgs {
             merge_gltf: self.merge_gltf,
             camera: self.camera_index,
             pool_mb: self.pool_mb,
+            sun: self.sun.map(meshlight::glam::Vec3::from_array),
+            shadows: self.shadows.request(),
+        }
+    }
+}
+
+impl ShadowArgs {
+    /// The library's shadow request.
+    pub fn request(&self) -> ShadowRequest {
+        ShadowRequest {
+            cascades: self.shadow_cascades,
+            resolution: self.shadow_resolution,
+            distance: self.shadow_distance,
+            split_lambda: self.shadow_split,
+            depth_bias: self.shadow_depth_bias,
+            normal_bias: self.shadow_normal_bias,
+            lod_bias: self.shadow_lod_bias,
         }
     }
 }

@@ -190,6 +190,23 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
     for (label, value) in still.counts.rows() {
         let _ = writeln!(report, "  {label:<30} {value}");
     }
+    if let Some(s) = &renderer.settings.shadows {
+        let c = s.cascades;
+        let _ = writeln!(
+            report,
+            "  sun shadow: {} cascades of {}², to {:.1} units (split λ {}), casters {:.1} units towards the sun",
+            c.count, c.resolution, c.distance, c.split_lambda, c.caster_reach
+        );
+    }
+    for c in &renderer.shadow_counts {
+        let _ = writeln!(
+            report,
+            "  {:<30} {} clusters, {} triangles",
+            format!("shadow cascade {}", c.cascade),
+            c.drawn,
+            c.triangles
+        );
+    }
     let _ = writeln!(
         report,
         "  {:<30} {:.2}",

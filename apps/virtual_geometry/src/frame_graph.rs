@@ -147,7 +147,6 @@ pub fn frame(source: &GraphSource, data: &SceneData, s: &FrameSettings) -> Resul
             "raster_clusters",
             "raster_counts",
             SECOND_COUNTS,
-            meshlight::resolve::shadows::SHADOW_MAPS,
         ] {
             if let Some(h) = graph.resource(name) {
                 graph.export(h);

@@ -111,6 +111,10 @@ pub struct Renderer {
     cascades: u32,
     /// The newest counters of each shadow cascade that have come back.
     pub shadow_counts: Vec<super::shadows::CascadeCounts>,
+    /// The cascades' maps and what each holds.
+    shadow_cache: super::shadows::ShadowCache,
+    /// Cascades drawn by the last frame (the others kept their maps).
+    pub cascades_drawn: u32,
 }
 
 /// The imported object list of the light clustering and its count.
@@ -254,6 +258,8 @@ impl Renderer {
             streaming: None,
             cascades: 0,
             shadow_counts: Vec::new(),
+            shadow_cache: Default::default(),
+            cascades_drawn: 0,
         };
         renderer.note_readbacks();
         renderer
@@ -323,6 +329,19 @@ impl Renderer {
             None => 0,
         };
         self.shadow_counts.clear();
+        let resolution = self.settings.shadows.map_or(0, |s| s.cascades.resolution);
+        self.shadow_cache.reset(
+            &self.executor.gpu,
+            self.cascades,
+            resolution,
+            &self.pipeline,
+        );
+    }
+
+    /// The shadow cascades' maps (`cascades × resolution²` reverse-Z depth bits, cascade
+    /// after cascade), as the last frame left them; `None` without shadows.
+    pub fn shadow_maps(&self) -> Option<&wgpu::Buffer> {
+        self.shadow_cache.maps()
     }
 
     /// The direction towards the sun: the first `resolve` pass's `light_direction`, or
@@ -421,7 +440,7 @@ impl Renderer {
         };
         self.frame_index = self.frame_index.wrapping_add(1);
         let upload = std::time::Instant::now();
-        self.scene.upload(&self.executor.gpu, &mut self.data);
+        let uploaded = self.scene.upload(&self.executor.gpu, &mut self.data);
         if let Some(streaming) = &mut self.streaming {
             streaming.add_upload_time(upload.elapsed());
         }
@@ -431,6 +450,17 @@ impl Renderer {
             .with(meshlight::cull_lod::CAMERA_CUT_INPUT, &cut.to_le_bytes());
         if let Some(shadows) = &shadows {
             frame = shadows.add_to(frame);
+            // Anything the GPU scene took this frame (a transform, a material, pages
+            // installed or evicted) may change a shadow.
+            let streamed = self.streaming.as_ref().is_some_and(|s| {
+                let f = s.stats().frame;
+                f.installed > 0 || f.evicted > 0
+            });
+            let changed = uploaded.bytes > 0 || streamed;
+            let cache = self.settings.shadows.is_some_and(|s| s.cache);
+            self.cascades_drawn = self
+                .shadow_cache
+                .skip_unchanged(shadows, changed, cache, &mut frame);
         }
         let mut imports = self.scene.imports().merge(extra);
         if let Some(streaming) = &self.streaming {
@@ -462,6 +492,9 @@ impl Renderer {
         }
         for (name, texture) in &self.imported_textures {
             imports = imports.texture(name, texture);
+        }
+        if let Some(maps) = self.shadow_cache.maps() {
+            imports = imports.buffer(meshlight::resolve::shadows::SHADOW_MAPS, maps);
         }
         let stats = self
             .executor

@@ -51,17 +51,22 @@ pub struct ShadowSettings {
     /// shadow view's texels): 0 keeps a texel of error, 1 allows two (fewer triangles
     /// drawn into the maps, coarser silhouettes in the shadow).
     pub lod_bias: f32,
+    /// Keep a cascade's map while its view and the scene stay as they were when it was
+    /// drawn (nothing moved or streamed in, the camera still): the cascade's passes are
+    /// left out of the frame. Off, every cascade is drawn every frame.
+    pub cache: bool,
 }
 
 impl Default for ShadowSettings {
     /// The default cascades ([`CascadeSettings::default`]: four 2048² to 100 units), one
-    /// texel of depth and normal bias, no LOD bias.
+    /// texel of depth and normal bias, no LOD bias, maps kept while nothing changes.
     fn default() -> Self {
         Self {
             cascades: CascadeSettings::default(),
             depth_bias: 1.0,
             normal_bias: 1.0,
             lod_bias: 0.0,
+            cache: true,
         }
     }
 }
@@ -137,8 +142,8 @@ pub struct FrameSettings {
     /// Cluster the renderer's lights and shade with them; `None` takes the light
     /// clustering's passes out of the frame.
     pub clustering: Option<ClusteringSettings>,
-    /// Keep the visibility target (`visbuffer`), the slot list (`raster_clusters`), the
-    /// culling passes' counters and the shadow maps (`shadow_maps`) after the frame, for `Executor::read_buffer` (tests,
+    /// Keep the visibility target (`visbuffer`), the slot list (`raster_clusters`) and
+    /// the culling passes' counters after the frame, for `Executor::read_buffer` (tests,
     /// debugging).
     pub keep_visibility: bool,
     /// Two-pass occlusion culling: the shipped frame is `pipelines/virtual_geometry.toml`

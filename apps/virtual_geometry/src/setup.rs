@@ -6,7 +6,7 @@
 use crate::frame_graph::GraphSource;
 use crate::gltf_scene::{self, GltfSceneError};
 use crate::scenes::{self, Paint};
-use crate::settings::FrameSettings;
+use crate::settings::{FrameSettings, ShadowSettings};
 use meshlight::gpu_scene::{Camera, SceneData, SceneDataError, data::Limits};
 use meshlight::graph::{GpuAdapter, GraphError};
 use meshlight::resolve::DebugView;
@@ -65,6 +65,129 @@ pub struct SceneOptions {
     /// Stream the meshes' pages through a GPU pool of this many MiB (see
     /// [`crate::streaming`]); `None`: every page resident.
     pub pool_mb: Option<u64>,
+    /// Direction towards the sun; `None`: the pipeline's.
+    pub sun: Option<glam::Vec3>,
+    /// The sun's shadow.
+    pub shadows: ShadowRequest,
+}
+
+/// The sun's shadow as a caller asks for it, before the scene is known.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowRequest {
+    /// Cascades, 0 to 4 (0: none); `None`: 4 where the pipeline has the shadow stage,
+    /// else none.
+    pub cascades: Option<u32>,
+    /// Texels along each side of a cascade's map; `None`: [`default_resolution`] of the
+    /// viewport.
+    pub resolution: Option<u32>,
+    /// How far shadows reach from the camera; `None`: [`crate::shadows::shadow_distance`].
+    pub distance: Option<f32>,
+    /// The split between uniform (0) and logarithmic (1).
+    pub split_lambda: f32,
+    /// See [`ShadowSettings::depth_bias`].
+    pub depth_bias: f32,
+    /// See [`ShadowSettings::normal_bias`].
+    pub normal_bias: f32,
+    /// See [`ShadowSettings::lod_bias`].
+    pub lod_bias: f32,
+}
+
+impl Default for ShadowRequest {
+    /// The defaults of [`ShadowSettings`], with the count and distance left to the
+    /// pipeline and the scene.
+    fn default() -> Self {
+        let s = ShadowSettings::default();
+        Self {
+            cascades: None,
+            resolution: None,
+            distance: None,
+            split_lambda: s.cascades.split_lambda,
+            depth_bias: s.depth_bias,
+            normal_bias: s.normal_bias,
+            lod_bias: s.lod_bias,
+        }
+    }
+}
+
+/// A cascade's side for a viewport when none is given: the viewport's longer side (a
+/// cascade then has about as many texels across as the screen has pixels), rounded up
+/// to a multiple of 8, from 256 to 2048.
+pub fn default_resolution(viewport: [u32; 2]) -> u32 {
+    viewport[0]
+        .max(viewport[1])
+        .next_multiple_of(8)
+        .clamp(256, 2048)
+}
+
+impl ShadowRequest {
+    /// No shadow.
+    pub fn off() -> Self {
+        Self {
+            cascades: Some(0),
+            ..Self::default()
+        }
+    }
+
+    /// Refuses a number out of range, naming it, before any work: the scene's own
+    /// distance stands in for one not given.
+    pub fn check(&self, viewport: [u32; 2]) -> Result<(), GraphError> {
+        if self.cascades == Some(0) {
+            return Ok(());
+        }
+        let s = ShadowSettings {
+            cascades: meshlight::gpu_scene::cascades::CascadeSettings {
+                count: self.cascades.unwrap_or(1),
+                resolution: self.resolution.unwrap_or(default_resolution(viewport)),
+                distance: self.distance.unwrap_or(1.0),
+                split_lambda: self.split_lambda,
+                caster_reach: 1.0,
+            },
+            depth_bias: self.depth_bias,
+            normal_bias: self.normal_bias,
+            lod_bias: self.lod_bias,
+            cache: true,
+        };
+        s.validate()
+    }
+
+    /// The settings for a scene seen from `camera` (`None`: no shadow). The distance
+    /// not given is [`crate::shadows::shadow_distance`]'s, and casters are kept as far
+    /// towards the sun as the shadow distance; a pipeline without the shadow stage draws none unless cascades are asked
+    /// for (and then refuses, saying so).
+    pub fn settings(
+        &self,
+        data: &SceneData,
+        camera: &Camera,
+        viewport: [u32; 2],
+        has_stage: bool,
+    ) -> Option<ShadowSettings> {
+        let count = self.cascades.unwrap_or(if has_stage {
+            ShadowSettings::default().cascades.count
+        } else {
+            0
+        });
+        if count == 0 {
+            return None;
+        }
+        let reach = crate::shadows::scene_reach(data, camera.position).max(1.0);
+        let distance = crate::shadows::shadow_distance(data, camera, viewport).max(1.0);
+        Some(ShadowSettings {
+            cascades: meshlight::gpu_scene::cascades::CascadeSettings {
+                count,
+                resolution: self.resolution.unwrap_or(default_resolution(viewport)),
+                distance: self.distance.unwrap_or(distance),
+                split_lambda: self.split_lambda,
+                // Casters as far towards the sun as shadows reach from the camera (a
+                // slope or a tower beyond that shades nothing the cascades hold in view
+                // unless it is taller than the shadow distance).
+                caster_reach: self.distance.unwrap_or(distance).min(reach),
+            },
+            depth_bias: self.depth_bias,
+            normal_bias: self.normal_bias,
+            lod_bias: self.lod_bias,
+            cache: true,
+        })
+    }
 }
 
 impl SceneOptions {
@@ -82,6 +205,18 @@ impl SceneOptions {
             merge_gltf: false,
             camera: None,
             pool_mb: None,
+            sun: None,
+            shadows: ShadowRequest::default(),
+        }
+    }
+
+    /// Whether the pipeline has the shadow stage (passes over the view set
+    /// `cascades`): the shipped frame does; a file that cannot be read does not.
+    pub fn graph_has_shadow_stage(&self) -> bool {
+        match &self.pipeline {
+            None => true,
+            Some(path) => meshlight::graph::file::Pipeline::load(path)
+                .is_ok_and(|p| p.passes.iter().any(crate::shadows::is_shadow)),
         }
     }
 
@@ -202,6 +337,7 @@ fn pool_bytes(o: &SceneOptions, loaded: &Loaded, limits: &Limits) -> Option<u64>
 /// run on, and fills the frame settings.
 pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     o.check_pipeline()?;
+    o.shadows.check([o.width, o.height])?;
     if o.camera.is_some() && !o.is_gltf_scene() {
         return Err(GltfSceneError::NotAScene {
             mesh: o.mesh.display().to_string(),
@@ -264,6 +400,16 @@ pub fn setup(o: &SceneOptions) -> Result<SceneSetup, SetupError> {
     let mut settings = FrameSettings::new(o.width, o.height);
     // A view given wins over a pipeline file's; none given leaves the file's.
     settings.view = o.view;
+    settings.sun_direction = o.sun;
+    settings.shadows = o.shadows.settings(
+        &placed.data,
+        &placed.camera,
+        [o.width, o.height],
+        o.graph_has_shadow_stage(),
+    );
+    if let Some(shadows) = &settings.shadows {
+        shadows.validate()?;
+    }
     let lights = match (&loaded, o.lights) {
         // A scene is lit by the sun and the sky unless lights are asked for.
         (Loaded::Scene(_), Some(n)) => gltf_scene::scene_lights(&placed, n),

@@ -148,6 +148,71 @@ impl CascadeCounts {
     }
 }
 
+/// Each instance's world bounding sphere (centre, radius).
+fn instance_spheres(
+    data: &meshlight::gpu_scene::SceneData,
+) -> impl Iterator<Item = (glam::Vec3, f32)> + '_ {
+    data.instances.iter().filter_map(|i| {
+        let mesh = data.meshes.get(i.mesh as usize)?;
+        let m = glam::Mat4::from_cols_array_2d(&i.world_from_local);
+        let [x, y, z, r] = mesh.bounding_sphere;
+        let centre = m.transform_point3(glam::Vec3::new(x, y, z));
+        let scale = m
+            .x_axis
+            .length()
+            .max(m.y_axis.length())
+            .max(m.z_axis.length());
+        let radius = r * scale;
+        (centre.is_finite() && radius.is_finite()).then_some((centre, radius))
+    })
+}
+
+/// How far the scene reaches from `from`: the farthest instance's bounding sphere's
+/// far side (0 for an empty scene).
+pub fn scene_reach(data: &meshlight::gpu_scene::SceneData, from: glam::Vec3) -> f32 {
+    instance_spheres(data)
+        .map(|(c, r)| c.distance(from) + r)
+        .fold(0.0, f32::max)
+}
+
+/// Pixels across which the median instance is still worth a shadow: past the distance
+/// where it looks this small, [`shadow_distance`] ends the shadow.
+pub const SHADOWED_PIXELS: f32 = 8.0;
+
+/// The default shadow distance for a scene seen by `camera` in `viewport`: where the
+/// median instance's bounding sphere spans [`SHADOWED_PIXELS`] pixels (its shadow a few
+/// pixels more), or the scene's far side if nearer. A field of small copies so gets
+/// shadows as far as they can be told apart, not across the whole field; an
+/// orthographic camera (whose pixels do not shrink with distance) gets the whole scene.
+pub fn shadow_distance(
+    data: &meshlight::gpu_scene::SceneData,
+    camera: &meshlight::gpu_scene::Camera,
+    viewport: [u32; 2],
+) -> f32 {
+    let reach = scene_reach(data, camera.position);
+    let projection = camera.projection_matrix(viewport);
+    // Pixels per world unit at distance 1: half the viewport's height times the
+    // projection's y scale.
+    let pixels_at_one = 0.5 * viewport[1].max(1) as f32 * projection.y_axis.y;
+    let mut radii: Vec<f32> = instance_spheres(data).map(|(_, r)| r).collect();
+    if radii.is_empty()
+        || projection.w_axis.w != 0.0
+        || pixels_at_one.is_nan()
+        || pixels_at_one <= 0.0
+    {
+        return reach;
+    }
+    let mid = radii.len() / 2;
+    let median = *radii.select_nth_unstable_by(mid, f32::total_cmp).1;
+    // The sphere spans 2 · r · pixels_at_one / d pixels.
+    let far = 2.0 * median * pixels_at_one / SHADOWED_PIXELS;
+    if far.is_finite() && far > 0.0 {
+        far.min(reach)
+    } else {
+        reach
+    }
+}
+
 /// `name` of view `k`.
 pub fn view_name(name: &str, k: u32) -> String {
     name.replace("{view}", &k.to_string())
@@ -208,5 +273,94 @@ impl ShadowFrame {
             );
         }
         frame.with(SHADOWS_INPUT, bytemuck::bytes_of(&self.params))
+    }
+}
+
+/// The cascades' maps, which the renderer owns so that they outlive the frame, and what
+/// each layer was last drawn with: a cascade whose view and scene are unchanged since
+/// is left out of the frame ([`ShadowSettings::cache`]).
+#[derive(Default)]
+pub struct ShadowCache {
+    maps: Option<wgpu::Buffer>,
+    /// Per cascade, the view its layer holds (its frame index zeroed); `None`: not drawn
+    /// since the maps were made.
+    drawn: Vec<Option<meshlight::shaders::cpu::layout::View>>,
+    /// The shadow stage's pass names, `{view}` unreplaced (with their readbacks').
+    passes: Vec<String>,
+}
+
+impl ShadowCache {
+    /// Maps for `count` cascades of `resolution²` (none for 0, or where the pipeline
+    /// keeps `shadow_maps` itself instead of importing it: then nothing is kept), the
+    /// frame's shadow passes taken from `pipeline`; every layer is drawn by the next
+    /// frame.
+    pub fn reset(
+        &mut self,
+        gpu: &meshlight::graph::GpuContext,
+        count: u32,
+        resolution: u32,
+        pipeline: &Pipeline,
+    ) {
+        let bytes = u64::from(count) * u64::from(resolution) * u64::from(resolution) * 4;
+        self.drawn = vec![None; count as usize];
+        self.passes = pipeline
+            .passes
+            .iter()
+            .filter(|e| is_shadow(e))
+            .map(|e| e.name.clone())
+            .chain([RASTER_COUNTS, CLUSTER_COUNT].map(|n| format!("readback:{n}")))
+            .collect();
+        let imported = pipeline
+            .resource(SHADOW_MAPS)
+            .is_some_and(|r| r.kind == meshlight::graph::file::EntryKind::Imported);
+        if bytes == 0 || !imported {
+            self.maps = None;
+            self.drawn.clear();
+        } else if self.maps.as_ref().is_none_or(|b| b.size() != bytes) {
+            self.maps = Some(gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(SHADOW_MAPS),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }));
+        }
+    }
+
+    /// The maps, `count × resolution²` words of reverse-Z depth bits.
+    pub fn maps(&self) -> Option<&wgpu::Buffer> {
+        self.maps.as_ref()
+    }
+
+    /// Leaves out of `data` the passes of every cascade whose layer already holds
+    /// `frame`'s view of an unchanged scene (with `cache`), and notes the others as drawn.
+    /// Returns how many cascades are drawn.
+    pub fn skip_unchanged(
+        &mut self,
+        frame: &ShadowFrame,
+        scene_changed: bool,
+        cache: bool,
+        data: &mut FrameData,
+    ) -> u32 {
+        let mut drawn = 0;
+        for (k, c) in frame.cascades.iter().enumerate() {
+            let mut view = c.view;
+            view.frame_index = 0;
+            let Some(slot) = self.drawn.get_mut(k) else {
+                drawn += 1;
+                continue;
+            };
+            let same = slot.is_some_and(|v| bytemuck::bytes_of(&v) == bytemuck::bytes_of(&view));
+            if cache && same && !scene_changed {
+                for name in &self.passes {
+                    data.skip(&view_name(name, k as u32));
+                }
+            } else {
+                *slot = Some(view);
+                drawn += 1;
+            }
+        }
+        drawn
     }
 }

@@ -295,8 +295,16 @@ fn each_cascades_depth_map_is_the_references_cut_rasterised() {
 
 /// The renderer's maps against the reference's, cascade by cascade.
 fn check_maps(r: &mut Renderer, shadows: &ShadowSettings, hierarchy: bool) {
-    let maps: Vec<u32> =
-        bytemuck::pod_collect_to_vec(&r.executor.read_buffer(SHADOW_MAPS).unwrap());
+    let buffer = r
+        .shadow_maps()
+        .expect("the renderer keeps the maps")
+        .clone();
+    let maps: Vec<u32> = bytemuck::pod_collect_to_vec(
+        &r.executor
+            .gpu
+            .read_buffer(&buffer, 0, buffer.size())
+            .unwrap(),
+    );
     let frame = ShadowFrame::new(&camera(), [W, H], toward_sun(), shadows, 0, 1.0).unwrap();
     let side = shadows.cascades.resolution;
     let layer = (side * side) as usize;
@@ -374,4 +382,48 @@ fn shadows_only_darken_the_shaded_image_and_without_them_the_stage_is_gone() {
         darker += usize::from(u32::from(a[0]) + 10 < u32::from(b[0]));
     }
     assert!(darker > 1000, "only {darker} pixels are in shadow");
+}
+
+/// A cascade whose view and scene did not change is not drawn again, and the image is the
+/// same; moving an instance or the camera draws the cascades again.
+#[test]
+fn unchanged_cascades_keep_their_maps_and_a_change_draws_them_again() {
+    let shadows = shadow_settings();
+    let mut r = renderer(Some(shadows), DebugView::Shaded);
+    let first = r.render_still(&camera()).unwrap().rgba;
+    assert_eq!(r.cascades_drawn, 2, "the first frame draws every cascade");
+    let again = r.render_still(&camera()).unwrap().rgba;
+    assert_eq!(
+        r.cascades_drawn, 0,
+        "a still of an unchanged view drew cascades again"
+    );
+    assert!(first == again, "the kept maps shade differently");
+    // A sphere moved: every cascade is drawn again, and the shadow follows it.
+    let moved = Mat4::from_translation(SPHERES[1] + Vec3::new(0.0, 0.0, -2.0));
+    r.set_transform(meshlight::gpu_scene::data::InstanceId(2), moved)
+        .unwrap();
+    let after = r.render_still(&camera()).unwrap().rgba;
+    assert!(after != again, "the image did not change with the sphere");
+    let mut fresh = renderer(Some(shadows), DebugView::Shaded);
+    fresh
+        .set_transform(meshlight::gpu_scene::data::InstanceId(2), moved)
+        .unwrap();
+    let want = fresh.render_still(&camera()).unwrap().rgba;
+    assert!(after == want, "the kept maps missed the move");
+    // The camera moved: its slices moved, so the cascades are drawn.
+    let mut camera = camera();
+    camera.position.x += 0.5;
+    r.frame(&camera).unwrap();
+    assert_eq!(r.cascades_drawn, 2);
+    // Without the cache every frame draws them all.
+    let mut uncached = renderer(
+        Some(ShadowSettings {
+            cache: false,
+            ..shadows
+        }),
+        DebugView::Shaded,
+    );
+    uncached.render_still(&camera).unwrap();
+    uncached.frame(&camera).unwrap();
+    assert_eq!(uncached.cascades_drawn, 2);
 }

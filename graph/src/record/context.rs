@@ -413,8 +413,8 @@ impl<'a> RecordContext<'a> {
             )));
         };
         let align = u64::from(self.device.limits().min_storage_buffer_offset_alignment);
-        let end = offset.checked_add(bytes).unwrap_or(u64::MAX);
-        if offset % align != 0 || bytes % 4 != 0 || end > buffer.size() {
+        let end = offset.saturating_add(bytes);
+        if !offset.is_multiple_of(align) || !bytes.is_multiple_of(4) || end > buffer.size() {
             return Err(self.err(format!(
                 "cannot clear bytes {offset}..{end} of slot `{slot}` ({} bytes): the start must be a multiple of {align} and the length of 4, within the buffer",
                 buffer.size()

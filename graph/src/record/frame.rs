@@ -1,13 +1,14 @@
 //! Per-frame inputs: what changes every frame (the view, the instance count) without the
 //! graph being rebuilt or recompiled.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Named byte blocks a frame hands its passes; a pass declares the ones it reads with
 /// `SetupContext::frame_input` and reads them with `RecordContext::frame_bytes`.
 #[derive(Clone, Debug, Default)]
 pub struct FrameData {
     entries: HashMap<String, Vec<u8>>,
+    skipped: HashSet<String>,
 }
 
 impl FrameData {
@@ -40,5 +41,23 @@ impl FrameData {
     /// The bytes set for `name`, or `None` when this frame does not supply it.
     pub fn get(&self, name: &str) -> Option<&[u8]> {
         self.entries.get(name).map(Vec::as_slice)
+    }
+    /// Leaves the pass `name` out of this frame: it records nothing and is not timed, so
+    /// what it writes keeps what it held. For work a caller knows is still valid (a
+    /// shadow cascade whose view and scene did not change, drawn into a buffer the caller
+    /// owns); the passes reading its output must not depend on a transient it would
+    /// have written this frame. A name that is no pass of the graph is an error when the
+    /// frame runs.
+    pub fn skip(&mut self, name: &str) -> &mut Self {
+        self.skipped.insert(name.to_string());
+        self
+    }
+    /// Whether the pass `name` is left out of this frame.
+    pub fn skips(&self, name: &str) -> bool {
+        self.skipped.contains(name)
+    }
+    /// The passes left out of this frame.
+    pub fn skipped(&self) -> impl Iterator<Item = &str> {
+        self.skipped.iter().map(String::as_str)
     }
 }

@@ -336,7 +336,7 @@ impl SwRaster {
             )));
         }
         let layer_bytes = u64::from(width) * u64::from(height) * 4;
-        if depth_only && layer_bytes % 256 != 0 {
+        if depth_only && !layer_bytes.is_multiple_of(256) {
             return Err(GraphError::parameter(format!(
                 "a depth-only layer of {width} × {height} is {layer_bytes} bytes, not a multiple of 256, so it cannot be cleared alone; give sizes whose product is a multiple of 64 (sides that are multiples of 8)"
             )));

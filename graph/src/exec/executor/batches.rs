@@ -117,8 +117,9 @@ impl FrameRecord<'_> {
                 timer.batch_edge(&mut encoder, b, false);
             }
             for &p in &batch.passes {
-                // A pass skipped on this adapter records nothing and is not timed.
-                if plan.passes[p].skipped.is_some() {
+                // A pass skipped on this adapter, or left out of this frame, records
+                // nothing and is not timed.
+                if plan.passes[p].skipped.is_some() || self.frame_data.skips(&plan.passes[p].name) {
                     continue;
                 }
                 let node = &graph.passes[p];
@@ -168,7 +169,10 @@ impl FrameRecord<'_> {
                 passes: batch
                     .passes
                     .iter()
-                    .filter(|&&p| plan.passes[p].skipped.is_none())
+                    .filter(|&&p| {
+                        plan.passes[p].skipped.is_none()
+                            && !self.frame_data.skips(&plan.passes[p].name)
+                    })
                     .map(|&p| plan.passes[p].name.clone())
                     .collect(),
                 gpu_us: None,

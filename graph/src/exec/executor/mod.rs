@@ -488,7 +488,18 @@ impl Executor {
                     .into(),
             });
         }
+        if let Some(unknown) = frame_data.skipped().find(|n| plan.pass_index(n).is_none()) {
+            return Err(GraphError::Setting {
+                setting: "FrameData::skip".into(),
+                message: format!(
+                    "the frame leaves out a pass `{unknown}`, which the graph does not have; name one of its passes"
+                ),
+            });
+        }
         for &p in &plan.order {
+            if frame_data.skips(&plan.passes[p].name) {
+                continue;
+            }
             if let Some(input) = plan.passes[p]
                 .frame_inputs
                 .iter()
