@@ -57,9 +57,10 @@ fn graph_and_render_choose_the_same_for_every_stage_on_each_adapter() {
         let options = CompileOptions::new(features).with_class(class);
         // `meshlight graph --pipeline pipelines/virtual_geometry.toml`, planned so.
         let graph = meshlight_cli::graph::plan(shipped, &options).unwrap_or_else(|e| panic!("{e}"));
-        // `meshlight render`'s frame (the shipped frame, with lights) for a scene.
+        // `meshlight render`'s frame (the shipped frame, with lights and shadows) for a scene.
         let settings = FrameSettings {
             clustering: Some(ClusteringSettings::new([640, 360], 8)),
+            shadows: Some(meshlight_virtual_geometry::ShadowSettings::default()),
             ..FrameSettings::new(640, 360)
         };
         let render = frame(&GraphSource::Shipped, &placed.data, &settings)
