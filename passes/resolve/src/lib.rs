@@ -410,7 +410,7 @@ impl Pass for Resolve {
         let shadowed = ctx.is_bound(shadows::SHADOW_MAPS);
         if shadowed {
             ctx.frame_input(shadows::SHADOWS_INPUT);
-        } else if self.settings.view == DebugView::Shadow {
+        } else if self.settings.view.needs_shadows() {
             return Err(GraphError::parameter(
                 "the `shadow` view shows the sun's shadow cascades, and none are bound; bind the cascades' depth maps to the `shadow_maps` slot (the shipped frame does, with shadows on) or pick another view",
             ));

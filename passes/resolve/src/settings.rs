@@ -113,6 +113,11 @@ impl DebugView {
         self == DebugView::Pyramid
     }
 
+    /// True for views that show the sun's shadow cascades (the `shadow_maps` slot).
+    pub fn needs_shadows(self) -> bool {
+        self == DebugView::Shadow
+    }
+
     /// True for views that read the culling passes' records (`second_counts`,
     /// `occluded_per_instance`), which a frame binds only for them.
     pub fn needs_occlusion_records(self) -> bool {

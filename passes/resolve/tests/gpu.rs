@@ -690,8 +690,10 @@ fn depth_material_depth_and_every_view_match_the_reference() {
         "empty, spot's two materials and the knot's three: {materials:?}"
     );
 
-    let needs_more =
-        |v: &DebugView| v.needs_lights() || v.needs_pyramid() || v.needs_occlusion_records();
+    // Views that need slots this frame does not bind have tests of their own.
+    let needs_more = |v: &DebugView| {
+        v.needs_lights() || v.needs_pyramid() || v.needs_occlusion_records() || v.needs_shadows()
+    };
     for view in DebugView::ALL.into_iter().filter(|v| !needs_more(v)) {
         let got = run(&mut f, Resolve::new(W, H).with_view(view));
         // Depth and material depth do not depend on the view: check them every time.
