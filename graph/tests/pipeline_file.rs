@@ -308,50 +308,20 @@ fn view_set_mistakes_name_the_entry_and_what_to_change() {
 /// `i * k` and copies it out before the next view refills it.
 #[test]
 fn consecutive_entries_over_a_view_set_run_view_by_view() {
-    let text = r#"
-[views]
-cascades = 3
-
-[[resource]]
-name = "shared"
-kind = "transient"
-buffer = { element = "u32", count = 1000 }
-
-[[resource]]
-name = "a_{view}"
-kind = "transient"
-views = "cascades"
-buffer = { element = "u32", count = 1000 }
-
-[[resource]]
-name = "result"
-kind = "imported"
-buffer = { element = "u32", count = 1000 }
-usage = ["STORAGE", "COPY_SRC", "COPY_DST"]
-
-[[pass]]
-name = "fill_{view}"
-stage = "produce"
-implementation = "fill"
-views = "cascades"
-params = { count = 1000, k = "{view}" }
-bind = { output = "shared" }
-
-[[pass]]
-name = "copy_{view}"
-stage = "transform"
-implementation = "add"
-views = "cascades"
-params = { count = 1000, k = 0 }
-bind = { input = "shared", output = "a_{view}" }
-
-[[pass]]
-name = "transform"
-stage = "transform"
-implementation = "add"
-params = { count = 1000, k = 1 }
-bind = { input = "a_1", output = "result" }
-"#;
+    // The view set above, each view's fill writing one `shared` list that a copy per
+    // view takes out.
+    let text = VIEWS
+        .replace("COUNT", "3")
+        .replace("LAST", "a_1")
+        .replace(
+            "[[resource]]\nname = \"result\"",
+            "[[resource]]\nname = \"shared\"\nkind = \"transient\"\nbuffer = { element = \"u32\", count = 1000 }\n\n[[resource]]\nname = \"result\"",
+        )
+        .replace(
+            "bind = { output = \"a_{view}\" }",
+            "bind = { output = \"shared\" }\n\n[[pass]]\nname = \"copy_{view}\"\nstage = \"transform\"\nimplementation = \"add\"\nviews = \"cascades\"\nparams = { count = 1000, k = 0 }\nbind = { input = \"shared\", output = \"a_{view}\" }",
+        );
+    let text = text.as_str();
     let g = parse_pipeline(text, "views.toml", &registry()).unwrap();
     let plan = g
         .compile(&CompileOptions::new(wgpu::Features::empty()))

@@ -128,32 +128,21 @@ impl ShadowRequest {
         }
     }
 
-    /// Refuses a number out of range, naming it, before any work: the scene's own
-    /// distance stands in for one not given.
+    /// Refuses a number out of range, naming it, before any work: a unit distance stands
+    /// in for the scene's, which is not known yet.
     pub fn check(&self, viewport: [u32; 2]) -> Result<(), GraphError> {
-        if self.cascades == Some(0) {
-            return Ok(());
+        match self.cascades {
+            Some(0) => Ok(()),
+            count => self.with(count.unwrap_or(1), viewport, 1.0, 1.0).validate(),
         }
-        let s = ShadowSettings {
-            cascades: meshlight::gpu_scene::cascades::CascadeSettings {
-                count: self.cascades.unwrap_or(1),
-                resolution: self.resolution.unwrap_or(default_resolution(viewport)),
-                distance: self.distance.unwrap_or(1.0),
-                split_lambda: self.split_lambda,
-                caster_reach: 1.0,
-            },
-            depth_bias: self.depth_bias,
-            normal_bias: self.normal_bias,
-            lod_bias: self.lod_bias,
-            cache: true,
-        };
-        s.validate()
     }
 
     /// The settings for a scene seen from `camera` (`None`: no shadow). The distance
     /// not given is [`crate::shadows::shadow_distance`]'s, and casters are kept as far
-    /// towards the sun as the shadow distance; a pipeline without the shadow stage draws none unless cascades are asked
-    /// for (and then refuses, saying so).
+    /// towards the sun as shadows reach from the camera (a slope or a tower beyond that
+    /// shades nothing in view unless it is taller than the distance); a pipeline without
+    /// the shadow stage draws none unless cascades are asked for (and then refuses,
+    /// saying so).
     pub fn settings(
         &self,
         data: &SceneData,
@@ -161,32 +150,34 @@ impl ShadowRequest {
         viewport: [u32; 2],
         has_stage: bool,
     ) -> Option<ShadowSettings> {
-        let count = self.cascades.unwrap_or(if has_stage {
-            ShadowSettings::default().cascades.count
-        } else {
-            0
-        });
+        let default_count = ShadowSettings::default().cascades.count;
+        let count = self
+            .cascades
+            .unwrap_or(if has_stage { default_count } else { 0 });
         if count == 0 {
             return None;
         }
         let reach = crate::shadows::scene_reach(data, camera.position).max(1.0);
-        let distance = crate::shadows::shadow_distance(data, camera, viewport).max(1.0);
-        Some(ShadowSettings {
+        let distance = (self.distance)
+            .unwrap_or_else(|| crate::shadows::shadow_distance(data, camera, viewport).max(1.0));
+        Some(self.with(count, viewport, distance, distance.min(reach)))
+    }
+
+    /// The settings with these numbers and the request's own.
+    fn with(&self, count: u32, viewport: [u32; 2], distance: f32, reach: f32) -> ShadowSettings {
+        ShadowSettings {
             cascades: meshlight::gpu_scene::cascades::CascadeSettings {
                 count,
                 resolution: self.resolution.unwrap_or(default_resolution(viewport)),
                 distance: self.distance.unwrap_or(distance),
                 split_lambda: self.split_lambda,
-                // Casters as far towards the sun as shadows reach from the camera (a
-                // slope or a tower beyond that shades nothing the cascades hold in view
-                // unless it is taller than the shadow distance).
-                caster_reach: self.distance.unwrap_or(distance).min(reach),
+                caster_reach: reach,
             },
             depth_bias: self.depth_bias,
             normal_bias: self.normal_bias,
             lod_bias: self.lod_bias,
             cache: true,
-        })
+        }
     }
 }
 

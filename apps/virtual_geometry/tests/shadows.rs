@@ -427,3 +427,51 @@ fn unchanged_cascades_keep_their_maps_and_a_change_draws_them_again() {
     uncached.frame(&camera).unwrap();
     assert_eq!(uncached.cascades_drawn, 2);
 }
+
+/// What a caller who asks for nothing gets: four cascades where the pipeline has the
+/// stage (none where it has not, none for 0), maps as wide as the viewport's longer side
+/// within 256..=2048, and shadows as far as the median instance spans 8 pixels.
+#[test]
+fn the_defaults_follow_the_pipeline_the_viewport_and_the_scene() {
+    use meshlight_virtual_geometry::setup::{ShadowRequest, default_resolution};
+    use meshlight_virtual_geometry::shadows::{SHADOWED_PIXELS, scene_reach, shadow_distance};
+    assert_eq!(default_resolution([1280, 720]), 1280);
+    assert_eq!(default_resolution([96, 64]), 256);
+    assert_eq!(default_resolution([3840, 2160]), 2048);
+    assert_eq!(default_resolution([1001, 10]), 1008);
+    let data = scene();
+    let ask = ShadowRequest::default();
+    let s = ask.settings(&data, &camera(), [W, H], true).unwrap();
+    assert_eq!((s.cascades.count, s.cascades.resolution), (4, 320));
+    assert!(ask.settings(&data, &camera(), [W, H], false).is_none());
+    assert!(
+        ShadowRequest::off()
+            .settings(&data, &camera(), [W, H], true)
+            .is_none()
+    );
+    // Four spheres and the plane: the median bounding radius is a sphere's, which spans
+    // 2 · r · H / 2 · cot(fov / 2) / d pixels at distance d; here that is past the
+    // plane's far side, where the scene ends.
+    let r = data.meshes[1].bounding_sphere[3];
+    let pixels_at_one = 0.5 * H as f32 / (0.5f32).tan();
+    let eight_pixels = 2.0 * r * pixels_at_one / SHADOWED_PIXELS;
+    let reach = scene_reach(&data, camera().position);
+    assert!(eight_pixels > reach, "{eight_pixels} {reach}");
+    let got = shadow_distance(&data, &camera(), [W, H]);
+    assert_eq!(got, reach);
+    // 36 pixels high, the spheres reach 8 pixels before the scene ends.
+    let small = shadow_distance(&data, &camera(), [W / 5, H / 5]);
+    let want = eight_pixels / 5.0;
+    assert!((small - want).abs() < 1e-3 * want, "{small} against {want}");
+    assert_eq!(s.cascades.distance, got);
+    // A number out of range is refused before any work, by name.
+    let bad = ShadowRequest {
+        resolution: Some(100),
+        ..ShadowRequest::default()
+    };
+    let e = bad.check([W, H]).unwrap_err().to_string();
+    assert!(
+        e.contains("resolution = 100") && e.contains("multiple of 8"),
+        "{e}"
+    );
+}
