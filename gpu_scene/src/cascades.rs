@@ -265,18 +265,17 @@ pub fn cascades(
         .collect()
 }
 
-/// The planes a caster of a cascade is culled against. The cascade box's four sides
-/// (casters outside them draw off the map), and two planes of the camera's slice
-/// `near..far`: a caster matters only where its shadow can fall on the slice, so only
-/// inside the slice swept towards the light, and each of the slice's planes (the
-/// camera's four sides and the slice's two ends, moved out by `margin` for the filter's
-/// reach) whose inward normal does not face away from the light bounds that sweep
-/// (moving towards the light never brings a point back inside it). The slice's ends
-/// are taken first, then the sides most across the light; where fewer than two bound
-/// the sweep, the box's near and far planes fill in. So slots 4 and 5 do not hold the
-/// box's near and far planes: a shadow view's cull sends every cluster to software
-/// (`hardware = false`), which clips at the near plane itself, and never reads slot 4
-/// as one. The projection, and so the LOD and the texel snapping, stays the box's.
+/// The planes a caster of a cascade is culled against: the cascade box's four sides
+/// (casters outside them draw off the map) and its near plane (slot 4, where `cull_lod`
+/// finds the near plane for its split between the rasterisers), and one plane of the
+/// camera's slice `near..far` in slot 5. A caster matters only where its shadow can fall
+/// on the slice, so only inside the slice swept towards the light, and each of the
+/// slice's planes (the camera's four sides and the slice's two ends, moved out by
+/// `margin` for the filter's reach) whose inward normal does not face away from the
+/// light bounds that sweep (moving towards the light never brings a point back inside
+/// it). The slice's ends are taken first, then the sides most across the light; where
+/// none bounds the sweep, the box's far plane stays. The projection, and so the LOD and
+/// the texel snapping, stays the box's.
 fn caster_planes(
     camera: &Camera,
     viewport: [u32; 2],
@@ -303,15 +302,11 @@ fn caster_planes(
     lateral.sort_by(|a, b| {
         (a.truncate().dot(toward_light)).total_cmp(&b.truncate().dot(toward_light))
     });
-    let mut chosen = ends
-        .into_iter()
-        .filter(bounding)
-        .chain(lateral)
-        .map(|p| (p + glam::Vec4::W * margin).to_array())
-        .chain([box_planes[4], box_planes[5]]);
+    let chosen = ends.into_iter().filter(bounding).chain(lateral).next();
     let mut out = *box_planes;
-    out[4] = chosen.next().unwrap_or(box_planes[4]);
-    out[5] = chosen.next().unwrap_or(box_planes[5]);
+    if let Some(p) = chosen {
+        out[5] = (p + glam::Vec4::W * margin).to_array();
+    }
     out
 }
 

@@ -284,12 +284,7 @@ fn hardware(p: &mut Pipeline, registry: &Registry, hardware: Option<bool>) -> Re
     let Some(on) = hardware else {
         return Ok(());
     };
-    // The shadow views draw depth in software only.
-    for cull in p.passes_of_mut(meshlight::cull_lod::STAGE) {
-        if !super::shadows::is_shadow(cull) {
-            cull.set_param("hardware", on);
-        }
-    }
+    p.set_stage_param(meshlight::cull_lod::STAGE, "hardware", on);
     if on {
         p.set_stage_param(meshlight::hw_raster::STAGE, "run", "always");
     } else {

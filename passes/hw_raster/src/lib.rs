@@ -109,6 +109,26 @@ pub const MESH_SHADER_SOURCE: PassShader = PassShader {
 
 /// The slots every implementation of `hw_raster` shares.
 pub fn contract() -> StageContract {
+    contract_with(false)
+}
+
+/// The stage's slots; with `depth_only` ([`HwRaster::depth_only`]), `visbuffer` is a
+/// buffer of `u32` depths, drawn onto what the software rasteriser's layer holds.
+fn contract_with(depth_only: bool) -> StageContract {
+    let target = if depth_only {
+        Slot::buffer(
+            "visbuffer",
+            Access::StorageReadWrite,
+            Element::U32,
+            "layers of width × height reverse-Z depth bits; atomicMax onto layer `layer`",
+        )
+    } else {
+        Slot::visibility64(
+            "visbuffer",
+            Access::StorageReadWrite,
+            "width × height visibility values (u64 buffer or r64uint texture); atomicMax onto the software raster's",
+        )
+    };
     StageContract {
         stage: STAGE,
         slots: [
@@ -131,11 +151,7 @@ pub fn contract() -> StageContract {
                 ),
             ],
             scene_reads(&[Instances, Meshes, Meshlets, Payload, Materials, Textures]),
-            vec![Slot::visibility64(
-                "visbuffer",
-                Access::StorageReadWrite,
-                "width × height visibility values (u64 buffer or r64uint texture); atomicMax onto the software raster's",
-            )],
+            vec![target],
         ]
         .concat(),
     }
@@ -186,6 +202,11 @@ pub struct HwRaster {
     /// the cutoff (`sw_raster`'s parameter of the same name, the same test); off, no
     /// material is read for it.
     pub alpha_mask: bool,
+    /// Write only the depth into layer [`Self::layer`] of a buffer of `u32` layers, as
+    /// `sw_raster`'s `depth_only` does (a shadow map; that pass clears the layer).
+    pub depth_only: bool,
+    /// With [`Self::depth_only`], the layer drawn.
+    pub layer: u32,
 }
 
 impl HwRaster {
@@ -198,6 +219,8 @@ impl HwRaster {
             auto_skip: false,
             two_sided: false,
             alpha_mask: false,
+            depth_only: false,
+            layer: 0,
         }
     }
 }
@@ -214,6 +237,8 @@ shader_defs! {
         pub two_sided: bool => "TWO_SIDED",
         /// See [`HwRaster::alpha_mask`].
         pub alpha_mask: bool => "ALPHA_MASK",
+        /// See [`HwRaster::depth_only`].
+        pub depth_only: bool => "DEPTH_ONLY",
     }
 }
 
@@ -232,17 +257,27 @@ uniform_block! {
         /// adapter's mesh-dispatch limits).
         row: u32,
         total: u32,
-        pad_a: u32,
+        /// DEPTH_ONLY: the layer of `visbuffer` drawn.
+        layer: u32,
         pad_b: u32,
         pad_c: u32,
     }
 }
 
-const PARAM_KEYS: [&str; 5] = ["width", "height", "run", "two_sided", "alpha_mask"];
+const PARAM_KEYS: [&str; 7] = [
+    "width",
+    "height",
+    "run",
+    "two_sided",
+    "alpha_mask",
+    "depth_only",
+    "layer",
+];
 
 impl HwRaster {
     /// Reads `width` and `height` (required, > 0: the visibility buffer's size), `run`,
-    /// `two_sided` and `alpha_mask` (default false).
+    /// `two_sided`, `alpha_mask` and `depth_only` (default false), and `layer` (default
+    /// 0, only with `depth_only`).
     pub fn from_params(params: &Params, feed: Feed) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let [width, height] = params.size("the visibility buffer")?;
@@ -255,6 +290,13 @@ impl HwRaster {
                 )));
             }
         };
+        let depth_only = params.bool("depth_only", false)?;
+        let layer = params.u32("layer", 0)?;
+        if layer > 0 && !depth_only {
+            return Err(GraphError::parameter(format!(
+                "`layer = {layer}` draws one layer of a stack of depth maps, which only `depth_only = true` writes; set it, or drop `layer`"
+            )));
+        }
         Ok(Self {
             width,
             height,
@@ -262,13 +304,15 @@ impl HwRaster {
             auto_skip,
             two_sided: params.bool("two_sided", false)?,
             alpha_mask: params.bool("alpha_mask", false)?,
+            depth_only,
+            layer,
         })
     }
 }
 
 impl Pass for HwRaster {
     fn implementation(&self) -> Implementation {
-        Implementation::new(self.feed.implementation(), contract())
+        Implementation::new(self.feed.implementation(), contract_with(self.depth_only))
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         if self.auto_skip {
@@ -278,15 +322,22 @@ impl Pass for HwRaster {
                 return Ok(());
             }
         }
-        let texture = ctx.is_texture("visbuffer");
-        // atomicMax onto the 64-bit target, as sw_raster draws onto it.
-        let target = if texture {
-            Visibility64::Texture
+        let texture = ctx.is_texture("visbuffer") && !self.depth_only;
+        let pixels = self.width as u64 * self.height as u64;
+        if self.depth_only {
+            // 32-bit atomics onto the layer; 64-bit integers for the shared code.
+            ctx.require_features(wgpu::Features::SHADER_INT64);
+            ctx.min_bytes("visbuffer", pixels * 4 * (u64::from(self.layer) + 1));
         } else {
-            Visibility64::Buffer
-        };
-        ctx.require_features(target.atomic_max_features());
-        ctx.min_bytes("visbuffer", self.width as u64 * self.height as u64 * 8);
+            // atomicMax onto the 64-bit target, as sw_raster draws onto it.
+            let target = if texture {
+                Visibility64::Texture
+            } else {
+                Visibility64::Buffer
+            };
+            ctx.require_features(target.atomic_max_features());
+            ctx.min_bytes("visbuffer", pixels * 8);
+        }
         ctx.min_bytes("raster_counts", 16);
         ctx.min_bytes("hw_args", 16);
         ctx.frame_input(VIEW_INPUT);
@@ -310,6 +361,7 @@ impl Pass for HwRaster {
             texture,
             two_sided: self.two_sided,
             alpha_mask: self.alpha_mask,
+            depth_only: self.depth_only,
         };
         ctx.shader_defs(&defs);
         let table = InstanceTable::of(ctx);
@@ -360,6 +412,7 @@ impl Pass for HwRaster {
             nan_bits: NAN_BITS,
             row: limits.max_mesh_workgroups_per_dimension.max(1),
             total: limits.max_mesh_workgroup_total_count,
+            layer: self.layer,
             ..GpuParams::default()
         };
         let params = bytemuck::bytes_of(&params);
@@ -432,11 +485,12 @@ mod tests {
             | Capabilities::TEXTURE_ATOMIC
             | Capabilities::TEXTURE_INT64_ATOMIC;
         for mesh_shader in [false, true] {
-            for (on_texture, two_sided, alpha_mask) in [
-                (false, false, false),
-                (false, true, true),
-                (true, false, true),
-                (true, true, false),
+            for (on_texture, two_sided, alpha_mask, depth_only) in [
+                (false, false, false, false),
+                (false, true, true, false),
+                (true, false, true, false),
+                (true, true, false, false),
+                (false, true, true, true),
             ] {
                 // `setup` refuses the mesh variant with `alpha_mask` (see there).
                 let alpha_mask = alpha_mask && !mesh_shader;
@@ -445,6 +499,7 @@ mod tests {
                     texture: on_texture,
                     two_sided,
                     alpha_mask,
+                    depth_only,
                 };
                 let mut caps = if on_texture { texture } else { int64 };
                 if mesh_shader {
@@ -459,6 +514,7 @@ mod tests {
             texture: false,
             two_sided: false,
             alpha_mask: false,
+            depth_only: false,
         };
         assert!(compose(defs, int64).is_err());
     }

@@ -19,6 +19,7 @@
 #import meshlight::instance_table::instance_at
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
+#import meshlight::visbuffer::visbuffer_depth_bits
 
 // The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
 #import hw_raster::params::Params
@@ -41,10 +42,15 @@
 #import meshlight::scene_buffers::{meshes, meshlets, payload, materials}
 #endif
 // width × height visibility values, row-major; the software rasteriser wrote first.
+#ifdef DEPTH_ONLY
+// Layers of width × height reverse-Z depth bits; this pass draws layer `params.layer`.
+@group(0) @binding(6) var<storage, read_write> visbuffer: array<atomic<u32>>;
+#else
 #ifdef VIS_TEXTURE
 @group(0) @binding(6) var visbuffer: texture_storage_2d<r64uint, atomic>;
 #else
 @group(0) @binding(6) var<storage, read_write> visbuffer: array<atomic<u64>>;
+#endif
 #endif
 @group(0) @binding(7) var<uniform> view: View;
 @group(0) @binding(8) var<uniform> params: Params;
@@ -95,11 +101,17 @@ fn write_visibility(position: vec4<f32>, id: vec2<u32>) {
         return;
     }
 #endif
+#ifdef DEPTH_ONLY
+    // The visibility value's high word.
+    let layer_start = params.layer * params.width * params.height;
+    atomicMax(&visbuffer[layer_start + y * params.width + x], visbuffer_depth_bits(position.z));
+#else
     let value = visbuffer64_pack(position.z, id.x, id.y);
 #ifdef VIS_TEXTURE
     textureAtomicMax(visbuffer, vec2(x, y), value);
 #else
     atomicMax(&visbuffer[y * params.width + x], value);
+#endif
 #endif
 }
 

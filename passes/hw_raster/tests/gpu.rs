@@ -160,6 +160,8 @@ fn run_fed(frame: &mut Frame, feed: Feed) -> Result<Vec<u64>> {
             feed,
             two_sided: frame.two_sided,
             alpha_mask: frame.alpha_mask,
+            depth_only: false,
+            layer: 0,
         },
         Bindings::new(),
     )?;
@@ -656,5 +658,81 @@ fn mask_materials_cut_out_the_fragments_the_reference_cuts() {
         Err(e) if e.to_string().contains("indirect_draw") => {}
         Err(e) if e.to_string().contains("EXPERIMENTAL_MESH_SHADER") => {}
         other => panic!("mesh_shader with alpha_mask: {:?}", other.map(|_| ())),
+    }
+}
+
+/// A depth-only pass (a shadow map's) draws layer 1 of a stack of `u32` depths onto what
+/// it held: each depth is the high word of the visibility value the ordinary pass writes
+/// over the same contents, and layer 0 keeps what it held. Both feeds where the adapter
+/// has them.
+#[test]
+fn a_depth_only_layer_holds_the_visibility_passs_depths_and_leaves_the_other_layer() {
+    let mut f = frame(scene(), camera(), |_, m| m.level() == 0);
+    let want: Vec<u32> = run(&mut f).iter().map(|&v| (v >> 32) as u32).collect();
+    assert!(
+        want.iter().filter(|&&d| d != 0).count() > 300,
+        "the frame covers little"
+    );
+    let layer = (W * H) as usize;
+    let stale: Vec<u32> = (0..layer as u32).map(|i| i * 3 + 1).collect();
+    let initial: Vec<u32> = stale
+        .iter()
+        .copied()
+        .chain(f.initial.iter().map(|&v| (v >> 32) as u32))
+        .collect();
+    for feed in [Feed::IndirectDraw, Feed::MeshShader] {
+        let gpu = gpu();
+        if feed == Feed::MeshShader
+            && !gpu
+                .features
+                .contains(wgpu::Features::EXPERIMENTAL_MESH_SHADER)
+        {
+            continue;
+        }
+        let scene = GpuScene::new(&gpu, &mut f.scene);
+        let capacity = f.raster_clusters.len() as u32;
+        let counts: [u32; 8] = [SOFTWARE, f.hw_count, 0, capacity, 0, 0, 0, 0];
+        let args = [VERTICES_PER_CLUSTER, f.hw_count, 0, 0];
+        let mut g = GraphBuilder::new();
+        scene.import(&mut g);
+        let Imported {
+            buffers: [.., maps],
+            imports,
+            ..
+        } = import_filled(
+            &mut g,
+            &gpu,
+            [
+                filled("raster_clusters", elements::CLUSTER, &f.raster_clusters),
+                filled("raster_counts", Element::U32, &counts),
+                filled("hw_args", Element::DRAW_ARGS, &args),
+                filled("visbuffer", Element::U32, &initial),
+            ],
+            scene.imports(),
+        );
+        let pass = HwRaster {
+            depth_only: true,
+            layer: 1,
+            feed,
+            ..HwRaster::indirect(W, H)
+        };
+        g.add_pass("shadow_hw_raster", pass, Bindings::new())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let compiled = g
+            .compile(&CompileOptions::for_gpu(&gpu))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut exec = Executor::new(gpu);
+        let got = run_per_view(&mut exec, &compiled, &imports, &[f.view], |exec| {
+            let bytes = exec.gpu.read_buffer(&maps, 0, (2 * layer * 4) as u64)?;
+            Ok(bytemuck::pod_collect_to_vec::<u8, u32>(&bytes))
+        })
+        .unwrap_or_else(|e| panic!("{e}"))
+        .remove(0);
+        assert_eq!(&got[..layer], &stale[..], "{feed:?}: layer 0 was touched");
+        let differ = (0..layer).filter(|&i| got[layer + i] != want[i]).count();
+        assert_eq!(
+            differ, 0,
+            "{feed:?}: {differ} depths differ from the visibility pass's"
+        );
     }
 }
