@@ -258,8 +258,10 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
             },
             other => other,
         })?;
-        if let Some((read, supplied)) =
-            (node.inputs.iter()).find(|(read, _)| !ctx.frame_inputs.iter().any(|i| i == read))
+        // A pass skipped on this adapter class declares nothing, its inputs included.
+        if ctx.skipped.is_none()
+            && let Some((read, supplied)) =
+                (node.inputs.iter()).find(|(read, _)| !ctx.frame_inputs.iter().any(|i| i == read))
         {
             return Err(GraphError::Parameter {
                 pass: node.name.clone(),
