@@ -266,16 +266,16 @@ pub fn cascades(
 }
 
 /// The planes a caster of a cascade is culled against: the cascade box's four sides
-/// (casters outside them draw off the map) and its near plane (slot 4, where `cull_lod`
-/// finds the near plane for its split between the rasterisers), and one plane of the
-/// camera's slice `near..far` in slot 5. A caster matters only where its shadow can fall
-/// on the slice, so only inside the slice swept towards the light, and each of the
-/// slice's planes (the camera's four sides and the slice's two ends, moved out by
-/// `margin` for the filter's reach) whose inward normal does not face away from the
-/// light bounds that sweep (moving towards the light never brings a point back inside
-/// it). The slice's ends are taken first, then the sides most across the light; where
-/// none bounds the sweep, the box's far plane stays. The projection, and so the LOD and
-/// the texel snapping, stays the box's.
+/// (casters outside them draw off the map) and, in slots 4 and 5, two planes of the
+/// camera's slice `near..far`. A caster matters only where its shadow can fall on the
+/// slice, so only inside the slice swept towards the light, and each of the slice's
+/// planes (the camera's four sides and the slice's two ends, moved out by `margin` for
+/// the filter's reach) whose inward normal does not face away from the light bounds
+/// that sweep (moving towards the light never brings a point back inside it). The
+/// slice's ends are taken first, then the sides most across the light; where fewer
+/// than two bound the sweep, the box's near and far planes stay. Nothing reads slot 4
+/// as the near plane (`cull_lod` measures the near plane from the view matrix and
+/// `near`). The projection, and so the LOD and the texel snapping, stays the box's.
 fn caster_planes(
     camera: &Camera,
     viewport: [u32; 2],
@@ -302,10 +302,16 @@ fn caster_planes(
     lateral.sort_by(|a, b| {
         (a.truncate().dot(toward_light)).total_cmp(&b.truncate().dot(toward_light))
     });
-    let chosen = ends.into_iter().filter(bounding).chain(lateral).next();
+    let mut chosen = ends
+        .into_iter()
+        .filter(bounding)
+        .chain(lateral)
+        .map(|p| (p + glam::Vec4::W * margin).to_array());
     let mut out = *box_planes;
-    if let Some(p) = chosen {
-        out[5] = (p + glam::Vec4::W * margin).to_array();
+    for slot in [4, 5] {
+        if let Some(p) = chosen.next() {
+            out[slot] = p;
+        }
     }
     out
 }

@@ -73,7 +73,11 @@ fn a_toy_implementation_registered_outside_renders_from_a_pipeline_file() {
     ));
     let text = std::fs::read_to_string(&shipped).unwrap();
     let named = "stage = \"remap_dispatch\"\nimplementation = \"single_thread\"";
-    assert_eq!(text.matches(named).count(), 2, "both culling passes remap");
+    assert_eq!(
+        text.matches(named).count(),
+        3,
+        "both culling passes remap, and the shadow cascades' (taken out without shadows)"
+    );
     let dir = std::env::temp_dir().join(format!("meshlight-toy-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let toy = dir.join("virtual_geometry_square.toml");

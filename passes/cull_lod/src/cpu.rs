@@ -171,12 +171,12 @@ pub fn is_software(
     radius: f32,
     threshold: f32,
 ) -> (bool, f32, [f32; 2]) {
-    let near = view.frustum[4];
-    let near_distance = dot3(xyz(near), center) + near[3];
+    // The view's near plane (view-space depth `near`), as cull.wgsl measures it.
+    let c = transform_point(&view.view, center);
+    let near_distance = -c[2] - view.near;
     if near_distance <= radius {
         return (false, near_distance - radius, [0.0; 2]);
     }
-    let c = transform_point(&view.view, center);
     let mut lo = [f32::MAX; 2];
     let mut hi = [-f32::MAX; 2];
     for k in 0..8u32 {

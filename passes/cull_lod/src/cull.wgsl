@@ -255,12 +255,13 @@ fn prepare() {
 // Software when the sphere (world space) lies wholly beyond the near plane and the
 // screen box of its view-space bounding box is under the threshold in both axes. The
 // box's nearest face is as near as the sphere, so every corner projects with w > 0.
+// The near plane is the view's (view-space depth `near`), not `frustum[4]`: a shadow
+// cascade's view keeps a caster plane there.
 fn is_software(center: vec3<f32>, radius: f32) -> bool {
-    let near = view.frustum[4];
-    if dot(near.xyz, center) + near.w <= radius {
+    let c = (view.view * vec4(center, 1.0)).xyz;
+    if -c.z - view.near <= radius {
         return false;
     }
-    let c = (view.view * vec4(center, 1.0)).xyz;
     var lo = vec2(F32_MAX);
     var hi = vec2(-F32_MAX);
     for (var k = 0u; k < 8u; k += 1u) {
