@@ -4,9 +4,9 @@
 //! inputs, and the cascades' counters read back so their lists grow like the camera's.
 //!
 //! A shadow pass is told from the camera's by its `views`: the renderer's settings that
-//! concern the camera's passes (occlusion records, the streaming slots, the hardware
-//! rasteriser) leave the shadow passes as the file wrote them, and the LOD threshold of
-//! a shadow pass is the camera's times `2^lod_bias`.
+//! concern the camera's passes only (the occlusion view's records, the streaming
+//! slots) leave the shadow passes as the file wrote them, and the LOD threshold of a
+//! shadow pass is the camera's times `2^lod_bias`.
 
 use super::settings::{FrameSettings, ShadowSettings};
 use meshlight::gpu_scene::Camera;
@@ -124,7 +124,7 @@ pub struct CascadeCounts {
     pub candidates_requested: u32,
     /// Clusters that passed the frustum and LOD tests (slots requested).
     pub visible: u32,
-    /// Clusters drawn, all in software.
+    /// Clusters drawn, by both rasterisers.
     pub drawn: u32,
     /// Triangles drawn.
     pub triangles: u32,
