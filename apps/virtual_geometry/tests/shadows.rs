@@ -498,3 +498,33 @@ fn the_defaults_follow_the_pipeline_the_viewport_and_the_scene() {
         "{e}"
     );
 }
+
+/// The one-pass frame (`pipelines/virtual_geometry_one_pass.toml`, occlusion off) carries
+/// the same shadow stage: its maps equal the two-pass frame's.
+#[test]
+fn the_one_pass_frame_draws_the_same_shadow_maps() {
+    let maps = |occlusion: bool| {
+        let settings = FrameSettings {
+            shadows: Some(shadow_settings()),
+            sun_direction: Some(toward_sun()),
+            occlusion,
+            ..FrameSettings::new(W, H)
+        };
+        let mut r = Renderer::new(scene(), settings, &GraphSource::Shipped)
+            .unwrap_or_else(|e| panic!("{e}"));
+        r.render_still(&camera()).unwrap_or_else(|e| panic!("{e}"));
+        let buffer = r
+            .shadow_maps()
+            .expect("the renderer keeps the maps")
+            .clone();
+        let bytes = r
+            .executor
+            .gpu
+            .read_buffer(&buffer, 0, buffer.size())
+            .unwrap();
+        bytemuck::pod_collect_to_vec::<u8, u32>(&bytes)
+    };
+    let two_pass = maps(true);
+    assert!(two_pass.iter().filter(|&&d| d != 0).count() > two_pass.len() / 4);
+    assert!(maps(false) == two_pass, "the one-pass frame's maps differ");
+}
