@@ -115,6 +115,8 @@ pub struct Renderer {
     shadow_cache: super::shadows::ShadowCache,
     /// Cascades drawn by the last frame (the others kept their maps).
     pub cascades_drawn: u32,
+    /// Towards the sun, as the frame's resolve has it (read when the frame is built).
+    sun: glam::Vec3,
 }
 
 /// The imported object list of the light clustering and its count.
@@ -260,6 +262,7 @@ impl Renderer {
             shadow_counts: Vec::new(),
             shadow_cache: Default::default(),
             cascades_drawn: 0,
+            sun: glam::Vec3::ZERO,
         };
         renderer.note_readbacks();
         renderer
@@ -313,7 +316,8 @@ impl Renderer {
         Ok(max_frames)
     }
 
-    /// Which counters the compiled frame reads back.
+    /// What the renderer keeps of a newly built frame: which counters come back, the
+    /// shadow cascades (their maps made anew) and the sun they follow.
     fn note_readbacks(&mut self) {
         let has = |name: &str| {
             self.compiled
@@ -329,6 +333,7 @@ impl Renderer {
             None => 0,
         };
         self.shadow_counts.clear();
+        self.sun = self.sun_direction();
         let resolution = self.settings.shadows.map_or(0, |s| s.cascades.resolution);
         self.shadow_cache.reset(
             &self.executor.gpu,
@@ -431,7 +436,7 @@ impl Renderer {
             Some(settings) => Some(super::shadows::ShadowFrame::new(
                 camera,
                 viewport,
-                self.sun_direction(),
+                self.sun,
                 &settings,
                 self.frame_index,
                 self.streaming.as_ref().map_or(1.0, |s| s.lod_scale()),
