@@ -284,7 +284,22 @@ fn view_set_mistakes_name_the_entry_and_what_to_change() {
     );
     let e = refused(&base.replace("name = \"fill_{view}\"", "name = \"fill\""));
     assert!(
-        e.contains("pass `fill` runs over view set `cascades`, but its name holds no `{view}`"),
+        e.contains("pass `fill` runs once for the whole view set `cascades` (its name holds no `{view}`), so `{view}` in its bindings"),
+        "{e}"
+    );
+    let e = refused(&base.replace("name = \"a_{view}\"", "name = \"a\""));
+    assert!(
+        e.contains("resource `a` runs over view set `cascades`, but its name holds no `{view}`"),
+        "{e}"
+    );
+    let e = refused(&base.replace("[views]", "[params]\ncascades = 3\n\n[views]"));
+    assert!(
+        e.contains("`cascades` is both a size parameter ([params]) and a view set ([views])"),
+        "{e}"
+    );
+    let e = refused(&base.replace("count = 1000, k = 1 }", "count = 1000, k = \"$cascade\" }"));
+    assert!(
+        e.contains("refers to `$cascade`, which neither [params] nor [views] declares"),
         "{e}"
     );
     let e = refused(&base.replace("bind = { input = \"a_1\"", "bind = { input = \"a_{view}\""));
@@ -301,6 +316,35 @@ fn view_set_mistakes_name_the_entry_and_what_to_change() {
         e.contains("reads no frame input `view` (it reads: none)"),
         "{e}"
     );
+}
+
+/// A pass over a view set whose name holds no `{view}` runs once for the whole set, and
+/// reads the set's size as `"$cascades"`: here `transform` adds the number of views.
+#[test]
+fn a_pass_for_the_whole_view_set_runs_once_and_reads_its_size() {
+    for count in [2u32, 3] {
+        let text = VIEWS
+            .replace("COUNT", &count.to_string())
+            .replace("LAST", "a_1")
+            .replace(
+                "name = \"transform\"\nstage",
+                "name = \"transform\"\nviews = \"cascades\"\nstage",
+            )
+            .replace("count = 1000, k = 1 }", "count = 1000, k = \"$cascades\" }");
+        let g = parse_pipeline(&text, "views.toml", &registry()).unwrap();
+        let plan = g
+            .compile(&CompileOptions::new(wgpu::Features::empty()))
+            .unwrap()
+            .plan;
+        let passes: Vec<&str> = plan.passes.iter().map(|p| p.name.as_str()).collect();
+        let mut want: Vec<String> = (0..count).map(|k| format!("fill_{k}")).collect();
+        want.push("transform".into());
+        assert_eq!(passes, want);
+        assert_eq!(
+            run(&text),
+            (0..1000).map(|i| i + count).collect::<Vec<u32>>()
+        );
+    }
 }
 
 /// Consecutive entries over one view set run view by view: view 0's passes, then view

@@ -48,7 +48,7 @@ pub(crate) fn build_pass(pipeline: &Pipeline, p: &PassEntry, registry: &Registry
         });
     }
     let mut table = p.params.clone();
-    substitute_params(&mut table, &pipeline.params)
+    substitute_params(&mut table, &pipeline.params, &pipeline.views)
         .map_err(|m| ferr(format!("pass `{}`: {m}", p.name)))?;
     let params = Params::new(table);
     let with_pass = |e| match e {
@@ -165,7 +165,7 @@ fn expanded(pipeline: &Pipeline) -> Result<(Vec<ResourceEntry>, Vec<PassEntry>)>
             "{what} `{name}` writes `{VIEW}` but runs over no view set; add `views = \"<set>\"` naming one of [views]"
         ))),
         None => Ok(None),
-        Some(set) if !name.contains(VIEW) => Err(ferr(format!(
+        Some(set) if !name.contains(VIEW) && what == "resource" => Err(ferr(format!(
             "{what} `{name}` runs over view set `{set}`, but its name holds no `{VIEW}`, so its views would share one name; name it like `{name}_{VIEW}`"
         ))),
         Some(set) => match pipeline.views.get(set) {
@@ -175,6 +175,16 @@ fn expanded(pipeline: &Pipeline) -> Result<(Vec<ResourceEntry>, Vec<PassEntry>)>
             ))),
         },
     };
+    // `"$name"` reads [params] first, then [views]: one name in both would be ambiguous.
+    if let Some(name) = pipeline
+        .views
+        .keys()
+        .find(|v| pipeline.params.contains_key(*v))
+    {
+        return Err(ferr(format!(
+            "`{name}` is both a size parameter ([params]) and a view set ([views]), so `\"${name}\"` would be ambiguous; rename one"
+        )));
+    }
     let mut resources = Vec::new();
     for r in &pipeline.resources {
         match views("resource", &r.name, &r.views, r.name.contains(VIEW))? {
@@ -205,11 +215,27 @@ fn expanded(pipeline: &Pipeline) -> Result<(Vec<ResourceEntry>, Vec<PassEntry>)>
             || p.inputs.values().any(|t| uses_view(t))
             || p.params.values().any(|v| v.as_str().is_some_and(uses_view));
         let count = views("pass", &p.name, &p.views, written)?;
-        if block.first().is_some_and(|b| b.views != p.views) || count.is_none() {
+        // An entry over a set whose name holds no `{view}` is one pass for every view
+        // of the set (it reads the set's size as `"$<set>"`): it must not write `{view}`.
+        let whole_set = count.is_some() && !uses_view(&p.name);
+        if whole_set && written {
+            return Err(ferr(format!(
+                "pass `{}` runs once for the whole view set `{}` (its name holds no `{VIEW}`), so `{VIEW}` in its bindings, inputs or params names no view; name it like `{}_{VIEW}` to run it per view",
+                p.name,
+                p.views.as_deref().unwrap_or_default(),
+                p.name
+            )));
+        }
+        if block.first().is_some_and(|b| b.views != p.views) || count.is_none() || whole_set {
             flush(&mut block, block_count, &mut passes);
         }
         match count {
             None => passes.push(p.clone()),
+            Some(0) if whole_set => {}
+            Some(_) if whole_set => passes.push(PassEntry {
+                views: None,
+                ..p.clone()
+            }),
             Some(count) => {
                 block.push(p);
                 block_count = count;
@@ -283,18 +309,27 @@ fn parse_range(text: &str) -> std::result::Result<TextureRange, String> {
 }
 
 /// Pass parameters written `"$name"` take the value of size parameter `name`, so one
-/// `[params]` entry (the viewport, say) reaches resources and passes alike.
+/// `[params]` entry (the viewport, say) reaches resources and passes alike; a name that
+/// [params] does not declare but [views] does reads the set's number of views.
 fn substitute_params(
     table: &mut toml::Table,
     params: &BTreeMap<String, u64>,
+    views: &BTreeMap<String, u32>,
 ) -> std::result::Result<(), String> {
     for (key, value) in table.iter_mut() {
         if let toml::Value::String(s) = value
             && let Some(name) = s.strip_prefix('$')
         {
-            let v = params.get(name).ok_or_else(|| {
-                format!("parameter `{key}` refers to `${name}`, which [params] does not declare")
-            })?;
+            let v = params
+                .get(name)
+                .copied()
+                .or_else(|| views.get(name).map(|&n| u64::from(n)))
+                .ok_or_else(|| {
+                    format!(
+                        "parameter `{key}` refers to `${name}`, which neither [params] nor [views] declares"
+                    )
+                })?;
+            let v = &v;
             let v = i64::try_from(*v)
                 .map_err(|_| format!("`${name}` = {v} is too large for parameter `{key}`"))?;
             *value = toml::Value::Integer(v);

@@ -84,7 +84,9 @@ pub struct Pipeline {
     /// View sets: `[views] cascades = 4`. A `[[resource]]` or `[[pass]]` with
     /// `views = "cascades"` stands for one entry per view of the set, `{view}` in its name,
     /// bindings and inputs replaced by the view's number (0, 1, …); a set of 0 views
-    /// leaves its entries out.
+    /// leaves its entries out. A pass over a set whose name holds no `{view}` is one pass
+    /// for all the set's views (a walk that culls every view at once), which reads the
+    /// set's size as a parameter `"$cascades"`.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub views: BTreeMap<String, u32>,
     /// The `[[resource]]` entries, in file order.
@@ -359,7 +361,8 @@ pub struct PassEntry {
     /// (`inputs = { view = "cascade_view_{view}" }`): see `Bindings::input`.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub inputs: BTreeMap<String, String>,
-    /// The view set (`[views]`) it runs once per view of; its name holds `{view}`.
+    /// The view set (`[views]`) it runs once per view of, its name holding `{view}`; or,
+    /// with no `{view}` in its name, the set it runs once for, over all its views.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub views: Option<String>,
 }
