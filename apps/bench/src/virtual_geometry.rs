@@ -242,12 +242,16 @@ pub fn default_scene(quick: bool) -> BenchResult {
 /// The sun's shadow (`vg-shadows`): the default scene at 1920×1080 and 1,048,576 bunnies
 /// at 2560×1440, each without shadows and with four 2048² cascades to the default
 /// shadow distance: every cascade drawn every frame (as when the camera moves), and kept
-/// while nothing changes (a still camera: the frame then draws no cascade); the default
+/// while nothing changes (a still camera: the frame then draws no cascade); drawn every
+/// frame also with a walk per cascade instead of one walk for all four; the default
 /// scene also with a shadow LOD bias of 1. All in one run. Per case: the frame, the
-/// shadow passes' sum and share of the per-pass profile, and each cascade's clusters and
-/// triangles. With `quick`, 64 small meshes and 4,096 bunnies.
+/// shadow passes' sum and share of the per-pass profile, the walks' sum, and each
+/// cascade's clusters and triangles. With `quick`, 64 small meshes and 4,096 bunnies.
 pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     use meshlight_virtual_geometry::setup::ShadowRequest;
+    use meshlight_virtual_geometry::shadows::ShadowWalk;
+    const ONE: ShadowWalk = ShadowWalk::AsWritten;
+    const PER: ShadowWalk = ShadowWalk::PerView;
     let (segments, instances) = if quick {
         (64, 64)
     } else {
@@ -272,26 +276,31 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         ..ShadowRequest::default()
     };
     let mut rows = Vec::new();
-    // (LOD bias, maps kept while nothing changes)
+    // (LOD bias, maps kept while nothing changes, how the cascades are walked)
     let cases = [
         (
             &default,
             format!("{instances} procedural meshes"),
             (1920, 1080),
-            &[(0.0, false), (0.0, true), (1.0, false)][..],
+            &[
+                (0.0, false, ONE),
+                (0.0, false, PER),
+                (0.0, true, ONE),
+                (1.0, false, ONE),
+            ][..],
         ),
         (
             &million,
             format!("{copies} {} on the field", stem(&mesh)),
             (2560, 1440),
-            &[(0.0, false), (0.0, true)][..],
+            &[(0.0, false, ONE), (0.0, false, PER), (0.0, true, ONE)][..],
         ),
     ];
     for (placed, scene, (width, height), variants) in cases {
         let case = case_label(&scene, placed, width, height);
         let m = measure(placed, FrameSettings::new(width, height), frames)?;
         rows.extend(rows_of("vg-shadows", &format!("{case}, no shadows"), &m));
-        for &(lod_bias, cache) in variants {
+        for &(lod_bias, cache, walk) in variants {
             let mut shadows = ShadowRequest {
                 lod_bias,
                 ..request
@@ -299,18 +308,23 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
             .settings(&placed.data, &placed.camera, [width, height], true)
             .ok_or("no shadows")?;
             shadows.cache = cache;
+            shadows.walk = walk;
             let settings = FrameSettings {
                 shadows: Some(shadows),
                 ..FrameSettings::new(width, height)
             };
             let m = measure(placed, settings, frames)?;
             let case = format!(
-                "{case}, 4 cascades of 2048² to {:.0} units, LOD bias {lod_bias}, {}",
+                "{case}, 4 cascades of 2048² to {:.0} units, LOD bias {lod_bias}, {}, {}",
                 shadows.cascades.distance,
                 if cache {
                     "kept while still"
                 } else {
                     "drawn every frame"
+                },
+                match walk {
+                    ShadowWalk::AsWritten => "one walk for all cascades",
+                    ShadowWalk::PerView => "a walk per cascade",
                 }
             );
             rows.extend(rows_of("vg-shadows", &case, &m));
@@ -320,12 +334,26 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                 .filter(|(n, _)| n.starts_with("shadow_"))
                 .map(|(_, ms)| ms)
                 .sum();
+            let walk_ms: f64 = m
+                .passes
+                .iter()
+                .filter(|(n, _)| n.starts_with("shadow_fill"))
+                .map(|(_, ms)| ms)
+                .sum();
             let device = m.device.as_str();
             rows.push(row(
                 "vg-shadows",
                 case.clone(),
                 "GPU shadow passes, sum (timing mode passes)",
                 shadow_ms,
+                "ms",
+                device,
+            ));
+            rows.push(row(
+                "vg-shadows",
+                case.clone(),
+                "GPU shadow walks, sum (timing mode passes)",
+                walk_ms,
                 "ms",
                 device,
             ));

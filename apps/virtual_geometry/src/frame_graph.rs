@@ -195,7 +195,7 @@ pub fn apply(
     instance_table(p, data)?;
     material_variants(p, data);
     thresholds(p, s);
-    super::shadows::bias_thresholds(p, s);
+    super::shadows::bias_thresholds(p, s)?;
     if let Some(view) = s.view {
         p.set_stage_param(meshlight::resolve::STAGE, "view", view.name());
     }
@@ -250,6 +250,9 @@ fn lights(p: &mut Pipeline, registry: &Registry, s: &FrameSettings) -> Result<()
 /// [`FLAT_FILL`] (its pyramid and hidden-node bindings dropped), the second walk goes,
 /// and with it what only it made (the second cull's walked clusters).
 fn flat_fill(p: &mut Pipeline, registry: &Registry) -> Result<()> {
+    // The flat fill lists one view: the shadow walk over every cascade becomes one fill
+    // per cascade, each writing its cascade's list.
+    super::shadows::walk_per_view(p);
     let mut second = Vec::new();
     for fill in p.passes_of_mut(meshlight::fill_clusters::STAGE) {
         if fill.param_str("mode") == Some("second") {
@@ -257,7 +260,9 @@ fn flat_fill(p: &mut Pipeline, registry: &Registry) -> Result<()> {
             continue;
         }
         fill.implementation = FLAT_FILL.to_string();
-        fill.params.clear();
+        // Which list of the buffers it writes stays; the walk's own params go.
+        fill.params
+            .retain(|k, _| meshlight::gpu_scene::list_part::LIST_PARAM_KEYS.contains(&k));
         if super::shadows::is_shadow(fill) {
             // A shadow view's lists stay its own; the walk's occlusion slot goes.
             fill.unbind("pyramid");

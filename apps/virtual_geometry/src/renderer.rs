@@ -699,25 +699,35 @@ impl Renderer {
     /// Takes each cascade's counters that have come back, and grows the shared lists
     /// for a cascade that overflowed them.
     fn take_shadow_counts(&mut self) -> Result<()> {
-        use super::shadows::{CLUSTER_COUNT, CascadeCounts, RASTER_COUNTS, view_name};
+        use super::shadows::{
+            CANDIDATES_PARAM, CLUSTER_COUNTS, CascadeCounts, RASTER_COUNTS, view_name,
+        };
+        if self.cascades == 0 {
+            return Ok(());
+        }
+        let mut fill = None;
+        while let Some(r) = self.executor.take_readback(CLUSTER_COUNTS)? {
+            fill = Some(r);
+        }
+        let Some(fill) = fill else {
+            return Ok(());
+        };
         for k in 0..self.cascades {
             let mut cull = None;
             while let Some(r) = self.executor.take_readback(&view_name(RASTER_COUNTS, k))? {
                 cull = Some(r);
             }
-            let mut fill = None;
-            while let Some(r) = self.executor.take_readback(&view_name(CLUSTER_COUNT, k))? {
-                fill = Some(r);
-            }
-            let (Some(cull), Some(fill)) = (cull, fill) else {
+            let Some(cull) = cull else {
                 continue;
             };
             let counts = CascadeCounts::from_words(k, cull.frame, &cull.bytes, &fill.bytes)
                 .ok_or_else(|| GraphError::Readback(format!("cascade {k}'s counters are short")))?;
+            // The lists lie side by side, one a cascade: each as long as the longest asks.
+            let cascades = u64::from(self.cascades);
             for (param, wanted, limit, flag) in [
                 (
-                    CLUSTERS_PARAM,
-                    u64::from(counts.candidates_requested),
+                    CANDIDATES_PARAM,
+                    u64::from(counts.candidates_requested) * cascades,
                     self.max_elements,
                     "--clusters",
                 ),

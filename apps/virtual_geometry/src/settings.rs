@@ -55,6 +55,9 @@ pub struct ShadowSettings {
     /// drawn (nothing moved or streamed in, the camera still): the cascade's passes are
     /// left out of the frame. Off, every cascade is drawn every frame.
     pub cache: bool,
+    /// How the cascades' candidates are listed: as the pipeline file says (the shipped
+    /// files walk every cascade at once), or a walk per cascade.
+    pub walk: super::shadows::ShadowWalk,
 }
 
 impl Default for ShadowSettings {
@@ -67,6 +70,7 @@ impl Default for ShadowSettings {
             normal_bias: 1.0,
             lod_bias: 0.0,
             cache: true,
+            walk: super::shadows::ShadowWalk::AsWritten,
         }
     }
 }

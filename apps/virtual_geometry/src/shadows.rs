@@ -23,14 +23,56 @@ pub const CASCADE_VIEW_INPUT: &str = "cascade_view_{view}";
 pub const RESOLUTION_PARAM: &str = "shadow_resolution";
 /// The size parameter of the maps' texels (cascades × side²).
 pub const TEXELS_PARAM: &str = "shadow_texels";
+/// The frame input a walk over every cascade reads: their Views back to back (a
+/// cascade left out of the frame given a zeroed View, which the walk skips).
+pub const CASCADE_VIEWS_INPUT: &str = "cascade_views";
 /// Each cascade's culling counters (`cull_lod`'s `raster_counts`), read back.
 pub const RASTER_COUNTS: &str = "shadow_raster_counts_{view}";
-/// Each cascade's candidate count (`fill_clusters`' `cluster_count`), read back.
-pub const CLUSTER_COUNT: &str = "shadow_cluster_count_{view}";
+/// The cascades' candidate counts (`fill_clusters`' `cluster_count`, two words a
+/// cascade), read back.
+pub const CLUSTER_COUNTS: &str = "shadow_cluster_counts";
+/// The size parameter of the cascades' candidate lists, side by side (cascades ×
+/// candidates a cascade may list).
+pub const CANDIDATES_PARAM: &str = "shadow_candidates";
 
 /// True for an entry of the shadow stage.
 pub fn is_shadow(e: &PassEntry) -> bool {
     e.views.as_deref() == Some(CASCADES)
+}
+
+/// True for a shadow entry that is one pass for every cascade (its name holds no
+/// `{view}`): the walk over all cascades.
+fn is_whole_set(name: &str) -> bool {
+    !name.contains("{view}")
+}
+
+/// How the cascades' candidates are listed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShadowWalk {
+    /// As the pipeline file says (the shipped files: one walk for every cascade).
+    #[default]
+    AsWritten,
+    /// A walk per cascade: the file's walk over every cascade is split into one pass
+    /// per cascade, each writing its own list (the same lists; for comparisons).
+    PerView,
+}
+
+/// Splits the walk over every cascade into a walk per cascade (each view's own pass,
+/// reading `cascade_view_{view}` and writing list `{view}`), in the same place of the
+/// frame. A pipeline that walks per cascade already is left as it is.
+pub fn walk_per_view(p: &mut Pipeline) {
+    for pass in p.passes.iter_mut().filter(|e| {
+        is_shadow(e) && is_whole_set(&e.name) && e.stage == meshlight::fill_clusters::STAGE
+    }) {
+        pass.name = format!("{}_{{view}}", pass.name);
+        pass.params.remove("views");
+        pass.set_param("list", "{view}");
+        pass.set_param("lists", format!("${CASCADES}"));
+        pass.inputs.insert(
+            meshlight::fill_clusters::VIEW_INPUT.to_string(),
+            CASCADE_VIEW_INPUT.to_string(),
+        );
+    }
 }
 
 /// Sizes the shadow stage for `s.shadows`, or takes it out (its passes, and the
@@ -65,6 +107,9 @@ pub fn apply(p: &mut Pipeline, registry: &Registry, s: &FrameSettings) -> Result
     }
     let c = shadows.cascades;
     p.views.insert(CASCADES.to_string(), c.count);
+    if shadows.walk == ShadowWalk::PerView {
+        walk_per_view(p);
+    }
     let side = u64::from(c.resolution);
     for (name, value) in [
         (RESOLUTION_PARAM, side),
@@ -77,12 +122,21 @@ pub fn apply(p: &mut Pipeline, registry: &Registry, s: &FrameSettings) -> Result
     Ok(())
 }
 
-/// After the camera's thresholds are set: the shadow passes' LOD threshold times
-/// `2^lod_bias`.
-pub fn bias_thresholds(p: &mut Pipeline, s: &FrameSettings) {
+/// After the camera's sizes and thresholds are set: the cascades' lists as long as the
+/// camera's each, and the shadow passes' LOD threshold times `2^lod_bias`.
+pub fn bias_thresholds(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
     let Some(shadows) = s.shadows else {
-        return;
+        return Ok(());
     };
+    if let (Some(clusters), true) = (
+        p.param(super::frame_graph::CLUSTERS_PARAM),
+        p.param(CANDIDATES_PARAM).is_some(),
+    ) {
+        p.set_param(
+            CANDIDATES_PARAM,
+            clusters * u64::from(shadows.cascades.count.max(1)),
+        )?;
+    }
     let scale = f64::from(shadows.lod_bias).exp2();
     for pass in p.passes.iter_mut().filter(|e| is_shadow(e)) {
         let threshold = match pass.param("lod_threshold_px") {
@@ -92,22 +146,23 @@ pub fn bias_thresholds(p: &mut Pipeline, s: &FrameSettings) {
         };
         pass.set_param("lod_threshold_px", threshold * scale);
     }
+    Ok(())
 }
 
-/// The readbacks of each cascade's counters (the cull's first eight words and the
-/// candidate count), [`super::frame_graph::COUNTS_LATENCY`] frames late.
+/// The readbacks of each cascade's counters (the cull's first eight words) and of the
+/// candidate counts (two words a cascade), [`super::frame_graph::COUNTS_LATENCY`]
+/// frames late.
 pub fn add_readbacks(g: &mut GraphBuilder, count: u32) -> Result<()> {
-    for k in 0..count {
-        for (name, bytes) in [(RASTER_COUNTS, 32), (CLUSTER_COUNT, 8)] {
-            let name = view_name(name, k);
-            if g.resource(&name).is_some() {
-                g.readback_named(
-                    &name,
-                    &name,
-                    Some(0..bytes),
-                    super::frame_graph::COUNTS_LATENCY,
-                )?;
-            }
+    let per_view = (0..count).map(|k| (view_name(RASTER_COUNTS, k), 32));
+    let shared = (count > 0).then(|| (CLUSTER_COUNTS.to_string(), 8 * u64::from(count)));
+    for (name, bytes) in per_view.chain(shared) {
+        if g.resource(&name).is_some() {
+            g.readback_named(
+                &name,
+                &name,
+                Some(0..bytes),
+                super::frame_graph::COUNTS_LATENCY,
+            )?;
         }
     }
     Ok(())
@@ -131,7 +186,8 @@ pub struct CascadeCounts {
 }
 
 impl CascadeCounts {
-    /// From the cull's `raster_counts` (eight words) and the walk's `cluster_count`.
+    /// From the cull's `raster_counts` (eight words) and the walk's `cluster_count` (two
+    /// words a cascade).
     pub fn from_words(cascade: u32, frame: u64, cull: &[u8], fill: &[u8]) -> Option<Self> {
         let word = |b: &[u8], i: usize| {
             b.get(i * 4..i * 4 + 4)
@@ -140,7 +196,7 @@ impl CascadeCounts {
         Some(Self {
             cascade,
             frame,
-            candidates_requested: word(fill, 1)?,
+            candidates_requested: word(fill, 2 * cascade as usize + 1)?,
             visible: word(cull, 2)?,
             drawn: word(cull, 0)? + word(cull, 1)?,
             triangles: word(cull, 5)? + word(cull, 6)?,
@@ -264,7 +320,8 @@ impl ShadowFrame {
         })
     }
 
-    /// `frame` with every cascade's View and the resolve's parameters.
+    /// `frame` with every cascade's View (each, and all back to back) and the
+    /// resolve's parameters.
     pub fn add_to(&self, mut frame: FrameData) -> FrameData {
         for (k, c) in self.cascades.iter().enumerate() {
             frame = frame.with(
@@ -272,7 +329,10 @@ impl ShadowFrame {
                 bytemuck::bytes_of(&c.view),
             );
         }
-        frame.with(SHADOWS_INPUT, bytemuck::bytes_of(&self.params))
+        let views: Vec<_> = self.cascades.iter().map(|c| c.view).collect();
+        frame
+            .with(CASCADE_VIEWS_INPUT, bytemuck::cast_slice(&views))
+            .with(SHADOWS_INPUT, bytemuck::bytes_of(&self.params))
     }
 }
 
@@ -308,7 +368,7 @@ impl ShadowCache {
             .iter()
             .filter(|e| is_shadow(e))
             .map(|e| e.name.clone())
-            .chain([RASTER_COUNTS, CLUSTER_COUNT].map(|n| format!("readback:{n}")))
+            .chain([RASTER_COUNTS, CLUSTER_COUNTS].map(|n| format!("readback:{n}")))
             .collect();
         let imported = pipeline
             .resource(SHADOW_MAPS)
@@ -335,7 +395,8 @@ impl ShadowCache {
 
     /// Leaves out of `data` the passes of every cascade whose layer already holds
     /// `frame`'s view of an unchanged scene (with `cache`), and notes the others as drawn.
-    /// Returns how many cascades are drawn.
+    /// The walk over every cascade runs while one is drawn, given a zeroed View for each
+    /// cascade left out (so it lists nothing for it). Returns how many cascades are drawn.
     pub fn skip_unchanged(
         &mut self,
         frame: &ShadowFrame,
@@ -344,23 +405,33 @@ impl ShadowCache {
         data: &mut FrameData,
     ) -> u32 {
         let mut drawn = 0;
+        let mut views = Vec::with_capacity(frame.cascades.len());
         for (k, c) in frame.cascades.iter().enumerate() {
             let mut view = c.view;
             view.frame_index = 0;
             let Some(slot) = self.drawn.get_mut(k) else {
                 drawn += 1;
+                views.push(c.view);
                 continue;
             };
             let same = slot.is_some_and(|v| bytemuck::bytes_of(&v) == bytemuck::bytes_of(&view));
             if cache && same && !scene_changed {
-                for name in &self.passes {
+                for name in self.passes.iter().filter(|n| !is_whole_set(n)) {
                     data.skip(&view_name(name, k as u32));
                 }
+                views.push(meshlight::shaders::cpu::layout::View::default());
             } else {
                 *slot = Some(view);
                 drawn += 1;
+                views.push(c.view);
             }
         }
+        if drawn == 0 {
+            for name in self.passes.iter().filter(|n| is_whole_set(n)) {
+                data.skip(name);
+            }
+        }
+        data.set(CASCADE_VIEWS_INPUT, bytemuck::cast_slice(&views));
         drawn
     }
 }

@@ -21,7 +21,7 @@ use meshlight::resolve::shadows::{CASCADE_COLORS, SHADOW_MAPS};
 use meshlight::scene::terrain::Terrain;
 use meshlight::scene::{BuildOptions, Mesh, MeshletAsset, build_asset};
 use meshlight::shaders::cpu::layout::Cluster;
-use meshlight_virtual_geometry::shadows::ShadowFrame;
+use meshlight_virtual_geometry::shadows::{ShadowFrame, ShadowWalk};
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer, ShadowSettings};
 use std::sync::OnceLock;
 
@@ -298,19 +298,40 @@ fn each_cascades_depth_map_is_the_references_cut_rasterised() {
     for hierarchy in [true, false] {
         let mut r = renderer_with(Some(shadows), DebugView::Shaded, hierarchy, Some(false));
         r.render_still(&camera()).unwrap_or_else(|e| panic!("{e}"));
-        check_maps(&mut r, &shadows, hierarchy, 0.0);
+        check_maps(&mut r, &camera(), &shadows, hierarchy, 0.0);
     }
+    // A walk per cascade instead of one for both: the same maps.
+    let per_view = ShadowSettings {
+        walk: ShadowWalk::PerView,
+        ..shadows
+    };
+    let mut r = renderer_with(Some(per_view), DebugView::Shaded, true, Some(false));
+    assert!(
+        r.pipeline
+            .passes
+            .iter()
+            .any(|p| p.name == "shadow_fill_{view}"),
+        "the walk was not split per cascade"
+    );
+    r.render_still(&camera()).unwrap_or_else(|e| panic!("{e}"));
+    check_maps(&mut r, &camera(), &per_view, true, 0.0);
     // The adapter class's split (lavapipe: the casters crossing a cascade's near plane
     // in hardware): the hardware rasteriser interpolates depth in floats, within 1e-5
     // of the reference (its own test's tolerance on lavapipe).
     let mut r = renderer_with(Some(shadows), DebugView::Shaded, true, None);
     r.render_still(&camera()).unwrap_or_else(|e| panic!("{e}"));
-    check_maps(&mut r, &shadows, true, 1e-5);
+    check_maps(&mut r, &camera(), &shadows, true, 1e-5);
 }
 
 /// The renderer's maps against the reference's, cascade by cascade: every depth within
 /// `tolerance`, nothing drawn where the reference draws nothing.
-fn check_maps(r: &mut Renderer, shadows: &ShadowSettings, hierarchy: bool, tolerance: f32) {
+fn check_maps(
+    r: &mut Renderer,
+    camera: &Camera,
+    shadows: &ShadowSettings,
+    hierarchy: bool,
+    tolerance: f32,
+) {
     let buffer = r
         .shadow_maps()
         .expect("the renderer keeps the maps")
@@ -321,7 +342,7 @@ fn check_maps(r: &mut Renderer, shadows: &ShadowSettings, hierarchy: bool, toler
             .read_buffer(&buffer, 0, buffer.size())
             .unwrap(),
     );
-    let frame = ShadowFrame::new(&camera(), [W, H], toward_sun(), shadows, 0, 1.0).unwrap();
+    let frame = ShadowFrame::new(camera, [W, H], toward_sun(), shadows, 0, 1.0).unwrap();
     let side = shadows.cascades.resolution;
     let layer = (side * side) as usize;
     let thresholds = Thresholds {

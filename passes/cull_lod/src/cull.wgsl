@@ -187,8 +187,14 @@ fn is_occluded(instance: Instance, bounds: vec4<f32>) -> bool {
 const COUNT_WORDS: u32 = 8u;
 #endif
 
+// The list read: list `params.list` of `params.lists` equal parts of the buffers
+// (fill_clusters' list module), its written word at cluster_count[2 * list].
+fn list_length() -> u32 {
+    return arrayLength(&clusters) / max(params.lists, 1u);
+}
+
 fn listed_total() -> u32 {
-    return min(cluster_count[0], arrayLength(&clusters));
+    return min(cluster_count[2u * params.list], list_length());
 }
 
 fn walked_total() -> u32 {
@@ -211,7 +217,7 @@ fn cluster_at(i: u32) -> Cluster {
         return walked_clusters[i - listed];
     }
 #endif
-    return clusters[i];
+    return clusters[params.list * list_length() + i];
 }
 
 @compute @workgroup_size(1)

@@ -135,6 +135,7 @@
 //! | `mode`              | `"first"` | `first`: every candidate, occlusion against last frame's pyramid when one is bound; `second`: the re-test of the first pass's occluded clusters against this frame's |
 //! | `capacity`          | 0 (all of `raster_clusters`) | `C`, at most the buffer's size / 8 |
 //! | `max_per_dimension` | 0 (the adapter's) | workgroup limit per dimension of the indirect cull dispatch |
+//! | `list`, `lists`     | 0, 1    | the candidate buffers hold `lists` lists (one per view) and the pass reads list `list` (`meshlight_gpu_scene::ListPart`) |
 //!
 //! # Definitions the tests pin down
 //!
@@ -206,7 +207,7 @@ pub use cpu::{CullResult, Decision, Thresholds, cpu_cull};
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::InstanceTable;
 use meshlight_gpu_scene::view::frame_view;
-use meshlight_gpu_scene::{Phase, SceneBuffer::*, scene_reads};
+use meshlight_gpu_scene::{ListPart, Phase, SceneBuffer::*, scene_reads};
 use meshlight_graph::prelude::*;
 
 /// The stage name pipelines use.
@@ -409,6 +410,9 @@ pub struct CullLod {
     /// A per-dimension limit below the adapter's (tests use small ones); `None`: the
     /// adapter's `max_compute_workgroups_per_dimension`.
     pub max_per_dimension: Option<u32>,
+    /// The list of `clusters` and `cluster_count` it reads, where the buffers hold one
+    /// list per view (params `list` and `lists`; one list by default).
+    pub part: ListPart,
 }
 
 uniform_block! {
@@ -427,12 +431,15 @@ uniform_block! {
         hardware: u32,
         /// 1: test occlusion against `pyramid`; 0: skip it (no valid history, camera cut).
         test_occlusion: u32,
-        pad_a: u32,
-        pad_b: u32,
+        /// The list of the candidate buffers read ([`ListPart`]), and how many they hold.
+        list: u32,
+        lists: u32,
     }
 }
 
-const PARAM_KEYS: [&str; 6] = [
+const PARAM_KEYS: [&str; 8] = [
+    "list",
+    "lists",
     "lod_threshold_px",
     "sw_threshold_px",
     "hardware",
@@ -461,6 +468,7 @@ impl CullLod {
             phase,
             capacity: nonzero(params.u32("capacity", 0)?),
             max_per_dimension: nonzero(params.u32("max_per_dimension", 0)?),
+            part: ListPart::from_params(params, 1)?,
         };
         pass.check_thresholds()?;
         Ok(pass)
@@ -636,7 +644,7 @@ impl Pass for CullLod {
         ctx.shader_defs(&defs);
         let table = InstanceTable::of(ctx);
         ctx.shader_defs(&table);
-        ctx.min_bytes("cluster_count", 4);
+        ctx.min_bytes("cluster_count", 8 * u64::from(self.part.list) + 4);
         let words = if occlusion { OCCLUSION_COUNT_WORDS } else { 8 };
         ctx.min_bytes("raster_counts", words * 4);
         ctx.min_bytes("hw_args", 16);
@@ -708,7 +716,8 @@ impl Pass for CullLod {
             sw_threshold_px: thresholds.sw_threshold_px,
             hardware: thresholds.hardware as u32,
             test_occlusion: test_occlusion as u32,
-            ..GpuParams::default()
+            list: self.part.list,
+            lists: self.part.lists,
         };
         let (view, params) = (bytemuck::bytes_of(&view), bytemuck::bytes_of(&params));
         if self.phase == Phase::First && ctx.is_bound(PER_INSTANCE_FIRST) {

@@ -10,7 +10,7 @@
 #import meshlight::instance_table::{instance_at, instance_total}
 #import meshlight::scene_buffers::meshes
 #import meshlight::view::{View, sphere_in_frustum}
-#import fill_clusters::list::{clusters, cluster_count, cluster_capacity}
+#import fill_clusters::list::{clusters, cluster_count, cluster_capacity, list_length}
 
 // The uniform block, declared once for Rust and WGSL by `GpuParams` in lib.rs.
 #import fill_clusters::fill_params::Params
@@ -27,7 +27,24 @@ const WORKGROUP_SIZE: u32 = 64u;
 var<workgroup> range_start: u32;
 
 fn capacity() -> u32 {
-    return cluster_capacity(params.capacity);
+    return cluster_capacity(params.capacity, params.lists);
+}
+
+// The first cluster of this pass's list, and the index of its `requested` word.
+fn list_base() -> u32 {
+    return params.list * list_length(params.lists);
+}
+
+fn requested_word() -> u32 {
+    return 2u * params.list + 1u;
+}
+
+// Zeroes this pass's list's words, where the buffers hold other lists too (with one
+// list, the graph clears the buffer).
+@compute @workgroup_size(1)
+fn prepare() {
+    atomicStore(&cluster_count[requested_word() - 1u], 0u);
+    atomicStore(&cluster_count[requested_word()], 0u);
 }
 
 @compute @workgroup_size(64)
@@ -46,7 +63,7 @@ fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
         }
     }
     if t == 0u && count > 0u {
-        range_start = atomicAdd(&cluster_count[1], count);
+        range_start = atomicAdd(&cluster_count[requested_word()], count);
     }
     workgroupBarrier();
     if count == 0u {
@@ -59,13 +76,14 @@ fn fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
     }
     // The part of the range below the capacity; nothing is written past it.
     let written = min(count, cap - start);
+    let base = list_base() + start;
     for (var k = t; k < written; k += WORKGROUP_SIZE) {
-        clusters[start + k] = Cluster(index, first_meshlet + k);
+        clusters[base + k] = Cluster(index, first_meshlet + k);
     }
 }
 
 @compute @workgroup_size(1)
 fn finish() {
-    let requested = atomicLoad(&cluster_count[1]);
-    atomicStore(&cluster_count[0], min(requested, capacity()));
+    let requested = atomicLoad(&cluster_count[requested_word()]);
+    atomicStore(&cluster_count[requested_word() - 1u], min(requested, capacity()));
 }

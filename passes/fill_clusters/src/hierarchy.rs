@@ -26,6 +26,8 @@
 //! | `spread_groups`    | 0 ([`SPREAD_GROUPS`]) | workgroups of each step after the first |
 //! | `mode`             | `"first"` | `first`: the walk from every instance's root (with a pyramid, hidden nodes go to `occluded_nodes`); `second`: the walk from the first's hidden nodes against this frame's pyramid |
 //! | `occlusion_min_clusters` | [`OCCLUSION_MIN_CLUSTERS`] | with a pyramid, inner nodes with fewer meshlets below are not tested for occlusion (a walk's entries always are) |
+//! | `views`            | 1       | views one walk serves, at most [`MAX_VIEWS`] (no pyramid then): see "One walk for several views" |
+//! | `list`, `lists`    | 0, `views` | the buffers hold `lists` lists and view v's is `list + v` ([`meshlight_gpu_scene::ListPart`]) |
 //!
 //! `hierarchy_counts`: `[0]` nodes tested, `[1]` leaves accepted, `[2]` subtrees emitted
 //! whole because a frontier and the next step's list were full, `[3]` walks (of an
@@ -87,6 +89,19 @@
 //! is `prepare` (the counters zeroed), `roots`, `walk_dispatch` (step 0's indirect
 //! arguments) and `spread_steps + 1` walks.
 //!
+//! # One walk for several views
+//!
+//! With `views` > 1 the frame input `view` holds that many Views back to back (a sun's
+//! shadow cascades), and the walk serves them all: an entry of a frontier or a list
+//! carries, in the top four bits of its node id, the views it is walked for; a node is
+//! tested against each of those views (the same `node_visible` test, per view) and the
+//! walk goes on below it for the views that accept it; an accepted leaf's meshlets are
+//! written to the list of each view that accepted it. So view v's list holds exactly
+//! what a walk of view v alone lists (the tests compare them, and the cut after), while
+//! a node several views want is loaded and transformed once, and the views share one
+//! chain of dispatches instead of one chain each. A view given an empty viewport (a
+//! zeroed View) is left out: its list stays empty. Such a walk tests no occlusion.
+//!
 //! # Measured
 //!
 //! The benchmark's 15³ bunny lattice at 2240×1260, threshold 1 px (`cpu_walk` and
@@ -118,9 +133,11 @@ use crate::{
     OCCLUDED_NODE_COUNT_SLOT, OCCLUDED_NODES_SLOT, PYRAMID_SLOT, STAGE, VIEW_INPUT,
     hierarchy_contract, instance_grid, instance_programs,
 };
+use bytemuck::Zeroable;
 use meshlight_gpu_scene::Phase;
 use meshlight_gpu_scene::view::frame_view;
 use meshlight_graph::prelude::*;
+use meshlight_shaders::cpu::layout::View;
 
 /// The implementation name pipelines use.
 pub const IMPLEMENTATION: &str = "hierarchy";
@@ -177,8 +194,14 @@ shader_defs! {
         pub occlusion: bool => "OCCLUSION",
         /// [`Phase::Second`].
         pub second: bool => "SECOND_PASS",
+        /// One walk for several views (`views` > 1).
+        pub multi_view: bool => "MULTI_VIEW",
     }
 }
+
+/// Views one walk serves at most (`MAX_VIEWS` in the shader): their mask takes the top
+/// four bits of a node id in the frontiers and lists.
+pub const MAX_VIEWS: u32 = 4;
 
 /// Words of `hierarchy_counts` with occlusion: `[4]` nodes the pyramid hid.
 pub const OCCLUSION_COUNT_WORDS: u64 = 5;
@@ -215,6 +238,13 @@ pub struct HierarchyFill {
     /// the inner nodes with at least this many meshlets below are tested against the
     /// pyramid ([`OCCLUSION_MIN_CLUSTERS`] by default; `u32::MAX`: entries only).
     pub occlusion_min_clusters: u32,
+    /// Views the walk serves, 1 to [`MAX_VIEWS`]: with more than one, the frame input
+    /// `view` holds that many Views back to back, and view v's list is list
+    /// `part.list + v` of the buffers. A view whose viewport is empty (all zeros) is not
+    /// walked, and its list is left empty.
+    pub views: u32,
+    /// The lists of `clusters` and `cluster_count` it writes.
+    pub part: meshlight_gpu_scene::ListPart,
 }
 
 /// Inner nodes with fewer meshlets below are left to `cull_lod`'s per-cluster test by
@@ -235,6 +265,8 @@ impl Default for HierarchyFill {
             spread_groups: None,
             phase: Phase::First,
             occlusion_min_clusters: OCCLUSION_MIN_CLUSTERS,
+            views: 1,
+            part: meshlight_gpu_scene::ListPart::default(),
         }
     }
 }
@@ -272,13 +304,18 @@ uniform_block! {
         /// tests their clusters): each test costs the walk a dependent texture read. A
         /// walk's entries (instance roots, the second walk's nodes) always are.
         occlusion_min_clusters: u32,
-        pad_a: u32,
-        pad_b: u32,
-        pad_c: u32,
+        /// Views the walk serves (MULTI_VIEW), 1 without.
+        views: u32,
+        /// View 0's list, and the lists the buffers hold ([`meshlight_gpu_scene::ListPart`]).
+        list: u32,
+        lists: u32,
     }
 }
 
-const PARAM_KEYS: [&str; 9] = [
+const PARAM_KEYS: [&str; 12] = [
+    "views",
+    "list",
+    "lists",
     "mode",
     "occlusion_min_clusters",
     "capacity",
@@ -305,6 +342,18 @@ impl HierarchyFill {
             spread_groups: nonzero(params.u32("spread_groups", 0)?),
             occlusion_min_clusters: params.u32("occlusion_min_clusters", OCCLUSION_MIN_CLUSTERS)?,
             phase: Phase::from_params(params)?,
+            views: params.u32("views", 1)?,
+            part: meshlight_gpu_scene::ListPart::default(),
+        };
+        if !(1..=MAX_VIEWS).contains(&pass.views) {
+            return Err(GraphError::parameter(format!(
+                "`views` = {} must be 1 to {MAX_VIEWS}: the views one walk serves",
+                pass.views
+            )));
+        }
+        let pass = Self {
+            part: meshlight_gpu_scene::ListPart::from_params(params, pass.views)?,
+            ..pass
         };
         pass.check()?;
         Ok(pass)
@@ -396,6 +445,35 @@ impl HierarchyFill {
     }
 }
 
+impl HierarchyFill {
+    /// The frame's Views: one, or with several views [`MAX_VIEWS`] (the uniform's
+    /// length), those the input does not give left zero (not walked).
+    fn frame_views(&self, ctx: &RecordContext<'_>) -> Result<Vec<View>> {
+        if self.views == 1 {
+            return Ok(vec![frame_view(ctx, VIEW_INPUT, None)?]);
+        }
+        let bytes = ctx.frame_bytes(VIEW_INPUT)?;
+        let size = size_of::<View>();
+        if bytes.len() != self.views as usize * size {
+            return Err(GraphError::Record {
+                pass: ctx.pass_name().to_string(),
+                message: format!(
+                    "frame input `{VIEW_INPUT}` must hold {} Views back to back ({} bytes) for `views` = {}, got {} bytes",
+                    self.views,
+                    self.views as usize * size,
+                    self.views,
+                    bytes.len()
+                ),
+            });
+        }
+        let mut views = vec![View::zeroed(); MAX_VIEWS as usize];
+        for (v, chunk) in views.iter_mut().zip(bytes.chunks_exact(size)) {
+            *v = bytemuck::pod_read_unaligned(chunk);
+        }
+        Ok(views)
+    }
+}
+
 impl Pass for HierarchyFill {
     fn implementation(&self) -> Implementation {
         Implementation::new(IMPLEMENTATION, hierarchy_contract())
@@ -409,8 +487,19 @@ impl Pass for HierarchyFill {
         }
         let occlusion = self.check_phase(ctx)?;
         let second = self.phase == Phase::Second;
-        let defs = WalkDefs { occlusion, second };
-        ctx.min_bytes("cluster_count", 8);
+        let multi_view = self.views > 1;
+        if multi_view && occlusion {
+            return Err(GraphError::parameter(format!(
+                "a walk over {} views tests no occlusion: unbind `{PYRAMID_SLOT}` (`pyramid = \"\"`), or walk each view on its own (`views = 1`)",
+                self.views
+            )));
+        }
+        let defs = WalkDefs {
+            occlusion,
+            second,
+            multi_view,
+        };
+        ctx.min_bytes("cluster_count", self.part.count_bytes());
         ctx.frame_input(VIEW_INPUT);
         let count_words = if occlusion { OCCLUSION_COUNT_WORDS } else { 4 };
         // A scratch buffer holds the entry counters too; a bound one holds them when
@@ -469,7 +558,9 @@ impl Pass for HierarchyFill {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let view = frame_view(ctx, VIEW_INPUT, None)?;
+        let views = self.frame_views(ctx)?;
+        // The WGSL variable: `views` (an array) with MULTI_VIEW, `view` without.
+        let uniform_name = if self.views > 1 { "views" } else { "view" };
         let InstanceGrid {
             instance_count,
             limit,
@@ -527,10 +618,12 @@ impl Pass for HierarchyFill {
                 root_capacity: ROOT_CAPACITY,
                 max_per_dimension: limit,
                 occlusion_min_clusters: self.occlusion_min_clusters,
-                ..GpuParams::default()
+                views: self.views,
+                list: self.part.list,
+                lists: self.part.lists,
             };
             let uniforms: [(&str, &[u8]); 2] = [
-                ("view", bytemuck::bytes_of(&view)),
+                (uniform_name, bytemuck::cast_slice(&views)),
                 ("params", bytemuck::bytes_of(&params)),
             ];
             ctx.dispatch_compute(entry, &uniforms, grid)?;

@@ -32,6 +32,15 @@
 // second pass (SECOND_PASS: this frame's pyramid and view) starts its walk from that
 // list instead of the instances' roots and drops what is still hidden. A root is the
 // instance, so a hidden instance costs one node test per pass and emits nothing.
+//
+// With MULTI_VIEW, one walk serves up to MAX_VIEWS views (a sun's shadow cascades): a
+// node is tested against each view its parent was accepted for, and the walk goes on
+// below it for the views that accept it, carried as a mask in the top bits of each
+// frontier and list entry; an accepted leaf's meshlets go to the list of each view that
+// accepted it (view v's is list `params.list + v` of the buffers). So each view's list
+// is the one a walk of that view alone writes (the tests compare them), while a node
+// wanted by several views is loaded, transformed and queued once. No occlusion: the
+// views it serves have no pyramid.
 
 #import meshlight::dispatch::linear_workgroup
 #import meshlight::meshlet::{Cluster, error_perceptible}
@@ -77,7 +86,12 @@ struct Subtree {
 
 // The instances: `instance_at` (meshlight::instance_table, bindings 30 and 31); the
 // cluster list and its count (fill_clusters::list, bindings 1 and 2).
+#ifdef MULTI_VIEW
+// `params.views` of them; a view with an empty viewport is left out of the walk.
+@group(0) @binding(3) var<uniform> views: array<View, MAX_VIEWS>;
+#else
 @group(0) @binding(3) var<uniform> view: View;
+#endif
 @group(0) @binding(4) var<uniform> params: Params;
 // Every mesh's hierarchy nodes.
 @group(0) @binding(5) var<storage, read> hierarchy_nodes: array<HierarchyNode>;
@@ -115,6 +129,13 @@ struct Subtree {
 #endif
 
 const WORKGROUP_SIZE: u32 = 64u;
+#ifdef MULTI_VIEW
+// Views one walk serves; their mask takes the top bits of a node id.
+const MAX_VIEWS: u32 = 4u;
+const ID_BITS: u32 = 28u;
+#else
+const MAX_VIEWS: u32 = 1u;
+#endif
 // Nodes a frontier holds; two frontiers take 8 KiB of workgroup memory.
 const QUEUE: u32 = 1024u;
 // Lists of subtrees at most (spreading steps).
@@ -144,13 +165,15 @@ var<workgroup> next_len: atomic<u32>;
 // thread keeps the workgroup's memory, and so the workgroups resident per compute unit,
 // what they were with one range per thread (about 9 KiB with the frontiers).
 const EMIT_SLOTS: u32 = 64u;
+// With MULTI_VIEW a range goes to each view of its mask (packed with its count), at its
+// offset in that view's reservation.
 var<workgroup> emit_first: array<u32, EMIT_SLOTS>;
 var<workgroup> emit_count: array<u32, EMIT_SLOTS>;
-var<workgroup> emit_offset: array<u32, EMIT_SLOTS>;
+var<workgroup> emit_offset: array<u32, EMIT_SLOTS * MAX_VIEWS>;
 var<workgroup> emit_ranges: atomic<u32>;
-var<workgroup> emit_total: atomic<u32>;
+var<workgroup> emit_total: array<atomic<u32>, MAX_VIEWS>;
 var<workgroup> emit_len: u32;
-var<workgroup> emit_base: u32;
+var<workgroup> emit_base: array<u32, MAX_VIEWS>;
 var<workgroup> leaves: atomic<u32>;
 var<workgroup> tested_nodes: atomic<u32>;
 // The walk's entries (instance roots; the second walk's hidden nodes) tested and passed.
@@ -163,13 +186,65 @@ var<workgroup> hidden_nodes: atomic<u32>;
 var<workgroup> entry_total: u32;
 
 fn capacity() -> u32 {
-    return cluster_list::cluster_capacity(params.capacity);
+    return cluster_list::cluster_capacity(params.capacity, params.lists);
 }
 
-// This thread's range not yet handed to the chunk (adjacent leaves extend it), and the
-// instance the workgroup walks.
+// View v's list: its first cluster, and its words in `cluster_count` ([w]: 0 written,
+// 1 requested).
+fn list_base(v: u32) -> u32 {
+    return (params.list + v) * cluster_list::list_length(params.lists);
+}
+
+fn count_word(v: u32, w: u32) -> u32 {
+    return 2u * (params.list + v) + w;
+}
+
+// A node id with the views it is walked for (MULTI_VIEW), and its parts; with one view
+// the mask is 1 and the entry the id.
+fn with_views(id: u32, mask: u32) -> u32 {
+#ifdef MULTI_VIEW
+    return id | (mask << ID_BITS);
+#else
+    return id;
+#endif
+}
+
+fn entry_id(entry: u32) -> u32 {
+#ifdef MULTI_VIEW
+    return entry & ((1u << ID_BITS) - 1u);
+#else
+    return entry;
+#endif
+}
+
+fn entry_views(entry: u32) -> u32 {
+#ifdef MULTI_VIEW
+    return entry >> ID_BITS;
+#else
+    return 1u;
+#endif
+}
+
+// The views the walk starts with: every view given a viewport.
+fn walked_views() -> u32 {
+#ifdef MULTI_VIEW
+    var mask = 0u;
+    for (var v = 0u; v < min(params.views, MAX_VIEWS); v += 1u) {
+        if views[v].viewport_size.x > 0.0 {
+            mask |= 1u << v;
+        }
+    }
+    return mask;
+#else
+    return 1u;
+#endif
+}
+
+// This thread's range not yet handed to the chunk (adjacent leaves with the same views
+// extend it), and the instance the workgroup walks.
 var<private> pending_first: u32;
 var<private> pending_count: u32;
+var<private> pending_views: u32;
 var<private> walk_instance: u32;
 
 // Hands the pending range to the chunk's emission, or, when the chunk's slots are
@@ -183,66 +258,88 @@ fn flush() {
     let e = atomicAdd(&emit_ranges, 1u);
     if e < EMIT_SLOTS {
         emit_first[e] = pending_first;
-        emit_count[e] = count;
-        emit_offset[e] = atomicAdd(&emit_total, count);
+        emit_count[e] = with_views(count, pending_views);
+        for (var v = 0u; v < MAX_VIEWS; v += 1u) {
+            if (pending_views & (1u << v)) != 0u {
+                emit_offset[v * EMIT_SLOTS + e] = atomicAdd(&emit_total[v], count);
+            }
+        }
         return;
     }
-    emit_now(walk_instance, pending_first, count);
+    emit_now(walk_instance, pending_first, count, pending_views);
 }
 
-fn emit_range(first: u32, count: u32) {
+fn emit_range(first: u32, count: u32, mask: u32) {
     if count == 0u {
         return;
     }
-    if pending_count > 0u && pending_first + pending_count == first {
+    if pending_count > 0u && pending_first + pending_count == first && pending_views == mask {
         pending_count += count;
         return;
     }
     flush();
     pending_first = first;
     pending_count = count;
+    pending_views = mask;
 }
 
 // What stays the same for every node of one instance.
 struct Walker {
     instance: Instance,
     scale: f32,
-    // |translation| + |camera|: with the sphere's own size, the magnitudes a test adds.
-    reach: f32,
+    // Per view, |translation| + |camera|: with the sphere's own size, the magnitudes a
+    // test adds.
+    reach: array<f32, MAX_VIEWS>,
 }
 
-fn slack(w: Walker, sphere: vec4<f32>) -> f32 {
-    return (w.reach + w.scale * (length(sphere.xyz) + sphere.w)) * SLACK;
+fn slack(w: Walker, v: u32, sphere: vec4<f32>) -> f32 {
+    return (w.reach[v] + w.scale * (length(sphere.xyz) + sphere.w)) * SLACK;
 }
 
-// Whether any meshlet below `node` can be in cull_lod's cut: its culling sphere in the
-// frustum, its parent perceptible and its own error imperceptible. Every comparison is
-// the per-cluster one with the node's bounds, shifted by the slack toward keeping.
-fn node_visible(node: HierarchyNode, w: Walker) -> bool {
+// Whether any meshlet below `node` can be in cull_lod's cut of `vw`, the walk's view v:
+// its culling sphere in the frustum, its parent perceptible and its own error
+// imperceptible. Every comparison is the per-cluster one with the node's bounds, shifted
+// by the slack toward keeping.
+fn node_visible_in(node: HierarchyNode, w: Walker, vw: View, v: u32) -> bool {
     let centre = instance_transform_point(w.instance, node.bounds.xyz);
-    let radius = node.bounds.w * w.scale + slack(w, node.bounds);
+    let radius = node.bounds.w * w.scale + slack(w, v, node.bounds);
     for (var p = 0u; p < 6u; p += 1u) {
-        let plane = view.frustum[p];
+        let plane = vw.frustum[p];
         if dot(plane.xyz, centre) + plane.w < -(radius + SLACK * abs(plane.w)) {
             return false;
         }
     }
     let lod_centre = instance_transform_point(w.instance, node.lod_sphere.xyz);
     let lod_radius = node.lod_sphere.w * w.scale;
-    let s = slack(w, node.lod_sphere);
-    let d = length(lod_centre - view.camera_position);
+    let s = slack(w, v, node.lod_sphere);
+    let d = length(lod_centre - vw.camera_position);
     // Too fine: the largest parent error, seen from the sphere's nearest point, is
     // imperceptible, so every parent below is.
     if node.max_parent_error < F32_MAX {
-        let parent_px = error_to_pixels(view, d - lod_radius - s, node.max_parent_error * w.scale);
+        let parent_px = error_to_pixels(vw, d - lod_radius - s, node.max_parent_error * w.scale);
         if !error_perceptible(parent_px, params.lod_threshold_px) {
             return false;
         }
     }
     // Too coarse: the smallest own error, seen from the sphere's farthest point, is
     // perceptible, so every own error below is.
-    let own_px = error_to_pixels(view, d + lod_radius + s, node.min_error * w.scale);
+    let own_px = error_to_pixels(vw, d + lod_radius + s, node.min_error * w.scale);
     return !error_perceptible(own_px, params.lod_threshold_px);
+}
+
+// The views of `mask` for which the walk goes on below `node` (`node_visible_in`).
+fn node_views(node: HierarchyNode, w: Walker, mask: u32) -> u32 {
+#ifdef MULTI_VIEW
+    var kept = 0u;
+    for (var v = 0u; v < MAX_VIEWS; v += 1u) {
+        if (mask & (1u << v)) != 0u && node_visible_in(node, w, views[v], v) {
+            kept |= 1u << v;
+        }
+    }
+    return kept;
+#else
+    return select(0u, 1u, node_visible_in(node, w, view, 0u));
+#endif
 }
 
 #ifdef OCCLUSION
@@ -289,8 +386,12 @@ fn node_seen(node: HierarchyNode, id: u32, w: Walker, entry: bool) -> bool {
 
 @compute @workgroup_size(1)
 fn prepare() {
-    atomicStore(&cluster_list::cluster_count[0], 0u);
-    atomicStore(&cluster_list::cluster_count[1], 0u);
+    for (var v = 0u; v < MAX_VIEWS; v += 1u) {
+        if v < max(params.views, 1u) {
+            atomicStore(&cluster_list::cluster_count[count_word(v, 0u)], 0u);
+            atomicStore(&cluster_list::cluster_count[count_word(v, 1u)], 0u);
+        }
+    }
     for (var i = 0u; i < min(ENTRY_WORDS, arrayLength(&hierarchy_counts)); i += 1u) {
         atomicStore(&hierarchy_counts[i], 0u);
     }
@@ -324,18 +425,19 @@ fn hand_on(instance: u32, first: u32, count: u32) -> bool {
 
 // Appends an accepted inner node's children to the next frontier (`into`); those that
 // do not fit are handed on to the next step or, when that cannot be, emitted whole.
-fn enqueue(node: HierarchyNode, into: u32, width: u32, spreading: bool, index: u32) {
+// `mask`: the views the children are walked for.
+fn enqueue(node: HierarchyNode, mask: u32, into: u32, width: u32, spreading: bool, index: u32) {
     let slot = atomicAdd(&next_len, node.child_count);
     let fit = min(node.child_count, width - min(slot, width));
     for (var k = 0u; k < fit; k += 1u) {
-        frontier[into][slot + k] = node.first_child + k;
+        frontier[into][slot + k] = with_views(node.first_child + k, mask);
     }
     let rest = node.child_count - fit;
-    if rest > 0u && !(spreading && hand_on(index, node.first_child + fit, rest)) {
+    if rest > 0u && !(spreading && hand_on(index, with_views(node.first_child + fit, mask), rest)) {
         // The children that did not fit, with everything below them.
         let end = node.first_cluster + node.cluster_count;
         let from_cluster = hierarchy_nodes[node.first_child + fit].first_cluster;
-        emit_range(from_cluster, select(0u, end - from_cluster, from_cluster < end));
+        emit_range(from_cluster, select(0u, end - from_cluster, from_cluster < end), mask);
         atomicAdd(&spilled, 1u);
     }
 }
@@ -349,15 +451,22 @@ fn root_total() -> u32 {
 // Writes meshlets `first .. first + count` of hierarchy_clusters for instance `index` at
 // once: a root that is a leaf, one the roots list has no room for (then every meshlet
 // below it, as a full queue emits a subtree whole), or a range a chunk has no slot for.
-fn emit_now(index: u32, first: u32, count: u32) {
+// Into the list of each view of `mask`.
+fn emit_now(index: u32, first: u32, count: u32, mask: u32) {
     let cap = capacity();
-    let start = atomicAdd(&cluster_list::cluster_count[1], count);
-    let written = min(count, cap - min(start, cap));
-    if written > 0u {
-        atomicAdd(&cluster_list::cluster_count[0], written);
-    }
-    for (var k = 0u; k < written; k += 1u) {
-        cluster_list::clusters[start + k] = Cluster(index, hierarchy_clusters[first + k]);
+    for (var v = 0u; v < MAX_VIEWS; v += 1u) {
+        if (mask & (1u << v)) == 0u {
+            continue;
+        }
+        let start = atomicAdd(&cluster_list::cluster_count[count_word(v, 1u)], count);
+        let written = min(count, cap - min(start, cap));
+        if written > 0u {
+            atomicAdd(&cluster_list::cluster_count[count_word(v, 0u)], written);
+        }
+        let base = list_base(v) + start;
+        for (var k = 0u; k < written; k += 1u) {
+            cluster_list::clusters[base + k] = Cluster(index, hierarchy_clusters[first + k]);
+        }
     }
 }
 
@@ -383,7 +492,14 @@ fn walker(index: u32) -> Walker {
     var w: Walker;
     w.instance = instance_at(min(index, instance_total() - 1u));
     w.scale = instance_max_scale(w.instance);
-    w.reach = length(w.instance.world_from_local[3].xyz) + length(view.camera_position);
+    let translation = length(w.instance.world_from_local[3].xyz);
+#ifdef MULTI_VIEW
+    for (var v = 0u; v < MAX_VIEWS; v += 1u) {
+        w.reach[v] = translation + length(views[v].camera_position);
+    }
+#else
+    w.reach[0] = translation + length(view.camera_position);
+#endif
     return w;
 }
 
@@ -408,6 +524,7 @@ fn roots(
     let total = min(params.instance_count, instance_total());
 #endif
     let held = min(params.root_capacity, arrayLength(&root_list));
+    let walked = walked_views();
     for (var e = linear_workgroup(wg, groups.x) * WORKGROUP_SIZE + t; e < total; e += threads) {
         var index = e;
         var id = 0xffffffffu;
@@ -431,21 +548,22 @@ fn roots(
         let node = hierarchy_nodes[id];
         atomicAdd(&tested_nodes, 1u);
         atomicAdd(&entries_tested, 1u);
-        if !(node_visible(node, w) && node_seen(node, id, w, true)) {
+        let seen = node_views(node, w, walked);
+        if seen == 0u || !node_seen(node, id, w, true) {
             continue;
         }
         atomicAdd(&entries_passed, 1u);
         if node.child_count == 0u {
             atomicAdd(&leaves, 1u);
-            emit_now(index, node.first_cluster, node.cluster_count);
+            emit_now(index, node.first_cluster, node.cluster_count, seen);
             continue;
         }
         let at = atomicAdd(&subtree_counts[MAX_STEPS], 1u);
         if at < held {
-            root_list[at] = Subtree(index, node.first_child, node.child_count);
+            root_list[at] = Subtree(index, with_views(node.first_child, seen), node.child_count);
         } else {
             atomicAdd(&spilled, 1u);
-            emit_now(index, node.first_cluster, node.cluster_count);
+            emit_now(index, node.first_cluster, node.cluster_count, seen);
         }
     }
     workgroupBarrier();
@@ -502,7 +620,9 @@ fn fill(
         }
         atomicStore(&next_len, 0u);
         atomicStore(&emit_ranges, 0u);
-        atomicStore(&emit_total, 0u);
+        for (var v = 0u; v < MAX_VIEWS; v += 1u) {
+            atomicStore(&emit_total[v], 0u);
+        }
         clear_counters();
     }
     let entries = workgroupUniformLoad(&entry_total);
@@ -523,7 +643,8 @@ fn fill(
             }
         }
         index = s.instance;
-        first = s.first;
+        first = entry_id(s.first);
+        let mask = entry_views(s.first);
         count = min(s.count, QUEUE);
         if index >= instance_total() {
             count = 0u;
@@ -534,7 +655,7 @@ fn fill(
             frontier_len = count;
         }
         for (var k = t; k < count; k += WORKGROUP_SIZE) {
-            frontier[0][k] = first + k;
+            frontier[0][k] = with_views(first + k, mask);
         }
         var left = 0u;
         var cur = 0u;
@@ -551,13 +672,17 @@ fn fill(
                     // Two levels a round: the node, and at once the children of an
                     // accepted inner node (the same nodes a level-by-level walk tests,
                     // in half the dependent rounds).
-                    let id = frontier[cur][i];
+                    let entry = frontier[cur][i];
+                    let id = entry_id(entry);
                     tests = 1u;
-                    if id < arrayLength(&hierarchy_nodes) && node_visible(hierarchy_nodes[id], w)
-                        && node_seen(hierarchy_nodes[id], id, w, false) {
+                    var seen = 0u;
+                    if id < arrayLength(&hierarchy_nodes) {
+                        seen = node_views(hierarchy_nodes[id], w, entry_views(entry));
+                    }
+                    if seen != 0u && node_seen(hierarchy_nodes[id], id, w, false) {
                         let node = hierarchy_nodes[id];
                         if node.child_count == 0u {
-                            emit_range(node.first_cluster, node.cluster_count);
+                            emit_range(node.first_cluster, node.cluster_count, seen);
                             atomicAdd(&leaves, 1u);
                         } else {
                             for (var c = 0u; c < node.child_count; c += 1u) {
@@ -567,14 +692,15 @@ fn fill(
                                     continue;
                                 }
                                 let child = hierarchy_nodes[child_id];
-                                if !node_visible(child, w) || !node_seen(child, child_id, w, false) {
+                                let child_seen = node_views(child, w, seen);
+                                if child_seen == 0u || !node_seen(child, child_id, w, false) {
                                     continue;
                                 }
                                 if child.child_count == 0u {
-                                    emit_range(child.first_cluster, child.cluster_count);
+                                    emit_range(child.first_cluster, child.cluster_count, child_seen);
                                     atomicAdd(&leaves, 1u);
                                 } else {
-                                    enqueue(child, 1u - cur, width, spreading, index);
+                                    enqueue(child, child_seen, 1u - cur, width, spreading, index);
                                 }
                             }
                         }
@@ -587,28 +713,39 @@ fn fill(
                 workgroupBarrier();
                 if t == 0u {
                     emit_len = min(atomicExchange(&emit_ranges, 0u), EMIT_SLOTS);
-                    let total = atomicExchange(&emit_total, 0u);
-                    if total > 0u {
-                        emit_base = atomicAdd(&cluster_list::cluster_count[1], total);
-                        // The written word grows by the part below the capacity: the
-                        // reservations tile [0, requested), so the sum is min(requested,
-                        // capacity) once every step is done, with no dispatch after.
-                        let written = min(total, cap - min(emit_base, cap));
-                        if written > 0u {
-                            atomicAdd(&cluster_list::cluster_count[0], written);
+                    for (var v = 0u; v < MAX_VIEWS; v += 1u) {
+                        let total = atomicExchange(&emit_total[v], 0u);
+                        if total > 0u {
+                            emit_base[v] = atomicAdd(&cluster_list::cluster_count[count_word(v, 1u)], total);
+                            // The written word grows by the part below the capacity: the
+                            // reservations tile [0, requested), so the sum is
+                            // min(requested, capacity) once every step is done, with no
+                            // dispatch after.
+                            let written = min(total, cap - min(emit_base[v], cap));
+                            if written > 0u {
+                                atomicAdd(&cluster_list::cluster_count[count_word(v, 0u)], written);
+                            }
                         }
                     }
                 }
-                // One range after another, consecutive threads on consecutive slots.
+                // One range after another (and view after view), consecutive threads on
+                // consecutive slots.
                 let ranges = workgroupUniformLoad(&emit_len);
-                let chunk_base = emit_base;
                 for (var e = 0u; e < ranges; e += 1u) {
-                    let c = emit_count[e];
-                    let start = chunk_base + emit_offset[e];
+                    let packed = emit_count[e];
+                    let c = entry_id(packed);
+                    let range_views = entry_views(packed);
                     let range_first = emit_first[e];
-                    for (var k = t; k < c; k += WORKGROUP_SIZE) {
-                        if start + k < cap {
-                            cluster_list::clusters[start + k] = Cluster(index, hierarchy_clusters[range_first + k]);
+                    for (var v = 0u; v < MAX_VIEWS; v += 1u) {
+                        if (range_views & (1u << v)) == 0u {
+                            continue;
+                        }
+                        let start = emit_base[v] + emit_offset[v * EMIT_SLOTS + e];
+                        let base = list_base(v) + start;
+                        for (var k = t; k < c; k += WORKGROUP_SIZE) {
+                            if start + k < cap {
+                                cluster_list::clusters[base + k] = Cluster(index, hierarchy_clusters[range_first + k]);
+                            }
                         }
                     }
                 }

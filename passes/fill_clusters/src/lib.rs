@@ -30,6 +30,7 @@
 //! |------------------|---------|---|
 //! | `capacity`       | 0 (the whole `clusters` buffer) | clusters the list may hold, at most the buffer's |
 //! | `instance_count` | 0 (every bound instance) | instances to visit, at most the bound count |
+//! | `list`, `lists`  | 0, 1    | the buffers hold `lists` lists side by side and the pass writes list `list` ([`ListPart`]) |
 //!
 //! # Definitions the tests pin down
 //!
@@ -68,6 +69,7 @@ pub use cpu::{FillResult, cpu_fill};
 pub use hierarchy::HierarchyFill;
 pub use hierarchy_cpu::{HierarchyWalk, WalkOcclusion, WalkParams, cpu_walk, cpu_walk_with};
 
+use meshlight_gpu_scene::ListPart;
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::instance_table::{self, InstanceTable};
 use meshlight_gpu_scene::view::frame_view;
@@ -205,6 +207,8 @@ pub struct FillClusters {
     pub capacity: Option<u32>,
     /// Instances to visit; `None`: every instance the `instances` buffer holds.
     pub instance_count: Option<u32>,
+    /// The list of the buffers it writes.
+    pub part: ListPart,
 }
 
 uniform_block! {
@@ -216,20 +220,28 @@ uniform_block! {
         instance_count: u32,
         /// x size of the dispatch, to linearise the workgroup id.
         groups_x: u32,
+        /// The list written ([`ListPart`]).
+        list: u32,
+        /// The lists the buffers hold.
+        lists: u32,
         pad_a: u32,
+        pad_b: u32,
+        pad_c: u32,
     }
 }
 
-const PARAM_KEYS: [&str; 2] = ["capacity", "instance_count"];
+const PARAM_KEYS: [&str; 4] = ["capacity", "instance_count", "list", "lists"];
 
 impl FillClusters {
-    /// Reads `capacity` and `instance_count` (0 or absent: the bound buffer's size).
+    /// Reads `capacity` and `instance_count` (0 or absent: the bound buffer's size), and
+    /// `list` and `lists` ([`ListPart`]).
     pub fn from_params(params: &Params) -> Result<Self> {
         params.only(&PARAM_KEYS)?;
         let nonzero = |v: u32| (v > 0).then_some(v);
         Ok(Self {
             capacity: nonzero(params.u32("capacity", 0)?),
             instance_count: nonzero(params.u32("instance_count", 0)?),
+            part: ListPart::from_params(params, 1)?,
         })
     }
 }
@@ -302,10 +314,10 @@ impl Pass for FillClusters {
         Implementation::new(IMPLEMENTATION, contract())
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
-        ctx.min_bytes("cluster_count", 8);
+        ctx.min_bytes("cluster_count", self.part.count_bytes());
         ctx.frame_input(VIEW_INPUT);
         let layout = BindingLayout::from_shader("fill_clusters");
-        instance_programs(ctx, &SHADER, &["fill", "finish"], layout, &());
+        instance_programs(ctx, &SHADER, &["prepare", "fill", "finish"], layout, &());
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
@@ -319,13 +331,20 @@ impl Pass for FillClusters {
             capacity: self.capacity.unwrap_or(u32::MAX),
             instance_count,
             groups_x: x,
+            list: self.part.list,
+            lists: self.part.lists,
             ..GpuParams::default()
         };
-        ctx.clear("cluster_count")?;
         let uniforms: [(&str, &[u8]); 2] = [
             ("view", bytemuck::bytes_of(&view)),
             ("params", bytemuck::bytes_of(&params)),
         ];
+        if self.part.lists == 1 {
+            ctx.clear("cluster_count")?;
+        } else {
+            // Only this pass's list's words: the other lists may be another view's.
+            ctx.dispatch_compute("prepare", &uniforms, Workgroups::Direct([1, 1, 1]))?;
+        }
         ctx.dispatch_compute("fill", &uniforms, Workgroups::Direct([x, y, 1]))?;
         // A second dispatch (dependent, so wgpu puts a barrier before it): the requested
         // count is final when it is read.

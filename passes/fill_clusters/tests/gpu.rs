@@ -195,6 +195,7 @@ fn a_small_capacity_writes_exactly_the_capacity_and_nothing_past_it() {
     let pass = FillClusters {
         capacity: Some(capacity),
         instance_count: None,
+        ..FillClusters::default()
     };
     let got = run(&mut data, &view, pass, capacity + GUARD);
     assert_eq!(got.cluster_count, [capacity, full.requested]);
@@ -216,6 +217,7 @@ fn instance_count_limits_the_instances_visited() {
     let pass = FillClusters {
         capacity: None,
         instance_count: Some(4),
+        ..FillClusters::default()
     };
     let got = run(&mut data, &view, pass, full.requested);
     assert_eq!(

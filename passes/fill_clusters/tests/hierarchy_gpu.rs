@@ -70,6 +70,7 @@ fn run(data: &mut SceneData, view: &View, fill: Fill, cull: Option<f32>, slots: 
         Fill::Flat => Box::new(FillClusters {
             capacity: Some(slots),
             instance_count: None,
+            ..FillClusters::default()
         }),
         Fill::Hierarchy(pass) => Box::new(HierarchyFill {
             capacity: Some(slots),

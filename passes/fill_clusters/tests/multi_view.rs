@@ -1,0 +1,344 @@
+//! One hierarchy walk for several views (`views` > 1) against a walk per view: each
+//! view's list holds exactly the clusters its own walk lists (as a set, each once), with
+//! the same count words, and `cull_lod` reading that view's list (`list`, `lists`) finds
+//! the same cut. Views are seeded perspective and orthographic ones and a sun's shadow
+//! cascades; a view given no viewport lists nothing; lists may start past the first of
+//! the buffers; and with a queue too short to hold the frontier (whole subtrees emitted)
+//! the lists may differ but every cut still holds.
+
+mod support;
+
+use glam::Vec3;
+use meshlight_gpu_scene::cascades::{CascadeSettings, cascades};
+use meshlight_gpu_scene::gpu::elements;
+use meshlight_gpu_scene::{Camera, GpuScene, ListPart, SceneData};
+use meshlight_graph::*;
+use meshlight_pass_cull_lod::{CullLod, Thresholds};
+use meshlight_pass_fill_clusters::{HierarchyFill, hierarchy};
+use meshlight_shaders::cpu::layout::{Cluster, View};
+use std::collections::BTreeSet;
+use support::run::{Cull, run_fill};
+use support::scenes::{Views, field};
+use support::*;
+
+/// The bunny and spot on a 4 × 3 field, turned and scaled differently.
+fn scene() -> SceneData {
+    field(&[("bunny", bunny()), ("spot", spot())], 12, |i| {
+        let (x, z) = ((i % 4) as f32, (i / 4) as f32);
+        let scale = Vec3::splat(0.7 + 0.1 * (i % 5) as f32);
+        (scale, i as f32 * 1.3, Vec3::new(x * 3.0, 0.0, z * 3.0))
+    })
+}
+
+/// Random views of the field (every fourth orthographic), near and far.
+const VIEWS: Views = Views {
+    target: [Vec3::new(-1.0, -0.5, -1.0), Vec3::new(10.0, 1.0, 7.0)],
+    lowest: -0.3,
+    distance: [0.4, 120.0],
+    viewports: &[[320, 240], [640, 360], [1280, 720]],
+    fov: [0.5, 1.5],
+    thresholds: &[1.0],
+};
+
+/// Clusters each list may hold.
+const LIST: u32 = 1 << 15;
+
+/// What one view's list and cut came to.
+struct ViewResult {
+    list: BTreeSet<(u32, u32)>,
+    /// Entries written, before being made a set (to see none was written twice).
+    written: usize,
+    words: [u32; 2],
+    cut: BTreeSet<(u32, u32)>,
+}
+
+/// One walk over `views` writing lists `first .. first + views.len()` of `lists`, then a
+/// cull per view reading its list; each view's list and cut. `queue`: the walk's
+/// frontier capacity (`None`: the default).
+fn one_walk(
+    data: &mut SceneData,
+    views: &[View],
+    first: u32,
+    lists: u32,
+    threshold: f32,
+    queue: Option<u32>,
+) -> Vec<ViewResult> {
+    let gpu = gpu();
+    let scene = GpuScene::new(&gpu, data);
+    let mut g = GraphBuilder::new();
+    scene.import(&mut g);
+    scene.import_hierarchy(&mut g);
+    g.import_buffer(
+        "clusters",
+        BufferDesc::array(elements::CLUSTER, u64::from(LIST * lists)),
+        USAGE,
+    );
+    g.create_buffer(
+        "cluster_count",
+        BufferDesc::array(Element::U32, 2 * u64::from(lists)),
+    );
+    let walk = HierarchyFill {
+        lod_threshold_px: threshold,
+        capacity: Some(LIST),
+        queue_capacity: queue,
+        views: views.len() as u32,
+        part: ListPart { list: first, lists },
+        ..HierarchyFill::default()
+    };
+    let out = g
+        .add_pass("walk", walk, Bindings::new().input("view", "views"))
+        .unwrap();
+    g.export(out.buffer("cluster_count").unwrap());
+    for k in 0..views.len() as u32 {
+        let cull = CullLod {
+            thresholds: Thresholds {
+                lod_threshold_px: threshold,
+                ..Thresholds::default()
+            },
+            part: ListPart {
+                list: first + k,
+                lists,
+            },
+            ..CullLod::default()
+        };
+        let name = |n: &str| format!("{n}_{k}");
+        g.create_buffer(
+            &name("raster_clusters"),
+            BufferDesc::array(elements::CLUSTER, u64::from(LIST)),
+        );
+        g.create_buffer(&name("raster_counts"), BufferDesc::array(Element::U32, 8));
+        g.create_buffer(&name("hw_args"), BufferDesc::array(Element::DRAW_ARGS, 1));
+        let bindings = Bindings::new()
+            .input("view", &name("view"))
+            .bind_named("raster_clusters", &name("raster_clusters"))
+            .bind_named("raster_counts", &name("raster_counts"))
+            .bind_named("hw_args", &name("hw_args"));
+        let culled = g.add_pass(&name("cull"), cull, bindings).unwrap();
+        g.export(culled.buffer("raster_clusters").unwrap());
+        g.export(culled.buffer("raster_counts").unwrap());
+    }
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let list_buffer = gpu.buffer_with_data(
+        "clusters",
+        bytemuck::cast_slice(&vec![SENTINEL; (LIST * lists) as usize]),
+        USAGE,
+    );
+    let mut frame = FrameData::new().with("views", bytemuck::cast_slice(views));
+    for (k, v) in views.iter().enumerate() {
+        frame = frame.with(&format!("view_{k}"), bytemuck::bytes_of(v));
+    }
+    let mut exec = Executor::new(gpu);
+    exec.execute_frame(
+        &compiled,
+        &scene.imports().buffer("clusters", &list_buffer),
+        &frame,
+    )
+    .unwrap();
+    let words: Vec<u32> = bytemuck::pod_collect_to_vec(&exec.read_buffer("cluster_count").unwrap());
+    let all: Vec<Cluster> = bytemuck::pod_collect_to_vec(
+        &exec
+            .gpu
+            .read_buffer(&list_buffer, 0, list_buffer.size())
+            .unwrap(),
+    );
+    // Lists the walk does not write keep the sentinel and zero words.
+    for k in (0..lists).filter(|k| !(first..first + views.len() as u32).contains(k)) {
+        let part = &all[(k * LIST) as usize..((k + 1) * LIST) as usize];
+        assert!(
+            part.iter().all(|c| *c == SENTINEL),
+            "list {k}, which no view of the walk owns, was written"
+        );
+        assert_eq!(
+            words[2 * k as usize..2 * k as usize + 2],
+            [0, 0],
+            "list {k}'s words"
+        );
+    }
+    (0..views.len() as u32)
+        .map(|k| {
+            let list = first + k;
+            let w = [words[2 * list as usize], words[2 * list as usize + 1]];
+            let part = &all[(list * LIST) as usize..((list + 1) * LIST) as usize];
+            assert!(
+                part[w[0] as usize..].iter().all(|c| *c == SENTINEL),
+                "view {k}: a slot past its list was written"
+            );
+            let listed = &part[..w[0] as usize];
+            let raster: Vec<Cluster> = bytemuck::pod_collect_to_vec(
+                &exec.read_buffer(&format!("raster_clusters_{k}")).unwrap(),
+            );
+            let c: Vec<u32> = bytemuck::pod_collect_to_vec(
+                &exec.read_buffer(&format!("raster_counts_{k}")).unwrap(),
+            );
+            let (sw, hw) = (c[0] as usize, c[1] as usize);
+            let cut = raster[..sw]
+                .iter()
+                .chain(&raster[LIST as usize - hw..])
+                .map(|c| (c.instance, c.meshlet))
+                .collect();
+            ViewResult {
+                list: set(listed),
+                written: listed.len(),
+                words: w,
+                cut,
+            }
+        })
+        .collect()
+}
+
+/// The walk of `view` alone, with cull after it: its list and cut.
+fn single_walk(
+    data: &mut SceneData,
+    view: &View,
+    threshold: f32,
+    queue: Option<u32>,
+) -> ViewResult {
+    let walk = HierarchyFill {
+        lod_threshold_px: threshold,
+        capacity: Some(LIST),
+        queue_capacity: queue,
+        ..HierarchyFill::default()
+    };
+    let cull = Cull {
+        threshold,
+        slots: LIST,
+    };
+    let f = run_fill(data, view, Box::new(walk), LIST + GUARD, Some(cull));
+    ViewResult {
+        list: set(f.listed()),
+        written: f.listed().len(),
+        words: f.cluster_count,
+        cut: f.cut.expect("cull ran"),
+    }
+}
+
+/// Every view of `views` walked at once and alone: the same lists (`exact`) and cuts.
+fn compare(
+    data: &mut SceneData,
+    views: &[View],
+    first: u32,
+    lists: u32,
+    queue: Option<u32>,
+    exact: bool,
+) -> usize {
+    let threshold = 1.0;
+    let together = one_walk(data, views, first, lists, threshold, queue);
+    let mut clusters = 0;
+    for (k, (view, got)) in views.iter().zip(&together).enumerate() {
+        assert_eq!(
+            got.written,
+            got.list.len(),
+            "view {k}: a cluster written twice"
+        );
+        if view.viewport_size == [0.0, 0.0] {
+            assert_eq!(
+                got.words,
+                [0, 0],
+                "view {k} has no viewport, yet listed clusters"
+            );
+            continue;
+        }
+        let alone = single_walk(data, view, threshold, queue);
+        if exact {
+            assert_eq!(got.words, alone.words, "view {k}: count words");
+            assert!(
+                got.list == alone.list,
+                "view {k}: {} clusters listed alone, {} in one walk, {} differ",
+                alone.list.len(),
+                got.list.len(),
+                got.list.symmetric_difference(&alone.list).count()
+            );
+        }
+        assert!(
+            got.cut == alone.cut,
+            "view {k}: the cut differs ({} alone, {} in one walk)",
+            alone.cut.len(),
+            got.cut.len()
+        );
+        clusters += got.list.len();
+    }
+    clusters
+}
+
+#[test]
+fn one_walk_for_four_views_lists_what_four_walks_list() {
+    let mut data = scene();
+    let mut listed = 0;
+    for seed in [0x5eed_0001u64, 0x5eed_0002, 0x5eed_0003] {
+        let views: Vec<View> = VIEWS.seeded(&data, seed, 4).map(|(_, v, _)| v).collect();
+        listed += compare(&mut data, &views, 0, 4, None, true);
+    }
+    assert!(
+        listed > 1000,
+        "only {listed} clusters listed: the views see too little"
+    );
+}
+
+#[test]
+fn one_walk_for_a_suns_cascades_lists_what_a_walk_per_cascade_lists() {
+    let mut data = scene();
+    let radius = data.meshes[0].bounding_sphere[3];
+    let camera = Camera::perspective(
+        Vec3::new(-2.0, 1.5, -2.0) * radius,
+        Vec3::new(5.0, 0.0, 4.0) * radius,
+        1.0,
+        radius * 0.02,
+    );
+    let settings = CascadeSettings {
+        count: 4,
+        resolution: 512,
+        distance: 30.0 * radius,
+        caster_reach: 30.0 * radius,
+        ..CascadeSettings::default()
+    };
+    let list = cascades(&camera, [640, 360], Vec3::new(0.4, 1.0, 0.3), &settings, 0).unwrap();
+    let views: Vec<View> = list.iter().map(|c| c.view).collect();
+    let listed = compare(&mut data, &views, 0, 4, None, true);
+    assert!(listed > 100, "only {listed} clusters listed");
+}
+
+#[test]
+fn a_view_without_a_viewport_lists_nothing_and_lists_may_start_past_the_first() {
+    let mut data = scene();
+    let mut views: Vec<View> = VIEWS
+        .seeded(&data, 0x5eed_0004, 3)
+        .map(|(_, v, _)| v)
+        .collect();
+    views[1] = View::default();
+    views[1].viewport_size = [0.0, 0.0];
+    compare(&mut data, &views, 1, 5, None, true);
+}
+
+#[test]
+fn a_full_queue_emits_whole_subtrees_for_its_views_and_keeps_every_cut() {
+    let mut data = scene();
+    let views: Vec<View> = VIEWS
+        .seeded(&data, 0x5eed_0005, 4)
+        .map(|(_, v, _)| v)
+        .collect();
+    compare(&mut data, &views, 0, 4, Some(2), false);
+}
+
+#[test]
+fn views_and_lists_out_of_range_are_refused_by_name() {
+    use meshlight_graph::file::Registry;
+    let mut registry = Registry::new();
+    meshlight_pass_fill_clusters::register(&mut registry);
+    let pass = |params: &str| {
+        let text = format!(
+            "[[pass]]\nname = \"fill\"\nstage = \"fill_clusters\"\nimplementation = \"{}\"\nparams = {{ {params} }}\n",
+            hierarchy::IMPLEMENTATION
+        );
+        meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry).map(|_| ())
+    };
+    meshlight_testing::assert_params(
+        pass,
+        &[],
+        &[
+            ("views = 5", "views"),
+            ("views = 0", "views"),
+            ("views = 3, lists = 2", "lists"),
+            ("views = 2, list = 3, lists = 4", "list"),
+        ],
+    );
+}
