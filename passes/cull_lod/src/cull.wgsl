@@ -217,6 +217,10 @@ fn cluster_at(i: u32) -> Cluster {
         return walked_clusters[i - listed];
     }
 #endif
+    // One list (the common case) starts at 0: no division per cluster.
+    if params.lists <= 1u {
+        return clusters[i];
+    }
     return clusters[params.list * list_length() + i];
 }
 

@@ -192,7 +192,14 @@ fn capacity() -> u32 {
 // View v's list: its first cluster, and its words in `cluster_count` ([w]: 0 written,
 // 1 requested).
 fn list_base(v: u32) -> u32 {
+#ifdef MULTI_VIEW
     return (params.list + v) * cluster_list::list_length(params.lists);
+#else
+    if params.lists <= 1u {
+        return 0u;
+    }
+    return params.list * cluster_list::list_length(params.lists);
+#endif
 }
 
 fn count_word(v: u32, w: u32) -> u32 {
@@ -259,11 +266,15 @@ fn flush() {
     if e < EMIT_SLOTS {
         emit_first[e] = pending_first;
         emit_count[e] = with_views(count, pending_views);
+#ifdef MULTI_VIEW
         for (var v = 0u; v < MAX_VIEWS; v += 1u) {
             if (pending_views & (1u << v)) != 0u {
                 emit_offset[v * EMIT_SLOTS + e] = atomicAdd(&emit_total[v], count);
             }
         }
+#else
+        emit_offset[e] = atomicAdd(&emit_total[0], count);
+#endif
         return;
     }
     emit_now(walk_instance, pending_first, count, pending_views);
@@ -287,43 +298,70 @@ fn emit_range(first: u32, count: u32, mask: u32) {
 struct Walker {
     instance: Instance,
     scale: f32,
-    // Per view, |translation| + |camera|: with the sphere's own size, the magnitudes a
-    // test adds.
-    reach: array<f32, MAX_VIEWS>,
+    // |translation|: with |camera| and the sphere's own size, the magnitudes a test adds.
+    translation: f32,
 }
 
-fn slack(w: Walker, v: u32, sphere: vec4<f32>) -> f32 {
-    return (w.reach[v] + w.scale * (length(sphere.xyz) + sphere.w)) * SLACK;
+fn slack(w: Walker, camera: vec3<f32>, sphere: vec4<f32>) -> f32 {
+    return (w.translation + length(camera) + w.scale * (length(sphere.xyz) + sphere.w)) * SLACK;
 }
 
-// Whether any meshlet below `node` can be in cull_lod's cut of `vw`, the walk's view v:
+// View v's frustum plane p and camera position, read from the uniform in place (a View
+// copied into a function would put its plane array in local memory, indexed per plane).
+fn view_plane(v: u32, p: u32) -> vec4<f32> {
+#ifdef MULTI_VIEW
+    return views[v].frustum[p];
+#else
+    return view.frustum[p];
+#endif
+}
+
+fn view_camera(v: u32) -> vec3<f32> {
+#ifdef MULTI_VIEW
+    return views[v].camera_position;
+#else
+    return view.camera_position;
+#endif
+}
+
+// `error` seen from `distance` in view v, in pixels (`error_to_pixels`).
+fn view_pixels(v: u32, distance: f32, error: f32) -> f32 {
+#ifdef MULTI_VIEW
+    return error_to_pixels(views[v], distance, error);
+#else
+    return error_to_pixels(view, distance, error);
+#endif
+}
+
+// Whether any meshlet below `node` can be in cull_lod's cut of the walk's view v:
 // its culling sphere in the frustum, its parent perceptible and its own error
 // imperceptible. Every comparison is the per-cluster one with the node's bounds, shifted
 // by the slack toward keeping.
-fn node_visible_in(node: HierarchyNode, w: Walker, vw: View, v: u32) -> bool {
+fn node_visible_in(node: HierarchyNode, w: Walker, v: u32) -> bool {
+    let camera = view_camera(v);
     let centre = instance_transform_point(w.instance, node.bounds.xyz);
-    let radius = node.bounds.w * w.scale + slack(w, v, node.bounds);
+    let radius = node.bounds.w * w.scale + slack(w, camera, node.bounds);
     for (var p = 0u; p < 6u; p += 1u) {
-        let plane = vw.frustum[p];
+        let plane = view_plane(v, p);
         if dot(plane.xyz, centre) + plane.w < -(radius + SLACK * abs(plane.w)) {
             return false;
         }
     }
     let lod_centre = instance_transform_point(w.instance, node.lod_sphere.xyz);
     let lod_radius = node.lod_sphere.w * w.scale;
-    let s = slack(w, v, node.lod_sphere);
-    let d = length(lod_centre - vw.camera_position);
+    let s = slack(w, camera, node.lod_sphere);
+    let d = length(lod_centre - camera);
     // Too fine: the largest parent error, seen from the sphere's nearest point, is
     // imperceptible, so every parent below is.
     if node.max_parent_error < F32_MAX {
-        let parent_px = error_to_pixels(vw, d - lod_radius - s, node.max_parent_error * w.scale);
+        let parent_px = view_pixels(v, d - lod_radius - s, node.max_parent_error * w.scale);
         if !error_perceptible(parent_px, params.lod_threshold_px) {
             return false;
         }
     }
     // Too coarse: the smallest own error, seen from the sphere's farthest point, is
     // perceptible, so every own error below is.
-    let own_px = error_to_pixels(vw, d + lod_radius + s, node.min_error * w.scale);
+    let own_px = view_pixels(v, d + lod_radius + s, node.min_error * w.scale);
     return !error_perceptible(own_px, params.lod_threshold_px);
 }
 
@@ -332,13 +370,13 @@ fn node_views(node: HierarchyNode, w: Walker, mask: u32) -> u32 {
 #ifdef MULTI_VIEW
     var kept = 0u;
     for (var v = 0u; v < MAX_VIEWS; v += 1u) {
-        if (mask & (1u << v)) != 0u && node_visible_in(node, w, views[v], v) {
+        if (mask & (1u << v)) != 0u && node_visible_in(node, w, v) {
             kept |= 1u << v;
         }
     }
     return kept;
 #else
-    return select(0u, 1u, node_visible_in(node, w, view, 0u));
+    return select(0u, 1u, node_visible_in(node, w, 0u));
 #endif
 }
 
@@ -492,14 +530,7 @@ fn walker(index: u32) -> Walker {
     var w: Walker;
     w.instance = instance_at(min(index, instance_total() - 1u));
     w.scale = instance_max_scale(w.instance);
-    let translation = length(w.instance.world_from_local[3].xyz);
-#ifdef MULTI_VIEW
-    for (var v = 0u; v < MAX_VIEWS; v += 1u) {
-        w.reach[v] = translation + length(views[v].camera_position);
-    }
-#else
-    w.reach[0] = translation + length(view.camera_position);
-#endif
+    w.translation = length(w.instance.world_from_local[3].xyz);
     return w;
 }
 
@@ -731,6 +762,7 @@ fn fill(
                 // One range after another (and view after view), consecutive threads on
                 // consecutive slots.
                 let ranges = workgroupUniformLoad(&emit_len);
+#ifdef MULTI_VIEW
                 for (var e = 0u; e < ranges; e += 1u) {
                     let packed = emit_count[e];
                     let c = entry_id(packed);
@@ -749,6 +781,20 @@ fn fill(
                         }
                     }
                 }
+#else
+                let chunk_base = emit_base[0];
+                let first_slot = list_base(0u);
+                for (var e = 0u; e < ranges; e += 1u) {
+                    let c = emit_count[e];
+                    let start = chunk_base + emit_offset[e];
+                    let range_first = emit_first[e];
+                    for (var k = t; k < c; k += WORKGROUP_SIZE) {
+                        if start + k < cap {
+                            cluster_list::clusters[first_slot + start + k] = Cluster(index, hierarchy_clusters[range_first + k]);
+                        }
+                    }
+                }
+#endif
                 workgroupBarrier();
             }
             if t == 0u {
