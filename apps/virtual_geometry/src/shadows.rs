@@ -4,9 +4,10 @@
 //! inputs, and the cascades' counters read back so their lists grow like the camera's.
 //!
 //! A shadow pass is told from the camera's by its `views`: the renderer's settings that
-//! concern the camera's passes only (the occlusion view's records, the streaming
-//! slots) leave the shadow passes as the file wrote them, and the LOD threshold of a
-//! shadow pass is the camera's times `2^lod_bias`.
+//! concern the camera's passes only (the occlusion view's records) leave the shadow
+//! passes as the file wrote them, a streamed scene's shadow culls add their page
+//! requests to the camera's, and the LOD threshold of a shadow pass is the camera's
+//! times `2^lod_bias`.
 
 use super::settings::{FrameSettings, ShadowSettings};
 use meshlight::gpu_scene::Camera;

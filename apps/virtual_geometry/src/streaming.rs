@@ -172,9 +172,11 @@ pub fn apply(p: &mut Pipeline, data: &SceneData) -> Result<()> {
         }
     }
     let mut threshold = None;
-    // The shadow views draw what the camera's pages hold; they ask for none of their own.
+    // Every first cull asks for the pages of its cut: the camera's starts the frame's
+    // list, the shadow views' add theirs after it (a caster's shadow reaches the detail
+    // its cascade wants, and the pages it draws from are kept in use).
     for pass in p.passes_of_mut(cull) {
-        if pass.param_str("mode") != Some("second") && !super::shadows::is_shadow(pass) {
+        if pass.param_str("mode") != Some("second") {
             for (slot, resource) in [
                 (STREAM_ERRORS_SLOT, STREAM_ERRORS),
                 (PAGE_MARKS_SLOT, PAGE_MARKS),
@@ -183,7 +185,11 @@ pub fn apply(p: &mut Pipeline, data: &SceneData) -> Result<()> {
             ] {
                 pass.bind(slot, resource);
             }
-            threshold = threshold.or(pass.param("lod_threshold_px").cloned());
+            if super::shadows::is_shadow(pass) {
+                pass.set_param("append_requests", true);
+            } else {
+                threshold = threshold.or(pass.param("lod_threshold_px").cloned());
+            }
         }
     }
     // The `residency` view measures missing detail against the cull's threshold.

@@ -414,3 +414,55 @@ fn the_residency_view_shows_missing_detail_until_streaming_settles() {
     assert!(covered > 1000, "{covered} covered pixels");
     assert_eq!(coarser(&settled), 0, "drawn coarser once settled");
 }
+
+/// The shadow maps of the resident field, or of the streamed one once streaming settles.
+fn shadow_maps(placed: &Placed, streamed: bool) -> Vec<u32> {
+    use meshlight_virtual_geometry::setup::ShadowRequest;
+    let request = ShadowRequest {
+        cascades: Some(2),
+        // Texels far finer than the camera's pixels: the cascades want finer levels
+        // than the camera's cut holds.
+        resolution: Some(1024),
+        ..ShadowRequest::default()
+    };
+    let shadows = request.settings(&placed.data, &placed.camera, [W, H], true);
+    let settings = FrameSettings {
+        shadows,
+        // Every cluster in software, so the maps compare bit for bit.
+        hardware: Some(false),
+        ..FrameSettings::new(W, H)
+    };
+    let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped).unwrap();
+    if streamed {
+        r.start_streaming(sources(placed), Budget::default(), 2)
+            .unwrap();
+        settle(&mut r, placed, 300);
+    } else {
+        r.render_still(&placed.camera).unwrap();
+    }
+    let maps = r
+        .shadow_maps()
+        .expect("the renderer keeps the maps")
+        .clone();
+    bytemuck::pod_collect_to_vec(&r.executor.gpu.read_buffer(&maps, 0, maps.size()).unwrap())
+}
+
+/// The shadow culls ask for the pages of their cascades' cuts after the camera's, so
+/// once a streamed field settles its shadow maps are the resident field's, texel for
+/// texel, though its cascades want finer levels than its low-resolution camera (with
+/// the camera's requests alone, the maps stay coarser).
+#[test]
+fn a_streamed_fields_shadow_maps_settle_on_the_resident_maps() {
+    let want = shadow_maps(&field(None), false);
+    let got = shadow_maps(&field(Some(all_pages())), true);
+    assert_eq!(got.len(), want.len());
+    let drawn = want.iter().filter(|&&d| d != 0).count();
+    assert!(drawn > want.len() / 4, "the maps cover only {drawn} texels");
+    let differ = got.iter().zip(&want).filter(|(g, w)| g != w).count();
+    assert_eq!(
+        differ,
+        0,
+        "{differ} of {} texels differ from the resident maps",
+        want.len()
+    );
+}

@@ -253,8 +253,11 @@ fn prepare() {
 #endif
 #endif
 #ifdef STREAMING
-    atomicStore(&page_request_count[0], 0u);
-    atomicStore(&page_request_count[1], 0u);
+    // A cull that appends (a shadow view's) keeps the requests of the culls before it.
+    if params.append_requests == 0u {
+        atomicStore(&page_request_count[0], 0u);
+        atomicStore(&page_request_count[1], 0u);
+    }
 #endif
     atomicStore(&hw_args[0], HW_VERTICES);
     atomicStore(&hw_args[1], 0u);

@@ -135,6 +135,7 @@
 //! | `mode`              | `"first"` | `first`: every candidate, occlusion against last frame's pyramid when one is bound; `second`: the re-test of the first pass's occluded clusters against this frame's |
 //! | `capacity`          | 0 (all of `raster_clusters`) | `C`, at most the buffer's size / 8 |
 //! | `max_per_dimension` | 0 (the adapter's) | workgroup limit per dimension of the indirect cull dispatch |
+//! | `append_requests`   | false   | streaming: add the pass's page requests to those of the culls before it (a shadow view's cull after the camera's) instead of starting the frame's list |
 //! | `list`, `lists`     | 0, 1    | the candidate buffers hold `lists` lists (one per view) and the pass reads list `list` (`meshlight_gpu_scene::ListPart`) |
 //!
 //! # Definitions the tests pin down
@@ -413,6 +414,11 @@ pub struct CullLod {
     /// The list of `clusters` and `cluster_count` it reads, where the buffers hold one
     /// list per view (params `list` and `lists`; one list by default).
     pub part: ListPart,
+    /// Streaming: add this pass's page requests to those of the culls before it (a
+    /// shadow view's after the camera's) instead of starting the frame's list
+    /// (`append_requests`; off by default). The page marks keep each page listed once a
+    /// frame across the views, whose Views carry the same frame index.
+    pub append_requests: bool,
 }
 
 uniform_block! {
@@ -434,10 +440,16 @@ uniform_block! {
         /// The list of the candidate buffers read ([`ListPart`]), and how many they hold.
         list: u32,
         lists: u32,
+        /// 1: keep the page requests of the culls before (`append_requests`).
+        append_requests: u32,
+        pad_a: u32,
+        pad_b: u32,
+        pad_c: u32,
     }
 }
 
-const PARAM_KEYS: [&str; 8] = [
+const PARAM_KEYS: [&str; 9] = [
+    "append_requests",
     "list",
     "lists",
     "lod_threshold_px",
@@ -469,6 +481,7 @@ impl CullLod {
             capacity: nonzero(params.u32("capacity", 0)?),
             max_per_dimension: nonzero(params.u32("max_per_dimension", 0)?),
             part: ListPart::from_params(params, 1)?,
+            append_requests: params.bool("append_requests", false)?,
         };
         pass.check_thresholds()?;
         Ok(pass)
@@ -599,7 +612,18 @@ impl CullLod {
 
 impl Pass for CullLod {
     fn implementation(&self) -> Implementation {
-        Implementation::new(IMPLEMENTATION, contract())
+        let mut contract = contract();
+        if self.append_requests {
+            // The requests of the culls before are kept: the list is read, not restarted.
+            for slot in contract
+                .slots
+                .iter_mut()
+                .filter(|s| [PAGE_REQUESTS_SLOT, PAGE_REQUEST_COUNT_SLOT].contains(&s.name))
+            {
+                slot.access = Access::StorageReadWrite;
+            }
+        }
+        Implementation::new(IMPLEMENTATION, contract)
     }
     fn setup(&self, ctx: &mut SetupContext) -> Result<()> {
         self.check_thresholds()?;
@@ -718,6 +742,8 @@ impl Pass for CullLod {
             test_occlusion: test_occlusion as u32,
             list: self.part.list,
             lists: self.part.lists,
+            append_requests: self.append_requests as u32,
+            ..GpuParams::default()
         };
         let (view, params) = (bytemuck::bytes_of(&view), bytemuck::bytes_of(&params));
         if self.phase == Phase::First && ctx.is_bound(PER_INSTANCE_FIRST) {
