@@ -97,7 +97,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let all: u64 = cut.iter().map(triangles).sum();
                     let hid: u64 = hidden.iter().map(|c| triangles(c)).sum();
                     format!(
-                        "{name}: {} clusters, {all} triangles; hidden by its own finished map: {} clusters ({:.1} %), {hid} triangles ({:.1} %)",
+                        "{name}: {} instances walked, {} nodes tested, {} candidates; {} clusters, {all} triangles; hidden by its own finished map: {} clusters ({:.1} %), {hid} triangles ({:.1} %)",
+                        walk.visible_instances.len(),
+                        walk.counts[0],
+                        walk.clusters.len(),
                         cut.len(),
                         hidden.len(),
                         100.0 * hidden.len() as f64 / cut.len().max(1) as f64,
