@@ -5,8 +5,11 @@
 //
 // Roots first, a thread each (`roots`): every instance's root (or, in the second walk,
 // every node the first walk found hidden) is tested on its own, so an instance that is
-// culled or hidden costs one thread, not a workgroup; a root that passes hands its
-// children on as one entry of the roots list (a leaf root emits its meshlets at once).
+// culled or hidden costs one thread, not a workgroup; the thread of a root that passes
+// tests its children too, emits the meshlets of those that are accepted leaves and
+// hands the children of each accepted inner one on as one entry of the roots list (a
+// leaf root emits its meshlets at once). A distant instance, whose cut is its coarsest
+// meshlets, so costs one thread.
 // Then the walk is split over `steps + 1` dispatches of `fill` so that a large
 // instance's walk spreads over many workgroups: step 0 takes the roots list, a workgroup
 // per entry (an indirect dispatch `walk_args` writes); each later step's workgroups take
@@ -589,12 +592,33 @@ fn roots(
             emit_now(index, node.first_cluster, node.cluster_count, seen);
             continue;
         }
-        let at = atomicAdd(&subtree_counts[MAX_STEPS], 1u);
-        if at < held {
-            root_list[at] = Subtree(index, with_views(node.first_child, seen), node.child_count);
-        } else {
-            atomicAdd(&spilled, 1u);
-            emit_now(index, node.first_cluster, node.cluster_count, seen);
+        // The root's children are tested here too: an accepted leaf emits at once, an
+        // accepted inner child hands its children on as one entry of the roots list. An
+        // instance whose cut is its coarsest meshlets (the root's first child, the roots
+        // leaf; the second, the chain of finer levels, too fine) so costs no workgroup.
+        for (var c = 0u; c < node.child_count; c += 1u) {
+            let child_id = node.first_child + c;
+            atomicAdd(&tested_nodes, 1u);
+            if child_id >= arrayLength(&hierarchy_nodes) {
+                continue;
+            }
+            let child = hierarchy_nodes[child_id];
+            let child_seen = node_views(child, w, seen);
+            if child_seen == 0u || !node_seen(child, child_id, w, false) {
+                continue;
+            }
+            if child.child_count == 0u {
+                atomicAdd(&leaves, 1u);
+                emit_now(index, child.first_cluster, child.cluster_count, child_seen);
+                continue;
+            }
+            let at = atomicAdd(&subtree_counts[MAX_STEPS], 1u);
+            if at < held {
+                root_list[at] = Subtree(index, with_views(child.first_child, child_seen), child.child_count);
+            } else {
+                atomicAdd(&spilled, 1u);
+                emit_now(index, child.first_cluster, child.cluster_count, child_seen);
+            }
         }
     }
     workgroupBarrier();

@@ -327,8 +327,10 @@ pub fn cpu_walk_with(
         r.hidden_nodes.push((index, id));
         false
     };
-    // Each root tested on its own; one that passes hands its children on as step 0's
-    // entry (a leaf root emits its meshlets; the list is never full here).
+    // Each root tested on its own, and the children of one that passes by the same
+    // thread: an accepted leaf emits its meshlets, an accepted inner child hands its
+    // children on as step 0's entry (a leaf root emits its meshlets; the list is never
+    // full here).
     let mut entries = Vec::new();
     for root in &roots {
         let (index, id) = (root.instance, root.first);
@@ -346,7 +348,7 @@ pub fn cpu_walk_with(
             continue;
         }
         r.visible_instances.push(index);
-        if node.is_leaf() {
+        let emit = |r: &mut HierarchyWalk, node: &NodeRecord| {
             r.counts[1] += 1;
             r.clusters.extend(
                 scene.hierarchy_clusters[node.first_cluster as usize
@@ -357,13 +359,35 @@ pub fn cpu_walk_with(
                         meshlet,
                     }),
             );
+        };
+        if node.is_leaf() {
+            emit(&mut r, node);
             continue;
         }
-        entries.push(Entry {
-            instance: index,
-            first: node.first_child,
-            count: node.child_count,
-        });
+        // The root's thread tests its children too: an accepted leaf emits, an accepted
+        // inner child hands its children on as step 0's entry.
+        for child_id in node.first_child..node.first_child + node.child_count {
+            r.counts[0] += 1;
+            let Some(child) = nodes.get(child_id as usize) else {
+                continue;
+            };
+            let test = node_test(view, &w, child, params.lod_threshold_px);
+            if test.closeness < near {
+                r.near_threshold.push((index, child_id));
+            }
+            if !test.visible || !seen(&mut r, index, instance, child_id, child, false) {
+                continue;
+            }
+            if child.is_leaf() {
+                emit(&mut r, child);
+                continue;
+            }
+            entries.push(Entry {
+                instance: index,
+                first: child.first_child,
+                count: child.child_count,
+            });
+        }
     }
     for step in 0..=params.spread_steps {
         let spreading = step < params.spread_steps;
