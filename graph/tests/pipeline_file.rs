@@ -282,31 +282,33 @@ fn view_set_mistakes_name_the_entry_and_what_to_change() {
         e.contains("view set `cascdes`, which [views] does not declare"),
         "{e}"
     );
-    let e = refused(&base.replace("name = \"fill_{view}\"", "name = \"fill\""));
-    assert!(
-        e.contains("pass `fill` runs once for the whole view set `cascades` (its name holds no `{view}`), so `{view}` in its bindings"),
-        "{e}"
-    );
-    let e = refused(&base.replace("name = \"a_{view}\"", "name = \"a\""));
-    assert!(
-        e.contains("resource `a` runs over view set `cascades`, but its name holds no `{view}`"),
-        "{e}"
-    );
-    let e = refused(&base.replace("[views]", "[params]\ncascades = 3\n\n[views]"));
-    assert!(
-        e.contains("`cascades` is both a size parameter ([params]) and a view set ([views])"),
-        "{e}"
-    );
-    let e = refused(&base.replace("count = 1000, k = 1 }", "count = 1000, k = \"$cascade\" }"));
-    assert!(
-        e.contains("refers to `$cascade`, which neither [params] nor [views] declares"),
-        "{e}"
-    );
-    let e = refused(&base.replace("bind = { input = \"a_1\"", "bind = { input = \"a_{view}\""));
-    assert!(
-        e.contains("pass `transform` writes `{view}` but runs over no view set"),
-        "{e}"
-    );
+    // (what the file changes, what the error must say)
+    let mistakes = [
+        (
+            ("name = \"fill_{view}\"", "name = \"fill\""),
+            "pass `fill` runs once for the whole view set `cascades` (its name holds no `{view}`), so `{view}` in its bindings",
+        ),
+        (
+            ("name = \"a_{view}\"", "name = \"a\""),
+            "resource `a` runs over view set `cascades`, but its name holds no `{view}`",
+        ),
+        (
+            ("[views]", "[params]\ncascades = 3\n\n[views]"),
+            "`cascades` is both a size parameter ([params]) and a view set ([views])",
+        ),
+        (
+            ("count = 1000, k = 1 }", "count = 1000, k = \"$cascade\" }"),
+            "refers to `$cascade`, which neither [params] nor [views] declares",
+        ),
+        (
+            ("bind = { input = \"a_1\"", "bind = { input = \"a_{view}\""),
+            "pass `transform` writes `{view}` but runs over no view set",
+        ),
+    ];
+    for ((from, to), want) in mistakes {
+        let e = refused(&base.replace(from, to));
+        assert!(e.contains(want), "{e}");
+    }
     // A pass supplied a frame input it does not read.
     let e = refused(&base.replace(
         "params = { count = 1000, k = 1 }",

@@ -425,6 +425,27 @@ fn node_seen(node: HierarchyNode, id: u32, w: Walker, entry: bool) -> bool {
     return true;
 }
 
+// A child of an accepted node, tested: the node, and the views of `mask` for which the
+// walk goes on below it (none when it is rejected, hidden, or past the buffer).
+struct TestedChild {
+    node: HierarchyNode,
+    views: u32,
+}
+
+fn test_child(id: u32, w: Walker, mask: u32) -> TestedChild {
+    var tested: TestedChild;
+    tested.views = 0u;
+    if id >= arrayLength(&hierarchy_nodes) {
+        return tested;
+    }
+    tested.node = hierarchy_nodes[id];
+    let views = node_views(tested.node, w, mask);
+    if views != 0u && node_seen(tested.node, id, w, false) {
+        tested.views = views;
+    }
+    return tested;
+}
+
 @compute @workgroup_size(1)
 fn prepare() {
     for (var v = 0u; v < MAX_VIEWS; v += 1u) {
@@ -597,14 +618,11 @@ fn roots(
         // instance whose cut is its coarsest meshlets (the root's first child, the roots
         // leaf; the second, the chain of finer levels, too fine) so costs no workgroup.
         for (var c = 0u; c < node.child_count; c += 1u) {
-            let child_id = node.first_child + c;
             atomicAdd(&tested_nodes, 1u);
-            if child_id >= arrayLength(&hierarchy_nodes) {
-                continue;
-            }
-            let child = hierarchy_nodes[child_id];
-            let child_seen = node_views(child, w, seen);
-            if child_seen == 0u || !node_seen(child, child_id, w, false) {
+            let tested = test_child(node.first_child + c, w, seen);
+            let child = tested.node;
+            let child_seen = tested.views;
+            if child_seen == 0u {
                 continue;
             }
             if child.child_count == 0u {
@@ -741,14 +759,11 @@ fn fill(
                             atomicAdd(&leaves, 1u);
                         } else {
                             for (var c = 0u; c < node.child_count; c += 1u) {
-                                let child_id = node.first_child + c;
                                 tests += 1u;
-                                if child_id >= arrayLength(&hierarchy_nodes) {
-                                    continue;
-                                }
-                                let child = hierarchy_nodes[child_id];
-                                let child_seen = node_views(child, w, seen);
-                                if child_seen == 0u || !node_seen(child, child_id, w, false) {
+                                let tested = test_child(node.first_child + c, w, seen);
+                                let child = tested.node;
+                                let child_seen = tested.views;
+                                if child_seen == 0u {
                                     continue;
                                 }
                                 if child.child_count == 0u {

@@ -20,24 +20,16 @@ use meshlight_scene::MeshletAsset;
 use meshlight_shaders::cpu::layout::View;
 use std::sync::OnceLock;
 use support::run::{Cull, Frame, run_fill};
-use support::scenes::{Views, bake, field};
+use support::scenes::{Views, bake};
 use support::*;
 
 /// A node the GPU and the reference decide differently must have a deciding value
 /// within this relative distance of its threshold (f32 rounding, fused multiply-adds).
 const NEAR_THRESHOLD: f32 = 1e-5;
 
-/// Two meshes (the bunny and spot, so hierarchies are rebased in the shared buffers) on
-/// a 4 × 3 field, turned and scaled differently (one unevenly), in bunny radii.
+/// The bunny and spot on a 4 × 3 field ([`support::scenes::bunny_and_spot`]).
 fn scene() -> SceneData {
-    field(&[("bunny", bunny()), ("spot", spot())], 12, |i| {
-        let (x, z) = ((i % 4) as f32, (i / 4) as f32);
-        let mut scale = Vec3::splat(0.7 + 0.1 * (i % 5) as f32);
-        if i == 5 {
-            scale = Vec3::new(1.5, 0.6, 1.0);
-        }
-        (scale, i as f32 * 1.3, Vec3::new(x * 3.0, 0.0, z * 3.0))
-    })
+    support::scenes::bunny_and_spot()
 }
 
 /// Random views of the field, from within it to 48 bunny radii away.

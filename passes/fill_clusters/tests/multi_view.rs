@@ -18,16 +18,12 @@ use meshlight_pass_fill_clusters::{HierarchyFill, hierarchy};
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use std::collections::BTreeSet;
 use support::run::{Cull, run_fill};
-use support::scenes::{Views, field};
+use support::scenes::Views;
 use support::*;
 
 /// The bunny and spot on a 4 × 3 field, turned and scaled differently.
 fn scene() -> SceneData {
-    field(&[("bunny", bunny()), ("spot", spot())], 12, |i| {
-        let (x, z) = ((i % 4) as f32, (i / 4) as f32);
-        let scale = Vec3::splat(0.7 + 0.1 * (i % 5) as f32);
-        (scale, i as f32 * 1.3, Vec3::new(x * 3.0, 0.0, z * 3.0))
-    })
+    support::scenes::bunny_and_spot()
 }
 
 /// Random views of the field (every fourth orthographic), near and far.

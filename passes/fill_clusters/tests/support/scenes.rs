@@ -14,6 +14,20 @@ pub fn bake(mesh: &Mesh) -> MeshletAsset {
         .asset
 }
 
+/// Two meshes (the bunny and spot, so hierarchies are rebased in the shared buffers) on
+/// a 4 × 3 field, turned and scaled differently (one unevenly), in bunny radii.
+pub fn bunny_and_spot() -> SceneData {
+    use meshlight_testing::meshes::{bunny, spot};
+    field(&[("bunny", bunny()), ("spot", spot())], 12, |i| {
+        let (x, z) = ((i % 4) as f32, (i / 4) as f32);
+        let mut scale = Vec3::splat(0.7 + 0.1 * (i % 5) as f32);
+        if i == 5 {
+            scale = Vec3::new(1.5, 0.6, 1.0);
+        }
+        (scale, i as f32 * 1.3, Vec3::new(x * 3.0, 0.0, z * 3.0))
+    })
+}
+
 /// `count` instances of `meshes` (`(name, asset)`; instance `i` takes `meshes[i % len]`)
 /// with one material. `place(i)` gives instance `i`'s scale (each mesh first scaled to
 /// the first one's radius), its turn about y, and its position in radii of the first mesh.
