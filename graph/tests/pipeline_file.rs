@@ -234,16 +234,28 @@ params = { count = 1000, k = 1 }
 bind = { input = "LAST", output = "result" }
 "#;
 
+/// The plan of a view-set file, compiled without an adapter.
+fn plan_of(text: &str) -> meshlight_graph::Plan {
+    parse_pipeline(text, "views.toml", &registry())
+        .unwrap()
+        .compile(&CompileOptions::new(wgpu::Features::empty()))
+        .unwrap()
+        .plan
+}
+
+/// The plan's passes, in order.
+fn pass_names(plan: &meshlight_graph::Plan) -> Vec<&str> {
+    plan.passes.iter().map(|p| p.name.as_str()).collect()
+}
+
 #[test]
 fn a_view_set_writes_its_entries_out_once_per_view() {
     let text = VIEWS.replace("COUNT", "3").replace("LAST", "a_2");
-    let g = parse_pipeline(&text, "views.toml", &registry()).unwrap();
-    let plan = g
-        .compile(&CompileOptions::new(wgpu::Features::empty()))
-        .unwrap()
-        .plan;
-    let passes: Vec<&str> = plan.passes.iter().map(|p| p.name.as_str()).collect();
-    assert_eq!(passes, ["fill_0", "fill_1", "fill_2", "transform"]);
+    let plan = plan_of(&text);
+    assert_eq!(
+        pass_names(&plan),
+        ["fill_0", "fill_1", "fill_2", "transform"]
+    );
     for k in 0..3 {
         assert!(
             plan.resources
@@ -333,15 +345,9 @@ fn a_pass_for_the_whole_view_set_runs_once_and_reads_its_size() {
                 "name = \"transform\"\nviews = \"cascades\"\nstage",
             )
             .replace("count = 1000, k = 1 }", "count = 1000, k = \"$cascades\" }");
-        let g = parse_pipeline(&text, "views.toml", &registry()).unwrap();
-        let plan = g
-            .compile(&CompileOptions::new(wgpu::Features::empty()))
-            .unwrap()
-            .plan;
-        let passes: Vec<&str> = plan.passes.iter().map(|p| p.name.as_str()).collect();
         let mut want: Vec<String> = (0..count).map(|k| format!("fill_{k}")).collect();
         want.push("transform".into());
-        assert_eq!(passes, want);
+        assert_eq!(pass_names(&plan_of(&text)), want);
         assert_eq!(
             run(&text),
             (0..1000).map(|i| i + count).collect::<Vec<u32>>()
@@ -368,14 +374,8 @@ fn consecutive_entries_over_a_view_set_run_view_by_view() {
             "bind = { output = \"shared\" }\n\n[[pass]]\nname = \"copy_{view}\"\nstage = \"transform\"\nimplementation = \"add\"\nviews = \"cascades\"\nparams = { count = 1000, k = 0 }\nbind = { input = \"shared\", output = \"a_{view}\" }",
         );
     let text = text.as_str();
-    let g = parse_pipeline(text, "views.toml", &registry()).unwrap();
-    let plan = g
-        .compile(&CompileOptions::new(wgpu::Features::empty()))
-        .unwrap()
-        .plan;
-    let passes: Vec<&str> = plan.passes.iter().map(|p| p.name.as_str()).collect();
     assert_eq!(
-        passes,
+        pass_names(&plan_of(text)),
         [
             "fill_0",
             "copy_0",

@@ -33,14 +33,7 @@ fn scene() -> SceneData {
 }
 
 /// Random views of the field, from within it to 48 bunny radii away.
-const VIEWS: Views = Views {
-    target: [Vec3::new(-1.0, -0.5, -1.0), Vec3::new(10.0, 1.0, 7.0)],
-    lowest: -0.3,
-    distance: [0.4, 120.0],
-    viewports: &[[320, 240], [640, 360], [1280, 720]],
-    fov: [0.5, 1.5],
-    thresholds: &[0.5, 1.0, 2.0],
-};
+const VIEWS: Views = support::scenes::BUNNY_AND_SPOT_VIEWS;
 
 enum Fill {
     Flat,

@@ -26,14 +26,10 @@ fn scene() -> SceneData {
     support::scenes::bunny_and_spot()
 }
 
-/// Random views of the field (every fourth orthographic), near and far.
+/// Random views of the field (every fourth orthographic), near and far, at 1 px.
 const VIEWS: Views = Views {
-    target: [Vec3::new(-1.0, -0.5, -1.0), Vec3::new(10.0, 1.0, 7.0)],
-    lowest: -0.3,
-    distance: [0.4, 120.0],
-    viewports: &[[320, 240], [640, 360], [1280, 720]],
-    fov: [0.5, 1.5],
     thresholds: &[1.0],
+    ..support::scenes::BUNNY_AND_SPOT_VIEWS
 };
 
 /// Clusters each list may hold.

@@ -28,6 +28,17 @@ pub fn bunny_and_spot() -> SceneData {
     })
 }
 
+/// Random views of [`bunny_and_spot`]'s field, from within it to 48 bunny radii away
+/// (every fourth orthographic), at thresholds of 0.5, 1 and 2 px.
+pub const BUNNY_AND_SPOT_VIEWS: Views = Views {
+    target: [Vec3::new(-1.0, -0.5, -1.0), Vec3::new(10.0, 1.0, 7.0)],
+    lowest: -0.3,
+    distance: [0.4, 120.0],
+    viewports: &[[320, 240], [640, 360], [1280, 720]],
+    fov: [0.5, 1.5],
+    thresholds: &[0.5, 1.0, 2.0],
+};
+
 /// `count` instances of `meshes` (`(name, asset)`; instance `i` takes `meshes[i % len]`)
 /// with one material. `place(i)` gives instance `i`'s scale (each mesh first scaled to
 /// the first one's radius), its turn about y, and its position in radii of the first mesh.
