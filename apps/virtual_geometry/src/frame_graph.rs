@@ -195,7 +195,8 @@ pub fn apply(
     instance_table(p, data)?;
     material_variants(p, data);
     thresholds(p, s);
-    super::shadows::bias_thresholds(p, s)?;
+    super::shadows::size_lists(p, s)?;
+    super::shadows::bias_thresholds(p, s);
     if let Some(view) = s.view {
         p.set_stage_param(meshlight::resolve::STAGE, "view", view.name());
     }

@@ -123,9 +123,9 @@ pub fn apply(p: &mut Pipeline, registry: &Registry, s: &FrameSettings) -> Result
     Ok(())
 }
 
-/// After the camera's sizes and thresholds are set: the cascades' lists as long as the
-/// camera's each, and the shadow passes' LOD threshold times `2^lod_bias`.
-pub fn bias_thresholds(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
+/// After the camera's sizes are set: each cascade's candidate list as long as the
+/// camera's (`shadow_candidates` = cascades × `clusters`).
+pub fn size_lists(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
     let Some(shadows) = s.shadows else {
         return Ok(());
     };
@@ -133,11 +133,18 @@ pub fn bias_thresholds(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
         p.param(super::frame_graph::CLUSTERS_PARAM),
         p.param(CANDIDATES_PARAM).is_some(),
     ) {
-        p.set_param(
-            CANDIDATES_PARAM,
-            clusters * u64::from(shadows.cascades.count.max(1)),
-        )?;
+        let lists = u64::from(shadows.cascades.count.max(1));
+        p.set_param(CANDIDATES_PARAM, clusters * lists)?;
     }
+    Ok(())
+}
+
+/// After the camera's thresholds are set: the shadow passes' LOD threshold times
+/// `2^lod_bias`.
+pub fn bias_thresholds(p: &mut Pipeline, s: &FrameSettings) {
+    let Some(shadows) = s.shadows else {
+        return;
+    };
     let scale = f64::from(shadows.lod_bias).exp2();
     for pass in p.passes.iter_mut().filter(|e| is_shadow(e)) {
         let threshold = match pass.param("lod_threshold_px") {
@@ -147,7 +154,6 @@ pub fn bias_thresholds(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
         };
         pass.set_param("lod_threshold_px", threshold * scale);
     }
-    Ok(())
 }
 
 /// The readbacks of each cascade's counters (the cull's first eight words) and of the

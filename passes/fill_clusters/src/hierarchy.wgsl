@@ -133,7 +133,8 @@ struct Subtree {
 
 const WORKGROUP_SIZE: u32 = 64u;
 #ifdef MULTI_VIEW
-// Views one walk serves; their mask takes the top bits of a node id.
+// Views one walk serves; their mask takes the top bits of a node id (a binding of
+// 64-byte nodes holds fewer than 2^26, so an id never reaches them).
 const MAX_VIEWS: u32 = 4u;
 const ID_BITS: u32 = 28u;
 #else
