@@ -730,6 +730,10 @@ mod tests {
                 ("queu_capacity = 4", "queu_capacity"),
                 ("spread_steps = 5", "spread_steps"),
                 ("spread_groups = 70000", "spread_groups"),
+                ("views = 5", "views"),
+                ("views = 0", "views"),
+                ("views = 3, lists = 2", "lists"),
+                ("views = 2, list = 3, lists = 4", "list"),
             ],
         );
     }

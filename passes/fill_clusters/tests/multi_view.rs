@@ -14,7 +14,7 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::{Camera, GpuScene, ListPart, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_cull_lod::{CullLod, Thresholds};
-use meshlight_pass_fill_clusters::{HierarchyFill, hierarchy};
+use meshlight_pass_fill_clusters::HierarchyFill;
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use std::collections::BTreeSet;
 use support::run::{Cull, run_fill};
@@ -309,28 +309,4 @@ fn a_full_queue_emits_whole_subtrees_for_its_views_and_keeps_every_cut() {
         .map(|(_, v, _)| v)
         .collect();
     compare(&mut data, &views, 0, 4, Some(2), false);
-}
-
-#[test]
-fn views_and_lists_out_of_range_are_refused_by_name() {
-    use meshlight_graph::file::Registry;
-    let mut registry = Registry::new();
-    meshlight_pass_fill_clusters::register(&mut registry);
-    let pass = |params: &str| {
-        let text = format!(
-            "[[pass]]\nname = \"fill\"\nstage = \"fill_clusters\"\nimplementation = \"{}\"\nparams = {{ {params} }}\n",
-            hierarchy::IMPLEMENTATION
-        );
-        meshlight_graph::file::parse_pipeline(&text, "test.toml", &registry).map(|_| ())
-    };
-    meshlight_testing::assert_params(
-        pass,
-        &[],
-        &[
-            ("views = 5", "views"),
-            ("views = 0", "views"),
-            ("views = 3, lists = 2", "lists"),
-            ("views = 2, list = 3, lists = 4", "list"),
-        ],
-    );
 }
