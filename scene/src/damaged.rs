@@ -17,5 +17,10 @@ pub fn error_below_child(built: &Built) -> Option<MeshletAsset> {
             .any(|&c| dag.clusters[c as usize].level > 0)
     })?;
     dag.groups[g].lod.error = 0.0;
-    Some(MeshletAsset::from_dag(&built.mesh, &dag, 16, 0))
+    Some(MeshletAsset::from_dag(
+        &built.mesh,
+        &dag,
+        16,
+        Default::default(),
+    ))
 }

@@ -28,6 +28,7 @@ pub mod error;
 pub mod hierarchy;
 pub mod input;
 pub mod inspect;
+pub mod open_edges;
 pub mod verify;
 pub mod watertight;
 

@@ -137,7 +137,15 @@ pub fn build_asset(
             clean.dropped_duplicate
         );
     }
-    let asset = MeshletAsset::from_dag_on_grid(&mesh, &dag, grid, clean.dropped_degenerate);
+    let asset = MeshletAsset::from_dag_on_grid(
+        &mesh,
+        &dag,
+        grid,
+        crate::asset::Dropped {
+            degenerate: clean.dropped_degenerate,
+            duplicate: clean.dropped_duplicate,
+        },
+    );
     Ok(Built {
         asset,
         fallbacks: dag.fallbacks,

@@ -1,6 +1,6 @@
 //! The DAG checks on a packed asset, in two kinds: [`verify`] finds structural
 //! violations (the asset would draw wrongly: bounds, error monotonicity, parent links,
-//! cracks in LOD cuts, triangle records),
+//! LOD 0 open where the bake left it closed, cracks in LOD cuts, triangle records),
 //! which make `meshlight inspect` fail; [`quality`] finds a valid DAG that is merely poor
 //! (too deep, too many roots, levels that do not halve), which it reports as warnings.
 
@@ -162,7 +162,8 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
         }
     }
     // One decoding pass gives the per-meshlet checks and the crack check's fingerprints.
-    let scans = scan_meshlets(asset, &ChainKeys::random());
+    let keys = ChainKeys::random();
+    let scans = scan_meshlets(asset, &keys);
     for (i, (m, scan)) in meshlets.iter().zip(&scans).enumerate() {
         if let Some(t) = scan.first_out_of_range {
             problems.push(format!(
@@ -186,6 +187,7 @@ pub fn verify(asset: &MeshletAsset) -> Vec<String> {
     // Cracks compare neighbouring pages: checked on a whole asset (by `bake` and
     // `inspect`), not on the resident part of one opened for streaming.
     if asset.page_file().is_none() {
+        problems.extend(crate::open_edges::lod0_problem(asset, &scans, &keys));
         problems.extend(crate::watertight::crack_problems_scanned(asset, &scans));
     }
     if roots as u32 != h.root_count {

@@ -128,7 +128,7 @@ fn inspect_warns_on_poor_dags_and_fails_only_on_broken_ones() {
         c.level = 0;
     }
     dag.level_count = 1;
-    let poor = MeshletAsset::from_dag(&built.mesh, &dag, 16, 0);
+    let poor = MeshletAsset::from_dag(&built.mesh, &dag, 16, Default::default());
     let dir = common::scratch("cli-poor");
     let path = dir.join("poor.mlasset");
     poor.save(&path).unwrap();

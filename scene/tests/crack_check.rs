@@ -39,7 +39,12 @@ fn meshes() -> Vec<(&'static str, Mesh)> {
 }
 
 fn rebuild(built: &Built, dag: &Dag) -> MeshletAsset {
-    MeshletAsset::from_dag_on_grid(&built.mesh, dag, built.asset.quantization(), 0)
+    MeshletAsset::from_dag_on_grid(
+        &built.mesh,
+        dag,
+        built.asset.quantization(),
+        Default::default(),
+    )
 }
 
 fn agree(what: &str, asset: &MeshletAsset) -> Vec<String> {

@@ -59,7 +59,9 @@ fn invariants_hold_on_the_procedural_mesh() {
 fn verify_reports_broken_invariants() {
     let mesh = procedural_mesh(16);
     let built = build(&mesh, Grouping::Metis);
-    let rebuild = |dag: &Dag| meshlight_scene::MeshletAsset::from_dag(&built.mesh, dag, 16, 0);
+    let rebuild = |dag: &Dag| {
+        meshlight_scene::MeshletAsset::from_dag(&built.mesh, dag, 16, Default::default())
+    };
     assert!(verify(&rebuild(&built.dag)).is_empty());
 
     // A group whose error is below a (simplified) child's.

@@ -401,11 +401,41 @@ fn spheres_must_lie_around_the_mesh() {
     );
 }
 
+/// The source's counts, which nothing draws by, still agree with the meshlets: a
+/// header that says otherwise was not written by the bake.
+#[test]
+fn the_source_counts_agree_with_the_meshlets() {
+    refused_saying(
+        "a triangle more in the source",
+        "header.input_triangles",
+        "dropped make",
+        |w| header(w).input_triangles += 1,
+    );
+    refused_saying(
+        "a dropped triangle fewer",
+        "header.input_triangles",
+        "dropped make",
+        |w| header(w).dropped_duplicate = header(w).dropped_duplicate.wrapping_sub(1),
+    );
+    refused_saying(
+        "more LOD-0 vertices than its records",
+        "header.lod0_vertices",
+        "at most all its meshlets' vertex records",
+        |w| header(w).lod0_vertices = header(w).total_vertices + 1,
+    );
+    refused_saying(
+        "fewer LOD-0 vertices than one meshlet holds",
+        "header.lod0_vertices",
+        "at least",
+        |w| header(w).lod0_vertices = 2,
+    );
+}
+
 #[test]
 fn every_payload_word_belongs_to_one_meshlet() {
     refused_saying(
         "a word no meshlet refers to",
-        "sections[6]",
+        &format!("sections[{SECTION_PAYLOAD}]"),
         "belongs to one meshlet",
         |w| {
             let s = header(w).sections;

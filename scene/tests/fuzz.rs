@@ -13,8 +13,9 @@ use std::path::Path;
 
 use meshlight_scene::asset::checksum::seal;
 use meshlight_scene::asset::format::{
-    AssetHeader, GroupRecord, MeshletRecord, NodeRecord, SECTION_CHILDREN, SECTION_GROUPS,
-    SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES, SECTION_PAYLOAD,
+    AssetHeader, GroupRecord, MeshletRecord, NodeRecord, OpenEdgeRecord, SECTION_CHILDREN,
+    SECTION_GROUPS, SECTION_MESHLETS, SECTION_NODE_CLUSTERS, SECTION_NODES, SECTION_OPEN_EDGES,
+    SECTION_PAYLOAD,
 };
 use meshlight_scene::load::{load_gltf_scene, load_mesh, parse_obj, parse_stl};
 use meshlight_scene::{
@@ -164,7 +165,7 @@ struct Field {
 }
 
 /// The parts of a file [`Field::region`] numbers.
-const REGIONS: usize = 7;
+const REGIONS: usize = 8;
 
 /// A record's fields: name, byte offset, 32-bit words, float or not.
 type Layout = &'static [(&'static str, usize, usize, bool)];
@@ -204,8 +205,12 @@ const HEADER: Layout = layout!(AssetHeader {
     lod0_triangles: 1 u32,
     total_triangles: 1 u32,
     total_vertices: 1 u32,
-    input_vertices: 1 u32,
+    lod0_vertices: 1 u32,
+    input_triangles: 1 u32,
     dropped_degenerate: 1 u32,
+    dropped_duplicate: 1 u32,
+    material_count: 1 u32,
+    resident_words: 1 u32,
     bounds_min: 3 f32,
     bounds_max: 3 f32,
     quant_origin: 3 f32,
@@ -213,7 +218,7 @@ const HEADER: Layout = layout!(AssetHeader {
     quant_bits: 1 u32,
     uv_min: 2 f32,
     uv_step: 2 f32,
-    sections: 12 u32,
+    sections: 16 u32,
 });
 
 const MESHLET: Layout = layout!(MeshletRecord {
@@ -233,6 +238,12 @@ const GROUP: Layout = layout!(GroupRecord {
     level: 1 u32,
     first_child: 1 u32,
     child_count: 1 u32,
+});
+
+const OPEN_EDGE: Layout = layout!(OpenEdgeRecord {
+    from: 3 u32,
+    to: 3 u32,
+    uses: 1 u32,
 });
 
 const NODE: Layout = layout!(NodeRecord {
@@ -270,6 +281,7 @@ fn fields(words: &[u32]) -> Vec<Field> {
         (SECTION_MESHLETS, "meshlet", MESHLET),
         (SECTION_GROUPS, "group", GROUP),
         (SECTION_NODES, "node", NODE),
+        (SECTION_OPEN_EDGES, "open_edge", OPEN_EDGE),
     ]
     .into_iter()
     .enumerate()
@@ -304,7 +316,7 @@ fn fields(words: &[u32]) -> Vec<Field> {
                 word: s.offset as usize + k,
                 float: false,
                 record: None,
-                region: 4 + region,
+                region: 5 + region,
             });
         }
     }
@@ -495,6 +507,13 @@ fn load_mutated(words: Vec<u32>, outcomes: &mut Outcomes) {
             if let Err(e) = asset.check_all(path) {
                 panic!("loaded, but check_all refuses it: {e}");
             }
+            // What the fingerprint check passed, edge by edge: LOD 0 is open exactly
+            // where the bake recorded.
+            assert_eq!(
+                meshlight_scene::open_edges::decoded_lod0_chain(&asset),
+                asset.open_edges(),
+                "verified, but LOD 0's open edges are not the recorded ones"
+            );
             outcomes.loaded += 1;
         }
         Err(e) => {
@@ -600,6 +619,10 @@ fn fuzz_asset_fields() {
         let mut mutated = Vec::new();
         for (region, at, mutation) in edits {
             let in_region = &regions[base][region];
+            // A closed mesh has no open edges to change.
+            if in_region.is_empty() {
+                continue;
+            }
             let f = in_region[at.index(in_region.len())];
             mutate(&mut w, fields, f, mutation);
             mutated.push(f);

@@ -309,7 +309,7 @@ fn format_3_file(asset: &MeshletAsset) -> Vec<u8> {
     head.extend_from_slice(&[0; 4]); // file size and checksum, set below
     head.extend_from_slice(&[h.meshlet_count, h.group_count, h.level_count, h.root_count]);
     head.extend_from_slice(&[h.lod0_meshlets, h.lod0_triangles, h.total_triangles]);
-    head.extend_from_slice(&[h.total_vertices, h.input_vertices, h.dropped_degenerate]);
+    head.extend_from_slice(&[h.total_vertices, h.lod0_vertices, h.dropped_degenerate]);
     for v in h
         .bounds_min
         .iter()

@@ -51,7 +51,7 @@ pub fn dag_table(summary: &AssetSummary) -> String {
     let per = |bytes: usize| bytes as f64 / h.lod0_triangles.max(1) as f64;
     let _ = writeln!(
         s,
-        "  bytes per LOD-0 triangle: records {:.2}, groups {:.2}, hierarchy {:.2}, positions {:.2}, normals {:.2}, UVs {:.2}, colours {:.2}, indices {:.2}; {:.2} vertex copies per triangle",
+        "  bytes per LOD-0 triangle: records {:.2}, groups {:.2}, hierarchy {:.2}, positions {:.2}, normals {:.2}, UVs {:.2}, colours {:.2}, indices {:.2}, open edges {:.2}; {:.2} vertex copies per triangle",
         per(b.meshlet_records),
         per(b.groups),
         per(b.hierarchy),
@@ -60,6 +60,7 @@ pub fn dag_table(summary: &AssetSummary) -> String {
         per(b.uvs),
         per(b.colors),
         per(b.indices),
+        per(b.open_edges),
         h.total_vertices as f64 / h.total_triangles.max(1) as f64
     );
     s

@@ -44,8 +44,13 @@ pub fn text(report: &InspectReport) -> String {
     );
     let _ = writeln!(
         s,
-        "  source: {} vertices; {} degenerate triangles were dropped",
-        h.input_vertices, h.dropped_degenerate
+        "  source: {} triangles, of which {} degenerate and {} duplicate were dropped; LOD 0 \
+         uses {} vertices and is open along {} edges",
+        h.input_triangles,
+        h.dropped_degenerate,
+        h.dropped_duplicate,
+        h.lod0_vertices,
+        summary.open_edges
     );
     s += &dag_table(summary);
     if report.problems.is_empty() {

@@ -2,12 +2,13 @@
 //! plain old data of 4-byte fields, so a loaded file is used in place through bytemuck
 //! casts and uploaded to the GPU as is.
 //!
-//! File = [`AssetHeader`] then seven sections, each a whole number of 32-bit words:
+//! File = [`AssetHeader`] then eight sections, each a whole number of 32-bit words:
 //! meshlets ([`MeshletRecord`]), groups ([`GroupRecord`]), group children (`u32`
 //! meshlet ids), the culling hierarchy's nodes ([`NodeRecord`]) and its cluster list
 //! (`u32` meshlet ids, every meshlet once, in the order the hierarchy's leaves take
-//! them; see [`crate::hierarchy`]), the pages ([`PageRecord`]), and last the payload
-//! (`u32` words of packed vertex and index data).
+//! them; see [`crate::hierarchy`]), the pages ([`PageRecord`]), LOD 0's open edges as
+//! baked ([`OpenEdgeRecord`]), and last the payload (`u32` words of packed vertex and
+//! index data).
 //!
 //! **Pages.** The file is laid out so that a renderer can stream it: meshlets are stored
 //! page by page, the roots first, then each group's children in group order, and their
@@ -45,8 +46,13 @@ pub const MAGIC: [u8; 8] = *b"MLASSET\0";
 /// the meshlet's bits per component, the UV block after the triangles; vertex colours
 /// ([`FLAG_COLORS`]). 8: pages: meshlets and payload stored page by page, the payload
 /// last, a page section with a checksum per page, the header's checksum over the
-/// resident part ([`AssetHeader::resident_words`]).
-pub const VERSION: u32 = 8;
+/// resident part ([`AssetHeader::resident_words`]). 9: LOD 0's open edges as baked
+/// ([`SECTION_OPEN_EDGES`]), so that a load can tell a mesh that was open from one whose
+/// meshlets were pulled apart since; the source's triangle counts
+/// ([`AssetHeader::input_triangles`], [`AssetHeader::dropped_duplicate`]) and
+/// [`AssetHeader::lod0_vertices`] in place of the cleaned mesh's vertex count, each
+/// checkable against the meshlets.
+pub const VERSION: u32 = 9;
 
 /// Words at the start of a meshlet's UV block: its UV grid origin, one code per
 /// component (see [`crate::compress::UvQuantization`]).
@@ -72,11 +78,14 @@ pub const SECTION_NODES: usize = 3;
 pub const SECTION_NODE_CLUSTERS: usize = 4;
 /// One [`PageRecord`] per group.
 pub const SECTION_PAGES: usize = 5;
+/// LOD 0's open edges as the bake packed them, one [`OpenEdgeRecord`] each (none for a
+/// closed mesh); see [`crate::open_edges`].
+pub const SECTION_OPEN_EDGES: usize = 6;
 /// The packed vertex, UV and triangle words of every meshlet, the roots' first, then
 /// page by page. Last, so that everything before the first page is one prefix.
-pub const SECTION_PAYLOAD: usize = 6;
+pub const SECTION_PAYLOAD: usize = 7;
 /// Sections in a file; the header holds one [`Section`] for each.
-pub const SECTION_COUNT: usize = 7;
+pub const SECTION_COUNT: usize = 8;
 
 /// Where a section lies, in 32-bit words from the start of the file.
 #[repr(C)]
@@ -124,11 +133,17 @@ pub struct AssetHeader {
     pub total_triangles: u32,
     /// Vertex records of all levels (a vertex is stored once per meshlet using it).
     pub total_vertices: u32,
-    /// Vertices of the mesh the asset was built from, after cleaning.
-    pub input_vertices: u32,
+    /// Distinct vertices LOD 0's triangles use (a position with its normal, UV and
+    /// colour): at least the most any one LOD-0 meshlet holds, at most the LOD-0
+    /// meshlets' vertex records together, which share the vertices on their borders.
+    pub lod0_vertices: u32,
+    /// Triangles of the source mesh as read: LOD 0's plus those the bake dropped.
+    pub input_triangles: u32,
     /// Triangles the bake dropped as degenerate, so that a summary can say the asset
     /// has fewer triangles than the source for that reason.
     pub dropped_degenerate: u32,
+    /// Triangles the bake dropped as repeating an earlier one's points and winding.
+    pub dropped_duplicate: u32,
     /// Material slots of the mesh (at least 1): every meshlet's slot is below it, and
     /// whoever places the mesh gives a material for each.
     pub material_count: u32,
@@ -318,6 +333,33 @@ pub struct GroupRecord {
     pub first_child: u32,
     /// Meshlets simplified in the group.
     pub child_count: u32,
+}
+
+/// One edge of LOD 0's open boundary as baked: the grid points of its ends, and how
+/// many more times LOD 0's triangles run along it from `from` to `to` than back. An
+/// edge two triangles share the usual way cancels, so a closed mesh has none; the
+/// mesh's own rim, holes and non-manifold edges are what is left. Records are in
+/// ascending order of their ends' pair (the smaller grid point first), each pair once.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct OpenEdgeRecord {
+    /// Grid point the edge leaves.
+    pub from: [u32; 3],
+    /// Grid point the edge reaches (not `from`).
+    pub to: [u32; 3],
+    /// Net uses from `from` to `to` (at least 1).
+    pub uses: u32,
+}
+
+impl OpenEdgeRecord {
+    /// The ends in ascending order: the key records are sorted by.
+    pub fn key(&self) -> ([u32; 3], [u32; 3]) {
+        if self.from < self.to {
+            (self.from, self.to)
+        } else {
+            (self.to, self.from)
+        }
+    }
 }
 
 /// One page: a group's children's payload, one range of the payload section. Pages

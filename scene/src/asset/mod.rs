@@ -5,6 +5,8 @@ pub mod checksum;
 pub mod format;
 #[cfg(feature = "build")]
 mod pack;
+#[cfg(feature = "build")]
+pub use pack::Dropped;
 pub mod scan;
 pub mod summary;
 pub mod triangles;
@@ -74,6 +76,8 @@ pub struct SizeBreakdown {
     pub hierarchy: usize,
     /// The page records (ranges and checksums).
     pub pages: usize,
+    /// LOD 0's open edges as baked.
+    pub open_edges: usize,
 }
 
 impl SizeBreakdown {
@@ -89,6 +93,7 @@ impl SizeBreakdown {
             + self.indices
             + self.hierarchy
             + self.pages
+            + self.open_edges
     }
 }
 
@@ -538,6 +543,13 @@ impl MeshletAsset {
         bytemuck::cast_slice(self.section(SECTION_PAGES))
     }
 
+    /// LOD 0's open edges as the bake recorded them (none for a closed mesh); see
+    /// [`crate::open_edges`]. Empty if the section does not hold whole records, which
+    /// validation refuses.
+    pub fn open_edges(&self) -> &[OpenEdgeRecord] {
+        bytemuck::try_cast_slice(self.section(SECTION_OPEN_EDGES)).unwrap_or_default()
+    }
+
     /// Bytes of the resident part: every section before the payload and the roots'
     /// payload, the prefix of the file a streamed scene reads whole.
     pub fn resident_bytes(&self) -> u64 {
@@ -599,6 +611,7 @@ impl MeshletAsset {
             groups: (self.section(SECTION_GROUPS).len() + self.children().len()) * 4,
             hierarchy: (self.section(SECTION_NODES).len() + self.node_clusters().len()) * 4,
             pages: self.section(SECTION_PAGES).len() * 4,
+            open_edges: self.section(SECTION_OPEN_EDGES).len() * 4,
             ..Default::default()
         };
         for m in self.meshlets() {

@@ -14,23 +14,28 @@ use crate::compress::{
 use crate::dag::Dag;
 use crate::mesh::Mesh;
 
+/// Triangles of the source that cleaning dropped (see [`crate::mesh::CleanReport`]), for
+/// the header's counts: the source had LOD 0's triangles and these.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Dropped {
+    /// Triangles dropped as degenerate.
+    pub degenerate: usize,
+    /// Triangles dropped as duplicates of earlier ones.
+    pub duplicate: usize,
+}
+
 impl MeshletAsset {
     /// Quantises and packs a DAG of `mesh` (the cleaned mesh it was built from) on a
     /// grid of `position_bits` over the mesh's bounds.
-    pub fn from_dag(mesh: &Mesh, dag: &Dag, position_bits: u32, dropped_degenerate: usize) -> Self {
+    pub fn from_dag(mesh: &Mesh, dag: &Dag, position_bits: u32, dropped: Dropped) -> Self {
         let (min, max) = mesh.bounds();
         let quant = Quantization::new(min, max, position_bits);
-        Self::from_dag_on_grid(mesh, dag, quant, dropped_degenerate)
+        Self::from_dag_on_grid(mesh, dag, quant, dropped)
     }
 
     /// Quantises and packs a DAG of `mesh` on the given grid, which must cover the
     /// mesh's bounds (a mesh snapped to a grid keeps the grid it was snapped to).
-    pub fn from_dag_on_grid(
-        mesh: &Mesh,
-        dag: &Dag,
-        quant: Quantization,
-        dropped_degenerate: usize,
-    ) -> Self {
+    pub fn from_dag_on_grid(mesh: &Mesh, dag: &Dag, quant: Quantization, dropped: Dropped) -> Self {
         let (min, max) = mesh.bounds();
         let uvq = UvQuantization::new(&mesh.uvs);
         let has_uvs = mesh.has_uvs();
@@ -195,6 +200,26 @@ impl MeshletAsset {
             .collect();
 
         let hierarchy = crate::hierarchy::build(&meshlets, &groups, &children);
+        let lod0: Vec<&crate::dag::DagCluster> =
+            dag.clusters.iter().filter(|c| c.level == 0).collect();
+        // LOD 0 on the grid, as the asset stores it: what a load compares it with.
+        let lod0_on_grid: Vec<Vec<[[u32; 3]; 3]>> = lod0
+            .par_iter()
+            .map(|c| {
+                c.indices
+                    .chunks_exact(3)
+                    .map(|t| [0, 1, 2].map(|k| grid[t[k] as usize]))
+                    .collect()
+            })
+            .collect();
+        let open_edges =
+            crate::open_edges::boundary_chain(lod0_on_grid.par_iter().map(Vec::as_slice));
+        let mut used = vec![false; mesh.positions.len()];
+        for c in &lod0 {
+            for &v in &c.indices {
+                used[v as usize] = true;
+            }
+        }
 
         let mut header = <AssetHeader as bytemuck::Zeroable>::zeroed();
         header.magic = MAGIC;
@@ -205,13 +230,15 @@ impl MeshletAsset {
         header.node_count = hierarchy.nodes.len() as u32;
         header.level_count = dag.level_count;
         header.root_count = dag.roots().count() as u32;
-        let lod0 = dag.clusters.iter().filter(|c| c.level == 0);
-        header.lod0_meshlets = lod0.clone().count() as u32;
-        header.lod0_triangles = lod0.map(|c| c.triangle_count() as u32).sum();
+        header.lod0_meshlets = lod0.len() as u32;
+        header.lod0_triangles = lod0.iter().map(|c| c.triangle_count() as u32).sum();
         header.total_triangles = meshlets.iter().map(|m| m.triangle_count()).sum();
         header.total_vertices = meshlets.iter().map(|m| m.vertex_count()).sum();
-        header.input_vertices = mesh.positions.len() as u32;
-        header.dropped_degenerate = dropped_degenerate as u32;
+        header.lod0_vertices = used.iter().filter(|&&u| u).count() as u32;
+        header.dropped_degenerate = dropped.degenerate as u32;
+        header.dropped_duplicate = dropped.duplicate as u32;
+        header.input_triangles =
+            header.lod0_triangles + header.dropped_degenerate + header.dropped_duplicate;
         header.material_count = mesh.material_count();
         header.resident_words = resident_words;
         header.bounds_min = min.to_array();
@@ -237,6 +264,7 @@ impl MeshletAsset {
         header.sections[SECTION_NODES] = push(&mut words, bytemuck::cast_slice(&hierarchy.nodes));
         header.sections[SECTION_NODE_CLUSTERS] = push(&mut words, &hierarchy.clusters);
         header.sections[SECTION_PAGES] = push(&mut words, bytemuck::cast_slice(&pages));
+        header.sections[SECTION_OPEN_EDGES] = push(&mut words, bytemuck::cast_slice(&open_edges));
         header.sections[SECTION_PAYLOAD] = push(&mut words, &payload);
         let size = words.len() as u64 * 4;
         header.file_size = [size as u32, (size >> 32) as u32];

@@ -50,6 +50,8 @@ pub struct AssetSummary {
     pub hierarchy: HierarchySummary,
     /// Bytes per part of the file.
     pub size: SizeBreakdown,
+    /// Edges along which LOD 0 is open, as the bake recorded them (0: a closed mesh).
+    pub open_edges: usize,
 }
 
 impl AssetSummary {
@@ -88,6 +90,7 @@ impl AssetSummary {
                 depth: crate::hierarchy::depth(nodes),
             },
             size: asset.size_breakdown(),
+            open_edges: asset.open_edges().len(),
         }
     }
 

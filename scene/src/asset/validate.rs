@@ -156,6 +156,9 @@ pub fn validate_prefix(words: &[u32], total: u64) -> Result<(), Invalid> {
     let grid_max = (1u64 << h.quant_bits) - 1;
     let (mut lod0_meshlets, mut lod0_triangles, mut triangles, mut vertices, mut roots) =
         (0u64, 0u64, 0u64, 0u64, 0u64);
+    // LOD 0's vertex records, together and in its largest meshlet: what bounds
+    // `lod0_vertices`.
+    let (mut lod0_records, mut lod0_widest) = (0u64, 0u64);
     let mut max_level = 0;
     for (i, m) in meshlets.iter().enumerate() {
         let f = |name: &str| format!("meshlet[{i}].{name}");
@@ -326,6 +329,8 @@ pub fn validate_prefix(words: &[u32], total: u64) -> Result<(), Invalid> {
         if level == 0 {
             lod0_meshlets += 1;
             lod0_triangles += tc as u64;
+            lod0_records += vc as u64;
+            lod0_widest = lod0_widest.max(vc as u64);
         }
         triangles += tc as u64;
         vertices += vc as u64;
@@ -363,6 +368,8 @@ pub fn validate_prefix(words: &[u32], total: u64) -> Result<(), Invalid> {
             ));
         }
     }
+    source_counts(h, lod0_records, lod0_widest)?;
+    open_edges(h, section(SECTION_OPEN_EDGES))?;
     for (i, g) in groups.iter().enumerate() {
         let f = |name: &str| format!("group[{i}].{name}");
         if !finite_sphere(g.lod_sphere) {
@@ -428,6 +435,91 @@ pub fn validate_prefix(words: &[u32], total: u64) -> Result<(), Invalid> {
     )?;
     let nodes: &[NodeRecord] = bytemuck::cast_slice(section(SECTION_NODES));
     hierarchy(meshlets, groups, nodes, section(SECTION_NODE_CLUSTERS))
+}
+
+/// The header's counts of the source: the triangles it had are LOD 0's and those
+/// dropped, and the distinct vertices LOD 0 uses lie between its largest meshlet's and
+/// all its meshlets' vertex records (a vertex on a border between meshlets is stored in
+/// each).
+fn source_counts(h: &AssetHeader, lod0_records: u64, lod0_widest: u64) -> Result<(), Invalid> {
+    let sum = h.lod0_triangles as u64 + h.dropped_degenerate as u64 + h.dropped_duplicate as u64;
+    if h.input_triangles as u64 != sum {
+        return Err(bad(
+            "header.input_triangles",
+            format!(
+                "is {}, but LOD 0's {} triangles and the {} degenerate and {} duplicate ones \
+                 dropped make {sum}",
+                h.input_triangles, h.lod0_triangles, h.dropped_degenerate, h.dropped_duplicate
+            ),
+        ));
+    }
+    let vertices = h.lod0_vertices as u64;
+    if !(lod0_widest..=lod0_records).contains(&vertices) {
+        return Err(bad(
+            "header.lod0_vertices",
+            format!(
+                "is {vertices}, outside {lod0_widest}..={lod0_records}: LOD 0 uses at least \
+                 its largest meshlet's vertices and at most all its meshlets' vertex records"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The open-edge section in its one form: whole records, each an edge between two
+/// different grid points on the grid, used at least once, in ascending order of its
+/// ends with each pair once. Whether LOD 0 still has them is a DAG check
+/// ([`crate::open_edges::lod0_problem`]), which decodes the meshlets.
+fn open_edges(h: &AssetHeader, words: &[u32]) -> Result<(), Invalid> {
+    let size = size_of::<OpenEdgeRecord>() / 4;
+    if !words.len().is_multiple_of(size) {
+        return Err(bad(
+            format!("header.sections[{SECTION_OPEN_EDGES}].words"),
+            format!(
+                "is {}, not a whole number of {size}-word open edges",
+                words.len()
+            ),
+        ));
+    }
+    let records: &[OpenEdgeRecord] = bytemuck::cast_slice(words);
+    let grid_max = (1u64 << h.quant_bits) - 1;
+    let on_grid = |p: [u32; 3]| p.iter().all(|&c| c as u64 <= grid_max);
+    let mut uses = 0u64;
+    for (i, r) in records.iter().enumerate() {
+        let field = |name: &str| format!("open_edge[{i}].{name}");
+        if !on_grid(r.from) || !on_grid(r.to) {
+            return Err(bad(
+                field("from/to"),
+                format!(
+                    "{:?}–{:?} lies off the {}-bit grid",
+                    r.from, r.to, h.quant_bits
+                ),
+            ));
+        }
+        if r.from == r.to {
+            return Err(bad(field("to"), "equals `from`; an edge joins two points"));
+        }
+        // Together at most three uses per LOD-0 triangle: so they sum in 64 bits.
+        uses += r.uses as u64;
+        if r.uses == 0 || uses > 3 * h.lod0_triangles as u64 {
+            return Err(bad(
+                field("uses"),
+                format!(
+                    "is {}; each edge is used at least once, and all at most {} times (three \
+                     edges per LOD-0 triangle)",
+                    r.uses,
+                    3 * h.lod0_triangles as u64
+                ),
+            ));
+        }
+        if i > 0 && records[i - 1].key() >= r.key() {
+            return Err(bad(
+                field("from/to"),
+                "does not follow the edge before in ascending order (each edge once)",
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The checks of one meshlet's `data` (its payload words, `layout.end` of them) that
