@@ -94,15 +94,20 @@ pub struct Dag {
     pub fallbacks: Fallbacks,
 }
 
-/// Groups whose simplified result used an edge shared with a neighbouring group
-/// differently from their children (a crack in some LOD cut), repaired locally.
+/// Groups with no result that keeps the edges they share with neighbouring groups as
+/// their children used them (anything else is a crack in some LOD cut), repaired
+/// locally.
 ///
-/// Border locking alone does not always prevent this: where an edge has more than two
-/// triangles, or a locked vertex's last triangles collapse, the simplifier may drop or
-/// add a use of a border edge. Such a group is simplified again with every corner of
-/// its border triangles locked (`relocked`); if that still cracks or is stuck, the
-/// group is not formed (`unsimplified`): its children stay the cut there and are tried
-/// once more at the next level with other neighbours, like a stuck group's.
+/// Border locking alone does not always keep them: where an edge has more than two
+/// triangles, a triangle is wound the other way (a scan's), or a locked vertex's last
+/// triangles collapse, the simplifier may drop or add a use of a border edge. Each
+/// mode's result is checked, so a group takes the smallest result that keeps its border
+/// (a mode that broke it does not end the search). A group none of whose modes keep it,
+/// or that is stuck, is simplified again with every corner of its border triangles
+/// locked (`relocked`); if that still fails, the group is not formed
+/// (`unsimplified`): its children stay the cut there and are tried once more at the
+/// next level with other neighbours. That leaves a level short and the next one long,
+/// which is why a mode that breaks the border must not end the search.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Fallbacks {
     /// Groups simplified again with their border triangles locked.
@@ -271,30 +276,31 @@ pub fn build_dag(
                     .collect();
                 let seals = |out: &[u32]| seals_borders(&indices, out, &remap, &border, &shared);
                 let mut fallback = None;
-                let simplified = match simplify_group(positions, &attributes, &indices, &flags) {
-                    Some(s) if seals(&s.indices) => s,
-                    None => return (None, None),
-                    Some(_) => {
-                        let relocked = border_triangle_corners(&indices, &remap, &border, &shared);
-                        let locked = |v: u32| {
-                            let w = remap[v as usize];
-                            border[w as usize] || relocked.contains(&w)
-                        };
-                        let flags = VertexFlags {
-                            locked: &locked,
-                            seam: &seam,
-                            materials: &slots,
-                            material_border: &material_border,
-                        };
-                        match simplify_group(positions, &attributes, &indices, &flags) {
-                            Some(s) if seals(&s.indices) => {
-                                fallback = Some(Fallback::Relocked);
-                                s
+                let simplified =
+                    match simplify_group(positions, &attributes, &indices, &flags, &seals) {
+                        Some(s) => s,
+                        None => {
+                            let relocked =
+                                border_triangle_corners(&indices, &remap, &border, &shared);
+                            let locked = |v: u32| {
+                                let w = remap[v as usize];
+                                border[w as usize] || relocked.contains(&w)
+                            };
+                            let flags = VertexFlags {
+                                locked: &locked,
+                                seam: &seam,
+                                materials: &slots,
+                                material_border: &material_border,
+                            };
+                            match simplify_group(positions, &attributes, &indices, &flags, &seals) {
+                                Some(s) => {
+                                    fallback = Some(Fallback::Relocked);
+                                    s
+                                }
+                                _ => return (None, Some(Fallback::Unsimplified)),
                             }
-                            _ => return (None, Some(Fallback::Unsimplified)),
                         }
-                    }
-                };
+                    };
                 let uv_slide = simplified_uv_slide(&level_surface, &indices, &simplified.indices);
                 let meshlets = meshlets_by_material(&simplified.indices, &slots, |indices| {
                     split_into_meshlets(positions, indices, weld)

@@ -110,8 +110,9 @@ pub struct Attributes<'a> {
     pub texel: f32,
 }
 
-/// Simplifies `indices` (global vertex ids) to about half. Returns `None` when even the
-/// sloppy fallback cannot remove 15% of the triangles (`STUCK_RATIO`).
+/// Simplifies `indices` (global vertex ids) to about half, taking only results that
+/// `seals` accepts (given in global ids: the border the group shares is kept). Returns
+/// `None` when no mode's accepted result removes 15% of the triangles (`STUCK_RATIO`).
 ///
 /// Works on a compact copy of the group's vertices: meshoptimizer's cost is per vertex
 /// of the buffer it is given, and a group is a tiny part of the mesh.
@@ -120,6 +121,7 @@ pub fn simplify_group(
     attributes: &Attributes<'_>,
     indices: &[u32],
     flags: &VertexFlags<'_>,
+    seals: &dyn Fn(&[u32]) -> bool,
 ) -> Option<Simplified> {
     let crate::meshlets::Localised { globals, local } = crate::meshlets::localise(indices);
     let pos: Vec<Vec3> = globals.iter().map(|&g| positions[g as usize]).collect();
@@ -295,9 +297,15 @@ pub fn simplify_group(
                 continue;
             }
         }
-        if best.as_ref().is_none_or(|(b, _, _)| out.len() < b.len()) {
-            best = Some((out, error, mode));
+        if best.as_ref().is_some_and(|(b, _, _)| out.len() >= b.len()) {
+            continue;
         }
+        // A result that moves the border is no result: the next mode may keep it.
+        let global: Vec<u32> = out.iter().map(|&l| globals[l as usize]).collect();
+        if !seals(&global) {
+            continue;
+        }
+        best = Some((out, error, mode));
         if count <= good {
             break;
         }

@@ -290,3 +290,112 @@ impl AttributedSphere {
         }
     }
 }
+
+/// What a raw scan of a figure has beyond its surface, for [`scan_figure`].
+#[derive(Debug, Clone, Copy)]
+pub struct ScanFlaws {
+    /// Radial noise per vertex, in units of the mean edge length.
+    pub noise: f32,
+    /// Share of the surface's triangles cut out in small holes (patches of about six).
+    pub holes: f32,
+    /// Floating specks near the surface: tiny closed tetrahedra, four triangles each.
+    pub specks: u32,
+    /// Share of the surface's triangles written with the other winding.
+    pub flipped: f32,
+}
+
+/// A scanned figure as a capture program writes it: a lumpy closed body (a sphere
+/// displaced by a few lobes) triangulated irregularly (jittered grid points, each quad's
+/// diagonal chosen at random), with `flaws`. Returns positions and indices.
+pub fn scan_figure(rings: u32, segments: u32, flaws: ScanFlaws) -> (Vec<[f32; 3]>, Vec<u32>) {
+    use glam::Vec3;
+    let radius = |d: Vec3| {
+        1.0 + 0.25 * (3.0 * d.x).sin() * (2.0 * d.y).cos() + 0.15 * (4.0 * d.z + d.x).sin()
+    };
+    let edge = std::f32::consts::PI / rings as f32;
+    let mut positions = Vec::new();
+    let mut at = |d: Vec3, i: u32| {
+        let n = (hash01(i, 11) - 0.5) * 2.0 * flaws.noise * edge;
+        positions.push((d * (radius(d) + n)).to_array());
+        positions.len() as u32 - 1
+    };
+    let north = at(Vec3::Z, 0);
+    let mut grid = Vec::new();
+    for r in 1..rings {
+        for s in 0..segments {
+            let i = r * segments + s;
+            let theta =
+                std::f32::consts::PI * (r as f32 + (hash01(i, 1) - 0.5) * 0.6) / rings as f32;
+            let phi =
+                std::f32::consts::TAU * (s as f32 + (hash01(i, 2) - 0.5) * 0.6) / segments as f32;
+            let d = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
+            grid.push(at(d, i));
+        }
+    }
+    let south = at(-Vec3::Z, 1);
+    let ring = |r: u32, s: u32| grid[((r - 1) * segments + s % segments) as usize];
+    let mut indices = Vec::new();
+    for s in 0..segments {
+        indices.extend_from_slice(&[north, ring(1, s), ring(1, s + 1)]);
+        indices.extend_from_slice(&[south, ring(rings - 1, s + 1), ring(rings - 1, s)]);
+        for r in 1..rings - 1 {
+            let (a, b, c, d) = (
+                ring(r, s),
+                ring(r, s + 1),
+                ring(r + 1, s),
+                ring(r + 1, s + 1),
+            );
+            if hash01(r * segments + s, 5) < 0.5 {
+                indices.extend_from_slice(&[a, c, d, a, d, b]);
+            } else {
+                indices.extend_from_slice(&[a, c, b, b, c, d]);
+            }
+        }
+    }
+    // Holes: a triangle and the five after it, at seeded places.
+    let triangles = indices.len() / 3;
+    let mut keep = vec![true; triangles];
+    let holes = (triangles as f32 * flaws.holes / 6.0) as u32;
+    for h in 0..holes {
+        let t = (hash01(h, 21) * triangles as f32) as usize;
+        for k in t..(t + 6).min(triangles) {
+            keep[k] = false;
+        }
+    }
+    let mut indices: Vec<u32> = indices
+        .chunks_exact(3)
+        .zip(&keep)
+        .enumerate()
+        .filter(|(_, (_, k))| **k)
+        .flat_map(|(i, (t, _))| match hash01(i as u32, 41) < flaws.flipped {
+            true => [t[0], t[2], t[1]],
+            false => [t[0], t[1], t[2]],
+        })
+        .collect();
+    for k in 0..flaws.specks {
+        let d = Vec3::new(
+            hash01(k, 31) - 0.5,
+            hash01(k, 32) - 0.5,
+            hash01(k, 33) - 0.5,
+        )
+        .normalize_or(Vec3::X);
+        let centre = d * (radius(d) + edge * (1.0 + 3.0 * hash01(k, 34)));
+        let size = edge * (0.3 + hash01(k, 35));
+        let corner = |v: Vec3| (centre + v * size).to_array();
+        let base = positions.len() as u32;
+        positions.extend([
+            corner(Vec3::new(1.0, 1.0, 1.0)),
+            corner(Vec3::new(1.0, -1.0, -1.0)),
+            corner(Vec3::new(-1.0, 1.0, -1.0)),
+            corner(Vec3::new(-1.0, -1.0, 1.0)),
+        ]);
+        for t in [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]] {
+            indices.extend(t.map(|v| base + v));
+        }
+    }
+    (positions, indices)
+}
