@@ -362,9 +362,7 @@ pub fn scan_figure(rings: u32, segments: u32, flaws: ScanFlaws) -> (Vec<[f32; 3]
     let holes = (triangles as f32 * flaws.holes / 6.0) as u32;
     for h in 0..holes {
         let t = (hash01(h, 21) * triangles as f32) as usize;
-        for k in t..(t + 6).min(triangles) {
-            keep[k] = false;
-        }
+        keep[t..(t + 6).min(triangles)].fill(false);
     }
     let mut indices: Vec<u32> = indices
         .chunks_exact(3)
