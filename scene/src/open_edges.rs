@@ -24,21 +24,35 @@ use crate::chain_fingerprint::{ChainKeys, edge};
 
 type Vertex = [u32; 3];
 
-/// The boundary chain of triangles given per meshlet as grid points, in the recorded
-/// form: one record per edge with a net use, oriented so that it is positive, sorted by
-/// [`OpenEdgeRecord::key`]. Each meshlet's own shared edges cancel before anything is
-/// hashed across meshlets, so only their borders meet in the table.
-pub fn boundary_chain<'a>(
-    meshlets: impl IndexedParallelIterator<Item = &'a [[Vertex; 3]]>,
-) -> Vec<OpenEdgeRecord> {
-    let borders: Vec<Vec<((Vertex, Vertex), i32)>> = meshlets.map(net_uses).collect();
-    let mut net: FxHashMap<(Vertex, Vertex), i32> = FxHashMap::default();
-    for (e, n) in borders.into_iter().flatten() {
-        *net.entry(e).or_default() += n;
-    }
-    let mut records: Vec<OpenEdgeRecord> = net
+/// The boundary chain of the triangles of `meshlets` meshlets, `triangles(i)` giving
+/// meshlet `i`'s as grid points, in the recorded form: one record per edge with a net
+/// use, oriented so that it is positive, sorted by [`OpenEdgeRecord::key`]. Each
+/// meshlet's own shared edges cancel before anything is gathered across meshlets, so
+/// only their borders meet in the final sort. Sorted runs rather than hash tables: a
+/// meshlet's few hundred edges sort faster than they hash.
+pub fn boundary_chain<F, I>(meshlets: usize, triangles: F) -> Vec<OpenEdgeRecord>
+where
+    F: Fn(usize) -> I + Sync,
+    I: Iterator<Item = [Vertex; 3]>,
+{
+    let mut borders: Vec<((Vertex, Vertex), i32)> = (0..meshlets)
+        .into_par_iter()
+        .flat_map_iter(|i| {
+            let mut edges: Vec<((Vertex, Vertex), i32)> = Vec::new();
+            for t in triangles(i) {
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    if a != b {
+                        edges.push(if a < b { ((a, b), 1) } else { ((b, a), -1) });
+                    }
+                }
+            }
+            net_runs(edges)
+        })
+        .collect();
+    borders.par_sort_unstable_by_key(|&(e, _)| e);
+    net_runs(borders)
         .into_iter()
-        .filter(|&(_, n)| n != 0)
         .map(|((a, b), n)| {
             let (from, to) = if n > 0 { (a, b) } else { (b, a) };
             OpenEdgeRecord {
@@ -47,25 +61,18 @@ pub fn boundary_chain<'a>(
                 uses: n.unsigned_abs(),
             }
         })
-        .collect();
-    records.sort_unstable_by_key(OpenEdgeRecord::key);
-    records
+        .collect()
 }
 
-/// Net directed uses of the edges of `triangles` between two different points, keyed
-/// by the points in ascending order (+ from the first to the second), zeros left out.
-fn net_uses(triangles: &[[Vertex; 3]]) -> Vec<((Vertex, Vertex), i32)> {
-    let mut net: FxHashMap<(Vertex, Vertex), i32> = FxHashMap::default();
-    for t in triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if a != b {
-                let (key, s) = if a < b { ((a, b), 1) } else { ((b, a), -1) };
-                *net.entry(key).or_default() += s;
-            }
-        }
-    }
-    net.into_iter().filter(|&(_, n)| n != 0).collect()
+/// The net use of each edge of `edges` (keyed by its points in ascending order, + from
+/// the first to the second), zeros left out, in ascending order of the key.
+fn net_runs(mut edges: Vec<((Vertex, Vertex), i32)>) -> Vec<((Vertex, Vertex), i32)> {
+    edges.sort_unstable_by_key(|&(e, _)| e);
+    edges
+        .chunk_by(|x, y| x.0 == y.0)
+        .map(|run| (run[0].0, run.iter().map(|&(_, n)| n).sum::<i32>()))
+        .filter(|&(_, n)| n != 0)
+        .collect()
 }
 
 /// LOD 0's boundary chain as the asset's meshlets decode it (grid points, corners as
@@ -74,18 +81,13 @@ pub fn decoded_lod0_chain(asset: &MeshletAsset) -> Vec<OpenEdgeRecord> {
     let lod0: Vec<usize> = (0..asset.meshlets().len())
         .filter(|&i| asset.meshlets()[i].level() == 0)
         .collect();
-    let triangles: Vec<Vec<[Vertex; 3]>> = lod0
-        .par_iter()
-        .map(|&i| {
-            let (grid, triangles) = asset.decode_topology(i);
-            let at = |k: u8| grid[(k as usize).min(grid.len().saturating_sub(1))];
-            triangles
-                .iter()
-                .map(|t| [at(t[0]), at(t[1]), at(t[2])])
-                .collect()
-        })
-        .collect();
-    boundary_chain(triangles.par_iter().map(Vec::as_slice))
+    boundary_chain(lod0.len(), |i| {
+        let (grid, triangles) = asset.decode_topology(lod0[i]);
+        let last = grid.len().saturating_sub(1);
+        triangles
+            .into_iter()
+            .map(move |t| t.map(|k| grid[(k as usize).min(last)]))
+    })
 }
 
 /// The fingerprint of a recorded chain under `keys`: what the LOD-0 meshlets'
@@ -167,6 +169,10 @@ pub fn lod0_problem(
 mod tests {
     use super::*;
 
+    fn chain_of(meshlets: &[Vec<[Vertex; 3]>]) -> Vec<OpenEdgeRecord> {
+        boundary_chain(meshlets.len(), |i| meshlets[i].iter().copied())
+    }
+
     fn tri(a: u32, b: u32, c: u32) -> [Vertex; 3] {
         [[a, 0, 0], [b, 0, 0], [c, 0, 0]]
     }
@@ -178,10 +184,10 @@ mod tests {
             vec![tri(0, 1, 2), tri(0, 3, 1)],
             vec![tri(0, 2, 3), tri(1, 3, 2)],
         ];
-        assert!(boundary_chain(closed.par_iter().map(Vec::as_slice)).is_empty());
+        assert!(chain_of(&closed).is_empty());
         // Without its last face (1, 3, 2): that face's three edges, reversed.
         let open = [vec![tri(0, 1, 2), tri(0, 3, 1)], vec![tri(0, 2, 3)]];
-        let chain = boundary_chain(open.par_iter().map(Vec::as_slice));
+        let chain = chain_of(&open);
         let edges: Vec<(u32, u32, u32)> =
             chain.iter().map(|r| (r.from[0], r.to[0], r.uses)).collect();
         assert_eq!(edges, [(1, 2, 1), (3, 1, 1), (2, 3, 1)]);
@@ -200,7 +206,7 @@ mod tests {
     fn a_doubled_edge_is_recorded_with_its_count() {
         // Two fans on the same rim edge 0→1: the edge is used twice the same way.
         let fans = [vec![tri(0, 1, 2)], vec![tri(0, 1, 3)]];
-        let chain = boundary_chain(fans.par_iter().map(Vec::as_slice));
+        let chain = chain_of(&fans);
         let doubled = chain.iter().find(|r| r.key() == ([0, 0, 0], [1, 0, 0]));
         assert_eq!(doubled.map(|r| (r.from[0], r.uses)), Some((0, 2)));
     }

@@ -203,17 +203,12 @@ impl MeshletAsset {
         let lod0: Vec<&crate::dag::DagCluster> =
             dag.clusters.iter().filter(|c| c.level == 0).collect();
         // LOD 0 on the grid, as the asset stores it: what a load compares it with.
-        let lod0_on_grid: Vec<Vec<[[u32; 3]; 3]>> = lod0
-            .par_iter()
-            .map(|c| {
-                c.indices
-                    .chunks_exact(3)
-                    .map(|t| [0, 1, 2].map(|k| grid[t[k] as usize]))
-                    .collect()
-            })
-            .collect();
-        let open_edges =
-            crate::open_edges::boundary_chain(lod0_on_grid.par_iter().map(Vec::as_slice));
+        let open_edges = crate::open_edges::boundary_chain(lod0.len(), |i| {
+            lod0[i]
+                .indices
+                .chunks_exact(3)
+                .map(|t| [0, 1, 2].map(|k| grid[t[k] as usize]))
+        });
         let mut used = vec![false; mesh.positions.len()];
         for c in &lod0 {
             for &v in &c.indices {
