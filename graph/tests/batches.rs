@@ -420,6 +420,59 @@ fn a_readback_between_compute_passes_returns_each_frames_value() {
     }
 }
 
+/// A readback moves as late as its edges allow: past passes that do not write what it
+/// copies, to just before the next writer of its source, or to the end; and its values
+/// are still those of the version it names.
+#[test]
+fn readbacks_are_recorded_as_late_as_their_source_allows() {
+    let mut g = GraphBuilder::new();
+    let data = g.import_buffer("data", BufferDesc::array(Element::U32, N as u64), USAGE);
+    let other = g.create_buffer("other", BufferDesc::array(Element::U32, N as u64));
+    let data = step_on(&mut g, "before", Step { k: 2, clear: false }, data);
+    g.readback("early", data, Some(0..16), 1).unwrap();
+    let other = step_on(&mut g, "other", Step { k: 5, clear: true }, other);
+    g.readback("other", other, Some(0..16), 1).unwrap();
+    let other = step_on(&mut g, "other again", Step { k: 6, clear: false }, other);
+    g.export(other);
+    let data = step_on(&mut g, "after", Step { k: 1, clear: false }, data);
+    g.readback("late", data, Some(0..16), 1).unwrap();
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu())).unwrap();
+    let plan = &compiled.plan;
+    let order: Vec<&str> = plan
+        .order
+        .iter()
+        .map(|&p| plan.passes[p].name.as_str())
+        .collect();
+    // Declared (and topologically first): before, early, other, readback of other,
+    // other again, after, late.
+    assert_eq!(
+        order,
+        [
+            "before",
+            "other",
+            "readback:other",
+            "other again",
+            "readback:early",
+            "after",
+            "readback:late"
+        ]
+    );
+    let gpu = gpu();
+    let start = start_words();
+    let buffer = gpu.buffer_with_data("data", bytemuck::cast_slice(&start), USAGE);
+    let mut exec = Executor::new(gpu);
+    exec.execute(&compiled, &Imports::new().buffer("data", &buffer))
+        .unwrap();
+    exec.finish().unwrap();
+    let mut words = |name: &str| {
+        let r = exec.take_readback(name).unwrap().expect("one frame's copy");
+        bytemuck::pod_collect_to_vec::<u8, u32>(&r.bytes)
+    };
+    assert_eq!(words("early"), cpu_steps(&start[..4], &[2]));
+    assert_eq!(words("late"), cpu_steps(&start[..4], &[2, 1]));
+    assert_eq!(words("other"), cpu_steps(&[0; 4], &[5]));
+}
+
 #[test]
 fn history_carries_through_a_batch_from_frame_to_frame() {
     let mut g = GraphBuilder::new();

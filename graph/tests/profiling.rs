@@ -111,7 +111,8 @@ fn compile_prepare_record_and_submit_are_scopes_a_profiler_sees() {
         .filter(|(n, _)| n == "meshlight::record")
         .filter_map(|(_, tag)| tag.as_deref())
         .collect();
-    assert_eq!(records, ["fill", "readback:a", "add"], "{seen:?}");
+    // The readback sunk past `add`, which does not write what it copies.
+    assert_eq!(records, ["fill", "add", "readback:a"], "{seen:?}");
     assert!(
         seen.iter()
             .any(|(n, t)| n == "meshlight::prepare pass" && t.as_deref() == Some("fill")),
@@ -129,7 +130,8 @@ fn a_frames_timings_are_a_chrome_trace_with_an_event_per_batch() {
     );
     let compiled = graph().compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let plan = &compiled.plan;
-    assert_eq!(plan.batches.len(), 3, "{:?}", plan.batches);
+    // The two kernels in one compute pass, then the readback's copy.
+    assert_eq!(plan.batches.len(), 2, "{:?}", plan.batches);
     let mut exec = Executor::new(gpu);
     exec.timing = TimingMode::Frame;
     exec.execute(&compiled, &Imports::new()).unwrap();
@@ -151,7 +153,7 @@ fn a_frames_timings_are_a_chrome_trace_with_an_event_per_batch() {
         last_end = ts + dur;
         assert!(e["pid"].is_number() && e["tid"].is_number(), "{e}");
     }
-    assert_eq!(complete[0]["args"]["passes"], "fill");
-    assert_eq!(complete[2]["args"]["passes"], "add");
+    assert_eq!(complete[0]["args"]["passes"], "fill, add");
+    assert_eq!(complete[1]["args"]["passes"], "readback:a");
     assert_eq!(trace["displayTimeUnit"], "ms");
 }

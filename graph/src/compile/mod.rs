@@ -336,6 +336,11 @@ pub fn compile(builder: GraphBuilder, options: &CompileOptions) -> Result<Compil
     let side_effects: Vec<bool> = setups.iter().map(|s| s.side_effect).collect();
     let live = cull::live_passes(&resources, &passes, &side_effects, &table.edges);
     let order: Vec<usize> = topo.into_iter().filter(|&p| live[p]).collect();
+    let is_readback: Vec<bool> = passes
+        .iter()
+        .map(|p| p.contract.stage == crate::readback::STAGE)
+        .collect();
+    let order = order::sink_readbacks(&dag, order, &is_readback);
     let culled: Vec<usize> = (0..passes.len()).filter(|&p| !live[p]).collect();
 
     // Lifetimes over the executed order.

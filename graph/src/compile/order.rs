@@ -57,6 +57,54 @@ pub fn topological_order(
     })
 }
 
+/// `order` with each readback pass moved as late as its edges allow: just before the
+/// first pass that must follow it (the next writer of what it copies), or to the end.
+///
+/// Why: a copy cannot be recorded inside a compute pass, so a readback between two
+/// compute passes splits the frame's one compute pass in two, and each split costs a
+/// few microseconds on the GPU. A readback's copy has no consumer in the frame, so
+/// nothing is gained by running it early; sunk to the end, the frame's readbacks follow
+/// one another after the last compute work. The order stays topological: a readback
+/// only moves past passes that do not depend on it. Readbacks that meet at one place
+/// keep their order.
+pub fn sink_readbacks(
+    dag: &DiGraph<usize, usize>,
+    order: Vec<usize>,
+    is_readback: &[bool],
+) -> Vec<usize> {
+    let position: Vec<usize> = {
+        let mut at = vec![usize::MAX; is_readback.len()];
+        for (i, &p) in order.iter().enumerate() {
+            at[p] = i;
+        }
+        at
+    };
+    // Each readback's place: the position of its first successor in the order, so
+    // that it is recorded right before that pass (its place, then its old position,
+    // breaks ties).
+    let mut keyed: Vec<(usize, usize, usize)> = order
+        .iter()
+        .enumerate()
+        .map(|(i, &p)| {
+            if !is_readback[p] {
+                return (i, 1, p);
+            }
+            let first_after = dag
+                .neighbors_directed(NodeIndex::new(p), Direction::Outgoing)
+                .map(|q| position[q.index()])
+                .filter(|&at| at != usize::MAX)
+                .min()
+                .unwrap_or(order.len());
+            (first_after, 0, i)
+        })
+        .collect();
+    keyed.sort_unstable();
+    keyed
+        .into_iter()
+        .map(|(_, kind, x)| if kind == 0 { order[x] } else { x })
+        .collect()
+}
+
 /// Every node left after Kahn's algorithm lies on or behind a cycle; walking predecessors
 /// that are also left must revisit a node, and the walk between the visits is the cycle.
 fn find_cycle(dag: &DiGraph<usize, usize>, remaining: &[bool]) -> Vec<usize> {
