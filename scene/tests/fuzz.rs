@@ -522,6 +522,8 @@ fn load_mutated(words: Vec<u32>, outcomes: &mut Outcomes) {
                 SceneError::AssetVersion { .. } => "version",
                 SceneError::AssetTruncated { .. } => "truncated",
                 SceneError::AssetChecksum { .. } => "checksum",
+                // A header field that moves the pages (now in the header's layout).
+                SceneError::AssetPageChecksum { .. } => "page checksum",
                 SceneError::AssetField { .. } => "field",
                 SceneError::AssetCorrupt { .. } => "DAG",
                 other => panic!("not an asset error: {other:?}"),
