@@ -5,6 +5,7 @@
 
 pub mod builder;
 pub mod html;
+pub mod image_metric;
 pub mod light_clustering;
 pub mod scan_fan;
 pub mod virtual_geometry;
@@ -58,6 +59,7 @@ pub const ALL: &[&str] = &[
     "vg-million",
     "vg-stream",
     "vg-shadows",
+    "lod-quality",
     "rasterisers",
     "builder",
     "scan-fan",
@@ -113,6 +115,7 @@ pub fn run(args: &BenchOptions) -> std::result::Result<(), Box<dyn std::error::E
             "vg-million" => crate::virtual_geometry::million(args.quick, &args.meshes)?,
             "vg-stream" => crate::virtual_geometry::stream(args.quick, &args.meshes)?,
             "vg-shadows" => crate::virtual_geometry::shadows(args.quick, &args.meshes)?,
+            "lod-quality" => crate::virtual_geometry::lod_quality(args.quick, &args.meshes)?,
             "builder" => builder(args.quick, &args.meshes)?,
             "scan-fan" => scan_fan(args.quick)?,
             "light-clustering" => crate::light_clustering::run(args.quick)?,
