@@ -1800,47 +1800,67 @@ pub fn lod_quality(quick: bool, meshes: &[PathBuf]) -> BenchResult {
             ..FrameSettings::new(width, height)
         };
         let normal = Some(meshlight::resolve::DebugView::Normal);
-        let still = |settings: FrameSettings| -> Result<_, Box<dyn std::error::Error>> {
-            let mut r = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)?;
-            let still = r.render_still(&placed.camera)?;
-            if still.counts.overflowed() {
+        // One renderer (one device, the scene uploaded once), its frame rebuilt for each
+        // threshold and view.
+        let mut r = Renderer::new(placed.data.clone(), at(1.0, None), &GraphSource::Shipped)?;
+        let still =
+            |r: &mut Renderer, settings: FrameSettings| -> Result<_, Box<dyn std::error::Error>> {
+                r.rebuild(&GraphSource::Shipped, settings, &|_, _| Ok(()))?;
+                let still = r.render_still(&placed.camera)?;
+                if still.counts.overflowed() {
+                    return Err(
+                        format!("{case}: the lists still overflow; no image to compare").into(),
+                    );
+                }
+                Ok(still)
+            };
+        // Coarsest first, LOD 0 last: the lists only grow, so each threshold is timed
+        // with the lists it needs rather than LOD 0's.
+        let mut drawn = Vec::new();
+        for &lod in thresholds.iter().rev().chain(std::iter::once(&0.0)) {
+            let normals = still(&mut r, at(lod, normal))?;
+            let shaded = still(&mut r, at(lod, None))?;
+            // The frame as `measure` times it, at the shaded view just built; fewer frames
+            // at threshold 0, where LOD 0 of a whole scene is slow to draw.
+            let frames = if lod == 0.0 { frames.min(5) } else { frames };
+            warm_up(&mut r, &placed.camera)?;
+            r.executor.timing = TimingMode::Frame;
+            r.executor.take_gpu_timings()?;
+            for _ in 0..frames {
+                r.frame(&placed.camera)?;
+            }
+            r.executor.finish()?;
+            let times: Vec<f64> = r
+                .executor
+                .take_gpu_timings()?
+                .iter()
+                .map(|t| t.total_us / 1e3)
+                .collect();
+            if times.is_empty() {
                 return Err(
-                    format!("{case}: the lists still overflow; no image to compare").into(),
+                    format!("{} has no GPU timestamps; nothing to measure", r.adapter).into(),
                 );
             }
-            Ok(still)
-        };
-        let reference = (still(at(0.0, None))?, still(at(0.0, normal))?);
+            drawn.push((lod, shaded, normals, median(times)));
+        }
+        drawn.reverse();
+        let (shaded0, normals0) = (&drawn[0].1.rgba, &drawn[0].2.rgba);
         let mut table = format!(
             "{case}\n  threshold  tris/px  frame ms  SSIM shaded  PSNR shaded  SSIM normals\n"
         );
-        for &lod in std::iter::once(&0.0).chain(thresholds) {
-            // Fewer frames at threshold 0: LOD 0 of a whole scene is slow to draw.
-            let frames = if lod == 0.0 { frames.min(5) } else { frames };
-            let m = measure(placed, at(lod, None), frames)?;
-            let (shaded, normals) = (still(at(lod, None))?, still(at(lod, normal))?);
-            let per_pixel = m.counts.triangles_per_pixel(width, height);
-            let ssim_shaded = crate::image_metric::ssim(
-                &shaded.rgba,
-                &reference.0.rgba,
-                width as usize,
-                height as usize,
-            );
-            let psnr_shaded = crate::image_metric::psnr(&shaded.rgba, &reference.0.rgba);
-            let ssim_normals = crate::image_metric::ssim(
-                &normals.rgba,
-                &reference.1.rgba,
-                width as usize,
-                height as usize,
-            );
+        for (lod, shaded, normals, frame_ms) in &drawn {
+            let per_pixel = shaded.counts.triangles_per_pixel(width, height);
+            let (w, h) = (width as usize, height as usize);
+            let ssim_shaded = crate::image_metric::ssim(&shaded.rgba, shaded0, w, h);
+            let psnr_shaded = crate::image_metric::psnr(&shaded.rgba, shaded0);
+            let ssim_normals = crate::image_metric::ssim(&normals.rgba, normals0, w, h);
             table += &format!(
-                "  {lod:9}  {per_pixel:7.2}  {:8.3}  {ssim_shaded:11.4}  {psnr_shaded:11.2}  {ssim_normals:12.4}\n",
-                m.total_ms
+                "  {lod:9}  {per_pixel:7.2}  {frame_ms:8.3}  {ssim_shaded:11.4}  {psnr_shaded:11.2}  {ssim_normals:12.4}\n"
             );
             let case = format!("{case}, LOD threshold {lod} px");
             for (metric, value, unit) in [
                 ("triangles rasterised per pixel", per_pixel, ""),
-                ("GPU frame (timing mode frame)", m.total_ms, "ms"),
+                ("GPU frame (timing mode frame)", *frame_ms, "ms"),
                 ("SSIM of the shaded image against LOD 0", ssim_shaded, ""),
                 ("PSNR of the shaded image against LOD 0", psnr_shaded, "dB"),
                 ("SSIM of the normal view against LOD 0", ssim_normals, ""),
@@ -1851,7 +1871,7 @@ pub fn lod_quality(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                     metric,
                     value,
                     unit,
-                    &m.device,
+                    &r.adapter,
                 ));
             }
         }
