@@ -1841,15 +1841,18 @@ pub fn lod_quality(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                     format!("{} has no GPU timestamps; nothing to measure", r.adapter).into(),
                 );
             }
-            drawn.push((lod, shaded, normals, median(times)));
+            // The counters of a frame like the timed ones (with history to test
+            // occlusion against; the still's first frame after a rebuild has none).
+            let counts = r.render_still(&placed.camera)?.counts;
+            drawn.push((lod, shaded, normals, median(times), counts));
         }
         drawn.reverse();
         let (shaded0, normals0) = (&drawn[0].1.rgba, &drawn[0].2.rgba);
         let mut table = format!(
             "{case}\n  threshold  tris/px  frame ms  SSIM shaded  PSNR shaded  SSIM normals\n"
         );
-        for (lod, shaded, normals, frame_ms) in &drawn {
-            let per_pixel = shaded.counts.triangles_per_pixel(width, height);
+        for (lod, shaded, normals, frame_ms, counts) in &drawn {
+            let per_pixel = counts.triangles_per_pixel(width, height);
             let (w, h) = (width as usize, height as usize);
             let ssim_shaded = crate::image_metric::ssim(&shaded.rgba, shaded0, w, h);
             let psnr_shaded = crate::image_metric::psnr(&shaded.rgba, shaded0);
