@@ -774,6 +774,55 @@ fn bake_refuses_options_out_of_bounds_when_parsing() {
     );
 }
 
+/// `bake --jobs N` where N threads cannot be started (here an address-space limit with
+/// room for the process but not for 4,096 thread stacks) fails saying so and what to
+/// change, not with a bare OS error; two jobs bake under the same limit.
+#[cfg(unix)]
+#[test]
+fn bake_says_when_its_threads_cannot_start() {
+    use std::os::unix::process::CommandExt;
+    let dir = scratch("jobs-limit");
+    let out = dir.join("teapot.mlasset");
+    let run = |jobs: &str| {
+        let mut cmd = command(&[
+            "bake",
+            "--jobs",
+            jobs,
+            "assets/meshes/teapot.obj",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        // SAFETY: the closure only calls setrlimit, which is async-signal-safe.
+        unsafe {
+            cmd.pre_exec(|| {
+                let limit = libc::rlimit {
+                    rlim_cur: 1_500_000_000,
+                    rlim_max: 1_500_000_000,
+                };
+                match libc::setrlimit(libc::RLIMIT_AS, &limit) {
+                    0 => Ok(()),
+                    _ => Err(std::io::Error::last_os_error()),
+                }
+            });
+        }
+        cmd.output().expect("runs")
+    };
+    let many = run("4096");
+    let err = String::from_utf8_lossy(&many.stderr);
+    assert_eq!(many.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("4096 threads could not be started") && err.contains("smaller --jobs"),
+        "{err}"
+    );
+    let two = run("2");
+    assert!(
+        two.status.success(),
+        "{}",
+        String::from_utf8_lossy(&two.stderr)
+    );
+    assert!(out.is_file());
+}
+
 /// A glTF file of two tetrahedra on two nodes and a camera, written for the test.
 fn two_node_scene(dir: &Path) -> std::path::PathBuf {
     use meshlight_testing::gltf_writer::{GltfWriter, Node, Primitive};
