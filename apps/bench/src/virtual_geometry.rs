@@ -66,26 +66,8 @@ pub fn measure_prepared(
     let mut renderer = Renderer::new(placed.data.clone(), settings, &GraphSource::Shipped)?;
     prepare(&mut renderer)?;
     warm_up(&mut renderer, &placed.camera)?;
-    let mut run = |mode: TimingMode| -> Result<Vec<GpuTimings>, Box<dyn std::error::Error>> {
-        renderer.executor.timing = mode;
-        renderer.render_still(&placed.camera)?;
-        renderer.executor.take_gpu_timings()?;
-        for _ in 0..frames {
-            renderer.frame(&placed.camera)?;
-        }
-        renderer.executor.finish()?;
-        let timings = renderer.executor.take_gpu_timings()?;
-        if timings.is_empty() {
-            return Err(format!(
-                "{} has no GPU timestamps; nothing to measure",
-                renderer.adapter
-            )
-            .into());
-        }
-        Ok(timings)
-    };
-    let framed = run(TimingMode::Frame)?;
-    let profiled = run(TimingMode::Passes)?;
+    let framed = timed_frames(&mut renderer, &placed.camera, frames, TimingMode::Frame)?;
+    let profiled = timed_frames(&mut renderer, &placed.camera, frames, TimingMode::Passes)?;
     // The counters of a frame like the timed ones: with occlusion, the still's are
     // those of a first frame, which has no history to test against.
     let counts = renderer.render_still(&placed.camera)?.counts;
@@ -116,6 +98,32 @@ pub fn measure_prepared(
         stream: renderer.streaming.as_ref().map(|s| s.stats()),
         shadow_counts: renderer.shadow_counts.clone(),
     })
+}
+
+/// The GPU timings of `frames` back-to-back frames in timing `mode`, after one still
+/// frame (which lets the lists grow to what the view needs).
+fn timed_frames(
+    renderer: &mut Renderer,
+    camera: &meshlight::gpu_scene::Camera,
+    frames: u32,
+    mode: TimingMode,
+) -> Result<Vec<GpuTimings>, Box<dyn std::error::Error>> {
+    renderer.executor.timing = mode;
+    renderer.render_still(camera)?;
+    renderer.executor.take_gpu_timings()?;
+    for _ in 0..frames {
+        renderer.frame(camera)?;
+    }
+    renderer.executor.finish()?;
+    let timings = renderer.executor.take_gpu_timings()?;
+    if timings.is_empty() {
+        return Err(format!(
+            "{} has no GPU timestamps; nothing to measure",
+            renderer.adapter
+        )
+        .into());
+    }
+    Ok(timings)
 }
 
 fn rows_of(scenario: &str, case: &str, m: &Measured) -> Vec<Row> {
@@ -203,9 +211,9 @@ fn screen_sizes(quick: bool) -> (&'static [(u32, u32)], u32) {
     }
 }
 
-/// The default scene (a field of procedural meshes on the ground) at 1920×1080 and
-/// 3840×2160 (1080p alone with `quick`).
-pub fn default_scene(quick: bool) -> BenchResult {
+/// The default scene's field of procedural meshes and their count (64 small ones with
+/// `quick`).
+fn default_field(quick: bool) -> Result<(Placed, u32), Box<dyn std::error::Error>> {
     let (segments, instances) = if quick {
         (64, 64)
     } else {
@@ -216,6 +224,13 @@ pub fn default_scene(quick: bool) -> BenchResult {
     };
     let asset = scenes::load_asset(Path::new("procedural"), segments)?;
     let placed = scenes::field(SceneData::new(Default::default()), &asset, instances)?;
+    Ok((placed, instances))
+}
+
+/// The default scene (a field of procedural meshes on the ground) at 1920×1080 and
+/// 3840×2160 (1080p alone with `quick`).
+pub fn default_scene(quick: bool) -> BenchResult {
+    let (placed, instances) = default_field(quick)?;
     let (sizes, frames) = screen_sizes(quick);
     let mut rows = Vec::new();
     for &(width, height) in sizes {
@@ -1764,16 +1779,7 @@ const LOD_THRESHOLDS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 /// The default scene at 1920×1080 and the 15³ bunnies at 2240×1260 (with `quick`, thresholds 1
 /// and 4 of the small scenes).
 pub fn lod_quality(quick: bool, meshes: &[PathBuf]) -> BenchResult {
-    let (segments, instances) = if quick {
-        (64, 64)
-    } else {
-        (
-            meshlight::scene::DEFAULT_SEGMENTS,
-            scenes::DEFAULT_INSTANCES,
-        )
-    };
-    let asset = scenes::load_asset(Path::new("procedural"), segments)?;
-    let field = scenes::field(SceneData::new(Default::default()), &asset, instances)?;
+    let (field, instances) = default_field(quick)?;
     let (width, height) = if quick { (1280, 720) } else { (1920, 1080) };
     let field_case = case_label(
         &format!("{instances} procedural meshes"),
@@ -1824,23 +1830,10 @@ pub fn lod_quality(quick: bool, meshes: &[PathBuf]) -> BenchResult {
             // at threshold 0, where LOD 0 of a whole scene is slow to draw.
             let frames = if lod == 0.0 { frames.min(5) } else { frames };
             warm_up(&mut r, &placed.camera)?;
-            r.executor.timing = TimingMode::Frame;
-            r.executor.take_gpu_timings()?;
-            for _ in 0..frames {
-                r.frame(&placed.camera)?;
-            }
-            r.executor.finish()?;
-            let times: Vec<f64> = r
-                .executor
-                .take_gpu_timings()?
+            let times: Vec<f64> = timed_frames(&mut r, &placed.camera, frames, TimingMode::Frame)?
                 .iter()
                 .map(|t| t.total_us / 1e3)
                 .collect();
-            if times.is_empty() {
-                return Err(
-                    format!("{} has no GPU timestamps; nothing to measure", r.adapter).into(),
-                );
-            }
             // The counters of a frame like the timed ones (with history to test
             // occlusion against; the still's first frame after a rebuild has none).
             let counts = r.render_still(&placed.camera)?.counts;

@@ -177,10 +177,25 @@ pub fn welded_sphere(rings: u32, segments: u32) -> (Vec<[f32; 3]>, Vec<u32>) {
     positions.push([0.0, 0.0, -1.0]);
     let bottom = positions.len() as u32 - 1;
     let ring = |r: u32, s: u32| 1 + (r - 1) * segments + s % segments;
+    let indices = sphere_indices(rings, segments, [0, bottom], ring, |_, _| false);
+    (positions, indices)
+}
+
+/// The triangles of a sphere of `rings` × `segments` grid points: a fan at each pole
+/// (`poles`: north, south) and two triangles per quad of rings `r`, `r + 1`
+/// (`ring(r, s)` the point), split along the other diagonal where `other(r, s)`;
+/// counter-clockwise from outside.
+fn sphere_indices(
+    rings: u32,
+    segments: u32,
+    [north, south]: [u32; 2],
+    ring: impl Fn(u32, u32) -> u32,
+    other: impl Fn(u32, u32) -> bool,
+) -> Vec<u32> {
     let mut indices = Vec::new();
     for s in 0..segments {
-        indices.extend_from_slice(&[0, ring(1, s), ring(1, s + 1)]);
-        indices.extend_from_slice(&[bottom, ring(rings - 1, s + 1), ring(rings - 1, s)]);
+        indices.extend_from_slice(&[north, ring(1, s), ring(1, s + 1)]);
+        indices.extend_from_slice(&[south, ring(rings - 1, s + 1), ring(rings - 1, s)]);
         for r in 1..rings - 1 {
             let (a, b, c, d) = (
                 ring(r, s),
@@ -188,10 +203,14 @@ pub fn welded_sphere(rings: u32, segments: u32) -> (Vec<[f32; 3]>, Vec<u32>) {
                 ring(r + 1, s),
                 ring(r + 1, s + 1),
             );
-            indices.extend_from_slice(&[a, c, d, a, d, b]);
+            if other(r, s) {
+                indices.extend_from_slice(&[a, c, b, b, c, d]);
+            } else {
+                indices.extend_from_slice(&[a, c, d, a, d, b]);
+            }
         }
     }
-    (positions, indices)
+    indices
 }
 
 /// A closed sphere (welded: one pole vertex, no seam column) with fins like a scan's
@@ -338,24 +357,9 @@ pub fn scan_figure(rings: u32, segments: u32, flaws: ScanFlaws) -> (Vec<[f32; 3]
     }
     let south = at(-Vec3::Z, 1);
     let ring = |r: u32, s: u32| grid[((r - 1) * segments + s % segments) as usize];
-    let mut indices = Vec::new();
-    for s in 0..segments {
-        indices.extend_from_slice(&[north, ring(1, s), ring(1, s + 1)]);
-        indices.extend_from_slice(&[south, ring(rings - 1, s + 1), ring(rings - 1, s)]);
-        for r in 1..rings - 1 {
-            let (a, b, c, d) = (
-                ring(r, s),
-                ring(r, s + 1),
-                ring(r + 1, s),
-                ring(r + 1, s + 1),
-            );
-            if hash01(r * segments + s, 5) < 0.5 {
-                indices.extend_from_slice(&[a, c, d, a, d, b]);
-            } else {
-                indices.extend_from_slice(&[a, c, b, b, c, d]);
-            }
-        }
-    }
+    let indices = sphere_indices(rings, segments, [north, south], ring, |r, s| {
+        hash01(r * segments + s, 5) >= 0.5
+    });
     // Holes: a triangle and the five after it, at seeded places.
     let triangles = indices.len() / 3;
     let mut keep = vec![true; triangles];
