@@ -13,8 +13,10 @@
 //! fill → cull (first, last frame's pyramid) → remap → sw_raster → hw_raster
 //!      → depth_pyramid → fill_second → cull_second (the first's candidates, this
 //!      frame's pyramid) → remap_second → sw_raster_second → hw_raster_second
-//!      → z_slice → count → scan → populate → resolve → history_pyramid
+//!      → z_slice → count → scan → populate → resolve
 //! ```
+//!
+//! The one pyramid, built after the first pass, is also kept for the next frame.
 //!
 //! Both rasterisations accumulate into one visibility target and one slot list, so a
 //! visibility id means the same to resolve whichever pass drew it.
