@@ -254,11 +254,14 @@ pub struct HierarchyFill {
     pub part: meshlight_gpu_scene::ListPart,
 }
 
-/// Inner nodes with fewer meshlets below are left to `cull_lod`'s per-cluster test by
-/// default: a node test costs the walk a dependent texture read in its round, and on
-/// the scenes measured (the bunny lattice, the default scene; docs/BENCHMARKS.md has
-/// the sweep) testing smaller subtrees cost the walk more than it saved the cull.
-pub const OCCLUSION_MIN_CLUSTERS: u32 = 1024;
+/// Inner nodes with fewer meshlets below are left to `cull_lod`'s per-cluster test; by
+/// default that is every inner node, and only a walk's entries (an instance's root, a
+/// node handed to the second walk) are tested. A node test costs the walk a dependent
+/// texture read in its round, and on every scene measured (the default scene at 1080p
+/// and 4K, the bunny lattice, the million bunnies; docs/BENCHMARKS.md, "Occlusion tests
+/// in the walk") testing inner nodes, down to any size tried, cost the walk more than
+/// it saved the cull.
+pub const OCCLUSION_MIN_CLUSTERS: u32 = u32::MAX;
 
 impl Default for HierarchyFill {
     fn default() -> Self {

@@ -175,12 +175,9 @@ fn the_second_walk_matches_the_reference_on_random_views_and_walls() {
         let view = random_view(&data, &mut rng, v);
         let count = 1 + rng.below(4);
         let pyramid = walls(&mut rng, &data, &view, count);
-        // Every node tested on even views, the default's large ones on odd views.
-        let min = if v % 2 == 0 {
-            0
-        } else {
-            OCCLUSION_MIN_CLUSTERS
-        };
+        // Every node tested, nodes of 64 meshlets and more, or the default's (the
+        // walk's entries alone), in turn.
+        let min = [0, 64, OCCLUSION_MIN_CLUSTERS][v as usize % 3];
         let params = WalkParams {
             occlusion_min_clusters: min,
             ..WalkParams::default()
