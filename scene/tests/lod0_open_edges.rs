@@ -6,6 +6,7 @@
 mod common;
 
 use std::path::Path;
+use std::sync::OnceLock;
 
 use common::damage::{record_mut, reseal};
 use meshlight_scene::asset::format::{
@@ -35,26 +36,40 @@ fn lod0_problem(asset: &MeshletAsset) -> Option<String> {
         .find(|p| p.contains("LOD 0 is open"))
 }
 
-fn terrain() -> MeshletAsset {
-    let terrain = Terrain {
-        origin: glam::Vec2::new(-4.0, -4.0),
-        size: 8.0,
-        cells: 24,
-        amplitude: 1.0,
-        wavelength: 4.0,
-        octaves: 2,
-        seed: 3,
-        uv_scale: 0.5,
-        calm_centre: glam::Vec2::ZERO,
-        calm_radius: 0.0,
-    };
-    build_asset(
-        &terrain.mesh().unwrap(),
-        &BuildOptions::default(),
-        &mut |_| {},
-    )
-    .unwrap()
-    .asset
+/// A height field of 24 × 24 cells, baked once: open along its border.
+fn terrain() -> &'static MeshletAsset {
+    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
+    ASSET.get_or_init(|| {
+        let terrain = Terrain {
+            origin: glam::Vec2::new(-4.0, -4.0),
+            size: 8.0,
+            cells: 24,
+            amplitude: 1.0,
+            wavelength: 4.0,
+            octaves: 2,
+            seed: 3,
+            uv_scale: 0.5,
+            calm_centre: glam::Vec2::ZERO,
+            calm_radius: 0.0,
+        };
+        build_asset(
+            &terrain.mesh().unwrap(),
+            &BuildOptions::default(),
+            &mut |_| {},
+        )
+        .unwrap()
+        .asset
+    })
+}
+
+/// The closed procedural knot of 12 segments, baked once.
+fn knot() -> &'static MeshletAsset {
+    static ASSET: OnceLock<MeshletAsset> = OnceLock::new();
+    ASSET.get_or_init(|| {
+        build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {})
+            .unwrap()
+            .asset
+    })
 }
 
 /// The recorded chain is the decoded one: none for the closed procedural mesh, the rim
@@ -62,9 +77,7 @@ fn terrain() -> MeshletAsset {
 /// one verifies.
 #[test]
 fn the_bake_records_lod0s_open_edges() {
-    let knot = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {})
-        .unwrap()
-        .asset;
+    let knot = knot();
     assert!(knot.open_edges().is_empty());
     let teapot = load_mesh(&common::shared_mesh("teapot.obj")).unwrap();
     let teapot = build_asset(&teapot, &BuildOptions::default(), &mut |_| {})
@@ -74,7 +87,7 @@ fn the_bake_records_lod0s_open_edges() {
     // The height field's border: 24 cells a side, each cell edge one grid edge.
     assert_eq!(terrain.open_edges().len(), 4 * 24);
     assert!(!teapot.open_edges().is_empty());
-    for (name, asset) in [("knot", &knot), ("teapot", &teapot), ("terrain", &terrain)] {
+    for (name, asset) in [("knot", knot), ("teapot", &teapot), ("terrain", terrain)] {
         assert_eq!(decoded_lod0_chain(asset), asset.open_edges(), "{name}");
         assert_eq!(verify(asset), Vec::<String>::new(), "{name}");
     }
@@ -85,12 +98,10 @@ fn the_bake_records_lod0s_open_edges() {
 /// group, whose moved edges no other group uses), which is why LOD 0 is recorded.
 #[test]
 fn a_lod0_meshlet_moved_one_grid_step_is_refused() {
-    let knot = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {})
-        .unwrap()
-        .asset;
+    let knot = knot();
     let mut crack_check_missed = 0;
     for (name, asset) in [("knot", knot), ("terrain", terrain())] {
-        let words = words_of(&asset);
+        let words = words_of(asset);
         let lod0: Vec<usize> = (0..asset.meshlets().len())
             .filter(|&i| asset.meshlets()[i].level() == 0)
             .collect();
@@ -115,9 +126,7 @@ fn a_lod0_meshlet_moved_one_grid_step_is_refused() {
 /// leaves its neighbours, and the asset is refused.
 #[test]
 fn a_flipped_bit_in_a_border_vertex_is_refused() {
-    let asset = build_asset(&procedural_mesh(12), &BuildOptions::default(), &mut |_| {})
-        .unwrap()
-        .asset;
+    let asset = knot();
     let m = (0..asset.meshlets().len())
         .find(|&i| asset.meshlets()[i].level() == 0)
         .unwrap();
@@ -136,7 +145,7 @@ fn a_flipped_bit_in_a_border_vertex_is_refused() {
     let bit = v as u64 * record.vertex_stride() as u64 + bits[..axis].iter().sum::<u32>() as u64;
     let payload = asset.header().sections[SECTION_PAYLOAD].offset as u64;
     let word = (payload + record.data_offset as u64 + bit / 32) as usize;
-    let mut w = words_of(&asset);
+    let mut w = words_of(asset);
     w[word] ^= 1 << (bit % 32);
     let flipped = load(w);
     assert_ne!(flipped.decode_grid(m)[v], grid[v]);
@@ -148,7 +157,7 @@ fn a_flipped_bit_in_a_border_vertex_is_refused() {
 #[test]
 fn an_open_edge_record_that_does_not_match_lod0_is_refused() {
     let asset = terrain();
-    let words = words_of(&asset);
+    let words = words_of(asset);
     let h: AssetHeader = *asset.header();
     let section = h.sections[SECTION_OPEN_EDGES];
     let size = size_of::<OpenEdgeRecord>() / 4;
@@ -181,7 +190,7 @@ fn an_open_edge_record_that_does_not_match_lod0_is_refused() {
 /// different points on the grid, a use, ascending order.
 #[test]
 fn a_malformed_open_edge_record_is_refused_at_load() {
-    let words = words_of(&terrain());
+    let words = words_of(terrain());
     let quant_bits = terrain().header().quant_bits;
     let refused = |what: &str, field: &str, edit: &dyn Fn(&mut Vec<u32>)| {
         let mut w = words.clone();
