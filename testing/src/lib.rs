@@ -1,6 +1,7 @@
 //! Helpers every crate's tests share: the GPU they run on and a runner for one pass.
 //! A dev-dependency only; nothing in a library depends on it.
 
+pub mod copy_pyramid;
 pub mod features;
 pub mod frames;
 pub mod gltf_writer;

@@ -155,7 +155,7 @@ pub fn frame(source: &GraphSource, data: &SceneData, s: &FrameSettings) -> Resul
             }
         }
     }
-    add_readbacks(&mut graph)?;
+    add_readbacks(&mut graph, &pipeline)?;
     super::streaming::add_readbacks(&mut graph)?;
     let cascades = pipeline.views.get(super::shadows::CASCADES).copied();
     super::shadows::add_readbacks(&mut graph, cascades.unwrap_or(0))?;
@@ -211,6 +211,26 @@ pub fn apply(
     }
     super::streaming::apply(p, data)?;
     targets(p, s)
+}
+
+/// The resource holding the camera's list words (written, requested) and the list's
+/// number in it: the camera's first fill's `cluster_count` and `list` (by default
+/// `cluster_count`, list 0; the shadow stage's when the camera's walk serves the
+/// cascades, [`super::shadows::ShadowWalk::WithCamera`]).
+fn camera_list_words(p: &Pipeline) -> (String, u64) {
+    let fill = p.passes.iter().find(|e| {
+        e.stage == meshlight::fill_clusters::STAGE
+            && !super::shadows::is_shadow(e)
+            && e.param_str("mode") != Some("second")
+    });
+    let resource = fill
+        .and_then(|f| f.binding("cluster_count"))
+        .unwrap_or("cluster_count");
+    let list = fill
+        .and_then(|f| f.param("list"))
+        .and_then(toml::Value::as_integer)
+        .unwrap_or(0);
+    (resource.to_string(), list.max(0) as u64)
 }
 
 /// The implementation of `fill_clusters` that lists every cluster of every instance in
@@ -573,14 +593,16 @@ fn targets(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
     Ok(())
 }
 
-/// The counters come back [`COUNTS_LATENCY`] frames later; the graph needs resources
-/// named `cluster_count` and `raster_counts` (a pipeline file too). With a second culling
-/// pass (a resource named [`SECOND_COUNTS`]) both passes' words come back, twelve each.
-fn add_readbacks(g: &mut GraphBuilder) -> Result<()> {
+/// The counters come back [`COUNTS_LATENCY`] frames later; the graph needs a resource
+/// named `raster_counts`, and the camera's list words where its first fill writes them
+/// ([`camera_list_words`]; a pipeline file too). With a second culling pass (a resource
+/// named [`SECOND_COUNTS`]) both passes' words come back, twelve each.
+fn add_readbacks(g: &mut GraphBuilder, p: &Pipeline) -> Result<()> {
+    let (resource, list) = camera_list_words(p);
     g.readback_named(
         CLUSTER_COUNT_READBACK,
-        "cluster_count",
-        Some(0..8),
+        &resource,
+        Some(8 * list..8 * list + 8),
         COUNTS_LATENCY,
     )?;
     let two_pass = g.resource(SECOND_COUNTS).is_some();

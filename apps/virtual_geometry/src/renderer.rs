@@ -465,7 +465,7 @@ impl Renderer {
             let cache = self.settings.shadows.is_some_and(|s| s.cache);
             self.cascades_drawn = self
                 .shadow_cache
-                .skip_unchanged(shadows, changed, cache, &mut frame);
+                .skip_unchanged(shadows, changed, cache, &view, &mut frame);
         }
         let mut imports = self.scene.imports().merge(extra);
         if let Some(streaming) = &self.streaming {
@@ -722,8 +722,13 @@ impl Renderer {
             };
             let counts = CascadeCounts::from_words(k, cull.frame, &cull.bytes, &fill.bytes)
                 .ok_or_else(|| GraphError::Readback(format!("cascade {k}'s counters are short")))?;
-            // The lists lie side by side, one a cascade: each as long as the longest asks.
-            let cascades = u64::from(self.cascades);
+            // The lists lie side by side, one a cascade (and the camera's when it walks
+            // them): each as long as the longest asks.
+            let lists = self
+                .settings
+                .shadows
+                .map_or(self.cascades, |s| super::shadows::list_count(&s));
+            let cascades = u64::from(lists);
             for (param, wanted, limit, flag) in [
                 (
                     CANDIDATES_PARAM,

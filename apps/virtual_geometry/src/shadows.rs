@@ -27,6 +27,10 @@ pub const TEXELS_PARAM: &str = "shadow_texels";
 /// The frame input a walk over every cascade reads: their Views back to back (a
 /// cascade left out of the frame given a zeroed View, which the walk skips).
 pub const CASCADE_VIEWS_INPUT: &str = "cascade_views";
+/// The frame input of the camera's first walk when it walks the cascades too
+/// ([`ShadowWalk::WithCamera`]): the cascades' Views as in [`CASCADE_VIEWS_INPUT`], then
+/// the camera's.
+pub const WALK_VIEWS_INPUT: &str = "walk_views";
 /// Each cascade's culling counters (`cull_lod`'s `raster_counts`), read back.
 pub const RASTER_COUNTS: &str = "shadow_raster_counts_{view}";
 /// The cascades' candidate counts (`fill_clusters`' `cluster_count`, two words a
@@ -56,6 +60,84 @@ pub enum ShadowWalk {
     /// A walk per cascade: the file's walk over every cascade is split into one pass
     /// per cascade, each writing its own list (the same lists; for comparisons).
     PerView,
+    /// The camera's first walk serves the cascades too ([`walk_with_camera`]): one walk
+    /// for every view of the frame, occlusion tested for the camera alone. The same
+    /// lists (the tests compare them), one chain of dispatches fewer; measured against
+    /// [`ShadowWalk::AsWritten`] in `meshlight bench --scenario vg-shadows`. Its
+    /// `hierarchy_counts` then count the nodes tested for every view. It needs the
+    /// hierarchy walk and the camera's LOD threshold for the cascades (no `lod_bias`):
+    /// one walk compares every view with one threshold.
+    WithCamera,
+}
+
+/// The lists of the shadow stage's buffers: one per cascade, and the camera's after
+/// them when it walks the cascades ([`ShadowWalk::WithCamera`]).
+pub fn list_count(shadows: &ShadowSettings) -> u32 {
+    shadows.cascades.count + u32::from(shadows.walk == ShadowWalk::WithCamera)
+}
+
+/// Folds the walk over every cascade into the camera's first walk, which then serves
+/// `cascades + 1` views: the cascades' (lists `0 .. cascades` of the shadow stage's
+/// buffers, as before) and the camera's last (list `cascades`, occlusion tested for it
+/// alone; its first cull reads that list). The camera's walk keeps its place at the
+/// frame's start and its hidden nodes still go to the second walk; the shadow walk's
+/// pass goes, and so does what only it wrote (its counters).
+pub fn walk_with_camera(p: &mut Pipeline, registry: &Registry, cascades: u32) -> Result<()> {
+    use meshlight::fill_clusters::{STAGE as FILL, VIEW_INPUT};
+    let error = |p: &Pipeline, message: &str| GraphError::PipelineFile {
+        file: p.file().to_string(),
+        message: message.to_string(),
+    };
+    let Some(shadow_walk) = p
+        .passes
+        .iter()
+        .find(|e| is_shadow(e) && is_whole_set(&e.name) && e.stage == FILL)
+    else {
+        return Err(error(
+            p,
+            "the camera's walk serves the cascades in place of the shadow stage's walk over every cascade, which this pipeline lacks; write one `fill_clusters` pass over `cascades` as pipelines/virtual_geometry.toml does, or walk as written",
+        ));
+    };
+    let shadow_walk_name = shadow_walk.name.clone();
+    let lists_of = |slot: &'static str| shadow_walk.binding(slot).unwrap_or(slot).to_string();
+    let (clusters, counts) = (lists_of("clusters"), lists_of("cluster_count"));
+    let lists = cascades + 1;
+    let Some(camera) = p
+        .passes
+        .iter_mut()
+        .find(|e| !is_shadow(e) && e.stage == FILL && e.param_str("mode") != Some("second"))
+    else {
+        return Err(error(
+            p,
+            "the camera's walk serves the cascades, but the pipeline has no first `fill_clusters` pass for the camera; add one, or walk as written",
+        ));
+    };
+    let camera_list = camera.binding("clusters").unwrap_or("clusters").to_string();
+    for (key, value) in [
+        ("views", lists),
+        ("occlusion_view", cascades),
+        ("list", cascades),
+        ("lists", lists),
+    ] {
+        camera.set_param(key, i64::from(value));
+    }
+    camera.bind("clusters", &clusters);
+    camera.bind("cluster_count", &counts);
+    camera
+        .inputs
+        .insert(VIEW_INPUT.to_string(), WALK_VIEWS_INPUT.to_string());
+    for pass in p.passes_of_mut(meshlight::cull_lod::STAGE) {
+        if is_shadow(pass) {
+            pass.set_param("lists", i64::from(lists));
+        } else if pass.binding("clusters").unwrap_or("clusters") == camera_list {
+            pass.bind("clusters", &clusters);
+            pass.bind("cluster_count", &counts);
+            pass.set_param("list", i64::from(cascades));
+            pass.set_param("lists", i64::from(lists));
+        }
+    }
+    p.remove_passes(registry, |e| e.name == shadow_walk_name)?;
+    Ok(())
 }
 
 /// Splits the walk over every cascade into a walk per cascade (each view's own pass,
@@ -108,8 +190,22 @@ pub fn apply(p: &mut Pipeline, registry: &Registry, s: &FrameSettings) -> Result
     }
     let c = shadows.cascades;
     p.views.insert(CASCADES.to_string(), c.count);
-    if shadows.walk == ShadowWalk::PerView {
-        walk_per_view(p);
+    match shadows.walk {
+        ShadowWalk::AsWritten => {}
+        ShadowWalk::PerView => walk_per_view(p),
+        ShadowWalk::WithCamera => {
+            let flat = !s.hierarchy
+                || s.implementations.iter().any(|(stage, i)| {
+                    stage == meshlight::fill_clusters::STAGE && i == super::frame_graph::FLAT_FILL
+                });
+            if flat || shadows.lod_bias != 0.0 {
+                return Err(GraphError::Setting {
+                    setting: "shadows.walk".into(),
+                    message: "the camera's walk serves the cascades only with the hierarchy walk and no shadow LOD bias (one walk compares every view with one threshold); walk the cascades as written (`ShadowWalk::AsWritten`)".into(),
+                });
+            }
+            walk_with_camera(p, registry, c.count)?;
+        }
     }
     let side = u64::from(c.resolution);
     for (name, value) in [
@@ -133,7 +229,7 @@ pub fn size_lists(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
         p.param(super::frame_graph::CLUSTERS_PARAM),
         p.param(CANDIDATES_PARAM).is_some(),
     ) {
-        let lists = u64::from(shadows.cascades.count.max(1));
+        let lists = u64::from(list_count(&shadows).max(1));
         p.set_param(CANDIDATES_PARAM, clusters * lists)?;
     }
     Ok(())
@@ -403,12 +499,15 @@ impl ShadowCache {
     /// Leaves out of `data` the passes of every cascade whose layer already holds
     /// `frame`'s view of an unchanged scene (with `cache`), and notes the others as drawn.
     /// The walk over every cascade runs while one is drawn, given a zeroed View for each
-    /// cascade left out (so it lists nothing for it). Returns how many cascades are drawn.
+    /// cascade left out (so it lists nothing for it); so does the camera's walk when it
+    /// serves the cascades, given those Views and then `camera`'s
+    /// ([`WALK_VIEWS_INPUT`]). Returns how many cascades are drawn.
     pub fn skip_unchanged(
         &mut self,
         frame: &ShadowFrame,
         scene_changed: bool,
         cache: bool,
+        camera: &meshlight::shaders::cpu::layout::View,
         data: &mut FrameData,
     ) -> u32 {
         let mut drawn = 0;
@@ -439,6 +538,8 @@ impl ShadowCache {
             }
         }
         data.set(CASCADE_VIEWS_INPUT, bytemuck::cast_slice(&views));
+        views.push(*camera);
+        data.set(WALK_VIEWS_INPUT, bytemuck::cast_slice(&views));
         drawn
     }
 }

@@ -18,6 +18,7 @@ use meshlight_pass_cull_lod::{
 };
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
+use meshlight_testing::copy_pyramid::CopyPyramid;
 use meshlight_testing::{texture, write_pyramid};
 use std::collections::BTreeSet;
 
@@ -34,56 +35,6 @@ const T: Thresholds = Thresholds {
     sw_threshold_px: 32.0,
     hardware: true,
 };
-
-/// Copies every mip of `source` into `target` (the history's current half), so the next
-/// frame's first pass reads it as last frame's pyramid.
-struct CopyPyramid {
-    levels: u32,
-    size: [u32; 2],
-}
-
-impl Pass for CopyPyramid {
-    fn implementation(&self) -> Implementation {
-        let f = Some(meshlight_pass_cull_lod::PYRAMID_FORMAT);
-        Implementation::new(
-            "copy",
-            StageContract {
-                stage: "copy_pyramid",
-                slots: vec![
-                    Slot::texture("source", Access::CopySrc, f, ""),
-                    Slot::texture("target", Access::CopyDst, f, ""),
-                ],
-            },
-        )
-    }
-    fn setup(&self, _: &mut SetupContext) -> Result<()> {
-        Ok(())
-    }
-    fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
-        let (source, _) = ctx.texture("source")?;
-        let (target, _) = ctx.texture("target")?;
-        for level in 0..self.levels {
-            fn copy(texture: &wgpu::Texture, level: u32) -> wgpu::TexelCopyTextureInfo<'_> {
-                wgpu::TexelCopyTextureInfo {
-                    texture,
-                    mip_level: level,
-                    origin: wgpu::Origin3d::ZERO,
-                    aspect: wgpu::TextureAspect::All,
-                }
-            }
-            ctx.encoder().copy_texture_to_texture(
-                copy(&source, level),
-                copy(&target, level),
-                wgpu::Extent3d {
-                    width: (self.size[0] >> level).max(1),
-                    height: (self.size[1] >> level).max(1),
-                    depth_or_array_layers: 1,
-                },
-            );
-        }
-        Ok(())
-    }
-}
 
 /// The pyramid texture: level 0 rounded up to powers of two, so every mip wgpu makes
 /// (sizes rounded down) holds the level the rule makes (sizes rounded up).

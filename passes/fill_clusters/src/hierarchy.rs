@@ -26,7 +26,8 @@
 //! | `spread_groups`    | 0 ([`SPREAD_GROUPS`]) | workgroups of each step after the first |
 //! | `mode`             | `"first"` | `first`: the walk from every instance's root (with a pyramid, hidden nodes go to `occluded_nodes`); `second`: the walk from the first's hidden nodes against this frame's pyramid |
 //! | `occlusion_min_clusters` | [`OCCLUSION_MIN_CLUSTERS`] | with a pyramid, inner nodes with fewer meshlets below are not tested for occlusion (a walk's entries always are) |
-//! | `views`            | 1       | views one walk serves, at most [`MAX_VIEWS`] (no pyramid then): see "One walk for several views" |
+//! | `views`            | 1       | views one walk serves, at most [`MAX_VIEWS`]: see "One walk for several views" |
+//! | `occlusion_view`   | 0       | with several views and a pyramid, the view the pyramid is of (the others test no occlusion) |
 //! | `list`, `lists`    | 0, `views` | the buffers hold `lists` lists and view v's is `list + v` ([`meshlight_gpu_scene::ListPart`]) |
 //!
 //! `hierarchy_counts`: `[0]` nodes tested, `[1]` leaves accepted, `[2]` subtrees emitted
@@ -107,7 +108,13 @@
 //! what a walk of view v alone lists (the tests compare them, and the cut after), while
 //! a node several views want is loaded and transformed once, and the views share one
 //! chain of dispatches instead of one chain each. A view given an empty viewport (a
-//! zeroed View) is left out: its list stays empty. Such a walk tests no occlusion.
+//! zeroed View) is left out: its list stays empty.
+//!
+//! A first walk over several views may test occlusion for one of them,
+//! `occlusion_view` (the camera walked with the sun's cascades): a node that view's
+//! pyramid hides goes to `occluded_nodes` as in a walk of that view alone, and the walk
+//! goes on below it for the other views that accepted it. So the view's list and its
+//! hidden nodes are those of its own walk, and the second walk (one view) is unchanged.
 //!
 //! # Measured
 //!
@@ -206,9 +213,10 @@ shader_defs! {
     }
 }
 
-/// Views one walk serves at most (`MAX_VIEWS` in the shader): their mask takes the top
-/// four bits of a node id in the frontiers and lists.
-pub const MAX_VIEWS: u32 = 4;
+/// Views one walk serves at most (`MAX_VIEWS` in the shader): the camera and a sun's
+/// four cascades. Their mask takes the top five bits of a node id in the frontiers and
+/// lists.
+pub const MAX_VIEWS: u32 = 5;
 
 /// Words of `hierarchy_counts` with occlusion: `[4]` nodes the pyramid hid.
 pub const OCCLUSION_COUNT_WORDS: u64 = 5;
@@ -250,6 +258,8 @@ pub struct HierarchyFill {
     /// `part.list + v` of the buffers. A view whose viewport is empty (all zeros) is not
     /// walked, and its list is left empty.
     pub views: u32,
+    /// With several views and a pyramid (a first walk), the view the pyramid is of.
+    pub occlusion_view: u32,
     /// The lists of `clusters` and `cluster_count` it writes.
     pub part: meshlight_gpu_scene::ListPart,
 }
@@ -276,6 +286,7 @@ impl Default for HierarchyFill {
             phase: Phase::First,
             occlusion_min_clusters: OCCLUSION_MIN_CLUSTERS,
             views: 1,
+            occlusion_view: 0,
             part: meshlight_gpu_scene::ListPart::default(),
         }
     }
@@ -319,11 +330,17 @@ uniform_block! {
         /// View 0's list, and the lists the buffers hold ([`meshlight_gpu_scene::ListPart`]).
         list: u32,
         lists: u32,
+        /// MULTI_VIEW with OCCLUSION: the view the pyramid is of.
+        occlusion_view: u32,
+        pad_a: u32,
+        pad_b: u32,
+        pad_c: u32,
     }
 }
 
-const PARAM_KEYS: [&str; 12] = [
+const PARAM_KEYS: [&str; 13] = [
     "views",
+    "occlusion_view",
     "list",
     "lists",
     "mode",
@@ -353,12 +370,27 @@ impl HierarchyFill {
             occlusion_min_clusters: params.u32("occlusion_min_clusters", OCCLUSION_MIN_CLUSTERS)?,
             phase: Phase::from_params(params)?,
             views: params.u32("views", 1)?,
+            occlusion_view: params.u32("occlusion_view", 0)?,
             part: meshlight_gpu_scene::ListPart::default(),
         };
         if !(1..=MAX_VIEWS).contains(&pass.views) {
             return Err(GraphError::parameter(format!(
                 "`views` = {} must be 1 to {MAX_VIEWS}: the views one walk serves",
                 pass.views
+            )));
+        }
+        if pass.phase == Phase::Second && pass.views > 1 {
+            return Err(GraphError::parameter(format!(
+                "a `mode = \"second\"` walk serves one view (the hidden nodes of the first walk's `occlusion_view`), not {}: set `views = 1`",
+                pass.views
+            )));
+        }
+        if pass.occlusion_view >= pass.views {
+            return Err(GraphError::parameter(format!(
+                "`occlusion_view` = {} must name one of the {} view(s), 0 to {}: the view the pyramid is of",
+                pass.occlusion_view,
+                pass.views,
+                pass.views - 1
             )));
         }
         let pass = Self {
@@ -498,12 +530,6 @@ impl Pass for HierarchyFill {
         let occlusion = self.check_phase(ctx)?;
         let second = self.phase == Phase::Second;
         let multi_view = self.views > 1;
-        if multi_view && occlusion {
-            return Err(GraphError::parameter(format!(
-                "a walk over {} views tests no occlusion: unbind `{PYRAMID_SLOT}` (`pyramid = \"\"`), or walk each view on its own (`views = 1`)",
-                self.views
-            )));
-        }
         let defs = WalkDefs {
             occlusion,
             second,
@@ -631,6 +657,10 @@ impl Pass for HierarchyFill {
                 views: self.views,
                 list: self.part.list,
                 lists: self.part.lists,
+                occlusion_view: self.occlusion_view,
+                pad_a: 0,
+                pad_b: 0,
+                pad_c: 0,
             };
             let uniforms: [(&str, &[u8]); 2] = [
                 (uniform_name, bytemuck::cast_slice(&views)),
@@ -733,7 +763,9 @@ mod tests {
                 ("queu_capacity = 4", "queu_capacity"),
                 ("spread_steps = 5", "spread_steps"),
                 ("spread_groups = 70000", "spread_groups"),
-                ("views = 5", "views"),
+                ("views = 6", "views"),
+                ("views = 2, occlusion_view = 2", "occlusion_view"),
+                ("mode = \"second\", views = 2", "views"),
                 ("views = 0", "views"),
                 ("views = 3, lists = 2", "lists"),
                 ("views = 2, list = 3, lists = 4", "list"),

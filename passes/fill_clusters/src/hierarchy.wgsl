@@ -42,8 +42,10 @@
 // frontier and list entry; an accepted leaf's meshlets go to the list of each view that
 // accepted it (view v's is list `params.list + v` of the buffers). So each view's list
 // is the one a walk of that view alone writes (the tests compare them), while a node
-// wanted by several views is loaded, transformed and queued once. No occlusion: the
-// views it serves have no pyramid.
+// wanted by several views is loaded, transformed and queued once. With OCCLUSION too
+// (a first walk only), one view, `params.occlusion_view` (the camera beside the sun's
+// cascades), has the pyramid: a node it hides is handed to the second walk for that view
+// alone and the walk goes on below it for the others.
 
 #import meshlight::dispatch::linear_workgroup
 #import meshlight::meshlet::{Cluster, error_perceptible}
@@ -135,8 +137,8 @@ const WORKGROUP_SIZE: u32 = 64u;
 #ifdef MULTI_VIEW
 // Views one walk serves; their mask takes the top bits of a node id (a binding of
 // 64-byte nodes holds fewer than 2^26, so an id never reaches them).
-const MAX_VIEWS: u32 = 4u;
-const ID_BITS: u32 = 28u;
+const MAX_VIEWS: u32 = 5u;
+const ID_BITS: u32 = 27u;
 #else
 const MAX_VIEWS: u32 = 1u;
 #endif
@@ -388,7 +390,21 @@ fn node_views(node: HierarchyNode, w: Walker, mask: u32) -> u32 {
 // Whether the pyramid proves a node's bounding sphere (which encloses the culling
 // sphere of every meshlet below) hidden: cull_lod's cluster test on the node's sphere.
 fn node_occluded(node: HierarchyNode, w: Walker) -> bool {
-    return sphere_occluded(pyramid, instance_sphere_rect(w.instance, view, node.bounds));
+#ifdef MULTI_VIEW
+    let rect = instance_sphere_rect(w.instance, views[params.occlusion_view], node.bounds);
+#else
+    let rect = instance_sphere_rect(w.instance, view, node.bounds);
+#endif
+    return sphere_occluded(pyramid, rect);
+}
+
+// The mask bit of the view the pyramid belongs to.
+fn occlusion_bit() -> u32 {
+#ifdef MULTI_VIEW
+    return 1u << params.occlusion_view;
+#else
+    return 1u;
+#endif
 }
 
 #ifndef SECOND_PASS
@@ -406,24 +422,26 @@ fn defer_node(id: u32) -> bool {
 #endif
 #endif
 
-// Whether the walk goes on below a node `node_visible` accepted: with OCCLUSION, not
-// when the pyramid hides it (the first pass hands it to the second, the second drops it).
-fn node_seen(node: HierarchyNode, id: u32, w: Walker, entry: bool) -> bool {
+// The views of `views` (those `node_views` accepted) for which the walk goes on below
+// a node: with OCCLUSION, all but the pyramid's view when the pyramid hides the node
+// (the first pass hands it to the second for that view, the second drops it).
+fn node_seen(node: HierarchyNode, id: u32, w: Walker, entry: bool, views: u32) -> u32 {
 #ifdef OCCLUSION
+    let bit = occlusion_bit();
     let tested = entry || node.cluster_count >= params.occlusion_min_clusters;
-    if params.test_occlusion != 0u && tested && node_occluded(node, w) {
+    if (views & bit) != 0u && params.test_occlusion != 0u && tested && node_occluded(node, w) {
 #ifdef SECOND_PASS
         atomicAdd(&hidden_nodes, 1u);
-        return false;
+        return views & ~bit;
 #else
         if defer_node(id) {
             atomicAdd(&hidden_nodes, 1u);
-            return false;
+            return views & ~bit;
         }
 #endif
     }
 #endif
-    return true;
+    return views;
 }
 
 // A child of an accepted node, tested: the node, and the views of `mask` for which the
@@ -441,8 +459,8 @@ fn test_child(id: u32, w: Walker, mask: u32) -> TestedChild {
     }
     tested.node = hierarchy_nodes[id];
     let views = node_views(tested.node, w, mask);
-    if views != 0u && node_seen(tested.node, id, w, false) {
-        tested.views = views;
+    if views != 0u {
+        tested.views = node_seen(tested.node, id, w, false, views);
     }
     return tested;
 }
@@ -604,8 +622,11 @@ fn roots(
         let node = hierarchy_nodes[id];
         atomicAdd(&tested_nodes, 1u);
         atomicAdd(&entries_tested, 1u);
-        let seen = node_views(node, w, walked);
-        if seen == 0u || !node_seen(node, id, w, true) {
+        var seen = node_views(node, w, walked);
+        if seen != 0u {
+            seen = node_seen(node, id, w, true, seen);
+        }
+        if seen == 0u {
             continue;
         }
         atomicAdd(&entries_passed, 1u);
@@ -753,7 +774,10 @@ fn fill(
                     if id < arrayLength(&hierarchy_nodes) {
                         seen = node_views(hierarchy_nodes[id], w, entry_views(entry));
                     }
-                    if seen != 0u && node_seen(hierarchy_nodes[id], id, w, false) {
+                    if seen != 0u {
+                        seen = node_seen(hierarchy_nodes[id], id, w, false, seen);
+                    }
+                    if seen != 0u {
                         let node = hierarchy_nodes[id];
                         if node.child_count == 0u {
                             emit_range(node.first_cluster, node.cluster_count, seen);

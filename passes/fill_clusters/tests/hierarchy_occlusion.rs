@@ -20,7 +20,7 @@ use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
 use meshlight_testing::{texture, write_pyramid};
 use support::run::words;
-use support::scenes::field;
+use support::scenes::{field, walls};
 use support::*;
 
 const VIEWPORT: [u32; 2] = [320, 200];
@@ -51,30 +51,6 @@ fn random_view(data: &SceneData, rng: &mut Rng, v: u32) -> View {
         radius * 0.05,
     );
     camera.view(VIEWPORT, v, None)
-}
-
-/// Rectangles of depth, each nearer than a random instance, on an empty image.
-fn walls(rng: &mut Rng, data: &SceneData, view: &View, count: u32) -> DepthPyramid {
-    let [w, h] = VIEWPORT;
-    let mut depth = vec![0.0f32; (w * h) as usize];
-    let eye = Vec3::from(view.camera_position);
-    for _ in 0..count {
-        let instance = &data.instances[rng.below(data.instances.len() as u32) as usize];
-        let at = Vec3::from_slice(&instance.world_from_local[3][..3]);
-        let d = view.near / ((at - eye).length() * rng.range(0.3, 0.9));
-        let (x0, y0) = (rng.below(w / 2), rng.below(h / 2));
-        let (x1, y1) = (
-            (x0 + w / 4 + rng.below(w / 2)).min(w),
-            (y0 + h / 4 + rng.below(h / 2)).min(h),
-        );
-        for y in y0..y1 {
-            for x in x0..x1 {
-                let p = &mut depth[(y * w + x) as usize];
-                *p = p.max(d);
-            }
-        }
-    }
-    DepthPyramid::from_depth(w, h, &depth)
 }
 
 /// What the second walk left on the GPU.
@@ -174,7 +150,7 @@ fn the_second_walk_matches_the_reference_on_random_views_and_walls() {
     for v in 0..8 {
         let view = random_view(&data, &mut rng, v);
         let count = 1 + rng.below(4);
-        let pyramid = walls(&mut rng, &data, &view, count);
+        let pyramid = walls(&mut rng, &data, &view, VIEWPORT, count);
         // Every node tested, nodes of 64 meshlets and more, or the default's (the
         // walk's entries alone), in turn.
         let min = [0, 64, OCCLUSION_MIN_CLUSTERS][v as usize % 3];

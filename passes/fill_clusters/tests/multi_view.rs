@@ -4,7 +4,9 @@
 //! the same cut. Views are seeded perspective and orthographic ones and a sun's shadow
 //! cascades; a view given no viewport lists nothing; lists may start past the first of
 //! the buffers; and with a queue too short to hold the frontier (whole subtrees emitted)
-//! the lists may differ but every cut still holds.
+//! the lists may differ but every cut still holds. A first walk over a camera and a sun's
+//! cascades, occlusion tested for the camera alone against last frame's pyramid, lists
+//! for each view and hands on as hidden exactly what the walk of each view alone does.
 
 mod support;
 
@@ -14,11 +16,14 @@ use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::{Camera, GpuScene, ListPart, SceneData};
 use meshlight_graph::*;
 use meshlight_pass_cull_lod::{CullLod, Thresholds};
-use meshlight_pass_fill_clusters::HierarchyFill;
+use meshlight_pass_fill_clusters::{CAMERA_CUT_INPUT, HIDDEN_NODE, HierarchyFill};
 use meshlight_shaders::cpu::layout::{Cluster, View};
+use meshlight_shaders::cpu::occlusion::DepthPyramid;
+use meshlight_testing::copy_pyramid::CopyPyramid;
+use meshlight_testing::{texture, write_pyramid};
 use std::collections::BTreeSet;
 use support::run::{Cull, run_fill};
-use support::scenes::Views;
+use support::scenes::{Views, walls};
 use support::*;
 
 /// The bunny and spot on a 4 × 3 field, turned and scaled differently.
@@ -309,4 +314,201 @@ fn a_full_queue_emits_whole_subtrees_for_its_views_and_keeps_every_cut() {
         .map(|(_, v, _)| v)
         .collect();
     compare(&mut data, &views, 0, 4, Some(2), false);
+}
+
+/// What a first walk left: per view its list (as a set) and words, and the nodes the
+/// pyramid hid with their words (written, found).
+struct FirstWalk {
+    lists: Vec<(BTreeSet<(u32, u32)>, [u32; 2])>,
+    hidden: BTreeSet<(u32, u32)>,
+    hidden_words: [u32; 2],
+}
+
+/// A first walk over `views` (lists `0 .. views.len()` of as many), occlusion tested for
+/// view `o` of `occlusion` against its pyramid as last frame's (a history filled the
+/// frame before); `None`: no pyramid bound.
+fn first_walk(
+    data: &mut SceneData,
+    views: &[View],
+    occlusion: Option<(u32, &DepthPyramid)>,
+) -> FirstWalk {
+    const NODES: u64 = 1 << 12;
+    let gpu = gpu();
+    let scene = GpuScene::new(&gpu, data);
+    let lists = views.len() as u32;
+    let mut g = GraphBuilder::new();
+    scene.import(&mut g);
+    scene.import_hierarchy(&mut g);
+    g.create_buffer(
+        "clusters",
+        BufferDesc::array(elements::CLUSTER, u64::from(LIST * lists)),
+    );
+    g.create_buffer(
+        "cluster_count",
+        BufferDesc::array(Element::U32, 2 * u64::from(lists)),
+    );
+    let walk = HierarchyFill {
+        capacity: Some(LIST),
+        views: lists,
+        occlusion_view: occlusion.map_or(0, |(o, _)| o),
+        part: ListPart { list: 0, lists },
+        ..HierarchyFill::default()
+    };
+    let mut bindings = Bindings::new().input("view", "views");
+    let usage = wgpu::TextureUsages::TEXTURE_BINDING
+        | wgpu::TextureUsages::COPY_SRC
+        | wgpu::TextureUsages::COPY_DST;
+    let mut upload = None;
+    if let Some((_, pyramid)) = occlusion {
+        let (w, h, _) = pyramid.levels[0];
+        let levels = pyramid.levels.len() as u32;
+        let desc = TextureDesc::d2(
+            wgpu::TextureFormat::R32Float,
+            w.next_power_of_two(),
+            h.next_power_of_two(),
+        )
+        .with_mips(levels);
+        let history = g.history_texture("pyramid", desc.clone());
+        let source = g.import_texture("upload", desc.clone(), usage);
+        let nodes = g.create_buffer("hidden_nodes", BufferDesc::array(HIDDEN_NODE, NODES));
+        let count = g.create_buffer("hidden_count", BufferDesc::array(Element::U32, 2));
+        bindings = bindings
+            .bind("pyramid", history.prev)
+            .bind("occluded_nodes", nodes)
+            .bind("occluded_node_count", count);
+        let copy = CopyPyramid {
+            levels,
+            size: [desc.width, desc.height],
+        };
+        g.add_pass(
+            "copy_pyramid",
+            copy,
+            Bindings::new()
+                .bind("source", source)
+                .bind("target", history.current),
+        )
+        .unwrap();
+        upload = Some((texture(&gpu, "upload", &desc, usage), pyramid));
+    }
+    let out = g.add_pass("walk", walk, bindings).unwrap();
+    g.export(out.buffer("clusters").unwrap());
+    g.export(out.buffer("cluster_count").unwrap());
+    if occlusion.is_some() {
+        g.export(out.buffer("occluded_nodes").unwrap());
+        g.export(out.buffer("occluded_node_count").unwrap());
+    }
+    let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
+    let mut imports = scene.imports();
+    if let Some((texture, pyramid)) = &upload {
+        write_pyramid(&gpu.queue, texture, pyramid);
+        imports = imports.texture("upload", texture);
+    }
+    let frame = FrameData::new()
+        .with("views", bytemuck::cast_slice(views))
+        .with(CAMERA_CUT_INPUT, &0u32.to_le_bytes());
+    let mut exec = Executor::new(gpu);
+    // The first frame fills the history; the second walks against it.
+    for _ in 0..2 {
+        exec.execute_frame(&compiled, &imports, &frame).unwrap();
+    }
+    let words = |exec: &mut Executor, name: &str| -> Vec<u32> {
+        bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
+    };
+    let counts = words(&mut exec, "cluster_count");
+    let all: Vec<Cluster> = bytemuck::pod_collect_to_vec(&exec.read_buffer("clusters").unwrap());
+    let lists = (0..lists as usize)
+        .map(|k| {
+            let w = [counts[2 * k], counts[2 * k + 1]];
+            assert_eq!(w[0], w[1], "list {k} overflowed");
+            let listed = &all[k * LIST as usize..][..w[0] as usize];
+            let listed_set = set(listed);
+            assert_eq!(listed_set.len(), listed.len(), "list {k}: a cluster twice");
+            (listed_set, w)
+        })
+        .collect();
+    let (mut hidden, mut hidden_words) = (BTreeSet::new(), [0, 0]);
+    if occlusion.is_some() {
+        let w = words(&mut exec, "hidden_count");
+        hidden_words = [w[0], w[1]];
+        let nodes = words(&mut exec, "hidden_nodes");
+        hidden = nodes
+            .chunks_exact(3)
+            .take(w[0] as usize)
+            .map(|n| (n[0], n[1]))
+            .collect();
+        assert_eq!(hidden.len(), w[0] as usize, "a hidden node twice");
+    }
+    FirstWalk {
+        lists,
+        hidden,
+        hidden_words,
+    }
+}
+
+#[test]
+fn one_walk_for_the_camera_and_a_suns_cascades_tests_occlusion_for_the_camera_alone() {
+    let mut data = scene();
+    let radius = data.meshes[0].bounding_sphere[3];
+    let viewport = [640, 360];
+    let mut rng = Rng(0x0cc1_7a11);
+    let (mut hidden, mut behind) = (0, 0);
+    for round in 0..6 {
+        let eye = Vec3::new(rng.range(-3.0, -1.0), rng.range(0.8, 2.5), rng.range(-3.0, -1.0));
+        let target = Vec3::new(rng.range(4.0, 7.0), 0.0, rng.range(3.0, 5.0));
+        let camera = Camera::perspective(eye * radius, target * radius, 1.0, radius * 0.02);
+        let settings = CascadeSettings {
+            count: 4,
+            resolution: 512,
+            distance: 30.0 * radius,
+            caster_reach: 30.0 * radius,
+            ..CascadeSettings::default()
+        };
+        let sun = Vec3::new(0.4, 1.0, 0.3);
+        let suns = cascades(&camera, viewport, sun, &settings, 0).unwrap();
+        let camera_view = camera.view(viewport, 0, None);
+        let walls_count = 6 + rng.below(6);
+        let pyramid = walls(&mut rng, &data, &camera_view, viewport, walls_count);
+        // The camera last (as the shipped frame walks it), or first.
+        let mut views: Vec<View> = suns.iter().map(|c| c.view).collect();
+        let o = if round % 2 == 0 { views.len() } else { 0 };
+        views.insert(o, camera_view);
+        let together = first_walk(&mut data, &views, Some((o as u32, &pyramid)));
+        let alone = first_walk(&mut data, &[camera_view], Some((0, &pyramid)));
+        assert_eq!(
+            (&together.hidden, together.hidden_words),
+            (&alone.hidden, alone.hidden_words),
+            "round {round}: the camera's hidden nodes"
+        );
+        for (k, view) in views.iter().enumerate() {
+            let want = if k == o {
+                alone.lists[0].clone()
+            } else {
+                first_walk(&mut data, &[*view], None).lists[0].clone()
+            };
+            let got = &together.lists[k];
+            assert_eq!(got.1, want.1, "round {round}, view {k}: count words");
+            assert!(
+                got.0 == want.0,
+                "round {round}, view {k}: {} clusters alone, {} in one walk, {} differ",
+                want.0.len(),
+                got.0.len(),
+                got.0.symmetric_difference(&want.0).count()
+            );
+        }
+        // Instances the camera's pyramid hides whole are still listed for a cascade.
+        let hidden_instances: BTreeSet<u32> = together.hidden.iter().map(|h| h.0).collect();
+        behind += views
+            .iter()
+            .enumerate()
+            .filter(|&(k, _)| k != o)
+            .flat_map(|(k, _)| &together.lists[k].0)
+            .filter(|(instance, _)| hidden_instances.contains(instance))
+            .count();
+        hidden += together.hidden.len();
+    }
+    assert!(hidden > 0, "the walls hid no node on any view");
+    assert!(
+        behind > 0,
+        "no cascade listed a cluster of an instance the camera's pyramid hid"
+    );
 }

@@ -5,6 +5,7 @@ use glam::{Mat4, Quat, Vec3};
 use meshlight_gpu_scene::{Camera, Material, Projection, SceneData, data::Limits};
 use meshlight_scene::{BuildOptions, Mesh, MeshletAsset, build_asset};
 use meshlight_shaders::cpu::layout::View;
+use meshlight_shaders::cpu::occlusion::DepthPyramid;
 use meshlight_testing::Rng;
 
 /// `mesh` baked with the default options.
@@ -139,4 +140,35 @@ impl Views {
         let threshold = self.thresholds[rng.below(self.thresholds.len() as u32) as usize];
         (camera.view(viewport, v, None), threshold)
     }
+}
+
+/// Rectangles of depth, each nearer than a random instance, on an empty image of
+/// `viewport`: a pyramid that hides some of a field seen through `view`.
+pub fn walls(
+    rng: &mut Rng,
+    data: &SceneData,
+    view: &View,
+    viewport: [u32; 2],
+    count: u32,
+) -> DepthPyramid {
+    let [w, h] = viewport;
+    let mut depth = vec![0.0f32; (w * h) as usize];
+    let eye = Vec3::from(view.camera_position);
+    for _ in 0..count {
+        let instance = &data.instances[rng.below(data.instances.len() as u32) as usize];
+        let at = Vec3::from_slice(&instance.world_from_local[3][..3]);
+        let d = view.near / ((at - eye).length() * rng.range(0.3, 0.9));
+        let (x0, y0) = (rng.below(w / 2), rng.below(h / 2));
+        let (x1, y1) = (
+            (x0 + w / 4 + rng.below(w / 2)).min(w),
+            (y0 + h / 4 + rng.below(h / 2)).min(h),
+        );
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let p = &mut depth[(y * w + x) as usize];
+                *p = p.max(d);
+            }
+        }
+    }
+    DepthPyramid::from_depth(w, h, &depth)
 }
