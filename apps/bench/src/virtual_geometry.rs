@@ -258,7 +258,8 @@ pub fn default_scene(quick: bool) -> BenchResult {
 /// at 2560×1440, each without shadows and with four 2048² cascades to the default
 /// shadow distance: every cascade drawn every frame (as when the camera moves), and kept
 /// while nothing changes (a still camera: the frame then draws no cascade); drawn every
-/// frame also with a walk per cascade instead of one walk for all four; the default
+/// frame also with a walk per cascade instead of one walk for all four, and with the
+/// camera's walk serving the four too (drawn and kept: one walk for every view); the default
 /// scene also with a shadow LOD bias of 1. All in one run. Per case: the frame, the
 /// shadow passes' sum and share of the per-pass profile, the walks' sum, and each
 /// cascade's clusters and triangles. With `quick`, 64 small meshes and 4,096 bunnies.
@@ -267,6 +268,7 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     use meshlight_virtual_geometry::shadows::ShadowWalk;
     const ONE: ShadowWalk = ShadowWalk::AsWritten;
     const PER: ShadowWalk = ShadowWalk::PerView;
+    const WITH: ShadowWalk = ShadowWalk::WithCamera;
     let (segments, instances) = if quick {
         (64, 64)
     } else {
@@ -300,7 +302,9 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
             &[
                 (0.0, false, ONE),
                 (0.0, false, PER),
+                (0.0, false, WITH),
                 (0.0, true, ONE),
+                (0.0, true, WITH),
                 (1.0, false, ONE),
             ][..],
         ),
@@ -308,7 +312,13 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
             &million,
             format!("{copies} {} on the field", stem(&mesh)),
             (2560, 1440),
-            &[(0.0, false, ONE), (0.0, false, PER), (0.0, true, ONE)][..],
+            &[
+                (0.0, false, ONE),
+                (0.0, false, PER),
+                (0.0, false, WITH),
+                (0.0, true, ONE),
+                (0.0, true, WITH),
+            ][..],
         ),
     ];
     for (placed, scene, (width, height), variants) in cases {
@@ -340,6 +350,7 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                 match walk {
                     ShadowWalk::AsWritten => "one walk for all cascades",
                     ShadowWalk::PerView => "a walk per cascade",
+                    ShadowWalk::WithCamera => "one walk for the camera and every cascade",
                 }
             );
             rows.extend(rows_of("vg-shadows", &case, &m));
@@ -355,7 +366,23 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                 .filter(|(n, _)| n.starts_with("shadow_fill"))
                 .map(|(_, ms)| ms)
                 .sum();
+            // The camera's first walk and the shadow walks: what one walk for every view
+            // replaces (its shadow share then holds no walk).
+            let first_walks_ms: f64 = m
+                .passes
+                .iter()
+                .filter(|(n, _)| n == "fill" || n.starts_with("shadow_fill"))
+                .map(|(_, ms)| ms)
+                .sum();
             let device = m.device.as_str();
+            rows.push(row(
+                "vg-shadows",
+                case.clone(),
+                "GPU first walks (camera's and shadows'), sum (timing mode passes)",
+                first_walks_ms,
+                "ms",
+                device,
+            ));
             rows.push(row(
                 "vg-shadows",
                 case.clone(),

@@ -198,7 +198,6 @@ pub fn apply(
     material_variants(p, data);
     thresholds(p, s);
     super::shadows::size_lists(p, s)?;
-    super::shadows::bias_thresholds(p, s);
     if let Some(view) = s.view {
         p.set_stage_param(meshlight::resolve::STAGE, "view", view.name());
     }
@@ -214,9 +213,9 @@ pub fn apply(
 }
 
 /// The resource holding the camera's list words (written, requested) and the list's
-/// number in it: the camera's first fill's `cluster_count` and `list` (by default
-/// `cluster_count`, list 0; the shadow stage's when the camera's walk serves the
-/// cascades, [`super::shadows::ShadowWalk::WithCamera`]).
+/// number in it: the camera's first fill's `cluster_count`, and its `list` plus its
+/// `occlusion_view` (by default `cluster_count`, list 0; the shadow stage's buffers when
+/// the camera's walk serves the cascades, [`super::shadows::ShadowWalk::WithCamera`]).
 fn camera_list_words(p: &Pipeline) -> (String, u64) {
     let fill = p.passes.iter().find(|e| {
         e.stage == meshlight::fill_clusters::STAGE
@@ -226,11 +225,15 @@ fn camera_list_words(p: &Pipeline) -> (String, u64) {
     let resource = fill
         .and_then(|f| f.binding("cluster_count"))
         .unwrap_or("cluster_count");
-    let list = fill
-        .and_then(|f| f.param("list"))
-        .and_then(toml::Value::as_integer)
-        .unwrap_or(0);
-    (resource.to_string(), list.max(0) as u64)
+    // A walk over several views writes view v's list at `list + v`; the camera is the
+    // view with the pyramid.
+    let int = |key| {
+        fill.and_then(|f| f.param(key))
+            .and_then(toml::Value::as_integer)
+            .unwrap_or(0)
+            .max(0) as u64
+    };
+    (resource.to_string(), int("list") + int("occlusion_view"))
 }
 
 /// The implementation of `fill_clusters` that lists every cluster of every instance in

@@ -49,20 +49,22 @@ pub struct ShadowSettings {
     pub normal_bias: f32,
     /// The shadow views' LOD threshold is the camera's times `2^lod_bias` (in the
     /// shadow view's texels): 0 keeps a texel of error, 1 allows two (fewer triangles
-    /// drawn into the maps, coarser silhouettes in the shadow).
+    /// drawn into the maps, coarser silhouettes in the shadow). Applied to each
+    /// cascade's View (its LOD scale), so one walk serves the camera and the cascades.
     pub lod_bias: f32,
     /// Keep a cascade's map while its view and the scene stay as they were when it was
     /// drawn (nothing moved or streamed in, the camera still): the cascade's passes are
     /// left out of the frame. Off, every cascade is drawn every frame.
     pub cache: bool,
-    /// How the cascades' candidates are listed: as the pipeline file says (the shipped
-    /// files walk every cascade at once), or a walk per cascade.
+    /// How the cascades' candidates are listed: by the camera's walk (the default: one
+    /// walk for every view), as the pipeline file says, or a walk per cascade.
     pub walk: super::shadows::ShadowWalk,
 }
 
 impl Default for ShadowSettings {
     /// The default cascades ([`CascadeSettings::default`]: four 2048² to 100 units), one
-    /// texel of depth and normal bias, no LOD bias, maps kept while nothing changes.
+    /// texel of depth and normal bias, no LOD bias, maps kept while nothing changes, one
+    /// walk for every view.
     fn default() -> Self {
         Self {
             cascades: CascadeSettings::default(),
@@ -70,7 +72,7 @@ impl Default for ShadowSettings {
             normal_bias: 1.0,
             lod_bias: 0.0,
             cache: true,
-            walk: super::shadows::ShadowWalk::AsWritten,
+            walk: super::shadows::ShadowWalk::WithCamera,
         }
     }
 }

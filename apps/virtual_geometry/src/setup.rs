@@ -177,7 +177,7 @@ impl ShadowRequest {
             normal_bias: self.normal_bias,
             lod_bias: self.lod_bias,
             cache: true,
-            walk: crate::shadows::ShadowWalk::AsWritten,
+            walk: crate::shadows::ShadowWalk::default(),
         }
     }
 }

@@ -323,6 +323,103 @@ fn each_cascades_depth_map_is_the_references_cut_rasterised() {
     check_maps(&mut r, &camera(), &shadows, true, 1e-5);
 }
 
+/// The camera's first walk serving the cascades too (one walk for every view, the
+/// default) against the file's passes as written (the cascades' own walk): the same
+/// maps, and the camera's list (then in the shadow stage's buffers) the same, so the same
+/// image and counters; with a LOD bias (applied through the cascades' views) too, and
+/// with four cascades, the most one walk serves besides the camera.
+#[test]
+fn the_cameras_walk_serving_the_cascades_draws_the_same_maps_and_image() {
+    let shadows = shadow_settings();
+    assert_eq!(shadows.walk, ShadowWalk::WithCamera, "the default walk");
+    let mut drawn_in_two = Vec::new();
+    for (cascades, lod_bias) in [(2, 0.0), (2, 1.0), (4, 0.5)] {
+        let mut with_camera = ShadowSettings {
+            lod_bias,
+            ..shadows
+        };
+        with_camera.cascades.count = cascades;
+        let as_written = ShadowSettings {
+            walk: ShadowWalk::AsWritten,
+            ..with_camera
+        };
+        let mut r = renderer_with(Some(with_camera), DebugView::Shaded, true, Some(false));
+        let fills: Vec<_> = r
+            .pipeline
+            .passes
+            .iter()
+            .filter(|p| p.stage == meshlight::fill_clusters::STAGE)
+            .map(|p| {
+                (
+                    p.name.clone(),
+                    p.param("views").and_then(|v| v.as_integer()),
+                )
+            })
+            .collect();
+        assert_eq!(
+            fills,
+            [
+                ("fill".to_string(), Some(i64::from(cascades) + 1)),
+                ("fill_second".to_string(), None)
+            ],
+            "the camera's walk serves the cascades and itself; no other first walk"
+        );
+        let got = r.render_still(&camera()).unwrap_or_else(|e| panic!("{e}"));
+        let mut plain = renderer_with(Some(as_written), DebugView::Shaded, true, Some(false));
+        let want = plain.render_still(&camera()).unwrap();
+        let maps = |r: &mut Renderer| {
+            let buffer = r
+                .shadow_maps()
+                .expect("the renderer keeps the maps")
+                .clone();
+            r.executor
+                .gpu
+                .read_buffer(&buffer, 0, buffer.size())
+                .unwrap()
+        };
+        let case = format!("{cascades} cascades, LOD bias {lod_bias}");
+        assert!(maps(&mut r) == maps(&mut plain), "{case}: the maps differ");
+        let counts = |c: &meshlight_virtual_geometry::FrameCounts| {
+            (
+                c.clusters_requested,
+                c.clusters_considered,
+                c.visible,
+                c.software,
+            )
+        };
+        assert_eq!(
+            counts(&got.counts),
+            counts(&want.counts),
+            "{case}: the camera's counters"
+        );
+        assert!(
+            got.counts.clusters_considered > 0,
+            "{case}: the camera listed nothing"
+        );
+        assert!(got.rgba == want.rgba, "{case}: the image differs");
+        let drawn = |r: &Renderer| {
+            let mut c: Vec<_> = r
+                .shadow_counts
+                .iter()
+                .map(|c| (c.cascade, c.drawn))
+                .collect();
+            c.sort();
+            c
+        };
+        assert_eq!(drawn(&r), drawn(&plain), "{case}: the cascades' counters");
+        if cascades == 2 {
+            drawn_in_two.push(drawn(&r).iter().map(|c| c.1).sum::<u32>());
+        }
+        if cascades == 2 && lod_bias == 0.0 {
+            check_maps(&mut r, &camera(), &with_camera, true, 0.0);
+        }
+    }
+    assert!(
+        drawn_in_two[1] < drawn_in_two[0],
+        "a LOD bias of 1 drew no fewer clusters into the maps: {drawn_in_two:?}"
+    );
+}
+
 /// The renderer's maps against the reference's, cascade by cascade: every depth within
 /// `tolerance`, nothing drawn where the reference draws nothing.
 fn check_maps(

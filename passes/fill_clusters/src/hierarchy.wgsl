@@ -58,7 +58,7 @@
 // The uniform block, declared once for Rust and WGSL by `GpuParams` in hierarchy.rs.
 #import fill_clusters::hierarchy_params::Params
 #ifdef OCCLUSION
-#import meshlight::occlusion::{instance_sphere_rect, sphere_occluded}
+#import meshlight::occlusion::{instance_sphere_rect, instance_sphere_rect_in, sphere_occluded}
 #endif
 
 // 64 bytes: the asset's `NodeRecord`, with `first_child` and `first_cluster` rebased
@@ -391,7 +391,14 @@ fn node_views(node: HierarchyNode, w: Walker, mask: u32) -> u32 {
 // sphere of every meshlet below) hidden: cull_lod's cluster test on the node's sphere.
 fn node_occluded(node: HierarchyNode, w: Walker) -> bool {
 #ifdef MULTI_VIEW
-    let rect = instance_sphere_rect(w.instance, views[params.occlusion_view], node.bounds);
+    let o = params.occlusion_view;
+    let rect = instance_sphere_rect_in(
+        w.instance,
+        views[o].view_projection,
+        views[o].previous_view_projection,
+        views[o].viewport_size,
+        node.bounds,
+    );
 #else
     let rect = instance_sphere_rect(w.instance, view, node.bounds);
 #endif
@@ -467,10 +474,14 @@ fn test_child(id: u32, w: Walker, mask: u32) -> TestedChild {
 
 @compute @workgroup_size(1)
 fn prepare() {
-    for (var v = 0u; v < MAX_VIEWS; v += 1u) {
-        if v < max(params.views, 1u) {
-            atomicStore(&cluster_list::cluster_count[count_word(v, 0u)], 0u);
-            atomicStore(&cluster_list::cluster_count[count_word(v, 1u)], 0u);
+    // Every list of the walk's views (in a one-view dispatch of a walk over several,
+    // the others' too, so none keeps an old count).
+    let words = arrayLength(&cluster_list::cluster_count);
+    for (var l = 0u; l < params.cleared_lists; l += 1u) {
+        let w = 2u * (params.first_cleared + l);
+        if w + 1u < words {
+            atomicStore(&cluster_list::cluster_count[w], 0u);
+            atomicStore(&cluster_list::cluster_count[w + 1u], 0u);
         }
     }
     for (var i = 0u; i < min(ENTRY_WORDS, arrayLength(&hierarchy_counts)); i += 1u) {

@@ -326,10 +326,12 @@ struct FirstWalk {
 
 /// A first walk over `views` (lists `0 .. views.len()` of as many), occlusion tested for
 /// view `o` of `occlusion` against its pyramid as last frame's (a history filled the
-/// frame before); `None`: no pyramid bound.
+/// frame before, which walks `before`, or `views` when `None`); `None`: no pyramid
+/// bound.
 fn first_walk(
     data: &mut SceneData,
     views: &[View],
+    before: Option<&[View]>,
     occlusion: Option<(u32, &DepthPyramid)>,
 ) -> FirstWalk {
     const NODES: u64 = 1 << 12;
@@ -403,13 +405,16 @@ fn first_walk(
         write_pyramid(&gpu.queue, texture, pyramid);
         imports = imports.texture("upload", texture);
     }
-    let frame = FrameData::new()
-        .with("views", bytemuck::cast_slice(views))
-        .with(CAMERA_CUT_INPUT, &0u32.to_le_bytes());
+    let frame = |views: &[View]| {
+        FrameData::new()
+            .with("views", bytemuck::cast_slice(views))
+            .with(CAMERA_CUT_INPUT, &0u32.to_le_bytes())
+    };
     let mut exec = Executor::new(gpu);
     // The first frame fills the history; the second walks against it.
-    for _ in 0..2 {
-        exec.execute_frame(&compiled, &imports, &frame).unwrap();
+    for views in [before.unwrap_or(views), views] {
+        exec.execute_frame(&compiled, &imports, &frame(views))
+            .unwrap();
     }
     let words = |exec: &mut Executor, name: &str| -> Vec<u32> {
         bytemuck::pod_collect_to_vec(&exec.read_buffer(name).unwrap())
@@ -453,7 +458,11 @@ fn one_walk_for_the_camera_and_a_suns_cascades_tests_occlusion_for_the_camera_al
     let mut rng = Rng(0x0cc1_7a11);
     let (mut hidden, mut behind) = (0, 0);
     for round in 0..6 {
-        let eye = Vec3::new(rng.range(-3.0, -1.0), rng.range(0.8, 2.5), rng.range(-3.0, -1.0));
+        let eye = Vec3::new(
+            rng.range(-3.0, -1.0),
+            rng.range(0.8, 2.5),
+            rng.range(-3.0, -1.0),
+        );
         let target = Vec3::new(rng.range(4.0, 7.0), 0.0, rng.range(3.0, 5.0));
         let camera = Camera::perspective(eye * radius, target * radius, 1.0, radius * 0.02);
         let settings = CascadeSettings {
@@ -472,8 +481,8 @@ fn one_walk_for_the_camera_and_a_suns_cascades_tests_occlusion_for_the_camera_al
         let mut views: Vec<View> = suns.iter().map(|c| c.view).collect();
         let o = if round % 2 == 0 { views.len() } else { 0 };
         views.insert(o, camera_view);
-        let together = first_walk(&mut data, &views, Some((o as u32, &pyramid)));
-        let alone = first_walk(&mut data, &[camera_view], Some((0, &pyramid)));
+        let together = first_walk(&mut data, &views, None, Some((o as u32, &pyramid)));
+        let alone = first_walk(&mut data, &[camera_view], None, Some((0, &pyramid)));
         assert_eq!(
             (&together.hidden, together.hidden_words),
             (&alone.hidden, alone.hidden_words),
@@ -483,7 +492,7 @@ fn one_walk_for_the_camera_and_a_suns_cascades_tests_occlusion_for_the_camera_al
             let want = if k == o {
                 alone.lists[0].clone()
             } else {
-                first_walk(&mut data, &[*view], None).lists[0].clone()
+                first_walk(&mut data, &[*view], None, None).lists[0].clone()
             };
             let got = &together.lists[k];
             assert_eq!(got.1, want.1, "round {round}, view {k}: count words");
@@ -511,4 +520,61 @@ fn one_walk_for_the_camera_and_a_suns_cascades_tests_occlusion_for_the_camera_al
         behind > 0,
         "no cascade listed a cluster of an instance the camera's pyramid hid"
     );
+}
+
+/// A walk over several views given one viewport this frame (the camera while every
+/// cascade keeps its map; one cascade drawn) runs as that view's own walk: the same list
+/// and hidden nodes, and every other list's words zeroed though the frame before wrote
+/// them.
+#[test]
+fn a_walk_given_one_view_lists_and_hides_what_that_views_own_walk_does() {
+    let mut data = scene();
+    let radius = data.meshes[0].bounding_sphere[3];
+    let viewport = [640, 360];
+    let mut rng = Rng(0x0e1e_0001);
+    let camera = Camera::perspective(
+        Vec3::new(-2.0, 1.5, -2.0) * radius,
+        Vec3::new(5.0, 0.0, 4.0) * radius,
+        1.0,
+        radius * 0.02,
+    );
+    let settings = CascadeSettings {
+        count: 2,
+        resolution: 512,
+        distance: 30.0 * radius,
+        caster_reach: 30.0 * radius,
+        ..CascadeSettings::default()
+    };
+    let suns = cascades(&camera, viewport, Vec3::new(0.4, 1.0, 0.3), &settings, 0).unwrap();
+    let camera_view = camera.view(viewport, 0, None);
+    let pyramid = walls(&mut rng, &data, &camera_view, viewport, 8);
+    let all = [suns[0].view, suns[1].view, camera_view];
+    let zeroed = View {
+        viewport_size: [0.0; 2],
+        ..View::default()
+    };
+    // The camera alone, occlusion tested for it.
+    let lone = [zeroed, zeroed, camera_view];
+    let got = first_walk(&mut data, &lone, Some(&all), Some((2, &pyramid)));
+    let want = first_walk(&mut data, &[camera_view], None, Some((0, &pyramid)));
+    assert_eq!(got.lists[2], want.lists[0], "the camera's list and words");
+    assert_eq!(
+        (&got.hidden, got.hidden_words),
+        (&want.hidden, want.hidden_words),
+        "the camera's hidden nodes"
+    );
+    assert!(!want.hidden.is_empty(), "the walls hid nothing");
+    // One cascade alone, no pyramid.
+    let lone = [zeroed, suns[1].view, zeroed];
+    let got = first_walk(&mut data, &lone, Some(&all), None);
+    let want = first_walk(&mut data, &[suns[1].view], None, None);
+    assert_eq!(got.lists[1], want.lists[0], "the cascade's list and words");
+    for k in [0, 2] {
+        assert_eq!(
+            got.lists[k].1,
+            [0, 0],
+            "list {k}'s words kept the frame before's"
+        );
+    }
+    assert!(!want.lists[0].0.is_empty(), "the cascade listed nothing");
 }
