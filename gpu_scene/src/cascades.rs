@@ -12,6 +12,14 @@
 //! - **Whole texels.** The sphere's centre is snapped, in the light's frame, to whole
 //!   texels, so when the camera moves the map slides by whole texels and a still edge
 //!   falls on the same texels (no shimmer).
+//! - **Held while the camera moves.** With [`CascadeSettings::hold`] > 0 a cascade's box
+//!   is the sphere grown by that fraction of its radius, and its centre is snapped, in
+//!   all three axes of the light's frame, to a grid of steps of twice that (in whole
+//!   texels): the box keeps its place, and so its view, while the camera moves within a
+//!   grid cell, yet always holds the slice's sphere. A renderer that keeps a map while
+//!   its view is unchanged then draws a cascade again only when the camera leaves its
+//!   cell, at the cost of texels `1 + hold` times larger and casters culled to the box
+//!   rather than to the camera's slice (those planes move with the camera).
 //! - **Casters outside the slice.** The depth range covers the sphere and reaches
 //!   [`CascadeSettings::caster_reach`] further towards the light: a mountain behind the
 //!   camera still shades the ground in front of it.
@@ -29,6 +37,10 @@ use crate::view::{Camera, CameraError};
 /// The most cascades a light has.
 pub const MAX_CASCADES: u32 = 4;
 
+/// [`CascadeSettings::hold`] by default: texels an eighth larger, for a map drawn again
+/// only after the camera has moved a quarter of its cascade's radius.
+pub const DEFAULT_HOLD: f32 = 0.125;
+
 /// How a directional light's shadow is split into cascades.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CascadeSettings {
@@ -42,11 +54,17 @@ pub struct CascadeSettings {
     pub split_lambda: f32,
     /// How far beyond a cascade's sphere, towards the light, casters are kept.
     pub caster_reach: f32,
+    /// How far a cascade's box reaches past its slice's sphere, as a fraction of the
+    /// sphere's radius, 0 to 1: its view then stays the same while the camera moves
+    /// within a grid cell of twice that, so a kept map is not drawn again. 0 fits the
+    /// box to the sphere (the sharpest map), and every camera move changes the view.
+    pub hold: f32,
 }
 
 impl Default for CascadeSettings {
     /// Four 2048² cascades to 100 units, split 0.8 of the way to logarithmic, casters
-    /// kept 100 units towards the light.
+    /// kept 100 units towards the light, boxes an eighth of a radius larger than their
+    /// slices (held while the camera moves a quarter of a radius).
     fn default() -> Self {
         Self {
             count: 4,
@@ -54,6 +72,7 @@ impl Default for CascadeSettings {
             distance: 100.0,
             split_lambda: 0.8,
             caster_reach: 100.0,
+            hold: DEFAULT_HOLD,
         }
     }
 }
@@ -144,6 +163,14 @@ impl CascadeSettings {
                 "give a finite distance, 0 or more",
             );
         }
+        if !(0.0..=1.0).contains(&self.hold) {
+            return out(
+                "hold",
+                self.hold.to_string(),
+                "0..=1",
+                "give a fraction of a cascade's radius: 0 fits the box to its slice, 1 doubles it",
+            );
+        }
         Ok(())
     }
 
@@ -220,40 +247,54 @@ pub fn cascades(
         .map(|pair| {
             let (slice_near, slice_far) = (pair[0], pair[1]);
             let (centre, radius) = slice_sphere(&view_from_clip, slice_near, slice_far);
-            let texel_size = 2.0 * radius / res as f32;
+            // The box's half side: the sphere's radius, grown by `hold`.
+            let half = radius * (1.0 + settings.hold);
+            let texel_size = 2.0 * half / res as f32;
             let in_light =
                 light_from_world.transform_point3(world_from_view.transform_point3(centre));
-            let snapped = Vec3::new(
-                (in_light.x / texel_size).floor() * texel_size,
-                (in_light.y / texel_size).floor() * texel_size,
-                in_light.z,
-            );
-            // The eye: on the light's side of the sphere, just past the casters' reach
+            let snapped = if settings.hold > 0.0 {
+                // Whole steps of the grid (whole texels, at most `hold × radius` from
+                // the sphere's centre along each axis, so the box holds the sphere).
+                let texels = (2.0 * settings.hold * radius / texel_size).floor().max(1.0);
+                let step = texels * texel_size;
+                (in_light / step).round() * step
+            } else {
+                Vec3::new(
+                    (in_light.x / texel_size).floor() * texel_size,
+                    (in_light.y / texel_size).floor() * texel_size,
+                    in_light.z,
+                )
+            };
+            // The eye: on the light's side of the box, just past the casters' reach
             // (the near plane, a hundredth of the way in, keeps the projection
             // invertible).
-            let margin = 0.01 * (radius + settings.caster_reach);
-            let back = radius + settings.caster_reach + margin;
+            let margin = 0.01 * (half + settings.caster_reach);
+            let back = half + settings.caster_reach + margin;
             let eye = world_from_light.transform_point3(snapped + Vec3::Z * back);
             let view = glam::camera::rh::view::look_to_mat4(eye, -light, up);
-            // Reverse-Z: the near plane at depth 1, the sphere's far side at 0.
+            // Reverse-Z: the near plane at depth 1, the box's far side at 0.
             let projection = glam::camera::rh::proj::directx::orthographic(
-                -radius,
-                radius,
-                -radius,
-                radius,
-                back + radius,
+                -half,
+                half,
+                -half,
+                half,
+                back + half,
                 margin,
             );
             let light_camera = Camera::from_matrices(view, projection)?;
             let mut view = light_camera.view([res, res], frame_index, None);
-            view.frustum = caster_planes(
-                camera,
-                viewport,
-                light,
-                (slice_near, slice_far),
-                3.0 * texel_size,
-                &view.frustum,
-            );
+            // Held, the casters are culled to the box alone: the slice's planes move
+            // with the camera.
+            if settings.hold == 0.0 {
+                view.frustum = caster_planes(
+                    camera,
+                    viewport,
+                    light,
+                    (slice_near, slice_far),
+                    3.0 * texel_size,
+                    &view.frustum,
+                );
+            }
             Ok(Cascade {
                 near: slice_near,
                 far: slice_far,
@@ -408,10 +449,27 @@ mod tests {
 
     #[test]
     fn each_cascade_covers_its_slice_of_the_camera_frustum() {
-        let settings = CascadeSettings::default();
-        let cam = camera(Vec3::new(3.0, 5.0, 9.0), Vec3::new(-4.0, 0.0, -30.0));
+        for hold in [0.0, DEFAULT_HOLD, 1.0] {
+            let settings = CascadeSettings {
+                hold,
+                ..CascadeSettings::default()
+            };
+            for (eye, target) in [
+                (Vec3::new(3.0, 5.0, 9.0), Vec3::new(-4.0, 0.0, -30.0)),
+                (Vec3::new(-13.7, 2.2, 41.3), Vec3::new(20.0, -3.0, 0.5)),
+                (Vec3::new(0.3, 0.7, -0.2), Vec3::new(0.0, 0.5, -1.0)),
+            ] {
+                covers_its_slice(&settings, &camera(eye, target));
+            }
+        }
+    }
+
+    /// Every cascade of `cam`: texels no larger than its slice's (grown by the hold)
+    /// need, every corner and the middle of its slice inside its box.
+    fn covers_its_slice(settings: &CascadeSettings, cam: &Camera) {
+        let settings = *settings;
         let viewport = [1920, 1080];
-        let cascades = cascades(&cam, viewport, Vec3::new(-0.5, 0.8, 0.35), &settings, 0).unwrap();
+        let cascades = cascades(cam, viewport, Vec3::new(-0.5, 0.8, 0.35), &settings, 0).unwrap();
         assert_eq!(cascades.len(), 4);
         let world_from_view = cam.view_matrix().inverse();
         let view_from_clip = cam.projection_matrix(viewport).inverse();
@@ -433,7 +491,9 @@ mod tests {
                 .map(|p| (*p - centroid).length())
                 .fold(0.0, f32::max);
             assert!(
-                c.texel_size <= 2.0 * loose / settings.resolution as f32 * (1.0 + 1e-5),
+                c.texel_size
+                    <= 2.0 * loose * (1.0 + settings.hold) / settings.resolution as f32
+                        * (1.0 + 1e-5),
                 "cascade {}..{}: a texel of {} for a slice of radius {loose}",
                 c.near,
                 c.far,
@@ -503,6 +563,53 @@ mod tests {
         }
     }
 
+    /// Along a camera path of small steps, moving and turning: a held cascade's view
+    /// changes only now and then (when the camera leaves its grid cell), a fitted one's
+    /// at almost every step, and every box still holds its slice.
+    #[test]
+    fn held_cascades_keep_their_views_while_the_camera_moves_within_a_cell() {
+        let light = Vec3::new(-0.5, 0.8, 0.35);
+        let changes = |hold: f32| {
+            let settings = CascadeSettings {
+                hold,
+                ..CascadeSettings::default()
+            };
+            let mut changed = [0u32; 4];
+            let mut last: Option<Vec<Cascade>> = None;
+            for i in 0..200 {
+                let t = i as f32;
+                let eye = Vec3::new(0.05 * t, 2.0, 5.0 - 0.08 * t);
+                let turn = 0.002 * t;
+                let cam = camera(eye, eye + Vec3::new(turn.sin(), -0.1, -turn.cos()));
+                let list = cascades(&cam, [1280, 720], light, &settings, i).unwrap();
+                if i % 20 == 0 {
+                    covers_its_slice(&settings, &cam);
+                }
+                if let Some(before) = &last {
+                    for (k, (a, b)) in before.iter().zip(&list).enumerate() {
+                        let (mut a, mut b) = (a.view, b.view);
+                        a.frame_index = 0;
+                        b.frame_index = 0;
+                        changed[k] += u32::from(bytemuck::bytes_of(&a) != bytemuck::bytes_of(&b));
+                    }
+                }
+                last = Some(list);
+            }
+            changed
+        };
+        let fitted = changes(0.0);
+        let held = changes(DEFAULT_HOLD);
+        assert!(
+            fitted.iter().all(|&n| n >= 190),
+            "fitted: {fitted:?} of 199 steps"
+        );
+        assert!(held.iter().all(|&n| n <= 40), "held: {held:?} of 199 steps");
+        assert!(
+            held[3] <= held[0],
+            "the far cascade changed more often: {held:?}"
+        );
+    }
+
     #[test]
     fn bad_settings_name_what_to_change() {
         let cam = camera(Vec3::new(0.0, 2.0, 5.0), Vec3::ZERO);
@@ -535,6 +642,9 @@ mod tests {
             })
             .contains("split_lambda")
         );
+        for hold in [-0.1, 1.5, f32::NAN] {
+            assert!(bad(CascadeSettings { hold, ..d }).contains("hold"));
+        }
         let e = cascades(&cam, [64, 64], Vec3::ZERO, &d, 0)
             .unwrap_err()
             .to_string();
@@ -566,10 +676,12 @@ mod tests {
                 .iter()
                 .all(|q| Vec3::new(q[0], q[1], q[2]).dot(p) + q[3] >= -slack)
         };
+        // Boxes fitted to their slices: held ones are culled to the box alone.
         let settings = CascadeSettings {
             count: 3,
             resolution: 512,
             distance: 60.0,
+            hold: 0.0,
             ..CascadeSettings::default()
         };
         let mut cut = 0;

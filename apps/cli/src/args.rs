@@ -99,6 +99,12 @@ pub struct ShadowArgs {
     /// cascade covers the same ratio of distances), between: a blend.
     #[arg(long, value_name = "LAMBDA", default_value_t = 0.8)]
     pub shadow_split: f32,
+    /// How much larger than its slice of the view a cascade's map reaches, as a fraction
+    /// of the slice's radius, 0 to 1: the map is kept while the camera moves within
+    /// twice that, at the cost of texels that much larger; 0 fits each map to its slice
+    /// and draws every cascade again whenever the camera moves.
+    #[arg(long, value_name = "FRACTION", default_value_t = meshlight::gpu_scene::cascades::DEFAULT_HOLD)]
+    pub shadow_hold: f32,
     /// How far a receiver moves towards the sun before it is compared, in texels of its
     /// cascade (against acne on surfaces facing the sun).
     #[arg(long, value_name = "TEXELS", default_value_t = 1.0)]
@@ -161,6 +167,7 @@ impl ShadowArgs {
             resolution: self.shadow_resolution,
             distance: self.shadow_distance,
             split_lambda: self.shadow_split,
+            hold: self.shadow_hold,
             depth_bias: self.shadow_depth_bias,
             normal_bias: self.shadow_normal_bias,
             lod_bias: self.shadow_lod_bias,

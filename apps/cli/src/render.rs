@@ -194,8 +194,8 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
         let c = s.cascades;
         let _ = writeln!(
             report,
-            "  sun shadow: {} cascades of {}², to {:.1} units (split λ {}), casters {:.1} units towards the sun",
-            c.count, c.resolution, c.distance, c.split_lambda, c.caster_reach
+            "  sun shadow: {} cascades of {}², to {:.1} units (split λ {}), casters {:.1} units towards the sun, held {}",
+            c.count, c.resolution, c.distance, c.split_lambda, c.caster_reach, c.hold
         );
     }
     for c in &renderer.shadow_counts {

@@ -84,6 +84,9 @@ pub struct ShadowRequest {
     pub distance: Option<f32>,
     /// The split between uniform (0) and logarithmic (1).
     pub split_lambda: f32,
+    /// How much larger than its slice a cascade's box is, so it is kept while the camera
+    /// moves ([`meshlight::gpu_scene::cascades::CascadeSettings::hold`]).
+    pub hold: f32,
     /// See [`ShadowSettings::depth_bias`].
     pub depth_bias: f32,
     /// See [`ShadowSettings::normal_bias`].
@@ -102,6 +105,7 @@ impl Default for ShadowRequest {
             resolution: None,
             distance: None,
             split_lambda: s.cascades.split_lambda,
+            hold: s.cascades.hold,
             depth_bias: s.depth_bias,
             normal_bias: s.normal_bias,
             lod_bias: s.lod_bias,
@@ -172,6 +176,7 @@ impl ShadowRequest {
                 distance: self.distance.unwrap_or(distance),
                 split_lambda: self.split_lambda,
                 caster_reach: reach,
+                hold: self.hold,
             },
             depth_bias: self.depth_bias,
             normal_bias: self.normal_bias,

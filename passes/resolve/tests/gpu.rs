@@ -1156,6 +1156,8 @@ fn the_sun_is_shadowed_through_two_cascades_like_the_reference() {
         distance: 6.0,
         split_lambda: 0.0,
         caster_reach: 4.0,
+        // Fitted to the slices.
+        hold: 0.0,
     };
     let list = cascades(
         &camera,
