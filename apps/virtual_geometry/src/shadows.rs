@@ -57,11 +57,12 @@ fn is_whole_set(name: &str) -> bool {
 pub enum ShadowWalk {
     /// One walk for every view: the camera's first walk serves the cascades too
     /// ([`walk_with_camera`]), occlusion tested for the camera alone. One chain of
-    /// dispatches fewer than [`ShadowWalk::AsWritten`], and as fast or faster on every
-    /// bench scene (NVIDIA H200, `meshlight bench --scenario vg-shadows`; with the
-    /// cascades drawn, 0.02 ms on the default scene and 0.09 ms on the million bunnies;
-    /// with them kept, equal and 0.04 ms). The camera's `hierarchy_counts` then count
-    /// the nodes tested for every view. Where there is no such walk to fold (the flat
+    /// dispatches fewer than [`ShadowWalk::AsWritten`]; on an NVIDIA H200 (`meshlight
+    /// bench --scenario vg-shadows`, docs/BENCHMARKS.md) the fastest wherever cascades
+    /// are drawn (0.003 to 0.02 ms on the default scene, 0.07 to 0.09 ms on the million
+    /// bunnies), and on a still frame, where it serves the camera alone, 0.008 ms slower
+    /// on the default scene and 0.045 ms faster on the bunnies. The camera's
+    /// `hierarchy_counts` then count the nodes tested for every view. Where there is no such walk to fold (the flat
     /// fill lists each view on its own; a file that walks its cascades per view, or
     /// has no first walk for the camera) the file's passes run as written.
     #[default]
