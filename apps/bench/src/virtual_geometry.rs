@@ -353,6 +353,11 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                 ),
                 ("GPU frame, worst (timing mode frame)", m.worst_ms, "ms"),
                 ("cascades drawn a frame, mean", m.cascades_drawn, ""),
+                (
+                    "GPU frame held still at the path's end (timing mode frame)",
+                    m.still_at_end_ms,
+                    "ms",
+                ),
             ] {
                 rows.push(row(
                     "vg-shadows",
@@ -362,6 +367,10 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                     unit,
                     &m.device,
                 ));
+            }
+            for (name, ms) in &m.passes {
+                let what = format!("GPU {name}, mean along the path (timing mode passes)");
+                rows.push(row("vg-shadows", case.clone(), &what, *ms, "ms", &m.device));
             }
         }
         for &(lod_bias, cache, walk) in variants {
@@ -477,6 +486,10 @@ struct Moving {
     p95_ms: f64,
     worst_ms: f64,
     cascades_drawn: f64,
+    /// The frame held still at the path's end, for comparison.
+    still_at_end_ms: f64,
+    /// Per pass, the mean along the path again in the `passes` timing mode.
+    passes: Vec<(String, f64)>,
     device: String,
 }
 
@@ -520,11 +533,37 @@ fn measure_moving(
         return Err(format!("{} has no GPU timestamps; nothing to measure", r.adapter).into());
     }
     ms.sort_by(f64::total_cmp);
+    // Where the moving frame's time goes: the path again from its start, profiled.
+    r.executor.timing = TimingMode::Passes;
+    r.render_still(&start)?;
+    r.executor.take_gpu_timings()?;
+    for i in 1..=frames {
+        r.frame(&at(i))?;
+    }
+    r.executor.finish()?;
+    let profiled = r.executor.take_gpu_timings()?;
+    let mut sums: Vec<(String, f64)> = Vec::new();
+    for t in &profiled {
+        for (name, us) in &t.passes {
+            match sums.iter_mut().find(|(n, _)| n == name) {
+                Some((_, sum)) => *sum += us / 1e3,
+                None => sums.push((name.clone(), us / 1e3)),
+            }
+        }
+    }
+    let passes = sums
+        .into_iter()
+        .filter(|(name, _)| !name.starts_with("readback:"))
+        .map(|(name, sum)| (name, sum / profiled.len().max(1) as f64))
+        .collect();
+    let still = timed_frames(&mut r, &at(frames), 50, TimingMode::Frame)?;
     Ok(Moving {
         mean_ms: ms.iter().sum::<f64>() / ms.len() as f64,
         p95_ms: ms[(ms.len() * 95 / 100).min(ms.len() - 1)],
         worst_ms: ms[ms.len() - 1],
         cascades_drawn: drawn as f64 / f64::from(frames),
+        still_at_end_ms: median(still.iter().map(|t| t.total_us / 1e3).collect()),
+        passes,
         device: r.adapter.clone(),
     })
 }

@@ -58,11 +58,11 @@ pub enum ShadowWalk {
     /// One walk for every view: the camera's first walk serves the cascades too
     /// ([`walk_with_camera`]), occlusion tested for the camera alone. One chain of
     /// dispatches fewer than [`ShadowWalk::AsWritten`]; on an NVIDIA H200 (`meshlight
-    /// bench --scenario vg-shadows`, docs/BENCHMARKS.md) the fastest wherever cascades
-    /// are drawn (0.003 to 0.02 ms on the default scene, 0.07 to 0.09 ms on the million
-    /// bunnies), and on a still frame, where it serves the camera alone, 0.008 ms slower
-    /// on the default scene and 0.045 ms faster on the bunnies. The camera's
-    /// `hierarchy_counts` then count the nodes tested for every view. Where there is no such walk to fold (the flat
+    /// bench --scenario vg-shadows`, docs/BENCHMARKS.md) 0.07 ms faster on the million
+    /// bunnies with the cascades drawn and 0.04 ms with them kept, and on the default
+    /// scene within run-to-run noise of the walks as written (its walks 0.03 ms shorter
+    /// in the profile). The camera's `hierarchy_counts` then count the nodes tested for
+    /// every view. Where there is no such walk to fold (the flat
     /// fill lists each view on its own; a file that walks its cascades per view, or
     /// has no first walk for the camera) the file's passes run as written.
     #[default]

@@ -58,7 +58,7 @@
 // The uniform block, declared once for Rust and WGSL by `GpuParams` in hierarchy.rs.
 #import fill_clusters::hierarchy_params::Params
 #ifdef OCCLUSION
-#import meshlight::occlusion::{instance_sphere_rect, instance_sphere_rect_in, sphere_occluded}
+#import meshlight::occlusion::{instance_sphere_rect, sphere_occluded}
 #endif
 
 // 64 bytes: the asset's `NodeRecord`, with `first_child` and `first_cluster` rebased
@@ -391,14 +391,7 @@ fn node_views(node: HierarchyNode, w: Walker, mask: u32) -> u32 {
 // sphere of every meshlet below) hidden: cull_lod's cluster test on the node's sphere.
 fn node_occluded(node: HierarchyNode, w: Walker) -> bool {
 #ifdef MULTI_VIEW
-    let o = params.occlusion_view;
-    let rect = instance_sphere_rect_in(
-        w.instance,
-        views[o].view_projection,
-        views[o].previous_view_projection,
-        views[o].viewport_size,
-        node.bounds,
-    );
+    let rect = instance_sphere_rect(w.instance, views[params.occlusion_view], node.bounds);
 #else
     let rect = instance_sphere_rect(w.instance, view, node.bounds);
 #endif

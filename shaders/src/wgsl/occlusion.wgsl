@@ -92,35 +92,16 @@ fn occlusion_rect(view_projection: mat4x4<f32>, viewport: vec2<f32>, center: vec
 // choice follows that shader's SECOND_PASS. One place for it keeps the per-cluster test
 // (cull_lod) and the per-node test (fill_clusters' hierarchy) projecting alike.
 fn instance_sphere_rect(instance: Instance, view: View, sphere: vec4<f32>) -> OcclusionRect {
-    return instance_sphere_rect_in(
-        instance,
-        view.view_projection,
-        view.previous_view_projection,
-        view.viewport_size,
-        sphere,
-    );
-}
-
-// `instance_sphere_rect` given the view's matrices and viewport: for a caller that reads
-// them from an array of Views in place (a View copied out of a dynamically indexed
-// array goes through local memory).
-fn instance_sphere_rect_in(
-    instance: Instance,
-    view_projection: mat4x4<f32>,
-    previous_view_projection: mat4x4<f32>,
-    viewport_size: vec2<f32>,
-    sphere: vec4<f32>,
-) -> OcclusionRect {
     var seen = instance;
 #ifdef SECOND_PASS
-    let through = view_projection;
+    let view_projection = view.view_projection;
 #else
     seen.world_from_local = instance.previous_world_from_local;
-    let through = previous_view_projection;
+    let view_projection = view.previous_view_projection;
 #endif
     let center = instance_transform_point(seen, sphere.xyz);
     let radius = sphere.w * instance_max_scale(seen);
-    return occlusion_rect(through, viewport_size, center, radius);
+    return occlusion_rect(view_projection, view.viewport_size, center, radius);
 }
 
 // The finest pyramid level at which the rectangle covers at most 2 × 2 texels: a texel
