@@ -316,10 +316,13 @@ fn a_full_queue_emits_whole_subtrees_for_its_views_and_keeps_every_cut() {
     compare(&mut data, &views, 0, 4, Some(2), false);
 }
 
-/// What a first walk left: per view its list (as a set) and words, and the nodes the
-/// pyramid hid with their words (written, found).
+/// One view's list (as a set) and its words (written, requested).
+type Listed = (BTreeSet<(u32, u32)>, [u32; 2]);
+
+/// What a first walk left: per view its list, and the nodes the pyramid hid with their
+/// words (written, found).
 struct FirstWalk {
-    lists: Vec<(BTreeSet<(u32, u32)>, [u32; 2])>,
+    lists: Vec<Listed>,
     hidden: BTreeSet<(u32, u32)>,
     hidden_words: [u32; 2],
 }
