@@ -11,7 +11,7 @@
 mod support;
 
 use glam::Vec3;
-use meshlight_gpu_scene::cascades::{CascadeSettings, cascades};
+use meshlight_gpu_scene::cascades::{Cascade, CascadeSettings, cascades};
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::{Camera, GpuScene, ListPart, SceneData};
 use meshlight_graph::*;
@@ -39,6 +39,30 @@ const VIEWS: Views = Views {
 
 /// Clusters each list may hold.
 const LIST: u32 = 1 << 15;
+
+/// The sun's cascades over the field: `count` of 512² to 30 bunny radii, for `camera`.
+fn suns(data: &SceneData, camera: &Camera, viewport: [u32; 2], count: u32) -> Vec<Cascade> {
+    let radius = data.meshes[0].bounding_sphere[3];
+    let settings = CascadeSettings {
+        count,
+        resolution: 512,
+        distance: 30.0 * radius,
+        caster_reach: 30.0 * radius,
+        ..CascadeSettings::default()
+    };
+    cascades(camera, viewport, Vec3::new(0.4, 1.0, 0.3), &settings, 0).unwrap()
+}
+
+/// A camera over the field from one corner, in bunny radii.
+fn corner_camera(data: &SceneData) -> Camera {
+    let radius = data.meshes[0].bounding_sphere[3];
+    Camera::perspective(
+        Vec3::new(-2.0, 1.5, -2.0) * radius,
+        Vec3::new(5.0, 0.0, 4.0) * radius,
+        1.0,
+        radius * 0.02,
+    )
+}
 
 /// What one view's list and cut came to.
 struct ViewResult {
@@ -274,21 +298,7 @@ fn one_walk_for_four_views_lists_what_four_walks_list() {
 #[test]
 fn one_walk_for_a_suns_cascades_lists_what_a_walk_per_cascade_lists() {
     let mut data = scene();
-    let radius = data.meshes[0].bounding_sphere[3];
-    let camera = Camera::perspective(
-        Vec3::new(-2.0, 1.5, -2.0) * radius,
-        Vec3::new(5.0, 0.0, 4.0) * radius,
-        1.0,
-        radius * 0.02,
-    );
-    let settings = CascadeSettings {
-        count: 4,
-        resolution: 512,
-        distance: 30.0 * radius,
-        caster_reach: 30.0 * radius,
-        ..CascadeSettings::default()
-    };
-    let list = cascades(&camera, [640, 360], Vec3::new(0.4, 1.0, 0.3), &settings, 0).unwrap();
+    let list = suns(&data, &corner_camera(&data), [640, 360], 4);
     let views: Vec<View> = list.iter().map(|c| c.view).collect();
     let listed = compare(&mut data, &views, 0, 4, None, true);
     assert!(listed > 100, "only {listed} clusters listed");
@@ -468,15 +478,7 @@ fn one_walk_for_the_camera_and_a_suns_cascades_tests_occlusion_for_the_camera_al
         );
         let target = Vec3::new(rng.range(4.0, 7.0), 0.0, rng.range(3.0, 5.0));
         let camera = Camera::perspective(eye * radius, target * radius, 1.0, radius * 0.02);
-        let settings = CascadeSettings {
-            count: 4,
-            resolution: 512,
-            distance: 30.0 * radius,
-            caster_reach: 30.0 * radius,
-            ..CascadeSettings::default()
-        };
-        let sun = Vec3::new(0.4, 1.0, 0.3);
-        let suns = cascades(&camera, viewport, sun, &settings, 0).unwrap();
+        let suns = suns(&data, &camera, viewport, 4);
         let camera_view = camera.view(viewport, 0, None);
         let walls_count = 6 + rng.below(6);
         let pyramid = walls(&mut rng, &data, &camera_view, viewport, walls_count);
@@ -532,23 +534,10 @@ fn one_walk_for_the_camera_and_a_suns_cascades_tests_occlusion_for_the_camera_al
 #[test]
 fn a_walk_given_one_view_lists_and_hides_what_that_views_own_walk_does() {
     let mut data = scene();
-    let radius = data.meshes[0].bounding_sphere[3];
     let viewport = [640, 360];
     let mut rng = Rng(0x0e1e_0001);
-    let camera = Camera::perspective(
-        Vec3::new(-2.0, 1.5, -2.0) * radius,
-        Vec3::new(5.0, 0.0, 4.0) * radius,
-        1.0,
-        radius * 0.02,
-    );
-    let settings = CascadeSettings {
-        count: 2,
-        resolution: 512,
-        distance: 30.0 * radius,
-        caster_reach: 30.0 * radius,
-        ..CascadeSettings::default()
-    };
-    let suns = cascades(&camera, viewport, Vec3::new(0.4, 1.0, 0.3), &settings, 0).unwrap();
+    let camera = corner_camera(&data);
+    let suns = suns(&data, &camera, viewport, 2);
     let camera_view = camera.view(viewport, 0, None);
     let pyramid = walls(&mut rng, &data, &camera_view, viewport, 8);
     let all = [suns[0].view, suns[1].view, camera_view];
