@@ -38,7 +38,7 @@ use crate::view::{Camera, CameraError};
 pub const MAX_CASCADES: u32 = 4;
 
 /// [`CascadeSettings::hold`] by default: texels an eighth larger, for a map drawn again
-/// only after the camera has moved a quarter of its cascade's radius.
+/// about once for every quarter of its cascade's radius the camera moves.
 pub const DEFAULT_HOLD: f32 = 0.125;
 
 /// How a directional light's shadow is split into cascades.

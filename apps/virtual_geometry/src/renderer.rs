@@ -724,10 +724,7 @@ impl Renderer {
                 .ok_or_else(|| GraphError::Readback(format!("cascade {k}'s counters are short")))?;
             // The lists lie side by side, one a cascade (and the camera's when it walks
             // them): each as long as the longest asks.
-            let lists = self
-                .settings
-                .shadows
-                .map_or(self.cascades, |s| super::shadows::list_count(&s));
+            let lists = super::shadows::list_count(&self.pipeline, self.cascades);
             let cascades = u64::from(lists);
             for (param, wanted, limit, flag) in [
                 (

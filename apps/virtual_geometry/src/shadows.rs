@@ -75,10 +75,16 @@ pub enum ShadowWalk {
     PerView,
 }
 
-/// The lists of the shadow stage's buffers: one per cascade, and the camera's after
-/// them when it walks the cascades ([`ShadowWalk::WithCamera`]).
-pub fn list_count(shadows: &ShadowSettings) -> u32 {
-    shadows.cascades.count + u32::from(shadows.walk == ShadowWalk::WithCamera)
+/// The lists of the shadow stage's buffers for `cascades` cascades: one per cascade,
+/// and the camera's after them where `p`'s camera walk serves the cascades
+/// ([`walk_with_camera`] folded them).
+pub fn list_count(p: &Pipeline, cascades: u32) -> u32 {
+    let folded = p.passes.iter().any(|e| {
+        !is_shadow(e)
+            && e.stage == meshlight::fill_clusters::STAGE
+            && e.param("views").and_then(toml::Value::as_integer) > Some(1)
+    });
+    cascades + u32::from(folded)
 }
 
 /// Folds the walk over every cascade into the camera's first walk, which then serves
@@ -236,7 +242,7 @@ pub fn size_lists(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
         p.param(super::frame_graph::CLUSTERS_PARAM),
         p.param(CANDIDATES_PARAM).is_some(),
     ) {
-        let lists = u64::from(list_count(&shadows).max(1));
+        let lists = u64::from(list_count(p, shadows.cascades.count).max(1));
         p.set_param(CANDIDATES_PARAM, clusters * lists)?;
     }
     Ok(())

@@ -492,8 +492,13 @@ impl HierarchyFill {
 /// The walk's kernels, in the order a frame dispatches them.
 const ENTRIES: [&str; 4] = ["walk_dispatch", "prepare", "roots", "fill"];
 
-/// The prefix of the one-view programs a walk over several views also compiles.
-const ONE_VIEW: &str = "one_view:";
+/// The one-view programs a walk over several views also compiles, entry by entry.
+const ONE_VIEW_PROGRAMS: [&str; 4] = [
+    "one_view:walk_dispatch",
+    "one_view:prepare",
+    "one_view:roots",
+    "one_view:fill",
+];
 
 impl HierarchyFill {
     /// The one view a walk over several is given this frame, when only one has a
@@ -621,9 +626,9 @@ impl Pass for HierarchyFill {
                 ..defs
             };
             let table = meshlight_gpu_scene::instance_table::InstanceTable::of(ctx);
-            for entry in ENTRIES {
+            for (entry, name) in ENTRIES.into_iter().zip(ONE_VIEW_PROGRAMS) {
                 ctx.program(
-                    &format!("{ONE_VIEW}{entry}"),
+                    name,
                     ProgramDesc::compute(&SHADER, entry)
                         .defs(&one)
                         .defs(&table)
@@ -638,10 +643,10 @@ impl Pass for HierarchyFill {
         let occlusion = ctx.is_bound(PYRAMID_SLOT);
         // The programs, their view uniform (WGSL `views`, an array, with MULTI_VIEW;
         // `view` without), and the first list and pyramid's view they are told.
-        let (prefix, uniform_name, uniform, walked, list, occlusion_view) =
+        let (programs, uniform_name, uniform, walked, list, occlusion_view) =
             match self.lone_view(&views, occlusion) {
                 Some(v) => (
-                    ONE_VIEW,
+                    ONE_VIEW_PROGRAMS,
                     "view",
                     bytemuck::bytes_of(&views[v as usize]),
                     1,
@@ -649,7 +654,7 @@ impl Pass for HierarchyFill {
                     0,
                 ),
                 None if self.views > 1 => (
-                    "",
+                    ENTRIES,
                     "views",
                     bytemuck::cast_slice(&views),
                     self.views,
@@ -657,7 +662,7 @@ impl Pass for HierarchyFill {
                     self.occlusion_view,
                 ),
                 None => (
-                    "",
+                    ENTRIES,
                     "view",
                     bytemuck::cast_slice(&views),
                     1,
@@ -733,7 +738,8 @@ impl Pass for HierarchyFill {
                 (uniform_name, uniform),
                 ("params", bytemuck::bytes_of(&params)),
             ];
-            ctx.dispatch_compute(&format!("{prefix}{entry}"), &uniforms, grid)?;
+            let at = ENTRIES.iter().position(|e| *e == entry).unwrap_or(0);
+            ctx.dispatch_compute(programs[at], &uniforms, grid)?;
         }
         Ok(())
     }
