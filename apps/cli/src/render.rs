@@ -197,6 +197,13 @@ pub fn render(a: RenderArgs) -> Result<(), Box<dyn std::error::Error>> {
             "  sun shadow: {} cascades of {}², to {:.1} units (split λ {}), casters {:.1} units towards the sun, held {}",
             c.count, c.resolution, c.distance, c.split_lambda, c.caster_reach, c.hold
         );
+        let lists = meshlight_virtual_geometry::shadows::list_count(&renderer.pipeline, c.count);
+        if lists > c.count {
+            let _ = writeln!(
+                report,
+                "  one walk serves the camera and the cascades: its instance and hierarchy counts above are theirs together"
+            );
+        }
     }
     for c in &renderer.shadow_counts {
         let _ = writeln!(

@@ -125,6 +125,12 @@ fn render_draws_a_mesh_file_through_the_shipped_pipeline_and_reports_its_counter
     let out = meshlight_ok(&args);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("clusters visible (LOD cut)"), "{stdout}");
+    // The default shadow: held cascades, one walk for the camera and the cascades.
+    assert!(stdout.contains("held 0.125"), "{stdout}");
+    assert!(
+        stdout.contains("one walk serves the camera and the cascades"),
+        "{stdout}"
+    );
     let page = std::fs::read_to_string(&html).unwrap();
     assert!(page.contains("sw_raster") && page.contains("triangles rasterised"));
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
