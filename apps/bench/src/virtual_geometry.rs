@@ -353,6 +353,7 @@ pub fn shadows(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                 ),
                 ("GPU frame, worst (timing mode frame)", m.worst_ms, "ms"),
                 ("cascades drawn a frame, mean", m.cascades_drawn, ""),
+                ("lists grown along the path", m.growths as f64, ""),
                 (
                     "GPU frame held still at the path's end (timing mode frame)",
                     m.still_at_end_ms,
@@ -488,6 +489,8 @@ struct Moving {
     cascades_drawn: f64,
     /// The frame held still at the path's end, for comparison.
     still_at_end_ms: f64,
+    /// Lists grown along the path (the first time through).
+    growths: usize,
     /// Per pass, the mean along the path again in the `passes` timing mode.
     passes: Vec<(String, f64)>,
     device: String,
@@ -518,11 +521,13 @@ fn measure_moving(
     r.render_still(&start)?;
     r.executor.take_gpu_timings()?;
     let mut drawn = 0u64;
+    let grown_before = r.growths.len();
     for i in 1..=frames {
         r.frame(&at(i))?;
         drawn += u64::from(r.cascades_drawn);
     }
     r.executor.finish()?;
+    let growths = r.growths.len() - grown_before;
     let mut ms: Vec<f64> = r
         .executor
         .take_gpu_timings()?
@@ -563,6 +568,7 @@ fn measure_moving(
         worst_ms: ms[ms.len() - 1],
         cascades_drawn: drawn as f64 / f64::from(frames),
         still_at_end_ms: median(still.iter().map(|t| t.total_us / 1e3).collect()),
+        growths,
         passes,
         device: r.adapter.clone(),
     })
