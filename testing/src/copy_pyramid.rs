@@ -2,6 +2,7 @@
 //! next frame's first pass (cull or walk) reads it as last frame's pyramid.
 
 use meshlight_graph::prelude::*;
+use meshlight_graph::{Bindings, GraphBuilder, History, Texture};
 
 /// Copies mips `0 .. levels` of slot `source` into slot `target` (both R32Float, level
 /// 0 `size`).
@@ -51,4 +52,42 @@ impl Pass for CopyPyramid {
         }
         Ok(())
     }
+}
+
+/// A history texture `name` of `desc` that a pass fills every frame from the imported
+/// texture `upload` (which the caller writes, e.g. with [`crate::write_pyramid`]): the
+/// next frame's first pass reads it, through `prev`, as last frame's pyramid.
+pub fn uploaded_history(
+    g: &mut GraphBuilder,
+    name: &str,
+    upload: &str,
+    desc: &TextureDesc,
+    usage: wgpu::TextureUsages,
+) -> Result<History<Texture>> {
+    let history = g.history_texture(name, desc.clone());
+    let source = g.import_texture(upload, desc.clone(), usage);
+    let copy = CopyPyramid {
+        levels: desc.mip_levels,
+        size: [desc.width, desc.height],
+    };
+    let bindings = Bindings::new()
+        .bind("source", source)
+        .bind("target", history.current);
+    g.add_pass(&format!("copy_{name}"), copy, bindings)?;
+    Ok(history)
+}
+
+/// The R32Float texture that holds `pyramid`: level 0 rounded up to powers of two, so
+/// every mip wgpu makes (sizes rounded down) holds the level the pyramid's rule makes
+/// (sizes rounded up), with one mip per level.
+pub fn pyramid_texture_desc(
+    pyramid: &meshlight_shaders::cpu::occlusion::DepthPyramid,
+) -> TextureDesc {
+    let (w, h, _) = pyramid.levels[0];
+    TextureDesc::d2(
+        wgpu::TextureFormat::R32Float,
+        w.next_power_of_two(),
+        h.next_power_of_two(),
+    )
+    .with_mips(pyramid.levels.len() as u32)
 }

@@ -18,7 +18,7 @@ use meshlight_pass_cull_lod::{
 };
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
-use meshlight_testing::copy_pyramid::CopyPyramid;
+use meshlight_testing::copy_pyramid::{pyramid_texture_desc, uploaded_history};
 use meshlight_testing::{texture, write_pyramid};
 use std::collections::BTreeSet;
 
@@ -36,15 +36,13 @@ const T: Thresholds = Thresholds {
     hardware: true,
 };
 
-/// The pyramid texture: level 0 rounded up to powers of two, so every mip wgpu makes
-/// (sizes rounded down) holds the level the rule makes (sizes rounded up).
-fn pyramid_desc() -> (TextureDesc, u32) {
-    let p = DepthPyramid::from_depth(VIEWPORT[0], VIEWPORT[1], &vec![0.0; pixels()]);
-    let (w, h, _) = p.levels[0];
-    let levels = p.levels.len() as u32;
-    let (w, h) = (w.next_power_of_two(), h.next_power_of_two());
-    let desc = TextureDesc::d2(meshlight_pass_cull_lod::PYRAMID_FORMAT, w, h).with_mips(levels);
-    (desc, levels)
+/// The pyramid texture of the viewport.
+fn pyramid_desc() -> TextureDesc {
+    pyramid_texture_desc(&DepthPyramid::from_depth(
+        VIEWPORT[0],
+        VIEWPORT[1],
+        &vec![0.0; pixels()],
+    ))
 }
 
 fn pixels() -> usize {
@@ -107,12 +105,11 @@ impl Harness {
             BufferDesc::array(Element::U32, data.instances.len() as u64 * 2),
         );
         let hw_args2 = g.create_buffer("hw_args_second", args);
-        let (desc, levels) = pyramid_desc();
+        let desc = pyramid_desc();
         let usage = wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC
             | wgpu::TextureUsages::COPY_DST;
-        let history = g.history_texture("pyramid", desc.clone());
-        let upload_handle = g.import_texture("upload", desc.clone(), usage);
+        let history = uploaded_history(&mut g, "pyramid", "upload", &desc, usage).unwrap();
         let now_handle = g.import_texture("pyramid_now", desc.clone(), usage);
         let scene_bindings = || Bindings::new().bind("meshlet_groups", h.groups);
         let first = CullLod {
@@ -155,18 +152,6 @@ impl Harness {
                     .bind(PER_INSTANCE_SECOND, out.buffer(PER_INSTANCE_FIRST).unwrap()),
             )
             .unwrap();
-        let copy = CopyPyramid {
-            levels,
-            size: [desc.width, desc.height],
-        };
-        g.add_pass(
-            "copy_pyramid",
-            copy,
-            Bindings::new()
-                .bind("source", upload_handle)
-                .bind("target", history.current),
-        )
-        .unwrap();
         for name in ["raster_counts", "hw_args", "occluded", "occluded_count"] {
             g.export(out.buffer(name).unwrap());
         }

@@ -19,7 +19,7 @@ use meshlight_pass_cull_lod::{CullLod, Thresholds};
 use meshlight_pass_fill_clusters::{CAMERA_CUT_INPUT, HIDDEN_NODE, HierarchyFill};
 use meshlight_shaders::cpu::layout::{Cluster, View};
 use meshlight_shaders::cpu::occlusion::DepthPyramid;
-use meshlight_testing::copy_pyramid::CopyPyramid;
+use meshlight_testing::copy_pyramid::{pyramid_texture_desc, uploaded_history};
 use meshlight_testing::{texture, write_pyramid};
 use std::collections::BTreeSet;
 use support::run::{Cull, run_fill};
@@ -375,34 +375,14 @@ fn first_walk(
         | wgpu::TextureUsages::COPY_DST;
     let mut upload = None;
     if let Some((_, pyramid)) = occlusion {
-        let (w, h, _) = pyramid.levels[0];
-        let levels = pyramid.levels.len() as u32;
-        let desc = TextureDesc::d2(
-            wgpu::TextureFormat::R32Float,
-            w.next_power_of_two(),
-            h.next_power_of_two(),
-        )
-        .with_mips(levels);
-        let history = g.history_texture("pyramid", desc.clone());
-        let source = g.import_texture("upload", desc.clone(), usage);
+        let desc = pyramid_texture_desc(pyramid);
+        let history = uploaded_history(&mut g, "pyramid", "upload", &desc, usage).unwrap();
         let nodes = g.create_buffer("hidden_nodes", BufferDesc::array(HIDDEN_NODE, NODES));
         let count = g.create_buffer("hidden_count", BufferDesc::array(Element::U32, 2));
         bindings = bindings
             .bind("pyramid", history.prev)
             .bind("occluded_nodes", nodes)
             .bind("occluded_node_count", count);
-        let copy = CopyPyramid {
-            levels,
-            size: [desc.width, desc.height],
-        };
-        g.add_pass(
-            "copy_pyramid",
-            copy,
-            Bindings::new()
-                .bind("source", source)
-                .bind("target", history.current),
-        )
-        .unwrap();
         upload = Some((texture(&gpu, "upload", &desc, usage), pyramid));
     }
     let out = g.add_pass("walk", walk, bindings).unwrap();
