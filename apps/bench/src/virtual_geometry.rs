@@ -20,8 +20,11 @@ type BenchResult = std::result::Result<Vec<Row>, Box<dyn std::error::Error>>;
 pub struct Measured {
     /// Per pass, from the `passes` timing mode.
     pub passes: Vec<(String, f64)>,
-    /// The frame, from the `frame` timing mode.
+    /// The frame, from the `frame` timing mode (the median frame).
     pub total_ms: f64,
+    /// The mean frame of the same frames: with what a frame does now and then (a
+    /// probe of adaptive occlusion, a list grown) spread over them.
+    pub mean_ms: f64,
     /// The frame as the sum of the `passes`-mode profile, for comparison.
     pub profiled_total_ms: f64,
     pub counts: meshlight_virtual_geometry::FrameCounts,
@@ -73,13 +76,20 @@ pub fn measure_prepared(
     let counts = renderer.render_still(&placed.camera)?.counts;
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut order = Vec::new();
-    for t in &profiled {
+    for (k, t) in profiled.iter().enumerate() {
         for (name, us) in &t.passes {
             if !per_pass.contains_key(name) {
                 order.push(name.clone());
             }
-            per_pass.entry(name.clone()).or_default().push(us / 1e3);
+            // A pass some frames leave out (adaptive occlusion's second pass, a kept
+            // shadow cascade) costs those frames nothing.
+            let times = per_pass.entry(name.clone()).or_default();
+            times.resize(k, 0.0);
+            times.push(us / 1e3);
         }
+    }
+    for times in per_pass.values_mut() {
+        times.resize(profiled.len(), 0.0);
     }
     let passes = order
         .into_iter()
@@ -92,6 +102,7 @@ pub fn measure_prepared(
     Ok(Measured {
         passes,
         total_ms: total(&framed),
+        mean_ms: framed.iter().map(|t| t.total_us / 1e3).sum::<f64>() / framed.len() as f64,
         profiled_total_ms: total(&profiled),
         counts,
         device: renderer.adapter.clone(),
@@ -147,6 +158,14 @@ fn rows_of(scenario: &str, case: &str, m: &Measured) -> Vec<Row> {
         case.into(),
         "GPU frame (timing mode frame)",
         m.total_ms,
+        "ms",
+        &m.device,
+    ));
+    rows.push(row(
+        scenario,
+        case.into(),
+        "GPU frame, mean (timing mode frame)",
+        m.mean_ms,
         "ms",
         &m.device,
     ));
@@ -228,7 +247,8 @@ fn default_field(quick: bool) -> Result<(Placed, u32), Box<dyn std::error::Error
 }
 
 /// The default scene (a field of procedural meshes on the ground) at 1920×1080 and
-/// 3840×2160 (1080p alone with `quick`).
+/// 3840×2160 (1080p alone with `quick`), each also without occlusion and with occlusion
+/// tested every frame ([`occlusion_rows`]), and with the hardware rasteriser.
 pub fn default_scene(quick: bool) -> BenchResult {
     let (placed, instances) = default_field(quick)?;
     let (sizes, frames) = screen_sizes(quick);
@@ -240,8 +260,10 @@ pub fn default_scene(quick: bool) -> BenchResult {
             width,
             height,
         );
-        let m = measure(&placed, FrameSettings::new(width, height), frames)?;
+        let settings = FrameSettings::new(width, height);
+        let m = measure(&placed, settings.clone(), frames)?;
         rows.extend(rows_of("render", &case, &m));
+        rows.extend(occlusion_rows("render", &case, &placed, &settings, frames)?);
         // The same frame with the clusters crossing the near plane (and, on a graphics
         // GPU, the large ones) drawn by the hardware rasteriser.
         let hardware = FrameSettings {
@@ -719,6 +741,37 @@ impl Lattice {
     }
 }
 
+/// The frame of `settings` without occlusion (one culling pass) and with occlusion tested
+/// every frame, against which the default (adaptive occlusion, measured by the caller)
+/// is judged: with occlusion never slower than without.
+fn occlusion_rows(
+    scenario: &str,
+    case: &str,
+    placed: &Placed,
+    settings: &FrameSettings,
+    frames: u32,
+) -> BenchResult {
+    let one_pass = FrameSettings {
+        occlusion: false,
+        ..settings.clone()
+    };
+    let mut rows = rows_of(
+        scenario,
+        &format!("{case}, no occlusion"),
+        &measure(placed, one_pass, frames)?,
+    );
+    let always = FrameSettings {
+        occlusion_policy: meshlight_virtual_geometry::OcclusionPolicy::ALWAYS,
+        ..settings.clone()
+    };
+    rows.extend(rows_of(
+        scenario,
+        &format!("{case}, occlusion tested every frame"),
+        &measure(placed, always, frames)?,
+    ));
+    Ok(rows)
+}
+
 /// 15 × 15 × 15 copies of a mesh (the Stanford bunny unless `meshes` names another) at
 /// 2240×1260: the frame, then the same cluster set drawn all in software and all in
 /// hardware for each rasteriser's throughput.
@@ -739,12 +792,7 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         occlusion: false,
         ..settings.clone()
     };
-    let without = measure(&placed, one_pass.clone(), frames)?;
-    rows.extend(rows_of(
-        "virtual-geometry",
-        &format!("{case}, no occlusion"),
-        &without,
-    ));
+    rows.extend(occlusion_rows("virtual-geometry", &case, &placed, &settings, frames)?);
 
     // The same cut, every cluster to one rasteriser.
     let software = measure(
@@ -980,7 +1028,8 @@ pub fn scale(quick: bool, meshes: &[PathBuf]) -> BenchResult {
 /// with `quick`) on the default scene's field and ground at 2560×1440: scale, where the
 /// instance records alone are 224 MiB. Measured twice: the table in one binding as the
 /// adapter's limits allow, and split in two bindings, the first holding wgpu's default
-/// binding of 599,186 instances or half the instances, whichever is fewer.
+/// binding of 599,186 instances or half the instances, whichever is fewer. The table in
+/// one binding also without occlusion and with occlusion tested every frame.
 pub fn million(quick: bool, meshes: &[PathBuf]) -> BenchResult {
     let mesh = mesh_or_bunny(meshes);
     let asset = scenes::load_asset(&mesh, 0)?;
@@ -1011,8 +1060,12 @@ pub fn million(quick: bool, meshes: &[PathBuf]) -> BenchResult {
                 placed.data.instance_split()
             );
         }
-        let m = measure(&placed, FrameSettings::new(width, height), frames)?;
+        let settings = FrameSettings::new(width, height);
+        let m = measure(&placed, settings.clone(), frames)?;
         rows.extend(rows_of("vg-million", &case, &m));
+        if !placed.data.instances_split() {
+            rows.extend(occlusion_rows("vg-million", &case, &placed, &settings, frames)?);
+        }
     }
     Ok(rows)
 }

@@ -18,6 +18,7 @@
 
 #![warn(missing_docs)]
 
+pub mod adaptive_occlusion;
 pub mod counts;
 pub mod frame_graph;
 pub mod gltf_scene;
@@ -28,6 +29,7 @@ pub mod setup;
 pub mod shadows;
 pub mod streaming;
 
+pub use adaptive_occlusion::OcclusionPolicy;
 pub use counts::FrameCounts;
 pub use frame_graph::GraphSource;
 pub use renderer::{Renderer, Still};

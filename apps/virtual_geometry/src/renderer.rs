@@ -13,6 +13,7 @@ use super::frame_graph::{
     CLUSTERS_PARAM, DEPTH, Frame, GraphSource, HOST_TARGET, MAX_SLOTS, SECOND_COUNTS, SLOTS_PARAM,
     frame,
 };
+use super::adaptive_occlusion::{Adaptive, FramePlan, OcclusionPolicy, SecondPass};
 use super::settings::FrameSettings;
 use super::streaming::{PageSource, Streaming};
 use glam::Mat4;
@@ -88,6 +89,14 @@ pub struct Renderer {
     walks_hierarchy: bool,
     /// A second walk (from the nodes the first found hidden) and its counters.
     walks_twice: bool,
+    /// Whether frames test occlusion now ([`FrameSettings::occlusion_policy`]).
+    occlusion: Adaptive,
+    /// What a frame leaves out when it does not test (`None`: it always tests).
+    second_pass: Option<SecondPass>,
+    /// What each submitted frame ran, until its counters are in.
+    frame_plans: BTreeMap<u64, FramePlan>,
+    /// What the last frame ran.
+    last_plan: FramePlan,
     /// Instances moved through [`Renderer::set_transform`] since the last frame.
     moved: Vec<meshlight::gpu_scene::InstanceId>,
     /// Counters by frame, until both readbacks of a frame are in.
@@ -241,6 +250,10 @@ impl Renderer {
             two_pass: false,
             walks_hierarchy: false,
             walks_twice: false,
+            occlusion: Adaptive::new(OcclusionPolicy::ALWAYS),
+            second_pass: None,
+            frame_plans: BTreeMap::new(),
+            last_plan: FramePlan::FULL,
             cut: false,
             moved: Vec::new(),
             compiled,
@@ -328,6 +341,7 @@ impl Renderer {
         self.two_pass = has(SECOND_COUNTS_READBACK);
         self.walks_hierarchy = has(HIERARCHY_COUNTS_READBACK);
         self.walks_twice = has(SECOND_WALK_COUNT_READBACK);
+        self.note_second_pass();
         self.cascades = match self.settings.shadows {
             Some(_) => (self.pipeline.views.get(super::shadows::CASCADES)).map_or(0, |&n| n),
             None => 0,
@@ -341,6 +355,42 @@ impl Renderer {
             resolution,
             &self.pipeline,
         );
+    }
+
+    /// What a frame that does not test occlusion leaves out, and the policy that decides:
+    /// the settings' where the frame's second pass can be left out on its own, else
+    /// testing every frame. The `occlusion` view reads the second pass's counters every
+    /// frame, so it tests every frame.
+    fn note_second_pass(&mut self) {
+        let second: Vec<String> = (self.pipeline.passes.iter())
+            .filter(|e| e.param_str("mode") == Some("second"))
+            .map(|e| e.name.clone())
+            .collect();
+        self.second_pass = match SecondPass::of(&self.compiled.plan, &second) {
+            _ if !self.two_pass || self.view.needs_occlusion_records() => None,
+            Ok(pass) => Some(pass),
+            Err(why) => {
+                log::info!("occlusion is tested every frame: {why}");
+                None
+            }
+        };
+        let policy = match self.second_pass {
+            Some(_) => self.settings.occlusion_policy,
+            None => OcclusionPolicy::ALWAYS,
+        };
+        self.occlusion = Adaptive::new(policy);
+    }
+
+    /// Whether the frames test occlusion now: `false` while a two-pass frame leaves its
+    /// second pass out because occlusion culled too little to pay
+    /// ([`FrameSettings::occlusion_policy`]).
+    pub fn tests_occlusion(&self) -> bool {
+        self.two_pass && self.occlusion.testing()
+    }
+
+    /// What the last frame ran of a two-pass frame (the whole of it in a one-pass frame).
+    pub fn last_frame_plan(&self) -> FramePlan {
+        self.last_plan
     }
 
     /// The shadow cascades' maps (`cascades × resolution²` reverse-Z depth bits, cascade
@@ -449,7 +499,8 @@ impl Renderer {
         if let Some(streaming) = &mut self.streaming {
             streaming.add_upload_time(upload.elapsed());
         }
-        let cut = u32::from(std::mem::take(&mut self.cut));
+        let plan = self.occlusion.next_frame(std::mem::take(&mut self.cut));
+        let cut = u32::from(!plan.test);
         let mut frame = FrameData::new()
             .with(meshlight::gpu_scene::names::VIEW, bytemuck::bytes_of(&view))
             .with(meshlight::cull_lod::CAMERA_CUT_INPUT, &cut.to_le_bytes());
@@ -466,6 +517,16 @@ impl Renderer {
             self.cascades_drawn = self
                 .shadow_cache
                 .skip_unchanged(shadows, changed, cache, &view, &mut frame);
+        }
+        if let Some(second) = &self.second_pass {
+            if !plan.second {
+                for name in &second.passes {
+                    frame.skip(name);
+                }
+            }
+            if !plan.pyramid {
+                frame.skip(&second.pyramid);
+            }
         }
         let mut imports = self.scene.imports().merge(extra);
         if let Some(streaming) = &self.streaming {
@@ -504,6 +565,8 @@ impl Renderer {
         let stats = self
             .executor
             .execute_frame(&self.compiled, &imports, &frame)?;
+        self.last_plan = plan;
+        self.frame_plans.insert(stats.frame, plan);
         self.settle_previous_transforms();
         self.take_counts()?;
         Ok(stats)
@@ -570,7 +633,7 @@ impl Renderer {
         // `prepare` zeroes words 0..8 in every mode.
         first.resize(first.len().max(8), 0);
         take(&first);
-        if self.two_pass {
+        if self.two_pass && self.last_plan.second {
             take(&words(self, SECOND_COUNTS)?);
         }
         Ok(drawn)
@@ -640,6 +703,9 @@ impl Renderer {
         if self.walks_twice {
             names.extend([SECOND_HIERARCHY_COUNTS_READBACK, SECOND_WALK_COUNT_READBACK]);
         }
+        // A frame leaves its second pass's readbacks out while it does not test
+        // occlusion, so they may not have run yet.
+        names.retain(|n| self.executor.readback_has_run(n));
         for name in names {
             while let Some(r) = self.executor.take_readback(name)? {
                 let entry = self.pending.entry(r.frame).or_default();
@@ -654,16 +720,20 @@ impl Renderer {
                 *part = Some(r.bytes);
             }
         }
-        let (two_pass, walks, twice) = (self.two_pass, self.walks_hierarchy, self.walks_twice);
+        let (walks, plans) = (self.walks_hierarchy, &self.frame_plans);
+        // A frame that left its second pass out has none of its counters.
+        let second = |frame: &u64| plans.get(frame).is_none_or(|p| p.second);
+        let two_pass = |frame: &u64| self.two_pass && second(frame);
+        let twice = |frame: &u64| self.walks_twice && second(frame);
         let complete: Vec<u64> = self
             .pending
             .iter()
-            .filter(|(_, p)| {
+            .filter(|(f, p)| {
                 p.cluster_count.is_some()
                     && p.raster_counts.is_some()
-                    && (p.second.is_some() || !two_pass)
+                    && (p.second.is_some() || !two_pass(f))
                     && (p.hierarchy.is_some() || !walks)
-                    && (p.second_walk.is_some() && p.second_walk_list.is_some() || !twice)
+                    && (p.second_walk.is_some() && p.second_walk_list.is_some() || !twice(f))
             })
             .map(|(f, _)| *f)
             .collect();
@@ -684,6 +754,9 @@ impl Renderer {
                 }
                 counts.hierarchy = Some(h);
             }
+            if let Some(plan) = self.frame_plans.remove(&frame) {
+                self.occlusion.observe(plan, &counts);
+            }
             self.grow_for(&counts)?;
             if self.latest.is_none_or(|l| l.frame < frame) {
                 self.latest = Some(counts);
@@ -692,6 +765,9 @@ impl Renderer {
         // A frame whose other half never comes (dropped by a full ring) is forgotten.
         while self.pending.len() > 16 {
             self.pending.pop_first();
+        }
+        while self.frame_plans.len() > 64 {
+            self.frame_plans.pop_first();
         }
         self.take_shadow_counts()
     }

@@ -3,6 +3,7 @@
 //! lights, a host's target). A setting left `None` keeps what the pipeline says, so the
 //! shipped frame and a user's file take the same settings the same way.
 
+use crate::adaptive_occlusion::OcclusionPolicy;
 use meshlight::gpu_scene::cascades::CascadeSettings;
 use meshlight::graph::{GraphError, Result};
 use meshlight::resolve::DebugView;
@@ -20,6 +21,9 @@ pub mod env {
     pub const OCCLUSION_MIN_CLUSTERS: &str = "MESHLIGHT_OCCLUSION_MIN_CLUSTERS";
     /// `sw_raster`'s `big_triangle_px`.
     pub const BIG_TRIANGLE_PX: &str = "MESHLIGHT_BIG_TRIANGLE_PX";
+    /// `always`, `adaptive` or `MIN_HIDDEN/PROBE_EVERY`: when a two-pass frame tests
+    /// occlusion (see [`crate::adaptive_occlusion::OcclusionPolicy::parse`]).
+    pub const OCCLUSION_POLICY: &str = "MESHLIGHT_OCCLUSION_POLICY";
 }
 
 /// A host application's targets: the frame ends by drawing its image into the host's
@@ -156,6 +160,10 @@ pub struct FrameSettings {
     /// with it and `pipelines/virtual_geometry_one_pass.toml` without. A pipeline file
     /// of the caller's decides for itself.
     pub occlusion: bool,
+    /// When a two-pass frame tests occlusion: while it culls enough to pay for itself
+    /// (the default), or every frame ([`OcclusionPolicy::ALWAYS`]). The `occlusion`
+    /// view tests every frame whatever this says.
+    pub occlusion_policy: OcclusionPolicy,
     /// `fill` walks each visible instance's culling hierarchy; off, every cluster of
     /// every instance in view is a candidate (`workgroup_per_instance`).
     pub hierarchy: bool,
@@ -207,6 +215,10 @@ impl FrameSettings {
             clustering: None,
             keep_visibility: false,
             occlusion: true,
+            occlusion_policy: std::env::var(env::OCCLUSION_POLICY)
+                .ok()
+                .and_then(|v| OcclusionPolicy::parse(&v))
+                .unwrap_or_default(),
             hierarchy: true,
             occlusion_min_clusters: from_env(env::OCCLUSION_MIN_CLUSTERS),
             big_triangle_px: from_env(env::BIG_TRIANGLE_PX),

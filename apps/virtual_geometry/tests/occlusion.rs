@@ -20,7 +20,8 @@ use meshlight::scene::{BuildOptions, MeshletAsset, build_asset};
 use meshlight::shaders::cpu::layout::Cluster;
 use meshlight::shaders::cpu::visbuffer;
 use meshlight_virtual_geometry::counts::OcclusionCounts;
-use meshlight_virtual_geometry::{FrameSettings, GraphSource, Renderer};
+use meshlight_virtual_geometry::adaptive_occlusion::{FramePlan, hidden_share};
+use meshlight_virtual_geometry::{FrameSettings, GraphSource, OcclusionPolicy, Renderer};
 use std::sync::OnceLock;
 
 /// A flat 4 × 4 square on the x–z plane, facing +y: a solid occluder.
@@ -162,8 +163,19 @@ fn path() -> Vec<Step> {
 }
 
 fn renderer(occlusion: bool, split: Option<f32>, width: u32, height: u32) -> Renderer {
+    renderer_with(OcclusionPolicy::ALWAYS, occlusion, split, width, height)
+}
+
+fn renderer_with(
+    policy: OcclusionPolicy,
+    occlusion: bool,
+    split: Option<f32>,
+    width: u32,
+    height: u32,
+) -> Renderer {
     let settings = FrameSettings {
         occlusion,
+        occlusion_policy: policy,
         keep_visibility: true,
         // `Some(0.0)`: every cluster to the hardware rasteriser; `None`: the adapter
         // class's split.
@@ -206,6 +218,20 @@ fn compare(
     step: &Step,
     frame: usize,
 ) -> (OcclusionCounts, usize) {
+    let (counts, ties) = compare_images(with, without, step, frame);
+    (
+        counts.expect("the two-pass frame reads both counters back"),
+        ties,
+    )
+}
+
+/// [`compare`], for a frame that may have left its second pass out (`None`).
+fn compare_images(
+    with: &mut Renderer,
+    without: &mut Renderer,
+    step: &Step,
+    frame: usize,
+) -> (Option<OcclusionCounts>, usize) {
     for r in [&mut *with, &mut *without] {
         r.set_transform(MOVER, mover_at(step.mover)).unwrap();
     }
@@ -232,10 +258,7 @@ fn compare(
             lost.push((i, *p, *q));
         }
     }
-    let counts = a
-        .counts
-        .occlusion
-        .expect("the two-pass frame reads both counters back");
+    let counts = a.counts.occlusion;
     assert!(
         lost.is_empty(),
         "frame {frame} ({}): {} pixels differ in depth from the frame without occlusion, e.g. pixel {} has {:?}, should have {:?}; counters {counts:?}",
@@ -245,16 +268,24 @@ fn compare(
         lost[0].1,
         lost[0].2
     );
-    eprintln!(
-        "frame {frame} ({}): drawn {} clusters ({} in the second pass), first pass tested {} occluded {}, second pass considered {} occluded {}, ties {ties}",
-        step.label,
-        a.counts.visible,
-        counts.second_drawn,
-        counts.first_tested,
-        counts.first_occluded,
-        counts.second_considered,
-        counts.second_occluded
-    );
+    match counts {
+        Some(c) => eprintln!(
+            "frame {frame} ({}): drawn {} clusters ({} in the second pass), first pass tested {} occluded {}, second pass considered {} occluded {}, ties {ties}",
+            step.label,
+            a.counts.visible,
+            c.second_drawn,
+            c.first_tested,
+            c.first_occluded,
+            c.second_considered,
+            c.second_occluded
+        ),
+        None => eprintln!(
+            "frame {frame} ({}): drawn {} clusters in one pass ({:?}), ties {ties}",
+            step.label,
+            a.counts.visible,
+            with.last_frame_plan()
+        ),
+    }
     (counts, ties)
 }
 
@@ -384,6 +415,7 @@ fn the_pipeline_files_run_the_frames_built_in_code() {
     ] {
         let settings = FrameSettings {
             occlusion,
+            occlusion_policy: OcclusionPolicy::ALWAYS,
             ..FrameSettings::new(w, h)
         };
         let mut code = Renderer::new(scene(), settings.clone(), &GraphSource::Shipped).unwrap();
@@ -416,4 +448,79 @@ fn the_pipeline_files_run_the_frames_built_in_code() {
             .map(|o| o.first_tested);
         assert!(!occlusion || tested > Some(0), "{file}: {tested:?}");
     }
+}
+
+/// Occlusion tested only while it pays: where the view hides little, a two-pass frame
+/// stops testing and leaves its second pass and pyramid out; where a wall hides much, it
+/// tests again within a probe. Every frame's visibility target equals the frame without
+/// occlusion's, through both switches, a cut told and untold, and the mover coming out.
+#[test]
+fn adaptive_occlusion_stops_and_resumes_testing_and_draws_what_the_frame_without_it_does() {
+    let (w, h) = (160, 96);
+    // Above the scene, looking down: the instances stand side by side, little is hidden.
+    let open = look(Vec3::new(0.5, 16.0, -2.0), Vec3::new(0.0, 0.0, -2.5));
+    // Facing the wall: the three small instances and the panel's neighbours are hidden.
+    let walled = look(Vec3::new(0.0, 2.0, 11.0), Vec3::ZERO);
+    // The share each view hides, from frames that test every time.
+    let share = |camera: &Camera| {
+        let mut r = renderer(true, None, w, h);
+        r.render_still(camera).unwrap();
+        let c = r.render_still(camera).unwrap().counts;
+        hidden_share(&c).expect("the second frame tested")
+    };
+    let (little, much) = (share(&open), share(&walled));
+    eprintln!("hidden share: {little} looking down, {much} facing the wall");
+    assert!(much > 2.0 * little + 0.02, "{little} against {much}");
+    let policy = OcclusionPolicy {
+        min_hidden: (little + much) / 2.0,
+        probe_every: 4,
+    };
+    let mut with = renderer_with(policy, true, None, w, h);
+    let mut without = renderer(false, None, w, h);
+    let step = |label, camera, cut| Step {
+        label,
+        camera,
+        mover: 0.0,
+        cut,
+    };
+    let mut steps: Vec<Step> = (0..12).map(|_| step("looking down", open, false)).collect();
+    steps.push(step("to the wall, told", walled, true));
+    steps.extend((0..8).map(|_| step("facing the wall", walled, false)));
+    steps.push(step("looking down, not told", open, false));
+    steps.extend((0..4).map(|k| Step {
+        mover: 0.25 * k as f32,
+        ..step("looking down, mover out", open, false)
+    }));
+    let mut plans = Vec::new();
+    for (frame, s) in steps.iter().enumerate() {
+        let (counts, ties) = compare_images(&mut with, &mut without, s, frame);
+        let plan = with.last_frame_plan();
+        assert_eq!(
+            counts.is_some(),
+            plan.second,
+            "frame {frame}: the counters of the second pass come back exactly when it runs"
+        );
+        assert!(ties * 100 <= (w * h) as usize, "{ties} ties");
+        plans.push((s.label, plan, with.tests_occlusion()));
+    }
+    let off = |range: std::ops::Range<usize>| {
+        plans[range]
+            .iter()
+            .filter(|(_, p, _)| !p.pyramid && !p.second)
+            .count()
+    };
+    // Looking down: testing stops after the first tested frame; frames without a
+    // pyramid outnumber the probes' (a pyramid frame, then a tested one).
+    assert!(off(0..12) >= 6, "{plans:?}");
+    assert!(plans[2..6].iter().all(|(_, p, _)| !p.pyramid), "{plans:?}");
+    // Facing the wall (told it was a cut: a pyramid frame first): every later frame
+    // tests, and the policy stays on.
+    assert!(
+        plans[13..21].iter().all(|(_, p, t)| *p == FramePlan::FULL && *t),
+        "{plans:?}"
+    );
+    // Looking down again (a move the renderer was not told of, drawn by the second
+    // pass): testing stops again.
+    assert_eq!(plans[21].1, FramePlan::FULL);
+    assert!(off(22..26) >= 3, "{plans:?}");
 }

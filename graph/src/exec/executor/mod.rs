@@ -304,6 +304,12 @@ impl Executor {
         Ok(self.readbacks.take(name))
     }
 
+    /// Whether readback `name` has run in some frame, so [`Self::take_readback`] knows it.
+    /// A readback whose pass every frame so far left out has not.
+    pub fn readback_has_run(&self, name: &str) -> bool {
+        self.readbacks.known(name)
+    }
+
     /// Copies dropped because the GPU was further behind than the readback rings hold.
     pub fn readbacks_dropped(&self) -> u64 {
         self.readbacks.dropped() + self.timestamps.as_ref().map_or(0, |t| t.dropped())
