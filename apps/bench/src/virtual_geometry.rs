@@ -792,7 +792,13 @@ pub fn lattice(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         occlusion: false,
         ..settings.clone()
     };
-    rows.extend(occlusion_rows("virtual-geometry", &case, &placed, &settings, frames)?);
+    rows.extend(occlusion_rows(
+        "virtual-geometry",
+        &case,
+        &placed,
+        &settings,
+        frames,
+    )?);
 
     // The same cut, every cluster to one rasteriser.
     let software = measure(
@@ -1064,7 +1070,13 @@ pub fn million(quick: bool, meshes: &[PathBuf]) -> BenchResult {
         let m = measure(&placed, settings.clone(), frames)?;
         rows.extend(rows_of("vg-million", &case, &m));
         if !placed.data.instances_split() {
-            rows.extend(occlusion_rows("vg-million", &case, &placed, &settings, frames)?);
+            rows.extend(occlusion_rows(
+                "vg-million",
+                &case,
+                &placed,
+                &settings,
+                frames,
+            )?);
         }
     }
     Ok(rows)

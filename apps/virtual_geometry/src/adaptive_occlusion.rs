@@ -9,8 +9,10 @@
 //! [`OcclusionPolicy::min_hidden`], stops testing: each frame then runs as a frame
 //! without occlusion would (its first pass tests nothing, as after a camera cut), and
 //! the second pass and the pyramid are left out of it ([`FrameData::skip`]). Every
-//! [`OcclusionPolicy::probe_every`] frames it builds a pyramid again and tests the next
-//! frames, whose counters decide whether testing goes on.
+//! [`OcclusionPolicy::probe_every`] frames it probes: one frame builds a pyramid, the
+//! next tests against it (two-pass, as always), and the frames after it test nothing
+//! until that frame's counters come back and decide whether testing resumes. A probe
+//! costs about one pyramid and one second pass.
 //!
 //! Lossless by construction: a frame tests against last frame's pyramid only when last
 //! frame built one, and a frame that tests nothing hides nothing, so its second pass has
@@ -130,10 +132,12 @@ impl SecondPass {
             return Err("the frame has no second walk or cull".into());
         }
         let writers = |r: usize| {
-            plan.order
-                .iter()
-                .copied()
-                .filter(move |&p| plan.passes[p].slots.iter().any(|s| s.resource == r && s.writes_version.is_some()))
+            plan.order.iter().copied().filter(move |&p| {
+                plan.passes[p]
+                    .slots
+                    .iter()
+                    .any(|s| s.resource == r && s.writes_version.is_some())
+            })
         };
         loop {
             // Resources only the set writes: what a pass reading them needs the second
@@ -215,15 +219,26 @@ pub fn hidden_share(c: &FrameCounts) -> Option<f32> {
     Some(if total > 0.0 { hidden / total } else { 0.0 })
 }
 
-/// The renderer's state: testing or not, and whether last frame left a pyramid.
+/// Where the renderer is in its cycle of testing and probing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    /// Every frame tests (its pyramid permitting).
+    Testing,
+    /// No frame tests; `frames` since testing stopped or the last probe.
+    Idle { frames: u32 },
+    /// The next frame builds a pyramid for the probe.
+    ProbePyramid,
+    /// The next frame tests against it; then frames idle until its counters decide.
+    ProbeTest,
+}
+
+/// The renderer's state: what its frames test, and whether last frame left a pyramid.
 #[derive(Clone, Debug)]
 pub struct Adaptive {
     policy: OcclusionPolicy,
-    testing: bool,
+    mode: Mode,
     /// Last frame built the pyramid this frame would test against.
     pyramid_fresh: bool,
-    /// Frames since testing stopped.
-    idle: u32,
 }
 
 impl Adaptive {
@@ -231,16 +246,15 @@ impl Adaptive {
     pub fn new(policy: OcclusionPolicy) -> Self {
         Self {
             policy,
-            testing: true,
+            mode: Mode::Testing,
             pyramid_fresh: false,
-            idle: 0,
         }
     }
 
     /// Whether the frames test occlusion now (the next may still be one that only builds
-    /// a pyramid).
+    /// a pyramid); `false` while idle or probing.
     pub fn testing(&self) -> bool {
-        self.testing
+        self.mode == Mode::Testing
     }
 
     /// What the next frame runs; `cut`: the caller said the camera jumped.
@@ -251,30 +265,45 @@ impl Adaptive {
                 ..FramePlan::FULL
             };
         }
-        if self.testing {
-            let test = !cut && self.pyramid_fresh;
-            self.pyramid_fresh = true;
-            // A frame that tests nothing hides nothing: no second pass.
-            return FramePlan {
-                test,
-                pyramid: true,
-                second: test,
-            };
-        }
-        self.idle += 1;
-        if self.idle >= self.policy.probe_every {
-            self.testing = true;
-        }
-        self.pyramid_fresh = false;
-        FramePlan {
-            test: false,
-            pyramid: false,
-            second: false,
+        let fresh = std::mem::replace(&mut self.pyramid_fresh, true);
+        match self.mode {
+            Mode::Testing | Mode::ProbeTest => {
+                if self.mode == Mode::ProbeTest {
+                    self.mode = Mode::Idle { frames: 0 };
+                }
+                // A frame that tests nothing hides nothing: no second pass.
+                let test = !cut && fresh;
+                FramePlan {
+                    test,
+                    pyramid: true,
+                    second: test,
+                }
+            }
+            Mode::ProbePyramid => {
+                self.mode = Mode::ProbeTest;
+                FramePlan {
+                    test: false,
+                    pyramid: true,
+                    second: false,
+                }
+            }
+            Mode::Idle { frames } => {
+                self.mode = match frames + 1 >= self.policy.probe_every {
+                    true => Mode::ProbePyramid,
+                    false => Mode::Idle { frames: frames + 1 },
+                };
+                self.pyramid_fresh = false;
+                FramePlan {
+                    test: false,
+                    pyramid: false,
+                    second: false,
+                }
+            }
         }
     }
 
     /// Takes the counters of a frame that ran `plan`: a frame that tested decides
-    /// whether the frames test on.
+    /// whether the frames test on (a probe's, whether they test again).
     pub fn observe(&mut self, plan: FramePlan, counts: &FrameCounts) {
         if self.policy.always() || !plan.second {
             return;
@@ -282,11 +311,11 @@ impl Adaptive {
         let Some(share) = hidden_share(counts) else {
             return;
         };
-        let testing = share >= self.policy.min_hidden;
-        if self.testing && !testing {
-            self.idle = 0;
+        if share >= self.policy.min_hidden {
+            self.mode = Mode::Testing;
+        } else if self.mode == Mode::Testing {
+            self.mode = Mode::Idle { frames: 0 };
         }
-        self.testing = testing;
     }
 }
 
@@ -360,14 +389,21 @@ mod tests {
             for latency in [0, 2, 3] {
                 let plans = run(OcclusionPolicy::DEFAULT, 400, latency, &[7, 130], |f| {
                     // Alternating long stretches of little and much hidden.
-                    if (f / 90) % 2 == 0 { hidden } else { 1000 - hidden }
+                    if (f / 90) % 2 == 0 {
+                        hidden
+                    } else {
+                        1000 - hidden
+                    }
                 });
                 for (f, p) in plans.iter().enumerate() {
                     if p.test {
                         assert!(f > 0 && plans[f - 1].pyramid, "frame {f}: {plans:?}");
                         assert!(p.second && p.pyramid, "frame {f}");
                     }
-                    assert!(!p.second || p.test, "frame {f}: a second pass with nothing hidden");
+                    assert!(
+                        !p.second || p.test,
+                        "frame {f}: a second pass with nothing hidden"
+                    );
                 }
                 assert!(!plans[7].test && !plans[130].test, "a cut frame tested");
             }
@@ -387,12 +423,22 @@ mod tests {
         let tests: Vec<usize> = (0..200).filter(|&f| plans[f].test).collect();
         assert_eq!(&tests[..2], &[1, 2], "{tests:?}");
         let skipped = plans.iter().filter(|p| !p.pyramid).count();
-        assert!(skipped > 150, "{skipped} frames without a pyramid: {plans:?}");
+        assert!(
+            skipped > 150,
+            "{skipped} frames without a pyramid: {plans:?}"
+        );
+        // A probe is a pyramid frame and one tested frame; the frames after it wait
+        // for its counters without testing.
+        let second_passes = plans.iter().filter(|p| p.second).count();
+        assert!(second_passes <= 3 + 200 / 20, "{second_passes}: {plans:?}");
         // Probes keep coming.
         assert!(tests.iter().any(|&f| f > 150), "{tests:?}");
         // 30 % hidden: every frame after the first tests.
         let plans = run(policy, 200, 2, &[], |_| 300);
-        assert!(plans[1..].iter().all(|p| *p == FramePlan::FULL), "{plans:?}");
+        assert!(
+            plans[1..].iter().all(|p| *p == FramePlan::FULL),
+            "{plans:?}"
+        );
         // Hidden again after a stretch of nothing: testing resumes within a probe.
         let plans = run(policy, 200, 2, &[], |f| if f < 60 { 0 } else { 300 });
         let back = (60..200).find(|&f| plans[f].test).unwrap();
@@ -405,14 +451,27 @@ mod tests {
         let plans = run(OcclusionPolicy::ALWAYS, 50, 2, &[10], |_| 0);
         for (f, p) in plans.iter().enumerate() {
             let test = f != 10;
-            assert_eq!(*p, FramePlan { test, ..FramePlan::FULL }, "frame {f}");
+            assert_eq!(
+                *p,
+                FramePlan {
+                    test,
+                    ..FramePlan::FULL
+                },
+                "frame {f}"
+            );
         }
     }
 
     #[test]
     fn the_policy_parses_from_its_names_and_numbers() {
-        assert_eq!(OcclusionPolicy::parse("always"), Some(OcclusionPolicy::ALWAYS));
-        assert_eq!(OcclusionPolicy::parse(" adaptive "), Some(OcclusionPolicy::DEFAULT));
+        assert_eq!(
+            OcclusionPolicy::parse("always"),
+            Some(OcclusionPolicy::ALWAYS)
+        );
+        assert_eq!(
+            OcclusionPolicy::parse(" adaptive "),
+            Some(OcclusionPolicy::DEFAULT)
+        );
         assert_eq!(
             OcclusionPolicy::parse("0.25/30"),
             Some(OcclusionPolicy {

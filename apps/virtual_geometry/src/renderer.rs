@@ -4,6 +4,7 @@
 //! `FrameSettings::clustering`, the renderer's lights are uploaded and clustered every
 //! frame, and the clustering's lists grow the same way.
 
+use super::adaptive_occlusion::{Adaptive, FramePlan, OcclusionPolicy, SecondPass};
 use super::counts::{
     CLUSTER_COUNT_READBACK, FrameCounts, HIERARCHY_COUNTS_READBACK, HierarchyCounts,
     RASTER_COUNTS_READBACK, SECOND_COUNTS_READBACK, SECOND_HIERARCHY_COUNTS_READBACK,
@@ -13,7 +14,6 @@ use super::frame_graph::{
     CLUSTERS_PARAM, DEPTH, Frame, GraphSource, HOST_TARGET, MAX_SLOTS, SECOND_COUNTS, SLOTS_PARAM,
     frame,
 };
-use super::adaptive_occlusion::{Adaptive, FramePlan, OcclusionPolicy, SecondPass};
 use super::settings::FrameSettings;
 use super::streaming::{PageSource, Streaming};
 use glam::Mat4;

@@ -19,8 +19,8 @@ use meshlight::scene::terrain::Terrain;
 use meshlight::scene::{BuildOptions, MeshletAsset, build_asset};
 use meshlight::shaders::cpu::layout::Cluster;
 use meshlight::shaders::cpu::visbuffer;
-use meshlight_virtual_geometry::counts::OcclusionCounts;
 use meshlight_virtual_geometry::adaptive_occlusion::{FramePlan, hidden_share};
+use meshlight_virtual_geometry::counts::OcclusionCounts;
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, OcclusionPolicy, Renderer};
 use std::sync::OnceLock;
 
@@ -516,7 +516,9 @@ fn adaptive_occlusion_stops_and_resumes_testing_and_draws_what_the_frame_without
     // Facing the wall (told it was a cut: a pyramid frame first): every later frame
     // tests, and the policy stays on.
     assert!(
-        plans[13..21].iter().all(|(_, p, t)| *p == FramePlan::FULL && *t),
+        plans[13..21]
+            .iter()
+            .all(|(_, p, t)| *p == FramePlan::FULL && *t),
         "{plans:?}"
     );
     // Looking down again (a move the renderer was not told of, drawn by the second
