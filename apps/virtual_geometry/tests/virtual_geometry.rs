@@ -453,7 +453,7 @@ fn a_still_of_the_occlusion_view_culls_against_a_history() {
     let still = r.render_still(&camera).unwrap_or_else(|e| panic!("{e}"));
     // A first frame tests nothing, so it hides nothing and leaves the second pass out.
     assert_eq!(still.counts.occlusion, None);
-    assert_eq!(r.last_frame_plan().second, false);
+    assert!(!r.last_frame_plan().second);
 }
 
 #[test]
