@@ -500,6 +500,12 @@ const ONE_VIEW_PROGRAMS: [&str; 4] = [
     "one_view:fill",
 ];
 
+/// The programs a one-view first walk with a pyramid also compiles without occlusion,
+/// entry by entry (`prepare` and `walk_dispatch` are not among them: the occlusion
+/// variant's `prepare` also zeroes the hidden-node count a second walk may read).
+const UNTESTED_PROGRAMS: [(&str, &str); 2] =
+    [("roots", "untested:roots"), ("fill", "untested:fill")];
+
 impl HierarchyFill {
     /// The one view a walk over several is given this frame, when only one has a
     /// viewport (the camera while every cascade keeps its map, or one cascade drawn)
@@ -619,6 +625,26 @@ impl Pass for HierarchyFill {
         }
         // Only `walk_dispatch` uses `walk_args` as storage; `fill` is dispatched with it.
         instance_programs(ctx, &SHADER, &ENTRIES, layout.clone(), &defs);
+        if occlusion && !second && !multi_view {
+            // A frame that tests nothing (no history, a camera cut, a renderer leaving
+            // occlusion out) walks without the occlusion test compiled in: the
+            // variant with it carried the walk 0.009 ms slower on an NVIDIA H200 (15³
+            // bunnies, docs/BENCHMARKS.md). Its bindings are the shader's own.
+            let untested = WalkDefs {
+                occlusion: false,
+                ..defs
+            };
+            let table = meshlight_gpu_scene::instance_table::InstanceTable::of(ctx);
+            for (entry, name) in UNTESTED_PROGRAMS {
+                ctx.program(
+                    name,
+                    ProgramDesc::compute(&SHADER, entry)
+                        .defs(&untested)
+                        .defs(&table)
+                        .layout(BindingLayout::from_shader("fill_clusters::hierarchy")),
+                );
+            }
+        }
         if multi_view {
             // The one-view programs, for a frame that gives one view a viewport.
             let one = WalkDefs {
@@ -739,7 +765,12 @@ impl Pass for HierarchyFill {
                 ("params", bytemuck::bytes_of(&params)),
             ];
             let at = ENTRIES.iter().position(|e| *e == entry).unwrap_or(0);
-            ctx.dispatch_compute(programs[at], &uniforms, grid)?;
+            let untested = (occlusion && !test_occlusion && self.phase == Phase::First)
+                .then(|| UNTESTED_PROGRAMS.iter().find(|(e, _)| *e == entry))
+                .flatten()
+                .filter(|_| self.views == 1);
+            let program = untested.map_or(programs[at], |(_, name)| *name);
+            ctx.dispatch_compute(program, &uniforms, grid)?;
         }
         Ok(())
     }

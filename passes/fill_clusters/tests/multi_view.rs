@@ -347,6 +347,17 @@ fn first_walk(
     before: Option<&[View]>,
     occlusion: Option<(u32, &DepthPyramid)>,
 ) -> FirstWalk {
+    walk_frames(data, views, before, occlusion, false)
+}
+
+/// [`first_walk`], with `cut`: one frame more, told the camera jumped (it tests nothing).
+fn walk_frames(
+    data: &mut SceneData,
+    views: &[View],
+    before: Option<&[View]>,
+    occlusion: Option<(u32, &DepthPyramid)>,
+    cut: bool,
+) -> FirstWalk {
     const NODES: u64 = 1 << 12;
     let gpu = gpu();
     let scene = GpuScene::new(&gpu, data);
@@ -398,15 +409,20 @@ fn first_walk(
         write_pyramid(&gpu.queue, texture, pyramid);
         imports = imports.texture("upload", texture);
     }
-    let frame = |views: &[View]| {
+    let frame = |views: &[View], cut: bool| {
         FrameData::new()
             .with("views", bytemuck::cast_slice(views))
-            .with(CAMERA_CUT_INPUT, &0u32.to_le_bytes())
+            .with(CAMERA_CUT_INPUT, &u32::from(cut).to_le_bytes())
     };
     let mut exec = Executor::new(gpu);
-    // The first frame fills the history; the second walks against it.
+    // The first frame fills the history; the second walks against it; with `cut`, a
+    // third is told the camera jumped.
     for views in [before.unwrap_or(views), views] {
-        exec.execute_frame(&compiled, &imports, &frame(views))
+        exec.execute_frame(&compiled, &imports, &frame(views, false))
+            .unwrap();
+    }
+    if cut {
+        exec.execute_frame(&compiled, &imports, &frame(views, true))
             .unwrap();
     }
     let words = |exec: &mut Executor, name: &str| -> Vec<u32> {
@@ -549,4 +565,23 @@ fn a_walk_given_one_view_lists_and_hides_what_that_views_own_walk_does() {
         );
     }
     assert!(!want.lists[0].0.is_empty(), "the cascade listed nothing");
+}
+
+/// A first walk with a pyramid that tests nothing (no history, a camera cut: the
+/// renderer's frames while occlusion does not pay) runs kernels compiled without the
+/// test. It lists what a walk without a pyramid lists, and hands on no hidden node,
+/// though the frame before hid some.
+#[test]
+fn a_first_walk_that_tests_nothing_lists_what_a_walk_without_a_pyramid_does() {
+    let mut data = scene();
+    let viewport = [640, 360];
+    let mut rng = Rng(0x0c07_0001);
+    let camera_view = corner_camera(&data).view(viewport, 0, None);
+    let pyramid = walls(&mut rng, &data, &camera_view, viewport, 8);
+    let tested = first_walk(&mut data, &[camera_view], None, Some((0, &pyramid)));
+    assert!(!tested.hidden.is_empty(), "the walls hid nothing");
+    let cut = walk_frames(&mut data, &[camera_view], None, Some((0, &pyramid)), true);
+    let plain = first_walk(&mut data, &[camera_view], None, None);
+    assert_eq!(cut.lists[0], plain.lists[0], "the list and its words");
+    assert_eq!(cut.hidden_words, [0, 0], "hidden nodes after a cut");
 }
