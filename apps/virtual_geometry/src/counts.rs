@@ -143,9 +143,9 @@ impl HierarchyCounts {
 /// (`visible`, `software`, `hardware`, triangles) include the second pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct OcclusionCounts {
-    /// First pass: clusters in the LOD cut, those whose sphere could be tested against
-    /// last frame's pyramid (0 without valid history or on a camera cut), and those it
-    /// hid (the second pass's candidates).
+    /// First pass: clusters in the LOD cut and those whose sphere could be tested
+    /// against last frame's pyramid (both 0 without valid history or on a camera cut,
+    /// when nothing is tested), and those it hid (the second pass's candidates).
     pub first_cut: u32,
     /// See `first_cut`.
     pub first_tested: u32,

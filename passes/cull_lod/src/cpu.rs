@@ -131,7 +131,8 @@ pub struct CullResult {
     pub occluded: Vec<Cluster>,
     /// `raster_counts`. Words 0, 1, 5 and 6 count the clusters that got a slot; when the
     /// cut exceeds the capacity, which ones do depends on the GPU's atomics, and the
-    /// reference gives the slots in list order. Words 8..12 are 0 without occlusion.
+    /// reference gives the slots in list order. Words 8..12 are 0 without occlusion, and
+    /// words 8, 9 and 11 when the test is skipped.
     pub counts: [u32; 12],
     /// `hw_args`: `[384, counts[1], 0, 0]`.
     pub hw_args: [u32; 4],
@@ -407,7 +408,9 @@ pub fn cpu_cull_with(
     if !matches!(occlusion, Occlusion::Off) {
         r.counts[9] = r.occluded.len() as u32;
         r.counts[10] = slots;
-    } else {
+    }
+    // The cut is counted only where the test runs.
+    if matches!(occlusion, Occlusion::Off | Occlusion::Skipped) {
         r.counts[8] = 0;
     }
     r.hw_args = [HW_VERTICES, r.counts[1], 0, 0];

@@ -351,7 +351,11 @@ fn cull(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) t
 #endif
 
 #ifdef OCCLUSION
-    atomicAdd(&raster_counts[8], 1u);
+    // The cut the test saw: counted only when it runs (a frame that tests nothing runs
+    // `cull` compiled without OCCLUSION where it can, which counts nothing here).
+    if params.test_occlusion != 0u {
+        atomicAdd(&raster_counts[8], 1u);
+    }
 #ifdef PER_INSTANCE
     let at = per_instance_word(cluster.instance, 0u);
     let in_bounds = at + 1u < arrayLength(&per_instance);

@@ -41,8 +41,8 @@
 //! pass has), `[3]` `C`, `[4]` clusters that passed the frustum test, `[5]` software
 //! triangles, `[6]` hardware triangles, `[7]` the first slot of this pass's software
 //! clusters (0 but in a second pass). Overflow = `max(0, [2] - [3])`.
-//! With a pyramid the buffer has 12 words: `[8]` clusters in the LOD cut, `[9]` of
-//! those found hidden, `[10]` the slots this pass has (overflow = `max(0, [2] - [10])`),
+//! With a pyramid the buffer has 12 words: `[8]` clusters in the LOD cut (0 when the
+//! test is skipped), `[9]` of those found hidden, `[10]` the slots this pass has (overflow = `max(0, [2] - [10])`),
 //! `[11]` clusters whose sphere could be tested (in front of the near plane, wholly on
 //! the screen; 0 when the test is skipped). Frame input `view`
 //! (`meshlight_shaders::cpu::layout::View`); a `first` pass with a pyramid also reads
@@ -244,6 +244,9 @@ pub const PAGE_REQUESTS_SLOT: &str = "page_requests";
 pub const PAGE_REQUEST_COUNT_SLOT: &str = "page_request_count";
 /// The element of `page_requests`: a group and its priority (f32 bits).
 pub const PAGE_REQUEST: Element = Element::named("PageRequest", 8);
+
+/// The program a first pass with a pyramid culls with when it tests nothing.
+const UNTESTED_CULL: &str = "untested:cull";
 
 /// The binding of the per-instance counters in cull.wgsl.
 const PER_INSTANCE_BINDING: u32 = 16;
@@ -721,6 +724,27 @@ impl Pass for CullLod {
                 .defs(&table)
                 .layout(cull),
         );
+        if occlusion && !second && per_instance.is_none() {
+            // A frame that tests nothing (no history, a camera cut, a renderer leaving
+            // occlusion out) culls without the test compiled in; `prepare` is the
+            // occlusion variant's, which zeroes the candidates' count a second pass
+            // may read.
+            let untested = CullDefs {
+                occlusion: false,
+                ..defs
+            };
+            ctx.program(
+                UNTESTED_CULL,
+                ProgramDesc::compute(&SHADER, "cull")
+                    .defs(&untested)
+                    .defs(&table)
+                    .layout(BindingLayout::from_shader("cull_lod::cull").scratch(
+                        9,
+                        "dispatch",
+                        Access::StorageRead,
+                    )),
+            );
+        }
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
@@ -757,8 +781,12 @@ impl Pass for CullLod {
         )?;
         // A second dispatch: the counters and arguments are written before any cluster
         // reads them.
+        let untested = ctx.is_bound("pyramid")
+            && self.phase == Phase::First
+            && !test_occlusion
+            && !ctx.is_bound(PER_INSTANCE_FIRST);
         ctx.dispatch_compute(
-            "cull",
+            if untested { UNTESTED_CULL } else { "cull" },
             &[("view", view), ("params", params)],
             Workgroups::Indirect(dispatch, 0),
         )

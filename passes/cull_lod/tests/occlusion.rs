@@ -61,6 +61,7 @@ struct Harness {
     upload: wgpu::Texture,
     now: wgpu::Texture,
     capacity: u32,
+    per_instance_bound: bool,
 }
 
 /// What one frame left.
@@ -78,6 +79,12 @@ struct Frame {
 
 impl Harness {
     fn new(data: &mut SceneData, clusters: &[Cluster]) -> Self {
+        Self::with(data, clusters, true)
+    }
+
+    /// With `per_instance`, the per-instance counters are bound (the `occlusion` view's
+    /// frame); without, a first pass that tests nothing runs its untested kernel.
+    fn with(data: &mut SceneData, clusters: &[Cluster], per_instance_bound: bool) -> Self {
         let gpu = gpu();
         let scene = GpuScene::new(&gpu, data);
         let mut g = GraphBuilder::new();
@@ -116,49 +123,45 @@ impl Harness {
             thresholds: T,
             ..CullLod::default()
         };
-        let out = g
-            .add_pass(
-                "cull",
-                first,
-                scene_bindings()
-                    .bind("clusters", list)
-                    .bind("cluster_count", count)
-                    .bind("raster_clusters", raster)
-                    .bind("raster_counts", counts)
-                    .bind("hw_args", hw_args)
-                    .bind("pyramid", history.prev)
-                    .bind("occluded", occluded)
-                    .bind("occluded_count", occluded_count)
-                    .bind(PER_INSTANCE_FIRST, per_instance),
-            )
-            .unwrap();
+        let mut bindings = scene_bindings()
+            .bind("clusters", list)
+            .bind("cluster_count", count)
+            .bind("raster_clusters", raster)
+            .bind("raster_counts", counts)
+            .bind("hw_args", hw_args)
+            .bind("pyramid", history.prev)
+            .bind("occluded", occluded)
+            .bind("occluded_count", occluded_count);
+        if per_instance_bound {
+            bindings = bindings.bind(PER_INSTANCE_FIRST, per_instance);
+        }
+        let out = g.add_pass("cull", first, bindings).unwrap();
         let second = CullLod {
             thresholds: T,
             phase: Phase::Second,
             ..CullLod::default()
         };
-        let out2 = g
-            .add_pass(
-                "cull_second",
-                second,
-                scene_bindings()
-                    .bind("clusters", out.buffer("occluded").unwrap())
-                    .bind("cluster_count", out.buffer("occluded_count").unwrap())
-                    .bind("raster_clusters", out.buffer("raster_clusters").unwrap())
-                    .bind("raster_counts", counts2)
-                    .bind("hw_args", hw_args2)
-                    .bind("pyramid", now_handle)
-                    .bind("first_counts", out.buffer("raster_counts").unwrap())
-                    .bind(PER_INSTANCE_SECOND, out.buffer(PER_INSTANCE_FIRST).unwrap()),
-            )
-            .unwrap();
+        let mut bindings = scene_bindings()
+            .bind("clusters", out.buffer("occluded").unwrap())
+            .bind("cluster_count", out.buffer("occluded_count").unwrap())
+            .bind("raster_clusters", out.buffer("raster_clusters").unwrap())
+            .bind("raster_counts", counts2)
+            .bind("hw_args", hw_args2)
+            .bind("pyramid", now_handle)
+            .bind("first_counts", out.buffer("raster_counts").unwrap());
+        if per_instance_bound {
+            bindings = bindings.bind(PER_INSTANCE_SECOND, out.buffer(PER_INSTANCE_FIRST).unwrap());
+        }
+        let out2 = g.add_pass("cull_second", second, bindings).unwrap();
         for name in ["raster_counts", "hw_args", "occluded", "occluded_count"] {
             g.export(out.buffer(name).unwrap());
         }
         g.export(out2.buffer("raster_counts").unwrap());
         g.export(out2.buffer("hw_args").unwrap());
         g.export(out2.buffer("raster_clusters").unwrap());
-        g.export(out2.buffer(PER_INSTANCE_SECOND).unwrap());
+        if per_instance_bound {
+            g.export(out2.buffer(PER_INSTANCE_SECOND).unwrap());
+        }
         let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
         let [clusters_buffer, count_buffer, raster_buffer] = cull_buffers(&gpu, clusters, n as u32);
         let (upload, now) = (
@@ -175,6 +178,7 @@ impl Harness {
             upload,
             now,
             capacity,
+            per_instance_bound,
         }
     }
 
@@ -212,7 +216,10 @@ impl Harness {
         let candidate_count = words(&mut self.exec, "candidate_count");
         let second = words(&mut self.exec, "raster_counts_second");
         let second_hw_args = words(&mut self.exec, "hw_args_second");
-        let per_instance = words(&mut self.exec, "instance_occlusion");
+        let per_instance = match self.per_instance_bound {
+            true => words(&mut self.exec, "instance_occlusion"),
+            false => Vec::new(),
+        };
         let raster = self
             .exec
             .gpu
@@ -551,8 +558,15 @@ fn the_second_pass_tests_only_the_first_passs_candidates_in_the_free_slots() {
 
 #[test]
 fn with_no_valid_history_or_on_a_camera_cut_the_first_pass_culls_nothing_by_occlusion() {
+    // With the per-instance counters bound, and without (the untested kernel).
+    for per_instance in [true, false] {
+        no_test_culls_nothing(per_instance);
+    }
+}
+
+fn no_test_culls_nothing(per_instance: bool) {
     let (_, mut data, clusters) = seeded(0x1157_0e41_0000_0003, moved_scene());
-    let mut harness = Harness::new(&mut data, &clusters);
+    let mut harness = Harness::with(&mut data, &clusters, per_instance);
     let view = Camera::perspective(Vec3::new(-2.0, 3.0, 10.0), Vec3::ZERO, 1.1, 0.05)
         .view(VIEWPORT, 1, None);
     // A wall over the whole screen, nearer than everything: with a valid history it
@@ -615,4 +629,8 @@ fn with_no_valid_history_or_on_a_camera_cut_the_first_pass_culls_nothing_by_occl
         "the valid history hid only {}",
         f.first[9]
     );
+    // Frame 3, a cut after a frame that listed candidates: none is left for the second
+    // pass.
+    let f = harness.frame(&view, true, &wall, &wall);
+    check(&f, "camera cut after a tested frame");
 }
