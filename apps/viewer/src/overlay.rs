@@ -156,6 +156,18 @@ impl Overlay {
                 });
             });
         }
+        if f.renderer.culls_in_two_passes() {
+            let policy = f.settings.occlusion_policy;
+            ui.label(if f.renderer.tests_occlusion() || policy.always() {
+                "occlusion: tested".to_string()
+            } else {
+                format!(
+                    "occlusion: left out (culled under {:.0} % of the cut), probed every {} frames",
+                    policy.min_hidden * 100.0,
+                    policy.probe_every
+                )
+            });
+        }
         if let Some(s) = f.stats {
             ui.label(format!(
                 "frame {}  graph CPU {:.2} ms  in flight {}",

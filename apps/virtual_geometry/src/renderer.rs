@@ -388,6 +388,12 @@ impl Renderer {
         self.two_pass && self.occlusion.testing()
     }
 
+    /// Whether the frame culls in two passes (its graph has a second culling pass), so
+    /// that it may test occlusion.
+    pub fn culls_in_two_passes(&self) -> bool {
+        self.two_pass
+    }
+
     /// What the last frame ran of a two-pass frame (the whole of it in a one-pass frame).
     pub fn last_frame_plan(&self) -> FramePlan {
         self.last_plan

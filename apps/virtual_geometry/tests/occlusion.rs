@@ -477,6 +477,7 @@ fn adaptive_occlusion_stops_and_resumes_testing_and_draws_what_the_frame_without
     };
     let mut with = renderer_with(policy, true, None, w, h);
     let mut without = renderer(false, None, w, h);
+    assert!(with.culls_in_two_passes() && !without.culls_in_two_passes());
     let step = |label, camera, cut| Step {
         label,
         camera,
