@@ -5,8 +5,9 @@
 //! frame, whatever they find (about 0.13 ms a frame on an NVIDIA H200 at 2240×1260). On
 //! a view that hides little (a see-through lattice of instances hides 3 % of its cut) that
 //! is more than the raster it saves. So the renderer watches the counters the frame
-//! reads back anyway and, where the share of the cut occlusion culled for good is below
-//! [`OcclusionPolicy::min_hidden`], stops testing: each frame then runs as a frame
+//! reads back anyway and, where the share of the cut occlusion culled for good stays
+//! below [`OcclusionPolicy::min_hidden`] for [`LOW_FRAMES`] tested frames in a row, stops
+//! testing: each frame then runs as a frame
 //! without occlusion would (its first pass tests nothing, as after a camera cut), and
 //! the second pass and the pyramid are left out of it ([`FrameData::skip`]). Every
 //! [`OcclusionPolicy::probe_every`] frames it probes: one frame builds a pyramid, the
@@ -42,10 +43,11 @@ impl OcclusionPolicy {
     /// frames (a second at 60 Hz) when it does not.
     ///
     /// Why a tenth: on an NVIDIA H200 a frame's occlusion costs about a quarter of its
-    /// raster (0.13 ms of 0.49 on the 15³ bunnies), and the raster a culled cluster
-    /// saves is less than its share of the cut (the first pass's clusters are the
-    /// larger ones). The default scene culls 35 % and the bunny lattice 3 %, so both
-    /// sit far from the line.
+    /// raster (0.13 ms against 0.47 on the 15³ bunnies). The default scene culls 35 %
+    /// and the bunny lattice 3 %, so both sit far from the line. The share counts
+    /// clusters, not the raster they cost: along the default scene's moving path,
+    /// stretches that culled under a tenth saved about as much raster as occlusion cost
+    /// there (docs/BENCHMARKS.md, "Adaptive occlusion").
     pub const DEFAULT: Self = Self {
         min_hidden: 0.1,
         probe_every: 60,
