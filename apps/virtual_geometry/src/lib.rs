@@ -1,16 +1,20 @@
-//! The virtual-geometry renderer: a GPU scene, the frame graph that draws it (built in
-//! code by [`frame_graph::build`], or loaded from a pipeline file such as
-//! `pipelines/virtual_geometry.toml`), and the frame loop that reads the GPU's counters
-//! back and grows the cluster lists when a frame overflowed them.
+//! The virtual-geometry renderer: a GPU scene, the frame graph that draws it (the
+//! shipped pipeline file `pipelines/virtual_geometry.toml`, embedded, or a caller's file,
+//! with the settings applied by [`frame_graph::frame`]), and the frame loop that reads the
+//! GPU's counters back and grows the cluster lists when a frame overflowed them.
 //!
 //! ```text
 //! fill_clusters → cull_lod (first) → remap_dispatch → sw_raster → hw_raster
-//!   → depth_pyramid → cull_lod (second) → hw_raster → resolve → depth_pyramid (history)
+//!   → depth_pyramid (also next frame's history) → fill_clusters (second)
+//!   → cull_lod (second) → remap_dispatch → sw_raster → hw_raster
+//!   → the shadow cascades → light clustering → resolve
 //! ```
 //!
 //! Two culling passes (occlusion, [`FrameSettings::occlusion`], on by default): the
 //! first against last frame's depth pyramid, the second, over what the first found
 //! hidden, against this frame's; see [`frame_graph`]. Off, one pass draws the LOD cut.
+//! While occlusion culls too little to pay, frames leave the second pass out
+//! ([`adaptive_occlusion`]).
 //!
 //! Nothing here decides what a pass does; the passes are the crates under `passes/`.
 //! This crate only wires them, sizes what they share, and turns the counters into
