@@ -42,9 +42,10 @@
 //! triangles, `[6]` hardware triangles, `[7]` the first slot of this pass's software
 //! clusters (0 but in a second pass). Overflow = `max(0, [2] - [3])`.
 //! With a pyramid the buffer has 12 words: `[8]` clusters in the LOD cut (0 when the
-//! test is skipped), `[9]` of those found hidden, `[10]` the slots this pass has (overflow = `max(0, [2] - [10])`),
-//! `[11]` clusters whose sphere could be tested (in front of the near plane, wholly on
-//! the screen; 0 when the test is skipped). Frame input `view`
+//! test is skipped), `[9]` of those found hidden, `[10]` the slots this pass has
+//! (overflow = `max(0, [2] - [10])`), `[11]` clusters whose sphere could be tested (in
+//! front of the near plane, wholly on the screen; 0 when the test is skipped). Frame
+//! input `view`
 //! (`meshlight_shaders::cpu::layout::View`); a `first` pass with a pyramid also reads
 //! frame input `camera_cut` (u32, non-zero: last frame's depth says nothing of this one).
 //!
@@ -55,8 +56,11 @@
 //! instance's `previous_world_from_local`, and sends it to `occluded` instead of a raster
 //! slot when the pyramid proves it hidden. When the history is not valid (first frame,
 //! resize; `RecordContext::history_valid`) or the frame input `camera_cut` is set, it
-//! tests nothing and behaves as without a pyramid. A pyramid that is not a history
-//! resource is never valid for the first pass.
+//! tests nothing and behaves as without a pyramid: without per-instance counters it
+//! then dispatches `cull` compiled without the test (its `prepare` still the occlusion
+//! variant's, which zeroes `occluded_count`), so such a frame costs what a frame without
+//! a pyramid does. A pyramid that is not a history resource is never valid for the
+//! first pass.
 //!
 //! `mode = "second"` takes the first pass's `occluded` list as its `clusters` and
 //! `occluded_count` as its `cluster_count`, binds this frame's pyramid (built from what
