@@ -45,9 +45,9 @@
 //! test is skipped), `[9]` of those found hidden, `[10]` the slots this pass has
 //! (overflow = `max(0, [2] - [10])`), `[11]` clusters whose sphere could be tested (in
 //! front of the near plane, wholly on the screen; 0 when the test is skipped). Frame
-//! input `view`
-//! (`meshlight_shaders::cpu::layout::View`); a `first` pass with a pyramid also reads
-//! frame input `camera_cut` (u32, non-zero: last frame's depth says nothing of this one).
+//! input `view` (`meshlight_shaders::cpu::layout::View`); a `first` pass with a pyramid
+//! also reads frame input `camera_cut` (u32, non-zero: last frame's depth says nothing
+//! of this one).
 //!
 //! # Two-pass occlusion
 //!
