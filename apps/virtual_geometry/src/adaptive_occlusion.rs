@@ -23,6 +23,8 @@
 //! [`FrameData::skip`]: meshlight::graph::FrameData::skip
 
 use crate::counts::FrameCounts;
+use crate::frame_graph::is_second_pass;
+use meshlight::graph::file::Pipeline;
 use meshlight::graph::{Plan, READBACK_STAGE};
 use std::collections::BTreeSet;
 
@@ -120,14 +122,14 @@ pub struct SecondPass {
 }
 
 impl SecondPass {
-    /// The second pass of `plan`, whose passes named in `second` are the second walk and
-    /// cull. `Err` says why the frame's second pass cannot be left out on its own (a
-    /// pass of another kind reads what it writes, or the pyramid is not one pass), and
-    /// the renderer then tests every frame.
-    pub fn of(plan: &Plan, second: &[String]) -> Result<Self, String> {
-        let mut set: BTreeSet<usize> = second
-            .iter()
-            .filter_map(|n| plan.pass_index(n))
+    /// The second pass of `plan`, compiled from `pipeline`, whose second walk and cull
+    /// start it ([`is_second_pass`]). `Err` says why the frame's second pass cannot be
+    /// left out on its own (a pass of another kind reads what it writes, or the pyramid
+    /// is not one pass), and the renderer then tests every frame.
+    pub fn of(plan: &Plan, pipeline: &Pipeline) -> Result<Self, String> {
+        let mut set: BTreeSet<usize> = (pipeline.passes.iter())
+            .filter(|e| is_second_pass(e))
+            .filter_map(|e| plan.pass_index(&e.name))
             .filter(|&p| !plan.is_culled(p))
             .collect();
         if set.is_empty() {

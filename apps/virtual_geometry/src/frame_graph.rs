@@ -220,7 +220,7 @@ fn camera_list_words(p: &Pipeline) -> (String, u64) {
     let fill = p.passes.iter().find(|e| {
         e.stage == meshlight::fill_clusters::STAGE
             && !super::shadows::is_shadow(e)
-            && e.param_str("mode") != Some("second")
+            && !is_second_pass(e)
     });
     let resource = fill
         .and_then(|f| f.binding("cluster_count"))
@@ -281,7 +281,7 @@ fn flat_fill(p: &mut Pipeline, registry: &Registry) -> Result<()> {
     super::shadows::walk_per_view(p);
     let mut second = Vec::new();
     for fill in p.passes_of_mut(meshlight::fill_clusters::STAGE) {
-        if fill.param_str("mode") == Some("second") {
+        if is_second_pass(fill) {
             second.push(fill.name.clone());
             continue;
         }
@@ -498,15 +498,11 @@ pub fn view_of(p: &Pipeline) -> Result<DebugView> {
 /// two atomics per cluster of the cut that no other view reads.
 fn occlusion_records(p: &mut Pipeline, instances: usize) -> Result<()> {
     let cull = meshlight::cull_lod::STAGE;
-    let Some(second_counts) = p
-        .passes_of(cull)
-        .find(|e| e.param_str("mode") == Some("second"))
-        .map(|e| {
-            e.binding("raster_counts")
-                .unwrap_or("raster_counts")
-                .to_string()
-        })
-    else {
+    let Some(second_counts) = p.passes_of(cull).find(|e| is_second_pass(e)).map(|e| {
+        e.binding("raster_counts")
+            .unwrap_or("raster_counts")
+            .to_string()
+    }) else {
         return Ok(());
     };
     if p.resource(INSTANCE_OCCLUSION).is_none() {
@@ -522,7 +518,7 @@ fn occlusion_records(p: &mut Pipeline, instances: usize) -> Result<()> {
         if super::shadows::is_shadow(pass) {
             continue;
         }
-        if pass.param_str("mode") == Some("second") {
+        if is_second_pass(pass) {
             pass.bind(PER_INSTANCE_SECOND, INSTANCE_OCCLUSION);
         } else if pass.binding("pyramid").is_some_and(|b| !b.is_empty()) {
             pass.bind(PER_INSTANCE_FIRST, INSTANCE_OCCLUSION);
@@ -594,6 +590,12 @@ fn targets(p: &mut Pipeline, s: &FrameSettings) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// Whether `e` is a second culling pass's walk or cull (`mode = "second"`): it re-tests
+/// what the first pass hid against this frame's pyramid.
+pub fn is_second_pass(e: &PassEntry) -> bool {
+    e.param_str("mode") == Some(meshlight::gpu_scene::Phase::Second.name())
 }
 
 /// The counters come back [`COUNTS_LATENCY`] frames later; the graph needs a resource

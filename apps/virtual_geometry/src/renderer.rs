@@ -362,11 +362,7 @@ impl Renderer {
     /// testing every frame. The `occlusion` view reads the second pass's counters every
     /// frame, so it tests every frame.
     fn note_second_pass(&mut self) {
-        let second: Vec<String> = (self.pipeline.passes.iter())
-            .filter(|e| e.param_str("mode") == Some("second"))
-            .map(|e| e.name.clone())
-            .collect();
-        self.second_pass = match SecondPass::of(&self.compiled.plan, &second) {
+        self.second_pass = match SecondPass::of(&self.compiled.plan, &self.pipeline) {
             _ if !self.two_pass || self.view.needs_occlusion_records() => None,
             Ok(pass) => Some(pass),
             Err(why) => {

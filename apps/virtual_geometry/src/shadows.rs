@@ -112,7 +112,7 @@ pub fn walk_with_camera(p: &mut Pipeline, registry: &Registry, cascades: u32) ->
         !is_shadow(e)
             && e.stage == FILL
             && e.implementation == meshlight::fill_clusters::hierarchy::IMPLEMENTATION
-            && e.param_str("mode") != Some("second")
+            && !super::frame_graph::is_second_pass(e)
     }) else {
         return Ok(false);
     };

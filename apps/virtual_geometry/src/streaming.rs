@@ -142,7 +142,7 @@ pub fn apply(p: &mut Pipeline, data: &SceneData) -> Result<()> {
     let cull = meshlight::cull_lod::STAGE;
     if !p
         .passes_of(cull)
-        .any(|e| e.param_str("mode") != Some("second"))
+        .any(|e| !super::frame_graph::is_second_pass(e))
     {
         return Err(GraphError::PipelineFile {
             file: p.file().to_string(),
@@ -176,7 +176,7 @@ pub fn apply(p: &mut Pipeline, data: &SceneData) -> Result<()> {
     // list, the shadow views' add theirs after it (a caster's shadow reaches the detail
     // its cascade wants, and the pages it draws from are kept in use).
     for pass in p.passes_of_mut(cull) {
-        if pass.param_str("mode") != Some("second") {
+        if !super::frame_graph::is_second_pass(pass) {
             for (slot, resource) in [
                 (STREAM_ERRORS_SLOT, STREAM_ERRORS),
                 (PAGE_MARKS_SLOT, PAGE_MARKS),

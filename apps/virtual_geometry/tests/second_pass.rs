@@ -7,23 +7,20 @@
 
 mod common;
 
+use meshlight::graph::file::Pipeline;
 use meshlight::graph::{AdapterClass, CompileOptions, Plan};
 use meshlight::resolve::DebugView;
 use meshlight_light_clustering::ClusteringSettings;
 use meshlight_virtual_geometry::adaptive_occlusion::SecondPass;
-use meshlight_virtual_geometry::frame_graph::frame;
+use meshlight_virtual_geometry::frame_graph::{frame, is_second_pass};
 use meshlight_virtual_geometry::{FrameSettings, GraphSource, ShadowSettings};
 
-fn plan(settings: &FrameSettings, class: AdapterClass) -> (Plan, Vec<String>) {
+fn plan(settings: &FrameSettings, class: AdapterClass) -> (Plan, Pipeline) {
     let (data, _, _) = common::grey_scene();
     let f = frame(&GraphSource::Shipped, &data, settings).unwrap_or_else(|e| panic!("{e}"));
-    let second = (f.pipeline.passes.iter())
-        .filter(|e| e.param_str("mode") == Some("second"))
-        .map(|e| e.name.clone())
-        .collect();
     let options = CompileOptions::new(wgpu::Features::all()).with_class(class);
     let compiled = f.graph.compile(&options).unwrap_or_else(|e| panic!("{e}"));
-    (compiled.plan, second)
+    (compiled.plan, f.pipeline)
 }
 
 #[test]
@@ -34,8 +31,8 @@ fn the_shipped_frames_second_pass_is_its_second_walk_cull_and_rasterisers() {
         ..FrameSettings::new(640, 360)
     };
     for class in [AdapterClass::FewGraphicsUnits, AdapterClass::Cpu] {
-        let (plan, second) = plan(&settings, class);
-        let got = SecondPass::of(&plan, &second).unwrap_or_else(|e| panic!("{class:?}: {e}"));
+        let (plan, pipeline) = plan(&settings, class);
+        let got = SecondPass::of(&plan, &pipeline).unwrap_or_else(|e| panic!("{class:?}: {e}"));
         let mut passes = got.passes.clone();
         passes.sort();
         assert_eq!(
@@ -59,11 +56,13 @@ fn the_shipped_frames_second_pass_is_its_second_walk_cull_and_rasterisers() {
 #[test]
 fn the_occlusion_views_resolve_reads_the_second_pass_so_it_stays() {
     let settings = FrameSettings::new(320, 180).with_view(DebugView::Occlusion);
-    let (plan, second) = plan(&settings, AdapterClass::FewGraphicsUnits);
-    match SecondPass::of(&plan, &second) {
+    let (plan, pipeline) = plan(&settings, AdapterClass::FewGraphicsUnits);
+    match SecondPass::of(&plan, &pipeline) {
         Err(why) => assert!(why.contains("`resolve`"), "{why}"),
         Ok(p) => panic!("left out with the occlusion view: {:?}", p.passes),
     }
-    // No second walk or cull named: nothing to leave out.
-    assert!(SecondPass::of(&plan, &[]).is_err());
+    // No second walk or cull: nothing to leave out.
+    let mut one_pass = pipeline.clone();
+    one_pass.passes.retain(|e| !is_second_pass(e));
+    assert!(SecondPass::of(&plan, &one_pass).is_err());
 }

@@ -709,6 +709,10 @@ impl Pass for HierarchyFill {
                     ctx.history_valid(PYRAMID_SLOT)? && ctx.frame_u32(CAMERA_CUT_INPUT)? == 0
                 }
             };
+        // A one-view first walk with a pyramid that tests nothing this frame runs the
+        // kernels compiled without the test (setup made them).
+        let untested =
+            occlusion && !test_occlusion && self.phase == Phase::First && self.views == 1;
         // The roots a thread each: every instance's (a grid over them), or the second
         // walk's nodes, whose count only the GPU knows (a fixed grid striding over them).
         let roots_grid = match self.phase {
@@ -765,11 +769,9 @@ impl Pass for HierarchyFill {
                 ("params", bytemuck::bytes_of(&params)),
             ];
             let at = ENTRIES.iter().position(|e| *e == entry).unwrap_or(0);
-            let untested = (occlusion && !test_occlusion && self.phase == Phase::First)
-                .then(|| UNTESTED_PROGRAMS.iter().find(|(e, _)| *e == entry))
-                .flatten()
-                .filter(|_| self.views == 1);
-            let program = untested.map_or(programs[at], |(_, name)| *name);
+            let program = (UNTESTED_PROGRAMS.iter())
+                .find(|(e, _)| untested && *e == entry)
+                .map_or(programs[at], |(_, name)| *name);
             ctx.dispatch_compute(program, &uniforms, grid)?;
         }
         Ok(())
