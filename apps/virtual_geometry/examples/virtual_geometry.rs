@@ -83,6 +83,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         exact_division: false,
         accumulate: false,
         big_triangle_px: meshlight::sw_raster::BIG_TRIANGLE_PX,
+        small_triangle_px: meshlight::sw_raster::SMALL_TRIANGLE_PX,
         two_sided: false,
         alpha_mask: false,
         depth_only: false,

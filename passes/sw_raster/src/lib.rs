@@ -62,9 +62,13 @@
 //!   only when the edge is a top edge (horizontal, going right) or a left edge (going up).
 //! - Depth: `z0 + e1 * g1 + e2 * g2` in f32, summed left to right, with the gradients
 //!   `g1 = (z1 - z0) / area` and `g2 = (z2 - z0) / area` computed once per triangle.
-//! - Loop shape: if the widest clipped triangle box of the workgroup is at least
+//! - Loop shape: a triangle whose corners lie within fewer than `small_triangle_px`
+//!   pixels of each other on both axes (param, default and most [`SMALL_TRIANGLE_PX`];
+//!   0: none) loops over its box with 32-bit edge functions stepped by adds, exact
+//!   there. Others: if the widest clipped triangle box of the workgroup is at least
 //!   `scanline_width` pixels (param, default 16) every thread loops per scanline over
-//!   that row's edge span, else over its whole box; both cover the same pixels.
+//!   that row's edge span (bounded in f32, one pixel wider than the span), else over
+//!   its whole box, with 64-bit edge functions. All cover the same pixels.
 //! - Big triangles (param `big_triangle_px`, default [`BIG_TRIANGLE_PX`]; 0: off): a
 //!   triangle whose clipped box is at least that many pixels wide or tall is cut into
 //!   64 × 64-pixel tiles of its box, listed, and covered by a second dispatch, a
@@ -191,6 +195,11 @@ const BIG_TILES: &str = "big_triangle_tiles";
 /// an H200 (the default scene at 3840×2160: sw_raster 0.72 ms at 24 px, 0.74 at 32,
 /// 0.81 at 48, 1.57 at 8, 2.11 untiled; docs/BENCHMARKS.md).
 pub const BIG_TRIANGLE_PX: u32 = 24;
+/// Triangles whose corners lie within fewer than this many pixels of each other are
+/// covered with 32-bit edge functions by default, which is also the most allowed: 2^14
+/// fixed-point units, under which every edge function of a pixel of the triangle's box
+/// stays under 2^30 (raster.wgsl's `cover_small`).
+pub const SMALL_TRIANGLE_PX: u32 = 64;
 /// Tiles the list holds: a 3840 × 2160 triangle is 2,040 of them.
 pub const BIG_TILE_CAPACITY: u32 = 1 << 18;
 /// Workgroups of the big-triangle dispatch, striding over the tiles listed.
@@ -241,6 +250,12 @@ pub struct SwRaster {
     /// Triangles whose box is this many pixels wide or tall are tiled and covered by a
     /// workgroup per tile; 0: every triangle by its thread.
     pub big_triangle_px: u32,
+    /// Triangles whose corners lie within fewer than this many pixels of each other on
+    /// both axes are covered with 32-bit edge functions stepped by adds, the others with
+    /// 64-bit products per pixel; the same pixels and depths either way. At most
+    /// [`SMALL_TRIANGLE_PX`], the bound under which the 32-bit functions cannot
+    /// overflow; 0: every triangle takes the 64-bit path.
+    pub small_triangle_px: u32,
     /// Draw the back faces of clusters whose material is double-sided (turned to face
     /// the eye). Off, every back face is culled and the kernel reads no material: the
     /// lookup and the turn cost about 2% of the pass on an H200, so a renderer turns it
@@ -303,14 +318,17 @@ uniform_block! {
         big_capacity: u32,
         /// DEPTH_ONLY: the layer of `visbuffer` drawn.
         layer: u32,
-        pad: u32,
+        /// Triangles whose corners lie within this many fixed-point units (256 a
+        /// pixel) of each other on both axes take `cover_small`: at most 2^14.
+        small_extent: u32,
     }
 }
 
-const PARAM_KEYS: [&str; 10] = [
+const PARAM_KEYS: [&str; 11] = [
     "depth_only",
     "layer",
     "big_triangle_px",
+    "small_triangle_px",
     "width",
     "height",
     "scanline_width",
@@ -322,7 +340,8 @@ const PARAM_KEYS: [&str; 10] = [
 
 impl SwRaster {
     /// Reads `width`, `height` (required, > 0), `scanline_width` (default 16),
-    /// `big_triangle_px` (default [`BIG_TRIANGLE_PX`]) and `exact_division`,
+    /// `big_triangle_px` (default [`BIG_TRIANGLE_PX`]), `small_triangle_px` (default and
+    /// most [`SMALL_TRIANGLE_PX`]) and `exact_division`,
     /// `accumulate`, `two_sided`, `alpha_mask` and `depth_only` (default false), and
     /// `layer` (default 0, only with `depth_only`); `target` picks the implementation.
     pub fn from_params(params: &Params, target: Visibility64) -> Result<Self> {
@@ -341,6 +360,12 @@ impl SwRaster {
                 "a depth-only layer of {width} × {height} is {layer_bytes} bytes, not a multiple of 256, so it cannot be cleared alone; give sizes whose product is a multiple of 64 (sides that are multiples of 8)"
             )));
         }
+        let small_triangle_px = params.u32("small_triangle_px", SMALL_TRIANGLE_PX)?;
+        if small_triangle_px > SMALL_TRIANGLE_PX {
+            return Err(GraphError::parameter(format!(
+                "`small_triangle_px = {small_triangle_px}` is past {SMALL_TRIANGLE_PX}, above which the 32-bit edge functions of the small-triangle path can overflow; give {SMALL_TRIANGLE_PX} or less (0 turns the path off)"
+            )));
+        }
         let accumulate = params.bool("accumulate", false)?;
         if depth_only && accumulate {
             return Err(GraphError::parameter(
@@ -355,6 +380,7 @@ impl SwRaster {
             exact_division: params.bool("exact_division", false)?,
             accumulate,
             big_triangle_px: params.u32("big_triangle_px", BIG_TRIANGLE_PX)?,
+            small_triangle_px,
             two_sided: params.bool("two_sided", false)?,
             alpha_mask: params.bool("alpha_mask", false)?,
             depth_only,
@@ -472,7 +498,7 @@ impl Pass for SwRaster {
             big_triangle_px: self.big_triangle_px,
             big_capacity: BIG_TILE_CAPACITY,
             layer: self.layer,
-            ..GpuParams::default()
+            small_extent: self.small_triangle_px * 256,
         };
         let big = self.big_triangle_px > 0;
         ctx.clear_scratch(CLIP_COUNT)?;

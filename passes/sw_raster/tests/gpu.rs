@@ -4,7 +4,7 @@
 //! tessellated quad whose shared edges must cover every pixel once, the per-frame clear
 //! and the errors.
 
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Quat, Vec2, Vec3};
 use meshlight_gpu_scene::data::Limits;
 use meshlight_gpu_scene::{Camera, GpuScene, Material, Projection, SceneData};
 use meshlight_graph::*;
@@ -222,10 +222,20 @@ fn pass(scanline_width: u32) -> SwRaster {
         exact_division: true,
         accumulate: false,
         big_triangle_px: 0,
+        small_triangle_px: meshlight_pass_sw_raster::SMALL_TRIANGLE_PX,
         two_sided: false,
         alpha_mask: false,
         depth_only: false,
         layer: 0,
+    }
+}
+
+/// `pass(scanline_width)` with the small-triangle path for corners within
+/// `small_triangle_px` only (0: none).
+fn small_below(scanline_width: u32, small_triangle_px: u32) -> SwRaster {
+    SwRaster {
+        small_triangle_px,
+        ..pass(scanline_width)
     }
 }
 
@@ -333,10 +343,18 @@ fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
             big_triangle_px: 3,
             ..pass(SCANLINES)
         };
+        // Every triangle by 64-bit edge functions in each loop shape, every one the
+        // small path takes by 32-bit ones, and a mix.
         for (loop_name, raster) in [
-            ("scanline", pass(SCANLINES)),
-            ("box", pass(BOXES)),
+            ("scanline", small_below(SCANLINES, 0)),
+            ("box", small_below(BOXES, 0)),
             ("tiled", tiled),
+            ("small-triangle", pass(SCANLINES)),
+            (
+                "small-triangle below 3 px, scanline",
+                small_below(SCANLINES, 3),
+            ),
+            ("small-triangle below 3 px, box", small_below(BOXES, 3)),
         ] {
             let got = run(&mut scene, input, &views, raster).unwrap_or_else(|e| panic!("{e}"));
             for (k, (g, w)) in got.iter().zip(&want).enumerate() {
@@ -348,11 +366,9 @@ fn matches_the_reference_bit_for_bit_in_both_loop_shapes_and_dispatch_shapes() {
             }
             results.push(got);
         }
-        assert_eq!(results[0], results[1], "{shape}: the loop shapes disagree");
-        assert_eq!(
-            results[0], results[2],
-            "{shape}: the tiled triangles disagree"
-        );
+        for (k, r) in results.iter().enumerate().skip(1) {
+            assert_eq!(&results[0], r, "{shape}: loop shape {k} disagrees");
+        }
         // The driver's division: exact on lavapipe, within an ulp or so elsewhere.
         let driver = SwRaster {
             exact_division: false,
@@ -612,6 +628,106 @@ fn shared_edges_of_a_flat_quad_cover_every_pixel_exactly_once() {
                     .count();
                 assert_eq!(gpu_holes, 0, "{name}: background inside the square");
             }
+        }
+    }
+}
+
+/// Triangles whose corners lie just within the small-triangle path's bound (63.98
+/// pixels apart), exactly on it (64: the 64-bit path) and past it (80 and 400 pixels),
+/// at sub-pixel offsets: the largest edge functions the 32-bit path meets. Both paths
+/// equal the reference; 32-bit edge functions for the 400-pixel triangles would
+/// overflow.
+#[test]
+fn triangles_at_the_small_paths_bound_match_the_reference() {
+    let mut scene = flat_scene(&[("square", flat_quad(1, 0.0)), ("cells", flat_quad(2, 0.0))]);
+    // The square is 2 units wide: `pixels` pixels per unit make its triangles' corners
+    // 2 × `pixels` apart (one cell of the 2 × 2 grid: `pixels`).
+    let ortho = |pixels: f32, offset: Vec2| {
+        let eye = Vec3::new(offset.x, offset.y, 5.0);
+        Camera {
+            position: eye,
+            target: eye - Vec3::Z,
+            up: Vec3::Y,
+            projection: Projection::Orthographic {
+                height: H as f32 / pixels,
+                near: 1.0,
+                far: 10.0,
+            },
+        }
+        .view([W, H], 0, None)
+    };
+    let views = [
+        ortho(31.99, Vec2::new(0.0013, -0.0021)),
+        ortho(32.0, Vec2::ZERO),
+        ortho(31.999, Vec2::new(-0.0107, 0.0031)),
+        ortho(40.0, Vec2::new(0.3, 0.1)),
+        ortho(200.0, Vec2::new(0.71, 0.23)),
+    ];
+    for instance in 0..2 {
+        let slots: Vec<Cluster> = clusters_of(&scene, instance, |l| l == 0);
+        let input = Input::every(slots, 2);
+        let mut widest = 0;
+        for view in &views {
+            for c in &input.slots {
+                for t in cpu::screen_triangles(&scene, view, c, W, H) {
+                    let xs = t.corners.map(|(p, _)| p[0]);
+                    let ys = t.corners.map(|(p, _)| p[1]);
+                    let extent = (xs.iter().max().unwrap() - xs.iter().min().unwrap())
+                        .max(ys.iter().max().unwrap() - ys.iter().min().unwrap());
+                    if extent < 64 * 256 {
+                        widest = widest.max(extent);
+                    }
+                }
+            }
+        }
+        if instance == 0 {
+            assert!(
+                widest > 63 * 256,
+                "the widest triangle within the bound is {} px",
+                widest as f32 / 256.0
+            );
+        }
+        let want: Vec<Vec<u64>> = views.iter().map(|v| input.reference(&scene, v)).collect();
+        for (name, raster) in [
+            ("small-triangle path", pass(SCANLINES)),
+            ("64-bit path", small_below(SCANLINES, 0)),
+        ] {
+            let got = run(&mut scene, &input, &views, raster).unwrap_or_else(|e| panic!("{e}"));
+            for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+                assert!(covered(w) > 1000, "view {k} covers {} pixels", covered(w));
+                assert_identical(&format!("instance {instance}, {name}, view {k}"), g, w);
+            }
+        }
+    }
+}
+
+#[test]
+fn a_small_triangle_bound_past_the_safe_one_is_a_parameter_error() {
+    let mut registry = file::Registry::new();
+    meshlight_pass_sw_raster::register(&mut registry);
+    let text = |px: u32| {
+        format!(
+            "[[pass]]\nname = \"raster\"\nstage = \"sw_raster\"\nimplementation = \"buffer\"\n\
+             params = {{ width = {W}, height = {H}, small_triangle_px = {px} }}\n"
+        )
+    };
+    match file::parse_pipeline(&text(65), "p.toml", &registry) {
+        Err(GraphError::Parameter { pass, message }) => {
+            assert_eq!(pass, "raster");
+            assert!(
+                message.contains("`small_triangle_px = 65`") && message.contains("64 or less"),
+                "{message}"
+            );
+        }
+        Err(other) => panic!("not a parameter error: {other}"),
+        Ok(_) => panic!("a small-triangle bound of 65 pixels was accepted"),
+    }
+    // The file binds no slots, so it fails later, but not on its parameters.
+    for px in [0, 1, 64] {
+        if let Err(GraphError::Parameter { message, .. }) =
+            file::parse_pipeline(&text(px), "p.toml", &registry)
+        {
+            panic!("small_triangle_px = {px} refused: {message}");
         }
     }
 }
