@@ -1,6 +1,8 @@
 //! The shared WGSL meshlet decoder against the asset's CPU decoder, on every meshlet of
-//! a real mesh with UVs and of the procedural mesh: grid positions exactly, normals and
-//! UVs to float rounding, triangles exactly. Also the record layouts WGSL sees.
+//! a real mesh with UVs and of the procedural mesh (also on a 24-bit grid): grid offsets
+//! exactly, read through one window of words as the passes read them and field by
+//! field; positions, normals and UVs to float rounding; triangles exactly. Also the
+//! record layouts WGSL sees.
 
 use meshlight_gpu_scene::gpu::elements;
 use meshlight_gpu_scene::{GpuScene, SceneData, data::Limits, names};
@@ -28,6 +30,7 @@ impl Pass for Decode {
                     Slot::buffer("meshes", Access::StorageRead, elements::MESH, ""),
                     Slot::buffer("vertices", Access::StorageWrite, Element::VEC4_F32, ""),
                     Slot::buffer("triangles", Access::StorageWrite, Element::VEC4_F32, ""),
+                    Slot::buffer("mismatched", Access::ClearedReadWrite, Element::U32, ""),
                 ],
             },
         )
@@ -38,7 +41,8 @@ impl Pass for Decode {
             .slot(1, "payload")
             .slot(2, "meshes")
             .slot(3, "vertices")
-            .slot(4, "triangles");
+            .slot(4, "triangles")
+            .slot(5, "mismatched");
         ctx.program(
             "decode",
             ProgramDesc::compute(&DECODE, "decode").layout(layout),
@@ -46,6 +50,7 @@ impl Pass for Decode {
         Ok(())
     }
     fn record(&self, ctx: &mut RecordContext<'_>) -> Result<()> {
+        ctx.clear("mismatched")?;
         let grid = [self.meshlets.min(65_535), self.meshlets.div_ceil(65_535), 1];
         ctx.dispatch_compute("decode", &[], Workgroups::Direct(grid))
     }
@@ -63,11 +68,15 @@ fn check(asset: &MeshletAsset) {
     scene.import(&mut g);
     let vertices = g.create_buffer(
         "vertices",
-        BufferDesc::array(Element::VEC4_F32, n as u64 * 255 * 2),
+        BufferDesc::array(Element::VEC4_F32, n as u64 * 255 * 3),
     );
     let triangles = g.create_buffer(
         "triangles",
         BufferDesc::array(Element::VEC4_F32, n as u64 * 128),
+    );
+    let mismatched = g.create_buffer(
+        "mismatched",
+        BufferDesc::array(Element::U32, n as u64 * 255),
     );
     let out = g
         .add_pass(
@@ -75,26 +84,35 @@ fn check(asset: &MeshletAsset) {
             Decode { meshlets: n },
             Bindings::new()
                 .bind("vertices", vertices)
-                .bind("triangles", triangles),
+                .bind("triangles", triangles)
+                .bind("mismatched", mismatched),
         )
         .unwrap();
     g.export(out.buffer("vertices").unwrap());
+    g.export(out.buffer("mismatched").unwrap());
     g.export(out.buffer("triangles").unwrap());
     let compiled = g.compile(&CompileOptions::for_gpu(&gpu)).unwrap();
     let mut exec = Executor::new(gpu);
     exec.execute(&compiled, &scene.imports()).unwrap();
     let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&exec.read_buffer("vertices").unwrap());
     let t: Vec<[u32; 4]> = bytemuck::pod_collect_to_vec(&exec.read_buffer("triangles").unwrap());
-    let grid = data.meshes[0].position_grid;
+    let mismatched: Vec<u32> =
+        bytemuck::pod_collect_to_vec(&exec.read_buffer("mismatched").unwrap());
+    let differing = mismatched.iter().filter(|&&m| m != 0).count();
+    assert_eq!(
+        differing, 0,
+        "{differing} vertices read differently through one window and field by field"
+    );
     let has_uvs = asset.header().has_uvs();
     for i in 0..n as usize {
         let d = asset.decode_meshlet(i);
         for (k, q) in d.grid.iter().enumerate() {
-            let [p, nrm] = [v[(i * 255 + k) * 2], v[(i * 255 + k) * 2 + 1]];
-            // The grid coordinate is exact: recover it from the position.
+            let at = (i * 255 + k) * 3;
+            let [p, nrm, offsets] = [v[at], v[at + 1], v[at + 2]];
+            // The grid offsets are exact.
             for axis in 0..3 {
-                let back = ((p[axis] - grid[axis]) / grid[3]).round() as u32;
-                assert_eq!(back, q[axis], "meshlet {i} vertex {k} axis {axis}");
+                let got = offsets[axis].to_bits() + asset.meshlets()[i].grid_min[axis];
+                assert_eq!(got, q[axis], "meshlet {i} vertex {k} axis {axis}");
                 let want = d.positions[k][axis];
                 assert!(
                     (p[axis] - want).abs() <= want.abs() * 2e-7 + 1e-7,
@@ -143,6 +161,32 @@ fn gpu_decoding_equals_the_asset_decoder_on_a_mesh_with_uvs() {
     assert!(
         built.asset.header().has_uvs(),
         "spot.obj has texture coordinates"
+    );
+    check(&built.asset);
+}
+
+/// A 24-bit position grid, the widest the builder makes: the meshlets' grid offsets
+/// take up to 72 bits, so a vertex's third offset starts past the window's second word
+/// (the last select of `meshlet_grid_offsets`).
+#[test]
+fn gpu_decoding_equals_the_asset_decoder_with_24_bit_positions() {
+    let mesh = meshlight_scene::procedural_mesh(12);
+    let options = BuildOptions {
+        position_bits: meshlight_scene::compress::PositionBits::Fixed(24),
+        ..BuildOptions::default()
+    };
+    let built = build_asset(&mesh, &options, &mut |_| {}).unwrap();
+    // Some vertex's z offset starts at bit 64 or later of its window: its record starts
+    // at `vertex * stride % 32`, and x and y take a.x + a.y bits before it.
+    let reaches_third_word = built.asset.meshlets().iter().any(|m| {
+        let [x, y, _] = m.axis_bits();
+        let stride = m.vertex_stride();
+        let vertices = m.counts & 0xff;
+        (0..vertices).any(|v| (v * stride) % 32 + x + y >= 64)
+    });
+    assert!(
+        reaches_third_word,
+        "no grid offset starts in the window's third word"
     );
     check(&built.asset);
 }

@@ -10,8 +10,7 @@
 // first, and cannot sit behind an #ifdef.
 
 #import meshlight::dispatch::linear_workgroup
-#import meshlight::math::read_bits
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESHLET_MAX_TRIANGLES, MESHLET_MAX_VERTICES, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_field, meshlet_position, meshlet_triangle_location, meshlet_triangle, meshlet_material}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESHLET_MAX_TRIANGLES, MESHLET_MAX_VERTICES, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_location, meshlet_grid_offsets, meshlet_position, meshlet_triangle_location, meshlet_triangle, meshlet_material}
 #import meshlight::instance::{Instance, Material, MATERIAL_FLAG_DOUBLE_SIDED}
 #ifdef ALPHA_MASK
 #import meshlight::surface::cut_out
@@ -55,15 +54,17 @@
 @group(0) @binding(7) var<uniform> view: View;
 @group(0) @binding(8) var<uniform> params: Params;
 
-fn field(m: Meshlet, vertex: u32, f: u32) -> u32 {
-    let at = meshlet_vertex_field(m, vertex, f);
-    return read_bits(vec2(payload[at.x], payload[at.x + 1u]), at.y, at.z);
+// The grid offsets of vertex `vertex` of meshlet `m`, read from the payload in one window.
+fn grid_offsets(m: Meshlet, vertex: u32) -> vec3<u32> {
+    let at = meshlet_vertex_location(m, vertex);
+    let words = vec4(payload[at.x], payload[at.x + 1u], payload[at.x + 2u], payload[at.x + 3u]);
+    return meshlet_grid_offsets(m, words, at.y);
 }
 
 // Clip position of vertex `k` of the cluster's meshlet, with the software rasteriser's
 // operations, so both rasterisers start from the same bits.
 fn clip_position(instance: Instance, mesh: Mesh, m: Meshlet, k: u32) -> vec4<f32> {
-    let p = meshlet_position(m, mesh.position_grid, vec3(field(m, k, 0u), field(m, k, 1u), field(m, k, 2u)));
+    let p = meshlet_position(m, mesh.position_grid, grid_offsets(m, k));
     let world = instance.world_from_local * vec4(p, 1.0);
     return view.view_projection * vec4(world.xyz, 1.0);
 }

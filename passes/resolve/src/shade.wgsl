@@ -4,11 +4,11 @@
 // the three clip-space corners. `cpu::shade` is the reference; every step has its mirror
 // there.
 
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_COLORS, MESHLET_NO_GROUP, meshlet_level, meshlet_material, meshlet_normal, meshlet_color_word, meshlet_bounds, error_perceptible}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_COLORS, MESHLET_NO_GROUP, meshlet_level, meshlet_material, meshlet_color_word, meshlet_bounds, error_perceptible}
 #import meshlight::instance::{Instance, Material, instance_max_scale, MATERIAL_FLAG_CHECKER, MATERIAL_FLAG_DOUBLE_SIDED, MAP_BASE_COLOR, MAP_METALLIC_ROUGHNESS, MAP_NORMAL, MAP_OCCLUSION, MAP_EMISSIVE, instance_transform_normal, material_uv}
 #import resolve::brdf::{Surface, surface, light_response, ambient_response}
 #import meshlight::texture::{texture_present, sample_texture, texture_lod, vertex_color}
-#import meshlight::surface::{barycentrics, interpolated_uv, uv_transform_rows, transformed_uv, corner_field, corner_position, corner_uv}
+#import meshlight::surface::{barycentrics, interpolated_uv, uv_transform_rows, transformed_uv, corner_normal, corner_position, corner_uv}
 #import meshlight::cluster_triangle::cluster_triangle
 #import meshlight::instance_table::instance_at
 #import meshlight::scene_buffers::{meshlets, payload, materials}
@@ -301,7 +301,7 @@ fn corner_attributes(instance: Instance, m: Meshlet, mesh: Mesh, v: u32) -> Corn
     var c: CornerAttributes;
     c.world = (instance.world_from_local * vec4(corner_position(m, mesh, v), 1.0)).xyz;
     c.clip = view.view_projection * vec4(c.world, 1.0);
-    c.normal = meshlet_normal(m, vec2(corner_field(m, v, 3u), corner_field(m, v, 4u)));
+    c.normal = corner_normal(m, v);
     c.uv = corner_uv(m, mesh, v);
     return c;
 }

@@ -208,6 +208,48 @@ fn meshlet_vertex_field(m: Meshlet, vertex: u32, field: u32) -> vec3<u32> {
     return vec3(m.data_offset + bit / 32u, bit % 32u, width);
 }
 
+// Where vertex `vertex`'s record starts: x = payload word, y = bit in it. Its grid
+// offsets (fields 0, 1, 2: at most 93 bits) lie in words x to x + 3: read the four and
+// pass them, with y, to `meshlet_grid_offsets`. One window of loads for the three
+// fields, where `meshlet_vertex_field` reads two words per field.
+fn meshlet_vertex_location(m: Meshlet, vertex: u32) -> vec2<u32> {
+    let bit = vertex * meshlet_vertex_stride(m);
+    return vec2(m.data_offset + bit / 32u, bit % 32u);
+}
+
+// The grid offsets (x, y, z) of a vertex whose record starts at bit `bit` (0..31) of
+// `words`, four payload words from `meshlet_vertex_location`. Each field is read from
+// the pair of words holding it, picked by selects (no indexed array: see
+// `meshlet_vertex_field`).
+fn meshlet_grid_offsets(m: Meshlet, words: vec4<u32>, bit: u32) -> vec3<u32> {
+    let a = meshlet_axis_bits(m);
+    // Field y starts below bit 63 of the window, field z below bit 94.
+    let y = bit + a.x;
+    let z = y + a.y;
+    return vec3(
+        read_bits(words.xy, bit, a.x),
+        read_bits(select(words.xy, words.yz, y >= 32u), y % 32u, a.y),
+        read_bits(select(select(words.xy, words.yz, z >= 32u), words.zw, z >= 64u), z % 32u, a.z),
+    );
+}
+
+// Where vertex `vertex`'s two octahedral offsets lie: x = payload word, y = bit in it,
+// z = their bits together (at most 30, so words x and x + 1 hold both). Read the two
+// words and pass them to `meshlet_normal_offsets`.
+fn meshlet_normal_location(m: Meshlet, vertex: u32) -> vec3<u32> {
+    let a = meshlet_axis_bits(m);
+    let n = meshlet_normal_bits(m);
+    let bit = vertex * meshlet_vertex_stride(m) + a.x + a.y + a.z;
+    return vec3(m.data_offset + bit / 32u, bit % 32u, n.x + n.y);
+}
+
+// The two octahedral offsets from the words and location `meshlet_normal_location` gave.
+fn meshlet_normal_offsets(m: Meshlet, words: vec2<u32>, at: vec3<u32>) -> vec2<u32> {
+    let both = read_bits(words, at.y, at.z);
+    let n = meshlet_normal_bits(m);
+    return vec2(extractBits(both, 0u, n.x), extractBits(both, n.x, n.y));
+}
+
 // Mesh-space position from the three grid offsets. The integer add comes first, so a
 // vertex shared by neighbouring meshlets decodes to identical bits in each: no cracks.
 fn meshlet_position(m: Meshlet, position_grid: vec4<f32>, offset: vec3<u32>) -> vec3<f32> {
