@@ -107,6 +107,11 @@ const _: () = assert!(
 /// Element counts the buffers may not exceed. Each buffer is bound whole, so the binding
 /// limit of the device bounds it; [`Limits::for_device`] derives them. The instance
 /// table alone may take two bindings ([`crate::instance_table`]).
+/// Zero words after the payload in its binding, so that a read of the words at a
+/// field's location never leaves it: two for a field (`read_bits`), four for a vertex's
+/// grid offsets (`meshlet_grid_offsets`' window), whatever record ends the payload.
+pub const PAYLOAD_PADDING: u32 = 4;
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Limits {
     /// Instances one binding holds: past this the table continues in `instances_high`.
@@ -115,7 +120,8 @@ pub struct Limits {
     pub max_instances: u32,
     /// Meshlet records the shared `meshlets` binding holds.
     pub max_meshlets: u32,
-    /// Words the shared `payload` binding holds (less the two words of padding after it).
+    /// Words the shared `payload` binding holds (less the [`PAYLOAD_PADDING`] words of
+    /// padding after it).
     pub max_payload_words: u32,
     /// Culling-hierarchy nodes the shared `hierarchy_nodes` binding holds.
     pub max_hierarchy_nodes: u32,
@@ -133,8 +139,8 @@ impl Limits {
             instances_per_binding,
             max_instances: instances_per_binding.saturating_mul(2),
             max_meshlets: count(size_of::<MeshletRecord>()),
-            // Two words of padding follow the payload (see `GpuScene`).
-            max_payload_words: count(4).saturating_sub(2),
+            // Padding follows the payload (see `GpuScene`).
+            max_payload_words: count(4).saturating_sub(PAYLOAD_PADDING),
             max_hierarchy_nodes: count(size_of::<NodeRecord>()),
             max_texture_words: count(4),
         }

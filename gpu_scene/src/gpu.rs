@@ -130,8 +130,12 @@ pub fn buffer_lengths(data: &SceneData) -> [(&'static str, Element, u64); 8] {
             count(data.meshlets.len()),
         ),
         (names::GROUPS, elements::GROUP, count(data.groups.len())),
-        // The two padding words of `contents`.
-        (names::PAYLOAD, Element::U32, data.payload.len() as u64 + 2),
+        // The padding words of `contents`.
+        (
+            names::PAYLOAD,
+            Element::U32,
+            data.payload.len() as u64 + u64::from(crate::data::PAYLOAD_PADDING),
+        ),
         (names::MESHES, elements::MESH, count(data.meshes.len())),
         (names::INSTANCES, elements::INSTANCE, count(split)),
         (
@@ -218,8 +222,9 @@ const ORDER: [&str; 12] = [
 
 /// What buffer `name` holds, borrowed from `data` (only the payload is copied, to append
 /// its padding): a frame that changed nothing copies nothing. Every buffer holds at
-/// least one element (wgpu refuses empty bindings); the payload carries two words of
-/// padding so a two-word field read never leaves it.
+/// least one element (wgpu refuses empty bindings); the payload carries
+/// [`PAYLOAD_PADDING`](crate::data::PAYLOAD_PADDING) words of padding so a read of a
+/// field's words never leaves it.
 fn content<'a>(data: &'a SceneData, name: &str) -> (Element, Cow<'a, [u8]>) {
     fn borrowed<T: bytemuck::Pod>(items: &[T]) -> Cow<'_, [u8]> {
         Cow::Borrowed(bytemuck::cast_slice(items))
@@ -230,7 +235,7 @@ fn content<'a>(data: &'a SceneData, name: &str) -> (Element, Cow<'a, [u8]>) {
         names::GROUPS => (elements::GROUP, borrowed(&data.groups)),
         names::PAYLOAD => {
             let mut payload = bytemuck::cast_slice::<u32, u8>(&data.payload).to_vec();
-            payload.extend([0; 8]);
+            payload.resize(payload.len() + 4 * crate::data::PAYLOAD_PADDING as usize, 0);
             (Element::U32, Cow::Owned(payload))
         }
         names::MESHES => (elements::MESH, borrowed(&data.meshes)),

@@ -24,10 +24,10 @@ pub const BAKED_SEGMENTS: RangeInclusive<u64> = 3..=1024;
 
 /// The most segments of a procedural mesh drawn resident. Its payload (the meshlets'
 /// vertices and triangles) and the field's ground share the scene's `payload` binding,
-/// [`SceneLimits::max_payload_words`]: 33,554,430 words with wgpu's default 128 MiB.
+/// [`SceneLimits::max_payload_words`]: 33,554,428 words with wgpu's default 128 MiB.
 /// How many words a mesh bakes to is known only once baked, so the bound was measured
 /// with the builder's default options: at 745 segments the mesh takes 31,233,554 words,
-/// leaving 2,320,876 for the ground, which at its largest (512 × 512 cells, from 901
+/// leaving 2,320,874 for the ground, which at its largest (512 × 512 cells, from 901
 /// copies on) took 2,293,292 to 2,301,491 words over 33 copy counts from 901 to
 /// 1,198,371; at 746 the mesh alone takes 31,346,356 words and no such ground fits
 /// beside it (at 1024, 57,218,601).

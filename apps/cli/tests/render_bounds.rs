@@ -50,7 +50,7 @@ fn each_flag_passes_at_its_maximum_and_is_refused_one_past_it() {
             false,
             MAX_RESIDENT_SEGMENTS,
             |n, v| n.segments = v as u32,
-            "payload binding of 33554430 words",
+            "payload binding of 33554428 words",
         ),
         (
             "segments",

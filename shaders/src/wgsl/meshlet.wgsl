@@ -22,7 +22,8 @@
 //   they come last.
 // Every field is found by multiplying, so a thread per vertex or per triangle decodes
 // its own record with no serial state. Read a field with `read_bits` from the two words
-// at its location; the GPU scene pads the payload so the second word always exists.
+// at its location, a vertex's grid offsets from the four at its record; the GPU scene
+// pads the payload with four words so those always exist.
 // `meshlight_scene::asset::MeshletAsset::decode_meshlet` is the CPU reference.
 
 #import meshlight::math::{read_bits, F32_MAX}
