@@ -104,14 +104,14 @@ const _: () = assert!(
         && MESH_FLAG_COLORS == meshlight_scene::asset::format::FLAG_COLORS
 );
 
-/// Element counts the buffers may not exceed. Each buffer is bound whole, so the binding
-/// limit of the device bounds it; [`Limits::for_device`] derives them. The instance
-/// table alone may take two bindings ([`crate::instance_table`]).
 /// Zero words after the payload in its binding, so that a read of the words at a
 /// field's location never leaves it: two for a field (`read_bits`), four for a vertex's
 /// grid offsets (`meshlet_grid_offsets`' window), whatever record ends the payload.
 pub const PAYLOAD_PADDING: u32 = 4;
 
+/// Element counts the buffers may not exceed. Each buffer is bound whole, so the binding
+/// limit of the device bounds it; [`Limits::for_device`] derives them. The instance
+/// table alone may take two bindings ([`crate::instance_table`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Limits {
     /// Instances one binding holds: past this the table continues in `instances_high`.
