@@ -54,7 +54,9 @@
 @group(0) @binding(7) var<uniform> view: View;
 @group(0) @binding(8) var<uniform> params: Params;
 
-// The grid offsets of vertex `vertex` of meshlet `m`, read from the payload in one window.
+// The grid offsets of vertex `vertex` of meshlet `m`, read from the payload in one window:
+// `meshlight::scene_buffers`' `payload_grid_offsets`, over the payload this file declares
+// for the mesh variant (see above).
 fn grid_offsets(m: Meshlet, vertex: u32) -> vec3<u32> {
     let at = meshlet_vertex_location(m, vertex);
     let words = vec4(payload[at.x], payload[at.x + 1u], payload[at.x + 2u], payload[at.x + 3u]);

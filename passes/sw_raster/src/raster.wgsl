@@ -19,10 +19,10 @@
 // so the clipping code (and the registers it needs) stays out of the main kernel.
 
 #import meshlight::dispatch::linear_workgroup
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_vertex_location, meshlet_grid_offsets, meshlet_triangle_location, meshlet_triangle, meshlet_material}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, meshlet_vertex_count, meshlet_triangle_count, meshlet_triangle_location, meshlet_triangle, meshlet_material}
 #import meshlight::instance::{Instance, MATERIAL_FLAG_DOUBLE_SIDED, MATERIAL_FLAG_MASK}
 #import meshlight::instance_table::instance_at
-#import meshlight::scene_buffers::{meshes, meshlets, payload, materials}
+#import meshlight::scene_buffers::{meshes, meshlets, payload, materials, payload_grid_offsets}
 #import meshlight::cluster_triangle::{ClusterTriangle, cluster_triangle}
 #import meshlight::view::View
 #import meshlight::visbuffer64::visbuffer64_pack
@@ -95,13 +95,6 @@ var<workgroup> usable: array<u32, 255>;
 var<workgroup> widest: atomic<u32>;
 // Set when a triangle of the cluster needs clipping.
 var<workgroup> needs_clip: atomic<u32>;
-
-// The grid offsets of vertex `vertex` of meshlet `m`, read from the payload in one window.
-fn grid_offsets(m: Meshlet, vertex: u32) -> vec3<u32> {
-    let at = meshlet_vertex_location(m, vertex);
-    let words = vec4(payload[at.x], payload[at.x + 1u], payload[at.x + 2u], payload[at.x + 3u]);
-    return meshlet_grid_offsets(m, words, at.y);
-}
 
 // `m * vec4(p, 1.0)` summed column by column in a fixed order, which `cpu::affine`
 // repeats; a matrix-vector product may be summed in any order by the driver.
@@ -181,7 +174,7 @@ struct ScreenVertex {
 // Vertex `v` of meshlet `m` in clip space.
 fn clip_vertex(m: Meshlet, mesh: Mesh, instance: Instance, v: u32) -> vec4<f32> {
     // `meshlet_position`, with the product kept apart from the add.
-    let q = vec3(m.grid_min[0], m.grid_min[1], m.grid_min[2]) + grid_offsets(m, v);
+    let q = vec3(m.grid_min[0], m.grid_min[1], m.grid_min[2]) + payload_grid_offsets(m, v);
     let p = mesh.position_grid.xyz + unfused3(vec3<f32>(q) * mesh.position_grid.w);
     let world = affine(instance.world_from_local, p);
     return affine(view.view_projection, world.xyz);

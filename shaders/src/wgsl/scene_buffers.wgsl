@@ -6,7 +6,7 @@
 // the importer's own: bindings 24 to 29 are these, as 30 and 31 are
 // meshlight::instance_table's.
 
-#import meshlight::meshlet::{Mesh, Meshlet, MeshletGroup}
+#import meshlight::meshlet::{Mesh, Meshlet, MeshletGroup, meshlet_vertex_location, meshlet_grid_offsets}
 #import meshlight::instance::Material
 
 @group(0) @binding(25) var<storage, read> meshes: array<Mesh>;
@@ -19,3 +19,12 @@
 // Every texture's mip chain, one RGBA8 texel a word (`cpu::layout::TextureRef` says
 // where a texture lies; resolve::texture samples them).
 @group(0) @binding(24) var<storage, read> textures: array<u32>;
+
+// The grid offsets of vertex `vertex` of meshlet `m`, read from the payload through one
+// window of four words (`meshlet_grid_offsets`; the GPU scene pads the payload so the
+// window never leaves it).
+fn payload_grid_offsets(m: Meshlet, vertex: u32) -> vec3<u32> {
+    let at = meshlet_vertex_location(m, vertex);
+    let words = vec4(payload[at.x], payload[at.x + 1u], payload[at.x + 2u], payload[at.x + 3u]);
+    return meshlet_grid_offsets(m, words, at.y);
+}

@@ -8,10 +8,10 @@
 // pixels of a MASK material to leave undrawn, so the three agree on every pixel.
 // `meshlight_gpu_scene::surface` mirrors each step on the CPU.
 
-#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, MESH_FLAG_COLORS, meshlet_material, meshlet_vertex_location, meshlet_grid_offsets, meshlet_normal_location, meshlet_normal_offsets, meshlet_normal, meshlet_position, meshlet_uv_word, meshlet_uv, meshlet_uv_location, meshlet_color_word}
+#import meshlight::meshlet::{Meshlet, Mesh, Cluster, MESH_FLAG_UVS, MESH_FLAG_COLORS, meshlet_material, meshlet_normal_location, meshlet_normal_offsets, meshlet_normal, meshlet_position, meshlet_uv_word, meshlet_uv, meshlet_uv_location, meshlet_color_word}
 #import meshlight::instance::{MATERIAL_FLAG_MASK, MAP_BASE_COLOR, material_uv, material_uv_step}
 #import meshlight::cluster_triangle::{cluster_triangle, ClusterTriangle}
-#import meshlight::scene_buffers::{payload, materials, textures}
+#import meshlight::scene_buffers::{payload, materials, textures, payload_grid_offsets}
 #import meshlight::texture::{texture_present, sample_alpha, vertex_color}
 
 // Perspective-correct barycentrics at a pixel and their derivatives per pixel step in
@@ -122,16 +122,9 @@ fn base_alpha(map: vec2<u32>, factor: f32, s: SampleUv) -> f32 {
     return factor * sample_alpha(map, s.uv, s.dx, s.dy);
 }
 
-// The grid offsets of vertex `v` of meshlet `m`, read from the payload in one window.
-fn corner_grid_offsets(m: Meshlet, v: u32) -> vec3<u32> {
-    let at = meshlet_vertex_location(m, v);
-    let words = vec4(payload[at.x], payload[at.x + 1u], payload[at.x + 2u], payload[at.x + 3u]);
-    return meshlet_grid_offsets(m, words, at.y);
-}
-
 // Mesh-space position of vertex `v` of meshlet `m` of `mesh`.
 fn corner_position(m: Meshlet, mesh: Mesh, v: u32) -> vec3<f32> {
-    return meshlet_position(m, mesh.position_grid, corner_grid_offsets(m, v));
+    return meshlet_position(m, mesh.position_grid, payload_grid_offsets(m, v));
 }
 
 // Mesh-space unit normal of vertex `v` of meshlet `m`.
