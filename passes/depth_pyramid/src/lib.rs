@@ -49,7 +49,9 @@
 //! - `single_pass` (`auto` takes it): one dispatch of one workgroup per 128 × 128 tile.
 //!   Each reduces its tile through levels 0 to 6 in registers and workgroup memory and
 //!   writes them; the last workgroup to finish (a global atomic counter) reduces all the
-//!   tiles' results through the remaining levels and sets the counter back to 0. No
+//!   tiles' results through the remaining levels and sets the counter back to 0 (over
+//!   the smallest 32-, 64- or 128-tile square covering the grid, so the lone workgroup
+//!   that ends the pass loads no more than it must). No
 //!   workgroup waits on another, so it needs no forward-progress guarantee and runs on
 //!   every adapter, lavapipe included. It binds a view of all 14 possible levels:
 //!   adapters need 14 storage textures per stage (every desktop Vulkan driver has far

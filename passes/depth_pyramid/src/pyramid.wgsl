@@ -6,10 +6,11 @@
 // non-negative depths (0 = empty = far, with reverse-Z), whose bits order like the floats,
 // so a u32 min is the float min and every stored texel is exactly one source depth.
 //
-// A workgroup reduces one tile: a 128 × 128 block of its input into the seven levels
-// above it (64 × 64 texels down to 1). In the first step the input is the visibility
-// target and the levels are 0 to 6; in the top step it is the grid of tile results
-// (one texel of level 6 per tile) and the levels are 7 to 13.
+// A workgroup reduces one block of its input into the levels above it, down to 1 texel.
+// In the first step the input is the visibility target, the block a 128 × 128 tile and
+// the levels 0 to 6; in the top step it is the grid of tile results (one texel of level
+// 6 per tile), the block the smallest of 32², 64² or 128² tiles covering the grid, and
+// the levels 7 up to 11, 12 or 13.
 
 // The uniform block, declared once for Rust and WGSL by `ShaderParams` in lib.rs.
 #import depth_pyramid::params::Params
@@ -122,46 +123,62 @@ fn quad_min(from_tiles: bool, texel: vec2<u32>) -> u32 {
     return min(top, bottom);
 }
 
-// 16 × 16 texels of level `first + 2`, then the levels above them, one per step.
+// 16 × 16 texels of level `first + patch_log`, then the levels above them, one per step.
 var<workgroup> cells: array<u32, 256>;
 
-// Reduces the 64 × 64 texels `block` of level `first` and the six levels above them,
-// writing each; returns the block's one texel of level `first + 6` (in thread 0).
-// Each thread first reduces a 4 × 4 patch of level `first` in registers, through
-// 2 × 2 of level `first + 1` to one texel of `first + 2`; the last four levels go through
-// workgroup memory. Texels partly outside the image take the min of their inside part
-// (outside inputs are NONE); texels wholly outside are computed and not written.
-fn reduce_block(from_tiles: bool, block: vec2<u32>, first: u32, local: u32) -> u32 {
+// Reduces the (16 · 2^patch_log)² texels `block` of level `first` and the levels above
+// them up to its one texel of level `first + patch_log + 4`, writing each; returns that
+// texel (in thread 0).
+//
+// Each thread first reduces a 2^patch_log-square patch of level `first` in registers,
+// visiting its texels in Morton order so that every fourth closes a texel of level
+// `first + 1` and every sixteenth one of `first + 2`; the last four levels go through
+// workgroup memory, from 16 × 16 cells of level `first + patch_log`. Texels partly
+// outside the image take the min of their inside part (outside inputs are NONE); texels
+// wholly outside are computed and not written.
+//
+// The first step takes patch_log 2 (a 128 × 128 tile, seven levels, 64 input pixels a
+// thread). The top step takes the smallest patch that covers the tile grid: up to 4096
+// pixels a side, each of its threads loads four tile results rather than sixty-four.
+// Its one workgroup runs alone at the end of the pass, so its loads are the pass's tail.
+fn reduce_block(from_tiles: bool, block: vec2<u32>, first: u32, patch_log: u32, local: u32) -> u32 {
     let thread = vec2(local % 16u, local / 16u);
     // The thread's first texel of level `first`.
-    let corner = block * 64u + thread * 4u;
+    let corner = (block * 16u + thread) << vec2(patch_log);
     var patch_bits = NONE;
-    for (var q = 0u; q < 4u; q++) {
-        let quad = vec2(q & 1u, q >> 1u);
-        var quad_bits = NONE;
-        for (var t = 0u; t < 4u; t++) {
-            let texel = corner + quad * 2u + vec2(t & 1u, t >> 1u);
-            let bits = quad_min(from_tiles, texel);
-            store_level(first, texel, bits);
-            quad_bits = min(quad_bits, bits);
+    var quad_bits = NONE;
+    var square_bits = NONE;
+    for (var i = 0u; i < 1u << (2u * patch_log); i++) {
+        // Bits 0, 2 of i are the offset's x; bits 1, 3 its y.
+        let offset = vec2((i & 1u) | ((i >> 1u) & 2u), ((i >> 1u) & 1u) | ((i >> 2u) & 2u));
+        let texel = corner + offset;
+        let bits = quad_min(from_tiles, texel);
+        store_level(first, texel, bits);
+        patch_bits = min(patch_bits, bits);
+        quad_bits = min(quad_bits, bits);
+        if (i & 3u) == 3u {
+            store_level(first + 1u, texel >> vec2(1u), quad_bits);
+            square_bits = min(square_bits, quad_bits);
+            quad_bits = NONE;
         }
-        store_level(first + 1u, (corner >> vec2(1u)) + quad, quad_bits);
-        patch_bits = min(patch_bits, quad_bits);
+        if (i & 15u) == 15u {
+            store_level(first + 2u, texel >> vec2(2u), square_bits);
+            square_bits = NONE;
+        }
     }
-    store_level(first + 2u, corner >> vec2(2u), patch_bits);
     cells[local] = patch_bits;
     var bits = patch_bits;
-    // Levels first + 3 .. first + 6: 8 × 8 texels of the block down to 1, each from the
-    // 2 × 2 cells (row-major, twice the side) below it.
-    for (var k = 3u; k < BLOCK_LEVELS; k++) {
-        let side = 64u >> k;
+    // Levels first + patch_log + 1 ..= first + patch_log + 4: 8 × 8 texels of the block
+    // down to 1, each from the 2 × 2 cells (row-major, twice the side) below it.
+    for (var k = 1u; k <= 4u; k++) {
+        let side = 16u >> k;
         let below = side * 2u;
         let texel = vec2(local % side, local / side);
         workgroupBarrier();
         if local < side * side {
             let i = texel.y * 2u * below + texel.x * 2u;
             bits = min(min(cells[i], cells[i + 1u]), min(cells[i + below], cells[i + below + 1u]));
-            store_level(first + k, block * side + texel, bits);
+            store_level(first + patch_log + k, block * side + texel, bits);
         }
         workgroupBarrier();
         if local < side * side {
@@ -171,10 +188,26 @@ fn reduce_block(from_tiles: bool, block: vec2<u32>, first: u32, local: u32) -> u
     return bits;
 }
 
+// The first step's patch: 4 × 4 pixel quads a thread, 128 × 128 pixels a tile.
+const TILE_PATCH_LOG: u32 = 2u;
+
+// The top step's patch: the smallest whose block (16 · 2^patch_log texels of level 7,
+// twice that many tiles a side) covers the tile grid.
+fn top_patch_log() -> u32 {
+    let tiles = max(params.tiles.x, params.tiles.y);
+    if tiles <= 32u {
+        return 0u;
+    }
+    if tiles <= 64u {
+        return 1u;
+    }
+    return 2u;
+}
+
 // The first step: workgroup (x, y) reduces tile (x, y) of the visibility target into
 // levels 0 to 6 and, where levels above 6 exist, publishes its level-6 texel.
 fn reduce_tile(tile: vec2<u32>, local: u32) {
-    let bits = reduce_block(false, tile, 0u, local);
+    let bits = reduce_block(false, tile, 0u, TILE_PATCH_LOG, local);
     if local == 0u && params.levels > BLOCK_LEVELS {
         atomicStore(&tile_results[tile.y * params.tiles.x + tile.x], bits);
     }
@@ -193,7 +226,7 @@ fn tiles(
 // the tile results, which the first dispatch wrote.
 @compute @workgroup_size(256)
 fn top(@builtin(local_invocation_index) local: u32) {
-    reduce_block(true, vec2(0u), BLOCK_LEVELS, local);
+    reduce_block(true, vec2(0u), BLOCK_LEVELS, top_patch_log(), local);
 }
 
 #ifdef SINGLE_PASS
@@ -235,6 +268,6 @@ fn single_pass(
     if local == 0u {
         atomicStore(&arrivals, 0u);
     }
-    reduce_block(true, vec2(0u), BLOCK_LEVELS, local);
+    reduce_block(true, vec2(0u), BLOCK_LEVELS, top_patch_log(), local);
 }
 #endif

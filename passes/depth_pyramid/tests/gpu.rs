@@ -248,7 +248,10 @@ fn check(method: Method, w: u32, h: u32, form: Form) -> Frames {
     got
 }
 
-const SIZES: [(u32, u32); 9] = [
+/// The first nine sizes fit the top step's smallest block (32 × 32 tiles, 4096 pixels a
+/// side); the last four take its 64- and 128-tile blocks, in each direction, and the
+/// largest size there is.
+const SIZES: [(u32, u32); 13] = [
     (1, 1),
     (3, 5),
     (37, 23),
@@ -258,6 +261,10 @@ const SIZES: [(u32, u32); 9] = [
     (1, 300),
     (280, 158),
     (300, 260),
+    (4160, 130),
+    (8300, 2),
+    (3, 9000),
+    (16384, 1),
 ];
 
 #[test]
