@@ -282,14 +282,18 @@ pub struct BenchArgs {
     /// Scenarios to run (default: all). Known: graph-compile, graph-execute, graph-floor
     /// (1, 16 and 256 dependent one-thread passes through the graph against the same
     /// dispatches in one raw wgpu compute pass), pool-reuse,
-    /// render (the default scene at 1920x1080), virtual-geometry (15³ meshes at
+    /// render (the default scene at 1920x1080 and 3840x2160), textured (a textured mesh
+    /// on the default field, then with MASK materials), virtual-geometry (15³ meshes at
     /// 2240x1260, the first --mesh or the bunny), vg-scale (1 to 32,768 copies of that
-    /// mesh at 2240x1260: frame time and work tested), vg-million, vg-stream (the
-    /// default scene and 15³ bunnies resident, then streamed with every page in the
-    /// pool: what streaming costs a settled frame), rasterisers (the same
-    /// scene: each implementation of sw_raster and hw_raster, and the software/hardware
-    /// split sweep), builder, scan-fan, light-clustering (1,000 to 1,000,000 point
-    /// lights at 1920x1080, both implementations, against the CPU reference).
+    /// mesh at 2240x1260: frame time and work tested), vg-million (1,048,576 copies at
+    /// 2560x1440), vg-stream (the default scene and 15³ bunnies resident, then streamed
+    /// with every page in the pool: what streaming costs a settled frame), vg-shadows
+    /// (the sun's four cascades, drawn every frame and kept), lod-quality (per LOD
+    /// threshold: triangles per pixel, frame, and SSIM/PSNR against LOD 0),
+    /// rasterisers (the same scene: each implementation of sw_raster and hw_raster, and
+    /// the software/hardware split sweep), builder, scan-fan, light-clustering (1,000 to
+    /// 1,000,000 point lights at 1920x1080, both implementations, against the CPU
+    /// reference).
     #[arg(long = "scenario", value_delimiter = ',')]
     pub scenarios: Vec<String>,
     /// Write the rows as JSON here too.

@@ -478,6 +478,17 @@ fn an_unset_or_invalid_runtime_dir_is_not_complained_about() {
     }
 }
 
+/// `bench --help` names every scenario `meshlight bench` runs.
+#[test]
+fn bench_help_lists_every_scenario() {
+    let out = meshlight(&["bench", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    for scenario in meshlight_bench::ALL {
+        assert!(help.contains(scenario), "{scenario} missing:\n{help}");
+    }
+}
+
 /// `render --help` names every view the resolve pass has, and says what the size is.
 #[test]
 fn render_help_lists_the_views_and_the_size() {
