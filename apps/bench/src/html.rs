@@ -84,7 +84,12 @@ fn unique<'a>(items: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
 
 fn charts(h: &mut String, rows: &[&Row]) {
     // Per-pass profiles: one stacked bar per case.
-    let profiled: Vec<&Row> = rows.iter().copied().filter(|r| per_pass(r)).collect();
+    // A value that is not finite (written as `null`) is listed in the table only.
+    let profiled: Vec<&Row> = rows
+        .iter()
+        .copied()
+        .filter(|r| per_pass(r) && r.value.is_finite())
+        .collect();
     if !profiled.is_empty() {
         let _ = writeln!(h, "<h3>GPU time per pass (ms, passes timing)</h3>");
         h.push_str(&stacked(&profiled));
@@ -96,7 +101,7 @@ fn charts(h: &mut String, rows: &[&Row]) {
         let of: Vec<&Row> = rows
             .iter()
             .copied()
-            .filter(|r| r.metric == metric && charted(&r.unit))
+            .filter(|r| r.metric == metric && charted(&r.unit) && r.value.is_finite())
             .collect();
         if of.len() < 2 {
             continue;
@@ -359,6 +364,8 @@ fn shorten(s: &str, most: usize) -> String {
 
 fn format_value(v: f64) -> String {
     match v.abs() {
+        _ if v.is_nan() => "not a number".into(),
+        a if a.is_infinite() => format!("{v}"),
         a if a >= 100.0 => format!("{v:.0}"),
         a if a >= 1.0 => format!("{v:.2}"),
         _ => format!("{v:.3}"),
@@ -447,5 +454,29 @@ mod tests {
         assert!(!page.contains("<h3>clusters"));
         assert_eq!(page.matches("<tr><td>").count(), rows.len());
         assert!(!page.contains("http") && !page.contains("<script"));
+    }
+
+    /// A value that is not finite is listed, never drawn: no `NaN` or `inf` in the SVG.
+    #[test]
+    fn a_value_that_is_not_finite_goes_to_the_table_only() {
+        let pass = format!("GPU fill{PASS_SUFFIX}");
+        let rows = [
+            row("bars", "one", "CPU build", 2.0, "ms"),
+            row("bars", "two", "CPU build", 3.0, "ms"),
+            row("bars", "three", "CPU build", f64::NAN, "ms"),
+            row("bars", "four", "PSNR", f64::INFINITY, "dB"),
+            row("profile", "a", &pass, 0.1, "ms"),
+            row("profile", "b", &pass, f64::NAN, "ms"),
+        ];
+        let page = page("t", &rows);
+        assert_eq!(page.matches("<tr><td>").count(), rows.len());
+        assert!(page.contains(">not a number<") && page.contains(">inf<"));
+        // The charts: the page without its tables (one per scenario).
+        let svg: String = page
+            .split("<details>")
+            .map(|part| part.split("</details>").last().unwrap())
+            .collect();
+        assert!(!svg.contains("NaN") && !svg.contains("inf"), "{svg}");
+        assert_eq!(svg.matches("<title>fill: ").count(), 1);
     }
 }

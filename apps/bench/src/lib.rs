@@ -39,6 +39,9 @@ pub struct Row {
     pub scenario: String,
     pub case: String,
     pub metric: String,
+    /// JSON has no NaN or infinity: serde writes a value that is not finite (the PSNR of
+    /// two equal images is +∞) as `null`, and `--from-json` reads `null` back as NaN.
+    #[serde(deserialize_with = "finite_or_null")]
     pub value: f64,
     pub unit: String,
     /// Value relative to the scenario's baseline measured in the same run, when it has one.
@@ -148,6 +151,12 @@ pub fn run(args: &BenchOptions) -> std::result::Result<(), Box<dyn std::error::E
         println!("charts: {}", path.display());
     }
     Ok(())
+}
+
+/// Reads a row's value as `--json` wrote it: a number, or `null` for one that was not
+/// finite.
+fn finite_or_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(<Option<f64> as serde::Deserialize>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 pub(crate) fn row(
@@ -892,4 +901,24 @@ fn graph_floor(quick: bool) -> std::result::Result<Vec<Row>, Box<dyn std::error:
         .into());
     }
     Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Row;
+
+    /// What `--json` writes for a value that is not finite, `--from-json` reads back.
+    #[test]
+    fn a_value_that_is_not_finite_survives_the_json_as_not_a_number() {
+        let mut r = super::row("s", "c".into(), "m", f64::INFINITY, "dB", "d");
+        let mut rows = vec![r.clone()];
+        r.value = 1.5;
+        rows.push(r);
+        let text = serde_json::to_string(&rows).unwrap();
+        assert!(text.contains("\"value\":null"), "{text}");
+        let read: Vec<Row> = serde_json::from_str(&text).unwrap();
+        assert!(read[0].value.is_nan());
+        assert_eq!(read[1].value, 1.5);
+        assert!(serde_json::from_str::<Vec<Row>>(&text.replace("1.5", "\"x\"")).is_err());
+    }
 }

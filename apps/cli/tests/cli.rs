@@ -744,6 +744,34 @@ fn bench_charts_saved_rows_and_names_a_file_it_cannot_read() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Every file of rows under docs/ draws, as BENCHMARKS says it does, those with values
+/// `--json` wrote as `null` (not finite: a PSNR of +∞, a pass a frame did not run) too.
+#[test]
+fn bench_charts_every_saved_file_of_rows() {
+    let dir = scratch("bench-html-every");
+    let page = dir.join("charts.html");
+    let mut files: Vec<String> = std::fs::read_dir("docs")
+        .unwrap()
+        .map(|e| e.unwrap().path().to_str().unwrap().to_owned())
+        .filter(|p| p.ends_with(".json"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 10, "{files:?}");
+    let mut args = vec!["bench"];
+    for f in &files {
+        args.extend(["--from-json", f.as_str()]);
+    }
+    args.extend(["--html", page.to_str().unwrap()]);
+    meshlight_ok(&args);
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(
+        html.contains(">not a number<"),
+        "no null value among the files"
+    );
+    assert!(!html.contains("NaN"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `bake`'s options are bounded where they are parsed: a bad value is clap's usage error
 /// (exit 2) naming the option, before any mesh is read; a good one gets past parsing to
 /// the missing file (exit 1).
