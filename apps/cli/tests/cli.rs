@@ -750,9 +750,9 @@ fn bench_charts_saved_rows_and_names_a_file_it_cannot_read() {
 fn bench_charts_every_saved_file_of_rows() {
     let dir = scratch("bench-html-every");
     let page = dir.join("charts.html");
-    let mut files: Vec<String> = std::fs::read_dir("docs")
+    let mut files: Vec<String> = std::fs::read_dir(format!("{ROOT}/docs"))
         .unwrap()
-        .map(|e| e.unwrap().path().to_str().unwrap().to_owned())
+        .map(|e| format!("docs/{}", e.unwrap().file_name().to_str().unwrap()))
         .filter(|p| p.ends_with(".json"))
         .collect();
     files.sort();
